@@ -1,0 +1,126 @@
+# Four single-header libraries, their tests, benchmarks and examples.
+#
+#   make          build the examples
+#   make test     install the reference libraries if needed, compile-check every
+#                 header, run unit tests (ASan+UBSan) and reference tests
+#   make bench    run the benchmarks (throughput next to the papers' figures)
+#   make demo     run the main example
+#   make clean
+#
+# Files are found by name, so adding one needs no edit here:
+#   tests/test_*.c    unit tests: headers only, run under ASan+UBSan
+#   tests/ref_*.c     reference tests: linked with tests/reference (Embree, OpenEXR)
+#   tests/bench_*.c   benchmarks: optimised, linked with tests/reference
+#   examples/*.c      examples: one program each, `cc examples/x.c -lm` builds it
+
+CC      ?= cc
+CXX     ?= g++
+CLANG   := $(shell command -v clang 2>/dev/null)
+CLANGXX := $(shell command -v clang++ 2>/dev/null)
+NPROC   := $(shell nproc 2>/dev/null || echo 2)
+
+BUILD   := build
+HEADERS := irrvol.h radinterp.h lightvec.h rendercache.h
+WARN    := -Wall -Wextra -pedantic -Werror
+CFLAGS_PROJECT := -std=c99 $(WARN) -I.
+SAN     := -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
+LIBS    := -lm -lpthread
+OPT     := -O2
+BENCH_OPT ?= -O3 -march=native
+
+# Every program depends on every project header: headers are the product.
+ALL_H := $(HEADERS) $(wildcard tests/*.h tests/reference/*.h examples/common/*.h)
+
+UNIT_BINS    := $(patsubst tests/%.c,$(BUILD)/tests/%,$(wildcard tests/test_*.c))
+REF_BINS     := $(patsubst tests/%.c,$(BUILD)/tests/%,$(wildcard tests/ref_*.c))
+BENCH_BINS   := $(patsubst tests/%.c,$(BUILD)/bench/%,$(wildcard tests/bench_*.c))
+EXAMPLE_BINS := $(patsubst examples/%.c,$(BUILD)/examples/%,$(wildcard examples/*.c))
+REF_OBJS     := $(patsubst tests/reference/%.c,$(BUILD)/ref/%.o,$(wildcard tests/reference/*.c))
+LINKAGE_BIN  := $(BUILD)/tests/linkage
+
+# Compile checks: each header with its implementation, as C99, C11 and C++,
+# with gcc and (when present) clang, and once as static.
+CHECK_KINDS := c99 c11 cxx static
+ifneq ($(CLANG),)
+CHECK_KINDS += clang-c99
+endif
+ifneq ($(CLANGXX),)
+CHECK_KINDS += clang-cxx
+endif
+CHECK_OBJS := $(foreach h,$(basename $(HEADERS)),$(foreach k,$(CHECK_KINDS),$(BUILD)/check/$(h).$(k).o))
+
+# The reference libraries are looked up only after tests/deps.sh ran.
+REF_CFLAGS = $(shell pkg-config --cflags OpenEXR 2>/dev/null)
+REF_LIBS   = -lembree3 $(shell pkg-config --libs OpenEXR 2>/dev/null)
+
+.SECONDARY:
+.PHONY: all examples test test-build bench bench-build demo deps clean
+
+all: examples
+examples: $(EXAMPLE_BINS)
+
+test: deps
+	@$(MAKE) --no-print-directory -j$(NPROC) test-build
+	@tests/run.sh $(LINKAGE_BIN) $(UNIT_BINS) $(REF_BINS)
+
+test-build: $(CHECK_OBJS) $(LINKAGE_BIN) $(UNIT_BINS) $(REF_BINS) $(EXAMPLE_BINS)
+
+bench: deps
+	@$(MAKE) --no-print-directory -j$(NPROC) bench-build
+	@for b in $(BENCH_BINS); do echo "== $$(basename $$b)"; $$b || exit 1; done
+
+bench-build: $(BENCH_BINS)
+
+# The main job. Runs the walkthrough once it exists, else the scene viewer.
+DEMO := $(if $(wildcard examples/walkthrough.c),$(BUILD)/examples/walkthrough,$(BUILD)/examples/scene_view)
+demo: $(DEMO)
+	@mkdir -p $(BUILD)/demo
+	$(DEMO) --out $(BUILD)/demo
+
+deps: $(BUILD)/.deps-ok
+$(BUILD)/.deps-ok: tests/deps.sh
+	@CC=$(CC) tests/deps.sh
+	@mkdir -p $(BUILD) && touch $@
+
+# --- compile checks -------------------------------------------------------
+$(BUILD)/check/%.c: | $(BUILD)/check
+	@up=$$(echo $* | tr a-z A-Z); \
+	 printf '#define %s_IMPLEMENTATION\n#include "%s.h"\n#include "%s.h" /* included twice on purpose */\n' $$up $* $* > $@
+$(BUILD)/check/%.c99.o: $(BUILD)/check/%.c %.h
+	$(CC) -std=c99 $(WARN) -I. -c $< -o $@
+$(BUILD)/check/%.c11.o: $(BUILD)/check/%.c %.h
+	$(CC) -std=c11 $(WARN) -I. -c $< -o $@
+$(BUILD)/check/%.cxx.o: $(BUILD)/check/%.c %.h
+	$(CXX) -x c++ $(WARN) -I. -c $< -o $@
+$(BUILD)/check/%.static.o: $(BUILD)/check/%.c %.h
+	$(CC) -std=c99 $(WARN) -Wno-unused-function -I. -D$(shell echo $* | tr a-z A-Z)_STATIC -c $< -o $@
+$(BUILD)/check/%.clang-c99.o: $(BUILD)/check/%.c %.h
+	$(CLANG) -std=c99 $(WARN) -I. -c $< -o $@
+$(BUILD)/check/%.clang-cxx.o: $(BUILD)/check/%.c %.h
+	$(CLANGXX) -x c++ $(WARN) -I. -c $< -o $@
+
+# --- tests ----------------------------------------------------------------
+$(LINKAGE_BIN): tests/linkage/impl.c tests/linkage/main.c $(ALL_H) | $(BUILD)/tests
+	$(CC) $(CFLAGS_PROJECT) $(OPT) tests/linkage/impl.c tests/linkage/main.c -o $@ $(LIBS)
+
+$(BUILD)/tests/test_%: tests/test_%.c $(ALL_H) | $(BUILD)/tests
+	$(CC) $(CFLAGS_PROJECT) -O1 -g $(SAN) $< -o $@ $(LIBS)
+
+$(BUILD)/tests/ref_%: tests/ref_%.c $(REF_OBJS) $(ALL_H) | $(BUILD)/tests
+	$(CC) $(CFLAGS_PROJECT) $(OPT) -g $(REF_CFLAGS) $< $(REF_OBJS) -o $@ $(REF_LIBS) $(LIBS)
+
+$(BUILD)/ref/%.o: tests/reference/%.c $(ALL_H) | $(BUILD)/ref
+	$(CC) $(CFLAGS_PROJECT) $(OPT) -g $(REF_CFLAGS) -c $< -o $@
+
+$(BUILD)/bench/bench_%: tests/bench_%.c $(REF_OBJS) $(ALL_H) | $(BUILD)/bench
+	$(CC) $(CFLAGS_PROJECT) $(BENCH_OPT) $(REF_CFLAGS) $< $(REF_OBJS) -o $@ $(REF_LIBS) $(LIBS)
+
+# --- examples -------------------------------------------------------------
+$(BUILD)/examples/%: examples/%.c $(ALL_H) | $(BUILD)/examples
+	$(CC) $(CFLAGS_PROJECT) $(OPT) $< -o $@ $(LIBS)
+
+$(BUILD)/check $(BUILD)/tests $(BUILD)/ref $(BUILD)/bench $(BUILD)/examples:
+	@mkdir -p $@
+
+clean:
+	rm -rf $(BUILD)

@@ -1,0 +1,136 @@
+/* test.h - the project's test harness: named test cases, tolerant float
+   comparisons that print both values, and the closing line "N passed, N failed".
+
+   Usage, in exactly one .c file per test program:
+
+       #include "test.h"
+       static void test_addition(void) { CHECK(1 + 1 == 2); CHECK_CLOSE(0.1 + 0.2, 0.3, 1e-12, 0.0); }
+       int main(int argc, char **argv) {
+           TEST_INIT(argc, argv);
+           RUN(test_addition);
+           return test_finish();
+       }
+
+   A test case passes when none of its checks fails. CHECK_CLOSE(actual, expected,
+   rel, abs) passes when |actual - expected| <= abs + rel * |expected|; NaN never
+   passes. Each failure prints file, line, both values, the difference and the
+   tolerance. test_finish() prints "N passed, N failed" alone on the last line and
+   returns the process exit code (non-zero when anything failed).
+
+   Running "prog NAME" runs only the test cases whose name contains NAME.
+   test_note() prints a measured number that belongs in an issue note (an error
+   table, a hit rate); it never affects the result. */
+#ifndef PROJECT_TEST_H
+#define PROJECT_TEST_H
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#if defined(__GNUC__) || defined(__clang__)
+#  define TEST__FN static __attribute__((unused))
+#else
+#  define TEST__FN static
+#endif
+
+typedef struct test_state {
+    int passed, failed;       /* test cases */
+    int case_failures;        /* failed checks in the running case */
+    const char *filter;       /* run only names containing this, or NULL */
+    const char *current;      /* name of the running case */
+} test_state;
+
+static test_state test__state;
+
+#define TEST_INIT(argc, argv) test_init((argc), (argv))
+#define RUN(fn) test_run(#fn, fn)
+
+#define CHECK(cond) \
+    test_check((cond) ? 1 : 0, __FILE__, __LINE__, "%s", #cond)
+#define CHECK_MSG(cond, ...) \
+    test_check((cond) ? 1 : 0, __FILE__, __LINE__, __VA_ARGS__)
+#define CHECK_CLOSE(actual, expected, rel, abs_tol) \
+    test_check_close((double)(actual), (double)(expected), (double)(rel), (double)(abs_tol), \
+                     __FILE__, __LINE__, #actual, #expected)
+#define CHECK_EQ_INT(actual, expected) \
+    test_check_int((long long)(actual), (long long)(expected), __FILE__, __LINE__, #actual, #expected)
+
+TEST__FN void test_init(int argc, char **argv)
+{
+    memset(&test__state, 0, sizeof test__state);
+    test__state.filter = argc > 1 ? argv[1] : NULL;
+}
+
+/* Prints a failure and marks the running case failed. Returns ok so a caller
+   can stop early: if (!CHECK(p != NULL)) return; */
+TEST__FN int test_check(int ok, const char *file, int line, const char *fmt, ...)
+{
+    va_list ap;
+    if (ok) return 1;
+    test__state.case_failures++;
+    fprintf(stderr, "  FAIL %s (%s:%d): ", test__state.current ? test__state.current : "?", file, line);
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fputc('\n', stderr);
+    return 0;
+}
+
+TEST__FN int test_check_close(double actual, double expected, double rel, double abs_tol,
+                            const char *file, int line, const char *actual_text,
+                            const char *expected_text)
+{
+    double diff = fabs(actual - expected);
+    double tol = abs_tol + rel * fabs(expected);
+    int ok = !(diff > tol) && !isnan(actual) && !isnan(expected);
+    return test_check(ok, file, line,
+                      "%s = %.9g, expected %s = %.9g (difference %.3g, tolerance %.3g)",
+                      actual_text, actual, expected_text, expected, diff, tol);
+}
+
+TEST__FN int test_check_int(long long actual, long long expected, const char *file, int line,
+                          const char *actual_text, const char *expected_text)
+{
+    return test_check(actual == expected, file, line, "%s = %lld, expected %s = %lld",
+                      actual_text, actual, expected_text, expected);
+}
+
+/* A measured figure worth reporting; printed, never judged. */
+TEST__FN void test_note(const char *fmt, ...)
+{
+    va_list ap;
+    printf("  note: ");
+    va_start(ap, fmt);
+    vprintf(fmt, ap);
+    va_end(ap);
+    putchar('\n');
+    fflush(stdout);
+}
+
+TEST__FN void test_run(const char *name, void (*fn)(void))
+{
+    if (test__state.filter && !strstr(name, test__state.filter)) return;
+    test__state.current = name;
+    test__state.case_failures = 0;
+    fn();
+    if (test__state.case_failures) {
+        test__state.failed++;
+        printf("FAIL %s\n", name);
+    } else {
+        test__state.passed++;
+        printf("ok   %s\n", name);
+    }
+    fflush(stdout);
+    test__state.current = NULL;
+}
+
+TEST__FN int test_finish(void)
+{
+    printf("%d passed, %d failed\n", test__state.passed, test__state.failed);
+    fflush(stdout);
+    return test__state.failed ? 1 : 0;
+}
+
+#endif /* PROJECT_TEST_H */
