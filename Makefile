@@ -9,6 +9,7 @@
 #
 # Files are found by name, so adding one needs no edit here:
 #   tests/test_*.c    unit tests: headers only, run under ASan+UBSan
+#   tests/tsan_*.c    concurrency tests: headers only, run under ThreadSanitizer
 #   tests/ref_*.c     reference tests: linked with tests/reference (Embree, OpenEXR)
 #   tests/bench_*.c   benchmarks: optimised, linked with tests/reference
 #   examples/*.c      examples: one program each, `cc examples/x.c -lm` builds it
@@ -32,6 +33,7 @@ BENCH_OPT ?= -O3 -march=native
 ALL_H := $(HEADERS) $(wildcard tests/*.h tests/reference/*.h examples/common/*.h)
 
 UNIT_BINS    := $(patsubst tests/%.c,$(BUILD)/tests/%,$(wildcard tests/test_*.c))
+TSAN_BINS    := $(patsubst tests/%.c,$(BUILD)/tests/%,$(wildcard tests/tsan_*.c))
 REF_BINS     := $(patsubst tests/%.c,$(BUILD)/tests/%,$(wildcard tests/ref_*.c))
 BENCH_BINS   := $(patsubst tests/%.c,$(BUILD)/bench/%,$(wildcard tests/bench_*.c))
 EXAMPLE_BINS := $(patsubst examples/%.c,$(BUILD)/examples/%,$(wildcard examples/*.c))
@@ -61,9 +63,9 @@ examples: $(EXAMPLE_BINS)
 
 test: deps
 	@$(MAKE) --no-print-directory -j$(NPROC) test-build
-	@tests/run.sh $(LINKAGE_BIN) $(UNIT_BINS) $(REF_BINS)
+	@tests/run.sh $(LINKAGE_BIN) $(UNIT_BINS) $(TSAN_BINS) $(REF_BINS)
 
-test-build: $(CHECK_OBJS) $(LINKAGE_BIN) $(UNIT_BINS) $(REF_BINS) $(EXAMPLE_BINS)
+test-build: $(CHECK_OBJS) $(LINKAGE_BIN) $(UNIT_BINS) $(TSAN_BINS) $(REF_BINS) $(EXAMPLE_BINS)
 
 bench: deps
 	@$(MAKE) --no-print-directory -j$(NPROC) bench-build
@@ -105,6 +107,9 @@ $(LINKAGE_BIN): tests/linkage/impl.c tests/linkage/main.c $(ALL_H) | $(BUILD)/te
 
 $(BUILD)/tests/test_%: tests/test_%.c $(ALL_H) | $(BUILD)/tests
 	$(CC) $(CFLAGS_PROJECT) -O1 -g $(SAN) $< -o $@ $(LIBS)
+
+$(BUILD)/tests/tsan_%: tests/tsan_%.c $(ALL_H) | $(BUILD)/tests
+	$(CC) $(CFLAGS_PROJECT) -O1 -g -fsanitize=thread $< -o $@ $(LIBS)
 
 $(BUILD)/tests/ref_%: tests/ref_%.c $(REF_OBJS) $(ALL_H) | $(BUILD)/tests
 	$(CC) $(CFLAGS_PROJECT) $(OPT) -g $(REF_CFLAGS) $< $(REF_OBJS) -o $@ $(REF_LIBS) $(LIBS)
