@@ -114,8 +114,9 @@ $(BUILD)/tests/tsan_%: tests/tsan_%.c $(ALL_H) | $(BUILD)/tests
 $(BUILD)/tests/ref_%: tests/ref_%.c $(REF_OBJS) $(ALL_H) | $(BUILD)/tests
 	$(CC) $(CFLAGS_PROJECT) $(OPT) -g $(REF_CFLAGS) $< $(REF_OBJS) -o $@ $(REF_LIBS) $(LIBS)
 
+# C11: OpenEXR's C API uses anonymous unions.
 $(BUILD)/ref/%.o: tests/reference/%.c $(ALL_H) | $(BUILD)/ref
-	$(CC) $(CFLAGS_PROJECT) $(OPT) -g $(REF_CFLAGS) -c $< -o $@
+	$(CC) -std=c11 $(WARN) -I. $(OPT) -g $(REF_CFLAGS) -c $< -o $@
 
 $(BUILD)/bench/bench_%: tests/bench_%.c $(REF_OBJS) $(ALL_H) | $(BUILD)/bench
 	$(CC) $(CFLAGS_PROJECT) $(BENCH_OPT) $(REF_CFLAGS) $< $(REF_OBJS) -o $@ $(REF_LIBS) $(LIBS)
