@@ -1,0 +1,438 @@
+/* raster.h - software rasterizer for the examples: triangles into a depth
+   buffer, a triangle-ID buffer and a perspective-correct barycentric buffer
+   (Hardt's online phase, section 3.4), tiled and parallel.
+
+       ex_raster r;
+       ex_raster_init(&r, 640, 480);
+       r.pool = pool;                           // optional ex_pool, NULL = serial
+       ex_raster_clear(&r);
+       ex_raster_draw(&r, &camera, positions, indices, tri_count, 0);
+       ex_raster_draw(&r, &camera, bunny_pos, bunny_idx, bunny_tris, tri_count);
+       ... r.id[p] (EX_RASTER_EMPTY or id_base + triangle), r.bary[2p], r.bary[2p+1]
+       ex_raster_free(&r);
+
+   The barycentric pair of a pixel holds the weights of the triangle's second
+   and third vertex at the pixel centre (the first vertex gets 1 - u - v),
+   interpolated perspective-correctly. Depth is the distance along the view
+   axis.
+
+   Exact coverage: vertices are snapped to 1/256 pixel and edge functions are
+   evaluated in 64-bit integers with a tie rule equivalent to moving every
+   pixel centre by an infinitesimal fixed offset (the top-left rule up to
+   convention), so a pixel centre inside a mesh is covered by exactly one of
+   its triangles: no cracks, no double coverage along shared edges or at shared
+   vertices. ex_raster_count() counts coverage instead of depth testing, to
+   check exactly that. Triangles are clipped against the near plane and a
+   guard band in view space (clip points computed the same way for both
+   triangles of a shared edge). Both faces are drawn (no culling). Only
+   perspective cameras rasterize. */
+#ifndef EXAMPLES_COMMON_RASTER_H
+#define EXAMPLES_COMMON_RASTER_H
+
+#include <float.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "camera.h"
+#include "pool.h"
+
+#define EX_RASTER_EMPTY 0xFFFFFFFFu
+#define EX_RASTER_TILE 64            /* tile side in pixels: one parallel job per tile */
+#define EX_RASTER_SUBPIXEL 256       /* fixed-point steps per pixel */
+#define EX_RASTER_GUARD 16.0f        /* guard band, in half screen widths */
+
+typedef struct ex_raster_tri {
+    int64_t x[3], y[3];          /* snapped screen positions, 1/256 pixel */
+    float inv_z[3];              /* 1 / view depth at each corner */
+    float u[3], v[3];            /* original barycentric weights at each corner */
+    uint32_t id;
+    int x0, y0, x1, y1;          /* pixel bounds, inclusive, inside the image */
+} ex_raster_tri;
+
+typedef struct ex_raster {
+    int width, height;
+    float *depth;                /* view depth of the nearest surface; FLT_MAX where empty */
+    uint32_t *id;
+    float *bary;                 /* 2 per pixel */
+    uint32_t *coverage;          /* per pixel hit count, filled by ex_raster_count */
+    float near_plane;            /* default 1e-3 (scene units) */
+    ex_pool *pool;               /* optional */
+    /* scratch reused by every draw */
+    ex_raster_tri *tris;
+    uint32_t tri_count, tri_capacity;
+    uint32_t *bin_start, *bin_items, bin_capacity;
+    int tiles_x, tiles_y;
+    int counting;
+} ex_raster;
+
+EX_FN void ex_raster_free(ex_raster *r)
+{
+    if (!r) return;
+    free(r->depth);
+    free(r->id);
+    free(r->bary);
+    free(r->coverage);
+    free(r->tris);
+    free(r->bin_start);
+    free(r->bin_items);
+    memset(r, 0, sizeof *r);
+}
+
+EX_FN int ex_raster_init(ex_raster *r, int width, int height)
+{
+    size_t n;
+    memset(r, 0, sizeof *r);
+    if (width <= 0 || height <= 0 || width > (1 << 14) || height > (1 << 14)) return -1;
+    n = (size_t)width * (size_t)height;
+    r->width = width;
+    r->height = height;
+    r->near_plane = 1e-3f;
+    r->tiles_x = (width + EX_RASTER_TILE - 1) / EX_RASTER_TILE;
+    r->tiles_y = (height + EX_RASTER_TILE - 1) / EX_RASTER_TILE;
+    r->depth = (float *)malloc(n * sizeof(float));
+    r->id = (uint32_t *)malloc(n * sizeof(uint32_t));
+    r->bary = (float *)malloc(2 * n * sizeof(float));
+    r->coverage = (uint32_t *)calloc(n, sizeof(uint32_t));
+    r->bin_start = (uint32_t *)malloc(((size_t)r->tiles_x * (size_t)r->tiles_y + 1) * sizeof(uint32_t));
+    if (!r->depth || !r->id || !r->bary || !r->coverage || !r->bin_start) {
+        ex_raster_free(r);
+        return -1;
+    }
+    return 0;
+}
+
+EX_FN void ex_raster_clear(ex_raster *r)
+{
+    size_t i, n = (size_t)r->width * (size_t)r->height;
+    for (i = 0; i < n; i++) {
+        r->depth[i] = FLT_MAX;
+        r->id[i] = EX_RASTER_EMPTY;
+        r->bary[2 * i] = r->bary[2 * i + 1] = 0.0f;
+    }
+    memset(r->coverage, 0, n * sizeof(uint32_t));
+}
+
+/* ---- clipping in view space ----------------------------------------------- */
+
+typedef struct ex__clip_vertex { float p[3]; float u, v; } ex__clip_vertex;
+
+/* Signed distance to a clip plane (inside >= 0). Planes: 0 near, 1-4 guard band. */
+static float ex__clip_distance(const ex__clip_vertex *v, int plane, float near_plane, float ax, float ay)
+{
+    switch (plane) {
+    case 0: return v->p[2] - near_plane;
+    case 1: return EX_RASTER_GUARD * ax * v->p[2] - v->p[0];
+    case 2: return EX_RASTER_GUARD * ax * v->p[2] + v->p[0];
+    case 3: return EX_RASTER_GUARD * ay * v->p[2] - v->p[1];
+    default: return EX_RASTER_GUARD * ay * v->p[2] + v->p[1];
+    }
+}
+
+/* The crossing point of segment a-b with the plane, computed from the
+   endpoint that sorts first so that both triangles of a shared edge get the
+   same point. */
+static ex__clip_vertex ex__clip_cross(const ex__clip_vertex *a, float da, const ex__clip_vertex *b, float db)
+{
+    ex__clip_vertex out;
+    float t;
+    int k;
+    if (a->p[0] > b->p[0] || (a->p[0] == b->p[0] && (a->p[1] > b->p[1] || (a->p[1] == b->p[1] && a->p[2] > b->p[2])))) {
+        const ex__clip_vertex *tv = a;
+        float td = da;
+        a = b; da = db;
+        b = tv; db = td;
+    }
+    t = da / (da - db);
+    for (k = 0; k < 3; k++) out.p[k] = a->p[k] + t * (b->p[k] - a->p[k]);
+    out.u = a->u + t * (b->u - a->u);
+    out.v = a->v + t * (b->v - a->v);
+    return out;
+}
+
+/* Sutherland-Hodgman against the five planes; returns the vertex count. */
+static int ex__clip_polygon(ex__clip_vertex *poly, int n, float near_plane, float ax, float ay)
+{
+    ex__clip_vertex tmp[16];
+    int plane;
+    for (plane = 0; plane < 5 && n > 0; plane++) {
+        int i, m = 0;
+        for (i = 0; i < n; i++) {
+            const ex__clip_vertex *a = &poly[i], *b = &poly[(i + 1) % n];
+            float da = ex__clip_distance(a, plane, near_plane, ax, ay);
+            float db = ex__clip_distance(b, plane, near_plane, ax, ay);
+            if (da >= 0) tmp[m++] = *a;
+            if ((da >= 0) != (db >= 0)) tmp[m++] = ex__clip_cross(a, da, b, db);
+        }
+        memcpy(poly, tmp, (size_t)m * sizeof *poly);
+        n = m;
+    }
+    return n;
+}
+
+/* ---- setup and binning ---------------------------------------------------- */
+
+static int ex__raster_reserve(ex_raster *r, uint32_t tris)
+{
+    if (tris > r->tri_capacity) {
+        uint32_t cap = r->tri_capacity ? r->tri_capacity : 1024;
+        ex_raster_tri *p;
+        while (cap < tris) cap *= 2;
+        p = (ex_raster_tri *)realloc(r->tris, (size_t)cap * sizeof *p);
+        if (!p) return -1;
+        r->tris = p;
+        r->tri_capacity = cap;
+    }
+    return 0;
+}
+
+/* Snaps one clipped triangle to the screen and appends it when it covers any
+   pixel centre's bounding box. */
+static void ex__raster_emit(ex_raster *r, const ex_camera *c, const ex__clip_vertex *a,
+                            const ex__clip_vertex *b, const ex__clip_vertex *d, uint32_t id)
+{
+    const ex__clip_vertex *cv[3];
+    ex_raster_tri *t = &r->tris[r->tri_count];
+    float aspect = (float)r->width / (float)r->height;
+    int64_t area, lo_x, hi_x, lo_y, hi_y;
+    int k;
+    cv[0] = a; cv[1] = b; cv[2] = d;
+    for (k = 0; k < 3; k++) {
+        float z = cv[k]->p[2];
+        float sx = (cv[k]->p[0] / (z * c->tan_half * aspect) + 1.0f) * 0.5f * (float)r->width;
+        float sy = (1.0f - cv[k]->p[1] / (z * c->tan_half)) * 0.5f * (float)r->height;
+        t->x[k] = (int64_t)floor((double)sx * EX_RASTER_SUBPIXEL + 0.5);
+        t->y[k] = (int64_t)floor((double)sy * EX_RASTER_SUBPIXEL + 0.5);
+        t->inv_z[k] = 1.0f / z;
+        t->u[k] = cv[k]->u;
+        t->v[k] = cv[k]->v;
+    }
+    area = (t->x[1] - t->x[0]) * (t->y[2] - t->y[0]) - (t->y[1] - t->y[0]) * (t->x[2] - t->x[0]);
+    if (area == 0) return;
+    if (area < 0) { /* make the edge functions positive inside */
+        int64_t tx = t->x[1], ty = t->y[1];
+        float tz = t->inv_z[1], tu = t->u[1], tv = t->v[1];
+        t->x[1] = t->x[2]; t->y[1] = t->y[2]; t->inv_z[1] = t->inv_z[2]; t->u[1] = t->u[2]; t->v[1] = t->v[2];
+        t->x[2] = tx; t->y[2] = ty; t->inv_z[2] = tz; t->u[2] = tu; t->v[2] = tv;
+    }
+    lo_x = t->x[0]; hi_x = t->x[0]; lo_y = t->y[0]; hi_y = t->y[0];
+    for (k = 1; k < 3; k++) {
+        if (t->x[k] < lo_x) lo_x = t->x[k];
+        if (t->x[k] > hi_x) hi_x = t->x[k];
+        if (t->y[k] < lo_y) lo_y = t->y[k];
+        if (t->y[k] > hi_y) hi_y = t->y[k];
+    }
+    /* pixels whose centre (x + 1/2) lies in the box */
+    lo_x = (lo_x - EX_RASTER_SUBPIXEL / 2 + EX_RASTER_SUBPIXEL - 1) / EX_RASTER_SUBPIXEL;
+    lo_y = (lo_y - EX_RASTER_SUBPIXEL / 2 + EX_RASTER_SUBPIXEL - 1) / EX_RASTER_SUBPIXEL;
+    hi_x = (hi_x - EX_RASTER_SUBPIXEL / 2) >= 0 ? (hi_x - EX_RASTER_SUBPIXEL / 2) / EX_RASTER_SUBPIXEL : -1;
+    hi_y = (hi_y - EX_RASTER_SUBPIXEL / 2) >= 0 ? (hi_y - EX_RASTER_SUBPIXEL / 2) / EX_RASTER_SUBPIXEL : -1;
+    if (lo_x < 0) lo_x = 0;
+    if (lo_y < 0) lo_y = 0;
+    if (hi_x > r->width - 1) hi_x = r->width - 1;
+    if (hi_y > r->height - 1) hi_y = r->height - 1;
+    if (lo_x > hi_x || lo_y > hi_y) return;
+    t->x0 = (int)lo_x; t->x1 = (int)hi_x;
+    t->y0 = (int)lo_y; t->y1 = (int)hi_y;
+    t->id = id;
+    r->tri_count++;
+}
+
+static int ex__raster_setup(ex_raster *r, const ex_camera *c, const float *positions,
+                            const uint32_t *indices, uint32_t tri_count, uint32_t id_base)
+{
+    float aspect = (float)r->width / (float)r->height, ax = c->tan_half * aspect, ay = c->tan_half;
+    uint32_t i;
+    r->tri_count = 0;
+    for (i = 0; i < tri_count; i++) {
+        ex__clip_vertex poly[16];
+        int k, n;
+        if (ex__raster_reserve(r, r->tri_count + 6) != 0) return -1;
+        for (k = 0; k < 3; k++) {
+            const float *p = positions + 3 * (size_t)indices[3 * (size_t)i + (size_t)k];
+            float d[3];
+            d[0] = p[0] - c->eye[0];
+            d[1] = p[1] - c->eye[1];
+            d[2] = p[2] - c->eye[2];
+            poly[k].p[0] = ex__dot(d, c->right);
+            poly[k].p[1] = ex__dot(d, c->up);
+            poly[k].p[2] = ex__dot(d, c->forward);
+            poly[k].u = k == 1 ? 1.0f : 0.0f;
+            poly[k].v = k == 2 ? 1.0f : 0.0f;
+        }
+        n = ex__clip_polygon(poly, 3, r->near_plane, ax, ay);
+        for (k = 1; k + 1 < n; k++) ex__raster_emit(r, c, &poly[0], &poly[k], &poly[k + 1], id_base + i);
+    }
+    return 0;
+}
+
+/* Buckets triangle indices per tile, in triangle order (so results do not
+   depend on how tiles are scheduled). */
+static int ex__raster_bin(ex_raster *r)
+{
+    uint32_t tiles = (uint32_t)(r->tiles_x * r->tiles_y), i, total = 0;
+    memset(r->bin_start, 0, (tiles + 1) * sizeof(uint32_t));
+    for (i = 0; i < r->tri_count; i++) {
+        const ex_raster_tri *t = &r->tris[i];
+        int tx, ty;
+        for (ty = t->y0 / EX_RASTER_TILE; ty <= t->y1 / EX_RASTER_TILE; ty++)
+            for (tx = t->x0 / EX_RASTER_TILE; tx <= t->x1 / EX_RASTER_TILE; tx++) {
+                r->bin_start[ty * r->tiles_x + tx + 1]++;
+                total++;
+            }
+    }
+    for (i = 0; i < tiles; i++) r->bin_start[i + 1] += r->bin_start[i];
+    if (total > r->bin_capacity) {
+        uint32_t *p = (uint32_t *)realloc(r->bin_items, (size_t)total * sizeof(uint32_t));
+        if (!p) return -1;
+        r->bin_items = p;
+        r->bin_capacity = total;
+    }
+    {
+        uint32_t *fill = (uint32_t *)malloc((tiles + 1) * sizeof(uint32_t));
+        if (!fill) return -1;
+        memcpy(fill, r->bin_start, (tiles + 1) * sizeof(uint32_t));
+        for (i = 0; i < r->tri_count; i++) {
+            const ex_raster_tri *t = &r->tris[i];
+            int tx, ty;
+            for (ty = t->y0 / EX_RASTER_TILE; ty <= t->y1 / EX_RASTER_TILE; ty++)
+                for (tx = t->x0 / EX_RASTER_TILE; tx <= t->x1 / EX_RASTER_TILE; tx++)
+                    r->bin_items[fill[ty * r->tiles_x + tx]++] = i;
+        }
+        free(fill);
+    }
+    return 0;
+}
+
+/* ---- per tile --------------------------------------------------------- */
+
+/* Whether an edge's on-line points belong to the triangle to its left: true
+   for exactly one of an edge and its reverse, as if every pixel centre moved
+   by an infinitesimal (-1, -eta). */
+static int ex__edge_owns_ties(int64_t dx, int64_t dy) { return dy > 0 || (dy == 0 && dx < 0); }
+
+static void ex__raster_tri_in_tile(ex_raster *r, const ex_raster_tri *t, int tx0, int ty0, int tx1, int ty1)
+{
+    int64_t e_dx[3], e_dy[3], row[3];
+    int bias[3], k, x, y;
+    int x0 = t->x0 > tx0 ? t->x0 : tx0, x1 = t->x1 < tx1 ? t->x1 : tx1;
+    int y0 = t->y0 > ty0 ? t->y0 : ty0, y1 = t->y1 < ty1 ? t->y1 : ty1;
+    int64_t px0 = (int64_t)x0 * EX_RASTER_SUBPIXEL + EX_RASTER_SUBPIXEL / 2;
+    int64_t py0 = (int64_t)y0 * EX_RASTER_SUBPIXEL + EX_RASTER_SUBPIXEL / 2;
+    float inv_area;
+    if (x0 > x1 || y0 > y1) return;
+    /* edge k goes from vertex k+1 to k+2; it is zero on that edge and positive
+       at vertex k, so its value over the area is vertex k's weight */
+    for (k = 0; k < 3; k++) {
+        int a = (k + 1) % 3, b = (k + 2) % 3;
+        e_dx[k] = t->x[b] - t->x[a];
+        e_dy[k] = t->y[b] - t->y[a];
+        row[k] = e_dx[k] * (py0 - t->y[a]) - e_dy[k] * (px0 - t->x[a]);
+        bias[k] = ex__edge_owns_ties(e_dx[k], e_dy[k]);
+    }
+    /* twice the area: edge 0's value at vertex 0 */
+    inv_area = 1.0f / (float)(e_dx[0] * (t->y[0] - t->y[1]) - e_dy[0] * (t->x[0] - t->x[1]));
+    for (y = y0; y <= y1; y++) {
+        int64_t w0 = row[0], w1 = row[1], w2 = row[2];
+        for (x = x0; x <= x1; x++) {
+            if (w0 + bias[0] > 0 && w1 + bias[1] > 0 && w2 + bias[2] > 0) {
+                size_t p = (size_t)y * (size_t)r->width + (size_t)x;
+                if (r->counting) {
+                    r->coverage[p]++;
+                } else {
+                    float l0 = (float)w0 * inv_area, l1 = (float)w1 * inv_area, l2 = (float)w2 * inv_area;
+                    float iz = l0 * t->inv_z[0] + l1 * t->inv_z[1] + l2 * t->inv_z[2];
+                    float z = 1.0f / iz;
+                    if (z < r->depth[p]) {
+                        r->depth[p] = z;
+                        r->id[p] = t->id;
+                        r->bary[2 * p] = (l0 * t->inv_z[0] * t->u[0] + l1 * t->inv_z[1] * t->u[1] + l2 * t->inv_z[2] * t->u[2]) * z;
+                        r->bary[2 * p + 1] = (l0 * t->inv_z[0] * t->v[0] + l1 * t->inv_z[1] * t->v[1] + l2 * t->inv_z[2] * t->v[2]) * z;
+                    }
+                }
+            }
+            w0 -= e_dy[0] * EX_RASTER_SUBPIXEL;
+            w1 -= e_dy[1] * EX_RASTER_SUBPIXEL;
+            w2 -= e_dy[2] * EX_RASTER_SUBPIXEL;
+        }
+        row[0] += e_dx[0] * EX_RASTER_SUBPIXEL;
+        row[1] += e_dx[1] * EX_RASTER_SUBPIXEL;
+        row[2] += e_dx[2] * EX_RASTER_SUBPIXEL;
+    }
+}
+
+static void ex__raster_tile_job(void *ctx, uint32_t tile)
+{
+    ex_raster *r = (ex_raster *)ctx;
+    int tx = (int)tile % r->tiles_x, ty = (int)tile / r->tiles_x;
+    int x0 = tx * EX_RASTER_TILE, y0 = ty * EX_RASTER_TILE;
+    int x1 = x0 + EX_RASTER_TILE - 1, y1 = y0 + EX_RASTER_TILE - 1;
+    uint32_t i;
+    if (x1 >= r->width) x1 = r->width - 1;
+    if (y1 >= r->height) y1 = r->height - 1;
+    for (i = r->bin_start[tile]; i < r->bin_start[tile + 1]; i++)
+        ex__raster_tri_in_tile(r, &r->tris[r->bin_items[i]], x0, y0, x1, y1);
+}
+
+static int ex__raster_run(ex_raster *r, const ex_camera *c, const float *positions,
+                          const uint32_t *indices, uint32_t tri_count, uint32_t id_base)
+{
+    if (!r || !c || c->kind != EX_CAMERA_PERSPECTIVE || c->width != r->width || c->height != r->height)
+        return -1;
+    if (tri_count == 0) return 0;
+    if (!positions || !indices) return -1;
+    if (ex__raster_setup(r, c, positions, indices, tri_count, id_base) != 0 || ex__raster_bin(r) != 0)
+        return -1;
+    ex_pool_parallel_for(r->pool, ex__raster_tile_job, r, (uint32_t)(r->tiles_x * r->tiles_y));
+    return 0;
+}
+
+/* Draws triangles (xyz positions, 3 indices each) with depth test; pixel ids
+   become id_base + triangle index. Returns 0, or -1 on bad arguments (the
+   camera must be perspective and of the raster's size) or out of memory. */
+EX_FN int ex_raster_draw(ex_raster *r, const ex_camera *c, const float *positions,
+                         const uint32_t *indices, uint32_t tri_count, uint32_t id_base)
+{
+    if (r) r->counting = 0;
+    return ex__raster_run(r, c, positions, indices, tri_count, id_base);
+}
+
+/* Adds to r->coverage how many of the triangles cover each pixel centre, with
+   no depth test: the tool to check that a mesh covers each pixel once. */
+EX_FN int ex_raster_count(ex_raster *r, const ex_camera *c, const float *positions,
+                          const uint32_t *indices, uint32_t tri_count)
+{
+    int result;
+    if (!r) return -1;
+    r->counting = 1;
+    result = ex__raster_run(r, c, positions, indices, tri_count, 0);
+    r->counting = 0;
+    return result;
+}
+
+/* Gouraud resolve: pixels whose id lies in [id_base, id_base + tri_count) get
+   the barycentric blend of their triangle's vertex colours. */
+EX_FN void ex_raster_resolve_gouraud(const ex_raster *r, const uint32_t *indices, uint32_t tri_count,
+                                     uint32_t id_base, const float *vertex_rgb, float *rgb)
+{
+    size_t p, n = (size_t)r->width * (size_t)r->height;
+    for (p = 0; p < n; p++) {
+        uint32_t id = r->id[p], tri;
+        const uint32_t *v;
+        float u, w, o;
+        int k;
+        if (id == EX_RASTER_EMPTY || id < id_base || id - id_base >= tri_count) continue;
+        tri = id - id_base;
+        v = indices + 3 * (size_t)tri;
+        u = r->bary[2 * p];
+        w = r->bary[2 * p + 1];
+        o = 1.0f - u - w;
+        for (k = 0; k < 3; k++)
+            rgb[3 * p + (size_t)k] = o * vertex_rgb[3 * (size_t)v[0] + (size_t)k] +
+                                     u * vertex_rgb[3 * (size_t)v[1] + (size_t)k] +
+                                     w * vertex_rgb[3 * (size_t)v[2] + (size_t)k];
+    }
+}
+
+#endif /* EXAMPLES_COMMON_RASTER_H */

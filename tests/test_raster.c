@@ -1,0 +1,265 @@
+/* Unit tests of examples/common/camera.h and raster.h: exact coverage (each
+   pixel centre inside a mesh covered by exactly one triangle, also where
+   triangles are clipped by the near plane), depth order, perspective-correct
+   barycentrics, and parallel = serial. */
+#include "examples/common/raster.h"
+#include "tests/test.h"
+
+/* A w x h grid of quads in the plane y = height, from (x0,z0) to (x1,z1),
+   each quad split along a diagonal that alternates, with optional jitter of
+   interior vertices. */
+typedef struct grid { float *pos; uint32_t *idx; uint32_t tris, verts; } grid;
+
+static grid make_grid(int w, int h, float x0, float z0, float x1, float z1, float height, float jitter)
+{
+    grid g;
+    int i, j;
+    uint64_t state = 99;
+    g.verts = (uint32_t)((w + 1) * (h + 1));
+    g.tris = (uint32_t)(2 * w * h);
+    g.pos = (float *)malloc(sizeof(float) * 3 * g.verts);
+    g.idx = (uint32_t *)malloc(sizeof(uint32_t) * 3 * g.tris);
+    for (j = 0; j <= h; j++)
+        for (i = 0; i <= w; i++) {
+            float *p = g.pos + 3 * (j * (w + 1) + i);
+            float jx = 0, jz = 0;
+            if (i > 0 && i < w && j > 0 && j < h) {
+                state = state * 6364136223846793005ull + 1442695040888963407ull;
+                jx = jitter * ((float)((state >> 40) & 1023) / 1023.0f - 0.5f);
+                jz = jitter * ((float)((state >> 20) & 1023) / 1023.0f - 0.5f);
+            }
+            p[0] = x0 + (x1 - x0) * ((float)i + jx) / (float)w;
+            p[1] = height;
+            p[2] = z0 + (z1 - z0) * ((float)j + jz) / (float)h;
+        }
+    for (j = 0; j < h; j++)
+        for (i = 0; i < w; i++) {
+            uint32_t a = (uint32_t)(j * (w + 1) + i), b = a + 1, c = a + (uint32_t)(w + 1), d = c + 1;
+            uint32_t *t = g.idx + 6 * (j * w + i);
+            if ((i + j) & 1) { t[0] = a; t[1] = b; t[2] = d; t[3] = a; t[4] = d; t[5] = c; }
+            else { t[0] = a; t[1] = b; t[2] = c; t[3] = b; t[4] = d; t[5] = c; }
+        }
+    return g;
+}
+
+static void free_grid(grid *g) { free(g->pos); free(g->idx); }
+
+/* Counts pixels by coverage: how many have 0, 1 and more than 1. */
+static void coverage_histogram(const ex_raster *r, int *zero, int *one, int *more)
+{
+    int p;
+    *zero = *one = *more = 0;
+    for (p = 0; p < r->width * r->height; p++) {
+        if (r->coverage[p] == 0) (*zero)++;
+        else if (r->coverage[p] == 1) (*one)++;
+        else (*more)++;
+    }
+}
+
+/* A jittered grid filling the whole view: every pixel exactly once. */
+static void test_mesh_covers_every_pixel_once(void)
+{
+    float eye[3] = { 0, 5, 0 }, target[3] = { 0, 0, 0.001f }, up[3] = { 0, 0, 1 };
+    ex_camera c = ex_camera_look_at(eye, target, up, 70.0f, 97, 61);
+    ex_raster r;
+    grid g = make_grid(37, 23, -20, -20, 20, 20, 0, 0.8f);
+    int zero, one, more;
+    if (!CHECK(ex_raster_init(&r, 97, 61) == 0)) return;
+    ex_raster_clear(&r);
+    CHECK(ex_raster_count(&r, &c, g.pos, g.idx, g.tris) == 0);
+    coverage_histogram(&r, &zero, &one, &more);
+    CHECK_EQ_INT(zero, 0);
+    CHECK_EQ_INT(more, 0);
+    CHECK_EQ_INT(one, 97 * 61);
+    ex_raster_free(&r);
+    free_grid(&g);
+}
+
+/* Vertices exactly on pixel centres and pixel edges (an unjittered grid seen
+   straight on with one grid step per pixel): the tie rule decides alone. */
+static void test_ties_on_pixel_centres(void)
+{
+    /* a 64x64 image of a plane at distance 1 with vfov 90: the visible square
+       spans [-1,1], so 0.5/32 per half pixel */
+    float eye[3] = { 0, 1, 0 }, target[3] = { 0, 0, 0 }, up[3] = { 0, 0, -1 };
+    ex_camera c = ex_camera_look_at(eye, target, up, 90.0f, 64, 64);
+    ex_raster r;
+    grid g = make_grid(128, 128, -2, -2, 2, 2, 0, 0.0f); /* steps of 1/32: corners on centres and edges */
+    int zero, one, more;
+    if (!CHECK(ex_raster_init(&r, 64, 64) == 0)) return;
+    ex_raster_clear(&r);
+    CHECK(ex_raster_count(&r, &c, g.pos, g.idx, g.tris) == 0);
+    coverage_histogram(&r, &zero, &one, &more);
+    CHECK_EQ_INT(zero, 0);
+    CHECK_EQ_INT(more, 0);
+    ex_raster_free(&r);
+    free_grid(&g);
+}
+
+/* A floor that extends behind the camera: triangles cut by the near plane
+   and the guard band still cover each pixel below the horizon once. */
+static void test_clipped_floor_covers_once(void)
+{
+    float eye[3] = { 0.3f, 1.0f, 0.2f }, target[3] = { 0.5f, 0.6f, 3.0f }, up[3] = { 0, 1, 0 };
+    ex_camera c = ex_camera_look_at(eye, target, up, 75.0f, 80, 60);
+    ex_raster r;
+    grid g = make_grid(31, 29, -50, -50, 50, 50, 0, 0.7f);
+    int zero, one, more, x, y, mismatches = 0;
+    if (!CHECK(ex_raster_init(&r, 80, 60) == 0)) return;
+    ex_raster_clear(&r);
+    CHECK(ex_raster_count(&r, &c, g.pos, g.idx, g.tris) == 0);
+    coverage_histogram(&r, &zero, &one, &more);
+    CHECK_EQ_INT(more, 0);
+    CHECK(one > 0 && zero > 0);
+    /* covered exactly where the pixel ray goes down and meets the floor inside the grid */
+    for (y = 0; y < 60; y++)
+        for (x = 0; x < 80; x++) {
+            float d[3];
+            int hits_floor;
+            ex_camera_ray(&c, (float)x + 0.5f, (float)y + 0.5f, d);
+            hits_floor = d[1] < 0 && fabsf(eye[0] - eye[1] / d[1] * d[0]) < 49.0f &&
+                         fabsf(eye[2] - eye[1] / d[1] * d[2]) < 49.0f;
+            if (d[1] < 0 && !hits_floor) continue; /* near the grid border: jitter decides */
+            mismatches += hits_floor != (r.coverage[y * 80 + x] == 1);
+        }
+    CHECK_EQ_INT(mismatches, 0);
+    ex_raster_free(&r);
+    free_grid(&g);
+}
+
+/* Barycentrics reconstruct a point that projects back onto the pixel centre,
+   and the depth buffer holds its view depth. */
+static void test_perspective_correct_barycentrics(void)
+{
+    static const float pos[] = { -1, 0, 1, 3, 0.5f, 6, -2, 2, 9 };
+    static const uint32_t idx[] = { 0, 1, 2 };
+    float eye[3] = { 0, 0.5f, -1 }, target[3] = { 0, 0.7f, 5 }, up[3] = { 0, 1, 0 };
+    ex_camera c = ex_camera_look_at(eye, target, up, 60.0f, 50, 40);
+    ex_raster r;
+    int p, covered = 0;
+    float worst = 0, worst_depth = 0;
+    if (!CHECK(ex_raster_init(&r, 50, 40) == 0)) return;
+    ex_raster_clear(&r);
+    CHECK(ex_raster_draw(&r, &c, pos, idx, 1, 7) == 0);
+    for (p = 0; p < 50 * 40; p++) {
+        float u, v, q[3], px, py, depth;
+        int k;
+        if (r.id[p] == EX_RASTER_EMPTY) continue;
+        CHECK_EQ_INT(r.id[p], 7);
+        covered++;
+        u = r.bary[2 * p];
+        v = r.bary[2 * p + 1];
+        for (k = 0; k < 3; k++) q[k] = (1 - u - v) * pos[k] + u * pos[3 + k] + v * pos[6 + k];
+        CHECK(ex_camera_project(&c, q, &px, &py, &depth));
+        worst = fmaxf(worst, fmaxf(fabsf(px - (float)(p % 50) - 0.5f), fabsf(py - (float)(p / 50) - 0.5f)));
+        worst_depth = fmaxf(worst_depth, fabsf(depth - r.depth[p]) / depth);
+    }
+    CHECK(covered > 100);
+    /* vertices snap to 1/256 pixel, moving them up to 0.00195 pixels; float
+       interpolation adds a little: 0.003 pixels */
+    CHECK_MSG(worst < 3e-3f, "reprojection error %g pixels", worst);
+    CHECK_MSG(worst_depth < 1e-5f, "relative depth error %g", worst_depth);
+    ex_raster_free(&r);
+}
+
+static void test_depth_order(void)
+{
+    /* two full-screen quads; the nearer one wins whatever the draw order */
+    static const float near_quad[] = { -9, -9, 2, 9, -9, 2, 9, 9, 2, -9, 9, 2 };
+    static const float far_quad[] = { -9, -9, 4, 9, -9, 4, 9, 9, 4, -9, 9, 4 };
+    static const uint32_t idx[] = { 0, 1, 2, 0, 2, 3 };
+    float eye[3] = { 0, 0, 0 }, target[3] = { 0, 0, 1 }, up[3] = { 0, 1, 0 };
+    ex_camera c = ex_camera_look_at(eye, target, up, 60.0f, 32, 32);
+    ex_raster r;
+    int p, wrong = 0, pass;
+    if (!CHECK(ex_raster_init(&r, 32, 32) == 0)) return;
+    for (pass = 0; pass < 2; pass++) {
+        ex_raster_clear(&r);
+        if (pass == 0) {
+            ex_raster_draw(&r, &c, far_quad, idx, 2, 100);
+            ex_raster_draw(&r, &c, near_quad, idx, 2, 200);
+        } else {
+            ex_raster_draw(&r, &c, near_quad, idx, 2, 200);
+            ex_raster_draw(&r, &c, far_quad, idx, 2, 100);
+        }
+        for (p = 0; p < 32 * 32; p++) wrong += r.id[p] < 200 || r.id[p] > 201 || fabsf(r.depth[p] - 2) > 1e-5f;
+    }
+    CHECK_EQ_INT(wrong, 0);
+    ex_raster_free(&r);
+}
+
+static void test_parallel_equals_serial(void)
+{
+    float eye[3] = { 0.3f, 1.0f, 0.2f }, target[3] = { 0.5f, 0.6f, 3.0f }, up[3] = { 0, 1, 0 };
+    ex_camera c = ex_camera_look_at(eye, target, up, 75.0f, 200, 150);
+    ex_raster a, b;
+    grid g = make_grid(40, 40, -10, -10, 10, 10, 0, 0.9f);
+    ex_pool *pool = ex_pool_create(2);
+    size_t n = 200 * 150;
+    if (!CHECK(ex_raster_init(&a, 200, 150) == 0 && ex_raster_init(&b, 200, 150) == 0)) return;
+    ex_raster_clear(&a);
+    ex_raster_clear(&b);
+    b.pool = pool;
+    ex_raster_draw(&a, &c, g.pos, g.idx, g.tris, 0);
+    ex_raster_draw(&b, &c, g.pos, g.idx, g.tris, 0);
+    CHECK(memcmp(a.id, b.id, n * sizeof(uint32_t)) == 0);
+    CHECK(memcmp(a.bary, b.bary, 2 * n * sizeof(float)) == 0);
+    CHECK(memcmp(a.depth, b.depth, n * sizeof(float)) == 0);
+    ex_raster_free(&a);
+    ex_raster_free(&b);
+    ex_pool_destroy(pool);
+    free_grid(&g);
+}
+
+static void test_camera_round_trip(void)
+{
+    float eye[3] = { 1, 2, 3 }, target[3] = { -2, 0.5f, 7 }, up[3] = { 0, 1, 0 };
+    ex_camera cams[2];
+    int k, i;
+    cams[0] = ex_camera_look_at(eye, target, up, 50.0f, 120, 80);
+    cams[1] = ex_camera_fisheye(eye, target, up, 100, 100);
+    for (k = 0; k < 2; k++)
+        for (i = 0; i < 200; i++) {
+            float px = 5.0f + (float)((i * 37) % 90), py = 5.0f + (float)((i * 53) % 70), d[3], q[3], x, y, depth;
+            if (!ex_camera_ray(&cams[k], px, py, d)) continue;
+            q[0] = eye[0] + 3 * d[0]; q[1] = eye[1] + 3 * d[1]; q[2] = eye[2] + 3 * d[2];
+            CHECK(ex_camera_project(&cams[k], q, &x, &y, &depth));
+            CHECK_CLOSE(x, px, 0, 1e-3);
+            CHECK_CLOSE(y, py, 0, 1e-3);
+        }
+    /* a perspective camera does not project points behind it */
+    {
+        float behind[3] = { 4, 3.5f, -1 }, x, y, depth;
+        CHECK(!ex_camera_project(&cams[0], behind, &x, &y, &depth));
+    }
+}
+
+static void test_bad_arguments(void)
+{
+    ex_raster r;
+    float eye[3] = { 0, 0, 0 }, target[3] = { 0, 0, 1 }, up[3] = { 0, 1, 0 };
+    ex_camera c = ex_camera_look_at(eye, target, up, 60.0f, 16, 16), wrong = c;
+    CHECK(ex_raster_init(&r, 0, 10) != 0);
+    CHECK(ex_raster_init(&r, 16, 16) == 0);
+    wrong.width = 17;
+    CHECK(ex_raster_draw(&r, &wrong, NULL, NULL, 1, 0) != 0);
+    wrong = ex_camera_fisheye(eye, target, up, 16, 16);
+    CHECK(ex_raster_draw(&r, &wrong, NULL, NULL, 1, 0) != 0);
+    CHECK(ex_raster_draw(&r, &c, NULL, NULL, 1, 0) != 0);
+    CHECK(ex_raster_draw(&r, &c, NULL, NULL, 0, 0) == 0);
+    ex_raster_free(&r);
+}
+
+int main(int argc, char **argv)
+{
+    TEST_INIT(argc, argv);
+    RUN(test_mesh_covers_every_pixel_once);
+    RUN(test_ties_on_pixel_centres);
+    RUN(test_clipped_floor_covers_once);
+    RUN(test_perspective_correct_barycentrics);
+    RUN(test_depth_order);
+    RUN(test_parallel_equals_serial);
+    RUN(test_camera_round_trip);
+    RUN(test_bad_arguments);
+    return test_finish();
+}
