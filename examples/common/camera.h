@@ -13,13 +13,7 @@
 
 #include <math.h>
 
-#ifndef EX_FN
-#  if defined(__GNUC__) || defined(__clang__)
-#    define EX_FN static __attribute__((unused))
-#  else
-#    define EX_FN static
-#  endif
-#endif
+#include "base.h"
 
 #define EX_PI 3.14159265358979323846
 

@@ -19,13 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#ifndef EX_FN
-#  if defined(__GNUC__) || defined(__clang__)
-#    define EX_FN static __attribute__((unused))
-#  else
-#    define EX_FN static
-#  endif
-#endif
+#include "base.h"
 
 /* ---- PNG ---------------------------------------------------------------- */
 

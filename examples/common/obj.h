@@ -35,13 +35,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#ifndef EX_FN
-#  if defined(__GNUC__) || defined(__clang__)
-#    define EX_FN static __attribute__((unused))
-#  else
-#    define EX_FN static
-#  endif
-#endif
+#include "base.h"
 
 #define OBJ_NAME_MAX 64
 #define OBJ_MAX_FILE_BYTES ((size_t)1 << 30) /* refuse inputs over 1 GiB */
@@ -137,6 +131,20 @@ static const char *obj__token(const char *s, const char *end, char *tok, size_t 
     return s;
 }
 
+/* The next line of [*s, end) without its newline, advancing *s past it and
+   counting it in p->line; returns 0 at the end of the text. */
+static int obj__next_line(obj__parser *p, const char **s, const char *end, const char **line,
+                          const char **eol)
+{
+    if (*s >= end) return 0;
+    *line = *s;
+    *eol = (const char *)memchr(*s, '\n', (size_t)(end - *s));
+    if (!*eol) *eol = end;
+    *s = *eol + (*eol < end);
+    p->line++;
+    return 1;
+}
+
 static int obj__parse_float(const char *tok, float *out)
 {
     char *stop;
@@ -219,16 +227,12 @@ static void obj__default_material(obj_material *m, const char *name)
 /* Parses MTL text and appends its materials. */
 static int obj__parse_mtl(obj__parser *p, const char *text, size_t len, obj__array *materials)
 {
-    const char *s = text, *end = text + len;
+    const char *s = text, *end = text + len, *line, *eol;
     obj_material *cur = NULL;
     char tok[OBJ_NAME_MAX + 8];
     p->line = 0;
-    while (s < end) {
-        const char *eol = (const char *)memchr(s, '\n', (size_t)(end - s));
-        const char *rest;
-        if (!eol) eol = end;
-        p->line++;
-        rest = obj__token(s, eol, tok, sizeof tok);
+    while (obj__next_line(p, &s, end, &line, &eol)) {
+        const char *rest = obj__token(line, eol, tok, sizeof tok);
         if (!tok[0] || tok[0] == '#') {
             /* blank or comment */
         } else if (strcmp(tok, "newmtl") == 0) {
@@ -250,7 +254,6 @@ static int obj__parse_mtl(obj__parser *p, const char *text, size_t len, obj__arr
         } else if (strcmp(tok, "Ns") == 0) {
             if (obj__floats(p, rest, eol, &cur->ns, 1, "Ns")) return -1;
         } /* other statements (Ka, illum, map_*, ...) are ignored */
-        s = eol + (eol < end);
     }
     return 0;
 }
@@ -325,7 +328,7 @@ static int obj__parse_face(obj__parser *p, const char *s, const char *end, obj__
 static int obj__parse_obj(obj__parser *p, const char *text, size_t len, const char *base_dir,
                           obj__build *b)
 {
-    const char *s = text, *end = text + len;
+    const char *s = text, *end = text + len, *line, *eol;
     char tok[OBJ_NAME_MAX + 8];
     uint32_t material = 0, group = 0;
     obj_material def;
@@ -334,12 +337,8 @@ static int obj__parse_obj(obj__parser *p, const char *text, size_t len, const ch
     if (!obj__push(&b->materials, &def) || !obj__push(&b->groups, def_group))
         return obj__fail(p, "out of memory");
     p->line = 0;
-    while (s < end) {
-        const char *eol = (const char *)memchr(s, '\n', (size_t)(end - s));
-        const char *rest;
-        if (!eol) eol = end;
-        p->line++;
-        rest = obj__token(s, eol, tok, sizeof tok);
+    while (obj__next_line(p, &s, end, &line, &eol)) {
+        const char *rest = obj__token(line, eol, tok, sizeof tok);
         if (!tok[0] || tok[0] == '#') {
             /* blank or comment */
         } else if (strcmp(tok, "v") == 0) {
@@ -374,7 +373,6 @@ static int obj__parse_obj(obj__parser *p, const char *text, size_t len, const ch
         } else {
             return obj__fail(p, "unknown statement '%s'", tok);
         }
-        s = eol + (eol < end);
     }
     return 0;
 }

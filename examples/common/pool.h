@@ -27,13 +27,7 @@
 #include <stdlib.h>
 #include <unistd.h>
 
-#ifndef EX_FN
-#  if defined(__GNUC__) || defined(__clang__)
-#    define EX_FN static __attribute__((unused))
-#  else
-#    define EX_FN static
-#  endif
-#endif
+#include "base.h"
 
 #define EX_POOL_MAX_THREADS 64
 

@@ -27,11 +27,9 @@
 
 #include "obj.h"
 
-#if defined(__GNUC__) || defined(__clang__)
-#  define TR__FN static __attribute__((unused))
-#else
-#  define TR__FN static
-#endif
+#include "base.h"
+
+#define TR__FN EX_FN
 #define TR_MALLOC(size) malloc(size)
 #define TR_FREE(ptr) free(ptr)
 

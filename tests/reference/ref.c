@@ -583,38 +583,39 @@ static int ref_check_point(const float p[3], const float n[3])
            ref_finite(n[1]) && ref_finite(n[2]) && (n[0] != 0 || n[1] != 0 || n[2] != 0);
 }
 
-ref_estimate ref_irradiance_field(const ref_scene *s, const float p[3], const float n[3],
-                                  const float *tri_radiance, const float background[3],
-                                  uint64_t samples, uint64_t seed)
+static ref_estimate ref_field_run(const ref_scene *s, const float p[3], const float n[3],
+                                  const float *tri_radiance, const float *background,
+                                  ref_radiance_fn fn, void *user, uint64_t samples, uint64_t seed)
 {
     ref_field_ctx c;
     ref_estimate none;
     memset(&none, 0, sizeof none);
-    if (!s || !tri_radiance || !ref_check_point(p, n)) return none;
+    if (!s || (!tri_radiance && !fn) || !ref_check_point(p, n)) return none;
     memset(&c, 0, sizeof c);
     c.s = s;
     c.p = rv_load(p);
     c.n = rv_normalize(rv_load(n));
     c.tri_radiance = tri_radiance;
     c.background = background;
+    c.fn = fn;
+    c.user = user;
     return ref_estimate_run(s, ref_field_sample, &c, samples, seed);
+}
+
+ref_estimate ref_irradiance_field(const ref_scene *s, const float p[3], const float n[3],
+                                  const float *tri_radiance, const float background[3],
+                                  uint64_t samples, uint64_t seed)
+{
+    if (!tri_radiance) { ref_estimate none; memset(&none, 0, sizeof none); return none; }
+    return ref_field_run(s, p, n, tri_radiance, background, NULL, NULL, samples, seed);
 }
 
 ref_estimate ref_irradiance_callback(const ref_scene *s, const float p[3], const float n[3],
                                      ref_radiance_fn radiance, void *user, uint64_t samples,
                                      uint64_t seed)
 {
-    ref_field_ctx c;
-    ref_estimate none;
-    memset(&none, 0, sizeof none);
-    if (!s || !radiance || !ref_check_point(p, n)) return none;
-    memset(&c, 0, sizeof c);
-    c.s = s;
-    c.p = rv_load(p);
-    c.n = rv_normalize(rv_load(n));
-    c.fn = radiance;
-    c.user = user;
-    return ref_estimate_run(s, ref_field_sample, &c, samples, seed);
+    if (!radiance) { ref_estimate none; memset(&none, 0, sizeof none); return none; }
+    return ref_field_run(s, p, n, NULL, NULL, radiance, user, samples, seed);
 }
 
 /* (b) global-illumination irradiance: direct light by emitter sampling plus
