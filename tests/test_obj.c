@@ -163,6 +163,26 @@ static void test_mutations_never_crash(void)
     free(copy);
 }
 
+/* A unit cube's corner normal points along the diagonal; a bunny's normals
+   are unit length. */
+static void test_vertex_normals(void)
+{
+    const char *cube =
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+        "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 4 8 7 3\nf 1 5 8 4\nf 2 3 7 6\n";
+    obj_scene s;
+    char err[256];
+    float n[3 * 8];
+    if (!CHECK(obj_parse(cube, strlen(cube), NULL, NULL, &s, err, sizeof err) == 0)) return;
+    obj_vertex_normals(&s, n);
+    /* vertex 7 = (1,1,1): its three faces are outward +x, +y, +z; the fan
+       split gives two of them unequal weight, so only the octant is exact */
+    CHECK(n[3 * 6] > 0.3f && n[3 * 6 + 1] > 0.3f && n[3 * 6 + 2] > 0.3f);
+    CHECK(n[0] < -0.3f && n[1] < -0.3f && n[2] < -0.3f);
+    CHECK_CLOSE(n[3 * 6] * n[3 * 6] + n[3 * 6 + 1] * n[3 * 6 + 1] + n[3 * 6 + 2] * n[3 * 6 + 2], 1.0, 1e-6, 0);
+    obj_free(&s);
+}
+
 int main(int argc, char **argv)
 {
     TEST_INIT(argc, argv);
@@ -174,5 +194,6 @@ int main(int argc, char **argv)
     RUN(test_missing_file_and_null);
     RUN(test_empty_input_is_an_empty_scene);
     RUN(test_mutations_never_crash);
+    RUN(test_vertex_normals);
     return test_finish();
 }

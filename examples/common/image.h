@@ -190,4 +190,20 @@ EX_FN float ex_auto_exposure(const float *rgb, int w, int h, float percentile)
     return best > 0.0f ? 1.0f / best : 1.0f;
 }
 
+/* Copies count 8-bit RGB images of w x h into a sheet of columns x rows
+   cells (sheet: 3 * columns*w * rows*h bytes, cleared to dark grey first). */
+EX_FN void ex_contact_sheet(const unsigned char *const *images, int count, int w, int h, int columns,
+                            unsigned char *sheet)
+{
+    int rows = columns > 0 ? (count + columns - 1) / columns : 0, i, y;
+    size_t sheet_w = (size_t)columns * (size_t)w;
+    memset(sheet, 32, 3 * sheet_w * (size_t)rows * (size_t)h);
+    for (i = 0; i < count; i++) {
+        size_t x0 = (size_t)(i % columns) * (size_t)w, y0 = (size_t)(i / columns) * (size_t)h;
+        for (y = 0; y < h; y++)
+            memcpy(sheet + 3 * ((y0 + (size_t)y) * sheet_w + x0), images[i] + 3 * (size_t)y * (size_t)w,
+                   3 * (size_t)w);
+    }
+}
+
 #endif /* EXAMPLES_COMMON_IMAGE_H */

@@ -528,4 +528,32 @@ EX_FN int obj_bounds(const obj_scene *s, float lo[3], float hi[3])
     return 1;
 }
 
+/* Smooth vertex normals: the area-weighted sum of the normals of the
+   triangles around each vertex (by winding), normalised. normals holds 3
+   floats per vertex; a vertex used by no non-degenerate triangle gets 0,1,0. */
+EX_FN void obj_vertex_normals(const obj_scene *s, float *normals)
+{
+    uint32_t i, v;
+    memset(normals, 0, sizeof(float) * 3 * (size_t)s->vertex_count);
+    for (i = 0; i < s->tri_count; i++) {
+        const uint32_t *t = s->tri_indices + 3 * (size_t)i;
+        const float *a = s->positions + 3 * (size_t)t[0], *b = s->positions + 3 * (size_t)t[1],
+                    *c = s->positions + 3 * (size_t)t[2];
+        float e1[3], e2[3], n[3];
+        int k, j;
+        for (k = 0; k < 3; k++) { e1[k] = b[k] - a[k]; e2[k] = c[k] - a[k]; }
+        n[0] = e1[1] * e2[2] - e1[2] * e2[1];   /* |n| = twice the area: area weighting */
+        n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+        n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        for (j = 0; j < 3; j++)
+            for (k = 0; k < 3; k++) normals[3 * (size_t)t[j] + (size_t)k] += n[k];
+    }
+    for (v = 0; v < s->vertex_count; v++) {
+        float *n = normals + 3 * (size_t)v;
+        float l = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (l > 0.0f) { n[0] /= l; n[1] /= l; n[2] /= l; }
+        else { n[0] = 0.0f; n[1] = 1.0f; n[2] = 0.0f; }
+    }
+}
+
 #endif /* EXAMPLES_COMMON_OBJ_H */
