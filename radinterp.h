@@ -1,12 +1,13 @@
-/* radinterp.h - v0.1.0 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
+/* radinterp.h - v0.2.0 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
 
    RADINTERP.H: hierarchical radiosity, ranked discontinuities and quadratic irradiance interpolants evaluated per pixel.
 
-   STATUS
-
-   Skeleton: this version declares the error codes and the version macros
-   only. The technique itself is not implemented yet; nothing else is declared
-   until it is.
+   This version holds the offline foundation of Hardt's method: a
+   hierarchical radiosity solver over planar convex patches (chapter 4) and
+   an accurate irradiance-at-a-point query with exact visibility by
+   backprojection onto the sources (chapter 6), plus the robust constrained
+   Delaunay triangulation both need. The discontinuity mesh, the quadratic
+   interpolants and the per-pixel phase build on it.
 
    DO THIS
 
@@ -16,26 +17,130 @@
    in exactly one C or C++ file; include "radinterp.h" without the define
    everywhere else.
 
+   EXAMPLE
+
+       radinterp_material mat[2] = {
+           {{0.7f, 0.7f, 0.7f}, {0, 0, 0}},            // grey wall
+           {{0.8f, 0.8f, 0.8f}, {100.f, 100.f, 100.f}} // emitter: E = pi * Ke
+       };
+       radinterp_desc d = {0};
+       radinterp_solution *sol;
+       float rgb[3];
+       d.positions = xyz;  d.vertex_count = nv;
+       d.patches = quads;  d.patch_count = np;    // 4 indices per patch
+       d.patch_materials = mat_of_patch;
+       d.materials = mat;  d.material_count = 2;
+       if (radinterp_solve(&d, &sol) != RADINTERP_OK) ...;
+       radinterp_irradiance_at_point(sol, patch, point, NULL, rgb);  // W/m^2
+       radinterp_solution_destroy(sol);
+
+   SCENE AND UNITS
+
+   A patch is a planar convex polygon of 3 or 4 vertices given by indices
+   into `positions` (4 per patch; the 4th is RADINTERP_NO_VERTEX for a
+   triangle), counter-clockwise seen from the side that reflects and emits
+   light (its front; the back is invisible, as in a radiosity solver). Patches
+   must not interpenetrate. A material has a diffuse reflectance rho in [0, 1]
+   and an emission E: the radiosity the patch emits by itself, in W/m^2. A
+   diffuse emitter of radiance L emits E = pi * L, so a caller reading an MTL
+   file, whose Ke is emitted radiance, passes E = pi * Ke. Radiosity
+   B = E + rho * H where H is the irradiance (W/m^2); the outgoing radiance of
+   a patch is B / pi.
+
+   Validation: NULL arrays, zero counts, indices out of range, NaN or infinite
+   coordinates or material values, reflectance outside [0, 1], negative
+   emission, non-planar quadrilaterals (4th vertex farther than
+   planarity_tolerance times the patch diagonal from the plane of the other
+   three) and non-convex or self-intersecting quadrilaterals give
+   RADINTERP_ERROR_INVALID_ARGUMENT, with the patch named through the log
+   callback. Zero-area patches are skipped and counted (info.skipped_patches);
+   repeated or collinear corners reduce a quadrilateral to a triangle.
+
+   PARAMETERS (Hardt, appendix A; zero means the default)
+
+       eps                Gur::eps, transport error bound in W/m^2: a link is
+                          refined while B_src * (max - min of the point form
+                          factors over its receiver) exceeds it.   default 0.5
+       min_area           Gur::aeps, no node is split into children smaller
+                          than this (m^2).          default (diagonal / 200)^2
+       rel_error_cutoff   Basis::relErrorCutoff, convergence: every leaf's
+                          radiosity changes by less than this fraction in an
+                          iteration.                                default 1e-3
+       max_iterations     gather/push-pull iterations at most.       default 64
+       ff_samples         receiver points per link form factor.       default 4
+       visibility_rays    shadow rays per receiver point when shaft culling
+                          left blockers.                              default 8
+       push_off           Polygon::ffPushOff: sources are moved this far behind
+                          their plane in point queries (6.4). default 1e-5 * diag
+       nudge              nudgeAmt: a query point moves this far toward
+                          `toward` for visibility (6.3).       default 1e-6 * diag
+       min_bp_segment     Backprojection::minBPSegment: shorter projected blocker
+                          edges are not inserted.             default 1e-9 * diag
+       epsilon            _m_eps_f: coordinates closer than epsilon * diag are
+                          equal (facing and coplanarity tests). default 1e-6
+       planarity_tolerance  see validation.                      default 1e-3
+   `diag` is the diagonal of the scene's bounding box.
+
    CONFIGURATION MACROS
 
        RADINTERP_STATIC          make every function static (private to one file)
        RADINTERP_API             linkage of public functions (default: extern)
        RADINTERP_MALLOC, RADINTERP_FREE  replace malloc/free (define both or neither)
+       RADINTERP_BVH_BINS        SAH bins of the built-in BVH (default 16)
 
    FUNCTION REFERENCE
 
        const char *radinterp_result_string(radinterp_result r);   name of an error code
+       radinterp_result radinterp_solve(const radinterp_desc *desc, radinterp_solution **out);
+                                    hierarchical radiosity solution of the scene
+       void radinterp_solution_destroy(radinterp_solution *s);
+       void radinterp_solution_info(const radinterp_solution *s, radinterp_info *info);
+       radinterp_result radinterp_patch_radiosity(const radinterp_solution *s, uint32_t patch, float rgb[3]);
+                                    area-average radiosity B of a patch
+       uint32_t radinterp_leaf_count(const radinterp_solution *s);
+       radinterp_result radinterp_get_leaf(const radinterp_solution *s, uint32_t index, radinterp_leaf *leaf);
+                                    the quadtree leaves (elements) with their radiosity
+       radinterp_result radinterp_irradiance_at_point(const radinterp_solution *s, uint32_t patch,
+                                    const float p[3], const float toward[3], float rgb[3]);
+                                    Hardt's IrradianceAtPoint (chapter 6), W/m^2
+       radinterp_result radinterp_radiosity_at_point(const radinterp_solution *s, uint32_t patch,
+                                    const float p[3], const float toward[3], float rgb[3]);
+                                    E + rho * IrradianceAtPoint
+       double radinterp_form_factor_point_polygon(const float p[3], const float n[3],
+                                    const float *verts, uint32_t count);
+                                    differential area to polygon form factor (eq. 6.1)
+
+   THREADS
+
+   radinterp_solve runs its independent work (link form factors, gathers,
+   push-pull) through desc.parallel_for when given; results are bit-identical
+   for any thread count. A trace callback must then be thread-safe. Queries on
+   a finished solution are const and may run from many threads at once.
+
+   LIMITS
+
+   Patches are planar convex polygons of 3 or 4 vertices (curved surfaces must
+   be tessellated by the caller). Links are directional (one per receiver and
+   source) and there is no clustering, so the initial linking is quadratic in
+   the patch count: the method suits scenes of hundreds to a few thousand
+   patches, as the paper's.
 
    PAPER
 
        Stephen L. Hardt, High Fidelity Radiosity Rendering at Interactive Rates, M.Eng. thesis, MIT, 1996.
+       Hanrahan, Salzman, Aupperle, A Rapid Hierarchical Radiosity Algorithm, SIGGRAPH 1991.
+       Haines, Wallace, Shaft Culling for Efficient Ray-Traced Radiosity, 1991.
+       Shewchuk, Adaptive Precision Floating-Point Arithmetic and Fast Robust Geometric Predicates, 1997.
 */
 #ifndef RADINTERP_H
 #define RADINTERP_H
 
 #define RADINTERP_VERSION_MAJOR 0
-#define RADINTERP_VERSION_MINOR 1
+#define RADINTERP_VERSION_MINOR 2
 #define RADINTERP_VERSION_PATCH 0
+
+#include <stddef.h>
+#include <stdint.h>
 
 #ifndef RADINTERP_API
 #  ifdef RADINTERP_STATIC
@@ -60,7 +165,133 @@ typedef enum radinterp_result {
     RADINTERP_ERROR_IO                 /* a read or write callback failed */
 } radinterp_result;
 
+/* The 4th index of a triangular patch. */
+#define RADINTERP_NO_VERTEX 0xFFFFFFFFu
+
+typedef struct radinterp_allocator {
+    void *(*alloc)(size_t size, void *user);  /* NULL: RADINTERP_MALLOC */
+    void (*free)(void *ptr, void *user);      /* NULL: RADINTERP_FREE */
+    void *user;
+} radinterp_allocator;
+
+typedef void (*radinterp_job_fn)(void *ctx, uint32_t index);
+
+/* A ray hit as Embree reports it: u, v = barycentric weights of the
+   triangle's 2nd and 3rd vertex. */
+typedef struct radinterp_hit {
+    float t;
+    float u, v;
+    uint32_t triangle;
+} radinterp_hit;
+
+/* Replaces the built-in BVH for the solver's shadow rays: returns 1 when
+   anything lies along org + t * dir for 0 < t < tmax (dir has unit length). */
+typedef int (*radinterp_trace_fn)(void *user, const float org[3], const float dir[3], float tmax,
+                                  radinterp_hit *hit);
+
+typedef struct radinterp_material {
+    float reflectance[3];  /* diffuse reflectance rho, each in [0, 1] */
+    float emission[3];     /* emitted radiosity E in W/m^2 (= pi * emitted radiance, e.g. pi * Ke of an MTL file) */
+} radinterp_material;
+
+typedef struct radinterp_desc {
+    /* scene */
+    const float *positions;            /* xyz per vertex */
+    size_t position_stride;            /* bytes between vertices; 0 = 3 floats */
+    uint32_t vertex_count;
+    const uint32_t *patches;           /* 4 vertex indices per patch; 4th = RADINTERP_NO_VERTEX for a triangle */
+    uint32_t patch_count;
+    const uint32_t *patch_materials;   /* material of each patch; NULL = material 0 for all */
+    const radinterp_material *materials;
+    uint32_t material_count;
+
+    /* parameters, see PARAMETERS above; zero = default */
+    float eps;
+    float min_area;
+    float rel_error_cutoff;
+    uint32_t max_iterations;
+    uint32_t ff_samples;
+    uint32_t visibility_rays;
+    float push_off;
+    float nudge;
+    float min_bp_segment;
+    float epsilon;
+    float planarity_tolerance;
+    uint64_t seed;                     /* random choices (sample points); results depend only on it */
+
+    /* optional callbacks */
+    radinterp_trace_fn trace;          /* NULL: the built-in BVH over the patches */
+    void *trace_user;
+    radinterp_allocator allocator;
+    void (*parallel_for)(void *user, radinterp_job_fn job, void *ctx, uint32_t count);
+    void *parallel_user;
+    int (*progress)(void *user, uint64_t done, uint64_t total);  /* non-zero cancels */
+    void *progress_user;
+    void (*log)(void *user, const char *message);
+    void *log_user;
+} radinterp_desc;
+
+typedef struct radinterp_solution radinterp_solution;
+
+typedef struct radinterp_info {
+    uint32_t patch_count;        /* patches given */
+    uint32_t skipped_patches;    /* zero-area patches left out */
+    uint32_t node_count;         /* quadtree nodes, roots included */
+    uint32_t leaf_count;         /* quadtree leaves (elements) */
+    uint32_t link_count;         /* links (one per receiver node and source node) */
+    uint64_t blocker_entries;    /* sum of the links' blocker-list lengths */
+    uint32_t iterations;         /* gather/push-pull iterations run */
+    int converged;               /* the last iteration changed no leaf by more than rel_error_cutoff */
+    float max_relative_change;   /* of the last iteration */
+    uint64_t shadow_rays;        /* rays cast for link visibility */
+    size_t bytes;                /* memory held by the solution */
+} radinterp_info;
+
+/* One quadtree leaf: a convex polygon of 3 or 4 corners on its patch. */
+typedef struct radinterp_leaf {
+    uint32_t patch;
+    uint32_t depth;              /* 0 = the patch itself */
+    uint32_t vertex_count;       /* 3 or 4 */
+    float vertices[4][3];
+    float radiosity[3];          /* B of the element, W/m^2 */
+    float area;
+} radinterp_leaf;
+
 RADINTERP_API const char *radinterp_result_string(radinterp_result r);
+
+RADINTERP_API radinterp_result radinterp_solve(const radinterp_desc *desc, radinterp_solution **out);
+RADINTERP_API void radinterp_solution_destroy(radinterp_solution *s);
+RADINTERP_API void radinterp_solution_info(const radinterp_solution *s, radinterp_info *info);
+RADINTERP_API radinterp_result radinterp_patch_radiosity(const radinterp_solution *s, uint32_t patch,
+                                                         float rgb[3]);
+RADINTERP_API uint32_t radinterp_leaf_count(const radinterp_solution *s);
+RADINTERP_API radinterp_result radinterp_get_leaf(const radinterp_solution *s, uint32_t index,
+                                                  radinterp_leaf *leaf);
+
+/* Irradiance (W/m^2) at point p of a patch from every source linked to the
+   leaf containing p and to its ancestors (Hardt chapter 6): exact form
+   factors (eq. 6.1) with horizon clipping, and exact visibility by
+   backprojection of the blockers onto the source. p should lie on the
+   patch (it is used as given). toward (may be NULL) is a point on the patch
+   from which p is approached: p moves `nudge` toward it for visibility, so
+   a point on a blocker's edge takes the visibility of the side it is
+   approached from (6.3). */
+RADINTERP_API radinterp_result radinterp_irradiance_at_point(const radinterp_solution *s, uint32_t patch,
+                                                             const float p[3], const float toward[3],
+                                                             float rgb[3]);
+/* Radiosity B = E + rho * IrradianceAtPoint (W/m^2). */
+RADINTERP_API radinterp_result radinterp_radiosity_at_point(const radinterp_solution *s, uint32_t patch,
+                                                            const float p[3], const float toward[3],
+                                                            float rgb[3]);
+
+/* Form factor from a differential area at p with normal n (need not be unit
+   length) to a polygon of `count` xyz vertices (either winding), in double
+   precision: F = 1/(2 pi) sum_g n . Gamma_g (Hardt eq. 6.1). The polygon is
+   clipped to the hemisphere above p first, so it may cross p's tangent plane;
+   a polygon in that plane, or p on the polygon's plane, gives 0. Returns 0
+   for NULL pointers, count < 3, a zero n or non-finite input. */
+RADINTERP_API double radinterp_form_factor_point_polygon(const float p[3], const float n[3],
+                                                         const float *verts, uint32_t count);
 
 #ifdef __cplusplus
 }
@@ -71,15 +302,1750 @@ RADINTERP_API const char *radinterp_result_string(radinterp_result r);
 #if defined(RADINTERP_IMPLEMENTATION) && !defined(RADINTERP_IMPLEMENTATION_INCLUDED)
 #define RADINTERP_IMPLEMENTATION_INCLUDED
 
+#include <float.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
 #if defined(RADINTERP_MALLOC) != defined(RADINTERP_FREE)
 #  error "radinterp.h: define both RADINTERP_MALLOC and RADINTERP_FREE, or neither"
 #endif
 #ifndef RADINTERP_MALLOC
-#  include <stdlib.h>
 #  define RADINTERP_MALLOC(size) malloc(size)
 #  define RADINTERP_FREE(ptr) free(ptr)
 #endif
 
+/* The exact predicates below rely on IEEE double arithmetic rounded to
+   nearest with no extended precision (x86-64 SSE2, ARM64): do not compile
+   this file with -ffast-math. Fused multiply-adds are harmless. */
+
+#define RADINTERP__NONE 0xFFFFFFFFu
+
+/* ======================================================================
+   1. allocation
+   ---------------------------------------------------------------------- */
+/* In the declarations (public):
+
+   typedef struct radinterp_allocator {
+       void *(*alloc)(size_t size, void *user);  // NULL: RADINTERP_MALLOC
+       void (*free)(void *ptr, void *user);      // NULL: RADINTERP_FREE
+       void *user;
+   } radinterp_allocator;
+*/
+
+/* Both callbacks or neither: a lone alloc would leak through RADINTERP_FREE. */
+static int radinterp__allocator_valid(const radinterp_allocator *a)
+{
+    return (a->alloc == NULL) == (a->free == NULL);
+}
+
+static void *radinterp__alloc(const radinterp_allocator *a, size_t size)
+{
+    if (size == 0) size = 1;
+    return a->alloc ? a->alloc(size, a->user) : RADINTERP_MALLOC(size);
+}
+
+/* count * item bytes, or NULL when the product overflows. */
+static void *radinterp__alloc_array(const radinterp_allocator *a, size_t count, size_t item)
+{
+    if (item && count > SIZE_MAX / item) return NULL;
+    return radinterp__alloc(a, count * item);
+}
+
+static void radinterp__free(const radinterp_allocator *a, void *p)
+{
+    if (!p) return;
+    if (a->free) a->free(p, a->user);
+    else RADINTERP_FREE(p);
+}
+
+/* Zero means default: the documented default replaces a zero field. */
+#define radinterp__def(v, d) ((v) ? (v) : (d))
+
+/* ======================================================================
+   2. small math
+   ---------------------------------------------------------------------- */
+typedef struct radinterp__vec3 { float x, y, z; } radinterp__vec3;
+
+static radinterp__vec3 radinterp__v3(float x, float y, float z) { radinterp__vec3 r; r.x = x; r.y = y; r.z = z; return r; }
+static radinterp__vec3 radinterp__v3_load(const float *p) { return radinterp__v3(p[0], p[1], p[2]); }
+static radinterp__vec3 radinterp__add(radinterp__vec3 a, radinterp__vec3 b) { return radinterp__v3(a.x + b.x, a.y + b.y, a.z + b.z); }
+static radinterp__vec3 radinterp__sub(radinterp__vec3 a, radinterp__vec3 b) { return radinterp__v3(a.x - b.x, a.y - b.y, a.z - b.z); }
+static radinterp__vec3 radinterp__scale(radinterp__vec3 a, float s) { return radinterp__v3(a.x * s, a.y * s, a.z * s); }
+static float radinterp__dot(radinterp__vec3 a, radinterp__vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+static radinterp__vec3 radinterp__cross(radinterp__vec3 a, radinterp__vec3 b)
+{
+    return radinterp__v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+static float radinterp__length(radinterp__vec3 a) { return sqrtf(radinterp__dot(a, a)); }
+static radinterp__vec3 radinterp__normalize(radinterp__vec3 a)
+{
+    float l = radinterp__length(a);
+    return l > 0.0f ? radinterp__scale(a, 1.0f / l) : a;
+}
+static float radinterp__minf(float a, float b) { return a < b ? a : b; }
+static float radinterp__maxf(float a, float b) { return a > b ? a : b; }
+static int radinterp__finite3(const float *p) { return isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]); }
+
+/* An orthonormal basis (t, b, n) around unit n (Duff et al. 2017, branchless). */
+static void radinterp__basis(radinterp__vec3 n, radinterp__vec3 *t, radinterp__vec3 *b)
+{
+    float s = n.z >= 0.0f ? 1.0f : -1.0f;
+    float a = -1.0f / (s + n.z);
+    float c = n.x * n.y * a;
+    *t = radinterp__v3(1.0f + s * n.x * n.x * a, s * c, -s * n.x);
+    *b = radinterp__v3(c, s + n.y * n.y * a, -n.y);
+}
+
+/* ======================================================================
+   3. counter-based random numbers
+   A stream is a pure function of (seed, stream id): jobs seed their own
+   stream from (desc.seed, job index) and never share state, so results are
+   bit-identical for any thread count.
+   ---------------------------------------------------------------------- */
+typedef struct radinterp__rng { uint64_t state; } radinterp__rng;
+
+/* SplitMix64 finaliser (Steele, Lea, Flood 2014). */
+static uint64_t radinterp__mix64(uint64_t z)
+{
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+static radinterp__rng radinterp__rng_stream(uint64_t seed, uint64_t stream)
+{
+    radinterp__rng r;
+    r.state = radinterp__mix64(seed + 0x9E3779B97F4A7C15ull) ^ radinterp__mix64(stream * 0xD1B54A32D192ED03ull + 1u);
+    return r;
+}
+
+static uint32_t radinterp__rng_u32(radinterp__rng *r)
+{
+    r->state += 0x9E3779B97F4A7C15ull;
+    return (uint32_t)(radinterp__mix64(r->state) >> 32);
+}
+
+/* Uniform in [0, 1): 24 random bits, exactly representable. */
+static float radinterp__rng_float(radinterp__rng *r)
+{
+    return (float)(radinterp__rng_u32(r) >> 8) * (1.0f / 16777216.0f);
+}
+
+/* ======================================================================
+   4. BVH over triangles
+   Binned SAH build (RADINTERP_BVH_BINS bins over centroid bounds), nodes flattened
+   depth first (left child follows its parent), ordered traversal (nearer
+   child box first), watertight ray/triangle test (Woop, Benthin, Wald 2013),
+   any-hit for shadow rays. Triangles are copied into leaf order (9 floats and
+   the caller's triangle index) because the traversal reads them in that order;
+   nothing else of the caller's data is kept.
+   ---------------------------------------------------------------------- */
+#ifndef RADINTERP_BVH_BINS
+#define RADINTERP_BVH_BINS 16
+#endif
+#define RADINTERP__BVH_LEAF_MAX 4    /* triangles per leaf */
+#define RADINTERP__BVH_MAX_DEPTH 60  /* deeper nodes split at the median: bounds the traversal stack */
+#define RADINTERP__BVH_STACK (RADINTERP__BVH_MAX_DEPTH + 34) /* + 32 median halvings of a uint32_t count */
+
+typedef struct radinterp__bvh_node {
+    float lo[3];
+    uint32_t first;  /* leaf: first triangle; inner: index of the right child */
+    float hi[3];
+    uint32_t count;  /* leaf: triangle count (>0); inner: 0 */
+} radinterp__bvh_node;
+
+typedef struct radinterp__bvh_tri {
+    float v0[3], v1[3], v2[3];
+    uint32_t id;     /* the caller's triangle index */
+} radinterp__bvh_tri;
+
+typedef struct radinterp__bvh {
+    radinterp__bvh_node *nodes;
+    radinterp__bvh_tri *tris;
+    uint32_t node_count, tri_count;
+    uint32_t degenerate_count;  /* zero-area triangles skipped by the build */
+} radinterp__bvh;
+
+typedef struct radinterp__hit {
+    float t;         /* distance along the ray in units of |dir| */
+    float u, v;      /* barycentric weights of the triangle's 2nd and 3rd vertex */
+    uint32_t tri;    /* the caller's triangle index; RADINTERP__NO_HIT when missed */
+} radinterp__hit;
+#define RADINTERP__NO_HIT 0xFFFFFFFFu
+
+/* Caller's triangle soup: positions with a byte stride, 3 indices per triangle. */
+typedef struct radinterp__mesh_view {
+    const float *positions;
+    size_t stride;             /* bytes between vertices; 0 = 3 floats */
+    const uint32_t *indices;
+    uint32_t tri_count;
+} radinterp__mesh_view;
+
+static const float *radinterp__vertex(const radinterp__mesh_view *m, uint32_t v)
+{
+    size_t stride = m->stride ? m->stride : 3 * sizeof(float);
+    return (const float *)((const char *)m->positions + (size_t)v * stride);
+}
+
+typedef struct radinterp__bvh_ref {   /* build-time record of one triangle */
+    float lo[3], hi[3], c[3];
+    uint32_t tri;
+} radinterp__bvh_ref;
+
+typedef struct radinterp__bvh_bin { float lo[3], hi[3]; uint32_t count; } radinterp__bvh_bin;
+
+static void radinterp__box_empty(float lo[3], float hi[3])
+{
+    lo[0] = lo[1] = lo[2] = FLT_MAX;
+    hi[0] = hi[1] = hi[2] = -FLT_MAX;
+}
+static void radinterp__box_grow(float lo[3], float hi[3], const float plo[3], const float phi[3])
+{
+    int k;
+    for (k = 0; k < 3; k++) {
+        lo[k] = radinterp__minf(lo[k], plo[k]);
+        hi[k] = radinterp__maxf(hi[k], phi[k]);
+    }
+}
+static float radinterp__box_area(const float lo[3], const float hi[3])
+{
+    float dx = hi[0] - lo[0], dy = hi[1] - lo[1], dz = hi[2] - lo[2];
+    if (dx < 0.0f) return 0.0f;
+    return dx * dy + dy * dz + dz * dx;
+}
+
+/* Chooses the binned-SAH split of refs[0..n); returns 0 when no split beats a
+   leaf, else the axis (1-based in *axis) and the bin boundary in *split_bin. */
+static int radinterp__bvh_find_split(const radinterp__bvh_ref *refs, uint32_t n, const float clo[3],
+                              const float chi[3], int *axis, int *split_bin)
+{
+    float best = FLT_MAX, leaf_cost = (float)n;
+    float node_lo[3], node_hi[3];
+    int k, b, found = 0;
+    uint32_t i;
+    radinterp__box_empty(node_lo, node_hi);
+    for (i = 0; i < n; i++) radinterp__box_grow(node_lo, node_hi, refs[i].lo, refs[i].hi);
+    for (k = 0; k < 3; k++) {
+        radinterp__bvh_bin bins[RADINTERP_BVH_BINS];
+        float right_area[RADINTERP_BVH_BINS];
+        uint32_t right_count[RADINTERP_BVH_BINS];
+        float extent = chi[k] - clo[k], scale, lo[3], hi[3];
+        uint32_t count;
+        if (!(extent > 0.0f)) continue;
+        scale = (float)RADINTERP_BVH_BINS / extent;
+        for (b = 0; b < RADINTERP_BVH_BINS; b++) { radinterp__box_empty(bins[b].lo, bins[b].hi); bins[b].count = 0; }
+        for (i = 0; i < n; i++) {
+            int bin = (int)((refs[i].c[k] - clo[k]) * scale);
+            if (bin >= RADINTERP_BVH_BINS) bin = RADINTERP_BVH_BINS - 1;
+            if (bin < 0) bin = 0;
+            bins[bin].count++;
+            radinterp__box_grow(bins[bin].lo, bins[bin].hi, refs[i].lo, refs[i].hi);
+        }
+        /* sweep from the right, then from the left evaluating each boundary */
+        radinterp__box_empty(lo, hi);
+        count = 0;
+        for (b = RADINTERP_BVH_BINS - 1; b > 0; b--) {
+            radinterp__box_grow(lo, hi, bins[b].lo, bins[b].hi);
+            count += bins[b].count;
+            right_area[b] = radinterp__box_area(lo, hi);
+            right_count[b] = count;
+        }
+        radinterp__box_empty(lo, hi);
+        count = 0;
+        for (b = 1; b < RADINTERP_BVH_BINS; b++) {
+            float cost;
+            radinterp__box_grow(lo, hi, bins[b - 1].lo, bins[b - 1].hi);
+            count += bins[b - 1].count;
+            if (count == 0 || right_count[b] == 0) continue;
+            cost = 1.0f + (radinterp__box_area(lo, hi) * (float)count +
+                           right_area[b] * (float)right_count[b]) / radinterp__box_area(node_lo, node_hi);
+            if (cost < best) { best = cost; *axis = k; *split_bin = b; found = 1; }
+        }
+    }
+    return found && (best < leaf_cost || n > RADINTERP__BVH_LEAF_MAX);
+}
+
+/* Partitions refs[0..n) so that the first part lies left of the chosen
+   boundary. Returns the size of the left part (always in 1..n-1). */
+static uint32_t radinterp__bvh_partition(radinterp__bvh_ref *refs, uint32_t n, const float clo[3],
+                                  const float chi[3], int depth)
+{
+    int axis = 0, split_bin = 0;
+    uint32_t i, j;
+    if (depth < RADINTERP__BVH_MAX_DEPTH && radinterp__bvh_find_split(refs, n, clo, chi, &axis, &split_bin)) {
+        float scale = (float)RADINTERP_BVH_BINS / (chi[axis] - clo[axis]);
+        for (i = 0, j = n; i < j;) {
+            int bin = (int)((refs[i].c[axis] - clo[axis]) * scale);
+            if (bin >= RADINTERP_BVH_BINS) bin = RADINTERP_BVH_BINS - 1;
+            if (bin < split_bin) i++;
+            else { radinterp__bvh_ref t = refs[i]; refs[i] = refs[--j]; refs[j] = t; }
+        }
+        if (i > 0 && i < n) return i;
+    }
+    return n / 2; /* no useful SAH split (coincident centroids, depth cap): halve by count */
+}
+
+typedef struct radinterp__bvh_task {
+    uint32_t parent, begin, end, depth;
+    int is_right;    /* the parent learns a right child's index when it is popped */
+} radinterp__bvh_task;
+
+/* Copies the triangles into leaf order. */
+static void radinterp__bvh_store_tris(radinterp__bvh *bvh, const radinterp__mesh_view *m, const radinterp__bvh_ref *refs)
+{
+    uint32_t i;
+    for (i = 0; i < bvh->tri_count; i++) {
+        radinterp__bvh_tri *t = &bvh->tris[i];
+        uint32_t tri = refs[i].tri;
+        memcpy(t->v0, radinterp__vertex(m, m->indices[3 * tri + 0]), sizeof t->v0);
+        memcpy(t->v1, radinterp__vertex(m, m->indices[3 * tri + 1]), sizeof t->v1);
+        memcpy(t->v2, radinterp__vertex(m, m->indices[3 * tri + 2]), sizeof t->v2);
+        t->id = tri;
+    }
+}
+
+/* Bounds of every non-degenerate triangle; counts the degenerate ones. */
+static uint32_t radinterp__bvh_collect(radinterp__bvh *bvh, const radinterp__mesh_view *m, radinterp__bvh_ref *refs)
+{
+    uint32_t i, n = 0;
+    for (i = 0; i < m->tri_count; i++) {
+        const float *p0 = radinterp__vertex(m, m->indices[3 * i + 0]);
+        const float *p1 = radinterp__vertex(m, m->indices[3 * i + 1]);
+        const float *p2 = radinterp__vertex(m, m->indices[3 * i + 2]);
+        radinterp__vec3 c = radinterp__cross(radinterp__sub(radinterp__v3_load(p1), radinterp__v3_load(p0)),
+                               radinterp__sub(radinterp__v3_load(p2), radinterp__v3_load(p0)));
+        int k;
+        if (radinterp__dot(c, c) == 0.0f) { bvh->degenerate_count++; continue; }
+        for (k = 0; k < 3; k++) {
+            refs[n].lo[k] = radinterp__minf(p0[k], radinterp__minf(p1[k], p2[k]));
+            refs[n].hi[k] = radinterp__maxf(p0[k], radinterp__maxf(p1[k], p2[k]));
+            refs[n].c[k] = 0.5f * (refs[n].lo[k] + refs[n].hi[k]);
+        }
+        refs[n].tri = i;
+        n++;
+    }
+    return n;
+}
+
+/* Builds the BVH of m's non-degenerate triangles. Indices must be in range and
+   coordinates finite (validate first). Returns 0, or -1 when out of memory. */
+static int radinterp__bvh_build(radinterp__bvh *bvh, const radinterp__mesh_view *m, const radinterp_allocator *a)
+{
+    radinterp__bvh_task stack[RADINTERP__BVH_STACK];
+    radinterp__bvh_ref *refs;
+    uint32_t i, n, top = 0;
+    memset(bvh, 0, sizeof *bvh);
+    refs = (radinterp__bvh_ref *)radinterp__alloc_array(a, m->tri_count, sizeof *refs);
+    if (!refs) return -1;
+    n = radinterp__bvh_collect(bvh, m, refs);
+    bvh->nodes = (radinterp__bvh_node *)radinterp__alloc_array(a, n ? 2 * (size_t)n - 1 : 1, sizeof(radinterp__bvh_node));
+    bvh->tris = (radinterp__bvh_tri *)radinterp__alloc_array(a, n, sizeof(radinterp__bvh_tri));
+    if (!bvh->nodes || !bvh->tris) {
+        radinterp__free(a, refs);
+        radinterp__free(a, bvh->nodes);
+        radinterp__free(a, bvh->tris);
+        memset(bvh, 0, sizeof *bvh);
+        return -1;
+    }
+    bvh->tri_count = n;
+    if (n == 0) { /* an empty root leaf: every ray misses */
+        radinterp__box_empty(bvh->nodes[0].lo, bvh->nodes[0].hi);
+        bvh->nodes[0].first = bvh->nodes[0].count = 0;
+        bvh->node_count = 1;
+    } else {
+        stack[top].parent = 0; stack[top].begin = 0; stack[top].end = n;
+        stack[top].depth = 0; stack[top].is_right = 0; top++;
+    }
+    while (top) {
+        radinterp__bvh_task t = stack[--top];
+        uint32_t index = bvh->node_count++, count = t.end - t.begin;
+        radinterp__bvh_node *node = &bvh->nodes[index];
+        float clo[3], chi[3];
+        if (t.is_right) bvh->nodes[t.parent].first = index;
+        radinterp__box_empty(node->lo, node->hi);
+        radinterp__box_empty(clo, chi);
+        for (i = t.begin; i < t.end; i++) {
+            radinterp__box_grow(node->lo, node->hi, refs[i].lo, refs[i].hi);
+            radinterp__box_grow(clo, chi, refs[i].c, refs[i].c);
+        }
+        if (count <= RADINTERP__BVH_LEAF_MAX) {
+            node->first = t.begin;
+            node->count = count;
+        } else {
+            uint32_t mid = t.begin + radinterp__bvh_partition(refs + t.begin, count, clo, chi, (int)t.depth);
+            node->count = 0;
+            /* right pushed first so the left child is popped next: left = index + 1 */
+            stack[top].parent = index; stack[top].begin = mid; stack[top].end = t.end;
+            stack[top].depth = t.depth + 1; stack[top].is_right = 1; top++;
+            stack[top].parent = index; stack[top].begin = t.begin; stack[top].end = mid;
+            stack[top].depth = t.depth + 1; stack[top].is_right = 0; top++;
+        }
+    }
+    radinterp__bvh_store_tris(bvh, m, refs);
+    radinterp__free(a, refs);
+    return 0;
+}
+
+static void radinterp__bvh_free(radinterp__bvh *bvh, const radinterp_allocator *a)
+{
+    radinterp__free(a, bvh->nodes);
+    radinterp__free(a, bvh->tris);
+    memset(bvh, 0, sizeof *bvh);
+}
+
+/* Per-ray constants of the watertight test and of the slab test. */
+typedef struct radinterp__ray {
+    float org[3], dir[3], inv[3];
+    int kx, ky, kz;          /* dir[kz] has the largest magnitude */
+    float sx, sy, sz;        /* shear that maps dir to +z */
+} radinterp__ray;
+
+static void radinterp__ray_setup(radinterp__ray *r, const float org[3], const float dir[3])
+{
+    int k;
+    for (k = 0; k < 3; k++) {
+        /* a zero component would give 0 * inf = NaN in the slab test */
+        float d = dir[k];
+        if (fabsf(d) < 1e-30f) d = d < 0.0f ? -1e-30f : 1e-30f;
+        r->org[k] = org[k];
+        r->dir[k] = dir[k];
+        r->inv[k] = 1.0f / d;
+    }
+    r->kz = fabsf(dir[0]) > fabsf(dir[1]) ? (fabsf(dir[0]) > fabsf(dir[2]) ? 0 : 2)
+                                          : (fabsf(dir[1]) > fabsf(dir[2]) ? 1 : 2);
+    r->kx = (r->kz + 1) % 3;
+    r->ky = (r->kx + 1) % 3;
+    if (dir[r->kz] < 0.0f) { int t = r->kx; r->kx = r->ky; r->ky = t; } /* keep winding */
+    r->sx = dir[r->kx] / dir[r->kz];
+    r->sy = dir[r->ky] / dir[r->kz];
+    r->sz = 1.0f / dir[r->kz];
+}
+
+/* Entry distance of the ray into the box, or FLT_MAX when it misses within
+   [tmin, tmax]. The tmax bound is widened by 2 ulp-ish factors so that a hit
+   exactly on a box face is not lost to rounding (Ize 2013). */
+static float radinterp__ray_box(const radinterp__ray *r, const float lo[3], const float hi[3], float tmin, float tmax)
+{
+    int k;
+    for (k = 0; k < 3; k++) {
+        float t0 = (lo[k] - r->org[k]) * r->inv[k];
+        float t1 = (hi[k] - r->org[k]) * r->inv[k];
+        if (t0 > t1) { float t = t0; t0 = t1; t1 = t; }
+        tmin = radinterp__maxf(tmin, t0);
+        tmax = radinterp__minf(tmax, t1 * 1.00000024f);
+    }
+    return tmin <= tmax ? tmin : FLT_MAX;
+}
+
+/* Watertight ray/triangle test (Woop, Benthin, Wald 2013): edge functions in
+   a sheared space where the ray is the +z axis; edges shared by two triangles
+   are hit by exactly one of them. Double precision only when an edge function
+   is exactly zero. Updates *hit when closer than hit->t. */
+static int radinterp__ray_tri(const radinterp__ray *r, const radinterp__bvh_tri *tri, float tmin, radinterp__hit *hit)
+{
+    float ax = tri->v0[r->kx] - r->org[r->kx], ay = tri->v0[r->ky] - r->org[r->ky], az = tri->v0[r->kz] - r->org[r->kz];
+    float bx = tri->v1[r->kx] - r->org[r->kx], by = tri->v1[r->ky] - r->org[r->ky], bz = tri->v1[r->kz] - r->org[r->kz];
+    float cx = tri->v2[r->kx] - r->org[r->kx], cy = tri->v2[r->ky] - r->org[r->ky], cz = tri->v2[r->kz] - r->org[r->kz];
+    float u, v, w, det, t;
+    ax -= r->sx * az; ay -= r->sy * az;
+    bx -= r->sx * bz; by -= r->sy * bz;
+    cx -= r->sx * cz; cy -= r->sy * cz;
+    u = cx * by - cy * bx;
+    v = ax * cy - ay * cx;
+    w = bx * ay - by * ax;
+    if (u == 0.0f || v == 0.0f || w == 0.0f) {
+        u = (float)((double)cx * by - (double)cy * bx);
+        v = (float)((double)ax * cy - (double)ay * cx);
+        w = (float)((double)bx * ay - (double)by * ax);
+    }
+    if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f)) return 0;
+    det = u + v + w;
+    if (det == 0.0f) return 0;
+    t = (u * az + v * bz + w * cz) * r->sz / det;
+    if (!(t > tmin && t < hit->t)) return 0;
+    hit->t = t;
+    hit->u = v / det;
+    hit->v = w / det;
+    hit->tri = tri->id;
+    return 1;
+}
+
+/* Closest hit in (tmin, tmax). Returns 1 and fills *hit, else hit->tri = RADINTERP__NO_HIT. */
+static int radinterp__bvh_intersect(const radinterp__bvh *bvh, const float org[3], const float dir[3],
+                             float tmin, float tmax, radinterp__hit *hit)
+{
+    uint32_t stack[RADINTERP__BVH_STACK], top = 0, index = 0;
+    radinterp__ray r;
+    radinterp__ray_setup(&r, org, dir);
+    hit->t = tmax;
+    hit->u = hit->v = 0.0f;
+    hit->tri = RADINTERP__NO_HIT;
+    if (radinterp__ray_box(&r, bvh->nodes[0].lo, bvh->nodes[0].hi, tmin, tmax) == FLT_MAX) return 0;
+    for (;;) {
+        const radinterp__bvh_node *node = &bvh->nodes[index];
+        if (node->count) {
+            uint32_t i;
+            for (i = node->first; i < node->first + node->count; i++)
+                radinterp__ray_tri(&r, &bvh->tris[i], tmin, hit);
+        } else {
+            uint32_t left = index + 1, right = node->first;
+            float tl = radinterp__ray_box(&r, bvh->nodes[left].lo, bvh->nodes[left].hi, tmin, hit->t);
+            float tr = radinterp__ray_box(&r, bvh->nodes[right].lo, bvh->nodes[right].hi, tmin, hit->t);
+            if (tl != FLT_MAX && tr != FLT_MAX) {
+                if (tr < tl) { uint32_t t = left; left = right; right = t; }
+                stack[top++] = right; /* the farther child waits */
+                index = left;
+                continue;
+            }
+            if (tl != FLT_MAX) { index = left; continue; }
+            if (tr != FLT_MAX) { index = right; continue; }
+        }
+        if (!top) break;
+        index = stack[--top];
+    }
+    return hit->tri != RADINTERP__NO_HIT;
+}
+
+/* Any hit in (tmin, tmax): for shadow rays. */
+static int radinterp__bvh_occluded(const radinterp__bvh *bvh, const float org[3], const float dir[3],
+                            float tmin, float tmax)
+{
+    uint32_t stack[RADINTERP__BVH_STACK], top = 0, index = 0;
+    radinterp__ray r;
+    radinterp__hit hit;
+    radinterp__ray_setup(&r, org, dir);
+    hit.t = tmax;
+    hit.tri = RADINTERP__NO_HIT;
+    for (;;) {
+        const radinterp__bvh_node *node = &bvh->nodes[index];
+        if (radinterp__ray_box(&r, node->lo, node->hi, tmin, tmax) != FLT_MAX) {
+            if (node->count) {
+                uint32_t i;
+                for (i = node->first; i < node->first + node->count; i++)
+                    if (radinterp__ray_tri(&r, &bvh->tris[i], tmin, &hit)) return 1;
+            } else {
+                stack[top++] = node->first;
+                index = index + 1;
+                continue;
+            }
+        }
+        if (!top) return 0;
+        index = stack[--top];
+    }
+}
+
+/* ======================================================================
+   7. jobs: the caller's parallel_for, or a serial loop
+   ---------------------------------------------------------------------- */
+/* In the declarations (public):
+
+   typedef void (*radinterp_job_fn)(void *ctx, uint32_t index);
+   // in the desc:
+   void (*parallel_for)(void *user, radinterp_job_fn job, void *ctx, uint32_t count);
+   void *parallel_user;
+   int (*progress)(void *user, uint64_t done, uint64_t total);   // non-zero cancels
+   void *progress_user;
+
+   Long builds run their jobs in batches and call progress between batches,
+   from the calling thread, so a callback never runs concurrently with itself. */
+static void radinterp__run_jobs(void (*parallel_for)(void *, radinterp_job_fn, void *, uint32_t), void *user,
+                         radinterp_job_fn job, void *ctx, uint32_t count)
+{
+    uint32_t i;
+    if (count == 0) return;
+    if (parallel_for) { parallel_for(user, job, ctx, count); return; }
+    for (i = 0; i < count; i++) job(ctx, i);
+}
+
+/* ======================================================================
+   8. exact geometric predicates (the technique of Shewchuk 1997)
+   orient2d and incircle are first evaluated in double precision with a
+   forward error bound; only when the sign is not certain are they evaluated
+   exactly with expansion arithmetic: a value is kept as a sum of doubles
+   (an expansion) of increasing magnitude whose components do not overlap, so
+   sums and products lose nothing. Degenerate inputs (collinear, cocircular)
+   therefore get exactly 0, which the triangulation relies on.
+   ---------------------------------------------------------------------- */
+#define RADINTERP__ROUND 1.1102230246251565e-16 /* 2^-53: relative rounding error of a double */
+
+/* x + y = a + b exactly, x = fl(a + b) (Knuth's two-sum). */
+static void radinterp__two_sum(double a, double b, double *x, double *y)
+{
+    double s = a + b, bv = s - a, av = s - bv;
+    *x = s;
+    *y = (a - av) + (b - bv);
+}
+
+/* Same for |a| >= |b| (Dekker), three operations. */
+static void radinterp__fast_two_sum(double a, double b, double *x, double *y)
+{
+    double s = a + b;
+    *x = s;
+    *y = b - (s - a);
+}
+
+/* x + y = a * b exactly: the fused multiply-add returns the rounding error
+   of the product exactly. */
+static void radinterp__two_product(double a, double b, double *x, double *y)
+{
+    double p = a * b;
+    *x = p;
+    *y = fma(a, b, -p);
+}
+
+/* a - b as an expansion of 1 or 2 components; returns the length. */
+static int radinterp__diff_expansion(double a, double b, double *h)
+{
+    double x, y;
+    radinterp__two_sum(a, -b, &x, &y);
+    if (y != 0.0) { h[0] = y; h[1] = x; return 2; }
+    h[0] = x;
+    return 1;
+}
+
+/* h = e + f for non-overlapping expansions (merge by magnitude, then one
+   carry sweep). Zero components are dropped; a zero sum is {0}. h must not
+   alias e or f. */
+static int radinterp__expansion_sum(int elen, const double *e, int flen, const double *f, double *h)
+{
+    double q, hh, g;
+    int i = 0, j = 0, k = 0, first = 1;
+    q = 0.0;
+    while (i < elen || j < flen) {
+        if (j >= flen || (i < elen && fabs(e[i]) < fabs(f[j]))) g = e[i++];
+        else g = f[j++];
+        if (first) { q = g; first = 0; continue; }
+        radinterp__two_sum(q, g, &q, &hh);
+        if (hh != 0.0) h[k++] = hh;
+    }
+    if (q != 0.0 || k == 0) h[k++] = q;
+    return k;
+}
+
+/* h = e * b (Shewchuk's scale-expansion), zero components dropped. */
+static int radinterp__scale_expansion(int elen, const double *e, double b, double *h)
+{
+    double q, hh, prod, err, sum;
+    int i, k = 0;
+    radinterp__two_product(e[0], b, &q, &hh);
+    if (hh != 0.0) h[k++] = hh;
+    for (i = 1; i < elen; i++) {
+        radinterp__two_product(e[i], b, &prod, &err);
+        radinterp__two_sum(q, err, &sum, &hh);
+        if (hh != 0.0) h[k++] = hh;
+        radinterp__fast_two_sum(prod, sum, &q, &hh);
+        if (hh != 0.0) h[k++] = hh;
+    }
+    if (q != 0.0 || k == 0) h[k++] = q;
+    return k;
+}
+
+/* h = e * f for expansions of at most 16 components each (at most 512
+   components out): the sum of e scaled by each component of f. */
+static int radinterp__expansion_product(int elen, const double *e, int flen, const double *f, double *h)
+{
+    double part[32], acc[2][512];
+    int j, len = 1, cur = 0;
+    acc[0][0] = 0.0;
+    for (j = 0; j < flen; j++) {
+        int plen = radinterp__scale_expansion(elen, e, f[j], part);
+        len = radinterp__expansion_sum(len, acc[cur], plen, part, acc[1 - cur]);
+        cur = 1 - cur;
+    }
+    memcpy(h, acc[cur], (size_t)len * sizeof(double));
+    return len;
+}
+
+/* The sign of an expansion is the sign of its largest component. */
+static double radinterp__expansion_sign(int len, const double *e)
+{
+    double top = e[len - 1];
+    return top > 0.0 ? 1.0 : (top < 0.0 ? -1.0 : 0.0);
+}
+
+static double radinterp__orient2d_exact(const double *a, const double *b, const double *c)
+{
+    double acx[2], acy[2], bcx[2], bcy[2], left[8], right[8], det[16];
+    int nacx = radinterp__diff_expansion(a[0], c[0], acx);
+    int nacy = radinterp__diff_expansion(a[1], c[1], acy);
+    int nbcx = radinterp__diff_expansion(b[0], c[0], bcx);
+    int nbcy = radinterp__diff_expansion(b[1], c[1], bcy);
+    int nl = radinterp__expansion_product(nacx, acx, nbcy, bcy, left);
+    int nr = radinterp__expansion_product(nacy, acy, nbcx, bcx, right), i, n;
+    for (i = 0; i < nr; i++) right[i] = -right[i];
+    n = radinterp__expansion_sum(nl, left, nr, right, det);
+    return radinterp__expansion_sign(n, det);
+}
+
+/* Positive when a, b, c turn counter-clockwise, negative when clockwise,
+   exactly zero when collinear. Only the sign is meaningful. */
+static double radinterp__orient2d(const double *a, const double *b, const double *c)
+{
+    double left = (a[0] - c[0]) * (b[1] - c[1]);
+    double right = (a[1] - c[1]) * (b[0] - c[0]);
+    double det = left - right, sum;
+    if (left > 0.0) {
+        if (right <= 0.0) return det;
+        sum = left + right;
+    } else if (left < 0.0) {
+        if (right >= 0.0) return det;
+        sum = -left - right;
+    } else {
+        return det;
+    }
+    if (fabs(det) >= (3.0 + 16.0 * RADINTERP__ROUND) * RADINTERP__ROUND * sum) return det;
+    return radinterp__orient2d_exact(a, b, c);
+}
+
+/* x^2 + y^2 for coordinate differences given as expansions. */
+static int radinterp__lift(int nx, const double *x, int ny, const double *y, double *h)
+{
+    double xx[8], yy[8];
+    int nxx = radinterp__expansion_product(nx, x, nx, x, xx);
+    int nyy = radinterp__expansion_product(ny, y, ny, y, yy);
+    return radinterp__expansion_sum(nxx, xx, nyy, yy, h);
+}
+
+/* u_x * v_y - u_y * v_x for expansions. */
+static int radinterp__cross_expansion(int nux, const double *ux, int nuy, const double *uy,
+                                      int nvx, const double *vx, int nvy, const double *vy, double *h)
+{
+    double l[8], r[8];
+    int nl = radinterp__expansion_product(nux, ux, nvy, vy, l);
+    int nr = radinterp__expansion_product(nuy, uy, nvx, vx, r), i;
+    for (i = 0; i < nr; i++) r[i] = -r[i];
+    return radinterp__expansion_sum(nl, l, nr, r, h);
+}
+
+static double radinterp__incircle_exact(const double *a, const double *b, const double *c, const double *d)
+{
+    double adx[2], ady[2], bdx[2], bdy[2], cdx[2], cdy[2];
+    double lift[16], cross[16], term[3][512], ab[1024], det[1536];
+    int n[6], nl, nc, nt[3], nab, ndet, k;
+    const double *p[3];
+    n[0] = radinterp__diff_expansion(a[0], d[0], adx);
+    n[1] = radinterp__diff_expansion(a[1], d[1], ady);
+    n[2] = radinterp__diff_expansion(b[0], d[0], bdx);
+    n[3] = radinterp__diff_expansion(b[1], d[1], bdy);
+    n[4] = radinterp__diff_expansion(c[0], d[0], cdx);
+    n[5] = radinterp__diff_expansion(c[1], d[1], cdy);
+    p[0] = a; p[1] = b; p[2] = c;
+    for (k = 0; k < 3; k++) {
+        /* term k = lift(point k) * cross(point k+1, point k+2), all relative to d */
+        const double *x[3], *y[3];
+        int nx[3], ny[3], i0 = k, i1 = (k + 1) % 3, i2 = (k + 2) % 3;
+        x[0] = adx; x[1] = bdx; x[2] = cdx;
+        y[0] = ady; y[1] = bdy; y[2] = cdy;
+        nx[0] = n[0]; nx[1] = n[2]; nx[2] = n[4];
+        ny[0] = n[1]; ny[1] = n[3]; ny[2] = n[5];
+        nl = radinterp__lift(nx[i0], x[i0], ny[i0], y[i0], lift);
+        nc = radinterp__cross_expansion(nx[i1], x[i1], ny[i1], y[i1], nx[i2], x[i2], ny[i2], y[i2], cross);
+        nt[k] = radinterp__expansion_product(nl, lift, nc, cross, term[k]);
+    }
+    (void)p;
+    nab = radinterp__expansion_sum(nt[0], term[0], nt[1], term[1], ab);
+    ndet = radinterp__expansion_sum(nab, ab, nt[2], term[2], det);
+    return radinterp__expansion_sign(ndet, det);
+}
+
+/* Positive when d lies inside the circle through a, b, c (counter-clockwise),
+   negative outside, exactly zero on it. Only the sign is meaningful. */
+static double radinterp__incircle(const double *a, const double *b, const double *c, const double *d)
+{
+    double adx = a[0] - d[0], ady = a[1] - d[1];
+    double bdx = b[0] - d[0], bdy = b[1] - d[1];
+    double cdx = c[0] - d[0], cdy = c[1] - d[1];
+    double bc1 = bdx * cdy, bc2 = cdx * bdy, ca1 = cdx * ady, ca2 = adx * cdy, ab1 = adx * bdy, ab2 = bdx * ady;
+    double alift = adx * adx + ady * ady, blift = bdx * bdx + bdy * bdy, clift = cdx * cdx + cdy * cdy;
+    double det = alift * (bc1 - bc2) + blift * (ca1 - ca2) + clift * (ab1 - ab2);
+    double permanent = (fabs(bc1) + fabs(bc2)) * alift + (fabs(ca1) + fabs(ca2)) * blift +
+                       (fabs(ab1) + fabs(ab2)) * clift;
+    if (fabs(det) > (10.0 + 96.0 * RADINTERP__ROUND) * RADINTERP__ROUND * permanent) return det;
+    return radinterp__incircle_exact(a, b, c, d);
+}
+
+/* ======================================================================
+   9. constrained Delaunay triangulation (CDT)
+   Incremental: a point is located by a stochastic walk, splits the
+   triangle or edge it falls in, and Lawson flips restore the (constrained)
+   Delaunay property without ever flipping a constraint. A segment is
+   inserted by flipping away the edges it crosses (Sloan 1993), then the
+   touched edges are made locally Delaunay again. A segment that passes
+   through a vertex is split there; one that crosses another constraint is
+   split at the crossing, which becomes a vertex splitting the other one too.
+   Exact duplicates (and points closer than merge_distance) are merged.
+
+   The hull is closed by ghost triangles that share the vertex at infinity
+   RADINTERP__GHOST, so points outside the current hull need no special
+   case: a ghost contains p when p lies strictly outside its hull edge (or on
+   it), which is its "circumcircle".
+
+   Interface (part of the private toolkit reused by the mesher):
+     radinterp__cdt_init(c, allocator, mem, bytes)  optional caller memory used first
+     radinterp__cdt_clear(c) / radinterp__cdt_free(c)
+     radinterp__cdt_add_point(c, x, y)      -> vertex id (an existing one when merged),
+                                              RADINTERP__NONE when out of memory
+     radinterp__cdt_add_points(c, xy, n, ids)  bulk, in spatial (Hilbert) order
+     radinterp__cdt_add_segment(c, a, b)    constraint between two vertex ids
+     c->tri[0 .. c->tri_count): v[3] counter-clockwise, n[3] neighbour across
+       the edge opposite v[i], flags bit i = that edge is a constraint;
+       radinterp__cdt_is_real(c, t) is false for ghost triangles.
+     c->xy[2 * v], c->vertex_count; vertices made at constraint crossings
+       follow the caller's. c->failed is set when memory ran out or a step
+       limit stopped an insertion (the triangulation stays valid).
+   ---------------------------------------------------------------------- */
+#define RADINTERP__GHOST 0xFFFFFFFEu
+#define RADINTERP__CDT_STEP_LIMIT 4000000u
+
+typedef struct radinterp__cdt_tri {
+    uint32_t v[3];     /* counter-clockwise; a ghost has one vertex RADINTERP__GHOST */
+    uint32_t n[3];     /* n[i]: the triangle across the edge opposite v[i] */
+    uint32_t flags;    /* bit i: the edge opposite v[i] is a constraint */
+} radinterp__cdt_tri;
+
+typedef struct radinterp__u32s {
+    uint32_t *data;
+    uint32_t count, cap;
+    int owned;         /* data came from the allocator */
+} radinterp__u32s;
+
+typedef struct radinterp__cdt {
+    radinterp_allocator alloc;
+    double *xy;                  /* 2 per vertex */
+    uint32_t *vtri;              /* a triangle incident to each vertex (NONE before the first triangle) */
+    uint32_t vertex_count, vertex_cap;
+    radinterp__cdt_tri *tri;
+    uint32_t tri_count, tri_cap;
+    radinterp__u32s fix;         /* triangles around a new vertex whose far edge needs a check */
+    radinterp__u32s segs;        /* segment pieces still to insert (vertex pairs) */
+    radinterp__u32s queue;       /* crossing edges (vertex pairs) */
+    radinterp__u32s touched;     /* triangles changed while a segment went in */
+    uint32_t last;               /* a triangle: where point location starts */
+    uint32_t rng;
+    int started;                 /* a first triangle exists */
+    int owns_xy, owns_tri;
+    double merge_distance2;
+    int failed;
+} radinterp__cdt;
+
+static void *radinterp__grow_block(radinterp__cdt *c, void *old, int *owned, size_t old_bytes, size_t new_bytes)
+{
+    void *p = radinterp__alloc(&c->alloc, new_bytes);
+    if (!p) { c->failed = 1; return NULL; }
+    if (old_bytes) memcpy(p, old, old_bytes);
+    if (*owned) radinterp__free(&c->alloc, old);
+    *owned = 1;
+    return p;
+}
+
+static int radinterp__u32s_push(radinterp__cdt *c, radinterp__u32s *s, uint32_t v)
+{
+    if (s->count == s->cap) {
+        uint32_t cap = s->cap ? s->cap * 2 : 64;
+        void *p;
+        if (cap < s->cap) { c->failed = 1; return 0; }
+        p = radinterp__grow_block(c, s->data, &s->owned, (size_t)s->count * 4, (size_t)cap * 4);
+        if (!p) return 0;
+        s->data = (uint32_t *)p;
+        s->cap = cap;
+    }
+    s->data[s->count++] = v;
+    return 1;
+}
+
+static int radinterp__u32s_push2(radinterp__cdt *c, radinterp__u32s *s, uint32_t a, uint32_t b)
+{
+    return radinterp__u32s_push(c, s, a) && radinterp__u32s_push(c, s, b);
+}
+
+/* Carves the optional caller block (stack memory for small triangulations)
+   into the arrays; they move to the allocator when they outgrow it. */
+static void radinterp__cdt_init(radinterp__cdt *c, const radinterp_allocator *a, void *mem, size_t bytes)
+{
+    memset(c, 0, sizeof *c);
+    c->alloc = *a;
+    c->last = RADINTERP__NONE;
+    c->rng = 0x9E3779B9u;
+    if (mem && bytes >= 1024) {
+        /* per vertex: 16 (xy) + 4 (vtri) + 2 triangles of 28 + lists of 4 x 4 words */
+        size_t vcap = bytes / (16 + 4 + 2 * sizeof(radinterp__cdt_tri) + 64) - 4;
+        char *p = (char *)mem;
+        c->xy = (double *)(void *)p;                 p += vcap * 16;
+        c->tri = (radinterp__cdt_tri *)(void *)p;    p += 2 * vcap * sizeof(radinterp__cdt_tri);
+        c->vtri = (uint32_t *)(void *)p;             p += vcap * 4;
+        c->fix.data = (uint32_t *)(void *)p;         p += vcap * 16;
+        c->segs.data = (uint32_t *)(void *)p;        p += vcap * 16;
+        c->queue.data = (uint32_t *)(void *)p;       p += vcap * 16;
+        c->touched.data = (uint32_t *)(void *)p;
+        c->vertex_cap = (uint32_t)vcap;
+        c->tri_cap = (uint32_t)(2 * vcap);
+        c->fix.cap = c->segs.cap = c->queue.cap = c->touched.cap = (uint32_t)(4 * vcap);
+    }
+}
+
+static void radinterp__cdt_clear(radinterp__cdt *c)
+{
+    c->vertex_count = c->tri_count = 0;
+    c->fix.count = c->segs.count = c->queue.count = c->touched.count = 0;
+    c->last = RADINTERP__NONE;
+    c->started = 0;
+    c->failed = 0;
+}
+
+static void radinterp__cdt_free(radinterp__cdt *c)
+{
+    if (c->owns_xy) { radinterp__free(&c->alloc, c->xy); radinterp__free(&c->alloc, c->vtri); }
+    if (c->owns_tri) radinterp__free(&c->alloc, c->tri);
+    if (c->fix.owned) radinterp__free(&c->alloc, c->fix.data);
+    if (c->segs.owned) radinterp__free(&c->alloc, c->segs.data);
+    if (c->queue.owned) radinterp__free(&c->alloc, c->queue.data);
+    if (c->touched.owned) radinterp__free(&c->alloc, c->touched.data);
+    memset(c, 0, sizeof *c);
+}
+
+static int radinterp__cdt_reserve(radinterp__cdt *c, uint32_t vertices, uint32_t triangles)
+{
+    if (c->vertex_count + vertices > c->vertex_cap) {
+        uint32_t cap = c->vertex_cap ? c->vertex_cap : 32;
+        int owned = c->owns_xy;
+        double *xy;
+        uint32_t *vtri;
+        while (cap < c->vertex_count + vertices) {
+            if (cap > 0x3FFFFFFFu) { c->failed = 1; return 0; }
+            cap *= 2;
+        }
+        xy = (double *)radinterp__alloc_array(&c->alloc, cap, 2 * sizeof(double));
+        vtri = (uint32_t *)radinterp__alloc_array(&c->alloc, cap, sizeof(uint32_t));
+        if (!xy || !vtri) {
+            radinterp__free(&c->alloc, xy);
+            radinterp__free(&c->alloc, vtri);
+            c->failed = 1;
+            return 0;
+        }
+        if (c->vertex_count) {
+            memcpy(xy, c->xy, (size_t)c->vertex_count * 2 * sizeof(double));
+            memcpy(vtri, c->vtri, (size_t)c->vertex_count * sizeof(uint32_t));
+        }
+        if (owned) { radinterp__free(&c->alloc, c->xy); radinterp__free(&c->alloc, c->vtri); }
+        c->xy = xy;
+        c->vtri = vtri;
+        c->vertex_cap = cap;
+        c->owns_xy = 1;
+    }
+    if (c->tri_count + triangles > c->tri_cap) {
+        uint32_t cap = c->tri_cap ? c->tri_cap : 64;
+        void *p;
+        while (cap < c->tri_count + triangles) {
+            if (cap > 0x3FFFFFFFu) { c->failed = 1; return 0; }
+            cap *= 2;
+        }
+        p = radinterp__grow_block(c, c->tri, &c->owns_tri, (size_t)c->tri_count * sizeof(radinterp__cdt_tri),
+                                  (size_t)cap * sizeof(radinterp__cdt_tri));
+        if (!p) return 0;
+        c->tri = (radinterp__cdt_tri *)p;
+        c->tri_cap = cap;
+    }
+    return 1;
+}
+
+static int radinterp__cdt_is_ghost(const radinterp__cdt *c, uint32_t t)
+{
+    const uint32_t *v = c->tri[t].v;
+    return v[0] == RADINTERP__GHOST || v[1] == RADINTERP__GHOST || v[2] == RADINTERP__GHOST;
+}
+
+static int radinterp__cdt_is_real(const radinterp__cdt *c, uint32_t t)
+{
+    return t < c->tri_count && !radinterp__cdt_is_ghost(c, t);
+}
+
+static int radinterp__cdt_ghost_index(const radinterp__cdt *c, uint32_t t)
+{
+    const uint32_t *v = c->tri[t].v;
+    return v[0] == RADINTERP__GHOST ? 0 : (v[1] == RADINTERP__GHOST ? 1 : (v[2] == RADINTERP__GHOST ? 2 : -1));
+}
+
+static int radinterp__cdt_index(const radinterp__cdt *c, uint32_t t, uint32_t v)
+{
+    const uint32_t *w = c->tri[t].v;
+    return w[0] == v ? 0 : (w[1] == v ? 1 : (w[2] == v ? 2 : -1));
+}
+
+static int radinterp__cdt_neighbour_index(const radinterp__cdt *c, uint32_t t, uint32_t of)
+{
+    const uint32_t *n = c->tri[t].n;
+    return n[0] == of ? 0 : (n[1] == of ? 1 : (n[2] == of ? 2 : -1));
+}
+
+static const double *radinterp__cdt_p(const radinterp__cdt *c, uint32_t v) { return c->xy + 2 * (size_t)v; }
+
+static void radinterp__cdt_set(radinterp__cdt *c, uint32_t t, uint32_t a, uint32_t b, uint32_t d,
+                               uint32_t na, uint32_t nb, uint32_t nd, uint32_t flags)
+{
+    radinterp__cdt_tri *r = &c->tri[t];
+    r->v[0] = a; r->v[1] = b; r->v[2] = d;
+    r->n[0] = na; r->n[1] = nb; r->n[2] = nd;
+    r->flags = flags;
+}
+
+/* Points neighbour t's link that went to `from` at `to` instead. */
+static void radinterp__cdt_relink(radinterp__cdt *c, uint32_t t, uint32_t from, uint32_t to)
+{
+    int k = radinterp__cdt_neighbour_index(c, t, from);
+    if (k >= 0) c->tri[t].n[k] = to;
+}
+
+static void radinterp__cdt_touch(radinterp__cdt *c, uint32_t t)
+{
+    int k;
+    for (k = 0; k < 3; k++) {
+        uint32_t v = c->tri[t].v[k];
+        if (v != RADINTERP__GHOST) c->vtri[v] = t;
+    }
+}
+
+/* Is d strictly inside the circumcircle of t? For a ghost: is d strictly
+   outside its hull edge, or on the open edge itself. */
+static int radinterp__cdt_in_circle(const radinterp__cdt *c, uint32_t t, uint32_t d)
+{
+    const uint32_t *v = c->tri[t].v;
+    int g = radinterp__cdt_ghost_index(c, t);
+    const double *pa, *pb, *pd;
+    double o;
+    if (d == RADINTERP__GHOST) return 0;
+    pd = radinterp__cdt_p(c, d);
+    if (g < 0)
+        return radinterp__incircle(radinterp__cdt_p(c, v[0]), radinterp__cdt_p(c, v[1]),
+                                   radinterp__cdt_p(c, v[2]), pd) > 0.0;
+    pa = radinterp__cdt_p(c, v[(g + 1) % 3]);
+    pb = radinterp__cdt_p(c, v[(g + 2) % 3]);
+    o = radinterp__orient2d(pa, pb, pd);
+    if (o != 0.0) return o > 0.0;
+    {
+        double ex = pb[0] - pa[0], ey = pb[1] - pa[1];
+        double s = (pd[0] - pa[0]) * ex + (pd[1] - pa[1]) * ey;
+        return s > 0.0 && s < ex * ex + ey * ey;
+    }
+}
+
+/* Flipping the edge opposite v[k] of t gives (a, b, d) and (a, d, c):
+   allowed when neither is a real triangle turned clockwise or flat. */
+static int radinterp__cdt_flip_ok(const radinterp__cdt *c, uint32_t t, int k)
+{
+    uint32_t a = c->tri[t].v[k], b = c->tri[t].v[(k + 1) % 3], cc = c->tri[t].v[(k + 2) % 3];
+    uint32_t u = c->tri[t].n[k];
+    int j = radinterp__cdt_neighbour_index(c, u, t);
+    uint32_t d = c->tri[u].v[j];
+    if (a != RADINTERP__GHOST && b != RADINTERP__GHOST && d != RADINTERP__GHOST &&
+        !(radinterp__orient2d(radinterp__cdt_p(c, a), radinterp__cdt_p(c, b), radinterp__cdt_p(c, d)) > 0.0))
+        return 0;
+    if (a != RADINTERP__GHOST && d != RADINTERP__GHOST && cc != RADINTERP__GHOST &&
+        !(radinterp__orient2d(radinterp__cdt_p(c, a), radinterp__cdt_p(c, d), radinterp__cdt_p(c, cc)) > 0.0))
+        return 0;
+    return 1;
+}
+
+/* Replaces the edge (b, c) opposite a = v[k] of t = (a, b, c) by (a, d),
+   where d is the far vertex of the neighbour u = (d, c, b). Afterwards
+   t = (a, b, d) and u = (a, d, c); both still contain a. */
+static void radinterp__cdt_flip(radinterp__cdt *c, uint32_t t, int k)
+{
+    radinterp__cdt_tri T = c->tri[t], U;
+    uint32_t u = T.n[k], a = T.v[k], b = T.v[(k + 1) % 3], cc = T.v[(k + 2) % 3], d;
+    uint32_t n_bd, n_dc, n_ca = T.n[(k + 1) % 3], n_ab = T.n[(k + 2) % 3];
+    uint32_t f_bd, f_dc, f_ca = (T.flags >> ((k + 1) % 3)) & 1u, f_ab = (T.flags >> ((k + 2) % 3)) & 1u;
+    int j = radinterp__cdt_neighbour_index(c, u, t);
+    U = c->tri[u];
+    d = U.v[j];
+    n_bd = U.n[(j + 1) % 3];
+    n_dc = U.n[(j + 2) % 3];
+    f_bd = (U.flags >> ((j + 1) % 3)) & 1u;
+    f_dc = (U.flags >> ((j + 2) % 3)) & 1u;
+    radinterp__cdt_set(c, t, a, b, d, n_bd, u, n_ab, f_bd | (f_ab << 2));
+    radinterp__cdt_set(c, u, a, d, cc, n_dc, n_ca, t, f_dc | (f_ca << 1));
+    radinterp__cdt_relink(c, n_bd, u, t);
+    radinterp__cdt_relink(c, n_ca, t, u);
+    radinterp__cdt_touch(c, t);
+    radinterp__cdt_touch(c, u);
+}
+
+/* Lawson's legalisation around the new vertex p: every triangle on c->fix
+   contains p; its far edge is flipped when not locally Delaunay. */
+static void radinterp__cdt_legalize(radinterp__cdt *c, uint32_t p)
+{
+    while (c->fix.count) {
+        uint32_t t = c->fix.data[--c->fix.count], u, d;
+        int k = radinterp__cdt_index(c, t, p), j;
+        if (k < 0 || (c->tri[t].flags >> k) & 1u) continue;
+        u = c->tri[t].n[k];
+        j = radinterp__cdt_neighbour_index(c, u, t);
+        d = c->tri[u].v[j];
+        if (!radinterp__cdt_in_circle(c, t, d) || !radinterp__cdt_flip_ok(c, t, k)) continue;
+        radinterp__cdt_flip(c, t, k);
+        if (!radinterp__u32s_push2(c, &c->fix, t, u)) return;
+    }
+}
+
+/* p inside t = (a, b, c) (for a ghost: beyond its hull edge) becomes the
+   apex of three triangles. Two slots are reserved by the caller. */
+static void radinterp__cdt_split_triangle(radinterp__cdt *c, uint32_t t, uint32_t p)
+{
+    radinterp__cdt_tri T = c->tri[t];
+    uint32_t t1 = c->tri_count++, t2 = c->tri_count++;
+    uint32_t a = T.v[0], b = T.v[1], cc = T.v[2];
+    radinterp__cdt_set(c, t, p, b, cc, T.n[0], t1, t2, T.flags & 1u);
+    radinterp__cdt_set(c, t1, a, p, cc, t, T.n[1], t2, T.flags & 2u);
+    radinterp__cdt_set(c, t2, a, b, p, t, t1, T.n[2], T.flags & 4u);
+    radinterp__cdt_relink(c, T.n[1], t, t1);
+    radinterp__cdt_relink(c, T.n[2], t, t2);
+    radinterp__cdt_touch(c, t1);
+    radinterp__cdt_touch(c, t2);
+    radinterp__cdt_touch(c, t);
+    c->fix.count = 0;
+    radinterp__u32s_push(c, &c->fix, t);
+    radinterp__u32s_push(c, &c->fix, t1);
+    radinterp__u32s_push(c, &c->fix, t2);
+}
+
+/* p on the edge opposite v[k] of t splits t and its neighbour in two each;
+   a constraint there stays a constraint in both halves. */
+static void radinterp__cdt_split_edge(radinterp__cdt *c, uint32_t t, int k, uint32_t p)
+{
+    radinterp__cdt_tri T = c->tri[t], U;
+    uint32_t u = T.n[k], a = T.v[k], b = T.v[(k + 1) % 3], cc = T.v[(k + 2) % 3], d;
+    uint32_t t2 = c->tri_count++, u2 = c->tri_count++;
+    uint32_t nb_t = T.n[(k + 1) % 3], nc_t = T.n[(k + 2) % 3], fb_t, fc_t, ce, nb_u, nc_u, fb_u, fc_u;
+    int j = radinterp__cdt_neighbour_index(c, u, t);
+    U = c->tri[u];
+    d = U.v[j];
+    ce = (T.flags >> k) & 1u;
+    fb_t = (T.flags >> ((k + 1) % 3)) & 1u;
+    fc_t = (T.flags >> ((k + 2) % 3)) & 1u;
+    nc_u = U.n[(j + 1) % 3];  /* across (b, d), opposite c */
+    nb_u = U.n[(j + 2) % 3];  /* across (d, c), opposite b */
+    fc_u = (U.flags >> ((j + 1) % 3)) & 1u;
+    fb_u = (U.flags >> ((j + 2) % 3)) & 1u;
+    radinterp__cdt_set(c, t, a, b, p, u2, t2, nc_t, ce | (fc_t << 2));
+    radinterp__cdt_set(c, t2, a, p, cc, u, nb_t, t, ce | (fb_t << 1));
+    radinterp__cdt_set(c, u, d, cc, p, t2, u2, nb_u, ce | (fb_u << 2));
+    radinterp__cdt_set(c, u2, d, p, b, t, nc_u, u, ce | (fc_u << 1));
+    radinterp__cdt_relink(c, nb_t, t, t2);
+    radinterp__cdt_relink(c, nc_u, u, u2);
+    radinterp__cdt_touch(c, t2);
+    radinterp__cdt_touch(c, u2);
+    radinterp__cdt_touch(c, u);
+    radinterp__cdt_touch(c, t);
+    c->fix.count = 0;
+    radinterp__u32s_push(c, &c->fix, t);
+    radinterp__u32s_push(c, &c->fix, t2);
+    radinterp__u32s_push(c, &c->fix, u);
+    radinterp__u32s_push(c, &c->fix, u2);
+}
+
+static uint32_t radinterp__cdt_rand(radinterp__cdt *c)
+{
+    c->rng ^= c->rng << 13;
+    c->rng ^= c->rng >> 17;
+    c->rng ^= c->rng << 5;
+    return c->rng;
+}
+
+/* Where p lies relative to ghost t's hull edge (a, b) when collinear with it:
+   0 on the open edge, 1 beyond b, 2 beyond a, 3 at a, 4 at b. */
+static int radinterp__cdt_along(const double *pa, const double *pb, const double *p)
+{
+    double ex = pb[0] - pa[0], ey = pb[1] - pa[1];
+    double s = (p[0] - pa[0]) * ex + (p[1] - pa[1]) * ey, l = ex * ex + ey * ey;
+    if (p[0] == pa[0] && p[1] == pa[1]) return 3;
+    if (p[0] == pb[0] && p[1] == pb[1]) return 4;
+    if (s <= 0.0) return 2;
+    if (s >= l) return 1;
+    return 0;
+}
+
+/* Classifies p against triangle t: -1 outside (sets *next to the triangle to
+   walk to), 0 inside, 1 on the edge opposite v[*k], 2 at vertex v[*k]. */
+static int radinterp__cdt_classify(radinterp__cdt *c, uint32_t t, const double *p, int *k, uint32_t *next)
+{
+    const radinterp__cdt_tri *T = &c->tri[t];
+    int g = radinterp__cdt_ghost_index(c, t), i, zeros = 0, zero_edge = -1, r;
+    double o[3];
+    if (g >= 0) {
+        const double *pa = radinterp__cdt_p(c, T->v[(g + 1) % 3]), *pb = radinterp__cdt_p(c, T->v[(g + 2) % 3]);
+        double s = radinterp__orient2d(pa, pb, p);
+        if (s > 0.0) return 0;
+        if (s < 0.0) { *next = T->n[g]; return -1; }
+        switch (radinterp__cdt_along(pa, pb, p)) {
+        case 0: *k = g; return 1;
+        case 3: *k = (g + 1) % 3; return 2;
+        case 4: *k = (g + 2) % 3; return 2;
+        case 1: *next = T->n[(g + 1) % 3]; return -1;
+        default: *next = T->n[(g + 2) % 3]; return -1;
+        }
+    }
+    r = (int)(radinterp__cdt_rand(c) % 3u);
+    for (i = 0; i < 3; i++) {
+        int e = (r + i) % 3;
+        o[e] = radinterp__orient2d(radinterp__cdt_p(c, T->v[(e + 1) % 3]), radinterp__cdt_p(c, T->v[(e + 2) % 3]), p);
+        if (o[e] < 0.0) { *next = T->n[e]; return -1; }
+    }
+    for (i = 0; i < 3; i++)
+        if (o[i] == 0.0) { zeros++; zero_edge = i; }
+    if (zeros == 0) return 0;
+    if (zeros == 1) { *k = zero_edge; return 1; }
+    for (i = 0; i < 3; i++)
+        if (o[i] != 0.0) { *k = i; return 2; } /* on two edges: the vertex they share */
+    return 2;
+}
+
+static uint32_t radinterp__cdt_locate(radinterp__cdt *c, const double *p, int *where, int *k)
+{
+    uint32_t t = c->last, steps = 0, next = 0, limit = 3 * c->tri_count + 64, i;
+    if (t >= c->tri_count) t = 0;
+    for (;;) {
+        int w = radinterp__cdt_classify(c, t, p, k, &next);
+        if (w >= 0) { *where = w; return t; }
+        t = next;
+        if (++steps > limit) break;
+    }
+    /* the walk did not settle (it cannot cycle forever, but be certain): scan */
+    for (i = 0; i < c->tri_count; i++) {
+        int w = radinterp__cdt_classify(c, i, p, k, &next);
+        if (w >= 0) { *where = w; return i; }
+    }
+    *where = -1;
+    return RADINTERP__NONE;
+}
+
+/* Inserts the stored vertex v into the triangulation; returns v, or the
+   vertex it coincides with (v is then left out). */
+static uint32_t radinterp__cdt_insert_vertex(radinterp__cdt *c, uint32_t v)
+{
+    const double *p = radinterp__cdt_p(c, v);
+    int where = 0, k = 0, i;
+    uint32_t t = radinterp__cdt_locate(c, p, &where, &k);
+    if (t == RADINTERP__NONE) { c->failed = 1; return RADINTERP__NONE; }
+    if (where == 2) return c->tri[t].v[k];
+    if (c->merge_distance2 > 0.0) {
+        for (i = 0; i < 3; i++) {
+            uint32_t w = c->tri[t].v[i];
+            const double *q;
+            if (w == RADINTERP__GHOST) continue;
+            q = radinterp__cdt_p(c, w);
+            if ((q[0] - p[0]) * (q[0] - p[0]) + (q[1] - p[1]) * (q[1] - p[1]) <= c->merge_distance2) return w;
+        }
+    }
+    if (!radinterp__cdt_reserve(c, 0, 2)) return RADINTERP__NONE;
+    if (where == 0) radinterp__cdt_split_triangle(c, t, v);
+    else radinterp__cdt_split_edge(c, t, k, v);
+    radinterp__cdt_legalize(c, v);
+    c->last = c->vtri[v];
+    return v;
+}
+
+/* The first triangle, from three non-collinear stored vertices, closed by
+   three ghosts. */
+static void radinterp__cdt_start(radinterp__cdt *c, uint32_t a, uint32_t b, uint32_t d)
+{
+    uint32_t T = 0, G0 = 1, G1 = 2, G2 = 3, G = RADINTERP__GHOST;
+    radinterp__cdt_set(c, T, a, b, d, G0, G1, G2, 0);
+    radinterp__cdt_set(c, G0, d, b, G, G2, G1, T, 0);
+    radinterp__cdt_set(c, G1, a, d, G, G0, G2, T, 0);
+    radinterp__cdt_set(c, G2, b, a, G, G1, G0, T, 0);
+    c->tri_count = 4;
+    c->vtri[a] = c->vtri[b] = c->vtri[d] = T;
+    c->last = T;
+    c->started = 1;
+}
+
+/* Before the first triangle exists every point waits (all so far are
+   collinear); the first point off their line starts the triangulation. */
+static uint32_t radinterp__cdt_add_waiting(radinterp__cdt *c, const double *p)
+{
+    uint32_t i, v, n = c->vertex_count, third = RADINTERP__NONE;
+    for (i = 0; i < n; i++) {
+        const double *q = radinterp__cdt_p(c, i);
+        double dx = q[0] - p[0], dy = q[1] - p[1];
+        if ((dx == 0.0 && dy == 0.0) || dx * dx + dy * dy <= c->merge_distance2) return i;
+    }
+    if (!radinterp__cdt_reserve(c, 1, 4)) return RADINTERP__NONE;
+    v = c->vertex_count++;
+    c->xy[2 * v] = p[0];
+    c->xy[2 * v + 1] = p[1];
+    c->vtri[v] = RADINTERP__NONE;
+    if (v < 2) return v;
+    if (radinterp__orient2d(radinterp__cdt_p(c, 0), radinterp__cdt_p(c, 1), p) == 0.0) return v;
+    third = v;
+    if (radinterp__orient2d(radinterp__cdt_p(c, 0), radinterp__cdt_p(c, 1), p) > 0.0) radinterp__cdt_start(c, 0, 1, third);
+    else radinterp__cdt_start(c, 1, 0, third);
+    for (i = 2; i < v; i++) radinterp__cdt_insert_vertex(c, i); /* the collinear ones that waited */
+    return v;
+}
+
+static uint32_t radinterp__cdt_add_point(radinterp__cdt *c, double x, double y)
+{
+    double p[2];
+    uint32_t v, w;
+    p[0] = x;
+    p[1] = y;
+    if (!(fabs(x) < 1e300 && fabs(y) < 1e300)) { c->failed = 1; return RADINTERP__NONE; }
+    if (!c->started) return radinterp__cdt_add_waiting(c, p);
+    if (!radinterp__cdt_reserve(c, 1, 2)) return RADINTERP__NONE;
+    v = c->vertex_count;
+    c->xy[2 * v] = x;
+    c->xy[2 * v + 1] = y;
+    c->vtri[v] = RADINTERP__NONE;
+    c->vertex_count++;
+    w = radinterp__cdt_insert_vertex(c, v);
+    if (w != v) c->vertex_count--; /* merged into w (or failed): drop the copy */
+    return w;
+}
+
+/* Hilbert-curve index of a point on a 65536 x 65536 grid. */
+static uint32_t radinterp__hilbert(uint32_t x, uint32_t y)
+{
+    uint32_t s, d = 0;
+    for (s = 1u << 15; s > 0; s >>= 1) {
+        uint32_t rx = (x & s) ? 1u : 0u, ry = (y & s) ? 1u : 0u;
+        d += s * s * ((3u * rx) ^ ry);
+        if (ry == 0) {
+            uint32_t t;
+            if (rx == 1) { x = 0xFFFFu - x; y = 0xFFFFu - y; }
+            t = x; x = y; y = t;
+        }
+    }
+    return d;
+}
+
+static int radinterp__cmp_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : (x > y ? 1 : 0);
+}
+
+/* Adds n points in Hilbert order, so that each walk is short; ids[i]
+   receives the vertex of point i. Returns 0, or -1 when out of memory. */
+static int radinterp__cdt_add_points(radinterp__cdt *c, const double *xy, uint32_t n, uint32_t *ids)
+{
+    double lo[2] = {DBL_MAX, DBL_MAX}, hi[2] = {-DBL_MAX, -DBL_MAX}, sx, sy;
+    uint64_t *keys;
+    uint32_t i;
+    if (n == 0) return 0;
+    keys = (uint64_t *)radinterp__alloc_array(&c->alloc, n, sizeof(uint64_t));
+    if (!keys) { c->failed = 1; return -1; }
+    for (i = 0; i < n; i++) {
+        lo[0] = xy[2 * i] < lo[0] ? xy[2 * i] : lo[0];
+        lo[1] = xy[2 * i + 1] < lo[1] ? xy[2 * i + 1] : lo[1];
+        hi[0] = xy[2 * i] > hi[0] ? xy[2 * i] : hi[0];
+        hi[1] = xy[2 * i + 1] > hi[1] ? xy[2 * i + 1] : hi[1];
+    }
+    sx = hi[0] > lo[0] ? 65535.0 / (hi[0] - lo[0]) : 0.0;
+    sy = hi[1] > lo[1] ? 65535.0 / (hi[1] - lo[1]) : 0.0;
+    for (i = 0; i < n; i++) {
+        double fx = (xy[2 * i] - lo[0]) * sx, fy = (xy[2 * i + 1] - lo[1]) * sy;
+        uint32_t qx = fx >= 0.0 && fx <= 65535.0 ? (uint32_t)fx : 0u, qy = fy >= 0.0 && fy <= 65535.0 ? (uint32_t)fy : 0u;
+        keys[i] = ((uint64_t)radinterp__hilbert(qx, qy) << 32) | i;
+    }
+    qsort(keys, n, sizeof(uint64_t), radinterp__cmp_u64);
+    for (i = 0; i < n; i++) {
+        uint32_t j = (uint32_t)(keys[i] & 0xFFFFFFFFu);
+        ids[j] = radinterp__cdt_add_point(c, xy[2 * j], xy[2 * j + 1]);
+        if (ids[j] == RADINTERP__NONE) { radinterp__free(&c->alloc, keys); return -1; }
+    }
+    radinterp__free(&c->alloc, keys);
+    return 0;
+}
+
+/* Finds the edge (u, v): sets *t and *k (the edge is opposite v[*k] of *t). */
+static int radinterp__cdt_find_edge(const radinterp__cdt *c, uint32_t u, uint32_t v, uint32_t *t, int *k)
+{
+    uint32_t s = c->vtri[u], cur = s, guard = 0;
+    if (s == RADINTERP__NONE) return 0;
+    do {
+        int i = radinterp__cdt_index(c, cur, u);
+        if (i < 0) return 0;
+        if (c->tri[cur].v[(i + 1) % 3] == v) { *t = cur; *k = (i + 2) % 3; return 1; }
+        if (c->tri[cur].v[(i + 2) % 3] == v) { *t = cur; *k = (i + 1) % 3; return 1; }
+        cur = c->tri[cur].n[(i + 1) % 3];
+    } while (cur != s && ++guard < c->tri_count);
+    return 0;
+}
+
+static void radinterp__cdt_mark(radinterp__cdt *c, uint32_t t, int k, int on)
+{
+    uint32_t u = c->tri[t].n[k];
+    int j = radinterp__cdt_neighbour_index(c, u, t);
+    if (on) { c->tri[t].flags |= 1u << k; c->tri[u].flags |= 1u << j; }
+    else { c->tri[t].flags &= ~(1u << k); c->tri[u].flags &= ~(1u << j); }
+}
+
+static int radinterp__cdt_constrain(radinterp__cdt *c, uint32_t a, uint32_t b)
+{
+    uint32_t t;
+    int k;
+    if (!radinterp__cdt_find_edge(c, a, b, &t, &k)) return 0;
+    radinterp__cdt_mark(c, t, k, 1);
+    return 1;
+}
+
+/* Lawson flips over the edges queued in c->queue (vertex pairs) until each
+   of them, and every edge a flip exposes, is constrained or locally
+   Delaunay. */
+static void radinterp__cdt_lawson(radinterp__cdt *c)
+{
+    uint32_t steps = 0;
+    while (c->queue.count >= 2) {
+        uint32_t b = c->queue.data[--c->queue.count], a = c->queue.data[--c->queue.count], t, u, d;
+        int k, j;
+        if (++steps > RADINTERP__CDT_STEP_LIMIT) { c->failed = 1; return; }
+        if (!radinterp__cdt_find_edge(c, a, b, &t, &k)) continue;
+        if ((c->tri[t].flags >> k) & 1u || radinterp__cdt_is_ghost(c, t)) continue;
+        u = c->tri[t].n[k];
+        if (radinterp__cdt_is_ghost(c, u)) continue;
+        j = radinterp__cdt_neighbour_index(c, u, t);
+        d = c->tri[u].v[j];
+        if (!radinterp__cdt_in_circle(c, t, d) || !radinterp__cdt_flip_ok(c, t, k)) continue;
+        radinterp__cdt_flip(c, t, k);
+        /* t = (x, y, d), u = (x, d, z): recheck the four outer edges */
+        if (!radinterp__u32s_push2(c, &c->queue, c->tri[t].v[0], c->tri[t].v[1]) ||
+            !radinterp__u32s_push2(c, &c->queue, c->tri[t].v[1], c->tri[t].v[2]) ||
+            !radinterp__u32s_push2(c, &c->queue, c->tri[u].v[1], c->tri[u].v[2]) ||
+            !radinterp__u32s_push2(c, &c->queue, c->tri[u].v[2], c->tri[u].v[0]))
+            return;
+    }
+}
+
+/* After a segment went in: every edge of the triangles it changed. */
+static void radinterp__cdt_restore(radinterp__cdt *c)
+{
+    uint32_t i;
+    c->queue.count = 0;
+    for (i = 0; i < c->touched.count; i++) {
+        const uint32_t *v = c->tri[c->touched.data[i]].v;
+        int e;
+        for (e = 0; e < 3; e++) {
+            uint32_t a = v[(e + 1) % 3], b = v[(e + 2) % 3];
+            if (a != RADINTERP__GHOST && b != RADINTERP__GHOST && !radinterp__u32s_push2(c, &c->queue, a, b)) return;
+        }
+    }
+    radinterp__cdt_lawson(c);
+}
+
+/* Does the edge (p, q) cross the line through a and b, strictly? */
+static int radinterp__cdt_crosses(const radinterp__cdt *c, uint32_t a, uint32_t b, uint32_t p, uint32_t q)
+{
+    double op = radinterp__orient2d(radinterp__cdt_p(c, a), radinterp__cdt_p(c, b), radinterp__cdt_p(c, p));
+    double oq = radinterp__orient2d(radinterp__cdt_p(c, a), radinterp__cdt_p(c, b), radinterp__cdt_p(c, q));
+    return (op > 0.0 && oq < 0.0) || (op < 0.0 && oq > 0.0);
+}
+
+/* Squared distance of p from the line through a and b, and where along
+   (a, b) its projection falls (0 at a, 1 at b). */
+static double radinterp__cdt_line_distance2(const double *a, const double *b, const double *p, double *along)
+{
+    double dx = b[0] - a[0], dy = b[1] - a[1], l2 = dx * dx + dy * dy;
+    double c = (p[0] - a[0]) * dy - (p[1] - a[1]) * dx;
+    *along = l2 > 0.0 ? ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / l2 : 0.0;
+    return l2 > 0.0 ? c * c / l2 : 0.0;
+}
+
+/* The segment (a, b) crosses the constraint (r, l). Where the two are so
+   close to collinear that their crossing point is ill-conditioned (an
+   endpoint of one lies within RADINTERP__CDT_SNAP of their lengths from
+   the other's line), the segment bends through that endpoint; otherwise
+   the crossing point becomes a vertex that splits both. */
+#define RADINTERP__CDT_SNAP 1e-11
+static void radinterp__cdt_split_crossing(radinterp__cdt *c, uint32_t a, uint32_t b, uint32_t r, uint32_t l)
+{
+    const double *pa = radinterp__cdt_p(c, a), *pb = radinterp__cdt_p(c, b);
+    const double *pr = radinterp__cdt_p(c, r), *pl = radinterp__cdt_p(c, l);
+    double ab2 = (pb[0] - pa[0]) * (pb[0] - pa[0]) + (pb[1] - pa[1]) * (pb[1] - pa[1]);
+    double rl2 = (pl[0] - pr[0]) * (pl[0] - pr[0]) + (pl[1] - pr[1]) * (pl[1] - pr[1]);
+    double tol2 = RADINTERP__CDT_SNAP * RADINTERP__CDT_SNAP * (ab2 > rl2 ? ab2 : rl2), s, x, y, along;
+    double dr = radinterp__cdt_line_distance2(pa, pb, pr, &along), sr = along;
+    double dl = radinterp__cdt_line_distance2(pa, pb, pl, &along), sl = along;
+    double da = radinterp__cdt_line_distance2(pr, pl, pa, &along), ta = along;
+    double db = radinterp__cdt_line_distance2(pr, pl, pb, &along), tb = along;
+    uint32_t v = RADINTERP__NONE;
+    if (dr <= tol2 && sr > 0.0 && sr < 1.0 && (dr <= dl || !(sl > 0.0 && sl < 1.0))) v = r;
+    else if (dl <= tol2 && sl > 0.0 && sl < 1.0) v = l;
+    else if (da <= tol2 && ta > 0.0 && ta < 1.0) v = a;
+    else if (db <= tol2 && tb > 0.0 && tb < 1.0) v = b;
+    if (v == RADINTERP__NONE) {
+        double dx = pb[0] - pa[0], dy = pb[1] - pa[1];
+        double or_ = dx * (pr[1] - pa[1]) - dy * (pr[0] - pa[0]);
+        double ol = dx * (pl[1] - pa[1]) - dy * (pl[0] - pa[0]);
+        s = or_ - ol != 0.0 ? or_ / (or_ - ol) : 0.5;
+        if (!(s >= 0.0)) s = 0.0;
+        if (s > 1.0) s = 1.0;
+        x = pr[0] + s * (pl[0] - pr[0]);
+        y = pr[1] + s * (pl[1] - pr[1]);
+        v = radinterp__cdt_add_point(c, x, y);
+        if (v == RADINTERP__NONE) return;
+    }
+    if (v != r && v != l) {
+        uint32_t t;
+        int k;
+        if (radinterp__cdt_find_edge(c, r, l, &t, &k)) {
+            /* no longer a constraint: it must be Delaunay again (or flipped away) */
+            radinterp__cdt_mark(c, t, k, 0);
+            c->queue.count = 0;
+            radinterp__u32s_push2(c, &c->queue, r, l);
+            radinterp__cdt_lawson(c);
+        }
+        radinterp__u32s_push2(c, &c->segs, v, b);
+        radinterp__u32s_push2(c, &c->segs, a, v);
+        radinterp__u32s_push2(c, &c->segs, r, v);
+        radinterp__u32s_push2(c, &c->segs, v, l);
+    } else {
+        radinterp__u32s_push2(c, &c->segs, v, b);
+        radinterp__u32s_push2(c, &c->segs, a, v);
+    }
+}
+
+/* One piece (a, b) of a segment: either it ends early at a vertex on it
+   (the rest is pushed back), or a crossing constraint splits it, or the
+   crossed edges are flipped away until (a, end) is an edge. */
+static void radinterp__cdt_segment_piece(radinterp__cdt *c, uint32_t a, uint32_t b)
+{
+    const double *pa = radinterp__cdt_p(c, a), *pb = radinterp__cdt_p(c, b);
+    uint32_t s = c->vtri[a], t = s, right = 0, left = 0, end, guard = 0, head, steps = 0;
+    int found = 0;
+    /* 1. the triangle at a that the segment leaves through */
+    do {
+        int i = radinterp__cdt_index(c, t, a);
+        uint32_t p = c->tri[t].v[(i + 1) % 3], q = c->tri[t].v[(i + 2) % 3];
+        if (p != RADINTERP__GHOST && q != RADINTERP__GHOST) {
+            const double *pp = radinterp__cdt_p(c, p), *pq = radinterp__cdt_p(c, q);
+            double o1 = radinterp__orient2d(pa, pp, pb), o2 = radinterp__orient2d(pa, pq, pb);
+            if (o1 == 0.0 && (pp[0] - pa[0]) * (pb[0] - pa[0]) + (pp[1] - pa[1]) * (pb[1] - pa[1]) > 0.0) {
+                radinterp__cdt_mark(c, t, (i + 2) % 3, 1);  /* p lies on the segment */
+                radinterp__u32s_push2(c, &c->segs, p, b);
+                return;
+            }
+            if (o2 == 0.0 && (pq[0] - pa[0]) * (pb[0] - pa[0]) + (pq[1] - pa[1]) * (pb[1] - pa[1]) > 0.0) {
+                radinterp__cdt_mark(c, t, (i + 1) % 3, 1);
+                radinterp__u32s_push2(c, &c->segs, q, b);
+                return;
+            }
+            if (o1 > 0.0 && o2 < 0.0) { right = p; left = q; found = 1; break; }
+        }
+        t = c->tri[t].n[(i + 1) % 3];
+    } while (t != s && ++guard < c->tri_count);
+    if (!found) { c->failed = 1; return; }
+    /* 2. walk across the crossed edges */
+    c->queue.count = 0;
+    for (;;) {
+        uint32_t u, e;
+        int m = radinterp__cdt_index(c, t, right) , w;
+        m = 3 - m - radinterp__cdt_index(c, t, left);  /* the vertex opposite (right, left) */
+        if ((c->tri[t].flags >> m) & 1u) { radinterp__cdt_split_crossing(c, a, b, right, left); return; }
+        if (!radinterp__u32s_push2(c, &c->queue, right, left)) return;
+        u = c->tri[t].n[m];
+        w = radinterp__cdt_neighbour_index(c, u, t);
+        e = c->tri[u].v[w];
+        if (e == RADINTERP__GHOST || ++steps > c->tri_count) { c->failed = 1; return; }
+        if (e == b) { end = b; break; }
+        {
+            double o = radinterp__orient2d(pa, pb, radinterp__cdt_p(c, e));
+            if (o == 0.0) { end = e; radinterp__u32s_push2(c, &c->segs, e, b); break; }
+            if (o > 0.0) left = e;
+            else right = e;
+        }
+        t = u;
+    }
+    /* 3. flip the crossed edges away (Sloan): an edge whose quadrilateral is
+       not convex waits at the back of the queue */
+    c->touched.count = 0;
+    head = 0;
+    steps = 0;
+    while (head < c->queue.count) {
+        uint32_t p = c->queue.data[head], q = c->queue.data[head + 1], tt, x, d;
+        int k;
+        head += 2;
+        if (++steps > RADINTERP__CDT_STEP_LIMIT) { c->failed = 1; return; }
+        if (!radinterp__cdt_find_edge(c, p, q, &tt, &k)) continue;
+        if (!radinterp__cdt_flip_ok(c, tt, k)) {
+            if (!radinterp__u32s_push2(c, &c->queue, p, q)) return;
+            continue;
+        }
+        x = c->tri[tt].n[k];
+        radinterp__cdt_flip(c, tt, k);
+        radinterp__u32s_push(c, &c->touched, tt);
+        radinterp__u32s_push(c, &c->touched, x);
+        d = c->tri[tt].v[2];  /* tt = (apex, b, d): the new edge is (apex, d) */
+        if (radinterp__cdt_crosses(c, a, end, c->tri[tt].v[0], d) &&
+            !radinterp__u32s_push2(c, &c->queue, c->tri[tt].v[0], d))
+            return;
+        if (head > 4096 && head * 2 > c->queue.count) { /* keep the queue short */
+            memmove(c->queue.data, c->queue.data + head, (size_t)(c->queue.count - head) * 4);
+            c->queue.count -= head;
+            head = 0;
+        }
+    }
+    if (!radinterp__cdt_constrain(c, a, end)) { c->failed = 1; return; }
+    radinterp__cdt_restore(c);
+}
+
+/* Makes the segment between vertices a and b a union of constrained edges.
+   Returns 0, or -1 when it could not be completed (c->failed is set). */
+static int radinterp__cdt_add_segment(radinterp__cdt *c, uint32_t a, uint32_t b)
+{
+    uint32_t steps = 0;
+    if (!c->started || a >= c->vertex_count || b >= c->vertex_count) return -1;
+    if (c->vtri[a] == RADINTERP__NONE || c->vtri[b] == RADINTERP__NONE) return -1;
+    c->segs.count = 0;
+    if (!radinterp__u32s_push2(c, &c->segs, a, b)) return -1;
+    while (c->segs.count >= 2 && !c->failed) {
+        uint32_t y = c->segs.data[--c->segs.count], x = c->segs.data[--c->segs.count];
+        if (x == y) continue;
+        if (++steps > RADINTERP__CDT_STEP_LIMIT) { c->failed = 1; break; }
+        if (radinterp__cdt_constrain(c, x, y)) continue;
+        radinterp__cdt_segment_piece(c, x, y);
+    }
+    return c->failed ? -1 : 0;
+}
+
+/* ======================================================================
+   10. polygons in double precision and the point-to-polygon form factor
+   ---------------------------------------------------------------------- */
+#define RADINTERP__PI 3.14159265358979323846
+#define RADINTERP__POLY_MAX 16   /* a quadrilateral clipped by up to 12 planes */
+
+static void radinterp__d3_sub(const double *a, const double *b, double *r) { r[0] = a[0] - b[0]; r[1] = a[1] - b[1]; r[2] = a[2] - b[2]; }
+static double radinterp__d3_dot(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+static void radinterp__d3_cross(const double *a, const double *b, double *r)
+{
+    r[0] = a[1] * b[2] - a[2] * b[1];
+    r[1] = a[2] * b[0] - a[0] * b[2];
+    r[2] = a[0] * b[1] - a[1] * b[0];
+}
+static void radinterp__d3_from_f(const float *f, double *d) { d[0] = f[0]; d[1] = f[1]; d[2] = f[2]; }
+static double radinterp__d3_len(const double *a) { return sqrt(radinterp__d3_dot(a, a)); }
+
+/* One edge's term of eq. 6.1 without the 1/(2 pi): n . Gamma_g, where
+   Gamma_g has the length of the angle gamma between ra and rb (the edge's
+   ends seen from p) and the direction of ra x rb. atan2 keeps gamma exact
+   for nearly parallel and nearly opposite vectors; an edge through p (whose
+   direction is undefined) contributes nothing. */
+static double radinterp__ff_edge(const double *ra, const double *rb, const double *n)
+{
+    double c[3], s;
+    radinterp__d3_cross(ra, rb, c);
+    s = radinterp__d3_len(c);
+    if (s == 0.0) return 0.0;
+    return atan2(s, radinterp__d3_dot(ra, rb)) * radinterp__d3_dot(n, c) / s;
+}
+
+/* Eq. 6.1 for a polygon wholly in front of p's tangent plane: positive when
+   the polygon winds counter-clockwise seen from the side facing p. */
+static double radinterp__ff_poly(const double *p, const double *n, const double (*v)[3], int count)
+{
+    double r[RADINTERP__POLY_MAX][3], sum = 0.0;
+    int i;
+    for (i = 0; i < count; i++) radinterp__d3_sub(v[i], p, r[i]);
+    for (i = 0; i < count; i++) sum += radinterp__ff_edge(r[i], r[(i + 1) % count], n);
+    return -sum / (2.0 * RADINTERP__PI);
+}
+
+/* Sutherland-Hodgman: the part of the convex polygon in n . x >= d.
+   Returns the vertex count of out (at most count + 1; < 3 means empty). */
+static int radinterp__clip_poly(const double (*in)[3], int count, const double *n, double d, double (*out)[3])
+{
+    int i, m = 0;
+    for (i = 0; i < count; i++) {
+        const double *a = in[i], *b = in[(i + 1) % count];
+        double da = radinterp__d3_dot(n, a) - d, db = radinterp__d3_dot(n, b) - d;
+        if (da >= 0.0 && m < RADINTERP__POLY_MAX) { out[m][0] = a[0]; out[m][1] = a[1]; out[m][2] = a[2]; m++; }
+        if (((da > 0.0 && db < 0.0) || (da < 0.0 && db > 0.0)) && m < RADINTERP__POLY_MAX) {
+            double s = da / (da - db);
+            out[m][0] = a[0] + s * (b[0] - a[0]);
+            out[m][1] = a[1] + s * (b[1] - a[1]);
+            out[m][2] = a[2] + s * (b[2] - a[2]);
+            m++;
+        }
+    }
+    return m;
+}
+
+static void radinterp__copy_poly(const double (*in)[3], int count, double (*out)[3])
+{
+    memcpy(out, in, (size_t)count * sizeof(double[3]));
+}
+
+/* Area of a planar polygon (Newell), with its unnormalised normal. */
+static double radinterp__poly_area(const double (*v)[3], int count)
+{
+    double s[3] = {0.0, 0.0, 0.0}, c[3];
+    int i;
+    for (i = 0; i < count; i++) {
+        radinterp__d3_cross(v[i], v[(i + 1) % count], c);
+        s[0] += c[0]; s[1] += c[1]; s[2] += c[2];
+    }
+    return 0.5 * radinterp__d3_len(s);
+}
+
+/* Streaming form of eq. 6.1 for the public function: vertices arrive one by
+   one (already clipped), so no buffer bounds the polygon size. */
+typedef struct radinterp__ff_stream {
+    double p[3], n[3], first[3], prev[3], sum;
+    uint32_t count;
+} radinterp__ff_stream;
+
+static void radinterp__ff_stream_add(radinterp__ff_stream *s, const double *x)
+{
+    double r[3];
+    radinterp__d3_sub(x, s->p, r);
+    if (s->count == 0) memcpy(s->first, r, sizeof r);
+    else s->sum += radinterp__ff_edge(s->prev, r, s->n);
+    memcpy(s->prev, r, sizeof r);
+    s->count++;
+}
+
+RADINTERP_API double radinterp_form_factor_point_polygon(const float p[3], const float n[3],
+                                                         const float *verts, uint32_t count)
+{
+    radinterp__ff_stream st;
+    double len, d, front = 0.0;
+    uint32_t i;
+    if (!p || !n || !verts || count < 3) return 0.0;
+    if (!radinterp__finite3(p) || !radinterp__finite3(n)) return 0.0;
+    for (i = 0; i < count; i++)
+        if (!radinterp__finite3(verts + 3 * (size_t)i)) return 0.0;
+    memset(&st, 0, sizeof st);
+    radinterp__d3_from_f(p, st.p);
+    radinterp__d3_from_f(n, st.n);
+    len = radinterp__d3_len(st.n);
+    if (!(len > 0.0)) return 0.0;
+    st.n[0] /= len; st.n[1] /= len; st.n[2] /= len;
+    d = radinterp__d3_dot(st.n, st.p);
+    /* horizon clipping to n . x >= n . p, one edge at a time */
+    for (i = 0; i < count; i++) {
+        double a[3], b[3], da, db;
+        radinterp__d3_from_f(verts + 3 * (size_t)i, a);
+        radinterp__d3_from_f(verts + 3 * (size_t)((i + 1) % count), b);
+        da = radinterp__d3_dot(st.n, a) - d;
+        db = radinterp__d3_dot(st.n, b) - d;
+        if (da > front) front = da;
+        if (da >= 0.0) radinterp__ff_stream_add(&st, a);
+        if ((da > 0.0 && db < 0.0) || (da < 0.0 && db > 0.0)) {
+            double s = da / (da - db), x[3];
+            x[0] = a[0] + s * (b[0] - a[0]);
+            x[1] = a[1] + s * (b[1] - a[1]);
+            x[2] = a[2] + s * (b[2] - a[2]);
+            radinterp__ff_stream_add(&st, x);
+        }
+    }
+    if (!(front > 0.0) || st.count < 3) return 0.0; /* nothing above the tangent plane */
+    st.sum += radinterp__ff_edge(st.prev, st.first, st.n);
+    return fabs(st.sum) / (2.0 * RADINTERP__PI);
+}
+
+/* ======================================================================
+   14. public entry points
+   ---------------------------------------------------------------------- */
 RADINTERP_API const char *radinterp_result_string(radinterp_result r)
 {
     switch (r) {
