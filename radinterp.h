@@ -322,6 +322,14 @@ RADINTERP_API double radinterp_form_factor_point_polygon(const float p[3], const
 
 #define RADINTERP__NONE 0xFFFFFFFFu
 
+/* Private functions that some builds do not call (the triangulation toolkit
+   is shared with the mesher). */
+#if defined(__GNUC__) || defined(__clang__)
+#  define RADINTERP__MAYBE_UNUSED __attribute__((unused))
+#else
+#  define RADINTERP__MAYBE_UNUSED
+#endif
+
 /* ======================================================================
    1. allocation
    ---------------------------------------------------------------------- */
@@ -370,33 +378,16 @@ typedef struct radinterp__vec3 { float x, y, z; } radinterp__vec3;
 
 static radinterp__vec3 radinterp__v3(float x, float y, float z) { radinterp__vec3 r; r.x = x; r.y = y; r.z = z; return r; }
 static radinterp__vec3 radinterp__v3_load(const float *p) { return radinterp__v3(p[0], p[1], p[2]); }
-static radinterp__vec3 radinterp__add(radinterp__vec3 a, radinterp__vec3 b) { return radinterp__v3(a.x + b.x, a.y + b.y, a.z + b.z); }
 static radinterp__vec3 radinterp__sub(radinterp__vec3 a, radinterp__vec3 b) { return radinterp__v3(a.x - b.x, a.y - b.y, a.z - b.z); }
-static radinterp__vec3 radinterp__scale(radinterp__vec3 a, float s) { return radinterp__v3(a.x * s, a.y * s, a.z * s); }
 static float radinterp__dot(radinterp__vec3 a, radinterp__vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 static radinterp__vec3 radinterp__cross(radinterp__vec3 a, radinterp__vec3 b)
 {
     return radinterp__v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
 }
-static float radinterp__length(radinterp__vec3 a) { return sqrtf(radinterp__dot(a, a)); }
-static radinterp__vec3 radinterp__normalize(radinterp__vec3 a)
-{
-    float l = radinterp__length(a);
-    return l > 0.0f ? radinterp__scale(a, 1.0f / l) : a;
-}
 static float radinterp__minf(float a, float b) { return a < b ? a : b; }
 static float radinterp__maxf(float a, float b) { return a > b ? a : b; }
 static int radinterp__finite3(const float *p) { return isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]); }
 
-/* An orthonormal basis (t, b, n) around unit n (Duff et al. 2017, branchless). */
-static void radinterp__basis(radinterp__vec3 n, radinterp__vec3 *t, radinterp__vec3 *b)
-{
-    float s = n.z >= 0.0f ? 1.0f : -1.0f;
-    float a = -1.0f / (s + n.z);
-    float c = n.x * n.y * a;
-    *t = radinterp__v3(1.0f + s * n.x * n.x * a, s * c, -s * n.x);
-    *b = radinterp__v3(c, s + n.y * n.y * a, -n.y);
-}
 
 /* ======================================================================
    3. counter-based random numbers
@@ -773,7 +764,7 @@ static int radinterp__ray_tri(const radinterp__ray *r, const radinterp__bvh_tri 
 }
 
 /* Closest hit in (tmin, tmax). Returns 1 and fills *hit, else hit->tri = RADINTERP__NO_HIT. */
-static int radinterp__bvh_intersect(const radinterp__bvh *bvh, const float org[3], const float dir[3],
+RADINTERP__MAYBE_UNUSED static int radinterp__bvh_intersect(const radinterp__bvh *bvh, const float org[3], const float dir[3],
                              float tmin, float tmax, radinterp__hit *hit)
 {
     uint32_t stack[RADINTERP__BVH_STACK], top = 0, index = 0;
@@ -1256,7 +1247,7 @@ static int radinterp__cdt_is_ghost(const radinterp__cdt *c, uint32_t t)
     return v[0] == RADINTERP__GHOST || v[1] == RADINTERP__GHOST || v[2] == RADINTERP__GHOST;
 }
 
-static int radinterp__cdt_is_real(const radinterp__cdt *c, uint32_t t)
+RADINTERP__MAYBE_UNUSED static int radinterp__cdt_is_real(const radinterp__cdt *c, uint32_t t)
 {
     return t < c->tri_count && !radinterp__cdt_is_ghost(c, t);
 }
@@ -1627,7 +1618,7 @@ static int radinterp__cmp_u64(const void *a, const void *b)
 
 /* Adds n points in Hilbert order, so that each walk is short; ids[i]
    receives the vertex of point i. Returns 0, or -1 when out of memory. */
-static int radinterp__cdt_add_points(radinterp__cdt *c, const double *xy, uint32_t n, uint32_t *ids)
+RADINTERP__MAYBE_UNUSED static int radinterp__cdt_add_points(radinterp__cdt *c, const double *xy, uint32_t n, uint32_t *ids)
 {
     double lo[2] = {DBL_MAX, DBL_MAX}, hi[2] = {-DBL_MAX, -DBL_MAX}, sx, sy;
     uint64_t *keys;
@@ -2044,8 +2035,1788 @@ RADINTERP_API double radinterp_form_factor_point_polygon(const float p[3], const
 }
 
 /* ======================================================================
+   11. solution data: patches, quadtree nodes, links, blockers
+   The solution is the hierarchical radiosity state the point queries and the
+   mesher read:
+   - patches[i]: the caller's patch i (same index), its plane, corners,
+     material and quadtree root; count == 0 marks a skipped (zero-area) one.
+   - nodes: every quadtree node of every patch. Children of a node are four
+     consecutive nodes: for a quadrilateral (v0 v1 v2 v3) the children are
+     (v0 m01 c m30) (m01 v1 m12 c) (c m12 v2 m23) (m30 c m23 v3) with m the
+     edge midpoints and c the centre; for a triangle (v0 v1 v2) they are the
+     three corner triangles (v0 m01 m20) (m01 v1 m12) (m20 m12 v2) and the
+     middle one (m12 m20 m01). Children wind like their parent.
+   - links: each carries energy from a source node to a receiver node (a
+     "gather" link; the two directions of an interaction are two links).
+     Links are sorted by receiver: node.first_link .. + link_count are the
+     links the node gathers. A point's irradiance comes from the links of its
+     leaf and of every ancestor.
+   - blockers: a link's potential occluders (patch indices) from shaft
+     culling, blockers[link.first_blocker .. + link.blocker_count).
+   ---------------------------------------------------------------------- */
+typedef struct radinterp__patch {
+    float v[4][3];            /* corners, counter-clockwise seen from the front */
+    uint32_t count;           /* 3 or 4; 0 = skipped (zero area) */
+    uint32_t material;
+    uint32_t root;            /* quadtree root node; NONE when skipped */
+    double n[3], d;           /* unit front normal and plane n . x = d */
+    double area;
+    float lo[3], hi[3];       /* bounding box */
+    double centre[3], radius; /* bounding sphere */
+    float rho[3], e[3];       /* reflectance and emitted radiosity */
+} radinterp__patch;
+
+typedef struct radinterp__node {
+    float v[4][3];            /* corners, as the patch's */
+    uint32_t count;           /* 3 or 4 */
+    uint32_t patch;
+    uint32_t parent;          /* NONE for a root */
+    uint32_t child;           /* first of four consecutive children; NONE for a leaf */
+    uint32_t depth;           /* 0 for a root */
+    uint32_t first_link, link_count;   /* the links this node gathers */
+    float area;
+    float lo[3], hi[3];
+    float b[3];               /* radiosity B (W/m^2), constant over the node */
+    float h[3];               /* irradiance gathered by this node's own links */
+} radinterp__node;
+
+#define RADINTERP__LINK_FINAL 1u   /* may not be refined further */
+#define RADINTERP__LINK_DEAD 2u    /* carries nothing: dropped at the next rebuild */
+
+typedef struct radinterp__link {
+    uint32_t receiver, source;         /* nodes */
+    float ff;                          /* F: mean point-to-source factor over the receiver (4.2) */
+    float dff;                         /* max - min of the point factors: transport error / B_src */
+    uint32_t first_blocker, blocker_count;
+    uint32_t flags;
+} radinterp__link;
+
+struct radinterp_solution {
+    radinterp_allocator allocator;
+    /* parameters after defaults */
+    double eps, min_area, rel_error_cutoff, push_off, nudge, min_bp_segment, epsilon, diag;
+    uint32_t max_iterations, ff_samples, visibility_rays;
+    uint64_t seed;
+    radinterp_trace_fn trace;
+    void *trace_user;
+    /* scene */
+    radinterp__patch *patches;
+    uint32_t patch_count, skipped_patches;
+    float scene_lo[3], scene_hi[3];
+    radinterp__bvh bvh;
+    uint32_t *tri_patch;               /* BVH triangle -> patch */
+    /* hierarchy */
+    radinterp__node *nodes;
+    uint32_t node_count, node_cap;
+    radinterp__link *links;
+    uint32_t link_count;
+    uint32_t *blockers;
+    uint64_t blocker_count;
+    uint32_t *leaves;                  /* leaf node indices in patch order */
+    uint32_t leaf_count;
+    /* statistics */
+    uint32_t iterations;
+    int converged;
+    float max_relative_change;
+    uint64_t shadow_rays;
+};
+
+
+/* ---- patch geometry ---------------------------------------------------- */
+
+/* Newell's normal of a polygon (twice the area vector). */
+static void radinterp__newell(const double (*v)[3], int count, double *n)
+{
+    int i;
+    n[0] = n[1] = n[2] = 0.0;
+    for (i = 0; i < count; i++) {
+        const double *a = v[i], *b = v[(i + 1) % count];
+        n[0] += (a[1] - b[1]) * (a[2] + b[2]);
+        n[1] += (a[2] - b[2]) * (a[0] + b[0]);
+        n[2] += (a[0] - b[0]) * (a[1] + b[1]);
+    }
+}
+
+/* Removes repeated corners and corners on the line through their
+   neighbours (a quadrilateral may so become a triangle). */
+static int radinterp__simplify_corners(double (*v)[3], int count, double scale)
+{
+    int i, changed = 1;
+    while (changed && count >= 3) {
+        changed = 0;
+        for (i = 0; i < count; i++) {
+            const double *p = v[(i + count - 1) % count], *q = v[i], *r = v[(i + 1) % count];
+            double e1[3], e2[3], c[3];
+            radinterp__d3_sub(q, p, e1);
+            radinterp__d3_sub(r, q, e2);
+            radinterp__d3_cross(e1, e2, c);
+            if (radinterp__d3_len(c) <= 1e-12 * scale * scale) {
+                memmove(v[i], v[i + 1], (size_t)(count - i - 1) * sizeof(double[3]));
+                count--;
+                changed = 1;
+                break;
+            }
+        }
+    }
+    return count;
+}
+
+typedef enum radinterp__patch_check {
+    RADINTERP__PATCH_OK,
+    RADINTERP__PATCH_DEGENERATE,
+    RADINTERP__PATCH_NONPLANAR,
+    RADINTERP__PATCH_NONCONVEX
+} radinterp__patch_check;
+
+/* Fills the geometry of a patch from its corners; reports degenerate,
+   non-planar or non-convex input. */
+static radinterp__patch_check radinterp__patch_setup(radinterp__patch *pt, double (*v)[3], int count,
+                                                     double scene_diag, double planarity, double *deviation)
+{
+    double n[3], len, size = 0.0, c[3] = {0.0, 0.0, 0.0};
+    int i, k;
+    for (i = 0; i < count; i++)
+        for (k = 0; k < count; k++) {
+            double d[3];
+            radinterp__d3_sub(v[i], v[k], d);
+            if (radinterp__d3_len(d) > size) size = radinterp__d3_len(d);
+        }
+    count = radinterp__simplify_corners(v, count, size > 0.0 ? size : 1.0);
+    *deviation = 0.0;
+    if (count < 3) return RADINTERP__PATCH_DEGENERATE;
+    radinterp__newell((const double (*)[3])v, count, n);
+    len = radinterp__d3_len(n);
+    if (!(len > 0.0) || 0.5 * len <= 1e-14 * scene_diag * scene_diag) return RADINTERP__PATCH_DEGENERATE;
+    n[0] /= len; n[1] /= len; n[2] /= len;
+    for (i = 0; i < count; i++) { c[0] += v[i][0] / count; c[1] += v[i][1] / count; c[2] += v[i][2] / count; }
+    for (i = 0; i < count; i++) {
+        double d[3], dev;
+        radinterp__d3_sub(v[i], c, d);
+        dev = fabs(radinterp__d3_dot(d, n));
+        if (dev > *deviation) *deviation = dev;
+    }
+    if (*deviation > planarity * size) return RADINTERP__PATCH_NONPLANAR;
+    for (i = 0; i < count; i++) {
+        double e1[3], e2[3], x[3];
+        radinterp__d3_sub(v[i], v[(i + count - 1) % count], e1);
+        radinterp__d3_sub(v[(i + 1) % count], v[i], e2);
+        radinterp__d3_cross(e1, e2, x);
+        if (!(radinterp__d3_dot(x, n) > 0.0)) return RADINTERP__PATCH_NONCONVEX;
+    }
+    pt->count = (uint32_t)count;
+    pt->area = 0.5 * len;
+    memcpy(pt->n, n, sizeof n);
+    pt->d = radinterp__d3_dot(n, c);
+    for (k = 0; k < 3; k++) { pt->lo[k] = FLT_MAX; pt->hi[k] = -FLT_MAX; }
+    pt->radius = 0.0;
+    for (i = 0; i < count; i++) {
+        double d[3];
+        for (k = 0; k < 3; k++) {
+            pt->v[i][k] = (float)v[i][k];
+            pt->lo[k] = radinterp__minf(pt->lo[k], pt->v[i][k]);
+            pt->hi[k] = radinterp__maxf(pt->hi[k], pt->v[i][k]);
+        }
+        radinterp__d3_sub(v[i], c, d);
+        if (radinterp__d3_len(d) > pt->radius) pt->radius = radinterp__d3_len(d);
+    }
+    memcpy(pt->centre, c, sizeof c);
+    pt->radius *= 1.0 + 1e-6;
+    return RADINTERP__PATCH_OK;
+}
+
+/* Corners of a patch or node as doubles. */
+static int radinterp__node_poly(const radinterp__node *nd, double (*v)[3])
+{
+    uint32_t i;
+    for (i = 0; i < nd->count; i++) radinterp__d3_from_f(nd->v[i], v[i]);
+    return (int)nd->count;
+}
+
+static int radinterp__patch_poly(const radinterp__patch *pt, double (*v)[3])
+{
+    uint32_t i;
+    for (i = 0; i < pt->count; i++) radinterp__d3_from_f(pt->v[i], v[i]);
+    return (int)pt->count;
+}
+
+/* Largest signed distance of a patch's corners from a plane. */
+static double radinterp__patch_front(const radinterp__patch *pt, const double *n, double d)
+{
+    double best = -DBL_MAX;
+    uint32_t i;
+    for (i = 0; i < pt->count; i++) {
+        double x[3], s;
+        radinterp__d3_from_f(pt->v[i], x);
+        s = radinterp__d3_dot(n, x) - d;
+        if (s > best) best = s;
+    }
+    return best;
+}
+
+static double radinterp__node_front(const radinterp__node *nd, const double *n, double d)
+{
+    double best = -DBL_MAX;
+    uint32_t i;
+    for (i = 0; i < nd->count; i++) {
+        double x[3], s;
+        radinterp__d3_from_f(nd->v[i], x);
+        s = radinterp__d3_dot(n, x) - d;
+        if (s > best) best = s;
+    }
+    return best;
+}
+
+/* ---- quadtree nodes ---------------------------------------------------- */
+
+static void radinterp__node_bounds(radinterp__node *nd)
+{
+    uint32_t i;
+    int k;
+    double v[4][3];
+    for (k = 0; k < 3; k++) { nd->lo[k] = FLT_MAX; nd->hi[k] = -FLT_MAX; }
+    for (i = 0; i < nd->count; i++)
+        for (k = 0; k < 3; k++) {
+            nd->lo[k] = radinterp__minf(nd->lo[k], nd->v[i][k]);
+            nd->hi[k] = radinterp__maxf(nd->hi[k], nd->v[i][k]);
+        }
+    radinterp__node_poly(nd, v);
+    nd->area = (float)radinterp__poly_area((const double (*)[3])v, (int)nd->count);
+}
+
+static int radinterp__nodes_reserve(radinterp_solution *s, uint32_t extra)
+{
+    radinterp__node *p;
+    uint32_t cap;
+    if (s->node_count + extra <= s->node_cap) return 1;
+    cap = s->node_cap ? s->node_cap : 256;
+    while (cap < s->node_count + extra) {
+        if (cap > 0x3FFFFFFFu) return 0;
+        cap *= 2;
+    }
+    p = (radinterp__node *)radinterp__alloc_array(&s->allocator, cap, sizeof *p);
+    if (!p) return 0;
+    if (s->node_count) memcpy(p, s->nodes, (size_t)s->node_count * sizeof *p);
+    radinterp__free(&s->allocator, s->nodes);
+    s->nodes = p;
+    s->node_cap = cap;
+    return 1;
+}
+
+static void radinterp__mid(const float *a, const float *b, float *m)
+{
+    m[0] = 0.5f * (a[0] + b[0]);
+    m[1] = 0.5f * (a[1] + b[1]);
+    m[2] = 0.5f * (a[2] + b[2]);
+}
+
+static void radinterp__set_corners(radinterp__node *nd, const float *a, const float *b, const float *c,
+                                   const float *d)
+{
+    memcpy(nd->v[0], a, 3 * sizeof(float));
+    memcpy(nd->v[1], b, 3 * sizeof(float));
+    memcpy(nd->v[2], c, 3 * sizeof(float));
+    if (d) memcpy(nd->v[3], d, 3 * sizeof(float));
+    nd->count = d ? 4u : 3u;
+}
+
+/* Splits a leaf into four children (4.1) that start with its radiosity.
+   Returns 0, or -1 when out of memory. The node array may move. */
+static int radinterp__node_split(radinterp_solution *s, uint32_t index)
+{
+    radinterp__node *nd, *ch;
+    float m[4][3], c[3];
+    uint32_t first, k;
+    if (s->nodes[index].child != RADINTERP__NONE) return 0;
+    if (!radinterp__nodes_reserve(s, 4)) return -1;
+    nd = &s->nodes[index];
+    first = s->node_count;
+    ch = &s->nodes[first];
+    memset(ch, 0, 4 * sizeof *ch);
+    if (nd->count == 4) {
+        radinterp__mid(nd->v[0], nd->v[1], m[0]);
+        radinterp__mid(nd->v[1], nd->v[2], m[1]);
+        radinterp__mid(nd->v[2], nd->v[3], m[2]);
+        radinterp__mid(nd->v[3], nd->v[0], m[3]);
+        for (k = 0; k < 3; k++) c[k] = 0.25f * (nd->v[0][k] + nd->v[1][k] + nd->v[2][k] + nd->v[3][k]);
+        radinterp__set_corners(&ch[0], nd->v[0], m[0], c, m[3]);
+        radinterp__set_corners(&ch[1], m[0], nd->v[1], m[1], c);
+        radinterp__set_corners(&ch[2], c, m[1], nd->v[2], m[2]);
+        radinterp__set_corners(&ch[3], m[3], c, m[2], nd->v[3]);
+    } else {
+        radinterp__mid(nd->v[0], nd->v[1], m[0]);
+        radinterp__mid(nd->v[1], nd->v[2], m[1]);
+        radinterp__mid(nd->v[2], nd->v[0], m[2]);
+        radinterp__set_corners(&ch[0], nd->v[0], m[0], m[2], NULL);
+        radinterp__set_corners(&ch[1], m[0], nd->v[1], m[1], NULL);
+        radinterp__set_corners(&ch[2], m[2], m[1], nd->v[2], NULL);
+        radinterp__set_corners(&ch[3], m[1], m[2], m[0], NULL);
+    }
+    for (k = 0; k < 4; k++) {
+        ch[k].patch = nd->patch;
+        ch[k].parent = index;
+        ch[k].child = RADINTERP__NONE;
+        ch[k].depth = nd->depth + 1;
+        ch[k].first_link = 0;
+        ch[k].link_count = 0;
+        memcpy(ch[k].b, nd->b, sizeof nd->b);
+        radinterp__node_bounds(&ch[k]);
+    }
+    nd->child = first;
+    s->node_count += 4;
+    return 0;
+}
+
+static double radinterp__side(const float *a, const float *b, const double *p, const double *n)
+{
+    double e[3], q[3], c[3], x[3];
+    radinterp__d3_from_f(a, x);
+    e[0] = (double)b[0] - x[0]; e[1] = (double)b[1] - x[1]; e[2] = (double)b[2] - x[2];
+    radinterp__d3_sub(p, x, q);
+    radinterp__d3_cross(e, q, c);
+    return radinterp__d3_dot(c, n);
+}
+
+static int radinterp__same_side(const float *a, const float *b, const double *p, const float *ref, const double *n)
+{
+    double r[3];
+    radinterp__d3_from_f(ref, r);
+    return radinterp__side(a, b, p, n) * radinterp__side(a, b, r, n) > 0.0;
+}
+
+/* The leaf of a patch's quadtree that contains p (a point on the patch):
+   at each level the child is chosen by the lines that split the node. */
+static uint32_t radinterp__locate_leaf(const radinterp_solution *s, uint32_t patch, const double *p)
+{
+    const double *n = s->patches[patch].n;
+    uint32_t node = s->patches[patch].root;
+    while (s->nodes[node].child != RADINTERP__NONE) {
+        const radinterp__node *nd = &s->nodes[node], *ch = &s->nodes[nd->child];
+        uint32_t pick;
+        if (nd->count == 4) {
+            /* u splits along m01-m23, v along m30-m12 */
+            int hi_u = radinterp__same_side(ch[0].v[1], ch[2].v[3], p, nd->v[1], n);
+            int hi_v = radinterp__same_side(ch[0].v[3], ch[1].v[2], p, nd->v[3], n);
+            pick = hi_v ? (hi_u ? 2u : 3u) : (hi_u ? 1u : 0u);
+        } else if (radinterp__same_side(ch[0].v[1], ch[0].v[2], p, nd->v[0], n)) {
+            pick = 0;
+        } else if (radinterp__same_side(ch[1].v[0], ch[1].v[2], p, nd->v[1], n)) {
+            pick = 1;
+        } else if (radinterp__same_side(ch[2].v[0], ch[2].v[1], p, nd->v[2], n)) {
+            pick = 2;
+        } else {
+            pick = 3;
+        }
+        node = nd->child + pick;
+    }
+    return node;
+}
+
+/* ---- shaft culling (Haines and Wallace) ------------------------------- */
+typedef struct radinterp__shaft {
+    double lo[3], hi[3];       /* union of the two boxes */
+    double pn[12][3], pd[12];  /* x is outside when pn . x > pd */
+    int planes;
+} radinterp__shaft;
+
+/* The shaft between two boxes: their union box cut by the planes through
+   an edge of each box wherever one box alone reaches one face of the union
+   and the other box alone reaches an adjacent face. */
+static void radinterp__shaft_build(radinterp__shaft *sh, const float *alo, const float *ahi, const float *blo,
+                                   const float *bhi)
+{
+    int i, j, si, sj, k;
+    double A[2][3], B[2][3];
+    for (k = 0; k < 3; k++) {
+        A[0][k] = alo[k]; A[1][k] = ahi[k];
+        B[0][k] = blo[k]; B[1][k] = bhi[k];
+        sh->lo[k] = A[0][k] < B[0][k] ? A[0][k] : B[0][k];
+        sh->hi[k] = A[1][k] > B[1][k] ? A[1][k] : B[1][k];
+    }
+    sh->planes = 0;
+    for (i = 0; i < 3; i++)
+        for (j = i + 1; j < 3; j++)
+            for (si = 0; si < 2; si++)
+                for (sj = 0; sj < 2; sj++) {
+                    double ui = si ? sh->hi[i] : sh->lo[i], uj = sj ? sh->hi[j] : sh->lo[j];
+                    int a_i = A[si][i] == ui, b_i = B[si][i] == ui, a_j = A[sj][j] == uj, b_j = B[sj][j] == uj;
+                    double pa[2], pb[2], nx, ny, s;
+                    if (!((a_i && !b_i && b_j && !a_j) || (b_i && !a_i && a_j && !b_j))) continue;
+                    pa[0] = A[si][i]; pa[1] = A[sj][j];
+                    pb[0] = B[si][i]; pb[1] = B[sj][j];
+                    nx = pb[1] - pa[1];
+                    ny = -(pb[0] - pa[0]);
+                    s = nx * (ui - pa[0]) + ny * (uj - pa[1]); /* the union's corner is outside */
+                    if (s == 0.0) continue;
+                    if (s < 0.0) { nx = -nx; ny = -ny; }
+                    sh->pn[sh->planes][0] = sh->pn[sh->planes][1] = sh->pn[sh->planes][2] = 0.0;
+                    sh->pn[sh->planes][i] = nx;
+                    sh->pn[sh->planes][j] = ny;
+                    sh->pd[sh->planes] = nx * pa[0] + ny * pa[1];
+                    sh->planes++;
+                }
+}
+
+/* Is a box wholly outside the shaft (by more than margin)? */
+static int radinterp__shaft_culls(const radinterp__shaft *sh, const float *lo, const float *hi, double margin)
+{
+    int k, p;
+    for (k = 0; k < 3; k++)
+        if ((double)lo[k] > sh->hi[k] + margin || (double)hi[k] < sh->lo[k] - margin) return 1;
+    for (p = 0; p < sh->planes; p++) {
+        const double *n = sh->pn[p];
+        double m = 0.0, len = sqrt(radinterp__d3_dot(n, n));
+        for (k = 0; k < 3; k++) m += n[k] * (n[k] > 0.0 ? (double)lo[k] : (double)hi[k]);
+        if (m > sh->pd[p] + margin * len) return 1;
+    }
+    return 0;
+}
+
+/* Can patch b block light between receiver node r and source node src?
+   Its box meets the shaft, and part of it lies in front of both planes. */
+static int radinterp__may_block(const radinterp_solution *s, const radinterp__shaft *sh, uint32_t b,
+                                const radinterp__node *r, const radinterp__node *src)
+{
+    const radinterp__patch *pb = &s->patches[b], *pr = &s->patches[r->patch], *ps = &s->patches[src->patch];
+    double tol = s->epsilon * s->diag;
+    if (b == r->patch || b == src->patch || pb->count == 0) return 0;
+    /* a box that only touches the shaft's boundary cannot block: it must
+       reach tol inside */
+    if (radinterp__shaft_culls(sh, pb->lo, pb->hi, -tol)) return 0;
+    if (radinterp__patch_front(pb, pr->n, pr->d) <= tol) return 0;
+    if (radinterp__patch_front(pb, ps->n, ps->d) <= tol) return 0;
+    return 1;
+}
+
+/* ======================================================================
+   12. hierarchical radiosity (Hardt chapter 4, after Hanrahan et al.)
+   ---------------------------------------------------------------------- */
+/* A link waiting for its form factor: made by the initial linking or by
+   splitting a link. Its candidate blockers are its parent's (filtered here
+   by the new, narrower shaft) or the shaft culling result. */
+typedef struct radinterp__pending {
+    uint32_t receiver, source;
+    uint32_t first, count;       /* candidates in the input pool; results at the same offset of the output pool */
+    uint32_t filter;             /* candidates still need the shaft test */
+    uint32_t kept;               /* blockers kept */
+    float ff, dff;
+    uint32_t dead;               /* no part of either element faces the other */
+    uint32_t rays;
+} radinterp__pending;
+
+typedef struct radinterp__ff_ctx {
+    radinterp_solution *s;
+    radinterp__pending *pending;
+    uint32_t begin, end, per_job;
+    const uint32_t *in_pool;
+    uint32_t *out_pool;
+} radinterp__ff_ctx;
+
+/* A uniformly distributed point of a convex polygon: u1 picks a fan triangle
+   by area (and is reused inside it), u2 the position across it. */
+static void radinterp__poly_point(const double (*v)[3], int count, const double *tri_area, double total, double u1,
+                                  double u2, double *out)
+{
+    int t = 1, k;
+    double acc = 0.0, a, b, x = u1 * total;
+    while (t < count - 2 && acc + tri_area[t] < x) { acc += tri_area[t]; t++; }
+    u1 = tri_area[t] > 0.0 ? (x - acc) / tri_area[t] : 0.5;
+    if (u1 < 0.0) u1 = 0.0;
+    if (u1 > 1.0) u1 = 1.0;
+    a = sqrt(u1);
+    b = u2;
+    for (k = 0; k < 3; k++) out[k] = (1.0 - a) * v[0][k] + a * (1.0 - b) * v[t][k] + a * b * v[t + 1][k];
+}
+
+/* Areas of the fan triangles (v0, vt, vt+1), stored at index t. */
+static double radinterp__fan_areas(const double (*v)[3], int count, double *tri_area)
+{
+    double total = 0.0;
+    int t;
+    for (t = 1; t + 1 < count; t++) {
+        double e1[3], e2[3], c[3];
+        radinterp__d3_sub(v[t], v[0], e1);
+        radinterp__d3_sub(v[t + 1], v[0], e2);
+        radinterp__d3_cross(e1, e2, c);
+        tri_area[t] = 0.5 * radinterp__d3_len(c);
+        total += tri_area[t];
+    }
+    return total;
+}
+
+static float radinterp__rng_unit(radinterp__rng *r) { return radinterp__rng_float(r); }
+
+/* Is the segment from a to b blocked? Through the caller's ray caster or
+   the built-in BVH. */
+static int radinterp__segment_blocked(const radinterp_solution *s, const double *a, const double *b)
+{
+    float org[3], dir[3];
+    int k;
+    for (k = 0; k < 3; k++) {
+        org[k] = (float)a[k];
+        dir[k] = (float)(b[k] - a[k]);
+    }
+    if (s->trace) {
+        radinterp_hit hit;
+        float len = sqrtf(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+        if (!(len > 0.0f)) return 0;
+        dir[0] /= len; dir[1] /= len; dir[2] /= len;
+        hit.t = len; hit.u = hit.v = 0.0f; hit.triangle = RADINTERP__NONE;
+        return s->trace(s->trace_user, org, dir, len, &hit) != 0;
+    }
+    return radinterp__bvh_occluded(&s->bvh, org, dir, 0.0f, 1.0f);
+}
+
+/* Fraction of `rays` segments from q (on the receiver) to stratified points
+   of the source polygon that nothing blocks. Both ends leave their surface
+   by a small offset along its normal, so neither end hits its own surface. */
+static double radinterp__visible_fraction(const radinterp_solution *s, const double *q, const double *nr,
+                                          const double (*src)[3], int count, const double *ns, radinterp__rng *rng,
+                                          uint32_t rays)
+{
+    double tri_area[RADINTERP__POLY_MAX], total = radinterp__fan_areas(src, count, tri_area), off = 10.0 * s->epsilon * s->diag;
+    double a[3], b[3];
+    uint32_t i, open = 0;
+    int k;
+    for (k = 0; k < 3; k++) a[k] = q[k] + off * nr[k];
+    for (i = 0; i < rays; i++) {
+        double u1 = (i + radinterp__rng_unit(rng)) / rays, u2 = radinterp__rng_unit(rng);
+        radinterp__poly_point(src, count, tri_area, total, u1, u2, b);
+        for (k = 0; k < 3; k++) b[k] += off * ns[k];
+        if (!radinterp__segment_blocked(s, a, b)) open++;
+    }
+    return (double)open / rays;
+}
+
+/* Keeps the candidates that may block between the two nodes. */
+static uint32_t radinterp__filter_blockers(const radinterp_solution *s, const radinterp__node *r,
+                                           const radinterp__node *src, const uint32_t *in, uint32_t count,
+                                           uint32_t *out)
+{
+    radinterp__shaft sh;
+    uint32_t i, kept = 0;
+    radinterp__shaft_build(&sh, r->lo, r->hi, src->lo, src->hi);
+    for (i = 0; i < count; i++)
+        if (radinterp__may_block(s, &sh, in[i], r, src)) out[kept++] = in[i];
+    return kept;
+}
+
+/* Link form factor (4.2, method 3): the mean of the point-to-polygon factors
+   (eq. 6.1) at stratified points of the receiver, times the visible fraction
+   of the source at each point when blockers remain. Each polygon is first
+   clipped to the other's front half-space (horizon); the receiver's clipped
+   area ratio scales the result. dff is the spread of the point values. */
+static void radinterp__link_compute(radinterp_solution *s, radinterp__pending *pl, const uint32_t *in, uint32_t *out)
+{
+    const radinterp__node *r = &s->nodes[pl->receiver], *src = &s->nodes[pl->source];
+    const radinterp__patch *pr = &s->patches[r->patch], *ps = &s->patches[src->patch];
+    double R[RADINTERP__POLY_MAX][3], S[RADINTERP__POLY_MAX][3], Rc[RADINTERP__POLY_MAX][3], Sc[RADINTERP__POLY_MAX][3];
+    double tri_area[RADINTERP__POLY_MAX], total, ratio, sum = 0.0, lo = DBL_MAX, hi = 0.0, tiny;
+    int nR = radinterp__node_poly(r, R), nS = radinterp__node_poly(src, S), nRc, nSc, clipped;
+    uint32_t i, n = s->ff_samples;
+    radinterp__rng rng;
+    if (pl->filter) pl->kept = radinterp__filter_blockers(s, r, src, in + pl->first, pl->count, out + pl->first);
+    else {
+        if (pl->count) memcpy(out + pl->first, in + pl->first, pl->count * sizeof(uint32_t));
+        pl->kept = pl->count;
+    }
+    pl->ff = pl->dff = 0.0f;
+    pl->rays = 0;
+    pl->dead = 1;
+    nSc = radinterp__clip_poly((const double (*)[3])S, nS, pr->n, pr->d, Sc);
+    nRc = radinterp__clip_poly((const double (*)[3])R, nR, ps->n, ps->d, Rc);
+    tiny = 1e-12 * s->diag * s->diag;
+    if (nSc < 3 || nRc < 3) return;
+    if (radinterp__poly_area((const double (*)[3])Sc, nSc) <= tiny) return;
+    total = radinterp__fan_areas((const double (*)[3])Rc, nRc, tri_area);
+    if (total <= tiny) return;
+    pl->dead = 0;
+    clipped = radinterp__node_front(r, ps->n, ps->d) > 0.0 && total < 0.999999 * r->area;
+    ratio = clipped ? total / r->area : 1.0;
+    /* unclipped receivers use the same points for every source (seeded by
+       the receiver alone), so the factors of a closed scene sum to one */
+    rng = radinterp__rng_stream(s->seed, clipped ? ((uint64_t)pl->receiver << 32 | pl->source) : pl->receiver);
+    for (i = 0; i < n; i++) {
+        double q[3], f;
+        double u1 = (i + radinterp__rng_unit(&rng)) / n, u2 = radinterp__rng_unit(&rng);
+        radinterp__poly_point((const double (*)[3])Rc, nRc, tri_area, total, u1, u2, q);
+        f = radinterp__ff_poly(q, pr->n, (const double (*)[3])Sc, nSc);
+        if (f < 0.0) f = 0.0;
+        if (pl->kept && f > 0.0) {
+            radinterp__rng vis = radinterp__rng_stream(s->seed ^ 0xA5A5A5A5u, ((uint64_t)pl->receiver << 32 | pl->source) * 64u + i);
+            f *= radinterp__visible_fraction(s, q, pr->n, (const double (*)[3])Sc, nSc, ps->n, &vis, s->visibility_rays);
+            pl->rays += s->visibility_rays;
+        }
+        sum += f;
+        lo = f < lo ? f : lo;
+        hi = f > hi ? f : hi;
+    }
+    pl->ff = (float)(ratio * sum / n);
+    pl->dff = (float)(ratio * (hi - lo));
+}
+
+static void radinterp__ff_job(void *ctx_, uint32_t index)
+{
+    radinterp__ff_ctx *ctx = (radinterp__ff_ctx *)ctx_;
+    uint32_t i = ctx->begin + index * ctx->per_job, end = i + ctx->per_job;
+    if (end > ctx->end) end = ctx->end;
+    for (; i < end; i++) radinterp__link_compute(ctx->s, &ctx->pending[i], ctx->in_pool, ctx->out_pool);
+}
+
+typedef struct radinterp__run {
+    const radinterp_desc *desc;
+    uint32_t iteration;          /* for progress reports */
+} radinterp__run;
+
+static int radinterp__cancelled(const radinterp_solution *s, const radinterp__run *run)
+{
+    const radinterp_desc *d = run->desc;
+    (void)s;
+    return d->progress && d->progress(d->progress_user, run->iteration, s->max_iterations) != 0;
+}
+
+/* Computes every pending link, in batches with a progress check between. */
+static radinterp_result radinterp__compute_pending(radinterp_solution *s, const radinterp__run *run,
+                                                   radinterp__pending *pending, uint32_t count,
+                                                   const uint32_t *in_pool, uint32_t *out_pool)
+{
+    const uint32_t batch = 16384, per_job = 64;
+    uint32_t begin;
+    for (begin = 0; begin < count; begin += batch) {
+        radinterp__ff_ctx ctx;
+        uint32_t i;
+        ctx.s = s;
+        ctx.pending = pending;
+        ctx.begin = begin;
+        ctx.end = begin + batch < count ? begin + batch : count;
+        ctx.per_job = per_job;
+        ctx.in_pool = in_pool;
+        ctx.out_pool = out_pool;
+        radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__ff_job, &ctx,
+                            (ctx.end - ctx.begin + per_job - 1) / per_job);
+        for (i = ctx.begin; i < ctx.end; i++) s->shadow_rays += pending[i].rays;
+        if (radinterp__cancelled(s, run)) return RADINTERP_ERROR_CANCELLED;
+    }
+    return RADINTERP_OK;
+}
+
+/* Replaces the link list by the kept links plus the live pending ones,
+   sorted by receiver (stable), with their blockers copied into one pool. */
+static radinterp_result radinterp__install_links(radinterp_solution *s, const radinterp__link *keep, uint32_t keep_count,
+                                                 const radinterp__pending *pend, uint32_t pend_count,
+                                                 const uint32_t *pend_pool)
+{
+    uint32_t *start = NULL, *pool = NULL, i, total = keep_count, at;
+    uint64_t blockers = 0;
+    radinterp__link *links = NULL;
+    for (i = 0; i < keep_count; i++) blockers += keep[i].blocker_count;
+    for (i = 0; i < pend_count; i++)
+        if (!pend[i].dead) { total++; blockers += pend[i].kept; }
+    if (blockers > 0xFFFFFFFFu) return RADINTERP_ERROR_OUT_OF_MEMORY;
+    links = (radinterp__link *)radinterp__alloc_array(&s->allocator, total, sizeof *links);
+    pool = (uint32_t *)radinterp__alloc_array(&s->allocator, (size_t)blockers, sizeof *pool);
+    start = (uint32_t *)radinterp__alloc_array(&s->allocator, (size_t)s->node_count + 1, sizeof *start);
+    if (!links || !pool || !start) {
+        radinterp__free(&s->allocator, links);
+        radinterp__free(&s->allocator, pool);
+        radinterp__free(&s->allocator, start);
+        return RADINTERP_ERROR_OUT_OF_MEMORY;
+    }
+    memset(start, 0, ((size_t)s->node_count + 1) * sizeof *start);
+    for (i = 0; i < keep_count; i++) start[keep[i].receiver + 1]++;
+    for (i = 0; i < pend_count; i++)
+        if (!pend[i].dead) start[pend[i].receiver + 1]++;
+    for (i = 0; i < s->node_count; i++) {
+        s->nodes[i].first_link = start[i];
+        s->nodes[i].link_count = start[i + 1];
+        start[i + 1] += start[i];
+    }
+    at = 0;
+    for (i = 0; i < keep_count; i++) {
+        radinterp__link *l = &links[start[keep[i].receiver]++];
+        *l = keep[i];
+        if (l->blocker_count) memcpy(pool + at, s->blockers + keep[i].first_blocker, l->blocker_count * sizeof *pool);
+        l->first_blocker = at;
+        at += l->blocker_count;
+    }
+    for (i = 0; i < pend_count; i++) {
+        radinterp__link *l;
+        if (pend[i].dead) continue;
+        l = &links[start[pend[i].receiver]++];
+        l->receiver = pend[i].receiver;
+        l->source = pend[i].source;
+        l->ff = pend[i].ff;
+        l->dff = pend[i].dff;
+        l->flags = 0;
+        l->blocker_count = pend[i].kept;
+        if (l->blocker_count) memcpy(pool + at, pend_pool + pend[i].first, l->blocker_count * sizeof *pool);
+        l->first_blocker = at;
+        at += l->blocker_count;
+    }
+    radinterp__free(&s->allocator, start);
+    radinterp__free(&s->allocator, s->links);
+    radinterp__free(&s->allocator, s->blockers);
+    s->links = links;
+    s->link_count = total;
+    s->blockers = pool;
+    s->blocker_count = blockers;
+    return RADINTERP_OK;
+}
+
+/* Growable arrays for the serial parts of linking and refinement. */
+typedef struct radinterp__grow {
+    void *data;
+    size_t count, cap, item;
+} radinterp__grow;
+
+static void *radinterp__grow_push(radinterp_solution *s, radinterp__grow *g)
+{
+    if (g->count == g->cap) {
+        size_t cap = g->cap ? 2 * g->cap : 1024;
+        void *p = radinterp__alloc_array(&s->allocator, cap, g->item);
+        if (!p) return NULL;
+        if (g->count) memcpy(p, g->data, g->count * g->item);
+        radinterp__free(&s->allocator, g->data);
+        g->data = p;
+        g->cap = cap;
+    }
+    return (char *)g->data + g->item * g->count++;
+}
+
+/* Potential blockers of a pair of patches: the patches whose boxes meet the
+   shaft, found through the BVH (its leaves hold the patches' triangles). */
+static int radinterp__shaft_query(radinterp_solution *s, const radinterp__node *r, const radinterp__node *src,
+                                  radinterp__grow *pool, uint32_t *stamp, uint32_t mark, uint32_t *count)
+{
+    radinterp__shaft sh;
+    uint32_t stack[RADINTERP__BVH_STACK], top = 0, index = 0;
+    double tol = s->epsilon * s->diag;
+    radinterp__shaft_build(&sh, r->lo, r->hi, src->lo, src->hi);
+    *count = 0;
+    if (s->bvh.tri_count == 0) return 1;
+    for (;;) {
+        const radinterp__bvh_node *node = &s->bvh.nodes[index];
+        if (!radinterp__shaft_culls(&sh, node->lo, node->hi, -tol)) {
+            if (node->count) {
+                uint32_t i;
+                for (i = node->first; i < node->first + node->count; i++) {
+                    uint32_t b = s->tri_patch[s->bvh.tris[i].id];
+                    uint32_t *slot;
+                    if (stamp[b] == mark || !radinterp__may_block(s, &sh, b, r, src)) continue;
+                    stamp[b] = mark;
+                    slot = (uint32_t *)radinterp__grow_push(s, pool);
+                    if (!slot) return 0;
+                    *slot = b;
+                    (*count)++;
+                }
+            } else {
+                stack[top++] = node->first;
+                index = index + 1;
+                continue;
+            }
+        }
+        if (!top) break;
+        index = stack[--top];
+    }
+    return 1;
+}
+
+/* Initial links (4.1): one per ordered pair of patches that face each other
+   (part of each lies in front of the other's plane), with the blockers from
+   shaft culling. Sources that can never shine (black, not emitting) get none. */
+static radinterp_result radinterp__initial_links(radinterp_solution *s, const radinterp__run *run)
+{
+    radinterp__grow pend, pool;
+    uint32_t *stamp, i, j, mark = 0;
+    radinterp_result res = RADINTERP_OK;
+    double tol = s->epsilon * s->diag;
+    memset(&pend, 0, sizeof pend);
+    memset(&pool, 0, sizeof pool);
+    pend.item = sizeof(radinterp__pending);
+    pool.item = sizeof(uint32_t);
+    stamp = (uint32_t *)radinterp__alloc_array(&s->allocator, s->patch_count, sizeof *stamp);
+    if (!stamp) return RADINTERP_ERROR_OUT_OF_MEMORY;
+    memset(stamp, 0xFF, (size_t)s->patch_count * sizeof *stamp);
+    for (i = 0; i < s->patch_count && res == RADINTERP_OK; i++) {
+        const radinterp__patch *pr = &s->patches[i];
+        if (!pr->count) continue;
+        for (j = 0; j < s->patch_count; j++) {
+            const radinterp__patch *ps = &s->patches[j];
+            radinterp__pending *pl;
+            uint32_t first = (uint32_t)pool.count, count;
+            if (j == i || !ps->count) continue;
+            if (ps->rho[0] == 0.0f && ps->rho[1] == 0.0f && ps->rho[2] == 0.0f && ps->e[0] == 0.0f &&
+                ps->e[1] == 0.0f && ps->e[2] == 0.0f)
+                continue;
+            if (radinterp__patch_front(pr, ps->n, ps->d) <= tol || radinterp__patch_front(ps, pr->n, pr->d) <= tol)
+                continue;
+            if (!radinterp__shaft_query(s, &s->nodes[pr->root], &s->nodes[ps->root], &pool, stamp, mark++, &count)) {
+                res = RADINTERP_ERROR_OUT_OF_MEMORY;
+                break;
+            }
+            pl = (radinterp__pending *)radinterp__grow_push(s, &pend);
+            if (!pl) { res = RADINTERP_ERROR_OUT_OF_MEMORY; break; }
+            memset(pl, 0, sizeof *pl);
+            pl->receiver = pr->root;
+            pl->source = ps->root;
+            pl->first = first;
+            pl->count = count;
+        }
+    }
+    radinterp__free(&s->allocator, stamp);
+    if (res == RADINTERP_OK && pool.count > 0xFFFFFFFFu) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    if (res == RADINTERP_OK) {
+        uint32_t *out = (uint32_t *)radinterp__alloc_array(&s->allocator, pool.count, sizeof(uint32_t));
+        if (!out) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+        if (res == RADINTERP_OK)
+            res = radinterp__compute_pending(s, run, (radinterp__pending *)pend.data, (uint32_t)pend.count,
+                                             (const uint32_t *)pool.data, out);
+        if (res == RADINTERP_OK)
+            res = radinterp__install_links(s, NULL, 0, (const radinterp__pending *)pend.data, (uint32_t)pend.count, out);
+        radinterp__free(&s->allocator, out);
+    }
+    radinterp__free(&s->allocator, pend.data);
+    radinterp__free(&s->allocator, pool.data);
+    return res;
+}
+
+static int radinterp__can_split(const radinterp_solution *s, const radinterp__node *nd)
+{
+    return 0.25 * nd->area >= s->min_area;
+}
+
+/* Transport-based refinement (4.4.1): a link whose estimated transport
+   error B_src * (max - min point factor) exceeds eps is replaced by four
+   links to the children of its larger element (the other one when the
+   larger may not be split; a link that can go no further is final).
+   Returns the number of links split, or -1 when out of memory (*res). */
+static int radinterp__refine(radinterp_solution *s, const radinterp__run *run, radinterp_result *res)
+{
+    radinterp__grow keep, pend;
+    uint32_t i, k, split = 0, *out = NULL;
+    uint64_t cand = 0;
+    memset(&keep, 0, sizeof keep);
+    memset(&pend, 0, sizeof pend);
+    keep.item = sizeof(radinterp__link);
+    pend.item = sizeof(radinterp__pending);
+    *res = RADINTERP_OK;
+    for (i = 0; i < s->link_count; i++) {
+        radinterp__link l = s->links[i];
+        const float *b = s->nodes[l.source].b;
+        double bmax = b[0] > b[1] ? (b[0] > b[2] ? b[0] : b[2]) : (b[1] > b[2] ? b[1] : b[2]);
+        int which = -1;
+        if (!(l.flags & RADINTERP__LINK_FINAL) && bmax * l.dff > s->eps) {
+            const radinterp__node *r = &s->nodes[l.receiver], *src = &s->nodes[l.source];
+            int rs = radinterp__can_split(s, r), ss = radinterp__can_split(s, src);
+            if (rs && (r->area >= src->area || !ss)) which = 0;
+            else if (ss) which = 1;
+            else l.flags |= RADINTERP__LINK_FINAL;
+        }
+        if (which < 0) {
+            radinterp__link *slot = (radinterp__link *)radinterp__grow_push(s, &keep);
+            if (!slot) { *res = RADINTERP_ERROR_OUT_OF_MEMORY; break; }
+            *slot = l;
+            continue;
+        }
+        if (radinterp__node_split(s, which == 0 ? l.receiver : l.source) != 0) {
+            *res = RADINTERP_ERROR_OUT_OF_MEMORY;
+            break;
+        }
+        split++;
+        for (k = 0; k < 4; k++) {
+            radinterp__pending *pl = (radinterp__pending *)radinterp__grow_push(s, &pend);
+            if (!pl) { *res = RADINTERP_ERROR_OUT_OF_MEMORY; break; }
+            memset(pl, 0, sizeof *pl);
+            pl->receiver = which == 0 ? s->nodes[l.receiver].child + k : l.receiver;
+            pl->source = which == 1 ? s->nodes[l.source].child + k : l.source;
+            pl->first = l.first_blocker;
+            pl->count = l.blocker_count;
+            pl->filter = 1;
+            cand += l.blocker_count;
+        }
+        if (*res != RADINTERP_OK) break;
+    }
+    if (*res == RADINTERP_OK && split) {
+        /* the four children of a link share its candidates: give each its own copy */
+        radinterp__pending *p = (radinterp__pending *)pend.data;
+        size_t n = cand ? (size_t)cand : 1;
+        uint32_t *wide = (uint32_t *)radinterp__alloc_array(&s->allocator, n, sizeof(uint32_t)), at = 0;
+        out = (uint32_t *)radinterp__alloc_array(&s->allocator, n, sizeof(uint32_t));
+        if (!wide || !out || cand > 0xFFFFFFFFu) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
+        for (i = 0; i < pend.count && *res == RADINTERP_OK; i++) {
+            if (p[i].count) memcpy(wide + at, s->blockers + p[i].first, p[i].count * sizeof(uint32_t));
+            p[i].first = at;
+            at += p[i].count;
+        }
+        if (*res == RADINTERP_OK) *res = radinterp__compute_pending(s, run, p, (uint32_t)pend.count, wide, out);
+        radinterp__free(&s->allocator, wide);
+        if (*res == RADINTERP_OK)
+            *res = radinterp__install_links(s, (const radinterp__link *)keep.data, (uint32_t)keep.count, p,
+                                            (uint32_t)pend.count, out);
+    } else if (*res == RADINTERP_OK && keep.count) {
+        memcpy(s->links, keep.data, keep.count * sizeof(radinterp__link)); /* keeps the final flags */
+    }
+    radinterp__free(&s->allocator, out);
+    radinterp__free(&s->allocator, keep.data);
+    radinterp__free(&s->allocator, pend.data);
+    return *res == RADINTERP_OK ? (int)split : -1;
+}
+
+/* ---- gather and push-pull (4.3) ---------------------------------------- */
+typedef struct radinterp__iter_ctx {
+    radinterp_solution *s;
+    uint32_t per_job;
+    double floor;            /* radiosities below it count as this for relative change */
+    double *patch_change;    /* largest relative change per patch */
+} radinterp__iter_ctx;
+
+/* H = sum over the node's links of F * B_src, from last iteration's B. */
+static void radinterp__gather_job(void *ctx_, uint32_t index)
+{
+    radinterp__iter_ctx *ctx = (radinterp__iter_ctx *)ctx_;
+    radinterp_solution *s = ctx->s;
+    uint32_t i = index * ctx->per_job, end = i + ctx->per_job;
+    if (end > s->node_count) end = s->node_count;
+    for (; i < end; i++) {
+        radinterp__node *nd = &s->nodes[i];
+        double h[3] = {0.0, 0.0, 0.0};
+        uint32_t l;
+        for (l = nd->first_link; l < nd->first_link + nd->link_count; l++) {
+            const radinterp__link *lk = &s->links[l];
+            const float *b = s->nodes[lk->source].b;
+            h[0] += (double)lk->ff * b[0];
+            h[1] += (double)lk->ff * b[1];
+            h[2] += (double)lk->ff * b[2];
+        }
+        nd->h[0] = (float)h[0];
+        nd->h[1] = (float)h[1];
+        nd->h[2] = (float)h[2];
+    }
+}
+
+/* Push the irradiance gathered above down to the leaves, B = E + rho H there
+   (eq. 2.1), and pull area-weighted averages back up. */
+static void radinterp__push_pull(radinterp_solution *s, uint32_t index, const double *down, double floor,
+                                 double *change, double *b_out)
+{
+    radinterp__node *nd = &s->nodes[index];
+    const radinterp__patch *pt = &s->patches[nd->patch];
+    double h[3], b[3];
+    int k;
+    for (k = 0; k < 3; k++) h[k] = down[k] + nd->h[k];
+    if (nd->child == RADINTERP__NONE) {
+        for (k = 0; k < 3; k++) {
+            double rel;
+            b[k] = pt->e[k] + pt->rho[k] * h[k];
+            rel = fabs(b[k] - nd->b[k]) / (b[k] > floor ? b[k] : floor);
+            if (rel > *change) *change = rel;
+        }
+    } else {
+        double area = 0.0, cb[3];
+        uint32_t c;
+        b[0] = b[1] = b[2] = 0.0;
+        for (c = 0; c < 4; c++) {
+            uint32_t ch = s->nodes[index].child + c;
+            double a = s->nodes[ch].area;
+            radinterp__push_pull(s, ch, h, floor, change, cb);
+            for (k = 0; k < 3; k++) b[k] += a * cb[k];
+            area += a;
+        }
+        nd = &s->nodes[index];
+        for (k = 0; k < 3; k++) b[k] = area > 0.0 ? b[k] / area : 0.0;
+    }
+    for (k = 0; k < 3; k++) { nd->b[k] = (float)b[k]; b_out[k] = b[k]; }
+}
+
+static void radinterp__push_pull_job(void *ctx_, uint32_t index)
+{
+    radinterp__iter_ctx *ctx = (radinterp__iter_ctx *)ctx_;
+    radinterp_solution *s = ctx->s;
+    double zero[3] = {0.0, 0.0, 0.0}, b[3], change = 0.0;
+    if (s->patches[index].count) radinterp__push_pull(s, s->patches[index].root, zero, ctx->floor, &change, b);
+    ctx->patch_change[index] = change;
+}
+
+/* Gather + push-pull until no leaf changes by more than rel_error_cutoff,
+   refining after each pass while any link is above eps (4.3 steps 2-4). */
+static radinterp_result radinterp__iterate(radinterp_solution *s, radinterp__run *run)
+{
+    radinterp__iter_ctx ctx;
+    double emax = 0.0;
+    uint32_t i, it;
+    int refining = 1;
+    radinterp_result res = RADINTERP_OK;
+    for (i = 0; i < s->patch_count; i++) {
+        int k;
+        for (k = 0; k < 3; k++) emax = s->patches[i].e[k] > emax ? s->patches[i].e[k] : emax;
+    }
+    ctx.s = s;
+    ctx.per_job = 4096;
+    ctx.floor = emax > 0.0 ? 1e-4 * emax : 1e-30;
+    ctx.patch_change = (double *)radinterp__alloc_array(&s->allocator, s->patch_count, sizeof(double));
+    if (!ctx.patch_change) return RADINTERP_ERROR_OUT_OF_MEMORY;
+    for (it = 0; it < s->max_iterations; it++) {
+        double change = 0.0;
+        run->iteration = it;
+        radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__gather_job, &ctx,
+                            (s->node_count + ctx.per_job - 1) / ctx.per_job);
+        radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__push_pull_job, &ctx,
+                            s->patch_count);
+        for (i = 0; i < s->patch_count; i++) change = ctx.patch_change[i] > change ? ctx.patch_change[i] : change;
+        s->iterations = it + 1;
+        s->max_relative_change = (float)change;
+        run->iteration = it + 1;
+        if (radinterp__cancelled(s, run)) { res = RADINTERP_ERROR_CANCELLED; break; }
+        if (refining) {
+            int split = radinterp__refine(s, run, &res);
+            if (split < 0) break;
+            if (split == 0) refining = 0;
+        }
+        if (!refining && change < s->rel_error_cutoff) { s->converged = 1; break; }
+    }
+    radinterp__free(&s->allocator, ctx.patch_change);
+    return res;
+}
+
+/* ======================================================================
+   13. irradiance at a point (Hardt chapter 6)
+   For every link delivering to the leaf that contains p or to one of its
+   ancestors: move the source push_off behind its plane (6.4), clip it to the
+   half-space in front of p (horizon, 6.2.1), and take eq. 6.1 directly when
+   the link has no blockers (6.2.2). Otherwise backproject (6.2.3): the part
+   of each blocker inside the pyramid from p to the source is projected from
+   p onto the source plane; the source is triangulated (CDT) with the
+   projected edges as constraints, so each face of the arrangement is wholly
+   visible or wholly hidden; one ray per face (through one triangle's centre)
+   classifies it against the blockers, and eq. 6.1 summed over the visible
+   triangles gives the factor. Visibility is judged from p moved `nudge`
+   toward `toward` (6.3).
+   ---------------------------------------------------------------------- */
+#define RADINTERP__BP_BYTES 32768        /* stack memory of one query's triangulation */
+#define RADINTERP__BP_MAX_SURVIVORS 64   /* blockers remembered for classification */
+
+typedef struct radinterp__query {
+    const radinterp_solution *s;
+    double p[3];          /* the point: form factors are taken here */
+    double pv[3];         /* p nudged toward `toward`: visibility is judged from here */
+    double n[3], dr;      /* receiver normal and n . p */
+    radinterp__cdt cdt;
+    int cdt_ready;        /* cdt initialised (on mem) */
+    int failed;           /* out of memory in a triangulation */
+    double mem[RADINTERP__BP_BYTES / sizeof(double)];
+    double shadow[RADINTERP__BP_MAX_SURVIVORS][RADINTERP__POLY_MAX][2];   /* projected blockers, 2D */
+    int shadow_count[RADINTERP__BP_MAX_SURVIVORS];
+    unsigned char flags[2048];
+} radinterp__query;
+
+/* 2D frame on the source plane: origin o, axes e1, e2 with e1 x e2 = n. */
+typedef struct radinterp__frame { double o[3], e1[3], e2[3]; } radinterp__frame;
+
+static void radinterp__frame_make(radinterp__frame *f, const double (*poly)[3], const double *n)
+{
+    double d[3], len, k;
+    memcpy(f->o, poly[0], sizeof f->o);
+    radinterp__d3_sub(poly[1], poly[0], d);
+    k = radinterp__d3_dot(d, n);
+    d[0] -= k * n[0]; d[1] -= k * n[1]; d[2] -= k * n[2];
+    len = radinterp__d3_len(d);
+    f->e1[0] = d[0] / len; f->e1[1] = d[1] / len; f->e1[2] = d[2] / len;
+    radinterp__d3_cross(n, f->e1, f->e2);
+}
+
+static void radinterp__frame_to2d(const radinterp__frame *f, const double *x, double *uv)
+{
+    double d[3];
+    radinterp__d3_sub(x, f->o, d);
+    uv[0] = radinterp__d3_dot(d, f->e1);
+    uv[1] = radinterp__d3_dot(d, f->e2);
+}
+
+static void radinterp__frame_to3d(const radinterp__frame *f, const double *uv, double *x)
+{
+    int k;
+    for (k = 0; k < 3; k++) x[k] = f->o[k] + uv[0] * f->e1[k] + uv[1] * f->e2[k];
+}
+
+/* Does the segment from a to b cross the interior of the patch? */
+static int radinterp__ray_hits_patch(const radinterp__patch *pt, const double *a, const double *b)
+{
+    double da = radinterp__d3_dot(pt->n, a) - pt->d, db = radinterp__d3_dot(pt->n, b) - pt->d, t, x[3];
+    uint32_t i;
+    int k;
+    if ((da > 0.0) == (db > 0.0) || da == db) return 0;
+    t = da / (da - db);
+    if (!(t > 1e-9 && t < 1.0 - 1e-9)) return 0;
+    for (k = 0; k < 3; k++) x[k] = a[k] + t * (b[k] - a[k]);
+    for (i = 0; i < pt->count; i++) {
+        double e[3], q[3], c[3], v0[3], v1[3];
+        radinterp__d3_from_f(pt->v[i], v0);
+        radinterp__d3_from_f(pt->v[(i + 1) % pt->count], v1);
+        radinterp__d3_sub(v1, v0, e);
+        radinterp__d3_sub(x, v0, q);
+        radinterp__d3_cross(e, q, c);
+        if (radinterp__d3_dot(c, pt->n) < 0.0) return 0;
+    }
+    return 1;
+}
+
+/* Does the convex polygon a (either winding) contain every corner of b? */
+static int radinterp__covers(const double (*a)[2], int na, const double (*b)[2], int nb)
+{
+    double area = 0.0;
+    int i, j;
+    for (i = 0; i < na; i++) area += a[i][0] * a[(i + 1) % na][1] - a[(i + 1) % na][0] * a[i][1];
+    if (area == 0.0) return 0;
+    for (j = 0; j < nb; j++)
+        for (i = 0; i < na; i++) {
+            double o = radinterp__orient2d(a[i], a[(i + 1) % na], b[j]);
+            if (area > 0.0 ? o < 0.0 : o > 0.0) return 0;
+        }
+    return 1;
+}
+
+/* Twice the signed area of a triangle (plain floating point: a size, not a predicate). */
+static double radinterp__orient2d_area(const double *a, const double *b, const double *c)
+{
+    return (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]);
+}
+
+/* Visible part of the source polygon Sc (front normal ns, plane
+   ns . x = ds_pushed, already moved push behind the real source) from the
+   query point, by backprojection of the link's blockers. Visibility is that
+   of the real source (so moving it opens no gap at a contact); the form
+   factors are those of the moved polygon. */
+static double radinterp__backproject(radinterp__query *q, const radinterp__link *lk, const double (*Sc)[3], int nc,
+                                     const double *ns, double ds_pushed, double push)
+{
+    const radinterp_solution *s = q->s;
+    radinterp__cdt *cdt = &q->cdt;
+    radinterp__frame fr;
+    double plane_n[RADINTERP__POLY_MAX + 1][3], plane_d[RADINTERP__POLY_MAX + 1], centre[3] = {0, 0, 0};
+    double sc2[RADINTERP__POLY_MAX][2], hp, sum = 0.0;
+    const double *pv = q->pv, (*Sc_pushed)[3] = Sc;
+    uint32_t survivors[RADINTERP__BP_MAX_SURVIVORS], nsurv = 0, i, sc_id[RADINTERP__POLY_MAX], t;
+    int np = 0, k, overflow = 0;
+    unsigned char *flags = q->flags;
+    double Sr[RADINTERP__POLY_MAX][3], ds = ds_pushed + push;
+    radinterp__frame fr_ff;
+    if (radinterp__d3_dot(ns, q->p) - ds <= 0.0) { push = 0.0; ds = ds_pushed; } /* p within push of the plane */
+    if (radinterp__d3_dot(ns, pv) - ds <= 0.0) pv = q->p; /* nudged behind the source: judge from p */
+    for (k = 0; k < nc; k++) {
+        Sr[k][0] = Sc[k][0] + push * ns[0];
+        Sr[k][1] = Sc[k][1] + push * ns[1];
+        Sr[k][2] = Sc[k][2] + push * ns[2];
+    }
+    Sc = (const double (*)[3])Sr;
+    hp = radinterp__d3_dot(ns, pv) - ds;
+    /* the pyramid from pv over Sc: one plane per edge, and the source plane */
+    for (k = 0; k < nc; k++) { centre[0] += Sc[k][0] / nc; centre[1] += Sc[k][1] / nc; centre[2] += Sc[k][2] / nc; }
+    for (k = 0; k < nc; k++) {
+        double a[3], b[3], m[3], c[3], len;
+        radinterp__d3_sub(Sc[k], pv, a);
+        radinterp__d3_sub(Sc[(k + 1) % nc], pv, b);
+        radinterp__d3_cross(a, b, m);
+        len = radinterp__d3_len(m);
+        if (!(len > 0.0)) continue;
+        radinterp__d3_sub(centre, pv, c);
+        if (radinterp__d3_dot(m, c) < 0.0) len = -len;
+        plane_n[np][0] = m[0] / len; plane_n[np][1] = m[1] / len; plane_n[np][2] = m[2] / len;
+        plane_d[np] = radinterp__d3_dot(plane_n[np], pv);
+        np++;
+    }
+    memcpy(plane_n[np], ns, 3 * sizeof(double));
+    plane_d[np] = ds;
+    np++;
+    /* the triangulation: the source outline first */
+    if (!q->cdt_ready) radinterp__cdt_init(cdt, &s->allocator, q->mem, sizeof q->mem);
+    else radinterp__cdt_clear(cdt);
+    q->cdt_ready = 1;
+    cdt->merge_distance2 = s->min_bp_segment * s->min_bp_segment;
+    radinterp__frame_make(&fr, Sc, ns);
+    fr_ff = fr; /* the same frame on the moved plane, for the form factors */
+    fr_ff.o[0] -= push * ns[0];
+    fr_ff.o[1] -= push * ns[1];
+    fr_ff.o[2] -= push * ns[2];
+    for (k = 0; k < nc; k++) {
+        radinterp__frame_to2d(&fr, Sc[k], sc2[k]);
+        sc_id[k] = radinterp__cdt_add_point(cdt, sc2[k][0], sc2[k][1]);
+    }
+    for (k = 0; k < nc; k++)
+        if (sc_id[k] != RADINTERP__NONE && sc_id[(k + 1) % nc] != RADINTERP__NONE)
+            radinterp__cdt_add_segment(cdt, sc_id[k], sc_id[(k + 1) % nc]);
+    /* each blocker's part inside the pyramid, projected from pv */
+    for (i = 0; i < lk->blocker_count; i++) {
+        uint32_t b = s->blockers[lk->first_blocker + i];
+        const radinterp__patch *pb = &s->patches[b];
+        double poly[RADINTERP__POLY_MAX][3], tmp[RADINTERP__POLY_MAX][3], (*shadow)[2];
+        int m, j, outside = 0;
+        for (j = 0; j < np && !outside; j++)
+            if (radinterp__d3_dot(plane_n[j], pb->centre) - plane_d[j] < -pb->radius) outside = 1;
+        if (outside) continue;
+        if (fabs(radinterp__d3_dot(pb->n, pv) - pb->d) <= s->epsilon * s->diag) continue; /* seen edge-on */
+        m = radinterp__patch_poly(pb, poly);
+        for (j = 0; j < np && m >= 3; j++) {
+            m = radinterp__clip_poly((const double (*)[3])poly, m, plane_n[j], plane_d[j], tmp);
+            radinterp__copy_poly((const double (*)[3])tmp, m, poly);
+        }
+        if (m < 3 || radinterp__poly_area((const double (*)[3])poly, m) <= 1e-14 * s->diag * s->diag) continue;
+        if (nsurv == RADINTERP__BP_MAX_SURVIVORS) { overflow = 1; break; }
+        shadow = q->shadow[nsurv];
+        for (j = 0; j < m; j++) {
+            double h = hp - (radinterp__d3_dot(ns, poly[j]) - ds), tt, y[3];
+            int c;
+            if (h < 1e-12 * hp) h = 1e-12 * hp;
+            tt = hp / h;
+            for (c = 0; c < 3; c++) y[c] = pv[c] + tt * (poly[j][c] - pv[c]);
+            radinterp__frame_to2d(&fr, y, shadow[j]);
+        }
+        if (radinterp__covers((const double (*)[2])shadow, m, (const double (*)[2])sc2, nc))
+            return 0.0; /* this blocker alone hides the whole source */
+        q->shadow_count[nsurv] = m;
+        survivors[nsurv++] = b;
+    }
+    if (nsurv == 0 && !overflow) return radinterp__ff_poly(q->p, q->n, Sc_pushed, nc);
+    /* a shadow inside another one adds no edge to the visible region, and a
+       ray through it meets the other blocker too: leave it out */
+    for (i = 0; i < nsurv && !overflow; i++) {
+        uint32_t j;
+        for (j = 0; j < nsurv; j++) {
+            if (j == i || q->shadow_count[j] == 0) continue;
+            if (radinterp__covers((const double (*)[2])q->shadow[j], q->shadow_count[j],
+                                  (const double (*)[2])q->shadow[i], q->shadow_count[i])) {
+                q->shadow_count[i] = 0;
+                break;
+            }
+        }
+    }
+    /* the shadows' edges as constraints: every shadow is a closed loop, so
+       the flood below cannot leak out of it */
+    for (i = 0; i < nsurv; i++) {
+        int m = q->shadow_count[i], j;
+        uint32_t ids[RADINTERP__POLY_MAX];
+        for (j = 0; j < m; j++) ids[j] = radinterp__cdt_add_point(cdt, q->shadow[i][j][0], q->shadow[i][j][1]);
+        for (j = 0; j < m; j++) {
+            uint32_t a = ids[j], b = ids[(j + 1) % m];
+            if (a == RADINTERP__NONE || b == RADINTERP__NONE || a == b) continue;
+            radinterp__cdt_add_segment(cdt, a, b);
+        }
+    }
+    {
+        uint32_t kept = 0;
+        for (i = 0; i < nsurv; i++)
+            if (q->shadow_count[i]) survivors[kept++] = survivors[i];
+        nsurv = kept;
+    }
+    if (cdt->failed && cdt->vertex_count == 0) q->failed = 1;
+    if (nsurv == 0 && !overflow) return radinterp__ff_poly(q->p, q->n, Sc_pushed, nc);
+    /* classify the faces: flood each region bounded by constraints, then
+       let its largest triangle's centre decide (inside the source outline
+       and not blocked); a sliver's centre could sit on an edge */
+    if (cdt->tri_count > sizeof q->flags) {
+        flags = (unsigned char *)radinterp__alloc(&s->allocator, cdt->tri_count);
+        if (!flags) { q->failed = 1; return 0.0; }
+    }
+    memset(flags, 0, cdt->tri_count);
+    for (t = 0; t < cdt->tri_count; t++) {
+        double c2[2], c3[3], best = -1.0;
+        uint32_t r, pick = t;
+        int visible = 1;
+        if (flags[t] || radinterp__cdt_is_ghost(cdt, t)) continue;
+        cdt->queue.count = cdt->touched.count = 0;
+        flags[t] = 3; /* in the region being flooded */
+        if (!radinterp__u32s_push(cdt, &cdt->queue, t)) break;
+        while (cdt->queue.count) {
+            uint32_t u = cdt->queue.data[--cdt->queue.count];
+            const uint32_t *v = cdt->tri[u].v;
+            double area = radinterp__orient2d_area(cdt->xy + 2 * v[0], cdt->xy + 2 * v[1], cdt->xy + 2 * v[2]);
+            if (area > best) { best = area; pick = u; }
+            if (!radinterp__u32s_push(cdt, &cdt->touched, u)) break;
+            for (k = 0; k < 3; k++) {
+                uint32_t w = cdt->tri[u].n[k];
+                if ((cdt->tri[u].flags >> k) & 1u || flags[w] || radinterp__cdt_is_ghost(cdt, w)) continue;
+                flags[w] = 3;
+                if (!radinterp__u32s_push(cdt, &cdt->queue, w)) break;
+            }
+        }
+        {
+            const uint32_t *v = cdt->tri[pick].v;
+            c2[0] = (cdt->xy[2 * v[0]] + cdt->xy[2 * v[1]] + cdt->xy[2 * v[2]]) / 3.0;
+            c2[1] = (cdt->xy[2 * v[0] + 1] + cdt->xy[2 * v[1] + 1] + cdt->xy[2 * v[2] + 1]) / 3.0;
+        }
+        for (k = 0; k < nc && visible; k++)
+            if (!(radinterp__orient2d(sc2[k], sc2[(k + 1) % nc], c2) > 0.0)) visible = 0;
+        if (visible) {
+            radinterp__frame_to3d(&fr, c2, c3);
+            if (overflow) {
+                for (i = 0; i < lk->blocker_count && visible; i++)
+                    if (radinterp__ray_hits_patch(&s->patches[s->blockers[lk->first_blocker + i]], pv, c3)) visible = 0;
+            } else {
+                for (i = 0; i < nsurv && visible; i++)
+                    if (radinterp__ray_hits_patch(&s->patches[survivors[i]], pv, c3)) visible = 0;
+            }
+        }
+        /* 1 = hidden or outside, 2 = visible */
+        for (r = 0; r < cdt->touched.count; r++) flags[cdt->touched.data[r]] = (unsigned char)(visible ? 2 : 1);
+    }
+    /* eq. 6.1 over the visible triangles: shared edges cancel, so only the
+       edges between a visible and a non-visible triangle are summed */
+    for (t = 0; t < cdt->tri_count; t++) {
+        if (flags[t] != 2) continue;
+        for (k = 0; k < 3; k++) {
+            uint32_t w = cdt->tri[t].n[k];
+            const uint32_t *v = cdt->tri[t].v;
+            double a3[3], b3[3], ra[3], rb[3];
+            if (flags[w] == 2 && !radinterp__cdt_is_ghost(cdt, w)) continue;
+            radinterp__frame_to3d(&fr_ff, cdt->xy + 2 * v[(k + 1) % 3], a3);
+            radinterp__frame_to3d(&fr_ff, cdt->xy + 2 * v[(k + 2) % 3], b3);
+            radinterp__d3_sub(a3, q->p, ra);
+            radinterp__d3_sub(b3, q->p, rb);
+            sum += radinterp__ff_edge(ra, rb, q->n);
+        }
+    }
+    if (flags != q->flags) radinterp__free(&s->allocator, flags);
+    return -sum / (2.0 * RADINTERP__PI);
+}
+
+/* Point-to-source factor of one link at the query point. */
+static double radinterp__link_point_ff(radinterp__query *q, const radinterp__link *lk)
+{
+    const radinterp_solution *s = q->s;
+    const radinterp__node *src = &s->nodes[lk->source];
+    const radinterp__patch *ps = &s->patches[src->patch];
+    double S[RADINTERP__POLY_MAX][3], Sc[RADINTERP__POLY_MAX][3], ds = ps->d - s->push_off;
+    int n = radinterp__node_poly(src, S), nc, i;
+    if (radinterp__d3_dot(ps->n, q->p) - ds <= 0.0) return 0.0;  /* p behind the source */
+    for (i = 0; i < n; i++) {  /* push-off (6.4) */
+        S[i][0] -= s->push_off * ps->n[0];
+        S[i][1] -= s->push_off * ps->n[1];
+        S[i][2] -= s->push_off * ps->n[2];
+    }
+    nc = radinterp__clip_poly((const double (*)[3])S, n, q->n, q->dr, Sc);  /* horizon (6.2.1) */
+    if (nc < 3) return 0.0;
+    if (lk->blocker_count == 0) return radinterp__ff_poly(q->p, q->n, (const double (*)[3])Sc, nc);
+    return radinterp__backproject(q, lk, (const double (*)[3])Sc, nc, ps->n, ds, s->push_off);
+}
+
+/* ======================================================================
    14. public entry points
    ---------------------------------------------------------------------- */
+#include <stdarg.h>
+
+static void radinterp__log(const radinterp_desc *d, const char *fmt, ...)
+{
+    char msg[320];
+    va_list ap;
+    if (!d->log) return;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    d->log(d->log_user, msg);
+}
+
+static const float *radinterp__position(const radinterp_desc *d, uint32_t v)
+{
+    size_t stride = d->position_stride ? d->position_stride : 3 * sizeof(float);
+    return (const float *)(const void *)((const char *)d->positions + (size_t)v * stride);
+}
+
+static int radinterp__bad_param(float v) { return !(v >= 0.0f) || !isfinite(v); }
+
+/* Arguments, indices, numbers: everything but the patch shapes. */
+static radinterp_result radinterp__check_desc(const radinterp_desc *d)
+{
+    uint32_t i, k;
+    if (!radinterp__allocator_valid(&d->allocator)) {
+        radinterp__log(d, "radinterp_solve: allocator.alloc and allocator.free must both be set or both be NULL");
+        return RADINTERP_ERROR_INVALID_ARGUMENT;
+    }
+    if (!d->positions || !d->vertex_count || !d->patches || !d->patch_count || !d->materials || !d->material_count) {
+        radinterp__log(d, "radinterp_solve: positions, patches and materials must be non-NULL with non-zero counts");
+        return RADINTERP_ERROR_INVALID_ARGUMENT;
+    }
+    if (d->position_stride && d->position_stride < 3 * sizeof(float)) {
+        radinterp__log(d, "radinterp_solve: position_stride %u is smaller than a vertex", (unsigned)d->position_stride);
+        return RADINTERP_ERROR_INVALID_ARGUMENT;
+    }
+    if (d->patch_count > 0x3FFFFFFFu) {
+        radinterp__log(d, "radinterp_solve: too many patches");
+        return RADINTERP_ERROR_INVALID_ARGUMENT;
+    }
+    if (radinterp__bad_param(d->eps) || radinterp__bad_param(d->min_area) || radinterp__bad_param(d->rel_error_cutoff) ||
+        radinterp__bad_param(d->push_off) || radinterp__bad_param(d->nudge) || radinterp__bad_param(d->min_bp_segment) ||
+        radinterp__bad_param(d->epsilon) || radinterp__bad_param(d->planarity_tolerance)) {
+        radinterp__log(d, "radinterp_solve: a parameter is negative, NaN or infinite");
+        return RADINTERP_ERROR_INVALID_ARGUMENT;
+    }
+    for (i = 0; i < d->material_count; i++) {
+        const radinterp_material *m = &d->materials[i];
+        for (k = 0; k < 3; k++) {
+            if (!isfinite(m->reflectance[k]) || m->reflectance[k] < 0.0f || m->reflectance[k] > 1.0f) {
+                radinterp__log(d, "radinterp_solve: material %u: reflectance must lie in [0, 1]", i);
+                return RADINTERP_ERROR_INVALID_ARGUMENT;
+            }
+            if (!isfinite(m->emission[k]) || m->emission[k] < 0.0f) {
+                radinterp__log(d, "radinterp_solve: material %u: emission must be finite and not negative", i);
+                return RADINTERP_ERROR_INVALID_ARGUMENT;
+            }
+        }
+    }
+    for (i = 0; i < d->patch_count; i++) {
+        const uint32_t *p = d->patches + 4 * (size_t)i;
+        for (k = 0; k < 4; k++) {
+            if (k == 3 && p[k] == RADINTERP_NO_VERTEX) break;
+            if (p[k] >= d->vertex_count) {
+                radinterp__log(d, "radinterp_solve: patch %u: vertex index %u out of range (%u vertices)", i, p[k],
+                               d->vertex_count);
+                return RADINTERP_ERROR_INVALID_ARGUMENT;
+            }
+            if (!radinterp__finite3(radinterp__position(d, p[k]))) {
+                radinterp__log(d, "radinterp_solve: patch %u: vertex %u is NaN or infinite", i, p[k]);
+                return RADINTERP_ERROR_INVALID_ARGUMENT;
+            }
+        }
+        if (d->patch_materials && d->patch_materials[i] >= d->material_count) {
+            radinterp__log(d, "radinterp_solve: patch %u: material %u out of range (%u materials)", i,
+                           d->patch_materials[i], d->material_count);
+            return RADINTERP_ERROR_INVALID_ARGUMENT;
+        }
+    }
+    return RADINTERP_OK;
+}
+
+/* Patch geometry: skipped when degenerate, an error when non-planar or
+   non-convex. */
+static radinterp_result radinterp__build_patches(radinterp_solution *s, const radinterp_desc *d)
+{
+    uint32_t i, k;
+    double lo[3] = {DBL_MAX, DBL_MAX, DBL_MAX}, hi[3] = {-DBL_MAX, -DBL_MAX, -DBL_MAX}, planarity;
+    s->patches = (radinterp__patch *)radinterp__alloc_array(&s->allocator, d->patch_count, sizeof *s->patches);
+    if (!s->patches) return RADINTERP_ERROR_OUT_OF_MEMORY;
+    memset(s->patches, 0, (size_t)d->patch_count * sizeof *s->patches);
+    s->patch_count = d->patch_count;
+    for (i = 0; i < d->patch_count; i++)
+        for (k = 0; k < 4; k++) {
+            uint32_t v = d->patches[4 * (size_t)i + k];
+            const float *x;
+            int c;
+            if (k == 3 && v == RADINTERP_NO_VERTEX) break;
+            x = radinterp__position(d, v);
+            for (c = 0; c < 3; c++) { lo[c] = x[c] < lo[c] ? x[c] : lo[c]; hi[c] = x[c] > hi[c] ? x[c] : hi[c]; }
+        }
+    for (k = 0; k < 3; k++) { s->scene_lo[k] = (float)lo[k]; s->scene_hi[k] = (float)hi[k]; }
+    s->diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    if (!(s->diag > 0.0)) s->diag = 1.0;
+    planarity = radinterp__def(d->planarity_tolerance, 1e-3f);
+    for (i = 0; i < d->patch_count; i++) {
+        radinterp__patch *pt = &s->patches[i];
+        double v[4][3], dev;
+        int count = 0;
+        uint32_t m = d->patch_materials ? d->patch_materials[i] : 0;
+        radinterp__patch_check r;
+        for (k = 0; k < 4; k++) {
+            uint32_t vi = d->patches[4 * (size_t)i + k];
+            if (k == 3 && vi == RADINTERP_NO_VERTEX) break;
+            radinterp__d3_from_f(radinterp__position(d, vi), v[count++]);
+        }
+        pt->root = RADINTERP__NONE;
+        pt->material = m;
+        memcpy(pt->rho, d->materials[m].reflectance, sizeof pt->rho);
+        memcpy(pt->e, d->materials[m].emission, sizeof pt->e);
+        r = radinterp__patch_setup(pt, v, count, s->diag, planarity, &dev);
+        if (r == RADINTERP__PATCH_DEGENERATE) {
+            pt->count = 0;
+            s->skipped_patches++;
+            continue;
+        }
+        if (r == RADINTERP__PATCH_NONPLANAR) {
+            radinterp__log(d, "radinterp_solve: patch %u is not planar (a corner lies %g from its plane)", i, dev);
+            return RADINTERP_ERROR_INVALID_ARGUMENT;
+        }
+        if (r == RADINTERP__PATCH_NONCONVEX) {
+            radinterp__log(d, "radinterp_solve: patch %u is not convex (or its corners cross)", i);
+            return RADINTERP_ERROR_INVALID_ARGUMENT;
+        }
+    }
+    if (s->skipped_patches == s->patch_count) {
+        radinterp__log(d, "radinterp_solve: every patch has zero area");
+        return RADINTERP_ERROR_INVALID_ARGUMENT;
+    }
+    return RADINTERP_OK;
+}
+
+/* The BVH over the patches' triangles (a quadrilateral gives two). */
+static radinterp_result radinterp__build_bvh(radinterp_solution *s)
+{
+    uint32_t i, k, tris = 0, t = 0;
+    float *pos;
+    uint32_t *idx;
+    radinterp__mesh_view view;
+    int ok;
+    for (i = 0; i < s->patch_count; i++) tris += s->patches[i].count ? s->patches[i].count - 2 : 0;
+    pos = (float *)radinterp__alloc_array(&s->allocator, (size_t)s->patch_count * 4, 3 * sizeof(float));
+    idx = (uint32_t *)radinterp__alloc_array(&s->allocator, tris, 3 * sizeof(uint32_t));
+    s->tri_patch = (uint32_t *)radinterp__alloc_array(&s->allocator, tris, sizeof(uint32_t));
+    if (!pos || !idx || !s->tri_patch) {
+        radinterp__free(&s->allocator, pos);
+        radinterp__free(&s->allocator, idx);
+        return RADINTERP_ERROR_OUT_OF_MEMORY;
+    }
+    for (i = 0; i < s->patch_count; i++) {
+        const radinterp__patch *pt = &s->patches[i];
+        memcpy(pos + 12 * (size_t)i, pt->v, sizeof pt->v);
+        for (k = 1; k + 1 < pt->count; k++) {
+            idx[3 * t] = 4 * i;
+            idx[3 * t + 1] = 4 * i + k;
+            idx[3 * t + 2] = 4 * i + k + 1;
+            s->tri_patch[t++] = i;
+        }
+    }
+    view.positions = pos;
+    view.stride = 0;
+    view.indices = idx;
+    view.tri_count = tris;
+    ok = radinterp__bvh_build(&s->bvh, &view, &s->allocator) == 0;
+    radinterp__free(&s->allocator, pos);
+    radinterp__free(&s->allocator, idx);
+    return ok ? RADINTERP_OK : RADINTERP_ERROR_OUT_OF_MEMORY;
+}
+
+static radinterp_result radinterp__make_roots(radinterp_solution *s)
+{
+    uint32_t i;
+    for (i = 0; i < s->patch_count; i++) {
+        radinterp__patch *pt = &s->patches[i];
+        radinterp__node *nd;
+        if (!pt->count) continue;
+        if (!radinterp__nodes_reserve(s, 1)) return RADINTERP_ERROR_OUT_OF_MEMORY;
+        nd = &s->nodes[s->node_count];
+        memset(nd, 0, sizeof *nd);
+        memcpy(nd->v, pt->v, sizeof pt->v);
+        nd->count = pt->count;
+        nd->patch = i;
+        nd->parent = RADINTERP__NONE;
+        nd->child = RADINTERP__NONE;
+        memcpy(nd->b, pt->e, sizeof pt->e);
+        radinterp__node_bounds(nd);
+        pt->root = s->node_count++;
+    }
+    return RADINTERP_OK;
+}
+
+static radinterp_result radinterp__collect_leaves(radinterp_solution *s)
+{
+    uint32_t i, n = 0, *stack, top;
+    for (i = 0; i < s->node_count; i++) n += s->nodes[i].child == RADINTERP__NONE;
+    s->leaves = (uint32_t *)radinterp__alloc_array(&s->allocator, n, sizeof(uint32_t));
+    stack = (uint32_t *)radinterp__alloc_array(&s->allocator, (size_t)s->node_count + 4, sizeof(uint32_t));
+    if (!s->leaves || !stack) {
+        radinterp__free(&s->allocator, stack);
+        return RADINTERP_ERROR_OUT_OF_MEMORY;
+    }
+    s->leaf_count = 0;
+    for (i = 0; i < s->patch_count; i++) {
+        if (!s->patches[i].count) continue;
+        top = 0;
+        stack[top++] = s->patches[i].root;
+        while (top) {
+            uint32_t nd = stack[--top], c = s->nodes[nd].child;
+            if (c == RADINTERP__NONE) { s->leaves[s->leaf_count++] = nd; continue; }
+            stack[top++] = c + 3; stack[top++] = c + 2; stack[top++] = c + 1; stack[top++] = c;
+        }
+    }
+    radinterp__free(&s->allocator, stack);
+    return RADINTERP_OK;
+}
+
+RADINTERP_API void radinterp_solution_destroy(radinterp_solution *s)
+{
+    radinterp_allocator a;
+    if (!s) return;
+    a = s->allocator;
+    radinterp__free(&a, s->patches);
+    radinterp__bvh_free(&s->bvh, &a);
+    radinterp__free(&a, s->tri_patch);
+    radinterp__free(&a, s->nodes);
+    radinterp__free(&a, s->links);
+    radinterp__free(&a, s->blockers);
+    radinterp__free(&a, s->leaves);
+    radinterp__free(&a, s);
+}
+
+RADINTERP_API radinterp_result radinterp_solve(const radinterp_desc *desc, radinterp_solution **out)
+{
+    radinterp_solution *s;
+    radinterp_result res;
+    radinterp__run run;
+    if (!out) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    *out = NULL;
+    if (!desc) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    res = radinterp__check_desc(desc);
+    if (res != RADINTERP_OK) return res;
+    s = (radinterp_solution *)radinterp__alloc(&desc->allocator, sizeof *s);
+    if (!s) return RADINTERP_ERROR_OUT_OF_MEMORY;
+    memset(s, 0, sizeof *s);
+    s->allocator = desc->allocator;
+    s->trace = desc->trace;
+    s->trace_user = desc->trace_user;
+    run.desc = desc;
+    run.iteration = 0;
+    res = radinterp__build_patches(s, desc);
+    if (res == RADINTERP_OK) {
+        double diag = s->diag;
+        s->eps = radinterp__def(desc->eps, 0.5f);
+        s->min_area = desc->min_area > 0.0f ? desc->min_area : (diag / 200.0) * (diag / 200.0);
+        s->rel_error_cutoff = radinterp__def(desc->rel_error_cutoff, 1e-3f);
+        s->max_iterations = radinterp__def(desc->max_iterations, 64u);
+        s->ff_samples = radinterp__def(desc->ff_samples, 4u);
+        s->visibility_rays = radinterp__def(desc->visibility_rays, 8u);
+        s->epsilon = radinterp__def(desc->epsilon, 1e-6f);
+        s->push_off = desc->push_off > 0.0f ? desc->push_off : 1e-5 * diag;
+        s->nudge = desc->nudge > 0.0f ? desc->nudge : 1e-6 * diag;
+        s->min_bp_segment = desc->min_bp_segment > 0.0f ? desc->min_bp_segment : 1e-9 * diag;
+        s->seed = desc->seed;
+        res = radinterp__build_bvh(s);
+    }
+    if (res == RADINTERP_OK) res = radinterp__make_roots(s);
+    if (res == RADINTERP_OK) res = radinterp__initial_links(s, &run);
+    if (res == RADINTERP_OK) res = radinterp__iterate(s, &run);
+    if (res == RADINTERP_OK) res = radinterp__collect_leaves(s);
+    if (res != RADINTERP_OK) {
+        if (res == RADINTERP_ERROR_OUT_OF_MEMORY) radinterp__log(desc, "radinterp_solve: out of memory");
+        radinterp_solution_destroy(s);
+        return res;
+    }
+    *out = s;
+    return RADINTERP_OK;
+}
+
+RADINTERP_API void radinterp_solution_info(const radinterp_solution *s, radinterp_info *info)
+{
+    if (!info) return;
+    memset(info, 0, sizeof *info);
+    if (!s) return;
+    info->patch_count = s->patch_count;
+    info->skipped_patches = s->skipped_patches;
+    info->node_count = s->node_count;
+    info->leaf_count = s->leaf_count;
+    info->link_count = s->link_count;
+    info->blocker_entries = s->blocker_count;
+    info->iterations = s->iterations;
+    info->converged = s->converged;
+    info->max_relative_change = s->max_relative_change;
+    info->shadow_rays = s->shadow_rays;
+    info->bytes = sizeof *s + (size_t)s->patch_count * sizeof(radinterp__patch) +
+                  (size_t)s->node_cap * sizeof(radinterp__node) + (size_t)s->link_count * sizeof(radinterp__link) +
+                  (size_t)s->blocker_count * sizeof(uint32_t) + (size_t)s->leaf_count * sizeof(uint32_t) +
+                  (size_t)s->bvh.node_count * sizeof(radinterp__bvh_node) +
+                  (size_t)s->bvh.tri_count * (sizeof(radinterp__bvh_tri) + sizeof(uint32_t));
+}
+
+static int radinterp__patch_ok(const radinterp_solution *s, uint32_t patch)
+{
+    return s && patch < s->patch_count && s->patches[patch].count != 0;
+}
+
+RADINTERP_API radinterp_result radinterp_patch_radiosity(const radinterp_solution *s, uint32_t patch, float rgb[3])
+{
+    if (!rgb) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    rgb[0] = rgb[1] = rgb[2] = 0.0f;
+    if (!radinterp__patch_ok(s, patch)) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    memcpy(rgb, s->nodes[s->patches[patch].root].b, 3 * sizeof(float));
+    return RADINTERP_OK;
+}
+
+RADINTERP_API uint32_t radinterp_leaf_count(const radinterp_solution *s) { return s ? s->leaf_count : 0; }
+
+RADINTERP_API radinterp_result radinterp_get_leaf(const radinterp_solution *s, uint32_t index, radinterp_leaf *leaf)
+{
+    const radinterp__node *nd;
+    if (!leaf) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    memset(leaf, 0, sizeof *leaf);
+    if (!s || index >= s->leaf_count) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    nd = &s->nodes[s->leaves[index]];
+    leaf->patch = nd->patch;
+    leaf->depth = nd->depth;
+    leaf->vertex_count = nd->count;
+    memcpy(leaf->vertices, nd->v, sizeof nd->v);
+    memcpy(leaf->radiosity, nd->b, sizeof nd->b);
+    leaf->area = nd->area;
+    return RADINTERP_OK;
+}
+
+/* Irradiance at p on a patch, summed over the links of its leaf and of the
+   leaf's ancestors (6.2). */
+static radinterp_result radinterp__irradiance(const radinterp_solution *s, uint32_t patch, const float p[3],
+                                              const float toward[3], double *h)
+{
+    radinterp__query query, *q = &query;  /* about 40 KB of stack: no allocation in the common case */
+    uint32_t node;
+    int k;
+    h[0] = h[1] = h[2] = 0.0;
+    if (!p || !radinterp__patch_ok(s, patch) || !radinterp__finite3(p) || (toward && !radinterp__finite3(toward)))
+        return RADINTERP_ERROR_INVALID_ARGUMENT;
+    q->s = s;
+    q->cdt_ready = 0;
+    q->failed = 0;
+    radinterp__d3_from_f(p, q->p);
+    memcpy(q->n, s->patches[patch].n, sizeof q->n);
+    q->dr = radinterp__d3_dot(q->n, q->p);
+    memcpy(q->pv, q->p, sizeof q->pv);
+    if (toward) {
+        double t[3], d[3], len, k2;
+        radinterp__d3_from_f(toward, t);
+        radinterp__d3_sub(t, q->p, d);
+        k2 = radinterp__d3_dot(d, q->n);
+        for (k = 0; k < 3; k++) d[k] -= k2 * q->n[k];
+        len = radinterp__d3_len(d);
+        if (len > 0.0) {
+            double step = len < s->nudge ? len : s->nudge;
+            for (k = 0; k < 3; k++) q->pv[k] += d[k] * (step / len);
+        }
+    }
+    for (node = radinterp__locate_leaf(s, patch, q->pv); node != RADINTERP__NONE; node = s->nodes[node].parent) {
+        const radinterp__node *nd = &s->nodes[node];
+        uint32_t l;
+        for (l = nd->first_link; l < nd->first_link + nd->link_count; l++) {
+            const radinterp__link *lk = &s->links[l];
+            const float *b = s->nodes[lk->source].b;
+            double f;
+            if (b[0] == 0.0f && b[1] == 0.0f && b[2] == 0.0f) continue;
+            f = radinterp__link_point_ff(q, lk);
+            h[0] += f * b[0];
+            h[1] += f * b[1];
+            h[2] += f * b[2];
+        }
+    }
+    if (q->cdt_ready) radinterp__cdt_free(&q->cdt);
+    return q->failed ? RADINTERP_ERROR_OUT_OF_MEMORY : RADINTERP_OK;
+}
+
+RADINTERP_API radinterp_result radinterp_irradiance_at_point(const radinterp_solution *s, uint32_t patch,
+                                                             const float p[3], const float toward[3], float rgb[3])
+{
+    double h[3];
+    radinterp_result r;
+    if (!rgb) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    r = radinterp__irradiance(s, patch, p, toward, h);
+    rgb[0] = (float)h[0];
+    rgb[1] = (float)h[1];
+    rgb[2] = (float)h[2];
+    return r;
+}
+
+RADINTERP_API radinterp_result radinterp_radiosity_at_point(const radinterp_solution *s, uint32_t patch,
+                                                            const float p[3], const float toward[3], float rgb[3])
+{
+    double h[3];
+    radinterp_result r;
+    int k;
+    if (!rgb) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    r = radinterp__irradiance(s, patch, p, toward, h);
+    if (r != RADINTERP_OK && r != RADINTERP_ERROR_OUT_OF_MEMORY) { rgb[0] = rgb[1] = rgb[2] = 0.0f; return r; }
+    for (k = 0; k < 3; k++) rgb[k] = (float)(s->patches[patch].e[k] + s->patches[patch].rho[k] * h[k]);
+    return r;
+}
+
 RADINTERP_API const char *radinterp_result_string(radinterp_result r)
 {
     switch (r) {
