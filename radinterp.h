@@ -60,14 +60,18 @@
 
        eps                Gur::eps, transport error bound in W/m^2: a link is
                           refined while B_src * (max - min of the point form
-                          factors over its receiver) exceeds it.   default 0.5
+                          factors over its receiver) exceeds it.
+                          default half the mean emitted radiosity (emitted
+                          power / total area): 0.13 W/m^2 for the office,
+                          near the paper's 0.1
        min_area           Gur::aeps, no node is split into children smaller
                           than this (m^2).          default (diagonal / 200)^2
        rel_error_cutoff   Basis::relErrorCutoff, convergence: every leaf's
                           radiosity changes by less than this fraction in an
                           iteration.                                default 1e-3
        max_iterations     gather/push-pull iterations at most.       default 64
-       ff_samples         receiver points per link form factor.       default 4
+       ff_samples         receiver points per link form factor (a square
+                          number gives a jittered grid).              default 9
        visibility_rays    shadow rays per receiver point when shaft culling
                           left blockers.                              default 8
        push_off           Polygon::ffPushOff: sources are moved this far behind
@@ -2545,6 +2549,37 @@ static double radinterp__fan_areas(const double (*v)[3], int count, double *tri_
 
 static float radinterp__rng_unit(radinterp__rng *r) { return radinterp__rng_float(r); }
 
+/* Sample i of n on a receiver polygon, with its weight (mean 1 over the
+   polygon). When n is a square k x k the samples are jittered in a k x k
+   grid of strata: mapped bilinearly onto a quadrilateral (weighted by the
+   map's area density, 1 for a parallelogram) or area-preservingly onto a
+   triangle. Otherwise they are stratified along the fan of triangles. */
+static double radinterp__receiver_point(const double (*v)[3], int count, const double *tri_area, double total,
+                                        uint32_t i, uint32_t n, radinterp__rng *rng, double *out)
+{
+    uint32_t k = (uint32_t)(sqrt((double)n) + 0.5);
+    double u = radinterp__rng_unit(rng), w = radinterp__rng_unit(rng);
+    int j;
+    if (k * k == n && (count == 3 || count == 4)) {
+        double a = ((i % k) + u) / k, b = ((i / k) + w) / k;
+        if (count == 4) {
+            double du[3], dv[3], c[3];
+            for (j = 0; j < 3; j++) {
+                out[j] = (1 - a) * (1 - b) * v[0][j] + a * (1 - b) * v[1][j] + a * b * v[2][j] + (1 - a) * b * v[3][j];
+                du[j] = (1 - b) * (v[1][j] - v[0][j]) + b * (v[2][j] - v[3][j]);
+                dv[j] = (1 - a) * (v[3][j] - v[0][j]) + a * (v[2][j] - v[1][j]);
+            }
+            radinterp__d3_cross(du, dv, c);
+            return total > 0.0 ? radinterp__d3_len(c) / total : 1.0;
+        }
+        a = sqrt(a);
+        for (j = 0; j < 3; j++) out[j] = (1 - a) * v[0][j] + a * (1 - b) * v[1][j] + a * b * v[2][j];
+        return 1.0;
+    }
+    radinterp__poly_point(v, count, tri_area, total, (i + u) / n, w, out);
+    return 1.0;
+}
+
 /* Is the segment from a to b blocked? Through the caller's ray caster or
    the built-in BVH. */
 static int radinterp__segment_blocked(const radinterp_solution *s, const double *a, const double *b)
@@ -2636,10 +2671,8 @@ static void radinterp__link_compute(radinterp_solution *s, radinterp__pending *p
        the receiver alone), so the factors of a closed scene sum to one */
     rng = radinterp__rng_stream(s->seed, clipped ? ((uint64_t)pl->receiver << 32 | pl->source) : pl->receiver);
     for (i = 0; i < n; i++) {
-        double q[3], f;
-        double u1 = (i + radinterp__rng_unit(&rng)) / n, u2 = radinterp__rng_unit(&rng);
-        radinterp__poly_point((const double (*)[3])Rc, nRc, tri_area, total, u1, u2, q);
-        f = radinterp__ff_poly(q, pr->n, (const double (*)[3])Sc, nSc);
+        double q[3], f, w = radinterp__receiver_point((const double (*)[3])Rc, nRc, tri_area, total, i, n, &rng, q);
+        f = w * radinterp__ff_poly(q, pr->n, (const double (*)[3])Sc, nSc);
         if (f < 0.0) f = 0.0;
         if (pl->kept && f > 0.0) {
             radinterp__rng vis = radinterp__rng_stream(s->seed ^ 0xA5A5A5A5u, ((uint64_t)pl->receiver << 32 | pl->source) * 64u + i);
@@ -2647,8 +2680,30 @@ static void radinterp__link_compute(radinterp_solution *s, radinterp__pending *p
             pl->rays += s->visibility_rays;
         }
         sum += f;
-        lo = f < lo ? f : lo;
-        hi = f > hi ? f : hi;
+    }
+    /* The refinement estimate comes from fixed points, the receiver's
+       corners pulled a fifth toward its centre, and the centre: if it came
+       from the random points, the links whose points happened to miss a peak
+       of the factor (near a shared edge) would be the ones kept, and the kept
+       factors would be biased low. */
+    {
+        double c[3] = {0.0, 0.0, 0.0};
+        int k, j;
+        for (k = 0; k < nRc; k++)
+            for (j = 0; j < 3; j++) c[j] += Rc[k][j] / nRc;
+        for (k = 0; k <= nRc; k++) {
+            double q[3], f;
+            for (j = 0; j < 3; j++) q[j] = k < nRc ? 0.8 * Rc[k][j] + 0.2 * c[j] : c[j];
+            f = radinterp__ff_poly(q, pr->n, (const double (*)[3])Sc, nSc);
+            if (f < 0.0) f = 0.0;
+            if (pl->kept && f > 0.0) {
+                radinterp__rng vis = radinterp__rng_stream(s->seed ^ 0x5A5A5A5Au, ((uint64_t)pl->receiver << 32 | pl->source) * 64u + (uint64_t)k);
+                f *= radinterp__visible_fraction(s, q, pr->n, (const double (*)[3])Sc, nSc, ps->n, &vis, s->visibility_rays);
+                pl->rays += s->visibility_rays;
+            }
+            lo = f < lo ? f : lo;
+            hi = f > hi ? f : hi;
+        }
     }
     pl->ff = (float)(ratio * sum / n);
     pl->dff = (float)(ratio * (hi - lo));
@@ -3162,8 +3217,16 @@ static int radinterp__ray_hits_patch(const radinterp__patch *pt, const double *a
 /* Does the convex polygon a (either winding) contain every corner of b? */
 static int radinterp__covers(const double (*a)[2], int na, const double (*b)[2], int nb)
 {
-    double area = 0.0;
+    double area = 0.0, lo[2] = {DBL_MAX, DBL_MAX}, hi[2] = {-DBL_MAX, -DBL_MAX};
     int i, j;
+    for (i = 0; i < na; i++) {
+        lo[0] = a[i][0] < lo[0] ? a[i][0] : lo[0];
+        lo[1] = a[i][1] < lo[1] ? a[i][1] : lo[1];
+        hi[0] = a[i][0] > hi[0] ? a[i][0] : hi[0];
+        hi[1] = a[i][1] > hi[1] ? a[i][1] : hi[1];
+    }
+    for (j = 0; j < nb; j++) /* bounding boxes first: most pairs fail here */
+        if (b[j][0] < lo[0] || b[j][0] > hi[0] || b[j][1] < lo[1] || b[j][1] > hi[1]) return 0;
     for (i = 0; i < na; i++) area += a[i][0] * a[(i + 1) % na][1] - a[(i + 1) % na][0] * a[i][1];
     if (area == 0.0) return 0;
     for (j = 0; j < nb; j++)
@@ -3663,11 +3726,20 @@ RADINTERP_API radinterp_result radinterp_solve(const radinterp_desc *desc, radin
     res = radinterp__build_patches(s, desc);
     if (res == RADINTERP_OK) {
         double diag = s->diag;
-        s->eps = radinterp__def(desc->eps, 0.5f);
+        double power = 0.0, area = 0.0;
+        uint32_t i;
+        for (i = 0; i < s->patch_count; i++) {
+            const radinterp__patch *pt = &s->patches[i];
+            double e = pt->e[0] > pt->e[1] ? (pt->e[0] > pt->e[2] ? pt->e[0] : pt->e[2]) : (pt->e[1] > pt->e[2] ? pt->e[1] : pt->e[2]);
+            power += e * pt->area;
+            area += pt->area;
+        }
+        /* half the mean emitted radiosity: the scale of the light in the scene */
+        s->eps = desc->eps > 0.0f ? desc->eps : (area > 0.0 && power > 0.0 ? 0.5 * power / area : 1.0);
         s->min_area = desc->min_area > 0.0f ? desc->min_area : (diag / 200.0) * (diag / 200.0);
         s->rel_error_cutoff = radinterp__def(desc->rel_error_cutoff, 1e-3f);
         s->max_iterations = radinterp__def(desc->max_iterations, 64u);
-        s->ff_samples = radinterp__def(desc->ff_samples, 4u);
+        s->ff_samples = radinterp__def(desc->ff_samples, 9u);
         s->visibility_rays = radinterp__def(desc->visibility_rays, 8u);
         s->epsilon = radinterp__def(desc->epsilon, 1e-6f);
         s->push_off = desc->push_off > 0.0f ? desc->push_off : 1e-5 * diag;
