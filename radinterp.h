@@ -100,7 +100,7 @@
        void radinterp_solution_destroy(radinterp_solution *s);
        void radinterp_solution_info(const radinterp_solution *s, radinterp_info *info);
        radinterp_result radinterp_patch_radiosity(const radinterp_solution *s, uint32_t patch, float rgb[3]);
-                                    area-average radiosity B of a patch
+                                    area-average radiosity B of a patch (enclosed parts at E)
        uint32_t radinterp_leaf_count(const radinterp_solution *s);
        radinterp_result radinterp_get_leaf(const radinterp_solution *s, uint32_t index, radinterp_leaf *leaf);
                                     the quadtree leaves (elements) with their radiosity
@@ -257,8 +257,10 @@ typedef struct radinterp_leaf {
     uint32_t depth;              /* 0 = the patch itself */
     uint32_t vertex_count;       /* 3 or 4 */
     float vertices[4][3];
-    float radiosity[3];          /* B of the element, W/m^2 */
+    float radiosity[3];          /* B of the element's open part, W/m^2 */
     float area;
+    float open;                  /* fraction of the element not enclosed by geometry resting on it
+                                    (the floor under a box): enclosed parts are dark, at radiosity E */
 } radinterp_leaf;
 
 RADINTERP_API const char *radinterp_result_string(radinterp_result r);
@@ -2080,8 +2082,10 @@ typedef struct radinterp__node {
     uint32_t first_link, link_count;   /* the links this node gathers */
     float area;
     float lo[3], hi[3];
-    float b[3];               /* radiosity B (W/m^2), constant over the node */
-    float h[3];               /* irradiance gathered by this node's own links */
+    float b[3];               /* radiosity B (W/m^2) of the node's open part, constant over it */
+    float h[3];               /* irradiance gathered by this node's own links (mean over the whole node) */
+    float open;               /* fraction of the node not enclosed by touching geometry (such as the
+                                 floor under a box standing on it); enclosed parts receive and show nothing */
 } radinterp__node;
 
 #define RADINTERP__LINK_FINAL 1u   /* may not be refined further */
@@ -2363,6 +2367,7 @@ static int radinterp__node_split(radinterp_solution *s, uint32_t index)
         ch[k].first_link = 0;
         ch[k].link_count = 0;
         memcpy(ch[k].b, nd->b, sizeof nd->b);
+        ch[k].open = -1.0f; /* measured before the node is used */
         radinterp__node_bounds(&ch[k]);
     }
     nd->child = first;
@@ -2413,6 +2418,64 @@ static uint32_t radinterp__locate_leaf(const radinterp_solution *s, uint32_t pat
         node = nd->child + pick;
     }
     return node;
+}
+
+/* Fraction of a node that is open: at a 3 x 3 grid of its points, a point
+   is enclosed when rays in five directions of its hemisphere all meet back
+   faces (it lies inside closed geometry resting on it, like the floor under
+   a box). Enclosed parts neither receive nor show light, so radiosities are
+   kept for the open part; without this a node half under a box would carry
+   half its real radiosity to everything that sees its open half. */
+static float radinterp__node_openness(const radinterp_solution *s, const radinterp__node *nd)
+{
+    const radinterp__patch *pt = &s->patches[nd->patch];
+    radinterp__vec3 n = radinterp__v3((float)pt->n[0], (float)pt->n[1], (float)pt->n[2]), t, b;
+    double off = 10.0 * s->epsilon * s->diag;
+    int i, j, open = 0, k, r;
+    /* a basis around n (Duff et al. 2017) */
+    {
+        float sg = n.z >= 0.0f ? 1.0f : -1.0f, a = -1.0f / (sg + n.z), c = n.x * n.y * a;
+        t = radinterp__v3(1.0f + sg * n.x * n.x * a, sg * c, -sg * n.x);
+        b = radinterp__v3(c, sg + n.y * n.y * a, -n.y);
+    }
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++) {
+            double u = (i + 0.5) / 3.0, v = (j + 0.5) / 3.0, p[3];
+            int enclosed = 1;
+            for (k = 0; k < 3; k++) {
+                if (nd->count == 4)
+                    p[k] = (1 - u) * (1 - v) * nd->v[0][k] + u * (1 - v) * nd->v[1][k] + u * v * nd->v[2][k] + (1 - u) * v * nd->v[3][k];
+                else
+                    p[k] = (1 - sqrt(u)) * nd->v[0][k] + sqrt(u) * (1 - v) * nd->v[1][k] + sqrt(u) * v * nd->v[2][k];
+            }
+            for (r = 0; r < 5 && enclosed; r++) {
+                static const float ct[5] = {0.0f, 0.866f, -0.866f, 0.0f, 0.0f}, cb[5] = {0.0f, 0.0f, 0.0f, 0.866f, -0.866f};
+                float org[3], dir[3];
+                float cn = r == 0 ? 1.0f : 0.5f;
+                radinterp__hit hit;
+                dir[0] = cn * n.x + ct[r] * t.x + cb[r] * b.x;
+                dir[1] = cn * n.y + ct[r] * t.y + cb[r] * b.y;
+                dir[2] = cn * n.z + ct[r] * t.z + cb[r] * b.z;
+                for (k = 0; k < 3; k++) org[k] = (float)(p[k] + off * pt->n[k]);
+                if (!radinterp__bvh_intersect(&s->bvh, org, dir, 0.0f, FLT_MAX, &hit)) enclosed = 0;
+                else {
+                    const double *hn = s->patches[s->tri_patch[hit.tri]].n;
+                    if (hn[0] * dir[0] + hn[1] * dir[1] + hn[2] * dir[2] < 0.0) enclosed = 0; /* a front face */
+                }
+            }
+            open += !enclosed;
+        }
+    return (float)open / 9.0f;
+}
+
+typedef struct radinterp__open_ctx { radinterp_solution *s; uint32_t first, count; } radinterp__open_ctx;
+
+static void radinterp__open_job(void *ctx_, uint32_t index)
+{
+    radinterp__open_ctx *ctx = (radinterp__open_ctx *)ctx_;
+    uint32_t i = ctx->first + index * 64, end = i + 64;
+    if (end > ctx->first + ctx->count) end = ctx->first + ctx->count;
+    for (; i < end; i++) ctx->s->nodes[i].open = radinterp__node_openness(ctx->s, &ctx->s->nodes[i]);
 }
 
 /* ---- shaft culling (Haines and Wallace) ------------------------------- */
@@ -2601,25 +2664,33 @@ static int radinterp__segment_blocked(const radinterp_solution *s, const double 
     return radinterp__bvh_occluded(&s->bvh, org, dir, 0.0f, 1.0f);
 }
 
-/* Fraction of `rays` segments from q (on the receiver) to stratified points
-   of the source polygon that nothing blocks. Both ends leave their surface
-   by a small offset along its normal, so neither end hits its own surface. */
+/* Visible fraction of the source seen from q (on the receiver), weighted
+   like the form factor: rays to stratified points of the source polygon,
+   each counting with the kernel cos cos / r^2 of its end point, so that a
+   blocker hiding the near (bright) part of the source weighs more than one
+   hiding the far part. Both ends leave their surface by a small offset
+   along its normal, so neither end hits its own surface. */
 static double radinterp__visible_fraction(const radinterp_solution *s, const double *q, const double *nr,
                                           const double (*src)[3], int count, const double *ns, radinterp__rng *rng,
                                           uint32_t rays)
 {
     double tri_area[RADINTERP__POLY_MAX], total = radinterp__fan_areas(src, count, tri_area), off = 10.0 * s->epsilon * s->diag;
-    double a[3], b[3];
-    uint32_t i, open = 0;
+    double a[3], b[3], open = 0.0, all = 0.0;
+    uint32_t i;
     int k;
     for (k = 0; k < 3; k++) a[k] = q[k] + off * nr[k];
     for (i = 0; i < rays; i++) {
-        double u1 = (i + radinterp__rng_unit(rng)) / rays, u2 = radinterp__rng_unit(rng);
+        double u1 = (i + radinterp__rng_unit(rng)) / rays, u2 = radinterp__rng_unit(rng), d[3], r2, w;
         radinterp__poly_point(src, count, tri_area, total, u1, u2, b);
+        radinterp__d3_sub(b, q, d);
+        r2 = radinterp__d3_dot(d, d);
+        w = r2 > 0.0 ? radinterp__d3_dot(d, nr) * -radinterp__d3_dot(d, ns) / (r2 * r2) : 0.0;
+        if (!(w > 0.0)) continue;
         for (k = 0; k < 3; k++) b[k] += off * ns[k];
-        if (!radinterp__segment_blocked(s, a, b)) open++;
+        all += w;
+        if (!radinterp__segment_blocked(s, a, b)) open += w;
     }
-    return (double)open / rays;
+    return all > 0.0 ? open / all : 1.0;
 }
 
 /* Keeps the candidates that may block between the two nodes. */
@@ -2939,15 +3010,37 @@ static int radinterp__can_split(const radinterp_solution *s, const radinterp__no
     return 0.25 * nd->area >= s->min_area;
 }
 
+/* Largest difference between the radiosities of a node's children (0 for
+   a leaf): how far the node's mean may be from the part a receiver sees. */
+static double radinterp__source_spread(const radinterp_solution *s, uint32_t node)
+{
+    const radinterp__node *nd = &s->nodes[node];
+    double spread = 0.0;
+    int k, c;
+    if (nd->child == RADINTERP__NONE) return 0.0;
+    for (k = 0; k < 3; k++) {
+        double lo = DBL_MAX, hi = -DBL_MAX;
+        for (c = 0; c < 4; c++) {
+            double b = s->nodes[nd->child + c].b[k];
+            lo = b < lo ? b : lo;
+            hi = b > hi ? b : hi;
+        }
+        spread = hi - lo > spread ? hi - lo : spread;
+    }
+    return spread;
+}
+
 /* Transport-based refinement (4.4.1): a link whose estimated transport
    error B_src * (max - min point factor) exceeds eps is replaced by four
    links to the children of its larger element (the other one when the
-   larger may not be split; a link that can go no further is final).
+   larger may not be split; a link that can go no further is final). A link
+   whose source has children that differ by more than eps / F is replaced by
+   links from those children.
    Returns the number of links split, or -1 when out of memory (*res). */
 static int radinterp__refine(radinterp_solution *s, const radinterp__run *run, radinterp_result *res)
 {
     radinterp__grow keep, pend;
-    uint32_t i, k, split = 0, *out = NULL;
+    uint32_t i, k, split = 0, *out = NULL, nodes_before = s->node_count;
     uint64_t cand = 0;
     memset(&keep, 0, sizeof keep);
     memset(&pend, 0, sizeof pend);
@@ -2965,6 +3058,11 @@ static int radinterp__refine(radinterp_solution *s, const radinterp__run *run, r
             if (rs && (r->area >= src->area || !ss)) which = 0;
             else if (ss) which = 1;
             else l.flags |= RADINTERP__LINK_FINAL;
+        } else if (!(l.flags & RADINTERP__LINK_FINAL) && radinterp__source_spread(s, l.source) * l.ff > s->eps) {
+            /* the source is not uniform (its children differ): the link
+               carries its mean where the receiver may see a brighter or
+               darker part, so it goes to the children */
+            which = 1;
         }
         if (which < 0) {
             radinterp__link *slot = (radinterp__link *)radinterp__grow_push(s, &keep);
@@ -2989,6 +3087,13 @@ static int radinterp__refine(radinterp_solution *s, const radinterp__run *run, r
             cand += l.blocker_count;
         }
         if (*res != RADINTERP_OK) break;
+    }
+    if (*res == RADINTERP_OK && s->node_count > nodes_before) {
+        radinterp__open_ctx oc;
+        oc.s = s;
+        oc.first = nodes_before;
+        oc.count = s->node_count - nodes_before;
+        radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__open_job, &oc, (oc.count + 63) / 64);
     }
     if (*res == RADINTERP_OK && split) {
         /* the four children of a link share its candidates: give each its own copy */
@@ -3049,20 +3154,23 @@ static void radinterp__gather_job(void *ctx_, uint32_t index)
 }
 
 /* Push the irradiance gathered above down to the leaves, B = E + rho H there
-   (eq. 2.1), and pull area-weighted averages back up. */
+   (eq. 2.1), and pull averages back up. Irradiance and radiosity are those
+   of the open part of each node: a node's gathered irradiance is a mean over
+   the whole node, in which enclosed points count zero, so it is divided by
+   the open fraction, and averages weigh children by their open areas. */
 static void radinterp__push_pull(radinterp_solution *s, uint32_t index, const double *down, double floor,
                                  double *change, double *b_out)
 {
     radinterp__node *nd = &s->nodes[index];
     const radinterp__patch *pt = &s->patches[nd->patch];
-    double h[3], b[3];
+    double h[3], b[3], open = nd->open;
     int k;
-    for (k = 0; k < 3; k++) h[k] = down[k] + nd->h[k];
+    for (k = 0; k < 3; k++) h[k] = down[k] + (open > 0.0 ? nd->h[k] / open : 0.0);
     if (nd->child == RADINTERP__NONE) {
         for (k = 0; k < 3; k++) {
             double rel;
             b[k] = pt->e[k] + pt->rho[k] * h[k];
-            rel = fabs(b[k] - nd->b[k]) / (b[k] > floor ? b[k] : floor);
+            rel = open > 0.0 ? fabs(b[k] - nd->b[k]) / (b[k] > floor ? b[k] : floor) : 0.0;
             if (rel > *change) *change = rel;
         }
     } else {
@@ -3071,13 +3179,13 @@ static void radinterp__push_pull(radinterp_solution *s, uint32_t index, const do
         b[0] = b[1] = b[2] = 0.0;
         for (c = 0; c < 4; c++) {
             uint32_t ch = s->nodes[index].child + c;
-            double a = s->nodes[ch].area;
+            double a = (double)s->nodes[ch].area * s->nodes[ch].open;
             radinterp__push_pull(s, ch, h, floor, change, cb);
             for (k = 0; k < 3; k++) b[k] += a * cb[k];
             area += a;
         }
         nd = &s->nodes[index];
-        for (k = 0; k < 3; k++) b[k] = area > 0.0 ? b[k] / area : 0.0;
+        for (k = 0; k < 3; k++) b[k] = area > 0.0 ? b[k] / area : pt->e[k];
     }
     for (k = 0; k < 3; k++) { nd->b[k] = (float)b[k]; b_out[k] = b[k]; }
 }
@@ -3156,6 +3264,7 @@ typedef struct radinterp__query {
     double n[3], dr;      /* receiver normal and n . p */
     radinterp__cdt cdt;
     int cdt_ready;        /* cdt initialised (on mem) */
+    int depth_left;       /* how much deeper into a source's children a query may go */
     int failed;           /* out of memory in a triangulation */
     double mem[RADINTERP__BP_BYTES / sizeof(double)];
     double shadow[RADINTERP__BP_MAX_SURVIVORS][RADINTERP__POLY_MAX][2];   /* projected blockers, 2D */
@@ -3440,11 +3549,12 @@ static double radinterp__backproject(radinterp__query *q, const radinterp__link 
     return -sum / (2.0 * RADINTERP__PI);
 }
 
-/* Point-to-source factor of one link at the query point. */
-static double radinterp__link_point_ff(radinterp__query *q, const radinterp__link *lk)
+/* Point-to-polygon factor from the query point to one node of a link's
+   source, seen past the link's blockers. */
+static double radinterp__node_point_ff(radinterp__query *q, const radinterp__link *lk, uint32_t node)
 {
     const radinterp_solution *s = q->s;
-    const radinterp__node *src = &s->nodes[lk->source];
+    const radinterp__node *src = &s->nodes[node];
     const radinterp__patch *ps = &s->patches[src->patch];
     double S[RADINTERP__POLY_MAX][3], Sc[RADINTERP__POLY_MAX][3], ds = ps->d - s->push_off;
     int n = radinterp__node_poly(src, S), nc, i;
@@ -3458,6 +3568,46 @@ static double radinterp__link_point_ff(radinterp__query *q, const radinterp__lin
     if (nc < 3) return 0.0;
     if (lk->blocker_count == 0) return radinterp__ff_poly(q->p, q->n, (const double (*)[3])Sc, nc);
     return radinterp__backproject(q, lk, (const double (*)[3])Sc, nc, ps->n, ds, s->push_off);
+}
+
+/* Point-to-source factor of one link at the query point. */
+RADINTERP__MAYBE_UNUSED static double radinterp__link_point_ff(radinterp__query *q, const radinterp__link *lk)
+{
+    return radinterp__node_point_ff(q, lk, lk->source);
+}
+
+/* Unoccluded factor from the query point to a node (no backprojection): an
+   upper bound of its share, to decide whether its children matter. */
+static double radinterp__node_point_ff_bound(const radinterp__query *q, uint32_t node)
+{
+    const radinterp__node *nd = &q->s->nodes[node];
+    double S[RADINTERP__POLY_MAX][3], Sc[RADINTERP__POLY_MAX][3];
+    int n = radinterp__node_poly(nd, S), nc = radinterp__clip_poly((const double (*)[3])S, n, q->n, q->dr, Sc);
+    return nc < 3 ? 0.0 : radinterp__ff_poly(q->p, q->n, (const double (*)[3])Sc, nc);
+}
+
+/* B_src * F for one link. The source node's radiosity is a mean; where its
+   children differ enough that the mean would misjudge the part seen from p
+   (their spread times the node's factor above a tenth of eps), the children
+   are taken instead, each with its own factor past the same blockers. */
+static void radinterp__link_point_add(radinterp__query *q, const radinterp__link *lk, uint32_t node, double *h)
+{
+    const radinterp_solution *s = q->s;
+    const radinterp__node *nd = &s->nodes[node];
+    double f;
+    if (nd->child != RADINTERP__NONE && q->depth_left > 0 &&
+        radinterp__source_spread(s, node) * radinterp__node_point_ff_bound(q, node) > 0.1 * s->eps) {
+        uint32_t c;
+        q->depth_left--;
+        for (c = 0; c < 4; c++) radinterp__link_point_add(q, lk, nd->child + c, h);
+        q->depth_left++;
+        return;
+    }
+    if (nd->b[0] == 0.0f && nd->b[1] == 0.0f && nd->b[2] == 0.0f) return;
+    f = radinterp__node_point_ff(q, lk, node);
+    h[0] += f * nd->b[0];
+    h[1] += f * nd->b[1];
+    h[2] += f * nd->b[2];
 }
 
 /* ======================================================================
@@ -3643,7 +3793,7 @@ static radinterp_result radinterp__build_bvh(radinterp_solution *s)
     return ok ? RADINTERP_OK : RADINTERP_ERROR_OUT_OF_MEMORY;
 }
 
-static radinterp_result radinterp__make_roots(radinterp_solution *s)
+static radinterp_result radinterp__make_roots(radinterp_solution *s, const radinterp__run *run)
 {
     uint32_t i;
     for (i = 0; i < s->patch_count; i++) {
@@ -3661,6 +3811,13 @@ static radinterp_result radinterp__make_roots(radinterp_solution *s)
         memcpy(nd->b, pt->e, sizeof pt->e);
         radinterp__node_bounds(nd);
         pt->root = s->node_count++;
+    }
+    {
+        radinterp__open_ctx oc;
+        oc.s = s;
+        oc.first = 0;
+        oc.count = s->node_count;
+        radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__open_job, &oc, (oc.count + 63) / 64);
     }
     return RADINTERP_OK;
 }
@@ -3748,7 +3905,7 @@ RADINTERP_API radinterp_result radinterp_solve(const radinterp_desc *desc, radin
         s->seed = desc->seed;
         res = radinterp__build_bvh(s);
     }
-    if (res == RADINTERP_OK) res = radinterp__make_roots(s);
+    if (res == RADINTERP_OK) res = radinterp__make_roots(s, &run);
     if (res == RADINTERP_OK) res = radinterp__initial_links(s, &run);
     if (res == RADINTERP_OK) res = radinterp__iterate(s, &run);
     if (res == RADINTERP_OK) res = radinterp__collect_leaves(s);
@@ -3793,7 +3950,25 @@ RADINTERP_API radinterp_result radinterp_patch_radiosity(const radinterp_solutio
     if (!rgb) return RADINTERP_ERROR_INVALID_ARGUMENT;
     rgb[0] = rgb[1] = rgb[2] = 0.0f;
     if (!radinterp__patch_ok(s, patch)) return RADINTERP_ERROR_INVALID_ARGUMENT;
-    memcpy(rgb, s->nodes[s->patches[patch].root].b, 3 * sizeof(float));
+    {
+        /* over the whole patch: open parts at their radiosity, enclosed parts
+           at their emission alone */
+        const radinterp__patch *pt = &s->patches[patch];
+        double acc[3] = {0.0, 0.0, 0.0};
+        uint32_t stack[128], top = 0;
+        int k;
+        stack[top++] = pt->root;
+        while (top) {
+            const radinterp__node *nd = &s->nodes[stack[--top]];
+            if (nd->child != RADINTERP__NONE && top + 4 <= 128) {
+                uint32_t c;
+                for (c = 0; c < 4; c++) stack[top++] = nd->child + c;
+                continue;
+            }
+            for (k = 0; k < 3; k++) acc[k] += nd->area * (nd->open * nd->b[k] + (1.0 - nd->open) * pt->e[k]);
+        }
+        for (k = 0; k < 3; k++) rgb[k] = (float)(acc[k] / pt->area);
+    }
     return RADINTERP_OK;
 }
 
@@ -3812,6 +3987,7 @@ RADINTERP_API radinterp_result radinterp_get_leaf(const radinterp_solution *s, u
     memcpy(leaf->vertices, nd->v, sizeof nd->v);
     memcpy(leaf->radiosity, nd->b, sizeof nd->b);
     leaf->area = nd->area;
+    leaf->open = nd->open;
     return RADINTERP_OK;
 }
 
@@ -3829,6 +4005,7 @@ static radinterp_result radinterp__irradiance(const radinterp_solution *s, uint3
     q->s = s;
     q->cdt_ready = 0;
     q->failed = 0;
+    q->depth_left = 8;
     radinterp__d3_from_f(p, q->p);
     memcpy(q->n, s->patches[patch].n, sizeof q->n);
     q->dr = radinterp__d3_dot(q->n, q->p);
@@ -3848,16 +4025,8 @@ static radinterp_result radinterp__irradiance(const radinterp_solution *s, uint3
     for (node = radinterp__locate_leaf(s, patch, q->pv); node != RADINTERP__NONE; node = s->nodes[node].parent) {
         const radinterp__node *nd = &s->nodes[node];
         uint32_t l;
-        for (l = nd->first_link; l < nd->first_link + nd->link_count; l++) {
-            const radinterp__link *lk = &s->links[l];
-            const float *b = s->nodes[lk->source].b;
-            double f;
-            if (b[0] == 0.0f && b[1] == 0.0f && b[2] == 0.0f) continue;
-            f = radinterp__link_point_ff(q, lk);
-            h[0] += f * b[0];
-            h[1] += f * b[1];
-            h[2] += f * b[2];
-        }
+        for (l = nd->first_link; l < nd->first_link + nd->link_count; l++)
+            radinterp__link_point_add(q, &s->links[l], s->links[l].source, h);
     }
     if (q->cdt_ready) radinterp__cdt_free(&q->cdt);
     return q->failed ? RADINTERP_ERROR_OUT_OF_MEMORY : RADINTERP_OK;

@@ -731,6 +731,59 @@ static void test_energy_closed_box(void)
     radinterp_solution_destroy(sol);
 }
 
+/* A box standing on the floor: the floor under it is enclosed (open
+   fraction 0 where a leaf lies wholly under it), receives nothing, and does
+   not lower the radiosity the floor shows elsewhere. */
+static void test_enclosed_floor_under_box(void)
+{
+    scene s;
+    radinterp_desc d;
+    radinterp_solution *sol;
+    uint32_t grey, light, i, n, under = 0, open_ok = 1;
+    float c[8][3], p[3] = {0.45f, 0.45f, 0.0f}, h[3];
+    memset(&s, 0, sizeof s);
+    grey = add_material(&s, 0.6f, 0.0f);
+    light = add_material(&s, 0.5f, 10.0f);
+    add_cube(&s, grey, grey, light);
+    for (i = 0; i < 8; i++) {
+        c[i][0] = (i & 1) ? 0.6f : 0.3f;
+        c[i][1] = ((i >> 1) & 1) ? 0.6f : 0.3f;
+        c[i][2] = ((i >> 2) & 1) ? 0.3f : 0.0f;
+    }
+    /* four sides and the top, facing out; no bottom */
+    add_quad(&s, c[4], c[5], c[7], c[6], grey);
+    add_quad(&s, c[0], c[1], c[5], c[4], grey);
+    add_quad(&s, c[2], c[6], c[7], c[3], grey);
+    add_quad(&s, c[0], c[4], c[6], c[2], grey);
+    add_quad(&s, c[1], c[3], c[7], c[5], grey);
+    d = scene_desc(&s);
+    d.eps = 0.15f; /* fine enough that some floor leaves lie wholly under the box */
+    if (!CHECK(radinterp_solve(&d, &sol) == RADINTERP_OK)) return;
+    n = radinterp_leaf_count(sol);
+    for (i = 0; i < n; i++) {
+        radinterp_leaf lf;
+        float lo[2] = {1e9f, 1e9f}, hi[2] = {-1e9f, -1e9f};
+        uint32_t k;
+        radinterp_get_leaf(sol, i, &lf);
+        if (lf.patch != 0) continue;
+        for (k = 0; k < lf.vertex_count; k++) {
+            lo[0] = fminf(lo[0], lf.vertices[k][0]); hi[0] = fmaxf(hi[0], lf.vertices[k][0]);
+            lo[1] = fminf(lo[1], lf.vertices[k][1]); hi[1] = fmaxf(hi[1], lf.vertices[k][1]);
+        }
+        if (lo[0] >= 0.3f && hi[0] <= 0.6f && lo[1] >= 0.3f && hi[1] <= 0.6f) {
+            under++;
+            if (lf.open != 0.0f) open_ok = 0;
+        } else if (hi[0] <= 0.3f || lo[0] >= 0.6f || hi[1] <= 0.3f || lo[1] >= 0.6f) {
+            if (lf.open != 1.0f) open_ok = 0;
+        }
+    }
+    CHECK(under > 0);
+    CHECK(open_ok);
+    CHECK_EQ_INT(radinterp_irradiance_at_point(sol, 0, p, NULL, h), RADINTERP_OK);
+    CHECK(h[0] == 0.0f);
+    radinterp_solution_destroy(sol);
+}
+
 /* ---- the office: leaves, determinism, threads, callbacks ------------------ */
 static obj_scene office;
 static uint32_t *office_patches;
@@ -993,6 +1046,7 @@ int main(int argc, char **argv)
     RUN(test_nudge_toward);
     RUN(test_furnace_closed_box);
     RUN(test_energy_closed_box);
+    RUN(test_enclosed_floor_under_box);
     RUN(test_leaves_tile_patches);
     RUN(test_deterministic_any_thread_count);
     RUN(test_cancel_and_allocation_failures);
