@@ -3265,6 +3265,7 @@ typedef struct radinterp__query {
     radinterp__cdt cdt;
     int cdt_ready;        /* cdt initialised (on mem) */
     int depth_left;       /* how much deeper into a source's children a query may go */
+    uint32_t triangulated; /* sources that needed the triangulation (statistics) */
     int failed;           /* out of memory in a triangulation */
     double mem[RADINTERP__BP_BYTES / sizeof(double)];
     double shadow[RADINTERP__BP_MAX_SURVIVORS][RADINTERP__POLY_MAX][2];   /* projected blockers, 2D */
@@ -3460,6 +3461,7 @@ static double radinterp__backproject(radinterp__query *q, const radinterp__link 
             }
         }
     }
+    q->triangulated++;
     /* the shadows' edges as constraints: every shadow is a closed loop, so
        the flood below cannot leak out of it */
     for (i = 0; i < nsurv; i++) {
@@ -3994,7 +3996,7 @@ RADINTERP_API radinterp_result radinterp_get_leaf(const radinterp_solution *s, u
 /* Irradiance at p on a patch, summed over the links of its leaf and of the
    leaf's ancestors (6.2). */
 static radinterp_result radinterp__irradiance(const radinterp_solution *s, uint32_t patch, const float p[3],
-                                              const float toward[3], double *h)
+                                              const float toward[3], double *h, uint32_t *triangulated)
 {
     radinterp__query query, *q = &query;  /* about 40 KB of stack: no allocation in the common case */
     uint32_t node;
@@ -4006,6 +4008,7 @@ static radinterp_result radinterp__irradiance(const radinterp_solution *s, uint3
     q->cdt_ready = 0;
     q->failed = 0;
     q->depth_left = 8;
+    q->triangulated = 0;
     radinterp__d3_from_f(p, q->p);
     memcpy(q->n, s->patches[patch].n, sizeof q->n);
     q->dr = radinterp__d3_dot(q->n, q->p);
@@ -4029,6 +4032,7 @@ static radinterp_result radinterp__irradiance(const radinterp_solution *s, uint3
             radinterp__link_point_add(q, &s->links[l], s->links[l].source, h);
     }
     if (q->cdt_ready) radinterp__cdt_free(&q->cdt);
+    if (triangulated) *triangulated = q->triangulated;
     return q->failed ? RADINTERP_ERROR_OUT_OF_MEMORY : RADINTERP_OK;
 }
 
@@ -4038,7 +4042,7 @@ RADINTERP_API radinterp_result radinterp_irradiance_at_point(const radinterp_sol
     double h[3];
     radinterp_result r;
     if (!rgb) return RADINTERP_ERROR_INVALID_ARGUMENT;
-    r = radinterp__irradiance(s, patch, p, toward, h);
+    r = radinterp__irradiance(s, patch, p, toward, h, NULL);
     rgb[0] = (float)h[0];
     rgb[1] = (float)h[1];
     rgb[2] = (float)h[2];
@@ -4052,7 +4056,7 @@ RADINTERP_API radinterp_result radinterp_radiosity_at_point(const radinterp_solu
     radinterp_result r;
     int k;
     if (!rgb) return RADINTERP_ERROR_INVALID_ARGUMENT;
-    r = radinterp__irradiance(s, patch, p, toward, h);
+    r = radinterp__irradiance(s, patch, p, toward, h, NULL);
     if (r != RADINTERP_OK && r != RADINTERP_ERROR_OUT_OF_MEMORY) { rgb[0] = rgb[1] = rgb[2] = 0.0f; return r; }
     for (k = 0; k < 3; k++) rgb[k] = (float)(s->patches[patch].e[k] + s->patches[patch].rho[k] * h[k]);
     return r;
