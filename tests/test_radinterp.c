@@ -854,6 +854,18 @@ static void test_leaves_tile_patches(void)
     radinterp_solution_destroy(sol);
 }
 
+typedef struct query_job {
+    const radinterp_solution *s;
+    uint32_t patch[64];
+    float p[64][3], h[64][3];
+} query_job;
+
+static void query_job_run(void *ctx, uint32_t i)
+{
+    query_job *j = (query_job *)ctx;
+    radinterp_irradiance_at_point(j->s, j->patch[i], j->p[i], NULL, j->h[i]);
+}
+
 static void test_deterministic_any_thread_count(void)
 {
     radinterp_desc d;
@@ -882,6 +894,31 @@ static void test_deterministic_any_thread_count(void)
     CHECK(same);
     test_note("office: %u leaves, %u links, %u iterations, %llu shadow rays", ia.leaf_count, ia.link_count, ia.iterations,
               (unsigned long long)ia.shadow_rays);
+    /* const queries from several threads at once give the serial answers */
+    {
+        query_job job;
+        uint32_t k;
+        job.s = b;
+        for (k = 0; k < 64; k++) {
+            radinterp_leaf lf;
+            uint32_t c;
+            radinterp_get_leaf(b, (k * 2654435761u) % ib.leaf_count, &lf);
+            job.patch[k] = lf.patch;
+            memset(job.p[k], 0, sizeof job.p[k]);
+            for (c = 0; c < lf.vertex_count; c++) {
+                job.p[k][0] += lf.vertices[c][0] / lf.vertex_count;
+                job.p[k][1] += lf.vertices[c][1] / lf.vertex_count;
+                job.p[k][2] += lf.vertices[c][2] / lf.vertex_count;
+            }
+        }
+        ex_pool_parallel_for(pool, query_job_run, &job, 64);
+        for (k = 0; k < 64; k++) {
+            float h[3];
+            radinterp_irradiance_at_point(b, job.patch[k], job.p[k], NULL, h);
+            if (memcmp(h, job.h[k], sizeof h) != 0) same = 0;
+        }
+        CHECK(same);
+    }
     radinterp_solution_destroy(a);
     radinterp_solution_destroy(b);
     ex_pool_destroy(pool);
