@@ -144,9 +144,10 @@
 
      Up to 2^32 - 1 records per cache. Strata: at most 256 x 512 cells. The
      built-in renderer shades hit points as Lambertian (direct light by area
-     sampling of the emitters plus `bounces - 1` cosine-sampled bounces), emitters
-     emit from their front face (counter-clockwise winding), other surfaces are
-     two-sided, rays that escape bring no light. A light vector is exact at the
+     sampling of the emitters plus `bounces - 1` cosine-sampled bounces), surfaces
+     are one-sided as in radiosity (the front is the side the counter-clockwise
+     winding faces; a back face is black and emits nothing), rays that escape
+     bring no light. A light vector is exact at the
      point and viewer direction it was computed for; elsewhere it is an
      interpolation, and a glossy lobe that needs light from several directions
      at once is approximated by one.
@@ -1235,14 +1236,17 @@ static int lightvec__material_valid(const lightvec_material *m)
 static void lightvec__brdf_unit(const lightvec_material *m, lightvec__vec3 n, lightvec__vec3 wi, lightvec__vec3 wo,
                                 float f[3])
 {
-    float cos_i = lightvec__dot(n, wi), lobe = 0.0f;
+    double lobe = 0.0;
     int c;
     if (m->specular[0] > 0.0f || m->specular[1] > 0.0f || m->specular[2] > 0.0f) {
-        lightvec__vec3 r = lightvec__sub(lightvec__scale(n, 2.0f * cos_i), wi); /* mirror of wi */
-        float ca = lightvec__dot(r, wo);
-        if (ca > 0.0f) lobe = (m->exponent + 2.0f) * (float)(1.0 / LIGHTVEC__TWO_PI) * powf(ca, m->exponent);
+        /* in double: a float cos alpha raised to a high exponent loses
+           exponent * 1e-7 of relative precision */
+        double ci = (double)n.x * wi.x + (double)n.y * wi.y + (double)n.z * wi.z;
+        double rx = 2.0 * ci * n.x - wi.x, ry = 2.0 * ci * n.y - wi.y, rz = 2.0 * ci * n.z - wi.z; /* mirror of wi */
+        double ca = rx * wo.x + ry * wo.y + rz * wo.z;
+        if (ca > 0.0) lobe = (m->exponent + 2.0) / LIGHTVEC__TWO_PI * pow(ca, m->exponent);
     }
-    for (c = 0; c < 3; c++) f[c] = m->diffuse[c] * (float)(1.0 / LIGHTVEC__PI) + m->specular[c] * lobe;
+    for (c = 0; c < 3; c++) f[c] = (float)(m->diffuse[c] / LIGHTVEC__PI + m->specular[c] * lobe);
 }
 
 LIGHTVEC_API void lightvec_brdf(const lightvec_material *m, const float normal[3], const float wi[3],
@@ -1554,7 +1558,7 @@ static lightvec__vec3 lightvec__emitter_point(const lightvec_scene *s, uint32_t 
    term cos_x cos_l / (r^2 pdf) and its visibility. Returns 0 when the sample
    faces away. */
 typedef struct lightvec__light_sample {
-    lightvec__vec3 dir;
+    lightvec__vec3 point, dir;
     float dist, cos_x, cos_l, inv_pdf;
     uint32_t emitter;
 } lightvec__light_sample;
@@ -1566,6 +1570,7 @@ static int lightvec__sample_emitter(const lightvec_scene *s, uint32_t e, lightve
     float r2 = lightvec__dot(d, d), r;
     if (!(r2 > 0.0f)) return 0;
     r = sqrtf(r2);
+    ls->point = p;
     ls->dir = lightvec__scale(d, 1.0f / r);
     ls->dist = r;
     ls->cos_x = lightvec__dot(n, ls->dir);
@@ -1584,9 +1589,11 @@ static int lightvec__sample_light(const lightvec_scene *s, lightvec__vec3 x, lig
 static int lightvec__light_visible(const lightvec_scene *s, lightvec__vec3 x, lightvec__vec3 n,
                                    const lightvec__light_sample *ls)
 {
-    lightvec__vec3 org = lightvec__add(x, lightvec__scale(n, s->eps));
-    float tmax = ls->dist * (1.0f - 1e-4f) - s->eps;
-    return tmax <= 0.0f || !lightvec__occluded(s, org, ls->dir, tmax);
+    /* from the offset origin to the light point itself, stopping 1e-4 short
+       of it (relative) so that the emitter does not shadow itself */
+    lightvec__vec3 org = lightvec__add(x, lightvec__scale(n, s->eps)), d = lightvec__sub(ls->point, org);
+    float len = lightvec__length(d);
+    return !(len > 0.0f) || !lightvec__occluded(s, org, lightvec__scale(d, 1.0f / len), len * (1.0f - 1e-4f));
 }
 
 /* Direct irradiance at x (normal n) from the emitters, `samples` samples. */
@@ -1608,7 +1615,7 @@ static void lightvec__direct_irradiance(const lightvec_scene *s, lightvec__rng *
     e[0] /= samples; e[1] /= samples; e[2] /= samples;
 }
 
-/* Radiance leaving the surface hit by the ray (org, dir) back toward org,
+/* Radiance leaving the front face hit by the ray (org, dir) back toward org,
    emission excluded (light straight from an emitter is direct light at the
    gathering point, not indirect): Lambertian reflection of the direct light
    at the hit, plus (bounces - 1) cosine-sampled diffuse bounces, each adding
@@ -1628,7 +1635,7 @@ static void lightvec__path_radiance(const lightvec_scene *s, lightvec__rng *rng,
         double e[3];
         float u1, u2, r, phi;
         int c;
-        if (lightvec__dot(n, dir) > 0.0f) n = lightvec__scale(n, -1.0f); /* two-sided */
+        if (!(lightvec__dot(n, dir) < 0.0f)) break; /* back faces are black (one-sided, as in radiosity) */
         lightvec__direct_irradiance(s, rng, y, n, light_samples, e);
         for (c = 0; c < 3; c++) out[c] += through[c] * rho[c] * (1.0 / LIGHTVEC__PI) * e[c];
         if (b + 1 == bounces) break;
