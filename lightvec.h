@@ -1213,7 +1213,9 @@ static int lightvec__unit(const float *in, lightvec__vec3 *out)
     v = lightvec__v3_load(in);
     l = lightvec__length(v);
     if (!(l > 1e-20f) || !isfinite(l)) return 0;
-    *out = lightvec__scale(v, 1.0f / l);
+    /* a vector already unit to float precision is kept as it is, so that
+       normalising twice (insert, save, load) changes nothing */
+    *out = fabsf(l - 1.0f) <= 4e-7f ? v : lightvec__scale(v, 1.0f / l);
     return 1;
 }
 
