@@ -38,6 +38,8 @@ static void jitter(rng *r, const float *base, double max_deg, float *out)
     for (k = 0; k < 3; k++) out[k] = (float)(out[k] / l);
 }
 
+static double dot3(const float *a, const float *b) { return (double)a[0] * b[0] + (double)a[1] * b[1] + (double)a[2] * b[2]; }
+
 static const float axes[6][3] = { { 1, 0, 0 }, { -1, 0, 0 }, { 0, 1, 0 }, { 0, -1, 0 }, { 0, 0, 1 }, { 0, 0, -1 } };
 
 /* Records in the unit cube, normals near the six axes, viewer directions half
@@ -123,6 +125,21 @@ static int brute_weight(const criteria *c, const lightvec_record *b, const float
 
 typedef struct query { float a[3], n[3], w[3]; int directional; } query;
 
+/* One record's term in the interpolated M (red channel), per 4.2.3 and the
+   header's interpolation modes. */
+static double interpolated_term(lightvec_interpolation mode, const lightvec_record *b, const float *a)
+{
+    double cos_nd = dot3(b->normal, b->vector.direction), m = b->vector.magnitude[0], f = 1.0;
+    if (mode == LIGHTVEC_INTERPOLATION_PLAIN) return m;
+    if (cos_nd < 0) cos_nd = 0;
+    if (mode == LIGHTVEC_INTERPOLATION_GRADIENT && b->irradiance[0] > 0) {
+        int k;
+        for (k = 0; k < 3; k++) f += (double)b->gradient[0][k] / b->irradiance[0] * (a[k] - b->position[k]);
+        if (f < 0) f = 0;
+    }
+    return m * cos_nd * f;
+}
+
 static void random_query(rng *r, const lightvec_record *recs, uint32_t count, query *q)
 {
     const lightvec_record *b = &recs[(uint32_t)(rnd(r) * count) % count];
@@ -163,7 +180,7 @@ static double compare_with_brute_force(lightvec_cache *cache, const lightvec_rec
     for (q = 0; q < nq; q++) {
         query qu;
         lightvec_lookup_result lr;
-        double wsum = 0, m[3] = { 0, 0, 0 }, dsum[3] = { 0, 0, 0 };
+        double wsum = 0, m[3] = { 0, 0, 0 }, dsum[3] = { 0, 0, 0 }, cos_a;
         int same = 1;
         random_query(&r, stored, count, &qu);
         if (!CHECK(lightvec_find(cache, qu.a, qu.n, qu.directional ? qu.w : NULL, g_ids, g_w, MAX_FOUND, &found) ==
@@ -177,7 +194,7 @@ static double compare_with_brute_force(lightvec_cache *cache, const lightvec_rec
                 g_bf_w[bf] = w;
                 bf++;
                 wsum += w;
-                m[0] += (double)w * stored[i].vector.magnitude[0];
+                m[0] += (double)w * interpolated_term(st.interpolation, &stored[i], qu.a);
                 dsum[0] += (double)w * stored[i].vector.direction[0];
                 dsum[1] += (double)w * stored[i].vector.direction[1];
                 dsum[2] += (double)w * stored[i].vector.direction[2];
@@ -205,9 +222,16 @@ static double compare_with_brute_force(lightvec_cache *cache, const lightvec_rec
         if (lr.hit) {
             double dl = sqrt(dsum[0] * dsum[0] + dsum[1] * dsum[1] + dsum[2] * dsum[2]);
             hits++;
+            cos_a = dl > 0 ? (qu.n[0] * dsum[0] + qu.n[1] * dsum[1] + qu.n[2] * dsum[2]) / dl : 1.0;
+            if (st.interpolation != LIGHTVEC_INTERPOLATION_PLAIN) m[0] /= cos_a > 1e-3 ? cos_a : 1.0;
             /* normalised weighted sums; the order of summation differs */
-            CHECK_CLOSE(lr.vector.magnitude[0], m[0] / wsum, 1e-5, 1e-6);
-            if (dl > 1e-3 * wsum) CHECK_CLOSE(lr.vector.direction[2], dsum[2] / dl, 1e-4, 1e-4);
+            if (cos_a > 1e-2) CHECK_CLOSE(lr.vector.magnitude[0], m[0] / wsum, 1e-4, 1e-6);
+            if (dl > 1e-3 * wsum) {
+                if (st.interpolation == LIGHTVEC_INTERPOLATION_PLAIN || cos_a > 2e-3)
+                    CHECK_CLOSE(lr.vector.direction[2], dsum[2] / dl, 1e-4, 1e-4);
+                else if (cos_a < 5e-4) /* light from behind A: the header falls back to n_A */
+                    CHECK_CLOSE(lr.vector.direction[2], qu.n[2], 1e-6, 1e-6);
+            }
         }
     }
     test_note("%u queries: %.1f valid records per query, %u hits", nq, (double)total / nq, hits);
@@ -241,7 +265,7 @@ static void test_brute_force_100k(void)
     double per_query;
     g_stored = (lightvec_record *)malloc(n * sizeof *g_stored);
     if (!CHECK(g_stored != NULL) || !CHECK(lightvec_cache_create(NULL, &cache) == LIGHTVEC_OK)) return;
-    fill_cache(cache, n, 11, 0.15);
+    fill_cache(cache, n, 11, 0.5); /* radius_scale 0.3: validity radii 0.075 .. 0.225 */
     lightvec_cache_info(cache, &st);
     test_note("100k records: %u faces (%u leaves, depth %u), %u kd-trees, %.1f MB", st.face_count, st.leaf_count,
               st.max_depth, st.tree_count, st.bytes / 1048576.0);
@@ -262,7 +286,7 @@ static void test_brute_force_100k(void)
         memset(&d, 0, sizeof d);
         d.parallel_for = ex_pool_parallel_for;
         d.parallel_user = pool;
-        CHECK(size == 20u + 40u + (size_t)n * 120u + 4u);
+        CHECK(size == 20u + 44u + (size_t)n * 120u + 4u);
         if (CHECK(lightvec_load_from_memory(data, size, &d, &loaded) == LIGHTVEC_OK)) {
             lightvec_record a, b;
             CHECK(lightvec_cache_record(loaded, 12345, &a) == LIGHTVEC_OK);
@@ -432,6 +456,42 @@ static void test_split_threshold(void)
 
 /* ---- interpolation, W, view independence --------------------------------------------- */
 
+/* The same two records under PROJECTED and GRADIENT: b's vector lies in the
+   tangent plane (cos(n_b, D_b) = 0), so only a contributes M cos; b's
+   gradient moves a's term. */
+static void interpolation_modes(lightvec_record *a, lightvec_record *b, const float *p, const float *n,
+                                const float *w, double wa, double wb)
+{
+    lightvec_cache_desc d;
+    lightvec_cache *cache = NULL;
+    lightvec_lookup_result lr;
+    double cos_d = wa / sqrt(wa * wa + wb * wb); /* cos(n_A, normalize(wa z + wb x)) */
+    memset(&d, 0, sizeof d);
+    d.min_valid = 2;
+    d.radius_scale = 1.0f;
+    d.interpolation = LIGHTVEC_INTERPOLATION_PROJECTED;
+    if (!CHECK(lightvec_cache_create(&d, &cache) == LIGHTVEC_OK)) return;
+    CHECK(lightvec_insert(cache, a, NULL) == LIGHTVEC_OK && lightvec_insert(cache, b, NULL) == LIGHTVEC_OK);
+    CHECK(lightvec_lookup(cache, p, n, w, &lr) == LIGHTVEC_OK);
+    CHECK_CLOSE(lr.vector.magnitude[0], wa * 1.0 / (wa + wb) / cos_d, 1e-6, 0);
+    lightvec_cache_destroy(cache);
+    /* GRADIENT: a's red irradiance grows by 50% per unit x; A is 0.1 from a */
+    a->gradient[0][0] = 0.5f;
+    d.interpolation = LIGHTVEC_INTERPOLATION_GRADIENT;
+    if (!CHECK(lightvec_cache_create(&d, &cache) == LIGHTVEC_OK)) return;
+    CHECK(lightvec_insert(cache, a, NULL) == LIGHTVEC_OK && lightvec_insert(cache, b, NULL) == LIGHTVEC_OK);
+    CHECK(lightvec_lookup(cache, p, n, w, &lr) == LIGHTVEC_OK);
+    /* the irradiance-change criterion shrinks a's weight: |AB| |grad Y| / Y */
+    {
+        double change = 0.1 * 0.5 * 0.2126 / 1.0, wa2 = 0.9 / (1 + change);
+        cos_d = wa2 / sqrt(wa2 * wa2 + wb * wb);
+        CHECK_CLOSE(lr.vector.magnitude[0], wa2 * 1.05 / (wa2 + wb) / cos_d, 1e-5, 0);
+        CHECK_CLOSE(lr.vector.magnitude[1], wa2 * 1.0 / (wa2 + wb) / cos_d, 1e-5, 0);
+    }
+    a->gradient[0][0] = 0.0f;
+    lightvec_cache_destroy(cache);
+}
+
 static void test_interpolation(void)
 {
     lightvec_cache *cache = NULL;
@@ -442,10 +502,12 @@ static void test_interpolation(void)
     double wa, wb;
     memset(&d, 0, sizeof d);
     d.min_valid = 2;
+    d.radius_scale = 1.0f; /* the paper's |AB| < d_avg */
+    d.interpolation = LIGHTVEC_INTERPOLATION_PLAIN;
     if (!CHECK(lightvec_cache_create(&d, &cache) == LIGHTVEC_OK)) return;
     memset(&a, 0, sizeof a);
     a.normal[2] = 1; a.outgoing[2] = 1; a.vector.direction[2] = 1;
-    a.vector.magnitude[0] = 1; a.distance = 1; a.visibility = 1;
+    a.vector.magnitude[0] = 1; a.vector.magnitude[1] = 1; a.distance = 1; a.visibility = 1;
     a.irradiance[0] = a.irradiance[1] = a.irradiance[2] = 1;
     b = a;
     b.position[0] = 0.4f;
@@ -463,6 +525,7 @@ static void test_interpolation(void)
     CHECK_CLOSE(lr.weight, (wa + wb) / 2, 1e-6, 0);
     CHECK_CLOSE(lr.vector.magnitude[0], (wa * 1 + wb * 3) / (wa + wb), 1e-6, 0);
     CHECK_CLOSE(lr.vector.direction[0], wb / sqrt(wa * wa + wb * wb), 1e-6, 0);
+    interpolation_modes(&a, &b, p, n, w, wa, wb);
     /* a viewer 10 degrees away: w_sigma = (cos 10 - cos 15) / (1 - cos 15) */
     w[0] = (float)sin(PI / 18); w[2] = (float)cos(PI / 18);
     CHECK(lightvec_lookup(cache, p, n, w, &lr) == LIGHTVEC_OK);
