@@ -352,7 +352,7 @@ typedef struct lightvec_cache_desc {
     float max_normal_angle;      /* degrees, S_curv = cos; 0 = 20 ILV, 10 DLV */
     float max_direction_angle;   /* degrees, S_dir = cos; 0 = 15 */
     uint32_t min_valid;          /* valid vectors needed to interpolate; 0 = 3 */
-    uint32_t face_split_threshold;  /* a leaf face holding more splits in four; 0 = 1024 */
+    uint32_t face_split_threshold;  /* a leaf face holding more splits in four; 0 = 8192 */
     uint32_t max_face_depth;     /* 0 = 8 (20 * 4^8 faces at most) */
     lightvec_allocator allocator;
     lightvec_parallel_for_fn parallel_for;   /* optimize and load; NULL = serial */
@@ -2006,8 +2006,9 @@ LIGHTVEC_API lightvec_result lightvec_gather_direct(const lightvec_scene *s, con
    Trees are immutable once published: readers never see a half-built one.
    ---------------------------------------------------------------------- */
 #define LIGHTVEC__LEAF 8u            /* items per kd-tree leaf */
-#define LIGHTVEC__TAIL 32u           /* items a face holds outside its kd-trees */
-#define LIGHTVEC__MAX_TREES 40u      /* > log2(2^32 / TAIL) + 1 */
+#define LIGHTVEC__TAIL 16u           /* items a face holds outside its kd-trees */
+#define LIGHTVEC__MAX_TREES 40u      /* > log8(2^32 / TAIL) + 1 */
+#define LIGHTVEC__MERGE_RATIO 8u     /* a merge absorbs kd-trees up to 8x its size so far */
 #define LIGHTVEC__CHUNK0 1024u       /* records in the first chunk; chunk k holds CHUNK0 << k */
 #define LIGHTVEC__CHUNKS 23          /* CHUNK0 * (2^23 - 1) >= 2^32 records */
 #define LIGHTVEC__RECLAIM_BYTES ((size_t)1 << 20)
@@ -2024,15 +2025,17 @@ typedef struct lightvec__params {
     lightvec_interpolation interpolation;  /* never DEFAULT */
 } lightvec__params;
 
+/* 128 bytes; what the criteria read comes first, so that in a kd-tree
+   (items aligned to 64 bytes) rejecting a record touches one cache line. */
 typedef struct lightvec__item {
-    float pos[3], radius;            /* B and R_B = radius_scale * d_avg */
-    float normal[3], rel_gradient;   /* n_B and |grad Y| / Y (luminance) */
     float outgoing[3], visibility;   /* sigma */
+    float normal[3], rel_gradient;   /* n_B and |grad Y| / Y (luminance) */
     float dir[3];                    /* D */
     float mag[3];                    /* M */
     float proj[3];                   /* M cos(n_B, D) */
     float slope[3][3];               /* grad E_c / E_c per channel (0 where E_c = 0) */
-    uint32_t id;
+    float pos[3], radius;            /* B and R_B = radius_scale * d_avg */
+    uint32_t id, pad;
 } lightvec__item;
 
 /* A balanced kd-tree over items (median splits on the axis of largest
@@ -2044,7 +2047,8 @@ typedef struct lightvec__item {
 typedef struct lightvec__tree {
     uint32_t count, node_count;
     float *boxes;                    /* 6 per node: lo xyz, hi xyz */
-    lightvec__item *items;
+    float *spheres;                  /* 4 per item: B, R_B (what a leaf reads for every item) */
+    lightvec__item *items;           /* the rest, read for items inside their sphere */
     size_t bytes;
 } lightvec__tree;
 
@@ -2052,6 +2056,7 @@ typedef struct lightvec__index {
     uint32_t tree_count;
     uint32_t tail_count;             /* atomic: items of tail[] published */
     lightvec__tree *trees[LIGHTVEC__MAX_TREES];   /* ascending sizes */
+    float tail_spheres[LIGHTVEC__TAIL][4];
     lightvec__item tail[LIGHTVEC__TAIL];
 } lightvec__index;
 
@@ -2061,6 +2066,8 @@ typedef struct lightvec__face {
     float v[3][3];                   /* unit vertices, counter-clockwise from outside */
     float center[3];                 /* normalised vertex sum */
     float cos_r, sin_r, r_angle;     /* bounding cap around center */
+    float edge[3][3][3];             /* per edge i (v_i, v_i+1): unit normal of its great
+                                        circle, n x v_i and v_i+1 x n */
     float plane[3][3];               /* separate the corner children (set when split) */
     void *children;                  /* atomic: lightvec__face[4], NULL for a leaf */
     void *index;                     /* atomic: lightvec__index, NULL while empty */
@@ -2118,7 +2125,7 @@ static lightvec_result lightvec__params_init(lightvec__params *p, const lightvec
     p->direction_angle = lightvec__def(d->max_direction_angle, 15.0f);
     p->min_valid = lightvec__def(d->min_valid, 3u);
     p->interpolation = d->interpolation ? d->interpolation : LIGHTVEC_INTERPOLATION_GRADIENT;
-    p->split_threshold = lightvec__def(d->face_split_threshold, 1024u);
+    p->split_threshold = lightvec__def(d->face_split_threshold, 8192u);
     p->max_depth = lightvec__def(d->max_face_depth, 8u);
     a = p->normal_angle * (LIGHTVEC__PI / 180.0);
     p->cos_normal = (float)cos(a);
@@ -2183,6 +2190,7 @@ static void lightvec__make_item(const lightvec__params *p, const lightvec_record
         if (!lightvec__finite3(it->slope[c])) it->slope[c][0] = it->slope[c][1] = it->slope[c][2] = 0.0f;
     }
     it->id = id;
+    it->pad = 0;
 }
 
 /* ---- record chunks ----------------------------------------------------------- */
@@ -2211,6 +2219,14 @@ static lightvec_record *lightvec__record_reserve(lightvec_cache *c, uint32_t id)
 }
 
 /* ---- kd-tree ------------------------------------------------------------------- */
+
+static void lightvec__sphere_of(const lightvec__item *it, float *sphere)
+{
+    sphere[0] = it->pos[0];
+    sphere[1] = it->pos[1];
+    sphere[2] = it->pos[2];
+    sphere[3] = it->radius;
+}
 
 static uint32_t lightvec__tree_levels(uint32_t n)
 {
@@ -2281,10 +2297,10 @@ static lightvec__tree *lightvec__tree_build(const lightvec_allocator *a, const l
 {
     uint32_t levels = lightvec__tree_levels(n), nodes = (2u << levels) - 1u, i, *perm;
     size_t head = (sizeof(lightvec__tree) + 15u) & ~(size_t)15u, box_bytes = (size_t)nodes * 6u * sizeof(float);
-    size_t bytes;
+    size_t bytes, item_bytes = sizeof(lightvec__item) + 4u * sizeof(float), items_at;
     lightvec__tree *t;
-    if ((size_t)n > (SIZE_MAX - head - box_bytes) / sizeof(lightvec__item)) return NULL;
-    bytes = head + box_bytes + (size_t)n * sizeof(lightvec__item);
+    if ((size_t)n > (SIZE_MAX - head - box_bytes - 64u) / item_bytes) return NULL;
+    bytes = head + box_bytes + (size_t)n * item_bytes + 64u; /* + room to align the items */
     t = (lightvec__tree *)lightvec__alloc(a, bytes);
     perm = (uint32_t *)lightvec__alloc_array(a, n, sizeof(uint32_t));
     if (!t || !perm) {
@@ -2295,11 +2311,17 @@ static lightvec__tree *lightvec__tree_build(const lightvec_allocator *a, const l
     t->count = n;
     t->node_count = nodes;
     t->boxes = (float *)((char *)t + head);
-    t->items = (lightvec__item *)((char *)t + head + box_bytes);
+    t->spheres = (float *)((char *)t + head + box_bytes);
+    items_at = head + box_bytes + (size_t)n * 4u * sizeof(float);
+    items_at += (64u - (size_t)(((uintptr_t)t + items_at) & 63u)) & 63u;
+    t->items = (lightvec__item *)((char *)t + items_at);
     t->bytes = bytes;
     for (i = 0; i < n; i++) perm[i] = i;
     if (n) lightvec__tree_build_node(t, src, perm, 0, 0, n);
-    for (i = 0; i < n; i++) t->items[i] = src[perm[i]];
+    for (i = 0; i < n; i++) {
+        t->items[i] = src[perm[i]];
+        lightvec__sphere_of(&t->items[i], t->spheres + 4 * (size_t)i);
+    }
     lightvec__free(a, perm);
     return t;
 }
@@ -2318,14 +2340,13 @@ typedef struct lightvec__query {
     uint32_t capacity;
 } lightvec__query;
 
-/* The criteria of 4.2 for one record; on success accumulates w = w_B * w_sigma. */
-static void lightvec__visit(lightvec__query *q, const lightvec__item *it)
+/* The criteria of 4.2 for one record inside its sphere (|AB| < R_B, tested
+   by the caller); on success accumulates w = w_B * w_sigma. */
+static void lightvec__visit(lightvec__query *q, const lightvec__item *it, float dx, float dy, float dz, float d2)
 {
     const lightvec__params *p = q->p;
-    float dx = q->a[0] - it->pos[0], dy = q->a[1] - it->pos[1], dz = q->a[2] - it->pos[2];
-    float d2 = dx * dx + dy * dy + dz * dz, ws = 1.0f, cs, cn, d, change, w;
+    float ws = 1.0f, cs, cn, d, change, w;
     int c;
-    if (!(d2 < it->radius * it->radius)) return;                     /* |AB| < R_B */
     if (q->directional) {                                            /* 4.2.2: cos(w, sigma) > S_dir */
         cs = q->w[0] * it->outgoing[0] + q->w[1] * it->outgoing[1] + q->w[2] * it->outgoing[2];
         if (!(cs > p->cos_dir)) return;
@@ -2358,6 +2379,19 @@ static void lightvec__visit(lightvec__query *q, const lightvec__item *it)
     else q->partial++;
 }
 
+/* |AB| < R_B for items[lo, hi), then the other criteria. */
+static void lightvec__visit_range(lightvec__query *q, const float *spheres, const lightvec__item *items, uint32_t lo,
+                                  uint32_t hi)
+{
+    uint32_t i;
+    for (i = lo; i < hi; i++) {
+        const float *s = spheres + 4 * (size_t)i;
+        float dx = q->a[0] - s[0], dy = q->a[1] - s[1], dz = q->a[2] - s[2];
+        float d2 = dx * dx + dy * dy + dz * dz;
+        if (d2 < s[3] * s[3]) lightvec__visit(q, &items[i], dx, dy, dz, d2);
+    }
+}
+
 static void lightvec__tree_query(const lightvec__tree *t, lightvec__query *q)
 {
     uint32_t stack[64][3], top = 1;
@@ -2368,12 +2402,12 @@ static void lightvec__tree_query(const lightvec__tree *t, lightvec__query *q)
         top--;
         node = stack[top][0]; lo = stack[top][1]; hi = stack[top][2];
         box = t->boxes + 6 * (size_t)node;
-        if (q->a[0] < box[0] || q->a[1] < box[1] || q->a[2] < box[2] || q->a[0] > box[3] || q->a[1] > box[4] ||
-            q->a[2] > box[5])
+        /* one branch for the six comparisons: box tests are hard to predict */
+        if (!((q->a[0] >= box[0]) & (q->a[1] >= box[1]) & (q->a[2] >= box[2]) & (q->a[0] <= box[3]) &
+              (q->a[1] <= box[4]) & (q->a[2] <= box[5])))
             continue;
         if (hi - lo <= LIGHTVEC__LEAF) {
-            uint32_t i;
-            for (i = lo; i < hi; i++) lightvec__visit(q, &t->items[i]);
+            lightvec__visit_range(q, t->spheres, t->items, lo, hi);
             continue;
         }
         mid = lo + (hi - lo) / 2;
@@ -2386,7 +2420,7 @@ static void lightvec__index_query(const lightvec__index *idx, lightvec__query *q
 {
     uint32_t i, n = lightvec__load_u32(&idx->tail_count);
     for (i = 0; i < idx->tree_count; i++) lightvec__tree_query(idx->trees[i], q);
-    for (i = 0; i < n; i++) lightvec__visit(q, &idx->tail[i]);
+    lightvec__visit_range(q, &idx->tail_spheres[0][0], idx->tail, 0, n);
 }
 
 /* ---- icosahedron ------------------------------------------------------------------- */
@@ -2396,6 +2430,7 @@ static void lightvec__face_init(lightvec__face *f, lightvec__vec3 a, lightvec__v
 {
     lightvec__vec3 m = lightvec__normalize(lightvec__add(lightvec__add(a, b), c));
     float cr;
+    int i;
     memset(f, 0, sizeof *f);
     f->v[0][0] = a.x; f->v[0][1] = a.y; f->v[0][2] = a.z;
     f->v[1][0] = b.x; f->v[1][1] = b.y; f->v[1][2] = b.z;
@@ -2408,6 +2443,13 @@ static void lightvec__face_init(lightvec__face *f, lightvec__vec3 a, lightvec__v
     f->sin_r = sqrtf(lightvec__maxf(0.0f, 1.0f - cr * cr));
     f->r_angle = acosf(cr);
     f->depth = depth;
+    for (i = 0; i < 3; i++) {
+        lightvec__vec3 a = lightvec__v3_load(f->v[i]), b = lightvec__v3_load(f->v[(i + 1) % 3]);
+        lightvec__vec3 n = lightvec__normalize(lightvec__cross(a, b)), ta = lightvec__cross(n, a), tb = lightvec__cross(b, n);
+        f->edge[i][0][0] = n.x; f->edge[i][0][1] = n.y; f->edge[i][0][2] = n.z;
+        f->edge[i][1][0] = ta.x; f->edge[i][1][1] = ta.y; f->edge[i][1][2] = ta.z;
+        f->edge[i][2][0] = tb.x; f->edge[i][2][1] = tb.y; f->edge[i][2][2] = tb.z;
+    }
 }
 
 /* The regular icosahedron (vertices (0, +-1, +-t) and cyclic, t the golden ratio). */
@@ -2478,21 +2520,43 @@ static uint32_t lightvec__child_of(const lightvec__face *f, const float d[3])
     return 3;
 }
 
-/* Can the face hold a record within the directional cone around w? The cone
-   (half-angle acos S_dir) and the face's cap intersect when the angle between
-   their axes is at most the sum of their radii. */
+static float lightvec__dot3(const float *a, const float *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+/* Can the face hold a record within the directional cone around w (angle
+   below beta = acos S_dir)? First the face's bounding cap: the cone and the
+   cap meet when the angle between their axes is at most the sum of their
+   radii. Then the spherical triangle itself (about half of its cap): w is
+   inside, or within beta of an edge (of the edge's great circle where the
+   nearest point falls inside the edge, else of its end points). Slack 1e-6
+   keeps records placed on a boundary by float rounding in. */
 static int lightvec__face_in_cone(const lightvec__face *f, const lightvec__params *p, const float w[3])
 {
-    float c = f->center[0] * w[0] + f->center[1] * w[1] + f->center[2] * w[2];
+    float c = lightvec__dot3(f->center, w), s[3];
+    int i;
     if (f->r_angle + p->dir_angle >= (float)LIGHTVEC__PI) return 1;
-    return c >= f->cos_r * p->cos_dir - f->sin_r * p->sin_dir - 1e-6f;
+    if (c < f->cos_r * p->cos_dir - f->sin_r * p->sin_dir - 1e-6f) return 0;
+    if (p->dir_angle >= (float)(LIGHTVEC__PI / 2)) return 1;
+    for (i = 0; i < 3; i++) s[i] = lightvec__dot3(f->edge[i][0], w);
+    if (s[0] >= -1e-6f && s[1] >= -1e-6f && s[2] >= -1e-6f) return 1; /* inside */
+    for (i = 0; i < 3; i++) {
+        if (s[i] >= 0.0f) continue; /* w is on the inner side of this edge */
+        if (lightvec__dot3(f->edge[i][1], w) >= 0.0f && lightvec__dot3(f->edge[i][2], w) >= 0.0f) {
+            if (-s[i] < p->sin_dir + 1e-6f) return 1; /* nearest point inside the edge */
+        } else if (lightvec__dot3(f->v[i], w) > p->cos_dir - 1e-6f ||
+                   lightvec__dot3(f->v[(i + 1) % 3], w) > p->cos_dir - 1e-6f) {
+            return 1;
+        }
+    }
+    return 0;
 }
 
-/* Splitting a face smaller than the directional cone would only add faces to
-   every search, so it stops there (and at max_depth). */
+/* Faces much smaller than the directional cone would only add faces to
+   every search (and kd-trees to descend), so a face splits only while its
+   children stay at least as wide as the cone's radius: a search then visits
+   a handful of faces. max_depth bounds it too. */
 static int lightvec__can_split(const lightvec_cache *c, const lightvec__face *f)
 {
-    return f != &c->omni && f->depth < c->p.max_depth && f->r_angle >= c->p.dir_angle;
+    return f != &c->omni && f->depth < c->p.max_depth && f->r_angle >= 2.0f * c->p.dir_angle;
 }
 
 /* ---- reader registration and deferred freeing ----------------------------------- */
@@ -2670,7 +2734,10 @@ static int lightvec__face_fill(lightvec_cache *c, lightvec__face *f, lightvec__i
 }
 
 /* Bentley-Saxe merge of a full tail: the tail and every kd-tree not larger
-   than what is merged so far become one new kd-tree. */
+   than MERGE_RATIO times what is merged so far become one new kd-tree.
+   Ratio 2 is the classic binary counter (log2 n trees); ratio 8 keeps about
+   half as many trees for lookups (3 to 4 at 10^5 .. 10^6 items per face) and
+   rebuilds each item about 3x as often (15 to 25 items per insert). */
 static int lightvec__merge(lightvec_cache *c, lightvec__face *f)
 {
     lightvec__index *old = (lightvec__index *)f->index, *idx;
@@ -2678,7 +2745,8 @@ static int lightvec__merge(lightvec_cache *c, lightvec__face *f)
     lightvec__tree *t;
     uint64_t acc = old->tail_count;
     uint32_t take = 0, i;
-    while (take < old->tree_count && (old->trees[take]->count <= acc || old->tree_count >= LIGHTVEC__MAX_TREES))
+    while (take < old->tree_count &&
+           (old->trees[take]->count <= LIGHTVEC__MERGE_RATIO * acc || old->tree_count - take >= LIGHTVEC__MAX_TREES))
         acc += old->trees[take++]->count;
     items = (lightvec__item *)lightvec__alloc_array(&c->a, (size_t)acc, sizeof *items);
     if (!items) return -1;
@@ -2737,6 +2805,7 @@ static void lightvec__face_push(lightvec__face *f, const lightvec__item *it)
     lightvec__index *idx = (lightvec__index *)f->index;
     uint32_t n = idx->tail_count;
     idx->tail[n] = *it;
+    lightvec__sphere_of(it, idx->tail_spheres[n]);
     lightvec__store_u32(&idx->tail_count, n + 1u); /* publishes the item */
     f->count++;
 }

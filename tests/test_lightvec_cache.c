@@ -263,8 +263,11 @@ static void test_brute_force_100k(void)
     size_t size = 0;
     int mismatches = 0;
     double per_query;
+    lightvec_cache_desc d;
+    memset(&d, 0, sizeof d);
+    d.face_split_threshold = 1024; /* splits during the insertions (default 8192) */
     g_stored = (lightvec_record *)malloc(n * sizeof *g_stored);
-    if (!CHECK(g_stored != NULL) || !CHECK(lightvec_cache_create(NULL, &cache) == LIGHTVEC_OK)) return;
+    if (!CHECK(g_stored != NULL) || !CHECK(lightvec_cache_create(&d, &cache) == LIGHTVEC_OK)) return;
     fill_cache(cache, n, 11, 0.5); /* radius_scale 0.3: validity radii 0.075 .. 0.225 */
     lightvec_cache_info(cache, &st);
     test_note("100k records: %u faces (%u leaves, depth %u), %u kd-trees, %.1f MB", st.face_count, st.leaf_count,

@@ -78,7 +78,11 @@ static void *reader(void *arg)
         for (k = 0; k < 3; k++) p[k] = near.position[k] + 0.05f * (unitf(&s) - 0.5f);
         o = near.outgoing;
         if (lightvec_lookup(sh->cache, p, n, o, &lr) != LIGHTVEC_OK) sh->bad[ra->index]++;
-        if (lr.hit && !(lr.vector.magnitude[0] >= 1.0f && lr.vector.magnitude[0] <= 7.0f)) sh->bad[ra->index]++;
+        /* a weighted mean of magnitudes 1..7 (float rounding aside) */
+        if (lr.hit && !(lr.vector.magnitude[0] >= 0.9999f && lr.vector.magnitude[0] <= 7.0001f)) {
+            if (sh->bad[ra->index] < 3) fprintf(stderr, "magnitude %.9g\n", lr.vector.magnitude[0]);
+            sh->bad[ra->index]++;
+        }
         if (lightvec_find(sh->cache, p, n, o, ids, w, 256, &count) != LIGHTVEC_OK) sh->bad[ra->index]++;
         for (k = 0; k < count && k < 256; k++) {
             lightvec_record r;
@@ -105,6 +109,8 @@ static void test_lookups_during_inserts(void)
     memset(&d, 0, sizeof d);
     d.face_split_threshold = 256; /* many splits */
     d.max_direction_angle = 5.0f;
+    d.radius_scale = 1.0f;        /* dense enough for interpolated hits */
+    d.min_valid = 1;
     if (!CHECK(lightvec_cache_create(&d, &sh.cache) == LIGHTVEC_OK)) return;
     for (i = 0; i < READERS; i++) {
         ra[i].sh = &sh;
