@@ -1221,6 +1221,7 @@ static void lightvec__add_sc(uint32_t *p, uint32_t v) { *p += v; }
 /* Rec. 709 luminance: the scalar weight of eq. 2 and of the criteria. */
 static float lightvec__lumf(const float c[3]) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
 
+/* A message with two integers for the optional logger. */
 static void lightvec__logf(lightvec_log_fn log, void *user, const char *fmt, long long a, long long b)
 {
     char buf[256];
@@ -1357,7 +1358,8 @@ static lightvec_result lightvec__scene_validate(const lightvec_scene_desc *d)
     for (i = 0; i < d->vertex_count; i++) {
         const float *p = (const float *)((const char *)d->positions + (size_t)i * stride);
         if (!lightvec__finite3(p)) {
-            lightvec__logf(d->log, d->log_user, "lightvec: vertex %lld is not finite%.0lld", (long long)i, 0);
+            lightvec__logf(d->log, d->log_user, "lightvec: vertex %lld of %lld is not finite", (long long)i,
+                           (long long)d->vertex_count);
             return LIGHTVEC_ERROR_INVALID_ARGUMENT;
         }
     }
@@ -1372,8 +1374,8 @@ static lightvec_result lightvec__scene_validate(const lightvec_scene_desc *d)
             if (d->material_ids[i] >= d->material_count) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
     for (i = 0; i < d->material_count; i++)
         if (!lightvec__material_valid(&d->materials[i])) {
-            lightvec__logf(d->log, d->log_user, "lightvec: material %lld has a negative or non-finite value%.0lld",
-                           (long long)i, 0);
+            lightvec__logf(d->log, d->log_user, "lightvec: material %lld of %lld has a negative or non-finite value",
+                           (long long)i, (long long)d->material_count);
             return LIGHTVEC_ERROR_INVALID_ARGUMENT;
         }
     return LIGHTVEC_OK;
@@ -1708,6 +1710,9 @@ static lightvec_result lightvec__gather_setup(const lightvec_gather_desc *d, con
     if (!lightvec__finite3(sf->position) || !lightvec__unit(sf->normal, n)) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
     if (!lightvec__material_valid(&sf->material) || (sf->flags & ~LIGHTVEC_RECORD_VIEW_INDEPENDENT))
         return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    if ((sf->flags & LIGHTVEC_RECORD_VIEW_INDEPENDENT) &&
+        (sf->material.specular[0] > 0.0f || sf->material.specular[1] > 0.0f || sf->material.specular[2] > 0.0f))
+        return LIGHTVEC_ERROR_INVALID_ARGUMENT; /* a glossy surface depends on the viewer */
     if (sf->flags & LIGHTVEC_RECORD_VIEW_INDEPENDENT) {
         *wo = *n;
     } else if (!lightvec__unit(sf->outgoing, wo)) {
@@ -2000,9 +2005,10 @@ LIGHTVEC_API lightvec_result lightvec_gather_direct(const lightvec_scene *s, con
    as an item, a compact copy of what the criteria read, in the spatial index
    of the icosahedron face that holds its direction sigma. A leaf face indexes
    its items with kd-trees built by the Bentley-Saxe scheme: new items go to a
-   small tail list; a full tail is merged with every kd-tree not larger than
-   what has been merged so far, into one new balanced kd-tree, so a face holds
-   O(log n) kd-trees of doubling sizes and an item is rebuilt O(log n) times.
+   small tail list; a full tail is merged with the smallest kd-trees (each up
+   to 8 times what has been merged so far) into one new balanced kd-tree, so
+   the trees of a face grow more than 8-fold from one to the next (at most
+   log8(n / 16) + 1 of them) and an item is rebuilt O(log n) times.
    Trees are immutable once published: readers never see a half-built one.
    ---------------------------------------------------------------------- */
 #define LIGHTVEC__LEAF 8u            /* items per kd-tree leaf */
@@ -2635,7 +2641,8 @@ static void lightvec__index_free(lightvec_cache *c, lightvec__index *idx)
     lightvec__free(&c->a, idx);
 }
 
-/* Frees everything below f (its index, or its children recursively). */
+/* Frees everything below f: its children recursively, or its index (the
+   index a split face still points to is on the retired list). */
 static void lightvec__face_free(lightvec_cache *c, lightvec__face *f)
 {
     lightvec__face *ch = (lightvec__face *)f->children;
@@ -2643,8 +2650,9 @@ static void lightvec__face_free(lightvec_cache *c, lightvec__face *f)
         int i;
         for (i = 0; i < 4; i++) lightvec__face_free(c, &ch[i]);
         lightvec__free(&c->a, ch);
+    } else {
+        lightvec__index_free(c, (lightvec__index *)f->index);
     }
-    lightvec__index_free(c, (lightvec__index *)f->index);
     f->children = NULL;
     f->index = NULL;
 }
@@ -2781,7 +2789,9 @@ static int lightvec__split(lightvec_cache *c, lightvec__face *f)
         return -1;
     }
     lightvec__free(&c->a, items);
-    lightvec__store_ptr(&f->index, NULL);
+    /* f->index keeps pointing at the retired index: a reader that saw no
+       children a moment ago still finds every record there, and readers that
+       see the children never read it again */
     for (i = 0; i < old->tree_count; i++) lightvec__retire(c, old->trees[i], old->trees[i]->bytes);
     lightvec__retire(c, old, sizeof *old);
     return 0;

@@ -649,6 +649,12 @@ static void test_bad_input(void)
     sf.material.diffuse[1] = -0.5f;
     CHECK(lightvec_gather(NULL, &gd, &sf, 0, &rec) == LIGHTVEC_ERROR_INVALID_ARGUMENT);
     sf.material.diffuse[1] = 0.5f;
+    sf.flags = LIGHTVEC_RECORD_VIEW_INDEPENDENT;
+    sf.material.specular[2] = 0.1f; /* a glossy surface cannot be view-independent */
+    CHECK(lightvec_gather(NULL, &gd, &sf, 0, &rec) == LIGHTVEC_ERROR_INVALID_ARGUMENT);
+    sf.material.specular[2] = 0.0f;
+    CHECK(lightvec_gather(NULL, &gd, &sf, 0, &rec) == LIGHTVEC_OK);
+    sf.flags = 0;
     gd.strata_theta = 100000;
     CHECK(lightvec_gather(NULL, &gd, &sf, 0, &rec) == LIGHTVEC_ERROR_INVALID_ARGUMENT);
     gd.strata_theta = 0;
