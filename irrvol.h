@@ -1495,6 +1495,8 @@ typedef struct irrvol__build {
     irrvol *vol;
     irrvol__mesh_view mesh;
     irrvol__bvh bvh;
+    irrvol__bvh important_bvh; /* over the IMPORTANT triangles; ids index b->important */
+    uint32_t *important_indices;
     uint32_t supersamples, weight_subdivisions, max_depth, important_side;
     float min_weight, ray_offset;
     float *dirs;            /* bin centre directions, xyz per bin */
@@ -1647,12 +1649,15 @@ static void irrvol__builtin_radiance(const irrvol__build *b, const float org[3],
             for (c = 0; c < 3; c++) rgb[c] += w[c] * d->background[c];
             return;
         }
-        /* mirror about the geometric normal, leave the surface on the side the ray came from */
+        /* mirror about the geometric normal; the next ray starts off the
+           surface on the side the ray came from and a little back along it,
+           so that a hit on the edge of a concave corner still finds the
+           other face instead of leaving through it */
         p0 = irrvol__v3_load(irrvol__vertex(&b->mesh, d->indices[3 * (size_t)hit.triangle]));
         n = irrvol__normalize(irrvol__cross(
             irrvol__sub(irrvol__v3_load(irrvol__vertex(&b->mesh, d->indices[3 * (size_t)hit.triangle + 1])), p0),
             irrvol__sub(irrvol__v3_load(irrvol__vertex(&b->mesh, d->indices[3 * (size_t)hit.triangle + 2])), p0)));
-        p = irrvol__add(irrvol__v3_load(o), irrvol__scale(dv, hit.t));
+        p = irrvol__add(irrvol__v3_load(o), irrvol__scale(dv, hit.t - b->ray_offset));
         dn = irrvol__dot(dv, n);
         dv = irrvol__normalize(irrvol__sub(dv, irrvol__scale(n, 2.0f * dn)));
         p = irrvol__add(p, irrvol__scale(n, dn < 0.0f ? b->ray_offset : -b->ray_offset));
@@ -1670,41 +1675,56 @@ static void irrvol__ray_radiance(const irrvol__build *b, const float org[3], irr
 
 static uint32_t irrvol__nearest_bin(const irrvol *v, const float dir[3]);
 
-/* Informed sampling (6.1.1): marks, for every IMPORTANT triangle, the bins
-   its directions from p fall into, with the side of the extra stratified
-   ray grid: enough that about four rays hit a triangle smaller than a bin.
-   Directions come from a barycentric grid over the triangle spaced a third
-   of a bin apart, so no overlapped bin is missed but for slivers. */
+/* Informed sampling (6.1.1). A bin's radiance is the mean of L over the
+   bin. The directions that point at IMPORTANT triangles (light sources) are
+   integrated apart, from points sampled on the triangles themselves, so a
+   source is captured however small it is next to a bin:
+
+     L_bin = (1 / omega_bin) * integral of L over the bin's important directions
+           + mean of L over the bin's rays, a ray toward an important triangle
+             counting zero.
+
+   A direction that meets several important triangles belongs to the first
+   one along it, so triangles seen behind one another count once. Bins that
+   an important triangle overlaps also get extra stratified rays, for the
+   rest of the bin. */
+
+/* The triangle's corners relative to p, their distances and its solid angle
+   seen from p (Van Oosterom and Strackee 1983); 0 when p is on its plane. */
+static double irrvol__important_corners(const irrvol__build *b, uint32_t t, const float p[3], double q[3][3])
+{
+    const uint32_t *tri = b->desc->indices + 3 * (size_t)b->important[t];
+    double len[3], det, den;
+    int c, e;
+    for (e = 0; e < 3; e++) {
+        const float *x = irrvol__vertex(&b->mesh, tri[e]);
+        for (c = 0; c < 3; c++) q[e][c] = (double)x[c] - p[c];
+        len[e] = sqrt(q[e][0] * q[e][0] + q[e][1] * q[e][1] + q[e][2] * q[e][2]);
+    }
+    if (!(len[0] > 0.0 && len[1] > 0.0 && len[2] > 0.0)) return 0.0;
+    det = q[0][0] * (q[1][1] * q[2][2] - q[1][2] * q[2][1]) - q[0][1] * (q[1][0] * q[2][2] - q[1][2] * q[2][0]) +
+          q[0][2] * (q[1][0] * q[2][1] - q[1][1] * q[2][0]);
+    den = len[0] * len[1] * len[2] +
+          (q[0][0] * q[1][0] + q[0][1] * q[1][1] + q[0][2] * q[1][2]) * len[2] +
+          (q[0][0] * q[2][0] + q[0][1] * q[2][1] + q[0][2] * q[2][2]) * len[1] +
+          (q[1][0] * q[2][0] + q[1][1] * q[2][1] + q[1][2] * q[2][2]) * len[0];
+    return 2.0 * atan2(fabs(det), den);
+}
+
+/* Marks the bins an important triangle's directions from p fall into, from
+   a barycentric grid over the triangle spaced a third of a bin apart. */
 static void irrvol__mark_important_bins(const irrvol__build *b, const float p[3], unsigned char *extra)
 {
-    const irrvol_desc *d = b->desc;
     uint32_t t;
     for (t = 0; t < b->important_count; t++) {
-        const uint32_t *tri = d->indices + 3 * (size_t)b->important[t];
-        double q[3][3], len[3], det, den, omega, cosmin = 1.0, need;
-        uint32_t steps, i, j, side;
+        double q[3][3], cosmin = 1.0;
+        uint32_t steps, i, j;
         int c, e;
-        for (e = 0; e < 3; e++) {
-            const float *x = irrvol__vertex(&b->mesh, tri[e]);
-            for (c = 0; c < 3; c++) q[e][c] = (double)x[c] - p[c];
-            len[e] = sqrt(q[e][0] * q[e][0] + q[e][1] * q[e][1] + q[e][2] * q[e][2]);
-        }
-        if (!(len[0] > 0.0 && len[1] > 0.0 && len[2] > 0.0)) continue;
-        /* solid angle (Van Oosterom and Strackee 1983) */
-        det = q[0][0] * (q[1][1] * q[2][2] - q[1][2] * q[2][1]) - q[0][1] * (q[1][0] * q[2][2] - q[1][2] * q[2][0]) +
-              q[0][2] * (q[1][0] * q[2][1] - q[1][1] * q[2][0]);
-        den = len[0] * len[1] * len[2] +
-              (q[0][0] * q[1][0] + q[0][1] * q[1][1] + q[0][2] * q[1][2]) * len[2] +
-              (q[0][0] * q[2][0] + q[0][1] * q[2][1] + q[0][2] * q[2][2]) * len[1] +
-              (q[1][0] * q[2][0] + q[1][1] * q[2][1] + q[1][2] * q[2][2]) * len[0];
-        omega = 2.0 * atan2(fabs(det), den);
-        if (!(omega > 0.0)) continue;   /* seen edge-on: no ray can hit it */
-        need = 4.0 * b->bin_solid_angle / omega;
-        side = b->important_side;
-        while (side < IRRVOL__IMPORTANT_MAX_SIDE && (double)side * side < need) side++;
-        for (e = 0; e < 3; e++) {       /* widest angle between two vertex directions */
+        if (!(irrvol__important_corners(b, t, p, q) > 0.0)) continue;   /* edge-on: no ray meets it */
+        for (e = 0; e < 3; e++) {       /* widest angle between two corner directions */
             const double *x = q[e], *y = q[(e + 1) % 3];
-            double cs = (x[0] * y[0] + x[1] * y[1] + x[2] * y[2]) / (len[e] * len[(e + 1) % 3]);
+            double cs = (x[0] * y[0] + x[1] * y[1] + x[2] * y[2]) /
+                        sqrt((x[0] * x[0] + x[1] * x[1] + x[2] * x[2]) * (y[0] * y[0] + y[1] * y[1] + y[2] * y[2]));
             if (cs < cosmin) cosmin = cs;
         }
         steps = (uint32_t)ceil(3.0 * acos(cosmin < -1.0 ? -1.0 : cosmin) / b->bin_angle);
@@ -1713,50 +1733,105 @@ static void irrvol__mark_important_bins(const irrvol__build *b, const float p[3]
             for (j = 0; i + j <= steps; j++) {
                 double s = (double)i / steps, r = (double)j / steps;
                 float dir[3];
-                uint32_t bin;
                 for (c = 0; c < 3; c++) dir[c] = (float)(q[0][c] + s * (q[1][c] - q[0][c]) + r * (q[2][c] - q[0][c]));
-                bin = irrvol__nearest_bin(b->vol, dir);
-                if (extra[bin] < side) extra[bin] = (unsigned char)side;
+                extra[irrvol__nearest_bin(b->vol, dir)] = 1;
             }
     }
 }
 
+/* The integral of L over the important directions, per bin: stratified
+   points uniform in area on each important triangle, each weighted by its
+   solid angle A cos(theta) / (r^2 M) and added to the bin of its direction.
+   At least desc.important_rays points per triangle, 16 per bin it covers.
+   Returns the rays cast. */
+static uint32_t irrvol__important_radiance(const irrvol__build *b, const float p[3], irrvol__rng *rng, double *part)
+{
+    uint32_t t, rays = 0;
+    for (t = 0; t < b->important_count; t++) {
+        double q[3][3], n[3], area2, want;
+        double omega = irrvol__important_corners(b, t, p, q);
+        uint32_t side, x, y;
+        int c;
+        if (!(omega > 0.0)) continue;
+        n[0] = (q[1][1] - q[0][1]) * (q[2][2] - q[0][2]) - (q[1][2] - q[0][2]) * (q[2][1] - q[0][1]);
+        n[1] = (q[1][2] - q[0][2]) * (q[2][0] - q[0][0]) - (q[1][0] - q[0][0]) * (q[2][2] - q[0][2]);
+        n[2] = (q[1][0] - q[0][0]) * (q[2][1] - q[0][1]) - (q[1][1] - q[0][1]) * (q[2][0] - q[0][0]);
+        area2 = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);   /* twice the area */
+        if (!(area2 > 0.0)) continue;
+        want = (double)b->important_side * b->important_side + 16.0 * omega / b->bin_solid_angle;
+        for (side = b->important_side; side < 64 && (double)side * side < want;) side++;
+        for (y = 0; y < side; y++)
+            for (x = 0; x < side; x++) {
+                double u1 = ((double)x + irrvol__rng_float(rng)) / side, u2 = ((double)y + irrvol__rng_float(rng)) / side;
+                double sq = sqrt(u1), w0 = 1.0 - sq, w1 = sq * (1.0 - u2), w2 = sq * u2, pt[3], r2, r, weight;
+                float dir[3], rgb[3];
+                irrvol__hit hit;
+                for (c = 0; c < 3; c++) pt[c] = w0 * q[0][c] + w1 * q[1][c] + w2 * q[2][c];
+                r2 = pt[0] * pt[0] + pt[1] * pt[1] + pt[2] * pt[2];
+                r = sqrt(r2);
+                if (!(r > 0.0)) continue;
+                for (c = 0; c < 3; c++) dir[c] = (float)(pt[c] / r);
+                weight = 0.5 * fabs(n[0] * pt[0] + n[1] * pt[1] + n[2] * pt[2]) / (r * r2) / ((double)side * side);
+                /* count the direction here only if this triangle is the first important one along it */
+                if (!irrvol__bvh_intersect(&b->important_bvh, p, dir, 0.0f, FLT_MAX, &hit) || hit.tri != t) continue;
+                irrvol__ray_radiance(b, p, irrvol__v3_load(dir), rgb);
+                rays++;
+                {
+                    double *acc = part + 3 * (size_t)irrvol__nearest_bin(b->vol, dir);
+                    acc[0] += weight * rgb[0]; acc[1] += weight * rgb[1]; acc[2] += weight * rgb[2];
+                }
+            }
+    }
+    return rays;
+}
+
 /* One sample: gather radiance in every bin (4.2.2), s x s jittered rays per
-   bin plus the informed extra rays, then the irradiance (4.2.3). */
+   bin (or one through the centre) plus the informed part, then the
+   irradiance (4.2.3). */
 static void irrvol__sample_job(void *ctx, uint32_t index)
 {
     irrvol__build *b = (irrvol__build *)ctx;
     irrvol *v = b->vol;
     uint32_t s = b->batch_begin + index, bins = v->bins, bin, rays = 0;
-    float *radiance = (float *)(b->scratch + (size_t)index * b->scratch_stride);
+    double *part = (double *)(b->scratch + (size_t)index * b->scratch_stride);
+    float *radiance = (float *)(part + 3 * (size_t)bins);
     float *irradiance = radiance + 3 * (size_t)bins;
     unsigned char *extra = (unsigned char *)(irradiance + 3 * (size_t)bins);
     const float *p = v->positions + 3 * (size_t)s;
     float *out;
     irrvol__rng rng = irrvol__rng_stream(b->desc->seed, s);
     memset(extra, 0, bins);
-    if (b->important_count) irrvol__mark_important_bins(b, p, extra);
+    memset(part, 0, 3 * (size_t)bins * sizeof(double));
+    if (b->important_count) {
+        irrvol__mark_important_bins(b, p, extra);
+        rays += irrvol__important_radiance(b, p, &rng, part);
+    }
     for (bin = 0; bin < bins; bin++) {
         double sum[3] = {0.0, 0.0, 0.0};
         uint32_t ss = b->supersamples, count = 0, pass;
+        int c;
         for (pass = 0; pass < 2; pass++) {
-            uint32_t side = pass == 0 ? ss : extra[bin], x, y;
+            uint32_t side = pass == 0 ? ss : (extra[bin] ? b->important_side : 0), x, y;
             for (y = 0; y < side; y++)
                 for (x = 0; x < side; x++) {
-                    float rgb[3], fu = 0.5f, fv = 0.5f;
+                    float rgb[3], dir[3], fu = 0.5f, fv = 0.5f;
+                    irrvol__vec3 d;
                     if (pass == 1 || ss > 1) {   /* jitter in stratum (x, y) */
                         fu = ((float)x + irrvol__rng_float(&rng)) / (float)side;
                         fv = ((float)y + irrvol__rng_float(&rng)) / (float)side;
                     }
-                    irrvol__ray_radiance(b, p, irrvol__bin_point(v->k, bin, fu, fv), rgb);
-                    sum[0] += rgb[0]; sum[1] += rgb[1]; sum[2] += rgb[2];
+                    d = irrvol__bin_point(v->k, bin, fu, fv);
+                    dir[0] = d.x; dir[1] = d.y; dir[2] = d.z;
                     count++;
+                    if (b->important_count && irrvol__bvh_occluded(&b->important_bvh, p, dir, 0.0f, FLT_MAX))
+                        continue;   /* an important direction: integrated by the informed part */
+                    irrvol__ray_radiance(b, p, d, rgb);
+                    sum[0] += rgb[0]; sum[1] += rgb[1]; sum[2] += rgb[2];
+                    rays++;
                 }
         }
-        radiance[bin] = (float)(sum[0] / count);
-        radiance[bins + bin] = (float)(sum[1] / count);
-        radiance[2 * (size_t)bins + bin] = (float)(sum[2] / count);
-        rays += count;
+        for (c = 0; c < 3; c++)
+            radiance[(size_t)c * bins + bin] = (float)(sum[c] / count + part[3 * (size_t)bin + c] / b->bin_solid_angle);
     }
     irrvol__irradiance(b->weights, bins, radiance, irradiance);
     for (bin = 0; bin < bins; bin++) {
@@ -1949,11 +2024,19 @@ static irrvol_result irrvol__setup_directions(irrvol__build *b)
         for (t = 0; t < d->triangle_count; t++)
             if (d->materials[d->triangle_materials ? d->triangle_materials[t] : 0].flags & IRRVOL_MATERIAL_IMPORTANT) n++;
         if (n) {
+            irrvol__mesh_view m = b->mesh;
             b->important = (uint32_t *)irrvol__alloc_array(a, n, sizeof(uint32_t));
-            if (!b->important) return IRRVOL_ERROR_OUT_OF_MEMORY;
+            b->important_indices = (uint32_t *)irrvol__alloc_array(a, n, 3 * sizeof(uint32_t));
+            if (!b->important || !b->important_indices) return IRRVOL_ERROR_OUT_OF_MEMORY;
             for (t = 0; t < d->triangle_count; t++)
-                if (d->materials[d->triangle_materials ? d->triangle_materials[t] : 0].flags & IRRVOL_MATERIAL_IMPORTANT)
+                if (d->materials[d->triangle_materials ? d->triangle_materials[t] : 0].flags & IRRVOL_MATERIAL_IMPORTANT) {
+                    memcpy(b->important_indices + 3 * (size_t)b->important_count, d->indices + 3 * (size_t)t,
+                           3 * sizeof(uint32_t));
                     b->important[b->important_count++] = t;
+                }
+            m.indices = b->important_indices;
+            m.tri_count = n;
+            if (irrvol__bvh_build(&b->important_bvh, &m, a) != 0) return IRRVOL_ERROR_OUT_OF_MEMORY;
         }
     }
     return IRRVOL_OK;
@@ -1967,7 +2050,8 @@ static irrvol_result irrvol__gather(irrvol__build *b)
     const irrvol_allocator *a = &v->allocator;
     size_t batch;
     uint32_t s;
-    b->scratch_stride = (6 * (size_t)v->bins * sizeof(float) + v->bins + 63) & ~(size_t)63;
+    b->scratch_stride = (3 * (size_t)v->bins * sizeof(double) + 6 * (size_t)v->bins * sizeof(float) + v->bins + 63) &
+                        ~(size_t)63;
     batch = IRRVOL__BATCH_BYTES / b->scratch_stride;
     batch = batch < 1 ? 1 : (batch > 256 ? 256 : batch);
     if (batch > v->sample_count) batch = v->sample_count;
@@ -2038,6 +2122,8 @@ IRRVOL_API irrvol_result irrvol_build(const irrvol_desc *desc, irrvol **out)
     irrvol__free(&v->allocator, b.dirs);
     irrvol__free(&v->allocator, b.weights);
     irrvol__free(&v->allocator, b.important);
+    irrvol__free(&v->allocator, b.important_indices);
+    irrvol__bvh_free(&b.important_bvh, &v->allocator);
     irrvol__free(&v->allocator, b.scratch);
     irrvol__free(&v->allocator, b.ray_counts);
     if (r == IRRVOL_ERROR_OUT_OF_MEMORY) irrvol__log(desc->log, desc->log_user, "irrvol_build: out of memory");
