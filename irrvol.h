@@ -1675,19 +1675,22 @@ static void irrvol__ray_radiance(const irrvol__build *b, const float org[3], irr
 
 static uint32_t irrvol__nearest_bin(const irrvol *v, const float dir[3]);
 
-/* Informed sampling (6.1.1). A bin's radiance is the mean of L over the
-   bin. The directions that point at IMPORTANT triangles (light sources) are
-   integrated apart, from points sampled on the triangles themselves, so a
-   source is captured however small it is next to a bin:
+/* Informed sampling (6.1.1). The directions that point at IMPORTANT
+   triangles (light sources: the "important set") are integrated apart, from
+   points sampled on the triangles themselves, so a source is captured however
+   small it is next to a bin:
 
-     L_bin = (1 / omega_bin) * integral of L over the bin's important directions
-           + mean of L over the bin's rays, a ray toward an important triangle
-             counting zero.
+     H^n(w_j) = sum over bins i of L_i W(i, j)                      (eq. 4.8)
+              + (n+1)/2 * integral over the important set of L max(0, w . w_j)^n dw
 
+   where L_i is the mean of the bin's rays, a ray toward an important
+   triangle counting zero. The second term is a stratified estimate with each
+   point's exact direction, so the source is not smeared over its bin either.
    A direction that meets several important triangles belongs to the first
    one along it, so triangles seen behind one another count once. Bins that
-   an important triangle overlaps also get extra stratified rays, for the
-   rest of the bin. */
+   an important triangle overlaps also get extra stratified rays, for the rest
+   of the bin. The kept radiance of a bin (keep_radiance) includes the
+   important part: the mean of L over the whole bin. */
 
 /* The triangle's corners relative to p, their distances and its solid angle
    seen from p (Van Oosterom and Strackee 1983); 0 when p is on its plane. */
@@ -1739,14 +1742,18 @@ static void irrvol__mark_important_bins(const irrvol__build *b, const float p[3]
     }
 }
 
-/* The integral of L over the important directions, per bin: stratified
-   points uniform in area on each important triangle, each weighted by its
-   solid angle A cos(theta) / (r^2 M) and added to the bin of its direction.
-   At least desc.important_rays points per triangle, 16 per bin it covers.
-   Returns the rays cast. */
-static uint32_t irrvol__important_radiance(const irrvol__build *b, const float p[3], irrvol__rng *rng, double *part)
+/* The important set's part: stratified points uniform in area on each
+   important triangle, weighted by their solid angle A cos(theta) / (r^2 M).
+   Each adds w L to its bin's radiance integral (part, for the kept radiance)
+   and (n+1)/2 w L max(0, w . w_j)^n to every irradiance bin j (direct, planar
+   rgb). At least desc.important_rays points per triangle, 16 per bin it
+   covers. Returns the rays cast. */
+static uint32_t irrvol__important_part(const irrvol__build *b, const float p[3], irrvol__rng *rng, double *part,
+                                       double *direct)
 {
-    uint32_t t, rays = 0;
+    const irrvol *v = b->vol;
+    uint32_t t, rays = 0, bins = v->bins, j;
+    double lobe = 0.5 * (v->moment + 1.0);
     for (t = 0; t < b->important_count; t++) {
         double q[3][3], n[3], area2, want;
         double omega = irrvol__important_corners(b, t, p, q);
@@ -1763,8 +1770,9 @@ static uint32_t irrvol__important_radiance(const irrvol__build *b, const float p
         for (y = 0; y < side; y++)
             for (x = 0; x < side; x++) {
                 double u1 = ((double)x + irrvol__rng_float(rng)) / side, u2 = ((double)y + irrvol__rng_float(rng)) / side;
-                double sq = sqrt(u1), w0 = 1.0 - sq, w1 = sq * (1.0 - u2), w2 = sq * u2, pt[3], r2, r, weight;
+                double sq = sqrt(u1), w0 = 1.0 - sq, w1 = sq * (1.0 - u2), w2 = sq * u2, pt[3], r2, r, weight, wl[3];
                 float dir[3], rgb[3];
+                double *acc;
                 irrvol__hit hit;
                 for (c = 0; c < 3; c++) pt[c] = w0 * q[0][c] + w1 * q[1][c] + w2 * q[2][c];
                 r2 = pt[0] * pt[0] + pt[1] * pt[1] + pt[2] * pt[2];
@@ -1776,9 +1784,18 @@ static uint32_t irrvol__important_radiance(const irrvol__build *b, const float p
                 if (!irrvol__bvh_intersect(&b->important_bvh, p, dir, 0.0f, FLT_MAX, &hit) || hit.tri != t) continue;
                 irrvol__ray_radiance(b, p, irrvol__v3_load(dir), rgb);
                 rays++;
-                {
-                    double *acc = part + 3 * (size_t)irrvol__nearest_bin(b->vol, dir);
-                    acc[0] += weight * rgb[0]; acc[1] += weight * rgb[1]; acc[2] += weight * rgb[2];
+                for (c = 0; c < 3; c++) wl[c] = weight * rgb[c];
+                if (wl[0] == 0.0 && wl[1] == 0.0 && wl[2] == 0.0) continue;
+                acc = part + 3 * (size_t)irrvol__nearest_bin(v, dir);
+                acc[0] += wl[0]; acc[1] += wl[1]; acc[2] += wl[2];
+                for (j = 0; j < bins; j++) {   /* eq. 4.8 with this point's own direction */
+                    const float *dj = b->dirs + 3 * (size_t)j;
+                    double cs = (double)dir[0] * dj[0] + (double)dir[1] * dj[1] + (double)dir[2] * dj[2], f;
+                    if (cs <= 0.0) continue;
+                    f = lobe * irrvol__powi(cs, v->moment);
+                    direct[j] += f * wl[0];
+                    direct[bins + j] += f * wl[1];
+                    direct[2 * (size_t)bins + j] += f * wl[2];
                 }
             }
     }
@@ -1786,7 +1803,7 @@ static uint32_t irrvol__important_radiance(const irrvol__build *b, const float p
 }
 
 /* One sample: gather radiance in every bin (4.2.2), s x s jittered rays per
-   bin (or one through the centre) plus the informed part, then the
+   bin (or one through the centre) plus the important part, then the
    irradiance (4.2.3). */
 static void irrvol__sample_job(void *ctx, uint32_t index)
 {
@@ -1794,22 +1811,22 @@ static void irrvol__sample_job(void *ctx, uint32_t index)
     irrvol *v = b->vol;
     uint32_t s = b->batch_begin + index, bins = v->bins, bin, rays = 0;
     double *part = (double *)(b->scratch + (size_t)index * b->scratch_stride);
-    float *radiance = (float *)(part + 3 * (size_t)bins);
+    double *direct = part + 3 * (size_t)bins;
+    float *radiance = (float *)(direct + 3 * (size_t)bins);
     float *irradiance = radiance + 3 * (size_t)bins;
     unsigned char *extra = (unsigned char *)(irradiance + 3 * (size_t)bins);
     const float *p = v->positions + 3 * (size_t)s;
-    float *out;
     irrvol__rng rng = irrvol__rng_stream(b->desc->seed, s);
+    int c;
     memset(extra, 0, bins);
-    memset(part, 0, 3 * (size_t)bins * sizeof(double));
     if (b->important_count) {
+        memset(part, 0, 6 * (size_t)bins * sizeof(double));
         irrvol__mark_important_bins(b, p, extra);
-        rays += irrvol__important_radiance(b, p, &rng, part);
+        rays += irrvol__important_part(b, p, &rng, part, direct);
     }
     for (bin = 0; bin < bins; bin++) {
         double sum[3] = {0.0, 0.0, 0.0};
         uint32_t ss = b->supersamples, count = 0, pass;
-        int c;
         for (pass = 0; pass < 2; pass++) {
             uint32_t side = pass == 0 ? ss : (extra[bin] ? b->important_side : 0), x, y;
             for (y = 0; y < side; y++)
@@ -1824,26 +1841,27 @@ static void irrvol__sample_job(void *ctx, uint32_t index)
                     dir[0] = d.x; dir[1] = d.y; dir[2] = d.z;
                     count++;
                     if (b->important_count && irrvol__bvh_occluded(&b->important_bvh, p, dir, 0.0f, FLT_MAX))
-                        continue;   /* an important direction: integrated by the informed part */
+                        continue;   /* an important direction: integrated by the important part */
                     irrvol__ray_radiance(b, p, d, rgb);
                     sum[0] += rgb[0]; sum[1] += rgb[1]; sum[2] += rgb[2];
                     rays++;
                 }
         }
-        for (c = 0; c < 3; c++)
-            radiance[(size_t)c * bins + bin] = (float)(sum[c] / count + part[3 * (size_t)bin + c] / b->bin_solid_angle);
+        for (c = 0; c < 3; c++) radiance[(size_t)c * bins + bin] = (float)(sum[c] / count);
     }
     irrvol__irradiance(b->weights, bins, radiance, irradiance);
     for (bin = 0; bin < bins; bin++) {
-        out = v->irradiance + ((size_t)bin * v->sample_count + s) * 3;
-        out[0] = irradiance[bin];
-        out[1] = irradiance[bins + bin];
-        out[2] = irradiance[2 * (size_t)bins + bin];
+        float *out = v->irradiance + ((size_t)bin * v->sample_count + s) * 3;
+        for (c = 0; c < 3; c++) {
+            size_t at = (size_t)c * bins + bin;
+            out[c] = b->important_count ? (float)(irradiance[at] + direct[at]) : irradiance[at];
+        }
         if (v->radiance) {
             out = v->radiance + ((size_t)bin * v->sample_count + s) * 3;
-            out[0] = radiance[bin];
-            out[1] = radiance[bins + bin];
-            out[2] = radiance[2 * (size_t)bins + bin];
+            for (c = 0; c < 3; c++)
+                out[c] = b->important_count ? (float)(radiance[(size_t)c * bins + bin] + part[3 * (size_t)bin + (size_t)c] /
+                                                                                          b->bin_solid_angle)
+                                            : radiance[(size_t)c * bins + bin];
         }
     }
     b->ray_counts[s] = rays;
@@ -2050,7 +2068,7 @@ static irrvol_result irrvol__gather(irrvol__build *b)
     const irrvol_allocator *a = &v->allocator;
     size_t batch;
     uint32_t s;
-    b->scratch_stride = (3 * (size_t)v->bins * sizeof(double) + 6 * (size_t)v->bins * sizeof(float) + v->bins + 63) &
+    b->scratch_stride = (6 * (size_t)v->bins * sizeof(double) + 6 * (size_t)v->bins * sizeof(float) + v->bins + 63) &
                         ~(size_t)63;
     batch = IRRVOL__BATCH_BYTES / b->scratch_stride;
     batch = batch < 1 ? 1 : (batch > 256 ? 256 : batch);
