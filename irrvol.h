@@ -133,8 +133,8 @@
 
    Informed sampling (6.1.1). Triangles of IMPORTANT materials (light
    sources) are never missed: for each sample, points are sampled on every
-   IMPORTANT triangle (stratified, at least desc.important_rays per triangle
-   and 16 per bin it covers) and their radiance enters eq. 4.3 / 4.8 with
+   IMPORTANT triangle (stratified; desc.important_rays in all, shared by solid
+   angle, plus 16 per bin covered) and their radiance enters eq. 4.3 / 4.8 with
    each point's own direction and solid angle, while the bin rays that point
    at an IMPORTANT triangle count zero; bins such a triangle overlaps also
    get important_rays extra rays for the rest of the bin. A lamp far smaller
@@ -279,7 +279,7 @@ typedef struct irrvol_desc {
     uint32_t max_depth;              /* mirror reflections followed; 0 = 6 */
     float min_weight;                /* chain weight floor; 0 = 0.01 */
     float ray_offset;                /* reflected rays start this far off the surface; 0 = 1e-4 * diagonal */
-    uint32_t important_rays;         /* least points per IMPORTANT triangle, extra rays per bin it overlaps; 0 = 64 */
+    uint32_t important_rays;         /* points on IMPORTANT triangles per sample, extra rays per bin; 0 = 64 */
     int keep_radiance;               /* non-zero: keep the gathered radiance (irrvol_sample) */
 
     uint64_t seed;                   /* jitter streams */
@@ -1813,13 +1813,19 @@ static void irrvol__add_lobe(const irrvol__build *b, const float dir[3], const d
    important triangle, weighted by their solid angle A cos(theta) / (r^2 M).
    Each adds w L to its bin's radiance integral (part, for the kept radiance)
    and (n+1)/2 w L max(0, w . w_j)^n to every irradiance bin j (direct, planar
-   rgb). At least desc.important_rays points per triangle, 16 per bin it
-   covers. Returns the rays cast. */
+   rgb). desc.important_rays points per sample, shared among the triangles by
+   solid angle, plus 16 per bin they cover; at least 2 x 2 per triangle.
+   Returns the rays cast. */
 static uint32_t irrvol__important_part(const irrvol__build *b, const float p[3], irrvol__rng *rng, double *part,
                                        float *direct)
 {
     const irrvol *v = b->vol;
     uint32_t t, rays = 0;
+    double total = 0.0;
+    for (t = 0; t < b->important_count; t++) {   /* the solid angle of the whole important set */
+        double q[3][3], omega = irrvol__important_corners(b, t, p, q);
+        if (omega > 0.0) total += omega;
+    }
     for (t = 0; t < b->important_count; t++) {
         double q[3][3], n[3], area2, want;
         double omega = irrvol__important_corners(b, t, p, q);
@@ -1831,8 +1837,9 @@ static uint32_t irrvol__important_part(const irrvol__build *b, const float p[3],
         n[2] = (q[1][0] - q[0][0]) * (q[2][1] - q[0][1]) - (q[1][1] - q[0][1]) * (q[2][0] - q[0][0]);
         area2 = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);   /* twice the area */
         if (!(area2 > 0.0)) continue;
-        want = (double)b->important_side * b->important_side + 16.0 * omega / b->bin_solid_angle;
-        for (side = b->important_side; side < 64 && (double)side * side < want;) side++;
+        /* important_rays points shared by solid angle, and 16 per bin covered */
+        want = (double)b->important_side * b->important_side * omega / total + 16.0 * omega / b->bin_solid_angle;
+        for (side = 2; side < 64 && (double)side * side < want;) side++;
         for (y = 0; y < side; y++)
             for (x = 0; x < side; x++) {
                 double u1 = ((double)x + irrvol__rng_float(rng)) / side, u2 = ((double)y + irrvol__rng_float(rng)) / side;
