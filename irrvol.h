@@ -1468,10 +1468,9 @@ static void irrvol__mark_refined(const irrvol *v, const irrvol__mesh_view *m, un
             qlo = (tlo[d] - v->lo[d]) / size[d];
             qhi = (thi[d] - v->lo[d]) / size[d];
             if (qhi < 0.0 || qlo > (double)v->cells[d]) { outside = 1; break; }
-            c0[d] = qlo <= 0.0 ? 0u : (uint32_t)qlo;
-            c1[d] = (uint32_t)qhi;
-            if (c0[d] >= v->cells[d]) c0[d] = v->cells[d] - 1;
-            if (c1[d] >= v->cells[d]) c1[d] = v->cells[d] - 1;
+            /* clamped before the conversion: a huge triangle must not overflow it */
+            c0[d] = qlo <= 0.0 ? 0u : qlo >= (double)v->cells[d] ? v->cells[d] - 1 : (uint32_t)qlo;
+            c1[d] = qhi >= (double)v->cells[d] ? v->cells[d] - 1 : (uint32_t)qhi;
             /* a bound on a cell face also touches the cell before it */
             if (c0[d] > 0 && qlo == (double)c0[d]) c0[d]--;
         }
@@ -2072,7 +2071,7 @@ static irrvol_result irrvol__setup_grid(irrvol__build *b)
             v->hi[k] = shi[k] - inset;
         }
         if (!(v->lo[k] < v->hi[k]) || !isfinite(v->hi[k] - v->lo[k]))
-            IRRVOL__REJECT(d->log, d->log_user, "irrvol_build: the grid has zero size along an axis");
+            IRRVOL__REJECT(d->log, d->log_user, "irrvol_build: the grid has zero or infinite size along an axis");
         samples[k] = irrvol__def(d->grid_samples[k], 7u);
         diag2 += (v->hi[k] - v->lo[k]) * (v->hi[k] - v->lo[k]);
     }

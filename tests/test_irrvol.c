@@ -384,6 +384,13 @@ static void test_shared_second_level_samples(void)
         CHECK_EQ_INT(dup, 0);
     }
     irrvol_destroy(v);
+    /* a huge plane through the lower layer of cells refines exactly those four */
+    memset(&s, 0, sizeof s);
+    sc_square(&s, 1, 0.5f, 0.0f, 0.0f, 1e30f, 0);
+    if (!CHECK_EQ_INT(structure_volume(&s, &v), IRRVOL_OK)) return;
+    irrvol_info(v, &info);
+    CHECK_EQ_INT(info.refined_cells, 4);
+    irrvol_destroy(v);
     /* geometry on the outer walls of the scene stays outside the inset grid */
     {
         sc_scene c;
