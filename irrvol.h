@@ -409,6 +409,9 @@ IRRVOL_API const char *irrvol_result_string(irrvol_result r);
 #ifndef IRRVOL_MAX_MOMENT
 #define IRRVOL_MAX_MOMENT 1024
 #endif
+#if (IRRVOL_MAX_GRID_SAMPLES) * ((IRRVOL_MAX_SUBGRID_SAMPLES) - 1) >= (1 << 21)
+#  error "irrvol.h: the fine lattice must fit 21 bits per axis (grid samples x subgrid cells)"
+#endif
 #define IRRVOL__MAX_SUPERSAMPLES 16      /* s x s rays per bin */
 #define IRRVOL__MAX_WEIGHT_SUBDIVISIONS 16
 #define IRRVOL__IMPORTANT_MAX_SIDE 16    /* at most 16 x 16 extra rays per bin */
@@ -1289,70 +1292,49 @@ static void irrvol__grid_dims(irrvol *v, const uint32_t samples[3], uint32_t sub
     v->first_level_count = samples[0] * samples[1] * samples[2];
 }
 
-/* Fills the id tables of the grid whose dimensions are set, given which
-   cells are refined; creates the sample positions. */
-static irrvol_result irrvol__make_grid(irrvol *v, const unsigned char *refined)
+/* Fills the cells' id tables in cell order. A refined cell's table holds
+   its side^3 points of the global fine lattice (f sub-cells per cell); a
+   point on the coarse lattice is a first-level sample, any other point gets
+   a new id the first time a cell meets it, so neighbours share it. The fine
+   coordinates of each new sample go to fine[]. Returns the sample count. */
+static uint32_t irrvol__fill_tables(irrvol *v, const unsigned char *refined, irrvol__id_map *map, uint32_t *fine)
 {
-    const irrvol_allocator *a = &v->allocator;
-    uint32_t side = v->subgrid, f = side - 1, c, cx, cy, cz, next;
-    uint64_t side3 = (uint64_t)side * side * side, ids, upper, capacity = 16;
-    uint32_t *fine = NULL;
-    irrvol__id_map map;
-    size_t at = 0, i;
-    v->refined_count = 0;
-    for (c = 0; c < v->cell_count; c++) v->refined_count += refined[c] ? 1u : 0u;
-    ids = (uint64_t)(v->cell_count - v->refined_count) * 8u + (uint64_t)v->refined_count * side3;
-    upper = (uint64_t)v->first_level_count + (uint64_t)v->refined_count * (side3 - 8u);
-    if (ids > UINT32_MAX || upper >= UINT32_MAX || ids > SIZE_MAX / 8 || upper > SIZE_MAX / 16)
-        return IRRVOL_ERROR_OUT_OF_MEMORY;
-    while (capacity < 2 * (uint64_t)v->refined_count * side3) capacity *= 2;
-    v->id_count = (size_t)ids;
-    v->cell = (irrvol__cell *)irrvol__alloc_array(a, v->cell_count, sizeof(irrvol__cell));
-    v->ids = (uint32_t *)irrvol__alloc_array(a, v->id_count, sizeof(uint32_t));
-    fine = (uint32_t *)irrvol__alloc_array(a, (size_t)(upper - v->first_level_count) * 3 + 3, sizeof(uint32_t));
-    map.keys = (uint64_t *)irrvol__alloc_array(a, (size_t)capacity, sizeof(uint64_t));
-    map.values = (uint32_t *)irrvol__alloc_array(a, (size_t)capacity, sizeof(uint32_t));
-    map.mask = (size_t)capacity - 1;
-    if (!v->cell || !v->ids || !fine || !map.keys || !map.values) {
-        irrvol__free(a, fine);
-        irrvol__free(a, map.keys);
-        irrvol__free(a, map.values);
-        return IRRVOL_ERROR_OUT_OF_MEMORY;
-    }
-    memset(map.keys, 0xFF, (size_t)capacity * sizeof(uint64_t));
-    next = v->first_level_count;
-    for (cz = 0, c = 0; cz < v->cells[2]; cz++)
+    uint32_t f = v->subgrid - 1, c = 0, cx, cy, cz, next = v->first_level_count;
+    size_t at = 0;
+    for (cz = 0; cz < v->cells[2]; cz++)
         for (cy = 0; cy < v->cells[1]; cy++)
             for (cx = 0; cx < v->cells[0]; cx++, c++) {
-                /* table side and lattice spacing of its points: fine or coarse */
-                uint32_t s = refined[c] ? side : 2, spacing = refined[c] ? 1 : f, lx, ly, lz;
+                /* table side and the lattice spacing of its points */
+                uint32_t s = refined[c] ? v->subgrid : 2, spacing = refined[c] ? 1 : f, lx, ly, lz;
                 v->cell[c].offset = (uint32_t)at;
                 v->cell[c].side = s;
                 for (lz = 0; lz < s; lz++)
                     for (ly = 0; ly < s; ly++)
                         for (lx = 0; lx < s; lx++) {
-                            /* the point on the fine lattice of f sub-cells per cell */
-                            uint32_t gi = cx * f + lx * spacing, gj = cy * f + ly * spacing;
-                            uint32_t gk = cz * f + lz * spacing;
+                            uint32_t gi = cx * f + lx * spacing, gj = cy * f + ly * spacing, gk = cz * f + lz * spacing;
+                            int created;
+                            uint32_t id;
                             if (gi % f == 0 && gj % f == 0 && gk % f == 0) {
                                 v->ids[at++] = gi / f + v->samples[0] * (gj / f + v->samples[1] * (gk / f));
-                            } else {
-                                int created;
-                                uint32_t id = irrvol__id_map_get(&map, irrvol__lattice_key(gi, gj, gk), &next, &created);
-                                if (created) {
-                                    uint32_t *p = &fine[3 * (size_t)(id - v->first_level_count)];
-                                    p[0] = gi; p[1] = gj; p[2] = gk;
-                                }
-                                v->ids[at++] = id;
+                                continue;
                             }
+                            id = irrvol__id_map_get(map, irrvol__lattice_key(gi, gj, gk), &next, &created);
+                            if (created) {
+                                uint32_t *p = &fine[3 * (size_t)(id - v->first_level_count)];
+                                p[0] = gi; p[1] = gj; p[2] = gk;
+                            }
+                            v->ids[at++] = id;
                         }
             }
-    irrvol__free(a, map.keys);
-    irrvol__free(a, map.values);
-    v->sample_count = next;
-    v->positions = (float *)irrvol__alloc_array(a, (size_t)next * 3, sizeof(float));
-    if (!v->positions) { irrvol__free(a, fine); return IRRVOL_ERROR_OUT_OF_MEMORY; }
-    for (i = 0; i < next; i++) {
+    return next;
+}
+
+/* Sample positions from their fine-lattice coordinates. */
+static void irrvol__sample_positions(irrvol *v, const uint32_t *fine)
+{
+    uint32_t f = v->subgrid - 1;
+    size_t i;
+    for (i = 0; i < v->sample_count; i++) {
         uint32_t g[3];
         int d;
         if (i < v->first_level_count) {
@@ -1367,8 +1349,44 @@ static irrvol_result irrvol__make_grid(irrvol *v, const unsigned char *refined)
             v->positions[3 * i + d] = (float)((double)v->lo[d] + t * ((double)v->hi[d] - (double)v->lo[d]));
         }
     }
+}
+
+/* Builds the id tables and sample positions of a grid whose dimensions are
+   set, given which cells are refined. */
+static irrvol_result irrvol__make_grid(irrvol *v, const unsigned char *refined)
+{
+    const irrvol_allocator *a = &v->allocator;
+    uint64_t side3 = (uint64_t)v->subgrid * v->subgrid * v->subgrid, ids, upper, capacity = 16;
+    uint32_t *fine, c;
+    irrvol__id_map map;
+    irrvol_result r = IRRVOL_OK;
+    v->refined_count = 0;
+    for (c = 0; c < v->cell_count; c++) v->refined_count += refined[c] ? 1u : 0u;
+    ids = (uint64_t)(v->cell_count - v->refined_count) * 8u + (uint64_t)v->refined_count * side3;
+    upper = (uint64_t)v->first_level_count + (uint64_t)v->refined_count * (side3 - 8u);   /* nothing shared */
+    if (ids > UINT32_MAX || upper >= UINT32_MAX || ids > SIZE_MAX / 8 || upper > SIZE_MAX / 16)
+        return IRRVOL_ERROR_OUT_OF_MEMORY;
+    while (capacity < 2 * (uint64_t)v->refined_count * side3) capacity *= 2;
+    v->id_count = (size_t)ids;
+    v->cell = (irrvol__cell *)irrvol__alloc_array(a, v->cell_count, sizeof(irrvol__cell));
+    v->ids = (uint32_t *)irrvol__alloc_array(a, v->id_count, sizeof(uint32_t));
+    fine = (uint32_t *)irrvol__alloc_array(a, (size_t)(upper - v->first_level_count) * 3 + 3, sizeof(uint32_t));
+    map.keys = (uint64_t *)irrvol__alloc_array(a, (size_t)capacity, sizeof(uint64_t));
+    map.values = (uint32_t *)irrvol__alloc_array(a, (size_t)capacity, sizeof(uint32_t));
+    map.mask = (size_t)capacity - 1;
+    if (v->cell && v->ids && fine && map.keys && map.values) {
+        memset(map.keys, 0xFF, (size_t)capacity * sizeof(uint64_t));
+        v->sample_count = irrvol__fill_tables(v, refined, &map, fine);
+        v->positions = (float *)irrvol__alloc_array(a, (size_t)v->sample_count * 3, sizeof(float));
+        if (v->positions) irrvol__sample_positions(v, fine);
+        else r = IRRVOL_ERROR_OUT_OF_MEMORY;
+    } else {
+        r = IRRVOL_ERROR_OUT_OF_MEMORY;
+    }
     irrvol__free(a, fine);
-    return IRRVOL_OK;
+    irrvol__free(a, map.keys);
+    irrvol__free(a, map.values);
+    return r;
 }
 
 static size_t irrvol__bytes(const irrvol *v)
