@@ -219,7 +219,8 @@ typedef struct irrvol_hit {
 typedef int (*irrvol_trace_fn)(void *user, const float org[3], const float dir[3], float tmax,
                                irrvol_hit *hit);
 
-/* Radiance arriving at org from direction -dir (seen looking along unit dir). */
+/* Radiance seen from org looking along the unit direction dir: the light
+   that arrives at org from that direction. */
 typedef void (*irrvol_radiance_fn)(void *user, const float org[3], const float dir[3], float rgb[3]);
 
 typedef int (*irrvol_write_fn)(void *user, const void *bytes, size_t n); /* 0 = ok */
