@@ -98,8 +98,9 @@ int main(void)
     irrvol_info(vol, &info);
     printf("%-44s %14u %12.3f s %12.3f s %7.1f MB\n", "this header, 1 ray per bin (thesis sampling)", info.sample_count,
            t1, t2, info.bytes / 1e6);
-    printf("%-44s %14s %12.2f M %12.2f M   rays/s\n", "", "", info.rays / t1 / 1e6, info.rays / t2 / 1e6);
+    printf("%-44s %14s %12.2f M %12.2f M   rays/s (whole build)\n", "", "", info.rays / t1 / 1e6, info.rays / t2 / 1e6);
     per_sample = t1 / info.sample_count;
+    printf("%-44s %14s %10.3f ms %14s   per sample, 1 thread (Greger: 630 ms)\n", "", "", 1e3 * per_sample, "");
     irrvol_destroy(vol);
 
     /* with the lamp IMPORTANT (informed sampling) */
@@ -110,7 +111,7 @@ int main(void)
     irrvol_info(vol, &info);
     printf("%-44s %14u %12.3f s %12.3f s %7.1f MB\n", "this header, lamp IMPORTANT (informed)", info.sample_count, t1,
            t2, info.bytes / 1e6);
-    printf("%-44s %14s %12.2f M %12.2f M   rays/s\n", "", "", info.rays / t1 / 1e6, info.rays / t2 / 1e6);
+    printf("%-44s %14s %12.2f M %12.2f M   rays/s (whole build)\n", "", "", info.rays / t1 / 1e6, info.rays / t2 / 1e6);
     printf("%-44s %14u %14s %14s %7.1f MB\n", "Greger 1996 (PA-RISC 7100LC, 100 MHz)", 2287u, "24 min", "", 18.0);
     printf("target: build under 3 s  [%s]\n\n", t2 < 3.0 ? "met" : "NOT MET");
 
