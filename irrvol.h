@@ -427,6 +427,14 @@ IRRVOL_API const char *irrvol_result_string(irrvol_result r);
 #  define IRRVOL__HOT static
 #endif
 
+/* Prefetching for the pipelined irrvol_query_many; a no-op elsewhere. */
+#if defined(__GNUC__) || defined(__clang__)
+#  define IRRVOL__PREFETCH(p) __builtin_prefetch(p)
+#else
+#  define IRRVOL__PREFETCH(p) ((void)(p))
+#endif
+#define IRRVOL__AHEAD 8   /* queries prepared ahead in irrvol_query_many */
+
 #if defined(__cplusplus)
 #  if defined(__GNUC__) || defined(__clang__) || defined(_MSC_VER)
 #    define IRRVOL__RESTRICT __restrict
@@ -2357,37 +2365,65 @@ IRRVOL__HOT void irrvol__bilinear_bins(const irrvol *v, float u, float t, uint32
     w[3] = tu * tv;
 }
 
-/* One query: eight corner samples, the bin(s) of the direction, trilinear
-   (and bilinear) weights. */
-IRRVOL__HOT void irrvol__query(const irrvol *vol, irrvol_filter filter, const float pos[3],
-                               const float dir[3], float rgb[3])
+/* A query reduced to the values it reads and their weights: eight corner
+   samples times one bin (NEAREST) or four bins (BILINEAR). */
+typedef struct irrvol__prepared {
+    const float *value[32];
+    float weight[32];
+    uint32_t count;
+} irrvol__prepared;
+
+IRRVOL__HOT void irrvol__prepare(const irrvol *vol, irrvol_filter filter, const float pos[3], const float dir[3],
+                                 irrvol__prepared *q)
 {
     uint32_t ids[8], c, h;
-    float w[8], u, t, r = 0.0f, g = 0.0f, b = 0.0f;
+    float w[8], u, t;
     size_t stride = (size_t)vol->sample_count * 3;   /* one bin of all samples */
     irrvol__locate(vol, pos, ids, w);
     irrvol__direction_to_square(dir, &u, &t, &h);
     if (filter == IRRVOL_FILTER_DEFAULT) filter = vol->filter;
     if (filter == IRRVOL_FILTER_BILINEAR) {
-        uint32_t bins[4], q;
+        uint32_t bins[4], b;
         float bw[4];
         irrvol__bilinear_bins(vol, u, t, h, bins, bw);
-        for (q = 0; q < 4; q++) {
-            const float *s = vol->irradiance + bins[q] * stride;
+        for (b = 0; b < 4; b++) {
+            const float *s = vol->irradiance + bins[b] * stride;
             for (c = 0; c < 8; c++) {
-                const float *p = s + 3 * (size_t)ids[c];
-                float x = w[c] * bw[q];
-                r += x * p[0]; g += x * p[1]; b += x * p[2];
+                q->value[8 * b + c] = s + 3 * (size_t)ids[c];
+                q->weight[8 * b + c] = w[c] * bw[b];
             }
         }
+        q->count = 32;
     } else {
         const float *s = vol->irradiance + irrvol__square_bin(vol, u, t, h) * stride;
         for (c = 0; c < 8; c++) {
-            const float *p = s + 3 * (size_t)ids[c];
-            r += w[c] * p[0]; g += w[c] * p[1]; b += w[c] * p[2];
+            q->value[c] = s + 3 * (size_t)ids[c];
+            q->weight[c] = w[c];
         }
+        q->count = 8;
+    }
+}
+
+IRRVOL__HOT void irrvol__finish(const irrvol__prepared *q, float rgb[3])
+{
+    float r = 0.0f, g = 0.0f, b = 0.0f;
+    uint32_t i;
+    for (i = 0; i < q->count; i++) {
+        const float *p = q->value[i];
+        float x = q->weight[i];
+        r += x * p[0]; g += x * p[1]; b += x * p[2];
     }
     rgb[0] = r; rgb[1] = g; rgb[2] = b;
+}
+
+/* One query: eight corner samples, the bin(s) of the direction, trilinear
+   (and bilinear) weights. */
+IRRVOL__HOT void irrvol__query(const irrvol *vol, irrvol_filter filter, const float pos[3],
+                               const float dir[3], float rgb[3])
+{
+    irrvol__prepared q;
+    irrvol__prepare(vol, filter, pos, dir, &q);
+    irrvol__finish(&q, rgb);
 }
 
 IRRVOL_API void irrvol_query_filter(const irrvol *vol, irrvol_filter filter, const float pos[3],
@@ -2415,16 +2451,27 @@ IRRVOL_API void irrvol_query_glossy(const irrvol *vol, const float pos[3], const
     irrvol__query(vol, IRRVOL_FILTER_DEFAULT, pos, q, rgb);
 }
 
+/* Many queries, pipelined: each query is prepared IRRVOL__AHEAD queries
+   before it is summed and its values are prefetched meanwhile, so the
+   memory latency of one query overlaps the work of the next ones. The
+   results equal irrvol_query_filter's bit for bit. */
 IRRVOL_API void irrvol_query_many(const irrvol *vol, irrvol_filter filter, uint32_t count,
                                   const float *pos, size_t pos_stride, const float *dir,
                                   size_t dir_stride, float *rgb)
 {
-    uint32_t i;
+    irrvol__prepared ring[IRRVOL__AHEAD];
+    uint32_t i, j;
     if (!pos_stride) pos_stride = 3 * sizeof(float);
     if (!dir_stride) dir_stride = 3 * sizeof(float);
-    for (i = 0; i < count; i++)
-        irrvol__query(vol, filter, (const float *)((const char *)pos + i * pos_stride),
-                      (const float *)((const char *)dir + i * dir_stride), rgb + 3 * (size_t)i);
+    for (i = 0; i < count + IRRVOL__AHEAD; i++) {
+        if (i >= IRRVOL__AHEAD) irrvol__finish(&ring[i % IRRVOL__AHEAD], rgb + 3 * (size_t)(i - IRRVOL__AHEAD));
+        if (i < count) {
+            irrvol__prepared *q = &ring[i % IRRVOL__AHEAD];
+            irrvol__prepare(vol, filter, (const float *)((const char *)pos + i * pos_stride),
+                            (const float *)((const char *)dir + i * dir_stride), q);
+            for (j = 0; j < q->count; j++) IRRVOL__PREFETCH(q->value[j]);
+        }
+    }
 }
 
 IRRVOL_API irrvol_result irrvol_sample(const irrvol *vol, uint32_t index, irrvol_sample_info *info)

@@ -2,7 +2,9 @@
    level, k = 17, 578 bins) on the office with a static bunny. Build time and
    rays/s on 1 and 2 threads, memory, queries/s, next to the thesis's figures
    (5.1.1: 2287 samples, 24 minutes, 18 MB, 27,600 queries/s on a 100 MHz
-   PA-RISC 7100LC). Medians of several runs; the machine is shared. */
+   PA-RISC 7100LC). Medians of several runs. The machine is shared with other
+   work: single-thread figures are measured in the thread's CPU time, which
+   time slicing does not inflate; two-thread builds in wall-clock time. */
 #define IRRVOL_IMPLEMENTATION
 #include "irrvol.h"
 #include "tests/ref_irrvol_scene.h"
@@ -16,6 +18,13 @@ static double now(void)
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
+static double cpu_now(void)   /* this thread's CPU time */
+{
+    struct timespec t;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
 static double median(double *x, int n)
 {
     int i, j;
@@ -26,10 +35,12 @@ static double median(double *x, int n)
 
 #define RUNS 5
 
-/* Median build time; *vol keeps the last volume. */
+/* Median build time (CPU time without a pool, else wall clock); *vol keeps
+   the last volume. */
 static double time_build(irrvol_desc *d, ex_pool *pool, irrvol **vol)
 {
     double t[RUNS];
+    double (*clock_fn)(void) = pool ? now : cpu_now;
     int r;
     d->parallel_for = pool ? ex_pool_parallel_for : NULL;
     d->parallel_user = pool;
@@ -37,15 +48,27 @@ static double time_build(irrvol_desc *d, ex_pool *pool, irrvol **vol)
     for (r = 0; r < RUNS; r++) {
         double t0;
         irrvol_destroy(*vol);
-        t0 = now();
+        t0 = clock_fn();
         if (irrvol_build(d, vol) != IRRVOL_OK) { fprintf(stderr, "build failed\n"); exit(1); }
-        t[r] = now() - t0;
+        t[r] = clock_fn() - t0;
     }
     return median(t, RUNS);
 }
 
 static float *queries;   /* position xyz, direction xyz */
 #define QUERIES 4000000u
+
+static double time_batched(const irrvol *v, irrvol_filter filter, const float *q, uint32_t n, float *out)
+{
+    double t[RUNS];
+    int r;
+    for (r = 0; r < RUNS; r++) {
+        double t0 = cpu_now();
+        irrvol_query_many(v, filter, n, q, 6 * sizeof(float), q + 3, 6 * sizeof(float), out);
+        t[r] = cpu_now() - t0;
+    }
+    return (double)n / median(t, RUNS);
+}
 
 static double time_queries(const irrvol *v, irrvol_filter filter, const float *q, uint32_t n, uint32_t repeat,
                            float *checksum)
@@ -54,7 +77,7 @@ static double time_queries(const irrvol *v, irrvol_filter filter, const float *q
     int r;
     float sum = 0.0f;
     for (r = 0; r < RUNS; r++) {
-        double t0 = now();
+        double t0 = cpu_now();
         uint32_t i, k;
         for (k = 0; k < repeat; k++)
             for (i = 0; i < n; i++) {
@@ -62,7 +85,7 @@ static double time_queries(const irrvol *v, irrvol_filter filter, const float *q
                 irrvol_query_filter(v, filter, q + 6 * (size_t)i, q + 6 * (size_t)i + 3, h);
                 sum += h[1];
             }
-        t[r] = now() - t0;
+        t[r] = cpu_now() - t0;
     }
     *checksum = sum;
     return (double)n * repeat / median(t, RUNS);
@@ -77,7 +100,8 @@ int main(void)
     ex_pool *two = ex_pool_create(2);
     uint32_t i, m, bunny_n;
     uint64_t state = 7;
-    double t1, t2, nearest, bilinear, coherent, per_sample;
+    double t1, t2, nearest, bilinear, coherent, per_sample, many_nearest, many_bilinear;
+    float *many_out;
     float checksum, *bunny_q;
     uint32_t flags[64];
     memset(&info, 0, sizeof info);
@@ -86,6 +110,7 @@ int main(void)
     printf("office + bunny: %u triangles; Greger's settings: 7^3 first level, 3^3 second level, k = 17 (578 bins)\n",
            s.tri_count);
     printf("%-44s %14s %14s %14s %10s\n", "", "samples", "build 1 thr", "build 2 thr", "memory");
+    printf("%-44s %14s %14s %14s\n", "", "", "(CPU time)", "(wall clock)");
 
     /* thesis sampling: one ray per bin, no informed sampling */
     for (m = 0; m < s.material_count; m++) {
@@ -128,6 +153,10 @@ int main(void)
     }
     nearest = time_queries(vol, IRRVOL_FILTER_NEAREST, queries, QUERIES, 1, &checksum);
     bilinear = time_queries(vol, IRRVOL_FILTER_BILINEAR, queries, QUERIES, 1, &checksum);
+    many_out = (float *)malloc(3 * sizeof(float) * QUERIES);
+    many_nearest = time_batched(vol, IRRVOL_FILTER_NEAREST, queries, QUERIES, many_out);
+    many_bilinear = time_batched(vol, IRRVOL_FILTER_BILINEAR, queries, QUERIES, many_out);
+    free(many_out);
     /* a bunny's vertices with their normals, 0.3 m tall, under the desk */
     bunny_n = s.bunny.vertex_count;
     bunny_q = (float *)malloc(6 * sizeof(float) * bunny_n);
@@ -142,14 +171,16 @@ int main(void)
         free(normals);
     }
     coherent = time_queries(vol, IRRVOL_FILTER_NEAREST, bunny_q, bunny_n, 1000, &checksum);
-    printf("%-44s %16s %16s\n", "queries per second, one thread", "nearest", "bilinear");
+    printf("%-44s %16s %16s\n", "queries per CPU second, one thread", "nearest", "bilinear");
     printf("%-44s %14.1f M %14.1f M\n", "random positions and directions", nearest / 1e6, bilinear / 1e6);
+    printf("%-44s %14.1f M %14.1f M\n", "  the same through irrvol_query_many", many_nearest / 1e6, many_bilinear / 1e6);
     printf("%-44s %14.1f M %16s   (%u queries: %.1f us per frame)\n", "the bunny's vertices (coherent)", coherent / 1e6,
            "", bunny_n, 1e6 * bunny_n / coherent);
     printf("%-44s %14.4f M %16s\n", "Greger 1996 (random)", 0.0276, "");
     printf("speed-up over the thesis: %.0fx; one query vs one sample's gather (578 rays + eq. 4.3, %.0f us): %.0fx\n",
            nearest / 27600.0, 1e6 * per_sample, per_sample * nearest);
-    printf("target: at least 20 M nearest queries/s on one core  [%s]\n", nearest >= 20e6 ? "met" : "NOT MET");
+    printf("target: at least 20 M nearest queries/s on one core  [single queries: %s, batched: %s]\n",
+           nearest >= 20e6 ? "met" : "NOT MET", many_nearest >= 20e6 ? "met" : "NOT MET");
     (void)checksum;
     free(bunny_q);
     free(queries);
