@@ -1,12 +1,17 @@
-/* rendercache.h - v0.1.0 - render cache and range-image walkthroughs - public domain or MIT, see end of file
+/* rendercache.h - v0.2.0 - render cache and range-image walkthroughs - public domain or MIT, see end of file
 
    RENDERCACHE.H: an image-space point cache that reprojects and resamples, and range-image walkthroughs of animated scenes.
 
-   STATUS
-
-   Skeleton: this version declares the error codes and the version macros
-   only. The technique itself is not implemented yet; nothing else is declared
-   until it is.
+   The render cache (Walter, Drettakis and Parker 1999; Walter, Drettakis and
+   Greenberg 2002) keeps the shaded points of earlier frames. Every frame it
+   reprojects them into the new camera, keeps the nearest one per pixel,
+   drops points that show through nearer surfaces (depth cull), fills small
+   holes from neighbouring points without blending across depth edges, and
+   builds a priority image (old points, sparse and empty regions). Error
+   diffusion of the thresholded priority image picks the pixels that deserve
+   a new ray within the caller's budget; the caller shades them with any
+   renderer and inserts the results. Objects may move: each point belongs to
+   an object whose transform the caller updates, and the point moves with it.
 
    DO THIS
 
@@ -15,6 +20,26 @@
 
    in exactly one C or C++ file; include "rendercache.h" without the define
    everywhere else.
+
+   EXAMPLE
+
+       rendercache_desc d;
+       rendercache *rc;
+       memset(&d, 0, sizeof d);
+       d.width = 512; d.height = 512;                 // everything else: defaults
+       if (rendercache_create(&d, &rc) != RENDERCACHE_OK) return 1;
+       while (running) {
+           uint32_t i, n;
+           rendercache_begin_frame(rc, &camera);      // reproject, cull, fill, prioritise
+           rendercache_request(rc, req, budget, &n);  // the pixels that deserve a ray
+           for (i = 0; i < n; i++) {
+               s[i].x = req[i].x; s[i].y = req[i].y; s[i].flags = req[i].flags;
+               shade(req[i].org, req[i].dir, s[i].position, s[i].rgb, &s[i].object);
+           }
+           rendercache_insert(rc, s, n);
+           show(rendercache_image(rc));               // width * height RGB floats, top row first
+       }
+       rendercache_destroy(rc);
 
    CONFIGURATION MACROS
 
@@ -25,16 +50,48 @@
    FUNCTION REFERENCE
 
        const char *rendercache_result_string(rendercache_result r);   name of an error code
+       rendercache_create(desc, &rc) / rendercache_destroy(rc)        the cache, sized from the image
+       rendercache_set_object_transform(rc, object, m)                object-to-world 3x4 matrix
+       rendercache_begin_frame(rc, camera)                            reproject into a new camera
+       rendercache_predict(rc, next_camera)                           optional: sample what it will uncover
+       rendercache_request(rc, out, max, &count)                      pixels to shade this frame
+       rendercache_insert(rc, samples, n)                             shaded samples become points
+       rendercache_image(rc)                                          the current RGB float image
+       rendercache_priority_image(rc), rendercache_pixel_kinds(rc),
+       rendercache_depth_image(rc)                                    per-pixel internals (inspection)
+       rendercache_get_stats(rc, &stats)                              counts and phase times of the frame
+       rendercache_clear(rc)                                          forget every point
+       rendercache_camera_ray(camera, px, py, org, dir)               primary ray through an image point
+       rendercache_camera_project(camera, p, &px, &py, &depth)        world point to image point
+
+   CONVENTIONS
+
+       Pixel (x, y) covers [x, x+1) x [y, y+1) of the image plane, y = 0 is the
+       top row; its primary ray passes through (x + 0.5, y + 0.5). Images are
+       row-major, top row first, linear RGB floats. Depth is the distance from
+       the eye along the ray. One rendercache object is used by one thread at
+       a time; the per-frame work runs in parallel through desc.parallel_for
+       and gives bit-identical results for any thread count.
+
+   LIMITS
+
+       Image up to 2^28 pixels, cache up to 2^31 points, up to 2^24 objects.
+       Point colours are fixed when they are inserted (the cache ages them so
+       that they get refreshed); view-dependent shading changes only as points
+       are resampled, as in the paper.
 
    PAPER
 
-       Bruce Walter, George Drettakis and Steven Parker, Interactive Rendering using the Render Cache, EGWR 1999; Nimeroff, Dorsey and Rushmeier, Implementation and Analysis of an Image-Based Global Illumination Framework for Animated Environments, IEEE TVCG 2(4), 1996.
+       Bruce Walter, George Drettakis and Steven Parker, Interactive Rendering using the Render Cache, EGWR 1999; Bruce Walter, George Drettakis and Donald P. Greenberg, Enhancing and Optimizing the Render Cache, EGWR 2002; Nimeroff, Dorsey and Rushmeier, Implementation and Analysis of an Image-Based Global Illumination Framework for Animated Environments, IEEE TVCG 2(4), 1996. The render cache as used by Crespin and Peroche, Interactive Global Illumination with 5D Light Vectors (sections 2.2 and 4.1).
 */
 #ifndef RENDERCACHE_H
 #define RENDERCACHE_H
 
+#include <stddef.h>
+#include <stdint.h>
+
 #define RENDERCACHE_VERSION_MAJOR 0
-#define RENDERCACHE_VERSION_MINOR 1
+#define RENDERCACHE_VERSION_MINOR 2
 #define RENDERCACHE_VERSION_PATCH 0
 
 #ifndef RENDERCACHE_API
@@ -60,7 +117,181 @@ typedef enum rendercache_result {
     RENDERCACHE_ERROR_IO                 /* a read or write callback failed */
 } rendercache_result;
 
+/* Object id of a sample whose ray left the scene: it becomes a background
+   point at infinity along the ray. */
+#define RENDERCACHE_MISS 0xFFFFFFFFu
+
+/* rendercache_pixel_request.flags: the ray belongs to the predicted camera
+   given to rendercache_predict, not to the current one. */
+#define RENDERCACHE_REQUEST_PREDICTED 1u
+
+typedef struct rendercache rendercache;
+
+typedef struct rendercache_allocator {
+    void *(*alloc)(size_t size, void *user);  /* NULL: RENDERCACHE_MALLOC */
+    void (*free)(void *ptr, void *user);      /* NULL: RENDERCACHE_FREE */
+    void *user;
+} rendercache_allocator;
+
+typedef void (*rendercache_job_fn)(void *ctx, uint32_t index);
+
+/* 0 is the pinhole camera; the range-image walkthroughs add wide-angle kinds. */
+typedef enum rendercache_camera_kind {
+    RENDERCACHE_CAMERA_PERSPECTIVE = 0
+} rendercache_camera_kind;
+
+/* A look-at camera: the image's vertical axis spans vfov_degrees, pixels are
+   square, "up" need not be orthogonal to the view direction (it is
+   orthogonalised), right = forward x up. */
+typedef struct rendercache_camera {
+    rendercache_camera_kind kind;
+    float eye[3];
+    float look_at[3];        /* a point on the view axis, not the eye */
+    float up[3];             /* not parallel to look_at - eye */
+    float vfov_degrees;      /* perspective: in (0, 180) */
+    uint32_t width, height;  /* pixels; must equal the cache's image size */
+} rendercache_camera;
+
+typedef struct rendercache_desc {
+    uint32_t width, height;      /* image size in pixels (required) */
+    float points_per_pixel;      /* cache capacity = points_per_pixel * width * height; default 2 */
+    uint32_t object_count;       /* object ids 0 .. object_count-1, each with a transform; default 256 */
+    float depth_tolerance;       /* relative depth step that counts as a discontinuity (depth cull,
+                                    interpolation layers); default 0.1 */
+    uint32_t age_ramp_frames;    /* a point's priority grows with age for this many frames; default 32 */
+    uint32_t moving_age_step;    /* age a point gains per frame while its object moves; default 4 */
+    uint32_t sparse_neighbours;  /* a hole with fewer points in its 3x3 neighbourhood uses the wide
+                                    filter; default 2 (1..8) */
+    uint32_t wide_radius;        /* half width of the wide filter: default 3 (7x7), at most 7 */
+    float predict_fraction;      /* share of the budget for predicted samples when
+                                    rendercache_predict was called; default 0.25, at most 1 */
+    float background[3];         /* colour of pixels nothing covers; default black */
+    rendercache_allocator allocator;
+    void (*parallel_for)(void *user, rendercache_job_fn job, void *ctx, uint32_t count);
+    void *parallel_user;
+    double (*clock)(void *user); /* optional: seconds, to time the phases in rendercache_stats */
+    void *clock_user;
+    void (*log)(void *user, const char *message); /* optional details on errors */
+    void *log_user;
+} rendercache_desc;
+
+/* A pixel that deserves a new sample, with its primary ray (unit dir). */
+typedef struct rendercache_pixel_request {
+    uint32_t x, y;
+    uint32_t flags;          /* RENDERCACHE_REQUEST_PREDICTED or 0 */
+    float org[3], dir[3];
+} rendercache_pixel_request;
+
+/* A shaded sample: copy x, y and flags from its request. */
+typedef struct rendercache_sample {
+    uint32_t x, y;           /* the requested pixel */
+    uint32_t flags;          /* the request's flags */
+    uint32_t object;         /* id of the object hit (< desc.object_count), or RENDERCACHE_MISS */
+    float position[3];       /* world-space hit point; ignored for a miss */
+    float rgb[3];            /* radiance towards the eye, linear RGB */
+    float priority_scale;    /* multiplies the point's priority, e.g. lightvec_priority(1, W);
+                                0 means 1 */
+} rendercache_sample;
+
+/* What a pixel of the current image shows (rendercache_pixel_kinds). */
+typedef enum rendercache_pixel_kind {
+    RENDERCACHE_PIXEL_POINT = 0,     /* a cached point */
+    RENDERCACHE_PIXEL_INTERPOLATED,  /* a hole filled by the 3x3 filter */
+    RENDERCACHE_PIXEL_SPARSE,        /* a hole filled by the wide filter */
+    RENDERCACHE_PIXEL_EMPTY          /* nothing near: background colour */
+} rendercache_pixel_kind;
+
+typedef struct rendercache_stats {
+    uint64_t frame;              /* begin_frame calls so far */
+    uint32_t capacity;           /* cache slots */
+    uint32_t live_points;        /* slots holding a point */
+    uint32_t projected;          /* points that landed inside the image this frame */
+    uint32_t visible;            /* pixels showing a point after z-buffer and depth cull */
+    uint32_t culled;             /* z-buffer winners dropped by the depth cull */
+    uint32_t interpolated;       /* holes filled by the 3x3 filter */
+    uint32_t sparse;             /* holes filled by the wide filter */
+    uint32_t empty;              /* pixels nothing covers */
+    uint32_t requested;          /* requests handed out since begin_frame (all kinds) */
+    uint32_t predicted;          /* of which for the predicted camera */
+    uint32_t inserted;           /* samples accepted since begin_frame */
+    uint32_t replaced;           /* of which replaced the point their pixel showed */
+    uint32_t evicted;            /* of which overwrote a point not visible in this frame */
+    uint32_t rejected;           /* samples ignored since begin_frame (bad values or pixel) */
+    /* seconds spent in each phase of the last frame (0 without desc.clock) */
+    double time_project;         /* ageing, projection and binning of every point */
+    double time_zbuffer;
+    double time_cull;
+    double time_interpolate;
+    double time_priority;
+    double time_predict;         /* rendercache_predict */
+    double time_request;         /* threshold and error diffusion (all request calls) */
+    double time_insert;
+} rendercache_stats;
+
 RENDERCACHE_API const char *rendercache_result_string(rendercache_result r);
+
+/* Creates a cache for images of desc->width x desc->height pixels. Every
+   buffer the per-frame work needs is allocated here, none later. */
+RENDERCACHE_API rendercache_result rendercache_create(const rendercache_desc *desc, rendercache **out);
+RENDERCACHE_API void rendercache_destroy(rendercache *rc);
+
+/* Sets the object-to-world transform of an object: m is 3x4 row-major
+   (world = m[0..2] . p + m[3], ...). Its points move with it from the next
+   begin_frame on, and age faster while the transform keeps changing. Every
+   object starts at the identity. Singular or non-finite matrices are
+   rejected. */
+RENDERCACHE_API rendercache_result rendercache_set_object_transform(rendercache *rc, uint32_t object,
+                                                                    const float m[12]);
+
+/* Starts a frame: ages the points, projects them into the camera, z-buffers,
+   depth-culls, fills holes and builds the priority image. */
+RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, const rendercache_camera *camera);
+
+/* Predictive sampling (2002): projects the cache into the camera the caller
+   expects next; rendercache_request then spends up to desc.predict_fraction
+   of its budget on the holes that camera would see (requests flagged
+   RENDERCACHE_REQUEST_PREDICTED, rays of the predicted camera). Valid until
+   the next begin_frame. */
+RENDERCACHE_API rendercache_result rendercache_predict(rendercache *rc, const rendercache_camera *next);
+
+/* Chooses up to max pixels to sample by error diffusion of the thresholded
+   priority image and writes them to out (*count of them). A second call in
+   the same frame returns the next most important pixels. */
+RENDERCACHE_API rendercache_result rendercache_request(rendercache *rc, rendercache_pixel_request *out,
+                                                       uint32_t max, uint32_t *count);
+
+/* Adds shaded samples as points. A sample for a current-frame pixel
+   replaces the point that pixel shows (and updates the image at once);
+   other samples take the slot of the oldest point not visible in this
+   frame. Samples with non-finite values, unknown objects or pixels outside
+   the image are ignored and counted in stats.rejected. n = 0 does nothing. */
+RENDERCACHE_API rendercache_result rendercache_insert(rendercache *rc, const rendercache_sample *samples,
+                                                      uint32_t n);
+
+/* The current image: width * height * 3 floats, valid until the next call
+   that changes the cache. */
+RENDERCACHE_API const float *rendercache_image(const rendercache *rc);
+/* Per-pixel priority in [0, 1] (1: nothing to show), after requests zeroed the chosen pixels. */
+RENDERCACHE_API const float *rendercache_priority_image(const rendercache *rc);
+/* Per-pixel rendercache_pixel_kind values. */
+RENDERCACHE_API const unsigned char *rendercache_pixel_kinds(const rendercache *rc);
+/* Per-pixel depth of the point shown (distance from the eye; 1e30 for a
+   background point), FLT_MAX where the pixel shows no point. */
+RENDERCACHE_API const float *rendercache_depth_image(const rendercache *rc);
+
+RENDERCACHE_API void rendercache_get_stats(const rendercache *rc, rendercache_stats *out);
+
+/* Forgets every point (e.g. after lights changed); transforms are kept. */
+RENDERCACHE_API void rendercache_clear(rendercache *rc);
+
+/* The primary ray through image point (px, py) (pixel centres at +0.5):
+   org = eye, dir = unit direction. */
+RENDERCACHE_API rendercache_result rendercache_camera_ray(const rendercache_camera *camera, float px, float py,
+                                                          float org[3], float dir[3]);
+/* Projects world point p: returns 1 and the image point and the distance
+   from the eye when p lands inside the image, else 0. */
+RENDERCACHE_API int rendercache_camera_project(const rendercache_camera *camera, const float p[3],
+                                               float *px, float *py, float *depth);
 
 #ifdef __cplusplus
 }
@@ -79,6 +310,1378 @@ RENDERCACHE_API const char *rendercache_result_string(rendercache_result r);
 #  define RENDERCACHE_MALLOC(size) malloc(size)
 #  define RENDERCACHE_FREE(ptr) free(ptr)
 #endif
+
+#include <string.h>
+#include <math.h>
+#include <float.h>
+
+/* ======================================================================
+   1. allocation
+   ---------------------------------------------------------------------- */
+/* Both callbacks or neither: a lone alloc would leak through RENDERCACHE_FREE. */
+static int rendercache__allocator_valid(const rendercache_allocator *a)
+{
+    return (a->alloc == NULL) == (a->free == NULL);
+}
+
+static void *rendercache__alloc(const rendercache_allocator *a, size_t size)
+{
+    if (size == 0) size = 1;
+    return a->alloc ? a->alloc(size, a->user) : RENDERCACHE_MALLOC(size);
+}
+
+/* count * item bytes, or NULL when the product overflows. */
+static void *rendercache__alloc_array(const rendercache_allocator *a, size_t count, size_t item)
+{
+    if (item && count > SIZE_MAX / item) return NULL;
+    return rendercache__alloc(a, count * item);
+}
+
+static void rendercache__free(const rendercache_allocator *a, void *p)
+{
+    if (!p) return;
+    if (a->free) a->free(p, a->user);
+    else RENDERCACHE_FREE(p);
+}
+
+/* Zero means default: the documented default replaces a zero field. */
+#define rendercache__def(v, d) ((v) ? (v) : (d))
+
+/* ======================================================================
+   2. small math
+   ---------------------------------------------------------------------- */
+static int rendercache__iabs(int v) { return v < 0 ? -v : v; }
+static int rendercache__finite3(const float *p) { return isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]); }
+
+static double rendercache__dot3d(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static void rendercache__cross3d(const double a[3], const double b[3], double out[3])
+{
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* Normalises v in place; returns 0 when v is zero or not finite. */
+static int rendercache__normalize3d(double v[3])
+{
+    double l = sqrt(rendercache__dot3d(v, v));
+    if (!(l > 0.0) || !isfinite(l)) return 0;
+    v[0] /= l; v[1] /= l; v[2] /= l;
+    return 1;
+}
+
+/* y = m x for a 3x4 row-major affine matrix (w = 1). */
+static void rendercache__affine(const float m[12], const float x[3], float y[3])
+{
+    y[0] = m[0] * x[0] + m[1] * x[1] + m[2] * x[2] + m[3];
+    y[1] = m[4] * x[0] + m[5] * x[1] + m[6] * x[2] + m[7];
+    y[2] = m[8] * x[0] + m[9] * x[1] + m[10] * x[2] + m[11];
+}
+
+/* ======================================================================
+   7. jobs: the caller's parallel_for, or a serial loop
+   ---------------------------------------------------------------------- */
+static void rendercache__run_jobs(void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t), void *user,
+                                  rendercache_job_fn job, void *ctx, uint32_t count)
+{
+    uint32_t i;
+    if (count == 0) return;
+    if (parallel_for) { parallel_for(user, job, ctx, count); return; }
+    for (i = 0; i < count; i++) job(ctx, i);
+}
+
+/* ======================================================================
+   8. cameras: world <-> image mapping shared by the render cache and the
+   range-image warps. A view is a validated camera with its orthonormal
+   basis; every mapping goes through camera space (right, up, forward
+   components), so a new camera kind only adds a case to view_to_pixel and
+   view_from_pixel.
+   ---------------------------------------------------------------------- */
+#define RENDERCACHE__NONE 0xFFFFFFFFu        /* no point / no element */
+#define RENDERCACHE__FAR 1e30f               /* depth of background points, "at infinity" */
+#define RENDERCACHE__MAX_PIXELS (1u << 28)
+#define RENDERCACHE__MAX_CAPACITY (1u << 31)
+#define RENDERCACHE__MAX_OBJECTS (1u << 24)
+
+typedef struct rendercache__view {
+    rendercache_camera_kind kind;
+    float eye[3];
+    float axis[3][3];        /* rows: right, up, forward; orthonormal */
+    float focal;             /* perspective: pixels per unit of tangent */
+    float cx, cy;            /* image centre in pixels */
+    uint32_t width, height;
+} rendercache__view;
+
+/* Validates a camera and builds its view; returns 0 on bad input. */
+static int rendercache__view_init(rendercache__view *v, const rendercache_camera *c)
+{
+    double f[3], u[3], r[3], half;
+    int k;
+    if (!c || c->kind != RENDERCACHE_CAMERA_PERSPECTIVE) return 0;
+    if (!rendercache__finite3(c->eye) || !rendercache__finite3(c->look_at) || !rendercache__finite3(c->up)) return 0;
+    if (c->width == 0 || c->height == 0 || (uint64_t)c->width * c->height > RENDERCACHE__MAX_PIXELS) return 0;
+    if (!(c->vfov_degrees > 0.0f && c->vfov_degrees < 180.0f)) return 0;
+    for (k = 0; k < 3; k++) {
+        f[k] = (double)c->look_at[k] - (double)c->eye[k];
+        u[k] = c->up[k];
+    }
+    if (!rendercache__normalize3d(f)) return 0;
+    rendercache__cross3d(f, u, r);
+    if (!rendercache__normalize3d(r)) return 0;     /* up parallel to the view direction */
+    rendercache__cross3d(r, f, u);
+    half = 0.5 * (double)c->vfov_degrees * 3.14159265358979323846 / 180.0;
+    v->kind = c->kind;
+    for (k = 0; k < 3; k++) {
+        v->eye[k] = c->eye[k];
+        v->axis[0][k] = (float)r[k];
+        v->axis[1][k] = (float)u[k];
+        v->axis[2][k] = (float)f[k];
+    }
+    v->width = c->width;
+    v->height = c->height;
+    v->cx = 0.5f * (float)c->width;
+    v->cy = 0.5f * (float)c->height;
+    v->focal = (float)(0.5 * (double)c->height / tan(half));
+    return 1;
+}
+
+/* Camera-space vector c (a point, or a direction for points at infinity) to
+   continuous image coordinates. Returns 0 when it does not land inside the
+   image (behind the camera, outside the frame, NaN). */
+static int rendercache__view_to_pixel(const rendercache__view *v, const float c[3], float *px, float *py)
+{
+    float x, y;
+    switch (v->kind) {
+    case RENDERCACHE_CAMERA_PERSPECTIVE:
+    default:
+        if (!(c[2] > 0.0f)) return 0;
+        x = v->cx + v->focal * c[0] / c[2];
+        y = v->cy - v->focal * c[1] / c[2];
+        break;
+    }
+    if (!(x >= 0.0f && x < (float)v->width && y >= 0.0f && y < (float)v->height)) return 0;
+    *px = x;
+    *py = y;
+    return 1;
+}
+
+/* Image point to a unit camera-space direction. */
+static void rendercache__view_from_pixel(const rendercache__view *v, float px, float py, float c[3])
+{
+    float l;
+    switch (v->kind) {
+    case RENDERCACHE_CAMERA_PERSPECTIVE:
+    default:
+        c[0] = (px - v->cx) / v->focal;
+        c[1] = (v->cy - py) / v->focal;
+        c[2] = 1.0f;
+        break;
+    }
+    l = sqrtf(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    c[0] /= l; c[1] /= l; c[2] /= l;
+}
+
+/* World vector to camera space (rotation only). */
+static void rendercache__view_rotate(const rendercache__view *v, const float w[3], float c[3])
+{
+    int k;
+    for (k = 0; k < 3; k++) c[k] = v->axis[k][0] * w[0] + v->axis[k][1] * w[1] + v->axis[k][2] * w[2];
+}
+
+/* The primary ray direction (world, unit) through image point (px, py). */
+static void rendercache__view_ray(const rendercache__view *v, float px, float py, float dir[3])
+{
+    float c[3], l;
+    int k;
+    rendercache__view_from_pixel(v, px, py, c);
+    for (k = 0; k < 3; k++) dir[k] = c[0] * v->axis[0][k] + c[1] * v->axis[1][k] + c[2] * v->axis[2][k];
+    l = sqrtf(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+    dir[0] /= l; dir[1] /= l; dir[2] /= l;
+}
+
+/* Object-to-camera matrix: the view's [R | -R eye] times the object's
+   object-to-world matrix m, composed in double. */
+static void rendercache__view_compose(const rendercache__view *v, const float m[12], float out[12])
+{
+    int i, j;
+    for (i = 0; i < 3; i++) {
+        const float *r = v->axis[i];
+        for (j = 0; j < 3; j++)
+            out[4 * i + j] = (float)((double)r[0] * m[j] + (double)r[1] * m[4 + j] + (double)r[2] * m[8 + j]);
+        out[4 * i + 3] = (float)((double)r[0] * ((double)m[3] - v->eye[0]) +
+                                 (double)r[1] * ((double)m[7] - v->eye[1]) +
+                                 (double)r[2] * ((double)m[11] - v->eye[2]));
+    }
+}
+
+/* ======================================================================
+   9. splat: many elements (cache points, range-image pixels) into one
+   z-buffer, keeping the nearest element per pixel. Parallel and
+   deterministic: jobs project fixed chunks of elements and count them per
+   band of pixels (a band is a power-of-two range of pixel indices, several
+   rows); a prefix sum gives every (chunk, band) pair its own output range;
+   jobs scatter the elements into their bands; then one job per band runs
+   the depth test over its own pixels. Within a band the elements keep their
+   index order, so equal depths resolve to the lowest element index whatever
+   the thread count. This is the tiled z-buffer of Walter et al. 2002, and
+   the reprojection step of Walter et al. 1999.
+   ---------------------------------------------------------------------- */
+#define RENDERCACHE__CHUNK 16384u   /* elements per projection job */
+
+/* Fills pix[0..end-begin) and depth[...] for elements [begin, end): pixel
+   index y * width + x, or RENDERCACHE__NONE when the element is not seen. */
+typedef void (*rendercache__source_fn)(const void *src, uint32_t begin, uint32_t end,
+                                       uint32_t *pix, float *depth);
+
+typedef struct rendercache__splat {
+    uint32_t width, height, pixel_count;
+    uint32_t band_shift, band_count;
+    uint32_t element_capacity, chunk_capacity;
+    float *depth;            /* per pixel: nearest depth, FLT_MAX when empty */
+    uint32_t *index;         /* per pixel: nearest element, RENDERCACHE__NONE when empty */
+    uint32_t *elem_pix;      /* per element */
+    float *elem_depth;
+    uint32_t *bin_pix;       /* per projected element, grouped by band */
+    float *bin_depth;
+    uint32_t *bin_index;
+    uint32_t *counts;        /* chunk_capacity * band_count: counts, then write offsets */
+    uint32_t *band_start;    /* band_count + 1 */
+    uint32_t projected;      /* elements that landed in the image in the last run */
+} rendercache__splat;
+
+static void rendercache__splat_free(rendercache__splat *s, const rendercache_allocator *a)
+{
+    rendercache__free(a, s->depth);
+    rendercache__free(a, s->index);
+    rendercache__free(a, s->elem_pix);
+    rendercache__free(a, s->elem_depth);
+    rendercache__free(a, s->bin_pix);
+    rendercache__free(a, s->bin_depth);
+    rendercache__free(a, s->bin_index);
+    rendercache__free(a, s->counts);
+    rendercache__free(a, s->band_start);
+    memset(s, 0, sizeof *s);
+}
+
+/* Allocates a splat for a width x height raster and up to capacity
+   elements. Returns 0, or -1 when out of memory. */
+static int rendercache__splat_alloc(rendercache__splat *s, uint32_t width, uint32_t height, uint32_t capacity,
+                                    const rendercache_allocator *a)
+{
+    uint32_t shift = 0;
+    memset(s, 0, sizeof *s);
+    s->width = width;
+    s->height = height;
+    s->pixel_count = width * height;
+    while (shift < 31 && (1u << shift) < 8u * width) shift++;   /* bands of at least 8 rows */
+    s->band_shift = shift;
+    s->band_count = (uint32_t)(((uint64_t)s->pixel_count + (1u << shift) - 1) >> shift);
+    s->element_capacity = capacity;
+    s->chunk_capacity = (uint32_t)(((uint64_t)capacity + RENDERCACHE__CHUNK - 1) / RENDERCACHE__CHUNK);
+    if (s->chunk_capacity == 0) s->chunk_capacity = 1;
+    s->depth = (float *)rendercache__alloc_array(a, s->pixel_count, sizeof(float));
+    s->index = (uint32_t *)rendercache__alloc_array(a, s->pixel_count, sizeof(uint32_t));
+    s->elem_pix = (uint32_t *)rendercache__alloc_array(a, capacity, sizeof(uint32_t));
+    s->elem_depth = (float *)rendercache__alloc_array(a, capacity, sizeof(float));
+    s->bin_pix = (uint32_t *)rendercache__alloc_array(a, capacity, sizeof(uint32_t));
+    s->bin_depth = (float *)rendercache__alloc_array(a, capacity, sizeof(float));
+    s->bin_index = (uint32_t *)rendercache__alloc_array(a, capacity, sizeof(uint32_t));
+    s->counts = (uint32_t *)rendercache__alloc_array(a, (size_t)s->chunk_capacity * s->band_count, sizeof(uint32_t));
+    s->band_start = (uint32_t *)rendercache__alloc_array(a, (size_t)s->band_count + 1, sizeof(uint32_t));
+    if (!s->depth || !s->index || !s->elem_pix || !s->elem_depth || !s->bin_pix || !s->bin_depth ||
+        !s->bin_index || !s->counts || !s->band_start) {
+        rendercache__splat_free(s, a);
+        return -1;
+    }
+    return 0;
+}
+
+typedef struct rendercache__splat_job {
+    rendercache__splat *s;
+    rendercache__source_fn source;
+    const void *src;
+    uint32_t element_count;
+} rendercache__splat_job;
+
+/* Job per chunk: project, then count the chunk's elements per band. */
+static void rendercache__splat_project(void *ctx, uint32_t chunk)
+{
+    const rendercache__splat_job *j = (const rendercache__splat_job *)ctx;
+    rendercache__splat *s = j->s;
+    uint32_t begin = chunk * RENDERCACHE__CHUNK, end = begin + RENDERCACHE__CHUNK, i;
+    uint32_t *counts = s->counts + (size_t)chunk * s->band_count;
+    if (end > j->element_count) end = j->element_count;
+    j->source(j->src, begin, end, s->elem_pix + begin, s->elem_depth + begin);
+    memset(counts, 0, s->band_count * sizeof *counts);
+    for (i = begin; i < end; i++)
+        if (s->elem_pix[i] != RENDERCACHE__NONE) counts[s->elem_pix[i] >> s->band_shift]++;
+}
+
+/* Serial: counts become write offsets, band by band, chunk by chunk. */
+static void rendercache__splat_offsets(rendercache__splat *s, uint32_t chunk_count)
+{
+    uint32_t b, c, total = 0;
+    for (b = 0; b < s->band_count; b++) {
+        s->band_start[b] = total;
+        for (c = 0; c < chunk_count; c++) {
+            uint32_t *slot = &s->counts[(size_t)c * s->band_count + b];
+            uint32_t n = *slot;
+            *slot = total;
+            total += n;
+        }
+    }
+    s->band_start[s->band_count] = total;
+    s->projected = total;
+}
+
+/* Job per chunk: scatter the chunk's elements into their bands. */
+static void rendercache__splat_scatter(void *ctx, uint32_t chunk)
+{
+    const rendercache__splat_job *j = (const rendercache__splat_job *)ctx;
+    rendercache__splat *s = j->s;
+    uint32_t begin = chunk * RENDERCACHE__CHUNK, end = begin + RENDERCACHE__CHUNK, i;
+    uint32_t *offset = s->counts + (size_t)chunk * s->band_count;
+    if (end > j->element_count) end = j->element_count;
+    for (i = begin; i < end; i++) {
+        uint32_t p = s->elem_pix[i], k;
+        if (p == RENDERCACHE__NONE) continue;
+        k = offset[p >> s->band_shift]++;
+        s->bin_pix[k] = p;
+        s->bin_depth[k] = s->elem_depth[i];
+        s->bin_index[k] = i;
+    }
+}
+
+/* Job per band: the depth test, nearest element per pixel. */
+static void rendercache__splat_zbuffer(void *ctx, uint32_t band)
+{
+    rendercache__splat *s = ((const rendercache__splat_job *)ctx)->s;
+    uint32_t lo = band << s->band_shift, hi = lo + (1u << s->band_shift), k;
+    if (hi > s->pixel_count || hi < lo) hi = s->pixel_count;
+    for (k = lo; k < hi; k++) {
+        s->depth[k] = FLT_MAX;
+        s->index[k] = RENDERCACHE__NONE;
+    }
+    for (k = s->band_start[band]; k < s->band_start[band + 1]; k++) {
+        uint32_t p = s->bin_pix[k];
+        if (s->bin_depth[k] < s->depth[p]) {
+            s->depth[p] = s->bin_depth[k];
+            s->index[p] = s->bin_index[k];
+        }
+    }
+}
+
+/* ======================================================================
+   10. the cache object
+   ---------------------------------------------------------------------- */
+#define RENDERCACHE__FREE_SLOT 0xFFFFFFFEu   /* object id of an unused cache slot */
+#define RENDERCACHE__TILE_ROWS 8u            /* image rows per tile job */
+#define RENDERCACHE__LEVELS 1024u            /* priority levels of the threshold histogram */
+#define RENDERCACHE__TILE_STATS 6u           /* visible, culled, interpolated, sparse, empty, holes */
+#define RENDERCACHE__AGE_MAX 65535u
+
+/* Priority image values (WDP99 priority image, extended to [0, 1]): a point
+   rises with age to POINT_MAX; holes rank above every point, the sparser the
+   higher; a pixel with nothing near is at 1. */
+#define RENDERCACHE__PRIORITY_POINT_MAX 0.5f
+#define RENDERCACHE__PRIORITY_INTERP 0.5f    /* + up to 0.25 as the 3x3 neighbourhood empties */
+#define RENDERCACHE__PRIORITY_SPARSE 0.75f   /* + up to 0.2 as the wide window empties */
+
+struct rendercache {
+    rendercache_allocator alloc;
+    void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t);
+    void *parallel_user;
+    double (*clock)(void *);
+    void *clock_user;
+    void (*log)(void *, const char *);
+    void *log_user;
+
+    uint32_t width, height, pixel_count, tile_count;
+    uint32_t capacity, chunk_count, object_count;
+    float depth_tolerance, predict_fraction, background[3];
+    uint32_t age_ramp, moving_age_step, sparse_neighbours, wide_radius;
+
+    /* point cache, struct of arrays: the projection reads only pos and object */
+    float *pos;              /* 3 per slot: object-space position, or world unit direction (background) */
+    uint32_t *object;        /* object id, RENDERCACHE_MISS, or RENDERCACHE__FREE_SLOT */
+    float *rgb;              /* 3 per slot */
+    float *scale;            /* priority scale */
+    uint16_t *age;           /* frames since sampled (faster while moving), saturating */
+    uint32_t *seen;          /* last frame the point was shown or inserted */
+    uint32_t hand;           /* clock hand of the eviction */
+    uint32_t live;
+    int hand_exhausted;      /* a full turn found no invisible slot in this frame */
+
+    /* objects */
+    float *obj_world;        /* 12 per object: object to world */
+    float *obj_local;        /* 12 per object: world to object */
+    float *obj_camera;       /* 12 per object: object to camera space of the view being projected */
+    unsigned char *obj_moved;
+
+    /* current frame */
+    uint32_t frame;
+    int has_frame, has_prediction;
+    rendercache__view view, predicted;
+    const rendercache__view *projecting;   /* view used by the point projection */
+    rendercache__splat splat;
+    uint32_t *px_index;      /* per pixel: the slot shown, after the depth cull */
+    float *px_depth;
+    float *image, *priority, *pred_priority;
+    unsigned char *kind, *count;
+    uint32_t *tile_stats;    /* RENDERCACHE__TILE_STATS per tile */
+
+    /* request scratch */
+    uint32_t *hist;          /* RENDERCACHE__LEVELS per tile, then the merged histogram */
+    float *select_v;         /* per pixel: thresholded priority, then value plus diffused error */
+    unsigned char *chosen;   /* per pixel: 1 chosen, 2 fractional (error-diffused) */
+    float *err_rows;         /* two rows of diffused error */
+    uint32_t pred_holes;
+
+    rendercache_stats stats;
+};
+
+static double rendercache__now(const rendercache *rc)
+{
+    return rc->clock ? rc->clock(rc->clock_user) : 0.0;
+}
+
+static void rendercache__log(const rendercache_desc *d, const char *message)
+{
+    if (d && d->log) d->log(d->log_user, message);
+}
+
+static void rendercache__identity(float m[12])
+{
+    memset(m, 0, 12 * sizeof(float));
+    m[0] = m[5] = m[10] = 1.0f;
+}
+
+/* Image and per-pixel state as if nothing were cached. */
+static void rendercache__reset_image(rendercache *rc)
+{
+    uint32_t p;
+    for (p = 0; p < rc->pixel_count; p++) {
+        rc->image[3 * p + 0] = rc->background[0];
+        rc->image[3 * p + 1] = rc->background[1];
+        rc->image[3 * p + 2] = rc->background[2];
+        rc->priority[p] = 1.0f;
+        rc->pred_priority[p] = 0.0f;
+        rc->kind[p] = RENDERCACHE_PIXEL_EMPTY;
+        rc->count[p] = 0;
+        rc->px_index[p] = RENDERCACHE__NONE;
+        rc->px_depth[p] = FLT_MAX;
+    }
+}
+
+static void rendercache__reset_points(rendercache *rc)
+{
+    uint32_t i;
+    for (i = 0; i < rc->capacity; i++) {
+        rc->object[i] = RENDERCACHE__FREE_SLOT;
+        rc->seen[i] = 0;
+        rc->age[i] = 0;
+    }
+    rc->hand = 0;
+    rc->live = 0;
+}
+
+static void rendercache__release(rendercache *rc)
+{
+    const rendercache_allocator a = rc->alloc;
+    void *blocks[22];
+    size_t i;
+    blocks[0] = rc->pos; blocks[1] = rc->object; blocks[2] = rc->rgb; blocks[3] = rc->scale;
+    blocks[4] = rc->age; blocks[5] = rc->seen; blocks[6] = rc->obj_world; blocks[7] = rc->obj_local;
+    blocks[8] = rc->obj_camera; blocks[9] = rc->obj_moved; blocks[10] = rc->px_index;
+    blocks[11] = rc->px_depth; blocks[12] = rc->image; blocks[13] = rc->priority;
+    blocks[14] = rc->pred_priority; blocks[15] = rc->kind; blocks[16] = rc->count;
+    blocks[17] = rc->tile_stats; blocks[18] = rc->hist; blocks[19] = rc->select_v;
+    blocks[20] = rc->chosen; blocks[21] = rc->err_rows;
+    for (i = 0; i < sizeof blocks / sizeof blocks[0]; i++) rendercache__free(&a, blocks[i]);
+    rendercache__splat_free(&rc->splat, &a);
+    rendercache__free(&a, rc);
+}
+
+static int rendercache__alloc_buffers(rendercache *rc)
+{
+    const rendercache_allocator *a = &rc->alloc;
+    size_t n = rc->capacity, px = rc->pixel_count, no = rc->object_count;
+    rc->pos = (float *)rendercache__alloc_array(a, n, 3 * sizeof(float));
+    rc->object = (uint32_t *)rendercache__alloc_array(a, n, sizeof(uint32_t));
+    rc->rgb = (float *)rendercache__alloc_array(a, n, 3 * sizeof(float));
+    rc->scale = (float *)rendercache__alloc_array(a, n, sizeof(float));
+    rc->age = (uint16_t *)rendercache__alloc_array(a, n, sizeof(uint16_t));
+    rc->seen = (uint32_t *)rendercache__alloc_array(a, n, sizeof(uint32_t));
+    rc->obj_world = (float *)rendercache__alloc_array(a, no, 12 * sizeof(float));
+    rc->obj_local = (float *)rendercache__alloc_array(a, no, 12 * sizeof(float));
+    rc->obj_camera = (float *)rendercache__alloc_array(a, no, 12 * sizeof(float));
+    rc->obj_moved = (unsigned char *)rendercache__alloc_array(a, no, 1);
+    rc->px_index = (uint32_t *)rendercache__alloc_array(a, px, sizeof(uint32_t));
+    rc->px_depth = (float *)rendercache__alloc_array(a, px, sizeof(float));
+    rc->image = (float *)rendercache__alloc_array(a, px, 3 * sizeof(float));
+    rc->priority = (float *)rendercache__alloc_array(a, px, sizeof(float));
+    rc->pred_priority = (float *)rendercache__alloc_array(a, px, sizeof(float));
+    rc->kind = (unsigned char *)rendercache__alloc_array(a, px, 1);
+    rc->count = (unsigned char *)rendercache__alloc_array(a, px, 1);
+    rc->tile_stats = (uint32_t *)rendercache__alloc_array(a, rc->tile_count, RENDERCACHE__TILE_STATS * sizeof(uint32_t));
+    rc->hist = (uint32_t *)rendercache__alloc_array(a, (size_t)rc->tile_count + 1, RENDERCACHE__LEVELS * sizeof(uint32_t));
+    rc->select_v = (float *)rendercache__alloc_array(a, px, sizeof(float));
+    rc->chosen = (unsigned char *)rendercache__alloc_array(a, px, 1);
+    rc->err_rows = (float *)rendercache__alloc_array(a, 2 * ((size_t)rc->width + 2), sizeof(float));
+    if (!rc->pos || !rc->object || !rc->rgb || !rc->scale || !rc->age || !rc->seen || !rc->obj_world ||
+        !rc->obj_local || !rc->obj_camera || !rc->obj_moved || !rc->px_index || !rc->px_depth || !rc->image ||
+        !rc->priority || !rc->pred_priority || !rc->kind || !rc->count || !rc->tile_stats || !rc->hist ||
+        !rc->select_v || !rc->chosen || !rc->err_rows)
+        return -1;
+    return rendercache__splat_alloc(&rc->splat, rc->width, rc->height, rc->capacity, a);
+}
+
+/* Applies the defaults and checks the ranges of a desc; 0 on bad input. */
+static int rendercache__configure(rendercache *rc, const rendercache_desc *d)
+{
+    double capacity;
+    float ppp = rendercache__def(d->points_per_pixel, 2.0f);
+    if (d->width == 0 || d->height == 0 || (uint64_t)d->width * d->height > RENDERCACHE__MAX_PIXELS) return 0;
+    if (!rendercache__allocator_valid(&d->allocator)) return 0;
+    if (!(ppp > 0.0f) || !isfinite(ppp)) return 0;
+    if (!(d->depth_tolerance >= 0.0f) || !isfinite(d->depth_tolerance)) return 0;
+    if (!(d->predict_fraction >= 0.0f && d->predict_fraction <= 1.0f)) return 0;
+    if (!rendercache__finite3(d->background)) return 0;
+    if (d->object_count > RENDERCACHE__MAX_OBJECTS || d->sparse_neighbours > 8 || d->wide_radius > 7) return 0;
+    capacity = ceil((double)ppp * d->width * d->height);
+    if (capacity < 1.0 || capacity > (double)RENDERCACHE__MAX_CAPACITY) return 0;
+    rc->alloc = d->allocator;
+    rc->parallel_for = d->parallel_for;
+    rc->parallel_user = d->parallel_user;
+    rc->clock = d->clock;
+    rc->clock_user = d->clock_user;
+    rc->log = d->log;
+    rc->log_user = d->log_user;
+    rc->width = d->width;
+    rc->height = d->height;
+    rc->pixel_count = d->width * d->height;
+    rc->tile_count = (d->height + RENDERCACHE__TILE_ROWS - 1) / RENDERCACHE__TILE_ROWS;
+    rc->capacity = (uint32_t)capacity;
+    rc->chunk_count = (rc->capacity + RENDERCACHE__CHUNK - 1) / RENDERCACHE__CHUNK;
+    rc->object_count = rendercache__def(d->object_count, 256u);
+    rc->depth_tolerance = rendercache__def(d->depth_tolerance, 0.1f);
+    rc->predict_fraction = rendercache__def(d->predict_fraction, 0.25f);
+    rc->age_ramp = rendercache__def(d->age_ramp_frames, 32u);
+    rc->moving_age_step = rendercache__def(d->moving_age_step, 4u);
+    if (rc->moving_age_step > RENDERCACHE__AGE_MAX) rc->moving_age_step = RENDERCACHE__AGE_MAX;
+    rc->sparse_neighbours = rendercache__def(d->sparse_neighbours, 2u);
+    rc->wide_radius = rendercache__def(d->wide_radius, 3u);
+    memcpy(rc->background, d->background, sizeof rc->background);
+    return 1;
+}
+
+RENDERCACHE_API rendercache_result rendercache_create(const rendercache_desc *desc, rendercache **out)
+{
+    rendercache *rc;
+    rendercache_allocator a;
+    uint32_t o;
+    if (!out) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    *out = NULL;
+    if (!desc) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    if (!rendercache__allocator_valid(&desc->allocator)) {
+        rendercache__log(desc, "rendercache_create: allocator needs both alloc and free, or neither");
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    }
+    a = desc->allocator;
+    rc = (rendercache *)rendercache__alloc(&a, sizeof *rc);
+    if (!rc) return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    memset(rc, 0, sizeof *rc);
+    rc->alloc = a;
+    if (!rendercache__configure(rc, desc)) {
+        rendercache__log(desc, "rendercache_create: bad size, tolerance, fraction or radius in the desc");
+        rendercache__release(rc);
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    }
+    if (rendercache__alloc_buffers(rc) != 0) {
+        rendercache__log(desc, "rendercache_create: out of memory");
+        rendercache__release(rc);
+        return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    }
+    for (o = 0; o < rc->object_count; o++) {
+        rendercache__identity(rc->obj_world + 12 * (size_t)o);
+        rendercache__identity(rc->obj_local + 12 * (size_t)o);
+        rc->obj_moved[o] = 0;
+    }
+    rendercache__reset_points(rc);
+    rendercache__reset_image(rc);
+    rc->stats.capacity = rc->capacity;
+    *out = rc;
+    return RENDERCACHE_OK;
+}
+
+RENDERCACHE_API void rendercache_destroy(rendercache *rc)
+{
+    if (rc) rendercache__release(rc);
+}
+
+RENDERCACHE_API void rendercache_clear(rendercache *rc)
+{
+    if (!rc) return;
+    rendercache__reset_points(rc);
+    rendercache__reset_image(rc);
+    rc->has_prediction = 0;
+    rc->stats.live_points = 0;
+}
+
+/* ======================================================================
+   11. object transforms
+   ---------------------------------------------------------------------- */
+/* Inverse of an affine 3x4 matrix in double; 0 when singular. */
+static int rendercache__invert_affine(const float m[12], float out[12])
+{
+    double a = m[0], b = m[1], c = m[2], d = m[4], e = m[5], f = m[6], g = m[8], h = m[9], k = m[10];
+    double det = a * (e * k - f * h) - b * (d * k - f * g) + c * (d * h - e * g), inv[9];
+    double scale = fabs(a) + fabs(b) + fabs(c) + fabs(d) + fabs(e) + fabs(f) + fabs(g) + fabs(h) + fabs(k);
+    int i;
+    if (!(fabs(det) > 1e-12 * scale * scale * scale) || !isfinite(det)) return 0;
+    inv[0] = (e * k - f * h) / det; inv[1] = (c * h - b * k) / det; inv[2] = (b * f - c * e) / det;
+    inv[3] = (f * g - d * k) / det; inv[4] = (a * k - c * g) / det; inv[5] = (c * d - a * f) / det;
+    inv[6] = (d * h - e * g) / det; inv[7] = (b * g - a * h) / det; inv[8] = (a * e - b * d) / det;
+    for (i = 0; i < 3; i++) {
+        out[4 * i + 0] = (float)inv[3 * i + 0];
+        out[4 * i + 1] = (float)inv[3 * i + 1];
+        out[4 * i + 2] = (float)inv[3 * i + 2];
+        out[4 * i + 3] = (float)-(inv[3 * i + 0] * m[3] + inv[3 * i + 1] * m[7] + inv[3 * i + 2] * m[11]);
+    }
+    return 1;
+}
+
+RENDERCACHE_API rendercache_result rendercache_set_object_transform(rendercache *rc, uint32_t object,
+                                                                    const float m[12])
+{
+    float inv[12];
+    int k;
+    if (!rc || !m || object >= rc->object_count) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    for (k = 0; k < 12; k++)
+        if (!isfinite(m[k])) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    if (!rendercache__invert_affine(m, inv)) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    if (memcmp(m, rc->obj_world + 12 * (size_t)object, 12 * sizeof(float)) != 0) rc->obj_moved[object] = 1;
+    memcpy(rc->obj_world + 12 * (size_t)object, m, 12 * sizeof(float));
+    memcpy(rc->obj_local + 12 * (size_t)object, inv, 12 * sizeof(float));
+    return RENDERCACHE_OK;
+}
+
+/* ======================================================================
+   12. per-frame pipeline (Walter et al. 1999, figure "render cache
+   structure"): age -> project -> z-buffer -> depth cull -> interpolate ->
+   priority image; then requests by error diffusion.
+   ---------------------------------------------------------------------- */
+/* Ageing (WDP99: the age of a point is the main measure of how likely its
+   colour is stale; points of moving objects age faster). Job per chunk. */
+static void rendercache__age_job(void *ctx, uint32_t chunk)
+{
+    rendercache *rc = (rendercache *)ctx;
+    uint32_t begin = chunk * RENDERCACHE__CHUNK, end = begin + RENDERCACHE__CHUNK, i;
+    if (end > rc->capacity) end = rc->capacity;
+    for (i = begin; i < end; i++) {
+        uint32_t o = rc->object[i], step, age;
+        if (o == RENDERCACHE__FREE_SLOT) continue;
+        step = (o != RENDERCACHE_MISS && rc->obj_moved[o]) ? rc->moving_age_step : 1u;
+        age = rc->age[i] + step;
+        rc->age[i] = (uint16_t)(age > RENDERCACHE__AGE_MAX ? RENDERCACHE__AGE_MAX : age);
+    }
+}
+
+/* Reprojection of cache points (the splat source): object space -> camera
+   space through the object's composed matrix; background points are
+   directions, rotated only, at depth RENDERCACHE__FAR. */
+static void rendercache__project_points(const void *src, uint32_t begin, uint32_t end, uint32_t *pix, float *depth)
+{
+    const rendercache *rc = (const rendercache *)src;
+    const rendercache__view *v = rc->projecting;
+    uint32_t i, w = v->width;
+    for (i = begin; i < end; i++) {
+        uint32_t o = rc->object[i];
+        float c[3], px, py, d;
+        if (o == RENDERCACHE__FREE_SLOT) { pix[i - begin] = RENDERCACHE__NONE; continue; }
+        if (o == RENDERCACHE_MISS) {
+            rendercache__view_rotate(v, rc->pos + 3 * (size_t)i, c);
+            d = RENDERCACHE__FAR;
+        } else {
+            rendercache__affine(rc->obj_camera + 12 * (size_t)o, rc->pos + 3 * (size_t)i, c);
+            d = sqrtf(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+        }
+        if (!rendercache__view_to_pixel(v, c, &px, &py)) { pix[i - begin] = RENDERCACHE__NONE; continue; }
+        pix[i - begin] = (uint32_t)py * w + (uint32_t)px;
+        depth[i - begin] = d;
+    }
+}
+
+/* Projects every point into view v and z-buffers them into rc->splat. */
+static void rendercache__splat_points(rendercache *rc, const rendercache__view *v, double *t_project,
+                                      double *t_zbuffer)
+{
+    rendercache__splat_job job;
+    double t0 = rendercache__now(rc), t1;
+    uint32_t o;
+    for (o = 0; o < rc->object_count; o++)
+        rendercache__view_compose(v, rc->obj_world + 12 * (size_t)o, rc->obj_camera + 12 * (size_t)o);
+    rc->projecting = v;
+    job.s = &rc->splat;
+    job.source = rendercache__project_points;
+    job.src = rc;
+    job.element_count = rc->capacity;
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__splat_project, &job, rc->chunk_count);
+    rendercache__splat_offsets(&rc->splat, rc->chunk_count);
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__splat_scatter, &job, rc->chunk_count);
+    t1 = rendercache__now(rc);
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__splat_zbuffer, &job, rc->splat.band_count);
+    if (t_project) *t_project += t1 - t0;
+    if (t_zbuffer) *t_zbuffer += rendercache__now(rc) - t1;
+}
+
+/* Offsets of the 8 neighbours in the order W E N S NW NE SW SE, so that
+   bits (0,1), (2,3), (4,7) and (5,6) are opposite pairs. */
+static const int rendercache__nx[8] = { -1, 1, 0, 0, -1, 1, -1, 1 };
+static const int rendercache__ny[8] = { 0, 0, -1, 1, -1, -1, 1, 1 };
+
+/* Depth cull (WDP99): a point much farther than the average depth of the
+   points in its 3x3 neighbourhood shows through a nearer surface and is
+   dropped. Refinement: the nearer points must also lie on opposite sides
+   (left and right, above and below, or both diagonals), as they do when a
+   far point falls into a gap of a nearer surface; a point beside a
+   silhouette has its nearer neighbours on one side only and is kept, so a
+   static view keeps every sampled point. */
+static int rendercache__occluded(const rendercache__splat *s, uint32_t x, uint32_t y, float d, float tol)
+{
+    uint32_t w = s->width, h = s->height, nearer = 0, n = 0;
+    float sum = 0.0f;
+    int k;
+    for (k = 0; k < 8; k++) {
+        int qx = (int)x + rendercache__nx[k], qy = (int)y + rendercache__ny[k];
+        uint32_t q;
+        if (qx < 0 || qy < 0 || qx >= (int)w || qy >= (int)h) continue;
+        q = (uint32_t)qy * w + (uint32_t)qx;
+        if (s->index[q] == RENDERCACHE__NONE) continue;
+        sum += s->depth[q];
+        n++;
+        if (d > s->depth[q] * tol) nearer |= 1u << k;
+    }
+    if (!(((nearer & 3u) == 3u) || ((nearer & 12u) == 12u) || ((nearer & 0xF0u) == 0xF0u))) return 0;
+    return d > (sum / (float)n) * tol;
+}
+
+/* Job per tile: depth cull; surviving points give their colour to the
+   image and are marked seen (they are not evicted this frame). */
+static void rendercache__cull_job(void *ctx, uint32_t tile)
+{
+    rendercache *rc = (rendercache *)ctx;
+    const rendercache__splat *s = &rc->splat;
+    uint32_t y0 = tile * RENDERCACHE__TILE_ROWS, y1 = y0 + RENDERCACHE__TILE_ROWS, x, y;
+    uint32_t visible = 0, culled = 0, *stats = rc->tile_stats + RENDERCACHE__TILE_STATS * (size_t)tile;
+    float tol = 1.0f + rc->depth_tolerance;
+    if (y1 > rc->height) y1 = rc->height;
+    for (y = y0; y < y1; y++) {
+        for (x = 0; x < rc->width; x++) {
+            uint32_t p = y * rc->width + x, slot = s->index[p];
+            if (slot != RENDERCACHE__NONE && rendercache__occluded(s, x, y, s->depth[p], tol)) {
+                slot = RENDERCACHE__NONE;
+                culled++;
+            }
+            rc->px_index[p] = slot;
+            if (slot == RENDERCACHE__NONE) { rc->px_depth[p] = FLT_MAX; continue; }
+            rc->px_depth[p] = s->depth[p];
+            rc->image[3 * (size_t)p + 0] = rc->rgb[3 * (size_t)slot + 0];
+            rc->image[3 * (size_t)p + 1] = rc->rgb[3 * (size_t)slot + 1];
+            rc->image[3 * (size_t)p + 2] = rc->rgb[3 * (size_t)slot + 2];
+            rc->kind[p] = RENDERCACHE_PIXEL_POINT;
+            rc->count[p] = 0;
+            rc->seen[slot] = rc->frame;
+            visible++;
+        }
+    }
+    stats[0] = visible;
+    stats[1] = culled;
+}
+
+/* Interpolation of a hole (WDP99 3x3 weighted filter; WDG02 wider filter
+   for sparse regions) from the points within radius r, tent weights
+   (r+1-|dx|)(r+1-|dy|). Never blends across a depth discontinuity: when the
+   neighbours' depths span more than the tolerance, only the nearest layer
+   (within tolerance of the minimum) or the farthest layer (within tolerance
+   of the maximum) is used, whichever carries more weight (the far one on a
+   tie: a hole beside an edge is more often uncovered background). Returns
+   the number of points in the window; rgb is set when it is not zero. */
+static uint32_t rendercache__interpolate(const rendercache *rc, uint32_t x, uint32_t y, int r, float rgb[3])
+{
+    int x0 = (int)x - r, x1 = (int)x + r, y0 = (int)y - r, y1 = (int)y + r, qx, qy;
+    float dmin = FLT_MAX, dmax = 0.0f, tol = 1.0f + rc->depth_tolerance;
+    float near_sum[4] = { 0, 0, 0, 0 }, far_sum[4] = { 0, 0, 0, 0 };
+    const float *chosen;
+    uint32_t n = 0;
+    if (x0 < 0) x0 = 0;
+    if (y0 < 0) y0 = 0;
+    if (x1 >= (int)rc->width) x1 = (int)rc->width - 1;
+    if (y1 >= (int)rc->height) y1 = (int)rc->height - 1;
+    for (qy = y0; qy <= y1; qy++)
+        for (qx = x0; qx <= x1; qx++) {
+            uint32_t q = (uint32_t)qy * rc->width + (uint32_t)qx;
+            if (rc->px_index[q] == RENDERCACHE__NONE) continue;
+            if (rc->px_depth[q] < dmin) dmin = rc->px_depth[q];
+            if (rc->px_depth[q] > dmax) dmax = rc->px_depth[q];
+            n++;
+        }
+    if (n == 0) return 0;
+    for (qy = y0; qy <= y1; qy++)
+        for (qx = x0; qx <= x1; qx++) {
+            uint32_t q = (uint32_t)qy * rc->width + (uint32_t)qx;
+            float d, wgt, *acc;
+            int k;
+            if (rc->px_index[q] == RENDERCACHE__NONE) continue;
+            d = rc->px_depth[q];
+            wgt = (float)((r + 1 - rendercache__iabs(qx - (int)x)) * (r + 1 - rendercache__iabs(qy - (int)y)));
+            if (d <= dmin * tol) acc = near_sum;
+            else if (d * tol >= dmax) acc = far_sum;
+            else continue;   /* a middle layer: neither side of the choice */
+            for (k = 0; k < 3; k++) acc[k] += wgt * rc->image[3 * (size_t)q + k];
+            acc[3] += wgt;
+        }
+    chosen = (far_sum[3] >= near_sum[3]) ? far_sum : near_sum;
+    if (dmax <= dmin * tol) chosen = near_sum;   /* one layer: every point was counted as near */
+    rgb[0] = chosen[0] / chosen[3];
+    rgb[1] = chosen[1] / chosen[3];
+    rgb[2] = chosen[2] / chosen[3];
+    return n;
+}
+
+/* Job per tile: fill the holes left by projection and cull. */
+static void rendercache__interpolate_job(void *ctx, uint32_t tile)
+{
+    rendercache *rc = (rendercache *)ctx;
+    uint32_t y0 = tile * RENDERCACHE__TILE_ROWS, y1 = y0 + RENDERCACHE__TILE_ROWS, x, y;
+    uint32_t counts[3] = { 0, 0, 0 }, *stats = rc->tile_stats + RENDERCACHE__TILE_STATS * (size_t)tile;
+    if (y1 > rc->height) y1 = rc->height;
+    for (y = y0; y < y1; y++) {
+        for (x = 0; x < rc->width; x++) {
+            uint32_t p = y * rc->width + x, n;
+            float rgb[3];
+            if (rc->px_index[p] != RENDERCACHE__NONE) continue;
+            n = rendercache__interpolate(rc, x, y, 1, rgb);
+            if (n >= rc->sparse_neighbours) {
+                rc->kind[p] = RENDERCACHE_PIXEL_INTERPOLATED;
+                counts[0]++;
+            } else {
+                n = rendercache__interpolate(rc, x, y, (int)rc->wide_radius, rgb);
+                if (n) {
+                    rc->kind[p] = RENDERCACHE_PIXEL_SPARSE;
+                    counts[1]++;
+                } else {
+                    memcpy(rgb, rc->background, sizeof rgb);
+                    rc->kind[p] = RENDERCACHE_PIXEL_EMPTY;
+                    counts[2]++;
+                }
+            }
+            rc->count[p] = (unsigned char)(n > 255 ? 255 : n);
+            memcpy(rc->image + 3 * (size_t)p, rgb, sizeof rgb);
+        }
+    }
+    stats[2] = counts[0];
+    stats[3] = counts[1];
+    stats[4] = counts[2];
+}
+
+/* The priority image (WDP99; Crespin and Peroche 2004 section 4.1): a
+   point's priority grows with its age, times its priority scale (the
+   light-vector weight of section 4.2.4); a hole's priority grows as fewer
+   points surround it; a pixel with nothing near gets the maximum. */
+static float rendercache__pixel_priority(const rendercache *rc, uint32_t p)
+{
+    uint32_t slot = rc->px_index[p];
+    float window, pr;
+    switch (rc->kind[p]) {
+    case RENDERCACHE_PIXEL_POINT:
+        pr = (float)rc->age[slot] / (float)rc->age_ramp;
+        if (pr > 1.0f) pr = 1.0f;
+        pr *= RENDERCACHE__PRIORITY_POINT_MAX * rc->scale[slot];
+        return pr > 1.0f ? 1.0f : pr;
+    case RENDERCACHE_PIXEL_INTERPOLATED:
+        return RENDERCACHE__PRIORITY_INTERP + 0.25f * (float)(8u - rc->count[p]) / 8.0f;
+    case RENDERCACHE_PIXEL_SPARSE:
+        window = (float)((2 * rc->wide_radius + 1) * (2 * rc->wide_radius + 1) - 1);
+        return RENDERCACHE__PRIORITY_SPARSE + 0.2f * (1.0f - (float)rc->count[p] / window);
+    default:
+        return 1.0f;
+    }
+}
+
+static void rendercache__priority_job(void *ctx, uint32_t tile)
+{
+    rendercache *rc = (rendercache *)ctx;
+    uint32_t p0 = tile * RENDERCACHE__TILE_ROWS * rc->width, p1 = p0 + RENDERCACHE__TILE_ROWS * rc->width, p;
+    if (p1 > rc->pixel_count) p1 = rc->pixel_count;
+    for (p = p0; p < p1; p++) rc->priority[p] = rendercache__pixel_priority(rc, p);
+}
+
+/* Sums one column of the per-tile statistics. */
+static uint32_t rendercache__tile_sum(const rendercache *rc, uint32_t column)
+{
+    uint32_t t, sum = 0;
+    for (t = 0; t < rc->tile_count; t++) sum += rc->tile_stats[RENDERCACHE__TILE_STATS * (size_t)t + column];
+    return sum;
+}
+
+static void rendercache__start_stats(rendercache *rc)
+{
+    rendercache_stats *s = &rc->stats;
+    s->frame = rc->frame;
+    s->requested = s->predicted = s->inserted = s->replaced = s->evicted = s->rejected = 0;
+    s->time_project = s->time_zbuffer = s->time_cull = s->time_interpolate = 0.0;
+    s->time_priority = s->time_predict = s->time_request = s->time_insert = 0.0;
+}
+
+RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, const rendercache_camera *camera)
+{
+    rendercache__view v;
+    double t0, t1, t2, t3;
+    uint32_t o;
+    if (!rc || !rendercache__view_init(&v, camera) || camera->width != rc->width || camera->height != rc->height) {
+        if (rc && rc->log) rc->log(rc->log_user, "rendercache_begin_frame: invalid camera or image size");
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    }
+    rc->frame++;
+    if (rc->frame == 0) { /* the stamp wrapped: no stale stamp may look current */
+        memset(rc->seen, 0, rc->capacity * sizeof *rc->seen);
+        rc->frame = 1;
+    }
+    rc->view = v;
+    rc->has_prediction = 0;
+    rc->hand_exhausted = 0;
+    rendercache__start_stats(rc);
+    t0 = rendercache__now(rc);
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__age_job, rc, rc->chunk_count);
+    rc->stats.time_project = rendercache__now(rc) - t0;
+    rendercache__splat_points(rc, &rc->view, &rc->stats.time_project, &rc->stats.time_zbuffer);
+    t1 = rendercache__now(rc);
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__cull_job, rc, rc->tile_count);
+    t2 = rendercache__now(rc);
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__interpolate_job, rc, rc->tile_count);
+    t3 = rendercache__now(rc);
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__priority_job, rc, rc->tile_count);
+    rc->stats.time_cull = t2 - t1;
+    rc->stats.time_interpolate = t3 - t2;
+    rc->stats.time_priority = rendercache__now(rc) - t3;
+    for (o = 0; o < rc->object_count; o++) rc->obj_moved[o] = 0;
+    rc->stats.projected = rc->splat.projected;
+    rc->stats.visible = rendercache__tile_sum(rc, 0);
+    rc->stats.culled = rendercache__tile_sum(rc, 1);
+    rc->stats.interpolated = rendercache__tile_sum(rc, 2);
+    rc->stats.sparse = rendercache__tile_sum(rc, 3);
+    rc->stats.empty = rendercache__tile_sum(rc, 4);
+    rc->stats.live_points = rc->live;
+    rc->has_frame = 1;
+    return RENDERCACHE_OK;
+}
+
+/* ======================================================================
+   13. predictive sampling (Walter et al. 2002): the cache projected into
+   the camera expected next; pixels with no point in their 3x3
+   neighbourhood there are regions the motion will uncover.
+   ---------------------------------------------------------------------- */
+static void rendercache__predict_job(void *ctx, uint32_t tile)
+{
+    rendercache *rc = (rendercache *)ctx;
+    const rendercache__splat *s = &rc->splat;
+    uint32_t y0 = tile * RENDERCACHE__TILE_ROWS, y1 = y0 + RENDERCACHE__TILE_ROWS, x, y, holes = 0;
+    if (y1 > rc->height) y1 = rc->height;
+    for (y = y0; y < y1; y++) {
+        uint32_t ya = y > 0 ? y - 1 : 0, yb = y + 1 < rc->height ? y + 1 : y;
+        for (x = 0; x < rc->width; x++) {
+            uint32_t xa = x > 0 ? x - 1 : 0, xb = x + 1 < rc->width ? x + 1 : x, qx, qy;
+            int covered = 0;
+            for (qy = ya; qy <= yb && !covered; qy++)
+                for (qx = xa; qx <= xb; qx++)
+                    if (s->index[qy * rc->width + qx] != RENDERCACHE__NONE) { covered = 1; break; }
+            rc->pred_priority[y * rc->width + x] = covered ? 0.0f : 1.0f;
+            holes += !covered;
+        }
+    }
+    rc->tile_stats[RENDERCACHE__TILE_STATS * (size_t)tile + 5] = holes;
+}
+
+RENDERCACHE_API rendercache_result rendercache_predict(rendercache *rc, const rendercache_camera *next)
+{
+    rendercache__view v;
+    double t0;
+    if (!rc || !rc->has_frame || !rendercache__view_init(&v, next) || next->width != rc->width ||
+        next->height != rc->height)
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    t0 = rendercache__now(rc);
+    rc->predicted = v;
+    rendercache__splat_points(rc, &rc->predicted, NULL, NULL);
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__predict_job, rc, rc->tile_count);
+    rc->pred_holes = rendercache__tile_sum(rc, 5);
+    rc->has_prediction = 1;
+    rc->stats.time_predict += rendercache__now(rc) - t0;
+    return RENDERCACHE_OK;
+}
+
+/* ======================================================================
+   14. sample selection: thresholding and error diffusion of the priority
+   image (WDP99, after Floyd and Steinberg 1976).
+   Thresholding: priorities are binned into RENDERCACHE__LEVELS levels; the
+   levels above a cut level, all of whose pixels fit the budget, are taken
+   whole (value 1); the cut level gets the fraction of the budget left
+   (value in (0, 1)); lower levels get 0. So holes are served before old
+   points, and old points before young ones.
+   Error diffusion: Floyd-Steinberg on these values in serpentine order
+   spreads the fractional level's requests evenly. Pixels of value 0 or 1
+   are decided outright and pass incoming error on unchanged; error that
+   would leave the image is given to the neighbours inside it, so the count
+   equals the budget up to the last pixel's residual, which a final pass
+   corrects with the pixels closest to the threshold. Each decision depends
+   on the previous ones, so this step is serial (a few ms at most for 1M
+   pixels); everything around it runs in tiles.
+   ---------------------------------------------------------------------- */
+typedef struct rendercache__select_job {
+    rendercache *rc;
+    const float *priority;
+    uint32_t cut;
+    float fraction;
+} rendercache__select_job;
+
+static uint32_t rendercache__level(float priority)
+{
+    uint32_t l = (uint32_t)(priority * (float)RENDERCACHE__LEVELS);
+    return l >= RENDERCACHE__LEVELS ? RENDERCACHE__LEVELS - 1 : l;
+}
+
+static void rendercache__histogram_job(void *ctx, uint32_t tile)
+{
+    const rendercache__select_job *j = (const rendercache__select_job *)ctx;
+    const rendercache *rc = j->rc;
+    uint32_t *h = rc->hist + (size_t)tile * RENDERCACHE__LEVELS;
+    uint32_t p0 = tile * RENDERCACHE__TILE_ROWS * rc->width, p1 = p0 + RENDERCACHE__TILE_ROWS * rc->width, p;
+    if (p1 > rc->pixel_count) p1 = rc->pixel_count;
+    memset(h, 0, RENDERCACHE__LEVELS * sizeof *h);
+    for (p = p0; p < p1; p++)
+        if (j->priority[p] > 0.0f) h[rendercache__level(j->priority[p])]++;
+}
+
+static void rendercache__threshold_job(void *ctx, uint32_t tile)
+{
+    const rendercache__select_job *j = (const rendercache__select_job *)ctx;
+    const rendercache *rc = j->rc;
+    uint32_t p0 = tile * RENDERCACHE__TILE_ROWS * rc->width, p1 = p0 + RENDERCACHE__TILE_ROWS * rc->width, p;
+    if (p1 > rc->pixel_count) p1 = rc->pixel_count;
+    for (p = p0; p < p1; p++) {
+        float pr = j->priority[p], v = 0.0f;
+        if (pr > 0.0f) {
+            uint32_t l = rendercache__level(pr);
+            v = l > j->cut ? 1.0f : (l == j->cut ? j->fraction : 0.0f);
+        }
+        rc->select_v[p] = v;
+    }
+}
+
+/* Finds the cut level and its fraction so that the values sum to budget
+   (or to the number of positive pixels when fewer). */
+static void rendercache__find_cut(rendercache *rc, uint32_t budget, uint32_t *cut, float *fraction)
+{
+    uint32_t *total = rc->hist + (size_t)rc->tile_count * RENDERCACHE__LEVELS, t, l;
+    uint64_t above = 0;
+    for (l = 0; l < RENDERCACHE__LEVELS; l++) {
+        uint32_t sum = 0;
+        for (t = 0; t < rc->tile_count; t++) sum += rc->hist[(size_t)t * RENDERCACHE__LEVELS + l];
+        total[l] = sum;
+    }
+    *cut = 0;
+    *fraction = 1.0f;
+    for (l = RENDERCACHE__LEVELS; l-- > 0;) {
+        if (above + total[l] >= budget) {
+            *cut = l;
+            *fraction = (float)((double)(budget - above) / (double)total[l]);
+            return;
+        }
+        above += total[l];
+    }
+}
+
+/* Hands pixel p's error e to its unvisited neighbours (Floyd-Steinberg
+   weights 7/16 ahead, 3/16 behind-below, 5/16 below, 1/16 ahead-below),
+   renormalised over the neighbours that exist. Returns e when none exists. */
+static float rendercache__spread_error(float *cur, float *next, int x, int dir, int ahead_ok, int behind_ok,
+                                       int below_ok, float e)
+{
+    float wa = ahead_ok ? 7.0f : 0.0f, wbb = (below_ok && behind_ok) ? 3.0f : 0.0f;
+    float wb = below_ok ? 5.0f : 0.0f, wba = (below_ok && ahead_ok) ? 1.0f : 0.0f;
+    float sum = wa + wbb + wb + wba, s;
+    if (sum == 0.0f) return e;
+    s = e / sum;
+    cur[x + dir + 1] += wa * s;
+    next[x - dir + 1] += wbb * s;
+    next[x + 1] += wb * s;
+    next[x + dir + 1] += wba * s;
+    return 0.0f;
+}
+
+/* Serial Floyd-Steinberg pass over rc->select_v; marks rc->chosen and
+   returns the count. Fractional pixels keep value + incoming error in
+   select_v for the correction pass. */
+static uint32_t rendercache__diffuse(rendercache *rc)
+{
+    uint32_t w = rc->width, h = rc->height, y, count = 0;
+    float *cur = rc->err_rows, *next = rc->err_rows + (w + 2);
+    memset(cur, 0, (w + 2) * sizeof *cur);
+    for (y = 0; y < h; y++) {
+        int dir = (y & 1u) ? -1 : 1, x = dir > 0 ? 0 : (int)w - 1, k;
+        float *t;
+        memset(next, 0, (w + 2) * sizeof *next);
+        for (k = 0; k < (int)w; k++, x += dir) {
+            uint32_t p = y * w + (uint32_t)x;
+            float v = rc->select_v[p], e = cur[x + 1];
+            unsigned char pick;
+            if (v <= 0.0f || v >= 1.0f) {
+                pick = v >= 1.0f;
+            } else {
+                float total = v + e;
+                pick = (unsigned char)(2u | (total >= 0.5f ? 1u : 0u));
+                rc->select_v[p] = total;
+                e = total - (float)(pick & 1u);
+            }
+            rc->chosen[p] = pick;
+            count += pick & 1u;
+            if (e != 0.0f)
+                rendercache__spread_error(cur, next, x, dir, k + 1 < (int)w, k > 0, y + 1 < h, e);
+        }
+        t = cur; cur = next; next = t;
+    }
+    return count;
+}
+
+/* Brings the count to the target with the fractional pixels nearest the
+   threshold: adds the unchosen with the largest value + error, or drops the
+   chosen with the smallest. Only the final residual needs it, so it runs
+   at most a few times. */
+static uint32_t rendercache__correct_count(rendercache *rc, uint32_t count, uint32_t target)
+{
+    while (count != target) {
+        uint32_t p, best = RENDERCACHE__NONE;
+        int add = count < target;
+        float best_v = add ? -FLT_MAX : FLT_MAX;
+        for (p = 0; p < rc->pixel_count; p++) {
+            unsigned char c = rc->chosen[p];
+            if (!(c & 2u) || (int)(c & 1u) == add) continue;
+            if (add ? rc->select_v[p] > best_v : rc->select_v[p] < best_v) { best_v = rc->select_v[p]; best = p; }
+        }
+        if (best == RENDERCACHE__NONE) break;
+        rc->chosen[best] ^= 1u;
+        count = add ? count + 1 : count - 1;
+    }
+    return count;
+}
+
+/* Selects up to budget pixels of a priority image into rc->chosen. */
+static uint32_t rendercache__select(rendercache *rc, const float *priority, uint32_t budget)
+{
+    rendercache__select_job job;
+    uint64_t positive = 0;
+    uint32_t l, count, target;
+    if (budget == 0) return 0;
+    job.rc = rc;
+    job.priority = priority;
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__histogram_job, &job, rc->tile_count);
+    rendercache__find_cut(rc, budget, &job.cut, &job.fraction);
+    for (l = 0; l < RENDERCACHE__LEVELS; l++) positive += rc->hist[(size_t)rc->tile_count * RENDERCACHE__LEVELS + l];
+    target = positive < budget ? (uint32_t)positive : budget;
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__threshold_job, &job, rc->tile_count);
+    count = rendercache__diffuse(rc);
+    return rendercache__correct_count(rc, count, target);
+}
+
+/* Writes the chosen pixels as requests in scan order and zeroes their
+   priority, so a further request call moves on to the next pixels. */
+static uint32_t rendercache__emit(rendercache *rc, const rendercache__view *v, float *priority, uint32_t flags,
+                                  rendercache_pixel_request *out, uint32_t max)
+{
+    uint32_t p, n = 0;
+    for (p = 0; p < rc->pixel_count && n < max; p++) {
+        rendercache_pixel_request *r;
+        if (!(rc->chosen[p] & 1u)) continue;
+        r = &out[n++];
+        r->x = p % rc->width;
+        r->y = p / rc->width;
+        r->flags = flags;
+        memcpy(r->org, v->eye, sizeof r->org);
+        rendercache__view_ray(v, (float)r->x + 0.5f, (float)r->y + 0.5f, r->dir);
+        priority[p] = 0.0f;
+    }
+    return n;
+}
+
+RENDERCACHE_API rendercache_result rendercache_request(rendercache *rc, rendercache_pixel_request *out,
+                                                       uint32_t max, uint32_t *count)
+{
+    uint32_t n = 0, pred_budget = 0;
+    double t0;
+    if (count) *count = 0;
+    if (!rc || !count || (!out && max) || !rc->has_frame) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    if (max == 0) return RENDERCACHE_OK;
+    t0 = rendercache__now(rc);
+    if (rc->has_prediction) {
+        pred_budget = (uint32_t)((double)max * rc->predict_fraction);
+        if (pred_budget > rc->pred_holes) pred_budget = rc->pred_holes;
+    }
+    if (rendercache__select(rc, rc->priority, max - pred_budget))
+        n = rendercache__emit(rc, &rc->view, rc->priority, 0u, out, max - pred_budget);
+    if (rc->has_prediction && n < max && rendercache__select(rc, rc->pred_priority, max - n)) {
+        uint32_t m = rendercache__emit(rc, &rc->predicted, rc->pred_priority, RENDERCACHE_REQUEST_PREDICTED,
+                                       out + n, max - n);
+        rc->pred_holes -= m;
+        rc->stats.predicted += m;
+        n += m;
+    }
+    rc->stats.requested += n;
+    rc->stats.time_request += rendercache__now(rc) - t0;
+    *count = n;
+    return RENDERCACHE_OK;
+}
+
+/* ======================================================================
+   15. insertion and eviction
+   ---------------------------------------------------------------------- */
+/* Eviction (clock, second chance): the hand walks the slots in the order
+   they were filled, so the slot under it holds the oldest insertion; a
+   point shown in this frame is skipped (still useful), a free slot or a
+   point not visible is taken. When a whole turn finds nothing, the cache
+   is smaller than what is visible and the oldest slot is taken anyway. */
+static uint32_t rendercache__victim(rendercache *rc)
+{
+    uint32_t scanned, slot;
+    for (scanned = 0; !rc->hand_exhausted && scanned < rc->capacity; scanned++) {
+        slot = rc->hand;
+        rc->hand = slot + 1 == rc->capacity ? 0 : slot + 1;
+        if (rc->object[slot] == RENDERCACHE__FREE_SLOT || rc->seen[slot] != rc->frame) return slot;
+    }
+    rc->hand_exhausted = 1;
+    slot = rc->hand;
+    rc->hand = slot + 1 == rc->capacity ? 0 : slot + 1;
+    return slot;
+}
+
+static int rendercache__sample_valid(const rendercache *rc, const rendercache_sample *s)
+{
+    if (s->x >= rc->width || s->y >= rc->height) return 0;
+    if (s->flags & ~RENDERCACHE_REQUEST_PREDICTED) return 0;
+    if ((s->flags & RENDERCACHE_REQUEST_PREDICTED) && !rc->has_prediction) return 0;
+    if (s->object != RENDERCACHE_MISS && s->object >= rc->object_count) return 0;
+    if (s->object != RENDERCACHE_MISS && !rendercache__finite3(s->position)) return 0;
+    if (!rendercache__finite3(s->rgb) || !(s->priority_scale >= 0.0f) || !isfinite(s->priority_scale)) return 0;
+    return 1;
+}
+
+/* Stores sample s in slot; returns its depth from the eye of view v. */
+static float rendercache__store(rendercache *rc, uint32_t slot, const rendercache_sample *s, const rendercache__view *v)
+{
+    float *pos = rc->pos + 3 * (size_t)slot, d;
+    if (rc->object[slot] == RENDERCACHE__FREE_SLOT) rc->live++;
+    if (s->object == RENDERCACHE_MISS) {
+        rendercache__view_ray(v, (float)s->x + 0.5f, (float)s->y + 0.5f, pos);
+        d = RENDERCACHE__FAR;
+    } else {
+        float dx = s->position[0] - v->eye[0], dy = s->position[1] - v->eye[1], dz = s->position[2] - v->eye[2];
+        rendercache__affine(rc->obj_local + 12 * (size_t)s->object, s->position, pos);
+        d = sqrtf(dx * dx + dy * dy + dz * dz);
+    }
+    rc->object[slot] = s->object;
+    memcpy(rc->rgb + 3 * (size_t)slot, s->rgb, 3 * sizeof(float));
+    rc->scale[slot] = s->priority_scale > 0.0f ? s->priority_scale : 1.0f;
+    rc->age[slot] = 0;
+    rc->seen[slot] = rc->frame;   /* new points are not evicted in their own frame */
+    return d;
+}
+
+/* A current-frame sample also becomes its pixel's point at once. */
+static void rendercache__show(rendercache *rc, uint32_t p, uint32_t slot, float depth, const float rgb[3])
+{
+    rc->px_index[p] = slot;
+    rc->px_depth[p] = depth;
+    memcpy(rc->image + 3 * (size_t)p, rgb, 3 * sizeof(float));
+    rc->kind[p] = RENDERCACHE_PIXEL_POINT;
+    rc->count[p] = 0;
+    rc->priority[p] = 0.0f;
+}
+
+RENDERCACHE_API rendercache_result rendercache_insert(rendercache *rc, const rendercache_sample *samples, uint32_t n)
+{
+    uint32_t i;
+    double t0;
+    if (!rc || (!samples && n)) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    t0 = rendercache__now(rc);
+    for (i = 0; i < n; i++) {
+        const rendercache_sample *s = &samples[i];
+        int predicted = (s->flags & RENDERCACHE_REQUEST_PREDICTED) != 0;
+        const rendercache__view *v = predicted ? &rc->predicted : &rc->view;
+        uint32_t p, slot;
+        float d;
+        if (!rendercache__sample_valid(rc, s) || (!predicted && !rc->has_frame)) { rc->stats.rejected++; continue; }
+        p = s->y * rc->width + s->x;
+        slot = predicted ? RENDERCACHE__NONE : rc->px_index[p];
+        if (slot != RENDERCACHE__NONE) {
+            rc->stats.replaced++;
+        } else {
+            slot = rendercache__victim(rc);
+            if (rc->object[slot] != RENDERCACHE__FREE_SLOT) rc->stats.evicted++;
+        }
+        d = rendercache__store(rc, slot, s, v);
+        if (!predicted) rendercache__show(rc, p, slot, d, s->rgb);
+        rc->stats.inserted++;
+    }
+    rc->stats.live_points = rc->live;
+    rc->stats.time_insert += rendercache__now(rc) - t0;
+    return RENDERCACHE_OK;
+}
+
+/* ======================================================================
+   16. accessors and camera helpers
+   ---------------------------------------------------------------------- */
+RENDERCACHE_API const float *rendercache_image(const rendercache *rc) { return rc ? rc->image : NULL; }
+RENDERCACHE_API const float *rendercache_priority_image(const rendercache *rc) { return rc ? rc->priority : NULL; }
+RENDERCACHE_API const unsigned char *rendercache_pixel_kinds(const rendercache *rc) { return rc ? rc->kind : NULL; }
+RENDERCACHE_API const float *rendercache_depth_image(const rendercache *rc) { return rc ? rc->px_depth : NULL; }
+
+RENDERCACHE_API void rendercache_get_stats(const rendercache *rc, rendercache_stats *out)
+{
+    if (!out) return;
+    if (!rc) { memset(out, 0, sizeof *out); return; }
+    *out = rc->stats;
+}
+
+RENDERCACHE_API rendercache_result rendercache_camera_ray(const rendercache_camera *camera, float px, float py,
+                                                          float org[3], float dir[3])
+{
+    rendercache__view v;
+    if (!org || !dir || !rendercache__view_init(&v, camera) || !isfinite(px) || !isfinite(py))
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    memcpy(org, v.eye, 3 * sizeof(float));
+    rendercache__view_ray(&v, px, py, dir);
+    return RENDERCACHE_OK;
+}
+
+RENDERCACHE_API int rendercache_camera_project(const rendercache_camera *camera, const float p[3], float *px,
+                                               float *py, float *depth)
+{
+    rendercache__view v;
+    float w[3], c[3], x, y;
+    if (!p || !rendercache__view_init(&v, camera) || !rendercache__finite3(p)) return 0;
+    w[0] = p[0] - v.eye[0];
+    w[1] = p[1] - v.eye[1];
+    w[2] = p[2] - v.eye[2];
+    rendercache__view_rotate(&v, w, c);
+    if (!rendercache__view_to_pixel(&v, c, &x, &y)) return 0;
+    if (px) *px = x;
+    if (py) *py = y;
+    if (depth) *depth = sqrtf(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+    return 1;
+}
 
 RENDERCACHE_API const char *rendercache_result_string(rendercache_result r)
 {
