@@ -1333,13 +1333,14 @@ RENDERCACHE_API rendercache_result rendercache_predict(rendercache *rc, const re
    (value in (0, 1)); lower levels get 0. So holes are served before old
    points, and old points before young ones.
    Error diffusion: Floyd-Steinberg on these values in serpentine order
-   spreads the fractional level's requests evenly. Pixels of value 0 or 1
-   are decided outright and pass incoming error on unchanged; error that
-   would leave the image is given to the neighbours inside it, so the count
-   equals the budget up to the last pixel's residual, which a final pass
-   corrects with the pixels closest to the threshold. Each decision depends
-   on the previous ones, so this step is serial (a few ms at most for 1M
-   pixels); everything around it runs in tiles.
+   spreads the fractional level's requests evenly (with a modulated
+   threshold for sparse levels, see below). Pixels of value 0 or 1 are
+   decided outright and pass incoming error on unchanged; error that would
+   leave the image goes to the next pixel in scan order instead, so the
+   count equals the budget up to the last pixel's residual, which a final
+   pass corrects with the pixels closest to the threshold. Each decision
+   depends on the previous ones, so this step is serial; everything around
+   it runs in tiles.
    ---------------------------------------------------------------------- */
 typedef struct rendercache__select_job {
     rendercache *rc;
@@ -1405,31 +1406,59 @@ static void rendercache__find_cut(rendercache *rc, uint32_t budget, uint32_t *cu
     }
 }
 
-/* Hands pixel p's error e to its unvisited neighbours (Floyd-Steinberg
-   weights 7/16 ahead, 3/16 behind-below, 5/16 below, 1/16 ahead-below),
-   renormalised over the neighbours that exist. Returns e when none exists. */
+/* Hands pixel p's error e to its unvisited neighbours with the
+   Floyd-Steinberg weights 7/16 ahead, 3/16 behind-below, 5/16 below, 1/16
+   ahead-below. A weight whose neighbour lies outside the image goes to the
+   next pixel in serpentine order instead (below at a row's end, ahead on
+   the last row), so no error is lost. Returns e when no pixel follows. */
 static float rendercache__spread_error(float *cur, float *next, int x, int dir, int ahead_ok, int behind_ok,
                                        int below_ok, float e)
 {
-    float wa = ahead_ok ? 7.0f : 0.0f, wbb = (below_ok && behind_ok) ? 3.0f : 0.0f;
-    float wb = below_ok ? 5.0f : 0.0f, wba = (below_ok && ahead_ok) ? 1.0f : 0.0f;
-    float sum = wa + wbb + wb + wba, s;
-    if (sum == 0.0f) return e;
-    s = e / sum;
-    cur[x + dir + 1] += wa * s;
-    next[x - dir + 1] += wbb * s;
-    next[x + 1] += wb * s;
-    next[x + dir + 1] += wba * s;
+    float s = e * (1.0f / 16.0f), ahead = 7.0f, behind_below = 3.0f, below = 5.0f, ahead_below = 1.0f;
+    if (!below_ok) {
+        if (!ahead_ok) return e;
+        cur[x + dir + 1] += e;
+        return 0.0f;
+    }
+    if (!ahead_ok) { below += ahead + ahead_below; ahead = ahead_below = 0.0f; }
+    if (!behind_ok) { below += behind_below; behind_below = 0.0f; }
+    cur[x + dir + 1] += ahead * s;
+    next[x - dir + 1] += behind_below * s;
+    next[x + 1] += below * s;
+    next[x + dir + 1] += ahead_below * s;
     return 0.0f;
 }
 
-/* Serial Floyd-Steinberg pass over rc->select_v; marks rc->chosen and
-   returns the count. Fractional pixels keep value + incoming error in
-   select_v for the correction pass. */
-static uint32_t rendercache__diffuse(rendercache *rc)
+/* Threshold modulation (Knuth 1987; Eschbach and Knox 1991): a sparse
+   level under plain Floyd-Steinberg chooses nothing until the error has
+   piled up to 0.5, and it spreads sideways while it does, so the first rows
+   of the image starve and choices come in bursts. A threshold varied per
+   pixel by up to +-amp breaks that up; it fades out as the level gets
+   denser (no transient there, and it would let choices touch). The
+   variation is a hash of (pixel, frame): deterministic, and different from
+   frame to frame. */
+#define RENDERCACHE__MODULATION 0.4f          /* amplitude at density 0 */
+#define RENDERCACHE__MODULATION_FADE 0.1f     /* density where it reaches 0 */
+
+static float rendercache__threshold(uint32_t p, uint32_t frame, float amp)
+{
+    uint64_t z = ((uint64_t)frame << 32 | p) * 0x9E3779B97F4A7C15ull;
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    z ^= z >> 31;
+    return 0.5f + amp * ((float)(z >> 40) * (1.0f / 8388608.0f) - 1.0f);
+}
+
+/* Serial serpentine Floyd-Steinberg pass over rc->select_v (fraction: the
+   value of the cut level); marks rc->chosen and returns the count.
+   Fractional pixels keep value + incoming error in select_v for the count
+   correction. */
+static uint32_t rendercache__diffuse(rendercache *rc, float fraction)
 {
     uint32_t w = rc->width, h = rc->height, y, count = 0;
     float *cur = rc->err_rows, *next = rc->err_rows + (w + 2);
+    float amp = RENDERCACHE__MODULATION * (1.0f - fraction / RENDERCACHE__MODULATION_FADE);
+    if (amp < 0.0f) amp = 0.0f;
     memset(cur, 0, (w + 2) * sizeof *cur);
     for (y = 0; y < h; y++) {
         int dir = (y & 1u) ? -1 : 1, x = dir > 0 ? 0 : (int)w - 1, k;
@@ -1440,17 +1469,16 @@ static uint32_t rendercache__diffuse(rendercache *rc)
             float v = rc->select_v[p], e = cur[x + 1];
             unsigned char pick;
             if (v <= 0.0f || v >= 1.0f) {
-                pick = v >= 1.0f;
+                pick = v >= 1.0f;   /* decided by the threshold level; incoming error passes on */
             } else {
                 float total = v + e;
-                pick = (unsigned char)(2u | (total >= 0.5f ? 1u : 0u));
-                rc->select_v[p] = total;
+                pick = (unsigned char)(2u | (total >= rendercache__threshold(p, rc->frame, amp) ? 1u : 0u));
                 e = total - (float)(pick & 1u);
+                rc->select_v[p] = total;
             }
             rc->chosen[p] = pick;
             count += pick & 1u;
-            if (e != 0.0f)
-                rendercache__spread_error(cur, next, x, dir, k + 1 < (int)w, k > 0, y + 1 < h, e);
+            if (e != 0.0f) rendercache__spread_error(cur, next, x, dir, k + 1 < (int)w, k > 0, y + 1 < h, e);
         }
         t = cur; cur = next; next = t;
     }
@@ -1493,7 +1521,7 @@ static uint32_t rendercache__select(rendercache *rc, const float *priority, uint
     for (l = 0; l < RENDERCACHE__LEVELS; l++) positive += rc->hist[(size_t)rc->tile_count * RENDERCACHE__LEVELS + l];
     target = positive < budget ? (uint32_t)positive : budget;
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__threshold_job, &job, rc->tile_count);
-    count = rendercache__diffuse(rc);
+    count = rendercache__diffuse(rc, job.fraction);
     return rendercache__correct_count(rc, count, target);
 }
 
