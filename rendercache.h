@@ -218,11 +218,10 @@ typedef struct rendercache_stats {
     uint32_t evicted;            /* of which overwrote a point not visible in this frame */
     uint32_t rejected;           /* samples ignored since begin_frame (bad values or pixel) */
     /* seconds spent in each phase of the last frame (0 without desc.clock) */
-    double time_project;         /* ageing, projection and binning of every point */
+    double time_project;         /* projection of every point and binning by image band */
     double time_zbuffer;
-    double time_cull;
-    double time_interpolate;
-    double time_priority;
+    double time_cull;            /* depth cull, with the colour and priority of the pixels showing points */
+    double time_interpolate;     /* hole filling, with the priority of the holes */
     double time_predict;         /* rendercache_predict */
     double time_request;         /* threshold and error diffusion (all request calls) */
     double time_insert;
@@ -682,7 +681,6 @@ static void rendercache__splat_zbuffer(void *ctx, uint32_t band)
 #define RENDERCACHE__TILE_ROWS 8u            /* image rows per tile job */
 #define RENDERCACHE__LEVELS 1024u            /* priority levels of the threshold histogram */
 #define RENDERCACHE__TILE_STATS 6u           /* visible, culled, interpolated, sparse, empty, holes */
-#define RENDERCACHE__AGE_MAX 65535u
 
 /* Priority image values (WDP99 priority image, extended to [0, 1]): a point
    rises with age to POINT_MAX; holes rank above every point, the sparser the
@@ -690,6 +688,24 @@ static void rendercache__splat_zbuffer(void *ctx, uint32_t band)
 #define RENDERCACHE__PRIORITY_POINT_MAX 0.5f
 #define RENDERCACHE__PRIORITY_INTERP 0.5f    /* + up to 0.25 as the 3x3 neighbourhood empties */
 #define RENDERCACHE__PRIORITY_SPARSE 0.75f   /* + up to 0.2 as the wide window empties */
+
+/* A cache slot as the projection reads it: 16 bytes. */
+typedef struct rendercache__geo {
+    float pos[3];            /* object-space position, or the world unit direction of a background point */
+    uint32_t object;         /* object id, RENDERCACHE_MISS, or RENDERCACHE__FREE_SLOT */
+} rendercache__geo;
+
+/* The rest of a slot, read for the points that win a pixel: 32 bytes, one
+   access. A point's age is not stored but derived, so nothing is written
+   per point and frame: age = frame - birth + (motion of its object since
+   birth), the last term making points of moving objects age faster. */
+typedef struct rendercache__point {
+    float rgb[3];
+    float scale;             /* priority scale */
+    uint32_t birth;          /* frame of insertion */
+    uint32_t motion_birth;   /* the object's obj_motion at insertion */
+    uint32_t pad[2];
+} rendercache__point;
 
 struct rendercache {
     rendercache_allocator alloc;
@@ -705,13 +721,10 @@ struct rendercache {
     float depth_tolerance, predict_fraction, background[3];
     uint32_t age_ramp, moving_age_step, sparse_neighbours, wide_radius;
 
-    /* point cache, struct of arrays: the projection reads only pos and object */
-    float *pos;              /* 3 per slot: object-space position, or world unit direction (background) */
-    uint32_t *object;        /* object id, RENDERCACHE_MISS, or RENDERCACHE__FREE_SLOT */
-    float *rgb;              /* 3 per slot */
-    float *scale;            /* priority scale */
-    uint16_t *age;           /* frames since sampled (faster while moving), saturating */
-    uint32_t *seen;          /* last frame the point was shown or inserted */
+    /* point cache: the projection streams through geo, the rest is read
+       only for the points that win a pixel, one cache line each */
+    rendercache__geo *geo;
+    rendercache__point *data;
     uint32_t hand;           /* clock hand of the eviction */
     uint32_t live;
     int hand_exhausted;      /* a full turn found no invisible slot in this frame */
@@ -719,14 +732,15 @@ struct rendercache {
     /* objects */
     float *obj_world;        /* 12 per object: object to world */
     float *obj_local;        /* 12 per object: world to object */
-    float *obj_camera;       /* 12 per object: object to camera space of the view being projected */
+    float *obj_camera;       /* 12 per object: object to camera space of the current view */
+    float *obj_predicted;    /* 12 per object: object to camera space of the predicted view */
+    uint32_t *obj_motion;    /* extra age the object's points gathered while it moved */
     unsigned char *obj_moved;
 
     /* current frame */
     uint32_t frame;
     int has_frame, has_prediction;
     rendercache__view view, predicted;
-    const rendercache__view *projecting;   /* view used by the point projection */
     rendercache__splat splat;
     uint32_t *px_index;      /* per pixel: the slot shown, after the depth cull */
     float *px_depth;
@@ -780,11 +794,7 @@ static void rendercache__reset_image(rendercache *rc)
 static void rendercache__reset_points(rendercache *rc)
 {
     uint32_t i;
-    for (i = 0; i < rc->capacity; i++) {
-        rc->object[i] = RENDERCACHE__FREE_SLOT;
-        rc->seen[i] = 0;
-        rc->age[i] = 0;
-    }
+    for (i = 0; i < rc->capacity; i++) rc->geo[i].object = RENDERCACHE__FREE_SLOT;
     rc->hand = 0;
     rc->live = 0;
 }
@@ -794,8 +804,8 @@ static void rendercache__release(rendercache *rc)
     const rendercache_allocator a = rc->alloc;
     void *blocks[22];
     size_t i;
-    blocks[0] = rc->pos; blocks[1] = rc->object; blocks[2] = rc->rgb; blocks[3] = rc->scale;
-    blocks[4] = rc->age; blocks[5] = rc->seen; blocks[6] = rc->obj_world; blocks[7] = rc->obj_local;
+    blocks[0] = rc->geo; blocks[1] = rc->data; blocks[2] = rc->obj_predicted; blocks[3] = rc->obj_motion;
+    blocks[4] = NULL; blocks[5] = NULL; blocks[6] = rc->obj_world; blocks[7] = rc->obj_local;
     blocks[8] = rc->obj_camera; blocks[9] = rc->obj_moved; blocks[10] = rc->px_index;
     blocks[11] = rc->px_depth; blocks[12] = rc->image; blocks[13] = rc->priority;
     blocks[14] = rc->pred_priority; blocks[15] = rc->kind; blocks[16] = rc->count;
@@ -810,12 +820,10 @@ static int rendercache__alloc_buffers(rendercache *rc)
 {
     const rendercache_allocator *a = &rc->alloc;
     size_t n = rc->capacity, px = rc->pixel_count, no = rc->object_count;
-    rc->pos = (float *)rendercache__alloc_array(a, n, 3 * sizeof(float));
-    rc->object = (uint32_t *)rendercache__alloc_array(a, n, sizeof(uint32_t));
-    rc->rgb = (float *)rendercache__alloc_array(a, n, 3 * sizeof(float));
-    rc->scale = (float *)rendercache__alloc_array(a, n, sizeof(float));
-    rc->age = (uint16_t *)rendercache__alloc_array(a, n, sizeof(uint16_t));
-    rc->seen = (uint32_t *)rendercache__alloc_array(a, n, sizeof(uint32_t));
+    rc->geo = (rendercache__geo *)rendercache__alloc_array(a, n, sizeof(rendercache__geo));
+    rc->data = (rendercache__point *)rendercache__alloc_array(a, n, sizeof(rendercache__point));
+    rc->obj_predicted = (float *)rendercache__alloc_array(a, no, 12 * sizeof(float));
+    rc->obj_motion = (uint32_t *)rendercache__alloc_array(a, no, sizeof(uint32_t));
     rc->obj_world = (float *)rendercache__alloc_array(a, no, 12 * sizeof(float));
     rc->obj_local = (float *)rendercache__alloc_array(a, no, 12 * sizeof(float));
     rc->obj_camera = (float *)rendercache__alloc_array(a, no, 12 * sizeof(float));
@@ -832,7 +840,7 @@ static int rendercache__alloc_buffers(rendercache *rc)
     rc->select_v = (float *)rendercache__alloc_array(a, px, sizeof(float));
     rc->chosen = (unsigned char *)rendercache__alloc_array(a, px, 1);
     rc->err_rows = (float *)rendercache__alloc_array(a, 2 * ((size_t)rc->width + 2), sizeof(float));
-    if (!rc->pos || !rc->object || !rc->rgb || !rc->scale || !rc->age || !rc->seen || !rc->obj_world ||
+    if (!rc->geo || !rc->data || !rc->obj_predicted || !rc->obj_motion || !rc->obj_world ||
         !rc->obj_local || !rc->obj_camera || !rc->obj_moved || !rc->px_index || !rc->px_depth || !rc->image ||
         !rc->priority || !rc->pred_priority || !rc->kind || !rc->count || !rc->tile_stats || !rc->hist ||
         !rc->select_v || !rc->chosen || !rc->err_rows)
@@ -872,7 +880,7 @@ static int rendercache__configure(rendercache *rc, const rendercache_desc *d)
     rc->predict_fraction = rendercache__def(d->predict_fraction, 0.25f);
     rc->age_ramp = rendercache__def(d->age_ramp_frames, 32u);
     rc->moving_age_step = rendercache__def(d->moving_age_step, 4u);
-    if (rc->moving_age_step > RENDERCACHE__AGE_MAX) rc->moving_age_step = RENDERCACHE__AGE_MAX;
+    if (rc->moving_age_step > 65536u) rc->moving_age_step = 65536u;
     rc->sparse_neighbours = rendercache__def(d->sparse_neighbours, 2u);
     rc->wide_radius = rendercache__def(d->wide_radius, 3u);
     memcpy(rc->background, d->background, sizeof rc->background);
@@ -910,6 +918,7 @@ RENDERCACHE_API rendercache_result rendercache_create(const rendercache_desc *de
         rendercache__identity(rc->obj_world + 12 * (size_t)o);
         rendercache__identity(rc->obj_local + 12 * (size_t)o);
         rc->obj_moved[o] = 0;
+        rc->obj_motion[o] = 0;
     }
     rendercache__reset_points(rc);
     rendercache__reset_image(rc);
@@ -975,60 +984,64 @@ RENDERCACHE_API rendercache_result rendercache_set_object_transform(rendercache 
    structure"): age -> project -> z-buffer -> depth cull -> interpolate ->
    priority image; then requests by error diffusion.
    ---------------------------------------------------------------------- */
-/* Ageing (WDP99: the age of a point is the main measure of how likely its
-   colour is stale; points of moving objects age faster). Job per chunk. */
-static void rendercache__age_job(void *ctx, uint32_t chunk)
+/* Where a projection goes: a view and its object-to-camera matrices. */
+typedef struct rendercache__projector {
+    const rendercache *rc;
+    const rendercache__view *view;
+    const float *obj_camera;
+} rendercache__projector;
+
+/* Reprojection of one cache point (WDP99): object space -> camera space
+   through the object's composed matrix, then to a pixel; background points
+   are directions, rotated only, at depth RENDERCACHE__FAR. Returns the
+   pixel index or RENDERCACHE__NONE. */
+static uint32_t rendercache__project_point(const rendercache__projector *pr, const rendercache__geo *g, float *depth)
 {
-    rendercache *rc = (rendercache *)ctx;
-    uint32_t begin = chunk * RENDERCACHE__CHUNK, end = begin + RENDERCACHE__CHUNK, i;
-    if (end > rc->capacity) end = rc->capacity;
-    for (i = begin; i < end; i++) {
-        uint32_t o = rc->object[i], step, age;
-        if (o == RENDERCACHE__FREE_SLOT) continue;
-        step = (o != RENDERCACHE_MISS && rc->obj_moved[o]) ? rc->moving_age_step : 1u;
-        age = rc->age[i] + step;
-        rc->age[i] = (uint16_t)(age > RENDERCACHE__AGE_MAX ? RENDERCACHE__AGE_MAX : age);
+    const rendercache__view *v = pr->view;
+    float c[3], px, py;
+    if (g->object == RENDERCACHE__FREE_SLOT) return RENDERCACHE__NONE;
+    if (g->object == RENDERCACHE_MISS) {
+        rendercache__view_rotate(v, g->pos, c);
+        *depth = RENDERCACHE__FAR;
+    } else {
+        rendercache__affine(pr->obj_camera + 12 * (size_t)g->object, g->pos, c);
+        *depth = sqrtf(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
     }
+    if (!rendercache__view_to_pixel(v, c, &px, &py)) return RENDERCACHE__NONE;
+    return (uint32_t)py * v->width + (uint32_t)px;
 }
 
-/* Reprojection of cache points (the splat source): object space -> camera
-   space through the object's composed matrix; background points are
-   directions, rotated only, at depth RENDERCACHE__FAR. */
+/* The splat source of the render cache: cache slots [begin, end). */
 static void rendercache__project_points(const void *src, uint32_t begin, uint32_t end, uint32_t *pix, float *depth)
 {
-    const rendercache *rc = (const rendercache *)src;
-    const rendercache__view *v = rc->projecting;
-    uint32_t i, w = v->width;
-    for (i = begin; i < end; i++) {
-        uint32_t o = rc->object[i];
-        float c[3], px, py, d;
-        if (o == RENDERCACHE__FREE_SLOT) { pix[i - begin] = RENDERCACHE__NONE; continue; }
-        if (o == RENDERCACHE_MISS) {
-            rendercache__view_rotate(v, rc->pos + 3 * (size_t)i, c);
-            d = RENDERCACHE__FAR;
-        } else {
-            rendercache__affine(rc->obj_camera + 12 * (size_t)o, rc->pos + 3 * (size_t)i, c);
-            d = sqrtf(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-        }
-        if (!rendercache__view_to_pixel(v, c, &px, &py)) { pix[i - begin] = RENDERCACHE__NONE; continue; }
-        pix[i - begin] = (uint32_t)py * w + (uint32_t)px;
-        depth[i - begin] = d;
-    }
+    const rendercache__projector *pr = (const rendercache__projector *)src;
+    const rendercache__geo *geo = pr->rc->geo;
+    uint32_t i;
+    for (i = begin; i < end; i++) pix[i - begin] = rendercache__project_point(pr, &geo[i], &depth[i - begin]);
 }
 
-/* Projects every point into view v and z-buffers them into rc->splat. */
-static void rendercache__splat_points(rendercache *rc, const rendercache__view *v, double *t_project,
-                                      double *t_zbuffer)
+/* Object-to-camera matrices of every object for view v. */
+static void rendercache__compose_objects(const rendercache *rc, const rendercache__view *v, float *out)
 {
-    rendercache__splat_job job;
-    double t0 = rendercache__now(rc), t1;
     uint32_t o;
     for (o = 0; o < rc->object_count; o++)
-        rendercache__view_compose(v, rc->obj_world + 12 * (size_t)o, rc->obj_camera + 12 * (size_t)o);
-    rc->projecting = v;
+        rendercache__view_compose(v, rc->obj_world + 12 * (size_t)o, out + 12 * (size_t)o);
+}
+
+/* Projects every point into view v (matrices obj_camera) and z-buffers
+   them into rc->splat. */
+static void rendercache__splat_points(rendercache *rc, const rendercache__view *v, const float *obj_camera,
+                                      double *t_project, double *t_zbuffer)
+{
+    rendercache__splat_job job;
+    rendercache__projector pr;
+    double t0 = rendercache__now(rc), t1;
+    pr.rc = rc;
+    pr.view = v;
+    pr.obj_camera = obj_camera;
     job.s = &rc->splat;
     job.source = rendercache__project_points;
-    job.src = rc;
+    job.src = &pr;
     job.element_count = rc->capacity;
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__splat_project, &job, rc->chunk_count);
     rendercache__splat_offsets(&rc->splat, rc->chunk_count);
@@ -1037,6 +1050,38 @@ static void rendercache__splat_points(rendercache *rc, const rendercache__view *
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__splat_zbuffer, &job, rc->splat.band_count);
     if (t_project) *t_project += t1 - t0;
     if (t_zbuffer) *t_zbuffer += rendercache__now(rc) - t1;
+}
+
+/* Priority of a pixel showing a point (WDP99: age is the main measure of
+   how likely a colour is stale; points of moving objects age faster),
+   times its priority scale (the light-vector weight of Crespin and Peroche
+   2004, section 4.2.4), in [0, 1]. */
+static float rendercache__point_priority(const rendercache *rc, uint32_t slot)
+{
+    const rendercache__point *pt = &rc->data[slot];
+    uint32_t object = rc->geo[slot].object, age = rc->frame - pt->birth;
+    float pr;
+    if (object != RENDERCACHE_MISS) age += rc->obj_motion[object] - pt->motion_birth;
+    pr = (float)age / (float)rc->age_ramp;
+    if (pr > 1.0f) pr = 1.0f;
+    pr *= RENDERCACHE__PRIORITY_POINT_MAX * pt->scale;
+    return pr > 1.0f ? 1.0f : pr;
+}
+
+/* Priority of a hole (WDP99, Crespin-Peroche 4.1): the fewer points around
+   it, the higher; nothing near gives the maximum. */
+static float rendercache__hole_priority(const rendercache *rc, unsigned char kind, uint32_t count)
+{
+    float window;
+    switch (kind) {
+    case RENDERCACHE_PIXEL_INTERPOLATED:
+        return RENDERCACHE__PRIORITY_INTERP + 0.25f * (float)(8u - count) / 8.0f;
+    case RENDERCACHE_PIXEL_SPARSE:
+        window = (float)((2 * rc->wide_radius + 1) * (2 * rc->wide_radius + 1) - 1);
+        return RENDERCACHE__PRIORITY_SPARSE + 0.2f * (1.0f - (float)count / window);
+    default:
+        return 1.0f;
+    }
 }
 
 /* Offsets of the 8 neighbours in the order W E N S NW NE SW SE, so that
@@ -1070,8 +1115,8 @@ static int rendercache__occluded(const rendercache__splat *s, uint32_t x, uint32
     return d > (sum / (float)n) * tol;
 }
 
-/* Job per tile: depth cull; surviving points give their colour to the
-   image and are marked seen (they are not evicted this frame). */
+/* Job per tile: depth cull; surviving points give their colour and
+   priority to the pixel. */
 static void rendercache__cull_job(void *ctx, uint32_t tile)
 {
     rendercache *rc = (rendercache *)ctx;
@@ -1090,12 +1135,10 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
             rc->px_index[p] = slot;
             if (slot == RENDERCACHE__NONE) { rc->px_depth[p] = FLT_MAX; continue; }
             rc->px_depth[p] = s->depth[p];
-            rc->image[3 * (size_t)p + 0] = rc->rgb[3 * (size_t)slot + 0];
-            rc->image[3 * (size_t)p + 1] = rc->rgb[3 * (size_t)slot + 1];
-            rc->image[3 * (size_t)p + 2] = rc->rgb[3 * (size_t)slot + 2];
+            memcpy(rc->image + 3 * (size_t)p, rc->data[slot].rgb, 3 * sizeof(float));
+            rc->priority[p] = rendercache__point_priority(rc, slot);
             rc->kind[p] = RENDERCACHE_PIXEL_POINT;
             rc->count[p] = 0;
-            rc->seen[slot] = rc->frame;
             visible++;
         }
     }
@@ -1153,7 +1196,7 @@ static uint32_t rendercache__interpolate(const rendercache *rc, uint32_t x, uint
     return n;
 }
 
-/* Job per tile: fill the holes left by projection and cull. */
+/* Job per tile: fill the holes left by projection and cull, and rank them. */
 static void rendercache__interpolate_job(void *ctx, uint32_t tile)
 {
     rendercache *rc = (rendercache *)ctx;
@@ -1181,44 +1224,13 @@ static void rendercache__interpolate_job(void *ctx, uint32_t tile)
                 }
             }
             rc->count[p] = (unsigned char)(n > 255 ? 255 : n);
+            rc->priority[p] = rendercache__hole_priority(rc, rc->kind[p], rc->count[p]);
             memcpy(rc->image + 3 * (size_t)p, rgb, sizeof rgb);
         }
     }
     stats[2] = counts[0];
     stats[3] = counts[1];
     stats[4] = counts[2];
-}
-
-/* The priority image (WDP99; Crespin and Peroche 2004 section 4.1): a
-   point's priority grows with its age, times its priority scale (the
-   light-vector weight of section 4.2.4); a hole's priority grows as fewer
-   points surround it; a pixel with nothing near gets the maximum. */
-static float rendercache__pixel_priority(const rendercache *rc, uint32_t p)
-{
-    uint32_t slot = rc->px_index[p];
-    float window, pr;
-    switch (rc->kind[p]) {
-    case RENDERCACHE_PIXEL_POINT:
-        pr = (float)rc->age[slot] / (float)rc->age_ramp;
-        if (pr > 1.0f) pr = 1.0f;
-        pr *= RENDERCACHE__PRIORITY_POINT_MAX * rc->scale[slot];
-        return pr > 1.0f ? 1.0f : pr;
-    case RENDERCACHE_PIXEL_INTERPOLATED:
-        return RENDERCACHE__PRIORITY_INTERP + 0.25f * (float)(8u - rc->count[p]) / 8.0f;
-    case RENDERCACHE_PIXEL_SPARSE:
-        window = (float)((2 * rc->wide_radius + 1) * (2 * rc->wide_radius + 1) - 1);
-        return RENDERCACHE__PRIORITY_SPARSE + 0.2f * (1.0f - (float)rc->count[p] / window);
-    default:
-        return 1.0f;
-    }
-}
-
-static void rendercache__priority_job(void *ctx, uint32_t tile)
-{
-    rendercache *rc = (rendercache *)ctx;
-    uint32_t p0 = tile * RENDERCACHE__TILE_ROWS * rc->width, p1 = p0 + RENDERCACHE__TILE_ROWS * rc->width, p;
-    if (p1 > rc->pixel_count) p1 = rc->pixel_count;
-    for (p = p0; p < p1; p++) rc->priority[p] = rendercache__pixel_priority(rc, p);
 }
 
 /* Sums one column of the per-tile statistics. */
@@ -1235,41 +1247,35 @@ static void rendercache__start_stats(rendercache *rc)
     s->frame = rc->frame;
     s->requested = s->predicted = s->inserted = s->replaced = s->evicted = s->rejected = 0;
     s->time_project = s->time_zbuffer = s->time_cull = s->time_interpolate = 0.0;
-    s->time_priority = s->time_predict = s->time_request = s->time_insert = 0.0;
+    s->time_predict = s->time_request = s->time_insert = 0.0;
 }
 
 RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, const rendercache_camera *camera)
 {
     rendercache__view v;
-    double t0, t1, t2, t3;
+    double t1, t2;
     uint32_t o;
     if (!rc || !rendercache__view_init(&v, camera) || camera->width != rc->width || camera->height != rc->height) {
         if (rc && rc->log) rc->log(rc->log_user, "rendercache_begin_frame: invalid camera or image size");
         return RENDERCACHE_ERROR_INVALID_ARGUMENT;
     }
     rc->frame++;
-    if (rc->frame == 0) { /* the stamp wrapped: no stale stamp may look current */
-        memset(rc->seen, 0, rc->capacity * sizeof *rc->seen);
-        rc->frame = 1;
-    }
     rc->view = v;
     rc->has_prediction = 0;
     rc->hand_exhausted = 0;
     rendercache__start_stats(rc);
-    t0 = rendercache__now(rc);
-    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__age_job, rc, rc->chunk_count);
-    rc->stats.time_project = rendercache__now(rc) - t0;
-    rendercache__splat_points(rc, &rc->view, &rc->stats.time_project, &rc->stats.time_zbuffer);
+    for (o = 0; o < rc->object_count; o++) {   /* points of moving objects age faster */
+        if (rc->obj_moved[o]) rc->obj_motion[o] += rc->moving_age_step - 1u;
+        rc->obj_moved[o] = 0;
+    }
+    rendercache__compose_objects(rc, &rc->view, rc->obj_camera);
+    rendercache__splat_points(rc, &rc->view, rc->obj_camera, &rc->stats.time_project, &rc->stats.time_zbuffer);
     t1 = rendercache__now(rc);
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__cull_job, rc, rc->tile_count);
     t2 = rendercache__now(rc);
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__interpolate_job, rc, rc->tile_count);
-    t3 = rendercache__now(rc);
-    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__priority_job, rc, rc->tile_count);
     rc->stats.time_cull = t2 - t1;
-    rc->stats.time_interpolate = t3 - t2;
-    rc->stats.time_priority = rendercache__now(rc) - t3;
-    for (o = 0; o < rc->object_count; o++) rc->obj_moved[o] = 0;
+    rc->stats.time_interpolate = rendercache__now(rc) - t2;
     rc->stats.projected = rc->splat.projected;
     rc->stats.visible = rendercache__tile_sum(rc, 0);
     rc->stats.culled = rendercache__tile_sum(rc, 1);
@@ -1316,7 +1322,8 @@ RENDERCACHE_API rendercache_result rendercache_predict(rendercache *rc, const re
         return RENDERCACHE_ERROR_INVALID_ARGUMENT;
     t0 = rendercache__now(rc);
     rc->predicted = v;
-    rendercache__splat_points(rc, &rc->predicted, NULL, NULL);
+    rendercache__compose_objects(rc, &rc->predicted, rc->obj_predicted);
+    rendercache__splat_points(rc, &rc->predicted, rc->obj_predicted, NULL, NULL);
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__predict_job, rc, rc->tile_count);
     rc->pred_holes = rendercache__tile_sum(rc, 5);
     rc->has_prediction = 1;
@@ -1406,26 +1413,40 @@ static void rendercache__find_cut(rendercache *rc, uint32_t budget, uint32_t *cu
     }
 }
 
-/* Hands pixel p's error e to its unvisited neighbours with the
+/* Whether pixel q takes part in the diffusion (its value is fractional). */
+static int rendercache__fractional(const rendercache *rc, uint32_t q)
+{
+    float v = rc->select_v[q];
+    return v > 0.0f && v < 1.0f;
+}
+
+/* Hands the error e of pixel (x, y) to its unvisited neighbours with the
    Floyd-Steinberg weights 7/16 ahead, 3/16 behind-below, 5/16 below, 1/16
    ahead-below. A weight whose neighbour lies outside the image goes to the
-   next pixel in serpentine order instead (below at a row's end, ahead on
-   the last row), so no error is lost. Returns e when no pixel follows. */
-static float rendercache__spread_error(float *cur, float *next, int x, int dir, int ahead_ok, int behind_ok,
-                                       int below_ok, float e)
+   pixel below instead (ahead on the last row); then only fractional
+   neighbours keep their weight, renormalised, so error never lands on a
+   pixel whose choice is already made (it would be lost there). Returns the
+   part that found no taker, for the next fractional pixel in scan order. */
+static float rendercache__spread_error(const rendercache *rc, float *cur, float *next, uint32_t y, int x, int dir,
+                                       float e)
 {
-    float s = e * (1.0f / 16.0f), ahead = 7.0f, behind_below = 3.0f, below = 5.0f, ahead_below = 1.0f;
-    if (!below_ok) {
-        if (!ahead_ok) return e;
-        cur[x + dir + 1] += e;
-        return 0.0f;
-    }
-    if (!ahead_ok) { below += ahead + ahead_below; ahead = ahead_below = 0.0f; }
-    if (!behind_ok) { below += behind_below; behind_below = 0.0f; }
-    cur[x + dir + 1] += ahead * s;
-    next[x - dir + 1] += behind_below * s;
-    next[x + 1] += below * s;
-    next[x + dir + 1] += ahead_below * s;
+    int w = (int)rc->width, ax = x + dir, bx = x - dir, below = y + 1 < rc->height;
+    float wt[4] = { 7.0f, 3.0f, 5.0f, 1.0f }, sum, s;   /* ahead, behind-below, below, ahead-below */
+    uint32_t row = y * rc->width, row_below = row + rc->width;
+    if (ax < 0 || ax >= w) { wt[2] += wt[0] + wt[3]; wt[0] = wt[3] = 0.0f; }
+    if (bx < 0 || bx >= w) { wt[2] += wt[1]; wt[1] = 0.0f; }
+    if (!below) { wt[0] += wt[1] + wt[2] + wt[3]; wt[1] = wt[2] = wt[3] = 0.0f; }
+    if (wt[0] > 0.0f && !rendercache__fractional(rc, row + (uint32_t)ax)) wt[0] = 0.0f;
+    if (wt[1] > 0.0f && !rendercache__fractional(rc, row_below + (uint32_t)bx)) wt[1] = 0.0f;
+    if (wt[2] > 0.0f && !rendercache__fractional(rc, row_below + (uint32_t)x)) wt[2] = 0.0f;
+    if (wt[3] > 0.0f && !rendercache__fractional(rc, row_below + (uint32_t)ax)) wt[3] = 0.0f;
+    sum = wt[0] + wt[1] + wt[2] + wt[3];
+    if (sum == 0.0f) return e;
+    s = e / sum;
+    if (wt[0] > 0.0f) cur[ax + 1] += wt[0] * s;
+    if (wt[1] > 0.0f) next[bx + 1] += wt[1] * s;
+    if (wt[2] > 0.0f) next[x + 1] += wt[2] * s;
+    if (wt[3] > 0.0f) next[ax + 1] += wt[3] * s;
     return 0.0f;
 }
 
@@ -1450,13 +1471,15 @@ static float rendercache__threshold(uint32_t p, uint32_t frame, float amp)
 }
 
 /* Serial serpentine Floyd-Steinberg pass over rc->select_v (fraction: the
-   value of the cut level); marks rc->chosen and returns the count.
-   Fractional pixels keep value + incoming error in select_v for the count
-   correction. */
+   value of the cut level); marks rc->chosen and returns the count. Pixels
+   of value 0 or 1 are decided outright; the error moves among the
+   fractional pixels only, so their count is their total value up to the
+   last carry. Fractional pixels keep value + incoming error in select_v
+   for the count correction. */
 static uint32_t rendercache__diffuse(rendercache *rc, float fraction)
 {
     uint32_t w = rc->width, h = rc->height, y, count = 0;
-    float *cur = rc->err_rows, *next = rc->err_rows + (w + 2);
+    float *cur = rc->err_rows, *next = rc->err_rows + (w + 2), carry = 0.0f;
     float amp = RENDERCACHE__MODULATION * (1.0f - fraction / RENDERCACHE__MODULATION_FADE);
     if (amp < 0.0f) amp = 0.0f;
     memset(cur, 0, (w + 2) * sizeof *cur);
@@ -1466,19 +1489,20 @@ static uint32_t rendercache__diffuse(rendercache *rc, float fraction)
         memset(next, 0, (w + 2) * sizeof *next);
         for (k = 0; k < (int)w; k++, x += dir) {
             uint32_t p = y * w + (uint32_t)x;
-            float v = rc->select_v[p], e = cur[x + 1];
+            float v = rc->select_v[p], total, e;
             unsigned char pick;
             if (v <= 0.0f || v >= 1.0f) {
-                pick = v >= 1.0f;   /* decided by the threshold level; incoming error passes on */
-            } else {
-                float total = v + e;
-                pick = (unsigned char)(2u | (total >= rendercache__threshold(p, rc->frame, amp) ? 1u : 0u));
-                e = total - (float)(pick & 1u);
-                rc->select_v[p] = total;
+                rc->chosen[p] = v >= 1.0f;
+                count += v >= 1.0f;
+                continue;
             }
-            rc->chosen[p] = pick;
-            count += pick & 1u;
-            if (e != 0.0f) rendercache__spread_error(cur, next, x, dir, k + 1 < (int)w, k > 0, y + 1 < h, e);
+            total = v + cur[x + 1] + carry;
+            pick = total >= rendercache__threshold(p, rc->frame, amp) ? 1u : 0u;
+            e = total - (float)pick;
+            rc->select_v[p] = total;
+            rc->chosen[p] = (unsigned char)(2u | pick);
+            count += pick;
+            carry = rendercache__spread_error(rc, cur, next, y, x, dir, e);
         }
         t = cur; cur = next; next = t;
     }
@@ -1576,18 +1600,35 @@ RENDERCACHE_API rendercache_result rendercache_request(rendercache *rc, renderca
 /* ======================================================================
    15. insertion and eviction
    ---------------------------------------------------------------------- */
+/* Whether slot shows in the current frame: inserted in it, or its point
+   projects to a pixel that shows it. Checked only for the slots the clock
+   hand passes, so nothing is written per point and frame. */
+static int rendercache__slot_in_use(const rendercache *rc, uint32_t slot)
+{
+    rendercache__projector pr;
+    float depth;
+    uint32_t p;
+    if (rc->data[slot].birth == rc->frame) return 1;
+    pr.rc = rc;
+    pr.view = &rc->view;
+    pr.obj_camera = rc->obj_camera;
+    p = rendercache__project_point(&pr, &rc->geo[slot], &depth);
+    return p != RENDERCACHE__NONE && rc->px_index[p] == slot;
+}
+
 /* Eviction (clock, second chance): the hand walks the slots in the order
    they were filled, so the slot under it holds the oldest insertion; a
    point shown in this frame is skipped (still useful), a free slot or a
-   point not visible is taken. When a whole turn finds nothing, the cache
-   is smaller than what is visible and the oldest slot is taken anyway. */
+   point not visible (off screen, hidden, culled) is taken. When a whole
+   turn finds nothing, the cache is smaller than what is visible and the
+   oldest slot is taken anyway. */
 static uint32_t rendercache__victim(rendercache *rc)
 {
     uint32_t scanned, slot;
     for (scanned = 0; !rc->hand_exhausted && scanned < rc->capacity; scanned++) {
         slot = rc->hand;
         rc->hand = slot + 1 == rc->capacity ? 0 : slot + 1;
-        if (rc->object[slot] == RENDERCACHE__FREE_SLOT || rc->seen[slot] != rc->frame) return slot;
+        if (rc->geo[slot].object == RENDERCACHE__FREE_SLOT || !rendercache__slot_in_use(rc, slot)) return slot;
     }
     rc->hand_exhausted = 1;
     slot = rc->hand;
@@ -1609,8 +1650,10 @@ static int rendercache__sample_valid(const rendercache *rc, const rendercache_sa
 /* Stores sample s in slot; returns its depth from the eye of view v. */
 static float rendercache__store(rendercache *rc, uint32_t slot, const rendercache_sample *s, const rendercache__view *v)
 {
-    float *pos = rc->pos + 3 * (size_t)slot, d;
-    if (rc->object[slot] == RENDERCACHE__FREE_SLOT) rc->live++;
+    rendercache__geo *g = &rc->geo[slot];
+    rendercache__point *pt = &rc->data[slot];
+    float *pos = g->pos, d;
+    if (g->object == RENDERCACHE__FREE_SLOT) rc->live++;
     if (s->object == RENDERCACHE_MISS) {
         rendercache__view_ray(v, (float)s->x + 0.5f, (float)s->y + 0.5f, pos);
         d = RENDERCACHE__FAR;
@@ -1619,11 +1662,12 @@ static float rendercache__store(rendercache *rc, uint32_t slot, const rendercach
         rendercache__affine(rc->obj_local + 12 * (size_t)s->object, s->position, pos);
         d = sqrtf(dx * dx + dy * dy + dz * dz);
     }
-    rc->object[slot] = s->object;
-    memcpy(rc->rgb + 3 * (size_t)slot, s->rgb, 3 * sizeof(float));
-    rc->scale[slot] = s->priority_scale > 0.0f ? s->priority_scale : 1.0f;
-    rc->age[slot] = 0;
-    rc->seen[slot] = rc->frame;   /* new points are not evicted in their own frame */
+    g->object = s->object;
+    memcpy(pt->rgb, s->rgb, sizeof pt->rgb);
+    pt->scale = s->priority_scale > 0.0f ? s->priority_scale : 1.0f;
+    pt->birth = rc->frame;   /* age 0; new points are not evicted in their own frame */
+    pt->motion_birth = s->object == RENDERCACHE_MISS ? 0u : rc->obj_motion[s->object];
+    pt->pad[0] = pt->pad[1] = 0;
     return d;
 }
 
@@ -1657,7 +1701,7 @@ RENDERCACHE_API rendercache_result rendercache_insert(rendercache *rc, const ren
             rc->stats.replaced++;
         } else {
             slot = rendercache__victim(rc);
-            if (rc->object[slot] != RENDERCACHE__FREE_SLOT) rc->stats.evicted++;
+            if (rc->geo[slot].object != RENDERCACHE__FREE_SLOT) rc->stats.evicted++;
         }
         d = rendercache__store(rc, slot, s, v);
         if (!predicted) rendercache__show(rc, p, slot, d, s->rgb);
