@@ -519,22 +519,39 @@ static void rendercache__view_compose(const rendercache__view *v, const float m[
 
 /* ======================================================================
    9. splat: many elements (cache points, range-image pixels) into one
-   z-buffer, keeping the nearest element per pixel. Parallel and
-   deterministic: jobs project fixed chunks of elements and count them per
-   band of pixels (a band is a power-of-two range of pixel indices, several
-   rows); a prefix sum gives every (chunk, band) pair its own output range;
-   jobs scatter the elements into their bands; then one job per band runs
-   the depth test over its own pixels. Within a band the elements keep their
-   index order, so equal depths resolve to the lowest element index whatever
-   the thread count. This is the tiled z-buffer of Walter et al. 2002, and
-   the reprojection step of Walter et al. 1999.
+   z-buffer, keeping the nearest element per pixel, with a payload of four
+   floats per element (colour and one more value) carried along so that the
+   winners' data is read from memory laid out by image band, not gathered
+   from wherever the elements live (Walter et al. 2002 keep the cache in
+   image tiles for the same reason).
+   Parallel and deterministic: one job per fixed chunk of elements projects
+   them, counts them per band of pixels (a band is a power-of-two range of
+   pixel indices, several rows) and sorts them by band into the chunk's own
+   part of the bin arrays; then one job per band runs the depth test over
+   its pixels, visiting the chunks in order. Elements of a band are thus met
+   in index order, so equal depths resolve to the lowest element index
+   whatever the thread count. This is the reprojection and z-buffer step of
+   Walter et al. 1999.
    ---------------------------------------------------------------------- */
-#define RENDERCACHE__CHUNK 16384u   /* elements per projection job */
+#define RENDERCACHE__CHUNK 8192u    /* elements per projection job */
+#define RENDERCACHE__BATCH 256u     /* elements per source call */
 
-/* Fills pix[0..end-begin) and depth[...] for elements [begin, end): pixel
-   index y * width + x, or RENDERCACHE__NONE when the element is not seen. */
-typedef void (*rendercache__source_fn)(const void *src, uint32_t begin, uint32_t end,
-                                       uint32_t *pix, float *depth);
+/* Projects elements [begin, end): pix[i - begin] = y * width + x of the
+   pixel it lands in, or RENDERCACHE__NONE; depth[...] its distance. */
+typedef void (*rendercache__source_fn)(const void *src, uint32_t begin, uint32_t end, uint32_t *pix, float *depth);
+/* Payload of elements [begin, end): 4 floats each, for those whose pix is
+   not RENDERCACHE__NONE. */
+typedef void (*rendercache__payload_fn)(const void *src, uint32_t begin, uint32_t end, const uint32_t *pix,
+                                        float *payload);
+
+/* One element in a band's bin: 32 bytes, read in one go by the z-buffer. */
+typedef struct rendercache__bin {
+    uint32_t pix;
+    float depth;
+    uint32_t element;
+    uint32_t pad;
+    float payload[4];
+} rendercache__bin;
 
 typedef struct rendercache__splat {
     uint32_t width, height, pixel_count;
@@ -542,13 +559,11 @@ typedef struct rendercache__splat {
     uint32_t element_capacity, chunk_capacity;
     float *depth;            /* per pixel: nearest depth, FLT_MAX when empty */
     uint32_t *index;         /* per pixel: nearest element, RENDERCACHE__NONE when empty */
-    uint32_t *elem_pix;      /* per element */
+    float *payload;          /* per pixel: 4 floats of the nearest element */
+    uint32_t *elem_pix;      /* per element: projection kept between a chunk's two passes */
     float *elem_depth;
-    uint32_t *bin_pix;       /* per projected element, grouped by band */
-    float *bin_depth;
-    uint32_t *bin_index;
-    uint32_t *counts;        /* chunk_capacity * band_count: counts, then write offsets */
-    uint32_t *band_start;    /* band_count + 1 */
+    rendercache__bin *bins;  /* chunk c owns [c * CHUNK, (c + 1) * CHUNK), sorted by band */
+    uint32_t *band_offset;   /* per chunk, band_count + 1 starts of the bands in its bins */
     uint32_t projected;      /* elements that landed in the image in the last run */
 } rendercache__splat;
 
@@ -556,13 +571,11 @@ static void rendercache__splat_free(rendercache__splat *s, const rendercache_all
 {
     rendercache__free(a, s->depth);
     rendercache__free(a, s->index);
+    rendercache__free(a, s->payload);
     rendercache__free(a, s->elem_pix);
     rendercache__free(a, s->elem_depth);
-    rendercache__free(a, s->bin_pix);
-    rendercache__free(a, s->bin_depth);
-    rendercache__free(a, s->bin_index);
-    rendercache__free(a, s->counts);
-    rendercache__free(a, s->band_start);
+    rendercache__free(a, s->bins);
+    rendercache__free(a, s->band_offset);
     memset(s, 0, sizeof *s);
 }
 
@@ -572,27 +585,29 @@ static int rendercache__splat_alloc(rendercache__splat *s, uint32_t width, uint3
                                     const rendercache_allocator *a)
 {
     uint32_t shift = 0;
+    size_t table;
     memset(s, 0, sizeof *s);
     s->width = width;
     s->height = height;
     s->pixel_count = width * height;
-    while (shift < 31 && (1u << shift) < 8u * width) shift++;   /* bands of at least 8 rows */
-    s->band_shift = shift;
-    s->band_count = (uint32_t)(((uint64_t)s->pixel_count + (1u << shift) - 1) >> shift);
     s->element_capacity = capacity;
     s->chunk_capacity = (uint32_t)(((uint64_t)capacity + RENDERCACHE__CHUNK - 1) / RENDERCACHE__CHUNK);
     if (s->chunk_capacity == 0) s->chunk_capacity = 1;
+    /* bands of at least 8 rows and 4096 pixels, and a band table of at most 2^22 entries */
+    while (shift < 31 && ((1u << shift) < 8u * width || (1u << shift) < 4096u ||
+                          ((uint64_t)s->pixel_count >> shift) * s->chunk_capacity > (1u << 22)))
+        shift++;
+    s->band_shift = shift;
+    s->band_count = (uint32_t)(((uint64_t)s->pixel_count + (1u << shift) - 1) >> shift);
+    table = (size_t)s->chunk_capacity * (s->band_count + 1);
     s->depth = (float *)rendercache__alloc_array(a, s->pixel_count, sizeof(float));
     s->index = (uint32_t *)rendercache__alloc_array(a, s->pixel_count, sizeof(uint32_t));
+    s->payload = (float *)rendercache__alloc_array(a, s->pixel_count, 4 * sizeof(float));
     s->elem_pix = (uint32_t *)rendercache__alloc_array(a, capacity, sizeof(uint32_t));
     s->elem_depth = (float *)rendercache__alloc_array(a, capacity, sizeof(float));
-    s->bin_pix = (uint32_t *)rendercache__alloc_array(a, capacity, sizeof(uint32_t));
-    s->bin_depth = (float *)rendercache__alloc_array(a, capacity, sizeof(float));
-    s->bin_index = (uint32_t *)rendercache__alloc_array(a, capacity, sizeof(uint32_t));
-    s->counts = (uint32_t *)rendercache__alloc_array(a, (size_t)s->chunk_capacity * s->band_count, sizeof(uint32_t));
-    s->band_start = (uint32_t *)rendercache__alloc_array(a, (size_t)s->band_count + 1, sizeof(uint32_t));
-    if (!s->depth || !s->index || !s->elem_pix || !s->elem_depth || !s->bin_pix || !s->bin_depth ||
-        !s->bin_index || !s->counts || !s->band_start) {
+    s->bins = (rendercache__bin *)rendercache__alloc_array(a, capacity, sizeof(rendercache__bin));
+    s->band_offset = (uint32_t *)rendercache__alloc_array(a, table, sizeof(uint32_t));
+    if (!s->depth || !s->index || !s->payload || !s->elem_pix || !s->elem_depth || !s->bins || !s->band_offset) {
         rendercache__splat_free(s, a);
         return -1;
     }
@@ -602,76 +617,104 @@ static int rendercache__splat_alloc(rendercache__splat *s, uint32_t width, uint3
 typedef struct rendercache__splat_job {
     rendercache__splat *s;
     rendercache__source_fn source;
+    rendercache__payload_fn payload;   /* NULL: no payload */
     const void *src;
-    uint32_t element_count;
+    uint32_t element_count, chunk_count;
 } rendercache__splat_job;
 
-/* Job per chunk: project, then count the chunk's elements per band. */
-static void rendercache__splat_project(void *ctx, uint32_t chunk)
+/* Job per chunk: project the chunk and count it per band, turn the counts
+   into band ends, then scatter it into its bins back to front, band by
+   band, so that the table ends up holding the band starts. The chunk's
+   projection stays in cache between the two passes; the payload is asked
+   for in the second, batch by batch. */
+static void rendercache__splat_chunk(void *ctx, uint32_t chunk)
 {
     const rendercache__splat_job *j = (const rendercache__splat_job *)ctx;
     rendercache__splat *s = j->s;
-    uint32_t begin = chunk * RENDERCACHE__CHUNK, end = begin + RENDERCACHE__CHUNK, i;
-    uint32_t *counts = s->counts + (size_t)chunk * s->band_count;
+    float payload[4 * RENDERCACHE__BATCH];
+    uint32_t *off = s->band_offset + (size_t)chunk * (s->band_count + 1), base = chunk * RENDERCACHE__CHUNK;
+    uint32_t begin = base, end = base + RENDERCACHE__CHUNK, b, i, total = 0, shift = s->band_shift;
+    uint32_t *pix = s->elem_pix;
+    float *depth = s->elem_depth;
+    rendercache__bin *bins = s->bins + base;
     if (end > j->element_count) end = j->element_count;
-    j->source(j->src, begin, end, s->elem_pix + begin, s->elem_depth + begin);
-    memset(counts, 0, s->band_count * sizeof *counts);
+    memset(off, 0, (s->band_count + 1) * sizeof *off);
+    j->source(j->src, begin, end, pix + begin, depth + begin);
     for (i = begin; i < end; i++)
-        if (s->elem_pix[i] != RENDERCACHE__NONE) counts[s->elem_pix[i] >> s->band_shift]++;
-}
-
-/* Serial: counts become write offsets, band by band, chunk by chunk. */
-static void rendercache__splat_offsets(rendercache__splat *s, uint32_t chunk_count)
-{
-    uint32_t b, c, total = 0;
-    for (b = 0; b < s->band_count; b++) {
-        s->band_start[b] = total;
-        for (c = 0; c < chunk_count; c++) {
-            uint32_t *slot = &s->counts[(size_t)c * s->band_count + b];
-            uint32_t n = *slot;
-            *slot = total;
-            total += n;
+        if (pix[i] != RENDERCACHE__NONE) off[pix[i] >> shift]++;
+    for (b = 0; b <= s->band_count; b++) {   /* counts -> ends of the bands */
+        total += off[b];
+        off[b] = total;
+    }
+    for (b = end; b > begin;) {
+        uint32_t n = b - begin < RENDERCACHE__BATCH ? b - begin : RENDERCACHE__BATCH;
+        b -= n;
+        if (j->payload) j->payload(j->src, b, b + n, pix + b, payload);
+        for (i = b + n; i-- > b;) {
+            rendercache__bin *r;
+            if (pix[i] == RENDERCACHE__NONE) continue;
+            r = &bins[--off[pix[i] >> shift]];
+            r->pix = pix[i];
+            r->depth = depth[i];
+            r->element = i;
+            r->pad = 0;
+            if (j->payload) memcpy(r->payload, payload + 4 * (i - b), sizeof r->payload);
         }
     }
-    s->band_start[s->band_count] = total;
-    s->projected = total;
 }
 
-/* Job per chunk: scatter the chunk's elements into their bands. */
-static void rendercache__splat_scatter(void *ctx, uint32_t chunk)
-{
-    const rendercache__splat_job *j = (const rendercache__splat_job *)ctx;
-    rendercache__splat *s = j->s;
-    uint32_t begin = chunk * RENDERCACHE__CHUNK, end = begin + RENDERCACHE__CHUNK, i;
-    uint32_t *offset = s->counts + (size_t)chunk * s->band_count;
-    if (end > j->element_count) end = j->element_count;
-    for (i = begin; i < end; i++) {
-        uint32_t p = s->elem_pix[i], k;
-        if (p == RENDERCACHE__NONE) continue;
-        k = offset[p >> s->band_shift]++;
-        s->bin_pix[k] = p;
-        s->bin_depth[k] = s->elem_depth[i];
-        s->bin_index[k] = i;
-    }
-}
-
-/* Job per band: the depth test, nearest element per pixel. */
+/* Job per band: the depth test, nearest element per pixel; its payload is
+   copied as it wins, while the band's bins stream through the cache. */
 static void rendercache__splat_zbuffer(void *ctx, uint32_t band)
 {
-    rendercache__splat *s = ((const rendercache__splat_job *)ctx)->s;
-    uint32_t lo = band << s->band_shift, hi = lo + (1u << s->band_shift), k;
+    const rendercache__splat_job *j = (const rendercache__splat_job *)ctx;
+    rendercache__splat *s = j->s;
+    uint32_t lo = band << s->band_shift, hi = lo + (1u << s->band_shift), c, k;
+    float *depth = s->depth, *payload = s->payload;
+    uint32_t *index = s->index;
+    int with_payload = j->payload != NULL;
     if (hi > s->pixel_count || hi < lo) hi = s->pixel_count;
     for (k = lo; k < hi; k++) {
-        s->depth[k] = FLT_MAX;
-        s->index[k] = RENDERCACHE__NONE;
+        depth[k] = FLT_MAX;
+        index[k] = RENDERCACHE__NONE;
     }
-    for (k = s->band_start[band]; k < s->band_start[band + 1]; k++) {
-        uint32_t p = s->bin_pix[k];
-        if (s->bin_depth[k] < s->depth[p]) {
-            s->depth[p] = s->bin_depth[k];
-            s->index[p] = s->bin_index[k];
+    for (c = 0; c < j->chunk_count; c++) {
+        const uint32_t *off = s->band_offset + (size_t)c * (s->band_count + 1);
+        const rendercache__bin *r = s->bins + (size_t)c * RENDERCACHE__CHUNK + off[band];
+        const rendercache__bin *end = s->bins + (size_t)c * RENDERCACHE__CHUNK + off[band + 1];
+        for (; r < end; r++) {
+            uint32_t p = r->pix;
+            if (r->depth < depth[p]) {
+                depth[p] = r->depth;
+                index[p] = r->element;
+                if (with_payload) memcpy(payload + 4 * (size_t)p, r->payload, 4 * sizeof(float));
+            }
         }
     }
+}
+
+/* Runs the splat over elements [0, count) (count <= element capacity). */
+static void rendercache__splat_run(rendercache__splat *s, void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t),
+                                   void *user, rendercache__source_fn source, rendercache__payload_fn payload,
+                                   const void *src, uint32_t count, double (*clock)(void *), void *clock_user,
+                                   double *t_project, double *t_zbuffer)
+{
+    rendercache__splat_job job;
+    double t0 = clock ? clock(clock_user) : 0.0, t1;
+    uint32_t c;
+    job.s = s;
+    job.source = source;
+    job.src = src;
+    job.element_count = count;
+    job.chunk_count = (count + RENDERCACHE__CHUNK - 1) / RENDERCACHE__CHUNK;
+    job.payload = payload;
+    rendercache__run_jobs(parallel_for, user, rendercache__splat_chunk, &job, job.chunk_count);
+    s->projected = 0;
+    for (c = 0; c < job.chunk_count; c++) s->projected += s->band_offset[(size_t)c * (s->band_count + 1) + s->band_count];
+    t1 = clock ? clock(clock_user) : 0.0;
+    rendercache__run_jobs(parallel_for, user, rendercache__splat_zbuffer, &job, s->band_count);
+    if (t_project) *t_project += t1 - t0;
+    if (t_zbuffer) *t_zbuffer += (clock ? clock(clock_user) : 0.0) - t1;
 }
 
 /* ======================================================================
@@ -695,8 +738,8 @@ typedef struct rendercache__geo {
     uint32_t object;         /* object id, RENDERCACHE_MISS, or RENDERCACHE__FREE_SLOT */
 } rendercache__geo;
 
-/* The rest of a slot, read for the points that win a pixel: 32 bytes, one
-   access. A point's age is not stored but derived, so nothing is written
+/* The rest of a slot, read for the points that land in the image: 24
+   bytes. A point's age is not stored but derived, so nothing is written
    per point and frame: age = frame - birth + (motion of its object since
    birth), the last term making points of moving objects age faster. */
 typedef struct rendercache__point {
@@ -704,7 +747,6 @@ typedef struct rendercache__point {
     float scale;             /* priority scale */
     uint32_t birth;          /* frame of insertion */
     uint32_t motion_birth;   /* the object's obj_motion at insertion */
-    uint32_t pad[2];
 } rendercache__point;
 
 struct rendercache {
@@ -717,12 +759,12 @@ struct rendercache {
     void *log_user;
 
     uint32_t width, height, pixel_count, tile_count;
-    uint32_t capacity, chunk_count, object_count;
+    uint32_t capacity, object_count;
     float depth_tolerance, predict_fraction, background[3];
     uint32_t age_ramp, moving_age_step, sparse_neighbours, wide_radius;
 
-    /* point cache: the projection streams through geo, the rest is read
-       only for the points that win a pixel, one cache line each */
+    /* point cache: slot order is insertion order; the projection streams
+       through both arrays */
     rendercache__geo *geo;
     rendercache__point *data;
     uint32_t hand;           /* clock hand of the eviction */
@@ -874,7 +916,6 @@ static int rendercache__configure(rendercache *rc, const rendercache_desc *d)
     rc->pixel_count = d->width * d->height;
     rc->tile_count = (d->height + RENDERCACHE__TILE_ROWS - 1) / RENDERCACHE__TILE_ROWS;
     rc->capacity = (uint32_t)capacity;
-    rc->chunk_count = (rc->capacity + RENDERCACHE__CHUNK - 1) / RENDERCACHE__CHUNK;
     rc->object_count = rendercache__def(d->object_count, 256u);
     rc->depth_tolerance = rendercache__def(d->depth_tolerance, 0.1f);
     rc->predict_fraction = rendercache__def(d->predict_fraction, 0.25f);
@@ -1011,13 +1052,70 @@ static uint32_t rendercache__project_point(const rendercache__projector *pr, con
     return (uint32_t)py * v->width + (uint32_t)px;
 }
 
-/* The splat source of the render cache: cache slots [begin, end). */
+/* Priority of a pixel showing a point (WDP99: age is the main measure of
+   how likely a colour is stale; points of moving objects age faster),
+   times its priority scale (the light-vector weight of Crespin and Peroche
+   2004, section 4.2.4), in [0, 1]. */
+static float rendercache__point_priority(const rendercache *rc, const rendercache__geo *g,
+                                         const rendercache__point *pt)
+{
+    uint32_t age = rc->frame - pt->birth;
+    float pr;
+    if (g->object != RENDERCACHE_MISS) age += rc->obj_motion[g->object] - pt->motion_birth;
+    pr = (float)age / (float)rc->age_ramp;
+    if (pr > 1.0f) pr = 1.0f;
+    pr *= RENDERCACHE__PRIORITY_POINT_MAX * pt->scale;
+    return pr > 1.0f ? 1.0f : pr;
+}
+
+/* The splat source of the render cache: cache slots [begin, end).
+   Perspective views take an inlined path (this loop is the hottest of the
+   frame); other kinds go through rendercache__project_point. */
 static void rendercache__project_points(const void *src, uint32_t begin, uint32_t end, uint32_t *pix, float *depth)
 {
     const rendercache__projector *pr = (const rendercache__projector *)src;
+    const rendercache__view *v = pr->view;
     const rendercache__geo *geo = pr->rc->geo;
+    const float fx = v->focal, cx = v->cx, cy = v->cy, w = (float)v->width, h = (float)v->height;
     uint32_t i;
-    for (i = begin; i < end; i++) pix[i - begin] = rendercache__project_point(pr, &geo[i], &depth[i - begin]);
+    if (v->kind != RENDERCACHE_CAMERA_PERSPECTIVE) {
+        for (i = begin; i < end; i++) pix[i - begin] = rendercache__project_point(pr, &geo[i], &depth[i - begin]);
+        return;
+    }
+    for (i = begin; i < end; i++) {
+        const rendercache__geo *g = &geo[i];
+        uint32_t p = RENDERCACHE__NONE, o = g->object;
+        if (o < RENDERCACHE__FREE_SLOT) {
+            const float *m = pr->obj_camera + 12 * (size_t)o;
+            float c0 = m[0] * g->pos[0] + m[1] * g->pos[1] + m[2] * g->pos[2] + m[3];
+            float c1 = m[4] * g->pos[0] + m[5] * g->pos[1] + m[6] * g->pos[2] + m[7];
+            float c2 = m[8] * g->pos[0] + m[9] * g->pos[1] + m[10] * g->pos[2] + m[11];
+            float inv = 1.0f / c2, x = cx + fx * c0 * inv, y = cy - fx * c1 * inv;
+            depth[i - begin] = sqrtf(c0 * c0 + c1 * c1 + c2 * c2);
+            if (c2 > 0.0f && x >= 0.0f && x < w && y >= 0.0f && y < h)
+                p = (uint32_t)y * v->width + (uint32_t)x;
+        } else if (o == RENDERCACHE_MISS) {
+            p = rendercache__project_point(pr, g, &depth[i - begin]);
+        }
+        pix[i - begin] = p;
+    }
+}
+
+/* The payload of a cache point: its colour and priority. */
+static void rendercache__point_payload(const void *src, uint32_t begin, uint32_t end, const uint32_t *pix,
+                                       float *payload)
+{
+    const rendercache *rc = ((const rendercache__projector *)src)->rc;
+    uint32_t i;
+    for (i = begin; i < end; i++) {
+        const rendercache__point *pt = &rc->data[i];
+        float *out = payload + 4 * (size_t)(i - begin);
+        if (pix[i - begin] == RENDERCACHE__NONE) continue;
+        out[0] = pt->rgb[0];
+        out[1] = pt->rgb[1];
+        out[2] = pt->rgb[2];
+        out[3] = rendercache__point_priority(rc, &rc->geo[i], pt);
+    }
 }
 
 /* Object-to-camera matrices of every object for view v. */
@@ -1029,43 +1127,17 @@ static void rendercache__compose_objects(const rendercache *rc, const rendercach
 }
 
 /* Projects every point into view v (matrices obj_camera) and z-buffers
-   them into rc->splat. */
+   them into rc->splat, with colour and priority when with_payload. */
 static void rendercache__splat_points(rendercache *rc, const rendercache__view *v, const float *obj_camera,
-                                      double *t_project, double *t_zbuffer)
+                                      int with_payload, double *t_project, double *t_zbuffer)
 {
-    rendercache__splat_job job;
     rendercache__projector pr;
-    double t0 = rendercache__now(rc), t1;
     pr.rc = rc;
     pr.view = v;
     pr.obj_camera = obj_camera;
-    job.s = &rc->splat;
-    job.source = rendercache__project_points;
-    job.src = &pr;
-    job.element_count = rc->capacity;
-    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__splat_project, &job, rc->chunk_count);
-    rendercache__splat_offsets(&rc->splat, rc->chunk_count);
-    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__splat_scatter, &job, rc->chunk_count);
-    t1 = rendercache__now(rc);
-    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__splat_zbuffer, &job, rc->splat.band_count);
-    if (t_project) *t_project += t1 - t0;
-    if (t_zbuffer) *t_zbuffer += rendercache__now(rc) - t1;
-}
-
-/* Priority of a pixel showing a point (WDP99: age is the main measure of
-   how likely a colour is stale; points of moving objects age faster),
-   times its priority scale (the light-vector weight of Crespin and Peroche
-   2004, section 4.2.4), in [0, 1]. */
-static float rendercache__point_priority(const rendercache *rc, uint32_t slot)
-{
-    const rendercache__point *pt = &rc->data[slot];
-    uint32_t object = rc->geo[slot].object, age = rc->frame - pt->birth;
-    float pr;
-    if (object != RENDERCACHE_MISS) age += rc->obj_motion[object] - pt->motion_birth;
-    pr = (float)age / (float)rc->age_ramp;
-    if (pr > 1.0f) pr = 1.0f;
-    pr *= RENDERCACHE__PRIORITY_POINT_MAX * pt->scale;
-    return pr > 1.0f ? 1.0f : pr;
+    rendercache__splat_run(&rc->splat, rc->parallel_for, rc->parallel_user, rendercache__project_points,
+                           with_payload ? rendercache__point_payload : NULL, &pr, rc->capacity, rc->clock,
+                           rc->clock_user, t_project, t_zbuffer);
 }
 
 /* Priority of a hole (WDP99, Crespin-Peroche 4.1): the fewer points around
@@ -1127,16 +1199,22 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
     if (y1 > rc->height) y1 = rc->height;
     for (y = y0; y < y1; y++) {
         for (x = 0; x < rc->width; x++) {
-            uint32_t p = y * rc->width + x, slot = s->index[p];
-            if (slot != RENDERCACHE__NONE && rendercache__occluded(s, x, y, s->depth[p], tol)) {
-                slot = RENDERCACHE__NONE;
+            uint32_t p = y * rc->width + x, k = s->index[p];
+            const float *payload;
+            if (k != RENDERCACHE__NONE && rendercache__occluded(s, x, y, s->depth[p], tol)) {
+                k = RENDERCACHE__NONE;
                 culled++;
             }
-            rc->px_index[p] = slot;
-            if (slot == RENDERCACHE__NONE) { rc->px_depth[p] = FLT_MAX; continue; }
+            if (k == RENDERCACHE__NONE) {
+                rc->px_index[p] = RENDERCACHE__NONE;
+                rc->px_depth[p] = FLT_MAX;
+                continue;
+            }
+            payload = s->payload + 4 * (size_t)p;
+            rc->px_index[p] = k;
             rc->px_depth[p] = s->depth[p];
-            memcpy(rc->image + 3 * (size_t)p, rc->data[slot].rgb, 3 * sizeof(float));
-            rc->priority[p] = rendercache__point_priority(rc, slot);
+            memcpy(rc->image + 3 * (size_t)p, payload, 3 * sizeof(float));
+            rc->priority[p] = payload[3];
             rc->kind[p] = RENDERCACHE_PIXEL_POINT;
             rc->count[p] = 0;
             visible++;
@@ -1269,7 +1347,7 @@ RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, cons
         rc->obj_moved[o] = 0;
     }
     rendercache__compose_objects(rc, &rc->view, rc->obj_camera);
-    rendercache__splat_points(rc, &rc->view, rc->obj_camera, &rc->stats.time_project, &rc->stats.time_zbuffer);
+    rendercache__splat_points(rc, &rc->view, rc->obj_camera, 1, &rc->stats.time_project, &rc->stats.time_zbuffer);
     t1 = rendercache__now(rc);
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__cull_job, rc, rc->tile_count);
     t2 = rendercache__now(rc);
@@ -1323,7 +1401,7 @@ RENDERCACHE_API rendercache_result rendercache_predict(rendercache *rc, const re
     t0 = rendercache__now(rc);
     rc->predicted = v;
     rendercache__compose_objects(rc, &rc->predicted, rc->obj_predicted);
-    rendercache__splat_points(rc, &rc->predicted, rc->obj_predicted, NULL, NULL);
+    rendercache__splat_points(rc, &rc->predicted, rc->obj_predicted, 0, NULL, NULL);
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__predict_job, rc, rc->tile_count);
     rc->pred_holes = rendercache__tile_sum(rc, 5);
     rc->has_prediction = 1;
@@ -1667,7 +1745,6 @@ static float rendercache__store(rendercache *rc, uint32_t slot, const rendercach
     pt->scale = s->priority_scale > 0.0f ? s->priority_scale : 1.0f;
     pt->birth = rc->frame;   /* age 0; new points are not evicted in their own frame */
     pt->motion_birth = s->object == RENDERCACHE_MISS ? 0u : rc->obj_motion[s->object];
-    pt->pad[0] = pt->pad[1] = 0;
     return d;
 }
 
