@@ -218,8 +218,7 @@ typedef struct rendercache_stats {
     uint32_t evicted;            /* of which overwrote a point not visible in this frame */
     uint32_t rejected;           /* samples ignored since begin_frame (bad values or pixel) */
     /* seconds spent in each phase of the last frame (0 without desc.clock) */
-    double time_project;         /* projection of every point and binning by image band */
-    double time_zbuffer;
+    double time_project;         /* projection and z-buffer of every point */
     double time_cull;            /* depth cull, with the colour and priority of the pixels showing points */
     double time_interpolate;     /* hole filling, with the priority of the holes */
     double time_predict;         /* rendercache_predict */
@@ -274,9 +273,10 @@ RENDERCACHE_API const float *rendercache_image(const rendercache *rc);
 RENDERCACHE_API const float *rendercache_priority_image(const rendercache *rc);
 /* Per-pixel rendercache_pixel_kind values. */
 RENDERCACHE_API const unsigned char *rendercache_pixel_kinds(const rendercache *rc);
-/* Per-pixel depth of the point shown (distance from the eye; 1e30 for a
-   background point), FLT_MAX where the pixel shows no point. */
-RENDERCACHE_API const float *rendercache_depth_image(const rendercache *rc);
+/* Per-pixel depth of the point shown (distance from the eye; 1e18 for a
+   background point), FLT_MAX where the pixel shows no point. Computed on
+   each call. */
+RENDERCACHE_API const float *rendercache_depth_image(rendercache *rc);
 
 RENDERCACHE_API void rendercache_get_stats(const rendercache *rc, rendercache_stats *out);
 
@@ -401,7 +401,8 @@ static void rendercache__run_jobs(void (*parallel_for)(void *, rendercache_job_f
    view_from_pixel.
    ---------------------------------------------------------------------- */
 #define RENDERCACHE__NONE 0xFFFFFFFFu        /* no point / no element */
-#define RENDERCACHE__FAR 1e30f               /* depth of background points, "at infinity" */
+#define RENDERCACHE__FAR 1e18f               /* distance of background points, "at infinity" */
+#define RENDERCACHE__FAR2 1e36f              /* its square: depths are compared squared */
 #define RENDERCACHE__MAX_PIXELS (1u << 28)
 #define RENDERCACHE__MAX_CAPACITY (1u << 31)
 #define RENDERCACHE__MAX_OBJECTS (1u << 24)
@@ -519,22 +520,22 @@ static void rendercache__view_compose(const rendercache__view *v, const float m[
 
 /* ======================================================================
    9. splat: many elements (cache points, range-image pixels) into one
-   z-buffer, keeping the nearest element per pixel, with a payload of four
-   floats per element (colour and one more value) carried along so that the
-   winners' data is read from memory laid out by image band, not gathered
-   from wherever the elements live (Walter et al. 2002 keep the cache in
-   image tiles for the same reason).
-   Parallel and deterministic: one job per fixed chunk of elements projects
-   them, counts them per band of pixels (a band is a power-of-two range of
-   pixel indices, several rows) and sorts them by band into the chunk's own
-   part of the bin arrays; then one job per band runs the depth test over
-   its pixels, visiting the chunks in order. Elements of a band are thus met
-   in index order, so equal depths resolve to the lowest element index
-   whatever the thread count. This is the reprojection and z-buffer step of
-   Walter et al. 1999.
+   z-buffer (the reprojection and z-buffer step of Walter et al. 1999),
+   keeping per pixel the nearest element, its depth and a payload of four
+   floats (colour and one more value) copied as it wins, so that nothing has
+   to be gathered from the elements afterwards.
+   Parallel and deterministic: when the caller gives parallel_for, the
+   elements are split into RENDERCACHE__SPLAT_JOBS ranges, each z-buffered
+   into its own raster, and the rasters are merged tile by tile. The winner
+   of a pixel is the least (depth, element index) in every case, so the
+   result does not depend on the split or on the thread count. (Sorting the
+   elements into image bands first, as the tiled cache of Walter et al. 2002
+   does, let any number of threads share the z-buffer but cost three times
+   as much memory traffic here.)
    ---------------------------------------------------------------------- */
-#define RENDERCACHE__CHUNK 8192u    /* elements per projection job */
-#define RENDERCACHE__BATCH 256u     /* elements per source call */
+#define RENDERCACHE__SPLAT_JOBS 2u   /* partial z-buffers when running in parallel */
+#define RENDERCACHE__BATCH 256u      /* elements per source call */
+#define RENDERCACHE__TILE_ROWS 8u    /* image rows per tile job */
 
 /* Projects elements [begin, end): pix[i - begin] = y * width + x of the
    pixel it lands in, or RENDERCACHE__NONE; depth[...] its distance. */
@@ -544,74 +545,63 @@ typedef void (*rendercache__source_fn)(const void *src, uint32_t begin, uint32_t
 typedef void (*rendercache__payload_fn)(const void *src, uint32_t begin, uint32_t end, const uint32_t *pix,
                                         float *payload);
 
-/* One element in a band's bin: 32 bytes, read in one go by the z-buffer. */
-typedef struct rendercache__bin {
-    uint32_t pix;
-    float depth;
-    uint32_t element;
-    uint32_t pad;
-    float payload[4];
-} rendercache__bin;
+/* A z-buffer: per pixel the nearest depth (FLT_MAX when empty), the
+   element (RENDERCACHE__NONE when empty) and its payload. */
+typedef struct rendercache__raster {
+    float *depth;
+    uint32_t *index;
+    float *payload;          /* 4 per pixel */
+} rendercache__raster;
 
 typedef struct rendercache__splat {
-    uint32_t width, height, pixel_count;
-    uint32_t band_shift, band_count;
-    uint32_t element_capacity, chunk_capacity;
-    float *depth;            /* per pixel: nearest depth, FLT_MAX when empty */
-    uint32_t *index;         /* per pixel: nearest element, RENDERCACHE__NONE when empty */
-    float *payload;          /* per pixel: 4 floats of the nearest element */
-    uint32_t *elem_pix;      /* per element: projection kept between a chunk's two passes */
-    float *elem_depth;
-    rendercache__bin *bins;  /* chunk c owns [c * CHUNK, (c + 1) * CHUNK), sorted by band */
-    uint32_t *band_offset;   /* per chunk, band_count + 1 starts of the bands in its bins */
+    uint32_t width, height, pixel_count, tile_count;
+    rendercache__raster final;                                    /* the result; job 0's raster */
+    rendercache__raster part[RENDERCACHE__SPLAT_JOBS - 1];         /* the other jobs' rasters */
     uint32_t projected;      /* elements that landed in the image in the last run */
+    uint32_t job_projected[RENDERCACHE__SPLAT_JOBS];
 } rendercache__splat;
+
+static void rendercache__raster_free(rendercache__raster *r, const rendercache_allocator *a)
+{
+    rendercache__free(a, r->depth);
+    rendercache__free(a, r->index);
+    rendercache__free(a, r->payload);
+    memset(r, 0, sizeof *r);
+}
+
+static int rendercache__raster_alloc(rendercache__raster *r, uint32_t pixels, const rendercache_allocator *a)
+{
+    r->depth = (float *)rendercache__alloc_array(a, pixels, sizeof(float));
+    r->index = (uint32_t *)rendercache__alloc_array(a, pixels, sizeof(uint32_t));
+    r->payload = (float *)rendercache__alloc_array(a, pixels, 4 * sizeof(float));
+    return r->depth && r->index && r->payload ? 0 : -1;
+}
 
 static void rendercache__splat_free(rendercache__splat *s, const rendercache_allocator *a)
 {
-    rendercache__free(a, s->depth);
-    rendercache__free(a, s->index);
-    rendercache__free(a, s->payload);
-    rendercache__free(a, s->elem_pix);
-    rendercache__free(a, s->elem_depth);
-    rendercache__free(a, s->bins);
-    rendercache__free(a, s->band_offset);
+    uint32_t j;
+    rendercache__raster_free(&s->final, a);
+    for (j = 0; j + 1 < RENDERCACHE__SPLAT_JOBS; j++) rendercache__raster_free(&s->part[j], a);
     memset(s, 0, sizeof *s);
 }
 
-/* Allocates a splat for a width x height raster and up to capacity
-   elements. Returns 0, or -1 when out of memory. */
-static int rendercache__splat_alloc(rendercache__splat *s, uint32_t width, uint32_t height, uint32_t capacity,
+/* Allocates a splat for a width x height raster. Returns 0, or -1 when
+   out of memory. */
+static int rendercache__splat_alloc(rendercache__splat *s, uint32_t width, uint32_t height,
                                     const rendercache_allocator *a)
 {
-    uint32_t shift = 0;
-    size_t table;
+    uint32_t j;
+    int failed;
     memset(s, 0, sizeof *s);
     s->width = width;
     s->height = height;
     s->pixel_count = width * height;
-    s->element_capacity = capacity;
-    s->chunk_capacity = (uint32_t)(((uint64_t)capacity + RENDERCACHE__CHUNK - 1) / RENDERCACHE__CHUNK);
-    if (s->chunk_capacity == 0) s->chunk_capacity = 1;
-    /* bands of at least 8 rows and 4096 pixels, and a band table of at most 2^22 entries */
-    while (shift < 31 && ((1u << shift) < 8u * width || (1u << shift) < 4096u ||
-                          ((uint64_t)s->pixel_count >> shift) * s->chunk_capacity > (1u << 22)))
-        shift++;
-    s->band_shift = shift;
-    s->band_count = (uint32_t)(((uint64_t)s->pixel_count + (1u << shift) - 1) >> shift);
-    table = (size_t)s->chunk_capacity * (s->band_count + 1);
-    s->depth = (float *)rendercache__alloc_array(a, s->pixel_count, sizeof(float));
-    s->index = (uint32_t *)rendercache__alloc_array(a, s->pixel_count, sizeof(uint32_t));
-    s->payload = (float *)rendercache__alloc_array(a, s->pixel_count, 4 * sizeof(float));
-    s->elem_pix = (uint32_t *)rendercache__alloc_array(a, capacity, sizeof(uint32_t));
-    s->elem_depth = (float *)rendercache__alloc_array(a, capacity, sizeof(float));
-    s->bins = (rendercache__bin *)rendercache__alloc_array(a, capacity, sizeof(rendercache__bin));
-    s->band_offset = (uint32_t *)rendercache__alloc_array(a, table, sizeof(uint32_t));
-    if (!s->depth || !s->index || !s->payload || !s->elem_pix || !s->elem_depth || !s->bins || !s->band_offset) {
-        rendercache__splat_free(s, a);
-        return -1;
-    }
-    return 0;
+    s->tile_count = (height + RENDERCACHE__TILE_ROWS - 1) / RENDERCACHE__TILE_ROWS;
+    failed = rendercache__raster_alloc(&s->final, s->pixel_count, a);
+    for (j = 0; j + 1 < RENDERCACHE__SPLAT_JOBS; j++)
+        failed |= rendercache__raster_alloc(&s->part[j], s->pixel_count, a);
+    if (failed) rendercache__splat_free(s, a);
+    return failed;
 }
 
 typedef struct rendercache__splat_job {
@@ -619,109 +609,86 @@ typedef struct rendercache__splat_job {
     rendercache__source_fn source;
     rendercache__payload_fn payload;   /* NULL: no payload */
     const void *src;
-    uint32_t element_count, chunk_count;
+    uint32_t element_count, jobs;
 } rendercache__splat_job;
 
-/* Job per chunk: project the chunk and count it per band, turn the counts
-   into band ends, then scatter it into its bins back to front, band by
-   band, so that the table ends up holding the band starts. The chunk's
-   projection stays in cache between the two passes; the payload is asked
-   for in the second, batch by batch. */
-static void rendercache__splat_chunk(void *ctx, uint32_t chunk)
+/* Job j: z-buffers its range of elements into its raster, in index order,
+   so an equal depth never displaces an earlier element. */
+static void rendercache__splat_range(void *ctx, uint32_t j)
 {
-    const rendercache__splat_job *j = (const rendercache__splat_job *)ctx;
-    rendercache__splat *s = j->s;
-    float payload[4 * RENDERCACHE__BATCH];
-    uint32_t *off = s->band_offset + (size_t)chunk * (s->band_count + 1), base = chunk * RENDERCACHE__CHUNK;
-    uint32_t begin = base, end = base + RENDERCACHE__CHUNK, b, i, total = 0, shift = s->band_shift;
-    uint32_t *pix = s->elem_pix;
-    float *depth = s->elem_depth;
-    rendercache__bin *bins = s->bins + base;
-    if (end > j->element_count) end = j->element_count;
-    memset(off, 0, (s->band_count + 1) * sizeof *off);
-    j->source(j->src, begin, end, pix + begin, depth + begin);
-    for (i = begin; i < end; i++)
-        if (pix[i] != RENDERCACHE__NONE) off[pix[i] >> shift]++;
-    for (b = 0; b <= s->band_count; b++) {   /* counts -> ends of the bands */
-        total += off[b];
-        off[b] = total;
+    const rendercache__splat_job *job = (const rendercache__splat_job *)ctx;
+    rendercache__splat *s = job->s;
+    const rendercache__raster *r = j == 0 ? &s->final : &s->part[j - 1];
+    float *depth = r->depth, *payload = r->payload;
+    uint32_t *index = r->index;
+    uint32_t pix[RENDERCACHE__BATCH], begin, end, b, i, projected = 0;
+    float d[RENDERCACHE__BATCH], pay[4 * RENDERCACHE__BATCH];
+    begin = (uint32_t)((uint64_t)job->element_count * j / job->jobs);
+    end = (uint32_t)((uint64_t)job->element_count * (j + 1) / job->jobs);
+    for (i = 0; i < s->pixel_count; i++) {
+        depth[i] = FLT_MAX;
+        index[i] = RENDERCACHE__NONE;
     }
-    for (b = end; b > begin;) {
-        uint32_t n = b - begin < RENDERCACHE__BATCH ? b - begin : RENDERCACHE__BATCH;
-        b -= n;
-        if (j->payload) j->payload(j->src, b, b + n, pix + b, payload);
-        for (i = b + n; i-- > b;) {
-            rendercache__bin *r;
-            if (pix[i] == RENDERCACHE__NONE) continue;
-            r = &bins[--off[pix[i] >> shift]];
-            r->pix = pix[i];
-            r->depth = depth[i];
-            r->element = i;
-            r->pad = 0;
-            if (j->payload) memcpy(r->payload, payload + 4 * (i - b), sizeof r->payload);
-        }
-    }
-}
-
-/* Job per band: the depth test, nearest element per pixel; its payload is
-   copied as it wins, while the band's bins stream through the cache. */
-static void rendercache__splat_zbuffer(void *ctx, uint32_t band)
-{
-    const rendercache__splat_job *j = (const rendercache__splat_job *)ctx;
-    rendercache__splat *s = j->s;
-    uint32_t lo = band << s->band_shift, hi = lo + (1u << s->band_shift), c, k;
-    float *depth = s->depth, *payload = s->payload;
-    uint32_t *index = s->index;
-    int with_payload = j->payload != NULL;
-    if (hi > s->pixel_count || hi < lo) hi = s->pixel_count;
-    for (k = lo; k < hi; k++) {
-        depth[k] = FLT_MAX;
-        index[k] = RENDERCACHE__NONE;
-    }
-    for (c = 0; c < j->chunk_count; c++) {
-        const uint32_t *off = s->band_offset + (size_t)c * (s->band_count + 1);
-        const rendercache__bin *r = s->bins + (size_t)c * RENDERCACHE__CHUNK + off[band];
-        const rendercache__bin *end = s->bins + (size_t)c * RENDERCACHE__CHUNK + off[band + 1];
-        for (; r < end; r++) {
-            uint32_t p = r->pix;
-            if (r->depth < depth[p]) {
-                depth[p] = r->depth;
-                index[p] = r->element;
-                if (with_payload) memcpy(payload + 4 * (size_t)p, r->payload, 4 * sizeof(float));
+    for (b = begin; b < end; b += RENDERCACHE__BATCH) {
+        uint32_t n = end - b < RENDERCACHE__BATCH ? end - b : RENDERCACHE__BATCH;
+        job->source(job->src, b, b + n, pix, d);
+        if (job->payload) job->payload(job->src, b, b + n, pix, pay);
+        for (i = 0; i < n; i++) {
+            uint32_t p = pix[i];
+            if (p == RENDERCACHE__NONE) continue;
+            projected++;
+            if (d[i] < depth[p]) {
+                depth[p] = d[i];
+                index[p] = b + i;
+                if (job->payload) memcpy(payload + 4 * (size_t)p, pay + 4 * i, 4 * sizeof(float));
             }
         }
     }
+    s->job_projected[j] = projected;
 }
 
-/* Runs the splat over elements [0, count) (count <= element capacity). */
+/* Job per tile: the other jobs' rasters into the final one. Their elements
+   come later in index order, so they win only when strictly nearer. */
+static void rendercache__splat_merge(void *ctx, uint32_t tile)
+{
+    const rendercache__splat_job *job = (const rendercache__splat_job *)ctx;
+    rendercache__splat *s = job->s;
+    uint32_t p0 = tile * RENDERCACHE__TILE_ROWS * s->width, p1 = p0 + RENDERCACHE__TILE_ROWS * s->width, j, p;
+    if (p1 > s->pixel_count) p1 = s->pixel_count;
+    for (j = 1; j < job->jobs; j++) {
+        const rendercache__raster *r = &s->part[j - 1];
+        for (p = p0; p < p1; p++) {
+            if (!(r->depth[p] < s->final.depth[p])) continue;
+            s->final.depth[p] = r->depth[p];
+            s->final.index[p] = r->index[p];
+            if (job->payload) memcpy(s->final.payload + 4 * (size_t)p, r->payload + 4 * (size_t)p, 4 * sizeof(float));
+        }
+    }
+}
+
+/* Runs the splat over elements [0, count) into s->final. */
 static void rendercache__splat_run(rendercache__splat *s, void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t),
                                    void *user, rendercache__source_fn source, rendercache__payload_fn payload,
-                                   const void *src, uint32_t count, double (*clock)(void *), void *clock_user,
-                                   double *t_project, double *t_zbuffer)
+                                   const void *src, uint32_t count)
 {
     rendercache__splat_job job;
-    double t0 = clock ? clock(clock_user) : 0.0, t1;
-    uint32_t c;
+    uint32_t j;
     job.s = s;
     job.source = source;
+    job.payload = payload;
     job.src = src;
     job.element_count = count;
-    job.chunk_count = (count + RENDERCACHE__CHUNK - 1) / RENDERCACHE__CHUNK;
-    job.payload = payload;
-    rendercache__run_jobs(parallel_for, user, rendercache__splat_chunk, &job, job.chunk_count);
+    job.jobs = parallel_for ? RENDERCACHE__SPLAT_JOBS : 1u;
+    rendercache__run_jobs(parallel_for, user, rendercache__splat_range, &job, job.jobs);
+    if (job.jobs > 1) rendercache__run_jobs(parallel_for, user, rendercache__splat_merge, &job, s->tile_count);
     s->projected = 0;
-    for (c = 0; c < job.chunk_count; c++) s->projected += s->band_offset[(size_t)c * (s->band_count + 1) + s->band_count];
-    t1 = clock ? clock(clock_user) : 0.0;
-    rendercache__run_jobs(parallel_for, user, rendercache__splat_zbuffer, &job, s->band_count);
-    if (t_project) *t_project += t1 - t0;
-    if (t_zbuffer) *t_zbuffer += (clock ? clock(clock_user) : 0.0) - t1;
+    for (j = 0; j < job.jobs; j++) s->projected += s->job_projected[j];
 }
 
 /* ======================================================================
    10. the cache object
    ---------------------------------------------------------------------- */
 #define RENDERCACHE__FREE_SLOT 0xFFFFFFFEu   /* object id of an unused cache slot */
-#define RENDERCACHE__TILE_ROWS 8u            /* image rows per tile job */
 #define RENDERCACHE__LEVELS 1024u            /* priority levels of the threshold histogram */
 #define RENDERCACHE__TILE_STATS 6u           /* visible, culled, interpolated, sparse, empty, holes */
 
@@ -762,6 +729,7 @@ struct rendercache {
     uint32_t capacity, object_count;
     float depth_tolerance, predict_fraction, background[3];
     uint32_t age_ramp, moving_age_step, sparse_neighbours, wide_radius;
+    float inv_age_ramp;
 
     /* point cache: slot order is insertion order; the projection streams
        through both arrays */
@@ -785,7 +753,8 @@ struct rendercache {
     rendercache__view view, predicted;
     rendercache__splat splat;
     uint32_t *px_index;      /* per pixel: the slot shown, after the depth cull */
-    float *px_depth;
+    float *px_depth;         /* per pixel: its squared distance, FLT_MAX without a point */
+    float *depth_out;        /* rendercache_depth_image: distances, filled on request */
     float *image, *priority, *pred_priority;
     unsigned char *kind, *count;
     uint32_t *tile_stats;    /* RENDERCACHE__TILE_STATS per tile */
@@ -847,7 +816,7 @@ static void rendercache__release(rendercache *rc)
     void *blocks[22];
     size_t i;
     blocks[0] = rc->geo; blocks[1] = rc->data; blocks[2] = rc->obj_predicted; blocks[3] = rc->obj_motion;
-    blocks[4] = NULL; blocks[5] = NULL; blocks[6] = rc->obj_world; blocks[7] = rc->obj_local;
+    blocks[4] = rc->depth_out; blocks[5] = NULL; blocks[6] = rc->obj_world; blocks[7] = rc->obj_local;
     blocks[8] = rc->obj_camera; blocks[9] = rc->obj_moved; blocks[10] = rc->px_index;
     blocks[11] = rc->px_depth; blocks[12] = rc->image; blocks[13] = rc->priority;
     blocks[14] = rc->pred_priority; blocks[15] = rc->kind; blocks[16] = rc->count;
@@ -872,6 +841,7 @@ static int rendercache__alloc_buffers(rendercache *rc)
     rc->obj_moved = (unsigned char *)rendercache__alloc_array(a, no, 1);
     rc->px_index = (uint32_t *)rendercache__alloc_array(a, px, sizeof(uint32_t));
     rc->px_depth = (float *)rendercache__alloc_array(a, px, sizeof(float));
+    rc->depth_out = (float *)rendercache__alloc_array(a, px, sizeof(float));
     rc->image = (float *)rendercache__alloc_array(a, px, 3 * sizeof(float));
     rc->priority = (float *)rendercache__alloc_array(a, px, sizeof(float));
     rc->pred_priority = (float *)rendercache__alloc_array(a, px, sizeof(float));
@@ -883,11 +853,11 @@ static int rendercache__alloc_buffers(rendercache *rc)
     rc->chosen = (unsigned char *)rendercache__alloc_array(a, px, 1);
     rc->err_rows = (float *)rendercache__alloc_array(a, 2 * ((size_t)rc->width + 2), sizeof(float));
     if (!rc->geo || !rc->data || !rc->obj_predicted || !rc->obj_motion || !rc->obj_world ||
-        !rc->obj_local || !rc->obj_camera || !rc->obj_moved || !rc->px_index || !rc->px_depth || !rc->image ||
+        !rc->obj_local || !rc->obj_camera || !rc->obj_moved || !rc->px_index || !rc->px_depth || !rc->depth_out || !rc->image ||
         !rc->priority || !rc->pred_priority || !rc->kind || !rc->count || !rc->tile_stats || !rc->hist ||
         !rc->select_v || !rc->chosen || !rc->err_rows)
         return -1;
-    return rendercache__splat_alloc(&rc->splat, rc->width, rc->height, rc->capacity, a);
+    return rendercache__splat_alloc(&rc->splat, rc->width, rc->height, a);
 }
 
 /* Applies the defaults and checks the ranges of a desc; 0 on bad input. */
@@ -920,6 +890,7 @@ static int rendercache__configure(rendercache *rc, const rendercache_desc *d)
     rc->depth_tolerance = rendercache__def(d->depth_tolerance, 0.1f);
     rc->predict_fraction = rendercache__def(d->predict_fraction, 0.25f);
     rc->age_ramp = rendercache__def(d->age_ramp_frames, 32u);
+    rc->inv_age_ramp = 1.0f / (float)rc->age_ramp;
     rc->moving_age_step = rendercache__def(d->moving_age_step, 4u);
     if (rc->moving_age_step > 65536u) rc->moving_age_step = 65536u;
     rc->sparse_neighbours = rendercache__def(d->sparse_neighbours, 2u);
@@ -1034,19 +1005,20 @@ typedef struct rendercache__projector {
 
 /* Reprojection of one cache point (WDP99): object space -> camera space
    through the object's composed matrix, then to a pixel; background points
-   are directions, rotated only, at depth RENDERCACHE__FAR. Returns the
-   pixel index or RENDERCACHE__NONE. */
-static uint32_t rendercache__project_point(const rendercache__projector *pr, const rendercache__geo *g, float *depth)
+   are directions, rotated only, at distance RENDERCACHE__FAR. Depths are
+   squared distances (the z-buffer only compares them). Returns the pixel
+   index or RENDERCACHE__NONE. */
+static uint32_t rendercache__project_point(const rendercache__projector *pr, const rendercache__geo *g, float *depth2)
 {
     const rendercache__view *v = pr->view;
     float c[3], px, py;
     if (g->object == RENDERCACHE__FREE_SLOT) return RENDERCACHE__NONE;
     if (g->object == RENDERCACHE_MISS) {
         rendercache__view_rotate(v, g->pos, c);
-        *depth = RENDERCACHE__FAR;
+        *depth2 = RENDERCACHE__FAR2;
     } else {
         rendercache__affine(pr->obj_camera + 12 * (size_t)g->object, g->pos, c);
-        *depth = sqrtf(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+        *depth2 = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
     }
     if (!rendercache__view_to_pixel(v, c, &px, &py)) return RENDERCACHE__NONE;
     return (uint32_t)py * v->width + (uint32_t)px;
@@ -1055,50 +1027,60 @@ static uint32_t rendercache__project_point(const rendercache__projector *pr, con
 /* Priority of a pixel showing a point (WDP99: age is the main measure of
    how likely a colour is stale; points of moving objects age faster),
    times its priority scale (the light-vector weight of Crespin and Peroche
-   2004, section 4.2.4), in [0, 1]. */
-static float rendercache__point_priority(const rendercache *rc, const rendercache__geo *g,
-                                         const rendercache__point *pt)
+   2004, section 4.2.4), in [0, 1]. motion: the object's obj_motion. */
+static float rendercache__point_priority(const rendercache *rc, const rendercache__point *pt, uint32_t motion)
 {
-    uint32_t age = rc->frame - pt->birth;
-    float pr;
-    if (g->object != RENDERCACHE_MISS) age += rc->obj_motion[g->object] - pt->motion_birth;
-    pr = (float)age / (float)rc->age_ramp;
-    if (pr > 1.0f) pr = 1.0f;
-    pr *= RENDERCACHE__PRIORITY_POINT_MAX * pt->scale;
-    return pr > 1.0f ? 1.0f : pr;
+    uint32_t age = rc->frame - pt->birth + (motion - pt->motion_birth);
+    float pr = (float)age * rc->inv_age_ramp;
+    pr = (pr < 1.0f ? pr : 1.0f) * (RENDERCACHE__PRIORITY_POINT_MAX * pt->scale);
+    return pr < 1.0f ? pr : 1.0f;
 }
 
-/* The splat source of the render cache: cache slots [begin, end).
-   Perspective views take an inlined path (this loop is the hottest of the
-   frame); other kinds go through rendercache__project_point. */
-static void rendercache__project_points(const void *src, uint32_t begin, uint32_t end, uint32_t *pix, float *depth)
+/* Perspective projection of n points of one object (matrix m): written
+   without branches or library calls so that compilers vectorise it; this
+   loop is the hottest of the frame. */
+static void rendercache__project_perspective(const rendercache__geo *g, uint32_t n, const float *m,
+                                             const rendercache__view *v, uint32_t *pix, float *depth2)
+{
+    const float fx = v->focal, cx = v->cx, cy = v->cy, w = (float)v->width, h = (float)v->height;
+    const uint32_t width = v->width;
+    uint32_t i;
+    for (i = 0; i < n; i++) {
+        float x0 = g[i].pos[0], x1 = g[i].pos[1], x2 = g[i].pos[2];
+        float c0 = m[0] * x0 + m[1] * x1 + m[2] * x2 + m[3];
+        float c1 = m[4] * x0 + m[5] * x1 + m[6] * x2 + m[7];
+        float c2 = m[8] * x0 + m[9] * x1 + m[10] * x2 + m[11];
+        float inv = 1.0f / c2, x = cx + fx * c0 * inv, y = cy - fx * c1 * inv;
+        int inside = (c2 > 0.0f) & (x >= 0.0f) & (x < w) & (y >= 0.0f) & (y < h);
+        float xs = inside ? x : 0.0f, ys = inside ? y : 0.0f;
+        depth2[i] = c0 * c0 + c1 * c1 + c2 * c2;
+        pix[i] = inside ? (uint32_t)ys * width + (uint32_t)xs : RENDERCACHE__NONE;
+    }
+}
+
+/* The object all points [begin, end) belong to, or RENDERCACHE__NONE when
+   they are mixed (or background, or free). */
+static uint32_t rendercache__batch_object(const rendercache__geo *geo, uint32_t begin, uint32_t end)
+{
+    uint32_t o = geo[begin].object, differ = 0, i;
+    for (i = begin + 1; i < end; i++) differ |= geo[i].object ^ o;
+    return differ || o >= RENDERCACHE__FREE_SLOT ? RENDERCACHE__NONE : o;
+}
+
+/* The splat source of the render cache: cache slots [begin, end). Batches
+   of one object under a perspective view take the vectorised path; the
+   rest goes point by point. */
+static void rendercache__project_points(const void *src, uint32_t begin, uint32_t end, uint32_t *pix, float *depth2)
 {
     const rendercache__projector *pr = (const rendercache__projector *)src;
-    const rendercache__view *v = pr->view;
     const rendercache__geo *geo = pr->rc->geo;
-    const float fx = v->focal, cx = v->cx, cy = v->cy, w = (float)v->width, h = (float)v->height;
-    uint32_t i;
-    if (v->kind != RENDERCACHE_CAMERA_PERSPECTIVE) {
-        for (i = begin; i < end; i++) pix[i - begin] = rendercache__project_point(pr, &geo[i], &depth[i - begin]);
+    uint32_t i, o = rendercache__batch_object(geo, begin, end);
+    if (pr->view->kind == RENDERCACHE_CAMERA_PERSPECTIVE && o != RENDERCACHE__NONE) {
+        rendercache__project_perspective(geo + begin, end - begin, pr->obj_camera + 12 * (size_t)o, pr->view, pix,
+                                         depth2);
         return;
     }
-    for (i = begin; i < end; i++) {
-        const rendercache__geo *g = &geo[i];
-        uint32_t p = RENDERCACHE__NONE, o = g->object;
-        if (o < RENDERCACHE__FREE_SLOT) {
-            const float *m = pr->obj_camera + 12 * (size_t)o;
-            float c0 = m[0] * g->pos[0] + m[1] * g->pos[1] + m[2] * g->pos[2] + m[3];
-            float c1 = m[4] * g->pos[0] + m[5] * g->pos[1] + m[6] * g->pos[2] + m[7];
-            float c2 = m[8] * g->pos[0] + m[9] * g->pos[1] + m[10] * g->pos[2] + m[11];
-            float inv = 1.0f / c2, x = cx + fx * c0 * inv, y = cy - fx * c1 * inv;
-            depth[i - begin] = sqrtf(c0 * c0 + c1 * c1 + c2 * c2);
-            if (c2 > 0.0f && x >= 0.0f && x < w && y >= 0.0f && y < h)
-                p = (uint32_t)y * v->width + (uint32_t)x;
-        } else if (o == RENDERCACHE_MISS) {
-            p = rendercache__project_point(pr, g, &depth[i - begin]);
-        }
-        pix[i - begin] = p;
-    }
+    for (i = begin; i < end; i++) pix[i - begin] = rendercache__project_point(pr, &geo[i], &depth2[i - begin]);
 }
 
 /* The payload of a cache point: its colour and priority. */
@@ -1106,15 +1088,28 @@ static void rendercache__point_payload(const void *src, uint32_t begin, uint32_t
                                        float *payload)
 {
     const rendercache *rc = ((const rendercache__projector *)src)->rc;
-    uint32_t i;
+    const rendercache__point *data = rc->data;
+    const rendercache__geo *geo = rc->geo;
+    uint32_t i, o = rendercache__batch_object(geo, begin, end);
+    if (o != RENDERCACHE__NONE) {   /* one object: no branch, vectorisable */
+        uint32_t motion = rc->obj_motion[o];
+        for (i = begin; i < end; i++) {
+            float *out = payload + 4 * (size_t)(i - begin);
+            out[0] = data[i].rgb[0];
+            out[1] = data[i].rgb[1];
+            out[2] = data[i].rgb[2];
+            out[3] = rendercache__point_priority(rc, &data[i], motion);
+        }
+        return;
+    }
     for (i = begin; i < end; i++) {
-        const rendercache__point *pt = &rc->data[i];
         float *out = payload + 4 * (size_t)(i - begin);
+        uint32_t obj = geo[i].object;
         if (pix[i - begin] == RENDERCACHE__NONE) continue;
-        out[0] = pt->rgb[0];
-        out[1] = pt->rgb[1];
-        out[2] = pt->rgb[2];
-        out[3] = rendercache__point_priority(rc, &rc->geo[i], pt);
+        out[0] = data[i].rgb[0];
+        out[1] = data[i].rgb[1];
+        out[2] = data[i].rgb[2];
+        out[3] = rendercache__point_priority(rc, &data[i], obj == RENDERCACHE_MISS ? 0u : rc->obj_motion[obj]);
     }
 }
 
@@ -1129,15 +1124,16 @@ static void rendercache__compose_objects(const rendercache *rc, const rendercach
 /* Projects every point into view v (matrices obj_camera) and z-buffers
    them into rc->splat, with colour and priority when with_payload. */
 static void rendercache__splat_points(rendercache *rc, const rendercache__view *v, const float *obj_camera,
-                                      int with_payload, double *t_project, double *t_zbuffer)
+                                      int with_payload, double *t_project)
 {
     rendercache__projector pr;
     pr.rc = rc;
     pr.view = v;
     pr.obj_camera = obj_camera;
+    double t0 = rendercache__now(rc);
     rendercache__splat_run(&rc->splat, rc->parallel_for, rc->parallel_user, rendercache__project_points,
-                           with_payload ? rendercache__point_payload : NULL, &pr, rc->capacity, rc->clock,
-                           rc->clock_user, t_project, t_zbuffer);
+                           with_payload ? rendercache__point_payload : NULL, &pr, rc->capacity);
+    if (t_project) *t_project += rendercache__now(rc) - t0;
 }
 
 /* Priority of a hole (WDP99, Crespin-Peroche 4.1): the fewer points around
@@ -1156,35 +1152,49 @@ static float rendercache__hole_priority(const rendercache *rc, unsigned char kin
     }
 }
 
-/* Offsets of the 8 neighbours in the order W E N S NW NE SW SE, so that
-   bits (0,1), (2,3), (4,7) and (5,6) are opposite pairs. */
+/* The 8 neighbours in the order W E N S NW NE SW SE, so that bits (0,1),
+   (2,3), (4,7) and (5,6) are opposite pairs. */
 static const int rendercache__nx[8] = { -1, 1, 0, 0, -1, 1, -1, 1 };
 static const int rendercache__ny[8] = { 0, 0, -1, 1, -1, -1, 1, 1 };
 
 /* Depth cull (WDP99): a point much farther than the average depth of the
    points in its 3x3 neighbourhood shows through a nearer surface and is
-   dropped. Refinement: the nearer points must also lie on opposite sides
-   (left and right, above and below, or both diagonals), as they do when a
-   far point falls into a gap of a nearer surface; a point beside a
-   silhouette has its nearer neighbours on one side only and is kept, so a
-   static view keeps every sampled point. */
-static int rendercache__occluded(const rendercache__splat *s, uint32_t x, uint32_t y, float d, float tol)
+   dropped. Depths are squared distances here (FLT_MAX where empty), so the
+   average is a root mean square and tol2 the squared tolerance factor.
+   Refinement: the nearer points must also lie on opposite sides (left and
+   right, above and below, or both diagonals), as they do when a far point
+   falls into a gap of a nearer surface; a point beside a silhouette has its
+   nearer neighbours on one side only and is kept, so a static view keeps
+   every sampled point. nd: the 8 neighbours' depths. */
+static int rendercache__occluded(const float nd[8], float d, float tol2)
 {
-    uint32_t w = s->width, h = s->height, nearer = 0, n = 0;
+    uint32_t nearer = 0, n = 0, k;
     float sum = 0.0f;
-    int k;
     for (k = 0; k < 8; k++) {
-        int qx = (int)x + rendercache__nx[k], qy = (int)y + rendercache__ny[k];
-        uint32_t q;
-        if (qx < 0 || qy < 0 || qx >= (int)w || qy >= (int)h) continue;
-        q = (uint32_t)qy * w + (uint32_t)qx;
-        if (s->index[q] == RENDERCACHE__NONE) continue;
-        sum += s->depth[q];
-        n++;
-        if (d > s->depth[q] * tol) nearer |= 1u << k;
+        int filled = nd[k] < FLT_MAX;
+        sum += filled ? nd[k] : 0.0f;
+        n += (uint32_t)filled;
+        nearer |= (uint32_t)(d > nd[k] * tol2) << k;
     }
     if (!(((nearer & 3u) == 3u) || ((nearer & 12u) == 12u) || ((nearer & 0xF0u) == 0xF0u))) return 0;
-    return d > (sum / (float)n) * tol;
+    return d > (sum / (float)n) * tol2;
+}
+
+/* The depths of the 8 neighbours of (x, y), FLT_MAX outside the image. */
+static void rendercache__neighbour_depths(const float *depth, uint32_t w, uint32_t h, uint32_t x, uint32_t y,
+                                          float nd[8])
+{
+    int k;
+    if (x > 0 && y > 0 && x + 1 < w && y + 1 < h) {
+        const float *c = depth + (size_t)y * w + x;
+        nd[0] = c[-1]; nd[1] = c[1]; nd[2] = c[-(ptrdiff_t)w]; nd[3] = c[w];
+        nd[4] = c[-(ptrdiff_t)w - 1]; nd[5] = c[-(ptrdiff_t)w + 1]; nd[6] = c[w - 1]; nd[7] = c[w + 1];
+        return;
+    }
+    for (k = 0; k < 8; k++) {
+        int qx = (int)x + rendercache__nx[k], qy = (int)y + rendercache__ny[k];
+        nd[k] = (qx < 0 || qy < 0 || qx >= (int)w || qy >= (int)h) ? FLT_MAX : depth[(size_t)qy * w + (uint32_t)qx];
+    }
 }
 
 /* Job per tile: depth cull; surviving points give their colour and
@@ -1192,31 +1202,37 @@ static int rendercache__occluded(const rendercache__splat *s, uint32_t x, uint32
 static void rendercache__cull_job(void *ctx, uint32_t tile)
 {
     rendercache *rc = (rendercache *)ctx;
-    const rendercache__splat *s = &rc->splat;
+    const rendercache__raster *s = &rc->splat.final;
+    const float *depth = s->depth, *payload = s->payload;
+    const uint32_t *index = s->index, w = rc->width, h = rc->height;
+    uint32_t *px_index = rc->px_index;
+    float *px_depth = rc->px_depth, *image = rc->image, *priority = rc->priority;
+    unsigned char *kind = rc->kind, *count = rc->count;
     uint32_t y0 = tile * RENDERCACHE__TILE_ROWS, y1 = y0 + RENDERCACHE__TILE_ROWS, x, y;
     uint32_t visible = 0, culled = 0, *stats = rc->tile_stats + RENDERCACHE__TILE_STATS * (size_t)tile;
-    float tol = 1.0f + rc->depth_tolerance;
-    if (y1 > rc->height) y1 = rc->height;
+    float tol2 = (1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance);
+    if (y1 > h) y1 = h;
     for (y = y0; y < y1; y++) {
-        for (x = 0; x < rc->width; x++) {
-            uint32_t p = y * rc->width + x, k = s->index[p];
-            const float *payload;
-            if (k != RENDERCACHE__NONE && rendercache__occluded(s, x, y, s->depth[p], tol)) {
-                k = RENDERCACHE__NONE;
-                culled++;
+        for (x = 0; x < w; x++) {
+            uint32_t p = y * w + x, k = index[p];
+            float nd[8];
+            if (k != RENDERCACHE__NONE) {
+                rendercache__neighbour_depths(depth, w, h, x, y, nd);
+                if (rendercache__occluded(nd, depth[p], tol2)) {
+                    k = RENDERCACHE__NONE;
+                    culled++;
+                }
             }
+            px_index[p] = k;
             if (k == RENDERCACHE__NONE) {
-                rc->px_index[p] = RENDERCACHE__NONE;
-                rc->px_depth[p] = FLT_MAX;
+                px_depth[p] = FLT_MAX;
                 continue;
             }
-            payload = s->payload + 4 * (size_t)p;
-            rc->px_index[p] = k;
-            rc->px_depth[p] = s->depth[p];
-            memcpy(rc->image + 3 * (size_t)p, payload, 3 * sizeof(float));
-            rc->priority[p] = payload[3];
-            rc->kind[p] = RENDERCACHE_PIXEL_POINT;
-            rc->count[p] = 0;
+            px_depth[p] = depth[p];
+            memcpy(image + 3 * (size_t)p, payload + 4 * (size_t)p, 3 * sizeof(float));
+            priority[p] = payload[4 * (size_t)p + 3];
+            kind[p] = RENDERCACHE_PIXEL_POINT;
+            count[p] = 0;
             visible++;
         }
     }
@@ -1231,11 +1247,12 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
    (within tolerance of the minimum) or the farthest layer (within tolerance
    of the maximum) is used, whichever carries more weight (the far one on a
    tie: a hole beside an edge is more often uncovered background). Returns
-   the number of points in the window; rgb is set when it is not zero. */
+   the number of points in the window; rgb is set when it is not zero.
+   Depths are squared distances, compared with the squared tolerance. */
 static uint32_t rendercache__interpolate(const rendercache *rc, uint32_t x, uint32_t y, int r, float rgb[3])
 {
     int x0 = (int)x - r, x1 = (int)x + r, y0 = (int)y - r, y1 = (int)y + r, qx, qy;
-    float dmin = FLT_MAX, dmax = 0.0f, tol = 1.0f + rc->depth_tolerance;
+    float dmin = FLT_MAX, dmax = 0.0f, tol2 = (1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance);
     float near_sum[4] = { 0, 0, 0, 0 }, far_sum[4] = { 0, 0, 0, 0 };
     const float *chosen;
     uint32_t n = 0;
@@ -1260,14 +1277,14 @@ static uint32_t rendercache__interpolate(const rendercache *rc, uint32_t x, uint
             if (rc->px_index[q] == RENDERCACHE__NONE) continue;
             d = rc->px_depth[q];
             wgt = (float)((r + 1 - rendercache__iabs(qx - (int)x)) * (r + 1 - rendercache__iabs(qy - (int)y)));
-            if (d <= dmin * tol) acc = near_sum;
-            else if (d * tol >= dmax) acc = far_sum;
+            if (d <= dmin * tol2) acc = near_sum;
+            else if (d * tol2 >= dmax) acc = far_sum;
             else continue;   /* a middle layer: neither side of the choice */
             for (k = 0; k < 3; k++) acc[k] += wgt * rc->image[3 * (size_t)q + k];
             acc[3] += wgt;
         }
     chosen = (far_sum[3] >= near_sum[3]) ? far_sum : near_sum;
-    if (dmax <= dmin * tol) chosen = near_sum;   /* one layer: every point was counted as near */
+    if (dmax <= dmin * tol2) chosen = near_sum;   /* one layer: every point was counted as near */
     rgb[0] = chosen[0] / chosen[3];
     rgb[1] = chosen[1] / chosen[3];
     rgb[2] = chosen[2] / chosen[3];
@@ -1324,7 +1341,7 @@ static void rendercache__start_stats(rendercache *rc)
     rendercache_stats *s = &rc->stats;
     s->frame = rc->frame;
     s->requested = s->predicted = s->inserted = s->replaced = s->evicted = s->rejected = 0;
-    s->time_project = s->time_zbuffer = s->time_cull = s->time_interpolate = 0.0;
+    s->time_project = s->time_cull = s->time_interpolate = 0.0;
     s->time_predict = s->time_request = s->time_insert = 0.0;
 }
 
@@ -1347,7 +1364,7 @@ RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, cons
         rc->obj_moved[o] = 0;
     }
     rendercache__compose_objects(rc, &rc->view, rc->obj_camera);
-    rendercache__splat_points(rc, &rc->view, rc->obj_camera, 1, &rc->stats.time_project, &rc->stats.time_zbuffer);
+    rendercache__splat_points(rc, &rc->view, rc->obj_camera, 1, &rc->stats.time_project);
     t1 = rendercache__now(rc);
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__cull_job, rc, rc->tile_count);
     t2 = rendercache__now(rc);
@@ -1373,7 +1390,7 @@ RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, cons
 static void rendercache__predict_job(void *ctx, uint32_t tile)
 {
     rendercache *rc = (rendercache *)ctx;
-    const rendercache__splat *s = &rc->splat;
+    const rendercache__raster *s = &rc->splat.final;
     uint32_t y0 = tile * RENDERCACHE__TILE_ROWS, y1 = y0 + RENDERCACHE__TILE_ROWS, x, y, holes = 0;
     if (y1 > rc->height) y1 = rc->height;
     for (y = y0; y < y1; y++) {
@@ -1401,7 +1418,7 @@ RENDERCACHE_API rendercache_result rendercache_predict(rendercache *rc, const re
     t0 = rendercache__now(rc);
     rc->predicted = v;
     rendercache__compose_objects(rc, &rc->predicted, rc->obj_predicted);
-    rendercache__splat_points(rc, &rc->predicted, rc->obj_predicted, 0, NULL, NULL);
+    rendercache__splat_points(rc, &rc->predicted, rc->obj_predicted, 0, NULL);
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__predict_job, rc, rc->tile_count);
     rc->pred_holes = rendercache__tile_sum(rc, 5);
     rc->has_prediction = 1;
@@ -1474,10 +1491,10 @@ static void rendercache__find_cut(rendercache *rc, uint32_t budget, uint32_t *cu
 {
     uint32_t *total = rc->hist + (size_t)rc->tile_count * RENDERCACHE__LEVELS, t, l;
     uint64_t above = 0;
-    for (l = 0; l < RENDERCACHE__LEVELS; l++) {
-        uint32_t sum = 0;
-        for (t = 0; t < rc->tile_count; t++) sum += rc->hist[(size_t)t * RENDERCACHE__LEVELS + l];
-        total[l] = sum;
+    memset(total, 0, RENDERCACHE__LEVELS * sizeof *total);
+    for (t = 0; t < rc->tile_count; t++) {
+        const uint32_t *h = rc->hist + (size_t)t * RENDERCACHE__LEVELS;
+        for (l = 0; l < RENDERCACHE__LEVELS; l++) total[l] += h[l];
     }
     *cut = 0;
     *fraction = 1.0f;
@@ -1554,9 +1571,10 @@ static float rendercache__threshold(uint32_t p, uint32_t frame, float amp)
    fractional pixels only, so their count is their total value up to the
    last carry. Fractional pixels keep value + incoming error in select_v
    for the count correction. */
-static uint32_t rendercache__diffuse(rendercache *rc, float fraction)
+static uint32_t rendercache__diffuse(rendercache *rc, float fraction, uint32_t *best_add, uint32_t *best_drop)
 {
     uint32_t w = rc->width, h = rc->height, y, count = 0;
+    float add_v = -FLT_MAX, drop_v = FLT_MAX;
     float *cur = rc->err_rows, *next = rc->err_rows + (w + 2), carry = 0.0f;
     float amp = RENDERCACHE__MODULATION * (1.0f - fraction / RENDERCACHE__MODULATION_FADE);
     if (amp < 0.0f) amp = 0.0f;
@@ -1580,6 +1598,10 @@ static uint32_t rendercache__diffuse(rendercache *rc, float fraction)
             rc->select_v[p] = total;
             rc->chosen[p] = (unsigned char)(2u | pick);
             count += pick;
+            if (pick ? total < drop_v : total > add_v) {   /* the marginal choices, for the correction */
+                if (pick) { drop_v = total; *best_drop = p; }
+                else { add_v = total; *best_add = p; }
+            }
             carry = rendercache__spread_error(rc, cur, next, y, x, dir, e);
         }
         t = cur; cur = next; next = t;
@@ -1589,10 +1611,14 @@ static uint32_t rendercache__diffuse(rendercache *rc, float fraction)
 
 /* Brings the count to the target with the fractional pixels nearest the
    threshold: adds the unchosen with the largest value + error, or drops the
-   chosen with the smallest. Only the final residual needs it, so it runs
-   at most a few times. */
-static uint32_t rendercache__correct_count(rendercache *rc, uint32_t count, uint32_t target)
+   chosen with the smallest. Only the final carry needs it, mostly for one
+   pixel, which the diffusion pass already found (best_add, best_drop); a
+   larger difference scans for each further pixel. */
+static uint32_t rendercache__correct_count(rendercache *rc, uint32_t count, uint32_t target, uint32_t best_add,
+                                           uint32_t best_drop)
 {
+    if (count + 1 == target && best_add != RENDERCACHE__NONE) { rc->chosen[best_add] ^= 1u; return target; }
+    if (count == target + 1 && best_drop != RENDERCACHE__NONE) { rc->chosen[best_drop] ^= 1u; return target; }
     while (count != target) {
         uint32_t p, best = RENDERCACHE__NONE;
         int add = count < target;
@@ -1614,7 +1640,7 @@ static uint32_t rendercache__select(rendercache *rc, const float *priority, uint
 {
     rendercache__select_job job;
     uint64_t positive = 0;
-    uint32_t l, count, target;
+    uint32_t l, count, target, best_add = RENDERCACHE__NONE, best_drop = RENDERCACHE__NONE;
     if (budget == 0) return 0;
     job.rc = rc;
     job.priority = priority;
@@ -1623,8 +1649,8 @@ static uint32_t rendercache__select(rendercache *rc, const float *priority, uint
     for (l = 0; l < RENDERCACHE__LEVELS; l++) positive += rc->hist[(size_t)rc->tile_count * RENDERCACHE__LEVELS + l];
     target = positive < budget ? (uint32_t)positive : budget;
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__threshold_job, &job, rc->tile_count);
-    count = rendercache__diffuse(rc, job.fraction);
-    return rendercache__correct_count(rc, count, target);
+    count = rendercache__diffuse(rc, job.fraction, &best_add, &best_drop);
+    return rendercache__correct_count(rc, count, target, best_add, best_drop);
 }
 
 /* Writes the chosen pixels as requests in scan order and zeroes their
@@ -1725,7 +1751,7 @@ static int rendercache__sample_valid(const rendercache *rc, const rendercache_sa
     return 1;
 }
 
-/* Stores sample s in slot; returns its depth from the eye of view v. */
+/* Stores sample s in slot; returns its squared distance from the eye of view v. */
 static float rendercache__store(rendercache *rc, uint32_t slot, const rendercache_sample *s, const rendercache__view *v)
 {
     rendercache__geo *g = &rc->geo[slot];
@@ -1734,11 +1760,11 @@ static float rendercache__store(rendercache *rc, uint32_t slot, const rendercach
     if (g->object == RENDERCACHE__FREE_SLOT) rc->live++;
     if (s->object == RENDERCACHE_MISS) {
         rendercache__view_ray(v, (float)s->x + 0.5f, (float)s->y + 0.5f, pos);
-        d = RENDERCACHE__FAR;
+        d = RENDERCACHE__FAR2;
     } else {
         float dx = s->position[0] - v->eye[0], dy = s->position[1] - v->eye[1], dz = s->position[2] - v->eye[2];
         rendercache__affine(rc->obj_local + 12 * (size_t)s->object, s->position, pos);
-        d = sqrtf(dx * dx + dy * dy + dz * dz);
+        d = dx * dx + dy * dy + dz * dz;
     }
     g->object = s->object;
     memcpy(pt->rgb, s->rgb, sizeof pt->rgb);
@@ -1795,7 +1821,14 @@ RENDERCACHE_API rendercache_result rendercache_insert(rendercache *rc, const ren
 RENDERCACHE_API const float *rendercache_image(const rendercache *rc) { return rc ? rc->image : NULL; }
 RENDERCACHE_API const float *rendercache_priority_image(const rendercache *rc) { return rc ? rc->priority : NULL; }
 RENDERCACHE_API const unsigned char *rendercache_pixel_kinds(const rendercache *rc) { return rc ? rc->kind : NULL; }
-RENDERCACHE_API const float *rendercache_depth_image(const rendercache *rc) { return rc ? rc->px_depth : NULL; }
+RENDERCACHE_API const float *rendercache_depth_image(rendercache *rc)
+{
+    uint32_t p;
+    if (!rc) return NULL;
+    for (p = 0; p < rc->pixel_count; p++)
+        rc->depth_out[p] = rc->px_depth[p] == FLT_MAX ? FLT_MAX : sqrtf(rc->px_depth[p]);
+    return rc->depth_out;
+}
 
 RENDERCACHE_API void rendercache_get_stats(const rendercache *rc, rendercache_stats *out)
 {

@@ -104,14 +104,14 @@ static void shade_all(ex_pool *pool, const ex_tracer *t, const rendercache_pixel
     ex_pool_parallel_for(pool, shade_one, &j, (n + 255) / 256);
 }
 
-enum { P_PROJECT, P_ZBUFFER, P_CULL, P_INTERP, P_REQUEST, P_INSERT, P_TOTAL, P_COUNT };
+enum { P_PROJECT, P_CULL, P_INTERP, P_REQUEST, P_INSERT, P_TOTAL, P_COUNT };
 
 static void run(const ex_tracer *tracer, ex_pool *shade_pool, uint32_t w, uint32_t h, int threads,
                 double *frame_ms, double *sample_us)
 {
     /* priority is computed inside cull (pixels with a point) and interp (holes) */
-    static const char *names[P_COUNT] = { "project+bin", "z-buffer", "cull+priority", "interp+priority",
-                                          "request", "insert", "total" };
+    static const char *names[P_COUNT] = { "project+z-buffer", "cull+priority", "interp+priority", "request",
+                                          "insert", "total" };
     double times[P_COUNT][FRAMES];
     rendercache_desc d;
     rendercache *rc;
@@ -154,12 +154,11 @@ static void run(const ex_tracer *tracer, ex_pool *shade_pool, uint32_t w, uint32
         rendercache_insert(rc, samples, n);
         rendercache_get_stats(rc, &st);
         times[P_PROJECT][f] = st.time_project;
-        times[P_ZBUFFER][f] = st.time_zbuffer;
         times[P_CULL][f] = st.time_cull;
         times[P_INTERP][f] = st.time_interpolate;
         times[P_REQUEST][f] = st.time_request;
         times[P_INSERT][f] = st.time_insert;
-        times[P_TOTAL][f] = st.time_project + st.time_zbuffer + st.time_cull + st.time_interpolate +
+        times[P_TOTAL][f] = st.time_project + st.time_cull + st.time_interpolate +
                             st.time_request + st.time_insert;
     }
     printf("%4ux%-4u %d thread%s (%s):", w, h, threads, threads > 1 ? "s" : " ", threads > 1 ? "wall" : "cpu ");
