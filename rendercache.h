@@ -1528,9 +1528,13 @@ static float rendercache__spread_error(const rendercache *rc, float *cur, float 
     int w = (int)rc->width, ax = x + dir, bx = x - dir, below = y + 1 < rc->height;
     float wt[4] = { 7.0f, 3.0f, 5.0f, 1.0f }, sum, s;   /* ahead, behind-below, below, ahead-below */
     uint32_t row = y * rc->width, row_below = row + rc->width;
+    if (!below) {   /* last row: everything ahead, if there is an ahead */
+        if (ax < 0 || ax >= w || !rendercache__fractional(rc, row + (uint32_t)ax)) return e;
+        cur[ax + 1] += e;
+        return 0.0f;
+    }
     if (ax < 0 || ax >= w) { wt[2] += wt[0] + wt[3]; wt[0] = wt[3] = 0.0f; }
     if (bx < 0 || bx >= w) { wt[2] += wt[1]; wt[1] = 0.0f; }
-    if (!below) { wt[0] += wt[1] + wt[2] + wt[3]; wt[1] = wt[2] = wt[3] = 0.0f; }
     if (wt[0] > 0.0f && !rendercache__fractional(rc, row + (uint32_t)ax)) wt[0] = 0.0f;
     if (wt[1] > 0.0f && !rendercache__fractional(rc, row_below + (uint32_t)bx)) wt[1] = 0.0f;
     if (wt[2] > 0.0f && !rendercache__fractional(rc, row_below + (uint32_t)x)) wt[2] = 0.0f;
@@ -1611,26 +1615,36 @@ static uint32_t rendercache__diffuse(rendercache *rc, float fraction, uint32_t *
 
 /* Brings the count to the target with the fractional pixels nearest the
    threshold: adds the unchosen with the largest value + error, or drops the
-   chosen with the smallest. Only the final carry needs it, mostly for one
-   pixel, which the diffusion pass already found (best_add, best_drop); a
-   larger difference scans for each further pixel. */
+   chosen with the smallest. The residual (the error left over at the end of
+   the diffusion) is mostly one pixel, which the diffusion pass already
+   found (best_add, best_drop); a larger one takes one scan per 64 pixels,
+   keeping the best 64 candidates in a sorted list. */
+#define RENDERCACHE__CORRECT_BATCH 64u
 static uint32_t rendercache__correct_count(rendercache *rc, uint32_t count, uint32_t target, uint32_t best_add,
                                            uint32_t best_drop)
 {
     if (count + 1 == target && best_add != RENDERCACHE__NONE) { rc->chosen[best_add] ^= 1u; return target; }
     if (count == target + 1 && best_drop != RENDERCACHE__NONE) { rc->chosen[best_drop] ^= 1u; return target; }
     while (count != target) {
-        uint32_t p, best = RENDERCACHE__NONE;
+        uint32_t list[RENDERCACHE__CORRECT_BATCH], n = 0, want, p, i;
+        float key[RENDERCACHE__CORRECT_BATCH];
         int add = count < target;
-        float best_v = add ? -FLT_MAX : FLT_MAX;
+        want = add ? target - count : count - target;
+        if (want > RENDERCACHE__CORRECT_BATCH) want = RENDERCACHE__CORRECT_BATCH;
         for (p = 0; p < rc->pixel_count; p++) {
             unsigned char c = rc->chosen[p];
+            float k;
             if (!(c & 2u) || (int)(c & 1u) == add) continue;
-            if (add ? rc->select_v[p] > best_v : rc->select_v[p] < best_v) { best_v = rc->select_v[p]; best = p; }
+            k = add ? -rc->select_v[p] : rc->select_v[p];   /* smaller key: better candidate */
+            if (n == want && !(k < key[n - 1])) continue;
+            i = n < want ? n++ : n - 1;
+            while (i > 0 && k < key[i - 1]) { key[i] = key[i - 1]; list[i] = list[i - 1]; i--; }
+            key[i] = k;
+            list[i] = p;
         }
-        if (best == RENDERCACHE__NONE) break;
-        rc->chosen[best] ^= 1u;
-        count = add ? count + 1 : count - 1;
+        if (n == 0) break;
+        for (i = 0; i < n; i++) rc->chosen[list[i]] ^= 1u;
+        count = add ? count + n : count - n;
     }
     return count;
 }

@@ -356,6 +356,26 @@ static int requests_adjacent(const rendercache_pixel_request *r, uint32_t n, uin
     return adjacent;
 }
 
+/* Odd sizes: the serpentine scan ends on the right and on the left. */
+static void test_error_diffusion_odd_sizes(void)
+{
+    static const uint32_t sizes[3][2] = { { 61, 47 }, { 1, 33 }, { 37, 1 } };
+    int s;
+    for (s = 0; s < 3; s++) {
+        uint32_t w = sizes[s][0], h = sizes[s][1], b, got = 0;
+        rendercache_camera cam = make_camera(0, 0, 0, 0, 0, 1, w, h);
+        rendercache_desc d = make_desc(w, h);
+        rendercache *rc;
+        if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+        for (b = 1; b <= w * h; b += 1 + w * h / 7) {
+            CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
+            CHECK_EQ_INT(rendercache_request(rc, g_req, b, &got), RENDERCACHE_OK);
+            CHECK_EQ_INT(got, b);
+        }
+        rendercache_destroy(rc);
+    }
+}
+
 static void test_error_diffusion_counts_and_spreads(void)
 {
     const uint32_t w = 64, h = 64, n = w * h;
@@ -975,6 +995,7 @@ int main(int argc, char **argv)
     RUN(test_camera_ray_and_projection_agree);
     RUN(test_static_camera_converges_to_full_render);
     RUN(test_error_diffusion_counts_and_spreads);
+    RUN(test_error_diffusion_odd_sizes);
     RUN(test_camera_motion_reprojects_and_requests_disocclusions);
     RUN(test_depth_cull_drops_hidden_points);
     RUN(test_moving_object_points_follow);
