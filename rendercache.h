@@ -545,43 +545,40 @@ typedef void (*rendercache__source_fn)(const void *src, uint32_t begin, uint32_t
 typedef void (*rendercache__payload_fn)(const void *src, uint32_t begin, uint32_t end, const uint32_t *pix,
                                         float *payload);
 
-/* A z-buffer: per pixel the nearest depth (FLT_MAX when empty), the
-   element (RENDERCACHE__NONE when empty) and its payload. */
+/* The result of a splat: per pixel the nearest depth (FLT_MAX when empty),
+   the element (RENDERCACHE__NONE when empty) and its payload. */
 typedef struct rendercache__raster {
     float *depth;
     uint32_t *index;
     float *payload;          /* 4 per pixel */
 } rendercache__raster;
 
+/* One job's z-buffer: per pixel the key (depth bits << 32 | element; depths
+   are non-negative, so their bits order as the values do, and one compare
+   settles depth and then index) and the payload. One random access per test. */
+typedef struct rendercache__zbuffer {
+    uint64_t *key;
+    float *payload;
+} rendercache__zbuffer;
+#define RENDERCACHE__EMPTY_KEY 0xFFFFFFFFFFFFFFFFull
+
 typedef struct rendercache__splat {
     uint32_t width, height, pixel_count, tile_count;
-    rendercache__raster final;                                    /* the result; job 0's raster */
-    rendercache__raster part[RENDERCACHE__SPLAT_JOBS - 1];         /* the other jobs' rasters */
+    rendercache__raster final;                        /* payload is job 0's */
+    rendercache__zbuffer zb[RENDERCACHE__SPLAT_JOBS];
     uint32_t projected;      /* elements that landed in the image in the last run */
     uint32_t job_projected[RENDERCACHE__SPLAT_JOBS];
 } rendercache__splat;
 
-static void rendercache__raster_free(rendercache__raster *r, const rendercache_allocator *a)
-{
-    rendercache__free(a, r->depth);
-    rendercache__free(a, r->index);
-    rendercache__free(a, r->payload);
-    memset(r, 0, sizeof *r);
-}
-
-static int rendercache__raster_alloc(rendercache__raster *r, uint32_t pixels, const rendercache_allocator *a)
-{
-    r->depth = (float *)rendercache__alloc_array(a, pixels, sizeof(float));
-    r->index = (uint32_t *)rendercache__alloc_array(a, pixels, sizeof(uint32_t));
-    r->payload = (float *)rendercache__alloc_array(a, pixels, 4 * sizeof(float));
-    return r->depth && r->index && r->payload ? 0 : -1;
-}
-
 static void rendercache__splat_free(rendercache__splat *s, const rendercache_allocator *a)
 {
     uint32_t j;
-    rendercache__raster_free(&s->final, a);
-    for (j = 0; j + 1 < RENDERCACHE__SPLAT_JOBS; j++) rendercache__raster_free(&s->part[j], a);
+    rendercache__free(a, s->final.depth);
+    rendercache__free(a, s->final.index);
+    for (j = 0; j < RENDERCACHE__SPLAT_JOBS; j++) {
+        rendercache__free(a, s->zb[j].key);
+        rendercache__free(a, s->zb[j].payload);
+    }
     memset(s, 0, sizeof *s);
 }
 
@@ -597,11 +594,17 @@ static int rendercache__splat_alloc(rendercache__splat *s, uint32_t width, uint3
     s->height = height;
     s->pixel_count = width * height;
     s->tile_count = (height + RENDERCACHE__TILE_ROWS - 1) / RENDERCACHE__TILE_ROWS;
-    failed = rendercache__raster_alloc(&s->final, s->pixel_count, a);
-    for (j = 0; j + 1 < RENDERCACHE__SPLAT_JOBS; j++)
-        failed |= rendercache__raster_alloc(&s->part[j], s->pixel_count, a);
+    s->final.depth = (float *)rendercache__alloc_array(a, s->pixel_count, sizeof(float));
+    s->final.index = (uint32_t *)rendercache__alloc_array(a, s->pixel_count, sizeof(uint32_t));
+    failed = !s->final.depth || !s->final.index;
+    for (j = 0; j < RENDERCACHE__SPLAT_JOBS; j++) {
+        s->zb[j].key = (uint64_t *)rendercache__alloc_array(a, s->pixel_count, sizeof(uint64_t));
+        s->zb[j].payload = (float *)rendercache__alloc_array(a, s->pixel_count, 4 * sizeof(float));
+        failed |= !s->zb[j].key || !s->zb[j].payload;
+    }
+    s->final.payload = s->zb[0].payload;
     if (failed) rendercache__splat_free(s, a);
-    return failed;
+    return failed ? -1 : 0;
 }
 
 typedef struct rendercache__splat_job {
@@ -612,34 +615,37 @@ typedef struct rendercache__splat_job {
     uint32_t element_count, jobs;
 } rendercache__splat_job;
 
-/* Job j: z-buffers its range of elements into its raster, in index order,
-   so an equal depth never displaces an earlier element. */
+static uint64_t rendercache__key(float depth, uint32_t element)
+{
+    uint32_t bits;
+    memcpy(&bits, &depth, sizeof bits);
+    return (uint64_t)bits << 32 | element;
+}
+
+/* Job j: z-buffers its range of elements into its own z-buffer. */
 static void rendercache__splat_range(void *ctx, uint32_t j)
 {
     const rendercache__splat_job *job = (const rendercache__splat_job *)ctx;
     rendercache__splat *s = job->s;
-    const rendercache__raster *r = j == 0 ? &s->final : &s->part[j - 1];
-    float *depth = r->depth, *payload = r->payload;
-    uint32_t *index = r->index;
+    uint64_t *key = s->zb[j].key;
+    float *payload = s->zb[j].payload;
     uint32_t pix[RENDERCACHE__BATCH], begin, end, b, i, projected = 0;
     float d[RENDERCACHE__BATCH], pay[4 * RENDERCACHE__BATCH];
     begin = (uint32_t)((uint64_t)job->element_count * j / job->jobs);
     end = (uint32_t)((uint64_t)job->element_count * (j + 1) / job->jobs);
-    for (i = 0; i < s->pixel_count; i++) {
-        depth[i] = FLT_MAX;
-        index[i] = RENDERCACHE__NONE;
-    }
+    for (i = 0; i < s->pixel_count; i++) key[i] = RENDERCACHE__EMPTY_KEY;
     for (b = begin; b < end; b += RENDERCACHE__BATCH) {
         uint32_t n = end - b < RENDERCACHE__BATCH ? end - b : RENDERCACHE__BATCH;
         job->source(job->src, b, b + n, pix, d);
         if (job->payload) job->payload(job->src, b, b + n, pix, pay);
         for (i = 0; i < n; i++) {
             uint32_t p = pix[i];
+            uint64_t k;
             if (p == RENDERCACHE__NONE) continue;
             projected++;
-            if (d[i] < depth[p]) {
-                depth[p] = d[i];
-                index[p] = b + i;
+            k = rendercache__key(d[i], b + i);
+            if (k < key[p]) {
+                key[p] = k;
                 if (job->payload) memcpy(payload + 4 * (size_t)p, pay + 4 * i, 4 * sizeof(float));
             }
         }
@@ -647,22 +653,30 @@ static void rendercache__splat_range(void *ctx, uint32_t j)
     s->job_projected[j] = projected;
 }
 
-/* Job per tile: the other jobs' rasters into the final one. Their elements
-   come later in index order, so they win only when strictly nearer. */
+/* Job per tile: the least key over the jobs' z-buffers becomes the final
+   depth and element (with its payload). */
 static void rendercache__splat_merge(void *ctx, uint32_t tile)
 {
     const rendercache__splat_job *job = (const rendercache__splat_job *)ctx;
     rendercache__splat *s = job->s;
     uint32_t p0 = tile * RENDERCACHE__TILE_ROWS * s->width, p1 = p0 + RENDERCACHE__TILE_ROWS * s->width, j, p;
     if (p1 > s->pixel_count) p1 = s->pixel_count;
-    for (j = 1; j < job->jobs; j++) {
-        const rendercache__raster *r = &s->part[j - 1];
-        for (p = p0; p < p1; p++) {
-            if (!(r->depth[p] < s->final.depth[p])) continue;
-            s->final.depth[p] = r->depth[p];
-            s->final.index[p] = r->index[p];
-            if (job->payload) memcpy(s->final.payload + 4 * (size_t)p, r->payload + 4 * (size_t)p, 4 * sizeof(float));
+    for (p = p0; p < p1; p++) {
+        uint64_t k = s->zb[0].key[p];
+        uint32_t bits;
+        for (j = 1; j < job->jobs; j++) {
+            if (!(s->zb[j].key[p] < k)) continue;
+            k = s->zb[j].key[p];
+            if (job->payload) memcpy(s->final.payload + 4 * (size_t)p, s->zb[j].payload + 4 * (size_t)p, 4 * sizeof(float));
         }
+        if (k == RENDERCACHE__EMPTY_KEY) {
+            s->final.depth[p] = FLT_MAX;
+            s->final.index[p] = RENDERCACHE__NONE;
+            continue;
+        }
+        bits = (uint32_t)(k >> 32);
+        memcpy(&s->final.depth[p], &bits, sizeof bits);
+        s->final.index[p] = (uint32_t)k;
     }
 }
 
@@ -680,7 +694,7 @@ static void rendercache__splat_run(rendercache__splat *s, void (*parallel_for)(v
     job.element_count = count;
     job.jobs = parallel_for ? RENDERCACHE__SPLAT_JOBS : 1u;
     rendercache__run_jobs(parallel_for, user, rendercache__splat_range, &job, job.jobs);
-    if (job.jobs > 1) rendercache__run_jobs(parallel_for, user, rendercache__splat_merge, &job, s->tile_count);
+    rendercache__run_jobs(parallel_for, user, rendercache__splat_merge, &job, s->tile_count);
     s->projected = 0;
     for (j = 0; j < job.jobs; j++) s->projected += s->job_projected[j];
 }
