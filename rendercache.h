@@ -1081,17 +1081,38 @@ static uint32_t rendercache__batch_object(const rendercache__geo *geo, uint32_t 
     return differ || o >= RENDERCACHE__FREE_SLOT ? RENDERCACHE__NONE : o;
 }
 
+/* The one object of the points [begin, end) other than background points,
+   RENDERCACHE__NONE when there are several or free slots; *background
+   tells whether background points are among them. */
+static uint32_t rendercache__batch_object_or_background(const rendercache__geo *geo, uint32_t begin, uint32_t end,
+                                                        int *background)
+{
+    uint32_t o = RENDERCACHE__NONE, i;
+    *background = 0;
+    for (i = begin; i < end; i++) {
+        uint32_t g = geo[i].object;
+        if (g == RENDERCACHE_MISS) { *background = 1; continue; }
+        if (g == RENDERCACHE__FREE_SLOT || (o != RENDERCACHE__NONE && g != o)) return RENDERCACHE__NONE;
+        o = g;
+    }
+    return o;
+}
+
 /* The splat source of the render cache: cache slots [begin, end). Batches
-   of one object under a perspective view take the vectorised path; the
-   rest goes point by point. */
+   of one object (with or without background points) under a perspective
+   view take the vectorised path; the rest goes point by point. */
 static void rendercache__project_points(const void *src, uint32_t begin, uint32_t end, uint32_t *pix, float *depth2)
 {
     const rendercache__projector *pr = (const rendercache__projector *)src;
     const rendercache__geo *geo = pr->rc->geo;
-    uint32_t i, o = rendercache__batch_object(geo, begin, end);
+    int background;
+    uint32_t i, o = rendercache__batch_object_or_background(geo, begin, end, &background);
     if (pr->view->kind == RENDERCACHE_CAMERA_PERSPECTIVE && o != RENDERCACHE__NONE) {
         rendercache__project_perspective(geo + begin, end - begin, pr->obj_camera + 12 * (size_t)o, pr->view, pix,
                                          depth2);
+        if (background)   /* the few background points, again, as directions */
+            for (i = begin; i < end; i++)
+                if (geo[i].object == RENDERCACHE_MISS) pix[i - begin] = rendercache__project_point(pr, &geo[i], &depth2[i - begin]);
         return;
     }
     for (i = begin; i < end; i++) pix[i - begin] = rendercache__project_point(pr, &geo[i], &depth2[i - begin]);
@@ -1265,6 +1286,8 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
    Depths are squared distances, compared with the squared tolerance. */
 static uint32_t rendercache__interpolate(const rendercache *rc, uint32_t x, uint32_t y, int r, float rgb[3])
 {
+    const float *depth = rc->px_depth, *image = rc->image;
+    const uint32_t w = rc->width;
     int x0 = (int)x - r, x1 = (int)x + r, y0 = (int)y - r, y1 = (int)y + r, qx, qy;
     float dmin = FLT_MAX, dmax = 0.0f, tol2 = (1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance);
     float near_sum[4] = { 0, 0, 0, 0 }, far_sum[4] = { 0, 0, 0, 0 };
@@ -1272,31 +1295,37 @@ static uint32_t rendercache__interpolate(const rendercache *rc, uint32_t x, uint
     uint32_t n = 0;
     if (x0 < 0) x0 = 0;
     if (y0 < 0) y0 = 0;
-    if (x1 >= (int)rc->width) x1 = (int)rc->width - 1;
+    if (x1 >= (int)w) x1 = (int)w - 1;
     if (y1 >= (int)rc->height) y1 = (int)rc->height - 1;
-    for (qy = y0; qy <= y1; qy++)
+    for (qy = y0; qy <= y1; qy++) {
+        const float *row = depth + (size_t)qy * w;
         for (qx = x0; qx <= x1; qx++) {
-            uint32_t q = (uint32_t)qy * rc->width + (uint32_t)qx;
-            if (rc->px_index[q] == RENDERCACHE__NONE) continue;
-            if (rc->px_depth[q] < dmin) dmin = rc->px_depth[q];
-            if (rc->px_depth[q] > dmax) dmax = rc->px_depth[q];
+            float d = row[qx];
+            if (d == FLT_MAX) continue;   /* no point there */
+            dmin = d < dmin ? d : dmin;
+            dmax = d > dmax ? d : dmax;
             n++;
         }
+    }
     if (n == 0) return 0;
-    for (qy = y0; qy <= y1; qy++)
+    for (qy = y0; qy <= y1; qy++) {
+        const float *row = depth + (size_t)qy * w;
+        float wy = (float)(r + 1 - rendercache__iabs(qy - (int)y));
         for (qx = x0; qx <= x1; qx++) {
-            uint32_t q = (uint32_t)qy * rc->width + (uint32_t)qx;
-            float d, wgt, *acc;
-            int k;
-            if (rc->px_index[q] == RENDERCACHE__NONE) continue;
-            d = rc->px_depth[q];
-            wgt = (float)((r + 1 - rendercache__iabs(qx - (int)x)) * (r + 1 - rendercache__iabs(qy - (int)y)));
+            float d = row[qx], wgt, *acc;
+            const float *c;
+            if (d == FLT_MAX) continue;
             if (d <= dmin * tol2) acc = near_sum;
             else if (d * tol2 >= dmax) acc = far_sum;
             else continue;   /* a middle layer: neither side of the choice */
-            for (k = 0; k < 3; k++) acc[k] += wgt * rc->image[3 * (size_t)q + k];
+            wgt = wy * (float)(r + 1 - rendercache__iabs(qx - (int)x));
+            c = image + 3 * ((size_t)qy * w + (size_t)qx);
+            acc[0] += wgt * c[0];
+            acc[1] += wgt * c[1];
+            acc[2] += wgt * c[2];
             acc[3] += wgt;
         }
+    }
     chosen = (far_sum[3] >= near_sum[3]) ? far_sum : near_sum;
     if (dmax <= dmin * tol2) chosen = near_sum;   /* one layer: every point was counted as near */
     rgb[0] = chosen[0] / chosen[3];
@@ -1465,38 +1494,49 @@ typedef struct rendercache__select_job {
     float fraction;
 } rendercache__select_job;
 
+/* The histogram level of a priority in [0, 1] (anything else: level 0). */
 static uint32_t rendercache__level(float priority)
 {
-    uint32_t l = (uint32_t)(priority * (float)RENDERCACHE__LEVELS);
-    return l >= RENDERCACHE__LEVELS ? RENDERCACHE__LEVELS - 1 : l;
+    float l = priority * (float)RENDERCACHE__LEVELS;
+    l = l > 0.0f ? l : 0.0f;
+    l = l < (float)(RENDERCACHE__LEVELS - 1) ? l : (float)(RENDERCACHE__LEVELS - 1);
+    return (uint32_t)l;
 }
 
 static void rendercache__histogram_job(void *ctx, uint32_t tile)
 {
     const rendercache__select_job *j = (const rendercache__select_job *)ctx;
     const rendercache *rc = j->rc;
+    const float *priority = j->priority;
     uint32_t *h = rc->hist + (size_t)tile * RENDERCACHE__LEVELS;
     uint32_t p0 = tile * RENDERCACHE__TILE_ROWS * rc->width, p1 = p0 + RENDERCACHE__TILE_ROWS * rc->width, p;
     if (p1 > rc->pixel_count) p1 = rc->pixel_count;
     memset(h, 0, RENDERCACHE__LEVELS * sizeof *h);
     for (p = p0; p < p1; p++)
-        if (j->priority[p] > 0.0f) h[rendercache__level(j->priority[p])]++;
+        if (priority[p] > 0.0f) h[rendercache__level(priority[p])]++;
 }
 
+/* Job per tile: the thresholded values, and the pixels decided outright. */
 static void rendercache__threshold_job(void *ctx, uint32_t tile)
 {
     const rendercache__select_job *j = (const rendercache__select_job *)ctx;
-    const rendercache *rc = j->rc;
-    uint32_t p0 = tile * RENDERCACHE__TILE_ROWS * rc->width, p1 = p0 + RENDERCACHE__TILE_ROWS * rc->width, p;
+    rendercache *rc = j->rc;
+    const float *priority = j->priority, fraction = j->fraction;
+    const uint32_t cut = j->cut;
+    float *select_v = rc->select_v;
+    unsigned char *chosen = rc->chosen;
+    uint32_t p0 = tile * RENDERCACHE__TILE_ROWS * rc->width, p1 = p0 + RENDERCACHE__TILE_ROWS * rc->width, p, ones = 0;
     if (p1 > rc->pixel_count) p1 = rc->pixel_count;
     for (p = p0; p < p1; p++) {
-        float pr = j->priority[p], v = 0.0f;
-        if (pr > 0.0f) {
-            uint32_t l = rendercache__level(pr);
-            v = l > j->cut ? 1.0f : (l == j->cut ? j->fraction : 0.0f);
-        }
-        rc->select_v[p] = v;
+        float pr = priority[p];
+        uint32_t l = rendercache__level(pr);
+        float v = !(pr > 0.0f) ? 0.0f : (l > cut ? 1.0f : (l == cut ? fraction : 0.0f));
+        select_v[p] = v;
+        /* 1: chosen outright; 2: fractional, for the error diffusion */
+        chosen[p] = (unsigned char)(v >= 1.0f ? 1u : (v > 0.0f ? 2u : 0u));
+        ones += v >= 1.0f;
     }
+    rc->tile_stats[RENDERCACHE__TILE_STATS * (size_t)tile + 5] = ones;
 }
 
 /* Finds the cut level and its fraction so that the values sum to budget
@@ -1525,8 +1565,7 @@ static void rendercache__find_cut(rendercache *rc, uint32_t budget, uint32_t *cu
 /* Whether pixel q takes part in the diffusion (its value is fractional). */
 static int rendercache__fractional(const rendercache *rc, uint32_t q)
 {
-    float v = rc->select_v[q];
-    return v > 0.0f && v < 1.0f;
+    return (rc->chosen[q] & 2u) != 0;
 }
 
 /* Hands the error e of pixel (x, y) to its unvisited neighbours with the
@@ -1588,10 +1627,13 @@ static float rendercache__threshold(uint32_t p, uint32_t frame, float amp)
    of value 0 or 1 are decided outright; the error moves among the
    fractional pixels only, so their count is their total value up to the
    last carry. Fractional pixels keep value + incoming error in select_v
-   for the count correction. */
+   for the count correction. The threshold pass marked them (chosen & 2)
+   and counted the pixels chosen outright (tile statistics column 5). */
 static uint32_t rendercache__diffuse(rendercache *rc, float fraction, uint32_t *best_add, uint32_t *best_drop)
 {
-    uint32_t w = rc->width, h = rc->height, y, count = 0;
+    uint32_t w = rc->width, h = rc->height, y, count = rendercache__tile_sum(rc, 5);
+    unsigned char *chosen = rc->chosen;
+    float *select_v = rc->select_v;
     float add_v = -FLT_MAX, drop_v = FLT_MAX;
     float *cur = rc->err_rows, *next = rc->err_rows + (w + 2), carry = 0.0f;
     float amp = RENDERCACHE__MODULATION * (1.0f - fraction / RENDERCACHE__MODULATION_FADE);
@@ -1603,18 +1645,14 @@ static uint32_t rendercache__diffuse(rendercache *rc, float fraction, uint32_t *
         memset(next, 0, (w + 2) * sizeof *next);
         for (k = 0; k < (int)w; k++, x += dir) {
             uint32_t p = y * w + (uint32_t)x;
-            float v = rc->select_v[p], total, e;
+            float total, e;
             unsigned char pick;
-            if (v <= 0.0f || v >= 1.0f) {
-                rc->chosen[p] = v >= 1.0f;
-                count += v >= 1.0f;
-                continue;
-            }
-            total = v + cur[x + 1] + carry;
+            if (!(chosen[p] & 2u)) continue;   /* decided by the threshold */
+            total = select_v[p] + cur[x + 1] + carry;
             pick = total >= rendercache__threshold(p, rc->frame, amp) ? 1u : 0u;
             e = total - (float)pick;
-            rc->select_v[p] = total;
-            rc->chosen[p] = (unsigned char)(2u | pick);
+            select_v[p] = total;
+            chosen[p] = (unsigned char)(2u | pick);
             count += pick;
             if (pick ? total < drop_v : total > add_v) {   /* the marginal choices, for the correction */
                 if (pick) { drop_v = total; *best_drop = p; }
