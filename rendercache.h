@@ -73,16 +73,37 @@
        a time; the per-frame work runs in parallel through desc.parallel_for
        and gives bit-identical results for any thread count.
 
+   HOW A FRAME WORKS (and which published step each part is)
+
+       begin_frame: every point is projected into the camera and z-buffered,
+       one point per pixel (WDP99 reprojection); a point much farther than
+       the average depth of its 3x3 neighbourhood, with nearer points on
+       opposite sides, is dropped (WDP99 depth cull); holes are filled by a
+       3x3 tent filter, or a 7x7 one where points are sparse (WDG02), from
+       the nearest or the farthest depth layer only, never a blend; the
+       priority image ranks old points (age, faster for moving objects,
+       times the sample's priority_scale) below holes (the fewer points
+       around, the higher), and pixels with nothing near at 1 (WDP99).
+       request: the levels of the priority image above a threshold are all
+       requested, the level at the threshold gets the rest of the budget,
+       spread by Floyd-Steinberg error diffusion (WDP99); with predict, up to
+       desc.predict_fraction of the budget goes to the holes of the next
+       camera (WDG02 predictive sampling). insert: a sample replaces the
+       point its pixel showed, or the oldest point not visible (clock).
+
    LIMITS
 
        Image up to 2^28 pixels, cache up to 2^31 points, up to 2^24 objects.
-       Point colours are fixed when they are inserted (the cache ages them so
-       that they get refreshed); view-dependent shading changes only as points
-       are resampled, as in the paper.
+       Memory: 40 bytes per cache point (2 per pixel by default) and about 71
+       bytes per pixel, 95 with parallel_for: 40 MB for 512x512. Point
+       colours are fixed when they are inserted (the cache ages them so that
+       they get refreshed); view-dependent shading changes only as points are
+       resampled, as in the paper. Error diffusion is sequential by nature and
+       runs on the calling thread; the rest of a frame runs in parallel.
 
    PAPER
 
-       Bruce Walter, George Drettakis and Steven Parker, Interactive Rendering using the Render Cache, EGWR 1999; Bruce Walter, George Drettakis and Donald P. Greenberg, Enhancing and Optimizing the Render Cache, EGWR 2002; Nimeroff, Dorsey and Rushmeier, Implementation and Analysis of an Image-Based Global Illumination Framework for Animated Environments, IEEE TVCG 2(4), 1996. The render cache as used by Crespin and Peroche, Interactive Global Illumination with 5D Light Vectors (sections 2.2 and 4.1).
+       Bruce Walter, George Drettakis and Steven Parker, Interactive Rendering using the Render Cache, EGWR 1999; Bruce Walter, George Drettakis and Donald P. Greenberg, Enhancing and Optimizing the Render Cache, EGWR 2002; Nimeroff, Dorsey and Rushmeier, Implementation and Analysis of an Image-Based Global Illumination Framework for Animated Environments, IEEE TVCG 2(4), 1996. The render cache as used by Rodolphe Crespin and Bernard Peroche, Light Vectors for a Moving Observer, WSCG 2004 (sections 2.2 and 4.1).
 */
 #ifndef RENDERCACHE_H
 #define RENDERCACHE_H
@@ -564,6 +585,7 @@ typedef struct rendercache__zbuffer {
 
 typedef struct rendercache__splat {
     uint32_t width, height, pixel_count, tile_count;
+    uint32_t jobs;           /* z-buffers allocated: 1, or SPLAT_JOBS with parallel_for */
     rendercache__raster final;                        /* payload is job 0's */
     rendercache__zbuffer zb[RENDERCACHE__SPLAT_JOBS];
     uint32_t projected;      /* elements that landed in the image in the last run */
@@ -582,14 +604,15 @@ static void rendercache__splat_free(rendercache__splat *s, const rendercache_all
     memset(s, 0, sizeof *s);
 }
 
-/* Allocates a splat for a width x height raster. Returns 0, or -1 when
-   out of memory. */
-static int rendercache__splat_alloc(rendercache__splat *s, uint32_t width, uint32_t height,
+/* Allocates a splat for a width x height raster, run by jobs (1 or
+   RENDERCACHE__SPLAT_JOBS) z-buffers. Returns 0, or -1 when out of memory. */
+static int rendercache__splat_alloc(rendercache__splat *s, uint32_t width, uint32_t height, uint32_t jobs,
                                     const rendercache_allocator *a)
 {
     uint32_t j;
     int failed;
     memset(s, 0, sizeof *s);
+    s->jobs = jobs;
     s->width = width;
     s->height = height;
     s->pixel_count = width * height;
@@ -597,7 +620,7 @@ static int rendercache__splat_alloc(rendercache__splat *s, uint32_t width, uint3
     s->final.depth = (float *)rendercache__alloc_array(a, s->pixel_count, sizeof(float));
     s->final.index = (uint32_t *)rendercache__alloc_array(a, s->pixel_count, sizeof(uint32_t));
     failed = !s->final.depth || !s->final.index;
-    for (j = 0; j < RENDERCACHE__SPLAT_JOBS; j++) {
+    for (j = 0; j < jobs; j++) {
         s->zb[j].key = (uint64_t *)rendercache__alloc_array(a, s->pixel_count, sizeof(uint64_t));
         s->zb[j].payload = (float *)rendercache__alloc_array(a, s->pixel_count, 4 * sizeof(float));
         failed |= !s->zb[j].key || !s->zb[j].payload;
@@ -680,7 +703,8 @@ static void rendercache__splat_merge(void *ctx, uint32_t tile)
     }
 }
 
-/* Runs the splat over elements [0, count) into s->final. */
+/* Runs the splat over elements [0, count) into s->final; parallel_for only
+   when the splat was allocated for several jobs. */
 static void rendercache__splat_run(rendercache__splat *s, void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t),
                                    void *user, rendercache__source_fn source, rendercache__payload_fn payload,
                                    const void *src, uint32_t count)
@@ -692,7 +716,7 @@ static void rendercache__splat_run(rendercache__splat *s, void (*parallel_for)(v
     job.payload = payload;
     job.src = src;
     job.element_count = count;
-    job.jobs = parallel_for ? RENDERCACHE__SPLAT_JOBS : 1u;
+    job.jobs = parallel_for ? s->jobs : 1u;
     rendercache__run_jobs(parallel_for, user, rendercache__splat_range, &job, job.jobs);
     rendercache__run_jobs(parallel_for, user, rendercache__splat_merge, &job, s->tile_count);
     s->projected = 0;
@@ -704,7 +728,7 @@ static void rendercache__splat_run(rendercache__splat *s, void (*parallel_for)(v
    ---------------------------------------------------------------------- */
 #define RENDERCACHE__FREE_SLOT 0xFFFFFFFEu   /* object id of an unused cache slot */
 #define RENDERCACHE__LEVELS 1024u            /* priority levels of the threshold histogram */
-#define RENDERCACHE__TILE_STATS 6u           /* visible, culled, interpolated, sparse, empty, holes */
+#define RENDERCACHE__TILE_STATS 6u           /* visible, culled, interpolated, sparse, empty, scratch */
 
 /* Priority image values (WDP99 priority image, extended to [0, 1]): a point
    rises with age to POINT_MAX; holes rank above every point, the sparser the
@@ -720,7 +744,7 @@ typedef struct rendercache__geo {
 } rendercache__geo;
 
 /* The rest of a slot, read for the points that land in the image: 24
-   bytes. A point's age is not stored but derived, so nothing is written
+   bytes, streamed with geo. A point's age is not stored but derived, so nothing is written
    per point and frame: age = frame - birth + (motion of its object since
    birth), the last term making points of moving objects age faster. */
 typedef struct rendercache__point {
@@ -827,15 +851,15 @@ static void rendercache__reset_points(rendercache *rc)
 static void rendercache__release(rendercache *rc)
 {
     const rendercache_allocator a = rc->alloc;
-    void *blocks[22];
+    void *blocks[21];
     size_t i;
     blocks[0] = rc->geo; blocks[1] = rc->data; blocks[2] = rc->obj_predicted; blocks[3] = rc->obj_motion;
-    blocks[4] = rc->depth_out; blocks[5] = NULL; blocks[6] = rc->obj_world; blocks[7] = rc->obj_local;
-    blocks[8] = rc->obj_camera; blocks[9] = rc->obj_moved; blocks[10] = rc->px_index;
-    blocks[11] = rc->px_depth; blocks[12] = rc->image; blocks[13] = rc->priority;
-    blocks[14] = rc->pred_priority; blocks[15] = rc->kind; blocks[16] = rc->count;
-    blocks[17] = rc->tile_stats; blocks[18] = rc->hist; blocks[19] = rc->select_v;
-    blocks[20] = rc->chosen; blocks[21] = rc->err_rows;
+    blocks[4] = rc->depth_out; blocks[5] = rc->obj_world; blocks[6] = rc->obj_local;
+    blocks[7] = rc->obj_camera; blocks[8] = rc->obj_moved; blocks[9] = rc->px_index;
+    blocks[10] = rc->px_depth; blocks[11] = rc->image; blocks[12] = rc->priority;
+    blocks[13] = rc->pred_priority; blocks[14] = rc->kind; blocks[15] = rc->count;
+    blocks[16] = rc->tile_stats; blocks[17] = rc->hist; blocks[18] = rc->select_v;
+    blocks[19] = rc->chosen; blocks[20] = rc->err_rows;
     for (i = 0; i < sizeof blocks / sizeof blocks[0]; i++) rendercache__free(&a, blocks[i]);
     rendercache__splat_free(&rc->splat, &a);
     rendercache__free(&a, rc);
@@ -871,7 +895,8 @@ static int rendercache__alloc_buffers(rendercache *rc)
         !rc->priority || !rc->pred_priority || !rc->kind || !rc->count || !rc->tile_stats || !rc->hist ||
         !rc->select_v || !rc->chosen || !rc->err_rows)
         return -1;
-    return rendercache__splat_alloc(&rc->splat, rc->width, rc->height, a);
+    return rendercache__splat_alloc(&rc->splat, rc->width, rc->height,
+                                    rc->parallel_for ? RENDERCACHE__SPLAT_JOBS : 1u, a);
 }
 
 /* Applies the defaults and checks the ranges of a desc; 0 on bad input. */
@@ -1006,9 +1031,11 @@ RENDERCACHE_API rendercache_result rendercache_set_object_transform(rendercache 
 }
 
 /* ======================================================================
-   12. per-frame pipeline (Walter et al. 1999, figure "render cache
-   structure"): age -> project -> z-buffer -> depth cull -> interpolate ->
-   priority image; then requests by error diffusion.
+   12. per-frame pipeline (Walter et al. 1999): project every point into
+   the new camera and z-buffer it (section 9) -> depth cull -> interpolate
+   the holes; the priority image is written by the last two (points: age;
+   holes: how few points surround them). Then requests by thresholding and
+   error diffusion (section 14), and insertion (section 15).
    ---------------------------------------------------------------------- */
 /* Where a projection goes: a view and its object-to-camera matrices. */
 typedef struct rendercache__projector {
