@@ -173,14 +173,16 @@ static int channels(const float *rgb)
 /* ---------------------------------------------------------------------
    desc and camera validation
    --------------------------------------------------------------------- */
+/* user: int[2], live blocks and allocation calls */
 static void *counting_alloc(size_t size, void *user)
 {
-    (*(int *)user)++;
+    ((int *)user)[0]++;
+    ((int *)user)[1]++;
     return malloc(size);
 }
 static void counting_free(void *p, void *user)
 {
-    if (p) (*(int *)user)--;
+    if (p) ((int *)user)[0]--;
     free(p);
 }
 
@@ -189,7 +191,7 @@ static void test_create_validates_desc(void)
     rendercache_desc d = make_desc(32, 24);
     rendercache *rc = (rendercache *)&d;
     rendercache_stats st;
-    int live = 0;
+    int live[2] = { 0, 0 };
     CHECK_EQ_INT(rendercache_create(NULL, &rc), RENDERCACHE_ERROR_INVALID_ARGUMENT);
     CHECK(rc == NULL);
     CHECK_EQ_INT(rendercache_create(&d, NULL), RENDERCACHE_ERROR_INVALID_ARGUMENT);
@@ -217,14 +219,14 @@ static void test_create_validates_desc(void)
     d.allocator.alloc = counting_alloc;   /* alloc without free */
     CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_ERROR_INVALID_ARGUMENT);
     d.allocator.free = counting_free;
-    d.allocator.user = &live;
+    d.allocator.user = live;
     CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK);
-    CHECK(live > 0);
+    CHECK(live[0] > 0);
     rendercache_get_stats(rc, &st);
     CHECK_EQ_INT(st.capacity, 2 * 32 * 24);   /* default: 2 points per pixel */
     CHECK_EQ_INT(st.live_points, 0);
     rendercache_destroy(rc);
-    CHECK_EQ_INT(live, 0);   /* everything allocated was freed */
+    CHECK_EQ_INT(live[0], 0);   /* everything allocated was freed */
     rendercache_destroy(NULL);
 }
 
@@ -852,6 +854,122 @@ static void test_priority_scale(void)
 }
 
 /* ---------------------------------------------------------------------
+   Interpolation: the 3x3 filter, the wide filter where points are sparse,
+   empty beyond it; a plane of one colour is filled with exactly it.
+   --------------------------------------------------------------------- */
+static int is_grid_point(uint32_t x, uint32_t y, uint32_t w)
+{
+    /* spacing 2 in the top half (3x3 filter), 4 below (wide filter), left half only */
+    uint32_t step = y < 20 ? 2 : 4;
+    return x < w / 2 && x % step == 0 && y % step == 0;
+}
+
+static void test_sparse_points_use_the_wide_filter(void)
+{
+    const uint32_t w = 40, h = 40;
+    rendercache_camera cam = make_camera(0, 0, 0, 0, 0, 10, w, h);
+    rendercache_desc d = make_desc(w, h);
+    rendercache *rc;
+    const unsigned char *kind;
+    const float *img, *prio;
+    uint32_t n = 0, x, y, wrong = 0, counts[4] = { 0, 0, 0, 0 };
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
+    for (y = 0; y < h; y++)
+        for (x = 0; x < w; x++) {
+            rendercache_sample *s = &g_samples[n];
+            float o[3], dir[3], t;
+            if (!is_grid_point(x, y, w)) continue;
+            n++;
+            memset(s, 0, sizeof *s);
+            s->x = x; s->y = y;
+            rendercache_camera_ray(&cam, (float)x + 0.5f, (float)y + 0.5f, o, dir);
+            t = 10.0f / dir[2];
+            s->position[0] = t * dir[0]; s->position[1] = t * dir[1]; s->position[2] = 10.0f;
+            s->rgb[0] = 0.25f; s->rgb[1] = 0.5f; s->rgb[2] = 0.75f;
+        }
+    CHECK_EQ_INT(rendercache_insert(rc, g_samples, n), RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
+    kind = rendercache_pixel_kinds(rc);
+    img = rendercache_image(rc);
+    prio = rendercache_priority_image(rc);
+    for (y = 0; y < h; y++)
+        for (x = 0; x < w; x++) {
+            uint32_t p = y * w + x, near3 = 0, near7 = 0;
+            int dx, dy;
+            unsigned char expect;
+            for (dy = -3; dy <= 3; dy++)
+                for (dx = -3; dx <= 3; dx++) {
+                    int qx = (int)x + dx, qy = (int)y + dy;
+                    if ((!dx && !dy) || qx < 0 || qy < 0 || qx >= (int)w || qy >= (int)h) continue;
+                    if (!is_grid_point((uint32_t)qx, (uint32_t)qy, w)) continue;
+                    near7++;
+                    near3 += dx >= -1 && dx <= 1 && dy >= -1 && dy <= 1;
+                }
+            /* the desc defaults: 3x3 from 2 neighbours on, else the 7x7 window */
+            expect = is_grid_point(x, y, w) ? RENDERCACHE_PIXEL_POINT
+                   : near3 >= 2 ? RENDERCACHE_PIXEL_INTERPOLATED
+                   : near7 > 0 ? RENDERCACHE_PIXEL_SPARSE : RENDERCACHE_PIXEL_EMPTY;
+            counts[kind[p]]++;
+            if (kind[p] != expect) { wrong++; continue; }
+            if (kind[p] == RENDERCACHE_PIXEL_EMPTY) {
+                CHECK(img[3 * p] == 0.0f && prio[p] == 1.0f);   /* background colour, maximum priority */
+                continue;
+            }
+            /* a weighted mean of equal colours is that colour (float rounding only) */
+            CHECK_CLOSE(img[3 * p + 0], 0.25, 1e-6, 0.0);
+            CHECK_CLOSE(img[3 * p + 2], 0.75, 1e-6, 0.0);
+            if (kind[p] == RENDERCACHE_PIXEL_SPARSE) CHECK(prio[p] > 0.75f && prio[p] < 1.0f);
+            if (kind[p] == RENDERCACHE_PIXEL_INTERPOLATED) CHECK(prio[p] >= 0.5f && prio[p] <= 0.75f);
+        }
+    CHECK_MSG(wrong == 0, "%u pixels of the wrong kind", wrong);
+    CHECK(counts[RENDERCACHE_PIXEL_INTERPOLATED] > 0 && counts[RENDERCACHE_PIXEL_SPARSE] > 0 &&
+          counts[RENDERCACHE_PIXEL_EMPTY] > 0);
+    test_note("one-colour points: %u shown, %u filled by 3x3, %u by 7x7, %u empty, all exact", counts[0], counts[1],
+              counts[2], counts[3]);
+    rendercache_destroy(rc);
+}
+
+/* ---------------------------------------------------------------------
+   No allocation after create.
+   --------------------------------------------------------------------- */
+static void test_no_allocation_per_frame(void)
+{
+    const uint32_t w = 48, h = 40;
+    rendercache_desc d = make_desc(w, h);
+    rendercache *rc;
+    scene s;
+    float m[12] = { 1, 0, 0, 0.1f, 0, 1, 0, 0, 0, 0, 1, 0 };
+    int live[2] = { 0, 0 }, calls_after_create, f;
+    ex_pool *pool = ex_pool_create(2);
+    memset(&s, 0, sizeof s);
+    d.allocator.alloc = counting_alloc;
+    d.allocator.free = counting_free;
+    d.allocator.user = live;
+    d.parallel_for = pool ? ex_pool_parallel_for : NULL;
+    d.parallel_user = pool;
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+    calls_after_create = live[1];
+    for (f = 0; f < 6; f++) {
+        rendercache_camera cam = make_camera(0.1f * (float)f, 0, 0, 0, 0, 10, w, h), next = cam;
+        uint32_t n = 0, i;
+        next.eye[0] += 0.1f;
+        m[3] = 0.1f * (float)f;
+        rendercache_set_object_transform(rc, 1, m);
+        rendercache_begin_frame(rc, &cam);
+        rendercache_predict(rc, &next);
+        rendercache_request(rc, g_req, w * h / 4, &n);
+        for (i = 0; i < n; i++) shade(&s, &g_req[i], &g_samples[i]);
+        rendercache_insert(rc, g_samples, n);
+        (void)rendercache_depth_image(rc);
+    }
+    CHECK_EQ_INT(live[1], calls_after_create);   /* not one allocator call per frame */
+    rendercache_destroy(rc);
+    CHECK_EQ_INT(live[0], 0);
+    ex_pool_destroy(pool);
+}
+
+/* ---------------------------------------------------------------------
    Bad input leaves the state untouched.
    --------------------------------------------------------------------- */
 static void test_bad_input_is_rejected(void)
@@ -1003,6 +1121,8 @@ int main(int argc, char **argv)
     RUN(test_predictive_sampling_fills_next_holes);
     RUN(test_eviction_spares_visible_points);
     RUN(test_priority_scale);
+    RUN(test_sparse_points_use_the_wide_filter);
+    RUN(test_no_allocation_per_frame);
     RUN(test_bad_input_is_rejected);
     RUN(test_deterministic_for_any_thread_count);
     return test_finish();
