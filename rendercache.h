@@ -403,6 +403,18 @@ static void rendercache__affine(const float m[12], const float x[3], float y[3])
 }
 
 /* ======================================================================
+   3. counter-based random numbers (only the finaliser is needed here: the
+   threshold modulation hashes (frame, pixel))
+   ---------------------------------------------------------------------- */
+/* SplitMix64 finaliser (Steele, Lea, Flood 2014). */
+static uint64_t rendercache__mix64(uint64_t z)
+{
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+/* ======================================================================
    7. jobs: the caller's parallel_for, or a serial loop
    ---------------------------------------------------------------------- */
 static void rendercache__run_jobs(void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t), void *user,
@@ -1642,10 +1654,7 @@ static float rendercache__spread_error(const rendercache *rc, float *cur, float 
 
 static float rendercache__threshold(uint32_t p, uint32_t frame, float amp)
 {
-    uint64_t z = ((uint64_t)frame << 32 | p) * 0x9E3779B97F4A7C15ull;
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    z ^= z >> 31;
+    uint64_t z = rendercache__mix64(((uint64_t)frame << 32 | p) * 0x9E3779B97F4A7C15ull);
     return 0.5f + amp * ((float)(z >> 40) * (1.0f / 8388608.0f) - 1.0f);
 }
 
