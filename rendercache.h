@@ -815,6 +815,7 @@ struct rendercache {
     unsigned char *chosen;   /* per pixel: 1 chosen, 2 fractional (error-diffused) */
     float *err_rows;         /* two rows of diffused error */
     uint32_t pred_holes;
+    uint32_t touched;        /* rendercache__touch_slots' results, kept so its reads stay */
 
     rendercache_stats stats;
 };
@@ -1887,6 +1888,22 @@ static void rendercache__show(rendercache *rc, uint32_t p, uint32_t slot, float 
     rc->priority[p] = 0.0f;
 }
 
+/* Reads the slots that the next samples will replace in place, all at
+   once, so that their cache misses overlap instead of coming one by one.
+   Returns a value that depends on the reads (for the caller to keep). */
+static uint32_t rendercache__touch_slots(const rendercache *rc, const rendercache_sample *samples, uint32_t n)
+{
+    uint32_t i, sum = 0;
+    for (i = 0; i < n; i++) {
+        const rendercache_sample *s = &samples[i];
+        uint32_t slot;
+        if (s->x >= rc->width || s->y >= rc->height || (s->flags & RENDERCACHE_REQUEST_PREDICTED)) continue;
+        slot = rc->px_index[s->y * rc->width + s->x];
+        if (slot != RENDERCACHE__NONE) sum += rc->geo[slot].object + rc->data[slot].birth;
+    }
+    return sum;
+}
+
 RENDERCACHE_API rendercache_result rendercache_insert(rendercache *rc, const rendercache_sample *samples, uint32_t n)
 {
     uint32_t i;
@@ -1899,6 +1916,7 @@ RENDERCACHE_API rendercache_result rendercache_insert(rendercache *rc, const ren
         const rendercache__view *v = predicted ? &rc->predicted : &rc->view;
         uint32_t p, slot;
         float d;
+        if (i % 32 == 0) rc->touched += rendercache__touch_slots(rc, s, n - i < 32 ? n - i : 32);
         if (!rendercache__sample_valid(rc, s) || (!predicted && !rc->has_frame)) { rc->stats.rejected++; continue; }
         p = s->y * rc->width + s->x;
         slot = predicted ? RENDERCACHE__NONE : rc->px_index[p];
