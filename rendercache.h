@@ -1252,7 +1252,7 @@ static int rendercache__occluded(const float nd[8], float d, float tol2)
         nearer |= (uint32_t)(d > nd[k] * tol2) << k;
     }
     if (!(((nearer & 3u) == 3u) || ((nearer & 12u) == 12u) || ((nearer & 0xF0u) == 0xF0u))) return 0;
-    return d > (sum / (float)n) * tol2;
+    return d * (float)n > sum * tol2;   /* d > mean * tol2, as rendercache__cull_row computes it */
 }
 
 /* The depths of the 8 neighbours of (x, y), FLT_MAX outside the image. */
@@ -1272,8 +1272,38 @@ static void rendercache__neighbour_depths(const float *depth, uint32_t w, uint32
     }
 }
 
+/* The depth cull of the interior pixels x in [1, w-1) of row y, written
+   without branches so that compilers vectorise it: occ[x] = 1 where the
+   pixel's point is culled. Same test as rendercache__occluded. */
+static void rendercache__cull_row(const float *depth, uint32_t w, uint32_t y, float tol2, unsigned char *occ)
+{
+    const float *c = depth + (size_t)y * w, *u = c - w, *l = c + w;
+    uint32_t x;
+    for (x = 1; x + 1 < w; x++) {
+        float d = c[x], sum = 0.0f, n = 0.0f;
+        float nd0 = c[x - 1], nd1 = c[x + 1], nd2 = u[x], nd3 = l[x];
+        float nd4 = u[x - 1], nd5 = u[x + 1], nd6 = l[x - 1], nd7 = l[x + 1];
+        int e01, e23, ediag, enclosed;
+        sum += nd0 < FLT_MAX ? nd0 : 0.0f; n += nd0 < FLT_MAX ? 1.0f : 0.0f;
+        sum += nd1 < FLT_MAX ? nd1 : 0.0f; n += nd1 < FLT_MAX ? 1.0f : 0.0f;
+        sum += nd2 < FLT_MAX ? nd2 : 0.0f; n += nd2 < FLT_MAX ? 1.0f : 0.0f;
+        sum += nd3 < FLT_MAX ? nd3 : 0.0f; n += nd3 < FLT_MAX ? 1.0f : 0.0f;
+        sum += nd4 < FLT_MAX ? nd4 : 0.0f; n += nd4 < FLT_MAX ? 1.0f : 0.0f;
+        sum += nd5 < FLT_MAX ? nd5 : 0.0f; n += nd5 < FLT_MAX ? 1.0f : 0.0f;
+        sum += nd6 < FLT_MAX ? nd6 : 0.0f; n += nd6 < FLT_MAX ? 1.0f : 0.0f;
+        sum += nd7 < FLT_MAX ? nd7 : 0.0f; n += nd7 < FLT_MAX ? 1.0f : 0.0f;
+        e01 = (d > nd0 * tol2) & (d > nd1 * tol2);
+        e23 = (d > nd2 * tol2) & (d > nd3 * tol2);
+        ediag = (d > nd4 * tol2) & (d > nd5 * tol2) & (d > nd6 * tol2) & (d > nd7 * tol2);
+        enclosed = e01 | e23 | ediag;
+        /* enclosed implies n >= 2, so the mean is defined where it matters */
+        occ[x] = (unsigned char)(enclosed & (d < FLT_MAX) & (d * (n > 0.0f ? n : 1.0f) > sum * tol2));
+    }
+}
+
 /* Job per tile: depth cull; surviving points give their colour and
-   priority to the pixel. */
+   priority to the pixel. The kind array holds the cull decisions of a row
+   until the row is written. */
 static void rendercache__cull_job(void *ctx, uint32_t tile)
 {
     rendercache *rc = (rendercache *)ctx;
@@ -1288,15 +1318,22 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
     float tol2 = (1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance);
     if (y1 > h) y1 = h;
     for (y = y0; y < y1; y++) {
+        unsigned char *occ = kind + (size_t)y * w;
+        int interior_row = y > 0 && y + 1 < h;
+        if (interior_row) rendercache__cull_row(depth, w, y, tol2, occ);
         for (x = 0; x < w; x++) {
             uint32_t p = y * w + x, k = index[p];
-            float nd[8];
-            if (k != RENDERCACHE__NONE) {
-                rendercache__neighbour_depths(depth, w, h, x, y, nd);
-                if (rendercache__occluded(nd, depth[p], tol2)) {
-                    k = RENDERCACHE__NONE;
-                    culled++;
+            if (!interior_row || x == 0 || x + 1 == w) {   /* border: the general test */
+                float nd[8];
+                occ[x] = 0;
+                if (k != RENDERCACHE__NONE) {
+                    rendercache__neighbour_depths(depth, w, h, x, y, nd);
+                    occ[x] = (unsigned char)rendercache__occluded(nd, depth[p], tol2);
                 }
+            }
+            if (k != RENDERCACHE__NONE && occ[x]) {
+                k = RENDERCACHE__NONE;
+                culled++;
             }
             px_index[p] = k;
             if (k == RENDERCACHE__NONE) {
