@@ -403,18 +403,6 @@ static void rendercache__affine(const float m[12], const float x[3], float y[3])
 }
 
 /* ======================================================================
-   3. counter-based random numbers (only the finaliser is needed here: the
-   threshold modulation hashes (frame, pixel))
-   ---------------------------------------------------------------------- */
-/* SplitMix64 finaliser (Steele, Lea, Flood 2014). */
-static uint64_t rendercache__mix64(uint64_t z)
-{
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-}
-
-/* ======================================================================
    7. jobs: the caller's parallel_for, or a serial loop
    ---------------------------------------------------------------------- */
 static void rendercache__run_jobs(void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t), void *user,
@@ -811,7 +799,7 @@ struct rendercache {
 
     /* request scratch */
     uint32_t *hist;          /* RENDERCACHE__LEVELS per tile, then the merged histogram */
-    float *select_v;         /* per pixel: thresholded priority, then value plus diffused error */
+    float *select_v;         /* per pixel: value plus diffused error of the fractional pixels */
     unsigned char *chosen;   /* per pixel: 1 chosen, 2 fractional (error-diffused) */
     float *err_rows;         /* two rows of diffused error */
     uint32_t pred_holes;
@@ -1593,25 +1581,25 @@ static void rendercache__histogram_job(void *ctx, uint32_t tile)
         if (priority[p] > 0.0f) h[rendercache__level(priority[p])]++;
 }
 
-/* Job per tile: the thresholded values, and the pixels decided outright. */
+/* Job per tile: the pixels decided outright, and those left to the error
+   diffusion (all of value fraction). */
 static void rendercache__threshold_job(void *ctx, uint32_t tile)
 {
     const rendercache__select_job *j = (const rendercache__select_job *)ctx;
     rendercache *rc = j->rc;
-    const float *priority = j->priority, fraction = j->fraction;
+    const float *priority = j->priority;
     const uint32_t cut = j->cut;
-    float *select_v = rc->select_v;
+    const unsigned char at_cut = j->fraction >= 1.0f ? 1u : 2u;   /* a whole level fits: chosen outright */
     unsigned char *chosen = rc->chosen;
     uint32_t p0 = tile * RENDERCACHE__TILE_ROWS * rc->width, p1 = p0 + RENDERCACHE__TILE_ROWS * rc->width, p, ones = 0;
     if (p1 > rc->pixel_count) p1 = rc->pixel_count;
     for (p = p0; p < p1; p++) {
         float pr = priority[p];
         uint32_t l = rendercache__level(pr);
-        float v = !(pr > 0.0f) ? 0.0f : (l > cut ? 1.0f : (l == cut ? fraction : 0.0f));
-        select_v[p] = v;
-        /* 1: chosen outright; 2: fractional, for the error diffusion */
-        chosen[p] = (unsigned char)(v >= 1.0f ? 1u : (v > 0.0f ? 2u : 0u));
-        ones += v >= 1.0f;
+        /* 1: chosen outright; 2: fractional (value: the cut's fraction), for the error diffusion */
+        unsigned char c = !(pr > 0.0f) ? 0u : (l > cut ? 1u : (l == cut ? at_cut : 0u));
+        chosen[p] = c;
+        ones += c == 1u;
     }
     rc->tile_stats[RENDERCACHE__TILE_STATS * (size_t)tile + 5] = ones;
 }
@@ -1692,15 +1680,21 @@ static float rendercache__spread_error(const rendercache *rc, float *cur, float 
 
 static float rendercache__threshold(uint32_t p, uint32_t frame, float amp)
 {
-    uint64_t z = rendercache__mix64(((uint64_t)frame << 32 | p) * 0x9E3779B97F4A7C15ull);
-    return 0.5f + amp * ((float)(z >> 40) * (1.0f / 8388608.0f) - 1.0f);
+    /* a 32-bit integer hash (lowbias32, Wellons): the serial loop is this one */
+    uint32_t z = p * 0x9E3779B9u ^ frame * 0x85EBCA6Bu;
+    z ^= z >> 16;
+    z *= 0x7FEB352Du;
+    z ^= z >> 15;
+    z *= 0x846CA68Bu;
+    z ^= z >> 16;
+    return 0.5f + amp * ((float)(z >> 8) * (1.0f / 8388608.0f) - 1.0f);
 }
 
-/* Serial serpentine Floyd-Steinberg pass over rc->select_v (fraction: the
-   value of the cut level); marks rc->chosen and returns the count. Pixels
-   of value 0 or 1 are decided outright; the error moves among the
-   fractional pixels only, so their count is their total value up to the
-   last carry. Fractional pixels keep value + incoming error in select_v
+/* Serial serpentine Floyd-Steinberg pass over the fractional pixels (of
+   value fraction, the cut level's share); marks rc->chosen and returns the
+   count. Pixels of value 0 or 1 are decided outright; the error moves
+   among the fractional pixels only, so their count is their total value up
+   to the last carry. Fractional pixels keep value + incoming error in select_v
    for the count correction. The threshold pass marked them (chosen & 2)
    and counted the pixels chosen outright (tile statistics column 5). */
 static uint32_t rendercache__diffuse(rendercache *rc, float fraction, uint32_t *best_add, uint32_t *best_drop)
@@ -1722,7 +1716,7 @@ static uint32_t rendercache__diffuse(rendercache *rc, float fraction, uint32_t *
             float total, e;
             unsigned char pick;
             if (!(chosen[p] & 2u)) continue;   /* decided by the threshold */
-            total = select_v[p] + cur[x + 1] + carry;
+            total = fraction + cur[x + 1] + carry;
             pick = total >= rendercache__threshold(p, rc->frame, amp) ? 1u : 0u;
             e = total - (float)pick;
             select_v[p] = total;
