@@ -37,10 +37,41 @@ static void test_irrvol_link(void)
     irrvol_destroy(vol);
 }
 
+static void test_rendercache_links(void)
+{
+    rendercache_desc d;
+    rendercache_camera cam;
+    rendercache_pixel_request req[4];
+    rendercache_sample s[4];
+    rendercache *rc = NULL;
+    uint32_t n = 0, i;
+    memset(&d, 0, sizeof d);
+    memset(&cam, 0, sizeof cam);
+    d.width = cam.width = 8;
+    d.height = cam.height = 6;
+    cam.look_at[2] = 1.0f;
+    cam.up[1] = 1.0f;
+    cam.vfov_degrees = 60.0f;
+    CHECK(rendercache_create(&d, &rc) == RENDERCACHE_OK);
+    CHECK(rendercache_begin_frame(rc, &cam) == RENDERCACHE_OK);
+    CHECK(rendercache_request(rc, req, 4, &n) == RENDERCACHE_OK && n == 4);
+    memset(s, 0, sizeof s);
+    for (i = 0; i < n; i++) {
+        s[i].x = req[i].x;
+        s[i].y = req[i].y;
+        s[i].object = RENDERCACHE_MISS;
+        s[i].rgb[0] = 1.0f;
+    }
+    CHECK(rendercache_insert(rc, s, n) == RENDERCACHE_OK);
+    CHECK(rendercache_image(rc)[3 * (req[0].y * 8 + req[0].x)] == 1.0f);
+    rendercache_destroy(rc);
+}
+
 int main(int argc, char **argv)
 {
     TEST_INIT(argc, argv);
     RUN(test_result_strings_link);
     RUN(test_irrvol_link);
+    RUN(test_rendercache_links);
     return test_finish();
 }
