@@ -145,7 +145,9 @@
    BILINEAR (future work, 6.1.2) interpolates the four nearest bin centres on
    the concentric square, across the equator too: 4x the memory reads.
    irrvol_query_glossy mirrors the view vector about the normal (fig. 4.17) for
-   moment volumes (desc.moment > 1).
+   moment volumes (desc.moment > 1). irrvol_query_many answers a batch (the
+   vertices of a moving object) with the same results, faster: it prepares
+   each query a few ahead and prefetches the values it will read.
 
    Determinism. Each sample draws its jitter from a stream seeded by
    (desc.seed, sample index): a volume is bit-identical for any thread count.
