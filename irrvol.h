@@ -2368,7 +2368,8 @@ IRRVOL__HOT void irrvol__bilinear_bins(const irrvol *v, float u, float t, uint32
 }
 
 /* A query reduced to the values it reads and their weights: eight corner
-   samples times one bin (NEAREST) or four bins (BILINEAR). */
+   samples times one bin (NEAREST) or four bins (BILINEAR), for the
+   pipelined irrvol_query_many. */
 typedef struct irrvol__prepared {
     const float *value[32];
     float weight[32];
@@ -2419,13 +2420,38 @@ IRRVOL__HOT void irrvol__finish(const irrvol__prepared *q, float rgb[3])
 }
 
 /* One query: eight corner samples, the bin(s) of the direction, trilinear
-   (and bilinear) weights. */
+   (and bilinear) weights. The same sums in the same order as prepare and
+   finish, written out so that the single query keeps everything in
+   registers. */
 IRRVOL__HOT void irrvol__query(const irrvol *vol, irrvol_filter filter, const float pos[3],
                                const float dir[3], float rgb[3])
 {
-    irrvol__prepared q;
-    irrvol__prepare(vol, filter, pos, dir, &q);
-    irrvol__finish(&q, rgb);
+    uint32_t ids[8], c, h;
+    float w[8], u, t, r = 0.0f, g = 0.0f, b = 0.0f;
+    size_t stride = (size_t)vol->sample_count * 3;   /* one bin of all samples */
+    irrvol__locate(vol, pos, ids, w);
+    irrvol__direction_to_square(dir, &u, &t, &h);
+    if (filter == IRRVOL_FILTER_DEFAULT) filter = vol->filter;
+    if (filter == IRRVOL_FILTER_BILINEAR) {
+        uint32_t bins[4], q;
+        float bw[4];
+        irrvol__bilinear_bins(vol, u, t, h, bins, bw);
+        for (q = 0; q < 4; q++) {
+            const float *s = vol->irradiance + bins[q] * stride;
+            for (c = 0; c < 8; c++) {
+                const float *p = s + 3 * (size_t)ids[c];
+                float x = w[c] * bw[q];
+                r += x * p[0]; g += x * p[1]; b += x * p[2];
+            }
+        }
+    } else {
+        const float *s = vol->irradiance + irrvol__square_bin(vol, u, t, h) * stride;
+        for (c = 0; c < 8; c++) {
+            const float *p = s + 3 * (size_t)ids[c];
+            r += w[c] * p[0]; g += w[c] * p[1]; b += w[c] * p[2];
+        }
+    }
+    rgb[0] = r; rgb[1] = g; rgb[2] = b;
 }
 
 IRRVOL_API void irrvol_query_filter(const irrvol *vol, irrvol_filter filter, const float pos[3],
@@ -2465,15 +2491,15 @@ IRRVOL_API void irrvol_query_many(const irrvol *vol, irrvol_filter filter, uint3
     uint32_t i, j;
     if (!pos_stride) pos_stride = 3 * sizeof(float);
     if (!dir_stride) dir_stride = 3 * sizeof(float);
-    for (i = 0; i < count + IRRVOL__AHEAD; i++) {
-        if (i >= IRRVOL__AHEAD) irrvol__finish(&ring[i % IRRVOL__AHEAD], rgb + 3 * (size_t)(i - IRRVOL__AHEAD));
-        if (i < count) {
-            irrvol__prepared *q = &ring[i % IRRVOL__AHEAD];
-            irrvol__prepare(vol, filter, (const float *)((const char *)pos + i * pos_stride),
-                            (const float *)((const char *)dir + i * dir_stride), q);
-            for (j = 0; j < q->count; j++) IRRVOL__PREFETCH(q->value[j]);
-        }
+    for (i = 0; i < count; i++) {
+        irrvol__prepared *q = &ring[i % IRRVOL__AHEAD];
+        if (i >= IRRVOL__AHEAD) irrvol__finish(q, rgb + 3 * (size_t)(i - IRRVOL__AHEAD));
+        irrvol__prepare(vol, filter, (const float *)((const char *)pos + i * pos_stride),
+                        (const float *)((const char *)dir + i * dir_stride), q);
+        for (j = 0; j < q->count; j++) IRRVOL__PREFETCH(q->value[j]);
     }
+    for (i = count > IRRVOL__AHEAD ? count - IRRVOL__AHEAD : 0; i < count; i++)
+        irrvol__finish(&ring[i % IRRVOL__AHEAD], rgb + 3 * (size_t)i);
 }
 
 IRRVOL_API irrvol_result irrvol_sample(const irrvol *vol, uint32_t index, irrvol_sample_info *info)

@@ -769,6 +769,24 @@ static void test_filters_and_queries(void)
         irrvol_query_filter(v, IRRVOL_FILTER_BILINEAR, out, n, g);
         CHECK(memcmp(many[0], h, sizeof h) == 0 && memcmp(many[1], g, sizeof g) == 0);
     }
+    {   /* a long batch through the pipeline equals single queries, bit for bit */
+        static float pos[1000][3], dir[1000][3], out[1000][3];
+        int f, k;
+        for (i = 0; i < 1000; i++) {
+            for (k = 0; k < 3; k++) pos[i][k] = 2.4f * frand() - 1.2f;
+            random_dir(dir[i]);
+        }
+        for (f = IRRVOL_FILTER_DEFAULT; f <= IRRVOL_FILTER_BILINEAR; f++) {
+            int same = 1;
+            irrvol_query_many(v, (irrvol_filter)f, 1000, &pos[0][0], 0, &dir[0][0], 0, &out[0][0]);
+            for (i = 0; i < 1000; i++) {
+                irrvol_query_filter(v, (irrvol_filter)f, pos[i], dir[i], h);
+                same &= memcmp(h, out[i], sizeof h) == 0;
+            }
+            CHECK(same);
+        }
+        irrvol_query_many(v, IRRVOL_FILTER_NEAREST, 0, NULL, 0, NULL, 0, NULL);   /* nothing to do */
+    }
     {   /* NaN positions and directions: finite results */
         float nan3[3] = {NAN, NAN, NAN}, dir[3] = {0, 0, 1};
         irrvol_query(v, nan3, dir, h);
