@@ -1020,6 +1020,25 @@ static void test_bad_inputs(void)
     BAD(d.allocator = counting_allocator(&c, -1); d.allocator.free = NULL);
 #undef BAD
     CHECK(log_calls > 20);
+    {   /* degenerate triangles are skipped and counted, not fatal */
+        irrvol_volume_info info;
+        uint32_t idx[3 * (2 * SC_MAX_QUADS + 2)];
+        uint32_t mat[2 * SC_MAX_QUADS + 2];
+        memcpy(idx, s.idx, 3 * s.nt * sizeof(uint32_t));
+        memcpy(mat, s.mat, s.nt * sizeof(uint32_t));
+        idx[3 * s.nt] = 0; idx[3 * s.nt + 1] = 0; idx[3 * s.nt + 2] = 1;       /* a repeated vertex */
+        idx[3 * s.nt + 3] = 0; idx[3 * s.nt + 4] = 1; idx[3 * s.nt + 5] = 0;
+        mat[s.nt] = mat[s.nt + 1] = 0;
+        d = good;
+        d.indices = idx;
+        d.triangle_materials = mat;
+        d.triangle_count = s.nt + 2;
+        if (CHECK_EQ_INT(irrvol_build(&d, &v), IRRVOL_OK)) {
+            irrvol_info(v, &info);
+            CHECK_EQ_INT(info.degenerate_triangles, 2);
+            irrvol_destroy(v);
+        }
+    }
     {   /* a ray caster that reports nonsense triangles: every ray misses */
         float p[3] = {0, 0, 0}, dir[3] = {0, 0, 1}, h[3];
         d = good;
