@@ -982,10 +982,12 @@ static void test_bad_inputs(void)
     CHECK_EQ_INT(irrvol_build(&good, NULL), IRRVOL_ERROR_INVALID_ARGUMENT);
 #define BAD(stmt) do { d = good; stmt; v = (irrvol *)&d; \
         CHECK_EQ_INT(irrvol_build(&d, &v), IRRVOL_ERROR_INVALID_ARGUMENT); CHECK(v == NULL); } while (0)
-    BAD(s.pos[4] = NAN);
-    s.pos[4] = -1.0f;
-    BAD(s.pos[7] = INFINITY);
-    s.pos[7] = -1.0f;
+    {
+        float keep = s.pos[4];
+        BAD(s.pos[4] = NAN);
+        BAD(s.pos[4] = INFINITY);
+        s.pos[4] = keep;
+    }
     BAD(d.indices = bad_idx; d.triangle_count = 1);
     BAD(s.mat[3] = 6);
     s.mat[3] = 1;
