@@ -15,6 +15,28 @@ static void test_result_strings_link(void)
     CHECK(strcmp(rendercache_result_string(RENDERCACHE_ERROR_INVALID_ARGUMENT), "invalid argument") == 0);
 }
 
+static void irrvol_link_radiance(void *user, const float org[3], const float dir[3], float rgb[3])
+{
+    (void)user; (void)org; (void)dir;
+    rgb[0] = rgb[1] = rgb[2] = 1.0f;
+}
+
+static void test_irrvol_link(void)
+{
+    irrvol_desc d;
+    irrvol *vol = NULL;
+    float p[3] = {0.5f, 0.5f, 0.5f}, n[3] = {0.0f, 1.0f, 0.0f}, h[3];
+    memset(&d, 0, sizeof d);
+    d.radiance = irrvol_link_radiance;
+    d.resolution = 3;
+    d.bounds_max[0] = d.bounds_max[1] = d.bounds_max[2] = 1.0f;
+    CHECK(irrvol_build(&d, &vol) == IRRVOL_OK);
+    if (!vol) return;
+    irrvol_query(vol, p, n, h);
+    CHECK(h[0] > 3.0f && h[0] < 3.3f);   /* pi, within the k = 3 quadrature */
+    irrvol_destroy(vol);
+}
+
 static void test_rendercache_links(void)
 {
     rendercache_desc d;
@@ -49,6 +71,7 @@ int main(int argc, char **argv)
 {
     TEST_INIT(argc, argv);
     RUN(test_result_strings_link);
+    RUN(test_irrvol_link);
     RUN(test_rendercache_links);
     return test_finish();
 }
