@@ -3109,29 +3109,52 @@ static void rendercache__warp_project_row(const rendercache__warp_src *ws, uint3
     }
 }
 
-/* Draws one triangle of a foreground quad: corners a, b, c (projected as
-   by warp_project_row) of source pixels ea, eb, ec, for element e. Drawn
-   when the three depths agree within twice the tolerance, so that no
-   triangle bridges a depth edge; colour and depth are interpolated with the
-   barycentric weights at the pixel centres, the object is the nearest
-   corner's. */
+/* Whether a triangle of a foreground quad is drawn: corners a, b, c
+   (projected as by warp_project_row) all projected, their depths agreeing
+   within twice the tolerance (so that no triangle bridges a depth edge),
+   and not wider than max_extent. */
+static int rendercache__warp_triangle_ok(const rendercache__warp_src *ws, const float *a, const float *b, const float *c)
+{
+    float dmin, dmax, xmin, xmax, ymin, ymax;
+    if (a[3] == 0.0f || b[3] == 0.0f || c[3] == 0.0f) return 0;
+    dmin = a[2] < b[2] ? a[2] : b[2]; dmin = c[2] < dmin ? c[2] : dmin;
+    dmax = a[2] > b[2] ? a[2] : b[2]; dmax = c[2] > dmax ? c[2] : dmax;
+    if (!(dmax <= dmin * ws->tol2x)) return 0;
+    xmin = a[0] < b[0] ? a[0] : b[0]; xmin = c[0] < xmin ? c[0] : xmin;
+    xmax = a[0] > b[0] ? a[0] : b[0]; xmax = c[0] > xmax ? c[0] : xmax;
+    ymin = a[1] < b[1] ? a[1] : b[1]; ymin = c[1] < ymin ? c[1] : ymin;
+    ymax = a[1] > b[1] ? a[1] : b[1]; ymax = c[1] > ymax ? c[1] : ymax;
+    return xmax - xmin <= ws->max_extent && ymax - ymin <= ws->max_extent;
+}
+
+/* Edge function of the directed edge u -> v at (px, py), evaluated with the
+   endpoints in a fixed order (the smaller source pixel index first) so that
+   the two triangles sharing an edge compute the same value with opposite
+   signs: no pixel centre on a shared edge falls between them. */
+static float rendercache__edge(const float *u, const float *v, uint32_t eu, uint32_t ev, float px, float py)
+{
+    const float *p = eu < ev ? u : v, *q = eu < ev ? v : u;
+    float e = (q[0] - p[0]) * (py - p[1]) - (q[1] - p[1]) * (px - p[0]);
+    return eu < ev ? e : -e;
+}
+
+/* Draws a triangle that passed warp_triangle_ok: corners a, b, c of source
+   pixels ea, eb, ec, for element e. Colour and squared distance are
+   interpolated with the barycentric weights at the pixel centres inside
+   (edges included), the object is the heaviest corner's. */
 static void rendercache__warp_triangle(const rendercache__warp_src *ws, rendercache__zbuffer *zb, const float *a,
                                        const float *b, const float *c, uint32_t ea, uint32_t eb, uint32_t ec,
                                        uint32_t e)
 {
     const rendercache_range_image *img = ws->image;
+    const float *ca = img->rgb + 3 * (size_t)ea, *cb = img->rgb + 3 * (size_t)eb, *cc = img->rgb + 3 * (size_t)ec;
     const uint32_t w = ws->target->width, h = ws->target->height;
-    float dmin, dmax, xmin, xmax, ymin, ymax, area, inv, payload[4];
+    float xmin, xmax, ymin, ymax, sign, payload[4];
     int x0, x1, y0, y1, x, y;
-    if (a[3] == 0.0f || b[3] == 0.0f || c[3] == 0.0f) return;
-    dmin = a[2] < b[2] ? a[2] : b[2]; dmin = c[2] < dmin ? c[2] : dmin;
-    dmax = a[2] > b[2] ? a[2] : b[2]; dmax = c[2] > dmax ? c[2] : dmax;
-    if (!(dmax <= dmin * ws->tol2x)) return;
     xmin = a[0] < b[0] ? a[0] : b[0]; xmin = c[0] < xmin ? c[0] : xmin;
     xmax = a[0] > b[0] ? a[0] : b[0]; xmax = c[0] > xmax ? c[0] : xmax;
     ymin = a[1] < b[1] ? a[1] : b[1]; ymin = c[1] < ymin ? c[1] : ymin;
     ymax = a[1] > b[1] ? a[1] : b[1]; ymax = c[1] > ymax ? c[1] : ymax;
-    if (!(xmax - xmin <= ws->max_extent && ymax - ymin <= ws->max_extent)) return;
     if (!(xmax >= 0.5f && ymax >= 0.5f && xmin < (float)w && ymin < (float)h)) return;
     x0 = (int)ceilf(xmin - 0.5f); x1 = (int)floorf(xmax - 0.5f);
     y0 = (int)ceilf(ymin - 0.5f); y1 = (int)floorf(ymax - 0.5f);
@@ -3140,19 +3163,18 @@ static void rendercache__warp_triangle(const rendercache__warp_src *ws, renderca
     if (x1 >= (int)w) x1 = (int)w - 1;
     if (y1 >= (int)h) y1 = (int)h - 1;
     if (x0 > x1 || y0 > y1) return;   /* no pixel centre in the box */
-    area = (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]);
-    if (area == 0.0f) return;
-    inv = 1.0f / area;
+    sign = (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]) < 0.0f ? -1.0f : 1.0f;   /* orientation */
     for (y = y0; y <= y1; y++) {
         float py = (float)y + 0.5f;
         for (x = x0; x <= x1; x++) {
-            float px = (float)x + 0.5f, wa, wb, wc, d;
-            const float *ca = img->rgb + 3 * (size_t)ea, *cb = img->rgb + 3 * (size_t)eb, *cc = img->rgb + 3 * (size_t)ec;
+            float px = (float)x + 0.5f, wa, wb, wc, sum, d;
             uint32_t o;
-            wb = ((px - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (py - a[1])) * inv;
-            wc = ((b[0] - a[0]) * (py - a[1]) - (px - a[0]) * (b[1] - a[1])) * inv;
-            wa = 1.0f - wb - wc;
-            if (wa < 0.0f || wb < 0.0f || wc < 0.0f) continue;
+            wa = sign * rendercache__edge(b, c, eb, ec, px, py);
+            wb = sign * rendercache__edge(c, a, ec, ea, px, py);
+            wc = sign * rendercache__edge(a, b, ea, eb, px, py);
+            sum = wa + wb + wc;
+            if (wa < 0.0f || wb < 0.0f || wc < 0.0f || !(sum > 0.0f)) continue;
+            wa /= sum; wb /= sum; wc /= sum;
             d = wa * a[2] + wb * b[2] + wc * c[2];
             payload[0] = wa * ca[0] + wb * cb[0] + wc * cc[0];
             payload[1] = wa * ca[1] + wb * cb[1] + wc * cc[1];
@@ -3164,42 +3186,79 @@ static void rendercache__warp_triangle(const rendercache__warp_src *ws, renderca
     }
 }
 
+/* Which triangles of the quads of source row y (between rows y and y + 1,
+   projected in r0 and r1) are drawn: bit 0 the upper-right triangle
+   (x, y) (x+1, y) (x+1, y+1), bit 1 the lower-left (x, y) (x+1, y+1) (x, y+1). */
+static void rendercache__warp_quad_flags(const rendercache__warp_src *ws, const float *r0, const float *r1,
+                                         unsigned char *flags)
+{
+    uint32_t x;
+    for (x = 0; x + 1 < ws->source.width; x++) {
+        const float *a = r0 + 4 * (size_t)x, *b = a + 4, *c = r1 + 4 * (size_t)(x + 1), *d = r1 + 4 * (size_t)x;
+        flags[x] = (unsigned char)(rendercache__warp_triangle_ok(ws, a, b, c) | rendercache__warp_triangle_ok(ws, a, c, d) << 1);
+    }
+}
+
+/* Whether all six triangles around source pixel x of a row are drawn, from
+   the flags of the quad rows above (up, NULL on the first row) and below
+   (down, NULL on the last): then they cover the pixel's surroundings and
+   its point is not needed. */
+static int rendercache__warp_surrounded(const unsigned char *up, const unsigned char *down, uint32_t x, uint32_t width)
+{
+    if (!up || !down || x == 0 || x + 1 == width) return 0;
+    return up[x - 1] == 3u && (up[x] & 2u) && (down[x - 1] & 1u) && down[x] == 3u;
+}
+
 /* The splat cover function of the foreground fill (pinterp's "foreground"
-   algorithm): source pixels [begin, end), each splatted as a point and its
-   quad to the right and lower neighbours drawn as two triangles. The rows
-   are projected once each (the last row of a job again by the next). */
+   algorithm): each source pixel of [begin, end) draws the two triangles of
+   its quad to the right and lower neighbours that pass warp_triangle_ok,
+   and is splatted as a point where its surrounding triangles are not all
+   drawn (depth edges, image borders), so points fill what the triangles
+   leave and never compete with them inside a surface. Three projected rows
+   and two rows of quad flags slide down the job's rows. */
 static uint32_t rendercache__warp_cover(const void *src, uint32_t job, uint32_t begin, uint32_t end,
                                         rendercache__zbuffer *zb, uint32_t width, uint32_t height)
 {
     const rendercache__warp_src *ws = (const rendercache__warp_src *)src;
     const rendercache_range_image *img = ws->image;
     const uint32_t sw = ws->source.width, sh = ws->source.height;
-    float *row0 = ws->rows + ws->rows_per_job * job, *row1 = row0 + 4 * (size_t)sw, *t;
+    float *rp = ws->rows + ws->rows_per_job * job, *rc = rp + 4 * (size_t)sw, *rn = rc + 4 * (size_t)sw, *t;
+    unsigned char *fu = (unsigned char *)(rn + 4 * (size_t)sw), *fd = fu + sw, *ft;
     uint32_t y0, y1, y, projected = 0;
     if (begin >= end) return 0;
     y0 = begin / sw;
     y1 = (end - 1) / sw;
-    rendercache__warp_project_row(ws, y0, row0);
+    rendercache__warp_project_row(ws, y0, rc);
+    if (y0 > 0) {
+        rendercache__warp_project_row(ws, y0 - 1, rp);
+        rendercache__warp_quad_flags(ws, rp, rc, fu);
+    }
     for (y = y0; y <= y1; y++) {
         uint32_t xa = y == y0 ? begin - y * sw : 0, xb = y == y1 ? end - y * sw : sw, x;
         int below = y + 1 < sh;
-        if (below) rendercache__warp_project_row(ws, y + 1, row1);
+        if (below) {
+            rendercache__warp_project_row(ws, y + 1, rn);
+            rendercache__warp_quad_flags(ws, rc, rn, fd);
+        }
         for (x = xa; x < xb; x++) {
-            const float *a = row0 + 4 * (size_t)x;
+            const float *a = rc + 4 * (size_t)x;
             uint32_t e = y * sw + x;
+            if (below && x + 1 < sw) {
+                if (fd[x] & 1u) rendercache__warp_triangle(ws, zb, a, a + 4, rn + 4 * (size_t)(x + 1), e, e + 1, e + sw + 1, e);
+                if (fd[x] & 2u)
+                    rendercache__warp_triangle(ws, zb, a, rn + 4 * (size_t)(x + 1), rn + 4 * (size_t)x, e, e + sw + 1, e + sw, e);
+            }
             if (a[3] != 0.0f && a[0] >= 0.0f && a[0] < (float)width && a[1] >= 0.0f && a[1] < (float)height) {
                 float payload[4];
+                projected++;
+                if (rendercache__warp_surrounded(y > 0 ? fu : NULL, below ? fd : NULL, x, sw)) continue;
                 memcpy(payload, img->rgb + 3 * (size_t)e, 3 * sizeof(float));
                 memcpy(payload + 3, &img->object[e], sizeof(float));
                 rendercache__zbuffer_test(zb, (uint32_t)a[1] * width + (uint32_t)a[0], a[2], e, payload);
-                projected++;
             }
-            if (!below || x + 1 == sw) continue;
-            rendercache__warp_triangle(ws, zb, a, a + 4, row1 + 4 * (size_t)(x + 1), e, e + 1, e + sw + 1, e);
-            rendercache__warp_triangle(ws, zb, a, row1 + 4 * (size_t)(x + 1), row1 + 4 * (size_t)x, e, e + sw + 1,
-                                       e + sw, e);
         }
-        t = row0; row0 = row1; row1 = t;
+        t = rp; rp = rc; rc = rn; rn = t;
+        ft = fu; fu = fd; fd = ft;
     }
     return projected;
 }
@@ -3293,8 +3352,8 @@ static int rendercache__warp_prepare(rendercache_warper *w, rendercache__warp_sr
     }
     ws->tol2x = (1.0f + 2.0f * w->tolerance) * (1.0f + 2.0f * w->tolerance);
     ws->max_extent = RENDERCACHE__MAX_QUAD_FRACTION * (float)(w->width > w->height ? w->width : w->height);
-    if (foreground) {
-        size_t per_job = 8 * (size_t)ws->source.width, jobs = w->splat.jobs;
+    if (foreground) {   /* three rows of 4 floats and two rows of flag bytes per job */
+        size_t per_job = 13 * (size_t)ws->source.width, jobs = w->splat.jobs;
         if (!rendercache__reserve(&w->alloc, (void **)&w->rows, &w->rows_cap, per_job * jobs, sizeof(float)))
             return 0;
         ws->rows = w->rows;
