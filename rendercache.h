@@ -3841,6 +3841,8 @@ struct rendercache_view_space {
     uint32_t *lattice;                 /* 3 per view */
     uint32_t **ids;                    /* per view: its id image (while building) */
     uint32_t view_count, view_cap, lattice_cap, ids_cap;
+    uint32_t *table;                   /* open-addressing hash of the lattice points: view or NONE */
+    uint32_t table_size;               /* a power of two, at least twice the views */
     rendercache__vs_node *nodes;
     uint32_t node_count, node_cap;
     uint32_t leaf_count;
@@ -3865,15 +3867,46 @@ static void rendercache__vs_camera(const rendercache_view_space *vs, const float
     }
 }
 
+/* The slot of lattice point k in the hash table: its view, or the empty
+   slot where it goes. */
+static uint32_t rendercache__vs_slot(const rendercache_view_space *vs, const uint32_t k[3])
+{
+    uint32_t mask = vs->table_size - 1, s;
+    s = (k[0] * 0x9E3779B1u) ^ (k[1] * 0x85EBCA77u) ^ (k[2] * 0xC2B2AE3Du);
+    s = (s ^ (s >> 15)) & mask;
+    while (vs->table[s] != RENDERCACHE__NONE && memcmp(vs->lattice + 3 * (size_t)vs->table[s], k, 3 * sizeof(uint32_t)))
+        s = (s + 1) & mask;
+    return s;
+}
+
+/* Doubles the hash table when it is half full. */
+static int rendercache__vs_rehash(rendercache_view_space *vs, uint32_t views)
+{
+    uint32_t size = vs->table_size ? vs->table_size : 64, v, *old = vs->table;
+    if (vs->table && 2 * (uint64_t)views <= vs->table_size) return 1;
+    while (2 * (uint64_t)views > size) {
+        if (size > (1u << 30)) return 0;
+        size *= 2;
+    }
+    vs->table = (uint32_t *)rendercache__alloc_array(&vs->alloc, size, sizeof(uint32_t));
+    if (!vs->table) { vs->table = old; return 0; }
+    rendercache__free(&vs->alloc, old);
+    vs->table_size = size;
+    for (v = 0; v < size; v++) vs->table[v] = RENDERCACHE__NONE;
+    for (v = 0; v < vs->view_count; v++) vs->table[rendercache__vs_slot(vs, vs->lattice + 3 * (size_t)v)] = v;
+    return 1;
+}
+
 /* The view at lattice point k, rendering its id image the first time.
    Returns RENDERCACHE_OK and *view. */
 static rendercache_result rendercache__vs_view(rendercache_view_space *vs, const uint32_t k[3], uint32_t *view)
 {
     const rendercache_view_space_desc *d = vs->desc;
     rendercache_camera cam;
-    uint32_t v, *ids;
-    for (v = 0; v < vs->view_count; v++)
-        if (!memcmp(vs->lattice + 3 * (size_t)v, k, 3 * sizeof(uint32_t))) { *view = v; return RENDERCACHE_OK; }
+    uint32_t v = vs->view_count, *ids, slot;
+    if (!rendercache__vs_rehash(vs, v + 1)) return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    slot = rendercache__vs_slot(vs, k);
+    if (vs->table[slot] != RENDERCACHE__NONE) { *view = vs->table[slot]; return RENDERCACHE_OK; }
     if (!rendercache__grow(&vs->alloc, (void **)&vs->eyes, &vs->view_cap, v + 1, 3 * sizeof(float)) ||
         !rendercache__grow(&vs->alloc, (void **)&vs->lattice, &vs->lattice_cap, v + 1, 3 * sizeof(uint32_t)) ||
         !rendercache__grow(&vs->alloc, (void **)&vs->ids, &vs->ids_cap, v + 1, sizeof(uint32_t *)))
@@ -3884,6 +3917,7 @@ static rendercache_result rendercache__vs_view(rendercache_view_space *vs, const
     memcpy(vs->lattice + 3 * (size_t)v, k, 3 * sizeof(uint32_t));
     rendercache__vs_eye(vs, k, vs->eyes + 3 * (size_t)v);
     vs->view_count = v + 1;
+    vs->table[slot] = v;
     rendercache__vs_camera(vs, vs->eyes + 3 * (size_t)v, &cam);
     if (d->render_ids(d->user, &cam, d->time, ids) != 0) return RENDERCACHE_ERROR_CANCELLED;
     *view = v;
@@ -3948,6 +3982,7 @@ RENDERCACHE_API void rendercache_view_space_destroy(rendercache_view_space *vs)
     rendercache__free(&a, vs->eyes);
     rendercache__free(&a, vs->lattice);
     rendercache__free(&a, vs->nodes);
+    rendercache__free(&a, vs->table);
     rendercache__free(&a, vs);
 }
 
