@@ -652,6 +652,13 @@ static void rendercache__free(const rendercache_allocator *a, void *p)
 /* Zero means default: the documented default replaces a zero field. */
 #define rendercache__def(v, d) ((v) ? (v) : (d))
 
+/* Outputs that alias nothing, so that loops writing them vectorise. */
+#if defined(__cplusplus) || !defined(__STDC_VERSION__) || __STDC_VERSION__ < 199901L
+#  define RENDERCACHE__RESTRICT __restrict
+#else
+#  define RENDERCACHE__RESTRICT restrict
+#endif
+
 /* ======================================================================
    2. small math
    ---------------------------------------------------------------------- */
@@ -1093,11 +1100,11 @@ static int rendercache__view_has_ray(const rendercache__view *v, uint32_t x, uin
     return u * u + w * w <= 1.0f;
 }
 
-/* Unit camera-space directions of the pixels [x0, x0 + n) of row y (centres):
-   dir 3 floats each, ok[i] = 0 where a pixel has no ray (its direction is
+/* Unit camera-space directions of the pixels [x0, x0 + n) of row y (centres),
+   as three arrays; ok[i] = 0 where a pixel has no ray (its direction is
    then 0). The perspective and fish-eye loops vectorise. */
-static void rendercache__view_row_dirs(const rendercache__view *v, uint32_t y, uint32_t x0, uint32_t n, float *dir,
-                                       unsigned char *ok)
+static void rendercache__view_row_dirs(const rendercache__view *v, uint32_t y, uint32_t x0, uint32_t n, float *dx,
+                                       float *dy, float *dz, unsigned char *ok)
 {
     const float py = (float)y + 0.5f;
     uint32_t i;
@@ -1105,9 +1112,9 @@ static void rendercache__view_row_dirs(const rendercache__view *v, uint32_t y, u
         const float inv_f = 1.0f / v->focal, cy = (v->cy - py) * inv_f, cy2 = 1.0f + cy * cy;
         for (i = 0; i < n; i++) {
             float cx = ((float)(x0 + i) + 0.5f - v->cx) * inv_f, inv = 1.0f / sqrtf(cx * cx + cy2);
-            dir[3 * i + 0] = cx * inv;
-            dir[3 * i + 1] = cy * inv;
-            dir[3 * i + 2] = inv;
+            dx[i] = cx * inv;
+            dy[i] = cy * inv;
+            dz[i] = inv;
             ok[i] = 1;
         }
     } else if (v->kind == RENDERCACHE_CAMERA_FISHEYE) {
@@ -1117,13 +1124,19 @@ static void rendercache__view_row_dirs(const rendercache__view *v, uint32_t y, u
             float u = ((float)(x0 + i) + 0.5f - v->cx) * inv_r, s = u * u + w2, inside = s <= 1.0f ? 1.0f : 0.0f;
             float p = sc[0] + s * (sc[1] + s * (sc[2] + s * (sc[3] + s * (sc[4] + s * (sc[5] + s * sc[6])))));
             float q = cc[0] + s * (cc[1] + s * (cc[2] + s * (cc[3] + s * (cc[4] + s * (cc[5] + s * cc[6])))));
-            dir[3 * i + 0] = inside * u * p;
-            dir[3 * i + 1] = -inside * w * p;
-            dir[3 * i + 2] = inside * q;
+            dx[i] = inside * u * p;
+            dy[i] = -inside * w * p;
+            dz[i] = inside * q;
             ok[i] = (unsigned char)(s <= 1.0f);
         }
     } else {
-        for (i = 0; i < n; i++) ok[i] = (unsigned char)rendercache__view_from_pixel(v, (float)(x0 + i) + 0.5f, py, dir + 3 * i);
+        for (i = 0; i < n; i++) {
+            float c[3];
+            ok[i] = (unsigned char)rendercache__view_from_pixel(v, (float)(x0 + i) + 0.5f, py, c);
+            dx[i] = c[0];
+            dy[i] = c[1];
+            dz[i] = c[2];
+        }
     }
 }
 
@@ -1182,8 +1195,9 @@ static void rendercache__view_compose(const rendercache__view *v, const float m[
 #define RENDERCACHE__TILE_ROWS 8u    /* image rows per tile job */
 
 /* Projects elements [begin, end): pix[i - begin] = y * width + x of the
-   pixel it lands in, or RENDERCACHE__NONE; depth[...] its distance. */
-typedef void (*rendercache__source_fn)(const void *src, uint32_t begin, uint32_t end, uint32_t *pix, float *depth);
+   pixel it lands in, or RENDERCACHE__NONE; depth[...] its distance.
+   Returns 0 when none landed (the batch is then skipped), else non-zero. */
+typedef uint32_t (*rendercache__source_fn)(const void *src, uint32_t begin, uint32_t end, uint32_t *pix, float *depth);
 /* Payload of elements [begin, end): 4 floats each, for those whose pix is
    not RENDERCACHE__NONE. */
 typedef void (*rendercache__payload_fn)(const void *src, uint32_t begin, uint32_t end, const uint32_t *pix,
@@ -1307,7 +1321,7 @@ static void rendercache__splat_range(void *ctx, uint32_t j)
     }
     for (b = begin; b < end; b += RENDERCACHE__BATCH) {
         uint32_t n = end - b < RENDERCACHE__BATCH ? end - b : RENDERCACHE__BATCH;
-        job->source(job->src, b, b + n, pix, d);
+        if (!job->source(job->src, b, b + n, pix, d)) continue;   /* nothing landed */
         if (job->payload) job->payload(job->src, b, b + n, pix, pay);
         for (i = 0; i < n; i++) {
             uint32_t p = pix[i];
@@ -1805,7 +1819,7 @@ static uint32_t rendercache__batch_object_or_background(const rendercache__geo *
 /* The splat source of the render cache: cache slots [begin, end). Batches
    of one object (with or without background points) under a perspective
    view take the vectorised path; the rest goes point by point. */
-static void rendercache__project_points(const void *src, uint32_t begin, uint32_t end, uint32_t *pix, float *depth2)
+static uint32_t rendercache__project_points(const void *src, uint32_t begin, uint32_t end, uint32_t *pix, float *depth2)
 {
     const rendercache__projector *pr = (const rendercache__projector *)src;
     const rendercache__geo *geo = pr->rc->geo;
@@ -1817,9 +1831,10 @@ static void rendercache__project_points(const void *src, uint32_t begin, uint32_
         if (background)   /* the few background points, again, as directions */
             for (i = begin; i < end; i++)
                 if (geo[i].object == RENDERCACHE_MISS) pix[i - begin] = rendercache__project_point(pr, &geo[i], &depth2[i - begin]);
-        return;
+        return end - begin;
     }
     for (i = begin; i < end; i++) pix[i - begin] = rendercache__project_point(pr, &geo[i], &depth2[i - begin]);
+    return end - begin;
 }
 
 /* The payload of a cache point: its colour and priority. */
@@ -2781,6 +2796,8 @@ static int rendercache__range_valid(const rendercache_range_image *img, renderca
                                                   image is not drawn (it spans the seam of a sphere
                                                   image, or a surface grazing the eye) */
 #define RENDERCACHE__COLUMN_STRIP 64u          /* columns per job of the background fill */
+#define RENDERCACHE__MAX_BIAS 1e6                /* largest depth bias of a late input (keeps depths finite) */
+#define RENDERCACHE__CULL_CHUNK 32u              /* rays tested together against the target's frustum */
 
 /* What filled a target pixel (warper.how). */
 enum { RENDERCACHE__HOW_EMPTY = 0, RENDERCACHE__HOW_WARPED, RENDERCACHE__HOW_BACKGROUND, RENDERCACHE__HOW_COMPUTED };
@@ -2821,6 +2838,8 @@ struct rendercache_warper {
     uint32_t motion_cap;         /* objects */
     uint32_t *order;             /* inputs by distance */
     uint32_t order_cap;
+    struct rendercache__warp_src *src;   /* the inputs, in that order */
+    uint32_t src_cap;
 
     rendercache__view target;
     rendercache_warp_stats stats;
@@ -2935,6 +2954,7 @@ RENDERCACHE_API void rendercache_warper_destroy(rendercache_warper *w)
     rendercache__free(&a, w->rows);
     rendercache__free(&a, w->motion);
     rendercache__free(&a, w->order);
+    rendercache__free(&a, w->src);
     rendercache__free(&a, w);
 }
 
@@ -2972,7 +2992,8 @@ static void rendercache__warp_matrix(const rendercache__view *s, const rendercac
         }
 }
 
-/* One input of a warp: its pixels are the splat's elements. */
+/* One input of a warp. The splat's elements are the pixels of all inputs,
+   input after input in rank order (nearest eye first). */
 typedef struct rendercache__warp_src {
     const rendercache_range_image *image;
     rendercache__view source;
@@ -2980,182 +3001,338 @@ typedef struct rendercache__warp_src {
     float m[12];                 /* source camera space -> target camera space, static pixels */
     const float *motion;         /* NULL, or 12 floats per object id < motion_count */
     uint32_t motion_count;
-    float tol2x;                 /* foreground quads: squared (1 + 2 tolerance) */
-    float max_extent;            /* foreground quads: largest in pixels */
-    float *rows;                 /* foreground quads: per job, 2 rows of 4 floats per source pixel */
-    size_t rows_per_job;
+    uint32_t first;              /* its first element */
+    uint32_t count;              /* its pixels */
+    float bias;                  /* its squared distances are compared times (1 + tolerance)^(2 rank) */
+    float inv_bias;
+    float cull[5][3];            /* planes of the target's frustum whose outside holds this input's eye,
+                                    as normals in source camera space: a ray pointing outside one of
+                                    them misses the target image at every depth */
+    uint32_t cull_count;
 } rendercache__warp_src;
 
-/* Kinds of source pixel in a batch. */
-enum { RENDERCACHE__SRC_NONE = 0, RENDERCACHE__SRC_POINT, RENDERCACHE__SRC_MISS };
+/* All inputs of a splat, and the foreground fill's parameters. */
+typedef struct rendercache__warp_set {
+    const rendercache__warp_src *src;
+    uint32_t count;
+    float tol2x;                 /* foreground quads: squared (1 + 2 tolerance) */
+    float max_extent;            /* foreground quads: largest in pixels */
+    float *rows;                 /* foreground quads: per job, 3 rows of 4 floats and 2 rows of flags */
+    size_t rows_per_job;         /* floats */
+} rendercache__warp_set;
 
-/* Source pixels [begin, end) as source-camera-space points (ray * depth; for
-   a background pixel the ray itself) in g[i].pos, their object in
-   g[i].object and their kind (no ray, bad depth and RENDERCACHE_NO_SAMPLE
-   pixels are SRC_NONE). Returns the kinds present, as bits. */
-static uint32_t rendercache__warp_gather(const rendercache__warp_src *ws, uint32_t begin, uint32_t end,
-                                         rendercache__geo *g, unsigned char *kind)
+/* The input holding element e. */
+static uint32_t rendercache__warp_input(const rendercache__warp_set *set, uint32_t e)
+{
+    uint32_t lo = 0, hi = set->count - 1;
+    while (lo < hi) {
+        uint32_t mid = (lo + hi + 1) / 2;
+        if (set->src[mid].first <= e) lo = mid;
+        else hi = mid - 1;
+    }
+    return lo;
+}
+
+/* Frustum culling of a batch of rays (camera-space directions, ok = has a
+   ray): 1 when every ray points outside one of the input's cull planes, so
+   that no depth brings it into the target image. */
+static int rendercache__warp_culled(const rendercache__warp_src *ws, const float *dx, const float *dy, const float *dz,
+                                    const unsigned char *ok, uint32_t n)
+{
+    uint32_t k, i;
+    for (k = 0; k < ws->cull_count; k++) {
+        const float a = ws->cull[k][0], b = ws->cull[k][1], c = ws->cull[k][2];
+        uint32_t inside = 0;   /* an integer reduction: it vectorises */
+        for (i = 0; i < n; i++) inside |= (uint32_t)(ok[i] & (a * dx[i] + b * dy[i] + c * dz[i] >= 0.0f));
+        if (!inside) return 1;
+    }
+    return 0;
+}
+
+/* The cull planes of a static input into a perspective target: the image's
+   four edges and the plane of the eye, as inward normals n in target camera
+   space; a plane qualifies when the input's eye lies on its outside
+   (n . b <= 0, b its eye in target camera space). A ray x of the input then
+   lands at n . (A x d + b), outside for every depth d when (A^T n) . x < 0. */
+static void rendercache__warp_cull_planes(rendercache__warp_src *ws)
+{
+    const rendercache__view *t = ws->target;
+    const float f = t->focal, w = (float)t->width, h = (float)t->height, *m = ws->m;
+    float n[5][3];
+    int k, i;
+    n[0][0] = f; n[0][1] = 0.0f; n[0][2] = t->cx;             /* x >= 0 */
+    n[1][0] = -f; n[1][1] = 0.0f; n[1][2] = w - t->cx;        /* x < w */
+    n[2][0] = 0.0f; n[2][1] = -f; n[2][2] = t->cy;            /* y >= 0 */
+    n[3][0] = 0.0f; n[3][1] = f; n[3][2] = h - t->cy;         /* y < h */
+    n[4][0] = 0.0f; n[4][1] = 0.0f; n[4][2] = 1.0f;           /* in front of the eye */
+    ws->cull_count = 0;
+    for (k = 0; k < 5; k++) {
+        float offset = n[k][0] * m[3] + n[k][1] * m[7] + n[k][2] * m[11];
+        if (offset > 0.0f) continue;
+        for (i = 0; i < 3; i++) ws->cull[ws->cull_count][i] = n[k][0] * m[i] + n[k][1] * m[4 + i] + n[k][2] * m[8 + i];
+        ws->cull_count++;
+    }
+}
+
+/* Static pixels [i0, i1) of a batch (objects, depths, ray directions) into
+   a perspective target: the projection of rendercache__project_perspective,
+   fused with the pixels' rays and written to vectorise. */
+static void rendercache__warp_project_static(const rendercache__warp_src *ws, const uint32_t *obj, const float *dep,
+                                             const float *dx, const float *dy, const float *dz, uint32_t i0,
+                                             uint32_t i1, float *RENDERCACHE__RESTRICT px,
+                                             float *RENDERCACHE__RESTRICT py, float *RENDERCACHE__RESTRICT d2,
+                                             unsigned char *RENDERCACHE__RESTRICT ok)
+{
+    const rendercache__view *t = ws->target;
+    const float *m = ws->m, f = t->focal, cx = t->cx, cy = t->cy, bias = ws->bias;
+    uint32_t i;
+    for (i = i0; i < i1; i++) {
+        uint32_t o = obj[i];
+        float d = dep[i];
+        int point = (o < RENDERCACHE_NO_SAMPLE) & (d > 0.0f) & (d <= FLT_MAX);
+        int valid = ok[i] & (point | (o == RENDERCACHE_MISS));
+        float s = point ? d : 1.0f, off = point ? 1.0f : 0.0f;   /* background: a direction */
+        float x0 = dx[i] * s, x1 = dy[i] * s, x2 = dz[i] * s;
+        float c0 = m[0] * x0 + m[1] * x1 + m[2] * x2 + off * m[3];
+        float c1 = m[4] * x0 + m[5] * x1 + m[6] * x2 + off * m[7];
+        float c2 = m[8] * x0 + m[9] * x1 + m[10] * x2 + off * m[11];
+        float inv = 1.0f / c2;
+        px[i] = cx + f * c0 * inv;
+        py[i] = cy - f * c1 * inv;
+        d2[i] = point ? (c0 * c0 + c1 * c1 + c2 * c2) * bias : RENDERCACHE__FAR2;
+        ok[i] = (unsigned char)(valid & (c2 > 0.0f));
+    }
+}
+
+/* Pixels [begin, end) of one input (its own pixel indices) into the
+   target's image plane: px, py (not clipped to the image), the squared
+   distance times the input's bias (background pixels: FAR2, unbiased, so
+   that the nearer input's background wins on the element index), and
+   ok = 1 where the pixel has a projection. Pixels without a ray,
+   RENDERCACHE_NO_SAMPLE and depths that are not finite and positive are
+   not ok. Static pixels into a perspective target take a loop written to
+   vectorise (the projection of rendercache__project_perspective, fused with
+   the pixels' rays); moving objects and other targets go pixel by pixel
+   through view_to_plane. */
+static uint32_t rendercache__warp_project(const rendercache__warp_src *ws, uint32_t begin, uint32_t end,
+                                          float *RENDERCACHE__RESTRICT px, float *RENDERCACHE__RESTRICT py,
+                                          float *RENDERCACHE__RESTRICT d2, unsigned char *RENDERCACHE__RESTRICT ok)
 {
     const rendercache_range_image *img = ws->image;
-    const uint32_t sw = ws->source.width;
-    float dir[3 * RENDERCACHE__BATCH];
-    unsigned char ok[RENDERCACHE__BATCH];
-    uint32_t p = begin, i = 0, present = 0;
-    while (p < end) {   /* the batch in row segments */
-        uint32_t y = p / sw, x = p - y * sw, n = sw - x, k;
-        if (n > end - p) n = end - p;
-        rendercache__view_row_dirs(&ws->source, y, x, n, dir + 3 * i, ok + i);
-        for (k = 0; k < n; k++, p++, i++) {
-            uint32_t o = img->object[p];
-            float d = img->depth[p], s;
-            int miss = o == RENDERCACHE_MISS, point = !miss && o != RENDERCACHE_NO_SAMPLE && d > 0.0f && d <= FLT_MAX;
-            unsigned char kd = (unsigned char)(!ok[i] ? RENDERCACHE__SRC_NONE
-                                                      : miss ? RENDERCACHE__SRC_MISS
-                                                             : point ? RENDERCACHE__SRC_POINT : RENDERCACHE__SRC_NONE);
-            s = kd == RENDERCACHE__SRC_POINT ? d : 1.0f;
-            g[i].pos[0] = dir[3 * i + 0] * s;
-            g[i].pos[1] = dir[3 * i + 1] * s;
-            g[i].pos[2] = dir[3 * i + 2] * s;
-            g[i].object = o;
-            kind[i] = kd;
-            present |= 1u << kd;
-        }
-    }
-    return present;
-}
-
-/* Target camera space of a gathered source pixel, and its squared distance. */
-static void rendercache__warp_transform(const rendercache__warp_src *ws, const rendercache__geo *g, unsigned char kind,
-                                        float c[3], float *depth2)
-{
-    const float *m = ws->m;
-    if (kind == RENDERCACHE__SRC_MISS) {   /* a direction: rotated only */
-        c[0] = m[0] * g->pos[0] + m[1] * g->pos[1] + m[2] * g->pos[2];
-        c[1] = m[4] * g->pos[0] + m[5] * g->pos[1] + m[6] * g->pos[2];
-        c[2] = m[8] * g->pos[0] + m[9] * g->pos[1] + m[10] * g->pos[2];
-        *depth2 = RENDERCACHE__FAR2;
-        return;
-    }
-    if (ws->motion && g->object < ws->motion_count) m = ws->motion + 12 * (size_t)g->object;
-    rendercache__affine(m, g->pos, c);
-    *depth2 = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
-}
-
-/* The splat source of a warp without foreground quads: source pixels
-   [begin, end). Static pixels into a perspective target take the render
-   cache's vectorised projection (section 12); background pixels, moving
-   objects and other targets go pixel by pixel. */
-static void rendercache__warp_source(const void *src, uint32_t begin, uint32_t end, uint32_t *pix, float *depth2)
-{
-    const rendercache__warp_src *ws = (const rendercache__warp_src *)src;
     const rendercache__view *t = ws->target;
-    rendercache__geo g[RENDERCACHE__BATCH];
-    unsigned char kind[RENDERCACHE__BATCH];
-    uint32_t n = end - begin, i, present = rendercache__warp_gather(ws, begin, end, g, kind);
+    const uint32_t sw = ws->source.width, *obj = img->object + begin;
+    const float *dep = img->depth + begin, bias = ws->bias;
+    float dx[RENDERCACHE__BATCH], dy[RENDERCACHE__BATCH], dz[RENDERCACHE__BATCH];
+    uint32_t p = begin, i = 0, n = end - begin;
+    while (p < end) {   /* the rays, in row segments */
+        uint32_t y = p / sw, x = p - y * sw, k = sw - x;
+        if (k > end - p) k = end - p;
+        rendercache__view_row_dirs(&ws->source, y, x, k, dx + i, dy + i, dz + i, ok + i);
+        p += k;
+        i += k;
+    }
     if (t->kind == RENDERCACHE_CAMERA_PERSPECTIVE && !ws->motion) {
-        rendercache__project_perspective(g, n, ws->m, t, pix, depth2);
-        if (!(present & ~(1u << RENDERCACHE__SRC_POINT))) return;
-        for (i = 0; i < n; i++) {
-            float c[3], px, py;
-            if (kind[i] == RENDERCACHE__SRC_POINT) continue;
-            pix[i] = RENDERCACHE__NONE;
-            if (kind[i] == RENDERCACHE__SRC_NONE) continue;
-            rendercache__warp_transform(ws, &g[i], kind[i], c, &depth2[i]);
-            if (rendercache__view_to_pixel(t, c, &px, &py)) pix[i] = (uint32_t)py * t->width + (uint32_t)px;
+        uint32_t k0, k1, kept = 0;
+        for (k0 = 0; k0 < n; k0 = k1) {   /* chunks of rays that all miss the target are skipped */
+            k1 = k0 + RENDERCACHE__CULL_CHUNK < n ? k0 + RENDERCACHE__CULL_CHUNK : n;
+            if (ws->cull_count && rendercache__warp_culled(ws, dx + k0, dy + k0, dz + k0, ok + k0, k1 - k0)) {
+                memset(ok + k0, 0, k1 - k0);
+            } else {
+                rendercache__warp_project_static(ws, obj, dep, dx, dy, dz, k0, k1, px, py, d2, ok);
+                kept += k1 - k0;
+            }
         }
-        return;
+        return kept;
     }
     for (i = 0; i < n; i++) {
-        float c[3], px, py;
-        pix[i] = RENDERCACHE__NONE;
-        if (kind[i] == RENDERCACHE__SRC_NONE) continue;
-        rendercache__warp_transform(ws, &g[i], kind[i], c, &depth2[i]);
-        if (rendercache__view_to_pixel(t, c, &px, &py)) pix[i] = (uint32_t)py * t->width + (uint32_t)px;
+        uint32_t o = obj[i];
+        float d = dep[i], x[3], c[3];
+        int point = o < RENDERCACHE_NO_SAMPLE && d > 0.0f && d <= FLT_MAX;
+        const float *m = ws->m;
+        if (!ok[i] || !(point || o == RENDERCACHE_MISS)) { ok[i] = 0; continue; }
+        x[0] = dx[i]; x[1] = dy[i]; x[2] = dz[i];
+        if (point) {
+            x[0] *= d; x[1] *= d; x[2] *= d;
+            if (ws->motion && o < ws->motion_count) m = ws->motion + 12 * (size_t)o;
+            rendercache__affine(m, x, c);
+            d2[i] = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) * bias;
+        } else {   /* a direction: rotated only */
+            c[0] = m[0] * x[0] + m[1] * x[1] + m[2] * x[2];
+            c[1] = m[4] * x[0] + m[5] * x[1] + m[6] * x[2];
+            c[2] = m[8] * x[0] + m[9] * x[1] + m[10] * x[2];
+            d2[i] = RENDERCACHE__FAR2;
+        }
+        ok[i] = (unsigned char)rendercache__view_to_plane(t, c, &px[i], &py[i]);
     }
+    return n;
+}
+
+/* The splat source of a warp without foreground quads: elements [begin,
+   end), each to the pixel it lands in. */
+static uint32_t rendercache__warp_source(const void *src, uint32_t begin, uint32_t end, uint32_t *pix, float *depth2)
+{
+    const rendercache__warp_set *set = (const rendercache__warp_set *)src;
+    float px[RENDERCACHE__BATCH], py[RENDERCACHE__BATCH];
+    unsigned char ok[RENDERCACHE__BATCH];
+    uint32_t e = begin, any = 0;
+    while (e < end) {
+        const rendercache__warp_src *ws = &set->src[rendercache__warp_input(set, e)];
+        const uint32_t local = e - ws->first, n = end - e < ws->count - local ? end - e : ws->count - local;
+        const uint32_t width = ws->target->width, o = e - begin;
+        const float w = (float)ws->target->width, h = (float)ws->target->height;
+        uint32_t i;
+        uint32_t *out = pix + o, inside_any = 0;
+        e += n;
+        if (!rendercache__warp_project(ws, local, local + n, px, py, depth2 + o, ok)) {
+            memset(out, 0xFF, n * sizeof *out);   /* RENDERCACHE__NONE */
+            continue;
+        }
+        for (i = 0; i < n; i++) {   /* through int: the conversion that vectorises everywhere */
+            int inside = ok[i] & (px[i] >= 0.0f) & (px[i] < w) & (py[i] >= 0.0f) & (py[i] < h);
+            int xs = (int)(inside ? px[i] : 0.0f), ys = (int)(inside ? py[i] : 0.0f);
+            out[i] = inside ? (uint32_t)ys * width + (uint32_t)xs : RENDERCACHE__NONE;
+            inside_any |= (uint32_t)inside;
+        }
+        any |= inside_any;
+    }
+    return any;
 }
 
 /* Payload of a source pixel: its colour and its object id (bits). */
 static void rendercache__warp_payload(const void *src, uint32_t begin, uint32_t end, const uint32_t *pix,
                                       float *payload)
 {
-    const rendercache_range_image *img = ((const rendercache__warp_src *)src)->image;
-    uint32_t i;
-    for (i = begin; i < end; i++) {
-        float *out = payload + 4 * (size_t)(i - begin);
-        if (pix[i - begin] == RENDERCACHE__NONE) continue;
-        memcpy(out, img->rgb + 3 * (size_t)i, 3 * sizeof(float));
-        memcpy(out + 3, &img->object[i], sizeof(float));
+    const rendercache__warp_set *set = (const rendercache__warp_set *)src;
+    uint32_t e = begin;
+    while (e < end) {
+        const rendercache__warp_src *ws = &set->src[rendercache__warp_input(set, e)];
+        const uint32_t local = e - ws->first, n = end - e < ws->count - local ? end - e : ws->count - local;
+        const float *rgb = ws->image->rgb;
+        const uint32_t *obj = ws->image->object;
+        uint32_t i;
+        for (i = 0; i < n; i++) {
+            float *out = payload + 4 * (size_t)(e - begin + i);
+            if (pix[e - begin + i] == RENDERCACHE__NONE) continue;
+            memcpy(out, rgb + 3 * (size_t)(local + i), 3 * sizeof(float));
+            memcpy(out + 3, &obj[local + i], sizeof(float));
+        }
+        e += n;
     }
 }
 
-/* Row y of the source projected into the target's image plane, 4 floats per
-   pixel: x, y, squared distance, 1 when it has a projection (else 0). */
-static void rendercache__warp_project_row(const rendercache__warp_src *ws, uint32_t y, float *row)
+/* Row y of an input projected into the target's image plane, 4 floats per
+   pixel: x, y, biased squared distance, 1 when it has a projection (else
+   0). span receives the range [span[0], span[1]) outside which no pixel has
+   one (empty: span[0] == span[1]). */
+static void rendercache__warp_project_row(const rendercache__warp_src *ws, uint32_t y, float *row, uint32_t span[2])
 {
     const uint32_t sw = ws->source.width;
-    rendercache__geo g[RENDERCACHE__BATCH];
-    unsigned char kind[RENDERCACHE__BATCH];
-    uint32_t x0, i;
+    float px[RENDERCACHE__BATCH], py[RENDERCACHE__BATCH], d2[RENDERCACHE__BATCH];
+    unsigned char ok[RENDERCACHE__BATCH];
+    uint32_t x0, i, lo = sw, hi = 0;
     for (x0 = 0; x0 < sw; x0 += RENDERCACHE__BATCH) {
-        uint32_t n = sw - x0 < RENDERCACHE__BATCH ? sw - x0 : RENDERCACHE__BATCH;
-        rendercache__warp_gather(ws, y * sw + x0, y * sw + x0 + n, g, kind);
-        for (i = 0; i < n; i++) {
-            float *r = row + 4 * (size_t)(x0 + i), c[3];
-            r[3] = 0.0f;
-            if (kind[i] == RENDERCACHE__SRC_NONE) continue;
-            rendercache__warp_transform(ws, &g[i], kind[i], c, &r[2]);
-            if (rendercache__view_to_plane(ws->target, c, &r[0], &r[1])) r[3] = 1.0f;
+        uint32_t n = sw - x0 < RENDERCACHE__BATCH ? sw - x0 : RENDERCACHE__BATCH, first = 0, last = n;
+        float *RENDERCACHE__RESTRICT r = row + 4 * (size_t)x0;
+        if (!rendercache__warp_project(ws, y * sw + x0, y * sw + x0 + n, px, py, d2, ok)) continue;
+        while (first < n && !ok[first]) first++;
+        while (last > first && !ok[last - 1]) last--;
+        if (first == last) continue;
+        lo = x0 + first < lo ? x0 + first : lo;
+        hi = x0 + last;
+        for (i = first; i < last; i++) {
+            float k = ok[i] ? 1.0f : 0.0f;
+            r[4 * i + 0] = ok[i] ? px[i] : 0.0f;
+            r[4 * i + 1] = ok[i] ? py[i] : 0.0f;
+            r[4 * i + 2] = d2[i];
+            r[4 * i + 3] = k;
         }
     }
+    span[0] = lo < hi ? lo : 0;
+    span[1] = lo < hi ? hi : 0;
 }
 
-/* Whether a triangle of a foreground quad is drawn: corners a, b, c
-   (projected as by warp_project_row) all projected, their depths agreeing
-   within twice the tolerance (so that no triangle bridges a depth edge),
-   and not wider than max_extent. */
-static int rendercache__warp_triangle_ok(const rendercache__warp_src *ws, const float *a, const float *b, const float *c)
+/* Whether a triangle of a foreground quad is drawn (corners projected as by
+   warp_project_row, all with a projection): their depths agree within
+   twice the tolerance (so that no triangle bridges a depth edge), and it is
+   not wider than max_extent. */
+static int rendercache__warp_triangle_ok(const rendercache__warp_set *set, const float *a, const float *b, const float *c)
 {
     float dmin, dmax, xmin, xmax, ymin, ymax;
-    if (a[3] == 0.0f || b[3] == 0.0f || c[3] == 0.0f) return 0;
     dmin = a[2] < b[2] ? a[2] : b[2]; dmin = c[2] < dmin ? c[2] : dmin;
     dmax = a[2] > b[2] ? a[2] : b[2]; dmax = c[2] > dmax ? c[2] : dmax;
-    if (!(dmax <= dmin * ws->tol2x)) return 0;
     xmin = a[0] < b[0] ? a[0] : b[0]; xmin = c[0] < xmin ? c[0] : xmin;
     xmax = a[0] > b[0] ? a[0] : b[0]; xmax = c[0] > xmax ? c[0] : xmax;
     ymin = a[1] < b[1] ? a[1] : b[1]; ymin = c[1] < ymin ? c[1] : ymin;
     ymax = a[1] > b[1] ? a[1] : b[1]; ymax = c[1] > ymax ? c[1] : ymax;
-    return xmax - xmin <= ws->max_extent && ymax - ymin <= ws->max_extent;
+    return (dmax <= dmin * set->tol2x) & (xmax - xmin <= set->max_extent) & (ymax - ymin <= set->max_extent);
 }
 
-/* Edge function of the directed edge u -> v at (px, py), evaluated with the
-   endpoints in a fixed order (the smaller source pixel index first) so that
-   the two triangles sharing an edge compute the same value with opposite
-   signs: no pixel centre on a shared edge falls between them. */
-static float rendercache__edge(const float *u, const float *v, uint32_t eu, uint32_t ev, float px, float py)
+/* The edge function of the directed edge u -> v, e(x, y) = A x + B y + C
+   (positive on its left in image coordinates, y down), with coefficients
+   computed from the endpoints in a fixed order (the smaller source pixel
+   index first) and negated when reversed: the two triangles sharing an edge
+   compute bit for bit opposite values, so that no pixel centre on a shared
+   edge falls between them (watertight). */
+typedef struct rendercache__edge { float a, b, c; } rendercache__edge;
+
+static rendercache__edge rendercache__edge_of(const float *u, const float *v, uint32_t eu, uint32_t ev)
 {
     const float *p = eu < ev ? u : v, *q = eu < ev ? v : u;
-    float e = (q[0] - p[0]) * (py - p[1]) - (q[1] - p[1]) * (px - p[0]);
-    return eu < ev ? e : -e;
+    rendercache__edge e;
+    e.a = p[1] - q[1];
+    e.b = q[0] - p[0];
+    e.c = -(e.a * p[0] + e.b * p[1]);
+    if (eu > ev) { e.a = -e.a; e.b = -e.b; e.c = -e.c; }
+    return e;
 }
 
-/* Draws a triangle that passed warp_triangle_ok: corners a, b, c of source
-   pixels ea, eb, ec, for element e. Colour and squared distance are
-   interpolated with the barycentric weights at the pixel centres inside
-   (edges included), the object is the heaviest corner's. */
-static void rendercache__warp_triangle(const rendercache__warp_src *ws, rendercache__zbuffer *zb, const float *a,
-                                       const float *b, const float *c, uint32_t ea, uint32_t eb, uint32_t ec,
-                                       uint32_t e)
+static float rendercache__edge_at(const rendercache__edge *e, float x, float y) { return e->a * x + e->b * y + e->c; }
+
+/* Writes a pixel of a foreground triangle: weights wu, wv, ww (not yet
+   normalised) of its corners u, v, w (projected rows, input pixels eu, ev, ew). */
+static void rendercache__warp_shade(const rendercache__warp_src *ws, rendercache__zbuffer *zb, uint32_t pixel, float wu,
+                                    float wv, float ww, const float *u, const float *v, const float *w, uint32_t eu,
+                                    uint32_t ev, uint32_t ew, uint32_t e)
 {
     const rendercache_range_image *img = ws->image;
-    const float *ca = img->rgb + 3 * (size_t)ea, *cb = img->rgb + 3 * (size_t)eb, *cc = img->rgb + 3 * (size_t)ec;
+    const float *cu = img->rgb + 3 * (size_t)eu, *cv = img->rgb + 3 * (size_t)ev, *cw = img->rgb + 3 * (size_t)ew;
+    float s = 1.0f / (wu + wv + ww), payload[4], d;
+    uint32_t o;
+    wu *= s; wv *= s; ww *= s;
+    d = wu * u[2] + wv * v[2] + ww * w[2];
+    payload[0] = wu * cu[0] + wv * cv[0] + ww * cw[0];
+    payload[1] = wu * cu[1] + wv * cv[1] + ww * cw[1];
+    payload[2] = wu * cu[2] + wv * cv[2] + ww * cw[2];
+    o = wu >= wv && wu >= ww ? img->object[eu] : (wv >= ww ? img->object[ev] : img->object[ew]);
+    memcpy(payload + 3, &o, sizeof o);
+    rendercache__zbuffer_test(zb, pixel, d, e, payload);
+}
+
+/* Draws the triangles of a foreground quad that passed warp_triangle_ok
+   (flags bit 0: a b c, bit 1: a c d; corners projected as by
+   warp_project_row, input pixels pa .. pd), for element e: colour and
+   squared distance interpolated with the barycentric weights at the pixel
+   centres inside (edges included), the object the heaviest corner's. Both
+   triangles share the quad's box and the diagonal a c decides between
+   them. */
+static void rendercache__warp_quad(const rendercache__warp_src *ws, rendercache__zbuffer *zb, const float *a,
+                                   const float *b, const float *c, const float *d, uint32_t pa, uint32_t pb, uint32_t pc,
+                                   uint32_t pd, unsigned flags, uint32_t e)
+{
     const uint32_t w = ws->target->width, h = ws->target->height;
-    float xmin, xmax, ymin, ymax, sign, payload[4];
+    rendercache__edge ab, bc, ac, cd, da;
+    float xmin, xmax, ymin, ymax, s1, s2;
     int x0, x1, y0, y1, x, y;
-    xmin = a[0] < b[0] ? a[0] : b[0]; xmin = c[0] < xmin ? c[0] : xmin;
-    xmax = a[0] > b[0] ? a[0] : b[0]; xmax = c[0] > xmax ? c[0] : xmax;
-    ymin = a[1] < b[1] ? a[1] : b[1]; ymin = c[1] < ymin ? c[1] : ymin;
-    ymax = a[1] > b[1] ? a[1] : b[1]; ymax = c[1] > ymax ? c[1] : ymax;
-    if (!(xmax >= 0.5f && ymax >= 0.5f && xmin < (float)w && ymin < (float)h)) return;
+    xmin = a[0] < c[0] ? a[0] : c[0]; xmax = a[0] > c[0] ? a[0] : c[0];
+    ymin = a[1] < c[1] ? a[1] : c[1]; ymax = a[1] > c[1] ? a[1] : c[1];
+    if (flags & 1u) {
+        xmin = b[0] < xmin ? b[0] : xmin; xmax = b[0] > xmax ? b[0] : xmax;
+        ymin = b[1] < ymin ? b[1] : ymin; ymax = b[1] > ymax ? b[1] : ymax;
+    }
+    if (flags & 2u) {
+        xmin = d[0] < xmin ? d[0] : xmin; xmax = d[0] > xmax ? d[0] : xmax;
+        ymin = d[1] < ymin ? d[1] : ymin; ymax = d[1] > ymax ? d[1] : ymax;
+    }
     x0 = (int)ceilf(xmin - 0.5f); x1 = (int)floorf(xmax - 0.5f);
     y0 = (int)ceilf(ymin - 0.5f); y1 = (int)floorf(ymax - 0.5f);
     if (x0 < 0) x0 = 0;
@@ -3163,39 +3340,63 @@ static void rendercache__warp_triangle(const rendercache__warp_src *ws, renderca
     if (x1 >= (int)w) x1 = (int)w - 1;
     if (y1 >= (int)h) y1 = (int)h - 1;
     if (x0 > x1 || y0 > y1) return;   /* no pixel centre in the box */
-    sign = (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]) < 0.0f ? -1.0f : 1.0f;   /* orientation */
+    ac = rendercache__edge_of(a, c, pa, pc);
+    ab = rendercache__edge_of(a, b, pa, pb);
+    bc = rendercache__edge_of(b, c, pb, pc);
+    cd = rendercache__edge_of(c, d, pc, pd);
+    da = rendercache__edge_of(d, a, pd, pa);
+    /* orientations: the sign that makes each triangle's inside positive */
+    s1 = rendercache__edge_at(&ab, c[0], c[1]) < 0.0f ? -1.0f : 1.0f;
+    s2 = rendercache__edge_at(&cd, a[0], a[1]) < 0.0f ? -1.0f : 1.0f;
     for (y = y0; y <= y1; y++) {
         float py = (float)y + 0.5f;
         for (x = x0; x <= x1; x++) {
-            float px = (float)x + 0.5f, wa, wb, wc, sum, d;
-            uint32_t o;
-            wa = sign * rendercache__edge(b, c, eb, ec, px, py);
-            wb = sign * rendercache__edge(c, a, ec, ea, px, py);
-            wc = sign * rendercache__edge(a, b, ea, eb, px, py);
-            sum = wa + wb + wc;
-            if (wa < 0.0f || wb < 0.0f || wc < 0.0f || !(sum > 0.0f)) continue;
-            wa /= sum; wb /= sum; wc /= sum;
-            d = wa * a[2] + wb * b[2] + wc * c[2];
-            payload[0] = wa * ca[0] + wb * cb[0] + wc * cc[0];
-            payload[1] = wa * ca[1] + wb * cb[1] + wc * cc[1];
-            payload[2] = wa * ca[2] + wb * cb[2] + wc * cc[2];
-            o = wa >= wb && wa >= wc ? img->object[ea] : (wb >= wc ? img->object[eb] : img->object[ec]);
-            memcpy(payload + 3, &o, sizeof o);
-            rendercache__zbuffer_test(zb, (uint32_t)y * w + (uint32_t)x, d, e, payload);
+            float px = (float)x + 0.5f, eac = rendercache__edge_at(&ac, px, py), w0, w1, w2;
+            uint32_t pixel = (uint32_t)y * w + (uint32_t)x;
+            if ((flags & 1u) && -s1 * eac >= 0.0f) {   /* T1 = a b c: edges b c, c a, a b */
+                w0 = s1 * rendercache__edge_at(&bc, px, py);
+                w2 = s1 * rendercache__edge_at(&ab, px, py);
+                w1 = -s1 * eac;
+                if (w0 >= 0.0f && w2 >= 0.0f && w0 + w1 + w2 > 0.0f) {
+                    rendercache__warp_shade(ws, zb, pixel, w0, w1, w2, a, b, c, pa, pb, pc, e);
+                    continue;
+                }
+            }
+            if ((flags & 2u) && s2 * eac >= 0.0f) {    /* T2 = a c d: edges c d, d a, a c */
+                w0 = s2 * rendercache__edge_at(&cd, px, py);
+                w1 = s2 * rendercache__edge_at(&da, px, py);
+                w2 = s2 * eac;
+                if (w0 >= 0.0f && w1 >= 0.0f && w0 + w1 + w2 > 0.0f)
+                    rendercache__warp_shade(ws, zb, pixel, w0, w1, w2, a, c, d, pa, pc, pd, e);
+            }
         }
     }
 }
 
 /* Which triangles of the quads of source row y (between rows y and y + 1,
    projected in r0 and r1) are drawn: bit 0 the upper-right triangle
-   (x, y) (x+1, y) (x+1, y+1), bit 1 the lower-left (x, y) (x+1, y+1) (x, y+1). */
-static void rendercache__warp_quad_flags(const rendercache__warp_src *ws, const float *r0, const float *r1,
+   (x, y) (x+1, y) (x+1, y+1), bit 1 the lower-left (x, y) (x+1, y+1)
+   (x, y+1). Quads with a corner that has no projection, or whose box misses
+   the image, draw nothing (and cost little). */
+static void rendercache__warp_quad_flags(const rendercache__warp_set *set, const rendercache__warp_src *ws,
+                                         const float *r0, const float *r1, const uint32_t s0[2], const uint32_t s1[2],
                                          unsigned char *flags)
 {
-    uint32_t x;
-    for (x = 0; x + 1 < ws->source.width; x++) {
+    const float w = (float)ws->target->width, h = (float)ws->target->height;
+    uint32_t x = s0[0] > s1[0] ? s0[0] : s1[0], end = s0[1] < s1[1] ? s0[1] : s1[1];   /* both rows projected */
+    memset(flags, 0, ws->source.width);
+    for (; x + 1 < end; x++) {
         const float *a = r0 + 4 * (size_t)x, *b = a + 4, *c = r1 + 4 * (size_t)(x + 1), *d = r1 + 4 * (size_t)x;
-        flags[x] = (unsigned char)(rendercache__warp_triangle_ok(ws, a, b, c) | rendercache__warp_triangle_ok(ws, a, c, d) << 1);
+        float xmin = a[0] < b[0] ? a[0] : b[0], xmax = a[0] > b[0] ? a[0] : b[0];
+        float ymin = a[1] < b[1] ? a[1] : b[1], ymax = a[1] > b[1] ? a[1] : b[1];
+        int projected = (a[3] != 0.0f) & (b[3] != 0.0f) & (c[3] != 0.0f) & (d[3] != 0.0f);
+        xmin = c[0] < xmin ? c[0] : xmin; xmin = d[0] < xmin ? d[0] : xmin;
+        xmax = c[0] > xmax ? c[0] : xmax; xmax = d[0] > xmax ? d[0] : xmax;
+        ymin = c[1] < ymin ? c[1] : ymin; ymin = d[1] < ymin ? d[1] : ymin;
+        ymax = c[1] > ymax ? c[1] : ymax; ymax = d[1] > ymax ? d[1] : ymax;
+        if (!(projected & (xmax >= 0.0f) & (ymax >= 0.0f) & (xmin < w) & (ymin < h))) continue;
+        flags[x] = (unsigned char)(rendercache__warp_triangle_ok(set, a, b, c) |
+                                   rendercache__warp_triangle_ok(set, a, c, d) << 1);
     }
 }
 
@@ -3209,56 +3410,73 @@ static int rendercache__warp_surrounded(const unsigned char *up, const unsigned 
     return up[x - 1] == 3u && (up[x] & 2u) && (down[x - 1] & 1u) && down[x] == 3u;
 }
 
-/* The splat cover function of the foreground fill (pinterp's "foreground"
-   algorithm): each source pixel of [begin, end) draws the two triangles of
-   its quad to the right and lower neighbours that pass warp_triangle_ok,
-   and is splatted as a point where its surrounding triangles are not all
-   drawn (depth edges, image borders), so points fill what the triangles
-   leave and never compete with them inside a surface. Three projected rows
-   and two rows of quad flags slide down the job's rows. */
-static uint32_t rendercache__warp_cover(const void *src, uint32_t job, uint32_t begin, uint32_t end,
-                                        rendercache__zbuffer *zb, uint32_t width, uint32_t height)
+/* The foreground fill of pixels [begin, end) of one input: each draws the
+   triangles of its quad to the right and lower neighbours that pass
+   warp_triangle_ok, and is splatted as a point where its surrounding
+   triangles are not all drawn (depth edges, image borders), so points fill
+   what the triangles leave and never compete with them inside a surface.
+   Three projected rows and two rows of quad flags slide down the rows. */
+static uint32_t rendercache__warp_cover_input(const rendercache__warp_set *set, const rendercache__warp_src *ws,
+                                              uint32_t job, uint32_t begin, uint32_t end, rendercache__zbuffer *zb)
 {
-    const rendercache__warp_src *ws = (const rendercache__warp_src *)src;
     const rendercache_range_image *img = ws->image;
-    const uint32_t sw = ws->source.width, sh = ws->source.height;
-    float *rp = ws->rows + ws->rows_per_job * job, *rc = rp + 4 * (size_t)sw, *rn = rc + 4 * (size_t)sw, *t;
+    const uint32_t sw = ws->source.width, sh = ws->source.height, width = ws->target->width;
+    const float w = (float)ws->target->width, h = (float)ws->target->height;
+    float *rp = set->rows + set->rows_per_job * job, *rc = rp + 4 * (size_t)sw, *rn = rc + 4 * (size_t)sw, *t;
     unsigned char *fu = (unsigned char *)(rn + 4 * (size_t)sw), *fd = fu + sw, *ft;
-    uint32_t y0, y1, y, projected = 0;
-    if (begin >= end) return 0;
-    y0 = begin / sw;
-    y1 = (end - 1) / sw;
-    rendercache__warp_project_row(ws, y0, rc);
+    uint32_t y0 = begin / sw, y1 = (end - 1) / sw, y, projected = 0, sp[2], sc[2], sn[2], st;
+    rendercache__warp_project_row(ws, y0, rc, sc);
     if (y0 > 0) {
-        rendercache__warp_project_row(ws, y0 - 1, rp);
-        rendercache__warp_quad_flags(ws, rp, rc, fu);
+        rendercache__warp_project_row(ws, y0 - 1, rp, sp);
+        rendercache__warp_quad_flags(set, ws, rp, rc, sp, sc, fu);
     }
     for (y = y0; y <= y1; y++) {
         uint32_t xa = y == y0 ? begin - y * sw : 0, xb = y == y1 ? end - y * sw : sw, x;
         int below = y + 1 < sh;
         if (below) {
-            rendercache__warp_project_row(ws, y + 1, rn);
-            rendercache__warp_quad_flags(ws, rc, rn, fd);
+            rendercache__warp_project_row(ws, y + 1, rn, sn);
+            rendercache__warp_quad_flags(set, ws, rc, rn, sc, sn, fd);
         }
+        /* only the projected part of the row has quads and points */
+        xa = xa > sc[0] ? xa : sc[0];
+        xb = xb < sc[1] ? xb : sc[1];
         for (x = xa; x < xb; x++) {
             const float *a = rc + 4 * (size_t)x;
-            uint32_t e = y * sw + x;
-            if (below && x + 1 < sw) {
-                if (fd[x] & 1u) rendercache__warp_triangle(ws, zb, a, a + 4, rn + 4 * (size_t)(x + 1), e, e + 1, e + sw + 1, e);
-                if (fd[x] & 2u)
-                    rendercache__warp_triangle(ws, zb, a, rn + 4 * (size_t)(x + 1), rn + 4 * (size_t)x, e, e + sw + 1, e + sw, e);
-            }
-            if (a[3] != 0.0f && a[0] >= 0.0f && a[0] < (float)width && a[1] >= 0.0f && a[1] < (float)height) {
+            uint32_t p = y * sw + x, e = ws->first + p;
+            if (below && x + 1 < sw && fd[x])
+                rendercache__warp_quad(ws, zb, a, a + 4, rn + 4 * (size_t)(x + 1), rn + 4 * (size_t)x, p, p + 1,
+                                       p + sw + 1, p + sw, fd[x], e);
+            if (a[3] != 0.0f && a[0] >= 0.0f && a[0] < w && a[1] >= 0.0f && a[1] < h) {
                 float payload[4];
                 projected++;
                 if (rendercache__warp_surrounded(y > 0 ? fu : NULL, below ? fd : NULL, x, sw)) continue;
-                memcpy(payload, img->rgb + 3 * (size_t)e, 3 * sizeof(float));
-                memcpy(payload + 3, &img->object[e], sizeof(float));
+                memcpy(payload, img->rgb + 3 * (size_t)p, 3 * sizeof(float));
+                memcpy(payload + 3, &img->object[p], sizeof(float));
                 rendercache__zbuffer_test(zb, (uint32_t)a[1] * width + (uint32_t)a[0], a[2], e, payload);
             }
         }
         t = rp; rp = rc; rc = rn; rn = t;
         ft = fu; fu = fd; fd = ft;
+        st = sc[0]; sc[0] = sn[0]; sn[0] = st;
+        st = sc[1]; sc[1] = sn[1]; sn[1] = st;
+    }
+    return projected;
+}
+
+/* The splat cover function of the foreground fill (pinterp's "foreground"
+   algorithm): elements [begin, end), input by input. */
+static uint32_t rendercache__warp_cover(const void *src, uint32_t job, uint32_t begin, uint32_t end,
+                                        rendercache__zbuffer *zb, uint32_t width, uint32_t height)
+{
+    const rendercache__warp_set *set = (const rendercache__warp_set *)src;
+    uint32_t e = begin, projected = 0;
+    (void)width;
+    (void)height;
+    while (e < end) {
+        const rendercache__warp_src *ws = &set->src[rendercache__warp_input(set, e)];
+        const uint32_t local = e - ws->first, n = end - e < ws->count - local ? end - e : ws->count - local;
+        projected += rendercache__warp_cover_input(set, ws, job, local, local + n, zb);
+        e += n;
     }
     return projected;
 }
@@ -3267,7 +3485,8 @@ static uint32_t rendercache__warp_cover(const void *src, uint32_t job, uint32_t 
 typedef struct rendercache__warp_job {
     rendercache_warper *w;
     rendercache__accum acc, second;
-    const rendercache__raster *raster;   /* merge: the splat of one input */
+    const rendercache__raster *raster;   /* extract: the splat */
+    const rendercache__warp_set *set;
     float tol2;                          /* squared (1 + tolerance) */
     float t;                             /* blend weight of the second image */
 } rendercache__warp_job;
@@ -3279,86 +3498,95 @@ static void rendercache__tile_rows(const rendercache_warper *w, uint32_t tile, u
     if (*p1 > w->pixel_count) *p1 = w->pixel_count;
 }
 
-static void rendercache__accum_clear_job(void *ctx, uint32_t tile)
-{
-    const rendercache__warp_job *j = (const rendercache__warp_job *)ctx;
-    uint32_t p0, p1, p;
-    rendercache__tile_rows(j->w, tile, &p0, &p1);
-    for (p = p0; p < p1; p++) {
-        j->acc.depth2[p] = FLT_MAX;
-        j->acc.object[p] = RENDERCACHE_NO_SAMPLE;
-        j->w->how[p] = RENDERCACHE__HOW_EMPTY;
-    }
-}
-
-/* Merges the splat of one input into the image (pinterp's rule): an empty
-   pixel takes it, a filled one only when it is nearer by more than the
-   tolerance, so that the inputs nearer the new eye, taken first, win over
-   the same surface seen from farther. */
-static void rendercache__merge_job(void *ctx, uint32_t tile)
+/* The splat's result as an image: colour, object and squared distance
+   (without the input's bias) per pixel, FLT_MAX where nothing landed. */
+static void rendercache__extract_job(void *ctx, uint32_t tile)
 {
     const rendercache__warp_job *j = (const rendercache__warp_job *)ctx;
     const rendercache__raster *r = j->raster;
+    const rendercache__warp_src *ws = j->set->src;
     uint32_t p0, p1, p;
     rendercache__tile_rows(j->w, tile, &p0, &p1);
     for (p = p0; p < p1; p++) {
-        float d = r->depth[p];
-        if (r->index[p] == RENDERCACHE__NONE) continue;
-        if (j->acc.depth2[p] != FLT_MAX && !(d * j->tol2 < j->acc.depth2[p])) continue;
-        j->acc.depth2[p] = d;
+        uint32_t e = r->index[p];
+        if (e == RENDERCACHE__NONE) {
+            j->acc.depth2[p] = FLT_MAX;
+            j->acc.object[p] = RENDERCACHE_NO_SAMPLE;
+            j->w->how[p] = RENDERCACHE__HOW_EMPTY;
+            continue;
+        }
         memcpy(j->acc.rgb + 3 * (size_t)p, r->payload + 4 * (size_t)p, 3 * sizeof(float));
         memcpy(&j->acc.object[p], r->payload + 4 * (size_t)p + 3, sizeof(uint32_t));
+        if (e - ws->first >= ws->count) ws = &j->set->src[rendercache__warp_input(j->set, e)];   /* the last one, mostly */
+        j->acc.depth2[p] = j->acc.object[p] == RENDERCACHE_MISS ? RENDERCACHE__FAR2 : r->depth[p] * ws->inv_bias;
         j->w->how[p] = RENDERCACHE__HOW_WARPED;
     }
 }
 
-/* Reprojects one input into the accumulator. */
-static void rendercache__warp_one(rendercache_warper *w, rendercache__warp_src *ws, int foreground,
-                                  const rendercache__accum *acc)
+/* Reprojects the inputs of set into acc, one splat for all. */
+static void rendercache__warp_splat(rendercache_warper *w, const rendercache__warp_set *set, int foreground,
+                                    const rendercache__accum *acc)
 {
     rendercache__warp_job job;
-    const uint32_t count = ws->source.width * ws->source.height;
+    const rendercache__warp_src *last = &set->src[set->count - 1];
+    const uint32_t count = last->first + last->count;
     if (foreground)
-        rendercache__splat_run_cover(&w->splat, w->parallel_for, w->parallel_user, rendercache__warp_cover, ws, count);
+        rendercache__splat_run_cover(&w->splat, w->parallel_for, w->parallel_user, rendercache__warp_cover, set, count);
     else
         rendercache__splat_run(&w->splat, w->parallel_for, w->parallel_user, rendercache__warp_source,
-                               rendercache__warp_payload, ws, count);
+                               rendercache__warp_payload, set, count);
     w->stats.projected += w->splat.projected;
     memset(&job, 0, sizeof job);
     job.w = w;
     job.acc = *acc;
     job.raster = &w->splat.final;
-    job.tol2 = (1.0f + w->tolerance) * (1.0f + w->tolerance);
-    rendercache__run_jobs(w->parallel_for, w->parallel_user, rendercache__merge_job, &job, w->tile_count);
+    job.set = set;
+    rendercache__run_jobs(w->parallel_for, w->parallel_user, rendercache__extract_job, &job, w->tile_count);
 }
 
-/* Sets up the source of one input; motion: per-object world motions (12
-   floats each) or NULL. Returns 0 when out of memory. */
-static int rendercache__warp_prepare(rendercache_warper *w, rendercache__warp_src *ws,
-                                     const rendercache_range_image *img, const float *motion, uint32_t motion_count,
-                                     float *motion_out, int foreground)
+/* Sets up input img as element range [first, first + pixels) with a bias;
+   motion: per-object world motions (12 floats each) or NULL, composed into
+   motion_out. */
+static void rendercache__warp_prepare(const rendercache_warper *w, rendercache__warp_src *ws,
+                                      const rendercache_range_image *img, const float *motion, uint32_t motion_count,
+                                      float *motion_out, uint32_t first, float bias)
 {
     uint32_t o;
     memset(ws, 0, sizeof *ws);
     ws->image = img;
     rendercache__view_init(&ws->source, &img->camera);   /* validated by the caller */
     ws->target = &w->target;
+    ws->first = first;
+    ws->count = img->camera.width * img->camera.height;
+    ws->bias = bias;
+    ws->inv_bias = 1.0f / bias;
     rendercache__warp_matrix(&ws->source, &w->target, NULL, ws->m);
+    if (w->target.kind == RENDERCACHE_CAMERA_PERSPECTIVE && !(motion && motion_count)) rendercache__warp_cull_planes(ws);
     if (motion && motion_count) {
         for (o = 0; o < motion_count; o++)
             rendercache__warp_matrix(&ws->source, &w->target, motion + 12 * (size_t)o, motion_out + 12 * (size_t)o);
         ws->motion = motion_out;
         ws->motion_count = motion_count;
     }
-    ws->tol2x = (1.0f + 2.0f * w->tolerance) * (1.0f + 2.0f * w->tolerance);
-    ws->max_extent = RENDERCACHE__MAX_QUAD_FRACTION * (float)(w->width > w->height ? w->width : w->height);
-    if (foreground) {   /* three rows of 4 floats and two rows of flag bytes per job */
-        size_t per_job = 13 * (size_t)ws->source.width, jobs = w->splat.jobs;
-        if (!rendercache__reserve(&w->alloc, (void **)&w->rows, &w->rows_cap, per_job * jobs, sizeof(float)))
-            return 0;
-        ws->rows = w->rows;
-        ws->rows_per_job = per_job;
-    }
+}
+
+/* The set of n prepared inputs, with the foreground fill's row buffers.
+   Returns 0 when out of memory. */
+static int rendercache__warp_set_init(rendercache_warper *w, rendercache__warp_set *set, const rendercache__warp_src *src,
+                                      uint32_t n, int foreground)
+{
+    uint32_t i, widest = 0;
+    memset(set, 0, sizeof *set);
+    set->src = src;
+    set->count = n;
+    set->tol2x = (1.0f + 2.0f * w->tolerance) * (1.0f + 2.0f * w->tolerance);
+    set->max_extent = RENDERCACHE__MAX_QUAD_FRACTION * (float)(w->width > w->height ? w->width : w->height);
+    if (!foreground) return 1;
+    for (i = 0; i < n; i++) widest = src[i].source.width > widest ? src[i].source.width : widest;
+    set->rows_per_job = 13 * (size_t)widest;   /* three rows of 4 floats and two rows of flag bytes */
+    if (!rendercache__reserve(&w->alloc, (void **)&w->rows, &w->rows_cap, set->rows_per_job * w->splat.jobs, sizeof(float)))
+        return 0;
+    set->rows = w->rows;
     return 1;
 }
 
@@ -3562,44 +3790,53 @@ RENDERCACHE_API rendercache_result rendercache_warp(rendercache_warper *w, const
                                                     rendercache_range_image *out)
 {
     rendercache__accum acc;
-    rendercache__warp_job job;
+    rendercache__warp_set set;
     rendercache_result r;
     rendercache__view v;
     size_t cap;
-    double t0, t1;
+    uint64_t elements = 0;
+    double t0, t1, bias = 1.0, tol2;
     uint32_t i;
     if (!w) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
     if (!images || n == 0 || !rendercache__fill_valid(fill)) {
         rendercache__warp_log(w, "rendercache_warp: no images, or an unknown fill mode");
         return RENDERCACHE_ERROR_INVALID_ARGUMENT;
     }
-    for (i = 0; i < n; i++)
+    for (i = 0; i < n; i++) {
         if (!rendercache__range_valid(images[i], &v) || images[i] == out) {
             rendercache__warp_log(w, "rendercache_warp: an input image is NULL, incomplete, has an invalid camera, or is out");
             return RENDERCACHE_ERROR_INVALID_ARGUMENT;
         }
+        elements += (uint64_t)images[i]->camera.width * images[i]->camera.height;
+    }
+    if (elements >= RENDERCACHE__NONE) {
+        rendercache__warp_log(w, "rendercache_warp: more than 2^32 - 1 input pixels");
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    }
     if (fill == RENDERCACHE_FILL_DEFAULT) fill = RENDERCACHE_FILL_BOTH;
     t0 = rendercache__warp_now(w);
     r = rendercache__warp_begin(w, camera, out, "rendercache_warp: invalid output image or camera, or sizes differ");
     if (r != RENDERCACHE_OK) return r;
     cap = w->order_cap;
-    if (!rendercache__reserve(&w->alloc, (void **)&w->order, &cap, n, sizeof(uint32_t)))
-        return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    if (!rendercache__reserve(&w->alloc, (void **)&w->order, &cap, n, sizeof(uint32_t))) return RENDERCACHE_ERROR_OUT_OF_MEMORY;
     w->order_cap = (uint32_t)cap;
+    cap = w->src_cap;
+    if (!rendercache__reserve(&w->alloc, (void **)&w->src, &cap, n, sizeof(rendercache__warp_src)))
+        return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    w->src_cap = (uint32_t)cap;
     rendercache__order_inputs(images, n, w->target.eye, w->order);
+    /* input of rank k: squared distances times (1 + t)^(2k), capped so that they stay finite */
+    tol2 = (1.0 + w->tolerance) * (1.0 + w->tolerance);
+    for (i = 0, elements = 0; i < n; i++) {
+        rendercache__warp_prepare(w, &w->src[i], images[w->order[i]], NULL, 0, NULL, (uint32_t)elements, (float)bias);
+        elements += w->src[i].count;
+        bias = bias * tol2 < RENDERCACHE__MAX_BIAS ? bias * tol2 : RENDERCACHE__MAX_BIAS;
+    }
+    if (!rendercache__warp_set_init(w, &set, w->src, n, rendercache__has_foreground(fill))) return RENDERCACHE_ERROR_OUT_OF_MEMORY;
     acc.rgb = out->rgb;
     acc.depth2 = out->depth;
     acc.object = out->object;
-    memset(&job, 0, sizeof job);
-    job.w = w;
-    job.acc = acc;
-    rendercache__run_jobs(w->parallel_for, w->parallel_user, rendercache__accum_clear_job, &job, w->tile_count);
-    for (i = 0; i < n; i++) {
-        rendercache__warp_src ws;
-        if (!rendercache__warp_prepare(w, &ws, images[w->order[i]], NULL, 0, NULL, rendercache__has_foreground(fill)))
-            return RENDERCACHE_ERROR_OUT_OF_MEMORY;
-        rendercache__warp_one(w, &ws, rendercache__has_foreground(fill), &acc);
-    }
+    rendercache__warp_splat(w, &set, rendercache__has_foreground(fill), &acc);
     t1 = rendercache__warp_now(w);
     rendercache__warp_finish(w, &acc, fill);
     out->time = images[w->order[0]]->time;
@@ -3700,6 +3937,7 @@ RENDERCACHE_API rendercache_result rendercache_blend_motion(rendercache_warper *
     rendercache__accum acc_a, acc_b;
     rendercache__warp_job job;
     rendercache__warp_src ws;
+    rendercache__warp_set set;
     rendercache__view va, vb;
     rendercache_result r;
     uint32_t count = motion ? motion->object_count : 0;
@@ -3735,22 +3973,18 @@ RENDERCACHE_API rendercache_result rendercache_blend_motion(rendercache_warper *
     }
     acc_a.rgb = out->rgb; acc_a.depth2 = out->depth; acc_a.object = out->object;
     acc_b.rgb = w->b_rgb; acc_b.depth2 = w->b_depth2; acc_b.object = w->b_object;
+    rendercache__warp_prepare(w, &ws, a, ma, count, w->motion + 24 * (size_t)count, 0, 1.0f);
+    if (!rendercache__warp_set_init(w, &set, &ws, 1, fg)) return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    rendercache__warp_splat(w, &set, fg, &acc_a);
+    rendercache__warp_prepare(w, &ws, b, mb, count, w->motion + 36 * (size_t)count, 0, 1.0f);
+    if (!rendercache__warp_set_init(w, &set, &ws, 1, fg)) return RENDERCACHE_ERROR_OUT_OF_MEMORY;   /* b's width */
+    rendercache__warp_splat(w, &set, fg, &acc_b);
     memset(&job, 0, sizeof job);
     job.w = w;
     job.acc = acc_a;
     job.second = acc_b;
     job.t = t;
     job.tol2 = (1.0f + w->tolerance) * (1.0f + w->tolerance);
-    rendercache__run_jobs(w->parallel_for, w->parallel_user, rendercache__accum_clear_job, &job, w->tile_count);
-    if (!rendercache__warp_prepare(w, &ws, a, ma, count, w->motion + 24 * (size_t)count, fg))
-        return RENDERCACHE_ERROR_OUT_OF_MEMORY;
-    rendercache__warp_one(w, &ws, fg, &acc_a);
-    job.acc = acc_b;
-    rendercache__run_jobs(w->parallel_for, w->parallel_user, rendercache__accum_clear_job, &job, w->tile_count);
-    job.acc = acc_a;
-    if (!rendercache__warp_prepare(w, &ws, b, mb, count, w->motion + 36 * (size_t)count, fg))
-        return RENDERCACHE_ERROR_OUT_OF_MEMORY;
-    rendercache__warp_one(w, &ws, fg, &acc_b);
     rendercache__run_jobs(w->parallel_for, w->parallel_user, rendercache__combine_job, &job, w->tile_count);
     t1 = rendercache__warp_now(w);
     rendercache__warp_finish(w, &acc_a, fill);
