@@ -3300,6 +3300,7 @@ static void rendercache__warp_shade(const rendercache__warp_src *ws, rendercache
     uint32_t o;
     wu *= s; wv *= s; ww *= s;
     d = wu * u[2] + wv * v[2] + ww * w[2];
+    if (!(rendercache__key(d, e) < zb->key[pixel])) return;   /* hidden: no colour to interpolate */
     payload[0] = wu * cu[0] + wv * cv[0] + ww * cw[0];
     payload[1] = wu * cu[1] + wv * cv[1] + ww * cw[1];
     payload[2] = wu * cu[2] + wv * cv[2] + ww * cw[2];
