@@ -2798,6 +2798,7 @@ static int rendercache__range_valid(const rendercache_range_image *img, renderca
 #define RENDERCACHE__COLUMN_STRIP 64u          /* columns per job of the background fill */
 #define RENDERCACHE__MAX_BIAS 1e6                /* largest depth bias of a late input (keeps depths finite) */
 #define RENDERCACHE__CULL_CHUNK 32u              /* rays tested together against the target's frustum */
+#define RENDERCACHE__IN_PLACE 2                  /* a projected pixel that stays on itself (warp_project's ok) */
 
 /* What filled a target pixel (warper.how). */
 enum { RENDERCACHE__HOW_EMPTY = 0, RENDERCACHE__HOW_WARPED, RENDERCACHE__HOW_BACKGROUND, RENDERCACHE__HOW_COMPUTED };
@@ -2836,6 +2837,8 @@ struct rendercache_warper {
     size_t rows_cap;             /* floats */
     float *motion;               /* per object id: source camera to target camera, 12 floats */
     uint32_t motion_cap;         /* objects */
+    unsigned char *moving;       /* per object id: 1 when its motion is not the identity */
+    uint32_t moving_cap;
     uint32_t *order;             /* inputs by distance */
     uint32_t order_cap;
     struct rendercache__warp_src *src;   /* the inputs, in that order */
@@ -2953,6 +2956,7 @@ RENDERCACHE_API void rendercache_warper_destroy(rendercache_warper *w)
     rendercache__warper_free_buffers(w);
     rendercache__free(&a, w->rows);
     rendercache__free(&a, w->motion);
+    rendercache__free(&a, w->moving);
     rendercache__free(&a, w->order);
     rendercache__free(&a, w->src);
     rendercache__free(&a, w);
@@ -3005,6 +3009,8 @@ typedef struct rendercache__warp_src {
     uint32_t count;              /* its pixels */
     float bias;                  /* its squared distances are compared times (1 + tolerance)^(2 rank) */
     float inv_bias;
+    int same_view;               /* the target is its own camera: static pixels stay in place */
+    const unsigned char *moving; /* with motion: per object id < motion_count, 1 when it moves */
     float cull[5][3];            /* planes of the target's frustum whose outside holds this input's eye,
                                     as normals in source camera space: a ray pointing outside one of
                                     them misses the target image at every depth */
@@ -3108,7 +3114,8 @@ static void rendercache__warp_project_static(const rendercache__warp_src *ws, co
    target's image plane: px, py (not clipped to the image), the squared
    distance times the input's bias (background pixels: FAR2, unbiased, so
    that the nearer input's background wins on the element index), and
-   ok = 1 where the pixel has a projection. Pixels without a ray,
+   ok = 1 where the pixel has a projection (RENDERCACHE__IN_PLACE when it
+   stays exactly on its own pixel: same camera, not moving). Pixels without a ray,
    RENDERCACHE_NO_SAMPLE and depths that are not finite and positive are
    not ok. Static pixels into a perspective target take a loop written to
    vectorise (the projection of rendercache__project_perspective, fused with
@@ -3150,6 +3157,15 @@ static uint32_t rendercache__warp_project(const rendercache__warp_src *ws, uint3
         int point = o < RENDERCACHE_NO_SAMPLE && d > 0.0f && d <= FLT_MAX;
         const float *m = ws->m;
         if (!ok[i] || !(point || o == RENDERCACHE_MISS)) { ok[i] = 0; continue; }
+        if (ws->same_view && (!point || !ws->motion || o >= ws->motion_count || !ws->moving[o])) {
+            /* into its own camera, not moving: the pixel's own centre, exactly */
+            uint32_t e = begin + i, y = e / sw;
+            px[i] = (float)(e - y * sw) + 0.5f;
+            py[i] = (float)y + 0.5f;
+            d2[i] = point ? d * d * bias : RENDERCACHE__FAR2;
+            ok[i] = RENDERCACHE__IN_PLACE;
+            continue;
+        }
         x[0] = dx[i]; x[1] = dy[i]; x[2] = dz[i];
         if (point) {
             x[0] *= d; x[1] *= d; x[2] *= d;
@@ -3188,7 +3204,7 @@ static uint32_t rendercache__warp_source(const void *src, uint32_t begin, uint32
             continue;
         }
         for (i = 0; i < n; i++) {   /* through int: the conversion that vectorises everywhere */
-            int inside = ok[i] & (px[i] >= 0.0f) & (px[i] < w) & (py[i] >= 0.0f) & (py[i] < h);
+            int inside = (ok[i] != 0) & (px[i] >= 0.0f) & (px[i] < w) & (py[i] >= 0.0f) & (py[i] < h);
             int xs = (int)(inside ? px[i] : 0.0f), ys = (int)(inside ? py[i] : 0.0f);
             out[i] = inside ? (uint32_t)ys * width + (uint32_t)xs : RENDERCACHE__NONE;
             inside_any |= (uint32_t)inside;
@@ -3240,7 +3256,7 @@ static void rendercache__warp_project_row(const rendercache__warp_src *ws, uint3
         lo = x0 + first < lo ? x0 + first : lo;
         hi = x0 + last;
         for (i = first; i < last; i++) {
-            float k = ok[i] ? 1.0f : 0.0f;
+            float k = (float)ok[i];   /* 0, 1, or 2 in place */
             r[4 * i + 0] = ok[i] ? px[i] : 0.0f;
             r[4 * i + 1] = ok[i] ? py[i] : 0.0f;
             r[4 * i + 2] = d2[i];
@@ -3391,11 +3407,13 @@ static void rendercache__warp_quad_flags(const rendercache__warp_set *set, const
         float xmin = a[0] < b[0] ? a[0] : b[0], xmax = a[0] > b[0] ? a[0] : b[0];
         float ymin = a[1] < b[1] ? a[1] : b[1], ymax = a[1] > b[1] ? a[1] : b[1];
         int projected = (a[3] != 0.0f) & (b[3] != 0.0f) & (c[3] != 0.0f) & (d[3] != 0.0f);
+        /* four pixels that stay in place: their points land on the pixel centres, no quad needed */
+        int in_place = (a[3] == 2.0f) & (b[3] == 2.0f) & (c[3] == 2.0f) & (d[3] == 2.0f);
         xmin = c[0] < xmin ? c[0] : xmin; xmin = d[0] < xmin ? d[0] : xmin;
         xmax = c[0] > xmax ? c[0] : xmax; xmax = d[0] > xmax ? d[0] : xmax;
         ymin = c[1] < ymin ? c[1] : ymin; ymin = d[1] < ymin ? d[1] : ymin;
         ymax = c[1] > ymax ? c[1] : ymax; ymax = d[1] > ymax ? d[1] : ymax;
-        if (!(projected & (xmax >= 0.0f) & (ymax >= 0.0f) & (xmin < w) & (ymin < h))) continue;
+        if (!(projected & !in_place & (xmax >= 0.0f) & (ymax >= 0.0f) & (xmin < w) & (ymin < h))) continue;
         flags[x] = (unsigned char)(rendercache__warp_triangle_ok(set, a, b, c) |
                                    rendercache__warp_triangle_ok(set, a, c, d) << 1);
     }
@@ -3545,12 +3563,24 @@ static void rendercache__warp_splat(rendercache_warper *w, const rendercache__wa
     rendercache__run_jobs(w->parallel_for, w->parallel_user, rendercache__extract_job, &job, w->tile_count);
 }
 
+static int rendercache__view_equal(const rendercache__view *a, const rendercache__view *b)
+{
+    int i, j;
+    if (a->kind != b->kind || a->width != b->width || a->height != b->height || a->focal != b->focal) return 0;
+    for (i = 0; i < 3; i++) {
+        if (a->eye[i] != b->eye[i]) return 0;
+        for (j = 0; j < 3; j++)
+            if (a->axis[i][j] != b->axis[i][j]) return 0;
+    }
+    return 1;
+}
+
 /* Sets up input img as element range [first, first + pixels) with a bias;
    motion: per-object world motions (12 floats each) or NULL, composed into
-   motion_out. */
+   motion_out, with moving[o] = 1 for the objects that do move. */
 static void rendercache__warp_prepare(const rendercache_warper *w, rendercache__warp_src *ws,
                                       const rendercache_range_image *img, const float *motion, uint32_t motion_count,
-                                      float *motion_out, uint32_t first, float bias)
+                                      float *motion_out, unsigned char *moving, uint32_t first, float bias)
 {
     uint32_t o;
     memset(ws, 0, sizeof *ws);
@@ -3563,11 +3593,16 @@ static void rendercache__warp_prepare(const rendercache_warper *w, rendercache__
     ws->inv_bias = 1.0f / bias;
     rendercache__warp_matrix(&ws->source, &w->target, NULL, ws->m);
     if (w->target.kind == RENDERCACHE_CAMERA_PERSPECTIVE && !(motion && motion_count)) rendercache__warp_cull_planes(ws);
+    ws->same_view = rendercache__view_equal(&ws->source, &w->target);
     if (motion && motion_count) {
-        for (o = 0; o < motion_count; o++)
+        static const float identity[12] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0 };
+        for (o = 0; o < motion_count; o++) {
             rendercache__warp_matrix(&ws->source, &w->target, motion + 12 * (size_t)o, motion_out + 12 * (size_t)o);
+            moving[o] = (unsigned char)(memcmp(motion + 12 * (size_t)o, identity, sizeof identity) != 0);
+        }
         ws->motion = motion_out;
         ws->motion_count = motion_count;
+        ws->moving = moving;
     }
 }
 
@@ -3595,32 +3630,35 @@ static int rendercache__warp_set_init(rendercache_warper *w, rendercache__warp_s
 
 /* Job per strip of columns: for each run of empty pixels in a column, the
    farther of the filled pixels just above and just below it (above on a
-   tie), written to w->column for every pixel of the run. */
+   tie), written to w->column for every pixel of the run. The strip is
+   scanned row by row (one open run per column), so that reads stay in
+   cache lines. */
 static void rendercache__column_job(void *ctx, uint32_t strip)
 {
     const rendercache__warp_job *j = (const rendercache__warp_job *)ctx;
     rendercache_warper *w = j->w;
     const float *d2 = j->acc.depth2;
+    const uint32_t width = w->width, height = w->height;
     uint32_t x0 = strip * RENDERCACHE__COLUMN_STRIP, x1 = x0 + RENDERCACHE__COLUMN_STRIP, x, y;
-    if (x1 > w->width) x1 = w->width;
-    for (x = x0; x < x1; x++) {
-        uint32_t run = RENDERCACHE__NONE;   /* first row of the current empty run */
-        for (y = 0; y <= w->height; y++) {
-            uint32_t p = y * w->width + x, above, below, cand, k;
-            int filled = y < w->height && d2[p] != FLT_MAX;
-            if (!filled && y < w->height) {
-                if (run == RENDERCACHE__NONE) run = y;
+    uint32_t run[RENDERCACHE__COLUMN_STRIP];   /* per column: first row of the open empty run, or NONE */
+    if (x1 > width) x1 = width;
+    for (x = x0; x < x1; x++) run[x - x0] = RENDERCACHE__NONE;
+    for (y = 0; y <= height; y++)
+        for (x = x0; x < x1; x++) {
+            uint32_t p = y * width + x, r = run[x - x0], above, below, cand, k;
+            int filled = y == height || d2[p] != FLT_MAX;
+            if (!filled) {
+                if (r == RENDERCACHE__NONE) run[x - x0] = y;
                 continue;
             }
-            if (run == RENDERCACHE__NONE) continue;
-            above = run > 0 ? (run - 1) * w->width + x : RENDERCACHE__NONE;
-            below = y < w->height ? p : RENDERCACHE__NONE;
+            if (r == RENDERCACHE__NONE) continue;
+            above = r > 0 ? (r - 1) * width + x : RENDERCACHE__NONE;
+            below = y < height ? p : RENDERCACHE__NONE;
             cand = above;
             if (below != RENDERCACHE__NONE && (above == RENDERCACHE__NONE || d2[above] < d2[below])) cand = below;
-            for (k = run; k < y; k++) w->column[k * w->width + x] = cand;
-            run = RENDERCACHE__NONE;
+            for (k = r; k < y; k++) w->column[k * width + x] = cand;
+            run[x - x0] = RENDERCACHE__NONE;
         }
-    }
 }
 
 /* Job per tile of rows: each empty pixel takes the row's candidate (the
@@ -3829,7 +3867,7 @@ RENDERCACHE_API rendercache_result rendercache_warp(rendercache_warper *w, const
     /* input of rank k: squared distances times (1 + t)^(2k), capped so that they stay finite */
     tol2 = (1.0 + w->tolerance) * (1.0 + w->tolerance);
     for (i = 0, elements = 0; i < n; i++) {
-        rendercache__warp_prepare(w, &w->src[i], images[w->order[i]], NULL, 0, NULL, (uint32_t)elements, (float)bias);
+        rendercache__warp_prepare(w, &w->src[i], images[w->order[i]], NULL, 0, NULL, NULL, (uint32_t)elements, (float)bias);
         elements += w->src[i].count;
         bias = bias * tol2 < RENDERCACHE__MAX_BIAS ? bias * tol2 : RENDERCACHE__MAX_BIAS;
     }
@@ -3964,6 +4002,10 @@ RENDERCACHE_API rendercache_result rendercache_blend_motion(rendercache_warper *
         !rendercache__reserve(&w->alloc, (void **)&w->motion, &cap, 4 * (size_t)count + 1, 12 * sizeof(float)))
         return count > RENDERCACHE__MAX_OBJECTS ? RENDERCACHE_ERROR_INVALID_ARGUMENT : RENDERCACHE_ERROR_OUT_OF_MEMORY;
     w->motion_cap = (uint32_t)cap;
+    cap = w->moving_cap;
+    if (!rendercache__reserve(&w->alloc, (void **)&w->moving, &cap, 2 * (size_t)count + 1, 1))
+        return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    w->moving_cap = (uint32_t)cap;
     /* the motions of a's and b's objects, then the composed matrices */
     ma = w->motion;
     mb = w->motion + 12 * (size_t)count;
@@ -3974,10 +4016,10 @@ RENDERCACHE_API rendercache_result rendercache_blend_motion(rendercache_warper *
     }
     acc_a.rgb = out->rgb; acc_a.depth2 = out->depth; acc_a.object = out->object;
     acc_b.rgb = w->b_rgb; acc_b.depth2 = w->b_depth2; acc_b.object = w->b_object;
-    rendercache__warp_prepare(w, &ws, a, ma, count, w->motion + 24 * (size_t)count, 0, 1.0f);
+    rendercache__warp_prepare(w, &ws, a, ma, count, w->motion + 24 * (size_t)count, w->moving, 0, 1.0f);
     if (!rendercache__warp_set_init(w, &set, &ws, 1, fg)) return RENDERCACHE_ERROR_OUT_OF_MEMORY;
     rendercache__warp_splat(w, &set, fg, &acc_a);
-    rendercache__warp_prepare(w, &ws, b, mb, count, w->motion + 36 * (size_t)count, 0, 1.0f);
+    rendercache__warp_prepare(w, &ws, b, mb, count, w->motion + 36 * (size_t)count, w->moving + count, 0, 1.0f);
     if (!rendercache__warp_set_init(w, &set, &ws, 1, fg)) return RENDERCACHE_ERROR_OUT_OF_MEMORY;   /* b's width */
     rendercache__warp_splat(w, &set, fg, &acc_b);
     memset(&job, 0, sizeof job);
