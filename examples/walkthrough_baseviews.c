@@ -425,8 +425,8 @@ static int reconstruct(world *w, level *L, level_result *r, rendercache_warper *
         motion.world_t = wt;
     }
     for (i = 0; i < n; i++) {
-        if (motion_compensated)
-            rendercache_blend_motion(blender, a[i], b[i], (float)s, &motion, RENDERCACHE_FILL_BOTH, blend[i]);
+        if (motion_compensated)   /* holes stay open: the warp fills them from the other views first */
+            rendercache_blend_motion(blender, a[i], b[i], (float)s, &motion, RENDERCACHE_FILL_FOREGROUND, blend[i]);
         else
             rendercache_blend(a[i], b[i], (float)s, blend[i]);
         in[i] = blend[i];
