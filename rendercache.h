@@ -1,4 +1,4 @@
-/* rendercache.h - v0.2.0 - render cache and range-image walkthroughs - public domain or MIT, see end of file
+/* rendercache.h - v0.3.0 - render cache and range-image walkthroughs - public domain or MIT, see end of file
 
    RENDERCACHE.H: an image-space point cache that reprojects and resamples, and range-image walkthroughs of animated scenes.
 
@@ -13,6 +13,21 @@
    renderer and inserts the results. Objects may move: each point belongs to
    an object whose transform the caller updates, and the point moves with it.
 
+   Range-image walkthroughs (Nimeroff, Dorsey and Rushmeier 1996) precompute
+   instead: a range image is what a camera sees (radiance, distance along
+   the ray, object id per pixel), and a walkthrough of an animated scene is
+   rebuilt from base images, fish-eye or full-sphere views taken at base
+   view positions and key times. Coherence tests on id images choose them:
+   a view space (a box of eye positions) and a time interval are subdivided
+   until the id images at the ends of every cell agree on a fraction q of
+   their pixels. A frame is then the base views around its eye, blended to
+   its time (pixelwise, or with moving objects moved by their transforms so
+   that they do not ghost) and warped into its camera as Radiance's pinterp
+   does, with foreground and background fill. Object-space solutions (e.g.
+   indirect irradiance per vertex) get key times of their own, and the
+   relative luminance RMS error measures the result. Warps share the render
+   cache's cameras and its z-buffered reprojection.
+
    DO THIS
 
        #define RENDERCACHE_IMPLEMENTATION
@@ -21,7 +36,7 @@
    in exactly one C or C++ file; include "rendercache.h" without the define
    everywhere else.
 
-   EXAMPLE
+   EXAMPLE: THE RENDER CACHE
 
        rendercache_desc d;
        rendercache *rc;
@@ -41,6 +56,25 @@
        }
        rendercache_destroy(rc);
 
+   EXAMPLE: A WALKTHROUGH FROM BASE VIEWS
+
+       rendercache_view_space_desc vd = {0};          // base views: fish-eyes in a box of eyes
+       vd.camera = fisheye;                           // kind, look direction, id image size
+       vd.lo = ..., vd.hi = ...; vd.quality = 0.9f;
+       vd.render_ids = my_id_renderer; vd.user = scene;
+       rendercache_view_space_create(&vd, &vs);
+       // base images: for each view i (rendercache_view_space_camera) and key
+       // time (rendercache_subdivide_time), fill a range image's rgb, depth, object
+       rendercache_warper_create(&warp_desc, &warper);
+       for (each frame) {
+           rendercache_view_space_locate(vs, camera.eye, corners, &n);
+           for (i = 0; i < n; i++)                    // each corner view at the frame's time
+               rendercache_blend_motion(blender, base[corners[i]][k], base[corners[i]][k + 1], s,
+                                        &motion, RENDERCACHE_FILL_FOREGROUND, blended[i]);
+           rendercache_warp(warper, blended, n, &camera, RENDERCACHE_FILL_BOTH, frame);
+           show(frame->rgb);
+       }
+
    CONFIGURATION MACROS
 
        RENDERCACHE_STATIC          make every function static (private to one file)
@@ -50,6 +84,7 @@
    FUNCTION REFERENCE
 
        const char *rendercache_result_string(rendercache_result r);   name of an error code
+     the render cache
        rendercache_create(desc, &rc) / rendercache_destroy(rc)        the cache, sized from the image
        rendercache_set_object_transform(rc, object, m)                object-to-world 3x4 matrix
        rendercache_begin_frame(rc, camera)                            reproject into a new camera
@@ -61,17 +96,48 @@
        rendercache_depth_image(rc)                                    per-pixel internals (inspection)
        rendercache_get_stats(rc, &stats)                              counts and phase times of the frame
        rendercache_clear(rc)                                          forget every point
+     cameras (perspective, hemispherical fish-eye, full sphere)
        rendercache_camera_ray(camera, px, py, org, dir)               primary ray through an image point
        rendercache_camera_project(camera, p, &px, &py, &depth)        world point to image point
+     range images
+       rendercache_range_image_create(camera, a, &img) / _destroy     rgb, depth and object arrays
+       rendercache_range_image_save(img, write, user) / _load(a, read, user, &img)
+       rendercache_range_image_save_to_memory(img, a, &data, &size) / _load_from_memory(data, size, a, &img)
+       rendercache_free_memory(a, data)                               what save_to_memory returned
+     view and time interpolation
+       rendercache_warper_create(desc, &w) / rendercache_warper_destroy(w)
+       rendercache_warp(w, images, n, camera, fill, out)              reproject range images into a view
+       rendercache_blend(a, b, t, out)                                pixelwise time blend (pcomb)
+       rendercache_blend_motion(w, a, b, t, motion, fill, out)        blend with moving objects moved
+       rendercache_warp_get_stats(w, &stats)                          counts and times of the last call
+     coherence (base views and key times)
+       rendercache_fitness(id_images, count, w, h, &f)                f = N / PQ
+       rendercache_view_space_create(desc, &vs) / _destroy(vs)        subdivided view space
+       rendercache_view_space_count(vs), _eyes(vs), _camera(vs, i, &c) the base views
+       rendercache_view_space_locate(vs, eye, views, &n)              corner views of the cell around an eye
+       rendercache_view_space_cell_count(vs), _cell(vs, i, lo, hi, &f) the leaf cells
+       rendercache_subdivide_time(desc, &times, &count)               key times of id images
+       rendercache_keytimes_create(desc, &kt) / _destroy(kt)          key times of an object-space solution
+       rendercache_keytimes_count(kt), _times(kt), _values(kt, k)     the keys
+       rendercache_keytimes_eval(kt, time, values)                    linear interpolation in time
+     error
+       rendercache_lrms(reference, image, w, h, &lrms)                relative luminance RMS
 
    CONVENTIONS
 
        Pixel (x, y) covers [x, x+1) x [y, y+1) of the image plane, y = 0 is the
        top row; its primary ray passes through (x + 0.5, y + 0.5). Images are
        row-major, top row first, linear RGB floats. Depth is the distance from
-       the eye along the ray. One rendercache object is used by one thread at
-       a time; the per-frame work runs in parallel through desc.parallel_for
-       and gives bit-identical results for any thread count.
+       the eye along the ray. A fish-eye is equidistant: the inscribed circle
+       spans 180 degrees and pixels outside it have no ray (object
+       RENDERCACHE_NO_SAMPLE in range images). A sphere camera puts the
+       forward hemisphere in the left half of the image and the backward one
+       in the right half, each by the equal-area concentric map of Shirley
+       and Chiu. Range-image pixels whose ray left the scene have object
+       RENDERCACHE_MISS and are warped as directions (background at
+       infinity). One rendercache, warper, view space or keytimes object is
+       used by one thread at a time; per-frame work runs in parallel through
+       desc.parallel_for and gives bit-identical results for any thread count.
 
    HOW A FRAME WORKS (and which published step each part is)
 
@@ -91,19 +157,55 @@
        camera (WDG02 predictive sampling). insert: a sample replaces the
        point its pixel showed, or the oldest point not visible (clock).
 
+   HOW A WARP WORKS (NDR96 section 4.4, after Radiance's pinterp)
+
+       Every pixel of every input is a point (eye + ray * depth) reprojected
+       into the target camera through the render cache's z-buffer, inputs in
+       order of their eye's distance to the target's. An input of rank k
+       competes with its squared distances multiplied by (1 + tolerance)^2k,
+       so a surface replaces the same surface seen by a nearer input only
+       when it is nearer by more than the tolerance per rank between them
+       (for two inputs exactly pinterp's rule). Fill NONE: one target pixel
+       per source pixel. FOREGROUND: each source pixel also spans the two
+       triangles of the quad to its right and lower neighbours when their
+       depths agree within twice the tolerance, colour and depth interpolated
+       (watertight edges); a source pixel is splatted as a point only where
+       its triangles do not surround it (depth edges, borders). BACKGROUND:
+       an empty pixel takes the farther of the nearest filled pixels left and
+       right of its run, and of those above and below, preferring one right
+       next to it. Then desc.fill_pixel computes what is still empty. Rays of
+       chunks of source pixels that all point outside the target's frustum
+       (seen from the input's eye) are skipped. blend_motion warps both
+       images into the output's camera with each object's motion (pixels of
+       static objects in their own camera stay in place, exactly), blends
+       where both show the same object at the same depth, and keeps the
+       nearer surface elsewhere.
+
    LIMITS
 
-       Image up to 2^28 pixels, cache up to 2^31 points, up to 2^24 objects.
-       Memory: 40 bytes per cache point (2 per pixel by default) and about 71
-       bytes per pixel, 95 with parallel_for: 40 MB for 512x512. Point
-       colours are fixed when they are inserted (the cache ages them so that
-       they get refreshed); view-dependent shading changes only as points are
-       resampled, as in the paper. Error diffusion is sequential by nature and
-       runs on the calling thread; the rest of a frame runs in parallel.
+       Render cache: image up to 2^28 pixels, cache up to 2^31 points, up to
+       2^24 objects. Memory: 40 bytes per cache point (2 per pixel by
+       default) and about 71 bytes per pixel, 95 with parallel_for: 40 MB for
+       512x512. Point colours are fixed when they are inserted (the cache ages
+       them so that they get refreshed); view-dependent shading changes only
+       as points are resampled, as in the paper. Error diffusion is
+       sequential by nature and runs on the calling thread; the rest of a
+       frame runs in parallel.
+       Walkthroughs: a range image takes 20 bytes per pixel; a warper about
+       37 bytes per target pixel (61 with parallel_for, 20 more after a
+       motion blend) plus, with foreground fill, 52 bytes per pixel of the
+       widest input's row per job. At most 2^32 - 1 input pixels per
+       warp. Warps reproduce no view-dependent shading the inputs lack, and a
+       pixelwise blend ghosts moving objects; the motion-compensated blend
+       moves objects but not their shadows or reflections on static surfaces
+       (those still blend pixelwise). Fitness counts pixels, so objects small
+       in the id images hardly drive the subdivision, and an interval whose
+       ends look alike is not split even if things happen in between (the
+       paper's tests compare the ends only).
 
    PAPER
 
-       Bruce Walter, George Drettakis and Steven Parker, Interactive Rendering using the Render Cache, EGWR 1999; Bruce Walter, George Drettakis and Donald P. Greenberg, Enhancing and Optimizing the Render Cache, EGWR 2002; Nimeroff, Dorsey and Rushmeier, Implementation and Analysis of an Image-Based Global Illumination Framework for Animated Environments, IEEE TVCG 2(4), 1996. The render cache as used by Rodolphe Crespin and Bernard Peroche, Light Vectors for a Moving Observer, WSCG 2004 (sections 2.2 and 4.1).
+       Bruce Walter, George Drettakis and Steven Parker, Interactive Rendering using the Render Cache, EGWR 1999; Bruce Walter, George Drettakis and Donald P. Greenberg, Enhancing and Optimizing the Render Cache, EGWR 2002; Jeffry S. Nimeroff, Julie Dorsey and Holly Rushmeier, Implementation and Analysis of an Image-Based Global Illumination Framework for Animated Environments, IEEE TVCG 2(4), 1996 (sections 3-5); Peter Shirley and Kenneth Chiu, A Low Distortion Map Between Disk and Square, JGT 1997 (sphere cameras). The render cache as used by Rodolphe Crespin and Bernard Peroche, Light Vectors for a Moving Observer, WSCG 2004 (sections 2.2 and 4.1).
 */
 #ifndef RENDERCACHE_H
 #define RENDERCACHE_H
@@ -112,7 +214,7 @@
 #include <stdint.h>
 
 #define RENDERCACHE_VERSION_MAJOR 0
-#define RENDERCACHE_VERSION_MINOR 2
+#define RENDERCACHE_VERSION_MINOR 3
 #define RENDERCACHE_VERSION_PATCH 0
 
 #ifndef RENDERCACHE_API
