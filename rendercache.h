@@ -539,7 +539,7 @@ typedef struct rendercache_view_space_desc {
     double time;                 /* passed to render_ids */
     float quality;               /* q in [0, 1]: 0 keeps the corners of the box, 1 subdivides until
                                     the id images agree (or max_depth) */
-    uint32_t max_depth;          /* halvings of a cell at most: default 8, at most 20 */
+    uint32_t max_depth;          /* halvings of each axis at most: default 8, at most 20 */
     rendercache_render_ids_fn render_ids;
     void *user;
     rendercache_allocator allocator;

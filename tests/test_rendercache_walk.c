@@ -254,6 +254,19 @@ static void test_view_space_edge_cases(void)
         CHECK_EQ_INT(rendercache_view_space_count(vs), 25);   /* a 5 x 5 lattice */
         rendercache_view_space_destroy(vs);
     }
+    /* 3D: the eight corners, and every eye inside the box located in the one cell */
+    d = view_desc(&s, 0.0f, 4);
+    d.hi[2] = 6.0f;
+    if (CHECK_EQ_INT(rendercache_view_space_create(&d, &vs), RENDERCACHE_OK)) {
+        uint32_t views[8], count = 0, k, seen = 0;
+        float eye[3] = { 0.5f, 0.5f, 5.5f };
+        CHECK_EQ_INT(rendercache_view_space_count(vs), 8);
+        CHECK_EQ_INT(rendercache_view_space_locate(vs, eye, views, &count), RENDERCACHE_OK);
+        CHECK_EQ_INT(count, 8);
+        for (k = 0; k < count; k++) seen |= 1u << views[k];
+        CHECK_EQ_INT(seen, 0xFF);
+        rendercache_view_space_destroy(vs);
+    }
     /* a point: one view */
     d = view_desc(&s, 0.9f, 4);
     d.hi[0] = d.lo[0];
