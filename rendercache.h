@@ -450,7 +450,9 @@ typedef int (*rendercache_read_fn)(void *user, void *bytes, size_t n);
    the pixel's ray and the id of the object hit. rendercache_range_image_create
    allocates the arrays (rendercache_range_image_destroy frees them); a caller
    may instead fill a struct of its own with its own arrays, and then must not
-   destroy it. Pixels are row-major, top row first. */
+   destroy it. Pixels are row-major, top row first. A warp skips pixels of
+   RENDERCACHE_NO_SAMPLE and pixels whose depth is not finite and positive;
+   it reads the depth of RENDERCACHE_MISS pixels as infinite. */
 typedef struct rendercache_range_image {
     rendercache_camera camera;       /* the view; its width x height is the image size */
     double time;                     /* scene time the image shows (caller's units) */
@@ -485,8 +487,9 @@ typedef int (*rendercache_fill_fn)(void *user, uint32_t x, uint32_t y, const flo
 
 typedef struct rendercache_warp_desc {
     float depth_tolerance;       /* relative depth difference below which two surfaces are the same
-                                    (pinterp's -t): a later input replaces a pixel only when it is
-                                    nearer by more than this; default 0.02 */
+                                    (pinterp's -t): an input farther from the new eye replaces a
+                                    pixel only when it is nearer by more than this (per rank);
+                                    foreground quads span depths within twice this; default 0.02 */
     float background[3];         /* colour of the pixels left empty; default black */
     rendercache_fill_fn fill_pixel;  /* optional: computes the pixels still empty after the fill */
     void *fill_user;
@@ -625,9 +628,11 @@ RENDERCACHE_API rendercache_result rendercache_warper_create(const rendercache_w
 RENDERCACHE_API void rendercache_warper_destroy(rendercache_warper *w);
 
 /* Reprojects every pixel of images[0..n) into camera (as Radiance's pinterp):
-   inputs are taken in order of their eye's distance to camera's eye, a
-   z-buffer keeps the nearest surface per pixel, and a later input replaces
-   a pixel only when nearer by more than the depth tolerance; then fill.
+   inputs are ranked by the distance of their eye to camera's eye, a
+   z-buffer keeps the nearest surface per pixel, and a surface of rank k
+   replaces one of a nearer rank only when nearer by more than the depth
+   tolerance per rank between them (its squared distances count times
+   (1 + tolerance)^2k); then fill (see HOW A WARP WORKS).
    camera may be NULL (out->camera); its size must be out's. Writes out's
    camera, rgb, depth, object and time (that of the nearest input). Pixels
    left empty are RENDERCACHE_NO_SAMPLE with the background colour. */

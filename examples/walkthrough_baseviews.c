@@ -615,8 +615,8 @@ int main(int argc, char **argv)
     }
     printf("  %-8s %6s %6s %14s %18s %18.1f %10.3f\n", "full", "-", "-", "-", "-", 1e3 * t_full / o.frames, 0.0);
     printf("\nMotion interpolation (cf. table 4)\n");
-    printf("  %-8s %6s %14s  %-28s %20s %20s\n", "quality", "steps", "decompose (s)", "time list", "LRMS fr 10 (motion)",
-           "LRMS fr 10 (pcomb)");
+    printf("  %-8s %6s %14s %20s %20s  %s\n", "quality", "steps", "decompose (s)", "LRMS fr 10 (motion)",
+           "LRMS fr 10 (pcomb)", "time list");
     for (qi = 0; qi < o.quality_count; qi++) {
         const level_result *r = &results[qi];
         char list[256];
@@ -625,8 +625,8 @@ int main(int argc, char **argv)
         list[0] = 0;
         for (k = 0; k < r->times && k < 64 && len + 8 < sizeof list; k++)
             len += (size_t)snprintf(list + len, sizeof list - len, "%s%.3g", k ? ", " : "", r->time_list[k]);
-        printf("  %-8.1f %6u %14.2f  %-28s %20.3f %20.3f\n", (double)r->q, r->times, r->t_times, list, r->frame10,
-               r->frame10_pixelwise);
+        printf("  %-8.1f %6u %14.2f %20.3f %20.3f  %s\n", (double)r->q, r->times, r->t_times, r->frame10,
+               r->frame10_pixelwise, list);
     }
     printf("\nWalkthrough (cf. table 5; all base images: their number times the time of one)\n");
     printf("  %-8s %14s %24s %26s\n", "quality", "decompose (s)", "all base images (s)", "walkthrough, frames (s)");
