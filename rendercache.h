@@ -3445,8 +3445,9 @@ static void rendercache__warp_quad(const rendercache__warp_src *ws, rendercache_
 {
     const uint32_t w = ws->target->width, h = ws->target->height;
     rendercache__edge ab, bc, ac, cd, da;
-    float xmin, xmax, ymin, ymax, s1, s2;
-    int x0, x1, y0, y1, x, y;
+    float xmin, xmax, ymin, ymax, s1 = 1.0f, s2 = 1.0f, dmin;
+    uint64_t nearest;
+    int x0, x1, y0, y1, x, y, edges = 0;
     xmin = a[0] < c[0] ? a[0] : c[0]; xmax = a[0] > c[0] ? a[0] : c[0];
     ymin = a[1] < c[1] ? a[1] : c[1]; ymax = a[1] > c[1] ? a[1] : c[1];
     if (flags & 1u) {
@@ -3464,19 +3465,30 @@ static void rendercache__warp_quad(const rendercache__warp_src *ws, rendercache_
     if (x1 >= (int)w) x1 = (int)w - 1;
     if (y1 >= (int)h) y1 = (int)h - 1;
     if (x0 > x1 || y0 > y1) return;   /* no pixel centre in the box */
-    ac = rendercache__edge_of(a, c, pa, pc);
-    ab = rendercache__edge_of(a, b, pa, pb);
-    bc = rendercache__edge_of(b, c, pb, pc);
-    cd = rendercache__edge_of(c, d, pc, pd);
-    da = rendercache__edge_of(d, a, pd, pa);
-    /* orientations: the sign that makes each triangle's inside positive */
-    s1 = rendercache__edge_at(&ab, c[0], c[1]) < 0.0f ? -1.0f : 1.0f;
-    s2 = rendercache__edge_at(&cd, a[0], a[1]) < 0.0f ? -1.0f : 1.0f;
+    /* the nearest corner: a pixel already nearer than it needs no edge test (and a quad
+       hidden everywhere no edge at all) */
+    dmin = a[2] < c[2] ? a[2] : c[2];
+    if (flags & 1u) dmin = b[2] < dmin ? b[2] : dmin;
+    if (flags & 2u) dmin = d[2] < dmin ? d[2] : dmin;
+    nearest = rendercache__key(dmin, e);
     for (y = y0; y <= y1; y++) {
         float py = (float)y + 0.5f;
         for (x = x0; x <= x1; x++) {
-            float px = (float)x + 0.5f, eac = rendercache__edge_at(&ac, px, py), w0, w1, w2;
+            float px = (float)x + 0.5f, eac, w0, w1, w2;
             uint32_t pixel = (uint32_t)y * w + (uint32_t)x;
+            if (!(nearest < zb->key[pixel])) continue;
+            if (!edges) {
+                ac = rendercache__edge_of(a, c, pa, pc);
+                ab = rendercache__edge_of(a, b, pa, pb);
+                bc = rendercache__edge_of(b, c, pb, pc);
+                cd = rendercache__edge_of(c, d, pc, pd);
+                da = rendercache__edge_of(d, a, pd, pa);
+                /* orientations: the sign that makes each triangle's inside positive */
+                s1 = rendercache__edge_at(&ab, c[0], c[1]) < 0.0f ? -1.0f : 1.0f;
+                s2 = rendercache__edge_at(&cd, a[0], a[1]) < 0.0f ? -1.0f : 1.0f;
+                edges = 1;
+            }
+            eac = rendercache__edge_at(&ac, px, py);
             if ((flags & 1u) && -s1 * eac >= 0.0f) {   /* T1 = a b c: edges b c, c a, a b */
                 w0 = s1 * rendercache__edge_at(&bc, px, py);
                 w2 = s1 * rendercache__edge_at(&ab, px, py);
