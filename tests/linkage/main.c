@@ -67,11 +67,39 @@ static void test_rendercache_links(void)
     rendercache_destroy(rc);
 }
 
+static void test_rendercache_walkthrough_links(void)
+{
+    rendercache_camera cam;
+    rendercache_range_image *img = NULL, *out = NULL;
+    const rendercache_range_image *in[1];
+    rendercache_warp_desc d;
+    rendercache_warper *w = NULL;
+    const uint32_t *ids[2];
+    float f = 0.0f;
+    memset(&cam, 0, sizeof cam);
+    cam.kind = RENDERCACHE_CAMERA_FISHEYE;
+    cam.look_at[2] = 1.0f;
+    cam.up[1] = 1.0f;
+    cam.width = cam.height = 8;
+    memset(&d, 0, sizeof d);
+    CHECK(rendercache_range_image_create(&cam, NULL, &img) == RENDERCACHE_OK);
+    CHECK(rendercache_range_image_create(&cam, NULL, &out) == RENDERCACHE_OK);
+    CHECK(rendercache_warper_create(&d, &w) == RENDERCACHE_OK);
+    in[0] = img;
+    CHECK(rendercache_warp(w, in, 1, NULL, RENDERCACHE_FILL_BOTH, out) == RENDERCACHE_OK);
+    ids[0] = ids[1] = out->object;
+    CHECK(rendercache_fitness(ids, 2, 8, 8, &f) == RENDERCACHE_OK && f == 1.0f);
+    rendercache_warper_destroy(w);
+    rendercache_range_image_destroy(img);
+    rendercache_range_image_destroy(out);
+}
+
 int main(int argc, char **argv)
 {
     TEST_INIT(argc, argv);
     RUN(test_result_strings_link);
     RUN(test_irrvol_link);
     RUN(test_rendercache_links);
+    RUN(test_rendercache_walkthrough_links);
     return test_finish();
 }
