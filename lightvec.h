@@ -1059,8 +1059,19 @@ static void lightvec__put_f32(lightvec__writer *w, float f)
 }
 static void lightvec__put_f32_array(lightvec__writer *w, const float *f, size_t n)
 {
-    size_t i;
-    for (i = 0; i < n; i++) lightvec__put_f32(w, f[i]);
+    unsigned char buf[4096];
+    size_t i = 0;
+    while (i < n) {
+        size_t m = n - i < sizeof buf / 4 ? n - i : sizeof buf / 4, j;
+        for (j = 0; j < m; j++) {
+            uint32_t v;
+            memcpy(&v, &f[i + j], 4);
+            buf[4 * j] = (unsigned char)v; buf[4 * j + 1] = (unsigned char)(v >> 8);
+            buf[4 * j + 2] = (unsigned char)(v >> 16); buf[4 * j + 3] = (unsigned char)(v >> 24);
+        }
+        lightvec__put(w, buf, 4 * m);
+        i += m;
+    }
 }
 
 typedef struct lightvec__reader {
@@ -3224,40 +3235,51 @@ LIGHTVEC_API lightvec_result lightvec_cache_optimize(lightvec_cache *c)
    ---------------------------------------------------------------------- */
 static const unsigned char lightvec__magic[8] = { 'L', 'I', 'G', 'H', 'T', 'V', 'E', 'C' };
 
-static void lightvec__put_record(lightvec__writer *w, const lightvec_record *r)
+/* A record's 29 floats in a fixed order, then its flags. */
+static void lightvec__record_floats(const lightvec_record *r, float f[29])
 {
     int c;
-    lightvec__put_f32_array(w, r->position, 3);
-    lightvec__put_f32_array(w, r->normal, 3);
-    lightvec__put_f32_array(w, r->outgoing, 3);
-    lightvec__put_f32_array(w, r->vector.direction, 3);
-    lightvec__put_f32_array(w, r->vector.magnitude, 3);
-    lightvec__put_f32_array(w, r->irradiance, 3);
-    for (c = 0; c < 3; c++) lightvec__put_f32_array(w, r->gradient[c], 3);
-    lightvec__put_f32(w, r->distance);
-    lightvec__put_f32(w, r->visibility);
+    memcpy(f, r->position, 12);
+    memcpy(f + 3, r->normal, 12);
+    memcpy(f + 6, r->outgoing, 12);
+    memcpy(f + 9, r->vector.direction, 12);
+    memcpy(f + 12, r->vector.magnitude, 12);
+    memcpy(f + 15, r->irradiance, 12);
+    for (c = 0; c < 3; c++) memcpy(f + 18 + 3 * c, r->gradient[c], 12);
+    f[27] = r->distance;
+    f[28] = r->visibility;
+}
+
+static void lightvec__put_record(lightvec__writer *w, const lightvec_record *r)
+{
+    float f[29];
+    lightvec__record_floats(r, f);
+    lightvec__put_f32_array(w, f, 29);
     lightvec__put_u32(w, r->flags);
 }
 
-static void lightvec__get_f32_array(lightvec__reader *r, float *f, int n)
-{
-    int i;
-    for (i = 0; i < n; i++) f[i] = lightvec__get_f32(r);
-}
-
+/* One serialized record, read in one call and decoded little-endian. */
 static void lightvec__get_record(lightvec__reader *r, lightvec_record *rec)
 {
-    int c;
-    lightvec__get_f32_array(r, rec->position, 3);
-    lightvec__get_f32_array(r, rec->normal, 3);
-    lightvec__get_f32_array(r, rec->outgoing, 3);
-    lightvec__get_f32_array(r, rec->vector.direction, 3);
-    lightvec__get_f32_array(r, rec->vector.magnitude, 3);
-    lightvec__get_f32_array(r, rec->irradiance, 3);
-    for (c = 0; c < 3; c++) lightvec__get_f32_array(r, rec->gradient[c], 3);
-    rec->distance = lightvec__get_f32(r);
-    rec->visibility = lightvec__get_f32(r);
-    rec->flags = lightvec__get_u32(r);
+    unsigned char b[LIGHTVEC__RECORD_BYTES];
+    uint32_t v[30];
+    float f[29];
+    int i, c;
+    lightvec__get(r, b, sizeof b);
+    for (i = 0; i < 30; i++)
+        v[i] = (uint32_t)b[4 * i] | ((uint32_t)b[4 * i + 1] << 8) | ((uint32_t)b[4 * i + 2] << 16) |
+               ((uint32_t)b[4 * i + 3] << 24);
+    memcpy(f, v, sizeof f);
+    memcpy(rec->position, f, 12);
+    memcpy(rec->normal, f + 3, 12);
+    memcpy(rec->outgoing, f + 6, 12);
+    memcpy(rec->vector.direction, f + 9, 12);
+    memcpy(rec->vector.magnitude, f + 12, 12);
+    memcpy(rec->irradiance, f + 15, 12);
+    for (c = 0; c < 3; c++) memcpy(rec->gradient[c], f + 18 + 3 * c, 12);
+    rec->distance = f[27];
+    rec->visibility = f[28];
+    rec->flags = v[29];
 }
 
 LIGHTVEC_API lightvec_result lightvec_save(const lightvec_cache *c, lightvec_write_fn write, void *user)
