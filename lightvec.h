@@ -10,9 +10,12 @@
    vectors are cached like Ward's irradiance records and interpolated between
    neighbours when the validity criteria allow (section 4.2). Crespin & Peroche
    extend the cache to five dimensions: a record also remembers the viewer
-   direction it was computed for, positions live in a 3D kd-tree and directions
-   in a recursive icosahedron, so a glossy surface seen from a moving camera
-   reuses vectors computed for nearby directions. A cache of direct light
+   direction it was computed for; directions are organised by a recursive
+   icosahedron (20 faces, a face splits in four when it holds more than a
+   threshold) and each face keeps the positions of its records in 3D
+   kd-trees, so a lookup descends only into the faces near the viewer
+   direction, and a glossy surface seen from a moving camera reuses vectors
+   computed for nearby directions. A cache of direct light
    vectors (DLV, the paper's future work) reuses the same machinery for the
    light of area sources. The BRDF is Lambert plus a normalized Phong lobe.
 
@@ -120,8 +123,8 @@
      Defaults and why they differ from the paper's bare criteria: the paper
      bounds |AB| by d_avg itself (radius_scale 1) and leaves I_B, S_curv,
      S_dir and the minimum count open. On the Cornell box (tests/ref_lightvec.c)
-     radius 1 * d_avg gives 10-15% mean error on the walls, with either
-     interpolation; radius 0.3 * d_avg (Ward's accuracy a = 0.3), at least 3
+     radius 1 * d_avg gives 10-15% mean error on the walls (15% with the plain
+     interpolation, 10% with the gradient one); radius 0.3 * d_avg (Ward's accuracy a = 0.3), at least 3
      valid vectors and gradient-corrected interpolation give about 3% against
      a converged gather, at 98% hits for a 512 x 512 image. radius_scale = 1,
      interpolation = PLAIN reproduce the paper.
@@ -156,13 +159,15 @@
 
      Up to 2^32 - 1 records per cache. Strata: at most 256 x 512 cells. The
      built-in renderer shades hit points as Lambertian (direct light by area
-     sampling of the emitters plus `bounces - 1` cosine-sampled bounces), surfaces
-     are one-sided as in radiosity (the front is the side the counter-clockwise
-     winding faces; a back face is black and emits nothing), rays that escape
-     bring no light. A light vector is exact at the
-     point and viewer direction it was computed for; elsewhere it is an
-     interpolation, and a glossy lobe that needs light from several directions
-     at once is approximated by one.
+     sampling of the emitters plus `bounces - 1` cosine-sampled bounces);
+     surfaces are one-sided as in radiosity (the front is the side the
+     counter-clockwise winding faces; a back face is black and emits nothing);
+     rays that escape bring no light. A light vector is exact at the point and
+     viewer direction it was computed for; elsewhere it is an interpolation,
+     and a glossy lobe that needs light from several directions at once is
+     approximated by one. Records of different materials are interpolated
+     together (for Lambert the albedo cancels out of M; for glossy ones it
+     does not, keep one cache per glossy material if that matters).
 
    PAPER
 
@@ -170,7 +175,7 @@
        Jacques Zaninetti and Bernard Peroche, A vector model for global illumination in
        ray tracing, WSCG 1998.
        Gregory J. Ward and Paul Heckbert, Irradiance gradients, Eurographics Workshop on
-       Rendering 1992 (the gradient of eq. 6 and the stratification of eq. 5).
+       Rendering 1992 (the gradient of eq. 6, the gradient-corrected interpolation).
        Gregory J. Ward, Francis M. Rubinstein and Robert D. Clear, A ray tracing solution
        for diffuse interreflection, SIGGRAPH 1988 (irradiance caching, d_avg).
        J. L. Bentley and J. B. Saxe, Decomposable searching problems I: static-to-dynamic
