@@ -94,6 +94,20 @@ static void test_rendercache_walkthrough_links(void)
     rendercache_range_image_destroy(out);
 }
 
+static void test_lightvec_link(void)
+{
+    lightvec_cache *cache = NULL;
+    lightvec_record rec;
+    lightvec_lookup_result lr;
+    memset(&rec, 0, sizeof rec);
+    rec.normal[2] = rec.outgoing[2] = rec.vector.direction[2] = 1.0f;
+    rec.distance = rec.visibility = 1.0f;
+    CHECK(lightvec_cache_create(NULL, &cache) == LIGHTVEC_OK);
+    CHECK(lightvec_insert(cache, &rec, NULL) == LIGHTVEC_OK);
+    CHECK(lightvec_lookup(cache, rec.position, rec.normal, rec.outgoing, &lr) == LIGHTVEC_OK && lr.valid_count == 1);
+    lightvec_cache_destroy(cache);
+}
+
 int main(int argc, char **argv)
 {
     TEST_INIT(argc, argv);
@@ -101,5 +115,6 @@ int main(int argc, char **argv)
     RUN(test_irrvol_link);
     RUN(test_rendercache_links);
     RUN(test_rendercache_walkthrough_links);
+    RUN(test_lightvec_link);
     return test_finish();
 }
