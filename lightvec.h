@@ -1,12 +1,23 @@
-/* lightvec.h - v0.1.0 - cached 5D indirect light vectors - public domain or MIT, see end of file
+/* lightvec.h - v0.2.0 - cached 5D indirect light vectors - public domain or MIT, see end of file
 
-   LIGHTVEC.H: cached indirect light vectors over position and direction for interactive glossy global illumination.
+   LIGHTVEC.H: cached light vectors over position and direction for interactive glossy global illumination.
 
-   STATUS
-
-   Skeleton: this version declares the error codes and the version macros
-   only. The technique itself is not implemented yet; nothing else is declared
-   until it is.
+   A light vector (Zaninetti & Peroche 1998) replaces the light arriving at a
+   surface point by one virtual light: a direction D (eq. 2) and an RGB
+   magnitude M (eq. 3) chosen so that the radiance the point reflects toward
+   the viewer direction w_r is exactly L = M * f_r(D -> w_r) * cos(n, D).
+   Computing one takes a hemisphere of rays (lightvec_gather, eq. 5), so light
+   vectors are cached like Ward's irradiance records and interpolated between
+   neighbours when the validity criteria allow (section 4.2). Crespin & Peroche
+   extend the cache to five dimensions: a record also remembers the viewer
+   direction it was computed for; directions are organised by a recursive
+   icosahedron (20 faces, a face splits in four when it holds more than a
+   threshold) and each face keeps the positions of its records in 3D
+   kd-trees, so a lookup descends only into the faces near the viewer
+   direction, and a glossy surface seen from a moving camera reuses vectors
+   computed for nearby directions. A cache of direct light
+   vectors (DLV, the paper's future work) reuses the same machinery for the
+   light of area sources. The BRDF is Lambert plus a normalized Phong lobe.
 
    DO THIS
 
@@ -16,26 +27,170 @@
    in exactly one C or C++ file; include "lightvec.h" without the define
    everywhere else.
 
+   EXAMPLE (the loop of figure 2 of the paper, one pixel)
+
+       lightvec_scene *scene;               // triangles + materials, built once
+       lightvec_cache *cache;
+       lightvec_scene_desc sd = {0};  sd.positions = xyz; sd.vertex_count = nv;
+       sd.indices = idx; sd.triangle_count = nt; sd.material_ids = mat;
+       sd.materials = mats; sd.material_count = nm;
+       lightvec_scene_create(&sd, &scene);
+       lightvec_cache_desc cd = {0};        // zero = the documented defaults
+       lightvec_cache_create(&cd, &cache);
+
+       lightvec_lookup_result r;
+       lightvec_lookup(cache, p, n, to_eye, &r);
+       if (!r.hit) {                        // too few valid vectors: compute one
+           lightvec_gather_desc gd = {0};
+           lightvec_surface s;  (p, n, to_eye and the material of the hit)
+           lightvec_record rec;
+           lightvec_gather(scene, &gd, &s, pixel_index, &rec);
+           lightvec_insert(cache, &rec, NULL);
+           r.vector = rec.vector;
+       }
+       lightvec_radiance(&material, n, to_eye, &r.vector, rgb);   // indirect light
+
    CONFIGURATION MACROS
 
        LIGHTVEC_STATIC          make every function static (private to one file)
        LIGHTVEC_API             linkage of public functions (default: extern)
        LIGHTVEC_MALLOC, LIGHTVEC_FREE  replace malloc/free (define both or neither)
+       LIGHTVEC_BVH_BINS        SAH bins of the built-in BVH (default 16)
 
    FUNCTION REFERENCE
 
-       const char *lightvec_result_string(lightvec_result r);   name of an error code
+     scene and built-in renderer
+       lightvec_scene_create(desc, &scene)    BVH over the triangles, emitter list
+       lightvec_scene_destroy(scene)
+       lightvec_scene_info(scene, &info)      counts and bounds
+       lightvec_scene_intersect(scene, org, dir, tmax, &hit)   closest hit (primary rays)
+     light vectors
+       lightvec_gather(scene, gdesc, surface, index, &record)          ILV: eq. 5, gradient, d_avg
+       lightvec_gather_direct(scene, gdesc, surface, index, &record)   DLV from the emitters
+       lightvec_brdf(material, normal, wi, wo, f)       Lambert + normalized Phong
+       lightvec_radiance(material, normal, wo, vector, rgb)   L = M f_r(D -> wo) cos(n, D)
+     cache
+       lightvec_cache_create(desc, &cache)
+       lightvec_cache_destroy(cache)
+       lightvec_insert(cache, record, &id)            writer
+       lightvec_lookup(cache, p, n, wo, &result)      reader: weights 4.2, interpolation
+       lightvec_find(cache, p, n, wo, ids, weights, capacity, &count)   every valid record
+       lightvec_priority(rc_priority, W)              render-cache priority (4.3)
+       lightvec_cache_optimize(cache)                 writer: one kd-tree per face
+       lightvec_cache_record(cache, id, &record)
+       lightvec_cache_info(cache, &info)
+       lightvec_cache_face(cache, i, &face)           icosahedron faces (inspection)
+       lightvec_cache_locate(cache, direction, &i)    leaf face holding a direction
+     serialization
+       lightvec_save(cache, write, user)              lightvec_load(desc, read, user, &cache)
+       lightvec_save_to_memory(cache, a, &data, &size)
+       lightvec_load_from_memory(data, size, desc, &cache)
+       lightvec_free_memory(a, data)
+       lightvec_result_string(result)
+
+   THREADS
+
+     A cache has one writer and any number of readers. lightvec_lookup,
+     lightvec_find and lightvec_cache_record may run on any number of threads
+     at once, also while ONE thread runs lightvec_insert or
+     lightvec_cache_optimize: the caller serializes the writers (one inserting
+     thread, or a mutex around insert). Readers never block: the kd-trees are
+     immutable once published, new vectors go to a small per-face list whose
+     length is published with release semantics, and a restructured face is
+     published with one atomic pointer store. Memory a reader may still see is
+     freed only after every reader that started before its replacement has
+     finished (two reader counters, flipped by the writer; the writer waits
+     for the old one to drain, which takes one lookup). lightvec_save,
+     lightvec_cache_info and lightvec_cache_face must not overlap a writer.
+     Atomics use the GCC/Clang __atomic builtins or the MSVC Interlocked
+     functions; other compilers get plain accesses (single-threaded use only).
+     A scene is read-only after creation: gathers may run on any threads.
+
+   VALIDITY (section 4.2; B = a cached record, A = the query point)
+
+     spatial     |AB| < R_B = radius_scale * d_avg_B  (d_avg: harmonic mean hit distance)
+                 |AB| |grad E_B| / E_B < max_irradiance_change   (luminance, grad from eq. 6)
+                 cos(n_A, n_B) > S_curv = cos(max_normal_angle)
+                 w_B = (1 - |AB|/R_B) / (1 + |AB| |grad E_B| / E_B) * (cos(n_A,n_B) - S_curv) / (1 - S_curv)
+     directional cos(w, sigma) > S_dir = cos(max_direction_angle)
+                 w_sigma = (cos(w, sigma) - S_dir) / (1 - S_dir)
+     global      w = w_B * w_sigma; a hit needs at least min_valid valid records;
+                 D = normalize(sum w D_i), W = mean of the w, and M by `interpolation`:
+                 PLAIN (the paper)  M = sum w M_i / sum w
+                 PROJECTED          M = (sum w M_i cos(n_i, D_i) / sum w) / cos(n_A, D)
+                 GRADIENT (default) PROJECTED with each term times 1 + grad E_c . (A - B) / E_c
+
+     Defaults and why they differ from the paper's bare criteria: the paper
+     bounds |AB| by d_avg itself (radius_scale 1) and leaves I_B, S_curv,
+     S_dir and the minimum count open. On the Cornell box (tests/ref_lightvec.c)
+     radius 1 * d_avg gives 10-15% mean error on the walls (15% with the plain
+     interpolation, 10% with the gradient one); radius 0.3 * d_avg (Ward's accuracy a = 0.3), at least 3
+     valid vectors and gradient-corrected interpolation give about 3% against
+     a converged gather, at 98% hits for a 512 x 512 image. radius_scale = 1,
+     interpolation = PLAIN reproduce the paper.
+
+     Lambertian surfaces: their light vector does not depend on the viewer
+     (M = E / cos(n, D)). Passing outgoing = NULL (lookup) or the flag
+     LIGHTVEC_RECORD_VIEW_INDEPENDENT (gather, insert) treats a point in 3D as
+     the original light vectors do: such records skip the icosahedron and the
+     directional criterion, and only lookups with outgoing = NULL find them.
+     With a viewer direction every surface is handled in 5D, as in the paper.
+
+   DIRECT LIGHT VECTORS (LIGHTVEC_KIND_DIRECT)
+
+     A DLV record holds the light of the emitters alone (lightvec_gather_direct:
+     stratified samples over the emitting triangles with shadow rays), d_avg is
+     the harmonic mean distance to the light samples, the gradient is the exact
+     derivative of the unoccluded estimate, and the record keeps the fraction
+     of unoccluded samples. Direct light changes smoothly where every sample is
+     visible (or none is), and abruptly across shadow boundaries, so a DLV
+     lookup interpolates only when every valid record is fully lit, or every one
+     is fully in umbra; a penumbra record among them, or lit and shadowed
+     records together, make it a miss. Valid: open lit areas, umbrae, the smooth
+     falloff of large sources. Not valid: penumbrae (every point there is
+     gathered), shadows of occluders smaller than the record spacing (no record
+     sees them, so interpolation crosses them), and the onset of a shadow
+     before the first penumbra record exists nearby. Its defaults are tighter
+     than the indirect ones (radius_scale 0.25, irradiance change 0.1).
+     Caustic light vectors (CLV) are not implemented: the built-in renderer has
+     no specular transport.
+
+   LIMITS
+
+     Up to 2^32 - 1 records per cache. Strata: at most 256 x 512 cells. The
+     built-in renderer shades hit points as Lambertian (direct light by area
+     sampling of the emitters plus `bounces - 1` cosine-sampled bounces);
+     surfaces are one-sided as in radiosity (the front is the side the
+     counter-clockwise winding faces; a back face is black and emits nothing);
+     rays that escape bring no light. A light vector is exact at the point and
+     viewer direction it was computed for; elsewhere it is an interpolation,
+     and a glossy lobe that needs light from several directions at once is
+     approximated by one. Records of different materials are interpolated
+     together (for Lambert the albedo cancels out of M; for glossy ones it
+     does not, keep one cache per glossy material if that matters).
 
    PAPER
 
        Rodolphe Crespin and Bernard Peroche, Light Vectors for a Moving Observer, WSCG 2004.
+       Jacques Zaninetti and Bernard Peroche, A vector model for global illumination in
+       ray tracing, WSCG 1998.
+       Gregory J. Ward and Paul Heckbert, Irradiance gradients, Eurographics Workshop on
+       Rendering 1992 (the gradient of eq. 6, the gradient-corrected interpolation).
+       Gregory J. Ward, Francis M. Rubinstein and Robert D. Clear, A ray tracing solution
+       for diffuse interreflection, SIGGRAPH 1988 (irradiance caching, d_avg).
+       J. L. Bentley and J. B. Saxe, Decomposable searching problems I: static-to-dynamic
+       transformation, J. Algorithms 1980 (the insertion scheme of the kd-trees).
 */
 #ifndef LIGHTVEC_H
 #define LIGHTVEC_H
 
+#include <stddef.h>
+#include <stdint.h>
+
 #define LIGHTVEC_VERSION_MAJOR 0
-#define LIGHTVEC_VERSION_MINOR 1
+#define LIGHTVEC_VERSION_MINOR 2
 #define LIGHTVEC_VERSION_PATCH 0
+#define LIGHTVEC_FILE_FORMAT_VERSION 1
 
 #ifndef LIGHTVEC_API
 #  ifdef LIGHTVEC_STATIC
@@ -60,7 +215,233 @@ typedef enum lightvec_result {
     LIGHTVEC_ERROR_IO                 /* a read or write callback failed */
 } lightvec_result;
 
+typedef struct lightvec_allocator {
+    void *(*alloc)(size_t size, void *user);  /* NULL: LIGHTVEC_MALLOC */
+    void (*free)(void *ptr, void *user);      /* NULL: LIGHTVEC_FREE */
+    void *user;
+} lightvec_allocator;
+
+typedef void (*lightvec_job_fn)(void *ctx, uint32_t index);
+typedef void (*lightvec_parallel_for_fn)(void *user, lightvec_job_fn job, void *ctx, uint32_t count);
+typedef int (*lightvec_progress_fn)(void *user, uint64_t done, uint64_t total); /* non-zero cancels */
+typedef void (*lightvec_log_fn)(void *user, const char *message);
+typedef int (*lightvec_write_fn)(void *user, const void *bytes, size_t n);  /* 0 = ok */
+typedef int (*lightvec_read_fn)(void *user, void *bytes, size_t n);         /* 0 = all n bytes read */
+
+/* A ray hit as Embree reports it: u, v = barycentric weights of the
+   triangle's 2nd and 3rd vertex, t in units of |dir|. */
+typedef struct lightvec_hit {
+    float t;
+    float u, v;
+    uint32_t triangle;
+} lightvec_hit;
+
+/* Replaces the built-in BVH: closest hit in (0, tmax), 1 on a hit. */
+typedef int (*lightvec_trace_fn)(void *user, const float org[3], const float dir[3], float tmax,
+                                 lightvec_hit *hit);
+
+/* Replaces the built-in renderer in lightvec_gather: the radiance arriving at
+   org from direction dir (unit, pointing away from org) and the distance to
+   the surface it comes from (INFINITY or any value >= 1e30 when the ray
+   escapes). Radiance must be finite and non-negative. */
+typedef void (*lightvec_incoming_fn)(void *user, const float org[3], const float dir[3],
+                                     float radiance[3], float *distance);
+
+/* Lambert + normalized Phong:
+   f_r(wi -> wo) = diffuse / pi + specular * (exponent + 2) / (2 pi) * max(0, cos alpha)^exponent,
+   alpha = angle between wo and the mirror image of wi about the normal. */
+typedef struct lightvec_material {
+    float diffuse[3];    /* Lambert reflectance */
+    float specular[3];   /* Phong reflectance */
+    float exponent;      /* Phong exponent, >= 0 */
+    float emission[3];   /* emitted radiance W/(m^2 sr), front face only (scene materials) */
+} lightvec_material;
+
+/* A light vector: direction D toward the virtual light (unit) and magnitude M. */
+typedef struct lightvec_vector {
+    float direction[3];
+    float magnitude[3];
+} lightvec_vector;
+
+/* Record flags. */
+#define LIGHTVEC_RECORD_VIEW_INDEPENDENT 1u  /* Lambertian: found by lookups with outgoing = NULL */
+
+/* One cached light vector (section 3.2: x, n, w, the vector, gradient, d_avg, irradiance). */
+typedef struct lightvec_record {
+    float position[3];      /* B */
+    float normal[3];        /* unit surface normal at B */
+    float outgoing[3];      /* unit sigma: toward the viewer it was computed for */
+    lightvec_vector vector; /* D (eq. 2), M (eq. 3) */
+    float irradiance[3];    /* E_B of the gathered light */
+    float gradient[3][3];   /* dE/dx: gradient[channel][axis] (eq. 6, Ward & Heckbert) */
+    float distance;         /* d_avg: harmonic mean distance to the gathered surfaces */
+    float visibility;       /* DLV: fraction of unoccluded light samples; 1 for indirect */
+    uint32_t flags;         /* LIGHTVEC_RECORD_* */
+} lightvec_record;
+
+/* ---- scene and built-in renderer ---------------------------------------- */
+
+typedef struct lightvec_scene_desc {
+    const float *positions;      /* xyz per vertex */
+    size_t stride;               /* bytes between vertices; 0 = 3 floats */
+    uint32_t vertex_count;
+    const uint32_t *indices;     /* 3 per triangle */
+    uint32_t triangle_count;
+    const uint32_t *material_ids;           /* per triangle; NULL = material 0 */
+    const lightvec_material *materials;     /* copied */
+    uint32_t material_count;
+    lightvec_trace_fn trace;     /* NULL = the built-in BVH */
+    void *trace_user;
+    lightvec_allocator allocator;
+    lightvec_log_fn log;
+    void *log_user;
+} lightvec_scene_desc;
+
+typedef struct lightvec_scene lightvec_scene;
+
+typedef struct lightvec_scene_stats {
+    uint32_t triangle_count;
+    uint32_t degenerate_count;   /* zero-area triangles, skipped */
+    uint32_t emitter_count;      /* triangles with non-zero emission */
+    uint32_t bvh_node_count;
+    float bounds_min[3], bounds_max[3];
+    float ray_offset;            /* origin offset along the normal of secondary rays */
+} lightvec_scene_stats;
+
+/* The point a light vector is computed for. */
+typedef struct lightvec_surface {
+    float position[3];
+    float normal[3];             /* unit, on the side of the viewer */
+    float outgoing[3];           /* unit, toward the viewer (ignored with VIEW_INDEPENDENT) */
+    uint32_t flags;              /* LIGHTVEC_RECORD_VIEW_INDEPENDENT: 3D record, Lambert only */
+    lightvec_material material;
+} lightvec_surface;
+
+typedef struct lightvec_gather_desc {
+    uint32_t strata_theta;       /* eq. 5 zenith strata (equal solid angle); 0 = 20 */
+    uint32_t strata_phi;         /* eq. 5 azimuth strata; 0 = 3 * strata_theta */
+    uint32_t bounces;            /* reflections of the gathered light: 1 = direct light reflected
+                                    at the hit points, each more = one diffuse bounce; 0 = 2 */
+    uint32_t light_samples;      /* emitter samples per hit point; 0 = 1 */
+    float min_distance;          /* clamp of d_avg (world units); 0 = none */
+    float max_distance;          /* 0 = none */
+    uint64_t seed;               /* random stream = (seed, index) */
+    lightvec_incoming_fn incoming_radiance;   /* NULL = the built-in renderer */
+    void *incoming_user;
+} lightvec_gather_desc;
+
+/* ---- cache ----------------------------------------------------------------- */
+
+typedef enum lightvec_kind {
+    LIGHTVEC_KIND_DEFAULT = 0,   /* indirect */
+    LIGHTVEC_KIND_INDIRECT = 1,  /* ILV */
+    LIGHTVEC_KIND_DIRECT = 2     /* DLV: visibility rule, tighter defaults */
+} lightvec_kind;
+
+/* How valid vectors are combined (4.2.3). */
+typedef enum lightvec_interpolation {
+    LIGHTVEC_INTERPOLATION_DEFAULT = 0,   /* GRADIENT */
+    LIGHTVEC_INTERPOLATION_PLAIN = 1,     /* the paper: M = sum w M_i / sum w, D = normalize(sum w D_i) */
+    LIGHTVEC_INTERPOLATION_PROJECTED = 2, /* M cos(n, D) is interpolated, then divided by cos(n_A, D):
+                                             for Lambert exactly Ward's interpolation of irradiance */
+    LIGHTVEC_INTERPOLATION_GRADIENT = 3   /* PROJECTED, each record first moved to A by its gradient:
+                                             times 1 + grad E_c . (A - B) / E_c (Ward & Heckbert) */
+} lightvec_interpolation;
+
+typedef struct lightvec_cache_desc {
+    lightvec_kind kind;
+    lightvec_interpolation interpolation;
+    float radius_scale;          /* R_B = radius_scale * d_avg_B (Ward's accuracy a; the paper
+                                    uses 1); 0 = 0.3 ILV, 0.25 DLV */
+    float max_irradiance_change; /* I_B, relative; 0 = 0.5 ILV, 0.1 DLV */
+    float max_normal_angle;      /* degrees, S_curv = cos; 0 = 20 ILV, 10 DLV */
+    float max_direction_angle;   /* degrees, S_dir = cos; 0 = 15 */
+    uint32_t min_valid;          /* valid vectors needed to interpolate; 0 = 3 */
+    uint32_t face_split_threshold;  /* a leaf face holding more splits in four; 0 = 8192 */
+    uint32_t max_face_depth;     /* 0 = 8 (20 * 4^8 faces at most) */
+    lightvec_allocator allocator;
+    lightvec_parallel_for_fn parallel_for;   /* optimize and load; NULL = serial */
+    void *parallel_user;
+    lightvec_progress_fn progress;
+    void *progress_user;
+    lightvec_log_fn log;
+    void *log_user;
+} lightvec_cache_desc;
+
+typedef struct lightvec_cache lightvec_cache;
+
+typedef struct lightvec_lookup_result {
+    lightvec_vector vector;      /* interpolated D and M (when hit) */
+    float weight;                /* W: mean global weight of the valid vectors (4.3); 0 if none */
+    uint32_t valid_count;        /* vectors that passed every criterion */
+    int hit;                     /* valid_count >= min_valid (and the DLV visibility rule) */
+} lightvec_lookup_result;
+
+typedef struct lightvec_cache_stats {
+    lightvec_kind kind;
+    uint64_t record_count;
+    uint32_t face_count;         /* icosahedron faces, inner and leaves */
+    uint32_t leaf_count;
+    uint32_t max_depth;          /* deepest leaf */
+    uint32_t tree_count;         /* kd-trees over all leaves */
+    size_t bytes;                /* memory held */
+    float radius_scale, max_irradiance_change, cos_normal, cos_direction;  /* effective */
+    lightvec_interpolation interpolation;
+    uint32_t min_valid, face_split_threshold, max_face_depth;
+} lightvec_cache_stats;
+
+typedef struct lightvec_face_info {
+    float vertices[3][3];        /* unit, counter-clockwise seen from outside */
+    uint32_t depth;              /* 0 = one of the 20 faces of the icosahedron */
+    uint32_t leaf;               /* 1 = holds records (not split) */
+    uint64_t record_count;       /* records in the face (leaf) or below it */
+} lightvec_face_info;
+
+#define LIGHTVEC_PRIORITY_MAX 1e30f  /* lightvec_priority when W is 0 */
+
 LIGHTVEC_API const char *lightvec_result_string(lightvec_result r);
+
+LIGHTVEC_API lightvec_result lightvec_scene_create(const lightvec_scene_desc *desc, lightvec_scene **out);
+LIGHTVEC_API void lightvec_scene_destroy(lightvec_scene *scene);
+LIGHTVEC_API lightvec_result lightvec_scene_info(const lightvec_scene *scene, lightvec_scene_stats *info);
+LIGHTVEC_API int lightvec_scene_intersect(const lightvec_scene *scene, const float org[3], const float dir[3],
+                                          float tmax, lightvec_hit *hit);
+
+LIGHTVEC_API lightvec_result lightvec_gather(const lightvec_scene *scene, const lightvec_gather_desc *desc,
+                                             const lightvec_surface *surface, uint64_t index,
+                                             lightvec_record *out);
+LIGHTVEC_API lightvec_result lightvec_gather_direct(const lightvec_scene *scene, const lightvec_gather_desc *desc,
+                                                    const lightvec_surface *surface, uint64_t index,
+                                                    lightvec_record *out);
+LIGHTVEC_API void lightvec_brdf(const lightvec_material *m, const float normal[3], const float wi[3],
+                                const float wo[3], float f[3]);
+LIGHTVEC_API void lightvec_radiance(const lightvec_material *m, const float normal[3], const float *outgoing,
+                                    const lightvec_vector *v, float rgb[3]);
+
+LIGHTVEC_API lightvec_result lightvec_cache_create(const lightvec_cache_desc *desc, lightvec_cache **out);
+LIGHTVEC_API void lightvec_cache_destroy(lightvec_cache *cache);
+LIGHTVEC_API lightvec_result lightvec_insert(lightvec_cache *cache, const lightvec_record *record, uint32_t *id);
+LIGHTVEC_API lightvec_result lightvec_lookup(lightvec_cache *cache, const float position[3], const float normal[3],
+                                             const float *outgoing, lightvec_lookup_result *out);
+LIGHTVEC_API lightvec_result lightvec_find(lightvec_cache *cache, const float position[3], const float normal[3],
+                                           const float *outgoing, uint32_t *ids, float *weights,
+                                           uint32_t capacity, uint32_t *count);
+LIGHTVEC_API float lightvec_priority(float rc_priority, float W);
+LIGHTVEC_API lightvec_result lightvec_cache_optimize(lightvec_cache *cache);
+LIGHTVEC_API lightvec_result lightvec_cache_record(lightvec_cache *cache, uint32_t id, lightvec_record *out);
+LIGHTVEC_API lightvec_result lightvec_cache_info(const lightvec_cache *cache, lightvec_cache_stats *info);
+LIGHTVEC_API lightvec_result lightvec_cache_face(const lightvec_cache *cache, uint32_t index, lightvec_face_info *out);
+LIGHTVEC_API lightvec_result lightvec_cache_locate(const lightvec_cache *cache, const float direction[3],
+                                                   uint32_t *index);
+
+LIGHTVEC_API lightvec_result lightvec_save(const lightvec_cache *cache, lightvec_write_fn write, void *user);
+LIGHTVEC_API lightvec_result lightvec_load(const lightvec_cache_desc *desc, lightvec_read_fn read, void *user,
+                                           lightvec_cache **out);
+LIGHTVEC_API lightvec_result lightvec_save_to_memory(const lightvec_cache *cache, const lightvec_allocator *a,
+                                                     void **data, size_t *size);
+LIGHTVEC_API lightvec_result lightvec_load_from_memory(const void *data, size_t size, const lightvec_cache_desc *desc,
+                                                       lightvec_cache **out);
+LIGHTVEC_API void lightvec_free_memory(const lightvec_allocator *a, void *data);
 
 #ifdef __cplusplus
 }
@@ -80,6 +461,11 @@ LIGHTVEC_API const char *lightvec_result_string(lightvec_result r);
 #  define LIGHTVEC_FREE(ptr) free(ptr)
 #endif
 
+#include <string.h>
+#include <math.h>
+#include <float.h>
+#include <stdio.h>
+
 LIGHTVEC_API const char *lightvec_result_string(lightvec_result r)
 {
     switch (r) {
@@ -92,6 +478,3001 @@ LIGHTVEC_API const char *lightvec_result_string(lightvec_result r)
     case LIGHTVEC_ERROR_IO: return "read or write callback failed";
     }
     return "unknown result";
+}
+
+/* ======================================================================
+   1. allocation
+   ---------------------------------------------------------------------- */
+/* In the declarations (public):
+
+   typedef struct lightvec_allocator {
+       void *(*alloc)(size_t size, void *user);  // NULL: LIGHTVEC_MALLOC
+       void (*free)(void *ptr, void *user);      // NULL: LIGHTVEC_FREE
+       void *user;
+   } lightvec_allocator;
+*/
+
+/* Both callbacks or neither: a lone alloc would leak through LIGHTVEC_FREE. */
+static int lightvec__allocator_valid(const lightvec_allocator *a)
+{
+    return (a->alloc == NULL) == (a->free == NULL);
+}
+
+static void *lightvec__alloc(const lightvec_allocator *a, size_t size)
+{
+    if (size == 0) size = 1;
+    return a->alloc ? a->alloc(size, a->user) : LIGHTVEC_MALLOC(size);
+}
+
+/* count * item bytes, or NULL when the product overflows. */
+static void *lightvec__alloc_array(const lightvec_allocator *a, size_t count, size_t item)
+{
+    if (item && count > SIZE_MAX / item) return NULL;
+    return lightvec__alloc(a, count * item);
+}
+
+static void lightvec__free(const lightvec_allocator *a, void *p)
+{
+    if (!p) return;
+    if (a->free) a->free(p, a->user);
+    else LIGHTVEC_FREE(p);
+}
+
+/* Zero means default: the documented default replaces a zero field. */
+#define lightvec__def(v, d) ((v) ? (v) : (d))
+
+/* ======================================================================
+   2. small math
+   ---------------------------------------------------------------------- */
+typedef struct lightvec__vec3 { float x, y, z; } lightvec__vec3;
+
+static lightvec__vec3 lightvec__v3(float x, float y, float z) { lightvec__vec3 r; r.x = x; r.y = y; r.z = z; return r; }
+static lightvec__vec3 lightvec__v3_load(const float *p) { return lightvec__v3(p[0], p[1], p[2]); }
+static lightvec__vec3 lightvec__add(lightvec__vec3 a, lightvec__vec3 b) { return lightvec__v3(a.x + b.x, a.y + b.y, a.z + b.z); }
+static lightvec__vec3 lightvec__sub(lightvec__vec3 a, lightvec__vec3 b) { return lightvec__v3(a.x - b.x, a.y - b.y, a.z - b.z); }
+static lightvec__vec3 lightvec__scale(lightvec__vec3 a, float s) { return lightvec__v3(a.x * s, a.y * s, a.z * s); }
+static float lightvec__dot(lightvec__vec3 a, lightvec__vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+static lightvec__vec3 lightvec__cross(lightvec__vec3 a, lightvec__vec3 b)
+{
+    return lightvec__v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+static float lightvec__length(lightvec__vec3 a) { return sqrtf(lightvec__dot(a, a)); }
+static lightvec__vec3 lightvec__normalize(lightvec__vec3 a)
+{
+    float l = lightvec__length(a);
+    return l > 0.0f ? lightvec__scale(a, 1.0f / l) : a;
+}
+static float lightvec__minf(float a, float b) { return a < b ? a : b; }
+static float lightvec__maxf(float a, float b) { return a > b ? a : b; }
+static int lightvec__finite3(const float *p) { return isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]); }
+
+/* An orthonormal basis (t, b, n) around unit n (Duff et al. 2017, branchless). */
+static void lightvec__basis(lightvec__vec3 n, lightvec__vec3 *t, lightvec__vec3 *b)
+{
+    float s = n.z >= 0.0f ? 1.0f : -1.0f;
+    float a = -1.0f / (s + n.z);
+    float c = n.x * n.y * a;
+    *t = lightvec__v3(1.0f + s * n.x * n.x * a, s * c, -s * n.x);
+    *b = lightvec__v3(c, s + n.y * n.y * a, -n.y);
+}
+
+/* ======================================================================
+   3. counter-based random numbers
+   A stream is a pure function of (seed, stream id): jobs seed their own
+   stream from (desc.seed, job index) and never share state, so results are
+   bit-identical for any thread count.
+   ---------------------------------------------------------------------- */
+typedef struct lightvec__rng { uint64_t state; } lightvec__rng;
+
+/* SplitMix64 finaliser (Steele, Lea, Flood 2014). */
+static uint64_t lightvec__mix64(uint64_t z)
+{
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+static lightvec__rng lightvec__rng_stream(uint64_t seed, uint64_t stream)
+{
+    lightvec__rng r;
+    r.state = lightvec__mix64(seed + 0x9E3779B97F4A7C15ull) ^ lightvec__mix64(stream * 0xD1B54A32D192ED03ull + 1u);
+    return r;
+}
+
+static uint32_t lightvec__rng_u32(lightvec__rng *r)
+{
+    r->state += 0x9E3779B97F4A7C15ull;
+    return (uint32_t)(lightvec__mix64(r->state) >> 32);
+}
+
+/* Uniform in [0, 1): 24 random bits, exactly representable. */
+static float lightvec__rng_float(lightvec__rng *r)
+{
+    return (float)(lightvec__rng_u32(r) >> 8) * (1.0f / 16777216.0f);
+}
+
+/* ======================================================================
+   4. BVH over triangles
+   Binned SAH build (LIGHTVEC_BVH_BINS bins over centroid bounds), nodes flattened
+   depth first (left child follows its parent), ordered traversal (nearer
+   child box first), watertight ray/triangle test (Woop, Benthin, Wald 2013),
+   any-hit for shadow rays. Triangles are copied into leaf order (9 floats and
+   the caller's triangle index) because the traversal reads them in that order;
+   nothing else of the caller's data is kept.
+   ---------------------------------------------------------------------- */
+#ifndef LIGHTVEC_BVH_BINS
+#define LIGHTVEC_BVH_BINS 16
+#endif
+#define LIGHTVEC__BVH_LEAF_MAX 4    /* triangles per leaf */
+#define LIGHTVEC__BVH_MAX_DEPTH 60  /* deeper nodes split at the median: bounds the traversal stack */
+#define LIGHTVEC__BVH_STACK (LIGHTVEC__BVH_MAX_DEPTH + 34) /* + 32 median halvings of a uint32_t count */
+
+typedef struct lightvec__bvh_node {
+    float lo[3];
+    uint32_t first;  /* leaf: first triangle; inner: index of the right child */
+    float hi[3];
+    uint32_t count;  /* leaf: triangle count (>0); inner: 0 */
+} lightvec__bvh_node;
+
+typedef struct lightvec__bvh_tri {
+    float v0[3], v1[3], v2[3];
+    uint32_t id;     /* the caller's triangle index */
+} lightvec__bvh_tri;
+
+typedef struct lightvec__bvh {
+    lightvec__bvh_node *nodes;
+    lightvec__bvh_tri *tris;
+    uint32_t node_count, tri_count;
+    uint32_t degenerate_count;  /* zero-area triangles skipped by the build */
+} lightvec__bvh;
+
+typedef struct lightvec__hit {
+    float t;         /* distance along the ray in units of |dir| */
+    float u, v;      /* barycentric weights of the triangle's 2nd and 3rd vertex */
+    uint32_t tri;    /* the caller's triangle index; LIGHTVEC__NO_HIT when missed */
+} lightvec__hit;
+#define LIGHTVEC__NO_HIT 0xFFFFFFFFu
+
+/* Caller's triangle soup: positions with a byte stride, 3 indices per triangle. */
+typedef struct lightvec__mesh_view {
+    const float *positions;
+    size_t stride;             /* bytes between vertices; 0 = 3 floats */
+    const uint32_t *indices;
+    uint32_t tri_count;
+} lightvec__mesh_view;
+
+static const float *lightvec__vertex(const lightvec__mesh_view *m, uint32_t v)
+{
+    size_t stride = m->stride ? m->stride : 3 * sizeof(float);
+    return (const float *)((const char *)m->positions + (size_t)v * stride);
+}
+
+typedef struct lightvec__bvh_ref {   /* build-time record of one triangle */
+    float lo[3], hi[3], c[3];
+    uint32_t tri;
+} lightvec__bvh_ref;
+
+typedef struct lightvec__bvh_bin { float lo[3], hi[3]; uint32_t count; } lightvec__bvh_bin;
+
+static void lightvec__box_empty(float lo[3], float hi[3])
+{
+    lo[0] = lo[1] = lo[2] = FLT_MAX;
+    hi[0] = hi[1] = hi[2] = -FLT_MAX;
+}
+static void lightvec__box_grow(float lo[3], float hi[3], const float plo[3], const float phi[3])
+{
+    int k;
+    for (k = 0; k < 3; k++) {
+        lo[k] = lightvec__minf(lo[k], plo[k]);
+        hi[k] = lightvec__maxf(hi[k], phi[k]);
+    }
+}
+static float lightvec__box_area(const float lo[3], const float hi[3])
+{
+    float dx = hi[0] - lo[0], dy = hi[1] - lo[1], dz = hi[2] - lo[2];
+    if (dx < 0.0f) return 0.0f;
+    return dx * dy + dy * dz + dz * dx;
+}
+
+/* Chooses the binned-SAH split of refs[0..n); returns 0 when no split beats a
+   leaf, else the axis (1-based in *axis) and the bin boundary in *split_bin. */
+static int lightvec__bvh_find_split(const lightvec__bvh_ref *refs, uint32_t n, const float clo[3],
+                              const float chi[3], int *axis, int *split_bin)
+{
+    float best = FLT_MAX, leaf_cost = (float)n;
+    float node_lo[3], node_hi[3];
+    int k, b, found = 0;
+    uint32_t i;
+    lightvec__box_empty(node_lo, node_hi);
+    for (i = 0; i < n; i++) lightvec__box_grow(node_lo, node_hi, refs[i].lo, refs[i].hi);
+    for (k = 0; k < 3; k++) {
+        lightvec__bvh_bin bins[LIGHTVEC_BVH_BINS];
+        float right_area[LIGHTVEC_BVH_BINS];
+        uint32_t right_count[LIGHTVEC_BVH_BINS];
+        float extent = chi[k] - clo[k], scale, lo[3], hi[3];
+        uint32_t count;
+        if (!(extent > 0.0f)) continue;
+        scale = (float)LIGHTVEC_BVH_BINS / extent;
+        for (b = 0; b < LIGHTVEC_BVH_BINS; b++) { lightvec__box_empty(bins[b].lo, bins[b].hi); bins[b].count = 0; }
+        for (i = 0; i < n; i++) {
+            int bin = (int)((refs[i].c[k] - clo[k]) * scale);
+            if (bin >= LIGHTVEC_BVH_BINS) bin = LIGHTVEC_BVH_BINS - 1;
+            if (bin < 0) bin = 0;
+            bins[bin].count++;
+            lightvec__box_grow(bins[bin].lo, bins[bin].hi, refs[i].lo, refs[i].hi);
+        }
+        /* sweep from the right, then from the left evaluating each boundary */
+        lightvec__box_empty(lo, hi);
+        count = 0;
+        for (b = LIGHTVEC_BVH_BINS - 1; b > 0; b--) {
+            lightvec__box_grow(lo, hi, bins[b].lo, bins[b].hi);
+            count += bins[b].count;
+            right_area[b] = lightvec__box_area(lo, hi);
+            right_count[b] = count;
+        }
+        lightvec__box_empty(lo, hi);
+        count = 0;
+        for (b = 1; b < LIGHTVEC_BVH_BINS; b++) {
+            float cost;
+            lightvec__box_grow(lo, hi, bins[b - 1].lo, bins[b - 1].hi);
+            count += bins[b - 1].count;
+            if (count == 0 || right_count[b] == 0) continue;
+            cost = 1.0f + (lightvec__box_area(lo, hi) * (float)count +
+                           right_area[b] * (float)right_count[b]) / lightvec__box_area(node_lo, node_hi);
+            if (cost < best) { best = cost; *axis = k; *split_bin = b; found = 1; }
+        }
+    }
+    return found && (best < leaf_cost || n > LIGHTVEC__BVH_LEAF_MAX);
+}
+
+/* Partitions refs[0..n) so that the first part lies left of the chosen
+   boundary. Returns the size of the left part (always in 1..n-1). */
+static uint32_t lightvec__bvh_partition(lightvec__bvh_ref *refs, uint32_t n, const float clo[3],
+                                  const float chi[3], int depth)
+{
+    int axis = 0, split_bin = 0;
+    uint32_t i, j;
+    if (depth < LIGHTVEC__BVH_MAX_DEPTH && lightvec__bvh_find_split(refs, n, clo, chi, &axis, &split_bin)) {
+        float scale = (float)LIGHTVEC_BVH_BINS / (chi[axis] - clo[axis]);
+        for (i = 0, j = n; i < j;) {
+            int bin = (int)((refs[i].c[axis] - clo[axis]) * scale);
+            if (bin >= LIGHTVEC_BVH_BINS) bin = LIGHTVEC_BVH_BINS - 1;
+            if (bin < split_bin) i++;
+            else { lightvec__bvh_ref t = refs[i]; refs[i] = refs[--j]; refs[j] = t; }
+        }
+        if (i > 0 && i < n) return i;
+    }
+    return n / 2; /* no useful SAH split (coincident centroids, depth cap): halve by count */
+}
+
+typedef struct lightvec__bvh_task {
+    uint32_t parent, begin, end, depth;
+    int is_right;    /* the parent learns a right child's index when it is popped */
+} lightvec__bvh_task;
+
+/* Copies the triangles into leaf order. */
+static void lightvec__bvh_store_tris(lightvec__bvh *bvh, const lightvec__mesh_view *m, const lightvec__bvh_ref *refs)
+{
+    uint32_t i;
+    for (i = 0; i < bvh->tri_count; i++) {
+        lightvec__bvh_tri *t = &bvh->tris[i];
+        uint32_t tri = refs[i].tri;
+        memcpy(t->v0, lightvec__vertex(m, m->indices[3 * tri + 0]), sizeof t->v0);
+        memcpy(t->v1, lightvec__vertex(m, m->indices[3 * tri + 1]), sizeof t->v1);
+        memcpy(t->v2, lightvec__vertex(m, m->indices[3 * tri + 2]), sizeof t->v2);
+        t->id = tri;
+    }
+}
+
+/* Bounds of every non-degenerate triangle; counts the degenerate ones. */
+static uint32_t lightvec__bvh_collect(lightvec__bvh *bvh, const lightvec__mesh_view *m, lightvec__bvh_ref *refs)
+{
+    uint32_t i, n = 0;
+    for (i = 0; i < m->tri_count; i++) {
+        const float *p0 = lightvec__vertex(m, m->indices[3 * i + 0]);
+        const float *p1 = lightvec__vertex(m, m->indices[3 * i + 1]);
+        const float *p2 = lightvec__vertex(m, m->indices[3 * i + 2]);
+        lightvec__vec3 c = lightvec__cross(lightvec__sub(lightvec__v3_load(p1), lightvec__v3_load(p0)),
+                               lightvec__sub(lightvec__v3_load(p2), lightvec__v3_load(p0)));
+        int k;
+        if (lightvec__dot(c, c) == 0.0f) { bvh->degenerate_count++; continue; }
+        for (k = 0; k < 3; k++) {
+            refs[n].lo[k] = lightvec__minf(p0[k], lightvec__minf(p1[k], p2[k]));
+            refs[n].hi[k] = lightvec__maxf(p0[k], lightvec__maxf(p1[k], p2[k]));
+            refs[n].c[k] = 0.5f * (refs[n].lo[k] + refs[n].hi[k]);
+        }
+        refs[n].tri = i;
+        n++;
+    }
+    return n;
+}
+
+/* Builds the BVH of m's non-degenerate triangles. Indices must be in range and
+   coordinates finite (validate first). Returns 0, or -1 when out of memory. */
+static int lightvec__bvh_build(lightvec__bvh *bvh, const lightvec__mesh_view *m, const lightvec_allocator *a)
+{
+    lightvec__bvh_task stack[LIGHTVEC__BVH_STACK];
+    lightvec__bvh_ref *refs;
+    uint32_t i, n, top = 0;
+    memset(bvh, 0, sizeof *bvh);
+    refs = (lightvec__bvh_ref *)lightvec__alloc_array(a, m->tri_count, sizeof *refs);
+    if (!refs) return -1;
+    n = lightvec__bvh_collect(bvh, m, refs);
+    bvh->nodes = (lightvec__bvh_node *)lightvec__alloc_array(a, n ? 2 * (size_t)n - 1 : 1, sizeof(lightvec__bvh_node));
+    bvh->tris = (lightvec__bvh_tri *)lightvec__alloc_array(a, n, sizeof(lightvec__bvh_tri));
+    if (!bvh->nodes || !bvh->tris) {
+        lightvec__free(a, refs);
+        lightvec__free(a, bvh->nodes);
+        lightvec__free(a, bvh->tris);
+        memset(bvh, 0, sizeof *bvh);
+        return -1;
+    }
+    bvh->tri_count = n;
+    if (n == 0) { /* an empty root leaf: every ray misses */
+        lightvec__box_empty(bvh->nodes[0].lo, bvh->nodes[0].hi);
+        bvh->nodes[0].first = bvh->nodes[0].count = 0;
+        bvh->node_count = 1;
+    } else {
+        stack[top].parent = 0; stack[top].begin = 0; stack[top].end = n;
+        stack[top].depth = 0; stack[top].is_right = 0; top++;
+    }
+    while (top) {
+        lightvec__bvh_task t = stack[--top];
+        uint32_t index = bvh->node_count++, count = t.end - t.begin;
+        lightvec__bvh_node *node = &bvh->nodes[index];
+        float clo[3], chi[3];
+        if (t.is_right) bvh->nodes[t.parent].first = index;
+        lightvec__box_empty(node->lo, node->hi);
+        lightvec__box_empty(clo, chi);
+        for (i = t.begin; i < t.end; i++) {
+            lightvec__box_grow(node->lo, node->hi, refs[i].lo, refs[i].hi);
+            lightvec__box_grow(clo, chi, refs[i].c, refs[i].c);
+        }
+        if (count <= LIGHTVEC__BVH_LEAF_MAX) {
+            node->first = t.begin;
+            node->count = count;
+        } else {
+            uint32_t mid = t.begin + lightvec__bvh_partition(refs + t.begin, count, clo, chi, (int)t.depth);
+            node->count = 0;
+            /* right pushed first so the left child is popped next: left = index + 1 */
+            stack[top].parent = index; stack[top].begin = mid; stack[top].end = t.end;
+            stack[top].depth = t.depth + 1; stack[top].is_right = 1; top++;
+            stack[top].parent = index; stack[top].begin = t.begin; stack[top].end = mid;
+            stack[top].depth = t.depth + 1; stack[top].is_right = 0; top++;
+        }
+    }
+    lightvec__bvh_store_tris(bvh, m, refs);
+    lightvec__free(a, refs);
+    return 0;
+}
+
+static void lightvec__bvh_free(lightvec__bvh *bvh, const lightvec_allocator *a)
+{
+    lightvec__free(a, bvh->nodes);
+    lightvec__free(a, bvh->tris);
+    memset(bvh, 0, sizeof *bvh);
+}
+
+/* Per-ray constants of the watertight test and of the slab test. */
+typedef struct lightvec__ray {
+    float org[3], dir[3], inv[3];
+    int kx, ky, kz;          /* dir[kz] has the largest magnitude */
+    float sx, sy, sz;        /* shear that maps dir to +z */
+} lightvec__ray;
+
+static void lightvec__ray_setup(lightvec__ray *r, const float org[3], const float dir[3])
+{
+    int k;
+    for (k = 0; k < 3; k++) {
+        /* a zero component would give 0 * inf = NaN in the slab test */
+        float d = dir[k];
+        if (fabsf(d) < 1e-30f) d = d < 0.0f ? -1e-30f : 1e-30f;
+        r->org[k] = org[k];
+        r->dir[k] = dir[k];
+        r->inv[k] = 1.0f / d;
+    }
+    r->kz = fabsf(dir[0]) > fabsf(dir[1]) ? (fabsf(dir[0]) > fabsf(dir[2]) ? 0 : 2)
+                                          : (fabsf(dir[1]) > fabsf(dir[2]) ? 1 : 2);
+    r->kx = (r->kz + 1) % 3;
+    r->ky = (r->kx + 1) % 3;
+    if (dir[r->kz] < 0.0f) { int t = r->kx; r->kx = r->ky; r->ky = t; } /* keep winding */
+    r->sx = dir[r->kx] / dir[r->kz];
+    r->sy = dir[r->ky] / dir[r->kz];
+    r->sz = 1.0f / dir[r->kz];
+}
+
+/* Entry distance of the ray into the box, or FLT_MAX when it misses within
+   [tmin, tmax]. The tmax bound is widened by 2 ulp-ish factors so that a hit
+   exactly on a box face is not lost to rounding (Ize 2013). */
+static float lightvec__ray_box(const lightvec__ray *r, const float lo[3], const float hi[3], float tmin, float tmax)
+{
+    int k;
+    for (k = 0; k < 3; k++) {
+        float t0 = (lo[k] - r->org[k]) * r->inv[k];
+        float t1 = (hi[k] - r->org[k]) * r->inv[k];
+        if (t0 > t1) { float t = t0; t0 = t1; t1 = t; }
+        tmin = lightvec__maxf(tmin, t0);
+        tmax = lightvec__minf(tmax, t1 * 1.00000024f);
+    }
+    return tmin <= tmax ? tmin : FLT_MAX;
+}
+
+/* Watertight ray/triangle test (Woop, Benthin, Wald 2013): edge functions in
+   a sheared space where the ray is the +z axis; edges shared by two triangles
+   are hit by exactly one of them. Double precision only when an edge function
+   is exactly zero. Updates *hit when closer than hit->t. */
+static int lightvec__ray_tri(const lightvec__ray *r, const lightvec__bvh_tri *tri, float tmin, lightvec__hit *hit)
+{
+    float ax = tri->v0[r->kx] - r->org[r->kx], ay = tri->v0[r->ky] - r->org[r->ky], az = tri->v0[r->kz] - r->org[r->kz];
+    float bx = tri->v1[r->kx] - r->org[r->kx], by = tri->v1[r->ky] - r->org[r->ky], bz = tri->v1[r->kz] - r->org[r->kz];
+    float cx = tri->v2[r->kx] - r->org[r->kx], cy = tri->v2[r->ky] - r->org[r->ky], cz = tri->v2[r->kz] - r->org[r->kz];
+    float u, v, w, det, t;
+    ax -= r->sx * az; ay -= r->sy * az;
+    bx -= r->sx * bz; by -= r->sy * bz;
+    cx -= r->sx * cz; cy -= r->sy * cz;
+    u = cx * by - cy * bx;
+    v = ax * cy - ay * cx;
+    w = bx * ay - by * ax;
+    if (u == 0.0f || v == 0.0f || w == 0.0f) {
+        u = (float)((double)cx * by - (double)cy * bx);
+        v = (float)((double)ax * cy - (double)ay * cx);
+        w = (float)((double)bx * ay - (double)by * ax);
+    }
+    if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f)) return 0;
+    det = u + v + w;
+    if (det == 0.0f) return 0;
+    t = (u * az + v * bz + w * cz) * r->sz / det;
+    if (!(t > tmin && t < hit->t)) return 0;
+    hit->t = t;
+    hit->u = v / det;
+    hit->v = w / det;
+    hit->tri = tri->id;
+    return 1;
+}
+
+/* Closest hit in (tmin, tmax). Returns 1 and fills *hit, else hit->tri = LIGHTVEC__NO_HIT. */
+static int lightvec__bvh_intersect(const lightvec__bvh *bvh, const float org[3], const float dir[3],
+                             float tmin, float tmax, lightvec__hit *hit)
+{
+    uint32_t stack[LIGHTVEC__BVH_STACK], top = 0, index = 0;
+    lightvec__ray r;
+    lightvec__ray_setup(&r, org, dir);
+    hit->t = tmax;
+    hit->u = hit->v = 0.0f;
+    hit->tri = LIGHTVEC__NO_HIT;
+    if (lightvec__ray_box(&r, bvh->nodes[0].lo, bvh->nodes[0].hi, tmin, tmax) == FLT_MAX) return 0;
+    for (;;) {
+        const lightvec__bvh_node *node = &bvh->nodes[index];
+        if (node->count) {
+            uint32_t i;
+            for (i = node->first; i < node->first + node->count; i++)
+                lightvec__ray_tri(&r, &bvh->tris[i], tmin, hit);
+        } else {
+            uint32_t left = index + 1, right = node->first;
+            float tl = lightvec__ray_box(&r, bvh->nodes[left].lo, bvh->nodes[left].hi, tmin, hit->t);
+            float tr = lightvec__ray_box(&r, bvh->nodes[right].lo, bvh->nodes[right].hi, tmin, hit->t);
+            if (tl != FLT_MAX && tr != FLT_MAX) {
+                if (tr < tl) { uint32_t t = left; left = right; right = t; }
+                stack[top++] = right; /* the farther child waits */
+                index = left;
+                continue;
+            }
+            if (tl != FLT_MAX) { index = left; continue; }
+            if (tr != FLT_MAX) { index = right; continue; }
+        }
+        if (!top) break;
+        index = stack[--top];
+    }
+    return hit->tri != LIGHTVEC__NO_HIT;
+}
+
+/* Any hit in (tmin, tmax): for shadow rays. */
+static int lightvec__bvh_occluded(const lightvec__bvh *bvh, const float org[3], const float dir[3],
+                            float tmin, float tmax)
+{
+    uint32_t stack[LIGHTVEC__BVH_STACK], top = 0, index = 0;
+    lightvec__ray r;
+    lightvec__hit hit;
+    lightvec__ray_setup(&r, org, dir);
+    hit.t = tmax;
+    hit.tri = LIGHTVEC__NO_HIT;
+    for (;;) {
+        const lightvec__bvh_node *node = &bvh->nodes[index];
+        if (lightvec__ray_box(&r, node->lo, node->hi, tmin, tmax) != FLT_MAX) {
+            if (node->count) {
+                uint32_t i;
+                for (i = node->first; i < node->first + node->count; i++)
+                    if (lightvec__ray_tri(&r, &bvh->tris[i], tmin, &hit)) return 1;
+            } else {
+                stack[top++] = node->first;
+                index = index + 1;
+                continue;
+            }
+        }
+        if (!top) return 0;
+        index = stack[--top];
+    }
+}
+
+/* ======================================================================
+   5. CRC32 and little-endian byte streams
+   A saved object is: magic (8 bytes), format version (u32), payload size
+   (u64), payload, CRC32 of everything before it (u32). Values are written
+   byte by byte in little-endian order, never as raw structs. A loader treats
+   its input as hostile: it checks every count against the declared payload
+   size before allocating, and the CRC at the end.
+   ---------------------------------------------------------------------- */
+/* In the declarations (public):
+
+   typedef int (*lightvec_write_fn)(void *user, const void *bytes, size_t n); // 0 = ok
+   typedef int (*lightvec_read_fn)(void *user, void *bytes, size_t n);        // 0 = all n bytes read
+*/
+
+/* CRC-32 (IEEE 802.3, reflected, as zlib and PNG). The table is built on the
+   stack per stream: 256 entries, cheaper than one page of data. */
+typedef struct lightvec__crc { uint32_t table[256]; uint32_t value; } lightvec__crc;
+
+static void lightvec__crc_init(lightvec__crc *c)
+{
+    uint32_t i, k;
+    for (i = 0; i < 256; i++) {
+        uint32_t v = i;
+        for (k = 0; k < 8; k++) v = (v & 1u) ? 0xEDB88320u ^ (v >> 1) : v >> 1;
+        c->table[i] = v;
+    }
+    c->value = 0xFFFFFFFFu;
+}
+static void lightvec__crc_add(lightvec__crc *c, const void *bytes, size_t n)
+{
+    const unsigned char *p = (const unsigned char *)bytes;
+    uint32_t v = c->value;
+    while (n--) v = c->table[(v ^ *p++) & 0xFFu] ^ (v >> 8);
+    c->value = v;
+}
+static uint32_t lightvec__crc_final(const lightvec__crc *c) { return c->value ^ 0xFFFFFFFFu; }
+
+typedef struct lightvec__writer {
+    lightvec_write_fn write;
+    void *user;
+    lightvec__crc crc;
+    int failed;        /* a write callback failed: LIGHTVEC_ERROR_IO */
+} lightvec__writer;
+
+static void lightvec__put(lightvec__writer *w, const void *bytes, size_t n)
+{
+    if (w->failed || n == 0) return;
+    lightvec__crc_add(&w->crc, bytes, n);
+    if (w->write(w->user, bytes, n) != 0) w->failed = 1;
+}
+static void lightvec__put_u32(lightvec__writer *w, uint32_t v)
+{
+    unsigned char b[4];
+    b[0] = (unsigned char)v; b[1] = (unsigned char)(v >> 8);
+    b[2] = (unsigned char)(v >> 16); b[3] = (unsigned char)(v >> 24);
+    lightvec__put(w, b, 4);
+}
+static void lightvec__put_u64(lightvec__writer *w, uint64_t v)
+{
+    lightvec__put_u32(w, (uint32_t)v);
+    lightvec__put_u32(w, (uint32_t)(v >> 32));
+}
+static void lightvec__put_f32(lightvec__writer *w, float f)
+{
+    uint32_t v;
+    memcpy(&v, &f, 4);
+    lightvec__put_u32(w, v);
+}
+static void lightvec__put_f32_array(lightvec__writer *w, const float *f, size_t n)
+{
+    unsigned char buf[4096];
+    size_t i = 0;
+    while (i < n) {
+        size_t m = n - i < sizeof buf / 4 ? n - i : sizeof buf / 4, j;
+        for (j = 0; j < m; j++) {
+            uint32_t v;
+            memcpy(&v, &f[i + j], 4);
+            buf[4 * j] = (unsigned char)v; buf[4 * j + 1] = (unsigned char)(v >> 8);
+            buf[4 * j + 2] = (unsigned char)(v >> 16); buf[4 * j + 3] = (unsigned char)(v >> 24);
+        }
+        lightvec__put(w, buf, 4 * m);
+        i += m;
+    }
+}
+
+typedef struct lightvec__reader {
+    lightvec_read_fn read;
+    void *user;
+    lightvec__crc crc;
+    uint64_t remaining;  /* payload bytes not yet read, from the header */
+    int failed;          /* short read or a size past the payload: corrupt */
+} lightvec__reader;
+
+static void lightvec__get(lightvec__reader *r, void *bytes, size_t n)
+{
+    if (r->failed) { memset(bytes, 0, n); return; }
+    if (n > r->remaining || r->read(r->user, bytes, n) != 0) {
+        r->failed = 1;
+        memset(bytes, 0, n);
+        return;
+    }
+    r->remaining -= n;
+    lightvec__crc_add(&r->crc, bytes, n);
+}
+static uint32_t lightvec__get_u32(lightvec__reader *r)
+{
+    unsigned char b[4];
+    lightvec__get(r, b, 4);
+    return (uint32_t)b[0] | ((uint32_t)b[1] << 8) | ((uint32_t)b[2] << 16) | ((uint32_t)b[3] << 24);
+}
+static uint64_t lightvec__get_u64(lightvec__reader *r)
+{
+    uint64_t lo = lightvec__get_u32(r);
+    return lo | ((uint64_t)lightvec__get_u32(r) << 32);
+}
+static float lightvec__get_f32(lightvec__reader *r)
+{
+    uint32_t v = lightvec__get_u32(r);
+    float f;
+    memcpy(&f, &v, 4);
+    return f;
+}
+/* True when count items of item_bytes each can still be in the payload:
+   call before allocating anything sized by a count read from the input. */
+static int lightvec__can_hold(lightvec__reader *r, uint64_t count, uint64_t item_bytes)
+{
+    if (item_bytes && count > r->remaining / item_bytes) { r->failed = 1; return 0; }
+    return !r->failed;
+}
+
+/* Memory-buffer streams behind the public save_to_memory/load_from_memory. */
+typedef struct lightvec__membuf {
+    unsigned char *data;
+    size_t size, capacity, pos;
+    const lightvec_allocator *a;
+} lightvec__membuf;
+
+static int lightvec__membuf_write(void *user, const void *bytes, size_t n)
+{
+    lightvec__membuf *m = (lightvec__membuf *)user;
+    if (n > m->capacity - m->size) {
+        size_t cap = m->capacity ? m->capacity : 4096;
+        unsigned char *p;
+        while (cap - m->size < n) {
+            if (cap > SIZE_MAX / 2) return -1;
+            cap *= 2;
+        }
+        p = (unsigned char *)lightvec__alloc(m->a, cap);
+        if (!p) return -1;
+        if (m->size) memcpy(p, m->data, m->size);
+        lightvec__free(m->a, m->data);
+        m->data = p;
+        m->capacity = cap;
+    }
+    memcpy(m->data + m->size, bytes, n);
+    m->size += n;
+    return 0;
+}
+
+static int lightvec__membuf_read(void *user, void *bytes, size_t n)
+{
+    lightvec__membuf *m = (lightvec__membuf *)user;
+    if (n > m->size - m->pos) return -1;
+    memcpy(bytes, m->data + m->pos, n);
+    m->pos += n;
+    return 0;
+}
+
+
+/* ======================================================================
+   7. jobs: the caller's parallel_for, or a serial loop
+   ---------------------------------------------------------------------- */
+/* In the declarations (public):
+
+   typedef void (*lightvec_job_fn)(void *ctx, uint32_t index);
+   // in the desc:
+   void (*parallel_for)(void *user, lightvec_job_fn job, void *ctx, uint32_t count);
+   void *parallel_user;
+   int (*progress)(void *user, uint64_t done, uint64_t total);   // non-zero cancels
+   void *progress_user;
+
+   Long builds run their jobs in batches and call progress between batches,
+   from the calling thread, so a callback never runs concurrently with itself. */
+static void lightvec__run_jobs(void (*parallel_for)(void *, lightvec_job_fn, void *, uint32_t), void *user,
+                         lightvec_job_fn job, void *ctx, uint32_t count)
+{
+    uint32_t i;
+    if (count == 0) return;
+    if (parallel_for) { parallel_for(user, job, ctx, count); return; }
+    for (i = 0; i < count; i++) job(ctx, i);
+}
+
+/* ======================================================================
+   8. atomics: acquire/release publication and sequentially consistent
+   reader counters (see THREADS in the documentation)
+   ---------------------------------------------------------------------- */
+#if defined(__GNUC__) || defined(__clang__)
+static uint32_t lightvec__load_u32(const uint32_t *p) { return __atomic_load_n(p, __ATOMIC_ACQUIRE); }
+static void lightvec__store_u32(uint32_t *p, uint32_t v) { __atomic_store_n(p, v, __ATOMIC_RELEASE); }
+static void *lightvec__load_ptr(void *const *p) { return __atomic_load_n(p, __ATOMIC_ACQUIRE); }
+static void lightvec__store_ptr(void **p, void *v) { __atomic_store_n(p, v, __ATOMIC_RELEASE); }
+static uint32_t lightvec__load_sc(const uint32_t *p) { return __atomic_load_n(p, __ATOMIC_SEQ_CST); }
+static void lightvec__store_sc(uint32_t *p, uint32_t v) { __atomic_store_n(p, v, __ATOMIC_SEQ_CST); }
+static void lightvec__add_sc(uint32_t *p, uint32_t v) { (void)__atomic_add_fetch(p, v, __ATOMIC_SEQ_CST); }
+#elif defined(_MSC_VER)
+#include <intrin.h>
+/* Interlocked operations are full barriers: stronger than needed, still correct. */
+static uint32_t lightvec__load_sc(const uint32_t *p) { return (uint32_t)_InterlockedOr((volatile long *)p, 0); }
+static void lightvec__store_sc(uint32_t *p, uint32_t v) { (void)_InterlockedExchange((volatile long *)p, (long)v); }
+static void lightvec__add_sc(uint32_t *p, uint32_t v) { (void)_InterlockedExchangeAdd((volatile long *)p, (long)v); }
+static uint32_t lightvec__load_u32(const uint32_t *p) { return lightvec__load_sc(p); }
+static void lightvec__store_u32(uint32_t *p, uint32_t v) { lightvec__store_sc(p, v); }
+static void *lightvec__load_ptr(void *const *p)
+{
+    return _InterlockedCompareExchangePointer((void *volatile *)p, NULL, NULL);
+}
+static void lightvec__store_ptr(void **p, void *v) { (void)_InterlockedExchangePointer((void *volatile *)p, v); }
+#else
+/* No atomics known for this compiler: single-threaded use only. */
+static uint32_t lightvec__load_u32(const uint32_t *p) { return *p; }
+static void lightvec__store_u32(uint32_t *p, uint32_t v) { *p = v; }
+static void *lightvec__load_ptr(void *const *p) { return *p; }
+static void lightvec__store_ptr(void **p, void *v) { *p = v; }
+static uint32_t lightvec__load_sc(const uint32_t *p) { return *p; }
+static void lightvec__store_sc(uint32_t *p, uint32_t v) { *p = v; }
+static void lightvec__add_sc(uint32_t *p, uint32_t v) { *p += v; }
+#endif
+
+/* ======================================================================
+   9. small helpers: luminance, validation, logging, BRDF
+   ---------------------------------------------------------------------- */
+#define LIGHTVEC__PI 3.14159265358979323846
+#define LIGHTVEC__TWO_PI 6.28318530717958647692
+#define LIGHTVEC__FAR 1e30f           /* distance of an escaped ray */
+#define LIGHTVEC__MAX_STRATA_THETA 256u
+#define LIGHTVEC__MAX_STRATA_PHI 512u
+#define LIGHTVEC__MAX_BOUNCES 64u
+#define LIGHTVEC__MAX_LIGHT_SAMPLES 4096u
+#define LIGHTVEC__MAX_FACE_DEPTH 12u
+
+/* Rec. 709 luminance: the scalar weight of eq. 2 and of the criteria. */
+static float lightvec__lumf(const float c[3]) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
+
+/* A message with two integers for the optional logger. */
+static void lightvec__logf(lightvec_log_fn log, void *user, const char *fmt, long long a, long long b)
+{
+    char buf[256];
+    if (!log) return;
+    snprintf(buf, sizeof buf, fmt, a, b);
+    log(user, buf);
+}
+
+/* A unit vector from a finite non-zero one, else 0. */
+static int lightvec__unit(const float *in, lightvec__vec3 *out)
+{
+    lightvec__vec3 v;
+    float l;
+    if (!in || !lightvec__finite3(in)) return 0;
+    v = lightvec__v3_load(in);
+    l = lightvec__length(v);
+    if (!(l > 1e-20f) || !isfinite(l)) return 0;
+    /* a vector already unit to float precision is kept as it is, so that
+       normalising twice (insert, save, load) changes nothing */
+    *out = fabsf(l - 1.0f) <= 4e-7f ? v : lightvec__scale(v, 1.0f / l);
+    return 1;
+}
+
+static int lightvec__finite_nonneg(const float *v, int n)
+{
+    int i;
+    for (i = 0; i < n; i++)
+        if (!isfinite(v[i]) || v[i] < 0.0f) return 0;
+    return 1;
+}
+
+static int lightvec__material_valid(const lightvec_material *m)
+{
+    return lightvec__finite_nonneg(m->diffuse, 3) && lightvec__finite_nonneg(m->specular, 3) &&
+           lightvec__finite_nonneg(m->emission, 3) && isfinite(m->exponent) && m->exponent >= 0.0f &&
+           m->exponent <= 1e6f;
+}
+
+/* f_r(wi -> wo) of Lambert + normalized Phong; all vectors unit. */
+static void lightvec__brdf_unit(const lightvec_material *m, lightvec__vec3 n, lightvec__vec3 wi, lightvec__vec3 wo,
+                                float f[3])
+{
+    double lobe = 0.0;
+    int c;
+    if (m->specular[0] > 0.0f || m->specular[1] > 0.0f || m->specular[2] > 0.0f) {
+        /* in double: a float cos alpha raised to a high exponent loses
+           exponent * 1e-7 of relative precision */
+        double ci = (double)n.x * wi.x + (double)n.y * wi.y + (double)n.z * wi.z;
+        double rx = 2.0 * ci * n.x - wi.x, ry = 2.0 * ci * n.y - wi.y, rz = 2.0 * ci * n.z - wi.z; /* mirror of wi */
+        double ca = rx * wo.x + ry * wo.y + rz * wo.z;
+        if (ca > 0.0) lobe = (m->exponent + 2.0) / LIGHTVEC__TWO_PI * pow(ca, m->exponent);
+    }
+    for (c = 0; c < 3; c++) f[c] = (float)(m->diffuse[c] / LIGHTVEC__PI + m->specular[c] * lobe);
+}
+
+LIGHTVEC_API void lightvec_brdf(const lightvec_material *m, const float normal[3], const float wi[3],
+                                const float wo[3], float f[3])
+{
+    lightvec__vec3 n, i, o;
+    if (!f) return;
+    f[0] = f[1] = f[2] = 0.0f;
+    if (!m || !lightvec__unit(normal, &n) || !lightvec__unit(wi, &i) || !lightvec__unit(wo, &o)) return;
+    lightvec__brdf_unit(m, n, i, o, f);
+}
+
+/* L = M * f_r(D -> wo) * cos(n, D): the radiance a light vector sends toward wo.
+   With outgoing NULL the surface is taken as Lambertian (diffuse part only). */
+LIGHTVEC_API void lightvec_radiance(const lightvec_material *m, const float normal[3], const float *outgoing,
+                                    const lightvec_vector *v, float rgb[3])
+{
+    lightvec__vec3 n, d, o;
+    float f[3], cos_d;
+    int c;
+    if (!rgb) return;
+    rgb[0] = rgb[1] = rgb[2] = 0.0f;
+    if (!m || !v || !lightvec__unit(normal, &n) || !lightvec__unit(v->direction, &d)) return;
+    cos_d = lightvec__dot(n, d);
+    if (!(cos_d > 0.0f)) return;
+    if (outgoing) {
+        if (!lightvec__unit(outgoing, &o)) return;
+        lightvec__brdf_unit(m, n, d, o, f);
+    } else {
+        for (c = 0; c < 3; c++) f[c] = m->diffuse[c] * (float)(1.0 / LIGHTVEC__PI);
+    }
+    for (c = 0; c < 3; c++) rgb[c] = v->magnitude[c] * f[c] * cos_d;
+}
+
+LIGHTVEC_API float lightvec_priority(float rc_priority, float W)
+{
+    /* 4.3: the render-cache priority times 1/W; a pixel whose vector had no
+       valid neighbour (W = 0) gets the highest priority. */
+    if (!(W > 0.0f)) return LIGHTVEC_PRIORITY_MAX;
+    {
+        float p = rc_priority / W;
+        return p < LIGHTVEC_PRIORITY_MAX ? p : LIGHTVEC_PRIORITY_MAX;
+    }
+}
+
+/* ======================================================================
+   10. scene and built-in renderer
+   ---------------------------------------------------------------------- */
+struct lightvec_scene {
+    lightvec_allocator a;
+    lightvec__bvh bvh;
+    int use_bvh;
+    lightvec_trace_fn trace;
+    void *trace_user;
+    uint32_t tri_count, degenerate_count;
+    float *normals;                 /* unit geometric normal per triangle (0 if degenerate) */
+    uint32_t *tri_material;
+    lightvec_material *materials;
+    uint32_t material_count;
+    uint32_t emitter_count;
+    float *emit_verts;              /* 9 per emitter */
+    float *emit_normal;             /* 3 per emitter */
+    float *emit_cdf;                /* cumulative selection probability, last = 1 */
+    float *emit_inv_pdf;            /* area / selection probability: 1 / pdf per unit area */
+    uint32_t *emit_material;
+    float lo[3], hi[3];
+    float eps;                      /* ray origin offset */
+};
+
+static lightvec_result lightvec__scene_validate(const lightvec_scene_desc *d)
+{
+    uint32_t i;
+    size_t stride;
+    if (!d->positions || !d->indices || !d->materials || d->vertex_count == 0 || d->triangle_count == 0 ||
+        d->material_count == 0)
+        return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    if (!lightvec__allocator_valid(&d->allocator)) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    stride = d->stride ? d->stride : 3 * sizeof(float);
+    if (stride < 3 * sizeof(float) || stride % sizeof(float)) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    if ((uint64_t)d->triangle_count * 3u > (uint64_t)SIZE_MAX / sizeof(float)) return LIGHTVEC_ERROR_OUT_OF_MEMORY;
+    for (i = 0; i < d->vertex_count; i++) {
+        const float *p = (const float *)((const char *)d->positions + (size_t)i * stride);
+        if (!lightvec__finite3(p)) {
+            lightvec__logf(d->log, d->log_user, "lightvec: vertex %lld of %lld is not finite", (long long)i,
+                           (long long)d->vertex_count);
+            return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+        }
+    }
+    for (i = 0; i < 3 * d->triangle_count; i++)
+        if (d->indices[i] >= d->vertex_count) {
+            lightvec__logf(d->log, d->log_user, "lightvec: index %lld out of range (%lld vertices)",
+                           (long long)i, (long long)d->vertex_count);
+            return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+        }
+    if (d->material_ids)
+        for (i = 0; i < d->triangle_count; i++)
+            if (d->material_ids[i] >= d->material_count) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    for (i = 0; i < d->material_count; i++)
+        if (!lightvec__material_valid(&d->materials[i])) {
+            lightvec__logf(d->log, d->log_user, "lightvec: material %lld of %lld has a negative or non-finite value",
+                           (long long)i, (long long)d->material_count);
+            return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+        }
+    return LIGHTVEC_OK;
+}
+
+/* Normals, materials, bounds; the emitter list with selection proportional
+   to area times emitted luminance. */
+static int lightvec__scene_fill(lightvec_scene *s, const lightvec_scene_desc *d, const lightvec__mesh_view *m)
+{
+    uint32_t i, e = 0;
+    double total = 0.0, acc = 0.0;
+    float diag;
+    lightvec__box_empty(s->lo, s->hi);
+    for (i = 0; i < d->triangle_count; i++) {
+        const float *p0 = lightvec__vertex(m, d->indices[3 * i]);
+        const float *p1 = lightvec__vertex(m, d->indices[3 * i + 1]);
+        const float *p2 = lightvec__vertex(m, d->indices[3 * i + 2]);
+        lightvec__vec3 c = lightvec__cross(lightvec__sub(lightvec__v3_load(p1), lightvec__v3_load(p0)),
+                                           lightvec__sub(lightvec__v3_load(p2), lightvec__v3_load(p0)));
+        uint32_t mat = d->material_ids ? d->material_ids[i] : 0u;
+        lightvec__vec3 n = lightvec__normalize(c);
+        if (lightvec__dot(c, c) == 0.0f || !isfinite(n.x)) n = lightvec__v3(0.0f, 0.0f, 0.0f);
+        s->normals[3 * i] = n.x; s->normals[3 * i + 1] = n.y; s->normals[3 * i + 2] = n.z;
+        s->tri_material[i] = mat;
+        lightvec__box_grow(s->lo, s->hi, p0, p0);
+        lightvec__box_grow(s->lo, s->hi, p1, p1);
+        lightvec__box_grow(s->lo, s->hi, p2, p2);
+        if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f) continue;
+        if (lightvec__lumf(d->materials[mat].emission) > 0.0f) {
+            double area = 0.5 * (double)lightvec__length(c);
+            memcpy(s->emit_verts + 9 * e, p0, 3 * sizeof(float));
+            memcpy(s->emit_verts + 9 * e + 3, p1, 3 * sizeof(float));
+            memcpy(s->emit_verts + 9 * e + 6, p2, 3 * sizeof(float));
+            s->emit_normal[3 * e] = n.x; s->emit_normal[3 * e + 1] = n.y; s->emit_normal[3 * e + 2] = n.z;
+            s->emit_material[e] = mat;
+            s->emit_cdf[e] = (float)(area * lightvec__lumf(d->materials[mat].emission)); /* weight for now */
+            s->emit_inv_pdf[e] = (float)area;
+            total += s->emit_cdf[e];
+            e++;
+        }
+    }
+    s->emitter_count = e;
+    for (i = 0; i < e; i++) {
+        double w = s->emit_cdf[i] / total;
+        acc += w;
+        s->emit_cdf[i] = (float)acc;
+        s->emit_inv_pdf[i] = (float)(s->emit_inv_pdf[i] / w); /* area / P(select) */
+    }
+    if (e) s->emit_cdf[e - 1] = 1.0f;
+    diag = lightvec__length(lightvec__sub(lightvec__v3_load(s->hi), lightvec__v3_load(s->lo)));
+    s->eps = diag > 0.0f ? 1e-4f * diag : 1e-6f;
+    return 0;
+}
+
+LIGHTVEC_API lightvec_result lightvec_scene_create(const lightvec_scene_desc *desc, lightvec_scene **out)
+{
+    lightvec_scene *s;
+    lightvec__mesh_view m;
+    lightvec_result r;
+    uint32_t n;
+    if (!out) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    *out = NULL;
+    if (!desc) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    r = lightvec__scene_validate(desc);
+    if (r != LIGHTVEC_OK) return r;
+    s = (lightvec_scene *)lightvec__alloc(&desc->allocator, sizeof *s);
+    if (!s) return LIGHTVEC_ERROR_OUT_OF_MEMORY;
+    memset(s, 0, sizeof *s);
+    s->a = desc->allocator;
+    s->trace = desc->trace;
+    s->trace_user = desc->trace_user;
+    n = desc->triangle_count;
+    s->tri_count = n;
+    s->material_count = desc->material_count;
+    s->normals = (float *)lightvec__alloc_array(&s->a, (size_t)n, 3 * sizeof(float));
+    s->tri_material = (uint32_t *)lightvec__alloc_array(&s->a, (size_t)n, sizeof(uint32_t));
+    s->materials = (lightvec_material *)lightvec__alloc_array(&s->a, desc->material_count, sizeof(lightvec_material));
+    s->emit_verts = (float *)lightvec__alloc_array(&s->a, (size_t)n, 9 * sizeof(float));
+    s->emit_normal = (float *)lightvec__alloc_array(&s->a, (size_t)n, 3 * sizeof(float));
+    s->emit_cdf = (float *)lightvec__alloc_array(&s->a, (size_t)n, sizeof(float));
+    s->emit_inv_pdf = (float *)lightvec__alloc_array(&s->a, (size_t)n, sizeof(float));
+    s->emit_material = (uint32_t *)lightvec__alloc_array(&s->a, (size_t)n, sizeof(uint32_t));
+    if (!s->normals || !s->tri_material || !s->materials || !s->emit_verts || !s->emit_normal || !s->emit_cdf ||
+        !s->emit_inv_pdf || !s->emit_material) {
+        lightvec_scene_destroy(s);
+        return LIGHTVEC_ERROR_OUT_OF_MEMORY;
+    }
+    memcpy(s->materials, desc->materials, desc->material_count * sizeof(lightvec_material));
+    m.positions = desc->positions;
+    m.stride = desc->stride;
+    m.indices = desc->indices;
+    m.tri_count = n;
+    lightvec__scene_fill(s, desc, &m);
+    if (!s->trace) {
+        if (lightvec__bvh_build(&s->bvh, &m, &s->a) != 0) {
+            lightvec_scene_destroy(s);
+            return LIGHTVEC_ERROR_OUT_OF_MEMORY;
+        }
+        s->use_bvh = 1;
+        s->degenerate_count = s->bvh.degenerate_count;
+    } else {
+        uint32_t i;
+        for (i = 0; i < n; i++)
+            if (s->normals[3 * i] == 0.0f && s->normals[3 * i + 1] == 0.0f && s->normals[3 * i + 2] == 0.0f)
+                s->degenerate_count++;
+    }
+    *out = s;
+    return LIGHTVEC_OK;
+}
+
+LIGHTVEC_API void lightvec_scene_destroy(lightvec_scene *s)
+{
+    lightvec_allocator a;
+    if (!s) return;
+    a = s->a;
+    if (s->use_bvh) lightvec__bvh_free(&s->bvh, &a);
+    lightvec__free(&a, s->normals);
+    lightvec__free(&a, s->tri_material);
+    lightvec__free(&a, s->materials);
+    lightvec__free(&a, s->emit_verts);
+    lightvec__free(&a, s->emit_normal);
+    lightvec__free(&a, s->emit_cdf);
+    lightvec__free(&a, s->emit_inv_pdf);
+    lightvec__free(&a, s->emit_material);
+    lightvec__free(&a, s);
+}
+
+LIGHTVEC_API lightvec_result lightvec_scene_info(const lightvec_scene *s, lightvec_scene_stats *info)
+{
+    if (!s || !info) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    memset(info, 0, sizeof *info);
+    info->triangle_count = s->tri_count;
+    info->degenerate_count = s->degenerate_count;
+    info->emitter_count = s->emitter_count;
+    info->bvh_node_count = s->use_bvh ? s->bvh.node_count : 0u;
+    memcpy(info->bounds_min, s->lo, sizeof s->lo);
+    memcpy(info->bounds_max, s->hi, sizeof s->hi);
+    info->ray_offset = s->eps;
+    return LIGHTVEC_OK;
+}
+
+/* Closest hit through the BVH or the caller's trace callback. A callback hit
+   naming a triangle out of range counts as a miss. */
+static int lightvec__trace(const lightvec_scene *s, lightvec__vec3 org, lightvec__vec3 dir, float tmax,
+                           lightvec__hit *hit)
+{
+    float o[3], d[3];
+    o[0] = org.x; o[1] = org.y; o[2] = org.z;
+    d[0] = dir.x; d[1] = dir.y; d[2] = dir.z;
+    if (s->use_bvh) return lightvec__bvh_intersect(&s->bvh, o, d, 0.0f, tmax, hit);
+    {
+        lightvec_hit h;
+        h.t = tmax; h.u = h.v = 0.0f; h.triangle = LIGHTVEC__NO_HIT;
+        hit->tri = LIGHTVEC__NO_HIT;
+        if (!s->trace(s->trace_user, o, d, tmax, &h) || h.triangle >= s->tri_count || !(h.t > 0.0f) ||
+            !(h.t <= tmax))
+            return 0;
+        hit->t = h.t; hit->u = h.u; hit->v = h.v; hit->tri = h.triangle;
+        return 1;
+    }
+}
+
+static int lightvec__occluded(const lightvec_scene *s, lightvec__vec3 org, lightvec__vec3 dir, float tmax)
+{
+    if (s->use_bvh) {
+        float o[3], d[3];
+        o[0] = org.x; o[1] = org.y; o[2] = org.z;
+        d[0] = dir.x; d[1] = dir.y; d[2] = dir.z;
+        return lightvec__bvh_occluded(&s->bvh, o, d, 0.0f, tmax);
+    } else {
+        lightvec__hit h;
+        return lightvec__trace(s, org, dir, tmax, &h);
+    }
+}
+
+LIGHTVEC_API int lightvec_scene_intersect(const lightvec_scene *s, const float org[3], const float dir[3],
+                                          float tmax, lightvec_hit *hit)
+{
+    lightvec__hit h;
+    if (!s || !org || !dir || !hit || !lightvec__finite3(org) || !lightvec__finite3(dir) || !(tmax > 0.0f))
+        return 0;
+    if (!lightvec__trace(s, lightvec__v3_load(org), lightvec__v3_load(dir), tmax, &h)) return 0;
+    hit->t = h.t; hit->u = h.u; hit->v = h.v; hit->triangle = h.tri;
+    return 1;
+}
+
+/* Emitter chosen by u in [0, 1) through the CDF (binary search). */
+static uint32_t lightvec__pick_emitter(const lightvec_scene *s, float u)
+{
+    uint32_t lo = 0, hi = s->emitter_count - 1;
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (u < s->emit_cdf[mid]) hi = mid;
+        else lo = mid + 1;
+    }
+    return lo;
+}
+
+/* Uniform point on emitter e from (u, v) in [0,1)^2 (square-root warp). */
+static lightvec__vec3 lightvec__emitter_point(const lightvec_scene *s, uint32_t e, float u, float v)
+{
+    const float *t = s->emit_verts + 9 * e;
+    float su = sqrtf(u), b0 = 1.0f - su, b1 = su * (1.0f - v), b2 = su * v;
+    return lightvec__v3(b0 * t[0] + b1 * t[3] + b2 * t[6], b0 * t[1] + b1 * t[4] + b2 * t[7],
+                        b0 * t[2] + b1 * t[5] + b2 * t[8]);
+}
+
+/* One light sample seen from x (normal n): direction, distance, the geometric
+   term cos_x cos_l / (r^2 pdf) and its visibility. Returns 0 when the sample
+   faces away. */
+typedef struct lightvec__light_sample {
+    lightvec__vec3 point, dir;
+    float dist, cos_x, cos_l, inv_pdf;
+    uint32_t emitter;
+} lightvec__light_sample;
+
+static int lightvec__sample_emitter(const lightvec_scene *s, uint32_t e, lightvec__vec3 x, lightvec__vec3 n,
+                                    float u, float v, lightvec__light_sample *ls)
+{
+    lightvec__vec3 p = lightvec__emitter_point(s, e, u, v), d = lightvec__sub(p, x);
+    float r2 = lightvec__dot(d, d), r;
+    if (!(r2 > 0.0f)) return 0;
+    r = sqrtf(r2);
+    ls->point = p;
+    ls->dir = lightvec__scale(d, 1.0f / r);
+    ls->dist = r;
+    ls->cos_x = lightvec__dot(n, ls->dir);
+    ls->cos_l = -lightvec__dot(lightvec__v3_load(s->emit_normal + 3 * e), ls->dir);
+    ls->inv_pdf = s->emit_inv_pdf[e];
+    ls->emitter = e;
+    return ls->cos_x > 0.0f && ls->cos_l > 0.0f;
+}
+
+static int lightvec__sample_light(const lightvec_scene *s, lightvec__vec3 x, lightvec__vec3 n, float u1, float u2,
+                                  float u3, lightvec__light_sample *ls)
+{
+    return lightvec__sample_emitter(s, lightvec__pick_emitter(s, u1), x, n, u2, u3, ls);
+}
+
+static int lightvec__light_visible(const lightvec_scene *s, lightvec__vec3 x, lightvec__vec3 n,
+                                   const lightvec__light_sample *ls)
+{
+    /* from the offset origin to the light point itself, stopping 1e-4 short
+       of it (relative) so that the emitter does not shadow itself */
+    lightvec__vec3 org = lightvec__add(x, lightvec__scale(n, s->eps)), d = lightvec__sub(ls->point, org);
+    float len = lightvec__length(d);
+    return !(len > 0.0f) || !lightvec__occluded(s, org, lightvec__scale(d, 1.0f / len), len * (1.0f - 1e-4f));
+}
+
+/* Direct irradiance at x (normal n) from the emitters, `samples` samples. */
+static void lightvec__direct_irradiance(const lightvec_scene *s, lightvec__rng *rng, lightvec__vec3 x,
+                                        lightvec__vec3 n, uint32_t samples, double e[3])
+{
+    uint32_t i;
+    e[0] = e[1] = e[2] = 0.0;
+    if (!s->emitter_count) return;
+    for (i = 0; i < samples; i++) {
+        lightvec__light_sample ls;
+        float u1 = lightvec__rng_float(rng), u2 = lightvec__rng_float(rng), u3 = lightvec__rng_float(rng);
+        if (lightvec__sample_light(s, x, n, u1, u2, u3, &ls) && lightvec__light_visible(s, x, n, &ls)) {
+            const float *le = s->materials[s->emit_material[ls.emitter]].emission;
+            double g = (double)ls.cos_x * ls.cos_l * ls.inv_pdf / ((double)ls.dist * ls.dist);
+            e[0] += le[0] * g; e[1] += le[1] * g; e[2] += le[2] * g;
+        }
+    }
+    e[0] /= samples; e[1] /= samples; e[2] /= samples;
+}
+
+/* Radiance leaving the front face hit by the ray (org, dir) back toward org,
+   emission excluded (light straight from an emitter is direct light at the
+   gathering point, not indirect): Lambertian reflection of the direct light
+   at the hit, plus (bounces - 1) cosine-sampled diffuse bounces, each adding
+   the direct light reflected at its own hit. */
+static void lightvec__path_radiance(const lightvec_scene *s, lightvec__rng *rng, lightvec__vec3 org,
+                                    lightvec__vec3 dir, const lightvec__hit *first, uint32_t bounces,
+                                    uint32_t light_samples, double out[3])
+{
+    double through[3] = { 1.0, 1.0, 1.0 };
+    lightvec__hit hit = *first;
+    uint32_t b;
+    out[0] = out[1] = out[2] = 0.0;
+    for (b = 0; b < bounces; b++) {
+        lightvec__vec3 y = lightvec__add(org, lightvec__scale(dir, hit.t));
+        lightvec__vec3 n = lightvec__v3_load(s->normals + 3 * hit.tri), t, bt, d;
+        const float *rho = s->materials[s->tri_material[hit.tri]].diffuse;
+        double e[3];
+        float u1, u2, r, phi;
+        int c;
+        if (!(lightvec__dot(n, dir) < 0.0f)) break; /* back faces are black (one-sided, as in radiosity) */
+        lightvec__direct_irradiance(s, rng, y, n, light_samples, e);
+        for (c = 0; c < 3; c++) out[c] += through[c] * rho[c] * (1.0 / LIGHTVEC__PI) * e[c];
+        if (b + 1 == bounces) break;
+        for (c = 0; c < 3; c++) through[c] *= rho[c]; /* cosine sampling: f cos / pdf = rho */
+        if (through[0] == 0.0 && through[1] == 0.0 && through[2] == 0.0) break;
+        u1 = lightvec__rng_float(rng);
+        u2 = lightvec__rng_float(rng);
+        r = sqrtf(u1);
+        phi = (float)LIGHTVEC__TWO_PI * u2;
+        lightvec__basis(n, &t, &bt);
+        d = lightvec__add(lightvec__add(lightvec__scale(t, r * cosf(phi)), lightvec__scale(bt, r * sinf(phi))),
+                          lightvec__scale(n, sqrtf(lightvec__maxf(0.0f, 1.0f - u1))));
+        org = lightvec__add(y, lightvec__scale(n, s->eps));
+        dir = lightvec__normalize(d);
+        if (!lightvec__trace(s, org, dir, FLT_MAX, &hit)) break;
+    }
+}
+
+/* ======================================================================
+   11. gather: ILV (eq. 2, 3, 5, 6) and DLV
+   ---------------------------------------------------------------------- */
+typedef struct lightvec__gather_params {
+    uint32_t m, n, bounces, light_samples;
+    float min_distance, max_distance;
+} lightvec__gather_params;
+
+static lightvec_result lightvec__gather_setup(const lightvec_gather_desc *d, const lightvec_surface *sf,
+                                              lightvec__gather_params *g, lightvec__vec3 *n, lightvec__vec3 *wo)
+{
+    if (!d || !sf) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    g->m = lightvec__def(d->strata_theta, 20u);
+    g->n = lightvec__def(d->strata_phi, 3u * g->m);
+    g->bounces = lightvec__def(d->bounces, 2u);
+    g->light_samples = lightvec__def(d->light_samples, 1u);
+    if (g->m > LIGHTVEC__MAX_STRATA_THETA || g->n > LIGHTVEC__MAX_STRATA_PHI || g->bounces > LIGHTVEC__MAX_BOUNCES ||
+        g->light_samples > LIGHTVEC__MAX_LIGHT_SAMPLES)
+        return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    if (!isfinite(d->min_distance) || !isfinite(d->max_distance) || d->min_distance < 0.0f ||
+        d->max_distance < 0.0f || (d->max_distance > 0.0f && d->min_distance > d->max_distance))
+        return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    g->min_distance = d->min_distance;
+    g->max_distance = d->max_distance > 0.0f ? d->max_distance : LIGHTVEC__FAR;
+    if (!lightvec__finite3(sf->position) || !lightvec__unit(sf->normal, n)) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    if (!lightvec__material_valid(&sf->material) || (sf->flags & ~LIGHTVEC_RECORD_VIEW_INDEPENDENT))
+        return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    if ((sf->flags & LIGHTVEC_RECORD_VIEW_INDEPENDENT) &&
+        (sf->material.specular[0] > 0.0f || sf->material.specular[1] > 0.0f || sf->material.specular[2] > 0.0f))
+        return LIGHTVEC_ERROR_INVALID_ARGUMENT; /* a glossy surface depends on the viewer */
+    if (sf->flags & LIGHTVEC_RECORD_VIEW_INDEPENDENT) {
+        *wo = *n;
+    } else if (!lightvec__unit(sf->outgoing, wo)) {
+        return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    }
+    return LIGHTVEC_OK;
+}
+
+/* eq. 3: M = (sum f_r L cos dw) / (f_r(D -> w_r) cos(n, D)), per channel, with D
+   normalised in float exactly as lightvec_radiance reads it back, so that
+   M * f_r(D -> w_r) * cos(n, D) reproduces the gathered radiance to float
+   rounding. A view-independent record stores M = E / cos(n, D) (the Lambert
+   BRDF cancels). Where f_r(D -> w_r) is zero in a channel (no diffuse part and
+   a lobe that misses D) the vector cannot carry that channel; it stores
+   E / cos(n, D) there. */
+static void lightvec__finish_vector(const lightvec_surface *sf, lightvec__vec3 n, lightvec__vec3 wo,
+                                    const double dsum[3], const double num[3], const double irr[3],
+                                    lightvec_vector *v)
+{
+    lightvec__vec3 d = lightvec__v3((float)dsum[0], (float)dsum[1], (float)dsum[2]);
+    float f[3], cos_d;
+    int c;
+    if (!(lightvec__length(d) > 0.0f) || !isfinite(lightvec__length(d))) d = n;
+    d = lightvec__normalize(d);
+    cos_d = lightvec__dot(n, d);
+    if (!(cos_d > 1e-6f)) { /* float rounding of a tangent D: fall back to the normal */
+        d = n;
+        cos_d = lightvec__dot(n, d);
+    }
+    v->direction[0] = d.x; v->direction[1] = d.y; v->direction[2] = d.z;
+    lightvec__brdf_unit(&sf->material, n, d, wo, f);
+    for (c = 0; c < 3; c++) {
+        double denom = (double)(f[c] * cos_d);
+        if ((sf->flags & LIGHTVEC_RECORD_VIEW_INDEPENDENT) || !(denom > 0.0)) v->magnitude[c] = (float)(irr[c] / cos_d);
+        else v->magnitude[c] = (float)(num[c] / denom);
+    }
+}
+
+static float lightvec__clamp_distance(const lightvec__gather_params *g, double d)
+{
+    if (!(d < (double)g->max_distance)) d = g->max_distance;
+    if (d < (double)g->min_distance) d = g->min_distance;
+    if (!(d > 0.0)) d = 1e-30;
+    return (float)d;
+}
+
+/* One stratum's sample: radiance and distance of the surface it sees. */
+typedef struct lightvec__cell { float l[3]; float r; } lightvec__cell;
+
+/* Ward & Heckbert's translational gradient, written for any stratum
+   boundaries (the paper's eq. 6 differentiates cos theta with the hit points
+   held fixed; Ward & Heckbert move the stratum boundaries instead, which is
+   what the paper follows). Moving the point by dx in the tangent plane shifts
+   what a boundary shows by the motion of the nearer of the two surfaces seen
+   on its sides (distance min(R, R')):
+     boundary between zenith strata j-1 and j, at theta_j-, azimuth cell k:
+       (2 pi / N) sin theta cos^2 theta (L_jk - L_j-1,k) / min(R) along u_k
+       (u_k: the cell's central azimuth);
+     boundary between azimuth cells k-1 and k, at phi_k-, zenith stratum j:
+       (sin theta_j+ - sin theta_j-) (L_jk - L_j,k-1) / min(R) along v_k-
+       (v_k-: perpendicular to the boundary's meridian plane).
+   The second factor is the integral of cos theta d theta over the stratum,
+   exact for any zenith boundaries (Ward & Heckbert's cosine-weighted strata
+   give the same expression). Accumulates in local tangent coordinates. */
+static void lightvec__gradient_row(const lightvec__cell *cur, const lightvec__cell *prev, uint32_t j, uint32_t m,
+                                   uint32_t n, float min_r, double g[3][2])
+{
+    double cos_lo = 1.0 - (double)j / m, cos_hi = 1.0 - (double)(j + 1) / m;
+    double sin_lo = sqrt(1.0 - cos_lo * cos_lo), sin_hi = sqrt(1.0 - cos_hi * cos_hi);
+    double polar = (LIGHTVEC__TWO_PI / n) * sin_lo * cos_lo * cos_lo;
+    uint32_t k;
+    int c;
+    for (k = 0; k < n; k++) {
+        const lightvec__cell *a = &cur[k], *b = &cur[(k + n - 1) % n];
+        double r = lightvec__maxf(lightvec__minf(a->r, b->r), min_r);
+        double phi_b = LIGHTVEC__TWO_PI * k / n, coef;
+        if (n > 1 && r < (double)LIGHTVEC__FAR) {
+            coef = (sin_hi - sin_lo) / r;
+            for (c = 0; c < 3; c++) {
+                double dl = coef * ((double)a->l[c] - b->l[c]);
+                g[c][0] += -sin(phi_b) * dl;
+                g[c][1] += cos(phi_b) * dl;
+            }
+        }
+        if (prev) {
+            const lightvec__cell *p = &prev[k];
+            double phi_c = LIGHTVEC__TWO_PI * (k + 0.5) / n;
+            r = lightvec__maxf(lightvec__minf(a->r, p->r), min_r);
+            if (r < (double)LIGHTVEC__FAR) {
+                coef = polar / r;
+                for (c = 0; c < 3; c++) {
+                    double dl = coef * ((double)a->l[c] - p->l[c]);
+                    g[c][0] += cos(phi_c) * dl;
+                    g[c][1] += sin(phi_c) * dl;
+                }
+            }
+        }
+    }
+}
+
+/* Incoming radiance and distance along one gather ray. */
+static lightvec_result lightvec__incoming(const lightvec_scene *s, const lightvec_gather_desc *d,
+                                          const lightvec__gather_params *g, lightvec__rng *rng, lightvec__vec3 org,
+                                          lightvec__vec3 dir, lightvec__cell *cell)
+{
+    if (d->incoming_radiance) {
+        float o[3], w[3], dist = LIGHTVEC__FAR;
+        o[0] = org.x; o[1] = org.y; o[2] = org.z;
+        w[0] = dir.x; w[1] = dir.y; w[2] = dir.z;
+        cell->l[0] = cell->l[1] = cell->l[2] = 0.0f;
+        d->incoming_radiance(d->incoming_user, o, w, cell->l, &dist);
+        if (!lightvec__finite_nonneg(cell->l, 3) || isnan(dist) || !(dist > 0.0f))
+            return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+        cell->r = dist < LIGHTVEC__FAR ? dist : LIGHTVEC__FAR;
+    } else {
+        lightvec__hit hit;
+        double l[3] = { 0.0, 0.0, 0.0 };
+        cell->r = LIGHTVEC__FAR;
+        if (lightvec__trace(s, org, dir, FLT_MAX, &hit)) {
+            cell->r = hit.t;
+            lightvec__path_radiance(s, rng, org, dir, &hit, g->bounces, g->light_samples, l);
+        }
+        cell->l[0] = (float)l[0]; cell->l[1] = (float)l[1]; cell->l[2] = (float)l[2];
+    }
+    return LIGHTVEC_OK;
+}
+
+/* eq. 5 over M x N strata of equal solid angle (cos theta uniform in each of
+   the M zenith strata, phi uniform in each of the N azimuth cells), one
+   jittered ray per stratum, each stratum weighing 2 pi / (M N):
+     L_ind(w_r) = 2 pi / (MN) sum f_r(w_jk -> w_r) L_jk cos theta_jk    (eq. 5, full BRDF)
+     E          = 2 pi / (MN) sum L_jk cos theta_jk
+     D          = 2 pi / (MN) sum Y(L_jk) w_jk                          (eq. 2, luminance Y)
+     d_avg      = MN / sum 1 / R_jk                                    (harmonic mean, Ward 1988) */
+LIGHTVEC_API lightvec_result lightvec_gather(const lightvec_scene *scene, const lightvec_gather_desc *desc,
+                                             const lightvec_surface *sf, uint64_t index, lightvec_record *out)
+{
+    lightvec__cell rows[2][LIGHTVEC__MAX_STRATA_PHI];
+    lightvec__gather_params g;
+    lightvec__vec3 n, wo, t, b, org;
+    lightvec__rng rng;
+    double irr[3] = { 0, 0, 0 }, num[3] = { 0, 0, 0 }, dsum[3] = { 0, 0, 0 }, grad[3][2], inv_r = 0.0, dw;
+    float min_r;
+    uint32_t j, k;
+    int c;
+    lightvec_result r;
+    if (!out) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    r = lightvec__gather_setup(desc, sf, &g, &n, &wo);
+    if (r != LIGHTVEC_OK) return r;
+    if (!desc->incoming_radiance && !scene) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    memset(grad, 0, sizeof grad);
+    rng = lightvec__rng_stream(desc->seed, index);
+    lightvec__basis(n, &t, &b);
+    org = lightvec__v3_load(sf->position);
+    if (!desc->incoming_radiance) org = lightvec__add(org, lightvec__scale(n, scene->eps));
+    min_r = (!desc->incoming_radiance) ? scene->eps : 1e-6f;
+    dw = LIGHTVEC__TWO_PI / ((double)g.m * g.n);
+    for (j = 0; j < g.m; j++) {
+        lightvec__cell *cur = rows[j & 1], *prev = j ? rows[(j + 1) & 1] : NULL;
+        for (k = 0; k < g.n; k++) {
+            float cos_t = 1.0f - ((float)j + lightvec__rng_float(&rng)) / (float)g.m;
+            float phi = (float)LIGHTVEC__TWO_PI * ((float)k + lightvec__rng_float(&rng)) / (float)g.n;
+            float sin_t = sqrtf(lightvec__maxf(0.0f, 1.0f - cos_t * cos_t)), f[3];
+            lightvec__vec3 w = lightvec__add(lightvec__add(lightvec__scale(t, sin_t * cosf(phi)),
+                                                           lightvec__scale(b, sin_t * sinf(phi))),
+                                             lightvec__scale(n, cos_t));
+            double y;
+            w = lightvec__normalize(w);
+            r = lightvec__incoming(scene, desc, &g, &rng, org, w, &cur[k]);
+            if (r != LIGHTVEC_OK) return r;
+            lightvec__brdf_unit(&sf->material, n, w, wo, f);
+            for (c = 0; c < 3; c++) {
+                irr[c] += (double)cur[k].l[c] * cos_t;
+                num[c] += (double)f[c] * cur[k].l[c] * cos_t;
+            }
+            y = 0.2126 * cur[k].l[0] + 0.7152 * cur[k].l[1] + 0.0722 * cur[k].l[2];
+            dsum[0] += y * w.x; dsum[1] += y * w.y; dsum[2] += y * w.z;
+            if (cur[k].r < LIGHTVEC__FAR) inv_r += 1.0 / lightvec__maxf(cur[k].r, min_r);
+        }
+        lightvec__gradient_row(cur, prev, j, g.m, g.n, min_r, grad);
+    }
+    for (c = 0; c < 3; c++) { irr[c] *= dw; num[c] *= dw; dsum[c] *= dw; }
+    memset(out, 0, sizeof *out);
+    memcpy(out->position, sf->position, sizeof out->position);
+    out->normal[0] = n.x; out->normal[1] = n.y; out->normal[2] = n.z;
+    out->outgoing[0] = wo.x; out->outgoing[1] = wo.y; out->outgoing[2] = wo.z;
+    lightvec__finish_vector(sf, n, wo, dsum, num, irr, &out->vector);
+    for (c = 0; c < 3; c++) {
+        out->irradiance[c] = (float)irr[c];
+        out->gradient[c][0] = (float)(grad[c][0] * t.x + grad[c][1] * b.x);
+        out->gradient[c][1] = (float)(grad[c][0] * t.y + grad[c][1] * b.y);
+        out->gradient[c][2] = (float)(grad[c][0] * t.z + grad[c][1] * b.z);
+    }
+    out->distance = lightvec__clamp_distance(&g, inv_r > 0.0 ? (double)g.m * g.n / inv_r : (double)LIGHTVEC__FAR);
+    out->visibility = 1.0f;
+    out->flags = sf->flags;
+    return LIGHTVEC_OK;
+}
+
+/* Direct light vector: M x N stratified samples of the emitters (the square
+   [0,1)^2 cut in N x M cells, u picks the emitter through the CDF and, rescaled,
+   the point with v), one shadow ray each. With dA the emitter area element and
+   p the sample density, the solid angle of a sample is cos_l dA / r^2, so
+     E = 1/S sum L_e V cos_x cos_l / (r^2 p),  D = 1/S sum Y(L_e) V w cos_l / (r^2 p),
+   and eq. 3 as for indirect light. The gradient differentiates each
+   unoccluded term G = cos_x cos_l / r^2 exactly with the sample point fixed:
+     dG/dx = (-cos_l n + cos_x n_l + 4 cos_x cos_l w) / r^3, projected on the tangent plane
+   (visibility changes are not in it: that is what the DLV visibility rule is for). */
+LIGHTVEC_API lightvec_result lightvec_gather_direct(const lightvec_scene *s, const lightvec_gather_desc *desc,
+                                                    const lightvec_surface *sf, uint64_t index,
+                                                    lightvec_record *out)
+{
+    lightvec__gather_params g;
+    lightvec__vec3 n, wo, x, grad[3];
+    lightvec__rng rng;
+    double irr[3] = { 0, 0, 0 }, num[3] = { 0, 0, 0 }, dsum[3] = { 0, 0, 0 }, gsum[3][3], inv_r = 0.0;
+    uint32_t j, k, facing = 0, visible = 0, total;
+    int c;
+    lightvec_result r;
+    if (!out || !s) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    r = lightvec__gather_setup(desc, sf, &g, &n, &wo);
+    if (r != LIGHTVEC_OK) return r;
+    memset(gsum, 0, sizeof gsum);
+    rng = lightvec__rng_stream(desc->seed, index);
+    x = lightvec__v3_load(sf->position);
+    total = g.m * g.n;
+    for (j = 0; j < g.m && s->emitter_count; j++) {
+        for (k = 0; k < g.n; k++) {
+            lightvec__light_sample ls;
+            float u = ((float)k + lightvec__rng_float(&rng)) / (float)g.n;
+            float v = ((float)j + lightvec__rng_float(&rng)) / (float)g.m, lo, hi, f[3];
+            uint32_t e = lightvec__pick_emitter(s, u);
+            const float *le;
+            double solid, geo;
+            lo = e ? s->emit_cdf[e - 1] : 0.0f;
+            hi = s->emit_cdf[e];
+            u = hi > lo ? (u - lo) / (hi - lo) : 0.5f;
+            if (u >= 1.0f) u = 0.99999994f;
+            if (!lightvec__sample_emitter(s, e, x, n, u, v, &ls)) continue;
+            facing++;
+            inv_r += 1.0 / ls.dist;
+            if (!lightvec__light_visible(s, x, n, &ls)) continue;
+            visible++;
+            le = s->materials[s->emit_material[ls.emitter]].emission;
+            solid = (double)ls.cos_l * ls.inv_pdf / ((double)ls.dist * ls.dist);
+            geo = solid * ls.cos_x;
+            lightvec__brdf_unit(&sf->material, n, ls.dir, wo, f);
+            for (c = 0; c < 3; c++) {
+                irr[c] += le[c] * geo;
+                num[c] += (double)f[c] * le[c] * geo;
+            }
+            {
+                double y = lightvec__lumf(le) * solid;
+                lightvec__vec3 nl = lightvec__v3_load(s->emit_normal + 3 * ls.emitter);
+                lightvec__vec3 dg = lightvec__add(lightvec__add(lightvec__scale(n, -ls.cos_l), lightvec__scale(nl, ls.cos_x)),
+                                                  lightvec__scale(ls.dir, 4.0f * ls.cos_x * ls.cos_l));
+                double sc = ls.inv_pdf / ((double)ls.dist * ls.dist * ls.dist);
+                dsum[0] += y * ls.dir.x; dsum[1] += y * ls.dir.y; dsum[2] += y * ls.dir.z;
+                dg = lightvec__sub(dg, lightvec__scale(n, lightvec__dot(dg, n)));
+                for (c = 0; c < 3; c++) {
+                    gsum[c][0] += le[c] * sc * dg.x;
+                    gsum[c][1] += le[c] * sc * dg.y;
+                    gsum[c][2] += le[c] * sc * dg.z;
+                }
+            }
+        }
+    }
+    for (c = 0; c < 3; c++) {
+        irr[c] /= total; num[c] /= total; dsum[c] /= total;
+        grad[c] = lightvec__v3((float)(gsum[c][0] / total), (float)(gsum[c][1] / total), (float)(gsum[c][2] / total));
+    }
+    memset(out, 0, sizeof *out);
+    memcpy(out->position, sf->position, sizeof out->position);
+    out->normal[0] = n.x; out->normal[1] = n.y; out->normal[2] = n.z;
+    out->outgoing[0] = wo.x; out->outgoing[1] = wo.y; out->outgoing[2] = wo.z;
+    lightvec__finish_vector(sf, n, wo, dsum, num, irr, &out->vector);
+    for (c = 0; c < 3; c++) {
+        out->irradiance[c] = (float)irr[c];
+        out->gradient[c][0] = grad[c].x; out->gradient[c][1] = grad[c].y; out->gradient[c][2] = grad[c].z;
+    }
+    out->distance = lightvec__clamp_distance(&g, inv_r > 0.0 ? (double)facing / inv_r : (double)LIGHTVEC__FAR);
+    out->visibility = facing ? (float)visible / (float)facing : 1.0f;
+    out->flags = sf->flags;
+    return LIGHTVEC_OK;
+}
+
+/* ======================================================================
+   12. cache structures
+   A record lives once in the record array (chunks that never move) and once
+   as an item, a compact copy of what the criteria read, in the spatial index
+   of the icosahedron face that holds its direction sigma. A leaf face indexes
+   its items with kd-trees built by the Bentley-Saxe scheme: new items go to a
+   small tail list; a full tail is merged with the smallest kd-trees (each up
+   to 8 times what has been merged so far) into one new balanced kd-tree, so
+   the trees of a face grow more than 8-fold from one to the next (at most
+   log8(n / 16) + 1 of them) and an item is rebuilt O(log n) times.
+   Trees are immutable once published: readers never see a half-built one.
+   ---------------------------------------------------------------------- */
+#define LIGHTVEC__LEAF 8u            /* items per kd-tree leaf */
+#define LIGHTVEC__TAIL 16u           /* items a face holds outside its kd-trees */
+#define LIGHTVEC__MAX_TREES 40u      /* > log8(2^32 / TAIL) + 1 */
+#define LIGHTVEC__MERGE_RATIO 8u     /* a merge absorbs kd-trees up to 8x its size so far */
+#define LIGHTVEC__CHUNK0 1024u       /* records in the first chunk; chunk k holds CHUNK0 << k */
+#define LIGHTVEC__CHUNKS 23          /* CHUNK0 * (2^23 - 1) >= 2^32 records */
+#define LIGHTVEC__RECLAIM_BYTES ((size_t)1 << 20)
+#define LIGHTVEC__FACE_STACK (20 + 4 * (LIGHTVEC__MAX_FACE_DEPTH + 1))
+#define LIGHTVEC__RECORD_BYTES 120u  /* serialized record: 29 floats + flags */
+
+typedef struct lightvec__params {
+    lightvec_kind kind;
+    float radius_scale, max_change, normal_angle, direction_angle;  /* as given (degrees) */
+    float cos_normal, inv_normal;    /* S_curv and 1 / (1 - S_curv) */
+    float cos_dir, sin_dir, inv_dir; /* S_dir, sin of its angle, 1 / (1 - S_dir) */
+    float dir_angle;                 /* radians */
+    uint32_t min_valid, split_threshold, max_depth;
+    lightvec_interpolation interpolation;  /* never DEFAULT */
+} lightvec__params;
+
+/* 128 bytes; what the criteria read comes first, so that in a kd-tree
+   (items aligned to 64 bytes) rejecting a record touches one cache line. */
+typedef struct lightvec__item {
+    float outgoing[3], visibility;   /* sigma */
+    float normal[3], rel_gradient;   /* n_B and |grad Y| / Y (luminance) */
+    float dir[3];                    /* D */
+    float mag[3];                    /* M */
+    float proj[3];                   /* M cos(n_B, D) */
+    float slope[3][3];               /* grad E_c / E_c per channel (0 where E_c = 0) */
+    float pos[3], radius;            /* B and R_B = radius_scale * d_avg */
+    uint32_t id, pad;
+} lightvec__item;
+
+/* A balanced kd-tree over items (median splits on the axis of largest
+   extent of the positions). Node i has children 2i+1, 2i+2 and covers a
+   range of the item array: [lo, hi) splits at lo + (hi - lo) / 2; a range of
+   at most LEAF items is a leaf. Each node stores the box of its items'
+   validity spheres (B +- R_B), so a query for A descends only into boxes that
+   contain A. */
+typedef struct lightvec__tree {
+    uint32_t count, node_count;
+    float *boxes;                    /* 6 per node: lo xyz, hi xyz */
+    float *spheres;                  /* 4 per item: B, R_B (what a leaf reads for every item) */
+    lightvec__item *items;           /* the rest, read for items inside their sphere */
+    size_t bytes;
+} lightvec__tree;
+
+typedef struct lightvec__index {
+    uint32_t tree_count;
+    uint32_t tail_count;             /* atomic: items of tail[] published */
+    lightvec__tree *trees[LIGHTVEC__MAX_TREES];   /* ascending sizes */
+    float tail_spheres[LIGHTVEC__TAIL][4];
+    lightvec__item tail[LIGHTVEC__TAIL];
+} lightvec__index;
+
+/* A face of the recursive icosahedron: a spherical triangle, the cap that
+   bounds it, and either four children or the index of its records. */
+typedef struct lightvec__face {
+    float v[3][3];                   /* unit vertices, counter-clockwise from outside */
+    float center[3];                 /* normalised vertex sum */
+    float cos_r, sin_r, r_angle;     /* bounding cap around center */
+    float edge[3][3][3];             /* per edge i (v_i, v_i+1): unit normal of its great
+                                        circle, n x v_i and v_i+1 x n */
+    float plane[3][3];               /* separate the corner children (set when split) */
+    void *children;                  /* atomic: lightvec__face[4], NULL for a leaf */
+    void *index;                     /* atomic: lightvec__index, NULL while empty */
+    uint32_t depth;
+    uint32_t count;                  /* records of a leaf (writer only) */
+} lightvec__face;
+
+typedef struct lightvec__retired { void *ptr; size_t bytes; } lightvec__retired;
+
+struct lightvec_cache {
+    lightvec_allocator a;
+    lightvec__params p;
+    lightvec_parallel_for_fn parallel_for;
+    void *parallel_user;
+    lightvec_progress_fn progress;
+    void *progress_user;
+    lightvec_log_fn log;
+    void *log_user;
+    lightvec__face roots[20];
+    lightvec__face omni;             /* view-independent records: one leaf, never split */
+    lightvec_record *chunks[LIGHTVEC__CHUNKS];
+    uint32_t record_count;           /* atomic: records stored */
+    lightvec__retired *retired;      /* unpublished memory readers may still see */
+    uint32_t retired_count, retired_capacity;
+    size_t retired_bytes;
+    /* reader registration: the epoch and each counter on its own cache line */
+    char pad0[64];
+    uint32_t epoch;
+    char pad1[64];
+    uint32_t readers[2][16];
+};
+
+/* ---- parameters and validation -------------------------------------------- */
+
+static lightvec_result lightvec__params_init(lightvec__params *p, const lightvec_cache_desc *d)
+{
+    int direct;
+    double a;
+    if (d->kind != LIGHTVEC_KIND_DEFAULT && d->kind != LIGHTVEC_KIND_INDIRECT && d->kind != LIGHTVEC_KIND_DIRECT)
+        return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    if ((unsigned)d->interpolation > (unsigned)LIGHTVEC_INTERPOLATION_GRADIENT) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    if (!isfinite(d->radius_scale) || d->radius_scale < 0.0f || d->radius_scale > 1e6f ||
+        !isfinite(d->max_irradiance_change) || d->max_irradiance_change < 0.0f ||
+        !isfinite(d->max_normal_angle) || d->max_normal_angle < 0.0f || d->max_normal_angle > 180.0f ||
+        (d->max_normal_angle > 0.0f && d->max_normal_angle < 0.1f) ||
+        !isfinite(d->max_direction_angle) || d->max_direction_angle < 0.0f || d->max_direction_angle > 180.0f ||
+        (d->max_direction_angle > 0.0f && d->max_direction_angle < 0.1f) ||
+        d->max_face_depth > LIGHTVEC__MAX_FACE_DEPTH)
+        return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    direct = d->kind == LIGHTVEC_KIND_DIRECT;
+    p->kind = direct ? LIGHTVEC_KIND_DIRECT : LIGHTVEC_KIND_INDIRECT;
+    p->radius_scale = lightvec__def(d->radius_scale, direct ? 0.25f : 0.3f);
+    p->max_change = lightvec__def(d->max_irradiance_change, direct ? 0.1f : 0.5f);
+    p->normal_angle = lightvec__def(d->max_normal_angle, direct ? 10.0f : 20.0f);
+    p->direction_angle = lightvec__def(d->max_direction_angle, 15.0f);
+    p->min_valid = lightvec__def(d->min_valid, 3u);
+    p->interpolation = d->interpolation ? d->interpolation : LIGHTVEC_INTERPOLATION_GRADIENT;
+    p->split_threshold = lightvec__def(d->face_split_threshold, 8192u);
+    p->max_depth = lightvec__def(d->max_face_depth, 8u);
+    a = p->normal_angle * (LIGHTVEC__PI / 180.0);
+    p->cos_normal = (float)cos(a);
+    p->inv_normal = 1.0f / (1.0f - p->cos_normal);
+    a = p->direction_angle * (LIGHTVEC__PI / 180.0);
+    p->dir_angle = (float)a;
+    p->cos_dir = (float)cos(a);
+    p->sin_dir = (float)sin(a);
+    p->inv_dir = 1.0f / (1.0f - p->cos_dir);
+    return LIGHTVEC_OK;
+}
+
+/* A record fit for the cache, with its unit vectors normalised. */
+static int lightvec__record_clean(const lightvec_record *r, lightvec_record *out)
+{
+    lightvec__vec3 n, o, d;
+    int c;
+    if ((r->flags & ~LIGHTVEC_RECORD_VIEW_INDEPENDENT) || !lightvec__finite3(r->position) ||
+        !lightvec__unit(r->normal, &n) || !lightvec__unit(r->vector.direction, &d))
+        return 0;
+    if (r->flags & LIGHTVEC_RECORD_VIEW_INDEPENDENT) o = n;
+    else if (!lightvec__unit(r->outgoing, &o)) return 0;
+    if (!lightvec__finite_nonneg(r->vector.magnitude, 3) || !lightvec__finite_nonneg(r->irradiance, 3))
+        return 0;
+    for (c = 0; c < 3; c++)
+        if (!lightvec__finite3(r->gradient[c])) return 0;
+    if (!isfinite(r->distance) || !(r->distance > 0.0f) || r->distance > LIGHTVEC__FAR ||
+        !(r->visibility >= 0.0f && r->visibility <= 1.0f))
+        return 0;
+    *out = *r;
+    out->normal[0] = n.x; out->normal[1] = n.y; out->normal[2] = n.z;
+    out->outgoing[0] = o.x; out->outgoing[1] = o.y; out->outgoing[2] = o.z;
+    out->vector.direction[0] = d.x; out->vector.direction[1] = d.y; out->vector.direction[2] = d.z;
+    return 1;
+}
+
+static void lightvec__make_item(const lightvec__params *p, const lightvec_record *r, uint32_t id,
+                                lightvec__item *it)
+{
+    lightvec__vec3 g = lightvec__v3(0.0f, 0.0f, 0.0f);
+    float y = lightvec__lumf(r->irradiance), gl;
+    int c;
+    static const float w[3] = { 0.2126f, 0.7152f, 0.0722f };
+    for (c = 0; c < 3; c++) g = lightvec__add(g, lightvec__scale(lightvec__v3_load(r->gradient[c]), w[c]));
+    gl = lightvec__length(g);
+    memcpy(it->pos, r->position, sizeof it->pos);
+    it->radius = p->radius_scale * r->distance;
+    memcpy(it->normal, r->normal, sizeof it->normal);
+    it->rel_gradient = y > 0.0f ? lightvec__minf(gl / y, FLT_MAX) : (gl > 0.0f ? FLT_MAX : 0.0f);
+    memcpy(it->outgoing, r->outgoing, sizeof it->outgoing);
+    it->visibility = r->visibility;
+    memcpy(it->dir, r->vector.direction, sizeof it->dir);
+    memcpy(it->mag, r->vector.magnitude, sizeof it->mag);
+    {
+        float cos_nd = lightvec__maxf(0.0f, lightvec__dot(lightvec__v3_load(r->normal), lightvec__v3_load(r->vector.direction)));
+        for (c = 0; c < 3; c++) it->proj[c] = r->vector.magnitude[c] * cos_nd;
+    }
+    for (c = 0; c < 3; c++) {
+        float e = r->irradiance[c];
+        int k;
+        for (k = 0; k < 3; k++) it->slope[c][k] = e > 0.0f ? r->gradient[c][k] / e : 0.0f;
+        if (!lightvec__finite3(it->slope[c])) it->slope[c][0] = it->slope[c][1] = it->slope[c][2] = 0.0f;
+    }
+    it->id = id;
+    it->pad = 0;
+}
+
+/* ---- record chunks ----------------------------------------------------------- */
+
+static lightvec_record *lightvec__record_at(const lightvec_cache *c, uint32_t id)
+{
+    uint64_t q = (uint64_t)id / LIGHTVEC__CHUNK0 + 1u;
+    uint32_t k = 0;
+    while ((q >> (k + 1)) != 0) k++;
+    return c->chunks[k] + (id - (uint64_t)LIGHTVEC__CHUNK0 * ((1ull << k) - 1u));
+}
+
+/* The slot of record id (the next one), allocating its chunk. */
+static lightvec_record *lightvec__record_reserve(lightvec_cache *c, uint32_t id)
+{
+    uint64_t q = (uint64_t)id / LIGHTVEC__CHUNK0 + 1u;
+    uint32_t k = 0;
+    while ((q >> (k + 1)) != 0) k++;
+    if (k >= LIGHTVEC__CHUNKS) return NULL;
+    if (!c->chunks[k]) {
+        c->chunks[k] = (lightvec_record *)lightvec__alloc_array(&c->a, (size_t)LIGHTVEC__CHUNK0 << k,
+                                                                sizeof(lightvec_record));
+        if (!c->chunks[k]) return NULL;
+    }
+    return lightvec__record_at(c, id);
+}
+
+/* ---- kd-tree ------------------------------------------------------------------- */
+
+static void lightvec__sphere_of(const lightvec__item *it, float *sphere)
+{
+    sphere[0] = it->pos[0];
+    sphere[1] = it->pos[1];
+    sphere[2] = it->pos[2];
+    sphere[3] = it->radius;
+}
+
+static uint32_t lightvec__tree_levels(uint32_t n)
+{
+    uint32_t d = 0;
+    while (n > LIGHTVEC__LEAF) { n -= n / 2; d++; }
+    return d;
+}
+
+/* Quickselect on perm[lo, hi) by item position on axis: afterwards the
+   k-th smallest is at k, smaller keys before, larger after. Three-way
+   partition around a median-of-three pivot, robust to equal keys. */
+static void lightvec__select(uint32_t *perm, const lightvec__item *src, int axis, uint32_t lo, uint32_t hi,
+                             uint32_t k)
+{
+    while (hi - lo > 1) {
+        float a = src[perm[lo]].pos[axis], b = src[perm[lo + (hi - lo) / 2]].pos[axis];
+        float c = src[perm[hi - 1]].pos[axis], pivot;
+        uint32_t lt = lo, i = lo, gt = hi;
+        pivot = a < b ? (b < c ? b : (a < c ? c : a)) : (a < c ? a : (b < c ? c : b));
+        while (i < gt) {
+            float key = src[perm[i]].pos[axis];
+            if (key < pivot) { uint32_t t = perm[lt]; perm[lt] = perm[i]; perm[i] = t; lt++; i++; }
+            else if (key > pivot) { uint32_t t; gt--; t = perm[gt]; perm[gt] = perm[i]; perm[i] = t; }
+            else i++;
+        }
+        if (k < lt) hi = lt;
+        else if (k >= gt) lo = gt;
+        else return;
+    }
+}
+
+/* Box of the validity spheres of perm[lo, hi), widened by a relative 1e-6 so
+   that the float test d^2 < R^2 never accepts a point the box rejects. */
+static int lightvec__tree_box(float *box, const uint32_t *perm, const lightvec__item *src, uint32_t lo, uint32_t hi)
+{
+    float clo[3], chi[3];
+    uint32_t i;
+    int k, axis = 0;
+    lightvec__box_empty(box, box + 3);
+    lightvec__box_empty(clo, chi);
+    for (i = lo; i < hi; i++) {
+        const lightvec__item *it = &src[perm[i]];
+        for (k = 0; k < 3; k++) {
+            float tol = (fabsf(it->pos[k]) + it->radius) * 1e-6f;
+            box[k] = lightvec__minf(box[k], it->pos[k] - it->radius - tol);
+            box[3 + k] = lightvec__maxf(box[3 + k], it->pos[k] + it->radius + tol);
+            clo[k] = lightvec__minf(clo[k], it->pos[k]);
+            chi[k] = lightvec__maxf(chi[k], it->pos[k]);
+        }
+    }
+    for (k = 1; k < 3; k++)
+        if (chi[k] - clo[k] > chi[axis] - clo[axis]) axis = k;
+    return axis;
+}
+
+static void lightvec__tree_build_node(lightvec__tree *t, const lightvec__item *src, uint32_t *perm, uint32_t node,
+                                      uint32_t lo, uint32_t hi)
+{
+    int axis = lightvec__tree_box(t->boxes + 6 * (size_t)node, perm, src, lo, hi);
+    uint32_t mid = lo + (hi - lo) / 2;
+    if (hi - lo <= LIGHTVEC__LEAF) return;
+    lightvec__select(perm, src, axis, lo, hi, mid);
+    lightvec__tree_build_node(t, src, perm, 2 * node + 1, lo, mid);
+    lightvec__tree_build_node(t, src, perm, 2 * node + 2, mid, hi);
+}
+
+static lightvec__tree *lightvec__tree_build(const lightvec_allocator *a, const lightvec__item *src, uint32_t n)
+{
+    uint32_t levels = lightvec__tree_levels(n), nodes = (2u << levels) - 1u, i, *perm;
+    size_t head = (sizeof(lightvec__tree) + 15u) & ~(size_t)15u, box_bytes = (size_t)nodes * 6u * sizeof(float);
+    size_t bytes, item_bytes = sizeof(lightvec__item) + 4u * sizeof(float), items_at;
+    lightvec__tree *t;
+    if ((size_t)n > (SIZE_MAX - head - box_bytes - 64u) / item_bytes) return NULL;
+    bytes = head + box_bytes + (size_t)n * item_bytes + 64u; /* + room to align the items */
+    t = (lightvec__tree *)lightvec__alloc(a, bytes);
+    perm = (uint32_t *)lightvec__alloc_array(a, n, sizeof(uint32_t));
+    if (!t || !perm) {
+        lightvec__free(a, t);
+        lightvec__free(a, perm);
+        return NULL;
+    }
+    t->count = n;
+    t->node_count = nodes;
+    t->boxes = (float *)((char *)t + head);
+    t->spheres = (float *)((char *)t + head + box_bytes);
+    items_at = head + box_bytes + (size_t)n * 4u * sizeof(float);
+    items_at += (64u - (size_t)(((uintptr_t)t + items_at) & 63u)) & 63u;
+    t->items = (lightvec__item *)((char *)t + items_at);
+    t->bytes = bytes;
+    for (i = 0; i < n; i++) perm[i] = i;
+    if (n) lightvec__tree_build_node(t, src, perm, 0, 0, n);
+    for (i = 0; i < n; i++) {
+        t->items[i] = src[perm[i]];
+        lightvec__sphere_of(&t->items[i], t->spheres + 4 * (size_t)i);
+    }
+    lightvec__free(a, perm);
+    return t;
+}
+
+/* ---- queries -------------------------------------------------------------------- */
+
+typedef struct lightvec__query {
+    float a[3], n[3], w[3];          /* A, n_A, w */
+    int directional;                 /* 0: view-independent query */
+    const lightvec__params *p;
+    double wsum, msum[3], dsum[3];
+    uint32_t count;
+    uint32_t lit, shadow, partial;   /* DLV visibility classes of the valid records */
+    uint32_t *ids;
+    float *weights;
+    uint32_t capacity;
+} lightvec__query;
+
+/* The criteria of 4.2 for one record inside its sphere (|AB| < R_B, tested
+   by the caller); on success accumulates w = w_B * w_sigma. */
+static void lightvec__visit(lightvec__query *q, const lightvec__item *it, float dx, float dy, float dz, float d2)
+{
+    const lightvec__params *p = q->p;
+    float ws = 1.0f, cs, cn, d, change, w;
+    int c;
+    if (q->directional) {                                            /* 4.2.2: cos(w, sigma) > S_dir */
+        cs = q->w[0] * it->outgoing[0] + q->w[1] * it->outgoing[1] + q->w[2] * it->outgoing[2];
+        if (!(cs > p->cos_dir)) return;
+        ws = (cs - p->cos_dir) * p->inv_dir;
+    }
+    cn = q->n[0] * it->normal[0] + q->n[1] * it->normal[1] + q->n[2] * it->normal[2];
+    if (!(cn > p->cos_normal)) return;                               /* curvature: S_curv */
+    d = sqrtf(d2);
+    change = d * it->rel_gradient;                                   /* |AB| |grad E| / E_B < I_B */
+    if (!(change < p->max_change)) return;
+    w = (1.0f - d / it->radius) * (1.0f / (1.0f + change)) * ((cn - p->cos_normal) * p->inv_normal) * ws;
+    if (q->ids && q->count < q->capacity) {
+        q->ids[q->count] = it->id;
+        q->weights[q->count] = w;
+    }
+    q->count++;
+    q->wsum += w;
+    for (c = 0; c < 3; c++) {
+        float m = p->interpolation == LIGHTVEC_INTERPOLATION_PLAIN ? it->mag[c] : it->proj[c];
+        if (p->interpolation == LIGHTVEC_INTERPOLATION_GRADIENT) {
+            /* Ward & Heckbert: E_c(A) = E_c(B) + grad E_c . (A - B); the vector scales with E */
+            float f = 1.0f + (it->slope[c][0] * dx + it->slope[c][1] * dy + it->slope[c][2] * dz);
+            m *= f > 0.0f ? f : 0.0f;
+        }
+        q->msum[c] += (double)w * m;
+        q->dsum[c] += (double)w * it->dir[c];
+    }
+    if (it->visibility >= 1.0f) q->lit++;
+    else if (it->visibility <= 0.0f) q->shadow++;
+    else q->partial++;
+}
+
+/* |AB| < R_B for items[lo, hi), then the other criteria. */
+static void lightvec__visit_range(lightvec__query *q, const float *spheres, const lightvec__item *items, uint32_t lo,
+                                  uint32_t hi)
+{
+    uint32_t i;
+    for (i = lo; i < hi; i++) {
+        const float *s = spheres + 4 * (size_t)i;
+        float dx = q->a[0] - s[0], dy = q->a[1] - s[1], dz = q->a[2] - s[2];
+        float d2 = dx * dx + dy * dy + dz * dz;
+        if (d2 < s[3] * s[3]) lightvec__visit(q, &items[i], dx, dy, dz, d2);
+    }
+}
+
+static void lightvec__tree_query(const lightvec__tree *t, lightvec__query *q)
+{
+    uint32_t stack[64][3], top = 1;
+    stack[0][0] = 0; stack[0][1] = 0; stack[0][2] = t->count;
+    while (top) {
+        uint32_t node, lo, hi, mid;
+        const float *box;
+        top--;
+        node = stack[top][0]; lo = stack[top][1]; hi = stack[top][2];
+        box = t->boxes + 6 * (size_t)node;
+        /* one branch for the six comparisons: box tests are hard to predict */
+        if (!((q->a[0] >= box[0]) & (q->a[1] >= box[1]) & (q->a[2] >= box[2]) & (q->a[0] <= box[3]) &
+              (q->a[1] <= box[4]) & (q->a[2] <= box[5])))
+            continue;
+        if (hi - lo <= LIGHTVEC__LEAF) {
+            lightvec__visit_range(q, t->spheres, t->items, lo, hi);
+            continue;
+        }
+        mid = lo + (hi - lo) / 2;
+        stack[top][0] = 2 * node + 2; stack[top][1] = mid; stack[top][2] = hi; top++;
+        stack[top][0] = 2 * node + 1; stack[top][1] = lo; stack[top][2] = mid; top++;
+    }
+}
+
+static void lightvec__index_query(const lightvec__index *idx, lightvec__query *q)
+{
+    uint32_t i, n = lightvec__load_u32(&idx->tail_count);
+    for (i = 0; i < idx->tree_count; i++) lightvec__tree_query(idx->trees[i], q);
+    lightvec__visit_range(q, &idx->tail_spheres[0][0], idx->tail, 0, n);
+}
+
+/* ---- icosahedron ------------------------------------------------------------------- */
+
+static void lightvec__face_init(lightvec__face *f, lightvec__vec3 a, lightvec__vec3 b, lightvec__vec3 c,
+                                uint32_t depth)
+{
+    lightvec__vec3 m = lightvec__normalize(lightvec__add(lightvec__add(a, b), c));
+    float cr;
+    int i;
+    memset(f, 0, sizeof *f);
+    f->v[0][0] = a.x; f->v[0][1] = a.y; f->v[0][2] = a.z;
+    f->v[1][0] = b.x; f->v[1][1] = b.y; f->v[1][2] = b.z;
+    f->v[2][0] = c.x; f->v[2][1] = c.y; f->v[2][2] = c.z;
+    f->center[0] = m.x; f->center[1] = m.y; f->center[2] = m.z;
+    /* a cap of radius < 90 degrees is convex on the sphere: holding the three
+       vertices, it holds the spherical triangle */
+    cr = lightvec__minf(lightvec__dot(m, a), lightvec__minf(lightvec__dot(m, b), lightvec__dot(m, c))) - 1e-6f;
+    f->cos_r = cr;
+    f->sin_r = sqrtf(lightvec__maxf(0.0f, 1.0f - cr * cr));
+    f->r_angle = acosf(cr);
+    f->depth = depth;
+    for (i = 0; i < 3; i++) {
+        lightvec__vec3 a = lightvec__v3_load(f->v[i]), b = lightvec__v3_load(f->v[(i + 1) % 3]);
+        lightvec__vec3 n = lightvec__normalize(lightvec__cross(a, b)), ta = lightvec__cross(n, a), tb = lightvec__cross(b, n);
+        f->edge[i][0][0] = n.x; f->edge[i][0][1] = n.y; f->edge[i][0][2] = n.z;
+        f->edge[i][1][0] = ta.x; f->edge[i][1][1] = ta.y; f->edge[i][1][2] = ta.z;
+        f->edge[i][2][0] = tb.x; f->edge[i][2][1] = tb.y; f->edge[i][2][2] = tb.z;
+    }
+}
+
+/* The regular icosahedron (vertices (0, +-1, +-t) and cyclic, t the golden ratio). */
+static void lightvec__icosahedron(lightvec__face roots[20])
+{
+    static const float t = 1.6180339887f;
+    static const signed char v[12][3] = { { -1, 2, 0 }, { 1, 2, 0 }, { -1, -2, 0 }, { 1, -2, 0 },
+                                          { 0, -1, 2 }, { 0, 1, 2 }, { 0, -1, -2 }, { 0, 1, -2 },
+                                          { 2, 0, -1 }, { 2, 0, 1 }, { -2, 0, -1 }, { -2, 0, 1 } };
+    static const unsigned char f[20][3] = { { 0, 11, 5 }, { 0, 5, 1 },  { 0, 1, 7 },   { 0, 7, 10 }, { 0, 10, 11 },
+                                            { 1, 5, 9 },  { 5, 11, 4 }, { 11, 10, 2 }, { 10, 7, 6 }, { 7, 1, 8 },
+                                            { 3, 9, 4 },  { 3, 4, 2 },  { 3, 2, 6 },   { 3, 6, 8 },  { 3, 8, 9 },
+                                            { 4, 9, 5 },  { 2, 4, 11 }, { 6, 2, 10 },  { 8, 6, 7 },  { 9, 8, 1 } };
+    lightvec__vec3 p[12];
+    int i, k;
+    for (i = 0; i < 12; i++) {
+        float c[3];
+        for (k = 0; k < 3; k++) c[k] = v[i][k] == 2 ? t : (v[i][k] == -2 ? -t : (float)v[i][k]);
+        p[i] = lightvec__normalize(lightvec__v3(c[0], c[1], c[2]));
+    }
+    for (i = 0; i < 20; i++) {
+        lightvec__vec3 a = p[f[i][0]], b = p[f[i][1]], c = p[f[i][2]];
+        if (lightvec__dot(lightvec__cross(a, b), c) < 0.0f) { lightvec__vec3 s = b; b = c; c = s; }
+        lightvec__face_init(&roots[i], a, b, c, 0);
+    }
+}
+
+/* The root face holding d: for a regular polyhedron the spherical faces are
+   the Voronoi cells of the face centres, so the largest dot product decides. */
+static uint32_t lightvec__root_of(const lightvec__face roots[20], const float d[3])
+{
+    uint32_t i, best = 0;
+    float bd = -2.0f;
+    for (i = 0; i < 20; i++) {
+        float x = roots[i].center[0] * d[0] + roots[i].center[1] * d[1] + roots[i].center[2] * d[2];
+        if (x > bd) { bd = x; best = i; }
+    }
+    return best;
+}
+
+/* Children of a split face: 0 = (v0, m01, m20), 1 = (m01, v1, m12),
+   2 = (m20, m12, v2), 3 = (m01, m12, m20), the m's edge midpoints pushed onto
+   the sphere (figure 4). A direction is in corner child i when it is on the
+   corner's side of the great circle through the child's inner edge. */
+static void lightvec__make_children(lightvec__face *f, lightvec__face ch[4])
+{
+    lightvec__vec3 v0 = lightvec__v3_load(f->v[0]), v1 = lightvec__v3_load(f->v[1]), v2 = lightvec__v3_load(f->v[2]);
+    lightvec__vec3 m01 = lightvec__normalize(lightvec__add(v0, v1));
+    lightvec__vec3 m12 = lightvec__normalize(lightvec__add(v1, v2));
+    lightvec__vec3 m20 = lightvec__normalize(lightvec__add(v2, v0));
+    lightvec__vec3 pl[3];
+    int i;
+    pl[0] = lightvec__cross(m01, m20);
+    pl[1] = lightvec__cross(m12, m01);
+    pl[2] = lightvec__cross(m20, m12);
+    for (i = 0; i < 3; i++) { f->plane[i][0] = pl[i].x; f->plane[i][1] = pl[i].y; f->plane[i][2] = pl[i].z; }
+    lightvec__face_init(&ch[0], v0, m01, m20, f->depth + 1);
+    lightvec__face_init(&ch[1], m01, v1, m12, f->depth + 1);
+    lightvec__face_init(&ch[2], m20, m12, v2, f->depth + 1);
+    lightvec__face_init(&ch[3], m01, m12, m20, f->depth + 1);
+}
+
+static uint32_t lightvec__child_of(const lightvec__face *f, const float d[3])
+{
+    uint32_t i;
+    for (i = 0; i < 3; i++)
+        if (f->plane[i][0] * d[0] + f->plane[i][1] * d[1] + f->plane[i][2] * d[2] > 0.0f) return i;
+    return 3;
+}
+
+static float lightvec__dot3(const float *a, const float *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+/* Can the face hold a record within the directional cone around w (angle
+   below beta = acos S_dir)? First the face's bounding cap: the cone and the
+   cap meet when the angle between their axes is at most the sum of their
+   radii. Then the spherical triangle itself (about half of its cap): w is
+   inside, or within beta of an edge (of the edge's great circle where the
+   nearest point falls inside the edge, else of its end points). Slack 1e-6
+   keeps records placed on a boundary by float rounding in. */
+static int lightvec__face_in_cone(const lightvec__face *f, const lightvec__params *p, const float w[3])
+{
+    float c = lightvec__dot3(f->center, w), s[3];
+    int i;
+    if (f->r_angle + p->dir_angle >= (float)LIGHTVEC__PI) return 1;
+    if (c < f->cos_r * p->cos_dir - f->sin_r * p->sin_dir - 1e-6f) return 0;
+    if (p->dir_angle >= (float)(LIGHTVEC__PI / 2)) return 1;
+    for (i = 0; i < 3; i++) s[i] = lightvec__dot3(f->edge[i][0], w);
+    if (s[0] >= -1e-6f && s[1] >= -1e-6f && s[2] >= -1e-6f) return 1; /* inside */
+    for (i = 0; i < 3; i++) {
+        if (s[i] >= 0.0f) continue; /* w is on the inner side of this edge */
+        if (lightvec__dot3(f->edge[i][1], w) >= 0.0f && lightvec__dot3(f->edge[i][2], w) >= 0.0f) {
+            if (-s[i] < p->sin_dir + 1e-6f) return 1; /* nearest point inside the edge */
+        } else if (lightvec__dot3(f->v[i], w) > p->cos_dir - 1e-6f ||
+                   lightvec__dot3(f->v[(i + 1) % 3], w) > p->cos_dir - 1e-6f) {
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* Faces much smaller than the directional cone would only add faces to
+   every search (and kd-trees to descend), so a face splits only while its
+   children stay at least as wide as the cone's radius: a search then visits
+   a handful of faces. max_depth bounds it too. */
+static int lightvec__can_split(const lightvec_cache *c, const lightvec__face *f)
+{
+    return f != &c->omni && f->depth < c->p.max_depth && f->r_angle >= 2.0f * c->p.dir_angle;
+}
+
+/* ---- reader registration and deferred freeing ----------------------------------- */
+
+static uint32_t lightvec__enter(lightvec_cache *c)
+{
+    for (;;) {
+        uint32_t e = lightvec__load_sc(&c->epoch);
+        lightvec__add_sc(&c->readers[e][0], 1u);
+        if (lightvec__load_sc(&c->epoch) == e) return e;
+        lightvec__add_sc(&c->readers[e][0], 0xFFFFFFFFu); /* the writer flipped meanwhile: retry */
+    }
+}
+
+static void lightvec__leave(lightvec_cache *c, uint32_t e) { lightvec__add_sc(&c->readers[e][0], 0xFFFFFFFFu); }
+
+/* Waits until no reader can hold memory unpublished before this call: flip
+   the epoch, then wait for the readers registered under the old one. A reader
+   that registers under the old epoch after the flip sees the flip when it
+   checks again, and retries under the new one. */
+static void lightvec__synchronize(lightvec_cache *c)
+{
+    uint32_t e = lightvec__load_sc(&c->epoch);
+    lightvec__store_sc(&c->epoch, e ^ 1u);
+    while (lightvec__load_sc(&c->readers[e][0]) != 0) {
+        /* readers leave within one lookup */
+    }
+}
+
+static void lightvec__reclaim(lightvec_cache *c)
+{
+    uint32_t i;
+    if (!c->retired_count) return;
+    lightvec__synchronize(c);
+    for (i = 0; i < c->retired_count; i++) lightvec__free(&c->a, c->retired[i].ptr);
+    c->retired_count = 0;
+    c->retired_bytes = 0;
+}
+
+static void lightvec__retire(lightvec_cache *c, void *ptr, size_t bytes)
+{
+    if (!ptr) return;
+    if (c->retired_count == c->retired_capacity) {
+        uint32_t cap = c->retired_capacity ? 2 * c->retired_capacity : 64u;
+        lightvec__retired *r = (lightvec__retired *)lightvec__alloc_array(&c->a, cap, sizeof *r);
+        if (!r) { /* no room to defer: wait for the readers now */
+            lightvec__reclaim(c);
+            lightvec__synchronize(c);
+            lightvec__free(&c->a, ptr);
+            return;
+        }
+        if (c->retired_count) memcpy(r, c->retired, c->retired_count * sizeof *r);
+        lightvec__free(&c->a, c->retired);
+        c->retired = r;
+        c->retired_capacity = cap;
+    }
+    c->retired[c->retired_count].ptr = ptr;
+    c->retired[c->retired_count].bytes = bytes;
+    c->retired_count++;
+    c->retired_bytes += bytes;
+}
+
+static void lightvec__maybe_reclaim(lightvec_cache *c)
+{
+    size_t live = (size_t)c->record_count * sizeof(lightvec__item);
+    if (c->retired_bytes > LIGHTVEC__RECLAIM_BYTES + live / 4) lightvec__reclaim(c);
+}
+
+/* ---- building and restructuring faces (writer) ----------------------------------- */
+
+static void lightvec__index_free(lightvec_cache *c, lightvec__index *idx)
+{
+    uint32_t i;
+    if (!idx) return;
+    for (i = 0; i < idx->tree_count; i++) lightvec__free(&c->a, idx->trees[i]);
+    lightvec__free(&c->a, idx);
+}
+
+/* Frees everything below f: its children recursively, or its index (the
+   index a split face still points to is on the retired list). */
+static void lightvec__face_free(lightvec_cache *c, lightvec__face *f)
+{
+    lightvec__face *ch = (lightvec__face *)f->children;
+    if (ch) {
+        int i;
+        for (i = 0; i < 4; i++) lightvec__face_free(c, &ch[i]);
+        lightvec__free(&c->a, ch);
+    } else {
+        lightvec__index_free(c, (lightvec__index *)f->index);
+    }
+    f->children = NULL;
+    f->index = NULL;
+}
+
+static lightvec__index *lightvec__index_new(lightvec_cache *c)
+{
+    lightvec__index *idx = (lightvec__index *)lightvec__alloc(&c->a, sizeof *idx);
+    if (idx) {
+        idx->tree_count = 0;
+        idx->tail_count = 0;
+    }
+    return idx;
+}
+
+/* Copies the tail and the first `trees` kd-trees of idx to dst; returns the count. */
+static uint32_t lightvec__index_items(const lightvec__index *idx, uint32_t trees, lightvec__item *dst)
+{
+    uint32_t i, n = idx->tail_count;
+    memcpy(dst, idx->tail, n * sizeof *dst);
+    for (i = 0; i < trees; i++) {
+        memcpy(dst + n, idx->trees[i]->items, idx->trees[i]->count * sizeof *dst);
+        n += idx->trees[i]->count;
+    }
+    return n;
+}
+
+static lightvec__index *lightvec__index_single(lightvec_cache *c, const lightvec__item *items, uint32_t n)
+{
+    lightvec__index *idx = lightvec__index_new(c);
+    lightvec__tree *t = lightvec__tree_build(&c->a, items, n);
+    if (!idx || !t) {
+        lightvec__free(&c->a, idx);
+        lightvec__free(&c->a, t);
+        return NULL;
+    }
+    idx->trees[0] = t;
+    idx->tree_count = 1;
+    return idx;
+}
+
+static int lightvec__face_fill(lightvec_cache *c, lightvec__face *f, lightvec__item *items, uint32_t n);
+
+/* Splits f into four children holding items[0, n) (figure 4), recursively
+   while a child still holds more than the threshold. Publishes the children. */
+static int lightvec__face_split_items(lightvec_cache *c, lightvec__face *f, lightvec__item *items, uint32_t n)
+{
+    lightvec__face *ch = (lightvec__face *)lightvec__alloc_array(&c->a, 4, sizeof(lightvec__face));
+    lightvec__item *tmp = (lightvec__item *)lightvec__alloc_array(&c->a, n, sizeof(lightvec__item));
+    uint32_t count[4] = { 0, 0, 0, 0 }, start[4], i;
+    int k;
+    if (!ch || !tmp) {
+        lightvec__free(&c->a, ch);
+        lightvec__free(&c->a, tmp);
+        return -1;
+    }
+    lightvec__make_children(f, ch);
+    for (i = 0; i < n; i++) count[lightvec__child_of(f, items[i].outgoing)]++;
+    start[0] = 0;
+    for (k = 1; k < 4; k++) start[k] = start[k - 1] + count[k - 1];
+    for (i = 0; i < n; i++) tmp[start[lightvec__child_of(f, items[i].outgoing)]++] = items[i];
+    for (k = 0; k < 4; k++) start[k] -= count[k];
+    for (k = 0; k < 4; k++)
+        if (lightvec__face_fill(c, &ch[k], tmp + start[k], count[k]) != 0) {
+            for (k = 0; k < 4; k++) lightvec__face_free(c, &ch[k]);
+            lightvec__free(&c->a, ch);
+            lightvec__free(&c->a, tmp);
+            return -1;
+        }
+    lightvec__free(&c->a, tmp);
+    lightvec__store_ptr(&f->children, ch);
+    f->count = 0;
+    return 0;
+}
+
+/* Fills an empty face with items[0, n): children while the threshold allows,
+   else one kd-tree. */
+static int lightvec__face_fill(lightvec_cache *c, lightvec__face *f, lightvec__item *items, uint32_t n)
+{
+    if (n > c->p.split_threshold && lightvec__can_split(c, f)) return lightvec__face_split_items(c, f, items, n);
+    if (n) {
+        lightvec__index *idx = lightvec__index_single(c, items, n);
+        if (!idx) return -1;
+        lightvec__store_ptr(&f->index, idx);
+    }
+    f->count = n;
+    return 0;
+}
+
+/* Bentley-Saxe merge of a full tail: the tail and every kd-tree not larger
+   than MERGE_RATIO times what is merged so far become one new kd-tree.
+   Ratio 2 is the classic binary counter (log2 n trees); ratio 8 keeps about
+   half as many trees for lookups (3 to 4 at 10^5 .. 10^6 items per face) and
+   rebuilds each item about 3x as often (15 to 25 items per insert). */
+static int lightvec__merge(lightvec_cache *c, lightvec__face *f)
+{
+    lightvec__index *old = (lightvec__index *)f->index, *idx;
+    lightvec__item *items;
+    lightvec__tree *t;
+    uint64_t acc = old->tail_count;
+    uint32_t take = 0, i;
+    while (take < old->tree_count &&
+           (old->trees[take]->count <= LIGHTVEC__MERGE_RATIO * acc || old->tree_count - take >= LIGHTVEC__MAX_TREES))
+        acc += old->trees[take++]->count;
+    items = (lightvec__item *)lightvec__alloc_array(&c->a, (size_t)acc, sizeof *items);
+    if (!items) return -1;
+    lightvec__index_items(old, take, items);
+    t = lightvec__tree_build(&c->a, items, (uint32_t)acc);
+    lightvec__free(&c->a, items);
+    idx = lightvec__index_new(c);
+    if (!t || !idx) {
+        lightvec__free(&c->a, t);
+        lightvec__free(&c->a, idx);
+        return -1;
+    }
+    idx->trees[0] = t;
+    for (i = take; i < old->tree_count; i++) idx->trees[1 + i - take] = old->trees[i];
+    idx->tree_count = 1 + old->tree_count - take;
+    lightvec__store_ptr(&f->index, idx);
+    for (i = 0; i < take; i++) lightvec__retire(c, old->trees[i], old->trees[i]->bytes);
+    lightvec__retire(c, old, sizeof *old);
+    return 0;
+}
+
+/* Splits a leaf holding more than the threshold (section 3.2, figure 4). */
+static int lightvec__split(lightvec_cache *c, lightvec__face *f)
+{
+    lightvec__index *old = (lightvec__index *)f->index;
+    lightvec__item *items = (lightvec__item *)lightvec__alloc_array(&c->a, f->count, sizeof *items);
+    uint32_t i, n;
+    if (!items) return -1;
+    n = lightvec__index_items(old, old->tree_count, items);
+    if (lightvec__face_split_items(c, f, items, n) != 0) {
+        lightvec__free(&c->a, items);
+        return -1;
+    }
+    lightvec__free(&c->a, items);
+    /* f->index keeps pointing at the retired index: a reader that saw no
+       children a moment ago still finds every record there, and readers that
+       see the children never read it again */
+    for (i = 0; i < old->tree_count; i++) lightvec__retire(c, old->trees[i], old->trees[i]->bytes);
+    lightvec__retire(c, old, sizeof *old);
+    return 0;
+}
+
+/* Room for one more item in leaf f: its first index, or a merged tail. */
+static int lightvec__face_prepare(lightvec_cache *c, lightvec__face *f)
+{
+    lightvec__index *idx = (lightvec__index *)f->index;
+    if (!idx) {
+        idx = lightvec__index_new(c);
+        if (!idx) return -1;
+        lightvec__store_ptr(&f->index, idx);
+        return 0;
+    }
+    return idx->tail_count == LIGHTVEC__TAIL ? lightvec__merge(c, f) : 0;
+}
+
+static void lightvec__face_push(lightvec__face *f, const lightvec__item *it)
+{
+    lightvec__index *idx = (lightvec__index *)f->index;
+    uint32_t n = idx->tail_count;
+    idx->tail[n] = *it;
+    lightvec__sphere_of(it, idx->tail_spheres[n]);
+    lightvec__store_u32(&idx->tail_count, n + 1u); /* publishes the item */
+    f->count++;
+}
+
+static lightvec__face *lightvec__leaf_for(lightvec_cache *c, const lightvec_record *r)
+{
+    lightvec__face *f;
+    if (r->flags & LIGHTVEC_RECORD_VIEW_INDEPENDENT) return &c->omni;
+    f = &c->roots[lightvec__root_of(c->roots, r->outgoing)];
+    while (f->children) f = &((lightvec__face *)f->children)[lightvec__child_of(f, r->outgoing)];
+    return f;
+}
+
+/* ---- public cache API -------------------------------------------------------------- */
+
+static lightvec_result lightvec__cache_new(const lightvec_cache_desc *desc, lightvec_cache **out)
+{
+    lightvec_cache_desc zero;
+    lightvec_cache *c;
+    lightvec__params p;
+    lightvec_result r;
+    if (!desc) {
+        memset(&zero, 0, sizeof zero);
+        desc = &zero;
+    }
+    if (!lightvec__allocator_valid(&desc->allocator)) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    r = lightvec__params_init(&p, desc);
+    if (r != LIGHTVEC_OK) return r;
+    c = (lightvec_cache *)lightvec__alloc(&desc->allocator, sizeof *c);
+    if (!c) return LIGHTVEC_ERROR_OUT_OF_MEMORY;
+    memset(c, 0, sizeof *c);
+    c->a = desc->allocator;
+    c->p = p;
+    c->parallel_for = desc->parallel_for;
+    c->parallel_user = desc->parallel_user;
+    c->progress = desc->progress;
+    c->progress_user = desc->progress_user;
+    c->log = desc->log;
+    c->log_user = desc->log_user;
+    lightvec__icosahedron(c->roots);
+    c->omni.r_angle = (float)LIGHTVEC__PI;
+    c->omni.cos_r = -1.0f;
+    *out = c;
+    return LIGHTVEC_OK;
+}
+
+LIGHTVEC_API lightvec_result lightvec_cache_create(const lightvec_cache_desc *desc, lightvec_cache **out)
+{
+    if (!out) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    *out = NULL;
+    return lightvec__cache_new(desc, out);
+}
+
+LIGHTVEC_API void lightvec_cache_destroy(lightvec_cache *c)
+{
+    lightvec_allocator a;
+    int i;
+    if (!c) return;
+    a = c->a;
+    for (i = 0; i < 20; i++) lightvec__face_free(c, &c->roots[i]);
+    lightvec__face_free(c, &c->omni);
+    for (i = 0; i < (int)c->retired_count; i++) lightvec__free(&a, c->retired[i].ptr);
+    lightvec__free(&a, c->retired);
+    for (i = 0; i < LIGHTVEC__CHUNKS; i++) lightvec__free(&a, c->chunks[i]);
+    lightvec__free(&a, c);
+}
+
+LIGHTVEC_API lightvec_result lightvec_insert(lightvec_cache *c, const lightvec_record *rec, uint32_t *id_out)
+{
+    lightvec_record clean, *slot;
+    lightvec__item it;
+    lightvec__face *f;
+    uint32_t id;
+    if (!c || !rec) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    if (!lightvec__record_clean(rec, &clean)) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    id = c->record_count;
+    if (id == 0xFFFFFFFFu) return LIGHTVEC_ERROR_OUT_OF_MEMORY;
+    slot = lightvec__record_reserve(c, id);
+    f = lightvec__leaf_for(c, &clean);
+    if (!slot || lightvec__face_prepare(c, f) != 0) return LIGHTVEC_ERROR_OUT_OF_MEMORY;
+    *slot = clean;
+    lightvec__store_u32(&c->record_count, id + 1u);
+    lightvec__make_item(&c->p, &clean, id, &it);
+    lightvec__face_push(f, &it);
+    if (f->count > c->p.split_threshold && lightvec__can_split(c, f) && lightvec__split(c, f) != 0 && c->log)
+        c->log(c->log_user, "lightvec: out of memory splitting a face; it stays a leaf for now");
+    lightvec__maybe_reclaim(c);
+    if (id_out) *id_out = id;
+    return LIGHTVEC_OK;
+}
+
+static lightvec_result lightvec__query_init(lightvec_cache *c, const float position[3], const float normal[3],
+                                            const float *outgoing, lightvec__query *q)
+{
+    lightvec__vec3 n, w;
+    if (!c || !position || !lightvec__finite3(position) || !lightvec__unit(normal, &n))
+        return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    memset(q, 0, sizeof *q);
+    q->p = &c->p;
+    memcpy(q->a, position, sizeof q->a);
+    q->n[0] = n.x; q->n[1] = n.y; q->n[2] = n.z;
+    if (outgoing) {
+        if (!lightvec__unit(outgoing, &w)) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+        q->w[0] = w.x; q->w[1] = w.y; q->w[2] = w.z;
+        q->directional = 1;
+    }
+    return LIGHTVEC_OK;
+}
+
+/* Visits every index that can hold a valid record: the view-independent leaf,
+   or the leaves of the icosahedron whose caps meet the directional cone. */
+static void lightvec__search(lightvec_cache *c, lightvec__query *q)
+{
+    const lightvec__face *stack[LIGHTVEC__FACE_STACK];
+    uint32_t top = 0, i, e = lightvec__enter(c);
+    if (!q->directional) {
+        const lightvec__index *idx = (const lightvec__index *)lightvec__load_ptr(&c->omni.index);
+        if (idx) lightvec__index_query(idx, q);
+        lightvec__leave(c, e);
+        return;
+    }
+    for (i = 0; i < 20; i++)
+        if (lightvec__face_in_cone(&c->roots[i], q->p, q->w)) stack[top++] = &c->roots[i];
+    while (top) {
+        const lightvec__face *f = stack[--top];
+        const lightvec__face *ch = (const lightvec__face *)lightvec__load_ptr(&f->children);
+        if (ch) {
+            for (i = 0; i < 4; i++)
+                if (lightvec__face_in_cone(&ch[i], q->p, q->w)) stack[top++] = &ch[i];
+        } else {
+            const lightvec__index *idx = (const lightvec__index *)lightvec__load_ptr(&f->index);
+            if (idx) lightvec__index_query(idx, q);
+        }
+    }
+    lightvec__leave(c, e);
+}
+
+/* 4.2.3: the normalised weighted interpolation of the valid vectors. The
+   paper averages D and M. Averaging unit directions shortens the sum, and its
+   normalised direction leans toward the normal more than the records' do, so
+   M * cos(n, D) grows: a bias of a few percent on walls lit from many
+   directions. The projected modes average M cos(n_B, D_B) (the irradiance,
+   for Lambert) and divide by cos(n_A, D) afterwards. */
+static void lightvec__interpolate(const lightvec__params *p, const lightvec__query *q, lightvec_vector *v)
+{
+    lightvec__vec3 d = lightvec__v3((float)q->dsum[0], (float)q->dsum[1], (float)q->dsum[2]);
+    lightvec__vec3 n = lightvec__v3_load(q->n);
+    double scale = 1.0 / q->wsum;
+    int k;
+    d = lightvec__length(d) > 0.0f ? lightvec__normalize(d) : n;
+    if (p->interpolation != LIGHTVEC_INTERPOLATION_PLAIN) {
+        float cos_d = lightvec__dot(n, d);
+        if (!(cos_d > 1e-3f)) { /* the mean light comes from behind A: keep it on A's side */
+            d = n;
+            cos_d = 1.0f;
+        }
+        scale /= cos_d;
+    }
+    v->direction[0] = d.x; v->direction[1] = d.y; v->direction[2] = d.z;
+    for (k = 0; k < 3; k++) v->magnitude[k] = (float)(q->msum[k] * scale);
+}
+
+LIGHTVEC_API lightvec_result lightvec_lookup(lightvec_cache *c, const float position[3], const float normal[3],
+                                             const float *outgoing, lightvec_lookup_result *out)
+{
+    lightvec__query q;
+    lightvec_result r;
+    if (!out) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    memset(out, 0, sizeof *out);
+    r = lightvec__query_init(c, position, normal, outgoing, &q);
+    if (r != LIGHTVEC_OK) return r;
+    lightvec__search(c, &q);
+    out->valid_count = q.count;
+    out->weight = q.count ? (float)(q.wsum / q.count) : 0.0f; /* 4.3: average of the weights */
+    out->hit = q.count >= c->p.min_valid && q.wsum > 0.0;
+    if (c->p.kind == LIGHTVEC_KIND_DIRECT && (q.partial || (q.lit && q.shadow))) out->hit = 0;
+    if (out->hit) lightvec__interpolate(&c->p, &q, &out->vector);
+    return LIGHTVEC_OK;
+}
+
+LIGHTVEC_API lightvec_result lightvec_find(lightvec_cache *c, const float position[3], const float normal[3],
+                                           const float *outgoing, uint32_t *ids, float *weights,
+                                           uint32_t capacity, uint32_t *count)
+{
+    lightvec__query q;
+    lightvec_result r;
+    if (!count || (capacity && (!ids || !weights))) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    *count = 0;
+    r = lightvec__query_init(c, position, normal, outgoing, &q);
+    if (r != LIGHTVEC_OK) return r;
+    q.ids = ids;
+    q.weights = weights;
+    q.capacity = capacity;
+    lightvec__search(c, &q);
+    *count = q.count;
+    return LIGHTVEC_OK;
+}
+
+LIGHTVEC_API lightvec_result lightvec_cache_record(lightvec_cache *c, uint32_t id, lightvec_record *out)
+{
+    if (!c || !out || id >= lightvec__load_u32(&c->record_count)) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    *out = *lightvec__record_at(c, id);
+    return LIGHTVEC_OK;
+}
+
+/* ---- walking the faces (writer side) ------------------------------------------------- */
+
+typedef struct lightvec__walk {
+    const lightvec__face *stack[LIGHTVEC__FACE_STACK];
+    uint32_t top;
+} lightvec__walk;
+
+/* Faces in depth-first pre-order: root 0, its subtree, root 1, ... */
+static void lightvec__walk_init(lightvec__walk *w, const lightvec_cache *c)
+{
+    int i;
+    w->top = 0;
+    for (i = 19; i >= 0; i--) w->stack[w->top++] = &c->roots[i];
+}
+
+static const lightvec__face *lightvec__walk_next(lightvec__walk *w)
+{
+    const lightvec__face *f, *ch;
+    int i;
+    if (!w->top) return NULL;
+    f = w->stack[--w->top];
+    ch = (const lightvec__face *)f->children;
+    if (ch)
+        for (i = 3; i >= 0; i--) w->stack[w->top++] = &ch[i];
+    return f;
+}
+
+static uint64_t lightvec__face_records(const lightvec__face *f)
+{
+    const lightvec__face *ch = (const lightvec__face *)f->children;
+    if (ch) return lightvec__face_records(&ch[0]) + lightvec__face_records(&ch[1]) +
+                   lightvec__face_records(&ch[2]) + lightvec__face_records(&ch[3]);
+    return f->count;
+}
+
+static size_t lightvec__index_bytes(const lightvec__index *idx, uint32_t *trees)
+{
+    size_t b = 0;
+    uint32_t i;
+    if (!idx) return 0;
+    for (i = 0; i < idx->tree_count; i++) b += idx->trees[i]->bytes;
+    *trees += idx->tree_count;
+    return b + sizeof *idx;
+}
+
+LIGHTVEC_API lightvec_result lightvec_cache_info(const lightvec_cache *c, lightvec_cache_stats *info)
+{
+    lightvec__walk w;
+    const lightvec__face *f;
+    int k;
+    if (!c || !info) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    memset(info, 0, sizeof *info);
+    info->kind = c->p.kind;
+    info->record_count = c->record_count;
+    info->bytes = sizeof *c + c->retired_bytes + (size_t)c->retired_capacity * sizeof(lightvec__retired);
+    for (k = 0; k < LIGHTVEC__CHUNKS; k++)
+        if (c->chunks[k]) info->bytes += ((size_t)LIGHTVEC__CHUNK0 << k) * sizeof(lightvec_record);
+    lightvec__walk_init(&w, c);
+    while ((f = lightvec__walk_next(&w)) != NULL) {
+        info->face_count++;
+        if (f->children) {
+            info->bytes += 4 * sizeof(lightvec__face);
+            continue;
+        }
+        info->leaf_count++;
+        if (f->depth > info->max_depth) info->max_depth = f->depth;
+        info->bytes += lightvec__index_bytes((const lightvec__index *)f->index, &info->tree_count);
+    }
+    info->bytes += lightvec__index_bytes((const lightvec__index *)c->omni.index, &info->tree_count);
+    info->radius_scale = c->p.radius_scale;
+    info->max_irradiance_change = c->p.max_change;
+    info->cos_normal = c->p.cos_normal;
+    info->cos_direction = c->p.cos_dir;
+    info->min_valid = c->p.min_valid;
+    info->interpolation = c->p.interpolation;
+    info->face_split_threshold = c->p.split_threshold;
+    info->max_face_depth = c->p.max_depth;
+    return LIGHTVEC_OK;
+}
+
+LIGHTVEC_API lightvec_result lightvec_cache_face(const lightvec_cache *c, uint32_t index, lightvec_face_info *out)
+{
+    lightvec__walk w;
+    const lightvec__face *f;
+    uint32_t i = 0;
+    if (!c || !out) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    lightvec__walk_init(&w, c);
+    while ((f = lightvec__walk_next(&w)) != NULL && i < index) i++;
+    if (!f) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    memcpy(out->vertices, f->v, sizeof out->vertices);
+    out->depth = f->depth;
+    out->leaf = f->children == NULL;
+    out->record_count = lightvec__face_records(f);
+    return LIGHTVEC_OK;
+}
+
+LIGHTVEC_API lightvec_result lightvec_cache_locate(const lightvec_cache *c, const float direction[3], uint32_t *index)
+{
+    lightvec__walk w;
+    const lightvec__face *f, *leaf;
+    lightvec__vec3 d;
+    float dd[3];
+    uint32_t i = 0;
+    if (!c || !index || !lightvec__unit(direction, &d)) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    dd[0] = d.x; dd[1] = d.y; dd[2] = d.z;
+    leaf = &c->roots[lightvec__root_of(c->roots, dd)];
+    while (leaf->children) leaf = &((const lightvec__face *)leaf->children)[lightvec__child_of(leaf, dd)];
+    lightvec__walk_init(&w, c);
+    while ((f = lightvec__walk_next(&w)) != NULL && f != leaf) i++;
+    *index = i;
+    return LIGHTVEC_OK;
+}
+
+/* ---- optimize: one kd-tree per leaf, built as jobs -------------------------------------- */
+
+typedef struct lightvec__rebuild {
+    lightvec_cache *c;
+    lightvec__face **faces;
+    lightvec__index **built;         /* per face: its new index, NULL on failure */
+} lightvec__rebuild;
+
+static void lightvec__rebuild_job(void *ctx, uint32_t i)
+{
+    lightvec__rebuild *r = (lightvec__rebuild *)ctx;
+    const lightvec__index *old = (const lightvec__index *)r->faces[i]->index;
+    lightvec__item *items = (lightvec__item *)lightvec__alloc_array(&r->c->a, r->faces[i]->count, sizeof *items);
+    r->built[i] = NULL;
+    if (!items) return;
+    lightvec__index_items(old, old->tree_count, items);
+    r->built[i] = lightvec__index_single(r->c, items, r->faces[i]->count);
+    lightvec__free(&r->c->a, items);
+}
+
+/* Leaves whose index has more than one kd-tree or a non-empty tail. */
+static uint32_t lightvec__fragmented_leaves(lightvec_cache *c, lightvec__face **out)
+{
+    lightvec__walk w;
+    const lightvec__face *f;
+    uint32_t n = 0;
+    lightvec__walk_init(&w, c);
+    for (f = lightvec__walk_next(&w); f; f = lightvec__walk_next(&w)) {
+        const lightvec__index *idx = (const lightvec__index *)f->index;
+        if (!f->children && idx && (idx->tree_count > 1 || idx->tail_count > 0)) {
+            if (out) out[n] = (lightvec__face *)f;
+            n++;
+        }
+    }
+    f = &c->omni;
+    if (f->index && (((const lightvec__index *)f->index)->tree_count > 1 ||
+                     ((const lightvec__index *)f->index)->tail_count > 0)) {
+        if (out) out[n] = (lightvec__face *)f;
+        n++;
+    }
+    return n;
+}
+
+LIGHTVEC_API lightvec_result lightvec_cache_optimize(lightvec_cache *c)
+{
+    lightvec__rebuild r;
+    uint32_t n, done = 0, i;
+    lightvec_result res = LIGHTVEC_OK;
+    const uint32_t batch = 64;
+    if (!c) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    n = lightvec__fragmented_leaves(c, NULL);
+    if (!n) return LIGHTVEC_OK;
+    r.c = c;
+    r.faces = (lightvec__face **)lightvec__alloc_array(&c->a, n, sizeof *r.faces);
+    r.built = (lightvec__index **)lightvec__alloc_array(&c->a, n, sizeof *r.built);
+    if (!r.faces || !r.built) {
+        lightvec__free(&c->a, r.faces);
+        lightvec__free(&c->a, r.built);
+        return LIGHTVEC_ERROR_OUT_OF_MEMORY;
+    }
+    lightvec__fragmented_leaves(c, r.faces);
+    while (done < n && res == LIGHTVEC_OK) {
+        uint32_t count = n - done < batch ? n - done : batch;
+        lightvec__rebuild sub = r;
+        sub.faces += done;
+        sub.built += done;
+        lightvec__run_jobs(c->parallel_for, c->parallel_user, lightvec__rebuild_job, &sub, count);
+        for (i = 0; i < count; i++) {
+            lightvec__face *f = sub.faces[i];
+            lightvec__index *old = (lightvec__index *)f->index;
+            uint32_t t;
+            if (!sub.built[i]) { res = LIGHTVEC_ERROR_OUT_OF_MEMORY; continue; }
+            lightvec__store_ptr(&f->index, sub.built[i]);
+            for (t = 0; t < old->tree_count; t++) lightvec__retire(c, old->trees[t], old->trees[t]->bytes);
+            lightvec__retire(c, old, sizeof *old);
+        }
+        done += count;
+        if (res == LIGHTVEC_OK && c->progress && c->progress(c->progress_user, done, n)) res = LIGHTVEC_ERROR_CANCELLED;
+    }
+    lightvec__reclaim(c);
+    lightvec__free(&c->a, r.faces);
+    lightvec__free(&c->a, r.built);
+    return res;
+}
+
+/* ======================================================================
+   13. save and load
+   ---------------------------------------------------------------------- */
+static const unsigned char lightvec__magic[8] = { 'L', 'I', 'G', 'H', 'T', 'V', 'E', 'C' };
+
+/* A record's 29 floats in a fixed order, then its flags. */
+static void lightvec__record_floats(const lightvec_record *r, float f[29])
+{
+    int c;
+    memcpy(f, r->position, 12);
+    memcpy(f + 3, r->normal, 12);
+    memcpy(f + 6, r->outgoing, 12);
+    memcpy(f + 9, r->vector.direction, 12);
+    memcpy(f + 12, r->vector.magnitude, 12);
+    memcpy(f + 15, r->irradiance, 12);
+    for (c = 0; c < 3; c++) memcpy(f + 18 + 3 * c, r->gradient[c], 12);
+    f[27] = r->distance;
+    f[28] = r->visibility;
+}
+
+static void lightvec__put_record(lightvec__writer *w, const lightvec_record *r)
+{
+    float f[29];
+    lightvec__record_floats(r, f);
+    lightvec__put_f32_array(w, f, 29);
+    lightvec__put_u32(w, r->flags);
+}
+
+/* One serialized record, read in one call and decoded little-endian. */
+static void lightvec__get_record(lightvec__reader *r, lightvec_record *rec)
+{
+    unsigned char b[LIGHTVEC__RECORD_BYTES];
+    uint32_t v[30];
+    float f[29];
+    int i, c;
+    lightvec__get(r, b, sizeof b);
+    for (i = 0; i < 30; i++)
+        v[i] = (uint32_t)b[4 * i] | ((uint32_t)b[4 * i + 1] << 8) | ((uint32_t)b[4 * i + 2] << 16) |
+               ((uint32_t)b[4 * i + 3] << 24);
+    memcpy(f, v, sizeof f);
+    memcpy(rec->position, f, 12);
+    memcpy(rec->normal, f + 3, 12);
+    memcpy(rec->outgoing, f + 6, 12);
+    memcpy(rec->vector.direction, f + 9, 12);
+    memcpy(rec->vector.magnitude, f + 12, 12);
+    memcpy(rec->irradiance, f + 15, 12);
+    for (c = 0; c < 3; c++) memcpy(rec->gradient[c], f + 18 + 3 * c, 12);
+    rec->distance = f[27];
+    rec->visibility = f[28];
+    rec->flags = v[29];
+}
+
+LIGHTVEC_API lightvec_result lightvec_save(const lightvec_cache *c, lightvec_write_fn write, void *user)
+{
+    lightvec__writer w;
+    uint32_t i, n;
+    if (!c || !write) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    w.write = write;
+    w.user = user;
+    w.failed = 0;
+    lightvec__crc_init(&w.crc);
+    n = c->record_count;
+    lightvec__put(&w, lightvec__magic, 8);
+    lightvec__put_u32(&w, LIGHTVEC_FILE_FORMAT_VERSION);
+    lightvec__put_u64(&w, 36u + 8u + (uint64_t)n * LIGHTVEC__RECORD_BYTES);
+    lightvec__put_u32(&w, (uint32_t)c->p.kind);
+    lightvec__put_f32(&w, c->p.radius_scale);
+    lightvec__put_f32(&w, c->p.max_change);
+    lightvec__put_f32(&w, c->p.normal_angle);
+    lightvec__put_f32(&w, c->p.direction_angle);
+    lightvec__put_u32(&w, c->p.min_valid);
+    lightvec__put_u32(&w, c->p.split_threshold);
+    lightvec__put_u32(&w, c->p.max_depth);
+    lightvec__put_u32(&w, (uint32_t)c->p.interpolation);
+    lightvec__put_u64(&w, n);
+    for (i = 0; i < n && !w.failed; i++) lightvec__put_record(&w, lightvec__record_at(c, i));
+    lightvec__put_u32(&w, lightvec__crc_final(&w.crc));
+    return w.failed ? LIGHTVEC_ERROR_IO : LIGHTVEC_OK;
+}
+
+/* Builds the index of a freshly loaded cache: items go to their root face
+   (or the view-independent leaf); each root is filled as one job. */
+typedef struct lightvec__bulk {
+    lightvec_cache *c;
+    lightvec__item *items;
+    uint32_t start[22];              /* 20 roots, the view-independent leaf, end */
+    int failed[21];
+} lightvec__bulk;
+
+static void lightvec__bulk_job(void *ctx, uint32_t i)
+{
+    lightvec__bulk *b = (lightvec__bulk *)ctx;
+    lightvec__face *f = i < 20 ? &b->c->roots[i] : &b->c->omni;
+    b->failed[i] = lightvec__face_fill(b->c, f, b->items + b->start[i], b->start[i + 1] - b->start[i]) != 0;
+}
+
+static uint32_t lightvec__slot_of(const lightvec_cache *c, const lightvec_record *r)
+{
+    return (r->flags & LIGHTVEC_RECORD_VIEW_INDEPENDENT) ? 20u : lightvec__root_of(c->roots, r->outgoing);
+}
+
+static lightvec_result lightvec__bulk_index(lightvec_cache *c)
+{
+    lightvec__bulk b;
+    uint32_t n = c->record_count, i, next[21];
+    int k, failed = 0;
+    memset(&b, 0, sizeof b);
+    b.c = c;
+    b.items = (lightvec__item *)lightvec__alloc_array(&c->a, n, sizeof *b.items);
+    if (!b.items) return LIGHTVEC_ERROR_OUT_OF_MEMORY;
+    for (i = 0; i < n; i++) b.start[lightvec__slot_of(c, lightvec__record_at(c, i)) + 1]++;
+    for (k = 1; k < 22; k++) b.start[k] += b.start[k - 1];
+    memcpy(next, b.start, sizeof next);
+    for (i = 0; i < n; i++) {
+        const lightvec_record *r = lightvec__record_at(c, i);
+        lightvec__make_item(&c->p, r, i, &b.items[next[lightvec__slot_of(c, r)]++]);
+    }
+    lightvec__run_jobs(c->parallel_for, c->parallel_user, lightvec__bulk_job, &b, 21);
+    lightvec__free(&c->a, b.items);
+    for (k = 0; k < 21; k++) failed |= b.failed[k];
+    return failed ? LIGHTVEC_ERROR_OUT_OF_MEMORY : LIGHTVEC_OK;
+}
+
+LIGHTVEC_API lightvec_result lightvec_load(const lightvec_cache_desc *desc, lightvec_read_fn read, void *user,
+                                           lightvec_cache **out)
+{
+    lightvec__reader r;
+    lightvec_cache_desc d;
+    lightvec_cache *c = NULL;
+    unsigned char magic[8], crc_bytes[4];
+    uint32_t version, expected, stored, kind, interp;
+    uint64_t payload, count, i;
+    lightvec_result res;
+    if (!out) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    *out = NULL;
+    if (!read) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    memset(&d, 0, sizeof d);
+    if (desc) d = *desc;
+    r.read = read;
+    r.user = user;
+    r.failed = 0;
+    r.remaining = 20u;
+    lightvec__crc_init(&r.crc);
+    lightvec__get(&r, magic, 8);
+    version = lightvec__get_u32(&r);
+    payload = lightvec__get_u64(&r);
+    if (r.failed || memcmp(magic, lightvec__magic, 8) != 0) return LIGHTVEC_ERROR_CORRUPT_DATA;
+    if (version != LIGHTVEC_FILE_FORMAT_VERSION) return LIGHTVEC_ERROR_VERSION;
+    r.remaining = payload;
+    kind = lightvec__get_u32(&r);
+    d.kind = kind == 1u ? LIGHTVEC_KIND_INDIRECT : (kind == 2u ? LIGHTVEC_KIND_DIRECT : (lightvec_kind)99);
+    d.radius_scale = lightvec__get_f32(&r);
+    d.max_irradiance_change = lightvec__get_f32(&r);
+    d.max_normal_angle = lightvec__get_f32(&r);
+    d.max_direction_angle = lightvec__get_f32(&r);
+    d.min_valid = lightvec__get_u32(&r);
+    d.face_split_threshold = lightvec__get_u32(&r);
+    d.max_face_depth = lightvec__get_u32(&r);
+    interp = lightvec__get_u32(&r);
+    d.interpolation = interp >= 1u && interp <= 3u ? (lightvec_interpolation)interp : (lightvec_interpolation)99;
+    count = lightvec__get_u64(&r);
+    if (r.failed || !lightvec__can_hold(&r, count, LIGHTVEC__RECORD_BYTES) || count >= 0xFFFFFFFFu ||
+        r.remaining != count * LIGHTVEC__RECORD_BYTES || !(d.radius_scale > 0.0f) ||
+        !(d.max_irradiance_change > 0.0f) || !(d.max_normal_angle > 0.0f) || !(d.max_direction_angle > 0.0f) ||
+        d.min_valid == 0 || d.face_split_threshold == 0 || d.max_face_depth == 0)
+        return LIGHTVEC_ERROR_CORRUPT_DATA;
+    res = lightvec__cache_new(&d, &c);
+    if (res == LIGHTVEC_ERROR_INVALID_ARGUMENT && lightvec__allocator_valid(&d.allocator))
+        return LIGHTVEC_ERROR_CORRUPT_DATA; /* settings out of range */
+    if (res != LIGHTVEC_OK) return res;
+    for (i = 0; i < count; i++) {
+        lightvec_record rec, clean, *slot;
+        lightvec__get_record(&r, &rec);
+        if (r.failed || !lightvec__record_clean(&rec, &clean)) { res = LIGHTVEC_ERROR_CORRUPT_DATA; break; }
+        slot = lightvec__record_reserve(c, (uint32_t)i);
+        if (!slot) { res = LIGHTVEC_ERROR_OUT_OF_MEMORY; break; }
+        *slot = clean;
+        c->record_count = (uint32_t)i + 1u;
+    }
+    if (res == LIGHTVEC_OK) {
+        expected = lightvec__crc_final(&r.crc);
+        r.remaining = 4u;
+        lightvec__get(&r, crc_bytes, 4);
+        stored = (uint32_t)crc_bytes[0] | ((uint32_t)crc_bytes[1] << 8) | ((uint32_t)crc_bytes[2] << 16) |
+                 ((uint32_t)crc_bytes[3] << 24);
+        if (r.failed || stored != expected) res = LIGHTVEC_ERROR_CORRUPT_DATA;
+    }
+    if (res == LIGHTVEC_OK) res = lightvec__bulk_index(c);
+    if (res != LIGHTVEC_OK) {
+        lightvec_cache_destroy(c);
+        return res;
+    }
+    *out = c;
+    return LIGHTVEC_OK;
+}
+
+LIGHTVEC_API lightvec_result lightvec_save_to_memory(const lightvec_cache *c, const lightvec_allocator *a,
+                                                     void **data, size_t *size)
+{
+    lightvec__membuf m;
+    lightvec_allocator zero;
+    lightvec_result r;
+    if (!data || !size) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    *data = NULL;
+    *size = 0;
+    memset(&zero, 0, sizeof zero);
+    if (!a) a = &zero;
+    if (!c || !lightvec__allocator_valid(a)) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    memset(&m, 0, sizeof m);
+    m.a = a;
+    r = lightvec_save(c, lightvec__membuf_write, &m);
+    if (r != LIGHTVEC_OK) {
+        lightvec__free(a, m.data);
+        return r == LIGHTVEC_ERROR_IO ? LIGHTVEC_ERROR_OUT_OF_MEMORY : r;
+    }
+    *data = m.data;
+    *size = m.size;
+    return LIGHTVEC_OK;
+}
+
+LIGHTVEC_API lightvec_result lightvec_load_from_memory(const void *data, size_t size, const lightvec_cache_desc *desc,
+                                                       lightvec_cache **out)
+{
+    lightvec__membuf m;
+    if (!out) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    *out = NULL;
+    if (!data && size) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    memset(&m, 0, sizeof m);
+    m.data = (unsigned char *)(uintptr_t)data; /* only read */
+    m.size = size;
+    return lightvec_load(desc, lightvec__membuf_read, &m, out);
+}
+
+LIGHTVEC_API void lightvec_free_memory(const lightvec_allocator *a, void *data)
+{
+    lightvec_allocator zero;
+    memset(&zero, 0, sizeof zero);
+    lightvec__free(a ? a : &zero, data);
 }
 
 #endif /* LIGHTVEC_IMPLEMENTATION */

@@ -1,12 +1,32 @@
-/* rendercache.h - v0.1.0 - render cache and range-image walkthroughs - public domain or MIT, see end of file
+/* rendercache.h - v0.3.0 - render cache and range-image walkthroughs - public domain or MIT, see end of file
 
    RENDERCACHE.H: an image-space point cache that reprojects and resamples, and range-image walkthroughs of animated scenes.
 
-   STATUS
+   The render cache (Walter, Drettakis and Parker 1999; Walter, Drettakis and
+   Greenberg 2002) keeps the shaded points of earlier frames. Every frame it
+   reprojects them into the new camera, keeps the nearest one per pixel,
+   drops points that show through nearer surfaces (depth cull), fills small
+   holes from neighbouring points without blending across depth edges, and
+   builds a priority image (old points, sparse and empty regions). Error
+   diffusion of the thresholded priority image picks the pixels that deserve
+   a new ray within the caller's budget; the caller shades them with any
+   renderer and inserts the results. Objects may move: each point belongs to
+   an object whose transform the caller updates, and the point moves with it.
 
-   Skeleton: this version declares the error codes and the version macros
-   only. The technique itself is not implemented yet; nothing else is declared
-   until it is.
+   Range-image walkthroughs (Nimeroff, Dorsey and Rushmeier 1996) precompute
+   instead: a range image is what a camera sees (radiance, distance along
+   the ray, object id per pixel), and a walkthrough of an animated scene is
+   rebuilt from base images, fish-eye or full-sphere views taken at base
+   view positions and key times. Coherence tests on id images choose them:
+   a view space (a box of eye positions) and a time interval are subdivided
+   until the id images at the ends of every cell agree on a fraction q of
+   their pixels. A frame is then the base views around its eye, blended to
+   its time (pixelwise, or with moving objects moved by their transforms so
+   that they do not ghost) and warped into its camera as Radiance's pinterp
+   does, with foreground and background fill. Object-space solutions (e.g.
+   indirect irradiance per vertex) get key times of their own, and the
+   relative luminance RMS error measures the result. Warps share the render
+   cache's cameras and its z-buffered reprojection.
 
    DO THIS
 
@@ -15,6 +35,45 @@
 
    in exactly one C or C++ file; include "rendercache.h" without the define
    everywhere else.
+
+   EXAMPLE: THE RENDER CACHE
+
+       rendercache_desc d;
+       rendercache *rc;
+       memset(&d, 0, sizeof d);
+       d.width = 512; d.height = 512;                 // everything else: defaults
+       if (rendercache_create(&d, &rc) != RENDERCACHE_OK) return 1;
+       while (running) {
+           uint32_t i, n;
+           rendercache_begin_frame(rc, &camera);      // reproject, cull, fill, prioritise
+           rendercache_request(rc, req, budget, &n);  // the pixels that deserve a ray
+           for (i = 0; i < n; i++) {
+               s[i].x = req[i].x; s[i].y = req[i].y; s[i].flags = req[i].flags;
+               shade(req[i].org, req[i].dir, s[i].position, s[i].rgb, &s[i].object);
+           }
+           rendercache_insert(rc, s, n);
+           show(rendercache_image(rc));               // width * height RGB floats, top row first
+       }
+       rendercache_destroy(rc);
+
+   EXAMPLE: A WALKTHROUGH FROM BASE VIEWS
+
+       rendercache_view_space_desc vd = {0};          // base views: fish-eyes in a box of eyes
+       vd.camera = fisheye;                           // kind, look direction, id image size
+       vd.lo = ..., vd.hi = ...; vd.quality = 0.9f;
+       vd.render_ids = my_id_renderer; vd.user = scene;
+       rendercache_view_space_create(&vd, &vs);
+       // base images: for each view i (rendercache_view_space_camera) and key
+       // time (rendercache_subdivide_time), fill a range image's rgb, depth, object
+       rendercache_warper_create(&warp_desc, &warper);
+       for (each frame) {
+           rendercache_view_space_locate(vs, camera.eye, corners, &n);
+           for (i = 0; i < n; i++)                    // each corner view at the frame's time
+               rendercache_blend_motion(blender, base[corners[i]][k], base[corners[i]][k + 1], s,
+                                        &motion, RENDERCACHE_FILL_FOREGROUND, blended[i]);
+           rendercache_warp(warper, blended, n, &camera, RENDERCACHE_FILL_BOTH, frame);
+           show(frame->rgb);
+       }
 
    CONFIGURATION MACROS
 
@@ -25,16 +84,137 @@
    FUNCTION REFERENCE
 
        const char *rendercache_result_string(rendercache_result r);   name of an error code
+     the render cache
+       rendercache_create(desc, &rc) / rendercache_destroy(rc)        the cache, sized from the image
+       rendercache_set_object_transform(rc, object, m)                object-to-world 3x4 matrix
+       rendercache_begin_frame(rc, camera)                            reproject into a new camera
+       rendercache_predict(rc, next_camera)                           optional: sample what it will uncover
+       rendercache_request(rc, out, max, &count)                      pixels to shade this frame
+       rendercache_insert(rc, samples, n)                             shaded samples become points
+       rendercache_image(rc)                                          the current RGB float image
+       rendercache_priority_image(rc), rendercache_pixel_kinds(rc),
+       rendercache_depth_image(rc)                                    per-pixel internals (inspection)
+       rendercache_get_stats(rc, &stats)                              counts and phase times of the frame
+       rendercache_clear(rc)                                          forget every point
+     cameras (perspective, hemispherical fish-eye, full sphere)
+       rendercache_camera_ray(camera, px, py, org, dir)               primary ray through an image point
+       rendercache_camera_project(camera, p, &px, &py, &depth)        world point to image point
+     range images
+       rendercache_range_image_create(camera, a, &img) / _destroy     rgb, depth and object arrays
+       rendercache_range_image_save(img, write, user) / _load(a, read, user, &img)
+       rendercache_range_image_save_to_memory(img, a, &data, &size) / _load_from_memory(data, size, a, &img)
+       rendercache_free_memory(a, data)                               what save_to_memory returned
+     view and time interpolation
+       rendercache_warper_create(desc, &w) / rendercache_warper_destroy(w)
+       rendercache_warp(w, images, n, camera, fill, out)              reproject range images into a view
+       rendercache_blend(a, b, t, out)                                pixelwise time blend (pcomb)
+       rendercache_blend_motion(w, a, b, t, motion, fill, out)        blend with moving objects moved
+       rendercache_warp_get_stats(w, &stats)                          counts and times of the last call
+     coherence (base views and key times)
+       rendercache_fitness(id_images, count, w, h, &f)                f = N / PQ
+       rendercache_view_space_create(desc, &vs) / _destroy(vs)        subdivided view space
+       rendercache_view_space_count(vs), _eyes(vs), _camera(vs, i, &c) the base views
+       rendercache_view_space_locate(vs, eye, views, &n)              corner views of the cell around an eye
+       rendercache_view_space_cell_count(vs), _cell(vs, i, lo, hi, &f) the leaf cells
+       rendercache_subdivide_time(desc, &times, &count)               key times of id images
+       rendercache_keytimes_create(desc, &kt) / _destroy(kt)          key times of an object-space solution
+       rendercache_keytimes_count(kt), _times(kt), _values(kt, k)     the keys
+       rendercache_keytimes_eval(kt, time, values)                    linear interpolation in time
+     error
+       rendercache_lrms(reference, image, w, h, &lrms)                relative luminance RMS
+
+   CONVENTIONS
+
+       Pixel (x, y) covers [x, x+1) x [y, y+1) of the image plane, y = 0 is the
+       top row; its primary ray passes through (x + 0.5, y + 0.5). Images are
+       row-major, top row first, linear RGB floats. Depth is the distance from
+       the eye along the ray. A fish-eye is equidistant: the inscribed circle
+       spans 180 degrees and pixels outside it have no ray (object
+       RENDERCACHE_NO_SAMPLE in range images). A sphere camera puts the
+       forward hemisphere in the left half of the image and the backward one
+       in the right half, each by the equal-area concentric map of Shirley
+       and Chiu. Range-image pixels whose ray left the scene have object
+       RENDERCACHE_MISS and are warped as directions (background at
+       infinity). One rendercache, warper, view space or keytimes object is
+       used by one thread at a time; per-frame work runs in parallel through
+       desc.parallel_for and gives bit-identical results for any thread count.
+
+   HOW A FRAME WORKS (and which published step each part is)
+
+       begin_frame: every point is projected into the camera and z-buffered,
+       one point per pixel (WDP99 reprojection); a point much farther than
+       the average depth of its 3x3 neighbourhood, with nearer points on
+       opposite sides, is dropped (WDP99 depth cull); holes are filled by a
+       3x3 tent filter, or a 7x7 one where points are sparse (WDG02), from
+       the nearest or the farthest depth layer only, never a blend; the
+       priority image ranks old points (age, faster for moving objects,
+       times the sample's priority_scale) below holes (the fewer points
+       around, the higher), and pixels with nothing near at 1 (WDP99).
+       request: the levels of the priority image above a threshold are all
+       requested, the level at the threshold gets the rest of the budget,
+       spread by Floyd-Steinberg error diffusion (WDP99); with predict, up to
+       desc.predict_fraction of the budget goes to the holes of the next
+       camera (WDG02 predictive sampling). insert: a sample replaces the
+       point its pixel showed, or the oldest point not visible (clock).
+
+   HOW A WARP WORKS (NDR96 section 4.4, after Radiance's pinterp)
+
+       Every pixel of every input is a point (eye + ray * depth) reprojected
+       into the target camera through the render cache's z-buffer, inputs in
+       order of their eye's distance to the target's. An input of rank k
+       competes with its squared distances multiplied by (1 + tolerance)^2k,
+       so a surface replaces the same surface seen by a nearer input only
+       when it is nearer by more than the tolerance per rank between them
+       (for two inputs exactly pinterp's rule). Fill NONE: one target pixel
+       per source pixel. FOREGROUND: each source pixel also spans the two
+       triangles of the quad to its right and lower neighbours when their
+       depths agree within twice the tolerance, colour and depth interpolated
+       (watertight edges); a source pixel is splatted as a point only where
+       its triangles do not surround it (depth edges, borders). BACKGROUND:
+       an empty pixel takes the farther of the nearest filled pixels left and
+       right of its run, and of those above and below, preferring one right
+       next to it. Then desc.fill_pixel computes what is still empty. Rays of
+       chunks of source pixels that all point outside the target's frustum
+       (seen from the input's eye) are skipped. blend_motion warps both
+       images into the output's camera with each object's motion (pixels of
+       static objects in their own camera stay in place, exactly), blends
+       where both show the same object at the same depth, and keeps the
+       nearer surface elsewhere.
+
+   LIMITS
+
+       Render cache: image up to 2^28 pixels, cache up to 2^31 points, up to
+       2^24 objects. Memory: 40 bytes per cache point (2 per pixel by
+       default) and about 71 bytes per pixel, 95 with parallel_for: 40 MB for
+       512x512. Point colours are fixed when they are inserted (the cache ages
+       them so that they get refreshed); view-dependent shading changes only
+       as points are resampled, as in the paper. Error diffusion is
+       sequential by nature and runs on the calling thread; the rest of a
+       frame runs in parallel.
+       Walkthroughs: a range image takes 20 bytes per pixel; a warper about
+       37 bytes per target pixel (61 with parallel_for, 20 more after a
+       motion blend) plus, with foreground fill, 52 bytes per pixel of the
+       widest input's row per job. At most 2^32 - 1 input pixels per
+       warp. Warps reproduce no view-dependent shading the inputs lack, and a
+       pixelwise blend ghosts moving objects; the motion-compensated blend
+       moves objects but not their shadows or reflections on static surfaces
+       (those still blend pixelwise). Fitness counts pixels, so objects small
+       in the id images hardly drive the subdivision, and an interval whose
+       ends look alike is not split even if things happen in between (the
+       paper's tests compare the ends only).
 
    PAPER
 
-       Bruce Walter, George Drettakis and Steven Parker, Interactive Rendering using the Render Cache, EGWR 1999; Nimeroff, Dorsey and Rushmeier, Implementation and Analysis of an Image-Based Global Illumination Framework for Animated Environments, IEEE TVCG 2(4), 1996.
+       Bruce Walter, George Drettakis and Steven Parker, Interactive Rendering using the Render Cache, EGWR 1999; Bruce Walter, George Drettakis and Donald P. Greenberg, Enhancing and Optimizing the Render Cache, EGWR 2002; Jeffry S. Nimeroff, Julie Dorsey and Holly Rushmeier, Implementation and Analysis of an Image-Based Global Illumination Framework for Animated Environments, IEEE TVCG 2(4), 1996 (sections 3-5); Peter Shirley and Kenneth Chiu, A Low Distortion Map Between Disk and Square, JGT 1997 (sphere cameras). The render cache as used by Rodolphe Crespin and Bernard Peroche, Light Vectors for a Moving Observer, WSCG 2004 (sections 2.2 and 4.1).
 */
 #ifndef RENDERCACHE_H
 #define RENDERCACHE_H
 
+#include <stddef.h>
+#include <stdint.h>
+
 #define RENDERCACHE_VERSION_MAJOR 0
-#define RENDERCACHE_VERSION_MINOR 1
+#define RENDERCACHE_VERSION_MINOR 3
 #define RENDERCACHE_VERSION_PATCH 0
 
 #ifndef RENDERCACHE_API
@@ -60,7 +240,470 @@ typedef enum rendercache_result {
     RENDERCACHE_ERROR_IO                 /* a read or write callback failed */
 } rendercache_result;
 
+/* Object id of a sample whose ray left the scene: it becomes a background
+   point at infinity along the ray. */
+#define RENDERCACHE_MISS 0xFFFFFFFFu
+
+/* Object id of a range-image pixel nothing is known about: a hole a warp
+   left, or a fish-eye pixel outside the image circle. Warps skip it. */
+#define RENDERCACHE_NO_SAMPLE 0xFFFFFFFEu
+
+/* Depth written for RENDERCACHE_MISS pixels of a range image: the
+   background, "at infinity" (the depth read for them is ignored). */
+#define RENDERCACHE_FAR_DEPTH 1e18f
+
+/* Version of the serialized range-image format (rendercache_range_image_save). */
+#define RENDERCACHE_FILE_FORMAT_VERSION 1
+
+/* rendercache_pixel_request.flags: the ray belongs to the predicted camera
+   given to rendercache_predict, not to the current one. */
+#define RENDERCACHE_REQUEST_PREDICTED 1u
+
+typedef struct rendercache rendercache;
+
+typedef struct rendercache_allocator {
+    void *(*alloc)(size_t size, void *user);  /* NULL: RENDERCACHE_MALLOC */
+    void (*free)(void *ptr, void *user);      /* NULL: RENDERCACHE_FREE */
+    void *user;
+} rendercache_allocator;
+
+typedef void (*rendercache_job_fn)(void *ctx, uint32_t index);
+
+/* Camera models. The render cache takes perspective cameras; range images
+   (base views) may use any kind. */
+typedef enum rendercache_camera_kind {
+    RENDERCACHE_CAMERA_PERSPECTIVE = 0,  /* pinhole; vfov_degrees spans the image height */
+    RENDERCACHE_CAMERA_FISHEYE = 1,      /* hemispherical, equidistant (as Radiance's angular fish-eye):
+                                            the circle inscribed in the image spans 180 degrees, the
+                                            distance from its centre is proportional to the angle from
+                                            the view axis; pixels outside the circle have no ray */
+    RENDERCACHE_CAMERA_SPHERE = 2        /* the full sphere: two hemispheres side by side, each mapped
+                                            to its half of the image by the equal-area concentric map
+                                            of Shirley and Chiu (left half: looking forward, right half:
+                                            looking backward); every pixel has a ray, and with
+                                            width = 2 * height every pixel covers the same solid angle */
+} rendercache_camera_kind;
+
+/* A look-at camera: pixels are square, "up" need not be orthogonal to the
+   view direction (it is orthogonalised), right = forward x up. */
+typedef struct rendercache_camera {
+    rendercache_camera_kind kind;
+    float eye[3];
+    float look_at[3];        /* a point on the view axis, not the eye */
+    float up[3];             /* not parallel to look_at - eye */
+    float vfov_degrees;      /* perspective: in (0, 180); ignored by the other kinds */
+    uint32_t width, height;  /* pixels; must equal the cache's image size */
+} rendercache_camera;
+
+typedef struct rendercache_desc {
+    uint32_t width, height;      /* image size in pixels (required) */
+    float points_per_pixel;      /* cache capacity = points_per_pixel * width * height; default 2 */
+    uint32_t object_count;       /* object ids 0 .. object_count-1, each with a transform; default 256 */
+    float depth_tolerance;       /* relative depth step that counts as a discontinuity (depth cull,
+                                    interpolation layers); default 0.1 */
+    uint32_t age_ramp_frames;    /* a point's priority grows with age for this many frames; default 32 */
+    uint32_t moving_age_step;    /* age a point gains per frame while its object moves; default 4 */
+    uint32_t sparse_neighbours;  /* a hole with fewer points in its 3x3 neighbourhood uses the wide
+                                    filter; default 2 (1..8) */
+    uint32_t wide_radius;        /* half width of the wide filter: default 3 (7x7), at most 7 */
+    float predict_fraction;      /* share of the budget for predicted samples when
+                                    rendercache_predict was called; default 0.25, at most 1 */
+    float background[3];         /* colour of pixels nothing covers; default black */
+    rendercache_allocator allocator;
+    void (*parallel_for)(void *user, rendercache_job_fn job, void *ctx, uint32_t count);
+    void *parallel_user;
+    double (*clock)(void *user); /* optional: seconds, to time the phases in rendercache_stats */
+    void *clock_user;
+    void (*log)(void *user, const char *message); /* optional details on errors */
+    void *log_user;
+} rendercache_desc;
+
+/* A pixel that deserves a new sample, with its primary ray (unit dir). */
+typedef struct rendercache_pixel_request {
+    uint32_t x, y;
+    uint32_t flags;          /* RENDERCACHE_REQUEST_PREDICTED or 0 */
+    float org[3], dir[3];
+} rendercache_pixel_request;
+
+/* A shaded sample: copy x, y and flags from its request. */
+typedef struct rendercache_sample {
+    uint32_t x, y;           /* the requested pixel */
+    uint32_t flags;          /* the request's flags */
+    uint32_t object;         /* id of the object hit (< desc.object_count), or RENDERCACHE_MISS */
+    float position[3];       /* world-space hit point; ignored for a miss */
+    float rgb[3];            /* radiance towards the eye, linear RGB */
+    float priority_scale;    /* multiplies the point's priority, e.g. lightvec_priority(1, W);
+                                0 means 1 */
+} rendercache_sample;
+
+/* What a pixel of the current image shows (rendercache_pixel_kinds). */
+typedef enum rendercache_pixel_kind {
+    RENDERCACHE_PIXEL_POINT = 0,     /* a cached point */
+    RENDERCACHE_PIXEL_INTERPOLATED,  /* a hole filled by the 3x3 filter */
+    RENDERCACHE_PIXEL_SPARSE,        /* a hole filled by the wide filter */
+    RENDERCACHE_PIXEL_EMPTY          /* nothing near: background colour */
+} rendercache_pixel_kind;
+
+typedef struct rendercache_stats {
+    uint64_t frame;              /* begin_frame calls so far */
+    uint32_t capacity;           /* cache slots */
+    uint32_t live_points;        /* slots holding a point */
+    uint32_t projected;          /* points that landed inside the image this frame */
+    uint32_t visible;            /* pixels showing a point after z-buffer and depth cull */
+    uint32_t culled;             /* z-buffer winners dropped by the depth cull */
+    uint32_t interpolated;       /* holes filled by the 3x3 filter */
+    uint32_t sparse;             /* holes filled by the wide filter */
+    uint32_t empty;              /* pixels nothing covers */
+    uint32_t requested;          /* requests handed out since begin_frame (all kinds) */
+    uint32_t predicted;          /* of which for the predicted camera */
+    uint32_t inserted;           /* samples accepted since begin_frame */
+    uint32_t replaced;           /* of which replaced the point their pixel showed */
+    uint32_t evicted;            /* of which overwrote a point not visible in this frame */
+    uint32_t rejected;           /* samples ignored since begin_frame (bad values or pixel) */
+    /* seconds spent in each phase of the last frame (0 without desc.clock) */
+    double time_project;         /* projection and z-buffer of every point */
+    double time_cull;            /* depth cull, with the colour and priority of the pixels showing points */
+    double time_interpolate;     /* hole filling, with the priority of the holes */
+    double time_predict;         /* rendercache_predict */
+    double time_request;         /* threshold and error diffusion (all request calls) */
+    double time_insert;
+} rendercache_stats;
+
 RENDERCACHE_API const char *rendercache_result_string(rendercache_result r);
+
+/* Creates a cache for images of desc->width x desc->height pixels. Every
+   buffer the per-frame work needs is allocated here, none later. */
+RENDERCACHE_API rendercache_result rendercache_create(const rendercache_desc *desc, rendercache **out);
+RENDERCACHE_API void rendercache_destroy(rendercache *rc);
+
+/* Sets the object-to-world transform of an object: m is 3x4 row-major
+   (world = m[0..2] . p + m[3], ...). Its points move with it from the next
+   begin_frame on, and age faster while the transform keeps changing. Every
+   object starts at the identity. Singular or non-finite matrices are
+   rejected. */
+RENDERCACHE_API rendercache_result rendercache_set_object_transform(rendercache *rc, uint32_t object,
+                                                                    const float m[12]);
+
+/* Starts a frame: ages the points, projects them into the camera (a
+   perspective one), z-buffers, depth-culls, fills holes and builds the
+   priority image. */
+RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, const rendercache_camera *camera);
+
+/* Predictive sampling (2002): projects the cache into the camera the caller
+   expects next; rendercache_request then spends up to desc.predict_fraction
+   of its budget on the holes that camera would see (requests flagged
+   RENDERCACHE_REQUEST_PREDICTED, rays of the predicted camera). Valid until
+   the next begin_frame. */
+RENDERCACHE_API rendercache_result rendercache_predict(rendercache *rc, const rendercache_camera *next);
+
+/* Chooses up to max pixels to sample by error diffusion of the thresholded
+   priority image and writes them to out (*count of them). A second call in
+   the same frame returns the next most important pixels. */
+RENDERCACHE_API rendercache_result rendercache_request(rendercache *rc, rendercache_pixel_request *out,
+                                                       uint32_t max, uint32_t *count);
+
+/* Adds shaded samples as points. A sample for a current-frame pixel
+   replaces the point that pixel shows (and updates the image at once);
+   other samples take the slot of the oldest point not visible in this
+   frame. Samples with non-finite values, unknown objects or pixels outside
+   the image are ignored and counted in stats.rejected. n = 0 does nothing. */
+RENDERCACHE_API rendercache_result rendercache_insert(rendercache *rc, const rendercache_sample *samples,
+                                                      uint32_t n);
+
+/* The current image: width * height * 3 floats, valid until the next call
+   that changes the cache. */
+RENDERCACHE_API const float *rendercache_image(const rendercache *rc);
+/* Per-pixel priority in [0, 1] (1: nothing to show), after requests zeroed the chosen pixels. */
+RENDERCACHE_API const float *rendercache_priority_image(const rendercache *rc);
+/* Per-pixel rendercache_pixel_kind values. */
+RENDERCACHE_API const unsigned char *rendercache_pixel_kinds(const rendercache *rc);
+/* Per-pixel depth of the point shown (distance from the eye; 1e18 for a
+   background point), FLT_MAX where the pixel shows no point. Computed on
+   each call. */
+RENDERCACHE_API const float *rendercache_depth_image(rendercache *rc);
+
+RENDERCACHE_API void rendercache_get_stats(const rendercache *rc, rendercache_stats *out);
+
+/* Forgets every point (e.g. after lights changed); transforms are kept. */
+RENDERCACHE_API void rendercache_clear(rendercache *rc);
+
+/* The primary ray through image point (px, py) (pixel centres at +0.5):
+   org = eye, dir = unit direction. A point outside a fish-eye's circle has
+   no ray: RENDERCACHE_ERROR_INVALID_ARGUMENT. */
+RENDERCACHE_API rendercache_result rendercache_camera_ray(const rendercache_camera *camera, float px, float py,
+                                                          float org[3], float dir[3]);
+/* Projects world point p: returns 1 and the image point and the distance
+   from the eye when p lands inside the image (for a fish-eye: within its
+   hemisphere), else 0. */
+RENDERCACHE_API int rendercache_camera_project(const rendercache_camera *camera, const float p[3],
+                                               float *px, float *py, float *depth);
+
+/* ------------------------------------------------------------------------
+   Range-image walkthroughs (Nimeroff, Dorsey and Rushmeier 1996)
+   ------------------------------------------------------------------------ */
+
+/* Serialization callbacks: return 0 when all n bytes were written / read. */
+typedef int (*rendercache_write_fn)(void *user, const void *bytes, size_t n);
+typedef int (*rendercache_read_fn)(void *user, void *bytes, size_t n);
+
+/* A range image: what a camera sees, per pixel radiance, the distance along
+   the pixel's ray and the id of the object hit. rendercache_range_image_create
+   allocates the arrays (rendercache_range_image_destroy frees them); a caller
+   may instead fill a struct of its own with its own arrays, and then must not
+   destroy it. Pixels are row-major, top row first. A warp skips pixels of
+   RENDERCACHE_NO_SAMPLE and pixels whose depth is not finite and positive;
+   it reads the depth of RENDERCACHE_MISS pixels as infinite. */
+typedef struct rendercache_range_image {
+    rendercache_camera camera;       /* the view; its width x height is the image size */
+    double time;                     /* scene time the image shows (caller's units) */
+    float *rgb;                      /* 3 per pixel: radiance towards the eye, linear RGB */
+    float *depth;                    /* distance from camera.eye along the pixel's ray (> 0) */
+    uint32_t *object;                /* id of the object hit, RENDERCACHE_MISS (background at
+                                        infinity) or RENDERCACHE_NO_SAMPLE (nothing known) */
+    rendercache_allocator allocator; /* the allocator of the arrays (create and load set it) */
+} rendercache_range_image;
+
+/* How a warp fills the pixels no reprojected pixel lands in (the four fill
+   algorithms of Radiance's pinterp). 0 is the default, BOTH. */
+typedef enum rendercache_fill {
+    RENDERCACHE_FILL_DEFAULT = 0,      /* RENDERCACHE_FILL_BOTH */
+    RENDERCACHE_FILL_NONE,             /* one target pixel per source pixel; the rest stay empty */
+    RENDERCACHE_FILL_FOREGROUND,       /* each source pixel also spans the quad to its right and lower
+                                          neighbours (two triangles, colour interpolated) when their
+                                          depths agree within twice the tolerance */
+    RENDERCACHE_FILL_BACKGROUND,       /* empty pixels take the farther of the nearest filled pixels
+                                          along their row and their column */
+    RENDERCACHE_FILL_BOTH              /* foreground, then background */
+} rendercache_fill;
+
+typedef struct rendercache_warper rendercache_warper;
+
+/* Computes a pixel that the warp and the fills left empty (e.g. by tracing
+   its ray): writes its colour, its distance along dir and its object id
+   (RENDERCACHE_MISS for the background) and returns 1, or returns 0 to
+   leave it empty. Called from desc.parallel_for jobs when one is given. */
+typedef int (*rendercache_fill_fn)(void *user, uint32_t x, uint32_t y, const float org[3], const float dir[3],
+                                   float rgb[3], float *depth, uint32_t *object);
+
+typedef struct rendercache_warp_desc {
+    float depth_tolerance;       /* relative depth difference below which two surfaces are the same
+                                    (pinterp's -t): an input farther from the new eye replaces a
+                                    pixel only when it is nearer by more than this (per rank);
+                                    foreground quads span depths within twice this; default 0.02 */
+    float background[3];         /* colour of the pixels left empty; default black */
+    rendercache_fill_fn fill_pixel;  /* optional: computes the pixels still empty after the fill */
+    void *fill_user;
+    rendercache_allocator allocator;
+    void (*parallel_for)(void *user, rendercache_job_fn job, void *ctx, uint32_t count);
+    void *parallel_user;
+    double (*clock)(void *user); /* optional: seconds, to time the phases in rendercache_warp_stats */
+    void *clock_user;
+    void (*log)(void *user, const char *message);
+    void *log_user;
+} rendercache_warp_desc;
+
+typedef struct rendercache_warp_stats {
+    uint32_t images;             /* inputs of the last warp (2 for a blend) */
+    uint32_t projected;          /* source pixels that landed in the image, over all inputs */
+    uint32_t warped;             /* target pixels filled by reprojected pixels or foreground quads */
+    uint32_t background;         /* target pixels filled by the background fill */
+    uint32_t computed;           /* target pixels computed by fill_pixel */
+    uint32_t empty;              /* target pixels left RENDERCACHE_NO_SAMPLE (rays only) */
+    double time_project;         /* reprojection and z-buffer, all inputs (0 without desc.clock) */
+    double time_fill;            /* background fill and fill_pixel */
+    double time_total;
+} rendercache_warp_stats;
+
+/* Object motion for rendercache_blend_motion: object-to-world transforms
+   (3x4 row-major, 12 floats per object) of objects 0 .. object_count-1 at
+   the times of images a and b and at the time to show. Pixels of other ids
+   are static. */
+typedef struct rendercache_motion {
+    uint32_t object_count;
+    const float *world_a;
+    const float *world_b;
+    const float *world_t;
+} rendercache_motion;
+
+/* Renders an id image of camera at time: camera->width * camera->height
+   object (or polygon) ids, RENDERCACHE_NO_SAMPLE where the camera has no
+   ray. Returns 0, or non-zero to cancel the subdivision. */
+typedef int (*rendercache_render_ids_fn)(void *user, const rendercache_camera *camera, double time, uint32_t *ids);
+
+/* Adaptive subdivision of a view space (section 4.1): a box of eye
+   positions, 1D, 2D or 3D (an axis with lo == hi is not subdivided). A
+   cell whose corner cameras' id images have fitness below quality is
+   halved across its longest axis, recursively; the corners of the leaf
+   cells are the base views. */
+typedef struct rendercache_view_space_desc {
+    rendercache_camera camera;   /* every view's kind, look direction (look_at - eye), up, vfov and
+                                    id image size; its eye is replaced by the view's */
+    float lo[3], hi[3];          /* the view space */
+    double time;                 /* passed to render_ids */
+    float quality;               /* q in [0, 1]: 0 keeps the corners of the box, 1 subdivides until
+                                    the id images agree (or max_depth) */
+    uint32_t max_depth;          /* halvings of each axis at most: default 8, at most 20 */
+    rendercache_render_ids_fn render_ids;
+    void *user;
+    rendercache_allocator allocator;
+    void (*log)(void *user, const char *message);
+    void *log_user;
+} rendercache_view_space_desc;
+
+typedef struct rendercache_view_space rendercache_view_space;
+
+/* Adaptive subdivision of time (section 4.2): the sorted key times (at
+   least two, e.g. the start and end of the animation, or an earlier list to
+   refine) are refined by halving every interval in which the id images of
+   some camera at its two ends have fitness below quality. Cameras: fish-eye
+   or sphere cameras at the light sources (direct illumination coherence)
+   and the base views (visibility coherence). */
+typedef struct rendercache_time_desc {
+    const rendercache_camera *cameras;
+    uint32_t camera_count;
+    const double *times;         /* sorted, strictly increasing, finite */
+    uint32_t time_count;         /* at least 2 */
+    float quality;               /* q in [0, 1] */
+    uint32_t max_depth;          /* halvings of an interval at most: default 8, at most 20 */
+    rendercache_render_ids_fn render_ids;
+    void *user;
+    rendercache_allocator allocator;
+    void (*log)(void *user, const char *message);
+    void *log_user;
+} rendercache_time_desc;
+
+/* Computes the object-space solution (e.g. indirect irradiance of every
+   vertex) at time: element_count * components floats. Returns 0, or non-zero
+   to cancel. */
+typedef int (*rendercache_solve_fn)(void *user, double time, float *values);
+
+/* Key times of an object-space solution (sections 4.3 and 5.1.2): the
+   interval [t0, t1] is halved recursively while the fraction of elements
+   whose value changes by more than epsilon between the interval's ends
+   exceeds 1 - quality; between key times the solution is interpolated
+   linearly. */
+typedef struct rendercache_keytime_desc {
+    uint32_t element_count;      /* vertices or elements */
+    uint32_t components;         /* floats per element; default 1 (3 for RGB) */
+    double t0, t1;               /* t0 < t1 */
+    float quality;               /* q in [0, 1] */
+    float epsilon;               /* an element changed when some component moved by more than
+                                    epsilon * max(|before|, |after|, min_value); default 0.05 */
+    float min_value;             /* magnitude below which changes count as absolute; default 0 */
+    uint32_t max_depth;          /* halvings of an interval at most: default 8, at most 20 */
+    rendercache_solve_fn solve;
+    void *user;
+    rendercache_allocator allocator;
+    void (*log)(void *user, const char *message);
+    void *log_user;
+} rendercache_keytime_desc;
+
+typedef struct rendercache_keytimes rendercache_keytimes;
+
+/* Range images. create: arrays for camera's size, rgb 0, depth
+   RENDERCACHE_FAR_DEPTH, object RENDERCACHE_NO_SAMPLE (allocator may be NULL). */
+RENDERCACHE_API rendercache_result rendercache_range_image_create(const rendercache_camera *camera,
+                                                                  const rendercache_allocator *allocator,
+                                                                  rendercache_range_image **out);
+RENDERCACHE_API void rendercache_range_image_destroy(rendercache_range_image *image);
+RENDERCACHE_API rendercache_result rendercache_range_image_save(const rendercache_range_image *image,
+                                                                rendercache_write_fn write, void *user);
+RENDERCACHE_API rendercache_result rendercache_range_image_load(const rendercache_allocator *allocator,
+                                                                rendercache_read_fn read, void *user,
+                                                                rendercache_range_image **out);
+RENDERCACHE_API rendercache_result rendercache_range_image_save_to_memory(const rendercache_range_image *image,
+                                                                          const rendercache_allocator *allocator,
+                                                                          void **data, size_t *size);
+RENDERCACHE_API rendercache_result rendercache_range_image_load_from_memory(const void *data, size_t size,
+                                                                            const rendercache_allocator *allocator,
+                                                                            rendercache_range_image **out);
+/* Frees what save_to_memory (or subdivide_time) returned. */
+RENDERCACHE_API void rendercache_free_memory(const rendercache_allocator *allocator, void *data);
+
+/* View interpolation. A warper holds the buffers of one target size (they
+   are allocated by the first warp and again only when the size changes: use
+   one warper per target size). */
+RENDERCACHE_API rendercache_result rendercache_warper_create(const rendercache_warp_desc *desc,
+                                                             rendercache_warper **out);
+RENDERCACHE_API void rendercache_warper_destroy(rendercache_warper *w);
+
+/* Reprojects every pixel of images[0..n) into camera (as Radiance's pinterp):
+   inputs are ranked by the distance of their eye to camera's eye, a
+   z-buffer keeps the nearest surface per pixel, and a surface of rank k
+   replaces one of a nearer rank only when nearer by more than the depth
+   tolerance per rank between them (its squared distances count times
+   (1 + tolerance)^2k); then fill (see HOW A WARP WORKS).
+   camera may be NULL (out->camera); its size must be out's. Writes out's
+   camera, rgb, depth, object and time (that of the nearest input). Pixels
+   left empty are RENDERCACHE_NO_SAMPLE with the background colour. */
+RENDERCACHE_API rendercache_result rendercache_warp(rendercache_warper *w, const rendercache_range_image *const *images,
+                                                    uint32_t n, const rendercache_camera *camera, rendercache_fill fill,
+                                                    rendercache_range_image *out);
+
+/* Time interpolation, pixelwise (as Radiance's pcomb): rgb = (1 - t) a + t b;
+   depth and object of the image nearer in time (a when t < 0.5); time
+   interpolated. a, b and out have one size; out may be a or b. */
+RENDERCACHE_API rendercache_result rendercache_blend(const rendercache_range_image *a, const rendercache_range_image *b,
+                                                     float t, rendercache_range_image *out);
+
+/* Motion-compensated time interpolation: every pixel of a and b is moved
+   with its object from its image's time to the blend time and reprojected
+   into out->camera (usually a's); where both images then show the same
+   object at the same depth the colours are blended with weights 1 - t and t,
+   elsewhere the nearer surface is kept, and pixels neither image saw are
+   filled as by rendercache_warp. Moving objects do not ghost. */
+RENDERCACHE_API rendercache_result rendercache_blend_motion(rendercache_warper *w, const rendercache_range_image *a,
+                                                            const rendercache_range_image *b, float t,
+                                                            const rendercache_motion *motion, rendercache_fill fill,
+                                                            rendercache_range_image *out);
+RENDERCACHE_API void rendercache_warp_get_stats(const rendercache_warper *w, rendercache_warp_stats *out);
+
+/* Coherence. Fitness f = N / PQ (section 4.1): the fraction of pixels whose
+   id is the same in all count images (width x height each); pixels that are
+   RENDERCACHE_NO_SAMPLE in every image (no ray) are not counted. */
+RENDERCACHE_API rendercache_result rendercache_fitness(const uint32_t *const *id_images, uint32_t count, uint32_t width,
+                                                       uint32_t height, float *fitness);
+
+RENDERCACHE_API rendercache_result rendercache_view_space_create(const rendercache_view_space_desc *desc,
+                                                                 rendercache_view_space **out);
+RENDERCACHE_API void rendercache_view_space_destroy(rendercache_view_space *vs);
+/* The base views: count, and their eyes (3 floats each). */
+RENDERCACHE_API uint32_t rendercache_view_space_count(const rendercache_view_space *vs);
+RENDERCACHE_API const float *rendercache_view_space_eyes(const rendercache_view_space *vs);
+/* The camera of view i: desc.camera moved to the view's eye. */
+RENDERCACHE_API rendercache_result rendercache_view_space_camera(const rendercache_view_space *vs, uint32_t i,
+                                                                 rendercache_camera *camera);
+/* The views at the corners of the leaf cell holding eye (clamped into the
+   box): 2^d indices for a d-dimensional space (bit k of a corner's number
+   set: the upper end of the k-th subdivided axis), written to views[0..8). */
+RENDERCACHE_API rendercache_result rendercache_view_space_locate(const rendercache_view_space *vs, const float eye[3],
+                                                                 uint32_t views[8], uint32_t *count);
+/* Leaf cells and their fitness, for reports. */
+RENDERCACHE_API uint32_t rendercache_view_space_cell_count(const rendercache_view_space *vs);
+RENDERCACHE_API rendercache_result rendercache_view_space_cell(const rendercache_view_space *vs, uint32_t cell,
+                                                               float lo[3], float hi[3], float *fitness);
+
+/* Refines a time list; *times (allocated with desc.allocator, free it with
+   rendercache_free_memory) receives the *count sorted key times. */
+RENDERCACHE_API rendercache_result rendercache_subdivide_time(const rendercache_time_desc *desc, double **times,
+                                                              uint32_t *count);
+
+RENDERCACHE_API rendercache_result rendercache_keytimes_create(const rendercache_keytime_desc *desc,
+                                                               rendercache_keytimes **out);
+RENDERCACHE_API void rendercache_keytimes_destroy(rendercache_keytimes *kt);
+RENDERCACHE_API uint32_t rendercache_keytimes_count(const rendercache_keytimes *kt);
+RENDERCACHE_API const double *rendercache_keytimes_times(const rendercache_keytimes *kt);
+/* The stored solution of key k: element_count * components floats. */
+RENDERCACHE_API const float *rendercache_keytimes_values(const rendercache_keytimes *kt, uint32_t key);
+/* The solution at time, interpolated linearly between the key times around
+   it (clamped to [t0, t1]). */
+RENDERCACHE_API rendercache_result rendercache_keytimes_eval(const rendercache_keytimes *kt, double time, float *values);
+
+/* Relative luminance RMS error (section 5): the RMS of the per-pixel
+   luminance difference (Rec. 709 weights) divided by the mean luminance of
+   reference. width x height RGB images; the reference mean must be > 0. */
+RENDERCACHE_API rendercache_result rendercache_lrms(const float *reference, const float *image, uint32_t width,
+                                                    uint32_t height, double *lrms);
 
 #ifdef __cplusplus
 }
@@ -79,6 +722,4273 @@ RENDERCACHE_API const char *rendercache_result_string(rendercache_result r);
 #  define RENDERCACHE_MALLOC(size) malloc(size)
 #  define RENDERCACHE_FREE(ptr) free(ptr)
 #endif
+
+#include <string.h>
+#include <math.h>
+#include <float.h>
+
+/* ======================================================================
+   1. allocation
+   ---------------------------------------------------------------------- */
+/* Both callbacks or neither: a lone alloc would leak through RENDERCACHE_FREE. */
+static int rendercache__allocator_valid(const rendercache_allocator *a)
+{
+    return (a->alloc == NULL) == (a->free == NULL);
+}
+
+static void *rendercache__alloc(const rendercache_allocator *a, size_t size)
+{
+    if (size == 0) size = 1;
+    return a->alloc ? a->alloc(size, a->user) : RENDERCACHE_MALLOC(size);
+}
+
+/* count * item bytes, or NULL when the product overflows. */
+static void *rendercache__alloc_array(const rendercache_allocator *a, size_t count, size_t item)
+{
+    if (item && count > SIZE_MAX / item) return NULL;
+    return rendercache__alloc(a, count * item);
+}
+
+static void rendercache__free(const rendercache_allocator *a, void *p)
+{
+    if (!p) return;
+    if (a->free) a->free(p, a->user);
+    else RENDERCACHE_FREE(p);
+}
+
+/* Zero means default: the documented default replaces a zero field. */
+#define rendercache__def(v, d) ((v) ? (v) : (d))
+
+/* Outputs that alias nothing, so that loops writing them vectorise. */
+#if defined(__cplusplus) || !defined(__STDC_VERSION__) || __STDC_VERSION__ < 199901L
+#  define RENDERCACHE__RESTRICT __restrict
+#else
+#  define RENDERCACHE__RESTRICT restrict
+#endif
+
+/* ======================================================================
+   2. small math
+   ---------------------------------------------------------------------- */
+static int rendercache__iabs(int v) { return v < 0 ? -v : v; }
+static int rendercache__finite3(const float *p) { return isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]); }
+
+static double rendercache__dot3d(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static void rendercache__cross3d(const double a[3], const double b[3], double out[3])
+{
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* Normalises v in place; returns 0 when v is zero or not finite. */
+static int rendercache__normalize3d(double v[3])
+{
+    double l = sqrt(rendercache__dot3d(v, v));
+    if (!(l > 0.0) || !isfinite(l)) return 0;
+    v[0] /= l; v[1] /= l; v[2] /= l;
+    return 1;
+}
+
+/* y = m x for a 3x4 row-major affine matrix (w = 1). */
+static void rendercache__affine(const float m[12], const float x[3], float y[3])
+{
+    y[0] = m[0] * x[0] + m[1] * x[1] + m[2] * x[2] + m[3];
+    y[1] = m[4] * x[0] + m[5] * x[1] + m[6] * x[2] + m[7];
+    y[2] = m[8] * x[0] + m[9] * x[1] + m[10] * x[2] + m[11];
+}
+
+/* ======================================================================
+   5. CRC32 and little-endian byte streams
+   A saved object is: magic (8 bytes), format version (u32), payload size
+   (u64), payload, CRC32 of everything before it (u32). Values are written
+   byte by byte in little-endian order, never as raw structs. A loader treats
+   its input as hostile: it checks every count against the declared payload
+   size before allocating, and the CRC at the end.
+   ---------------------------------------------------------------------- */
+/* CRC-32 (IEEE 802.3, reflected, as zlib and PNG). The table is built on the
+   stack per stream: 256 entries, cheaper than one page of data. */
+typedef struct rendercache__crc { uint32_t table[256]; uint32_t value; } rendercache__crc;
+
+static void rendercache__crc_init(rendercache__crc *c)
+{
+    uint32_t i, k;
+    for (i = 0; i < 256; i++) {
+        uint32_t v = i;
+        for (k = 0; k < 8; k++) v = (v & 1u) ? 0xEDB88320u ^ (v >> 1) : v >> 1;
+        c->table[i] = v;
+    }
+    c->value = 0xFFFFFFFFu;
+}
+static void rendercache__crc_add(rendercache__crc *c, const void *bytes, size_t n)
+{
+    const unsigned char *p = (const unsigned char *)bytes;
+    uint32_t v = c->value;
+    while (n--) v = c->table[(v ^ *p++) & 0xFFu] ^ (v >> 8);
+    c->value = v;
+}
+static uint32_t rendercache__crc_final(const rendercache__crc *c) { return c->value ^ 0xFFFFFFFFu; }
+
+typedef struct rendercache__writer {
+    rendercache_write_fn write;
+    void *user;
+    rendercache__crc crc;
+    int failed;        /* a write callback failed: RENDERCACHE_ERROR_IO */
+} rendercache__writer;
+
+static void rendercache__put(rendercache__writer *w, const void *bytes, size_t n)
+{
+    if (w->failed || n == 0) return;
+    rendercache__crc_add(&w->crc, bytes, n);
+    if (w->write(w->user, bytes, n) != 0) w->failed = 1;
+}
+static void rendercache__put_u32(rendercache__writer *w, uint32_t v)
+{
+    unsigned char b[4];
+    b[0] = (unsigned char)v; b[1] = (unsigned char)(v >> 8);
+    b[2] = (unsigned char)(v >> 16); b[3] = (unsigned char)(v >> 24);
+    rendercache__put(w, b, 4);
+}
+static void rendercache__put_u64(rendercache__writer *w, uint64_t v)
+{
+    rendercache__put_u32(w, (uint32_t)v);
+    rendercache__put_u32(w, (uint32_t)(v >> 32));
+}
+static void rendercache__put_f32(rendercache__writer *w, float f)
+{
+    uint32_t v;
+    memcpy(&v, &f, 4);
+    rendercache__put_u32(w, v);
+}
+static void rendercache__put_f32_array(rendercache__writer *w, const float *f, size_t n)
+{
+    size_t i;
+    for (i = 0; i < n; i++) rendercache__put_f32(w, f[i]);
+}
+static void rendercache__put_u32_array(rendercache__writer *w, const uint32_t *v, size_t n)
+{
+    size_t i;
+    for (i = 0; i < n; i++) rendercache__put_u32(w, v[i]);
+}
+
+typedef struct rendercache__reader {
+    rendercache_read_fn read;
+    void *user;
+    rendercache__crc crc;
+    uint64_t remaining;  /* payload bytes not yet read, from the header */
+    int failed;          /* short read or a size past the payload: corrupt */
+} rendercache__reader;
+
+static void rendercache__get(rendercache__reader *r, void *bytes, size_t n)
+{
+    if (r->failed) { memset(bytes, 0, n); return; }
+    if (n > r->remaining || r->read(r->user, bytes, n) != 0) {
+        r->failed = 1;
+        memset(bytes, 0, n);
+        return;
+    }
+    r->remaining -= n;
+    rendercache__crc_add(&r->crc, bytes, n);
+}
+static uint32_t rendercache__get_u32(rendercache__reader *r)
+{
+    unsigned char b[4];
+    rendercache__get(r, b, 4);
+    return (uint32_t)b[0] | ((uint32_t)b[1] << 8) | ((uint32_t)b[2] << 16) | ((uint32_t)b[3] << 24);
+}
+static uint64_t rendercache__get_u64(rendercache__reader *r)
+{
+    uint64_t lo = rendercache__get_u32(r);
+    return lo | ((uint64_t)rendercache__get_u32(r) << 32);
+}
+static float rendercache__get_f32(rendercache__reader *r)
+{
+    uint32_t v = rendercache__get_u32(r);
+    float f;
+    memcpy(&f, &v, 4);
+    return f;
+}
+/* True when count items of item_bytes each can still be in the payload:
+   call before allocating anything sized by a count read from the input. */
+static int rendercache__can_hold(rendercache__reader *r, uint64_t count, uint64_t item_bytes)
+{
+    if (item_bytes && count > r->remaining / item_bytes) { r->failed = 1; return 0; }
+    return !r->failed;
+}
+
+/* Memory-buffer streams behind the public save_to_memory/load_from_memory. */
+typedef struct rendercache__membuf {
+    unsigned char *data;
+    size_t size, capacity, pos;
+    const rendercache_allocator *a;
+} rendercache__membuf;
+
+static int rendercache__membuf_write(void *user, const void *bytes, size_t n)
+{
+    rendercache__membuf *m = (rendercache__membuf *)user;
+    if (n > m->capacity - m->size) {
+        size_t cap = m->capacity ? m->capacity : 4096;
+        unsigned char *p;
+        while (cap - m->size < n) {
+            if (cap > SIZE_MAX / 2) return -1;
+            cap *= 2;
+        }
+        p = (unsigned char *)rendercache__alloc(m->a, cap);
+        if (!p) return -1;
+        if (m->size) memcpy(p, m->data, m->size);
+        rendercache__free(m->a, m->data);
+        m->data = p;
+        m->capacity = cap;
+    }
+    memcpy(m->data + m->size, bytes, n);
+    m->size += n;
+    return 0;
+}
+
+static int rendercache__membuf_read(void *user, void *bytes, size_t n)
+{
+    rendercache__membuf *m = (rendercache__membuf *)user;
+    if (n > m->size - m->pos) return -1;
+    memcpy(bytes, m->data + m->pos, n);
+    m->pos += n;
+    return 0;
+}
+
+/* ======================================================================
+   6. Shirley-Chiu concentric map (Shirley and Chiu 1997)
+   Square [0,1]^2 -> unit disk -> hemisphere around +z, preserving area: equal
+   squares map to equal solid angles. The inverse maps a direction back to the
+   square.
+   ---------------------------------------------------------------------- */
+#define RENDERCACHE__PI 3.14159265358979323846
+
+static void rendercache__square_to_disk(float u, float v, float *dx, float *dy)
+{
+    float a = 2.0f * u - 1.0f, b = 2.0f * v - 1.0f, r, phi;
+    if (a == 0.0f && b == 0.0f) { *dx = *dy = 0.0f; return; }
+    if (a * a > b * b) { r = a; phi = (float)(RENDERCACHE__PI / 4) * (b / a); }
+    else { r = b; phi = (float)(RENDERCACHE__PI / 2) - (float)(RENDERCACHE__PI / 4) * (a / b); }
+    *dx = r * cosf(phi);
+    *dy = r * sinf(phi);
+}
+
+static void rendercache__disk_to_square(float dx, float dy, float *u, float *v)
+{
+    float r = sqrtf(dx * dx + dy * dy), phi = atan2f(dy, dx), a, b;
+    if (phi < (float)(-RENDERCACHE__PI / 4)) phi += (float)(2 * RENDERCACHE__PI); /* phi in [-pi/4, 7pi/4) */
+    if (phi < (float)(RENDERCACHE__PI / 4)) { a = r; b = phi * a / (float)(RENDERCACHE__PI / 4); }
+    else if (phi < (float)(3 * RENDERCACHE__PI / 4)) { b = r; a = -(phi - (float)(RENDERCACHE__PI / 2)) * b / (float)(RENDERCACHE__PI / 4); }
+    else if (phi < (float)(5 * RENDERCACHE__PI / 4)) { a = -r; b = (phi - (float)RENDERCACHE__PI) * a / (float)(RENDERCACHE__PI / 4); }
+    else { b = -r; a = -(phi - (float)(3 * RENDERCACHE__PI / 2)) * b / (float)(RENDERCACHE__PI / 4); }
+    *u = 0.5f * (a + 1.0f);
+    *v = 0.5f * (b + 1.0f);
+}
+
+/* Square -> hemisphere (z >= 0): the disk point lifted by z = 1 - r^2.
+   (This header has no vec3 type: the direction is written to d[3].) */
+static void rendercache__square_to_hemisphere(float u, float v, float d[3])
+{
+    float dx, dy, r2, s;
+    rendercache__square_to_disk(u, v, &dx, &dy);
+    r2 = dx * dx + dy * dy;
+    s = sqrtf(2.0f - r2 > 0.0f ? 2.0f - r2 : 0.0f);
+    d[0] = dx * s;
+    d[1] = dy * s;
+    d[2] = 1.0f - r2;
+}
+
+/* Hemisphere -> square for a unit direction d with d[2] >= 0. */
+static void rendercache__hemisphere_to_square(const float d[3], float *u, float *v)
+{
+    float r2 = 1.0f - d[2] > 0.0f ? 1.0f - d[2] : 0.0f, s = sqrtf(2.0f - r2 > 0.0f ? 2.0f - r2 : 0.0f);
+    if (s > 0.0f) rendercache__disk_to_square(d[0] / s, d[1] / s, u, v);
+    else rendercache__disk_to_square(0.0f, 0.0f, u, v);
+}
+
+/* ======================================================================
+   7. jobs: the caller's parallel_for, or a serial loop
+   ---------------------------------------------------------------------- */
+static void rendercache__run_jobs(void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t), void *user,
+                                  rendercache_job_fn job, void *ctx, uint32_t count)
+{
+    uint32_t i;
+    if (count == 0) return;
+    if (parallel_for) { parallel_for(user, job, ctx, count); return; }
+    for (i = 0; i < count; i++) job(ctx, i);
+}
+
+/* ======================================================================
+   8. cameras: world <-> image mapping shared by the render cache and the
+   range-image warps. A view is a validated camera with its orthonormal
+   basis; every mapping goes through camera space (right, up, forward
+   components), so a camera kind is a case in view_to_plane and
+   view_from_pixel (and a fast loop in view_row_dirs).
+   ---------------------------------------------------------------------- */
+#define RENDERCACHE__NONE 0xFFFFFFFFu        /* no point / no element */
+#define RENDERCACHE__FAR RENDERCACHE_FAR_DEPTH   /* distance of background points, "at infinity" */
+#define RENDERCACHE__FAR2 1e36f              /* its square: depths are compared squared */
+#define RENDERCACHE__MAX_PIXELS (1u << 28)
+#define RENDERCACHE__MAX_CAPACITY (1u << 31)
+#define RENDERCACHE__MAX_OBJECTS (1u << 24)
+
+typedef struct rendercache__view {
+    rendercache_camera_kind kind;
+    float eye[3];
+    float axis[3][3];        /* rows: right, up, forward; orthonormal */
+    float focal;             /* perspective: pixels per unit of tangent */
+    float cx, cy;            /* image centre in pixels */
+    float radius;            /* fish-eye: radius of the 180-degree circle in pixels */
+    float half_width;        /* sphere: width of one hemisphere's half of the image */
+    uint32_t width, height;
+} rendercache__view;
+
+/* Fish-eye rays without library calls: for a pixel at distance r (in units
+   of the circle's radius) from the centre, the angle to the axis is
+   theta = r pi/2, and sin(theta)/r and cos(theta) are even functions of r,
+   so polynomials in s = r^2 (Taylor series of sin(a r)/r and cos(a r),
+   a = pi/2, to s^6: error below 1e-8 for r <= 1). The loops that turn pixels
+   into rays then vectorise. */
+static const float rendercache__fish_sin[7] = { 1.570796327e+00f, -6.459640975e-01f, 7.969262625e-02f,
+                                                -4.681754135e-03f, 1.604411848e-04f, -3.598843235e-06f,
+                                                5.692172922e-08f };
+static const float rendercache__fish_cos[7] = { 1.000000000e+00f, -1.233700550e+00f, 2.536695079e-01f,
+                                                -2.086348076e-02f, 9.192602748e-04f, -2.520204237e-05f,
+                                                4.710874779e-07f };
+
+static float rendercache__poly6(const float c[7], float s)
+{
+    return c[0] + s * (c[1] + s * (c[2] + s * (c[3] + s * (c[4] + s * (c[5] + s * c[6])))));
+}
+
+/* Validates a camera and builds its view; returns 0 on bad input. */
+static int rendercache__view_init(rendercache__view *v, const rendercache_camera *c)
+{
+    double f[3], u[3], r[3], half;
+    int k;
+    if (!c) return 0;
+    if (c->kind != RENDERCACHE_CAMERA_PERSPECTIVE && c->kind != RENDERCACHE_CAMERA_FISHEYE &&
+        c->kind != RENDERCACHE_CAMERA_SPHERE)
+        return 0;
+    if (!rendercache__finite3(c->eye) || !rendercache__finite3(c->look_at) || !rendercache__finite3(c->up)) return 0;
+    if (c->width == 0 || c->height == 0 || (uint64_t)c->width * c->height > RENDERCACHE__MAX_PIXELS) return 0;
+    if (c->kind == RENDERCACHE_CAMERA_PERSPECTIVE && !(c->vfov_degrees > 0.0f && c->vfov_degrees < 180.0f)) return 0;
+    if (c->kind == RENDERCACHE_CAMERA_SPHERE && c->width < 2) return 0;
+    for (k = 0; k < 3; k++) {
+        f[k] = (double)c->look_at[k] - (double)c->eye[k];
+        u[k] = c->up[k];
+    }
+    if (!rendercache__normalize3d(f)) return 0;
+    rendercache__cross3d(f, u, r);
+    if (!rendercache__normalize3d(r)) return 0;     /* up parallel to the view direction */
+    rendercache__cross3d(r, f, u);
+    v->kind = c->kind;
+    for (k = 0; k < 3; k++) {
+        v->eye[k] = c->eye[k];
+        v->axis[0][k] = (float)r[k];
+        v->axis[1][k] = (float)u[k];
+        v->axis[2][k] = (float)f[k];
+    }
+    v->width = c->width;
+    v->height = c->height;
+    v->cx = 0.5f * (float)c->width;
+    v->cy = 0.5f * (float)c->height;
+    v->radius = 0.5f * (float)(c->width < c->height ? c->width : c->height);
+    v->half_width = 0.5f * (float)c->width;
+    v->focal = 1.0f;
+    if (c->kind == RENDERCACHE_CAMERA_PERSPECTIVE) {
+        half = 0.5 * (double)c->vfov_degrees * RENDERCACHE__PI / 180.0;
+        v->focal = (float)(0.5 * (double)c->height / tan(half));
+    }
+    return 1;
+}
+
+/* Camera-space vector c (a point, or a direction for points at infinity) to
+   continuous image-plane coordinates, which may lie outside the image.
+   Returns 0 when c has no image (behind a perspective camera or a fish-eye's
+   hemisphere, zero, NaN). */
+static int rendercache__view_to_plane(const rendercache__view *v, const float c[3], float *px, float *py)
+{
+    float x, y, l, d[3], u, w;
+    switch (v->kind) {
+    case RENDERCACHE_CAMERA_FISHEYE:
+        l = sqrtf(c[0] * c[0] + c[1] * c[1]);
+        w = atan2f(l, c[2]);   /* angle to the view axis */
+        if (!(w <= (float)(RENDERCACHE__PI / 2)) || (l == 0.0f && !(c[2] > 0.0f))) return 0;
+        w *= v->radius / (float)(RENDERCACHE__PI / 2);   /* distance from the centre in pixels */
+        x = v->cx + (l > 0.0f ? w * c[0] / l : 0.0f);
+        y = v->cy - (l > 0.0f ? w * c[1] / l : 0.0f);
+        break;
+    case RENDERCACHE_CAMERA_SPHERE:
+        l = sqrtf(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+        if (!(l > 0.0f) || !(l < FLT_MAX)) return 0;
+        d[0] = c[0] / l; d[1] = c[1] / l; d[2] = c[2] / l;
+        if (d[2] >= 0.0f) {
+            rendercache__hemisphere_to_square(d, &u, &w);
+            x = u * v->half_width;
+        } else {   /* the back half: turned around the up axis */
+            d[0] = -d[0]; d[2] = -d[2];
+            rendercache__hemisphere_to_square(d, &u, &w);
+            x = v->half_width + u * v->half_width;
+        }
+        y = (1.0f - w) * (float)v->height;
+        break;
+    case RENDERCACHE_CAMERA_PERSPECTIVE:
+    default:
+        if (!(c[2] > 0.0f)) return 0;
+        x = v->cx + v->focal * c[0] / c[2];
+        y = v->cy - v->focal * c[1] / c[2];
+        break;
+    }
+    *px = x;
+    *py = y;
+    return 1;
+}
+
+/* As view_to_plane, and returns 0 also when the point does not land inside
+   the image. */
+static int rendercache__view_to_pixel(const rendercache__view *v, const float c[3], float *px, float *py)
+{
+    float x, y;
+    if (!rendercache__view_to_plane(v, c, &x, &y)) return 0;
+    if (!(x >= 0.0f && x < (float)v->width && y >= 0.0f && y < (float)v->height)) return 0;
+    *px = x;
+    *py = y;
+    return 1;
+}
+
+/* Image point to a unit camera-space direction; returns 0 when the point has
+   no ray (outside a fish-eye's circle). */
+static int rendercache__view_from_pixel(const rendercache__view *v, float px, float py, float c[3])
+{
+    float l, s, p, u, w;
+    switch (v->kind) {
+    case RENDERCACHE_CAMERA_FISHEYE:
+        u = (px - v->cx) / v->radius;
+        w = (py - v->cy) / v->radius;
+        s = u * u + w * w;
+        if (!(s <= 1.0f)) return 0;
+        p = rendercache__poly6(rendercache__fish_sin, s);   /* sin(theta) / r */
+        c[0] = u * p;
+        c[1] = -w * p;
+        c[2] = rendercache__poly6(rendercache__fish_cos, s);
+        break;
+    case RENDERCACHE_CAMERA_SPHERE:
+        w = 1.0f - py / (float)v->height;
+        if (px < v->half_width) {
+            rendercache__square_to_hemisphere(px / v->half_width, w, c);
+        } else {
+            rendercache__square_to_hemisphere((px - v->half_width) / v->half_width, w, c);
+            c[0] = -c[0];
+            c[2] = -c[2];
+        }
+        break;
+    case RENDERCACHE_CAMERA_PERSPECTIVE:
+    default:
+        c[0] = (px - v->cx) / v->focal;
+        c[1] = (v->cy - py) / v->focal;
+        c[2] = 1.0f;
+        break;
+    }
+    l = sqrtf(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    c[0] /= l; c[1] /= l; c[2] /= l;
+    return 1;
+}
+
+/* Whether pixel (x, y) has a ray: all but the corners outside a fish-eye's circle. */
+static int rendercache__view_has_ray(const rendercache__view *v, uint32_t x, uint32_t y)
+{
+    float u, w;
+    if (v->kind != RENDERCACHE_CAMERA_FISHEYE) return 1;
+    u = ((float)x + 0.5f - v->cx) / v->radius;
+    w = ((float)y + 0.5f - v->cy) / v->radius;
+    return u * u + w * w <= 1.0f;
+}
+
+/* Unit camera-space directions of the pixels [x0, x0 + n) of row y (centres),
+   as three arrays; ok[i] = 0 where a pixel has no ray (its direction is
+   then 0). The perspective and fish-eye loops vectorise. */
+static void rendercache__view_row_dirs(const rendercache__view *v, uint32_t y, uint32_t x0, uint32_t n, float *dx,
+                                       float *dy, float *dz, unsigned char *ok)
+{
+    const float py = (float)y + 0.5f;
+    uint32_t i;
+    if (v->kind == RENDERCACHE_CAMERA_PERSPECTIVE) {
+        const float inv_f = 1.0f / v->focal, cy = (v->cy - py) * inv_f, cy2 = 1.0f + cy * cy;
+        for (i = 0; i < n; i++) {
+            float cx = ((float)(x0 + i) + 0.5f - v->cx) * inv_f, inv = 1.0f / sqrtf(cx * cx + cy2);
+            dx[i] = cx * inv;
+            dy[i] = cy * inv;
+            dz[i] = inv;
+            ok[i] = 1;
+        }
+    } else if (v->kind == RENDERCACHE_CAMERA_FISHEYE) {
+        const float inv_r = 1.0f / v->radius, w = (py - v->cy) * inv_r, w2 = w * w;
+        const float *sc = rendercache__fish_sin, *cc = rendercache__fish_cos;
+        for (i = 0; i < n; i++) {
+            float u = ((float)(x0 + i) + 0.5f - v->cx) * inv_r, s = u * u + w2, inside = s <= 1.0f ? 1.0f : 0.0f;
+            float p = sc[0] + s * (sc[1] + s * (sc[2] + s * (sc[3] + s * (sc[4] + s * (sc[5] + s * sc[6])))));
+            float q = cc[0] + s * (cc[1] + s * (cc[2] + s * (cc[3] + s * (cc[4] + s * (cc[5] + s * cc[6])))));
+            dx[i] = inside * u * p;
+            dy[i] = -inside * w * p;
+            dz[i] = inside * q;
+            ok[i] = (unsigned char)(s <= 1.0f);
+        }
+    } else {
+        for (i = 0; i < n; i++) {
+            float c[3];
+            ok[i] = (unsigned char)rendercache__view_from_pixel(v, (float)(x0 + i) + 0.5f, py, c);
+            dx[i] = c[0];
+            dy[i] = c[1];
+            dz[i] = c[2];
+        }
+    }
+}
+
+/* World vector to camera space (rotation only). */
+static void rendercache__view_rotate(const rendercache__view *v, const float w[3], float c[3])
+{
+    int k;
+    for (k = 0; k < 3; k++) c[k] = v->axis[k][0] * w[0] + v->axis[k][1] * w[1] + v->axis[k][2] * w[2];
+}
+
+/* The primary ray direction (world, unit) through image point (px, py);
+   returns 0 when the point has no ray. */
+static int rendercache__view_ray(const rendercache__view *v, float px, float py, float dir[3])
+{
+    float c[3], l;
+    int k;
+    if (!rendercache__view_from_pixel(v, px, py, c)) { dir[0] = dir[1] = dir[2] = 0.0f; return 0; }
+    for (k = 0; k < 3; k++) dir[k] = c[0] * v->axis[0][k] + c[1] * v->axis[1][k] + c[2] * v->axis[2][k];
+    l = sqrtf(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+    dir[0] /= l; dir[1] /= l; dir[2] /= l;
+    return 1;
+}
+
+/* Object-to-camera matrix: the view's [R | -R eye] times the object's
+   object-to-world matrix m, composed in double. */
+static void rendercache__view_compose(const rendercache__view *v, const float m[12], float out[12])
+{
+    int i, j;
+    for (i = 0; i < 3; i++) {
+        const float *r = v->axis[i];
+        for (j = 0; j < 3; j++)
+            out[4 * i + j] = (float)((double)r[0] * m[j] + (double)r[1] * m[4 + j] + (double)r[2] * m[8 + j]);
+        out[4 * i + 3] = (float)((double)r[0] * ((double)m[3] - v->eye[0]) +
+                                 (double)r[1] * ((double)m[7] - v->eye[1]) +
+                                 (double)r[2] * ((double)m[11] - v->eye[2]));
+    }
+}
+
+/* ======================================================================
+   9. splat: many elements (cache points, range-image pixels) into one
+   z-buffer (the reprojection and z-buffer step of Walter et al. 1999),
+   keeping per pixel the nearest element, its depth and a payload of four
+   floats (colour and one more value) copied as it wins, so that nothing has
+   to be gathered from the elements afterwards.
+   Parallel and deterministic: when the caller gives parallel_for, the
+   elements are split into RENDERCACHE__SPLAT_JOBS ranges, each z-buffered
+   into its own raster, and the rasters are merged tile by tile. The winner
+   of a pixel is the least (depth, element index) in every case, so the
+   result does not depend on the split or on the thread count. (Sorting the
+   elements into image bands first, as the tiled cache of Walter et al. 2002
+   does, let any number of threads share the z-buffer but cost three times
+   as much memory traffic here.)
+   ---------------------------------------------------------------------- */
+#define RENDERCACHE__SPLAT_JOBS 2u   /* partial z-buffers when running in parallel */
+#define RENDERCACHE__BATCH 256u      /* elements per source call */
+#define RENDERCACHE__TILE_ROWS 8u    /* image rows per tile job */
+
+/* Projects elements [begin, end): pix[i - begin] = y * width + x of the
+   pixel it lands in, or RENDERCACHE__NONE; depth[...] its distance.
+   Returns 0 when none landed (the batch is then skipped), else non-zero. */
+typedef uint32_t (*rendercache__source_fn)(const void *src, uint32_t begin, uint32_t end, uint32_t *pix, float *depth);
+/* Payload of elements [begin, end): 4 floats each, for those whose pix is
+   not RENDERCACHE__NONE. */
+typedef void (*rendercache__payload_fn)(const void *src, uint32_t begin, uint32_t end, const uint32_t *pix,
+                                        float *payload);
+
+/* An element may also cover many pixels (the foreground fill of a warp
+   rasterises a quad per source pixel): a cover function z-buffers elements
+   [begin, end) into job j's z-buffer itself (with rendercache__zbuffer_test)
+   and returns how many landed in the image. */
+struct rendercache__zbuffer;
+typedef uint32_t (*rendercache__cover_fn)(const void *src, uint32_t job, uint32_t begin, uint32_t end,
+                                          struct rendercache__zbuffer *zb, uint32_t width, uint32_t height);
+
+/* The result of a splat: per pixel the nearest depth (FLT_MAX when empty),
+   the element (RENDERCACHE__NONE when empty) and its payload. */
+typedef struct rendercache__raster {
+    float *depth;
+    uint32_t *index;
+    float *payload;          /* 4 per pixel */
+} rendercache__raster;
+
+/* One job's z-buffer: per pixel the key (depth bits << 32 | element; depths
+   are non-negative, so their bits order as the values do, and one compare
+   settles depth and then index) and the payload. One random access per test. */
+typedef struct rendercache__zbuffer {
+    uint64_t *key;
+    float *payload;
+} rendercache__zbuffer;
+#define RENDERCACHE__EMPTY_KEY 0xFFFFFFFFFFFFFFFFull
+
+typedef struct rendercache__splat {
+    uint32_t width, height, pixel_count, tile_count;
+    uint32_t jobs;           /* z-buffers allocated: 1, or SPLAT_JOBS with parallel_for */
+    rendercache__raster final;                        /* payload is job 0's */
+    rendercache__zbuffer zb[RENDERCACHE__SPLAT_JOBS];
+    uint32_t projected;      /* elements that landed in the image in the last run */
+    uint32_t job_projected[RENDERCACHE__SPLAT_JOBS];
+} rendercache__splat;
+
+static void rendercache__splat_free(rendercache__splat *s, const rendercache_allocator *a)
+{
+    uint32_t j;
+    rendercache__free(a, s->final.depth);
+    rendercache__free(a, s->final.index);
+    for (j = 0; j < RENDERCACHE__SPLAT_JOBS; j++) {
+        rendercache__free(a, s->zb[j].key);
+        rendercache__free(a, s->zb[j].payload);
+    }
+    memset(s, 0, sizeof *s);
+}
+
+/* Allocates a splat for a width x height raster, run by jobs (1 or
+   RENDERCACHE__SPLAT_JOBS) z-buffers. Returns 0, or -1 when out of memory. */
+static int rendercache__splat_alloc(rendercache__splat *s, uint32_t width, uint32_t height, uint32_t jobs,
+                                    const rendercache_allocator *a)
+{
+    uint32_t j;
+    int failed;
+    memset(s, 0, sizeof *s);
+    s->jobs = jobs;
+    s->width = width;
+    s->height = height;
+    s->pixel_count = width * height;
+    s->tile_count = (height + RENDERCACHE__TILE_ROWS - 1) / RENDERCACHE__TILE_ROWS;
+    s->final.depth = (float *)rendercache__alloc_array(a, s->pixel_count, sizeof(float));
+    s->final.index = (uint32_t *)rendercache__alloc_array(a, s->pixel_count, sizeof(uint32_t));
+    failed = !s->final.depth || !s->final.index;
+    for (j = 0; j < jobs; j++) {
+        s->zb[j].key = (uint64_t *)rendercache__alloc_array(a, s->pixel_count, sizeof(uint64_t));
+        s->zb[j].payload = (float *)rendercache__alloc_array(a, s->pixel_count, 4 * sizeof(float));
+        failed |= !s->zb[j].key || !s->zb[j].payload;
+    }
+    s->final.payload = s->zb[0].payload;
+    if (failed) rendercache__splat_free(s, a);
+    return failed ? -1 : 0;
+}
+
+typedef struct rendercache__splat_job {
+    rendercache__splat *s;
+    rendercache__source_fn source;
+    rendercache__payload_fn payload;   /* NULL: no payload */
+    rendercache__cover_fn cover;       /* instead of source and payload */
+    const void *src;
+    uint32_t element_count, jobs;
+} rendercache__splat_job;
+
+static uint64_t rendercache__key(float depth, uint32_t element)
+{
+    uint32_t bits;
+    memcpy(&bits, &depth, sizeof bits);
+    return (uint64_t)bits << 32 | element;
+}
+
+/* The z-test of a cover function: element with depth (and payload, 4
+   floats) against pixel p. */
+static void rendercache__zbuffer_test(rendercache__zbuffer *zb, uint32_t p, float depth, uint32_t element,
+                                      const float payload[4])
+{
+    uint64_t k = rendercache__key(depth, element);
+    if (k < zb->key[p]) {
+        zb->key[p] = k;
+        memcpy(zb->payload + 4 * (size_t)p, payload, 4 * sizeof(float));
+    }
+}
+
+/* Job j: z-buffers its range of elements into its own z-buffer. */
+static void rendercache__splat_range(void *ctx, uint32_t j)
+{
+    const rendercache__splat_job *job = (const rendercache__splat_job *)ctx;
+    rendercache__splat *s = job->s;
+    uint64_t *key = s->zb[j].key;
+    float *payload = s->zb[j].payload;
+    uint32_t pix[RENDERCACHE__BATCH], begin, end, b, i, projected = 0;
+    float d[RENDERCACHE__BATCH], pay[4 * RENDERCACHE__BATCH];
+    begin = (uint32_t)((uint64_t)job->element_count * j / job->jobs);
+    end = (uint32_t)((uint64_t)job->element_count * (j + 1) / job->jobs);
+    for (i = 0; i < s->pixel_count; i++) key[i] = RENDERCACHE__EMPTY_KEY;
+    if (job->cover) {
+        s->job_projected[j] = job->cover(job->src, j, begin, end, &s->zb[j], s->width, s->height);
+        return;
+    }
+    for (b = begin; b < end; b += RENDERCACHE__BATCH) {
+        uint32_t n = end - b < RENDERCACHE__BATCH ? end - b : RENDERCACHE__BATCH;
+        if (!job->source(job->src, b, b + n, pix, d)) continue;   /* nothing landed */
+        if (job->payload) job->payload(job->src, b, b + n, pix, pay);
+        for (i = 0; i < n; i++) {
+            uint32_t p = pix[i];
+            uint64_t k;
+            if (p == RENDERCACHE__NONE) continue;
+            projected++;
+            k = rendercache__key(d[i], b + i);
+            if (k < key[p]) {
+                key[p] = k;
+                if (job->payload) memcpy(payload + 4 * (size_t)p, pay + 4 * i, 4 * sizeof(float));
+            }
+        }
+    }
+    s->job_projected[j] = projected;
+}
+
+/* Job per tile: the least key over the jobs' z-buffers becomes the final
+   depth and element (with its payload). */
+static void rendercache__splat_merge(void *ctx, uint32_t tile)
+{
+    const rendercache__splat_job *job = (const rendercache__splat_job *)ctx;
+    rendercache__splat *s = job->s;
+    uint32_t p0 = tile * RENDERCACHE__TILE_ROWS * s->width, p1 = p0 + RENDERCACHE__TILE_ROWS * s->width, j, p;
+    if (p1 > s->pixel_count) p1 = s->pixel_count;
+    for (p = p0; p < p1; p++) {
+        uint64_t k = s->zb[0].key[p];
+        uint32_t bits;
+        for (j = 1; j < job->jobs; j++) {
+            if (!(s->zb[j].key[p] < k)) continue;
+            k = s->zb[j].key[p];
+            if (job->payload || job->cover) memcpy(s->final.payload + 4 * (size_t)p, s->zb[j].payload + 4 * (size_t)p, 4 * sizeof(float));
+        }
+        if (k == RENDERCACHE__EMPTY_KEY) {
+            s->final.depth[p] = FLT_MAX;
+            s->final.index[p] = RENDERCACHE__NONE;
+            continue;
+        }
+        bits = (uint32_t)(k >> 32);
+        memcpy(&s->final.depth[p], &bits, sizeof bits);
+        s->final.index[p] = (uint32_t)k;
+    }
+}
+
+static void rendercache__splat_execute(rendercache__splat_job *job,
+                                       void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t), void *user)
+{
+    rendercache__splat *s = job->s;
+    uint32_t j;
+    job->jobs = parallel_for ? s->jobs : 1u;
+    rendercache__run_jobs(parallel_for, user, rendercache__splat_range, job, job->jobs);
+    rendercache__run_jobs(parallel_for, user, rendercache__splat_merge, job, s->tile_count);
+    s->projected = 0;
+    for (j = 0; j < job->jobs; j++) s->projected += s->job_projected[j];
+}
+
+/* Runs the splat over elements [0, count) into s->final; parallel_for only
+   when the splat was allocated for several jobs. */
+static void rendercache__splat_run(rendercache__splat *s, void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t),
+                                   void *user, rendercache__source_fn source, rendercache__payload_fn payload,
+                                   const void *src, uint32_t count)
+{
+    rendercache__splat_job job;
+    job.s = s;
+    job.source = source;
+    job.payload = payload;
+    job.cover = NULL;
+    job.src = src;
+    job.element_count = count;
+    rendercache__splat_execute(&job, parallel_for, user);
+}
+
+/* The same with a cover function (payload always kept). */
+static void rendercache__splat_run_cover(rendercache__splat *s,
+                                         void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t), void *user,
+                                         rendercache__cover_fn cover, const void *src, uint32_t count)
+{
+    rendercache__splat_job job;
+    job.s = s;
+    job.source = NULL;
+    job.payload = NULL;
+    job.cover = cover;
+    job.src = src;
+    job.element_count = count;
+    rendercache__splat_execute(&job, parallel_for, user);
+}
+
+/* ======================================================================
+   10. the cache object
+   ---------------------------------------------------------------------- */
+#define RENDERCACHE__FREE_SLOT 0xFFFFFFFEu   /* object id of an unused cache slot */
+#define RENDERCACHE__LEVELS 1024u            /* priority levels of the threshold histogram */
+#define RENDERCACHE__TILE_STATS 6u           /* visible, culled, interpolated, sparse, empty, scratch */
+
+/* Priority image values (WDP99 priority image, extended to [0, 1]): a point
+   rises with age to POINT_MAX; holes rank above every point, the sparser the
+   higher; a pixel with nothing near is at 1. */
+#define RENDERCACHE__PRIORITY_POINT_MAX 0.5f
+#define RENDERCACHE__PRIORITY_INTERP 0.5f    /* + up to 0.25 as the 3x3 neighbourhood empties */
+#define RENDERCACHE__PRIORITY_SPARSE 0.75f   /* + up to 0.2 as the wide window empties */
+
+/* A cache slot as the projection reads it: 16 bytes. */
+typedef struct rendercache__geo {
+    float pos[3];            /* object-space position, or the world unit direction of a background point */
+    uint32_t object;         /* object id, RENDERCACHE_MISS, or RENDERCACHE__FREE_SLOT */
+} rendercache__geo;
+
+/* The rest of a slot, read for the points that land in the image: 24
+   bytes, streamed with geo. A point's age is not stored but derived, so nothing is written
+   per point and frame: age = frame - birth + (motion of its object since
+   birth), the last term making points of moving objects age faster. */
+typedef struct rendercache__point {
+    float rgb[3];
+    float scale;             /* priority scale */
+    uint32_t birth;          /* frame of insertion */
+    uint32_t motion_birth;   /* the object's obj_motion at insertion */
+} rendercache__point;
+
+struct rendercache {
+    rendercache_allocator alloc;
+    void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t);
+    void *parallel_user;
+    double (*clock)(void *);
+    void *clock_user;
+    void (*log)(void *, const char *);
+    void *log_user;
+
+    uint32_t width, height, pixel_count, tile_count;
+    uint32_t capacity, object_count;
+    float depth_tolerance, predict_fraction, background[3];
+    uint32_t age_ramp, moving_age_step, sparse_neighbours, wide_radius;
+    float inv_age_ramp;
+
+    /* point cache: slot order is insertion order; the projection streams
+       through both arrays */
+    rendercache__geo *geo;
+    rendercache__point *data;
+    uint32_t hand;           /* clock hand of the eviction */
+    uint32_t live;
+    int hand_exhausted;      /* a full turn found no invisible slot in this frame */
+
+    /* objects */
+    float *obj_world;        /* 12 per object: object to world */
+    float *obj_local;        /* 12 per object: world to object */
+    float *obj_camera;       /* 12 per object: object to camera space of the current view */
+    float *obj_predicted;    /* 12 per object: object to camera space of the predicted view */
+    uint32_t *obj_motion;    /* extra age the object's points gathered while it moved */
+    unsigned char *obj_moved;
+
+    /* current frame */
+    uint32_t frame;
+    int has_frame, has_prediction;
+    rendercache__view view, predicted;
+    rendercache__splat splat;
+    uint32_t *px_index;      /* per pixel: the slot shown, after the depth cull */
+    float *px_depth;         /* per pixel: its squared distance, FLT_MAX without a point */
+    float *depth_out;        /* rendercache_depth_image: distances, filled on request */
+    float *image, *priority, *pred_priority;
+    unsigned char *kind, *count;
+    uint32_t *tile_stats;    /* RENDERCACHE__TILE_STATS per tile */
+
+    /* request scratch */
+    uint32_t *hist;          /* RENDERCACHE__LEVELS per tile, then the merged histogram */
+    float *select_v;         /* per pixel: value plus diffused error of the fractional pixels */
+    unsigned char *chosen;   /* per pixel: 1 chosen, 2 fractional (error-diffused) */
+    float *err_rows;         /* two rows of diffused error */
+    uint32_t pred_holes;
+    uint32_t touched;        /* rendercache__touch_slots' results, kept so its reads stay */
+
+    rendercache_stats stats;
+};
+
+static double rendercache__now(const rendercache *rc)
+{
+    return rc->clock ? rc->clock(rc->clock_user) : 0.0;
+}
+
+static void rendercache__log(const rendercache_desc *d, const char *message)
+{
+    if (d && d->log) d->log(d->log_user, message);
+}
+
+static void rendercache__log_to(void (*log)(void *, const char *), void *user, const char *message)
+{
+    if (log) log(user, message);
+}
+
+static void rendercache__identity(float m[12])
+{
+    memset(m, 0, 12 * sizeof(float));
+    m[0] = m[5] = m[10] = 1.0f;
+}
+
+/* Image and per-pixel state as if nothing were cached. */
+static void rendercache__reset_image(rendercache *rc)
+{
+    uint32_t p;
+    for (p = 0; p < rc->pixel_count; p++) {
+        rc->image[3 * p + 0] = rc->background[0];
+        rc->image[3 * p + 1] = rc->background[1];
+        rc->image[3 * p + 2] = rc->background[2];
+        rc->priority[p] = 1.0f;
+        rc->pred_priority[p] = 0.0f;
+        rc->kind[p] = RENDERCACHE_PIXEL_EMPTY;
+        rc->count[p] = 0;
+        rc->px_index[p] = RENDERCACHE__NONE;
+        rc->px_depth[p] = FLT_MAX;
+    }
+}
+
+static void rendercache__reset_points(rendercache *rc)
+{
+    uint32_t i;
+    for (i = 0; i < rc->capacity; i++) rc->geo[i].object = RENDERCACHE__FREE_SLOT;
+    rc->hand = 0;
+    rc->live = 0;
+}
+
+static void rendercache__release(rendercache *rc)
+{
+    const rendercache_allocator a = rc->alloc;
+    void *blocks[21];
+    size_t i;
+    blocks[0] = rc->geo; blocks[1] = rc->data; blocks[2] = rc->obj_predicted; blocks[3] = rc->obj_motion;
+    blocks[4] = rc->depth_out; blocks[5] = rc->obj_world; blocks[6] = rc->obj_local;
+    blocks[7] = rc->obj_camera; blocks[8] = rc->obj_moved; blocks[9] = rc->px_index;
+    blocks[10] = rc->px_depth; blocks[11] = rc->image; blocks[12] = rc->priority;
+    blocks[13] = rc->pred_priority; blocks[14] = rc->kind; blocks[15] = rc->count;
+    blocks[16] = rc->tile_stats; blocks[17] = rc->hist; blocks[18] = rc->select_v;
+    blocks[19] = rc->chosen; blocks[20] = rc->err_rows;
+    for (i = 0; i < sizeof blocks / sizeof blocks[0]; i++) rendercache__free(&a, blocks[i]);
+    rendercache__splat_free(&rc->splat, &a);
+    rendercache__free(&a, rc);
+}
+
+static int rendercache__alloc_buffers(rendercache *rc)
+{
+    const rendercache_allocator *a = &rc->alloc;
+    size_t n = rc->capacity, px = rc->pixel_count, no = rc->object_count;
+    rc->geo = (rendercache__geo *)rendercache__alloc_array(a, n, sizeof(rendercache__geo));
+    rc->data = (rendercache__point *)rendercache__alloc_array(a, n, sizeof(rendercache__point));
+    rc->obj_predicted = (float *)rendercache__alloc_array(a, no, 12 * sizeof(float));
+    rc->obj_motion = (uint32_t *)rendercache__alloc_array(a, no, sizeof(uint32_t));
+    rc->obj_world = (float *)rendercache__alloc_array(a, no, 12 * sizeof(float));
+    rc->obj_local = (float *)rendercache__alloc_array(a, no, 12 * sizeof(float));
+    rc->obj_camera = (float *)rendercache__alloc_array(a, no, 12 * sizeof(float));
+    rc->obj_moved = (unsigned char *)rendercache__alloc_array(a, no, 1);
+    rc->px_index = (uint32_t *)rendercache__alloc_array(a, px, sizeof(uint32_t));
+    rc->px_depth = (float *)rendercache__alloc_array(a, px, sizeof(float));
+    rc->depth_out = (float *)rendercache__alloc_array(a, px, sizeof(float));
+    rc->image = (float *)rendercache__alloc_array(a, px, 3 * sizeof(float));
+    rc->priority = (float *)rendercache__alloc_array(a, px, sizeof(float));
+    rc->pred_priority = (float *)rendercache__alloc_array(a, px, sizeof(float));
+    rc->kind = (unsigned char *)rendercache__alloc_array(a, px, 1);
+    rc->count = (unsigned char *)rendercache__alloc_array(a, px, 1);
+    rc->tile_stats = (uint32_t *)rendercache__alloc_array(a, rc->tile_count, RENDERCACHE__TILE_STATS * sizeof(uint32_t));
+    rc->hist = (uint32_t *)rendercache__alloc_array(a, (size_t)rc->tile_count + 1, RENDERCACHE__LEVELS * sizeof(uint32_t));
+    rc->select_v = (float *)rendercache__alloc_array(a, px, sizeof(float));
+    rc->chosen = (unsigned char *)rendercache__alloc_array(a, px, 1);
+    rc->err_rows = (float *)rendercache__alloc_array(a, 2 * ((size_t)rc->width + 2), sizeof(float));
+    if (!rc->geo || !rc->data || !rc->obj_predicted || !rc->obj_motion || !rc->obj_world ||
+        !rc->obj_local || !rc->obj_camera || !rc->obj_moved || !rc->px_index || !rc->px_depth || !rc->depth_out || !rc->image ||
+        !rc->priority || !rc->pred_priority || !rc->kind || !rc->count || !rc->tile_stats || !rc->hist ||
+        !rc->select_v || !rc->chosen || !rc->err_rows)
+        return -1;
+    return rendercache__splat_alloc(&rc->splat, rc->width, rc->height,
+                                    rc->parallel_for ? RENDERCACHE__SPLAT_JOBS : 1u, a);
+}
+
+/* Applies the defaults and checks the ranges of a desc; 0 on bad input. */
+static int rendercache__configure(rendercache *rc, const rendercache_desc *d)
+{
+    double capacity;
+    float ppp = rendercache__def(d->points_per_pixel, 2.0f);
+    if (d->width == 0 || d->height == 0 || (uint64_t)d->width * d->height > RENDERCACHE__MAX_PIXELS) return 0;
+    if (!rendercache__allocator_valid(&d->allocator)) return 0;
+    if (!(ppp > 0.0f) || !isfinite(ppp)) return 0;
+    if (!(d->depth_tolerance >= 0.0f) || !isfinite(d->depth_tolerance)) return 0;
+    if (!(d->predict_fraction >= 0.0f && d->predict_fraction <= 1.0f)) return 0;
+    if (!rendercache__finite3(d->background)) return 0;
+    if (d->object_count > RENDERCACHE__MAX_OBJECTS || d->sparse_neighbours > 8 || d->wide_radius > 7) return 0;
+    capacity = ceil((double)ppp * d->width * d->height);
+    if (capacity < 1.0 || capacity > (double)RENDERCACHE__MAX_CAPACITY) return 0;
+    rc->alloc = d->allocator;
+    rc->parallel_for = d->parallel_for;
+    rc->parallel_user = d->parallel_user;
+    rc->clock = d->clock;
+    rc->clock_user = d->clock_user;
+    rc->log = d->log;
+    rc->log_user = d->log_user;
+    rc->width = d->width;
+    rc->height = d->height;
+    rc->pixel_count = d->width * d->height;
+    rc->tile_count = (d->height + RENDERCACHE__TILE_ROWS - 1) / RENDERCACHE__TILE_ROWS;
+    rc->capacity = (uint32_t)capacity;
+    rc->object_count = rendercache__def(d->object_count, 256u);
+    rc->depth_tolerance = rendercache__def(d->depth_tolerance, 0.1f);
+    rc->predict_fraction = rendercache__def(d->predict_fraction, 0.25f);
+    rc->age_ramp = rendercache__def(d->age_ramp_frames, 32u);
+    rc->inv_age_ramp = 1.0f / (float)rc->age_ramp;
+    rc->moving_age_step = rendercache__def(d->moving_age_step, 4u);
+    if (rc->moving_age_step > 65536u) rc->moving_age_step = 65536u;
+    rc->sparse_neighbours = rendercache__def(d->sparse_neighbours, 2u);
+    rc->wide_radius = rendercache__def(d->wide_radius, 3u);
+    memcpy(rc->background, d->background, sizeof rc->background);
+    return 1;
+}
+
+RENDERCACHE_API rendercache_result rendercache_create(const rendercache_desc *desc, rendercache **out)
+{
+    rendercache *rc;
+    rendercache_allocator a;
+    uint32_t o;
+    if (!out) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    *out = NULL;
+    if (!desc) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    if (!rendercache__allocator_valid(&desc->allocator)) {
+        rendercache__log(desc, "rendercache_create: allocator needs both alloc and free, or neither");
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    }
+    a = desc->allocator;
+    rc = (rendercache *)rendercache__alloc(&a, sizeof *rc);
+    if (!rc) return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    memset(rc, 0, sizeof *rc);
+    rc->alloc = a;
+    if (!rendercache__configure(rc, desc)) {
+        rendercache__log(desc, "rendercache_create: bad size, tolerance, fraction or radius in the desc");
+        rendercache__release(rc);
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    }
+    if (rendercache__alloc_buffers(rc) != 0) {
+        rendercache__log(desc, "rendercache_create: out of memory");
+        rendercache__release(rc);
+        return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    }
+    for (o = 0; o < rc->object_count; o++) {
+        rendercache__identity(rc->obj_world + 12 * (size_t)o);
+        rendercache__identity(rc->obj_local + 12 * (size_t)o);
+        rc->obj_moved[o] = 0;
+        rc->obj_motion[o] = 0;
+    }
+    rendercache__reset_points(rc);
+    rendercache__reset_image(rc);
+    rc->stats.capacity = rc->capacity;
+    *out = rc;
+    return RENDERCACHE_OK;
+}
+
+RENDERCACHE_API void rendercache_destroy(rendercache *rc)
+{
+    if (rc) rendercache__release(rc);
+}
+
+RENDERCACHE_API void rendercache_clear(rendercache *rc)
+{
+    if (!rc) return;
+    rendercache__reset_points(rc);
+    rendercache__reset_image(rc);
+    rc->has_prediction = 0;
+    rc->stats.live_points = 0;
+}
+
+/* ======================================================================
+   11. object transforms
+   ---------------------------------------------------------------------- */
+/* Inverse of an affine 3x4 matrix in double; 0 when singular. */
+static int rendercache__invert_affine(const float m[12], float out[12])
+{
+    double a = m[0], b = m[1], c = m[2], d = m[4], e = m[5], f = m[6], g = m[8], h = m[9], k = m[10];
+    double det = a * (e * k - f * h) - b * (d * k - f * g) + c * (d * h - e * g), inv[9];
+    double scale = fabs(a) + fabs(b) + fabs(c) + fabs(d) + fabs(e) + fabs(f) + fabs(g) + fabs(h) + fabs(k);
+    int i;
+    if (!(fabs(det) > 1e-12 * scale * scale * scale) || !isfinite(det)) return 0;
+    inv[0] = (e * k - f * h) / det; inv[1] = (c * h - b * k) / det; inv[2] = (b * f - c * e) / det;
+    inv[3] = (f * g - d * k) / det; inv[4] = (a * k - c * g) / det; inv[5] = (c * d - a * f) / det;
+    inv[6] = (d * h - e * g) / det; inv[7] = (b * g - a * h) / det; inv[8] = (a * e - b * d) / det;
+    for (i = 0; i < 3; i++) {
+        out[4 * i + 0] = (float)inv[3 * i + 0];
+        out[4 * i + 1] = (float)inv[3 * i + 1];
+        out[4 * i + 2] = (float)inv[3 * i + 2];
+        out[4 * i + 3] = (float)-(inv[3 * i + 0] * m[3] + inv[3 * i + 1] * m[7] + inv[3 * i + 2] * m[11]);
+    }
+    return 1;
+}
+
+RENDERCACHE_API rendercache_result rendercache_set_object_transform(rendercache *rc, uint32_t object,
+                                                                    const float m[12])
+{
+    float inv[12];
+    int k;
+    if (!rc || !m || object >= rc->object_count) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    for (k = 0; k < 12; k++)
+        if (!isfinite(m[k])) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    if (!rendercache__invert_affine(m, inv)) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    if (memcmp(m, rc->obj_world + 12 * (size_t)object, 12 * sizeof(float)) != 0) rc->obj_moved[object] = 1;
+    memcpy(rc->obj_world + 12 * (size_t)object, m, 12 * sizeof(float));
+    memcpy(rc->obj_local + 12 * (size_t)object, inv, 12 * sizeof(float));
+    return RENDERCACHE_OK;
+}
+
+/* ======================================================================
+   12. per-frame pipeline (Walter et al. 1999): project every point into
+   the new camera and z-buffer it (section 9) -> depth cull -> interpolate
+   the holes; the priority image is written by the last two (points: age;
+   holes: how few points surround them). Then requests by thresholding and
+   error diffusion (section 14), and insertion (section 15).
+   ---------------------------------------------------------------------- */
+/* Where a projection goes: a view and its object-to-camera matrices. */
+typedef struct rendercache__projector {
+    const rendercache *rc;
+    const rendercache__view *view;
+    const float *obj_camera;
+} rendercache__projector;
+
+/* Reprojection of one cache point (WDP99): object space -> camera space
+   through the object's composed matrix, then to a pixel; background points
+   are directions, rotated only, at distance RENDERCACHE__FAR. Depths are
+   squared distances (the z-buffer only compares them). Returns the pixel
+   index or RENDERCACHE__NONE. */
+static uint32_t rendercache__project_point(const rendercache__projector *pr, const rendercache__geo *g, float *depth2)
+{
+    const rendercache__view *v = pr->view;
+    float c[3], px, py;
+    if (g->object == RENDERCACHE__FREE_SLOT) return RENDERCACHE__NONE;
+    if (g->object == RENDERCACHE_MISS) {
+        rendercache__view_rotate(v, g->pos, c);
+        *depth2 = RENDERCACHE__FAR2;
+    } else {
+        rendercache__affine(pr->obj_camera + 12 * (size_t)g->object, g->pos, c);
+        *depth2 = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
+    }
+    if (!rendercache__view_to_pixel(v, c, &px, &py)) return RENDERCACHE__NONE;
+    return (uint32_t)py * v->width + (uint32_t)px;
+}
+
+/* Priority of a pixel showing a point (WDP99: age is the main measure of
+   how likely a colour is stale; points of moving objects age faster),
+   times its priority scale (the light-vector weight of Crespin and Peroche
+   2004, section 4.2.4), in [0, 1]. motion: the object's obj_motion. */
+static float rendercache__point_priority(const rendercache *rc, const rendercache__point *pt, uint32_t motion)
+{
+    uint32_t age = rc->frame - pt->birth + (motion - pt->motion_birth);
+    float pr = (float)age * rc->inv_age_ramp;
+    pr = (pr < 1.0f ? pr : 1.0f) * (RENDERCACHE__PRIORITY_POINT_MAX * pt->scale);
+    return pr < 1.0f ? pr : 1.0f;
+}
+
+/* Perspective projection of n points of one object (matrix m): written
+   without branches or library calls so that compilers vectorise it; this
+   loop is the hottest of the frame. */
+static void rendercache__project_perspective(const rendercache__geo *g, uint32_t n, const float *m,
+                                             const rendercache__view *v, uint32_t *pix, float *depth2)
+{
+    const float fx = v->focal, cx = v->cx, cy = v->cy, w = (float)v->width, h = (float)v->height;
+    const uint32_t width = v->width;
+    uint32_t i;
+    for (i = 0; i < n; i++) {
+        float x0 = g[i].pos[0], x1 = g[i].pos[1], x2 = g[i].pos[2];
+        float c0 = m[0] * x0 + m[1] * x1 + m[2] * x2 + m[3];
+        float c1 = m[4] * x0 + m[5] * x1 + m[6] * x2 + m[7];
+        float c2 = m[8] * x0 + m[9] * x1 + m[10] * x2 + m[11];
+        float inv = 1.0f / c2, x = cx + fx * c0 * inv, y = cy - fx * c1 * inv;
+        int inside = (c2 > 0.0f) & (x >= 0.0f) & (x < w) & (y >= 0.0f) & (y < h);
+        float xs = inside ? x : 0.0f, ys = inside ? y : 0.0f;
+        depth2[i] = c0 * c0 + c1 * c1 + c2 * c2;
+        pix[i] = inside ? (uint32_t)ys * width + (uint32_t)xs : RENDERCACHE__NONE;
+    }
+}
+
+/* The object all points [begin, end) belong to, or RENDERCACHE__NONE when
+   they are mixed (or background, or free). */
+static uint32_t rendercache__batch_object(const rendercache__geo *geo, uint32_t begin, uint32_t end)
+{
+    uint32_t o = geo[begin].object, differ = 0, i;
+    for (i = begin + 1; i < end; i++) differ |= geo[i].object ^ o;
+    return differ || o >= RENDERCACHE__FREE_SLOT ? RENDERCACHE__NONE : o;
+}
+
+/* The one object of the points [begin, end) other than background points,
+   RENDERCACHE__NONE when there are several or free slots; *background
+   tells whether background points are among them. */
+static uint32_t rendercache__batch_object_or_background(const rendercache__geo *geo, uint32_t begin, uint32_t end,
+                                                        int *background)
+{
+    uint32_t o = RENDERCACHE__NONE, i;
+    *background = 0;
+    for (i = begin; i < end; i++) {
+        uint32_t g = geo[i].object;
+        if (g == RENDERCACHE_MISS) { *background = 1; continue; }
+        if (g == RENDERCACHE__FREE_SLOT || (o != RENDERCACHE__NONE && g != o)) return RENDERCACHE__NONE;
+        o = g;
+    }
+    return o;
+}
+
+/* The splat source of the render cache: cache slots [begin, end). Batches
+   of one object (with or without background points) under a perspective
+   view take the vectorised path; the rest goes point by point. */
+static uint32_t rendercache__project_points(const void *src, uint32_t begin, uint32_t end, uint32_t *pix, float *depth2)
+{
+    const rendercache__projector *pr = (const rendercache__projector *)src;
+    const rendercache__geo *geo = pr->rc->geo;
+    int background;
+    uint32_t i, o = rendercache__batch_object_or_background(geo, begin, end, &background);
+    if (pr->view->kind == RENDERCACHE_CAMERA_PERSPECTIVE && o != RENDERCACHE__NONE) {
+        rendercache__project_perspective(geo + begin, end - begin, pr->obj_camera + 12 * (size_t)o, pr->view, pix,
+                                         depth2);
+        if (background)   /* the few background points, again, as directions */
+            for (i = begin; i < end; i++)
+                if (geo[i].object == RENDERCACHE_MISS) pix[i - begin] = rendercache__project_point(pr, &geo[i], &depth2[i - begin]);
+        return end - begin;
+    }
+    for (i = begin; i < end; i++) pix[i - begin] = rendercache__project_point(pr, &geo[i], &depth2[i - begin]);
+    return end - begin;
+}
+
+/* The payload of a cache point: its colour and priority. */
+static void rendercache__point_payload(const void *src, uint32_t begin, uint32_t end, const uint32_t *pix,
+                                       float *payload)
+{
+    const rendercache *rc = ((const rendercache__projector *)src)->rc;
+    const rendercache__point *data = rc->data;
+    const rendercache__geo *geo = rc->geo;
+    uint32_t i, o = rendercache__batch_object(geo, begin, end);
+    if (o != RENDERCACHE__NONE) {   /* one object: no branch, vectorisable */
+        uint32_t motion = rc->obj_motion[o];
+        for (i = begin; i < end; i++) {
+            float *out = payload + 4 * (size_t)(i - begin);
+            out[0] = data[i].rgb[0];
+            out[1] = data[i].rgb[1];
+            out[2] = data[i].rgb[2];
+            out[3] = rendercache__point_priority(rc, &data[i], motion);
+        }
+        return;
+    }
+    for (i = begin; i < end; i++) {
+        float *out = payload + 4 * (size_t)(i - begin);
+        uint32_t obj = geo[i].object;
+        if (pix[i - begin] == RENDERCACHE__NONE) continue;
+        out[0] = data[i].rgb[0];
+        out[1] = data[i].rgb[1];
+        out[2] = data[i].rgb[2];
+        out[3] = rendercache__point_priority(rc, &data[i], obj == RENDERCACHE_MISS ? 0u : rc->obj_motion[obj]);
+    }
+}
+
+/* Object-to-camera matrices of every object for view v. */
+static void rendercache__compose_objects(const rendercache *rc, const rendercache__view *v, float *out)
+{
+    uint32_t o;
+    for (o = 0; o < rc->object_count; o++)
+        rendercache__view_compose(v, rc->obj_world + 12 * (size_t)o, out + 12 * (size_t)o);
+}
+
+/* Projects every point into view v (matrices obj_camera) and z-buffers
+   them into rc->splat, with colour and priority when with_payload. */
+static void rendercache__splat_points(rendercache *rc, const rendercache__view *v, const float *obj_camera,
+                                      int with_payload, double *t_project)
+{
+    rendercache__projector pr;
+    pr.rc = rc;
+    pr.view = v;
+    pr.obj_camera = obj_camera;
+    double t0 = rendercache__now(rc);
+    rendercache__splat_run(&rc->splat, rc->parallel_for, rc->parallel_user, rendercache__project_points,
+                           with_payload ? rendercache__point_payload : NULL, &pr, rc->capacity);
+    if (t_project) *t_project += rendercache__now(rc) - t0;
+}
+
+/* Priority of a hole (WDP99, Crespin-Peroche 4.1): the fewer points around
+   it, the higher; nothing near gives the maximum. */
+static float rendercache__hole_priority(const rendercache *rc, unsigned char kind, uint32_t count)
+{
+    float window;
+    switch (kind) {
+    case RENDERCACHE_PIXEL_INTERPOLATED:
+        return RENDERCACHE__PRIORITY_INTERP + 0.25f * (float)(8u - count) / 8.0f;
+    case RENDERCACHE_PIXEL_SPARSE:
+        window = (float)((2 * rc->wide_radius + 1) * (2 * rc->wide_radius + 1) - 1);
+        return RENDERCACHE__PRIORITY_SPARSE + 0.2f * (1.0f - (float)count / window);
+    default:
+        return 1.0f;
+    }
+}
+
+/* The 8 neighbours in the order W E N S NW NE SW SE, so that bits (0,1),
+   (2,3), (4,7) and (5,6) are opposite pairs. */
+static const int rendercache__nx[8] = { -1, 1, 0, 0, -1, 1, -1, 1 };
+static const int rendercache__ny[8] = { 0, 0, -1, 1, -1, -1, 1, 1 };
+
+/* Depth cull (WDP99): a point much farther than the average depth of the
+   points in its 3x3 neighbourhood shows through a nearer surface and is
+   dropped. Depths are squared distances here (FLT_MAX where empty), so the
+   average is a root mean square and tol2 the squared tolerance factor.
+   Refinement: the nearer points must also lie on opposite sides (left and
+   right, above and below, or both diagonals), as they do when a far point
+   falls into a gap of a nearer surface; a point beside a silhouette has its
+   nearer neighbours on one side only and is kept, so a static view keeps
+   every sampled point. nd: the 8 neighbours' depths. */
+static int rendercache__occluded(const float nd[8], float d, float tol2)
+{
+    uint32_t nearer = 0, n = 0, k;
+    float sum = 0.0f;
+    for (k = 0; k < 8; k++) {
+        int filled = nd[k] < FLT_MAX;
+        sum += filled ? nd[k] : 0.0f;
+        n += (uint32_t)filled;
+        nearer |= (uint32_t)(d > nd[k] * tol2) << k;
+    }
+    if (!(((nearer & 3u) == 3u) || ((nearer & 12u) == 12u) || ((nearer & 0xF0u) == 0xF0u))) return 0;
+    return d * (float)n > sum * tol2;   /* d > mean * tol2, as rendercache__cull_row computes it */
+}
+
+/* The depths of the 8 neighbours of (x, y), FLT_MAX outside the image. */
+static void rendercache__neighbour_depths(const float *depth, uint32_t w, uint32_t h, uint32_t x, uint32_t y,
+                                          float nd[8])
+{
+    int k;
+    if (x > 0 && y > 0 && x + 1 < w && y + 1 < h) {
+        const float *c = depth + (size_t)y * w + x;
+        nd[0] = c[-1]; nd[1] = c[1]; nd[2] = c[-(ptrdiff_t)w]; nd[3] = c[w];
+        nd[4] = c[-(ptrdiff_t)w - 1]; nd[5] = c[-(ptrdiff_t)w + 1]; nd[6] = c[w - 1]; nd[7] = c[w + 1];
+        return;
+    }
+    for (k = 0; k < 8; k++) {
+        int qx = (int)x + rendercache__nx[k], qy = (int)y + rendercache__ny[k];
+        nd[k] = (qx < 0 || qy < 0 || qx >= (int)w || qy >= (int)h) ? FLT_MAX : depth[(size_t)qy * w + (uint32_t)qx];
+    }
+}
+
+/* The depth cull of the interior pixels x in [1, w-1) of row y, written
+   without branches so that compilers vectorise it: occ[x] = 1 where the
+   pixel's point is culled. Same test as rendercache__occluded. */
+static void rendercache__cull_row(const float *depth, uint32_t w, uint32_t y, float tol2, unsigned char *occ)
+{
+    const float *c = depth + (size_t)y * w, *u = c - w, *l = c + w;
+    uint32_t x;
+    for (x = 1; x + 1 < w; x++) {
+        float d = c[x], sum = 0.0f, n = 0.0f;
+        float nd0 = c[x - 1], nd1 = c[x + 1], nd2 = u[x], nd3 = l[x];
+        float nd4 = u[x - 1], nd5 = u[x + 1], nd6 = l[x - 1], nd7 = l[x + 1];
+        int e01, e23, ediag, enclosed;
+        sum += nd0 < FLT_MAX ? nd0 : 0.0f; n += nd0 < FLT_MAX ? 1.0f : 0.0f;
+        sum += nd1 < FLT_MAX ? nd1 : 0.0f; n += nd1 < FLT_MAX ? 1.0f : 0.0f;
+        sum += nd2 < FLT_MAX ? nd2 : 0.0f; n += nd2 < FLT_MAX ? 1.0f : 0.0f;
+        sum += nd3 < FLT_MAX ? nd3 : 0.0f; n += nd3 < FLT_MAX ? 1.0f : 0.0f;
+        sum += nd4 < FLT_MAX ? nd4 : 0.0f; n += nd4 < FLT_MAX ? 1.0f : 0.0f;
+        sum += nd5 < FLT_MAX ? nd5 : 0.0f; n += nd5 < FLT_MAX ? 1.0f : 0.0f;
+        sum += nd6 < FLT_MAX ? nd6 : 0.0f; n += nd6 < FLT_MAX ? 1.0f : 0.0f;
+        sum += nd7 < FLT_MAX ? nd7 : 0.0f; n += nd7 < FLT_MAX ? 1.0f : 0.0f;
+        e01 = (d > nd0 * tol2) & (d > nd1 * tol2);
+        e23 = (d > nd2 * tol2) & (d > nd3 * tol2);
+        ediag = (d > nd4 * tol2) & (d > nd5 * tol2) & (d > nd6 * tol2) & (d > nd7 * tol2);
+        enclosed = e01 | e23 | ediag;
+        /* enclosed implies n >= 2, so the mean is defined where it matters */
+        occ[x] = (unsigned char)(enclosed & (d < FLT_MAX) & (d * (n > 0.0f ? n : 1.0f) > sum * tol2));
+    }
+}
+
+/* Job per tile: depth cull; surviving points give their colour and
+   priority to the pixel. The kind array holds the cull decisions of a row
+   until the row is written. */
+static void rendercache__cull_job(void *ctx, uint32_t tile)
+{
+    rendercache *rc = (rendercache *)ctx;
+    const rendercache__raster *s = &rc->splat.final;
+    const float *depth = s->depth, *payload = s->payload;
+    const uint32_t *index = s->index, w = rc->width, h = rc->height;
+    uint32_t *px_index = rc->px_index;
+    float *px_depth = rc->px_depth, *image = rc->image, *priority = rc->priority;
+    unsigned char *kind = rc->kind, *count = rc->count;
+    uint32_t y0 = tile * RENDERCACHE__TILE_ROWS, y1 = y0 + RENDERCACHE__TILE_ROWS, x, y;
+    uint32_t visible = 0, culled = 0, *stats = rc->tile_stats + RENDERCACHE__TILE_STATS * (size_t)tile;
+    float tol2 = (1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance);
+    if (y1 > h) y1 = h;
+    for (y = y0; y < y1; y++) {
+        unsigned char *occ = kind + (size_t)y * w;
+        int interior_row = y > 0 && y + 1 < h;
+        if (interior_row) rendercache__cull_row(depth, w, y, tol2, occ);
+        for (x = 0; x < w; x++) {
+            uint32_t p = y * w + x, k = index[p];
+            if (!interior_row || x == 0 || x + 1 == w) {   /* border: the general test */
+                float nd[8];
+                occ[x] = 0;
+                if (k != RENDERCACHE__NONE) {
+                    rendercache__neighbour_depths(depth, w, h, x, y, nd);
+                    occ[x] = (unsigned char)rendercache__occluded(nd, depth[p], tol2);
+                }
+            }
+            if (k != RENDERCACHE__NONE && occ[x]) {
+                k = RENDERCACHE__NONE;
+                culled++;
+            }
+            px_index[p] = k;
+            if (k == RENDERCACHE__NONE) {
+                px_depth[p] = FLT_MAX;
+                continue;
+            }
+            px_depth[p] = depth[p];
+            memcpy(image + 3 * (size_t)p, payload + 4 * (size_t)p, 3 * sizeof(float));
+            priority[p] = payload[4 * (size_t)p + 3];
+            kind[p] = RENDERCACHE_PIXEL_POINT;
+            count[p] = 0;
+            visible++;
+        }
+    }
+    stats[0] = visible;
+    stats[1] = culled;
+}
+
+/* Interpolation of a hole (WDP99 3x3 weighted filter; WDG02 wider filter
+   for sparse regions) from the points within radius r, tent weights
+   (r+1-|dx|)(r+1-|dy|). Never blends across a depth discontinuity: when the
+   neighbours' depths span more than the tolerance, only the nearest layer
+   (within tolerance of the minimum) or the farthest layer (within tolerance
+   of the maximum) is used, whichever carries more weight (the far one on a
+   tie: a hole beside an edge is more often uncovered background). Returns
+   the number of points in the window; rgb is set when it is not zero.
+   Depths are squared distances, compared with the squared tolerance. */
+static uint32_t rendercache__interpolate(const rendercache *rc, uint32_t x, uint32_t y, int r, float rgb[3])
+{
+    const float *depth = rc->px_depth, *image = rc->image;
+    const uint32_t w = rc->width;
+    int x0 = (int)x - r, x1 = (int)x + r, y0 = (int)y - r, y1 = (int)y + r, qx, qy;
+    float dmin = FLT_MAX, dmax = 0.0f, tol2 = (1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance);
+    float near_sum[4] = { 0, 0, 0, 0 }, far_sum[4] = { 0, 0, 0, 0 };
+    const float *chosen;
+    uint32_t n = 0;
+    if (x0 < 0) x0 = 0;
+    if (y0 < 0) y0 = 0;
+    if (x1 >= (int)w) x1 = (int)w - 1;
+    if (y1 >= (int)rc->height) y1 = (int)rc->height - 1;
+    for (qy = y0; qy <= y1; qy++) {
+        const float *row = depth + (size_t)qy * w;
+        for (qx = x0; qx <= x1; qx++) {
+            float d = row[qx];
+            if (d == FLT_MAX) continue;   /* no point there */
+            dmin = d < dmin ? d : dmin;
+            dmax = d > dmax ? d : dmax;
+            n++;
+        }
+    }
+    if (n == 0) return 0;
+    for (qy = y0; qy <= y1; qy++) {
+        const float *row = depth + (size_t)qy * w;
+        float wy = (float)(r + 1 - rendercache__iabs(qy - (int)y));
+        for (qx = x0; qx <= x1; qx++) {
+            float d = row[qx], wgt, *acc;
+            const float *c;
+            if (d == FLT_MAX) continue;
+            if (d <= dmin * tol2) acc = near_sum;
+            else if (d * tol2 >= dmax) acc = far_sum;
+            else continue;   /* a middle layer: neither side of the choice */
+            wgt = wy * (float)(r + 1 - rendercache__iabs(qx - (int)x));
+            c = image + 3 * ((size_t)qy * w + (size_t)qx);
+            acc[0] += wgt * c[0];
+            acc[1] += wgt * c[1];
+            acc[2] += wgt * c[2];
+            acc[3] += wgt;
+        }
+    }
+    chosen = (far_sum[3] >= near_sum[3]) ? far_sum : near_sum;
+    if (dmax <= dmin * tol2) chosen = near_sum;   /* one layer: every point was counted as near */
+    rgb[0] = chosen[0] / chosen[3];
+    rgb[1] = chosen[1] / chosen[3];
+    rgb[2] = chosen[2] / chosen[3];
+    return n;
+}
+
+/* Job per tile: fill the holes left by projection and cull, and rank them. */
+static void rendercache__interpolate_job(void *ctx, uint32_t tile)
+{
+    rendercache *rc = (rendercache *)ctx;
+    uint32_t y0 = tile * RENDERCACHE__TILE_ROWS, y1 = y0 + RENDERCACHE__TILE_ROWS, x, y;
+    uint32_t counts[3] = { 0, 0, 0 }, *stats = rc->tile_stats + RENDERCACHE__TILE_STATS * (size_t)tile;
+    if (y1 > rc->height) y1 = rc->height;
+    for (y = y0; y < y1; y++) {
+        for (x = 0; x < rc->width; x++) {
+            uint32_t p = y * rc->width + x, n;
+            float rgb[3];
+            if (rc->px_index[p] != RENDERCACHE__NONE) continue;
+            n = rendercache__interpolate(rc, x, y, 1, rgb);
+            if (n >= rc->sparse_neighbours) {
+                rc->kind[p] = RENDERCACHE_PIXEL_INTERPOLATED;
+                counts[0]++;
+            } else {
+                n = rendercache__interpolate(rc, x, y, (int)rc->wide_radius, rgb);
+                if (n) {
+                    rc->kind[p] = RENDERCACHE_PIXEL_SPARSE;
+                    counts[1]++;
+                } else {
+                    memcpy(rgb, rc->background, sizeof rgb);
+                    rc->kind[p] = RENDERCACHE_PIXEL_EMPTY;
+                    counts[2]++;
+                }
+            }
+            rc->count[p] = (unsigned char)(n > 255 ? 255 : n);
+            rc->priority[p] = rendercache__hole_priority(rc, rc->kind[p], rc->count[p]);
+            memcpy(rc->image + 3 * (size_t)p, rgb, sizeof rgb);
+        }
+    }
+    stats[2] = counts[0];
+    stats[3] = counts[1];
+    stats[4] = counts[2];
+}
+
+/* Sums one column of the per-tile statistics. */
+static uint32_t rendercache__tile_sum(const rendercache *rc, uint32_t column)
+{
+    uint32_t t, sum = 0;
+    for (t = 0; t < rc->tile_count; t++) sum += rc->tile_stats[RENDERCACHE__TILE_STATS * (size_t)t + column];
+    return sum;
+}
+
+static void rendercache__start_stats(rendercache *rc)
+{
+    rendercache_stats *s = &rc->stats;
+    s->frame = rc->frame;
+    s->requested = s->predicted = s->inserted = s->replaced = s->evicted = s->rejected = 0;
+    s->time_project = s->time_cull = s->time_interpolate = 0.0;
+    s->time_predict = s->time_request = s->time_insert = 0.0;
+}
+
+RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, const rendercache_camera *camera)
+{
+    rendercache__view v;
+    double t1, t2;
+    uint32_t o;
+    if (!rc || !rendercache__view_init(&v, camera) || camera->width != rc->width || camera->height != rc->height ||
+        camera->kind != RENDERCACHE_CAMERA_PERSPECTIVE) {
+        if (rc && rc->log) rc->log(rc->log_user, "rendercache_begin_frame: invalid camera or image size");
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    }
+    rc->frame++;
+    rc->view = v;
+    rc->has_prediction = 0;
+    rc->hand_exhausted = 0;
+    rendercache__start_stats(rc);
+    for (o = 0; o < rc->object_count; o++) {   /* points of moving objects age faster */
+        if (rc->obj_moved[o]) rc->obj_motion[o] += rc->moving_age_step - 1u;
+        rc->obj_moved[o] = 0;
+    }
+    rendercache__compose_objects(rc, &rc->view, rc->obj_camera);
+    rendercache__splat_points(rc, &rc->view, rc->obj_camera, 1, &rc->stats.time_project);
+    t1 = rendercache__now(rc);
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__cull_job, rc, rc->tile_count);
+    t2 = rendercache__now(rc);
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__interpolate_job, rc, rc->tile_count);
+    rc->stats.time_cull = t2 - t1;
+    rc->stats.time_interpolate = rendercache__now(rc) - t2;
+    rc->stats.projected = rc->splat.projected;
+    rc->stats.visible = rendercache__tile_sum(rc, 0);
+    rc->stats.culled = rendercache__tile_sum(rc, 1);
+    rc->stats.interpolated = rendercache__tile_sum(rc, 2);
+    rc->stats.sparse = rendercache__tile_sum(rc, 3);
+    rc->stats.empty = rendercache__tile_sum(rc, 4);
+    rc->stats.live_points = rc->live;
+    rc->has_frame = 1;
+    return RENDERCACHE_OK;
+}
+
+/* ======================================================================
+   13. predictive sampling (Walter et al. 2002): the cache projected into
+   the camera expected next; pixels with no point in their 3x3
+   neighbourhood there are regions the motion will uncover.
+   ---------------------------------------------------------------------- */
+static void rendercache__predict_job(void *ctx, uint32_t tile)
+{
+    rendercache *rc = (rendercache *)ctx;
+    const rendercache__raster *s = &rc->splat.final;
+    uint32_t y0 = tile * RENDERCACHE__TILE_ROWS, y1 = y0 + RENDERCACHE__TILE_ROWS, x, y, holes = 0;
+    if (y1 > rc->height) y1 = rc->height;
+    for (y = y0; y < y1; y++) {
+        uint32_t ya = y > 0 ? y - 1 : 0, yb = y + 1 < rc->height ? y + 1 : y;
+        for (x = 0; x < rc->width; x++) {
+            uint32_t xa = x > 0 ? x - 1 : 0, xb = x + 1 < rc->width ? x + 1 : x, qx, qy;
+            int covered = 0;
+            for (qy = ya; qy <= yb && !covered; qy++)
+                for (qx = xa; qx <= xb; qx++)
+                    if (s->index[qy * rc->width + qx] != RENDERCACHE__NONE) { covered = 1; break; }
+            rc->pred_priority[y * rc->width + x] = covered ? 0.0f : 1.0f;
+            holes += !covered;
+        }
+    }
+    rc->tile_stats[RENDERCACHE__TILE_STATS * (size_t)tile + 5] = holes;
+}
+
+RENDERCACHE_API rendercache_result rendercache_predict(rendercache *rc, const rendercache_camera *next)
+{
+    rendercache__view v;
+    double t0;
+    if (!rc || !rc->has_frame || !rendercache__view_init(&v, next) || next->width != rc->width ||
+        next->height != rc->height || next->kind != RENDERCACHE_CAMERA_PERSPECTIVE)
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    t0 = rendercache__now(rc);
+    rc->predicted = v;
+    rendercache__compose_objects(rc, &rc->predicted, rc->obj_predicted);
+    rendercache__splat_points(rc, &rc->predicted, rc->obj_predicted, 0, NULL);
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__predict_job, rc, rc->tile_count);
+    rc->pred_holes = rendercache__tile_sum(rc, 5);
+    rc->has_prediction = 1;
+    rc->stats.time_predict += rendercache__now(rc) - t0;
+    return RENDERCACHE_OK;
+}
+
+/* ======================================================================
+   14. sample selection: thresholding and error diffusion of the priority
+   image (WDP99, after Floyd and Steinberg 1976).
+   Thresholding: priorities are binned into RENDERCACHE__LEVELS levels; the
+   levels above a cut level, all of whose pixels fit the budget, are taken
+   whole (value 1); the cut level gets the fraction of the budget left
+   (value in (0, 1)); lower levels get 0. So holes are served before old
+   points, and old points before young ones.
+   Error diffusion: Floyd-Steinberg on these values in serpentine order
+   spreads the fractional level's requests evenly (with a modulated
+   threshold for sparse levels, see below). Pixels of value 0 or 1 are
+   decided outright and pass incoming error on unchanged; error that would
+   leave the image goes to the next pixel in scan order instead, so the
+   count equals the budget up to the last pixel's residual, which a final
+   pass corrects with the pixels closest to the threshold. Each decision
+   depends on the previous ones, so this step is serial; everything around
+   it runs in tiles.
+   ---------------------------------------------------------------------- */
+typedef struct rendercache__select_job {
+    rendercache *rc;
+    const float *priority;
+    uint32_t cut;
+    float fraction;
+} rendercache__select_job;
+
+/* The histogram level of a priority in [0, 1] (anything else: level 0). */
+static uint32_t rendercache__level(float priority)
+{
+    float l = priority * (float)RENDERCACHE__LEVELS;
+    l = l > 0.0f ? l : 0.0f;
+    l = l < (float)(RENDERCACHE__LEVELS - 1) ? l : (float)(RENDERCACHE__LEVELS - 1);
+    return (uint32_t)l;
+}
+
+static void rendercache__histogram_job(void *ctx, uint32_t tile)
+{
+    const rendercache__select_job *j = (const rendercache__select_job *)ctx;
+    const rendercache *rc = j->rc;
+    const float *priority = j->priority;
+    uint32_t *h = rc->hist + (size_t)tile * RENDERCACHE__LEVELS;
+    uint32_t p0 = tile * RENDERCACHE__TILE_ROWS * rc->width, p1 = p0 + RENDERCACHE__TILE_ROWS * rc->width, p;
+    if (p1 > rc->pixel_count) p1 = rc->pixel_count;
+    memset(h, 0, RENDERCACHE__LEVELS * sizeof *h);
+    for (p = p0; p < p1; p++)
+        if (priority[p] > 0.0f) h[rendercache__level(priority[p])]++;
+}
+
+/* Job per tile: the pixels decided outright, and those left to the error
+   diffusion (all of value fraction). */
+static void rendercache__threshold_job(void *ctx, uint32_t tile)
+{
+    const rendercache__select_job *j = (const rendercache__select_job *)ctx;
+    rendercache *rc = j->rc;
+    const float *priority = j->priority;
+    const uint32_t cut = j->cut;
+    const unsigned char at_cut = j->fraction >= 1.0f ? 1u : 2u;   /* a whole level fits: chosen outright */
+    unsigned char *chosen = rc->chosen;
+    uint32_t p0 = tile * RENDERCACHE__TILE_ROWS * rc->width, p1 = p0 + RENDERCACHE__TILE_ROWS * rc->width, p, ones = 0;
+    if (p1 > rc->pixel_count) p1 = rc->pixel_count;
+    for (p = p0; p < p1; p++) {
+        float pr = priority[p];
+        uint32_t l = rendercache__level(pr);
+        /* 1: chosen outright; 2: fractional (value: the cut's fraction), for the error diffusion */
+        unsigned char c = !(pr > 0.0f) ? 0u : (l > cut ? 1u : (l == cut ? at_cut : 0u));
+        chosen[p] = c;
+        ones += c == 1u;
+    }
+    rc->tile_stats[RENDERCACHE__TILE_STATS * (size_t)tile + 5] = ones;
+}
+
+/* Finds the cut level and its fraction so that the values sum to budget
+   (or to the number of positive pixels when fewer). */
+static void rendercache__find_cut(rendercache *rc, uint32_t budget, uint32_t *cut, float *fraction)
+{
+    uint32_t *total = rc->hist + (size_t)rc->tile_count * RENDERCACHE__LEVELS, t, l;
+    uint64_t above = 0;
+    memset(total, 0, RENDERCACHE__LEVELS * sizeof *total);
+    for (t = 0; t < rc->tile_count; t++) {
+        const uint32_t *h = rc->hist + (size_t)t * RENDERCACHE__LEVELS;
+        for (l = 0; l < RENDERCACHE__LEVELS; l++) total[l] += h[l];
+    }
+    *cut = 0;
+    *fraction = 1.0f;
+    for (l = RENDERCACHE__LEVELS; l-- > 0;) {
+        if (above + total[l] >= budget) {
+            *cut = l;
+            *fraction = (float)((double)(budget - above) / (double)total[l]);
+            return;
+        }
+        above += total[l];
+    }
+}
+
+/* Whether pixel q takes part in the diffusion (its value is fractional). */
+static int rendercache__fractional(const rendercache *rc, uint32_t q)
+{
+    return (rc->chosen[q] & 2u) != 0;
+}
+
+/* Hands the error e of pixel (x, y) to its unvisited neighbours with the
+   Floyd-Steinberg weights 7/16 ahead, 3/16 behind-below, 5/16 below, 1/16
+   ahead-below. A weight whose neighbour lies outside the image goes to the
+   pixel below instead (ahead on the last row); then only fractional
+   neighbours keep their weight, renormalised, so error never lands on a
+   pixel whose choice is already made (it would be lost there). Returns the
+   part that found no taker, for the next fractional pixel in scan order. */
+static float rendercache__spread_error(const rendercache *rc, float *cur, float *next, uint32_t y, int x, int dir,
+                                       float e)
+{
+    int w = (int)rc->width, ax = x + dir, bx = x - dir, below = y + 1 < rc->height;
+    float wt[4] = { 7.0f, 3.0f, 5.0f, 1.0f }, sum, s;   /* ahead, behind-below, below, ahead-below */
+    uint32_t row = y * rc->width, row_below = row + rc->width;
+    if (!below) {   /* last row: everything ahead, if there is an ahead */
+        if (ax < 0 || ax >= w || !rendercache__fractional(rc, row + (uint32_t)ax)) return e;
+        cur[ax + 1] += e;
+        return 0.0f;
+    }
+    if (ax < 0 || ax >= w) { wt[2] += wt[0] + wt[3]; wt[0] = wt[3] = 0.0f; }
+    if (bx < 0 || bx >= w) { wt[2] += wt[1]; wt[1] = 0.0f; }
+    if (wt[0] > 0.0f && !rendercache__fractional(rc, row + (uint32_t)ax)) wt[0] = 0.0f;
+    if (wt[1] > 0.0f && !rendercache__fractional(rc, row_below + (uint32_t)bx)) wt[1] = 0.0f;
+    if (wt[2] > 0.0f && !rendercache__fractional(rc, row_below + (uint32_t)x)) wt[2] = 0.0f;
+    if (wt[3] > 0.0f && !rendercache__fractional(rc, row_below + (uint32_t)ax)) wt[3] = 0.0f;
+    sum = wt[0] + wt[1] + wt[2] + wt[3];
+    if (sum == 0.0f) return e;
+    s = e / sum;
+    if (wt[0] > 0.0f) cur[ax + 1] += wt[0] * s;
+    if (wt[1] > 0.0f) next[bx + 1] += wt[1] * s;
+    if (wt[2] > 0.0f) next[x + 1] += wt[2] * s;
+    if (wt[3] > 0.0f) next[ax + 1] += wt[3] * s;
+    return 0.0f;
+}
+
+/* Threshold modulation (Knuth 1987; Eschbach and Knox 1991): a sparse
+   level under plain Floyd-Steinberg chooses nothing until the error has
+   piled up to 0.5, and it spreads sideways while it does, so the first rows
+   of the image starve and choices come in bursts. A threshold varied per
+   pixel by up to +-amp breaks that up; it fades out as the level gets
+   denser (no transient there, and it would let choices touch). The
+   variation is a hash of (pixel, frame): deterministic, and different from
+   frame to frame. */
+#define RENDERCACHE__MODULATION 0.4f          /* amplitude at density 0 */
+#define RENDERCACHE__MODULATION_FADE 0.1f     /* density where it reaches 0 */
+
+static float rendercache__threshold(uint32_t p, uint32_t frame, float amp)
+{
+    /* a 32-bit integer hash (lowbias32, Wellons): the serial loop is this one */
+    uint32_t z = p * 0x9E3779B9u ^ frame * 0x85EBCA6Bu;
+    z ^= z >> 16;
+    z *= 0x7FEB352Du;
+    z ^= z >> 15;
+    z *= 0x846CA68Bu;
+    z ^= z >> 16;
+    return 0.5f + amp * ((float)(z >> 8) * (1.0f / 8388608.0f) - 1.0f);
+}
+
+/* Serial serpentine Floyd-Steinberg pass over the fractional pixels (of
+   value fraction, the cut level's share); marks rc->chosen and returns the
+   count. Pixels of value 0 or 1 are decided outright; the error moves
+   among the fractional pixels only, so their count is their total value up
+   to the last carry. Fractional pixels keep value + incoming error in select_v
+   for the count correction. The threshold pass marked them (chosen & 2)
+   and counted the pixels chosen outright (tile statistics column 5). */
+static uint32_t rendercache__diffuse(rendercache *rc, float fraction, uint32_t *best_add, uint32_t *best_drop)
+{
+    uint32_t w = rc->width, h = rc->height, y, count = rendercache__tile_sum(rc, 5);
+    unsigned char *chosen = rc->chosen;
+    float *select_v = rc->select_v;
+    float add_v = -FLT_MAX, drop_v = FLT_MAX;
+    float *cur = rc->err_rows, *next = rc->err_rows + (w + 2), carry = 0.0f;
+    float amp = RENDERCACHE__MODULATION * (1.0f - fraction / RENDERCACHE__MODULATION_FADE);
+    if (amp < 0.0f) amp = 0.0f;
+    memset(cur, 0, (w + 2) * sizeof *cur);
+    for (y = 0; y < h; y++) {
+        int dir = (y & 1u) ? -1 : 1, x = dir > 0 ? 0 : (int)w - 1, k;
+        float *t;
+        memset(next, 0, (w + 2) * sizeof *next);
+        for (k = 0; k < (int)w; k++, x += dir) {
+            uint32_t p = y * w + (uint32_t)x;
+            float total, e;
+            unsigned char pick;
+            if (!(chosen[p] & 2u)) continue;   /* decided by the threshold */
+            total = fraction + cur[x + 1] + carry;
+            pick = total >= rendercache__threshold(p, rc->frame, amp) ? 1u : 0u;
+            e = total - (float)pick;
+            select_v[p] = total;
+            chosen[p] = (unsigned char)(2u | pick);
+            count += pick;
+            if (pick ? total < drop_v : total > add_v) {   /* the marginal choices, for the correction */
+                if (pick) { drop_v = total; *best_drop = p; }
+                else { add_v = total; *best_add = p; }
+            }
+            carry = rendercache__spread_error(rc, cur, next, y, x, dir, e);
+        }
+        t = cur; cur = next; next = t;
+    }
+    return count;
+}
+
+/* Brings the count to the target with the fractional pixels nearest the
+   threshold: adds the unchosen with the largest value + error, or drops the
+   chosen with the smallest. The residual (the error left over at the end of
+   the diffusion) is mostly one pixel, which the diffusion pass already
+   found (best_add, best_drop); a larger one takes one scan per 64 pixels,
+   keeping the best 64 candidates in a sorted list. */
+#define RENDERCACHE__CORRECT_BATCH 64u
+static uint32_t rendercache__correct_count(rendercache *rc, uint32_t count, uint32_t target, uint32_t best_add,
+                                           uint32_t best_drop)
+{
+    if (count + 1 == target && best_add != RENDERCACHE__NONE) { rc->chosen[best_add] ^= 1u; return target; }
+    if (count == target + 1 && best_drop != RENDERCACHE__NONE) { rc->chosen[best_drop] ^= 1u; return target; }
+    while (count != target) {
+        uint32_t list[RENDERCACHE__CORRECT_BATCH], n = 0, want, p, i;
+        float key[RENDERCACHE__CORRECT_BATCH];
+        int add = count < target;
+        want = add ? target - count : count - target;
+        if (want > RENDERCACHE__CORRECT_BATCH) want = RENDERCACHE__CORRECT_BATCH;
+        for (p = 0; p < rc->pixel_count; p++) {
+            unsigned char c = rc->chosen[p];
+            float k;
+            if (!(c & 2u) || (int)(c & 1u) == add) continue;
+            k = add ? -rc->select_v[p] : rc->select_v[p];   /* smaller key: better candidate */
+            if (n == want && !(k < key[n - 1])) continue;
+            i = n < want ? n++ : n - 1;
+            while (i > 0 && k < key[i - 1]) { key[i] = key[i - 1]; list[i] = list[i - 1]; i--; }
+            key[i] = k;
+            list[i] = p;
+        }
+        if (n == 0) break;
+        for (i = 0; i < n; i++) rc->chosen[list[i]] ^= 1u;
+        count = add ? count + n : count - n;
+    }
+    return count;
+}
+
+/* Selects up to budget pixels of a priority image into rc->chosen. */
+static uint32_t rendercache__select(rendercache *rc, const float *priority, uint32_t budget)
+{
+    rendercache__select_job job;
+    uint64_t positive = 0;
+    uint32_t l, count, target, best_add = RENDERCACHE__NONE, best_drop = RENDERCACHE__NONE;
+    if (budget == 0) return 0;
+    job.rc = rc;
+    job.priority = priority;
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__histogram_job, &job, rc->tile_count);
+    rendercache__find_cut(rc, budget, &job.cut, &job.fraction);
+    for (l = 0; l < RENDERCACHE__LEVELS; l++) positive += rc->hist[(size_t)rc->tile_count * RENDERCACHE__LEVELS + l];
+    target = positive < budget ? (uint32_t)positive : budget;
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__threshold_job, &job, rc->tile_count);
+    count = rendercache__diffuse(rc, job.fraction, &best_add, &best_drop);
+    return rendercache__correct_count(rc, count, target, best_add, best_drop);
+}
+
+/* Writes the chosen pixels as requests in scan order and zeroes their
+   priority, so a further request call moves on to the next pixels. */
+static uint32_t rendercache__emit(rendercache *rc, const rendercache__view *v, float *priority, uint32_t flags,
+                                  rendercache_pixel_request *out, uint32_t max)
+{
+    uint32_t p, n = 0;
+    for (p = 0; p < rc->pixel_count && n < max; p++) {
+        rendercache_pixel_request *r;
+        if (!(rc->chosen[p] & 1u)) continue;
+        r = &out[n++];
+        r->x = p % rc->width;
+        r->y = p / rc->width;
+        r->flags = flags;
+        memcpy(r->org, v->eye, sizeof r->org);
+        rendercache__view_ray(v, (float)r->x + 0.5f, (float)r->y + 0.5f, r->dir);
+        priority[p] = 0.0f;
+    }
+    return n;
+}
+
+RENDERCACHE_API rendercache_result rendercache_request(rendercache *rc, rendercache_pixel_request *out,
+                                                       uint32_t max, uint32_t *count)
+{
+    uint32_t n = 0, pred_budget = 0;
+    double t0;
+    if (count) *count = 0;
+    if (!rc || !count || (!out && max) || !rc->has_frame) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    if (max == 0) return RENDERCACHE_OK;
+    t0 = rendercache__now(rc);
+    if (rc->has_prediction) {
+        pred_budget = (uint32_t)((double)max * rc->predict_fraction);
+        if (pred_budget > rc->pred_holes) pred_budget = rc->pred_holes;
+    }
+    if (rendercache__select(rc, rc->priority, max - pred_budget))
+        n = rendercache__emit(rc, &rc->view, rc->priority, 0u, out, max - pred_budget);
+    if (rc->has_prediction && n < max && rendercache__select(rc, rc->pred_priority, max - n)) {
+        uint32_t m = rendercache__emit(rc, &rc->predicted, rc->pred_priority, RENDERCACHE_REQUEST_PREDICTED,
+                                       out + n, max - n);
+        rc->pred_holes -= m;
+        rc->stats.predicted += m;
+        n += m;
+    }
+    rc->stats.requested += n;
+    rc->stats.time_request += rendercache__now(rc) - t0;
+    *count = n;
+    return RENDERCACHE_OK;
+}
+
+/* ======================================================================
+   15. insertion and eviction
+   ---------------------------------------------------------------------- */
+/* Whether slot shows in the current frame: inserted in it, or its point
+   projects to a pixel that shows it. Checked only for the slots the clock
+   hand passes, so nothing is written per point and frame. */
+static int rendercache__slot_in_use(const rendercache *rc, uint32_t slot)
+{
+    rendercache__projector pr;
+    float depth;
+    uint32_t p;
+    if (rc->data[slot].birth == rc->frame) return 1;
+    pr.rc = rc;
+    pr.view = &rc->view;
+    pr.obj_camera = rc->obj_camera;
+    p = rendercache__project_point(&pr, &rc->geo[slot], &depth);
+    return p != RENDERCACHE__NONE && rc->px_index[p] == slot;
+}
+
+/* Eviction (clock, second chance): the hand walks the slots in the order
+   they were filled, so the slot under it holds the oldest insertion; a
+   point shown in this frame is skipped (still useful), a free slot or a
+   point not visible (off screen, hidden, culled) is taken. When a whole
+   turn finds nothing, the cache is smaller than what is visible and the
+   oldest slot is taken anyway. */
+static uint32_t rendercache__victim(rendercache *rc)
+{
+    uint32_t scanned, slot;
+    for (scanned = 0; !rc->hand_exhausted && scanned < rc->capacity; scanned++) {
+        slot = rc->hand;
+        rc->hand = slot + 1 == rc->capacity ? 0 : slot + 1;
+        if (rc->geo[slot].object == RENDERCACHE__FREE_SLOT || !rendercache__slot_in_use(rc, slot)) return slot;
+    }
+    rc->hand_exhausted = 1;
+    slot = rc->hand;
+    rc->hand = slot + 1 == rc->capacity ? 0 : slot + 1;
+    return slot;
+}
+
+static int rendercache__sample_valid(const rendercache *rc, const rendercache_sample *s)
+{
+    if (s->x >= rc->width || s->y >= rc->height) return 0;
+    if (s->flags & ~RENDERCACHE_REQUEST_PREDICTED) return 0;
+    if ((s->flags & RENDERCACHE_REQUEST_PREDICTED) && !rc->has_prediction) return 0;
+    if (s->object != RENDERCACHE_MISS && s->object >= rc->object_count) return 0;
+    if (s->object != RENDERCACHE_MISS && !rendercache__finite3(s->position)) return 0;
+    if (!rendercache__finite3(s->rgb) || !(s->priority_scale >= 0.0f) || !isfinite(s->priority_scale)) return 0;
+    return 1;
+}
+
+/* Stores sample s in slot; returns its squared distance from the eye of view v. */
+static float rendercache__store(rendercache *rc, uint32_t slot, const rendercache_sample *s, const rendercache__view *v)
+{
+    rendercache__geo *g = &rc->geo[slot];
+    rendercache__point *pt = &rc->data[slot];
+    float *pos = g->pos, d;
+    if (g->object == RENDERCACHE__FREE_SLOT) rc->live++;
+    if (s->object == RENDERCACHE_MISS) {
+        rendercache__view_ray(v, (float)s->x + 0.5f, (float)s->y + 0.5f, pos);
+        d = RENDERCACHE__FAR2;
+    } else {
+        float dx = s->position[0] - v->eye[0], dy = s->position[1] - v->eye[1], dz = s->position[2] - v->eye[2];
+        rendercache__affine(rc->obj_local + 12 * (size_t)s->object, s->position, pos);
+        d = dx * dx + dy * dy + dz * dz;
+    }
+    g->object = s->object;
+    memcpy(pt->rgb, s->rgb, sizeof pt->rgb);
+    pt->scale = s->priority_scale > 0.0f ? s->priority_scale : 1.0f;
+    pt->birth = rc->frame;   /* age 0; new points are not evicted in their own frame */
+    pt->motion_birth = s->object == RENDERCACHE_MISS ? 0u : rc->obj_motion[s->object];
+    return d;
+}
+
+/* A current-frame sample also becomes its pixel's point at once. */
+static void rendercache__show(rendercache *rc, uint32_t p, uint32_t slot, float depth, const float rgb[3])
+{
+    rc->px_index[p] = slot;
+    rc->px_depth[p] = depth;
+    memcpy(rc->image + 3 * (size_t)p, rgb, 3 * sizeof(float));
+    rc->kind[p] = RENDERCACHE_PIXEL_POINT;
+    rc->count[p] = 0;
+    rc->priority[p] = 0.0f;
+}
+
+/* Reads the slots that the next samples will replace in place, all at
+   once, so that their cache misses overlap instead of coming one by one.
+   Returns a value that depends on the reads (for the caller to keep). */
+static uint32_t rendercache__touch_slots(const rendercache *rc, const rendercache_sample *samples, uint32_t n)
+{
+    uint32_t i, sum = 0;
+    for (i = 0; i < n; i++) {
+        const rendercache_sample *s = &samples[i];
+        uint32_t slot;
+        if (s->x >= rc->width || s->y >= rc->height || (s->flags & RENDERCACHE_REQUEST_PREDICTED)) continue;
+        slot = rc->px_index[s->y * rc->width + s->x];
+        if (slot != RENDERCACHE__NONE) sum += rc->geo[slot].object + rc->data[slot].birth;
+    }
+    return sum;
+}
+
+RENDERCACHE_API rendercache_result rendercache_insert(rendercache *rc, const rendercache_sample *samples, uint32_t n)
+{
+    uint32_t i;
+    double t0;
+    if (!rc || (!samples && n)) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    t0 = rendercache__now(rc);
+    for (i = 0; i < n; i++) {
+        const rendercache_sample *s = &samples[i];
+        int predicted = (s->flags & RENDERCACHE_REQUEST_PREDICTED) != 0;
+        const rendercache__view *v = predicted ? &rc->predicted : &rc->view;
+        uint32_t p, slot;
+        float d;
+        if (i % 32 == 0) rc->touched += rendercache__touch_slots(rc, s, n - i < 32 ? n - i : 32);
+        if (!rendercache__sample_valid(rc, s) || (!predicted && !rc->has_frame)) { rc->stats.rejected++; continue; }
+        p = s->y * rc->width + s->x;
+        slot = predicted ? RENDERCACHE__NONE : rc->px_index[p];
+        if (slot != RENDERCACHE__NONE) {
+            rc->stats.replaced++;
+        } else {
+            slot = rendercache__victim(rc);
+            if (rc->geo[slot].object != RENDERCACHE__FREE_SLOT) rc->stats.evicted++;
+        }
+        d = rendercache__store(rc, slot, s, v);
+        if (!predicted) rendercache__show(rc, p, slot, d, s->rgb);
+        rc->stats.inserted++;
+    }
+    rc->stats.live_points = rc->live;
+    rc->stats.time_insert += rendercache__now(rc) - t0;
+    return RENDERCACHE_OK;
+}
+
+/* ======================================================================
+   16. accessors and camera helpers
+   ---------------------------------------------------------------------- */
+RENDERCACHE_API const float *rendercache_image(const rendercache *rc) { return rc ? rc->image : NULL; }
+RENDERCACHE_API const float *rendercache_priority_image(const rendercache *rc) { return rc ? rc->priority : NULL; }
+RENDERCACHE_API const unsigned char *rendercache_pixel_kinds(const rendercache *rc) { return rc ? rc->kind : NULL; }
+RENDERCACHE_API const float *rendercache_depth_image(rendercache *rc)
+{
+    uint32_t p;
+    if (!rc) return NULL;
+    for (p = 0; p < rc->pixel_count; p++)
+        rc->depth_out[p] = rc->px_depth[p] == FLT_MAX ? FLT_MAX : sqrtf(rc->px_depth[p]);
+    return rc->depth_out;
+}
+
+RENDERCACHE_API void rendercache_get_stats(const rendercache *rc, rendercache_stats *out)
+{
+    if (!out) return;
+    if (!rc) { memset(out, 0, sizeof *out); return; }
+    *out = rc->stats;
+}
+
+RENDERCACHE_API rendercache_result rendercache_camera_ray(const rendercache_camera *camera, float px, float py,
+                                                          float org[3], float dir[3])
+{
+    rendercache__view v;
+    if (!org || !dir || !rendercache__view_init(&v, camera) || !isfinite(px) || !isfinite(py))
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    memcpy(org, v.eye, 3 * sizeof(float));
+    return rendercache__view_ray(&v, px, py, dir) ? RENDERCACHE_OK : RENDERCACHE_ERROR_INVALID_ARGUMENT;
+}
+
+RENDERCACHE_API int rendercache_camera_project(const rendercache_camera *camera, const float p[3], float *px,
+                                               float *py, float *depth)
+{
+    rendercache__view v;
+    float w[3], c[3], x, y;
+    if (!p || !rendercache__view_init(&v, camera) || !rendercache__finite3(p)) return 0;
+    w[0] = p[0] - v.eye[0];
+    w[1] = p[1] - v.eye[1];
+    w[2] = p[2] - v.eye[2];
+    rendercache__view_rotate(&v, w, c);
+    if (!rendercache__view_to_pixel(&v, c, &x, &y)) return 0;
+    if (px) *px = x;
+    if (py) *py = y;
+    if (depth) *depth = sqrtf(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+    return 1;
+}
+
+/* ======================================================================
+   17. range images (Nimeroff, Dorsey and Rushmeier 1996, section 3.1):
+   per pixel of a camera, radiance, distance along the ray and object id.
+   ---------------------------------------------------------------------- */
+static void rendercache__range_clear(rendercache_range_image *img)
+{
+    size_t n = (size_t)img->camera.width * img->camera.height, p;
+    for (p = 0; p < n; p++) {
+        img->rgb[3 * p + 0] = img->rgb[3 * p + 1] = img->rgb[3 * p + 2] = 0.0f;
+        img->depth[p] = RENDERCACHE__FAR;
+        img->object[p] = RENDERCACHE_NO_SAMPLE;
+    }
+}
+
+/* Allocates an image for a validated camera (arrays not initialised). */
+static rendercache_range_image *rendercache__range_alloc(const rendercache_camera *camera, const rendercache_allocator *a)
+{
+    size_t n = (size_t)camera->width * camera->height;
+    rendercache_range_image *img = (rendercache_range_image *)rendercache__alloc(a, sizeof *img);
+    if (!img) return NULL;
+    memset(img, 0, sizeof *img);
+    img->camera = *camera;
+    img->allocator = *a;
+    img->rgb = (float *)rendercache__alloc_array(a, n, 3 * sizeof(float));
+    img->depth = (float *)rendercache__alloc_array(a, n, sizeof(float));
+    img->object = (uint32_t *)rendercache__alloc_array(a, n, sizeof(uint32_t));
+    if (!img->rgb || !img->depth || !img->object) {
+        rendercache_range_image_destroy(img);
+        return NULL;
+    }
+    return img;
+}
+
+/* The allocator argument of a public call: NULL means the default. */
+static int rendercache__allocator_arg(const rendercache_allocator *in, rendercache_allocator *out)
+{
+    memset(out, 0, sizeof *out);
+    if (in) *out = *in;
+    return rendercache__allocator_valid(out);
+}
+
+RENDERCACHE_API rendercache_result rendercache_range_image_create(const rendercache_camera *camera,
+                                                                  const rendercache_allocator *allocator,
+                                                                  rendercache_range_image **out)
+{
+    rendercache__view v;
+    rendercache_allocator a;
+    rendercache_range_image *img;
+    if (out) *out = NULL;
+    if (!out || !rendercache__view_init(&v, camera) || !rendercache__allocator_arg(allocator, &a))
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    img = rendercache__range_alloc(camera, &a);
+    if (!img) return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    rendercache__range_clear(img);
+    *out = img;
+    return RENDERCACHE_OK;
+}
+
+RENDERCACHE_API void rendercache_range_image_destroy(rendercache_range_image *img)
+{
+    rendercache_allocator a;
+    if (!img) return;
+    a = img->allocator;
+    rendercache__free(&a, img->rgb);
+    rendercache__free(&a, img->depth);
+    rendercache__free(&a, img->object);
+    rendercache__free(&a, img);
+}
+
+/* An image a call may read or write: arrays present, camera valid. */
+static int rendercache__range_valid(const rendercache_range_image *img, rendercache__view *v)
+{
+    return img && img->rgb && img->depth && img->object && rendercache__view_init(v, &img->camera);
+}
+
+/* ======================================================================
+   18. view interpolation (section 4.4, as Radiance's pinterp): every pixel
+   of every range image is a point in space, reprojected into the new
+   camera through the splat of section 9 (the render cache's z-buffer), one
+   input at a time from the nearest eye on; a later input replaces a pixel
+   only when it is nearer by more than the depth tolerance. Then the fills:
+   foreground quads (within the splat), background (farther of the nearest
+   filled pixels along the row and the column), and the caller's callback.
+   ---------------------------------------------------------------------- */
+#define RENDERCACHE__DEFAULT_WARP_TOLERANCE 0.02f
+#define RENDERCACHE__MAX_QUAD_FRACTION 0.25f   /* a foreground quad wider than this share of the
+                                                  image is not drawn (it spans the seam of a sphere
+                                                  image, or a surface grazing the eye) */
+#define RENDERCACHE__COLUMN_STRIP 64u          /* columns per job of the background fill */
+#define RENDERCACHE__MAX_BIAS 1e6                /* largest depth bias of a late input (keeps depths finite) */
+#define RENDERCACHE__CULL_CHUNK 32u              /* rays tested together against the target's frustum */
+#define RENDERCACHE__IN_PLACE 2                  /* a projected pixel that stays on itself (warp_project's ok) */
+
+/* What filled a target pixel (warper.how). */
+enum { RENDERCACHE__HOW_EMPTY = 0, RENDERCACHE__HOW_WARPED, RENDERCACHE__HOW_BACKGROUND, RENDERCACHE__HOW_COMPUTED };
+
+/* A target image under construction: colour, squared distance (FLT_MAX when
+   empty, RENDERCACHE__FAR2 for the background) and object per pixel. */
+typedef struct rendercache__accum {
+    float *rgb;
+    float *depth2;
+    uint32_t *object;
+} rendercache__accum;
+
+struct rendercache_warper {
+    rendercache_allocator alloc;
+    void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t);
+    void *parallel_user;
+    double (*clock)(void *);
+    void *clock_user;
+    void (*log)(void *, const char *);
+    void *log_user;
+    rendercache_fill_fn fill_pixel;
+    void *fill_user;
+    float tolerance, background[3];
+
+    /* buffers of the current target size (0 x 0 before the first warp) */
+    uint32_t width, height, pixel_count, tile_count;
+    rendercache__splat splat;
+    unsigned char *how;          /* per pixel: RENDERCACHE__HOW_* */
+    uint32_t *column;            /* per pixel: background fill's candidate along the column */
+    uint32_t *tile_counts;       /* 4 per tile: warped, background, computed, empty */
+    float *b_rgb, *b_depth2;     /* blend_motion: the second image's warp */
+    uint32_t *b_object;
+
+    /* scratch grown on demand */
+    float *rows;                 /* foreground fill: per job, two rows of projected source pixels */
+    size_t rows_cap;             /* floats */
+    float *motion;               /* per object id: source camera to target camera, 12 floats */
+    uint32_t motion_cap;         /* objects */
+    unsigned char *moving;       /* per object id: 1 when its motion is not the identity */
+    uint32_t moving_cap;
+    uint32_t *order;             /* inputs by distance */
+    uint32_t order_cap;
+    struct rendercache__warp_src *src;   /* the inputs, in that order */
+    uint32_t src_cap;
+
+    rendercache__view target;
+    rendercache_warp_stats stats;
+};
+
+static double rendercache__warp_now(const rendercache_warper *w)
+{
+    return w->clock ? w->clock(w->clock_user) : 0.0;
+}
+
+static void rendercache__warp_log(const rendercache_warper *w, const char *message)
+{
+    if (w && w->log) w->log(w->log_user, message);
+}
+
+static void rendercache__warper_free_buffers(rendercache_warper *w)
+{
+    const rendercache_allocator *a = &w->alloc;
+    rendercache__splat_free(&w->splat, a);
+    rendercache__free(a, w->how);
+    rendercache__free(a, w->column);
+    rendercache__free(a, w->tile_counts);
+    rendercache__free(a, w->b_rgb);
+    rendercache__free(a, w->b_depth2);
+    rendercache__free(a, w->b_object);
+    w->how = NULL;
+    w->column = w->tile_counts = w->b_object = NULL;
+    w->b_rgb = w->b_depth2 = NULL;
+    w->width = w->height = w->pixel_count = w->tile_count = 0;
+}
+
+/* Buffers for a width x height target; kept while the size stays. */
+static int rendercache__warper_reserve(rendercache_warper *w, uint32_t width, uint32_t height)
+{
+    const rendercache_allocator *a = &w->alloc;
+    size_t n = (size_t)width * height;
+    if (w->width == width && w->height == height) return 1;
+    rendercache__warper_free_buffers(w);
+    w->tile_count = (height + RENDERCACHE__TILE_ROWS - 1) / RENDERCACHE__TILE_ROWS;
+    w->how = (unsigned char *)rendercache__alloc_array(a, n, 1);
+    w->column = (uint32_t *)rendercache__alloc_array(a, n, sizeof(uint32_t));
+    w->tile_counts = (uint32_t *)rendercache__alloc_array(a, w->tile_count, 4 * sizeof(uint32_t));
+    if (!w->how || !w->column || !w->tile_counts ||
+        rendercache__splat_alloc(&w->splat, width, height, w->parallel_for ? RENDERCACHE__SPLAT_JOBS : 1u, a) != 0) {
+        rendercache__warper_free_buffers(w);
+        return 0;
+    }
+    w->width = width;
+    w->height = height;
+    w->pixel_count = (uint32_t)n;
+    return 1;
+}
+
+/* The second accumulator of blend_motion (after warper_reserve). */
+static int rendercache__warper_reserve_second(rendercache_warper *w)
+{
+    const rendercache_allocator *a = &w->alloc;
+    if (w->b_rgb) return 1;
+    w->b_rgb = (float *)rendercache__alloc_array(a, w->pixel_count, 3 * sizeof(float));
+    w->b_depth2 = (float *)rendercache__alloc_array(a, w->pixel_count, sizeof(float));
+    w->b_object = (uint32_t *)rendercache__alloc_array(a, w->pixel_count, sizeof(uint32_t));
+    return w->b_rgb && w->b_depth2 && w->b_object;
+}
+
+/* Grows *p to hold count items of item bytes (contents not kept). */
+static int rendercache__reserve(const rendercache_allocator *a, void **p, size_t *cap, size_t count, size_t item)
+{
+    void *q;
+    if (count <= *cap && *p) return 1;
+    q = rendercache__alloc_array(a, count, item);
+    if (!q) return 0;
+    rendercache__free(a, *p);
+    *p = q;
+    *cap = count;
+    return 1;
+}
+
+RENDERCACHE_API rendercache_result rendercache_warper_create(const rendercache_warp_desc *desc, rendercache_warper **out)
+{
+    rendercache_warper *w;
+    if (out) *out = NULL;
+    if (!out || !desc) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    if (!rendercache__allocator_valid(&desc->allocator) || !(desc->depth_tolerance >= 0.0f) ||
+        !(desc->depth_tolerance < 1e6f) || !rendercache__finite3(desc->background)) {
+        if (desc->log) desc->log(desc->log_user, "rendercache_warper_create: bad allocator, tolerance or background");
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    }
+    w = (rendercache_warper *)rendercache__alloc(&desc->allocator, sizeof *w);
+    if (!w) return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    memset(w, 0, sizeof *w);
+    w->alloc = desc->allocator;
+    w->parallel_for = desc->parallel_for;
+    w->parallel_user = desc->parallel_user;
+    w->clock = desc->clock;
+    w->clock_user = desc->clock_user;
+    w->log = desc->log;
+    w->log_user = desc->log_user;
+    w->fill_pixel = desc->fill_pixel;
+    w->fill_user = desc->fill_user;
+    w->tolerance = rendercache__def(desc->depth_tolerance, RENDERCACHE__DEFAULT_WARP_TOLERANCE);
+    memcpy(w->background, desc->background, sizeof w->background);
+    *out = w;
+    return RENDERCACHE_OK;
+}
+
+RENDERCACHE_API void rendercache_warper_destroy(rendercache_warper *w)
+{
+    rendercache_allocator a;
+    if (!w) return;
+    a = w->alloc;
+    rendercache__warper_free_buffers(w);
+    rendercache__free(&a, w->rows);
+    rendercache__free(&a, w->motion);
+    rendercache__free(&a, w->moving);
+    rendercache__free(&a, w->order);
+    rendercache__free(&a, w->src);
+    rendercache__free(&a, w);
+}
+
+RENDERCACHE_API void rendercache_warp_get_stats(const rendercache_warper *w, rendercache_warp_stats *out)
+{
+    if (!out) return;
+    if (!w) { memset(out, 0, sizeof *out); return; }
+    *out = w->stats;
+}
+
+/* Source camera space to target camera space, through an optional motion
+   of the world (3x4, world at the image's time to world at the target's;
+   NULL: static): x_target = R_t (D (R_s^T x + e_s) - e_t). Composed in
+   double. */
+static void rendercache__warp_matrix(const rendercache__view *s, const rendercache__view *t, const float *motion,
+                                     float out[12])
+{
+    double sw[12], m[12];   /* source camera to world, then moved */
+    int i, j;
+    for (i = 0; i < 3; i++) {
+        for (j = 0; j < 3; j++) sw[4 * i + j] = s->axis[j][i];   /* R_s^T */
+        sw[4 * i + 3] = s->eye[i];
+    }
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 4; j++)
+            m[4 * i + j] = motion ? (double)motion[4 * i] * sw[j] + (double)motion[4 * i + 1] * sw[4 + j] +
+                                        (double)motion[4 * i + 2] * sw[8 + j] + (j == 3 ? (double)motion[4 * i + 3] : 0.0)
+                                  : sw[4 * i + j];
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 4; j++) {
+            const float *r = t->axis[i];
+            double v = r[0] * m[j] + r[1] * m[4 + j] + r[2] * m[8 + j];
+            if (j == 3) v -= (double)r[0] * t->eye[0] + (double)r[1] * t->eye[1] + (double)r[2] * t->eye[2];
+            out[4 * i + j] = (float)v;
+        }
+}
+
+/* One input of a warp. The splat's elements are the pixels of all inputs,
+   input after input in rank order (nearest eye first). */
+typedef struct rendercache__warp_src {
+    const rendercache_range_image *image;
+    rendercache__view source;
+    const rendercache__view *target;
+    float m[12];                 /* source camera space -> target camera space, static pixels */
+    const float *motion;         /* NULL, or 12 floats per object id < motion_count */
+    uint32_t motion_count;
+    uint32_t first;              /* its first element */
+    uint32_t count;              /* its pixels */
+    float bias;                  /* its squared distances are compared times (1 + tolerance)^(2 rank) */
+    float inv_bias;
+    int same_view;               /* the target is its own camera: static pixels stay in place */
+    const unsigned char *moving; /* with motion: per object id < motion_count, 1 when it moves */
+    float cull[5][3];            /* planes of the target's frustum whose outside holds this input's eye,
+                                    as normals in source camera space: a ray pointing outside one of
+                                    them misses the target image at every depth */
+    uint32_t cull_count;
+} rendercache__warp_src;
+
+/* All inputs of a splat, and the foreground fill's parameters. */
+typedef struct rendercache__warp_set {
+    const rendercache__warp_src *src;
+    uint32_t count;
+    float tol2x;                 /* foreground quads: squared (1 + 2 tolerance) */
+    float max_extent;            /* foreground quads: largest in pixels */
+    float *rows;                 /* foreground quads: per job, 3 rows of 4 floats and 2 rows of flags */
+    size_t rows_per_job;         /* floats */
+} rendercache__warp_set;
+
+/* The input holding element e. */
+static uint32_t rendercache__warp_input(const rendercache__warp_set *set, uint32_t e)
+{
+    uint32_t lo = 0, hi = set->count - 1;
+    while (lo < hi) {
+        uint32_t mid = (lo + hi + 1) / 2;
+        if (set->src[mid].first <= e) lo = mid;
+        else hi = mid - 1;
+    }
+    return lo;
+}
+
+/* Frustum culling of a batch of rays (camera-space directions, ok = has a
+   ray): 1 when every ray points outside one of the input's cull planes, so
+   that no depth brings it into the target image. */
+static int rendercache__warp_culled(const rendercache__warp_src *ws, const float *dx, const float *dy, const float *dz,
+                                    const unsigned char *ok, uint32_t n)
+{
+    uint32_t k, i;
+    for (k = 0; k < ws->cull_count; k++) {
+        const float a = ws->cull[k][0], b = ws->cull[k][1], c = ws->cull[k][2];
+        uint32_t inside = 0;   /* an integer reduction: it vectorises */
+        for (i = 0; i < n; i++) inside |= (uint32_t)(ok[i] & (a * dx[i] + b * dy[i] + c * dz[i] >= 0.0f));
+        if (!inside) return 1;
+    }
+    return 0;
+}
+
+/* The cull planes of a static input into a perspective target: the image's
+   four edges and the plane of the eye, as inward normals n in target camera
+   space; a plane qualifies when the input's eye lies on its outside
+   (n . b <= 0, b its eye in target camera space). A ray x of the input then
+   lands at n . (A x d + b), outside for every depth d when (A^T n) . x < 0. */
+static void rendercache__warp_cull_planes(rendercache__warp_src *ws)
+{
+    const rendercache__view *t = ws->target;
+    const float f = t->focal, w = (float)t->width, h = (float)t->height, *m = ws->m;
+    float n[5][3];
+    int k, i;
+    n[0][0] = f; n[0][1] = 0.0f; n[0][2] = t->cx;             /* x >= 0 */
+    n[1][0] = -f; n[1][1] = 0.0f; n[1][2] = w - t->cx;        /* x < w */
+    n[2][0] = 0.0f; n[2][1] = -f; n[2][2] = t->cy;            /* y >= 0 */
+    n[3][0] = 0.0f; n[3][1] = f; n[3][2] = h - t->cy;         /* y < h */
+    n[4][0] = 0.0f; n[4][1] = 0.0f; n[4][2] = 1.0f;           /* in front of the eye */
+    ws->cull_count = 0;
+    for (k = 0; k < 5; k++) {
+        float offset = n[k][0] * m[3] + n[k][1] * m[7] + n[k][2] * m[11];
+        if (offset > 0.0f) continue;
+        for (i = 0; i < 3; i++) ws->cull[ws->cull_count][i] = n[k][0] * m[i] + n[k][1] * m[4 + i] + n[k][2] * m[8 + i];
+        ws->cull_count++;
+    }
+}
+
+/* Static pixels [i0, i1) of a batch (objects, depths, ray directions) into
+   a perspective target: the projection of rendercache__project_perspective,
+   fused with the pixels' rays and written to vectorise. */
+static void rendercache__warp_project_static(const rendercache__warp_src *ws, const uint32_t *obj, const float *dep,
+                                             const float *dx, const float *dy, const float *dz, uint32_t i0,
+                                             uint32_t i1, float *RENDERCACHE__RESTRICT px,
+                                             float *RENDERCACHE__RESTRICT py, float *RENDERCACHE__RESTRICT d2,
+                                             unsigned char *RENDERCACHE__RESTRICT ok)
+{
+    const rendercache__view *t = ws->target;
+    const float *m = ws->m, f = t->focal, cx = t->cx, cy = t->cy, bias = ws->bias;
+    uint32_t i;
+    for (i = i0; i < i1; i++) {
+        uint32_t o = obj[i];
+        float d = dep[i];
+        int point = (o < RENDERCACHE_NO_SAMPLE) & (d > 0.0f) & (d <= FLT_MAX);
+        int valid = ok[i] & (point | (o == RENDERCACHE_MISS));
+        float s = point ? d : 1.0f, off = point ? 1.0f : 0.0f;   /* background: a direction */
+        float x0 = dx[i] * s, x1 = dy[i] * s, x2 = dz[i] * s;
+        float c0 = m[0] * x0 + m[1] * x1 + m[2] * x2 + off * m[3];
+        float c1 = m[4] * x0 + m[5] * x1 + m[6] * x2 + off * m[7];
+        float c2 = m[8] * x0 + m[9] * x1 + m[10] * x2 + off * m[11];
+        float inv = 1.0f / c2;
+        px[i] = cx + f * c0 * inv;
+        py[i] = cy - f * c1 * inv;
+        d2[i] = point ? (c0 * c0 + c1 * c1 + c2 * c2) * bias : RENDERCACHE__FAR2;
+        ok[i] = (unsigned char)(valid & (c2 > 0.0f));
+    }
+}
+
+/* Pixels [begin, end) of one input (its own pixel indices) into the
+   target's image plane: px, py (not clipped to the image), the squared
+   distance times the input's bias (background pixels: FAR2, unbiased, so
+   that the nearer input's background wins on the element index), and
+   ok = 1 where the pixel has a projection (RENDERCACHE__IN_PLACE when it
+   stays exactly on its own pixel: same camera, not moving). Pixels without a ray,
+   RENDERCACHE_NO_SAMPLE and depths that are not finite and positive are
+   not ok. Static pixels into a perspective target take a loop written to
+   vectorise (the projection of rendercache__project_perspective, fused with
+   the pixels' rays); moving objects and other targets go pixel by pixel
+   through view_to_plane. */
+static uint32_t rendercache__warp_project(const rendercache__warp_src *ws, uint32_t begin, uint32_t end,
+                                          float *RENDERCACHE__RESTRICT px, float *RENDERCACHE__RESTRICT py,
+                                          float *RENDERCACHE__RESTRICT d2, unsigned char *RENDERCACHE__RESTRICT ok)
+{
+    const rendercache_range_image *img = ws->image;
+    const rendercache__view *t = ws->target;
+    const uint32_t sw = ws->source.width, *obj = img->object + begin;
+    const float *dep = img->depth + begin, bias = ws->bias;
+    float dx[RENDERCACHE__BATCH], dy[RENDERCACHE__BATCH], dz[RENDERCACHE__BATCH];
+    uint32_t p = begin, i = 0, n = end - begin;
+    while (p < end) {   /* the rays, in row segments */
+        uint32_t y = p / sw, x = p - y * sw, k = sw - x;
+        if (k > end - p) k = end - p;
+        rendercache__view_row_dirs(&ws->source, y, x, k, dx + i, dy + i, dz + i, ok + i);
+        p += k;
+        i += k;
+    }
+    if (t->kind == RENDERCACHE_CAMERA_PERSPECTIVE && !ws->motion) {
+        uint32_t k0, k1, kept = 0;
+        for (k0 = 0; k0 < n; k0 = k1) {   /* chunks of rays that all miss the target are skipped */
+            k1 = k0 + RENDERCACHE__CULL_CHUNK < n ? k0 + RENDERCACHE__CULL_CHUNK : n;
+            if (ws->cull_count && rendercache__warp_culled(ws, dx + k0, dy + k0, dz + k0, ok + k0, k1 - k0)) {
+                memset(ok + k0, 0, k1 - k0);
+            } else {
+                rendercache__warp_project_static(ws, obj, dep, dx, dy, dz, k0, k1, px, py, d2, ok);
+                kept += k1 - k0;
+            }
+        }
+        return kept;
+    }
+    for (i = 0; i < n; i++) {
+        uint32_t o = obj[i];
+        float d = dep[i], x[3], c[3];
+        int point = o < RENDERCACHE_NO_SAMPLE && d > 0.0f && d <= FLT_MAX;
+        const float *m = ws->m;
+        if (!ok[i] || !(point || o == RENDERCACHE_MISS)) { ok[i] = 0; continue; }
+        if (ws->same_view && (!point || !ws->motion || o >= ws->motion_count || !ws->moving[o])) {
+            /* into its own camera, not moving: the pixel's own centre, exactly */
+            uint32_t e = begin + i, y = e / sw;
+            px[i] = (float)(e - y * sw) + 0.5f;
+            py[i] = (float)y + 0.5f;
+            d2[i] = point ? d * d * bias : RENDERCACHE__FAR2;
+            ok[i] = RENDERCACHE__IN_PLACE;
+            continue;
+        }
+        x[0] = dx[i]; x[1] = dy[i]; x[2] = dz[i];
+        if (point) {
+            x[0] *= d; x[1] *= d; x[2] *= d;
+            if (ws->motion && o < ws->motion_count) m = ws->motion + 12 * (size_t)o;
+            rendercache__affine(m, x, c);
+            d2[i] = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) * bias;
+        } else {   /* a direction: rotated only */
+            c[0] = m[0] * x[0] + m[1] * x[1] + m[2] * x[2];
+            c[1] = m[4] * x[0] + m[5] * x[1] + m[6] * x[2];
+            c[2] = m[8] * x[0] + m[9] * x[1] + m[10] * x[2];
+            d2[i] = RENDERCACHE__FAR2;
+        }
+        ok[i] = (unsigned char)rendercache__view_to_plane(t, c, &px[i], &py[i]);
+    }
+    return n;
+}
+
+/* The splat source of a warp without foreground quads: elements [begin,
+   end), each to the pixel it lands in. */
+static uint32_t rendercache__warp_source(const void *src, uint32_t begin, uint32_t end, uint32_t *pix, float *depth2)
+{
+    const rendercache__warp_set *set = (const rendercache__warp_set *)src;
+    float px[RENDERCACHE__BATCH], py[RENDERCACHE__BATCH];
+    unsigned char ok[RENDERCACHE__BATCH];
+    uint32_t e = begin, any = 0;
+    while (e < end) {
+        const rendercache__warp_src *ws = &set->src[rendercache__warp_input(set, e)];
+        const uint32_t local = e - ws->first, n = end - e < ws->count - local ? end - e : ws->count - local;
+        const uint32_t width = ws->target->width, o = e - begin;
+        const float w = (float)ws->target->width, h = (float)ws->target->height;
+        uint32_t i;
+        uint32_t *out = pix + o, inside_any = 0;
+        e += n;
+        if (!rendercache__warp_project(ws, local, local + n, px, py, depth2 + o, ok)) {
+            memset(out, 0xFF, n * sizeof *out);   /* RENDERCACHE__NONE */
+            continue;
+        }
+        for (i = 0; i < n; i++) {   /* through int: the conversion that vectorises everywhere */
+            int inside = (ok[i] != 0) & (px[i] >= 0.0f) & (px[i] < w) & (py[i] >= 0.0f) & (py[i] < h);
+            int xs = (int)(inside ? px[i] : 0.0f), ys = (int)(inside ? py[i] : 0.0f);
+            out[i] = inside ? (uint32_t)ys * width + (uint32_t)xs : RENDERCACHE__NONE;
+            inside_any |= (uint32_t)inside;
+        }
+        any |= inside_any;
+    }
+    return any;
+}
+
+/* Payload of a source pixel: its colour and its object id (bits). */
+static void rendercache__warp_payload(const void *src, uint32_t begin, uint32_t end, const uint32_t *pix,
+                                      float *payload)
+{
+    const rendercache__warp_set *set = (const rendercache__warp_set *)src;
+    uint32_t e = begin;
+    while (e < end) {
+        const rendercache__warp_src *ws = &set->src[rendercache__warp_input(set, e)];
+        const uint32_t local = e - ws->first, n = end - e < ws->count - local ? end - e : ws->count - local;
+        const float *rgb = ws->image->rgb;
+        const uint32_t *obj = ws->image->object;
+        uint32_t i;
+        for (i = 0; i < n; i++) {
+            float *out = payload + 4 * (size_t)(e - begin + i);
+            if (pix[e - begin + i] == RENDERCACHE__NONE) continue;
+            memcpy(out, rgb + 3 * (size_t)(local + i), 3 * sizeof(float));
+            memcpy(out + 3, &obj[local + i], sizeof(float));
+        }
+        e += n;
+    }
+}
+
+/* Row y of an input projected into the target's image plane, 4 floats per
+   pixel: x, y, biased squared distance, 1 when it has a projection (else
+   0). span receives the range [span[0], span[1]) outside which no pixel has
+   one (empty: span[0] == span[1]). */
+static void rendercache__warp_project_row(const rendercache__warp_src *ws, uint32_t y, float *row, uint32_t span[2])
+{
+    const uint32_t sw = ws->source.width;
+    float px[RENDERCACHE__BATCH], py[RENDERCACHE__BATCH], d2[RENDERCACHE__BATCH];
+    unsigned char ok[RENDERCACHE__BATCH];
+    uint32_t x0, i, lo = sw, hi = 0;
+    for (x0 = 0; x0 < sw; x0 += RENDERCACHE__BATCH) {
+        uint32_t n = sw - x0 < RENDERCACHE__BATCH ? sw - x0 : RENDERCACHE__BATCH, first = 0, last = n;
+        float *RENDERCACHE__RESTRICT r = row + 4 * (size_t)x0;
+        if (!rendercache__warp_project(ws, y * sw + x0, y * sw + x0 + n, px, py, d2, ok)) continue;
+        while (first < n && !ok[first]) first++;
+        while (last > first && !ok[last - 1]) last--;
+        if (first == last) continue;
+        lo = x0 + first < lo ? x0 + first : lo;
+        hi = x0 + last;
+        for (i = first; i < last; i++) {
+            float k = (float)ok[i];   /* 0, 1, or 2 in place */
+            r[4 * i + 0] = ok[i] ? px[i] : 0.0f;
+            r[4 * i + 1] = ok[i] ? py[i] : 0.0f;
+            r[4 * i + 2] = d2[i];
+            r[4 * i + 3] = k;
+        }
+    }
+    span[0] = lo < hi ? lo : 0;
+    span[1] = lo < hi ? hi : 0;
+}
+
+/* Whether a triangle of a foreground quad is drawn (corners projected as by
+   warp_project_row, all with a projection): their depths agree within
+   twice the tolerance (so that no triangle bridges a depth edge), and it is
+   not wider than max_extent. */
+static int rendercache__warp_triangle_ok(const rendercache__warp_set *set, const float *a, const float *b, const float *c)
+{
+    float dmin, dmax, xmin, xmax, ymin, ymax;
+    dmin = a[2] < b[2] ? a[2] : b[2]; dmin = c[2] < dmin ? c[2] : dmin;
+    dmax = a[2] > b[2] ? a[2] : b[2]; dmax = c[2] > dmax ? c[2] : dmax;
+    xmin = a[0] < b[0] ? a[0] : b[0]; xmin = c[0] < xmin ? c[0] : xmin;
+    xmax = a[0] > b[0] ? a[0] : b[0]; xmax = c[0] > xmax ? c[0] : xmax;
+    ymin = a[1] < b[1] ? a[1] : b[1]; ymin = c[1] < ymin ? c[1] : ymin;
+    ymax = a[1] > b[1] ? a[1] : b[1]; ymax = c[1] > ymax ? c[1] : ymax;
+    return (dmax <= dmin * set->tol2x) & (xmax - xmin <= set->max_extent) & (ymax - ymin <= set->max_extent);
+}
+
+/* The edge function of the directed edge u -> v, e(x, y) = A x + B y + C
+   (positive on its left in image coordinates, y down), with coefficients
+   computed from the endpoints in a fixed order (the smaller source pixel
+   index first) and negated when reversed: the two triangles sharing an edge
+   compute bit for bit opposite values, so that no pixel centre on a shared
+   edge falls between them (watertight). */
+typedef struct rendercache__edge { float a, b, c; } rendercache__edge;
+
+static rendercache__edge rendercache__edge_of(const float *u, const float *v, uint32_t eu, uint32_t ev)
+{
+    const float *p = eu < ev ? u : v, *q = eu < ev ? v : u;
+    rendercache__edge e;
+    e.a = p[1] - q[1];
+    e.b = q[0] - p[0];
+    e.c = -(e.a * p[0] + e.b * p[1]);
+    if (eu > ev) { e.a = -e.a; e.b = -e.b; e.c = -e.c; }
+    return e;
+}
+
+static float rendercache__edge_at(const rendercache__edge *e, float x, float y) { return e->a * x + e->b * y + e->c; }
+
+/* Writes a pixel of a foreground triangle: weights wu, wv, ww (not yet
+   normalised) of its corners u, v, w (projected rows, input pixels eu, ev, ew). */
+static void rendercache__warp_shade(const rendercache__warp_src *ws, rendercache__zbuffer *zb, uint32_t pixel, float wu,
+                                    float wv, float ww, const float *u, const float *v, const float *w, uint32_t eu,
+                                    uint32_t ev, uint32_t ew, uint32_t e)
+{
+    const rendercache_range_image *img = ws->image;
+    const float *cu = img->rgb + 3 * (size_t)eu, *cv = img->rgb + 3 * (size_t)ev, *cw = img->rgb + 3 * (size_t)ew;
+    float s = 1.0f / (wu + wv + ww), payload[4], d;
+    uint32_t o;
+    wu *= s; wv *= s; ww *= s;
+    d = wu * u[2] + wv * v[2] + ww * w[2];
+    if (!(rendercache__key(d, e) < zb->key[pixel])) return;   /* hidden: no colour to interpolate */
+    payload[0] = wu * cu[0] + wv * cv[0] + ww * cw[0];
+    payload[1] = wu * cu[1] + wv * cv[1] + ww * cw[1];
+    payload[2] = wu * cu[2] + wv * cv[2] + ww * cw[2];
+    o = wu >= wv && wu >= ww ? img->object[eu] : (wv >= ww ? img->object[ev] : img->object[ew]);
+    memcpy(payload + 3, &o, sizeof o);
+    rendercache__zbuffer_test(zb, pixel, d, e, payload);
+}
+
+/* Draws the triangles of a foreground quad that passed warp_triangle_ok
+   (flags bit 0: a b c, bit 1: a c d; corners projected as by
+   warp_project_row, input pixels pa .. pd), for element e: colour and
+   squared distance interpolated with the barycentric weights at the pixel
+   centres inside (edges included), the object the heaviest corner's. Both
+   triangles share the quad's box and the diagonal a c decides between
+   them. */
+static void rendercache__warp_quad(const rendercache__warp_src *ws, rendercache__zbuffer *zb, const float *a,
+                                   const float *b, const float *c, const float *d, uint32_t pa, uint32_t pb, uint32_t pc,
+                                   uint32_t pd, unsigned flags, uint32_t e)
+{
+    const uint32_t w = ws->target->width, h = ws->target->height;
+    rendercache__edge ab, bc, ac, cd, da;
+    float xmin, xmax, ymin, ymax, s1 = 1.0f, s2 = 1.0f, dmin;
+    uint64_t nearest;
+    int x0, x1, y0, y1, x, y, edges = 0;
+    xmin = a[0] < c[0] ? a[0] : c[0]; xmax = a[0] > c[0] ? a[0] : c[0];
+    ymin = a[1] < c[1] ? a[1] : c[1]; ymax = a[1] > c[1] ? a[1] : c[1];
+    if (flags & 1u) {
+        xmin = b[0] < xmin ? b[0] : xmin; xmax = b[0] > xmax ? b[0] : xmax;
+        ymin = b[1] < ymin ? b[1] : ymin; ymax = b[1] > ymax ? b[1] : ymax;
+    }
+    if (flags & 2u) {
+        xmin = d[0] < xmin ? d[0] : xmin; xmax = d[0] > xmax ? d[0] : xmax;
+        ymin = d[1] < ymin ? d[1] : ymin; ymax = d[1] > ymax ? d[1] : ymax;
+    }
+    x0 = (int)ceilf(xmin - 0.5f); x1 = (int)floorf(xmax - 0.5f);
+    y0 = (int)ceilf(ymin - 0.5f); y1 = (int)floorf(ymax - 0.5f);
+    if (x0 < 0) x0 = 0;
+    if (y0 < 0) y0 = 0;
+    if (x1 >= (int)w) x1 = (int)w - 1;
+    if (y1 >= (int)h) y1 = (int)h - 1;
+    if (x0 > x1 || y0 > y1) return;   /* no pixel centre in the box */
+    /* the nearest corner: a pixel already nearer than it needs no edge test (and a quad
+       hidden everywhere no edge at all) */
+    dmin = a[2] < c[2] ? a[2] : c[2];
+    if (flags & 1u) dmin = b[2] < dmin ? b[2] : dmin;
+    if (flags & 2u) dmin = d[2] < dmin ? d[2] : dmin;
+    nearest = rendercache__key(dmin, e);
+    for (y = y0; y <= y1; y++) {
+        float py = (float)y + 0.5f;
+        for (x = x0; x <= x1; x++) {
+            float px = (float)x + 0.5f, eac, w0, w1, w2;
+            uint32_t pixel = (uint32_t)y * w + (uint32_t)x;
+            if (!(nearest < zb->key[pixel])) continue;
+            if (!edges) {
+                ac = rendercache__edge_of(a, c, pa, pc);
+                ab = rendercache__edge_of(a, b, pa, pb);
+                bc = rendercache__edge_of(b, c, pb, pc);
+                cd = rendercache__edge_of(c, d, pc, pd);
+                da = rendercache__edge_of(d, a, pd, pa);
+                /* orientations: the sign that makes each triangle's inside positive */
+                s1 = rendercache__edge_at(&ab, c[0], c[1]) < 0.0f ? -1.0f : 1.0f;
+                s2 = rendercache__edge_at(&cd, a[0], a[1]) < 0.0f ? -1.0f : 1.0f;
+                edges = 1;
+            }
+            eac = rendercache__edge_at(&ac, px, py);
+            if ((flags & 1u) && -s1 * eac >= 0.0f) {   /* T1 = a b c: edges b c, c a, a b */
+                w0 = s1 * rendercache__edge_at(&bc, px, py);
+                w2 = s1 * rendercache__edge_at(&ab, px, py);
+                w1 = -s1 * eac;
+                if (w0 >= 0.0f && w2 >= 0.0f && w0 + w1 + w2 > 0.0f) {
+                    rendercache__warp_shade(ws, zb, pixel, w0, w1, w2, a, b, c, pa, pb, pc, e);
+                    continue;
+                }
+            }
+            if ((flags & 2u) && s2 * eac >= 0.0f) {    /* T2 = a c d: edges c d, d a, a c */
+                w0 = s2 * rendercache__edge_at(&cd, px, py);
+                w1 = s2 * rendercache__edge_at(&da, px, py);
+                w2 = s2 * eac;
+                if (w0 >= 0.0f && w1 >= 0.0f && w0 + w1 + w2 > 0.0f)
+                    rendercache__warp_shade(ws, zb, pixel, w0, w1, w2, a, c, d, pa, pc, pd, e);
+            }
+        }
+    }
+}
+
+/* Which triangles of the quads of source row y (between rows y and y + 1,
+   projected in r0 and r1) are drawn: bit 0 the upper-right triangle
+   (x, y) (x+1, y) (x+1, y+1), bit 1 the lower-left (x, y) (x+1, y+1)
+   (x, y+1). Quads with a corner that has no projection, or whose box misses
+   the image, draw nothing (and cost little). */
+static void rendercache__warp_quad_flags(const rendercache__warp_set *set, const rendercache__warp_src *ws,
+                                         const float *r0, const float *r1, const uint32_t s0[2], const uint32_t s1[2],
+                                         unsigned char *flags)
+{
+    const float w = (float)ws->target->width, h = (float)ws->target->height;
+    uint32_t x = s0[0] > s1[0] ? s0[0] : s1[0], end = s0[1] < s1[1] ? s0[1] : s1[1];   /* both rows projected */
+    memset(flags, 0, ws->source.width);
+    for (; x + 1 < end; x++) {
+        const float *a = r0 + 4 * (size_t)x, *b = a + 4, *c = r1 + 4 * (size_t)(x + 1), *d = r1 + 4 * (size_t)x;
+        float xmin = a[0] < b[0] ? a[0] : b[0], xmax = a[0] > b[0] ? a[0] : b[0];
+        float ymin = a[1] < b[1] ? a[1] : b[1], ymax = a[1] > b[1] ? a[1] : b[1];
+        int projected = (a[3] != 0.0f) & (b[3] != 0.0f) & (c[3] != 0.0f) & (d[3] != 0.0f);
+        /* four pixels that stay in place: their points land on the pixel centres, no quad needed */
+        int in_place = (a[3] == 2.0f) & (b[3] == 2.0f) & (c[3] == 2.0f) & (d[3] == 2.0f);
+        xmin = c[0] < xmin ? c[0] : xmin; xmin = d[0] < xmin ? d[0] : xmin;
+        xmax = c[0] > xmax ? c[0] : xmax; xmax = d[0] > xmax ? d[0] : xmax;
+        ymin = c[1] < ymin ? c[1] : ymin; ymin = d[1] < ymin ? d[1] : ymin;
+        ymax = c[1] > ymax ? c[1] : ymax; ymax = d[1] > ymax ? d[1] : ymax;
+        if (!(projected & !in_place & (xmax >= 0.0f) & (ymax >= 0.0f) & (xmin < w) & (ymin < h))) continue;
+        flags[x] = (unsigned char)(rendercache__warp_triangle_ok(set, a, b, c) |
+                                   rendercache__warp_triangle_ok(set, a, c, d) << 1);
+    }
+}
+
+/* Whether all six triangles around source pixel x of a row are drawn, from
+   the flags of the quad rows above (up, NULL on the first row) and below
+   (down, NULL on the last): then they cover the pixel's surroundings and
+   its point is not needed. */
+static int rendercache__warp_surrounded(const unsigned char *up, const unsigned char *down, uint32_t x, uint32_t width)
+{
+    if (!up || !down || x == 0 || x + 1 == width) return 0;
+    return up[x - 1] == 3u && (up[x] & 2u) && (down[x - 1] & 1u) && down[x] == 3u;
+}
+
+/* The foreground fill of pixels [begin, end) of one input: each draws the
+   triangles of its quad to the right and lower neighbours that pass
+   warp_triangle_ok, and is splatted as a point where its surrounding
+   triangles are not all drawn (depth edges, image borders), so points fill
+   what the triangles leave and never compete with them inside a surface.
+   Three projected rows and two rows of quad flags slide down the rows. */
+static uint32_t rendercache__warp_cover_input(const rendercache__warp_set *set, const rendercache__warp_src *ws,
+                                              uint32_t job, uint32_t begin, uint32_t end, rendercache__zbuffer *zb)
+{
+    const rendercache_range_image *img = ws->image;
+    const uint32_t sw = ws->source.width, sh = ws->source.height, width = ws->target->width;
+    const float w = (float)ws->target->width, h = (float)ws->target->height;
+    float *rp = set->rows + set->rows_per_job * job, *rc = rp + 4 * (size_t)sw, *rn = rc + 4 * (size_t)sw, *t;
+    unsigned char *fu = (unsigned char *)(rn + 4 * (size_t)sw), *fd = fu + sw, *ft;
+    uint32_t y0 = begin / sw, y1 = (end - 1) / sw, y, projected = 0, sp[2], sc[2], sn[2], st;
+    rendercache__warp_project_row(ws, y0, rc, sc);
+    if (y0 > 0) {
+        rendercache__warp_project_row(ws, y0 - 1, rp, sp);
+        rendercache__warp_quad_flags(set, ws, rp, rc, sp, sc, fu);
+    }
+    for (y = y0; y <= y1; y++) {
+        uint32_t xa = y == y0 ? begin - y * sw : 0, xb = y == y1 ? end - y * sw : sw, x;
+        int below = y + 1 < sh;
+        if (below) {
+            rendercache__warp_project_row(ws, y + 1, rn, sn);
+            rendercache__warp_quad_flags(set, ws, rc, rn, sc, sn, fd);
+        }
+        /* only the projected part of the row has quads and points */
+        xa = xa > sc[0] ? xa : sc[0];
+        xb = xb < sc[1] ? xb : sc[1];
+        for (x = xa; x < xb; x++) {
+            const float *a = rc + 4 * (size_t)x;
+            uint32_t p = y * sw + x, e = ws->first + p;
+            if (below && x + 1 < sw && fd[x])
+                rendercache__warp_quad(ws, zb, a, a + 4, rn + 4 * (size_t)(x + 1), rn + 4 * (size_t)x, p, p + 1,
+                                       p + sw + 1, p + sw, fd[x], e);
+            if (a[3] != 0.0f && a[0] >= 0.0f && a[0] < w && a[1] >= 0.0f && a[1] < h) {
+                float payload[4];
+                projected++;
+                if (rendercache__warp_surrounded(y > 0 ? fu : NULL, below ? fd : NULL, x, sw)) continue;
+                memcpy(payload, img->rgb + 3 * (size_t)p, 3 * sizeof(float));
+                memcpy(payload + 3, &img->object[p], sizeof(float));
+                rendercache__zbuffer_test(zb, (uint32_t)a[1] * width + (uint32_t)a[0], a[2], e, payload);
+            }
+        }
+        t = rp; rp = rc; rc = rn; rn = t;
+        ft = fu; fu = fd; fd = ft;
+        st = sc[0]; sc[0] = sn[0]; sn[0] = st;
+        st = sc[1]; sc[1] = sn[1]; sn[1] = st;
+    }
+    return projected;
+}
+
+/* The splat cover function of the foreground fill (pinterp's "foreground"
+   algorithm): elements [begin, end), input by input. */
+static uint32_t rendercache__warp_cover(const void *src, uint32_t job, uint32_t begin, uint32_t end,
+                                        rendercache__zbuffer *zb, uint32_t width, uint32_t height)
+{
+    const rendercache__warp_set *set = (const rendercache__warp_set *)src;
+    uint32_t e = begin, projected = 0;
+    (void)width;
+    (void)height;
+    while (e < end) {
+        const rendercache__warp_src *ws = &set->src[rendercache__warp_input(set, e)];
+        const uint32_t local = e - ws->first, n = end - e < ws->count - local ? end - e : ws->count - local;
+        projected += rendercache__warp_cover_input(set, ws, job, local, local + n, zb);
+        e += n;
+    }
+    return projected;
+}
+
+/* Tile jobs over the target (RENDERCACHE__TILE_ROWS rows each). */
+typedef struct rendercache__warp_job {
+    rendercache_warper *w;
+    rendercache__accum acc, second;
+    const rendercache__raster *raster;   /* extract: the splat */
+    const rendercache__warp_set *set;
+    float tol2;                          /* squared (1 + tolerance) */
+    float t;                             /* blend weight of the second image */
+} rendercache__warp_job;
+
+static void rendercache__tile_rows(const rendercache_warper *w, uint32_t tile, uint32_t *p0, uint32_t *p1)
+{
+    *p0 = tile * RENDERCACHE__TILE_ROWS * w->width;
+    *p1 = *p0 + RENDERCACHE__TILE_ROWS * w->width;
+    if (*p1 > w->pixel_count) *p1 = w->pixel_count;
+}
+
+/* The splat's result as an image: colour, object and squared distance
+   (without the input's bias) per pixel, FLT_MAX where nothing landed. */
+static void rendercache__extract_job(void *ctx, uint32_t tile)
+{
+    const rendercache__warp_job *j = (const rendercache__warp_job *)ctx;
+    const rendercache__raster *r = j->raster;
+    const rendercache__warp_src *ws = j->set->src;
+    uint32_t p0, p1, p;
+    rendercache__tile_rows(j->w, tile, &p0, &p1);
+    for (p = p0; p < p1; p++) {
+        uint32_t e = r->index[p];
+        if (e == RENDERCACHE__NONE) {
+            j->acc.depth2[p] = FLT_MAX;
+            j->acc.object[p] = RENDERCACHE_NO_SAMPLE;
+            j->w->how[p] = RENDERCACHE__HOW_EMPTY;
+            continue;
+        }
+        memcpy(j->acc.rgb + 3 * (size_t)p, r->payload + 4 * (size_t)p, 3 * sizeof(float));
+        memcpy(&j->acc.object[p], r->payload + 4 * (size_t)p + 3, sizeof(uint32_t));
+        if (e - ws->first >= ws->count) ws = &j->set->src[rendercache__warp_input(j->set, e)];   /* the last one, mostly */
+        j->acc.depth2[p] = j->acc.object[p] == RENDERCACHE_MISS ? RENDERCACHE__FAR2 : r->depth[p] * ws->inv_bias;
+        j->w->how[p] = RENDERCACHE__HOW_WARPED;
+    }
+}
+
+/* Reprojects the inputs of set into acc, one splat for all. */
+static void rendercache__warp_splat(rendercache_warper *w, const rendercache__warp_set *set, int foreground,
+                                    const rendercache__accum *acc)
+{
+    rendercache__warp_job job;
+    const rendercache__warp_src *last = &set->src[set->count - 1];
+    const uint32_t count = last->first + last->count;
+    if (foreground)
+        rendercache__splat_run_cover(&w->splat, w->parallel_for, w->parallel_user, rendercache__warp_cover, set, count);
+    else
+        rendercache__splat_run(&w->splat, w->parallel_for, w->parallel_user, rendercache__warp_source,
+                               rendercache__warp_payload, set, count);
+    w->stats.projected += w->splat.projected;
+    memset(&job, 0, sizeof job);
+    job.w = w;
+    job.acc = *acc;
+    job.raster = &w->splat.final;
+    job.set = set;
+    rendercache__run_jobs(w->parallel_for, w->parallel_user, rendercache__extract_job, &job, w->tile_count);
+}
+
+static int rendercache__view_equal(const rendercache__view *a, const rendercache__view *b)
+{
+    int i, j;
+    if (a->kind != b->kind || a->width != b->width || a->height != b->height || a->focal != b->focal) return 0;
+    for (i = 0; i < 3; i++) {
+        if (a->eye[i] != b->eye[i]) return 0;
+        for (j = 0; j < 3; j++)
+            if (a->axis[i][j] != b->axis[i][j]) return 0;
+    }
+    return 1;
+}
+
+/* Sets up input img as element range [first, first + pixels) with a bias;
+   motion: per-object world motions (12 floats each) or NULL, composed into
+   motion_out, with moving[o] = 1 for the objects that do move. */
+static void rendercache__warp_prepare(const rendercache_warper *w, rendercache__warp_src *ws,
+                                      const rendercache_range_image *img, const float *motion, uint32_t motion_count,
+                                      float *motion_out, unsigned char *moving, uint32_t first, float bias)
+{
+    uint32_t o;
+    memset(ws, 0, sizeof *ws);
+    ws->image = img;
+    rendercache__view_init(&ws->source, &img->camera);   /* validated by the caller */
+    ws->target = &w->target;
+    ws->first = first;
+    ws->count = img->camera.width * img->camera.height;
+    ws->bias = bias;
+    ws->inv_bias = 1.0f / bias;
+    rendercache__warp_matrix(&ws->source, &w->target, NULL, ws->m);
+    if (w->target.kind == RENDERCACHE_CAMERA_PERSPECTIVE && !(motion && motion_count)) rendercache__warp_cull_planes(ws);
+    ws->same_view = rendercache__view_equal(&ws->source, &w->target);
+    if (motion && motion_count) {
+        static const float identity[12] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0 };
+        for (o = 0; o < motion_count; o++) {
+            rendercache__warp_matrix(&ws->source, &w->target, motion + 12 * (size_t)o, motion_out + 12 * (size_t)o);
+            moving[o] = (unsigned char)(memcmp(motion + 12 * (size_t)o, identity, sizeof identity) != 0);
+        }
+        ws->motion = motion_out;
+        ws->motion_count = motion_count;
+        ws->moving = moving;
+    }
+}
+
+/* The set of n prepared inputs, with the foreground fill's row buffers.
+   Returns 0 when out of memory. */
+static int rendercache__warp_set_init(rendercache_warper *w, rendercache__warp_set *set, const rendercache__warp_src *src,
+                                      uint32_t n, int foreground)
+{
+    uint32_t i, widest = 0;
+    memset(set, 0, sizeof *set);
+    set->src = src;
+    set->count = n;
+    set->tol2x = (1.0f + 2.0f * w->tolerance) * (1.0f + 2.0f * w->tolerance);
+    set->max_extent = RENDERCACHE__MAX_QUAD_FRACTION * (float)(w->width > w->height ? w->width : w->height);
+    if (!foreground) return 1;
+    for (i = 0; i < n; i++) widest = src[i].source.width > widest ? src[i].source.width : widest;
+    set->rows_per_job = 13 * (size_t)widest;   /* three rows of 4 floats and two rows of flag bytes */
+    if (!rendercache__reserve(&w->alloc, (void **)&w->rows, &w->rows_cap, set->rows_per_job * w->splat.jobs, sizeof(float)))
+        return 0;
+    set->rows = w->rows;
+    return 1;
+}
+
+/* ---- background fill (pinterp's "background" algorithm) -------------- */
+
+/* Job per strip of columns: for each run of empty pixels in a column, the
+   farther of the filled pixels just above and just below it (above on a
+   tie), written to w->column for every pixel of the run. The strip is
+   scanned row by row (one open run per column), so that reads stay in
+   cache lines. */
+static void rendercache__column_job(void *ctx, uint32_t strip)
+{
+    const rendercache__warp_job *j = (const rendercache__warp_job *)ctx;
+    rendercache_warper *w = j->w;
+    const float *d2 = j->acc.depth2;
+    const uint32_t width = w->width, height = w->height;
+    uint32_t x0 = strip * RENDERCACHE__COLUMN_STRIP, x1 = x0 + RENDERCACHE__COLUMN_STRIP, x, y;
+    uint32_t run[RENDERCACHE__COLUMN_STRIP];   /* per column: first row of the open empty run, or NONE */
+    if (x1 > width) x1 = width;
+    for (x = x0; x < x1; x++) run[x - x0] = RENDERCACHE__NONE;
+    for (y = 0; y <= height; y++)
+        for (x = x0; x < x1; x++) {
+            uint32_t p = y * width + x, r = run[x - x0], above, below, cand, k;
+            int filled = y == height || d2[p] != FLT_MAX;
+            if (!filled) {
+                if (r == RENDERCACHE__NONE) run[x - x0] = y;
+                continue;
+            }
+            if (r == RENDERCACHE__NONE) continue;
+            above = r > 0 ? (r - 1) * width + x : RENDERCACHE__NONE;
+            below = y < height ? p : RENDERCACHE__NONE;
+            cand = above;
+            if (below != RENDERCACHE__NONE && (above == RENDERCACHE__NONE || d2[above] < d2[below])) cand = below;
+            for (k = r; k < y; k++) w->column[k * width + x] = cand;
+            run[x - x0] = RENDERCACHE__NONE;
+        }
+}
+
+/* Job per tile of rows: each empty pixel takes the row's candidate (the
+   farther of the filled pixels left and right of its run) or the column's,
+   the one next to the pixel if one is, else the farther. */
+static void rendercache__row_job(void *ctx, uint32_t tile)
+{
+    const rendercache__warp_job *j = (const rendercache__warp_job *)ctx;
+    rendercache_warper *w = j->w;
+    float *d2 = j->acc.depth2, *rgb = j->acc.rgb;
+    uint32_t *obj = j->acc.object;
+    uint32_t y0 = tile * RENDERCACHE__TILE_ROWS, y1 = y0 + RENDERCACHE__TILE_ROWS, y;
+    if (y1 > w->height) y1 = w->height;
+    for (y = y0; y < y1; y++) {
+        const uint32_t row = y * w->width;
+        uint32_t x = 0;
+        while (x < w->width) {
+            uint32_t xa, xb, left, right, rc, k;
+            if (d2[row + x] != FLT_MAX) { x++; continue; }
+            xa = x;
+            while (x < w->width && d2[row + x] == FLT_MAX) x++;
+            xb = x;   /* the run is [xa, xb) */
+            left = xa > 0 ? row + xa - 1 : RENDERCACHE__NONE;
+            right = xb < w->width ? row + xb : RENDERCACHE__NONE;
+            rc = left;
+            if (right != RENDERCACHE__NONE && (left == RENDERCACHE__NONE || d2[left] < d2[right])) rc = right;
+            for (k = xa; k < xb; k++) {
+                uint32_t p = row + k, cc = w->column[p], src;
+                if (rc == RENDERCACHE__NONE && cc == RENDERCACHE__NONE) continue;
+                if (cc == RENDERCACHE__NONE) src = rc;
+                else if (rc == RENDERCACHE__NONE) src = cc;
+                else if ((rc == left && k == xa) || (rc == right && k + 1 == xb)) src = rc;   /* next to the pixel */
+                else if (cc == p - w->width || cc == p + w->width) src = cc;
+                else src = d2[cc] < d2[rc] ? rc : cc;
+                d2[p] = d2[src];   /* candidates are pixels filled before this pass: never written here */
+                memcpy(rgb + 3 * (size_t)p, rgb + 3 * (size_t)src, 3 * sizeof(float));
+                obj[p] = obj[src];
+                w->how[p] = RENDERCACHE__HOW_BACKGROUND;
+            }
+        }
+    }
+}
+
+/* ---- the caller's fill, and the output ----------------------------- */
+
+static void rendercache__callback_job(void *ctx, uint32_t tile)
+{
+    const rendercache__warp_job *j = (const rendercache__warp_job *)ctx;
+    rendercache_warper *w = j->w;
+    const rendercache__view *v = &w->target;
+    uint32_t p0, p1, p;
+    rendercache__tile_rows(w, tile, &p0, &p1);
+    for (p = p0; p < p1; p++) {
+        uint32_t x = p % w->width, y = p / w->width, o = RENDERCACHE_NO_SAMPLE;
+        float dir[3], rgb[3] = { 0, 0, 0 }, depth = 0.0f;
+        if (j->acc.depth2[p] != FLT_MAX || !rendercache__view_has_ray(v, x, y)) continue;
+        if (!rendercache__view_ray(v, (float)x + 0.5f, (float)y + 0.5f, dir)) continue;
+        if (!w->fill_pixel(w->fill_user, x, y, v->eye, dir, rgb, &depth, &o)) continue;
+        if (!rendercache__finite3(rgb) || o == RENDERCACHE_NO_SAMPLE) continue;
+        if (o != RENDERCACHE_MISS && !(depth > 0.0f && depth <= FLT_MAX)) continue;
+        j->acc.depth2[p] = o == RENDERCACHE_MISS ? RENDERCACHE__FAR2 : depth * depth;
+        memcpy(j->acc.rgb + 3 * (size_t)p, rgb, sizeof rgb);
+        j->acc.object[p] = o;
+        w->how[p] = RENDERCACHE__HOW_COMPUTED;
+    }
+}
+
+/* Squared distances to distances, empty pixels to the background colour,
+   and the counts of each kind of pixel. */
+static void rendercache__finish_job(void *ctx, uint32_t tile)
+{
+    const rendercache__warp_job *j = (const rendercache__warp_job *)ctx;
+    rendercache_warper *w = j->w;
+    uint32_t p0, p1, p, *counts = w->tile_counts + 4 * (size_t)tile;
+    rendercache__tile_rows(w, tile, &p0, &p1);
+    counts[0] = counts[1] = counts[2] = counts[3] = 0;
+    for (p = p0; p < p1; p++) {
+        int ray = rendercache__view_has_ray(&w->target, p % w->width, p / w->width);
+        if (!ray || j->acc.depth2[p] == FLT_MAX) {
+            memcpy(j->acc.rgb + 3 * (size_t)p, w->background, 3 * sizeof(float));
+            j->acc.depth2[p] = RENDERCACHE__FAR;
+            j->acc.object[p] = RENDERCACHE_NO_SAMPLE;
+            counts[3] += (uint32_t)ray;
+            continue;
+        }
+        counts[w->how[p] > 0 ? w->how[p] - 1 : 0]++;
+        j->acc.depth2[p] = j->acc.object[p] == RENDERCACHE_MISS ? RENDERCACHE__FAR : sqrtf(j->acc.depth2[p]);
+    }
+}
+
+/* The fills after the reprojection, and the output in acc (depth2 becomes
+   the distance). */
+static void rendercache__warp_finish(rendercache_warper *w, const rendercache__accum *acc, rendercache_fill fill)
+{
+    rendercache__warp_job job;
+    uint32_t t;
+    double t0 = rendercache__warp_now(w);
+    memset(&job, 0, sizeof job);
+    job.w = w;
+    job.acc = *acc;
+    if (fill == RENDERCACHE_FILL_BACKGROUND || fill == RENDERCACHE_FILL_BOTH) {
+        uint32_t strips = (w->width + RENDERCACHE__COLUMN_STRIP - 1) / RENDERCACHE__COLUMN_STRIP;
+        rendercache__run_jobs(w->parallel_for, w->parallel_user, rendercache__column_job, &job, strips);
+        rendercache__run_jobs(w->parallel_for, w->parallel_user, rendercache__row_job, &job, w->tile_count);
+    }
+    if (w->fill_pixel) rendercache__run_jobs(w->parallel_for, w->parallel_user, rendercache__callback_job, &job, w->tile_count);
+    rendercache__run_jobs(w->parallel_for, w->parallel_user, rendercache__finish_job, &job, w->tile_count);
+    w->stats.time_fill = rendercache__warp_now(w) - t0;
+    w->stats.warped = w->stats.background = w->stats.computed = w->stats.empty = 0;
+    for (t = 0; t < w->tile_count; t++) {
+        w->stats.warped += w->tile_counts[4 * t + 0];
+        w->stats.background += w->tile_counts[4 * t + 1];
+        w->stats.computed += w->tile_counts[4 * t + 2];
+        w->stats.empty += w->tile_counts[4 * t + 3];
+    }
+}
+
+static int rendercache__fill_valid(rendercache_fill fill)
+{
+    return fill >= RENDERCACHE_FILL_DEFAULT && fill <= RENDERCACHE_FILL_BOTH;
+}
+
+static int rendercache__has_foreground(rendercache_fill fill)
+{
+    return fill == RENDERCACHE_FILL_FOREGROUND || fill == RENDERCACHE_FILL_BOTH;
+}
+
+/* Orders the inputs by the distance of their eye to the target's (stable). */
+static void rendercache__order_inputs(const rendercache_range_image *const *images, uint32_t n, const float eye[3],
+                                      uint32_t *order)
+{
+    uint32_t i, k;
+    for (i = 0; i < n; i++) {
+        const float *e = images[i]->camera.eye;
+        double di = 0.0;
+        for (k = 0; k < 3; k++) di += ((double)e[k] - eye[k]) * ((double)e[k] - eye[k]);
+        for (k = i; k > 0; k--) {
+            const float *f = images[order[k - 1]]->camera.eye;
+            double dk = ((double)f[0] - eye[0]) * ((double)f[0] - eye[0]) + ((double)f[1] - eye[1]) * ((double)f[1] - eye[1]) +
+                        ((double)f[2] - eye[2]) * ((double)f[2] - eye[2]);
+            if (!(di < dk)) break;
+            order[k] = order[k - 1];
+        }
+        order[k] = i;
+    }
+}
+
+/* Checks a target image and its camera, reserves the buffers and sets
+   w->target. */
+static rendercache_result rendercache__warp_begin(rendercache_warper *w, const rendercache_camera *camera,
+                                                  rendercache_range_image *out, const char *who)
+{
+    rendercache__view v;
+    const rendercache_camera *c = camera ? camera : (out ? &out->camera : NULL);
+    if (!rendercache__range_valid(out, &v) || !rendercache__view_init(&w->target, c) ||
+        c->width != out->camera.width || c->height != out->camera.height) {
+        rendercache__warp_log(w, who);
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    }
+    if (!rendercache__warper_reserve(w, c->width, c->height)) return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    out->camera = *c;
+    memset(&w->stats, 0, sizeof w->stats);
+    return RENDERCACHE_OK;
+}
+
+RENDERCACHE_API rendercache_result rendercache_warp(rendercache_warper *w, const rendercache_range_image *const *images,
+                                                    uint32_t n, const rendercache_camera *camera, rendercache_fill fill,
+                                                    rendercache_range_image *out)
+{
+    rendercache__accum acc;
+    rendercache__warp_set set;
+    rendercache_result r;
+    rendercache__view v;
+    size_t cap;
+    uint64_t elements = 0;
+    double t0, t1, bias = 1.0, tol2;
+    uint32_t i;
+    if (!w) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    if (!images || n == 0 || !rendercache__fill_valid(fill)) {
+        rendercache__warp_log(w, "rendercache_warp: no images, or an unknown fill mode");
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    }
+    for (i = 0; i < n; i++) {
+        if (!rendercache__range_valid(images[i], &v) || images[i] == out) {
+            rendercache__warp_log(w, "rendercache_warp: an input image is NULL, incomplete, has an invalid camera, or is out");
+            return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+        }
+        elements += (uint64_t)images[i]->camera.width * images[i]->camera.height;
+    }
+    if (elements >= RENDERCACHE__NONE) {
+        rendercache__warp_log(w, "rendercache_warp: more than 2^32 - 1 input pixels");
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    }
+    if (fill == RENDERCACHE_FILL_DEFAULT) fill = RENDERCACHE_FILL_BOTH;
+    t0 = rendercache__warp_now(w);
+    r = rendercache__warp_begin(w, camera, out, "rendercache_warp: invalid output image or camera, or sizes differ");
+    if (r != RENDERCACHE_OK) return r;
+    cap = w->order_cap;
+    if (!rendercache__reserve(&w->alloc, (void **)&w->order, &cap, n, sizeof(uint32_t))) return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    w->order_cap = (uint32_t)cap;
+    cap = w->src_cap;
+    if (!rendercache__reserve(&w->alloc, (void **)&w->src, &cap, n, sizeof(rendercache__warp_src)))
+        return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    w->src_cap = (uint32_t)cap;
+    rendercache__order_inputs(images, n, w->target.eye, w->order);
+    /* input of rank k: squared distances times (1 + t)^(2k), capped so that they stay finite */
+    tol2 = (1.0 + w->tolerance) * (1.0 + w->tolerance);
+    for (i = 0, elements = 0; i < n; i++) {
+        rendercache__warp_prepare(w, &w->src[i], images[w->order[i]], NULL, 0, NULL, NULL, (uint32_t)elements, (float)bias);
+        elements += w->src[i].count;
+        bias = bias * tol2 < RENDERCACHE__MAX_BIAS ? bias * tol2 : RENDERCACHE__MAX_BIAS;
+    }
+    if (!rendercache__warp_set_init(w, &set, w->src, n, rendercache__has_foreground(fill))) return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    acc.rgb = out->rgb;
+    acc.depth2 = out->depth;
+    acc.object = out->object;
+    rendercache__warp_splat(w, &set, rendercache__has_foreground(fill), &acc);
+    t1 = rendercache__warp_now(w);
+    rendercache__warp_finish(w, &acc, fill);
+    out->time = images[w->order[0]]->time;
+    w->stats.images = n;
+    w->stats.time_project = t1 - t0;
+    w->stats.time_total = rendercache__warp_now(w) - t0;
+    return RENDERCACHE_OK;
+}
+
+/* ======================================================================
+   19. time interpolation (section 4.4: pcomb's pixelwise linear blend, as
+   the paper does it; and, beyond the paper, blending after moving each
+   image's pixels with their objects)
+   ---------------------------------------------------------------------- */
+RENDERCACHE_API rendercache_result rendercache_blend(const rendercache_range_image *a, const rendercache_range_image *b,
+                                                     float t, rendercache_range_image *out)
+{
+    rendercache__view va, vb, vo;
+    const rendercache_range_image *nearer;
+    size_t n, p;
+    if (!rendercache__range_valid(a, &va) || !rendercache__range_valid(b, &vb) || !rendercache__range_valid(out, &vo) ||
+        !(t >= 0.0f && t <= 1.0f))
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    if (a->camera.width != b->camera.width || a->camera.height != b->camera.height ||
+        a->camera.width != out->camera.width || a->camera.height != out->camera.height)
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    n = (size_t)a->camera.width * a->camera.height;
+    nearer = t < 0.5f ? a : b;
+    for (p = 0; p < 3 * n; p++) out->rgb[p] = (1.0f - t) * a->rgb[p] + t * b->rgb[p];
+    if (nearer != out) {
+        memcpy(out->depth, nearer->depth, n * sizeof(float));
+        memcpy(out->object, nearer->object, n * sizeof(uint32_t));
+    }
+    out->time = (1.0 - (double)t) * a->time + (double)t * b->time;
+    out->camera = a->camera;
+    return RENDERCACHE_OK;
+}
+
+/* Per-pixel choice between the two warped images of a motion blend: the
+   same object at the same depth is blended, else the nearer surface (or the
+   only one) is kept; within the tolerance but different objects, the image
+   nearer in time. */
+static void rendercache__combine_job(void *ctx, uint32_t tile)
+{
+    const rendercache__warp_job *j = (const rendercache__warp_job *)ctx;
+    const rendercache__accum *a = &j->acc, *b = &j->second;
+    const float t = j->t, tol2 = j->tol2;
+    uint32_t p0, p1, p;
+    rendercache__tile_rows(j->w, tile, &p0, &p1);
+    for (p = p0; p < p1; p++) {
+        float da = a->depth2[p], db = b->depth2[p];
+        int take_b;
+        if (da == FLT_MAX && db == FLT_MAX) continue;
+        j->w->how[p] = RENDERCACHE__HOW_WARPED;
+        if (db == FLT_MAX) continue;   /* only a */
+        if (da != FLT_MAX && a->object[p] == b->object[p] && da <= db * tol2 && db <= da * tol2) {
+            int k;
+            for (k = 0; k < 3; k++) a->rgb[3 * p + k] = (1.0f - t) * a->rgb[3 * p + k] + t * b->rgb[3 * p + k];
+            a->depth2[p] = (1.0f - t) * da + t * db;
+            continue;
+        }
+        take_b = da == FLT_MAX || db * tol2 < da || (!(da * tol2 < db) && t >= 0.5f);
+        if (!take_b) continue;
+        a->depth2[p] = db;
+        memcpy(a->rgb + 3 * (size_t)p, b->rgb + 3 * (size_t)p, 3 * sizeof(float));
+        a->object[p] = b->object[p];
+    }
+}
+
+/* World motion of each object from an image's time to the blend time:
+   world_t * inverse(world_i), into out (12 floats per object). Returns 0
+   when a transform is singular or not finite. */
+static int rendercache__object_motions(const float *world_i, const float *world_t, uint32_t count, float *out)
+{
+    uint32_t o;
+    int i, j, k;
+    for (o = 0; o < count; o++) {
+        const float *a = world_i + 12 * (size_t)o, *b = world_t + 12 * (size_t)o;
+        float inv[12];
+        double m[12];
+        for (k = 0; k < 12; k++)
+            if (!isfinite(a[k]) || !isfinite(b[k])) return 0;
+        if (!rendercache__invert_affine(a, inv)) return 0;
+        for (i = 0; i < 3; i++)
+            for (j = 0; j < 4; j++)
+                m[4 * i + j] = (double)b[4 * i] * inv[j] + (double)b[4 * i + 1] * inv[4 + j] +
+                               (double)b[4 * i + 2] * inv[8 + j] + (j == 3 ? (double)b[4 * i + 3] : 0.0);
+        for (k = 0; k < 12; k++) out[12 * (size_t)o + k] = (float)m[k];
+    }
+    return 1;
+}
+
+RENDERCACHE_API rendercache_result rendercache_blend_motion(rendercache_warper *w, const rendercache_range_image *a,
+                                                            const rendercache_range_image *b, float t,
+                                                            const rendercache_motion *motion, rendercache_fill fill,
+                                                            rendercache_range_image *out)
+{
+    rendercache__accum acc_a, acc_b;
+    rendercache__warp_job job;
+    rendercache__warp_src ws;
+    rendercache__warp_set set;
+    rendercache__view va, vb;
+    rendercache_result r;
+    uint32_t count = motion ? motion->object_count : 0;
+    size_t cap;
+    float *ma, *mb;
+    double t0, t1;
+    int fg;
+    if (!w) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    if (!rendercache__range_valid(a, &va) || !rendercache__range_valid(b, &vb) || a == out || b == out ||
+        !(t >= 0.0f && t <= 1.0f) || !rendercache__fill_valid(fill) ||
+        (count && (!motion->world_a || !motion->world_b || !motion->world_t))) {
+        rendercache__warp_log(w, "rendercache_blend_motion: invalid image, weight, fill mode or motion");
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    }
+    if (fill == RENDERCACHE_FILL_DEFAULT) fill = RENDERCACHE_FILL_BOTH;
+    fg = rendercache__has_foreground(fill);
+    t0 = rendercache__warp_now(w);
+    r = rendercache__warp_begin(w, NULL, out, "rendercache_blend_motion: invalid output image");
+    if (r != RENDERCACHE_OK) return r;
+    if (!rendercache__warper_reserve_second(w)) return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    cap = w->motion_cap;
+    if (count > (RENDERCACHE__MAX_OBJECTS) ||
+        !rendercache__reserve(&w->alloc, (void **)&w->motion, &cap, 4 * (size_t)count + 1, 12 * sizeof(float)))
+        return count > RENDERCACHE__MAX_OBJECTS ? RENDERCACHE_ERROR_INVALID_ARGUMENT : RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    w->motion_cap = (uint32_t)cap;
+    cap = w->moving_cap;
+    if (!rendercache__reserve(&w->alloc, (void **)&w->moving, &cap, 2 * (size_t)count + 1, 1))
+        return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    w->moving_cap = (uint32_t)cap;
+    /* the motions of a's and b's objects, then the composed matrices */
+    ma = w->motion;
+    mb = w->motion + 12 * (size_t)count;
+    if (count && (!rendercache__object_motions(motion->world_a, motion->world_t, count, ma) ||
+                  !rendercache__object_motions(motion->world_b, motion->world_t, count, mb))) {
+        rendercache__warp_log(w, "rendercache_blend_motion: a transform is singular or not finite");
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    }
+    acc_a.rgb = out->rgb; acc_a.depth2 = out->depth; acc_a.object = out->object;
+    acc_b.rgb = w->b_rgb; acc_b.depth2 = w->b_depth2; acc_b.object = w->b_object;
+    rendercache__warp_prepare(w, &ws, a, ma, count, w->motion + 24 * (size_t)count, w->moving, 0, 1.0f);
+    if (!rendercache__warp_set_init(w, &set, &ws, 1, fg)) return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    rendercache__warp_splat(w, &set, fg, &acc_a);
+    rendercache__warp_prepare(w, &ws, b, mb, count, w->motion + 36 * (size_t)count, w->moving + count, 0, 1.0f);
+    if (!rendercache__warp_set_init(w, &set, &ws, 1, fg)) return RENDERCACHE_ERROR_OUT_OF_MEMORY;   /* b's width */
+    rendercache__warp_splat(w, &set, fg, &acc_b);
+    memset(&job, 0, sizeof job);
+    job.w = w;
+    job.acc = acc_a;
+    job.second = acc_b;
+    job.t = t;
+    job.tol2 = (1.0f + w->tolerance) * (1.0f + w->tolerance);
+    rendercache__run_jobs(w->parallel_for, w->parallel_user, rendercache__combine_job, &job, w->tile_count);
+    t1 = rendercache__warp_now(w);
+    rendercache__warp_finish(w, &acc_a, fill);
+    out->time = (1.0 - (double)t) * a->time + (double)t * b->time;
+    w->stats.images = 2;
+    w->stats.time_project = t1 - t0;
+    w->stats.time_total = rendercache__warp_now(w) - t0;
+    return RENDERCACHE_OK;
+}
+
+/* ======================================================================
+   20. coherence tests (sections 4.1 and 4.2): fitness of id images, and the
+   adaptive subdivision of a view space and of time it drives.
+   ---------------------------------------------------------------------- */
+#define RENDERCACHE__DEFAULT_MAX_DEPTH 8u
+#define RENDERCACHE__MAX_DEPTH_LIMIT 20u
+
+/* f = N / PQ over the pixels some image has a ray for. */
+static float rendercache__fitness_of(const uint32_t *const *ids, uint32_t count, size_t n)
+{
+    size_t p, counted = 0, same = 0;
+    uint32_t k;
+    for (p = 0; p < n; p++) {
+        uint32_t first = ids[0][p];
+        int all_same = 1, none = first == RENDERCACHE_NO_SAMPLE;
+        for (k = 1; k < count; k++) {
+            uint32_t v = ids[k][p];
+            all_same &= v == first;
+            none &= v == RENDERCACHE_NO_SAMPLE;
+        }
+        if (none) continue;
+        counted++;
+        same += (size_t)all_same;
+    }
+    return counted ? (float)((double)same / (double)counted) : 1.0f;
+}
+
+RENDERCACHE_API rendercache_result rendercache_fitness(const uint32_t *const *id_images, uint32_t count, uint32_t width,
+                                                       uint32_t height, float *fitness)
+{
+    uint32_t k;
+    if (fitness) *fitness = 0.0f;
+    if (!fitness || !id_images || count == 0 || width == 0 || height == 0 ||
+        (uint64_t)width * height > RENDERCACHE__MAX_PIXELS)
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    for (k = 0; k < count; k++)
+        if (!id_images[k]) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    *fitness = rendercache__fitness_of(id_images, count, (size_t)width * height);
+    return RENDERCACHE_OK;
+}
+
+/* Doubles a growable array to hold need items. */
+static int rendercache__grow(const rendercache_allocator *a, void **p, uint32_t *cap, uint32_t need, size_t item)
+{
+    uint32_t c = *cap ? *cap : 16;
+    void *q;
+    if (need <= *cap) return 1;
+    while (c < need) {
+        if (c > UINT32_MAX / 2) return 0;
+        c *= 2;
+    }
+    q = rendercache__alloc_array(a, c, item);
+    if (!q) return 0;
+    if (*p) memcpy(q, *p, (size_t)*cap * item);
+    rendercache__free(a, *p);
+    *p = q;
+    *cap = c;
+    return 1;
+}
+
+/* A cell of the view space, on the lattice of 2^max_depth steps per axis. */
+typedef struct rendercache__vs_node {
+    uint32_t lo[3], hi[3];
+    int32_t axis;            /* split axis (an index into the active axes), -1 for a leaf */
+    uint32_t split;          /* lattice coordinate of the split */
+    uint32_t child[2];
+    uint32_t corner[8];      /* views at the corners (leaves) */
+    float fitness;
+} rendercache__vs_node;
+
+struct rendercache_view_space {
+    rendercache_allocator alloc;
+    rendercache_camera camera;
+    float lo[3], hi[3];
+    uint32_t axis[3], axis_count;      /* the subdivided axes */
+    uint32_t steps;                    /* lattice steps per axis: 2^max_depth */
+    float *eyes;                       /* 3 per view */
+    uint32_t *lattice;                 /* 3 per view */
+    uint32_t **ids;                    /* per view: its id image (while building) */
+    uint32_t view_count, view_cap, lattice_cap, ids_cap;
+    uint32_t *table;                   /* open-addressing hash of the lattice points: view or NONE */
+    uint32_t table_size;               /* a power of two, at least twice the views */
+    rendercache__vs_node *nodes;
+    uint32_t node_count, node_cap;
+    uint32_t leaf_count;
+    const rendercache_view_space_desc *desc;   /* while building */
+    size_t id_pixels;
+};
+
+static void rendercache__vs_eye(const rendercache_view_space *vs, const uint32_t k[3], float eye[3])
+{
+    int i;
+    for (i = 0; i < 3; i++)
+        eye[i] = (float)((double)vs->lo[i] + ((double)vs->hi[i] - vs->lo[i]) * ((double)k[i] / (double)vs->steps));
+}
+
+static void rendercache__vs_camera(const rendercache_view_space *vs, const float eye[3], rendercache_camera *c)
+{
+    int i;
+    *c = vs->camera;
+    for (i = 0; i < 3; i++) {
+        c->look_at[i] = eye[i] + (vs->camera.look_at[i] - vs->camera.eye[i]);
+        c->eye[i] = eye[i];
+    }
+}
+
+/* The slot of lattice point k in the hash table: its view, or the empty
+   slot where it goes. */
+static uint32_t rendercache__vs_slot(const rendercache_view_space *vs, const uint32_t k[3])
+{
+    uint32_t mask = vs->table_size - 1, s;
+    s = (k[0] * 0x9E3779B1u) ^ (k[1] * 0x85EBCA77u) ^ (k[2] * 0xC2B2AE3Du);
+    s = (s ^ (s >> 15)) & mask;
+    while (vs->table[s] != RENDERCACHE__NONE && memcmp(vs->lattice + 3 * (size_t)vs->table[s], k, 3 * sizeof(uint32_t)))
+        s = (s + 1) & mask;
+    return s;
+}
+
+/* Doubles the hash table when it is half full. */
+static int rendercache__vs_rehash(rendercache_view_space *vs, uint32_t views)
+{
+    uint32_t size = vs->table_size ? vs->table_size : 64, v, *old = vs->table;
+    if (vs->table && 2 * (uint64_t)views <= vs->table_size) return 1;
+    while (2 * (uint64_t)views > size) {
+        if (size > (1u << 30)) return 0;
+        size *= 2;
+    }
+    vs->table = (uint32_t *)rendercache__alloc_array(&vs->alloc, size, sizeof(uint32_t));
+    if (!vs->table) { vs->table = old; return 0; }
+    rendercache__free(&vs->alloc, old);
+    vs->table_size = size;
+    for (v = 0; v < size; v++) vs->table[v] = RENDERCACHE__NONE;
+    for (v = 0; v < vs->view_count; v++) vs->table[rendercache__vs_slot(vs, vs->lattice + 3 * (size_t)v)] = v;
+    return 1;
+}
+
+/* The view at lattice point k, rendering its id image the first time.
+   Returns RENDERCACHE_OK and *view. */
+static rendercache_result rendercache__vs_view(rendercache_view_space *vs, const uint32_t k[3], uint32_t *view)
+{
+    const rendercache_view_space_desc *d = vs->desc;
+    rendercache_camera cam;
+    uint32_t v = vs->view_count, *ids, slot;
+    if (!rendercache__vs_rehash(vs, v + 1)) return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    slot = rendercache__vs_slot(vs, k);
+    if (vs->table[slot] != RENDERCACHE__NONE) { *view = vs->table[slot]; return RENDERCACHE_OK; }
+    if (!rendercache__grow(&vs->alloc, (void **)&vs->eyes, &vs->view_cap, v + 1, 3 * sizeof(float)) ||
+        !rendercache__grow(&vs->alloc, (void **)&vs->lattice, &vs->lattice_cap, v + 1, 3 * sizeof(uint32_t)) ||
+        !rendercache__grow(&vs->alloc, (void **)&vs->ids, &vs->ids_cap, v + 1, sizeof(uint32_t *)))
+        return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    ids = (uint32_t *)rendercache__alloc_array(&vs->alloc, vs->id_pixels, sizeof(uint32_t));
+    if (!ids) return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    vs->ids[v] = ids;
+    memcpy(vs->lattice + 3 * (size_t)v, k, 3 * sizeof(uint32_t));
+    rendercache__vs_eye(vs, k, vs->eyes + 3 * (size_t)v);
+    vs->view_count = v + 1;
+    vs->table[slot] = v;
+    rendercache__vs_camera(vs, vs->eyes + 3 * (size_t)v, &cam);
+    if (d->render_ids(d->user, &cam, d->time, ids) != 0) return RENDERCACHE_ERROR_CANCELLED;
+    *view = v;
+    return RENDERCACHE_OK;
+}
+
+/* Subdivides node (section 4.1): the fitness of its corners' id images;
+   below quality, halved across its longest axis (in world units) that
+   can still be halved, and both halves in turn. */
+static rendercache_result rendercache__vs_build(rendercache_view_space *vs, uint32_t node)
+{
+    const uint32_t corners = 1u << vs->axis_count;
+    const uint32_t *ids[8];
+    rendercache__vs_node *nd = &vs->nodes[node];
+    uint32_t c, i, best = 0, mid, left, right;
+    double best_len = -1.0;
+    rendercache_result r;
+    for (c = 0; c < corners; c++) {
+        uint32_t k[3];
+        memcpy(k, vs->nodes[node].lo, sizeof k);
+        for (i = 0; i < vs->axis_count; i++)
+            if (c & (1u << i)) k[vs->axis[i]] = vs->nodes[node].hi[vs->axis[i]];
+        r = rendercache__vs_view(vs, k, &vs->nodes[node].corner[c]);
+        if (r != RENDERCACHE_OK) return r;
+        ids[c] = vs->ids[vs->nodes[node].corner[c]];
+    }
+    nd = &vs->nodes[node];
+    nd->fitness = rendercache__fitness_of(ids, corners, vs->id_pixels);
+    nd->axis = -1;
+    for (i = 0; i < vs->axis_count; i++) {
+        uint32_t a = vs->axis[i];
+        double len = ((double)vs->hi[a] - vs->lo[a]) * (double)(nd->hi[a] - nd->lo[a]);
+        if (nd->hi[a] - nd->lo[a] >= 2 && len > best_len) { best_len = len; best = i; }
+    }
+    if (nd->fitness >= vs->desc->quality || best_len < 0.0) { vs->leaf_count++; return RENDERCACHE_OK; }
+    if (!rendercache__grow(&vs->alloc, (void **)&vs->nodes, &vs->node_cap, vs->node_count + 2, sizeof *vs->nodes))
+        return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    nd = &vs->nodes[node];
+    mid = (nd->lo[vs->axis[best]] + nd->hi[vs->axis[best]]) / 2;
+    nd->axis = (int32_t)best;
+    nd->split = mid;
+    left = vs->node_count++;
+    right = vs->node_count++;
+    nd->child[0] = left;
+    nd->child[1] = right;
+    vs->nodes[left] = vs->nodes[right] = *nd;
+    vs->nodes[left].hi[vs->axis[best]] = mid;
+    vs->nodes[right].lo[vs->axis[best]] = mid;
+    r = rendercache__vs_build(vs, left);
+    return r != RENDERCACHE_OK ? r : rendercache__vs_build(vs, right);
+}
+
+RENDERCACHE_API void rendercache_view_space_destroy(rendercache_view_space *vs)
+{
+    rendercache_allocator a;
+    uint32_t v;
+    if (!vs) return;
+    a = vs->alloc;
+    if (vs->ids)
+        for (v = 0; v < vs->view_count; v++) rendercache__free(&a, vs->ids[v]);
+    rendercache__free(&a, vs->ids);
+    rendercache__free(&a, vs->eyes);
+    rendercache__free(&a, vs->lattice);
+    rendercache__free(&a, vs->nodes);
+    rendercache__free(&a, vs->table);
+    rendercache__free(&a, vs);
+}
+
+RENDERCACHE_API rendercache_result rendercache_view_space_create(const rendercache_view_space_desc *desc,
+                                                                 rendercache_view_space **out)
+{
+    rendercache_view_space *vs;
+    rendercache__view v;
+    rendercache_result r;
+    uint32_t depth, i;
+    if (out) *out = NULL;
+    if (!out || !desc) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    depth = rendercache__def(desc->max_depth, RENDERCACHE__DEFAULT_MAX_DEPTH);
+    if (!rendercache__allocator_valid(&desc->allocator) || !desc->render_ids || !rendercache__view_init(&v, &desc->camera) ||
+        !rendercache__finite3(desc->lo) || !rendercache__finite3(desc->hi) || !(desc->quality >= 0.0f && desc->quality <= 1.0f) ||
+        depth > RENDERCACHE__MAX_DEPTH_LIMIT || !isfinite(desc->time)) {
+        rendercache__log_to(desc->log, desc->log_user, "rendercache_view_space_create: invalid camera, box, quality, depth or callback");
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    }
+    for (i = 0; i < 3; i++)
+        if (!(desc->lo[i] <= desc->hi[i])) {
+            rendercache__log_to(desc->log, desc->log_user, "rendercache_view_space_create: lo > hi");
+            return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+        }
+    vs = (rendercache_view_space *)rendercache__alloc(&desc->allocator, sizeof *vs);
+    if (!vs) return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    memset(vs, 0, sizeof *vs);
+    vs->alloc = desc->allocator;
+    vs->camera = desc->camera;
+    vs->desc = desc;
+    vs->id_pixels = (size_t)desc->camera.width * desc->camera.height;
+    vs->steps = 1u << depth;
+    for (i = 0; i < 3; i++) {
+        vs->lo[i] = desc->lo[i];
+        vs->hi[i] = desc->hi[i];
+        if (desc->hi[i] > desc->lo[i]) vs->axis[vs->axis_count++] = i;
+    }
+    r = rendercache__grow(&vs->alloc, (void **)&vs->nodes, &vs->node_cap, 1, sizeof *vs->nodes)
+            ? RENDERCACHE_OK : RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    if (r == RENDERCACHE_OK) {
+        memset(&vs->nodes[0], 0, sizeof vs->nodes[0]);
+        for (i = 0; i < 3; i++) vs->nodes[0].hi[i] = vs->hi[i] > vs->lo[i] ? vs->steps : 0;
+        vs->node_count = 1;
+        r = rendercache__vs_build(vs, 0);
+    }
+    if (vs->ids)   /* id images are only needed while building */
+        for (i = 0; i < vs->view_count; i++) { rendercache__free(&vs->alloc, vs->ids[i]); vs->ids[i] = NULL; }
+    vs->desc = NULL;
+    if (r != RENDERCACHE_OK) {
+        rendercache_view_space_destroy(vs);
+        return r;
+    }
+    *out = vs;
+    return RENDERCACHE_OK;
+}
+
+RENDERCACHE_API uint32_t rendercache_view_space_count(const rendercache_view_space *vs) { return vs ? vs->view_count : 0; }
+RENDERCACHE_API const float *rendercache_view_space_eyes(const rendercache_view_space *vs) { return vs ? vs->eyes : NULL; }
+
+RENDERCACHE_API rendercache_result rendercache_view_space_camera(const rendercache_view_space *vs, uint32_t i,
+                                                                 rendercache_camera *camera)
+{
+    if (!vs || !camera || i >= vs->view_count) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    rendercache__vs_camera(vs, vs->eyes + 3 * (size_t)i, camera);
+    return RENDERCACHE_OK;
+}
+
+RENDERCACHE_API rendercache_result rendercache_view_space_locate(const rendercache_view_space *vs, const float eye[3],
+                                                                 uint32_t views[8], uint32_t *count)
+{
+    const rendercache__vs_node *nd;
+    double k[3];
+    uint32_t i;
+    if (count) *count = 0;
+    if (!vs || !eye || !views || !count || !rendercache__finite3(eye)) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    for (i = 0; i < 3; i++) {   /* the eye on the lattice, clamped into the box */
+        double span = (double)vs->hi[i] - vs->lo[i], f = span > 0.0 ? ((double)eye[i] - vs->lo[i]) / span : 0.0;
+        k[i] = (f < 0.0 ? 0.0 : f > 1.0 ? 1.0 : f) * (double)vs->steps;
+    }
+    nd = &vs->nodes[0];
+    while (nd->axis >= 0) nd = &vs->nodes[nd->child[k[vs->axis[nd->axis]] < (double)nd->split ? 0 : 1]];
+    *count = 1u << vs->axis_count;
+    memcpy(views, nd->corner, *count * sizeof(uint32_t));
+    return RENDERCACHE_OK;
+}
+
+RENDERCACHE_API uint32_t rendercache_view_space_cell_count(const rendercache_view_space *vs)
+{
+    return vs ? vs->leaf_count : 0;
+}
+
+RENDERCACHE_API rendercache_result rendercache_view_space_cell(const rendercache_view_space *vs, uint32_t cell,
+                                                               float lo[3], float hi[3], float *fitness)
+{
+    uint32_t n, seen = 0;
+    if (!vs || cell >= vs->leaf_count) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    for (n = 0; n < vs->node_count; n++) {
+        const rendercache__vs_node *nd = &vs->nodes[n];
+        if (nd->axis >= 0) continue;
+        if (seen++ != cell) continue;
+        if (lo) rendercache__vs_eye(vs, nd->lo, lo);
+        if (hi) rendercache__vs_eye(vs, nd->hi, hi);
+        if (fitness) *fitness = nd->fitness;
+        return RENDERCACHE_OK;
+    }
+    return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+}
+
+/* Time subdivision state: per camera, buffers for the id images of the
+   interval ends (levels 0 and 1) and of each level's midpoint. */
+typedef struct rendercache__time_state {
+    const rendercache_time_desc *d;
+    rendercache_allocator alloc;
+    uint32_t **ids;          /* (levels) * camera_count images */
+    uint32_t levels, max_depth;
+    double *out;
+    uint32_t count, cap;
+} rendercache__time_state;
+
+static uint32_t *rendercache__time_ids(const rendercache__time_state *s, uint32_t level, uint32_t camera)
+{
+    return s->ids[(size_t)level * s->d->camera_count + camera];
+}
+
+static rendercache_result rendercache__time_render(const rendercache__time_state *s, uint32_t level, double t)
+{
+    uint32_t c;
+    for (c = 0; c < s->d->camera_count; c++)
+        if (s->d->render_ids(s->d->user, &s->d->cameras[c], t, rendercache__time_ids(s, level, c)) != 0)
+            return RENDERCACHE_ERROR_CANCELLED;
+    return RENDERCACHE_OK;
+}
+
+static rendercache_result rendercache__time_emit(rendercache__time_state *s, double t)
+{
+    if (!rendercache__grow(&s->alloc, (void **)&s->out, &s->cap, s->count + 1, sizeof(double)))
+        return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    s->out[s->count++] = t;
+    return RENDERCACHE_OK;
+}
+
+/* Section 4.2: the interval [ta, tb] (id images at levels la, lb) is
+   coherent when every camera's pair of id images has fitness >= quality;
+   else it is halved, recursively. Emits the interval's inner key times and
+   tb, in order. */
+static rendercache_result rendercache__time_refine(rendercache__time_state *s, double ta, uint32_t la, double tb,
+                                                   uint32_t lb, uint32_t depth)
+{
+    uint32_t c, lm = depth + 2;
+    double tm = 0.5 * (ta + tb);
+    rendercache_result r;
+    int coherent = 1;
+    for (c = 0; c < s->d->camera_count && coherent; c++) {
+        const uint32_t *pair[2];
+        const rendercache_camera *cam = &s->d->cameras[c];
+        pair[0] = rendercache__time_ids(s, la, c);
+        pair[1] = rendercache__time_ids(s, lb, c);
+        coherent = rendercache__fitness_of(pair, 2, (size_t)cam->width * cam->height) >= s->d->quality;
+    }
+    if (coherent || depth >= s->max_depth || !(tm > ta && tm < tb)) return rendercache__time_emit(s, tb);
+    r = rendercache__time_render(s, lm, tm);
+    if (r == RENDERCACHE_OK) r = rendercache__time_refine(s, ta, la, tm, lm, depth + 1);
+    if (r == RENDERCACHE_OK) r = rendercache__time_refine(s, tm, lm, tb, lb, depth + 1);
+    return r;
+}
+
+static int rendercache__time_desc_valid(const rendercache_time_desc *d)
+{
+    rendercache__view v;
+    uint32_t i;
+    if (!d->cameras || d->camera_count == 0 || !d->times || d->time_count < 2 || !d->render_ids ||
+        !(d->quality >= 0.0f && d->quality <= 1.0f) || d->max_depth > RENDERCACHE__MAX_DEPTH_LIMIT ||
+        !rendercache__allocator_valid(&d->allocator))
+        return 0;
+    for (i = 0; i < d->camera_count; i++)
+        if (!rendercache__view_init(&v, &d->cameras[i])) return 0;
+    for (i = 0; i < d->time_count; i++)
+        if (!isfinite(d->times[i]) || (i > 0 && !(d->times[i] > d->times[i - 1]))) return 0;
+    return 1;
+}
+
+RENDERCACHE_API rendercache_result rendercache_subdivide_time(const rendercache_time_desc *desc, double **times,
+                                                              uint32_t *count)
+{
+    rendercache__time_state s;
+    rendercache_result r = RENDERCACHE_OK;
+    uint32_t i, c, ends = 0;
+    if (times) *times = NULL;
+    if (count) *count = 0;
+    if (!desc || !times || !count) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    if (!rendercache__time_desc_valid(desc)) {
+        rendercache__log_to(desc->log, desc->log_user, "rendercache_subdivide_time: invalid cameras, times, quality, depth or callback");
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    }
+    memset(&s, 0, sizeof s);
+    s.d = desc;
+    s.alloc = desc->allocator;
+    s.max_depth = rendercache__def(desc->max_depth, RENDERCACHE__DEFAULT_MAX_DEPTH);
+    s.levels = s.max_depth + 2;
+    s.ids = (uint32_t **)rendercache__alloc_array(&s.alloc, (size_t)s.levels * desc->camera_count, sizeof(uint32_t *));
+    if (!s.ids) return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    memset(s.ids, 0, (size_t)s.levels * desc->camera_count * sizeof(uint32_t *));
+    for (i = 0; i < s.levels && r == RENDERCACHE_OK; i++)
+        for (c = 0; c < desc->camera_count; c++) {
+            const rendercache_camera *cam = &desc->cameras[c];
+            uint32_t *ids = (uint32_t *)rendercache__alloc_array(&s.alloc, (size_t)cam->width * cam->height, sizeof(uint32_t));
+            s.ids[(size_t)i * desc->camera_count + c] = ids;
+            if (!ids) { r = RENDERCACHE_ERROR_OUT_OF_MEMORY; break; }
+        }
+    if (r == RENDERCACHE_OK) r = rendercache__time_render(&s, 0, desc->times[0]);
+    if (r == RENDERCACHE_OK) r = rendercache__time_emit(&s, desc->times[0]);
+    for (i = 1; i < desc->time_count && r == RENDERCACHE_OK; i++) {   /* the given intervals in turn; ends alternate levels 0, 1 */
+        r = rendercache__time_render(&s, 1u - ends, desc->times[i]);
+        if (r == RENDERCACHE_OK) r = rendercache__time_refine(&s, desc->times[i - 1], ends, desc->times[i], 1u - ends, 0);
+        ends = 1u - ends;
+    }
+    for (i = 0; i < s.levels * desc->camera_count; i++) rendercache__free(&s.alloc, s.ids[i]);
+    rendercache__free(&s.alloc, s.ids);
+    if (r != RENDERCACHE_OK) {
+        rendercache__free(&s.alloc, s.out);
+        return r;
+    }
+    *times = s.out;
+    *count = s.count;
+    return RENDERCACHE_OK;
+}
+
+/* ======================================================================
+   21. key times of an object-space solution (sections 4.3 and 5.1.2):
+   recursive halving of time until, between the ends of every interval,
+   the fraction of elements that changed by more than epsilon is at most
+   1 - q; linear interpolation in between.
+   ---------------------------------------------------------------------- */
+struct rendercache_keytimes {
+    rendercache_allocator alloc;
+    uint32_t elements, components;
+    size_t stride;           /* floats per solution */
+    double *times;
+    float *values;
+    uint32_t count, cap, values_cap;
+};
+
+typedef struct rendercache__key_state {
+    const rendercache_keytime_desc *d;
+    rendercache_keytimes *kt;
+    float *pool;             /* (max_depth + 2) solutions: the ends, then each level's midpoint */
+    uint32_t max_depth;
+    float epsilon;
+} rendercache__key_state;
+
+static float *rendercache__key_buffer(const rendercache__key_state *s, uint32_t level)
+{
+    return s->pool + s->kt->stride * level;
+}
+
+/* Solves at time t into buffer level; the values must be finite. */
+static rendercache_result rendercache__key_solve(const rendercache__key_state *s, uint32_t level, double t)
+{
+    float *v = rendercache__key_buffer(s, level);
+    size_t i;
+    if (s->d->solve(s->d->user, t, v) != 0) return RENDERCACHE_ERROR_CANCELLED;
+    for (i = 0; i < s->kt->stride; i++)
+        if (!isfinite(v[i])) {
+            rendercache__log_to(s->d->log, s->d->log_user, "rendercache_keytimes_create: the solution is not finite");
+            return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+        }
+    return RENDERCACHE_OK;
+}
+
+static rendercache_result rendercache__key_emit(rendercache__key_state *s, double t, const float *v)
+{
+    rendercache_keytimes *kt = s->kt;
+    uint32_t cap = kt->values_cap;
+    if (!rendercache__grow(&kt->alloc, (void **)&kt->times, &kt->cap, kt->count + 1, sizeof(double)) ||
+        !rendercache__grow(&kt->alloc, (void **)&kt->values, &cap, kt->count + 1, kt->stride * sizeof(float)))
+        return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    kt->values_cap = cap;
+    kt->times[kt->count] = t;
+    memcpy(kt->values + kt->stride * kt->count, v, kt->stride * sizeof(float));
+    kt->count++;
+    return RENDERCACHE_OK;
+}
+
+/* The fraction of elements unchanged between two solutions (section 4.3's f). */
+static float rendercache__key_fitness(const rendercache__key_state *s, const float *a, const float *b)
+{
+    const uint32_t comps = s->kt->components;
+    const float floor_value = s->d->min_value;
+    uint32_t e, k, unchanged = 0;
+    for (e = 0; e < s->kt->elements; e++) {
+        const float *x = a + (size_t)e * comps, *y = b + (size_t)e * comps;
+        float scale = floor_value, change = 0.0f;
+        for (k = 0; k < comps; k++) {
+            float ax = fabsf(x[k]), ay = fabsf(y[k]), d = fabsf(y[k] - x[k]);
+            scale = ax > scale ? ax : scale;
+            scale = ay > scale ? ay : scale;
+            change = d > change ? d : change;
+        }
+        unchanged += change <= s->epsilon * scale;
+    }
+    return (float)((double)unchanged / (double)s->kt->elements);
+}
+
+static rendercache_result rendercache__key_refine(rendercache__key_state *s, double ta, uint32_t la, double tb,
+                                                  uint32_t lb, uint32_t depth)
+{
+    uint32_t lm = depth + 2;
+    double tm = 0.5 * (ta + tb);
+    rendercache_result r;
+    if (rendercache__key_fitness(s, rendercache__key_buffer(s, la), rendercache__key_buffer(s, lb)) >= s->d->quality ||
+        depth >= s->max_depth || !(tm > ta && tm < tb))
+        return rendercache__key_emit(s, tb, rendercache__key_buffer(s, lb));
+    r = rendercache__key_solve(s, lm, tm);
+    if (r == RENDERCACHE_OK) r = rendercache__key_refine(s, ta, la, tm, lm, depth + 1);
+    if (r == RENDERCACHE_OK) r = rendercache__key_refine(s, tm, lm, tb, lb, depth + 1);
+    return r;
+}
+
+RENDERCACHE_API void rendercache_keytimes_destroy(rendercache_keytimes *kt)
+{
+    rendercache_allocator a;
+    if (!kt) return;
+    a = kt->alloc;
+    rendercache__free(&a, kt->times);
+    rendercache__free(&a, kt->values);
+    rendercache__free(&a, kt);
+}
+
+RENDERCACHE_API rendercache_result rendercache_keytimes_create(const rendercache_keytime_desc *desc,
+                                                               rendercache_keytimes **out)
+{
+    rendercache__key_state s;
+    rendercache_keytimes *kt;
+    rendercache_result r;
+    uint32_t comps;
+    if (out) *out = NULL;
+    if (!out || !desc) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    comps = rendercache__def(desc->components, 1u);
+    if (!desc->solve || desc->element_count == 0 || !rendercache__allocator_valid(&desc->allocator) ||
+        !isfinite(desc->t0) || !isfinite(desc->t1) || !(desc->t0 < desc->t1) ||
+        !(desc->quality >= 0.0f && desc->quality <= 1.0f) || !(desc->epsilon >= 0.0f) || !isfinite(desc->epsilon) ||
+        !(desc->min_value >= 0.0f) || !isfinite(desc->min_value) || desc->max_depth > RENDERCACHE__MAX_DEPTH_LIMIT ||
+        (uint64_t)desc->element_count * comps > (uint64_t)(SIZE_MAX / sizeof(float)) / (RENDERCACHE__MAX_DEPTH_LIMIT + 2)) {
+        rendercache__log_to(desc->log, desc->log_user, "rendercache_keytimes_create: invalid counts, times, quality, epsilon or callback");
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    }
+    kt = (rendercache_keytimes *)rendercache__alloc(&desc->allocator, sizeof *kt);
+    if (!kt) return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    memset(kt, 0, sizeof *kt);
+    kt->alloc = desc->allocator;
+    kt->elements = desc->element_count;
+    kt->components = comps;
+    kt->stride = (size_t)desc->element_count * comps;
+    memset(&s, 0, sizeof s);
+    s.d = desc;
+    s.kt = kt;
+    s.max_depth = rendercache__def(desc->max_depth, RENDERCACHE__DEFAULT_MAX_DEPTH);
+    s.epsilon = rendercache__def(desc->epsilon, 0.05f);
+    s.pool = (float *)rendercache__alloc_array(&kt->alloc, (size_t)(s.max_depth + 2) * kt->stride, sizeof(float));
+    r = s.pool ? RENDERCACHE_OK : RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    if (r == RENDERCACHE_OK) r = rendercache__key_solve(&s, 0, desc->t0);
+    if (r == RENDERCACHE_OK) r = rendercache__key_emit(&s, desc->t0, rendercache__key_buffer(&s, 0));
+    if (r == RENDERCACHE_OK) r = rendercache__key_solve(&s, 1, desc->t1);
+    if (r == RENDERCACHE_OK) r = rendercache__key_refine(&s, desc->t0, 0, desc->t1, 1, 0);
+    rendercache__free(&kt->alloc, s.pool);
+    if (r != RENDERCACHE_OK) {
+        rendercache_keytimes_destroy(kt);
+        return r;
+    }
+    *out = kt;
+    return RENDERCACHE_OK;
+}
+
+RENDERCACHE_API uint32_t rendercache_keytimes_count(const rendercache_keytimes *kt) { return kt ? kt->count : 0; }
+RENDERCACHE_API const double *rendercache_keytimes_times(const rendercache_keytimes *kt) { return kt ? kt->times : NULL; }
+
+RENDERCACHE_API const float *rendercache_keytimes_values(const rendercache_keytimes *kt, uint32_t key)
+{
+    return kt && key < kt->count ? kt->values + kt->stride * key : NULL;
+}
+
+RENDERCACHE_API rendercache_result rendercache_keytimes_eval(const rendercache_keytimes *kt, double time, float *values)
+{
+    uint32_t lo = 0, hi;
+    const float *a, *b;
+    float w;
+    size_t i;
+    if (!kt || !values || !isfinite(time)) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    hi = kt->count - 1;
+    if (time <= kt->times[0]) { memcpy(values, kt->values, kt->stride * sizeof(float)); return RENDERCACHE_OK; }
+    if (time >= kt->times[hi]) { memcpy(values, kt->values + kt->stride * hi, kt->stride * sizeof(float)); return RENDERCACHE_OK; }
+    while (hi - lo > 1) {   /* times[lo] < time < times[hi] */
+        uint32_t mid = (lo + hi) / 2;
+        if (kt->times[mid] <= time) lo = mid;
+        else hi = mid;
+    }
+    w = (float)((time - kt->times[lo]) / (kt->times[hi] - kt->times[lo]));
+    a = kt->values + kt->stride * lo;
+    b = kt->values + kt->stride * hi;
+    for (i = 0; i < kt->stride; i++) values[i] = (1.0f - w) * a[i] + w * b[i];
+    return RENDERCACHE_OK;
+}
+
+/* ======================================================================
+   22. relative luminance RMS error (section 5)
+   ---------------------------------------------------------------------- */
+RENDERCACHE_API rendercache_result rendercache_lrms(const float *reference, const float *image, uint32_t width,
+                                                    uint32_t height, double *lrms)
+{
+    size_t n = (size_t)width * height, p;
+    double sum_ref = 0.0, sum_d2 = 0.0, mean;
+    if (lrms) *lrms = 0.0;
+    if (!reference || !image || !lrms || width == 0 || height == 0 || (uint64_t)width * height > RENDERCACHE__MAX_PIXELS)
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    for (p = 0; p < n; p++) {
+        const float *r = reference + 3 * p, *c = image + 3 * p;
+        double lr = 0.2126 * r[0] + 0.7152 * r[1] + 0.0722 * r[2];
+        double lc = 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+        sum_ref += lr;
+        sum_d2 += (lc - lr) * (lc - lr);
+    }
+    mean = sum_ref / (double)n;
+    if (!(mean > 0.0) || !isfinite(sum_d2) || !isfinite(mean)) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    *lrms = sqrt(sum_d2 / (double)n) / mean;
+    return RENDERCACHE_OK;
+}
+
+/* ======================================================================
+   23. save and load of range images (file format version 1)
+   magic "RCRANGE\x1a", version u32, payload size u64, payload, CRC32.
+   Payload: camera (kind u32, eye, look_at, up 3 f32 each, vfov f32, width
+   u32, height u32), time (f64 bits as u64), rgb (3 f32 per pixel), depth
+   (f32 per pixel), object (u32 per pixel). Background and no-sample pixels
+   load with depth RENDERCACHE_FAR_DEPTH.
+   ---------------------------------------------------------------------- */
+static const unsigned char rendercache__magic[8] = { 'R', 'C', 'R', 'A', 'N', 'G', 'E', 0x1a };
+#define RENDERCACHE__RANGE_HEADER 60u   /* payload bytes before the pixels */
+
+/* Whether a pixel's depth is one a surface can have. */
+static int rendercache__depth_ok(uint32_t object, float depth)
+{
+    return object == RENDERCACHE_MISS || object == RENDERCACHE_NO_SAMPLE || (depth > 0.0f && depth <= FLT_MAX);
+}
+
+RENDERCACHE_API rendercache_result rendercache_range_image_save(const rendercache_range_image *img,
+                                                                rendercache_write_fn write, void *user)
+{
+    rendercache__writer w;
+    rendercache__view v;
+    size_t n, p;
+    uint64_t bits;
+    if (!rendercache__range_valid(img, &v) || !write || !isfinite(img->time)) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    n = (size_t)img->camera.width * img->camera.height;
+    for (p = 0; p < n; p++)   /* only what a loader accepts */
+        if (!rendercache__finite3(img->rgb + 3 * p) || !rendercache__depth_ok(img->object[p], img->depth[p]))
+            return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    memset(&w, 0, sizeof w);
+    w.write = write;
+    w.user = user;
+    rendercache__crc_init(&w.crc);
+    rendercache__put(&w, rendercache__magic, 8);
+    rendercache__put_u32(&w, RENDERCACHE_FILE_FORMAT_VERSION);
+    rendercache__put_u64(&w, RENDERCACHE__RANGE_HEADER + 20 * (uint64_t)n);
+    rendercache__put_u32(&w, (uint32_t)img->camera.kind);
+    rendercache__put_f32_array(&w, img->camera.eye, 3);
+    rendercache__put_f32_array(&w, img->camera.look_at, 3);
+    rendercache__put_f32_array(&w, img->camera.up, 3);
+    rendercache__put_f32(&w, img->camera.vfov_degrees);
+    rendercache__put_u32(&w, img->camera.width);
+    rendercache__put_u32(&w, img->camera.height);
+    memcpy(&bits, &img->time, sizeof bits);
+    rendercache__put_u64(&w, bits);
+    rendercache__put_f32_array(&w, img->rgb, 3 * n);
+    for (p = 0; p < n; p++)
+        rendercache__put_f32(&w, rendercache__depth_ok(img->object[p], img->depth[p]) &&
+                                         img->object[p] < RENDERCACHE_NO_SAMPLE ? img->depth[p] : RENDERCACHE__FAR);
+    rendercache__put_u32_array(&w, img->object, n);
+    rendercache__put_u32(&w, rendercache__crc_final(&w.crc));
+    return w.failed ? RENDERCACHE_ERROR_IO : RENDERCACHE_OK;
+}
+
+/* Reads n little-endian 32-bit words into out (floats or integers). */
+static void rendercache__get_words(rendercache__reader *r, void *out, size_t n)
+{
+    unsigned char buf[4096];
+    uint32_t *o = (uint32_t *)out;
+    size_t i = 0;
+    while (i < n && !r->failed) {
+        size_t m = n - i < sizeof buf / 4 ? n - i : sizeof buf / 4, j;
+        rendercache__get(r, buf, 4 * m);
+        for (j = 0; j < m; j++, i++) {
+            const unsigned char *b = buf + 4 * j;
+            o[i] = (uint32_t)b[0] | ((uint32_t)b[1] << 8) | ((uint32_t)b[2] << 16) | ((uint32_t)b[3] << 24);
+        }
+    }
+}
+
+static rendercache_result rendercache__read_range(rendercache__reader *r, const rendercache_allocator *a,
+                                                  rendercache_range_image **out)
+{
+    unsigned char magic[8];
+    rendercache_camera cam;
+    rendercache__view v;
+    rendercache_range_image *img;
+    uint32_t version, kind, expected_crc;
+    uint64_t bits;
+    size_t n, p;
+    rendercache__crc_init(&r->crc);
+    r->remaining = 20;
+    rendercache__get(r, magic, 8);
+    version = rendercache__get_u32(r);
+    r->remaining = rendercache__get_u64(r);
+    if (r->failed || memcmp(magic, rendercache__magic, 8) != 0) return RENDERCACHE_ERROR_CORRUPT_DATA;
+    if (version != RENDERCACHE_FILE_FORMAT_VERSION) return RENDERCACHE_ERROR_VERSION;
+    memset(&cam, 0, sizeof cam);
+    kind = rendercache__get_u32(r);
+    rendercache__get_words(r, cam.eye, 3);
+    rendercache__get_words(r, cam.look_at, 3);
+    rendercache__get_words(r, cam.up, 3);
+    cam.vfov_degrees = rendercache__get_f32(r);
+    cam.width = rendercache__get_u32(r);
+    cam.height = rendercache__get_u32(r);
+    bits = rendercache__get_u64(r);
+    if (r->failed || kind > (uint32_t)RENDERCACHE_CAMERA_SPHERE) return RENDERCACHE_ERROR_CORRUPT_DATA;
+    cam.kind = (rendercache_camera_kind)kind;
+    if (!rendercache__view_init(&v, &cam)) return RENDERCACHE_ERROR_CORRUPT_DATA;
+    n = (size_t)cam.width * cam.height;
+    if (r->remaining != 20 * (uint64_t)n || !rendercache__can_hold(r, n, 20)) return RENDERCACHE_ERROR_CORRUPT_DATA;
+    img = rendercache__range_alloc(&cam, a);
+    if (!img) return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    *out = img;
+    memcpy(&img->time, &bits, sizeof bits);
+    rendercache__get_words(r, img->rgb, 3 * n);
+    rendercache__get_words(r, img->depth, n);
+    rendercache__get_words(r, img->object, n);
+    if (r->failed || !isfinite(img->time)) return RENDERCACHE_ERROR_CORRUPT_DATA;
+    for (p = 0; p < n; p++) {
+        if (!rendercache__finite3(img->rgb + 3 * p) || !rendercache__depth_ok(img->object[p], img->depth[p]))
+            return RENDERCACHE_ERROR_CORRUPT_DATA;
+        if (img->object[p] >= RENDERCACHE_NO_SAMPLE) img->depth[p] = RENDERCACHE__FAR;
+    }
+    expected_crc = rendercache__crc_final(&r->crc);
+    r->remaining = 4;
+    if (rendercache__get_u32(r) != expected_crc || r->failed) return RENDERCACHE_ERROR_CORRUPT_DATA;
+    return RENDERCACHE_OK;
+}
+
+RENDERCACHE_API rendercache_result rendercache_range_image_load(const rendercache_allocator *allocator,
+                                                                rendercache_read_fn read, void *user,
+                                                                rendercache_range_image **out)
+{
+    rendercache_allocator a;
+    rendercache__reader r;
+    rendercache_range_image *img = NULL;
+    rendercache_result res;
+    if (out) *out = NULL;
+    if (!read || !out || !rendercache__allocator_arg(allocator, &a)) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    memset(&r, 0, sizeof r);
+    r.read = read;
+    r.user = user;
+    res = rendercache__read_range(&r, &a, &img);
+    if (res != RENDERCACHE_OK) {
+        rendercache_range_image_destroy(img);
+        return res;
+    }
+    *out = img;
+    return RENDERCACHE_OK;
+}
+
+RENDERCACHE_API rendercache_result rendercache_range_image_save_to_memory(const rendercache_range_image *image,
+                                                                          const rendercache_allocator *allocator,
+                                                                          void **data, size_t *size)
+{
+    rendercache_allocator a;
+    rendercache__membuf m;
+    rendercache_result r;
+    if (data) *data = NULL;
+    if (size) *size = 0;
+    if (!image || !data || !size || !rendercache__allocator_arg(allocator, &a)) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    memset(&m, 0, sizeof m);
+    m.a = &a;
+    r = rendercache_range_image_save(image, rendercache__membuf_write, &m);
+    if (r != RENDERCACHE_OK) {
+        rendercache__free(&a, m.data);
+        return r == RENDERCACHE_ERROR_IO ? RENDERCACHE_ERROR_OUT_OF_MEMORY : r;   /* only growth can fail */
+    }
+    *data = m.data;
+    *size = m.size;
+    return RENDERCACHE_OK;
+}
+
+RENDERCACHE_API rendercache_result rendercache_range_image_load_from_memory(const void *data, size_t size,
+                                                                            const rendercache_allocator *allocator,
+                                                                            rendercache_range_image **out)
+{
+    rendercache__membuf m;
+    if (out) *out = NULL;
+    if (!data || !out) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    memset(&m, 0, sizeof m);
+    m.data = (unsigned char *)(uintptr_t)data;   /* read only */
+    m.size = size;
+    return rendercache_range_image_load(allocator, rendercache__membuf_read, &m, out);
+}
+
+RENDERCACHE_API void rendercache_free_memory(const rendercache_allocator *allocator, void *data)
+{
+    rendercache_allocator a;
+    if (!rendercache__allocator_arg(allocator, &a)) return;
+    rendercache__free(&a, data);
+}
 
 RENDERCACHE_API const char *rendercache_result_string(rendercache_result r)
 {

@@ -1,0 +1,89 @@
+/* Small scenes and brute-force integrals shared by the irrvol tests. */
+#ifndef TESTS_IRRVOL_SCENES_H
+#define TESTS_IRRVOL_SCENES_H
+
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+#if defined(__GNUC__) || defined(__clang__)
+#  define SC_FN static __attribute__((unused))
+#else
+#  define SC_FN static
+#endif
+
+#define SC_PI 3.14159265358979323846
+#define SC_MAX_QUADS 32
+
+/* A triangle soup of quadrilaterals, each with its own four vertices. */
+typedef struct sc_scene {
+    float pos[4 * 3 * SC_MAX_QUADS];
+    uint32_t idx[6 * SC_MAX_QUADS];
+    uint32_t mat[2 * SC_MAX_QUADS];
+    uint32_t nv, nt;
+} sc_scene;
+
+SC_FN void sc_quad(sc_scene *s, const float a[3], const float b[3], const float c[3], const float d[3], uint32_t mat)
+{
+    uint32_t v = s->nv;
+    memcpy(s->pos + 3 * v, a, 12);
+    memcpy(s->pos + 3 * v + 3, b, 12);
+    memcpy(s->pos + 3 * v + 6, c, 12);
+    memcpy(s->pos + 3 * v + 9, d, 12);
+    s->idx[3 * s->nt + 0] = v; s->idx[3 * s->nt + 1] = v + 1; s->idx[3 * s->nt + 2] = v + 2;
+    s->idx[3 * s->nt + 3] = v; s->idx[3 * s->nt + 4] = v + 2; s->idx[3 * s->nt + 5] = v + 3;
+    s->mat[s->nt] = s->mat[s->nt + 1] = mat;
+    s->nv += 4;
+    s->nt += 2;
+}
+
+/* Axis-aligned square: the plane coordinate[axis] = at, the other two axes
+   (axis+1, axis+2 mod 3) in [c1 - h, c1 + h] x [c2 - h, c2 + h]. */
+SC_FN void sc_square(sc_scene *s, int axis, float at, float c1, float c2, float h, uint32_t mat)
+{
+    float q[4][3];
+    int i, a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+    for (i = 0; i < 4; i++) {
+        q[i][axis] = at;
+        q[i][a1] = c1 + ((i == 1 || i == 2) ? h : -h);
+        q[i][a2] = c2 + ((i >= 2) ? h : -h);
+    }
+    sc_quad(s, q[0], q[1], q[2], q[3], mat);
+}
+
+/* The cube [-1, 1]^3; face f (0..5 = -x, +x, -y, +y, -z, +z) has material f. */
+SC_FN void sc_cube(sc_scene *s)
+{
+    int f;
+    memset(s, 0, sizeof *s);
+    for (f = 0; f < 6; f++) sc_square(s, f / 2, (f & 1) ? 1.0f : -1.0f, 0.0f, 0.0f, 1.0f, (uint32_t)f);
+}
+
+/* Irradiance at p for a surface with unit normal n from a square of
+   (uniform or linear) radiance, by a g x g midpoint rule over the square:
+   H = integral of L max(0, n . w) cos(theta_e) / r^2 dA. The radiance at a
+   point is l0 + l1 * (coordinate along axis+1). */
+SC_FN double sc_square_irradiance(const double p[3], const double n[3], int axis, double at, double c1, double c2,
+                                   double h, double l0, double l1, int g)
+{
+    int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3, i, j;
+    double sum = 0.0, da = (2.0 * h / g) * (2.0 * h / g);
+    for (j = 0; j < g; j++)
+        for (i = 0; i < g; i++) {
+            double x[3], d[3], r2, r, cr, ce;
+            int k;
+            x[axis] = at;
+            x[a1] = c1 - h + (i + 0.5) * 2.0 * h / g;
+            x[a2] = c2 - h + (j + 0.5) * 2.0 * h / g;
+            for (k = 0; k < 3; k++) d[k] = x[k] - p[k];
+            r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+            r = sqrt(r2);
+            cr = (n[0] * d[0] + n[1] * d[1] + n[2] * d[2]) / r;
+            if (cr <= 0.0) continue;
+            ce = fabs(d[axis]) / r;
+            sum += (l0 + l1 * x[a1]) * cr * ce / r2 * da;
+        }
+    return sum;
+}
+
+#endif /* TESTS_IRRVOL_SCENES_H */

@@ -1,0 +1,1129 @@
+/* Unit tests of rendercache.h (the render cache): known answers from an
+   analytic scene of planes at known depths whose colours are linear
+   functions of position, so every reprojected pixel can be checked against
+   the exact colour range of its footprint. */
+#include "examples/common/pool.h"
+#define RENDERCACHE_IMPLEMENTATION
+#include "rendercache.h"
+#include "test.h"
+
+#include <float.h>
+
+/* ---------------------------------------------------------------------
+   The scene: object 0 is a wall at z = 10 (|x|, |y| <= 8), object 1 a
+   square at z = 5 (|x|, |y| <= 1, plus a translation when it moves), the
+   sky beyond. Each surface writes one colour channel only (wall red,
+   square green, sky blue), so a blend of two layers is visible as two
+   non-zero channels.
+   --------------------------------------------------------------------- */
+#define WALL_Z 10.0f
+#define WALL_HALF 8.0f
+#define SQUARE_Z 5.0f
+#define SQUARE_HALF 1.0f
+
+typedef struct scene {
+    float shift[3];    /* translation of the square (object 1) */
+} scene;
+
+static float wall_colour(float x, float y) { return 0.5f + 0.05f * x + 0.005f * y; }
+static float square_colour(float lx, float ly) { return 0.5f + 0.1f * lx + 0.01f * ly; }
+static float sky_colour(const float d[3]) { return 0.5f + 0.3f * d[1] + 0.1f * d[0]; }
+
+/* Closest hit along (o, d): returns the object id or RENDERCACHE_MISS and
+   fills the hit point and its colour. */
+static uint32_t trace(const scene *s, const float o[3], const float d[3], float pos[3], float rgb[3])
+{
+    uint32_t object = RENDERCACHE_MISS;
+    float best = FLT_MAX, t;
+    rgb[0] = rgb[1] = rgb[2] = 0.0f;
+    pos[0] = pos[1] = pos[2] = 0.0f;
+    if (d[2] == 0.0f) {
+        rgb[2] = sky_colour(d);
+        return object;
+    }
+    t = (SQUARE_Z + s->shift[2] - o[2]) / d[2];
+    if (t > 0.0f) {
+        float lx = o[0] + t * d[0] - s->shift[0], ly = o[1] + t * d[1] - s->shift[1];
+        if (fabsf(lx) <= SQUARE_HALF && fabsf(ly) <= SQUARE_HALF) {
+            best = t;
+            object = 1;
+            rgb[1] = square_colour(lx, ly);
+        }
+    }
+    t = (WALL_Z - o[2]) / d[2];
+    if (t > 0.0f && t < best) {
+        float x = o[0] + t * d[0], y = o[1] + t * d[1];
+        if (fabsf(x) <= WALL_HALF && fabsf(y) <= WALL_HALF) {
+            best = t;
+            object = 0;
+            rgb[0] = wall_colour(x, y);
+            rgb[1] = 0.0f;
+        }
+    }
+    if (object == RENDERCACHE_MISS) {
+        rgb[2] = sky_colour(d);
+        return object;
+    }
+    pos[0] = o[0] + best * d[0];
+    pos[1] = o[1] + best * d[1];
+    pos[2] = o[2] + best * d[2];
+    return object;
+}
+
+static void shade(const scene *s, const rendercache_pixel_request *r, rendercache_sample *out)
+{
+    memset(out, 0, sizeof *out);
+    out->x = r->x;
+    out->y = r->y;
+    out->flags = r->flags;
+    out->object = trace(s, r->org, r->dir, out->position, out->rgb);
+}
+
+static rendercache_camera make_camera(float ex, float ey, float ez, float lx, float ly, float lz,
+                                      uint32_t w, uint32_t h)
+{
+    rendercache_camera c;
+    memset(&c, 0, sizeof c);
+    c.kind = RENDERCACHE_CAMERA_PERSPECTIVE;
+    c.eye[0] = ex; c.eye[1] = ey; c.eye[2] = ez;
+    c.look_at[0] = lx; c.look_at[1] = ly; c.look_at[2] = lz;
+    c.up[1] = 1.0f;
+    c.vfov_degrees = 60.0f;
+    c.width = w;
+    c.height = h;
+    return c;
+}
+
+static rendercache_desc make_desc(uint32_t w, uint32_t h)
+{
+    rendercache_desc d;
+    memset(&d, 0, sizeof d);
+    d.width = w;
+    d.height = h;
+    return d;
+}
+
+/* Scratch big enough for every test image. */
+#define MAX_PIXELS (96 * 80)
+static rendercache_pixel_request g_req[MAX_PIXELS];
+static rendercache_sample g_samples[MAX_PIXELS];
+
+/* One frame of the caller's loop: reproject, request up to budget pixels,
+   shade them, insert. Returns the number of samples. */
+static uint32_t run_frame(rendercache *rc, const scene *s, const rendercache_camera *cam, uint32_t budget)
+{
+    uint32_t n = 0, i;
+    CHECK_EQ_INT(rendercache_begin_frame(rc, cam), RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_request(rc, g_req, budget, &n), RENDERCACHE_OK);
+    for (i = 0; i < n; i++) shade(s, &g_req[i], &g_samples[i]);
+    CHECK_EQ_INT(rendercache_insert(rc, g_samples, n), RENDERCACHE_OK);
+    return n;
+}
+
+/* Fills the cache with every pixel of cam (one frame with a full budget). */
+static void converge(rendercache *rc, const scene *s, const rendercache_camera *cam)
+{
+    uint32_t n = run_frame(rc, s, cam, cam->width * cam->height);
+    CHECK_EQ_INT(n, cam->width * cam->height);
+}
+
+/* The exact colour range of the surface seen through pixel (x, y): the
+   colour is linear on each plane, so over the pixel's footprint it lies
+   between the values at the four corners (the sky's colour is linear in
+   the normalised direction, nearly so; hence the small slack). Returns 1
+   when the corners and the centre all see the same object. */
+static int footprint(const scene *s, const rendercache_camera *cam, uint32_t x, uint32_t y, float lo[3],
+                     float hi[3], uint32_t *object)
+{
+    static const float cx[5] = { 0.5f, 0.0f, 1.0f, 0.0f, 1.0f }, cy[5] = { 0.5f, 0.0f, 0.0f, 1.0f, 1.0f };
+    int k, c, same = 1;
+    for (k = 0; k < 5; k++) {
+        float o[3], d[3], pos[3], rgb[3];
+        uint32_t obj;
+        rendercache_camera_ray(cam, (float)x + cx[k], (float)y + cy[k], o, d);
+        obj = trace(s, o, d, pos, rgb);
+        if (k == 0) {
+            *object = obj;
+            for (c = 0; c < 3; c++) lo[c] = hi[c] = rgb[c];
+        } else {
+            if (obj != *object) same = 0;
+            for (c = 0; c < 3; c++) {
+                if (rgb[c] < lo[c]) lo[c] = rgb[c];
+                if (rgb[c] > hi[c]) hi[c] = rgb[c];
+            }
+        }
+    }
+    return same;
+}
+
+/* Which surface a cached colour came from (one channel per surface). */
+static uint32_t colour_object(const float *rgb)
+{
+    if (rgb[0] > 0.0f) return 0;
+    if (rgb[1] > 0.0f) return 1;
+    return RENDERCACHE_MISS;
+}
+
+/* Number of the three channels that are non-zero. */
+static int channels(const float *rgb)
+{
+    return (rgb[0] != 0.0f) + (rgb[1] != 0.0f) + (rgb[2] != 0.0f);
+}
+
+/* ---------------------------------------------------------------------
+   desc and camera validation
+   --------------------------------------------------------------------- */
+/* user: int[2], live blocks and allocation calls */
+static void *counting_alloc(size_t size, void *user)
+{
+    ((int *)user)[0]++;
+    ((int *)user)[1]++;
+    return malloc(size);
+}
+static void counting_free(void *p, void *user)
+{
+    if (p) ((int *)user)[0]--;
+    free(p);
+}
+
+static void test_create_validates_desc(void)
+{
+    rendercache_desc d = make_desc(32, 24);
+    rendercache *rc = (rendercache *)&d;
+    rendercache_stats st;
+    int live[2] = { 0, 0 };
+    CHECK_EQ_INT(rendercache_create(NULL, &rc), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK(rc == NULL);
+    CHECK_EQ_INT(rendercache_create(&d, NULL), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    d.width = 0;
+    CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    d = make_desc(32, 0);
+    CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    d = make_desc(1u << 20, 1u << 20);   /* 2^40 pixels: overflow-checked */
+    CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    d = make_desc(32, 24);
+    d.points_per_pixel = NAN;
+    CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    d.points_per_pixel = -1.0f;
+    CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    d = make_desc(32, 24);
+    d.depth_tolerance = INFINITY;
+    CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    d = make_desc(32, 24);
+    d.wide_radius = 8;
+    CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    d = make_desc(32, 24);
+    d.predict_fraction = 1.5f;
+    CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    d = make_desc(32, 24);
+    d.allocator.alloc = counting_alloc;   /* alloc without free */
+    CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    d.allocator.free = counting_free;
+    d.allocator.user = live;
+    CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK);
+    CHECK(live[0] > 0);
+    rendercache_get_stats(rc, &st);
+    CHECK_EQ_INT(st.capacity, 2 * 32 * 24);   /* default: 2 points per pixel */
+    CHECK_EQ_INT(st.live_points, 0);
+    rendercache_destroy(rc);
+    CHECK_EQ_INT(live[0], 0);   /* everything allocated was freed */
+    rendercache_destroy(NULL);
+}
+
+static void test_camera_ray_and_projection_agree(void)
+{
+    rendercache_camera cam = make_camera(0.3f, -0.2f, 1.0f, 2.0f, 0.5f, 6.0f, 64, 48);
+    rendercache_camera bad;
+    float o[3], d[3], p[3], px, py, depth;
+    int i, k;
+    for (i = 0; i < 200; i++) {
+        float x = (float)(i % 20) * 3.1f + 0.5f, y = (float)(i / 20) * 4.7f + 0.25f, dist = 0.5f + (float)i;
+        CHECK_EQ_INT(rendercache_camera_ray(&cam, x, y, o, d), RENDERCACHE_OK);
+        CHECK_CLOSE(d[0] * d[0] + d[1] * d[1] + d[2] * d[2], 1.0, 1e-6, 0.0);   /* unit direction */
+        for (k = 0; k < 3; k++) p[k] = o[k] + dist * d[k];
+        CHECK(rendercache_camera_project(&cam, p, &px, &py, &depth));
+        /* float round trip through a 200-unit distance: 1e-3 pixel */
+        CHECK_CLOSE(px, x, 0.0, 1e-3);
+        CHECK_CLOSE(py, y, 0.0, 1e-3);
+        CHECK_CLOSE(depth, dist, 1e-5, 1e-5);
+    }
+    /* orientation: right = forward x up; with forward +z and up +y, world -x is image right */
+    cam = make_camera(0, 0, 0, 0, 0, 1, 64, 48);
+    p[0] = -1.0f; p[1] = 0.5f; p[2] = 5.0f;
+    CHECK(rendercache_camera_project(&cam, p, &px, &py, &depth));
+    CHECK(px > 32.0f && py < 24.0f);
+    /* the vertical field of view: a point at the top edge angle lands on row 0 */
+    p[0] = 0.0f; p[1] = tanf(30.0f * 3.14159265f / 180.0f) * 5.0f * 0.999f; p[2] = 5.0f;
+    CHECK(rendercache_camera_project(&cam, p, &px, &py, &depth));
+    CHECK_CLOSE(py, 0.0, 0.0, 0.05);
+    p[2] = -5.0f;   /* behind the eye */
+    CHECK(!rendercache_camera_project(&cam, p, &px, &py, &depth));
+    /* bad cameras */
+    bad = cam; bad.eye[1] = NAN;
+    CHECK_EQ_INT(rendercache_camera_ray(&bad, 1, 1, o, d), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    bad = cam; bad.vfov_degrees = 0.0f;
+    CHECK_EQ_INT(rendercache_camera_ray(&bad, 1, 1, o, d), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    bad = cam; bad.vfov_degrees = 180.0f;
+    CHECK_EQ_INT(rendercache_camera_ray(&bad, 1, 1, o, d), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    bad = cam; bad.up[0] = 0.0f; bad.up[1] = 0.0f; bad.up[2] = 2.0f;   /* parallel to the view */
+    CHECK_EQ_INT(rendercache_camera_ray(&bad, 1, 1, o, d), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    bad = cam; memcpy(bad.look_at, bad.eye, sizeof bad.eye);
+    CHECK_EQ_INT(rendercache_camera_ray(&bad, 1, 1, o, d), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    bad = cam; bad.width = 0;
+    CHECK_EQ_INT(rendercache_camera_ray(&bad, 1, 1, o, d), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    bad = cam; bad.kind = (rendercache_camera_kind)7;
+    CHECK_EQ_INT(rendercache_camera_ray(&bad, 1, 1, o, d), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK(!rendercache_camera_project(&bad, p, &px, &py, &depth));
+    CHECK_EQ_INT(rendercache_camera_ray(&cam, NAN, 1, o, d), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+}
+
+/* ---------------------------------------------------------------------
+   Static camera: the cache converges to the full render exactly.
+   --------------------------------------------------------------------- */
+static void full_render(const scene *s, const rendercache_camera *cam, float *image)
+{
+    uint32_t x, y;
+    for (y = 0; y < cam->height; y++)
+        for (x = 0; x < cam->width; x++) {
+            float o[3], d[3], pos[3];
+            rendercache_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f, o, d);
+            trace(s, o, d, pos, image + 3 * ((size_t)y * cam->width + x));
+        }
+}
+
+static int images_equal(const float *a, const float *b, size_t n)
+{
+    return memcmp(a, b, n * sizeof(float)) == 0;
+}
+
+static void test_static_camera_converges_to_full_render(void)
+{
+    const uint32_t w = 64, h = 48, n = w * h, budget = (uint32_t)(0.08 * n + 0.5);
+    rendercache_camera cam = make_camera(0.4f, 0.3f, 0.0f, 0.1f, 0.0f, 5.0f, w, h);
+    rendercache_desc d = make_desc(w, h);
+    rendercache *rc;
+    rendercache_stats st;
+    scene s;
+    static float reference[MAX_PIXELS * 3];
+    uint32_t frames = 0, p, exact_frames = 0, culled = 0;
+    int done = 0;
+    memset(&s, 0, sizeof s);
+    full_render(&s, &cam, reference);
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+    while (!done && frames < 100) {
+        uint32_t got = run_frame(rc, &s, &cam, budget);
+        frames++;
+        CHECK(got <= budget);
+        rendercache_begin_frame(rc, &cam);
+        done = 1;
+        for (p = 0; p < n; p++)
+            if (rendercache_pixel_kinds(rc)[p] != RENDERCACHE_PIXEL_POINT) done = 0;
+    }
+    /* while holes remain they outrank every point, so each frame samples
+       exactly `budget` new pixels: ceil(n / budget) frames */
+    CHECK_EQ_INT(frames, (n + budget - 1) / budget);
+    CHECK(images_equal(rendercache_image(rc), reference, 3 * (size_t)n));
+    /* further frames refresh the oldest points; the image stays exact and
+       no silhouette point is culled */
+    for (p = 0; p < 20; p++) {
+        run_frame(rc, &s, &cam, budget);
+        rendercache_get_stats(rc, &st);
+        culled += st.culled;
+        exact_frames += images_equal(rendercache_image(rc), reference, 3 * (size_t)n);
+        CHECK(st.live_points <= st.capacity);
+    }
+    CHECK_EQ_INT(exact_frames, 20);
+    CHECK_EQ_INT(culled, 0);
+    test_note("static %ux%u, budget %u (8%%): converged in %u frames, bit-identical to the full render",
+              w, h, budget, frames);
+    rendercache_destroy(rc);
+}
+
+/* ---------------------------------------------------------------------
+   Error diffusion of a constant priority image.
+   --------------------------------------------------------------------- */
+static int requests_adjacent(const rendercache_pixel_request *r, uint32_t n, uint32_t w, uint32_t h)
+{
+    static unsigned char mark[MAX_PIXELS];
+    uint32_t i;
+    int dx, dy, adjacent = 0;
+    memset(mark, 0, sizeof mark);
+    for (i = 0; i < n; i++) mark[r[i].y * w + r[i].x] = 1;
+    for (i = 0; i < n; i++)
+        for (dy = -1; dy <= 1; dy++)
+            for (dx = -1; dx <= 1; dx++) {
+                int x = (int)r[i].x + dx, y = (int)r[i].y + dy;
+                if ((dx || dy) && x >= 0 && y >= 0 && x < (int)w && y < (int)h && mark[y * w + x]) adjacent = 1;
+            }
+    return adjacent;
+}
+
+/* Odd sizes: the serpentine scan ends on the right and on the left. */
+static void test_error_diffusion_odd_sizes(void)
+{
+    static const uint32_t sizes[3][2] = { { 61, 47 }, { 1, 33 }, { 37, 1 } };
+    int s;
+    for (s = 0; s < 3; s++) {
+        uint32_t w = sizes[s][0], h = sizes[s][1], b, got = 0;
+        rendercache_camera cam = make_camera(0, 0, 0, 0, 0, 1, w, h);
+        rendercache_desc d = make_desc(w, h);
+        rendercache *rc;
+        if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+        for (b = 1; b <= w * h; b += 1 + w * h / 7) {
+            CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
+            CHECK_EQ_INT(rendercache_request(rc, g_req, b, &got), RENDERCACHE_OK);
+            CHECK_EQ_INT(got, b);
+        }
+        rendercache_destroy(rc);
+    }
+}
+
+static void test_error_diffusion_counts_and_spreads(void)
+{
+    const uint32_t w = 64, h = 64, n = w * h;
+    static const double fractions[6] = { 0.01, 0.05, 0.1, 0.25, 0.5, 1.0 };
+    rendercache_camera cam = make_camera(0, 0, 0, 0, 0, 1, w, h);
+    rendercache_desc d = make_desc(w, h);
+    rendercache *rc;
+    int f;
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+    for (f = 0; f < 6; f++) {
+        uint32_t b = (uint32_t)(fractions[f] * n + 0.5), got = 0, i, worst = 0;
+        uint32_t blocks[16];
+        /* an empty cache: every pixel has the maximum priority */
+        CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
+        CHECK_EQ_INT(rendercache_request(rc, g_req, b, &got), RENDERCACHE_OK);
+        CHECK_EQ_INT(got, b);
+        if (fractions[f] <= 0.05) CHECK_MSG(!requests_adjacent(g_req, got, w, h), "adjacent requests at %u", b);
+        memset(blocks, 0, sizeof blocks);
+        for (i = 0; i < got; i++) {
+            blocks[(g_req[i].y / 16) * 4 + g_req[i].x / 16]++;
+            if (i) CHECK(g_req[i].y * w + g_req[i].x > g_req[i - 1].y * w + g_req[i - 1].x);   /* distinct */
+        }
+        for (i = 0; i < 16; i++) {
+            uint32_t dev = (uint32_t)fabs((double)blocks[i] - b / 16.0);
+            if (dev > worst) worst = dev;
+        }
+        /* error diffusion keeps every 16x16 block within a few samples of its share */
+        CHECK_MSG(worst <= 3, "budget %u: a 16x16 block is %u off its share %.1f", b, worst, b / 16.0);
+        test_note("constant priority, budget %4u of %u: %u requests, worst 16x16 block off by %u", b, n, got,
+                  worst);
+    }
+    /* a second request in the same frame returns the next pixels, disjoint */
+    {
+        static unsigned char mark[64 * 64];
+        uint32_t got = 0, i, overlap = 0;
+        memset(mark, 0, sizeof mark);
+        rendercache_begin_frame(rc, &cam);
+        rendercache_request(rc, g_req, 100, &got);
+        for (i = 0; i < got; i++) mark[g_req[i].y * w + g_req[i].x] = 1;
+        rendercache_request(rc, g_req, 100, &got);
+        CHECK_EQ_INT(got, 100);
+        for (i = 0; i < got; i++) overlap += mark[g_req[i].y * w + g_req[i].x];
+        CHECK_EQ_INT(overlap, 0);
+    }
+    rendercache_destroy(rc);
+}
+
+/* ---------------------------------------------------------------------
+   Camera motion over the analytic scene.
+   --------------------------------------------------------------------- */
+/* Checks every pixel that shows a point against the exact colour range of
+   its footprint; returns the number of pixels checked. Points of another
+   surface are allowed only in pixels that straddle an edge. */
+static uint32_t check_points_against_scene(rendercache *rc, const scene *s, const rendercache_camera *cam)
+{
+    const float *img = rendercache_image(rc);
+    const unsigned char *kind = rendercache_pixel_kinds(rc);
+    uint32_t x, y, checked = 0, wrong = 0, edge_mismatch = 0;
+    for (y = 0; y < cam->height; y++)
+        for (x = 0; x < cam->width; x++) {
+            uint32_t p = y * cam->width + x, object;
+            float lo[3], hi[3];
+            const float *c = img + 3 * (size_t)p;
+            int pure, k;
+            if (kind[p] != RENDERCACHE_PIXEL_POINT) continue;
+            pure = footprint(s, cam, x, y, lo, hi, &object);
+            if (colour_object(c) != object) {
+                if (pure) wrong++;
+                else edge_mismatch++;
+                continue;
+            }
+            if (!pure) continue;
+            checked++;
+            for (k = 0; k < 3; k++) {
+                /* exact range of the footprint; 1e-5 for float rounding (2e-4 for the sky's curvature) */
+                float slack = object == RENDERCACHE_MISS ? 2e-4f : 1e-5f;
+                if (c[k] < lo[k] - slack || c[k] > hi[k] + slack) {
+                    wrong++;
+                    break;
+                }
+            }
+        }
+    CHECK_MSG(wrong == 0, "%u reprojected pixels outside their footprint's colour range", wrong);
+    return checked;
+}
+
+/* Whether the surface seen through pixel (x, y) of cam was visible from
+   camera a (inside its image and not hidden). */
+static int was_visible(const scene *s, const rendercache_camera *a, const rendercache_camera *cam, uint32_t x,
+                       uint32_t y, const scene *s_before)
+{
+    float o[3], d[3], pos[3], rgb[3], px, py, dist, oa[3], da[3], posa[3], rgba[3];
+    uint32_t obj = (rendercache_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f, o, d), trace(s, o, d, pos, rgb));
+    int k;
+    if (obj == RENDERCACHE_MISS) {
+        float far_point[3];
+        for (k = 0; k < 3; k++) far_point[k] = a->eye[k] + 1000.0f * d[k];
+        return rendercache_camera_project(a, far_point, &px, &py, &dist);
+    }
+    if (obj == 1) {   /* compare in the square's own frame when it moved */
+        for (k = 0; k < 3; k++) pos[k] += s_before->shift[k] - s->shift[k];
+    }
+    if (!rendercache_camera_project(a, pos, &px, &py, &dist)) return 0;
+    rendercache_camera_ray(a, px, py, oa, da);
+    return trace(s_before, oa, da, posa, rgba) == obj &&
+           fabsf(posa[0] - pos[0]) + fabsf(posa[1] - pos[1]) + fabsf(posa[2] - pos[2]) < 1e-3f;
+}
+
+/* Pixels within one pixel of a pixel not visible from a (a dilated
+   "newly visible" mask). */
+static void newly_visible_mask(const scene *s, const rendercache_camera *a, const rendercache_camera *b,
+                               const scene *s_before, unsigned char *mask, uint32_t *count)
+{
+    static unsigned char fresh[MAX_PIXELS];
+    uint32_t x, y;
+    int dx, dy;
+    *count = 0;
+    for (y = 0; y < b->height; y++)
+        for (x = 0; x < b->width; x++) {
+            fresh[y * b->width + x] = (unsigned char)!was_visible(s, a, b, x, y, s_before);
+            *count += fresh[y * b->width + x];
+        }
+    for (y = 0; y < b->height; y++)
+        for (x = 0; x < b->width; x++) {
+            unsigned char m = 0;
+            for (dy = -1; dy <= 1; dy++)
+                for (dx = -1; dx <= 1; dx++) {
+                    int qx = (int)x + dx, qy = (int)y + dy;
+                    if (qx >= 0 && qy >= 0 && qx < (int)b->width && qy < (int)b->height &&
+                        fresh[qy * b->width + qx])
+                        m = 1;
+                }
+            mask[y * b->width + x] = m;
+        }
+}
+
+/* Holes never show a blend of two depth layers (one channel per surface). */
+static uint32_t check_holes_single_layer(rendercache *rc)
+{
+    const float *img = rendercache_image(rc);
+    const unsigned char *kind = rendercache_pixel_kinds(rc);
+    rendercache_stats st;
+    uint32_t p, n, mixed = 0, holes = 0;
+    rendercache_get_stats(rc, &st);
+    n = st.capacity / 2;
+    for (p = 0; p < n; p++) {
+        if (kind[p] != RENDERCACHE_PIXEL_INTERPOLATED && kind[p] != RENDERCACHE_PIXEL_SPARSE) continue;
+        holes++;
+        if (channels(img + 3 * (size_t)p) != 1) mixed++;
+    }
+    CHECK_MSG(mixed == 0, "%u of %u filled holes blend two depth layers", mixed, holes);
+    return holes;
+}
+
+static void test_camera_motion_reprojects_and_requests_disocclusions(void)
+{
+    const uint32_t w = 96, h = 80;
+    /* a sideways step with a small turn: the square slides over the wall */
+    rendercache_camera a = make_camera(0, 0, 0, 0, 0, 10, w, h);
+    rendercache_camera b = make_camera(0.7f, 0.25f, 0.0f, 0.3f, 0.1f, 10.0f, w, h);
+    rendercache_desc d = make_desc(w, h);
+    rendercache *rc;
+    scene s;
+    static unsigned char fresh[MAX_PIXELS];
+    uint32_t fresh_count, checked, holes, high = 0, got = 0, i, inside = 0, p;
+    const unsigned char *kind;
+    memset(&s, 0, sizeof s);
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+    converge(rc, &s, &a);
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &b), RENDERCACHE_OK);
+    checked = check_points_against_scene(rc, &s, &b);
+    CHECK(checked > w * h / 2);
+    holes = check_holes_single_layer(rc);
+    newly_visible_mask(&s, &a, &b, &s, fresh, &fresh_count);
+    CHECK(fresh_count > 50);   /* the move uncovers wall and a strip at the image edge */
+    /* the most urgent requests: pixels far from every point (sparse or empty) */
+    kind = rendercache_pixel_kinds(rc);
+    for (p = 0; p < w * h; p++) high += kind[p] == RENDERCACHE_PIXEL_SPARSE || kind[p] == RENDERCACHE_PIXEL_EMPTY;
+    CHECK(high > 0);
+    CHECK_EQ_INT(rendercache_request(rc, g_req, high, &got), RENDERCACHE_OK);
+    CHECK_EQ_INT(got, high);
+    for (i = 0; i < got; i++) {
+        uint32_t q = g_req[i].y * w + g_req[i].x;
+        CHECK(kind[q] != RENDERCACHE_PIXEL_POINT);
+        inside += fresh[q];
+    }
+    CHECK_EQ_INT(inside, got);   /* every first request is in a disoccluded region */
+    test_note("camera step: %u pixels checked against their footprint, %u holes single-layer, "
+              "%u newly visible, first %u requests all disoccluded", checked, holes, fresh_count, got);
+    rendercache_destroy(rc);
+}
+
+static uint32_t square_interior_leaks(rendercache *rc, const scene *s, const rendercache_camera *cam,
+                                      uint32_t *interior)
+{
+    const float *img = rendercache_image(rc);
+    uint32_t x, y, leaks = 0;
+    *interior = 0;
+    for (y = 0; y < cam->height; y++)
+        for (x = 0; x < cam->width; x++) {
+            float lo[3], hi[3];
+            uint32_t object;
+            if (!footprint(s, cam, x, y, lo, hi, &object) || object != 1) continue;
+            (*interior)++;
+            if (colour_object(img + 3 * ((size_t)y * cam->width + x)) != 1) leaks++;
+        }
+    return leaks;
+}
+
+static void test_depth_cull_drops_hidden_points(void)
+{
+    const uint32_t w = 96, h = 80;
+    /* moving forward magnifies the square 2x: its points leave gaps, and
+       wall points seen beside it before now fall into those gaps */
+    rendercache_camera a = make_camera(0, 0, 0, 0, 0, 10, w, h);
+    rendercache_camera b = make_camera(0.3f, 0.2f, 2.5f, 0.3f, 0.2f, 10.0f, w, h);
+    rendercache_desc d = make_desc(w, h);
+    rendercache *rc;
+    rendercache_stats st;
+    scene s;
+    uint32_t interior, leaks_culled, leaks_uncull;
+    memset(&s, 0, sizeof s);
+    /* without the cull (tolerance beyond any depth ratio) the wall leaks through */
+    d.depth_tolerance = 1e9f;
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+    converge(rc, &s, &a);
+    rendercache_begin_frame(rc, &b);
+    leaks_uncull = square_interior_leaks(rc, &s, &b, &interior);
+    rendercache_destroy(rc);
+    CHECK(leaks_uncull > 20);
+    d.depth_tolerance = 0.0f;   /* default 0.1 */
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+    converge(rc, &s, &a);
+    rendercache_begin_frame(rc, &b);
+    rendercache_get_stats(rc, &st);
+    leaks_culled = square_interior_leaks(rc, &s, &b, &interior);
+    CHECK_EQ_INT(leaks_culled, 0);
+    CHECK(st.culled > 0);
+    check_holes_single_layer(rc);
+    check_points_against_scene(rc, &s, &b);
+    test_note("2x magnification: %u square pixels show the wall without the cull, %u with it (%u culled)",
+              leaks_uncull, leaks_culled, st.culled);
+    rendercache_destroy(rc);
+}
+
+/* ---------------------------------------------------------------------
+   Moving object: points follow the transform, uncovered wall is requested.
+   --------------------------------------------------------------------- */
+static void test_moving_object_points_follow(void)
+{
+    const uint32_t w = 96, h = 80;
+    rendercache_camera cam = make_camera(0, 0, 0, 0, 0, 10, w, h);
+    rendercache_desc d = make_desc(w, h);
+    rendercache *rc;
+    scene before, after;
+    float m[12] = { 1, 0, 0, 0.45f, 0, 1, 0, -0.3f, 0, 0, 1, 0 };
+    static unsigned char fresh[MAX_PIXELS];
+    const float *prio;
+    const unsigned char *kind;
+    uint32_t fresh_count, got = 0, i, inside = 0, p, high = 0, square_px = 0;
+    float wall_prio = 0.0f, square_prio = 0.0f;
+    memset(&before, 0, sizeof before);
+    after = before;
+    after.shift[0] = m[3];
+    after.shift[1] = m[7];
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+    converge(rc, &before, &cam);
+    CHECK_EQ_INT(rendercache_set_object_transform(rc, 1, m), RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
+    /* the square's points now sit where the moved square is */
+    check_points_against_scene(rc, &after, &cam);
+    check_holes_single_layer(rc);
+    kind = rendercache_pixel_kinds(rc);
+    prio = rendercache_priority_image(rc);
+    for (p = 0; p < w * h; p++) {
+        const float *c = rendercache_image(rc) + 3 * (size_t)p;
+        if (kind[p] == RENDERCACHE_PIXEL_SPARSE || kind[p] == RENDERCACHE_PIXEL_EMPTY) high++;
+        if (kind[p] != RENDERCACHE_PIXEL_POINT) continue;
+        if (colour_object(c) == 1) { square_prio = prio[p]; square_px++; }
+        else wall_prio = prio[p];
+    }
+    CHECK(square_px > 100);
+    /* moving points age moving_age_step (4) frames per frame, static ones 1 */
+    CHECK_CLOSE(square_prio, 4.0f * wall_prio, 1e-6, 0.0);
+    /* the wall the square uncovered is what gets requested first */
+    newly_visible_mask(&after, &cam, &cam, &before, fresh, &fresh_count);
+    CHECK(high > 0);
+    rendercache_request(rc, g_req, high, &got);
+    CHECK_EQ_INT(got, high);
+    for (i = 0; i < got; i++) inside += fresh[g_req[i].y * w + g_req[i].x];
+    CHECK_EQ_INT(inside, got);
+    for (i = 0; i < got; i++) shade(&after, &g_req[i], &g_samples[i]);
+    rendercache_insert(rc, g_samples, got);
+    /* a still transform is not motion: the next frame ages everything by 1 */
+    CHECK_EQ_INT(rendercache_set_object_transform(rc, 1, m), RENDERCACHE_OK);
+    rendercache_begin_frame(rc, &cam);
+    check_points_against_scene(rc, &after, &cam);
+    test_note("moving square: %u of its pixels reprojected exactly, %u uncovered pixels requested", square_px, got);
+    rendercache_destroy(rc);
+}
+
+/* ---------------------------------------------------------------------
+   Background points at infinity.
+   --------------------------------------------------------------------- */
+static void test_misses_are_points_at_infinity(void)
+{
+    const uint32_t w = 64, h = 48;
+    /* looking up past the wall's top edge: half sky */
+    rendercache_camera a = make_camera(0, 6, 0, 0, 9, 10, w, h);
+    rendercache_camera b = make_camera(1.5f, 6.5f, -1.0f, 0.5f, 9.5f, 10.0f, w, h);
+    rendercache_desc d = make_desc(w, h);
+    rendercache *rc;
+    scene s;
+    const unsigned char *kind;
+    const float *img, *depth;
+    uint32_t p, sky = 0;
+    memset(&s, 0, sizeof s);
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+    converge(rc, &s, &a);
+    /* translate and turn: directions only rotate */
+    rendercache_begin_frame(rc, &b);
+    check_points_against_scene(rc, &s, &b);
+    check_holes_single_layer(rc);
+    kind = rendercache_pixel_kinds(rc);
+    img = rendercache_image(rc);
+    depth = rendercache_depth_image(rc);
+    for (p = 0; p < w * h; p++)
+        if (kind[p] == RENDERCACHE_PIXEL_POINT && colour_object(img + 3 * (size_t)p) == RENDERCACHE_MISS) {
+            sky++;
+            CHECK(depth[p] == 1e18f);   /* the distance of points at infinity */
+        }
+    CHECK(sky > w * h / 4);
+    rendercache_destroy(rc);
+}
+
+/* ---------------------------------------------------------------------
+   Predictive sampling.
+   --------------------------------------------------------------------- */
+static uint32_t count_far_holes(rendercache *rc, uint32_t n)
+{
+    const unsigned char *kind = rendercache_pixel_kinds(rc);
+    uint32_t p, holes = 0;
+    for (p = 0; p < n; p++) holes += kind[p] == RENDERCACHE_PIXEL_SPARSE || kind[p] == RENDERCACHE_PIXEL_EMPTY;
+    return holes;
+}
+
+static void test_predictive_sampling_fills_next_holes(void)
+{
+    const uint32_t w = 96, h = 80, budget = 400;
+    rendercache_camera a = make_camera(0, 0, 0, 0, 0, 10, w, h);
+    rendercache_camera next = make_camera(1.0f, 0.0f, 0.0f, 1.0f, 0.0f, 10.0f, w, h);
+    rendercache_desc d = make_desc(w, h);
+    rendercache *with, *without;
+    rendercache_stats st;
+    scene s;
+    uint32_t got = 0, i, predicted = 0, holes_with, holes_without;
+    memset(&s, 0, sizeof s);
+    d.predict_fraction = 0.5f;
+    if (!CHECK_EQ_INT(rendercache_create(&d, &with), RENDERCACHE_OK)) return;
+    if (!CHECK_EQ_INT(rendercache_create(&d, &without), RENDERCACHE_OK)) return;
+    converge(with, &s, &a);
+    converge(without, &s, &a);
+    /* same frame in both; one of them also predicts the next camera */
+    CHECK_EQ_INT(rendercache_begin_frame(with, &a), RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_predict(with, &next), RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_request(with, g_req, budget, &got), RENDERCACHE_OK);
+    CHECK_EQ_INT(got, budget);   /* old points fill the rest of the budget */
+    for (i = 0; i < got; i++) {
+        if (g_req[i].flags & RENDERCACHE_REQUEST_PREDICTED) {
+            float o[3], dd[3];
+            predicted++;
+            /* rays of the predicted camera */
+            rendercache_camera_ray(&next, (float)g_req[i].x + 0.5f, (float)g_req[i].y + 0.5f, o, dd);
+            CHECK(memcmp(o, g_req[i].org, sizeof o) == 0 && memcmp(dd, g_req[i].dir, sizeof dd) == 0);
+        }
+        shade(&s, &g_req[i], &g_samples[i]);
+    }
+    CHECK(predicted > 0 && predicted <= budget / 2);
+    rendercache_insert(with, g_samples, got);
+    run_frame(without, &s, &a, budget);
+    rendercache_get_stats(with, &st);
+    CHECK_EQ_INT(st.predicted, predicted);
+    CHECK_EQ_INT(st.rejected, 0);
+    /* arriving at the predicted camera, the predicting cache has fewer holes */
+    rendercache_begin_frame(with, &next);
+    rendercache_begin_frame(without, &next);
+    holes_with = count_far_holes(with, w * h);
+    holes_without = count_far_holes(without, w * h);
+    CHECK(holes_with + predicted / 2 < holes_without);
+    check_points_against_scene(with, &s, &next);
+    test_note("prediction: %u of %u requests predicted; far holes at the next camera %u (without: %u)",
+              predicted, got, holes_with, holes_without);
+    rendercache_destroy(with);
+    rendercache_destroy(without);
+}
+
+/* ---------------------------------------------------------------------
+   Eviction keeps the points the frame shows.
+   --------------------------------------------------------------------- */
+static void test_eviction_spares_visible_points(void)
+{
+    const uint32_t w = 64, h = 48, n = w * h;
+    rendercache_camera a = make_camera(0, 0, 0, 0, 0, 10, w, h);
+    rendercache_camera b = make_camera(0, 0, 0, 4, 0, 10, w, h);   /* a turn: new wall enters */
+    rendercache_desc d = make_desc(w, h);
+    rendercache *rc;
+    rendercache_stats st;
+    static float shown[MAX_PIXELS * 3];
+    static unsigned char was_point[MAX_PIXELS];
+    uint32_t p, got, changed = 0;
+    scene s;
+    memset(&s, 0, sizeof s);
+    d.points_per_pixel = 1.0f;   /* as many points as pixels: the cache is full after one frame */
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+    converge(rc, &s, &a);
+    rendercache_get_stats(rc, &st);
+    CHECK_EQ_INT(st.live_points, n);
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &b), RENDERCACHE_OK);
+    memcpy(shown, rendercache_image(rc), sizeof(float) * 3 * n);
+    for (p = 0; p < n; p++) was_point[p] = rendercache_pixel_kinds(rc)[p] == RENDERCACHE_PIXEL_POINT;
+    CHECK_EQ_INT(rendercache_request(rc, g_req, n / 4, &got), RENDERCACHE_OK);
+    for (p = 0; p < got; p++) {
+        shade(&s, &g_req[p], &g_samples[p]);
+        was_point[g_req[p].y * w + g_req[p].x] = 0;   /* resampled on purpose */
+    }
+    rendercache_insert(rc, g_samples, got);
+    rendercache_get_stats(rc, &st);
+    CHECK(st.evicted > 0);                 /* points that left the view made room */
+    CHECK_EQ_INT(st.live_points, n);       /* never more than the capacity */
+    rendercache_begin_frame(rc, &b);
+    for (p = 0; p < n; p++)
+        if (was_point[p] && memcmp(shown + 3 * p, rendercache_image(rc) + 3 * p, 3 * sizeof(float)) != 0) changed++;
+    CHECK_EQ_INT(changed, 0);
+    rendercache_destroy(rc);
+}
+
+/* ---------------------------------------------------------------------
+   Per-point priority scale (the light-vector weight of Crespin-Peroche).
+   --------------------------------------------------------------------- */
+static void test_priority_scale(void)
+{
+    const uint32_t w = 32, h = 32, n = w * h;
+    rendercache_camera cam = make_camera(0, 0, 0, 0, 0, 10, w, h);
+    rendercache_desc d = make_desc(w, h);
+    rendercache *rc;
+    scene s;
+    uint32_t got = 0, i, frames, wrong = 0;
+    const float *prio;
+    memset(&s, 0, sizeof s);
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+    rendercache_begin_frame(rc, &cam);
+    rendercache_request(rc, g_req, n, &got);
+    for (i = 0; i < got; i++) {
+        shade(&s, &g_req[i], &g_samples[i]);
+        /* the left half is "poorly interpolated": a weight W = 1/3 gives scale 3 */
+        g_samples[i].priority_scale = g_req[i].x < w / 2 ? 3.0f : 0.0f;
+    }
+    rendercache_insert(rc, g_samples, got);
+    for (frames = 0; frames < 4; frames++) rendercache_begin_frame(rc, &cam);
+    prio = rendercache_priority_image(rc);
+    /* age 4 of a 32-frame ramp to 0.5: 1/16, and 3/16 on the left */
+    CHECK_CLOSE(prio[5], 3.0f / 16.0f, 1e-6, 0.0);
+    CHECK_CLOSE(prio[w - 5], 1.0f / 16.0f, 1e-6, 0.0);
+    /* so the budget goes to the left half first */
+    rendercache_request(rc, g_req, n / 4, &got);
+    for (i = 0; i < got; i++) wrong += g_req[i].x >= w / 2;
+    CHECK_EQ_INT(wrong, 0);
+    /* a huge scale (W = 0) saturates at the maximum */
+    g_samples[0].priority_scale = 1e30f;
+    rendercache_insert(rc, g_samples, 1);
+    for (frames = 0; frames < 2; frames++) rendercache_begin_frame(rc, &cam);
+    CHECK_CLOSE(rendercache_priority_image(rc)[g_samples[0].y * w + g_samples[0].x], 1.0f, 0.0, 0.0);
+    rendercache_destroy(rc);
+}
+
+/* ---------------------------------------------------------------------
+   Interpolation: the 3x3 filter, the wide filter where points are sparse,
+   empty beyond it; a plane of one colour is filled with exactly it.
+   --------------------------------------------------------------------- */
+static int is_grid_point(uint32_t x, uint32_t y, uint32_t w)
+{
+    /* spacing 2 in the top half (3x3 filter), 4 below (wide filter), left half only */
+    uint32_t step = y < 20 ? 2 : 4;
+    return x < w / 2 && x % step == 0 && y % step == 0;
+}
+
+static void test_sparse_points_use_the_wide_filter(void)
+{
+    const uint32_t w = 40, h = 40;
+    rendercache_camera cam = make_camera(0, 0, 0, 0, 0, 10, w, h);
+    rendercache_desc d = make_desc(w, h);
+    rendercache *rc;
+    const unsigned char *kind;
+    const float *img, *prio;
+    uint32_t n = 0, x, y, wrong = 0, counts[4] = { 0, 0, 0, 0 };
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
+    for (y = 0; y < h; y++)
+        for (x = 0; x < w; x++) {
+            rendercache_sample *s = &g_samples[n];
+            float o[3], dir[3], t;
+            if (!is_grid_point(x, y, w)) continue;
+            n++;
+            memset(s, 0, sizeof *s);
+            s->x = x; s->y = y;
+            rendercache_camera_ray(&cam, (float)x + 0.5f, (float)y + 0.5f, o, dir);
+            t = 10.0f / dir[2];
+            s->position[0] = t * dir[0]; s->position[1] = t * dir[1]; s->position[2] = 10.0f;
+            s->rgb[0] = 0.25f; s->rgb[1] = 0.5f; s->rgb[2] = 0.75f;
+        }
+    CHECK_EQ_INT(rendercache_insert(rc, g_samples, n), RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
+    kind = rendercache_pixel_kinds(rc);
+    img = rendercache_image(rc);
+    prio = rendercache_priority_image(rc);
+    for (y = 0; y < h; y++)
+        for (x = 0; x < w; x++) {
+            uint32_t p = y * w + x, near3 = 0, near7 = 0;
+            int dx, dy;
+            unsigned char expect;
+            for (dy = -3; dy <= 3; dy++)
+                for (dx = -3; dx <= 3; dx++) {
+                    int qx = (int)x + dx, qy = (int)y + dy;
+                    if ((!dx && !dy) || qx < 0 || qy < 0 || qx >= (int)w || qy >= (int)h) continue;
+                    if (!is_grid_point((uint32_t)qx, (uint32_t)qy, w)) continue;
+                    near7++;
+                    near3 += dx >= -1 && dx <= 1 && dy >= -1 && dy <= 1;
+                }
+            /* the desc defaults: 3x3 from 2 neighbours on, else the 7x7 window */
+            expect = is_grid_point(x, y, w) ? RENDERCACHE_PIXEL_POINT
+                   : near3 >= 2 ? RENDERCACHE_PIXEL_INTERPOLATED
+                   : near7 > 0 ? RENDERCACHE_PIXEL_SPARSE : RENDERCACHE_PIXEL_EMPTY;
+            counts[kind[p]]++;
+            if (kind[p] != expect) { wrong++; continue; }
+            if (kind[p] == RENDERCACHE_PIXEL_EMPTY) {
+                CHECK(img[3 * p] == 0.0f && prio[p] == 1.0f);   /* background colour, maximum priority */
+                continue;
+            }
+            /* a weighted mean of equal colours is that colour (float rounding only) */
+            CHECK_CLOSE(img[3 * p + 0], 0.25, 1e-6, 0.0);
+            CHECK_CLOSE(img[3 * p + 2], 0.75, 1e-6, 0.0);
+            if (kind[p] == RENDERCACHE_PIXEL_SPARSE) CHECK(prio[p] > 0.75f && prio[p] < 1.0f);
+            if (kind[p] == RENDERCACHE_PIXEL_INTERPOLATED) CHECK(prio[p] >= 0.5f && prio[p] <= 0.75f);
+        }
+    CHECK_MSG(wrong == 0, "%u pixels of the wrong kind", wrong);
+    CHECK(counts[RENDERCACHE_PIXEL_INTERPOLATED] > 0 && counts[RENDERCACHE_PIXEL_SPARSE] > 0 &&
+          counts[RENDERCACHE_PIXEL_EMPTY] > 0);
+    test_note("one-colour points: %u shown, %u filled by 3x3, %u by 7x7, %u empty, all exact", counts[0], counts[1],
+              counts[2], counts[3]);
+    rendercache_destroy(rc);
+}
+
+/* ---------------------------------------------------------------------
+   No allocation after create.
+   --------------------------------------------------------------------- */
+static void test_no_allocation_per_frame(void)
+{
+    const uint32_t w = 48, h = 40;
+    rendercache_desc d = make_desc(w, h);
+    rendercache *rc;
+    scene s;
+    float m[12] = { 1, 0, 0, 0.1f, 0, 1, 0, 0, 0, 0, 1, 0 };
+    int live[2] = { 0, 0 }, calls_after_create, f;
+    ex_pool *pool = ex_pool_create(2);
+    memset(&s, 0, sizeof s);
+    d.allocator.alloc = counting_alloc;
+    d.allocator.free = counting_free;
+    d.allocator.user = live;
+    d.parallel_for = pool ? ex_pool_parallel_for : NULL;
+    d.parallel_user = pool;
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+    calls_after_create = live[1];
+    for (f = 0; f < 6; f++) {
+        rendercache_camera cam = make_camera(0.1f * (float)f, 0, 0, 0, 0, 10, w, h), next = cam;
+        uint32_t n = 0, i;
+        next.eye[0] += 0.1f;
+        m[3] = 0.1f * (float)f;
+        rendercache_set_object_transform(rc, 1, m);
+        rendercache_begin_frame(rc, &cam);
+        rendercache_predict(rc, &next);
+        rendercache_request(rc, g_req, w * h / 4, &n);
+        for (i = 0; i < n; i++) shade(&s, &g_req[i], &g_samples[i]);
+        rendercache_insert(rc, g_samples, n);
+        (void)rendercache_depth_image(rc);
+    }
+    CHECK_EQ_INT(live[1], calls_after_create);   /* not one allocator call per frame */
+    rendercache_destroy(rc);
+    CHECK_EQ_INT(live[0], 0);
+    ex_pool_destroy(pool);
+}
+
+/* ---------------------------------------------------------------------
+   Bad input leaves the state untouched.
+   --------------------------------------------------------------------- */
+static void test_bad_input_is_rejected(void)
+{
+    const uint32_t w = 32, h = 24, n = w * h;
+    rendercache_camera cam = make_camera(0, 0, 0, 0, 0, 10, w, h), bad;
+    rendercache_desc d = make_desc(w, h);
+    rendercache *rc;
+    rendercache_stats st, st2;
+    rendercache_sample junk[8];
+    static float before[32 * 24 * 3];
+    float m[12] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0 };
+    uint32_t got = 5, i;
+    scene s;
+    memset(&s, 0, sizeof s);
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+    CHECK_EQ_INT(rendercache_request(rc, g_req, 10, &got), RENDERCACHE_ERROR_INVALID_ARGUMENT);   /* no frame yet */
+    CHECK_EQ_INT(got, 0);
+    converge(rc, &s, &cam);
+    rendercache_begin_frame(rc, &cam);
+    memcpy(before, rendercache_image(rc), sizeof before);
+    rendercache_get_stats(rc, &st);
+    bad = cam; bad.eye[0] = NAN;
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &bad), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    bad = cam; bad.look_at[2] = INFINITY;
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &bad), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    bad = cam; bad.vfov_degrees = NAN;
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &bad), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    bad = cam; bad.width = w + 1;   /* not the cache's size */
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &bad), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(rendercache_begin_frame(rc, NULL), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(rendercache_begin_frame(NULL, &cam), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    bad = cam; bad.eye[0] = NAN;
+    CHECK_EQ_INT(rendercache_predict(rc, &bad), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(rendercache_request(rc, NULL, 10, &got), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(rendercache_request(rc, g_req, 10, NULL), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(rendercache_insert(rc, NULL, 3), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(rendercache_insert(rc, NULL, 0), RENDERCACHE_OK);
+    /* transforms */
+    CHECK_EQ_INT(rendercache_set_object_transform(rc, 256, m), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    m[5] = NAN;
+    CHECK_EQ_INT(rendercache_set_object_transform(rc, 1, m), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    m[5] = 0.0f;   /* singular */
+    CHECK_EQ_INT(rendercache_set_object_transform(rc, 1, m), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(rendercache_set_object_transform(rc, 1, NULL), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    /* samples: every one of these is ignored */
+    for (i = 0; i < 8; i++) {
+        memset(&junk[i], 0, sizeof junk[i]);
+        junk[i].x = 3; junk[i].y = 4;
+        junk[i].position[2] = 10.0f;
+        junk[i].rgb[0] = 9.0f;
+    }
+    junk[0].x = w;                          /* outside the image */
+    junk[1].y = 1000000;
+    junk[2].position[1] = NAN;
+    junk[3].rgb[2] = INFINITY;
+    junk[4].object = 256;                   /* no such object */
+    junk[5].priority_scale = -1.0f;
+    junk[6].flags = RENDERCACHE_REQUEST_PREDICTED;   /* no prediction this frame */
+    junk[7].flags = 0x80;                   /* unknown flag */
+    CHECK_EQ_INT(rendercache_insert(rc, junk, 8), RENDERCACHE_OK);
+    rendercache_get_stats(rc, &st2);
+    CHECK_EQ_INT(st2.rejected, 8);
+    CHECK_EQ_INT(st2.inserted, 0);
+    CHECK_EQ_INT(st2.frame, st.frame);      /* the failed begin_frame calls changed nothing */
+    CHECK_EQ_INT(st2.live_points, st.live_points);
+    CHECK(images_equal(rendercache_image(rc), before, 3 * (size_t)n));
+    /* and the cache still works: the next frame shows the same image */
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
+    CHECK(images_equal(rendercache_image(rc), before, 3 * (size_t)n));
+    CHECK(rendercache_image(NULL) == NULL);
+    rendercache_destroy(rc);
+}
+
+/* ---------------------------------------------------------------------
+   Determinism: bit-identical for any job order and thread count.
+   --------------------------------------------------------------------- */
+static void reversed_parallel_for(void *user, rendercache_job_fn job, void *ctx, uint32_t count)
+{
+    (void)user;
+    while (count--) job(ctx, count);
+}
+
+static uint64_t hash_bytes(uint64_t h, const void *p, size_t n)
+{
+    const unsigned char *b = (const unsigned char *)p;
+    while (n--) h = (h ^ *b++) * 1099511628211ull;
+    return h;
+}
+
+static uint64_t run_sequence(void (*pf)(void *, rendercache_job_fn, void *, uint32_t), void *user)
+{
+    const uint32_t w = 96, h = 80;
+    rendercache_desc d = make_desc(w, h);
+    rendercache *rc;
+    scene s;
+    float m[12] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0 };
+    uint64_t hash = 1469598103934665603ull;
+    int f;
+    memset(&s, 0, sizeof s);
+    d.parallel_for = pf;
+    d.parallel_user = user;
+    if (rendercache_create(&d, &rc) != RENDERCACHE_OK) return 0;
+    for (f = 0; f < 12; f++) {
+        float t = (float)f * 0.1f;
+        rendercache_camera cam = make_camera(t, 0.3f * t, t, 0.2f, 0.0f, 10.0f, w, h), next = cam;
+        uint32_t n = 0, i;
+        next.eye[0] += 0.1f;
+        m[3] = 0.05f * (float)f;
+        s.shift[0] = m[3];
+        rendercache_set_object_transform(rc, 1, m);
+        rendercache_begin_frame(rc, &cam);
+        rendercache_predict(rc, &next);
+        rendercache_request(rc, g_req, 600, &n);
+        for (i = 0; i < n; i++) shade(&s, &g_req[i], &g_samples[i]);
+        rendercache_insert(rc, g_samples, n);
+        hash = hash_bytes(hash, g_req, n * sizeof *g_req);
+        hash = hash_bytes(hash, rendercache_image(rc), 3 * sizeof(float) * w * h);
+        hash = hash_bytes(hash, rendercache_priority_image(rc), sizeof(float) * w * h);
+    }
+    rendercache_destroy(rc);
+    return hash;
+}
+
+static void test_deterministic_for_any_thread_count(void)
+{
+    ex_pool *pool = ex_pool_create(3);
+    uint64_t serial = run_sequence(NULL, NULL);
+    CHECK(serial != 0);
+    CHECK(run_sequence(reversed_parallel_for, NULL) == serial);
+    if (pool) {
+        CHECK(run_sequence(ex_pool_parallel_for, pool) == serial);
+        ex_pool_destroy(pool);
+    }
+}
+
+int main(int argc, char **argv)
+{
+    TEST_INIT(argc, argv);
+    RUN(test_create_validates_desc);
+    RUN(test_camera_ray_and_projection_agree);
+    RUN(test_static_camera_converges_to_full_render);
+    RUN(test_error_diffusion_counts_and_spreads);
+    RUN(test_error_diffusion_odd_sizes);
+    RUN(test_camera_motion_reprojects_and_requests_disocclusions);
+    RUN(test_depth_cull_drops_hidden_points);
+    RUN(test_moving_object_points_follow);
+    RUN(test_misses_are_points_at_infinity);
+    RUN(test_predictive_sampling_fills_next_holes);
+    RUN(test_eviction_spares_visible_points);
+    RUN(test_priority_scale);
+    RUN(test_sparse_points_use_the_wide_filter);
+    RUN(test_no_allocation_per_frame);
+    RUN(test_bad_input_is_rejected);
+    RUN(test_deterministic_for_any_thread_count);
+    return test_finish();
+}

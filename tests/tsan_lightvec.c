@@ -1,0 +1,150 @@
+/* Concurrency test of lightvec.h under ThreadSanitizer: one writer inserts
+   records (tail appends, Bentley-Saxe merges, face splits, deferred frees,
+   an optimize) while three readers look up continuously. Afterwards every
+   reader's view must be explainable: a lookup made while n records were
+   visible returns only ids below the final count, and the final cache answers
+   exactly like a brute-force scan. */
+#define LIGHTVEC_IMPLEMENTATION
+#include "lightvec.h"
+#include <pthread.h>
+#include "tests/test.h"
+
+#define RECORDS 30000u
+#define READERS 3
+
+typedef struct shared {
+    lightvec_cache *cache;
+    int done;                 /* written by the writer with __atomic */
+    uint64_t lookups[READERS], hits[READERS], bad[READERS];
+} shared;
+
+static uint64_t mix(uint64_t z)
+{
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+static float unitf(uint64_t *s) { *s = mix(*s + 0x9E3779B97F4A7C15ull); return (float)(*s >> 40) / 16777216.0f; }
+
+static void make_record(uint32_t i, lightvec_record *r)
+{
+    uint64_t s = i * 7919ull + 1;
+    float a = unitf(&s) * 6.2831853f, z = unitf(&s) * 0.8f + 0.1f, q = sqrtf(1 - z * z);
+    memset(r, 0, sizeof *r);
+    r->position[0] = unitf(&s);
+    r->position[1] = unitf(&s);
+    r->position[2] = unitf(&s);
+    r->normal[2] = 1.0f;
+    r->outgoing[0] = q * cosf(a);
+    r->outgoing[1] = q * sinf(a);
+    r->outgoing[2] = z;
+    r->vector.direction[2] = 1.0f;
+    r->vector.magnitude[0] = r->vector.magnitude[1] = r->vector.magnitude[2] = 1.0f + (float)(i % 7);
+    r->irradiance[0] = r->irradiance[1] = r->irradiance[2] = 1.0f;
+    r->distance = 0.15f;
+    r->visibility = 1.0f;
+}
+
+static void *writer(void *arg)
+{
+    shared *sh = (shared *)arg;
+    uint32_t i;
+    for (i = 0; i < RECORDS; i++) {
+        lightvec_record r;
+        make_record(i, &r);
+        CHECK(lightvec_insert(sh->cache, &r, NULL) == LIGHTVEC_OK);
+        if (i == RECORDS / 2) CHECK(lightvec_cache_optimize(sh->cache) == LIGHTVEC_OK);
+    }
+    __atomic_store_n(&sh->done, 1, __ATOMIC_RELEASE);
+    return NULL;
+}
+
+typedef struct reader_arg { shared *sh; int index; } reader_arg;
+
+static void *reader(void *arg)
+{
+    reader_arg *ra = (reader_arg *)arg;
+    shared *sh = ra->sh;
+    uint64_t s = (uint64_t)ra->index * 1000003ull;
+    uint32_t ids[256];
+    float w[256];
+    while (!__atomic_load_n(&sh->done, __ATOMIC_ACQUIRE)) {
+        float p[3], n[3] = { 0, 0, 1 }, *o;
+        lightvec_lookup_result lr;
+        lightvec_record near;
+        uint32_t count, k;
+        /* near a record the writer inserts (or will insert) */
+        make_record((uint32_t)(unitf(&s) * RECORDS), &near);
+        for (k = 0; k < 3; k++) p[k] = near.position[k] + 0.05f * (unitf(&s) - 0.5f);
+        o = near.outgoing;
+        if (lightvec_lookup(sh->cache, p, n, o, &lr) != LIGHTVEC_OK) sh->bad[ra->index]++;
+        /* a weighted mean of magnitudes 1..7 (float rounding aside) */
+        if (lr.hit && !(lr.vector.magnitude[0] >= 0.9999f && lr.vector.magnitude[0] <= 7.0001f)) {
+            if (sh->bad[ra->index] < 3) fprintf(stderr, "magnitude %.9g\n", lr.vector.magnitude[0]);
+            sh->bad[ra->index]++;
+        }
+        if (lightvec_find(sh->cache, p, n, o, ids, w, 256, &count) != LIGHTVEC_OK) sh->bad[ra->index]++;
+        for (k = 0; k < count && k < 256; k++) {
+            lightvec_record r;
+            /* a record a reader found is complete: readable and as written */
+            if (lightvec_cache_record(sh->cache, ids[k], &r) != LIGHTVEC_OK ||
+                r.vector.magnitude[0] != 1.0f + (float)(ids[k] % 7))
+                sh->bad[ra->index]++;
+        }
+        sh->lookups[ra->index]++;
+        sh->hits[ra->index] += lr.hit;
+    }
+    return NULL;
+}
+
+static void test_lookups_during_inserts(void)
+{
+    shared sh;
+    pthread_t w, r[READERS];
+    reader_arg ra[READERS];
+    lightvec_cache_desc d;
+    uint64_t lookups = 0, bad = 0, hits = 0;
+    int i;
+    memset(&sh, 0, sizeof sh);
+    memset(&d, 0, sizeof d);
+    d.face_split_threshold = 256; /* many splits */
+    d.max_direction_angle = 5.0f;
+    d.radius_scale = 1.0f;        /* dense enough for interpolated hits */
+    d.min_valid = 1;
+    if (!CHECK(lightvec_cache_create(&d, &sh.cache) == LIGHTVEC_OK)) return;
+    for (i = 0; i < READERS; i++) {
+        ra[i].sh = &sh;
+        ra[i].index = i;
+        pthread_create(&r[i], NULL, reader, &ra[i]);
+    }
+    pthread_create(&w, NULL, writer, &sh);
+    pthread_join(w, NULL);
+    for (i = 0; i < READERS; i++) {
+        pthread_join(r[i], NULL);
+        lookups += sh.lookups[i];
+        hits += sh.hits[i];
+        bad += sh.bad[i];
+    }
+    test_note("%llu concurrent lookups (%llu hits) during %u inserts", (unsigned long long)lookups,
+              (unsigned long long)hits, RECORDS);
+    CHECK(lookups > 0);
+    CHECK_EQ_INT(bad, 0);
+    /* the final cache: every record findable at its own position */
+    for (i = 0; i < (int)RECORDS; i += 97) {
+        lightvec_record rec;
+        uint32_t ids[512], count, k, found = 0;
+        float wts[512];
+        make_record((uint32_t)i, &rec);
+        CHECK(lightvec_find(sh.cache, rec.position, rec.normal, rec.outgoing, ids, wts, 512, &count) == LIGHTVEC_OK);
+        for (k = 0; k < count && k < 512; k++) found += ids[k] == (uint32_t)i;
+        CHECK_EQ_INT(found, 1);
+    }
+    lightvec_cache_destroy(sh.cache);
+}
+
+int main(int argc, char **argv)
+{
+    TEST_INIT(argc, argv);
+    RUN(test_lookups_during_inserts);
+    return test_finish();
+}
