@@ -56,6 +56,36 @@
    callback. Zero-area patches are skipped and counted (info.skipped_patches);
    repeated or collinear corners reduce a quadrilateral to a triangle.
 
+   METHOD
+
+   radinterp_solve (chapter 4): one quadtree per patch (quadrilaterals and
+   triangles split in four at their edge midpoints); a link between every
+   ordered pair of patches that face each other, with its potential blockers
+   from shaft culling (Haines and Wallace) through a BVH of the patches; link
+   form factors = the mean of eq. 6.1 at a jittered grid of receiver points,
+   each scaled by the visible fraction of the source (shadow rays through the
+   BVH or desc.trace), with horizon clipping of both elements (4.2); Jacobi
+   gather + push-pull iterations (4.3); after each, transport refinement
+   (4.4.1): a link whose B_src times the spread of the point factors over
+   its receiver (taken at fixed points) exceeds eps is split at its larger
+   element, and a link whose source's children differ by more than eps / F
+   is split at the source. Parts of a patch enclosed by geometry resting on
+   it (the floor under a box) are found by rays and left out of its
+   radiosity (radinterp_leaf.open).
+
+   radinterp_irradiance_at_point (chapter 6): the sum of B_src * F over the
+   links of the leaf containing p and of its ancestors. F is eq. 6.1 for the
+   source clipped to p's tangent plane and moved push_off behind its plane;
+   with blockers, every blocker's part inside the pyramid from p to the
+   source is projected onto the source plane, the source outline and the
+   projected edges go into a constrained Delaunay triangulation (exact
+   adaptive predicates), and one ray per region of the triangulation decides
+   whether it is visible; eq. 6.1 over the visible triangles gives F (shared
+   edges cancel, so only region borders are summed). A projected blocker
+   that covers the whole source ends the work early; one inside another is
+   left out. Where a source node's children differ enough to matter at p,
+   they are used in its place.
+
    PARAMETERS (Hardt, appendix A; zero means the default)
 
        eps                Gur::eps, transport error bound in W/m^2: a link is
@@ -73,7 +103,8 @@
        ff_samples         receiver points per link form factor (a square
                           number gives a jittered grid).              default 9
        visibility_rays    shadow rays per receiver point when shaft culling
-                          left blockers.                              default 8
+                          left blockers (weighted like the form factor).
+                                                                      default 8
        push_off           Polygon::ffPushOff: sources are moved this far behind
                           their plane in point queries (6.4). default 1e-5 * diag
        nudge              nudgeAmt: a query point moves this far toward
@@ -116,10 +147,12 @@
 
    THREADS
 
-   radinterp_solve runs its independent work (link form factors, gathers,
-   push-pull) through desc.parallel_for when given; results are bit-identical
-   for any thread count. A trace callback must then be thread-safe. Queries on
-   a finished solution are const and may run from many threads at once.
+   radinterp_solve runs its independent work (link form factors, open
+   fractions, gathers, push-pull) through desc.parallel_for when given;
+   results are bit-identical for any thread count. A trace callback must then
+   be thread-safe. Queries on a finished solution are const and may run from
+   many threads at once; each uses up to about 100 KB of stack (its
+   triangulation moves to the allocator only when it outgrows 32 KB).
 
    LIMITS
 
@@ -127,7 +160,13 @@
    be tessellated by the caller). Links are directional (one per receiver and
    source) and there is no clustering, so the initial linking is quadratic in
    the patch count: the method suits scenes of hundreds to a few thousand
-   patches, as the paper's.
+   patches, as the paper's. Radiosity is constant over each element, so
+   points a few millimetres from a corner, or at the foot of an object, see
+   their nearest sources at the elements' mean: expect errors of several
+   percent there (about 2% on average elsewhere in the Cornell box with
+   eps = 5 mW/m^2). A point query costs a triangulation per partly visible
+   source: about 2,000 per second on the office scene, where nearly every
+   point has one, and over 300,000 per second where none is.
 
    PAPER
 
@@ -2059,6 +2098,13 @@ RADINTERP_API double radinterp_form_factor_point_polygon(const float p[3], const
      leaf and of every ancestor.
    - blockers: a link's potential occluders (patch indices) from shaft
      culling, blockers[link.first_blocker .. + link.blocker_count).
+   - node.b is the radiosity of the node's open part and node.open the
+     fraction of the node not enclosed by geometry resting on it.
+   Helpers the mesher reuses: radinterp__node_split(s, node) (children with
+   the parent's radiosity; ancestors' links keep delivering to them, so a
+   split after solving needs no new links), radinterp__node_openness,
+   radinterp__locate_leaf(s, patch, p), radinterp__node_poly, and the point
+   query radinterp__irradiance(s, patch, p, toward, h, NULL) of section 14.
    ---------------------------------------------------------------------- */
 typedef struct radinterp__patch {
     float v[4][3];            /* corners, counter-clockwise seen from the front */
