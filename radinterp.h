@@ -1726,17 +1726,35 @@ static int radinterp__cdt_constrain(radinterp__cdt *c, uint32_t a, uint32_t b)
     return 1;
 }
 
-/* Lawson flips over the edges queued in c->queue (vertex pairs) until each
-   of them, and every edge a flip exposes, is constrained or locally
-   Delaunay. */
+/* The edge (a, b) near triangle hint: *t, *k with the edge opposite
+   v[*k] of *t, found in the hint when it still holds the edge (the common
+   case while flipping), else around a. */
+static int radinterp__cdt_edge_near(const radinterp__cdt *c, uint32_t a, uint32_t b, uint32_t hint, uint32_t *t, int *k)
+{
+    if (hint < c->tri_count) {
+        int i = radinterp__cdt_index(c, hint, a), j = radinterp__cdt_index(c, hint, b);
+        if (i >= 0 && j >= 0) { *t = hint; *k = 3 - i - j; return 1; }
+    }
+    return radinterp__cdt_find_edge(c, a, b, t, k);
+}
+
+static int radinterp__cdt_queue_edge(radinterp__cdt *c, uint32_t a, uint32_t b, uint32_t hint)
+{
+    return radinterp__u32s_push2(c, &c->queue, a, b) && radinterp__u32s_push(c, &c->queue, hint);
+}
+
+/* Lawson flips over the edges queued in c->queue (vertex pairs with a
+   triangle hint) until each of them, and every edge a flip exposes, is
+   constrained or locally Delaunay. */
 static void radinterp__cdt_lawson(radinterp__cdt *c)
 {
     uint32_t steps = 0;
-    while (c->queue.count >= 2) {
-        uint32_t b = c->queue.data[--c->queue.count], a = c->queue.data[--c->queue.count], t, u, d;
+    while (c->queue.count >= 3) {
+        uint32_t hint = c->queue.data[--c->queue.count], b = c->queue.data[--c->queue.count];
+        uint32_t a = c->queue.data[--c->queue.count], t, u, d;
         int k, j;
         if (++steps > RADINTERP__CDT_STEP_LIMIT) { c->failed = 1; return; }
-        if (!radinterp__cdt_find_edge(c, a, b, &t, &k)) continue;
+        if (!radinterp__cdt_edge_near(c, a, b, hint, &t, &k)) continue;
         if ((c->tri[t].flags >> k) & 1u || radinterp__cdt_is_ghost(c, t)) continue;
         u = c->tri[t].n[k];
         if (radinterp__cdt_is_ghost(c, u)) continue;
@@ -1745,10 +1763,10 @@ static void radinterp__cdt_lawson(radinterp__cdt *c)
         if (!radinterp__cdt_in_circle(c, t, d) || !radinterp__cdt_flip_ok(c, t, k)) continue;
         radinterp__cdt_flip(c, t, k);
         /* t = (x, y, d), u = (x, d, z): recheck the four outer edges */
-        if (!radinterp__u32s_push2(c, &c->queue, c->tri[t].v[0], c->tri[t].v[1]) ||
-            !radinterp__u32s_push2(c, &c->queue, c->tri[t].v[1], c->tri[t].v[2]) ||
-            !radinterp__u32s_push2(c, &c->queue, c->tri[u].v[1], c->tri[u].v[2]) ||
-            !radinterp__u32s_push2(c, &c->queue, c->tri[u].v[2], c->tri[u].v[0]))
+        if (!radinterp__cdt_queue_edge(c, c->tri[t].v[0], c->tri[t].v[1], t) ||
+            !radinterp__cdt_queue_edge(c, c->tri[t].v[1], c->tri[t].v[2], t) ||
+            !radinterp__cdt_queue_edge(c, c->tri[u].v[1], c->tri[u].v[2], u) ||
+            !radinterp__cdt_queue_edge(c, c->tri[u].v[2], c->tri[u].v[0], u))
             return;
     }
 }
@@ -1759,11 +1777,12 @@ static void radinterp__cdt_restore(radinterp__cdt *c)
     uint32_t i;
     c->queue.count = 0;
     for (i = 0; i < c->touched.count; i++) {
-        const uint32_t *v = c->tri[c->touched.data[i]].v;
+        uint32_t t = c->touched.data[i];
+        const uint32_t *v = c->tri[t].v;
         int e;
         for (e = 0; e < 3; e++) {
             uint32_t a = v[(e + 1) % 3], b = v[(e + 2) % 3];
-            if (a != RADINTERP__GHOST && b != RADINTERP__GHOST && !radinterp__u32s_push2(c, &c->queue, a, b)) return;
+            if (a != RADINTERP__GHOST && b != RADINTERP__GHOST && !radinterp__cdt_queue_edge(c, a, b, t)) return;
         }
     }
     radinterp__cdt_lawson(c);
@@ -1828,7 +1847,7 @@ static void radinterp__cdt_split_crossing(radinterp__cdt *c, uint32_t a, uint32_
             /* no longer a constraint: it must be Delaunay again (or flipped away) */
             radinterp__cdt_mark(c, t, k, 0);
             c->queue.count = 0;
-            radinterp__u32s_push2(c, &c->queue, r, l);
+            radinterp__cdt_queue_edge(c, r, l, t);
             radinterp__cdt_lawson(c);
         }
         radinterp__u32s_push2(c, &c->segs, v, b);
