@@ -809,7 +809,7 @@ static int radinterp__ray_tri(const radinterp__ray *r, const radinterp__bvh_tri 
 }
 
 /* Closest hit in (tmin, tmax). Returns 1 and fills *hit, else hit->tri = RADINTERP__NO_HIT. */
-RADINTERP__MAYBE_UNUSED static int radinterp__bvh_intersect(const radinterp__bvh *bvh, const float org[3], const float dir[3],
+static int radinterp__bvh_intersect(const radinterp__bvh *bvh, const float org[3], const float dir[3],
                              float tmin, float tmax, radinterp__hit *hit)
 {
     uint32_t stack[RADINTERP__BVH_STACK], top = 0, index = 0;
