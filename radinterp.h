@@ -3482,6 +3482,7 @@ typedef struct radinterp__bp {
     double plane_n[RADINTERP__POLY_MAX + 1][3], plane_d[RADINTERP__POLY_MAX + 1];
     int np;                               /* the pyramid from pv over Sr: x inside when n . x >= d */
     double ns[3], ds, hp;                 /* source normal, real plane, height of pv above it */
+    double tol;                           /* 2D distances below it are rounding: 1e-12 of the source's size */
 } radinterp__bp;
 
 /* The pyramid from pv over the real source: one plane per edge, and the
@@ -3537,6 +3538,16 @@ static void radinterp__bp_setup(const radinterp__query *q, radinterp__bp *bp, co
     bp->fr_ff = bp->fr;
     for (k = 0; k < 3; k++) bp->fr_ff.o[k] -= push * ns[k];
     for (k = 0; k < nc; k++) radinterp__frame_to2d(&bp->fr, bp->Sr[k], bp->sc2[k]);
+    {
+        double lo[2] = {DBL_MAX, DBL_MAX}, hi[2] = {-DBL_MAX, -DBL_MAX};
+        for (k = 0; k < nc; k++) {
+            lo[0] = bp->sc2[k][0] < lo[0] ? bp->sc2[k][0] : lo[0];
+            lo[1] = bp->sc2[k][1] < lo[1] ? bp->sc2[k][1] : lo[1];
+            hi[0] = bp->sc2[k][0] > hi[0] ? bp->sc2[k][0] : hi[0];
+            hi[1] = bp->sc2[k][1] > hi[1] ? bp->sc2[k][1] : hi[1];
+        }
+        bp->tol = 1e-12 * (hi[0] - lo[0] + hi[1] - lo[1]);
+    }
 }
 
 /* The blocker's part inside the pyramid (poly, m corners) projected from
@@ -3728,6 +3739,12 @@ static int radinterp__bp_shadow_piece(const radinterp_solution *s, const radinte
     for (i = 0; i < m; i++) { inside[0] += out->v[i][0] / m; inside[1] += out->v[i][1] / m; }
     for (i = 0; i < m; i++)
         if (!radinterp__shadow_line(bp, pb, tag[i], inside, out->ln[i])) return -1;
+    /* corners and lines must describe the same polygon: in a sliver between
+       two nearly equal lines (a blocker hinged on the source's edge) the
+       centre may not tell their sides apart */
+    for (i = 0; i < m; i++)
+        for (j = 0; j < m; j++)
+            if (out->ln[i][0] * out->v[j][0] + out->ln[i][1] * out->v[j][1] + out->ln[i][2] < -bp->tol) return -1;
     out->count = m;
     radinterp__piece_bounds(out);
     return 1;
@@ -3883,18 +3900,9 @@ static double radinterp__bp_by_union(radinterp__query *q, const radinterp__bp *b
 {
     const radinterp_solution *s = q->s;
     const radinterp__link *lk = bp->lk;
-    double hidden = 0.0, full, f, tiny, tol, lo[2] = {DBL_MAX, DBL_MAX}, hi[2] = {-DBL_MAX, -DBL_MAX};
+    double hidden = 0.0, full, f, tiny, tol = bp->tol;
     int pass, count = 0, k;
     uint32_t i;
-    for (k = 0; k < bp->nc; k++) {
-        lo[0] = bp->sc2[k][0] < lo[0] ? bp->sc2[k][0] : lo[0];
-        lo[1] = bp->sc2[k][1] < lo[1] ? bp->sc2[k][1] : lo[1];
-        hi[0] = bp->sc2[k][0] > hi[0] ? bp->sc2[k][0] : hi[0];
-        hi[1] = bp->sc2[k][1] > hi[1] ? bp->sc2[k][1] : hi[1];
-    }
-    /* corners within tol of a line are on it: far below any real feature,
-       far above the rounding of the corners */
-    tol = 1e-12 * (hi[0] - lo[0] + hi[1] - lo[1]);
     /* a piece of area below tiny / 2 subtends less than 1e-12 / pi: dropped */
     tiny = 2e-12 * bp->hp * bp->hp;
     for (pass = 0; pass < 2; pass++)
