@@ -77,14 +77,22 @@
    links of the leaf containing p and of its ancestors. F is eq. 6.1 for the
    source clipped to p's tangent plane and moved push_off behind its plane;
    with blockers, every blocker's part inside the pyramid from p to the
-   source is projected onto the source plane, the source outline and the
-   projected edges go into a constrained Delaunay triangulation (exact
-   adaptive predicates), and one ray per region of the triangulation decides
-   whether it is visible; eq. 6.1 over the visible triangles gives F (shared
-   edges cancel, so only region borders are summed). A projected blocker
-   that covers the whole source ends the work early; one inside another is
-   left out. Where a source node's children differ enough to matter at p,
-   they are used in its place.
+   source (cut in 3D) is projected onto the source plane: its shadow. A
+   source point is hidden exactly when it lies in a shadow, so F is eq. 6.1
+   of the source minus eq. 6.1 of the union of the shadows, which is built
+   as disjoint convex pieces (each shadow minus the pieces so far; faces
+   turned toward p first), eq. 6.1 being additive over a partition. Every
+   piece edge keeps the line of the plane that made it, never a line
+   through two computed corners, so no decision rests on rounding noise; a
+   shadow that cannot be represented so (a sliver between nearly equal
+   lines, more than 48 pieces) sends that source to Hardt's method:
+   the source outline and the projected edges go into a constrained
+   Delaunay triangulation (exact adaptive predicates), one ray per region
+   decides whether it is visible, and eq. 6.1 over the visible triangles
+   gives F (desc.visibility selects it for every source). A projected
+   blocker that covers the whole source ends the work early. Where a source
+   node's children differ enough to matter at p, they are used in its
+   place.
 
    PARAMETERS (Hardt, appendix A; zero means the default)
 
@@ -168,9 +176,11 @@
    points a few millimetres from a corner, or at the foot of an object, see
    their nearest sources at the elements' mean: expect errors of several
    percent there (about 2% on average elsewhere in the Cornell box with
-   eps = 5 mW/m^2). A point query costs a triangulation per partly visible
-   source: about 2,000 per second on the office scene, where nearly every
-   point has one, and over 300,000 per second where none is.
+   eps = 5 mW/m^2). A point query costs a shadow union per partly visible
+   source: about 6,700 per second on one core on the office scene, where
+   nearly every point has one (about 28 such sources of 52, 5.6 shadows
+   each), and over 300,000 per second where none is; with the triangulation
+   method about 2,200.
 
    PAPER
 
