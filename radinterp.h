@@ -3911,16 +3911,23 @@ static double radinterp__bp_by_union(radinterp__query *q, const radinterp__bp *b
     const radinterp_solution *s = q->s;
     const radinterp__link *lk = bp->lk;
     double hidden = 0.0, full, f, tiny, tol = bp->tol;
+    uint32_t later[RADINTERP__BP_MAX_SURVIVORS], nlater = 0, i;
     int pass, count = 0, k;
-    uint32_t i;
     /* a piece of area below tiny / 2 subtends less than 1e-12 / pi: dropped */
     tiny = 2e-12 * bp->hp * bp->hp;
-    for (pass = 0; pass < 2; pass++)
-        for (i = 0; i < lk->blocker_count; i++) {
-            const radinterp__patch *pb = &s->patches[s->blockers[lk->first_blocker + i]];
+    /* faces turned away wait in `later`: one pass over the list */
+    for (pass = 0; pass < 2; pass++) {
+        uint32_t n = pass ? nlater : lk->blocker_count;
+        for (i = 0; i < n; i++) {
+            uint32_t b = pass ? later[i] : s->blockers[lk->first_blocker + i];
+            const radinterp__patch *pb = &s->patches[b];
             radinterp__piece *sh;
             int r;
-            if ((radinterp__d3_dot(pb->n, bp->pv) > pb->d) != (pass == 0)) continue;
+            if (!pass && !(radinterp__d3_dot(pb->n, bp->pv) > pb->d)) {
+                if (nlater == RADINTERP__BP_MAX_SURVIVORS) return -1;
+                later[nlater++] = b;
+                continue;
+            }
             if (count >= RADINTERP__PIECES) return -1;
             sh = &q->piece[count];
             r = radinterp__bp_shadow_piece(s, bp, pb, sh);
@@ -3930,6 +3937,7 @@ static double radinterp__bp_by_union(radinterp__query *q, const radinterp__bp *b
                 return 0.0; /* this blocker alone hides the whole source */
             if (radinterp__union_add(q, &count, tol, tiny) != 0) return -1;
         }
+    }
     if (count == 0) return radinterp__ff_poly(q->p, q->n, bp->Sc_pushed, bp->nc);
     q->triangulated++;
     for (k = 0; k < count; k++)
