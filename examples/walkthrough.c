@@ -225,7 +225,7 @@ int main(int argc, char **argv)
         if (u.o.reference) {
             rendercache_camera c = wt_camera(&u.o, wt_frame_time(&u.o, f), (uint32_t)u.o.width, (uint32_t)u.o.height);
             if (wt_render_full(u.w, &c, wt_frame_time(&u.o, f), (uint32_t)f, u.full, NULL) != 0 ||
-                rendercache_lrms(u.full, u.rgb, (uint32_t)u.o.width, (uint32_t)u.o.height, &s->lrms) != RENDERCACHE_OK)
+                wt_display_lrms(u.full, u.rgb, u.o.width, u.o.height, u.exposure, &s->lrms) != 0)
                 s->lrms = -1.0;
         }
         if (u.o.verbose) table_row(&u, f, s);

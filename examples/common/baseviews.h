@@ -66,6 +66,7 @@ typedef struct ex_baseviews_reconstructor {
     ex_baseviews_motion_fn motion;
     void *motion_user;
     rendercache_fill fill;           /* of the final warp; 0 = BOTH */
+    rendercache_fill blend_fill;     /* of the motion-compensated blends; 0 = FOREGROUND */
     double seconds_blend, seconds_warp;   /* of the last reconstruction */
 } ex_baseviews_reconstructor;
 
@@ -201,7 +202,8 @@ EX_FN int ex_baseviews_reconstruct(const ex_baseviews *bv, ex_baseviews_reconstr
         const rendercache_range_image *a = bv->base[corners[i] * bv->time_count + k];
         const rendercache_range_image *b = bv->base[corners[i] * bv->time_count + k + 1];
         if (r->object_count)
-            ok = rendercache_blend_motion(r->blender, a, b, (float)s, &motion, RENDERCACHE_FILL_FOREGROUND,
+            ok = rendercache_blend_motion(r->blender, a, b, (float)s, &motion,
+                                          r->blend_fill ? r->blend_fill : RENDERCACHE_FILL_FOREGROUND,
                                           blend[i]) == RENDERCACHE_OK;
         else
             ok = rendercache_blend(a, b, (float)s, blend[i]) == RENDERCACHE_OK;

@@ -151,10 +151,10 @@ EX_FN void wt_options_default(wt_options *o)
     o->bounces = 2;
     o->warmup_divisor = 4;
     o->budget = 0.08f;        /* Crespin & Peroche: 21000 of 512 x 512 pixels */
-    o->base_size = 256;
+    o->base_size = 512;
     o->id_size = 64;
-    o->keys = 9;
-    o->quality = 0.6f;
+    o->keys = 5;
+    o->quality = 0.8f;
     o->volume_resolution = 17;   /* Greger's k */
     o->visibility_rays = 256;
     o->use_cache = 1;
@@ -205,9 +205,9 @@ EX_FN void wt_usage(FILE *f)
           "  --budget F           raytrace: share of the pixels sampled per frame (default 0.08)\n"
           "  --light-samples N    direct light: samples per emitting triangle (default 4)\n"
           "  --strata N           light-vector gathers: N x 3N rays (default 16)\n"
-          "  --base N             baseviews: fish-eye base images N x N (default 256)\n"
-          "  --keys N             baseviews: key times before refinement (default 9)\n"
-          "  --quality Q          baseviews: coherence quality q in [0, 1] (default 0.6)\n"
+          "  --base N             baseviews: fish-eye base images N x N (default 512)\n"
+          "  --keys N             baseviews: key times before refinement (default 5)\n"
+          "  --quality Q          baseviews: coherence quality q in [0, 1] (default 0.8)\n"
           "  --exposure E         tone-mapping scale (default: automatic from the first frame)\n"
           "  --reference          also trace every frame in full and print the LRMS error\n"
           "  --no-frames          do not write PNG frames\n"
@@ -926,7 +926,8 @@ EX_FN double wt_frame_time(const wt_options *o, int frame)
     return o->frames > 1 ? (double)frame / (double)(o->frames - 1) : 0.0;
 }
 
-/* The camera at time t: eye height 1.35 m along the front wall,
+/* The camera at time t: eye height 1.35 m along the front wall (a line: a
+   one-dimensional view space for the base views),
    looking at the bunny's path a little ahead and behind (smoothed). */
 EX_FN rendercache_camera wt_camera(const wt_options *o, double t, uint32_t width, uint32_t height)
 {
@@ -938,7 +939,7 @@ EX_FN rendercache_camera wt_camera(const wt_options *o, double t, uint32_t width
     c.kind = RENDERCACHE_CAMERA_PERSPECTIVE;
     c.eye[0] = 1.10f + 1.30f * s;
     c.eye[1] = 1.35f;
-    c.eye[2] = 0.30f - 0.05f * s;
+    c.eye[2] = 0.30f;
     for (j = -2; j <= 2; j++) {
         float p[3];
         wt_bunny_position(t + 0.04 * j, p, NULL);
@@ -1465,6 +1466,29 @@ EX_FN int wt_render_full(wt_world *w, const rendercache_camera *c, double t, uin
     }
     free(points);
     free(index);
+    return result;
+}
+
+/* Relative luminance RMS error (Nimeroff et al.) of what is displayed:
+   both images clamped at the white point 1 / exposure first, so that the
+   few pixels of the lamp (radiance 40, a hundred times the room's) weigh
+   as white pixels, not as a hundred. Returns 0 or -1. */
+EX_FN int wt_display_lrms(const float *reference, const float *image, int width, int height, float exposure,
+                          double *lrms)
+{
+    size_t i, n = 3 * (size_t)width * (size_t)height;
+    float white = exposure > 0.0f ? 1.0f / exposure : FLT_MAX;
+    float *a = (float *)malloc(sizeof(float) * n), *b = (float *)malloc(sizeof(float) * n);
+    int result = -1;
+    if (a && b) {
+        for (i = 0; i < n; i++) {
+            a[i] = reference[i] < white ? reference[i] : white;
+            b[i] = image[i] < white ? image[i] : white;
+        }
+        result = rendercache_lrms(a, b, (uint32_t)width, (uint32_t)height, lrms) == RENDERCACHE_OK ? 0 : -1;
+    }
+    free(a);
+    free(b);
     return result;
 }
 
@@ -2087,6 +2111,9 @@ static int wt__baseviews_create(wt_renderer *r, char *err, size_t err_size)
     r->rec.motion = wt__object_transforms;
     r->rec.motion_user = w;
     r->rec.fill = RENDERCACHE_FILL_BOTH;
+    /* no fill in the blends: a foreground quad between a bunny pixel and the
+       floor next to it would stretch as the bunny moves; the warp fills */
+    r->rec.blend_fill = RENDERCACHE_FILL_NONE;
     {
         rendercache_camera bc = ex_baseviews_base_camera(&r->bv, 0, (uint32_t)o->base_size);
         for (i = 0; i < 8; i++)
