@@ -1443,21 +1443,45 @@ static int wt__shade_camera(wt_world *w, const rendercache_camera *c, int use, u
     return result;
 }
 
+/* A copy of a light-vector cache (through its serialization), or NULL. */
+static lightvec_cache *wt__cache_copy(const wt_world *w, const lightvec_cache *c)
+{
+    lightvec_cache_desc d;
+    lightvec_cache *copy = NULL;
+    void *data = NULL;
+    size_t size = 0;
+    memset(&d, 0, sizeof d);
+    d.parallel_for = ex_pool_parallel_for;
+    d.parallel_user = w->pool;
+    if (lightvec_save_to_memory(c, NULL, &data, &size) == LIGHTVEC_OK)
+        lightvec_load_from_memory(data, size, &d, &copy);
+    lightvec_free_memory(NULL, data);
+    return copy;
+}
+
 /* Renders every pixel of camera c at time t with the frames' shading
-   (direct light, light vectors looked up, and gathered where missing
-   without changing the caches): the full render a cached frame is compared
-   with. rgb: 3 floats per pixel; object (optional): WT_OBJECT_* per pixel. */
+   (direct light, light vectors looked up and gathered where missing): the
+   full render a cached frame is compared with. New light vectors go to
+   copies of the caches, so the frames see the caches unchanged. rgb: 3
+   floats per pixel; object (optional): WT_OBJECT_* per pixel. */
 EX_FN int wt_render_full(wt_world *w, const rendercache_camera *c, double t, uint32_t frame, float *rgb,
                          uint32_t *object)
 {
     uint32_t n = c->width * c->height, i;
     wt_point *points = (wt_point *)malloc(sizeof(wt_point) * n);
     uint32_t *index = (uint32_t *)malloc(sizeof(uint32_t) * n);
+    lightvec_cache *saved = w->static_cache, *copy = NULL;
     wt_light_stats st = { 0, 0, 0, 0 };
     int result = -1;
-    if (points && index) {
-        wt_set_time(w, t);
-        result = wt__shade_camera(w, c, WT_STREAM_FULL, frame, WT_SHADE_DIRECT, points, index, &st);
+    wt_set_time(w, t);
+    if (points && index && wt__ensure_pose(w) == 0 && (copy = wt__cache_copy(w, saved)) != NULL) {
+        w->static_cache = copy;
+        result = wt__shade_camera(w, c, WT_STREAM_FULL, frame, WT_SHADE_DIRECT | WT_SHADE_INSERT, points, index, &st);
+        w->static_cache = saved;
+        lightvec_cache_destroy(copy);
+        pthread_mutex_lock(&w->pose_lock);
+        w->pose_ready = 0;   /* the bunny's cache got the full render's vectors: start it anew */
+        pthread_mutex_unlock(&w->pose_lock);
         for (i = 0; i < n && result == 0; i++) {
             int k;
             for (k = 0; k < 3; k++) rgb[3 * i + k] = points[i].t >= 0.0f ? points[i].rgb[k] : 0.0f;
@@ -1646,10 +1670,16 @@ static int wt__static_lightvec(wt_renderer *r, char *err, size_t err_size)
     }
     if (got == -1) wt__say(w, "light vectors: %s is damaged, rebuilding it\n", path);
     if (!r->reused_lightvec) {
+        lightvec_cache *copy;
         if (wt__warm_up(r) != 0) {
             snprintf(err, err_size, "the light-vector warm-up failed (out of memory)");
             return -1;
         }
+        /* the frames use the cache as a later run will load it (the same
+           kd-trees, so the same sums in the same order) */
+        if (!(copy = wt__cache_copy(w, w->static_cache))) return wt__fail(err, err_size, "%s", "out of memory");
+        lightvec_cache_destroy(w->static_cache);
+        w->static_cache = copy;
         if (o->use_cache) {
             lightvec_result lr = lightvec_save_to_memory(w->static_cache, NULL, &data, &size);
             if (lr != LIGHTVEC_OK || wt_cache_store(o->cache_dir, "lightvec", key, data, size, err, err_size) != 0) {
@@ -2055,18 +2085,9 @@ static int wt__baseviews_create(wt_renderer *r, char *err, size_t err_size)
         /* base images add light vectors to a copy of the static cache, so that
            the frames see the same cache whether the base images were loaded
            or traced */
-        lightvec_cache *saved = w->static_cache, *copy = NULL;
-        void *blob = NULL;
-        size_t blob_size = 0;
-        lightvec_cache_desc cd;
+        lightvec_cache *saved = w->static_cache, *copy = wt__cache_copy(w, saved);
         wt_progress bar;
-        memset(&cd, 0, sizeof cd);
-        if (lightvec_save_to_memory(saved, NULL, &blob, &blob_size) != LIGHTVEC_OK ||
-            lightvec_load_from_memory(blob, blob_size, &cd, &copy) != LIGHTVEC_OK) {
-            lightvec_free_memory(NULL, blob);
-            return wt__fail(err, err_size, "%s", "out of memory");
-        }
-        lightvec_free_memory(NULL, blob);
+        if (!copy) return wt__fail(err, err_size, "%s", "out of memory");
         w->static_cache = copy;
         wt_progress_begin(&bar, "base images", o->progress);
         for (k = 0, i = 0; k < r->bv.time_count; k++)   /* key by key: the bunny's pose changes least often */
