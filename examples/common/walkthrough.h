@@ -478,7 +478,7 @@ EX_FN int wt_cache_store(const char *dir, const char *what, uint64_t key, const 
     FILE *f;
     int ok;
     if (wt_make_dirs(dir) != 0) {
-        snprintf(err, err_size, "cannot create the cache directory %.900s: %s", dir, strerror(errno));
+        snprintf(err, err_size, "cannot create the cache directory %.200s: %s", dir, strerror(errno));
         return -1;
     }
     wt_cache_path(dir, what, key, path, sizeof path);
@@ -492,14 +492,14 @@ EX_FN int wt_cache_store(const char *dir, const char *what, uint64_t key, const 
     f = fopen(wt__tmp_path, "wb");
     if (!f) {
         wt__tmp_active = 0;
-        snprintf(err, err_size, "cannot write %.900s: %s", wt__tmp_path, strerror(errno));
+        snprintf(err, err_size, "cannot write %.200s: %s", wt__tmp_path, strerror(errno));
         return -1;
     }
     ok = fwrite(head, 1, sizeof head, f) == sizeof head && fwrite(data, 1, size, f) == size && fflush(f) == 0 &&
          fsync(fileno(f)) == 0;
     ok = fclose(f) == 0 && ok;
     if (!ok || rename(wt__tmp_path, path) != 0) {
-        snprintf(err, err_size, "cannot write %.900s: %s", path, strerror(errno));
+        snprintf(err, err_size, "cannot write %.200s: %s", path, strerror(errno));
         unlink(wt__tmp_path);
         wt__tmp_active = 0;
         return -1;
@@ -776,7 +776,7 @@ EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t
         !wt__hash_file(w->bunny_path, &w->scene_hash)) {
         const char *missing = access(w->office_path, R_OK) != 0 ? w->office_path
                               : access(mtl_path, R_OK) != 0   ? mtl_path : w->bunny_path;
-        snprintf(err, err_size, "cannot read %.900s: %s (run from the repository root, or pass --data DIR)", missing,
+        snprintf(err, err_size, "cannot read %.200s: %s (run from the repository root, or pass --data DIR)", missing,
                  strerror(errno));
         wt_world_destroy(w);
         return -1;
@@ -788,7 +788,7 @@ EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t
         return -1;
     }
     if (!obj_bounds(&w->bunny, w->bunny_lo, w->bunny_hi) || !(w->bunny_hi[1] > w->bunny_lo[1])) {
-        snprintf(err, err_size, "%.900s: an empty or flat mesh", w->bunny_path);
+        snprintf(err, err_size, "%.200s: an empty or flat mesh", w->bunny_path);
         wt_world_destroy(w);
         return -1;
     }
