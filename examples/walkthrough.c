@@ -214,7 +214,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "walkthrough: out of memory\n");
         return 1;
     }
-    if (u.o.verbose) table_header(&u);
+    table_header(&u);
     for (f = 0; f < u.o.frames; f++) {
         wt_frame_stats *s = &u.stats[f];
         if (wt_render_frame(u.r, f, u.rgb, s) != 0) {
@@ -228,7 +228,7 @@ int main(int argc, char **argv)
                 wt_display_lrms(u.full, u.rgb, u.o.width, u.o.height, u.exposure, &s->lrms) != 0)
                 s->lrms = -1.0;
         }
-        if (u.o.verbose) table_row(&u, f, s);
+        table_row(&u, f, s);
         if (write_frame(&u, f) != 0) return 1;
     }
     table_summary(&u);

@@ -1,38 +1,77 @@
 /* walkthrough.h - the frame pipeline of examples/walkthrough.c: the office
    with a bunny walking from the open floor under the desk and past the
-   yellow divider, seen from a moving camera, rendered in one of three modes
-   that compose the project's four headers.
+   yellow divider, seen from a camera moving along the front wall, rendered
+   in one of three modes that compose the project's four headers. Tests and
+   the benchmark drive it too.
 
-     raytrace   the render cache (rendercache.h) fed by a ray tracer (trace.h)
-                whose indirect light comes from cached light vectors
-                (lightvec.h); the light-vector weight W scales the priority of
-                the cache's points (Crespin & Peroche 2004, 4.3); a fixed
-                sample budget per frame.
-     baseviews  the range-image framework (rendercache.h part 2, Nimeroff,
-                Dorsey & Rushmeier 1996): fish-eye base views chosen by
-                fitness, key times, motion-compensated time blends and warps
-                with both fills.
-     radiosity  the static office shaded per pixel by radiosity interpolants
-                (radinterp.h, Hardt 1996) from an ID + barycentric buffer, the
-                bunny Gouraud-shaded from an irradiance volume (irrvol.h,
-                Greger 1996) with its self-occlusion ratio. Needs radinterp.h's
-                online phase (radinterp_build_mesh, radinterp_shade); until
-                the header provides it, wt_static_shading_build reports so.
-
-   Header-only like the rest of examples/common, and it includes the
-   implementations of irrvol.h, lightvec.h and rendercache.h: include it in
-   exactly one translation unit (an example or a test).
-
-       wt_options o;  wt_world *w;  wt_renderer *r;
-       wt_options_default(&o);  o.mode = WT_MODE_RAYTRACE;
-       wt_world_create(&o, &w, err, sizeof err);
-       wt_renderer_create(w, &r, err, sizeof err);     // precompute, cached on disk
-       for (f = 0; f < o.frames; f++) wt_render_frame(r, f, rgb, &stats);
+       wt_options o;  wt_world *w;  wt_renderer *r;  wt_frame_stats st;
+       wt_options_default(&o);                         // or wt_parse_options
+       wt_world_create(&o, &w, err, sizeof err);       // scene files, tracer, light-vector scene
+       wt_renderer_create(w, &r, err, sizeof err);     // the mode's precompute, cached on disk
+       for (f = 0; f < o.frames; f++) wt_render_frame(r, f, rgb, &st);
        wt_renderer_destroy(r);  wt_world_destroy(w);
 
-   Scene conventions: metres, +y up. Object ids of the render cache and the
-   range images: 0 = the office, 1 = the bunny. Time t runs from 0 (first
-   frame) to 1 (last frame). */
+   Shading (modes raytrace and baseviews). A primary hit gets its emission,
+   direct light from the lamp's emitting polygons (stratified area samples
+   with shadow rays through examples/common/trace.h, so the bunny casts
+   shadows; Lambert + normalized Phong) and indirect light from a light
+   vector (lightvec.h, Crespin & Peroche 2004): looked up in a cache, and
+   gathered and inserted where the cache has too few valid vectors. Glossy
+   materials (floor, desk, lamp pole) use 5D light vectors (position and
+   viewing direction), Lambertian ones view-independent 3D vectors. The
+   office's vectors live in a static cache, warmed up along the path in the
+   precompute and saved; the bunny's in a cache of their own, made anew at
+   every pose (a gather on the bunny sees the office and the posed bunny).
+   Lookups and gathers run in rounds that make the result independent of
+   the thread count (wt__light_points).
+
+     raytrace   the render cache (rendercache.h, Walter et al. 1999/2002):
+                each frame reprojects the cached points, requests a fixed
+                budget of pixels (default 8%, as in Crespin & Peroche) by
+                error diffusion of the priority image, predicts the next
+                camera's holes, shades the requests and inserts them with
+                priority scale lightvec_priority(1, W) (4.3: a point lit by
+                an interpolated vector of weight W is refreshed 1/W times
+                sooner; the bunny's points 4 times sooner still, as its light
+                changes while it walks). The first frame is traced in full.
+     baseviews  range images (rendercache.h part 2, Nimeroff, Dorsey &
+                Rushmeier 1996, through examples/common/baseviews.h): the
+                camera's line of eyes is subdivided until fish-eye id images
+                agree on a fraction q of their pixels (base views), key
+                times are refined with the same test (a fish-eye at the lamp
+                and the base views), base images are traced with the shading
+                above and saved; a frame blends the base images of the two
+                views around its eye to its time, moving the bunny by its
+                transforms, and warps them into its camera with both fills
+                (pixels still empty are traced).
+     radiosity  the static office shaded per pixel by Hardt's quadratic
+                irradiance interpolants (radinterp.h) from an ID +
+                barycentric buffer (examples/common/raster.h), the bunny
+                Gouraud-shaded per vertex from an irradiance volume
+                (irrvol.h, Greger 1996) built from the radiosity solution,
+                times its self-occlusion ratio (irrvol_visibility_ratio).
+                radinterp.h does not have its mesh and online phase yet:
+                wt_static_shading_build says so and the mode does not run;
+                every other part of it is here (wt_bunny_visibility,
+                wt_volume_build, wt_bunny_light, wt_raster_scene) and
+                tested, and wt_static_shading_build/_shade are where
+                radinterp_build_mesh and radinterp_shade go.
+
+   Precompute cache. Files <cache_dir>/walkthrough-<what>-<key>.bin, key =
+   FNV-1a hash of the scene files' bytes, the paths (every frame's camera,
+   the bunny's transforms), the header versions and every parameter the data
+   depends on; each holds a header's own serialization (lightvec_save,
+   rendercache_range_image_save, irrvol_save) in an envelope with a CRC.
+   Written to a temporary file and renamed; an interrupt deletes the
+   temporary file (wt_install_interrupt_handler). A damaged or stale file is
+   rebuilt. A later run with the same inputs loads the data and renders the
+   same frames, bit for bit.
+
+   Header-only like the rest of examples/common; it includes the
+   implementations of irrvol.h, lightvec.h and rendercache.h, so include it
+   in exactly one translation unit. Conventions: metres, +y up, time t in
+   [0, 1] from the first frame to the last; object ids of the render cache
+   and the range images: 0 = the office, 1 = the bunny. */
 #ifndef EXAMPLES_COMMON_WALKTHROUGH_H
 #define EXAMPLES_COMMON_WALKTHROUGH_H
 
@@ -901,7 +940,7 @@ EX_FN void wt_bunny_position(double t, float pos[3], float *heading)
     if (heading) *heading = atan2f(b[0] - a[0], b[1] - a[1]);
 }
 
-/* bunny.obj faces -x... its nose points along this heading in OBJ coordinates. */
+/* The heading of the nose of bunny.obj in its own coordinates: -x. */
 #define WT_BUNNY_NOSE_HEADING (-0.5f * WT_PI)
 
 /* Object-to-world transform of the bunny at time t (3x4 row-major): OBJ
