@@ -667,6 +667,7 @@ typedef struct wt_point {
     unsigned char glossy;    /* 5D light vector (view dependent) */
     unsigned char lit;       /* indirect light known */
     unsigned char gathered;  /* its light vector was computed for it */
+    unsigned char bunny_shadow;   /* the bunny blocked some of its direct light */
 } wt_point;
 
 /* An emitting polygon of the office (its fan triangles are consecutive). */
@@ -1096,13 +1097,26 @@ static void wt__bunny_normal(const wt_world *w, const ex_trace_hit *h, float n[3
     for (k = 0; k < 3; k++) n[k] = l > 0.0f ? n[k] / l : h->normal[k];
 }
 
+/* Shadow ray test through the tracer; *by_bunny is set when the bunny (not
+   the office) blocks it. */
+static int wt__occluded(const ex_tracer *t, int bunny, const float org[3], const float dir[3], float tmax, int *by_bunny)
+{
+    float o[3], d[3];
+    if (tr__bvh_occluded(&t->bvh, org, dir, 0.0f, tmax)) return 1;
+    ex__affine_point(t->instances[bunny].to_object, org, o);
+    ex__affine_vector(t->instances[bunny].to_object, dir, d);
+    if (!tr__bvh_occluded(&t->instances[bunny].bvh, o, d, 0.0f, tmax)) return 0;
+    *by_bunny = 1;
+    return 1;
+}
+
 /* Direct light reflected at a hit towards -dir: every emitting polygon of
    the office sampled at opt.light_samples stratified points (side x side
    cells when it is a square) with shadow rays through the tracer, so the
    bunny casts shadows; polygons facing away are skipped without a ray.
    Lambert + normalized Phong. */
 static void wt__direct(const wt_world *w, const ex_trace_hit *h, const float dir[3], const lightvec_material *m,
-                       ex_rng *r, float rgb[3])
+                       ex_rng *r, float rgb[3], int *bunny_shadow)
 {
     const ex_tracer *t = w->tracer;
     const float *pos = w->office.positions;
@@ -1143,7 +1157,7 @@ static void wt__direct(const wt_world *w, const ex_trace_hit *h, const float dir
             cos_x = wi[0] * h->normal[0] + wi[1] * h->normal[1] + wi[2] * h->normal[2];
             cos_y = -(wi[0] * ln[0] + wi[1] * ln[1] + wi[2] * ln[2]);
             if (cos_x <= 0.0f || cos_y <= 0.0f) continue;
-            if (ex_tracer_occluded(t, org, wi, d * (1.0f - 1e-4f) - t->epsilon)) continue;
+            if (wt__occluded(t, w->bunny_instance, org, wi, d * (1.0f - 1e-4f) - t->epsilon, bunny_shadow)) continue;
             g = cos_x * cos_y / d2 * weight;
             for (k = 0; k < 3; k++) c_m += mirror[k] * wi[k];
             f = c_m > 0.0f && m->exponent > 0.0f ? (m->exponent + 2.0f) / (2.0f * WT_PI) * powf(c_m, m->exponent) : 0.0f;
@@ -1158,8 +1172,9 @@ static void wt__trace_point(const wt_world *w, wt_point *p, int direct)
     ex_trace_hit h;
     ex_rng rng;
     float d[3];
-    int k;
+    int k, shadow = 0;
     p->light = WT_LIGHT_NONE;
+    p->bunny_shadow = 0;
     p->lit = 1;
     p->gathered = 0;
     p->glossy = 0;
@@ -1191,7 +1206,8 @@ static void wt__trace_point(const wt_world *w, wt_point *p, int direct)
     for (k = 0; k < 3; k++) p->direct[k] = w->materials[p->material].emission[k];
     if (direct) {
         rng = ex_rng_stream(w->opt.seed, p->stream);
-        wt__direct(w, &h, p->dir, &w->materials[p->material], &rng, d);
+        wt__direct(w, &h, p->dir, &w->materials[p->material], &rng, d, &shadow);
+        p->bunny_shadow = (unsigned char)shadow;
         for (k = 0; k < 3; k++) p->direct[k] += d[k];
     }
     p->light = p->object == WT_OBJECT_BUNNY ? WT_LIGHT_BUNNY : WT_LIGHT_STATIC;
@@ -1827,9 +1843,10 @@ static int wt__raytrace_frame(wt_renderer *r, int frame, float *rgb, wt_frame_st
            for the point itself has weight 1 */
         s->priority_scale = p->light != WT_LIGHT_NONE && !p->gathered ? lightvec_priority(1.0f, p->weight) : 1.0f;
         /* the bunny's light changes as it walks (the desk's shadow, the
-           divider's colour): its points are refreshed before static ones,
-           which the 1/W scale would otherwise favour */
-        if (p->object == WT_OBJECT_BUNNY) s->priority_scale *= WT_BUNNY_PRIORITY;
+           divider's colour), and so does the light of the floor it shadows:
+           these points are refreshed first (the 1/W scale raises the
+           priority of every static point lit by an interpolated vector) */
+        if (p->object == WT_OBJECT_BUNNY || p->bunny_shadow) s->priority_scale *= WT_BUNNY_PRIORITY;
     }
     a = wt_seconds();
     if (rendercache_insert(r->rc, r->samples, n) != RENDERCACHE_OK) return -1;
