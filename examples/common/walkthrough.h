@@ -1580,9 +1580,17 @@ EX_FN int wt_display_lrms(const float *reference, const float *image, int width,
    buffers and shaded per pixel. */
 typedef struct wt_static_shading {
     const float *positions;     /* the mesh the rasterizer draws: xyz per vertex */
+    uint32_t vertex_count;
     const uint32_t *indices;    /* 3 per triangle; raster ids 0 .. triangle_count-1 */
     uint32_t triangle_count;
     void *mesh;                 /* radinterp's mesh with its interpolants */
+    /* the radiance of the solution along a ray (the irradiance volume's
+       source: trace to a mesh triangle, evaluate its interpolant there:
+       emission + reflectance * E / pi), and a key of the solution for the
+       precompute cache */
+    irrvol_radiance_fn radiance;
+    void *radiance_user;
+    uint64_t key;
 } wt_static_shading;
 
 typedef struct wt_renderer {
@@ -2232,10 +2240,11 @@ static int wt__baseviews_frame(wt_renderer *r, int frame, float *rgb, wt_frame_s
 
 /* Builds the static office's shading data: radinterp_solve (hierarchical
    radiosity) and radinterp_build_mesh (discontinuity mesh with one
-   quadratic interpolant per triangle), cached with radinterp's save/load,
-   filling s->positions, s->indices, s->triangle_count and s->mesh. The
-   installed radinterp.h does not provide the mesh and online phase yet, so
-   this reports that mode radiosity cannot run. */
+   quadratic interpolant per triangle), cached with radinterp's save/load
+   (file "radinterp", key from the scene, the solver's parameters and
+   RADINTERP_FILE_FORMAT_VERSION), filling every field of s. The installed
+   radinterp.h does not provide the mesh and online phase yet, so this
+   reports that mode radiosity cannot run. */
 EX_FN int wt_static_shading_build(wt_world *w, wt_static_shading *s, char *err, size_t err_size)
 {
     (void)w;
@@ -2430,9 +2439,12 @@ static int wt__radiosity_create(wt_renderer *r, char *err, size_t err_size)
        evaluates the interpolants where a ray hits) */
     memset(&source, 0, sizeof source);
     source.positions = r->statics.positions;
+    source.vertex_count = r->statics.vertex_count;
     source.indices = r->statics.indices;
     source.triangle_count = r->statics.triangle_count;
-    if (wt_volume_build(w, &source, w->scene_hash, &r->volume, &r->reused_volume, err, err_size) != 0) return -1;
+    source.radiance = r->statics.radiance;
+    source.radiance_user = r->statics.radiance_user;
+    if (wt_volume_build(w, &source, r->statics.key, &r->volume, &r->reused_volume, err, err_size) != 0) return -1;
     r->visibility = (float *)malloc(sizeof(float) * nv);
     r->bunny_world = (float *)malloc(3 * sizeof(float) * nv);
     r->bunny_world_normals = (float *)malloc(3 * sizeof(float) * nv);
