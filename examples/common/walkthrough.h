@@ -889,7 +889,8 @@ EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t
    along the front of the room at eye height and looks at where the bunny
    is about to be.
    ---------------------------------------------------------------------- */
-#define WT_PATH_VERSION 1u   /* bump when the paths change: precompute keys depend on them */
+#define WT_PATH_VERSION 1u     /* bump when the paths change: precompute keys depend on them */
+#define WT_SHADING_VERSION 1u  /* bump when the shading changes: cached light vectors and base images */
 #define WT__WAYPOINTS 9
 static const float wt__waypoints[WT__WAYPOINTS][2] = {   /* (x, z) on the floor */
     { 1.35f, 1.55f }, { 1.65f, 2.35f }, { 1.80f, 3.15f }, { 2.15f, 3.35f }, { 2.40f, 2.80f },
@@ -1661,6 +1662,7 @@ static uint64_t wt__lightvec_key(const wt_world *w)
     h = wt_hash_u64(h, LIGHTVEC_FILE_FORMAT_VERSION);
     h = wt_hash_u64(h, LIGHTVEC_VERSION_MAJOR * 10000u + LIGHTVEC_VERSION_MINOR * 100u + LIGHTVEC_VERSION_PATCH);
     h = wt_hash_u64(h, WT_PATH_VERSION);
+    h = wt_hash_u64(h, WT_SHADING_VERSION);
     h = wt_hash_u64(h, o->seed);
     h = wt_hash_u64(h, (uint64_t)o->strata);
     h = wt_hash_u64(h, (uint64_t)o->bounces);
