@@ -12,9 +12,10 @@
    Modes:
      raytrace   the render cache (Walter et al. 1999) fed by a ray tracer with
                 direct light from the lamp and indirect light from cached 5D
-                light vectors (Crespin & Peroche 2004), whose weight raises the
-                priority of the pixels they light; a fixed sample budget per
-                frame (8% of the pixels). The first frame is traced in full.
+                light vectors (Crespin & Peroche 2004): a pixel lit by an
+                interpolated vector of weight W gets 1/W times the priority;
+                a fixed sample budget per frame (8% of the pixels). The first
+                frame is traced in full.
      baseviews  range-image reconstruction (Nimeroff, Dorsey & Rushmeier 1996):
                 fish-eye base views and key times chosen by coherence tests,
                 motion-compensated time blends, warps with both fills.
@@ -26,7 +27,10 @@
    under --cache (default build/cache) in files named by a hash of the scene
    files and the parameters; a second run reuses them. Writes
    <out>/walkthrough_<mode>_NNN.png, <out>/walkthrough_<mode>_sheet.png and
-   prints a per-frame timing table in the style of Greger's figure 5.8. */
+   prints a per-frame timing table in the style of Greger's figure 5.8. With
+   --reference every frame is also traced in full with the same shading
+   (<out>/walkthrough_<mode>_NNN_full.png) and the table shows the LRMS error
+   of the displayed range. --help lists the options. */
 #define _POSIX_C_SOURCE 200809L
 #include "examples/common/walkthrough.h"
 
