@@ -350,6 +350,7 @@ typedef struct radinterp_mesh_desc {
     /* parameters, see MESH PARAMETERS above; zero = default */
     float min_discont_weight;    /* Tree::minDiscontWeight (W/m^2) */
     uint32_t max_leaf_dsets;     /* Tree::maxLeafDSets */
+    float min_leaf_area;         /* the mesh stops where the solution's quadtrees split into smaller nodes (m^2) */
     int no_discontinuities;      /* non-zero: leaves are triangulated without discontinuities */
     int refine;                  /* non-zero: representation-based refinement (4.4.2) */
     float refine_eps;            /* Gur::eps of that refinement, W/m^2 of irradiance */
@@ -4803,7 +4804,7 @@ typedef struct radinterp__builder {
     double weld;                     /* outline vertices closer than this are one */
     float min_weight;
     uint32_t max_dsets;
-    double refine_eps, refine_min_area;
+    double refine_eps, refine_min_area, min_leaf_area;
     uint32_t refine_samples, refine_passes;
     radinterp__pframe *frames;       /* per patch */
     double *outline;                 /* per patch: corners in its frame, 8 doubles */
@@ -5569,7 +5570,7 @@ static int radinterp__copy_tree(radinterp__builder *b, uint32_t R, radinterp__bu
     while (head < queue->count) {
         uint32_t sn = RADINTERP__U32(*queue)[head], mn = RADINTERP__U32(*queue)[head + 1], k, first;
         head += 2;
-        if (s->nodes[sn].child == RADINTERP__NONE) continue;
+        if (s->nodes[sn].child == RADINTERP__NONE || (double)s->nodes[s->nodes[sn].child].area < b->min_leaf_area) continue;
         first = (uint32_t)b->nodes.count;
         if (radinterp__buf_reserve(&b->a, &b->nodes, b->nodes.count + 4) != 0) return -1;
         for (k = 0; k < 4; k++) {
@@ -6124,7 +6125,7 @@ static int radinterp__make_chain(radinterp__builder *b, uint32_t P, uint32_t k, 
     a_rep = radinterp__hmap_get(&b->canon, key);
     radinterp__point_key(pt->v[(k + 1) % pt->count], 0, key);
     c_rep = radinterp__hmap_get(&b->canon, key);
-    qsort(tmp->data, tmp->count, sizeof(radinterp__tkey), radinterp__cmp_tkey);
+    if (tmp->count > 1) qsort(tmp->data, tmp->count, sizeof(radinterp__tkey), radinterp__cmp_tkey);
     b->chain_first[4 * P + k] = (uint32_t)b->chains.count;
     if (radinterp__buf_u32(&b->a, &b->chains, a_rep) != 0) return -1;
     for (i = 0; i < tmp->count; i++) {
@@ -6151,11 +6152,33 @@ typedef struct radinterp__tri_work {
     radinterp__buf stack, order, tmp;
     radinterp__cdt cdt;
     int cdt_ready;
+    radinterp_allocator real;  /* the caller's allocator, behind `tracked` */
+    radinterp_allocator tracked;
+    int out_of_memory;         /* an allocation of the triangulation failed */
 } radinterp__tri_work;
 
-static void radinterp__tri_work_init(radinterp__tri_work *w)
+/* The triangulation reports memory and geometry failures alike (c->failed):
+   its allocations go through this wrapper, which remembers a NULL. */
+static void *radinterp__tracked_alloc(size_t size, void *user)
+{
+    radinterp__tri_work *w = (radinterp__tri_work *)user;
+    void *p = radinterp__alloc(&w->real, size);
+    if (!p) w->out_of_memory = 1;
+    return p;
+}
+
+static void radinterp__tracked_free(void *ptr, void *user)
+{
+    radinterp__free(&((radinterp__tri_work *)user)->real, ptr);
+}
+
+static void radinterp__tri_work_init(radinterp__tri_work *w, const radinterp_allocator *a)
 {
     memset(w, 0, sizeof *w);
+    w->real = *a;
+    w->tracked.alloc = radinterp__tracked_alloc;
+    w->tracked.free = radinterp__tracked_free;
+    w->tracked.user = w;
     radinterp__buf_init(&w->pts, sizeof(radinterp__lpoint));
     radinterp__buf_init(&w->xy, 2 * sizeof(double));
     radinterp__buf_init(&w->ids, sizeof(uint32_t));
@@ -6271,7 +6294,7 @@ static int radinterp__patch_cdt(radinterp__builder *b, radinterp__tri_work *w, u
     if (radinterp__buf_reserve(&b->a, &w->xy, n) != 0 || radinterp__buf_reserve(&b->a, &w->ids, n) != 0) return -1;
     for (i = 0; i < n; i++) memcpy((double *)w->xy.data + 2 * (size_t)i, ((radinterp__lpoint *)w->pts.data)[i].uv, 2 * sizeof(double));
     w->ids.count = n;
-    if (!w->cdt_ready) radinterp__cdt_init(&w->cdt, &b->a, NULL, 0);
+    if (!w->cdt_ready) radinterp__cdt_init(&w->cdt, &w->tracked, NULL, 0);
     else radinterp__cdt_clear(&w->cdt);
     w->cdt_ready = 1;
     if (radinterp__cdt_add_points(&w->cdt, (const double *)w->xy.data, n, RADINTERP__U32(w->ids)) != 0 || !w->cdt.started)
@@ -6452,9 +6475,10 @@ static radinterp_result radinterp__triangulate_patch(radinterp__builder *b, radi
     int with = 1, r;
     for (;;) {
         uint32_t hanging = b->hanging;
+        w->out_of_memory = 0;
         r = radinterp__patch_cdt(b, w, P, with);
         if (r == 0) r = radinterp__classify(b, w, P);
-        if (r < 0) return RADINTERP_ERROR_OUT_OF_MEMORY;
+        if (r < 0 || w->out_of_memory) return RADINTERP_ERROR_OUT_OF_MEMORY;
         if (r == 0) break;
         b->hanging = hanging;
         if (!with) {
@@ -6750,7 +6774,7 @@ static radinterp_result radinterp__mesh_pass(radinterp__builder *b)
     uint32_t P, k, *own = NULL;
     size_t at;
     radinterp_result res = RADINTERP_OK;
-    radinterp__tri_work_init(&w);
+    radinterp__tri_work_init(&w, &b->a);
     memset(&seen, 0, sizeof seen);
     radinterp__buf_init(&tmp, sizeof(radinterp__tkey));
     b->segs.count = b->pool.count = b->chains.count = b->pos.count = b->tris.count = 0;
@@ -6987,7 +7011,8 @@ static radinterp_result radinterp__check_mesh_desc(const radinterp_mesh_desc *d)
     const char *bad = NULL;
     if (!radinterp__allocator_valid(&d->allocator)) bad = "allocator.alloc and allocator.free must both be set or both be NULL";
     else if (radinterp__bad_param(d->min_discont_weight) || radinterp__bad_param(d->refine_eps) ||
-             radinterp__bad_param(d->refine_min_area) || radinterp__bad_param(d->weld_distance))
+             radinterp__bad_param(d->refine_min_area) || radinterp__bad_param(d->weld_distance) ||
+             radinterp__bad_param(d->min_leaf_area))
         bad = "a parameter is negative, NaN or infinite";
     else if (d->max_leaf_dsets > 4096) bad = "max_leaf_dsets is above 4096";
     else if (d->refine_samples > 64) bad = "refine_samples is above 64";
@@ -7050,6 +7075,7 @@ static radinterp_result radinterp__builder_init(radinterp__builder *b, const rad
     b->max_dsets = radinterp__def(d->max_leaf_dsets, 10u);
     b->refine_eps = d->refine_eps > 0.0f ? d->refine_eps : s->eps;
     b->refine_min_area = d->refine_min_area > 0.0f ? d->refine_min_area : s->min_area;
+    b->min_leaf_area = d->min_leaf_area;
     b->refine_samples = radinterp__def(d->refine_samples, 3u);
     b->refine_passes = radinterp__def(d->refine_passes, 8u);
     radinterp__buf_init(&b->discs, sizeof(radinterp__disc));
