@@ -544,70 +544,125 @@ static unsigned char *outline_vertices(const radinterp_mesh_data *md)
     return on;
 }
 
+/* Appends a triangulation of the polygon ring[0..nr) (positions in pos,
+   counter-clockwise seen from the front n) to idx: the constrained Delaunay
+   triangulation of part 1, so that its triangles are as well shaped as the
+   polygon allows (a fan from one point would be slivers along rows of close
+   vertices, which the rasterizer's 1/256-pixel snapping can fold over). */
+static int triangulate_ring(const float *pos, const uint32_t *ring, uint32_t nr, const double *n, uint32_t *idx,
+                            uint32_t *nt)
+{
+    radinterp__cdt c;
+    radinterp_allocator a;
+    double *xy = (double *)malloc(sizeof(double) * 2 * nr), e1[3], e2[3], len;
+    uint32_t *ids = (uint32_t *)malloc(sizeof(uint32_t) * nr), *back, i, t, *stack, top = 0;
+    unsigned char *inside;
+    const float *o = pos + 3 * ring[0], *p1 = pos + 3 * ring[1];
+    int k, ok = 1;
+    for (k = 0; k < 3; k++) e1[k] = (double)p1[k] - o[k];
+    len = sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
+    for (k = 0; k < 3; k++) e1[k] /= len;
+    e2[0] = n[1] * e1[2] - n[2] * e1[1];
+    e2[1] = n[2] * e1[0] - n[0] * e1[2];
+    e2[2] = n[0] * e1[1] - n[1] * e1[0];
+    for (i = 0; i < nr; i++) {
+        const float *x = pos + 3 * ring[i];
+        double d[3];
+        for (k = 0; k < 3; k++) d[k] = (double)x[k] - o[k];
+        xy[2 * i] = d[0] * e1[0] + d[1] * e1[1] + d[2] * e1[2];
+        xy[2 * i + 1] = d[0] * e2[0] + d[1] * e2[1] + d[2] * e2[2];
+    }
+    memset(&a, 0, sizeof a);
+    radinterp__cdt_init(&c, &a, NULL, 0);
+    if (radinterp__cdt_add_points(&c, xy, nr, ids) != 0) ok = 0;
+    for (i = 0; i < nr && ok; i++)
+        if (ids[i] != ids[(i + 1) % nr] && radinterp__cdt_add_segment(&c, ids[i], ids[(i + 1) % nr]) != 0) ok = 0;
+    if (ok && c.vertex_count != nr) ok = 0;   /* the ring crossed itself */
+    back = (uint32_t *)malloc(sizeof(uint32_t) * (nr + 1));
+    inside = (unsigned char *)malloc(c.tri_count + 1);
+    stack = (uint32_t *)malloc(sizeof(uint32_t) * (c.tri_count + 1));
+    for (i = 0; i < nr; i++) back[ids[i]] = ring[i];
+    for (t = 0; t < c.tri_count; t++) {
+        inside[t] = (unsigned char)radinterp__cdt_is_real(&c, t);
+        if (!inside[t]) stack[top++] = t;
+    }
+    while (top) {  /* outside: reachable from the hull without crossing the ring */
+        t = stack[--top];
+        for (k = 0; k < 3; k++) {
+            uint32_t u = c.tri[t].n[k];
+            if (((c.tri[t].flags >> k) & 1u) || !inside[u]) continue;
+            inside[u] = 0;
+            stack[top++] = u;
+        }
+    }
+    for (t = 0; t < c.tri_count && ok; t++) {
+        if (!inside[t]) continue;
+        for (k = 0; k < 3; k++) idx[3 * *nt + k] = back[c.tri[t].v[k]];
+        (*nt)++;
+    }
+    radinterp__cdt_free(&c);
+    free(xy); free(ids); free(back); free(inside); free(stack);
+    return ok;
+}
+
 /* Every pixel is covered by the mesh as often as by the patches drawn
    plainly, each as a polygon through its corners and every vertex of any
    patch's mesh outline that lies on its edges (found here geometrically,
-   each on its nearest edge), fanned from its centre. Where patches share an
-   edge their plain outlines are then the same, so the plain drawing covers
-   each pixel once per layer; a crack or an overlap in the mesh (a T-vertex
-   inside a patch, or a seam whose two sides differ) changes the count. */
+   each on its nearest edge). Where patches share an edge their plain
+   outlines are then the same, so the plain drawing covers each pixel once
+   per layer; a crack or an overlap in the mesh (a T-vertex inside a patch,
+   or a seam whose two sides differ) changes the count. */
 static int coverage_matches(const scene *s, const radinterp_mesh_data *md, const unsigned char *on_outline,
                             const ex_camera *cam, ex_raster *r, long *pixels)
 {
-    float *pos = (float *)malloc(sizeof(float) * 3 * (md->vertex_count + s->np) + 12);
     uint32_t *idx = (uint32_t *)malloc(sizeof(uint32_t) * 3 * (md->vertex_count * 4 + 64));
-    uint32_t *mesh_count, p, nt = 0, nv = md->vertex_count;
+    uint32_t *mesh_count, p, nt = 0, *ring = (uint32_t *)malloc(sizeof(uint32_t) * (md->vertex_count + 4));
+    double *ts = (double *)malloc(sizeof(double) * (md->vertex_count + 4));
     size_t i, n = (size_t)r->width * (size_t)r->height;
     int ok = 1;
-    memcpy(pos, md->positions, sizeof(float) * 3 * md->vertex_count);
     for (p = 0; p < s->np; p++) {
-        uint32_t c = s->patch[4 * p + 3] == RADINTERP_NO_VERTEX ? 3 : 4, k, v, centre = nv++, ring[512], nr = 0;
-        float cx[3] = {0, 0, 0};
+        uint32_t c = s->patch[4 * p + 3] == RADINTERP_NO_VERTEX ? 3 : 4, k, v, nr = 0;
+        double nrm[3] = {0, 0, 0}, len;
         for (k = 0; k < c; k++) {
             const float *a = s->pos + 3 * s->patch[4 * p + k], *b = s->pos + 3 * s->patch[4 * p + (k + 1) % c];
-            double ts[512];
-            uint32_t ids[512], m = 0, q, w;
-            cx[0] += a[0] / c; cx[1] += a[1] / c; cx[2] += a[2] / c;
+            uint32_t first = nr, q;
+            nrm[0] += ((double)a[1] - b[1]) * ((double)a[2] + b[2]);
+            nrm[1] += ((double)a[2] - b[2]) * ((double)a[0] + b[0]);
+            nrm[2] += ((double)a[0] - b[0]) * ((double)a[1] + b[1]);
             for (v = 0; v < md->vertex_count; v++) {  /* outline vertices on this edge, by position along it */
                 const float *x = md->positions + 3 * v;
                 double t, dist2 = edge_distance2(a, b, x, &t), other_t;
                 uint32_t j;
                 int nearest = 1;
-                if (!on_outline[v] || t < -1e-9 || t >= 1.0 - 1e-9 || dist2 > 1e-10 || m >= 512) continue;
+                if (!on_outline[v] || t < -1e-9 || t >= 1.0 - 1e-9 || dist2 > 1e-11) continue;
                 for (j = 0; j < c; j++)
                     if (j != k && edge_distance2(s->pos + 3 * s->patch[4 * p + j], s->pos + 3 * s->patch[4 * p + (j + 1) % c], x,
                                                  &other_t) < dist2)
                         nearest = 0;
                 if (!nearest) continue;
-                for (q = m; q > 0 && ts[q - 1] > t; q--) { ts[q] = ts[q - 1]; ids[q] = ids[q - 1]; }
+                for (q = nr; q > first && ts[q - 1] > t; q--) { ts[q] = ts[q - 1]; ring[q] = ring[q - 1]; }
                 ts[q] = t;
-                ids[q] = v;
-                m++;
+                ring[q] = v;
+                nr++;
             }
-            for (w = 0; w < m && nr < 512; w++) ring[nr++] = ids[w];
         }
-        memcpy(pos + 3 * centre, cx, sizeof cx);
-        for (k = 0; k < nr; k++) {
-            idx[3 * nt] = centre;
-            idx[3 * nt + 1] = ring[k];
-            idx[3 * nt + 2] = ring[(k + 1) % nr];
-            nt++;
-        }
+        len = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+        nrm[0] /= len; nrm[1] /= len; nrm[2] /= len;
+        if (nr < 3 || !triangulate_ring(md->positions, ring, nr, nrm, idx, &nt)) ok = 0;
     }
     mesh_count = (uint32_t *)malloc(sizeof(uint32_t) * n);
     memset(r->coverage, 0, n * sizeof(uint32_t));
     ex_raster_count(r, cam, md->positions, md->indices, md->triangle_count);
     memcpy(mesh_count, r->coverage, n * sizeof(uint32_t));
     memset(r->coverage, 0, n * sizeof(uint32_t));
-    ex_raster_count(r, cam, pos, idx, nt);
+    ex_raster_count(r, cam, md->positions, idx, nt);
     for (i = 0; i < n; i++) {
         if (r->coverage[i]) (*pixels)++;
-        if (mesh_count[i] != r->coverage[i]) {
-            ok = 0;
-        }
+        if (mesh_count[i] != r->coverage[i]) ok = 0;
     }
-    free(pos);
     free(idx);
+    free(ring);
+    free(ts);
     free(mesh_count);
     return ok;
 }
