@@ -1,13 +1,17 @@
-/* radinterp.h - v0.2.0 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
+/* radinterp.h - v0.3.0 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
 
    RADINTERP.H: hierarchical radiosity, ranked discontinuities and quadratic irradiance interpolants evaluated per pixel.
 
-   This version holds the offline foundation of Hardt's method: a
-   hierarchical radiosity solver over planar convex patches (chapter 4) and
-   an accurate irradiance-at-a-point query with exact visibility by
-   backprojection onto the sources (chapter 6), plus the robust constrained
-   Delaunay triangulation both need. The discontinuity mesh, the quadratic
-   interpolants and the per-pixel phase build on it.
+   Hardt's method in two phases. Offline: a hierarchical radiosity solver
+   over planar convex patches (chapter 4); an accurate irradiance-at-a-point
+   query with exact visibility by backprojection onto the sources (chapter
+   6); the discontinuities of the irradiance (shadow boundaries, horizons,
+   contacts) ranked by weight, the strongest of which the quadtree leaves
+   are triangulated along (chapter 5); one quadratic irradiance interpolant
+   per triangle from six point queries (chapter 3). Online: an ID buffer
+   and a barycentric buffer from any rasterizer become radiosity per pixel
+   at 5 multiplies and 5 adds a channel (radinterp_shade), or the triangles
+   and their coefficients go to a shader. The output mesh is crack-free.
 
    DO THIS
 
@@ -32,6 +36,17 @@
        d.materials = mat;  d.material_count = 2;
        if (radinterp_solve(&d, &sol) != RADINTERP_OK) ...;
        radinterp_irradiance_at_point(sol, patch, point, NULL, rgb);  // W/m^2
+
+       radinterp_mesh_desc md = {0};
+       radinterp_mesh *mesh;
+       radinterp_mesh_data data;
+       if (radinterp_build_mesh(sol, &md, &mesh) != RADINTERP_OK) ...;
+       radinterp_mesh_get_data(mesh, &data);     // triangles and coefficients
+       // every frame: rasterize data.positions / data.indices into an ID
+       // buffer (triangle index per pixel) and a perspective-correct
+       // barycentric buffer (weights of each triangle's 2nd and 3rd corner):
+       radinterp_shade(mesh, ids, st, width * height, rgb_pixels);  // B, W/m^2
+       radinterp_mesh_destroy(mesh);
        radinterp_solution_destroy(sol);
 
    SCENE AND UNITS
@@ -86,6 +101,89 @@
    left out. Where a source node's children differ enough to matter at p,
    they are used in its place.
 
+   radinterp_build_mesh (chapters 5 and 3) reads the solution and leaves it
+   unchanged. Discontinuities (5.2-5.4): for every receiver patch and every
+   source patch linked to its quadtree, with the union of those links'
+   blockers, EV wedges (a source edge and a blocker vertex) and VE wedges (a
+   source vertex and a blocker edge) whose plane supports the blocker (EV)
+   or the source (VE), traced onto the receiver plane through the blocker
+   and clipped to the part of the receiver in front of the source; horizons
+   (a linked source's plane splitting the receiver); contacts (an edge of
+   another patch lying on the receiver). Weight w = max(d_sb / d_br) * B_src
+   over the segment (horizon: 1 * B_src; contact: FLT_MAX); the geometric
+   factor is computed once, the weight cached with the radiosity state of
+   the solution it was computed for. EEE surfaces, and EV events between two
+   blockers, are ignored as in the thesis. DSets (5.5.4): collinear
+   discontinuities of a receiver (direction within 1e-6 rad, offset within
+   epsilon * diag) share a line. The mesh keeps its own copy of the
+   solution's quadtrees (down to min_leaf_area), restricted so that
+   neighbouring leaves of a patch differ by at most one level; every node
+   lists the candidate discontinuities crossing its interior, a child the
+   part of its parent's list that crosses it (5.5.6). Activation (5.5.7):
+   per patch, by descending weight, a candidate is activated when no leaf it
+   crosses would then hold more than max_leaf_dsets active DSets, and it is
+   then active in every leaf it crosses. Triangulation: one constrained
+   Delaunay triangulation per patch with every leaf edge and every active
+   discontinuity edge (the union of a DSet's overlapping active
+   discontinuities) as constraints, which is the union of the leaves' own
+   triangulations. T-vertices (3.6): case A (leaves one level apart) is
+   closed by inserting each leaf edge through its neighbour's corner at its
+   midpoint, so the larger leaf's triangles take that vertex; case C
+   (patches sharing an edge): the outline vertices of all patches (leaf
+   corners, discontinuity ends) are welded within weld_distance and every
+   patch outline runs through those on its edges where another patch's edge
+   runs along it; case B cannot occur. A triangulation that fails its checks
+   (outline, area) is redone without the patch's discontinuities (counted in
+   info.fallback_patches). Interpolants (3.3): IrradianceAtPoint at each
+   triangle's corners and edge midpoints, each approached from the
+   triangle's centre, and the closed form of eq. 3.3 for (A, 2B, 2C, D, 2E,
+   F) per channel. With refine, representation-based refinement (4.4.2):
+   SAMPLES x SAMPLES more points per triangle measure the interpolant's
+   error, leaves above refine_eps are split (children inherit their parent's
+   clipped DSets), and the pass repeats; unchanged triangles keep their
+   samples.
+
+   Online phase (3.4): radinterp_shade(mesh, ids, st, n, rgb) computes
+   B(s, t) = E + rho H(s, t) for each pixel from its triangle id and the
+   barycentric weights (s, t) of the triangle's 2nd and 3rd corner (as a
+   perspective-correct rasterizer or gl_BaryCoord give them; the first
+   corner's weight is 1 - s - t); 5 multiplies and 5 adds per channel in
+   the form s (A s + 2B t + 2C) + t (D t + 2E) + F (Hardt counts 8
+   multiplies for the expanded form). Pixels whose id is not a triangle of
+   the mesh are left as they are, so other objects can be drawn around it.
+   radinterp_shade_gouraud blends the corner radiosities instead, for
+   comparison (the thesis's "Gouraud shading with discontinuities").
+
+   IN A SHADER
+
+   radinterp_mesh_get_data gives positions (shared vertices are bit-identical,
+   which a rasterizer's fill rule needs for crack-free coverage), indices
+   (counter-clockwise from the front), the patch of each triangle and 18
+   floats per triangle: data.coefficients[18 t + 3 k + c] = coefficient k of
+   (A, 2B, 2C, D, 2E, F) of B in channel c (E and rho already applied;
+   data.irradiance_coefficients has H itself). Upload them as 6 RGB texels
+   per triangle and evaluate with the triangle's barycentrics:
+
+       uniform samplerBuffer radinterp_coeff;     // RGB32F, 6 texels per triangle
+       vec3 radinterp_radiosity(int tri, vec2 st) // st = weights of corners 2 and 3
+       {
+           vec3 A  = texelFetch(radinterp_coeff, 6 * tri + 0).rgb;
+           vec3 B2 = texelFetch(radinterp_coeff, 6 * tri + 1).rgb;
+           vec3 C2 = texelFetch(radinterp_coeff, 6 * tri + 2).rgb;
+           vec3 D  = texelFetch(radinterp_coeff, 6 * tri + 3).rgb;
+           vec3 E2 = texelFetch(radinterp_coeff, 6 * tri + 4).rgb;
+           vec3 F  = texelFetch(radinterp_coeff, 6 * tri + 5).rgb;
+           return max(st.x * (A * st.x + B2 * st.y + C2) + st.y * (D * st.y + E2) + F, 0.0);
+       }
+       // fragment: radiance = radinterp_radiosity(gl_PrimitiveID, st) / 3.14159265
+       // with st = gl_BaryCoordEXT.yz, or a flat-interpolated varying pair
+       // (0,0), (1,0), (0,1) at the three corners
+
+   data.corner_radiosity holds B at each triangle's corners (Gouraud) and
+   data.vertex_radiosity the mean over the corners sharing each vertex (it
+   blends patches that meet there; for per-patch values use an unshared
+   vertex list with corner_radiosity).
+
    PARAMETERS (Hardt, appendix A; zero means the default)
 
        eps                Gur::eps, transport error bound in W/m^2: a link is
@@ -116,6 +214,31 @@
        planarity_tolerance  see validation.                      default 1e-3
    `diag` is the diagonal of the scene's bounding box.
 
+   MESH PARAMETERS (radinterp_mesh_desc; zero means the default)
+
+       min_discont_weight Tree::minDiscontWeight (W/m^2): weaker
+                          discontinuities never enter a triangulation.
+                          default 1% of the largest patch radiosity (the
+                          thesis used 100 W/m^2 for its office; the brightest
+                          patch here is the lamp, about 126 W/m^2)
+       max_leaf_dsets     Tree::maxLeafDSets: active DSets per leaf at most.
+                                                     default 10 (the thesis)
+       min_leaf_area      the mesh stops where the solution's quadtrees split
+                          into nodes smaller than this (m^2), so a fine
+                          solution (accurate sources for IrradianceAtPoint)
+                          can be meshed coarsely.  default 0: every leaf
+       no_discontinuities non-zero: leaves are triangulated without them
+       refine             non-zero: representation-based refinement (4.4.2)
+       refine_eps         Gur::eps of that refinement: largest difference, in
+                          W/m^2 of irradiance, between an interpolant and
+                          IrradianceAtPoint.        default the solution's eps
+       refine_samples     SAMPLES (appendix A, 8).                 default 3
+       refine_passes      passes at most.                          default 8
+       refine_min_area    no leaf is split into children smaller than this
+                          (m^2).               default the solution's min_area
+       weld_distance      outline vertices of neighbouring patches closer
+                          than this are one vertex (m). default 1e-6 * diag
+
    CONFIGURATION MACROS
 
        RADINTERP_STATIC          make every function static (private to one file)
@@ -145,6 +268,53 @@
                                     const float *verts, uint32_t count);
                                     differential area to polygon form factor (eq. 6.1)
 
+       radinterp_result radinterp_build_mesh(const radinterp_solution *s, const radinterp_mesh_desc *desc,
+                                    radinterp_mesh **out);
+                                    discontinuity mesh with one quadratic interpolant per triangle
+       void radinterp_mesh_destroy(radinterp_mesh *m);
+       void radinterp_mesh_get_info(const radinterp_mesh *m, radinterp_mesh_info *info);
+                                    counts (discontinuities found/active, leaves, triangles, samples)
+       void radinterp_mesh_get_data(const radinterp_mesh *m, radinterp_mesh_data *data);
+                                    the arrays: positions, indices, patches, coefficients, radiosities
+       uint32_t radinterp_mesh_discontinuity_count(const radinterp_mesh *m);
+       radinterp_result radinterp_mesh_get_discontinuity(const radinterp_mesh *m, uint32_t i,
+                                    radinterp_discontinuity *d);   segment, kind, weight, active
+       uint32_t radinterp_mesh_leaf_count(const radinterp_mesh *m);
+       radinterp_result radinterp_mesh_get_leaf(const radinterp_mesh *m, uint32_t i, radinterp_mesh_leaf *leaf);
+                                    a leaf, its DSets and its triangles
+       void radinterp_mesh_set_parallel_for(radinterp_mesh *m, parallel_for, void *user);
+                                    the job system of radinterp_shade
+       void radinterp_fit_quadratic(const float r[6], float coefficients[6]);
+                                    eq. 3.3: (A, 2B, 2C, D, 2E, F) from six samples
+       radinterp_result radinterp_eval(const radinterp_mesh *m, uint32_t triangle, float s, float t,
+                                    float rgb[3]);   radiosity B at barycentric (s, t)
+       radinterp_result radinterp_eval_irradiance(const radinterp_mesh *m, uint32_t triangle, float s,
+                                    float t, float rgb[3]);   the interpolant H(s, t)
+       radinterp_result radinterp_shade(const radinterp_mesh *m, const uint32_t *triangle_ids,
+                                    const float *st, size_t count, float *rgb_out);
+                                    ID + barycentric buffer -> radiosity per pixel
+       radinterp_result radinterp_shade_gouraud(... same ...);   the same, Gouraud-shaded
+       radinterp_result radinterp_mesh_save(const radinterp_mesh *m, radinterp_write_fn write, void *user);
+       radinterp_result radinterp_mesh_load(const radinterp_allocator *a, radinterp_read_fn read, void *user,
+                                    radinterp_mesh **out);
+       radinterp_result radinterp_mesh_save_to_memory(const radinterp_mesh *m, const radinterp_allocator *a,
+                                    void **data, size_t *size);
+       radinterp_result radinterp_mesh_load_from_memory(const void *data, size_t size,
+                                    const radinterp_allocator *a, radinterp_mesh **out);
+       void radinterp_free_memory(const radinterp_allocator *a, void *data);
+
+   SAVED MESHES
+
+   radinterp_mesh_save writes magic "RADIMESH", RADINTERP_FILE_FORMAT_VERSION,
+   the payload size, the payload (positions, triangles, irradiance
+   coefficients, each patch's reflectance and emission, discontinuities,
+   leaves, build statistics; little-endian, field by field) and a CRC-32.
+   The loader checks every size against the payload before allocating and
+   every index and float: truncated or corrupted data gives
+   RADINTERP_ERROR_CORRUPT_DATA (another format version
+   RADINTERP_ERROR_VERSION), never a crash. A loaded mesh shades and exports
+   like a built one (it needs no solution).
+
    THREADS
 
    radinterp_solve runs its independent work (link form factors, open
@@ -153,6 +323,11 @@
    be thread-safe. Queries on a finished solution are const and may run from
    many threads at once; each uses up to about 100 KB of stack (its
    triangulation moves to the allocator only when it outgrows 32 KB).
+   radinterp_build_mesh samples its interpolants through
+   mesh_desc.parallel_for (jobs of 4 triangles, progress between batches);
+   the mesh is bit-identical for any thread count. radinterp_shade splits
+   its pixels into jobs of 16384 through the mesh's parallel_for (the
+   build's, or radinterp_mesh_set_parallel_for). Queries on a mesh are const.
 
    LIMITS
 
@@ -168,6 +343,17 @@
    source: about 2,000 per second on the office scene, where nearly every
    point has one, and over 300,000 per second where none is.
 
+   The mesh build costs six point queries per triangle (more with refine):
+   the office's 12,000 triangles take 72,000 queries, nearly all of the
+   build time. Interpolants are only as accurate as IrradianceAtPoint, whose
+   sources are the solution's elements: for a more accurate image solve
+   with a smaller eps and mesh with a larger min_leaf_area. Discontinuity
+   edges that nearly graze a patch outline can make a triangulation fail
+   its checks; the patch is then meshed without its discontinuities. The
+   output has no T-vertices where patches share an edge or part of one; a
+   patch edge that ends on another patch's face (a wall meeting a floor
+   away from the floor's edge) needs none.
+
    PAPER
 
        Stephen L. Hardt, High Fidelity Radiosity Rendering at Interactive Rates, M.Eng. thesis, MIT, 1996.
@@ -179,7 +365,7 @@
 #define RADINTERP_H
 
 #define RADINTERP_VERSION_MAJOR 0
-#define RADINTERP_VERSION_MINOR 2
+#define RADINTERP_VERSION_MINOR 3
 #define RADINTERP_VERSION_PATCH 0
 #define RADINTERP_FILE_FORMAT_VERSION 1   /* of saved meshes */
 
