@@ -5396,12 +5396,6 @@ static int radinterp__contacts(radinterp__builder *b, uint32_t R)
     return 0;
 }
 
-static int radinterp__cmp_u64_asc(const void *a, const void *b)
-{
-    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
-    return x < y ? -1 : (x > y ? 1 : 0);
-}
-
 /* Source and blocker pairs of every link delivering to R's quadtree. */
 static int radinterp__link_pairs(radinterp__builder *b, uint32_t R, radinterp__buf *pairs, radinterp__buf *stack)
 {
@@ -5428,7 +5422,7 @@ static int radinterp__link_pairs(radinterp__builder *b, uint32_t R, radinterp__b
             for (k = 0; k < 4; k++)
                 if (radinterp__buf_u32(&b->a, stack, nd->child + k) != 0) return -1;
     }
-    if (pairs->count) qsort(pairs->data, pairs->count, sizeof(uint64_t), radinterp__cmp_u64_asc);
+    if (pairs->count) qsort(pairs->data, pairs->count, sizeof(uint64_t), radinterp__cmp_u64);
     return 0;
 }
 
@@ -6112,7 +6106,7 @@ static int radinterp__outline_vertices(radinterp__builder *b, uint32_t P, radint
     const double (*o)[2] = radinterp__outline_of(b, P);
     uint32_t i, k, c, key[4];
     for (k = 0; k < pt->count; k++) {
-        radinterp__point_key(pt->v[k], 0, key);
+        radinterp__point_key(pt->v[k], P + 1u, key);
         if (radinterp__hmap_put(&b->a, seen, key, 1u) == RADINTERP__NONE) return -1;
         if (radinterp__pool_add(b, pt->v[k], P, k, 1) != 0) return -1;
     }
@@ -6120,7 +6114,7 @@ static int radinterp__outline_vertices(radinterp__builder *b, uint32_t P, radint
         const radinterp__mnode *n = &RADINTERP__MNODES(b)[RADINTERP__U32(b->leaves)[b->leaf_first[P] + i]];
         for (c = 0; c < n->count; c++) {
             uint32_t before = seen->count;
-            radinterp__point_key(n->v[c], 0, key);
+            radinterp__point_key(n->v[c], P + 1u, key);
             if (radinterp__hmap_put(&b->a, seen, key, 1u) == RADINTERP__NONE) return -1;
             if (seen->count == before) continue;
             for (k = 0; k < pt->count; k++)
@@ -6646,7 +6640,7 @@ static int radinterp__emit_patch(radinterp__builder *b, radinterp__tri_work *w, 
         radinterp__otri *copy = (radinterp__otri *)radinterp__alloc_array(&b->a, w->order.count, sizeof *copy);
         if (!copy) return -1;
         memcpy(copy, (radinterp__otri *)b->tris.data + first, w->order.count * sizeof *copy);
-        qsort(w->order.data, w->order.count, sizeof(uint64_t), radinterp__cmp_u64_asc);
+        qsort(w->order.data, w->order.count, sizeof(uint64_t), radinterp__cmp_u64);
         for (t = 0; t < w->order.count; t++)
             ((radinterp__otri *)b->tris.data)[first + t] = copy[((uint64_t *)w->order.data)[t] & 0xFFFFFFFFu];
         radinterp__free(&b->a, copy);

@@ -299,6 +299,34 @@ static void test_weights(void)
     radinterp_solution_destroy(sol);
 }
 
+/* 5.4: the geometric factor is kept, the weight cached; it is recomputed
+   once the solver has run again (new radiosities), not before. */
+static void test_weight_cache(void)
+{
+    scene s;
+    radinterp_solution *sol = penumbra_scene(&s);
+    radinterp__disc d;
+    float w0, w1;
+    uint32_t root;
+    if (!sol) return;
+    memset(&d, 0, sizeof d);
+    d.type = RADINTERP_DISCONTINUITY_EV;
+    d.source = 1;
+    d.geom = 1.5f;
+    root = sol->patches[1].root;
+    w0 = radinterp__disc_weight(sol, &d);
+    CHECK_CLOSE(w0, 1.5 * sol->nodes[root].b[0], 1e-6, 0);
+    sol->nodes[root].b[0] *= 2.0f;                       /* radiosities change ... */
+    CHECK(radinterp__disc_weight(sol, &d) == w0);        /* ... but the cache is only invalidated by a new pass */
+    sol->iterations++;
+    w1 = radinterp__disc_weight(sol, &d);
+    CHECK_CLOSE(w1, 2.0 * w0, 1e-6, 0);
+    d.type = RADINTERP_DISCONTINUITY_CONTACT;
+    d.weight_stamp = 0;
+    CHECK(radinterp__disc_weight(sol, &d) == FLT_MAX);   /* contacts: infinite */
+    radinterp_solution_destroy(sol);
+}
+
 /* Horizon and contact: a wall standing on the floor and a light facing the
    floor beside it. The wall's plane splits the floor (horizon, weight B_src
    = the wall's radiosity times 1) and its foot is a contact (FLT_MAX). */
@@ -1103,6 +1131,7 @@ int main(int argc, char **argv)
     RUN(test_fit_reproduces_quadratics);
     RUN(test_penumbra_boundaries);
     RUN(test_weights);
+    RUN(test_weight_cache);
     RUN(test_horizon_and_contact);
     RUN(test_activation_rules);
     RUN(test_crack_free_room);
