@@ -13,6 +13,7 @@
    (the interpolant image with leaf edges in grey and discontinuity edges in
    red). Options: --scene FILE (the office or the Cornell box have built-in
    views), --out DIR, --size WxH, --eps W/m^2 (solver error bound),
+   --min-leaf-area M2 (coarsest mesh leaves taken from the solution),
    --min-weight W/m^2 (weakest discontinuity meshed), --max-dsets N,
    --refine (representation-based refinement), --save FILE (the mesh). */
 #define _POSIX_C_SOURCE 200809L /* clock_gettime */
@@ -101,8 +102,8 @@ static int write_image(const char *dir, const char *name, const float *rgb, int 
 
 static void usage(void)
 {
-    puts("usage: radinterp_office [--scene FILE.obj] [--out DIR] [--size WxH] [--eps E] [--min-weight W]\n"
-         "                        [--max-dsets N] [--refine] [--save FILE]\n"
+    puts("usage: radinterp_office [--scene FILE.obj] [--out DIR] [--size WxH] [--eps E] [--min-leaf-area A]\n"
+         "                        [--min-weight W] [--max-dsets N] [--refine] [--save FILE]\n"
          "Solves the scene by hierarchical radiosity, builds the discontinuity mesh with\n"
          "quadratic irradiance interpolants and writes the interpolant, Gouraud and mesh\n"
          "images to DIR (default build/out).");
@@ -112,7 +113,7 @@ int main(int argc, char **argv)
 {
     const char *scene_path = "examples/data/office.obj", *out = "build/out", *save = NULL, *name;
     int width = 640, height = 480, i, refine = 0, max_dsets = 0;
-    float eps = 0.0f, min_weight = 0.0f, eye[3], target[3], up[3] = {0, 1, 0}, vfov = 60.0f, exposure;
+    float eps = 0.0f, min_weight = 0.0f, min_leaf_area = 0.0f, eye[3], target[3], up[3] = {0, 1, 0}, vfov = 60.0f, exposure;
     obj_scene scene;
     char err[512];
     uint32_t *patches, f, k;
@@ -140,6 +141,7 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[i], "--save")) save = argv[++i];
         else if (!strcmp(argv[i], "--eps")) eps = (float)atof(argv[++i]);
         else if (!strcmp(argv[i], "--min-weight")) min_weight = (float)atof(argv[++i]);
+        else if (!strcmp(argv[i], "--min-leaf-area")) min_leaf_area = (float)atof(argv[++i]);
         else if (!strcmp(argv[i], "--max-dsets")) max_dsets = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--size")) {
             if (sscanf(argv[++i], "%dx%d", &width, &height) != 2 || width < 16 || height < 16 || width > 8192 ||
@@ -149,8 +151,8 @@ int main(int argc, char **argv)
             }
         } else { fprintf(stderr, "radinterp_office: unknown option '%s' (see --help)\n", argv[i]); return 2; }
     }
-    if (eps < 0.0f || min_weight < 0.0f || max_dsets < 0) {
-        fprintf(stderr, "radinterp_office: --eps, --min-weight and --max-dsets must not be negative\n");
+    if (eps < 0.0f || min_weight < 0.0f || min_leaf_area < 0.0f || max_dsets < 0) {
+        fprintf(stderr, "radinterp_office: --eps, --min-leaf-area, --min-weight and --max-dsets must not be negative\n");
         return 2;
     }
     if (obj_load(scene_path, &scene, err, sizeof err) != 0) { fprintf(stderr, "radinterp_office: %s\n", err); return 1; }
@@ -198,6 +200,7 @@ int main(int argc, char **argv)
 
     memset(&md, 0, sizeof md);
     md.min_discont_weight = min_weight;
+    md.min_leaf_area = min_leaf_area;
     md.max_leaf_dsets = (uint32_t)max_dsets;
     md.refine = refine;
     md.parallel_for = ex_pool_parallel_for;
