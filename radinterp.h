@@ -1,13 +1,17 @@
-/* radinterp.h - v0.2.0 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
+/* radinterp.h - v0.3.0 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
 
    RADINTERP.H: hierarchical radiosity, ranked discontinuities and quadratic irradiance interpolants evaluated per pixel.
 
-   This version holds the offline foundation of Hardt's method: a
-   hierarchical radiosity solver over planar convex patches (chapter 4) and
-   an accurate irradiance-at-a-point query with exact visibility by
-   backprojection onto the sources (chapter 6), plus the robust constrained
-   Delaunay triangulation both need. The discontinuity mesh, the quadratic
-   interpolants and the per-pixel phase build on it.
+   Hardt's method in two phases. Offline: a hierarchical radiosity solver
+   over planar convex patches (chapter 4); an accurate irradiance-at-a-point
+   query with exact visibility by backprojection onto the sources (chapter
+   6); the discontinuities of the irradiance (shadow boundaries, horizons,
+   contacts) ranked by weight, the strongest of which the quadtree leaves
+   are triangulated along (chapter 5); one quadratic irradiance interpolant
+   per triangle from six point queries (chapter 3). Online: an ID buffer
+   and a barycentric buffer from any rasterizer become radiosity per pixel
+   at 5 multiplies and 5 adds a channel (radinterp_shade), or the triangles
+   and their coefficients go to a shader. The output mesh is crack-free.
 
    DO THIS
 
@@ -32,6 +36,17 @@
        d.materials = mat;  d.material_count = 2;
        if (radinterp_solve(&d, &sol) != RADINTERP_OK) ...;
        radinterp_irradiance_at_point(sol, patch, point, NULL, rgb);  // W/m^2
+
+       radinterp_mesh_desc md = {0};
+       radinterp_mesh *mesh;
+       radinterp_mesh_data data;
+       if (radinterp_build_mesh(sol, &md, &mesh) != RADINTERP_OK) ...;
+       radinterp_mesh_get_data(mesh, &data);     // triangles and coefficients
+       // every frame: rasterize data.positions / data.indices into an ID
+       // buffer (triangle index per pixel) and a perspective-correct
+       // barycentric buffer (weights of each triangle's 2nd and 3rd corner):
+       radinterp_shade(mesh, ids, st, width * height, rgb_pixels);  // B, W/m^2
+       radinterp_mesh_destroy(mesh);
        radinterp_solution_destroy(sol);
 
    SCENE AND UNITS
@@ -94,6 +109,89 @@
    node's children differ enough to matter at p, they are used in its
    place.
 
+   radinterp_build_mesh (chapters 5 and 3) reads the solution and leaves it
+   unchanged. Discontinuities (5.2-5.4): for every receiver patch and every
+   source patch linked to its quadtree, with the union of those links'
+   blockers, EV wedges (a source edge and a blocker vertex) and VE wedges (a
+   source vertex and a blocker edge) whose plane supports the blocker (EV)
+   or the source (VE), traced onto the receiver plane through the blocker
+   and clipped to the part of the receiver in front of the source; horizons
+   (a linked source's plane splitting the receiver); contacts (an edge of
+   another patch lying on the receiver). Weight w = max(d_sb / d_br) * B_src
+   over the segment (horizon: 1 * B_src; contact: FLT_MAX); the geometric
+   factor is computed once, the weight cached with the radiosity state of
+   the solution it was computed for. EEE surfaces, and EV events between two
+   blockers, are ignored as in the thesis. DSets (5.5.4): collinear
+   discontinuities of a receiver (direction within 1e-6 rad, offset within
+   epsilon * diag) share a line. The mesh keeps its own copy of the
+   solution's quadtrees (down to min_leaf_area), restricted so that
+   neighbouring leaves of a patch differ by at most one level; every node
+   lists the candidate discontinuities crossing its interior, a child the
+   part of its parent's list that crosses it (5.5.6). Activation (5.5.7):
+   per patch, by descending weight, a candidate is activated when no leaf it
+   crosses would then hold more than max_leaf_dsets active DSets, and it is
+   then active in every leaf it crosses. Triangulation: one constrained
+   Delaunay triangulation per patch with every leaf edge and every active
+   discontinuity edge (the union of a DSet's overlapping active
+   discontinuities) as constraints, which is the union of the leaves' own
+   triangulations. T-vertices (3.6): case A (leaves one level apart) is
+   closed by inserting each leaf edge through its neighbour's corner at its
+   midpoint, so the larger leaf's triangles take that vertex; case C
+   (patches sharing an edge): the outline vertices of all patches (leaf
+   corners, discontinuity ends) are welded within weld_distance and every
+   patch outline runs through those on its edges where another patch's edge
+   runs along it; case B cannot occur. A triangulation that fails its checks
+   (outline, area) is redone without the patch's discontinuities (counted in
+   info.fallback_patches). Interpolants (3.3): IrradianceAtPoint at each
+   triangle's corners and edge midpoints, each approached from the
+   triangle's centre, and the closed form of eq. 3.3 for (A, 2B, 2C, D, 2E,
+   F) per channel. With refine, representation-based refinement (4.4.2):
+   SAMPLES x SAMPLES more points per triangle measure the interpolant's
+   error, leaves above refine_eps are split (children inherit their parent's
+   clipped DSets), and the pass repeats; unchanged triangles keep their
+   samples.
+
+   Online phase (3.4): radinterp_shade(mesh, ids, st, n, rgb) computes
+   B(s, t) = E + rho H(s, t) for each pixel from its triangle id and the
+   barycentric weights (s, t) of the triangle's 2nd and 3rd corner (as a
+   perspective-correct rasterizer or gl_BaryCoord give them; the first
+   corner's weight is 1 - s - t); 5 multiplies and 5 adds per channel in
+   the form s (A s + 2B t + 2C) + t (D t + 2E) + F (Hardt counts 8
+   multiplies for the expanded form). Pixels whose id is not a triangle of
+   the mesh are left as they are, so other objects can be drawn around it.
+   radinterp_shade_gouraud blends the corner radiosities instead, for
+   comparison (the thesis's "Gouraud shading with discontinuities").
+
+   IN A SHADER
+
+   radinterp_mesh_get_data gives positions (shared vertices are bit-identical,
+   which a rasterizer's fill rule needs for crack-free coverage), indices
+   (counter-clockwise from the front), the patch of each triangle and 18
+   floats per triangle: data.coefficients[18 t + 3 k + c] = coefficient k of
+   (A, 2B, 2C, D, 2E, F) of B in channel c (E and rho already applied;
+   data.irradiance_coefficients has H itself). Upload them as 6 RGB texels
+   per triangle and evaluate with the triangle's barycentrics:
+
+       uniform samplerBuffer radinterp_coeff;     // RGB32F, 6 texels per triangle
+       vec3 radinterp_radiosity(int tri, vec2 st) // st = weights of corners 2 and 3
+       {
+           vec3 A  = texelFetch(radinterp_coeff, 6 * tri + 0).rgb;
+           vec3 B2 = texelFetch(radinterp_coeff, 6 * tri + 1).rgb;
+           vec3 C2 = texelFetch(radinterp_coeff, 6 * tri + 2).rgb;
+           vec3 D  = texelFetch(radinterp_coeff, 6 * tri + 3).rgb;
+           vec3 E2 = texelFetch(radinterp_coeff, 6 * tri + 4).rgb;
+           vec3 F  = texelFetch(radinterp_coeff, 6 * tri + 5).rgb;
+           return max(st.x * (A * st.x + B2 * st.y + C2) + st.y * (D * st.y + E2) + F, 0.0);
+       }
+       // fragment: radiance = radinterp_radiosity(gl_PrimitiveID, st) / 3.14159265
+       // with st = gl_BaryCoordEXT.yz, or a flat-interpolated varying pair
+       // (0,0), (1,0), (0,1) at the three corners
+
+   data.corner_radiosity holds B at each triangle's corners (Gouraud) and
+   data.vertex_radiosity the mean over the corners sharing each vertex (it
+   blends patches that meet there; for per-patch values use an unshared
+   vertex list with corner_radiosity).
+
    PARAMETERS (Hardt, appendix A; zero means the default)
 
        eps                Gur::eps, transport error bound in W/m^2: a link is
@@ -128,6 +226,31 @@
                           (Hardt's CDT and rays, slower; same results).
    `diag` is the diagonal of the scene's bounding box.
 
+   MESH PARAMETERS (radinterp_mesh_desc; zero means the default)
+
+       min_discont_weight Tree::minDiscontWeight (W/m^2): weaker
+                          discontinuities never enter a triangulation.
+                          default 1% of the largest patch radiosity (the
+                          thesis used 100 W/m^2 for its office; the brightest
+                          patch here is the lamp, about 126 W/m^2)
+       max_leaf_dsets     Tree::maxLeafDSets: active DSets per leaf at most.
+                                                     default 10 (the thesis)
+       min_leaf_area      the mesh stops where the solution's quadtrees split
+                          into nodes smaller than this (m^2), so a fine
+                          solution (accurate sources for IrradianceAtPoint)
+                          can be meshed coarsely.  default 0: every leaf
+       no_discontinuities non-zero: leaves are triangulated without them
+       refine             non-zero: representation-based refinement (4.4.2)
+       refine_eps         Gur::eps of that refinement: largest difference, in
+                          W/m^2 of irradiance, between an interpolant and
+                          IrradianceAtPoint.        default the solution's eps
+       refine_samples     SAMPLES (appendix A, 8).                 default 3
+       refine_passes      passes at most.                          default 8
+       refine_min_area    no leaf is split into children smaller than this
+                          (m^2).               default the solution's min_area
+       weld_distance      outline vertices of neighbouring patches closer
+                          than this are one vertex (m). default 1e-6 * diag
+
    CONFIGURATION MACROS
 
        RADINTERP_STATIC          make every function static (private to one file)
@@ -157,6 +280,53 @@
                                     const float *verts, uint32_t count);
                                     differential area to polygon form factor (eq. 6.1)
 
+       radinterp_result radinterp_build_mesh(const radinterp_solution *s, const radinterp_mesh_desc *desc,
+                                    radinterp_mesh **out);
+                                    discontinuity mesh with one quadratic interpolant per triangle
+       void radinterp_mesh_destroy(radinterp_mesh *m);
+       void radinterp_mesh_get_info(const radinterp_mesh *m, radinterp_mesh_info *info);
+                                    counts (discontinuities found/active, leaves, triangles, samples)
+       void radinterp_mesh_get_data(const radinterp_mesh *m, radinterp_mesh_data *data);
+                                    the arrays: positions, indices, patches, coefficients, radiosities
+       uint32_t radinterp_mesh_discontinuity_count(const radinterp_mesh *m);
+       radinterp_result radinterp_mesh_get_discontinuity(const radinterp_mesh *m, uint32_t i,
+                                    radinterp_discontinuity *d);   segment, kind, weight, active
+       uint32_t radinterp_mesh_leaf_count(const radinterp_mesh *m);
+       radinterp_result radinterp_mesh_get_leaf(const radinterp_mesh *m, uint32_t i, radinterp_mesh_leaf *leaf);
+                                    a leaf, its DSets and its triangles
+       void radinterp_mesh_set_parallel_for(radinterp_mesh *m, parallel_for, void *user);
+                                    the job system of radinterp_shade
+       void radinterp_fit_quadratic(const float r[6], float coefficients[6]);
+                                    eq. 3.3: (A, 2B, 2C, D, 2E, F) from six samples
+       radinterp_result radinterp_eval(const radinterp_mesh *m, uint32_t triangle, float s, float t,
+                                    float rgb[3]);   radiosity B at barycentric (s, t)
+       radinterp_result radinterp_eval_irradiance(const radinterp_mesh *m, uint32_t triangle, float s,
+                                    float t, float rgb[3]);   the interpolant H(s, t)
+       radinterp_result radinterp_shade(const radinterp_mesh *m, const uint32_t *triangle_ids,
+                                    const float *st, size_t count, float *rgb_out);
+                                    ID + barycentric buffer -> radiosity per pixel
+       radinterp_result radinterp_shade_gouraud(... same ...);   the same, Gouraud-shaded
+       radinterp_result radinterp_mesh_save(const radinterp_mesh *m, radinterp_write_fn write, void *user);
+       radinterp_result radinterp_mesh_load(const radinterp_allocator *a, radinterp_read_fn read, void *user,
+                                    radinterp_mesh **out);
+       radinterp_result radinterp_mesh_save_to_memory(const radinterp_mesh *m, const radinterp_allocator *a,
+                                    void **data, size_t *size);
+       radinterp_result radinterp_mesh_load_from_memory(const void *data, size_t size,
+                                    const radinterp_allocator *a, radinterp_mesh **out);
+       void radinterp_free_memory(const radinterp_allocator *a, void *data);
+
+   SAVED MESHES
+
+   radinterp_mesh_save writes magic "RADIMESH", RADINTERP_FILE_FORMAT_VERSION,
+   the payload size, the payload (positions, triangles, irradiance
+   coefficients, each patch's reflectance and emission, discontinuities,
+   leaves, build statistics; little-endian, field by field) and a CRC-32.
+   The loader checks every size against the payload before allocating and
+   every index and float: truncated or corrupted data gives
+   RADINTERP_ERROR_CORRUPT_DATA (another format version
+   RADINTERP_ERROR_VERSION), never a crash. A loaded mesh shades and exports
+   like a built one (it needs no solution).
+
    THREADS
 
    radinterp_solve runs its independent work (link form factors, open
@@ -165,6 +335,11 @@
    be thread-safe. Queries on a finished solution are const and may run from
    many threads at once; each uses up to about 100 KB of stack (its
    triangulation moves to the allocator only when it outgrows 32 KB).
+   radinterp_build_mesh samples its interpolants through
+   mesh_desc.parallel_for (jobs of 4 triangles, progress between batches);
+   the mesh is bit-identical for any thread count. radinterp_shade splits
+   its pixels into jobs of 16384 through the mesh's parallel_for (the
+   build's, or radinterp_mesh_set_parallel_for). Queries on a mesh are const.
 
    LIMITS
 
@@ -182,6 +357,17 @@
    each), and over 300,000 per second where none is; with the triangulation
    method about 2,200.
 
+   The mesh build costs six point queries per triangle (more with refine):
+   the office's 12,000 triangles take 72,000 queries, nearly all of the
+   build time. Interpolants are only as accurate as IrradianceAtPoint, whose
+   sources are the solution's elements: for a more accurate image solve
+   with a smaller eps and mesh with a larger min_leaf_area. Discontinuity
+   edges that nearly graze a patch outline can make a triangulation fail
+   its checks; the patch is then meshed without its discontinuities. The
+   output has no T-vertices where patches share an edge or part of one; a
+   patch edge that ends on another patch's face (a wall meeting a floor
+   away from the floor's edge) needs none.
+
    PAPER
 
        Stephen L. Hardt, High Fidelity Radiosity Rendering at Interactive Rates, M.Eng. thesis, MIT, 1996.
@@ -193,8 +379,9 @@
 #define RADINTERP_H
 
 #define RADINTERP_VERSION_MAJOR 0
-#define RADINTERP_VERSION_MINOR 2
+#define RADINTERP_VERSION_MINOR 3
 #define RADINTERP_VERSION_PATCH 0
+#define RADINTERP_FILE_FORMAT_VERSION 1   /* of saved meshes */
 
 #include <stddef.h>
 #include <stdint.h>
@@ -361,6 +548,159 @@ RADINTERP_API radinterp_result radinterp_radiosity_at_point(const radinterp_solu
    for NULL pointers, count < 3, a zero n or non-finite input. */
 RADINTERP_API double radinterp_form_factor_point_polygon(const float p[3], const float n[3],
                                                          const float *verts, uint32_t count);
+
+/* ---- discontinuity mesh, quadratic interpolants, per-pixel shading ------ */
+
+typedef int (*radinterp_write_fn)(void *user, const void *bytes, size_t n); /* 0 = ok */
+typedef int (*radinterp_read_fn)(void *user, void *bytes, size_t n);        /* 0 = all n bytes read */
+
+typedef struct radinterp_mesh radinterp_mesh;
+
+typedef struct radinterp_mesh_desc {
+    /* parameters, see MESH PARAMETERS above; zero = default */
+    float min_discont_weight;    /* Tree::minDiscontWeight (W/m^2) */
+    uint32_t max_leaf_dsets;     /* Tree::maxLeafDSets */
+    float min_leaf_area;         /* the mesh stops where the solution's quadtrees split into smaller nodes (m^2) */
+    int no_discontinuities;      /* non-zero: leaves are triangulated without discontinuities */
+    int refine;                  /* non-zero: representation-based refinement (4.4.2) */
+    float refine_eps;            /* Gur::eps of that refinement, W/m^2 of irradiance */
+    uint32_t refine_samples;     /* SAMPLES: SAMPLES x SAMPLES test points per triangle */
+    uint32_t refine_passes;      /* refinement passes at most */
+    float refine_min_area;       /* leaves are not split into children smaller than this (m^2) */
+    float weld_distance;         /* outline vertices of neighbouring patches closer than this are one (m) */
+
+    /* optional callbacks */
+    radinterp_allocator allocator;
+    void (*parallel_for)(void *user, radinterp_job_fn job, void *ctx, uint32_t count);
+    void *parallel_user;
+    int (*progress)(void *user, uint64_t done, uint64_t total);  /* non-zero cancels */
+    void *progress_user;
+    void (*log)(void *user, const char *message);
+    void *log_user;
+} radinterp_mesh_desc;
+
+typedef struct radinterp_mesh_info {
+    uint32_t triangle_count;
+    uint32_t vertex_count;
+    uint32_t leaf_count;              /* leaves of the restricted quadtrees */
+    uint32_t patch_count;
+    uint32_t discontinuities;         /* found: the four kinds below */
+    uint32_t ev, ve, horizon, contact;
+    uint32_t dsets;                   /* lines carrying collinear discontinuities, over all patches */
+    uint32_t candidates;              /* discontinuities with weight >= min_discont_weight */
+    uint32_t active_discontinuities;
+    uint32_t active_leaf_dsets;       /* sum over leaves of their active DSets */
+    uint32_t max_leaf_active_dsets;   /* the most on one leaf (<= max_leaf_dsets) */
+    uint32_t balance_splits;          /* leaves split to restrict the quadtrees */
+    uint32_t hanging_vertices;        /* T-vertices inside patches closed (case A) */
+    uint32_t seam_vertices;           /* outline vertices taken from neighbouring patches (case C) */
+    uint32_t fallback_patches;        /* patches triangulated without their discontinuities */
+    uint32_t refine_passes;           /* representation-based passes run */
+    uint32_t refined_leaves;          /* leaves they split */
+    float max_fit_error;              /* largest representation error measured (refine only) */
+    uint64_t samples;                 /* IrradianceAtPoint calls of the build */
+    size_t bytes;                     /* memory held by the mesh */
+} radinterp_mesh_info;
+
+/* The mesh as arrays an engine can upload. Pointers stay valid until
+   radinterp_mesh_destroy. */
+typedef struct radinterp_mesh_data {
+    uint32_t vertex_count, triangle_count;
+    const float *positions;          /* 3 per vertex; shared vertices are bit-identical */
+    const uint32_t *indices;         /* 3 per triangle, counter-clockwise seen from the patch's front */
+    const uint32_t *triangle_patch;  /* the caller's patch index of each triangle */
+    const uint32_t *triangle_leaf;   /* leaf of each triangle (radinterp_mesh_get_leaf) */
+    const float *coefficients;       /* 18 per triangle: radiosity B(s, t) = E + rho H(s, t) as
+                                        (A, 2B, 2C, D, 2E, F), each an rgb triple: [6][3] */
+    const float *irradiance_coefficients;  /* 18 per triangle: H(s, t), the interpolant itself */
+    const float *reflectance;        /* 3 per triangle: rho of its patch */
+    const float *emission;           /* 3 per triangle: E of its patch */
+    const float *corner_radiosity;   /* 9 per triangle: B at its corners (Gouraud shading) */
+    const float *vertex_radiosity;   /* 3 per vertex: mean B of the corners that share it (blends
+                                        patches that meet there) */
+    const unsigned char *edge_flags; /* per triangle: bit i = the edge opposite corner i lies on a
+                                        leaf edge or the patch outline; bit 3 + i = it lies on an
+                                        active discontinuity */
+} radinterp_mesh_data;
+
+typedef enum radinterp_discontinuity_type {
+    RADINTERP_DISCONTINUITY_EV = 1,      /* source edge, blocker vertex */
+    RADINTERP_DISCONTINUITY_VE = 2,      /* source vertex, blocker edge */
+    RADINTERP_DISCONTINUITY_HORIZON = 3, /* the source's plane splits the receiver */
+    RADINTERP_DISCONTINUITY_CONTACT = 4  /* the blocker touches the receiver */
+} radinterp_discontinuity_type;
+
+typedef struct radinterp_discontinuity {
+    float a[3], b[3];            /* endpoints on the receiver */
+    uint32_t type;               /* radinterp_discontinuity_type */
+    uint32_t receiver;           /* patches; RADINTERP_NO_PATCH where none takes part */
+    uint32_t source;
+    uint32_t blocker;
+    uint32_t dset;               /* collinear discontinuities on one receiver share it */
+    float weight;                /* max(d_sb / d_br) * B_src; FLT_MAX for a contact */
+    int active;                  /* in the triangulation of every leaf it crosses */
+} radinterp_discontinuity;
+#define RADINTERP_NO_PATCH 0xFFFFFFFFu
+
+typedef struct radinterp_mesh_leaf {
+    uint32_t patch;
+    uint32_t depth;
+    uint32_t vertex_count;       /* 3 or 4 */
+    float vertices[4][3];
+    uint32_t dsets;              /* DSets impinging on it (weight >= min_discont_weight) */
+    uint32_t active_dsets;       /* those in its triangulation (<= max_leaf_dsets) */
+    uint32_t first_triangle, triangle_count;   /* its triangles are consecutive */
+    float error;                 /* representation error (refine), else -1 */
+} radinterp_mesh_leaf;
+
+RADINTERP_API radinterp_result radinterp_build_mesh(const radinterp_solution *s, const radinterp_mesh_desc *desc,
+                                                    radinterp_mesh **out);
+RADINTERP_API void radinterp_mesh_destroy(radinterp_mesh *m);
+RADINTERP_API void radinterp_mesh_get_info(const radinterp_mesh *m, radinterp_mesh_info *info);
+RADINTERP_API void radinterp_mesh_get_data(const radinterp_mesh *m, radinterp_mesh_data *data);
+RADINTERP_API uint32_t radinterp_mesh_discontinuity_count(const radinterp_mesh *m);
+RADINTERP_API radinterp_result radinterp_mesh_get_discontinuity(const radinterp_mesh *m, uint32_t index,
+                                                                radinterp_discontinuity *d);
+RADINTERP_API uint32_t radinterp_mesh_leaf_count(const radinterp_mesh *m);
+RADINTERP_API radinterp_result radinterp_mesh_get_leaf(const radinterp_mesh *m, uint32_t index,
+                                                       radinterp_mesh_leaf *leaf);
+/* The job system radinterp_shade uses (a loaded mesh has none: serial). */
+RADINTERP_API void radinterp_mesh_set_parallel_for(radinterp_mesh *m,
+                                                   void (*parallel_for)(void *user, radinterp_job_fn job,
+                                                                        void *ctx, uint32_t count),
+                                                   void *user);
+
+/* Coefficients (A, 2B, 2C, D, 2E, F) of the quadratic through six values at
+   the corners and edge midpoints of a triangle (Hardt eq. 3.1-3.3): r[0] at
+   (s, t) = (0, 0), r[1] at (1/2, 0), r[2] at (1, 0), r[3] at (1/2, 1/2),
+   r[4] at (0, 1), r[5] at (0, 1/2); s, t = weights of the 2nd and 3rd corner. */
+RADINTERP_API void radinterp_fit_quadratic(const float r[6], float coefficients[6]);
+/* Radiosity B = E + rho * H(s, t) of a triangle at barycentric (s, t). */
+RADINTERP_API radinterp_result radinterp_eval(const radinterp_mesh *m, uint32_t triangle, float s, float t,
+                                              float rgb[3]);
+/* The irradiance interpolant H(s, t) itself (W/m^2). */
+RADINTERP_API radinterp_result radinterp_eval_irradiance(const radinterp_mesh *m, uint32_t triangle, float s,
+                                                         float t, float rgb[3]);
+/* Per pixel: rgb_out[3 i..] = B of triangle triangle_ids[i] at
+   (st[2 i], st[2 i + 1]), clamped at 0. Pixels whose id is not a triangle of
+   the mesh (RADINTERP_NO_TRIANGLE, other objects' ids) are left unchanged. */
+RADINTERP_API radinterp_result radinterp_shade(const radinterp_mesh *m, const uint32_t *triangle_ids,
+                                               const float *st, size_t count, float *rgb_out);
+/* The same with Gouraud shading: B at the corners, blended linearly. */
+RADINTERP_API radinterp_result radinterp_shade_gouraud(const radinterp_mesh *m, const uint32_t *triangle_ids,
+                                                       const float *st, size_t count, float *rgb_out);
+#define RADINTERP_NO_TRIANGLE 0xFFFFFFFFu
+
+RADINTERP_API radinterp_result radinterp_mesh_save(const radinterp_mesh *m, radinterp_write_fn write, void *user);
+RADINTERP_API radinterp_result radinterp_mesh_load(const radinterp_allocator *allocator, radinterp_read_fn read,
+                                                   void *user, radinterp_mesh **out);
+RADINTERP_API radinterp_result radinterp_mesh_save_to_memory(const radinterp_mesh *m,
+                                                             const radinterp_allocator *allocator, void **data,
+                                                             size_t *size);
+RADINTERP_API radinterp_result radinterp_mesh_load_from_memory(const void *data, size_t size,
+                                                               const radinterp_allocator *allocator,
+                                                               radinterp_mesh **out);
+RADINTERP_API void radinterp_free_memory(const radinterp_allocator *allocator, void *data);
 
 #ifdef __cplusplus
 }
@@ -895,6 +1235,180 @@ static int radinterp__bvh_occluded(const radinterp__bvh *bvh, const float org[3]
         index = stack[--top];
     }
 }
+
+/* ======================================================================
+   5. CRC32 and little-endian byte streams
+   A saved object is: magic (8 bytes), format version (u32), payload size
+   (u64), payload, CRC32 of everything before it (u32). Values are written
+   byte by byte in little-endian order, never as raw structs. A loader treats
+   its input as hostile: it checks every count against the declared payload
+   size before allocating, and the CRC at the end.
+   ---------------------------------------------------------------------- */
+/* In the declarations (public):
+
+   typedef int (*radinterp_write_fn)(void *user, const void *bytes, size_t n); // 0 = ok
+   typedef int (*radinterp_read_fn)(void *user, void *bytes, size_t n);        // 0 = all n bytes read
+*/
+
+/* CRC-32 (IEEE 802.3, reflected, as zlib and PNG). The table is built on the
+   stack per stream: 256 entries, cheaper than one page of data. */
+typedef struct radinterp__crc { uint32_t table[256]; uint32_t value; } radinterp__crc;
+
+static void radinterp__crc_init(radinterp__crc *c)
+{
+    uint32_t i, k;
+    for (i = 0; i < 256; i++) {
+        uint32_t v = i;
+        for (k = 0; k < 8; k++) v = (v & 1u) ? 0xEDB88320u ^ (v >> 1) : v >> 1;
+        c->table[i] = v;
+    }
+    c->value = 0xFFFFFFFFu;
+}
+static void radinterp__crc_add(radinterp__crc *c, const void *bytes, size_t n)
+{
+    const unsigned char *p = (const unsigned char *)bytes;
+    uint32_t v = c->value;
+    while (n--) v = c->table[(v ^ *p++) & 0xFFu] ^ (v >> 8);
+    c->value = v;
+}
+static uint32_t radinterp__crc_final(const radinterp__crc *c) { return c->value ^ 0xFFFFFFFFu; }
+
+typedef struct radinterp__writer {
+    radinterp_write_fn write;
+    void *user;
+    radinterp__crc crc;
+    int failed;        /* a write callback failed: RADINTERP_ERROR_IO */
+} radinterp__writer;
+
+static void radinterp__put(radinterp__writer *w, const void *bytes, size_t n)
+{
+    if (w->failed || n == 0) return;
+    radinterp__crc_add(&w->crc, bytes, n);
+    if (w->write(w->user, bytes, n) != 0) w->failed = 1;
+}
+static void radinterp__put_u32(radinterp__writer *w, uint32_t v)
+{
+    unsigned char b[4];
+    b[0] = (unsigned char)v; b[1] = (unsigned char)(v >> 8);
+    b[2] = (unsigned char)(v >> 16); b[3] = (unsigned char)(v >> 24);
+    radinterp__put(w, b, 4);
+}
+static void radinterp__put_u64(radinterp__writer *w, uint64_t v)
+{
+    radinterp__put_u32(w, (uint32_t)v);
+    radinterp__put_u32(w, (uint32_t)(v >> 32));
+}
+static void radinterp__put_f32(radinterp__writer *w, float f)
+{
+    uint32_t v;
+    memcpy(&v, &f, 4);
+    radinterp__put_u32(w, v);
+}
+static void radinterp__put_f32_array(radinterp__writer *w, const float *f, size_t n)
+{
+    unsigned char buf[4096];
+    size_t i = 0;
+    while (i < n) {
+        size_t m = n - i < sizeof buf / 4 ? n - i : sizeof buf / 4, j;
+        for (j = 0; j < m; j++) {
+            uint32_t v;
+            memcpy(&v, &f[i + j], 4);
+            buf[4 * j] = (unsigned char)v; buf[4 * j + 1] = (unsigned char)(v >> 8);
+            buf[4 * j + 2] = (unsigned char)(v >> 16); buf[4 * j + 3] = (unsigned char)(v >> 24);
+        }
+        radinterp__put(w, buf, 4 * m);
+        i += m;
+    }
+}
+static void radinterp__put_u32_array(radinterp__writer *w, const uint32_t *v, size_t n)
+{
+    size_t i;
+    for (i = 0; i < n; i++) radinterp__put_u32(w, v[i]);
+}
+
+typedef struct radinterp__reader {
+    radinterp_read_fn read;
+    void *user;
+    radinterp__crc crc;
+    uint64_t remaining;  /* payload bytes not yet read, from the header */
+    int failed;          /* short read or a size past the payload: corrupt */
+} radinterp__reader;
+
+static void radinterp__get(radinterp__reader *r, void *bytes, size_t n)
+{
+    if (r->failed) { memset(bytes, 0, n); return; }
+    if (n > r->remaining || r->read(r->user, bytes, n) != 0) {
+        r->failed = 1;
+        memset(bytes, 0, n);
+        return;
+    }
+    r->remaining -= n;
+    radinterp__crc_add(&r->crc, bytes, n);
+}
+static uint32_t radinterp__get_u32(radinterp__reader *r)
+{
+    unsigned char b[4];
+    radinterp__get(r, b, 4);
+    return (uint32_t)b[0] | ((uint32_t)b[1] << 8) | ((uint32_t)b[2] << 16) | ((uint32_t)b[3] << 24);
+}
+static uint64_t radinterp__get_u64(radinterp__reader *r)
+{
+    uint64_t lo = radinterp__get_u32(r);
+    return lo | ((uint64_t)radinterp__get_u32(r) << 32);
+}
+static float radinterp__get_f32(radinterp__reader *r)
+{
+    uint32_t v = radinterp__get_u32(r);
+    float f;
+    memcpy(&f, &v, 4);
+    return f;
+}
+/* True when count items of item_bytes each can still be in the payload:
+   call before allocating anything sized by a count read from the input. */
+static int radinterp__can_hold(radinterp__reader *r, uint64_t count, uint64_t item_bytes)
+{
+    if (item_bytes && count > r->remaining / item_bytes) { r->failed = 1; return 0; }
+    return !r->failed;
+}
+
+/* Memory-buffer streams behind the public save_to_memory/load_from_memory. */
+typedef struct radinterp__membuf {
+    unsigned char *data;
+    size_t size, capacity, pos;
+    const radinterp_allocator *a;
+} radinterp__membuf;
+
+static int radinterp__membuf_write(void *user, const void *bytes, size_t n)
+{
+    radinterp__membuf *m = (radinterp__membuf *)user;
+    if (n > m->capacity - m->size) {
+        size_t cap = m->capacity ? m->capacity : 4096;
+        unsigned char *p;
+        while (cap - m->size < n) {
+            if (cap > SIZE_MAX / 2) return -1;
+            cap *= 2;
+        }
+        p = (unsigned char *)radinterp__alloc(m->a, cap);
+        if (!p) return -1;
+        if (m->size) memcpy(p, m->data, m->size);
+        radinterp__free(m->a, m->data);
+        m->data = p;
+        m->capacity = cap;
+    }
+    memcpy(m->data + m->size, bytes, n);
+    m->size += n;
+    return 0;
+}
+
+static int radinterp__membuf_read(void *user, void *bytes, size_t n)
+{
+    radinterp__membuf *m = (radinterp__membuf *)user;
+    if (n > m->size - m->pos) return -1;
+    memcpy(bytes, m->data + m->pos, n);
+    m->pos += n;
+    return 0;
+}
+
 
 /* ======================================================================
    7. jobs: the caller's parallel_for, or a serial loop
@@ -4655,6 +5169,3177 @@ RADINTERP_API const char *radinterp_result_string(radinterp_result r)
     case RADINTERP_ERROR_IO: return "read or write callback failed";
     }
     return "unknown result";
+}
+
+/* ======================================================================
+   15. mesh building blocks: growable arrays, a hash map, patch frames
+   Part 2 of the method (chapters 3 and 5) starts here. It reads the
+   solution through its const interface (patches, nodes, links, blockers,
+   radinterp__irradiance) and never changes it: the mesh keeps its own copy
+   of the quadtrees, which it restricts and refines.
+   ---------------------------------------------------------------------- */
+typedef struct radinterp__buf {
+    void *data;
+    size_t count, cap, item;
+} radinterp__buf;
+
+static void radinterp__buf_init(radinterp__buf *b, size_t item)
+{
+    b->data = NULL;
+    b->count = b->cap = 0;
+    b->item = item;
+}
+
+static int radinterp__buf_reserve(const radinterp_allocator *a, radinterp__buf *b, size_t n)
+{
+    size_t cap;
+    void *p;
+    if (n <= b->cap) return 0;
+    cap = b->cap ? b->cap : 64;
+    while (cap < n) {
+        if (cap > SIZE_MAX / 2 / b->item) return -1;
+        cap *= 2;
+    }
+    p = radinterp__alloc_array(a, cap, b->item);
+    if (!p) return -1;
+    if (b->count) memcpy(p, b->data, b->count * b->item);
+    radinterp__free(a, b->data);
+    b->data = p;
+    b->cap = cap;
+    return 0;
+}
+
+/* A new zeroed item at the end, or NULL when out of memory. */
+static void *radinterp__buf_push(const radinterp_allocator *a, radinterp__buf *b)
+{
+    void *p;
+    if (b->count == b->cap && radinterp__buf_reserve(a, b, b->count + 1) != 0) return NULL;
+    p = (char *)b->data + b->count * b->item;
+    memset(p, 0, b->item);
+    b->count++;
+    return p;
+}
+
+static int radinterp__buf_u32(const radinterp_allocator *a, radinterp__buf *b, uint32_t v)
+{
+    uint32_t *p = (uint32_t *)radinterp__buf_push(a, b);
+    if (!p) return -1;
+    *p = v;
+    return 0;
+}
+
+static void radinterp__buf_free(const radinterp_allocator *a, radinterp__buf *b)
+{
+    radinterp__free(a, b->data);
+    b->data = NULL;
+    b->count = b->cap = 0;
+}
+
+#define RADINTERP__U32(b) ((uint32_t *)(b).data)
+
+/* Open addressing from keys of `words` 32-bit words to values (NONE marks
+   an empty slot, so it cannot be stored). */
+typedef struct radinterp__hmap {
+    uint32_t *keys;
+    uint32_t *vals;
+    uint32_t cap, count, words;
+} radinterp__hmap;
+
+static uint32_t radinterp__hmap_hash(const uint32_t *k, uint32_t words)
+{
+    uint64_t h = 0x9E3779B97F4A7C15ull;
+    uint32_t i;
+    for (i = 0; i < words; i++) h = radinterp__mix64(h ^ ((uint64_t)k[i] << (i & 1 ? 32 : 0)) ^ i);
+    return (uint32_t)(h >> 32);
+}
+
+static int radinterp__hmap_alloc(const radinterp_allocator *a, radinterp__hmap *m, uint32_t words, uint32_t cap)
+{
+    uint32_t i;
+    m->keys = (uint32_t *)radinterp__alloc_array(a, (size_t)cap * words, sizeof(uint32_t));
+    m->vals = (uint32_t *)radinterp__alloc_array(a, cap, sizeof(uint32_t));
+    if (!m->keys || !m->vals) {
+        radinterp__free(a, m->keys);
+        radinterp__free(a, m->vals);
+        m->keys = m->vals = NULL;
+        return -1;
+    }
+    for (i = 0; i < cap; i++) m->vals[i] = RADINTERP__NONE;
+    m->cap = cap;
+    m->count = 0;
+    m->words = words;
+    return 0;
+}
+
+static int radinterp__hmap_init(const radinterp_allocator *a, radinterp__hmap *m, uint32_t words, uint32_t expected)
+{
+    uint32_t cap = 64;
+    while (cap < 2u * expected + 1u) {
+        if (cap > 0x3FFFFFFFu) return -1;
+        cap *= 2;
+    }
+    return radinterp__hmap_alloc(a, m, words, cap);
+}
+
+static void radinterp__hmap_free(const radinterp_allocator *a, radinterp__hmap *m)
+{
+    radinterp__free(a, m->keys);
+    radinterp__free(a, m->vals);
+    memset(m, 0, sizeof *m);
+}
+
+static void radinterp__hmap_clear(radinterp__hmap *m)
+{
+    uint32_t i;
+    for (i = 0; i < m->cap; i++) m->vals[i] = RADINTERP__NONE;
+    m->count = 0;
+}
+
+static uint32_t radinterp__hmap_slot(const radinterp__hmap *m, const uint32_t *key)
+{
+    uint32_t i = radinterp__hmap_hash(key, m->words) & (m->cap - 1);
+    while (m->vals[i] != RADINTERP__NONE &&
+           memcmp(m->keys + (size_t)i * m->words, key, m->words * sizeof(uint32_t)) != 0)
+        i = (i + 1) & (m->cap - 1);
+    return i;
+}
+
+static uint32_t radinterp__hmap_get(const radinterp__hmap *m, const uint32_t *key)
+{
+    return m->cap ? m->vals[radinterp__hmap_slot(m, key)] : RADINTERP__NONE;
+}
+
+/* Stores key -> val unless key is present; returns the value stored for key
+   (val, or the earlier one), or NONE when out of memory. */
+static uint32_t radinterp__hmap_put(const radinterp_allocator *a, radinterp__hmap *m, const uint32_t *key, uint32_t val)
+{
+    uint32_t i;
+    if (2u * (m->count + 1u) > m->cap) {
+        radinterp__hmap old = *m;
+        uint32_t j;
+        if (m->cap > 0x3FFFFFFFu || radinterp__hmap_alloc(a, m, old.words, old.cap * 2) != 0) {
+            *m = old;
+            return RADINTERP__NONE;
+        }
+        for (j = 0; j < old.cap; j++) {
+            if (old.vals[j] == RADINTERP__NONE) continue;
+            i = radinterp__hmap_slot(m, old.keys + (size_t)j * old.words);
+            memcpy(m->keys + (size_t)i * m->words, old.keys + (size_t)j * old.words, m->words * sizeof(uint32_t));
+            m->vals[i] = old.vals[j];
+            m->count++;
+        }
+        radinterp__hmap_free(a, &old);
+    }
+    i = radinterp__hmap_slot(m, key);
+    if (m->vals[i] != RADINTERP__NONE) return m->vals[i];
+    memcpy(m->keys + (size_t)i * m->words, key, m->words * sizeof(uint32_t));
+    m->vals[i] = val;
+    m->count++;
+    return val;
+}
+
+/* Key of a float point (and a tag, e.g. a patch): its exact bits, with -0
+   folded into +0 so that equal coordinates give equal keys. */
+static void radinterp__point_key(const float *p, uint32_t tag, uint32_t *key)
+{
+    int k;
+    for (k = 0; k < 3; k++) {
+        float x = p[k] + 0.0f;
+        memcpy(&key[k], &x, 4);
+    }
+    key[3] = tag;
+}
+
+/* 2D frame of a patch: origin at its first corner, e1 along its first
+   edge, e2 = n x e1, so counter-clockwise in 2D is counter-clockwise seen
+   from the front. */
+typedef struct radinterp__pframe { double o[3], e1[3], e2[3]; } radinterp__pframe;
+
+static void radinterp__pframe_make(radinterp__pframe *f, const radinterp__patch *pt)
+{
+    double d[3], len, k;
+    radinterp__d3_from_f(pt->v[0], f->o);
+    radinterp__d3_from_f(pt->v[1], d);
+    radinterp__d3_sub(d, f->o, d);
+    k = radinterp__d3_dot(d, pt->n);
+    d[0] -= k * pt->n[0]; d[1] -= k * pt->n[1]; d[2] -= k * pt->n[2];
+    len = radinterp__d3_len(d);
+    f->e1[0] = d[0] / len; f->e1[1] = d[1] / len; f->e1[2] = d[2] / len;
+    radinterp__d3_cross(pt->n, f->e1, f->e2);
+}
+
+static void radinterp__pframe_2d(const radinterp__pframe *f, const double *x, double *uv)
+{
+    double d[3];
+    radinterp__d3_sub(x, f->o, d);
+    uv[0] = radinterp__d3_dot(d, f->e1);
+    uv[1] = radinterp__d3_dot(d, f->e2);
+}
+
+static void radinterp__pframe_2df(const radinterp__pframe *f, const float *x, double *uv)
+{
+    double d[3];
+    radinterp__d3_from_f(x, d);
+    radinterp__pframe_2d(f, d, uv);
+}
+
+static void radinterp__pframe_3d(const radinterp__pframe *f, const double *uv, double *x)
+{
+    int k;
+    for (k = 0; k < 3; k++) x[k] = f->o[k] + uv[0] * f->e1[k] + uv[1] * f->e2[k];
+}
+
+static void radinterp__pframe_3df(const radinterp__pframe *f, const double *uv, float *x)
+{
+    double d[3];
+    radinterp__pframe_3d(f, uv, d);
+    x[0] = (float)d[0]; x[1] = (float)d[1]; x[2] = (float)d[2];
+}
+
+/* Clips the segment p + t (q - p), t in [0, 1], to the convex polygon poly
+   (counter-clockwise) moved `inset` inward. Returns 1 when a piece of
+   positive length remains: [*t0, *t1], with the polygon edge that cut each
+   end (-1 where the segment's own end remains). */
+static int radinterp__clip_segment2(const double (*poly)[2], int n, double inset, const double *p, const double *q,
+                                    double *t0, double *t1, int *e0, int *e1)
+{
+    int i;
+    *t0 = 0.0; *t1 = 1.0; *e0 = *e1 = -1;
+    for (i = 0; i < n; i++) {
+        const double *a = poly[i], *b = poly[(i + 1) % n];
+        double dx = b[0] - a[0], dy = b[1] - a[1], len = sqrt(dx * dx + dy * dy), fp, fq, t;
+        if (!(len > 0.0)) continue;
+        fp = (-dy * (p[0] - a[0]) + dx * (p[1] - a[1])) / len - inset;
+        fq = (-dy * (q[0] - a[0]) + dx * (q[1] - a[1])) / len - inset;
+        if (fp < 0.0 && fq < 0.0) return 0;
+        if (fp >= 0.0 && fq >= 0.0) continue;
+        t = fp / (fp - fq);
+        if (fp < 0.0) { if (t > *t0) { *t0 = t; *e0 = i; } }
+        else if (t < *t1) { *t1 = t; *e1 = i; }
+        if (*t0 >= *t1) return 0;
+    }
+    return *t1 > *t0;
+}
+
+/* Distance from p to the segment (a, b), in 2D. */
+static double radinterp__seg_dist2(const double *a, const double *b, const double *p)
+{
+    double dx = b[0] - a[0], dy = b[1] - a[1], l2 = dx * dx + dy * dy, t = 0.0, x, y;
+    if (l2 > 0.0) t = ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / l2;
+    t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
+    x = a[0] + t * dx - p[0];
+    y = a[1] + t * dy - p[1];
+    return sqrt(x * x + y * y);
+}
+
+/* ======================================================================
+   16. discontinuities (Hardt 5.2-5.4)
+   For every receiver patch R and every source patch S linked to R's
+   quadtree, with the union of those links' blockers B:
+   - EV: a source edge e and a blocker vertex v span a wedge; the rays from e
+     through v, continued to R's plane, trace a segment on R;
+   - VE: a source vertex s and a blocker edge f likewise (rays from s through f);
+   - horizon: S's plane splits R (one side of the line sees S's front);
+   - contact: a patch resting on R (an edge of it lies on R).
+   A wedge counts only when it is a real visual event: its plane supports
+   the blocker at v (EV) or the source at s (VE), so the blocker's
+   silhouette, seen from the source, changes across it. EEE surfaces are
+   ignored, as in the thesis. Segments are clipped to the part of R in front
+   of S and kept when they cross R's interior (not just run along its
+   outline). Weight (5.3): w = max(d_sb / d_br) * B_src over the segment,
+   geometric factor 1 for a horizon, infinite (FLT_MAX) for a contact. The
+   geometric factor is computed once; the weight is cached with the state of
+   the solution's radiosities and recomputed when they change (5.4).
+   ---------------------------------------------------------------------- */
+typedef struct radinterp__disc {
+    double p[2], q[2];        /* endpoints in the receiver's frame (on the DSet line once grouped) */
+    double t0, t1;            /* positions of p and q along the DSet line, t0 < t1 */
+    uint32_t on0, on1;        /* 1 + the receiver outline edge that p / q lies on; 0 inside */
+    uint32_t receiver, source, blocker, type, dset;
+    float geom;               /* max(d_sb / d_br); 1 for a horizon; FLT_MAX for a contact */
+    float weight;             /* cached geom * B_src */
+    uint32_t weight_stamp;    /* radiosity state of the cached weight; 0 = not computed */
+    uint32_t active;
+} radinterp__disc;
+
+/* A DSet's line on a receiver (5.5.4): point o, unit direction d. */
+typedef struct radinterp__dset { double o[2], d[2]; uint32_t receiver; } radinterp__dset;
+
+/* A node of the mesh's own quadtrees (a copy of the solution's, restricted
+   and refined). Children wind like their parent, as in the solution. */
+typedef struct radinterp__mnode {
+    float v[4][3];
+    double uv[4][2];          /* corners in the patch frame */
+    uint32_t count, patch, parent, child, depth;
+    uint32_t first_disc, disc_count;   /* discontinuities impinging on it, by DSet (node_discs) */
+    uint32_t leaf;            /* index in the leaf list of the current pass */
+} radinterp__mnode;
+
+/* An active discontinuity edge of a patch: the union of a DSet's active
+   discontinuities that overlap (5.5.7). */
+typedef struct radinterp__seg {
+    double p[2], q[2];
+    float a[3], b[3];
+    uint32_t on0, on1;        /* 1 + outline edge of each end; 0 inside */
+} radinterp__seg;
+
+/* A vertex on a patch outline: a patch corner, a leaf corner on an outline
+   edge, or the end of a discontinuity edge there. */
+typedef struct radinterp__bvert {
+    float x[3];
+    uint32_t patch, edge;     /* the outline edge it lies on (a corner: the edge it starts) */
+    uint32_t corner;          /* a corner of the patch */
+    uint32_t rep;             /* the vertex it is welded to */
+} radinterp__bvert;
+
+typedef struct radinterp__otri {
+    uint32_t v[3];
+    uint32_t patch, node;
+    uint32_t flags;
+} radinterp__otri;
+
+typedef struct radinterp__builder {
+    const radinterp_solution *s;
+    const radinterp_mesh_desc *desc;
+    radinterp_allocator a;
+    double tol;                      /* geometric tolerance: epsilon * diag */
+    double weld;                     /* outline vertices closer than this are one */
+    float min_weight;
+    uint32_t max_dsets;
+    double refine_eps, refine_min_area, min_leaf_area;
+    uint32_t refine_samples, refine_passes;
+    radinterp__pframe *frames;       /* per patch */
+    double *outline;                 /* per patch: corners in its frame, 8 doubles */
+    /* discontinuities, grouped by receiver and by DSet inside */
+    radinterp__buf discs, dsets;
+    uint32_t *disc_first, *disc_count;
+    /* quadtrees */
+    radinterp__buf nodes, node_discs;
+    uint32_t *roots;
+    radinterp__hmap corners;         /* (corner, patch + 1) of every node */
+    radinterp__buf leaves;           /* node ids, patch by patch */
+    uint32_t *leaf_first, *leaf_count;
+    /* one pass: discontinuity edges, outline vertices, output */
+    radinterp__buf segs;
+    uint32_t *seg_first, *seg_count;
+    radinterp__buf pool;             /* radinterp__bvert */
+    radinterp__hmap canon;           /* point -> pool index of its representative */
+    radinterp__buf reps;             /* pool entries sorted by x */
+    radinterp__buf chains;           /* per patch edge: representatives along it */
+    uint32_t *chain_first, *chain_len;
+    radinterp__buf pos, tris;        /* output of the pass */
+    radinterp__hmap vmap;            /* point -> output vertex */
+    /* statistics */
+    uint32_t balance_splits, hanging, seam, fallback, degenerate;
+    uint64_t samples;
+    int cancelled;
+} radinterp__builder;
+
+static void radinterp__mesh_log(const radinterp__builder *b, const char *fmt, ...)
+{
+    char msg[320];
+    va_list ap;
+    if (!b->desc->log) return;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    b->desc->log(b->desc->log_user, msg);
+}
+
+/* Largest channel of a patch's radiosity: B_src of the weights. */
+static float radinterp__brightness(const radinterp_solution *s, uint32_t patch)
+{
+    const float *b = s->nodes[s->patches[patch].root].b;
+    return radinterp__maxf(b[0], radinterp__maxf(b[1], b[2]));
+}
+
+/* Changes whenever the solver runs another gather and push-pull. */
+static uint32_t radinterp__radiosity_stamp(const radinterp_solution *s) { return s->iterations + 1u; }
+
+/* The weight of a discontinuity (5.3), from the cache while the radiosities
+   it was computed with still hold (5.4). */
+static float radinterp__disc_weight(const radinterp_solution *s, radinterp__disc *d)
+{
+    uint32_t stamp = radinterp__radiosity_stamp(s);
+    if (d->weight_stamp != stamp) {
+        if (d->type == RADINTERP_DISCONTINUITY_CONTACT) {
+            d->weight = FLT_MAX;
+        } else {
+            double w = (double)d->geom * radinterp__brightness(s, d->source);
+            d->weight = w > FLT_MAX ? FLT_MAX : (float)w;
+        }
+        d->weight_stamp = stamp;
+    }
+    return d->weight;
+}
+
+static const double (*radinterp__outline_of(const radinterp__builder *b, uint32_t patch))[2]
+{
+    return (const double (*)[2])(b->outline + 8 * (size_t)patch);
+}
+
+/* The part of receiver R in front of S's plane, in R's frame, with the R
+   outline edge each of its edges lies on (-1: the cut along S's plane).
+   Returns its corner count, 0 when no part of R is in front of S. */
+static int radinterp__front_region(const radinterp__builder *b, uint32_t R, uint32_t S, double (*out)[2], int *label)
+{
+    const radinterp__patch *pr = &b->s->patches[R], *ps = &b->s->patches[S];
+    const double (*uv)[2] = radinterp__outline_of(b, R);
+    double g[4], lo = DBL_MAX, hi = -DBL_MAX;
+    int n = (int)pr->count, i, m = 0;
+    for (i = 0; i < n; i++) {
+        double x[3];
+        radinterp__d3_from_f(pr->v[i], x);
+        g[i] = radinterp__d3_dot(ps->n, x) - ps->d;
+        lo = g[i] < lo ? g[i] : lo;
+        hi = g[i] > hi ? g[i] : hi;
+    }
+    if (hi <= b->tol) return 0;
+    if (lo >= -b->tol) {
+        for (i = 0; i < n; i++) { out[i][0] = uv[i][0]; out[i][1] = uv[i][1]; label[i] = i; }
+        return n;
+    }
+    for (i = 0; i < n; i++) {
+        int j = (i + 1) % n;
+        double s = g[i] / (g[i] - g[j]);
+        if (g[i] >= 0.0) {
+            out[m][0] = uv[i][0]; out[m][1] = uv[i][1]; label[m++] = i;
+            if (g[j] < 0.0) {
+                out[m][0] = uv[i][0] + s * (uv[j][0] - uv[i][0]);
+                out[m][1] = uv[i][1] + s * (uv[j][1] - uv[i][1]);
+                label[m++] = -1;
+            }
+        } else if (g[j] >= 0.0) {
+            out[m][0] = uv[i][0] + s * (uv[j][0] - uv[i][0]);
+            out[m][1] = uv[i][1] + s * (uv[j][1] - uv[i][1]);
+            label[m++] = i;
+        }
+    }
+    return m;
+}
+
+/* 1 + the outline edge of R within tol of uv, or 0. */
+static uint32_t radinterp__on_outline(const radinterp__builder *b, uint32_t R, const double *uv)
+{
+    const double (*o)[2] = radinterp__outline_of(b, R);
+    uint32_t i, n = b->s->patches[R].count;
+    for (i = 0; i < n; i++)
+        if (radinterp__seg_dist2(o[i], o[(i + 1) % n], uv) <= b->tol) return i + 1;
+    return 0;
+}
+
+/* Clips the segment (p, q) of R's plane to region: 1 with the clipped ends
+   when a piece of it crosses the region's interior (not only its outline). */
+static int radinterp__clip_to_region(const radinterp__builder *b, uint32_t R, const double (*region)[2], const int *label,
+                                     int n, const double *p, const double *q, double *cp, double *cq, uint32_t *on_p,
+                                     uint32_t *on_q)
+{
+    double t0, t1, len;
+    int e0, e1;
+    if (!radinterp__clip_segment2(region, n, b->tol, p, q, &t0, &t1, &e0, &e1)) return 0;
+    if (!radinterp__clip_segment2(region, n, 0.0, p, q, &t0, &t1, &e0, &e1)) return 0;
+    cp[0] = p[0] + t0 * (q[0] - p[0]); cp[1] = p[1] + t0 * (q[1] - p[1]);
+    cq[0] = p[0] + t1 * (q[0] - p[0]); cq[1] = p[1] + t1 * (q[1] - p[1]);
+    len = sqrt((cq[0] - cp[0]) * (cq[0] - cp[0]) + (cq[1] - cp[1]) * (cq[1] - cp[1]));
+    if (!(len > b->tol)) return 0;
+    *on_p = e0 >= 0 && label[e0] >= 0 ? (uint32_t)label[e0] + 1 : (e0 < 0 ? radinterp__on_outline(b, R, cp) : 0);
+    *on_q = e1 >= 0 && label[e1] >= 0 ? (uint32_t)label[e1] + 1 : (e1 < 0 ? radinterp__on_outline(b, R, cq) : 0);
+    return 1;
+}
+
+static int radinterp__push_disc(radinterp__builder *b, uint32_t R, const double *p, const double *q, uint32_t on_p,
+                                uint32_t on_q, uint32_t type, uint32_t S, uint32_t B, double geom)
+{
+    radinterp__disc *d = (radinterp__disc *)radinterp__buf_push(&b->a, &b->discs);
+    if (!d) return -1;
+    d->p[0] = p[0]; d->p[1] = p[1];
+    d->q[0] = q[0]; d->q[1] = q[1];
+    d->on0 = on_p;
+    d->on1 = on_q;
+    d->receiver = R;
+    d->source = S;
+    d->blocker = B;
+    d->type = type;
+    d->geom = geom > FLT_MAX ? FLT_MAX : (float)geom;
+    return 0;
+}
+
+/* Restricts u in [*u0, *u1] to f0 + u (f1 - f0) >= thr. */
+static int radinterp__clip_linear(double f0, double f1, double thr, double *u0, double *u1)
+{
+    double d = f1 - f0, u;
+    if (d == 0.0) return f0 >= thr && *u0 < *u1;
+    u = (thr - f0) / d;
+    if (d > 0.0) { if (u > *u0) *u0 = u; }
+    else if (u < *u1) *u1 = u;
+    return *u0 < *u1;
+}
+
+/* The trace of a wedge on receiver R's plane: rays from a(u) through c(u),
+   u in [0, 1], continued past c(u) (one of a, c is a fixed point: the
+   blocker vertex of an EV wedge, the source vertex of a VE wedge). Only
+   rays that meet the plane after passing c, with c in front of R and of
+   the source, count; the trace of the others' limit is a ray, cut where
+   the projection grows past 1/tol. Returns 1 with the ends p, q (3D). */
+static int radinterp__wedge_trace(const radinterp__builder *b, const radinterp__patch *pr, const radinterp__patch *ps,
+                                  const double *a0, const double *a1, const double *c0, const double *c1, double *p,
+                                  double *q)
+{
+    double ha0 = radinterp__d3_dot(pr->n, a0) - pr->d, ha1 = radinterp__d3_dot(pr->n, a1) - pr->d;
+    double hc0 = radinterp__d3_dot(pr->n, c0) - pr->d, hc1 = radinterp__d3_dot(pr->n, c1) - pr->d;
+    double fs0 = radinterp__d3_dot(ps->n, c0) - ps->d, fs1 = radinterp__d3_dot(ps->n, c1) - ps->d;
+    double u0 = 0.0, u1 = 1.0, ends[2];
+    int e, k;
+    if (!radinterp__clip_linear(hc0, hc1, b->tol, &u0, &u1)) return 0;
+    if (!radinterp__clip_linear(ha0 - hc0, ha1 - hc1, b->tol, &u0, &u1)) return 0;
+    if (!radinterp__clip_linear(fs0, fs1, b->tol, &u0, &u1)) return 0;
+    ends[0] = u0;
+    ends[1] = u1;
+    for (e = 0; e < 2; e++) {
+        double u = ends[e], a[3], c[3], ha, hc, t, *r = e ? q : p;
+        for (k = 0; k < 3; k++) {
+            a[k] = a0[k] + u * (a1[k] - a0[k]);
+            c[k] = c0[k] + u * (c1[k] - c0[k]);
+        }
+        ha = ha0 + u * (ha1 - ha0);
+        hc = hc0 + u * (hc1 - hc0);
+        t = hc / (ha - hc);
+        for (k = 0; k < 3; k++) r[k] = c[k] + t * (c[k] - a[k]);
+    }
+    return 1;
+}
+
+/* The point x of the line (l0, l1) on the line through f and r (the two
+   lines lie in one wedge plane). Returns 0 when they are parallel. */
+static int radinterp__line_meet(const double *l0, const double *l1, const double *f, const double *r, double *x)
+{
+    double d1[3], d2[3], w[3], a, bb, c, d, e, den, t;
+    radinterp__d3_sub(l1, l0, d1);
+    radinterp__d3_sub(r, f, d2);
+    radinterp__d3_sub(l0, f, w);
+    a = radinterp__d3_dot(d1, d1);
+    bb = radinterp__d3_dot(d1, d2);
+    c = radinterp__d3_dot(d2, d2);
+    d = radinterp__d3_dot(d1, w);
+    e = radinterp__d3_dot(d2, w);
+    den = a * c - bb * bb;
+    if (!(den > 1e-14 * a * c)) return 0;
+    t = (bb * e - c * d) / den;
+    x[0] = l0[0] + t * d1[0];
+    x[1] = l0[1] + t * d1[1];
+    x[2] = l0[2] + t * d1[2];
+    return 1;
+}
+
+static double radinterp__d3_dist(const double *a, const double *b)
+{
+    double d[3];
+    radinterp__d3_sub(a, b, d);
+    return radinterp__d3_len(d);
+}
+
+/* d_sb / d_br along the wedge's line through receiver point r (5.3). EV:
+   the fixed point f is the blocker vertex and the line meets the source
+   edge (l0, l1) at x: |f - x| / |r - f|. VE: f is the source vertex and the
+   line meets the blocker edge at y: |y - f| / |r - y|. */
+static double radinterp__wedge_ratio(int ev, const double *f, const double *l0, const double *l1, const double *r)
+{
+    double x[3], dsb, dbr;
+    if (!radinterp__line_meet(l0, l1, f, r, x)) return 0.0;
+    dsb = radinterp__d3_dist(f, x);
+    dbr = ev ? radinterp__d3_dist(r, f) : radinterp__d3_dist(r, x);
+    return dbr > 0.0 ? dsb / dbr : DBL_MAX;
+}
+
+/* Do all points lie on one side of the plane through o with unit normal m? */
+static int radinterp__supports(const double *m, const double *o, const double (*pts)[3], int n, double tol)
+{
+    int i, pos = 0, neg = 0;
+    for (i = 0; i < n; i++) {
+        double d[3], h;
+        radinterp__d3_sub(pts[i], o, d);
+        h = radinterp__d3_dot(m, d);
+        pos |= h > tol;
+        neg |= h < -tol;
+    }
+    return !(pos && neg);
+}
+
+/* Unit normal of the plane through a, b, c; 0 when they are (nearly) collinear. */
+static int radinterp__plane_normal(const double *a, const double *b, const double *c, double *m)
+{
+    double e1[3], e2[3], len, l1, l2;
+    radinterp__d3_sub(b, a, e1);
+    radinterp__d3_sub(c, a, e2);
+    radinterp__d3_cross(e1, e2, m);
+    len = radinterp__d3_len(m);
+    l1 = radinterp__d3_len(e1);
+    l2 = radinterp__d3_len(e2);
+    if (!(len > 1e-9 * l1 * l2)) return 0;
+    m[0] /= len; m[1] /= len; m[2] /= len;
+    return 1;
+}
+
+typedef struct radinterp__wedge_ctx {
+    uint32_t R, S, B;
+    const double (*region)[2];
+    const int *label;
+    int region_n;
+} radinterp__wedge_ctx;
+
+/* Trace (3D ends p3, q3) -> clipped segment on R with its geometric factor. */
+static int radinterp__wedge_disc(radinterp__builder *b, const radinterp__wedge_ctx *w, int ev, const double *f,
+                                 const double *l0, const double *l1, const double *p3, const double *q3)
+{
+    const radinterp__pframe *fr = &b->frames[w->R];
+    double p[2], q[2], cp[2], cq[2], r[3], geom, g2;
+    uint32_t on_p, on_q;
+    radinterp__pframe_2d(fr, p3, p);
+    radinterp__pframe_2d(fr, q3, q);
+    if (!radinterp__clip_to_region(b, w->R, w->region, w->label, w->region_n, p, q, cp, cq, &on_p, &on_q)) return 0;
+    radinterp__pframe_3d(fr, cp, r);
+    geom = radinterp__wedge_ratio(ev, f, l0, l1, r);
+    radinterp__pframe_3d(fr, cq, r);
+    g2 = radinterp__wedge_ratio(ev, f, l0, l1, r);
+    if (g2 > geom) geom = g2;
+    return radinterp__push_disc(b, w->R, cp, cq, on_p, on_q,
+                                ev ? RADINTERP_DISCONTINUITY_EV : RADINTERP_DISCONTINUITY_VE, w->S, w->B, geom);
+}
+
+/* EV and VE discontinuities of one source (clipped to R's front: Sc) and
+   one blocker on R. */
+static int radinterp__wedges(radinterp__builder *b, const radinterp__wedge_ctx *w, const double (*Sc)[3], int nc)
+{
+    const radinterp_solution *s = b->s;
+    const radinterp__patch *pr = &s->patches[w->R], *ps = &s->patches[w->S], *pb = &s->patches[w->B];
+    double B[4][3], m[3], p3[3], q3[3];
+    int nb = radinterp__patch_poly(pb, B), i, k;
+    /* EV: source edge (Sc[k], Sc[k+1]), blocker vertex B[i] */
+    for (k = 0; k < nc; k++) {
+        const double *e0 = Sc[k], *e1 = Sc[(k + 1) % nc];
+        for (i = 0; i < nb; i++) {
+            if (radinterp__d3_dot(ps->n, B[i]) - ps->d <= b->tol) continue;  /* behind the source */
+            if (!radinterp__plane_normal(e0, e1, B[i], m)) continue;
+            if (fabs(radinterp__d3_dot(m, ps->n)) > 1.0 - 1e-9) continue;     /* the source's own plane */
+            if (!radinterp__supports(m, e0, (const double (*)[3])B, nb, b->tol)) continue;
+            if (!radinterp__wedge_trace(b, pr, ps, e0, e1, B[i], B[i], p3, q3)) continue;
+            if (radinterp__wedge_disc(b, w, 1, B[i], e0, e1, p3, q3) != 0) return -1;
+        }
+    }
+    /* VE: source vertex Sc[k], blocker edge (B[i], B[i+1]) */
+    for (k = 0; k < nc; k++) {
+        for (i = 0; i < nb; i++) {
+            const double *f0 = B[i], *f1 = B[(i + 1) % nb];
+            if (!radinterp__plane_normal(f0, f1, Sc[k], m)) continue;
+            if (fabs(radinterp__d3_dot(m, pb->n)) > 1.0 - 1e-9) continue;     /* the blocker's own plane */
+            if (!radinterp__supports(m, f0, Sc, nc, b->tol)) continue;
+            if (!radinterp__wedge_trace(b, pr, ps, Sc[k], Sc[k], f0, f1, p3, q3)) continue;
+            if (radinterp__wedge_disc(b, w, 0, Sc[k], f0, f1, p3, q3) != 0) return -1;
+        }
+    }
+    return 0;
+}
+
+/* Horizon: S's plane splits R; the line is one on both sides. */
+static int radinterp__horizon(radinterp__builder *b, uint32_t R, uint32_t S)
+{
+    const radinterp__patch *pr = &b->s->patches[R], *ps = &b->s->patches[S];
+    const double (*uv)[2] = radinterp__outline_of(b, R);
+    double g[4], lo = DBL_MAX, hi = -DBL_MAX, pts[2][2];
+    uint32_t on[2];
+    int n = (int)pr->count, i, m = 0;
+    for (i = 0; i < n; i++) {
+        double x[3];
+        radinterp__d3_from_f(pr->v[i], x);
+        g[i] = radinterp__d3_dot(ps->n, x) - ps->d;
+        lo = g[i] < lo ? g[i] : lo;
+        hi = g[i] > hi ? g[i] : hi;
+    }
+    if (!(lo < -b->tol && hi > b->tol)) return 0;
+    for (i = 0; i < n && m < 2; i++) {
+        int j = (i + 1) % n;
+        double t;
+        if ((g[i] >= 0.0) == (g[j] >= 0.0)) continue;
+        t = g[i] / (g[i] - g[j]);
+        pts[m][0] = uv[i][0] + t * (uv[j][0] - uv[i][0]);
+        pts[m][1] = uv[i][1] + t * (uv[j][1] - uv[i][1]);
+        on[m++] = (uint32_t)i + 1;
+    }
+    if (m < 2) return 0;
+    if (radinterp__seg_dist2(pts[0], pts[0], pts[1]) <= b->tol) return 0;
+    return radinterp__push_disc(b, R, pts[0], pts[1], on[0], on[1], RADINTERP_DISCONTINUITY_HORIZON, S,
+                                RADINTERP_NO_PATCH, 1.0);
+}
+
+/* Contact: edges of other patches lying on R, with the patch rising in
+   front of R (or lying flat on it, facing the same way). */
+static int radinterp__contacts(radinterp__builder *b, uint32_t R)
+{
+    const radinterp_solution *s = b->s;
+    const radinterp__patch *pr = &s->patches[R];
+    const double (*uv)[2] = radinterp__outline_of(b, R);
+    int labels[4] = {0, 1, 2, 3};
+    uint32_t B;
+    for (B = 0; B < s->patch_count; B++) {
+        const radinterp__patch *pb = &s->patches[B];
+        double V[4][3], h[4], lo = DBL_MAX, hi = -DBL_MAX;
+        int n, i, k, apart = 0;
+        if (B == R || !pb->count) continue;
+        for (k = 0; k < 3; k++)
+            if ((double)pb->lo[k] > (double)pr->hi[k] + b->tol || (double)pb->hi[k] < (double)pr->lo[k] - b->tol) apart = 1;
+        if (apart) continue;
+        n = radinterp__patch_poly(pb, V);
+        for (i = 0; i < n; i++) {
+            h[i] = radinterp__d3_dot(pr->n, V[i]) - pr->d;
+            lo = h[i] < lo ? h[i] : lo;
+            hi = h[i] > hi ? h[i] : hi;
+        }
+        if (lo < -b->tol) continue;                                            /* reaches behind R */
+        if (hi <= b->tol && radinterp__d3_dot(pb->n, pr->n) < 0.5) continue;   /* flat but facing R */
+        for (i = 0; i < n; i++) {
+            int j = (i + 1) % n;
+            double p[2], q[2], cp[2], cq[2];
+            uint32_t on_p, on_q;
+            if (fabs(h[i]) > b->tol || fabs(h[j]) > b->tol) continue;
+            radinterp__pframe_2d(&b->frames[R], V[i], p);
+            radinterp__pframe_2d(&b->frames[R], V[j], q);
+            if (!radinterp__clip_to_region(b, R, uv, labels, (int)pr->count, p, q, cp, cq, &on_p, &on_q)) continue;
+            if (radinterp__push_disc(b, R, cp, cq, on_p, on_q, RADINTERP_DISCONTINUITY_CONTACT, RADINTERP_NO_PATCH, B,
+                                     FLT_MAX) != 0)
+                return -1;
+        }
+    }
+    return 0;
+}
+
+/* Source and blocker pairs of every link delivering to R's quadtree. */
+static int radinterp__link_pairs(radinterp__builder *b, uint32_t R, radinterp__buf *pairs, radinterp__buf *stack)
+{
+    const radinterp_solution *s = b->s;
+    uint32_t l, k;
+    pairs->count = 0;
+    stack->count = 0;
+    if (radinterp__buf_u32(&b->a, stack, s->patches[R].root) != 0) return -1;
+    while (stack->count) {
+        const radinterp__node *nd = &s->nodes[RADINTERP__U32(*stack)[--stack->count]];
+        for (l = nd->first_link; l < nd->first_link + nd->link_count; l++) {
+            const radinterp__link *lk = &s->links[l];
+            uint64_t S = s->nodes[lk->source].patch, *e;
+            if (lk->blocker_count == 0) {
+                if (!(e = (uint64_t *)radinterp__buf_push(&b->a, pairs))) return -1;
+                *e = S << 32 | RADINTERP__NONE;
+            }
+            for (k = 0; k < lk->blocker_count; k++) {
+                if (!(e = (uint64_t *)radinterp__buf_push(&b->a, pairs))) return -1;
+                *e = S << 32 | s->blockers[lk->first_blocker + k];
+            }
+        }
+        if (nd->child != RADINTERP__NONE)
+            for (k = 0; k < 4; k++)
+                if (radinterp__buf_u32(&b->a, stack, nd->child + k) != 0) return -1;
+    }
+    if (pairs->count) qsort(pairs->data, pairs->count, sizeof(uint64_t), radinterp__cmp_u64);
+    return 0;
+}
+
+/* Every discontinuity on receiver R (5.5.3: from the links, so only
+   mutually visible pairs and their potential blockers are considered). */
+static int radinterp__receiver_discs(radinterp__builder *b, uint32_t R, radinterp__buf *pairs, radinterp__buf *stack)
+{
+    const radinterp_solution *s = b->s;
+    const uint64_t *pr;
+    size_t i = 0, j;
+    if (radinterp__link_pairs(b, R, pairs, stack) != 0) return -1;
+    pr = (const uint64_t *)pairs->data;
+    while (i < pairs->count) {
+        uint32_t S = (uint32_t)(pr[i] >> 32);
+        double region[RADINTERP__POLY_MAX][2], S3[RADINTERP__POLY_MAX][3], Sc[RADINTERP__POLY_MAX][3];
+        int label[RADINTERP__POLY_MAX], rn, nc;
+        radinterp__wedge_ctx w;
+        for (j = i; j < pairs->count && (uint32_t)(pr[j] >> 32) == S; j++) {}
+        if (S == R || !(radinterp__brightness(s, S) > 0.0f)) { i = j; continue; }
+        rn = radinterp__front_region(b, R, S, region, label);
+        if (rn >= 3) {
+            if (radinterp__horizon(b, R, S) != 0) return -1;
+            nc = radinterp__clip_poly((const double (*)[3])S3, radinterp__patch_poly(&s->patches[S], S3),
+                                      s->patches[R].n, s->patches[R].d, Sc);
+            w.R = R;
+            w.S = S;
+            w.region = (const double (*)[2])region;
+            w.label = label;
+            w.region_n = rn;
+            for (; i < j && nc >= 3; i++) {
+                uint32_t B = (uint32_t)(pr[i] & 0xFFFFFFFFu);
+                if (B == RADINTERP__NONE || B == R || B == S || !s->patches[B].count) continue;
+                if (i > 0 && pr[i - 1] == pr[i]) continue;
+                w.B = B;
+                if (radinterp__wedges(b, &w, (const double (*)[3])Sc, nc) != 0) return -1;
+            }
+        }
+        i = j;
+    }
+    return radinterp__contacts(b, R);
+}
+
+/* ---- DSets: collinear discontinuities on a receiver (5.5.4) ------------ */
+
+typedef struct radinterp__dkey { double angle, offset; uint32_t id; } radinterp__dkey;
+
+static int radinterp__cmp_dkey_angle(const void *a, const void *b)
+{
+    const radinterp__dkey *x = (const radinterp__dkey *)a, *y = (const radinterp__dkey *)b;
+    if (x->angle != y->angle) return x->angle < y->angle ? -1 : 1;
+    return x->id < y->id ? -1 : (x->id > y->id);
+}
+
+static int radinterp__cmp_dkey_offset(const void *a, const void *b)
+{
+    const radinterp__dkey *x = (const radinterp__dkey *)a, *y = (const radinterp__dkey *)b;
+    if (x->offset != y->offset) return x->offset < y->offset ? -1 : 1;
+    return x->id < y->id ? -1 : (x->id > y->id);
+}
+
+static int radinterp__cmp_disc_order(const void *a, const void *b)
+{
+    const radinterp__disc *x = (const radinterp__disc *)a, *y = (const radinterp__disc *)b;
+    if (x->dset != y->dset) return x->dset < y->dset ? -1 : 1;
+    if (x->t0 != y->t0) return x->t0 < y->t0 ? -1 : 1;
+    if (x->t1 != y->t1) return x->t1 < y->t1 ? -1 : 1;
+    return x->type < y->type ? -1 : (x->type > y->type);
+}
+
+#define RADINTERP__DSET_ANGLE 1e-6   /* radians: lines closer in direction may be one */
+#define RADINTERP__DSET_CUT 0.3      /* line directions are taken in [cut, cut + pi): an angle no axis-aligned line has */
+
+static int radinterp__new_dset(radinterp__builder *b, uint32_t R, const double *o, const double *d)
+{
+    radinterp__dset *ds = (radinterp__dset *)radinterp__buf_push(&b->a, &b->dsets);
+    if (!ds) return -1;
+    ds->o[0] = o[0]; ds->o[1] = o[1];
+    ds->d[0] = d[0]; ds->d[1] = d[1];
+    ds->receiver = R;
+    return 0;
+}
+
+/* Places disc on line (o, d) of DSet id: ends projected on the line,
+   ordered along it. */
+static void radinterp__disc_on_line(radinterp__disc *x, const double *o, const double *d, uint32_t id)
+{
+    double tp = (x->p[0] - o[0]) * d[0] + (x->p[1] - o[1]) * d[1];
+    double tq = (x->q[0] - o[0]) * d[0] + (x->q[1] - o[1]) * d[1];
+    x->dset = id;
+    if (tp > tq) {
+        double t = tp;
+        uint32_t on = x->on0;
+        tp = tq; tq = t;
+        x->on0 = x->on1; x->on1 = on;
+    }
+    x->t0 = tp;
+    x->t1 = tq;
+    x->p[0] = o[0] + tp * d[0]; x->p[1] = o[1] + tp * d[1];
+    x->q[0] = o[0] + tq * d[0]; x->q[1] = o[1] + tq * d[1];
+}
+
+/* Groups R's discontinuities into DSets (lines within RADINTERP__DSET_ANGLE
+   and tol of each other) and orders them by DSet, then along it. */
+static int radinterp__group_dsets(radinterp__builder *b, uint32_t R)
+{
+    radinterp__disc *dd = (radinterp__disc *)b->discs.data + b->disc_first[R];
+    uint32_t n = b->disc_count[R], i, j, k;
+    radinterp__dkey *key;
+    if (n == 0) return 0;
+    key = (radinterp__dkey *)radinterp__alloc_array(&b->a, n, sizeof *key);
+    if (!key) return -1;
+    for (i = 0; i < n; i++) {
+        double a = atan2(dd[i].q[1] - dd[i].p[1], dd[i].q[0] - dd[i].p[0]);
+        while (a < RADINTERP__DSET_CUT) a += RADINTERP__PI;
+        while (a >= RADINTERP__DSET_CUT + RADINTERP__PI) a -= RADINTERP__PI;
+        key[i].angle = a;
+        key[i].id = i;
+    }
+    qsort(key, n, sizeof *key, radinterp__cmp_dkey_angle);
+    for (i = 0; i < n; i = j) {
+        double dir[2], nrm[2];
+        for (j = i + 1; j < n && key[j].angle - key[i].angle <= RADINTERP__DSET_ANGLE; j++) {}
+        dir[0] = cos(key[i].angle);
+        dir[1] = sin(key[i].angle);
+        nrm[0] = -dir[1];
+        nrm[1] = dir[0];
+        for (k = i; k < j; k++) {
+            const radinterp__disc *x = &dd[key[k].id];
+            key[k].offset = 0.5 * (nrm[0] * (x->p[0] + x->q[0]) + nrm[1] * (x->p[1] + x->q[1]));
+        }
+        qsort(key + i, j - i, sizeof *key, radinterp__cmp_dkey_offset);
+        for (k = i; k < j;) {
+            uint32_t m, id = (uint32_t)b->dsets.count;
+            double o[2];
+            o[0] = nrm[0] * key[k].offset;
+            o[1] = nrm[1] * key[k].offset;
+            if (radinterp__new_dset(b, R, o, dir) != 0) { radinterp__free(&b->a, key); return -1; }
+            for (m = k; m < j && key[m].offset - key[k].offset <= b->tol; m++) {
+                radinterp__disc *x = &dd[key[m].id];
+                double hp = nrm[0] * x->p[0] + nrm[1] * x->p[1] - key[k].offset;
+                double hq = nrm[0] * x->q[0] + nrm[1] * x->q[1] - key[k].offset;
+                if (fabs(hp) > 2.0 * b->tol || fabs(hq) > 2.0 * b->tol) {
+                    /* a long segment at a slightly different angle: a line of its own */
+                    double d2[2], len = sqrt((x->q[0] - x->p[0]) * (x->q[0] - x->p[0]) + (x->q[1] - x->p[1]) * (x->q[1] - x->p[1]));
+                    d2[0] = (x->q[0] - x->p[0]) / len;
+                    d2[1] = (x->q[1] - x->p[1]) / len;
+                    if (radinterp__new_dset(b, R, x->p, d2) != 0) { radinterp__free(&b->a, key); return -1; }
+                    radinterp__disc_on_line(x, x->p, d2, (uint32_t)b->dsets.count - 1);
+                    continue;
+                }
+                radinterp__disc_on_line(x, o, dir, id);
+            }
+            k = m;
+        }
+    }
+    radinterp__free(&b->a, key);
+    qsort(dd, n, sizeof *dd, radinterp__cmp_disc_order);
+    return 0;
+}
+
+/* All discontinuities of the scene, by receiver. */
+static radinterp_result radinterp__find_discontinuities(radinterp__builder *b)
+{
+    const radinterp_solution *s = b->s;
+    radinterp__buf pairs, stack;
+    uint32_t R;
+    int fail = 0;
+    radinterp__buf_init(&pairs, sizeof(uint64_t));
+    radinterp__buf_init(&stack, sizeof(uint32_t));
+    for (R = 0; R < s->patch_count && !fail; R++) {
+        b->disc_first[R] = (uint32_t)b->discs.count;
+        if (s->patches[R].count && !b->desc->no_discontinuities) fail = radinterp__receiver_discs(b, R, &pairs, &stack) != 0;
+        b->disc_count[R] = (uint32_t)b->discs.count - b->disc_first[R];
+        if (!fail) fail = radinterp__group_dsets(b, R) != 0;
+    }
+    radinterp__buf_free(&b->a, &pairs);
+    radinterp__buf_free(&b->a, &stack);
+    if (!fail && b->discs.count > 0xFFFFFFF0u) fail = 1;
+    return fail ? RADINTERP_ERROR_OUT_OF_MEMORY : RADINTERP_OK;
+}
+
+/* ======================================================================
+   17. the mesh's quadtrees: a copy of the solution's, restricted (balanced)
+   and refined, with each node's discontinuities (5.5.6)
+   A node lists the discontinuities that cross its interior, grouped by
+   DSet: the root lists its patch's candidates (weight >= min_discont_weight;
+   the weights cannot change while the mesh is built), a child the part of
+   its parent's list that crosses it (DSet::Clip). Corners are computed with
+   the solution's arithmetic (edge midpoints 0.5 (a + b), quadrilateral
+   centres 0.25 (v0 + v1 + v2 + v3)), so a corner shared by two nodes is one
+   float triple and a hash of (corner, patch) answers "is there a vertex
+   here": the restriction (neighbour leaves differ by at most one level)
+   asks it of the quarter points of each leaf edge, the triangulation of the
+   midpoints (T-vertices, case A of 3.6).
+   ---------------------------------------------------------------------- */
+#define RADINTERP__MNODES(b) ((radinterp__mnode *)(b)->nodes.data)
+
+static int radinterp__corner_put(radinterp__builder *b, uint32_t patch, const float *p)
+{
+    uint32_t key[4];
+    radinterp__point_key(p, patch + 1u, key);
+    return radinterp__hmap_put(&b->a, &b->corners, key, 1u) == RADINTERP__NONE ? -1 : 0;
+}
+
+static int radinterp__corner_has(const radinterp__builder *b, uint32_t patch, const float *p)
+{
+    uint32_t key[4];
+    radinterp__point_key(p, patch + 1u, key);
+    return radinterp__hmap_get(&b->corners, key) != RADINTERP__NONE;
+}
+
+/* Does discontinuity d cross the interior of node nd (shrunk by tol)? */
+static int radinterp__impinges(const radinterp__builder *b, const radinterp__mnode *nd, const radinterp__disc *d)
+{
+    double lo[2] = {DBL_MAX, DBL_MAX}, hi[2] = {-DBL_MAX, -DBL_MAX}, t0, t1;
+    uint32_t i;
+    int e0, e1, k;
+    for (i = 0; i < nd->count; i++)
+        for (k = 0; k < 2; k++) {
+            lo[k] = nd->uv[i][k] < lo[k] ? nd->uv[i][k] : lo[k];
+            hi[k] = nd->uv[i][k] > hi[k] ? nd->uv[i][k] : hi[k];
+        }
+    for (k = 0; k < 2; k++) {
+        double a = d->p[k] < d->q[k] ? d->p[k] : d->q[k], c = d->p[k] < d->q[k] ? d->q[k] : d->p[k];
+        if (c < lo[k] || a > hi[k]) return 0;
+    }
+    return radinterp__clip_segment2((const double (*)[2])nd->uv, (int)nd->count, b->tol, d->p, d->q, &t0, &t1, &e0, &e1);
+}
+
+/* The part of a parent's discontinuity list that crosses node `child`. */
+static int radinterp__inherit_discs(radinterp__builder *b, uint32_t parent, uint32_t child)
+{
+    const radinterp__disc *dd = (const radinterp__disc *)b->discs.data;
+    uint32_t i, first = RADINTERP__MNODES(b)[parent].first_disc, count = RADINTERP__MNODES(b)[parent].disc_count;
+    uint32_t start = (uint32_t)b->node_discs.count;
+    for (i = 0; i < count; i++) {
+        uint32_t id = RADINTERP__U32(b->node_discs)[first + i];
+        if (radinterp__impinges(b, &RADINTERP__MNODES(b)[child], &dd[id]) &&
+            radinterp__buf_u32(&b->a, &b->node_discs, id) != 0)
+            return -1;
+    }
+    RADINTERP__MNODES(b)[child].first_disc = start;
+    RADINTERP__MNODES(b)[child].disc_count = (uint32_t)b->node_discs.count - start;
+    return 0;
+}
+
+static void radinterp__mnode_frame(const radinterp__builder *b, radinterp__mnode *nd)
+{
+    uint32_t i;
+    for (i = 0; i < nd->count; i++) radinterp__pframe_2df(&b->frames[nd->patch], nd->v[i], nd->uv[i]);
+}
+
+/* Splits leaf `index` into four children exactly as radinterp__node_split
+   does (same corners, same order). */
+static int radinterp__mnode_split(radinterp__builder *b, uint32_t index)
+{
+    radinterp__mnode nd = RADINTERP__MNODES(b)[index], ch[4];
+    float m[4][3], c[3];
+    uint32_t first = (uint32_t)b->nodes.count, k, i;
+    memset(ch, 0, sizeof ch);
+    if (nd.count == 4) {
+        radinterp__mid(nd.v[0], nd.v[1], m[0]);
+        radinterp__mid(nd.v[1], nd.v[2], m[1]);
+        radinterp__mid(nd.v[2], nd.v[3], m[2]);
+        radinterp__mid(nd.v[3], nd.v[0], m[3]);
+        for (k = 0; k < 3; k++) c[k] = 0.25f * (nd.v[0][k] + nd.v[1][k] + nd.v[2][k] + nd.v[3][k]);
+        memcpy(ch[0].v[0], nd.v[0], 12); memcpy(ch[0].v[1], m[0], 12); memcpy(ch[0].v[2], c, 12); memcpy(ch[0].v[3], m[3], 12);
+        memcpy(ch[1].v[0], m[0], 12); memcpy(ch[1].v[1], nd.v[1], 12); memcpy(ch[1].v[2], m[1], 12); memcpy(ch[1].v[3], c, 12);
+        memcpy(ch[2].v[0], c, 12); memcpy(ch[2].v[1], m[1], 12); memcpy(ch[2].v[2], nd.v[2], 12); memcpy(ch[2].v[3], m[2], 12);
+        memcpy(ch[3].v[0], m[3], 12); memcpy(ch[3].v[1], c, 12); memcpy(ch[3].v[2], m[2], 12); memcpy(ch[3].v[3], nd.v[3], 12);
+    } else {
+        radinterp__mid(nd.v[0], nd.v[1], m[0]);
+        radinterp__mid(nd.v[1], nd.v[2], m[1]);
+        radinterp__mid(nd.v[2], nd.v[0], m[2]);
+        memcpy(ch[0].v[0], nd.v[0], 12); memcpy(ch[0].v[1], m[0], 12); memcpy(ch[0].v[2], m[2], 12);
+        memcpy(ch[1].v[0], m[0], 12); memcpy(ch[1].v[1], nd.v[1], 12); memcpy(ch[1].v[2], m[1], 12);
+        memcpy(ch[2].v[0], m[2], 12); memcpy(ch[2].v[1], m[1], 12); memcpy(ch[2].v[2], nd.v[2], 12);
+        memcpy(ch[3].v[0], m[1], 12); memcpy(ch[3].v[1], m[2], 12); memcpy(ch[3].v[2], m[0], 12);
+    }
+    if (radinterp__buf_reserve(&b->a, &b->nodes, b->nodes.count + 4) != 0) return -1;
+    for (k = 0; k < 4; k++) {
+        radinterp__mnode *cn = (radinterp__mnode *)radinterp__buf_push(&b->a, &b->nodes);
+        memcpy(cn->v, ch[k].v, sizeof cn->v);
+        cn->count = nd.count;
+        cn->patch = nd.patch;
+        cn->parent = index;
+        cn->child = RADINTERP__NONE;
+        cn->depth = nd.depth + 1;
+        cn->leaf = RADINTERP__NONE;
+        radinterp__mnode_frame(b, cn);
+        for (i = 0; i < nd.count; i++)
+            if (radinterp__corner_put(b, nd.patch, cn->v[i]) != 0) return -1;
+    }
+    RADINTERP__MNODES(b)[index].child = first;
+    for (k = 0; k < 4; k++)
+        if (radinterp__inherit_discs(b, index, first + k) != 0) return -1;
+    return 0;
+}
+
+/* Copies patch R's quadtree from the solution, breadth first; the root
+   lists R's candidate discontinuities. */
+static int radinterp__copy_tree(radinterp__builder *b, uint32_t R, radinterp__buf *queue)
+{
+    const radinterp_solution *s = b->s;
+    const radinterp__disc *dd = (const radinterp__disc *)b->discs.data;
+    radinterp__mnode *root;
+    uint32_t head = 0, i;
+    b->roots[R] = (uint32_t)b->nodes.count;
+    root = (radinterp__mnode *)radinterp__buf_push(&b->a, &b->nodes);
+    if (!root) return -1;
+    memcpy(root->v, s->patches[R].v, sizeof root->v);
+    root->count = s->patches[R].count;
+    root->patch = R;
+    root->parent = root->child = root->leaf = RADINTERP__NONE;
+    radinterp__mnode_frame(b, root);
+    root->first_disc = (uint32_t)b->node_discs.count;
+    for (i = b->disc_first[R]; i < b->disc_first[R] + b->disc_count[R]; i++)
+        if (dd[i].weight >= b->min_weight && radinterp__buf_u32(&b->a, &b->node_discs, i) != 0) return -1;
+    RADINTERP__MNODES(b)[b->roots[R]].disc_count = (uint32_t)b->node_discs.count - RADINTERP__MNODES(b)[b->roots[R]].first_disc;
+    for (i = 0; i < s->patches[R].count; i++)
+        if (radinterp__corner_put(b, R, s->patches[R].v[i]) != 0) return -1;
+    queue->count = 0;
+    if (radinterp__buf_u32(&b->a, queue, s->patches[R].root) != 0 || radinterp__buf_u32(&b->a, queue, b->roots[R]) != 0)
+        return -1;
+    while (head < queue->count) {
+        uint32_t sn = RADINTERP__U32(*queue)[head], mn = RADINTERP__U32(*queue)[head + 1], k, first;
+        head += 2;
+        if (s->nodes[sn].child == RADINTERP__NONE || (double)s->nodes[s->nodes[sn].child].area < b->min_leaf_area) continue;
+        first = (uint32_t)b->nodes.count;
+        if (radinterp__buf_reserve(&b->a, &b->nodes, b->nodes.count + 4) != 0) return -1;
+        for (k = 0; k < 4; k++) {
+            const radinterp__node *src = &s->nodes[s->nodes[sn].child + k];
+            radinterp__mnode *cn = (radinterp__mnode *)radinterp__buf_push(&b->a, &b->nodes);
+            memcpy(cn->v, src->v, sizeof cn->v);
+            cn->count = src->count;
+            cn->patch = R;
+            cn->parent = mn;
+            cn->child = cn->leaf = RADINTERP__NONE;
+            cn->depth = src->depth;
+            radinterp__mnode_frame(b, cn);
+            for (i = 0; i < src->count; i++)
+                if (radinterp__corner_put(b, R, src->v[i]) != 0) return -1;
+        }
+        RADINTERP__MNODES(b)[mn].child = first;
+        for (k = 0; k < 4; k++) {
+            if (radinterp__inherit_discs(b, mn, first + k) != 0) return -1;
+            if (radinterp__buf_u32(&b->a, queue, s->nodes[sn].child + k) != 0 ||
+                radinterp__buf_u32(&b->a, queue, first + k) != 0)
+                return -1;
+        }
+    }
+    return 0;
+}
+
+/* A leaf must split when a neighbour is two or more levels deeper along
+   one of its edges: then a corner sits at a quarter point of that edge. */
+static int radinterp__unbalanced(const radinterp__builder *b, const radinterp__mnode *nd)
+{
+    uint32_t i;
+    for (i = 0; i < nd->count; i++) {
+        float m[3], q[3];
+        const float *a = nd->v[i], *c = nd->v[(i + 1) % nd->count];
+        radinterp__mid(a, c, m);
+        radinterp__mid(a, m, q);
+        if (radinterp__corner_has(b, nd->patch, q)) return 1;
+        radinterp__mid(m, c, q);
+        if (radinterp__corner_has(b, nd->patch, q)) return 1;
+    }
+    return 0;
+}
+
+/* Restricted quadtree (3.6): split until neighbouring leaves of a patch
+   differ by at most one level. */
+static int radinterp__balance(radinterp__builder *b)
+{
+    int changed = 1;
+    while (changed) {
+        uint32_t i;
+        changed = 0;
+        for (i = 0; i < b->nodes.count; i++) {
+            if (RADINTERP__MNODES(b)[i].child != RADINTERP__NONE || !radinterp__unbalanced(b, &RADINTERP__MNODES(b)[i]))
+                continue;
+            if (radinterp__mnode_split(b, i) != 0) return -1;
+            b->balance_splits++;
+            changed = 1;
+        }
+    }
+    return 0;
+}
+
+/* The leaves, patch by patch, each patch's in depth-first child order. */
+static int radinterp__collect_mleaves(radinterp__builder *b, radinterp__buf *stack)
+{
+    uint32_t R;
+    b->leaves.count = 0;
+    for (R = 0; R < b->s->patch_count; R++) {
+        b->leaf_first[R] = (uint32_t)b->leaves.count;
+        b->leaf_count[R] = 0;
+        if (b->roots[R] == RADINTERP__NONE) continue;
+        stack->count = 0;
+        if (radinterp__buf_u32(&b->a, stack, b->roots[R]) != 0) return -1;
+        while (stack->count) {
+            uint32_t n = RADINTERP__U32(*stack)[--stack->count], c = RADINTERP__MNODES(b)[n].child, k;
+            if (c == RADINTERP__NONE) {
+                RADINTERP__MNODES(b)[n].leaf = (uint32_t)b->leaves.count;
+                if (radinterp__buf_u32(&b->a, &b->leaves, n) != 0) return -1;
+                continue;
+            }
+            RADINTERP__MNODES(b)[n].leaf = RADINTERP__NONE;
+            for (k = 4; k-- > 0;)
+                if (radinterp__buf_u32(&b->a, stack, c + k) != 0) return -1;
+        }
+        b->leaf_count[R] = (uint32_t)b->leaves.count - b->leaf_first[R];
+    }
+    return 0;
+}
+
+/* The leaf of patch R that contains point uv (patch frame): at each level
+   the child that uv lies deepest inside. */
+static uint32_t radinterp__mlocate(const radinterp__builder *b, uint32_t R, const double *uv)
+{
+    uint32_t node = b->roots[R];
+    while (RADINTERP__MNODES(b)[node].child != RADINTERP__NONE) {
+        uint32_t first = RADINTERP__MNODES(b)[node].child, best = first, k, i;
+        double best_in = -DBL_MAX;
+        for (k = 0; k < 4; k++) {
+            const radinterp__mnode *c = &RADINTERP__MNODES(b)[first + k];
+            double in = DBL_MAX;
+            for (i = 0; i < c->count; i++) {
+                const double *p = c->uv[i], *q = c->uv[(i + 1) % c->count];
+                double dx = q[0] - p[0], dy = q[1] - p[1], len = sqrt(dx * dx + dy * dy);
+                double h = len > 0.0 ? (dx * (uv[1] - p[1]) - dy * (uv[0] - p[0])) / len : 0.0;
+                in = h < in ? h : in;
+            }
+            if (in > best_in) { best_in = in; best = first + k; }
+        }
+        node = best;
+    }
+    return node;
+}
+
+static double radinterp__mnode_area(const radinterp__mnode *nd)
+{
+    double a = 0.0;
+    uint32_t i;
+    for (i = 0; i < nd->count; i++) {
+        const double *p = nd->uv[i], *q = nd->uv[(i + 1) % nd->count];
+        a += p[0] * q[1] - q[0] * p[1];
+    }
+    return 0.5 * fabs(a);
+}
+
+/* ======================================================================
+   18. active discontinuities and active DSets (5.5.7)
+   Per top-level quadtree, the candidates are tried by descending weight; a
+   discontinuity is activated when no leaf it crosses would then hold more
+   than max_leaf_dsets active DSets (its DSet counts once per leaf, active or
+   not yet), and it is then active in every leaf it crosses: the same
+   decision for all of them, so no T-vertex of case B can arise. A leaf's
+   active DSets are the DSets of its active discontinuities.
+   ---------------------------------------------------------------------- */
+typedef struct radinterp__wkey { float weight; uint32_t id; } radinterp__wkey;
+
+static int radinterp__cmp_wkey(const void *a, const void *b)
+{
+    const radinterp__wkey *x = (const radinterp__wkey *)a, *y = (const radinterp__wkey *)b;
+    if (x->weight != y->weight) return x->weight > y->weight ? -1 : 1;
+    return x->id < y->id ? -1 : (x->id > y->id);
+}
+
+typedef struct radinterp__activation {
+    radinterp__buf order;        /* radinterp__wkey */
+    radinterp__buf start, list;  /* discontinuity -> leaves (CSR) */
+    radinterp__buf active;       /* per leaf: max_dsets DSet ids */
+    radinterp__buf active_n;     /* per leaf: how many */
+} radinterp__activation;
+
+static int radinterp__leaf_has_dset(const uint32_t *act, uint32_t n, uint32_t dset)
+{
+    uint32_t i;
+    for (i = 0; i < n; i++)
+        if (act[i] == dset) return 1;
+    return 0;
+}
+
+static int radinterp__activate_patch(radinterp__builder *b, uint32_t R, radinterp__activation *w)
+{
+    radinterp__disc *dd = (radinterp__disc *)b->discs.data;
+    uint32_t nl = b->leaf_count[R], first = b->disc_first[R], nd = b->disc_count[R], i, k, max = b->max_dsets;
+    uint32_t *start, *list, *act, *act_n;
+    radinterp__wkey *order;
+    size_t total = 0;
+    if (nl == 0 || nd == 0) return 0;
+    if (radinterp__buf_reserve(&b->a, &w->start, (size_t)nd + 1) != 0 ||
+        radinterp__buf_reserve(&b->a, &w->active, (size_t)nl * max) != 0 ||
+        radinterp__buf_reserve(&b->a, &w->active_n, nl) != 0 || radinterp__buf_reserve(&b->a, &w->order, nd) != 0)
+        return -1;
+    start = (uint32_t *)w->start.data;
+    memset(start, 0, ((size_t)nd + 1) * sizeof(uint32_t));
+    for (i = 0; i < nl; i++) {
+        const radinterp__mnode *n = &RADINTERP__MNODES(b)[RADINTERP__U32(b->leaves)[b->leaf_first[R] + i]];
+        for (k = 0; k < n->disc_count; k++) start[RADINTERP__U32(b->node_discs)[n->first_disc + k] - first + 1]++;
+        total += n->disc_count;
+    }
+    for (i = 0; i < nd; i++) start[i + 1] += start[i];
+    if (radinterp__buf_reserve(&b->a, &w->list, total) != 0) return -1;
+    list = (uint32_t *)w->list.data;
+    for (i = 0; i < nl; i++) {
+        const radinterp__mnode *n = &RADINTERP__MNODES(b)[RADINTERP__U32(b->leaves)[b->leaf_first[R] + i]];
+        for (k = 0; k < n->disc_count; k++) list[start[RADINTERP__U32(b->node_discs)[n->first_disc + k] - first]++] = i;
+    }
+    for (i = nd; i > 0; i--) start[i] = start[i - 1];
+    start[0] = 0;
+    order = (radinterp__wkey *)w->order.data;
+    for (i = 0; i < nd; i++) {
+        order[i].weight = radinterp__disc_weight(b->s, &dd[first + i]);
+        order[i].id = first + i;
+    }
+    qsort(order, nd, sizeof *order, radinterp__cmp_wkey);
+    act = (uint32_t *)w->active.data;
+    act_n = (uint32_t *)w->active_n.data;
+    memset(act_n, 0, (size_t)nl * sizeof(uint32_t));
+    for (i = 0; i < nd; i++) {
+        uint32_t id = order[i].id, local = id - first, j, dset = dd[id].dset;
+        int ok = 1;
+        if (!(order[i].weight >= b->min_weight)) break;
+        if (start[local] == start[local + 1]) continue;   /* crosses no leaf's interior */
+        for (j = start[local]; j < start[local + 1] && ok; j++) {
+            uint32_t l = list[j];
+            if (!radinterp__leaf_has_dset(act + (size_t)l * max, act_n[l], dset) && act_n[l] >= max) ok = 0;
+        }
+        if (!ok) continue;
+        for (j = start[local]; j < start[local + 1]; j++) {
+            uint32_t l = list[j];
+            if (!radinterp__leaf_has_dset(act + (size_t)l * max, act_n[l], dset)) act[(size_t)l * max + act_n[l]++] = dset;
+        }
+        dd[id].active = 1;
+    }
+    return 0;
+}
+
+static radinterp_result radinterp__activate(radinterp__builder *b)
+{
+    radinterp__activation w;
+    radinterp__disc *dd = (radinterp__disc *)b->discs.data;
+    uint32_t R, i;
+    int fail = 0;
+    radinterp__buf_init(&w.order, sizeof(radinterp__wkey));
+    radinterp__buf_init(&w.start, sizeof(uint32_t));
+    radinterp__buf_init(&w.list, sizeof(uint32_t));
+    radinterp__buf_init(&w.active, sizeof(uint32_t));
+    radinterp__buf_init(&w.active_n, sizeof(uint32_t));
+    for (i = 0; i < b->discs.count; i++) dd[i].active = 0;
+    for (R = 0; R < b->s->patch_count && !fail; R++) fail = radinterp__activate_patch(b, R, &w) != 0;
+    radinterp__buf_free(&b->a, &w.order);
+    radinterp__buf_free(&b->a, &w.start);
+    radinterp__buf_free(&b->a, &w.list);
+    radinterp__buf_free(&b->a, &w.active);
+    radinterp__buf_free(&b->a, &w.active_n);
+    return fail ? RADINTERP_ERROR_OUT_OF_MEMORY : RADINTERP_OK;
+}
+
+/* DSets of a leaf's list (they are grouped), and how many are active. */
+static void radinterp__leaf_dsets(const radinterp__builder *b, const radinterp__mnode *n, uint32_t *dsets,
+                                  uint32_t *active)
+{
+    const radinterp__disc *dd = (const radinterp__disc *)b->discs.data;
+    uint32_t k, last = RADINTERP__NONE, last_active = RADINTERP__NONE;
+    *dsets = *active = 0;
+    for (k = 0; k < n->disc_count; k++) {
+        const radinterp__disc *d = &dd[RADINTERP__U32(b->node_discs)[n->first_disc + k]];
+        if (d->dset != last) { (*dsets)++; last = d->dset; }
+        if (d->active && d->dset != last_active) { (*active)++; last_active = d->dset; }
+    }
+}
+
+/* Moves end p of the segment (q, p), which lies on outline edge k of R
+   within tol, onto that edge's line (where the segment's line meets it),
+   so that the outline does not bend in to reach it. */
+static void radinterp__onto_outline(const radinterp__builder *b, uint32_t R, uint32_t k, const double *q, double *p)
+{
+    const double (*o)[2] = radinterp__outline_of(b, R);
+    const double *a = o[k], *c = o[(k + 1) % b->s->patches[R].count];
+    double ex = c[0] - a[0], ey = c[1] - a[1], dx = p[0] - q[0], dy = p[1] - q[1];
+    double den = dx * ey - dy * ex, t;
+    if (!(fabs(den) > 1e-12 * sqrt((dx * dx + dy * dy) * (ex * ex + ey * ey)))) return;
+    t = ((a[0] - q[0]) * ey - (a[1] - q[1]) * ex) / den;   /* q + t (p - q) on the edge's line */
+    if (!(t > 0.5 && t < 1.5)) return;
+    p[0] = q[0] + t * dx;
+    p[1] = q[1] + t * dy;
+}
+
+/* A patch's discontinuity edges: for each DSet, the union of its active
+   discontinuities, one segment per run of overlapping ones. */
+static int radinterp__patch_segments(radinterp__builder *b, uint32_t R)
+{
+    const radinterp__disc *dd = (const radinterp__disc *)b->discs.data;
+    const radinterp__dset *ds = (const radinterp__dset *)b->dsets.data;
+    uint32_t i = b->disc_first[R], end = i + b->disc_count[R];
+    b->seg_first[R] = (uint32_t)b->segs.count;
+    while (i < end) {
+        uint32_t dset = dd[i].dset, j = i;
+        double t0 = 0.0, t1 = 0.0;
+        uint32_t on0 = 0, on1 = 0;
+        int open = 0;
+        for (; j < end && dd[j].dset == dset; j++) {
+            const radinterp__disc *d = &dd[j];
+            if (!d->active) continue;
+            if (open && d->t0 <= t1 + b->tol) {
+                if (d->t1 > t1) { t1 = d->t1; on1 = d->on1; }
+                continue;
+            }
+            if (open) {
+                radinterp__seg *sg = (radinterp__seg *)radinterp__buf_push(&b->a, &b->segs);
+                if (!sg) return -1;
+                sg->p[0] = ds[dset].o[0] + t0 * ds[dset].d[0]; sg->p[1] = ds[dset].o[1] + t0 * ds[dset].d[1];
+                sg->q[0] = ds[dset].o[0] + t1 * ds[dset].d[0]; sg->q[1] = ds[dset].o[1] + t1 * ds[dset].d[1];
+                sg->on0 = on0; sg->on1 = on1;
+            }
+            open = 1;
+            t0 = d->t0; t1 = d->t1; on0 = d->on0; on1 = d->on1;
+        }
+        if (open) {
+            radinterp__seg *sg = (radinterp__seg *)radinterp__buf_push(&b->a, &b->segs);
+            if (!sg) return -1;
+            sg->p[0] = ds[dset].o[0] + t0 * ds[dset].d[0]; sg->p[1] = ds[dset].o[1] + t0 * ds[dset].d[1];
+            sg->q[0] = ds[dset].o[0] + t1 * ds[dset].d[0]; sg->q[1] = ds[dset].o[1] + t1 * ds[dset].d[1];
+            sg->on0 = on0; sg->on1 = on1;
+        }
+        i = j;
+    }
+    b->seg_count[R] = (uint32_t)b->segs.count - b->seg_first[R];
+    for (i = b->seg_first[R]; i < b->segs.count; i++) {
+        radinterp__seg *sg = &((radinterp__seg *)b->segs.data)[i];
+        if (sg->on0) radinterp__onto_outline(b, R, sg->on0 - 1, sg->q, sg->p);
+        if (sg->on1) radinterp__onto_outline(b, R, sg->on1 - 1, sg->p, sg->q);
+        radinterp__pframe_3df(&b->frames[R], sg->p, sg->a);
+        radinterp__pframe_3df(&b->frames[R], sg->q, sg->b);
+    }
+    return 0;
+}
+
+/* ======================================================================
+   19. leaf triangulation and crack-free output (5.2, 3.6)
+   One constrained Delaunay triangulation per patch (section 9) whose
+   constraints are every leaf edge and every active discontinuity edge: as
+   leaf edges are constraints, it is the union of the leaves' own
+   triangulations (the CDT of each leaf's outline with its discontinuity
+   edges), and a discontinuity that crosses from one leaf into the next
+   meets their common edge at one vertex that both use. T-vertices:
+   - case A (leaves one level apart): a leaf edge is inserted through the
+     midpoint when the neighbour has a corner there, so the larger leaf's
+     triangles take that vertex too (its edge becomes two);
+   - case C (patches that share an edge): every patch outline runs through
+     every outline vertex of every patch within weld_distance of it (leaf
+     corners, discontinuity ends), welded across patches to one float
+     triple, so both sides of a seam have the same vertices;
+   - case B cannot arise (18).
+   Output vertices are shared by exact position, so a rasterizer with a
+   consistent fill rule covers every pixel of a patch exactly once.
+   ---------------------------------------------------------------------- */
+#define RADINTERP__BVERTS(b) ((radinterp__bvert *)(b)->pool.data)
+
+static int radinterp__pool_add(radinterp__builder *b, const float *x, uint32_t patch, uint32_t edge, uint32_t corner)
+{
+    radinterp__bvert *v = (radinterp__bvert *)radinterp__buf_push(&b->a, &b->pool);
+    if (!v) return -1;
+    memcpy(v->x, x, sizeof v->x);
+    v->patch = patch;
+    v->edge = edge;
+    v->corner = corner;
+    v->rep = (uint32_t)b->pool.count - 1;
+    return 0;
+}
+
+/* Outline vertices of patch P: its corners, leaf corners on its outline and
+   the ends of its discontinuity edges there. */
+static int radinterp__outline_vertices(radinterp__builder *b, uint32_t P, radinterp__hmap *seen)
+{
+    const radinterp__patch *pt = &b->s->patches[P];
+    const double (*o)[2] = radinterp__outline_of(b, P);
+    uint32_t i, k, c, key[4];
+    for (k = 0; k < pt->count; k++) {
+        radinterp__point_key(pt->v[k], P + 1u, key);
+        if (radinterp__hmap_put(&b->a, seen, key, 1u) == RADINTERP__NONE) return -1;
+        if (radinterp__pool_add(b, pt->v[k], P, k, 1) != 0) return -1;
+    }
+    for (i = 0; i < b->leaf_count[P]; i++) {
+        const radinterp__mnode *n = &RADINTERP__MNODES(b)[RADINTERP__U32(b->leaves)[b->leaf_first[P] + i]];
+        for (c = 0; c < n->count; c++) {
+            uint32_t before = seen->count;
+            radinterp__point_key(n->v[c], P + 1u, key);
+            if (radinterp__hmap_put(&b->a, seen, key, 1u) == RADINTERP__NONE) return -1;
+            if (seen->count == before) continue;
+            for (k = 0; k < pt->count; k++)
+                if (radinterp__seg_dist2(o[k], o[(k + 1) % pt->count], n->uv[c]) <= b->tol) {
+                    if (radinterp__pool_add(b, n->v[c], P, k, 0) != 0) return -1;
+                    break;
+                }
+        }
+    }
+    for (i = b->seg_first[P]; i < b->seg_first[P] + b->seg_count[P]; i++) {
+        const radinterp__seg *sg = &((const radinterp__seg *)b->segs.data)[i];
+        if (sg->on0 && radinterp__pool_add(b, sg->a, P, sg->on0 - 1, 0) != 0) return -1;
+        if (sg->on1 && radinterp__pool_add(b, sg->b, P, sg->on1 - 1, 0) != 0) return -1;
+    }
+    return 0;
+}
+
+static uint32_t radinterp__find_rep(radinterp__bvert *v, uint32_t i)
+{
+    while (v[i].rep != i) {
+        v[i].rep = v[v[i].rep].rep;
+        i = v[i].rep;
+    }
+    return i;
+}
+
+/* qsort has no context argument: the pool is sorted through a key array. */
+typedef struct radinterp__xkey { float x; uint32_t id; } radinterp__xkey;
+
+static int radinterp__cmp_xkey(const void *a, const void *b)
+{
+    const radinterp__xkey *p = (const radinterp__xkey *)a, *q = (const radinterp__xkey *)b;
+    if (p->x != q->x) return p->x < q->x ? -1 : 1;
+    return p->id < q->id ? -1 : (p->id > q->id);
+}
+
+/* Welds outline vertices closer than weld_distance (to the one listed
+   first), maps every point to its representative, and lists the entries
+   by x. */
+static int radinterp__weld(radinterp__builder *b)
+{
+    radinterp__bvert *v = RADINTERP__BVERTS(b);
+    uint32_t n = (uint32_t)b->pool.count, i, j, key[4];
+    radinterp__xkey *xs = (radinterp__xkey *)radinterp__alloc_array(&b->a, n ? n : 1, sizeof *xs);
+    double w2 = b->weld * b->weld;
+    if (!xs) return -1;
+    for (i = 0; i < n; i++) { xs[i].x = v[i].x[0]; xs[i].id = i; }
+    qsort(xs, n, sizeof *xs, radinterp__cmp_xkey);
+    for (i = 0; i < n; i++)
+        for (j = i + 1; j < n && (double)xs[j].x - (double)xs[i].x <= b->weld; j++) {
+            const float *p = v[xs[i].id].x, *q = v[xs[j].id].x;
+            double dx = (double)p[0] - q[0], dy = (double)p[1] - q[1], dz = (double)p[2] - q[2];
+            if (dx * dx + dy * dy + dz * dz <= w2) {
+                uint32_t ri = radinterp__find_rep(v, xs[i].id), rj = radinterp__find_rep(v, xs[j].id);
+                if (ri < rj) v[rj].rep = ri;
+                else if (rj < ri) v[ri].rep = rj;
+            }
+        }
+    radinterp__hmap_clear(&b->canon);
+    b->reps.count = 0;
+    for (i = 0; i < n; i++) {
+        uint32_t r = radinterp__find_rep(v, i);
+        v[i].rep = r;
+        radinterp__point_key(v[i].x, 0, key);
+        if (radinterp__hmap_put(&b->a, &b->canon, key, r) == RADINTERP__NONE) { radinterp__free(&b->a, xs); return -1; }
+    }
+    for (i = 0; i < n; i++)
+        if (radinterp__buf_u32(&b->a, &b->reps, xs[i].id) != 0) { radinterp__free(&b->a, xs); return -1; }
+    radinterp__free(&b->a, xs);
+    return 0;
+}
+
+/* The welded position of a point (itself when it is no outline vertex). */
+static const float *radinterp__canonical(const radinterp__builder *b, const float *x)
+{
+    uint32_t key[4], r;
+    radinterp__point_key(x, 0, key);
+    r = radinterp__hmap_get(&b->canon, key);
+    return r == RADINTERP__NONE ? x : RADINTERP__BVERTS(b)[r].x;
+}
+
+typedef struct radinterp__tkey { double t; uint32_t rep; } radinterp__tkey;
+
+/* The outline edge of a patch nearest to x (3D): a vertex near a corner
+   joins one edge's chain only. */
+static uint32_t radinterp__nearest_edge(const radinterp__patch *pt, const double *x)
+{
+    uint32_t k, best = 0;
+    double best_d = DBL_MAX;
+    for (k = 0; k < pt->count; k++) {
+        double a[3], c[3], d[3], w[3], t, l2, dist;
+        int e;
+        radinterp__d3_from_f(pt->v[k], a);
+        radinterp__d3_from_f(pt->v[(k + 1) % pt->count], c);
+        radinterp__d3_sub(c, a, d);
+        radinterp__d3_sub(x, a, w);
+        l2 = radinterp__d3_dot(d, d);
+        t = l2 > 0.0 ? radinterp__d3_dot(w, d) / l2 : 0.0;
+        t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
+        for (e = 0; e < 3; e++) w[e] = a[e] + t * d[e] - x[e];
+        dist = radinterp__d3_len(w);
+        if (dist < best_d) { best_d = dist; best = k; }
+    }
+    return best;
+}
+
+static int radinterp__cmp_tkey(const void *a, const void *b)
+{
+    const radinterp__tkey *x = (const radinterp__tkey *)a, *y = (const radinterp__tkey *)b;
+    if (x->t != y->t) return x->t < y->t ? -1 : 1;
+    return x->rep < y->rep ? -1 : (x->rep > y->rep);
+}
+
+/* Do outline edge k of P and edge j of Q lie on one line (within reach)? */
+static int radinterp__edges_collinear(const radinterp_solution *s, uint32_t P, uint32_t k, uint32_t Q, uint32_t j,
+                                      double reach)
+{
+    const radinterp__patch *pp = &s->patches[P], *pq = &s->patches[Q];
+    double a[3], c[3], a2[3], c2[3], d1[3], d2[3], x[3], w[3];
+    int i, e;
+    if (P == Q) return k == j;
+    radinterp__d3_from_f(pp->v[k], a);
+    radinterp__d3_from_f(pp->v[(k + 1) % pp->count], c);
+    radinterp__d3_from_f(pq->v[j], a2);
+    radinterp__d3_from_f(pq->v[(j + 1) % pq->count], c2);
+    radinterp__d3_sub(c, a, d1);
+    radinterp__d3_sub(c2, a2, d2);
+    radinterp__d3_cross(d1, d2, x);
+    if (radinterp__d3_len(x) > 1e-6 * radinterp__d3_len(d1) * radinterp__d3_len(d2)) return 0;
+    for (i = 0; i < 2; i++) {
+        const double *q = i ? c2 : a2;
+        double t;
+        radinterp__d3_sub(q, a, w);
+        t = radinterp__d3_dot(w, d1) / radinterp__d3_dot(d1, d1);
+        for (e = 0; e < 3; e++) x[e] = a[e] + t * d1[e] - q[e];
+        if (radinterp__d3_len(x) > reach) return 0;
+    }
+    return 1;
+}
+
+/* The chain of outline edge k of patch P (case C of 3.6): the welded
+   outline vertices of every patch whose outline edge there runs along
+   this one, in order along it. A vertex belongs to P's edge when it lies
+   within weld_distance + tol of it, strictly between its corners, nearer to
+   it than to P's other edges, and on an edge of its own patch collinear
+   with it (a vertex of a patch that meets P's edge at an angle stays out). */
+static int radinterp__make_chain(radinterp__builder *b, uint32_t P, uint32_t k, const uint32_t *own, radinterp__buf *tmp)
+{
+    const radinterp__patch *pt = &b->s->patches[P];
+    const uint32_t *sorted = RADINTERP__U32(b->reps);
+    const radinterp__bvert *v = RADINTERP__BVERTS(b);
+    uint32_t n = (uint32_t)b->reps.count, lo = 0, hi = n, i, a_rep, c_rep, key[4];
+    double a[3], c[3], d[3], len2, reach = b->weld + b->tol, xlo, xhi;
+    int e;
+    radinterp__d3_from_f(pt->v[k], a);
+    radinterp__d3_from_f(pt->v[(k + 1) % pt->count], c);
+    radinterp__d3_sub(c, a, d);
+    len2 = radinterp__d3_dot(d, d);
+    xlo = (a[0] < c[0] ? a[0] : c[0]) - 2.0 * reach;
+    xhi = (a[0] > c[0] ? a[0] : c[0]) + 2.0 * reach;
+    while (lo < hi) {  /* first entry with x >= xlo */
+        uint32_t mid = (lo + hi) / 2;
+        if ((double)v[sorted[mid]].x[0] < xlo) lo = mid + 1;
+        else hi = mid;
+    }
+    tmp->count = 0;
+    for (i = lo; i < n && (double)v[sorted[i]].x[0] <= xhi; i++) {
+        const radinterp__bvert *ent = &v[sorted[i]];
+        const radinterp__patch *pq = &b->s->patches[ent->patch];
+        uint32_t r = ent->rep, prev = (ent->edge + pq->count - 1) % pq->count;
+        double x[3], w[3], t, dist;
+        radinterp__tkey *tk;
+        if (!radinterp__edges_collinear(b->s, P, k, ent->patch, ent->edge, reach) &&
+            !(ent->corner && radinterp__edges_collinear(b->s, P, k, ent->patch, prev, reach)))
+            continue;
+        radinterp__d3_from_f(v[r].x, x);
+        radinterp__d3_sub(x, a, w);
+        t = radinterp__d3_dot(w, d) / len2;
+        if (!(t > 0.0 && t < 1.0)) continue;   /* a corner, or past one */
+        for (e = 0; e < 3; e++) w[e] = a[e] + t * d[e] - x[e];
+        dist = radinterp__d3_len(w);
+        if (dist > reach || radinterp__nearest_edge(pt, x) != k) continue;
+        if (!(tk = (radinterp__tkey *)radinterp__buf_push(&b->a, tmp))) return -1;
+        tk->t = t;
+        tk->rep = r;
+    }
+    radinterp__point_key(pt->v[k], 0, key);
+    a_rep = radinterp__hmap_get(&b->canon, key);
+    radinterp__point_key(pt->v[(k + 1) % pt->count], 0, key);
+    c_rep = radinterp__hmap_get(&b->canon, key);
+    if (tmp->count > 1) qsort(tmp->data, tmp->count, sizeof(radinterp__tkey), radinterp__cmp_tkey);
+    b->chain_first[4 * P + k] = (uint32_t)b->chains.count;
+    if (radinterp__buf_u32(&b->a, &b->chains, a_rep) != 0) return -1;
+    for (i = 0; i < tmp->count; i++) {
+        uint32_t r = ((radinterp__tkey *)tmp->data)[i].rep;
+        if (r == a_rep || r == c_rep || r == RADINTERP__U32(b->chains)[b->chains.count - 1]) continue;
+        if (radinterp__buf_u32(&b->a, &b->chains, r) != 0) return -1;
+        if (own[r] != P + 1u) b->seam++;
+    }
+    if (radinterp__buf_u32(&b->a, &b->chains, c_rep) != 0) return -1;
+    b->chain_len[4 * P + k] = (uint32_t)b->chains.count - b->chain_first[4 * P + k];
+    return 0;
+}
+
+/* Scratch of the per-patch triangulation, reused from patch to patch. */
+typedef struct radinterp__lpoint { double uv[2]; float x[3]; } radinterp__lpoint;
+
+typedef struct radinterp__tri_work {
+    radinterp__buf pts;        /* radinterp__lpoint: the triangulation's input points */
+    radinterp__hmap lmap;      /* point -> index in pts */
+    radinterp__buf xy, ids;    /* input coordinates; the CDT vertex of each point */
+    radinterp__buf v3;         /* float[3] per CDT vertex */
+    radinterp__buf mark;       /* per CDT vertex: 1 on the outline chain */
+    radinterp__buf inside;     /* per CDT triangle */
+    radinterp__buf stack, order, tmp;
+    radinterp__cdt cdt;
+    int cdt_ready;
+    radinterp_allocator real;  /* the caller's allocator, behind `tracked` */
+    radinterp_allocator tracked;
+    int out_of_memory;         /* an allocation of the triangulation failed */
+} radinterp__tri_work;
+
+/* The triangulation reports memory and geometry failures alike (c->failed):
+   its allocations go through this wrapper, which remembers a NULL. */
+static void *radinterp__tracked_alloc(size_t size, void *user)
+{
+    radinterp__tri_work *w = (radinterp__tri_work *)user;
+    void *p = radinterp__alloc(&w->real, size);
+    if (!p) w->out_of_memory = 1;
+    return p;
+}
+
+static void radinterp__tracked_free(void *ptr, void *user)
+{
+    radinterp__free(&((radinterp__tri_work *)user)->real, ptr);
+}
+
+static void radinterp__tri_work_init(radinterp__tri_work *w, const radinterp_allocator *a)
+{
+    memset(w, 0, sizeof *w);
+    w->real = *a;
+    w->tracked.alloc = radinterp__tracked_alloc;
+    w->tracked.free = radinterp__tracked_free;
+    w->tracked.user = w;
+    radinterp__buf_init(&w->pts, sizeof(radinterp__lpoint));
+    radinterp__buf_init(&w->xy, 2 * sizeof(double));
+    radinterp__buf_init(&w->ids, sizeof(uint32_t));
+    radinterp__buf_init(&w->v3, 3 * sizeof(float));
+    radinterp__buf_init(&w->mark, 1);
+    radinterp__buf_init(&w->inside, 1);
+    radinterp__buf_init(&w->stack, sizeof(uint32_t));
+    radinterp__buf_init(&w->order, sizeof(uint64_t));
+    radinterp__buf_init(&w->tmp, sizeof(radinterp__tkey));
+}
+
+static void radinterp__tri_work_free(const radinterp_allocator *a, radinterp__tri_work *w)
+{
+    radinterp__buf_free(a, &w->pts);
+    radinterp__hmap_free(a, &w->lmap);
+    radinterp__buf_free(a, &w->xy);
+    radinterp__buf_free(a, &w->ids);
+    radinterp__buf_free(a, &w->v3);
+    radinterp__buf_free(a, &w->mark);
+    radinterp__buf_free(a, &w->inside);
+    radinterp__buf_free(a, &w->stack);
+    radinterp__buf_free(a, &w->order);
+    radinterp__buf_free(a, &w->tmp);
+    if (w->cdt_ready) radinterp__cdt_free(&w->cdt);
+    w->cdt_ready = 0;
+}
+
+/* Index of point x (uv: its frame coordinates, NULL = project x). */
+static uint32_t radinterp__local_point(radinterp__builder *b, radinterp__tri_work *w, uint32_t P, const float *x,
+                                       const double *uv)
+{
+    uint32_t key[4], id;
+    radinterp__point_key(x, 0, key);
+    id = radinterp__hmap_put(&b->a, &w->lmap, key, (uint32_t)w->pts.count);
+    if (id == (uint32_t)w->pts.count) {
+        radinterp__lpoint *lp = (radinterp__lpoint *)radinterp__buf_push(&b->a, &w->pts);
+        if (!lp) return RADINTERP__NONE;
+        memcpy(lp->x, x, sizeof lp->x);
+        if (uv) { lp->uv[0] = uv[0]; lp->uv[1] = uv[1]; }
+        else radinterp__pframe_2df(&b->frames[P], x, lp->uv);
+    }
+    return id;
+}
+
+/* CDT vertex of a point already added (by its welded position). */
+static uint32_t radinterp__cdt_vertex(const radinterp__builder *b, const radinterp__tri_work *w, const float *x)
+{
+    uint32_t key[4], id;
+    radinterp__point_key(radinterp__canonical(b, x), 0, key);
+    id = radinterp__hmap_get(&w->lmap, key);
+    return id == RADINTERP__NONE ? RADINTERP__NONE : RADINTERP__U32(w->ids)[id];
+}
+
+/* A leaf edge as a constraint, through the corners of finer neighbours
+   on it (case A T-vertices). Returns 0, or -1 when the CDT failed. */
+static int radinterp__leaf_edge(radinterp__builder *b, radinterp__tri_work *w, uint32_t P, const float *a,
+                                const float *c, uint32_t depth)
+{
+    float m[3];
+    uint32_t ia, ic;
+    radinterp__mid(a, c, m);
+    if (depth < 40 && radinterp__corner_has(b, P, m)) {
+        b->hanging++;
+        return radinterp__leaf_edge(b, w, P, a, m, depth + 1) || radinterp__leaf_edge(b, w, P, m, c, depth + 1) ? -1 : 0;
+    }
+    ia = radinterp__cdt_vertex(b, w, a);
+    ic = radinterp__cdt_vertex(b, w, c);
+    if (ia == RADINTERP__NONE || ic == RADINTERP__NONE) return -1;
+    if (ia == ic) return 0;
+    return radinterp__cdt_add_segment(&w->cdt, ia, ic);
+}
+
+/* Is the leaf edge (a, b) part of outline edge k of P (both ends on it)? */
+static int radinterp__on_same_outline_edge(const radinterp__builder *b, uint32_t P, const double *a, const double *c)
+{
+    const double (*o)[2] = radinterp__outline_of(b, P);
+    uint32_t k, n = b->s->patches[P].count;
+    for (k = 0; k < n; k++)
+        if (radinterp__seg_dist2(o[k], o[(k + 1) % n], a) <= b->tol &&
+            radinterp__seg_dist2(o[k], o[(k + 1) % n], c) <= b->tol)
+            return 1;
+    return 0;
+}
+
+/* Input points and constraints of P's triangulation. Returns 0, 1 when the
+   triangulation failed, -1 when out of memory. */
+static int radinterp__patch_cdt(radinterp__builder *b, radinterp__tri_work *w, uint32_t P, int with_segments)
+{
+    const radinterp__bvert *pool = RADINTERP__BVERTS(b);
+    const radinterp__seg *segs = (const radinterp__seg *)b->segs.data;
+    uint32_t k, i, c, n;
+    radinterp__hmap_clear(&w->lmap);
+    w->pts.count = 0;
+    for (k = 0; k < b->s->patches[P].count; k++)
+        for (i = 0; i < b->chain_len[4 * P + k]; i++)
+            if (radinterp__local_point(b, w, P, pool[RADINTERP__U32(b->chains)[b->chain_first[4 * P + k] + i]].x, NULL) ==
+                RADINTERP__NONE)
+                return -1;
+    for (i = 0; i < b->leaf_count[P]; i++) {
+        const radinterp__mnode *nd = &RADINTERP__MNODES(b)[RADINTERP__U32(b->leaves)[b->leaf_first[P] + i]];
+        for (c = 0; c < nd->count; c++)
+            if (radinterp__local_point(b, w, P, radinterp__canonical(b, nd->v[c]), NULL) == RADINTERP__NONE) return -1;
+    }
+    for (i = b->seg_first[P]; with_segments && i < b->seg_first[P] + b->seg_count[P]; i++) {
+        const radinterp__seg *sg = &segs[i];
+        if (radinterp__local_point(b, w, P, sg->on0 ? radinterp__canonical(b, sg->a) : sg->a, sg->on0 ? NULL : sg->p) ==
+                RADINTERP__NONE ||
+            radinterp__local_point(b, w, P, sg->on1 ? radinterp__canonical(b, sg->b) : sg->b, sg->on1 ? NULL : sg->q) ==
+                RADINTERP__NONE)
+            return -1;
+    }
+    n = (uint32_t)w->pts.count;
+    if (radinterp__buf_reserve(&b->a, &w->xy, n) != 0 || radinterp__buf_reserve(&b->a, &w->ids, n) != 0) return -1;
+    for (i = 0; i < n; i++) memcpy((double *)w->xy.data + 2 * (size_t)i, ((radinterp__lpoint *)w->pts.data)[i].uv, 2 * sizeof(double));
+    w->ids.count = n;
+    if (!w->cdt_ready) radinterp__cdt_init(&w->cdt, &w->tracked, NULL, 0);
+    else radinterp__cdt_clear(&w->cdt);
+    w->cdt_ready = 1;
+    if (radinterp__cdt_add_points(&w->cdt, (const double *)w->xy.data, n, RADINTERP__U32(w->ids)) != 0 || !w->cdt.started)
+        return 1;
+    /* the outline chains, then the leaf edges, then the discontinuity edges */
+    for (k = 0; k < b->s->patches[P].count; k++)
+        for (i = 0; i + 1 < b->chain_len[4 * P + k]; i++) {
+            const uint32_t *ch = RADINTERP__U32(b->chains) + b->chain_first[4 * P + k];
+            uint32_t ia = radinterp__cdt_vertex(b, w, pool[ch[i]].x), ic = radinterp__cdt_vertex(b, w, pool[ch[i + 1]].x);
+            if (ia == RADINTERP__NONE || ic == RADINTERP__NONE) return 1;
+            if (ia != ic && radinterp__cdt_add_segment(&w->cdt, ia, ic) != 0) return 1;
+        }
+    for (i = 0; i < b->leaf_count[P]; i++) {
+        const radinterp__mnode *nd = &RADINTERP__MNODES(b)[RADINTERP__U32(b->leaves)[b->leaf_first[P] + i]];
+        for (c = 0; c < nd->count; c++) {
+            uint32_t d = (c + 1) % nd->count;
+            if (radinterp__on_same_outline_edge(b, P, nd->uv[c], nd->uv[d])) continue;
+            if (radinterp__leaf_edge(b, w, P, nd->v[c], nd->v[d], 0) != 0) return 1;
+        }
+    }
+    for (i = b->seg_first[P]; with_segments && i < b->seg_first[P] + b->seg_count[P]; i++) {
+        const radinterp__seg *sg = &segs[i];
+        uint32_t key[4], la, lb;
+        radinterp__point_key(sg->on0 ? radinterp__canonical(b, sg->a) : sg->a, 0, key);
+        la = radinterp__hmap_get(&w->lmap, key);
+        radinterp__point_key(sg->on1 ? radinterp__canonical(b, sg->b) : sg->b, 0, key);
+        lb = radinterp__hmap_get(&w->lmap, key);
+        if (la == RADINTERP__NONE || lb == RADINTERP__NONE) return 1;
+        la = RADINTERP__U32(w->ids)[la];
+        lb = RADINTERP__U32(w->ids)[lb];
+        if (la != lb && radinterp__cdt_add_segment(&w->cdt, la, lb) != 0) return 1;
+    }
+    return w->cdt.failed ? 1 : 0;
+}
+
+static double radinterp__perimeter(const radinterp__builder *b, uint32_t P)
+{
+    const double (*o)[2] = radinterp__outline_of(b, P);
+    uint32_t k, n = b->s->patches[P].count;
+    double sum = 0.0;
+    for (k = 0; k < n; k++) sum += radinterp__seg_dist2(o[k], o[k], o[(k + 1) % n]);
+    return sum;
+}
+
+/* Marks the triangles inside the outline: everything reachable from the
+   ghosts without crossing a constraint is outside. Checks that the inside
+   covers the patch and is bounded by chain vertices only. Returns 0, 1
+   when the check fails, -1 when out of memory. */
+static int radinterp__classify(radinterp__builder *b, radinterp__tri_work *w, uint32_t P)
+{
+    radinterp__cdt *c = &w->cdt;
+    unsigned char *inside, *mark;
+    uint32_t t, e, i, k;
+    double area = 0.0, want = b->s->patches[P].area;
+    if (radinterp__buf_reserve(&b->a, &w->inside, c->tri_count) != 0 ||
+        radinterp__buf_reserve(&b->a, &w->mark, c->vertex_count) != 0)
+        return -1;
+    inside = (unsigned char *)w->inside.data;
+    mark = (unsigned char *)w->mark.data;
+    w->stack.count = 0;
+    for (t = 0; t < c->tri_count; t++) {
+        inside[t] = (unsigned char)radinterp__cdt_is_real(c, t);
+        if (!inside[t] && radinterp__buf_u32(&b->a, &w->stack, t) != 0) return -1;
+    }
+    while (w->stack.count) {
+        t = RADINTERP__U32(w->stack)[--w->stack.count];
+        for (e = 0; e < 3; e++) {
+            uint32_t u = c->tri[t].n[e];
+            if ((c->tri[t].flags >> e) & 1u || u >= c->tri_count || !inside[u]) continue;
+            inside[u] = 0;
+            if (radinterp__buf_u32(&b->a, &w->stack, u) != 0) return -1;
+        }
+    }
+    memset(mark, 0, c->vertex_count);
+    for (k = 0; k < b->s->patches[P].count; k++)
+        for (i = 0; i < b->chain_len[4 * P + k]; i++) {
+            uint32_t v = radinterp__cdt_vertex(b, w, RADINTERP__BVERTS(b)[RADINTERP__U32(b->chains)[b->chain_first[4 * P + k] + i]].x);
+            if (v != RADINTERP__NONE) mark[v] = 1;
+        }
+    for (t = 0; t < c->tri_count; t++) {
+        const radinterp__cdt_tri *T = &c->tri[t];
+        if (!inside[t]) continue;
+        {
+            const double *p0 = radinterp__cdt_p(c, T->v[0]), *p1 = radinterp__cdt_p(c, T->v[1]), *p2 = radinterp__cdt_p(c, T->v[2]);
+            area += 0.5 * ((p1[0] - p0[0]) * (p2[1] - p0[1]) - (p2[0] - p0[0]) * (p1[1] - p0[1]));
+        }
+        for (e = 0; e < 3; e++)
+            if (!inside[T->n[e]] && (!mark[T->v[(e + 1) % 3]] || !mark[T->v[(e + 2) % 3]])) return 1;
+    }
+    /* the outline may bend through vertices up to weld + tol off it */
+    return fabs(area - want) <= 1e-9 * want + 2.0 * (b->weld + b->tol) * radinterp__perimeter(b, P) ? 0 : 1;
+}
+
+/* Does the 2D edge (p, q) lie on one of P's discontinuity edges? */
+static int radinterp__on_segment(const radinterp__builder *b, uint32_t P, const double *p, const double *q)
+{
+    const radinterp__seg *segs = (const radinterp__seg *)b->segs.data;
+    uint32_t i;
+    for (i = b->seg_first[P]; i < b->seg_first[P] + b->seg_count[P]; i++)
+        if (radinterp__seg_dist2(segs[i].p, segs[i].q, p) <= b->tol && radinterp__seg_dist2(segs[i].p, segs[i].q, q) <= b->tol)
+            return 1;
+    return 0;
+}
+
+/* Appends P's inside triangles to the pass output, ordered by leaf. */
+static int radinterp__emit_patch(radinterp__builder *b, radinterp__tri_work *w, uint32_t P, int with_segments)
+{
+    radinterp__cdt *c = &w->cdt;
+    const unsigned char *inside = (const unsigned char *)w->inside.data;
+    uint32_t t, i, k, first = (uint32_t)b->tris.count;
+    float *v3;
+    if (radinterp__buf_reserve(&b->a, &w->v3, c->vertex_count) != 0) return -1;
+    v3 = (float *)w->v3.data;
+    for (i = 0; i < c->vertex_count; i++) {
+        float x[3];
+        radinterp__pframe_3df(&b->frames[P], radinterp__cdt_p(c, i), x);
+        memcpy(v3 + 3 * (size_t)i, x, sizeof x);
+    }
+    for (i = (uint32_t)w->pts.count; i-- > 0;)  /* input points keep their exact position (the first of duplicates) */
+        memcpy(v3 + 3 * (size_t)RADINTERP__U32(w->ids)[i], ((radinterp__lpoint *)w->pts.data)[i].x, 3 * sizeof(float));
+    w->order.count = 0;
+    for (t = 0; t < c->tri_count; t++) {
+        const radinterp__cdt_tri *T = &c->tri[t];
+        radinterp__otri *o;
+        uint32_t g[3], key[4];
+        double uv[2];
+        if (!inside[t]) continue;
+        for (k = 0; k < 3; k++) {
+            radinterp__point_key(v3 + 3 * (size_t)T->v[k], 0, key);
+            g[k] = radinterp__hmap_put(&b->a, &b->vmap, key, (uint32_t)(b->pos.count / 3));
+            if (g[k] == RADINTERP__NONE) return -1;
+            if (g[k] == (uint32_t)(b->pos.count / 3)) {
+                uint32_t j;
+                for (j = 0; j < 3; j++) {
+                    float *f = (float *)radinterp__buf_push(&b->a, &b->pos);
+                    if (!f) return -1;
+                    *f = v3[3 * (size_t)T->v[k] + j];
+                }
+            }
+        }
+        if (g[0] == g[1] || g[1] == g[2] || g[2] == g[0]) { b->degenerate++; continue; }
+        if (!(o = (radinterp__otri *)radinterp__buf_push(&b->a, &b->tris))) return -1;
+        memcpy(o->v, g, sizeof g);
+        o->patch = P;
+        for (k = 0; k < 2; k++)
+            uv[k] = (radinterp__cdt_p(c, T->v[0])[k] + radinterp__cdt_p(c, T->v[1])[k] + radinterp__cdt_p(c, T->v[2])[k]) / 3.0;
+        o->node = radinterp__mlocate(b, P, uv);
+        for (k = 0; k < 3; k++) {
+            const double *p = radinterp__cdt_p(c, T->v[(k + 1) % 3]), *q = radinterp__cdt_p(c, T->v[(k + 2) % 3]);
+            if (!((T->flags >> k) & 1u)) continue;
+            o->flags |= 1u << k;
+            if (with_segments && radinterp__on_segment(b, P, p, q)) o->flags |= 8u << k;
+        }
+    }
+    /* leaf by leaf, in triangulation order inside a leaf */
+    for (t = first; t < b->tris.count; t++) {
+        uint64_t *key = (uint64_t *)radinterp__buf_push(&b->a, &w->order);
+        const radinterp__otri *o = &((radinterp__otri *)b->tris.data)[t];
+        if (!key) return -1;
+        *key = (uint64_t)RADINTERP__MNODES(b)[o->node].leaf << 32 | (t - first);
+    }
+    if (w->order.count > 1) {
+        radinterp__otri *copy = (radinterp__otri *)radinterp__alloc_array(&b->a, w->order.count, sizeof *copy);
+        if (!copy) return -1;
+        memcpy(copy, (radinterp__otri *)b->tris.data + first, w->order.count * sizeof *copy);
+        qsort(w->order.data, w->order.count, sizeof(uint64_t), radinterp__cmp_u64);
+        for (t = 0; t < w->order.count; t++)
+            ((radinterp__otri *)b->tris.data)[first + t] = copy[((uint64_t *)w->order.data)[t] & 0xFFFFFFFFu];
+        radinterp__free(&b->a, copy);
+    }
+    return 0;
+}
+
+/* P's triangles; without its discontinuity edges when the triangulation
+   with them fails its checks (logged and counted). */
+static radinterp_result radinterp__triangulate_patch(radinterp__builder *b, radinterp__tri_work *w, uint32_t P)
+{
+    int with = 1, r;
+    for (;;) {
+        uint32_t hanging = b->hanging;
+        w->out_of_memory = 0;
+        r = radinterp__patch_cdt(b, w, P, with);
+        if (r == 0) r = radinterp__classify(b, w, P);
+        if (r < 0 || w->out_of_memory) return RADINTERP_ERROR_OUT_OF_MEMORY;
+        if (r == 0) break;
+        b->hanging = hanging;
+        if (!with) {
+            radinterp__mesh_log(b, "radinterp_build_mesh: patch %u could not be triangulated", P);
+            return RADINTERP_ERROR_INVALID_ARGUMENT;
+        }
+        radinterp__mesh_log(b, "radinterp_build_mesh: patch %u triangulated without its discontinuities", P);
+        b->fallback++;
+        with = 0;
+    }
+    return radinterp__emit_patch(b, w, P, with) != 0 ? RADINTERP_ERROR_OUT_OF_MEMORY : RADINTERP_OK;
+}
+
+/* ======================================================================
+   20. interpolants (Hardt 3.3) and representation-based refinement (4.4.2)
+   Each triangle gets six IrradianceAtPoint samples, at its corners and
+   edge midpoints, each approached from the triangle's centre (so a sample
+   on a discontinuity takes the value of this triangle's side), and the
+   quadratic through them in closed form. With refinement, SAMPLES x SAMPLES
+   more points per triangle compare the interpolant with IrradianceAtPoint;
+   a leaf whose worst difference exceeds eps is split and the pass repeats
+   (triangles that did not change keep their samples).
+   ---------------------------------------------------------------------- */
+struct radinterp_mesh {
+    radinterp_allocator allocator;
+    void (*parallel_for)(void *user, radinterp_job_fn job, void *ctx, uint32_t count);
+    void *parallel_user;
+    uint32_t vertex_count, triangle_count, patch_count, disc_count, leaf_count;
+    float *positions;            /* 3 per vertex */
+    uint32_t *indices;           /* 3 per triangle */
+    uint32_t *tri_patch, *tri_leaf;
+    unsigned char *edge_flags;
+    float *irr;                  /* 18 per triangle: [6][3] irradiance coefficients */
+    float *rad;                  /* 18 per triangle: radiosity coefficients */
+    float *shade;                /* 24 per triangle: radiosity coefficients [6][4], for radinterp_shade */
+    float *reflectance, *emission;   /* 3 per triangle */
+    float *corner;               /* 9 per triangle */
+    float *vertex_rad;           /* 3 per vertex */
+    float *patch_rho, *patch_e;  /* 3 per patch */
+    radinterp_discontinuity *discs;
+    radinterp_mesh_leaf *leaves;
+    radinterp_mesh_info info;
+};
+
+/* Eq. 3.3 for one channel: coefficients (A, 2B, 2C, D, 2E, F) at c[0],
+   c[stride], ... from values at (0,0), (1/2,0), (1,0), (1/2,1/2), (0,1),
+   (0,1/2). (The thesis prints E = -3/2 r0 - 1/2 r4 + r5; its own system
+   gives 2 r5 there, by symmetry with C.) */
+static void radinterp__fit_channel(const double *r, float *c, size_t stride)
+{
+    c[0] = (float)(2.0 * r[0] - 4.0 * r[1] + 2.0 * r[2]);
+    c[stride] = (float)(4.0 * (r[0] - r[1] + r[3] - r[5]));
+    c[2 * stride] = (float)(-3.0 * r[0] + 4.0 * r[1] - r[2]);
+    c[3 * stride] = (float)(2.0 * r[0] + 2.0 * r[4] - 4.0 * r[5]);
+    c[4 * stride] = (float)(-3.0 * r[0] - r[4] + 4.0 * r[5]);
+    c[5 * stride] = (float)r[0];
+}
+
+/* R(s, t) = A s^2 + 2B st + 2C s + D t^2 + 2E t + F (eq. 3.1), as
+   s (A s + 2B t + 2C) + t (D t + 2E) + F: five multiplies, five adds. */
+static float radinterp__quad_eval(const float *c, size_t stride, float s, float t)
+{
+    return s * (c[0] * s + c[stride] * t + c[2 * stride]) + t * (c[3 * stride] * t + c[4 * stride]) + c[5 * stride];
+}
+
+RADINTERP_API void radinterp_fit_quadratic(const float r[6], float coefficients[6])
+{
+    double d[6];
+    int i;
+    if (!r || !coefficients) return;
+    for (i = 0; i < 6; i++) d[i] = r[i];
+    radinterp__fit_channel(d, coefficients, 1);
+}
+
+#define RADINTERP__SAMPLE_TRIS 4      /* triangles per job */
+#define RADINTERP__SAMPLE_BATCH 512   /* jobs between progress calls */
+
+typedef struct radinterp__sample_ctx {
+    const radinterp__builder *b;
+    const radinterp__otri *tris;
+    const float *pos;
+    const uint32_t *todo;        /* triangles to sample */
+    uint32_t first, count;       /* this batch: todo[first .. first + count) */
+    float *coeff, *error;        /* 18 and 1 per triangle */
+    radinterp_result *status;    /* per job of the batch */
+} radinterp__sample_ctx;
+
+static void radinterp__point_in(const float *p0, const float *p1, const float *p2, double s, double t, float *out)
+{
+    int k;
+    for (k = 0; k < 3; k++)
+        out[k] = (float)((double)p0[k] + s * ((double)p1[k] - p0[k]) + t * ((double)p2[k] - p0[k]));
+}
+
+/* The six samples and the coefficients of one triangle; with refinement
+   also its representation error. */
+static radinterp_result radinterp__sample_triangle(const radinterp__builder *b, const radinterp__otri *t, const float *pos,
+                                                   float *c, float *err)
+{
+    static const double at[6][2] = {{0, 0}, {0.5, 0}, {1, 0}, {0.5, 0.5}, {0, 1}, {0, 0.5}};
+    const float *p0 = pos + 3 * (size_t)t->v[0], *p1 = pos + 3 * (size_t)t->v[1], *p2 = pos + 3 * (size_t)t->v[2];
+    float toward[3], x[3];
+    double r[6][3], v[6];
+    int i, j, ch;
+    radinterp__point_in(p0, p1, p2, 1.0 / 3.0, 1.0 / 3.0, toward);
+    for (i = 0; i < 6; i++) {
+        radinterp_result res;
+        if (at[i][0] == 0 && at[i][1] == 0) memcpy(x, p0, sizeof x);
+        else if (at[i][0] == 1) memcpy(x, p1, sizeof x);
+        else if (at[i][1] == 1) memcpy(x, p2, sizeof x);
+        else radinterp__point_in(p0, p1, p2, at[i][0], at[i][1], x);
+        res = radinterp__irradiance(b->s, t->patch, x, toward, r[i], NULL);
+        if (res != RADINTERP_OK) return res;
+    }
+    for (ch = 0; ch < 3; ch++) {
+        for (i = 0; i < 6; i++) v[i] = r[i][ch];
+        radinterp__fit_channel(v, c + ch, 3);
+    }
+    *err = -1.0f;
+    if (b->desc->refine) {
+        uint32_t n = b->refine_samples;
+        double worst = 0.0;
+        for (i = 0; i < (int)n; i++)
+            for (j = 0; j < (int)n; j++) {
+                double s = (i + 0.5) / n, tt = (j + 0.5) / n, h[3];
+                radinterp_result res;
+                if (s + tt > 1.0) { s = 1.0 - s; tt = 1.0 - tt; }
+                radinterp__point_in(p0, p1, p2, s, tt, x);
+                res = radinterp__irradiance(b->s, t->patch, x, toward, h, NULL);
+                if (res != RADINTERP_OK) return res;
+                for (ch = 0; ch < 3; ch++) {
+                    double e = fabs(radinterp__quad_eval(c + ch, 3, (float)s, (float)tt) - h[ch]);
+                    worst = e > worst ? e : worst;
+                }
+            }
+        *err = (float)worst;
+    }
+    return RADINTERP_OK;
+}
+
+static void radinterp__sample_job(void *ctx_, uint32_t index)
+{
+    radinterp__sample_ctx *ctx = (radinterp__sample_ctx *)ctx_;
+    uint32_t i = index * RADINTERP__SAMPLE_TRIS, end = i + RADINTERP__SAMPLE_TRIS;
+    if (end > ctx->count) end = ctx->count;
+    ctx->status[index] = RADINTERP_OK;
+    for (; i < end; i++) {
+        uint32_t t = ctx->todo[ctx->first + i];
+        radinterp_result r = radinterp__sample_triangle(ctx->b, &ctx->tris[t], ctx->pos, ctx->coeff + 18 * (size_t)t,
+                                                        ctx->error + t);
+        if (r != RADINTERP_OK) ctx->status[index] = r;
+    }
+}
+
+/* Samples the listed triangles in batches of jobs, with progress calls
+   between batches. */
+static radinterp_result radinterp__sample_all(radinterp__builder *b, const uint32_t *todo, uint32_t n, float *coeff,
+                                              float *error)
+{
+    radinterp__sample_ctx ctx;
+    radinterp_result status[RADINTERP__SAMPLE_BATCH];
+    uint32_t done = 0, i;
+    ctx.b = b;
+    ctx.tris = (const radinterp__otri *)b->tris.data;
+    ctx.pos = (const float *)b->pos.data;
+    ctx.todo = todo;
+    ctx.coeff = coeff;
+    ctx.error = error;
+    ctx.status = status;
+    while (done < n) {
+        uint32_t count = n - done, jobs;
+        if (count > RADINTERP__SAMPLE_BATCH * RADINTERP__SAMPLE_TRIS) count = RADINTERP__SAMPLE_BATCH * RADINTERP__SAMPLE_TRIS;
+        jobs = (count + RADINTERP__SAMPLE_TRIS - 1) / RADINTERP__SAMPLE_TRIS;
+        ctx.first = done;
+        ctx.count = count;
+        radinterp__run_jobs(b->desc->parallel_for, b->desc->parallel_user, radinterp__sample_job, &ctx, jobs);
+        for (i = 0; i < jobs; i++)
+            if (status[i] != RADINTERP_OK) return status[i];
+        done += count;
+        b->samples += (uint64_t)count * (6u + (b->desc->refine ? b->refine_samples * b->refine_samples : 0u));
+        if (b->desc->progress && b->desc->progress(b->desc->progress_user, done, n)) return RADINTERP_ERROR_CANCELLED;
+    }
+    return RADINTERP_OK;
+}
+
+/* Key of a triangle for reusing its samples in the next pass. */
+static void radinterp__tri_key(const radinterp__builder *b, const radinterp__otri *t, uint32_t *key)
+{
+    const float *pos = (const float *)b->pos.data;
+    int k;
+    for (k = 0; k < 3; k++) radinterp__point_key(pos + 3 * (size_t)t->v[k], 0, key + 3 * k);
+    key[9] = t->patch;
+}
+
+typedef struct radinterp__interp {
+    float *coeff, *error;        /* of the current pass */
+    float *prev_coeff, *prev_error;
+    radinterp__hmap prev;        /* triangle key -> index in the previous pass */
+} radinterp__interp;
+
+static void radinterp__interp_free(const radinterp_allocator *a, radinterp__interp *ip)
+{
+    radinterp__free(a, ip->coeff);
+    radinterp__free(a, ip->error);
+    radinterp__free(a, ip->prev_coeff);
+    radinterp__free(a, ip->prev_error);
+    radinterp__hmap_free(a, &ip->prev);
+    memset(ip, 0, sizeof *ip);
+}
+
+/* Coefficients of the pass's triangles: from the previous pass where the
+   triangle is unchanged, else sampled. Remembers them for the next pass. */
+static radinterp_result radinterp__interpolants(radinterp__builder *b, radinterp__interp *ip)
+{
+    uint32_t n = (uint32_t)b->tris.count, i, key[10], todo_n = 0, *todo;
+    const radinterp__otri *tris = (const radinterp__otri *)b->tris.data;
+    radinterp_result res;
+    ip->coeff = (float *)radinterp__alloc_array(&b->a, (size_t)n * 18, sizeof(float));
+    ip->error = (float *)radinterp__alloc_array(&b->a, n, sizeof(float));
+    todo = (uint32_t *)radinterp__alloc_array(&b->a, n, sizeof(uint32_t));
+    if (!ip->coeff || !ip->error || !todo) { radinterp__free(&b->a, todo); return RADINTERP_ERROR_OUT_OF_MEMORY; }
+    for (i = 0; i < n; i++) {
+        uint32_t old = RADINTERP__NONE;
+        if (ip->prev.cap) {
+            radinterp__tri_key(b, &tris[i], key);
+            old = radinterp__hmap_get(&ip->prev, key);
+        }
+        if (old != RADINTERP__NONE) {
+            memcpy(ip->coeff + 18 * (size_t)i, ip->prev_coeff + 18 * (size_t)old, 18 * sizeof(float));
+            ip->error[i] = ip->prev_error[old];
+        } else {
+            todo[todo_n++] = i;
+        }
+    }
+    res = radinterp__sample_all(b, todo, todo_n, ip->coeff, ip->error);
+    radinterp__free(&b->a, todo);
+    if (res != RADINTERP_OK) return res;
+    if (b->desc->refine) {  /* remember this pass */
+        radinterp__free(&b->a, ip->prev_coeff);
+        radinterp__free(&b->a, ip->prev_error);
+        ip->prev_coeff = ip->coeff;
+        ip->prev_error = ip->error;
+        ip->coeff = ip->error = NULL;
+        radinterp__hmap_free(&b->a, &ip->prev);
+        if (radinterp__hmap_init(&b->a, &ip->prev, 10, n) != 0) return RADINTERP_ERROR_OUT_OF_MEMORY;
+        for (i = 0; i < n; i++) {
+            radinterp__tri_key(b, &tris[i], key);
+            if (radinterp__hmap_put(&b->a, &ip->prev, key, i) == RADINTERP__NONE) return RADINTERP_ERROR_OUT_OF_MEMORY;
+        }
+    }
+    return RADINTERP_OK;
+}
+
+/* Splits every leaf whose triangles miss IrradianceAtPoint by more than
+   eps (4.4.2 step 3). Returns the number split, or -1 when out of memory. */
+static int radinterp__refine_leaves(radinterp__builder *b, const float *error, float *worst)
+{
+    const radinterp__otri *tris = (const radinterp__otri *)b->tris.data;
+    uint32_t nl = (uint32_t)b->leaves.count, i, split = 0;
+    float *leaf_err = (float *)radinterp__alloc_array(&b->a, nl, sizeof(float));
+    uint32_t *list = (uint32_t *)radinterp__alloc_array(&b->a, nl, sizeof(uint32_t));
+    if (!leaf_err || !list) {
+        radinterp__free(&b->a, leaf_err);
+        radinterp__free(&b->a, list);
+        return -1;
+    }
+    for (i = 0; i < nl; i++) leaf_err[i] = 0.0f;
+    for (i = 0; i < b->tris.count; i++) {
+        uint32_t l = RADINTERP__MNODES(b)[tris[i].node].leaf;
+        if (error[i] > leaf_err[l]) leaf_err[l] = error[i];
+        if (error[i] > *worst) *worst = error[i];
+    }
+    for (i = 0; i < nl; i++) {
+        uint32_t node = RADINTERP__U32(b->leaves)[i];
+        if (leaf_err[i] > b->refine_eps && 0.25 * radinterp__mnode_area(&RADINTERP__MNODES(b)[node]) >= b->refine_min_area)
+            list[split++] = node;
+    }
+    for (i = 0; i < split; i++)
+        if (radinterp__mnode_split(b, list[i]) != 0) { split = RADINTERP__NONE; break; }
+    radinterp__free(&b->a, leaf_err);
+    radinterp__free(&b->a, list);
+    return split == RADINTERP__NONE ? -1 : (int)split;
+}
+
+/* One pass over the current quadtrees: activation, discontinuity edges,
+   outline vertices, and every patch's triangles. */
+static radinterp_result radinterp__mesh_pass(radinterp__builder *b)
+{
+    const radinterp_solution *s = b->s;
+    radinterp__tri_work w;
+    radinterp__hmap seen;
+    radinterp__buf tmp;
+    uint32_t P, k, *own = NULL;
+    size_t at;
+    radinterp_result res = RADINTERP_OK;
+    radinterp__tri_work_init(&w, &b->a);
+    memset(&seen, 0, sizeof seen);
+    radinterp__buf_init(&tmp, sizeof(radinterp__tkey));
+    b->segs.count = b->pool.count = b->chains.count = b->pos.count = b->tris.count = 0;
+    b->hanging = b->seam = b->fallback = b->degenerate = 0;
+    radinterp__hmap_clear(&b->vmap);
+    if (radinterp__collect_mleaves(b, &w.stack) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    if (res == RADINTERP_OK) res = radinterp__activate(b);
+    for (P = 0; P < s->patch_count && res == RADINTERP_OK; P++)
+        if (radinterp__patch_segments(b, P) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    if (res == RADINTERP_OK && radinterp__hmap_init(&b->a, &seen, 4, 1024) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    for (P = 0; P < s->patch_count && res == RADINTERP_OK; P++) {
+        if (!s->patches[P].count) continue;
+        if (radinterp__outline_vertices(b, P, &seen) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    }
+    if (res == RADINTERP_OK && radinterp__weld(b) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    if (res == RADINTERP_OK) {
+        own = (uint32_t *)radinterp__alloc_array(&b->a, b->pool.count ? b->pool.count : 1, sizeof(uint32_t));
+        if (!own) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+        else memset(own, 0, (b->pool.count ? b->pool.count : 1) * sizeof(uint32_t));
+    }
+    for (P = 0, at = 0; P < s->patch_count && res == RADINTERP_OK; P++) {
+        size_t i;
+        if (!s->patches[P].count) continue;
+        while (at < b->pool.count && RADINTERP__BVERTS(b)[at].patch < P) at++;   /* the pool is in patch order */
+        for (i = at; i < b->pool.count && RADINTERP__BVERTS(b)[i].patch == P; i++) own[RADINTERP__BVERTS(b)[i].rep] = P + 1u;
+        for (k = 0; k < s->patches[P].count && res == RADINTERP_OK; k++)
+            if (radinterp__make_chain(b, P, k, own, &tmp) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    }
+    if (res == RADINTERP_OK && radinterp__hmap_init(&b->a, &w.lmap, 4, 256) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    for (P = 0; P < s->patch_count && res == RADINTERP_OK; P++)
+        if (s->patches[P].count) res = radinterp__triangulate_patch(b, &w, P);
+    radinterp__free(&b->a, own);
+    radinterp__buf_free(&b->a, &tmp);
+    radinterp__hmap_free(&b->a, &seen);
+    radinterp__tri_work_free(&b->a, &w);
+    return res;
+}
+
+/* ======================================================================
+   21. radinterp_build_mesh and the mesh object
+   ---------------------------------------------------------------------- */
+static int radinterp__mesh_alloc(radinterp_mesh *m)
+{
+    const radinterp_allocator *a = &m->allocator;
+    size_t V = m->vertex_count, T = m->triangle_count, P = m->patch_count;
+    m->positions = (float *)radinterp__alloc_array(a, V, 3 * sizeof(float));
+    m->indices = (uint32_t *)radinterp__alloc_array(a, T, 3 * sizeof(uint32_t));
+    m->tri_patch = (uint32_t *)radinterp__alloc_array(a, T, sizeof(uint32_t));
+    m->tri_leaf = (uint32_t *)radinterp__alloc_array(a, T, sizeof(uint32_t));
+    m->edge_flags = (unsigned char *)radinterp__alloc_array(a, T, 1);
+    m->irr = (float *)radinterp__alloc_array(a, T, 18 * sizeof(float));
+    m->rad = (float *)radinterp__alloc_array(a, T, 18 * sizeof(float));
+    m->shade = (float *)radinterp__alloc_array(a, T, 24 * sizeof(float));
+    m->reflectance = (float *)radinterp__alloc_array(a, T, 3 * sizeof(float));
+    m->emission = (float *)radinterp__alloc_array(a, T, 3 * sizeof(float));
+    m->corner = (float *)radinterp__alloc_array(a, T, 9 * sizeof(float));
+    m->vertex_rad = (float *)radinterp__alloc_array(a, V, 3 * sizeof(float));
+    m->patch_rho = (float *)radinterp__alloc_array(a, P, 3 * sizeof(float));
+    m->patch_e = (float *)radinterp__alloc_array(a, P, 3 * sizeof(float));
+    m->discs = (radinterp_discontinuity *)radinterp__alloc_array(a, m->disc_count, sizeof(radinterp_discontinuity));
+    m->leaves = (radinterp_mesh_leaf *)radinterp__alloc_array(a, m->leaf_count, sizeof(radinterp_mesh_leaf));
+    return m->positions && m->indices && m->tri_patch && m->tri_leaf && m->edge_flags && m->irr && m->rad && m->shade &&
+                   m->reflectance && m->emission && m->corner && m->vertex_rad && m->patch_rho && m->patch_e && m->discs &&
+                   m->leaves
+               ? 0
+               : -1;
+}
+
+RADINTERP_API void radinterp_mesh_destroy(radinterp_mesh *m)
+{
+    radinterp_allocator a;
+    if (!m) return;
+    a = m->allocator;
+    radinterp__free(&a, m->positions);
+    radinterp__free(&a, m->indices);
+    radinterp__free(&a, m->tri_patch);
+    radinterp__free(&a, m->tri_leaf);
+    radinterp__free(&a, m->edge_flags);
+    radinterp__free(&a, m->irr);
+    radinterp__free(&a, m->rad);
+    radinterp__free(&a, m->shade);
+    radinterp__free(&a, m->reflectance);
+    radinterp__free(&a, m->emission);
+    radinterp__free(&a, m->corner);
+    radinterp__free(&a, m->vertex_rad);
+    radinterp__free(&a, m->patch_rho);
+    radinterp__free(&a, m->patch_e);
+    radinterp__free(&a, m->discs);
+    radinterp__free(&a, m->leaves);
+    radinterp__free(&a, m);
+}
+
+/* Everything that follows from the irradiance interpolants and the
+   materials: radiosity coefficients B = E + rho H, the shading table,
+   corner and vertex radiosities. */
+static int radinterp__mesh_derive(radinterp_mesh *m)
+{
+    uint32_t t, k, ch, v;
+    uint32_t *uses = (uint32_t *)radinterp__alloc_array(&m->allocator, m->vertex_count, sizeof(uint32_t));
+    static const float corner_st[3][2] = {{0, 0}, {1, 0}, {0, 1}};
+    if (!uses) return -1;
+    memset(uses, 0, (size_t)m->vertex_count * sizeof(uint32_t));
+    memset(m->vertex_rad, 0, (size_t)m->vertex_count * 3 * sizeof(float));
+    for (t = 0; t < m->triangle_count; t++) {
+        const float *rho = m->patch_rho + 3 * (size_t)m->tri_patch[t], *e = m->patch_e + 3 * (size_t)m->tri_patch[t];
+        float *rad = m->rad + 18 * (size_t)t, *sh = m->shade + 24 * (size_t)t;
+        const float *irr = m->irr + 18 * (size_t)t;
+        memcpy(m->reflectance + 3 * (size_t)t, rho, 3 * sizeof(float));
+        memcpy(m->emission + 3 * (size_t)t, e, 3 * sizeof(float));
+        for (k = 0; k < 6; k++)
+            for (ch = 0; ch < 3; ch++) rad[3 * k + ch] = rho[ch] * irr[3 * k + ch] + (k == 5 ? e[ch] : 0.0f);
+        for (k = 0; k < 6; k++) {
+            for (ch = 0; ch < 3; ch++) sh[4 * k + ch] = rad[3 * k + ch];
+            sh[4 * k + 3] = 0.0f;
+        }
+        for (k = 0; k < 3; k++) {
+            uint32_t vi = m->indices[3 * (size_t)t + k];
+            for (ch = 0; ch < 3; ch++) {
+                float b = radinterp__quad_eval(rad + ch, 3, corner_st[k][0], corner_st[k][1]);
+                m->corner[9 * (size_t)t + 3 * k + ch] = b;
+                m->vertex_rad[3 * (size_t)vi + ch] += b;
+            }
+            uses[vi]++;
+        }
+    }
+    for (v = 0; v < m->vertex_count; v++)
+        for (ch = 0; ch < 3; ch++)
+            if (uses[v]) m->vertex_rad[3 * (size_t)v + ch] /= (float)uses[v];
+    radinterp__free(&m->allocator, uses);
+    return 0;
+}
+
+static size_t radinterp__mesh_bytes(const radinterp_mesh *m)
+{
+    return sizeof *m + (size_t)m->vertex_count * 6 * sizeof(float) +
+           (size_t)m->triangle_count * (5 * sizeof(uint32_t) + 1 + (18 + 18 + 24 + 3 + 3 + 9) * sizeof(float)) +
+           (size_t)m->patch_count * 6 * sizeof(float) + (size_t)m->disc_count * sizeof(radinterp_discontinuity) +
+           (size_t)m->leaf_count * sizeof(radinterp_mesh_leaf);
+}
+
+/* The mesh from the last pass. */
+static radinterp_result radinterp__assemble(radinterp__builder *b, const float *coeff, const float *error,
+                                            radinterp_mesh **out)
+{
+    const radinterp_solution *s = b->s;
+    const radinterp__otri *tris = (const radinterp__otri *)b->tris.data;
+    radinterp__disc *dd = (radinterp__disc *)b->discs.data;
+    radinterp_mesh *m = (radinterp_mesh *)radinterp__alloc(&b->a, sizeof *m);
+    radinterp_mesh_info *info;
+    uint32_t i;
+    if (!m) return RADINTERP_ERROR_OUT_OF_MEMORY;
+    memset(m, 0, sizeof *m);
+    m->allocator = b->a;
+    m->parallel_for = b->desc->parallel_for;
+    m->parallel_user = b->desc->parallel_user;
+    m->vertex_count = (uint32_t)(b->pos.count / 3);
+    m->triangle_count = (uint32_t)b->tris.count;
+    m->patch_count = s->patch_count;
+    m->disc_count = (uint32_t)b->discs.count;
+    m->leaf_count = (uint32_t)b->leaves.count;
+    if (radinterp__mesh_alloc(m) != 0) { radinterp_mesh_destroy(m); return RADINTERP_ERROR_OUT_OF_MEMORY; }
+    memcpy(m->positions, b->pos.data, b->pos.count * sizeof(float));
+    memcpy(m->irr, coeff, (size_t)m->triangle_count * 18 * sizeof(float));
+    for (i = 0; i < m->triangle_count; i++) {
+        memcpy(m->indices + 3 * (size_t)i, tris[i].v, 3 * sizeof(uint32_t));
+        m->tri_patch[i] = tris[i].patch;
+        m->tri_leaf[i] = RADINTERP__MNODES(b)[tris[i].node].leaf;
+        m->edge_flags[i] = (unsigned char)tris[i].flags;
+    }
+    for (i = 0; i < s->patch_count; i++) {
+        memcpy(m->patch_rho + 3 * (size_t)i, s->patches[i].rho, 3 * sizeof(float));
+        memcpy(m->patch_e + 3 * (size_t)i, s->patches[i].e, 3 * sizeof(float));
+    }
+    info = &m->info;
+    for (i = 0; i < m->disc_count; i++) {
+        radinterp_discontinuity *o = &m->discs[i];
+        const radinterp__disc *d = &dd[i];
+        radinterp__pframe_3df(&b->frames[d->receiver], d->p, o->a);
+        radinterp__pframe_3df(&b->frames[d->receiver], d->q, o->b);
+        o->type = d->type;
+        o->receiver = d->receiver;
+        o->source = d->source;
+        o->blocker = d->blocker;
+        o->dset = d->dset;
+        o->weight = radinterp__disc_weight(s, &dd[i]);
+        o->active = (int)d->active;
+        info->ev += d->type == RADINTERP_DISCONTINUITY_EV;
+        info->ve += d->type == RADINTERP_DISCONTINUITY_VE;
+        info->horizon += d->type == RADINTERP_DISCONTINUITY_HORIZON;
+        info->contact += d->type == RADINTERP_DISCONTINUITY_CONTACT;
+        info->candidates += o->weight >= b->min_weight;
+        info->active_discontinuities += d->active;
+    }
+    for (i = 0; i < m->leaf_count; i++) {
+        const radinterp__mnode *nd = &RADINTERP__MNODES(b)[RADINTERP__U32(b->leaves)[i]];
+        radinterp_mesh_leaf *l = &m->leaves[i];
+        memset(l, 0, sizeof *l);
+        l->patch = nd->patch;
+        l->depth = nd->depth;
+        l->vertex_count = nd->count;
+        memcpy(l->vertices, nd->v, sizeof l->vertices);
+        radinterp__leaf_dsets(b, nd, &l->dsets, &l->active_dsets);
+        l->first_triangle = m->triangle_count;
+        l->error = b->desc->refine ? 0.0f : -1.0f;
+        info->active_leaf_dsets += l->active_dsets;
+        if (l->active_dsets > info->max_leaf_active_dsets) info->max_leaf_active_dsets = l->active_dsets;
+    }
+    for (i = 0; i < m->triangle_count; i++) {
+        radinterp_mesh_leaf *l = &m->leaves[m->tri_leaf[i]];
+        if (l->triangle_count == 0) l->first_triangle = i;
+        l->triangle_count++;
+        if (b->desc->refine && error[i] > l->error) l->error = error[i];
+    }
+    for (i = 0; i < m->leaf_count; i++)
+        if (m->leaves[i].triangle_count == 0) m->leaves[i].first_triangle = 0;
+    if (radinterp__mesh_derive(m) != 0) { radinterp_mesh_destroy(m); return RADINTERP_ERROR_OUT_OF_MEMORY; }
+    info->triangle_count = m->triangle_count;
+    info->vertex_count = m->vertex_count;
+    info->leaf_count = m->leaf_count;
+    info->patch_count = m->patch_count;
+    info->discontinuities = m->disc_count;
+    info->dsets = (uint32_t)b->dsets.count;
+    info->balance_splits = b->balance_splits;
+    info->hanging_vertices = b->hanging;
+    info->seam_vertices = b->seam;
+    info->fallback_patches = b->fallback;
+    info->samples = b->samples;
+    *out = m;
+    return RADINTERP_OK;
+}
+
+static radinterp_result radinterp__check_mesh_desc(const radinterp_mesh_desc *d)
+{
+    const char *bad = NULL;
+    if (!radinterp__allocator_valid(&d->allocator)) bad = "allocator.alloc and allocator.free must both be set or both be NULL";
+    else if (radinterp__bad_param(d->min_discont_weight) || radinterp__bad_param(d->refine_eps) ||
+             radinterp__bad_param(d->refine_min_area) || radinterp__bad_param(d->weld_distance) ||
+             radinterp__bad_param(d->min_leaf_area))
+        bad = "a parameter is negative, NaN or infinite";
+    else if (d->max_leaf_dsets > 4096) bad = "max_leaf_dsets is above 4096";
+    else if (d->refine_samples > 64) bad = "refine_samples is above 64";
+    else if (d->refine_passes > 64) bad = "refine_passes is above 64";
+    if (!bad) return RADINTERP_OK;
+    if (d->log) {
+        char msg[160];
+        snprintf(msg, sizeof msg, "radinterp_build_mesh: %s", bad);
+        d->log(d->log_user, msg);
+    }
+    return RADINTERP_ERROR_INVALID_ARGUMENT;
+}
+
+static void radinterp__builder_free(radinterp__builder *b)
+{
+    const radinterp_allocator *a = &b->a;
+    radinterp__free(a, b->frames);
+    radinterp__free(a, b->outline);
+    radinterp__free(a, b->disc_first);
+    radinterp__free(a, b->disc_count);
+    radinterp__free(a, b->roots);
+    radinterp__free(a, b->leaf_first);
+    radinterp__free(a, b->leaf_count);
+    radinterp__free(a, b->seg_first);
+    radinterp__free(a, b->seg_count);
+    radinterp__free(a, b->chain_first);
+    radinterp__free(a, b->chain_len);
+    radinterp__buf_free(a, &b->discs);
+    radinterp__buf_free(a, &b->dsets);
+    radinterp__buf_free(a, &b->nodes);
+    radinterp__buf_free(a, &b->node_discs);
+    radinterp__buf_free(a, &b->leaves);
+    radinterp__buf_free(a, &b->segs);
+    radinterp__buf_free(a, &b->pool);
+    radinterp__buf_free(a, &b->reps);
+    radinterp__buf_free(a, &b->chains);
+    radinterp__buf_free(a, &b->pos);
+    radinterp__buf_free(a, &b->tris);
+    radinterp__hmap_free(a, &b->corners);
+    radinterp__hmap_free(a, &b->canon);
+    radinterp__hmap_free(a, &b->vmap);
+}
+
+/* Parameters after defaults, per-patch arrays, frames and outlines. */
+static radinterp_result radinterp__builder_init(radinterp__builder *b, const radinterp_solution *s,
+                                                const radinterp_mesh_desc *d)
+{
+    uint32_t P = s->patch_count, i, k;
+    float brightest = 0.0f;
+    memset(b, 0, sizeof *b);
+    b->s = s;
+    b->desc = d;
+    b->a = d->allocator;
+    b->tol = s->epsilon * s->diag;
+    b->weld = d->weld_distance > 0.0f ? d->weld_distance : 1e-6 * s->diag;
+    if (b->weld < b->tol) b->weld = b->tol;
+    for (i = 0; i < P; i++)
+        if (s->patches[i].count && radinterp__brightness(s, i) > brightest) brightest = radinterp__brightness(s, i);
+    b->min_weight = d->min_discont_weight > 0.0f ? d->min_discont_weight : 0.01f * brightest;
+    b->max_dsets = radinterp__def(d->max_leaf_dsets, 10u);
+    b->refine_eps = d->refine_eps > 0.0f ? d->refine_eps : s->eps;
+    b->refine_min_area = d->refine_min_area > 0.0f ? d->refine_min_area : s->min_area;
+    b->min_leaf_area = d->min_leaf_area;
+    b->refine_samples = radinterp__def(d->refine_samples, 3u);
+    b->refine_passes = radinterp__def(d->refine_passes, 8u);
+    radinterp__buf_init(&b->discs, sizeof(radinterp__disc));
+    radinterp__buf_init(&b->dsets, sizeof(radinterp__dset));
+    radinterp__buf_init(&b->nodes, sizeof(radinterp__mnode));
+    radinterp__buf_init(&b->node_discs, sizeof(uint32_t));
+    radinterp__buf_init(&b->leaves, sizeof(uint32_t));
+    radinterp__buf_init(&b->segs, sizeof(radinterp__seg));
+    radinterp__buf_init(&b->pool, sizeof(radinterp__bvert));
+    radinterp__buf_init(&b->reps, sizeof(uint32_t));
+    radinterp__buf_init(&b->chains, sizeof(uint32_t));
+    radinterp__buf_init(&b->pos, sizeof(float));
+    radinterp__buf_init(&b->tris, sizeof(radinterp__otri));
+    b->frames = (radinterp__pframe *)radinterp__alloc_array(&b->a, P, sizeof *b->frames);
+    b->outline = (double *)radinterp__alloc_array(&b->a, P, 8 * sizeof(double));
+    b->disc_first = (uint32_t *)radinterp__alloc_array(&b->a, P, sizeof(uint32_t));
+    b->disc_count = (uint32_t *)radinterp__alloc_array(&b->a, P, sizeof(uint32_t));
+    b->roots = (uint32_t *)radinterp__alloc_array(&b->a, P, sizeof(uint32_t));
+    b->leaf_first = (uint32_t *)radinterp__alloc_array(&b->a, P, sizeof(uint32_t));
+    b->leaf_count = (uint32_t *)radinterp__alloc_array(&b->a, P, sizeof(uint32_t));
+    b->seg_first = (uint32_t *)radinterp__alloc_array(&b->a, P, sizeof(uint32_t));
+    b->seg_count = (uint32_t *)radinterp__alloc_array(&b->a, P, sizeof(uint32_t));
+    b->chain_first = (uint32_t *)radinterp__alloc_array(&b->a, P, 4 * sizeof(uint32_t));
+    b->chain_len = (uint32_t *)radinterp__alloc_array(&b->a, P, 4 * sizeof(uint32_t));
+    if (!b->frames || !b->outline || !b->disc_first || !b->disc_count || !b->roots || !b->leaf_first || !b->leaf_count ||
+        !b->seg_first || !b->seg_count || !b->chain_first || !b->chain_len ||
+        radinterp__hmap_init(&b->a, &b->corners, 4, 4 * s->node_count) != 0 ||
+        radinterp__hmap_init(&b->a, &b->canon, 4, 1024) != 0 || radinterp__hmap_init(&b->a, &b->vmap, 4, 4 * s->leaf_count) != 0)
+        return RADINTERP_ERROR_OUT_OF_MEMORY;
+    for (i = 0; i < P; i++) {
+        const radinterp__patch *pt = &s->patches[i];
+        b->roots[i] = RADINTERP__NONE;
+        b->disc_first[i] = b->disc_count[i] = b->leaf_first[i] = b->leaf_count[i] = b->seg_first[i] = b->seg_count[i] = 0;
+        for (k = 0; k < 4; k++) b->chain_first[4 * i + k] = b->chain_len[4 * i + k] = 0;
+        memset(b->outline + 8 * (size_t)i, 0, 8 * sizeof(double));
+        if (!pt->count) continue;
+        radinterp__pframe_make(&b->frames[i], pt);
+        for (k = 0; k < pt->count; k++) radinterp__pframe_2df(&b->frames[i], pt->v[k], b->outline + 8 * (size_t)i + 2 * k);
+    }
+    return RADINTERP_OK;
+}
+
+/* Quadtrees copied from the solution and restricted. */
+static radinterp_result radinterp__build_trees(radinterp__builder *b)
+{
+    radinterp__buf queue;
+    uint32_t R;
+    int fail = 0;
+    radinterp__buf_init(&queue, sizeof(uint32_t));
+    for (R = 0; R < b->s->patch_count && !fail; R++)
+        if (b->s->patches[R].count) fail = radinterp__copy_tree(b, R, &queue) != 0;
+    radinterp__buf_free(&b->a, &queue);
+    if (!fail) fail = radinterp__balance(b) != 0;
+    return fail ? RADINTERP_ERROR_OUT_OF_MEMORY : RADINTERP_OK;
+}
+
+RADINTERP_API radinterp_result radinterp_build_mesh(const radinterp_solution *s, const radinterp_mesh_desc *desc,
+                                                    radinterp_mesh **out)
+{
+    radinterp__builder b;
+    radinterp__interp ip;
+    radinterp_result res;
+    uint32_t pass = 0, refined = 0, i;
+    float worst = 0.0f;
+    if (!out) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    *out = NULL;
+    if (!s || !desc) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    res = radinterp__check_mesh_desc(desc);
+    if (res != RADINTERP_OK) return res;
+    memset(&ip, 0, sizeof ip);
+    res = radinterp__builder_init(&b, s, desc);
+    if (res == RADINTERP_OK) res = radinterp__find_discontinuities(&b);
+    if (res == RADINTERP_OK)
+        for (i = 0; i < b.discs.count; i++) radinterp__disc_weight(s, &((radinterp__disc *)b.discs.data)[i]);
+    if (res == RADINTERP_OK) res = radinterp__build_trees(&b);
+    while (res == RADINTERP_OK) {
+        int split;
+        res = radinterp__mesh_pass(&b);
+        if (res == RADINTERP_OK) res = radinterp__interpolants(&b, &ip);
+        if (res != RADINTERP_OK || !desc->refine || pass >= b.refine_passes) break;
+        split = radinterp__refine_leaves(&b, ip.prev_error, &worst);
+        if (split < 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+        if (split <= 0) break;
+        refined += (uint32_t)split;
+        pass++;
+        if (radinterp__balance(&b) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    }
+    if (res == RADINTERP_OK) {
+        res = radinterp__assemble(&b, desc->refine ? ip.prev_coeff : ip.coeff, desc->refine ? ip.prev_error : ip.error, out);
+        if (res == RADINTERP_OK) {
+            (*out)->info.refine_passes = desc->refine ? pass + 1 : 0;
+            (*out)->info.refined_leaves = refined;
+            (*out)->info.max_fit_error = worst;
+            (*out)->info.bytes = radinterp__mesh_bytes(*out);
+        }
+    }
+    if (res == RADINTERP_ERROR_OUT_OF_MEMORY) radinterp__mesh_log(&b, "radinterp_build_mesh: out of memory");
+    radinterp__interp_free(&b.a, &ip);
+    radinterp__builder_free(&b);
+    return res;
+}
+
+RADINTERP_API void radinterp_mesh_get_info(const radinterp_mesh *m, radinterp_mesh_info *info)
+{
+    if (!info) return;
+    memset(info, 0, sizeof *info);
+    if (m) *info = m->info;
+}
+
+RADINTERP_API void radinterp_mesh_get_data(const radinterp_mesh *m, radinterp_mesh_data *d)
+{
+    if (!d) return;
+    memset(d, 0, sizeof *d);
+    if (!m) return;
+    d->vertex_count = m->vertex_count;
+    d->triangle_count = m->triangle_count;
+    d->positions = m->positions;
+    d->indices = m->indices;
+    d->triangle_patch = m->tri_patch;
+    d->triangle_leaf = m->tri_leaf;
+    d->coefficients = m->rad;
+    d->irradiance_coefficients = m->irr;
+    d->reflectance = m->reflectance;
+    d->emission = m->emission;
+    d->corner_radiosity = m->corner;
+    d->vertex_radiosity = m->vertex_rad;
+    d->edge_flags = m->edge_flags;
+}
+
+RADINTERP_API uint32_t radinterp_mesh_discontinuity_count(const radinterp_mesh *m) { return m ? m->disc_count : 0; }
+
+RADINTERP_API radinterp_result radinterp_mesh_get_discontinuity(const radinterp_mesh *m, uint32_t index,
+                                                                radinterp_discontinuity *d)
+{
+    if (!d) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    memset(d, 0, sizeof *d);
+    if (!m || index >= m->disc_count) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    *d = m->discs[index];
+    return RADINTERP_OK;
+}
+
+RADINTERP_API uint32_t radinterp_mesh_leaf_count(const radinterp_mesh *m) { return m ? m->leaf_count : 0; }
+
+RADINTERP_API radinterp_result radinterp_mesh_get_leaf(const radinterp_mesh *m, uint32_t index, radinterp_mesh_leaf *leaf)
+{
+    if (!leaf) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    memset(leaf, 0, sizeof *leaf);
+    if (!m || index >= m->leaf_count) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    *leaf = m->leaves[index];
+    return RADINTERP_OK;
+}
+
+RADINTERP_API void radinterp_mesh_set_parallel_for(radinterp_mesh *m,
+                                                   void (*parallel_for)(void *user, radinterp_job_fn job, void *ctx,
+                                                                        uint32_t count),
+                                                   void *user)
+{
+    if (!m) return;
+    m->parallel_for = parallel_for;
+    m->parallel_user = user;
+}
+
+/* ======================================================================
+   22. the online phase (Hardt 3.4): per-pixel interpolant evaluation
+   ---------------------------------------------------------------------- */
+static radinterp_result radinterp__eval_table(const radinterp_mesh *m, const float *table, uint32_t triangle, float s,
+                                              float t, float rgb[3])
+{
+    int ch;
+    if (!rgb) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    if (!m || triangle >= m->triangle_count) {
+        rgb[0] = rgb[1] = rgb[2] = 0.0f;
+        return RADINTERP_ERROR_INVALID_ARGUMENT;
+    }
+    for (ch = 0; ch < 3; ch++) rgb[ch] = radinterp__quad_eval(table + 18 * (size_t)triangle + ch, 3, s, t);
+    return RADINTERP_OK;
+}
+
+RADINTERP_API radinterp_result radinterp_eval(const radinterp_mesh *m, uint32_t triangle, float s, float t, float rgb[3])
+{
+    return radinterp__eval_table(m, m ? m->rad : NULL, triangle, s, t, rgb);
+}
+
+RADINTERP_API radinterp_result radinterp_eval_irradiance(const radinterp_mesh *m, uint32_t triangle, float s, float t,
+                                                         float rgb[3])
+{
+    return radinterp__eval_table(m, m ? m->irr : NULL, triangle, s, t, rgb);
+}
+
+#define RADINTERP__SHADE_CHUNK 16384   /* pixels per job */
+
+typedef struct radinterp__shade_ctx {
+    const radinterp_mesh *m;
+    const uint32_t *ids;
+    const float *st;
+    float *rgb;
+    size_t count;
+} radinterp__shade_ctx;
+
+/* One chunk of pixels: B(s, t) from the padded table (4 lanes per
+   coefficient, so the channels evaluate as one short vector). */
+static void radinterp__shade_job(void *ctx_, uint32_t index)
+{
+    const radinterp__shade_ctx *ctx = (const radinterp__shade_ctx *)ctx_;
+    const float *table = ctx->m->shade;
+    uint32_t n = ctx->m->triangle_count;
+    size_t i = (size_t)index * RADINTERP__SHADE_CHUNK, end = i + RADINTERP__SHADE_CHUNK;
+    if (end > ctx->count) end = ctx->count;
+    for (; i < end; i++) {
+        uint32_t id = ctx->ids[i];
+        const float *c;
+        float s, t, v[4], *out;
+        int ch;
+        if (id >= n) continue;
+        c = table + 24 * (size_t)id;
+        s = ctx->st[2 * i];
+        t = ctx->st[2 * i + 1];
+        for (ch = 0; ch < 4; ch++)
+            v[ch] = s * (c[ch] * s + c[4 + ch] * t + c[8 + ch]) + t * (c[12 + ch] * t + c[16 + ch]) + c[20 + ch];
+        out = ctx->rgb + 3 * i;
+        out[0] = v[0] > 0.0f ? v[0] : 0.0f;
+        out[1] = v[1] > 0.0f ? v[1] : 0.0f;
+        out[2] = v[2] > 0.0f ? v[2] : 0.0f;
+    }
+}
+
+static void radinterp__gouraud_job(void *ctx_, uint32_t index)
+{
+    const radinterp__shade_ctx *ctx = (const radinterp__shade_ctx *)ctx_;
+    const float *corner = ctx->m->corner;
+    uint32_t n = ctx->m->triangle_count;
+    size_t i = (size_t)index * RADINTERP__SHADE_CHUNK, end = i + RADINTERP__SHADE_CHUNK;
+    if (end > ctx->count) end = ctx->count;
+    for (; i < end; i++) {
+        uint32_t id = ctx->ids[i];
+        const float *c;
+        float s, t, w;
+        int ch;
+        if (id >= n) continue;
+        c = corner + 9 * (size_t)id;
+        s = ctx->st[2 * i];
+        t = ctx->st[2 * i + 1];
+        w = 1.0f - s - t;
+        for (ch = 0; ch < 3; ch++) {
+            float v = w * c[ch] + s * c[3 + ch] + t * c[6 + ch];
+            ctx->rgb[3 * i + ch] = v > 0.0f ? v : 0.0f;
+        }
+    }
+}
+
+static radinterp_result radinterp__shade_run(const radinterp_mesh *m, const uint32_t *ids, const float *st, size_t count,
+                                             float *rgb, radinterp_job_fn job)
+{
+    radinterp__shade_ctx ctx;
+    size_t jobs;
+    if (!m || (count && (!ids || !st || !rgb))) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    jobs = (count + RADINTERP__SHADE_CHUNK - 1) / RADINTERP__SHADE_CHUNK;
+    if (jobs > 0xFFFFFFFFu) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    ctx.m = m;
+    ctx.ids = ids;
+    ctx.st = st;
+    ctx.rgb = rgb;
+    ctx.count = count;
+    radinterp__run_jobs(m->parallel_for, m->parallel_user, job, &ctx, (uint32_t)jobs);
+    return RADINTERP_OK;
+}
+
+RADINTERP_API radinterp_result radinterp_shade(const radinterp_mesh *m, const uint32_t *triangle_ids, const float *st,
+                                               size_t count, float *rgb_out)
+{
+    return radinterp__shade_run(m, triangle_ids, st, count, rgb_out, radinterp__shade_job);
+}
+
+RADINTERP_API radinterp_result radinterp_shade_gouraud(const radinterp_mesh *m, const uint32_t *triangle_ids,
+                                                       const float *st, size_t count, float *rgb_out)
+{
+    return radinterp__shade_run(m, triangle_ids, st, count, rgb_out, radinterp__gouraud_job);
+}
+
+/* ======================================================================
+   23. saving and loading a mesh (format of section 5)
+   Payload: counts (vertices, triangles, patches, discontinuities, leaves),
+   the build statistics, positions, indices, triangle patches, leaves and
+   edge flags, the irradiance coefficients, each patch's reflectance and
+   emission, the discontinuities and the leaves. Radiosity coefficients,
+   corner and vertex radiosities are recomputed on load.
+   ---------------------------------------------------------------------- */
+static const unsigned char radinterp__mesh_magic[8] = {'R', 'A', 'D', 'I', 'M', 'E', 'S', 'H'};
+
+#define RADINTERP__MESH_STATS 15   /* u32 statistics saved besides the counts */
+#define RADINTERP__DISC_BYTES 52
+#define RADINTERP__LEAF_BYTES 80
+
+static void radinterp__mesh_stats(radinterp_mesh_info *info, uint32_t **f)
+{
+    f[0] = &info->ev; f[1] = &info->ve; f[2] = &info->horizon; f[3] = &info->contact; f[4] = &info->dsets;
+    f[5] = &info->candidates; f[6] = &info->active_discontinuities; f[7] = &info->active_leaf_dsets;
+    f[8] = &info->max_leaf_active_dsets; f[9] = &info->balance_splits; f[10] = &info->hanging_vertices;
+    f[11] = &info->seam_vertices; f[12] = &info->fallback_patches; f[13] = &info->refine_passes;
+    f[14] = &info->refined_leaves;
+}
+
+static uint64_t radinterp__mesh_payload(const radinterp_mesh *m)
+{
+    return 5 * 4 + RADINTERP__MESH_STATS * 4 + 4 + 8 + 12 * (uint64_t)m->vertex_count +
+           (12 + 4 + 4 + 1 + 72) * (uint64_t)m->triangle_count + 24 * (uint64_t)m->patch_count +
+           RADINTERP__DISC_BYTES * (uint64_t)m->disc_count + RADINTERP__LEAF_BYTES * (uint64_t)m->leaf_count;
+}
+
+RADINTERP_API radinterp_result radinterp_mesh_save(const radinterp_mesh *m, radinterp_write_fn write, void *user)
+{
+    radinterp__writer w;
+    radinterp_mesh_info info;
+    uint32_t *stats[RADINTERP__MESH_STATS], i;
+    int k;
+    if (!m || !write) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    memset(&w, 0, sizeof w);
+    w.write = write;
+    w.user = user;
+    info = m->info;
+    radinterp__mesh_stats(&info, stats);
+    radinterp__crc_init(&w.crc);
+    radinterp__put(&w, radinterp__mesh_magic, 8);
+    radinterp__put_u32(&w, RADINTERP_FILE_FORMAT_VERSION);
+    radinterp__put_u64(&w, radinterp__mesh_payload(m));
+    radinterp__put_u32(&w, m->vertex_count);
+    radinterp__put_u32(&w, m->triangle_count);
+    radinterp__put_u32(&w, m->patch_count);
+    radinterp__put_u32(&w, m->disc_count);
+    radinterp__put_u32(&w, m->leaf_count);
+    for (k = 0; k < RADINTERP__MESH_STATS; k++) radinterp__put_u32(&w, *stats[k]);
+    radinterp__put_f32(&w, info.max_fit_error);
+    radinterp__put_u64(&w, info.samples);
+    radinterp__put_f32_array(&w, m->positions, 3 * (size_t)m->vertex_count);
+    radinterp__put_u32_array(&w, m->indices, 3 * (size_t)m->triangle_count);
+    radinterp__put_u32_array(&w, m->tri_patch, m->triangle_count);
+    radinterp__put_u32_array(&w, m->tri_leaf, m->triangle_count);
+    radinterp__put(&w, m->edge_flags, m->triangle_count);
+    radinterp__put_f32_array(&w, m->irr, 18 * (size_t)m->triangle_count);
+    radinterp__put_f32_array(&w, m->patch_rho, 3 * (size_t)m->patch_count);
+    radinterp__put_f32_array(&w, m->patch_e, 3 * (size_t)m->patch_count);
+    for (i = 0; i < m->disc_count; i++) {
+        const radinterp_discontinuity *d = &m->discs[i];
+        radinterp__put_f32_array(&w, d->a, 3);
+        radinterp__put_f32_array(&w, d->b, 3);
+        radinterp__put_u32(&w, d->type);
+        radinterp__put_u32(&w, d->receiver);
+        radinterp__put_u32(&w, d->source);
+        radinterp__put_u32(&w, d->blocker);
+        radinterp__put_u32(&w, d->dset);
+        radinterp__put_f32(&w, d->weight);
+        radinterp__put_u32(&w, d->active ? 1u : 0u);
+    }
+    for (i = 0; i < m->leaf_count; i++) {
+        const radinterp_mesh_leaf *l = &m->leaves[i];
+        radinterp__put_u32(&w, l->patch);
+        radinterp__put_u32(&w, l->depth);
+        radinterp__put_u32(&w, l->vertex_count);
+        radinterp__put_f32_array(&w, &l->vertices[0][0], 12);
+        radinterp__put_u32(&w, l->dsets);
+        radinterp__put_u32(&w, l->active_dsets);
+        radinterp__put_u32(&w, l->first_triangle);
+        radinterp__put_u32(&w, l->triangle_count);
+        radinterp__put_f32(&w, l->error);
+    }
+    radinterp__put_u32(&w, radinterp__crc_final(&w.crc));
+    return w.failed ? RADINTERP_ERROR_IO : RADINTERP_OK;
+}
+
+/* n little-endian floats, each finite. */
+static int radinterp__get_finite(radinterp__reader *r, float *f, size_t n)
+{
+    unsigned char buf[4096];
+    size_t i = 0;
+    while (i < n && !r->failed) {
+        size_t m = n - i < sizeof buf / 4 ? n - i : sizeof buf / 4, j;
+        radinterp__get(r, buf, 4 * m);
+        for (j = 0; j < m; j++, i++) {
+            const unsigned char *b = buf + 4 * j;
+            uint32_t u = (uint32_t)b[0] | ((uint32_t)b[1] << 8) | ((uint32_t)b[2] << 16) | ((uint32_t)b[3] << 24);
+            memcpy(&f[i], &u, 4);
+            if (!isfinite(f[i])) { r->failed = 1; return 0; }
+        }
+    }
+    return !r->failed;
+}
+
+/* n u32 values, each below limit. */
+static int radinterp__get_indices(radinterp__reader *r, uint32_t *v, size_t n, uint32_t limit)
+{
+    size_t i;
+    for (i = 0; i < n && !r->failed; i++) {
+        v[i] = radinterp__get_u32(r);
+        if (v[i] >= limit) r->failed = 1;
+    }
+    return !r->failed;
+}
+
+static int radinterp__read_discs(radinterp__reader *r, radinterp_mesh *m)
+{
+    uint32_t i;
+    for (i = 0; i < m->disc_count && !r->failed; i++) {
+        radinterp_discontinuity *d = &m->discs[i];
+        uint32_t active;
+        radinterp__get_finite(r, d->a, 3);
+        radinterp__get_finite(r, d->b, 3);
+        d->type = radinterp__get_u32(r);
+        d->receiver = radinterp__get_u32(r);
+        d->source = radinterp__get_u32(r);
+        d->blocker = radinterp__get_u32(r);
+        d->dset = radinterp__get_u32(r);
+        d->weight = radinterp__get_f32(r);
+        active = radinterp__get_u32(r);
+        if (d->type < RADINTERP_DISCONTINUITY_EV || d->type > RADINTERP_DISCONTINUITY_CONTACT ||
+            d->receiver >= m->patch_count || (d->source >= m->patch_count && d->source != RADINTERP_NO_PATCH) ||
+            (d->blocker >= m->patch_count && d->blocker != RADINTERP_NO_PATCH) || !(d->weight >= 0.0f) ||
+            !isfinite(d->weight) || active > 1)
+            r->failed = 1;
+        d->active = (int)active;
+    }
+    return !r->failed;
+}
+
+static int radinterp__read_leaves(radinterp__reader *r, radinterp_mesh *m)
+{
+    uint32_t i;
+    for (i = 0; i < m->leaf_count && !r->failed; i++) {
+        radinterp_mesh_leaf *l = &m->leaves[i];
+        l->patch = radinterp__get_u32(r);
+        l->depth = radinterp__get_u32(r);
+        l->vertex_count = radinterp__get_u32(r);
+        radinterp__get_finite(r, &l->vertices[0][0], 12);
+        l->dsets = radinterp__get_u32(r);
+        l->active_dsets = radinterp__get_u32(r);
+        l->first_triangle = radinterp__get_u32(r);
+        l->triangle_count = radinterp__get_u32(r);
+        l->error = radinterp__get_f32(r);
+        if (l->patch >= m->patch_count || (l->vertex_count != 3 && l->vertex_count != 4) || l->depth > 64 ||
+            l->active_dsets > l->dsets || l->first_triangle > m->triangle_count ||
+            l->triangle_count > m->triangle_count - l->first_triangle || !isfinite(l->error))
+            r->failed = 1;
+    }
+    return !r->failed;
+}
+
+static radinterp_result radinterp__mesh_read(radinterp_mesh *m, radinterp__reader *r)
+{
+    unsigned char magic[8];
+    uint32_t version, *stats[RADINTERP__MESH_STATS], expected_crc, i;
+    int k;
+    radinterp__crc_init(&r->crc);
+    r->remaining = 20;
+    radinterp__get(r, magic, 8);
+    version = radinterp__get_u32(r);
+    r->remaining = radinterp__get_u64(r);
+    if (r->failed || memcmp(magic, radinterp__mesh_magic, 8) != 0) return RADINTERP_ERROR_CORRUPT_DATA;
+    if (version != RADINTERP_FILE_FORMAT_VERSION) return RADINTERP_ERROR_VERSION;
+    m->vertex_count = radinterp__get_u32(r);
+    m->triangle_count = radinterp__get_u32(r);
+    m->patch_count = radinterp__get_u32(r);
+    m->disc_count = radinterp__get_u32(r);
+    m->leaf_count = radinterp__get_u32(r);
+    radinterp__mesh_stats(&m->info, stats);
+    for (k = 0; k < RADINTERP__MESH_STATS; k++) *stats[k] = radinterp__get_u32(r);
+    m->info.max_fit_error = radinterp__get_f32(r);
+    m->info.samples = radinterp__get_u64(r);
+    /* every size is checked against the payload before anything is allocated */
+    if (r->failed || !radinterp__can_hold(r, m->vertex_count, 12) || !radinterp__can_hold(r, m->triangle_count, 93) ||
+        !radinterp__can_hold(r, m->patch_count, 24) || !radinterp__can_hold(r, m->disc_count, RADINTERP__DISC_BYTES) ||
+        !radinterp__can_hold(r, m->leaf_count, RADINTERP__LEAF_BYTES) || r->remaining != radinterp__mesh_payload(m) - (5 * 4 + RADINTERP__MESH_STATS * 4 + 12))
+        return RADINTERP_ERROR_CORRUPT_DATA;
+    if (radinterp__mesh_alloc(m) != 0) return RADINTERP_ERROR_OUT_OF_MEMORY;
+    radinterp__get_finite(r, m->positions, 3 * (size_t)m->vertex_count);
+    radinterp__get_indices(r, m->indices, 3 * (size_t)m->triangle_count, m->vertex_count);
+    radinterp__get_indices(r, m->tri_patch, m->triangle_count, m->patch_count);
+    radinterp__get_indices(r, m->tri_leaf, m->triangle_count, m->leaf_count);
+    radinterp__get(r, m->edge_flags, m->triangle_count);
+    for (i = 0; i < m->triangle_count && !r->failed; i++)
+        if (m->edge_flags[i] > 63) r->failed = 1;
+    radinterp__get_finite(r, m->irr, 18 * (size_t)m->triangle_count);
+    radinterp__get_finite(r, m->patch_rho, 3 * (size_t)m->patch_count);
+    radinterp__get_finite(r, m->patch_e, 3 * (size_t)m->patch_count);
+    for (i = 0; i < 3 * m->patch_count && !r->failed; i++)
+        if (m->patch_rho[i] < 0.0f || m->patch_rho[i] > 1.0f || m->patch_e[i] < 0.0f) r->failed = 1;
+    radinterp__read_discs(r, m);
+    radinterp__read_leaves(r, m);
+    if (r->failed || r->remaining != 0) return RADINTERP_ERROR_CORRUPT_DATA;
+    expected_crc = radinterp__crc_final(&r->crc);
+    r->remaining = 4;
+    if (radinterp__get_u32(r) != expected_crc || r->failed) return RADINTERP_ERROR_CORRUPT_DATA;
+    m->info.triangle_count = m->triangle_count;
+    m->info.vertex_count = m->vertex_count;
+    m->info.leaf_count = m->leaf_count;
+    m->info.patch_count = m->patch_count;
+    m->info.discontinuities = m->disc_count;
+    if (radinterp__mesh_derive(m) != 0) return RADINTERP_ERROR_OUT_OF_MEMORY;
+    m->info.bytes = radinterp__mesh_bytes(m);
+    return RADINTERP_OK;
+}
+
+RADINTERP_API radinterp_result radinterp_mesh_load(const radinterp_allocator *allocator, radinterp_read_fn read, void *user,
+                                                   radinterp_mesh **out)
+{
+    radinterp_allocator a;
+    radinterp__reader r;
+    radinterp_mesh *m;
+    radinterp_result res;
+    if (out) *out = NULL;
+    if (!read || !out) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    memset(&a, 0, sizeof a);
+    if (allocator) a = *allocator;
+    if (!radinterp__allocator_valid(&a)) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    m = (radinterp_mesh *)radinterp__alloc(&a, sizeof *m);
+    if (!m) return RADINTERP_ERROR_OUT_OF_MEMORY;
+    memset(m, 0, sizeof *m);
+    m->allocator = a;
+    memset(&r, 0, sizeof r);
+    r.read = read;
+    r.user = user;
+    res = radinterp__mesh_read(m, &r);
+    if (res != RADINTERP_OK) { radinterp_mesh_destroy(m); return res; }
+    *out = m;
+    return RADINTERP_OK;
+}
+
+RADINTERP_API radinterp_result radinterp_mesh_save_to_memory(const radinterp_mesh *m, const radinterp_allocator *allocator,
+                                                             void **data, size_t *size)
+{
+    radinterp_allocator a;
+    radinterp__membuf mb;
+    radinterp_result r;
+    if (data) *data = NULL;
+    if (size) *size = 0;
+    if (!m || !data || !size) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    memset(&a, 0, sizeof a);
+    if (allocator) a = *allocator;
+    if (!radinterp__allocator_valid(&a)) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    memset(&mb, 0, sizeof mb);
+    mb.a = &a;
+    r = radinterp_mesh_save(m, radinterp__membuf_write, &mb);
+    if (r != RADINTERP_OK) {
+        radinterp__free(&a, mb.data);
+        return r == RADINTERP_ERROR_IO ? RADINTERP_ERROR_OUT_OF_MEMORY : r;
+    }
+    *data = mb.data;
+    *size = mb.size;
+    return RADINTERP_OK;
+}
+
+RADINTERP_API radinterp_result radinterp_mesh_load_from_memory(const void *data, size_t size,
+                                                               const radinterp_allocator *allocator, radinterp_mesh **out)
+{
+    radinterp__membuf mb;
+    if (out) *out = NULL;
+    if (!data || !out) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    memset(&mb, 0, sizeof mb);
+    mb.data = (unsigned char *)(uintptr_t)data;
+    mb.size = size;
+    return radinterp_mesh_load(allocator, radinterp__membuf_read, &mb, out);
+}
+
+RADINTERP_API void radinterp_free_memory(const radinterp_allocator *allocator, void *data)
+{
+    radinterp_allocator a;
+    memset(&a, 0, sizeof a);
+    if (allocator) a = *allocator;
+    if (!radinterp__allocator_valid(&a)) return;
+    radinterp__free(&a, data);
 }
 
 #endif /* RADINTERP_IMPLEMENTATION */

@@ -37,6 +37,20 @@ static void test_radinterp_link(void)
     CHECK(radinterp_solve(&d, &s) == RADINTERP_OK);
     CHECK(radinterp_irradiance_at_point(s, 0, p, NULL, h) == RADINTERP_OK);
     CHECK(fabs(h[0] - 0.554126) < 1e-3); /* the emitter is moved 1e-5 of the scene size behind its plane */
+    {
+        radinterp_mesh_desc md;
+        radinterp_mesh *mesh = NULL;
+        radinterp_mesh_data data;
+        uint32_t id = 0;
+        float st[2] = {0.25f, 0.25f}, b[3] = {-1, -1, -1}, e[3];
+        memset(&md, 0, sizeof md);
+        CHECK(radinterp_build_mesh(s, &md, &mesh) == RADINTERP_OK);
+        radinterp_mesh_get_data(mesh, &data);
+        CHECK(data.triangle_count > 0);
+        CHECK(radinterp_shade(mesh, &id, st, 1, b) == RADINTERP_OK);
+        CHECK(radinterp_eval(mesh, 0, st[0], st[1], e) == RADINTERP_OK && fabs(b[0] - e[0]) < 1e-5);
+        radinterp_mesh_destroy(mesh);
+    }
     radinterp_solution_destroy(s);
 }
 

@@ -1,0 +1,1145 @@
+/* Unit tests of radinterp.h part 2: the closed-form quadratic interpolant
+   (exact reproduction of quadratics), the EV/VE discontinuities of a square
+   source over a square blocker against the analytic penumbra and umbra
+   boundaries, the activation rules (max_leaf_dsets, active in every leaf
+   crossed or in none, greedy by weight) checked geometrically over the
+   whole quadtree, crack-free rasterization of a small room, per-pixel
+   shading, save/load with every truncation and corruption, validation,
+   allocation failures, cancellation and determinism. Scenes are small (the
+   tests run under the sanitizers); the office-scale checks are in
+   ref_radinterp_mesh.c. */
+#define RADINTERP_IMPLEMENTATION
+#include "../radinterp.h"
+#include "examples/common/camera.h"
+#include "examples/common/pool.h"
+#include "examples/common/raster.h"
+#include "test.h"
+
+#define PI 3.14159265358979323846
+
+/* ---- scenes built in code (z up) ---------------------------------------- */
+typedef struct scene {
+    float pos[3 * 512];
+    uint32_t patch[4 * 128], mat[128];
+    uint32_t nv, np;
+    radinterp_material m[8];
+    uint32_t nm;
+} scene;
+
+static uint32_t add_vertex(scene *s, float x, float y, float z)
+{
+    s->pos[3 * s->nv] = x; s->pos[3 * s->nv + 1] = y; s->pos[3 * s->nv + 2] = z;
+    return s->nv++;
+}
+
+static uint32_t add_quad(scene *s, const float *a, const float *b, const float *c, const float *d, uint32_t mat)
+{
+    uint32_t i = s->np++;
+    s->patch[4 * i] = add_vertex(s, a[0], a[1], a[2]);
+    s->patch[4 * i + 1] = add_vertex(s, b[0], b[1], b[2]);
+    s->patch[4 * i + 2] = add_vertex(s, c[0], c[1], c[2]);
+    s->patch[4 * i + 3] = d ? add_vertex(s, d[0], d[1], d[2]) : RADINTERP_NO_VERTEX;
+    s->mat[i] = mat;
+    return i;
+}
+
+/* Axis-aligned rectangle at height z facing up (+z) or down. */
+static uint32_t add_hrect(scene *s, float x0, float y0, float x1, float y1, float z, int up, uint32_t mat)
+{
+    float a[3], b[3], c[3], d[3];
+    a[0] = x0; a[1] = y0; a[2] = z;
+    b[0] = x1; b[1] = y0; b[2] = z;
+    c[0] = x1; c[1] = y1; c[2] = z;
+    d[0] = x0; d[1] = y1; d[2] = z;
+    return up ? add_quad(s, a, b, c, d, mat) : add_quad(s, a, d, c, b, mat);
+}
+
+static uint32_t add_material(scene *s, float rho, float e)
+{
+    radinterp_material *m = &s->m[s->nm];
+    m->reflectance[0] = m->reflectance[1] = m->reflectance[2] = rho;
+    m->emission[0] = m->emission[1] = m->emission[2] = e;
+    return s->nm++;
+}
+
+static radinterp_desc scene_desc(const scene *s)
+{
+    radinterp_desc d;
+    memset(&d, 0, sizeof d);
+    d.positions = s->pos;
+    d.vertex_count = s->nv;
+    d.patches = s->patch;
+    d.patch_count = s->np;
+    d.patch_materials = s->mat;
+    d.materials = s->m;
+    d.material_count = s->nm;
+    return d;
+}
+
+/* An inward-facing box [x0,x1] x [y0,y1] x [z0,z1] without its ceiling. */
+static void add_room(scene *s, float x0, float y0, float z0, float x1, float y1, float z1, uint32_t mat)
+{
+    float c[8][3];
+    int i;
+    for (i = 0; i < 8; i++) {
+        c[i][0] = i & 1 ? x1 : x0;
+        c[i][1] = (i >> 1) & 1 ? y1 : y0;
+        c[i][2] = (i >> 2) & 1 ? z1 : z0;
+    }
+    add_quad(s, c[0], c[1], c[3], c[2], mat);  /* floor, facing +z */
+    add_quad(s, c[0], c[4], c[5], c[1], mat);  /* y = y0, facing +y */
+    add_quad(s, c[2], c[3], c[7], c[6], mat);  /* y = y1, facing -y */
+    add_quad(s, c[0], c[2], c[6], c[4], mat);  /* x = x0, facing +x */
+    add_quad(s, c[1], c[5], c[7], c[3], mat);  /* x = x1, facing -x */
+}
+
+/* An outward-facing box standing on z = z0 (no bottom face). */
+static void add_block(scene *s, float x0, float y0, float z0, float x1, float y1, float z1, uint32_t mat)
+{
+    float c[8][3];
+    int i;
+    for (i = 0; i < 8; i++) {
+        c[i][0] = i & 1 ? x1 : x0;
+        c[i][1] = (i >> 1) & 1 ? y1 : y0;
+        c[i][2] = (i >> 2) & 1 ? z1 : z0;
+    }
+    add_quad(s, c[4], c[5], c[7], c[6], mat);  /* top, +z */
+    add_quad(s, c[0], c[1], c[5], c[4], mat);  /* y = y0, -y */
+    add_quad(s, c[2], c[6], c[7], c[3], mat);  /* y = y1, +y */
+    add_quad(s, c[0], c[4], c[6], c[2], mat);  /* x = x0, -x */
+    add_quad(s, c[1], c[3], c[7], c[5], mat);  /* x = x1, +x */
+}
+
+static uint64_t rng_state = 7;
+static double rnd(void)
+{
+    rng_state = rng_state * 6364136223846793005ull + 1442695040888963407ull;
+    return (double)(rng_state >> 11) * (1.0 / 9007199254740992.0);
+}
+
+static radinterp_mesh_desc mesh_desc(void)
+{
+    radinterp_mesh_desc md;
+    memset(&md, 0, sizeof md);
+    return md;
+}
+
+/* ---- the interpolant ------------------------------------------------------ */
+
+/* Any quadratic R(s, t) = A s^2 + 2B st + 2C s + D t^2 + 2E t + F comes back
+   from its six samples: coefficients to float precision, and the values at
+   the sample points. */
+static void test_fit_reproduces_quadratics(void)
+{
+    static const double at[6][2] = {{0, 0}, {0.5, 0}, {1, 0}, {0.5, 0.5}, {0, 1}, {0, 0.5}};
+    double worst = 0.0, worst_value = 0.0;
+    int trial, i;
+    for (trial = 0; trial < 2000; trial++) {
+        double c[6], scale = trial % 3 == 0 ? 1e3 : 1.0, big = 0.0;
+        float r[6], got[6], want[6];
+        for (i = 0; i < 6; i++) { c[i] = (2.0 * rnd() - 1.0) * scale; big = fabs(c[i]) > big ? fabs(c[i]) : big; }
+        for (i = 0; i < 6; i++) {
+            double s = at[i][0], t = at[i][1];
+            r[i] = (float)(c[0] * s * s + 2 * c[1] * s * t + 2 * c[2] * s + c[3] * t * t + 2 * c[4] * t + c[5]);
+        }
+        radinterp_fit_quadratic(r, got);
+        want[0] = (float)c[0]; want[1] = (float)(2 * c[1]); want[2] = (float)(2 * c[2]);
+        want[3] = (float)c[3]; want[4] = (float)(2 * c[4]); want[5] = (float)c[5];
+        for (i = 0; i < 6; i++) {
+            double e = fabs((double)got[i] - want[i]) / big;
+            worst = e > worst ? e : worst;
+        }
+        for (i = 0; i < 6; i++) {
+            float s = (float)at[i][0], t = (float)at[i][1];
+            double v = s * (got[0] * s + got[1] * t + got[2]) + t * (got[3] * t + got[4]) + got[5];
+            double e = fabs(v - r[i]) / big;
+            worst_value = e > worst_value ? e : worst_value;
+        }
+    }
+    /* the samples are rounded to float and the closed form adds up to 12
+       of them (|weight| <= 4): a few float ulps of the largest coefficient */
+    CHECK_MSG(worst < 2e-6, "coefficients off by %g of the largest", worst);
+    CHECK_MSG(worst_value < 2e-6, "sample values off by %g of the largest coefficient", worst_value);
+    test_note("quadratic reproduction over 2000 random quadratics: coefficients within %.2g, samples within %.2g "
+              "(relative to the largest coefficient)", worst, worst_value);
+}
+
+/* ---- discontinuity geometry --------------------------------------------- */
+
+/* Square source [-a, a]^2 at height H facing down, a blocker
+   [bx0, bx1] x [by0, by1] at height h facing up, a 4 x 4 floor. */
+#define SRC_A 0.25
+#define SRC_H 2.0
+#define BLK_H 0.8
+static const double blk[4] = {-0.1, -0.2, 0.3, 0.15};  /* bx0, by0, bx1, by1 */
+
+static radinterp_solution *penumbra_scene(scene *s)
+{
+    radinterp_desc d;
+    radinterp_solution *sol = NULL;
+    uint32_t grey, light;
+    memset(s, 0, sizeof *s);
+    grey = add_material(s, 0.5f, 0.0f);
+    light = add_material(s, 0.0f, 100.0f);
+    add_hrect(s, -2, -2, 2, 2, 0, 1, grey);                                                           /* 0: floor */
+    add_hrect(s, -(float)SRC_A, -(float)SRC_A, (float)SRC_A, (float)SRC_A, (float)SRC_H, 0, light);   /* 1: source */
+    add_hrect(s, (float)blk[0], (float)blk[1], (float)blk[2], (float)blk[3], (float)BLK_H, 1, grey);  /* 2: blocker */
+    d = scene_desc(s);
+    CHECK(radinterp_solve(&d, &sol) == RADINTERP_OK);
+    return sol;
+}
+
+/* The rays from a source edge at coordinate xs through a blocker edge at xb
+   meet the floor at xb + t (xb - xs), t = h / (H - h): for xs = -a, a and
+   xb = both blocker edges, four lines per axis bound the penumbra and the
+   umbra; along the other axis each spans the blocker's projection through
+   the whole source. */
+typedef struct expected_line { int axis; double at, lo, hi; double covered_lo, covered_hi; int hits; } expected_line;
+
+static void test_penumbra_boundaries(void)
+{
+    scene s;
+    radinterp_solution *sol = penumbra_scene(&s);
+    radinterp_mesh_desc md = mesh_desc();
+    radinterp_mesh *m = NULL;
+    expected_line L[8];
+    double t = BLK_H / (SRC_H - BLK_H), worst = 0.0;
+    uint32_t i, n = 0, on_floor = 0, others = 0;
+    int k, axis, e;
+    if (!sol) return;
+    md.min_discont_weight = 1e-3f;   /* every discontinuity counts */
+    md.min_leaf_area = 4.0f;         /* the floor alone: only the discontinuities matter here */
+    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &m), RADINTERP_OK);
+    if (!m) { radinterp_solution_destroy(sol); return; }
+    for (axis = 0; axis < 2; axis++)
+        for (k = 0; k < 2; k++)
+            for (e = 0; e < 2; e++) {
+                double xs = k ? SRC_A : -SRC_A, xb = blk[axis + 2 * e];
+                double o0 = blk[1 - axis], o1 = blk[3 - axis];
+                L[n].axis = axis;
+                L[n].at = xb + t * (xb - xs);
+                L[n].lo = o0 + t * (o0 - SRC_A);
+                L[n].hi = o1 + t * (o1 + SRC_A);
+                L[n].covered_lo = 1e9;
+                L[n].covered_hi = -1e9;
+                L[n].hits = 0;
+                n++;
+            }
+    for (i = 0; i < radinterp_mesh_discontinuity_count(m); i++) {
+        radinterp_discontinuity d;
+        uint32_t j, best = 0;
+        double best_d = 1e9;
+        radinterp_mesh_get_discontinuity(m, i, &d);
+        if (d.receiver != 0) continue;
+        if (d.type != RADINTERP_DISCONTINUITY_EV && d.type != RADINTERP_DISCONTINUITY_VE) { others++; continue; }
+        on_floor++;
+        for (j = 0; j < 8; j++) {
+            double dd = fabs(d.a[L[j].axis] - L[j].at) + fabs(d.b[L[j].axis] - L[j].at);
+            if (dd < best_d) { best_d = dd; best = j; }
+        }
+        {
+            expected_line *l = &L[best];
+            double u0 = d.a[1 - l->axis], u1 = d.b[1 - l->axis];
+            double lo = u0 < u1 ? u0 : u1, hi = u0 < u1 ? u1 : u0;
+            double err = fabs(d.a[l->axis] - l->at);
+            err = fabs(d.b[l->axis] - l->at) > err ? fabs(d.b[l->axis] - l->at) : err;
+            err = l->lo - lo > err ? l->lo - lo : err;   /* not past the extent */
+            err = hi - l->hi > err ? hi - l->hi : err;
+            worst = err > worst ? err : worst;
+            CHECK_MSG(err < 1e-5, "discontinuity %u (%s) off its analytic line by %g", i,
+                      d.type == RADINTERP_DISCONTINUITY_EV ? "EV" : "VE", err);
+            CHECK(fabs(d.a[2]) < 1e-6 && fabs(d.b[2]) < 1e-6);
+            if (lo < l->covered_lo) l->covered_lo = lo;
+            if (hi > l->covered_hi) l->covered_hi = hi;
+            l->hits++;
+        }
+    }
+    CHECK_EQ_INT(others, 0);  /* no horizon, no contact on the floor */
+    for (i = 0; i < 8; i++) {
+        /* each boundary is found, over its whole extent (the pieces overlap) */
+        CHECK_MSG(L[i].hits >= 2, "line %u (axis %d at %g) has %d discontinuities", i, L[i].axis, L[i].at, L[i].hits);
+        CHECK_CLOSE(L[i].covered_lo, L[i].lo, 0, 1e-5);
+        CHECK_CLOSE(L[i].covered_hi, L[i].hi, 0, 1e-5);
+        if (fabs(L[i].covered_lo - L[i].lo) > worst) worst = fabs(L[i].covered_lo - L[i].lo);
+        if (fabs(L[i].covered_hi - L[i].hi) > worst) worst = fabs(L[i].covered_hi - L[i].hi);
+    }
+    test_note("penumbra test: %u EV/VE discontinuities on the floor on 8 analytic lines, largest deviation %.2g m",
+              on_floor, worst);
+    radinterp_mesh_destroy(m);
+    radinterp_solution_destroy(sol);
+}
+
+/* Weights: geometric factor max(d_sb / d_br) times the source's radiosity.
+   For the boundary at x = xb + t (xb - xs) the ratio is (H - h) / h along
+   every ray, so every EV/VE weight on the floor is B_src (H - h) / h. */
+static void test_weights(void)
+{
+    scene s;
+    radinterp_solution *sol = penumbra_scene(&s);
+    radinterp_mesh_desc md = mesh_desc();
+    radinterp_mesh *m = NULL;
+    float src[3];
+    uint32_t i, checked = 0;
+    if (!sol) return;
+    md.min_discont_weight = 1e-3f;
+    md.min_leaf_area = 4.0f;
+    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &m), RADINTERP_OK);
+    if (!m) { radinterp_solution_destroy(sol); return; }
+    radinterp_patch_radiosity(sol, 1, src);
+    for (i = 0; i < radinterp_mesh_discontinuity_count(m); i++) {
+        radinterp_discontinuity d;
+        radinterp_mesh_get_discontinuity(m, i, &d);
+        if (d.receiver != 0) continue;
+        CHECK_CLOSE(d.weight, src[0] * (SRC_H - BLK_H) / BLK_H, 1e-4, 0);
+        CHECK(d.source == 1 && d.blocker == 2);
+        checked++;
+    }
+    CHECK(checked > 0);
+    radinterp_mesh_destroy(m);
+    radinterp_solution_destroy(sol);
+}
+
+/* 5.4: the geometric factor is kept, the weight cached; it is recomputed
+   once the solver has run again (new radiosities), not before. */
+static void test_weight_cache(void)
+{
+    scene s;
+    radinterp_solution *sol = penumbra_scene(&s);
+    radinterp__disc d;
+    float w0, w1;
+    uint32_t root;
+    if (!sol) return;
+    memset(&d, 0, sizeof d);
+    d.type = RADINTERP_DISCONTINUITY_EV;
+    d.source = 1;
+    d.geom = 1.5f;
+    root = sol->patches[1].root;
+    w0 = radinterp__disc_weight(sol, &d);
+    CHECK_CLOSE(w0, 1.5 * sol->nodes[root].b[0], 1e-6, 0);
+    sol->nodes[root].b[0] *= 2.0f;                       /* radiosities change ... */
+    CHECK(radinterp__disc_weight(sol, &d) == w0);        /* ... but the cache is only invalidated by a new pass */
+    sol->iterations++;
+    w1 = radinterp__disc_weight(sol, &d);
+    CHECK_CLOSE(w1, 2.0 * w0, 1e-6, 0);
+    d.type = RADINTERP_DISCONTINUITY_CONTACT;
+    d.weight_stamp = 0;
+    CHECK(radinterp__disc_weight(sol, &d) == FLT_MAX);   /* contacts: infinite */
+    radinterp_solution_destroy(sol);
+}
+
+/* Horizon and contact: a wall standing on the floor and a light facing the
+   floor beside it. The wall's plane splits the floor (horizon, weight B_src
+   = the wall's radiosity times 1) and its foot is a contact (FLT_MAX). */
+static void test_horizon_and_contact(void)
+{
+    scene s;
+    radinterp_desc d;
+    radinterp_solution *sol = NULL;
+    radinterp_mesh_desc md = mesh_desc();
+    radinterp_mesh *m = NULL;
+    uint32_t grey, light, i, horizon = 0, contact = 0;
+    float wall[4][3] = {{0.5f, -0.5f, 0}, {0.5f, 0.5f, 0}, {0.5f, 0.5f, 1}, {0.5f, -0.5f, 1}};  /* x = 0.5, facing -x */
+    memset(&s, 0, sizeof s);
+    grey = add_material(&s, 0.5f, 0.0f);
+    light = add_material(&s, 0.0f, 50.0f);
+    add_hrect(&s, -1, -1, 1, 1, 0, 1, grey);
+    add_quad(&s, wall[0], wall[3], wall[2], wall[1], grey);
+    add_hrect(&s, -0.3f, -0.2f, 0.1f, 0.2f, 1.5f, 0, light);
+    d = scene_desc(&s);
+    CHECK(radinterp_solve(&d, &sol) == RADINTERP_OK);
+    if (!sol) return;
+    md.min_discont_weight = 1e-3f;
+    md.min_leaf_area = 1.0f;
+    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &m), RADINTERP_OK);
+    for (i = 0; m && i < radinterp_mesh_discontinuity_count(m); i++) {
+        radinterp_discontinuity dc;
+        radinterp_mesh_get_discontinuity(m, i, &dc);
+        if (dc.receiver != 0) continue;
+        if (dc.type == RADINTERP_DISCONTINUITY_HORIZON) {
+            float b[3];
+            horizon++;
+            CHECK(dc.source == 1);
+            CHECK_CLOSE(dc.a[0], 0.5, 0, 1e-6);
+            CHECK_CLOSE(dc.b[0], 0.5, 0, 1e-6);
+            CHECK_CLOSE(fabs(dc.a[1] - dc.b[1]), 2.0, 0, 1e-6);   /* across the whole floor */
+            radinterp_patch_radiosity(sol, 1, b);
+            CHECK_CLOSE(dc.weight, b[0], 1e-5, 0);
+        }
+        if (dc.type == RADINTERP_DISCONTINUITY_CONTACT) {
+            contact++;
+            CHECK(dc.blocker == 1);
+            CHECK_CLOSE(dc.a[0], 0.5, 0, 1e-6);
+            CHECK_CLOSE(fabs(dc.a[1] - dc.b[1]), 1.0, 0, 1e-6);
+            CHECK(dc.weight == FLT_MAX);
+            CHECK(dc.active);                                   /* infinite weight: first in line */
+        }
+    }
+    CHECK_EQ_INT(horizon, 1);
+    CHECK_EQ_INT(contact, 1);
+    radinterp_mesh_destroy(m);
+    radinterp_solution_destroy(sol);
+}
+
+/* ---- activation over the whole quadtree --------------------------------- */
+
+/* Leaf corners and a segment in the leaf's patch plane (z = 0 here). Does
+   the segment cross the leaf's interior shrunk by inset? Returns the
+   parameters of the crossing piece. */
+static int crosses_leaf(const radinterp_mesh_leaf *l, const float *a, const float *b, double inset, double *t0, double *t1)
+{
+    uint32_t i, n = l->vertex_count;
+    *t0 = 0.0; *t1 = 1.0;
+    for (i = 0; i < n; i++) {
+        const float *p = l->vertices[i], *q = l->vertices[(i + 1) % n];
+        double dx = q[0] - p[0], dy = q[1] - p[1], len = sqrt(dx * dx + dy * dy);
+        double fa = (-dy * (a[0] - p[0]) + dx * (a[1] - p[1])) / len - inset;
+        double fb = (-dy * (b[0] - p[0]) + dx * (b[1] - p[1])) / len - inset;
+        if (fa < 0 && fb < 0) return 0;
+        if (fa >= 0 && fb >= 0) continue;
+        if (fa < 0) { double t = fa / (fa - fb); if (t > *t0) *t0 = t; }
+        else { double t = fa / (fa - fb); if (t < *t1) *t1 = t; }
+    }
+    return *t1 > *t0;
+}
+
+/* Distance from p to the nearest discontinuity edge among a leaf's triangles. */
+static double to_discontinuity_edge(const radinterp_mesh_data *md, const radinterp_mesh_leaf *l, const double *p)
+{
+    double best = 1e9;
+    uint32_t t;
+    int e;
+    for (t = l->first_triangle; t < l->first_triangle + l->triangle_count; t++)
+        for (e = 0; e < 3; e++) {
+            const float *a, *b;
+            double dx, dy, s, x, y, dd;
+            if (!((md->edge_flags[t] >> (3 + e)) & 1)) continue;
+            a = md->positions + 3 * (size_t)md->indices[3 * (size_t)t + (size_t)(e + 1) % 3];
+            b = md->positions + 3 * (size_t)md->indices[3 * (size_t)t + (size_t)(e + 2) % 3];
+            dx = b[0] - a[0]; dy = b[1] - a[1];
+            s = ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / (dx * dx + dy * dy);
+            s = s < 0 ? 0 : (s > 1 ? 1 : s);
+            x = a[0] + s * dx - p[0];
+            y = a[1] + s * dy - p[1];
+            dd = sqrt(x * x + y * y);
+            best = dd < best ? dd : best;
+        }
+    return best;
+}
+
+static void test_activation_rules(void)
+{
+    scene s;
+    radinterp_desc d;
+    radinterp_solution *sol = NULL;
+    radinterp_mesh_desc md = mesh_desc();
+    radinterp_mesh *m = NULL;
+    radinterp_mesh_data data;
+    radinterp_mesh_info info;
+    uint32_t grey, light, i, j, checked_pieces = 0, inactive_checked = 0, max_seen = 0;
+    const uint32_t max_dsets = 3;
+    memset(&s, 0, sizeof s);
+    grey = add_material(&s, 0.5f, 0.0f);
+    light = add_material(&s, 0.0f, 100.0f);
+    add_hrect(&s, -2, -2, 2, 2, 0, 1, grey);                    /* the receiver */
+    add_hrect(&s, -0.3f, -0.3f, 0.3f, 0.3f, 2.0f, 0, light);
+    add_hrect(&s, -0.4f, -0.5f, 0.1f, -0.1f, 0.6f, 1, grey);    /* three blockers at different heights */
+    add_hrect(&s, 0.2f, 0.1f, 0.6f, 0.4f, 1.0f, 1, grey);
+    add_hrect(&s, -0.7f, 0.3f, -0.3f, 0.9f, 0.3f, 1, grey);
+    d = scene_desc(&s);
+    CHECK(radinterp_solve(&d, &sol) == RADINTERP_OK);
+    if (!sol) return;
+    md.min_discont_weight = 1.0f;
+    md.max_leaf_dsets = max_dsets;
+    md.min_leaf_area = 0.2f;  /* a coarse tree: many discontinuities compete for each leaf */
+    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &m), RADINTERP_OK);
+    if (!m) { radinterp_solution_destroy(sol); return; }
+    radinterp_mesh_get_data(m, &data);
+    radinterp_mesh_get_info(m, &info);
+    CHECK(info.max_leaf_active_dsets <= max_dsets);
+    CHECK(info.active_discontinuities > 0 && info.active_discontinuities < info.candidates);
+    for (j = 0; j < radinterp_mesh_leaf_count(m); j++) {
+        radinterp_mesh_leaf l;
+        uint32_t dsets[64], nd = 0, k;
+        radinterp_mesh_get_leaf(m, j, &l);
+        if (l.patch != 0) continue;
+        CHECK(l.active_dsets <= max_dsets);
+        /* recount from the geometry: active DSets crossing the leaf (well inside) */
+        for (i = 0; i < radinterp_mesh_discontinuity_count(m); i++) {
+            radinterp_discontinuity dc;
+            double t0, t1;
+            radinterp_mesh_get_discontinuity(m, i, &dc);
+            if (dc.receiver != 0 || !dc.active || !crosses_leaf(&l, dc.a, dc.b, 1e-4, &t0, &t1)) continue;
+            for (k = 0; k < nd && dsets[k] != dc.dset; k++) {}
+            if (k == nd && nd < 64) dsets[nd++] = dc.dset;
+        }
+        CHECK_MSG(nd <= max_dsets, "leaf %u: %u active DSets cross it", j, nd);
+        if (nd > max_seen) max_seen = nd;
+    }
+    for (i = 0; i < radinterp_mesh_discontinuity_count(m); i++) {
+        radinterp_discontinuity dc;
+        int blocked = 0, crossed = 0;
+        radinterp_mesh_get_discontinuity(m, i, &dc);
+        if (dc.receiver != 0) continue;
+        for (j = 0; j < radinterp_mesh_leaf_count(m); j++) {
+            radinterp_mesh_leaf l;
+            double t0, t1;
+            radinterp_mesh_get_leaf(m, j, &l);
+            if (l.patch != 0) continue;
+            if (!crosses_leaf(&l, dc.a, dc.b, 1e-4, &t0, &t1)) {
+                /* crossing it within the library's tolerance only: it may still count there */
+                if (!dc.active && crosses_leaf(&l, dc.a, dc.b, 0.0, &t0, &t1) && l.active_dsets == max_dsets) blocked = 1;
+                continue;
+            }
+            crossed = 1;
+            if (dc.active) {
+                /* in every leaf it crosses: its piece there lies on discontinuity edges */
+                int q;
+                for (q = 0; q <= 8; q++) {
+                    double u = t0 + (t1 - t0) * q / 8.0, p[2];
+                    p[0] = dc.a[0] + u * (dc.b[0] - dc.a[0]);
+                    p[1] = dc.a[1] + u * (dc.b[1] - dc.a[1]);
+                    CHECK_MSG(to_discontinuity_edge(&data, &l, p) < 1e-5, "active discontinuity %u missing from leaf %u", i, j);
+                }
+                checked_pieces++;
+            } else if (l.active_dsets == max_dsets) {
+                blocked = 1;
+            }
+        }
+        if (!dc.active && dc.weight >= md.min_discont_weight && crossed) {
+            /* greedy by weight: it stayed out only because a leaf was full */
+            CHECK_MSG(blocked, "inactive discontinuity %u (weight %g) crosses no full leaf", i, dc.weight);
+            inactive_checked++;
+        }
+    }
+    CHECK(checked_pieces > 0 && inactive_checked > 0);
+    test_note("activation: %u candidates, %u active, max %u active DSets per leaf (limit %u); %u leaf pieces of "
+              "active discontinuities found in the triangulations, %u inactive ones blocked by a full leaf",
+              info.candidates, info.active_discontinuities, max_seen, max_dsets, checked_pieces, inactive_checked);
+    radinterp_mesh_destroy(m);
+    radinterp_solution_destroy(sol);
+}
+
+/* ---- crack-free output ---------------------------------------------------- */
+
+/* A room (floor, four walls) with a block on the floor and a light: the
+   patches meet along their edges, and the block's foot is a contact. */
+static radinterp_solution *room_scene(scene *s)
+{
+    radinterp_desc d;
+    radinterp_solution *sol = NULL;
+    uint32_t grey, light;
+    memset(s, 0, sizeof *s);
+    grey = add_material(s, 0.6f, 0.0f);
+    light = add_material(s, 0.0f, 30.0f);
+    add_room(s, 0, 0, 0, 2, 1.5f, 1.2f, grey);
+    add_block(s, 0.6f, 0.4f, 0, 1.1f, 0.9f, 0.45f, grey);
+    add_hrect(s, 0.8f, 0.5f, 1.4f, 1.0f, 1.2f, 0, light);
+    d = scene_desc(s);
+    d.eps = 0.5f;
+    CHECK(radinterp_solve(&d, &sol) == RADINTERP_OK);
+    return sol;
+}
+
+/* Squared distance from x to the segment (a, b) and its position t along it. */
+static double edge_distance2(const float *a, const float *b, const float *x, double *t)
+{
+    double d[3], e[3], l2 = 0, dist2 = 0, u;
+    int j;
+    for (j = 0; j < 3; j++) { d[j] = (double)b[j] - a[j]; e[j] = (double)x[j] - a[j]; l2 += d[j] * d[j]; }
+    *t = (d[0] * e[0] + d[1] * e[1] + d[2] * e[2]) / l2;
+    u = *t < 0 ? 0 : (*t > 1 ? 1 : *t);
+    for (j = 0; j < 3; j++) dist2 += (e[j] - u * d[j]) * (e[j] - u * d[j]);
+    return dist2;
+}
+
+/* Vertices on the outline of their patch's triangles (an edge no other
+   triangle of the patch shares). */
+static unsigned char *outline_vertices(const radinterp_mesh_data *md)
+{
+    unsigned char *on = (unsigned char *)calloc(md->vertex_count, 1);
+    uint32_t t, u, e, f;
+    for (t = 0; t < md->triangle_count; t++)
+        for (e = 0; e < 3; e++) {
+            uint32_t a = md->indices[3 * t + (e + 1) % 3], b = md->indices[3 * t + (e + 2) % 3];
+            int shared = 0;
+            for (u = 0; u < md->triangle_count && !shared; u++) {
+                if (u == t || md->triangle_patch[u] != md->triangle_patch[t]) continue;
+                for (f = 0; f < 3; f++)
+                    if (md->indices[3 * u + (f + 1) % 3] == b && md->indices[3 * u + (f + 2) % 3] == a) shared = 1;
+            }
+            if (!shared) on[a] = on[b] = 1;
+        }
+    return on;
+}
+
+/* Appends a triangulation of the polygon ring[0..nr) (positions in pos,
+   counter-clockwise seen from the front n) to idx: the constrained Delaunay
+   triangulation of part 1, so that its triangles are as well shaped as the
+   polygon allows (a fan from one point would be slivers along rows of close
+   vertices, which the rasterizer's 1/256-pixel snapping can fold over). */
+static int triangulate_ring(const float *pos, const uint32_t *ring, uint32_t nr, const double *n, uint32_t *idx,
+                            uint32_t *nt)
+{
+    radinterp__cdt c;
+    radinterp_allocator a;
+    double *xy = (double *)malloc(sizeof(double) * 2 * nr), e1[3], e2[3], len;
+    uint32_t *ids = (uint32_t *)malloc(sizeof(uint32_t) * nr), *back, i, t, *stack, top = 0;
+    unsigned char *inside;
+    const float *o = pos + 3 * ring[0], *p1 = pos + 3 * ring[1];
+    int k, ok = 1;
+    for (k = 0; k < 3; k++) e1[k] = (double)p1[k] - o[k];
+    len = sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
+    for (k = 0; k < 3; k++) e1[k] /= len;
+    e2[0] = n[1] * e1[2] - n[2] * e1[1];
+    e2[1] = n[2] * e1[0] - n[0] * e1[2];
+    e2[2] = n[0] * e1[1] - n[1] * e1[0];
+    for (i = 0; i < nr; i++) {
+        const float *x = pos + 3 * ring[i];
+        double d[3];
+        for (k = 0; k < 3; k++) d[k] = (double)x[k] - o[k];
+        xy[2 * i] = d[0] * e1[0] + d[1] * e1[1] + d[2] * e1[2];
+        xy[2 * i + 1] = d[0] * e2[0] + d[1] * e2[1] + d[2] * e2[2];
+    }
+    memset(&a, 0, sizeof a);
+    radinterp__cdt_init(&c, &a, NULL, 0);
+    if (radinterp__cdt_add_points(&c, xy, nr, ids) != 0) ok = 0;
+    for (i = 0; i < nr && ok; i++)
+        if (ids[i] != ids[(i + 1) % nr] && radinterp__cdt_add_segment(&c, ids[i], ids[(i + 1) % nr]) != 0) ok = 0;
+    if (ok && c.vertex_count != nr) ok = 0;   /* the ring crossed itself */
+    back = (uint32_t *)malloc(sizeof(uint32_t) * (nr + 1));
+    inside = (unsigned char *)malloc(c.tri_count + 1);
+    stack = (uint32_t *)malloc(sizeof(uint32_t) * (c.tri_count + 1));
+    for (i = 0; i < nr; i++) back[ids[i]] = ring[i];
+    for (t = 0; t < c.tri_count; t++) {
+        inside[t] = (unsigned char)radinterp__cdt_is_real(&c, t);
+        if (!inside[t]) stack[top++] = t;
+    }
+    while (top) {  /* outside: reachable from the hull without crossing the ring */
+        t = stack[--top];
+        for (k = 0; k < 3; k++) {
+            uint32_t u = c.tri[t].n[k];
+            if (((c.tri[t].flags >> k) & 1u) || !inside[u]) continue;
+            inside[u] = 0;
+            stack[top++] = u;
+        }
+    }
+    for (t = 0; t < c.tri_count && ok; t++) {
+        if (!inside[t]) continue;
+        for (k = 0; k < 3; k++) idx[3 * *nt + k] = back[c.tri[t].v[k]];
+        (*nt)++;
+    }
+    radinterp__cdt_free(&c);
+    free(xy); free(ids); free(back); free(inside); free(stack);
+    return ok;
+}
+
+/* Every pixel is covered by the mesh as often as by the patches drawn
+   plainly, each as a polygon through its corners and every vertex of any
+   patch's mesh outline that lies on its edges (found here geometrically,
+   each on its nearest edge). Where patches share an edge their plain
+   outlines are then the same, so the plain drawing covers each pixel once
+   per layer; a crack or an overlap in the mesh (a T-vertex inside a patch,
+   or a seam whose two sides differ) changes the count. */
+static int coverage_matches(const scene *s, const radinterp_mesh_data *md, const unsigned char *on_outline,
+                            const ex_camera *cam, ex_raster *r, long *pixels)
+{
+    uint32_t *idx = (uint32_t *)malloc(sizeof(uint32_t) * 3 * (md->vertex_count * 4 + 64));
+    uint32_t *mesh_count, p, nt = 0, *ring = (uint32_t *)malloc(sizeof(uint32_t) * (md->vertex_count + 4));
+    double *ts = (double *)malloc(sizeof(double) * (md->vertex_count + 4));
+    size_t i, n = (size_t)r->width * (size_t)r->height;
+    int ok = 1;
+    for (p = 0; p < s->np; p++) {
+        uint32_t c = s->patch[4 * p + 3] == RADINTERP_NO_VERTEX ? 3 : 4, k, v, nr = 0;
+        double nrm[3] = {0, 0, 0}, len;
+        for (k = 0; k < c; k++) {
+            const float *a = s->pos + 3 * s->patch[4 * p + k], *b = s->pos + 3 * s->patch[4 * p + (k + 1) % c];
+            uint32_t first = nr, q;
+            nrm[0] += ((double)a[1] - b[1]) * ((double)a[2] + b[2]);
+            nrm[1] += ((double)a[2] - b[2]) * ((double)a[0] + b[0]);
+            nrm[2] += ((double)a[0] - b[0]) * ((double)a[1] + b[1]);
+            for (v = 0; v < md->vertex_count; v++) {  /* outline vertices on this edge, by position along it */
+                const float *x = md->positions + 3 * v;
+                double t, dist2 = edge_distance2(a, b, x, &t), other_t;
+                uint32_t j;
+                int nearest = 1;
+                if (!on_outline[v] || t < -1e-9 || t >= 1.0 - 1e-9 || dist2 > 1e-11) continue;
+                for (j = 0; j < c; j++)
+                    if (j != k && edge_distance2(s->pos + 3 * s->patch[4 * p + j], s->pos + 3 * s->patch[4 * p + (j + 1) % c], x,
+                                                 &other_t) < dist2)
+                        nearest = 0;
+                if (!nearest) continue;
+                for (q = nr; q > first && ts[q - 1] > t; q--) { ts[q] = ts[q - 1]; ring[q] = ring[q - 1]; }
+                ts[q] = t;
+                ring[q] = v;
+                nr++;
+            }
+        }
+        len = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+        nrm[0] /= len; nrm[1] /= len; nrm[2] /= len;
+        if (nr < 3 || !triangulate_ring(md->positions, ring, nr, nrm, idx, &nt)) ok = 0;
+    }
+    mesh_count = (uint32_t *)malloc(sizeof(uint32_t) * n);
+    memset(r->coverage, 0, n * sizeof(uint32_t));
+    ex_raster_count(r, cam, md->positions, md->indices, md->triangle_count);
+    memcpy(mesh_count, r->coverage, n * sizeof(uint32_t));
+    memset(r->coverage, 0, n * sizeof(uint32_t));
+    ex_raster_count(r, cam, md->positions, idx, nt);
+    for (i = 0; i < n; i++) {
+        if (r->coverage[i]) (*pixels)++;
+        if (mesh_count[i] != r->coverage[i]) ok = 0;
+    }
+    free(idx);
+    free(ring);
+    free(ts);
+    free(mesh_count);
+    return ok;
+}
+
+static void test_crack_free_room(void)
+{
+    scene s;
+    radinterp_solution *sol = room_scene(&s);
+    radinterp_mesh_desc md = mesh_desc();
+    radinterp_mesh *m = NULL;
+    radinterp_mesh_data data;
+    radinterp_mesh_info info;
+    ex_raster r;
+    long pixels = 0;
+    int c, bad = 0;
+    unsigned char *on;
+    if (!sol) return;
+    md.min_discont_weight = 0.05f;
+    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &m), RADINTERP_OK);
+    if (!m) { radinterp_solution_destroy(sol); return; }
+    radinterp_mesh_get_data(m, &data);
+    radinterp_mesh_get_info(m, &info);
+    CHECK(info.hanging_vertices > 0);     /* case A occurred and was closed */
+    CHECK(info.seam_vertices > 0);        /* case C occurred and was closed */
+    CHECK(info.active_discontinuities > 0);
+    CHECK_EQ_INT(info.fallback_patches, 0);
+    if (ex_raster_init(&r, 160, 120) != 0) { CHECK(0); return; }
+    on = outline_vertices(&data);
+    for (c = 0; c < 6; c++) {
+        float eye[3], target[3] = {1.0f, 0.75f, 0.3f}, up[3] = {0, 0, 1};
+        ex_camera cam;
+        double a = 0.9 + c * 1.1;
+        eye[0] = (float)(1.0 + 0.8 * cos(a));
+        eye[1] = (float)(0.75 + 0.6 * sin(a));
+        eye[2] = (float)(0.6 + 0.1 * c);
+        cam = ex_camera_look_at(eye, target, up, 70.0f, 160, 120);
+        if (!coverage_matches(&s, &data, on, &cam, &r, &pixels)) bad++;
+    }
+    CHECK_MSG(bad == 0, "%d of 6 views have cracks or overlaps", bad);
+    test_note("crack-free room: %u triangles, %u T-vertices closed inside patches, %u seam vertices; %ld covered "
+              "pixels over 6 views, %d views with a mismatch", info.triangle_count, info.hanging_vertices,
+              info.seam_vertices, pixels, bad);
+    free(on);
+    ex_raster_free(&r);
+    radinterp_mesh_destroy(m);
+    radinterp_solution_destroy(sol);
+}
+
+/* ---- online phase ------------------------------------------------------------ */
+
+static void test_shading(void)
+{
+    scene s;
+    radinterp_solution *sol = room_scene(&s);
+    radinterp_mesh_desc md = mesh_desc();
+    radinterp_mesh *m = NULL;
+    radinterp_mesh_data data;
+    const size_t n = 5000;
+    uint32_t *ids = (uint32_t *)malloc(n * sizeof(uint32_t));
+    float *st = (float *)malloc(2 * n * sizeof(float)), *rgb = (float *)malloc(3 * n * sizeof(float));
+    float *rgb2 = (float *)malloc(3 * n * sizeof(float)), *gou = (float *)malloc(3 * n * sizeof(float));
+    ex_pool *pool = ex_pool_create(3);
+    size_t i;
+    int ok = 1, gok = 1, same = 1, untouched = 1;
+    if (!sol) return;
+    md.min_leaf_area = 0.05f;
+    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &m), RADINTERP_OK);
+    if (!m) { radinterp_solution_destroy(sol); return; }
+    radinterp_mesh_get_data(m, &data);
+    for (i = 0; i < n; i++) {
+        double a = rnd(), b = rnd();
+        if (a + b > 1) { a = 1 - a; b = 1 - b; }
+        ids[i] = i % 10 == 9 ? RADINTERP_NO_TRIANGLE : (i % 10 == 8 ? data.triangle_count + 5 : (uint32_t)(rnd() * data.triangle_count));
+        st[2 * i] = (float)a;
+        st[2 * i + 1] = (float)b;
+        rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = -7.0f;
+        gou[3 * i] = gou[3 * i + 1] = gou[3 * i + 2] = -7.0f;
+    }
+    CHECK_EQ_INT(radinterp_shade(m, ids, st, n, rgb), RADINTERP_OK);
+    CHECK_EQ_INT(radinterp_shade_gouraud(m, ids, st, n, gou), RADINTERP_OK);
+    for (i = 0; i < n; i++) {
+        float e[3], h[3];
+        int k;
+        if (ids[i] >= data.triangle_count) {
+            untouched &= rgb[3 * i] == -7.0f && gou[3 * i + 2] == -7.0f;  /* other ids are left alone */
+            continue;
+        }
+        radinterp_eval(m, ids[i], st[2 * i], st[2 * i + 1], e);
+        radinterp_eval_irradiance(m, ids[i], st[2 * i], st[2 * i + 1], h);
+        for (k = 0; k < 3; k++) {
+            const float *c = data.corner_radiosity + 9 * (size_t)ids[i];
+            float w = 1.0f - st[2 * i] - st[2 * i + 1];
+            float g = w * c[k] + st[2 * i] * c[3 + k] + st[2 * i + 1] * c[6 + k];
+            float b = data.emission[3 * (size_t)ids[i] + k] + data.reflectance[3 * (size_t)ids[i] + k] * h[k];
+            /* same polynomial, evaluated in another order: float rounding */
+            if (fabsf(rgb[3 * i + k] - (e[k] > 0 ? e[k] : 0)) > 1e-5f * (1 + fabsf(e[k]))) ok = 0;
+            if (fabsf(e[k] - b) > 1e-4f * (1 + fabsf(b))) ok = 0;
+            if (fabsf(gou[3 * i + k] - (g > 0 ? g : 0)) > 1e-5f * (1 + fabsf(g))) gok = 0;
+        }
+    }
+    CHECK(ok && gok && untouched);
+    /* a corner's Gouraud value is the interpolant there */
+    {
+        float e[3];
+        radinterp_eval(m, 0, 1.0f, 0.0f, e);
+        CHECK_CLOSE(data.corner_radiosity[3], e[0], 1e-5, 1e-6);
+    }
+    /* the same with a pool: identical bits */
+    radinterp_mesh_set_parallel_for(m, ex_pool_parallel_for, pool);
+    memcpy(rgb2, rgb, 3 * n * sizeof(float));
+    CHECK_EQ_INT(radinterp_shade(m, ids, st, n, rgb2), RADINTERP_OK);
+    for (i = 0; i < 3 * n; i++) same &= rgb[i] == rgb2[i];
+    CHECK(same);
+    CHECK_EQ_INT(radinterp_shade(NULL, ids, st, n, rgb), RADINTERP_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(radinterp_shade(m, NULL, st, n, rgb), RADINTERP_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(radinterp_shade(m, ids, st, 0, rgb), RADINTERP_OK);
+    CHECK_EQ_INT(radinterp_eval(m, data.triangle_count, 0, 0, rgb), RADINTERP_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(radinterp_eval(m, 0, 0, 0, NULL), RADINTERP_ERROR_INVALID_ARGUMENT);
+    /* vertex radiosity: the mean of the corners sharing the vertex */
+    {
+        uint32_t v = data.indices[0], t, k, uses = 0;
+        double sum = 0;
+        for (t = 0; t < data.triangle_count; t++)
+            for (k = 0; k < 3; k++)
+                if (data.indices[3 * t + k] == v) { sum += data.corner_radiosity[9 * t + 3 * k]; uses++; }
+        CHECK_CLOSE(data.vertex_radiosity[3 * v], sum / uses, 1e-5, 1e-6);
+    }
+    free(ids); free(st); free(rgb); free(rgb2); free(gou);
+    ex_pool_destroy(pool);
+    radinterp_mesh_destroy(m);
+    radinterp_solution_destroy(sol);
+}
+
+/* The interpolants against IrradianceAtPoint on an unoccluded floor (smooth
+   irradiance): quadratic pieces fit it closely, and far better than
+   the constant radiosity of the leaves. */
+static void test_interpolant_accuracy(void)
+{
+    scene s;
+    radinterp_desc d;
+    radinterp_solution *sol = NULL;
+    radinterp_mesh_desc md = mesh_desc();
+    radinterp_mesh *m = NULL;
+    radinterp_mesh_data data;
+    uint32_t grey, light, t;
+    double worst = 0, peak = 0;
+    memset(&s, 0, sizeof s);
+    grey = add_material(&s, 0.5f, 0.0f);
+    light = add_material(&s, 0.0f, 100.0f);
+    add_hrect(&s, -2, -2, 2, 2, 0, 1, grey);
+    add_hrect(&s, -0.2f, -0.2f, 0.2f, 0.2f, 1.0f, 0, light);
+    d = scene_desc(&s);
+    CHECK(radinterp_solve(&d, &sol) == RADINTERP_OK);
+    if (!sol) return;
+    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &m), RADINTERP_OK);
+    if (!m) { radinterp_solution_destroy(sol); return; }
+    radinterp_mesh_get_data(m, &data);
+    for (t = 0; t < data.triangle_count; t++) {
+        const float *a = data.positions + 3 * (size_t)data.indices[3 * t], *b = data.positions + 3 * (size_t)data.indices[3 * t + 1];
+        const float *c = data.positions + 3 * (size_t)data.indices[3 * t + 2];
+        float p[3], h[3], e[3], u = 0.2f + 0.3f * (float)rnd(), v = 0.2f + 0.3f * (float)rnd();
+        int k;
+        if (data.triangle_patch[t] != 0) continue;
+        for (k = 0; k < 3; k++) p[k] = a[k] + u * (b[k] - a[k]) + v * (c[k] - a[k]);
+        radinterp_irradiance_at_point(sol, 0, p, NULL, h);
+        radinterp_eval_irradiance(m, t, u, v, e);
+        if (fabs(e[0] - h[0]) > worst) worst = fabs(e[0] - h[0]);
+        if (h[0] > peak) peak = h[0];
+    }
+    /* quadratic pieces over the solver's leaves: within 1% of the peak */
+    CHECK_MSG(worst < 0.01 * peak, "interpolants miss by %g (peak %g)", worst, peak);
+    test_note("unoccluded floor: interpolants within %.3g%% of the peak irradiance (%u triangles)", 100 * worst / peak,
+              data.triangle_count);
+    radinterp_mesh_destroy(m);
+    /* representation-based refinement to a tighter bound */
+    md.refine = 1;
+    md.refine_eps = (float)(0.002 * peak);
+    md.refine_samples = 2;
+    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &m), RADINTERP_OK);
+    if (m) {
+        radinterp_mesh_info info;
+        uint32_t j, over = 0;
+        radinterp_mesh_get_info(m, &info);
+        CHECK(info.refine_passes >= 2 && info.refined_leaves > 0);
+        for (j = 0; j < radinterp_mesh_leaf_count(m); j++) {
+            radinterp_mesh_leaf l;
+            radinterp_mesh_get_leaf(m, j, &l);
+            CHECK(l.error >= 0.0f);
+            over += l.error > md.refine_eps;
+        }
+        test_note("refinement to %.3g W/m^2: %u passes, %u leaves split, %u leaves, %u still above (at the pass limit "
+                  "or the minimum area)", md.refine_eps, info.refine_passes, info.refined_leaves, info.leaf_count, over);
+        radinterp_mesh_destroy(m);
+    }
+    radinterp_solution_destroy(sol);
+}
+
+/* ---- save / load ------------------------------------------------------------- */
+
+typedef struct mem_reader { const unsigned char *data; size_t size, pos; } mem_reader;
+static int read_mem(void *user, void *bytes, size_t n)
+{
+    mem_reader *r = (mem_reader *)user;
+    if (n > r->size - r->pos) return -1;
+    memcpy(bytes, r->data + r->pos, n);
+    r->pos += n;
+    return 0;
+}
+static int failing_write(void *user, const void *bytes, size_t n)
+{
+    (void)user; (void)bytes; (void)n;
+    return -1;
+}
+
+/* A floor under a light with one blocker: a small mesh with a few
+   discontinuities, so that every truncation length can be tried. */
+static radinterp_solution *small_scene(scene *s)
+{
+    radinterp_desc d;
+    radinterp_solution *sol = NULL;
+    uint32_t grey, light;
+    memset(s, 0, sizeof *s);
+    grey = add_material(s, 0.5f, 0.0f);
+    light = add_material(s, 0.0f, 100.0f);
+    add_hrect(s, 0, 0, 1, 1, 0, 1, grey);
+    add_hrect(s, 0.4f, 0.4f, 0.6f, 0.6f, 1.0f, 0, light);
+    add_hrect(s, 0.3f, 0.45f, 0.5f, 0.65f, 0.4f, 1, grey);
+    d = scene_desc(s);
+    d.eps = 5.0f;
+    CHECK(radinterp_solve(&d, &sol) == RADINTERP_OK);
+    return sol;
+}
+
+static void test_save_load(void)
+{
+    scene s;
+    radinterp_solution *sol = small_scene(&s);
+    radinterp_mesh_desc md = mesh_desc();
+    radinterp_mesh *m = NULL, *back = NULL;
+    radinterp_mesh_data a, b;
+    void *bytes = NULL, *bytes2 = NULL;
+    size_t size = 0, size2 = 0, cut;
+    int k, corrupt_ok = 1, flips_ok = 1;
+    if (!sol) return;
+    md.min_discont_weight = 1.0f;
+    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &m), RADINTERP_OK);
+    if (!m) { radinterp_solution_destroy(sol); return; }
+    radinterp_mesh_get_data(m, &a);
+    CHECK_EQ_INT(radinterp_mesh_save_to_memory(m, NULL, &bytes, &size), RADINTERP_OK);
+    CHECK_EQ_INT(radinterp_mesh_load_from_memory(bytes, size, NULL, &back), RADINTERP_OK);
+    if (back) {
+        radinterp_mesh_info ia, ib;
+        radinterp_mesh_get_data(back, &b);
+        CHECK_EQ_INT(a.triangle_count, b.triangle_count);
+        CHECK_EQ_INT(a.vertex_count, b.vertex_count);
+        CHECK(memcmp(a.positions, b.positions, 12 * (size_t)a.vertex_count) == 0);
+        CHECK(memcmp(a.indices, b.indices, 12 * (size_t)a.triangle_count) == 0);
+        CHECK(memcmp(a.coefficients, b.coefficients, 72 * (size_t)a.triangle_count) == 0);
+        CHECK(memcmp(a.corner_radiosity, b.corner_radiosity, 36 * (size_t)a.triangle_count) == 0);
+        CHECK(memcmp(a.edge_flags, b.edge_flags, a.triangle_count) == 0);
+        radinterp_mesh_get_info(m, &ia);
+        radinterp_mesh_get_info(back, &ib);
+        CHECK_EQ_INT(ia.active_discontinuities, ib.active_discontinuities);
+        CHECK_EQ_INT(radinterp_mesh_leaf_count(back), radinterp_mesh_leaf_count(m));
+        CHECK_EQ_INT(radinterp_mesh_discontinuity_count(back), radinterp_mesh_discontinuity_count(m));
+        CHECK_EQ_INT(radinterp_mesh_save_to_memory(back, NULL, &bytes2, &size2), RADINTERP_OK);
+        CHECK(size2 == size && bytes2 && memcmp(bytes, bytes2, size) == 0);
+        radinterp_free_memory(NULL, bytes2);
+        radinterp_mesh_destroy(back);
+    }
+    /* every truncation length is corrupt data */
+    for (cut = 0; cut < size; cut++) {
+        radinterp_result r = radinterp_mesh_load_from_memory(bytes, cut, NULL, &back);
+        if (r != RADINTERP_ERROR_CORRUPT_DATA || back) { corrupt_ok = 0; radinterp_mesh_destroy(back); }
+    }
+    CHECK_MSG(corrupt_ok, "a truncated mesh was not rejected as corrupt");
+    /* random bit flips: corrupt (or, in the version field, a version error) */
+    for (k = 0; k < 3000; k++) {
+        unsigned char *copy = (unsigned char *)malloc(size);
+        size_t at = (size_t)(rnd() * size);
+        radinterp_result r;
+        memcpy(copy, bytes, size);
+        copy[at] ^= (unsigned char)(1u << (int)(rnd() * 8));
+        r = radinterp_mesh_load_from_memory(copy, size, NULL, &back);
+        if ((r != RADINTERP_ERROR_CORRUPT_DATA && r != RADINTERP_ERROR_VERSION) || back) {
+            flips_ok = 0;
+            radinterp_mesh_destroy(back);
+        }
+        free(copy);
+    }
+    CHECK(flips_ok);
+    {
+        mem_reader rd;
+        rd.data = (const unsigned char *)bytes;
+        rd.size = size;
+        rd.pos = 0;
+        CHECK_EQ_INT(radinterp_mesh_load(NULL, read_mem, &rd, &back), RADINTERP_OK);
+        radinterp_mesh_destroy(back);
+    }
+    CHECK_EQ_INT(radinterp_mesh_save(m, failing_write, NULL), RADINTERP_ERROR_IO);
+    CHECK_EQ_INT(radinterp_mesh_save(NULL, failing_write, NULL), RADINTERP_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(radinterp_mesh_load(NULL, NULL, NULL, &back), RADINTERP_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(radinterp_mesh_load_from_memory(NULL, 10, NULL, &back), RADINTERP_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(radinterp_mesh_save_to_memory(m, NULL, NULL, &size2), RADINTERP_ERROR_INVALID_ARGUMENT);
+    test_note("save/load: %lu bytes for %u triangles; every truncation and 3000 bit flips rejected",
+              (unsigned long)size, a.triangle_count);
+    radinterp_free_memory(NULL, bytes);
+    radinterp_mesh_destroy(m);
+    radinterp_solution_destroy(sol);
+}
+
+/* ---- validation, allocation failures, cancellation, determinism ----------- */
+
+static void dummy_alloc_free(void *p, void *user) { (void)user; free(p); }
+
+static void test_validation(void)
+{
+    scene s;
+    radinterp_solution *sol = room_scene(&s);
+    radinterp_mesh_desc md = mesh_desc();
+    radinterp_mesh *m = (radinterp_mesh *)&md;
+    if (!sol) return;
+    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, NULL), RADINTERP_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(radinterp_build_mesh(NULL, &md, &m), RADINTERP_ERROR_INVALID_ARGUMENT);
+    CHECK(m == NULL);
+    CHECK_EQ_INT(radinterp_build_mesh(sol, NULL, &m), RADINTERP_ERROR_INVALID_ARGUMENT);
+    md.min_discont_weight = -1.0f;
+    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &m), RADINTERP_ERROR_INVALID_ARGUMENT);
+    md = mesh_desc();
+    md.refine_eps = NAN;
+    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &m), RADINTERP_ERROR_INVALID_ARGUMENT);
+    md = mesh_desc();
+    md.min_leaf_area = INFINITY;
+    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &m), RADINTERP_ERROR_INVALID_ARGUMENT);
+    md = mesh_desc();
+    md.max_leaf_dsets = 100000;
+    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &m), RADINTERP_ERROR_INVALID_ARGUMENT);
+    md = mesh_desc();
+    md.allocator.free = dummy_alloc_free;   /* free without alloc */
+    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &m), RADINTERP_ERROR_INVALID_ARGUMENT);
+    CHECK(m == NULL);
+    radinterp_mesh_destroy(NULL);
+    CHECK_EQ_INT(radinterp_mesh_leaf_count(NULL), 0);
+    CHECK_EQ_INT(radinterp_mesh_discontinuity_count(NULL), 0);
+    radinterp_solution_destroy(sol);
+}
+
+typedef struct counting { long live, calls, fail_after; } counting;
+static void *count_alloc(size_t n, void *user)
+{
+    counting *c = (counting *)user;
+    if (c->fail_after >= 0 && c->calls >= c->fail_after) return NULL;
+    c->calls++;
+    c->live++;
+    return malloc(n);
+}
+static void count_free(void *p, void *user)
+{
+    counting *c = (counting *)user;
+    if (p) c->live--;
+    free(p);
+}
+static int cancel_after;
+static int progress_cb(void *user, uint64_t done, uint64_t total)
+{
+    int *calls = (int *)user;
+    (void)done; (void)total;
+    return ++*calls >= cancel_after;
+}
+
+static void test_allocation_failures_and_cancel(void)
+{
+    scene s;
+    radinterp_solution *sol = small_scene(&s);
+    radinterp_mesh_desc md = mesh_desc();
+    radinterp_mesh *m = NULL;
+    counting cnt;
+    int k, oom = 0, ok = 0, calls = 0;
+    if (!sol) return;
+    memset(&cnt, 0, sizeof cnt);
+    md.allocator.alloc = count_alloc;
+    md.allocator.free = count_free;
+    md.allocator.user = &cnt;
+    md.min_discont_weight = 0.1f;
+    for (k = 0; k < 3000 && !ok; k++) {
+        radinterp_result r;
+        cnt.calls = 0;
+        cnt.fail_after = k;
+        r = radinterp_build_mesh(sol, &md, &m);
+        if (r == RADINTERP_OK) { ok = 1; radinterp_mesh_destroy(m); }
+        else if (r == RADINTERP_ERROR_OUT_OF_MEMORY) oom++;
+        else CHECK_MSG(0, "failure %d gave %s", k, radinterp_result_string(r));
+        CHECK_EQ_INT(cnt.live, 0);
+    }
+    CHECK(ok);
+    test_note("mesh build: %d points of allocation failure, each reported as out of memory without leaks", oom);
+    cnt.fail_after = -1;
+    md.progress = progress_cb;
+    md.progress_user = &calls;
+    cancel_after = 1;
+    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &m), RADINTERP_ERROR_CANCELLED);
+    CHECK(m == NULL);
+    CHECK_EQ_INT(cnt.live, 0);
+    radinterp_solution_destroy(sol);
+}
+
+static void test_determinism(void)
+{
+    scene s;
+    radinterp_solution *sol = room_scene(&s);
+    radinterp_mesh_desc md = mesh_desc();
+    radinterp_mesh *a = NULL, *b = NULL;
+    void *ba = NULL, *bb = NULL;
+    size_t na = 0, nb = 0;
+    ex_pool *pool = ex_pool_create(3);
+    if (!sol) return;
+    md.min_leaf_area = 0.05f;
+    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &a), RADINTERP_OK);
+    md.parallel_for = ex_pool_parallel_for;
+    md.parallel_user = pool;
+    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &b), RADINTERP_OK);
+    if (a && b) {
+        radinterp_mesh_save_to_memory(a, NULL, &ba, &na);
+        radinterp_mesh_save_to_memory(b, NULL, &bb, &nb);
+        CHECK(na == nb && ba && bb && memcmp(ba, bb, na) == 0);  /* bit-identical for any thread count */
+    }
+    radinterp_free_memory(NULL, ba);
+    radinterp_free_memory(NULL, bb);
+    radinterp_mesh_destroy(a);
+    radinterp_mesh_destroy(b);
+    ex_pool_destroy(pool);
+    radinterp_solution_destroy(sol);
+}
+
+int main(int argc, char **argv)
+{
+    TEST_INIT(argc, argv);
+    RUN(test_fit_reproduces_quadratics);
+    RUN(test_penumbra_boundaries);
+    RUN(test_weights);
+    RUN(test_weight_cache);
+    RUN(test_horizon_and_contact);
+    RUN(test_activation_rules);
+    RUN(test_crack_free_room);
+    RUN(test_shading);
+    RUN(test_interpolant_accuracy);
+    RUN(test_save_load);
+    RUN(test_validation);
+    RUN(test_allocation_failures_and_cancel);
+    RUN(test_determinism);
+    return test_finish();
+}
