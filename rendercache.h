@@ -2367,6 +2367,9 @@ static uint32_t rendercache__level(float priority)
     return (uint32_t)l;
 }
 
+/* Job per tile: the histogram of the positive priorities. Without a
+   branch on the sign (priorities of every level mix in an image, so it
+   would be mispredicted): a pixel of priority 0 adds 0 to level 0. */
 static void rendercache__histogram_job(void *ctx, uint32_t tile)
 {
     const rendercache__select_job *j = (const rendercache__select_job *)ctx;
@@ -2376,31 +2379,51 @@ static void rendercache__histogram_job(void *ctx, uint32_t tile)
     uint32_t p0 = tile * RENDERCACHE__TILE_ROWS * rc->width, p1 = p0 + RENDERCACHE__TILE_ROWS * rc->width, p;
     if (p1 > rc->pixel_count) p1 = rc->pixel_count;
     memset(h, 0, RENDERCACHE__LEVELS * sizeof *h);
-    for (p = p0; p < p1; p++)
-        if (priority[p] > 0.0f) h[rendercache__level(priority[p])]++;
+    for (p = p0; p < p1; p++) h[rendercache__level(priority[p])] += (uint32_t)(priority[p] > 0.0f);
 }
 
 /* Job per tile: the pixels decided outright, and those left to the error
-   diffusion (all of value fraction). */
+   diffusion (all of value fraction). Written without branches, so that it
+   vectorises. */
 static void rendercache__threshold_job(void *ctx, uint32_t tile)
 {
     const rendercache__select_job *j = (const rendercache__select_job *)ctx;
     rendercache *rc = j->rc;
-    const float *priority = j->priority;
+    const float *RENDERCACHE__RESTRICT priority = j->priority;
     const uint32_t cut = j->cut;
-    const unsigned char at_cut = j->fraction >= 1.0f ? 1u : 2u;   /* a whole level fits: chosen outright */
-    unsigned char *chosen = rc->chosen;
+    const uint32_t at_cut = j->fraction >= 1.0f ? 1u : 2u;   /* a whole level fits: chosen outright */
+    unsigned char *RENDERCACHE__RESTRICT chosen = rc->chosen;
     uint32_t p0 = tile * RENDERCACHE__TILE_ROWS * rc->width, p1 = p0 + RENDERCACHE__TILE_ROWS * rc->width, p, ones = 0;
     if (p1 > rc->pixel_count) p1 = rc->pixel_count;
     for (p = p0; p < p1; p++) {
         float pr = priority[p];
-        uint32_t l = rendercache__level(pr);
+        uint32_t l = rendercache__level(pr), positive = pr > 0.0f;
         /* 1: chosen outright; 2: fractional (value: the cut's fraction), for the error diffusion */
-        unsigned char c = !(pr > 0.0f) ? 0u : (l > cut ? 1u : (l == cut ? at_cut : 0u));
-        chosen[p] = c;
+        uint32_t c = (positive & (l > cut)) | ((positive & (l == cut)) * at_cut);
+        chosen[p] = (unsigned char)c;
         ones += c == 1u;
     }
     rc->tile_stats[RENDERCACHE__TILE_STATS * (size_t)tile + 5] = ones;
+}
+
+/* The first of the pixels x, x + dir, x + 2 dir, ... of a row (before x
+   reaches end) whose chosen byte has one of the bits of mask, or end. Runs
+   of eight bytes without are skipped at once: the selection scans every
+   pixel of the image but marks a few percent of them. */
+static int rendercache__next_marked(const unsigned char *row, int x, int end, int dir, unsigned char mask)
+{
+    const uint64_t bits = 0x0101010101010101ull * mask;
+    while (x != end) {
+        int lo = dir > 0 ? x : x - 7;   /* the 8 bytes ahead, in the direction of travel */
+        uint64_t word;
+        if ((dir > 0 ? end - x : x - end) >= 8) {
+            memcpy(&word, row + lo, sizeof word);
+            if (!(word & bits)) { x += 8 * dir; continue; }
+        }
+        if (row[x] & mask) return x;
+        x += dir;
+    }
+    return end;
 }
 
 /* Finds the cut level and its fraction so that the values sum to budget
@@ -2507,14 +2530,16 @@ static uint32_t rendercache__diffuse(rendercache *rc, float fraction, uint32_t *
     if (amp < 0.0f) amp = 0.0f;
     memset(cur, 0, (w + 2) * sizeof *cur);
     for (y = 0; y < h; y++) {
-        int dir = (y & 1u) ? -1 : 1, x = dir > 0 ? 0 : (int)w - 1, k;
+        int dir = (y & 1u) ? -1 : 1, end = dir > 0 ? (int)w : -1, x = dir > 0 ? 0 : (int)w - 1;
         float *t;
         memset(next, 0, (w + 2) * sizeof *next);
-        for (k = 0; k < (int)w; k++, x += dir) {
-            uint32_t p = y * w + (uint32_t)x;
+        for (;; x += dir) {
+            uint32_t p;
             float total, e;
             unsigned char pick;
-            if (!(chosen[p] & 2u)) continue;   /* decided by the threshold */
+            x = rendercache__next_marked(chosen + (size_t)y * w, x, end, dir, 2u);   /* the rest was decided by the threshold */
+            if (x == end) break;
+            p = y * w + (uint32_t)x;
             total = fraction + cur[x + 1] + carry;
             pick = total >= rendercache__threshold(p, rc->frame, amp) ? 1u : 0u;
             e = total - (float)pick;
@@ -2591,10 +2616,11 @@ static uint32_t rendercache__select(rendercache *rc, const float *priority, uint
 static uint32_t rendercache__emit(rendercache *rc, const rendercache__view *v, float *priority, uint32_t flags,
                                   rendercache_pixel_request *out, uint32_t max)
 {
-    uint32_t p, n = 0;
-    for (p = 0; p < rc->pixel_count && n < max; p++) {
+    uint32_t p = 0, n = 0;
+    for (; n < max; p++) {
         rendercache_pixel_request *r;
-        if (!(rc->chosen[p] & 1u)) continue;
+        p = (uint32_t)rendercache__next_marked(rc->chosen, (int)p, (int)rc->pixel_count, 1, 1u);
+        if (p == rc->pixel_count) break;
         r = &out[n++];
         r->x = p % rc->width;
         r->y = p / rc->width;
