@@ -1535,15 +1535,15 @@ typedef struct rendercache__geo {
     uint32_t object;         /* object id, RENDERCACHE_MISS, or RENDERCACHE__FREE_SLOT */
 } rendercache__geo;
 
-/* The rest of a slot, read for the points that land in the image: 24
+/* The rest of a slot, read for the points that land in the image: 20
    bytes, streamed with geo. A point's age is not stored but derived, so nothing is written
    per point and frame: age = frame - birth + (motion of its object since
-   birth), the last term making points of moving objects age faster. */
+   birth), the last term making points of moving objects age faster; it is
+   kept as one sum, age = frame + obj_motion - base (modulo 2^32). */
 typedef struct rendercache__point {
     float rgb[3];
     float scale;             /* priority scale */
-    uint32_t birth;          /* frame of insertion */
-    uint32_t motion_birth;   /* the object's obj_motion at insertion */
+    uint32_t base;           /* frame of insertion + the object's obj_motion then */
 } rendercache__point;
 
 struct rendercache {
@@ -1565,6 +1565,8 @@ struct rendercache {
        through both arrays */
     rendercache__geo *geo;
     rendercache__point *data;
+    unsigned char *shown;    /* per slot: the frame's mark (rendercache__mark) when the point was
+                                inserted or shown in a pixel in that frame; the eviction spares it */
     uint32_t hand;           /* clock hand of the eviction */
     uint32_t live;
     int hand_exhausted;      /* a full turn found no invisible slot in this frame */
@@ -1599,6 +1601,14 @@ struct rendercache {
 
     rendercache_stats stats;
 };
+
+/* The byte that marks slots in use in a frame: 1 .. 255, the same for no
+   two frames of a run of 255; begin_frame clears the marks when a run
+   starts, so that a mark left 255 frames ago never passes for a new one. */
+static unsigned char rendercache__mark(uint32_t frame)
+{
+    return (unsigned char)(frame % 255u + 1u);
+}
 
 static double rendercache__now(const rendercache *rc)
 {
@@ -1642,6 +1652,7 @@ static void rendercache__reset_points(rendercache *rc)
 {
     uint32_t i;
     for (i = 0; i < rc->capacity; i++) rc->geo[i].object = RENDERCACHE__FREE_SLOT;
+    memset(rc->shown, 0, rc->capacity);   /* no mark */
     rc->hand = 0;
     rc->live = 0;
 }
@@ -1649,7 +1660,7 @@ static void rendercache__reset_points(rendercache *rc)
 static void rendercache__release(rendercache *rc)
 {
     const rendercache_allocator a = rc->alloc;
-    void *blocks[21];
+    void *blocks[22];
     size_t i;
     blocks[0] = rc->geo; blocks[1] = rc->data; blocks[2] = rc->obj_predicted; blocks[3] = rc->obj_motion;
     blocks[4] = rc->depth_out; blocks[5] = rc->obj_world; blocks[6] = rc->obj_local;
@@ -1657,7 +1668,7 @@ static void rendercache__release(rendercache *rc)
     blocks[10] = rc->px_depth; blocks[11] = rc->image; blocks[12] = rc->priority;
     blocks[13] = rc->pred_priority; blocks[14] = rc->kind; blocks[15] = rc->count;
     blocks[16] = rc->tile_stats; blocks[17] = rc->hist; blocks[18] = rc->select_v;
-    blocks[19] = rc->chosen; blocks[20] = rc->err_rows;
+    blocks[19] = rc->chosen; blocks[20] = rc->err_rows; blocks[21] = rc->shown;
     for (i = 0; i < sizeof blocks / sizeof blocks[0]; i++) rendercache__free(&a, blocks[i]);
     rendercache__splat_free(&rc->splat, &a);
     rendercache__free(&a, rc);
@@ -1669,6 +1680,7 @@ static int rendercache__alloc_buffers(rendercache *rc)
     size_t n = rc->capacity, px = rc->pixel_count, no = rc->object_count;
     rc->geo = (rendercache__geo *)rendercache__alloc_array(a, n, sizeof(rendercache__geo));
     rc->data = (rendercache__point *)rendercache__alloc_array(a, n, sizeof(rendercache__point));
+    rc->shown = (unsigned char *)rendercache__alloc_array(a, n, 1);
     rc->obj_predicted = (float *)rendercache__alloc_array(a, no, 12 * sizeof(float));
     rc->obj_motion = (uint32_t *)rendercache__alloc_array(a, no, sizeof(uint32_t));
     rc->obj_world = (float *)rendercache__alloc_array(a, no, 12 * sizeof(float));
@@ -1688,7 +1700,7 @@ static int rendercache__alloc_buffers(rendercache *rc)
     rc->select_v = (float *)rendercache__alloc_array(a, px, sizeof(float));
     rc->chosen = (unsigned char *)rendercache__alloc_array(a, px, 1);
     rc->err_rows = (float *)rendercache__alloc_array(a, 2 * ((size_t)rc->width + 2), sizeof(float));
-    if (!rc->geo || !rc->data || !rc->obj_predicted || !rc->obj_motion || !rc->obj_world ||
+    if (!rc->geo || !rc->data || !rc->shown || !rc->obj_predicted || !rc->obj_motion || !rc->obj_world ||
         !rc->obj_local || !rc->obj_camera || !rc->obj_moved || !rc->px_index || !rc->px_depth || !rc->depth_out || !rc->image ||
         !rc->priority || !rc->pred_priority || !rc->kind || !rc->count || !rc->tile_stats || !rc->hist ||
         !rc->select_v || !rc->chosen || !rc->err_rows)
@@ -1869,7 +1881,7 @@ static uint32_t rendercache__project_point(const rendercache__projector *pr, con
    2004, section 4.2.4), in [0, 1]. motion: the object's obj_motion. */
 static float rendercache__point_priority(const rendercache *rc, const rendercache__point *pt, uint32_t motion)
 {
-    uint32_t age = rc->frame - pt->birth + (motion - pt->motion_birth);
+    uint32_t age = rc->frame + motion - pt->base;
     float pr = (float)age * rc->inv_age_ramp;
     pr = (pr < 1.0f ? pr : 1.0f) * (RENDERCACHE__PRIORITY_POINT_MAX * pt->scale);
     return pr < 1.0f ? pr : 1.0f;
@@ -2098,7 +2110,7 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
     const uint32_t *index = s->index, w = rc->width, h = rc->height;
     uint32_t *px_index = rc->px_index;
     float *px_depth = rc->px_depth, *image = rc->image, *priority = rc->priority;
-    unsigned char *kind = rc->kind, *count = rc->count;
+    unsigned char *kind = rc->kind, *count = rc->count, *shown = rc->shown, mark = rendercache__mark(rc->frame);
     uint32_t y0 = tile * RENDERCACHE__TILE_ROWS, y1 = y0 + RENDERCACHE__TILE_ROWS, x, y;
     uint32_t visible = 0, culled = 0, *stats = rc->tile_stats + RENDERCACHE__TILE_STATS * (size_t)tile;
     float tol2 = (1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance);
@@ -2127,6 +2139,7 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
                 continue;
             }
             px_depth[p] = depth[p];
+            shown[k] = mark;   /* spared by the eviction in this frame */
             memcpy(image + 3 * (size_t)p, payload + 4 * (size_t)p, 3 * sizeof(float));
             priority[p] = payload[4 * (size_t)p + 3];
             kind[p] = RENDERCACHE_PIXEL_POINT;
@@ -2262,6 +2275,7 @@ RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, cons
         return RENDERCACHE_ERROR_INVALID_ARGUMENT;
     }
     rc->frame++;
+    if (rendercache__mark(rc->frame) == 1u) memset(rc->shown, 0, rc->capacity);
     rc->view = v;
     rc->has_prediction = 0;
     rc->hand_exhausted = 0;
@@ -2664,19 +2678,10 @@ RENDERCACHE_API rendercache_result rendercache_request(rendercache *rc, renderca
    15. insertion and eviction
    ---------------------------------------------------------------------- */
 /* Whether slot shows in the current frame: inserted in it, or its point
-   projects to a pixel that shows it. Checked only for the slots the clock
-   hand passes, so nothing is written per point and frame. */
+   is the one a pixel shows (the depth cull marks those). */
 static int rendercache__slot_in_use(const rendercache *rc, uint32_t slot)
 {
-    rendercache__projector pr;
-    float depth;
-    uint32_t p;
-    if (rc->data[slot].birth == rc->frame) return 1;
-    pr.rc = rc;
-    pr.view = &rc->view;
-    pr.obj_camera = rc->obj_camera;
-    p = rendercache__project_point(&pr, &rc->geo[slot], &depth);
-    return p != RENDERCACHE__NONE && rc->px_index[p] == slot;
+    return rc->shown[slot] == rendercache__mark(rc->frame);
 }
 
 /* Eviction (clock, second chance): the hand walks the slots in the order
@@ -2728,8 +2733,8 @@ static float rendercache__store(rendercache *rc, uint32_t slot, const rendercach
     g->object = s->object;
     memcpy(pt->rgb, s->rgb, sizeof pt->rgb);
     pt->scale = s->priority_scale > 0.0f ? s->priority_scale : 1.0f;
-    pt->birth = rc->frame;   /* age 0; new points are not evicted in their own frame */
-    pt->motion_birth = s->object == RENDERCACHE_MISS ? 0u : rc->obj_motion[s->object];
+    pt->base = rc->frame + (s->object == RENDERCACHE_MISS ? 0u : rc->obj_motion[s->object]);   /* age 0 */
+    rc->shown[slot] = rendercache__mark(rc->frame);   /* new points are not evicted in their own frame */
     return d;
 }
 
@@ -2755,7 +2760,7 @@ static uint32_t rendercache__touch_slots(const rendercache *rc, const rendercach
         uint32_t slot;
         if (s->x >= rc->width || s->y >= rc->height || (s->flags & RENDERCACHE_REQUEST_PREDICTED)) continue;
         slot = rc->px_index[s->y * rc->width + s->x];
-        if (slot != RENDERCACHE__NONE) sum += rc->geo[slot].object + rc->data[slot].birth;
+        if (slot != RENDERCACHE__NONE) sum += rc->geo[slot].object + rc->data[slot].base;
     }
     return sum;
 }
