@@ -759,6 +759,13 @@ static void rendercache__free(const rendercache_allocator *a, void *p)
 /* Zero means default: the documented default replaces a zero field. */
 #define rendercache__def(v, d) ((v) ? (v) : (d))
 
+/* A hint to load a cache line ahead of its use (compilers without one: nothing). */
+#if defined(__GNUC__) || defined(__clang__)
+#  define RENDERCACHE__PREFETCH(p) __builtin_prefetch(p)
+#else
+#  define RENDERCACHE__PREFETCH(p) ((void)(p))
+#endif
+
 /* Outputs that alias nothing, so that loops writing them vectorise. */
 #if defined(__cplusplus) || !defined(__STDC_VERSION__) || __STDC_VERSION__ < 199901L
 #  define RENDERCACHE__RESTRICT __restrict
@@ -1328,7 +1335,9 @@ typedef struct rendercache__raster {
 
 /* One job's z-buffer: per pixel the key (depth bits << 32 | element; depths
    are non-negative, so their bits order as the values do, and one compare
-   settles depth and then index) and the payload. One random access per test. */
+   settles depth and then index) and the payload. One random access per test.
+   Keys have one more entry, after the last pixel, where elements that miss
+   the image go when the test runs without a branch. */
 typedef struct rendercache__zbuffer {
     uint64_t *key;
     float *payload;
@@ -1373,7 +1382,7 @@ static int rendercache__splat_alloc(rendercache__splat *s, uint32_t width, uint3
     s->final.index = (uint32_t *)rendercache__alloc_array(a, s->pixel_count, sizeof(uint32_t));
     failed = !s->final.depth || !s->final.index;
     for (j = 0; j < jobs; j++) {
-        s->zb[j].key = (uint64_t *)rendercache__alloc_array(a, s->pixel_count, sizeof(uint64_t));
+        s->zb[j].key = (uint64_t *)rendercache__alloc_array(a, (size_t)s->pixel_count + 1, sizeof(uint64_t));
         s->zb[j].payload = (float *)rendercache__alloc_array(a, s->pixel_count, 4 * sizeof(float));
         failed |= !s->zb[j].key || !s->zb[j].payload;
     }
@@ -1410,6 +1419,23 @@ static void rendercache__zbuffer_test(rendercache__zbuffer *zb, uint32_t p, floa
     }
 }
 
+/* The z-test of n elements (from element first on) without payload:
+   written without branches, since which of two elements in a pixel is
+   nearer, and whether an element lands at all, are coin tosses for a
+   branch predictor. Returns how many landed. */
+static uint32_t rendercache__zbuffer_keys(uint64_t *key, uint32_t sink, const uint32_t *pix, const float *depth,
+                                          uint32_t first, uint32_t n)
+{
+    uint32_t i, landed = 0;
+    for (i = 0; i < n; i++) {
+        uint32_t p = pix[i] == RENDERCACHE__NONE ? sink : pix[i];
+        uint64_t k = rendercache__key(depth[i], first + i), old = key[p];
+        key[p] = k < old ? k : old;
+        landed += pix[i] != RENDERCACHE__NONE;
+    }
+    return landed;
+}
+
 /* Job j: z-buffers its range of elements into its own z-buffer. */
 static void rendercache__splat_range(void *ctx, uint32_t j)
 {
@@ -1421,7 +1447,7 @@ static void rendercache__splat_range(void *ctx, uint32_t j)
     float d[RENDERCACHE__BATCH], pay[4 * RENDERCACHE__BATCH];
     begin = (uint32_t)((uint64_t)job->element_count * j / job->jobs);
     end = (uint32_t)((uint64_t)job->element_count * (j + 1) / job->jobs);
-    for (i = 0; i < s->pixel_count; i++) key[i] = RENDERCACHE__EMPTY_KEY;
+    for (i = 0; i <= s->pixel_count; i++) key[i] = RENDERCACHE__EMPTY_KEY;
     if (job->cover) {
         s->job_projected[j] = job->cover(job->src, j, begin, end, &s->zb[j], s->width, s->height);
         return;
@@ -1429,7 +1455,11 @@ static void rendercache__splat_range(void *ctx, uint32_t j)
     for (b = begin; b < end; b += RENDERCACHE__BATCH) {
         uint32_t n = end - b < RENDERCACHE__BATCH ? end - b : RENDERCACHE__BATCH;
         if (!job->source(job->src, b, b + n, pix, d)) continue;   /* nothing landed */
-        if (job->payload) job->payload(job->src, b, b + n, pix, pay);
+        if (!job->payload) {
+            projected += rendercache__zbuffer_keys(key, s->pixel_count, pix, d, b, n);
+            continue;
+        }
+        job->payload(job->src, b, b + n, pix, pay);
         for (i = 0; i < n; i++) {
             uint32_t p = pix[i];
             uint64_t k;
@@ -1521,6 +1551,7 @@ static void rendercache__splat_run_cover(rendercache__splat *s,
 #define RENDERCACHE__FREE_SLOT 0xFFFFFFFEu   /* object id of an unused cache slot */
 #define RENDERCACHE__LEVELS 1024u            /* priority levels of the threshold histogram */
 #define RENDERCACHE__TILE_STATS 6u           /* visible, culled, interpolated, sparse, empty, scratch */
+#define RENDERCACHE__GATHER_AHEAD 64u        /* pixels between a slot's prefetch and its read */
 
 /* Priority image values (WDP99 priority image, extended to [0, 1]): a point
    rises with age to POINT_MAX; holes rank above every point, the sparser the
@@ -1535,15 +1566,16 @@ typedef struct rendercache__geo {
     uint32_t object;         /* object id, RENDERCACHE_MISS, or RENDERCACHE__FREE_SLOT */
 } rendercache__geo;
 
-/* The rest of a slot, read for the points that land in the image: 20
-   bytes, streamed with geo. A point's age is not stored but derived, so nothing is written
-   per point and frame: age = frame - birth + (motion of its object since
-   birth), the last term making points of moving objects age faster; it is
-   kept as one sum, age = frame + obj_motion - base (modulo 2^32). */
+/* The rest of a slot, read by the depth cull for the points that win a
+   pixel: 24 bytes. A point's age is not stored but derived, so nothing is
+   written per point and frame: age = frame - birth + (motion of its object
+   since birth), the last term making points of moving objects age faster;
+   it is kept as one sum, age = frame + obj_motion - base (modulo 2^32). */
 typedef struct rendercache__point {
     float rgb[3];
     float scale;             /* priority scale */
     uint32_t base;           /* frame of insertion + the object's obj_motion then */
+    uint32_t object;         /* geo's object, here too for the priority */
 } rendercache__point;
 
 struct rendercache {
@@ -1562,11 +1594,13 @@ struct rendercache {
     float inv_age_ramp;
 
     /* point cache: slot order is insertion order; the projection streams
-       through both arrays */
+       through geo. One more slot after the last stays empty (see cull_job). */
     rendercache__geo *geo;
     rendercache__point *data;
     unsigned char *shown;    /* per slot: the frame's mark (rendercache__mark) when the point was
-                                inserted or shown in a pixel in that frame; the eviction spares it */
+                                inserted or shown in a pixel in that frame; the eviction spares it.
+                                Apart from data: the cull writes it at random, and a byte array
+                                stays in cache where data would not */
     uint32_t hand;           /* clock hand of the eviction */
     uint32_t live;
     int hand_exhausted;      /* a full turn found no invisible slot in this frame */
@@ -1652,7 +1686,10 @@ static void rendercache__reset_points(rendercache *rc)
 {
     uint32_t i;
     for (i = 0; i < rc->capacity; i++) rc->geo[i].object = RENDERCACHE__FREE_SLOT;
-    memset(rc->shown, 0, rc->capacity);   /* no mark */
+    memset(rc->shown, 0, (size_t)rc->capacity + 1);   /* no mark */
+    memset(&rc->geo[rc->capacity], 0, sizeof rc->geo[0]);   /* the empty slot (what holes read): black, priority 0 */
+    memset(&rc->data[rc->capacity], 0, sizeof rc->data[0]);
+    rc->geo[rc->capacity].object = RENDERCACHE_MISS;
     rc->hand = 0;
     rc->live = 0;
 }
@@ -1678,9 +1715,9 @@ static int rendercache__alloc_buffers(rendercache *rc)
 {
     const rendercache_allocator *a = &rc->alloc;
     size_t n = rc->capacity, px = rc->pixel_count, no = rc->object_count;
-    rc->geo = (rendercache__geo *)rendercache__alloc_array(a, n, sizeof(rendercache__geo));
-    rc->data = (rendercache__point *)rendercache__alloc_array(a, n, sizeof(rendercache__point));
-    rc->shown = (unsigned char *)rendercache__alloc_array(a, n, 1);
+    rc->geo = (rendercache__geo *)rendercache__alloc_array(a, n + 1, sizeof(rendercache__geo));   /* + the empty slot */
+    rc->data = (rendercache__point *)rendercache__alloc_array(a, n + 1, sizeof(rendercache__point));
+    rc->shown = (unsigned char *)rendercache__alloc_array(a, n + 1, 1);
     rc->obj_predicted = (float *)rendercache__alloc_array(a, no, 12 * sizeof(float));
     rc->obj_motion = (uint32_t *)rendercache__alloc_array(a, no, sizeof(uint32_t));
     rc->obj_world = (float *)rendercache__alloc_array(a, no, 12 * sizeof(float));
@@ -1909,15 +1946,6 @@ static void rendercache__project_perspective(const rendercache__geo *g, uint32_t
     }
 }
 
-/* The object all points [begin, end) belong to, or RENDERCACHE__NONE when
-   they are mixed (or background, or free). */
-static uint32_t rendercache__batch_object(const rendercache__geo *geo, uint32_t begin, uint32_t end)
-{
-    uint32_t o = geo[begin].object, differ = 0, i;
-    for (i = begin + 1; i < end; i++) differ |= geo[i].object ^ o;
-    return differ || o >= RENDERCACHE__FREE_SLOT ? RENDERCACHE__NONE : o;
-}
-
 /* The one object of the points [begin, end) other than background points,
    RENDERCACHE__NONE when there are several or free slots; *background
    tells whether background points are among them. */
@@ -1956,36 +1984,6 @@ static uint32_t rendercache__project_points(const void *src, uint32_t begin, uin
     return end - begin;
 }
 
-/* The payload of a cache point: its colour and priority. */
-static void rendercache__point_payload(const void *src, uint32_t begin, uint32_t end, const uint32_t *pix,
-                                       float *payload)
-{
-    const rendercache *rc = ((const rendercache__projector *)src)->rc;
-    const rendercache__point *data = rc->data;
-    const rendercache__geo *geo = rc->geo;
-    uint32_t i, o = rendercache__batch_object(geo, begin, end);
-    if (o != RENDERCACHE__NONE) {   /* one object: no branch, vectorisable */
-        uint32_t motion = rc->obj_motion[o];
-        for (i = begin; i < end; i++) {
-            float *out = payload + 4 * (size_t)(i - begin);
-            out[0] = data[i].rgb[0];
-            out[1] = data[i].rgb[1];
-            out[2] = data[i].rgb[2];
-            out[3] = rendercache__point_priority(rc, &data[i], motion);
-        }
-        return;
-    }
-    for (i = begin; i < end; i++) {
-        float *out = payload + 4 * (size_t)(i - begin);
-        uint32_t obj = geo[i].object;
-        if (pix[i - begin] == RENDERCACHE__NONE) continue;
-        out[0] = data[i].rgb[0];
-        out[1] = data[i].rgb[1];
-        out[2] = data[i].rgb[2];
-        out[3] = rendercache__point_priority(rc, &data[i], obj == RENDERCACHE_MISS ? 0u : rc->obj_motion[obj]);
-    }
-}
-
 /* Object-to-camera matrices of every object for view v. */
 static void rendercache__compose_objects(const rendercache *rc, const rendercache__view *v, float *out)
 {
@@ -1995,17 +1993,19 @@ static void rendercache__compose_objects(const rendercache *rc, const rendercach
 }
 
 /* Projects every point into view v (matrices obj_camera) and z-buffers
-   them into rc->splat, with colour and priority when with_payload. */
+   them into rc->splat. Keys only: the points that win a pixel give their
+   colour and priority in the depth cull, so that the others (about half)
+   cost no read of their colour and no write. */
 static void rendercache__splat_points(rendercache *rc, const rendercache__view *v, const float *obj_camera,
-                                      int with_payload, double *t_project)
+                                      double *t_project)
 {
     rendercache__projector pr;
+    double t0 = rendercache__now(rc);
     pr.rc = rc;
     pr.view = v;
     pr.obj_camera = obj_camera;
-    double t0 = rendercache__now(rc);
-    rendercache__splat_run(&rc->splat, rc->parallel_for, rc->parallel_user, rendercache__project_points,
-                           with_payload ? rendercache__point_payload : NULL, &pr, rc->capacity);
+    rendercache__splat_run(&rc->splat, rc->parallel_for, rc->parallel_user, rendercache__project_points, NULL, &pr,
+                           rc->capacity);
     if (t_project) *t_project += rendercache__now(rc) - t0;
 }
 
@@ -2099,17 +2099,61 @@ static void rendercache__cull_row(const float *depth, uint32_t w, uint32_t y, fl
     }
 }
 
-/* Job per tile: depth cull; surviving points give their colour and
-   priority to the pixel. The kind array holds the cull decisions of a row
-   until the row is written. */
+/* The cull decisions of row y (occ[x] = 1: the point at x is culled):
+   the interior by rendercache__cull_row, the image border by the general test. */
+static void rendercache__cull_decisions(const rendercache *rc, const float *depth, const uint32_t *index, uint32_t y,
+                                        float tol2, unsigned char *occ)
+{
+    const uint32_t w = rc->width, h = rc->height;
+    uint32_t x;
+    int interior_row = y > 0 && y + 1 < h;
+    if (interior_row) rendercache__cull_row(depth, w, y, tol2, occ);
+    for (x = 0; x < w; x = interior_row && x == 0 && w > 1 ? w - 1 : x + 1) {   /* border pixels */
+        float nd[8];
+        uint32_t p = y * w + x;
+        occ[x] = 0;
+        if (index[p] == RENDERCACHE__NONE) continue;
+        rendercache__neighbour_depths(depth, w, h, x, y, nd);
+        occ[x] = (unsigned char)rendercache__occluded(nd, depth[p], tol2);
+    }
+}
+
+/* Colour and priority of the points that won the pixels [p0, p1) of a row,
+   culled or not (a culled pixel is a hole, which the filling writes again).
+   The slots are anywhere in the cache, so each read is a cache miss: the
+   loop does nothing else, and asks for the slot of a pixel further on
+   ahead of time, so that many misses are under way at once. A pixel
+   without a point reads the empty slot after the last (rc->capacity):
+   no branch, which points and holes along silhouettes would mispredict. */
+static void rendercache__gather_points(rendercache *rc, const uint32_t *index, uint32_t p0, uint32_t p1)
+{
+    const uint32_t empty = rc->capacity;
+    const rendercache__point *data = rc->data;
+    float *image = rc->image, *priority = rc->priority;
+    uint32_t p;
+    for (p = p0; p < p1; p++) {
+        uint32_t k = index[p] == RENDERCACHE__NONE ? empty : index[p], o = data[k].object;
+        uint32_t motion = o == RENDERCACHE_MISS ? 0u : rc->obj_motion[o < rc->object_count ? o : 0u];
+        if (p + RENDERCACHE__GATHER_AHEAD < p1) {
+            uint32_t next = index[p + RENDERCACHE__GATHER_AHEAD];
+            RENDERCACHE__PREFETCH(&data[next == RENDERCACHE__NONE ? empty : next]);
+        }
+        memcpy(image + 3 * (size_t)p, data[k].rgb, 3 * sizeof(float));
+        priority[p] = rendercache__point_priority(rc, &data[k], motion);
+    }
+}
+
+/* Job per tile: depth cull; surviving points give their colour, their
+   priority and their depth to the pixel, and are marked as shown. The
+   kind array holds the cull decisions of a row until the row is written. */
 static void rendercache__cull_job(void *ctx, uint32_t tile)
 {
     rendercache *rc = (rendercache *)ctx;
     const rendercache__raster *s = &rc->splat.final;
-    const float *depth = s->depth, *payload = s->payload;
-    const uint32_t *index = s->index, w = rc->width, h = rc->height;
+    const float *depth = s->depth;
+    const uint32_t *index = s->index, w = rc->width, h = rc->height, empty = rc->capacity;
     uint32_t *px_index = rc->px_index;
-    float *px_depth = rc->px_depth, *image = rc->image, *priority = rc->priority;
+    float *px_depth = rc->px_depth;
     unsigned char *kind = rc->kind, *count = rc->count, *shown = rc->shown, mark = rendercache__mark(rc->frame);
     uint32_t y0 = tile * RENDERCACHE__TILE_ROWS, y1 = y0 + RENDERCACHE__TILE_ROWS, x, y;
     uint32_t visible = 0, culled = 0, *stats = rc->tile_stats + RENDERCACHE__TILE_STATS * (size_t)tile;
@@ -2117,34 +2161,17 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
     if (y1 > h) y1 = h;
     for (y = y0; y < y1; y++) {
         unsigned char *occ = kind + (size_t)y * w;
-        int interior_row = y > 0 && y + 1 < h;
-        if (interior_row) rendercache__cull_row(depth, w, y, tol2, occ);
-        for (x = 0; x < w; x++) {
-            uint32_t p = y * w + x, k = index[p];
-            if (!interior_row || x == 0 || x + 1 == w) {   /* border: the general test */
-                float nd[8];
-                occ[x] = 0;
-                if (k != RENDERCACHE__NONE) {
-                    rendercache__neighbour_depths(depth, w, h, x, y, nd);
-                    occ[x] = (unsigned char)rendercache__occluded(nd, depth[p], tol2);
-                }
-            }
-            if (k != RENDERCACHE__NONE && occ[x]) {
-                k = RENDERCACHE__NONE;
-                culled++;
-            }
-            px_index[p] = k;
-            if (k == RENDERCACHE__NONE) {
-                px_depth[p] = FLT_MAX;
-                continue;
-            }
-            px_depth[p] = depth[p];
-            shown[k] = mark;   /* spared by the eviction in this frame */
-            memcpy(image + 3 * (size_t)p, payload + 4 * (size_t)p, 3 * sizeof(float));
-            priority[p] = payload[4 * (size_t)p + 3];
-            kind[p] = RENDERCACHE_PIXEL_POINT;
+        rendercache__gather_points(rc, index, y * w, y * w + w);
+        rendercache__cull_decisions(rc, depth, index, y, tol2, occ);
+        for (x = 0; x < w; x++) {   /* without branches, as gather_points */
+            uint32_t p = y * w + x, k = index[p], has = k != RENDERCACHE__NONE, shows = has & !occ[x];
+            px_index[p] = shows ? k : RENDERCACHE__NONE;
+            px_depth[p] = shows ? depth[p] : FLT_MAX;
+            shown[shows ? k : empty] = mark;   /* spared by the eviction in this frame */
+            kind[p] = (unsigned char)(shows ? (unsigned)RENDERCACHE_PIXEL_POINT : occ[x]);   /* holes: set by the filling */
             count[p] = 0;
-            visible++;
+            visible += shows;
+            culled += has & occ[x];
         }
     }
     stats[0] = visible;
@@ -2285,7 +2312,7 @@ RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, cons
         rc->obj_moved[o] = 0;
     }
     rendercache__compose_objects(rc, &rc->view, rc->obj_camera);
-    rendercache__splat_points(rc, &rc->view, rc->obj_camera, 1, &rc->stats.time_project);
+    rendercache__splat_points(rc, &rc->view, rc->obj_camera, &rc->stats.time_project);
     t1 = rendercache__now(rc);
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__cull_job, rc, rc->tile_count);
     t2 = rendercache__now(rc);
@@ -2339,7 +2366,7 @@ RENDERCACHE_API rendercache_result rendercache_predict(rendercache *rc, const re
     t0 = rendercache__now(rc);
     rc->predicted = v;
     rendercache__compose_objects(rc, &rc->predicted, rc->obj_predicted);
-    rendercache__splat_points(rc, &rc->predicted, rc->obj_predicted, 0, NULL);
+    rendercache__splat_points(rc, &rc->predicted, rc->obj_predicted, NULL);
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__predict_job, rc, rc->tile_count);
     rc->pred_holes = rendercache__tile_sum(rc, 5);
     rc->has_prediction = 1;
@@ -2735,6 +2762,7 @@ static float rendercache__store(rendercache *rc, uint32_t slot, const rendercach
     pt->scale = s->priority_scale > 0.0f ? s->priority_scale : 1.0f;
     pt->base = rc->frame + (s->object == RENDERCACHE_MISS ? 0u : rc->obj_motion[s->object]);   /* age 0 */
     rc->shown[slot] = rendercache__mark(rc->frame);   /* new points are not evicted in their own frame */
+    pt->object = s->object;
     return d;
 }
 
