@@ -766,6 +766,15 @@ static void rendercache__free(const rendercache_allocator *a, void *p)
 #  define RENDERCACHE__PREFETCH(p) ((void)(p))
 #endif
 
+/* Small functions that loops call and must inline to vectorise. */
+#if defined(__GNUC__) || defined(__clang__)
+#  define RENDERCACHE__INLINE __inline__ __attribute__((always_inline))
+#elif defined(__cplusplus) || (defined(__STDC_VERSION__) && __STDC_VERSION__ >= 199901L)
+#  define RENDERCACHE__INLINE inline
+#else
+#  define RENDERCACHE__INLINE
+#endif
+
 /* Outputs that alias nothing, so that loops writing them vectorise. */
 #if defined(__cplusplus) || !defined(__STDC_VERSION__) || __STDC_VERSION__ < 199901L
 #  define RENDERCACHE__RESTRICT __restrict
@@ -1891,25 +1900,45 @@ typedef struct rendercache__projector {
     const float *obj_camera;
 } rendercache__projector;
 
-/* Reprojection of one cache point (WDP99): object space -> camera space
-   through the object's composed matrix, then to a pixel; background points
-   are directions, rotated only, at distance RENDERCACHE__FAR. Depths are
-   squared distances (the z-buffer only compares them). Returns the pixel
-   index or RENDERCACHE__NONE. */
+/* Reprojection of a point x (WDP99) through the 3x4 matrix m into camera
+   space, then to a pixel of the perspective view v: the pixel index or
+   RENDERCACHE__NONE, and the squared distance (the z-buffer only compares
+   them). Both the loop that vectorises and the point-by-point path go
+   through this one function, so that a point lands in the same pixel
+   whichever projects it (batches differ with the number of jobs). */
+static RENDERCACHE__INLINE uint32_t rendercache__pixel_through(const float *m, const float x[3], const rendercache__view *v,
+                                                               float *depth2)
+{
+    const float w = (float)v->width, h = (float)v->height;
+    float c0 = m[0] * x[0] + m[1] * x[1] + m[2] * x[2] + m[3];
+    float c1 = m[4] * x[0] + m[5] * x[1] + m[6] * x[2] + m[7];
+    float c2 = m[8] * x[0] + m[9] * x[1] + m[10] * x[2] + m[11];
+    float inv = 1.0f / c2, px = v->cx + v->focal * c0 * inv, py = v->cy - v->focal * c1 * inv;
+    int inside = (c2 > 0.0f) & (px >= 0.0f) & (px < w) & (py >= 0.0f) & (py < h);
+    float xs = inside ? px : 0.0f, ys = inside ? py : 0.0f;
+    *depth2 = c0 * c0 + c1 * c1 + c2 * c2;
+    return inside ? (uint32_t)ys * v->width + (uint32_t)xs : RENDERCACHE__NONE;
+}
+
+/* Reprojection of one cache point: object space -> camera space through
+   the object's composed matrix; background points are directions, rotated
+   only, at distance RENDERCACHE__FAR. */
 static uint32_t rendercache__project_point(const rendercache__projector *pr, const rendercache__geo *g, float *depth2)
 {
     const rendercache__view *v = pr->view;
-    float c[3], px, py;
+    float sky[12];
+    uint32_t p;
+    int k;
     if (g->object == RENDERCACHE__FREE_SLOT) return RENDERCACHE__NONE;
-    if (g->object == RENDERCACHE_MISS) {
-        rendercache__view_rotate(v, g->pos, c);
-        *depth2 = RENDERCACHE__FAR2;
-    } else {
-        rendercache__affine(pr->obj_camera + 12 * (size_t)g->object, g->pos, c);
-        *depth2 = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
+    if (g->object != RENDERCACHE_MISS)
+        return rendercache__pixel_through(pr->obj_camera + 12 * (size_t)g->object, g->pos, v, depth2);
+    for (k = 0; k < 3; k++) {   /* the view's rotation, no translation */
+        memcpy(sky + 4 * k, v->axis[k], 3 * sizeof(float));
+        sky[4 * k + 3] = 0.0f;
     }
-    if (!rendercache__view_to_pixel(v, c, &px, &py)) return RENDERCACHE__NONE;
-    return (uint32_t)py * v->width + (uint32_t)px;
+    p = rendercache__pixel_through(sky, g->pos, v, depth2);
+    *depth2 = RENDERCACHE__FAR2;
+    return p;
 }
 
 /* Priority of a pixel showing a point (WDP99: age is the main measure of
@@ -1928,22 +1957,11 @@ static float rendercache__point_priority(const rendercache *rc, const rendercach
    without branches or library calls so that compilers vectorise it; this
    loop is the hottest of the frame. */
 static void rendercache__project_perspective(const rendercache__geo *g, uint32_t n, const float *m,
-                                             const rendercache__view *v, uint32_t *pix, float *depth2)
+                                             const rendercache__view *v, uint32_t *RENDERCACHE__RESTRICT pix,
+                                             float *RENDERCACHE__RESTRICT depth2)
 {
-    const float fx = v->focal, cx = v->cx, cy = v->cy, w = (float)v->width, h = (float)v->height;
-    const uint32_t width = v->width;
     uint32_t i;
-    for (i = 0; i < n; i++) {
-        float x0 = g[i].pos[0], x1 = g[i].pos[1], x2 = g[i].pos[2];
-        float c0 = m[0] * x0 + m[1] * x1 + m[2] * x2 + m[3];
-        float c1 = m[4] * x0 + m[5] * x1 + m[6] * x2 + m[7];
-        float c2 = m[8] * x0 + m[9] * x1 + m[10] * x2 + m[11];
-        float inv = 1.0f / c2, x = cx + fx * c0 * inv, y = cy - fx * c1 * inv;
-        int inside = (c2 > 0.0f) & (x >= 0.0f) & (x < w) & (y >= 0.0f) & (y < h);
-        float xs = inside ? x : 0.0f, ys = inside ? y : 0.0f;
-        depth2[i] = c0 * c0 + c1 * c1 + c2 * c2;
-        pix[i] = inside ? (uint32_t)ys * width + (uint32_t)xs : RENDERCACHE__NONE;
-    }
+    for (i = 0; i < n; i++) pix[i] = rendercache__pixel_through(m, g[i].pos, v, &depth2[i]);
 }
 
 /* The one object of the points [begin, end) other than background points,
@@ -2134,7 +2152,7 @@ static void rendercache__gather_points(rendercache *rc, const uint32_t *index, u
     for (p = p0; p < p1; p++) {
         uint32_t k = index[p] == RENDERCACHE__NONE ? empty : index[p], o = data[k].object;
         uint32_t motion = o == RENDERCACHE_MISS ? 0u : rc->obj_motion[o < rc->object_count ? o : 0u];
-        if (p + RENDERCACHE__GATHER_AHEAD < p1) {
+        if (p + RENDERCACHE__GATHER_AHEAD < rc->pixel_count) {   /* (into the next row or tile too) */
             uint32_t next = index[p + RENDERCACHE__GATHER_AHEAD];
             RENDERCACHE__PREFETCH(&data[next == RENDERCACHE__NONE ? empty : next]);
         }
