@@ -2982,6 +2982,7 @@ static int rendercache__range_valid(const rendercache_range_image *img, renderca
 #define RENDERCACHE__COLUMN_STRIP 64u          /* columns per job of the background fill */
 #define RENDERCACHE__MAX_BIAS 1e6                /* largest depth bias of a late input (keeps depths finite) */
 #define RENDERCACHE__CULL_CHUNK 32u              /* rays tested together against the target's frustum */
+#define RENDERCACHE__CULL_TILE 16u               /* source pixels per side of a tile culled as a whole */
 #define RENDERCACHE__IN_PLACE 2                  /* a projected pixel that stays on itself (warp_project's ok) */
 
 /* What filled a target pixel (warper.how). */
@@ -3027,6 +3028,10 @@ struct rendercache_warper {
     uint32_t order_cap;
     struct rendercache__warp_src *src;   /* the inputs, in that order */
     uint32_t src_cap;
+    unsigned char *skip;         /* tile culling: the inputs' skip flags, then the tiles' kinds */
+    size_t skip_cap;
+    float *skip_depths;          /* tile culling: the tiles' least, then largest depths */
+    size_t skip_depths_cap;
 
     rendercache__view target;
     rendercache_warp_stats stats;
@@ -3143,6 +3148,8 @@ RENDERCACHE_API void rendercache_warper_destroy(rendercache_warper *w)
     rendercache__free(&a, w->moving);
     rendercache__free(&a, w->order);
     rendercache__free(&a, w->src);
+    rendercache__free(&a, w->skip);
+    rendercache__free(&a, w->skip_depths);
     rendercache__free(&a, w);
 }
 
@@ -3199,6 +3206,12 @@ typedef struct rendercache__warp_src {
                                     as normals in source camera space: a ray pointing outside one of
                                     them misses the target image at every depth */
     uint32_t cull_count;
+    float planes[5][5];          /* all five planes: a point d r of the input (r its unit ray, d its
+                                    depth) is on the inside of plane k when d (a . r) + o >= 0, with
+                                    (a, o, |a|) = planes[k]; a background direction r when a . r >= 0 */
+    const unsigned char *skip;   /* per tile of CULL_TILE^2 pixels: 1 when no pixel of it, nor of
+                                    the ring of pixels around it, lands in the target; NULL: none */
+    uint32_t tiles_x, tiles_y;
 } rendercache__warp_src;
 
 /* All inputs of a splat, and the foreground fill's parameters. */
@@ -3224,13 +3237,18 @@ static uint32_t rendercache__warp_input(const rendercache__warp_set *set, uint32
 }
 
 /* Frustum culling of a batch of rays (camera-space directions, ok = has a
-   ray): 1 when every ray points outside one of the input's cull planes, so
-   that no depth brings it into the target image. */
+   ray): 1 when there is no ray (skipped tiles), or, with planes set, when
+   every ray points outside one of the input's cull planes, so that no
+   depth brings it into the target image. (Inputs with tile culling do not
+   use the planes here: a batch of one row cannot keep the quads that join
+   it to the next row and reach the image, the tiles do.) */
 static int rendercache__warp_culled(const rendercache__warp_src *ws, const float *dx, const float *dy, const float *dz,
-                                    const unsigned char *ok, uint32_t n)
+                                    const unsigned char *ok, uint32_t n, int planes)
 {
-    uint32_t k, i;
-    for (k = 0; k < ws->cull_count; k++) {
+    uint32_t k, i, any = 0;
+    for (i = 0; i < n; i++) any |= ok[i];
+    if (!any) return 1;
+    for (k = 0; planes && k < ws->cull_count; k++) {
         const float a = ws->cull[k][0], b = ws->cull[k][1], c = ws->cull[k][2];
         uint32_t inside = 0;   /* an integer reduction: it vectorises */
         for (i = 0; i < n; i++) inside |= (uint32_t)(ok[i] & (a * dx[i] + b * dy[i] + c * dz[i] >= 0.0f));
@@ -3257,11 +3275,193 @@ static void rendercache__warp_cull_planes(rendercache__warp_src *ws)
     n[4][0] = 0.0f; n[4][1] = 0.0f; n[4][2] = 1.0f;           /* in front of the eye */
     ws->cull_count = 0;
     for (k = 0; k < 5; k++) {
-        float offset = n[k][0] * m[3] + n[k][1] * m[7] + n[k][2] * m[11];
-        if (offset > 0.0f) continue;
-        for (i = 0; i < 3; i++) ws->cull[ws->cull_count][i] = n[k][0] * m[i] + n[k][1] * m[4 + i] + n[k][2] * m[8 + i];
-        ws->cull_count++;
+        float *pl = ws->planes[k];
+        for (i = 0; i < 3; i++) pl[i] = n[k][0] * m[i] + n[k][1] * m[4 + i] + n[k][2] * m[8 + i];
+        pl[3] = n[k][0] * m[3] + n[k][1] * m[7] + n[k][2] * m[11];
+        pl[4] = sqrtf(pl[0] * pl[0] + pl[1] * pl[1] + pl[2] * pl[2]);
+        if (pl[3] > 0.0f) continue;
+        memcpy(ws->cull[ws->cull_count++], pl, 3 * sizeof(float));
     }
+}
+
+/* ---- culling of whole tiles of an input -------------------------------
+   Most pixels of a fish-eye base view land outside a perspective target.
+   A tile of pixels is skipped (no ray, no projection, no quad) when all
+   its points lie outside one plane of the target's frustum: their rays
+   lie in a cone (centre ray c, half angle alpha, bounded from the camera
+   model) and their depths in [dmin, dmax], so that d (a . r) + o is at
+   most max(dmax M, dmin M) + o with M the largest a . r over the cone.
+   The bounds take the ring of pixels around the tile too: every quad with
+   a corner in a skipped tile then lies outside the same plane, and no quad
+   that reaches the image loses a corner. */
+#define RENDERCACHE__CULL_MARGIN 1e-3f   /* relative slack for rounding (angles in radians, and the plane test) */
+
+/* The unit camera-space ray through image point (px, py), continued past a
+   fish-eye's circle (the polynomials stay accurate to 1e-7 there); returns
+   the angular radius (radians) of the rays of the square of half diagonal
+   `reach` pixels around it, or -1 when the camera model has no such bound
+   (sphere). */
+static float rendercache__view_cone(const rendercache__view *v, float px, float py, float reach, float c[3])
+{
+    float l;
+    if (v->kind == RENDERCACHE_CAMERA_FISHEYE) {   /* equidistant: angles grow at most pi/2 per radius */
+        float u = (px - v->cx) / v->radius, w = (py - v->cy) / v->radius, q = u * u + w * w;
+        float sr = rendercache__poly6(rendercache__fish_sin, q);   /* sin(theta) / r */
+        c[0] = u * sr;
+        c[1] = -w * sr;
+        c[2] = rendercache__poly6(rendercache__fish_cos, q);
+        return reach * (float)(RENDERCACHE__PI / 2) / v->radius;
+    }
+    if (v->kind != RENDERCACHE_CAMERA_PERSPECTIVE) return -1.0f;
+    c[0] = (px - v->cx) / v->focal;   /* a segment of length L on the plane at distance >= focal spans
+                                         at most L / focal radians */
+    c[1] = (v->cy - py) / v->focal;
+    c[2] = 1.0f;
+    l = sqrtf(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    c[0] /= l; c[1] /= l; c[2] /= l;
+    return reach / v->focal;
+}
+
+/* The largest a . r over unit vectors r within angle alpha (< pi/2, given
+   by its cosine and sine) of c; len = |a|. */
+static float rendercache__cone_max(const float a[3], float len, const float c[3], float cos_a, float sin_a)
+{
+    float ac = a[0] * c[0] + a[1] * c[1] + a[2] * c[2], perp2 = len * len - ac * ac;
+    if (ac >= len * cos_a) return len;   /* a inside the cone */
+    return ac * cos_a + sqrtf(perp2 > 0.0f ? perp2 : 0.0f) * sin_a;
+}
+
+/* Per tile of the inputs (no ring): the least and largest depth of its
+   points, and bit 0 set when it has points, bit 1 when background pixels. */
+typedef struct rendercache__tile_bounds {
+    float *lo, *hi;
+    unsigned char *kinds;
+} rendercache__tile_bounds;
+
+/* The bounds of the tiles of tile row ty. Its pixels are taken in blocks
+   of RENDERCACHE__BATCH columns: each column's bounds down the tile row
+   first (a loop over the columns, without branches, that vectorises), then
+   each tile's from its columns. */
+static void rendercache__tile_row_bounds(const rendercache__warp_src *ws, uint32_t ty, float *lo, float *hi,
+                                         unsigned char *kinds)
+{
+    const rendercache_range_image *img = ws->image;
+    const uint32_t sw = ws->source.width, sh = ws->source.height, t = RENDERCACHE__CULL_TILE;
+    const uint32_t y0 = ty * t, y1 = y0 + t < sh ? y0 + t : sh;
+    float col_lo[RENDERCACHE__BATCH], col_hi[RENDERCACHE__BATCH];
+    unsigned char col_kind[RENDERCACHE__BATCH];
+    uint32_t x0, x, y;
+    for (x0 = 0; x0 < sw; x0 += RENDERCACHE__BATCH) {
+        const uint32_t n = sw - x0 < RENDERCACHE__BATCH ? sw - x0 : RENDERCACHE__BATCH;
+        for (x = 0; x < n; x++) { col_lo[x] = FLT_MAX; col_hi[x] = 0.0f; col_kind[x] = 0; }
+        for (y = y0; y < y1; y++) {
+            const uint32_t *RENDERCACHE__RESTRICT obj = img->object + (size_t)y * sw + x0;
+            const float *RENDERCACHE__RESTRICT dep = img->depth + (size_t)y * sw + x0;
+            for (x = 0; x < n; x++) {
+                uint32_t point = (obj[x] < RENDERCACHE_NO_SAMPLE) & (dep[x] > 0.0f) & (dep[x] <= FLT_MAX);
+                float dl = point ? dep[x] : FLT_MAX, dh = point ? dep[x] : 0.0f;
+                col_lo[x] = dl < col_lo[x] ? dl : col_lo[x];
+                col_hi[x] = dh > col_hi[x] ? dh : col_hi[x];
+                col_kind[x] = (unsigned char)(col_kind[x] | point | (uint32_t)(obj[x] == RENDERCACHE_MISS) << 1);
+            }
+        }
+        for (x = 0; x < n; x += t) {   /* x0 and the block size are multiples of the tile size */
+            uint32_t q = (x0 + x) / t, e = x + t < n ? x + t : n, c;
+            float l = FLT_MAX, h = 0.0f;
+            unsigned char k = 0;
+            for (c = x; c < e; c++) {
+                l = col_lo[c] < l ? col_lo[c] : l;
+                h = col_hi[c] > h ? col_hi[c] : h;
+                k |= col_kind[c];
+            }
+            lo[q] = l;
+            hi[q] = h;
+            kinds[q] = k;
+        }
+    }
+}
+
+/* Whether tile (tx, ty) of input ws can be skipped, from the bounds of the
+   tiles around it (which hold its ring of pixels); the cone of its rays has
+   the half angle whose cosine and sine are given. */
+static int rendercache__tile_skipped(const rendercache__warp_src *ws, const rendercache__tile_bounds *b, uint32_t tx,
+                                     uint32_t ty, float cos_a, float sin_a)
+{
+    const uint32_t t = RENDERCACHE__CULL_TILE, nx = ws->tiles_x;
+    uint32_t qx, qy, kinds = 0;
+    float c[3], m[5], dlo = FLT_MAX, dhi = 0.0f;
+    int k;
+    rendercache__view_cone(&ws->source, ((float)tx + 0.5f) * (float)t, ((float)ty + 0.5f) * (float)t, 0.0f, c);
+    for (k = 0; k < 5; k++) {
+        m[k] = rendercache__cone_max(ws->planes[k], ws->planes[k][4], c, cos_a, sin_a);
+        if (m[k] < 0.0f && ws->planes[k][3] < 0.0f) return 1;   /* outside at every depth */
+    }
+    for (qy = ty > 0 ? ty - 1 : 0; qy <= ty + 1 && qy < ws->tiles_y; qy++)
+        for (qx = tx > 0 ? tx - 1 : 0; qx <= tx + 1 && qx < nx; qx++) {
+            uint32_t q = qy * nx + qx;
+            dlo = b->lo[q] < dlo ? b->lo[q] : dlo;
+            dhi = b->hi[q] > dhi ? b->hi[q] : dhi;
+            kinds |= b->kinds[q];
+        }
+    if (!kinds) return 1;   /* nothing to warp */
+    for (k = 0; k < 5; k++) {
+        const float *pl = ws->planes[k], len = pl[4];
+        float slack = RENDERCACHE__CULL_MARGIN * (fabsf(pl[3]) + ((kinds & 1u) ? dhi : 1.0f) * len);
+        float most = (m[k] >= 0.0f ? dhi * m[k] : dlo * m[k]) + pl[3];   /* the largest d (a . r) + o */
+        if ((!(kinds & 1u) || most < -slack) && (!(kinds & 2u) || m[k] < -RENDERCACHE__CULL_MARGIN * len)) return 1;
+    }
+    return 0;
+}
+
+/* Jobs over the tile rows of all inputs of a set: first the bounds, then
+   the skip flags. */
+typedef struct rendercache__cull_tiles_job {
+    const rendercache__warp_set *set;
+    rendercache__tile_bounds bounds;   /* all inputs', tile after tile in the order of the skip flags */
+} rendercache__cull_tiles_job;
+
+/* The input holding tile row *row of the set's culled inputs (*row becomes
+   a row of it), and the offset of its tiles. */
+static const rendercache__warp_src *rendercache__tiles_input(const rendercache__warp_set *set, uint32_t *row, size_t *at)
+{
+    uint32_t i;
+    *at = 0;
+    for (i = 0; i < set->count; i++) {
+        const rendercache__warp_src *ws = &set->src[i];
+        if (!ws->skip) continue;
+        if (*row < ws->tiles_y) return ws;
+        *row -= ws->tiles_y;
+        *at += (size_t)ws->tiles_x * ws->tiles_y;
+    }
+    return NULL;
+}
+
+static void rendercache__tile_bounds_job(void *ctx, uint32_t row)
+{
+    const rendercache__cull_tiles_job *j = (const rendercache__cull_tiles_job *)ctx;
+    size_t at;
+    const rendercache__warp_src *ws = rendercache__tiles_input(j->set, &row, &at);
+    at += (size_t)row * ws->tiles_x;
+    rendercache__tile_row_bounds(ws, row, j->bounds.lo + at, j->bounds.hi + at, j->bounds.kinds + at);
+}
+
+static void rendercache__tile_skip_job(void *ctx, uint32_t row)
+{
+    const rendercache__cull_tiles_job *j = (const rendercache__cull_tiles_job *)ctx;
+    const float reach = 0.7072f * (float)(RENDERCACHE__CULL_TILE + 2);   /* half diagonal, ring included */
+    rendercache__tile_bounds b = j->bounds;
+    size_t at;
+    const rendercache__warp_src *ws = rendercache__tiles_input(j->set, &row, &at);
+    unsigned char *skip = (unsigned char *)ws->skip + (size_t)row * ws->tiles_x;
+    float c[3], alpha = rendercache__view_cone(&ws->source, 0.0f, 0.0f, reach, c);
+    float cos_a, sin_a;
+    uint32_t tx;
+    alpha = alpha * (1.0f + RENDERCACHE__CULL_MARGIN) + RENDERCACHE__CULL_MARGIN;
+    if (alpha > 1.5f) alpha = 1.5f;   /* a coarse view: then only tiles behind a plane are skipped */
+    cos_a = cosf(alpha);
+    sin_a = sinf(alpha);
+    b.lo += at; b.hi += at; b.kinds += at;
+    for (tx = 0; tx < ws->tiles_x; tx++) skip[tx] = (unsigned char)rendercache__tile_skipped(ws, &b, tx, row, cos_a, sin_a);
 }
 
 /* Static pixels [i0, i1) of a batch (objects, depths, ray directions) into
@@ -3294,6 +3494,34 @@ static void rendercache__warp_project_static(const rendercache__warp_src *ws, co
     }
 }
 
+/* The length (at most n) of the run of pixels from (x, y) of an input whose
+   tiles are all skipped or all kept (*skipped tells which). */
+static uint32_t rendercache__skip_run(const rendercache__warp_src *ws, uint32_t y, uint32_t x, uint32_t n, int *skipped)
+{
+    const uint32_t t = RENDERCACHE__CULL_TILE;
+    const unsigned char *row = ws->skip + (size_t)(y / t) * ws->tiles_x;
+    uint32_t tx = x / t, end = x + n, e = (tx + 1) * t;
+    *skipped = row[tx];
+    while (e < end && row[e / t] == row[tx]) e += t;
+    return (e < end ? e : end) - x;
+}
+
+/* Whether every pixel of [begin, end) of an input lies in a skipped tile. */
+static int rendercache__range_skipped(const rendercache__warp_src *ws, uint32_t begin, uint32_t end)
+{
+    const uint32_t sw = ws->source.width, t = RENDERCACHE__CULL_TILE;
+    uint32_t p = begin;
+    while (p < end) {   /* row by row: the flags of the tiles the row segment crosses */
+        uint32_t y = p / sw, x = p - y * sw, k = sw - x < end - p ? sw - x : end - p, tx;
+        const unsigned char *row = ws->skip + (size_t)(y / t) * ws->tiles_x;
+        unsigned char all = 1;
+        for (tx = x / t; tx <= (x + k - 1) / t; tx++) all &= row[tx];
+        if (!all) return 0;
+        p += k;
+    }
+    return 1;
+}
+
 /* Pixels [begin, end) of one input (its own pixel indices) into the
    target's image plane: px, py (not clipped to the image), the squared
    distance times the input's bias (background pixels: FAR2, unbiased, so
@@ -3314,19 +3542,37 @@ static uint32_t rendercache__warp_project(const rendercache__warp_src *ws, uint3
     const uint32_t sw = ws->source.width, *obj = img->object + begin;
     const float *dep = img->depth + begin, bias = ws->bias;
     float dx[RENDERCACHE__BATCH], dy[RENDERCACHE__BATCH], dz[RENDERCACHE__BATCH];
-    uint32_t p = begin, i = 0, n = end - begin;
-    while (p < end) {   /* the rays, in row segments */
+    uint32_t p = begin, i = 0, n = end - begin, any = 0;
+    if (ws->skip && rendercache__range_skipped(ws, begin, end)) {
+        memset(ok, 0, n);
+        return 0;
+    }
+    while (p < end) {   /* the rays, in row segments cut where tiles start or stop being skipped */
         uint32_t y = p / sw, x = p - y * sw, k = sw - x;
+        int skipped = 0;
         if (k > end - p) k = end - p;
-        rendercache__view_row_dirs(&ws->source, y, x, k, dx + i, dy + i, dz + i, ok + i);
+        if (ws->skip) k = rendercache__skip_run(ws, y, x, k, &skipped);
+        if (skipped) {
+            memset(ok + i, 0, k);
+            memset(dx + i, 0, k * sizeof *dx);
+            memset(dy + i, 0, k * sizeof *dy);
+            memset(dz + i, 0, k * sizeof *dz);
+        } else {
+            rendercache__view_row_dirs(&ws->source, y, x, k, dx + i, dy + i, dz + i, ok + i);
+            any = 1;
+        }
         p += k;
         i += k;
+    }
+    if (!any) {
+        memset(ok, 0, n);
+        return 0;
     }
     if (t->kind == RENDERCACHE_CAMERA_PERSPECTIVE && !ws->motion) {
         uint32_t k0, k1, kept = 0;
         for (k0 = 0; k0 < n; k0 = k1) {   /* chunks of rays that all miss the target are skipped */
             k1 = k0 + RENDERCACHE__CULL_CHUNK < n ? k0 + RENDERCACHE__CULL_CHUNK : n;
-            if (ws->cull_count && rendercache__warp_culled(ws, dx + k0, dy + k0, dz + k0, ok + k0, k1 - k0)) {
+            if (rendercache__warp_culled(ws, dx + k0, dy + k0, dz + k0, ok + k0, k1 - k0, ws->skip == NULL)) {
                 memset(ok + k0, 0, k1 - k0);
             } else {
                 rendercache__warp_project_static(ws, obj, dep, dx, dy, dz, k0, k1, px, py, d2, ok);
@@ -3437,6 +3683,8 @@ static void rendercache__warp_project_row(const rendercache__warp_src *ws, uint3
         while (first < n && !ok[first]) first++;
         while (last > first && !ok[last - 1]) last--;
         if (first == last) continue;
+        for (i = lo < hi ? hi : x0 + first; i < x0 + first; i++) row[4 * (size_t)i + 3] = 0.0f;   /* a gap in the span:
+                                                                             no projection (else stale data) */
         lo = x0 + first < lo ? x0 + first : lo;
         hi = x0 + last;
         for (i = first; i < last; i++) {
@@ -3804,7 +4052,43 @@ static void rendercache__warp_prepare(const rendercache_warper *w, rendercache__
 
 /* The set of n prepared inputs, with the foreground fill's row buffers.
    Returns 0 when out of memory. */
-static int rendercache__warp_set_init(rendercache_warper *w, rendercache__warp_set *set, const rendercache__warp_src *src,
+/* Tile culling for the inputs that allow it (a static input into a
+   perspective target, from a fish-eye or perspective view): their skip
+   flags, in w->skip. Returns 0 when out of memory. */
+static int rendercache__warp_tile_culling(rendercache_warper *w, rendercache__warp_set *set, rendercache__warp_src *src)
+{
+    rendercache__cull_tiles_job job;
+    size_t tiles = 0, at = 0;
+    uint32_t i, rows = 0;
+    for (i = 0; i < set->count; i++) {
+        rendercache__warp_src *ws = &src[i];
+        if (ws->target->kind != RENDERCACHE_CAMERA_PERSPECTIVE || ws->motion || ws->same_view ||
+            ws->source.kind == RENDERCACHE_CAMERA_SPHERE)
+            continue;
+        ws->tiles_x = (ws->source.width + RENDERCACHE__CULL_TILE - 1) / RENDERCACHE__CULL_TILE;
+        ws->tiles_y = (ws->source.height + RENDERCACHE__CULL_TILE - 1) / RENDERCACHE__CULL_TILE;
+        tiles += (size_t)ws->tiles_x * ws->tiles_y;
+    }
+    if (tiles == 0) return 1;
+    if (!rendercache__reserve(&w->alloc, (void **)&w->skip, &w->skip_cap, tiles, 2) ||   /* flags, kinds */
+        !rendercache__reserve(&w->alloc, (void **)&w->skip_depths, &w->skip_depths_cap, tiles, 2 * sizeof(float)))
+        return 0;
+    for (i = 0; i < set->count; i++) {
+        if (!src[i].tiles_x) continue;
+        src[i].skip = w->skip + at;
+        at += (size_t)src[i].tiles_x * src[i].tiles_y;
+        rows += src[i].tiles_y;
+    }
+    job.set = set;
+    job.bounds.lo = w->skip_depths;
+    job.bounds.hi = w->skip_depths + tiles;
+    job.bounds.kinds = w->skip + tiles;
+    rendercache__run_jobs(w->parallel_for, w->parallel_user, rendercache__tile_bounds_job, &job, rows);
+    rendercache__run_jobs(w->parallel_for, w->parallel_user, rendercache__tile_skip_job, &job, rows);
+    return 1;
+}
+
+static int rendercache__warp_set_init(rendercache_warper *w, rendercache__warp_set *set, rendercache__warp_src *src,
                                       uint32_t n, int foreground)
 {
     uint32_t i, widest = 0;
@@ -3813,6 +4097,7 @@ static int rendercache__warp_set_init(rendercache_warper *w, rendercache__warp_s
     set->count = n;
     set->tol2x = (1.0f + 2.0f * w->tolerance) * (1.0f + 2.0f * w->tolerance);
     set->max_extent = RENDERCACHE__MAX_QUAD_FRACTION * (float)(w->width > w->height ? w->width : w->height);
+    if (!rendercache__warp_tile_culling(w, set, src)) return 0;
     if (!foreground) return 1;
     for (i = 0; i < n; i++) widest = src[i].source.width > widest ? src[i].source.width : widest;
     set->rows_per_job = 13 * (size_t)widest;   /* three rows of 4 floats and two rows of flag bytes */
