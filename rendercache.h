@@ -2983,6 +2983,8 @@ static int rendercache__range_valid(const rendercache_range_image *img, renderca
 #define RENDERCACHE__MAX_BIAS 1e6                /* largest depth bias of a late input (keeps depths finite) */
 #define RENDERCACHE__CULL_CHUNK 32u              /* rays tested together against the target's frustum */
 #define RENDERCACHE__CULL_TILE 16u               /* source pixels per side of a tile culled as a whole */
+#define RENDERCACHE__HIDDEN_BLOCK 4u             /* target pixels per side of a block of the coarse z-buffer */
+#define RENDERCACHE__HIDDEN_RUN 8u               /* source pixels of a row tested at once against it */
 #define RENDERCACHE__IN_PLACE 2                  /* a projected pixel that stays on itself (warp_project's ok) */
 
 /* What filled a target pixel (warper.how). */
@@ -3032,6 +3034,8 @@ struct rendercache_warper {
     size_t skip_cap;
     float *skip_depths;          /* tile culling: the tiles' least, then largest depths */
     size_t skip_depths_cap;
+    uint64_t *hidden;            /* foreground quads: the coarse z-buffers */
+    size_t hidden_cap;
 
     rendercache__view target;
     rendercache_warp_stats stats;
@@ -3150,6 +3154,7 @@ RENDERCACHE_API void rendercache_warper_destroy(rendercache_warper *w)
     rendercache__free(&a, w->src);
     rendercache__free(&a, w->skip);
     rendercache__free(&a, w->skip_depths);
+    rendercache__free(&a, w->hidden);
     rendercache__free(&a, w);
 }
 
@@ -3222,6 +3227,8 @@ typedef struct rendercache__warp_set {
     float max_extent;            /* foreground quads: largest in pixels */
     float *rows;                 /* foreground quads: per job, 3 rows of 4 floats and 2 rows of flags */
     size_t rows_per_job;         /* floats */
+    uint64_t *hidden;            /* foreground quads: per job, the coarse z-buffer (warp_hidden_build) */
+    uint32_t blocks_x, blocks_y; /* its blocks of HIDDEN_BLOCK^2 target pixels */
 } rendercache__warp_set;
 
 /* The input holding element e. */
@@ -3873,6 +3880,79 @@ static int rendercache__warp_surrounded(const unsigned char *up, const unsigned 
     return up[x - 1] == 3u && (up[x] & 2u) && (down[x - 1] & 1u) && down[x] == 3u;
 }
 
+/* ---- hidden runs: most quads of later inputs lie behind nearer ones ---
+   Inputs are warped nearest eye first, and each later one covers about
+   the same pixels again, nearly all of them behind what the first drew (in
+   the office walkthrough, 13k of the 307k pixels come from inputs 2-4 of
+   4, which draw 520k quads). A coarse z-buffer keeps per block of target
+   pixels the largest key in it; keys only decrease, so it stays an upper
+   bound once built. A run of source pixels whose quads and points all fit
+   in blocks whose largest key is below the least key any of them could
+   write (their least depth, their first element) would fail every z-test:
+   it is skipped, with the same result. */
+
+/* The coarse z-buffer of a job's z-buffer (blocks_x * blocks_y keys). */
+static void rendercache__warp_hidden_build(const rendercache__warp_set *set, const rendercache__zbuffer *zb, uint32_t width,
+                                           uint32_t height, uint64_t *hidden)
+{
+    const uint32_t b = RENDERCACHE__HIDDEN_BLOCK;
+    uint32_t x, y, bx;
+    for (bx = 0; bx < set->blocks_x * set->blocks_y; bx++) hidden[bx] = 0;
+    for (y = 0; y < height; y++) {
+        const uint64_t *key = zb->key + (size_t)y * width;
+        uint64_t *row = hidden + (size_t)(y / b) * set->blocks_x;
+        for (x = 0; x < width; x++) row[x / b] = key[x] > row[x / b] ? key[x] : row[x / b];
+    }
+}
+
+/* Whether the quads of pixels [x0, x1) of source row y (corners in rows r0,
+   r1, r1 NULL on the last row) and their points would all fail their
+   z-tests against the coarse z-buffer; e0 is the element of pixel x0. */
+static int rendercache__warp_run_hidden(const rendercache__warp_set *set, const uint64_t *hidden, const rendercache__view *t,
+                                        const float *r0, const float *r1, uint32_t x0, uint32_t x1, uint32_t e0)
+{
+    float xmin = FLT_MAX, xmax = -FLT_MAX, ymin = FLT_MAX, ymax = -FLT_MAX, dmin = FLT_MAX;
+    uint32_t x, bx, by, bx0, bx1, by0, by1;
+    int r;
+    uint64_t least;
+    for (r = 0; r < 2; r++) {   /* corners x0 .. x1 (the quad at x1 - 1 reaches x1) of both rows */
+        const float *row = r ? r1 : r0;
+        if (!row) continue;
+        for (x = x0; x <= x1; x++) {
+            const float *c = row + 4 * (size_t)x;
+            int ok = c[3] != 0.0f;
+            xmin = ok && c[0] < xmin ? c[0] : xmin;
+            xmax = ok && c[0] > xmax ? c[0] : xmax;
+            ymin = ok && c[1] < ymin ? c[1] : ymin;
+            ymax = ok && c[1] > ymax ? c[1] : ymax;
+            dmin = ok && c[2] < dmin ? c[2] : dmin;
+        }
+    }
+    if (!(xmax >= 0.0f && ymax >= 0.0f && xmin < (float)t->width && ymin < (float)t->height)) return 1;   /* off the image */
+    least = rendercache__key(dmin, e0);
+    bx0 = xmin > 0.0f ? (uint32_t)xmin / RENDERCACHE__HIDDEN_BLOCK : 0;
+    by0 = ymin > 0.0f ? (uint32_t)ymin / RENDERCACHE__HIDDEN_BLOCK : 0;
+    bx1 = xmax < (float)t->width ? (uint32_t)xmax / RENDERCACHE__HIDDEN_BLOCK : set->blocks_x - 1;
+    by1 = ymax < (float)t->height ? (uint32_t)ymax / RENDERCACHE__HIDDEN_BLOCK : set->blocks_y - 1;
+    for (by = by0; by <= by1; by++)
+        for (bx = bx0; bx <= bx1; bx++)
+            if (hidden[(size_t)by * set->blocks_x + bx] > least) return 0;
+    return 1;
+}
+
+/* The points of pixels [x0, x1) of a row that land in the image (counted
+   for the statistics when their run is skipped). */
+static uint32_t rendercache__warp_run_landed(const rendercache__view *t, const float *row, uint32_t x0, uint32_t x1)
+{
+    const float w = (float)t->width, h = (float)t->height;
+    uint32_t x, n = 0;
+    for (x = x0; x < x1; x++) {
+        const float *a = row + 4 * (size_t)x;
+        n += (a[3] != 0.0f) & (a[0] >= 0.0f) & (a[0] < w) & (a[1] >= 0.0f) & (a[1] < h);
+    }
+    return n;
+}
+
 /* The foreground fill of pixels [begin, end) of one input: each draws the
    triangles of its quad to the right and lower neighbours that pass
    warp_triangle_ok, and is splatted as a point where its surrounding
@@ -3880,7 +3960,8 @@ static int rendercache__warp_surrounded(const unsigned char *up, const unsigned 
    what the triangles leave and never compete with them inside a surface.
    Three projected rows and two rows of quad flags slide down the rows. */
 static uint32_t rendercache__warp_cover_input(const rendercache__warp_set *set, const rendercache__warp_src *ws,
-                                              uint32_t job, uint32_t begin, uint32_t end, rendercache__zbuffer *zb)
+                                              uint32_t job, uint32_t begin, uint32_t end, rendercache__zbuffer *zb,
+                                              const uint64_t *hidden)
 {
     const rendercache_range_image *img = ws->image;
     const uint32_t sw = ws->source.width, sh = ws->source.height, width = ws->target->width;
@@ -3906,6 +3987,15 @@ static uint32_t rendercache__warp_cover_input(const rendercache__warp_set *set, 
         for (x = xa; x < xb; x++) {
             const float *a = rc + 4 * (size_t)x;
             uint32_t p = y * sw + x, e = ws->first + p;
+            if (hidden && (x - xa) % RENDERCACHE__HIDDEN_RUN == 0) {   /* a new run: behind what is drawn? */
+                uint32_t xe = x + RENDERCACHE__HIDDEN_RUN < xb ? x + RENDERCACHE__HIDDEN_RUN : xb;
+                if (rendercache__warp_run_hidden(set, hidden, ws->target, rc, below ? rn : NULL, x,
+                                                 xe < sw - 1 ? xe : sw - 1, e)) {
+                    projected += rendercache__warp_run_landed(ws->target, rc, x, xe);
+                    x = xe - 1;
+                    continue;
+                }
+            }
             if (below && x + 1 < sw && fd[x])
                 rendercache__warp_quad(ws, zb, a, a + 4, rn + 4 * (size_t)(x + 1), rn + 4 * (size_t)x, p, p + 1,
                                        p + sw + 1, p + sw, fd[x], e);
@@ -3932,14 +4022,16 @@ static uint32_t rendercache__warp_cover(const void *src, uint32_t job, uint32_t 
                                         rendercache__zbuffer *zb, uint32_t width, uint32_t height)
 {
     const rendercache__warp_set *set = (const rendercache__warp_set *)src;
+    uint64_t *hidden = set->hidden + (size_t)job * set->blocks_x * set->blocks_y;
     uint32_t e = begin, projected = 0;
-    (void)width;
-    (void)height;
+    int first = 1;
     while (e < end) {
         const rendercache__warp_src *ws = &set->src[rendercache__warp_input(set, e)];
         const uint32_t local = e - ws->first, n = end - e < ws->count - local ? end - e : ws->count - local;
-        projected += rendercache__warp_cover_input(set, ws, job, local, local + n, zb);
+        if (!first) rendercache__warp_hidden_build(set, zb, width, height, hidden);   /* what the inputs before drew */
+        projected += rendercache__warp_cover_input(set, ws, job, local, local + n, zb, first ? NULL : hidden);
         e += n;
+        first = 0;
     }
     return projected;
 }
@@ -4104,6 +4196,12 @@ static int rendercache__warp_set_init(rendercache_warper *w, rendercache__warp_s
     if (!rendercache__reserve(&w->alloc, (void **)&w->rows, &w->rows_cap, set->rows_per_job * w->splat.jobs, sizeof(float)))
         return 0;
     set->rows = w->rows;
+    set->blocks_x = (w->width + RENDERCACHE__HIDDEN_BLOCK - 1) / RENDERCACHE__HIDDEN_BLOCK;
+    set->blocks_y = (w->height + RENDERCACHE__HIDDEN_BLOCK - 1) / RENDERCACHE__HIDDEN_BLOCK;
+    if (!rendercache__reserve(&w->alloc, (void **)&w->hidden, &w->hidden_cap,
+                              (size_t)set->blocks_x * set->blocks_y * w->splat.jobs, sizeof(uint64_t)))
+        return 0;
+    set->hidden = w->hidden;
     return 1;
 }
 
