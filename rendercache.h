@@ -3673,6 +3673,12 @@ static void rendercache__warp_payload(const void *src, uint32_t begin, uint32_t 
     }
 }
 
+/* A projected pixel in a row of warp_project_row (the same 4 floats). */
+typedef struct rendercache__corner { float x, y, d, k; } rendercache__corner;
+
+static RENDERCACHE__INLINE float rendercache__minf(float a, float b) { return a < b ? a : b; }
+static RENDERCACHE__INLINE float rendercache__maxf(float a, float b) { return a > b ? a : b; }
+
 /* Row y of an input projected into the target's image plane, 4 floats per
    pixel: x, y, biased squared distance, 1 when it has a projection (else
    0). span receives the range [span[0], span[1]) outside which no pixel has
@@ -3710,16 +3716,16 @@ static void rendercache__warp_project_row(const rendercache__warp_src *ws, uint3
    warp_project_row, all with a projection): their depths agree within
    twice the tolerance (so that no triangle bridges a depth edge), and it is
    not wider than max_extent. */
-static int rendercache__warp_triangle_ok(const rendercache__warp_set *set, const float *a, const float *b, const float *c)
+static RENDERCACHE__INLINE int rendercache__warp_triangle_ok(float tol2x, float max_extent, rendercache__corner a,
+                                                              rendercache__corner b, rendercache__corner c)
 {
-    float dmin, dmax, xmin, xmax, ymin, ymax;
-    dmin = a[2] < b[2] ? a[2] : b[2]; dmin = c[2] < dmin ? c[2] : dmin;
-    dmax = a[2] > b[2] ? a[2] : b[2]; dmax = c[2] > dmax ? c[2] : dmax;
-    xmin = a[0] < b[0] ? a[0] : b[0]; xmin = c[0] < xmin ? c[0] : xmin;
-    xmax = a[0] > b[0] ? a[0] : b[0]; xmax = c[0] > xmax ? c[0] : xmax;
-    ymin = a[1] < b[1] ? a[1] : b[1]; ymin = c[1] < ymin ? c[1] : ymin;
-    ymax = a[1] > b[1] ? a[1] : b[1]; ymax = c[1] > ymax ? c[1] : ymax;
-    return (dmax <= dmin * set->tol2x) & (xmax - xmin <= set->max_extent) & (ymax - ymin <= set->max_extent);
+    float dmin = rendercache__minf(rendercache__minf(a.d, b.d), c.d);
+    float dmax = rendercache__maxf(rendercache__maxf(a.d, b.d), c.d);
+    float xmin = rendercache__minf(rendercache__minf(a.x, b.x), c.x);
+    float xmax = rendercache__maxf(rendercache__maxf(a.x, b.x), c.x);
+    float ymin = rendercache__minf(rendercache__minf(a.y, b.y), c.y);
+    float ymax = rendercache__maxf(rendercache__maxf(a.y, b.y), c.y);
+    return (dmax <= dmin * tol2x) & (xmax - xmin <= max_extent) & (ymax - ymin <= max_extent);
 }
 
 /* The edge function of the directed edge u -> v, e(x, y) = A x + B y + C
@@ -3848,25 +3854,25 @@ static void rendercache__warp_quad(const rendercache__warp_src *ws, rendercache_
    the image, draw nothing (and cost little). */
 static void rendercache__warp_quad_flags(const rendercache__warp_set *set, const rendercache__warp_src *ws,
                                          const float *r0, const float *r1, const uint32_t s0[2], const uint32_t s1[2],
-                                         unsigned char *flags)
+                                         unsigned char *RENDERCACHE__RESTRICT flags)
 {
-    const float w = (float)ws->target->width, h = (float)ws->target->height;
-    uint32_t x = s0[0] > s1[0] ? s0[0] : s1[0], end = s0[1] < s1[1] ? s0[1] : s1[1];   /* both rows projected */
+    const float w = (float)ws->target->width, h = (float)ws->target->height, tol2x = set->tol2x;
+    const float max_extent = set->max_extent;
+    const rendercache__corner *c0 = (const rendercache__corner *)r0, *c1 = (const rendercache__corner *)r1;
+    size_t x = s0[0] > s1[0] ? s0[0] : s1[0], end = s0[1] < s1[1] ? s0[1] : s1[1];   /* both rows projected */
     memset(flags, 0, ws->source.width);
-    for (; x + 1 < end; x++) {
-        const float *a = r0 + 4 * (size_t)x, *b = a + 4, *c = r1 + 4 * (size_t)(x + 1), *d = r1 + 4 * (size_t)x;
-        float xmin = a[0] < b[0] ? a[0] : b[0], xmax = a[0] > b[0] ? a[0] : b[0];
-        float ymin = a[1] < b[1] ? a[1] : b[1], ymax = a[1] > b[1] ? a[1] : b[1];
-        int projected = (a[3] != 0.0f) & (b[3] != 0.0f) & (c[3] != 0.0f) & (d[3] != 0.0f);
+    for (; x + 1 < end; x++) {   /* without branches: the loop vectorises */
+        rendercache__corner a = c0[x], b = c0[x + 1], c = c1[x + 1], d = c1[x];
+        float xmin = rendercache__minf(rendercache__minf(a.x, b.x), rendercache__minf(c.x, d.x));
+        float xmax = rendercache__maxf(rendercache__maxf(a.x, b.x), rendercache__maxf(c.x, d.x));
+        float ymin = rendercache__minf(rendercache__minf(a.y, b.y), rendercache__minf(c.y, d.y));
+        float ymax = rendercache__maxf(rendercache__maxf(a.y, b.y), rendercache__maxf(c.y, d.y));
+        int projected = (a.k != 0.0f) & (b.k != 0.0f) & (c.k != 0.0f) & (d.k != 0.0f);
         /* four pixels that stay in place: their points land on the pixel centres, no quad needed */
-        int in_place = (a[3] == 2.0f) & (b[3] == 2.0f) & (c[3] == 2.0f) & (d[3] == 2.0f);
-        xmin = c[0] < xmin ? c[0] : xmin; xmin = d[0] < xmin ? d[0] : xmin;
-        xmax = c[0] > xmax ? c[0] : xmax; xmax = d[0] > xmax ? d[0] : xmax;
-        ymin = c[1] < ymin ? c[1] : ymin; ymin = d[1] < ymin ? d[1] : ymin;
-        ymax = c[1] > ymax ? c[1] : ymax; ymax = d[1] > ymax ? d[1] : ymax;
-        if (!(projected & !in_place & (xmax >= 0.0f) & (ymax >= 0.0f) & (xmin < w) & (ymin < h))) continue;
-        flags[x] = (unsigned char)(rendercache__warp_triangle_ok(set, a, b, c) |
-                                   rendercache__warp_triangle_ok(set, a, c, d) << 1);
+        int in_place = (a.k == 2.0f) & (b.k == 2.0f) & (c.k == 2.0f) & (d.k == 2.0f);
+        int draw = projected & !in_place & (xmax >= 0.0f) & (ymax >= 0.0f) & (xmin < w) & (ymin < h);
+        flags[x] = (unsigned char)(draw * (rendercache__warp_triangle_ok(tol2x, max_extent, a, b, c) |
+                                           rendercache__warp_triangle_ok(tol2x, max_extent, a, c, d) << 1));
     }
 }
 
