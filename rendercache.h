@@ -3302,6 +3302,8 @@ static void rendercache__warp_cull_planes(rendercache__warp_src *ws)
    a corner in a skipped tile then lies outside the same plane, and no quad
    that reaches the image loses a corner. */
 #define RENDERCACHE__CULL_MARGIN 1e-3f   /* relative slack for rounding (angles in radians, and the plane test) */
+#define RENDERCACHE__BOUNDS_BLOCK 64u    /* columns of a tile row whose depth bounds are taken together */
+enum { RENDERCACHE__TILE_KEEP = 0, RENDERCACHE__TILE_SKIP = 1, RENDERCACHE__TILE_DEPTH = 2 };   /* tile classes */
 
 /* The unit camera-space ray through image point (px, py), continued past a
    fish-eye's circle (the polynomials stay accurate to 1e-7 there); returns
@@ -3345,21 +3347,25 @@ typedef struct rendercache__tile_bounds {
     unsigned char *kinds;
 } rendercache__tile_bounds;
 
-/* The bounds of the tiles of tile row ty. Its pixels are taken in blocks
-   of RENDERCACHE__BATCH columns: each column's bounds down the tile row
-   first (a loop over the columns, without branches, that vectorises), then
-   each tile's from its columns. */
-static void rendercache__tile_row_bounds(const rendercache__warp_src *ws, uint32_t ty, float *lo, float *hi,
-                                         unsigned char *kinds)
+/* The bounds of the tiles of tile row ty whose need[] is set (the others
+   are left as they are; need NULL: all). Its pixels are taken in blocks of
+   RENDERCACHE__BOUNDS_BLOCK columns: each column's bounds down the tile
+   row first (a loop over the columns, without branches, that vectorises),
+   then each tile's from its columns. */
+static void rendercache__tile_row_bounds(const rendercache__warp_src *ws, uint32_t ty, const unsigned char *need,
+                                         float *lo, float *hi, unsigned char *kinds)
 {
     const rendercache_range_image *img = ws->image;
     const uint32_t sw = ws->source.width, sh = ws->source.height, t = RENDERCACHE__CULL_TILE;
     const uint32_t y0 = ty * t, y1 = y0 + t < sh ? y0 + t : sh;
-    float col_lo[RENDERCACHE__BATCH], col_hi[RENDERCACHE__BATCH];
-    unsigned char col_kind[RENDERCACHE__BATCH];
+    float col_lo[RENDERCACHE__BOUNDS_BLOCK], col_hi[RENDERCACHE__BOUNDS_BLOCK];
+    unsigned char col_kind[RENDERCACHE__BOUNDS_BLOCK];
     uint32_t x0, x, y;
-    for (x0 = 0; x0 < sw; x0 += RENDERCACHE__BATCH) {
-        const uint32_t n = sw - x0 < RENDERCACHE__BATCH ? sw - x0 : RENDERCACHE__BATCH;
+    for (x0 = 0; x0 < sw; x0 += RENDERCACHE__BOUNDS_BLOCK) {
+        const uint32_t n = sw - x0 < RENDERCACHE__BOUNDS_BLOCK ? sw - x0 : RENDERCACHE__BOUNDS_BLOCK;
+        unsigned char any = need == NULL;
+        for (x = 0; need && x < n; x += t) any |= need[(x0 + x) / t];
+        if (!any) continue;
         for (x = 0; x < n; x++) { col_lo[x] = FLT_MAX; col_hi[x] = 0.0f; col_kind[x] = 0; }
         for (y = y0; y < y1; y++) {
             const uint32_t *RENDERCACHE__RESTRICT obj = img->object + (size_t)y * sw + x0;
@@ -3388,21 +3394,36 @@ static void rendercache__tile_row_bounds(const rendercache__warp_src *ws, uint32
     }
 }
 
-/* Whether tile (tx, ty) of input ws can be skipped, from the bounds of the
-   tiles around it (which hold its ring of pixels); the cone of its rays has
-   the half angle whose cosine and sine are given. */
-static int rendercache__tile_skipped(const rendercache__warp_src *ws, const rendercache__tile_bounds *b, uint32_t tx,
-                                     uint32_t ty, float cos_a, float sin_a)
+/* The class of tile (tx, ty) of input ws from the cone of its rays (half
+   angle given by its cosine and sine) and m[k], the largest a . r over the
+   cone for each plane: TILE_SKIP when outside a plane at every depth,
+   TILE_KEEP when no plane can leave it outside at any depth, else
+   TILE_DEPTH (the depths decide). */
+static int rendercache__tile_class(const rendercache__warp_src *ws, uint32_t tx, uint32_t ty, float cos_a, float sin_a,
+                                   float m[5])
 {
-    const uint32_t t = RENDERCACHE__CULL_TILE, nx = ws->tiles_x;
-    uint32_t qx, qy, kinds = 0;
-    float c[3], m[5], dlo = FLT_MAX, dhi = 0.0f;
-    int k;
+    const uint32_t t = RENDERCACHE__CULL_TILE;
+    float c[3];
+    int k, depth = 0;
     rendercache__view_cone(&ws->source, ((float)tx + 0.5f) * (float)t, ((float)ty + 0.5f) * (float)t, 0.0f, c);
     for (k = 0; k < 5; k++) {
         m[k] = rendercache__cone_max(ws->planes[k], ws->planes[k][4], c, cos_a, sin_a);
-        if (m[k] < 0.0f && ws->planes[k][3] < 0.0f) return 1;   /* outside at every depth */
+        if (m[k] < 0.0f && ws->planes[k][3] < 0.0f) return RENDERCACHE__TILE_SKIP;
+        depth |= (m[k] < 0.0f) | (ws->planes[k][3] < 0.0f);   /* near points, or far ones, may lie outside */
     }
+    return depth ? RENDERCACHE__TILE_DEPTH : RENDERCACHE__TILE_KEEP;
+}
+
+/* Whether tile (tx, ty) of class TILE_DEPTH can be skipped, from m (see
+   tile_class) and the bounds of the tiles around it (which hold its ring
+   of pixels). */
+static int rendercache__tile_skipped(const rendercache__warp_src *ws, const rendercache__tile_bounds *b, uint32_t tx,
+                                     uint32_t ty, const float m[5])
+{
+    const uint32_t nx = ws->tiles_x;
+    uint32_t qx, qy, kinds = 0;
+    float dlo = FLT_MAX, dhi = 0.0f;
+    int k;
     for (qy = ty > 0 ? ty - 1 : 0; qy <= ty + 1 && qy < ws->tiles_y; qy++)
         for (qx = tx > 0 ? tx - 1 : 0; qx <= tx + 1 && qx < nx; qx++) {
             uint32_t q = qy * nx + qx;
@@ -3420,8 +3441,11 @@ static int rendercache__tile_skipped(const rendercache__warp_src *ws, const rend
     return 0;
 }
 
-/* Jobs over the tile rows of all inputs of a set: first the bounds, then
-   the skip flags. */
+/* Jobs over the tile rows of all inputs of a set, in three passes: the
+   class of every tile from its cone (in the skip flags), the depth bounds
+   of the tiles next to one of class TILE_DEPTH (the others are not read:
+   half of the tiles of a fish-eye are decided by their cone), then the
+   skip flags. */
 typedef struct rendercache__cull_tiles_job {
     const rendercache__warp_set *set;
     rendercache__tile_bounds bounds;   /* all inputs', tile after tile in the order of the skip flags */
@@ -3443,32 +3467,69 @@ static const rendercache__warp_src *rendercache__tiles_input(const rendercache__
     return NULL;
 }
 
+/* The half angle of the rays of a tile and its ring of pixels, as cosine
+   and sine. */
+static void rendercache__tile_cone_angle(const rendercache__warp_src *ws, float *cos_a, float *sin_a)
+{
+    const float reach = 0.7072f * (float)(RENDERCACHE__CULL_TILE + 2);   /* half diagonal, ring included */
+    float c[3], alpha = rendercache__view_cone(&ws->source, 0.0f, 0.0f, reach, c);
+    alpha = alpha * (1.0f + RENDERCACHE__CULL_MARGIN) + RENDERCACHE__CULL_MARGIN;
+    if (alpha > 1.5f) alpha = 1.5f;   /* a coarse view: then only tiles behind a plane are skipped */
+    *cos_a = cosf(alpha);
+    *sin_a = sinf(alpha);
+}
+
+static void rendercache__tile_class_job(void *ctx, uint32_t row)
+{
+    const rendercache__cull_tiles_job *j = (const rendercache__cull_tiles_job *)ctx;
+    size_t at;
+    const rendercache__warp_src *ws = rendercache__tiles_input(j->set, &row, &at);
+    unsigned char *cls = (unsigned char *)ws->skip + (size_t)row * ws->tiles_x;
+    float cos_a, sin_a, m[5];
+    uint32_t tx;
+    rendercache__tile_cone_angle(ws, &cos_a, &sin_a);
+    for (tx = 0; tx < ws->tiles_x; tx++) cls[tx] = (unsigned char)rendercache__tile_class(ws, tx, row, cos_a, sin_a, m);
+}
+
 static void rendercache__tile_bounds_job(void *ctx, uint32_t row)
 {
     const rendercache__cull_tiles_job *j = (const rendercache__cull_tiles_job *)ctx;
     size_t at;
     const rendercache__warp_src *ws = rendercache__tiles_input(j->set, &row, &at);
-    at += (size_t)row * ws->tiles_x;
-    rendercache__tile_row_bounds(ws, row, j->bounds.lo + at, j->bounds.hi + at, j->bounds.kinds + at);
+    const uint32_t nx = ws->tiles_x;
+    unsigned char need[4096];   /* per tile of the row: its bounds are wanted (wider inputs: all) */
+    uint32_t tx, qy;
+    if (nx <= sizeof need) {
+        memset(need, 0, nx);
+        for (qy = row > 0 ? row - 1 : 0; qy <= row + 1 && qy < ws->tiles_y; qy++)
+            for (tx = 0; tx < nx; tx++) {
+                if (ws->skip[(size_t)qy * nx + tx] != RENDERCACHE__TILE_DEPTH) continue;
+                need[tx] = 1;
+                if (tx > 0) need[tx - 1] = 1;
+                if (tx + 1 < nx) need[tx + 1] = 1;
+            }
+    }
+    at += (size_t)row * nx;
+    rendercache__tile_row_bounds(ws, row, nx <= sizeof need ? need : NULL, j->bounds.lo + at, j->bounds.hi + at,
+                                 j->bounds.kinds + at);
 }
 
 static void rendercache__tile_skip_job(void *ctx, uint32_t row)
 {
     const rendercache__cull_tiles_job *j = (const rendercache__cull_tiles_job *)ctx;
-    const float reach = 0.7072f * (float)(RENDERCACHE__CULL_TILE + 2);   /* half diagonal, ring included */
     rendercache__tile_bounds b = j->bounds;
     size_t at;
     const rendercache__warp_src *ws = rendercache__tiles_input(j->set, &row, &at);
     unsigned char *skip = (unsigned char *)ws->skip + (size_t)row * ws->tiles_x;
-    float c[3], alpha = rendercache__view_cone(&ws->source, 0.0f, 0.0f, reach, c);
-    float cos_a, sin_a;
+    float cos_a, sin_a, m[5];
     uint32_t tx;
-    alpha = alpha * (1.0f + RENDERCACHE__CULL_MARGIN) + RENDERCACHE__CULL_MARGIN;
-    if (alpha > 1.5f) alpha = 1.5f;   /* a coarse view: then only tiles behind a plane are skipped */
-    cos_a = cosf(alpha);
-    sin_a = sinf(alpha);
+    rendercache__tile_cone_angle(ws, &cos_a, &sin_a);
     b.lo += at; b.hi += at; b.kinds += at;
-    for (tx = 0; tx < ws->tiles_x; tx++) skip[tx] = (unsigned char)rendercache__tile_skipped(ws, &b, tx, row, cos_a, sin_a);
+    for (tx = 0; tx < ws->tiles_x; tx++) {
+        if (skip[tx] != RENDERCACHE__TILE_DEPTH) continue;   /* TILE_KEEP is 0, TILE_SKIP 1: already the flag */
+        rendercache__tile_class(ws, tx, row, cos_a, sin_a, m);
+        skip[tx] = (unsigned char)rendercache__tile_skipped(ws, &b, tx, row, m);
+    }
 }
 
 /* Static pixels [i0, i1) of a batch (objects, depths, ray directions) into
@@ -3901,13 +3962,18 @@ static int rendercache__warp_surrounded(const unsigned char *up, const unsigned 
 static void rendercache__warp_hidden_build(const rendercache__warp_set *set, const rendercache__zbuffer *zb, uint32_t width,
                                            uint32_t height, uint64_t *hidden)
 {
-    const uint32_t b = RENDERCACHE__HIDDEN_BLOCK;
+    const uint32_t b = RENDERCACHE__HIDDEN_BLOCK, full = width / b;
     uint32_t x, y, bx;
     for (bx = 0; bx < set->blocks_x * set->blocks_y; bx++) hidden[bx] = 0;
     for (y = 0; y < height; y++) {
         const uint64_t *key = zb->key + (size_t)y * width;
         uint64_t *row = hidden + (size_t)(y / b) * set->blocks_x;
-        for (x = 0; x < width; x++) row[x / b] = key[x] > row[x / b] ? key[x] : row[x / b];
+        for (bx = 0; bx < full; bx++) {   /* whole blocks: a fixed count the compiler unrolls */
+            uint64_t m = row[bx];
+            for (x = 0; x < b; x++) m = key[bx * b + x] > m ? key[bx * b + x] : m;
+            row[bx] = m;
+        }
+        for (x = full * b; x < width; x++) row[full] = key[x] > row[full] ? key[x] : row[full];
     }
 }
 
@@ -3924,14 +3990,14 @@ static int rendercache__warp_run_hidden(const rendercache__warp_set *set, const 
     for (r = 0; r < 2; r++) {   /* corners x0 .. x1 (the quad at x1 - 1 reaches x1) of both rows */
         const float *row = r ? r1 : r0;
         if (!row) continue;
-        for (x = x0; x <= x1; x++) {
+        for (x = x0; x <= x1; x++) {   /* without branches (selects, then min and max) */
             const float *c = row + 4 * (size_t)x;
             int ok = c[3] != 0.0f;
-            xmin = ok && c[0] < xmin ? c[0] : xmin;
-            xmax = ok && c[0] > xmax ? c[0] : xmax;
-            ymin = ok && c[1] < ymin ? c[1] : ymin;
-            ymax = ok && c[1] > ymax ? c[1] : ymax;
-            dmin = ok && c[2] < dmin ? c[2] : dmin;
+            xmin = rendercache__minf(xmin, ok ? c[0] : FLT_MAX);
+            xmax = rendercache__maxf(xmax, ok ? c[0] : -FLT_MAX);
+            ymin = rendercache__minf(ymin, ok ? c[1] : FLT_MAX);
+            ymax = rendercache__maxf(ymax, ok ? c[1] : -FLT_MAX);
+            dmin = rendercache__minf(dmin, ok ? c[2] : FLT_MAX);
         }
     }
     if (!(xmax >= 0.0f && ymax >= 0.0f && xmin < (float)t->width && ymin < (float)t->height)) return 1;   /* off the image */
@@ -4148,8 +4214,6 @@ static void rendercache__warp_prepare(const rendercache_warper *w, rendercache__
     }
 }
 
-/* The set of n prepared inputs, with the foreground fill's row buffers.
-   Returns 0 when out of memory. */
 /* Tile culling for the inputs that allow it (a static input into a
    perspective target, from a fish-eye or perspective view): their skip
    flags, in w->skip. Returns 0 when out of memory. */
@@ -4181,11 +4245,14 @@ static int rendercache__warp_tile_culling(rendercache_warper *w, rendercache__wa
     job.bounds.lo = w->skip_depths;
     job.bounds.hi = w->skip_depths + tiles;
     job.bounds.kinds = w->skip + tiles;
+    rendercache__run_jobs(w->parallel_for, w->parallel_user, rendercache__tile_class_job, &job, rows);
     rendercache__run_jobs(w->parallel_for, w->parallel_user, rendercache__tile_bounds_job, &job, rows);
     rendercache__run_jobs(w->parallel_for, w->parallel_user, rendercache__tile_skip_job, &job, rows);
     return 1;
 }
 
+/* The set of n prepared inputs, with their tile culling and the
+   foreground fill's buffers. Returns 0 when out of memory. */
 static int rendercache__warp_set_init(rendercache_warper *w, rendercache__warp_set *set, rendercache__warp_src *src,
                                       uint32_t n, int foreground)
 {
