@@ -2218,14 +2218,15 @@ static uint32_t rendercache__interpolate(const rendercache *rc, uint32_t x, uint
     if (y0 < 0) y0 = 0;
     if (x1 >= (int)w) x1 = (int)w - 1;
     if (y1 >= (int)rc->height) y1 = (int)rc->height - 1;
+    /* without branches (points and holes alternate at random around a hole): selects, then min and max */
     for (qy = y0; qy <= y1; qy++) {
         const float *row = depth + (size_t)qy * w;
         for (qx = x0; qx <= x1; qx++) {
             float d = row[qx];
-            if (d == FLT_MAX) continue;   /* no point there */
+            int point = d != FLT_MAX;   /* no point there: FLT_MAX */
             dmin = d < dmin ? d : dmin;
-            dmax = d > dmax ? d : dmax;
-            n++;
+            dmax = point && d > dmax ? d : dmax;
+            n += (uint32_t)point;
         }
     }
     if (n == 0) return 0;
@@ -2233,18 +2234,13 @@ static uint32_t rendercache__interpolate(const rendercache *rc, uint32_t x, uint
         const float *row = depth + (size_t)qy * w;
         float wy = (float)(r + 1 - rendercache__iabs(qy - (int)y));
         for (qx = x0; qx <= x1; qx++) {
-            float d = row[qx], wgt, *acc;
-            const float *c;
-            if (d == FLT_MAX) continue;
-            if (d <= dmin * tol2) acc = near_sum;
-            else if (d * tol2 >= dmax) acc = far_sum;
-            else continue;   /* a middle layer: neither side of the choice */
-            wgt = wy * (float)(r + 1 - rendercache__iabs(qx - (int)x));
-            c = image + 3 * ((size_t)qy * w + (size_t)qx);
-            acc[0] += wgt * c[0];
-            acc[1] += wgt * c[1];
-            acc[2] += wgt * c[2];
-            acc[3] += wgt;
+            float d = row[qx], wgt = wy * (float)(r + 1 - rendercache__iabs(qx - (int)x));
+            const float *c = image + 3 * ((size_t)qy * w + (size_t)qx);
+            int point = d != FLT_MAX, near = point & (d <= dmin * tol2);
+            int far = point & !near & (d * tol2 >= dmax);   /* a middle layer: neither side of the choice */
+            float wn = near ? wgt : 0.0f, wf = far ? wgt : 0.0f;
+            near_sum[0] += wn * c[0]; near_sum[1] += wn * c[1]; near_sum[2] += wn * c[2]; near_sum[3] += wn;
+            far_sum[0] += wf * c[0]; far_sum[1] += wf * c[1]; far_sum[2] += wf * c[2]; far_sum[3] += wf;
         }
     }
     chosen = (far_sum[3] >= near_sum[3]) ? far_sum : near_sum;
