@@ -1,4 +1,4 @@
-/* rendercache.h - v0.3.0 - render cache and range-image walkthroughs - public domain or MIT, see end of file
+/* rendercache.h - v0.3.1 - render cache and range-image walkthroughs - public domain or MIT, see end of file
 
    RENDERCACHE.H: an image-space point cache that reprojects and resamples, and range-image walkthroughs of animated scenes.
 
@@ -173,9 +173,16 @@
        its triangles do not surround it (depth edges, borders). BACKGROUND:
        an empty pixel takes the farther of the nearest filled pixels left and
        right of its run, and of those above and below, preferring one right
-       next to it. Then desc.fill_pixel computes what is still empty. Rays of
-       chunks of source pixels that all point outside the target's frustum
-       (seen from the input's eye) are skipped. blend_motion warps both
+       next to it. Then desc.fill_pixel computes what is still empty. Tiles of
+       16x16 source pixels of a fish-eye or perspective input whose points
+       all lie outside the target's frustum (by a cone bound of their rays
+       and their depth range, the ring of pixels around them included, so
+       that no quad reaching the image loses a corner) are skipped; for
+       sphere inputs, chunks of rays that point outside it from the input's
+       eye. With foreground fill, runs of 8 pixels of a later input whose
+       quads and points would all fail their z-tests (against a coarse
+       z-buffer of what the nearer inputs drew) are skipped too, with the
+       same result. blend_motion warps both
        images into the output's camera with each object's motion (pixels of
        static objects in their own camera stay in place, exactly), blends
        where both show the same object at the same depth, and keeps the
@@ -184,7 +191,7 @@
    LIMITS
 
        Render cache: image up to 2^28 pixels, cache up to 2^31 points, up to
-       2^24 objects. Memory: 40 bytes per cache point (2 per pixel by
+       2^24 objects. Memory: 41 bytes per cache point (2 per pixel by
        default) and about 71 bytes per pixel, 95 with parallel_for: 40 MB for
        512x512. Point colours are fixed when they are inserted (the cache ages
        them so that they get refreshed); view-dependent shading changes only
@@ -194,7 +201,8 @@
        Walkthroughs: a range image takes 20 bytes per pixel; a warper about
        37 bytes per target pixel (61 with parallel_for, 20 more after a
        motion blend) plus, with foreground fill, 52 bytes per pixel of the
-       widest input's row per job. At most 2^32 - 1 input pixels per
+       widest input's row and half a byte per target pixel per job, and 10
+       bytes per 16x16 tile of the inputs. At most 2^32 - 1 input pixels per
        warp. Warps reproduce no view-dependent shading the inputs lack, and a
        pixelwise blend ghosts moving objects; the motion-compensated blend
        moves objects but not their shadows or reflections on static surfaces
@@ -215,7 +223,7 @@
 
 #define RENDERCACHE_VERSION_MAJOR 0
 #define RENDERCACHE_VERSION_MINOR 3
-#define RENDERCACHE_VERSION_PATCH 0
+#define RENDERCACHE_VERSION_PATCH 1
 
 #ifndef RENDERCACHE_API
 #  ifdef RENDERCACHE_STATIC
@@ -1301,9 +1309,12 @@ static void rendercache__view_compose(const rendercache__view *v, const float m[
 /* ======================================================================
    9. splat: many elements (cache points, range-image pixels) into one
    z-buffer (the reprojection and z-buffer step of Walter et al. 1999),
-   keeping per pixel the nearest element, its depth and a payload of four
-   floats (colour and one more value) copied as it wins, so that nothing has
-   to be gathered from the elements afterwards.
+   keeping per pixel the nearest element, its depth and, for warps, a
+   payload of four floats (colour and one more value) copied as it wins, so
+   that nothing has to be gathered from the elements afterwards. The render
+   cache keeps keys only (a test without a branch, see zbuffer_keys) and
+   gathers the colours of the winners, about half of its points, in the
+   depth cull.
    Parallel and deterministic: when the caller gives parallel_for, the
    elements are split into RENDERCACHE__SPLAT_JOBS ranges, each z-buffered
    into its own raster, and the rasters are merged tile by tile. The winner
