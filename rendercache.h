@@ -3250,6 +3250,16 @@ static uint32_t rendercache__warp_input(const rendercache__warp_set *set, uint32
     return lo;
 }
 
+/* The input holding element e, for pixels of the target that come from
+   any input in turn: without branches for a few inputs. */
+static uint32_t rendercache__warp_input_of(const rendercache__warp_set *set, uint32_t e)
+{
+    uint32_t i, k = 0;
+    if (set->count > 8) return rendercache__warp_input(set, e);
+    for (i = 1; i < set->count; i++) k += e >= set->src[i].first;
+    return k;
+}
+
 /* Frustum culling of a batch of rays (camera-space directions, ok = has a
    ray): 1 when there is no ray (skipped tiles), or, with planes set, when
    every ray points outside one of the input's cull planes, so that no
@@ -4151,7 +4161,7 @@ static void rendercache__extract_job(void *ctx, uint32_t tile)
         }
         memcpy(j->acc.rgb + 3 * (size_t)p, r->payload + 4 * (size_t)p, 3 * sizeof(float));
         memcpy(&j->acc.object[p], r->payload + 4 * (size_t)p + 3, sizeof(uint32_t));
-        if (e - ws->first >= ws->count) ws = &j->set->src[rendercache__warp_input(j->set, e)];   /* the last one, mostly */
+        if (e - ws->first >= ws->count) ws = &j->set->src[rendercache__warp_input_of(j->set, e)];   /* the last one, mostly */
         j->acc.depth2[p] = j->acc.object[p] == RENDERCACHE_MISS ? RENDERCACHE__FAR2 : r->depth[p] * ws->inv_bias;
         j->w->how[p] = RENDERCACHE__HOW_WARPED;
     }
