@@ -45,6 +45,7 @@
 #include <sys/stat.h>
 #include <time.h>
 
+#include "examples/common/baseviews.h"
 #include "examples/common/image.h"
 #include "examples/common/pool.h"
 #include "examples/common/trace.h"
@@ -272,62 +273,39 @@ typedef struct level_result {
     double t_views, t_times, t_bases, t_frames, lrms_sum, lrms_pixelwise_sum, lrms[512], frame10, frame10_pixelwise;
 } level_result;
 
-/* A decomposition and its base images. Base images are traced when a frame
-   first needs them (the views around the path, at the key times around the
-   frames' times) and dropped once the path's time has passed them: a real
-   system would precompute them all, for any path in the view space; the
-   tables report both counts. */
-typedef struct level {
-    rendercache_view_space *vs;
-    double *times;
-    uint32_t time_count, view_count;
-    rendercache_range_image **base;   /* view * time_count + key, NULL until needed */
-    uint32_t base_size;
-} level;
-
-static int build_level(world *w, const options *o, float q, level *L, level_result *r)
+/* A decomposition (examples/common/baseviews.h) and its base images. Base
+   images are traced when a frame first needs them (the views around the
+   path, at the key times around the frames' times) and dropped once the
+   path's time has passed them: a real system would precompute them all, for
+   any path in the view space; the tables report both counts. */
+static int build_level(world *w, const options *o, float q, ex_baseviews *L, level_result *r)
 {
-    rendercache_view_space_desc vd;
-    rendercache_time_desc td;
-    rendercache_camera *cams;
-    double t0 = seconds(), start[2] = { 0.0, 1.0 };
-    uint32_t v, k;
-    memset(&vd, 0, sizeof vd);
-    vd.camera = fisheye_template(ID_SIZE);
-    memcpy(vd.lo, space_lo, sizeof vd.lo);
-    memcpy(vd.hi, space_hi, sizeof vd.hi);
-    vd.time = 0.0;
-    vd.quality = q;
-    vd.max_depth = 3;   /* every axis halved at most 3 times: at most 9 x 9 views */
-    vd.render_ids = render_ids;
-    vd.user = w;
-    if (rendercache_view_space_create(&vd, &L->vs) != RENDERCACHE_OK) return 0;
-    L->view_count = rendercache_view_space_count(L->vs);
-    r->t_views = seconds() - t0;
+    ex_baseviews_desc d;
+    rendercache_camera light;
+    double start[2] = { 0.0, 1.0 };
+    uint32_t k;
+    memset(&d, 0, sizeof d);
+    d.fisheye = fisheye_template(ID_SIZE);
+    memcpy(d.lo, space_lo, sizeof d.lo);
+    memcpy(d.hi, space_hi, sizeof d.hi);
+    d.quality = q;
+    d.view_depth = 3;   /* every axis halved at most 3 times: at most 9 x 9 views */
+    d.time_depth = 5;
+    d.times = start;
+    d.time_count = 2;
     /* time steps: a fish-eye at the light looking down (direct light coherence) and the base views */
-    t0 = seconds();
-    cams = (rendercache_camera *)malloc(sizeof *cams * (L->view_count + 1));
-    if (!cams) return 0;
-    cams[0] = fisheye_template(ID_SIZE);
-    memcpy(cams[0].eye, light_pos, sizeof light_pos);
-    cams[0].look_at[0] = light_pos[0]; cams[0].look_at[1] = 0.0f; cams[0].look_at[2] = light_pos[2];
-    cams[0].up[1] = 0.0f; cams[0].up[2] = 1.0f;
-    for (v = 0; v < L->view_count; v++) rendercache_view_space_camera(L->vs, v, &cams[v + 1]);
-    memset(&td, 0, sizeof td);
-    td.cameras = cams;
-    td.camera_count = L->view_count + 1;
-    td.times = start;
-    td.time_count = 2;
-    td.quality = q;
-    td.max_depth = 5;
-    td.render_ids = render_ids;
-    td.user = w;
-    if (rendercache_subdivide_time(&td, &L->times, &L->time_count) != RENDERCACHE_OK) { free(cams); return 0; }
-    free(cams);
-    r->t_times = seconds() - t0;
-    L->base = (rendercache_range_image **)calloc((size_t)L->view_count * L->time_count, sizeof *L->base);
-    if (!L->base) return 0;
-    L->base_size = (uint32_t)o->base;
+    light = fisheye_template(ID_SIZE);
+    memcpy(light.eye, light_pos, sizeof light_pos);
+    light.look_at[0] = light_pos[0]; light.look_at[1] = 0.0f; light.look_at[2] = light_pos[2];
+    light.up[1] = 0.0f; light.up[2] = 1.0f;
+    d.extra_cameras = &light;
+    d.extra_count = 1;
+    d.render_ids = render_ids;
+    d.user = w;
+    (void)o;
+    if (ex_baseviews_build(&d, L) != 0) return 0;
+    r->t_views = L->seconds_views;
+    r->t_times = L->seconds_times;
     r->q = q;
     r->views = L->view_count;
     r->cells = rendercache_view_space_cell_count(L->vs);
@@ -337,15 +315,15 @@ static int build_level(world *w, const options *o, float q, level *L, level_resu
 }
 
 /* The base image of view v at key time k, traced the first time. */
-static rendercache_range_image *base_image(world *w, level *L, uint32_t v, uint32_t k, level_result *r)
+static rendercache_range_image *base_image(world *w, const options *o, ex_baseviews *L, uint32_t v, uint32_t k,
+                                           level_result *r)
 {
     rendercache_range_image **slot = &L->base[v * L->time_count + k];
     rendercache_camera c;
     double t0;
     if (*slot) return *slot;
     t0 = seconds();
-    rendercache_view_space_camera(L->vs, v, &c);
-    c.width = c.height = L->base_size;
+    c = ex_baseviews_base_camera(L, v, (uint32_t)o->base);
     if (rendercache_range_image_create(&c, NULL, slot) != RENDERCACHE_OK) return NULL;
     render_range(w, &c, L->times[k], *slot);
     r->t_bases += seconds() - t0;
@@ -354,7 +332,7 @@ static rendercache_range_image *base_image(world *w, level *L, uint32_t v, uint3
 }
 
 /* Drops the base images of the key times before key k. */
-static void drop_before(level *L, uint32_t k)
+static void drop_before(ex_baseviews *L, uint32_t k)
 {
     uint32_t v, i;
     for (v = 0; v < L->view_count; v++)
@@ -364,19 +342,11 @@ static void drop_before(level *L, uint32_t k)
         }
 }
 
-static void free_level(level *L)
-{
-    if (L->base) drop_before(L, L->time_count);
-    free(L->base);
-    rendercache_free_memory(NULL, L->times);
-    rendercache_view_space_destroy(L->vs);
-    memset(L, 0, sizeof *L);
-}
-
 /* The transforms of every range-image object at time t: the office's
    groups stay, the box moves. */
-static void object_transforms(const world *w, double t, float *m)
+static void object_transforms(void *user, double t, float *m)
 {
+    const world *w = (const world *)user;
     uint32_t o;
     for (o = 0; o < w->box_object; o++) {
         memset(m + 12 * (size_t)o, 0, 12 * sizeof(float));
@@ -390,53 +360,19 @@ static void object_transforms(const world *w, double t, float *m)
    around it (motion-compensated, or pixelwise as the paper's pcomb), then
    all warped into the camera. *seconds_spent: the time of the blends and
    the warp. */
-static int reconstruct(world *w, level *L, level_result *r, rendercache_warper *blender, rendercache_warper *warper,
+static int reconstruct(world *w, const options *o, ex_baseviews *L, level_result *r, ex_baseviews_reconstructor *rec,
                        const rendercache_camera *camera, double t, int motion_compensated, rendercache_range_image **blend,
                        rendercache_range_image *out, double *seconds_spent)
 {
-    uint32_t corners[8], n, i, k = 0;
-    const rendercache_range_image *in[8], *a[8], *b[8];
-    float *wa = NULL, *wb = NULL, *wt = NULL;
-    rendercache_motion motion;
-    double s, t0;
-    int ok;
-    if (rendercache_view_space_locate(L->vs, camera->eye, corners, &n) != RENDERCACHE_OK) return 0;
-    while (k + 2 < L->time_count && L->times[k + 1] <= t) k++;
+    uint32_t corners[8], n, i, k;
+    if (ex_baseviews_needs(L, camera->eye, t, corners, &n, &k) != 0) return 0;
     drop_before(L, k);
-    for (i = 0; i < n; i++) {   /* the base images this frame needs (traced now if new; not timed as synthesis) */
-        a[i] = base_image(w, L, corners[i], k, r);
-        b[i] = base_image(w, L, corners[i], k + 1, r);
-        if (!a[i] || !b[i]) return 0;
-    }
-    t0 = seconds();
-    s = (t - L->times[k]) / (L->times[k + 1] - L->times[k]);
-    if (motion_compensated) {
-        size_t bytes = 12 * sizeof(float) * (w->box_object + 1);
-        wa = (float *)malloc(bytes);
-        wb = (float *)malloc(bytes);
-        wt = (float *)malloc(bytes);
-        if (!wa || !wb || !wt) { free(wa); free(wb); free(wt); return 0; }
-        object_transforms(w, L->times[k], wa);
-        object_transforms(w, L->times[k + 1], wb);
-        object_transforms(w, t, wt);
-        motion.object_count = w->box_object + 1;
-        motion.world_a = wa;
-        motion.world_b = wb;
-        motion.world_t = wt;
-    }
-    for (i = 0; i < n; i++) {
-        if (motion_compensated)   /* holes stay open: the warp fills them from the other views first */
-            rendercache_blend_motion(blender, a[i], b[i], (float)s, &motion, RENDERCACHE_FILL_FOREGROUND, blend[i]);
-        else
-            rendercache_blend(a[i], b[i], (float)s, blend[i]);
-        in[i] = blend[i];
-    }
-    free(wa);
-    free(wb);
-    free(wt);
-    ok = rendercache_warp(warper, in, n, camera, RENDERCACHE_FILL_BOTH, out) == RENDERCACHE_OK;
-    *seconds_spent = seconds() - t0;
-    return ok;
+    for (i = 0; i < n; i++)   /* the base images this frame needs (traced now if new; not timed as synthesis) */
+        if (!base_image(w, o, L, corners[i], k, r) || !base_image(w, o, L, corners[i], k + 1, r)) return 0;
+    rec->object_count = motion_compensated ? w->box_object + 1 : 0;
+    if (ex_baseviews_reconstruct(L, rec, camera, t, blend, out) != 0) return 0;
+    *seconds_spent = rec->seconds_blend + rec->seconds_warp;
+    return 1;
 }
 
 /* ---------------------------------------------------------------------
@@ -507,7 +443,7 @@ int main(int argc, char **argv)
     world w;
     char err[512], name[128];
     rendercache_range_image **refs, *out = NULL, *blend[8];
-    rendercache_warper *blender = NULL, *warper = NULL;
+    ex_baseviews_reconstructor rec;
     rendercache_warp_desc wd;
     level_result results[MAX_Q];
     unsigned char *rgb8, *sheet_cells[MAX_Q + 1] = { 0 }, *sheet;
@@ -539,8 +475,13 @@ int main(int argc, char **argv)
     memset(&wd, 0, sizeof wd);
     wd.parallel_for = ex_pool_parallel_for;
     wd.parallel_user = w.pool;
-    if (!rgb8 || !refs || rendercache_warper_create(&wd, &blender) != RENDERCACHE_OK ||
-        rendercache_warper_create(&wd, &warper) != RENDERCACHE_OK) {
+    memset(&rec, 0, sizeof rec);
+    rec.motion = object_transforms;
+    rec.motion_user = &w;
+    rec.fill = RENDERCACHE_FILL_BOTH;
+    rec.blend_fill = RENDERCACHE_FILL_FOREGROUND;   /* holes stay open: the warp fills them from the other views first */
+    if (!rgb8 || !refs || rendercache_warper_create(&wd, &rec.blender) != RENDERCACHE_OK ||
+        rendercache_warper_create(&wd, &rec.warper) != RENDERCACHE_OK) {
         fprintf(stderr, "walkthrough_baseviews: out of memory\n");
         return 1;
     }
@@ -563,7 +504,7 @@ int main(int argc, char **argv)
     }
 
     for (qi = 0; qi < o.quality_count; qi++) {
-        level L;
+        ex_baseviews L;
         level_result *r = &results[qi];
         rendercache_camera bc = fisheye_template((uint32_t)o.base);
         memset(&L, 0, sizeof L);
@@ -579,11 +520,11 @@ int main(int argc, char **argv)
             double t = frame_time(&o, f), spent;
             if (!out && rendercache_range_image_create(&c, NULL, &out) != RENDERCACHE_OK) return 1;
             /* the paper's pixelwise time blend, for comparison */
-            if (!reconstruct(&w, &L, r, blender, warper, &c, t, 0, blend, out, &spent)) return 1;
+            if (!reconstruct(&w, &o, &L, r, &rec, &c, t, 0, blend, out, &spent)) return 1;
             rendercache_lrms(refs[f]->rgb, out->rgb, c.width, c.height, &r->lrms[f]);
             r->lrms_pixelwise_sum += r->lrms[f];
             if (f == 10 % o.frames) r->frame10_pixelwise = r->lrms[f];
-            if (!reconstruct(&w, &L, r, blender, warper, &c, t, 1, blend, out, &spent)) return 1;
+            if (!reconstruct(&w, &o, &L, r, &rec, &c, t, 1, blend, out, &spent)) return 1;
             r->t_frames += spent;
             rendercache_lrms(refs[f]->rgb, out->rgb, c.width, c.height, &r->lrms[f]);
             r->lrms_sum += r->lrms[f];
@@ -598,7 +539,7 @@ int main(int argc, char **argv)
             }
         }
         for (i = 0; i < 8; i++) rendercache_range_image_destroy(blend[i]);
-        free_level(&L);
+        ex_baseviews_free(&L);
         printf("q = %.1f: %u base views (%u cells), %u time steps: %u base images, %u traced for this path; "
                "mean LRMS %.3f (pixelwise time blend %.3f)\n", (double)r->q, r->views, r->cells, r->times,
                r->views * r->times, r->rendered, r->lrms_sum / o.frames, r->lrms_pixelwise_sum / o.frames);
@@ -669,8 +610,8 @@ int main(int argc, char **argv)
     free(refs);
     free(rgb8);
     rendercache_range_image_destroy(out);
-    rendercache_warper_destroy(blender);
-    rendercache_warper_destroy(warper);
+    rendercache_warper_destroy(rec.blender);
+    rendercache_warper_destroy(rec.warper);
     ex_tracer_destroy(w.tracer);
     ex_pool_destroy(w.pool);
     obj_free(&w.office);

@@ -310,7 +310,7 @@ static int obj__parse_face(obj__parser *p, const char *s, const char *end, obj__
     char tok[128];
     uint32_t start = (uint32_t)b->face_vertices.count, n = 0;
     for (;;) {
-        uint32_t v;
+        uint32_t v = 0;
         s = obj__token(s, end, tok, sizeof tok);
         if (!tok[0]) break;
         if (obj__vertex_ref(p, tok, b->positions.count / 3, &v)) return -1;

@@ -593,8 +593,10 @@ static ref_estimate ref_field_run(const ref_scene *s, const float p[3], const fl
     if (!s || (!tri_radiance && !fn) || !ref_check_point(p, n)) return none;
     memset(&c, 0, sizeof c);
     c.s = s;
-    c.p = rv_load(p);
     c.n = rv_normalize(rv_load(n));
+    /* a point on a surface must not see its own triangle: push it off along n,
+       as the global-illumination estimator does */
+    c.p = rv_add(rv_load(p), rv_scale(c.n, s->epsilon));
     c.tri_radiance = tri_radiance;
     c.background = background;
     c.fn = fn;

@@ -1,0 +1,2577 @@
+/* walkthrough.h - the frame pipeline of examples/walkthrough.c: the office
+   with a bunny walking from the open floor under the desk and past the
+   yellow divider, seen from a camera moving along the front wall, rendered
+   in one of three modes that compose the project's four headers. Tests and
+   the benchmark drive it too.
+
+       wt_options o;  wt_world *w;  wt_renderer *r;  wt_frame_stats st;
+       wt_options_default(&o);                         // or wt_parse_options
+       wt_world_create(&o, &w, err, sizeof err);       // scene files, tracer, light-vector scene
+       wt_renderer_create(w, &r, err, sizeof err);     // the mode's precompute, cached on disk
+       for (f = 0; f < o.frames; f++) wt_render_frame(r, f, rgb, &st);
+       wt_renderer_destroy(r);  wt_world_destroy(w);
+
+   Shading (modes raytrace and baseviews). A primary hit gets its emission,
+   direct light from the lamp's emitting polygons (stratified area samples
+   with shadow rays through examples/common/trace.h, so the bunny casts
+   shadows; Lambert + normalized Phong) and indirect light from a light
+   vector (lightvec.h, Crespin & Peroche 2004): looked up in a cache, and
+   gathered and inserted where the cache has too few valid vectors. Glossy
+   materials (floor, desk, lamp pole) use 5D light vectors (position and
+   viewing direction), Lambertian ones view-independent 3D vectors. The
+   office's vectors live in a static cache, warmed up along the path in the
+   precompute and saved; the bunny's in a cache of their own, made anew at
+   every pose (a gather on the bunny sees the office and the posed bunny).
+   Lookups and gathers run in rounds that make the result independent of
+   the thread count (wt__light_points).
+
+     raytrace   the render cache (rendercache.h, Walter et al. 1999/2002):
+                each frame reprojects the cached points, requests a fixed
+                budget of pixels (default 8%, as in Crespin & Peroche) by
+                error diffusion of the priority image, predicts the next
+                camera's holes, shades the requests and inserts them with
+                priority scale lightvec_priority(1, W) (4.3: a point lit by
+                an interpolated vector of weight W is refreshed 1/W times
+                sooner; the bunny's points 4 times sooner still, as its light
+                changes while it walks). The first frame is traced in full.
+     baseviews  range images (rendercache.h part 2, Nimeroff, Dorsey &
+                Rushmeier 1996, through examples/common/baseviews.h): the
+                camera's line of eyes is subdivided until fish-eye id images
+                agree on a fraction q of their pixels (base views), key
+                times are refined with the same test (a fish-eye at the lamp
+                and the base views), base images are traced with the shading
+                above and saved; a frame blends the base images of the two
+                views around its eye to its time, moving the bunny by its
+                transforms, and warps them into its camera with both fills
+                (pixels still empty are traced).
+     radiosity  the static office shaded per pixel by Hardt's quadratic
+                irradiance interpolants (radinterp.h) from an ID +
+                barycentric buffer (examples/common/raster.h), the bunny
+                Gouraud-shaded per vertex from an irradiance volume
+                (irrvol.h, Greger 1996) built from the radiosity solution,
+                times its self-occlusion ratio (irrvol_visibility_ratio).
+                radinterp.h does not have its mesh and online phase yet:
+                wt_static_shading_build says so and the mode does not run;
+                every other part of it is here (wt_bunny_visibility,
+                wt_volume_build, wt_bunny_light, wt_raster_scene) and
+                tested, and wt_static_shading_build/_shade are where
+                radinterp_build_mesh and radinterp_shade go.
+
+   Precompute cache. Files <cache_dir>/walkthrough-<what>-<key>.bin, key =
+   FNV-1a hash of the scene files' bytes, the paths (every frame's camera,
+   the bunny's transforms), the header versions and every parameter the data
+   depends on; each holds a header's own serialization (lightvec_save,
+   rendercache_range_image_save, irrvol_save) in an envelope with a CRC.
+   Written to a temporary file and renamed; an interrupt deletes the
+   temporary file (wt_install_interrupt_handler). A damaged or stale file is
+   rebuilt. A later run with the same inputs loads the data and renders the
+   same frames, bit for bit.
+
+   Header-only like the rest of examples/common; it includes the
+   implementations of irrvol.h, lightvec.h and rendercache.h, so include it
+   in exactly one translation unit. Conventions: metres, +y up, time t in
+   [0, 1] from the first frame to the last; object ids of the render cache
+   and the range images: 0 = the office, 1 = the bunny. */
+#ifndef EXAMPLES_COMMON_WALKTHROUGH_H
+#define EXAMPLES_COMMON_WALKTHROUGH_H
+
+#if !defined(_POSIX_C_SOURCE) || _POSIX_C_SOURCE < 200809L
+#  undef _POSIX_C_SOURCE
+#  define _POSIX_C_SOURCE 200809L
+#endif
+#include <errno.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "base.h"
+#include "camera.h"
+#include "image.h"
+#include "obj.h"
+#include "pool.h"
+#include "raster.h"
+#include "baseviews.h"
+#include "trace.h"
+
+#define IRRVOL_IMPLEMENTATION
+#include "irrvol.h"
+#define LIGHTVEC_IMPLEMENTATION
+#include "lightvec.h"
+#define RENDERCACHE_IMPLEMENTATION
+#include "rendercache.h"
+#include "radinterp.h"
+
+#define WT_PI 3.14159265358979f
+#define WT_OBJECT_OFFICE 0u
+#define WT_OBJECT_BUNNY 1u
+#define WT_BUNNY_SCALE 0.03f        /* bunny.obj is ~9.7 units tall: a 0.29 m bunny */
+#define WT_BUNNY_KD 0.6f            /* grey, like Greger's rabbit */
+#define WT_BUNNY_RADIUS 0.16f       /* metres: the scaled bunny's footprint (0.30 x 0.23 m) */
+#define WT_CAMERA_VFOV 60.0f
+#define WT_BUNNY_NORMAL_ANGLE 30.0f  /* degrees: light vectors valid between the bunny's normals */
+#define WT_BUNNY_PRIORITY 4.0f      /* render-cache priority scale of the bunny's points */
+#define WT_PHASES 4
+
+typedef enum wt_mode {
+    WT_MODE_RAYTRACE = 0,
+    WT_MODE_BASEVIEWS,
+    WT_MODE_RADIOSITY
+} wt_mode;
+
+/* Everything a run depends on. Fields that change pictures also change the
+   keys of the precompute cache. */
+typedef struct wt_options {
+    wt_mode mode;
+    const char *out;          /* PNG frames, contact sheet */
+    const char *cache_dir;    /* precompute cache */
+    const char *data_dir;     /* office.obj, office.mtl, bunny.obj */
+    int frames, width, height;
+    int threads;              /* 0 = one per core */
+    uint64_t seed;
+    /* shading (every mode that ray traces) */
+    int light_samples;        /* samples per emitting triangle per shaded point */
+    int strata;               /* light-vector gathers on the office: zenith strata (azimuth: 3x) */
+    int bunny_strata;         /* gathers on the bunny */
+    int bounces;              /* reflections of the gathered light (lightvec_gather_desc.bounces) */
+    int warmup_divisor;       /* light-vector warm-up: the path's views at 1/N of the frame size */
+    /* raytrace */
+    float budget;             /* share of the pixels sampled per frame */
+    /* baseviews */
+    int base_size;            /* fish-eye base images N x N */
+    int id_size;              /* id images of the coherence tests */
+    int keys;                 /* key times before refinement (uniform in [0, 1]) */
+    float quality;            /* q of the coherence tests */
+    /* radiosity */
+    int volume_resolution;    /* irradiance volume k */
+    int visibility_rays;      /* self-occlusion rays per bunny vertex */
+    /* run */
+    int use_cache;            /* load and save the precompute cache */
+    int write_frames;         /* PNGs */
+    int progress;             /* progress bars on stderr */
+    int verbose;              /* messages on stdout */
+    int reference;            /* trace every frame in full too and report LRMS */
+    float exposure;           /* 0 = automatic, from the first frame */
+} wt_options;
+
+/* What a frame cost. phase[] by mode (wt_phase_name). */
+typedef struct wt_frame_stats {
+    double phase[WT_PHASES];  /* seconds */
+    double total;             /* seconds, the frame's wall time */
+    uint32_t samples;         /* raytrace: pixels shaded; baseviews: pixels traced by the fill;
+                                 radiosity: volume queries */
+    uint32_t lookups, hits, gathers;   /* light vectors */
+    uint32_t bunny_gathers;            /* of which on the bunny */
+    int full;                 /* raytrace: the first frame, traced in full */
+    double lrms;              /* against a full render (wt_options.reference), else -1 */
+} wt_frame_stats;
+
+/* ======================================================================
+   options
+   ---------------------------------------------------------------------- */
+EX_FN void wt_options_default(wt_options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->mode = WT_MODE_RAYTRACE;
+    o->out = "build/out";
+    o->cache_dir = "build/cache";
+    o->data_dir = "examples/data";
+    o->frames = 48;
+    o->width = 640;
+    o->height = 480;
+    o->seed = 1;
+    o->light_samples = 4;
+    o->strata = 16;
+    o->bunny_strata = 8;
+    o->bounces = 2;
+    o->warmup_divisor = 4;
+    o->budget = 0.08f;        /* Crespin & Peroche: 21000 of 512 x 512 pixels */
+    o->base_size = 512;
+    o->id_size = 64;
+    o->keys = 5;
+    o->quality = 0.8f;
+    o->volume_resolution = 17;   /* Greger's k */
+    o->visibility_rays = 256;
+    o->use_cache = 1;
+    o->write_frames = 1;
+    o->progress = 1;
+    o->verbose = 1;
+}
+
+EX_FN const char *wt_mode_name(wt_mode m)
+{
+    switch (m) {
+    case WT_MODE_RAYTRACE: return "raytrace";
+    case WT_MODE_BASEVIEWS: return "baseviews";
+    case WT_MODE_RADIOSITY: return "radiosity";
+    }
+    return "?";
+}
+
+/* Names of the timing phases of a mode (NULL past the last). */
+EX_FN const char *wt_phase_name(wt_mode m, int phase)
+{
+    static const char *raytrace[WT_PHASES] = { "cache", "trace", "lightvec", "other" };
+    static const char *baseviews[WT_PHASES] = { "blend", "warp", "other", NULL };
+    static const char *radiosity[WT_PHASES] = { "raster", "shade", "volume", "other" };
+    if (phase < 0 || phase >= WT_PHASES) return NULL;
+    return m == WT_MODE_RAYTRACE ? raytrace[phase] : m == WT_MODE_BASEVIEWS ? baseviews[phase] : radiosity[phase];
+}
+
+EX_FN void wt_usage(FILE *f)
+{
+    fputs("usage: walkthrough [options]\n"
+          "A walkthrough of the office with a bunny walking under the desk and past the divider,\n"
+          "rendered interactively with global illumination. Writes PNG frames, a contact sheet and\n"
+          "a per-frame timing table; precomputed data is cached on disk and reused.\n"
+          "\n"
+          "  --mode M             raytrace (default): render cache + ray tracer + light vectors\n"
+          "                       baseviews: warps of fish-eye base views (range images)\n"
+          "                       radiosity: per-pixel radiosity interpolants + irradiance volume\n"
+          "                       (needs radinterp.h's online phase)\n"
+          "  --frames N           frames along the path (default 48)\n"
+          "  --size WxH           frame size (default 640x480)\n"
+          "  --out DIR            where frames go (default build/out)\n"
+          "  --cache DIR          precompute cache (default build/cache)\n"
+          "  --no-cache           neither read nor write the precompute cache\n"
+          "  --data DIR           office.obj, office.mtl, bunny.obj (default examples/data)\n"
+          "  --threads N          threads, 0 = one per core (default 0)\n"
+          "  --seed N             random seed (default 1)\n"
+          "  --budget F           raytrace: share of the pixels sampled per frame (default 0.08)\n"
+          "  --light-samples N    direct light: samples per emitting triangle (default 4)\n"
+          "  --strata N           light-vector gathers: N x 3N rays (default 16)\n"
+          "  --base N             baseviews: fish-eye base images N x N (default 512)\n"
+          "  --keys N             baseviews: key times before refinement (default 5)\n"
+          "  --quality Q          baseviews: coherence quality q in [0, 1] (default 0.8)\n"
+          "  --exposure E         tone-mapping scale (default: automatic from the first frame)\n"
+          "  --reference          also trace every frame in full and print the LRMS error\n"
+          "  --no-frames          do not write PNG frames\n"
+          "  --quiet              no progress bars or messages, only the timing table\n"
+          "  --help               this text\n", f);
+}
+
+static int wt__parse_int(const char *s, int lo, int hi, int *out)
+{
+    char *end;
+    long v;
+    errno = 0;
+    v = strtol(s, &end, 10);
+    if (errno || end == s || *end || v < lo || v > hi) return 0;
+    *out = (int)v;
+    return 1;
+}
+
+static int wt__parse_float(const char *s, float lo, float hi, float *out)
+{
+    char *end;
+    float v;
+    errno = 0;
+    v = strtof(s, &end);
+    if (errno || end == s || *end || !(v >= lo && v <= hi)) return 0;
+    *out = v;
+    return 1;
+}
+
+/* Parses the command line into o (start from wt_options_default). Returns
+   1 to run, 0 when --help was printed, -1 on an error (message in err). */
+EX_FN int wt_parse_options(int argc, char **argv, wt_options *o, char *err, size_t err_size)
+{
+    int i;
+    err[0] = 0;
+    for (i = 1; i < argc; i++) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        int ok = 1;
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) { wt_usage(stdout); return 0; }
+        if (!strcmp(a, "--no-cache")) { o->use_cache = 0; continue; }
+        if (!strcmp(a, "--no-frames")) { o->write_frames = 0; continue; }
+        if (!strcmp(a, "--quiet")) { o->progress = o->verbose = 0; continue; }
+        if (!strcmp(a, "--reference")) { o->reference = 1; continue; }
+        if (strncmp(a, "--", 2) != 0) {
+            snprintf(err, err_size, "unexpected argument '%s' (see --help)", a);
+            return -1;
+        }
+        if (!v) {
+            if (!strcmp(a, "--mode") || !strcmp(a, "--frames") || !strcmp(a, "--size") || !strcmp(a, "--out") ||
+                !strcmp(a, "--cache") || !strcmp(a, "--data") || !strcmp(a, "--threads") || !strcmp(a, "--seed") ||
+                !strcmp(a, "--budget") || !strcmp(a, "--light-samples") || !strcmp(a, "--strata") ||
+                !strcmp(a, "--base") || !strcmp(a, "--keys") || !strcmp(a, "--quality") || !strcmp(a, "--exposure"))
+                snprintf(err, err_size, "%s needs a value (see --help)", a);
+            else
+                snprintf(err, err_size, "unknown option '%s' (see --help)", a);
+            return -1;
+        }
+        if (!strcmp(a, "--mode")) {
+            if (!strcmp(v, "raytrace")) o->mode = WT_MODE_RAYTRACE;
+            else if (!strcmp(v, "baseviews")) o->mode = WT_MODE_BASEVIEWS;
+            else if (!strcmp(v, "radiosity")) o->mode = WT_MODE_RADIOSITY;
+            else { snprintf(err, err_size, "--mode must be raytrace, baseviews or radiosity, not '%s'", v); return -1; }
+        } else if (!strcmp(a, "--frames")) ok = wt__parse_int(v, 1, 100000, &o->frames);
+        else if (!strcmp(a, "--size")) {
+            char *x = strchr(v, 'x');
+            char w[32];
+            size_t n = x ? (size_t)(x - v) : 0;
+            ok = x && n > 0 && n < sizeof w;
+            if (ok) {
+                memcpy(w, v, n);
+                w[n] = 0;
+                ok = wt__parse_int(w, 8, 8192, &o->width) && wt__parse_int(x + 1, 8, 8192, &o->height);
+            }
+        } else if (!strcmp(a, "--out")) o->out = v;
+        else if (!strcmp(a, "--cache")) o->cache_dir = v;
+        else if (!strcmp(a, "--data")) o->data_dir = v;
+        else if (!strcmp(a, "--threads")) ok = wt__parse_int(v, 0, EX_POOL_MAX_THREADS, &o->threads);
+        else if (!strcmp(a, "--seed")) {
+            int s;
+            ok = wt__parse_int(v, 0, 2147483647, &s);
+            o->seed = (uint64_t)s;
+        } else if (!strcmp(a, "--budget")) ok = wt__parse_float(v, 1e-4f, 1.0f, &o->budget);
+        else if (!strcmp(a, "--light-samples")) ok = wt__parse_int(v, 1, 1024, &o->light_samples);
+        else if (!strcmp(a, "--strata")) ok = wt__parse_int(v, 2, 128, &o->strata);
+        else if (!strcmp(a, "--base")) ok = wt__parse_int(v, 16, 4096, &o->base_size);
+        else if (!strcmp(a, "--keys")) ok = wt__parse_int(v, 2, 257, &o->keys);
+        else if (!strcmp(a, "--quality")) ok = wt__parse_float(v, 0.0f, 1.0f, &o->quality);
+        else if (!strcmp(a, "--exposure")) ok = wt__parse_float(v, 1e-6f, 1e6f, &o->exposure);
+        else { snprintf(err, err_size, "unknown option '%s' (see --help)", a); return -1; }
+        if (!ok) {
+            snprintf(err, err_size, "bad value '%s' for %s (see --help for the ranges)", v, a);
+            return -1;
+        }
+        i++;
+    }
+    return 1;
+}
+
+/* ======================================================================
+   clocks, messages, progress bars
+   ---------------------------------------------------------------------- */
+EX_FN double wt_seconds(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+static double wt__clock(void *user)
+{
+    (void)user;
+    return wt_seconds();
+}
+
+/* A progress bar on stderr: redrawn in place on a terminal, one final line
+   otherwise. */
+typedef struct wt_progress {
+    const char *label;
+    double start;
+    int shown;       /* permille last drawn, -1 = none */
+    int enabled, tty;
+} wt_progress;
+
+EX_FN void wt_progress_begin(wt_progress *p, const char *label, int enabled)
+{
+    p->label = label;
+    p->start = wt_seconds();
+    p->shown = -1;
+    p->enabled = enabled;
+    p->tty = isatty(2);
+}
+
+/* Matches the headers' progress callback; never cancels (Ctrl-C ends the
+   process, see wt_install_interrupt_handler). */
+EX_FN int wt_progress_update(void *user, uint64_t done, uint64_t total)
+{
+    wt_progress *p = (wt_progress *)user;
+    int permille, filled, i;
+    char bar[41];
+    if (!p || !p->enabled) return 0;
+    permille = total ? (int)(1000.0 * (double)done / (double)total) : 1000;
+    if (permille > 1000) permille = 1000;
+    if (permille < 1000 && (!p->tty || permille - p->shown < 5)) return 0;
+    if (permille == 1000 && p->shown == 1000) return 0;
+    p->shown = permille;
+    filled = permille * 40 / 1000;
+    for (i = 0; i < 40; i++) bar[i] = i < filled ? '#' : '.';
+    bar[40] = 0;
+    fprintf(stderr, "%s  %-34s [%s] %3d%% %6.1f s%s", p->tty ? "\r" : "", p->label, bar, permille / 10,
+            wt_seconds() - p->start, permille == 1000 ? "\n" : "");
+    fflush(stderr);
+    return 0;
+}
+
+EX_FN void wt_progress_end(wt_progress *p)
+{
+    wt_progress_update(p, 1, 1);
+}
+
+/* ======================================================================
+   the precompute cache on disk
+   A file walkthrough-<what>-<key>.bin holds one header's serialized data
+   behind a small envelope (magic, envelope version, key, size, CRC-32).
+   The key hashes the scene files' bytes and every parameter the data
+   depends on, so a change of either makes a new file. Files are written to
+   a temporary name and renamed, and an interrupt removes the temporary
+   file: a cache file is complete or absent.
+   ---------------------------------------------------------------------- */
+#define WT_CACHE_MAGIC "WTCACHE"
+#define WT_CACHE_VERSION 1u
+
+/* FNV-1a, 64 bits. */
+EX_FN uint64_t wt_hash(uint64_t h, const void *data, size_t n)
+{
+    const unsigned char *p = (const unsigned char *)data;
+    size_t i;
+    if (h == 0) h = 0xcbf29ce484222325ull;
+    for (i = 0; i < n; i++) {
+        h ^= p[i];
+        h *= 0x100000001b3ull;
+    }
+    return h;
+}
+
+/* Hashes values one by one (never a struct's padding). */
+EX_FN uint64_t wt_hash_u64(uint64_t h, uint64_t v)
+{
+    unsigned char b[8];
+    int i;
+    for (i = 0; i < 8; i++) b[i] = (unsigned char)(v >> (8 * i));
+    return wt_hash(h, b, 8);
+}
+
+EX_FN uint64_t wt_hash_f32(uint64_t h, float v)
+{
+    uint32_t u;
+    memcpy(&u, &v, 4);
+    return wt_hash_u64(h, u);
+}
+
+EX_FN uint64_t wt_hash_str(uint64_t h, const char *s) { return wt_hash(wt_hash_u64(h, strlen(s)), s, strlen(s)); }
+
+static char wt__tmp_path[1100];
+static volatile sig_atomic_t wt__tmp_active;
+
+static void wt__on_interrupt(int sig)
+{
+    if (wt__tmp_active) unlink(wt__tmp_path);   /* async-signal-safe */
+    signal(sig, SIG_DFL);
+    raise(sig);
+}
+
+/* Ctrl-C (and SIGTERM) while a cache file is being written removes the
+   temporary file before the process ends. */
+EX_FN void wt_install_interrupt_handler(void)
+{
+    signal(SIGINT, wt__on_interrupt);
+    signal(SIGTERM, wt__on_interrupt);
+}
+
+/* mkdir -p */
+EX_FN int wt_make_dirs(const char *path)
+{
+    char buf[1024];
+    size_t i, n = strlen(path);
+    if (n == 0 || n >= sizeof buf) return -1;
+    memcpy(buf, path, n + 1);
+    for (i = 1; i <= n; i++)
+        if (buf[i] == '/' || buf[i] == '\0') {
+            char c = buf[i];
+            buf[i] = '\0';
+            if (mkdir(buf, 0777) != 0 && errno != EEXIST) return -1;
+            buf[i] = c;
+        }
+    return 0;
+}
+
+EX_FN void wt_cache_path(const char *dir, const char *what, uint64_t key, char *path, size_t size)
+{
+    snprintf(path, size, "%s/walkthrough-%s-%016llx.bin", dir, what, (unsigned long long)key);
+}
+
+static void wt__put32(unsigned char *p, uint32_t v)
+{
+    int i;
+    for (i = 0; i < 4; i++) p[i] = (unsigned char)(v >> (8 * i));
+}
+static void wt__put64(unsigned char *p, uint64_t v)
+{
+    int i;
+    for (i = 0; i < 8; i++) p[i] = (unsigned char)(v >> (8 * i));
+}
+static uint32_t wt__get32(const unsigned char *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+static uint64_t wt__get64(const unsigned char *p) { return (uint64_t)wt__get32(p) | (uint64_t)wt__get32(p + 4) << 32; }
+
+#define WT__ENVELOPE 32   /* magic 8, version 4, crc 4, key 8, size 8 */
+
+/* Writes data under its key: a temporary file, flushed, then renamed.
+   Returns 0, or -1 (with a message in err). */
+EX_FN int wt_cache_store(const char *dir, const char *what, uint64_t key, const void *data, size_t size,
+                         char *err, size_t err_size)
+{
+    char path[1024];
+    unsigned char head[WT__ENVELOPE];
+    FILE *f;
+    int ok;
+    if (wt_make_dirs(dir) != 0) {
+        snprintf(err, err_size, "cannot create the cache directory %.200s: %s", dir, strerror(errno));
+        return -1;
+    }
+    wt_cache_path(dir, what, key, path, sizeof path);
+    snprintf(wt__tmp_path, sizeof wt__tmp_path, "%.1000s.tmp%ld", path, (long)getpid());
+    memcpy(head, WT_CACHE_MAGIC, 8);
+    wt__put32(head + 8, WT_CACHE_VERSION);
+    wt__put32(head + 12, ex__crc32_update(0, (const unsigned char *)data, size));
+    wt__put64(head + 16, key);
+    wt__put64(head + 24, (uint64_t)size);
+    wt__tmp_active = 1;
+    f = fopen(wt__tmp_path, "wb");
+    if (!f) {
+        wt__tmp_active = 0;
+        snprintf(err, err_size, "cannot write %.200s: %s", wt__tmp_path, strerror(errno));
+        return -1;
+    }
+    ok = fwrite(head, 1, sizeof head, f) == sizeof head && fwrite(data, 1, size, f) == size && fflush(f) == 0 &&
+         fsync(fileno(f)) == 0;
+    ok = fclose(f) == 0 && ok;
+    if (!ok || rename(wt__tmp_path, path) != 0) {
+        snprintf(err, err_size, "cannot write %.200s: %s", path, strerror(errno));
+        unlink(wt__tmp_path);
+        wt__tmp_active = 0;
+        return -1;
+    }
+    wt__tmp_active = 0;
+    return 0;
+}
+
+/* Reads the data stored under key. Returns 1 with *data (free it) and
+   *size, 0 when there is no such file, -1 when the file is damaged (it
+   is then rebuilt and overwritten). */
+EX_FN int wt_cache_load(const char *dir, const char *what, uint64_t key, void **data, size_t *size)
+{
+    char path[1024];
+    unsigned char head[WT__ENVELOPE];
+    FILE *f;
+    uint64_t n;
+    void *buf;
+    *data = NULL;
+    *size = 0;
+    wt_cache_path(dir, what, key, path, sizeof path);
+    f = fopen(path, "rb");
+    if (!f) return 0;
+    if (fread(head, 1, sizeof head, f) != sizeof head || memcmp(head, WT_CACHE_MAGIC, 8) != 0 ||
+        wt__get32(head + 8) != WT_CACHE_VERSION || wt__get64(head + 16) != key) {
+        fclose(f);
+        return -1;
+    }
+    n = wt__get64(head + 24);
+    if (n > ((uint64_t)1 << 40) || (buf = malloc((size_t)n + 1)) == NULL) {
+        fclose(f);
+        return -1;
+    }
+    if (fread(buf, 1, (size_t)n, f) != (size_t)n || fgetc(f) != EOF ||
+        ex__crc32_update(0, (const unsigned char *)buf, (size_t)n) != wt__get32(head + 12)) {
+        free(buf);
+        fclose(f);
+        return -1;
+    }
+    fclose(f);
+    *data = buf;
+    *size = (size_t)n;
+    return 1;
+}
+
+/* ---- a growable byte buffer for composite cache payloads ---------------- */
+typedef struct wt_bytes {
+    unsigned char *data;
+    size_t size, capacity, read;   /* read: cursor of wt_bytes_get */
+    int failed;
+} wt_bytes;
+
+EX_FN void wt_bytes_put(wt_bytes *b, const void *p, size_t n)
+{
+    if (b->failed) return;
+    if (b->size + n > b->capacity) {
+        size_t cap = b->capacity ? b->capacity : 4096;
+        unsigned char *d;
+        while (cap < b->size + n) cap *= 2;
+        d = (unsigned char *)realloc(b->data, cap);
+        if (!d) { b->failed = 1; return; }
+        b->data = d;
+        b->capacity = cap;
+    }
+    memcpy(b->data + b->size, p, n);
+    b->size += n;
+}
+
+EX_FN void wt_bytes_put_u64(wt_bytes *b, uint64_t v)
+{
+    unsigned char p[8];
+    wt__put64(p, v);
+    wt_bytes_put(b, p, 8);
+}
+
+/* Reads n bytes at the cursor; 0 when fewer are left. */
+EX_FN int wt_bytes_get(wt_bytes *b, void *p, size_t n)
+{
+    if (n > b->size - b->read) return 0;
+    memcpy(p, b->data + b->read, n);
+    b->read += n;
+    return 1;
+}
+
+EX_FN int wt_bytes_get_u64(wt_bytes *b, uint64_t *v)
+{
+    unsigned char p[8];
+    if (!wt_bytes_get(b, p, 8)) return 0;
+    *v = wt__get64(p);
+    return 1;
+}
+
+/* Adds a file's bytes to a hash; 0 when the file cannot be read. */
+static int wt__hash_file(const char *path, uint64_t *h)
+{
+    unsigned char buf[65536];
+    size_t n;
+    FILE *f = fopen(path, "rb");
+    if (!f) return 0;
+    while ((n = fread(buf, 1, sizeof buf, f)) > 0) *h = wt_hash(*h, buf, n);
+    fclose(f);
+    return 1;
+}
+
+/* ======================================================================
+   the world: office, bunny, ray tracer, light-vector scenes and caches
+   ---------------------------------------------------------------------- */
+
+/* Which light-vector cache lights a shaded point. */
+enum { WT_LIGHT_NONE = 0, WT_LIGHT_STATIC = 1, WT_LIGHT_BUNNY = 2 };
+
+/* One point to shade: a primary ray in, radiance out. */
+typedef struct wt_point {
+    float org[3], dir[3];    /* in: the ray (dir unit) */
+    uint64_t stream;         /* in: its random stream (direct light, gather) */
+    float pos[3], normal[3]; /* the hit; normal faces the viewer */
+    float t;                 /* distance along the ray; FLT_MAX on a miss */
+    uint32_t object;         /* WT_OBJECT_* or RENDERCACHE_MISS */
+    uint32_t polygon;        /* office face, or the bunny triangle + office face count (id images) */
+    uint32_t material;       /* index into wt_world.materials */
+    float direct[3];         /* emission + direct light */
+    float indirect[3];       /* from the light vector */
+    float rgb[3];            /* out: radiance towards the eye */
+    float weight;            /* W of the light vector: lookup weight, 1 for a new vector */
+    unsigned char light;     /* WT_LIGHT_* */
+    unsigned char glossy;    /* 5D light vector (view dependent) */
+    unsigned char lit;       /* indirect light known */
+    unsigned char gathered;  /* its light vector was computed for it */
+    unsigned char bunny_shadow;   /* the bunny blocked some of its direct light */
+} wt_point;
+
+/* An emitting polygon of the office (its fan triangles are consecutive). */
+typedef struct wt_light {
+    uint32_t first_tri, tri_count;
+    float area, normal[3], point[3], ke[3];
+} wt_light;
+
+typedef struct wt_world {
+    wt_options opt;
+    char office_path[1024], bunny_path[1024];
+    uint64_t scene_hash;               /* the bytes of office.obj, office.mtl, bunny.obj */
+    obj_scene office, bunny;
+    float bunny_lo[3], bunny_hi[3];    /* bounds of bunny.obj */
+    float *bunny_normals;              /* smooth vertex normals, OBJ coordinates */
+    ex_tracer *tracer;
+    int bunny_instance;
+    wt_light *lights;                  /* emitting polygons */
+    uint32_t light_count;
+    ex_pool *pool;
+    lightvec_material *materials;      /* the office's, then the bunny's */
+    uint32_t material_count, bunny_material;
+    lightvec_scene *office_scene;      /* the static office: gathers of the static cache */
+    lightvec_cache *static_cache;
+    lightvec_gather_desc static_gather, bunny_gather;
+    /* the bunny at the current time */
+    double time;
+    float pose[12];
+    pthread_mutex_t pose_lock;
+    int pose_ready;                    /* posed_scene and bunny_cache match pose */
+    lightvec_scene *posed_scene;       /* office + bunny as posed */
+    lightvec_cache *bunny_cache;       /* light vectors on the bunny at this pose */
+    float *posed_positions;
+    uint32_t *posed_indices, *posed_materials;
+    /* scratch of the light-vector rounds */
+    uint32_t *pending, *picks;
+    uint64_t *cells;
+    lightvec_record *records;
+    uint32_t scratch_capacity, cell_capacity;
+} wt_world;
+
+static void wt__materials_from_obj(const obj_scene *s, lightvec_material *m)
+{
+    uint32_t i;
+    for (i = 0; i < s->material_count; i++) {
+        memset(&m[i], 0, sizeof m[i]);
+        memcpy(m[i].diffuse, s->materials[i].kd, sizeof m[i].diffuse);
+        memcpy(m[i].specular, s->materials[i].ks, sizeof m[i].specular);
+        memcpy(m[i].emission, s->materials[i].ke, sizeof m[i].emission);
+        m[i].exponent = s->materials[i].ns;
+    }
+}
+
+static int wt__is_glossy(const lightvec_material *m)
+{
+    return m->specular[0] > 0.0f || m->specular[1] > 0.0f || m->specular[2] > 0.0f;
+}
+
+/* A light-vector cache with the header's defaults (radius 0.3 d_avg, 3
+   valid vectors, 20 degrees between normals, gradient interpolation), or
+   for the bunny, whose normals turn fast over a small body, 30 degrees. */
+static lightvec_cache *wt__new_cache(const wt_world *w, int bunny)
+{
+    lightvec_cache_desc d;
+    lightvec_cache *c = NULL;
+    memset(&d, 0, sizeof d);
+    if (bunny) d.max_normal_angle = WT_BUNNY_NORMAL_ANGLE;
+    d.parallel_for = ex_pool_parallel_for;
+    d.parallel_user = w->pool;
+    return lightvec_cache_create(&d, &c) == LIGHTVEC_OK ? c : NULL;
+}
+
+EX_FN void wt_world_destroy(wt_world *w)
+{
+    if (!w) return;
+    lightvec_cache_destroy(w->static_cache);
+    lightvec_cache_destroy(w->bunny_cache);
+    lightvec_scene_destroy(w->office_scene);
+    lightvec_scene_destroy(w->posed_scene);
+    ex_tracer_destroy(w->tracer);
+    ex_pool_destroy(w->pool);
+    pthread_mutex_destroy(&w->pose_lock);
+    obj_free(&w->office);
+    obj_free(&w->bunny);
+    free(w->bunny_normals);
+    free(w->lights);
+    free(w->materials);
+    free(w->posed_positions);
+    free(w->posed_indices);
+    free(w->posed_materials);
+    free(w->pending);
+    free(w->picks);
+    free(w->cells);
+    free(w->records);
+    free(w);
+}
+
+/* The emitting polygons: runs of consecutive triangles of one emitting face. */
+static int wt__find_lights(wt_world *w)
+{
+    const obj_scene *s = &w->office;
+    uint32_t i;
+    w->lights = (wt_light *)calloc(s->tri_count + 1, sizeof *w->lights);
+    if (!w->lights) return -1;
+    for (i = 0; i < s->tri_count; i++) {
+        const obj_material *m = &s->materials[s->tri_material[i]];
+        wt_light *L = w->light_count ? &w->lights[w->light_count - 1] : NULL;
+        if (!(m->ke[0] > 0.0f || m->ke[1] > 0.0f || m->ke[2] > 0.0f) || !(w->tracer->tri_area[i] > 0.0f)) continue;
+        if (!L || s->tri_face[L->first_tri] != s->tri_face[i] || L->first_tri + L->tri_count != i) {
+            L = &w->lights[w->light_count++];
+            L->first_tri = i;
+            memcpy(L->normal, w->tracer->tri_normal + 3 * (size_t)i, sizeof L->normal);
+            memcpy(L->point, s->positions + 3 * (size_t)s->tri_indices[3 * i], sizeof L->point);
+            memcpy(L->ke, m->ke, sizeof L->ke);
+        }
+        L->tri_count++;
+        L->area += w->tracer->tri_area[i];
+    }
+    return 0;
+}
+
+static int wt__fail(char *err, size_t n, const char *fmt, const char *what)
+{
+    snprintf(err, n, fmt, what);
+    return -1;
+}
+
+/* Loads the scene files and builds what every mode shares: the ray tracer
+   (office + bunny instance), the light-vector scene of the office and an
+   empty static light-vector cache. Returns 0, or -1 with a message. */
+EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t err_size)
+{
+    wt_world *w = (wt_world *)calloc(1, sizeof *w);
+    char mtl_path[1024], msg[512];
+    lightvec_scene_desc sd;
+    float grey[3] = { WT_BUNNY_KD, WT_BUNNY_KD, WT_BUNNY_KD };
+    lightvec_result lr;
+    *out = NULL;
+    if (!w) return wt__fail(err, err_size, "%s", "out of memory");
+    w->opt = *o;
+    pthread_mutex_init(&w->pose_lock, NULL);
+    snprintf(w->office_path, sizeof w->office_path, "%s/office.obj", o->data_dir);
+    snprintf(mtl_path, sizeof mtl_path, "%s/office.mtl", o->data_dir);
+    snprintf(w->bunny_path, sizeof w->bunny_path, "%s/bunny.obj", o->data_dir);
+    if (!wt__hash_file(w->office_path, &w->scene_hash) || !wt__hash_file(mtl_path, &w->scene_hash) ||
+        !wt__hash_file(w->bunny_path, &w->scene_hash)) {
+        const char *missing = access(w->office_path, R_OK) != 0 ? w->office_path
+                              : access(mtl_path, R_OK) != 0   ? mtl_path : w->bunny_path;
+        snprintf(err, err_size, "cannot read %.200s: %s (run from the repository root, or pass --data DIR)", missing,
+                 strerror(errno));
+        wt_world_destroy(w);
+        return -1;
+    }
+    if (obj_load(w->office_path, &w->office, msg, sizeof msg) != 0 ||
+        obj_load(w->bunny_path, &w->bunny, msg, sizeof msg) != 0) {
+        snprintf(err, err_size, "%s", msg);
+        wt_world_destroy(w);
+        return -1;
+    }
+    if (!obj_bounds(&w->bunny, w->bunny_lo, w->bunny_hi) || !(w->bunny_hi[1] > w->bunny_lo[1])) {
+        snprintf(err, err_size, "%.200s: an empty or flat mesh", w->bunny_path);
+        wt_world_destroy(w);
+        return -1;
+    }
+    w->bunny_normals = (float *)malloc(3 * sizeof(float) * w->bunny.vertex_count);
+    w->material_count = w->office.material_count + 1;
+    w->bunny_material = w->office.material_count;
+    w->materials = (lightvec_material *)calloc(w->material_count, sizeof *w->materials);
+    w->pool = ex_pool_create(o->threads);
+    w->tracer = ex_tracer_create(&w->office);
+    if (!w->bunny_normals || !w->materials || !w->pool || !w->tracer) {
+        wt_world_destroy(w);
+        return wt__fail(err, err_size, "%s", "out of memory");
+    }
+    obj_vertex_normals(&w->bunny, w->bunny_normals);
+    if (wt__find_lights(w) != 0) {
+        wt_world_destroy(w);
+        return wt__fail(err, err_size, "%s", "out of memory");
+    }
+    w->bunny_instance = ex_tracer_add_instance(w->tracer, &w->bunny, grey);
+    wt__materials_from_obj(&w->office, w->materials);
+    memcpy(w->materials[w->bunny_material].diffuse, grey, sizeof grey);
+    memset(&sd, 0, sizeof sd);
+    sd.positions = w->office.positions;
+    sd.vertex_count = w->office.vertex_count;
+    sd.indices = w->office.tri_indices;
+    sd.triangle_count = w->office.tri_count;
+    sd.material_ids = w->office.tri_material;
+    sd.materials = w->materials;
+    sd.material_count = w->material_count;
+    lr = lightvec_scene_create(&sd, &w->office_scene);
+    if (w->bunny_instance < 0 || lr != LIGHTVEC_OK) {
+        snprintf(err, err_size, "cannot build the scene: %s", lr != LIGHTVEC_OK ? lightvec_result_string(lr) : "out of memory");
+        wt_world_destroy(w);
+        return -1;
+    }
+    memset(&w->static_gather, 0, sizeof w->static_gather);
+    w->static_gather.strata_theta = (uint32_t)o->strata;
+    w->static_gather.bounces = (uint32_t)o->bounces;
+    w->static_gather.seed = o->seed * 0x9E3779B97F4A7C15ull + 0x11ull;   /* not the direct light's streams */
+    w->bunny_gather = w->static_gather;
+    w->bunny_gather.strata_theta = (uint32_t)o->bunny_strata;
+    w->static_cache = wt__new_cache(w, 0);
+    if (!w->static_cache) {
+        wt_world_destroy(w);
+        return wt__fail(err, err_size, "%s", "out of memory");
+    }
+    w->time = -1.0;
+    *out = w;
+    return 0;
+}
+
+/* ======================================================================
+   the paths
+   The bunny walks from the open floor in front of the desk under the desk
+   (x 1.0-2.6, z 2.9-3.7, its top at 0.72-0.75 m), out again and along the
+   yellow divider (x 3.6-3.65, z 1.3-2.6): a Catmull-Rom spline through
+   waypoints, at constant speed, facing where it goes. The camera moves
+   along the front of the room at eye height and looks at where the bunny
+   is about to be.
+   ---------------------------------------------------------------------- */
+#define WT_PATH_VERSION 1u     /* bump when the paths change: precompute keys depend on them */
+#define WT_SHADING_VERSION 1u  /* bump when the shading changes: cached light vectors and base images */
+#define WT__WAYPOINTS 9
+static const float wt__waypoints[WT__WAYPOINTS][2] = {   /* (x, z) on the floor */
+    { 1.35f, 1.55f }, { 1.65f, 2.35f }, { 1.80f, 3.15f }, { 2.15f, 3.35f }, { 2.40f, 2.80f },
+    { 2.95f, 2.50f }, { 3.32f, 2.05f }, { 3.36f, 1.55f }, { 3.32f, 1.15f }
+};
+#define WT__PATH_STEPS 32    /* spline samples per segment for the arc length */
+
+static void wt__spline(float s, float xz[2])
+{
+    int n = WT__WAYPOINTS, i, k;
+    float u;
+    if (s <= 0.0f) s = 0.0f;
+    if (s >= (float)(n - 1)) s = (float)(n - 1) - 1e-6f;
+    i = (int)s;
+    u = s - (float)i;
+    for (k = 0; k < 2; k++) {
+        float p0 = wt__waypoints[i > 0 ? i - 1 : 0][k], p1 = wt__waypoints[i][k], p2 = wt__waypoints[i + 1][k];
+        float p3 = wt__waypoints[i + 2 < n ? i + 2 : n - 1][k];
+        xz[k] = 0.5f * (2.0f * p1 + (p2 - p0) * u + (2.0f * p0 - 5.0f * p1 + 4.0f * p2 - p3) * u * u +
+                        (3.0f * p1 - p0 - 3.0f * p2 + p3) * u * u * u);
+    }
+}
+
+/* The bunny's floor position (x, 0, z) and heading (radians about +y, 0 =
+   facing +z) at time t in [0, 1], at constant speed along the spline. */
+EX_FN void wt_bunny_position(double t, float pos[3], float *heading)
+{
+    float len[(WT__WAYPOINTS - 1) * WT__PATH_STEPS + 1], prev[2], xz[2], target, s, a[2], b[2];
+    int n = (WT__WAYPOINTS - 1) * WT__PATH_STEPS, i;
+    wt__spline(0.0f, prev);
+    len[0] = 0.0f;
+    for (i = 1; i <= n; i++) {
+        wt__spline((float)i / WT__PATH_STEPS, xz);
+        len[i] = len[i - 1] + sqrtf((xz[0] - prev[0]) * (xz[0] - prev[0]) + (xz[1] - prev[1]) * (xz[1] - prev[1]));
+        prev[0] = xz[0];
+        prev[1] = xz[1];
+    }
+    if (t < 0.0) t = 0.0;
+    if (t > 1.0) t = 1.0;
+    target = (float)t * len[n];
+    for (i = 1; i < n && len[i] < target; i++) {}
+    s = ((float)(i - 1) + (len[i] > len[i - 1] ? (target - len[i - 1]) / (len[i] - len[i - 1]) : 0.0f)) / WT__PATH_STEPS;
+    wt__spline(s, xz);
+    pos[0] = xz[0];
+    pos[1] = 0.0f;
+    pos[2] = xz[1];
+    wt__spline(s - 0.02f, a);
+    wt__spline(s + 0.02f, b);
+    if (heading) *heading = atan2f(b[0] - a[0], b[1] - a[1]);
+}
+
+/* The heading of the nose of bunny.obj in its own coordinates: -x. */
+#define WT_BUNNY_NOSE_HEADING (-0.5f * WT_PI)
+
+/* Object-to-world transform of the bunny at time t (3x4 row-major): OBJ
+   coordinates centred, feet on the floor, scaled by WT_BUNNY_SCALE, turned
+   to its heading, moved to its position. */
+EX_FN void wt_bunny_transform(const wt_world *w, double t, float m[12])
+{
+    float p[3], heading, yaw, c, s, k = WT_BUNNY_SCALE;
+    float cx = 0.5f * (w->bunny_lo[0] + w->bunny_hi[0]), cz = 0.5f * (w->bunny_lo[2] + w->bunny_hi[2]);
+    wt_bunny_position(t, p, &heading);
+    yaw = heading - WT_BUNNY_NOSE_HEADING;
+    c = cosf(yaw);
+    s = sinf(yaw);
+    /* world = R_y(yaw) k (q - (cx, lo_y, cz)) + p, R_y maps +z to (sin, 0, cos) */
+    m[0] = k * c;  m[1] = 0.0f; m[2] = k * s;  m[3] = p[0] - k * (c * cx + s * cz);
+    m[4] = 0.0f;   m[5] = k;    m[6] = 0.0f;   m[7] = -k * w->bunny_lo[1];
+    m[8] = -k * s; m[9] = 0.0f; m[10] = k * c; m[11] = p[2] - k * (-s * cx + c * cz);
+}
+
+EX_FN double wt_frame_time(const wt_options *o, int frame)
+{
+    return o->frames > 1 ? (double)frame / (double)(o->frames - 1) : 0.0;
+}
+
+/* The camera at time t: eye height 1.35 m along the front wall (a line: a
+   one-dimensional view space for the base views),
+   looking at the bunny's path a little ahead and behind (smoothed). */
+EX_FN rendercache_camera wt_camera(const wt_options *o, double t, uint32_t width, uint32_t height)
+{
+    rendercache_camera c;
+    float s = (float)(t * t * (3.0 - 2.0 * t)), look[3] = { 0, 0, 0 };
+    int j;
+    memset(&c, 0, sizeof c);
+    (void)o;
+    c.kind = RENDERCACHE_CAMERA_PERSPECTIVE;
+    c.eye[0] = 1.10f + 1.30f * s;
+    c.eye[1] = 1.35f;
+    c.eye[2] = 0.30f;
+    for (j = -2; j <= 2; j++) {
+        float p[3];
+        wt_bunny_position(t + 0.04 * j, p, NULL);
+        look[0] += 0.2f * p[0];
+        look[2] += 0.2f * p[2];
+    }
+    c.look_at[0] = look[0];
+    c.look_at[1] = 0.60f;
+    c.look_at[2] = look[2];
+    c.up[1] = 1.0f;
+    c.vfov_degrees = WT_CAMERA_VFOV;
+    c.width = width;
+    c.height = height;
+    return c;
+}
+
+/* The same camera for the software rasterizer. */
+EX_FN ex_camera wt_ex_camera(const rendercache_camera *c)
+{
+    return ex_camera_look_at(c->eye, c->look_at, c->up, c->vfov_degrees, (int)c->width, (int)c->height);
+}
+
+/* Moves the bunny to time t: the tracer's instance now, the light-vector
+   scene with the posed bunny and its empty cache when first needed. */
+EX_FN void wt_set_time(wt_world *w, double t)
+{
+    float m[12];
+    if (t == w->time) return;
+    wt_bunny_transform(w, t, m);
+    ex_tracer_set_transform(w->tracer, w->bunny_instance, m);
+    memcpy(w->pose, m, sizeof m);
+    w->time = t;
+    pthread_mutex_lock(&w->pose_lock);
+    w->pose_ready = 0;
+    pthread_mutex_unlock(&w->pose_lock);
+}
+
+/* Builds the posed light-vector scene and a fresh bunny cache (the bunny's
+   light vectors are valid at one pose only). Thread-safe. */
+static int wt__ensure_pose(wt_world *w)
+{
+    int ok = 1;
+    pthread_mutex_lock(&w->pose_lock);
+    if (!w->pose_ready) {
+        uint32_t nv = w->office.vertex_count + w->bunny.vertex_count, nt = w->office.tri_count + w->bunny.tri_count, i;
+        lightvec_scene_desc sd;
+        lightvec_scene_destroy(w->posed_scene);
+        lightvec_cache_destroy(w->bunny_cache);
+        w->posed_scene = NULL;
+        w->bunny_cache = NULL;
+        if (!w->posed_positions) {
+            w->posed_positions = (float *)malloc(3 * sizeof(float) * nv);
+            w->posed_indices = (uint32_t *)malloc(3 * sizeof(uint32_t) * nt);
+            w->posed_materials = (uint32_t *)malloc(sizeof(uint32_t) * nt);
+            if (w->posed_indices && w->posed_materials) {
+                memcpy(w->posed_indices, w->office.tri_indices, 3 * sizeof(uint32_t) * w->office.tri_count);
+                memcpy(w->posed_materials, w->office.tri_material, sizeof(uint32_t) * w->office.tri_count);
+                for (i = 0; i < 3 * w->bunny.tri_count; i++)
+                    w->posed_indices[3 * w->office.tri_count + i] = w->bunny.tri_indices[i] + w->office.vertex_count;
+                for (i = 0; i < w->bunny.tri_count; i++) w->posed_materials[w->office.tri_count + i] = w->bunny_material;
+            }
+        }
+        ok = w->posed_positions && w->posed_indices && w->posed_materials;
+        if (ok) {
+            memcpy(w->posed_positions, w->office.positions, 3 * sizeof(float) * w->office.vertex_count);
+            for (i = 0; i < w->bunny.vertex_count; i++)
+                ex__affine_point(w->pose, w->bunny.positions + 3 * (size_t)i,
+                                 w->posed_positions + 3 * ((size_t)w->office.vertex_count + i));
+            memset(&sd, 0, sizeof sd);
+            sd.positions = w->posed_positions;
+            sd.vertex_count = nv;
+            sd.indices = w->posed_indices;
+            sd.triangle_count = nt;
+            sd.material_ids = w->posed_materials;
+            sd.materials = w->materials;
+            sd.material_count = w->material_count;
+            ok = lightvec_scene_create(&sd, &w->posed_scene) == LIGHTVEC_OK;
+            w->bunny_cache = ok ? wt__new_cache(w, 1) : NULL;
+            ok = ok && w->bunny_cache;
+        }
+        w->pose_ready = ok;
+    }
+    pthread_mutex_unlock(&w->pose_lock);
+    return ok ? 0 : -1;
+}
+
+/* ======================================================================
+   shading: a primary hit gets emission + direct light (trace.h, area
+   samples with shadow rays, Lambert + Phong) + indirect light from a light
+   vector (lightvec.h). Light vectors are looked up in rounds so that the
+   result does not depend on the thread count: every round looks up all
+   points still dark (in parallel, the cache read-only), picks one point per
+   cell of a grid among the misses (cells shrink round by round), gathers
+   the picks' light vectors (in parallel) and inserts them in a fixed order.
+   The last round gathers every point still missing. The bunny's light
+   vectors come from a cache of their own, made anew at every pose.
+   ---------------------------------------------------------------------- */
+#define WT__ROUNDS 5
+#define WT__CELL_STATIC 0.35f     /* metres: pick cells of the first round */
+#define WT__CELL_BUNNY 0.08f
+#define WT__CELL_SHRINK 0.7f
+#define WT__BATCH 64              /* points per parallel job */
+
+/* Smooth normal of a bunny hit, in world space. */
+static void wt__bunny_normal(const wt_world *w, const ex_trace_hit *h, float n[3])
+{
+    const uint32_t *v = w->bunny.tri_indices + 3 * (size_t)h->tri;
+    float o = 1.0f - h->u - h->v, no[3], l;
+    int k;
+    for (k = 0; k < 3; k++)
+        no[k] = o * w->bunny_normals[3 * v[0] + k] + h->u * w->bunny_normals[3 * v[1] + k] +
+                h->v * w->bunny_normals[3 * v[2] + k];
+    ex__affine_vector(w->pose, no, n);   /* a similarity: normals map like vectors */
+    l = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (k = 0; k < 3; k++) n[k] = l > 0.0f ? n[k] / l : h->normal[k];
+}
+
+/* Shadow ray test through the tracer; *by_bunny is set when the bunny (not
+   the office) blocks it. */
+static int wt__occluded(const ex_tracer *t, int bunny, const float org[3], const float dir[3], float tmax, int *by_bunny)
+{
+    float o[3], d[3];
+    if (tr__bvh_occluded(&t->bvh, org, dir, 0.0f, tmax)) return 1;
+    ex__affine_point(t->instances[bunny].to_object, org, o);
+    ex__affine_vector(t->instances[bunny].to_object, dir, d);
+    if (!tr__bvh_occluded(&t->instances[bunny].bvh, o, d, 0.0f, tmax)) return 0;
+    *by_bunny = 1;
+    return 1;
+}
+
+/* Direct light reflected at a hit towards -dir: every emitting polygon of
+   the office sampled at opt.light_samples stratified points (side x side
+   cells when it is a square) with shadow rays through the tracer, so the
+   bunny casts shadows; polygons facing away are skipped without a ray.
+   Lambert + normalized Phong. */
+static void wt__direct(const wt_world *w, const ex_trace_hit *h, const float dir[3], const lightvec_material *m,
+                       ex_rng *r, float rgb[3], int *bunny_shadow)
+{
+    const ex_tracer *t = w->tracer;
+    const float *pos = w->office.positions;
+    int n = w->opt.light_samples, side = (int)sqrtf((float)n + 0.5f), s, k;
+    float org[3], mirror[3], vn = -(dir[0] * h->normal[0] + dir[1] * h->normal[1] + dir[2] * h->normal[2]);
+    uint32_t e;
+    rgb[0] = rgb[1] = rgb[2] = 0.0f;
+    if (side * side != n) side = 1;
+    for (k = 0; k < 3; k++) {
+        org[k] = h->pos[k] + t->epsilon * h->normal[k];
+        mirror[k] = dir[k] + 2.0f * vn * h->normal[k];   /* the view direction reflected */
+    }
+    for (e = 0; e < w->light_count; e++) {
+        const wt_light *L = &w->lights[e];
+        const float *ln = L->normal;
+        float front = (org[0] - L->point[0]) * ln[0] + (org[1] - L->point[1]) * ln[1] + (org[2] - L->point[2]) * ln[2];
+        float weight = L->area / (float)n;
+        if (front <= 0.0f) continue;   /* behind the emitter: one-sided */
+        for (s = 0; s < n; s++) {
+            float u1 = ((float)(s % side) + ex_rng_float(r)) / (float)side * L->area;
+            float u2 = ((float)(s / side) + ex_rng_float(r)) / (float)(n / side), su, y[3], wi[3];
+            float d2, d, cos_x, cos_y, g, f, c_m = 0.0f;
+            const float *a, *b, *c;
+            const uint32_t *v;
+            uint32_t i = 0;
+            while (i + 1 < L->tri_count && u1 >= t->tri_area[L->first_tri + i]) u1 -= t->tri_area[L->first_tri + i++];
+            v = w->office.tri_indices + 3 * (size_t)(L->first_tri + i);
+            a = pos + 3 * (size_t)v[0];
+            b = pos + 3 * (size_t)v[1];
+            c = pos + 3 * (size_t)v[2];
+            su = sqrtf(u1 / t->tri_area[L->first_tri + i]);   /* uniform on the triangle */
+            for (k = 0; k < 3; k++) y[k] = (1.0f - su) * a[k] + su * (1.0f - u2) * b[k] + su * u2 * c[k];
+            for (k = 0; k < 3; k++) wi[k] = y[k] - org[k];
+            d2 = wi[0] * wi[0] + wi[1] * wi[1] + wi[2] * wi[2];
+            if (!(d2 > 0.0f)) continue;
+            d = sqrtf(d2);
+            for (k = 0; k < 3; k++) wi[k] /= d;
+            cos_x = wi[0] * h->normal[0] + wi[1] * h->normal[1] + wi[2] * h->normal[2];
+            cos_y = -(wi[0] * ln[0] + wi[1] * ln[1] + wi[2] * ln[2]);
+            if (cos_x <= 0.0f || cos_y <= 0.0f) continue;
+            if (wt__occluded(t, w->bunny_instance, org, wi, d * (1.0f - 1e-4f) - t->epsilon, bunny_shadow)) continue;
+            g = cos_x * cos_y / d2 * weight;
+            for (k = 0; k < 3; k++) c_m += mirror[k] * wi[k];
+            f = c_m > 0.0f && m->exponent > 0.0f ? (m->exponent + 2.0f) / (2.0f * WT_PI) * powf(c_m, m->exponent) : 0.0f;
+            for (k = 0; k < 3; k++) rgb[k] += L->ke[k] * (m->diffuse[k] / WT_PI + m->specular[k] * f) * g;
+        }
+    }
+}
+
+/* Traces a point's ray and computes its emission and direct light. */
+static void wt__trace_point(const wt_world *w, wt_point *p, int direct)
+{
+    ex_trace_hit h;
+    ex_rng rng;
+    float d[3];
+    int k, shadow = 0;
+    p->light = WT_LIGHT_NONE;
+    p->bunny_shadow = 0;
+    p->lit = 1;
+    p->gathered = 0;
+    p->glossy = 0;
+    p->weight = 0.0f;
+    p->material = 0;
+    for (k = 0; k < 3; k++) p->direct[k] = p->indirect[k] = p->rgb[k] = 0.0f;
+    if (!ex_tracer_intersect(w->tracer, p->org, p->dir, FLT_MAX, &h)) {
+        p->t = FLT_MAX;
+        p->object = RENDERCACHE_MISS;
+        p->polygon = RENDERCACHE_MISS;
+        return;
+    }
+    p->t = h.t;
+    memcpy(p->pos, h.pos, sizeof p->pos);
+    if (h.instance == EX_TRACE_STATIC) {
+        p->object = WT_OBJECT_OFFICE;
+        p->polygon = w->office.tri_face[h.tri];
+        p->material = w->office.tri_material[h.tri];
+    } else {
+        float n[3];
+        p->object = WT_OBJECT_BUNNY;
+        p->polygon = w->office.face_count + h.tri;
+        p->material = w->bunny_material;
+        wt__bunny_normal(w, &h, n);
+        if (h.front && n[0] * p->dir[0] + n[1] * p->dir[1] + n[2] * p->dir[2] < 0.0f) memcpy(h.normal, n, sizeof n);
+    }
+    memcpy(p->normal, h.normal, sizeof p->normal);
+    if (!h.front) return;                 /* one-sided surfaces: a back face is black */
+    for (k = 0; k < 3; k++) p->direct[k] = w->materials[p->material].emission[k];
+    if (direct) {
+        rng = ex_rng_stream(w->opt.seed, p->stream);
+        wt__direct(w, &h, p->dir, &w->materials[p->material], &rng, d, &shadow);
+        p->bunny_shadow = (unsigned char)shadow;
+        for (k = 0; k < 3; k++) p->direct[k] += d[k];
+    }
+    p->light = p->object == WT_OBJECT_BUNNY ? WT_LIGHT_BUNNY : WT_LIGHT_STATIC;
+    p->glossy = (unsigned char)wt__is_glossy(&w->materials[p->material]);
+    p->lit = 0;
+}
+
+typedef struct wt__job {
+    wt_world *w;
+    wt_point *points;
+    uint32_t count;
+    int direct;
+} wt__job;
+
+static void wt__trace_job(void *ctx, uint32_t batch)
+{
+    const wt__job *j = (const wt__job *)ctx;
+    uint32_t i, end = batch * WT__BATCH + WT__BATCH;
+    if (end > j->count) end = j->count;
+    for (i = batch * WT__BATCH; i < end; i++) wt__trace_point(j->w, &j->points[i], j->direct);
+}
+
+static const float *wt__outgoing(const wt_point *p, float wo[3])
+{
+    if (!p->glossy) return NULL;   /* Lambertian: a view-independent (3D) light vector */
+    wo[0] = -p->dir[0];
+    wo[1] = -p->dir[1];
+    wo[2] = -p->dir[2];
+    return wo;
+}
+
+static lightvec_cache *wt__cache_of(const wt_world *w, const wt_point *p)
+{
+    return p->light == WT_LIGHT_BUNNY ? w->bunny_cache : w->static_cache;
+}
+
+static void wt__lookup_job(void *ctx, uint32_t batch)
+{
+    const wt__job *j = (const wt__job *)ctx;
+    uint32_t i, end = batch * WT__BATCH + WT__BATCH;
+    if (end > j->count) end = j->count;
+    for (i = batch * WT__BATCH; i < end; i++) {
+        wt_point *p = &j->points[j->w->pending[i]];
+        lightvec_lookup_result r;
+        float wo[3];
+        const float *out = wt__outgoing(p, wo);
+        if (lightvec_lookup(wt__cache_of(j->w, p), p->pos, p->normal, out, &r) != LIGHTVEC_OK || !r.hit) continue;
+        lightvec_radiance(&j->w->materials[p->material], p->normal, out, &r.vector, p->indirect);
+        p->weight = r.weight;
+        p->lit = 1;
+    }
+}
+
+static void wt__surface_of(const wt_world *w, const wt_point *p, lightvec_surface *s)
+{
+    int k;
+    memset(s, 0, sizeof *s);
+    memcpy(s->position, p->pos, sizeof s->position);
+    memcpy(s->normal, p->normal, sizeof s->normal);
+    for (k = 0; k < 3; k++) s->outgoing[k] = -p->dir[k];
+    s->flags = p->glossy ? 0u : LIGHTVEC_RECORD_VIEW_INDEPENDENT;
+    s->material = w->materials[p->material];
+}
+
+static void wt__gather_job(void *ctx, uint32_t batch)
+{
+    const wt__job *j = (const wt__job *)ctx;
+    const wt_world *w = j->w;
+    uint32_t i, end = batch * WT__BATCH + WT__BATCH;
+    if (end > j->count) end = j->count;
+    for (i = batch * WT__BATCH; i < end; i++) {
+        const wt_point *p = &j->points[w->picks[i]];
+        lightvec_surface s;
+        wt__surface_of(w, p, &s);
+        if (p->light == WT_LIGHT_BUNNY)
+            lightvec_gather(w->posed_scene, &w->bunny_gather, &s, p->stream, &w->records[i]);
+        else
+            lightvec_gather(w->office_scene, &w->static_gather, &s, p->stream, &w->records[i]);
+    }
+}
+
+static int wt__reserve(wt_world *w, uint32_t n)
+{
+    uint32_t cells = 16;
+    if (n > w->scratch_capacity) {
+        free(w->pending);
+        free(w->picks);
+        free(w->records);
+        w->pending = (uint32_t *)malloc(sizeof(uint32_t) * n);
+        w->picks = (uint32_t *)malloc(sizeof(uint32_t) * n);
+        w->records = (lightvec_record *)malloc(sizeof(lightvec_record) * n);
+        w->scratch_capacity = w->pending && w->picks && w->records ? n : 0;
+        if (!w->scratch_capacity) return -1;
+    }
+    while (cells < 2 * n) cells *= 2;
+    if (cells > w->cell_capacity) {
+        free(w->cells);
+        w->cells = (uint64_t *)malloc(sizeof(uint64_t) * cells);
+        w->cell_capacity = w->cells ? cells : 0;
+        if (!w->cells) return -1;
+    }
+    return 0;
+}
+
+/* The pick cell of a point: 18 bits per axis, the cache, and for glossy
+   points the octant and dominant axis of the view direction (their light
+   vectors are valid within 15 degrees of it). Never 0. */
+static uint64_t wt__cell_key(const wt_point *p, float cell)
+{
+    uint64_t key = 0;
+    int k;
+    for (k = 0; k < 3; k++) {
+        long c = (long)floorf((p->pos[k] + 64.0f) / cell);
+        if (c < 0) c = 0;
+        if (c > 0x3FFFF) c = 0x3FFFF;
+        key = key << 18 | (uint64_t)c;
+    }
+    key = key << 2 | p->light;
+    if (p->glossy) {
+        const float *d = p->dir;
+        int axis = fabsf(d[0]) > fabsf(d[1]) ? (fabsf(d[0]) > fabsf(d[2]) ? 0 : 2) : (fabsf(d[1]) > fabsf(d[2]) ? 1 : 2);
+        key = key << 5 | (uint64_t)(8 * axis + (d[0] < 0) + 2 * (d[1] < 0) + 4 * (d[2] < 0));
+        key |= (uint64_t)1 << 63;
+    } else {
+        key <<= 5;
+    }
+    return key | 1u;
+}
+
+/* Picks, among the pending points, the first of each cell (in point order). */
+static uint32_t wt__pick(wt_world *w, const wt_point *points, uint32_t pending, int round)
+{
+    uint32_t i, n = 0, mask = w->cell_capacity - 1;
+    float shrink = powf(WT__CELL_SHRINK, (float)round);
+    memset(w->cells, 0, sizeof(uint64_t) * w->cell_capacity);
+    for (i = 0; i < pending; i++) {
+        const wt_point *p = &points[w->pending[i]];
+        uint64_t key = wt__cell_key(p, (p->light == WT_LIGHT_BUNNY ? WT__CELL_BUNNY : WT__CELL_STATIC) * shrink);
+        uint32_t slot = (uint32_t)(key ^ key >> 29 ^ key >> 47) * 0x9E3779B1u & mask;
+        while (w->cells[slot] && w->cells[slot] != key) slot = (slot + 1) & mask;
+        if (w->cells[slot]) continue;
+        w->cells[slot] = key;
+        w->picks[n++] = w->pending[i];
+    }
+    return n;
+}
+
+/* Light-vector counters of one call. */
+typedef struct wt_light_stats { uint32_t lookups, hits, gathers, bunny_gathers; } wt_light_stats;
+
+/* Indirect light of every point with p->light set (see above). Without
+   insert the caches stay as they are: a miss gathers a vector for itself. */
+static int wt__light_points(wt_world *w, wt_point *points, uint32_t count, int insert, wt_light_stats *st)
+{
+    uint32_t pending = 0, i, round;
+    wt__job j;
+    if (wt__reserve(w, count) != 0) return -1;
+    for (i = 0; i < count; i++)
+        if (!points[i].lit) w->pending[pending++] = i;
+    for (i = 0; i < pending; i++)
+        if (points[w->pending[i]].light == WT_LIGHT_BUNNY) {
+            if (wt__ensure_pose(w) != 0) return -1;
+            break;
+        }
+    j.w = w;
+    j.points = points;
+    for (round = 0; pending; round++) {
+        uint32_t picks, kept;
+        j.count = pending;
+        ex_pool_parallel_for(w->pool, wt__lookup_job, &j, (pending + WT__BATCH - 1) / WT__BATCH);
+        st->lookups += pending;
+        for (i = kept = 0; i < pending; i++) {
+            if (points[w->pending[i]].lit) st->hits++;
+            else w->pending[kept++] = w->pending[i];
+        }
+        pending = kept;
+        if (!pending) break;
+        if (round + 1 >= WT__ROUNDS || !insert) {
+            memcpy(w->picks, w->pending, sizeof(uint32_t) * pending);
+            picks = pending;
+        } else {
+            picks = wt__pick(w, points, pending, (int)round);
+        }
+        j.count = picks;
+        ex_pool_parallel_for(w->pool, wt__gather_job, &j, (picks + WT__BATCH - 1) / WT__BATCH);
+        st->gathers += picks;
+        for (i = 0; i < picks; i++) st->bunny_gathers += points[w->picks[i]].light == WT_LIGHT_BUNNY;
+        for (i = 0; i < picks; i++) {   /* one writer, in a fixed order */
+            wt_point *p = &points[w->picks[i]];
+            float wo[3];
+            if (insert) lightvec_insert(wt__cache_of(w, p), &w->records[i], NULL);
+            lightvec_radiance(&w->materials[p->material], p->normal, wt__outgoing(p, wo), &w->records[i].vector,
+                              p->indirect);
+            p->weight = 1.0f;   /* exact at its own point: weight 1 */
+            p->lit = p->gathered = 1;
+        }
+        for (i = kept = 0; i < pending; i++)
+            if (!points[w->pending[i]].lit) w->pending[kept++] = w->pending[i];
+        pending = kept;
+    }
+    return 0;
+}
+
+/* How wt_shade_points works. */
+enum {
+    WT_SHADE_DIRECT = 1,        /* emission + direct light (else emission only) */
+    WT_SHADE_INSERT = 2,        /* new light vectors go into the caches */
+    WT_SHADE_STATIC_ONLY = 4    /* light vectors for the office only (the bunny's points get none) */
+};
+
+/* Shades points: traces them, computes emission and direct light, and adds
+   the indirect light of light vectors. Adds the seconds spent tracing and
+   in light vectors to *seconds_trace, *seconds_light (either may be NULL). */
+EX_FN int wt_shade_points(wt_world *w, wt_point *points, uint32_t count, int flags, wt_light_stats *st,
+                          double *seconds_trace, double *seconds_light)
+{
+    wt__job j;
+    double t0 = wt_seconds();
+    uint32_t i;
+    int k;
+    j.w = w;
+    j.points = points;
+    j.count = count;
+    j.direct = flags & WT_SHADE_DIRECT;
+    ex_pool_parallel_for(w->pool, wt__trace_job, &j, (count + WT__BATCH - 1) / WT__BATCH);
+    if (flags & WT_SHADE_STATIC_ONLY)
+        for (i = 0; i < count; i++)
+            if (points[i].light == WT_LIGHT_BUNNY) {
+                points[i].light = WT_LIGHT_NONE;
+                points[i].lit = 1;
+            }
+    if (seconds_trace) *seconds_trace += wt_seconds() - t0;
+    t0 = wt_seconds();
+    if (wt__light_points(w, points, count, (flags & WT_SHADE_INSERT) != 0, st) != 0) return -1;
+    for (i = 0; i < count; i++)
+        for (k = 0; k < 3; k++) points[i].rgb[k] = points[i].direct[k] + points[i].indirect[k];
+    if (seconds_light) *seconds_light += wt_seconds() - t0;
+    return 0;
+}
+
+/* ======================================================================
+   rays of whole images
+   ---------------------------------------------------------------------- */
+
+/* Random stream of pixel p of frame f in a given use (frames, warm-up,
+   base images, full renders draw from disjoint streams). */
+enum { WT_STREAM_FRAME = 0, WT_STREAM_WARMUP = 1, WT_STREAM_BASE = 2, WT_STREAM_FULL = 3, WT_STREAM_FILL = 4 };
+static uint64_t wt__stream(int use, uint32_t frame, uint32_t pixel)
+{
+    return (uint64_t)use << 56 | (uint64_t)(frame & 0xFFFFFFu) << 32 | pixel;
+}
+
+/* One point per pixel of camera c (row-major); pixels without a ray (outside
+   a fish-eye's circle) get t = -1. */
+static void wt__camera_points(const rendercache_camera *c, int use, uint32_t frame, wt_point *points)
+{
+    uint32_t x, y;
+    for (y = 0; y < c->height; y++)
+        for (x = 0; x < c->width; x++) {
+            wt_point *p = &points[(size_t)y * c->width + x];
+            p->stream = wt__stream(use, frame, y * c->width + x);
+            p->t = 0.0f;
+            if (rendercache_camera_ray(c, (float)x + 0.5f, (float)y + 0.5f, p->org, p->dir) != RENDERCACHE_OK)
+                p->t = -1.0f;
+        }
+}
+
+/* Shades the pixels of camera c that have rays. Points without a ray are
+   moved out of the way and back. */
+static int wt__shade_camera(wt_world *w, const rendercache_camera *c, int use, uint32_t frame, int flags,
+                            wt_point *points, uint32_t *index, wt_light_stats *st)
+{
+    uint32_t n = c->width * c->height, i, m = 0;
+    int result;
+    wt__camera_points(c, use, frame, points);
+    for (i = 0; i < n; i++)   /* compact the pixels with rays to the front, stably */
+        if (points[i].t >= 0.0f) {
+            index[m] = i;
+            if (m != i) points[m] = points[i];
+            m++;
+        }
+    result = wt_shade_points(w, points, m, flags, st, NULL, NULL);
+    for (i = m; i-- > 0;)
+        if (index[i] != i) {
+            points[index[i]] = points[i];
+            points[i].t = -1.0f;
+        }
+    return result;
+}
+
+/* A copy of a light-vector cache (through its serialization), or NULL. */
+static lightvec_cache *wt__cache_copy(const wt_world *w, const lightvec_cache *c)
+{
+    lightvec_cache_desc d;
+    lightvec_cache *copy = NULL;
+    void *data = NULL;
+    size_t size = 0;
+    memset(&d, 0, sizeof d);
+    d.parallel_for = ex_pool_parallel_for;
+    d.parallel_user = w->pool;
+    if (lightvec_save_to_memory(c, NULL, &data, &size) == LIGHTVEC_OK)
+        lightvec_load_from_memory(data, size, &d, &copy);
+    lightvec_free_memory(NULL, data);
+    return copy;
+}
+
+/* Renders every pixel of camera c at time t with the frames' shading
+   (direct light, light vectors looked up and gathered where missing): the
+   full render a cached frame is compared with. New light vectors go to
+   copies of the caches, so the frames see the caches unchanged. rgb: 3
+   floats per pixel; object (optional): WT_OBJECT_* per pixel. */
+EX_FN int wt_render_full(wt_world *w, const rendercache_camera *c, double t, uint32_t frame, float *rgb,
+                         uint32_t *object)
+{
+    uint32_t n = c->width * c->height, i;
+    wt_point *points = (wt_point *)malloc(sizeof(wt_point) * n);
+    uint32_t *index = (uint32_t *)malloc(sizeof(uint32_t) * n);
+    lightvec_cache *saved = w->static_cache, *copy = NULL;
+    wt_light_stats st = { 0, 0, 0, 0 };
+    int result = -1;
+    wt_set_time(w, t);
+    if (points && index && wt__ensure_pose(w) == 0 && (copy = wt__cache_copy(w, saved)) != NULL) {
+        w->static_cache = copy;
+        result = wt__shade_camera(w, c, WT_STREAM_FULL, frame, WT_SHADE_DIRECT | WT_SHADE_INSERT, points, index, &st);
+        w->static_cache = saved;
+        lightvec_cache_destroy(copy);
+        pthread_mutex_lock(&w->pose_lock);
+        w->pose_ready = 0;   /* the bunny's cache got the full render's vectors: start it anew */
+        pthread_mutex_unlock(&w->pose_lock);
+        for (i = 0; i < n && result == 0; i++) {
+            int k;
+            for (k = 0; k < 3; k++) rgb[3 * i + k] = points[i].t >= 0.0f ? points[i].rgb[k] : 0.0f;
+            if (object) object[i] = points[i].t >= 0.0f ? points[i].object : RENDERCACHE_NO_SAMPLE;
+        }
+    }
+    free(points);
+    free(index);
+    return result;
+}
+
+/* Relative luminance RMS error (Nimeroff et al.) of what is displayed:
+   both images clamped at the white point 1 / exposure first, so that the
+   few pixels of the lamp (radiance 40, a hundred times the room's) weigh
+   as white pixels, not as a hundred. Returns 0 or -1. */
+EX_FN int wt_display_lrms(const float *reference, const float *image, int width, int height, float exposure,
+                          double *lrms)
+{
+    size_t i, n = 3 * (size_t)width * (size_t)height;
+    float white = exposure > 0.0f ? 1.0f / exposure : FLT_MAX;
+    float *a = (float *)malloc(sizeof(float) * n), *b = (float *)malloc(sizeof(float) * n);
+    int result = -1;
+    if (a && b) {
+        for (i = 0; i < n; i++) {
+            a[i] = reference[i] < white ? reference[i] : white;
+            b[i] = image[i] < white ? image[i] : white;
+        }
+        result = rendercache_lrms(a, b, (uint32_t)width, (uint32_t)height, lrms) == RENDERCACHE_OK ? 0 : -1;
+    }
+    free(a);
+    free(b);
+    return result;
+}
+
+/* ======================================================================
+   the renderer of a mode: precompute (cached on disk), then frames
+   ---------------------------------------------------------------------- */
+
+/* Shading data of the static office for mode radiosity: the interpolant
+   mesh of radinterp.h (Hardt 1996), rasterized into the ID + barycentric
+   buffers and shaded per pixel. */
+typedef struct wt_static_shading {
+    const float *positions;     /* the mesh the rasterizer draws: xyz per vertex */
+    uint32_t vertex_count;
+    const uint32_t *indices;    /* 3 per triangle; raster ids 0 .. triangle_count-1 */
+    uint32_t triangle_count;
+    void *mesh;                 /* radinterp's mesh with its interpolants */
+    /* the radiance of the solution along a ray (the irradiance volume's
+       source: trace to a mesh triangle, evaluate its interpolant there:
+       emission + reflectance * E / pi), and a key of the solution for the
+       precompute cache */
+    irrvol_radiance_fn radiance;
+    void *radiance_user;
+    uint64_t key;
+} wt_static_shading;
+
+typedef struct wt_renderer {
+    wt_world *w;
+    wt_mode mode;
+    uint32_t width, height;
+    int frames_done;
+    wt_point *points;
+    uint32_t *index;
+    /* what the precompute did, for messages and tests */
+    int reused_lightvec, reused_baseviews, reused_visibility, reused_volume;
+    uint64_t lightvec_key, baseviews_key;
+    double seconds_precompute;
+    uint64_t static_vectors;    /* light vectors in the static cache after the precompute */
+    /* raytrace */
+    rendercache *rc;
+    rendercache_pixel_request *req;
+    rendercache_sample *samples;
+    uint32_t budget;
+    /* baseviews */
+    ex_baseviews bv;
+    ex_baseviews_reconstructor rec;
+    rendercache_range_image *blend[8], *out;
+    uint32_t fill_frame;
+    /* radiosity */
+    wt_static_shading statics;
+    irrvol *volume;
+    float *visibility;          /* self-occlusion ratio per bunny vertex */
+    float *bunny_world, *bunny_world_normals, *bunny_rgb;
+    ex_raster raster;
+} wt_renderer;
+
+static void wt__say(const wt_world *w, const char *fmt, ...)
+{
+    va_list ap;
+    if (!w->opt.verbose) return;
+    va_start(ap, fmt);
+    vprintf(fmt, ap);
+    va_end(ap);
+    fflush(stdout);
+}
+
+/* ---- light vectors of the office: a warm-up along the path ------------- */
+
+/* Hash of the paths: every frame's camera and the bunny at 65 times. */
+static uint64_t wt__path_hash(const wt_world *w, uint64_t h)
+{
+    int f, k;
+    for (f = 0; f < w->opt.frames; f++) {
+        rendercache_camera c = wt_camera(&w->opt, wt_frame_time(&w->opt, f), 8, 8);
+        for (k = 0; k < 3; k++) h = wt_hash_f32(wt_hash_f32(wt_hash_f32(h, c.eye[k]), c.look_at[k]), c.up[k]);
+        h = wt_hash_f32(h, c.vfov_degrees);
+    }
+    for (f = 0; f <= 64; f++) {
+        float m[12];
+        wt_bunny_transform(w, f / 64.0, m);
+        for (k = 0; k < 12; k++) h = wt_hash_f32(h, m[k]);
+    }
+    return h;
+}
+
+/* Key of the static light-vector cache: the scene, the gathers, the path. */
+static uint64_t wt__lightvec_key(const wt_world *w)
+{
+    const wt_options *o = &w->opt;
+    uint64_t h = wt_hash_str(w->scene_hash, "lightvec");
+    h = wt__path_hash(w, h);
+    h = wt_hash_u64(h, LIGHTVEC_FILE_FORMAT_VERSION);
+    h = wt_hash_u64(h, LIGHTVEC_VERSION_MAJOR * 10000u + LIGHTVEC_VERSION_MINOR * 100u + LIGHTVEC_VERSION_PATCH);
+    h = wt_hash_u64(h, WT_PATH_VERSION);
+    h = wt_hash_u64(h, WT_SHADING_VERSION);
+    h = wt_hash_u64(h, o->seed);
+    h = wt_hash_u64(h, (uint64_t)o->strata);
+    h = wt_hash_u64(h, (uint64_t)o->bounces);
+    h = wt_hash_u64(h, (uint64_t)o->warmup_divisor);
+    h = wt_hash_u64(h, (uint64_t)o->width);
+    h = wt_hash_u64(h, (uint64_t)o->height);
+    h = wt_hash_u64(h, (uint64_t)o->frames);
+    return h;
+}
+
+/* Fills the static cache with the light vectors the path's views need,
+   seen at 1/warmup_divisor of the frame size: the cached frames then
+   mostly look vectors up (Crespin & Peroche's first picture, moved into
+   the precompute). */
+static int wt__warm_up(wt_renderer *r)
+{
+    wt_world *w = r->w;
+    const wt_options *o = &w->opt;
+    uint32_t ww = r->width / (uint32_t)o->warmup_divisor, hh = r->height / (uint32_t)o->warmup_divisor;
+    wt_light_stats st = { 0, 0, 0, 0 };
+    wt_progress bar;
+    int f;
+    if (ww < 8) ww = 8;
+    if (hh < 8) hh = 8;
+    wt_progress_begin(&bar, "light vectors along the path", o->progress);
+    for (f = 0; f < o->frames; f++) {
+        double t = wt_frame_time(o, f);
+        rendercache_camera c = wt_camera(o, t, ww, hh);
+        wt_set_time(w, t);
+        if (wt__shade_camera(w, &c, WT_STREAM_WARMUP, (uint32_t)f, WT_SHADE_INSERT | WT_SHADE_STATIC_ONLY, r->points,
+                             r->index, &st) != 0)
+            return -1;
+        wt_progress_update(&bar, (uint64_t)f + 1, (uint64_t)o->frames);
+    }
+    wt_progress_end(&bar);
+    return lightvec_cache_optimize(w->static_cache) == LIGHTVEC_OK ? 0 : -1;
+}
+
+/* The static light-vector cache: loaded from the precompute cache, or
+   warmed up and saved. */
+static int wt__static_lightvec(wt_renderer *r, char *err, size_t err_size)
+{
+    wt_world *w = r->w;
+    const wt_options *o = &w->opt;
+    uint64_t key = wt__lightvec_key(w);
+    char path[1024];
+    void *data = NULL;
+    size_t size = 0;
+    lightvec_cache_stats info;
+    double t0 = wt_seconds();
+    int got = 0;
+    r->lightvec_key = key;
+    wt_cache_path(o->cache_dir, "lightvec", key, path, sizeof path);
+    if (o->use_cache) got = wt_cache_load(o->cache_dir, "lightvec", key, &data, &size);
+    if (got == 1) {
+        lightvec_cache_desc d;
+        lightvec_cache *c = NULL;
+        memset(&d, 0, sizeof d);
+        d.parallel_for = ex_pool_parallel_for;
+        d.parallel_user = w->pool;
+        if (lightvec_load_from_memory(data, size, &d, &c) == LIGHTVEC_OK) {
+            lightvec_cache_destroy(w->static_cache);
+            w->static_cache = c;
+            r->reused_lightvec = 1;
+        } else {
+            got = -1;
+        }
+        free(data);
+        data = NULL;
+    }
+    if (got == -1) wt__say(w, "light vectors: %s is damaged, rebuilding it\n", path);
+    if (!r->reused_lightvec) {
+        lightvec_cache *copy;
+        if (wt__warm_up(r) != 0) {
+            snprintf(err, err_size, "the light-vector warm-up failed (out of memory)");
+            return -1;
+        }
+        /* the frames use the cache as a later run will load it (the same
+           kd-trees, so the same sums in the same order) */
+        if (!(copy = wt__cache_copy(w, w->static_cache))) return wt__fail(err, err_size, "%s", "out of memory");
+        lightvec_cache_destroy(w->static_cache);
+        w->static_cache = copy;
+        if (o->use_cache) {
+            lightvec_result lr = lightvec_save_to_memory(w->static_cache, NULL, &data, &size);
+            if (lr != LIGHTVEC_OK || wt_cache_store(o->cache_dir, "lightvec", key, data, size, err, err_size) != 0) {
+                if (lr != LIGHTVEC_OK) snprintf(err, err_size, "lightvec_save_to_memory: %s", lightvec_result_string(lr));
+                wt__say(w, "light vectors: not cached (%s)\n", err);
+                err[0] = 0;
+            }
+            lightvec_free_memory(NULL, data);
+        }
+    }
+    lightvec_cache_info(w->static_cache, &info);
+    r->static_vectors = info.record_count;
+    if (w->opt.verbose) {
+        if (r->reused_lightvec)
+            printf("light vectors: reused the precompute cache %s (%llu vectors)\n", path,
+                   (unsigned long long)info.record_count);
+        else
+            printf("light vectors: %llu computed along the path in %.1f s%s%s\n", (unsigned long long)info.record_count,
+                   wt_seconds() - t0, o->use_cache ? ", saved to " : " (cache off)", o->use_cache ? path : "");
+        fflush(stdout);
+    }
+    return 0;
+}
+
+/* ---- mode raytrace ------------------------------------------------------ */
+
+static int wt__raytrace_create(wt_renderer *r, char *err, size_t err_size)
+{
+    rendercache_desc d;
+    uint32_t n = r->width * r->height;
+    rendercache_result rr;
+    if (wt__static_lightvec(r, err, err_size) != 0) return -1;
+    memset(&d, 0, sizeof d);
+    d.width = r->width;
+    d.height = r->height;
+    d.object_count = 2;
+    d.parallel_for = ex_pool_parallel_for;
+    d.parallel_user = r->w->pool;
+    d.clock = wt__clock;
+    rr = rendercache_create(&d, &r->rc);
+    r->budget = (uint32_t)(r->w->opt.budget * (float)n + 0.5f);
+    if (r->budget < 1) r->budget = 1;
+    r->req = (rendercache_pixel_request *)malloc(sizeof *r->req * n);
+    r->samples = (rendercache_sample *)malloc(sizeof *r->samples * n);
+    if (rr != RENDERCACHE_OK || !r->req || !r->samples) {
+        snprintf(err, err_size, "cannot create the render cache: %s",
+                 rr != RENDERCACHE_OK ? rendercache_result_string(rr) : "out of memory");
+        return -1;
+    }
+    return 0;
+}
+
+/* One frame of the render cache: reproject, request, shade, insert. The
+   first frame requests every pixel (the render cache starts empty). */
+static int wt__raytrace_frame(wt_renderer *r, int frame, float *rgb, wt_frame_stats *st)
+{
+    wt_world *w = r->w;
+    const wt_options *o = &w->opt;
+    double t = wt_frame_time(o, frame), t0 = wt_seconds(), a;
+    rendercache_camera cam = wt_camera(o, t, r->width, r->height);
+    wt_light_stats ls = { 0, 0, 0, 0 };
+    uint32_t n = 0, i;
+    int full = r->frames_done == 0;
+    wt_set_time(w, t);
+    a = wt_seconds();
+    if (rendercache_set_object_transform(r->rc, WT_OBJECT_BUNNY, w->pose) != RENDERCACHE_OK ||
+        rendercache_begin_frame(r->rc, &cam) != RENDERCACHE_OK)
+        return -1;
+    if (full) {
+        for (i = 0; i < r->width * r->height; i++) {
+            rendercache_pixel_request *q = &r->req[i];
+            q->x = i % r->width;
+            q->y = i / r->width;
+            q->flags = 0;
+            rendercache_camera_ray(&cam, (float)q->x + 0.5f, (float)q->y + 0.5f, q->org, q->dir);
+        }
+        n = r->width * r->height;
+    } else {
+        if (frame + 1 < o->frames) {   /* predictive sampling (WDG02): the holes the next camera will see */
+            rendercache_camera next = wt_camera(o, wt_frame_time(o, frame + 1), r->width, r->height);
+            if (rendercache_predict(r->rc, &next) != RENDERCACHE_OK) return -1;
+        }
+        if (rendercache_request(r->rc, r->req, r->budget, &n) != RENDERCACHE_OK) return -1;
+    }
+    st->phase[0] += wt_seconds() - a;
+    for (i = 0; i < n; i++) {
+        wt_point *p = &r->points[i];
+        memcpy(p->org, r->req[i].org, sizeof p->org);
+        memcpy(p->dir, r->req[i].dir, sizeof p->dir);
+        p->stream = wt__stream(WT_STREAM_FRAME, (uint32_t)frame, r->req[i].y * r->width + r->req[i].x +
+                               (r->req[i].flags ? r->width * r->height : 0u));
+    }
+    if (wt_shade_points(w, r->points, n, WT_SHADE_DIRECT | WT_SHADE_INSERT, &ls, &st->phase[1], &st->phase[2]) != 0)
+        return -1;
+    for (i = 0; i < n; i++) {
+        const wt_point *p = &r->points[i];
+        rendercache_sample *s = &r->samples[i];
+        s->x = r->req[i].x;
+        s->y = r->req[i].y;
+        s->flags = r->req[i].flags;
+        s->object = p->object;
+        memcpy(s->position, p->pos, sizeof s->position);
+        memcpy(s->rgb, p->rgb, sizeof s->rgb);
+        /* Crespin & Peroche 4.3: an interpolated light vector of weight W
+           makes its point's priority 1/W times higher; a vector computed
+           for the point itself has weight 1 */
+        s->priority_scale = p->light != WT_LIGHT_NONE && !p->gathered ? lightvec_priority(1.0f, p->weight) : 1.0f;
+        /* the bunny's light changes as it walks (the desk's shadow, the
+           divider's colour), and so does the light of the floor it shadows:
+           these points are refreshed first (the 1/W scale raises the
+           priority of every static point lit by an interpolated vector) */
+        if (p->object == WT_OBJECT_BUNNY || p->bunny_shadow) s->priority_scale *= WT_BUNNY_PRIORITY;
+    }
+    a = wt_seconds();
+    if (rendercache_insert(r->rc, r->samples, n) != RENDERCACHE_OK) return -1;
+    st->phase[0] += wt_seconds() - a;
+    memcpy(rgb, rendercache_image(r->rc), sizeof(float) * 3 * r->width * r->height);
+    st->samples = n;
+    st->full = full;
+    st->lookups = ls.lookups;
+    st->hits = ls.hits;
+    st->gathers = ls.gathers;
+    st->bunny_gathers = ls.bunny_gathers;
+    st->total = wt_seconds() - t0;
+    return 0;
+}
+
+/* ---- mode baseviews ----------------------------------------------------- */
+
+typedef struct wt__ids_job {
+    wt_world *w;
+    const rendercache_camera *camera;
+    uint32_t *ids;
+} wt__ids_job;
+
+static void wt__ids_row(void *ctx, uint32_t y)
+{
+    const wt__ids_job *j = (const wt__ids_job *)ctx;
+    const rendercache_camera *c = j->camera;
+    uint32_t x;
+    for (x = 0; x < c->width; x++) {
+        float org[3], dir[3];
+        ex_trace_hit h;
+        uint32_t *id = &j->ids[(size_t)y * c->width + x];
+        if (rendercache_camera_ray(c, (float)x + 0.5f, (float)y + 0.5f, org, dir) != RENDERCACHE_OK)
+            *id = RENDERCACHE_NO_SAMPLE;
+        else if (!ex_tracer_intersect(j->w->tracer, org, dir, FLT_MAX, &h))
+            *id = RENDERCACHE_MISS;
+        else   /* one id per polygon, as the paper's id images */
+            *id = h.instance == EX_TRACE_STATIC ? j->w->office.tri_face[h.tri] : j->w->office.face_count + h.tri;
+    }
+}
+
+/* The coherence tests' callback: an id image of camera at time. */
+static int wt__render_ids(void *user, const rendercache_camera *camera, double time, uint32_t *ids)
+{
+    wt__ids_job j;
+    j.w = (wt_world *)user;
+    j.camera = camera;
+    j.ids = ids;
+    wt_set_time(j.w, time);
+    ex_pool_parallel_for(j.w->pool, wt__ids_row, &j, camera->height);
+    return 0;
+}
+
+/* Transforms of the range images' objects at time t: the office stays, the
+   bunny walks. */
+static void wt__object_transforms(void *user, double t, float *m)
+{
+    const wt_world *w = (const wt_world *)user;
+    memset(m, 0, 12 * sizeof(float));
+    m[0] = m[5] = m[10] = 1.0f;
+    wt_bunny_transform(w, t, m + 12);
+}
+
+/* The base views look along the mean view direction of the path, from a box
+   around the path's eyes. */
+static void wt__view_space(const wt_options *o, float lo[3], float hi[3], float axis[3])
+{
+    int f, k, frames = o->frames > 1 ? o->frames : 2;
+    for (k = 0; k < 3; k++) {
+        lo[k] = FLT_MAX;
+        hi[k] = -FLT_MAX;
+        axis[k] = 0.0f;
+    }
+    for (f = 0; f < frames; f++) {
+        rendercache_camera c = wt_camera(o, (double)f / (frames - 1), 8, 8);
+        float d[3], l;
+        for (k = 0; k < 3; k++) {
+            lo[k] = c.eye[k] < lo[k] ? c.eye[k] : lo[k];
+            hi[k] = c.eye[k] > hi[k] ? c.eye[k] : hi[k];
+            d[k] = c.look_at[k] - c.eye[k];
+        }
+        l = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        for (k = 0; k < 3; k++) axis[k] += d[k] / l;
+    }
+}
+
+static rendercache_camera wt__fisheye(const float eye[3], const float axis[3], uint32_t size)
+{
+    rendercache_camera c;
+    int k;
+    memset(&c, 0, sizeof c);
+    c.kind = RENDERCACHE_CAMERA_FISHEYE;
+    for (k = 0; k < 3; k++) {
+        c.eye[k] = eye[k];
+        c.look_at[k] = eye[k] + axis[k];
+    }
+    c.up[1] = 1.0f;
+    if (fabsf(axis[0]) < 1e-3f && fabsf(axis[2]) < 1e-3f) { c.up[1] = 0.0f; c.up[2] = 1.0f; }
+    c.width = c.height = size;
+    return c;
+}
+
+static uint64_t wt__baseviews_key(const wt_renderer *r)
+{
+    const wt_options *o = &r->w->opt;
+    uint64_t h = wt_hash_str(r->lightvec_key, "baseviews");
+    h = wt_hash_u64(h, RENDERCACHE_FILE_FORMAT_VERSION);
+    h = wt_hash_u64(h, RENDERCACHE_VERSION_MAJOR * 10000u + RENDERCACHE_VERSION_MINOR * 100u + RENDERCACHE_VERSION_PATCH);
+    h = wt_hash_u64(h, (uint64_t)o->base_size);
+    h = wt_hash_u64(h, (uint64_t)o->id_size);
+    h = wt_hash_u64(h, (uint64_t)o->keys);
+    h = wt_hash_f32(h, o->quality);
+    h = wt_hash_u64(h, (uint64_t)o->light_samples);
+    h = wt_hash_u64(h, (uint64_t)o->bunny_strata);
+    return h;
+}
+
+/* Renders base image (view, key) with the frames' shading. */
+static int wt__render_base(wt_renderer *r, uint32_t view, uint32_t key, rendercache_range_image **out)
+{
+    wt_world *w = r->w;
+    rendercache_camera c = ex_baseviews_base_camera(&r->bv, view, (uint32_t)w->opt.base_size);
+    wt_light_stats st = { 0, 0, 0, 0 };
+    uint32_t i, n = c.width * c.height;
+    rendercache_range_image *img;
+    if (rendercache_range_image_create(&c, NULL, &img) != RENDERCACHE_OK) return -1;
+    img->time = r->bv.times[key];
+    wt_set_time(w, img->time);
+    if (wt__shade_camera(w, &c, WT_STREAM_BASE, view * r->bv.time_count + key, WT_SHADE_DIRECT | WT_SHADE_INSERT,
+                         r->points, r->index, &st) != 0) {
+        rendercache_range_image_destroy(img);
+        return -1;
+    }
+    for (i = 0; i < n; i++) {
+        const wt_point *p = &r->points[i];
+        if (p->t < 0.0f) continue;   /* outside the fish-eye's circle: RENDERCACHE_NO_SAMPLE */
+        memcpy(img->rgb + 3 * (size_t)i, p->rgb, 3 * sizeof(float));
+        img->object[i] = p->object;
+        img->depth[i] = p->object == RENDERCACHE_MISS ? RENDERCACHE_FAR_DEPTH : p->t;
+    }
+    *out = img;
+    return 0;
+}
+
+/* Base images from the precompute cache: the decomposition must match. */
+static int wt__load_bases(wt_renderer *r, const void *data, size_t size)
+{
+    wt_bytes b;
+    uint64_t views, times, bits, n;
+    uint32_t i;
+    memset(&b, 0, sizeof b);
+    b.data = (unsigned char *)data;
+    b.size = size;
+    if (!wt_bytes_get_u64(&b, &views) || !wt_bytes_get_u64(&b, &times) || views != r->bv.view_count ||
+        times != r->bv.time_count)
+        return -1;
+    for (i = 0; i < r->bv.time_count; i++) {
+        double t;
+        if (!wt_bytes_get_u64(&b, &bits)) return -1;
+        memcpy(&t, &bits, sizeof t);
+        if (t != r->bv.times[i]) return -1;
+    }
+    for (i = 0; i < r->bv.view_count * r->bv.time_count; i++) {
+        if (!wt_bytes_get_u64(&b, &n) || n > b.size - b.read ||
+            rendercache_range_image_load_from_memory(b.data + b.read, (size_t)n, NULL, &r->bv.base[i]) != RENDERCACHE_OK)
+            return -1;
+        b.read += (size_t)n;
+    }
+    return b.read == b.size ? 0 : -1;
+}
+
+static int wt__save_bases(const wt_renderer *r, wt_bytes *b)
+{
+    uint32_t i;
+    wt_bytes_put_u64(b, r->bv.view_count);
+    wt_bytes_put_u64(b, r->bv.time_count);
+    for (i = 0; i < r->bv.time_count; i++) {
+        uint64_t bits;
+        memcpy(&bits, &r->bv.times[i], sizeof bits);
+        wt_bytes_put_u64(b, bits);
+    }
+    for (i = 0; i < r->bv.view_count * r->bv.time_count; i++) {
+        void *data;
+        size_t size;
+        if (rendercache_range_image_save_to_memory(r->bv.base[i], NULL, &data, &size) != RENDERCACHE_OK) return -1;
+        wt_bytes_put_u64(b, size);
+        wt_bytes_put(b, data, size);
+        rendercache_free_memory(NULL, data);
+    }
+    return b->failed ? -1 : 0;
+}
+
+/* Traces what the warp's fills left empty (Radiance's pinterp -fr), with
+   the frames' shading; light vectors are looked up, not inserted. */
+static int wt__fill_pixel(void *user, uint32_t x, uint32_t y, const float org[3], const float dir[3], float rgb[3],
+                          float *depth, uint32_t *object)
+{
+    wt_renderer *r = (wt_renderer *)user;
+    wt_world *w = r->w;
+    wt_point p;
+    lightvec_lookup_result lr;
+    lightvec_record rec;
+    lightvec_surface s;
+    float wo[3];
+    const float *out;
+    memcpy(p.org, org, sizeof p.org);
+    memcpy(p.dir, dir, sizeof p.dir);
+    p.stream = wt__stream(WT_STREAM_FILL, r->fill_frame, y * r->width + x);
+    wt__trace_point(w, &p, 1);
+    if (!p.lit) {
+        out = wt__outgoing(&p, wo);
+        if (p.light == WT_LIGHT_BUNNY && wt__ensure_pose(w) != 0) return 0;
+        if (lightvec_lookup(wt__cache_of(w, &p), p.pos, p.normal, out, &lr) == LIGHTVEC_OK && lr.hit) {
+            rec.vector = lr.vector;
+        } else {
+            wt__surface_of(w, &p, &s);
+            if (lightvec_gather(p.light == WT_LIGHT_BUNNY ? w->posed_scene : w->office_scene,
+                                p.light == WT_LIGHT_BUNNY ? &w->bunny_gather : &w->static_gather, &s, p.stream,
+                                &rec) != LIGHTVEC_OK)
+                return 0;
+        }
+        lightvec_radiance(&w->materials[p.material], p.normal, out, &rec.vector, p.indirect);
+    }
+    rgb[0] = p.direct[0] + p.indirect[0];
+    rgb[1] = p.direct[1] + p.indirect[1];
+    rgb[2] = p.direct[2] + p.indirect[2];
+    *depth = p.object == RENDERCACHE_MISS ? RENDERCACHE_FAR_DEPTH : p.t;
+    *object = p.object;
+    return 1;
+}
+
+static int wt__baseviews_create(wt_renderer *r, char *err, size_t err_size)
+{
+    wt_world *w = r->w;
+    const wt_options *o = &w->opt;
+    ex_baseviews_desc d;
+    rendercache_warp_desc wd;
+    rendercache_camera lamp, frame_cam;
+    double *keys;
+    float axis[3], eye[3], down[3] = { 0.0f, -1.0f, 0.0f }, lamp_eye[3] = { 3.30f, 1.55f, 3.40f };
+    char path[1024];
+    void *data = NULL;
+    size_t size = 0;
+    uint32_t i, v, k;
+    int got = 0, k0;
+    double t0;
+    if (wt__static_lightvec(r, err, err_size) != 0) return -1;
+    /* the decomposition (id images are cheap: recomputed every run) */
+    t0 = wt_seconds();
+    memset(&d, 0, sizeof d);
+    wt__view_space(o, d.lo, d.hi, axis);
+    for (k0 = 0; k0 < 3; k0++) eye[k0] = 0.5f * (d.lo[k0] + d.hi[k0]);
+    d.fisheye = wt__fisheye(eye, axis, (uint32_t)o->id_size);
+    lamp = wt__fisheye(lamp_eye, down, (uint32_t)o->id_size);   /* direct light coherence */
+    d.extra_cameras = &lamp;
+    d.extra_count = 1;
+    d.quality = o->quality;
+    keys = (double *)malloc(sizeof(double) * (size_t)o->keys);
+    if (!keys) return wt__fail(err, err_size, "%s", "out of memory");
+    for (k0 = 0; k0 < o->keys; k0++) keys[k0] = (double)k0 / (o->keys - 1);
+    d.times = keys;
+    d.time_count = (uint32_t)o->keys;
+    d.render_ids = wt__render_ids;
+    d.user = w;
+    k0 = ex_baseviews_build(&d, &r->bv);
+    free(keys);
+    if (k0 != 0) return wt__fail(err, err_size, "%s", "the base-view decomposition failed (out of memory)");
+    if (o->verbose) {
+        printf("base views: %u views x %u key times = %u base images of %dx%d (q = %.2f, decomposition %.1f s)\n",
+               r->bv.view_count, r->bv.time_count, r->bv.view_count * r->bv.time_count, o->base_size, o->base_size,
+               (double)o->quality, wt_seconds() - t0);
+        fflush(stdout);
+    }
+    /* the base images */
+    t0 = wt_seconds();
+    r->baseviews_key = wt__baseviews_key(r);
+    wt_cache_path(o->cache_dir, "baseviews", r->baseviews_key, path, sizeof path);
+    if (o->use_cache) got = wt_cache_load(o->cache_dir, "baseviews", r->baseviews_key, &data, &size);
+    if (got == 1) {
+        if (wt__load_bases(r, data, size) == 0) r->reused_baseviews = 1;
+        else got = -1;
+        free(data);
+    }
+    if (got == -1) {
+        for (i = 0; i < r->bv.view_count * r->bv.time_count; i++) {
+            rendercache_range_image_destroy(r->bv.base[i]);
+            r->bv.base[i] = NULL;
+        }
+        wt__say(w, "base images: %s is damaged or stale, rebuilding it\n", path);
+    }
+    if (!r->reused_baseviews) {
+        /* base images add light vectors to a copy of the static cache, so that
+           the frames see the same cache whether the base images were loaded
+           or traced */
+        lightvec_cache *saved = w->static_cache, *copy = wt__cache_copy(w, saved);
+        wt_progress bar;
+        if (!copy) return wt__fail(err, err_size, "%s", "out of memory");
+        w->static_cache = copy;
+        wt_progress_begin(&bar, "base images", o->progress);
+        for (k = 0, i = 0; k < r->bv.time_count; k++)   /* key by key: the bunny's pose changes least often */
+            for (v = 0; v < r->bv.view_count; v++, i++) {
+                if (wt__render_base(r, v, k, &r->bv.base[v * r->bv.time_count + k]) != 0) {
+                    w->static_cache = saved;
+                    lightvec_cache_destroy(copy);
+                    return wt__fail(err, err_size, "%s", "rendering a base image failed (out of memory)");
+                }
+                wt_progress_update(&bar, i + 1, (uint64_t)r->bv.view_count * r->bv.time_count);
+            }
+        wt_progress_end(&bar);
+        w->static_cache = saved;
+        lightvec_cache_destroy(copy);
+        if (o->use_cache) {
+            wt_bytes b;
+            memset(&b, 0, sizeof b);
+            if (wt__save_bases(r, &b) != 0 ||
+                wt_cache_store(o->cache_dir, "baseviews", r->baseviews_key, b.data, b.size, err, err_size) != 0) {
+                wt__say(w, "base images: not cached (%s)\n", err[0] ? err : "out of memory");
+                err[0] = 0;
+            }
+            free(b.data);
+        }
+    }
+    if (o->verbose) {
+        if (r->reused_baseviews) printf("base images: reused the precompute cache %s\n", path);
+        else printf("base images: traced in %.1f s%s%s\n", wt_seconds() - t0, o->use_cache ? ", saved to " : "",
+                    o->use_cache ? path : "");
+        fflush(stdout);
+    }
+    /* reconstruction buffers */
+    memset(&wd, 0, sizeof wd);
+    wd.parallel_for = ex_pool_parallel_for;
+    wd.parallel_user = w->pool;
+    wd.clock = wt__clock;
+    if (rendercache_warper_create(&wd, &r->rec.blender) != RENDERCACHE_OK) return wt__fail(err, err_size, "%s", "out of memory");
+    wd.fill_pixel = wt__fill_pixel;
+    wd.fill_user = r;
+    if (rendercache_warper_create(&wd, &r->rec.warper) != RENDERCACHE_OK) return wt__fail(err, err_size, "%s", "out of memory");
+    r->rec.object_count = 2;
+    r->rec.motion = wt__object_transforms;
+    r->rec.motion_user = w;
+    r->rec.fill = RENDERCACHE_FILL_BOTH;
+    /* no fill in the blends: a foreground quad between a bunny pixel and the
+       floor next to it would stretch as the bunny moves; the warp fills */
+    r->rec.blend_fill = RENDERCACHE_FILL_NONE;
+    {
+        rendercache_camera bc = ex_baseviews_base_camera(&r->bv, 0, (uint32_t)o->base_size);
+        for (i = 0; i < 8; i++)
+            if (rendercache_range_image_create(&bc, NULL, &r->blend[i]) != RENDERCACHE_OK)
+                return wt__fail(err, err_size, "%s", "out of memory");
+    }
+    frame_cam = wt_camera(o, 0.0, r->width, r->height);
+    if (rendercache_range_image_create(&frame_cam, NULL, &r->out) != RENDERCACHE_OK)
+        return wt__fail(err, err_size, "%s", "out of memory");
+    return 0;
+}
+
+static int wt__baseviews_frame(wt_renderer *r, int frame, float *rgb, wt_frame_stats *st)
+{
+    wt_world *w = r->w;
+    double t = wt_frame_time(&w->opt, frame), t0 = wt_seconds();
+    rendercache_camera cam = wt_camera(&w->opt, t, r->width, r->height);
+    rendercache_warp_stats ws;
+    wt_set_time(w, t);   /* the fill traces the scene as it is at t */
+    r->fill_frame = (uint32_t)frame;
+    if (ex_baseviews_reconstruct(&r->bv, &r->rec, &cam, t, r->blend, r->out) != 0) return -1;
+    memcpy(rgb, r->out->rgb, sizeof(float) * 3 * r->width * r->height);
+    rendercache_warp_get_stats(r->rec.warper, &ws);
+    st->phase[0] = r->rec.seconds_blend;
+    st->phase[1] = r->rec.seconds_warp;
+    st->samples = ws.computed;
+    st->total = wt_seconds() - t0;
+    return 0;
+}
+
+/* ---- mode radiosity ------------------------------------------------------
+   Per frame: the bunny's vertices query the irradiance volume (Greger eq.
+   4.7: radiance = Kd H / pi, times the vertex's self-occlusion ratio,
+   thesis 6.1.3), the rasterizer draws the static mesh and the bunny into
+   the ID + barycentric buffers, the static pixels are shaded by their
+   triangle's interpolant (Hardt's online phase) and the bunny's by Gouraud
+   interpolation of its vertex colours.
+   ------------------------------------------------------------------------ */
+
+/* Builds the static office's shading data: radinterp_solve (hierarchical
+   radiosity) and radinterp_build_mesh (discontinuity mesh with one
+   quadratic interpolant per triangle), cached with radinterp's save/load
+   (file "radinterp", key from the scene, the solver's parameters and
+   RADINTERP_FILE_FORMAT_VERSION), filling every field of s. The installed
+   radinterp.h does not provide the mesh and online phase yet, so this
+   reports that mode radiosity cannot run. */
+EX_FN int wt_static_shading_build(wt_world *w, wt_static_shading *s, char *err, size_t err_size)
+{
+    (void)w;
+    memset(s, 0, sizeof *s);
+    snprintf(err, err_size,
+             "mode radiosity needs radinterp.h's interpolant mesh and online phase (radinterp_build_mesh, "
+             "radinterp_shade), which radinterp.h %d.%d.%d does not provide yet; use --mode raytrace or "
+             "--mode baseviews", RADINTERP_VERSION_MAJOR, RADINTERP_VERSION_MINOR, RADINTERP_VERSION_PATCH);
+    return -1;
+}
+
+/* Shades the pixels of the raster whose id is a static triangle
+   (id < s->triangle_count) from their triangle's interpolant at their
+   barycentrics (radinterp_shade over the ID and barycentric buffers); other
+   pixels are left as they are. Returns -1 without a mesh. */
+EX_FN int wt_static_shading_shade(const wt_static_shading *s, const ex_raster *raster, float *rgb)
+{
+    (void)raster;
+    (void)rgb;
+    return s->mesh ? 0 : -1;
+}
+
+EX_FN void wt_static_shading_free(wt_static_shading *s) { memset(s, 0, sizeof *s); }
+
+static void wt__put_floats(wt_bytes *b, const float *v, size_t n)
+{
+    size_t i;
+    for (i = 0; i < n; i++) {
+        unsigned char q[4];
+        uint32_t u;
+        memcpy(&u, &v[i], 4);
+        wt__put32(q, u);
+        wt_bytes_put(b, q, 4);
+    }
+}
+
+static int wt__get_floats(wt_bytes *b, float *v, size_t n)
+{
+    size_t i;
+    for (i = 0; i < n; i++) {
+        unsigned char q[4];
+        uint32_t u;
+        if (!wt_bytes_get(b, q, 4)) return 0;
+        u = wt__get32(q);
+        memcpy(&v[i], &u, 4);
+    }
+    return 1;
+}
+
+/* The bunny's self-occlusion ratio per vertex (irrvol_visibility_ratio,
+   thesis 6.1.3): the cosine-weighted open part of each vertex's
+   hemisphere. A rigid bunny keeps it as it moves: computed once, cached.
+   ratio: one float per bunny vertex. */
+EX_FN int wt_bunny_visibility(wt_world *w, float *ratio, int *reused, char *err, size_t err_size)
+{
+    const wt_options *o = &w->opt;
+    uint64_t key = wt_hash_str(w->scene_hash, "visibility"), n;
+    irrvol_visibility_desc vd;
+    irrvol_result ir;
+    wt_progress bar;
+    void *data = NULL;
+    size_t size = 0;
+    int got = 0;
+    key = wt_hash_u64(key, IRRVOL_VERSION_MAJOR * 10000u + IRRVOL_VERSION_MINOR * 100u + IRRVOL_VERSION_PATCH);
+    key = wt_hash_u64(key, (uint64_t)o->visibility_rays);
+    key = wt_hash_u64(key, o->seed);
+    *reused = 0;
+    if (o->use_cache) got = wt_cache_load(o->cache_dir, "visibility", key, &data, &size);
+    if (got == 1) {
+        wt_bytes b;
+        memset(&b, 0, sizeof b);
+        b.data = (unsigned char *)data;
+        b.size = size;
+        *reused = wt_bytes_get_u64(&b, &n) && n == w->bunny.vertex_count && wt__get_floats(&b, ratio, (size_t)n) &&
+                  b.read == b.size;
+        free(data);
+        if (*reused) return 0;
+    }
+    memset(&vd, 0, sizeof vd);
+    vd.positions = w->bunny.positions;
+    vd.vertex_count = w->bunny.vertex_count;
+    vd.indices = w->bunny.tri_indices;
+    vd.triangle_count = w->bunny.tri_count;
+    vd.normals = w->bunny_normals;
+    vd.rays = (uint32_t)o->visibility_rays;
+    vd.seed = o->seed;
+    vd.parallel_for = ex_pool_parallel_for;
+    vd.parallel_user = w->pool;
+    wt_progress_begin(&bar, "bunny self-occlusion", o->progress);
+    vd.progress = wt_progress_update;
+    vd.progress_user = &bar;
+    ir = irrvol_visibility_ratio(&vd, ratio);
+    if (ir != IRRVOL_OK) {
+        snprintf(err, err_size, "irrvol_visibility_ratio: %s", irrvol_result_string(ir));
+        return -1;
+    }
+    wt_progress_end(&bar);
+    if (o->use_cache) {
+        wt_bytes b;
+        memset(&b, 0, sizeof b);
+        wt_bytes_put_u64(&b, w->bunny.vertex_count);
+        wt__put_floats(&b, ratio, w->bunny.vertex_count);
+        if (b.failed || wt_cache_store(o->cache_dir, "visibility", key, b.data, b.size, err, err_size) != 0) err[0] = 0;
+        free(b.data);
+    }
+    return 0;
+}
+
+/* An irradiance volume of the office (Greger's grid: 7^3 first level, 3^3
+   second level, k = opt.volume_resolution) whose radiance comes from
+   `source` (its scene, materials or radiance callback; every other field is
+   set here). source_key identifies the source for the precompute cache. */
+EX_FN int wt_volume_build(wt_world *w, const irrvol_desc *source, uint64_t source_key, irrvol **out, int *reused,
+                          char *err, size_t err_size)
+{
+    const wt_options *o = &w->opt;
+    irrvol_desc d = *source;
+    irrvol_result ir;
+    wt_progress bar;
+    void *data = NULL;
+    size_t size = 0;
+    uint64_t key = wt_hash_str(source_key, "volume");
+    int got = 0;
+    key = wt_hash_u64(key, IRRVOL_FILE_FORMAT_VERSION);
+    key = wt_hash_u64(key, IRRVOL_VERSION_MAJOR * 10000u + IRRVOL_VERSION_MINOR * 100u + IRRVOL_VERSION_PATCH);
+    key = wt_hash_u64(key, (uint64_t)o->volume_resolution);
+    key = wt_hash_u64(key, o->seed);
+    *out = NULL;
+    *reused = 0;
+    if (o->use_cache) got = wt_cache_load(o->cache_dir, "volume", key, &data, &size);
+    if (got == 1) {
+        *reused = irrvol_load_from_memory(data, size, NULL, out) == IRRVOL_OK;
+        free(data);
+        if (*reused) return 0;
+    }
+    d.resolution = (uint32_t)o->volume_resolution;
+    d.seed = o->seed;
+    d.parallel_for = ex_pool_parallel_for;
+    d.parallel_user = w->pool;
+    wt_progress_begin(&bar, "irradiance volume", o->progress);
+    d.progress = wt_progress_update;
+    d.progress_user = &bar;
+    ir = irrvol_build(&d, out);
+    if (ir != IRRVOL_OK) {
+        snprintf(err, err_size, "irrvol_build: %s", irrvol_result_string(ir));
+        return -1;
+    }
+    wt_progress_end(&bar);
+    if (o->use_cache && irrvol_save_to_memory(*out, NULL, &data, &size) == IRRVOL_OK) {
+        if (wt_cache_store(o->cache_dir, "volume", key, data, size, err, err_size) != 0) err[0] = 0;
+        irrvol_free_memory(NULL, data);
+    }
+    return 0;
+}
+
+/* Places the bunny's vertices and normals by pose and lights them from the
+   volume: rgb = Kd H / pi (eq. 4.7) times the self-occlusion ratio. */
+EX_FN void wt_bunny_light(const wt_world *w, const irrvol *vol, const float *visibility, const float pose[12],
+                          float *world_pos, float *world_normals, float *rgb)
+{
+    uint32_t v, n = w->bunny.vertex_count;
+    for (v = 0; v < n; v++) {
+        float *q = world_normals + 3 * (size_t)v, l;
+        ex__affine_point(pose, w->bunny.positions + 3 * (size_t)v, world_pos + 3 * (size_t)v);
+        ex__affine_vector(pose, w->bunny_normals + 3 * (size_t)v, q);
+        l = sqrtf(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
+        if (l > 0.0f) { q[0] /= l; q[1] /= l; q[2] /= l; }
+    }
+    irrvol_query_many(vol, IRRVOL_FILTER_DEFAULT, n, world_pos, 0, world_normals, 0, rgb);
+    for (v = 0; v < 3 * n; v++) rgb[v] *= WT_BUNNY_KD / WT_PI * (visibility ? visibility[v / 3] : 1.0f);
+}
+
+/* Rasterizes the static mesh (ids 0 .. static_count-1) and the posed bunny
+   (ids static_count + triangle) into ra. */
+EX_FN int wt_raster_scene(const wt_world *w, ex_raster *ra, const rendercache_camera *c, const float *static_positions,
+                          const uint32_t *static_indices, uint32_t static_count, const float *bunny_world)
+{
+    ex_camera ec = wt_ex_camera(c);
+    ex_raster_clear(ra);
+    if (ex_raster_draw(ra, &ec, static_positions, static_indices, static_count, 0) != 0) return -1;
+    return ex_raster_draw(ra, &ec, bunny_world, w->bunny.tri_indices, w->bunny.tri_count, static_count);
+}
+
+static int wt__radiosity_create(wt_renderer *r, char *err, size_t err_size)
+{
+    wt_world *w = r->w;
+    irrvol_desc source;
+    size_t nv = w->bunny.vertex_count;
+    if (wt_static_shading_build(w, &r->statics, err, err_size) != 0) return -1;
+    /* the volume's radiance: the radiosity solution, through the mesh the
+       static shading built (its triangles, and a radiance callback that
+       evaluates the interpolants where a ray hits) */
+    memset(&source, 0, sizeof source);
+    source.positions = r->statics.positions;
+    source.vertex_count = r->statics.vertex_count;
+    source.indices = r->statics.indices;
+    source.triangle_count = r->statics.triangle_count;
+    source.radiance = r->statics.radiance;
+    source.radiance_user = r->statics.radiance_user;
+    if (wt_volume_build(w, &source, r->statics.key, &r->volume, &r->reused_volume, err, err_size) != 0) return -1;
+    r->visibility = (float *)malloc(sizeof(float) * nv);
+    r->bunny_world = (float *)malloc(3 * sizeof(float) * nv);
+    r->bunny_world_normals = (float *)malloc(3 * sizeof(float) * nv);
+    r->bunny_rgb = (float *)malloc(3 * sizeof(float) * nv);
+    if (!r->visibility || !r->bunny_world || !r->bunny_world_normals || !r->bunny_rgb ||
+        ex_raster_init(&r->raster, (int)r->width, (int)r->height) != 0)
+        return wt__fail(err, err_size, "%s", "out of memory");
+    r->raster.pool = w->pool;
+    return wt_bunny_visibility(w, r->visibility, &r->reused_visibility, err, err_size);
+}
+
+static int wt__radiosity_frame(wt_renderer *r, int frame, float *rgb, wt_frame_stats *st)
+{
+    wt_world *w = r->w;
+    double t = wt_frame_time(&w->opt, frame), t0 = wt_seconds(), a;
+    rendercache_camera cam = wt_camera(&w->opt, t, r->width, r->height);
+    wt_set_time(w, t);
+    a = wt_seconds();
+    wt_bunny_light(w, r->volume, r->visibility, w->pose, r->bunny_world, r->bunny_world_normals, r->bunny_rgb);
+    st->phase[2] = wt_seconds() - a;
+    a = wt_seconds();
+    if (wt_raster_scene(w, &r->raster, &cam, r->statics.positions, r->statics.indices, r->statics.triangle_count,
+                        r->bunny_world) != 0)
+        return -1;
+    st->phase[0] = wt_seconds() - a;
+    a = wt_seconds();
+    memset(rgb, 0, sizeof(float) * 3 * r->width * r->height);
+    if (wt_static_shading_shade(&r->statics, &r->raster, rgb) != 0) return -1;
+    ex_raster_resolve_gouraud(&r->raster, w->bunny.tri_indices, w->bunny.tri_count, r->statics.triangle_count,
+                              r->bunny_rgb, rgb);
+    st->phase[1] = wt_seconds() - a;
+    st->samples = w->bunny.vertex_count;
+    st->total = wt_seconds() - t0;
+    return 0;
+}
+
+/* ---- the renderer ------------------------------------------------------- */
+
+EX_FN void wt_renderer_destroy(wt_renderer *r)
+{
+    int i;
+    if (!r) return;
+    rendercache_destroy(r->rc);
+    free(r->req);
+    free(r->samples);
+    ex_baseviews_free(&r->bv);
+    rendercache_warper_destroy(r->rec.blender);
+    rendercache_warper_destroy(r->rec.warper);
+    for (i = 0; i < 8; i++) rendercache_range_image_destroy(r->blend[i]);
+    rendercache_range_image_destroy(r->out);
+    wt_static_shading_free(&r->statics);
+    irrvol_destroy(r->volume);
+    free(r->visibility);
+    free(r->bunny_world);
+    free(r->bunny_world_normals);
+    free(r->bunny_rgb);
+    ex_raster_free(&r->raster);
+    free(r->points);
+    free(r->index);
+    free(r);
+}
+
+/* The renderer of w's mode, with its precompute (loaded from the cache
+   directory when it holds the data for these scene files and parameters,
+   else computed and saved there). Returns 0, or -1 with a message. */
+EX_FN int wt_renderer_create(wt_world *w, wt_renderer **out, char *err, size_t err_size)
+{
+    wt_renderer *r = (wt_renderer *)calloc(1, sizeof *r);
+    const wt_options *o = &w->opt;
+    uint32_t n;
+    double t0 = wt_seconds();
+    int result;
+    *out = NULL;
+    err[0] = 0;
+    if (!r) return wt__fail(err, err_size, "%s", "out of memory");
+    r->w = w;
+    r->mode = o->mode;
+    r->width = (uint32_t)o->width;
+    r->height = (uint32_t)o->height;
+    n = r->width * r->height;
+    if (o->mode == WT_MODE_BASEVIEWS && (uint32_t)(o->base_size * o->base_size) > n)
+        n = (uint32_t)(o->base_size * o->base_size);
+    r->points = (wt_point *)malloc(sizeof(wt_point) * n);
+    r->index = (uint32_t *)malloc(sizeof(uint32_t) * n);
+    if (!r->points || !r->index) {
+        wt_renderer_destroy(r);
+        return wt__fail(err, err_size, "%s", "out of memory");
+    }
+    switch (o->mode) {
+    case WT_MODE_RAYTRACE: result = wt__raytrace_create(r, err, err_size); break;
+    case WT_MODE_BASEVIEWS: result = wt__baseviews_create(r, err, err_size); break;
+    default: result = wt__radiosity_create(r, err, err_size); break;
+    }
+    if (result != 0) {
+        wt_renderer_destroy(r);
+        return -1;
+    }
+    r->seconds_precompute = wt_seconds() - t0;
+    *out = r;
+    return 0;
+}
+
+/* Renders frame `frame` of the path into rgb (width x height x 3 floats,
+   linear radiance). Mode raytrace must be given its frames in order. */
+EX_FN int wt_render_frame(wt_renderer *r, int frame, float *rgb, wt_frame_stats *st)
+{
+    int result;
+    memset(st, 0, sizeof *st);
+    st->lrms = -1.0;
+    switch (r->mode) {
+    case WT_MODE_RAYTRACE: result = wt__raytrace_frame(r, frame, rgb, st); break;
+    case WT_MODE_BASEVIEWS: result = wt__baseviews_frame(r, frame, rgb, st); break;
+    default: result = wt__radiosity_frame(r, frame, rgb, st); break;
+    }
+    if (result == 0) {
+        double known = 0.0;
+        int k;
+        for (k = 0; k < WT_PHASES; k++)
+            if (wt_phase_name(r->mode, k) && strcmp(wt_phase_name(r->mode, k), "other") != 0) known += st->phase[k];
+        for (k = 0; k < WT_PHASES; k++)
+            if (wt_phase_name(r->mode, k) && !strcmp(wt_phase_name(r->mode, k), "other"))
+                st->phase[k] = st->total > known ? st->total - known : 0.0;
+        r->frames_done++;
+    }
+    return result;
+}
+
+#endif /* EXAMPLES_COMMON_WALKTHROUGH_H */

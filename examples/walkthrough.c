@@ -1,0 +1,248 @@
+/* walkthrough.c - the project's main example: a walkthrough of the office
+   with a bunny walking from the open floor under the desk and past the
+   yellow divider, rendered with global illumination at interactive rates by
+   composing the project's headers (examples/common/walkthrough.h holds the
+   frame pipeline; this file is the command line, the output and the timing
+   table).
+
+       cc -O2 -I. examples/walkthrough.c -o walkthrough -lm -lpthread
+       ./walkthrough --out build/demo                 # mode raytrace
+       ./walkthrough --mode baseviews --out build/demo
+
+   Modes:
+     raytrace   the render cache (Walter et al. 1999) fed by a ray tracer with
+                direct light from the lamp and indirect light from cached 5D
+                light vectors (Crespin & Peroche 2004): a pixel lit by an
+                interpolated vector of weight W gets 1/W times the priority;
+                a fixed sample budget per frame (8% of the pixels). The first
+                frame is traced in full.
+     baseviews  range-image reconstruction (Nimeroff, Dorsey & Rushmeier 1996):
+                fish-eye base views and key times chosen by coherence tests,
+                motion-compensated time blends, warps with both fills.
+     radiosity  per-pixel radiosity interpolants (Hardt 1996) and a bunny lit
+                from an irradiance volume (Greger 1996): needs radinterp.h's
+                online phase, and says so until it exists.
+
+   Precomputed data (light vectors along the path, base images) is cached
+   under --cache (default build/cache) in files named by a hash of the scene
+   files and the parameters; a second run reuses them. Writes
+   <out>/walkthrough_<mode>_NNN.png, <out>/walkthrough_<mode>_sheet.png and
+   prints a per-frame timing table in the style of Greger's figure 5.8. With
+   --reference every frame is also traced in full with the same shading
+   (<out>/walkthrough_<mode>_NNN_full.png) and the table shows the LRMS error
+   of the displayed range. --help lists the options. */
+#define _POSIX_C_SOURCE 200809L
+#include "examples/common/walkthrough.h"
+
+#define SHEET_FRAMES 8
+#define SHEET_COLUMNS 4
+
+typedef struct run {
+    wt_options o;
+    wt_world *w;
+    wt_renderer *r;
+    float *rgb, *full, exposure;
+    unsigned char *rgb8, *sheet_cells[SHEET_FRAMES];
+    int sheet_cell_w, sheet_cell_h, sheet_count;
+    wt_frame_stats *stats;
+} run;
+
+/* Downsamples an 8-bit image by an integer factor (box filter). */
+static void shrink(const unsigned char *src, int w, int h, int f, unsigned char *dst)
+{
+    int x, y, i, j, k, cw = w / f, ch = h / f;
+    for (y = 0; y < ch; y++)
+        for (x = 0; x < cw; x++)
+            for (k = 0; k < 3; k++) {
+                int sum = 0;
+                for (j = 0; j < f; j++)
+                    for (i = 0; i < f; i++) sum += src[3 * ((size_t)(y * f + j) * (size_t)w + (size_t)(x * f + i)) + (size_t)k];
+                dst[3 * ((size_t)y * (size_t)cw + (size_t)x) + (size_t)k] = (unsigned char)((sum + f * f / 2) / (f * f));
+            }
+}
+
+static int sheet_frame(const run *u, int f)
+{
+    int i;
+    for (i = 0; i < SHEET_FRAMES; i++)
+        if (f == (u->o.frames - 1) * i / (SHEET_FRAMES - 1)) return i;
+    return -1;
+}
+
+static int write_frame(run *u, int f)
+{
+    char path[1024];
+    int cell;
+    if (u->o.reference && u->o.write_frames) {   /* the full render beside the frame */
+        ex_tonemap(u->full, u->o.width, u->o.height, u->exposure, u->rgb8);
+        snprintf(path, sizeof path, "%s/walkthrough_%s_%03d_full.png", u->o.out, wt_mode_name(u->o.mode), f);
+        if (ex_write_png(path, u->o.width, u->o.height, u->rgb8) != 0) {
+            fprintf(stderr, "walkthrough: cannot write %s: %s\n", path, strerror(errno));
+            return -1;
+        }
+    }
+    ex_tonemap(u->rgb, u->o.width, u->o.height, u->exposure, u->rgb8);
+    if (u->o.write_frames) {
+        snprintf(path, sizeof path, "%s/walkthrough_%s_%03d.png", u->o.out, wt_mode_name(u->o.mode), f);
+        if (ex_write_png(path, u->o.width, u->o.height, u->rgb8) != 0) {
+            fprintf(stderr, "walkthrough: cannot write %s: %s\n", path, strerror(errno));
+            return -1;
+        }
+    }
+    cell = u->o.frames >= SHEET_FRAMES ? sheet_frame(u, f) : f;
+    if (cell >= 0 && cell < SHEET_FRAMES && u->sheet_cells[cell]) {
+        int factor = u->o.width / u->sheet_cell_w;
+        shrink(u->rgb8, u->o.width, u->o.height, factor, u->sheet_cells[cell]);
+        if (cell + 1 > u->sheet_count) u->sheet_count = cell + 1;
+    }
+    return 0;
+}
+
+static void write_sheet(run *u)
+{
+    char path[1024];
+    int rows = (u->sheet_count + SHEET_COLUMNS - 1) / SHEET_COLUMNS, cols = u->sheet_count < SHEET_COLUMNS ? u->sheet_count : SHEET_COLUMNS;
+    unsigned char *sheet;
+    if (u->sheet_count == 0) return;
+    sheet = (unsigned char *)malloc(3 * (size_t)u->sheet_cell_w * (size_t)u->sheet_cell_h * (size_t)(rows * cols));
+    if (!sheet) return;
+    ex_contact_sheet((const unsigned char *const *)u->sheet_cells, u->sheet_count, u->sheet_cell_w, u->sheet_cell_h,
+                     cols, sheet);
+    snprintf(path, sizeof path, "%s/walkthrough_%s_sheet.png", u->o.out, wt_mode_name(u->o.mode));
+    if (ex_write_png(path, cols * u->sheet_cell_w, rows * u->sheet_cell_h, sheet) != 0)
+        fprintf(stderr, "walkthrough: cannot write %s\n", path);
+    else if (u->o.verbose)
+        printf("wrote %s/walkthrough_%s_NNN.png and the contact sheet %s\n", u->o.out, wt_mode_name(u->o.mode), path);
+    free(sheet);
+}
+
+/* ---- the timing table ----------------------------------------------------- */
+
+static void table_header(const run *u)
+{
+    int k;
+    printf("\n%5s %6s %9s", "frame", "t", "total ms");
+    for (k = 0; k < WT_PHASES && wt_phase_name(u->o.mode, k); k++) printf(" %9s", wt_phase_name(u->o.mode, k));
+    if (u->o.mode == WT_MODE_RAYTRACE) printf(" %8s %7s %6s %6s", "samples", "gathers", "bunny", "hit %");
+    if (u->o.mode == WT_MODE_BASEVIEWS) printf(" %8s", "traced");
+    if (u->o.reference) printf(" %7s", "LRMS");
+    printf("\n");
+}
+
+static void table_row(const run *u, int f, const wt_frame_stats *s)
+{
+    int k;
+    printf("%5d %6.3f %9.2f", f, wt_frame_time(&u->o, f), 1e3 * s->total);
+    for (k = 0; k < WT_PHASES && wt_phase_name(u->o.mode, k); k++) printf(" %9.2f", 1e3 * s->phase[k]);
+    if (u->o.mode == WT_MODE_RAYTRACE)
+        printf(" %8u %7u %6u %6.1f", s->samples, s->gathers, s->bunny_gathers,
+               s->lookups ? 100.0 * s->hits / s->lookups : 100.0);
+    if (u->o.mode == WT_MODE_BASEVIEWS) printf(" %8u", s->samples);
+    if (u->o.reference) printf(" %7.4f", s->lrms);
+    printf("%s\n", s->full ? "   (traced in full)" : "");
+}
+
+/* Totals over the frames after the first in mode raytrace (the first one
+   is traced in full), over all frames otherwise: Greger's figure 5.8 shows
+   the total time, each phase's share of it and the frame rate. */
+static void table_summary(const run *u)
+{
+    const wt_options *o = &u->o;
+    int first = o->mode == WT_MODE_RAYTRACE && o->frames > 1 ? 1 : 0, f, k, n = o->frames - first;
+    double total = 0.0, phase[WT_PHASES] = { 0 }, samples = 0.0, lrms = 0.0;
+    for (f = first; f < o->frames; f++) {
+        total += u->stats[f].total;
+        samples += u->stats[f].samples;
+        lrms += u->stats[f].lrms;
+        for (k = 0; k < WT_PHASES; k++) phase[k] += u->stats[f].phase[k];
+    }
+    printf("\n%s, %dx%d, %d threads: frames %d-%d (cf. Greger fig. 5.8)\n", wt_mode_name(o->mode), o->width, o->height,
+           ex_pool_threads(u->w->pool), first, o->frames - 1);
+    printf("  %12s", "total (s)");
+    for (k = 0; k < WT_PHASES && wt_phase_name(o->mode, k); k++) printf(" %9s %%", wt_phase_name(o->mode, k));
+    printf(" %8s\n", "fps");
+    printf("  %12.3f", total);
+    for (k = 0; k < WT_PHASES && wt_phase_name(o->mode, k); k++) printf(" %11.1f", total > 0 ? 100.0 * phase[k] / total : 0.0);
+    printf(" %8.1f\n", total > 0 ? n / total : 0.0);
+    if (o->mode == WT_MODE_RAYTRACE && total > 0)
+        printf("  displayed %.1f frames/s, sampled %.0f samples/s (%.1f%% of the pixels per frame); "
+               "the first frame (all %d pixels) took %.2f s\n", n / total, samples / total,
+               100.0 * samples / n / ((double)o->width * o->height), o->width * o->height, u->stats[0].total);
+    printf("  Greger 1996 (fig. 5.8): 5.3 fps with a 1162-polygon rabbit; Hardt 1996: 2.3 updates/s at 640x480\n");
+    if (o->reference) printf("  mean LRMS against full renders: %.4f\n", lrms / n);
+}
+
+int main(int argc, char **argv)
+{
+    run u;
+    char err[1024];
+    int f, i, parsed;
+    double t0;
+    memset(&u, 0, sizeof u);
+    wt_options_default(&u.o);
+    parsed = wt_parse_options(argc, argv, &u.o, err, sizeof err);
+    if (parsed <= 0) {
+        if (parsed < 0) fprintf(stderr, "walkthrough: %s\n", err);
+        return parsed < 0 ? 2 : 0;
+    }
+    wt_install_interrupt_handler();
+    if (u.o.write_frames && wt_make_dirs(u.o.out) != 0) {
+        fprintf(stderr, "walkthrough: cannot create %s: %s\n", u.o.out, strerror(errno));
+        return 1;
+    }
+    if (wt_world_create(&u.o, &u.w, err, sizeof err) != 0) {
+        fprintf(stderr, "walkthrough: %s\n", err);
+        return 1;
+    }
+    if (u.o.verbose)
+        printf("walkthrough: mode %s, %d frames of %dx%d, %d threads; office %u triangles, bunny %u triangles\n",
+               wt_mode_name(u.o.mode), u.o.frames, u.o.width, u.o.height, ex_pool_threads(u.w->pool),
+               u.w->office.tri_count, u.w->bunny.tri_count);
+    fflush(stdout);
+    t0 = wt_seconds();
+    if (wt_renderer_create(u.w, &u.r, err, sizeof err) != 0) {
+        fprintf(stderr, "walkthrough: %s\n", err);
+        wt_world_destroy(u.w);
+        return 1;
+    }
+    if (u.o.verbose) printf("precompute: %.1f s\n", wt_seconds() - t0);
+    u.rgb = (float *)malloc(sizeof(float) * 3 * (size_t)u.o.width * (size_t)u.o.height);
+    u.full = u.o.reference ? (float *)malloc(sizeof(float) * 3 * (size_t)u.o.width * (size_t)u.o.height) : NULL;
+    u.rgb8 = (unsigned char *)malloc(3 * (size_t)u.o.width * (size_t)u.o.height);
+    u.stats = (wt_frame_stats *)calloc((size_t)u.o.frames, sizeof *u.stats);
+    for (i = 1; u.o.width / i > 320; i++) {}
+    u.sheet_cell_w = u.o.width / i;
+    u.sheet_cell_h = u.o.height / i;
+    for (f = 0; f < SHEET_FRAMES; f++) u.sheet_cells[f] = (unsigned char *)malloc(3 * (size_t)u.sheet_cell_w * (size_t)u.sheet_cell_h);
+    if (!u.rgb || !u.rgb8 || !u.stats || (u.o.reference && !u.full)) {
+        fprintf(stderr, "walkthrough: out of memory\n");
+        return 1;
+    }
+    table_header(&u);
+    for (f = 0; f < u.o.frames; f++) {
+        wt_frame_stats *s = &u.stats[f];
+        if (wt_render_frame(u.r, f, u.rgb, s) != 0) {
+            fprintf(stderr, "walkthrough: frame %d failed (out of memory)\n", f);
+            return 1;
+        }
+        if (f == 0) u.exposure = u.o.exposure > 0.0f ? u.o.exposure : ex_auto_exposure(u.rgb, u.o.width, u.o.height, 0.97f);
+        if (u.o.reference) {
+            rendercache_camera c = wt_camera(&u.o, wt_frame_time(&u.o, f), (uint32_t)u.o.width, (uint32_t)u.o.height);
+            if (wt_render_full(u.w, &c, wt_frame_time(&u.o, f), (uint32_t)f, u.full, NULL) != 0 ||
+                wt_display_lrms(u.full, u.rgb, u.o.width, u.o.height, u.exposure, &s->lrms) != 0)
+                s->lrms = -1.0;
+        }
+        table_row(&u, f, s);
+        if (write_frame(&u, f) != 0) return 1;
+    }
+    table_summary(&u);
+    write_sheet(&u);
+    for (f = 0; f < SHEET_FRAMES; f++) free(u.sheet_cells[f]);
+    free(u.rgb);
+    free(u.full);
+    free(u.rgb8);
+    free(u.stats);
+    wt_renderer_destroy(u.r);
+    wt_world_destroy(u.w);
+    return 0;
+}

@@ -1,0 +1,642 @@
+/* Tests of the walkthrough's frame pipeline (examples/common/walkthrough.h):
+   options, paths, the precompute cache on disk, the two modes that run today
+   (raytrace, baseviews) against stored reference frames, determinism across
+   thread counts, the bunny darkening under the desk (in the ray-traced
+   frames and through an irradiance volume), the rasterizer against the ray
+   tracer, and the clear refusal of mode radiosity until radinterp.h has its
+   online phase.
+
+   Reference frames (tests/data/walkthrough_<mode>_f<frame>.pfm, 64x48) were
+   written by this program with WT_WRITE_REFERENCE=1 from the repository
+   root:
+
+       WT_WRITE_REFERENCE=1 build/tests/test_walkthrough reference
+
+   at the settings of small_options() below, and are compared by the
+   relative luminance RMS error (LRMS). Rendering is deterministic (counter
+   based random streams, light vectors looked up and inserted in a fixed
+   order, the same on any thread count), so on the machine that wrote them
+   the error is 0. Another compiler or libm may round differently and flip
+   a decision (a light-vector lookup, a render cache request), which redraws
+   pixels with other random numbers. At these settings one pixel's noise is
+   about 0.6 of the mean luminance (the seed-to-seed LRMS, printed by
+   test_reference_frames), and a flip in frame 0 can at worst move all the
+   requests of frame 1 (8% of its pixels, 16% counting both frames):
+   LRMS <= 0.6 sqrt(0.16) = 0.24. The tolerance is half the seed-to-seed
+   LRMS (about 0.3): such flips pass, other random numbers everywhere fail,
+   and so does a change of the shading (the light vectors' indirect light is
+   63% of frame 0's luminance: without it the LRMS is 0.74). */
+#define _POSIX_C_SOURCE 200809L
+#include "examples/common/walkthrough.h"
+#include "tests/test.h"
+
+#define REF_W 64
+#define REF_H 48
+#define REF_TOLERANCE_SHARE 0.5   /* of the seed-to-seed LRMS, see above */
+
+/* Small, fast settings: 64x48 frames of a 24-frame path, thin gathers, no
+   disk cache. */
+static wt_options small_options(wt_mode mode)
+{
+    wt_options o;
+    wt_options_default(&o);
+    o.mode = mode;
+    o.width = REF_W;
+    o.height = REF_H;
+    o.frames = 24;
+    o.threads = 2;
+    o.strata = 6;
+    o.bunny_strata = 4;
+    o.light_samples = 1;
+    o.warmup_divisor = 4;
+    o.base_size = 64;
+    o.id_size = 24;
+    o.keys = 3;
+    o.quality = 0.6f;
+    o.use_cache = 0;
+    o.progress = 0;
+    o.verbose = 0;
+    return o;
+}
+
+static float luminance(const float *c) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
+
+/* Renders frames 0 .. count-1 of o's path; frames: count * w * h * 3 floats. */
+static int render_frames(const wt_options *o, int count, float *frames)
+{
+    wt_world *w = NULL;
+    wt_renderer *r = NULL;
+    wt_frame_stats st;
+    char err[512];
+    int f, ok = 1;
+    if (wt_world_create(o, &w, err, sizeof err) != 0 || wt_renderer_create(w, &r, err, sizeof err) != 0) {
+        fprintf(stderr, "  %s\n", err);
+        wt_world_destroy(w);
+        return 0;
+    }
+    for (f = 0; f < count && ok; f++)
+        ok = wt_render_frame(r, f, frames + (size_t)f * 3 * (size_t)o->width * (size_t)o->height, &st) == 0;
+    wt_renderer_destroy(r);
+    wt_world_destroy(w);
+    return ok;
+}
+
+/* ---- PFM (the project's reference frames) ------------------------------ */
+
+static int read_pfm(const char *path, int w, int h, float *rgb)
+{
+    FILE *f = fopen(path, "rb");
+    char magic[3] = { 0 };
+    int fw, fh, y;
+    float scale;
+    if (!f) return 0;
+    if (fscanf(f, "%2s %d %d %f", magic, &fw, &fh, &scale) != 4 || strcmp(magic, "PF") != 0 || fw != w || fh != h ||
+        fgetc(f) == EOF) {
+        fclose(f);
+        return 0;
+    }
+    for (y = h - 1; y >= 0; y--) {   /* rows bottom to top, little-endian floats */
+        int i;
+        for (i = 0; i < 3 * w; i++) {
+            unsigned char b[4];
+            uint32_t u;
+            if (fread(b, 1, 4, f) != 4 || scale >= 0.0f) {
+                fclose(f);
+                return 0;
+            }
+            u = (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
+            memcpy(&rgb[3 * (size_t)y * (size_t)w + (size_t)i], &u, 4);
+        }
+    }
+    fclose(f);
+    return 1;
+}
+
+static void reference_path(char *path, size_t size, wt_mode mode, int frame)
+{
+    snprintf(path, size, "tests/data/walkthrough_%s_f%d.pfm", wt_mode_name(mode), frame);
+}
+
+/* ---- options -------------------------------------------------------------- */
+
+static int parse(const char *line, wt_options *o, char *err, size_t err_size)
+{
+    char buf[512], *argv[32];
+    int argc = 0;
+    strcpy(buf, line);
+    argv[argc++] = (char *)"walkthrough";
+    for (argv[argc] = strtok(buf, " "); argv[argc] && argc < 31; argv[++argc] = strtok(NULL, " ")) {}
+    wt_options_default(o);
+    return wt_parse_options(argc, argv, o, err, err_size);
+}
+
+static void test_options(void)
+{
+    wt_options o;
+    char err[256];
+    static const char *bad[] = {
+        "--mode fast", "--frames 0", "--frames ten", "--size 640", "--size 640x", "--size x480", "--size 4x4",
+        "--budget 0", "--budget 2", "--quality 1.5", "--threads -1", "--light-samples 0", "--wobble", "--frames",
+        "frames", "--out"
+    };
+    size_t i;
+    CHECK_EQ_INT(parse("--mode baseviews --frames 12 --size 320x200 --threads 1 --seed 7 --no-cache --quiet", &o, err,
+                       sizeof err), 1);
+    CHECK(o.mode == WT_MODE_BASEVIEWS && o.frames == 12 && o.width == 320 && o.height == 200 && o.threads == 1);
+    CHECK(o.seed == 7 && !o.use_cache && !o.progress && !o.verbose);
+    CHECK_EQ_INT(parse("--mode radiosity --budget 0.25 --quality 0.5 --out x --cache y --data z", &o, err, sizeof err), 1);
+    CHECK(o.mode == WT_MODE_RADIOSITY && o.budget == 0.25f && o.quality == 0.5f && !strcmp(o.out, "x"));
+    for (i = 0; i < sizeof bad / sizeof *bad; i++) {
+        err[0] = 0;
+        CHECK_MSG(parse(bad[i], &o, err, sizeof err) == -1 && err[0], "'%s' was accepted", bad[i]);
+    }
+    wt_options_default(&o);
+    CHECK(o.mode == WT_MODE_RAYTRACE);   /* the default until radinterp.h has its online phase */
+}
+
+/* A missing scene file is an error that names it. */
+static void test_missing_files(void)
+{
+    wt_options o = small_options(WT_MODE_RAYTRACE);
+    wt_world *w = NULL;
+    char err[512];
+    o.data_dir = "tests/no-such-directory";
+    CHECK(wt_world_create(&o, &w, err, sizeof err) == -1 && w == NULL);
+    CHECK_MSG(strstr(err, "tests/no-such-directory/office.obj") != NULL, "message: %s", err);
+}
+
+/* ---- paths ---------------------------------------------------------------- */
+
+/* Distance from (x, z) to an axis-aligned rectangle of the floor plan. */
+static float box_distance(float x, float z, float x0, float x1, float z0, float z1)
+{
+    float dx = x < x0 ? x0 - x : x > x1 ? x - x1 : 0.0f, dz = z < z0 ? z0 - z : z > z1 ? z - z1 : 0.0f;
+    return sqrtf(dx * dx + dz * dz);
+}
+
+static void test_bunny_path(void)
+{
+    /* obstacles on the floor: desk panels, divider, lamp pole, shelves; and the walls */
+    static const float boxes[][4] = {
+        { 1.0f, 1.03f, 2.9f, 3.7f }, { 2.57f, 2.6f, 2.9f, 3.7f }, { 3.6f, 3.65f, 1.3f, 2.6f },
+        { 3.28f, 3.32f, 3.38f, 3.42f }, { 0.0f, 0.35f, 1.0f, 1.9f }
+    };
+    float clearance = 1e9f, under = -1e9f, divider = 1e9f, p[3], heading;
+    int i, b, open_start;
+    wt_bunny_position(0.0, p, &heading);
+    open_start = box_distance(p[0], p[2], 1.0f, 2.6f, 2.9f, 3.7f) > 0.5f;
+    CHECK_MSG(open_start, "the bunny starts at (%.2f, %.2f), not on the open floor", (double)p[0], (double)p[2]);
+    for (i = 0; i <= 1000; i++) {
+        wt_bunny_position(i / 1000.0, p, &heading);
+        CHECK(isfinite(heading));
+        for (b = 0; b < 5; b++) {
+            float d = box_distance(p[0], p[2], boxes[b][0], boxes[b][1], boxes[b][2], boxes[b][3]);
+            clearance = d < clearance ? d : clearance;
+        }
+        clearance = fminf(clearance, fminf(fminf(p[0], 5.0f - p[0]), fminf(p[2], 4.0f - p[2])));
+        /* depth under the desk top (x 1.0-2.6, z 2.9-3.7): how far inside its footprint */
+        under = fmaxf(under, fminf(fminf(p[0] - 1.0f, 2.6f - p[0]), fminf(p[2] - 2.9f, 3.7f - p[2])));
+        divider = fminf(divider, box_distance(p[0], p[2], 3.6f, 3.65f, 1.3f, 2.6f));
+    }
+    test_note("bunny path: clearance %.3f m (footprint radius %.2f), %.2f m inside the desk, %.2f m from the divider",
+              (double)clearance, (double)WT_BUNNY_RADIUS, (double)under, (double)divider);
+    CHECK(clearance > WT_BUNNY_RADIUS);        /* never walks through anything */
+    CHECK(under > 0.3f);                       /* well under the desk top */
+    CHECK(divider < 0.35f);                    /* right past the divider */
+}
+
+/* The camera sees the bunny in every frame, from inside the room. */
+static void test_camera_path(void)
+{
+    wt_options o = small_options(WT_MODE_RAYTRACE);
+    int f;
+    for (f = 0; f < o.frames; f++) {
+        double t = wt_frame_time(&o, f);
+        rendercache_camera c = wt_camera(&o, t, 640, 480);
+        float p[3], px, py, depth;
+        wt_bunny_position(t, p, NULL);
+        p[1] = 0.15f;   /* the bunny's middle */
+        CHECK(c.eye[0] > 0.2f && c.eye[0] < 4.8f && c.eye[1] > 0.2f && c.eye[1] < 2.6f && c.eye[2] > 0.2f && c.eye[2] < 3.8f);
+        CHECK_MSG(rendercache_camera_project(&c, p, &px, &py, &depth) && px > 32 && px < 608 && py > 32 && py < 448,
+                  "frame %d: the bunny projects to (%.0f, %.0f)", f, (double)px, (double)py);
+    }
+}
+
+/* ---- the precompute cache on disk -------------------------------------------- */
+
+static int make_temp_dir(char *dir, size_t size)
+{
+    snprintf(dir, size, "/tmp/walkthrough-test-XXXXXX");
+    return mkdtemp(dir) != NULL;
+}
+
+static void remove_dir(const char *dir)
+{
+    char cmd[1200];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+    if (system(cmd) != 0) fprintf(stderr, "  could not remove %s\n", dir);
+}
+
+static int count_files(const char *dir, const char *suffix)
+{
+    char cmd[1200];
+    FILE *p;
+    int n = -1;
+    snprintf(cmd, sizeof cmd, "ls -1 '%s' | grep -c -- '%s$'", dir, suffix);
+    p = popen(cmd, "r");
+    if (p) {
+        if (fscanf(p, "%d", &n) != 1) n = -1;
+        pclose(p);
+    }
+    return n;
+}
+
+static void test_cache_files(void)
+{
+    char dir[256], path[1024], err[256];
+    unsigned char payload[1000];
+    void *data;
+    size_t size, i;
+    FILE *f;
+    if (!CHECK(make_temp_dir(dir, sizeof dir))) return;
+    for (i = 0; i < sizeof payload; i++) payload[i] = (unsigned char)(i * 7);
+    CHECK_EQ_INT(wt_cache_load(dir, "thing", 42, &data, &size), 0);          /* absent */
+    CHECK_EQ_INT(wt_cache_store(dir, "thing", 42, payload, sizeof payload, err, sizeof err), 0);
+    CHECK_EQ_INT(count_files(dir, ".bin"), 1);
+    CHECK_EQ_INT(count_files(dir, "tmp[0-9]*"), 0);                          /* renamed, nothing left */
+    CHECK_EQ_INT(wt_cache_load(dir, "thing", 42, &data, &size), 1);
+    CHECK(size == sizeof payload && memcmp(data, payload, size) == 0);
+    free(data);
+    CHECK_EQ_INT(wt_cache_load(dir, "thing", 43, &data, &size), 0);          /* another key: another file */
+    /* a flipped byte, then a truncation: damaged, never trusted */
+    wt_cache_path(dir, "thing", 42, path, sizeof path);
+    f = fopen(path, "r+b");
+    if (CHECK(f != NULL)) {
+        fseek(f, 100, SEEK_SET);
+        fputc(0x55, f);
+        fclose(f);
+    }
+    CHECK_EQ_INT(wt_cache_load(dir, "thing", 42, &data, &size), -1);
+    CHECK(data == NULL);
+    CHECK(truncate(path, 20) == 0);
+    CHECK_EQ_INT(wt_cache_load(dir, "thing", 42, &data, &size), -1);
+    remove_dir(dir);
+}
+
+/* A second renderer reuses the precomputed light vectors and base images,
+   and renders the same frames; other parameters make other files. */
+static void test_precompute_reuse(void)
+{
+    int m;
+    for (m = 0; m < 2; m++) {
+        char dir[256], err[512];
+        wt_options o = small_options((wt_mode)m);
+        wt_world *w1 = NULL, *w2 = NULL;
+        wt_renderer *r1 = NULL, *r2 = NULL;
+        size_t n = 3 * (size_t)REF_W * REF_H;
+        float *a = (float *)malloc(sizeof(float) * 2 * n), *b = (float *)malloc(sizeof(float) * 2 * n);
+        wt_frame_stats st;
+        uint64_t key = 0;
+        int f;
+        if (!CHECK(a && b && make_temp_dir(dir, sizeof dir))) { free(a); free(b); return; }
+        o.cache_dir = dir;
+        o.use_cache = 1;
+        if (CHECK(wt_world_create(&o, &w1, err, sizeof err) == 0 && wt_renderer_create(w1, &r1, err, sizeof err) == 0)) {
+            CHECK(!r1->reused_lightvec && !r1->reused_baseviews);
+            for (f = 0; f < 2; f++) CHECK(wt_render_frame(r1, f, a + f * n, &st) == 0);
+            key = r1->lightvec_key;
+        }
+        if (CHECK(wt_world_create(&o, &w2, err, sizeof err) == 0 && wt_renderer_create(w2, &r2, err, sizeof err) == 0)) {
+            CHECK(r2->reused_lightvec);
+            CHECK(m != WT_MODE_BASEVIEWS || r2->reused_baseviews);
+            CHECK(r1 && r2->static_vectors == r1->static_vectors);
+            for (f = 0; f < 2; f++) CHECK(wt_render_frame(r2, f, b + f * n, &st) == 0);
+            /* the same vectors and base images, the same kd-trees: the same frames */
+            CHECK_MSG(memcmp(a, b, sizeof(float) * 2 * n) == 0, "%s: frames differ after loading the precompute",
+                      wt_mode_name((wt_mode)m));
+        }
+        wt_renderer_destroy(r2);
+        wt_world_destroy(w2);
+        w2 = NULL;
+        r2 = NULL;
+        o.strata = 7;   /* another parameter: another key, nothing reused */
+        if (CHECK(wt_world_create(&o, &w2, err, sizeof err) == 0 && wt_renderer_create(w2, &r2, err, sizeof err) == 0))
+            CHECK(!r2->reused_lightvec && r2->lightvec_key != key);
+        CHECK_EQ_INT(count_files(dir, "tmp[0-9]*"), 0);
+        wt_renderer_destroy(r1);
+        wt_renderer_destroy(r2);
+        wt_world_destroy(w1);
+        wt_world_destroy(w2);
+        remove_dir(dir);
+        free(a);
+        free(b);
+    }
+}
+
+/* ---- frames ------------------------------------------------------------------ */
+
+/* Frames 0 and 1 of both modes against the stored references. */
+static double frames_vs_reference(wt_mode mode, uint64_t seed, int write)
+{
+    wt_options o = small_options(mode);
+    float *frames = (float *)malloc(sizeof(float) * 6 * REF_W * REF_H), *ref = (float *)malloc(sizeof(float) * 3 * REF_W * REF_H);
+    double worst = -1.0;
+    int f;
+    o.seed = seed;
+    if (frames && ref && render_frames(&o, 2, frames)) {
+        worst = 0.0;
+        for (f = 0; f < 2; f++) {
+            char path[256];
+            double lrms;
+            reference_path(path, sizeof path, mode, f);
+            if (write) {
+                if (ex_write_pfm(path, REF_W, REF_H, frames + (size_t)f * 3 * REF_W * REF_H) != 0) worst = -1.0;
+                continue;
+            }
+            if (!read_pfm(path, REF_W, REF_H, ref) ||
+                rendercache_lrms(ref, frames + (size_t)f * 3 * REF_W * REF_H, REF_W, REF_H, &lrms) != RENDERCACHE_OK)
+                return -1.0;
+            worst = lrms > worst ? lrms : worst;
+        }
+    }
+    free(frames);
+    free(ref);
+    return worst;
+}
+
+static void test_reference_frames(void)
+{
+    int m;
+    for (m = 0; m < 2; m++) {
+        double other = frames_vs_reference((wt_mode)m, 2, 0), lrms = frames_vs_reference((wt_mode)m, 1, 0);
+        double tol = REF_TOLERANCE_SHARE * other;
+        test_note("%s: frames 0 and 1 against the references: LRMS %.4f; with another seed %.4f (tolerance %.4f)",
+                  wt_mode_name((wt_mode)m), lrms, other, tol);
+        CHECK(other > 0.0);   /* the comparison sees a change of random numbers */
+        CHECK_MSG(lrms >= 0.0 && lrms <= tol, "%s: LRMS %.4f", wt_mode_name((wt_mode)m), lrms);
+    }
+}
+
+/* Frames are bit-identical on 1 and 2 threads. */
+static void test_threads(void)
+{
+    int m;
+    for (m = 0; m < 2; m++) {
+        wt_options o = small_options((wt_mode)m);
+        size_t n = 6 * (size_t)REF_W * REF_H;
+        float *a = (float *)malloc(sizeof(float) * n), *b = (float *)malloc(sizeof(float) * n);
+        if (CHECK(a && b)) {
+            o.threads = 1;
+            CHECK(render_frames(&o, 2, a));
+            o.threads = 2;
+            CHECK(render_frames(&o, 2, b));
+            CHECK_MSG(memcmp(a, b, sizeof(float) * n) == 0, "%s differs between 1 and 2 threads", wt_mode_name((wt_mode)m));
+        }
+        free(a);
+        free(b);
+    }
+}
+
+/* ---- the bunny under the desk ------------------------------------------------- */
+
+/* The time at which the bunny is deepest under the desk. */
+static double time_under_desk(void)
+{
+    double best = 0.0;
+    float depth = -1e9f, p[3];
+    int i;
+    for (i = 0; i <= 200; i++) {
+        float d;
+        wt_bunny_position(i / 200.0, p, NULL);
+        d = fminf(fminf(p[0] - 1.0f, 2.6f - p[0]), fminf(p[2] - 2.9f, 3.7f - p[2]));
+        if (d > depth) { depth = d; best = i / 200.0; }
+    }
+    return best;
+}
+
+/* Mean luminance of the bunny's pixels in a full render at time t. */
+static double bunny_pixels(wt_world *w, double t, int *count)
+{
+    const int W = 96, H = 72;
+    rendercache_camera c = wt_camera(&w->opt, t, W, H);
+    float *rgb = (float *)malloc(sizeof(float) * 3 * W * H);
+    uint32_t *obj = (uint32_t *)malloc(sizeof(uint32_t) * W * H);
+    double sum = 0.0;
+    int i;
+    *count = 0;
+    if (rgb && obj && wt_render_full(w, &c, t, 0, rgb, obj) == 0)
+        for (i = 0; i < W * H; i++)
+            if (obj[i] == WT_OBJECT_BUNNY) {
+                sum += luminance(rgb + 3 * i);
+                ++*count;
+            }
+    free(rgb);
+    free(obj);
+    return *count ? sum / *count : 0.0;
+}
+
+/* Greger's figure 5.3: the rabbit darkens as it enters the desk's shadow.
+   In the ray-traced frames: direct light and light vectors on its pixels. */
+static void test_bunny_darkens_in_frames(void)
+{
+    wt_options o = small_options(WT_MODE_RAYTRACE);
+    wt_world *w = NULL;
+    char err[512];
+    double open, under;
+    int n_open, n_under;
+    wt_renderer *r = NULL;
+    if (!CHECK(wt_world_create(&o, &w, err, sizeof err) == 0 && wt_renderer_create(w, &r, err, sizeof err) == 0)) {
+        wt_world_destroy(w);
+        return;
+    }
+    open = bunny_pixels(w, 0.0, &n_open);
+    under = bunny_pixels(w, time_under_desk(), &n_under);
+    test_note("bunny pixels: mean luminance %.4f in the open (%d pixels), %.4f under the desk (%d): ratio %.2f", open,
+              n_open, under, n_under, under / open);
+    CHECK(n_open > 20 && n_under > 10);   /* seen in both */
+    CHECK(under < 0.6 * open);            /* the desk takes the ceiling's and the lamp's light */
+    wt_renderer_destroy(r);
+    wt_world_destroy(w);
+}
+
+/* The same through the irradiance volume that will light the bunny in mode
+   radiosity: here a volume of the lamp's emission alone (the direct
+   component, lamp IMPORTANT), queried at the bunny's vertices with their
+   self-occlusion ratios, and the bunny rasterized and Gouraud-shaded. */
+static void test_bunny_darkens_in_volume(void)
+{
+    wt_options o = small_options(WT_MODE_RADIOSITY);
+    wt_world *w = NULL;
+    irrvol *vol = NULL;
+    irrvol_desc src;
+    irrvol_material *mats;
+    char err[512];
+    float *vis, *pos, *nrm, *rgb, m[12];
+    double mean[2] = { 0, 0 };
+    int reused, k;
+    uint32_t i, v, nv;
+    o.volume_resolution = 6;
+    o.visibility_rays = 16;
+    if (!CHECK(wt_world_create(&o, &w, err, sizeof err) == 0)) return;
+    nv = w->bunny.vertex_count;
+    mats = (irrvol_material *)calloc(w->office.material_count, sizeof *mats);
+    vis = (float *)malloc(sizeof(float) * nv);
+    pos = (float *)malloc(3 * sizeof(float) * nv);
+    nrm = (float *)malloc(3 * sizeof(float) * nv);
+    rgb = (float *)malloc(3 * sizeof(float) * nv);
+    if (CHECK(mats && vis && pos && nrm && rgb)) {
+        for (i = 0; i < w->office.material_count; i++) {
+            memcpy(mats[i].radiance, w->office.materials[i].ke, sizeof mats[i].radiance);
+            if (mats[i].radiance[0] > 0.0f) mats[i].flags = IRRVOL_MATERIAL_IMPORTANT;
+        }
+        memset(&src, 0, sizeof src);
+        src.positions = w->office.positions;
+        src.vertex_count = w->office.vertex_count;
+        src.indices = w->office.tri_indices;
+        src.triangle_count = w->office.tri_count;
+        src.triangle_materials = w->office.tri_material;
+        src.materials = mats;
+        src.material_count = w->office.material_count;
+        /* Greger's grid (7^3, second level 3^3): samples every 0.23 m in
+           height near geometry, so some lie under the desk top */
+        CHECK(wt_bunny_visibility(w, vis, &reused, err, sizeof err) == 0);
+        for (v = 0, mean[0] = 0.0; v < nv; v++) mean[0] += vis[v] / nv;
+        test_note("bunny self-occlusion: mean open fraction %.3f", mean[0]);
+        CHECK(mean[0] > 0.5 && mean[0] < 0.98);   /* ears and legs shade the body, most of it is open */
+        if (CHECK(wt_volume_build(w, &src, 1, &vol, &reused, err, sizeof err) == 0)) {
+            double t[2];
+            t[0] = 0.0;
+            t[1] = time_under_desk();
+            for (k = 0; k < 2; k++) {
+                mean[k] = 0.0;
+                wt_bunny_transform(w, t[k], m);
+                wt_bunny_light(w, vol, vis, m, pos, nrm, rgb);
+                for (v = 0; v < nv; v++) mean[k] += luminance(rgb + 3 * v) / nv;
+            }
+            test_note("bunny vertices lit by the lamp's volume: %.4f in the open, %.4f under the desk", mean[0], mean[1]);
+            CHECK(mean[1] < 0.3 * mean[0]);   /* the desk top blocks the lamp */
+            /* rasterized, Gouraud-shaded: the bunny's pixels darken too */
+            {
+                ex_raster ra;
+                const int W = 96, H = 72;
+                float *img = (float *)calloc(3 * W * H, sizeof(float));
+                double pix[2] = { 0, 0 };
+                int cnt[2] = { 0, 0 }, p;
+                if (CHECK(img && ex_raster_init(&ra, W, H) == 0)) {
+                    for (k = 0; k < 2; k++) {
+                        rendercache_camera c = wt_camera(&o, t[k], W, H);
+                        wt_bunny_transform(w, t[k], m);
+                        wt_bunny_light(w, vol, vis, m, pos, nrm, rgb);
+                        CHECK(wt_raster_scene(w, &ra, &c, w->office.positions, w->office.tri_indices,
+                                              w->office.tri_count, pos) == 0);
+                        ex_raster_resolve_gouraud(&ra, w->bunny.tri_indices, w->bunny.tri_count, w->office.tri_count,
+                                                  rgb, img);
+                        for (p = 0; p < W * H; p++)
+                            if (ra.id[p] != EX_RASTER_EMPTY && ra.id[p] >= w->office.tri_count) {
+                                pix[k] += luminance(img + 3 * p);
+                                cnt[k]++;
+                            }
+                    }
+                    CHECK(cnt[0] > 20 && cnt[1] > 10);
+                    CHECK(cnt[0] && cnt[1] && pix[1] / cnt[1] < 0.3 * pix[0] / cnt[0]);
+                    ex_raster_free(&ra);
+                }
+                free(img);
+            }
+            irrvol_destroy(vol);
+        }
+    }
+    free(mats);
+    free(vis);
+    free(pos);
+    free(nrm);
+    free(rgb);
+    wt_world_destroy(w);
+}
+
+/* The rasterizer's camera is the ray tracer's: the ID buffer of the office
+   and the bunny agrees with primary rays pixel by pixel, but for pixels on
+   edges. */
+static void test_raster_matches_tracer(void)
+{
+    wt_options o = small_options(WT_MODE_RADIOSITY);
+    wt_world *w = NULL;
+    ex_raster ra;
+    char err[512];
+    const int W = 96, H = 72;
+    float *pos;
+    uint32_t v, agree = 0, bunny = 0;
+    int x, y;
+    double t = 0.3;
+    if (!CHECK(wt_world_create(&o, &w, err, sizeof err) == 0)) return;
+    pos = (float *)malloc(3 * sizeof(float) * w->bunny.vertex_count);
+    if (CHECK(pos && ex_raster_init(&ra, W, H) == 0)) {
+        rendercache_camera c = wt_camera(&o, t, W, H);
+        wt_set_time(w, t);
+        for (v = 0; v < w->bunny.vertex_count; v++) ex__affine_point(w->pose, w->bunny.positions + 3 * (size_t)v, pos + 3 * (size_t)v);
+        CHECK(wt_raster_scene(w, &ra, &c, w->office.positions, w->office.tri_indices, w->office.tri_count, pos) == 0);
+        for (y = 0; y < H; y++)
+            for (x = 0; x < W; x++) {
+                float org[3], dir[3];
+                ex_trace_hit h;
+                uint32_t id = ra.id[y * W + x], expect;
+                rendercache_camera_ray(&c, (float)x + 0.5f, (float)y + 0.5f, org, dir);
+                if (!ex_tracer_intersect(w->tracer, org, dir, FLT_MAX, &h)) continue;
+                expect = h.instance == EX_TRACE_STATIC ? w->office.tri_face[h.tri] : 0xFFFFu;
+                if (id != EX_RASTER_EMPTY)
+                    id = id < w->office.tri_count ? w->office.tri_face[id] : 0xFFFFu;
+                agree += id == expect;
+                bunny += expect == 0xFFFFu;
+            }
+        test_note("raster vs tracer: %u of %d pixels show the same polygon (%u bunny pixels)", agree, W * H, bunny);
+        CHECK(bunny > 10);
+        CHECK(agree >= (uint32_t)(0.97 * W * H));   /* polygon edges may fall either way by rounding */
+        ex_raster_free(&ra);
+    }
+    free(pos);
+    wt_world_destroy(w);
+}
+
+/* Mode radiosity says what it needs instead of rendering something else. */
+static void test_radiosity_needs_radinterp(void)
+{
+    wt_options o = small_options(WT_MODE_RADIOSITY);
+    wt_world *w = NULL;
+    wt_renderer *r = NULL;
+    char err[512];
+    if (!CHECK(wt_world_create(&o, &w, err, sizeof err) == 0)) return;
+    CHECK(wt_renderer_create(w, &r, err, sizeof err) == -1 && r == NULL);
+    CHECK_MSG(strstr(err, "radinterp_build_mesh") && strstr(err, "radinterp_shade"), "message: %s", err);
+    wt_world_destroy(w);
+}
+
+static void write_references(void)
+{
+    int m;
+    for (m = 0; m < 2; m++) {
+        CHECK(frames_vs_reference((wt_mode)m, 1, 1) == 0.0);
+        printf("  wrote tests/data/walkthrough_%s_f0.pfm, _f1.pfm\n", wt_mode_name((wt_mode)m));
+    }
+}
+
+int main(int argc, char **argv)
+{
+    TEST_INIT(argc, argv);
+    if (getenv("WT_WRITE_REFERENCE")) {
+        RUN(write_references);
+        return test_finish();
+    }
+    RUN(test_options);
+    RUN(test_missing_files);
+    RUN(test_bunny_path);
+    RUN(test_camera_path);
+    RUN(test_cache_files);
+    RUN(test_precompute_reuse);
+    RUN(test_reference_frames);
+    RUN(test_threads);
+    RUN(test_bunny_darkens_in_frames);
+    RUN(test_bunny_darkens_in_volume);
+    RUN(test_raster_matches_tracer);
+    RUN(test_radiosity_needs_radinterp);
+    return test_finish();
+}
