@@ -3261,18 +3261,20 @@ static uint32_t rendercache__warp_input_of(const rendercache__warp_set *set, uin
 }
 
 /* Frustum culling of a batch of rays (camera-space directions, ok = has a
-   ray): 1 when there is no ray (skipped tiles), or, with planes set, when
-   every ray points outside one of the input's cull planes, so that no
-   depth brings it into the target image. (Inputs with tile culling do not
-   use the planes here: a batch of one row cannot keep the quads that join
-   it to the next row and reach the image, the tiles do.) */
+   ray): 1 when there is no ray (skipped tiles), or when every ray points
+   outside one of the input's cull planes, so that no depth brings it into
+   the target image. A known flaw, kept so that warps give the same images
+   as before tile culling: a quad joining a culled batch of one row to the
+   next row is dropped even where it reaches the image (a hole at the image
+   border, which the background fill then covers); the tiles alone, with
+   their ring of pixels, would keep it. */
 static int rendercache__warp_culled(const rendercache__warp_src *ws, const float *dx, const float *dy, const float *dz,
-                                    const unsigned char *ok, uint32_t n, int planes)
+                                    const unsigned char *ok, uint32_t n)
 {
     uint32_t k, i, any = 0;
     for (i = 0; i < n; i++) any |= ok[i];
     if (!any) return 1;
-    for (k = 0; planes && k < ws->cull_count; k++) {
+    for (k = 0; k < ws->cull_count; k++) {
         const float a = ws->cull[k][0], b = ws->cull[k][1], c = ws->cull[k][2];
         uint32_t inside = 0;   /* an integer reduction: it vectorises */
         for (i = 0; i < n; i++) inside |= (uint32_t)(ok[i] & (a * dx[i] + b * dy[i] + c * dz[i] >= 0.0f));
@@ -3657,7 +3659,7 @@ static uint32_t rendercache__warp_project(const rendercache__warp_src *ws, uint3
         uint32_t k0, k1, kept = 0;
         for (k0 = 0; k0 < n; k0 = k1) {   /* chunks of rays that all miss the target are skipped */
             k1 = k0 + RENDERCACHE__CULL_CHUNK < n ? k0 + RENDERCACHE__CULL_CHUNK : n;
-            if (rendercache__warp_culled(ws, dx + k0, dy + k0, dz + k0, ok + k0, k1 - k0, ws->skip == NULL)) {
+            if (rendercache__warp_culled(ws, dx + k0, dy + k0, dz + k0, ok + k0, k1 - k0)) {
                 memset(ok + k0, 0, k1 - k0);
             } else {
                 rendercache__warp_project_static(ws, obj, dep, dx, dy, dz, k0, k1, px, py, d2, ok);
