@@ -359,6 +359,22 @@ static void bench_walkthrough(ex_pool *shade_pool, int quick)
     obj_free(&scene);
 }
 
+/* The render cache figures next to the paper's and the target. */
+static void cache_summary(double frame_ms[2][2], double sample_us, int shade_threads)
+{
+    double pixels = 512.0 * 512.0, full_ms = pixels * sample_us * 1e-3;
+    double cache_ms = frame_ms[0][0] + BUDGET * pixels * sample_us * 1e-3;
+    printf("paper (Walter et al. 2002): 62 ms per 512x512 frame on a Pentium 4 (16 fps potential, 12-14 observed)\n");
+    printf("ours 512x512: %.2f ms on 1 thread (target < 8 ms), %.2f ms on 2; ratio to the paper %.1fx\n",
+           frame_ms[0][0], frame_ms[0][1], 62.0 / frame_ms[0][0]);
+    printf("512x512 with direct light + one bounce (%.2f us per sample, %d shading threads): full re-render "
+           "%.0f ms, cache frame (overhead + 8%% samples) %.0f ms, %.1fx faster\n",
+           sample_us, shade_threads, full_ms, cache_ms, full_ms / cache_ms);
+}
+
+/* Arguments: "quick" (any argument but the two below) runs 512x512 and
+   the warps on one thread only; "cache" or "warp" runs that part only,
+   quick (e.g. under valgrind --tool=callgrind). */
 int main(int argc, char **argv)
 {
     static const uint32_t sizes[2][2] = { { 512, 512 }, { 1024, 768 } };
@@ -366,9 +382,10 @@ int main(int argc, char **argv)
     ex_tracer *tracer;
     ex_pool *shade_pool;
     char err[256];
-    int s, threads;
+    int s, threads, quick = argc > 1, cache = 1, warp = 1;
     double frame_ms[2][2] = { { 0, 0 }, { 0, 0 } }, sample_us = 0.0;
-    (void)argv;
+    if (quick && strcmp(argv[1], "cache") == 0) warp = 0;
+    if (quick && strcmp(argv[1], "warp") == 0) cache = 0;
     if (obj_load("examples/data/cornell_box.obj", &scene, err, sizeof err) != 0) {
         printf("cannot load the Cornell box: %s\n", err);
         return 1;
@@ -376,22 +393,13 @@ int main(int argc, char **argv)
     tracer = ex_tracer_create(&scene);
     shade_pool = ex_pool_create(0);
     if (!tracer || !shade_pool) return 1;
-    printf("render cache per-frame overhead, Cornell box camera path, %d frames, budget %.0f%% of the pixels\n",
-           FRAMES, BUDGET * 100);
-    for (s = 0; s < (argc > 1 ? 1 : 2); s++)
-        for (threads = 1; threads <= (argc > 1 ? 1 : 2); threads++)
+    if (cache) printf("render cache per-frame overhead, Cornell box camera path, %d frames, budget %.0f%% of the pixels\n",
+                      FRAMES, BUDGET * 100);
+    for (s = 0; cache && s < (quick ? 1 : 2); s++)
+        for (threads = 1; threads <= (quick ? 1 : 2); threads++)
             run(tracer, shade_pool, sizes[s][0], sizes[s][1], threads, &frame_ms[s][threads - 1], &sample_us);
-    printf("paper (Walter et al. 2002): 62 ms per 512x512 frame on a Pentium 4 (16 fps potential, 12-14 observed)\n");
-    printf("ours 512x512: %.2f ms on 1 thread (target < 8 ms), %.2f ms on 2; ratio to the paper %.1fx\n",
-           frame_ms[0][0], frame_ms[0][1], 62.0 / frame_ms[0][0]);
-    {
-        double pixels = 512.0 * 512.0, full_ms = pixels * sample_us * 1e-3;
-        double cache_ms = frame_ms[0][0] + BUDGET * pixels * sample_us * 1e-3;
-        printf("512x512 with direct light + one bounce (%.2f us per sample, %d shading threads): full re-render "
-               "%.0f ms, cache frame (overhead + 8%% samples) %.0f ms, %.1fx faster\n",
-               sample_us, ex_pool_threads(shade_pool), full_ms, cache_ms, full_ms / cache_ms);
-    }
-    bench_walkthrough(shade_pool, argc > 1);
+    if (cache) cache_summary(frame_ms, sample_us, ex_pool_threads(shade_pool));
+    if (warp) bench_walkthrough(shade_pool, quick);
     ex_tracer_destroy(tracer);
     ex_pool_destroy(shade_pool);
     obj_free(&scene);

@@ -444,6 +444,131 @@ static void test_flanking_views_fill_every_visible_pixel(void)
     rendercache_warper_destroy(w);
 }
 
+/* ---------------------------------------------------------------------
+   Tile culling: tiles of an input whose points all fall outside the
+   target's frustum are skipped, with their ring of pixels, so that no
+   quad reaching the image loses a corner.
+   --------------------------------------------------------------------- */
+/* Where the pixel (x, y) of base lands in target, as rendercache_camera_project
+   says (a background pixel: a point far along its ray). Returns 0 when it has
+   no sample or lands nowhere. */
+static int landing(const rendercache_range_image *base, const rendercache_camera *target, uint32_t x, uint32_t y,
+                   float *px, float *py)
+{
+    size_t p = (size_t)y * base->camera.width + x;
+    float o[3], d[3], q[3], depth;
+    uint32_t id = base->object[p];
+    int k;
+    if (id == RENDERCACHE_NO_SAMPLE) return 0;
+    if (rendercache_camera_ray(&base->camera, (float)x + 0.5f, (float)y + 0.5f, o, d) != RENDERCACHE_OK) return 0;
+    for (k = 0; k < 3; k++) q[k] = o[k] + (id == RENDERCACHE_MISS ? 1e5f : base->depth[p]) * d[k];
+    return rendercache_camera_project(target, q, px, py, &depth);
+}
+
+/* Fish-eye and perspective inputs, most of whose pixels miss a turned
+   target, warped without fill: every target pixel that some input pixel
+   lands in (clear of pixel edges by more than rounding) is filled, and
+   every pixel that none comes near stays empty. */
+static void test_culled_tiles_lose_no_landing_pixel(void)
+{
+    scene s = boxes_scene();
+    rendercache_camera cams[3], target;
+    rendercache_range_image *bases[3], *out = NULL;
+    const rendercache_range_image *in[3];
+    static unsigned char sure[64 * 48], near[64 * 48];
+    rendercache_warper *w = make_warper(NULL, NULL);
+    uint32_t i, x, y, missing = 0, extra = 0, landed = 0;
+    const float margin = 0.01f;   /* pixels: rounding of two different projections of one point */
+    cams[0] = make_camera(RENDERCACHE_CAMERA_FISHEYE, -0.8f, 0.2f, 0, -0.8f, 0.2f, 10, 0, 160, 160);
+    cams[1] = make_camera(RENDERCACHE_CAMERA_FISHEYE, 0.9f, -0.1f, 0.5f, 3, 0, 10, 0, 128, 128);
+    cams[2] = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, 0.2f, 0, -1, -2, 0, 10, 80, 96, 72);
+    target = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, 0.1f, 0, 0.3f, 3.5f, 1.0f, 10, 40, 64, 48);
+    memset(sure, 0, sizeof sure);
+    memset(near, 0, sizeof near);
+    for (i = 0; i < 3; i++) {
+        bases[i] = render(&s, &cams[i], 0);
+        in[i] = bases[i];
+        if (!CHECK(bases[i])) return;
+        for (y = 0; y < cams[i].height; y++)
+            for (x = 0; x < cams[i].width; x++) {
+                float px, py;
+                int dx, dy;
+                if (!landing(bases[i], &target, x, y, &px, &py)) continue;
+                for (dy = -1; dy <= 1; dy++)
+                    for (dx = -1; dx <= 1; dx++) {
+                        float qx = px + (float)dx * margin, qy = py + (float)dy * margin;
+                        if (qx >= 0.0f && qy >= 0.0f && qx < 64.0f && qy < 48.0f) near[(int)qy * 64 + (int)qx] = 1;
+                    }
+                if (px - floorf(px) > margin && px - floorf(px) < 1.0f - margin && py - floorf(py) > margin &&
+                    py - floorf(py) < 1.0f - margin)
+                    sure[(int)py * 64 + (int)px] = 1;
+            }
+    }
+    if (!CHECK(w) || !CHECK_EQ_INT(rendercache_range_image_create(&target, NULL, &out), RENDERCACHE_OK)) return;
+    CHECK_EQ_INT(rendercache_warp(w, in, 3, NULL, RENDERCACHE_FILL_NONE, out), RENDERCACHE_OK);
+    for (i = 0; i < 64 * 48; i++) {
+        int filled = out->object[i] != RENDERCACHE_NO_SAMPLE;
+        landed += sure[i];
+        missing += sure[i] && !filled;
+        extra += filled && !near[i];
+    }
+    test_note("tile culling: %u target pixels surely landed in, %u of them empty, %u filled from nowhere", landed, missing,
+              extra);
+    CHECK(landed > 1000);
+    CHECK_EQ_INT(missing, 0);
+    CHECK_EQ_INT(extra, 0);
+    for (i = 0; i < 3; i++) rendercache_range_image_destroy(bases[i]);
+    rendercache_range_image_destroy(out);
+    rendercache_warper_destroy(w);
+}
+
+/* A fish-eye coarser than the target (0.70 against 0.42 degrees per
+   pixel), of a wall that fills its view: without quads the target would
+   have holes. With foreground fill every target pixel shows the wall, the
+   image border included, where the tiles of the input are cut by the
+   culling; and so for any number of jobs. (The input's eye lies inside the
+   target's frustum, a little in front of its eye, so that only the tiles
+   cull: the older culling of single rows by the planes whose outside holds
+   the input's eye drops some quads at the border, see warp_culled.) */
+static void test_culled_tiles_keep_quads_at_the_border(void)
+{
+    scene s;
+    rendercache_camera base = make_camera(RENDERCACHE_CAMERA_FISHEYE, 0, 0, 0, 0.5f, 0.3f, 10, 0, 256, 256);
+    rendercache_camera target = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, 0.1f, -0.05f, -0.6f, 1.5f, 0.4f, 10, 40, 128, 96);
+    rendercache_range_image *src, *out = NULL;
+    const rendercache_range_image *in[1];
+    ex_pool *pool = ex_pool_create(2);
+    int run;
+    memset(&s, 0, sizeof s);
+    s.wall_z = 10.0f;
+    s.wall_half = 60.0f;
+    src = render(&s, &base, 0);
+    in[0] = src;
+    if (!CHECK(src) || !CHECK_EQ_INT(rendercache_range_image_create(&target, NULL, &out), RENDERCACHE_OK)) return;
+    for (run = 0; run < 2; run++) {
+        rendercache_warper *w = run ? make_warper(pool ? ex_pool_parallel_for : NULL, pool) : make_warper(NULL, NULL);
+        uint32_t p, holes = 0, border_holes = 0, none_filled = 0;
+        if (!w) break;
+        CHECK_EQ_INT(rendercache_warp(w, in, 1, NULL, RENDERCACHE_FILL_NONE, out), RENDERCACHE_OK);
+        for (p = 0; p < 128 * 96; p++) none_filled += out->object[p] == 0;
+        CHECK_EQ_INT(rendercache_warp(w, in, 1, NULL, RENDERCACHE_FILL_FOREGROUND, out), RENDERCACHE_OK);
+        for (p = 0; p < 128 * 96; p++) {
+            uint32_t x = p % 128, y = p / 128;
+            holes += out->object[p] != 0;
+            border_holes += out->object[p] != 0 && (x == 0 || y == 0 || x == 127 || y == 95);
+        }
+        if (run == 0) test_note("coarse fish-eye: %u of %u pixels filled by points alone, %u holes with quads",
+                                none_filled, 128 * 96, holes);
+        CHECK(none_filled < 128 * 96 * 3 / 4);   /* the quads are needed */
+        CHECK_EQ_INT(holes, 0);
+        CHECK_EQ_INT(border_holes, 0);
+        rendercache_warper_destroy(w);
+    }
+    rendercache_range_image_destroy(src);
+    rendercache_range_image_destroy(out);
+    ex_pool_destroy(pool);
+}
+
 /* A sideways move uncovers the wall beside a box. Foreground quads never
    bridge the uncovered strip (depth edge), background fill gives it the
    wall, the farther surface. */
@@ -850,6 +975,8 @@ int main(int argc, char **argv)
     RUN(test_warp_into_own_camera_is_identity);
     RUN(test_warp_along_plane_normal_matches_analytic_image);
     RUN(test_flanking_views_fill_every_visible_pixel);
+    RUN(test_culled_tiles_lose_no_landing_pixel);
+    RUN(test_culled_tiles_keep_quads_at_the_border);
     RUN(test_fill_modes_at_a_disocclusion);
     RUN(test_fill_callback_computes_the_rest);
     RUN(test_input_order_and_depth_tolerance);
