@@ -3927,14 +3927,32 @@ static void rendercache__warp_quad(const rendercache__warp_src *ws, rendercache_
     }
 }
 
+/* With moving objects (motion-compensated warps), a triangle joins pixels of
+   one object only: where a moving object touches a static surface at a
+   similar depth (a bunny's feet on the floor), a triangle across the two
+   would stretch as the object moves. Static warps keep bridging such
+   contacts, as pinterp does. */
+static void rendercache__warp_quad_flags_one_object(const rendercache__warp_src *ws, uint32_t y,
+                                                    const uint32_t s0[2], const uint32_t s1[2],
+                                                    unsigned char *flags)
+{
+    const uint32_t *o0 = ws->image->object + (size_t)y * ws->source.width, *o1 = o0 + ws->source.width;
+    size_t x = s0[0] > s1[0] ? s0[0] : s1[0], end = s0[1] < s1[1] ? s0[1] : s1[1];
+    for (; x + 1 < end; x++) {
+        int upper = (o0[x] == o0[x + 1]) & (o0[x] == o1[x + 1]);   /* (x, y) (x+1, y) (x+1, y+1) */
+        int lower = (o0[x] == o1[x + 1]) & (o0[x] == o1[x]);       /* (x, y) (x+1, y+1) (x, y+1) */
+        flags[x] &= (unsigned char)(upper | lower << 1);
+    }
+}
+
 /* Which triangles of the quads of source row y (between rows y and y + 1,
    projected in r0 and r1) are drawn: bit 0 the upper-right triangle
    (x, y) (x+1, y) (x+1, y+1), bit 1 the lower-left (x, y) (x+1, y+1)
    (x, y+1). Quads with a corner that has no projection, or whose box misses
    the image, draw nothing (and cost little). */
 static void rendercache__warp_quad_flags(const rendercache__warp_set *set, const rendercache__warp_src *ws,
-                                         const float *r0, const float *r1, const uint32_t s0[2], const uint32_t s1[2],
-                                         unsigned char *RENDERCACHE__RESTRICT flags)
+                                         uint32_t y, const float *r0, const float *r1, const uint32_t s0[2],
+                                         const uint32_t s1[2], unsigned char *RENDERCACHE__RESTRICT flags)
 {
     const float w = (float)ws->target->width, h = (float)ws->target->height, tol2x = set->tol2x;
     const float max_extent = set->max_extent;
@@ -3954,6 +3972,7 @@ static void rendercache__warp_quad_flags(const rendercache__warp_set *set, const
         flags[x] = (unsigned char)(draw * (rendercache__warp_triangle_ok(tol2x, max_extent, a, b, c) |
                                            rendercache__warp_triangle_ok(tol2x, max_extent, a, c, d) << 1));
     }
+    if (ws->motion) rendercache__warp_quad_flags_one_object(ws, y, s0, s1, flags);
 }
 
 /* Whether all six triangles around source pixel x of a row are drawn, from
@@ -4063,14 +4082,14 @@ static uint32_t rendercache__warp_cover_input(const rendercache__warp_set *set, 
     rendercache__warp_project_row(ws, y0, rc, sc);
     if (y0 > 0) {
         rendercache__warp_project_row(ws, y0 - 1, rp, sp);
-        rendercache__warp_quad_flags(set, ws, rp, rc, sp, sc, fu);
+        rendercache__warp_quad_flags(set, ws, y0 - 1, rp, rc, sp, sc, fu);
     }
     for (y = y0; y <= y1; y++) {
         uint32_t xa = y == y0 ? begin - y * sw : 0, xb = y == y1 ? end - y * sw : sw, x;
         int below = y + 1 < sh;
         if (below) {
             rendercache__warp_project_row(ws, y + 1, rn, sn);
-            rendercache__warp_quad_flags(set, ws, rc, rn, sc, sn, fd);
+            rendercache__warp_quad_flags(set, ws, y, rc, rn, sc, sn, fd);
         }
         /* only the projected part of the row has quads and points */
         xa = xa > sc[0] ? xa : sc[0];
