@@ -153,6 +153,7 @@ typedef struct wt_options {
     int volume_resolution;    /* irradiance volume k */
     int visibility_rays;      /* self-occlusion rays per bunny vertex */
     int bunny_shadow;         /* the bunny's occlusion blob on the office */
+    int gouraud;              /* the office Gouraud-shaded from the mesh's corners (radinterp_shade_gouraud) */
     /* run */
     int use_cache;            /* load and save the precompute cache */
     int write_frames;         /* PNGs */
@@ -256,6 +257,7 @@ EX_FN void wt_usage(FILE *f)
           "  --min-leaf-area A    radiosity: coarsest mesh leaves in m^2 (default 0: every leaf)\n"
           "  --volume-k K         radiosity: irradiance volume bins 2K^2, K <= 32 (default 17)\n"
           "  --no-bunny-shadow    radiosity: no occlusion blob of the bunny on the office\n"
+          "  --gouraud            radiosity: Gouraud shading of the mesh instead of its interpolants\n"
           "  --exposure E         tone-mapping scale (default: automatic from the first frame)\n"
           "  --reference          also trace every frame in full and print the LRMS error\n"
           "  --no-frames          do not write PNG frames\n"
@@ -300,6 +302,7 @@ EX_FN int wt_parse_options(int argc, char **argv, wt_options *o, char *err, size
         if (!strcmp(a, "--quiet")) { o->progress = o->verbose = 0; continue; }
         if (!strcmp(a, "--reference")) { o->reference = 1; continue; }
         if (!strcmp(a, "--no-bunny-shadow")) { o->bunny_shadow = 0; continue; }
+        if (!strcmp(a, "--gouraud")) { o->gouraud = 1; continue; }
         if (strncmp(a, "--", 2) != 0) {
             snprintf(err, err_size, "unexpected argument '%s' (see --help)", a);
             return -1;
@@ -2454,14 +2457,17 @@ EX_FN int wt_static_shading_build(wt_world *w, wt_static_shading *s, char *err, 
 
 /* Shades pixels [first, first + count) of the raster whose id is a static
    triangle (id < s->data.triangle_count) from their triangle's interpolant
-   at their barycentrics: rgb = radiosity B in W/m^2 (radinterp_shade);
-   other pixels are left as they are. */
+   at their barycentrics: rgb = radiosity B in W/m^2 (radinterp_shade, or
+   with gouraud the corners' radiosities blended linearly); other pixels are
+   left as they are. */
 EX_FN int wt_static_shading_shade(const wt_static_shading *s, const ex_raster *raster, size_t first, size_t count,
-                                  float *rgb)
+                                  int gouraud, float *rgb)
 {
+    radinterp_result rr;
     if (!s->mesh || first + count > (size_t)raster->width * (size_t)raster->height) return -1;
-    return radinterp_shade(s->mesh, raster->id + first, raster->bary + 2 * first, count, rgb + 3 * first) == RADINTERP_OK
-               ? 0 : -1;
+    rr = gouraud ? radinterp_shade_gouraud(s->mesh, raster->id + first, raster->bary + 2 * first, count, rgb + 3 * first)
+                 : radinterp_shade(s->mesh, raster->id + first, raster->bary + 2 * first, count, rgb + 3 * first);
+    return rr == RADINTERP_OK ? 0 : -1;
 }
 
 EX_FN void wt_static_shading_free(wt_static_shading *s)
@@ -2837,7 +2843,7 @@ static void wt__pixel_band(void *ctx, uint32_t band)
     const uint32_t *bunny = r->w->bunny.tri_indices, nt = s->data.triangle_count, nb = r->w->bunny.tri_count;
     uint32_t y0 = band * WT__PIXEL_ROWS, y1 = y0 + WT__PIXEL_ROWS, x, y;
     if (y1 > r->height) y1 = r->height;
-    wt_static_shading_shade(s, ra, (size_t)y0 * r->width, (size_t)(y1 - y0) * r->width, j->rgb);
+    wt_static_shading_shade(s, ra, (size_t)y0 * r->width, (size_t)(y1 - y0) * r->width, r->w->opt.gouraud, j->rgb);
     for (y = y0; y < y1; y++) {
         int blob_row = j->blob && (int)y >= r->blob_box[1] && (int)y < r->blob_box[3];
         for (x = 0; x < r->width; x++) {
