@@ -6,11 +6,13 @@
    radiosity solution it was built from.
 
    The settings are coarse so that the suite stays fast under the
-   sanitizers: 64x48 frames, mesh leaves of at least 1 m^2 (about 2,300
-   triangles and 14,000 IrradianceAtPoint samples instead of 12,000-21,000
-   triangles), a volume with k = 6, 16 self-occlusion rays per bunny vertex.
-   The mesh is built twice (2 threads into a temporary precompute cache, 1
-   thread without it); every other renderer loads it.
+   sanitizers: 64x48 frames, mesh leaves of at least 4 m^2 (about 1,300
+   triangles and 8,000 IrradianceAtPoint samples, most of them on
+   discontinuities, instead of 12,000-21,000 triangles), a volume with
+   k = 6, 16 self-occlusion rays per bunny vertex. The first test fills a
+   temporary precompute cache that the later ones load from; meshes are
+   built anew only where a test needs it (another parameter, another seed,
+   one thread).
 
    Reference frames (tests/data/walkthrough_radiosity_f<frame>.pfm, 64x48)
    were written by this program from the repository root with
@@ -24,12 +26,13 @@
    machine that wrote them the error is 0, with gcc at -O1 with the
    sanitizers, -O2 and -O3 -march=native alike. Another compiler rounds the
    solver's arithmetic differently and may flip refinement decisions near
-   their thresholds: clang -O2 gives 0.0028. The tolerance is 7 times that
-   and half the LRMS of another draw of the random numbers (another seed:
-   0.042, as the solver's jittered form-factor points refine the quadtrees
+   their thresholds: clang gives 0.0029 at -O1 and -O2, 0.0051 at -O3
+   -march=native. The tolerance is 4 times the latter and half the LRMS of
+   another draw of the random numbers (another seed: 0.042, as the
+   solver's jittered form-factor points refine the quadtrees
    elsewhere), so such a draw fails, and so does Gouraud shading of the
-   mesh instead of its interpolants (0.20). The bunny covers 1% of these
-   frames (without its self-occlusion ratio: 0.0075, without its occlusion
+   mesh instead of its interpolants (0.43). The bunny covers 1% of these
+   frames (without its self-occlusion ratio: 0.0081, without its occlusion
    blob: 0.017): its lighting is tested apart. */
 #define _POSIX_C_SOURCE 200809L
 #include "examples/common/walkthrough.h"
@@ -50,7 +53,7 @@ static wt_options small_options(void)
     o.height = REF_H;
     o.frames = 24;
     o.threads = 2;
-    o.min_leaf_area = 1.0f;
+    o.min_leaf_area = 4.0f;
     o.volume_resolution = 6;
     o.visibility_rays = 16;
     o.cache_dir = cache_dir;
@@ -270,7 +273,7 @@ static void test_precompute_reuse(void)
         CHECK_MSG(memcmp(fa, fb, sizeof(float) * 2 * n) == 0, "frames differ after loading the precompute");
         close_session(&b);
     }
-    o.min_leaf_area = 4.0f;   /* another mesh parameter: another mesh, another volume */
+    o.min_leaf_area = 8.0f;   /* another mesh parameter: another mesh, another volume */
     if (CHECK(open_session(&o, &b))) {
         CHECK(!b.r->statics.reused && !b.r->reused_volume && b.r->reused_visibility);
         CHECK(b.r->statics.key != key);
@@ -462,14 +465,15 @@ static void test_volume_matches_solution(void)
     test_note("radiosity: volume vs the floor's interpolant 5 cm below, %d points: mean ratio %.3f, worst |ratio - 1| %.3f",
               count, mean, worst);
     /* At these settings (k = 6: 72 bins of 0.17 sr, one ray each, beside
-       the lamp's informed samples; mesh leaves of 1 m^2) the volume reads
-       about 11% high on average, 15% at worst; the error shrinks with the
-       resolution (k = 12: 8%, k = 17: 4%; k = 17 on the full mesh: 1.8%,
-       5% at worst). A wrong unit (B for B / pi, Ke for pi Ke) would be a
-       factor of 3. */
+       the lamp's informed samples; the volume's source is the corner
+       radiosities of mesh leaves of 4 m^2, linear across each triangle)
+       the volume reads 16% high on average, 22% at worst. The error shrinks
+       with the resolution: with leaves of 1 m^2 11% (k = 6), 8% (k = 12),
+       4% (k = 17); k = 17 on the full mesh: 1.8%, 5% at worst. A wrong unit
+       (B for B / pi, Ke for pi Ke) would be a factor of 3. */
     CHECK_EQ_INT(count, 12);
-    CHECK_CLOSE(mean, 1.0, 0.15, 0.0);
-    CHECK(worst < 0.25);
+    CHECK_CLOSE(mean, 1.0, 0.25, 0.0);
+    CHECK(worst < 0.35);
     close_session(&s);
 }
 
