@@ -889,8 +889,19 @@ static void rendercache__put_f32(rendercache__writer *w, float f)
 }
 static void rendercache__put_f32_array(rendercache__writer *w, const float *f, size_t n)
 {
-    size_t i;
-    for (i = 0; i < n; i++) rendercache__put_f32(w, f[i]);
+    unsigned char buf[4096];
+    size_t i = 0;
+    while (i < n) {
+        size_t m = n - i < sizeof buf / 4 ? n - i : sizeof buf / 4, j;
+        for (j = 0; j < m; j++) {
+            uint32_t v;
+            memcpy(&v, &f[i + j], 4);
+            buf[4 * j] = (unsigned char)v; buf[4 * j + 1] = (unsigned char)(v >> 8);
+            buf[4 * j + 2] = (unsigned char)(v >> 16); buf[4 * j + 3] = (unsigned char)(v >> 24);
+        }
+        rendercache__put(w, buf, 4 * m);
+        i += m;
+    }
 }
 static void rendercache__put_u32_array(rendercache__writer *w, const uint32_t *v, size_t n)
 {
