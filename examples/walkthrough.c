@@ -6,10 +6,18 @@
    table).
 
        cc -O2 -I. examples/walkthrough.c -o walkthrough -lm -lpthread
-       ./walkthrough --out build/demo                 # mode raytrace
-       ./walkthrough --mode baseviews --out build/demo
+       ./walkthrough --out build/demo                 # mode radiosity
+       ./walkthrough --mode raytrace --out build/demo
 
    Modes:
+     radiosity  (the default) the online phase of Hardt 1996: the office's
+                radiosity solution and discontinuity mesh are precomputed
+                (radinterp.h); per frame the rasterizer fills an ID +
+                barycentric buffer and radinterp_shade evaluates the
+                quadratic interpolants at every pixel. The bunny is lit per
+                vertex from an irradiance volume built from the radiosity
+                solution (Greger 1996, irrvol.h), attenuated by its
+                self-occlusion ratio, and casts an occlusion blob.
      raytrace   the render cache (Walter et al. 1999) fed by a ray tracer with
                 direct light from the lamp and indirect light from cached 5D
                 light vectors (Crespin & Peroche 2004): a pixel lit by an
@@ -19,11 +27,9 @@
      baseviews  range-image reconstruction (Nimeroff, Dorsey & Rushmeier 1996):
                 fish-eye base views and key times chosen by coherence tests,
                 motion-compensated time blends, warps with both fills.
-     radiosity  per-pixel radiosity interpolants (Hardt 1996) and a bunny lit
-                from an irradiance volume (Greger 1996): needs radinterp.h's
-                online phase, and says so until it exists.
 
-   Precomputed data (light vectors along the path, base images) is cached
+   Precomputed data (the radiosity mesh, the irradiance volume, the bunny's
+   self-occlusion, light vectors along the path, base images) is cached
    under --cache (default build/cache) in files named by a hash of the scene
    files and the parameters; a second run reuses them. Writes
    <out>/walkthrough_<mode>_NNN.png, <out>/walkthrough_<mode>_sheet.png and

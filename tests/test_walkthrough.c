@@ -1,10 +1,9 @@
 /* Tests of the walkthrough's frame pipeline (examples/common/walkthrough.h):
-   options, paths, the precompute cache on disk, the two modes that run today
-   (raytrace, baseviews) against stored reference frames, determinism across
-   thread counts, the bunny darkening under the desk (in the ray-traced
-   frames and through an irradiance volume), the rasterizer against the ray
-   tracer, and the clear refusal of mode radiosity until radinterp.h has its
-   online phase.
+   options, paths, the precompute cache on disk, modes raytrace and
+   baseviews against stored reference frames, determinism across thread
+   counts, the bunny darkening under the desk (in the ray-traced frames and
+   through an irradiance volume of the lamp), and the rasterizer against the
+   ray tracer. Mode radiosity: tests/test_walkthrough_radiosity.c.
 
    Reference frames (tests/data/walkthrough_<mode>_f<frame>.pfm, 64x48) were
    written by this program with WT_WRITE_REFERENCE=1 from the repository
@@ -150,8 +149,14 @@ static void test_options(void)
         err[0] = 0;
         CHECK_MSG(parse(bad[i], &o, err, sizeof err) == -1 && err[0], "'%s' was accepted", bad[i]);
     }
+    CHECK_EQ_INT(parse("--eps 0.5 --min-leaf-area 0.25 --volume-k 9 --no-bunny-shadow", &o, err, sizeof err), 1);
+    CHECK(o.radiosity_eps == 0.5f && o.min_leaf_area == 0.25f && o.volume_resolution == 9 && !o.bunny_shadow);
+    for (i = 0; i < 3; i++) {
+        static const char *more[] = { "--eps 0", "--min-leaf-area -1", "--volume-k 33" };
+        CHECK_MSG(parse(more[i], &o, err, sizeof err) == -1 && err[0], "'%s' was accepted", more[i]);
+    }
     wt_options_default(&o);
-    CHECK(o.mode == WT_MODE_RAYTRACE);   /* the default until radinterp.h has its online phase */
+    CHECK(o.mode == WT_MODE_RADIOSITY);   /* the default: what make demo shows */
 }
 
 /* A missing scene file is an error that names it. */
@@ -459,8 +464,8 @@ static void test_bunny_darkens_in_frames(void)
     wt_world_destroy(w);
 }
 
-/* The same through the irradiance volume that will light the bunny in mode
-   radiosity: here a volume of the lamp's emission alone (the direct
+/* The same through the pipeline that lights the bunny in mode radiosity,
+   with a volume of the lamp's emission alone (the direct
    component, lamp IMPORTANT), queried at the bunny's vertices with their
    self-occlusion ratios, and the bunny rasterized and Gouraud-shaded. */
 static void test_bunny_darkens_in_volume(void)
@@ -597,19 +602,6 @@ static void test_raster_matches_tracer(void)
     wt_world_destroy(w);
 }
 
-/* Mode radiosity says what it needs instead of rendering something else. */
-static void test_radiosity_needs_radinterp(void)
-{
-    wt_options o = small_options(WT_MODE_RADIOSITY);
-    wt_world *w = NULL;
-    wt_renderer *r = NULL;
-    char err[512];
-    if (!CHECK(wt_world_create(&o, &w, err, sizeof err) == 0)) return;
-    CHECK(wt_renderer_create(w, &r, err, sizeof err) == -1 && r == NULL);
-    CHECK_MSG(strstr(err, "radinterp_build_mesh") && strstr(err, "radinterp_shade"), "message: %s", err);
-    wt_world_destroy(w);
-}
-
 static void write_references(void)
 {
     int m;
@@ -637,6 +629,5 @@ int main(int argc, char **argv)
     RUN(test_bunny_darkens_in_frames);
     RUN(test_bunny_darkens_in_volume);
     RUN(test_raster_matches_tracer);
-    RUN(test_radiosity_needs_radinterp);
     return test_finish();
 }

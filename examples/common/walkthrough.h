@@ -104,6 +104,7 @@
 #include "lightvec.h"
 #define RENDERCACHE_IMPLEMENTATION
 #include "rendercache.h"
+#define RADINTERP_IMPLEMENTATION
 #include "radinterp.h"
 
 #define WT_PI 3.14159265358979f
@@ -123,6 +124,13 @@ typedef enum wt_mode {
     WT_MODE_RADIOSITY
 } wt_mode;
 
+/* Mode radiosity's full renders (--reference) gather this many reflections:
+   the radiosity solution holds every interreflection, and the office's mean
+   reflectance of about 0.6 leaves 0.6^9 = 1% of the light to later ones
+   (with the raytrace mode's 2, the reference lacks 36% of the indirect
+   light and its LRMS against the radiosity frames is 0.42 instead of 0.10). */
+#define WT_REFERENCE_BOUNCES 8
+
 /* Everything a run depends on. Fields that change pictures also change the
    keys of the precompute cache. */
 typedef struct wt_options {
@@ -137,7 +145,8 @@ typedef struct wt_options {
     int light_samples;        /* samples per emitting triangle per shaded point */
     int strata;               /* light-vector gathers on the office: zenith strata (azimuth: 3x) */
     int bunny_strata;         /* gathers on the bunny */
-    int bounces;              /* reflections of the gathered light (lightvec_gather_desc.bounces) */
+    int bounces;              /* reflections of the gathered light (lightvec_gather_desc.bounces);
+                                 mode radiosity's full renders use at least WT_REFERENCE_BOUNCES */
     int warmup_divisor;       /* light-vector warm-up: the path's views at 1/N of the frame size */
     /* raytrace */
     float budget;             /* share of the pixels sampled per frame */
@@ -147,8 +156,12 @@ typedef struct wt_options {
     int keys;                 /* key times before refinement (uniform in [0, 1]) */
     float quality;            /* q of the coherence tests */
     /* radiosity */
+    float radiosity_eps;      /* radinterp_desc.eps, W/m^2; 0 = radinterp's default */
+    float min_leaf_area;      /* radinterp_mesh_desc.min_leaf_area, m^2; 0 = every leaf */
     int volume_resolution;    /* irradiance volume k */
     int visibility_rays;      /* self-occlusion rays per bunny vertex */
+    int bunny_shadow;         /* the bunny's occlusion blob on the office */
+    int gouraud;              /* the office Gouraud-shaded from the mesh's corners (radinterp_shade_gouraud) */
     /* run */
     int use_cache;            /* load and save the precompute cache */
     int write_frames;         /* PNGs */
@@ -176,7 +189,7 @@ typedef struct wt_frame_stats {
 EX_FN void wt_options_default(wt_options *o)
 {
     memset(o, 0, sizeof *o);
-    o->mode = WT_MODE_RAYTRACE;
+    o->mode = WT_MODE_RADIOSITY;
     o->out = "build/out";
     o->cache_dir = "build/cache";
     o->data_dir = "examples/data";
@@ -196,6 +209,7 @@ EX_FN void wt_options_default(wt_options *o)
     o->quality = 0.8f;
     o->volume_resolution = 17;   /* Greger's k */
     o->visibility_rays = 256;
+    o->bunny_shadow = 1;
     o->use_cache = 1;
     o->write_frames = 1;
     o->progress = 1;
@@ -229,10 +243,10 @@ EX_FN void wt_usage(FILE *f)
           "rendered interactively with global illumination. Writes PNG frames, a contact sheet and\n"
           "a per-frame timing table; precomputed data is cached on disk and reused.\n"
           "\n"
-          "  --mode M             raytrace (default): render cache + ray tracer + light vectors\n"
+          "  --mode M             radiosity (default): per-pixel radiosity interpolants for the office,\n"
+          "                       an irradiance volume for the bunny\n"
+          "                       raytrace: render cache + ray tracer + light vectors\n"
           "                       baseviews: warps of fish-eye base views (range images)\n"
-          "                       radiosity: per-pixel radiosity interpolants + irradiance volume\n"
-          "                       (needs radinterp.h's online phase)\n"
           "  --frames N           frames along the path (default 48)\n"
           "  --size WxH           frame size (default 640x480)\n"
           "  --out DIR            where frames go (default build/out)\n"
@@ -247,6 +261,11 @@ EX_FN void wt_usage(FILE *f)
           "  --base N             baseviews: fish-eye base images N x N (default 512)\n"
           "  --keys N             baseviews: key times before refinement (default 5)\n"
           "  --quality Q          baseviews: coherence quality q in [0, 1] (default 0.8)\n"
+          "  --eps E              radiosity: solver error bound in W/m^2 (default: radinterp's, 0.13)\n"
+          "  --min-leaf-area A    radiosity: coarsest mesh leaves in m^2 (default 0: every leaf)\n"
+          "  --volume-k K         radiosity: irradiance volume bins 2K^2, K <= 32 (default 17)\n"
+          "  --no-bunny-shadow    radiosity: no occlusion blob of the bunny on the office\n"
+          "  --gouraud            radiosity: Gouraud shading of the mesh instead of its interpolants\n"
           "  --exposure E         tone-mapping scale (default: automatic from the first frame)\n"
           "  --reference          also trace every frame in full and print the LRMS error\n"
           "  --no-frames          do not write PNG frames\n"
@@ -290,6 +309,8 @@ EX_FN int wt_parse_options(int argc, char **argv, wt_options *o, char *err, size
         if (!strcmp(a, "--no-frames")) { o->write_frames = 0; continue; }
         if (!strcmp(a, "--quiet")) { o->progress = o->verbose = 0; continue; }
         if (!strcmp(a, "--reference")) { o->reference = 1; continue; }
+        if (!strcmp(a, "--no-bunny-shadow")) { o->bunny_shadow = 0; continue; }
+        if (!strcmp(a, "--gouraud")) { o->gouraud = 1; continue; }
         if (strncmp(a, "--", 2) != 0) {
             snprintf(err, err_size, "unexpected argument '%s' (see --help)", a);
             return -1;
@@ -298,7 +319,8 @@ EX_FN int wt_parse_options(int argc, char **argv, wt_options *o, char *err, size
             if (!strcmp(a, "--mode") || !strcmp(a, "--frames") || !strcmp(a, "--size") || !strcmp(a, "--out") ||
                 !strcmp(a, "--cache") || !strcmp(a, "--data") || !strcmp(a, "--threads") || !strcmp(a, "--seed") ||
                 !strcmp(a, "--budget") || !strcmp(a, "--light-samples") || !strcmp(a, "--strata") ||
-                !strcmp(a, "--base") || !strcmp(a, "--keys") || !strcmp(a, "--quality") || !strcmp(a, "--exposure"))
+                !strcmp(a, "--base") || !strcmp(a, "--keys") || !strcmp(a, "--quality") || !strcmp(a, "--exposure") ||
+                !strcmp(a, "--eps") || !strcmp(a, "--min-leaf-area") || !strcmp(a, "--volume-k"))
                 snprintf(err, err_size, "%s needs a value (see --help)", a);
             else
                 snprintf(err, err_size, "unknown option '%s' (see --help)", a);
@@ -335,6 +357,9 @@ EX_FN int wt_parse_options(int argc, char **argv, wt_options *o, char *err, size
         else if (!strcmp(a, "--keys")) ok = wt__parse_int(v, 2, 257, &o->keys);
         else if (!strcmp(a, "--quality")) ok = wt__parse_float(v, 0.0f, 1.0f, &o->quality);
         else if (!strcmp(a, "--exposure")) ok = wt__parse_float(v, 1e-6f, 1e6f, &o->exposure);
+        else if (!strcmp(a, "--eps")) ok = wt__parse_float(v, 1e-6f, 1e6f, &o->radiosity_eps);
+        else if (!strcmp(a, "--min-leaf-area")) ok = wt__parse_float(v, 0.0f, 100.0f, &o->min_leaf_area);
+        else if (!strcmp(a, "--volume-k")) ok = wt__parse_int(v, 2, 32, &o->volume_resolution);
         else { snprintf(err, err_size, "unknown option '%s' (see --help)", a); return -1; }
         if (!ok) {
             snprintf(err, err_size, "bad value '%s' for %s (see --help for the ranges)", v, a);
@@ -850,6 +875,13 @@ EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t
     w->bunny_instance = ex_tracer_add_instance(w->tracer, &w->bunny, grey);
     wt__materials_from_obj(&w->office, w->materials);
     memcpy(w->materials[w->bunny_material].diffuse, grey, sizeof grey);
+    if (o->mode == WT_MODE_RADIOSITY) {   /* a diffuse method: its full renders (--reference) are Lambertian too */
+        uint32_t i;
+        for (i = 0; i < w->material_count; i++) {
+            memset(w->materials[i].specular, 0, sizeof w->materials[i].specular);
+            w->materials[i].exponent = 0.0f;
+        }
+    }
     memset(&sd, 0, sizeof sd);
     sd.positions = w->office.positions;
     sd.vertex_count = w->office.vertex_count;
@@ -867,6 +899,8 @@ EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t
     memset(&w->static_gather, 0, sizeof w->static_gather);
     w->static_gather.strata_theta = (uint32_t)o->strata;
     w->static_gather.bounces = (uint32_t)o->bounces;
+    if (o->mode == WT_MODE_RADIOSITY && o->bounces < WT_REFERENCE_BOUNCES)
+        w->static_gather.bounces = WT_REFERENCE_BOUNCES;
     w->static_gather.seed = o->seed * 0x9E3779B97F4A7C15ull + 0x11ull;   /* not the direct light's streams */
     w->bunny_gather = w->static_gather;
     w->bunny_gather.strata_theta = (uint32_t)o->bunny_strata;
@@ -1576,22 +1610,19 @@ EX_FN int wt_display_lrms(const float *reference, const float *image, int width,
    the renderer of a mode: precompute (cached on disk), then frames
    ---------------------------------------------------------------------- */
 
-/* Shading data of the static office for mode radiosity: the interpolant
-   mesh of radinterp.h (Hardt 1996), rasterized into the ID + barycentric
-   buffers and shaded per pixel. */
+/* Shading data of the static office for mode radiosity: the discontinuity
+   mesh of radinterp.h (Hardt 1996) with one quadratic interpolant per
+   triangle, rasterized into the ID + barycentric buffers and shaded per
+   pixel. */
 typedef struct wt_static_shading {
-    const float *positions;     /* the mesh the rasterizer draws: xyz per vertex */
-    uint32_t vertex_count;
-    const uint32_t *indices;    /* 3 per triangle; raster ids 0 .. triangle_count-1 */
-    uint32_t triangle_count;
-    void *mesh;                 /* radinterp's mesh with its interpolants */
-    /* the radiance of the solution along a ray (the irradiance volume's
-       source: trace to a mesh triangle, evaluate its interpolant there:
-       emission + reflectance * E / pi), and a key of the solution for the
-       precompute cache */
-    irrvol_radiance_fn radiance;
-    void *radiance_user;
-    uint64_t key;
+    radinterp_mesh *mesh;
+    radinterp_mesh_data data;   /* positions, indices (raster ids 0 .. triangle_count-1), coefficients,
+                                   corner radiosities; valid while mesh lives */
+    radinterp_mesh_info info;
+    float *normals;             /* unit front normal per triangle (the bunny's occlusion blob) */
+    uint64_t key;               /* of the mesh in the precompute cache: the solution and the mesh */
+    int reused;                 /* loaded from the precompute cache */
+    double seconds_solve, seconds_mesh;
 } wt_static_shading;
 
 typedef struct wt_renderer {
@@ -1621,6 +1652,10 @@ typedef struct wt_renderer {
     irrvol *volume;
     float *visibility;          /* self-occlusion ratio per bunny vertex */
     float *bunny_world, *bunny_world_normals, *bunny_rgb;
+    float bunny_centre[3];      /* the bunny's occlusion sphere: centre in OBJ coordinates */
+    float bunny_radius;         /* its radius in metres (wt_bunny_sphere) */
+    float sphere[4];            /* this frame's: world centre, radius */
+    int blob_box[4];            /* this frame's pixels the blob may touch: x0, y0, x1, y1 (exclusive) */
     ex_raster raster;
 } wt_renderer;
 
@@ -1665,7 +1700,7 @@ static uint64_t wt__lightvec_key(const wt_world *w)
     h = wt_hash_u64(h, WT_SHADING_VERSION);
     h = wt_hash_u64(h, o->seed);
     h = wt_hash_u64(h, (uint64_t)o->strata);
-    h = wt_hash_u64(h, (uint64_t)o->bounces);
+    h = wt_hash_u64(h, (uint64_t)w->static_gather.bounces);
     h = wt_hash_u64(h, (uint64_t)o->warmup_divisor);
     h = wt_hash_u64(h, (uint64_t)o->width);
     h = wt_hash_u64(h, (uint64_t)o->height);
@@ -2232,44 +2267,286 @@ static int wt__baseviews_frame(wt_renderer *r, int frame, float *rgb, wt_frame_s
 }
 
 /* ---- mode radiosity ------------------------------------------------------
-   Per frame: the bunny's vertices query the irradiance volume (Greger eq.
-   4.7: radiance = Kd H / pi, times the vertex's self-occlusion ratio,
-   thesis 6.1.3), the rasterizer draws the static mesh and the bunny into
-   the ID + barycentric buffers, the static pixels are shaded by their
-   triangle's interpolant (Hardt's online phase) and the bunny's by Gouraud
-   interpolation of its vertex colours.
+   Precompute: radinterp_solve (hierarchical radiosity of the office's 55
+   polygons) and radinterp_build_mesh (discontinuity mesh, one quadratic
+   irradiance interpolant per triangle), saved with radinterp_mesh_save; an
+   irradiance volume (irrvol.h) whose radiance is that solution; the bunny's
+   self-occlusion ratios. Per frame: the bunny's vertices query the volume
+   (Greger eq. 4.7: radiance = Kd H / pi, times the vertex's self-occlusion
+   ratio, thesis 6.1.3), the rasterizer draws the static mesh and the bunny
+   into the ID + barycentric buffers, and one pass over the pixels shades
+   the static ones by their triangle's interpolant (radinterp_shade, Hardt's
+   online phase; radiance B / pi) with the bunny's occlusion blob, and the
+   bunny's by Gouraud interpolation of its vertex colours.
    ------------------------------------------------------------------------ */
+#define WT_RADIOSITY_VERSION 1u  /* bump when the patches, materials or the volume's source change */
 
-/* Builds the static office's shading data: radinterp_solve (hierarchical
-   radiosity) and radinterp_build_mesh (discontinuity mesh with one
-   quadratic interpolant per triangle), cached with radinterp's save/load
-   (file "radinterp", key from the scene, the solver's parameters and
-   RADINTERP_FILE_FORMAT_VERSION), filling every field of s. The installed
-   radinterp.h does not provide the mesh and online phase yet, so this
-   reports that mode radiosity cannot run. */
+/* Key of the office's mesh: the scene, radinterp's version and format, and
+   the solver's and the mesh's parameters. */
+static uint64_t wt__radinterp_key(const wt_world *w)
+{
+    const wt_options *o = &w->opt;
+    uint64_t h = wt_hash_str(w->scene_hash, "radinterp");
+    h = wt_hash_u64(h, RADINTERP_FILE_FORMAT_VERSION);
+    h = wt_hash_u64(h, RADINTERP_VERSION_MAJOR * 10000u + RADINTERP_VERSION_MINOR * 100u + RADINTERP_VERSION_PATCH);
+    h = wt_hash_u64(h, WT_RADIOSITY_VERSION);
+    h = wt_hash_f32(h, o->radiosity_eps);
+    h = wt_hash_f32(h, o->min_leaf_area);
+    return wt_hash_u64(h, o->seed);
+}
+
+typedef struct wt__log { char text[256]; } wt__log;
+
+static void wt__keep_log(void *user, const char *message)
+{
+    snprintf(((wt__log *)user)->text, sizeof ((wt__log *)user)->text, "%s", message);
+}
+
+/* Says where a piece of precomputed data came from: "reused the precompute
+   cache FILE", or computed (with `detail`) and saved, after a note when a
+   cache file was there but damaged or stale. */
+static void wt__cache_say(const wt_world *w, const char *label, const char *what, uint64_t key, int found, int reused,
+                          double seconds, const char *detail)
+{
+    char path[1024];
+    wt_cache_path(w->opt.cache_dir, what, key, path, sizeof path);
+    if (found && !reused) wt__say(w, "%s: %s is damaged or stale, rebuilt it\n", label, path);
+    if (reused)
+        wt__say(w, "%s: reused the precompute cache %s%s\n", label, path, detail);
+    else
+        wt__say(w, "%s: computed in %.1f s%s%s%s\n", label, seconds, detail,
+                w->opt.use_cache ? ", saved to " : " (cache off)", w->opt.use_cache ? path : "");
+}
+
+/* The office as radinterp patches (one per OBJ polygon, 3 or 4 corners) and
+   materials: reflectance Kd, emitted radiosity E = pi Ke (Ke is the MTL's
+   emitted radiance). */
+static int wt__radiosity_solve(wt_world *w, radinterp_solution **sol, char *err, size_t err_size)
+{
+    const obj_scene *s = &w->office;
+    uint32_t *patches = (uint32_t *)malloc(4 * sizeof(uint32_t) * s->face_count), f, k;
+    radinterp_material *mats = (radinterp_material *)calloc(s->material_count ? s->material_count : 1, sizeof *mats);
+    radinterp_desc d;
+    radinterp_result rr;
+    wt__log log;
+    log.text[0] = 0;
+    if (!patches || !mats) {
+        free(patches);
+        free(mats);
+        return wt__fail(err, err_size, "%s", "out of memory");
+    }
+    for (f = 0; f < s->face_count; f++) {
+        uint32_t c = s->face_start[f + 1] - s->face_start[f];
+        if (c < 3 || c > 4) {
+            snprintf(err, err_size, "%.200s: polygon %u has %u corners; mode radiosity takes 3 or 4", w->office_path, f, c);
+            free(patches);
+            free(mats);
+            return -1;
+        }
+        for (k = 0; k < 4; k++) patches[4 * f + k] = k < c ? s->face_vertices[s->face_start[f] + k] : RADINTERP_NO_VERTEX;
+    }
+    for (f = 0; f < s->material_count; f++)
+        for (k = 0; k < 3; k++) {
+            mats[f].reflectance[k] = s->materials[f].kd[k];
+            mats[f].emission[k] = WT_PI * s->materials[f].ke[k];
+        }
+    memset(&d, 0, sizeof d);
+    d.positions = s->positions;
+    d.vertex_count = s->vertex_count;
+    d.patches = patches;
+    d.patch_count = s->face_count;
+    d.patch_materials = s->face_material;
+    d.materials = mats;
+    d.material_count = s->material_count ? s->material_count : 1;
+    d.eps = w->opt.radiosity_eps;
+    d.seed = w->opt.seed;
+    d.parallel_for = ex_pool_parallel_for;
+    d.parallel_user = w->pool;
+    d.log = wt__keep_log;
+    d.log_user = &log;
+    rr = radinterp_solve(&d, sol);
+    free(patches);
+    free(mats);
+    if (rr != RADINTERP_OK) {
+        snprintf(err, err_size, "radinterp_solve: %s%s%s", radinterp_result_string(rr), log.text[0] ? ": " : "", log.text);
+        return -1;
+    }
+    return 0;
+}
+
+/* Unit front normals of the mesh's triangles (counter-clockwise fronts). */
+static int wt__mesh_normals(wt_static_shading *s)
+{
+    uint32_t t;
+    s->normals = (float *)malloc(3 * sizeof(float) * (s->data.triangle_count ? s->data.triangle_count : 1));
+    if (!s->normals) return -1;
+    for (t = 0; t < s->data.triangle_count; t++) {
+        const float *a = s->data.positions + 3 * (size_t)s->data.indices[3 * t];
+        const float *b = s->data.positions + 3 * (size_t)s->data.indices[3 * t + 1];
+        const float *c = s->data.positions + 3 * (size_t)s->data.indices[3 * t + 2];
+        float e1[3] = { b[0] - a[0], b[1] - a[1], b[2] - a[2] }, e2[3] = { c[0] - a[0], c[1] - a[1], c[2] - a[2] };
+        float *n = s->normals + 3 * (size_t)t, l;
+        n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+        n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+        n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        l = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (l > 0.0f) { n[0] /= l; n[1] /= l; n[2] /= l; }
+    }
+    return 0;
+}
+
+/* Builds the static office's shading data: the radiosity solution and its
+   interpolant mesh, or the mesh alone from the precompute cache (file
+   "radinterp": radinterp_mesh_save's bytes; a loaded mesh needs no
+   solution). The mesh is left without a job system: the frame's pixel
+   pass calls radinterp_shade on bands of rows from its own jobs. */
 EX_FN int wt_static_shading_build(wt_world *w, wt_static_shading *s, char *err, size_t err_size)
 {
-    (void)w;
+    const wt_options *o = &w->opt;
+    radinterp_solution *sol = NULL;
+    radinterp_mesh_desc md;
+    radinterp_result rr;
+    wt_progress bar;
+    wt__log log;
+    void *data = NULL;
+    size_t size = 0;
+    double t0;
+    char detail[256];
+    int got = 0;
     memset(s, 0, sizeof *s);
-    snprintf(err, err_size,
-             "mode radiosity needs radinterp.h's interpolant mesh and online phase (radinterp_build_mesh, "
-             "radinterp_shade), which radinterp.h %d.%d.%d does not provide yet; use --mode raytrace or "
-             "--mode baseviews", RADINTERP_VERSION_MAJOR, RADINTERP_VERSION_MINOR, RADINTERP_VERSION_PATCH);
-    return -1;
+    s->key = wt__radinterp_key(w);
+    t0 = wt_seconds();
+    if (o->use_cache) got = wt_cache_load(o->cache_dir, "radinterp", s->key, &data, &size);
+    if (got == 1) {
+        s->reused = radinterp_mesh_load_from_memory(data, size, NULL, &s->mesh) == RADINTERP_OK;
+        free(data);
+    }
+    if (!s->reused) {
+        t0 = wt_seconds();
+        if (wt__radiosity_solve(w, &sol, err, err_size) != 0) return -1;
+        s->seconds_solve = wt_seconds() - t0;
+        log.text[0] = 0;
+        memset(&md, 0, sizeof md);
+        md.min_leaf_area = o->min_leaf_area;
+        md.parallel_for = ex_pool_parallel_for;
+        md.parallel_user = w->pool;
+        md.log = wt__keep_log;
+        md.log_user = &log;
+        wt_progress_begin(&bar, "radiosity interpolants", o->progress);
+        md.progress = wt_progress_update;
+        md.progress_user = &bar;
+        t0 = wt_seconds();
+        rr = radinterp_build_mesh(sol, &md, &s->mesh);
+        radinterp_solution_destroy(sol);
+        if (rr != RADINTERP_OK) {
+            snprintf(err, err_size, "radinterp_build_mesh: %s%s%s", radinterp_result_string(rr), log.text[0] ? ": " : "",
+                     log.text);
+            return -1;
+        }
+        wt_progress_end(&bar);
+        s->seconds_mesh = wt_seconds() - t0;
+        radinterp_mesh_set_parallel_for(s->mesh, NULL, NULL);
+        if (o->use_cache && radinterp_mesh_save_to_memory(s->mesh, NULL, &data, &size) == RADINTERP_OK) {
+            if (wt_cache_store(o->cache_dir, "radinterp", s->key, data, size, err, err_size) != 0) err[0] = 0;
+            radinterp_free_memory(NULL, data);
+        }
+    }
+    radinterp_mesh_get_data(s->mesh, &s->data);
+    radinterp_mesh_get_info(s->mesh, &s->info);
+    if (s->reused)
+        snprintf(detail, sizeof detail, " (%u triangles)", s->info.triangle_count);
+    else
+        snprintf(detail, sizeof detail, " (solve %.2f s; mesh %.1f s: %u triangles, %u of %u discontinuities active, "
+                 "%llu IrradianceAtPoint samples)", s->seconds_solve, s->seconds_mesh, s->info.triangle_count,
+                 s->info.active_discontinuities, s->info.discontinuities, (unsigned long long)s->info.samples);
+    wt__cache_say(w, "radiosity mesh", "radinterp", s->key, got != 0, s->reused, wt_seconds() - t0, detail);
+    if (s->data.triangle_count == 0 || s->data.triangle_count >= EX_RASTER_EMPTY - w->bunny.tri_count)
+        return wt__fail(err, err_size, "%s", "the radiosity mesh has no triangles, or too many for the ID buffer");
+    return wt__mesh_normals(s) == 0 ? 0 : wt__fail(err, err_size, "%s", "out of memory");
 }
 
-/* Shades the pixels of the raster whose id is a static triangle
-   (id < s->triangle_count) from their triangle's interpolant at their
-   barycentrics (radinterp_shade over the ID and barycentric buffers); other
-   pixels are left as they are. Returns -1 without a mesh. */
-EX_FN int wt_static_shading_shade(const wt_static_shading *s, const ex_raster *raster, float *rgb)
+/* Shades pixels [first, first + count) of the raster whose id is a static
+   triangle (id < s->data.triangle_count) from their triangle's interpolant
+   at their barycentrics: rgb = radiosity B in W/m^2 (radinterp_shade, or
+   with gouraud the corners' radiosities blended linearly); other pixels are
+   left as they are. */
+EX_FN int wt_static_shading_shade(const wt_static_shading *s, const ex_raster *raster, size_t first, size_t count,
+                                  int gouraud, float *rgb)
 {
-    (void)raster;
-    (void)rgb;
-    return s->mesh ? 0 : -1;
+    radinterp_result rr;
+    if (!s->mesh || first + count > (size_t)raster->width * (size_t)raster->height) return -1;
+    rr = gouraud ? radinterp_shade_gouraud(s->mesh, raster->id + first, raster->bary + 2 * first, count, rgb + 3 * first)
+                 : radinterp_shade(s->mesh, raster->id + first, raster->bary + 2 * first, count, rgb + 3 * first);
+    return rr == RADINTERP_OK ? 0 : -1;
 }
 
-EX_FN void wt_static_shading_free(wt_static_shading *s) { memset(s, 0, sizeof *s); }
+EX_FN void wt_static_shading_free(wt_static_shading *s)
+{
+    radinterp_mesh_destroy(s->mesh);
+    free(s->normals);
+    memset(s, 0, sizeof *s);
+}
+
+/* The irradiance volume's scene: the mesh's triangles with vertices of
+   their own (3 per triangle), each corner's radiance its triangle's
+   radiosity there over pi (data.corner_radiosity: the patch's own value,
+   not blended with the patches that meet at a shared vertex; irrvol
+   interpolates it linearly across the triangle). The emitters' triangles
+   are IMPORTANT, so informed sampling never misses the lamp. */
+typedef struct wt_volume_scene {
+    float *positions, *radiance;
+    uint32_t *indices, *materials;
+    irrvol_material material[2];   /* 0: reflector, 1: emitter (flags only: vertex radiance replaces theirs) */
+    uint32_t negative;             /* corner radiosities below 0 (or NaN) clamped */
+} wt_volume_scene;
+
+EX_FN void wt_volume_scene_free(wt_volume_scene *v)
+{
+    free(v->positions);
+    free(v->radiance);
+    free(v->indices);
+    free(v->materials);
+    memset(v, 0, sizeof *v);
+}
+
+EX_FN int wt_volume_scene_make(const wt_static_shading *s, wt_volume_scene *v, irrvol_desc *src)
+{
+    const radinterp_mesh_data *d = &s->data;
+    size_t n = d->triangle_count, t, k;
+    memset(v, 0, sizeof *v);
+    v->positions = (float *)malloc(9 * sizeof(float) * n);
+    v->radiance = (float *)malloc(9 * sizeof(float) * n);
+    v->indices = (uint32_t *)malloc(3 * sizeof(uint32_t) * n);
+    v->materials = (uint32_t *)malloc(sizeof(uint32_t) * n);
+    if (!v->positions || !v->radiance || !v->indices || !v->materials) {
+        wt_volume_scene_free(v);
+        return -1;
+    }
+    for (t = 0; t < n; t++) {
+        const float *e = d->emission + 3 * t;
+        for (k = 0; k < 3; k++) {
+            memcpy(v->positions + 9 * t + 3 * k, d->positions + 3 * (size_t)d->indices[3 * t + k], 3 * sizeof(float));
+            v->indices[3 * t + k] = (uint32_t)(3 * t + k);
+        }
+        for (k = 0; k < 9; k++) {   /* the interpolant's value at a corner, clamped at 0 like radinterp_shade */
+            float b = d->corner_radiosity[9 * t + k];
+            v->radiance[9 * t + k] = b > 0.0f ? b / WT_PI : 0.0f;
+            if (!(b >= 0.0f)) v->negative++;
+        }
+        v->materials[t] = e[0] > 0.0f || e[1] > 0.0f || e[2] > 0.0f;
+    }
+    v->material[1].flags = IRRVOL_MATERIAL_IMPORTANT;
+    memset(src, 0, sizeof *src);
+    src->positions = v->positions;
+    src->vertex_count = (uint32_t)(3 * n);
+    src->indices = v->indices;
+    src->triangle_count = (uint32_t)n;
+    src->triangle_materials = v->materials;
+    src->materials = v->material;
+    src->material_count = 2;
+    src->vertex_radiance = v->radiance;
+    return 0;
+}
 
 static void wt__put_floats(wt_bytes *b, const float *v, size_t n)
 {
@@ -2313,6 +2590,7 @@ EX_FN int wt_bunny_visibility(wt_world *w, float *ratio, int *reused, char *err,
     key = wt_hash_u64(key, IRRVOL_VERSION_MAJOR * 10000u + IRRVOL_VERSION_MINOR * 100u + IRRVOL_VERSION_PATCH);
     key = wt_hash_u64(key, (uint64_t)o->visibility_rays);
     key = wt_hash_u64(key, o->seed);
+    double t0 = wt_seconds();
     *reused = 0;
     if (o->use_cache) got = wt_cache_load(o->cache_dir, "visibility", key, &data, &size);
     if (got == 1) {
@@ -2323,7 +2601,10 @@ EX_FN int wt_bunny_visibility(wt_world *w, float *ratio, int *reused, char *err,
         *reused = wt_bytes_get_u64(&b, &n) && n == w->bunny.vertex_count && wt__get_floats(&b, ratio, (size_t)n) &&
                   b.read == b.size;
         free(data);
-        if (*reused) return 0;
+        if (*reused) {
+            wt__cache_say(w, "bunny self-occlusion", "visibility", key, 1, 1, 0.0, "");
+            return 0;
+        }
     }
     memset(&vd, 0, sizeof vd);
     vd.positions = w->bunny.positions;
@@ -2352,6 +2633,7 @@ EX_FN int wt_bunny_visibility(wt_world *w, float *ratio, int *reused, char *err,
         if (b.failed || wt_cache_store(o->cache_dir, "visibility", key, b.data, b.size, err, err_size) != 0) err[0] = 0;
         free(b.data);
     }
+    wt__cache_say(w, "bunny self-occlusion", "visibility", key, got != 0, 0, wt_seconds() - t0, "");
     return 0;
 }
 
@@ -2369,18 +2651,25 @@ EX_FN int wt_volume_build(wt_world *w, const irrvol_desc *source, uint64_t sourc
     void *data = NULL;
     size_t size = 0;
     uint64_t key = wt_hash_str(source_key, "volume");
+    wt__log log;
     int got = 0;
     key = wt_hash_u64(key, IRRVOL_FILE_FORMAT_VERSION);
     key = wt_hash_u64(key, IRRVOL_VERSION_MAJOR * 10000u + IRRVOL_VERSION_MINOR * 100u + IRRVOL_VERSION_PATCH);
     key = wt_hash_u64(key, (uint64_t)o->volume_resolution);
     key = wt_hash_u64(key, o->seed);
+    irrvol_volume_info info;
+    char detail[128];
+    double t0 = wt_seconds();
     *out = NULL;
     *reused = 0;
     if (o->use_cache) got = wt_cache_load(o->cache_dir, "volume", key, &data, &size);
     if (got == 1) {
         *reused = irrvol_load_from_memory(data, size, NULL, out) == IRRVOL_OK;
         free(data);
-        if (*reused) return 0;
+        if (*reused) {
+            wt__cache_say(w, "irradiance volume", "volume", key, 1, 1, 0.0, "");
+            return 0;
+        }
     }
     d.resolution = (uint32_t)o->volume_resolution;
     d.seed = o->seed;
@@ -2389,9 +2678,12 @@ EX_FN int wt_volume_build(wt_world *w, const irrvol_desc *source, uint64_t sourc
     wt_progress_begin(&bar, "irradiance volume", o->progress);
     d.progress = wt_progress_update;
     d.progress_user = &bar;
+    log.text[0] = 0;
+    d.log = wt__keep_log;
+    d.log_user = &log;
     ir = irrvol_build(&d, out);
     if (ir != IRRVOL_OK) {
-        snprintf(err, err_size, "irrvol_build: %s", irrvol_result_string(ir));
+        snprintf(err, err_size, "irrvol_build: %s%s%s", irrvol_result_string(ir), log.text[0] ? ": " : "", log.text);
         return -1;
     }
     wt_progress_end(&bar);
@@ -2399,6 +2691,10 @@ EX_FN int wt_volume_build(wt_world *w, const irrvol_desc *source, uint64_t sourc
         if (wt_cache_store(o->cache_dir, "volume", key, data, size, err, err_size) != 0) err[0] = 0;
         irrvol_free_memory(NULL, data);
     }
+    detail[0] = 0;
+    if (irrvol_info(*out, &info) == IRRVOL_OK)
+        snprintf(detail, sizeof detail, " (%u samples, %u bins each)", info.sample_count, 2 * info.resolution * info.resolution);
+    wt__cache_say(w, "irradiance volume", "volume", key, got != 0, 0, wt_seconds() - t0, detail);
     return 0;
 }
 
@@ -2430,23 +2726,54 @@ EX_FN int wt_raster_scene(const wt_world *w, ex_raster *ra, const rendercache_ca
     return ex_raster_draw(ra, &ec, bunny_world, w->bunny.tri_indices, w->bunny.tri_count, static_count);
 }
 
+/* The bunny as a sphere for its occlusion blob: the sphere of its volume
+   (divergence theorem over its triangles), centred at its centroid; OBJ
+   coordinates for the centre, metres for the radius. A mesh without a
+   usable volume gets the sphere inside its bounding box. */
+EX_FN void wt_bunny_sphere(const wt_world *w, float centre[3], float *radius)
+{
+    const float *p = w->bunny.positions;
+    double vol = 0.0, c[3] = { 0, 0, 0 };
+    uint32_t t;
+    int k;
+    for (t = 0; t < w->bunny.tri_count; t++) {
+        const float *a = p + 3 * (size_t)w->bunny.tri_indices[3 * t], *b = p + 3 * (size_t)w->bunny.tri_indices[3 * t + 1];
+        const float *q = p + 3 * (size_t)w->bunny.tri_indices[3 * t + 2];
+        /* signed volume of the tetrahedron (0, a, b, q) and its centroid */
+        double v = ((double)a[0] * ((double)b[1] * q[2] - (double)b[2] * q[1]) -
+                    (double)a[1] * ((double)b[0] * q[2] - (double)b[2] * q[0]) +
+                    (double)a[2] * ((double)b[0] * q[1] - (double)b[1] * q[0])) / 6.0;
+        vol += v;
+        for (k = 0; k < 3; k++) c[k] += v * ((double)a[k] + b[k] + q[k]) / 4.0;
+    }
+    for (k = 0; k < 3; k++) centre[k] = 0.5f * (w->bunny_lo[k] + w->bunny_hi[k]);
+    *radius = 0.25f * WT_BUNNY_SCALE * (w->bunny_hi[1] - w->bunny_lo[1]);
+    if (vol > 0.0) {
+        double r = cbrt(3.0 * vol / (4.0 * WT_PI));
+        int inside = 1;
+        for (k = 0; k < 3; k++) inside &= c[k] / vol > w->bunny_lo[k] && c[k] / vol < w->bunny_hi[k];
+        if (inside && r < 0.5 * (w->bunny_hi[1] - w->bunny_lo[1])) {
+            for (k = 0; k < 3; k++) centre[k] = (float)(c[k] / vol);
+            *radius = (float)(WT_BUNNY_SCALE * r);
+        }
+    }
+}
+
 static int wt__radiosity_create(wt_renderer *r, char *err, size_t err_size)
 {
     wt_world *w = r->w;
+    wt_volume_scene vs;
     irrvol_desc source;
     size_t nv = w->bunny.vertex_count;
+    int result;
     if (wt_static_shading_build(w, &r->statics, err, err_size) != 0) return -1;
-    /* the volume's radiance: the radiosity solution, through the mesh the
-       static shading built (its triangles, and a radiance callback that
-       evaluates the interpolants where a ray hits) */
-    memset(&source, 0, sizeof source);
-    source.positions = r->statics.positions;
-    source.vertex_count = r->statics.vertex_count;
-    source.indices = r->statics.indices;
-    source.triangle_count = r->statics.triangle_count;
-    source.radiance = r->statics.radiance;
-    source.radiance_user = r->statics.radiance_user;
-    if (wt_volume_build(w, &source, r->statics.key, &r->volume, &r->reused_volume, err, err_size) != 0) return -1;
+    /* the volume's radiance: the radiosity solution through the mesh */
+    if (wt_volume_scene_make(&r->statics, &vs, &source) != 0) return wt__fail(err, err_size, "%s", "out of memory");
+
+    result = wt_volume_build(w, &source, wt_hash_str(r->statics.key, "mesh corners"), &r->volume, &r->reused_volume,
+                             err, err_size);
+    wt_volume_scene_free(&vs);
+    if (result != 0) return -1;
     r->visibility = (float *)malloc(sizeof(float) * nv);
     r->bunny_world = (float *)malloc(3 * sizeof(float) * nv);
     r->bunny_world_normals = (float *)malloc(3 * sizeof(float) * nv);
@@ -2455,7 +2782,107 @@ static int wt__radiosity_create(wt_renderer *r, char *err, size_t err_size)
         ex_raster_init(&r->raster, (int)r->width, (int)r->height) != 0)
         return wt__fail(err, err_size, "%s", "out of memory");
     r->raster.pool = w->pool;
+    wt_bunny_sphere(w, r->bunny_centre, &r->bunny_radius);
     return wt_bunny_visibility(w, r->visibility, &r->reused_visibility, err, err_size);
+}
+
+/* The bunny's occlusion blob (an approximation, not a shadow ray test): a
+   point of the office with normal n near the bunny's sphere (centre c,
+   radius R at distance d) loses the sphere's share of its hemisphere, the
+   form factor F = (R / d)^2 cos(theta) of a sphere seen from a
+   differential area, from its reflected light, as if the light arriving
+   there were the same from every direction: B' = E + (B - E)(1 - F). F
+   fades to 0 between 3R and 6R (where it is under 3%). */
+#define WT__BLOB_NEAR 3.0f
+#define WT__BLOB_FAR 6.0f
+
+static float wt__blob(const float sphere[4], const float p[3], const float n[3])
+{
+    float v[3] = { sphere[0] - p[0], sphere[1] - p[1], sphere[2] - p[2] };
+    float d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2], r2 = sphere[3] * sphere[3];
+    float far2 = WT__BLOB_FAR * WT__BLOB_FAR * r2, near2 = WT__BLOB_NEAR * WT__BLOB_NEAR * r2;
+    float c = v[0] * n[0] + v[1] * n[1] + v[2] * n[2], f, fade;
+    if (d2 >= far2 || c <= 0.0f) return 1.0f;
+    f = d2 > r2 ? r2 * c / (d2 * sqrtf(d2)) : 1.0f;
+    fade = d2 <= near2 ? 1.0f : (far2 - d2) / (far2 - near2);
+    f *= fade;
+    return f < 1.0f ? 1.0f - f : 0.0f;
+}
+
+/* The pixels the blob may touch this frame: the screen box of the cube of
+   half side 6R around the sphere, or the whole image when a corner lies
+   behind the camera. */
+static void wt__blob_box(wt_renderer *r, const ex_camera *cam)
+{
+    int i, k, box[4] = { (int)r->width, (int)r->height, 0, 0 };
+    float ext = WT__BLOB_FAR * r->sphere[3];
+    for (i = 0; i < 8; i++) {
+        float p[3], px, py, depth;
+        for (k = 0; k < 3; k++) p[k] = r->sphere[k] + ((i >> k) & 1 ? ext : -ext);
+        if (!ex_camera_project(cam, p, &px, &py, &depth) || !(depth > 0.0f) || !isfinite(px) || !isfinite(py)) {
+            box[0] = box[1] = 0;
+            box[2] = (int)r->width;
+            box[3] = (int)r->height;
+            break;
+        }
+        if (px < (float)box[0]) box[0] = px < 0.0f ? 0 : (int)px;
+        if (py < (float)box[1]) box[1] = py < 0.0f ? 0 : (int)py;
+        if (px + 1.0f > (float)box[2]) box[2] = px + 1.0f > (float)r->width ? (int)r->width : (int)px + 1;
+        if (py + 1.0f > (float)box[3]) box[3] = py + 1.0f > (float)r->height ? (int)r->height : (int)py + 1;
+    }
+    memcpy(r->blob_box, box, sizeof box);
+}
+
+typedef struct wt__pixel_job {
+    const wt_renderer *r;
+    float *rgb;
+    int blob;
+} wt__pixel_job;
+
+#define WT__PIXEL_ROWS 8   /* rows per job of the pixel pass */
+
+/* The pixel pass over a band of rows: static pixels get their radiosity B
+   (radinterp_shade), then radiance (E + (B - E) * blob) / pi; the bunny's
+   the Gouraud blend of its vertex radiances; empty pixels black. */
+static void wt__pixel_band(void *ctx, uint32_t band)
+{
+    const wt__pixel_job *j = (const wt__pixel_job *)ctx;
+    const wt_renderer *r = j->r;
+    const wt_static_shading *s = &r->statics;
+    const ex_raster *ra = &r->raster;
+    const uint32_t *bunny = r->w->bunny.tri_indices, nt = s->data.triangle_count, nb = r->w->bunny.tri_count;
+    uint32_t y0 = band * WT__PIXEL_ROWS, y1 = y0 + WT__PIXEL_ROWS, x, y;
+    if (y1 > r->height) y1 = r->height;
+    wt_static_shading_shade(s, ra, (size_t)y0 * r->width, (size_t)(y1 - y0) * r->width, r->w->opt.gouraud, j->rgb);
+    for (y = y0; y < y1; y++) {
+        int blob_row = j->blob && (int)y >= r->blob_box[1] && (int)y < r->blob_box[3];
+        for (x = 0; x < r->width; x++) {
+            size_t p = (size_t)y * r->width + x;
+            uint32_t id = ra->id[p];
+            float *out = j->rgb + 3 * p, u = ra->bary[2 * p], v = ra->bary[2 * p + 1], o = 1.0f - u - v;
+            int k;
+            if (id < nt) {
+                const float *e = s->data.emission + 3 * (size_t)id;
+                float keep = 1.0f;
+                if (blob_row && (int)x >= r->blob_box[0] && (int)x < r->blob_box[2]) {
+                    const uint32_t *tri = s->data.indices + 3 * (size_t)id;
+                    const float *a = s->data.positions + 3 * (size_t)tri[0], *b = s->data.positions + 3 * (size_t)tri[1];
+                    const float *c = s->data.positions + 3 * (size_t)tri[2];
+                    float q[3];
+                    for (k = 0; k < 3; k++) q[k] = o * a[k] + u * b[k] + v * c[k];
+                    keep = wt__blob(r->sphere, q, s->normals + 3 * (size_t)id);
+                }
+                for (k = 0; k < 3; k++) out[k] = (e[k] + (out[k] - e[k]) * keep) * (1.0f / WT_PI);
+            } else if (id != EX_RASTER_EMPTY && id - nt < nb) {
+                const uint32_t *tri = bunny + 3 * (size_t)(id - nt);
+                const float *a = r->bunny_rgb + 3 * (size_t)tri[0], *b = r->bunny_rgb + 3 * (size_t)tri[1];
+                const float *c = r->bunny_rgb + 3 * (size_t)tri[2];
+                for (k = 0; k < 3; k++) out[k] = o * a[k] + u * b[k] + v * c[k];
+            } else {
+                out[0] = out[1] = out[2] = 0.0f;
+            }
+        }
+    }
 }
 
 static int wt__radiosity_frame(wt_renderer *r, int frame, float *rgb, wt_frame_stats *st)
@@ -2463,20 +2890,25 @@ static int wt__radiosity_frame(wt_renderer *r, int frame, float *rgb, wt_frame_s
     wt_world *w = r->w;
     double t = wt_frame_time(&w->opt, frame), t0 = wt_seconds(), a;
     rendercache_camera cam = wt_camera(&w->opt, t, r->width, r->height);
+    ex_camera ec = wt_ex_camera(&cam);
+    wt__pixel_job j;
     wt_set_time(w, t);
     a = wt_seconds();
     wt_bunny_light(w, r->volume, r->visibility, w->pose, r->bunny_world, r->bunny_world_normals, r->bunny_rgb);
     st->phase[2] = wt_seconds() - a;
     a = wt_seconds();
-    if (wt_raster_scene(w, &r->raster, &cam, r->statics.positions, r->statics.indices, r->statics.triangle_count,
-                        r->bunny_world) != 0)
+    if (wt_raster_scene(w, &r->raster, &cam, r->statics.data.positions, r->statics.data.indices,
+                        r->statics.data.triangle_count, r->bunny_world) != 0)
         return -1;
     st->phase[0] = wt_seconds() - a;
     a = wt_seconds();
-    memset(rgb, 0, sizeof(float) * 3 * r->width * r->height);
-    if (wt_static_shading_shade(&r->statics, &r->raster, rgb) != 0) return -1;
-    ex_raster_resolve_gouraud(&r->raster, w->bunny.tri_indices, w->bunny.tri_count, r->statics.triangle_count,
-                              r->bunny_rgb, rgb);
+    ex__affine_point(w->pose, r->bunny_centre, r->sphere);
+    r->sphere[3] = r->bunny_radius;
+    j.r = r;
+    j.rgb = rgb;
+    j.blob = w->opt.bunny_shadow;
+    if (j.blob) wt__blob_box(r, &ec);
+    ex_pool_parallel_for(w->pool, wt__pixel_band, &j, (r->height + WT__PIXEL_ROWS - 1) / WT__PIXEL_ROWS);
     st->phase[1] = wt_seconds() - a;
     st->samples = w->bunny.vertex_count;
     st->total = wt_seconds() - t0;
