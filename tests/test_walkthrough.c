@@ -82,35 +82,6 @@ static int render_frames(const wt_options *o, int count, float *frames)
 
 /* ---- PFM (the project's reference frames) ------------------------------ */
 
-static int read_pfm(const char *path, int w, int h, float *rgb)
-{
-    FILE *f = fopen(path, "rb");
-    char magic[3] = { 0 };
-    int fw, fh, y;
-    float scale;
-    if (!f) return 0;
-    if (fscanf(f, "%2s %d %d %f", magic, &fw, &fh, &scale) != 4 || strcmp(magic, "PF") != 0 || fw != w || fh != h ||
-        fgetc(f) == EOF) {
-        fclose(f);
-        return 0;
-    }
-    for (y = h - 1; y >= 0; y--) {   /* rows bottom to top, little-endian floats */
-        int i;
-        for (i = 0; i < 3 * w; i++) {
-            unsigned char b[4];
-            uint32_t u;
-            if (fread(b, 1, 4, f) != 4 || scale >= 0.0f) {
-                fclose(f);
-                return 0;
-            }
-            u = (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
-            memcpy(&rgb[3 * (size_t)y * (size_t)w + (size_t)i], &u, 4);
-        }
-    }
-    fclose(f);
-    return 1;
-}
-
 static void reference_path(char *path, size_t size, wt_mode mode, int frame)
 {
     snprintf(path, size, "tests/data/walkthrough_%s_f%d.pfm", wt_mode_name(mode), frame);
@@ -358,7 +329,7 @@ static double frames_vs_reference(wt_mode mode, uint64_t seed, int write)
                 if (ex_write_pfm(path, REF_W, REF_H, frames + (size_t)f * 3 * REF_W * REF_H) != 0) worst = -1.0;
                 continue;
             }
-            if (!read_pfm(path, REF_W, REF_H, ref) ||
+            if (ex_read_pfm(path, REF_W, REF_H, ref) != 0 ||
                 rendercache_lrms(ref, frames + (size_t)f * 3 * REF_W * REF_H, REF_W, REF_H, &lrms) != RENDERCACHE_OK)
                 return -1.0;
             worst = lrms > worst ? lrms : worst;

@@ -104,35 +104,6 @@ static int render_frames(session *s, int count, float *frames)
 
 /* ---- PFM ------------------------------------------------------------------ */
 
-static int read_pfm(const char *path, int w, int h, float *rgb)
-{
-    FILE *f = fopen(path, "rb");
-    char magic[3] = { 0 };
-    int fw, fh, y;
-    float scale;
-    if (!f) return 0;
-    if (fscanf(f, "%2s %d %d %f", magic, &fw, &fh, &scale) != 4 || strcmp(magic, "PF") != 0 || fw != w || fh != h ||
-        fgetc(f) == EOF) {
-        fclose(f);
-        return 0;
-    }
-    for (y = h - 1; y >= 0; y--) {   /* rows bottom to top, little-endian floats */
-        int i;
-        for (i = 0; i < 3 * w; i++) {
-            unsigned char b[4];
-            uint32_t u;
-            if (fread(b, 1, 4, f) != 4 || scale >= 0.0f) {
-                fclose(f);
-                return 0;
-            }
-            u = (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
-            memcpy(&rgb[3 * (size_t)y * (size_t)w + (size_t)i], &u, 4);
-        }
-    }
-    fclose(f);
-    return 1;
-}
-
 static void reference_path(char *path, size_t size, int frame)
 {
     snprintf(path, size, "tests/data/walkthrough_radiosity_f%d.pfm", frame);
@@ -147,7 +118,7 @@ static double against_references(const float *frames)
     for (f = 0; f < 2 && worst >= 0.0; f++) {
         char path[256];
         reference_path(path, sizeof path, f);
-        if (!ref || !read_pfm(path, REF_W, REF_H, ref) ||
+        if (!ref || ex_read_pfm(path, REF_W, REF_H, ref) != 0 ||
             rendercache_lrms(ref, frames + (size_t)f * 3 * REF_W * REF_H, REF_W, REF_H, &lrms) != RENDERCACHE_OK)
             worst = -1.0;
         else if (lrms > worst)

@@ -5,7 +5,7 @@
        unsigned char *rgb8 = malloc(3 * w * h);
        ex_tonemap(hdr, w, h, exposure, rgb8);   // linear float RGB -> sRGB bytes
        ex_write_png("frame.png", w, h, rgb8);
-       ex_write_pfm("frame.pfm", w, h, hdr);
+       ex_write_pfm("frame.pfm", w, h, hdr);   // ex_read_pfm reads it back
 
    Rows are stored top to bottom everywhere (PFM's bottom-up order is handled
    on write). Every writer returns 0 on success and -1 when the file cannot be
@@ -145,6 +145,35 @@ EX_FN int ex_write_pfm(const char *path, int w, int h, const float *rgb)
             }
     }
     ok = (fclose(f) == 0) && ok;
+    return ok ? 0 : -1;
+}
+
+/* Reads a little-endian PFM of exactly w x h pixels written by
+   ex_write_pfm (the tests' stored reference frames) into rgb, rows top to
+   bottom. Returns 0, or -1 when the file is missing, of another size or
+   format, or short. */
+EX_FN int ex_read_pfm(const char *path, int w, int h, float *rgb)
+{
+    FILE *f;
+    char magic[3] = { 0 };
+    int fw, fh, y, ok;
+    float scale;
+    if (w <= 0 || h <= 0 || !rgb) return -1;
+    f = fopen(path, "rb");
+    if (!f) return -1;
+    ok = fscanf(f, "%2s %d %d %f", magic, &fw, &fh, &scale) == 4 && strcmp(magic, "PF") == 0 && fw == w &&
+         fh == h && scale < 0.0f && fgetc(f) != EOF;   /* the one whitespace byte before the data */
+    for (y = h - 1; ok && y >= 0; y--) {   /* rows bottom to top */
+        int i;
+        for (i = 0; ok && i < 3 * w; i++) {
+            unsigned char b[4];
+            uint32_t u;
+            ok = fread(b, 1, 4, f) == 4;
+            u = (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
+            if (ok) memcpy(&rgb[3 * (size_t)y * (size_t)w + (size_t)i], &u, 4);
+        }
+    }
+    fclose(f);
     return ok ? 0 : -1;
 }
 

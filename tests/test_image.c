@@ -1,0 +1,95 @@
+/* Tests of examples/common/image.h's PFM reader and writer, which carry the
+   tests' stored reference frames: a round trip is bit-exact (values of
+   every magnitude, signed zeros, infinities), and the reader refuses a
+   missing file, another size, another format and every truncation. */
+#define _POSIX_C_SOURCE 200809L
+#include "examples/common/image.h"
+#include "tests/test.h"
+
+#include <unistd.h>
+
+#define W 7
+#define H 5
+
+static void temp_path(char *path, size_t size)
+{
+    snprintf(path, size, "/tmp/test_image_%ld.pfm", (long)getpid());
+}
+
+static void fill(float *rgb)
+{
+    int i;
+    for (i = 0; i < 3 * W * H; i++) rgb[i] = (float)((i * 7919) % 1000) * 0.37f - 100.0f;
+    rgb[0] = -0.0f;
+    rgb[1] = 1e-40f;          /* subnormal */
+    rgb[2] = 3.0e38f;
+    rgb[3] = (float)HUGE_VAL; /* infinity */
+}
+
+static void test_pfm_round_trip(void)
+{
+    float a[3 * W * H], b[3 * W * H];
+    char path[128];
+    temp_path(path, sizeof path);
+    fill(a);
+    memset(b, 0, sizeof b);
+    CHECK(ex_write_pfm(path, W, H, a) == 0);
+    CHECK(ex_read_pfm(path, W, H, b) == 0);
+    CHECK_MSG(memcmp(a, b, sizeof a) == 0, "the round trip changed a value");
+    remove(path);
+}
+
+static void test_pfm_rejects(void)
+{
+    float a[3 * W * H], b[3 * W * H];
+    char path[128];
+    FILE *f;
+    long size, cut;
+    unsigned char *bytes;
+    int rejected = 0;
+    temp_path(path, sizeof path);
+    fill(a);
+    CHECK(ex_read_pfm("/nonexistent/frame.pfm", W, H, b) == -1);
+    CHECK(ex_write_pfm(path, W, H, a) == 0);
+    CHECK(ex_read_pfm(path, W + 1, H, b) == -1);   /* another size */
+    CHECK(ex_read_pfm(path, W, H - 1, b) == -1);
+    CHECK(ex_read_pfm(path, 0, H, b) == -1);
+    CHECK(ex_read_pfm(path, W, H, NULL) == -1);
+    f = fopen(path, "rb");
+    if (!CHECK(f != NULL)) return;
+    fseek(f, 0, SEEK_END);
+    size = ftell(f);
+    rewind(f);
+    bytes = (unsigned char *)malloc((size_t)size);
+    if (!CHECK(bytes && fread(bytes, 1, (size_t)size, f) == (size_t)size)) {
+        fclose(f);
+        free(bytes);
+        return;
+    }
+    fclose(f);
+    for (cut = 0; cut < size; cut++) {   /* every truncation */
+        f = fopen(path, "wb");
+        if (!f) break;
+        fwrite(bytes, 1, (size_t)cut, f);
+        fclose(f);
+        rejected += ex_read_pfm(path, W, H, b) == -1;
+    }
+    CHECK_EQ_INT(rejected, (int)size);
+    bytes[1] = 'f';                       /* "Pf": one channel, another format */
+    f = fopen(path, "wb");
+    if (CHECK(f != NULL)) {
+        fwrite(bytes, 1, (size_t)size, f);
+        fclose(f);
+        CHECK(ex_read_pfm(path, W, H, b) == -1);
+    }
+    free(bytes);
+    remove(path);
+}
+
+int main(int argc, char **argv)
+{
+    TEST_INIT(argc, argv);
+    RUN(test_pfm_round_trip);
+    RUN(test_pfm_rejects);
+    return test_finish();
+}
