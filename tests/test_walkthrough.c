@@ -28,6 +28,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "examples/common/walkthrough.h"
 #include "tests/test.h"
+#include "tests/walkthrough_test.h"
 
 #define REF_W 64
 #define REF_H 48
@@ -58,8 +59,6 @@ static wt_options small_options(wt_mode mode)
     return o;
 }
 
-static float luminance(const float *c) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
-
 /* Renders frames 0 .. count-1 of o's path; frames: count * w * h * 3 floats. */
 static int render_frames(const wt_options *o, int count, float *frames)
 {
@@ -78,13 +77,6 @@ static int render_frames(const wt_options *o, int count, float *frames)
     wt_renderer_destroy(r);
     wt_world_destroy(w);
     return ok;
-}
-
-/* ---- PFM (the project's reference frames) ------------------------------ */
-
-static void reference_path(char *path, size_t size, wt_mode mode, int frame)
-{
-    snprintf(path, size, "tests/data/walkthrough_%s_f%d.pfm", wt_mode_name(mode), frame);
 }
 
 /* ---- options -------------------------------------------------------------- */
@@ -200,33 +192,6 @@ static void test_camera_path(void)
 
 /* ---- the precompute cache on disk -------------------------------------------- */
 
-static int make_temp_dir(char *dir, size_t size)
-{
-    snprintf(dir, size, "/tmp/walkthrough-test-XXXXXX");
-    return mkdtemp(dir) != NULL;
-}
-
-static void remove_dir(const char *dir)
-{
-    char cmd[1200];
-    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
-    if (system(cmd) != 0) fprintf(stderr, "  could not remove %s\n", dir);
-}
-
-static int count_files(const char *dir, const char *suffix)
-{
-    char cmd[1200];
-    FILE *p;
-    int n = -1;
-    snprintf(cmd, sizeof cmd, "ls -1 '%s' | grep -c -- '%s$'", dir, suffix);
-    p = popen(cmd, "r");
-    if (p) {
-        if (fscanf(p, "%d", &n) != 1) n = -1;
-        pclose(p);
-    }
-    return n;
-}
-
 static void test_cache_files(void)
 {
     char dir[256], path[1024], err[256];
@@ -238,8 +203,8 @@ static void test_cache_files(void)
     for (i = 0; i < sizeof payload; i++) payload[i] = (unsigned char)(i * 7);
     CHECK_EQ_INT(wt_cache_load(dir, "thing", 42, &data, &size), 0);          /* absent */
     CHECK_EQ_INT(wt_cache_store(dir, "thing", 42, payload, sizeof payload, err, sizeof err), 0);
-    CHECK_EQ_INT(count_files(dir, ".bin"), 1);
-    CHECK_EQ_INT(count_files(dir, "tmp[0-9]*"), 0);                          /* renamed, nothing left */
+    CHECK_EQ_INT(count_files(dir, "\\.bin$"), 1);
+    CHECK_EQ_INT(count_files(dir, "tmp[0-9]*$"), 0);                          /* renamed, nothing left */
     CHECK_EQ_INT(wt_cache_load(dir, "thing", 42, &data, &size), 1);
     CHECK(size == sizeof payload && memcmp(data, payload, size) == 0);
     free(data);
@@ -298,7 +263,7 @@ static void test_precompute_reuse(void)
         o.strata = 7;   /* another parameter: another key, nothing reused */
         if (CHECK(wt_world_create(&o, &w2, err, sizeof err) == 0 && wt_renderer_create(w2, &r2, err, sizeof err) == 0))
             CHECK(!r2->reused_lightvec && r2->lightvec_key != key);
-        CHECK_EQ_INT(count_files(dir, "tmp[0-9]*"), 0);
+        CHECK_EQ_INT(count_files(dir, "tmp[0-9]*$"), 0);
         wt_renderer_destroy(r1);
         wt_renderer_destroy(r2);
         wt_world_destroy(w1);
@@ -374,21 +339,6 @@ static void test_threads(void)
 }
 
 /* ---- the bunny under the desk ------------------------------------------------- */
-
-/* The time at which the bunny is deepest under the desk. */
-static double time_under_desk(void)
-{
-    double best = 0.0;
-    float depth = -1e9f, p[3];
-    int i;
-    for (i = 0; i <= 200; i++) {
-        float d;
-        wt_bunny_position(i / 200.0, p, NULL);
-        d = fminf(fminf(p[0] - 1.0f, 2.6f - p[0]), fminf(p[2] - 2.9f, 3.7f - p[2]));
-        if (d > depth) { depth = d; best = i / 200.0; }
-    }
-    return best;
-}
 
 /* Mean luminance of the bunny's pixels in a full render at time t. */
 static double bunny_pixels(wt_world *w, double t, int *count)

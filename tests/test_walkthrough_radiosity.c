@@ -37,6 +37,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "examples/common/walkthrough.h"
 #include "tests/test.h"
+#include "tests/walkthrough_test.h"
 
 #define REF_W 64
 #define REF_H 48
@@ -62,8 +63,6 @@ static wt_options small_options(void)
     o.verbose = 0;
     return o;
 }
-
-static float luminance(const float *c) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
 
 typedef struct session {
     wt_world *w;
@@ -102,12 +101,7 @@ static int render_frames(session *s, int count, float *frames)
     return 1;
 }
 
-/* ---- PFM ------------------------------------------------------------------ */
-
-static void reference_path(char *path, size_t size, int frame)
-{
-    snprintf(path, size, "tests/data/walkthrough_radiosity_f%d.pfm", frame);
-}
+/* ---- the stored reference frames ---------------------------------------------- */
 
 /* Worst LRMS of frames 0 and 1 against the references (or -1). */
 static double against_references(const float *frames)
@@ -117,7 +111,7 @@ static double against_references(const float *frames)
     int f;
     for (f = 0; f < 2 && worst >= 0.0; f++) {
         char path[256];
-        reference_path(path, sizeof path, f);
+        reference_path(path, sizeof path, WT_MODE_RADIOSITY, f);
         if (!ref || ex_read_pfm(path, REF_W, REF_H, ref) != 0 ||
             rendercache_lrms(ref, frames + (size_t)f * 3 * REF_W * REF_H, REF_W, REF_H, &lrms) != RENDERCACHE_OK)
             worst = -1.0;
@@ -203,20 +197,6 @@ static void test_threads(void)
     free(fb);
 }
 
-static int count_files(const char *dir, const char *pattern)
-{
-    char cmd[1200];
-    FILE *p;
-    int n = -1;
-    snprintf(cmd, sizeof cmd, "ls -1 '%s' | grep -c -- '%s'", dir, pattern);
-    p = popen(cmd, "r");
-    if (p) {
-        if (fscanf(p, "%d", &n) != 1) n = -1;
-        pclose(p);
-    }
-    return n;
-}
-
 /* A second renderer loads the mesh, the volume and the ratios, and renders
    the same frames bit for bit; another mesh parameter makes another mesh
    (and so another volume), the ratios are kept. */
@@ -254,21 +234,6 @@ static void test_precompute_reuse(void)
     CHECK_EQ_INT(count_files(cache_dir, "tmp[0-9]*$"), 0);
     free(fa);
     free(fb);
-}
-
-/* The time at which the bunny is deepest under the desk (x 1.0-2.6, z 2.9-3.7). */
-static double time_under_desk(void)
-{
-    double best = 0.0;
-    float depth = -1e9f, p[3];
-    int i;
-    for (i = 0; i <= 200; i++) {
-        float d;
-        wt_bunny_position(i / 200.0, p, NULL);
-        d = fminf(fminf(p[0] - 1.0f, 2.6f - p[0]), fminf(p[2] - 2.9f, 3.7f - p[2]));
-        if (d > depth) { depth = d; best = i / 200.0; }
-    }
-    return best;
 }
 
 /* Mean luminance of the bunny's pixels in frame f (and their count). */
@@ -458,7 +423,7 @@ static void write_references(void)
         CHECK(render_frames(&s, 2, frames));
         for (f = 0; f < 2; f++) {
             char path[256];
-            reference_path(path, sizeof path, f);
+            reference_path(path, sizeof path, WT_MODE_RADIOSITY, f);
             CHECK(ex_write_pfm(path, REF_W, REF_H, frames + (size_t)f * 3 * REF_W * REF_H) == 0);
             printf("  wrote %s\n", path);
         }
@@ -471,8 +436,7 @@ int main(int argc, char **argv)
 {
     int result;
     TEST_INIT(argc, argv);
-    snprintf(cache_dir, sizeof cache_dir, "/tmp/walkthrough-radiosity-XXXXXX");
-    if (!mkdtemp(cache_dir)) {
+    if (!make_temp_dir(cache_dir, sizeof cache_dir)) {
         fprintf(stderr, "cannot create a temporary directory\n");
         return 1;
     }
@@ -488,10 +452,6 @@ int main(int argc, char **argv)
         RUN(test_volume_matches_solution);
     }
     result = test_finish();
-    {
-        char cmd[512];
-        snprintf(cmd, sizeof cmd, "rm -rf '%s'", cache_dir);
-        if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", cache_dir);
-    }
+    remove_dir(cache_dir);
     return result;
 }
