@@ -152,6 +152,13 @@
    Determinism. Each sample draws its jitter from a stream seeded by
    (desc.seed, sample index): a volume is bit-identical for any thread count.
 
+   Threads. Every function taking a const irrvol * (queries, irrvol_info,
+   irrvol_sample, irrvol_sample_values, the bin functions, irrvol_save and
+   irrvol_save_to_memory) only reads the volume, so any number of threads may
+   call them on one volume at once, and irrvol_visibility_ratio keeps no
+   shared state, so concurrent calls on one const desc with distinct ratio
+   arrays are safe too.
+
    LIMITS
 
    k <= IRRVOL_MAX_RESOLUTION (64). Objects lit from the volume cast no shadows
