@@ -2726,6 +2726,14 @@ struct radinterp_solution {
     uint64_t blocker_count;
     uint32_t *leaves;                  /* leaf node indices in patch order */
     uint32_t leaf_count;
+    /* convex solids (section 13): their back faces cast no shadow of their own */
+    uint32_t *patch_solid;             /* solid of each patch; NONE when it belongs to none */
+    struct radinterp__solid *solids;
+    uint32_t solid_count;
+    double (*solid_planes)[4];         /* n, d of each solid's hull planes not covered by patches (holes) */
+    uint32_t solid_plane_count;
+    uint32_t *solid_members;           /* patches of each solid, solid after solid */
+    uint32_t solid_member_count;
     /* statistics */
     uint32_t iterations;
     int converged;
@@ -3869,6 +3877,7 @@ static radinterp_result radinterp__iterate(radinterp_solution *s, radinterp__run
    ---------------------------------------------------------------------- */
 #define RADINTERP__BP_BYTES 32768        /* stack memory of one query's triangulation */
 #define RADINTERP__BP_MAX_SURVIVORS 64   /* shadows remembered per source */
+#define RADINTERP__SOLID_CACHE 16        /* convex solids a query remembers its verdict for (below) */
 /* A convex polygon of the source plane, in the frame: its corners and, for
    each edge (from corner i to i + 1), the line it lies on, a u + b v + c = 0
    with (a, b) of unit length and the polygon on the positive side. The
@@ -3900,6 +3909,8 @@ typedef struct radinterp__query {
     int shadow_count[RADINTERP__BP_MAX_SURVIVORS];
     unsigned char flags[2048];
     radinterp__piece piece[RADINTERP__PIECES];
+    uint32_t solid_tag[RADINTERP__SOLID_CACHE];  /* solids whose back faces' verdict at pv is known */
+    unsigned char solid_skip[RADINTERP__SOLID_CACHE];
 } radinterp__query;
 
 /* 2D frame on the source plane: origin o, axes e1, e2 with e1 x e2 = n. */
@@ -4088,6 +4099,15 @@ static void radinterp__bp_project(const radinterp__bp *bp, const double (*poly)[
     }
 }
 
+/* Is a shadow (2D, in the frame) too small to matter? Below 1e-12 of the
+   square of pv's height above the source it subtends less than 1e-12 / pi.
+   Judged on the source, not by the blocker's part in 3D, which is tiny
+   when the blocker stands right next to pv yet may hide the whole source. */
+static int radinterp__shadow_negligible(const radinterp__bp *bp, const double (*v)[2], int m)
+{
+    return fabs(radinterp__area2(v, m)) <= 2e-12 * bp->hp * bp->hp;
+}
+
 /* The shadow of patch pb on the source: its part inside the pyramid,
    projected from pv. Returns the corner count, 0 when it casts none. Each
    corner is tested against each plane once: a plane that has every corner
@@ -4114,9 +4134,9 @@ static int radinterp__bp_shadow(const radinterp_solution *s, const radinterp__bp
         m = radinterp__clip_poly((const double (*)[3])poly, m, bp->plane_n[j], bp->plane_d[j], tmp);
         radinterp__copy_poly((const double (*)[3])tmp, m, poly);
     }
-    if (m < 3 || radinterp__poly_area((const double (*)[3])poly, m) <= 1e-14 * s->diag * s->diag) return 0;
+    if (m < 3) return 0;
     radinterp__bp_project(bp, (const double (*)[3])poly, m, shadow);
-    return m;
+    return radinterp__shadow_negligible(bp, (const double (*)[2])shadow, m) ? 0 : m;
 }
 
 /* The shadows of the link's blockers into q->shadow (at most
@@ -4147,6 +4167,351 @@ static int radinterp__bp_collect(radinterp__query *q, const radinterp__bp *bp, u
         survivors[count++] = b;
     }
     return count;
+}
+
+/* ---- convex solids: back faces whose shadows add nothing ----------------- */
+/* Most blockers are faces of convex objects: boxes standing on the floor, a
+   lamp shade. Seen from a point outside a convex solid, a segment that
+   leaves the solid through a face turned away from the point (a back face)
+   has entered it through a face turned toward the point, so the back
+   face's shadow lies inside the union of the front faces' shadows and
+   changes nothing (up to its outline, which has no area). Back faces are
+   half of a query's blocker tests and most of the work of the union, so
+   they are skipped wherever this holds.
+   A solid is a set of patches joined edge to edge (an edge shared by
+   exactly two of them, run in opposite directions) lying on the boundary
+   of the convex hull of their corners, fronts outward; on each facet of
+   the hull they cover, they tile it (no two overlap). Facets of the hull
+   that its patches do not wholly cover are holes (the open bottom of a box
+   standing on the floor, the ends of a tube): a segment may enter through
+   one, so the rule needs the point on the inner side of every hole's plane
+   (or on it: a segment from there cannot cross it) as well as in front of
+   some face's plane (outside the solid). A face whose plane passes less
+   than epsilon * diag behind the point is left out as seen edge-on
+   (radinterp__bp_shadow_piece), so it must not be an entrance either: no
+   face's plane may pass that close behind the point (a point just beside
+   the corner of a box standing on the floor, where a mesh vertex lies,
+   would otherwise see through the box). Solids are found once, at solve
+   time. The triangulation method does not use them, so the test comparing
+   the two methods checks this rule as well. */
+#define RADINTERP__SOLID_VERTS 32    /* larger groups of patches are not examined */
+#define RADINTERP__SOLID_PLANES 32   /* hull facets of a solid at most */
+
+typedef struct radinterp__solid {
+    uint32_t first_plane;            /* into solution.solid_planes */
+    uint32_t faces, holes;           /* hull facets covered by the solid's patches, and the others (stored) */
+    uint32_t first_member, members;  /* into solution.solid_members */
+} radinterp__solid;
+
+typedef struct radinterp__edge_rec {
+    float key[6];                    /* the edge's ends, the lexicographically smaller first */
+    uint32_t patch, forward;         /* forward: the patch runs from key[0..2] to key[3..5] */
+} radinterp__edge_rec;
+
+static int radinterp__edge_cmp(const void *a_, const void *b_)
+{
+    const float *a = ((const radinterp__edge_rec *)a_)->key, *b = ((const radinterp__edge_rec *)b_)->key;
+    int k;
+    for (k = 0; k < 6; k++)
+        if (a[k] != b[k]) return a[k] < b[k] ? -1 : 1;
+    return 0;
+}
+
+static int radinterp__point_less(const float *a, const float *b)
+{
+    return a[0] != b[0] ? a[0] < b[0] : (a[1] != b[1] ? a[1] < b[1] : a[2] < b[2]);
+}
+
+static uint32_t radinterp__uf_find(uint32_t *parent, uint32_t x)
+{
+    while (parent[x] != x) {
+        parent[x] = parent[parent[x]];
+        x = parent[x];
+    }
+    return x;
+}
+
+/* Joins patches that share an edge used by exactly two patches in opposite
+   directions (a leg standing under the edge of a table top makes that edge
+   a three-patch edge, which joins nothing). Returns 0, or -1 when out of
+   memory. */
+static int radinterp__join_patches(const radinterp_solution *s, uint32_t *parent)
+{
+    radinterp__edge_rec *e = (radinterp__edge_rec *)radinterp__alloc_array(&s->allocator, (size_t)s->patch_count * 4, sizeof *e);
+    uint32_t i, k, n = 0, run;
+    if (!e) return -1;
+    for (i = 0; i < s->patch_count; i++) {
+        const radinterp__patch *pt = &s->patches[i];
+        for (k = 0; k < pt->count; k++) {
+            const float *a = pt->v[k], *b = pt->v[(k + 1) % pt->count];
+            e[n].forward = (uint32_t)radinterp__point_less(a, b);
+            memcpy(e[n].key, e[n].forward ? a : b, 3 * sizeof(float));
+            memcpy(e[n].key + 3, e[n].forward ? b : a, 3 * sizeof(float));
+            e[n].patch = i;
+            n++;
+        }
+    }
+    qsort(e, n, sizeof *e, radinterp__edge_cmp);
+    for (i = 0; i < n; i += run) {
+        for (run = 1; i + run < n && radinterp__edge_cmp(&e[i], &e[i + run]) == 0; run++) {}
+        if (run == 2 && e[i].forward != e[i + 1].forward && e[i].patch != e[i + 1].patch)
+            parent[radinterp__uf_find(parent, e[i].patch)] = radinterp__uf_find(parent, e[i + 1].patch);
+    }
+    radinterp__free(&s->allocator, e);
+    return 0;
+}
+
+/* Area of the convex hull of n 2D points (Andrew's monotone chain). */
+static double radinterp__hull_area(double (*p)[2], int n)
+{
+    double h[2 * RADINTERP__SOLID_VERTS + 1][2];
+    int i, j, m = 0, lower;
+    for (i = 1; i < n; i++) /* insertion sort by x, then y */
+        for (j = i; j > 0 && (p[j][0] < p[j - 1][0] || (p[j][0] == p[j - 1][0] && p[j][1] < p[j - 1][1])); j--) {
+            double t0 = p[j][0], t1 = p[j][1];
+            p[j][0] = p[j - 1][0]; p[j][1] = p[j - 1][1];
+            p[j - 1][0] = t0; p[j - 1][1] = t1;
+        }
+    for (i = 0; i < n; i++) {
+        while (m >= 2 && radinterp__orient2d_area(h[m - 2], h[m - 1], p[i]) <= 0.0) m--;
+        h[m][0] = p[i][0]; h[m][1] = p[i][1]; m++;
+    }
+    for (i = n - 2, lower = m + 1; i >= 0; i--) {
+        while (m >= lower && radinterp__orient2d_area(h[m - 2], h[m - 1], p[i]) <= 0.0) m--;
+        h[m][0] = p[i][0]; h[m][1] = p[i][1]; m++;
+    }
+    return m > 3 ? 0.5 * fabs(radinterp__area2((const double (*)[2])h, m - 1)) : 0.0;
+}
+
+/* Signed distance of x from the plane (n, d). */
+static double radinterp__plane_dist(const double *pl, const double *x) { return radinterp__d3_dot(pl, x) - pl[3]; }
+
+/* The facet planes of the convex hull of v (every plane through three of
+   them with all of them behind it, within tol), outward. Returns their
+   count, or -1 when there are more than RADINTERP__SOLID_PLANES. */
+static int radinterp__hull_planes(const double (*v)[3], int nv, double tol, double (*out)[4])
+{
+    int i, j, k, l, n = 0;
+    for (i = 0; i < nv; i++)
+        for (j = i + 1; j < nv; j++)
+            for (k = j + 1; k < nv; k++) {
+                double a[3], b[3], pl[4], len, lo = 0.0, hi = 0.0;
+                radinterp__d3_sub(v[j], v[i], a);
+                radinterp__d3_sub(v[k], v[i], b);
+                radinterp__d3_cross(a, b, pl);
+                len = radinterp__d3_len(pl);
+                if (!(len > 1e-9 * (radinterp__d3_dot(a, a) + radinterp__d3_dot(b, b)))) continue; /* collinear */
+                pl[0] /= len; pl[1] /= len; pl[2] /= len;
+                pl[3] = radinterp__d3_dot(pl, v[i]);
+                for (l = 0; l < nv; l++) {
+                    double t = radinterp__plane_dist(pl, v[l]);
+                    lo = t < lo ? t : lo;
+                    hi = t > hi ? t : hi;
+                }
+                if (hi > tol && lo < -tol) continue;    /* corners on both sides */
+                if (hi > tol) { pl[0] = -pl[0]; pl[1] = -pl[1]; pl[2] = -pl[2]; pl[3] = -pl[3]; }
+                for (l = 0; l < n; l++)
+                    if (radinterp__d3_dot(out[l], pl) > 1.0 - 1e-9 && fabs(out[l][3] - pl[3]) <= tol) break;
+                if (l < n) continue;                    /* found before */
+                if (n == RADINTERP__SOLID_PLANES) return -1;
+                memcpy(out[n++], pl, sizeof pl);
+            }
+    return n;
+}
+
+/* Is every corner of the 2D polygon b within tol of the outside of some
+   edge of the counter-clockwise polygon a? */
+static int radinterp__outside_edge_2d(const double (*a)[2], int na, const double (*b)[2], int nb, double tol)
+{
+    int i, j;
+    for (i = 0; i < na; i++) {
+        const double *p0 = a[i], *p1 = a[(i + 1) % na];
+        double len = sqrt((p1[0] - p0[0]) * (p1[0] - p0[0]) + (p1[1] - p0[1]) * (p1[1] - p0[1]));
+        for (j = 0; j < nb; j++)
+            if (radinterp__orient2d_area(p0, p1, b[j]) > tol * len) break;
+        if (j == nb) return 1;
+    }
+    return 0;
+}
+
+#define RADINTERP__SOLID_PATCHES 64  /* patches of one solid at most */
+
+/* Does the solid's group of patches wholly cover the hull facet pl? Its
+   patches there must not overlap (a separating edge for every pair: they
+   are convex) and must add up to the area of the facet; as their corners
+   are corners of the solid, they lie in the facet, so they then tile it. */
+static int radinterp__facet_covered(const radinterp_solution *s, const uint32_t *members, uint32_t count,
+                                    const double (*v)[3], int nv, const double *pl, double tol)
+{
+    double uv[RADINTERP__SOLID_VERTS][2], e1[3], e2[3], covered = 0.0, area;
+    double on_uv[RADINTERP__SOLID_PATCHES][4][2];
+    int on_count[RADINTERP__SOLID_PATCHES];
+    int i, m = 0, non = 0, a;
+    uint32_t j, k;
+    radinterp__frame f;
+    memset(&f, 0, sizeof f);
+    e1[0] = fabs(pl[0]) < 0.6 ? 1.0 : 0.0; e1[1] = e1[0] == 0.0 ? 1.0 : 0.0; e1[2] = 0.0;
+    radinterp__d3_cross(pl, e1, e2);
+    radinterp__d3_cross(e2, pl, e1);
+    for (k = 0; k < 3; k++) { f.e1[k] = e1[k] / radinterp__d3_len(e1); f.e2[k] = e2[k] / radinterp__d3_len(e2); }
+    for (i = 0; i < nv; i++)
+        if (fabs(radinterp__plane_dist(pl, v[i])) <= tol) radinterp__frame_to2d(&f, v[i], uv[m++]);
+    area = radinterp__hull_area(uv, m);
+    for (j = 0; j < count; j++) {
+        const radinterp__patch *pt = &s->patches[members[j]];
+        double x[3];
+        int on = radinterp__d3_dot(pt->n, pl) > 0.0;
+        for (k = 0; k < pt->count && on; k++) {
+            radinterp__d3_from_f(pt->v[k], x);
+            on = fabs(radinterp__plane_dist(pl, x)) <= tol;
+        }
+        if (!on) continue;
+        covered += pt->area;
+        for (k = 0; k < pt->count; k++) { /* counter-clockwise in the frame, as e1 x e2 = pl */
+            radinterp__d3_from_f(pt->v[k], x);
+            radinterp__frame_to2d(&f, x, on_uv[non][k]);
+        }
+        on_count[non] = (int)pt->count;
+        for (a = 0; a < non; a++)
+            if (!radinterp__outside_edge_2d((const double (*)[2])on_uv[a], on_count[a], (const double (*)[2])on_uv[non],
+                                            on_count[non], tol) &&
+                !radinterp__outside_edge_2d((const double (*)[2])on_uv[non], on_count[non], (const double (*)[2])on_uv[a],
+                                            on_count[a], tol))
+                return 0; /* two patches overlap */
+        non++;
+    }
+    return area > 0.0 && covered >= (1.0 - 1e-6) * area;
+}
+
+/* Examines a group of joined patches: the planes of the holes of a convex
+   solid into planes, and the counts of its covered facets (faces) and
+   holes; returns 0 when the group is not one (too many corners or facets,
+   a corner in front of a patch's plane, no facet covered). */
+static int radinterp__solid_examine(const radinterp_solution *s, const uint32_t *members, uint32_t count,
+                                    double (*planes)[4], uint32_t *faces, uint32_t *holes)
+{
+    double v[RADINTERP__SOLID_VERTS][3], hull[RADINTERP__SOLID_PLANES][4], tol = s->epsilon * s->diag;
+    int nv = 0, nh, i, l;
+    uint32_t j, k, nf = 0, no = 0;
+    for (j = 0; j < count; j++) { /* distinct corners */
+        const radinterp__patch *pt = &s->patches[members[j]];
+        for (k = 0; k < pt->count; k++) {
+            double x[3];
+            radinterp__d3_from_f(pt->v[k], x);
+            for (l = 0; l < nv; l++) if (x[0] == v[l][0] && x[1] == v[l][1] && x[2] == v[l][2]) break;
+            if (l < nv) continue;
+            if (nv == RADINTERP__SOLID_VERTS) return 0;
+            memcpy(v[nv++], x, sizeof x);
+        }
+    }
+    for (j = 0; j < count; j++) { /* every patch on a supporting plane, front outward */
+        const radinterp__patch *pt = &s->patches[members[j]];
+        for (l = 0; l < nv; l++)
+            if (radinterp__d3_dot(pt->n, v[l]) - pt->d > tol) return 0;
+    }
+    nh = radinterp__hull_planes((const double (*)[3])v, nv, tol, hull);
+    if (nh <= 0) return 0;
+    for (i = 0; i < nh; i++) {
+        if (radinterp__facet_covered(s, members, count, (const double (*)[3])v, nv, hull[i], tol)) nf++;
+        else memcpy(planes[no++], hull[i], sizeof hull[i]);
+    }
+    *faces = nf;
+    *holes = no;
+    return nf > 0;
+}
+
+/* Finds the convex solids among the patches: solution.patch_solid, solids,
+   solid_members and solid_planes. Returns 0, or -1 when out of memory. */
+static int radinterp__find_solids(radinterp_solution *s)
+{
+    uint32_t n = s->patch_count, i, pass, *parent, *next, *head;
+    int res = 0;
+    parent = (uint32_t *)radinterp__alloc_array(&s->allocator, n, sizeof(uint32_t));
+    next = (uint32_t *)radinterp__alloc_array(&s->allocator, n, sizeof(uint32_t));
+    head = (uint32_t *)radinterp__alloc_array(&s->allocator, n, sizeof(uint32_t));
+    s->patch_solid = (uint32_t *)radinterp__alloc_array(&s->allocator, n, sizeof(uint32_t));
+    if (!parent || !next || !head || !s->patch_solid) res = -1;
+    for (i = 0; i < n && res == 0; i++) { parent[i] = i; head[i] = RADINTERP__NONE; s->patch_solid[i] = RADINTERP__NONE; }
+    if (res == 0) res = radinterp__join_patches(s, parent);
+    for (i = n; i-- > 0 && res == 0;) { /* members of each group, in patch order */
+        uint32_t r = radinterp__uf_find(parent, i);
+        next[i] = head[r];
+        head[r] = i;
+    }
+    /* pass 0 counts the solids, their members and planes, pass 1 stores them */
+    for (pass = 0; pass < 2 && res == 0; pass++) {
+        uint32_t solids = 0, planes = 0, members_total = 0;
+        for (i = 0; i < n; i++) {
+            uint32_t members[RADINTERP__SOLID_PATCHES], count = 0, m, faces, holes;
+            double pl[RADINTERP__SOLID_PLANES][4];
+            if (head[i] == RADINTERP__NONE || next[head[i]] == RADINTERP__NONE) continue; /* not a root, or alone */
+            for (m = head[i]; m != RADINTERP__NONE && count < RADINTERP__SOLID_PATCHES; m = next[m]) members[count++] = m;
+            if (m != RADINTERP__NONE || !radinterp__solid_examine(s, members, count, pl, &faces, &holes)) continue;
+            if (pass == 1) {
+                radinterp__solid *so = &s->solids[solids];
+                so->first_plane = planes;
+                so->faces = faces;
+                so->holes = holes;
+                so->first_member = members_total;
+                so->members = count;
+                memcpy(s->solid_planes[planes], pl, (size_t)holes * sizeof pl[0]);
+                memcpy(s->solid_members + members_total, members, (size_t)count * sizeof members[0]);
+                for (m = 0; m < count; m++) s->patch_solid[members[m]] = solids;
+            }
+            solids++;
+            planes += holes;
+            members_total += count;
+        }
+        if (pass == 0) {
+            s->solids = (radinterp__solid *)radinterp__alloc_array(&s->allocator, solids, sizeof *s->solids);
+            s->solid_planes = (double (*)[4])radinterp__alloc_array(&s->allocator, planes, sizeof s->solid_planes[0]);
+            s->solid_members = (uint32_t *)radinterp__alloc_array(&s->allocator, members_total, sizeof(uint32_t));
+            if (!s->solids || !s->solid_planes || !s->solid_members) res = -1;
+            s->solid_count = solids;
+            s->solid_plane_count = planes;
+            s->solid_member_count = members_total;
+        }
+    }
+    radinterp__free(&s->allocator, parent);
+    radinterp__free(&s->allocator, next);
+    radinterp__free(&s->allocator, head);
+    return res;
+}
+
+/* May patch b, turned away from the point bp->pv, be left out of the
+   shadows? When it is a face of a convex solid that the point lies outside
+   of (in front of one of its patches) and on the inner side of every hole
+   of, and no patch of the solid is left out as seen edge-on while turned
+   toward the point (see above). The patches are judged by the very
+   expressions radinterp__bp_by_union and radinterp__bp_shadow_piece use, so
+   a patch this rule counts as an entrance is one whose shadow is taken.
+   The verdict for q->pv is remembered per solid. */
+static int radinterp__back_face_covered(radinterp__query *q, const radinterp__bp *bp, uint32_t b)
+{
+    const radinterp_solution *s = q->s;
+    uint32_t g = s->patch_solid[b], slot = g % RADINTERP__SOLID_CACHE, i;
+    const radinterp__solid *so;
+    const double (*pl)[4];
+    double tol = s->epsilon * s->diag;
+    int outside = 0, sealed = 1;
+    if (g == RADINTERP__NONE) return 0;
+    if (bp->pv == q->pv && q->solid_tag[slot] == g) return q->solid_skip[slot];
+    so = &s->solids[g];
+    for (i = 0; i < so->members && sealed; i++) {
+        const radinterp__patch *pm = &s->patches[s->solid_members[so->first_member + i]];
+        if (radinterp__d3_dot(pm->n, bp->pv) > pm->d) {   /* turned toward the point */
+            int edge_on = fabs(radinterp__d3_dot(pm->n, bp->pv) - pm->d) <= tol;
+            outside |= !edge_on;
+            sealed = !edge_on;
+        }
+    }
+    pl = (const double (*)[4])s->solid_planes + so->first_plane;
+    for (i = 0; i < so->holes && sealed; i++) sealed = radinterp__plane_dist(pl[i], bp->pv) <= 0.0;
+    if (bp->pv == q->pv) {
+        q->solid_tag[slot] = g;
+        q->solid_skip[slot] = (unsigned char)(outside && sealed);
+    }
+    return outside && sealed;
 }
 
 /* ---- visibility by the union of the shadows (the default) -------------- */
@@ -4257,9 +4622,10 @@ static int radinterp__bp_shadow_piece(const radinterp_solution *s, const radinte
         memcpy(poly, tmp, (size_t)m * sizeof(double[3]));
         memcpy(tag, ttmp, (size_t)m * sizeof(int));
     }
-    if (m < 3 || radinterp__poly_area((const double (*)[3])poly, m) <= 1e-14 * s->diag * s->diag) return 0;
+    if (m < 3) return 0;
     if (m > RADINTERP__PIECE_VERTS) return -1;
     radinterp__bp_project(bp, (const double (*)[3])poly, m, out->v);
+    if (radinterp__shadow_negligible(bp, (const double (*)[2])out->v, m)) return 0;
     for (i = 0; i < m; i++) { inside[0] += out->v[i][0] / m; inside[1] += out->v[i][1] / m; }
     for (i = 0; i < m; i++)
         if (!radinterp__shadow_line(bp, pb, tag[i], inside, out->ln[i])) return -1;
@@ -4438,6 +4804,7 @@ static double radinterp__bp_by_union(radinterp__query *q, const radinterp__bp *b
             radinterp__piece *sh;
             int r;
             if (!pass && !(radinterp__d3_dot(pb->n, bp->pv) > pb->d)) {
+                if (radinterp__back_face_covered(q, bp, b)) continue;
                 if (nlater == RADINTERP__BP_MAX_SURVIVORS) return -1;
                 later[nlater++] = b;
                 continue;
@@ -4446,7 +4813,7 @@ static double radinterp__bp_by_union(radinterp__query *q, const radinterp__bp *b
             sh = &q->piece[count];
             r = radinterp__bp_shadow_piece(s, bp, pb, sh);
             if (r < 0) return -1;
-            if (r == 0 || fabs(radinterp__area2((const double (*)[2])sh->v, sh->count)) <= tiny) continue;
+            if (r == 0) continue;
             if (radinterp__covers((const double (*)[2])sh->v, sh->count, (const double (*)[2])bp->sc2, bp->nc))
                 return 0.0; /* this blocker alone hides the whole source */
             if (radinterp__union_add(q, &count, tol, tiny) != 0) return -1;
@@ -4955,6 +5322,10 @@ RADINTERP_API void radinterp_solution_destroy(radinterp_solution *s)
     radinterp__free(&a, s->links);
     radinterp__free(&a, s->blockers);
     radinterp__free(&a, s->leaves);
+    radinterp__free(&a, s->patch_solid);
+    radinterp__free(&a, s->solids);
+    radinterp__free(&a, s->solid_planes);
+    radinterp__free(&a, s->solid_members);
     radinterp__free(&a, s);
 }
 
@@ -5001,6 +5372,7 @@ RADINTERP_API radinterp_result radinterp_solve(const radinterp_desc *desc, radin
         s->seed = desc->seed;
         s->visibility = desc->visibility ? (uint32_t)desc->visibility : (uint32_t)RADINTERP_VISIBILITY_SHADOWS;
         res = radinterp__build_bvh(s);
+        if (res == RADINTERP_OK && radinterp__find_solids(s) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     }
     if (res == RADINTERP_OK) res = radinterp__make_roots(s, &run);
     if (res == RADINTERP_OK) res = radinterp__initial_links(s, &run);
@@ -5033,6 +5405,9 @@ RADINTERP_API void radinterp_solution_info(const radinterp_solution *s, radinter
     info->bytes = sizeof *s + (size_t)s->patch_count * sizeof(radinterp__patch) +
                   (size_t)s->node_cap * sizeof(radinterp__node) + (size_t)s->link_count * sizeof(radinterp__link) +
                   (size_t)s->blocker_count * sizeof(uint32_t) + (size_t)s->leaf_count * sizeof(uint32_t) +
+                  (size_t)s->patch_count * sizeof(uint32_t) + (size_t)s->solid_count * sizeof(radinterp__solid) +
+                  (size_t)s->solid_plane_count * sizeof s->solid_planes[0] +
+                  (size_t)s->solid_member_count * sizeof(uint32_t) +
                   (size_t)s->bvh.node_count * sizeof(radinterp__bvh_node) +
                   (size_t)s->bvh.tri_count * (sizeof(radinterp__bvh_tri) + sizeof(uint32_t));
 }
@@ -5104,6 +5479,7 @@ static radinterp_result radinterp__irradiance(const radinterp_solution *s, uint3
     q->failed = 0;
     q->depth_left = 8;
     q->triangulated = 0;
+    memset(q->solid_tag, 0xFF, sizeof q->solid_tag);
     radinterp__d3_from_f(p, q->p);
     memcpy(q->n, s->patches[patch].n, sizeof q->n);
     q->dr = radinterp__d3_dot(q->n, q->p);

@@ -347,6 +347,209 @@ static void test_many_overlapping_blockers(void)
     CHECK(a.partly > 20);
 }
 
+/* A wall standing a few micrometres in front of the query point hides a
+   small source completely. The wall's part inside the pyramid from the
+   point to the source is then tiny (micrometres across), its shadow still
+   the whole source: a blocker is judged by its shadow, not by its size. */
+static void test_blocker_at_the_point(void)
+{
+    static scene s;
+    float q[4][3] = {{0.1f, -0.5f, 0.0f}, {0.1f, -0.5f, 0.8f}, {0.1f, 0.5f, 0.8f}, {0.1f, 0.5f, 0.0f}};
+    method_pair m;
+    uint32_t black, light;
+    int i;
+    memset(&s, 0, sizeof s);
+    black = add_material(&s, 0.0f, 0.0f);
+    light = add_material(&s, 0.0f, 1.0f);
+    {
+        float f[4][3];
+        set_rect(f, -1.5f, -1.5f, 1.5f, 1.5f, 0.0f, 1);
+        add_quad(&s, (const float (*)[3])f, black);
+        set_rect(f, 0.3f, -0.01f, 0.32f, 0.01f, 1.0f, 0);
+        add_quad(&s, (const float (*)[3])f, light);
+    }
+    add_quad(&s, (const float (*)[3])q, black);  /* faces -x, toward the points */
+    if (!solve_both(scene_desc(&s), &m)) return;
+    for (i = 0; i < 3; i++) {
+        /* 6, 20 and 100 micrometres from the wall (epsilon * diag is 4.4) */
+        static const float gap[3] = {6e-6f, 2e-5f, 1e-4f};
+        float p[3] = {0.1f - gap[i], 0.0f, 0.0f}, hs[3], ht[3];
+        CHECK_EQ_INT(radinterp_irradiance_at_point(m.shadows, 0, p, NULL, hs), RADINTERP_OK);
+        CHECK_EQ_INT(radinterp_irradiance_at_point(m.tri, 0, p, NULL, ht), RADINTERP_OK);
+        CHECK_MSG(hs[0] == 0.0f && ht[0] == 0.0f, "%g from the wall: shadows %g, triangulation %g", gap[i], hs[0], ht[0]);
+    }
+    free_both(&m);
+}
+
+/* ---- convex solids: back faces left out of the union ---------------------- */
+/* The faces of an axis-aligned box [lo, hi], fronts outward: face f has the
+   normal +axis (f even) or -axis (f odd) of axis f / 2; bit f of `faces`
+   keeps it. Returns the number written. */
+static int box_faces(const float *lo, const float *hi, unsigned faces, float (*out)[4][3])
+{
+    /* (u, v) with u x v = the outward normal, so corners run counter-clockwise
+       seen from outside */
+    static const int uv[6][2] = {{1, 2}, {2, 1}, {2, 0}, {0, 2}, {0, 1}, {1, 0}};
+    static const float su[4] = {0, 1, 1, 0}, sv[4] = {0, 0, 1, 1};
+    int f, k, n = 0;
+    for (f = 0; f < 6; f++) {
+        int axis = f / 2;
+        if (!((faces >> f) & 1u)) continue;
+        for (k = 0; k < 4; k++) {
+            float *x = out[n][k];
+            int u = uv[f][0], v = uv[f][1];
+            x[axis] = f % 2 ? lo[axis] : hi[axis];
+            x[u] = su[k] ? hi[u] : lo[u];
+            x[v] = sv[k] ? hi[v] : lo[v];
+        }
+        n++;
+    }
+    return n;
+}
+
+/* The solids found in a scene of one box's faces over the floor and under
+   the source of bp_scene: the faces and holes of the only solid, or -1. */
+static void solid_of_box(const float *lo, const float *hi, unsigned faces, int *nf, int *nh)
+{
+    static scene s;
+    float blk[6][4][3];
+    radinterp_solution *sol = NULL;
+    radinterp_desc d;
+    int n = box_faces(lo, hi, faces, blk);
+    *nf = *nh = -1;
+    bp_scene(&s, (const float (*)[4][3])blk, n);
+    d = scene_desc(&s);
+    if (!CHECK(radinterp_solve(&d, &sol) == RADINTERP_OK)) return;
+    if (sol->solid_count == 1) {
+        uint32_t i, members = 0;
+        *nf = (int)sol->solids[0].faces;
+        *nh = (int)sol->solids[0].holes;
+        for (i = 0; i < sol->patch_count; i++) members += sol->patch_solid[i] == 0;
+        CHECK_EQ_INT(members, n);
+        CHECK(sol->patch_solid[0] == RADINTERP__NONE && sol->patch_solid[1] == RADINTERP__NONE);
+    } else {
+        CHECK_EQ_INT(sol->solid_count, 0);
+    }
+    radinterp_solution_destroy(sol);
+}
+
+/* Closed and open boxes are solids with the right holes; faces turned
+   inward (a room seen from inside) are none. */
+static void test_solids_found(void)
+{
+    float lo[3] = {-0.2f, -0.15f, 0.35f}, hi[3] = {0.2f, 0.25f, 0.6f};
+    float (*blk)[4][3] = (float (*)[4][3])malloc(6 * sizeof *blk);
+    int nf, nh, k;
+    solid_of_box(lo, hi, 63u, &nf, &nh);
+    CHECK(nf == 6 && nh == 0);
+    solid_of_box(lo, hi, 63u & ~32u, &nf, &nh); /* no bottom */
+    CHECK(nf == 5 && nh == 1);
+    solid_of_box(lo, hi, 63u & ~3u, &nf, &nh);  /* a tube along x */
+    CHECK(nf == 4 && nh == 2);
+    {
+        /* the same box turned inside out: every corner lies in front of some
+           face, so it is no convex solid */
+        static scene s;
+        radinterp_solution *sol = NULL;
+        radinterp_desc d;
+        int n = box_faces(lo, hi, 63u, blk);
+        for (k = 0; k < n; k++) {
+            float t[3];
+            memcpy(t, blk[k][1], sizeof t);
+            memcpy(blk[k][1], blk[k][3], sizeof t);
+            memcpy(blk[k][3], t, sizeof t);
+        }
+        bp_scene(&s, (const float (*)[4][3])blk, n);
+        d = scene_desc(&s);
+        if (CHECK(radinterp_solve(&d, &sol) == RADINTERP_OK)) CHECK_EQ_INT(sol->solid_count, 0);
+        radinterp_solution_destroy(sol);
+    }
+    free(blk);
+}
+
+/* Patches covering a facet must tile it: two that overlap leave part of
+   the facet open even when their areas add up to its area. The facet is
+   the unit square (the group's corners include (1, 0) and (1, 1)). */
+static void test_facet_tiles(void)
+{
+    static scene s;
+    float f[4][3];
+    radinterp_solution *sol = NULL;
+    radinterp_desc d;
+    double v[10][3], pl[4] = {0.0, 0.0, 1.0, 0.0};
+    uint32_t members[2] = {0, 1}, light;
+    int k, pair;
+    for (pair = 0; pair < 2; pair++) {
+        memset(&s, 0, sizeof s);
+        light = add_material(&s, 0.0f, 1.0f);
+        set_rect(f, 0.0f, 0.0f, 0.6f, 1.0f, 0.0f, 1);
+        add_quad(&s, (const float (*)[3])f, add_material(&s, 0.5f, 0.0f));
+        /* tiles [0, 0.6] and [0.6, 1], or [0, 0.6] and [0.4, 0.8] (areas adding up to 1, [0.8, 1] open) */
+        set_rect(f, pair ? 0.4f : 0.6f, 0.0f, pair ? 0.8f : 1.0f, 1.0f, 0.0f, 1);
+        add_quad(&s, (const float (*)[3])f, 1);
+        set_rect(f, 0.4f, 0.4f, 0.6f, 0.6f, 1.0f, 0);
+        add_quad(&s, (const float (*)[3])f, light);
+        d = scene_desc(&s);
+        if (!CHECK(radinterp_solve(&d, &sol) == RADINTERP_OK)) return;
+        for (k = 0; k < 8; k++) radinterp__d3_from_f(sol->patches[k / 4].v[k % 4], v[k]);
+        v[8][0] = v[9][0] = 1.0; v[8][1] = 0.0; v[9][1] = 1.0; v[8][2] = v[9][2] = 0.0;
+        if (pair == 0) CHECK(radinterp__facet_covered(sol, members, 2, (const double (*)[3])v, 10, pl, 1e-6));
+        else CHECK(!radinterp__facet_covered(sol, members, 2, (const double (*)[3])v, 10, pl, 1e-6));
+        radinterp_solution_destroy(sol);
+        sol = NULL;
+    }
+}
+
+/* The back-face rule against the triangulation, which does not use it: a
+   closed box, an open box standing on the floor (points under it are
+   inside: every face is turned away, none may be dropped), and a tube
+   lying across the light (points beyond its open ends see into it: a face
+   turned away then hides light that entered through the hole). */
+static void test_solid_back_faces(void)
+{
+    float blk[6][4][3];
+    float lo[3] = {-0.2f, -0.15f, 0.35f}, hi[3] = {0.2f, 0.25f, 0.6f};
+    float olo[3] = {-0.3f, -0.2f, 0.0f}, ohi[3] = {0.1f, 0.2f, 0.5f};
+    float tlo[3] = {-0.3f, -0.1f, 0.4f}, thi[3] = {0.3f, 0.1f, 0.6f};
+    agreement a;
+    a = compare_bp_scene("closed box", (const float (*)[4][3])blk, box_faces(lo, hi, 63u, blk));
+    CHECK(a.partly > 20);
+    a = compare_bp_scene("open box on the floor", (const float (*)[4][3])blk, box_faces(olo, ohi, 63u & ~32u, blk));
+    CHECK(a.partly > 20);
+    a = compare_bp_scene("tube across the light", (const float (*)[4][3])blk, box_faces(tlo, thi, 63u & ~3u, blk));
+    CHECK(a.partly > 20);
+    {
+        /* under the open box the floor receives nothing; at its foot, at
+           corners and edges approached from outside (where mesh vertices
+           lie), the nudged point is outside but closer to two or one of its
+           face planes than epsilon * diag: those faces count as seen
+           edge-on, so the faces turned away must not be dropped */
+        static scene s;
+        method_pair m;
+        float p[3] = {-0.1f, 0.05f, 0.0f}, h[3];
+        static const float at[6][2][2] = {
+            {{0.1f, 0.2f}, {0.2f, 0.3f}},  {{-0.3f, -0.2f}, {-0.4f, -0.25f}}, {{0.1f, 0.0f}, {0.3f, 0.05f}},
+            {{-0.1f, 0.2f}, {-0.05f, 0.4f}},
+            /* a few micrometres beyond a corner, approached along one face */
+            {{0.100003f, 0.2f}, {1.0f, 0.25f}}, {{-0.3f, -0.200003f}, {-0.35f, -1.0f}}};
+        int i;
+        memset(&a, 0, sizeof a);
+        bp_scene(&s, (const float (*)[4][3])blk, box_faces(olo, ohi, 63u & ~32u, blk));
+        if (solve_both(scene_desc(&s), &m)) {
+            CHECK_EQ_INT(radinterp_irradiance_at_point(m.shadows, 0, p, NULL, h), RADINTERP_OK);
+            CHECK_MSG(h[0] == 0.0f, "irradiance %g under the box", h[0]);
+            for (i = 0; i < 6; i++) {
+                float q[3], t[3];
+                q[0] = at[i][0][0]; q[1] = at[i][0][1]; q[2] = 0.0f;
+                t[0] = at[i][1][0]; t[1] = at[i][1][1]; t[2] = 0.0f;
+                compare_point(&m, 0, q, t, 1e-3, 1e-9, &a);
+            }
+            test_note("foot of the open box: %u points, largest relative difference %.2e", a.points, a.worst_rel);
+            free_both(&m);
+        }
+    }
+}
+
 static void test_validation(void)
 {
     static scene s;
@@ -372,6 +575,10 @@ int main(int argc, char **argv)
     RUN(test_backprojection_scenes);
     RUN(test_blocker_through_both_planes);
     RUN(test_many_overlapping_blockers);
+    RUN(test_blocker_at_the_point);
+    RUN(test_solids_found);
+    RUN(test_facet_tiles);
+    RUN(test_solid_back_faces);
     RUN(test_office_random_points);
     RUN(test_cornell_random_points);
     return test_finish();
