@@ -2655,6 +2655,11 @@ RADINTERP_API double radinterp_form_factor_point_polygon(const float p[3], const
      leaf and of every ancestor.
    - blockers: a link's potential occluders (patch indices) from shaft
      culling, blockers[link.first_blocker .. + link.blocker_count).
+   - leaf lists: for each leaf, the links delivering to it (its own and its
+     ancestors', in that order), each with the blockers of the link that may
+     block between the leaf and the source: leaf_links[leaf_link_first[leaf]
+     .. leaf_link_first[leaf + 1]) (empty for other nodes), their blockers in
+     leaf_blockers. A point query reads these shorter lists (section 14).
    - node.b is the radiosity of the node's open part and node.open the
      fraction of the node not enclosed by geometry resting on it.
    Helpers the mesher reuses: radinterp__node_split(s, node) (children with
@@ -2726,6 +2731,11 @@ struct radinterp_solution {
     uint64_t blocker_count;
     uint32_t *leaves;                  /* leaf node indices in patch order */
     uint32_t leaf_count;
+    uint32_t *leaf_link_first;         /* per node (+ 1 at the end): into leaf_links */
+    struct radinterp__leaf_link *leaf_links;
+    uint32_t *leaf_blockers;
+    uint64_t leaf_blocker_count, leaf_link_count;
+    double leaf_margin;                /* the leaf lists hold for points this close to the leaf's box */
     /* convex solids (section 13): their back faces cast no shadow of their own */
     uint32_t *patch_solid;             /* solid of each patch; NONE when it belongs to none */
     struct radinterp__solid *solids;
@@ -3909,6 +3919,8 @@ typedef struct radinterp__query {
     int shadow_count[RADINTERP__BP_MAX_SURVIVORS];
     unsigned char flags[2048];
     radinterp__piece piece[RADINTERP__PIECES];
+    const uint32_t *blk;  /* the blockers of the link being summed (a leaf list or the link's own) */
+    uint32_t nblk;
     uint32_t solid_tag[RADINTERP__SOLID_CACHE];  /* solids whose back faces' verdict at pv is known */
     unsigned char solid_skip[RADINTERP__SOLID_CACHE];
 } radinterp__query;
@@ -4008,6 +4020,8 @@ static double radinterp__area2(const double (*v)[2], int n)
    moved one, through fr_ff. */
 typedef struct radinterp__bp {
     const radinterp__link *lk;
+    const uint32_t *blk;                  /* its blockers */
+    uint32_t nblk;
     const double *pv;                     /* visibility is judged from here */
     const double (*Sc_pushed)[3];         /* the moved, clipped source */
     double Sr[RADINTERP__POLY_MAX][3];    /* the real source */
@@ -4055,6 +4069,8 @@ static void radinterp__bp_setup(const radinterp__query *q, radinterp__bp *bp, co
     double ds = ds_pushed + push;
     int k;
     bp->lk = lk;
+    bp->blk = q->blk;
+    bp->nblk = q->nblk;
     bp->nc = nc;
     bp->pv = q->pv;
     bp->Sc_pushed = Sc;
@@ -4146,12 +4162,11 @@ static int radinterp__bp_shadow(const radinterp_solution *s, const radinterp__bp
 static int radinterp__bp_collect(radinterp__query *q, const radinterp__bp *bp, uint32_t *survivors, int *overflow)
 {
     const radinterp_solution *s = q->s;
-    const radinterp__link *lk = bp->lk;
     uint32_t i;
     int count = 0;
     *overflow = 0;
-    for (i = 0; i < lk->blocker_count; i++) {
-        uint32_t b = s->blockers[lk->first_blocker + i];
+    for (i = 0; i < bp->nblk; i++) {
+        uint32_t b = bp->blk[i];
         const radinterp__patch *pb = &s->patches[b];
         int m;
         if (count == RADINTERP__BP_MAX_SURVIVORS) {
@@ -4789,7 +4804,6 @@ static double radinterp__ff_frame(const radinterp__query *q, const radinterp__fr
 static double radinterp__bp_by_union(radinterp__query *q, const radinterp__bp *bp)
 {
     const radinterp_solution *s = q->s;
-    const radinterp__link *lk = bp->lk;
     double hidden = 0.0, full, f, tiny, tol = bp->tol;
     uint32_t later[RADINTERP__BP_MAX_SURVIVORS], nlater = 0, i;
     int pass, count = 0, k;
@@ -4797,9 +4811,9 @@ static double radinterp__bp_by_union(radinterp__query *q, const radinterp__bp *b
     tiny = 2e-12 * bp->hp * bp->hp;
     /* faces turned away wait in `later`: one pass over the list */
     for (pass = 0; pass < 2; pass++) {
-        uint32_t n = pass ? nlater : lk->blocker_count;
+        uint32_t n = pass ? nlater : bp->nblk;
         for (i = 0; i < n; i++) {
-            uint32_t b = pass ? later[i] : s->blockers[lk->first_blocker + i];
+            uint32_t b = pass ? later[i] : bp->blk[i];
             const radinterp__patch *pb = &s->patches[b];
             radinterp__piece *sh;
             int r;
@@ -4889,8 +4903,8 @@ static int radinterp__bp_region_visible(const radinterp__query *q, const radinte
         if (!(radinterp__orient2d(bp->sc2[k], bp->sc2[(k + 1) % bp->nc], c2) > 0.0)) return 0;
     radinterp__frame_to3d(&bp->fr, c2, c3);
     if (overflow) {
-        for (i = 0; i < bp->lk->blocker_count; i++)
-            if (radinterp__ray_hits_patch(&s->patches[s->blockers[bp->lk->first_blocker + i]], bp->pv, c3)) return 0;
+        for (i = 0; i < bp->nblk; i++)
+            if (radinterp__ray_hits_patch(&s->patches[bp->blk[i]], bp->pv, c3)) return 0;
     } else {
         for (k = 0; k < nsurv; k++)
             if (radinterp__ray_hits_patch(&s->patches[survivors[k]], bp->pv, c3)) return 0;
@@ -5025,13 +5039,15 @@ static double radinterp__node_point_ff(radinterp__query *q, const radinterp__lin
     }
     nc = radinterp__clip_poly((const double (*)[3])S, n, q->n, q->dr, Sc);  /* horizon (6.2.1) */
     if (nc < 3) return 0.0;
-    if (lk->blocker_count == 0) return radinterp__ff_poly(q->p, q->n, (const double (*)[3])Sc, nc);
+    if (q->nblk == 0) return radinterp__ff_poly(q->p, q->n, (const double (*)[3])Sc, nc);
     return radinterp__backproject(q, lk, (const double (*)[3])Sc, nc, ps->n, ds, s->push_off);
 }
 
 /* Point-to-source factor of one link at the query point. */
 RADINTERP__MAYBE_UNUSED static double radinterp__link_point_ff(radinterp__query *q, const radinterp__link *lk)
 {
+    q->blk = q->s->blockers + lk->first_blocker;
+    q->nblk = lk->blocker_count;
     return radinterp__node_point_ff(q, lk, lk->source);
 }
 
@@ -5310,6 +5326,142 @@ static radinterp_result radinterp__collect_leaves(radinterp_solution *s)
     return RADINTERP_OK;
 }
 
+/* ---- per-leaf blocker lists --------------------------------------------
+   A link's blockers were found by the shaft between its receiver and its
+   source, and the receiver is often a large ancestor of the leaf a query
+   point lies in: most of them cannot come between that leaf and the source.
+   For each leaf and link delivering to it, the link's blockers are culled
+   again by the shaft between the leaf and the source, both boxes grown by
+   a margin M. The convex hull of two boxes grown by M contains every point
+   within M of the hull of the boxes, so a patch that meets a segment from
+   a point within M of the leaf to the source reaches at least M (more than
+   the shaft test's epsilon * diag) into that shaft and is kept; the tests
+   against the receiver's and the source's planes are those the link's list
+   passed already. Queries use the lists for points within M / 2 of the
+   leaf's box (the point nudged toward `toward` lies within nudge of it). */
+typedef struct radinterp__leaf_link {
+    uint32_t link;
+    uint32_t count;
+    uint64_t first;   /* into leaf_blockers */
+} radinterp__leaf_link;
+
+typedef struct radinterp__leaf_ctx {
+    radinterp_solution *s;
+    uint32_t *wide;          /* room for every link blocker of each leaf's path */
+    const uint64_t *wide_first;
+    uint32_t per_job;
+} radinterp__leaf_ctx;
+
+/* The box of a node grown by margin. */
+static void radinterp__grown_box(const radinterp__node *nd, double margin, float *lo, float *hi)
+{
+    int k;
+    for (k = 0; k < 3; k++) {
+        lo[k] = (float)((double)nd->lo[k] - margin);
+        hi[k] = (float)((double)nd->hi[k] + margin);
+    }
+}
+
+static void radinterp__leaf_lists_job(void *ctx_, uint32_t index)
+{
+    radinterp__leaf_ctx *ctx = (radinterp__leaf_ctx *)ctx_;
+    radinterp_solution *s = ctx->s;
+    uint32_t i = index * ctx->per_job, end = i + ctx->per_job;
+    if (end > s->leaf_count) end = s->leaf_count;
+    for (; i < end; i++) {
+        uint32_t leaf = s->leaves[i], node, e = s->leaf_link_first[leaf];
+        uint64_t at = ctx->wide_first[i];
+        float llo[3], lhi[3];
+        radinterp__grown_box(&s->nodes[leaf], s->leaf_margin, llo, lhi);
+        for (node = leaf; node != RADINTERP__NONE; node = s->nodes[node].parent) {
+            const radinterp__node *nd = &s->nodes[node];
+            uint32_t l, k;
+            for (l = nd->first_link; l < nd->first_link + nd->link_count; l++, e++) {
+                const radinterp__link *lk = &s->links[l];
+                radinterp__leaf_link *ll = &s->leaf_links[e];
+                radinterp__shaft sh;
+                float slo[3], shi[3];
+                ll->link = l;
+                ll->first = at;
+                ll->count = 0;
+                if (!lk->blocker_count) continue;
+                radinterp__grown_box(&s->nodes[lk->source], s->leaf_margin, slo, shi);
+                radinterp__shaft_build(&sh, llo, lhi, slo, shi);
+                for (k = 0; k < lk->blocker_count; k++) {
+                    uint32_t b = s->blockers[lk->first_blocker + k];
+                    if (radinterp__may_block(s, &sh, b, &s->nodes[leaf], &s->nodes[lk->source])) {
+                        ctx->wide[at++] = b;
+                        ll->count++;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/* Builds the leaf lists (see above): entries and room counted serially,
+   lists filled per leaf in parallel, then packed. */
+static radinterp_result radinterp__build_leaf_lists(radinterp_solution *s, const radinterp__run *run)
+{
+    uint64_t entries = 0, room = 0, *wide_first, kept = 0;
+    uint32_t i, *wide;
+    radinterp__leaf_ctx ctx;
+    s->leaf_margin = 10.0 * (s->nudge + s->epsilon * s->diag);
+    s->leaf_link_first = (uint32_t *)radinterp__alloc_array(&s->allocator, (size_t)s->node_count + 1, sizeof(uint32_t));
+    wide_first = (uint64_t *)radinterp__alloc_array(&s->allocator, (size_t)s->leaf_count + 1, sizeof(uint64_t));
+    if (!s->leaf_link_first || !wide_first) {
+        radinterp__free(&s->allocator, wide_first);
+        return RADINTERP_ERROR_OUT_OF_MEMORY;
+    }
+    memset(s->leaf_link_first, 0, ((size_t)s->node_count + 1) * sizeof(uint32_t));
+    for (i = 0; i < s->leaf_count; i++) { /* entries per leaf, by leaf node index */
+        uint32_t node;
+        wide_first[i] = room;
+        for (node = s->leaves[i]; node != RADINTERP__NONE; node = s->nodes[node].parent) {
+            const radinterp__node *nd = &s->nodes[node];
+            uint32_t l;
+            s->leaf_link_first[s->leaves[i]] += nd->link_count;
+            for (l = nd->first_link; l < nd->first_link + nd->link_count; l++) room += s->links[l].blocker_count;
+        }
+    }
+    wide_first[s->leaf_count] = room;
+    for (i = 0; i <= s->node_count; i++) { /* counts to offsets */
+        uint32_t c = i < s->node_count ? s->leaf_link_first[i] : 0;
+        if (entries + c > 0xFFFFFFFFu) { radinterp__free(&s->allocator, wide_first); return RADINTERP_ERROR_OUT_OF_MEMORY; }
+        s->leaf_link_first[i] = (uint32_t)entries;
+        entries += c;
+    }
+    s->leaf_link_count = entries;
+    s->leaf_links = (radinterp__leaf_link *)radinterp__alloc_array(&s->allocator, (size_t)entries, sizeof *s->leaf_links);
+    wide = (uint32_t *)radinterp__alloc_array(&s->allocator, (size_t)room, sizeof(uint32_t));
+    if (!s->leaf_links || !wide || room > (uint64_t)SIZE_MAX / sizeof(uint32_t)) {
+        radinterp__free(&s->allocator, wide);
+        radinterp__free(&s->allocator, wide_first);
+        return RADINTERP_ERROR_OUT_OF_MEMORY;
+    }
+    ctx.s = s;
+    ctx.wide = wide;
+    ctx.wide_first = wide_first;
+    ctx.per_job = 16;
+    radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__leaf_lists_job, &ctx,
+                        (s->leaf_count + ctx.per_job - 1) / ctx.per_job);
+    for (i = 0; i < entries; i++) kept += s->leaf_links[i].count;
+    s->leaf_blockers = (uint32_t *)radinterp__alloc_array(&s->allocator, (size_t)kept, sizeof(uint32_t));
+    if (s->leaf_blockers) {
+        uint64_t at = 0;
+        for (i = 0; i < entries; i++) { /* pack */
+            radinterp__leaf_link *ll = &s->leaf_links[i];
+            if (ll->count) memcpy(s->leaf_blockers + at, wide + ll->first, (size_t)ll->count * sizeof(uint32_t));
+            ll->first = at;
+            at += ll->count;
+        }
+        s->leaf_blocker_count = kept;
+    }
+    radinterp__free(&s->allocator, wide);
+    radinterp__free(&s->allocator, wide_first);
+    return s->leaf_blockers ? RADINTERP_OK : RADINTERP_ERROR_OUT_OF_MEMORY;
+}
+
 RADINTERP_API void radinterp_solution_destroy(radinterp_solution *s)
 {
     radinterp_allocator a;
@@ -5326,6 +5478,9 @@ RADINTERP_API void radinterp_solution_destroy(radinterp_solution *s)
     radinterp__free(&a, s->solids);
     radinterp__free(&a, s->solid_planes);
     radinterp__free(&a, s->solid_members);
+    radinterp__free(&a, s->leaf_link_first);
+    radinterp__free(&a, s->leaf_links);
+    radinterp__free(&a, s->leaf_blockers);
     radinterp__free(&a, s);
 }
 
@@ -5378,6 +5533,7 @@ RADINTERP_API radinterp_result radinterp_solve(const radinterp_desc *desc, radin
     if (res == RADINTERP_OK) res = radinterp__initial_links(s, &run);
     if (res == RADINTERP_OK) res = radinterp__iterate(s, &run);
     if (res == RADINTERP_OK) res = radinterp__collect_leaves(s);
+    if (res == RADINTERP_OK) res = radinterp__build_leaf_lists(s, &run);
     if (res != RADINTERP_OK) {
         if (res == RADINTERP_ERROR_OUT_OF_MEMORY) radinterp__log(desc, "radinterp_solve: out of memory");
         radinterp_solution_destroy(s);
@@ -5408,6 +5564,8 @@ RADINTERP_API void radinterp_solution_info(const radinterp_solution *s, radinter
                   (size_t)s->patch_count * sizeof(uint32_t) + (size_t)s->solid_count * sizeof(radinterp__solid) +
                   (size_t)s->solid_plane_count * sizeof s->solid_planes[0] +
                   (size_t)s->solid_member_count * sizeof(uint32_t) +
+                  ((size_t)s->node_count + 1) * sizeof(uint32_t) + (size_t)s->leaf_link_count * sizeof(radinterp__leaf_link) +
+                  (size_t)s->leaf_blocker_count * sizeof(uint32_t) +
                   (size_t)s->bvh.node_count * sizeof(radinterp__bvh_node) +
                   (size_t)s->bvh.tri_count * (sizeof(radinterp__bvh_tri) + sizeof(uint32_t));
 }
@@ -5463,13 +5621,22 @@ RADINTERP_API radinterp_result radinterp_get_leaf(const radinterp_solution *s, u
     return RADINTERP_OK;
 }
 
+/* Is x within margin of the node's box? */
+static int radinterp__near_box(const radinterp__node *nd, const double *x, double margin)
+{
+    int k;
+    for (k = 0; k < 3; k++)
+        if (!(x[k] >= (double)nd->lo[k] - margin && x[k] <= (double)nd->hi[k] + margin)) return 0;
+    return 1;
+}
+
 /* Irradiance at p on a patch, summed over the links of its leaf and of the
-   leaf's ancestors (6.2). */
+   leaf's ancestors (6.2), past the blockers of the leaf lists. */
 static radinterp_result radinterp__irradiance(const radinterp_solution *s, uint32_t patch, const float p[3],
                                               const float toward[3], double *h, uint32_t *triangulated)
 {
     radinterp__query query, *q = &query;  /* about 40 KB of stack: no allocation in the common case */
-    uint32_t node;
+    uint32_t node, leaf;
     int k;
     h[0] = h[1] = h[2] = 0.0;
     if (!p || !radinterp__patch_ok(s, patch) || !radinterp__finite3(p) || (toward && !radinterp__finite3(toward)))
@@ -5496,11 +5663,26 @@ static radinterp_result radinterp__irradiance(const radinterp_solution *s, uint3
             for (k = 0; k < 3; k++) q->pv[k] += d[k] * (step / len);
         }
     }
-    for (node = radinterp__locate_leaf(s, patch, q->pv); node != RADINTERP__NONE; node = s->nodes[node].parent) {
-        const radinterp__node *nd = &s->nodes[node];
-        uint32_t l;
-        for (l = nd->first_link; l < nd->first_link + nd->link_count; l++)
-            radinterp__link_point_add(q, &s->links[l], s->links[l].source, h);
+    leaf = radinterp__locate_leaf(s, patch, q->pv);
+    if (s->leaf_link_first && radinterp__near_box(&s->nodes[leaf], q->pv, 0.5 * s->leaf_margin) &&
+        radinterp__near_box(&s->nodes[leaf], q->p, 0.5 * s->leaf_margin)) {
+        uint32_t e;
+        for (e = s->leaf_link_first[leaf]; e < s->leaf_link_first[leaf + 1]; e++) { /* leaf lists (section 14) */
+            const radinterp__leaf_link *ll = &s->leaf_links[e];
+            q->blk = s->leaf_blockers + ll->first;
+            q->nblk = ll->count;
+            radinterp__link_point_add(q, &s->links[ll->link], s->links[ll->link].source, h);
+        }
+    } else {
+        for (node = leaf; node != RADINTERP__NONE; node = s->nodes[node].parent) {
+            const radinterp__node *nd = &s->nodes[node];
+            uint32_t l;
+            for (l = nd->first_link; l < nd->first_link + nd->link_count; l++) {
+                q->blk = s->blockers + s->links[l].first_blocker;
+                q->nblk = s->links[l].blocker_count;
+                radinterp__link_point_add(q, &s->links[l], s->links[l].source, h);
+            }
+        }
     }
     if (q->cdt_ready) radinterp__cdt_free(&q->cdt);
     if (triangulated) *triangulated = q->triangulated;
