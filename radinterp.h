@@ -4057,6 +4057,7 @@ typedef struct radinterp__bp {
     uint32_t nblk;
     const double *pv;                     /* visibility is judged from here */
     const double (*Sc_pushed)[3];         /* the moved, clipped source */
+    double full;                          /* its unoccluded factor */
     double Sr[RADINTERP__POLY_MAX][3];    /* the real source */
     double sc2[RADINTERP__POLY_MAX][2];   /* its corners in the frame */
     int nc;
@@ -4837,7 +4838,7 @@ static double radinterp__ff_frame(const radinterp__query *q, const radinterp__fr
 static double radinterp__bp_by_union(radinterp__query *q, const radinterp__bp *bp)
 {
     const radinterp_solution *s = q->s;
-    double hidden = 0.0, full, f, tiny, tol = bp->tol;
+    double hidden = 0.0, full = bp->full, f, tiny, tol = bp->tol;
     uint32_t later[RADINTERP__BP_MAX_SURVIVORS], nlater = 0, i;
     int pass, count = 0, k;
     /* a piece of area below tiny / 2 subtends less than 1e-12 / pi: dropped */
@@ -4866,11 +4867,10 @@ static double radinterp__bp_by_union(radinterp__query *q, const radinterp__bp *b
             if (radinterp__union_add(q, &count, tol, tiny) != 0) return -1;
         }
     }
-    if (count == 0) return radinterp__ff_poly(q->p, q->n, bp->Sc_pushed, bp->nc);
+    if (count == 0) return full;
     q->triangulated++;
     for (k = 0; k < count; k++)
         hidden += radinterp__ff_frame(q, &bp->fr_ff, (const double (*)[2])q->piece[k].v, q->piece[k].count);
-    full = radinterp__ff_poly(q->p, q->n, bp->Sc_pushed, bp->nc);
     f = full - hidden;
     /* the difference carries the rounding of both sums: a source hidden
        by several shadows together comes out at about 1e-16 of F, not 0 */
@@ -5023,7 +5023,7 @@ static double radinterp__bp_by_triangulation(radinterp__query *q, const radinter
     radinterp__bp_triangulate(q, bp, nsurv);
     for (i = 0; i < nsurv; i++)
         if (q->shadow_count[i]) survivors[kept++] = survivors[i];
-    if (kept == 0 && !overflow) return radinterp__ff_poly(q->p, q->n, bp->Sc_pushed, bp->nc);
+    if (kept == 0 && !overflow) return bp->full;
     if (q->cdt.tri_count > sizeof q->flags) {
         flags = (unsigned char *)radinterp__alloc(&q->s->allocator, q->cdt.tri_count);
         if (!flags) { q->failed = 1; return 0.0; }
@@ -5035,84 +5035,100 @@ static double radinterp__bp_by_triangulation(radinterp__query *q, const radinter
 }
 
 /* Visible factor of the source polygon Sc (front normal ns, plane
-   ns . x = ds_pushed, already moved push behind the real source) from the
-   query point, by backprojection of the link's blockers. */
+   ns . x = ds_pushed, already moved push behind the real source; full is
+   its unoccluded factor) from the query point, by backprojection of the
+   link's blockers. */
 static double radinterp__backproject(radinterp__query *q, const radinterp__link *lk, const double (*Sc)[3], int nc,
-                                     const double *ns, double ds_pushed, double push)
+                                     const double *ns, double ds_pushed, double push, double full)
 {
     radinterp__bp bp;
     uint32_t survivors[RADINTERP__BP_MAX_SURVIVORS];
     int overflow, nsurv;
     radinterp__bp_setup(q, &bp, lk, Sc, nc, ns, ds_pushed, push);
+    bp.full = full;
     if (q->s->visibility == RADINTERP_VISIBILITY_SHADOWS) {
         double f = radinterp__bp_by_union(q, &bp);
         if (f >= 0.0) return f;
     }
     nsurv = radinterp__bp_collect(q, &bp, survivors, &overflow);
     if (nsurv < 0) return 0.0;
-    if (nsurv == 0 && !overflow) return radinterp__ff_poly(q->p, q->n, Sc, nc);
+    if (nsurv == 0 && !overflow) return full;
     q->triangulated++;
     return radinterp__bp_by_triangulation(q, &bp, survivors, nsurv, overflow);
 }
 
-/* Point-to-polygon factor from the query point to one node of a link's
-   source, seen past the link's blockers. */
-static double radinterp__node_point_ff(radinterp__query *q, const radinterp__link *lk, uint32_t node)
+/* A source node as the query point sees it: moved push_off behind its
+   plane (6.4) and clipped by the receiver's horizon (6.2.1), into Sc, and
+   its unoccluded factor (eq. 6.1) into *full. Returns the corner count; 0
+   when no part of it lies in front of p. */
+static int radinterp__query_source(const radinterp__query *q, uint32_t node, double (*Sc)[3], double *full)
 {
     const radinterp_solution *s = q->s;
     const radinterp__node *src = &s->nodes[node];
     const radinterp__patch *ps = &s->patches[src->patch];
-    double S[RADINTERP__POLY_MAX][3], Sc[RADINTERP__POLY_MAX][3], ds = ps->d - s->push_off;
-    int n = radinterp__node_poly(src, S), nc, i;
-    if (radinterp__d3_dot(ps->n, q->p) - ds <= 0.0) return 0.0;  /* p behind the source */
+    double S[RADINTERP__POLY_MAX][3];
+    int n, nc, i;
+    *full = 0.0;
+    if (radinterp__d3_dot(ps->n, q->p) - (ps->d - s->push_off) <= 0.0) return 0;  /* p behind the source */
+    n = radinterp__node_poly(src, S);
     for (i = 0; i < n; i++) {  /* push-off (6.4) */
         S[i][0] -= s->push_off * ps->n[0];
         S[i][1] -= s->push_off * ps->n[1];
         S[i][2] -= s->push_off * ps->n[2];
     }
     nc = radinterp__clip_poly((const double (*)[3])S, n, q->n, q->dr, Sc);  /* horizon (6.2.1) */
+    if (nc < 3) return 0;
+    *full = radinterp__ff_poly(q->p, q->n, (const double (*)[3])Sc, nc);
+    return nc;
+}
+
+/* Point-to-polygon factor from the query point to one node of a link's
+   source (Sc, nc and full from radinterp__query_source), seen past the
+   blockers q->blk. */
+static double radinterp__node_point_ff(radinterp__query *q, const radinterp__link *lk, uint32_t node,
+                                       const double (*Sc)[3], int nc, double full)
+{
+    const radinterp_solution *s = q->s;
+    const radinterp__patch *ps = &s->patches[s->nodes[node].patch];
     if (nc < 3) return 0.0;
-    if (q->nblk == 0) return radinterp__ff_poly(q->p, q->n, (const double (*)[3])Sc, nc);
-    return radinterp__backproject(q, lk, (const double (*)[3])Sc, nc, ps->n, ds, s->push_off);
+    if (q->nblk == 0) return full;
+    return radinterp__backproject(q, lk, Sc, nc, ps->n, ps->d - s->push_off, s->push_off, full);
 }
 
 /* Point-to-source factor of one link at the query point. */
 RADINTERP__MAYBE_UNUSED static double radinterp__link_point_ff(radinterp__query *q, const radinterp__link *lk)
 {
+    double Sc[RADINTERP__POLY_MAX][3], full;
+    int nc = radinterp__query_source(q, lk->source, Sc, &full);
     q->blk = q->s->blockers + lk->first_blocker;
     q->nblk = lk->blocker_count;
-    return radinterp__node_point_ff(q, lk, lk->source);
-}
-
-/* Unoccluded factor from the query point to a node (no backprojection): an
-   upper bound of its share, to decide whether its children matter. */
-static double radinterp__node_point_ff_bound(const radinterp__query *q, uint32_t node)
-{
-    const radinterp__node *nd = &q->s->nodes[node];
-    double S[RADINTERP__POLY_MAX][3], Sc[RADINTERP__POLY_MAX][3];
-    int n = radinterp__node_poly(nd, S), nc = radinterp__clip_poly((const double (*)[3])S, n, q->n, q->dr, Sc);
-    return nc < 3 ? 0.0 : radinterp__ff_poly(q->p, q->n, (const double (*)[3])Sc, nc);
+    return radinterp__node_point_ff(q, lk, lk->source, (const double (*)[3])Sc, nc, full);
 }
 
 /* B_src * F for one link. The source node's radiosity is a mean; where its
    children differ enough that the mean would misjudge the part seen from p
-   (their spread times the node's factor above a tenth of eps), the children
-   are taken instead, each with its own factor past the same blockers. */
+   (their spread times the node's unoccluded factor above a tenth of eps),
+   the children are taken instead, each with its own factor past the same
+   blockers. */
 static void radinterp__link_point_add(radinterp__query *q, const radinterp__link *lk, uint32_t node, double *h)
 {
     const radinterp_solution *s = q->s;
     const radinterp__node *nd = &s->nodes[node];
-    double f;
-    if (nd->child != RADINTERP__NONE && q->depth_left > 0 &&
-        radinterp__source_spread(s, node) * radinterp__node_point_ff_bound(q, node) > 0.1 * s->eps) {
-        uint32_t c;
-        q->depth_left--;
-        for (c = 0; c < 4; c++) radinterp__link_point_add(q, lk, nd->child + c, h);
-        q->depth_left++;
-        return;
+    double f, full, Sc[RADINTERP__POLY_MAX][3], spread;
+    int nc = -1;
+    if (nd->child != RADINTERP__NONE && q->depth_left > 0 && (spread = radinterp__source_spread(s, node)) > 0.0) {
+        nc = radinterp__query_source(q, node, Sc, &full);
+        if (spread * full > 0.1 * s->eps) {
+            uint32_t c;
+            q->depth_left--;
+            for (c = 0; c < 4; c++) radinterp__link_point_add(q, lk, nd->child + c, h);
+            q->depth_left++;
+            return;
+        }
     }
     if (nd->b[0] == 0.0f && nd->b[1] == 0.0f && nd->b[2] == 0.0f) return;
-    f = radinterp__node_point_ff(q, lk, node);
+    if (nc < 0) nc = radinterp__query_source(q, node, Sc, &full);
+    f = radinterp__node_point_ff(q, lk, node, (const double (*)[3])Sc, nc, full);
     h[0] += f * nd->b[0];
     h[1] += f * nd->b[1];
     h[2] += f * nd->b[2];
