@@ -4572,10 +4572,12 @@ static int radinterp__back_face_covered(radinterp__query *q, const radinterp__bp
 static int radinterp__clip_tagged(const double (*in)[3], const int *tin, int count, const double *n, double d,
                                   int tag, double (*out)[3], int *tout)
 {
+    double dist[RADINTERP__POLY_MAX];
     int i, m = 0, k;
+    for (i = 0; i < count; i++) dist[i] = radinterp__d3_dot(n, in[i]) - d;
     for (i = 0; i < count; i++) {
         const double *a = in[i], *b = in[(i + 1) % count];
-        double da = radinterp__d3_dot(n, a) - d, db = radinterp__d3_dot(n, b) - d;
+        double da = dist[i], db = dist[(i + 1) % count];
         if (m + 2 > RADINTERP__POLY_MAX) return -1;
         if (da >= 0.0) {
             memcpy(out[m], a, sizeof(double[3]));
@@ -4596,9 +4598,9 @@ static int radinterp__clip_tagged(const double (*in)[3], const int *tin, int cou
    the source plane. */
 static int radinterp__trace_line(const radinterp__bp *bp, const double *m, double k, const double *inside, double *ln)
 {
-    double a = radinterp__d3_dot(m, bp->fr.e1), b = radinterp__d3_dot(m, bp->fr.e2);
-    double len = sqrt(a * a + b * b);
-    if (!(len > 1e-9 * radinterp__d3_len(m))) return 0;
+    double a = radinterp__d3_dot(m, bp->fr.e1), b = radinterp__d3_dot(m, bp->fr.e2), len2 = a * a + b * b, len;
+    if (!(len2 > 1e-18 * radinterp__d3_dot(m, m))) return 0;
+    len = sqrt(len2);
     ln[0] = a / len;
     ln[1] = b / len;
     ln[2] = (radinterp__d3_dot(m, bp->fr.o) - k) / len;
@@ -4623,7 +4625,7 @@ static int radinterp__shadow_line(const radinterp__bp *bp, const radinterp__patc
         radinterp__d3_sub(a, bp->pv, ra);
         radinterp__d3_sub(b, bp->pv, rb);
         radinterp__d3_cross(ra, rb, m);
-        if (!(radinterp__d3_len(m) > 1e-9 * radinterp__d3_len(ra) * radinterp__d3_len(rb))) return 0;
+        if (!(radinterp__d3_dot(m, m) > 1e-18 * radinterp__d3_dot(ra, ra) * radinterp__d3_dot(rb, rb))) return 0;
         return radinterp__trace_line(bp, m, radinterp__d3_dot(m, bp->pv), inside, ln);
     }
     if (tag == bp->np - 1) return radinterp__trace_line(bp, pb->n, pb->d, inside, ln);
