@@ -2774,6 +2774,7 @@ struct radinterp_solution {
     struct radinterp__solid *solids;
     uint32_t solid_count;
     double (*solid_planes)[4];         /* n, d of each solid's hull planes not covered by patches (holes) */
+    uint32_t *solid_plugs;             /* per hole: a patch of another object covering it, or NONE */
     uint32_t solid_plane_count;
     uint32_t *solid_members;           /* patches of each solid, solid after solid */
     uint32_t solid_member_count;
@@ -4242,7 +4243,16 @@ static int radinterp__bp_collect(radinterp__query *q, const radinterp__bp *bp, u
    the corner of a box standing on the floor, where a mesh vertex lies,
    would otherwise see through the box). Solids are found once, at solve
    time. The triangulation method does not use them, so the test comparing
-   the two methods checks this rule as well. */
+   the two methods checks this rule as well.
+   A hole may be plugged: wholly covered by one patch of another object in
+   its plane (a leg's open top under the table top, a shelf board's open
+   back against the wall). A segment entering through it crosses the plug,
+   whose shadow is in the union whichever way it faces: taken as a face
+   turned toward the point, or in the second pass, or left out as a back
+   face of a solid of its own, whose front faces then cover it (each step
+   of that argument moves along the segment toward the point, so it ends).
+   So a point outside a plugged hole's plane is fine, unless the plug is
+   seen edge-on (it would then be left out). */
 #define RADINTERP__SOLID_VERTS 32    /* larger groups of patches are not examined */
 #define RADINTERP__SOLID_PLANES 32   /* hull facets of a solid at most */
 
@@ -4436,8 +4446,41 @@ static int radinterp__facet_covered(const radinterp_solution *s, const uint32_t 
    solid into planes, and the counts of its covered facets (faces) and
    holes; returns 0 when the group is not one (too many corners or facets,
    a corner in front of a patch's plane, no facet covered). */
+/* A patch outside the group that lies in the plane pl and contains every
+   corner of v in that plane (the hole's facet), or NONE. */
+static uint32_t radinterp__find_plug(const radinterp_solution *s, const uint32_t *members, uint32_t count,
+                                     const double (*v)[3], int nv, const double *pl, double tol)
+{
+    uint32_t i, j, k;
+    for (i = 0; i < s->patch_count; i++) {
+        const radinterp__patch *pt = &s->patches[i];
+        int l, inside = 1;
+        if (pt->count == 0 || fabs(fabs(radinterp__d3_dot(pt->n, pl)) - 1.0) > 1e-9) continue;
+        for (k = 0; k < pt->count && inside; k++) {
+            double x[3];
+            radinterp__d3_from_f(pt->v[k], x);
+            inside = fabs(radinterp__plane_dist(pl, x)) <= tol;
+        }
+        for (j = 0; j < count && inside; j++) inside = members[j] != i;
+        for (l = 0; l < nv && inside; l++) {
+            if (fabs(radinterp__plane_dist(pl, v[l])) > tol) continue; /* not a corner of the hole */
+            for (k = 0; k < pt->count && inside; k++) { /* within tol inside every edge of the patch */
+                double a[3], b[3], e[3], r[3], c[3];
+                radinterp__d3_from_f(pt->v[k], a);
+                radinterp__d3_from_f(pt->v[(k + 1) % pt->count], b);
+                radinterp__d3_sub(b, a, e);
+                radinterp__d3_sub(v[l], a, r);
+                radinterp__d3_cross(e, r, c);
+                inside = radinterp__d3_dot(c, pt->n) >= -tol * radinterp__d3_len(e);
+            }
+        }
+        if (inside) return i;
+    }
+    return RADINTERP__NONE;
+}
+
 static int radinterp__solid_examine(const radinterp_solution *s, const uint32_t *members, uint32_t count,
-                                    double (*planes)[4], uint32_t *faces, uint32_t *holes)
+                                    double (*planes)[4], uint32_t *plugs, uint32_t *faces, uint32_t *holes)
 {
     double v[RADINTERP__SOLID_VERTS][3], hull[RADINTERP__SOLID_PLANES][4], tol = s->epsilon * s->diag;
     int nv = 0, nh, i, l;
@@ -4461,8 +4504,12 @@ static int radinterp__solid_examine(const radinterp_solution *s, const uint32_t 
     nh = radinterp__hull_planes((const double (*)[3])v, nv, tol, hull);
     if (nh <= 0) return 0;
     for (i = 0; i < nh; i++) {
-        if (radinterp__facet_covered(s, members, count, (const double (*)[3])v, nv, hull[i], tol)) nf++;
-        else memcpy(planes[no++], hull[i], sizeof hull[i]);
+        if (radinterp__facet_covered(s, members, count, (const double (*)[3])v, nv, hull[i], tol)) {
+            nf++;
+        } else {
+            plugs[no] = radinterp__find_plug(s, members, count, (const double (*)[3])v, nv, hull[i], tol);
+            memcpy(planes[no++], hull[i], sizeof hull[i]);
+        }
     }
     *faces = nf;
     *holes = no;
@@ -4491,11 +4538,11 @@ static int radinterp__find_solids(radinterp_solution *s)
     for (pass = 0; pass < 2 && res == 0; pass++) {
         uint32_t solids = 0, planes = 0, members_total = 0;
         for (i = 0; i < n; i++) {
-            uint32_t members[RADINTERP__SOLID_PATCHES], count = 0, m, faces, holes;
+            uint32_t members[RADINTERP__SOLID_PATCHES], count = 0, m, faces, holes, plugs[RADINTERP__SOLID_PLANES];
             double pl[RADINTERP__SOLID_PLANES][4];
             if (head[i] == RADINTERP__NONE || next[head[i]] == RADINTERP__NONE) continue; /* not a root, or alone */
             for (m = head[i]; m != RADINTERP__NONE && count < RADINTERP__SOLID_PATCHES; m = next[m]) members[count++] = m;
-            if (m != RADINTERP__NONE || !radinterp__solid_examine(s, members, count, pl, &faces, &holes)) continue;
+            if (m != RADINTERP__NONE || !radinterp__solid_examine(s, members, count, pl, plugs, &faces, &holes)) continue;
             if (pass == 1) {
                 radinterp__solid *so = &s->solids[solids];
                 so->first_plane = planes;
@@ -4504,6 +4551,7 @@ static int radinterp__find_solids(radinterp_solution *s)
                 so->first_member = members_total;
                 so->members = count;
                 memcpy(s->solid_planes[planes], pl, (size_t)holes * sizeof pl[0]);
+                memcpy(s->solid_plugs + planes, plugs, (size_t)holes * sizeof plugs[0]);
                 memcpy(s->solid_members + members_total, members, (size_t)count * sizeof members[0]);
                 for (m = 0; m < count; m++) s->patch_solid[members[m]] = solids;
             }
@@ -4515,7 +4563,8 @@ static int radinterp__find_solids(radinterp_solution *s)
             s->solids = (radinterp__solid *)radinterp__alloc_array(&s->allocator, solids, sizeof *s->solids);
             s->solid_planes = (double (*)[4])radinterp__alloc_array(&s->allocator, planes, sizeof s->solid_planes[0]);
             s->solid_members = (uint32_t *)radinterp__alloc_array(&s->allocator, members_total, sizeof(uint32_t));
-            if (!s->solids || !s->solid_planes || !s->solid_members) res = -1;
+            s->solid_plugs = (uint32_t *)radinterp__alloc_array(&s->allocator, planes, sizeof(uint32_t));
+            if (!s->solids || !s->solid_planes || !s->solid_members || !s->solid_plugs) res = -1;
             s->solid_count = solids;
             s->solid_plane_count = planes;
             s->solid_member_count = members_total;
@@ -4555,7 +4604,12 @@ static int radinterp__back_face_covered(radinterp__query *q, const radinterp__bp
         }
     }
     pl = (const double (*)[4])s->solid_planes + so->first_plane;
-    for (i = 0; i < so->holes && sealed; i++) sealed = radinterp__plane_dist(pl[i], bp->pv) <= 0.0;
+    for (i = 0; i < so->holes && sealed; i++) {
+        uint32_t plug = s->solid_plugs[so->first_plane + i];
+        const radinterp__patch *pp = plug != RADINTERP__NONE ? &s->patches[plug] : NULL;
+        sealed = radinterp__plane_dist(pl[i], bp->pv) <= 0.0 ||
+                 (pp && fabs(radinterp__d3_dot(pp->n, bp->pv) - pp->d) > tol); /* plugged, the plug not edge-on */
+    }
     if (bp->pv == q->pv) {
         q->solid_tag[slot] = g;
         q->solid_skip[slot] = (unsigned char)(outside && sealed);
@@ -5529,6 +5583,7 @@ RADINTERP_API void radinterp_solution_destroy(radinterp_solution *s)
     radinterp__free(&a, s->solids);
     radinterp__free(&a, s->solid_planes);
     radinterp__free(&a, s->solid_members);
+    radinterp__free(&a, s->solid_plugs);
     radinterp__free(&a, s->leaf_link_first);
     radinterp__free(&a, s->leaf_links);
     radinterp__free(&a, s->leaf_blockers);
@@ -5613,7 +5668,7 @@ RADINTERP_API void radinterp_solution_info(const radinterp_solution *s, radinter
                   (size_t)s->node_cap * sizeof(radinterp__node) + (size_t)s->link_count * sizeof(radinterp__link) +
                   (size_t)s->blocker_count * sizeof(uint32_t) + (size_t)s->leaf_count * sizeof(uint32_t) +
                   (size_t)s->patch_count * sizeof(uint32_t) + (size_t)s->solid_count * sizeof(radinterp__solid) +
-                  (size_t)s->solid_plane_count * sizeof s->solid_planes[0] +
+                  (size_t)s->solid_plane_count * (sizeof s->solid_planes[0] + sizeof(uint32_t)) +
                   (size_t)s->solid_member_count * sizeof(uint32_t) +
                   ((size_t)s->node_count + 1) * sizeof(uint32_t) + (size_t)s->leaf_link_count * sizeof(radinterp__leaf_link) +
                   (size_t)s->leaf_blocker_count * sizeof(uint32_t) +

@@ -626,6 +626,53 @@ static void test_solid_back_faces(void)
     }
 }
 
+/* Plugged holes: a tube standing over the floor (its side faces only),
+   under the source, with a quad just under its open bottom. Floor points
+   lie outside the bottom hole's plane; when the quad covers the hole, rays
+   entering through it cross the quad, and the tube's faces turned away
+   may be left out; when it covers half the hole, rays enter through the
+   other half and they may not. Both against the triangulation. */
+static void test_plugged_holes(void)
+{
+    float blk[5][4][3];
+    float lo[3] = {-0.2f, -0.15f, 0.2f}, hi[3] = {0.2f, 0.25f, 0.5f};
+    int full;
+    for (full = 1; full >= 0; full--) {
+        static scene s;
+        method_pair m;
+        agreement a;
+        int n = box_faces(lo, hi, 15u, blk), i, j; /* the four sides along z */
+        uint32_t plug = RADINTERP__NONE;
+        memset(&a, 0, sizeof a);
+        /* the plug, facing down (toward the floor points) */
+        set_rect(blk[n], -0.3f, -0.3f, full ? 0.3f : 0.0f, 0.3f, 0.2f, 0);
+        n++;
+        bp_scene(&s, (const float (*)[4][3])blk, n);
+        if (!solve_both(scene_desc(&s), &m)) return;
+        if (CHECK_EQ_INT(m.shadows->solid_count, 1)) {
+            const radinterp__solid *so = &m.shadows->solids[0];
+            uint32_t h;
+            CHECK(so->faces == 4 && so->holes == 2);
+            for (h = 0; h < so->holes; h++)
+                if (m.shadows->solid_plugs[so->first_plane + h] != RADINTERP__NONE) plug = m.shadows->solid_plugs[so->first_plane + h];
+            /* the plug is patch 2 + 4 (after the floor, the source and the sides) when it covers the hole */
+            CHECK_EQ_INT(plug, full ? 6u : RADINTERP__NONE);
+        }
+        for (i = 0; i < 9; i++)
+            for (j = 0; j < 9; j++) {
+                float p[3];
+                p[0] = (float)(-0.9 + 1.8 * (i + 0.37) / 9);
+                p[1] = (float)(-0.9 + 1.8 * (j + 0.61) / 9);
+                p[2] = 0.0f;
+                compare_point(&m, 0, p, NULL, 1e-3, 1e-9, &a);
+            }
+        test_note("tube over the floor, %s plug: %u points (%u partly hidden), largest relative difference %.2e",
+                  full ? "covering" : "half", a.points, a.partly, a.worst_rel);
+        CHECK(a.partly > 20);
+        free_both(&m);
+    }
+}
+
 static void test_validation(void)
 {
     static scene s;
@@ -655,6 +702,7 @@ int main(int argc, char **argv)
     RUN(test_solids_found);
     RUN(test_facet_tiles);
     RUN(test_solid_back_faces);
+    RUN(test_plugged_holes);
     RUN(test_office_random_points);
     RUN(test_leaf_lists);
     RUN(test_cornell_random_points);
