@@ -352,10 +352,11 @@
    their nearest sources at the elements' mean: expect errors of several
    percent there (about 2% on average elsewhere in the Cornell box with
    eps = 5 mW/m^2). A point query costs a shadow union per partly visible
-   source: about 6,700 per second on one core on the office scene, where
-   nearly every point has one (about 28 such sources of 52, 5.6 shadows
-   each), and over 300,000 per second where none is; with the triangulation
-   method about 2,200.
+   source: about 15,000 per second on one core on the office scene, where
+   nearly every point has one (about 28 such sources of 52, 3 shadows each
+   once the faces of convex solids turned away from the point are left
+   out), and about 500,000 per second where none is; with the triangulation
+   method about 2,300.
 
    The mesh build costs six point queries per triangle (more with refine):
    the office's 12,000 triangles take 72,000 queries, nearly all of the
