@@ -91,12 +91,18 @@
    radinterp_irradiance_at_point (chapter 6): the sum of B_src * F over the
    links of the leaf containing p and of its ancestors. F is eq. 6.1 for the
    source clipped to p's tangent plane and moved push_off behind its plane;
-   with blockers, every blocker's part inside the pyramid from p to the
+   the links' blockers are culled once more per leaf at solve time (the
+   shaft between the leaf and the source); with blockers, every blocker's
+   part inside the pyramid from p to the
    source (cut in 3D) is projected onto the source plane: its shadow. A
    source point is hidden exactly when it lies in a shadow, so F is eq. 6.1
    of the source minus eq. 6.1 of the union of the shadows, which is built
    as disjoint convex pieces (each shadow minus the pieces so far; faces
-   turned toward p first), eq. 6.1 being additive over a partition. Every
+   turned toward p first), eq. 6.1 being additive over a partition. Faces
+   of a convex solid (patches joined edge to edge on the hull of their
+   corners, found at solve time) turned away from a point outside it add
+   nothing to the union and are left out, unless light could enter the
+   solid unseen through an open side. Every
    piece edge keeps the line of the plane that made it, never a line
    through two computed corners, so no decision rests on rounding noise; a
    shadow that cannot be represented so (a sliver between nearly equal
