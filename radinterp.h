@@ -4066,6 +4066,7 @@ typedef struct radinterp__bp {
     const double *pv;                     /* visibility is judged from here */
     const double (*Sc_pushed)[3];         /* the moved, clipped source */
     double full;                          /* its unoccluded factor */
+    double push;                          /* Sr = Sc + push * ns */
     double Sr[RADINTERP__POLY_MAX][3];    /* the real source */
     double sc2[RADINTERP__POLY_MAX][2];   /* its corners in the frame */
     int nc;
@@ -4118,6 +4119,7 @@ static void radinterp__bp_setup(const radinterp__query *q, radinterp__bp *bp, co
     bp->Sc_pushed = Sc;
     if (radinterp__d3_dot(ns, q->p) - ds <= 0.0) { push = 0.0; ds = ds_pushed; } /* p within push of the plane */
     if (radinterp__d3_dot(ns, bp->pv) - ds <= 0.0) bp->pv = q->p; /* nudged behind the source: judge from p */
+    bp->push = push;
     for (k = 0; k < nc; k++) {
         bp->Sr[k][0] = Sc[k][0] + push * ns[0];
         bp->Sr[k][1] = Sc[k][1] + push * ns[1];
@@ -4892,20 +4894,21 @@ static double radinterp__ff_frame(const radinterp__query *q, const radinterp__fr
     return fabs(sum) / (2.0 * RADINTERP__PI);
 }
 
-/* Visible factor = F(source) - sum of F over the disjoint pieces of the
-   shadows' union (eq. 6.1 is additive over a partition). Shadows of faces
-   turned toward the point go in first: those of one convex object do not
-   overlap, and its faces turned away then fall inside them. Returns -1
-   when a shadow cannot be represented or the pieces outgrow their arrays
-   (the caller triangulates). */
-static double radinterp__bp_by_union(radinterp__query *q, const radinterp__bp *bp)
+/* The union of the shadows on the source of bp as disjoint convex pieces
+   q->piece[0 .. *count). Shadows of faces turned toward the point go in
+   first: those of one convex object do not overlap, and its faces turned
+   away then fall inside them. Returns 1; 0 when one shadow alone hides the
+   whole source; -1 when a shadow cannot be represented or the pieces
+   outgrow their arrays (the caller triangulates). */
+static int radinterp__bp_union(radinterp__query *q, const radinterp__bp *bp, int *count_out)
 {
     const radinterp_solution *s = q->s;
-    double hidden = 0.0, full = bp->full, f, tiny, tol = bp->tol;
+    double tiny, tol = bp->tol;
     uint32_t later[RADINTERP__BP_MAX_SURVIVORS], nlater = 0, i;
-    int pass, count = 0, k;
+    int pass, count = 0;
     /* a piece of area below tiny / 2 subtends less than 1e-12 / pi: dropped */
     tiny = 2e-12 * bp->hp * bp->hp;
+    *count_out = 0;
     /* faces turned away wait in `later`: one pass over the list */
     for (pass = 0; pass < 2; pass++) {
         uint32_t n = pass ? nlater : bp->nblk;
@@ -4926,18 +4929,82 @@ static double radinterp__bp_by_union(radinterp__query *q, const radinterp__bp *b
             if (r < 0) return -1;
             if (r == 0) continue;
             if (radinterp__covers((const double (*)[2])sh->v, sh->count, (const double (*)[2])bp->sc2, bp->nc))
-                return 0.0; /* this blocker alone hides the whole source */
+                return 0; /* this blocker alone hides the whole source */
             if (radinterp__union_add(q, &count, tol, tiny) != 0) return -1;
         }
     }
-    if (count == 0) return full;
+    *count_out = count;
+    return 1;
+}
+
+/* full - hidden, where the difference carries the rounding of both sums:
+   a source hidden by several shadows together comes out at about 1e-16 of
+   F, not 0. */
+static double radinterp__visible_rest(double full, double hidden)
+{
+    double f = full - hidden;
+    return f > 1e-12 * full ? f : 0.0;
+}
+
+/* Visible factor = F(source) - sum of F over the disjoint pieces of the
+   shadows' union (eq. 6.1 is additive over a partition). Returns -1 when
+   the union cannot be built (the caller triangulates). */
+static double radinterp__bp_by_union(radinterp__query *q, const radinterp__bp *bp)
+{
+    double hidden = 0.0;
+    int count, k, r = radinterp__bp_union(q, bp, &count);
+    if (r <= 0) return r < 0 ? -1.0 : 0.0;
+    if (count == 0) return bp->full;
     q->triangulated++;
     for (k = 0; k < count; k++)
         hidden += radinterp__ff_frame(q, &bp->fr_ff, (const double (*)[2])q->piece[k].v, q->piece[k].count);
-    f = full - hidden;
-    /* the difference carries the rounding of both sums: a source hidden
-       by several shadows together comes out at about 1e-16 of F, not 0 */
-    return f > 1e-12 * full ? f : 0.0;
+    return radinterp__visible_rest(bp->full, hidden);
+}
+
+/* Visible factor of a part of bp's source from the pieces of its union
+   (q->piece[0 .. count)): the part's polygon Sc (moved and clipped as the
+   source, nc corners, unoccluded factor full) in the source's frame, each
+   piece cut to it by its edges' lines, F(part) - sum of F over the cut
+   pieces. The four children of a source node share one union this way.
+   Returns -1 when a cut piece outgrows its array. */
+static double radinterp__part_visible(radinterp__query *q, const radinterp__bp *bp, const double (*Sc)[3], int nc,
+                                      double full, int count)
+{
+    double c2[RADINTERP__POLY_MAX][2], L[RADINTERP__POLY_MAX][3], hidden = 0.0, area;
+    radinterp__piece buf[2], scratch;
+    int k, j, nl = 0, any = 0;
+    for (k = 0; k < nc; k++) { /* onto the real source plane, then into the frame */
+        double x[3];
+        for (j = 0; j < 3; j++) x[j] = Sc[k][j] + bp->push * bp->ns[j];
+        radinterp__frame_to2d(&bp->fr, x, c2[k]);
+    }
+    area = radinterp__area2((const double (*)[2])c2, nc);
+    if (area == 0.0) return 0.0;
+    for (k = 0; k < nc; k++) { /* its edges' lines, its inside on their positive side */
+        const double *a = c2[k], *b = c2[(k + 1) % nc];
+        double dx = b[0] - a[0], dy = b[1] - a[1], len = sqrt(dx * dx + dy * dy), sg = area > 0.0 ? 1.0 : -1.0;
+        if (!(len > bp->tol)) continue; /* a vanishing edge: its neighbours' lines enclose it */
+        L[nl][0] = -sg * dy / len;
+        L[nl][1] = sg * dx / len;
+        L[nl][2] = -(L[nl][0] * a[0] + L[nl][1] * a[1]);
+        nl++;
+    }
+    for (k = 0; k < count; k++) {
+        const radinterp__piece *cur = &q->piece[k];
+        int which = 0;
+        for (j = 0; j < nl && cur; j++) {
+            int r = radinterp__split_piece(cur, L[j], bp->tol, &buf[which], &scratch);
+            if (r < 0) return -1.0;
+            if (r == 2) cur = NULL;                 /* wholly outside the part */
+            else if (r == 0) { cur = &buf[which]; which = 1 - which; }
+        }
+        if (!cur || cur->count < 3) continue;
+        hidden += radinterp__ff_frame(q, &bp->fr_ff, (const double (*)[2])cur->v, cur->count);
+        any = 1;
+    }
+    if (!any) return full;
+    q->triangulated++;
+    return radinterp__visible_rest(full, hidden);
 }
 
 /* ---- visibility by triangulation and rays (Hardt 6.2.3) ----------------- */
@@ -5168,6 +5235,59 @@ RADINTERP__MAYBE_UNUSED static double radinterp__link_point_ff(radinterp__query 
     return radinterp__node_point_ff(q, lk, lk->source, (const double (*)[3])Sc, nc, full);
 }
 
+/* Are the children of a node to be taken in its place (see below)? */
+static int radinterp__take_children(const radinterp__query *q, uint32_t node, int depth_left, double full)
+{
+    const radinterp_solution *s = q->s;
+    return s->nodes[node].child != RADINTERP__NONE && depth_left > 0 &&
+           radinterp__source_spread(s, node) * full > 0.1 * s->eps;
+}
+
+/* B_src * F for the four children of node (its polygon as the query sees
+   it: Sc, nc, full) sharing one union of shadows over the node, as long as
+   none of them is to be split further: the children lie in the node, so
+   the shadows on a child are the node's cut to it. Returns 0 when they
+   cannot share one (then each is taken on its own). The triangulation
+   method takes each child on its own, so the tests comparing the two
+   methods at random points of the office and the Cornell box, where most
+   points take a source's children, check this too. */
+static int radinterp__children_add(radinterp__query *q, const radinterp__link *lk, uint32_t node,
+                                   const double (*Sc)[3], int nc, double full, double *h)
+{
+    const radinterp_solution *s = q->s;
+    const radinterp__node *nd = &s->nodes[node];
+    const radinterp__patch *ps = &s->patches[nd->patch];
+    double Scc[4][RADINTERP__POLY_MAX][3], fullc[4], f[4];
+    int ncc[4], c, count, r;
+    radinterp__bp bp;
+    if (s->visibility != RADINTERP_VISIBILITY_SHADOWS || q->nblk == 0 || nc < 3) return 0;
+    for (c = 0; c < 4; c++) {
+        ncc[c] = radinterp__query_source(q, nd->child + (uint32_t)c, Scc[c], &fullc[c]);
+        if (radinterp__take_children(q, nd->child + (uint32_t)c, q->depth_left - 1, fullc[c])) return 0;
+    }
+    radinterp__bp_setup(q, &bp, lk, Sc, nc, ps->n, ps->d - s->push_off, s->push_off);
+    bp.full = full;
+    r = radinterp__bp_union(q, &bp, &count);
+    if (r < 0) return 0;
+    for (c = 0; c < 4; c++) {
+        if (ncc[c] < 3 || r == 0) f[c] = 0.0;
+        else if (count == 0) f[c] = fullc[c];
+        else f[c] = radinterp__part_visible(q, &bp, (const double (*)[3])Scc[c], ncc[c], fullc[c], count);
+    }
+    q->depth_left--;
+    for (c = 0; c < 4; c++) {
+        const radinterp__node *ch = &s->nodes[nd->child + (uint32_t)c];
+        if (ch->b[0] == 0.0f && ch->b[1] == 0.0f && ch->b[2] == 0.0f) continue;
+        if (f[c] < 0.0) /* after the shared pieces are done with */
+            f[c] = radinterp__node_point_ff(q, lk, nd->child + (uint32_t)c, (const double (*)[3])Scc[c], ncc[c], fullc[c]);
+        h[0] += f[c] * ch->b[0];
+        h[1] += f[c] * ch->b[1];
+        h[2] += f[c] * ch->b[2];
+    }
+    q->depth_left++;
+    return 1;
+}
+
 /* B_src * F for one link. The source node's radiosity is a mean; where its
    children differ enough that the mean would misjudge the part seen from p
    (their spread times the node's unoccluded factor above a tenth of eps),
@@ -5177,12 +5297,13 @@ static void radinterp__link_point_add(radinterp__query *q, const radinterp__link
 {
     const radinterp_solution *s = q->s;
     const radinterp__node *nd = &s->nodes[node];
-    double f, full, Sc[RADINTERP__POLY_MAX][3], spread;
+    double f, full, Sc[RADINTERP__POLY_MAX][3];
     int nc = -1;
-    if (nd->child != RADINTERP__NONE && q->depth_left > 0 && (spread = radinterp__source_spread(s, node)) > 0.0) {
+    if (nd->child != RADINTERP__NONE && q->depth_left > 0 && radinterp__source_spread(s, node) > 0.0) {
         nc = radinterp__query_source(q, node, Sc, &full);
-        if (spread * full > 0.1 * s->eps) {
+        if (radinterp__take_children(q, node, q->depth_left, full)) {
             uint32_t c;
+            if (radinterp__children_add(q, lk, node, (const double (*)[3])Sc, nc, full, h)) return;
             q->depth_left--;
             for (c = 0; c < 4; c++) radinterp__link_point_add(q, lk, nd->child + c, h);
             q->depth_left++;
