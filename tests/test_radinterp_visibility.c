@@ -253,6 +253,82 @@ static void test_cornell_random_points(void)
     check_scene_file("examples/data/cornell_box.obj", "Cornell box", 300, 1e-6);
 }
 
+/* ---- leaf lists ---------------------------------------------------------------- */
+/* Irradiance with the leaf lists and with the links' own blocker lists
+   (the leaf lists switched off): the blockers the leaf lists leave out
+   cannot come between the leaf and the source, so both must agree to
+   rounding: rel_tol 1e-12 in the office; in the Cornell box 1e-6, as
+   between the two methods (test_cornell_random_points): beside the hinged
+   left wall, the slivers of the union come out differently when fewer
+   shadows come before them. Points:
+   random ones, and corners and edge midpoints of random leaves, where the
+   mesh evaluates, nudged toward the leaf's centre or away from it (into
+   the neighbouring leaf), or not at all. */
+static void check_leaf_lists(const char *path, const char *name, uint32_t n, double rel_tol)
+{
+    obj_scene o;
+    uint32_t *patches = NULL, i, *saved, worst_patch = 0;
+    radinterp_material *mats = NULL;
+    radinterp_desc d;
+    radinterp_solution *s = NULL;
+    double worst = 0.0;
+    memset(&o, 0, sizeof o);
+    if (!load_scene(path, &o, &patches, &mats, &d) || !CHECK(radinterp_solve(&d, &s) == RADINTERP_OK)) goto done;
+    { /* the lists are shorter than the links' */
+        uint64_t e, full = 0;
+        for (e = 0; e < s->leaf_link_count; e++) full += s->links[s->leaf_links[e].link].blocker_count;
+        CHECK(s->leaf_blocker_count < full);
+        test_note("%s: leaf lists hold %llu blockers where the links' lists hold %llu", name,
+                  (unsigned long long)s->leaf_blocker_count, (unsigned long long)full);
+    }
+    for (i = 0; i < n; i++) {
+        float p[3], t[3];
+        const float *toward = NULL;
+        double h1[3], h2[3];
+        uint32_t patch;
+        int k;
+        if (i % 2 == 0) {
+            patch = random_point(s, p);
+        } else {
+            const radinterp__node *leaf = &s->nodes[s->leaves[(uint32_t)(rnd() * s->leaf_count) % s->leaf_count]];
+            uint32_t c = (uint32_t)(rnd() * leaf->count) % leaf->count, c2 = (c + 1) % leaf->count;
+            double half = (i / 2) % 2 ? 0.5 : 0.0, centre[3] = {0.0, 0.0, 0.0};
+            patch = leaf->patch;
+            for (k = 0; k < 3; k++) {
+                uint32_t j;
+                p[k] = (float)((1.0 - half) * leaf->v[c][k] + half * leaf->v[c2][k]);
+                for (j = 0; j < leaf->count; j++) centre[k] += leaf->v[j][k] / leaf->count;
+                /* toward the centre, or away from it */
+                t[k] = (float)((i / 4) % 2 ? centre[k] : 2.0 * p[k] - centre[k]);
+            }
+            if ((i / 8) % 3 != 2) toward = t;
+        }
+        CHECK_EQ_INT(radinterp__irradiance(s, patch, p, toward, h1, NULL), RADINTERP_OK);
+        saved = s->leaf_link_first;
+        s->leaf_link_first = NULL;
+        CHECK_EQ_INT(radinterp__irradiance(s, patch, p, toward, h2, NULL), RADINTERP_OK);
+        s->leaf_link_first = saved;
+        for (k = 0; k < 3; k++) {
+            double rel = fabs(h1[k] - h2[k]) / (h2[k] > 1e-3 ? h2[k] : 1e-3);
+            CHECK_MSG(rel <= rel_tol, "%s: patch %u point (%.9g %.9g %.9g): leaf lists %.15g, link lists %.15g", name,
+                      patch, p[0], p[1], p[2], h1[k], h2[k]);
+            if (rel > worst) { worst = rel; worst_patch = patch; }
+        }
+    }
+    test_note("%s: %u points: largest relative difference %.2e (patch %u)", name, n, worst, worst_patch);
+done:
+    radinterp_solution_destroy(s);
+    free(patches);
+    free(mats);
+    if (o.positions) obj_free(&o);
+}
+
+static void test_leaf_lists(void)
+{
+    check_leaf_lists("examples/data/office.obj", "office", 600, 1e-12);
+    check_leaf_lists("examples/data/cornell_box.obj", "Cornell box", 600, 1e-6);
+}
+
 /* ---- the backprojection scenes ------------------------------------------- */
 /* Receiver: the floor z = 0 (3 x 3). Source: the unit square at z = 1 facing
    down, emitting 1, so the irradiance at a floor point is its visible form
@@ -347,6 +423,256 @@ static void test_many_overlapping_blockers(void)
     CHECK(a.partly > 20);
 }
 
+/* A wall standing a few micrometres in front of the query point hides a
+   small source completely. The wall's part inside the pyramid from the
+   point to the source is then tiny (micrometres across), its shadow still
+   the whole source: a blocker is judged by its shadow, not by its size. */
+static void test_blocker_at_the_point(void)
+{
+    static scene s;
+    float q[4][3] = {{0.1f, -0.5f, 0.0f}, {0.1f, -0.5f, 0.8f}, {0.1f, 0.5f, 0.8f}, {0.1f, 0.5f, 0.0f}};
+    method_pair m;
+    uint32_t black, light;
+    int i;
+    memset(&s, 0, sizeof s);
+    black = add_material(&s, 0.0f, 0.0f);
+    light = add_material(&s, 0.0f, 1.0f);
+    {
+        float f[4][3];
+        set_rect(f, -1.5f, -1.5f, 1.5f, 1.5f, 0.0f, 1);
+        add_quad(&s, (const float (*)[3])f, black);
+        set_rect(f, 0.3f, -0.01f, 0.32f, 0.01f, 1.0f, 0);
+        add_quad(&s, (const float (*)[3])f, light);
+    }
+    add_quad(&s, (const float (*)[3])q, black);  /* faces -x, toward the points */
+    if (!solve_both(scene_desc(&s), &m)) return;
+    for (i = 0; i < 3; i++) {
+        /* 6, 20 and 100 micrometres from the wall (epsilon * diag is 4.4) */
+        static const float gap[3] = {6e-6f, 2e-5f, 1e-4f};
+        float p[3] = {0.1f - gap[i], 0.0f, 0.0f}, hs[3], ht[3];
+        CHECK_EQ_INT(radinterp_irradiance_at_point(m.shadows, 0, p, NULL, hs), RADINTERP_OK);
+        CHECK_EQ_INT(radinterp_irradiance_at_point(m.tri, 0, p, NULL, ht), RADINTERP_OK);
+        CHECK_MSG(hs[0] == 0.0f && ht[0] == 0.0f, "%g from the wall: shadows %g, triangulation %g", gap[i], hs[0], ht[0]);
+    }
+    free_both(&m);
+}
+
+/* ---- convex solids: back faces left out of the union ---------------------- */
+/* The faces of an axis-aligned box [lo, hi], fronts outward: face f has the
+   normal +axis (f even) or -axis (f odd) of axis f / 2; bit f of `faces`
+   keeps it. Returns the number written. */
+static int box_faces(const float *lo, const float *hi, unsigned faces, float (*out)[4][3])
+{
+    /* (u, v) with u x v = the outward normal, so corners run counter-clockwise
+       seen from outside */
+    static const int uv[6][2] = {{1, 2}, {2, 1}, {2, 0}, {0, 2}, {0, 1}, {1, 0}};
+    static const float su[4] = {0, 1, 1, 0}, sv[4] = {0, 0, 1, 1};
+    int f, k, n = 0;
+    for (f = 0; f < 6; f++) {
+        int axis = f / 2;
+        if (!((faces >> f) & 1u)) continue;
+        for (k = 0; k < 4; k++) {
+            float *x = out[n][k];
+            int u = uv[f][0], v = uv[f][1];
+            x[axis] = f % 2 ? lo[axis] : hi[axis];
+            x[u] = su[k] ? hi[u] : lo[u];
+            x[v] = sv[k] ? hi[v] : lo[v];
+        }
+        n++;
+    }
+    return n;
+}
+
+/* The solids found in a scene of one box's faces over the floor and under
+   the source of bp_scene: the faces and holes of the only solid, or -1. */
+static void solid_of_box(const float *lo, const float *hi, unsigned faces, int *nf, int *nh)
+{
+    static scene s;
+    float blk[6][4][3];
+    radinterp_solution *sol = NULL;
+    radinterp_desc d;
+    int n = box_faces(lo, hi, faces, blk);
+    *nf = *nh = -1;
+    bp_scene(&s, (const float (*)[4][3])blk, n);
+    d = scene_desc(&s);
+    if (!CHECK(radinterp_solve(&d, &sol) == RADINTERP_OK)) return;
+    if (sol->solid_count == 1) {
+        uint32_t i, members = 0;
+        *nf = (int)sol->solids[0].faces;
+        *nh = (int)sol->solids[0].holes;
+        for (i = 0; i < sol->patch_count; i++) members += sol->patch_solid[i] == 0;
+        CHECK_EQ_INT(members, n);
+        CHECK(sol->patch_solid[0] == RADINTERP__NONE && sol->patch_solid[1] == RADINTERP__NONE);
+    } else {
+        CHECK_EQ_INT(sol->solid_count, 0);
+    }
+    radinterp_solution_destroy(sol);
+}
+
+/* Closed and open boxes are solids with the right holes; faces turned
+   inward (a room seen from inside) are none. */
+static void test_solids_found(void)
+{
+    float lo[3] = {-0.2f, -0.15f, 0.35f}, hi[3] = {0.2f, 0.25f, 0.6f};
+    float (*blk)[4][3] = (float (*)[4][3])malloc(6 * sizeof *blk);
+    int nf, nh, k;
+    solid_of_box(lo, hi, 63u, &nf, &nh);
+    CHECK(nf == 6 && nh == 0);
+    solid_of_box(lo, hi, 63u & ~32u, &nf, &nh); /* no bottom */
+    CHECK(nf == 5 && nh == 1);
+    solid_of_box(lo, hi, 63u & ~3u, &nf, &nh);  /* a tube along x */
+    CHECK(nf == 4 && nh == 2);
+    {
+        /* the same box turned inside out: every corner lies in front of some
+           face, so it is no convex solid */
+        static scene s;
+        radinterp_solution *sol = NULL;
+        radinterp_desc d;
+        int n = box_faces(lo, hi, 63u, blk);
+        for (k = 0; k < n; k++) {
+            float t[3];
+            memcpy(t, blk[k][1], sizeof t);
+            memcpy(blk[k][1], blk[k][3], sizeof t);
+            memcpy(blk[k][3], t, sizeof t);
+        }
+        bp_scene(&s, (const float (*)[4][3])blk, n);
+        d = scene_desc(&s);
+        if (CHECK(radinterp_solve(&d, &sol) == RADINTERP_OK)) CHECK_EQ_INT(sol->solid_count, 0);
+        radinterp_solution_destroy(sol);
+    }
+    free(blk);
+}
+
+/* Patches covering a facet must tile it: two that overlap leave part of
+   the facet open even when their areas add up to its area. The facet is
+   the unit square (the group's corners include (1, 0) and (1, 1)). */
+static void test_facet_tiles(void)
+{
+    static scene s;
+    float f[4][3];
+    radinterp_solution *sol = NULL;
+    radinterp_desc d;
+    double v[10][3], pl[4] = {0.0, 0.0, 1.0, 0.0};
+    uint32_t members[2] = {0, 1}, light;
+    int k, pair;
+    for (pair = 0; pair < 2; pair++) {
+        memset(&s, 0, sizeof s);
+        light = add_material(&s, 0.0f, 1.0f);
+        set_rect(f, 0.0f, 0.0f, 0.6f, 1.0f, 0.0f, 1);
+        add_quad(&s, (const float (*)[3])f, add_material(&s, 0.5f, 0.0f));
+        /* tiles [0, 0.6] and [0.6, 1], or [0, 0.6] and [0.4, 0.8] (areas adding up to 1, [0.8, 1] open) */
+        set_rect(f, pair ? 0.4f : 0.6f, 0.0f, pair ? 0.8f : 1.0f, 1.0f, 0.0f, 1);
+        add_quad(&s, (const float (*)[3])f, 1);
+        set_rect(f, 0.4f, 0.4f, 0.6f, 0.6f, 1.0f, 0);
+        add_quad(&s, (const float (*)[3])f, light);
+        d = scene_desc(&s);
+        if (!CHECK(radinterp_solve(&d, &sol) == RADINTERP_OK)) return;
+        for (k = 0; k < 8; k++) radinterp__d3_from_f(sol->patches[k / 4].v[k % 4], v[k]);
+        v[8][0] = v[9][0] = 1.0; v[8][1] = 0.0; v[9][1] = 1.0; v[8][2] = v[9][2] = 0.0;
+        if (pair == 0) CHECK(radinterp__facet_covered(sol, members, 2, (const double (*)[3])v, 10, pl, 1e-6));
+        else CHECK(!radinterp__facet_covered(sol, members, 2, (const double (*)[3])v, 10, pl, 1e-6));
+        radinterp_solution_destroy(sol);
+        sol = NULL;
+    }
+}
+
+/* The back-face rule against the triangulation, which does not use it: a
+   closed box, an open box standing on the floor (points under it are
+   inside: every face is turned away, none may be dropped), and a tube
+   lying across the light (points beyond its open ends see into it: a face
+   turned away then hides light that entered through the hole). */
+static void test_solid_back_faces(void)
+{
+    float blk[6][4][3];
+    float lo[3] = {-0.2f, -0.15f, 0.35f}, hi[3] = {0.2f, 0.25f, 0.6f};
+    float olo[3] = {-0.3f, -0.2f, 0.0f}, ohi[3] = {0.1f, 0.2f, 0.5f};
+    float tlo[3] = {-0.3f, -0.1f, 0.4f}, thi[3] = {0.3f, 0.1f, 0.6f};
+    agreement a;
+    a = compare_bp_scene("closed box", (const float (*)[4][3])blk, box_faces(lo, hi, 63u, blk));
+    CHECK(a.partly > 20);
+    a = compare_bp_scene("open box on the floor", (const float (*)[4][3])blk, box_faces(olo, ohi, 63u & ~32u, blk));
+    CHECK(a.partly > 20);
+    a = compare_bp_scene("tube across the light", (const float (*)[4][3])blk, box_faces(tlo, thi, 63u & ~3u, blk));
+    CHECK(a.partly > 20);
+    {
+        /* under the open box the floor receives nothing; at its foot, at
+           corners and edges approached from outside (where mesh vertices
+           lie), the nudged point is outside but closer to two or one of its
+           face planes than epsilon * diag: those faces count as seen
+           edge-on, so the faces turned away must not be dropped */
+        static scene s;
+        method_pair m;
+        float p[3] = {-0.1f, 0.05f, 0.0f}, h[3];
+        static const float at[6][2][2] = {
+            {{0.1f, 0.2f}, {0.2f, 0.3f}},  {{-0.3f, -0.2f}, {-0.4f, -0.25f}}, {{0.1f, 0.0f}, {0.3f, 0.05f}},
+            {{-0.1f, 0.2f}, {-0.05f, 0.4f}},
+            /* a few micrometres beyond a corner, approached along one face */
+            {{0.100003f, 0.2f}, {1.0f, 0.25f}}, {{-0.3f, -0.200003f}, {-0.35f, -1.0f}}};
+        int i;
+        memset(&a, 0, sizeof a);
+        bp_scene(&s, (const float (*)[4][3])blk, box_faces(olo, ohi, 63u & ~32u, blk));
+        if (solve_both(scene_desc(&s), &m)) {
+            CHECK_EQ_INT(radinterp_irradiance_at_point(m.shadows, 0, p, NULL, h), RADINTERP_OK);
+            CHECK_MSG(h[0] == 0.0f, "irradiance %g under the box", h[0]);
+            for (i = 0; i < 6; i++) {
+                float q[3], t[3];
+                q[0] = at[i][0][0]; q[1] = at[i][0][1]; q[2] = 0.0f;
+                t[0] = at[i][1][0]; t[1] = at[i][1][1]; t[2] = 0.0f;
+                compare_point(&m, 0, q, t, 1e-3, 1e-9, &a);
+            }
+            test_note("foot of the open box: %u points, largest relative difference %.2e", a.points, a.worst_rel);
+            free_both(&m);
+        }
+    }
+}
+
+/* Plugged holes: a tube standing over the floor (its side faces only),
+   under the source, with a quad just under its open bottom. Floor points
+   lie outside the bottom hole's plane; when the quad covers the hole, rays
+   entering through it cross the quad, and the tube's faces turned away
+   may be left out; when it covers half the hole, rays enter through the
+   other half and they may not. Both against the triangulation. */
+static void test_plugged_holes(void)
+{
+    float blk[5][4][3];
+    float lo[3] = {-0.2f, -0.15f, 0.2f}, hi[3] = {0.2f, 0.25f, 0.5f};
+    int full;
+    for (full = 1; full >= 0; full--) {
+        static scene s;
+        method_pair m;
+        agreement a;
+        int n = box_faces(lo, hi, 15u, blk), i, j; /* the four sides along z */
+        uint32_t plug = RADINTERP__NONE;
+        memset(&a, 0, sizeof a);
+        /* the plug, facing down (toward the floor points) */
+        set_rect(blk[n], -0.3f, -0.3f, full ? 0.3f : 0.0f, 0.3f, 0.2f, 0);
+        n++;
+        bp_scene(&s, (const float (*)[4][3])blk, n);
+        if (!solve_both(scene_desc(&s), &m)) return;
+        if (CHECK_EQ_INT(m.shadows->solid_count, 1)) {
+            const radinterp__solid *so = &m.shadows->solids[0];
+            uint32_t h;
+            CHECK(so->faces == 4 && so->holes == 2);
+            for (h = 0; h < so->holes; h++)
+                if (m.shadows->solid_plugs[so->first_plane + h] != RADINTERP__NONE) plug = m.shadows->solid_plugs[so->first_plane + h];
+            /* the plug is patch 2 + 4 (after the floor, the source and the sides) when it covers the hole */
+            CHECK_EQ_INT(plug, full ? 6u : RADINTERP__NONE);
+        }
+        for (i = 0; i < 9; i++)
+            for (j = 0; j < 9; j++) {
+                float p[3];
+                p[0] = (float)(-0.9 + 1.8 * (i + 0.37) / 9);
+                p[1] = (float)(-0.9 + 1.8 * (j + 0.61) / 9);
+                p[2] = 0.0f;
+                compare_point(&m, 0, p, NULL, 1e-3, 1e-9, &a);
+            }
+        test_note("tube over the floor, %s plug: %u points (%u partly hidden), largest relative difference %.2e",
+                  full ? "covering" : "half", a.points, a.partly, a.worst_rel);
+        CHECK(a.partly > 20);
+        free_both(&m);
+    }
+}
+
 static void test_validation(void)
 {
     static scene s;
@@ -372,7 +698,13 @@ int main(int argc, char **argv)
     RUN(test_backprojection_scenes);
     RUN(test_blocker_through_both_planes);
     RUN(test_many_overlapping_blockers);
+    RUN(test_blocker_at_the_point);
+    RUN(test_solids_found);
+    RUN(test_facet_tiles);
+    RUN(test_solid_back_faces);
+    RUN(test_plugged_holes);
     RUN(test_office_random_points);
+    RUN(test_leaf_lists);
     RUN(test_cornell_random_points);
     return test_finish();
 }
