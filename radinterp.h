@@ -1,4 +1,4 @@
-/* radinterp.h - v0.3.0 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
+/* radinterp.h - v0.3.1 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
 
    RADINTERP.H: hierarchical radiosity, ranked discontinuities and quadratic irradiance interpolants evaluated per pixel.
 
@@ -387,7 +387,7 @@
 
 #define RADINTERP_VERSION_MAJOR 0
 #define RADINTERP_VERSION_MINOR 3
-#define RADINTERP_VERSION_PATCH 0
+#define RADINTERP_VERSION_PATCH 1
 #define RADINTERP_FILE_FORMAT_VERSION 1   /* of saved meshes */
 
 #include <stddef.h>
