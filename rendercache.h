@@ -2177,7 +2177,9 @@ static void rendercache__gather_points(rendercache *rc, const uint32_t *index, u
         uint32_t motion = o == RENDERCACHE_MISS ? 0u : rc->obj_motion[o < rc->object_count ? o : 0u];
         if (p + RENDERCACHE__GATHER_AHEAD < rc->pixel_count) {   /* (into the next row or tile too) */
             uint32_t next = index[p + RENDERCACHE__GATHER_AHEAD];
-            RENDERCACHE__PREFETCH(&data[next == RENDERCACHE__NONE ? empty : next]);
+            const rendercache__point *q = &data[next == RENDERCACHE__NONE ? empty : next];
+            RENDERCACHE__PREFETCH(q);
+            RENDERCACHE__PREFETCH((const char *)q + sizeof *q - 1);   /* a record may straddle two cache lines */
         }
         memcpy(image + 3 * (size_t)p, data[k].rgb, 3 * sizeof(float));
         priority[p] = rendercache__point_priority(rc, &data[k], motion);
