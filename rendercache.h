@@ -2230,19 +2230,16 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
    tie: a hole beside an edge is more often uncovered background). Returns
    the number of points in the window; rgb is set when it is not zero.
    Depths are squared distances, compared with the squared tolerance. */
-static uint32_t rendercache__interpolate(const rendercache *rc, uint32_t x, uint32_t y, int r, float rgb[3])
+static RENDERCACHE__INLINE uint32_t rendercache__interpolate_window(const rendercache *rc, uint32_t x, uint32_t y, int r,
+                                                                    int x0, int x1, int y0, int y1, float rgb[3])
 {
     const float *depth = rc->px_depth, *image = rc->image;
     const uint32_t w = rc->width;
-    int x0 = (int)x - r, x1 = (int)x + r, y0 = (int)y - r, y1 = (int)y + r, qx, qy;
+    int qx, qy;
     float dmin = FLT_MAX, dmax = 0.0f, tol2 = (1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance);
     float near_sum[4] = { 0, 0, 0, 0 }, far_sum[4] = { 0, 0, 0, 0 };
     const float *chosen;
     uint32_t n = 0;
-    if (x0 < 0) x0 = 0;
-    if (y0 < 0) y0 = 0;
-    if (x1 >= (int)w) x1 = (int)w - 1;
-    if (y1 >= (int)rc->height) y1 = (int)rc->height - 1;
     /* without branches (points and holes alternate at random around a hole): selects, then min and max */
     for (qy = y0; qy <= y1; qy++) {
         const float *row = depth + (size_t)qy * w;
@@ -2276,35 +2273,61 @@ static uint32_t rendercache__interpolate(const rendercache *rc, uint32_t x, uint
     return n;
 }
 
+/* The window of radius r around (x, y), clipped to the image. */
+static uint32_t rendercache__interpolate(const rendercache *rc, uint32_t x, uint32_t y, int r, float rgb[3])
+{
+    int x0 = (int)x - r, x1 = (int)x + r, y0 = (int)y - r, y1 = (int)y + r;
+    if (x0 < 0) x0 = 0;
+    if (y0 < 0) y0 = 0;
+    if (x1 >= (int)rc->width) x1 = (int)rc->width - 1;
+    if (y1 >= (int)rc->height) y1 = (int)rc->height - 1;
+    return rendercache__interpolate_window(rc, x, y, r, x0, x1, y0, y1, rgb);
+}
+
+/* The 3x3 window of a hole inside the image (nearly all of them): a fixed
+   window, whose loops the compiler unrolls; the same operations in the same
+   order as rendercache__interpolate, so the same colour bit for bit. */
+static uint32_t rendercache__interpolate3(const rendercache *rc, uint32_t x, uint32_t y, float rgb[3])
+{
+    return rendercache__interpolate_window(rc, x, y, 1, (int)x - 1, (int)x + 1, (int)y - 1, (int)y + 1, rgb);
+}
+
 /* Job per tile: fill the holes left by projection and cull, and rank them. */
 static void rendercache__interpolate_job(void *ctx, uint32_t tile)
 {
     rendercache *rc = (rendercache *)ctx;
+    const uint32_t w = rc->width, h = rc->height, *px_index = rc->px_index;
     uint32_t y0 = tile * RENDERCACHE__TILE_ROWS, y1 = y0 + RENDERCACHE__TILE_ROWS, x, y;
     uint32_t counts[3] = { 0, 0, 0 }, *stats = rc->tile_stats + RENDERCACHE__TILE_STATS * (size_t)tile;
-    if (y1 > rc->height) y1 = rc->height;
+    if (y1 > h) y1 = h;
     for (y = y0; y < y1; y++) {
-        for (x = 0; x < rc->width; x++) {
-            uint32_t p = y * rc->width + x, n;
+        const uint32_t *row = px_index + (size_t)y * w;
+        for (x = 0;; x++) {
+            uint32_t p, n;
+            unsigned char kind;
             float rgb[3];
-            if (rc->px_index[p] != RENDERCACHE__NONE) continue;
-            n = rendercache__interpolate(rc, x, y, 1, rgb);
+            while (x < w && row[x] != RENDERCACHE__NONE) x++;   /* to the next hole (a few percent of the pixels) */
+            if (x == w) break;
+            p = y * w + x;
+            n = x > 0 && y > 0 && x + 1 < w && y + 1 < h ? rendercache__interpolate3(rc, x, y, rgb)
+                                                         : rendercache__interpolate(rc, x, y, 1, rgb);
             if (n >= rc->sparse_neighbours) {
-                rc->kind[p] = RENDERCACHE_PIXEL_INTERPOLATED;
+                kind = RENDERCACHE_PIXEL_INTERPOLATED;
                 counts[0]++;
             } else {
                 n = rendercache__interpolate(rc, x, y, (int)rc->wide_radius, rgb);
                 if (n) {
-                    rc->kind[p] = RENDERCACHE_PIXEL_SPARSE;
+                    kind = RENDERCACHE_PIXEL_SPARSE;
                     counts[1]++;
                 } else {
                     memcpy(rgb, rc->background, sizeof rgb);
-                    rc->kind[p] = RENDERCACHE_PIXEL_EMPTY;
+                    kind = RENDERCACHE_PIXEL_EMPTY;
                     counts[2]++;
                 }
             }
+            rc->kind[p] = kind;
             rc->count[p] = (unsigned char)(n > 255 ? 255 : n);
-            rc->priority[p] = rendercache__hole_priority(rc, rc->kind[p], rc->count[p]);
+            rc->priority[p] = rendercache__hole_priority(rc, kind, rc->count[p]);
             memcpy(rc->image + 3 * (size_t)p, rgb, sizeof rgb);
         }
     }
