@@ -1382,6 +1382,7 @@ typedef struct rendercache__splat {
     rendercache__raster final;                        /* payload is job 0's */
     rendercache__zbuffer zb[RENDERCACHE__SPLAT_JOBS];
     uint32_t projected;      /* elements that landed in the image in the last run */
+    uint32_t ran_jobs;       /* z-buffers the last run filled */
     uint32_t job_projected[RENDERCACHE__SPLAT_JOBS];
 } rendercache__splat;
 
@@ -1430,6 +1431,7 @@ typedef struct rendercache__splat_job {
     rendercache__cover_fn cover;       /* instead of source and payload */
     const void *src;
     uint32_t element_count, jobs;
+    int merge;                         /* 0: s->final is not written; the caller reads the z-buffers */
 } rendercache__splat_job;
 
 static uint64_t rendercache__key(float depth, uint32_t element)
@@ -1507,6 +1509,22 @@ static void rendercache__splat_range(void *ctx, uint32_t j)
     s->job_projected[j] = projected;
 }
 
+/* The least key of pixel p over the z-buffers of the last run, and the
+   payload of the z-buffer that holds it (keys are unique but for the empty
+   one, so this is the key and payload rendercache__splat_merge keeps). */
+static RENDERCACHE__INLINE uint64_t rendercache__splat_least(const rendercache__splat *s, uint32_t p, const float **payload)
+{
+    uint64_t k = s->zb[0].key[p];
+    uint32_t j;
+    *payload = s->zb[0].payload + 4 * (size_t)p;
+    for (j = 1; j < s->ran_jobs; j++)
+        if (s->zb[j].key[p] < k) {
+            k = s->zb[j].key[p];
+            *payload = s->zb[j].payload + 4 * (size_t)p;
+        }
+    return k;
+}
+
 /* Job per tile: the least key over the jobs' z-buffers becomes the final
    depth and element (with its payload). */
 static void rendercache__splat_merge(void *ctx, uint32_t tile)
@@ -1541,16 +1559,19 @@ static void rendercache__splat_execute(rendercache__splat_job *job,
     uint32_t j;
     job->jobs = parallel_for ? s->jobs : 1u;
     rendercache__run_jobs(parallel_for, user, rendercache__splat_range, job, job->jobs);
-    rendercache__run_jobs(parallel_for, user, rendercache__splat_merge, job, s->tile_count);
+    if (job->merge) rendercache__run_jobs(parallel_for, user, rendercache__splat_merge, job, s->tile_count);
+    s->ran_jobs = job->jobs;
     s->projected = 0;
     for (j = 0; j < job->jobs; j++) s->projected += s->job_projected[j];
 }
 
 /* Runs the splat over elements [0, count) into s->final; parallel_for only
-   when the splat was allocated for several jobs. */
+   when the splat was allocated for several jobs. merge = 0: s->final is
+   not written, and the caller takes the least key of each pixel over the
+   z-buffers itself (rendercache__splat_least), in a pass it makes anyway. */
 static void rendercache__splat_run(rendercache__splat *s, void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t),
                                    void *user, rendercache__source_fn source, rendercache__payload_fn payload,
-                                   const void *src, uint32_t count)
+                                   const void *src, uint32_t count, int merge)
 {
     rendercache__splat_job job;
     job.s = s;
@@ -1559,13 +1580,14 @@ static void rendercache__splat_run(rendercache__splat *s, void (*parallel_for)(v
     job.cover = NULL;
     job.src = src;
     job.element_count = count;
+    job.merge = merge;
     rendercache__splat_execute(&job, parallel_for, user);
 }
 
 /* The same with a cover function (payload always kept). */
 static void rendercache__splat_run_cover(rendercache__splat *s,
                                          void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t), void *user,
-                                         rendercache__cover_fn cover, const void *src, uint32_t count)
+                                         rendercache__cover_fn cover, const void *src, uint32_t count, int merge)
 {
     rendercache__splat_job job;
     job.s = s;
@@ -1574,6 +1596,7 @@ static void rendercache__splat_run_cover(rendercache__splat *s,
     job.cover = cover;
     job.src = src;
     job.element_count = count;
+    job.merge = merge;
     rendercache__splat_execute(&job, parallel_for, user);
 }
 
@@ -2046,7 +2069,7 @@ static void rendercache__splat_points(rendercache *rc, const rendercache__view *
     pr.view = v;
     pr.obj_camera = obj_camera;
     rendercache__splat_run(&rc->splat, rc->parallel_for, rc->parallel_user, rendercache__project_points, NULL, &pr,
-                           rc->capacity);
+                           rc->capacity, 1);
     if (t_project) *t_project += rendercache__now(rc) - t0;
 }
 
@@ -4212,7 +4235,7 @@ static uint32_t rendercache__warp_cover(const void *src, uint32_t job, uint32_t 
 typedef struct rendercache__warp_job {
     rendercache_warper *w;
     rendercache__accum acc, second;
-    const rendercache__raster *raster;   /* extract: the splat */
+    const rendercache__splat *splat;     /* extract: the splat (its z-buffers) */
     const rendercache__warp_set *set;
     float tol2;                          /* squared (1 + tolerance) */
     float t;                             /* blend weight of the second image */
@@ -4230,22 +4253,26 @@ static void rendercache__tile_rows(const rendercache_warper *w, uint32_t tile, u
 static void rendercache__extract_job(void *ctx, uint32_t tile)
 {
     const rendercache__warp_job *j = (const rendercache__warp_job *)ctx;
-    const rendercache__raster *r = j->raster;
+    const rendercache__splat *s = j->splat;
     const rendercache__warp_src *ws = j->set->src;
     uint32_t p0, p1, p;
     rendercache__tile_rows(j->w, tile, &p0, &p1);
-    for (p = p0; p < p1; p++) {
-        uint32_t e = r->index[p];
-        if (e == RENDERCACHE__NONE) {
+    for (p = p0; p < p1; p++) {   /* the splat's merge, fused: one pass over the pixels instead of two */
+        const float *payload;
+        uint64_t k = rendercache__splat_least(s, p, &payload);
+        uint32_t e = (uint32_t)k, bits = (uint32_t)(k >> 32);
+        float depth2;
+        if (k == RENDERCACHE__EMPTY_KEY) {
             j->acc.depth2[p] = FLT_MAX;
             j->acc.object[p] = RENDERCACHE_NO_SAMPLE;
             j->w->how[p] = RENDERCACHE__HOW_EMPTY;
             continue;
         }
-        memcpy(j->acc.rgb + 3 * (size_t)p, r->payload + 4 * (size_t)p, 3 * sizeof(float));
-        memcpy(&j->acc.object[p], r->payload + 4 * (size_t)p + 3, sizeof(uint32_t));
+        memcpy(&depth2, &bits, sizeof depth2);
+        memcpy(j->acc.rgb + 3 * (size_t)p, payload, 3 * sizeof(float));
+        memcpy(&j->acc.object[p], payload + 3, sizeof(uint32_t));
         if (e - ws->first >= ws->count) ws = &j->set->src[rendercache__warp_input_of(j->set, e)];   /* the last one, mostly */
-        j->acc.depth2[p] = j->acc.object[p] == RENDERCACHE_MISS ? RENDERCACHE__FAR2 : r->depth[p] * ws->inv_bias;
+        j->acc.depth2[p] = j->acc.object[p] == RENDERCACHE_MISS ? RENDERCACHE__FAR2 : depth2 * ws->inv_bias;
         j->w->how[p] = RENDERCACHE__HOW_WARPED;
     }
 }
@@ -4258,15 +4285,15 @@ static void rendercache__warp_splat(rendercache_warper *w, const rendercache__wa
     const rendercache__warp_src *last = &set->src[set->count - 1];
     const uint32_t count = last->first + last->count;
     if (foreground)
-        rendercache__splat_run_cover(&w->splat, w->parallel_for, w->parallel_user, rendercache__warp_cover, set, count);
+        rendercache__splat_run_cover(&w->splat, w->parallel_for, w->parallel_user, rendercache__warp_cover, set, count, 0);
     else
         rendercache__splat_run(&w->splat, w->parallel_for, w->parallel_user, rendercache__warp_source,
-                               rendercache__warp_payload, set, count);
+                               rendercache__warp_payload, set, count, 0);
     w->stats.projected += w->splat.projected;
     memset(&job, 0, sizeof job);
     job.w = w;
     job.acc = *acc;
-    job.raster = &w->splat.final;
+    job.splat = &w->splat;
     job.set = set;
     rendercache__run_jobs(w->parallel_for, w->parallel_user, rendercache__extract_job, &job, w->tile_count);
 }
@@ -4485,10 +4512,11 @@ static void rendercache__finish_job(void *ctx, uint32_t tile)
     const rendercache__warp_job *j = (const rendercache__warp_job *)ctx;
     rendercache_warper *w = j->w;
     uint32_t p0, p1, p, *counts = w->tile_counts + 4 * (size_t)tile;
+    const int fisheye = w->target.kind == RENDERCACHE_CAMERA_FISHEYE;   /* other targets have a ray everywhere */
     rendercache__tile_rows(w, tile, &p0, &p1);
     counts[0] = counts[1] = counts[2] = counts[3] = 0;
     for (p = p0; p < p1; p++) {
-        int ray = rendercache__view_has_ray(&w->target, p % w->width, p / w->width);
+        int ray = !fisheye || rendercache__view_has_ray(&w->target, p % w->width, p / w->width);
         if (!ray || j->acc.depth2[p] == FLT_MAX) {
             memcpy(j->acc.rgb + 3 * (size_t)p, w->background, 3 * sizeof(float));
             j->acc.depth2[p] = RENDERCACHE__FAR;
