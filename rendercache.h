@@ -2887,9 +2887,11 @@ static void rendercache__show(rendercache *rc, uint32_t p, uint32_t slot, float 
     rc->priority[p] = 0.0f;
 }
 
-/* Reads the slots that the next samples will replace in place, all at
-   once, so that their cache misses overlap instead of coming one by one.
-   Returns a value that depends on the reads (for the caller to keep). */
+/* Prefetches the slots that the next samples will replace in place, all at
+   once, so that their cache misses overlap instead of coming one by one
+   (prefetches rather than loads: they need not complete before the
+   insertion goes on). Returns a value that depends on the pixels' slots
+   (for the caller to keep). */
 static uint32_t rendercache__touch_slots(const rendercache *rc, const rendercache_sample *samples, uint32_t n)
 {
     uint32_t i, sum = 0;
@@ -2898,7 +2900,11 @@ static uint32_t rendercache__touch_slots(const rendercache *rc, const rendercach
         uint32_t slot;
         if (s->x >= rc->width || s->y >= rc->height || (s->flags & RENDERCACHE_REQUEST_PREDICTED)) continue;
         slot = rc->px_index[s->y * rc->width + s->x];
-        if (slot != RENDERCACHE__NONE) sum += rc->geo[slot].object + rc->data[slot].base;
+        if (slot == RENDERCACHE__NONE) continue;
+        sum += slot;
+        RENDERCACHE__PREFETCH(&rc->geo[slot]);
+        RENDERCACHE__PREFETCH(&rc->data[slot]);
+        RENDERCACHE__PREFETCH((const char *)&rc->data[slot] + sizeof rc->data[0] - 1);   /* may straddle two lines */
     }
     return sum;
 }
