@@ -3922,9 +3922,10 @@ static float rendercache__edge_at(const rendercache__edge *e, float x, float y) 
 
 /* Writes a pixel of a foreground triangle: weights wu, wv, ww (not yet
    normalised) of its corners u, v, w (projected rows, input pixels eu, ev, ew). */
-static void rendercache__warp_shade(const rendercache__warp_src *ws, rendercache__zbuffer *zb, uint32_t pixel, float wu,
-                                    float wv, float ww, const float *u, const float *v, const float *w, uint32_t eu,
-                                    uint32_t ev, uint32_t ew, uint32_t e)
+static RENDERCACHE__INLINE void rendercache__warp_shade(const rendercache__warp_src *ws, rendercache__zbuffer *zb,
+                                                        uint32_t pixel, float wu, float wv, float ww, const float *u,
+                                                        const float *v, const float *w, uint32_t eu, uint32_t ev,
+                                                        uint32_t ew, uint32_t e)
 {
     const rendercache_range_image *img = ws->image;
     const float *cu = img->rgb + 3 * (size_t)eu, *cv = img->rgb + 3 * (size_t)ev, *cw = img->rgb + 3 * (size_t)ew;
@@ -3947,10 +3948,13 @@ static void rendercache__warp_shade(const rendercache__warp_src *ws, rendercache
    squared distance interpolated with the barycentric weights at the pixel
    centres inside (edges included), the object the heaviest corner's. Both
    triangles share the quad's box and the diagonal a c decides between
-   them. */
-static void rendercache__warp_quad(const rendercache__warp_src *ws, rendercache__zbuffer *zb, const float *a,
-                                   const float *b, const float *c, const float *d, uint32_t pa, uint32_t pb, uint32_t pc,
-                                   uint32_t pd, unsigned flags, uint32_t e)
+   them. Inlined, with warp_shade, into the loop over a row's quads: a
+   quad covers about two pixels, and the calls with their dozen arguments
+   cost as much as the pixels. */
+static RENDERCACHE__INLINE void rendercache__warp_quad(const rendercache__warp_src *ws, rendercache__zbuffer *zb,
+                                                       const float *a, const float *b, const float *c, const float *d,
+                                                       uint32_t pa, uint32_t pb, uint32_t pc, uint32_t pd,
+                                                       unsigned flags, uint32_t e)
 {
     const uint32_t w = ws->target->width, h = ws->target->height;
     rendercache__edge ab, bc, ac, cd, da;
