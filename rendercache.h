@@ -1329,7 +1329,8 @@ static void rendercache__view_compose(const rendercache__view *v, const float m[
    depth cull.
    Parallel and deterministic: when the caller gives parallel_for, the
    elements are split into RENDERCACHE__SPLAT_JOBS ranges, each z-buffered
-   into its own raster, and the rasters are merged tile by tile. The winner
+   into its own raster, and the rasters are merged tile by tile (warps
+   merge them within their extraction pass, rendercache__splat_least). The winner
    of a pixel is the least (depth, element index) in every case, so the
    result does not depend on the split or on the thread count. (Sorting the
    elements into image bands first, as the tiled cache of Walter et al. 2002
