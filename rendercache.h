@@ -370,8 +370,9 @@ typedef struct rendercache_stats {
     uint32_t rejected;           /* samples ignored since begin_frame (bad values or pixel) */
     /* seconds spent in each phase of the last frame (0 without desc.clock) */
     double time_project;         /* projection and z-buffer of every point */
-    double time_cull;            /* depth cull, with the colour and priority of the pixels showing points */
-    double time_interpolate;     /* hole filling, with the priority of the holes */
+    double time_cull;            /* depth cull, with the colour and priority of the pixels showing points;
+                                    without parallel_for also the hole filling, interleaved with it */
+    double time_interpolate;     /* hole filling, with the priority of the holes (0 without parallel_for) */
     double time_predict;         /* rendercache_predict */
     double time_request;         /* threshold and error diffusion (all request calls) */
     double time_insert;
@@ -1328,7 +1329,8 @@ static void rendercache__view_compose(const rendercache__view *v, const float m[
    depth cull.
    Parallel and deterministic: when the caller gives parallel_for, the
    elements are split into RENDERCACHE__SPLAT_JOBS ranges, each z-buffered
-   into its own raster, and the rasters are merged tile by tile. The winner
+   into its own raster, and the rasters are merged tile by tile (warps
+   merge them within their extraction pass, rendercache__splat_least). The winner
    of a pixel is the least (depth, element index) in every case, so the
    result does not depend on the split or on the thread count. (Sorting the
    elements into image bands first, as the tiled cache of Walter et al. 2002
@@ -1381,6 +1383,7 @@ typedef struct rendercache__splat {
     rendercache__raster final;                        /* payload is job 0's */
     rendercache__zbuffer zb[RENDERCACHE__SPLAT_JOBS];
     uint32_t projected;      /* elements that landed in the image in the last run */
+    uint32_t ran_jobs;       /* z-buffers the last run filled */
     uint32_t job_projected[RENDERCACHE__SPLAT_JOBS];
 } rendercache__splat;
 
@@ -1429,6 +1432,7 @@ typedef struct rendercache__splat_job {
     rendercache__cover_fn cover;       /* instead of source and payload */
     const void *src;
     uint32_t element_count, jobs;
+    int merge;                         /* 0: s->final is not written; the caller reads the z-buffers */
 } rendercache__splat_job;
 
 static uint64_t rendercache__key(float depth, uint32_t element)
@@ -1506,6 +1510,22 @@ static void rendercache__splat_range(void *ctx, uint32_t j)
     s->job_projected[j] = projected;
 }
 
+/* The least key of pixel p over the z-buffers of the last run, and the
+   payload of the z-buffer that holds it (keys are unique but for the empty
+   one, so this is the key and payload rendercache__splat_merge keeps). */
+static RENDERCACHE__INLINE uint64_t rendercache__splat_least(const rendercache__splat *s, uint32_t p, const float **payload)
+{
+    uint64_t k = s->zb[0].key[p];
+    uint32_t j;
+    *payload = s->zb[0].payload + 4 * (size_t)p;
+    for (j = 1; j < s->ran_jobs; j++)
+        if (s->zb[j].key[p] < k) {
+            k = s->zb[j].key[p];
+            *payload = s->zb[j].payload + 4 * (size_t)p;
+        }
+    return k;
+}
+
 /* Job per tile: the least key over the jobs' z-buffers becomes the final
    depth and element (with its payload). */
 static void rendercache__splat_merge(void *ctx, uint32_t tile)
@@ -1540,16 +1560,19 @@ static void rendercache__splat_execute(rendercache__splat_job *job,
     uint32_t j;
     job->jobs = parallel_for ? s->jobs : 1u;
     rendercache__run_jobs(parallel_for, user, rendercache__splat_range, job, job->jobs);
-    rendercache__run_jobs(parallel_for, user, rendercache__splat_merge, job, s->tile_count);
+    if (job->merge) rendercache__run_jobs(parallel_for, user, rendercache__splat_merge, job, s->tile_count);
+    s->ran_jobs = job->jobs;
     s->projected = 0;
     for (j = 0; j < job->jobs; j++) s->projected += s->job_projected[j];
 }
 
 /* Runs the splat over elements [0, count) into s->final; parallel_for only
-   when the splat was allocated for several jobs. */
+   when the splat was allocated for several jobs. merge = 0: s->final is
+   not written, and the caller takes the least key of each pixel over the
+   z-buffers itself (rendercache__splat_least), in a pass it makes anyway. */
 static void rendercache__splat_run(rendercache__splat *s, void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t),
                                    void *user, rendercache__source_fn source, rendercache__payload_fn payload,
-                                   const void *src, uint32_t count)
+                                   const void *src, uint32_t count, int merge)
 {
     rendercache__splat_job job;
     job.s = s;
@@ -1558,13 +1581,14 @@ static void rendercache__splat_run(rendercache__splat *s, void (*parallel_for)(v
     job.cover = NULL;
     job.src = src;
     job.element_count = count;
+    job.merge = merge;
     rendercache__splat_execute(&job, parallel_for, user);
 }
 
 /* The same with a cover function (payload always kept). */
 static void rendercache__splat_run_cover(rendercache__splat *s,
                                          void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t), void *user,
-                                         rendercache__cover_fn cover, const void *src, uint32_t count)
+                                         rendercache__cover_fn cover, const void *src, uint32_t count, int merge)
 {
     rendercache__splat_job job;
     job.s = s;
@@ -1573,6 +1597,7 @@ static void rendercache__splat_run_cover(rendercache__splat *s,
     job.cover = cover;
     job.src = src;
     job.element_count = count;
+    job.merge = merge;
     rendercache__splat_execute(&job, parallel_for, user);
 }
 
@@ -2045,7 +2070,7 @@ static void rendercache__splat_points(rendercache *rc, const rendercache__view *
     pr.view = v;
     pr.obj_camera = obj_camera;
     rendercache__splat_run(&rc->splat, rc->parallel_for, rc->parallel_user, rendercache__project_points, NULL, &pr,
-                           rc->capacity);
+                           rc->capacity, 1);
     if (t_project) *t_project += rendercache__now(rc) - t0;
 }
 
@@ -2176,7 +2201,9 @@ static void rendercache__gather_points(rendercache *rc, const uint32_t *index, u
         uint32_t motion = o == RENDERCACHE_MISS ? 0u : rc->obj_motion[o < rc->object_count ? o : 0u];
         if (p + RENDERCACHE__GATHER_AHEAD < rc->pixel_count) {   /* (into the next row or tile too) */
             uint32_t next = index[p + RENDERCACHE__GATHER_AHEAD];
-            RENDERCACHE__PREFETCH(&data[next == RENDERCACHE__NONE ? empty : next]);
+            const rendercache__point *q = &data[next == RENDERCACHE__NONE ? empty : next];
+            RENDERCACHE__PREFETCH(q);
+            RENDERCACHE__PREFETCH((const char *)q + sizeof *q - 1);   /* a record may straddle two cache lines */
         }
         memcpy(image + 3 * (size_t)p, data[k].rgb, 3 * sizeof(float));
         priority[p] = rendercache__point_priority(rc, &data[k], motion);
@@ -2227,19 +2254,16 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
    tie: a hole beside an edge is more often uncovered background). Returns
    the number of points in the window; rgb is set when it is not zero.
    Depths are squared distances, compared with the squared tolerance. */
-static uint32_t rendercache__interpolate(const rendercache *rc, uint32_t x, uint32_t y, int r, float rgb[3])
+static RENDERCACHE__INLINE uint32_t rendercache__interpolate_window(const rendercache *rc, uint32_t x, uint32_t y, int r,
+                                                                    int x0, int x1, int y0, int y1, float rgb[3])
 {
     const float *depth = rc->px_depth, *image = rc->image;
     const uint32_t w = rc->width;
-    int x0 = (int)x - r, x1 = (int)x + r, y0 = (int)y - r, y1 = (int)y + r, qx, qy;
+    int qx, qy;
     float dmin = FLT_MAX, dmax = 0.0f, tol2 = (1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance);
     float near_sum[4] = { 0, 0, 0, 0 }, far_sum[4] = { 0, 0, 0, 0 };
     const float *chosen;
     uint32_t n = 0;
-    if (x0 < 0) x0 = 0;
-    if (y0 < 0) y0 = 0;
-    if (x1 >= (int)w) x1 = (int)w - 1;
-    if (y1 >= (int)rc->height) y1 = (int)rc->height - 1;
     /* without branches (points and holes alternate at random around a hole): selects, then min and max */
     for (qy = y0; qy <= y1; qy++) {
         const float *row = depth + (size_t)qy * w;
@@ -2273,41 +2297,88 @@ static uint32_t rendercache__interpolate(const rendercache *rc, uint32_t x, uint
     return n;
 }
 
+/* The window of radius r around (x, y), clipped to the image. */
+static uint32_t rendercache__interpolate(const rendercache *rc, uint32_t x, uint32_t y, int r, float rgb[3])
+{
+    int x0 = (int)x - r, x1 = (int)x + r, y0 = (int)y - r, y1 = (int)y + r;
+    if (x0 < 0) x0 = 0;
+    if (y0 < 0) y0 = 0;
+    if (x1 >= (int)rc->width) x1 = (int)rc->width - 1;
+    if (y1 >= (int)rc->height) y1 = (int)rc->height - 1;
+    return rendercache__interpolate_window(rc, x, y, r, x0, x1, y0, y1, rgb);
+}
+
+/* The 3x3 window of a hole inside the image (nearly all of them): a fixed
+   window, whose loops the compiler unrolls; the same operations in the same
+   order as rendercache__interpolate, so the same colour bit for bit. */
+static uint32_t rendercache__interpolate3(const rendercache *rc, uint32_t x, uint32_t y, float rgb[3])
+{
+    return rendercache__interpolate_window(rc, x, y, 1, (int)x - 1, (int)x + 1, (int)y - 1, (int)y + 1, rgb);
+}
+
 /* Job per tile: fill the holes left by projection and cull, and rank them. */
 static void rendercache__interpolate_job(void *ctx, uint32_t tile)
 {
     rendercache *rc = (rendercache *)ctx;
+    const uint32_t w = rc->width, h = rc->height, *px_index = rc->px_index;
     uint32_t y0 = tile * RENDERCACHE__TILE_ROWS, y1 = y0 + RENDERCACHE__TILE_ROWS, x, y;
     uint32_t counts[3] = { 0, 0, 0 }, *stats = rc->tile_stats + RENDERCACHE__TILE_STATS * (size_t)tile;
-    if (y1 > rc->height) y1 = rc->height;
+    if (y1 > h) y1 = h;
     for (y = y0; y < y1; y++) {
-        for (x = 0; x < rc->width; x++) {
-            uint32_t p = y * rc->width + x, n;
+        const uint32_t *row = px_index + (size_t)y * w;
+        for (x = 0;; x++) {
+            uint32_t p, n;
+            unsigned char kind;
             float rgb[3];
-            if (rc->px_index[p] != RENDERCACHE__NONE) continue;
-            n = rendercache__interpolate(rc, x, y, 1, rgb);
+            while (x < w && row[x] != RENDERCACHE__NONE) x++;   /* to the next hole (a few percent of the pixels) */
+            if (x == w) break;
+            p = y * w + x;
+            n = x > 0 && y > 0 && x + 1 < w && y + 1 < h ? rendercache__interpolate3(rc, x, y, rgb)
+                                                         : rendercache__interpolate(rc, x, y, 1, rgb);
             if (n >= rc->sparse_neighbours) {
-                rc->kind[p] = RENDERCACHE_PIXEL_INTERPOLATED;
+                kind = RENDERCACHE_PIXEL_INTERPOLATED;
                 counts[0]++;
             } else {
                 n = rendercache__interpolate(rc, x, y, (int)rc->wide_radius, rgb);
                 if (n) {
-                    rc->kind[p] = RENDERCACHE_PIXEL_SPARSE;
+                    kind = RENDERCACHE_PIXEL_SPARSE;
                     counts[1]++;
                 } else {
                     memcpy(rgb, rc->background, sizeof rgb);
-                    rc->kind[p] = RENDERCACHE_PIXEL_EMPTY;
+                    kind = RENDERCACHE_PIXEL_EMPTY;
                     counts[2]++;
                 }
             }
+            rc->kind[p] = kind;
             rc->count[p] = (unsigned char)(n > 255 ? 255 : n);
-            rc->priority[p] = rendercache__hole_priority(rc, rc->kind[p], rc->count[p]);
+            rc->priority[p] = rendercache__hole_priority(rc, kind, rc->count[p]);
             memcpy(rc->image + 3 * (size_t)p, rgb, sizeof rgb);
         }
     }
     stats[2] = counts[0];
     stats[3] = counts[1];
     stats[4] = counts[2];
+}
+
+/* The cull and the hole filling on the calling thread, interleaved: the
+   holes of tile t - 1 are filled right after the cull of tile t, while the
+   rows both touch (the depths and colours around a hole) are still in
+   cache; as two passes, the filling read them back from memory, about one
+   miss per hole and row. A hole reads at most wide_radius (<= 7) rows
+   below its own, which the cull of the next tile (TILE_ROWS = 8 rows) has
+   written, so the filling reads what it read after a full cull pass: the
+   same image, bit for bit. The two are timed together (stats.time_cull):
+   a clock read per tile would cost more than the saving. */
+static void rendercache__cull_and_interpolate(rendercache *rc)
+{
+    uint32_t t;
+    double t0 = rendercache__now(rc);
+    for (t = 0; t <= rc->tile_count; t++) {
+        if (t < rc->tile_count) rendercache__cull_job(rc, t);
+        if (t > 0) rendercache__interpolate_job(rc, t - 1);
+    }
+    rc->stats.time_cull = rendercache__now(rc) - t0;
+    rc->stats.time_interpolate = 0.0;
 }
 
 /* Sums one column of the per-tile statistics. */
@@ -2349,12 +2420,16 @@ RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, cons
     }
     rendercache__compose_objects(rc, &rc->view, rc->obj_camera);
     rendercache__splat_points(rc, &rc->view, rc->obj_camera, &rc->stats.time_project);
-    t1 = rendercache__now(rc);
-    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__cull_job, rc, rc->tile_count);
-    t2 = rendercache__now(rc);
-    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__interpolate_job, rc, rc->tile_count);
-    rc->stats.time_cull = t2 - t1;
-    rc->stats.time_interpolate = rendercache__now(rc) - t2;
+    if (rc->parallel_for) {
+        t1 = rendercache__now(rc);
+        rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__cull_job, rc, rc->tile_count);
+        t2 = rendercache__now(rc);
+        rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__interpolate_job, rc, rc->tile_count);
+        rc->stats.time_cull = t2 - t1;
+        rc->stats.time_interpolate = rendercache__now(rc) - t2;
+    } else {
+        rendercache__cull_and_interpolate(rc);
+    }
     rc->stats.projected = rc->splat.projected;
     rc->stats.visible = rendercache__tile_sum(rc, 0);
     rc->stats.culled = rendercache__tile_sum(rc, 1);
@@ -2813,9 +2888,11 @@ static void rendercache__show(rendercache *rc, uint32_t p, uint32_t slot, float 
     rc->priority[p] = 0.0f;
 }
 
-/* Reads the slots that the next samples will replace in place, all at
-   once, so that their cache misses overlap instead of coming one by one.
-   Returns a value that depends on the reads (for the caller to keep). */
+/* Prefetches the slots that the next samples will replace in place, all at
+   once, so that their cache misses overlap instead of coming one by one
+   (prefetches rather than loads: they need not complete before the
+   insertion goes on). Returns a value that depends on the pixels' slots
+   (for the caller to keep). */
 static uint32_t rendercache__touch_slots(const rendercache *rc, const rendercache_sample *samples, uint32_t n)
 {
     uint32_t i, sum = 0;
@@ -2824,7 +2901,11 @@ static uint32_t rendercache__touch_slots(const rendercache *rc, const rendercach
         uint32_t slot;
         if (s->x >= rc->width || s->y >= rc->height || (s->flags & RENDERCACHE_REQUEST_PREDICTED)) continue;
         slot = rc->px_index[s->y * rc->width + s->x];
-        if (slot != RENDERCACHE__NONE) sum += rc->geo[slot].object + rc->data[slot].base;
+        if (slot == RENDERCACHE__NONE) continue;
+        sum += slot;
+        RENDERCACHE__PREFETCH(&rc->geo[slot]);
+        RENDERCACHE__PREFETCH(&rc->data[slot]);
+        RENDERCACHE__PREFETCH((const char *)&rc->data[slot] + sizeof rc->data[0] - 1);   /* may straddle two lines */
     }
     return sum;
 }
@@ -3842,9 +3923,10 @@ static float rendercache__edge_at(const rendercache__edge *e, float x, float y) 
 
 /* Writes a pixel of a foreground triangle: weights wu, wv, ww (not yet
    normalised) of its corners u, v, w (projected rows, input pixels eu, ev, ew). */
-static void rendercache__warp_shade(const rendercache__warp_src *ws, rendercache__zbuffer *zb, uint32_t pixel, float wu,
-                                    float wv, float ww, const float *u, const float *v, const float *w, uint32_t eu,
-                                    uint32_t ev, uint32_t ew, uint32_t e)
+static RENDERCACHE__INLINE void rendercache__warp_shade(const rendercache__warp_src *ws, rendercache__zbuffer *zb,
+                                                        uint32_t pixel, float wu, float wv, float ww, const float *u,
+                                                        const float *v, const float *w, uint32_t eu, uint32_t ev,
+                                                        uint32_t ew, uint32_t e)
 {
     const rendercache_range_image *img = ws->image;
     const float *cu = img->rgb + 3 * (size_t)eu, *cv = img->rgb + 3 * (size_t)ev, *cw = img->rgb + 3 * (size_t)ew;
@@ -3867,10 +3949,13 @@ static void rendercache__warp_shade(const rendercache__warp_src *ws, rendercache
    squared distance interpolated with the barycentric weights at the pixel
    centres inside (edges included), the object the heaviest corner's. Both
    triangles share the quad's box and the diagonal a c decides between
-   them. */
-static void rendercache__warp_quad(const rendercache__warp_src *ws, rendercache__zbuffer *zb, const float *a,
-                                   const float *b, const float *c, const float *d, uint32_t pa, uint32_t pb, uint32_t pc,
-                                   uint32_t pd, unsigned flags, uint32_t e)
+   them. Inlined, with warp_shade, into the loop over a row's quads: a
+   quad covers about two pixels, and the calls with their dozen arguments
+   cost as much as the pixels. */
+static RENDERCACHE__INLINE void rendercache__warp_quad(const rendercache__warp_src *ws, rendercache__zbuffer *zb,
+                                                       const float *a, const float *b, const float *c, const float *d,
+                                                       uint32_t pa, uint32_t pb, uint32_t pc, uint32_t pd,
+                                                       unsigned flags, uint32_t e)
 {
     const uint32_t w = ws->target->width, h = ws->target->height;
     rendercache__edge ab, bc, ac, cd, da;
@@ -4161,7 +4246,7 @@ static uint32_t rendercache__warp_cover(const void *src, uint32_t job, uint32_t 
 typedef struct rendercache__warp_job {
     rendercache_warper *w;
     rendercache__accum acc, second;
-    const rendercache__raster *raster;   /* extract: the splat */
+    const rendercache__splat *splat;     /* extract: the splat (its z-buffers) */
     const rendercache__warp_set *set;
     float tol2;                          /* squared (1 + tolerance) */
     float t;                             /* blend weight of the second image */
@@ -4179,22 +4264,26 @@ static void rendercache__tile_rows(const rendercache_warper *w, uint32_t tile, u
 static void rendercache__extract_job(void *ctx, uint32_t tile)
 {
     const rendercache__warp_job *j = (const rendercache__warp_job *)ctx;
-    const rendercache__raster *r = j->raster;
+    const rendercache__splat *s = j->splat;
     const rendercache__warp_src *ws = j->set->src;
     uint32_t p0, p1, p;
     rendercache__tile_rows(j->w, tile, &p0, &p1);
-    for (p = p0; p < p1; p++) {
-        uint32_t e = r->index[p];
-        if (e == RENDERCACHE__NONE) {
+    for (p = p0; p < p1; p++) {   /* the splat's merge, fused: one pass over the pixels instead of two */
+        const float *payload;
+        uint64_t k = rendercache__splat_least(s, p, &payload);
+        uint32_t e = (uint32_t)k, bits = (uint32_t)(k >> 32);
+        float depth2;
+        if (k == RENDERCACHE__EMPTY_KEY) {
             j->acc.depth2[p] = FLT_MAX;
             j->acc.object[p] = RENDERCACHE_NO_SAMPLE;
             j->w->how[p] = RENDERCACHE__HOW_EMPTY;
             continue;
         }
-        memcpy(j->acc.rgb + 3 * (size_t)p, r->payload + 4 * (size_t)p, 3 * sizeof(float));
-        memcpy(&j->acc.object[p], r->payload + 4 * (size_t)p + 3, sizeof(uint32_t));
+        memcpy(&depth2, &bits, sizeof depth2);
+        memcpy(j->acc.rgb + 3 * (size_t)p, payload, 3 * sizeof(float));
+        memcpy(&j->acc.object[p], payload + 3, sizeof(uint32_t));
         if (e - ws->first >= ws->count) ws = &j->set->src[rendercache__warp_input_of(j->set, e)];   /* the last one, mostly */
-        j->acc.depth2[p] = j->acc.object[p] == RENDERCACHE_MISS ? RENDERCACHE__FAR2 : r->depth[p] * ws->inv_bias;
+        j->acc.depth2[p] = j->acc.object[p] == RENDERCACHE_MISS ? RENDERCACHE__FAR2 : depth2 * ws->inv_bias;
         j->w->how[p] = RENDERCACHE__HOW_WARPED;
     }
 }
@@ -4207,15 +4296,15 @@ static void rendercache__warp_splat(rendercache_warper *w, const rendercache__wa
     const rendercache__warp_src *last = &set->src[set->count - 1];
     const uint32_t count = last->first + last->count;
     if (foreground)
-        rendercache__splat_run_cover(&w->splat, w->parallel_for, w->parallel_user, rendercache__warp_cover, set, count);
+        rendercache__splat_run_cover(&w->splat, w->parallel_for, w->parallel_user, rendercache__warp_cover, set, count, 0);
     else
         rendercache__splat_run(&w->splat, w->parallel_for, w->parallel_user, rendercache__warp_source,
-                               rendercache__warp_payload, set, count);
+                               rendercache__warp_payload, set, count, 0);
     w->stats.projected += w->splat.projected;
     memset(&job, 0, sizeof job);
     job.w = w;
     job.acc = *acc;
-    job.raster = &w->splat.final;
+    job.splat = &w->splat;
     job.set = set;
     rendercache__run_jobs(w->parallel_for, w->parallel_user, rendercache__extract_job, &job, w->tile_count);
 }
@@ -4434,10 +4523,11 @@ static void rendercache__finish_job(void *ctx, uint32_t tile)
     const rendercache__warp_job *j = (const rendercache__warp_job *)ctx;
     rendercache_warper *w = j->w;
     uint32_t p0, p1, p, *counts = w->tile_counts + 4 * (size_t)tile;
+    const int fisheye = w->target.kind == RENDERCACHE_CAMERA_FISHEYE;   /* other targets have a ray everywhere */
     rendercache__tile_rows(w, tile, &p0, &p1);
     counts[0] = counts[1] = counts[2] = counts[3] = 0;
     for (p = p0; p < p1; p++) {
-        int ray = rendercache__view_has_ray(&w->target, p % w->width, p / w->width);
+        int ray = !fisheye || rendercache__view_has_ray(&w->target, p % w->width, p / w->width);
         if (!ray || j->acc.depth2[p] == FLT_MAX) {
             memcpy(j->acc.rgb + 3 * (size_t)p, w->background, 3 * sizeof(float));
             j->acc.depth2[p] = RENDERCACHE__FAR;

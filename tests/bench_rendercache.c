@@ -118,8 +118,9 @@ enum { P_PROJECT, P_CULL, P_INTERP, P_REQUEST, P_INSERT, P_TOTAL, P_COUNT };
 static void run(const ex_tracer *tracer, ex_pool *shade_pool, uint32_t w, uint32_t h, int threads,
                 double *frame_ms, double *sample_us)
 {
-    /* priority is computed inside cull (pixels with a point) and interp (holes) */
-    static const char *names[P_COUNT] = { "project+z-buffer", "cull+priority", "interp+priority", "request",
+    /* priority is computed inside cull (pixels with a point) and interp (holes); on one thread the
+       two run interleaved, timed together under cull */
+    static const char *names[P_COUNT] = { "project+z-buffer", "cull(+interp on 1 thread)", "interp+priority", "request",
                                           "insert", "total" };
     double times[P_COUNT][FRAMES];
     rendercache_desc d;
