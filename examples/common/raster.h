@@ -51,6 +51,14 @@ typedef struct ex_raster_tri {
     int x0, y0, x1, y1;          /* pixel bounds, inclusive, inside the image */
 } ex_raster_tri;
 
+/* The snapped triangles of one batch of EX__RASTER_BATCH input triangles:
+   the setup's parallel jobs each fill one, in input order. */
+typedef struct ex__raster_batch {
+    ex_raster_tri *tris;
+    uint32_t count, capacity;
+    int failed;                  /* out of memory */
+} ex__raster_batch;
+
 typedef struct ex_raster {
     int width, height;
     float *depth;                /* view depth of the nearest surface; FLT_MAX where empty */
@@ -60,21 +68,28 @@ typedef struct ex_raster {
     float near_plane;            /* default 1e-3 (scene units) */
     ex_pool *pool;               /* optional */
     /* scratch reused by every draw */
-    ex_raster_tri *tris;
-    uint32_t tri_count, tri_capacity;
-    uint32_t *bin_start, *bin_items, bin_capacity;
+    ex__raster_batch *batches;
+    uint32_t batch_count, batch_capacity;
+    const ex_camera *camera;     /* the draw in progress (read by the setup jobs) */
+    const float *positions;
+    const uint32_t *indices;
+    uint32_t tri_count, id_base;
+    uint32_t *bin_start, *bin_items, bin_capacity;   /* items: batch << EX__RASTER_BATCH_BITS | index */
     int tiles_x, tiles_y;
     int counting;
 } ex_raster;
 
 EX_FN void ex_raster_free(ex_raster *r)
 {
+    uint32_t i;
     if (!r) return;
     free(r->depth);
     free(r->id);
     free(r->bary);
     free(r->coverage);
-    free(r->tris);
+    if (r->batches)
+        for (i = 0; i < r->batch_capacity; i++) free(r->batches[i].tris);
+    free(r->batches);
     free(r->bin_start);
     free(r->bin_items);
     memset(r, 0, sizeof *r);
@@ -192,27 +207,32 @@ static int ex__clip_polygon(ex__clip_vertex *poly, int n, float near_plane, floa
 
 /* ---- setup and binning ---------------------------------------------------- */
 
-static int ex__raster_reserve(ex_raster *r, uint32_t tris)
+#define EX__RASTER_BATCH 1024u      /* input triangles per setup job */
+#define EX__RASTER_BATCH_BITS 13     /* a batch holds at most 6 * 1024 < 2^13 triangles (clipping
+                                        by 5 planes leaves at most 8 corners: 6 triangles) */
+
+static int ex__raster_reserve(ex__raster_batch *batch, uint32_t tris)
 {
-    if (tris > r->tri_capacity) {
-        uint32_t cap = r->tri_capacity ? r->tri_capacity : 1024;
+    if (tris > batch->capacity) {
+        uint32_t cap = batch->capacity ? batch->capacity : 1024;
         ex_raster_tri *p;
         while (cap < tris) cap *= 2;
-        p = (ex_raster_tri *)realloc(r->tris, (size_t)cap * sizeof *p);
+        p = (ex_raster_tri *)realloc(batch->tris, (size_t)cap * sizeof *p);
         if (!p) return -1;
-        r->tris = p;
-        r->tri_capacity = cap;
+        batch->tris = p;
+        batch->capacity = cap;
     }
     return 0;
 }
 
 /* Snaps one clipped triangle to the screen and appends it when it covers any
    pixel centre's bounding box. */
-static void ex__raster_emit(ex_raster *r, const ex_camera *c, const ex__clip_vertex *a,
+static void ex__raster_emit(const ex_raster *r, ex__raster_batch *batch, const ex__clip_vertex *a,
                             const ex__clip_vertex *b, const ex__clip_vertex *d, uint32_t id)
 {
+    const ex_camera *c = r->camera;
     const ex__clip_vertex *cv[3];
-    ex_raster_tri *t = &r->tris[r->tri_count];
+    ex_raster_tri *t = &batch->tris[batch->count];
     float aspect = (float)r->width / (float)r->height;
     int64_t area, lo_x, hi_x, lo_y, hi_y;
     int k;
@@ -255,21 +275,30 @@ static void ex__raster_emit(ex_raster *r, const ex_camera *c, const ex__clip_ver
     t->x0 = (int)lo_x; t->x1 = (int)hi_x;
     t->y0 = (int)lo_y; t->y1 = (int)hi_y;
     t->id = id;
-    r->tri_count++;
+    batch->count++;
 }
 
-static int ex__raster_setup(ex_raster *r, const ex_camera *c, const float *positions,
-                            const uint32_t *indices, uint32_t tri_count, uint32_t id_base)
+/* One setup job: input triangles [batch * EX__RASTER_BATCH, ...) into
+   r->batches[batch], transformed to view space, clipped and snapped. */
+static void ex__raster_setup_job(void *ctx, uint32_t index)
 {
+    ex_raster *r = (ex_raster *)ctx;
+    const ex_camera *c = r->camera;
+    ex__raster_batch *batch = &r->batches[index];
     float aspect = (float)r->width / (float)r->height, ax = c->tan_half * aspect, ay = c->tan_half;
-    uint32_t i;
-    r->tri_count = 0;
-    for (i = 0; i < tri_count; i++) {
+    uint32_t i, end = index * EX__RASTER_BATCH + EX__RASTER_BATCH;
+    batch->count = 0;
+    batch->failed = 0;
+    if (end > r->tri_count) end = r->tri_count;
+    for (i = index * EX__RASTER_BATCH; i < end; i++) {
         ex__clip_vertex poly[16];
         int k, n;
-        if (ex__raster_reserve(r, r->tri_count + 6) != 0) return -1;
+        if (ex__raster_reserve(batch, batch->count + 6) != 0) {
+            batch->failed = 1;
+            return;
+        }
         for (k = 0; k < 3; k++) {
-            const float *p = positions + 3 * (size_t)indices[3 * (size_t)i + (size_t)k];
+            const float *p = r->positions + 3 * (size_t)r->indices[3 * (size_t)i + (size_t)k];
             float d[3];
             d[0] = p[0] - c->eye[0];
             d[1] = p[1] - c->eye[1];
@@ -281,26 +310,65 @@ static int ex__raster_setup(ex_raster *r, const ex_camera *c, const float *posit
             poly[k].v = k == 2 ? 1.0f : 0.0f;
         }
         n = ex__clip_polygon(poly, 3, r->near_plane, ax, ay);
-        for (k = 1; k + 1 < n; k++) ex__raster_emit(r, c, &poly[0], &poly[k], &poly[k + 1], id_base + i);
+        for (k = 1; k + 1 < n; k++) ex__raster_emit(r, batch, &poly[0], &poly[k], &poly[k + 1], r->id_base + i);
     }
+}
+
+/* Sets up the draw's triangles in batches, in parallel on the pool; the
+   batches keep input order, so the result does not depend on the thread
+   count. */
+static int ex__raster_setup(ex_raster *r, const ex_camera *c, const float *positions,
+                            const uint32_t *indices, uint32_t tri_count, uint32_t id_base)
+{
+    uint32_t batches = (tri_count + EX__RASTER_BATCH - 1) / EX__RASTER_BATCH, i;
+    if (batches > r->batch_capacity) {
+        ex__raster_batch *p = (ex__raster_batch *)realloc(r->batches, (size_t)batches * sizeof *p);
+        if (!p) return -1;
+        memset(p + r->batch_capacity, 0, (size_t)(batches - r->batch_capacity) * sizeof *p);
+        r->batches = p;
+        r->batch_capacity = batches;
+    }
+    r->batch_count = batches;
+    r->camera = c;
+    r->positions = positions;
+    r->indices = indices;
+    r->tri_count = tri_count;
+    r->id_base = id_base;
+    ex_pool_parallel_for(r->pool, ex__raster_setup_job, r, batches);
+    for (i = 0; i < batches; i++)
+        if (r->batches[i].failed) return -1;
     return 0;
 }
 
-/* Buckets triangle indices per tile, in triangle order (so results do not
-   depend on how tiles are scheduled). */
+/* One pass over the set-up triangles in input order and the tiles each
+   overlaps: counts them into bin_start[tile + 1] when fill is NULL, else
+   stores each triangle's item (batch << EX__RASTER_BATCH_BITS | index) at
+   fill[tile]++. Returns the number of (triangle, tile) pairs. */
+static uint32_t ex__raster_bin_pass(ex_raster *r, uint32_t *fill)
+{
+    uint32_t batch, i, total = 0;
+    for (batch = 0; batch < r->batch_count; batch++)
+        for (i = 0; i < r->batches[batch].count; i++) {
+            const ex_raster_tri *t = &r->batches[batch].tris[i];
+            int tx, ty;
+            for (ty = t->y0 / EX_RASTER_TILE; ty <= t->y1 / EX_RASTER_TILE; ty++)
+                for (tx = t->x0 / EX_RASTER_TILE; tx <= t->x1 / EX_RASTER_TILE; tx++) {
+                    int tile = ty * r->tiles_x + tx;
+                    if (fill) r->bin_items[fill[tile]++] = batch << EX__RASTER_BATCH_BITS | i;
+                    else r->bin_start[tile + 1]++;
+                    total++;
+                }
+        }
+    return total;
+}
+
+/* Buckets triangles per tile, in input order (so results do not depend on
+   how tiles are scheduled). */
 static int ex__raster_bin(ex_raster *r)
 {
-    uint32_t tiles = (uint32_t)(r->tiles_x * r->tiles_y), i, total = 0;
+    uint32_t tiles = (uint32_t)(r->tiles_x * r->tiles_y), i, total, *fill;
     memset(r->bin_start, 0, (tiles + 1) * sizeof(uint32_t));
-    for (i = 0; i < r->tri_count; i++) {
-        const ex_raster_tri *t = &r->tris[i];
-        int tx, ty;
-        for (ty = t->y0 / EX_RASTER_TILE; ty <= t->y1 / EX_RASTER_TILE; ty++)
-            for (tx = t->x0 / EX_RASTER_TILE; tx <= t->x1 / EX_RASTER_TILE; tx++) {
-                r->bin_start[ty * r->tiles_x + tx + 1]++;
-                total++;
-            }
-    }
+    total = ex__raster_bin_pass(r, NULL);
     for (i = 0; i < tiles; i++) r->bin_start[i + 1] += r->bin_start[i];
     if (total > r->bin_capacity) {
         uint32_t *p = (uint32_t *)realloc(r->bin_items, (size_t)total * sizeof(uint32_t));
@@ -308,19 +376,11 @@ static int ex__raster_bin(ex_raster *r)
         r->bin_items = p;
         r->bin_capacity = total;
     }
-    {
-        uint32_t *fill = (uint32_t *)malloc((tiles + 1) * sizeof(uint32_t));
-        if (!fill) return -1;
-        memcpy(fill, r->bin_start, (tiles + 1) * sizeof(uint32_t));
-        for (i = 0; i < r->tri_count; i++) {
-            const ex_raster_tri *t = &r->tris[i];
-            int tx, ty;
-            for (ty = t->y0 / EX_RASTER_TILE; ty <= t->y1 / EX_RASTER_TILE; ty++)
-                for (tx = t->x0 / EX_RASTER_TILE; tx <= t->x1 / EX_RASTER_TILE; tx++)
-                    r->bin_items[fill[ty * r->tiles_x + tx]++] = i;
-        }
-        free(fill);
-    }
+    fill = (uint32_t *)malloc((tiles + 1) * sizeof(uint32_t));
+    if (!fill) return -1;
+    memcpy(fill, r->bin_start, (tiles + 1) * sizeof(uint32_t));
+    ex__raster_bin_pass(r, fill);
+    free(fill);
     return 0;
 }
 
@@ -390,8 +450,11 @@ static void ex__raster_tile_job(void *ctx, uint32_t tile)
     uint32_t i;
     if (x1 >= r->width) x1 = r->width - 1;
     if (y1 >= r->height) y1 = r->height - 1;
-    for (i = r->bin_start[tile]; i < r->bin_start[tile + 1]; i++)
-        ex__raster_tri_in_tile(r, &r->tris[r->bin_items[i]], x0, y0, x1, y1);
+    for (i = r->bin_start[tile]; i < r->bin_start[tile + 1]; i++) {
+        uint32_t item = r->bin_items[i];
+        const ex__raster_batch *batch = &r->batches[item >> EX__RASTER_BATCH_BITS];
+        ex__raster_tri_in_tile(r, &batch->tris[item & ((1u << EX__RASTER_BATCH_BITS) - 1u)], x0, y0, x1, y1);
+    }
 }
 
 static int ex__raster_run(ex_raster *r, const ex_camera *c, const float *positions,
