@@ -348,25 +348,32 @@ static void bp_scene(scene *s, const float (*blk)[4][3], int count)
     for (k = 0; k < count; k++) add_quad(s, blk[k], black);
 }
 
-/* Both methods on a 9 x 9 grid of floor points under and beside the source. */
-static agreement compare_bp_scene(const char *name, const float (*blk)[4][3], int count)
+/* Both methods on a 9 x 9 grid of floor points (patch 0, z = 0) under and
+   beside the source: 1e-9 relative as for the office, below 1e-3 W/m^2
+   absolute. */
+static void compare_floor_grid(const method_pair *m, agreement *a)
 {
-    static scene s;
-    method_pair m;
-    agreement a;
     int i, j;
-    memset(&a, 0, sizeof a);
-    bp_scene(&s, blk, count);
-    if (!solve_both(scene_desc(&s), &m)) return a;
     for (i = 0; i < 9; i++)
         for (j = 0; j < 9; j++) {
             float p[3];
             p[0] = (float)(-0.9 + 1.8 * (i + 0.37) / 9);
             p[1] = (float)(-0.9 + 1.8 * (j + 0.61) / 9);
             p[2] = 0.0f;
-            /* 1e-9 as for the office; below 1e-3 W/m^2 absolute */
-            compare_point(&m, 0, p, NULL, 1e-3, 1e-9, &a);
+            compare_point(m, 0, p, NULL, 1e-3, 1e-9, a);
         }
+}
+
+/* Both methods on a 9 x 9 grid of floor points under and beside the source. */
+static agreement compare_bp_scene(const char *name, const float (*blk)[4][3], int count)
+{
+    static scene s;
+    method_pair m;
+    agreement a;
+    memset(&a, 0, sizeof a);
+    bp_scene(&s, blk, count);
+    if (!solve_both(scene_desc(&s), &m)) return a;
+    compare_floor_grid(&m, &a);
     test_note("%s: %u floor points (%u partly hidden): largest relative difference %.2e", name, a.points, a.partly,
               a.worst_rel);
     free_both(&m);
@@ -641,7 +648,7 @@ static void test_plugged_holes(void)
         static scene s;
         method_pair m;
         agreement a;
-        int n = box_faces(lo, hi, 15u, blk), i, j; /* the four sides along z */
+        int n = box_faces(lo, hi, 15u, blk); /* the four sides along z */
         uint32_t plug = RADINTERP__NONE;
         memset(&a, 0, sizeof a);
         /* the plug, facing down (toward the floor points) */
@@ -658,14 +665,7 @@ static void test_plugged_holes(void)
             /* the plug is patch 2 + 4 (after the floor, the source and the sides) when it covers the hole */
             CHECK_EQ_INT(plug, full ? 6u : RADINTERP__NONE);
         }
-        for (i = 0; i < 9; i++)
-            for (j = 0; j < 9; j++) {
-                float p[3];
-                p[0] = (float)(-0.9 + 1.8 * (i + 0.37) / 9);
-                p[1] = (float)(-0.9 + 1.8 * (j + 0.61) / 9);
-                p[2] = 0.0f;
-                compare_point(&m, 0, p, NULL, 1e-3, 1e-9, &a);
-            }
+        compare_floor_grid(&m, &a);
         test_note("tube over the floor, %s plug: %u points (%u partly hidden), largest relative difference %.2e",
                   full ? "covering" : "half", a.points, a.partly, a.worst_rel);
         CHECK(a.partly > 20);
