@@ -8048,8 +8048,8 @@ typedef struct radinterp__sample_ctx {
     const radinterp__builder *b;
     const radinterp__otri *tris;
     const float *pos;
-    const uint32_t *todo;        /* triangles to sample */
-    uint32_t first, count;       /* this batch: todo[first .. first + count) */
+    const uint32_t *unsampled;   /* triangles with no samples from an earlier pass */
+    uint32_t first, count;       /* this batch: unsampled[first .. first + count) */
     float *coeff, *error;        /* 18 and 1 per triangle */
     radinterp_result *status;    /* per job of the batch */
 } radinterp__sample_ctx;
@@ -8114,7 +8114,7 @@ static void radinterp__sample_job(void *ctx_, uint32_t index)
     if (end > ctx->count) end = ctx->count;
     ctx->status[index] = RADINTERP_OK;
     for (; i < end; i++) {
-        uint32_t t = ctx->todo[ctx->first + i];
+        uint32_t t = ctx->unsampled[ctx->first + i];
         radinterp_result r = radinterp__sample_triangle(ctx->b, &ctx->tris[t], ctx->pos, ctx->coeff + 18 * (size_t)t,
                                                         ctx->error + t);
         if (r != RADINTERP_OK) ctx->status[index] = r;
@@ -8123,8 +8123,8 @@ static void radinterp__sample_job(void *ctx_, uint32_t index)
 
 /* Samples the listed triangles in batches of jobs, with progress calls
    between batches. */
-static radinterp_result radinterp__sample_all(radinterp__builder *b, const uint32_t *todo, uint32_t n, float *coeff,
-                                              float *error)
+static radinterp_result radinterp__sample_all(radinterp__builder *b, const uint32_t *unsampled, uint32_t n,
+                                              float *coeff, float *error)
 {
     radinterp__sample_ctx ctx;
     radinterp_result status[RADINTERP__SAMPLE_BATCH];
@@ -8132,7 +8132,7 @@ static radinterp_result radinterp__sample_all(radinterp__builder *b, const uint3
     ctx.b = b;
     ctx.tris = (const radinterp__otri *)b->tris.data;
     ctx.pos = (const float *)b->pos.data;
-    ctx.todo = todo;
+    ctx.unsampled = unsampled;
     ctx.coeff = coeff;
     ctx.error = error;
     ctx.status = status;
@@ -8181,13 +8181,16 @@ static void radinterp__interp_free(const radinterp_allocator *a, radinterp__inte
    triangle is unchanged, else sampled. Remembers them for the next pass. */
 static radinterp_result radinterp__interpolants(radinterp__builder *b, radinterp__interp *ip)
 {
-    uint32_t n = (uint32_t)b->tris.count, i, key[10], todo_n = 0, *todo;
+    uint32_t n = (uint32_t)b->tris.count, i, key[10], unsampled_n = 0, *unsampled;
     const radinterp__otri *tris = (const radinterp__otri *)b->tris.data;
     radinterp_result res;
     ip->coeff = (float *)radinterp__alloc_array(&b->a, (size_t)n * 18, sizeof(float));
     ip->error = (float *)radinterp__alloc_array(&b->a, n, sizeof(float));
-    todo = (uint32_t *)radinterp__alloc_array(&b->a, n, sizeof(uint32_t));
-    if (!ip->coeff || !ip->error || !todo) { radinterp__free(&b->a, todo); return RADINTERP_ERROR_OUT_OF_MEMORY; }
+    unsampled = (uint32_t *)radinterp__alloc_array(&b->a, n, sizeof(uint32_t));
+    if (!ip->coeff || !ip->error || !unsampled) {
+        radinterp__free(&b->a, unsampled);
+        return RADINTERP_ERROR_OUT_OF_MEMORY;
+    }
     for (i = 0; i < n; i++) {
         uint32_t old = RADINTERP__NONE;
         if (ip->prev.cap) {
@@ -8198,11 +8201,11 @@ static radinterp_result radinterp__interpolants(radinterp__builder *b, radinterp
             memcpy(ip->coeff + 18 * (size_t)i, ip->prev_coeff + 18 * (size_t)old, 18 * sizeof(float));
             ip->error[i] = ip->prev_error[old];
         } else {
-            todo[todo_n++] = i;
+            unsampled[unsampled_n++] = i;
         }
     }
-    res = radinterp__sample_all(b, todo, todo_n, ip->coeff, ip->error);
-    radinterp__free(&b->a, todo);
+    res = radinterp__sample_all(b, unsampled, unsampled_n, ip->coeff, ip->error);
+    radinterp__free(&b->a, unsampled);
     if (res != RADINTERP_OK) return res;
     if (b->desc->refine) {  /* remember this pass */
         radinterp__free(&b->a, ip->prev_coeff);
