@@ -2910,31 +2910,29 @@ static int radinterp__patch_poly(const radinterp__patch *pt, double (*v)[3])
     return (int)pt->count;
 }
 
-/* Largest signed distance of a patch's corners from a plane. */
-static double radinterp__patch_front(const radinterp__patch *pt, const double *n, double d)
+/* Largest signed distance of a polygon's corners (a patch's or a node's)
+   from a plane. */
+static double radinterp__corners_front(const float (*v)[3], uint32_t count, const double *n, double d)
 {
     double best = -DBL_MAX;
     uint32_t i;
-    for (i = 0; i < pt->count; i++) {
+    for (i = 0; i < count; i++) {
         double x[3], s;
-        radinterp__d3_from_f(pt->v[i], x);
+        radinterp__d3_from_f(v[i], x);
         s = radinterp__d3_dot(n, x) - d;
         if (s > best) best = s;
     }
     return best;
 }
 
+static double radinterp__patch_front(const radinterp__patch *pt, const double *n, double d)
+{
+    return radinterp__corners_front((const float (*)[3])pt->v, pt->count, n, d);
+}
+
 static double radinterp__node_front(const radinterp__node *nd, const double *n, double d)
 {
-    double best = -DBL_MAX;
-    uint32_t i;
-    for (i = 0; i < nd->count; i++) {
-        double x[3], s;
-        radinterp__d3_from_f(nd->v[i], x);
-        s = radinterp__d3_dot(n, x) - d;
-        if (s > best) best = s;
-    }
-    return best;
+    return radinterp__corners_front((const float (*)[3])nd->v, nd->count, n, d);
 }
 
 /* ---- quadtree nodes ---------------------------------------------------- */
