@@ -767,72 +767,96 @@ static void translation(float x, float m[12])
     m[3] = x;
 }
 
+/* A box of the channel-1 texture in front of the wall, between depths z0
+   and z1, moving in x from -1.2 at time 0 (image a) to 1.2 at time 1 (image
+   b); ref is the render at 0.5 and motion the objects' transforms: the wall
+   (object 0) static, the box (object 1) translated. */
+typedef struct sliding_box {
+    scene s;
+    rendercache_camera cam;
+    rendercache_range_image *a, *b, *ref;
+    float world[3][2 * 12];
+    rendercache_motion motion;
+} sliding_box;
+
+static void sliding_box_free(sliding_box *sb)
+{
+    rendercache_range_image_destroy(sb->a);
+    rendercache_range_image_destroy(sb->b);
+    rendercache_range_image_destroy(sb->ref);
+}
+
+static int sliding_box_init(sliding_box *sb, float z0, float z1)
+{
+    scene *s = &sb->s;
+    memset(sb, 0, sizeof *sb);
+    sb->cam = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, 0, 0, 0, 0, 0, 10, 50, 64, 48);
+    s->wall_z = 10.0f;
+    s->wall_half = 40.0f;
+    s->box_count = 1;
+    s->boxes[0].lo[0] = -1.0f; s->boxes[0].lo[1] = -1.0f; s->boxes[0].lo[2] = z0;
+    s->boxes[0].hi[0] = 1.0f; s->boxes[0].hi[1] = 1.0f; s->boxes[0].hi[2] = z1;
+    s->boxes[0].channel = 1;
+    s->boxes[0].shift[0] = -1.2f;
+    sb->a = render(s, &sb->cam, 0.0);
+    s->boxes[0].shift[0] = 1.2f;
+    sb->b = render(s, &sb->cam, 1.0);
+    s->boxes[0].shift[0] = 0.0f;
+    sb->ref = render(s, &sb->cam, 0.5);
+    translation(0.0f, sb->world[0]); translation(0.0f, sb->world[1]); translation(0.0f, sb->world[2]);
+    translation(-1.2f, sb->world[0] + 12); translation(1.2f, sb->world[1] + 12); translation(0.0f, sb->world[2] + 12);
+    sb->motion.object_count = 2;
+    sb->motion.world_a = sb->world[0];
+    sb->motion.world_b = sb->world[1];
+    sb->motion.world_t = sb->world[2];
+    return sb->a && sb->b && sb->ref;
+}
+
 static void test_motion_blend_does_not_ghost(void)
 {
-    scene s;
-    rendercache_camera cam = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, 0, 0, 0, 0, 0, 10, 50, 64, 48);
-    rendercache_range_image *a, *b, *ref, *out = NULL;
+    sliding_box sb;
+    rendercache_range_image *out = NULL;
     rendercache_warper *w = make_warper(NULL, NULL);
-    rendercache_motion motion;
-    float world[3][2 * 12];
     uint32_t x, y, checked = 0, wrong_motion = 0, wrong_plain = 0;
-    memset(&s, 0, sizeof s);
-    s.wall_z = 10.0f;
-    s.wall_half = 40.0f;
-    s.box_count = 1;
-    s.boxes[0].lo[0] = -1.0f; s.boxes[0].lo[1] = -1.0f; s.boxes[0].lo[2] = 6.0f;
-    s.boxes[0].hi[0] = 1.0f; s.boxes[0].hi[1] = 1.0f; s.boxes[0].hi[2] = 6.5f;
-    s.boxes[0].channel = 1;
-    s.boxes[0].shift[0] = -1.2f;
-    a = render(&s, &cam, 0.0);
-    s.boxes[0].shift[0] = 1.2f;
-    b = render(&s, &cam, 1.0);
-    s.boxes[0].shift[0] = 0.0f;
-    ref = render(&s, &cam, 0.5);
-    if (!CHECK(a && b && ref && w) || !CHECK_EQ_INT(rendercache_range_image_create(&cam, NULL, &out), RENDERCACHE_OK))
+    if (!CHECK(sliding_box_init(&sb, 6.0f, 6.5f) && w) ||
+        !CHECK_EQ_INT(rendercache_range_image_create(&sb.cam, NULL, &out), RENDERCACHE_OK)) {
+        sliding_box_free(&sb);
+        rendercache_warper_destroy(w);
         return;
-    /* object 0 (the wall) is static, object 1 (the box) moves */
-    translation(0.0f, world[0]); translation(0.0f, world[1]); translation(0.0f, world[2]);
-    translation(-1.2f, world[0] + 12); translation(1.2f, world[1] + 12); translation(0.0f, world[2] + 12);
-    motion.object_count = 2;
-    motion.world_a = world[0];
-    motion.world_b = world[1];
-    motion.world_t = world[2];
-    CHECK_EQ_INT(rendercache_blend_motion(w, a, b, 0.5f, &motion, RENDERCACHE_FILL_BOTH, out), RENDERCACHE_OK);
+    }
+    CHECK_EQ_INT(rendercache_blend_motion(w, sb.a, sb.b, 0.5f, &sb.motion, RENDERCACHE_FILL_BOTH, out), RENDERCACHE_OK);
     CHECK_CLOSE(out->time, 0.5, 0.0, 1e-12);
     for (y = 0; y < 48; y++)
         for (x = 0; x < 64; x++) {
             size_t p = (size_t)y * 64 + x;
             uint32_t id;
             int k, off = 0;
-            if (!far_from_edges(&s, &cam, x, y, &id)) continue;
+            if (!far_from_edges(&sb.s, &sb.cam, x, y, &id)) continue;
             checked++;
             /* both images show each surface point with the same colour, so a blend of the same
                point is exact up to the interpolation inside a quad: 1e-3 */
-            for (k = 0; k < 3; k++) off |= fabsf(out->rgb[3 * p + k] - ref->rgb[3 * p + k]) > 1e-3f;
+            for (k = 0; k < 3; k++) off |= fabsf(out->rgb[3 * p + k] - sb.ref->rgb[3 * p + k]) > 1e-3f;
             wrong_motion += out->object[p] != id || off;
         }
     test_note("motion blend: %u of %u interior pixels differ from the render at t = 0.5", wrong_motion, checked);
     CHECK_EQ_INT(wrong_motion, 0);
-    CHECK_EQ_INT(rendercache_blend(a, b, 0.5f, out), RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_blend(sb.a, sb.b, 0.5f, out), RENDERCACHE_OK);
     for (y = 0; y < 48; y++)
         for (x = 0; x < 64; x++) {
             size_t p = (size_t)y * 64 + x;
             uint32_t id;
             int k, off = 0;
-            if (!far_from_edges(&s, &cam, x, y, &id)) continue;
-            for (k = 0; k < 3; k++) off |= fabsf(out->rgb[3 * p + k] - ref->rgb[3 * p + k]) > 1e-3f;
+            if (!far_from_edges(&sb.s, &sb.cam, x, y, &id)) continue;
+            for (k = 0; k < 3; k++) off |= fabsf(out->rgb[3 * p + k] - sb.ref->rgb[3 * p + k]) > 1e-3f;
             wrong_plain += off;
         }
     test_note("pixelwise blend: %u of %u interior pixels differ (ghosts)", wrong_plain, checked);
     CHECK(wrong_plain > 200);
     /* a singular transform at an image's time is refused */
-    memset(world[0] + 12, 0, 12 * sizeof(float));
-    CHECK_EQ_INT(rendercache_blend_motion(w, a, b, 0.5f, &motion, RENDERCACHE_FILL_BOTH, out),
+    memset(sb.world[0] + 12, 0, 12 * sizeof(float));
+    CHECK_EQ_INT(rendercache_blend_motion(w, sb.a, sb.b, 0.5f, &sb.motion, RENDERCACHE_FILL_BOTH, out),
                  RENDERCACHE_ERROR_INVALID_ARGUMENT);
-    rendercache_range_image_destroy(a);
-    rendercache_range_image_destroy(b);
-    rendercache_range_image_destroy(ref);
+    sliding_box_free(&sb);
     rendercache_range_image_destroy(out);
     rendercache_warper_destroy(w);
 }
@@ -842,54 +866,35 @@ static void test_motion_blend_does_not_ghost(void)
    pixels to the wall's, or they stretch across the wall as the box moves. */
 static void test_motion_blend_keeps_objects_apart(void)
 {
-    scene s;
-    rendercache_camera cam = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, 0, 0, 0, 0, 0, 10, 50, 64, 48);
-    rendercache_range_image *a, *b, *ref, *out = NULL;
+    sliding_box sb;
+    rendercache_range_image *out = NULL;
     rendercache_warper *w = make_warper(NULL, NULL);
-    rendercache_motion motion;
-    float world[3][2 * 12];
     uint32_t x, y, checked = 0, wrong = 0;
-    memset(&s, 0, sizeof s);
-    s.wall_z = 10.0f;
-    s.wall_half = 40.0f;
-    s.box_count = 1;
-    s.boxes[0].lo[0] = -1.0f; s.boxes[0].lo[1] = -1.0f; s.boxes[0].lo[2] = 9.9f;
-    s.boxes[0].hi[0] = 1.0f; s.boxes[0].hi[1] = 1.0f; s.boxes[0].hi[2] = 10.0f;
-    s.boxes[0].channel = 1;
-    s.boxes[0].shift[0] = -1.2f;
-    a = render(&s, &cam, 0.0);
-    s.boxes[0].shift[0] = 1.2f;
-    b = render(&s, &cam, 1.0);
-    s.boxes[0].shift[0] = 0.0f;
-    ref = render(&s, &cam, 0.5);
-    if (!CHECK(a && b && ref && w) || !CHECK_EQ_INT(rendercache_range_image_create(&cam, NULL, &out), RENDERCACHE_OK))
+    if (!CHECK(sliding_box_init(&sb, 9.9f, 10.0f) && w) ||
+        !CHECK_EQ_INT(rendercache_range_image_create(&sb.cam, NULL, &out), RENDERCACHE_OK)) {
+        sliding_box_free(&sb);
+        rendercache_warper_destroy(w);
         return;
-    translation(0.0f, world[0]); translation(0.0f, world[1]); translation(0.0f, world[2]);
-    translation(-1.2f, world[0] + 12); translation(1.2f, world[1] + 12); translation(0.0f, world[2] + 12);
-    motion.object_count = 2;
-    motion.world_a = world[0];
-    motion.world_b = world[1];
-    motion.world_t = world[2];
-    CHECK_EQ_INT(rendercache_blend_motion(w, a, b, 0.5f, &motion, RENDERCACHE_FILL_FOREGROUND, out), RENDERCACHE_OK);
+    }
+    CHECK_EQ_INT(rendercache_blend_motion(w, sb.a, sb.b, 0.5f, &sb.motion, RENDERCACHE_FILL_FOREGROUND, out),
+                 RENDERCACHE_OK);
     for (y = 0; y < 48; y++)
         for (x = 0; x < 64; x++) {
             size_t p = (size_t)y * 64 + x;
             uint32_t id;
             int k, off = 0;
-            if (!far_from_edges(&s, &cam, x, y, &id)) continue;
+            if (!far_from_edges(&sb.s, &sb.cam, x, y, &id)) continue;
             checked++;
             /* same tolerance as the ghost test: interpolation inside a quad */
             for (k = 0; k < 3; k++) off |= out->object[p] != RENDERCACHE_NO_SAMPLE &&
-                                           fabsf(out->rgb[3 * p + k] - ref->rgb[3 * p + k]) > 1e-3f;
+                                           fabsf(out->rgb[3 * p + k] - sb.ref->rgb[3 * p + k]) > 1e-3f;
             wrong += off || (out->object[p] != RENDERCACHE_NO_SAMPLE && out->object[p] != id);
         }
     test_note("box against a wall, motion blend with foreground fill: %u of %u interior pixels wrong",
               wrong, checked);
     CHECK(checked > 1000);
     CHECK_EQ_INT(wrong, 0);
-    rendercache_range_image_destroy(a);
-    rendercache_range_image_destroy(b);
-    rendercache_range_image_destroy(ref);
+    sliding_box_free(&sb);
     rendercache_range_image_destroy(out);
     rendercache_warper_destroy(w);
 }
