@@ -2,9 +2,12 @@
 #
 #   make          build the examples
 #   make test     install the reference libraries if needed, compile-check every
-#                 header, run unit tests (ASan+UBSan) and reference tests
+#                 header, run unit tests (ASan+UBSan), replay the fuzz corpora,
+#                 run reference tests
 #   make bench    run the benchmarks (throughput next to the papers' figures)
 #   make demo     run the main example
+#   make fuzz     run every fuzz target for FUZZ_SECONDS (default 60) with libFuzzer
+#   make fuzz-corpus  rewrite the fuzz seeds from the headers' save functions
 #   make clean
 #
 # Files are found by name, so adding one needs no edit here:
@@ -13,6 +16,7 @@
 #   tests/ref_*.c     reference tests: linked with tests/reference (Embree, OpenEXR)
 #   tests/bench_*.c   benchmarks: optimised, linked with tests/reference
 #   examples/*.c      examples: one program each, `cc examples/x.c -lm` builds it
+#   tests/fuzz/fuzz_*.c  fuzz targets (tests/fuzz/fuzz.h), corpus tests/fuzz/corpus/*
 
 CC      ?= cc
 CXX     ?= g++
@@ -40,6 +44,18 @@ EXAMPLE_BINS := $(patsubst examples/%.c,$(BUILD)/examples/%,$(wildcard examples/
 REF_OBJS     := $(patsubst tests/reference/%.c,$(BUILD)/ref/%.o,$(wildcard tests/reference/*.c))
 LINKAGE_BIN  := $(BUILD)/tests/linkage
 
+# Fuzz targets (tests/fuzz/fuzz.h), each built twice: replay_NAME replays the
+# committed corpus tests/fuzz/corpus/NAME under ASan+UBSan with any compiler
+# (make test); fuzz_NAME is the libFuzzer program (clang, make fuzz).
+FUZZ_NAMES   := $(patsubst tests/fuzz/fuzz_%.c,%,$(wildcard tests/fuzz/fuzz_*.c))
+REPLAY_BINS  := $(patsubst %,$(BUILD)/fuzz/replay_%,$(FUZZ_NAMES))
+FUZZ_BINS    := $(patsubst %,$(BUILD)/fuzz/fuzz_%,$(FUZZ_NAMES))
+FUZZ_SECONDS ?= 60
+
+# UBSan of the fuzz targets: clang's undefined group (with float-cast-overflow,
+# which gcc's lacks) and implicit integer conversions that change a value.
+CLANG_UBSAN := -fsanitize=undefined,implicit-conversion -fno-sanitize-recover=all -fno-omit-frame-pointer
+
 # Compile checks: each header with its implementation, as C99, C11 and C++,
 # with gcc and (when present) clang, and once as static.
 CHECK_KINDS := c99 c11 cxx static
@@ -56,16 +72,17 @@ REF_CFLAGS = $(shell pkg-config --cflags OpenEXR 2>/dev/null)
 REF_LIBS   = -lembree3 $(shell pkg-config --libs OpenEXR 2>/dev/null)
 
 .SECONDARY:
-.PHONY: all examples test test-build bench bench-build demo deps clean
+.PHONY: all examples test test-build bench bench-build demo deps clean fuzz fuzz-build fuzz-corpus
 
 all: examples
 examples: $(EXAMPLE_BINS)
 
 test: deps
 	@$(MAKE) --no-print-directory -j$(NPROC) test-build
-	@tests/run.sh $(LINKAGE_BIN) $(UNIT_BINS) $(TSAN_BINS) $(REF_BINS)
+	@tests/run.sh $(LINKAGE_BIN) $(UNIT_BINS) $(REPLAY_BINS) $(TSAN_BINS) $(REF_BINS)
 
-test-build: $(CHECK_OBJS) $(LINKAGE_BIN) $(UNIT_BINS) $(TSAN_BINS) $(REF_BINS) $(EXAMPLE_BINS)
+test-build: $(CHECK_OBJS) $(LINKAGE_BIN) $(UNIT_BINS) $(REPLAY_BINS) $(TSAN_BINS) $(REF_BINS) \
+            $(EXAMPLE_BINS)
 
 bench: deps
 	@$(MAKE) --no-print-directory -j$(NPROC) bench-build
@@ -121,11 +138,34 @@ $(BUILD)/ref/%.o: tests/reference/%.c $(ALL_H) | $(BUILD)/ref
 $(BUILD)/bench/bench_%: tests/bench_%.c $(REF_OBJS) $(ALL_H) | $(BUILD)/bench
 	$(CC) $(CFLAGS_PROJECT) $(BENCH_OPT) $(REF_CFLAGS) $< $(REF_OBJS) -o $@ $(REF_LIBS) $(LIBS)
 
+# --- fuzzing ----------------------------------------------------------------
+$(BUILD)/fuzz/replay_%: tests/fuzz/fuzz_%.c tests/fuzz/replay.c tests/fuzz/fuzz.h $(ALL_H) | $(BUILD)/fuzz
+	$(CC) $(CFLAGS_PROJECT) -O1 -g $(SAN) $< tests/fuzz/replay.c -o $@ $(LIBS)
+
+$(BUILD)/fuzz/fuzz_%: tests/fuzz/fuzz_%.c tests/fuzz/fuzz.h $(ALL_H) | $(BUILD)/fuzz
+	$(CLANG) $(CFLAGS_PROJECT) -O1 -g -fsanitize=fuzzer,address $(CLANG_UBSAN) $< -o $@ $(LIBS)
+
+# Installs clang's fuzzer runtime when it is missing and it can
+# (tests/deps_fuzz.sh); otherwise says what to install and skips.
+fuzz:
+	@if tests/deps_fuzz.sh; then \
+	    $(MAKE) --no-print-directory -j$(NPROC) fuzz-build && \
+	    tests/fuzz/run.sh $(FUZZ_SECONDS) $(BUILD) $(FUZZ_BINS); \
+	 else echo "fuzz: skipped: clang cannot build libFuzzer programs here (see above)"; fi
+
+fuzz-build: $(FUZZ_BINS) $(REPLAY_BINS)
+
+fuzz-corpus: $(BUILD)/fuzz/make_corpus
+	$(BUILD)/fuzz/make_corpus tests/fuzz/corpus
+
+$(BUILD)/fuzz/make_corpus: tests/fuzz/make_corpus.c tests/fuzz/fuzz.h $(ALL_H) | $(BUILD)/fuzz
+	$(CC) $(CFLAGS_PROJECT) -O1 -g $(SAN) $< -o $@ $(LIBS)
+
 # --- examples -------------------------------------------------------------
 $(BUILD)/examples/%: examples/%.c $(ALL_H) | $(BUILD)/examples
 	$(CC) $(CFLAGS_PROJECT) $(OPT) $< -o $@ $(LIBS)
 
-$(BUILD)/check $(BUILD)/tests $(BUILD)/ref $(BUILD)/bench $(BUILD)/examples:
+$(BUILD)/check $(BUILD)/tests $(BUILD)/ref $(BUILD)/bench $(BUILD)/examples $(BUILD)/fuzz:
 	@mkdir -p $@
 
 clean:

@@ -1,0 +1,88 @@
+/* Fuzz target of rendercache_range_image_load (see tests/fuzz/fuzz.h): loads
+   the bytes as a range image; an image that loads must have a camera that
+   casts rays through its pixels and projects points along them, blend with
+   itself and give its fitness (pixelwise, so every array is read whole under
+   ASan), and save to bytes that load again and save to the same bytes. (Pixels
+   without a surface load with the far depth whatever depth the file gave
+   them, so the first save may differ from the input.) */
+#define RENDERCACHE_IMPLEMENTATION
+#include "rendercache.h"
+#include "tests/fuzz/fuzz.h"
+
+/* Rays are cast through at most this many pixels per input, spread evenly. */
+#define MAX_RAYS 256u
+
+static fuzz_outcome outcome_of(rendercache_result r)
+{
+    switch (r) {
+    case RENDERCACHE_OK: return FUZZ_LOADED;
+    case RENDERCACHE_ERROR_CORRUPT_DATA: return FUZZ_CORRUPT;
+    case RENDERCACHE_ERROR_VERSION: return FUZZ_VERSION;
+    default: return FUZZ_OTHER;
+    }
+}
+
+static void cast_rays(const rendercache_range_image *img)
+{
+    const rendercache_camera *cam = &img->camera;
+    size_t pixels = (size_t)cam->width * cam->height, step = pixels / MAX_RAYS + 1, p;
+    for (p = 0; p < pixels; p += step) {
+        float org[3], dir[3], point[3], px, py, depth;
+        uint32_t x = (uint32_t)(p % cam->width), y = (uint32_t)(p / cam->width);
+        int k;
+        if (rendercache_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f, org, dir) != RENDERCACHE_OK) continue;
+        if (img->object[p] >= RENDERCACHE_NO_SAMPLE) continue;
+        for (k = 0; k < 3; k++) point[k] = org[k] + img->depth[p] * dir[k];
+        rendercache_camera_project(cam, point, &px, &py, &depth);
+    }
+}
+
+static void blend_and_fitness(const rendercache_range_image *img)
+{
+    rendercache_range_image *out = NULL;
+    const uint32_t *ids[2];
+    float fitness = -1.0f;
+    if (rendercache_range_image_create(&img->camera, NULL, &out) != RENDERCACHE_OK) return;   /* out of memory */
+    fuzz_require(rendercache_blend(img, img, 0.5f, out) == RENDERCACHE_OK, "a loaded image did not blend with itself");
+    ids[0] = img->object;
+    ids[1] = out->object;
+    fuzz_require(rendercache_fitness(ids, 2, img->camera.width, img->camera.height, &fitness) == RENDERCACHE_OK &&
+                     (fitness == 1.0f || fitness == 0.0f),
+                 "an image blended with itself changed its ids");
+    rendercache_range_image_destroy(out);
+}
+
+/* save, load, save: the two saves are the same bytes. */
+static void check_save_is_stable(const rendercache_range_image *img)
+{
+    void *first = NULL, *second = NULL;
+    size_t first_size = 0, second_size = 0;
+    rendercache_range_image *back = NULL;
+    fuzz_require(rendercache_range_image_save_to_memory(img, NULL, &first, &first_size) == RENDERCACHE_OK,
+                 "a loaded image did not save");
+    fuzz_require(rendercache_range_image_load_from_memory(first, first_size, NULL, &back) == RENDERCACHE_OK,
+                 "a saved image did not load");
+    fuzz_require(rendercache_range_image_save_to_memory(back, NULL, &second, &second_size) == RENDERCACHE_OK,
+                 "a reloaded image did not save");
+    fuzz_require(fuzz_same_bytes(first, first_size, second, second_size), "saving a reloaded image changed its bytes");
+    rendercache_free_memory(NULL, first);
+    rendercache_free_memory(NULL, second);
+    rendercache_range_image_destroy(back);
+}
+
+static fuzz_outcome load_image(const uint8_t *data, size_t size)
+{
+    rendercache_range_image *img = NULL;
+    rendercache_result r = rendercache_range_image_load_from_memory(data, size, NULL, &img);
+    if (r != RENDERCACHE_OK) {
+        fuzz_require(img == NULL, "a refused image was returned");
+        return outcome_of(r);
+    }
+    cast_rays(img);
+    blend_and_fitness(img);
+    check_save_is_stable(img);
+    rendercache_range_image_destroy(img);
+    return FUZZ_LOADED;
+}
+
+const fuzz_target fuzz_this_target = { "rendercache", load_image, 1 };
