@@ -21,13 +21,10 @@
 #endif
 #define RADINTERP_IMPLEMENTATION
 #include "radinterp.h"
-#include <pthread.h>
-#include <sys/types.h>
-#include <sys/wait.h>
 #include <time.h>
-#include <unistd.h>
 #include "tests/test.h"
 #include "examples/common/pool.h"
+#include "tests/tsan.h"
 
 /* 3 threads on the 2 cores of the test machine: more threads than cores,
    so the scheduler interleaves them mid-call as well as running two at once. */
@@ -122,56 +119,6 @@ static void make_scene(scene *s, radinterp_desc *d)
     d->materials = s->m;
     d->material_count = 2;
     d->eps = 0.1f;   /* about 3,300 leaves with links through the block: a solve of about a second under ThreadSanitizer */
-}
-
-/* ---- a pool that counts the threads its jobs ran on ---------------------- */
-/* Forwards to ex_pool_parallel_for and counts, per pool thread, the jobs it
-   ran. The counters are relaxed atomics: they order nothing, so they hide no
-   race of the library's jobs from ThreadSanitizer (a mutex here would). The
-   job and its context travel in a per-call struct, so a parallel_for issued
-   from inside a job (the pool runs it serially) cannot overwrite them. */
-typedef struct counted_pool {
-    ex_pool *pool;
-    uint32_t jobs[EX_POOL_MAX_THREADS + 1];   /* [0]: the calling thread, [1 + i]: worker i */
-} counted_pool;
-
-typedef struct counted_call {
-    counted_pool *c;
-    radinterp_job_fn job;
-    void *ctx;
-} counted_call;
-
-static void counted_job(void *ctx, uint32_t index)
-{
-    counted_call *call = (counted_call *)ctx;
-    pthread_t self = pthread_self();
-    int i, slot = 0;
-    for (i = 0; i < call->c->pool->thread_count; i++)
-        if (pthread_equal(self, call->c->pool->threads[i])) slot = 1 + i;
-    __atomic_fetch_add(&call->c->jobs[slot], 1u, __ATOMIC_RELAXED);
-    call->job(call->ctx, index);
-}
-
-static void counted_parallel_for(void *user, radinterp_job_fn job, void *ctx, uint32_t count)
-{
-    counted_call call;
-    call.c = (counted_pool *)user;
-    call.job = job;
-    call.ctx = ctx;
-    ex_pool_parallel_for(call.c->pool, counted_job, &call, count);
-}
-
-/* Threads that ran at least one job since the last call; clears the counts. */
-static int busy_threads(counted_pool *c, uint32_t *jobs)
-{
-    int i, busy = 0;
-    *jobs = 0;
-    for (i = 0; i <= c->pool->thread_count; i++) {
-        *jobs += c->jobs[i];
-        busy += c->jobs[i] > 0;
-        c->jobs[i] = 0;
-    }
-    return busy;
 }
 
 /* ---- point queries -------------------------------------------------------- */
@@ -344,7 +291,7 @@ static int same_solution(const radinterp_solution *a, const radinterp_solution *
     return 1;
 }
 
-static void test_pool_solve_matches_serial(counted_pool *cp)
+static void test_pool_solve_matches_serial(tsan_pool *tp)
 {
     radinterp_desc d;
     radinterp_solution *pooled = NULL;
@@ -353,12 +300,12 @@ static void test_pool_solve_matches_serial(counted_pool *cp)
     double t0;
     if (!CHECK(serial_solution != NULL)) return;
     make_scene(&the_scene, &d);
-    d.parallel_for = counted_parallel_for;
-    d.parallel_user = cp;
+    d.parallel_for = tsan_parallel_for;
+    d.parallel_user = tp;
     t0 = seconds();
     if (!CHECK_EQ_INT(radinterp_solve(&d, &pooled), RADINTERP_OK)) return;
-    busy = busy_threads(cp, &jobs);
-    test_note("pooled solve: %.2f s, %u jobs on %d of %d threads", seconds() - t0, jobs, busy, ex_pool_threads(cp->pool));
+    busy = tsan_busy_threads(tp, &jobs);
+    test_note("pooled solve: %.2f s, %u jobs on %d of %d threads", seconds() - t0, jobs, busy, ex_pool_threads(tp->pool));
     /* the solve runs hundreds of jobs under ThreadSanitizer, ample time for a
        worker to wake: one thread alone would mean nothing ran concurrently */
     CHECK(busy >= 2);
@@ -400,7 +347,7 @@ static void shade_both(const radinterp_mesh *m, const uint32_t *ids, const float
     *r = (radinterp_result)(*r | radinterp_shade_gouraud(m, ids, st, PIXELS, rgb + 3 * (size_t)PIXELS));
 }
 
-static void test_pool_mesh_and_shade_match_serial(counted_pool *cp)
+static void test_pool_mesh_and_shade_match_serial(tsan_pool *tp)
 {
     radinterp_mesh_desc md;
     radinterp_mesh *serial = NULL, *pooled = NULL;
@@ -415,13 +362,13 @@ static void test_pool_mesh_and_shade_match_serial(counted_pool *cp)
     memset(&md, 0, sizeof md);
     md.min_leaf_area = 0.05f;   /* the unit tests' room mesh: a few thousand triangles */
     if (!CHECK_EQ_INT(radinterp_build_mesh(serial_solution, &md, &serial), RADINTERP_OK)) goto done;
-    md.parallel_for = counted_parallel_for;
-    md.parallel_user = cp;
+    md.parallel_for = tsan_parallel_for;
+    md.parallel_user = tp;
     t0 = seconds();
     if (!CHECK_EQ_INT(radinterp_build_mesh(serial_solution, &md, &pooled), RADINTERP_OK)) goto done;
-    busy = busy_threads(cp, &jobs);
+    busy = tsan_busy_threads(tp, &jobs);
     test_note("pooled mesh: %.2f s, %u jobs on %d of %d threads", seconds() - t0, jobs, busy,
-              ex_pool_threads(cp->pool));
+              ex_pool_threads(tp->pool));
     CHECK(busy >= 2);
     CHECK(saved_equal(serial, pooled));   /* bit-identical for any thread count */
 
@@ -431,10 +378,10 @@ static void test_pool_mesh_and_shade_match_serial(counted_pool *cp)
     if (!CHECK(data.triangle_count > 0)) goto done;
     make_pixels(data.triangle_count, ids, st);
     shade_both(serial, ids, st, a, &rs);
-    radinterp_mesh_set_parallel_for(pooled, counted_parallel_for, cp);
+    radinterp_mesh_set_parallel_for(pooled, tsan_parallel_for, tp);
     t0 = seconds();
     shade_both(pooled, ids, st, b, &rp);
-    busy = busy_threads(cp, &jobs);
+    busy = tsan_busy_threads(tp, &jobs);
     test_note("pooled shade of %u pixels (B and Gouraud) over %u triangles: %.3f s, %u jobs on %d threads",
               PIXELS, data.triangle_count, seconds() - t0, jobs, busy);
     CHECK_EQ_INT(rs, RADINTERP_OK);
@@ -450,7 +397,7 @@ done:
     free(b);
 }
 
-static counted_pool the_pool;
+static tsan_pool the_pool;
 static void test_pool_solve(void) { test_pool_solve_matches_serial(&the_pool); }
 static void test_pool_mesh_and_shade(void) { test_pool_mesh_and_shade_match_serial(&the_pool); }
 
@@ -471,45 +418,7 @@ static int racy_main(void)
     return 0;
 }
 
-static void test_racy_run_is_reported(void)
-{
-    int fds[2], status = 0;
-    pid_t pid;
-    char buf[4096];
-    size_t have = 0;
-    static char out[1 << 16];
-    ssize_t got;
-    if (!CHECK(pipe(fds) == 0)) return;
-    fflush(NULL);
-    pid = fork();
-    if (pid == 0) {   /* the child runs this program again, stdout and stderr into the pipe */
-        char *args[3];
-        args[0] = (char *)"tsan_radinterp";
-        args[1] = (char *)"--racy";
-        args[2] = NULL;
-        close(fds[0]);
-        dup2(fds[1], 1);
-        dup2(fds[1], 2);
-        close(fds[1]);
-        execv("/proc/self/exe", args);
-        _exit(127);
-    }
-    close(fds[1]);
-    if (!CHECK(pid > 0)) { close(fds[0]); return; }
-    while ((got = read(fds[0], buf, sizeof buf)) > 0) {   /* keep the first 64 KiB: the report comes first */
-        size_t n = (size_t)got < sizeof out - 1 - have ? (size_t)got : sizeof out - 1 - have;
-        memcpy(out + have, buf, n);
-        have += n;
-    }
-    out[have] = '\0';
-    close(fds[0]);
-    waitpid(pid, &status, 0);
-    test_note("--racy run: exit status %d, %zu bytes of output, %s", WIFEXITED(status) ? WEXITSTATUS(status) : -1,
-              have, strstr(out, "WARNING: ThreadSanitizer: data race") ? "data race reported" : "NO report");
-    CHECK(strstr(out, "WARNING: ThreadSanitizer: data race") != NULL);
-    CHECK(strstr(out, "SUMMARY: ThreadSanitizer: data race") != NULL && strstr(out, " in worker") != NULL);   /* at the racy sum */
-    CHECK(WIFEXITED(status) && WEXITSTATUS(status) != 0 && WEXITSTATUS(status) != 127);
-}
+static void test_racy_run_is_reported(void) { tsan_check_racy_run("tsan_radinterp"); }
 
 int main(int argc, char **argv)
 {
