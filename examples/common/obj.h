@@ -1,7 +1,7 @@
 /* obj.h - OBJ + MTL loader for the project's examples and tests.
 
    Loads positions, polygonal faces (kept as polygons, because the radiosity
-   solver wants quadrilaterals, and also fan-triangulated for everything that
+   solver wants quadrilaterals, and also triangulated for everything that
    wants triangles), materials and group names. Texture coordinates and normals
    are validated and ignored.
 
@@ -19,6 +19,16 @@
    diffuse emitter's radiosity is pi * Ke). Faces before any `usemtl` use
    material 0, "default" (Kd 0.8). Faces before any `o`/`g` belong to group 0,
    "default".
+
+   Triangulation: a face is a planar polygon without holes, of any number of
+   corners, concave or not (CAD exports cut door openings into a wall's
+   outline and windows as keyholes). Strictly convex faces are fanned from
+   their first corner; every other face is ear-clipped in the plane of its
+   dominant axis, robust to collinear and repeated corners and to slivers.
+   A face of n corners always gives n - 2 triangles (tri_face names the face),
+   none turned against the face, their areas adding up to the face's. A face
+   whose outline crosses itself has no such triangulation: it still gives
+   n - 2 triangles, cut where the outline turns most.
 
    Every problem (missing file, malformed number, index out of range, face with
    fewer than three vertices, unknown material) returns non-zero with a message
@@ -58,7 +68,7 @@ typedef struct obj_scene {
     uint32_t *face_group;
     uint32_t face_count;
 
-    uint32_t *tri_indices;     /* 3 per triangle, fan-triangulated faces */
+    uint32_t *tri_indices;     /* 3 per triangle: the faces' n - 2 triangles each, in face order */
     uint32_t *tri_material;
     uint32_t *tri_face;        /* the face each triangle came from */
     uint32_t tri_count;
@@ -377,36 +387,226 @@ static int obj__parse_obj(obj__parser *p, const char *text, size_t len, const ch
     return 0;
 }
 
-/* Fan-triangulates the faces and moves the arrays into out. */
-static int obj__finish(obj__parser *p, obj__build *b, obj_scene *out)
+/* ---- triangulation -------------------------------------------------------
+   A face is a planar polygon without holes. Its corners are projected on the
+   plane of the dominant axis of its Newell normal (the axis where the
+   projected area is largest, so the projection cannot fold), oriented
+   counter-clockwise there. A strictly convex face is fanned from its first
+   corner; any other face (a concave outline, collinear corners, repeated
+   corners, a nearly degenerate sliver) is ear-clipped: a corner is cut off
+   when it turns left and no other corner lies in or on the triangle it cuts.
+   Every face of n corners gives n - 2 triangles, each turning the face's way
+   (or of zero area), and their areas add up to the face's area. Orientation
+   tests run in double precision on the float coordinates, where a difference
+   of two floats is exact. */
+
+/* Relative size of a turn below which a corner counts as collinear: sin of
+   the angle between the two edges. Float coordinates carry a relative error
+   of 6e-8, so turns a thousand times finer than 1e-6 are noise. */
+#define OBJ__COLLINEAR 1e-6
+typedef struct obj__ring {
+    double *x, *y;          /* projected corners */
+    uint32_t *prev, *next;  /* the corners still in the outline */
+    uint32_t capacity;
+} obj__ring;
+
+/* Newell's normal of a polygon (twice its vector area), in double. */
+static void obj__newell(const float *pos, const uint32_t *v, uint32_t n, double nrm[3])
 {
-    uint32_t f, tri = 0, face_count = (uint32_t)b->face_start.count;
-    uint32_t end = (uint32_t)b->face_vertices.count;
-    size_t tri_count = b->face_vertices.count - 2 * (size_t)face_count;
-    const uint32_t *start = (const uint32_t *)b->face_start.data;
-    const uint32_t *fv = (const uint32_t *)b->face_vertices.data;
-    if (!obj__push(&b->face_start, &end)) return obj__fail(p, "out of memory");
-    start = (const uint32_t *)b->face_start.data;
-    memset(out, 0, sizeof *out);
-    out->tri_indices = (uint32_t *)malloc(sizeof(uint32_t) * 3 * (tri_count ? tri_count : 1));
-    out->tri_material = (uint32_t *)malloc(sizeof(uint32_t) * (tri_count ? tri_count : 1));
-    out->tri_face = (uint32_t *)malloc(sizeof(uint32_t) * (tri_count ? tri_count : 1));
-    if (!out->tri_indices || !out->tri_material || !out->tri_face) {
-        free(out->tri_indices); free(out->tri_material); free(out->tri_face);
-        memset(out, 0, sizeof *out);
-        return obj__fail(p, "out of memory");
+    uint32_t i;
+    nrm[0] = nrm[1] = nrm[2] = 0.0;
+    for (i = 0; i < n; i++) {
+        const float *a = pos + 3 * (size_t)v[i], *b = pos + 3 * (size_t)v[(i + 1) % n];
+        nrm[0] += ((double)a[1] - b[1]) * ((double)a[2] + b[2]);
+        nrm[1] += ((double)a[2] - b[2]) * ((double)a[0] + b[0]);
+        nrm[2] += ((double)a[0] - b[0]) * ((double)a[1] + b[1]);
     }
+}
+
+/* Twice the signed area of the triangle (a, b, c) of the ring. */
+static double obj__orient(const obj__ring *r, uint32_t a, uint32_t b, uint32_t c)
+{
+    return (r->x[b] - r->x[a]) * (r->y[c] - r->y[a]) - (r->y[b] - r->y[a]) * (r->x[c] - r->x[a]);
+}
+
+/* The turn at corner b of the path a -> b -> c: positive when it turns left
+   by more than OBJ__COLLINEAR, negative when right, zero when collinear. */
+static int obj__turn(const obj__ring *r, uint32_t a, uint32_t b, uint32_t c)
+{
+    double ex = r->x[b] - r->x[a], ey = r->y[b] - r->y[a], fx = r->x[c] - r->x[b], fy = r->y[c] - r->y[b];
+    double cross = ex * fy - ey * fx, scale = sqrt((ex * ex + ey * ey) * (fx * fx + fy * fy));
+    if (cross > OBJ__COLLINEAR * scale) return 1;
+    if (cross < -OBJ__COLLINEAR * scale) return -1;
+    return 0;
+}
+
+/* Projects face v[0..n) on its dominant plane, counter-clockwise. */
+static void obj__project(obj__ring *r, const float *pos, const uint32_t *v, uint32_t n)
+{
+    double nrm[3];
+    int axis, u, w;
+    uint32_t i;
+    obj__newell(pos, v, n, nrm);
+    axis = fabs(nrm[0]) > fabs(nrm[1]) ? (fabs(nrm[0]) > fabs(nrm[2]) ? 0 : 2) : (fabs(nrm[1]) > fabs(nrm[2]) ? 1 : 2);
+    u = (axis + 1) % 3;
+    w = (axis + 2) % 3;
+    if (nrm[axis] < 0.0) { int t = u; u = w; w = t; }   /* seen from the side the normal points to */
+    for (i = 0; i < n; i++) {
+        r->x[i] = pos[3 * (size_t)v[i] + u];
+        r->y[i] = pos[3 * (size_t)v[i] + w];
+        r->prev[i] = (i + n - 1) % n;
+        r->next[i] = (i + 1) % n;
+    }
+}
+
+/* Strictly convex: every corner turns left and the outline goes round once
+   (its turning angles add up to 2 pi, not 4 pi as in a pentagram). */
+static int obj__convex(const obj__ring *r, uint32_t n)
+{
+    double total = 0.0;
+    uint32_t i;
+    for (i = 0; i < n; i++) {
+        uint32_t a = (i + n - 1) % n, c = (i + 1) % n;
+        double ex = r->x[i] - r->x[a], ey = r->y[i] - r->y[a], fx = r->x[c] - r->x[i], fy = r->y[c] - r->y[i];
+        if (obj__turn(r, a, i, c) <= 0) return 0;
+        total += atan2(ex * fy - ey * fx, ex * fx + ey * fy);
+    }
+    return total < 3.0 * 3.14159265358979323846;   /* 2 pi, far from 4 pi */
+}
+
+/* Whether p is left of, on or within OBJ__COLLINEAR of the line a -> b. */
+static int obj__left_or_on(const obj__ring *r, uint32_t a, uint32_t b, uint32_t p)
+{
+    double ex = r->x[b] - r->x[a], ey = r->y[b] - r->y[a], fx = r->x[p] - r->x[a], fy = r->y[p] - r->y[a];
+    return ex * fy - ey * fx >= -OBJ__COLLINEAR * sqrt((ex * ex + ey * ey) * (fx * fx + fy * fy));
+}
+
+/* Whether corner p lies inside or on triangle (a, b, c), counter-clockwise,
+   counting a corner within rounding of an edge as on it (a diagonal through
+   a corner would leave a crack or a flipped sliver). A corner at the same
+   place as a, b or c does not count (outlines that touch themselves repeat
+   a point). */
+static int obj__blocks(const obj__ring *r, uint32_t a, uint32_t b, uint32_t c, uint32_t p)
+{
+    if ((r->x[p] == r->x[a] && r->y[p] == r->y[a]) || (r->x[p] == r->x[b] && r->y[p] == r->y[b]) ||
+        (r->x[p] == r->x[c] && r->y[p] == r->y[c]))
+        return 0;
+    return obj__left_or_on(r, a, b, p) && obj__left_or_on(r, b, c, p) && obj__left_or_on(r, c, a, p);
+}
+
+/* Corner b is an ear: it turns left and no other remaining corner that does
+   not turn left lies in or on the triangle it cuts (a corner that turns left
+   cannot be the first one inside a convex ear). */
+static int obj__is_ear(const obj__ring *r, uint32_t b)
+{
+    uint32_t a = r->prev[b], c = r->next[b], p;
+    if (obj__turn(r, a, b, c) <= 0) return 0;
+    for (p = r->next[c]; p != a; p = r->next[p])
+        if (obj__turn(r, r->prev[p], p, r->next[p]) <= 0 && obj__blocks(r, a, b, c, p)) return 0;
+    return 1;
+}
+
+/* The corner to cut when no corner is an ear (an outline that crosses itself,
+   or all corners collinear): the one that turns left the most, else the one
+   closest to straight. A simple outline always has an ear (Meisters 1975). */
+static uint32_t obj__fallback_ear(const obj__ring *r, uint32_t start)
+{
+    uint32_t b = start, best = start;
+    double best_area = -DBL_MAX;
+    do {
+        double area = obj__orient(r, r->prev[b], b, r->next[b]);
+        if (area > best_area) { best_area = area; best = b; }
+        b = r->next[b];
+    } while (b != start);
+    return best;
+}
+
+/* Writes the n - 2 triangles of face v[0..n) to tri (3 corner indices each). */
+static void obj__triangulate(obj__ring *r, const float *pos, const uint32_t *v, uint32_t n, uint32_t *tri)
+{
+    uint32_t b = 0, left = n, tested = 0, k;
+    obj__project(r, pos, v, n);
+    if (n == 3 || obj__convex(r, n)) {
+        for (k = 1; k + 1 < n; k++) { tri[0] = v[0]; tri[1] = v[k]; tri[2] = v[k + 1]; tri += 3; }
+        return;
+    }
+    while (left > 3) {
+        uint32_t a, c;
+        if (!obj__is_ear(r, b)) {
+            if (++tested < left) { b = r->next[b]; continue; }
+            b = obj__fallback_ear(r, b);   /* a whole round without an ear */
+        }
+        tested = 0;
+        a = r->prev[b];
+        c = r->next[b];
+        tri[0] = v[a]; tri[1] = v[b]; tri[2] = v[c];
+        tri += 3;
+        r->next[a] = c;
+        r->prev[c] = a;
+        left--;
+        b = c;   /* the next ear is likely next door */
+    }
+    tri[0] = v[r->prev[b]]; tri[1] = v[b]; tri[2] = v[r->next[b]];
+}
+
+static void obj__ring_free(obj__ring *r)
+{
+    free(r->x); free(r->y); free(r->prev); free(r->next);
+    memset(r, 0, sizeof *r);
+}
+
+static int obj__ring_reserve(obj__ring *r, uint32_t n)
+{
+    if (n <= r->capacity) return 1;
+    obj__ring_free(r);
+    r->x = (double *)malloc(sizeof(double) * n);
+    r->y = (double *)malloc(sizeof(double) * n);
+    r->prev = (uint32_t *)malloc(sizeof(uint32_t) * n);
+    r->next = (uint32_t *)malloc(sizeof(uint32_t) * n);
+    if (!r->x || !r->y || !r->prev || !r->next) { obj__ring_free(r); return 0; }
+    r->capacity = n;
+    return 1;
+}
+
+/* Triangulates every face into out's triangle arrays; -1 when out of memory. */
+static int obj__triangulate_faces(const obj__build *b, obj_scene *out)
+{
+    const uint32_t *start = (const uint32_t *)b->face_start.data, *fv = (const uint32_t *)b->face_vertices.data;
+    const uint32_t *material = (const uint32_t *)b->face_material.data;
+    const float *pos = (const float *)b->positions.data;
+    uint32_t f, tri = 0, face_count = (uint32_t)b->face_start.count - 1;
+    obj__ring ring;
+    memset(&ring, 0, sizeof ring);
     for (f = 0; f < face_count; f++) {
-        uint32_t k;
-        for (k = start[f] + 1; k + 1 < start[f + 1]; k++, tri++) {
-            out->tri_indices[3 * tri + 0] = fv[start[f]];
-            out->tri_indices[3 * tri + 1] = fv[k];
-            out->tri_indices[3 * tri + 2] = fv[k + 1];
-            out->tri_material[tri] = ((const uint32_t *)b->face_material.data)[f];
+        uint32_t n = start[f + 1] - start[f], k;
+        if (!obj__ring_reserve(&ring, n)) return -1;
+        obj__triangulate(&ring, pos, fv + start[f], n, out->tri_indices + 3 * (size_t)tri);
+        for (k = 0; k + 2 < n; k++, tri++) {
+            out->tri_material[tri] = material[f];
             out->tri_face[tri] = f;
         }
     }
     out->tri_count = tri;
+    obj__ring_free(&ring);
+    return 0;
+}
+
+/* Triangulates the faces and moves the arrays into out. */
+static int obj__finish(obj__parser *p, obj__build *b, obj_scene *out)
+{
+    uint32_t face_count = (uint32_t)b->face_start.count;
+    uint32_t end = (uint32_t)b->face_vertices.count;
+    size_t tri_count = b->face_vertices.count - 2 * (size_t)face_count;
+    if (!obj__push(&b->face_start, &end)) return obj__fail(p, "out of memory");
+    memset(out, 0, sizeof *out);
+    out->tri_indices = (uint32_t *)malloc(sizeof(uint32_t) * 3 * (tri_count ? tri_count : 1));
+    out->tri_material = (uint32_t *)malloc(sizeof(uint32_t) * (tri_count ? tri_count : 1));
+    out->tri_face = (uint32_t *)malloc(sizeof(uint32_t) * (tri_count ? tri_count : 1));
+    if (!out->tri_indices || !out->tri_material || !out->tri_face || obj__triangulate_faces(b, out) != 0) {
+        free(out->tri_indices); free(out->tri_material); free(out->tri_face);
+        memset(out, 0, sizeof *out);
+        return obj__fail(p, "out of memory");
+    }
     out->positions = (float *)b->positions.data;
     out->vertex_count = (uint32_t)(b->positions.count / 3);
     out->face_start = (uint32_t *)b->face_start.data;
