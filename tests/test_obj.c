@@ -494,6 +494,170 @@ static void test_house_doorways_open(void)
     obj_free(&s);
 }
 
+/* ---- materials that pass light ------------------------------------------ */
+
+static int write_file(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    if (!f) return 0;
+    fputs(text, f);
+    return fclose(f) == 0;
+}
+
+/* MTL transmission (obj.h's "Transmission"): glass by Tf under a
+   transparent illumination model, coverage by d or Tr, both together, and
+   Tf on an opaque model (as 3ds Max writes it) is no glass. */
+static void test_mtl_transmission(void)
+{
+    const char *mtl =
+        "newmtl glass\nKd 0.5 0.5 0.5\nKs 0.08 0.08 0.08\nTf 0.8 0.9 0.7\nillum 4\n"
+        "newmtl veil\nKd 0.4 0.6 0.8\nKs 0.2 0.2 0.2\nd 0.25\n"
+        "newmtl tr\nKd 1 1 1\nTr 0.6\n"
+        "newmtl halo\nd -halo 0.5\n"
+        "newmtl both\nKd 0.5 0.5 0.5\nd 0.5\nTf 0.8\nillum 7\n"
+        "newmtl max_opaque\nKd 0.3 0.3 0.3\nTf 1 1 1\nd 1\nillum 2\n";
+    const char *obj = "mtllib test_obj_glass.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl glass\nf 1 2 3\n";
+    obj_scene s;
+    char err[256];
+    const obj_material *m;
+    if (!CHECK(write_file("build/tests/test_obj_glass.mtl", mtl))) return;
+    if (!CHECK_MSG(obj_parse(obj, strlen(obj), "glass.obj", "build/tests/", &s, err, sizeof err) == 0, "%s", err)) return;
+    /* float products of short decimals: 1e-6 */
+    m = &s.materials[obj_find_material(&s, "glass")];
+    CHECK_CLOSE(m->tf[0], 0.8, 1e-6, 0); CHECK_CLOSE(m->tf[1], 0.9, 1e-6, 0); CHECK_CLOSE(m->tf[2], 0.7, 1e-6, 0);
+    CHECK_CLOSE(m->kd[0], 0.5 * 0.2, 1e-6, 0); CHECK_CLOSE(m->kd[2], 0.5 * 0.3, 1e-6, 0);
+    CHECK_CLOSE(m->ks[1], 0.08, 1e-6, 0);
+    m = &s.materials[obj_find_material(&s, "veil")];
+    CHECK_CLOSE(m->tf[0], 0.75, 1e-6, 0); CHECK_CLOSE(m->tf[2], 0.75, 1e-6, 0);
+    CHECK_CLOSE(m->kd[1], 0.6 * 0.25, 1e-6, 0); CHECK_CLOSE(m->ks[0], 0.2 * 0.25, 1e-6, 0);
+    m = &s.materials[obj_find_material(&s, "tr")];
+    CHECK_CLOSE(m->tf[1], 0.6, 1e-6, 0); CHECK_CLOSE(m->kd[1], 0.4, 1e-6, 0);
+    m = &s.materials[obj_find_material(&s, "halo")];
+    CHECK_CLOSE(m->tf[0], 0.5, 1e-6, 0);
+    m = &s.materials[obj_find_material(&s, "both")];
+    CHECK_CLOSE(m->tf[0], 0.5 + 0.5 * 0.8, 1e-6, 0); CHECK_CLOSE(m->kd[0], 0.5 * 0.5 * 0.2, 1e-6, 0);
+    m = &s.materials[obj_find_material(&s, "max_opaque")];
+    CHECK(m->tf[0] == 0.0f && m->tf[1] == 0.0f && m->tf[2] == 0.0f);
+    CHECK_CLOSE(m->kd[0], 0.3, 1e-6, 0);
+    m = &s.materials[0];   /* the default material is opaque */
+    CHECK(m->tf[0] == 0.0f);
+    obj_free(&s);
+}
+
+/* Bad transmission statements fail with the MTL file's line. */
+static void test_mtl_transmission_errors(void)
+{
+    static const struct { const char *mtl, *msg; } bad[] = {
+        { "newmtl a\nd 1.5\n", ":2:" },
+        { "newmtl a\nTr -0.1\n", ":2:" },
+        { "newmtl a\nTf spectral glass.rfl\n", "spectral" },
+        { "newmtl a\nTf xyz 0.5 0.5 0.5\n", "xyz" },
+        { "newmtl a\nTf 0.5 0.5\n", ":2:" },
+        { "newmtl a\nillum 2.5\n", ":2:" },
+        { "newmtl a\nd nan\n", ":2:" },
+        { "d 0.5\n", ":1:" },
+    };
+    const char *obj = "mtllib test_obj_bad.mtl\n";
+    size_t i;
+    for (i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        obj_scene s;
+        char err[256] = "";
+        if (!CHECK(write_file("build/tests/test_obj_bad.mtl", bad[i].mtl))) return;
+        CHECK_MSG(obj_parse(obj, strlen(obj), "bad.obj", "build/tests/", &s, err, sizeof err) != 0, "input %u accepted", (unsigned)i);
+        CHECK_MSG(strstr(err, bad[i].msg) != NULL, "input %u: '%s' lacks '%s'", (unsigned)i, err, bad[i].msg);
+        CHECK(s.tri_count == 0 && s.materials == NULL);
+    }
+}
+
+/* ---- coincident faces --------------------------------------------------- */
+
+/* A 10 x 10 floor (faces up) with: paint over all of it written after it
+   (the same corners from another one: a different diagonal), a wall
+   painted on half its area, a wall back to back with its twin, floor
+   tiles that only share edges, a face 1e-7 of the scene above the floor
+   (coincident) and one 1e-3 above it (not). */
+static const char *coincident_text =
+    "v 0 0 0\nv 10 0 0\nv 10 0 10\nv 0 0 10\n"                    /* 1-4 floor */
+    "f 1 4 3 2\n"                                               /* face 0: floor */
+    "v 0 0 0\nv 0 3 0\nv 10 3 0\nv 10 0 0\nv 5 0 0\nv 5 3 0\n"  /* 5-10 wall z = 0, facing +z */
+    "f 5 8 7 6\n"                                               /* face 1: wall */
+    "f 5 9 10 6\n"                                              /* face 2: paint on half the wall */
+    "f 5 6 7 8\n"                                               /* face 3: the wall's back */
+    "v 20 0 0\nv 21 0 0\nv 22 0 0\nv 20 0 1\nv 21 0 1\nv 22 0 1\n" /* 11-16 tiles */
+    "f 11 14 15 12\nf 12 15 16 13\n"                            /* faces 4, 5: tiles */
+    "f 2 1 4 3\n"                                               /* face 6: paint over the floor */
+    "v 2 0.0000015 2\nv 2 0.0000015 3\nv 3 0.0000015 3\nv 3 0.0000015 2\n"
+    "f 17 18 19 20\n"                                           /* face 7: 1e-7 of the scene above */
+    "v 2 0.02 2\nv 2 0.02 3\nv 3 0.02 3\nv 3 0.02 2\n"
+    "f 21 22 23 24\n";                                          /* face 8: 1e-3 above */
+
+static void test_coincident_faces_reported(void)
+{
+    obj_scene s;
+    char err[256];
+    if (!CHECK_MSG(obj_parse(coincident_text, strlen(coincident_text), NULL, NULL, &s, err, sizeof err) == 0, "%s", err))
+        return;
+    /* floor + paint, floor + raised square, paint + raised square, wall + half paint */
+    CHECK_EQ_INT(s.coincident_pairs, 4);
+    CHECK_EQ_INT(s.coincident_faces, 5);   /* 0, 6, 7, 1, 2 */
+    /* overlaps: 100 + 1 + 1 + 15 m^2 (clipping is exact to rounding) */
+    CHECK_CLOSE(s.coincident_area, 117.0, 1e-9, 0);
+    obj_free(&s);
+}
+
+static void test_drop_coincident(void)
+{
+    obj_scene s;
+    char err[256];
+    int d;
+    uint32_t t;
+    if (!CHECK(obj_parse(coincident_text, strlen(coincident_text), NULL, NULL, &s, err, sizeof err) == 0)) return;
+    /* only the floor goes: the later paint covers it; the raised square
+       (face 7) comes after everything it overlaps, the half-painted wall is
+       covered in part */
+    d = obj_drop_coincident(&s);
+    CHECK_EQ_INT(d, 1);
+    CHECK_EQ_INT(s.face_count, 8);
+    CHECK_EQ_INT(s.tri_count, 16);
+    /* the first face is now the wall, and every triangle names its face */
+    CHECK_EQ_INT(s.face_vertices[s.face_start[0]], 4);
+    for (t = 0; t < s.tri_count; t++) {
+        uint32_t f = s.tri_face[t], k, in = 0;
+        for (k = 0; k < 3; k++) {
+            uint32_t c;
+            for (c = s.face_start[f]; c < s.face_start[f + 1]; c++) in += s.face_vertices[c] == s.tri_indices[3 * t + k];
+        }
+        CHECK_MSG(in == 3, "triangle %u is not made of face %u's corners", t, f);
+    }
+    /* left: paint + raised square, wall + half paint (kept: the paint covers half) */
+    CHECK_EQ_INT(s.coincident_pairs, 2);
+    CHECK_EQ_INT(obj_drop_coincident(&s), 0);
+    obj_free(&s);
+}
+
+/* A face covered by the union of two later ones (each covering part) goes;
+   a face covered by an earlier one stays. */
+static void test_drop_coincident_union(void)
+{
+    const char *text =
+        "v 0 0 0\nv 4 0 0\nv 4 0 4\nv 0 0 4\nv 2 0 0\nv 2 0 4\n"
+        "f 1 4 3 2\n"        /* 0: the whole square */
+        "f 1 4 6 5\n"        /* 1: its left half */
+        "f 5 6 3 2\n"        /* 2: its right half */
+        "v 10 0 0\nv 14 0 0\nv 14 0 4\nv 10 0 4\n"
+        "f 7 10 9 8\n"       /* 3: a square */
+        "f 7 10 9 8\n";      /* 4: its exact copy */
+    obj_scene s;
+    char err[256];
+    if (!CHECK(obj_parse(text, strlen(text), NULL, NULL, &s, err, sizeof err) == 0)) return;
+    CHECK_EQ_INT(s.coincident_pairs, 3);
+    CHECK_EQ_INT(obj_drop_coincident(&s), 2);   /* faces 0 and 3 */
+    CHECK_EQ_INT(s.face_count, 3);
+    CHECK_EQ_INT(s.coincident_pairs, 0);
+    CHECK_CLOSE(s.coincident_area, 0.0, 0, 0);
+    obj_free(&s);
+}
+
 int main(int argc, char **argv)
 {
     TEST_INIT(argc, argv);
@@ -511,5 +675,10 @@ int main(int argc, char **argv)
     RUN(test_collinear_and_degenerate_faces);
     RUN(test_impossible_faces);
     RUN(test_house_doorways_open);
+    RUN(test_mtl_transmission);
+    RUN(test_mtl_transmission_errors);
+    RUN(test_coincident_faces_reported);
+    RUN(test_drop_coincident);
+    RUN(test_drop_coincident_union);
     return test_finish();
 }

@@ -20,6 +20,21 @@
    material 0, "default" (Kd 0.8). Faces before any `o`/`g` belong to group 0,
    "default".
 
+   Transmission: tf is the share of the light arriving on either side that
+   goes straight through, per channel (a thin dielectric: no refraction, no
+   change of direction). Two MTL statements make a surface pass light:
+   - `d` (dissolve, or `Tr` = 1 - d) is coverage: a share 1 - d of the surface
+     is not there, so 1 - d of the light passes untinted and Kd, Ks reflect
+     d of what they would;
+   - `Tf` (transmission filter) is glass when the illumination model is one
+     of the transparent ones (`illum` 4, 6, 7 or 9): Tf passes through, the
+     diffuse part keeps 1 - Tf of its reflectance (as glTF's transmission
+     mixes the diffuse lobe) and Ks stays (the glass's reflection). Exporters
+     write `Tf 1 1 1` on opaque materials with other models, so Tf alone is
+     not glass.
+   Together: tf = (1 - d) + d Tf, Kd d (1 - Tf), Ks d. Every value must lie in
+   [0, 1].
+
    Triangulation: a face is a planar polygon without holes, of any number of
    corners, concave or not (CAD exports cut door openings into a wall's
    outline and windows as keyholes). Strictly convex faces are fanned from
@@ -29,6 +44,17 @@
    none turned against the face, their areas adding up to the face's. A face
    whose outline crosses itself has no such triangulation: it still gives
    n - 2 triangles, cut where the outline turns most.
+
+   Coincident faces: two faces that overlap in one plane (within 1e-5 of the
+   scene's size, OBJ_COINCIDENT_TOLERANCE) facing the same way, such as paint
+   exported over the concrete it covers, make every renderer pick either one
+   per pixel or per ray: speckled bands. The loader finds them and reports
+   them in coincident_pairs, coincident_faces and coincident_area; it keeps
+   them. obj_drop_coincident removes each face that faces of higher index
+   cover entirely (the later face is the one meant: paint is written after
+   the wall); a face covered only in part stays, as cutting it would leave
+   T-junctions. Faces back to back (a wall's two sides in one plane) face
+   opposite ways and are not coincident.
 
    Every problem (missing file, malformed number, index out of range, face with
    fewer than three vertices, unknown material) returns non-zero with a message
@@ -56,6 +82,7 @@ typedef struct obj_material {
     float ks[3];   /* glossy reflectance */
     float ke[3];   /* emitted radiance */
     float ns;      /* Phong exponent */
+    float tf[3];   /* straight-through transmittance (thin glass, no refraction); 0 = opaque */
 } obj_material;
 
 typedef struct obj_scene {
@@ -77,6 +104,11 @@ typedef struct obj_scene {
     uint32_t material_count;
     char (*groups)[OBJ_NAME_MAX];
     uint32_t group_count;
+
+    /* coincident faces (see "Coincident faces" above), found at load */
+    uint32_t coincident_pairs;     /* pairs of faces overlapping in one plane, facing the same way */
+    uint32_t coincident_faces;     /* faces in at least one such pair */
+    double coincident_area;        /* area of the overlaps, summed over the pairs */
 } obj_scene;
 
 /* ---- growable arrays ---------------------------------------------------- */
@@ -234,13 +266,78 @@ static void obj__default_material(obj_material *m, const char *name)
     m->ns = 1.0f;
 }
 
+/* What an MTL material says about light through it, kept until the
+   material's last line has been read. */
+typedef struct obj__mtl_pass {
+    float d;             /* dissolve: the share of the surface that is there (1 = opaque) */
+    float filter[3];     /* Tf */
+    int has_filter, illum;
+} obj__mtl_pass;
+
+static void obj__mtl_pass_reset(obj__mtl_pass *t)
+{
+    memset(t, 0, sizeof *t);
+    t->d = 1.0f;
+    t->illum = -1;
+}
+
+/* The straight-through transmittance of a finished material, and the
+   reflectances scaled to what is left (see "Transmission" above). */
+static void obj__material_transmission(obj_material *m, const obj__mtl_pass *t)
+{
+    int glass = t->has_filter && (t->illum == 4 || t->illum == 6 || t->illum == 7 || t->illum == 9), k;
+    for (k = 0; k < 3; k++) {
+        float through_glass = glass ? t->filter[k] : 0.0f;
+        m->tf[k] = (1.0f - t->d) + t->d * through_glass;
+        m->kd[k] *= t->d * (1.0f - through_glass);
+        m->ks[k] *= t->d;
+    }
+}
+
+/* A fraction in [0, 1] (d, Tr, Tf): anything else is an error. */
+static int obj__fractions(obj__parser *p, const char *s, const char *end, float *out, int n, const char *what)
+{
+    int k;
+    if (obj__floats(p, s, end, out, n, what)) return -1;
+    for (k = 0; k < n; k++)
+        if (!(out[k] >= 0.0f && out[k] <= 1.0f)) return obj__fail(p, "%s must be in [0, 1], got %g", what, (double)out[k]);
+    return 0;
+}
+
+/* "d factor" or "d -halo factor" (the halo form is read as the plain one). */
+static int obj__dissolve(obj__parser *p, const char *s, const char *end, float *d)
+{
+    char tok[16];
+    const char *after = obj__token(s, end, tok, sizeof tok);
+    return obj__fractions(p, strcmp(tok, "-halo") == 0 ? after : s, end, d, 1, "d");
+}
+
+/* "Tf r g b" or "Tf r" (grey). The spectral and CIE XYZ forms are refused. */
+static int obj__filter(obj__parser *p, const char *s, const char *end, float f[3])
+{
+    char tok[32];
+    const char *after = obj__token(s, end, tok, sizeof tok);
+    obj__token(after, end, tok, sizeof tok);
+    if (!tok[0]) {
+        if (obj__fractions(p, s, end, f, 1, "Tf")) return -1;
+        f[1] = f[2] = f[0];
+        return 0;
+    }
+    obj__token(s, end, tok, sizeof tok);
+    if (strcmp(tok, "spectral") == 0 || strcmp(tok, "xyz") == 0)
+        return obj__fail(p, "Tf %s is not supported (give Tf r g b)", tok);
+    return obj__fractions(p, s, end, f, 3, "Tf");
+}
+
 /* Parses MTL text and appends its materials. */
 static int obj__parse_mtl(obj__parser *p, const char *text, size_t len, obj__array *materials)
 {
     const char *s = text, *end = text + len, *line, *eol;
     obj_material *cur = NULL;
+    obj__mtl_pass pass;
     char tok[OBJ_NAME_MAX + 8];
     p->line = 0;
+    obj__mtl_pass_reset(&pass);
     while (obj__next_line(p, &s, end, &line, &eol)) {
         const char *rest = obj__token(line, eol, tok, sizeof tok);
         if (!tok[0] || tok[0] == '#') {
@@ -250,6 +347,8 @@ static int obj__parse_mtl(obj__parser *p, const char *text, size_t len, obj__arr
             obj__token(rest, eol, tok, sizeof tok);
             if (!tok[0]) return obj__fail(p, "newmtl without a name");
             if (strlen(tok) >= OBJ_NAME_MAX) return obj__fail(p, "material name too long");
+            if (cur) obj__material_transmission(cur, &pass);
+            obj__mtl_pass_reset(&pass);
             obj__default_material(&m, tok);
             if (!obj__push(materials, &m)) return obj__fail(p, "out of memory");
             cur = (obj_material *)materials->data + materials->count - 1;
@@ -263,8 +362,24 @@ static int obj__parse_mtl(obj__parser *p, const char *text, size_t len, obj__arr
             if (obj__floats(p, rest, eol, cur->ke, 3, "Ke")) return -1;
         } else if (strcmp(tok, "Ns") == 0) {
             if (obj__floats(p, rest, eol, &cur->ns, 1, "Ns")) return -1;
-        } /* other statements (Ka, illum, map_*, ...) are ignored */
+        } else if (strcmp(tok, "d") == 0) {
+            if (obj__dissolve(p, rest, eol, &pass.d)) return -1;
+        } else if (strcmp(tok, "Tr") == 0) {
+            float tr;
+            if (obj__fractions(p, rest, eol, &tr, 1, "Tr")) return -1;
+            pass.d = 1.0f - tr;
+        } else if (strcmp(tok, "Tf") == 0) {
+            if (obj__filter(p, rest, eol, pass.filter)) return -1;
+            pass.has_filter = 1;
+        } else if (strcmp(tok, "illum") == 0) {
+            float illum;
+            if (obj__floats(p, rest, eol, &illum, 1, "illum")) return -1;
+            if (!(illum >= 0.0f && illum <= 10.0f) || illum != (float)(int)illum)
+                return obj__fail(p, "illum must be an integer 0..10");
+            pass.illum = (int)illum;
+        } /* other statements (Ka, Ni, map_*, ...) are ignored */
     }
+    if (cur) obj__material_transmission(cur, &pass);
     return 0;
 }
 
@@ -591,6 +706,347 @@ static int obj__triangulate_faces(const obj__build *b, obj_scene *out)
     return 0;
 }
 
+EX_FN void obj_free(obj_scene *s)
+{
+    if (!s) return;
+    free(s->positions);
+    free(s->face_start);
+    free(s->face_vertices);
+    free(s->face_material);
+    free(s->face_group);
+    free(s->tri_indices);
+    free(s->tri_material);
+    free(s->tri_face);
+    free(s->materials);
+    free(s->groups);
+    memset(s, 0, sizeof *s);
+}
+
+/* ---- coincident faces -------------------------------------------------
+   Two triangles of different faces coincide when each one's corners lie
+   within OBJ_COINCIDENT_TOLERANCE of the other's plane, they face the same
+   way and their overlap in that plane has an area. Candidates come from a
+   sort by plane offset (from the scene's centre) and, within a run of equal
+   offsets, a sweep along the scene's longest axis; the overlap is the
+   convex clip of one triangle by the other, in 2D on the dominant plane.
+   Back-to-back faces (a wall's two sides in one plane) face opposite ways
+   and are no coincidence. */
+
+/* Relative to the scene's bounding-box diagonal: the examples' tracers
+   offset their rays by 1e-5 of it, so surfaces closer than that are told
+   apart by chance. */
+#define OBJ_COINCIDENT_TOLERANCE 1e-5
+/* An overlap counts when larger than this share of the smaller triangle:
+   neighbours that share an edge overlap by rounding, 1e-7 of their area. */
+#define OBJ__OVERLAP_MIN 1e-5
+#define OBJ__CLIP_MAX 16       /* corners of a clipped piece: 3 + one per cut */
+#define OBJ__PIECES_MAX 64     /* pieces of a triangle left uncovered, before giving up */
+
+typedef struct obj__plane_tri {
+    double n[3], d, area;      /* unit normal, offset from the centre, area */
+    float lo[3], hi[3];
+    float key;                 /* lo along the sweep axis */
+    uint32_t tri;
+} obj__plane_tri;
+
+typedef struct obj__pair { uint32_t lower, upper; double area; } obj__pair;  /* triangles, lower's face < upper's; first */
+
+typedef struct obj__poly2 { double x[OBJ__CLIP_MAX], y[OBJ__CLIP_MAX]; int n; } obj__poly2;
+
+static int obj__cmp_plane(const void *a, const void *b)
+{
+    double x = ((const obj__plane_tri *)a)->d, y = ((const obj__plane_tri *)b)->d;
+    return x < y ? -1 : x > y;
+}
+
+static int obj__cmp_sweep(const void *a, const void *b)
+{
+    float x = ((const obj__plane_tri *)a)->key, y = ((const obj__plane_tri *)b)->key;
+    return x < y ? -1 : x > y;
+}
+
+/* Pairs of uint32_t: by first, then second. */
+static int obj__cmp_pair(const void *a, const void *b)
+{
+    const uint32_t *p = (const uint32_t *)a, *q = (const uint32_t *)b;
+    if (p[0] != q[0]) return p[0] < q[0] ? -1 : 1;
+    return p[1] < q[1] ? -1 : p[1] > q[1];
+}
+
+static double obj__poly2_area(const obj__poly2 *p)
+{
+    double a = 0.0;
+    int i;
+    for (i = 0; i < p->n; i++) {
+        int j = (i + 1) % p->n;
+        a += p->x[i] * p->y[j] - p->x[j] * p->y[i];
+    }
+    return 0.5 * a;
+}
+
+/* The part of convex p on the left of a -> b (keep = 1) or on its right
+   (keep = 0): one Sutherland-Hodgman step. */
+static void obj__clip(const obj__poly2 *p, double ax, double ay, double bx, double by, int keep, obj__poly2 *out)
+{
+    int i;
+    out->n = 0;
+    for (i = 0; i < p->n; i++) {
+        int j = (i + 1) % p->n;
+        double si = (bx - ax) * (p->y[i] - ay) - (by - ay) * (p->x[i] - ax);
+        double sj = (bx - ax) * (p->y[j] - ay) - (by - ay) * (p->x[j] - ax);
+        if (!keep) { si = -si; sj = -sj; }
+        if (si >= 0.0 && out->n < OBJ__CLIP_MAX) { out->x[out->n] = p->x[i]; out->y[out->n] = p->y[i]; out->n++; }
+        if (((si >= 0.0) != (sj >= 0.0)) && out->n < OBJ__CLIP_MAX) {
+            double t = si / (si - sj);
+            out->x[out->n] = p->x[i] + t * (p->x[j] - p->x[i]);
+            out->y[out->n] = p->y[i] + t * (p->y[j] - p->y[i]);
+            out->n++;
+        }
+    }
+}
+
+/* Triangle tri projected along the axis of normal n, counter-clockwise
+   seen from n's side. Returns the factor from projected to true area. */
+static double obj__project_tri(const obj_scene *s, uint32_t tri, const double n[3], obj__poly2 *out)
+{
+    int axis = fabs(n[0]) > fabs(n[1]) ? (fabs(n[0]) > fabs(n[2]) ? 0 : 2) : (fabs(n[1]) > fabs(n[2]) ? 1 : 2);
+    int u = (axis + 1) % 3, w = (axis + 2) % 3, k;
+    if (n[axis] < 0.0) { int t = u; u = w; w = t; }
+    for (k = 0; k < 3; k++) {
+        const float *p = s->positions + 3 * (size_t)s->tri_indices[3 * (size_t)tri + (size_t)k];
+        out->x[k] = p[u];
+        out->y[k] = p[w];
+    }
+    out->n = 3;
+    return 1.0 / fabs(n[axis]);
+}
+
+/* Area of the overlap of triangles a and b (coplanar, same facing). */
+static double obj__overlap(const obj_scene *s, const obj__plane_tri *a, const obj__plane_tri *b)
+{
+    obj__poly2 pa, pb, t;
+    double scale = obj__project_tri(s, a->tri, a->n, &pa);
+    int k;
+    obj__project_tri(s, b->tri, a->n, &pb);
+    for (k = 0; k < 3 && pb.n >= 3; k++) {
+        obj__clip(&pb, pa.x[k], pa.y[k], pa.x[(k + 1) % 3], pa.y[(k + 1) % 3], 1, &t);
+        pb = t;
+    }
+    return pb.n >= 3 ? scale * obj__poly2_area(&pb) : 0.0;
+}
+
+static double obj__plane_distance(const obj__plane_tri *a, const float *p, const double centre[3])
+{
+    return a->n[0] * (p[0] - centre[0]) + a->n[1] * (p[1] - centre[1]) + a->n[2] * (p[2] - centre[2]) - a->d;
+}
+
+/* Whether b's corners lie within tol of a's plane. */
+static int obj__near_plane(const obj_scene *s, const obj__plane_tri *a, const obj__plane_tri *b, const double centre[3],
+                           double tol)
+{
+    int k;
+    for (k = 0; k < 3; k++)
+        if (fabs(obj__plane_distance(a, s->positions + 3 * (size_t)s->tri_indices[3 * (size_t)b->tri + (size_t)k], centre)) > tol)
+            return 0;
+    return 1;
+}
+
+/* The plane (offset from centre), area and bounds of triangle tri; false
+   when it has no area. */
+static int obj__plane_tri_at(const obj_scene *s, uint32_t tri, const double centre[3], obj__plane_tri *out)
+{
+    const float *a = s->positions + 3 * (size_t)s->tri_indices[3 * (size_t)tri];
+    const float *b = s->positions + 3 * (size_t)s->tri_indices[3 * (size_t)tri + 1];
+    const float *c = s->positions + 3 * (size_t)s->tri_indices[3 * (size_t)tri + 2];
+    double e[3], f[3], x[3], len;
+    int k;
+    for (k = 0; k < 3; k++) { e[k] = (double)b[k] - a[k]; f[k] = (double)c[k] - a[k]; }
+    x[0] = e[1] * f[2] - e[2] * f[1];
+    x[1] = e[2] * f[0] - e[0] * f[2];
+    x[2] = e[0] * f[1] - e[1] * f[0];
+    len = sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+    if (!(len > 0.0)) return 0;
+    for (k = 0; k < 3; k++) {
+        out->n[k] = x[k] / len;
+        out->lo[k] = a[k] < b[k] ? (a[k] < c[k] ? a[k] : c[k]) : (b[k] < c[k] ? b[k] : c[k]);
+        out->hi[k] = a[k] > b[k] ? (a[k] > c[k] ? a[k] : c[k]) : (b[k] > c[k] ? b[k] : c[k]);
+    }
+    out->area = 0.5 * len;
+    out->d = 0.0;
+    out->d = obj__plane_distance(out, a, centre);   /* with d = 0: n . (a - centre) */
+    out->key = 0.0f;
+    out->tri = tri;
+    return 1;
+}
+
+/* Every triangle with an area; returns how many. */
+static uint32_t obj__plane_tris(const obj_scene *s, const double centre[3], obj__plane_tri *out)
+{
+    uint32_t i, n = 0;
+    for (i = 0; i < s->tri_count; i++) n += obj__plane_tri_at(s, i, centre, &out[n]);
+    return n;
+}
+
+/* Tests a and b (of different faces) and records a coincidence. */
+static int obj__test_pair(const obj_scene *s, const obj__plane_tri *a, const obj__plane_tri *b, const double centre[3],
+                          double tol, obj__array *pairs)
+{
+    obj__pair pair;
+    uint32_t fa = s->tri_face[a->tri], fb = s->tri_face[b->tri];
+    int k;
+    if (fa == fb || a->n[0] * b->n[0] + a->n[1] * b->n[1] + a->n[2] * b->n[2] <= 0.0) return 0;
+    for (k = 0; k < 3; k++)
+        if (a->lo[k] > b->hi[k] + tol || b->lo[k] > a->hi[k] + tol) return 0;
+    if (!obj__near_plane(s, a, b, centre, tol) || !obj__near_plane(s, b, a, centre, tol)) return 0;
+    pair.area = obj__overlap(s, a, b);
+    if (!(pair.area > OBJ__OVERLAP_MIN * (a->area < b->area ? a->area : b->area))) return 0;
+    pair.lower = fa < fb ? a->tri : b->tri;
+    pair.upper = fa < fb ? b->tri : a->tri;
+    return obj__push(pairs, &pair) ? 0 : -1;
+}
+
+/* Bounds of the vertices of triangles; false when there are none. */
+static int obj__tri_bounds(const obj_scene *s, double lo[3], double hi[3])
+{
+    uint32_t i;
+    int k;
+    if (!s->tri_count) return 0;
+    for (k = 0; k < 3; k++) { lo[k] = DBL_MAX; hi[k] = -DBL_MAX; }
+    for (i = 0; i < 3 * s->tri_count; i++)
+        for (k = 0; k < 3; k++) {
+            double x = s->positions[3 * (size_t)s->tri_indices[i] + (size_t)k];
+            if (x < lo[k]) lo[k] = x;
+            if (x > hi[k]) hi[k] = x;
+        }
+    return 1;
+}
+
+/* Every coincident pair of triangles, sorted by lower triangle. Returns 0,
+   or -1 when out of memory. */
+static int obj__coincident_pairs(const obj_scene *s, obj__array *pairs)
+{
+    double lo[3], hi[3], centre[3], diag = 0.0, tol;
+    obj__plane_tri *pt;
+    uint32_t n, i, j, run_end;
+    int k, axis = 0;
+    memset(pairs, 0, sizeof *pairs);
+    pairs->item = sizeof(obj__pair);
+    if (s->tri_count < 2 || !obj__tri_bounds(s, lo, hi)) return 0;
+    for (k = 0; k < 3; k++) {
+        centre[k] = 0.5 * (lo[k] + hi[k]);
+        diag += (hi[k] - lo[k]) * (hi[k] - lo[k]);
+        if (hi[k] - lo[k] > hi[axis] - lo[axis]) axis = k;
+    }
+    tol = OBJ_COINCIDENT_TOLERANCE * sqrt(diag);
+    pt = (obj__plane_tri *)malloc(sizeof *pt * s->tri_count);
+    if (!pt) return -1;
+    n = obj__plane_tris(s, centre, pt);
+    qsort(pt, n, sizeof *pt, obj__cmp_plane);
+    for (i = 0; i < n; i = run_end) {
+        /* a run of offsets each within 2 tol of the previous one, swept
+           along the longest axis */
+        for (run_end = i + 1; run_end < n && pt[run_end].d - pt[run_end - 1].d <= 2.0 * tol; run_end++) {}
+        for (j = i; j < run_end; j++) pt[j].key = pt[j].lo[axis];
+        qsort(pt + i, run_end - i, sizeof *pt, obj__cmp_sweep);
+        for (j = i; j < run_end; j++) {
+            uint32_t m;
+            for (m = j + 1; m < run_end && pt[m].lo[axis] <= pt[j].hi[axis] + tol; m++)
+                if (obj__test_pair(s, &pt[j], &pt[m], centre, tol, pairs) != 0) { free(pt); free(pairs->data); return -1; }
+        }
+    }
+    free(pt);
+    if (pairs->count > 1) qsort(pairs->data, pairs->count, sizeof(obj__pair), obj__cmp_pair);
+    return 0;
+}
+
+/* Counts the coincident pairs of faces and their overlap into the scene. */
+static int obj__report_coincident(obj_scene *s)
+{
+    obj__array pairs;
+    unsigned char *in_pair;
+    uint32_t *faces;
+    size_t i;
+    if (obj__coincident_pairs(s, &pairs) != 0) return -1;
+    s->coincident_pairs = s->coincident_faces = 0;
+    s->coincident_area = 0.0;
+    in_pair = (unsigned char *)calloc(s->face_count + 1, 1);
+    faces = (uint32_t *)malloc(sizeof(uint32_t) * 2 * (pairs.count + 1));
+    if (!in_pair || !faces) { free(in_pair); free(faces); free(pairs.data); return -1; }
+    for (i = 0; i < pairs.count; i++) {
+        const obj__pair *p = (const obj__pair *)pairs.data + i;
+        faces[2 * i] = s->tri_face[p->lower];
+        faces[2 * i + 1] = s->tri_face[p->upper];
+        in_pair[faces[2 * i]] = in_pair[faces[2 * i + 1]] = 1;
+        s->coincident_area += p->area;
+    }
+    qsort(faces, pairs.count, 2 * sizeof(uint32_t), obj__cmp_pair);
+    for (i = 0; i < pairs.count; i++)
+        s->coincident_pairs += i == 0 || faces[2 * i] != faces[2 * i - 2] || faces[2 * i + 1] != faces[2 * i - 1];
+    for (i = 0; i < s->face_count; i++) s->coincident_faces += in_pair[i];
+    free(in_pair);
+    free(faces);
+    free(pairs.data);
+    return 0;
+}
+
+/* Whether triangle lower is covered by the union of the upper triangles of
+   pairs[0..count): what is left of it after cutting each one away (convex
+   pieces: outside each edge of an upper triangle in turn) is under
+   OBJ__OVERLAP_MIN of its area. */
+static int obj__covered(const obj_scene *s, uint32_t lower, const obj__pair *pairs, size_t count)
+{
+    obj__poly2 pieces[OBJ__PIECES_MAX], next[OBJ__PIECES_MAX], b, rest, out;
+    obj__plane_tri pl;
+    double scale, left = 0.0;
+    int np = 1, nn, i, k;
+    size_t c;
+    static const double origin[3] = { 0.0, 0.0, 0.0 };
+    if (!obj__plane_tri_at(s, lower, origin, &pl)) return 1;   /* no area: nothing to see */
+    scale = obj__project_tri(s, lower, pl.n, &pieces[0]);
+    for (c = 0; c < count; c++) {
+        obj__project_tri(s, pairs[c].upper, pl.n, &b);
+        for (i = 0, nn = 0; i < np; i++) {
+            rest = pieces[i];
+            for (k = 0; k < 3 && rest.n >= 3; k++) {
+                obj__clip(&rest, b.x[k], b.y[k], b.x[(k + 1) % 3], b.y[(k + 1) % 3], 0, &out);
+                if (out.n >= 3 && scale * obj__poly2_area(&out) > 1e-9 * pl.area) {
+                    if (nn == OBJ__PIECES_MAX) return 0;   /* too finely cut to tell: keep the face */
+                    next[nn++] = out;
+                }
+                obj__clip(&rest, b.x[k], b.y[k], b.x[(k + 1) % 3], b.y[(k + 1) % 3], 1, &out);
+                rest = out;
+            }
+        }
+        memcpy(pieces, next, sizeof(obj__poly2) * (size_t)nn);
+        np = nn;
+        if (np == 0) break;
+    }
+    for (i = 0; i < np; i++) left += scale * obj__poly2_area(&pieces[i]);
+    return left <= OBJ__OVERLAP_MIN * pl.area;
+}
+
+/* Removes the faces flagged in drop, keeping the order of the others. */
+static void obj__remove_faces(obj_scene *s, const unsigned char *drop)
+{
+    uint32_t f, nf = 0, nv = 0, t = 0, nt = 0;
+    for (f = 0; f < s->face_count; f++) {
+        uint32_t a = s->face_start[f], b = s->face_start[f + 1], k, tris = b - a - 2;
+        if (drop[f]) { t += tris; continue; }
+        s->face_start[nf] = nv;
+        for (k = a; k < b; k++) s->face_vertices[nv++] = s->face_vertices[k];
+        s->face_material[nf] = s->face_material[f];
+        s->face_group[nf] = s->face_group[f];
+        for (k = 0; k < tris; k++, t++, nt++) {
+            memmove(s->tri_indices + 3 * (size_t)nt, s->tri_indices + 3 * (size_t)t, 3 * sizeof(uint32_t));
+            s->tri_material[nt] = s->tri_material[t];
+            s->tri_face[nt] = nf;
+        }
+        nf++;
+    }
+    s->face_start[nf] = nv;
+    s->face_count = nf;
+    s->tri_count = nt;
+}
 /* Triangulates the faces and moves the arrays into out. */
 static int obj__finish(obj__parser *p, obj__build *b, obj_scene *out)
 {
@@ -619,23 +1075,11 @@ static int obj__finish(obj__parser *p, obj__build *b, obj_scene *out)
     out->groups = (char (*)[OBJ_NAME_MAX])b->groups.data;
     out->group_count = (uint32_t)b->groups.count;
     memset(b, 0, sizeof *b);
+    if (obj__report_coincident(out) != 0) {
+        obj_free(out);
+        return obj__fail(p, "out of memory");
+    }
     return 0;
-}
-
-EX_FN void obj_free(obj_scene *s)
-{
-    if (!s) return;
-    free(s->positions);
-    free(s->face_start);
-    free(s->face_vertices);
-    free(s->face_material);
-    free(s->face_group);
-    free(s->tri_indices);
-    free(s->tri_material);
-    free(s->tri_face);
-    free(s->materials);
-    free(s->groups);
-    memset(s, 0, sizeof *s);
 }
 
 /* Parses OBJ text held in memory. base_dir (ending in '/', or NULL) locates
@@ -692,6 +1136,41 @@ EX_FN int obj_load(const char *path, obj_scene *out, char *err, size_t err_size)
     r = obj_parse(text, len, path, dir, out, err, err_size);
     free(text);
     return r;
+}
+
+/* Drops every face whose triangles are all covered by coincident
+   triangles of faces with a higher index (see "Coincident faces"), keeping
+   the others in order, and counts again what is left. Returns the number of
+   faces dropped, or -1 when out of memory (the scene unchanged). */
+EX_FN int obj_drop_coincident(obj_scene *s)
+{
+    obj__array pairs;
+    unsigned char *drop, *covered;
+    const obj__pair *pr;
+    uint32_t f, t, dropped = 0;
+    size_t i = 0;
+    if (!s || obj__coincident_pairs(s, &pairs) != 0) return -1;
+    pr = (const obj__pair *)pairs.data;
+    drop = (unsigned char *)malloc(s->face_count + 1);
+    covered = (unsigned char *)malloc(s->tri_count + 1);
+    if (!drop || !covered) { free(drop); free(covered); free(pairs.data); return -1; }
+    for (t = 0; t < s->tri_count; t++) {
+        size_t first = i;
+        while (i < pairs.count && pr[i].lower == t) i++;
+        covered[t] = (unsigned char)obj__covered(s, t, pr + first, i - first);
+    }
+    for (f = 0, t = 0; f < s->face_count; f++) {
+        uint32_t end = t + (s->face_start[f + 1] - s->face_start[f] - 2);
+        drop[f] = 1;
+        for (; t < end; t++) drop[f] &= covered[t];
+        dropped += drop[f];
+    }
+    if (dropped) obj__remove_faces(s, drop);
+    free(drop);
+    free(covered);
+    free(pairs.data);
+    if (dropped && obj__report_coincident(s) != 0) return -1;
+    return (int)dropped;
 }
 
 /* Index of the group with this name, or -1. */
