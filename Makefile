@@ -13,6 +13,7 @@
 #   tests/ref_*.c     reference tests: linked with tests/reference (Embree, OpenEXR)
 #   tests/bench_*.c   benchmarks: optimised, linked with tests/reference
 #   examples/*.c      examples: one program each, `cc examples/x.c -lm` builds it
+#   tests/check_*.py  checks of the generated data (python3), run by make test
 
 CC      ?= cc
 CXX     ?= g++
@@ -39,6 +40,11 @@ BENCH_BINS   := $(patsubst tests/%.c,$(BUILD)/bench/%,$(wildcard tests/bench_*.c
 EXAMPLE_BINS := $(patsubst examples/%.c,$(BUILD)/examples/%,$(wildcard examples/*.c))
 REF_OBJS     := $(patsubst tests/reference/%.c,$(BUILD)/ref/%.o,$(wildcard tests/reference/*.c))
 LINKAGE_BIN  := $(BUILD)/tests/linkage
+DATA_CHECKS  := $(wildcard tests/check_*.py)
+
+# The generated buildings: the 1k and 4k presets are committed under
+# examples/data, the larger ones are written here for the benchmarks.
+BUILDINGS    := $(BUILD)/data/building_16k.obj $(BUILD)/data/building_64k.obj
 
 # Compile checks: each header with its implementation, as C99, C11 and C++,
 # with gcc and (when present) clang, and once as static.
@@ -63,12 +69,12 @@ examples: $(EXAMPLE_BINS)
 
 test: deps
 	@$(MAKE) --no-print-directory -j$(NPROC) test-build
-	@tests/run.sh $(LINKAGE_BIN) $(UNIT_BINS) $(TSAN_BINS) $(REF_BINS)
+	@tests/run.sh $(DATA_CHECKS) $(LINKAGE_BIN) $(UNIT_BINS) $(TSAN_BINS) $(REF_BINS)
 
 test-build: $(CHECK_OBJS) $(LINKAGE_BIN) $(UNIT_BINS) $(TSAN_BINS) $(REF_BINS) $(EXAMPLE_BINS)
 
 bench: deps
-	@$(MAKE) --no-print-directory -j$(NPROC) bench-build
+	@$(MAKE) --no-print-directory -j$(NPROC) bench-build $(BUILDINGS)
 	@for b in $(BENCH_BINS); do echo "== $$(basename $$b)"; $$b || exit 1; done
 
 bench-build: $(BENCH_BINS)
@@ -121,11 +127,14 @@ $(BUILD)/ref/%.o: tests/reference/%.c $(ALL_H) | $(BUILD)/ref
 $(BUILD)/bench/bench_%: tests/bench_%.c $(REF_OBJS) $(ALL_H) | $(BUILD)/bench
 	$(CC) $(CFLAGS_PROJECT) $(BENCH_OPT) $(REF_CFLAGS) $< $(REF_OBJS) -o $@ $(REF_LIBS) $(LIBS)
 
+$(BUILD)/data/building_%.obj: examples/data/make_building.py | $(BUILD)/data
+	python3 examples/data/make_building.py --preset $* --out $(BUILD)/data/building_$*
+
 # --- examples -------------------------------------------------------------
 $(BUILD)/examples/%: examples/%.c $(ALL_H) | $(BUILD)/examples
 	$(CC) $(CFLAGS_PROJECT) $(OPT) $< -o $@ $(LIBS)
 
-$(BUILD)/check $(BUILD)/tests $(BUILD)/ref $(BUILD)/bench $(BUILD)/examples:
+$(BUILD)/check $(BUILD)/tests $(BUILD)/ref $(BUILD)/bench $(BUILD)/examples $(BUILD)/data:
 	@mkdir -p $@
 
 clean:
