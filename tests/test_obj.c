@@ -658,6 +658,76 @@ static void test_drop_coincident_union(void)
     obj_free(&s);
 }
 
+/* ---- writing and moving ------------------------------------------------- */
+
+/* A scene with a concave face, a convex quad, a concave quad, a triangle,
+   glass, an emitter and names that are no OBJ tokens, written and read
+   back: the same positions, the same triangles in the same order, the same
+   material values; concave faces come back as their triangles. */
+static void test_write_round_trip(void)
+{
+    const char *mtl = "newmtl glass\nKd 0.5 0.4 0.3\nKs 0.05 0.05 0.05\nNs 200\nTf 0.8 0.7 0.6\nillum 4\n"
+                      "newmtl lamp\nKd 0.1 0.1 0.1\nKe 5 4 3\nnewmtl default\nKd 0.2 0.3 0.4\n";
+    const char *obj =
+        "mtllib test_obj_rt.mtl\n"
+        "v 0 0 0\nv 4 0 0\nv 4 2.1 0\nv 5 2.1 0\nv 5 0 0\nv 10 0 0\nv 10 3 0\nv 0 3 0\n"
+        "v 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\nv 0.5 0.25 1\n"
+        "g front\nusemtl glass\nf 1 2 3 4 5 6 7 8\n"
+        "g quads\nusemtl lamp\nf 9 10 11 12\nusemtl default\nf 9 10 11 13\nf 9 10 11\n";
+    obj_scene a, b;
+    char err[256];
+    uint32_t i;
+    int k;
+    if (!CHECK(write_file("build/tests/test_obj_rt.mtl", mtl))) return;
+    if (!CHECK_MSG(obj_parse(obj, strlen(obj), "rt.obj", "build/tests/", &a, err, sizeof err) == 0, "%s", err)) return;
+    strcpy(a.groups[1], "front wall");   /* not a token: written as front_wall */
+    if (!CHECK_MSG(obj_write(&a, "build/tests/test_obj_written.obj", err, sizeof err) == 0, "%s", err)) return;
+    if (!CHECK_MSG(obj_load("build/tests/test_obj_written.obj", &b, err, sizeof err) == 0, "%s", err)) return;
+    CHECK_EQ_INT(b.vertex_count, a.vertex_count);
+    CHECK(memcmp(a.positions, b.positions, sizeof(float) * 3 * a.vertex_count) == 0);
+    CHECK_EQ_INT(b.tri_count, a.tri_count);
+    CHECK(memcmp(a.tri_indices, b.tri_indices, sizeof(uint32_t) * 3 * a.tri_count) == 0);
+    CHECK_EQ_INT(b.face_count, 6 + 1 + 2 + 1);   /* the door frame and the concave quad as triangles */
+    CHECK(obj_find_group(&b, "front_wall") >= 0 && obj_find_group(&b, "quads") >= 0);
+    for (i = 0; i < a.tri_count; i++) {
+        const obj_material *ma = &a.materials[a.tri_material[i]], *mb = &b.materials[b.tri_material[i]];
+        for (k = 0; k < 3; k++) {   /* Kd goes through a division by 1 - tf and back: float rounding */
+            CHECK_CLOSE(mb->kd[k], ma->kd[k], 1e-6, 0);
+            CHECK_CLOSE(mb->ks[k], ma->ks[k], 0, 0);
+            CHECK_CLOSE(mb->ke[k], ma->ke[k], 0, 0);
+            CHECK_CLOSE(mb->tf[k], ma->tf[k], 0, 0);
+        }
+        CHECK_CLOSE(mb->ns, ma->ns, 0, 0);
+    }
+    CHECK(obj_write(&a, "build/tests/no_extension", err, sizeof err) != 0);
+    CHECK(obj_write(&a, "build/no_such_dir/x.obj", err, sizeof err) != 0 && strstr(err, "no_such_dir") != NULL);
+    obj_free(&a);
+    obj_free(&b);
+}
+
+/* z-up to y-up with a scale: positions turned, fronts kept; a mirror
+   reverses the faces and triangles so the fronts stay fronts. */
+static void test_transform(void)
+{
+    const char *text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n";   /* faces +z */
+    const float z_up_cm[9] = { 0.01f, 0, 0, 0, 0, 0.01f, 0, -0.01f, 0 }, mirror[9] = { -1, 0, 0, 0, 1, 0, 0, 0, 1 };
+    obj_scene s;
+    char err[256];
+    float n[12];
+    if (!CHECK(obj_parse(text, strlen(text), NULL, NULL, &s, err, sizeof err) == 0)) return;
+    CHECK(obj_transform(&s, z_up_cm) == 0);
+    CHECK_CLOSE(s.positions[3 * 2 + 0], 0.01, 1e-7, 0);   /* (1, 1, 0) -> (0.01, 0, -0.01) */
+    CHECK_CLOSE(s.positions[3 * 2 + 1], 0.0, 0, 0);
+    CHECK_CLOSE(s.positions[3 * 2 + 2], -0.01, 1e-7, 0);
+    obj_vertex_normals(&s, n);
+    CHECK_CLOSE(n[1], 1.0, 1e-6, 0);   /* +z became +y */
+    CHECK(obj_transform(&s, mirror) == 0);
+    obj_vertex_normals(&s, n);
+    CHECK_CLOSE(n[1], 1.0, 1e-6, 0);   /* still +y: the winding was reversed with the mirror */
+    CHECK_EQ_INT(s.face_vertices[0], 3);
+    obj_free(&s);
+}
+
 int main(int argc, char **argv)
 {
     TEST_INIT(argc, argv);
@@ -680,5 +750,7 @@ int main(int argc, char **argv)
     RUN(test_coincident_faces_reported);
     RUN(test_drop_coincident);
     RUN(test_drop_coincident_union);
+    RUN(test_write_round_trip);
+    RUN(test_transform);
     return test_finish();
 }

@@ -145,7 +145,8 @@ static int obj__fail(obj__parser *p, const char *fmt, ...)
     va_list ap;
     int n = 0;
     if (p->err && p->err_size) {
-        n = snprintf(p->err, p->err_size, "%s:%d: ", p->file, p->line);
+        n = p->line > 0 ? snprintf(p->err, p->err_size, "%s:%d: ", p->file, p->line)
+                        : snprintf(p->err, p->err_size, "%s: ", p->file);
         if (n < 0 || (size_t)n >= p->err_size) n = 0;
         va_start(ap, fmt);
         vsnprintf(p->err + n, p->err_size - (size_t)n, fmt, ap);
@@ -389,6 +390,23 @@ typedef struct obj__build {
     obj__array positions, face_start, face_vertices, face_material, face_group;
     obj__array materials, groups;
 } obj__build;
+
+static void obj__build_init(obj__build *b)
+{
+    memset(b, 0, sizeof *b);
+    b->positions.item = sizeof(float);
+    b->face_start.item = b->face_vertices.item = b->face_material.item = b->face_group.item = sizeof(uint32_t);
+    b->materials.item = sizeof(obj_material);
+    b->groups.item = OBJ_NAME_MAX;
+}
+
+static void obj__parser_init(obj__parser *p, const char *name, char *err, size_t err_size)
+{
+    p->file = name ? name : "<memory>";
+    p->line = 0;
+    p->err = err;
+    p->err_size = err_size;
+}
 
 static void obj__build_free(obj__build *b)
 {
@@ -1090,16 +1108,8 @@ EX_FN int obj_parse(const char *text, size_t len, const char *name, const char *
     obj__build b;
     obj__parser p;
     int r;
-    memset(&b, 0, sizeof b);
-    b.positions.item = sizeof(float);
-    b.face_start.item = b.face_vertices.item = b.face_material.item = b.face_group.item =
-        sizeof(uint32_t);
-    b.materials.item = sizeof(obj_material);
-    b.groups.item = OBJ_NAME_MAX;
-    p.file = name ? name : "<memory>";
-    p.line = 0;
-    p.err = err;
-    p.err_size = err_size;
+    obj__build_init(&b);
+    obj__parser_init(&p, name, err, err_size);
     if (out) memset(out, 0, sizeof *out);
     if (!text || !out) return obj__fail(&p, "no input");
     r = obj__parse_obj(&p, text, len, base_dir, &b);
@@ -1171,6 +1181,158 @@ EX_FN int obj_drop_coincident(obj_scene *s)
     free(pairs.data);
     if (dropped && obj__report_coincident(s) != 0) return -1;
     return (int)dropped;
+}
+
+/* ---- writing ------------------------------------------------------------ */
+
+/* name as an OBJ/MTL token (whitespace and controls become '_'), different
+   from the names[0..count) before it and from the parser's "default". */
+static void obj__unique_name(const char *name, char (*names)[OBJ_NAME_MAX], uint32_t count, char *out)
+{
+    char base[OBJ_NAME_MAX];
+    uint32_t i, suffix = 0;
+    int clash;
+    size_t k;
+    snprintf(base, sizeof base, "%.50s", name[0] ? name : "unnamed");
+    for (k = 0; base[k]; k++)
+        if ((unsigned char)base[k] <= ' ' || base[k] == 127) base[k] = '_';
+    memcpy(out, base, sizeof base);
+    do {
+        clash = strcmp(out, "default") == 0;
+        for (i = 0; i < count && !clash; i++) clash = strcmp(out, names[i]) == 0;
+        if (clash) snprintf(out, OBJ_NAME_MAX, "%.50s_%u", base, ++suffix);
+    } while (clash);
+}
+
+/* Writes the materials as MTL that obj__parse_mtl reads back to the same
+   values: a material that passes light as glass (Tf under illum 4, its Kd
+   divided by what glass keeps of it). */
+static int obj__write_mtl(FILE *f, const obj_scene *s, char (*names)[OBJ_NAME_MAX])
+{
+    uint32_t m;
+    int k;
+    fprintf(f, "# written by examples/common/obj.h\n");
+    for (m = 0; m < s->material_count; m++) {
+        const obj_material *mt = &s->materials[m];
+        float kd[3];
+        int glass = mt->tf[0] > 0 || mt->tf[1] > 0 || mt->tf[2] > 0;
+        for (k = 0; k < 3; k++) kd[k] = glass ? (mt->tf[k] < 1.0f ? mt->kd[k] / (1.0f - mt->tf[k]) : 0.0f) : mt->kd[k];
+        fprintf(f, "newmtl %s\nKd %.9g %.9g %.9g\nKs %.9g %.9g %.9g\nNs %.9g\nKe %.9g %.9g %.9g\n", names[m], kd[0], kd[1],
+                kd[2], mt->ks[0], mt->ks[1], mt->ks[2], mt->ns, mt->ke[0], mt->ke[1], mt->ke[2]);
+        if (glass) fprintf(f, "Tf %.9g %.9g %.9g\nillum 4\n", mt->tf[0], mt->tf[1], mt->tf[2]);
+    }
+    return ferror(f) ? -1 : 0;
+}
+
+/* Whether face f is written as it is: 3 corners, or 4 strictly convex. */
+static int obj__face_as_is(const obj_scene *s, uint32_t f, obj__ring *ring)
+{
+    uint32_t n = s->face_start[f + 1] - s->face_start[f];
+    if (n == 3) return 1;
+    if (n != 4) return 0;
+    obj__project(ring, s->positions, s->face_vertices + s->face_start[f], 4);
+    return obj__convex(ring, 4);
+}
+
+static int obj__write_obj(FILE *f, const obj_scene *s, const char *mtl_name, char (*mat_names)[OBJ_NAME_MAX],
+                          char (*group_names)[OBJ_NAME_MAX])
+{
+    obj__ring ring;
+    uint32_t v, fc, t = 0, material = UINT32_MAX, group = UINT32_MAX, k;
+    memset(&ring, 0, sizeof ring);
+    if (!obj__ring_reserve(&ring, 4)) return -1;
+    fprintf(f, "# written by examples/common/obj.h: faces of 3 corners or convex 4, the others as triangles\n");
+    fprintf(f, "mtllib %s\n", mtl_name);
+    for (v = 0; v < s->vertex_count; v++)
+        fprintf(f, "v %.9g %.9g %.9g\n", s->positions[3 * (size_t)v], s->positions[3 * (size_t)v + 1], s->positions[3 * (size_t)v + 2]);
+    for (fc = 0; fc < s->face_count; fc++) {
+        uint32_t a = s->face_start[fc], n = s->face_start[fc + 1] - a;
+        if (s->face_group[fc] != group) fprintf(f, "g %s\n", group_names[group = s->face_group[fc]]);
+        if (s->face_material[fc] != material) fprintf(f, "usemtl %s\n", mat_names[material = s->face_material[fc]]);
+        if (obj__face_as_is(s, fc, &ring)) {
+            fputc('f', f);
+            for (k = 0; k < n; k++) fprintf(f, " %u", s->face_vertices[a + k] + 1);
+            fputc('\n', f);
+        } else {
+            for (k = 0; k + 2 < n; k++, t++)   /* the face's triangles: they come in face order */
+                fprintf(f, "f %u %u %u\n", s->tri_indices[3 * (size_t)t] + 1, s->tri_indices[3 * (size_t)t + 1] + 1,
+                        s->tri_indices[3 * (size_t)t + 2] + 1);
+            continue;
+        }
+        t += n - 2;
+    }
+    obj__ring_free(&ring);
+    return ferror(f) ? -1 : 0;
+}
+
+/* Writes s as an OBJ file at obj_path (ending in ".obj") and its materials
+   beside it (the same name ending in ".mtl"), so that obj_load reads back
+   the same positions, triangles, groups' and materials' values (names made
+   unique OBJ tokens). Faces of 3 corners and strictly convex faces of 4 are
+   written as they are; every other face as its triangles, so every face of
+   the file is a convex patch of 3 or 4 corners (what radinterp takes).
+   Returns 0, or -1 with a message. */
+EX_FN int obj_write(const obj_scene *s, const char *obj_path, char *err, size_t err_size)
+{
+    char mtl_path[1024], (*mat_names)[OBJ_NAME_MAX], (*group_names)[OBJ_NAME_MAX];
+    const char *base;
+    size_t n = obj_path ? strlen(obj_path) : 0;
+    FILE *fo = NULL, *fm = NULL;
+    uint32_t i;
+    int r = -1;
+    if (!s || n < 5 || strcmp(obj_path + n - 4, ".obj") != 0 || n >= sizeof mtl_path) {
+        if (err && err_size) snprintf(err, err_size, "obj_write: the path must end in .obj");
+        return -1;
+    }
+    memcpy(mtl_path, obj_path, n - 3);
+    memcpy(mtl_path + n - 3, "mtl", 4);
+    base = strrchr(mtl_path, '/') ? strrchr(mtl_path, '/') + 1 : mtl_path;
+    mat_names = (char (*)[OBJ_NAME_MAX])malloc(OBJ_NAME_MAX * ((size_t)s->material_count + 1));
+    group_names = (char (*)[OBJ_NAME_MAX])malloc(OBJ_NAME_MAX * ((size_t)s->group_count + 1));
+    if (mat_names && group_names) {
+        for (i = 0; i < s->material_count; i++) obj__unique_name(s->materials[i].name, mat_names, i, mat_names[i]);
+        for (i = 0; i < s->group_count; i++) obj__unique_name(s->groups[i], group_names, i, group_names[i]);
+        fo = fopen(obj_path, "w");
+        fm = fopen(mtl_path, "w");
+        if (fo && fm) r = obj__write_mtl(fm, s, mat_names) | obj__write_obj(fo, s, base, mat_names, group_names);
+    }
+    if (fo && fclose(fo) != 0) r = -1;
+    if (fm && fclose(fm) != 0) r = -1;
+    if (r != 0 && err && err_size) snprintf(err, err_size, "%s: cannot write (%s)", obj_path, mat_names && group_names ? strerror(errno) : "out of memory");
+    free(mat_names);
+    free(group_names);
+    return r;
+}
+
+/* Maps every position p to m p (m 3x3, row-major): a change of axes or of
+   units. A mirroring map (negative determinant) also reverses every face
+   and triangle, so that fronts stay fronts. The coincidence report is
+   counted again. Returns 0, or -1 when out of memory (positions already
+   mapped, report left as it was). */
+EX_FN int obj_transform(obj_scene *s, const float m[9])
+{
+    double det = (double)m[0] * ((double)m[4] * m[8] - (double)m[5] * m[7]) -
+                 (double)m[1] * ((double)m[3] * m[8] - (double)m[5] * m[6]) +
+                 (double)m[2] * ((double)m[3] * m[7] - (double)m[4] * m[6]);
+    uint32_t i, f;
+    for (i = 0; i < s->vertex_count; i++) {
+        float *p = s->positions + 3 * (size_t)i, q[3];
+        int r;
+        for (r = 0; r < 3; r++) q[r] = m[3 * r] * p[0] + m[3 * r + 1] * p[1] + m[3 * r + 2] * p[2];
+        memcpy(p, q, sizeof q);
+    }
+    if (det < 0.0) {
+        for (f = 0; f < s->face_count; f++) {
+            uint32_t a = s->face_start[f], b = s->face_start[f + 1] - 1;
+            for (; a < b; a++, b--) { uint32_t t = s->face_vertices[a]; s->face_vertices[a] = s->face_vertices[b]; s->face_vertices[b] = t; }
+        }
+        for (i = 0; i < s->tri_count; i++) {
+            uint32_t t = s->tri_indices[3 * (size_t)i + 1];
+            s->tri_indices[3 * (size_t)i + 1] = s->tri_indices[3 * (size_t)i + 2];
+            s->tri_indices[3 * (size_t)i + 2] = t;
+        }
+    }
+    return obj__report_coincident(s);
 }
 
 /* Index of the group with this name, or -1. */
