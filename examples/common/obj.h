@@ -56,6 +56,16 @@
    T-junctions. Faces back to back (a wall's two sides in one plane) face
    opposite ways and are not coincident.
 
+   Functions:
+       obj_load, obj_parse       read a file / text in memory
+       obj_free
+       obj_write                 write OBJ + MTL that read back the same
+       obj_transform             change axes or units (mirrors keep fronts)
+       obj_drop_coincident       drop faces covered by later coincident ones
+       obj_find_group, obj_find_material, obj_bounds, obj_vertex_normals
+   Other formats: scene_load.h (ex_scene_load) reads them through Assimp
+   into the same obj_scene.
+
    Every problem (missing file, malformed number, index out of range, face with
    fewer than three vertices, unknown material) returns non-zero with a message
    naming the file and line, and leaves *out empty. No input crashes it. */
@@ -1304,6 +1314,14 @@ EX_FN int obj_write(const obj_scene *s, const char *obj_path, char *err, size_t 
     return r;
 }
 
+/* Determinant of a 3x3 row-major matrix: negative for a mirror. */
+static double obj__det3(const float m[9])
+{
+    return (double)m[0] * ((double)m[4] * m[8] - (double)m[5] * m[7]) -
+           (double)m[1] * ((double)m[3] * m[8] - (double)m[5] * m[6]) +
+           (double)m[2] * ((double)m[3] * m[7] - (double)m[4] * m[6]);
+}
+
 /* Maps every position p to m p (m 3x3, row-major): a change of axes or of
    units. A mirroring map (negative determinant) also reverses every face
    and triangle, so that fronts stay fronts. The coincidence report is
@@ -1311,9 +1329,7 @@ EX_FN int obj_write(const obj_scene *s, const char *obj_path, char *err, size_t 
    mapped, report left as it was). */
 EX_FN int obj_transform(obj_scene *s, const float m[9])
 {
-    double det = (double)m[0] * ((double)m[4] * m[8] - (double)m[5] * m[7]) -
-                 (double)m[1] * ((double)m[3] * m[8] - (double)m[5] * m[6]) +
-                 (double)m[2] * ((double)m[3] * m[7] - (double)m[4] * m[6]);
+    double det = obj__det3(m);
     uint32_t i, f;
     for (i = 0; i < s->vertex_count; i++) {
         float *p = s->positions + 3 * (size_t)i, q[3];

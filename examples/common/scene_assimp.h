@@ -401,9 +401,7 @@ static int64_t ex__ai_vertex(ex__ai_weld *w, obj__build *b, const float p[3])
 static int ex__ai_mesh(obj__parser *p, const struct aiMesh *me, const float m[9], uint32_t material, uint32_t group,
                        ex__ai_weld *w, obj__build *b, uint32_t *map)
 {
-    double det = (double)m[0] * ((double)m[4] * m[8] - (double)m[5] * m[7]) -
-                 (double)m[1] * ((double)m[3] * m[8] - (double)m[5] * m[6]) +
-                 (double)m[2] * ((double)m[3] * m[7] - (double)m[4] * m[6]);
+    double det = obj__det3(m);
     unsigned v, f, k;
     for (v = 0; v < me->mNumVertices; v++) {
         const struct aiVector3D *a = &me->mVertices[v];
