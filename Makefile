@@ -53,7 +53,10 @@ ASSIMP_OK    := $(shell pkg-config --exists assimp 2>/dev/null && echo yes)
 ASSIMP_FLAGS := $(if $(ASSIMP_OK),-DEX_HAVE_ASSIMP $(shell pkg-config --cflags assimp))
 ASSIMP_LIBS  := $(if $(ASSIMP_OK),$(shell pkg-config --libs assimp))
 ASSIMP_BINS  := $(if $(ASSIMP_OK),$(patsubst tests/%.c,$(BUILD)/tests/%,$(wildcard tests/assimp_*.c)))
-ASSIMP_STAMP := $(BUILD)/.assimp-$(if $(ASSIMP_OK),yes,no)
+# Programs are built again when Assimp comes or goes: this file changes then.
+ASSIMP_STAMP := $(BUILD)/.assimp-flags
+$(shell mkdir -p $(BUILD) && echo '$(ASSIMP_FLAGS) $(ASSIMP_LIBS)' | cmp -s - $(ASSIMP_STAMP) || \
+        echo '$(ASSIMP_FLAGS) $(ASSIMP_LIBS)' > $(ASSIMP_STAMP))
 
 # Compile checks: each header with its implementation, as C99, C11 and C++,
 # with gcc and (when present) clang, and once as static.
@@ -105,10 +108,6 @@ $(BUILD)/.deps-ok: tests/deps.sh
 $(BUILD)/.deps-assimp-tried: tests/deps_assimp.sh
 	@CC=$(CC) tests/deps_assimp.sh
 	@mkdir -p $(BUILD) && touch $@
-
-# Programs are built again when Assimp comes or goes.
-$(ASSIMP_STAMP):
-	@mkdir -p $(BUILD) && rm -f $(BUILD)/.assimp-yes $(BUILD)/.assimp-no && touch $@
 
 # --- compile checks -------------------------------------------------------
 $(BUILD)/check/%.c: | $(BUILD)/check
