@@ -268,6 +268,39 @@ static void test_bad_files(void)
     }
 }
 
+/* The JSON reader behind KHR_materials_emissive_strength: the written
+   glTF gives the lamp's 8 and 1 elsewhere; byte flips and truncations of it
+   never crash it (ASan) and give finite, non-negative strengths. */
+static void test_emissive_strength_reader(void)
+{
+    char *text, *copy;
+    size_t len, i;
+    float strength[MESHES + 1];
+    uint64_t state = 99;
+    static const char alphabet[] = "{}[]\",:0123456789.eE-+ \\tnul";
+    int round, k;
+    if (!CHECK(write_scene("build/tests/assimp_scene.gltf", NULL, 0))) return;
+    if (!CHECK(obj__read_file("build/tests/assimp_scene.gltf", &text, &len) == 0)) return;
+    for (k = 0; k <= MESHES; k++) strength[k] = 1.0f;
+    ex__json_strengths(text, len, strength, MESHES);
+    for (k = 0; k < MESHES; k++) CHECK_CLOSE(strength[k], k == 3 ? 8.0 : 1.0, 0, 0);
+    copy = (char *)malloc(len + 1);
+    for (round = 0; round < 3000 && copy; round++) {
+        size_t n = len;
+        memcpy(copy, text, len);
+        for (i = 0; i < 1 + (size_t)round % 4; i++) {
+            state = state * 6364136223846793005ull + 1442695040888963407ull;
+            copy[(state >> 33) % len] = alphabet[(state >> 20) % (sizeof alphabet - 1)];
+        }
+        if (round % 5 == 0) n = (size_t)((state >> 40) % len);
+        for (k = 0; k <= MESHES; k++) strength[k] = 1.0f;
+        ex__json_strengths(copy, n, strength, MESHES);
+        for (k = 0; k <= MESHES; k++) CHECK_MSG(strength[k] >= 0.0f && isfinite(strength[k]), "round %d: %g", round, strength[k]);
+    }
+    free(copy);
+    free(text);
+}
+
 /* ---- models of Debian's assimp-testmodels ---------------------------------- */
 
 static int have_model(const char *path)
@@ -382,6 +415,7 @@ int main(int argc, char **argv)
     RUN(test_gltf_equals_obj_twin);
     RUN(test_up_and_scale);
     RUN(test_bad_files);
+    RUN(test_emissive_strength_reader);
     RUN(test_ifc_house);
     RUN(test_fbx_units);
     RUN(test_glb_box);
