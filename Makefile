@@ -192,8 +192,10 @@ $(BUILD)/data/building_%.obj: examples/data/make_building.py | $(BUILD)/data
 $(BUILD)/clang-ubsan/%-clang-ubsan: tests/%.c $(ALL_H) | $(BUILD)/clang-ubsan
 	$(CLANG) $(CFLAGS_PROJECT) -O1 -g $(CLANG_UBSAN) $(CLANG_UBSAN_PENDING) $< -o $@ $(LIBS)
 
+# The replays use the fuzzers' sanitizers when clang is present, else gcc's.
+REPLAY_CC := $(if $(CLANG),$(CLANG) $(CFLAGS_PROJECT) -O1 -g -fsanitize=address $(CLANG_UBSAN),$(CC) $(CFLAGS_PROJECT) -O1 -g $(SAN))
 $(BUILD)/fuzz/replay_%: tests/fuzz/fuzz_%.c tests/fuzz/replay.c tests/fuzz/fuzz.h $(ALL_H) | $(BUILD)/fuzz
-	$(CC) $(CFLAGS_PROJECT) -O1 -g $(SAN) $< tests/fuzz/replay.c -o $@ $(LIBS)
+	$(REPLAY_CC) $< tests/fuzz/replay.c -o $@ $(LIBS)
 
 $(BUILD)/fuzz/fuzz_%: tests/fuzz/fuzz_%.c tests/fuzz/fuzz.h $(ALL_H) | $(BUILD)/fuzz
 	$(CLANG) $(CFLAGS_PROJECT) -O1 -g -fsanitize=fuzzer,address $(CLANG_UBSAN) $< -o $@ $(LIBS)
