@@ -3,10 +3,13 @@
    byte and the text of a material library: that part is written to the file
    m.mtl in a directory of this process, which the OBJ text's `mtllib m.mtl`
    finds (the seeds say so; a mutated name reaches the parser's "cannot read"
-   path). A scene that parses must be consistent: every triangle's corners
-   are vertices, every face's material and group exist, faces and triangles
-   agree, and its bounds and vertex normals compute without a sanitizer
-   report. */
+   path). A scene that parses must be consistent (every triangle's corners
+   are vertices, every face's material and group exist, a face of n corners
+   gives its n - 2 triangles in face order, transmittances lie in [0, 1]);
+   its bounds and vertex normals compute without a sanitizer report; obj_write
+   writes files that parse back to the same positions, triangles and
+   material values; and the scene stays consistent through a mirroring
+   obj_transform and obj_drop_coincident. */
 #if !defined(_POSIX_C_SOURCE) || _POSIX_C_SOURCE < 200809L
 #  undef _POSIX_C_SOURCE
 #  define _POSIX_C_SOURCE 200809L   /* mkdtemp */
@@ -65,27 +68,28 @@ static int write_mtl(const uint8_t *text, size_t size)
 
 static void check_scene(const obj_scene *s)
 {
-    uint32_t f, t, i, corners = 0;
+    uint32_t f, t = 0, i;
     float lo[3], hi[3], *normals;
     for (f = 0; f < s->face_count; f++) {
-        uint32_t n = s->face_start[f + 1] - s->face_start[f];
+        uint32_t n = s->face_start[f + 1] - s->face_start[f], end;
         fuzz_require(s->face_start[f] < s->face_start[f + 1] && n >= 3, "a face with fewer than 3 corners");
         fuzz_require(s->face_material[f] < s->material_count && s->face_group[f] < s->group_count,
                      "a face's material or group does not exist");
         for (i = s->face_start[f]; i < s->face_start[f + 1]; i++)
             fuzz_require(s->face_vertices[i] < s->vertex_count, "a face's corner is not a vertex");
-        corners += n - 2;
+        for (end = t + n - 2; t < end; t++)
+            fuzz_require(t < s->tri_count && s->tri_face[t] == f && s->tri_material[t] == s->face_material[f],
+                         "a face's n - 2 triangles are not next in face order");
     }
-    fuzz_require(corners == s->tri_count, "the triangles are not the faces' fans");
-    for (t = 0; t < s->tri_count; t++) {
-        fuzz_require(s->tri_indices[3 * t] < s->vertex_count && s->tri_indices[3 * t + 1] < s->vertex_count &&
-                         s->tri_indices[3 * t + 2] < s->vertex_count,
-                     "a triangle's corner is not a vertex");
-        fuzz_require(s->tri_face[t] < s->face_count && s->tri_material[t] == s->face_material[s->tri_face[t]],
-                     "a triangle's face or material");
+    fuzz_require(t == s->tri_count, "triangles of no face");
+    for (t = 0; t < 3 * s->tri_count; t++)
+        fuzz_require(s->tri_indices[t] < s->vertex_count, "a triangle's corner is not a vertex");
+    for (i = 0; i < s->material_count; i++) {
+        const obj_material *m = &s->materials[i];
+        fuzz_require(memchr(m->name, 0, OBJ_NAME_MAX) != NULL, "a material name without its end");
+        fuzz_require(m->tf[0] >= 0 && m->tf[0] <= 1 && m->tf[1] >= 0 && m->tf[1] <= 1 && m->tf[2] >= 0 && m->tf[2] <= 1,
+                     "a transmittance outside [0, 1]");
     }
-    for (i = 0; i < s->material_count; i++)
-        fuzz_require(memchr(s->materials[i].name, 0, OBJ_NAME_MAX) != NULL, "a material name without its end");
     for (i = 0; i < s->group_count; i++)
         fuzz_require(memchr(s->groups[i], 0, OBJ_NAME_MAX) != NULL, "a group name without its end");
     fuzz_require(obj_bounds(s, lo, hi) == (s->vertex_count > 0), "obj_bounds");
@@ -94,6 +98,56 @@ static void check_scene(const obj_scene *s)
         obj_vertex_normals(s, normals);
         free(normals);
     }
+}
+
+/* Whether two materials have the same values: exactly, except the diffuse
+   reflectance of glass, which the file holds divided by 1 - tf (a rounding
+   each way, so within 4 float steps). */
+static int same_material(const obj_material *a, const obj_material *b)
+{
+    int k, same = a->ns == b->ns;
+    for (k = 0; k < 3; k++) {
+        float tol = a->tf[k] > 0.0f ? 4.0f * FLT_EPSILON * a->kd[k] : 0.0f;
+        same &= a->ks[k] == b->ks[k] && a->ke[k] == b->ke[k] && a->tf[k] == b->tf[k] && fabsf(a->kd[k] - b->kd[k]) <= tol;
+    }
+    return same;
+}
+
+/* obj_write, then obj_load of what it wrote: the same positions, triangles
+   and materials' values (names are made unique tokens, faces may come back
+   as their triangles). */
+static void check_written_scene(const obj_scene *s)
+{
+    char path[128], err[256];
+    obj_scene back;
+    uint32_t t;
+    snprintf(path, sizeof path, "%s/written.obj", mtl_dir);
+    fuzz_require(obj_write(s, path, err, sizeof err) == 0, "obj_write failed");
+    fuzz_require(obj_load(path, &back, err, sizeof err) == 0, "what obj_write wrote does not load");
+    fuzz_require(back.vertex_count == s->vertex_count && back.tri_count == s->tri_count,
+                 "what obj_write wrote loads with other counts");
+    fuzz_require(fuzz_same_bytes(back.positions, 12 * (size_t)back.vertex_count, s->positions, 12 * (size_t)s->vertex_count) &&
+                     fuzz_same_bytes(back.tri_indices, 12 * (size_t)back.tri_count, s->tri_indices, 12 * (size_t)s->tri_count),
+                 "what obj_write wrote loads with other positions or triangles");
+    for (t = 0; t < s->tri_count; t++)
+        fuzz_require(same_material(&s->materials[s->tri_material[t]], &back.materials[back.tri_material[t]]),
+                     "what obj_write wrote loads with other material values");
+    obj_free(&back);
+    snprintf(path, sizeof path, "%s/written.obj", mtl_dir);
+    unlink(path);
+    snprintf(path, sizeof path, "%s/written.mtl", mtl_dir);
+    unlink(path);
+}
+
+/* A mirror (x and z swapped, so faces turn) and the removal of covered
+   coincident faces keep the scene consistent. */
+static void check_transform_and_drop(obj_scene *s)
+{
+    static const float mirror[9] = { 0, 0, 1, 0, 1, 0, 1, 0, 0 };
+    if (obj_transform(s, mirror) != 0) return;   /* out of memory */
+    check_scene(s);
+    if (obj_drop_coincident(s) < 0) return;      /* out of memory */
+    check_scene(s);
 }
 
 static fuzz_outcome parse_scene(const uint8_t *data, size_t size)
@@ -118,6 +172,8 @@ static fuzz_outcome parse_scene(const uint8_t *data, size_t size)
         return FUZZ_CORRUPT;
     }
     check_scene(&s);
+    check_written_scene(&s);
+    check_transform_and_drop(&s);
     obj_free(&s);
     return FUZZ_LOADED;
 }
