@@ -1,15 +1,15 @@
 /* fuzz.h - what the project's fuzz targets share.
 
-   One target per loader, tests/fuzz/fuzz_NAME.c: it defines a load function
-   (load the bytes, use what loaded, check it, free it) and the program's
-   fuzz_target, then includes this header, which defines the libFuzzer entry
-   point. The same source builds two programs:
+   One target per loader, tests/fuzz/fuzz_NAME.c: it includes this header
+   (which defines the libFuzzer entry point), defines a load function (load
+   the bytes, use what loaded, check it, free it) and the program's
+   fuzz_this_target. The same source builds two programs:
    - `make fuzz`: with clang -fsanitize=fuzzer,address,undefined, a libFuzzer
      program that mutates the committed seeds of tests/fuzz/corpus/NAME (its
      findings and the inputs it keeps go under build/fuzz/);
-   - `make test`: with tests/fuzz/replay.c and any C compiler under
-     ASan+UBSan, a program that replays every committed file of
-     tests/fuzz/corpus/NAME (no libFuzzer needed).
+   - `make test`: with tests/fuzz/replay.c under ASan+UBSan (clang's when
+     clang is present, else gcc's), a program that replays every committed
+     file of tests/fuzz/corpus/NAME (no libFuzzer needed).
    tests/fuzz/make_corpus.c writes the seeds from the headers' own save
    functions (`make fuzz-corpus` after a file format changes).
 
