@@ -1,4 +1,4 @@
-/* lightvec.h - v0.2.0 - cached 5D indirect light vectors - public domain or MIT, see end of file
+/* lightvec.h - v0.2.1 - cached 5D indirect light vectors - public domain or MIT, see end of file
 
    LIGHTVEC.H: cached light vectors over position and direction for interactive glossy global illumination.
 
@@ -189,7 +189,7 @@
 
 #define LIGHTVEC_VERSION_MAJOR 0
 #define LIGHTVEC_VERSION_MINOR 2
-#define LIGHTVEC_VERSION_PATCH 0
+#define LIGHTVEC_VERSION_PATCH 1
 #define LIGHTVEC_FILE_FORMAT_VERSION 1
 
 #ifndef LIGHTVEC_API
@@ -1246,18 +1246,22 @@ static void lightvec__logf(lightvec_log_fn log, void *user, const char *fmt, lon
     log(user, buf);
 }
 
-/* A unit vector from a finite non-zero one, else 0. */
+/* A unit vector from a finite non-zero one, else 0. The length is taken in
+   double: the squares of float components neither underflow nor overflow
+   there, so a vector of length 1e-20 (whose float squares are subnormal)
+   also comes out unit to float precision. */
 static int lightvec__unit(const float *in, lightvec__vec3 *out)
 {
-    lightvec__vec3 v;
-    float l;
+    double x, y, z, l;
     if (!in || !lightvec__finite3(in)) return 0;
-    v = lightvec__v3_load(in);
-    l = lightvec__length(v);
-    if (!(l > 1e-20f) || !isfinite(l)) return 0;
+    x = in[0];
+    y = in[1];
+    z = in[2];
+    l = sqrt(x * x + y * y + z * z);
+    if (!(l > 1e-20)) return 0;
     /* a vector already unit to float precision is kept as it is, so that
        normalising twice (insert, save, load) changes nothing */
-    *out = fabsf(l - 1.0f) <= 4e-7f ? v : lightvec__scale(v, 1.0f / l);
+    *out = fabs(l - 1.0) <= 4e-7 ? lightvec__v3_load(in) : lightvec__v3((float)(x / l), (float)(y / l), (float)(z / l));
     return 1;
 }
 

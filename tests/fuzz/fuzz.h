@@ -20,7 +20,8 @@
    loads each file as it is, and checks that this header's CRC-32 agrees with
    the library's on every seed that must load.
 
-   A seed's name says what loading it must give: "ok-..." must load,
+   A seed's name says what loading it must give: "ok-..." must load (and,
+   being a file the library wrote, save to the same bytes),
    "corrupt-..." must be refused as corrupt data, "version-..." as a version
    the library cannot read. Other names (a fuzzer's reproducers: crash-...,
    oom-..., or plain hashes) must only not crash.
@@ -56,6 +57,11 @@ typedef struct fuzz_target {
     const char *name;                                  /* tests/fuzz/corpus/<name> */
     fuzz_outcome (*load)(const uint8_t *data, size_t size);
     int checksum_trailer;                              /* the format ends in a CRC-32 of the rest */
+    /* Whether loading the bytes and saving gives them back, as it must for a
+       file the library wrote; the replay asks it of the seeds that must
+       load. NULL where load itself requires it of every input, or where
+       the format has no save. */
+    int (*resaves_same)(const uint8_t *data, size_t size);
 } fuzz_target;
 
 /* Defined by the target's source, read by the entry point and the replay. */

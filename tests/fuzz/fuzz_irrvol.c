@@ -92,4 +92,4 @@ static fuzz_outcome load_volume(const uint8_t *data, size_t size)
     return FUZZ_LOADED;
 }
 
-const fuzz_target fuzz_this_target = { "irrvol", load_volume, 1 };
+const fuzz_target fuzz_this_target = { "irrvol", load_volume, 1, NULL };   /* load checks that it saves the same bytes */

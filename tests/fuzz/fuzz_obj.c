@@ -178,4 +178,4 @@ static fuzz_outcome parse_scene(const uint8_t *data, size_t size)
     return FUZZ_LOADED;
 }
 
-const fuzz_target fuzz_this_target = { "obj", parse_scene, 0 };
+const fuzz_target fuzz_this_target = { "obj", parse_scene, 0, NULL };

@@ -123,4 +123,4 @@ static fuzz_outcome load_mesh(const uint8_t *data, size_t size)
     return FUZZ_LOADED;
 }
 
-const fuzz_target fuzz_this_target = { "radinterp", load_mesh, 1 };
+const fuzz_target fuzz_this_target = { "radinterp", load_mesh, 1, NULL };   /* load checks that it saves the same bytes */

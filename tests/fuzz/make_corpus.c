@@ -347,6 +347,30 @@ static void radinterp_seeds(void)
 
 /* ---- lightvec --------------------------------------------------------------------- */
 
+/* A cache of one record whose view direction was given as a vector of
+   length 1.25e-20 (components of 1e-20 and 3e-40, whose squares are
+   subnormal floats): what insert makes of it must save, load and save to
+   the same bytes (the first fuzz finding of fuzz_lightvec). */
+static void save_tiny_view(lightvec_cache *gathered)
+{
+    lightvec_cache_desc cd;
+    lightvec_cache *cache = NULL;
+    lightvec_record rec;
+    void *bytes = NULL;
+    size_t size = 0;
+    lightvec_result r = lightvec_cache_record(gathered, 0, &rec);
+    memset(&cd, 0, sizeof cd);
+    if (r == LIGHTVEC_OK) r = lightvec_cache_create(&cd, &cache);
+    rec.flags = 0;
+    set3(rec.outgoing, 1.2510025e-20f, 3.0376367e-40f, 0.0f);
+    if (r == LIGHTVEC_OK) r = lightvec_insert(cache, &rec, NULL);
+    if (r == LIGHTVEC_OK) r = lightvec_save_to_memory(cache, NULL, &bytes, &size);
+    if (r != LIGHTVEC_OK) fail("tiny-view", lightvec_result_string(r));
+    else write_file("lightvec", "ok-tiny-view", bytes, size);
+    lightvec_free_memory(NULL, bytes);
+    lightvec_cache_destroy(cache);
+}
+
 static void lightvec_seeds(void)
 {
     lightvec_material mats[8];
@@ -420,6 +444,7 @@ static void lightvec_seeds(void)
         if (r != LIGHTVEC_OK) fail(names[kind], lightvec_result_string(r));
         else write_seeds("lightvec", names[kind], bytes, size);
         lightvec_free_memory(NULL, bytes);
+        if (kind == 0) save_tiny_view(cache);
         lightvec_cache_destroy(cache);
     }
     lightvec_scene_destroy(scene);

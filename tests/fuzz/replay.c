@@ -4,7 +4,7 @@
    compiler under ASan+UBSan, it runs every file of tests/fuzz/corpus/NAME
    (or the files and directories given as arguments) through the target:
    once as the file is, checking the outcome its name promises ("ok-",
-   "corrupt-", "version-"), and once through the fuzzing entry point (with its
+   "corrupt-", "version-"; an ok- file must also save to the same bytes), and once through the fuzzing entry point (with its
    checksum made to match). Each file is one case; the program ends with the
    project's closing line "N passed, N failed". */
 #if !defined(_POSIX_C_SOURCE) || _POSIX_C_SOURCE < 200809L
@@ -93,6 +93,10 @@ static void replay_file(const char *path, replay_totals *t)
     t->outcomes[got]++;
     if (promised >= 0 && got != (fuzz_outcome)promised) {
         printf("FAIL %s: %s, its name promises %s\n", path, outcome_name(got), outcome_name((fuzz_outcome)promised));
+        ok = 0;
+    }
+    if (promised == FUZZ_LOADED && fuzz_this_target.resaves_same && !fuzz_this_target.resaves_same(data, size)) {
+        printf("FAIL %s: a file the library wrote loads and saves to other bytes\n", path);
         ok = 0;
     }
     if (promised == FUZZ_LOADED && !checksum_agrees(data, size)) {
