@@ -10,7 +10,8 @@
 # program and leaves its input in BUILD_DIR/fuzz/findings/NAME/. Every run adds a line
 # to BUILD_DIR/fuzz/history.tsv; the table printed at the end gives this run's
 # figures and the executions of all runs so far. Exits non-zero when any
-# program found something.
+# program found something. Several runs may go on at once (on other targets,
+# or on one target: they share its corpus directory).
 set -u
 seconds=$1
 build=$2
@@ -25,15 +26,15 @@ for prog in "$@"; do
     name=${name#fuzz_}
     work="$build/fuzz/corpus/$name"
     findings="$build/fuzz/findings/$name"
-    log="$build/fuzz/$name.log"
-    mkdir -p "$work" "$findings"
+    log="$build/fuzz/logs/$name-$(date -u +%Y%m%dT%H%M%S)-$$.log"   # one per run: runs may overlap
+    mkdir -p "$work" "$findings" "$build/fuzz/logs"
     echo "== fuzz_$name: $seconds s"
     "$prog" -max_total_time="$seconds" -timeout=10 -print_final_stats=1 \
         -artifact_prefix="$findings/" "$work" "tests/fuzz/corpus/$name" >"$log" 2>&1
     status=$?
     runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log")
     rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log")
-    last=$(grep -E '^#[0-9]+' "$log" | tail -n 1)
+    last=$(grep -aE '^#[0-9]+' "$log" | tail -n 1)
     cov=$(echo "$last" | sed -n 's/.* cov: \([0-9]*\).*/\1/p')
     ft=$(echo "$last" | sed -n 's/.* ft: \([0-9]*\).*/\1/p')
     corp=$(echo "$last" | sed -n 's/.* corp: \([0-9]*\).*/\1/p')
@@ -41,7 +42,7 @@ for prog in "$@"; do
         found=1
         echo "   fuzz_$name FOUND SOMETHING (status $status): see $log; reproduce with"
         for f in "$findings"/*; do [ -f "$f" ] && echo "     $build/fuzz/replay_$name $f"; done
-        grep -E '^(==[0-9]+==ERROR|SUMMARY|fuzz_)' "$log" | head -n 5 | sed 's/^/     /'
+        grep -aE '^(==[0-9]+==ERROR|SUMMARY|fuzz_)' "$log" | head -n 5 | sed 's/^/     /'
         result=finding
     else
         result=clean
