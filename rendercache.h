@@ -267,6 +267,15 @@ typedef enum rendercache_result {
    given to rendercache_predict, not to the current one. */
 #define RENDERCACHE_REQUEST_PREDICTED 1u
 
+/* rendercache_invalidate: every object, and the background points. */
+#define RENDERCACHE_ALL_OBJECTS 0xFFFFFFFDu
+
+/* Colour-change detection (rendercache_insert): a sample that changed the
+   colour of its point ages the points shown within this many pixels of it
+   (a window of 7 x 7: at an 8% budget, requests lie about 3.5 pixels apart,
+   so the windows of one frame's changed samples cover a changed region). */
+#define RENDERCACHE_CHANGE_RADIUS 3
+
 typedef struct rendercache rendercache;
 
 typedef struct rendercache_allocator {
@@ -316,6 +325,12 @@ typedef struct rendercache_desc {
     uint32_t wide_radius;        /* half width of the wide filter: default 3 (7x7), at most 7 */
     float predict_fraction;      /* share of the budget for predicted samples when
                                     rendercache_predict was called; default 0.25, at most 1 */
+    uint32_t max_latency;        /* frames a sample may come back late (its request's frame before
+                                    the current one); later ones are dropped; default 4, at most 64 */
+    float change_threshold;      /* a sample whose colour differs from the point it replaces by more
+                                    than this share of the brighter of the two (largest channel
+                                    difference over largest channel) ages the points shown around it
+                                    (WDG02); default 0.25; FLT_MAX never */
     float background[3];         /* colour of pixels nothing covers; default black */
     rendercache_allocator allocator;
     void (*parallel_for)(void *user, rendercache_job_fn job, void *ctx, uint32_t count);
@@ -328,18 +343,23 @@ typedef struct rendercache_desc {
 
 /* A pixel that deserves a new sample, with its primary ray (unit dir). */
 typedef struct rendercache_pixel_request {
+    uint64_t frame;          /* the frame it was made in (rendercache_stats.frame then) */
     uint32_t x, y;
     uint32_t flags;          /* RENDERCACHE_REQUEST_PREDICTED or 0 */
     float org[3], dir[3];
 } rendercache_pixel_request;
 
-/* A shaded sample: copy x, y and flags from its request. */
+/* A shaded sample: copy frame, x, y and flags from its request. It may come
+   back frames later (an asynchronous renderer): it is then stored at its
+   own point, as seen in its request's frame. */
 typedef struct rendercache_sample {
+    uint64_t frame;          /* the request's frame; 0 means the current frame */
     uint32_t x, y;           /* the requested pixel */
     uint32_t flags;          /* the request's flags */
     uint32_t object;         /* id of the object hit (< desc.object_count), or RENDERCACHE_MISS */
-    float position[3];       /* world-space hit point; ignored for a miss */
-    float rgb[3];            /* radiance towards the eye, linear RGB */
+    float position[3];       /* world-space hit point at the request's frame (the object where it
+                                was then); ignored for a miss */
+    float rgb[3];            /* radiance towards the eye, linear RGB, finite */
     float priority_scale;    /* multiplies the point's priority, e.g. lightvec_priority(1, W);
                                 0 means 1 */
 } rendercache_sample;
@@ -367,7 +387,11 @@ typedef struct rendercache_stats {
     uint32_t inserted;           /* samples accepted since begin_frame */
     uint32_t replaced;           /* of which replaced the point their pixel showed */
     uint32_t evicted;            /* of which overwrote a point not visible in this frame */
+    uint32_t late;               /* of which came from an earlier frame's requests */
+    uint32_t changed;            /* of which changed the colour of the point they replaced */
     uint32_t rejected;           /* samples ignored since begin_frame (bad values or pixel) */
+    uint32_t dropped;            /* samples ignored: later than desc.max_latency, or late or
+                                    predicted ones finding no slot the frame does not show */
     /* seconds spent in each phase of the last frame (0 without desc.clock) */
     double time_project;         /* projection and z-buffer of every point */
     double time_cull;            /* depth cull, with the colour and priority of the pixels showing points;
@@ -411,13 +435,32 @@ RENDERCACHE_API rendercache_result rendercache_predict(rendercache *rc, const re
 RENDERCACHE_API rendercache_result rendercache_request(rendercache *rc, rendercache_pixel_request *out,
                                                        uint32_t max, uint32_t *count);
 
-/* Adds shaded samples as points. A sample for a current-frame pixel
-   replaces the point that pixel shows (and updates the image at once);
-   other samples take the slot of the oldest point not visible in this
-   frame. Samples with non-finite values, unknown objects or pixels outside
-   the image are ignored and counted in stats.rejected. n = 0 does nothing. */
+/* Adds shaded samples as points and writes to *taken (may be NULL) how
+   many were stored. A sample of the current frame replaces the point its
+   pixel shows (and updates the image at once). A late sample (its
+   request's frame before the current one) is stored at its own point: its
+   hit point, or for a miss the direction of its request's ray; where that
+   point lands in the current image it replaces the point shown there when
+   that is the same surface (within the depth tolerance) and is shown when
+   nothing nearer is; otherwise, and for predicted samples, it takes the
+   slot of the oldest point the frame does not show. A sample that replaces
+   a point of another colour (desc.change_threshold) ages the points shown
+   within RENDERCACHE_CHANGE_RADIUS pixels of it, so that they are
+   requested next. Returns RENDERCACHE_ERROR_INVALID_ARGUMENT when some
+   sample was malformed (pixel outside the image, unknown object or flag,
+   non-finite value, a frame not yet begun, a predicted sample of a frame
+   without prediction): those are skipped and counted in stats.rejected,
+   the others are stored. Samples later than desc.max_latency frames are
+   dropped (stats.dropped; not an error). n = 0 does nothing. */
 RENDERCACHE_API rendercache_result rendercache_insert(rendercache *rc, const rendercache_sample *samples,
-                                                      uint32_t n);
+                                                      uint32_t n, uint32_t *taken);
+
+/* The lighting of an object changed (or of everything, object =
+   RENDERCACHE_ALL_OBJECTS; the background points: RENDERCACHE_MISS): its
+   points are aged to the top of the age ramp, so that they are resampled
+   before every point that is merely old, from the priority image of the
+   current frame on. */
+RENDERCACHE_API rendercache_result rendercache_invalidate(rendercache *rc, uint32_t object);
 
 /* The current image: width * height * 3 floats, valid until the next call
    that changes the cache. */
@@ -795,6 +838,9 @@ static void rendercache__free(const rendercache_allocator *a, void *p)
    2. small math
    ---------------------------------------------------------------------- */
 static int rendercache__iabs(int v) { return v < 0 ? -v : v; }
+/* x clamped to the finite floats: a weighted mean of finite colours that
+   rounds past FLT_MAX stays finite (NaN passes, and cannot arise there). */
+static float rendercache__finitef(float x) { return x < -FLT_MAX ? -FLT_MAX : x > FLT_MAX ? FLT_MAX : x; }
 static int rendercache__finite3(const float *p) { return isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]); }
 
 static double rendercache__dot3d(const double a[3], const double b[3])
@@ -1069,6 +1115,7 @@ static void rendercache__run_jobs(void (*parallel_for)(void *, rendercache_job_f
 #define RENDERCACHE__MAX_PIXELS (1u << 28)
 #define RENDERCACHE__MAX_CAPACITY (1u << 31)
 #define RENDERCACHE__MAX_OBJECTS (1u << 24)
+#define RENDERCACHE__MAX_LATENCY 64u
 
 typedef struct rendercache__view {
     rendercache_camera_kind kind;
@@ -1634,6 +1681,13 @@ typedef struct rendercache__point {
     uint32_t object;         /* geo's object, here too for the priority */
 } rendercache__point;
 
+/* What insert needs of a frame whose samples may still come back. */
+typedef struct rendercache__frame_record {
+    uint64_t frame;          /* 0: no frame here yet */
+    rendercache__view view, predicted;
+    int has_prediction;
+} rendercache__frame_record;
+
 struct rendercache {
     rendercache_allocator alloc;
     void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t);
@@ -1645,9 +1699,10 @@ struct rendercache {
 
     uint32_t width, height, pixel_count, tile_count;
     uint32_t capacity, object_count;
-    float depth_tolerance, predict_fraction, background[3];
-    uint32_t age_ramp, moving_age_step, sparse_neighbours, wide_radius;
+    float depth_tolerance, predict_fraction, change_threshold, background[3];
+    uint32_t age_ramp, moving_age_step, sparse_neighbours, wide_radius, max_latency;
     float inv_age_ramp;
+    float window_scale[8];   /* per interpolation radius: the power of two that scales its weights */
 
     /* point cache: slot order is insertion order; the projection streams
        through geo. One more slot after the last stays empty (see cull_job). */
@@ -1656,23 +1711,30 @@ struct rendercache {
     unsigned char *shown;    /* per slot: the frame's mark (rendercache__mark) when the point was
                                 inserted or shown in a pixel in that frame; the eviction spares it.
                                 Apart from data: the cull writes it at random, and a byte array
-                                stays in cache where data would not */
+                                stays in cache where data would not. After the slots, one byte per
+                                tile that the tile's pixels without a point write instead */
     uint32_t hand;           /* clock hand of the eviction */
     uint32_t live;
     int hand_exhausted;      /* a full turn found no invisible slot in this frame */
 
     /* objects */
-    float *obj_world;        /* 12 per object: object to world */
-    float *obj_local;        /* 12 per object: world to object */
+    float *obj_world;        /* 12 per object: object to world, in force since frame obj_since */
+    float *obj_local;        /* 12 per object: world to object, the same */
+    float *obj_next;         /* 24 per object: object to world and back set for the next frame */
+    uint64_t *obj_since;     /* per object: the first frame of its transform */
+    float *obj_history;      /* 12 per object and history slot: world to object in the frame of that
+                                slot (rendercache__object_local) */
     float *obj_camera;       /* 12 per object: object to camera space of the current view */
     float *obj_predicted;    /* 12 per object: object to camera space of the predicted view */
-    uint32_t *obj_motion;    /* extra age the object's points gathered while it moved */
-    unsigned char *obj_moved;
+    uint32_t *obj_motion;    /* per object, then the background: extra age its points gathered while
+                                it moved or since its light changed */
+    unsigned char *obj_moved;   /* a transform waits in obj_next */
 
-    /* current frame */
-    uint32_t frame;
+    /* current frame, and the frames whose samples may still come back */
+    uint64_t frame;
     int has_frame, has_prediction;
     rendercache__view view, predicted;
+    rendercache__frame_record *history;   /* max_latency + 1 slots, frame f in slot f % that */
     rendercache__splat splat;
     uint32_t *px_index;      /* per pixel: the slot shown, after the depth cull */
     float *px_depth;         /* per pixel: its squared distance, FLT_MAX without a point */
@@ -1687,6 +1749,7 @@ struct rendercache {
     unsigned char *chosen;   /* per pixel: 1 chosen, 2 fractional (error-diffused) */
     float *err_rows;         /* two rows of diffused error */
     uint32_t pred_holes;
+    uint32_t refill_rows[2];  /* rows [first, end) holding holes marked RENDERCACHE__REFILL */
     uint32_t touched;        /* rendercache__touch_slots' results, kept so its reads stay */
 
     rendercache_stats stats;
@@ -1695,7 +1758,7 @@ struct rendercache {
 /* The byte that marks slots in use in a frame: 1 .. 255, the same for no
    two frames of a run of 255; begin_frame clears the marks when a run
    starts, so that a mark left 255 frames ago never passes for a new one. */
-static unsigned char rendercache__mark(uint32_t frame)
+static unsigned char rendercache__mark(uint64_t frame)
 {
     return (unsigned char)(frame % 255u + 1u);
 }
@@ -1742,7 +1805,7 @@ static void rendercache__reset_points(rendercache *rc)
 {
     uint32_t i;
     for (i = 0; i < rc->capacity; i++) rc->geo[i].object = RENDERCACHE__FREE_SLOT;
-    memset(rc->shown, 0, (size_t)rc->capacity + 1);   /* no mark */
+    memset(rc->shown, 0, (size_t)rc->capacity + rc->tile_count);   /* no mark */
     memset(&rc->geo[rc->capacity], 0, sizeof rc->geo[0]);   /* the empty slot (what holes read): black, priority 0 */
     memset(&rc->data[rc->capacity], 0, sizeof rc->data[0]);
     rc->geo[rc->capacity].object = RENDERCACHE_MISS;
@@ -1753,7 +1816,7 @@ static void rendercache__reset_points(rendercache *rc)
 static void rendercache__release(rendercache *rc)
 {
     const rendercache_allocator a = rc->alloc;
-    void *blocks[22];
+    void *blocks[26];
     size_t i;
     blocks[0] = rc->geo; blocks[1] = rc->data; blocks[2] = rc->obj_predicted; blocks[3] = rc->obj_motion;
     blocks[4] = rc->depth_out; blocks[5] = rc->obj_world; blocks[6] = rc->obj_local;
@@ -1762,6 +1825,8 @@ static void rendercache__release(rendercache *rc)
     blocks[13] = rc->pred_priority; blocks[14] = rc->kind; blocks[15] = rc->count;
     blocks[16] = rc->tile_stats; blocks[17] = rc->hist; blocks[18] = rc->select_v;
     blocks[19] = rc->chosen; blocks[20] = rc->err_rows; blocks[21] = rc->shown;
+    blocks[22] = rc->obj_next; blocks[23] = rc->obj_since; blocks[24] = rc->obj_history;
+    blocks[25] = rc->history;
     for (i = 0; i < sizeof blocks / sizeof blocks[0]; i++) rendercache__free(&a, blocks[i]);
     rendercache__splat_free(&rc->splat, &a);
     rendercache__free(&a, rc);
@@ -1771,13 +1836,18 @@ static int rendercache__alloc_buffers(rendercache *rc)
 {
     const rendercache_allocator *a = &rc->alloc;
     size_t n = rc->capacity, px = rc->pixel_count, no = rc->object_count;
+    size_t slots = (size_t)rc->max_latency + 1;
     rc->geo = (rendercache__geo *)rendercache__alloc_array(a, n + 1, sizeof(rendercache__geo));   /* + the empty slot */
     rc->data = (rendercache__point *)rendercache__alloc_array(a, n + 1, sizeof(rendercache__point));
-    rc->shown = (unsigned char *)rendercache__alloc_array(a, n + 1, 1);
+    rc->shown = (unsigned char *)rendercache__alloc_array(a, n + rc->tile_count, 1);
     rc->obj_predicted = (float *)rendercache__alloc_array(a, no, 12 * sizeof(float));
-    rc->obj_motion = (uint32_t *)rendercache__alloc_array(a, no, sizeof(uint32_t));
+    rc->obj_motion = (uint32_t *)rendercache__alloc_array(a, no + 1, sizeof(uint32_t));
     rc->obj_world = (float *)rendercache__alloc_array(a, no, 12 * sizeof(float));
     rc->obj_local = (float *)rendercache__alloc_array(a, no, 12 * sizeof(float));
+    rc->obj_next = (float *)rendercache__alloc_array(a, no, 24 * sizeof(float));
+    rc->obj_since = (uint64_t *)rendercache__alloc_array(a, no, sizeof(uint64_t));
+    rc->obj_history = (float *)rendercache__alloc_array(a, no * slots, 12 * sizeof(float));
+    rc->history = (rendercache__frame_record *)rendercache__alloc_array(a, slots, sizeof(rendercache__frame_record));
     rc->obj_camera = (float *)rendercache__alloc_array(a, no, 12 * sizeof(float));
     rc->obj_moved = (unsigned char *)rendercache__alloc_array(a, no, 1);
     rc->px_index = (uint32_t *)rendercache__alloc_array(a, px, sizeof(uint32_t));
@@ -1794,7 +1864,8 @@ static int rendercache__alloc_buffers(rendercache *rc)
     rc->chosen = (unsigned char *)rendercache__alloc_array(a, px, 1);
     rc->err_rows = (float *)rendercache__alloc_array(a, 2 * ((size_t)rc->width + 2), sizeof(float));
     if (!rc->geo || !rc->data || !rc->shown || !rc->obj_predicted || !rc->obj_motion || !rc->obj_world ||
-        !rc->obj_local || !rc->obj_camera || !rc->obj_moved || !rc->px_index || !rc->px_depth || !rc->depth_out || !rc->image ||
+        !rc->obj_local || !rc->obj_next || !rc->obj_since || !rc->obj_history || !rc->history ||
+        !rc->obj_camera || !rc->obj_moved || !rc->px_index || !rc->px_depth || !rc->depth_out || !rc->image ||
         !rc->priority || !rc->pred_priority || !rc->kind || !rc->count || !rc->tile_stats || !rc->hist ||
         !rc->select_v || !rc->chosen || !rc->err_rows)
         return -1;
@@ -1806,12 +1877,14 @@ static int rendercache__alloc_buffers(rendercache *rc)
 static int rendercache__configure(rendercache *rc, const rendercache_desc *d)
 {
     double capacity;
+    uint32_t r;
     float ppp = rendercache__def(d->points_per_pixel, 2.0f);
     if (d->width == 0 || d->height == 0 || (uint64_t)d->width * d->height > RENDERCACHE__MAX_PIXELS) return 0;
     if (!rendercache__allocator_valid(&d->allocator)) return 0;
     if (!(ppp > 0.0f) || !isfinite(ppp)) return 0;
     if (!(d->depth_tolerance >= 0.0f) || !isfinite(d->depth_tolerance)) return 0;
     if (!(d->predict_fraction >= 0.0f && d->predict_fraction <= 1.0f)) return 0;
+    if (!(d->change_threshold >= 0.0f) || d->max_latency > RENDERCACHE__MAX_LATENCY) return 0;
     if (!rendercache__finite3(d->background)) return 0;
     if (d->object_count > RENDERCACHE__MAX_OBJECTS || d->sparse_neighbours > 8 || d->wide_radius > 7) return 0;
     capacity = ceil((double)ppp * d->width * d->height);
@@ -1831,12 +1904,20 @@ static int rendercache__configure(rendercache *rc, const rendercache_desc *d)
     rc->object_count = rendercache__def(d->object_count, 256u);
     rc->depth_tolerance = rendercache__def(d->depth_tolerance, 0.1f);
     rc->predict_fraction = rendercache__def(d->predict_fraction, 0.25f);
+    rc->change_threshold = rendercache__def(d->change_threshold, 0.25f);
+    rc->max_latency = rendercache__def(d->max_latency, 4u);
     rc->age_ramp = rendercache__def(d->age_ramp_frames, 32u);
     rc->inv_age_ramp = 1.0f / (float)rc->age_ramp;
     rc->moving_age_step = rendercache__def(d->moving_age_step, 4u);
     if (rc->moving_age_step > 65536u) rc->moving_age_step = 65536u;
     rc->sparse_neighbours = rendercache__def(d->sparse_neighbours, 2u);
     rc->wide_radius = rendercache__def(d->wide_radius, 3u);
+    for (r = 0; r < 8; r++) {   /* tent weights of radius r sum to ((r + 1)^2)^2 at most */
+        uint32_t total = (r + 1) * (r + 1) * (r + 1) * (r + 1);
+        int e = 0;
+        while ((1u << e) < total) e++;
+        rc->window_scale[r] = ldexpf(1.0f, -e);
+    }
     memcpy(rc->background, d->background, sizeof rc->background);
     return 1;
 }
@@ -1873,9 +1954,13 @@ RENDERCACHE_API rendercache_result rendercache_create(const rendercache_desc *de
         rendercache__identity(rc->obj_local + 12 * (size_t)o);
         rc->obj_moved[o] = 0;
         rc->obj_motion[o] = 0;
+        rc->obj_since[o] = 0;
     }
+    rc->obj_motion[rc->object_count] = 0;   /* the background */
+    memset(rc->history, 0, ((size_t)rc->max_latency + 1) * sizeof *rc->history);
     rendercache__reset_points(rc);
     rendercache__reset_image(rc);
+    rc->refill_rows[0] = rc->height;
     rc->stats.capacity = rc->capacity;
     *out = rc;
     return RENDERCACHE_OK;
@@ -1921,16 +2006,56 @@ static int rendercache__invert_affine(const float m[12], float out[12])
 RENDERCACHE_API rendercache_result rendercache_set_object_transform(rendercache *rc, uint32_t object,
                                                                     const float m[12])
 {
-    float inv[12];
+    float inv[12], *next;
     int k;
     if (!rc || !m || object >= rc->object_count) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
     for (k = 0; k < 12; k++)
         if (!isfinite(m[k])) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
     if (!rendercache__invert_affine(m, inv)) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
-    if (memcmp(m, rc->obj_world + 12 * (size_t)object, 12 * sizeof(float)) != 0) rc->obj_moved[object] = 1;
-    memcpy(rc->obj_world + 12 * (size_t)object, m, 12 * sizeof(float));
-    memcpy(rc->obj_local + 12 * (size_t)object, inv, 12 * sizeof(float));
+    next = rc->obj_next + 24 * (size_t)object;
+    if (!rc->obj_moved[object] && memcmp(m, rc->obj_world + 12 * (size_t)object, 12 * sizeof(float)) == 0)
+        return RENDERCACHE_OK;   /* a still transform is not motion */
+    memcpy(next, m, 12 * sizeof(float));
+    memcpy(next + 12, inv, 12 * sizeof(float));
+    rc->obj_moved[object] = 1;
     return RENDERCACHE_OK;
+}
+
+/* The transforms set since the last frame come into force in frame
+   rc->frame; the frames of the history window that saw an object's old
+   transform keep it in obj_history (rendercache__object_local). Points of
+   moving objects age faster. */
+static void rendercache__commit_transforms(rendercache *rc)
+{
+    const uint64_t f = rc->frame, slots = (uint64_t)rc->max_latency + 1;
+    const uint64_t first = f > rc->max_latency ? f - rc->max_latency : 1;   /* the oldest frame kept */
+    uint32_t o;
+    for (o = 0; o < rc->object_count; o++) {
+        float *local = rc->obj_local + 12 * (size_t)o, *next = rc->obj_next + 24 * (size_t)o;
+        uint64_t g;
+        if (!rc->obj_moved[o]) continue;
+        for (g = rc->obj_since[o] > first ? rc->obj_since[o] : first; g < f; g++)
+            memcpy(rc->obj_history + 12 * ((size_t)o * slots + g % slots), local, 12 * sizeof(float));
+        memcpy(rc->obj_world + 12 * (size_t)o, next, 12 * sizeof(float));
+        memcpy(local, next + 12, 12 * sizeof(float));
+        rc->obj_since[o] = f;
+        rc->obj_motion[o] += rc->moving_age_step - 1u;
+        rc->obj_moved[o] = 0;
+    }
+}
+
+/* World to object space of object o in frame f of the history window. */
+static const float *rendercache__object_local(const rendercache *rc, uint32_t o, uint64_t f)
+{
+    const size_t slots = (size_t)rc->max_latency + 1;
+    if (f >= rc->obj_since[o]) return rc->obj_local + 12 * (size_t)o;
+    return rc->obj_history + 12 * ((size_t)o * slots + (size_t)(f % slots));
+}
+
+/* The index of a point's object in obj_motion: the background after the objects. */
+static uint32_t rendercache__motion_index(const rendercache *rc, uint32_t object)
+{
+    return object < rc->object_count ? object : rc->object_count;
 }
 
 /* ======================================================================
@@ -1994,7 +2119,7 @@ static uint32_t rendercache__project_point(const rendercache__projector *pr, con
    2004, section 4.2.4), in [0, 1]. motion: the object's obj_motion. */
 static float rendercache__point_priority(const rendercache *rc, const rendercache__point *pt, uint32_t motion)
 {
-    uint32_t age = rc->frame + motion - pt->base;
+    uint32_t age = (uint32_t)rc->frame + motion - pt->base;
     float pr = (float)age * rc->inv_age_ramp;
     pr = (pr < 1.0f ? pr : 1.0f) * (RENDERCACHE__PRIORITY_POINT_MAX * pt->scale);
     return pr < 1.0f ? pr : 1.0f;
@@ -2103,19 +2228,22 @@ static const int rendercache__ny[8] = { 0, 0, -1, 1, -1, -1, 1, 1 };
    right, above and below, or both diagonals), as they do when a far point
    falls into a gap of a nearer surface; a point beside a silhouette has its
    nearer neighbours on one side only and is kept, so a static view keeps
-   every sampled point. nd: the 8 neighbours' depths. */
-static int rendercache__occluded(const float nd[8], float d, float tol2)
+   every sampled point. d: the point's depth (FLT_MAX: no point, never
+   culled); nd: the 8 neighbours' depths (order of rendercache__nx).
+   Without branches: cull_row's loop over a row vectorises with it. */
+static RENDERCACHE__INLINE int rendercache__occluded(float d, const float nd[8], float tol2)
 {
-    uint32_t nearer = 0, n = 0, k;
-    float sum = 0.0f;
+    float sum = 0.0f, n = 0.0f;
+    int k, e01, e23, ediag;
     for (k = 0; k < 8; k++) {
-        int filled = nd[k] < FLT_MAX;
-        sum += filled ? nd[k] : 0.0f;
-        n += (uint32_t)filled;
-        nearer |= (uint32_t)(d > nd[k] * tol2) << k;
+        sum += nd[k] < FLT_MAX ? nd[k] : 0.0f;
+        n += nd[k] < FLT_MAX ? 1.0f : 0.0f;
     }
-    if (!(((nearer & 3u) == 3u) || ((nearer & 12u) == 12u) || ((nearer & 0xF0u) == 0xF0u))) return 0;
-    return d * (float)n > sum * tol2;   /* d > mean * tol2, as rendercache__cull_row computes it */
+    e01 = (d > nd[0] * tol2) & (d > nd[1] * tol2);
+    e23 = (d > nd[2] * tol2) & (d > nd[3] * tol2);
+    ediag = (d > nd[4] * tol2) & (d > nd[5] * tol2) & (d > nd[6] * tol2) & (d > nd[7] * tol2);
+    /* enclosed implies n >= 2, so the mean is defined where it matters */
+    return (e01 | e23 | ediag) & (d < FLT_MAX) & (d * n > sum * tol2);
 }
 
 /* The depths of the 8 neighbours of (x, y), FLT_MAX outside the image. */
@@ -2135,39 +2263,24 @@ static void rendercache__neighbour_depths(const float *depth, uint32_t w, uint32
     }
 }
 
-/* The depth cull of the interior pixels x in [1, w-1) of row y, written
-   without branches so that compilers vectorise it: occ[x] = 1 where the
-   pixel's point is culled. Same test as rendercache__occluded. */
+/* The depth cull of the interior pixels x in [1, w-1) of row y: occ[x] = 1
+   where the pixel's point is culled. */
 static void rendercache__cull_row(const float *depth, uint32_t w, uint32_t y, float tol2, unsigned char *occ)
 {
     const float *c = depth + (size_t)y * w, *u = c - w, *l = c + w;
     uint32_t x;
     for (x = 1; x + 1 < w; x++) {
-        float d = c[x], sum = 0.0f, n = 0.0f;
-        float nd0 = c[x - 1], nd1 = c[x + 1], nd2 = u[x], nd3 = l[x];
-        float nd4 = u[x - 1], nd5 = u[x + 1], nd6 = l[x - 1], nd7 = l[x + 1];
-        int e01, e23, ediag, enclosed;
-        sum += nd0 < FLT_MAX ? nd0 : 0.0f; n += nd0 < FLT_MAX ? 1.0f : 0.0f;
-        sum += nd1 < FLT_MAX ? nd1 : 0.0f; n += nd1 < FLT_MAX ? 1.0f : 0.0f;
-        sum += nd2 < FLT_MAX ? nd2 : 0.0f; n += nd2 < FLT_MAX ? 1.0f : 0.0f;
-        sum += nd3 < FLT_MAX ? nd3 : 0.0f; n += nd3 < FLT_MAX ? 1.0f : 0.0f;
-        sum += nd4 < FLT_MAX ? nd4 : 0.0f; n += nd4 < FLT_MAX ? 1.0f : 0.0f;
-        sum += nd5 < FLT_MAX ? nd5 : 0.0f; n += nd5 < FLT_MAX ? 1.0f : 0.0f;
-        sum += nd6 < FLT_MAX ? nd6 : 0.0f; n += nd6 < FLT_MAX ? 1.0f : 0.0f;
-        sum += nd7 < FLT_MAX ? nd7 : 0.0f; n += nd7 < FLT_MAX ? 1.0f : 0.0f;
-        e01 = (d > nd0 * tol2) & (d > nd1 * tol2);
-        e23 = (d > nd2 * tol2) & (d > nd3 * tol2);
-        ediag = (d > nd4 * tol2) & (d > nd5 * tol2) & (d > nd6 * tol2) & (d > nd7 * tol2);
-        enclosed = e01 | e23 | ediag;
-        /* enclosed implies n >= 2, so the mean is defined where it matters */
-        occ[x] = (unsigned char)(enclosed & (d < FLT_MAX) & (d * (n > 0.0f ? n : 1.0f) > sum * tol2));
+        float nd[8];
+        nd[0] = c[x - 1]; nd[1] = c[x + 1]; nd[2] = u[x]; nd[3] = l[x];
+        nd[4] = u[x - 1]; nd[5] = u[x + 1]; nd[6] = l[x - 1]; nd[7] = l[x + 1];
+        occ[x] = (unsigned char)rendercache__occluded(c[x], nd, tol2);
     }
 }
 
 /* The cull decisions of row y (occ[x] = 1: the point at x is culled):
    the interior by rendercache__cull_row, the image border by the general test. */
-static void rendercache__cull_decisions(const rendercache *rc, const float *depth, const uint32_t *index, uint32_t y,
-                                        float tol2, unsigned char *occ)
+static void rendercache__cull_decisions(const rendercache *rc, const float *depth, uint32_t y, float tol2,
+                                        unsigned char *occ)
 {
     const uint32_t w = rc->width, h = rc->height;
     uint32_t x;
@@ -2176,10 +2289,8 @@ static void rendercache__cull_decisions(const rendercache *rc, const float *dept
     for (x = 0; x < w; x = interior_row && x == 0 && w > 1 ? w - 1 : x + 1) {   /* border pixels */
         float nd[8];
         uint32_t p = y * w + x;
-        occ[x] = 0;
-        if (index[p] == RENDERCACHE__NONE) continue;
         rendercache__neighbour_depths(depth, w, h, x, y, nd);
-        occ[x] = (unsigned char)rendercache__occluded(nd, depth[p], tol2);
+        occ[x] = (unsigned char)rendercache__occluded(depth[p], nd, tol2);
     }
 }
 
@@ -2197,8 +2308,8 @@ static void rendercache__gather_points(rendercache *rc, const uint32_t *index, u
     float *image = rc->image, *priority = rc->priority;
     uint32_t p;
     for (p = p0; p < p1; p++) {
-        uint32_t k = index[p] == RENDERCACHE__NONE ? empty : index[p], o = data[k].object;
-        uint32_t motion = o == RENDERCACHE_MISS ? 0u : rc->obj_motion[o < rc->object_count ? o : 0u];
+        uint32_t k = index[p] == RENDERCACHE__NONE ? empty : index[p];
+        uint32_t motion = rc->obj_motion[rendercache__motion_index(rc, data[k].object)];
         if (p + RENDERCACHE__GATHER_AHEAD < rc->pixel_count) {   /* (into the next row or tile too) */
             uint32_t next = index[p + RENDERCACHE__GATHER_AHEAD];
             const rendercache__point *q = &data[next == RENDERCACHE__NONE ? empty : next];
@@ -2218,10 +2329,11 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
     rendercache *rc = (rendercache *)ctx;
     const rendercache__raster *s = &rc->splat.final;
     const float *depth = s->depth;
-    const uint32_t *index = s->index, w = rc->width, h = rc->height, empty = rc->capacity;
+    const uint32_t *index = s->index, w = rc->width, h = rc->height;
     uint32_t *px_index = rc->px_index;
     float *px_depth = rc->px_depth;
     unsigned char *kind = rc->kind, *count = rc->count, *shown = rc->shown, mark = rendercache__mark(rc->frame);
+    const uint32_t sink = rc->capacity + tile;   /* this tile's byte for pixels without a point */
     uint32_t y0 = tile * RENDERCACHE__TILE_ROWS, y1 = y0 + RENDERCACHE__TILE_ROWS, x, y;
     uint32_t visible = 0, culled = 0, *stats = rc->tile_stats + RENDERCACHE__TILE_STATS * (size_t)tile;
     float tol2 = (1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance);
@@ -2229,12 +2341,12 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
     for (y = y0; y < y1; y++) {
         unsigned char *occ = kind + (size_t)y * w;
         rendercache__gather_points(rc, index, y * w, y * w + w);
-        rendercache__cull_decisions(rc, depth, index, y, tol2, occ);
+        rendercache__cull_decisions(rc, depth, y, tol2, occ);
         for (x = 0; x < w; x++) {   /* without branches, as gather_points */
             uint32_t p = y * w + x, k = index[p], has = k != RENDERCACHE__NONE, shows = has & !occ[x];
             px_index[p] = shows ? k : RENDERCACHE__NONE;
             px_depth[p] = shows ? depth[p] : FLT_MAX;
-            shown[shows ? k : empty] = mark;   /* spared by the eviction in this frame */
+            shown[shows ? k : sink] = mark;   /* spared by the eviction in this frame */
             kind[p] = (unsigned char)(shows ? (unsigned)RENDERCACHE_PIXEL_POINT : occ[x]);   /* holes: set by the filling */
             count[p] = 0;
             visible += shows;
@@ -2253,12 +2365,19 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
    of the maximum) is used, whichever carries more weight (the far one on a
    tie: a hole beside an edge is more often uncovered background). Returns
    the number of points in the window; rgb is set when it is not zero.
-   Depths are squared distances, compared with the squared tolerance. */
+   Depths are squared distances, compared with the squared tolerance.
+   Weights are scaled by a power of two that brings their sum below 1, so
+   that the sums of finite colours do not overflow and the mean is what it
+   would be unscaled, bit for bit. Holes' colours are never read: the
+   filling of another tile may be writing them. */
+static const float rendercache__black[3] = { 0.0f, 0.0f, 0.0f };
+
 static RENDERCACHE__INLINE uint32_t rendercache__interpolate_window(const rendercache *rc, uint32_t x, uint32_t y, int r,
                                                                     int x0, int x1, int y0, int y1, float rgb[3])
 {
     const float *depth = rc->px_depth, *image = rc->image;
     const uint32_t w = rc->width;
+    const float scale = rc->window_scale[r];
     int qx, qy;
     float dmin = FLT_MAX, dmax = 0.0f, tol2 = (1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance);
     float near_sum[4] = { 0, 0, 0, 0 }, far_sum[4] = { 0, 0, 0, 0 };
@@ -2278,12 +2397,12 @@ static RENDERCACHE__INLINE uint32_t rendercache__interpolate_window(const render
     if (n == 0) return 0;
     for (qy = y0; qy <= y1; qy++) {
         const float *row = depth + (size_t)qy * w;
-        float wy = (float)(r + 1 - rendercache__iabs(qy - (int)y));
+        float wy = (float)(r + 1 - rendercache__iabs(qy - (int)y)) * scale;
         for (qx = x0; qx <= x1; qx++) {
             float d = row[qx], wgt = wy * (float)(r + 1 - rendercache__iabs(qx - (int)x));
-            const float *c = image + 3 * ((size_t)qy * w + (size_t)qx);
             int point = d != FLT_MAX, near = point & (d <= dmin * tol2);
             int far = point & !near & (d * tol2 >= dmax);   /* a middle layer: neither side of the choice */
+            const float *c = point ? image + 3 * ((size_t)qy * w + (size_t)qx) : rendercache__black;
             float wn = near ? wgt : 0.0f, wf = far ? wgt : 0.0f;
             near_sum[0] += wn * c[0]; near_sum[1] += wn * c[1]; near_sum[2] += wn * c[2]; near_sum[3] += wn;
             far_sum[0] += wf * c[0]; far_sum[1] += wf * c[1]; far_sum[2] += wf * c[2]; far_sum[3] += wf;
@@ -2291,9 +2410,9 @@ static RENDERCACHE__INLINE uint32_t rendercache__interpolate_window(const render
     }
     chosen = (far_sum[3] >= near_sum[3]) ? far_sum : near_sum;
     if (dmax <= dmin * tol2) chosen = near_sum;   /* one layer: every point was counted as near */
-    rgb[0] = chosen[0] / chosen[3];
-    rgb[1] = chosen[1] / chosen[3];
-    rgb[2] = chosen[2] / chosen[3];
+    rgb[0] = rendercache__finitef(chosen[0] / chosen[3]);
+    rgb[1] = rendercache__finitef(chosen[1] / chosen[3]);
+    rgb[2] = rendercache__finitef(chosen[2] / chosen[3]);
     return n;
 }
 
@@ -2316,48 +2435,51 @@ static uint32_t rendercache__interpolate3(const rendercache *rc, uint32_t x, uin
     return rendercache__interpolate_window(rc, x, y, 1, (int)x - 1, (int)x + 1, (int)y - 1, (int)y + 1, rgb);
 }
 
+/* Fills hole (x, y) (a pixel showing no point) from the points around it
+   and ranks it; returns its kind. */
+static unsigned char rendercache__fill_hole(rendercache *rc, uint32_t x, uint32_t y)
+{
+    const uint32_t w = rc->width, h = rc->height, p = y * w + x;
+    uint32_t n;
+    unsigned char kind;
+    float rgb[3];
+    n = x > 0 && y > 0 && x + 1 < w && y + 1 < h ? rendercache__interpolate3(rc, x, y, rgb)
+                                                 : rendercache__interpolate(rc, x, y, 1, rgb);
+    if (n >= rc->sparse_neighbours) {
+        kind = RENDERCACHE_PIXEL_INTERPOLATED;
+    } else {
+        n = rendercache__interpolate(rc, x, y, (int)rc->wide_radius, rgb);
+        kind = n ? RENDERCACHE_PIXEL_SPARSE : RENDERCACHE_PIXEL_EMPTY;
+        if (!n) memcpy(rgb, rc->background, sizeof rgb);
+    }
+    rc->kind[p] = kind;
+    rc->count[p] = (unsigned char)(n > 255 ? 255 : n);
+    rc->priority[p] = rendercache__hole_priority(rc, kind, rc->count[p]);
+    rc->image[3 * (size_t)p + 0] = rgb[0];   /* stores a race detector sees, unlike an inlined memcpy */
+    rc->image[3 * (size_t)p + 1] = rgb[1];
+    rc->image[3 * (size_t)p + 2] = rgb[2];
+    return kind;
+}
+
 /* Job per tile: fill the holes left by projection and cull, and rank them. */
 static void rendercache__interpolate_job(void *ctx, uint32_t tile)
 {
     rendercache *rc = (rendercache *)ctx;
     const uint32_t w = rc->width, h = rc->height, *px_index = rc->px_index;
     uint32_t y0 = tile * RENDERCACHE__TILE_ROWS, y1 = y0 + RENDERCACHE__TILE_ROWS, x, y;
-    uint32_t counts[3] = { 0, 0, 0 }, *stats = rc->tile_stats + RENDERCACHE__TILE_STATS * (size_t)tile;
+    uint32_t counts[4] = { 0, 0, 0, 0 }, *stats = rc->tile_stats + RENDERCACHE__TILE_STATS * (size_t)tile;
     if (y1 > h) y1 = h;
     for (y = y0; y < y1; y++) {
         const uint32_t *row = px_index + (size_t)y * w;
         for (x = 0;; x++) {
-            uint32_t p, n;
-            unsigned char kind;
-            float rgb[3];
             while (x < w && row[x] != RENDERCACHE__NONE) x++;   /* to the next hole (a few percent of the pixels) */
             if (x == w) break;
-            p = y * w + x;
-            n = x > 0 && y > 0 && x + 1 < w && y + 1 < h ? rendercache__interpolate3(rc, x, y, rgb)
-                                                         : rendercache__interpolate(rc, x, y, 1, rgb);
-            if (n >= rc->sparse_neighbours) {
-                kind = RENDERCACHE_PIXEL_INTERPOLATED;
-                counts[0]++;
-            } else {
-                n = rendercache__interpolate(rc, x, y, (int)rc->wide_radius, rgb);
-                if (n) {
-                    kind = RENDERCACHE_PIXEL_SPARSE;
-                    counts[1]++;
-                } else {
-                    memcpy(rgb, rc->background, sizeof rgb);
-                    kind = RENDERCACHE_PIXEL_EMPTY;
-                    counts[2]++;
-                }
-            }
-            rc->kind[p] = kind;
-            rc->count[p] = (unsigned char)(n > 255 ? 255 : n);
-            rc->priority[p] = rendercache__hole_priority(rc, kind, rc->count[p]);
-            memcpy(rc->image + 3 * (size_t)p, rgb, sizeof rgb);
+            counts[rendercache__fill_hole(rc, x, y)]++;
         }
     }
-    stats[2] = counts[0];
-    stats[3] = counts[1];
-    stats[4] = counts[2];
+    stats[2] = counts[RENDERCACHE_PIXEL_INTERPOLATED];
+    stats[3] = counts[RENDERCACHE_PIXEL_SPARSE];
+    stats[4] = counts[RENDERCACHE_PIXEL_EMPTY];
 }
 
 /* The cull and the hole filling on the calling thread, interleaved: the
@@ -2394,6 +2516,7 @@ static void rendercache__start_stats(rendercache *rc)
     rendercache_stats *s = &rc->stats;
     s->frame = rc->frame;
     s->requested = s->predicted = s->inserted = s->replaced = s->evicted = s->rejected = 0;
+    s->late = s->changed = s->dropped = 0;
     s->time_project = s->time_cull = s->time_interpolate = 0.0;
     s->time_predict = s->time_request = s->time_insert = 0.0;
 }
@@ -2401,23 +2524,24 @@ static void rendercache__start_stats(rendercache *rc)
 RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, const rendercache_camera *camera)
 {
     rendercache__view v;
+    rendercache__frame_record *record;
     double t1, t2;
-    uint32_t o;
     if (!rc || !rendercache__view_init(&v, camera) || camera->width != rc->width || camera->height != rc->height ||
         camera->kind != RENDERCACHE_CAMERA_PERSPECTIVE) {
         if (rc && rc->log) rc->log(rc->log_user, "rendercache_begin_frame: invalid camera or image size");
         return RENDERCACHE_ERROR_INVALID_ARGUMENT;
     }
     rc->frame++;
-    if (rendercache__mark(rc->frame) == 1u) memset(rc->shown, 0, rc->capacity);
+    if (rendercache__mark(rc->frame) == 1u) memset(rc->shown, 0, (size_t)rc->capacity + rc->tile_count);
     rc->view = v;
     rc->has_prediction = 0;
     rc->hand_exhausted = 0;
+    record = &rc->history[rc->frame % ((uint64_t)rc->max_latency + 1)];
+    memset(record, 0, sizeof *record);
+    record->frame = rc->frame;
+    record->view = v;
     rendercache__start_stats(rc);
-    for (o = 0; o < rc->object_count; o++) {   /* points of moving objects age faster */
-        if (rc->obj_moved[o]) rc->obj_motion[o] += rc->moving_age_step - 1u;
-        rc->obj_moved[o] = 0;
-    }
+    rendercache__commit_transforms(rc);
     rendercache__compose_objects(rc, &rc->view, rc->obj_camera);
     rendercache__splat_points(rc, &rc->view, rc->obj_camera, &rc->stats.time_project);
     if (rc->parallel_for) {
@@ -2476,6 +2600,8 @@ RENDERCACHE_API rendercache_result rendercache_predict(rendercache *rc, const re
         return RENDERCACHE_ERROR_INVALID_ARGUMENT;
     t0 = rendercache__now(rc);
     rc->predicted = v;
+    rc->history[rc->frame % ((uint64_t)rc->max_latency + 1)].predicted = v;
+    rc->history[rc->frame % ((uint64_t)rc->max_latency + 1)].has_prediction = 1;
     rendercache__compose_objects(rc, &rc->predicted, rc->obj_predicted);
     rendercache__splat_points(rc, &rc->predicted, rc->obj_predicted, NULL);
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__predict_job, rc, rc->tile_count);
@@ -2693,7 +2819,7 @@ static uint32_t rendercache__diffuse(rendercache *rc, float fraction, uint32_t *
             if (x == end) break;
             p = y * w + (uint32_t)x;
             total = fraction + cur[x + 1] + carry;
-            pick = total >= rendercache__threshold(p, rc->frame, amp) ? 1u : 0u;
+            pick = total >= rendercache__threshold(p, (uint32_t)rc->frame, amp) ? 1u : 0u;
             e = total - (float)pick;
             select_v[p] = total;
             chosen[p] = (unsigned char)(2u | pick);
@@ -2777,6 +2903,7 @@ static uint32_t rendercache__emit(rendercache *rc, const rendercache__view *v, f
         r->x = p % rc->width;
         r->y = p / rc->width;
         r->flags = flags;
+        r->frame = rc->frame;
         memcpy(r->org, v->eye, sizeof r->org);
         rendercache__view_ray(v, (float)r->x + 0.5f, (float)r->y + 0.5f, r->dir);
         priority[p] = 0.0f;
@@ -2842,50 +2969,210 @@ static uint32_t rendercache__victim(rendercache *rc)
     return slot;
 }
 
+/* The frame a sample was requested in (0: the current one). */
+static uint64_t rendercache__sample_frame(const rendercache *rc, const rendercache_sample *s)
+{
+    return s->frame ? s->frame : rc->frame;
+}
+
+/* Whether a sample is well formed: a pixel of the image, known flags and
+   object, finite values, a frame begun already. */
 static int rendercache__sample_valid(const rendercache *rc, const rendercache_sample *s)
 {
+    if (!rc->has_frame || s->frame > rc->frame) return 0;
     if (s->x >= rc->width || s->y >= rc->height) return 0;
     if (s->flags & ~RENDERCACHE_REQUEST_PREDICTED) return 0;
-    if ((s->flags & RENDERCACHE_REQUEST_PREDICTED) && !rc->has_prediction) return 0;
     if (s->object != RENDERCACHE_MISS && s->object >= rc->object_count) return 0;
     if (s->object != RENDERCACHE_MISS && !rendercache__finite3(s->position)) return 0;
     if (!rendercache__finite3(s->rgb) || !(s->priority_scale >= 0.0f) || !isfinite(s->priority_scale)) return 0;
     return 1;
 }
 
-/* Stores sample s in slot; returns its squared distance from the eye of view v. */
-static float rendercache__store(rendercache *rc, uint32_t slot, const rendercache_sample *s, const rendercache__view *v)
+/* The point of sample s as a slot stores it: its object and its position
+   in object space (through the object's transform in frame f), or for a
+   miss the unit world direction of its ray in view v. */
+static void rendercache__sample_point(const rendercache *rc, const rendercache_sample *s, uint64_t f,
+                                      const rendercache__view *v, rendercache__geo *g)
 {
-    rendercache__geo *g = &rc->geo[slot];
-    rendercache__point *pt = &rc->data[slot];
-    float *pos = g->pos, d;
-    if (g->object == RENDERCACHE__FREE_SLOT) rc->live++;
-    if (s->object == RENDERCACHE_MISS) {
-        rendercache__view_ray(v, (float)s->x + 0.5f, (float)s->y + 0.5f, pos);
-        d = RENDERCACHE__FAR2;
-    } else {
-        float dx = s->position[0] - v->eye[0], dy = s->position[1] - v->eye[1], dz = s->position[2] - v->eye[2];
-        rendercache__affine(rc->obj_local + 12 * (size_t)s->object, s->position, pos);
-        d = dx * dx + dy * dy + dz * dz;
-    }
     g->object = s->object;
-    memcpy(pt->rgb, s->rgb, sizeof pt->rgb);
-    pt->scale = s->priority_scale > 0.0f ? s->priority_scale : 1.0f;
-    pt->base = rc->frame + (s->object == RENDERCACHE_MISS ? 0u : rc->obj_motion[s->object]);   /* age 0 */
-    rc->shown[slot] = rendercache__mark(rc->frame);   /* new points are not evicted in their own frame */
-    pt->object = s->object;
-    return d;
+    if (s->object == RENDERCACHE_MISS) rendercache__view_ray(v, (float)s->x + 0.5f, (float)s->y + 0.5f, g->pos);
+    else rendercache__affine(rendercache__object_local(rc, s->object, f), s->position, g->pos);
 }
 
-/* A current-frame sample also becomes its pixel's point at once. */
-static void rendercache__show(rendercache *rc, uint32_t p, uint32_t slot, float depth, const float rgb[3])
+/* Stores point g of sample s in slot, as a point of age 0. */
+static void rendercache__store(rendercache *rc, uint32_t slot, const rendercache__geo *g, const rendercache_sample *s)
 {
+    rendercache__point *pt = &rc->data[slot];
+    if (rc->geo[slot].object == RENDERCACHE__FREE_SLOT) rc->live++;
+    rc->geo[slot] = *g;
+    memcpy(pt->rgb, s->rgb, sizeof pt->rgb);
+    pt->scale = s->priority_scale > 0.0f ? s->priority_scale : 1.0f;
+    pt->base = (uint32_t)rc->frame + rc->obj_motion[rendercache__motion_index(rc, s->object)];   /* age 0 */
+    pt->object = s->object;
+    rc->shown[slot] = rendercache__mark(rc->frame);   /* new points are not evicted in their own frame */
+}
+
+/* Holes around a new point are filled again when an insert call ends
+   (rendercache__refill): the point is one more for their filters. The
+   holes wait with this bit set in their kind. */
+#define RENDERCACHE__REFILL 0x80u
+
+/* Marks the holes whose filters reach pixel p (within wide_radius). */
+static void rendercache__mark_refill(rendercache *rc, uint32_t p)
+{
+    const int r = (int)rc->wide_radius, x = (int)(p % rc->width), y = (int)(p / rc->width);
+    int x0 = x - r < 0 ? 0 : x - r, x1 = x + r >= (int)rc->width ? (int)rc->width - 1 : x + r, qx, qy;
+    int y0 = y - r < 0 ? 0 : y - r, y1 = y + r >= (int)rc->height ? (int)rc->height - 1 : y + r;
+    for (qy = y0; qy <= y1; qy++)
+        for (qx = x0; qx <= x1; qx++) {
+            uint32_t q = (uint32_t)qy * rc->width + (uint32_t)qx;
+            if (rc->px_index[q] == RENDERCACHE__NONE) rc->kind[q] = (unsigned char)(rc->kind[q] | RENDERCACHE__REFILL);
+        }
+    rc->refill_rows[0] = (uint32_t)y0 < rc->refill_rows[0] ? (uint32_t)y0 : rc->refill_rows[0];
+    rc->refill_rows[1] = (uint32_t)y1 + 1 > rc->refill_rows[1] ? (uint32_t)y1 + 1 : rc->refill_rows[1];
+}
+
+/* Fills the marked holes again. */
+static void rendercache__refill(rendercache *rc)
+{
+    uint32_t x, y;
+    for (y = rc->refill_rows[0]; y < rc->refill_rows[1]; y++)
+        for (x = 0; x < rc->width; x++) {
+            uint32_t q = y * rc->width + x;
+            if (!(rc->kind[q] & RENDERCACHE__REFILL)) continue;
+            rc->kind[q] = (unsigned char)(rc->kind[q] & ~RENDERCACHE__REFILL);
+            if (rc->px_index[q] == RENDERCACHE__NONE) rendercache__fill_hole(rc, x, y);
+        }
+    rc->refill_rows[0] = rc->height;
+    rc->refill_rows[1] = 0;
+}
+
+/* A sample also becomes the point pixel p shows, at once; where p was a
+   hole, the holes around it are filled again. */
+static void rendercache__show(rendercache *rc, uint32_t p, uint32_t slot, float depth2, const float rgb[3])
+{
+    if (rc->px_index[p] == RENDERCACHE__NONE) rendercache__mark_refill(rc, p);
     rc->px_index[p] = slot;
-    rc->px_depth[p] = depth;
+    rc->px_depth[p] = depth2;
     memcpy(rc->image + 3 * (size_t)p, rgb, 3 * sizeof(float));
     rc->kind[p] = RENDERCACHE_PIXEL_POINT;
     rc->count[p] = 0;
     rc->priority[p] = 0.0f;
+}
+
+/* Whether a new colour differs from the old one by more than the
+   threshold: the largest channel difference against the largest channel
+   of either. */
+static int rendercache__colour_changed(const rendercache *rc, const float old_rgb[3], const float rgb[3])
+{
+    float d = 0.0f, m = 0.0f;
+    int k;
+    for (k = 0; k < 3; k++) {
+        float a = fabsf(old_rgb[k]), b = fabsf(rgb[k]), e = fabsf(rgb[k] - old_rgb[k]);
+        m = a > m ? a : m;
+        m = b > m ? b : m;
+        d = e > d ? e : d;
+    }
+    return d > rc->change_threshold * m;
+}
+
+/* Colour-change detection (WDG02): the points shown within
+   RENDERCACHE_CHANGE_RADIUS pixels of pixel p are aged to the top of the
+   age ramp (at least), so that the next requests look around the change. */
+static void rendercache__age_around(rendercache *rc, uint32_t p)
+{
+    const int r = RENDERCACHE_CHANGE_RADIUS, x = (int)(p % rc->width), y = (int)(p / rc->width);
+    int qx, qy;
+    for (qy = y - r; qy <= y + r; qy++) {
+        if (qy < 0 || qy >= (int)rc->height) continue;
+        for (qx = x - r; qx <= x + r; qx++) {
+            uint32_t q = (uint32_t)qy * rc->width + (uint32_t)qx, k, motion;
+            rendercache__point *pt;
+            if (qx < 0 || qx >= (int)rc->width || rc->px_index[q] == RENDERCACHE__NONE) continue;
+            k = rc->px_index[q];
+            pt = &rc->data[k];
+            motion = rc->obj_motion[rendercache__motion_index(rc, pt->object)];
+            if ((uint32_t)rc->frame + motion - pt->base < rc->age_ramp) pt->base = (uint32_t)rc->frame + motion - rc->age_ramp;
+            rc->priority[q] = rendercache__point_priority(rc, pt, motion);
+        }
+    }
+}
+
+/* Puts sample s in slot, replacing the point that was there (replacing:
+   the slot held a point of the same surface, whose colour it compares),
+   and shows it in pixel p (RENDERCACHE__NONE: not shown). */
+static void rendercache__place(rendercache *rc, uint32_t slot, int replacing, const rendercache__geo *g,
+                             const rendercache_sample *s, uint32_t p, float depth2)
+{
+    int changed = replacing && rendercache__colour_changed(rc, rc->data[slot].rgb, s->rgb);
+    if (replacing) rc->stats.replaced++;
+    else if (rc->geo[slot].object != RENDERCACHE__FREE_SLOT) rc->stats.evicted++;
+    rendercache__store(rc, slot, g, s);
+    if (p != RENDERCACHE__NONE) rendercache__show(rc, p, slot, depth2, s->rgb);
+    if (changed) {
+        rc->stats.changed++;
+        rendercache__age_around(rc, p);
+    }
+}
+
+/* A sample of the current frame: it replaces the point its pixel shows, or
+   fills the hole there (the hit point projects into its own pixel). */
+static void rendercache__insert_current(rendercache *rc, const rendercache_sample *s)
+{
+    uint32_t p = s->y * rc->width + s->x, slot = rc->px_index[p];
+    rendercache__geo g;
+    float d;
+    rendercache__sample_point(rc, s, rc->frame, &rc->view, &g);
+    if (s->object == RENDERCACHE_MISS) {
+        d = RENDERCACHE__FAR2;
+    } else {
+        float dx = s->position[0] - rc->view.eye[0], dy = s->position[1] - rc->view.eye[1];
+        float dz = s->position[2] - rc->view.eye[2];
+        d = dx * dx + dy * dy + dz * dz;
+    }
+    rendercache__place(rc, slot != RENDERCACHE__NONE ? slot : rendercache__victim(rc), slot != RENDERCACHE__NONE, &g, s,
+                       p, d);
+}
+
+/* A late sample (requested in frame f < the current one) or a predicted
+   one: its point is where its own ray hit, which the current camera sees
+   in another pixel, if at all. Where it lands on the same surface it
+   replaces the point shown there; where it lands in front of what is
+   shown, or in a hole it is not hidden in, it is shown in a new slot;
+   elsewhere it only joins the cache. A new slot is never one the current
+   frame shows. Returns 0 when no such slot is left (the sample is dropped). */
+static int rendercache__insert_other(rendercache *rc, const rendercache_sample *s, uint64_t f,
+                                     const rendercache__view *v)
+{
+    const float tol2 = (1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance);
+    rendercache__projector pr;
+    rendercache__geo g;
+    uint32_t p, slot;
+    float d2 = 0.0f, nd[8];
+    int show;
+    rendercache__sample_point(rc, s, f, v, &g);
+    pr.rc = rc;
+    pr.view = &rc->view;
+    pr.obj_camera = rc->obj_camera;
+    p = rendercache__project_point(&pr, &g, &d2);
+    if (p != RENDERCACHE__NONE && rc->px_index[p] != RENDERCACHE__NONE) {
+        uint32_t k = rc->px_index[p];
+        float dk = rc->px_depth[p];
+        if (rc->data[k].object == s->object && d2 <= dk * tol2 && dk <= d2 * tol2) {   /* the same surface */
+            rendercache__place(rc, k, 1, &g, s, p, d2);
+            return 1;
+        }
+        show = d2 * tol2 < dk;   /* in front of what is shown there */
+    } else if (p != RENDERCACHE__NONE) {   /* a hole: shown unless nearer points around enclose it */
+        rendercache__neighbour_depths(rc->px_depth, rc->width, rc->height, p % rc->width, p / rc->width, nd);
+        show = !rendercache__occluded(d2, nd, tol2);
+    } else {
+        show = 0;
+    }
+    slot = rendercache__victim(rc);
+    if (rendercache__slot_in_use(rc, slot)) return 0;
+    rendercache__place(rc, slot, 0, &g, s, show ? p : RENDERCACHE__NONE, d2);
+    return 1;
 }
 
 /* Prefetches the slots that the next samples will replace in place, all at
@@ -2899,7 +3186,9 @@ static uint32_t rendercache__touch_slots(const rendercache *rc, const rendercach
     for (i = 0; i < n; i++) {
         const rendercache_sample *s = &samples[i];
         uint32_t slot;
-        if (s->x >= rc->width || s->y >= rc->height || (s->flags & RENDERCACHE_REQUEST_PREDICTED)) continue;
+        if (s->x >= rc->width || s->y >= rc->height || (s->flags & RENDERCACHE_REQUEST_PREDICTED) ||
+            rendercache__sample_frame(rc, s) != rc->frame)
+            continue;
         slot = rc->px_index[s->y * rc->width + s->x];
         if (slot == RENDERCACHE__NONE) continue;
         sum += slot;
@@ -2910,34 +3199,60 @@ static uint32_t rendercache__touch_slots(const rendercache *rc, const rendercach
     return sum;
 }
 
-RENDERCACHE_API rendercache_result rendercache_insert(rendercache *rc, const rendercache_sample *samples, uint32_t n)
+RENDERCACHE_API rendercache_result rendercache_insert(rendercache *rc, const rendercache_sample *samples, uint32_t n,
+                                                      uint32_t *taken)
 {
-    uint32_t i;
+    const uint64_t slots = rc ? (uint64_t)rc->max_latency + 1 : 1;
+    uint32_t i, stored = 0, bad = 0;
     double t0;
+    if (taken) *taken = 0;
     if (!rc || (!samples && n)) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
     t0 = rendercache__now(rc);
     for (i = 0; i < n; i++) {
         const rendercache_sample *s = &samples[i];
+        const rendercache__frame_record *record;
         int predicted = (s->flags & RENDERCACHE_REQUEST_PREDICTED) != 0;
-        const rendercache__view *v = predicted ? &rc->predicted : &rc->view;
-        uint32_t p, slot;
-        float d;
+        uint64_t f;
         if (i % 32 == 0) rc->touched += rendercache__touch_slots(rc, s, n - i < 32 ? n - i : 32);
-        if (!rendercache__sample_valid(rc, s) || (!predicted && !rc->has_frame)) { rc->stats.rejected++; continue; }
-        p = s->y * rc->width + s->x;
-        slot = predicted ? RENDERCACHE__NONE : rc->px_index[p];
-        if (slot != RENDERCACHE__NONE) {
-            rc->stats.replaced++;
-        } else {
-            slot = rendercache__victim(rc);
-            if (rc->geo[slot].object != RENDERCACHE__FREE_SLOT) rc->stats.evicted++;
+        if (!rendercache__sample_valid(rc, s)) { bad++; continue; }
+        f = rendercache__sample_frame(rc, s);
+        if (rc->frame - f > rc->max_latency) { rc->stats.dropped++; continue; }
+        record = &rc->history[f % slots];
+        if (record->frame != f || (predicted && !record->has_prediction)) { bad++; continue; }
+        if (f == rc->frame && !predicted) {
+            rendercache__insert_current(rc, s);
+        } else if (!rendercache__insert_other(rc, s, f, predicted ? &record->predicted : &record->view)) {
+            rc->stats.dropped++;
+            continue;
         }
-        d = rendercache__store(rc, slot, s, v);
-        if (!predicted) rendercache__show(rc, p, slot, d, s->rgb);
-        rc->stats.inserted++;
+        rc->stats.late += f != rc->frame;
+        stored++;
     }
+    rendercache__refill(rc);
+    rc->stats.inserted += stored;
+    rc->stats.rejected += bad;
     rc->stats.live_points = rc->live;
     rc->stats.time_insert += rendercache__now(rc) - t0;
+    if (taken) *taken = stored;
+    if (bad && rc->log) rc->log(rc->log_user, "rendercache_insert: malformed samples skipped (see stats.rejected)");
+    return bad ? RENDERCACHE_ERROR_INVALID_ARGUMENT : RENDERCACHE_OK;
+}
+
+RENDERCACHE_API rendercache_result rendercache_invalidate(rendercache *rc, uint32_t object)
+{
+    uint32_t o, p;
+    if (!rc || (object != RENDERCACHE_ALL_OBJECTS && object != RENDERCACHE_MISS && object >= rc->object_count))
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    for (o = 0; o <= rc->object_count; o++)   /* a point's age includes its object's motion counter */
+        if (object == RENDERCACHE_ALL_OBJECTS || o == rendercache__motion_index(rc, object)) rc->obj_motion[o] += rc->age_ramp;
+    if (!rc->has_frame) return RENDERCACHE_OK;
+    for (p = 0; p < rc->pixel_count; p++) {   /* and the priorities of this frame's pixels showing them */
+        const rendercache__point *pt;
+        if (rc->px_index[p] == RENDERCACHE__NONE) continue;
+        pt = &rc->data[rc->px_index[p]];
+        if (object != RENDERCACHE_ALL_OBJECTS && pt->object != object) continue;
+        rc->priority[p] = rendercache__point_priority(rc, pt, rc->obj_motion[rendercache__motion_index(rc, pt->object)]);
+    }
     return RENDERCACHE_OK;
 }
 

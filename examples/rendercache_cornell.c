@@ -108,6 +108,7 @@ static void shade_batch(void *ctx, uint32_t index)
         s->x = r->x;
         s->y = r->y;
         s->flags = r->flags;
+        s->frame = r->frame;
         s->object = RENDERCACHE_MISS;
         for (n = 0; n < j->spp; n++) {
             float rgb[3];
@@ -281,7 +282,7 @@ int main(int argc, char **argv)
         t1 = seconds();
         shade(pool, tracer, req, samples, n, (uint32_t)frame + 1, &o);
         t2 = seconds();
-        rendercache_insert(rc, samples, n);
+        rendercache_insert(rc, samples, n, NULL);
         t3 = seconds();
         rendercache_get_stats(rc, &st);
         if (frame == 0) exposure = ex_auto_exposure(rendercache_image(rc), o.width, o.height, 0.97f);

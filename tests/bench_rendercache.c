@@ -91,6 +91,7 @@ static void shade_one(void *ctx, uint32_t index)
         s->x = r->x;
         s->y = r->y;
         s->flags = r->flags;
+        s->frame = r->frame;
         if (!ex_tracer_shade(j->tracer, r->org, r->dir, j->bounces, &rng, s->rgb, &hit)) {
             s->object = RENDERCACHE_MISS;
         } else {
@@ -149,7 +150,7 @@ static void run(const ex_tracer *tracer, ex_pool *shade_pool, uint32_t w, uint32
         rendercache_begin_frame(rc, &c);
         rendercache_request(rc, req, w * h, &n);
         shade_all(shade_pool, tracer, req, samples, n, 0, 0);
-        rendercache_insert(rc, samples, n);
+        rendercache_insert(rc, samples, n, NULL);
     }
     for (f = 0; f < FRAMES; f++) {
         rendercache_camera c = path_camera(f + 1, w, h);
@@ -161,7 +162,7 @@ static void run(const ex_tracer *tracer, ex_pool *shade_pool, uint32_t w, uint32
         shade_all(shade_pool, tracer, req, samples, n, (uint32_t)f + 1, 1);   /* direct + one bounce */
         shade_time += now_seconds(NULL) - t0;
         shaded += n;
-        rendercache_insert(rc, samples, n);
+        rendercache_insert(rc, samples, n, NULL);
         rendercache_get_stats(rc, &st);
         times[P_PROJECT][f] = st.time_project;
         times[P_CULL][f] = st.time_cull;

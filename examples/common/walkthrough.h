@@ -1854,6 +1854,7 @@ static int wt__raytrace_frame(wt_renderer *r, int frame, float *rgb, wt_frame_st
             q->x = i % r->width;
             q->y = i / r->width;
             q->flags = 0;
+            q->frame = 0;   /* the current frame */
             rendercache_camera_ray(&cam, (float)q->x + 0.5f, (float)q->y + 0.5f, q->org, q->dir);
         }
         n = r->width * r->height;
@@ -1877,6 +1878,7 @@ static int wt__raytrace_frame(wt_renderer *r, int frame, float *rgb, wt_frame_st
     for (i = 0; i < n; i++) {
         const wt_point *p = &r->points[i];
         rendercache_sample *s = &r->samples[i];
+        s->frame = r->req[i].frame;
         s->x = r->req[i].x;
         s->y = r->req[i].y;
         s->flags = r->req[i].flags;
@@ -1894,7 +1896,7 @@ static int wt__raytrace_frame(wt_renderer *r, int frame, float *rgb, wt_frame_st
         if (p->object == WT_OBJECT_BUNNY || p->bunny_shadow) s->priority_scale *= WT_BUNNY_PRIORITY;
     }
     a = wt_seconds();
-    if (rendercache_insert(r->rc, r->samples, n) != RENDERCACHE_OK) return -1;
+    if (rendercache_insert(r->rc, r->samples, n, NULL) != RENDERCACHE_OK) return -1;
     st->phase[0] += wt_seconds() - a;
     memcpy(rgb, rendercache_image(r->rc), sizeof(float) * 3 * r->width * r->height);
     st->samples = n;
