@@ -838,6 +838,8 @@ static void rendercache__free(const rendercache_allocator *a, void *p)
    2. small math
    ---------------------------------------------------------------------- */
 static int rendercache__iabs(int v) { return v < 0 ? -v : v; }
+static RENDERCACHE__INLINE float rendercache__minf(float a, float b) { return a < b ? a : b; }
+static RENDERCACHE__INLINE float rendercache__maxf(float a, float b) { return a > b ? a : b; }
 /* x clamped to the finite floats: a weighted mean of finite colours that
    rounds past FLT_MAX stays finite (NaN passes, and cannot arise there). */
 static float rendercache__finitef(float x) { return x < -FLT_MAX ? -FLT_MAX : x > FLT_MAX ? FLT_MAX : x; }
@@ -3400,6 +3402,11 @@ static int rendercache__range_valid(const rendercache_range_image *img, renderca
 #define RENDERCACHE__HIDDEN_BLOCK 4u             /* target pixels per side of a block of the coarse z-buffer */
 #define RENDERCACHE__HIDDEN_RUN 8u               /* source pixels of a row tested at once against it */
 #define RENDERCACHE__IN_PLACE 2                  /* a projected pixel that stays on itself (warp_project's ok) */
+#define RENDERCACHE__MIN_DEPTH 1e-18f           /* least distance a warp writes (squares of smaller ones underflow) */
+#define RENDERCACHE__MAX_PLANE 16777216.0f       /* 2^24: a pixel projected farther than this from the image's
+                                                    origin has no projection (float positions are no longer
+                                                    whole pixels there, and every position in this range
+                                                    converts to an int) */
 
 /* What filled a target pixel (warper.how). */
 enum { RENDERCACHE__HOW_EMPTY = 0, RENDERCACHE__HOW_WARPED, RENDERCACHE__HOW_BACKGROUND, RENDERCACHE__HOW_COMPUTED };
@@ -3980,11 +3987,13 @@ static void rendercache__warp_project_static(const rendercache__warp_src *ws, co
         float c0 = m[0] * x0 + m[1] * x1 + m[2] * x2 + off * m[3];
         float c1 = m[4] * x0 + m[5] * x1 + m[6] * x2 + off * m[7];
         float c2 = m[8] * x0 + m[9] * x1 + m[10] * x2 + off * m[11];
-        float inv = 1.0f / c2;
-        px[i] = cx + f * c0 * inv;
-        py[i] = cy - f * c1 * inv;
-        d2[i] = point ? (c0 * c0 + c1 * c1 + c2 * c2) * bias : RENDERCACHE__FAR2;
-        ok[i] = (unsigned char)(valid & (c2 > 0.0f));
+        float inv = 1.0f / c2, x = cx + f * c0 * inv, y = cy - f * c1 * inv;
+        float e = (c0 * c0 + c1 * c1 + c2 * c2) * bias;   /* may overflow: capped at the background's */
+        px[i] = x;
+        py[i] = y;
+        d2[i] = point ? rendercache__minf(e, RENDERCACHE__FAR2) : RENDERCACHE__FAR2;
+        ok[i] = (unsigned char)(valid & (c2 > 0.0f) & (fabsf(x) < RENDERCACHE__MAX_PLANE) &
+                                (fabsf(y) < RENDERCACHE__MAX_PLANE));   /* and not NaN */
     }
 }
 
@@ -4086,7 +4095,7 @@ static uint32_t rendercache__warp_project(const rendercache__warp_src *ws, uint3
             uint32_t e = begin + i, y = e / sw;
             px[i] = (float)(e - y * sw) + 0.5f;
             py[i] = (float)y + 0.5f;
-            d2[i] = point ? d * d * bias : RENDERCACHE__FAR2;
+            d2[i] = point ? rendercache__minf(d * d * bias, RENDERCACHE__FAR2) : RENDERCACHE__FAR2;
             ok[i] = RENDERCACHE__IN_PLACE;
             continue;
         }
@@ -4095,14 +4104,15 @@ static uint32_t rendercache__warp_project(const rendercache__warp_src *ws, uint3
             x[0] *= d; x[1] *= d; x[2] *= d;
             if (ws->motion && o < ws->motion_count) m = ws->motion + 12 * (size_t)o;
             rendercache__affine(m, x, c);
-            d2[i] = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) * bias;
+            d2[i] = rendercache__minf((c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) * bias, RENDERCACHE__FAR2);
         } else {   /* a direction: rotated only */
             c[0] = m[0] * x[0] + m[1] * x[1] + m[2] * x[2];
             c[1] = m[4] * x[0] + m[5] * x[1] + m[6] * x[2];
             c[2] = m[8] * x[0] + m[9] * x[1] + m[10] * x[2];
             d2[i] = RENDERCACHE__FAR2;
         }
-        ok[i] = (unsigned char)rendercache__view_to_plane(t, c, &px[i], &py[i]);
+        ok[i] = (unsigned char)(rendercache__view_to_plane(t, c, &px[i], &py[i]) && fabsf(px[i]) < RENDERCACHE__MAX_PLANE &&
+                                fabsf(py[i]) < RENDERCACHE__MAX_PLANE);
     }
     return n;
 }
@@ -4163,8 +4173,6 @@ static void rendercache__warp_payload(const void *src, uint32_t begin, uint32_t 
 /* A projected pixel in a row of warp_project_row (the same 4 floats). */
 typedef struct rendercache__corner { float x, y, d, k; } rendercache__corner;
 
-static RENDERCACHE__INLINE float rendercache__minf(float a, float b) { return a < b ? a : b; }
-static RENDERCACHE__INLINE float rendercache__maxf(float a, float b) { return a > b ? a : b; }
 
 /* Row y of an input projected into the target's image plane, 4 floats per
    pixel: x, y, biased squared distance, 1 when it has a projection (else
@@ -4250,9 +4258,9 @@ static RENDERCACHE__INLINE void rendercache__warp_shade(const rendercache__warp_
     wu *= s; wv *= s; ww *= s;
     d = wu * u[2] + wv * v[2] + ww * w[2];
     if (!(rendercache__key(d, e) < zb->key[pixel])) return;   /* hidden: no colour to interpolate */
-    payload[0] = wu * cu[0] + wv * cv[0] + ww * cw[0];
-    payload[1] = wu * cu[1] + wv * cv[1] + ww * cw[1];
-    payload[2] = wu * cu[2] + wv * cv[2] + ww * cw[2];
+    payload[0] = rendercache__finitef(wu * cu[0] + wv * cv[0] + ww * cw[0]);
+    payload[1] = rendercache__finitef(wu * cu[1] + wv * cv[1] + ww * cw[1]);
+    payload[2] = rendercache__finitef(wu * cu[2] + wv * cv[2] + ww * cw[2]);
     o = wu >= wv && wu >= ww ? img->object[eu] : (wv >= ww ? img->object[ev] : img->object[ew]);
     memcpy(payload + 3, &o, sizeof o);
     rendercache__zbuffer_test(zb, pixel, d, e, payload);
@@ -4851,7 +4859,8 @@ static void rendercache__finish_job(void *ctx, uint32_t tile)
             continue;
         }
         counts[w->how[p] > 0 ? w->how[p] - 1 : 0]++;
-        j->acc.depth2[p] = j->acc.object[p] == RENDERCACHE_MISS ? RENDERCACHE__FAR : sqrtf(j->acc.depth2[p]);
+        j->acc.depth2[p] = j->acc.object[p] == RENDERCACHE_MISS ? RENDERCACHE__FAR
+                                                                 : rendercache__maxf(sqrtf(j->acc.depth2[p]), RENDERCACHE__MIN_DEPTH);
     }
 }
 
@@ -5010,7 +5019,7 @@ RENDERCACHE_API rendercache_result rendercache_blend(const rendercache_range_ima
         return RENDERCACHE_ERROR_INVALID_ARGUMENT;
     n = (size_t)a->camera.width * a->camera.height;
     nearer = t < 0.5f ? a : b;
-    for (p = 0; p < 3 * n; p++) out->rgb[p] = (1.0f - t) * a->rgb[p] + t * b->rgb[p];
+    for (p = 0; p < 3 * n; p++) out->rgb[p] = rendercache__finitef((1.0f - t) * a->rgb[p] + t * b->rgb[p]);
     if (nearer != out) {
         memcpy(out->depth, nearer->depth, n * sizeof(float));
         memcpy(out->object, nearer->object, n * sizeof(uint32_t));
@@ -5039,7 +5048,7 @@ static void rendercache__combine_job(void *ctx, uint32_t tile)
         if (db == FLT_MAX) continue;   /* only a */
         if (da != FLT_MAX && a->object[p] == b->object[p] && da <= db * tol2 && db <= da * tol2) {
             int k;
-            for (k = 0; k < 3; k++) a->rgb[3 * p + k] = (1.0f - t) * a->rgb[3 * p + k] + t * b->rgb[3 * p + k];
+            for (k = 0; k < 3; k++) a->rgb[3 * p + k] = rendercache__finitef((1.0f - t) * a->rgb[3 * p + k] + t * b->rgb[3 * p + k]);
             a->depth2[p] = (1.0f - t) * da + t * db;
             continue;
         }

@@ -23,6 +23,7 @@
 
 typedef struct scene {
     float shift[3];    /* translation of the square (object 1) */
+    float shadow[3];   /* a shadow on the wall: centre x, y and radius (0: none) */
 } scene;
 
 static float wall_colour(float x, float y) { return 0.5f + 0.05f * x + 0.005f * y; }
@@ -58,6 +59,9 @@ static uint32_t trace(const scene *s, const float o[3], const float d[3], float 
             object = 0;
             rgb[0] = wall_colour(x, y);
             rgb[1] = 0.0f;
+            if ((x - s->shadow[0]) * (x - s->shadow[0]) + (y - s->shadow[1]) * (y - s->shadow[1]) <
+                s->shadow[2] * s->shadow[2])
+                rgb[0] *= 0.3f;   /* a light blocked */
         }
     }
     if (object == RENDERCACHE_MISS) {
@@ -104,7 +108,7 @@ static rendercache_desc make_desc(uint32_t w, uint32_t h)
 }
 
 /* Scratch big enough for every test image. */
-#define MAX_PIXELS (96 * 80)
+#define MAX_PIXELS (128 * 128)
 static rendercache_pixel_request g_req[MAX_PIXELS];
 static rendercache_sample g_samples[MAX_PIXELS];
 
@@ -939,6 +943,96 @@ static void test_late_samples_land_where_they_were_seen(void)
 }
 
 /* ---------------------------------------------------------------------
+   Changing light under a static camera: a shadow appears on the wall.
+   --------------------------------------------------------------------- */
+#define SHADOW_W 128
+#define SHADOW_H 128
+
+/* Frames until every pixel of the shadow shows it (its colour within 0.02
+   of the exact one; the shadow takes 70% off a colour of 0.5), at an 8%
+   budget, after 40 frames of a converged static view; 99 when not within
+   20 frames. */
+static int frames_to_show_shadow(float change_threshold, int invalidate, uint32_t *shadow_pixels)
+{
+    const uint32_t n = SHADOW_W * SHADOW_H, budget = (uint32_t)(0.08 * n);
+    static float exact[SHADOW_W * SHADOW_H * 3], before[SHADOW_W * SHADOW_H * 3];
+    rendercache_camera cam = make_camera(0.3f, 0.2f, 0.0f, 0.3f, 0.2f, 10.0f, SHADOW_W, SHADOW_H);
+    rendercache_desc d = make_desc(SHADOW_W, SHADOW_H);
+    rendercache *rc;
+    scene s;
+    int f, result = 99;
+    uint32_t p;
+    memset(&s, 0, sizeof s);
+    d.change_threshold = change_threshold;
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return 99;
+    run_frame(rc, &s, &cam, n);
+    for (f = 0; f < 40; f++) run_frame(rc, &s, &cam, budget);
+    /* a disc of radius 1.75 on the wall, in the view of the wall beside the square: 6% of the image */
+    full_render(&s, &cam, before);
+    s.shadow[0] = -3.0f; s.shadow[1] = -1.8f; s.shadow[2] = 1.75f;
+    full_render(&s, &cam, exact);
+    *shadow_pixels = 0;
+    for (p = 0; p < n; p++) *shadow_pixels += exact[3 * p] != before[3 * p];
+    if (invalidate) CHECK_EQ_INT(rendercache_invalidate(rc, 0), RENDERCACHE_OK);
+    for (f = 1; f <= 20 && result == 99; f++) {
+        uint32_t missing = 0;
+        run_frame(rc, &s, &cam, budget);
+        for (p = 0; p < n; p++) {
+            const float *c = rendercache_image(rc) + 3 * (size_t)p;
+            if (exact[3 * p] != before[3 * p]) missing += fabsf(c[0] - exact[3 * p]) > 0.02f;
+        }
+        if (missing == 0) result = f;
+    }
+    rendercache_destroy(rc);
+    return result;
+}
+
+static void test_changed_colours_are_resampled_first(void)
+{
+    uint32_t pixels;
+    int detected = frames_to_show_shadow(0.0f, 0, &pixels);   /* the default threshold, 0.25 */
+    int blind = frames_to_show_shadow(FLT_MAX, 0, &pixels);
+    int told = frames_to_show_shadow(FLT_MAX, 1, &pixels);
+    test_note("a shadow over %.1f%% of a static view, 8%% budget: fully shown after %d frames with colour-change "
+              "detection, %d without, %d without but told (rendercache_invalidate)", 100.0 * pixels / (SHADOW_W * SHADOW_H),
+              detected, blind, told);
+    CHECK(pixels > 0.055 * SHADOW_W * SHADOW_H && pixels < 0.065 * SHADOW_W * SHADOW_H);
+    CHECK(detected <= 3);   /* the acceptance bound */
+    CHECK(blind > 3);       /* age alone takes longer: the test sees the difference */
+    CHECK(told < blind);
+}
+
+/* An engine that knows an object's light changed says so: its points are
+   requested before every other one, from the current frame on. */
+static void test_invalidate_ranks_an_object_first(void)
+{
+    const uint32_t w = 64, h = 48, n = w * h;
+    rendercache_camera cam = make_camera(0, 0, 0, 0, 0, 10, w, h);
+    rendercache_desc d = make_desc(w, h);
+    rendercache *rc;
+    scene s;
+    uint32_t got = 0, i, square = 0, off = 0, f;
+    memset(&s, 0, sizeof s);
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+    CHECK_EQ_INT(rendercache_invalidate(rc, 1), RENDERCACHE_OK);   /* before any frame: fine */
+    converge(rc, &s, &cam);
+    for (f = 0; f < 10; f++) run_frame(rc, &s, &cam, n / 20);
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
+    for (i = 0; i < n; i++) square += colour_object(rendercache_image(rc) + 3 * (size_t)i) == 1;
+    CHECK_EQ_INT(rendercache_invalidate(rc, 1), RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_request(rc, g_req, square, &got), RENDERCACHE_OK);
+    CHECK_EQ_INT(got, square);
+    for (i = 0; i < got; i++) off += colour_object(rendercache_image(rc) + 3 * ((size_t)g_req[i].y * w + g_req[i].x)) != 1;
+    CHECK_EQ_INT(off, 0);
+    CHECK_EQ_INT(rendercache_invalidate(rc, RENDERCACHE_ALL_OBJECTS), RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_invalidate(rc, RENDERCACHE_MISS), RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_invalidate(rc, 256), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(rendercache_invalidate(rc, RENDERCACHE_NO_SAMPLE), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(rendercache_invalidate(NULL, 0), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    rendercache_destroy(rc);
+}
+
+/* ---------------------------------------------------------------------
    Per-point priority scale (the light-vector weight of Crespin-Peroche).
    --------------------------------------------------------------------- */
 static void test_priority_scale(void)
@@ -1055,6 +1149,42 @@ static void test_sparse_points_use_the_wide_filter(void)
 }
 
 /* ---------------------------------------------------------------------
+   Huge finite colours (3e38, near FLT_MAX) stay finite through the
+   filters: holes average them, and a weighted sum of them would overflow.
+   --------------------------------------------------------------------- */
+static void test_huge_colours_stay_finite(void)
+{
+    const uint32_t w = 40, h = 32;
+    rendercache_camera cam = make_camera(0, 0, 0, 0, 0, 10, w, h), moved = make_camera(0.3f, 0.1f, 1.5f, 0.2f, 0, 10, w, h);
+    rendercache_desc d = make_desc(w, h);
+    rendercache *rc;
+    scene s;
+    uint32_t got = 0, i, p, bad = 0, huge = 0, f;
+    memset(&s, 0, sizeof s);
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+    for (f = 0; f < 3; f++) {   /* sparse points first (holes everywhere), then a step forward */
+        CHECK_EQ_INT(rendercache_begin_frame(rc, f < 2 ? &cam : &moved), RENDERCACHE_OK);
+        CHECK_EQ_INT(rendercache_request(rc, g_req, w * h / 3, &got), RENDERCACHE_OK);
+        for (i = 0; i < got; i++) {
+            shade(&s, &g_req[i], &g_samples[i]);
+            g_samples[i].rgb[0] = g_samples[i].rgb[1] = g_samples[i].rgb[2] = i % 3 ? 3e38f : -3e38f;
+            if (i % 7 == 0) g_samples[i].rgb[1] = FLT_MAX;
+        }
+        CHECK_EQ_INT(rendercache_insert(rc, g_samples, got, NULL), RENDERCACHE_OK);
+        for (p = 0; p < 3 * w * h; p++) bad += !isfinite(rendercache_image(rc)[p]);
+    }
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &moved), RENDERCACHE_OK);
+    for (p = 0; p < 3 * w * h; p++) {
+        bad += !isfinite(rendercache_image(rc)[p]);
+        huge += fabsf(rendercache_image(rc)[p]) > 1e38f;
+    }
+    for (p = 0; p < w * h; p++) bad += !isfinite(rendercache_priority_image(rc)[p]);
+    CHECK_EQ_INT(bad, 0);
+    CHECK(huge > w * h);   /* the holes were filled from them */
+    rendercache_destroy(rc);
+}
+
+/* ---------------------------------------------------------------------
    No allocation after create.
    --------------------------------------------------------------------- */
 static void test_no_allocation_per_frame(void)
@@ -1160,11 +1290,40 @@ static void test_bad_input_is_rejected(void)
     rendercache_get_stats(rc, &st2);
     CHECK_EQ_INT(st2.rejected, 8);
     CHECK_EQ_INT(st2.inserted, 0);
+    /* a batch of good and bad samples: the good ones are taken, the call says some were bad */
+    memset(&g_req[0], 0, sizeof g_req[0]);
+    g_req[0].x = 3; g_req[0].y = 4;
+    rendercache_camera_ray(&cam, 3.5f, 4.5f, g_req[0].org, g_req[0].dir);
+    shade(&s, &g_req[0], &junk[0]);
+    junk[1] = junk[0];
+    junk[1].object = 4096;
+    junk[2] = junk[0];
+    junk[2].frame = st.frame + 1;           /* a frame not begun yet */
+    junk[3] = junk[0];
+    junk[3].frame = st.frame;               /* the current frame, by number */
+    CHECK_EQ_INT(rendercache_insert(rc, junk, 4, &taken), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(taken, 2);
+    rendercache_get_stats(rc, &st2);
+    CHECK_EQ_INT(st2.rejected, 10);
+    CHECK_EQ_INT(st2.inserted, 2);
+    CHECK(images_equal(rendercache_image(rc), before, 3 * (size_t)n));   /* the same colour again */
     CHECK_EQ_INT(st2.frame, st.frame);      /* the failed begin_frame calls changed nothing */
     CHECK_EQ_INT(st2.live_points, st.live_points);
     CHECK(images_equal(rendercache_image(rc), before, 3 * (size_t)n));
     /* and the cache still works: the next frame shows the same image */
     CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
+    CHECK(images_equal(rendercache_image(rc), before, 3 * (size_t)n));
+    /* later than desc.max_latency (4 frames): dropped, not an error */
+    rendercache_get_stats(rc, &st);
+    junk[0].frame = st.frame;
+    for (i = 0; i < 4; i++) rendercache_begin_frame(rc, &cam);
+    CHECK_EQ_INT(rendercache_insert(rc, junk, 1, &taken), RENDERCACHE_OK);
+    CHECK_EQ_INT(taken, 1);
+    rendercache_begin_frame(rc, &cam);
+    CHECK_EQ_INT(rendercache_insert(rc, junk, 1, &taken), RENDERCACHE_OK);
+    CHECK_EQ_INT(taken, 0);
+    rendercache_get_stats(rc, &st2);
+    CHECK_EQ_INT(st2.dropped, 1);
     CHECK(images_equal(rendercache_image(rc), before, 3 * (size_t)n));
     CHECK(rendercache_image(NULL) == NULL);
     rendercache_destroy(rc);
@@ -1247,8 +1406,11 @@ int main(int argc, char **argv)
     RUN(test_predictive_sampling_fills_next_holes);
     RUN(test_eviction_spares_visible_points);
     RUN(test_late_samples_land_where_they_were_seen);
+    RUN(test_changed_colours_are_resampled_first);
+    RUN(test_invalidate_ranks_an_object_first);
     RUN(test_priority_scale);
     RUN(test_sparse_points_use_the_wide_filter);
+    RUN(test_huge_colours_stay_finite);
     RUN(test_no_allocation_per_frame);
     RUN(test_bad_input_is_rejected);
     RUN(test_deterministic_for_any_thread_count);

@@ -966,6 +966,105 @@ static void lone_free(void *ptr, void *user)
     free(ptr);
 }
 
+/* Whether a range image is one the library accepts: what save validates
+   (finite colours, depths finite and positive where there is a surface). */
+static int image_valid(const rendercache_range_image *img)
+{
+    void *data = NULL;
+    size_t size = 0;
+    int ok = rendercache_range_image_save_to_memory(img, NULL, &data, &size) == RENDERCACHE_OK;
+    rendercache_free_memory(NULL, data);
+    return ok;
+}
+
+/* Depths at the ends of the float range (a denormal 2e-41 next to 2.7e23 in
+   one 2x2 block) and colours near FLT_MAX: the projected positions leave
+   every integer range and the squared distances overflow, and the warp must
+   still give a valid image (no float-to-int overflow: compile with clang
+   -fsanitize=float-cast-overflow to see the conversions themselves). */
+static void test_extreme_depths_and_colours(void)
+{
+    static const rendercache_fill fills[4] = { RENDERCACHE_FILL_NONE, RENDERCACHE_FILL_FOREGROUND,
+                                               RENDERCACHE_FILL_BACKGROUND, RENDERCACHE_FILL_BOTH };
+    rendercache_camera src = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, 0, 0, 0, 0, 0, 10, 60.0f, 4, 4);
+    /* the source's eye lies 1e-20 in front of the target's eye plane: its nearest pixels project to x ~ -1e21 */
+    rendercache_camera dst = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, -1.0f, 0.0f, -1e-20f, -1.0f, 0.0f, 10.0f, 60.0f, 16, 12);
+    rendercache_range_image *in = NULL, *out = NULL, *other = NULL, *blend = NULL;
+    rendercache_warper *w = make_warper(NULL, NULL);
+    const rendercache_range_image *list[2];
+    uint64_t seed = 12345;
+    uint32_t p, f, trial, invalid = 0;
+    if (!w || !CHECK_EQ_INT(rendercache_range_image_create(&src, NULL, &in), RENDERCACHE_OK) ||
+        !CHECK_EQ_INT(rendercache_range_image_create(&dst, NULL, &out), RENDERCACHE_OK))
+        return;
+    for (p = 0; p < 16; p++) {
+        in->object[p] = 0;
+        in->depth[p] = 5.0f;
+        in->rgb[3 * p] = in->rgb[3 * p + 1] = in->rgb[3 * p + 2] = 0.5f;
+    }
+    in->depth[5] = in->depth[6] = in->depth[9] = 2e-41f;   /* the 2x2 block of pixels (1..2, 1..2) */
+    in->depth[10] = 2.7e23f;
+    for (f = 0; f < 4; f++) {
+        CHECK_EQ_INT(rendercache_warp(w, (const rendercache_range_image *const *)&in, 1, &dst, fills[f], out), RENDERCACHE_OK);
+        CHECK_MSG(image_valid(out), "fill %u: an invalid output image", f);
+    }
+    /* random images: depths log-uniform over the floats (denormals included), colours up to 3e38 */
+    src = make_camera(RENDERCACHE_CAMERA_FISHEYE, 0, 0, 0, 0, 0, 10, 60.0f, 24, 24);
+    rendercache_range_image_destroy(in);
+    in = NULL;
+    CHECK_EQ_INT(rendercache_range_image_create(&src, NULL, &in), RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_range_image_create(&src, NULL, &other), RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_range_image_create(&src, NULL, &blend), RENDERCACHE_OK);
+    for (trial = 0; trial < 24; trial++) {
+        rendercache_range_image *imgs[2];
+        imgs[0] = in;
+        imgs[1] = other;
+        for (f = 0; f < 2; f++)
+            for (p = 0; p < 24 * 24; p++) {
+                rendercache_range_image *img = imgs[f];
+                float u;
+                int k;
+                seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+                u = (float)(seed >> 40) / 16777216.0f;
+                if (img->object[p] == RENDERCACHE_NO_SAMPLE && f == 0 && trial == 0) continue;   /* outside the circle */
+                img->object[p] = (seed >> 20) % 5 == 0 ? RENDERCACHE_MISS : (uint32_t)((seed >> 24) % 2);
+                img->depth[p] = img->object[p] == RENDERCACHE_MISS ? RENDERCACHE_FAR_DEPTH : powf(10.0f, -41.0f + 79.5f * u);
+                if (!(img->depth[p] > 0.0f && img->depth[p] <= FLT_MAX)) img->depth[p] = 1.0f;
+                for (k = 0; k < 3; k++) img->rgb[3 * p + k] = (seed >> (30 + k)) & 1 ? 3e38f : -3e38f * u;
+            }
+        other->camera.eye[0] = 0.3f * (float)(trial % 5);
+        other->camera.look_at[0] = other->camera.eye[0];
+        dst = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, -1.0f + 0.1f * (float)trial, 0.2f, trial % 3 ? -1e-20f : 0.5f,
+                          0.3f * (float)trial, 0.0f, 10.0f, 60.0f, 16, 12);
+        list[0] = in;
+        list[1] = other;
+        CHECK_EQ_INT(rendercache_warp(w, list, 2, &dst, fills[trial % 4], out), RENDERCACHE_OK);
+        invalid += !image_valid(out);
+        {
+            float world[36];
+            rendercache_motion m;
+            int k;
+            memset(world, 0, sizeof world);
+            for (k = 0; k < 3; k++) world[12 * k] = world[12 * k + 5] = world[12 * k + 10] = 1.0f;
+            world[12 + 3] = 2.0f;   /* object 0 moves */
+            m.object_count = 1;
+            m.world_a = world;
+            m.world_b = world + 12;
+            m.world_t = world + 24;
+            CHECK_EQ_INT(rendercache_blend_motion(w, in, in, 0.5f, &m, fills[trial % 4], blend), RENDERCACHE_OK);
+            invalid += !image_valid(blend);
+            CHECK_EQ_INT(rendercache_blend(in, in, 0.3f, blend), RENDERCACHE_OK);
+            invalid += !image_valid(blend);
+        }
+    }
+    CHECK_EQ_INT(invalid, 0);
+    rendercache_range_image_destroy(in);
+    rendercache_range_image_destroy(other);
+    rendercache_range_image_destroy(blend);
+    rendercache_range_image_destroy(out);
+    rendercache_warper_destroy(w);
+}
+
 static void test_warp_rejects_bad_input(void)
 {
     scene s = boxes_scene();
@@ -1046,6 +1145,7 @@ int main(int argc, char **argv)
     RUN(test_motion_blend_does_not_ghost);
     RUN(test_motion_blend_keeps_objects_apart);
     RUN(test_warp_deterministic_for_any_thread_count);
+    RUN(test_extreme_depths_and_colours);
     RUN(test_warp_rejects_bad_input);
     return test_finish();
 }
