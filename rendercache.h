@@ -1657,6 +1657,7 @@ static void rendercache__splat_run_cover(rendercache__splat *s,
 #define RENDERCACHE__LEVELS 1024u            /* priority levels of the threshold histogram */
 #define RENDERCACHE__TILE_STATS 6u           /* visible, culled, interpolated, sparse, empty, scratch */
 #define RENDERCACHE__GATHER_AHEAD 64u        /* pixels between a slot's prefetch and its read */
+#define RENDERCACHE__CHANGE_BINS 64u         /* histogram of relative colour differences in [0, 2] */
 
 /* Priority image values (WDP99 priority image, extended to [0, 1]): a point
    rises with age to POINT_MAX; holes rank above every point, the sparser the
@@ -1751,11 +1752,15 @@ struct rendercache {
     unsigned char *chosen;   /* per pixel: 1 chosen, 2 fractional (error-diffused) */
     float *err_rows;         /* two rows of diffused error */
     uint32_t pred_holes;
+    uint32_t change_hist[RENDERCACHE__CHANGE_BINS];   /* relative colour differences of this frame's replacements */
+    float change_level;      /* colour changes above this age the points around (this frame) */
     uint32_t refill_rows[2];  /* rows [first, end) holding holes marked RENDERCACHE__REFILL */
     uint32_t touched;        /* rendercache__touch_slots' results, kept so its reads stay */
 
     rendercache_stats stats;
 };
+
+static void rendercache__change_level(rendercache *rc);   /* section 15 */
 
 /* The byte that marks slots in use in a frame: 1 .. 255, the same for no
    two frames of a run of 255; begin_frame clears the marks when a run
@@ -2543,6 +2548,7 @@ RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, cons
     record->frame = rc->frame;
     record->view = v;
     rendercache__start_stats(rc);
+    rendercache__change_level(rc);
     rendercache__commit_transforms(rc);
     rendercache__compose_objects(rc, &rc->view, rc->obj_camera);
     rendercache__splat_points(rc, &rc->view, rc->obj_camera, &rc->stats.time_project);
@@ -3049,11 +3055,9 @@ static void rendercache__refill(rendercache *rc)
     rc->refill_rows[1] = 0;
 }
 
-/* A sample also becomes the point pixel p shows, at once; where p was a
-   hole, the holes around it are filled again. */
+/* A sample also becomes the point pixel p shows, at once. */
 static void rendercache__show(rendercache *rc, uint32_t p, uint32_t slot, float depth2, const float rgb[3])
 {
-    if (rc->px_index[p] == RENDERCACHE__NONE) rendercache__mark_refill(rc, p);
     rc->px_index[p] = slot;
     rc->px_depth[p] = depth2;
     memcpy(rc->image + 3 * (size_t)p, rgb, 3 * sizeof(float));
@@ -3064,10 +3068,13 @@ static void rendercache__show(rendercache *rc, uint32_t p, uint32_t slot, float 
 
 /* Whether a new colour differs from the old one by more than the
    threshold: the largest channel difference against the largest channel
-   of either. */
-static int rendercache__colour_changed(const rendercache *rc, const float old_rgb[3], const float rgb[3])
+   of either. A renderer's noise makes resamples of unchanged points
+   differ too, so the differences of each frame's replacements are
+   counted (rendercache__change_level): a change must also lie three
+   standard deviations out in the previous frame's differences. */
+static int rendercache__colour_changed(rendercache *rc, const float old_rgb[3], const float rgb[3])
 {
-    float d = 0.0f, m = 0.0f;
+    float d = 0.0f, m = 0.0f, r;
     int k;
     for (k = 0; k < 3; k++) {
         float a = fabsf(old_rgb[k]), b = fabsf(rgb[k]), e = fabsf(rgb[k] - old_rgb[k]);
@@ -3075,7 +3082,32 @@ static int rendercache__colour_changed(const rendercache *rc, const float old_rg
         m = b > m ? b : m;
         d = e > d ? e : d;
     }
-    return d > rc->change_threshold * m;
+    r = m > 0.0f ? d / m : 0.0f;   /* in [0, 2] for finite colours; inf when the difference overflows */
+    rc->change_hist[r < 2.0f ? (uint32_t)(r * (0.5f * RENDERCACHE__CHANGE_BINS)) : RENDERCACHE__CHANGE_BINS - 1]++;
+    return r > rc->change_level;
+}
+
+/* At the start of a frame: the threshold of colour changes for the frame,
+   the larger of desc.change_threshold and three standard deviations of
+   the last frame's replacement differences (the renderer's noise),
+   estimated robustly from their median (sigma = 1.4826 median absolute
+   deviation), when it had 64 or more. A deterministic renderer's median
+   is 0: the desc's threshold alone counts. */
+#define RENDERCACHE__NOISE_SIGMAS (3.0f * 1.4826f)
+static void rendercache__change_level(rendercache *rc)
+{
+    uint32_t b, total = 0, below = 0;
+    for (b = 0; b < RENDERCACHE__CHANGE_BINS; b++) total += rc->change_hist[b];
+    rc->change_level = rc->change_threshold;
+    for (b = 0; total >= 64 && b < RENDERCACHE__CHANGE_BINS; b++) {
+        below += rc->change_hist[b];
+        if (2 * below >= total) {
+            float median = (float)b * (2.0f / RENDERCACHE__CHANGE_BINS);   /* the bin's lower end: 0 when most are 0 */
+            if (RENDERCACHE__NOISE_SIGMAS * median > rc->change_level) rc->change_level = RENDERCACHE__NOISE_SIGMAS * median;
+            break;
+        }
+    }
+    memset(rc->change_hist, 0, sizeof rc->change_hist);
 }
 
 /* Colour-change detection (WDG02): the points shown within
@@ -3090,7 +3122,8 @@ static void rendercache__age_around(rendercache *rc, uint32_t p)
         for (qx = x - r; qx <= x + r; qx++) {
             uint32_t q = (uint32_t)qy * rc->width + (uint32_t)qx, k, motion;
             rendercache__point *pt;
-            if (qx < 0 || qx >= (int)rc->width || rc->px_index[q] == RENDERCACHE__NONE) continue;
+            if (qx < 0 || qx >= (int)rc->width || q == p || rc->px_index[q] == RENDERCACHE__NONE || rc->count[q]) continue;
+            rc->count[q] = 1;   /* aged in this frame (count is 0 for every pixel showing a point) */
             k = rc->px_index[q];
             pt = &rc->data[k];
             motion = rc->obj_motion[rendercache__motion_index(rc, pt->object)];
@@ -3102,14 +3135,19 @@ static void rendercache__age_around(rendercache *rc, uint32_t p)
 
 /* Puts sample s in slot, replacing the point that was there (replacing:
    the slot held a point of the same surface, whose colour it compares),
-   and shows it in pixel p (RENDERCACHE__NONE: not shown). */
-static void rendercache__place(rendercache *rc, uint32_t slot, int replacing, const rendercache__geo *g,
-                             const rendercache_sample *s, uint32_t p, float depth2)
+   and shows it in pixel p (RENDERCACHE__NONE: not shown). A sample that
+   comes after its frame's hole filling (refill: late or predicted) and
+   lands in a hole has the holes around it filled again: the frame it
+   shows in was filled without it. The requests of the current frame were
+   made knowing the filling; their neighbours wait for the next frame. */
+static void rendercache__place(rendercache *rc, uint32_t slot, int replacing, int refill, const rendercache__geo *g,
+                               const rendercache_sample *s, uint32_t p, float depth2)
 {
     int changed = replacing && rendercache__colour_changed(rc, rc->data[slot].rgb, s->rgb);
     if (replacing) rc->stats.replaced++;
     else if (rc->geo[slot].object != RENDERCACHE__FREE_SLOT) rc->stats.evicted++;
     rendercache__store(rc, slot, g, s);
+    if (p != RENDERCACHE__NONE && refill && rc->px_index[p] == RENDERCACHE__NONE) rendercache__mark_refill(rc, p);
     if (p != RENDERCACHE__NONE) rendercache__show(rc, p, slot, depth2, s->rgb);
     if (changed) {
         rc->stats.changed++;
@@ -3132,8 +3170,8 @@ static void rendercache__insert_current(rendercache *rc, const rendercache_sampl
         float dz = s->position[2] - rc->view.eye[2];
         d = dx * dx + dy * dy + dz * dz;
     }
-    rendercache__place(rc, slot != RENDERCACHE__NONE ? slot : rendercache__victim(rc), slot != RENDERCACHE__NONE, &g, s,
-                       p, d);
+    rendercache__place(rc, slot != RENDERCACHE__NONE ? slot : rendercache__victim(rc), slot != RENDERCACHE__NONE, 0, &g,
+                       s, p, d);
 }
 
 /* A late sample (requested in frame f < the current one) or a predicted
@@ -3161,7 +3199,7 @@ static int rendercache__insert_other(rendercache *rc, const rendercache_sample *
         uint32_t k = rc->px_index[p];
         float dk = rc->px_depth[p];
         if (rc->data[k].object == s->object && d2 <= dk * tol2 && dk <= d2 * tol2) {   /* the same surface */
-            rendercache__place(rc, k, 1, &g, s, p, d2);
+            rendercache__place(rc, k, 1, 1, &g, s, p, d2);
             return 1;
         }
         show = d2 * tol2 < dk;   /* in front of what is shown there */
@@ -3173,7 +3211,7 @@ static int rendercache__insert_other(rendercache *rc, const rendercache_sample *
     }
     slot = rendercache__victim(rc);
     if (rendercache__slot_in_use(rc, slot)) return 0;
-    rendercache__place(rc, slot, 0, &g, s, show ? p : RENDERCACHE__NONE, d2);
+    rendercache__place(rc, slot, 0, 1, &g, s, show ? p : RENDERCACHE__NONE, d2);
     return 1;
 }
 
