@@ -1449,9 +1449,10 @@ static void rendercache__splat_free(rendercache__splat *s, const rendercache_all
 }
 
 /* Allocates a splat for a width x height raster, run by jobs (1 or
-   RENDERCACHE__SPLAT_JOBS) z-buffers. Returns 0, or -1 when out of memory. */
+   RENDERCACHE__SPLAT_JOBS) z-buffers, with payloads (warps) or without
+   (the render cache). Returns 0, or -1 when out of memory. */
 static int rendercache__splat_alloc(rendercache__splat *s, uint32_t width, uint32_t height, uint32_t jobs,
-                                    const rendercache_allocator *a)
+                                    int payload, const rendercache_allocator *a)
 {
     uint32_t j;
     int failed;
@@ -1466,8 +1467,8 @@ static int rendercache__splat_alloc(rendercache__splat *s, uint32_t width, uint3
     failed = !s->final.depth || !s->final.index;
     for (j = 0; j < jobs; j++) {
         s->zb[j].key = (uint64_t *)rendercache__alloc_array(a, (size_t)s->pixel_count + 1, sizeof(uint64_t));
-        s->zb[j].payload = (float *)rendercache__alloc_array(a, s->pixel_count, 4 * sizeof(float));
-        failed |= !s->zb[j].key || !s->zb[j].payload;
+        s->zb[j].payload = payload ? (float *)rendercache__alloc_array(a, s->pixel_count, 4 * sizeof(float)) : NULL;
+        failed |= !s->zb[j].key || (payload && !s->zb[j].payload);
     }
     s->final.payload = s->zb[0].payload;
     if (failed) rendercache__splat_free(s, a);
@@ -1658,6 +1659,10 @@ static void rendercache__splat_run_cover(rendercache__splat *s,
 #define RENDERCACHE__TILE_STATS 6u           /* visible, culled, interpolated, sparse, empty, scratch */
 #define RENDERCACHE__GATHER_AHEAD 64u        /* pixels between a slot's prefetch and its read */
 #define RENDERCACHE__CHANGE_BINS 64u         /* histogram of relative colour differences in [0, 2] */
+#define RENDERCACHE__CELL_SHIFT 2u           /* predictive sampling: cells of 4 x 4 pixels, an occupancy
+                                                image of 1/16 the resolution (WDG02) */
+#define RENDERCACHE__CELL (1u << RENDERCACHE__CELL_SHIFT)
+#define RENDERCACHE__CELL_FEW 4u             /* points in a cell below which it is a hole: a quarter covered */
 
 /* Priority image values (WDP99 priority image, extended to [0, 1]): a point
    rises with age to POINT_MAX; holes rank above every point, the sparser the
@@ -1742,7 +1747,7 @@ struct rendercache {
     uint32_t *px_index;      /* per pixel: the slot shown, after the depth cull */
     float *px_depth;         /* per pixel: its squared distance, FLT_MAX without a point */
     float *depth_out;        /* rendercache_depth_image: distances, filled on request */
-    float *image, *priority, *pred_priority;
+    float *image, *priority;
     unsigned char *kind, *count;
     uint32_t *tile_stats;    /* RENDERCACHE__TILE_STATS per tile */
 
@@ -1751,7 +1756,11 @@ struct rendercache {
     float *select_v;         /* per pixel: value plus diffused error of the fractional pixels */
     unsigned char *chosen;   /* per pixel: 1 chosen, 2 fractional (error-diffused) */
     float *err_rows;         /* two rows of diffused error */
-    uint32_t pred_holes;
+    unsigned char *occupancy; /* predictive sampling, per job (splat.jobs) cell_count + 1 bytes: the points
+                                that land in the cell, up to 255 (the last byte takes the points that
+                                miss); after rendercache_predict job 0's: the sum over the jobs, and
+                                255 once the cell was requested */
+    uint32_t cells_x, cells_y, cell_count, pred_cells;   /* the cells, and those empty not yet requested */
     uint32_t change_hist[RENDERCACHE__CHANGE_BINS];   /* relative colour differences of this frame's replacements */
     float change_level;      /* colour changes above this age the points around (this frame) */
     uint32_t refill_rows[2];  /* rows [first, end) holding holes marked RENDERCACHE__REFILL */
@@ -1800,7 +1809,6 @@ static void rendercache__reset_image(rendercache *rc)
         rc->image[3 * p + 1] = rc->background[1];
         rc->image[3 * p + 2] = rc->background[2];
         rc->priority[p] = 1.0f;
-        rc->pred_priority[p] = 0.0f;
         rc->kind[p] = RENDERCACHE_PIXEL_EMPTY;
         rc->count[p] = 0;
         rc->px_index[p] = RENDERCACHE__NONE;
@@ -1829,7 +1837,7 @@ static void rendercache__release(rendercache *rc)
     blocks[4] = rc->depth_out; blocks[5] = rc->obj_world; blocks[6] = rc->obj_local;
     blocks[7] = rc->obj_camera; blocks[8] = rc->obj_moved; blocks[9] = rc->px_index;
     blocks[10] = rc->px_depth; blocks[11] = rc->image; blocks[12] = rc->priority;
-    blocks[13] = rc->pred_priority; blocks[14] = rc->kind; blocks[15] = rc->count;
+    blocks[13] = rc->occupancy; blocks[14] = rc->kind; blocks[15] = rc->count;
     blocks[16] = rc->tile_stats; blocks[17] = rc->hist; blocks[18] = rc->select_v;
     blocks[19] = rc->chosen; blocks[20] = rc->err_rows; blocks[21] = rc->shown;
     blocks[22] = rc->obj_next; blocks[23] = rc->obj_since; blocks[24] = rc->obj_history;
@@ -1862,7 +1870,8 @@ static int rendercache__alloc_buffers(rendercache *rc)
     rc->depth_out = (float *)rendercache__alloc_array(a, px, sizeof(float));
     rc->image = (float *)rendercache__alloc_array(a, px, 3 * sizeof(float));
     rc->priority = (float *)rendercache__alloc_array(a, px, sizeof(float));
-    rc->pred_priority = (float *)rendercache__alloc_array(a, px, sizeof(float));
+    rc->occupancy = (unsigned char *)rendercache__alloc_array(a, (size_t)rc->cell_count + 1,
+                                                              rc->parallel_for ? RENDERCACHE__SPLAT_JOBS : 1u);
     rc->kind = (unsigned char *)rendercache__alloc_array(a, px, 1);
     rc->count = (unsigned char *)rendercache__alloc_array(a, px, 1);
     rc->tile_stats = (uint32_t *)rendercache__alloc_array(a, rc->tile_count, RENDERCACHE__TILE_STATS * sizeof(uint32_t));
@@ -1873,11 +1882,11 @@ static int rendercache__alloc_buffers(rendercache *rc)
     if (!rc->geo || !rc->data || !rc->shown || !rc->obj_predicted || !rc->obj_motion || !rc->obj_world ||
         !rc->obj_local || !rc->obj_next || !rc->obj_since || !rc->obj_history || !rc->history ||
         !rc->obj_camera || !rc->obj_moved || !rc->px_index || !rc->px_depth || !rc->depth_out || !rc->image ||
-        !rc->priority || !rc->pred_priority || !rc->kind || !rc->count || !rc->tile_stats || !rc->hist ||
+        !rc->priority || !rc->occupancy || !rc->kind || !rc->count || !rc->tile_stats || !rc->hist ||
         !rc->select_v || !rc->chosen || !rc->err_rows)
         return -1;
     return rendercache__splat_alloc(&rc->splat, rc->width, rc->height,
-                                    rc->parallel_for ? RENDERCACHE__SPLAT_JOBS : 1u, a);
+                                    rc->parallel_for ? RENDERCACHE__SPLAT_JOBS : 1u, 0, a);
 }
 
 /* Applies the defaults and checks the ranges of a desc; 0 on bad input. */
@@ -1907,6 +1916,9 @@ static int rendercache__configure(rendercache *rc, const rendercache_desc *d)
     rc->height = d->height;
     rc->pixel_count = d->width * d->height;
     rc->tile_count = (d->height + RENDERCACHE__TILE_ROWS - 1) / RENDERCACHE__TILE_ROWS;
+    rc->cells_x = (d->width + RENDERCACHE__CELL - 1) >> RENDERCACHE__CELL_SHIFT;
+    rc->cells_y = (d->height + RENDERCACHE__CELL - 1) >> RENDERCACHE__CELL_SHIFT;
+    rc->cell_count = rc->cells_x * rc->cells_y;
     rc->capacity = (uint32_t)capacity;
     rc->object_count = rendercache__def(d->object_count, 256u);
     rc->depth_tolerance = rendercache__def(d->depth_tolerance, 0.1f);
@@ -2077,16 +2089,19 @@ typedef struct rendercache__projector {
     const rendercache *rc;
     const rendercache__view *view;
     const float *obj_camera;
+    uint32_t shift, stride;  /* the index a point lands in: (y >> shift) * stride + (x >> shift); pixels:
+                                0 and the width; prediction's cells: RENDERCACHE__CELL_SHIFT */
 } rendercache__projector;
 
 /* Reprojection of a point x (WDP99) through the 3x4 matrix m into camera
-   space, then to a pixel of the perspective view v: the pixel index or
+   space, then to the perspective view v: the index of the pixel (or cell
+   of 2^shift x 2^shift pixels, stride per row) it lands in, or
    RENDERCACHE__NONE, and the squared distance (the z-buffer only compares
    them). Both the loop that vectorises and the point-by-point path go
    through this one function, so that a point lands in the same pixel
    whichever projects it (batches differ with the number of jobs). */
 static RENDERCACHE__INLINE uint32_t rendercache__pixel_through(const float *m, const float x[3], const rendercache__view *v,
-                                                               float *depth2)
+                                                               uint32_t shift, uint32_t stride, float *depth2)
 {
     const float w = (float)v->width, h = (float)v->height;
     float c0 = m[0] * x[0] + m[1] * x[1] + m[2] * x[2] + m[3];
@@ -2096,7 +2111,7 @@ static RENDERCACHE__INLINE uint32_t rendercache__pixel_through(const float *m, c
     int inside = (c2 > 0.0f) & (px >= 0.0f) & (px < w) & (py >= 0.0f) & (py < h);
     float xs = inside ? px : 0.0f, ys = inside ? py : 0.0f;
     *depth2 = c0 * c0 + c1 * c1 + c2 * c2;
-    return inside ? (uint32_t)ys * v->width + (uint32_t)xs : RENDERCACHE__NONE;
+    return inside ? ((uint32_t)ys >> shift) * stride + ((uint32_t)xs >> shift) : RENDERCACHE__NONE;
 }
 
 /* Reprojection of one cache point: object space -> camera space through
@@ -2110,12 +2125,12 @@ static uint32_t rendercache__project_point(const rendercache__projector *pr, con
     int k;
     if (g->object == RENDERCACHE__FREE_SLOT) return RENDERCACHE__NONE;
     if (g->object != RENDERCACHE_MISS)
-        return rendercache__pixel_through(pr->obj_camera + 12 * (size_t)g->object, g->pos, v, depth2);
+        return rendercache__pixel_through(pr->obj_camera + 12 * (size_t)g->object, g->pos, v, pr->shift, pr->stride, depth2);
     for (k = 0; k < 3; k++) {   /* the view's rotation, no translation */
         memcpy(sky + 4 * k, v->axis[k], 3 * sizeof(float));
         sky[4 * k + 3] = 0.0f;
     }
-    p = rendercache__pixel_through(sky, g->pos, v, depth2);
+    p = rendercache__pixel_through(sky, g->pos, v, pr->shift, pr->stride, depth2);
     *depth2 = RENDERCACHE__FAR2;
     return p;
 }
@@ -2136,11 +2151,13 @@ static float rendercache__point_priority(const rendercache *rc, const rendercach
    without branches or library calls so that compilers vectorise it; this
    loop is the hottest of the frame. */
 static void rendercache__project_perspective(const rendercache__geo *g, uint32_t n, const float *m,
-                                             const rendercache__view *v, uint32_t *RENDERCACHE__RESTRICT pix,
+                                             const rendercache__projector *pr, uint32_t *RENDERCACHE__RESTRICT pix,
                                              float *RENDERCACHE__RESTRICT depth2)
 {
+    const rendercache__view *v = pr->view;
+    const uint32_t shift = pr->shift, stride = pr->stride;
     uint32_t i;
-    for (i = 0; i < n; i++) pix[i] = rendercache__pixel_through(m, g[i].pos, v, &depth2[i]);
+    for (i = 0; i < n; i++) pix[i] = rendercache__pixel_through(m, g[i].pos, v, shift, stride, &depth2[i]);
 }
 
 /* The one object of the points [begin, end) other than background points,
@@ -2170,8 +2187,7 @@ static uint32_t rendercache__project_points(const void *src, uint32_t begin, uin
     int background;
     uint32_t i, o = rendercache__batch_object_or_background(geo, begin, end, &background);
     if (pr->view->kind == RENDERCACHE_CAMERA_PERSPECTIVE && o != RENDERCACHE__NONE) {
-        rendercache__project_perspective(geo + begin, end - begin, pr->obj_camera + 12 * (size_t)o, pr->view, pix,
-                                         depth2);
+        rendercache__project_perspective(geo + begin, end - begin, pr->obj_camera + 12 * (size_t)o, pr, pix, depth2);
         if (background)   /* the few background points, again, as directions */
             for (i = begin; i < end; i++)
                 if (geo[i].object == RENDERCACHE_MISS) pix[i - begin] = rendercache__project_point(pr, &geo[i], &depth2[i - begin]);
@@ -2201,6 +2217,8 @@ static void rendercache__splat_points(rendercache *rc, const rendercache__view *
     pr.rc = rc;
     pr.view = v;
     pr.obj_camera = obj_camera;
+    pr.shift = 0;
+    pr.stride = rc->width;
     rendercache__splat_run(&rc->splat, rc->parallel_for, rc->parallel_user, rendercache__project_points, NULL, &pr,
                            rc->capacity, 1);
     if (t_project) *t_project += rendercache__now(rc) - t0;
@@ -2575,33 +2593,48 @@ RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, cons
 
 /* ======================================================================
    13. predictive sampling (Walter et al. 2002): the cache projected into
-   the camera expected next; pixels with no point in their 3x3
-   neighbourhood there are regions the motion will uncover.
+   the camera expected next, into an occupancy image of 1/16 the
+   resolution (cells of 4 x 4 pixels, no depth): cells that fewer than
+   RENDERCACHE__CELL_FEW points land in are regions the motion will
+   uncover (where the cache shows a surface, about one point lands per
+   pixel). A request goes to one pixel of such a cell (its place in the
+   cell varies from frame to frame), so a share of the budget seeds a large
+   uncovered region sparsely, and the wide filter fills it when it comes
+   into view.
    ---------------------------------------------------------------------- */
-static void rendercache__predict_job(void *ctx, uint32_t tile)
+typedef struct rendercache__predict_job {
+    rendercache *rc;
+    rendercache__projector pr;
+    uint32_t jobs;
+} rendercache__predict_job;
+
+/* Job j: counts the points of its range in each cell, in its own bytes. */
+static void rendercache__occupancy_job(void *ctx, uint32_t j)
 {
-    rendercache *rc = (rendercache *)ctx;
-    const rendercache__raster *s = &rc->splat.final;
-    uint32_t y0 = tile * RENDERCACHE__TILE_ROWS, y1 = y0 + RENDERCACHE__TILE_ROWS, x, y, holes = 0;
-    if (y1 > rc->height) y1 = rc->height;
-    for (y = y0; y < y1; y++) {
-        uint32_t ya = y > 0 ? y - 1 : 0, yb = y + 1 < rc->height ? y + 1 : y;
-        for (x = 0; x < rc->width; x++) {
-            uint32_t xa = x > 0 ? x - 1 : 0, xb = x + 1 < rc->width ? x + 1 : x, qx, qy;
-            int covered = 0;
-            for (qy = ya; qy <= yb && !covered; qy++)
-                for (qx = xa; qx <= xb; qx++)
-                    if (s->index[qy * rc->width + qx] != RENDERCACHE__NONE) { covered = 1; break; }
-            rc->pred_priority[y * rc->width + x] = covered ? 0.0f : 1.0f;
-            holes += !covered;
+    const rendercache__predict_job *job = (const rendercache__predict_job *)ctx;
+    const rendercache *rc = job->rc;
+    const uint32_t cells = rc->cell_count;
+    unsigned char *occ = rc->occupancy + (size_t)j * (cells + 1);
+    uint32_t cell[RENDERCACHE__BATCH], b, i, begin, end;
+    float d[RENDERCACHE__BATCH];
+    begin = (uint32_t)((uint64_t)rc->capacity * j / job->jobs);
+    end = (uint32_t)((uint64_t)rc->capacity * (j + 1) / job->jobs);
+    memset(occ, 0, (size_t)cells + 1);
+    for (b = begin; b < end; b += RENDERCACHE__BATCH) {
+        uint32_t n = end - b < RENDERCACHE__BATCH ? end - b : RENDERCACHE__BATCH;
+        rendercache__project_points(&job->pr, b, b + n, cell, d);
+        for (i = 0; i < n; i++) {   /* without a branch */
+            unsigned char *o = &occ[cell[i] == RENDERCACHE__NONE ? cells : cell[i]];
+            *o = (unsigned char)(*o + (*o < 255u));
         }
     }
-    rc->tile_stats[RENDERCACHE__TILE_STATS * (size_t)tile + 5] = holes;
 }
 
 RENDERCACHE_API rendercache_result rendercache_predict(rendercache *rc, const rendercache_camera *next)
 {
+    rendercache__predict_job job;
     rendercache__view v;
+    uint32_t j, c;
     double t0;
     if (!rc || !rc->has_frame || !rendercache__view_init(&v, next) || next->width != rc->width ||
         next->height != rc->height || next->kind != RENDERCACHE_CAMERA_PERSPECTIVE)
@@ -2611,9 +2644,21 @@ RENDERCACHE_API rendercache_result rendercache_predict(rendercache *rc, const re
     rc->history[rc->frame % ((uint64_t)rc->max_latency + 1)].predicted = v;
     rc->history[rc->frame % ((uint64_t)rc->max_latency + 1)].has_prediction = 1;
     rendercache__compose_objects(rc, &rc->predicted, rc->obj_predicted);
-    rendercache__splat_points(rc, &rc->predicted, rc->obj_predicted, NULL);
-    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__predict_job, rc, rc->tile_count);
-    rc->pred_holes = rendercache__tile_sum(rc, 5);
+    job.rc = rc;
+    job.pr.rc = rc;
+    job.pr.view = &rc->predicted;
+    job.pr.obj_camera = rc->obj_predicted;
+    job.pr.shift = RENDERCACHE__CELL_SHIFT;
+    job.pr.stride = rc->cells_x;
+    job.jobs = rc->parallel_for ? RENDERCACHE__SPLAT_JOBS : 1u;
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__occupancy_job, &job, job.jobs);
+    rc->pred_cells = 0;
+    for (c = 0; c < rc->cell_count; c++) {   /* job 0's bytes become the sum */
+        uint32_t sum = rc->occupancy[c];
+        for (j = 1; j < job.jobs; j++) sum += rc->occupancy[(size_t)j * (rc->cell_count + 1) + c];
+        rc->occupancy[c] = (unsigned char)(sum < 255u ? sum : 255u);
+        rc->pred_cells += sum < RENDERCACHE__CELL_FEW;
+    }
     rc->has_prediction = 1;
     rc->stats.time_predict += rendercache__now(rc) - t0;
     return RENDERCACHE_OK;
@@ -2786,15 +2831,20 @@ static float rendercache__spread_error(const rendercache *rc, float *cur, float 
 #define RENDERCACHE__MODULATION 0.4f          /* amplitude at density 0 */
 #define RENDERCACHE__MODULATION_FADE 0.1f     /* density where it reaches 0 */
 
-static float rendercache__threshold(uint32_t p, uint32_t frame, float amp)
+/* A 32-bit integer hash (lowbias32, Wellons): the serial loop is this one. */
+static uint32_t rendercache__hash(uint32_t z)
 {
-    /* a 32-bit integer hash (lowbias32, Wellons): the serial loop is this one */
-    uint32_t z = p * 0x9E3779B9u ^ frame * 0x85EBCA6Bu;
     z ^= z >> 16;
     z *= 0x7FEB352Du;
     z ^= z >> 15;
     z *= 0x846CA68Bu;
     z ^= z >> 16;
+    return z;
+}
+
+static float rendercache__threshold(uint32_t p, uint32_t frame, float amp)
+{
+    uint32_t z = rendercache__hash(p * 0x9E3779B9u ^ frame * 0x85EBCA6Bu);
     return 0.5f + amp * ((float)(z >> 8) * (1.0f / 8388608.0f) - 1.0f);
 }
 
@@ -2919,6 +2969,42 @@ static uint32_t rendercache__emit(rendercache *rc, const rendercache__view *v, f
     return n;
 }
 
+/* Requests for min(max, empty cells) empty cells of the prediction,
+   spread evenly over them in serpentine scan order (the k-th empty cell
+   is taken when floor(k max / E) steps, from an offset that changes with
+   the frame), one pixel each at a place in its cell that also changes
+   with the frame. Returns the count. */
+static uint32_t rendercache__emit_predicted(rendercache *rc, rendercache_pixel_request *out, uint32_t max)
+{
+    const uint64_t e = rc->pred_cells, want = max < rc->pred_cells ? max : rc->pred_cells;
+    const uint64_t offset = e ? rendercache__hash((uint32_t)rc->frame * 0x9E3779B9u) % e : 0;
+    uint64_t k = offset;
+    uint32_t cy, i, n = 0;
+    for (cy = 0; cy < rc->cells_y && n < want; cy++)
+        for (i = 0; i < rc->cells_x && n < want; i++) {
+            uint32_t cx = cy & 1u ? rc->cells_x - 1 - i : i, c = cy * rc->cells_x + cx, h, x, y;
+            rendercache_pixel_request *r;
+            if (rc->occupancy[c] >= RENDERCACHE__CELL_FEW) continue;
+            k++;
+            if ((k * want) / e == ((k - 1) * want) / e) continue;
+            rc->occupancy[c] = 255;   /* requested: not again in this frame */
+            h = rendercache__hash(c * 0x85EBCA6Bu ^ (uint32_t)rc->frame * 0x632BE5ABu);
+            x = (cx << RENDERCACHE__CELL_SHIFT) + (h & (RENDERCACHE__CELL - 1));
+            y = (cy << RENDERCACHE__CELL_SHIFT) + ((h >> 8) & (RENDERCACHE__CELL - 1));
+            if (x >= rc->width) x = rc->width - 1;   /* the last cells may be narrower */
+            if (y >= rc->height) y = rc->height - 1;
+            r = &out[n++];
+            r->x = x;
+            r->y = y;
+            r->flags = RENDERCACHE_REQUEST_PREDICTED;
+            r->frame = rc->frame;
+            memcpy(r->org, rc->predicted.eye, sizeof r->org);
+            rendercache__view_ray(&rc->predicted, (float)x + 0.5f, (float)y + 0.5f, r->dir);
+        }
+    rc->pred_cells -= n;
+    return n;
+}
+
 RENDERCACHE_API rendercache_result rendercache_request(rendercache *rc, rendercache_pixel_request *out,
                                                        uint32_t max, uint32_t *count)
 {
@@ -2930,14 +3016,12 @@ RENDERCACHE_API rendercache_result rendercache_request(rendercache *rc, renderca
     t0 = rendercache__now(rc);
     if (rc->has_prediction) {
         pred_budget = (uint32_t)((double)max * rc->predict_fraction);
-        if (pred_budget > rc->pred_holes) pred_budget = rc->pred_holes;
+        if (pred_budget > rc->pred_cells) pred_budget = rc->pred_cells;
     }
     if (rendercache__select(rc, rc->priority, max - pred_budget))
         n = rendercache__emit(rc, &rc->view, rc->priority, 0u, out, max - pred_budget);
-    if (rc->has_prediction && n < max && rendercache__select(rc, rc->pred_priority, max - n)) {
-        uint32_t m = rendercache__emit(rc, &rc->predicted, rc->pred_priority, RENDERCACHE_REQUEST_PREDICTED,
-                                       out + n, max - n);
-        rc->pred_holes -= m;
+    if (rc->has_prediction && n < max && rc->pred_cells) {   /* the share, and what the priority image left */
+        uint32_t m = rendercache__emit_predicted(rc, out + n, max - n);
         rc->stats.predicted += m;
         n += m;
     }
@@ -3194,6 +3278,8 @@ static int rendercache__insert_other(rendercache *rc, const rendercache_sample *
     pr.rc = rc;
     pr.view = &rc->view;
     pr.obj_camera = rc->obj_camera;
+    pr.shift = 0;
+    pr.stride = rc->width;
     p = rendercache__project_point(&pr, &g, &d2);
     if (p != RENDERCACHE__NONE && rc->px_index[p] != RENDERCACHE__NONE) {
         uint32_t k = rc->px_index[p];
@@ -3538,7 +3624,7 @@ static int rendercache__warper_reserve(rendercache_warper *w, uint32_t width, ui
     w->column = (uint32_t *)rendercache__alloc_array(a, n, sizeof(uint32_t));
     w->tile_counts = (uint32_t *)rendercache__alloc_array(a, w->tile_count, 4 * sizeof(uint32_t));
     if (!w->how || !w->column || !w->tile_counts ||
-        rendercache__splat_alloc(&w->splat, width, height, w->parallel_for ? RENDERCACHE__SPLAT_JOBS : 1u, a) != 0) {
+        rendercache__splat_alloc(&w->splat, width, height, w->parallel_for ? RENDERCACHE__SPLAT_JOBS : 1u, 1, a) != 0) {
         rendercache__warper_free_buffers(w);
         return 0;
     }

@@ -136,15 +136,15 @@ static void shade_all(ex_pool *pool, const ex_tracer *t, const rendercache_pixel
     ex_pool_parallel_for(pool, shade_one, &j, (n + 255) / 256);
 }
 
-enum { P_PROJECT, P_CULL, P_INTERP, P_REQUEST, P_INSERT, P_TOTAL, P_COUNT };
+enum { P_PROJECT, P_CULL, P_INTERP, P_PREDICT, P_REQUEST, P_INSERT, P_TOTAL, P_COUNT };
 
 static void run(const ex_tracer *tracer, ex_pool *shade_pool, uint32_t w, uint32_t h, int threads,
                 double *frame_ms, double *sample_us, double *bytes_per_pixel)
 {
     /* priority is computed inside cull (pixels with a point) and interp (holes); on one thread the
        two run interleaved, timed together under cull */
-    static const char *names[P_COUNT] = { "project+z-buffer", "cull(+interp on 1 thread)", "interp+priority", "request",
-                                          "insert", "total" };
+    static const char *names[P_COUNT] = { "project+z-buffer", "cull(+interp on 1 thread)", "interp+priority",
+                                          "predict", "request", "insert", "total" };
     double times[P_COUNT][FRAMES];
     rendercache_desc d;
     rendercache *rc;
@@ -180,10 +180,11 @@ static void run(const ex_tracer *tracer, ex_pool *shade_pool, uint32_t w, uint32
         rendercache_insert(rc, samples, n, NULL);
     }
     for (f = 0; f < FRAMES; f++) {
-        rendercache_camera c = path_camera(f + 1, w, h);
+        rendercache_camera c = path_camera(f + 1, w, h), next = path_camera(f + 2, w, h);
         rendercache_stats st;
         double t0;
         rendercache_begin_frame(rc, &c);
+        rendercache_predict(rc, &next);   /* WDG02: the holes of the next camera, from a quarter of the budget */
         rendercache_request(rc, req, budget, &n);
         t0 = now_seconds(NULL);
         shade_all(shade_pool, tracer, req, samples, n, (uint32_t)f + 1, 1);   /* direct + one bounce */
@@ -194,10 +195,11 @@ static void run(const ex_tracer *tracer, ex_pool *shade_pool, uint32_t w, uint32
         times[P_PROJECT][f] = st.time_project;
         times[P_CULL][f] = st.time_cull;
         times[P_INTERP][f] = st.time_interpolate;
+        times[P_PREDICT][f] = st.time_predict;
         times[P_REQUEST][f] = st.time_request;
         times[P_INSERT][f] = st.time_insert;
         if (getenv("BENCH_DEBUG")) printf("frame %d: inserted %u replaced %u changed %u\n", f, st.inserted, st.replaced, st.changed);
-        times[P_TOTAL][f] = st.time_project + st.time_cull + st.time_interpolate +
+        times[P_TOTAL][f] = st.time_project + st.time_cull + st.time_interpolate + st.time_predict +
                             st.time_request + st.time_insert;
     }
     *bytes_per_pixel = (double)memory.peak / ((double)w * h);
