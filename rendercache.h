@@ -692,6 +692,17 @@ RENDERCACHE_API rendercache_result rendercache_warp(rendercache_warper *w, const
                                                     uint32_t n, const rendercache_camera *camera, rendercache_fill fill,
                                                     rendercache_range_image *out);
 
+/* Seeds the cache from range images (e.g. rendercache_warp's output, or
+   base views), after rendercache_begin_frame: every pixel of an image
+   whose object is one of the cache's (or RENDERCACHE_MISS) and that shows
+   in the current frame (lands in the image, in front of or on the surface
+   shown there, or in a hole it is not hidden in) becomes a point, as old
+   as the top of the age ramp (real samples replace it first), and the
+   image is updated at once. Objects are taken where their current
+   transforms put them. *taken (may be NULL): the points stored. */
+RENDERCACHE_API rendercache_result rendercache_seed(rendercache *rc, const rendercache_range_image *const *images,
+                                                    uint32_t count, uint32_t *taken);
+
 /* Time interpolation, pixelwise (as Radiance's pcomb): rgb = (1 - t) a + t b;
    depth and object of the image nearer in time (a when t < 0.5); time
    interpolated. a, b and out have one size; out may be a or b. */
@@ -3091,16 +3102,34 @@ static void rendercache__sample_point(const rendercache *rc, const rendercache_s
     else rendercache__affine(rendercache__object_local(rc, s->object, f), s->position, g->pos);
 }
 
-/* Stores point g of sample s in slot, as a point of age 0. */
-static void rendercache__store(rendercache *rc, uint32_t slot, const rendercache__geo *g, const rendercache_sample *s)
+/* A point on its way into the cache: a sample's (age 0) or a seed's. */
+typedef struct rendercache__new_point {
+    rendercache__geo g;      /* object and object-space position, or the background's direction */
+    float rgb[3];
+    float scale;             /* priority scale, > 0 */
+    uint32_t age;            /* the age it starts with (frames) */
+} rendercache__new_point;
+
+/* The new point of a sample requested in frame f through view v. */
+static void rendercache__sample_new_point(const rendercache *rc, const rendercache_sample *s, uint64_t f,
+                                          const rendercache__view *v, rendercache__new_point *np)
+{
+    rendercache__sample_point(rc, s, f, v, &np->g);
+    memcpy(np->rgb, s->rgb, sizeof np->rgb);
+    np->scale = s->priority_scale > 0.0f ? s->priority_scale : 1.0f;
+    np->age = 0;
+}
+
+/* Stores a new point in slot. */
+static void rendercache__store(rendercache *rc, uint32_t slot, const rendercache__new_point *np)
 {
     rendercache__point *pt = &rc->data[slot];
     if (rc->geo[slot].object == RENDERCACHE__FREE_SLOT) rc->live++;
-    rc->geo[slot] = *g;
-    memcpy(pt->rgb, s->rgb, sizeof pt->rgb);
-    pt->scale = s->priority_scale > 0.0f ? s->priority_scale : 1.0f;
-    pt->base = (uint32_t)rc->frame + rc->obj_motion[rendercache__motion_index(rc, s->object)];   /* age 0 */
-    pt->object = s->object;
+    rc->geo[slot] = np->g;
+    memcpy(pt->rgb, np->rgb, sizeof pt->rgb);
+    pt->scale = np->scale;
+    pt->base = (uint32_t)rc->frame + rc->obj_motion[rendercache__motion_index(rc, np->g.object)] - np->age;
+    pt->object = np->g.object;
     rc->shown[slot] = rendercache__mark(rc->frame);   /* new points are not evicted in their own frame */
 }
 
@@ -3224,15 +3253,15 @@ static void rendercache__age_around(rendercache *rc, uint32_t p)
    lands in a hole has the holes around it filled again: the frame it
    shows in was filled without it. The requests of the current frame were
    made knowing the filling; their neighbours wait for the next frame. */
-static void rendercache__place(rendercache *rc, uint32_t slot, int replacing, int refill, const rendercache__geo *g,
-                               const rendercache_sample *s, uint32_t p, float depth2)
+static void rendercache__place(rendercache *rc, uint32_t slot, int replacing, int refill,
+                               const rendercache__new_point *np, uint32_t p, float depth2)
 {
-    int changed = replacing && rendercache__colour_changed(rc, rc->data[slot].rgb, s->rgb);
+    int changed = replacing && np->age == 0 && rendercache__colour_changed(rc, rc->data[slot].rgb, np->rgb);
     if (replacing) rc->stats.replaced++;
     else if (rc->geo[slot].object != RENDERCACHE__FREE_SLOT) rc->stats.evicted++;
-    rendercache__store(rc, slot, g, s);
+    rendercache__store(rc, slot, np);
     if (p != RENDERCACHE__NONE && refill && rc->px_index[p] == RENDERCACHE__NONE) rendercache__mark_refill(rc, p);
-    if (p != RENDERCACHE__NONE) rendercache__show(rc, p, slot, depth2, s->rgb);
+    if (p != RENDERCACHE__NONE) rendercache__show(rc, p, slot, depth2, np->rgb);
     if (changed) {
         rc->stats.changed++;
         rendercache__age_around(rc, p);
@@ -3244,9 +3273,9 @@ static void rendercache__place(rendercache *rc, uint32_t slot, int replacing, in
 static void rendercache__insert_current(rendercache *rc, const rendercache_sample *s)
 {
     uint32_t p = s->y * rc->width + s->x, slot = rc->px_index[p];
-    rendercache__geo g;
+    rendercache__new_point np;
     float d;
-    rendercache__sample_point(rc, s, rc->frame, &rc->view, &g);
+    rendercache__sample_new_point(rc, s, rc->frame, &rc->view, &np);
     if (s->object == RENDERCACHE_MISS) {
         d = RENDERCACHE__FAR2;
     } else {
@@ -3254,38 +3283,36 @@ static void rendercache__insert_current(rendercache *rc, const rendercache_sampl
         float dz = s->position[2] - rc->view.eye[2];
         d = dx * dx + dy * dy + dz * dz;
     }
-    rendercache__place(rc, slot != RENDERCACHE__NONE ? slot : rendercache__victim(rc), slot != RENDERCACHE__NONE, 0, &g,
-                       s, p, d);
+    rendercache__place(rc, slot != RENDERCACHE__NONE ? slot : rendercache__victim(rc), slot != RENDERCACHE__NONE, 0, &np,
+                       p, d);
 }
 
-/* A late sample (requested in frame f < the current one) or a predicted
-   one: its point is where its own ray hit, which the current camera sees
-   in another pixel, if at all. Where it lands on the same surface it
-   replaces the point shown there; where it lands in front of what is
-   shown, or in a hole it is not hidden in, it is shown in a new slot;
-   elsewhere it only joins the cache. A new slot is never one the current
-   frame shows. Returns 0 when no such slot is left (the sample is dropped). */
-static int rendercache__insert_other(rendercache *rc, const rendercache_sample *s, uint64_t f,
-                                     const rendercache__view *v)
+/* A late sample (requested in frame f < the current one), a predicted
+   one or a seed: its point is where its own ray hit, which the current
+   camera sees in another pixel, if at all. Where it lands on the same
+   surface it replaces the point shown there; where it lands in front of
+   what is shown, or in a hole it is not hidden in, it is shown in a new
+   slot; elsewhere it only joins the cache (unless shown_only: a seed). A
+   new slot is never one the current frame shows. Returns 1 when stored,
+   0 when no such slot is left (or not shown, for shown_only). */
+static int rendercache__insert_other(rendercache *rc, const rendercache__new_point *np, int shown_only)
 {
     const float tol2 = (1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance);
     rendercache__projector pr;
-    rendercache__geo g;
     uint32_t p, slot;
     float d2 = 0.0f, nd[8];
     int show;
-    rendercache__sample_point(rc, s, f, v, &g);
     pr.rc = rc;
     pr.view = &rc->view;
     pr.obj_camera = rc->obj_camera;
     pr.shift = 0;
     pr.stride = rc->width;
-    p = rendercache__project_point(&pr, &g, &d2);
+    p = rendercache__project_point(&pr, &np->g, &d2);
     if (p != RENDERCACHE__NONE && rc->px_index[p] != RENDERCACHE__NONE) {
         uint32_t k = rc->px_index[p];
         float dk = rc->px_depth[p];
-        if (rc->data[k].object == s->object && d2 <= dk * tol2 && dk <= d2 * tol2) {   /* the same surface */
-            rendercache__place(rc, k, 1, 1, &g, s, p, d2);
+        if (rc->data[k].object == np->g.object && d2 <= dk * tol2 && dk <= d2 * tol2) {   /* the same surface */
+            rendercache__place(rc, k, 1, 1, np, p, d2);
             return 1;
         }
         show = d2 * tol2 < dk;   /* in front of what is shown there */
@@ -3295,9 +3322,10 @@ static int rendercache__insert_other(rendercache *rc, const rendercache_sample *
     } else {
         show = 0;
     }
+    if (shown_only && !show) return 0;
     slot = rendercache__victim(rc);
     if (rendercache__slot_in_use(rc, slot)) return 0;
-    rendercache__place(rc, slot, 0, 1, &g, s, show ? p : RENDERCACHE__NONE, d2);
+    rendercache__place(rc, slot, 0, 1, np, show ? p : RENDERCACHE__NONE, d2);
     return 1;
 }
 
@@ -3347,9 +3375,13 @@ RENDERCACHE_API rendercache_result rendercache_insert(rendercache *rc, const ren
         if (record->frame != f || (predicted && !record->has_prediction)) { bad++; continue; }
         if (f == rc->frame && !predicted) {
             rendercache__insert_current(rc, s);
-        } else if (!rendercache__insert_other(rc, s, f, predicted ? &record->predicted : &record->view)) {
-            rc->stats.dropped++;
-            continue;
+        } else {
+            rendercache__new_point np;
+            rendercache__sample_new_point(rc, s, f, predicted ? &record->predicted : &record->view, &np);
+            if (!rendercache__insert_other(rc, &np, 0)) {
+                rc->stats.dropped++;
+                continue;
+            }
         }
         rc->stats.late += f != rc->frame;
         stored++;
@@ -3504,6 +3536,70 @@ RENDERCACHE_API void rendercache_range_image_destroy(rendercache_range_image *im
 static int rendercache__range_valid(const rendercache_range_image *img, rendercache__view *v)
 {
     return img && img->rgb && img->depth && img->object && rendercache__view_init(v, &img->camera);
+}
+
+/* The render cache seeded from range images (the bridge between the two
+   halves of this header): each pixel becomes a point as a late sample
+   does (rendercache__insert_other), but only where it shows in the
+   current frame, and as old as the top of the age ramp, so that the
+   cache shows the precomputed view at once and real samples replace it
+   first. */
+static uint32_t rendercache__seed_image(rendercache *rc, const rendercache_range_image *img, const rendercache__view *v)
+{
+    uint32_t x, y, stored = 0;
+    for (y = 0; y < v->height; y++)
+        for (x = 0; x < v->width; x++) {
+            const size_t p = (size_t)y * v->width + x;
+            const uint32_t o = img->object[p];
+            const float d = img->depth[p];
+            rendercache__new_point np;
+            float dir[3];
+            if (o == RENDERCACHE_NO_SAMPLE || (o != RENDERCACHE_MISS && (o >= rc->object_count || !(d > 0.0f && d <= FLT_MAX))))
+                continue;
+            if (!rendercache__finite3(img->rgb + 3 * p) || !rendercache__view_ray(v, (float)x + 0.5f, (float)y + 0.5f, dir))
+                continue;
+            np.g.object = o;
+            if (o == RENDERCACHE_MISS) {
+                memcpy(np.g.pos, dir, sizeof dir);
+            } else {
+                float world[3];
+                int k;
+                for (k = 0; k < 3; k++) world[k] = v->eye[k] + dir[k] * d;
+                rendercache__affine(rendercache__object_local(rc, o, rc->frame), world, np.g.pos);
+                if (!rendercache__finite3(np.g.pos)) continue;
+            }
+            memcpy(np.rgb, img->rgb + 3 * p, sizeof np.rgb);
+            np.scale = 1.0f;
+            np.age = rc->age_ramp;
+            stored += (uint32_t)rendercache__insert_other(rc, &np, 1);
+        }
+    return stored;
+}
+
+RENDERCACHE_API rendercache_result rendercache_seed(rendercache *rc, const rendercache_range_image *const *images,
+                                                    uint32_t count, uint32_t *taken)
+{
+    rendercache__view v;
+    uint32_t i, stored = 0;
+    double t0;
+    if (taken) *taken = 0;
+    if (!rc || !rc->has_frame || (!images && count)) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    for (i = 0; i < count; i++)
+        if (!rendercache__range_valid(images[i], &v)) {
+            if (rc->log) rc->log(rc->log_user, "rendercache_seed: an image is NULL, incomplete or has an invalid camera");
+            return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+        }
+    t0 = rendercache__now(rc);
+    for (i = 0; i < count; i++) {
+        rendercache__view_init(&v, &images[i]->camera);
+        stored += rendercache__seed_image(rc, images[i], &v);
+    }
+    rendercache__refill(rc);
+    rc->stats.inserted += stored;
+    rc->stats.live_points = rc->live;
+    rc->stats.time_insert += rendercache__now(rc) - t0;
+    if (taken) *taken = stored;
+    return RENDERCACHE_OK;
 }
 
 /* ======================================================================

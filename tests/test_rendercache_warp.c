@@ -966,6 +966,108 @@ static void lone_free(void *ptr, void *user)
     free(ptr);
 }
 
+/* ---------------------------------------------------------------------
+   A render cache seeded from base views (rendercache_seed): the first
+   frame of an interactive session shows the precomputed views at once,
+   and sampling then replaces them.
+   --------------------------------------------------------------------- */
+/* Pixels of an image of cam whose colour lies outside the range of the
+   exact colours at the centres of the 3x3 pixels around it (+- 0.01). */
+static uint32_t wrong_against_scene(const scene *s, const rendercache_camera *cam, const float *img)
+{
+    uint32_t x, y, wrong = 0;
+    for (y = 0; y < cam->height; y++)
+        for (x = 0; x < cam->width; x++) {
+            float lo[3] = { FLT_MAX, FLT_MAX, FLT_MAX }, hi[3] = { -FLT_MAX, -FLT_MAX, -FLT_MAX };
+            const float *c = img + 3 * ((size_t)y * cam->width + x);
+            int dx, dy, k, bad = 0;
+            for (dy = -1; dy <= 1; dy++)
+                for (dx = -1; dx <= 1; dx++) {
+                    float o[3], d[3], rgb[3], dist;
+                    rendercache_camera_ray(cam, (float)x + 0.5f + (float)dx, (float)y + 0.5f + (float)dy, o, d);
+                    trace(s, o, d, &dist, rgb);
+                    for (k = 0; k < 3; k++) {
+                        lo[k] = rgb[k] < lo[k] ? rgb[k] : lo[k];
+                        hi[k] = rgb[k] > hi[k] ? rgb[k] : hi[k];
+                    }
+                }
+            for (k = 0; k < 3; k++) bad |= c[k] < lo[k] - 0.01f || c[k] > hi[k] + 0.01f;
+            wrong += (uint32_t)bad;
+        }
+    return wrong;
+}
+
+static void test_seed_render_cache_from_base_views(void)
+{
+    const uint32_t w = 64, h = 48, n = w * h;
+    scene s = boxes_scene();
+    rendercache_camera cam = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, 0.3f, 0.1f, 0.5f, 0.5f, 0.0f, 10.0f, 60.0f, w, h);
+    rendercache_camera fish[2];
+    rendercache_range_image *base[2] = { NULL, NULL }, *bad = NULL;
+    rendercache_desc d;
+    rendercache *rc = NULL;
+    rendercache_stats st;
+    static rendercache_pixel_request req[64 * 48];
+    static rendercache_sample smp[64 * 48];
+    uint32_t taken = 0, wrong_seeded, empty = 0, p, got, i, f, wrong_after;
+    fish[0] = make_camera(RENDERCACHE_CAMERA_FISHEYE, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 10.0f, 0, 160, 160);
+    fish[1] = make_camera(RENDERCACHE_CAMERA_FISHEYE, 0.8f, 0.2f, 0.8f, 0.8f, 0.2f, 10.8f, 0, 160, 160);
+    base[0] = render(&s, &fish[0], 0.0);
+    base[1] = render(&s, &fish[1], 0.0);
+    memset(&d, 0, sizeof d);
+    d.width = w;
+    d.height = h;
+    d.object_count = 4;
+    if (!CHECK(base[0] && base[1]) || !CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+    CHECK_EQ_INT(rendercache_seed(rc, (const rendercache_range_image *const *)base, 2, &taken),
+                 RENDERCACHE_ERROR_INVALID_ARGUMENT);   /* no frame yet */
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
+    for (p = 0; p < n; p++) empty += rendercache_pixel_kinds(rc)[p] == RENDERCACHE_PIXEL_EMPTY;
+    CHECK_EQ_INT(empty, n);   /* an empty cache */
+    CHECK_EQ_INT(rendercache_seed(rc, (const rendercache_range_image *const *)base, 2, &taken), RENDERCACHE_OK);
+    CHECK(taken > n / 2);   /* (seeds of one surface that land in one pixel replace each other) */
+    empty = 0;
+    for (p = 0; p < n; p++) empty += rendercache_pixel_kinds(rc)[p] == RENDERCACHE_PIXEL_EMPTY;
+    wrong_seeded = wrong_against_scene(&s, &cam, rendercache_image(rc));
+    /* the seeded frame is nearly right (disocclusions of both base views, and edges of their
+       coarser pixels, stay wrong) and nothing is empty */
+    CHECK_EQ_INT(empty, 0);
+    CHECK_MSG(wrong_seeded < n / 25, "%u of %u pixels wrong after seeding", wrong_seeded, n);
+    /* the seeds are old: the first requests of the next frames go to them, and they make way */
+    for (f = 0; f < 14; f++) {
+        CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
+        CHECK_EQ_INT(rendercache_request(rc, req, n / 12, &got), RENDERCACHE_OK);
+        for (i = 0; i < got; i++) {
+            float dist;
+            memset(&smp[i], 0, sizeof smp[i]);
+            smp[i].x = req[i].x; smp[i].y = req[i].y; smp[i].frame = req[i].frame;
+            smp[i].object = trace(&s, req[i].org, req[i].dir, &dist, smp[i].rgb);
+            for (p = 0; p < 3; p++) smp[i].position[p] = req[i].org[p] + dist * req[i].dir[p];
+        }
+        CHECK_EQ_INT(rendercache_insert(rc, smp, got, NULL), RENDERCACHE_OK);
+    }
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
+    wrong_after = wrong_against_scene(&s, &cam, rendercache_image(rc));
+    rendercache_get_stats(rc, &st);
+    test_note("seeding a %ux%u cache from 2 fish-eyes: %u points, %u pixels wrong, %u after 14 frames at 8%%",
+              w, h, taken, wrong_seeded, wrong_after);
+    CHECK(wrong_after < wrong_seeded || wrong_after == 0);
+    CHECK(st.live_points <= st.capacity);
+    /* bad input */
+    CHECK_EQ_INT(rendercache_seed(NULL, (const rendercache_range_image *const *)base, 2, &taken), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(rendercache_seed(rc, NULL, 2, &taken), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(rendercache_seed(rc, NULL, 0, &taken), RENDERCACHE_OK);
+    CHECK_EQ_INT(taken, 0);
+    CHECK_EQ_INT(rendercache_range_image_create(&fish[0], NULL, &bad), RENDERCACHE_OK);
+    bad->camera.vfov_degrees = 0.0f;
+    bad->camera.kind = (rendercache_camera_kind)9;
+    CHECK_EQ_INT(rendercache_seed(rc, (const rendercache_range_image *const *)&bad, 1, &taken), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    rendercache_range_image_destroy(bad);
+    rendercache_range_image_destroy(base[0]);
+    rendercache_range_image_destroy(base[1]);
+    rendercache_destroy(rc);
+}
+
 /* Whether a range image is one the library accepts: what save validates
    (finite colours, depths finite and positive where there is a surface). */
 static int image_valid(const rendercache_range_image *img)
@@ -1145,6 +1247,7 @@ int main(int argc, char **argv)
     RUN(test_motion_blend_does_not_ghost);
     RUN(test_motion_blend_keeps_objects_apart);
     RUN(test_warp_deterministic_for_any_thread_count);
+    RUN(test_seed_render_cache_from_base_views);
     RUN(test_extreme_depths_and_colours);
     RUN(test_warp_rejects_bad_input);
     return test_finish();

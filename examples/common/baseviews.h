@@ -201,6 +201,7 @@ EX_FN int ex_baseviews_reconstruct(const ex_baseviews *bv, ex_baseviews_reconstr
     for (i = 0; i < n && ok; i++) {
         const rendercache_range_image *a = bv->base[corners[i] * bv->time_count + k];
         const rendercache_range_image *b = bv->base[corners[i] * bv->time_count + k + 1];
+        blend[i]->camera = a->camera;   /* the blend stays in the corner view's camera */
         if (r->object_count)
             ok = rendercache_blend_motion(r->blender, a, b, (float)s, &motion,
                                           r->blend_fill ? r->blend_fill : RENDERCACHE_FILL_FOREGROUND,
