@@ -545,6 +545,13 @@ typedef struct rendercache_warp_desc {
     float background[3];         /* colour of the pixels left empty; default black */
     rendercache_fill_fn fill_pixel;  /* optional: computes the pixels still empty after the fill */
     void *fill_user;
+    uint32_t max_fill_distance;  /* background fill: an empty pixel takes a filled pixel at most this many
+                                    pixels away along its row or column, else stays empty (for
+                                    fill_pixel: pinterp's -fs); default 0: any distance */
+    int average;                 /* non-zero: several inputs that see the same surface (within the
+                                    tolerance) are averaged, each weighted by how nearly its ray
+                                    agrees with the target's (pinterp's -a); costs a warp of each
+                                    input alone and 20 bytes per target pixel and input */
     rendercache_allocator allocator;
     void (*parallel_for)(void *user, rendercache_job_fn job, void *ctx, uint32_t count);
     void *parallel_user;
@@ -3650,6 +3657,8 @@ struct rendercache_warper {
     rendercache_fill_fn fill_pixel;
     void *fill_user;
     float tolerance, background[3];
+    uint32_t max_fill;           /* background fill: farthest source in pixels, 0 unlimited */
+    int average;                 /* average the inputs that see the same surface */
 
     /* buffers of the current target size (0 x 0 before the first warp) */
     uint32_t width, height, pixel_count, tile_count;
@@ -3677,6 +3686,9 @@ struct rendercache_warper {
     size_t skip_depths_cap;
     uint64_t *hidden;            /* foreground quads: the coarse z-buffers */
     size_t hidden_cap;
+    float *layers;               /* averaging: per input, the warp of it alone (3 colour, squared
+                                    distance and object bits per pixel) */
+    size_t layers_cap;
 
     rendercache__view target;
     rendercache_warp_stats stats;
@@ -3777,6 +3789,8 @@ RENDERCACHE_API rendercache_result rendercache_warper_create(const rendercache_w
     w->fill_pixel = desc->fill_pixel;
     w->fill_user = desc->fill_user;
     w->tolerance = rendercache__def(desc->depth_tolerance, RENDERCACHE__DEFAULT_WARP_TOLERANCE);
+    w->max_fill = desc->max_fill_distance;
+    w->average = desc->average != 0;
     memcpy(w->background, desc->background, sizeof w->background);
     *out = w;
     return RENDERCACHE_OK;
@@ -3796,6 +3810,7 @@ RENDERCACHE_API void rendercache_warper_destroy(rendercache_warper *w)
     rendercache__free(&a, w->skip);
     rendercache__free(&a, w->skip_depths);
     rendercache__free(&a, w->hidden);
+    rendercache__free(&a, w->layers);
     rendercache__free(&a, w);
 }
 
@@ -4959,6 +4974,121 @@ static int rendercache__warp_set_init(rendercache_warper *w, rendercache__warp_s
     return 1;
 }
 
+/* ---- averaging (pinterp's -a) ---------------------------------------
+   Each input is warped alone into a layer of its own; then every target
+   pixel takes the surface the ranked z-buffer would have kept (the least
+   biased squared distance, the nearer rank on a tie) and averages the
+   colours of the layers that see it too (distances within the tolerance),
+   each weighted as pinterp weighs a pixel: 1 / sin of the angle between
+   its input's ray to the point and the target's ray (at most 1000), so
+   that views that look from nearly the same direction count most. The
+   result does not depend on the order of the jobs or their number. */
+#define RENDERCACHE__MAX_AVERAGE_WEIGHT 1000.0f
+
+typedef struct rendercache__average_job {
+    rendercache_warper *w;
+    rendercache__accum acc;
+    const float *layers;
+    uint32_t n;
+} rendercache__average_job;
+
+/* The layer of input i: colour, squared distance, object (float bits). */
+static rendercache__accum rendercache__layer(const rendercache_warper *w, float *layers, uint32_t i)
+{
+    rendercache__accum a;
+    float *base = layers + (size_t)i * 5 * w->pixel_count;
+    a.rgb = base;
+    a.depth2 = base + 3 * (size_t)w->pixel_count;
+    a.object = (uint32_t *)(void *)(base + 4 * (size_t)w->pixel_count);
+    return a;
+}
+
+static void rendercache__average_job_run(void *ctx, uint32_t tile)
+{
+    const rendercache__average_job *j = (const rendercache__average_job *)ctx;
+    rendercache_warper *w = j->w;
+    const rendercache__view *t = &w->target;
+    const float tol2 = (1.0f + w->tolerance) * (1.0f + w->tolerance);
+    float dx[RENDERCACHE__BATCH], dy[RENDERCACHE__BATCH], dz[RENDERCACHE__BATCH];
+    unsigned char ok[RENDERCACHE__BATCH];
+    uint32_t y0 = tile * RENDERCACHE__TILE_ROWS, y1 = y0 + RENDERCACHE__TILE_ROWS, x, y, x0, i;
+    if (y1 > w->height) y1 = w->height;
+    for (y = y0; y < y1; y++)
+        for (x0 = 0; x0 < w->width; x0 += RENDERCACHE__BATCH) {
+            uint32_t m = w->width - x0 < RENDERCACHE__BATCH ? w->width - x0 : RENDERCACHE__BATCH;
+            rendercache__view_row_dirs(t, y, x0, m, dx, dy, dz, ok);
+            for (x = 0; x < m; x++) {
+                const uint32_t p = y * w->width + x0 + x;
+                uint32_t best = RENDERCACHE__NONE;
+                float best_key = FLT_MAX, dbest, sum[3] = { 0, 0, 0 }, total = 0.0f, ray[3], bias = 1.0f;
+                int k;
+                for (i = 0; i < j->n; i++, bias = bias * tol2 < (float)RENDERCACHE__MAX_BIAS ? bias * tol2 : (float)RENDERCACHE__MAX_BIAS) {
+                    rendercache__accum a = rendercache__layer(w, (float *)j->layers, i);
+                    float d = a.depth2[p], key = d == FLT_MAX ? FLT_MAX : a.object[p] == RENDERCACHE_MISS ? d : d * bias;
+                    if (key < best_key) { best_key = key; best = i; }
+                }
+                if (best == RENDERCACHE__NONE) {
+                    j->acc.depth2[p] = FLT_MAX;
+                    j->acc.object[p] = RENDERCACHE_NO_SAMPLE;
+                    w->how[p] = RENDERCACHE__HOW_EMPTY;
+                    continue;
+                }
+                for (k = 0; k < 3; k++) ray[k] = dx[x] * t->axis[0][k] + dy[x] * t->axis[1][k] + dz[x] * t->axis[2][k];
+                dbest = rendercache__layer(w, (float *)j->layers, best).depth2[p];
+                for (i = 0; i < j->n; i++) {
+                    rendercache__accum a = rendercache__layer(w, (float *)j->layers, i);
+                    const float d = a.depth2[p], *e = w->src[i].source.eye;
+                    float wgt = RENDERCACHE__MAX_AVERAGE_WEIGHT;
+                    if (d == FLT_MAX || d > dbest * tol2 || dbest > d * tol2) continue;   /* another surface */
+                    if (a.object[p] != RENDERCACHE_MISS) {   /* the angle at the point between the two rays */
+                        float r = sqrtf(dbest), q[3], l2 = 0.0f, c = 0.0f, s2;
+                        for (k = 0; k < 3; k++) {
+                            q[k] = t->eye[k] + ray[k] * r - e[k];
+                            l2 += q[k] * q[k];
+                            c += q[k] * ray[k];
+                        }
+                        s2 = l2 > 0.0f ? 1.0f - c * c / l2 : 0.0f;
+                        if (s2 > 1.0f / (RENDERCACHE__MAX_AVERAGE_WEIGHT * RENDERCACHE__MAX_AVERAGE_WEIGHT)) wgt = 1.0f / sqrtf(s2);
+                    }
+                    for (k = 0; k < 3; k++) sum[k] += wgt * a.rgb[3 * (size_t)p + k];
+                    total += wgt;
+                }
+                {
+                    rendercache__accum b = rendercache__layer(w, (float *)j->layers, best);
+                    for (k = 0; k < 3; k++) j->acc.rgb[3 * (size_t)p + k] = rendercache__finitef(sum[k] / total);
+                    j->acc.depth2[p] = dbest;
+                    j->acc.object[p] = b.object[p];
+                    w->how[p] = RENDERCACHE__HOW_WARPED;
+                }
+            }
+        }
+}
+
+/* The averaging warp of the n prepared inputs w->src (in rank order) into acc. */
+static rendercache_result rendercache__warp_average(rendercache_warper *w, uint32_t n, int foreground,
+                                                   const rendercache__accum *acc)
+{
+    rendercache__average_job job;
+    rendercache__warp_set set;
+    rendercache__warp_src one;
+    uint32_t i;
+    if ((size_t)n > SIZE_MAX / 5 / w->pixel_count ||
+        !rendercache__reserve(&w->alloc, (void **)&w->layers, &w->layers_cap, (size_t)n * 5 * w->pixel_count, sizeof(float)))
+        return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    for (i = 0; i < n; i++) {   /* each input alone, unbiased */
+        rendercache__accum layer = rendercache__layer(w, w->layers, i);
+        rendercache__warp_prepare(w, &one, w->src[i].image, NULL, 0, NULL, NULL, 0, 1.0f);
+        if (!rendercache__warp_set_init(w, &set, &one, 1, foreground)) return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+        rendercache__warp_splat(w, &set, foreground, &layer);
+    }
+    job.w = w;
+    job.acc = *acc;
+    job.layers = w->layers;
+    job.n = n;
+    rendercache__run_jobs(w->parallel_for, w->parallel_user, rendercache__average_job_run, &job, w->tile_count);
+    return RENDERCACHE_OK;
+}
+
 /* ---- background fill (pinterp's "background" algorithm) -------------- */
 
 /* Job per strip of columns: for each run of empty pixels in a column, the
@@ -5019,13 +5149,16 @@ static void rendercache__row_job(void *ctx, uint32_t tile)
             rc = left;
             if (right != RENDERCACHE__NONE && (left == RENDERCACHE__NONE || d2[left] < d2[right])) rc = right;
             for (k = xa; k < xb; k++) {
-                uint32_t p = row + k, cc = w->column[p], src;
+                uint32_t p = row + k, cc = w->column[p], src, reach;
                 if (rc == RENDERCACHE__NONE && cc == RENDERCACHE__NONE) continue;
                 if (cc == RENDERCACHE__NONE) src = rc;
                 else if (rc == RENDERCACHE__NONE) src = cc;
                 else if ((rc == left && k == xa) || (rc == right && k + 1 == xb)) src = rc;   /* next to the pixel */
                 else if (cc == p - w->width || cc == p + w->width) src = cc;
                 else src = d2[cc] < d2[rc] ? rc : cc;
+                /* pinterp's -fs: a source too far away leaves the pixel to fill_pixel */
+                reach = src == left ? k + 1 - xa : src == right ? xb - k : (src > p ? src - p : p - src) / w->width;
+                if (w->max_fill && reach > w->max_fill) continue;
                 d2[p] = d2[src];   /* candidates are pixels filled before this pass: never written here */
                 memcpy(rgb + 3 * (size_t)p, rgb + 3 * (size_t)src, 3 * sizeof(float));
                 obj[p] = obj[src];
@@ -5206,11 +5339,16 @@ RENDERCACHE_API rendercache_result rendercache_warp(rendercache_warper *w, const
         elements += w->src[i].count;
         bias = bias * tol2 < RENDERCACHE__MAX_BIAS ? bias * tol2 : RENDERCACHE__MAX_BIAS;
     }
-    if (!rendercache__warp_set_init(w, &set, w->src, n, rendercache__has_foreground(fill))) return RENDERCACHE_ERROR_OUT_OF_MEMORY;
     acc.rgb = out->rgb;
     acc.depth2 = out->depth;
     acc.object = out->object;
-    rendercache__warp_splat(w, &set, rendercache__has_foreground(fill), &acc);
+    if (w->average && n > 1) {
+        r = rendercache__warp_average(w, n, rendercache__has_foreground(fill), &acc);
+        if (r != RENDERCACHE_OK) return r;
+    } else {
+        if (!rendercache__warp_set_init(w, &set, w->src, n, rendercache__has_foreground(fill))) return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+        rendercache__warp_splat(w, &set, rendercache__has_foreground(fill), &acc);
+    }
     t1 = rendercache__warp_now(w);
     rendercache__warp_finish(w, &acc, fill);
     out->time = images[w->order[0]]->time;

@@ -627,7 +627,7 @@ static void test_fill_modes_at_a_disocclusion(void)
 
 /* The fill callback computes the pixels still empty. */
 static const scene *g_fill_scene;
-static unsigned char g_computed[64 * 48];
+static unsigned char g_computed[64 * 48], g_far[64 * 48];
 static int fill_by_tracing(void *user, uint32_t x, uint32_t y, const float org[3], const float dir[3], float rgb[3],
                            float *depth, uint32_t *object)
 {
@@ -672,6 +672,40 @@ static void test_fill_callback_computes_the_rest(void)
     }
     CHECK_EQ_INT(wrong, 0);
     CHECK_EQ_INT(calls, 0);   /* one call per computed pixel */
+    /* background fill at most 2 pixels from its source (pinterp's -fs 2): the pixels farther
+       from every filled pixel of their row and column go to the callback */
+    {
+        rendercache_warp_stats full, near2;
+        rendercache_warper *w2 = NULL;
+        uint32_t x, y, far = 0, far_computed = 0;
+        CHECK_EQ_INT(rendercache_warp(w, in, 1, NULL, RENDERCACHE_FILL_BACKGROUND, out), RENDERCACHE_OK);
+        rendercache_warp_get_stats(w, &full);
+        d.max_fill_distance = 2;
+        CHECK_EQ_INT(rendercache_warper_create(&d, &w2), RENDERCACHE_OK);
+        memset(g_computed, 0, sizeof g_computed);
+        CHECK_EQ_INT(rendercache_warp(w2, in, 1, NULL, RENDERCACHE_FILL_NONE, out), RENDERCACHE_OK);
+        memcpy(g_far, g_computed, sizeof g_far);   /* what no-fill leaves empty */
+        memset(g_computed, 0, sizeof g_computed);
+        CHECK_EQ_INT(rendercache_warp(w2, in, 1, NULL, RENDERCACHE_FILL_BACKGROUND, out), RENDERCACHE_OK);
+        rendercache_warp_get_stats(w2, &near2);
+        CHECK(near2.computed > 0 && near2.background < full.background);
+        CHECK_EQ_INT(near2.background + near2.computed, full.background + full.computed);
+        for (y = 0; y < 48; y++)
+            for (x = 0; x < 64; x++) {   /* an empty pixel 3 or more pixels from filled ones in all four directions */
+                int dx, reach = 1;
+                if (!g_far[y * 64 + x]) continue;
+                for (dx = -2; dx <= 2; dx++) {
+                    int qx = (int)x + dx, qy = (int)y + dx;
+                    if (qx >= 0 && qx < 64 && !g_far[y * 64 + (uint32_t)qx]) reach = 0;
+                    if (qy >= 0 && qy < 48 && !g_far[(uint32_t)qy * 64 + x]) reach = 0;
+                }
+                far += (uint32_t)reach;
+                far_computed += (uint32_t)(reach && g_computed[y * 64 + x]);
+            }
+        CHECK(far > 0);
+        CHECK_EQ_INT(far_computed, far);
+        rendercache_warper_destroy(w2);
+    }
     rendercache_range_image_destroy(src);
     rendercache_range_image_destroy(ref);
     rendercache_range_image_destroy(out);
@@ -966,6 +1000,95 @@ static void lone_free(void *ptr, void *user)
     free(ptr);
 }
 
+/* pinterp's weight of a view with eye e for the target ray (o, dir) to a
+   point at distance dist: 1 / sin of the angle between the two rays. */
+static float average_weight(const float e[3], const float o[3], const float dir[3], float dist)
+{
+    float q[3], l2 = 0.0f, c = 0.0f;
+    int k;
+    for (k = 0; k < 3; k++) {
+        q[k] = o[k] + dir[k] * dist - e[k];
+        l2 += q[k] * q[k];
+        c += q[k] * dir[k];
+    }
+    return 1.0f / sqrtf(1.0f - c * c / l2);
+}
+
+/* Averaging (pinterp's -a): two views of the scene from eyes at x = -1
+   and x = +1, the second with every colour doubled, warped to x = 0.
+   Where both see the wall, the weighted mean (1 wa + 2 wb) / (wa + wb) of
+   the colour; without averaging the nearer (first) input's colour stays;
+   where one alone sees it (the disocclusions of the boxes), its colour. */
+static void test_averaging_weighs_inputs_by_ray_angle(void)
+{
+    scene s = boxes_scene();
+    rendercache_camera a = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, -1.0f, 0, 0, -1.0f, 0, 10, 80, 96, 72);
+    rendercache_camera b = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, 1.0f, 0, 0, 1.0f, 0, 10, 80, 96, 72);
+    rendercache_camera t = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, -0.01f, 0, 0, -0.01f, 0, 10, 50, 64, 48);
+    rendercache_range_image *in[2], *out = NULL, *avg = NULL;
+    rendercache_warp_desc d;
+    rendercache_warper *plain = make_warper(NULL, NULL), *mean = NULL, *mean2 = NULL;
+    ex_pool *pool = ex_pool_create(3);
+    uint32_t x, y, both = 0, mixed = 0, only = 0, kept = 0, p;
+    in[0] = render(&s, &a, 0.0);
+    in[1] = render(&s, &b, 0.0);
+    memset(&d, 0, sizeof d);
+    d.average = 1;
+    if (!CHECK(in[0] && in[1] && plain) || !CHECK_EQ_INT(rendercache_warper_create(&d, &mean), RENDERCACHE_OK)) return;
+    d.parallel_for = pool ? ex_pool_parallel_for : NULL;
+    d.parallel_user = pool;
+    CHECK_EQ_INT(rendercache_warper_create(&d, &mean2), RENDERCACHE_OK);
+    for (p = 0; p < 96 * 72 * 3; p++) in[1]->rgb[p] *= 2.0f;
+    CHECK_EQ_INT(rendercache_range_image_create(&t, NULL, &out), RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_range_image_create(&t, NULL, &avg), RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_warp(plain, (const rendercache_range_image *const *)in, 2, &t, RENDERCACHE_FILL_FOREGROUND, out),
+                 RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_warp(mean, (const rendercache_range_image *const *)in, 2, &t, RENDERCACHE_FILL_FOREGROUND, avg),
+                 RENDERCACHE_OK);
+    for (y = 0; y < 48; y++)
+        for (x = 0; x < 64; x++) {
+            float o[3], dir[3], rgb[3], dist, point[3];
+            uint32_t id, k;
+            p = y * 64 + x;
+            if (!far_from_edges(&s, &t, x, y, &id) || id != 0) continue;
+            rendercache_camera_ray(&t, (float)x + 0.5f, (float)y + 0.5f, o, dir);
+            trace(&s, o, dir, &dist, rgb);
+            for (k = 0; k < 3; k++) point[k] = o[k] + dist * dir[k];
+            if (visible_from(&s, &a, point, 0) && visible_from(&s, &b, point, 0)) {
+                float wa = average_weight(a.eye, o, dir, dist), wb = average_weight(b.eye, o, dir, dist);
+                both++;
+                /* the quads interpolate the colour linearly, exact on the plane but for rounding: 1e-4 */
+                mixed += fabsf(avg->rgb[3 * p] / rgb[0] - (wa + 2.0f * wb) / (wa + wb)) < 1e-4f;
+                kept += fabsf(out->rgb[3 * p] / rgb[0] - 1.0f) < 0.01f || fabsf(out->rgb[3 * p] / rgb[0] - 2.0f) < 0.02f;
+            } else if (visible_from(&s, &a, point, 0) != visible_from(&s, &b, point, 0)) {
+                float expect = visible_from(&s, &a, point, 0) ? 1.0f : 2.0f;
+                only += fabsf(avg->rgb[3 * p] / rgb[0] - expect) < 1e-4f * expect;
+            }
+        }
+    test_note("averaging: %u wall pixels seen by both views, %u of them the weighted mean (plain warp: %u kept one view); "
+              "%u seen by one view keep its colour", both, mixed, kept, only);
+    CHECK(both > 500);
+    /* a few wall pixels next to a disocclusion of one view get that view's edge points instead of quads */
+    CHECK(mixed >= both - both / 30);
+    CHECK(kept >= both - both / 100);
+    CHECK(only > 0);
+    /* any number of threads: the same image, bit for bit */
+    CHECK_EQ_INT(rendercache_warp(mean2, (const rendercache_range_image *const *)in, 2, &t, RENDERCACHE_FILL_BOTH, out),
+                 RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_warp(mean, (const rendercache_range_image *const *)in, 2, &t, RENDERCACHE_FILL_BOTH, avg),
+                 RENDERCACHE_OK);
+    CHECK(memcmp(out->rgb, avg->rgb, sizeof(float) * 3 * 64 * 48) == 0);
+    CHECK(memcmp(out->depth, avg->depth, sizeof(float) * 64 * 48) == 0);
+    rendercache_range_image_destroy(in[0]);
+    rendercache_range_image_destroy(in[1]);
+    rendercache_range_image_destroy(out);
+    rendercache_range_image_destroy(avg);
+    rendercache_warper_destroy(plain);
+    rendercache_warper_destroy(mean);
+    rendercache_warper_destroy(mean2);
+    ex_pool_destroy(pool);
+}
+
 /* ---------------------------------------------------------------------
    A render cache seeded from base views (rendercache_seed): the first
    frame of an interactive session shows the precomputed views at once,
@@ -1247,6 +1370,7 @@ int main(int argc, char **argv)
     RUN(test_motion_blend_does_not_ghost);
     RUN(test_motion_blend_keeps_objects_apart);
     RUN(test_warp_deterministic_for_any_thread_count);
+    RUN(test_averaging_weighs_inputs_by_ray_angle);
     RUN(test_seed_render_cache_from_base_views);
     RUN(test_extreme_depths_and_colours);
     RUN(test_warp_rejects_bad_input);

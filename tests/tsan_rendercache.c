@@ -172,8 +172,13 @@ static uint64_t run_warps(ex_pool *pool)
     CHECK_EQ_INT(rendercache_warper_create(&d, &w), RENDERCACHE_OK);
     CHECK_EQ_INT(rendercache_range_image_create(&target, NULL, &out), RENDERCACHE_OK);
     CHECK_EQ_INT(rendercache_range_image_create(&fish[0], NULL, &blend), RENDERCACHE_OK);
-    for (f = 0; f < 4; f++) {
-        CHECK_EQ_INT(rendercache_warp(w, (const rendercache_range_image *const *)in, 3, &target, fills[f], out),
+    for (f = 0; f < 8; f++) {   /* every fill, then every fill averaging the inputs */
+        if (f == 4) {
+            rendercache_warper_destroy(w);
+            d.average = 1;
+            CHECK_EQ_INT(rendercache_warper_create(&d, &w), RENDERCACHE_OK);
+        }
+        CHECK_EQ_INT(rendercache_warp(w, (const rendercache_range_image *const *)in, 3, &target, fills[f % 4], out),
                      RENDERCACHE_OK);
         h = hash_bytes(h, out->rgb, sizeof(float) * 3 * W * H);
         h = hash_bytes(h, out->depth, sizeof(float) * W * H);

@@ -117,6 +117,7 @@
 #define WT_BUNNY_NORMAL_ANGLE 30.0f  /* degrees: light vectors valid between the bunny's normals */
 #define WT_BUNNY_PRIORITY 4.0f      /* render-cache priority scale of the bunny's points */
 #define WT_PHASES 4
+#define WT_BASEVIEWS_MAX_FILL 8u   /* baseviews: background fill reaches this many pixels; farther ones are traced */
 
 typedef enum wt_mode {
     WT_MODE_RAYTRACE = 0,
@@ -2230,6 +2231,8 @@ static int wt__baseviews_create(wt_renderer *r, char *err, size_t err_size)
     if (rendercache_warper_create(&wd, &r->rec.blender) != RENDERCACHE_OK) return wt__fail(err, err_size, "%s", "out of memory");
     wd.fill_pixel = wt__fill_pixel;
     wd.fill_user = r;
+    wd.average = 1;                     /* the corner views that see a surface are averaged (pinterp -a) */
+    wd.max_fill_distance = WT_BASEVIEWS_MAX_FILL;   /* wider gaps are traced, not smeared (pinterp -fs) */
     if (rendercache_warper_create(&wd, &r->rec.warper) != RENDERCACHE_OK) return wt__fail(err, err_size, "%s", "out of memory");
     r->rec.object_count = 2;
     r->rec.motion = wt__object_transforms;
