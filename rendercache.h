@@ -1,4 +1,4 @@
-/* rendercache.h - v0.3.1 - render cache and range-image walkthroughs - public domain or MIT, see end of file
+/* rendercache.h - v0.4.0 - render cache and range-image walkthroughs - public domain or MIT, see end of file
 
    RENDERCACHE.H: an image-space point cache that reprojects and resamples, and range-image walkthroughs of animated scenes.
 
@@ -10,8 +10,14 @@
    builds a priority image (old points, sparse and empty regions). Error
    diffusion of the thresholded priority image picks the pixels that deserve
    a new ray within the caller's budget; the caller shades them with any
-   renderer and inserts the results. Objects may move: each point belongs to
-   an object whose transform the caller updates, and the point moves with it.
+   renderer and inserts the results, in the same frame or frames later (an
+   asynchronous renderer): a late sample is stored at its own point. A
+   sample whose colour differs from the point it replaces ages the points
+   around it, so that changed lighting is found and resampled first (or the
+   engine says so: rendercache_invalidate). Objects may move: each point
+   belongs to an object whose transform the caller updates, and the point
+   moves with it. Range images can seed the cache (rendercache_seed), so
+   that precomputed views warm-start an interactive session.
 
    Range-image walkthroughs (Nimeroff, Dorsey and Rushmeier 1996) precompute
    instead: a range image is what a camera sees (radiance, distance along
@@ -46,15 +52,23 @@
        while (running) {
            uint32_t i, n;
            rendercache_begin_frame(rc, &camera);      // reproject, cull, fill, prioritise
+           rendercache_predict(rc, &next_camera);     // optional: seed what the motion will uncover
            rendercache_request(rc, req, budget, &n);  // the pixels that deserve a ray
            for (i = 0; i < n; i++) {
+               memset(&s[i], 0, sizeof s[i]);         // priority_scale 0: 1
+               s[i].frame = req[i].frame;             // the request's frame, x, y and flags
                s[i].x = req[i].x; s[i].y = req[i].y; s[i].flags = req[i].flags;
                shade(req[i].org, req[i].dir, s[i].position, s[i].rgb, &s[i].object);
            }
-           rendercache_insert(rc, s, n);
+           rendercache_insert(rc, s, n, NULL);        // now, or frames later from a render thread
            show(rendercache_image(rc));               // width * height RGB floats, top row first
        }
        rendercache_destroy(rc);
+
+   An asynchronous renderer returns the samples of frame f's requests after
+   begin_frame(f + 1) or later: insert them then, with the frame field
+   copied (desc.max_latency frames at most). Each is stored where its own
+   ray hit, seen with its objects' transforms of frame f.
 
    EXAMPLE: A WALKTHROUGH FROM BASE VIEWS
 
@@ -90,7 +104,9 @@
        rendercache_begin_frame(rc, camera)                            reproject into a new camera
        rendercache_predict(rc, next_camera)                           optional: sample what it will uncover
        rendercache_request(rc, out, max, &count)                      pixels to shade this frame
-       rendercache_insert(rc, samples, n)                             shaded samples become points
+       rendercache_insert(rc, samples, n, &taken)                     shaded samples become points (late too)
+       rendercache_invalidate(rc, object)                             an object's (or all) lighting changed
+       rendercache_seed(rc, images, n, &taken)                        range images become points
        rendercache_image(rc)                                          the current RGB float image
        rendercache_priority_image(rc), rendercache_pixel_kinds(rc),
        rendercache_depth_image(rc)                                    per-pixel internals (inspection)
@@ -119,7 +135,7 @@
        rendercache_subdivide_time(desc, &times, &count)               key times of id images
        rendercache_keytimes_create(desc, &kt) / _destroy(kt)          key times of an object-space solution
        rendercache_keytimes_count(kt), _times(kt), _values(kt, k)     the keys
-       rendercache_keytimes_eval(kt, time, values)                    linear interpolation in time
+       rendercache_keytimes_eval(kt, time, values, count)             linear interpolation in time
      error
        rendercache_lrms(reference, image, w, h, &lrms)                relative luminance RMS
 
@@ -136,8 +152,12 @@
        and Chiu. Range-image pixels whose ray left the scene have object
        RENDERCACHE_MISS and are warped as directions (background at
        infinity). One rendercache, warper, view space or keytimes object is
-       used by one thread at a time; per-frame work runs in parallel through
-       desc.parallel_for and gives bit-identical results for any thread count.
+       used by one thread at a time (an asynchronous renderer hands its
+       samples to the thread that calls insert); per-frame work runs in
+       parallel through desc.parallel_for and gives bit-identical results
+       for any thread count. Frames are numbered from 1 by begin_frame;
+       requests carry their frame's number, and a sample whose frame field
+       is 0 belongs to the current frame.
 
    HOW A FRAME WORKS (and which published step each part is)
 
@@ -153,9 +173,21 @@
        request: the levels of the priority image above a threshold are all
        requested, the level at the threshold gets the rest of the budget,
        spread by Floyd-Steinberg error diffusion (WDP99); with predict, up to
-       desc.predict_fraction of the budget goes to the holes of the next
-       camera (WDG02 predictive sampling). insert: a sample replaces the
-       point its pixel showed, or the oldest point not visible (clock).
+       desc.predict_fraction of the budget goes to the regions the next
+       camera uncovers: the points are counted in an occupancy image of 1/16
+       the resolution (cells of 4x4 pixels) of that camera, and a cell with
+       fewer than 4 is seeded with one request (WDG02 predictive sampling).
+       insert: a sample of the current frame replaces the point its pixel
+       showed, or takes the slot of the oldest point not visible (clock); a
+       late or predicted sample is stored at its own point, replaces the
+       point of the same surface where that lands now, and is shown there
+       (the holes around it filled again) when nothing nearer is. A sample
+       whose colour differs from the point it replaces by more than
+       desc.change_threshold (and by more than three standard deviations of
+       the last frame's resample differences: a noisy renderer does not
+       trigger it) ages the points shown within RENDERCACHE_CHANGE_RADIUS
+       pixels to the top of the age ramp (WDG02): a new shadow is found by
+       the samples that land in it and filled in by the next requests.
 
    HOW A WARP WORKS (NDR96 section 4.4, after Radiance's pinterp)
 
@@ -182,27 +214,150 @@
        eye. With foreground fill, runs of 8 pixels of a later input whose
        quads and points would all fail their z-tests (against a coarse
        z-buffer of what the nearer inputs drew) are skipped too, with the
-       same result. blend_motion warps both
+       same result. With desc.average (pinterp's -a), each input is warped
+       alone and every pixel averages the inputs that see the surface the
+       ranked z-buffer keeps (squared distances within the tolerance),
+       weighted by 1 / sin of the angle between each input's ray and the
+       target's (at most 1000): views from nearly the target's direction
+       count most, and the inputs' noise and staircases average out.
+       desc.max_fill_distance bounds the background fill (pinterp's -fs):
+       farther gaps stay for fill_pixel. Positions more than 2^24 pixels
+       from the image have no projection, squared distances are capped at
+       the background's and distances below 1e-18 written as 1e-18, so any
+       valid inputs give a valid image. blend_motion warps both
        images into the output's camera with each object's motion (pixels of
        static objects in their own camera stay in place, exactly), blends
        where both show the same object at the same depth, and keeps the
        nearer surface elsewhere.
 
+   VALIDATION AND CONTRACTS
+
+       What each call checks (a failed check returns
+       RENDERCACHE_ERROR_INVALID_ARGUMENT, or CORRUPT_DATA/VERSION for data
+       read, and changes nothing) and what the caller must guarantee (the
+       library cannot check it: breaking it is undefined behaviour).
+       Callbacks (alloc, free, parallel_for, clock, log, render_ids, solve,
+       fill_pixel, write, read) must do what their comments say; parallel_for
+       must run every index once and return when all are done.
+
+       create(desc, &out): checks desc and out non-NULL; width, height > 0 and
+         at most 2^28 pixels; alloc and free both or neither;
+         points_per_pixel > 0 and finite, at most 2^31 points; depth_tolerance
+         >= 0 and finite; predict_fraction in [0, 1]; change_threshold >= 0;
+         max_latency <= 64; object_count <= 2^24; sparse_neighbours <= 8;
+         wide_radius <= 7; background finite. *out is NULL on failure.
+       destroy(rc), clear(rc): rc NULL does nothing. Contract: rc came from
+         create and is not used after destroy.
+       set_object_transform(rc, object, m): checks rc and m non-NULL, object
+         < object_count, m finite and invertible. Contract: m holds 12 floats.
+       begin_frame(rc, camera), predict(rc, next): check a perspective camera
+         of the cache's size with finite eye, look_at and up, up not
+         parallel to the view, vfov in (0, 180); predict needs a frame.
+       request(rc, out, max, &count): checks rc and count non-NULL, out
+         non-NULL when max > 0, a frame begun. Contract: out holds max
+         requests.
+       insert(rc, samples, n, &taken): checks rc, and samples non-NULL when n
+         > 0; each sample: frame begun and not in the future, pixel inside
+         the image, only known flags (a predicted one from a frame with a
+         prediction), object < object_count or RENDERCACHE_MISS, finite
+         position (hits), finite colour, priority_scale >= 0 and finite;
+         the others are stored and the call reports INVALID_ARGUMENT.
+         Contract: samples holds n samples.
+       invalidate(rc, object): checks rc, and object < object_count,
+         RENDERCACHE_MISS or RENDERCACHE_ALL_OBJECTS.
+       seed(rc, images, count, &taken): checks rc, a frame begun, images
+         non-NULL when count > 0, each image's arrays non-NULL and camera
+         valid; pixels of unknown objects, without a positive finite depth or
+         with a non-finite colour are skipped. Contract: images holds count
+         pointers, each image's rgb 3 w h floats, depth and object w h.
+       image, priority_image, pixel_kinds, depth_image(rc): NULL for rc NULL.
+         Contract: the pointer is read before the next call that changes the
+         cache (begin_frame, request, insert, seed, invalidate, clear,
+         destroy).
+       get_stats(rc, &out): out NULL does nothing, rc NULL gives zeros.
+       camera_ray(camera, px, py, org, dir): checks the camera (any kind; a
+         sphere at least 2 pixels wide), px and py finite, org and dir
+         non-NULL; a point outside a fish-eye's circle has no ray.
+         camera_project(camera, p, ...) returns 0 for a bad camera or p NULL
+         or not finite; its outputs may be NULL.
+       range_image_create(camera, allocator, &out): checks out, the camera
+         and the allocator (NULL: default). range_image_destroy(img): NULL
+         does nothing. Contract: img came from create or load (an image the
+         caller assembled is the caller's to free).
+       range_image_save(img, write, user): checks img's arrays and camera,
+         write non-NULL, time finite, every colour finite and every surface
+         depth positive and finite (what a loader accepts). Contract: the
+         arrays hold w h pixels (rgb 3 w h floats).
+       range_image_load(allocator, read, user, &out), load_from_memory(data,
+         size, ...): the input is hostile: every size is checked against the
+         payload, the CRC, the camera, every colour and depth; truncated or
+         altered data gives CORRUPT_DATA, another format VERSION, never a
+         crash. Contract: data holds size bytes.
+       save_to_memory(img, allocator, &data, &size) as save; free_memory(a,
+         data): contract: data came from save_to_memory or subdivide_time
+         with the same allocator.
+       warper_create(desc, &out): checks desc and out, the allocator,
+         depth_tolerance in [0, 1e6), background finite.
+       warp(w, images, n, camera, fill, out): checks w, images non-NULL and n
+         > 0, each input's arrays and camera, out's arrays and camera (camera
+         NULL: out's), the sizes of camera and out, no input being out, the
+         fill mode, at most 2^32 - 1 input pixels; input pixels that are
+         RENDERCACHE_NO_SAMPLE or have no positive finite depth are skipped,
+         and any valid inputs give a valid output (see HOW A WARP WORKS).
+         Contract: every array holds its image's pixels; input colours are
+         finite (as save and load ensure).
+       blend(a, b, t, out): checks the three images' arrays and cameras,
+         equal sizes, t in [0, 1]. blend_motion(w, a, b, t, motion, fill,
+         out): as blend, and out is neither a nor b, the fill mode, a
+         motion's arrays non-NULL, its transforms finite and invertible,
+         object_count <= 2^24. Contract: world_a, world_b and world_t hold 12
+         object_count floats.
+       fitness(ids, count, w, h, &f): checks ids and each image non-NULL,
+         count, w, h > 0, at most 2^28 pixels. Contract: each image holds w h
+         ids.
+       view_space_create(desc, &out): checks desc and out, the camera, lo and
+         hi finite with lo <= hi, quality in [0, 1], max_depth <= 20,
+         render_ids, the allocator, time finite. Contract: render_ids writes
+         camera->width * camera->height ids. The accessors check vs and
+         indices; locate checks a finite eye (clamped into the box).
+       subdivide_time(desc, &times, &count): checks the cameras, at least 2
+         finite strictly increasing times, quality, max_depth <= 20,
+         render_ids, the allocator. Contract: as view_space_create.
+       keytimes_create(desc, &out): checks solve, element_count > 0, finite
+         t0 < t1, quality in [0, 1], epsilon and min_value >= 0 and finite,
+         max_depth <= 20, the solution's size; a solve that returns
+         non-finite values fails with INVALID_ARGUMENT. Contract: solve
+         writes element_count * components floats. keytimes_eval(kt, time,
+         values, count): checks kt, values, a finite time and count >=
+         element_count * components; keytimes_values(kt, key) is NULL for a key
+         out of range.
+       lrms(reference, image, w, h, &lrms): checks the pointers, w, h > 0,
+         at most 2^28 pixels, a positive finite mean luminance of reference
+         and a finite sum. Contract: both images hold 3 w h floats.
+
    LIMITS
 
        Render cache: image up to 2^28 pixels, cache up to 2^31 points, up to
-       2^24 objects. Memory: 41 bytes per cache point (2 per pixel by
-       default) and about 71 bytes per pixel, 95 with parallel_for: 40 MB for
-       512x512. Point colours are fixed when they are inserted (the cache ages
-       them so that they get refreshed); view-dependent shading changes only
-       as points are resampled, as in the paper. Error diffusion is
+       2^24 objects, samples up to 64 frames late. Memory: 41 bytes per cache
+       point (2 per pixel by default), 51 bytes per pixel (59 with
+       parallel_for), and about 48 (max_latency + 8) bytes per object: 133
+       bytes per pixel in all (141 with parallel_for), 35 MB for 512x512 and
+       276 MB (292) for 1920x1080. Point
+       colours are fixed when they are inserted (the cache ages them so that
+       they get refreshed, and faster where samples find a colour changed);
+       view-dependent shading changes only as points are resampled, as in
+       the paper. A late sample of a moving object is placed with the
+       transform of its frame, which the cache keeps for max_latency frames.
+       Colour-change detection compares a sample with the one point it
+       replaces: with a renderer as noisy as the changes it should see, it
+       sees nothing (its threshold rises with the noise). Error diffusion is
        sequential by nature and runs on the calling thread; the rest of a
        frame runs in parallel.
        Walkthroughs: a range image takes 20 bytes per pixel; a warper about
        37 bytes per target pixel (61 with parallel_for, 20 more after a
-       motion blend) plus, with foreground fill, 52 bytes per pixel of the
-       widest input's row and half a byte per target pixel per job, and 10
-       bytes per 16x16 tile of the inputs. At most 2^32 - 1 input pixels per
+       motion blend, and 20 per input when averaging) plus, with foreground
+       fill, 52 bytes per pixel of the widest input's row and half a byte per
+       target pixel per job, and 10 bytes per 16x16 tile of the inputs. At most 2^32 - 1 input pixels per
        warp. Warps reproduce no view-dependent shading the inputs lack, and a
        pixelwise blend ghosts moving objects; the motion-compensated blend
        moves objects but not their shadows or reflections on static surfaces
@@ -222,8 +377,8 @@
 #include <stdint.h>
 
 #define RENDERCACHE_VERSION_MAJOR 0
-#define RENDERCACHE_VERSION_MINOR 3
-#define RENDERCACHE_VERSION_PATCH 1
+#define RENDERCACHE_VERSION_MINOR 4
+#define RENDERCACHE_VERSION_PATCH 0
 
 #ifndef RENDERCACHE_API
 #  ifdef RENDERCACHE_STATIC
@@ -766,8 +921,10 @@ RENDERCACHE_API const double *rendercache_keytimes_times(const rendercache_keyti
 /* The stored solution of key k: element_count * components floats. */
 RENDERCACHE_API const float *rendercache_keytimes_values(const rendercache_keytimes *kt, uint32_t key);
 /* The solution at time, interpolated linearly between the key times around
-   it (clamped to [t0, t1]). */
-RENDERCACHE_API rendercache_result rendercache_keytimes_eval(const rendercache_keytimes *kt, double time, float *values);
+   it (clamped to [t0, t1]), into values[0 .. count): count must be at
+   least element_count * components. */
+RENDERCACHE_API rendercache_result rendercache_keytimes_eval(const rendercache_keytimes *kt, double time, float *values,
+                                                             size_t count);
 
 /* Relative luminance RMS error (section 5): the RMS of the per-pixel
    luminance difference (Rec. 709 weights) divided by the mean luminance of
@@ -6114,13 +6271,14 @@ RENDERCACHE_API const float *rendercache_keytimes_values(const rendercache_keyti
     return kt && key < kt->count ? kt->values + kt->stride * key : NULL;
 }
 
-RENDERCACHE_API rendercache_result rendercache_keytimes_eval(const rendercache_keytimes *kt, double time, float *values)
+RENDERCACHE_API rendercache_result rendercache_keytimes_eval(const rendercache_keytimes *kt, double time, float *values,
+                                                             size_t count)
 {
     uint32_t lo = 0, hi;
     const float *a, *b;
     float w;
     size_t i;
-    if (!kt || !values || !isfinite(time)) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    if (!kt || !values || !isfinite(time) || count < kt->stride) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
     hi = kt->count - 1;
     if (time <= kt->times[0]) { memcpy(values, kt->values, kt->stride * sizeof(float)); return RENDERCACHE_OK; }
     if (time >= kt->times[hi]) { memcpy(values, kt->values + kt->stride * hi, kt->stride * sizeof(float)); return RENDERCACHE_OK; }

@@ -597,7 +597,7 @@ static void test_key_times_reproduce_the_signal(void)
         for (i = 0; i <= 200; i++) {
             double t = (double)i / 200.0;
             uint32_t lo = 0, off = 0;
-            CHECK_EQ_INT(rendercache_keytimes_eval(kt, t, values), RENDERCACHE_OK);
+            CHECK_EQ_INT(rendercache_keytimes_eval(kt, t, values, sizeof values / sizeof values[0]), RENDERCACHE_OK);
             while (lo + 2 < keys && times[lo + 1] <= t) lo++;
             for (v = 0; v < VERTS; v++) {
                 double a = irradiance(v, times[lo]), b = irradiance(v, times[lo + 1]);
@@ -613,11 +613,14 @@ static void test_key_times_reproduce_the_signal(void)
         /* at the key times themselves, the stored solution */
         for (i = 0; i < (int)keys; i++) {
             const float *kv = rendercache_keytimes_values(kt, (uint32_t)i);
-            CHECK_EQ_INT(rendercache_keytimes_eval(kt, times[i], values), RENDERCACHE_OK);
+            CHECK_EQ_INT(rendercache_keytimes_eval(kt, times[i], values, sizeof values / sizeof values[0]), RENDERCACHE_OK);
             CHECK(memcmp(values, kv, VERTS * s.components * sizeof(float)) == 0);
         }
         /* clamped outside [t0, t1] */
-        CHECK_EQ_INT(rendercache_keytimes_eval(kt, -5.0, values), RENDERCACHE_OK);
+        CHECK_EQ_INT(rendercache_keytimes_eval(kt, -5.0, values, sizeof values / sizeof values[0]), RENDERCACHE_OK);
+        /* a buffer shorter than the solution */
+        CHECK_EQ_INT(rendercache_keytimes_eval(kt, 0.5, values, (size_t)VERTS * s.components - 1),
+                     RENDERCACHE_ERROR_INVALID_ARGUMENT);
         CHECK(values[0] == rendercache_keytimes_values(kt, 0)[0]);
         rendercache_keytimes_destroy(kt);
         kt = NULL;
@@ -639,7 +642,7 @@ static void test_key_times_reproduce_the_signal(void)
     d.element_count = VERTS;
     d.epsilon = NAN;
     CHECK_EQ_INT(rendercache_keytimes_create(&d, &kt), RENDERCACHE_ERROR_INVALID_ARGUMENT);
-    CHECK_EQ_INT(rendercache_keytimes_eval(NULL, 0.0, values), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(rendercache_keytimes_eval(NULL, 0.0, values, sizeof values / sizeof values[0]), RENDERCACHE_ERROR_INVALID_ARGUMENT);
     rendercache_keytimes_destroy(NULL);
 }
 
