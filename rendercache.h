@@ -1838,6 +1838,7 @@ static void rendercache__splat_run_cover(rendercache__splat *s,
                                                 image of 1/16 the resolution (WDG02) */
 #define RENDERCACHE__CELL (1u << RENDERCACHE__CELL_SHIFT)
 #define RENDERCACHE__CELL_FEW 4u             /* points in a cell below which it is a hole: a quarter covered */
+#define RENDERCACHE__BAND_ROWS 128u          /* rows per band of the error diffusion: 9 bands at 1080p */
 
 /* Priority image values (WDP99 priority image, extended to [0, 1]): a point
    rises with age to POINT_MAX; holes rank above every point, the sparser the
@@ -1863,6 +1864,13 @@ typedef struct rendercache__point {
     uint32_t base;           /* frame of insertion + the object's obj_motion then */
     uint32_t object;         /* geo's object, here too for the priority */
 } rendercache__point;
+
+/* A band of the error diffusion (rendercache__diffuse): its count and its
+   marginal choices. */
+typedef struct rendercache__band {
+    uint32_t count, best_add, best_drop;
+    float add_v, drop_v;
+} rendercache__band;
 
 /* What insert needs of a frame whose samples may still come back. */
 typedef struct rendercache__frame_record {
@@ -1930,7 +1938,9 @@ struct rendercache {
     uint32_t *hist;          /* RENDERCACHE__LEVELS per tile, then the merged histogram */
     float *select_v;         /* per pixel: value plus diffused error of the fractional pixels */
     unsigned char *chosen;   /* per pixel: 1 chosen, 2 fractional (error-diffused) */
-    float *err_rows;         /* two rows of diffused error */
+    float *err_rows;         /* per band, two rows of diffused error */
+    rendercache__band *bands;   /* per band: its count and marginal choices */
+    uint32_t band_count;
     unsigned char *occupancy; /* predictive sampling, per job (splat.jobs) cell_count + 1 bytes: the points
                                 that land in the cell, up to 255 (the last byte takes the points that
                                 miss); after rendercache_predict job 0's: the sum over the jobs, and
@@ -2006,7 +2016,7 @@ static void rendercache__reset_points(rendercache *rc)
 static void rendercache__release(rendercache *rc)
 {
     const rendercache_allocator a = rc->alloc;
-    void *blocks[26];
+    void *blocks[27];
     size_t i;
     blocks[0] = rc->geo; blocks[1] = rc->data; blocks[2] = rc->obj_predicted; blocks[3] = rc->obj_motion;
     blocks[4] = rc->depth_out; blocks[5] = rc->obj_world; blocks[6] = rc->obj_local;
@@ -2017,6 +2027,7 @@ static void rendercache__release(rendercache *rc)
     blocks[19] = rc->chosen; blocks[20] = rc->err_rows; blocks[21] = rc->shown;
     blocks[22] = rc->obj_next; blocks[23] = rc->obj_since; blocks[24] = rc->obj_history;
     blocks[25] = rc->history;
+    blocks[26] = rc->bands;
     for (i = 0; i < sizeof blocks / sizeof blocks[0]; i++) rendercache__free(&a, blocks[i]);
     rendercache__splat_free(&rc->splat, &a);
     rendercache__free(&a, rc);
@@ -2053,12 +2064,13 @@ static int rendercache__alloc_buffers(rendercache *rc)
     rc->hist = (uint32_t *)rendercache__alloc_array(a, (size_t)rc->tile_count + 1, RENDERCACHE__LEVELS * sizeof(uint32_t));
     rc->select_v = (float *)rendercache__alloc_array(a, px, sizeof(float));
     rc->chosen = (unsigned char *)rendercache__alloc_array(a, px, 1);
-    rc->err_rows = (float *)rendercache__alloc_array(a, 2 * ((size_t)rc->width + 2), sizeof(float));
+    rc->err_rows = (float *)rendercache__alloc_array(a, 2 * (size_t)rc->band_count * ((size_t)rc->width + 2), sizeof(float));
+    rc->bands = (rendercache__band *)rendercache__alloc_array(a, rc->band_count, sizeof *rc->bands);
     if (!rc->geo || !rc->data || !rc->shown || !rc->obj_predicted || !rc->obj_motion || !rc->obj_world ||
         !rc->obj_local || !rc->obj_next || !rc->obj_since || !rc->obj_history || !rc->history ||
         !rc->obj_camera || !rc->obj_moved || !rc->px_index || !rc->px_depth || !rc->depth_out || !rc->image ||
         !rc->priority || !rc->occupancy || !rc->kind || !rc->count || !rc->tile_stats || !rc->hist ||
-        !rc->select_v || !rc->chosen || !rc->err_rows)
+        !rc->select_v || !rc->chosen || !rc->err_rows || !rc->bands)
         return -1;
     return rendercache__splat_alloc(&rc->splat, rc->width, rc->height,
                                     rc->parallel_for ? RENDERCACHE__SPLAT_JOBS : 1u, 0, a);
@@ -2091,6 +2103,7 @@ static int rendercache__configure(rendercache *rc, const rendercache_desc *d)
     rc->height = d->height;
     rc->pixel_count = d->width * d->height;
     rc->tile_count = (d->height + RENDERCACHE__TILE_ROWS - 1) / RENDERCACHE__TILE_ROWS;
+    rc->band_count = (d->height + RENDERCACHE__BAND_ROWS - 1) / RENDERCACHE__BAND_ROWS;
     rc->cells_x = (d->width + RENDERCACHE__CELL - 1) >> RENDERCACHE__CELL_SHIFT;
     rc->cells_y = (d->height + RENDERCACHE__CELL - 1) >> RENDERCACHE__CELL_SHIFT;
     rc->cell_count = rc->cells_x * rc->cells_y;
@@ -2968,10 +2981,10 @@ static int rendercache__fractional(const rendercache *rc, uint32_t q)
    neighbours keep their weight, renormalised, so error never lands on a
    pixel whose choice is already made (it would be lost there). Returns the
    part that found no taker, for the next fractional pixel in scan order. */
-static float rendercache__spread_error(const rendercache *rc, float *cur, float *next, uint32_t y, int x, int dir,
-                                       float e)
+static float rendercache__spread_error(const rendercache *rc, float *cur, float *next, uint32_t y, uint32_t y_end, int x,
+                                       int dir, float e)
 {
-    int w = (int)rc->width, ax = x + dir, bx = x - dir, below = y + 1 < rc->height;
+    int w = (int)rc->width, ax = x + dir, bx = x - dir, below = y + 1 < y_end;
     float wt[4] = { 7.0f, 3.0f, 5.0f, 1.0f }, sum, s;   /* ahead, behind-below, below, ahead-below */
     uint32_t row = y * rc->width, row_below = row + rc->width;
     if (!below) {   /* last row: everything ahead, if there is an ahead */
@@ -3023,24 +3036,39 @@ static float rendercache__threshold(uint32_t p, uint32_t frame, float amp)
     return 0.5f + amp * ((float)(z >> 8) * (1.0f / 8388608.0f) - 1.0f);
 }
 
-/* Serial serpentine Floyd-Steinberg pass over the fractional pixels (of
-   value fraction, the cut level's share); marks rc->chosen and returns the
-   count. Pixels of value 0 or 1 are decided outright; the error moves
-   among the fractional pixels only, so their count is their total value up
-   to the last carry. Fractional pixels keep value + incoming error in select_v
-   for the count correction. The threshold pass marked them (chosen & 2)
-   and counted the pixels chosen outright (tile statistics column 5). */
-static uint32_t rendercache__diffuse(rendercache *rc, float fraction, uint32_t *best_add, uint32_t *best_drop)
+/* Serpentine Floyd-Steinberg over the fractional pixels (of value
+   fraction, the cut level's share), in bands of RENDERCACHE__BAND_ROWS
+   rows diffused each on its own (in parallel, and the same for any number
+   of threads: the bands do not depend on it): error does not cross from a
+   band into the next, as it does not leave the image at its bottom. Marks
+   rc->chosen and counts the picks per band. Pixels of value 0 or 1 are
+   decided outright; the error moves among the fractional pixels only, so a
+   band's count is its total value up to its last carry. Fractional pixels
+   keep value + incoming error in select_v for the count correction, and
+   each band its marginal choices (the unpicked pixel nearest a pick, the
+   picked one nearest a miss). */
+typedef struct rendercache__diffuse_job {
+    rendercache *rc;
+    float fraction, amp;
+} rendercache__diffuse_job;
+
+static void rendercache__diffuse_band(void *ctx, uint32_t band)
 {
-    uint32_t w = rc->width, h = rc->height, y, count = rendercache__tile_sum(rc, 5);
+    const rendercache__diffuse_job *j = (const rendercache__diffuse_job *)ctx;
+    rendercache *rc = j->rc;
+    rendercache__band *out = &rc->bands[band];
+    const uint32_t w = rc->width, y0 = band * RENDERCACHE__BAND_ROWS;
+    const uint32_t y1 = y0 + RENDERCACHE__BAND_ROWS < rc->height ? y0 + RENDERCACHE__BAND_ROWS : rc->height;
     unsigned char *chosen = rc->chosen;
-    float *select_v = rc->select_v;
-    float add_v = -FLT_MAX, drop_v = FLT_MAX;
-    float *cur = rc->err_rows, *next = rc->err_rows + (w + 2), carry = 0.0f;
-    float amp = RENDERCACHE__MODULATION * (1.0f - fraction / RENDERCACHE__MODULATION_FADE);
-    if (amp < 0.0f) amp = 0.0f;
+    float *select_v = rc->select_v, carry = 0.0f;
+    float *cur = rc->err_rows + 2 * (size_t)band * (w + 2), *next = cur + (w + 2);
+    uint32_t y;
+    out->count = 0;
+    out->best_add = out->best_drop = RENDERCACHE__NONE;
+    out->add_v = -FLT_MAX;
+    out->drop_v = FLT_MAX;
     memset(cur, 0, (w + 2) * sizeof *cur);
-    for (y = 0; y < h; y++) {
+    for (y = y0; y < y1; y++) {
         int dir = (y & 1u) ? -1 : 1, end = dir > 0 ? (int)w : -1, x = dir > 0 ? 0 : (int)w - 1;
         float *t;
         memset(next, 0, (w + 2) * sizeof *next);
@@ -3051,19 +3079,39 @@ static uint32_t rendercache__diffuse(rendercache *rc, float fraction, uint32_t *
             x = rendercache__next_marked(chosen + (size_t)y * w, x, end, dir, 2u);   /* the rest was decided by the threshold */
             if (x == end) break;
             p = y * w + (uint32_t)x;
-            total = fraction + cur[x + 1] + carry;
-            pick = total >= rendercache__threshold(p, (uint32_t)rc->frame, amp) ? 1u : 0u;
+            total = j->fraction + cur[x + 1] + carry;
+            pick = total >= rendercache__threshold(p, (uint32_t)rc->frame, j->amp) ? 1u : 0u;
             e = total - (float)pick;
             select_v[p] = total;
             chosen[p] = (unsigned char)(2u | pick);
-            count += pick;
-            if (pick ? total < drop_v : total > add_v) {   /* the marginal choices, for the correction */
-                if (pick) { drop_v = total; *best_drop = p; }
-                else { add_v = total; *best_add = p; }
+            out->count += pick;
+            if (pick ? total < out->drop_v : total > out->add_v) {   /* the marginal choices, for the correction */
+                if (pick) { out->drop_v = total; out->best_drop = p; }
+                else { out->add_v = total; out->best_add = p; }
             }
-            carry = rendercache__spread_error(rc, cur, next, y, x, dir, e);
+            carry = rendercache__spread_error(rc, cur, next, y, y1, x, dir, e);
         }
         t = cur; cur = next; next = t;
+    }
+}
+
+/* The diffusion of every band; returns the count of the pixels chosen and
+   the image's marginal choices. */
+static uint32_t rendercache__diffuse(rendercache *rc, float fraction, uint32_t *best_add, uint32_t *best_drop)
+{
+    rendercache__diffuse_job job;
+    uint32_t b, count = rendercache__tile_sum(rc, 5);
+    float add_v = -FLT_MAX, drop_v = FLT_MAX;
+    job.rc = rc;
+    job.fraction = fraction;
+    job.amp = RENDERCACHE__MODULATION * (1.0f - fraction / RENDERCACHE__MODULATION_FADE);
+    if (job.amp < 0.0f) job.amp = 0.0f;
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__diffuse_band, &job, rc->band_count);
+    for (b = 0; b < rc->band_count; b++) {   /* in band order: the same for any thread count */
+        const rendercache__band *band = &rc->bands[b];
+        count += band->count;
+        if (band->best_add != RENDERCACHE__NONE && band->add_v > add_v) { add_v = band->add_v; *best_add = band->best_add; }
+        if (band->best_drop != RENDERCACHE__NONE && band->drop_v < drop_v) { drop_v = band->drop_v; *best_drop = band->best_drop; }
     }
     return count;
 }
