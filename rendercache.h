@@ -162,7 +162,10 @@
    HOW A FRAME WORKS (and which published step each part is)
 
        begin_frame: every point is projected into the camera and z-buffered,
-       one point per pixel (WDP99 reprojection); a point much farther than
+       one point per pixel (WDP99 reprojection; with parallel_for, 8 jobs of
+       points share the z-buffer through an atomic minimum of a key that
+       orders by depth, then slot, so any schedule keeps the same point); a
+       point much farther than
        the average depth of its 3x3 neighbourhood, with nearer points on
        opposite sides, is dropped (WDP99 depth cull); holes are filled by a
        3x3 tent filter, or a 7x7 one where points are sparse (WDG02), from
@@ -172,7 +175,8 @@
        around, the higher), and pixels with nothing near at 1 (WDP99).
        request: the levels of the priority image above a threshold are all
        requested, the level at the threshold gets the rest of the budget,
-       spread by Floyd-Steinberg error diffusion (WDP99); with predict, up to
+       spread by Floyd-Steinberg error diffusion (WDP99) in bands of 128 rows
+       diffused in parallel; with predict, up to
        desc.predict_fraction of the budget goes to the regions the next
        camera uncovers: the points are counted in an occupancy image of 1/16
        the resolution (cells of 4x4 pixels) of that camera, and a cell with
@@ -340,9 +344,9 @@
        Render cache: image up to 2^28 pixels, cache up to 2^31 points, up to
        2^24 objects, samples up to 64 frames late. Memory: 41 bytes per cache
        point (2 per pixel by default), 51 bytes per pixel (59 with
-       parallel_for), and about 48 (max_latency + 8) bytes per object: 133
-       bytes per pixel in all (141 with parallel_for), 35 MB for 512x512 and
-       276 MB (292) for 1920x1080. Point
+       parallel_for from a compiler without the GNU atomic builtins), and
+       about 48 (max_latency + 8) bytes per object: 133 bytes per pixel in
+       all, 35 MB for 512x512 and 276 MB for 1920x1080. Point
        colours are fixed when they are inserted (the cache ages them so that
        they get refreshed, and faster where samples find a colour changed);
        view-dependent shading changes only as points are resampled, as in
@@ -350,9 +354,10 @@
        transform of its frame, which the cache keeps for max_latency frames.
        Colour-change detection compares a sample with the one point it
        replaces: with a renderer as noisy as the changes it should see, it
-       sees nothing (its threshold rises with the noise). Error diffusion is
-       sequential by nature and runs on the calling thread; the rest of a
-       frame runs in parallel.
+       sees nothing (its threshold rises with the noise). Error diffusion
+       runs in bands of 128 rows whose error does not cross into the next
+       band (seams a 2-pixel-tall image would not have); the rest of a frame
+       runs in parallel too.
        Walkthroughs: a range image takes 20 bytes per pixel; a warper about
        37 bytes per target pixel (61 with parallel_for, 20 more after a
        motion blend, and 20 per input when averaging) plus, with foreground
@@ -1554,14 +1559,32 @@ static void rendercache__view_compose(const rendercache__view *v, const float m[
    Parallel and deterministic: when the caller gives parallel_for, the
    elements are split into RENDERCACHE__SPLAT_JOBS ranges, each z-buffered
    into its own raster, and the rasters are merged tile by tile (warps
-   merge them within their extraction pass, rendercache__splat_least). The winner
-   of a pixel is the least (depth, element index) in every case, so the
-   result does not depend on the split or on the thread count. (Sorting the
+   merge them within their extraction pass, rendercache__splat_least); a
+   splat of keys only (the render cache) splits them into
+   RENDERCACHE__SHARED_JOBS ranges that share one raster through an atomic
+   minimum, when the compiler has the GNU atomic builtins. The winner of a
+   pixel is the least (depth, element index) in every case, so the result
+   does not depend on the split or on the thread count. (Sorting the
    elements into image bands first, as the tiled cache of Walter et al. 2002
    does, let any number of threads share the z-buffer but cost three times
    as much memory traffic here.)
    ---------------------------------------------------------------------- */
 #define RENDERCACHE__SPLAT_JOBS 2u   /* partial z-buffers when running in parallel */
+#define RENDERCACHE__SHARED_JOBS 8u  /* jobs of a splat into one shared z-buffer (atomic min) */
+
+/* The z-test of a shared z-buffer is an atomic minimum of 64-bit keys
+   (compare and swap): any order of the jobs leaves the same least key.
+   Without the GNU builtins, splats run with one partial z-buffer per job. */
+#if defined(__GNUC__) || defined(__clang__)
+#  define RENDERCACHE__ATOMICS 1
+static void rendercache__atomic_min(uint64_t *p, uint64_t k)
+{
+    uint64_t old = __atomic_load_n(p, __ATOMIC_RELAXED);
+    while (k < old && !__atomic_compare_exchange_n(p, &old, k, 1, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {}
+}
+#else
+#  define RENDERCACHE__ATOMICS 0
+#endif
 #define RENDERCACHE__BATCH 256u      /* elements per source call */
 #define RENDERCACHE__TILE_ROWS 8u    /* image rows per tile job */
 
@@ -1604,11 +1627,12 @@ typedef struct rendercache__zbuffer {
 typedef struct rendercache__splat {
     uint32_t width, height, pixel_count, tile_count;
     uint32_t jobs;           /* z-buffers allocated: 1, or SPLAT_JOBS with parallel_for */
+    int shared;              /* keys only, in parallel: SHARED_JOBS jobs share z-buffer 0 (atomic min) */
     rendercache__raster final;                        /* payload is job 0's */
     rendercache__zbuffer zb[RENDERCACHE__SPLAT_JOBS];
     uint32_t projected;      /* elements that landed in the image in the last run */
     uint32_t ran_jobs;       /* z-buffers the last run filled */
-    uint32_t job_projected[RENDERCACHE__SPLAT_JOBS];
+    uint32_t job_projected[RENDERCACHE__SHARED_JOBS];
 } rendercache__splat;
 
 static void rendercache__splat_free(rendercache__splat *s, const rendercache_allocator *a)
@@ -1658,7 +1682,18 @@ typedef struct rendercache__splat_job {
     const void *src;
     uint32_t element_count, jobs;
     int merge;                         /* 0: s->final is not written; the caller reads the z-buffers */
+    int shared;                        /* the jobs share z-buffer 0 (s->shared, in parallel) */
 } rendercache__splat_job;
+
+/* Job per tile: clears the shared z-buffer (its last key too, past the pixels). */
+static void rendercache__splat_clear(void *ctx, uint32_t tile)
+{
+    const rendercache__splat_job *job = (const rendercache__splat_job *)ctx;
+    const rendercache__splat *s = job->s;
+    uint32_t p0 = tile * RENDERCACHE__TILE_ROWS * s->width, p1 = p0 + RENDERCACHE__TILE_ROWS * s->width, p;
+    if (p1 >= s->pixel_count) p1 = s->pixel_count + 1;
+    for (p = p0; p < p1; p++) s->zb[0].key[p] = RENDERCACHE__EMPTY_KEY;
+}
 
 static uint64_t rendercache__key(float depth, uint32_t element)
 {
@@ -1701,12 +1736,27 @@ static void rendercache__splat_range(void *ctx, uint32_t j)
 {
     const rendercache__splat_job *job = (const rendercache__splat_job *)ctx;
     rendercache__splat *s = job->s;
-    uint64_t *key = s->zb[j].key;
-    float *payload = s->zb[j].payload;
+    uint64_t *key = s->zb[job->shared ? 0 : j].key;
+    float *payload = job->shared ? NULL : s->zb[j].payload;
     uint32_t pix[RENDERCACHE__BATCH], begin, end, b, i, projected = 0;
     float d[RENDERCACHE__BATCH], pay[4 * RENDERCACHE__BATCH];
     begin = (uint32_t)((uint64_t)job->element_count * j / job->jobs);
     end = (uint32_t)((uint64_t)job->element_count * (j + 1) / job->jobs);
+#if RENDERCACHE__ATOMICS
+    if (job->shared) {   /* keys only, z-buffer 0 cleared already */
+        for (b = begin; b < end; b += RENDERCACHE__BATCH) {
+            uint32_t n = end - b < RENDERCACHE__BATCH ? end - b : RENDERCACHE__BATCH;
+            if (!job->source(job->src, b, b + n, pix, d)) continue;
+            for (i = 0; i < n; i++) {
+                if (pix[i] == RENDERCACHE__NONE) continue;
+                rendercache__atomic_min(&key[pix[i]], rendercache__key(d[i], b + i));
+                projected++;
+            }
+        }
+        s->job_projected[j] = projected;
+        return;
+    }
+#endif
     for (i = 0; i <= s->pixel_count; i++) key[i] = RENDERCACHE__EMPTY_KEY;
     if (job->cover) {
         s->job_projected[j] = job->cover(job->src, j, begin, end, &s->zb[j], s->width, s->height);
@@ -1783,10 +1833,17 @@ static void rendercache__splat_execute(rendercache__splat_job *job,
 {
     rendercache__splat *s = job->s;
     uint32_t j;
-    job->jobs = parallel_for ? s->jobs : 1u;
+    job->shared = parallel_for && s->shared && !job->cover && !job->payload;
+    job->jobs = job->shared ? RENDERCACHE__SHARED_JOBS : parallel_for ? s->jobs : 1u;
+    if (job->shared) rendercache__run_jobs(parallel_for, user, rendercache__splat_clear, job, s->tile_count);
     rendercache__run_jobs(parallel_for, user, rendercache__splat_range, job, job->jobs);
-    if (job->merge) rendercache__run_jobs(parallel_for, user, rendercache__splat_merge, job, s->tile_count);
-    s->ran_jobs = job->jobs;
+    s->ran_jobs = job->shared ? 1u : job->jobs;
+    if (job->merge) {
+        uint32_t jobs = job->jobs;
+        job->jobs = s->ran_jobs;   /* the z-buffers to merge */
+        rendercache__run_jobs(parallel_for, user, rendercache__splat_merge, job, s->tile_count);
+        job->jobs = jobs;
+    }
     s->projected = 0;
     for (j = 0; j < job->jobs; j++) s->projected += s->job_projected[j];
 }
@@ -2072,8 +2129,11 @@ static int rendercache__alloc_buffers(rendercache *rc)
         !rc->priority || !rc->occupancy || !rc->kind || !rc->count || !rc->tile_stats || !rc->hist ||
         !rc->select_v || !rc->chosen || !rc->err_rows || !rc->bands)
         return -1;
-    return rendercache__splat_alloc(&rc->splat, rc->width, rc->height,
-                                    rc->parallel_for ? RENDERCACHE__SPLAT_JOBS : 1u, 0, a);
+    if (rendercache__splat_alloc(&rc->splat, rc->width, rc->height,
+                                 rc->parallel_for && !RENDERCACHE__ATOMICS ? RENDERCACHE__SPLAT_JOBS : 1u, 0, a) != 0)
+        return -1;
+    rc->splat.shared = rc->parallel_for != NULL && RENDERCACHE__ATOMICS;
+    return 0;
 }
 
 /* Applies the defaults and checks the ranges of a desc; 0 on bad input. */
@@ -2864,11 +2924,11 @@ RENDERCACHE_API rendercache_result rendercache_predict(rendercache *rc, const re
    spreads the fractional level's requests evenly (with a modulated
    threshold for sparse levels, see below). Pixels of value 0 or 1 are
    decided outright and pass incoming error on unchanged; error that would
-   leave the image goes to the next pixel in scan order instead, so the
-   count equals the budget up to the last pixel's residual, which a final
-   pass corrects with the pixels closest to the threshold. Each decision
-   depends on the previous ones, so this step is serial; everything around
-   it runs in tiles.
+   leave the image (or its band) goes to the next pixel in scan order
+   instead, so the count equals the budget up to each band's last residual,
+   which a final pass corrects with the pixels closest to the threshold.
+   Each decision depends on the previous ones, so a band is serial; the
+   bands of 128 rows run in parallel, and everything around them in tiles.
    ---------------------------------------------------------------------- */
 typedef struct rendercache__select_job {
     rendercache *rc;
