@@ -498,6 +498,20 @@ static void nim_render(ex_pool *pool, nim_view *v)
     ex_pool_parallel_for(pool, nim_rows, v, v->camera->height);
 }
 
+/* An image of camera with the grid's indirect light (ind NULL: none). */
+static void nim_image(ex_pool *pool, const ex_tracer *t, const ex_indirect *ind, const float *irradiance,
+                      const rendercache_camera *camera, float *rgb)
+{
+    nim_view v;
+    memset(&v, 0, sizeof v);
+    v.tracer = t;
+    v.ind = ind;
+    v.irradiance = irradiance;
+    v.camera = camera;
+    v.rgb = rgb;
+    nim_render(pool, &v);
+}
+
 static rendercache_camera nim_camera(rendercache_camera_kind kind, const float eye[3], const float at[3], uint32_t w,
                                      uint32_t h)
 {
@@ -553,7 +567,6 @@ static void nim_table1(ex_pool *pool)
         ex_indirect ind;
         ex_indirect_desc d;
         float *values;
-        nim_view v;
         memset(&d, 0, sizeof d);
         d.tracer = tracer;
         d.scene = &office;
@@ -571,13 +584,7 @@ static void nim_table1(ex_pool *pool)
         nodes[q] = ind.node_count;
         seconds[q] = ind.seconds;
         for (f = reduced[q] = 0; f < ind.face_count; f++) reduced[q] += ind.faces[f].nu * ind.faces[f].nv == 1;
-        memset(&v, 0, sizeof v);
-        v.tracer = tracer;
-        v.ind = &ind;
-        v.irradiance = values;
-        v.camera = &cam;
-        v.rgb = img[q];
-        nim_render(pool, &v);
+        nim_image(pool, tracer, &ind, values, &cam, img[q]);
         rendercache_lrms(img[3], img[q], cam.width, cam.height, &lrms[q]);
         free(values);
         ex_indirect_free(&ind);
@@ -684,17 +691,10 @@ static void nim_tables24(ex_pool *pool, int table)
     ref = (float *)malloc(sizeof(float) * 3 * 160 * 160);
     if (!exact || !values || !img || !ref) exit(1);
     {   /* the reference of table 2: the indirect light gathered at the frame's own time */
-        nim_view v;
         double t0;
         nim_solve(&b, t_test, exact);
-        memset(&v, 0, sizeof v);
-        v.tracer = b.tracer;
-        v.ind = &b.ind;
-        v.irradiance = exact;
-        v.camera = &cam;
-        v.rgb = ref;
         t0 = now_seconds(NULL);
-        nim_render(pool, &v);
+        nim_image(pool, b.tracer, &b.ind, exact, &cam, ref);
         render_s = now_seconds(NULL) - t0;
     }
     if (table == 2) {
@@ -705,7 +705,6 @@ static void nim_tables24(ex_pool *pool, int table)
     for (q = 0; q < 3 && table == 2; q++) {
         rendercache_keytime_desc kd;
         rendercache_keytimes *kt = NULL;
-        nim_view v;
         double seconds = b.ind.seconds, t0, lrms;
         memset(&kd, 0, sizeof kd);
         kd.element_count = b.ind.node_count;
@@ -721,13 +720,7 @@ static void nim_tables24(ex_pool *pool, int table)
         rendercache_keytimes_eval(kt, t_test, values, 3 * (size_t)b.ind.node_count);
         t0 = now_seconds(NULL) - t0;
         nim_box_time(&b, t_test);
-        memset(&v, 0, sizeof v);
-        v.tracer = b.tracer;
-        v.ind = &b.ind;
-        v.irradiance = values;
-        v.camera = &cam;
-        v.rgb = img;
-        nim_render(pool, &v);
+        nim_image(pool, b.tracer, &b.ind, values, &cam, img);
         rendercache_lrms(ref, img, 160, 160, &lrms);
         printf("  %-8.1f %6u %16.2f %18.3f %14.1f %10.4f\n", (double)qs[q], rendercache_keytimes_count(kt),
                b.ind.seconds - seconds, 1e3 * t0, 1e3 * render_s, lrms);
@@ -747,15 +740,8 @@ static void nim_tables24(ex_pool *pool, int table)
         printf("  %-8s %6s %16s %22s %22s  %s\n", "quality", "keys", "decompose (s)", "LRMS pixelwise (pcomb)",
                "LRMS motion-compensated", "time list");
     }
-    {
-        nim_view v;
-        memset(&v, 0, sizeof v);
-        v.tracer = b.tracer;
-        v.camera = &cam;
-        v.rgb = ref;
-        nim_box_time(&b, t_test);
-        nim_render(pool, &v);   /* frame 10 rendered at its time */
-    }
+    nim_box_time(&b, t_test);
+    if (table == 4) nim_image(pool, b.tracer, NULL, NULL, &cam, ref);   /* frame 10 rendered at its time */
     for (q = 0; q < 3 && table == 4; q++) {
         rendercache_time_desc td;
         double ends[2] = { 0.0, 1.0 }, *times = NULL, t0 = now_seconds(NULL), lrms[2];
@@ -786,12 +772,10 @@ static void nim_tables24(ex_pool *pool, int table)
             if (!ids || rendercache_range_image_create(&cam, NULL, &key[i]) != RENDERCACHE_OK) exit(1);
             key[i]->time = times[k + i];
             nim_box_time(&b, times[k + i]);
+            nim_image(pool, b.tracer, NULL, NULL, &cam, key[i]->rgb);
             memset(&v, 0, sizeof v);
             v.tracer = b.tracer;
             v.camera = &cam;
-            v.rgb = key[i]->rgb;
-            nim_render(pool, &v);
-            v.rgb = NULL;
             v.ids = ids;
             v.instance_faces = b.box.face_count;
             nim_render(pool, &v);
