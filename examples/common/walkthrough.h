@@ -40,10 +40,13 @@
                 agree on a fraction q of their pixels (base views), key
                 times are refined with the same test (a fish-eye at the lamp
                 and the base views), base images are traced with the shading
-                above and saved; a frame blends the base images of the two
-                views around its eye to its time, moving the bunny by its
-                transforms, and warps them into its camera with both fills
-                (pixels still empty are traced).
+                above and saved; the bunny's indirect light is solved at key
+                times of its own (rendercache_keytimes_create, section 4.3)
+                and interpolated in time for the base images. A frame blends
+                the base images of the two views around its eye to its time,
+                moving the bunny by its transforms, and warps them into its
+                camera with both fills, averaging the views that see a
+                surface (pinterp -a); gaps wider than 8 pixels are traced.
      radiosity  the static office shaded per pixel by Hardt's quadratic
                 irradiance interpolants (radinterp.h) from an ID +
                 barycentric buffer (examples/common/raster.h), the bunny
