@@ -2,7 +2,8 @@
    the bytes as a range image; an image that loads must have a camera that
    casts rays through its pixels and projects points along them, blend with
    itself and give its fitness (pixelwise, so every array is read whole under
-   ASan), and save to bytes that load again and save to the same bytes. (Pixels
+   ASan), warp into other views (both fills, and averaged) giving finite
+   colours, and save to bytes that load again and save to the same bytes. (Pixels
    without a surface load with the far depth whatever depth the file gave
    them, so the first save may differ from the input.) */
 #define RENDERCACHE_IMPLEMENTATION
@@ -52,6 +53,47 @@ static void blend_and_fitness(const rendercache_range_image *img)
     rendercache_range_image_destroy(out);
 }
 
+/* Warps the image into a small perspective view and a small sphere from its
+   own eye, and into a view from a point a tenth of the way to what it looks
+   at, with both fills (and once averaged): every warp succeeds and every
+   output colour is finite (the inputs' are). */
+static void warp_views(const rendercache_range_image *img)
+{
+    rendercache_camera cams[3];
+    rendercache_warp_desc wd;
+    const rendercache_range_image *in[1];
+    int i, k;
+    in[0] = img;
+    for (i = 0; i < 3; i++) {
+        cams[i] = img->camera;
+        cams[i].kind = i == 1 ? RENDERCACHE_CAMERA_SPHERE : RENDERCACHE_CAMERA_PERSPECTIVE;
+        cams[i].vfov_degrees = 60.0f;
+        cams[i].width = i == 1 ? 8 : 12;
+        cams[i].height = i == 1 ? 4 : 9;
+    }
+    for (k = 0; k < 3; k++)   /* the moved eye: 0.9 eye + 0.1 look_at (a warp may refuse it as a camera) */
+        cams[2].eye[k] = 0.9f * img->camera.eye[k] + 0.1f * img->camera.look_at[k];
+    memset(&wd, 0, sizeof wd);
+    for (i = 0; i < 4; i++) {
+        rendercache_warper *w = NULL;
+        rendercache_range_image *out = NULL;
+        const rendercache_camera *cam = &cams[i < 3 ? i : 0];
+        size_t n, p;
+        wd.average = i == 3;
+        if (rendercache_warper_create(&wd, &w) != RENDERCACHE_OK) return;   /* out of memory */
+        if (rendercache_range_image_create(cam, NULL, &out) == RENDERCACHE_OK) {
+            rendercache_result r = rendercache_warp(w, in, 1, cam, RENDERCACHE_FILL_BOTH, out);
+            fuzz_require(r == RENDERCACHE_OK || (i == 2 && r == RENDERCACHE_ERROR_INVALID_ARGUMENT),
+                         "a loaded image did not warp");
+            n = (size_t)cam->width * cam->height;
+            for (p = 0; r == RENDERCACHE_OK && p < 3 * n; p++)
+                fuzz_require(isfinite(out->rgb[p]), "a warp of finite colours gave a colour that is not finite");
+            rendercache_range_image_destroy(out);
+        }
+        rendercache_warper_destroy(w);
+    }
+}
+
 /* save, load, save: the two saves are the same bytes. */
 static void check_save_is_stable(const rendercache_range_image *img)
 {
@@ -80,6 +122,7 @@ static fuzz_outcome load_image(const uint8_t *data, size_t size)
     }
     cast_rays(img);
     blend_and_fitness(img);
+    warp_views(img);
     check_save_is_stable(img);
     rendercache_range_image_destroy(img);
     return FUZZ_LOADED;
