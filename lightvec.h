@@ -281,6 +281,9 @@ typedef struct lightvec_record {
 
 /* ---- scene and built-in renderer ---------------------------------------- */
 
+/* Largest triangle_count: 3 * count indices stay addressable in 32 bits. */
+#define LIGHTVEC_MAX_TRIANGLES 0x55555555u
+
 typedef struct lightvec_scene_desc {
     const float *positions;      /* xyz per vertex */
     size_t stride;               /* bytes between vertices; 0 = 3 floats */
@@ -1363,6 +1366,7 @@ struct lightvec_scene {
 static lightvec_result lightvec__scene_validate(const lightvec_scene_desc *d)
 {
     uint32_t i;
+    uint64_t k, index_count;
     size_t stride;
     if (!d->positions || !d->indices || !d->materials || d->vertex_count == 0 || d->triangle_count == 0 ||
         d->material_count == 0)
@@ -1370,7 +1374,10 @@ static lightvec_result lightvec__scene_validate(const lightvec_scene_desc *d)
     if (!lightvec__allocator_valid(&d->allocator)) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
     stride = d->stride ? d->stride : 3 * sizeof(float);
     if (stride < 3 * sizeof(float) || stride % sizeof(float)) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
-    if ((uint64_t)d->triangle_count * 3u > (uint64_t)SIZE_MAX / sizeof(float)) return LIGHTVEC_ERROR_OUT_OF_MEMORY;
+    /* 3 * triangle_count is counted in 64 bits: in 32 it wraps past 0x55555555 */
+    if (d->triangle_count > LIGHTVEC_MAX_TRIANGLES) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    index_count = 3u * (uint64_t)d->triangle_count;
+    if (index_count > (uint64_t)SIZE_MAX / (9u * sizeof(float))) return LIGHTVEC_ERROR_OUT_OF_MEMORY;
     for (i = 0; i < d->vertex_count; i++) {
         const float *p = (const float *)((const char *)d->positions + (size_t)i * stride);
         if (!lightvec__finite3(p)) {
@@ -1379,10 +1386,10 @@ static lightvec_result lightvec__scene_validate(const lightvec_scene_desc *d)
             return LIGHTVEC_ERROR_INVALID_ARGUMENT;
         }
     }
-    for (i = 0; i < 3 * d->triangle_count; i++)
-        if (d->indices[i] >= d->vertex_count) {
+    for (k = 0; k < index_count; k++)
+        if (d->indices[k] >= d->vertex_count) {
             lightvec__logf(d->log, d->log_user, "lightvec: index %lld out of range (%lld vertices)",
-                           (long long)i, (long long)d->vertex_count);
+                           (long long)k, (long long)d->vertex_count);
             return LIGHTVEC_ERROR_INVALID_ARGUMENT;
         }
     if (d->material_ids)
@@ -1406,15 +1413,15 @@ static int lightvec__scene_fill(lightvec_scene *s, const lightvec_scene_desc *d,
     float diag;
     lightvec__box_empty(s->lo, s->hi);
     for (i = 0; i < d->triangle_count; i++) {
-        const float *p0 = lightvec__vertex(m, d->indices[3 * i]);
-        const float *p1 = lightvec__vertex(m, d->indices[3 * i + 1]);
-        const float *p2 = lightvec__vertex(m, d->indices[3 * i + 2]);
+        const float *p0 = lightvec__vertex(m, d->indices[(size_t)3 * i]);
+        const float *p1 = lightvec__vertex(m, d->indices[(size_t)3 * i + 1]);
+        const float *p2 = lightvec__vertex(m, d->indices[(size_t)3 * i + 2]);
         lightvec__vec3 c = lightvec__cross(lightvec__sub(lightvec__v3_load(p1), lightvec__v3_load(p0)),
                                            lightvec__sub(lightvec__v3_load(p2), lightvec__v3_load(p0)));
         uint32_t mat = d->material_ids ? d->material_ids[i] : 0u;
         lightvec__vec3 n = lightvec__normalize(c);
         if (lightvec__dot(c, c) == 0.0f || !isfinite(n.x)) n = lightvec__v3(0.0f, 0.0f, 0.0f);
-        s->normals[3 * i] = n.x; s->normals[3 * i + 1] = n.y; s->normals[3 * i + 2] = n.z;
+        s->normals[(size_t)3 * i] = n.x; s->normals[(size_t)3 * i + 1] = n.y; s->normals[(size_t)3 * i + 2] = n.z;
         s->tri_material[i] = mat;
         lightvec__box_grow(s->lo, s->hi, p0, p0);
         lightvec__box_grow(s->lo, s->hi, p1, p1);
@@ -1422,10 +1429,10 @@ static int lightvec__scene_fill(lightvec_scene *s, const lightvec_scene_desc *d,
         if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f) continue;
         if (lightvec__lumf(d->materials[mat].emission) > 0.0f) {
             double area = 0.5 * (double)lightvec__length(c);
-            memcpy(s->emit_verts + 9 * e, p0, 3 * sizeof(float));
-            memcpy(s->emit_verts + 9 * e + 3, p1, 3 * sizeof(float));
-            memcpy(s->emit_verts + 9 * e + 6, p2, 3 * sizeof(float));
-            s->emit_normal[3 * e] = n.x; s->emit_normal[3 * e + 1] = n.y; s->emit_normal[3 * e + 2] = n.z;
+            memcpy(s->emit_verts + (size_t)9 * e, p0, 3 * sizeof(float));
+            memcpy(s->emit_verts + (size_t)9 * e + 3, p1, 3 * sizeof(float));
+            memcpy(s->emit_verts + (size_t)9 * e + 6, p2, 3 * sizeof(float));
+            s->emit_normal[(size_t)3 * e] = n.x; s->emit_normal[(size_t)3 * e + 1] = n.y; s->emit_normal[(size_t)3 * e + 2] = n.z;
             s->emit_material[e] = mat;
             s->emit_cdf[e] = (float)(area * lightvec__lumf(d->materials[mat].emission)); /* weight for now */
             s->emit_inv_pdf[e] = (float)area;
@@ -1495,7 +1502,8 @@ LIGHTVEC_API lightvec_result lightvec_scene_create(const lightvec_scene_desc *de
     } else {
         uint32_t i;
         for (i = 0; i < n; i++)
-            if (s->normals[3 * i] == 0.0f && s->normals[3 * i + 1] == 0.0f && s->normals[3 * i + 2] == 0.0f)
+            if (s->normals[(size_t)3 * i] == 0.0f && s->normals[(size_t)3 * i + 1] == 0.0f &&
+                s->normals[(size_t)3 * i + 2] == 0.0f)
                 s->degenerate_count++;
     }
     *out = s;
@@ -1593,7 +1601,7 @@ static uint32_t lightvec__pick_emitter(const lightvec_scene *s, float u)
 /* Uniform point on emitter e from (u, v) in [0,1)^2 (square-root warp). */
 static lightvec__vec3 lightvec__emitter_point(const lightvec_scene *s, uint32_t e, float u, float v)
 {
-    const float *t = s->emit_verts + 9 * e;
+    const float *t = s->emit_verts + (size_t)9 * e;
     float su = sqrtf(u), b0 = 1.0f - su, b1 = su * (1.0f - v), b2 = su * v;
     return lightvec__v3(b0 * t[0] + b1 * t[3] + b2 * t[6], b0 * t[1] + b1 * t[4] + b2 * t[7],
                         b0 * t[2] + b1 * t[5] + b2 * t[8]);
@@ -1619,7 +1627,7 @@ static int lightvec__sample_emitter(const lightvec_scene *s, uint32_t e, lightve
     ls->dir = lightvec__scale(d, 1.0f / r);
     ls->dist = r;
     ls->cos_x = lightvec__dot(n, ls->dir);
-    ls->cos_l = -lightvec__dot(lightvec__v3_load(s->emit_normal + 3 * e), ls->dir);
+    ls->cos_l = -lightvec__dot(lightvec__v3_load(s->emit_normal + (size_t)3 * e), ls->dir);
     ls->inv_pdf = s->emit_inv_pdf[e];
     ls->emitter = e;
     return ls->cos_x > 0.0f && ls->cos_l > 0.0f;
@@ -1675,7 +1683,7 @@ static void lightvec__path_radiance(const lightvec_scene *s, lightvec__rng *rng,
     out[0] = out[1] = out[2] = 0.0;
     for (b = 0; b < bounces; b++) {
         lightvec__vec3 y = lightvec__add(org, lightvec__scale(dir, hit.t));
-        lightvec__vec3 n = lightvec__v3_load(s->normals + 3 * hit.tri), t, bt, d;
+        lightvec__vec3 n = lightvec__v3_load(s->normals + (size_t)3 * hit.tri), t, bt, d;
         const float *rho = s->materials[s->tri_material[hit.tri]].diffuse;
         double e[3];
         float u1, u2, r, phi;
@@ -1982,7 +1990,7 @@ LIGHTVEC_API lightvec_result lightvec_gather_direct(const lightvec_scene *s, con
             }
             {
                 double y = lightvec__lumf(le) * solid;
-                lightvec__vec3 nl = lightvec__v3_load(s->emit_normal + 3 * ls.emitter);
+                lightvec__vec3 nl = lightvec__v3_load(s->emit_normal + (size_t)3 * ls.emitter);
                 lightvec__vec3 dg = lightvec__add(lightvec__add(lightvec__scale(n, -ls.cos_l), lightvec__scale(nl, ls.cos_x)),
                                                   lightvec__scale(ls.dir, 4.0f * ls.cos_x * ls.cos_l));
                 double sc = ls.inv_pdf / ((double)ls.dist * ls.dist * ls.dist);
