@@ -2719,18 +2719,21 @@ static lightvec__index *lightvec__index_single(lightvec_cache *c, const lightvec
 
 static int lightvec__face_fill(lightvec_cache *c, lightvec__face *f, lightvec__item *items, uint32_t n);
 
-/* Splits f into four children holding items[0, n) (figure 4), recursively
-   while a child still holds more than the threshold. Publishes the children. */
-static int lightvec__face_split_items(lightvec_cache *c, lightvec__face *f, lightvec__item *items, uint32_t n)
+/* The four children of f holding items[0, n) (figure 4), split again while a
+   child still holds more than the threshold. Not published: the caller stores
+   the pointer into f->children when the rest of its change is ready. NULL
+   when out of memory (nothing is left allocated). */
+static lightvec__face *lightvec__face_children(lightvec_cache *c, lightvec__face *f, const lightvec__item *items,
+                                               uint32_t n)
 {
     lightvec__face *ch = (lightvec__face *)lightvec__alloc_array(&c->a, 4, sizeof(lightvec__face));
     lightvec__item *tmp = (lightvec__item *)lightvec__alloc_array(&c->a, n, sizeof(lightvec__item));
     uint32_t count[4] = { 0, 0, 0, 0 }, start[4], i;
-    int k;
+    int k, failed = 0;
     if (!ch || !tmp) {
         lightvec__free(&c->a, ch);
         lightvec__free(&c->a, tmp);
-        return -1;
+        return NULL;
     }
     lightvec__make_children(f, ch);
     for (i = 0; i < n; i++) count[lightvec__child_of(f, items[i].outgoing)]++;
@@ -2738,24 +2741,27 @@ static int lightvec__face_split_items(lightvec_cache *c, lightvec__face *f, ligh
     for (k = 1; k < 4; k++) start[k] = start[k - 1] + count[k - 1];
     for (i = 0; i < n; i++) tmp[start[lightvec__child_of(f, items[i].outgoing)]++] = items[i];
     for (k = 0; k < 4; k++) start[k] -= count[k];
-    for (k = 0; k < 4; k++)
-        if (lightvec__face_fill(c, &ch[k], tmp + start[k], count[k]) != 0) {
-            for (k = 0; k < 4; k++) lightvec__face_free(c, &ch[k]);
-            lightvec__free(&c->a, ch);
-            lightvec__free(&c->a, tmp);
-            return -1;
-        }
+    for (k = 0; k < 4 && !failed; k++) failed = lightvec__face_fill(c, &ch[k], tmp + start[k], count[k]) != 0;
     lightvec__free(&c->a, tmp);
-    lightvec__store_ptr(&f->children, ch);
-    f->count = 0;
-    return 0;
+    if (failed) {
+        for (k = 0; k < 4; k++) lightvec__face_free(c, &ch[k]);
+        lightvec__free(&c->a, ch);
+        return NULL;
+    }
+    return ch;
 }
 
 /* Fills an empty face with items[0, n): children while the threshold allows,
    else one kd-tree. */
 static int lightvec__face_fill(lightvec_cache *c, lightvec__face *f, lightvec__item *items, uint32_t n)
 {
-    if (n > c->p.split_threshold && lightvec__can_split(c, f)) return lightvec__face_split_items(c, f, items, n);
+    if (n > c->p.split_threshold && lightvec__can_split(c, f)) {
+        lightvec__face *ch = lightvec__face_children(c, f, items, n);
+        if (!ch) return -1;
+        lightvec__store_ptr(&f->children, ch);
+        f->count = 0;
+        return 0;
+    }
     if (n) {
         lightvec__index *idx = lightvec__index_single(c, items, n);
         if (!idx) return -1;
@@ -2800,25 +2806,34 @@ static int lightvec__merge(lightvec_cache *c, lightvec__face *f)
     return 0;
 }
 
-/* Splits a leaf holding more than the threshold (section 3.2, figure 4). */
-static int lightvec__split(lightvec_cache *c, lightvec__face *f)
+/* The children of leaf f holding its items and one more (section 3.2,
+   figure 4), unpublished; NULL when out of memory. */
+static lightvec__face *lightvec__split_with(lightvec_cache *c, lightvec__face *f, const lightvec__item *extra)
+{
+    const lightvec__index *old = (const lightvec__index *)f->index;
+    lightvec__item *items = (lightvec__item *)lightvec__alloc_array(&c->a, (size_t)f->count + 1u, sizeof *items);
+    lightvec__face *ch;
+    uint32_t n = 0;
+    if (!items) return NULL;
+    if (old) n = lightvec__index_items(old, old->tree_count, items);
+    items[n++] = *extra;
+    ch = lightvec__face_children(c, f, items, n);
+    lightvec__free(&c->a, items);
+    return ch;
+}
+
+/* Publishes the children of a split leaf. f->index keeps pointing at the
+   retired index: a reader that saw no children a moment ago still finds every
+   record there, and readers that see the children never read it again. */
+static void lightvec__publish_split(lightvec_cache *c, lightvec__face *f, lightvec__face *ch)
 {
     lightvec__index *old = (lightvec__index *)f->index;
-    lightvec__item *items = (lightvec__item *)lightvec__alloc_array(&c->a, f->count, sizeof *items);
-    uint32_t i, n;
-    if (!items) return -1;
-    n = lightvec__index_items(old, old->tree_count, items);
-    if (lightvec__face_split_items(c, f, items, n) != 0) {
-        lightvec__free(&c->a, items);
-        return -1;
-    }
-    lightvec__free(&c->a, items);
-    /* f->index keeps pointing at the retired index: a reader that saw no
-       children a moment ago still finds every record there, and readers that
-       see the children never read it again */
+    uint32_t i;
+    lightvec__store_ptr(&f->children, ch);
+    f->count = 0;
+    if (!old) return;
     for (i = 0; i < old->tree_count; i++) lightvec__retire(c, old->trees[i], old->trees[i]->bytes);
     lightvec__retire(c, old, sizeof *old);
-    return 0;
 }
 
 /* Room for one more item in leaf f: its first index, or a merged tail. */
@@ -2918,14 +2933,24 @@ LIGHTVEC_API lightvec_result lightvec_insert(lightvec_cache *c, const lightvec_r
     id = c->record_count;
     if (id == 0xFFFFFFFFu) return LIGHTVEC_ERROR_OUT_OF_MEMORY;
     slot = lightvec__record_reserve(c, id);
+    if (!slot) return LIGHTVEC_ERROR_OUT_OF_MEMORY;
     f = lightvec__leaf_for(c, &clean);
-    if (!slot || lightvec__face_prepare(c, f) != 0) return LIGHTVEC_ERROR_OUT_OF_MEMORY;
-    *slot = clean;
-    lightvec__store_u32(&c->record_count, id + 1u);
     lightvec__make_item(&c->p, &clean, id, &it);
-    lightvec__face_push(f, &it);
-    if (f->count > c->p.split_threshold && lightvec__can_split(c, f) && lightvec__split(c, f) != 0 && c->log)
-        c->log(c->log_user, "lightvec: out of memory splitting a face; it stays a leaf for now");
+    /* Everything that can fail happens before the record is published: on an
+       error the cache is as it was. The record count is published before the
+       item, so a reader that finds the item can read its record. */
+    if (f->count + 1u > c->p.split_threshold && lightvec__can_split(c, f)) {
+        lightvec__face *ch = lightvec__split_with(c, f, &it);
+        if (!ch) return LIGHTVEC_ERROR_OUT_OF_MEMORY;
+        *slot = clean;
+        lightvec__store_u32(&c->record_count, id + 1u);
+        lightvec__publish_split(c, f, ch);
+    } else {
+        if (lightvec__face_prepare(c, f) != 0) return LIGHTVEC_ERROR_OUT_OF_MEMORY;
+        *slot = clean;
+        lightvec__store_u32(&c->record_count, id + 1u);
+        lightvec__face_push(f, &it);
+    }
     lightvec__maybe_reclaim(c);
     if (id_out) *id_out = id;
     return LIGHTVEC_OK;

@@ -720,7 +720,7 @@ static void test_allocation_failures(void)
         failures += res != LIGHTVEC_OK;
         if (cnt.allocs != cnt.frees) { CHECK_MSG(0, "fail at %ld: %ld allocs, %ld frees", k, cnt.allocs, cnt.frees); break; }
     }
-    CHECK(failures > total / 2); /* most failures surface; a failed split is retried later */
+    CHECK(failures > total / 2); /* most failures surface; a full list of memory awaiting readers is absorbed */
 }
 
 /* ---- progress and cancel ------------------------------------------------------------------ */

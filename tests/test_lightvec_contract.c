@@ -84,9 +84,147 @@ static void test_triangle_count_wraps_32_bits(void)
     }
 }
 
+/* ---- issue 17, defect 9: a face split or an optimize without memory -------------------------- */
+
+typedef struct lcg { uint64_t s; } lcg;
+static float lcg_float(lcg *r)
+{
+    r->s = r->s * 6364136223846793005ull + 1442695040888963407ull;
+    return (float)(r->s >> 40) * (1.0f / 16777216.0f);
+}
+
+/* Records in the unit cube viewed from a few directions: faces split often
+   with threshold 24. */
+static void split_record(lcg *r, lightvec_record *rec)
+{
+    int k;
+    memset(rec, 0, sizeof *rec);
+    for (k = 0; k < 3; k++) rec->position[k] = lcg_float(r);
+    rec->normal[2] = 1.0f;
+    rec->outgoing[0] = 0.3f * lcg_float(r);
+    rec->outgoing[1] = 0.3f * lcg_float(r) - 0.15f;
+    rec->outgoing[2] = 1.0f;
+    rec->vector.direction[2] = 1.0f;
+    for (k = 0; k < 3; k++) rec->vector.magnitude[k] = rec->irradiance[k] = 1.0f;
+    rec->distance = 0.3f;
+    rec->visibility = 1.0f;
+}
+
+typedef struct shape { uint64_t faces, leaves, trees, records; } shape;
+
+static int same_shape(const shape *a, const shape *b)
+{
+    return a->faces == b->faces && a->leaves == b->leaves && a->trees == b->trees && a->records == b->records;
+}
+
+static shape shape_of(const lightvec_cache *c)
+{
+    lightvec_cache_stats st;
+    shape s;
+    lightvec_cache_info(c, &st);
+    s.faces = st.face_count;
+    s.leaves = st.leaf_count;
+    s.trees = st.tree_count;
+    s.records = st.record_count;
+    return s;
+}
+
+#define SPLIT_RECORDS 400
+
+/* Inserts SPLIT_RECORDS records then optimizes, with allocation fail_at
+   (counted after create) refused. A call that refuses is repeated once
+   (the refusal is one-shot). Every call that answers OK leaves the cache
+   shaped exactly as the run without failures at the same step (a refused
+   allocation it absorbed, such as the list of memory awaiting readers, must
+   not change the result); every call that answers OUT_OF_MEMORY leaves it as
+   before the call. Returns the number of calls that answered an error. */
+static int split_scenario(long fail_at, shape *reference, int *mismatches)
+{
+    lightvec_cache_desc d;
+    lightvec_cache *c = NULL;
+    tally t;
+    lcg r;
+    int errors = 0, i;
+    memset(&d, 0, sizeof d);
+    d.allocator = tally_allocator(&t);
+    d.face_split_threshold = 24;
+    d.max_direction_angle = 1.0f;
+    if (!CHECK(lightvec_cache_create(&d, &c) == LIGHTVEC_OK)) return 0;
+    if (fail_at >= 0) t.fail_at = t.allocs + fail_at;
+    r.s = 3;
+    for (i = 0; i <= SPLIT_RECORDS; i++) {
+        shape before = shape_of(c), after;
+        lightvec_record rec;
+        lightvec_result res;
+        if (i < SPLIT_RECORDS) {
+            split_record(&r, &rec);
+            res = lightvec_insert(c, &rec, NULL);
+        } else {
+            res = lightvec_cache_optimize(c);
+        }
+        after = shape_of(c);
+        if (res == LIGHTVEC_ERROR_OUT_OF_MEMORY) {
+            errors++;
+            if (i < SPLIT_RECORDS && !same_shape(&before, &after)) (*mismatches)++;
+            res = i < SPLIT_RECORDS ? lightvec_insert(c, &rec, NULL) : lightvec_cache_optimize(c);
+            after = shape_of(c);
+        }
+        if (!CHECK_MSG(res == LIGHTVEC_OK, "fail at %ld, step %d: %s", fail_at, i, lightvec_result_string(res))) break;
+        if (fail_at < 0) reference[i] = after;
+        else if (!same_shape(&reference[i], &after)) {
+            if (*mismatches < 3)
+                test_note("fail at %ld, step %d: %llu faces, %llu trees (without failures %llu, %llu)", fail_at, i,
+                          (unsigned long long)after.faces, (unsigned long long)after.trees,
+                          (unsigned long long)reference[i].faces, (unsigned long long)reference[i].trees);
+            (*mismatches)++;
+        }
+    }
+    lightvec_cache_destroy(c);
+    CHECK_EQ_INT(t.allocs, t.frees);
+    return errors;
+}
+
+static void test_split_and_optimize_out_of_memory(void)
+{
+    static shape reference[SPLIT_RECORDS + 1];
+    tally t;
+    long k, total;
+    int errors = 0, mismatches = 0;
+    lightvec_cache_desc d;
+    lightvec_cache *c = NULL;
+    split_scenario(-1, reference, &mismatches);
+    CHECK(reference[SPLIT_RECORDS - 1].faces > 40); /* splits happened */
+    /* the number of allocations after create */
+    memset(&d, 0, sizeof d);
+    d.allocator = tally_allocator(&t);
+    d.face_split_threshold = 24;
+    d.max_direction_angle = 1.0f;
+    {
+        lcg r;
+        int i;
+        long base;
+        lightvec_cache_create(&d, &c);
+        base = t.allocs;
+        r.s = 3;
+        for (i = 0; i < SPLIT_RECORDS; i++) {
+            lightvec_record rec;
+            split_record(&r, &rec);
+            lightvec_insert(c, &rec, NULL);
+        }
+        lightvec_cache_optimize(c);
+        total = t.allocs - base;
+        lightvec_cache_destroy(c);
+    }
+    for (k = 0; k < total; k++) errors += split_scenario(k, reference, &mismatches);
+    test_note("%ld allocations refused one at a time: %d calls answered out of memory", total, errors);
+    CHECK_EQ_INT(mismatches, 0);
+    CHECK(errors > total / 2); /* most refusals surface; the rest are absorbed without a change */
+}
+
 int main(int argc, char **argv)
 {
     TEST_INIT(argc, argv);
     RUN(test_triangle_count_wraps_32_bits);
+    RUN(test_split_and_optimize_out_of_memory);
     return test_finish();
 }
