@@ -424,14 +424,14 @@ LIGHTVEC_API void lightvec_radiance(const lightvec_material *m, const float norm
 LIGHTVEC_API lightvec_result lightvec_cache_create(const lightvec_cache_desc *desc, lightvec_cache **out);
 LIGHTVEC_API void lightvec_cache_destroy(lightvec_cache *cache);
 LIGHTVEC_API lightvec_result lightvec_insert(lightvec_cache *cache, const lightvec_record *record, uint32_t *id);
-LIGHTVEC_API lightvec_result lightvec_lookup(lightvec_cache *cache, const float position[3], const float normal[3],
+LIGHTVEC_API lightvec_result lightvec_lookup(const lightvec_cache *cache, const float position[3], const float normal[3],
                                              const float *outgoing, lightvec_lookup_result *out);
-LIGHTVEC_API lightvec_result lightvec_find(lightvec_cache *cache, const float position[3], const float normal[3],
+LIGHTVEC_API lightvec_result lightvec_find(const lightvec_cache *cache, const float position[3], const float normal[3],
                                            const float *outgoing, uint32_t *ids, float *weights,
                                            uint32_t capacity, uint32_t *count);
 LIGHTVEC_API float lightvec_priority(float rc_priority, float W);
 LIGHTVEC_API lightvec_result lightvec_cache_optimize(lightvec_cache *cache);
-LIGHTVEC_API lightvec_result lightvec_cache_record(lightvec_cache *cache, uint32_t id, lightvec_record *out);
+LIGHTVEC_API lightvec_result lightvec_cache_record(const lightvec_cache *cache, uint32_t id, lightvec_record *out);
 LIGHTVEC_API lightvec_result lightvec_cache_info(const lightvec_cache *cache, lightvec_cache_stats *info);
 LIGHTVEC_API lightvec_result lightvec_cache_face(const lightvec_cache *cache, uint32_t index, lightvec_face_info *out);
 LIGHTVEC_API lightvec_result lightvec_cache_locate(const lightvec_cache *cache, const float direction[3],
@@ -2107,6 +2107,15 @@ typedef struct lightvec__face {
 
 typedef struct lightvec__retired { void *ptr; size_t bytes; } lightvec__retired;
 
+/* Reader registration: the epoch and each counter on its own cache line. A
+   separate block, so that the read-only queries take a const cache: the
+   registration is the only state a reader writes. */
+typedef struct lightvec__readers {
+    uint32_t epoch;
+    char pad[60];
+    uint32_t count[2][16];
+} lightvec__readers;
+
 struct lightvec_cache {
     lightvec_allocator a;
     lightvec__params p;
@@ -2123,11 +2132,7 @@ struct lightvec_cache {
     lightvec__retired *retired;      /* unpublished memory readers may still see */
     uint32_t retired_count, retired_capacity;
     size_t retired_bytes;
-    /* reader registration: the epoch and each counter on its own cache line */
-    char pad0[64];
-    uint32_t epoch;
-    char pad1[64];
-    uint32_t readers[2][16];
+    lightvec__readers *readers;      /* reader registration (readers of a const cache write it) */
 };
 
 /* ---- parameters and validation -------------------------------------------- */
@@ -2591,17 +2596,17 @@ static int lightvec__can_split(const lightvec_cache *c, const lightvec__face *f)
 
 /* ---- reader registration and deferred freeing ----------------------------------- */
 
-static uint32_t lightvec__enter(lightvec_cache *c)
+static uint32_t lightvec__enter(lightvec__readers *r)
 {
     for (;;) {
-        uint32_t e = lightvec__load_sc(&c->epoch);
-        lightvec__add_sc(&c->readers[e][0], 1u);
-        if (lightvec__load_sc(&c->epoch) == e) return e;
-        lightvec__add_sc(&c->readers[e][0], 0xFFFFFFFFu); /* the writer flipped meanwhile: retry */
+        uint32_t e = lightvec__load_sc(&r->epoch);
+        lightvec__add_sc(&r->count[e][0], 1u);
+        if (lightvec__load_sc(&r->epoch) == e) return e;
+        lightvec__add_sc(&r->count[e][0], 0xFFFFFFFFu); /* the writer flipped meanwhile: retry */
     }
 }
 
-static void lightvec__leave(lightvec_cache *c, uint32_t e) { lightvec__add_sc(&c->readers[e][0], 0xFFFFFFFFu); }
+static void lightvec__leave(lightvec__readers *r, uint32_t e) { lightvec__add_sc(&r->count[e][0], 0xFFFFFFFFu); }
 
 /* Waits until no reader can hold memory unpublished before this call: flip
    the epoch, then wait for the readers registered under the old one. A reader
@@ -2609,9 +2614,9 @@ static void lightvec__leave(lightvec_cache *c, uint32_t e) { lightvec__add_sc(&c
    checks again, and retries under the new one. */
 static void lightvec__synchronize(lightvec_cache *c)
 {
-    uint32_t e = lightvec__load_sc(&c->epoch);
-    lightvec__store_sc(&c->epoch, e ^ 1u);
-    while (lightvec__load_sc(&c->readers[e][0]) != 0) {
+    uint32_t e = lightvec__load_sc(&c->readers->epoch);
+    lightvec__store_sc(&c->readers->epoch, e ^ 1u);
+    while (lightvec__load_sc(&c->readers->count[e][0]) != 0) {
         /* readers leave within one lookup */
     }
 }
@@ -2886,6 +2891,12 @@ static lightvec_result lightvec__cache_new(const lightvec_cache_desc *desc, ligh
     c = (lightvec_cache *)lightvec__alloc(&desc->allocator, sizeof *c);
     if (!c) return LIGHTVEC_ERROR_OUT_OF_MEMORY;
     memset(c, 0, sizeof *c);
+    c->readers = (lightvec__readers *)lightvec__alloc(&desc->allocator, sizeof *c->readers);
+    if (!c->readers) {
+        lightvec__free(&desc->allocator, c);
+        return LIGHTVEC_ERROR_OUT_OF_MEMORY;
+    }
+    memset(c->readers, 0, sizeof *c->readers);
     c->a = desc->allocator;
     c->p = p;
     c->parallel_for = desc->parallel_for;
@@ -2919,6 +2930,7 @@ LIGHTVEC_API void lightvec_cache_destroy(lightvec_cache *c)
     for (i = 0; i < (int)c->retired_count; i++) lightvec__free(&a, c->retired[i].ptr);
     lightvec__free(&a, c->retired);
     for (i = 0; i < LIGHTVEC__CHUNKS; i++) lightvec__free(&a, c->chunks[i]);
+    lightvec__free(&a, c->readers);
     lightvec__free(&a, c);
 }
 
@@ -2956,7 +2968,7 @@ LIGHTVEC_API lightvec_result lightvec_insert(lightvec_cache *c, const lightvec_r
     return LIGHTVEC_OK;
 }
 
-static lightvec_result lightvec__query_init(lightvec_cache *c, const float position[3], const float normal[3],
+static lightvec_result lightvec__query_init(const lightvec_cache *c, const float position[3], const float normal[3],
                                             const float *outgoing, lightvec__query *q)
 {
     lightvec__vec3 n, w;
@@ -2976,14 +2988,14 @@ static lightvec_result lightvec__query_init(lightvec_cache *c, const float posit
 
 /* Visits every index that can hold a valid record: the view-independent leaf,
    or the leaves of the icosahedron whose caps meet the directional cone. */
-static void lightvec__search(lightvec_cache *c, lightvec__query *q)
+static void lightvec__search(const lightvec_cache *c, lightvec__query *q)
 {
     const lightvec__face *stack[LIGHTVEC__FACE_STACK];
-    uint32_t top = 0, i, e = lightvec__enter(c);
+    uint32_t top = 0, i, e = lightvec__enter(c->readers);
     if (!q->directional) {
         const lightvec__index *idx = (const lightvec__index *)lightvec__load_ptr(&c->omni.index);
         if (idx) lightvec__index_query(idx, q);
-        lightvec__leave(c, e);
+        lightvec__leave(c->readers, e);
         return;
     }
     for (i = 0; i < 20; i++)
@@ -2999,7 +3011,7 @@ static void lightvec__search(lightvec_cache *c, lightvec__query *q)
             if (idx) lightvec__index_query(idx, q);
         }
     }
-    lightvec__leave(c, e);
+    lightvec__leave(c->readers, e);
 }
 
 /* 4.2.3: the normalised weighted interpolation of the valid vectors. The
@@ -3027,7 +3039,7 @@ static void lightvec__interpolate(const lightvec__params *p, const lightvec__que
     for (k = 0; k < 3; k++) v->magnitude[k] = (float)(q->msum[k] * scale);
 }
 
-LIGHTVEC_API lightvec_result lightvec_lookup(lightvec_cache *c, const float position[3], const float normal[3],
+LIGHTVEC_API lightvec_result lightvec_lookup(const lightvec_cache *c, const float position[3], const float normal[3],
                                              const float *outgoing, lightvec_lookup_result *out)
 {
     lightvec__query q;
@@ -3045,7 +3057,7 @@ LIGHTVEC_API lightvec_result lightvec_lookup(lightvec_cache *c, const float posi
     return LIGHTVEC_OK;
 }
 
-LIGHTVEC_API lightvec_result lightvec_find(lightvec_cache *c, const float position[3], const float normal[3],
+LIGHTVEC_API lightvec_result lightvec_find(const lightvec_cache *c, const float position[3], const float normal[3],
                                            const float *outgoing, uint32_t *ids, float *weights,
                                            uint32_t capacity, uint32_t *count)
 {
@@ -3063,7 +3075,7 @@ LIGHTVEC_API lightvec_result lightvec_find(lightvec_cache *c, const float positi
     return LIGHTVEC_OK;
 }
 
-LIGHTVEC_API lightvec_result lightvec_cache_record(lightvec_cache *c, uint32_t id, lightvec_record *out)
+LIGHTVEC_API lightvec_result lightvec_cache_record(const lightvec_cache *c, uint32_t id, lightvec_record *out)
 {
     if (!c || !out || id >= lightvec__load_u32(&c->record_count)) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
     *out = *lightvec__record_at(c, id);
@@ -3124,7 +3136,7 @@ LIGHTVEC_API lightvec_result lightvec_cache_info(const lightvec_cache *c, lightv
     memset(info, 0, sizeof *info);
     info->kind = c->p.kind;
     info->record_count = c->record_count;
-    info->bytes = sizeof *c + c->retired_bytes + (size_t)c->retired_capacity * sizeof(lightvec__retired);
+    info->bytes = sizeof *c + sizeof *c->readers + c->retired_bytes + (size_t)c->retired_capacity * sizeof(lightvec__retired);
     for (k = 0; k < LIGHTVEC__CHUNKS; k++)
         if (c->chunks[k]) info->bytes += ((size_t)LIGHTVEC__CHUNK0 << k) * sizeof(lightvec_record);
     lightvec__walk_init(&w, c);
