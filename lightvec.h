@@ -1,4 +1,4 @@
-/* lightvec.h - v0.2.0 - cached 5D indirect light vectors - public domain or MIT, see end of file
+/* lightvec.h - v0.3.0 - cached 5D indirect light vectors - public domain or MIT, see end of file
 
    LIGHTVEC.H: cached light vectors over position and direction for interactive glossy global illumination.
 
@@ -188,9 +188,9 @@
 #include <stdint.h>
 
 #define LIGHTVEC_VERSION_MAJOR 0
-#define LIGHTVEC_VERSION_MINOR 2
+#define LIGHTVEC_VERSION_MINOR 3
 #define LIGHTVEC_VERSION_PATCH 0
-#define LIGHTVEC_FILE_FORMAT_VERSION 1
+#define LIGHTVEC_FILE_FORMAT_VERSION 2
 
 #ifndef LIGHTVEC_API
 #  ifdef LIGHTVEC_STATIC
@@ -257,24 +257,41 @@ typedef struct lightvec_material {
     float emission[3];   /* emitted radiance W/(m^2 sr), front face only (scene materials) */
 } lightvec_material;
 
-/* A light vector: direction D toward the virtual light (unit) and magnitude M. */
+/* The light arriving at a point as two virtual lights (see GLOSSY SURFACES):
+   the diffuse light vector (D, M) of eq. 2 and 3 with the Lambert term, which
+   holds for every viewer, and the glossy light vector (D_g, M_g), eq. 3 with
+   the glossy lobe for the viewer it was made for:
+     L(w_r) = M rho_d / pi cos(n, D) + M_g f_s(D_g -> w_r) cos(n, D_g). */
 typedef struct lightvec_vector {
-    float direction[3];
-    float magnitude[3];
+    float direction[3];          /* D: unit, toward the mean incident light (eq. 2) */
+    float magnitude[3];          /* M = E / cos(n, D): the irradiance it carries */
+    float glossy_direction[3];   /* D_g: unit, the mirror direction of the viewer; 0 = no glossy part */
+    float glossy_magnitude[3];   /* M_g = G / (lobe(D_g -> w_r) cos(n, D_g)) (eq. 3 for the lobe) */
 } lightvec_vector;
 
 /* Record flags. */
 #define LIGHTVEC_RECORD_VIEW_INDEPENDENT 1u  /* Lambertian: found by lookups with outgoing = NULL */
 
-/* One cached light vector (section 3.2: x, n, w, the vector, gradient, d_avg, irradiance). */
+/* One cached light vector (section 3.2: x, n, w, the vector, gradient, d_avg,
+   irradiance; and the glossy lobe's radiance with its view gradient). */
 typedef struct lightvec_record {
     float position[3];      /* B */
     float normal[3];        /* unit surface normal at B */
     float outgoing[3];      /* unit sigma: toward the viewer it was computed for */
-    lightvec_vector vector; /* D (eq. 2), M (eq. 3) */
+    lightvec_vector vector; /* the light vectors at (B, sigma) */
     float irradiance[3];    /* E_B of the gathered light */
     float gradient[3][3];   /* dE/dx: gradient[channel][axis] (eq. 6, Ward & Heckbert) */
+    float glossy[3];        /* G(sigma): radiance the normalized Phong lobe reflects toward sigma per
+                               unit specular reflectance (the glossy part is specular * G) */
+    float glossy_gradient[3][3];  /* dG/dw_r at sigma: [channel][axis], perpendicular to sigma */
     float distance;         /* d_avg: harmonic mean distance to the gathered surfaces */
+    float glossy_distance;  /* d_g: harmonic mean distance along the lobe (its parallax); 0 = no glossy part */
+    float exponent;         /* Phong exponent of the lobe of G; sets the record's direction tolerance */
+    float glossy_share;     /* specular * G / the whole radiance toward sigma (luminance): how much of
+                               what the viewer sees the glossy part is, which scales its tolerances;
+                               0 = 1 */
+    float radius;           /* validity radius in effect (set by the cache: radius_scale * distance,
+                               clamped by its neighbours); ignored by lightvec_insert */
     float visibility;       /* DLV: fraction of unoccluded light samples; 1 for indirect */
     uint32_t flags;         /* LIGHTVEC_RECORD_* */
 } lightvec_record;
@@ -326,6 +343,9 @@ typedef struct lightvec_gather_desc {
     uint32_t bounces;            /* reflections of the gathered light: 1 = direct light reflected
                                     at the hit points, each more = one diffuse bounce; 0 = 2 */
     uint32_t light_samples;      /* emitter samples per hit point; 0 = 1 */
+    uint32_t glossy_samples;     /* rays sampled from the glossy lobe (in antithetic pairs: rounded
+                                    down to even), combined with the strata by multiple importance
+                                    sampling; 0 = a quarter of the strata (glossy surfaces only) */
     float min_distance;          /* clamp of d_avg (world units); 0 = none */
     float max_distance;          /* 0 = none */
     uint64_t seed;               /* random stream = (seed, index) */
@@ -351,6 +371,9 @@ typedef enum lightvec_interpolation {
                                              times 1 + grad E_c . (A - B) / E_c (Ward & Heckbert) */
 } lightvec_interpolation;
 
+/* Cache flags. */
+#define LIGHTVEC_CACHE_NO_NEIGHBOR_CLAMP 1u  /* keep R_B = radius_scale * d_avg (no neighbour clamping) */
+
 typedef struct lightvec_cache_desc {
     lightvec_kind kind;
     lightvec_interpolation interpolation;
@@ -358,8 +381,14 @@ typedef struct lightvec_cache_desc {
                                     uses 1); 0 = 0.3 ILV, 0.25 DLV */
     float max_irradiance_change; /* I_B, relative; 0 = 0.5 ILV, 0.1 DLV */
     float max_normal_angle;      /* degrees, S_curv = cos; 0 = 20 ILV, 10 DLV */
-    float max_direction_angle;   /* degrees, S_dir = cos; 0 = 15 */
+    float max_direction_angle;   /* degrees: the largest S_dir angle (a glossy record's own angle
+                                    follows its lobe, lightvec_direction_angle); 0 = 15 */
     uint32_t min_valid;          /* valid vectors needed to interpolate; 0 = 3 */
+    uint32_t max_neighbors;      /* a lookup interpolates at most this many valid vectors, those of
+                                    the largest weights (k-nearest cap); 0 = 16 */
+    float front_tolerance;       /* Ward's "in front" test: B is skipped when A lies behind B's
+                                    surface, (A - B) . (n_A + n_B) / 2 < -front_tolerance * R_B; 0 = 0.05 */
+    uint32_t flags;              /* LIGHTVEC_CACHE_*; 0 = defaults */
     uint32_t face_split_threshold;  /* a leaf face holding more splits in four; 0 = 8192 */
     uint32_t max_face_depth;     /* 0 = 8 (20 * 4^8 faces at most) */
     lightvec_allocator allocator;
@@ -375,9 +404,10 @@ typedef struct lightvec_cache lightvec_cache;
 
 typedef struct lightvec_lookup_result {
     lightvec_vector vector;      /* interpolated D and M (when hit) */
-    float weight;                /* W: mean global weight of the valid vectors (4.3); 0 if none */
+    float weight;                /* W: mean global weight of the interpolated vectors (4.3); 0 if none */
     uint32_t valid_count;        /* vectors that passed every criterion */
-    int hit;                     /* valid_count >= min_valid (and the DLV visibility rule) */
+    uint32_t used_count;         /* of those, interpolated: min(valid_count, max_neighbors) */
+    int hit;                     /* used_count >= min_valid (and the DLV visibility rule) */
 } lightvec_lookup_result;
 
 typedef struct lightvec_cache_stats {
@@ -389,8 +419,9 @@ typedef struct lightvec_cache_stats {
     uint32_t tree_count;         /* kd-trees over all leaves */
     size_t bytes;                /* memory held */
     float radius_scale, max_irradiance_change, cos_normal, cos_direction;  /* effective */
+    float front_tolerance;
     lightvec_interpolation interpolation;
-    uint32_t min_valid, face_split_threshold, max_face_depth;
+    uint32_t min_valid, max_neighbors, face_split_threshold, max_face_depth, flags;
 } lightvec_cache_stats;
 
 typedef struct lightvec_face_info {
@@ -420,6 +451,7 @@ LIGHTVEC_API void lightvec_brdf(const lightvec_material *m, const float normal[3
                                 const float wo[3], float f[3]);
 LIGHTVEC_API void lightvec_radiance(const lightvec_material *m, const float normal[3], const float *outgoing,
                                     const lightvec_vector *v, float rgb[3]);
+LIGHTVEC_API float lightvec_direction_angle(float exponent);
 
 LIGHTVEC_API lightvec_result lightvec_cache_create(const lightvec_cache_desc *desc, lightvec_cache **out);
 LIGHTVEC_API void lightvec_cache_destroy(lightvec_cache *cache);
@@ -1201,6 +1233,8 @@ static void lightvec__store_ptr(void **p, void *v) { __atomic_store_n(p, v, __AT
 static uint32_t lightvec__load_sc(const uint32_t *p) { return __atomic_load_n(p, __ATOMIC_SEQ_CST); }
 static void lightvec__store_sc(uint32_t *p, uint32_t v) { __atomic_store_n(p, v, __ATOMIC_SEQ_CST); }
 static void lightvec__add_sc(uint32_t *p, uint32_t v) { (void)__atomic_add_fetch(p, v, __ATOMIC_SEQ_CST); }
+static float lightvec__load_f32(const float *p) { float v; __atomic_load(p, &v, __ATOMIC_RELAXED); return v; }
+static void lightvec__store_f32(float *p, float v) { __atomic_store(p, &v, __ATOMIC_RELAXED); }
 #elif defined(_MSC_VER)
 #include <intrin.h>
 /* Interlocked operations are full barriers: stronger than needed, still correct. */
@@ -1214,6 +1248,9 @@ static void *lightvec__load_ptr(void *const *p)
     return _InterlockedCompareExchangePointer((void *volatile *)p, NULL, NULL);
 }
 static void lightvec__store_ptr(void **p, void *v) { (void)_InterlockedExchangePointer((void *volatile *)p, v); }
+/* aligned 32-bit volatile accesses are single instructions: atomic */
+static float lightvec__load_f32(const float *p) { return *(const volatile float *)p; }
+static void lightvec__store_f32(float *p, float v) { *(volatile float *)p = v; }
 #else
 /* No atomics known for this compiler: single-threaded use only. */
 static uint32_t lightvec__load_u32(const uint32_t *p) { return *p; }
@@ -1223,6 +1260,8 @@ static void lightvec__store_ptr(void **p, void *v) { *p = v; }
 static uint32_t lightvec__load_sc(const uint32_t *p) { return *p; }
 static void lightvec__store_sc(uint32_t *p, uint32_t v) { *p = v; }
 static void lightvec__add_sc(uint32_t *p, uint32_t v) { *p += v; }
+static float lightvec__load_f32(const float *p) { return *p; }
+static void lightvec__store_f32(float *p, float v) { *p = v; }
 #endif
 
 /* ======================================================================
@@ -1279,20 +1318,42 @@ static int lightvec__material_valid(const lightvec_material *m)
            m->exponent <= 1e6f;
 }
 
+/* A double as a float, saturated at FLT_MAX: a magnitude computed in double
+   stays finite when stored. */
+static float lightvec__to_float(double v)
+{
+    if (v > (double)FLT_MAX) return FLT_MAX;
+    if (v < -(double)FLT_MAX) return -FLT_MAX;
+    return (float)v;
+}
+
+/* cos alpha of the Phong lobe: the mirror image of wi about n, dotted with
+   wo (symmetric in wi and wo). In double: a float cos alpha raised to a high
+   exponent loses exponent * 1e-7 of relative precision. */
+static double lightvec__mirror_cos(lightvec__vec3 n, lightvec__vec3 wi, lightvec__vec3 wo)
+{
+    double ci = (double)n.x * wi.x + (double)n.y * wi.y + (double)n.z * wi.z;
+    return (2.0 * ci * n.x - wi.x) * wo.x + (2.0 * ci * n.y - wi.y) * wo.y + (2.0 * ci * n.z - wi.z) * wo.z;
+}
+
+/* The normalized Phong lobe per unit specular reflectance:
+   (exponent + 2) / (2 pi) max(0, cos alpha)^exponent. */
+static double lightvec__lobe(double exponent, double cos_alpha)
+{
+    return cos_alpha > 0.0 ? (exponent + 2.0) / LIGHTVEC__TWO_PI * pow(cos_alpha, exponent) : 0.0;
+}
+
+static int lightvec__glossy(const lightvec_material *m)
+{
+    return m->specular[0] > 0.0f || m->specular[1] > 0.0f || m->specular[2] > 0.0f;
+}
+
 /* f_r(wi -> wo) of Lambert + normalized Phong; all vectors unit. */
 static void lightvec__brdf_unit(const lightvec_material *m, lightvec__vec3 n, lightvec__vec3 wi, lightvec__vec3 wo,
                                 float f[3])
 {
-    double lobe = 0.0;
+    double lobe = lightvec__glossy(m) ? lightvec__lobe(m->exponent, lightvec__mirror_cos(n, wi, wo)) : 0.0;
     int c;
-    if (m->specular[0] > 0.0f || m->specular[1] > 0.0f || m->specular[2] > 0.0f) {
-        /* in double: a float cos alpha raised to a high exponent loses
-           exponent * 1e-7 of relative precision */
-        double ci = (double)n.x * wi.x + (double)n.y * wi.y + (double)n.z * wi.z;
-        double rx = 2.0 * ci * n.x - wi.x, ry = 2.0 * ci * n.y - wi.y, rz = 2.0 * ci * n.z - wi.z; /* mirror of wi */
-        double ca = rx * wo.x + ry * wo.y + rz * wo.z;
-        if (ca > 0.0) lobe = (m->exponent + 2.0) / LIGHTVEC__TWO_PI * pow(ca, m->exponent);
-    }
     for (c = 0; c < 3; c++) f[c] = (float)(m->diffuse[c] / LIGHTVEC__PI + m->specular[c] * lobe);
 }
 
@@ -1306,26 +1367,74 @@ LIGHTVEC_API void lightvec_brdf(const lightvec_material *m, const float normal[3
     lightvec__brdf_unit(m, n, i, o, f);
 }
 
-/* L = M * f_r(D -> wo) * cos(n, D): the radiance a light vector sends toward wo.
-   With outgoing NULL the surface is taken as Lambertian (diffuse part only). */
+/* The view change a glossy record tolerates (GLOSSY SURFACES in the
+   documentation derives it): the lobe's angular radius
+   s = acos(exp(-1 / (2 n))), where cos^n falls to e^-1/2 of its peak (for
+   large n, the standard deviation 1 / sqrt(n) of the Gaussian that cos^n
+   approaches), times sqrt(2 eps / phi(1)) = LIGHTVEC__LOBE_SPAN. */
+#define LIGHTVEC__GLOSSY_ERROR 0.1           /* eps: first-order error / contrast under the lobe */
+#define LIGHTVEC__LOBE_SPAN 0.90915          /* sqrt(2 eps / phi(1)), phi(1) = 0.24197 the normal density at 1 */
+#define LIGHTVEC__MIN_DIRECTION_ANGLE 0.1    /* degrees */
+
+LIGHTVEC_API float lightvec_direction_angle(float exponent)
+{
+    double s, a;
+    if (!(exponent > 0.0f)) return 180.0f; /* a constant lobe does not depend on the viewer (NaN too) */
+    s = acos(exp(-1.0 / (2.0 * (double)exponent)));
+    a = LIGHTVEC__LOBE_SPAN * s * (180.0 / LIGHTVEC__PI);
+    if (!(a > LIGHTVEC__MIN_DIRECTION_ANGLE)) a = LIGHTVEC__MIN_DIRECTION_ANGLE;
+    return a < 180.0 ? (float)a : 180.0f;
+}
+
+#define LIGHTVEC__MIN_GLOSSY_COS 1e-3f  /* D_g at least this high above the horizon */
+
+/* The glossy light vector of a point (normal n) seen from w whose lobe
+   (exponent) reflects g per unit specular reflectance. D_g is the mirror
+   direction of w, where the lobe peaks (raised to LIGHTVEC__MIN_GLOSSY_COS
+   above the horizon when the viewer grazes): eq. 3 then divides by the
+   largest lobe value there is, and M_g stays of the order of g. M_g is
+   computed in double from D_g as stored, so that lightvec_radiance gives back
+   specular * g to float rounding. A viewer below the horizon sees no glossy
+   light. */
+static void lightvec__glossy_vector(lightvec__vec3 n, lightvec__vec3 w, double exponent, const double g[3],
+                                    lightvec_vector *v)
+{
+    float c = lightvec__dot(n, w);
+    lightvec__vec3 d;
+    double denom;
+    int k;
+    memset(v->glossy_direction, 0, sizeof v->glossy_direction);
+    memset(v->glossy_magnitude, 0, sizeof v->glossy_magnitude);
+    if (!(c > 0.0f)) return;
+    d = lightvec__sub(lightvec__scale(n, 2.0f * c), w);
+    if (c < LIGHTVEC__MIN_GLOSSY_COS) d = lightvec__add(d, lightvec__scale(n, LIGHTVEC__MIN_GLOSSY_COS - c));
+    d = lightvec__normalize(d);
+    v->glossy_direction[0] = d.x; v->glossy_direction[1] = d.y; v->glossy_direction[2] = d.z;
+    denom = lightvec__lobe(exponent, lightvec__mirror_cos(n, d, w)) * lightvec__dot(n, d);
+    if (!(denom > 0.0)) return;
+    for (k = 0; k < 3; k++) v->glossy_magnitude[k] = lightvec__to_float(g[k] / denom);
+}
+
+/* L = M rho_d / pi cos(n, D) + M_g f_s(D_g -> wo) cos(n, D_g): the radiance a
+   pair of light vectors sends toward wo. With outgoing NULL the surface is
+   taken as Lambertian (the diffuse vector only). */
 LIGHTVEC_API void lightvec_radiance(const lightvec_material *m, const float normal[3], const float *outgoing,
                                     const lightvec_vector *v, float rgb[3])
 {
     lightvec__vec3 n, d, o;
-    float f[3], cos_d;
+    double sum[3] = { 0.0, 0.0, 0.0 }, cos_d, lobe;
     int c;
     if (!rgb) return;
     rgb[0] = rgb[1] = rgb[2] = 0.0f;
-    if (!m || !v || !lightvec__unit(normal, &n) || !lightvec__unit(v->direction, &d)) return;
-    cos_d = lightvec__dot(n, d);
-    if (!(cos_d > 0.0f)) return;
-    if (outgoing) {
-        if (!lightvec__unit(outgoing, &o)) return;
-        lightvec__brdf_unit(m, n, d, o, f);
-    } else {
-        for (c = 0; c < 3; c++) f[c] = m->diffuse[c] * (float)(1.0 / LIGHTVEC__PI);
+    if (!m || !v || !lightvec__unit(normal, &n)) return;
+    if (lightvec__unit(v->direction, &d) && (cos_d = lightvec__dot(n, d)) > 0.0)
+        for (c = 0; c < 3; c++) sum[c] += v->magnitude[c] * (m->diffuse[c] / LIGHTVEC__PI) * cos_d;
+    if (outgoing && lightvec__glossy(m) && lightvec__unit(outgoing, &o) && lightvec__unit(v->glossy_direction, &d) &&
+        (cos_d = lightvec__dot(n, d)) > 0.0) {
+        lobe = lightvec__lobe(m->exponent, lightvec__mirror_cos(n, d, o));
+        for (c = 0; c < 3; c++) sum[c] += v->glossy_magnitude[c] * (m->specular[c] * lobe) * cos_d;
     }
-    for (c = 0; c < 3; c++) rgb[c] = v->magnitude[c] * f[c] * cos_d;
+    for (c = 0; c < 3; c++) rgb[c] = lightvec__to_float(sum[c]);
 }
 
 LIGHTVEC_API float lightvec_priority(float rc_priority, float W)
@@ -1711,9 +1820,11 @@ static void lightvec__path_radiance(const lightvec_scene *s, lightvec__rng *rng,
    11. gather: ILV (eq. 2, 3, 5, 6) and DLV
    ---------------------------------------------------------------------- */
 typedef struct lightvec__gather_params {
-    uint32_t m, n, bounces, light_samples;
+    uint32_t m, n, bounces, light_samples, lobe_samples;
     float min_distance, max_distance;
 } lightvec__gather_params;
+
+#define LIGHTVEC__MAX_GLOSSY_SAMPLES 65536u
 
 static lightvec_result lightvec__gather_setup(const lightvec_gather_desc *d, const lightvec_surface *sf,
                                               lightvec__gather_params *g, lightvec__vec3 *n, lightvec__vec3 *wo)
@@ -1724,8 +1835,9 @@ static lightvec_result lightvec__gather_setup(const lightvec_gather_desc *d, con
     g->bounces = lightvec__def(d->bounces, 2u);
     g->light_samples = lightvec__def(d->light_samples, 1u);
     if (g->m > LIGHTVEC__MAX_STRATA_THETA || g->n > LIGHTVEC__MAX_STRATA_PHI || g->bounces > LIGHTVEC__MAX_BOUNCES ||
-        g->light_samples > LIGHTVEC__MAX_LIGHT_SAMPLES)
+        g->light_samples > LIGHTVEC__MAX_LIGHT_SAMPLES || d->glossy_samples > LIGHTVEC__MAX_GLOSSY_SAMPLES)
         return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    g->lobe_samples = lightvec__def(d->glossy_samples, g->m * g->n / 4u) & ~1u; /* antithetic pairs */
     if (!isfinite(d->min_distance) || !isfinite(d->max_distance) || d->min_distance < 0.0f ||
         d->max_distance < 0.0f || (d->max_distance > 0.0f && d->min_distance > d->max_distance))
         return LIGHTVEC_ERROR_INVALID_ARGUMENT;
@@ -1734,44 +1846,76 @@ static lightvec_result lightvec__gather_setup(const lightvec_gather_desc *d, con
     if (!lightvec__finite3(sf->position) || !lightvec__unit(sf->normal, n)) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
     if (!lightvec__material_valid(&sf->material) || (sf->flags & ~LIGHTVEC_RECORD_VIEW_INDEPENDENT))
         return LIGHTVEC_ERROR_INVALID_ARGUMENT;
-    if ((sf->flags & LIGHTVEC_RECORD_VIEW_INDEPENDENT) &&
-        (sf->material.specular[0] > 0.0f || sf->material.specular[1] > 0.0f || sf->material.specular[2] > 0.0f))
+    if ((sf->flags & LIGHTVEC_RECORD_VIEW_INDEPENDENT) && lightvec__glossy(&sf->material))
         return LIGHTVEC_ERROR_INVALID_ARGUMENT; /* a glossy surface depends on the viewer */
     if (sf->flags & LIGHTVEC_RECORD_VIEW_INDEPENDENT) {
         *wo = *n;
     } else if (!lightvec__unit(sf->outgoing, wo)) {
         return LIGHTVEC_ERROR_INVALID_ARGUMENT;
     }
+    if (!lightvec__glossy(&sf->material)) g->lobe_samples = 0;
     return LIGHTVEC_OK;
 }
 
-/* eq. 3: M = (sum f_r L cos dw) / (f_r(D -> w_r) cos(n, D)), per channel, with D
-   normalised in float exactly as lightvec_radiance reads it back, so that
-   M * f_r(D -> w_r) * cos(n, D) reproduces the gathered radiance to float
-   rounding. A view-independent record stores M = E / cos(n, D) (the Lambert
-   BRDF cancels). Where f_r(D -> w_r) is zero in a channel (no diffuse part and
-   a lobe that misses D) the vector cannot carry that channel; it stores
-   E / cos(n, D) there. */
-static void lightvec__finish_vector(const lightvec_surface *sf, lightvec__vec3 n, lightvec__vec3 wo,
-                                    const double dsum[3], const double num[3], const double irr[3],
-                                    lightvec_vector *v)
+/* The glossy lobe a gather integrates: around the mirror direction of the
+   viewer wo (on = 0 for a Lambertian or view-independent surface). */
+typedef struct lightvec__lobe_frame {
+    int on;
+    lightvec__vec3 n, wo, mirror;
+    double exponent;
+} lightvec__lobe_frame;
+
+static lightvec__lobe_frame lightvec__lobe_frame_of(const lightvec_surface *sf, lightvec__vec3 n, lightvec__vec3 wo)
 {
-    lightvec__vec3 d = lightvec__v3((float)dsum[0], (float)dsum[1], (float)dsum[2]);
-    float f[3], cos_d;
-    int c;
-    if (!(lightvec__length(d) > 0.0f) || !isfinite(lightvec__length(d))) d = n;
-    d = lightvec__normalize(d);
-    cos_d = lightvec__dot(n, d);
-    if (!(cos_d > 1e-6f)) { /* float rounding of a tangent D: fall back to the normal */
-        d = n;
-        cos_d = lightvec__dot(n, d);
-    }
-    v->direction[0] = d.x; v->direction[1] = d.y; v->direction[2] = d.z;
-    lightvec__brdf_unit(&sf->material, n, d, wo, f);
-    for (c = 0; c < 3; c++) {
-        double denom = (double)(f[c] * cos_d);
-        if ((sf->flags & LIGHTVEC_RECORD_VIEW_INDEPENDENT) || !(denom > 0.0)) v->magnitude[c] = (float)(irr[c] / cos_d);
-        else v->magnitude[c] = (float)(num[c] / denom);
+    lightvec__lobe_frame f;
+    f.on = lightvec__glossy(&sf->material) && !(sf->flags & LIGHTVEC_RECORD_VIEW_INDEPENDENT);
+    f.n = n;
+    f.wo = wo;
+    f.mirror = lightvec__normalize(lightvec__sub(lightvec__scale(n, 2.0f * lightvec__dot(n, wo)), wo));
+    f.exponent = sf->material.exponent;
+    return f;
+}
+
+/* What a gather accumulates, in double, before the record is made. */
+typedef struct lightvec__sums {
+    double irr[3];              /* E */
+    double dir[3];              /* eq. 2: the integral of Y(L) w */
+    double grad[3][3];          /* dE/dx in world axes */
+    double glossy[3];           /* G */
+    double glossy_grad[3][3];   /* dG/dw_r in world axes, perpendicular to w_r */
+    double inv_r, samples;      /* harmonic mean distance: sum of 1 / r over `samples` */
+    double lobe_inv_r, lobe_weight;  /* the same along the lobe, weighted by it */
+    float visibility;
+} lightvec__sums;
+
+/* One incident sample's share of G = integral of lobe(wi -> wo) L cos theta_i
+   and of its view gradient: d lobe / d wo = e (e + 2) / (2 pi)
+   (r(wi) . wo)^(e - 1) r(wi), r(wi) the mirror image of wi, taken off wo
+   sample by sample: r(wi) . wo = c, so r(wi) - c wo (the part a unit wo can
+   move along; the part along wo, e times larger, would only add noise).
+   scale is the sample's solid angle (its estimator weight), r the distance
+   it saw. */
+static void lightvec__add_lobe(lightvec__sums *s, const lightvec__lobe_frame *f, lightvec__vec3 wi, const float l[3],
+                               double scale, double r)
+{
+    double c = (double)wi.x * f->mirror.x + (double)wi.y * f->mirror.y + (double)wi.z * f->mirror.z;
+    double ci = (double)wi.x * f->n.x + (double)wi.y * f->n.y + (double)wi.z * f->n.z, p, k, kd, rw[3];
+    int ch;
+    if (!(c > 0.0) || !(ci > 0.0) || !(scale > 0.0)) return;
+    p = pow(c, f->exponent);
+    k = (f->exponent + 2.0) / LIGHTVEC__TWO_PI * p * ci * scale;
+    /* the derivative is singular at the lobe's edge when e < 1: left out there */
+    kd = c > 1e-6 ? k * f->exponent / c : 0.0;
+    rw[0] = 2.0 * ci * f->n.x - wi.x - c * f->wo.x;
+    rw[1] = 2.0 * ci * f->n.y - wi.y - c * f->wo.y;
+    rw[2] = 2.0 * ci * f->n.z - wi.z - c * f->wo.z;
+    s->lobe_weight += k;
+    if (r < (double)LIGHTVEC__FAR) s->lobe_inv_r += k / r;
+    for (ch = 0; ch < 3; ch++) {
+        s->glossy[ch] += k * l[ch];
+        s->glossy_grad[ch][0] += kd * l[ch] * rw[0];
+        s->glossy_grad[ch][1] += kd * l[ch] * rw[1];
+        s->glossy_grad[ch][2] += kd * l[ch] * rw[2];
     }
 }
 
@@ -1781,6 +1925,58 @@ static float lightvec__clamp_distance(const lightvec__gather_params *g, double d
     if (d < (double)g->min_distance) d = g->min_distance;
     if (!(d > 0.0)) d = 1e-30;
     return (float)d;
+}
+
+/* The record of a gather, from its sums (eq. 2 and 3):
+   diffuse vector  D = the eq. 2 integral normalised (the normal when it
+                   vanishes or, by float rounding, grazes), M = E / cos(n, D)
+                   in double: the Lambert term of eq. 3 cancels;
+   glossy part     G and dG/dw_r (in the tangent plane of w_r, along which a
+                   unit direction moves), d_g, the exponent, and the glossy
+                   light vector toward w_r (lightvec__glossy_vector). */
+static void lightvec__fill_record(const lightvec_surface *sf, const lightvec__gather_params *g,
+                                  const lightvec__lobe_frame *f, lightvec__vec3 wo, const lightvec__sums *s,
+                                  lightvec_record *out)
+{
+    lightvec__vec3 n = f->n, d = lightvec__v3((float)s->dir[0], (float)s->dir[1], (float)s->dir[2]);
+    double cos_d;
+    int c, k;
+    memset(out, 0, sizeof *out);
+    memcpy(out->position, sf->position, sizeof out->position);
+    out->normal[0] = n.x; out->normal[1] = n.y; out->normal[2] = n.z;
+    out->outgoing[0] = wo.x; out->outgoing[1] = wo.y; out->outgoing[2] = wo.z;
+    if (!(lightvec__length(d) > 0.0f) || !isfinite(lightvec__length(d))) d = n;
+    d = lightvec__normalize(d);
+    if (!(lightvec__dot(n, d) > 1e-6f)) d = n;
+    cos_d = lightvec__dot(n, d);
+    out->vector.direction[0] = d.x; out->vector.direction[1] = d.y; out->vector.direction[2] = d.z;
+    for (c = 0; c < 3; c++) {
+        out->vector.magnitude[c] = lightvec__to_float(s->irr[c] / cos_d);
+        out->irradiance[c] = lightvec__to_float(s->irr[c]);
+        for (k = 0; k < 3; k++) out->gradient[c][k] = lightvec__to_float(s->grad[c][k]);
+    }
+    if (f->on) {
+        for (c = 0; c < 3; c++) {
+            out->glossy[c] = lightvec__to_float(s->glossy[c]);
+            for (k = 0; k < 3; k++) out->glossy_gradient[c][k] = lightvec__to_float(s->glossy_grad[c][k]);
+        }
+        out->glossy_distance = lightvec__clamp_distance(
+            g, s->lobe_inv_r > 0.0 ? s->lobe_weight / s->lobe_inv_r : (double)LIGHTVEC__FAR);
+        out->exponent = (float)f->exponent;
+        lightvec__glossy_vector(n, wo, f->exponent, s->glossy, &out->vector);
+        {
+            double yg = 0.0, yd = 0.0;
+            static const double lum[3] = { 0.2126, 0.7152, 0.0722 };
+            for (c = 0; c < 3; c++) {
+                yg += lum[c] * sf->material.specular[c] * s->glossy[c];
+                yd += lum[c] * sf->material.diffuse[c] / LIGHTVEC__PI * s->irr[c];
+            }
+            out->glossy_share = yg + yd > 0.0 ? (float)(yg / (yg + yd)) : 1.0f;
+        }
+    }
+    out->distance = lightvec__clamp_distance(g, s->inv_r > 0.0 ? s->samples / s->inv_r : (double)LIGHTVEC__FAR);
+    out->visibility = s->visibility;
+    out->flags = sf->flags;
 }
 
 /* One stratum's sample: radiance and distance of the surface it sees. */
@@ -1864,21 +2060,60 @@ static lightvec_result lightvec__incoming(const lightvec_scene *s, const lightve
     return LIGHTVEC_OK;
 }
 
+/* The density of the glossy samples of a gather at wi: lobe_samples times
+   the Phong sampling density (e + 1) / (2 pi) cos^e alpha, plus that of the
+   M N strata, MN / (2 pi). 1 / this is a sample's weight under the balance
+   heuristic (Veach 1997), which needs no other knowledge of which technique
+   drew the sample. */
+static double lightvec__mis_density(const lightvec__lobe_frame *f, const lightvec__gather_params *g, lightvec__vec3 wi)
+{
+    double c = (double)wi.x * f->mirror.x + (double)wi.y * f->mirror.y + (double)wi.z * f->mirror.z;
+    double q = (double)g->m * g->n / LIGHTVEC__TWO_PI;
+    if (c > 0.0 && g->lobe_samples) q += g->lobe_samples * (f->exponent + 1.0) / LIGHTVEC__TWO_PI * pow(c, f->exponent);
+    return q;
+}
+
+/* Pair i of `pairs` drawn from the Phong lobe around f->mirror: cos alpha =
+   u^(1 / (e + 1)) with u stratified, the azimuth on a rank-1 lattice (golden
+   ratio), both jittered; the second direction of the pair is the first
+   turned by 180 degrees about the lobe's axis. Antithetic pairs: the view
+   gradient of a lobe is odd about its axis, and a pair cancels that odd part
+   for light that does not change across the lobe, where single samples
+   would leave it as noise (about sqrt(e) times the gradient itself). */
+static void lightvec__lobe_pair(const lightvec__lobe_frame *f, uint32_t i, uint32_t pairs, lightvec__rng *rng,
+                                lightvec__vec3 w[2])
+{
+    lightvec__vec3 t, b, axis;
+    float u = ((float)i + lightvec__rng_float(rng)) / (float)pairs, v = lightvec__rng_float(rng);
+    float ca = (float)pow((double)u, 1.0 / (f->exponent + 1.0)), sa = sqrtf(lightvec__maxf(0.0f, 1.0f - ca * ca));
+    float phi = (float)LIGHTVEC__TWO_PI * (v + 0.6180339887f * (float)i);
+    lightvec__vec3 side;
+    lightvec__basis(f->mirror, &t, &b);
+    side = lightvec__add(lightvec__scale(t, sa * cosf(phi)), lightvec__scale(b, sa * sinf(phi)));
+    axis = lightvec__scale(f->mirror, ca);
+    w[0] = lightvec__normalize(lightvec__add(axis, side));
+    w[1] = lightvec__normalize(lightvec__sub(axis, side));
+}
+
 /* eq. 5 over M x N strata of equal solid angle (cos theta uniform in each of
    the M zenith strata, phi uniform in each of the N azimuth cells), one
    jittered ray per stratum, each stratum weighing 2 pi / (M N):
-     L_ind(w_r) = 2 pi / (MN) sum f_r(w_jk -> w_r) L_jk cos theta_jk    (eq. 5, full BRDF)
-     E          = 2 pi / (MN) sum L_jk cos theta_jk
-     D          = 2 pi / (MN) sum Y(L_jk) w_jk                          (eq. 2, luminance Y)
-     d_avg      = MN / sum 1 / R_jk                                    (harmonic mean, Ward 1988) */
+     E     = 2 pi / (MN) sum L_jk cos theta_jk           (eq. 5 with the Lambert term rho_d / pi)
+     D     = 2 pi / (MN) sum Y(L_jk) w_jk                (eq. 2, luminance Y)
+     d_avg = MN / sum 1 / R_jk                           (harmonic mean, Ward 1988)
+   and on a glossy surface, glossy_samples more rays drawn from the lobe:
+     G     = sum over all rays of lobe(w -> w_r) L cos theta / q(w)   (q: lightvec__mis_density)
+   with its view gradient and d_g from the same rays (lightvec__add_lobe). */
 LIGHTVEC_API lightvec_result lightvec_gather(const lightvec_scene *scene, const lightvec_gather_desc *desc,
                                              const lightvec_surface *sf, uint64_t index, lightvec_record *out)
 {
     lightvec__cell rows[2][LIGHTVEC__MAX_STRATA_PHI];
     lightvec__gather_params g;
+    lightvec__lobe_frame f;
+    lightvec__sums sums;
     lightvec__vec3 n, wo, t, b, org;
     lightvec__rng rng;
-    double irr[3] = { 0, 0, 0 }, num[3] = { 0, 0, 0 }, dsum[3] = { 0, 0, 0 }, grad[3][2], inv_r = 0.0, dw;
+    double grad[3][2], dw;
     float min_r;
     uint32_t j, k;
     int c;
@@ -1887,7 +2122,9 @@ LIGHTVEC_API lightvec_result lightvec_gather(const lightvec_scene *scene, const 
     r = lightvec__gather_setup(desc, sf, &g, &n, &wo);
     if (r != LIGHTVEC_OK) return r;
     if (!desc->incoming_radiance && !scene) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    memset(&sums, 0, sizeof sums);
     memset(grad, 0, sizeof grad);
+    f = lightvec__lobe_frame_of(sf, n, wo);
     rng = lightvec__rng_stream(desc->seed, index);
     lightvec__basis(n, &t, &b);
     org = lightvec__v3_load(sf->position);
@@ -1899,7 +2136,7 @@ LIGHTVEC_API lightvec_result lightvec_gather(const lightvec_scene *scene, const 
         for (k = 0; k < g.n; k++) {
             float cos_t = 1.0f - ((float)j + lightvec__rng_float(&rng)) / (float)g.m;
             float phi = (float)LIGHTVEC__TWO_PI * ((float)k + lightvec__rng_float(&rng)) / (float)g.n;
-            float sin_t = sqrtf(lightvec__maxf(0.0f, 1.0f - cos_t * cos_t)), f[3];
+            float sin_t = sqrtf(lightvec__maxf(0.0f, 1.0f - cos_t * cos_t));
             lightvec__vec3 w = lightvec__add(lightvec__add(lightvec__scale(t, sin_t * cosf(phi)),
                                                            lightvec__scale(b, sin_t * sinf(phi))),
                                              lightvec__scale(n, cos_t));
@@ -1907,32 +2144,34 @@ LIGHTVEC_API lightvec_result lightvec_gather(const lightvec_scene *scene, const 
             w = lightvec__normalize(w);
             r = lightvec__incoming(scene, desc, &g, &rng, org, w, &cur[k]);
             if (r != LIGHTVEC_OK) return r;
-            lightvec__brdf_unit(&sf->material, n, w, wo, f);
-            for (c = 0; c < 3; c++) {
-                irr[c] += (double)cur[k].l[c] * cos_t;
-                num[c] += (double)f[c] * cur[k].l[c] * cos_t;
-            }
+            for (c = 0; c < 3; c++) sums.irr[c] += (double)cur[k].l[c] * cos_t * dw;
             y = 0.2126 * cur[k].l[0] + 0.7152 * cur[k].l[1] + 0.0722 * cur[k].l[2];
-            dsum[0] += y * w.x; dsum[1] += y * w.y; dsum[2] += y * w.z;
-            if (cur[k].r < LIGHTVEC__FAR) inv_r += 1.0 / lightvec__maxf(cur[k].r, min_r);
+            sums.dir[0] += y * w.x * dw; sums.dir[1] += y * w.y * dw; sums.dir[2] += y * w.z * dw;
+            if (cur[k].r < LIGHTVEC__FAR) sums.inv_r += 1.0 / lightvec__maxf(cur[k].r, min_r);
+            if (f.on) lightvec__add_lobe(&sums, &f, w, cur[k].l, 1.0 / lightvec__mis_density(&f, &g, w), cur[k].r);
         }
         lightvec__gradient_row(cur, prev, j, g.m, g.n, min_r, grad);
     }
-    for (c = 0; c < 3; c++) { irr[c] *= dw; num[c] *= dw; dsum[c] *= dw; }
-    memset(out, 0, sizeof *out);
-    memcpy(out->position, sf->position, sizeof out->position);
-    out->normal[0] = n.x; out->normal[1] = n.y; out->normal[2] = n.z;
-    out->outgoing[0] = wo.x; out->outgoing[1] = wo.y; out->outgoing[2] = wo.z;
-    lightvec__finish_vector(sf, n, wo, dsum, num, irr, &out->vector);
-    for (c = 0; c < 3; c++) {
-        out->irradiance[c] = (float)irr[c];
-        out->gradient[c][0] = (float)(grad[c][0] * t.x + grad[c][1] * b.x);
-        out->gradient[c][1] = (float)(grad[c][0] * t.y + grad[c][1] * b.y);
-        out->gradient[c][2] = (float)(grad[c][0] * t.z + grad[c][1] * b.z);
+    for (k = 0; f.on && k < g.lobe_samples / 2; k++) {
+        lightvec__vec3 w[2];
+        int i;
+        lightvec__lobe_pair(&f, k, g.lobe_samples / 2, &rng, w);
+        for (i = 0; i < 2; i++) {
+            lightvec__cell cell;
+            if (!(lightvec__dot(w[i], n) > 0.0f)) continue; /* below the horizon: no light, the sample still counts */
+            r = lightvec__incoming(scene, desc, &g, &rng, org, w[i], &cell);
+            if (r != LIGHTVEC_OK) return r;
+            lightvec__add_lobe(&sums, &f, w[i], cell.l, 1.0 / lightvec__mis_density(&f, &g, w[i]), cell.r);
+        }
     }
-    out->distance = lightvec__clamp_distance(&g, inv_r > 0.0 ? (double)g.m * g.n / inv_r : (double)LIGHTVEC__FAR);
-    out->visibility = 1.0f;
-    out->flags = sf->flags;
+    for (c = 0; c < 3; c++) {
+        sums.grad[c][0] = grad[c][0] * t.x + grad[c][1] * b.x;
+        sums.grad[c][1] = grad[c][0] * t.y + grad[c][1] * b.y;
+        sums.grad[c][2] = grad[c][0] * t.z + grad[c][1] * b.z;
+    }
+    sums.samples = (double)g.m * g.n;
+    sums.visibility = 1.0f;
+    lightvec__fill_record(sf, &g, &f, wo, &sums, out);
     return LIGHTVEC_OK;
 }
 
@@ -1941,8 +2180,9 @@ LIGHTVEC_API lightvec_result lightvec_gather(const lightvec_scene *scene, const 
    the point with v), one shadow ray each. With dA the emitter area element and
    p the sample density, the solid angle of a sample is cos_l dA / r^2, so
      E = 1/S sum L_e V cos_x cos_l / (r^2 p),  D = 1/S sum Y(L_e) V w cos_l / (r^2 p),
-   and eq. 3 as for indirect light. The gradient differentiates each
-   unoccluded term G = cos_x cos_l / r^2 exactly with the sample point fixed:
+   G the same sum with lobe(w -> w_r) cos_x, and the record as for indirect
+   light. The gradient differentiates each unoccluded term
+   G = cos_x cos_l / r^2 exactly with the sample point fixed:
      dG/dx = (-cos_l n + cos_x n_l + 4 cos_x cos_l w) / r^3, projected on the tangent plane
    (visibility changes are not in it: that is what the DLV visibility rule is for). */
 LIGHTVEC_API lightvec_result lightvec_gather_direct(const lightvec_scene *s, const lightvec_gather_desc *desc,
@@ -1950,16 +2190,18 @@ LIGHTVEC_API lightvec_result lightvec_gather_direct(const lightvec_scene *s, con
                                                     lightvec_record *out)
 {
     lightvec__gather_params g;
-    lightvec__vec3 n, wo, x, grad[3];
+    lightvec__lobe_frame f;
+    lightvec__sums sums;
+    lightvec__vec3 n, wo, x;
     lightvec__rng rng;
-    double irr[3] = { 0, 0, 0 }, num[3] = { 0, 0, 0 }, dsum[3] = { 0, 0, 0 }, gsum[3][3], inv_r = 0.0;
     uint32_t j, k, facing = 0, visible = 0, total;
     int c;
     lightvec_result r;
     if (!out || !s) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
     r = lightvec__gather_setup(desc, sf, &g, &n, &wo);
     if (r != LIGHTVEC_OK) return r;
-    memset(gsum, 0, sizeof gsum);
+    memset(&sums, 0, sizeof sums);
+    f = lightvec__lobe_frame_of(sf, n, wo);
     rng = lightvec__rng_stream(desc->seed, index);
     x = lightvec__v3_load(sf->position);
     total = g.m * g.n;
@@ -1967,59 +2209,41 @@ LIGHTVEC_API lightvec_result lightvec_gather_direct(const lightvec_scene *s, con
         for (k = 0; k < g.n; k++) {
             lightvec__light_sample ls;
             float u = ((float)k + lightvec__rng_float(&rng)) / (float)g.n;
-            float v = ((float)j + lightvec__rng_float(&rng)) / (float)g.m, lo, hi, f[3];
+            float v = ((float)j + lightvec__rng_float(&rng)) / (float)g.m, lo, hi;
             uint32_t e = lightvec__pick_emitter(s, u);
             const float *le;
-            double solid, geo;
+            double solid, y, sc;
+            lightvec__vec3 nl, dg;
             lo = e ? s->emit_cdf[e - 1] : 0.0f;
             hi = s->emit_cdf[e];
             u = hi > lo ? (u - lo) / (hi - lo) : 0.5f;
             if (u >= 1.0f) u = 0.99999994f;
             if (!lightvec__sample_emitter(s, e, x, n, u, v, &ls)) continue;
             facing++;
-            inv_r += 1.0 / ls.dist;
+            sums.inv_r += 1.0 / ls.dist;
             if (!lightvec__light_visible(s, x, n, &ls)) continue;
             visible++;
             le = s->materials[s->emit_material[ls.emitter]].emission;
-            solid = (double)ls.cos_l * ls.inv_pdf / ((double)ls.dist * ls.dist);
-            geo = solid * ls.cos_x;
-            lightvec__brdf_unit(&sf->material, n, ls.dir, wo, f);
+            solid = (double)ls.cos_l * ls.inv_pdf / ((double)ls.dist * ls.dist) / total;
+            for (c = 0; c < 3; c++) sums.irr[c] += le[c] * solid * ls.cos_x;
+            y = lightvec__lumf(le) * solid;
+            sums.dir[0] += y * ls.dir.x; sums.dir[1] += y * ls.dir.y; sums.dir[2] += y * ls.dir.z;
+            nl = lightvec__v3_load(s->emit_normal + (size_t)3 * ls.emitter);
+            dg = lightvec__add(lightvec__add(lightvec__scale(n, -ls.cos_l), lightvec__scale(nl, ls.cos_x)),
+                               lightvec__scale(ls.dir, 4.0f * ls.cos_x * ls.cos_l));
+            dg = lightvec__sub(dg, lightvec__scale(n, lightvec__dot(dg, n)));
+            sc = ls.inv_pdf / ((double)ls.dist * ls.dist * ls.dist) / total;
             for (c = 0; c < 3; c++) {
-                irr[c] += le[c] * geo;
-                num[c] += (double)f[c] * le[c] * geo;
+                sums.grad[c][0] += le[c] * sc * dg.x;
+                sums.grad[c][1] += le[c] * sc * dg.y;
+                sums.grad[c][2] += le[c] * sc * dg.z;
             }
-            {
-                double y = lightvec__lumf(le) * solid;
-                lightvec__vec3 nl = lightvec__v3_load(s->emit_normal + (size_t)3 * ls.emitter);
-                lightvec__vec3 dg = lightvec__add(lightvec__add(lightvec__scale(n, -ls.cos_l), lightvec__scale(nl, ls.cos_x)),
-                                                  lightvec__scale(ls.dir, 4.0f * ls.cos_x * ls.cos_l));
-                double sc = ls.inv_pdf / ((double)ls.dist * ls.dist * ls.dist);
-                dsum[0] += y * ls.dir.x; dsum[1] += y * ls.dir.y; dsum[2] += y * ls.dir.z;
-                dg = lightvec__sub(dg, lightvec__scale(n, lightvec__dot(dg, n)));
-                for (c = 0; c < 3; c++) {
-                    gsum[c][0] += le[c] * sc * dg.x;
-                    gsum[c][1] += le[c] * sc * dg.y;
-                    gsum[c][2] += le[c] * sc * dg.z;
-                }
-            }
+            if (f.on) lightvec__add_lobe(&sums, &f, ls.dir, le, solid, ls.dist);
         }
     }
-    for (c = 0; c < 3; c++) {
-        irr[c] /= total; num[c] /= total; dsum[c] /= total;
-        grad[c] = lightvec__v3((float)(gsum[c][0] / total), (float)(gsum[c][1] / total), (float)(gsum[c][2] / total));
-    }
-    memset(out, 0, sizeof *out);
-    memcpy(out->position, sf->position, sizeof out->position);
-    out->normal[0] = n.x; out->normal[1] = n.y; out->normal[2] = n.z;
-    out->outgoing[0] = wo.x; out->outgoing[1] = wo.y; out->outgoing[2] = wo.z;
-    lightvec__finish_vector(sf, n, wo, dsum, num, irr, &out->vector);
-    for (c = 0; c < 3; c++) {
-        out->irradiance[c] = (float)irr[c];
-        out->gradient[c][0] = grad[c].x; out->gradient[c][1] = grad[c].y; out->gradient[c][2] = grad[c].z;
-    }
-    out->distance = lightvec__clamp_distance(&g, inv_r > 0.0 ? (double)facing / inv_r : (double)LIGHTVEC__FAR);
-    out->visibility = facing ? (float)visible / (float)facing : 1.0f;
-    out->flags = sf->flags;
+    sums.samples = facing;
+    sums.visibility = facing ? (float)visible / (float)facing : 1.0f;
+    lightvec__fill_record(sf, &g, &f, wo, &sums, out);
     return LIGHTVEC_OK;
 }
 
@@ -2043,29 +2267,40 @@ LIGHTVEC_API lightvec_result lightvec_gather_direct(const lightvec_scene *s, con
 #define LIGHTVEC__CHUNKS 23          /* CHUNK0 * (2^23 - 1) >= 2^32 records */
 #define LIGHTVEC__RECLAIM_BYTES ((size_t)1 << 20)
 #define LIGHTVEC__FACE_STACK (20 + 4 * (LIGHTVEC__MAX_FACE_DEPTH + 1))
-#define LIGHTVEC__RECORD_BYTES 120u  /* serialized record: 29 floats + flags */
+#define LIGHTVEC__RECORD_BYTES 208u  /* serialized record: 51 floats + flags */
+#define LIGHTVEC__SETTINGS_BYTES 48u /* serialized settings: 12 values of 4 bytes */
+#define LIGHTVEC__MAX_NEIGHBORS 256u
 
 typedef struct lightvec__params {
     lightvec_kind kind;
     float radius_scale, max_change, normal_angle, direction_angle;  /* as given (degrees) */
     float cos_normal, inv_normal;    /* S_curv and 1 / (1 - S_curv) */
-    float cos_dir, sin_dir, inv_dir; /* S_dir, sin of its angle, 1 / (1 - S_dir) */
+    float cos_dir, sin_dir, inv_dir; /* the largest S_dir, sin of its angle, 1 / (1 - S_dir) */
     float dir_angle;                 /* radians */
-    uint32_t min_valid, split_threshold, max_depth;
+    float front;                     /* Ward's "in front" tolerance, relative to R_B */
+    uint32_t min_valid, max_neighbors, split_threshold, max_depth, flags;
     lightvec_interpolation interpolation;  /* never DEFAULT */
 } lightvec__params;
 
-/* 128 bytes; what the criteria read comes first, so that in a kd-tree
+/* 192 bytes; what the criteria read comes first, so that in a kd-tree
    (items aligned to 64 bytes) rejecting a record touches one cache line. */
 typedef struct lightvec__item {
-    float outgoing[3], visibility;   /* sigma */
+    float outgoing[3], cos_dir;      /* sigma and this record's S_dir (from its lobe) */
     float normal[3], rel_gradient;   /* n_B and |grad Y| / Y (luminance) */
+    float inv_glossy_distance;       /* 1 / d_g; 0 = no glossy part */
+    float visibility;
+    float radius;                    /* R_B as the writer knows it; readers read the sphere's copy */
+    uint32_t id;
+    float pos[3];                    /* B */
+    float exponent;                  /* of the lobe of G */
     float dir[3];                    /* D */
     float mag[3];                    /* M */
     float proj[3];                   /* M cos(n_B, D) */
     float slope[3][3];               /* grad E_c / E_c per channel (0 where E_c = 0) */
-    float pos[3], radius;            /* B and R_B = radius_scale * d_avg */
-    uint32_t id, pad;
+    float glossy[3];                 /* G(sigma) */
+    float glossy_gradient[3][3];     /* dG/dw_r */
+    float rel_glossy_gradient;       /* |dY(G)/dw_r| / Y(G) (luminance) times the glossy share */
+    float pad;
 } lightvec__item;
 
 /* A balanced kd-tree over items (median splits on the axis of largest
@@ -2128,6 +2363,7 @@ struct lightvec_cache {
     lightvec__face roots[20];
     lightvec__face omni;             /* view-independent records: one leaf, never split */
     lightvec_record *chunks[LIGHTVEC__CHUNKS];
+    float *radii[LIGHTVEC__CHUNKS];  /* live R_B per record, beside chunks */
     uint32_t record_count;           /* atomic: records stored */
     lightvec__retired *retired;      /* unpublished memory readers may still see */
     uint32_t retired_count, retired_capacity;
@@ -2149,8 +2385,9 @@ static lightvec_result lightvec__params_init(lightvec__params *p, const lightvec
         !isfinite(d->max_normal_angle) || d->max_normal_angle < 0.0f || d->max_normal_angle > 180.0f ||
         (d->max_normal_angle > 0.0f && d->max_normal_angle < 0.1f) ||
         !isfinite(d->max_direction_angle) || d->max_direction_angle < 0.0f || d->max_direction_angle > 180.0f ||
-        (d->max_direction_angle > 0.0f && d->max_direction_angle < 0.1f) ||
-        d->max_face_depth > LIGHTVEC__MAX_FACE_DEPTH)
+        (d->max_direction_angle > 0.0f && d->max_direction_angle < LIGHTVEC__MIN_DIRECTION_ANGLE) ||
+        d->max_face_depth > LIGHTVEC__MAX_FACE_DEPTH || d->max_neighbors > LIGHTVEC__MAX_NEIGHBORS ||
+        !isfinite(d->front_tolerance) || d->front_tolerance < 0.0f || (d->flags & ~LIGHTVEC_CACHE_NO_NEIGHBOR_CLAMP))
         return LIGHTVEC_ERROR_INVALID_ARGUMENT;
     direct = d->kind == LIGHTVEC_KIND_DIRECT;
     p->kind = direct ? LIGHTVEC_KIND_DIRECT : LIGHTVEC_KIND_INDIRECT;
@@ -2158,7 +2395,10 @@ static lightvec_result lightvec__params_init(lightvec__params *p, const lightvec
     p->max_change = lightvec__def(d->max_irradiance_change, direct ? 0.1f : 0.5f);
     p->normal_angle = lightvec__def(d->max_normal_angle, direct ? 10.0f : 20.0f);
     p->direction_angle = lightvec__def(d->max_direction_angle, 15.0f);
+    p->front = lightvec__def(d->front_tolerance, 0.05f);
     p->min_valid = lightvec__def(d->min_valid, 3u);
+    p->max_neighbors = lightvec__def(d->max_neighbors, 16u);
+    p->flags = d->flags;
     p->interpolation = d->interpolation ? d->interpolation : LIGHTVEC_INTERPOLATION_GRADIENT;
     p->split_threshold = lightvec__def(d->face_split_threshold, 8192u);
     p->max_depth = lightvec__def(d->max_face_depth, 8u);
@@ -2173,28 +2413,70 @@ static lightvec_result lightvec__params_init(lightvec__params *p, const lightvec
     return LIGHTVEC_OK;
 }
 
-/* A record fit for the cache, with its unit vectors normalised. */
-static int lightvec__record_clean(const lightvec_record *r, lightvec_record *out)
+/* A unit vector, or zero for a zero input (an absent glossy light vector);
+   0 for anything else. */
+static int lightvec__unit_or_zero(const float *in, float out[3])
+{
+    lightvec__vec3 v;
+    if (in[0] == 0.0f && in[1] == 0.0f && in[2] == 0.0f) {
+        out[0] = out[1] = out[2] = 0.0f;
+        return 1;
+    }
+    if (!lightvec__unit(in, &v)) return 0;
+    out[0] = v.x; out[1] = v.y; out[2] = v.z;
+    return 1;
+}
+
+/* A record fit for the cache, with its unit vectors normalised and its
+   radius set to radius_scale * d_avg. */
+static int lightvec__record_clean(const lightvec__params *p, const lightvec_record *r, lightvec_record *out)
 {
     lightvec__vec3 n, o, d;
+    float g[3];
     int c;
     if ((r->flags & ~LIGHTVEC_RECORD_VIEW_INDEPENDENT) || !lightvec__finite3(r->position) ||
-        !lightvec__unit(r->normal, &n) || !lightvec__unit(r->vector.direction, &d))
+        !lightvec__unit(r->normal, &n) || !lightvec__unit(r->vector.direction, &d) ||
+        !lightvec__unit_or_zero(r->vector.glossy_direction, g))
         return 0;
     if (r->flags & LIGHTVEC_RECORD_VIEW_INDEPENDENT) o = n;
     else if (!lightvec__unit(r->outgoing, &o)) return 0;
-    if (!lightvec__finite_nonneg(r->vector.magnitude, 3) || !lightvec__finite_nonneg(r->irradiance, 3))
+    if (!lightvec__finite_nonneg(r->vector.magnitude, 3) || !lightvec__finite_nonneg(r->irradiance, 3) ||
+        !lightvec__finite_nonneg(r->vector.glossy_magnitude, 3) || !lightvec__finite_nonneg(r->glossy, 3))
         return 0;
     for (c = 0; c < 3; c++)
-        if (!lightvec__finite3(r->gradient[c])) return 0;
+        if (!lightvec__finite3(r->gradient[c]) || !lightvec__finite3(r->glossy_gradient[c])) return 0;
     if (!isfinite(r->distance) || !(r->distance > 0.0f) || r->distance > LIGHTVEC__FAR ||
+        !isfinite(r->glossy_distance) || r->glossy_distance < 0.0f || r->glossy_distance > LIGHTVEC__FAR ||
+        !isfinite(r->exponent) || r->exponent < 0.0f || r->exponent > 1e6f ||
+        !(r->glossy_share >= 0.0f && r->glossy_share <= 1.0f) ||
         !(r->visibility >= 0.0f && r->visibility <= 1.0f))
         return 0;
     *out = *r;
     out->normal[0] = n.x; out->normal[1] = n.y; out->normal[2] = n.z;
     out->outgoing[0] = o.x; out->outgoing[1] = o.y; out->outgoing[2] = o.z;
     out->vector.direction[0] = d.x; out->vector.direction[1] = d.y; out->vector.direction[2] = d.z;
+    memcpy(out->vector.glossy_direction, g, sizeof g);
+    out->radius = lightvec__minf(p->radius_scale * r->distance, FLT_MAX);
     return 1;
+}
+
+/* The glossy share of a record, 0 read as 1. */
+static float lightvec__share(const lightvec_record *r)
+{
+    return r->glossy_share > 0.0f ? r->glossy_share : 1.0f;
+}
+
+/* S_dir of a record's glossy part: the angle its lobe tolerates
+   (lightvec_direction_angle) over sqrt(glossy share): the first-order
+   remainder grows as the angle squared and counts in the radiance in
+   proportion to the share. Never wider than the cache's max_direction_angle
+   (the cone its faces are searched in). */
+static float lightvec__record_cos_dir(const lightvec__params *p, const lightvec_record *r)
+{
+    double a;
+    if (!(r->glossy_distance > 0.0f)) return p->cos_dir;
+    a = lightvec_direction_angle(r->exponent) * (LIGHTVEC__PI / 180.0) / sqrt((double)lightvec__share(r));
+    return a < (double)p->dir_angle ? (float)cos(a) : p->cos_dir;
 }
 
 static void lightvec__make_item(const lightvec__params *p, const lightvec_record *r, uint32_t id,
@@ -2204,13 +2486,17 @@ static void lightvec__make_item(const lightvec__params *p, const lightvec_record
     float y = lightvec__lumf(r->irradiance), gl;
     int c;
     static const float w[3] = { 0.2126f, 0.7152f, 0.0722f };
+    memset(it, 0, sizeof *it);
     for (c = 0; c < 3; c++) g = lightvec__add(g, lightvec__scale(lightvec__v3_load(r->gradient[c]), w[c]));
     gl = lightvec__length(g);
     memcpy(it->pos, r->position, sizeof it->pos);
-    it->radius = p->radius_scale * r->distance;
+    it->radius = r->radius;
     memcpy(it->normal, r->normal, sizeof it->normal);
     it->rel_gradient = y > 0.0f ? lightvec__minf(gl / y, FLT_MAX) : (gl > 0.0f ? FLT_MAX : 0.0f);
     memcpy(it->outgoing, r->outgoing, sizeof it->outgoing);
+    it->cos_dir = lightvec__record_cos_dir(p, r);
+    it->inv_glossy_distance = r->glossy_distance > 0.0f ? 1.0f / r->glossy_distance : 0.0f;
+    it->exponent = r->exponent;
     it->visibility = r->visibility;
     memcpy(it->dir, r->vector.direction, sizeof it->dir);
     memcpy(it->mag, r->vector.magnitude, sizeof it->mag);
@@ -2224,33 +2510,61 @@ static void lightvec__make_item(const lightvec__params *p, const lightvec_record
         for (k = 0; k < 3; k++) it->slope[c][k] = e > 0.0f ? r->gradient[c][k] / e : 0.0f;
         if (!lightvec__finite3(it->slope[c])) it->slope[c][0] = it->slope[c][1] = it->slope[c][2] = 0.0f;
     }
+    memcpy(it->glossy, r->glossy, sizeof it->glossy);
+    memcpy(it->glossy_gradient, r->glossy_gradient, sizeof it->glossy_gradient);
+    g = lightvec__v3(0.0f, 0.0f, 0.0f);
+    for (c = 0; c < 3; c++) g = lightvec__add(g, lightvec__scale(lightvec__v3_load(r->glossy_gradient[c]), w[c]));
+    gl = lightvec__length(g);
+    y = lightvec__lumf(r->glossy);
+    /* the change of G relative to the radiance: |grad Y(G)| / Y(G) times the share */
+    it->rel_glossy_gradient = y > 0.0f ? lightvec__minf(gl / y * lightvec__share(r), FLT_MAX) : (gl > 0.0f ? FLT_MAX : 0.0f);
     it->id = id;
-    it->pad = 0;
 }
 
 /* ---- record chunks ----------------------------------------------------------- */
 
-static lightvec_record *lightvec__record_at(const lightvec_cache *c, uint32_t id)
+/* Record id lives in chunk k at offset o (chunk k holds CHUNK0 << k records). */
+static uint32_t lightvec__chunk_of(uint32_t id, uint32_t *offset)
 {
     uint64_t q = (uint64_t)id / LIGHTVEC__CHUNK0 + 1u;
     uint32_t k = 0;
     while ((q >> (k + 1)) != 0) k++;
-    return c->chunks[k] + (id - (uint64_t)LIGHTVEC__CHUNK0 * ((1ull << k) - 1u));
+    *offset = (uint32_t)(id - (uint64_t)LIGHTVEC__CHUNK0 * ((1ull << k) - 1u));
+    return k;
+}
+
+static lightvec_record *lightvec__record_at(const lightvec_cache *c, uint32_t id)
+{
+    uint32_t o, k = lightvec__chunk_of(id, &o);
+    return c->chunks[k] + o;
+}
+
+/* The live validity radius of record id (neighbour clamping may shrink it
+   after the record is published: read and written atomically). */
+static float *lightvec__radius_at(const lightvec_cache *c, uint32_t id)
+{
+    uint32_t o, k = lightvec__chunk_of(id, &o);
+    return c->radii[k] + o;
 }
 
 /* The slot of record id (the next one), allocating its chunk. */
 static lightvec_record *lightvec__record_reserve(lightvec_cache *c, uint32_t id)
 {
-    uint64_t q = (uint64_t)id / LIGHTVEC__CHUNK0 + 1u;
-    uint32_t k = 0;
-    while ((q >> (k + 1)) != 0) k++;
+    uint32_t o, k = lightvec__chunk_of(id, &o);
     if (k >= LIGHTVEC__CHUNKS) return NULL;
     if (!c->chunks[k]) {
-        c->chunks[k] = (lightvec_record *)lightvec__alloc_array(&c->a, (size_t)LIGHTVEC__CHUNK0 << k,
-                                                                sizeof(lightvec_record));
-        if (!c->chunks[k]) return NULL;
+        lightvec_record *rec = (lightvec_record *)lightvec__alloc_array(&c->a, (size_t)LIGHTVEC__CHUNK0 << k,
+                                                                        sizeof(lightvec_record));
+        float *radii = (float *)lightvec__alloc_array(&c->a, (size_t)LIGHTVEC__CHUNK0 << k, sizeof(float));
+        if (!rec || !radii) {
+            lightvec__free(&c->a, rec);
+            lightvec__free(&c->a, radii);
+            return NULL;
+        }
+        c->chunks[k] = rec;
+        c->radii[k] = radii;
     }
-    return lightvec__record_at(c, id);
+    return c->chunks[k] + o;
 }
 
 /* ---- kd-tree ------------------------------------------------------------------- */
@@ -2363,58 +2677,130 @@ static lightvec__tree *lightvec__tree_build(const lightvec_allocator *a, const l
 
 /* ---- queries -------------------------------------------------------------------- */
 
+/* A valid record kept for the interpolation. */
+typedef struct lightvec__candidate {
+    float w;                         /* the diffuse vector's weight, w_B w_sigma (the cache's S_dir) */
+    float wg;                        /* the glossy part's, w_B w_sigma (the record's S_dir); 0 = not valid */
+    uint32_t id;
+    const lightvec__item *it;
+} lightvec__candidate;
+
 typedef struct lightvec__query {
     float a[3], n[3], w[3];          /* A, n_A, w */
+    float mirror[3];                 /* w mirrored about n_A: the axis of A's lobe */
     int directional;                 /* 0: view-independent query */
     const lightvec__params *p;
-    double wsum, msum[3], dsum[3];
-    uint32_t count;
-    uint32_t lit, shadow, partial;   /* DLV visibility classes of the valid records */
-    uint32_t *ids;
+    uint32_t count;                  /* valid records */
+    uint32_t *ids;                   /* lightvec_find: every valid record, up to capacity */
     float *weights;
     uint32_t capacity;
+    lightvec__candidate *heap;       /* lightvec_lookup: the heap_capacity records of largest weight, */
+    uint32_t heap_count, heap_capacity;  /* a min-heap on (w, -id) */
 } lightvec__query;
 
-/* The criteria of 4.2 for one record inside its sphere (|AB| < R_B, tested
-   by the caller); on success accumulates w = w_B * w_sigma. */
-static void lightvec__visit(lightvec__query *q, const lightvec__item *it, float dx, float dy, float dz, float d2)
+/* The angle psi over which record B's glossy part is carried to A's view w:
+   the view change |w - sigma| (the chord, the angle to second order) plus
+   the parallax of the move from B to A as seen along A's lobe. A point
+   A + t m seen from B lies in direction m + (A - B)_perp / t, so the move
+   turns what the lobe sees by |(A - B)_perp| / t; d_g, the lobe's harmonic
+   mean distance, weighs the nearest surfaces most and bounds it from above.
+   The two add (their directions are not known to agree): a conservative
+   bound, used for validity only. The view change itself is extrapolated
+   with the view gradient, the parallax is not (a single distance cannot
+   say how a lobe that sees near and far surfaces shifts). */
+static float lightvec__glossy_angle(const lightvec__query *q, const lightvec__item *it, float dx, float dy, float dz)
 {
-    const lightvec__params *p = q->p;
-    float ws = 1.0f, cs, cn, d, change, w;
-    int c;
-    if (q->directional) {                                            /* 4.2.2: cos(w, sigma) > S_dir */
-        cs = q->w[0] * it->outgoing[0] + q->w[1] * it->outgoing[1] + q->w[2] * it->outgoing[2];
-        if (!(cs > p->cos_dir)) return;
-        ws = (cs - p->cos_dir) * p->inv_dir;
+    float vx = q->w[0] - it->outgoing[0], vy = q->w[1] - it->outgoing[1], vz = q->w[2] - it->outgoing[2];
+    float along = dx * q->mirror[0] + dy * q->mirror[1] + dz * q->mirror[2];
+    float px = dx - along * q->mirror[0], py = dy - along * q->mirror[1], pz = dz - along * q->mirror[2];
+    return sqrtf(vx * vx + vy * vy + vz * vz) + sqrtf(px * px + py * py + pz * pz) * it->inv_glossy_distance;
+}
+
+static int lightvec__heap_less(const lightvec__candidate *a, const lightvec__candidate *b)
+{
+    return a->w < b->w || (a->w == b->w && a->id > b->id);
+}
+
+static void lightvec__heap_down(lightvec__candidate *h, uint32_t n, uint32_t i)
+{
+    for (;;) {
+        uint32_t l = 2 * i + 1, m = i;
+        lightvec__candidate t;
+        if (l < n && lightvec__heap_less(&h[l], &h[m])) m = l;
+        if (l + 1 < n && lightvec__heap_less(&h[l + 1], &h[m])) m = l + 1;
+        if (m == i) return;
+        t = h[i]; h[i] = h[m]; h[m] = t;
+        i = m;
     }
-    cn = q->n[0] * it->normal[0] + q->n[1] * it->normal[1] + q->n[2] * it->normal[2];
-    if (!(cn > p->cos_normal)) return;                               /* curvature: S_curv */
-    d = sqrtf(d2);
-    change = d * it->rel_gradient;                                   /* |AB| |grad E| / E_B < I_B */
-    if (!(change < p->max_change)) return;
-    w = (1.0f - d / it->radius) * (1.0f / (1.0f + change)) * ((cn - p->cos_normal) * p->inv_normal) * ws;
+}
+
+/* Keeps a valid record: in the ids of lightvec_find, or among the
+   max_neighbors of largest weight (ties: the smaller id) of lightvec_lookup. */
+static void lightvec__keep(lightvec__query *q, const lightvec__item *it, float w, float wg)
+{
     if (q->ids && q->count < q->capacity) {
         q->ids[q->count] = it->id;
         q->weights[q->count] = w;
     }
     q->count++;
-    q->wsum += w;
-    for (c = 0; c < 3; c++) {
-        float m = p->interpolation == LIGHTVEC_INTERPOLATION_PLAIN ? it->mag[c] : it->proj[c];
-        if (p->interpolation == LIGHTVEC_INTERPOLATION_GRADIENT) {
-            /* Ward & Heckbert: E_c(A) = E_c(B) + grad E_c . (A - B); the vector scales with E */
-            float f = 1.0f + (it->slope[c][0] * dx + it->slope[c][1] * dy + it->slope[c][2] * dz);
-            m *= f > 0.0f ? f : 0.0f;
+    if (q->heap) {
+        lightvec__candidate c;
+        c.w = w;
+        c.wg = wg;
+        c.id = it->id;
+        c.it = it;
+        if (q->heap_count < q->heap_capacity) {
+            uint32_t i = q->heap_count++;
+            while (i && lightvec__heap_less(&c, &q->heap[(i - 1) / 2])) {
+                q->heap[i] = q->heap[(i - 1) / 2];
+                i = (i - 1) / 2;
+            }
+            q->heap[i] = c;
+        } else if (lightvec__heap_less(&q->heap[0], &c)) {
+            q->heap[0] = c;
+            lightvec__heap_down(q->heap, q->heap_count, 0);
         }
-        q->msum[c] += (double)w * m;
-        q->dsum[c] += (double)w * it->dir[c];
     }
-    if (it->visibility >= 1.0f) q->lit++;
-    else if (it->visibility <= 0.0f) q->shadow++;
-    else q->partial++;
 }
 
-/* |AB| < R_B for items[lo, hi), then the other criteria. */
+/* The criteria of 4.2 for one record inside its sphere (|AB| < R_B, tested
+   by the caller; dx = A - B), with Ward's "in front" test. The diffuse
+   vector's weight is the paper's w = w_B * w_sigma with the cache's S_dir.
+   The glossy part's is w_g = w_B * w_sigma,B / (1 + psi |grad G_B| / G_B)
+   with the record's own S_dir (from its lobe), psi from
+   lightvec__glossy_angle (cos psi = 1 - psi^2 / 2, the paper's cos(w, sigma)
+   exactly without parallax), valid while psi < acos S_dir,B and
+   psi |grad G_B| / G_B < I_B: the irradiance-change criterion and weight of
+   4.2.1, applied to G along the angle. w_g = 0 when either fails. */
+static void lightvec__visit(lightvec__query *q, const lightvec__item *it, float radius, float dx, float dy, float dz,
+                            float d2)
+{
+    const lightvec__params *p = q->p;
+    float ws = 1.0f, wg = 0.0f, wb, cn, d, change, front;
+    if (q->directional) {                                            /* 4.2.2: cos(w, sigma) > S_dir */
+        float cs = q->w[0] * it->outgoing[0] + q->w[1] * it->outgoing[1] + q->w[2] * it->outgoing[2];
+        if (!(cs > p->cos_dir)) return;
+        ws = (cs - p->cos_dir) * p->inv_dir;
+    }
+    cn = q->n[0] * it->normal[0] + q->n[1] * it->normal[1] + q->n[2] * it->normal[2];
+    if (!(cn > p->cos_normal)) return;                               /* curvature: S_curv */
+    front = 0.5f * (dx * (q->n[0] + it->normal[0]) + dy * (q->n[1] + it->normal[1]) + dz * (q->n[2] + it->normal[2]));
+    if (!(front >= -p->front * radius)) return;                      /* B in front of A (Ward 1988) */
+    d = sqrtf(d2);
+    change = d * it->rel_gradient;                                   /* |AB| |grad E| / E_B < I_B */
+    if (!(change < p->max_change)) return;
+    wb = (1.0f - d / radius) * (1.0f / (1.0f + change)) * ((cn - p->cos_normal) * p->inv_normal);
+    if (q->directional && it->inv_glossy_distance > 0.0f) {          /* the glossy part */
+        float psi = lightvec__glossy_angle(q, it, dx, dy, dz), cos_psi = 1.0f - 0.5f * psi * psi;
+        float gchange = psi * it->rel_glossy_gradient;
+        if (cos_psi > it->cos_dir && gchange < p->max_change)
+            wg = wb * ((cos_psi - it->cos_dir) / (1.0f - it->cos_dir)) * (1.0f / (1.0f + gchange));
+    }
+    lightvec__keep(q, it, wb * ws, wg);
+}
+
+/* |AB| < R_B for items[lo, hi), then the other criteria. R_B is read
+   atomically: neighbour clamping may shrink it while readers run. */
 static void lightvec__visit_range(lightvec__query *q, const float *spheres, const lightvec__item *items, uint32_t lo,
                                   uint32_t hi)
 {
@@ -2422,8 +2808,8 @@ static void lightvec__visit_range(lightvec__query *q, const float *spheres, cons
     for (i = lo; i < hi; i++) {
         const float *s = spheres + 4 * (size_t)i;
         float dx = q->a[0] - s[0], dy = q->a[1] - s[1], dz = q->a[2] - s[2];
-        float d2 = dx * dx + dy * dy + dz * dz;
-        if (d2 < s[3] * s[3]) lightvec__visit(q, &items[i], dx, dy, dz, d2);
+        float d2 = dx * dx + dy * dy + dz * dz, r = lightvec__load_f32(s + 3);
+        if (d2 < r * r) lightvec__visit(q, &items[i], r, dx, dy, dz, d2);
     }
 }
 
@@ -2451,8 +2837,9 @@ static void lightvec__tree_query(const lightvec__tree *t, lightvec__query *q)
     }
 }
 
-static void lightvec__index_query(const lightvec__index *idx, lightvec__query *q)
+static void lightvec__index_query(void *ctx, const lightvec__index *idx)
 {
+    lightvec__query *q = (lightvec__query *)ctx;
     uint32_t i, n = lightvec__load_u32(&idx->tail_count);
     for (i = 0; i < idx->tree_count; i++) lightvec__tree_query(idx->trees[i], q);
     lightvec__visit_range(q, &idx->tail_spheres[0][0], idx->tail, 0, n);
@@ -2929,49 +3316,18 @@ LIGHTVEC_API void lightvec_cache_destroy(lightvec_cache *c)
     lightvec__face_free(c, &c->omni);
     for (i = 0; i < (int)c->retired_count; i++) lightvec__free(&a, c->retired[i].ptr);
     lightvec__free(&a, c->retired);
-    for (i = 0; i < LIGHTVEC__CHUNKS; i++) lightvec__free(&a, c->chunks[i]);
+    for (i = 0; i < LIGHTVEC__CHUNKS; i++) {
+        lightvec__free(&a, c->chunks[i]);
+        lightvec__free(&a, c->radii[i]);
+    }
     lightvec__free(&a, c->readers);
     lightvec__free(&a, c);
-}
-
-LIGHTVEC_API lightvec_result lightvec_insert(lightvec_cache *c, const lightvec_record *rec, uint32_t *id_out)
-{
-    lightvec_record clean, *slot;
-    lightvec__item it;
-    lightvec__face *f;
-    uint32_t id;
-    if (!c || !rec) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
-    if (!lightvec__record_clean(rec, &clean)) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
-    id = c->record_count;
-    if (id == 0xFFFFFFFFu) return LIGHTVEC_ERROR_OUT_OF_MEMORY;
-    slot = lightvec__record_reserve(c, id);
-    if (!slot) return LIGHTVEC_ERROR_OUT_OF_MEMORY;
-    f = lightvec__leaf_for(c, &clean);
-    lightvec__make_item(&c->p, &clean, id, &it);
-    /* Everything that can fail happens before the record is published: on an
-       error the cache is as it was. The record count is published before the
-       item, so a reader that finds the item can read its record. */
-    if (f->count + 1u > c->p.split_threshold && lightvec__can_split(c, f)) {
-        lightvec__face *ch = lightvec__split_with(c, f, &it);
-        if (!ch) return LIGHTVEC_ERROR_OUT_OF_MEMORY;
-        *slot = clean;
-        lightvec__store_u32(&c->record_count, id + 1u);
-        lightvec__publish_split(c, f, ch);
-    } else {
-        if (lightvec__face_prepare(c, f) != 0) return LIGHTVEC_ERROR_OUT_OF_MEMORY;
-        *slot = clean;
-        lightvec__store_u32(&c->record_count, id + 1u);
-        lightvec__face_push(f, &it);
-    }
-    lightvec__maybe_reclaim(c);
-    if (id_out) *id_out = id;
-    return LIGHTVEC_OK;
 }
 
 static lightvec_result lightvec__query_init(const lightvec_cache *c, const float position[3], const float normal[3],
                                             const float *outgoing, lightvec__query *q)
 {
-    lightvec__vec3 n, w;
+    lightvec__vec3 n, w, m;
     if (!c || !position || !lightvec__finite3(position) || !lightvec__unit(normal, &n))
         return LIGHTVEC_ERROR_INVALID_ARGUMENT;
     memset(q, 0, sizeof *q);
@@ -2981,52 +3337,108 @@ static lightvec_result lightvec__query_init(const lightvec_cache *c, const float
     if (outgoing) {
         if (!lightvec__unit(outgoing, &w)) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
         q->w[0] = w.x; q->w[1] = w.y; q->w[2] = w.z;
+        m = lightvec__sub(lightvec__scale(n, 2.0f * lightvec__dot(n, w)), w);
+        q->mirror[0] = m.x; q->mirror[1] = m.y; q->mirror[2] = m.z;
         q->directional = 1;
     }
     return LIGHTVEC_OK;
 }
 
-/* Visits every index that can hold a valid record: the view-independent leaf,
-   or the leaves of the icosahedron whose caps meet the directional cone. */
-static void lightvec__search(const lightvec_cache *c, lightvec__query *q)
+/* Calls fn for every index that can hold a record valid in the direction
+   cone around w (directional), or for the view-independent leaf. The caller
+   registers as a reader, unless it is the writer. */
+static void lightvec__for_indexes(const lightvec_cache *c, int directional, const float w[3],
+                                  void (*fn)(void *ctx, const lightvec__index *idx), void *ctx)
 {
     const lightvec__face *stack[LIGHTVEC__FACE_STACK];
-    uint32_t top = 0, i, e = lightvec__enter(c->readers);
-    if (!q->directional) {
+    uint32_t top = 0, i;
+    if (!directional) {
         const lightvec__index *idx = (const lightvec__index *)lightvec__load_ptr(&c->omni.index);
-        if (idx) lightvec__index_query(idx, q);
-        lightvec__leave(c->readers, e);
+        if (idx) fn(ctx, idx);
         return;
     }
     for (i = 0; i < 20; i++)
-        if (lightvec__face_in_cone(&c->roots[i], q->p, q->w)) stack[top++] = &c->roots[i];
+        if (lightvec__face_in_cone(&c->roots[i], &c->p, w)) stack[top++] = &c->roots[i];
     while (top) {
         const lightvec__face *f = stack[--top];
         const lightvec__face *ch = (const lightvec__face *)lightvec__load_ptr(&f->children);
         if (ch) {
             for (i = 0; i < 4; i++)
-                if (lightvec__face_in_cone(&ch[i], q->p, q->w)) stack[top++] = &ch[i];
+                if (lightvec__face_in_cone(&ch[i], &c->p, w)) stack[top++] = &ch[i];
         } else {
             const lightvec__index *idx = (const lightvec__index *)lightvec__load_ptr(&f->index);
-            if (idx) lightvec__index_query(idx, q);
+            if (idx) fn(ctx, idx);
         }
     }
+}
+
+/* Every record valid at the query, as a registered reader. */
+static void lightvec__search(const lightvec_cache *c, lightvec__query *q)
+{
+    uint32_t e = lightvec__enter(c->readers);
+    lightvec__for_indexes(c, q->directional, q->w, lightvec__index_query, q);
     lightvec__leave(c->readers, e);
 }
 
-/* 4.2.3: the normalised weighted interpolation of the valid vectors. The
-   paper averages D and M. Averaging unit directions shortens the sum, and its
-   normalised direction leans toward the normal more than the records' do, so
-   M * cos(n, D) grows: a bias of a few percent on walls lit from many
-   directions. The projected modes average M cos(n_B, D_B) (the irradiance,
-   for Lambert) and divide by cos(n_A, D) afterwards. */
-static void lightvec__interpolate(const lightvec__params *p, const lightvec__query *q, lightvec_vector *v)
+/* 4.2.3: the normalised weighted interpolation of the kept records.
+   Diffuse vector: the paper averages D and M. Averaging unit directions
+   shortens the sum, and its normalised direction leans toward the normal
+   more than the records' do, so M * cos(n, D) grows: a bias of a few percent
+   on walls lit from many directions. The projected modes average
+   M cos(n_B, D_B) (the irradiance, for Lambert) and divide by cos(n_A, D)
+   afterwards; GRADIENT first moves each record to A by Ward & Heckbert's
+   gradient, E_c(A) = E_c(B) (1 + grad E_c / E_c . (A - B)).
+   Glossy vector: G(A, w) = the w_g-weighted mean of max(0, G_B + dG_B/dw .
+   (w - sigma_B)) over the records valid for their glossy part, turned into
+   the glossy light vector toward w with their mean exponent. */
+static void lightvec__interpolate(const lightvec__query *q, lightvec_lookup_result *out)
 {
-    lightvec__vec3 d = lightvec__v3((float)q->dsum[0], (float)q->dsum[1], (float)q->dsum[2]);
-    lightvec__vec3 n = lightvec__v3_load(q->n);
-    double scale = 1.0 / q->wsum;
+    const lightvec__params *p = q->p;
+    double wsum = 0.0, msum[3] = { 0, 0, 0 }, dsum[3] = { 0, 0, 0 }, gsum[3] = { 0, 0, 0 }, gw = 0.0, esum = 0.0, scale;
+    uint32_t i, lit = 0, shadow = 0, partial = 0, glossy = 0, glossy_valid = 0;
+    lightvec__vec3 d, n = lightvec__v3_load(q->n);
     int k;
+    for (i = 0; i < q->heap_count; i++) {
+        const lightvec__item *it = q->heap[i].it;
+        double w = q->heap[i].w, wg = q->heap[i].wg;
+        float dx = q->a[0] - it->pos[0], dy = q->a[1] - it->pos[1], dz = q->a[2] - it->pos[2];
+        wsum += w;
+        for (k = 0; k < 3; k++) {
+            float m = p->interpolation == LIGHTVEC_INTERPOLATION_PLAIN ? it->mag[k] : it->proj[k];
+            if (p->interpolation == LIGHTVEC_INTERPOLATION_GRADIENT) {
+                float f = 1.0f + (it->slope[k][0] * dx + it->slope[k][1] * dy + it->slope[k][2] * dz);
+                m *= f > 0.0f ? f : 0.0f;
+            }
+            msum[k] += w * m;
+            dsum[k] += w * it->dir[k];
+        }
+        glossy += q->directional && it->inv_glossy_distance > 0.0f;
+        if (wg > 0.0) {
+            float v[3];
+            v[0] = q->w[0] - it->outgoing[0]; v[1] = q->w[1] - it->outgoing[1]; v[2] = q->w[2] - it->outgoing[2];
+            for (k = 0; k < 3; k++) {
+                const float *g = it->glossy_gradient[k];
+                float gk = it->glossy[k] + (g[0] * v[0] + g[1] * v[1] + g[2] * v[2]);
+                gsum[k] += wg * (gk > 0.0f ? gk : 0.0f);
+            }
+            gw += wg;
+            esum += wg * it->exponent;
+            glossy_valid++;
+        }
+        if (it->visibility >= 1.0f) lit++;
+        else if (it->visibility <= 0.0f) shadow++;
+        else partial++;
+    }
+    out->used_count = q->heap_count;
+    out->weight = q->heap_count ? (float)(wsum / q->heap_count) : 0.0f; /* 4.3: average of the weights */
+    /* where the kept records have glossy parts, min_valid of them must be
+       valid for the glossy part too */
+    out->hit = q->heap_count >= p->min_valid && wsum > 0.0 && (!glossy || glossy_valid >= p->min_valid);
+    if (p->kind == LIGHTVEC_KIND_DIRECT && (partial || (lit && shadow))) out->hit = 0;
+    if (!out->hit) return;
+    d = lightvec__v3((float)dsum[0], (float)dsum[1], (float)dsum[2]);
     d = lightvec__length(d) > 0.0f ? lightvec__normalize(d) : n;
+    scale = 1.0 / wsum;
     if (p->interpolation != LIGHTVEC_INTERPOLATION_PLAIN) {
         float cos_d = lightvec__dot(n, d);
         if (!(cos_d > 1e-3f)) { /* the mean light comes from behind A: keep it on A's side */
@@ -3035,25 +3447,29 @@ static void lightvec__interpolate(const lightvec__params *p, const lightvec__que
         }
         scale /= cos_d;
     }
-    v->direction[0] = d.x; v->direction[1] = d.y; v->direction[2] = d.z;
-    for (k = 0; k < 3; k++) v->magnitude[k] = (float)(q->msum[k] * scale);
+    out->vector.direction[0] = d.x; out->vector.direction[1] = d.y; out->vector.direction[2] = d.z;
+    for (k = 0; k < 3; k++) out->vector.magnitude[k] = lightvec__to_float(msum[k] * scale);
+    if (gw > 0.0) {
+        for (k = 0; k < 3; k++) gsum[k] /= gw;
+        lightvec__glossy_vector(n, lightvec__v3_load(q->w), esum / gw, gsum, &out->vector);
+    }
 }
 
 LIGHTVEC_API lightvec_result lightvec_lookup(const lightvec_cache *c, const float position[3], const float normal[3],
                                              const float *outgoing, lightvec_lookup_result *out)
 {
+    lightvec__candidate heap[LIGHTVEC__MAX_NEIGHBORS];
     lightvec__query q;
     lightvec_result r;
     if (!out) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
     memset(out, 0, sizeof *out);
     r = lightvec__query_init(c, position, normal, outgoing, &q);
     if (r != LIGHTVEC_OK) return r;
+    q.heap = heap;
+    q.heap_capacity = c->p.max_neighbors;
     lightvec__search(c, &q);
     out->valid_count = q.count;
-    out->weight = q.count ? (float)(q.wsum / q.count) : 0.0f; /* 4.3: average of the weights */
-    out->hit = q.count >= c->p.min_valid && q.wsum > 0.0;
-    if (c->p.kind == LIGHTVEC_KIND_DIRECT && (q.partial || (q.lit && q.shadow))) out->hit = 0;
-    if (out->hit) lightvec__interpolate(&c->p, &q, &out->vector);
+    lightvec__interpolate(&q, out);
     return LIGHTVEC_OK;
 }
 
@@ -3079,6 +3495,135 @@ LIGHTVEC_API lightvec_result lightvec_cache_record(const lightvec_cache *c, uint
 {
     if (!c || !out || id >= lightvec__load_u32(&c->record_count)) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
     *out = *lightvec__record_at(c, id);
+    out->radius = lightvec__load_f32(lightvec__radius_at(c, id));
+    return LIGHTVEC_OK;
+}
+
+/* ---- neighbour clamping and insertion (writer) ------------------------------------- */
+
+/* Neighbour clamping (Krivanek et al. 2006; Jarosz et al. 2008): the radii of
+   records whose validity spheres overlap obey R_i <= R_j + |B_i - B_j| both
+   ways, the triangle inequality the harmonic-mean distance field itself
+   obeys. A record whose rays missed a nearby occluder (a large d_avg) is held
+   back by neighbours that saw it, so it cannot reach over the occluder's
+   shadow. Neighbours are the records a lookup at (B_i, sigma_i) could find:
+   the view-independent ones for a view-independent record, else those
+   within max_direction_angle of sigma_i. Pass 1 clamps the new radius by the
+   records within it; pass 2 clamps every record whose sphere holds B_i by
+   the new radius. */
+typedef struct lightvec__clamp {
+    lightvec_cache *c;
+    lightvec__item *it;              /* the new record (its radius is R_i) */
+    int directional, pass;
+} lightvec__clamp;
+
+static void lightvec__clamp_item(lightvec__clamp *k, float *sphere, lightvec__item *other)
+{
+    lightvec__item *it = k->it;
+    float dx = it->pos[0] - sphere[0], dy = it->pos[1] - sphere[1], dz = it->pos[2] - sphere[2];
+    float d = sqrtf(dx * dx + dy * dy + dz * dz), r = sphere[3];
+    if (k->directional && !(it->outgoing[0] * other->outgoing[0] + it->outgoing[1] * other->outgoing[1] +
+                                it->outgoing[2] * other->outgoing[2] > k->c->p.cos_dir))
+        return;
+    if (k->pass == 1) {
+        if (r + d < it->radius) it->radius = r + d;
+    } else if (it->radius + d < r) {
+        r = it->radius + d;
+        lightvec__store_f32(sphere + 3, r);   /* readers may be reading it */
+        lightvec__store_f32(lightvec__radius_at(k->c, other->id), r);
+        other->radius = r;                   /* what the next rebuild of its tree copies */
+    }
+}
+
+/* The items of a kd-tree whose sphere box meets the ball of radius reach
+   around the new record (reach 0: the boxes holding its position). */
+static void lightvec__clamp_tree(lightvec__clamp *k, lightvec__tree *t, float reach)
+{
+    uint32_t stack[64][3], top = 1, i;
+    const float *p = k->it->pos;
+    stack[0][0] = 0; stack[0][1] = 0; stack[0][2] = t->count;
+    while (top) {
+        uint32_t node, lo, hi, mid;
+        const float *box;
+        float d2 = 0.0f;
+        int a;
+        top--;
+        node = stack[top][0]; lo = stack[top][1]; hi = stack[top][2];
+        box = t->boxes + 6 * (size_t)node;
+        for (a = 0; a < 3; a++) {
+            float e = p[a] < box[a] ? box[a] - p[a] : (p[a] > box[3 + a] ? p[a] - box[3 + a] : 0.0f);
+            d2 += e * e;
+        }
+        if (!(d2 <= reach * reach)) continue;
+        if (hi - lo <= LIGHTVEC__LEAF) {
+            for (i = lo; i < hi; i++) lightvec__clamp_item(k, t->spheres + 4 * (size_t)i, &t->items[i]);
+            continue;
+        }
+        mid = lo + (hi - lo) / 2;
+        stack[top][0] = 2 * node + 2; stack[top][1] = mid; stack[top][2] = hi; top++;
+        stack[top][0] = 2 * node + 1; stack[top][1] = lo; stack[top][2] = mid; top++;
+    }
+}
+
+static void lightvec__clamp_index(void *ctx, const lightvec__index *cidx)
+{
+    lightvec__clamp *k = (lightvec__clamp *)ctx;
+    lightvec__index *idx = (lightvec__index *)(uintptr_t)cidx; /* the writer's own memory */
+    float reach = k->pass == 1 ? k->it->radius : 0.0f;
+    uint32_t i;
+    for (i = 0; i < idx->tree_count; i++) lightvec__clamp_tree(k, idx->trees[i], reach);
+    for (i = 0; i < idx->tail_count; i++) lightvec__clamp_item(k, idx->tail_spheres[i], &idx->tail[i]);
+}
+
+static void lightvec__clamp_pass(lightvec_cache *c, lightvec__item *it, int directional, int pass)
+{
+    lightvec__clamp k;
+    k.c = c;
+    k.it = it;
+    k.directional = directional;
+    k.pass = pass;
+    lightvec__for_indexes(c, directional, it->outgoing, lightvec__clamp_index, &k);
+}
+
+LIGHTVEC_API lightvec_result lightvec_insert(lightvec_cache *c, const lightvec_record *rec, uint32_t *id_out)
+{
+    lightvec_record clean, *slot;
+    lightvec__item it;
+    lightvec__face *f;
+    uint32_t id;
+    int directional, clamp;
+    if (!c || !rec) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    if (!lightvec__record_clean(&c->p, rec, &clean)) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    id = c->record_count;
+    if (id == 0xFFFFFFFFu) return LIGHTVEC_ERROR_OUT_OF_MEMORY;
+    slot = lightvec__record_reserve(c, id);
+    if (!slot) return LIGHTVEC_ERROR_OUT_OF_MEMORY;
+    directional = !(clean.flags & LIGHTVEC_RECORD_VIEW_INDEPENDENT);
+    clamp = !(c->p.flags & LIGHTVEC_CACHE_NO_NEIGHBOR_CLAMP);
+    f = lightvec__leaf_for(c, &clean);
+    lightvec__make_item(&c->p, &clean, id, &it);
+    if (clamp) lightvec__clamp_pass(c, &it, directional, 1);
+    clean.radius = it.radius;
+    /* Everything that can fail happens before the record is published: on an
+       error the cache is as it was. The record count is published before the
+       item, so a reader that finds the item can read its record. */
+    if (f->count + 1u > c->p.split_threshold && lightvec__can_split(c, f)) {
+        lightvec__face *ch = lightvec__split_with(c, f, &it);
+        if (!ch) return LIGHTVEC_ERROR_OUT_OF_MEMORY;
+        *slot = clean;
+        lightvec__store_f32(lightvec__radius_at(c, id), clean.radius);
+        lightvec__store_u32(&c->record_count, id + 1u);
+        lightvec__publish_split(c, f, ch);
+    } else {
+        if (lightvec__face_prepare(c, f) != 0) return LIGHTVEC_ERROR_OUT_OF_MEMORY;
+        *slot = clean;
+        lightvec__store_f32(lightvec__radius_at(c, id), clean.radius);
+        lightvec__store_u32(&c->record_count, id + 1u);
+        lightvec__face_push(f, &it);
+    }
+    if (clamp) lightvec__clamp_pass(c, &it, directional, 2);
+    lightvec__maybe_reclaim(c);
+    if (id_out) *id_out = id;
     return LIGHTVEC_OK;
 }
 
@@ -3138,7 +3683,7 @@ LIGHTVEC_API lightvec_result lightvec_cache_info(const lightvec_cache *c, lightv
     info->record_count = c->record_count;
     info->bytes = sizeof *c + sizeof *c->readers + c->retired_bytes + (size_t)c->retired_capacity * sizeof(lightvec__retired);
     for (k = 0; k < LIGHTVEC__CHUNKS; k++)
-        if (c->chunks[k]) info->bytes += ((size_t)LIGHTVEC__CHUNK0 << k) * sizeof(lightvec_record);
+        if (c->chunks[k]) info->bytes += ((size_t)LIGHTVEC__CHUNK0 << k) * (sizeof(lightvec_record) + sizeof(float));
     lightvec__walk_init(&w, c);
     while ((f = lightvec__walk_next(&w)) != NULL) {
         info->face_count++;
@@ -3155,7 +3700,10 @@ LIGHTVEC_API lightvec_result lightvec_cache_info(const lightvec_cache *c, lightv
     info->max_irradiance_change = c->p.max_change;
     info->cos_normal = c->p.cos_normal;
     info->cos_direction = c->p.cos_dir;
+    info->front_tolerance = c->p.front;
     info->min_valid = c->p.min_valid;
+    info->max_neighbors = c->p.max_neighbors;
+    info->flags = c->p.flags;
     info->interpolation = c->p.interpolation;
     info->face_split_threshold = c->p.split_threshold;
     info->max_face_depth = c->p.max_depth;
@@ -3285,8 +3833,10 @@ LIGHTVEC_API lightvec_result lightvec_cache_optimize(lightvec_cache *c)
    ---------------------------------------------------------------------- */
 static const unsigned char lightvec__magic[8] = { 'L', 'I', 'G', 'H', 'T', 'V', 'E', 'C' };
 
-/* A record's 29 floats in a fixed order, then its flags. */
-static void lightvec__record_floats(const lightvec_record *r, float f[29])
+/* A record's 51 floats in a fixed order (then its flags). */
+#define LIGHTVEC__RECORD_FLOATS 51
+
+static void lightvec__record_floats(const lightvec_record *r, float f[LIGHTVEC__RECORD_FLOATS])
 {
     int c;
     memcpy(f, r->position, 12);
@@ -3294,17 +3844,47 @@ static void lightvec__record_floats(const lightvec_record *r, float f[29])
     memcpy(f + 6, r->outgoing, 12);
     memcpy(f + 9, r->vector.direction, 12);
     memcpy(f + 12, r->vector.magnitude, 12);
-    memcpy(f + 15, r->irradiance, 12);
-    for (c = 0; c < 3; c++) memcpy(f + 18 + 3 * c, r->gradient[c], 12);
-    f[27] = r->distance;
-    f[28] = r->visibility;
+    memcpy(f + 15, r->vector.glossy_direction, 12);
+    memcpy(f + 18, r->vector.glossy_magnitude, 12);
+    memcpy(f + 21, r->irradiance, 12);
+    for (c = 0; c < 3; c++) memcpy(f + 24 + 3 * c, r->gradient[c], 12);
+    memcpy(f + 33, r->glossy, 12);
+    for (c = 0; c < 3; c++) memcpy(f + 36 + 3 * c, r->glossy_gradient[c], 12);
+    f[45] = r->distance;
+    f[46] = r->glossy_distance;
+    f[47] = r->exponent;
+    f[48] = r->radius;
+    f[49] = r->visibility;
+    f[50] = r->glossy_share;
+}
+
+static void lightvec__floats_record(const float f[LIGHTVEC__RECORD_FLOATS], lightvec_record *r)
+{
+    int c;
+    memcpy(r->position, f, 12);
+    memcpy(r->normal, f + 3, 12);
+    memcpy(r->outgoing, f + 6, 12);
+    memcpy(r->vector.direction, f + 9, 12);
+    memcpy(r->vector.magnitude, f + 12, 12);
+    memcpy(r->vector.glossy_direction, f + 15, 12);
+    memcpy(r->vector.glossy_magnitude, f + 18, 12);
+    memcpy(r->irradiance, f + 21, 12);
+    for (c = 0; c < 3; c++) memcpy(r->gradient[c], f + 24 + 3 * c, 12);
+    memcpy(r->glossy, f + 33, 12);
+    for (c = 0; c < 3; c++) memcpy(r->glossy_gradient[c], f + 36 + 3 * c, 12);
+    r->distance = f[45];
+    r->glossy_distance = f[46];
+    r->exponent = f[47];
+    r->radius = f[48];
+    r->visibility = f[49];
+    r->glossy_share = f[50];
 }
 
 static void lightvec__put_record(lightvec__writer *w, const lightvec_record *r)
 {
-    float f[29];
+    float f[LIGHTVEC__RECORD_FLOATS];
     lightvec__record_floats(r, f);
-    lightvec__put_f32_array(w, f, 29);
+    lightvec__put_f32_array(w, f, LIGHTVEC__RECORD_FLOATS);
     lightvec__put_u32(w, r->flags);
 }
 
@@ -3312,24 +3892,16 @@ static void lightvec__put_record(lightvec__writer *w, const lightvec_record *r)
 static void lightvec__get_record(lightvec__reader *r, lightvec_record *rec)
 {
     unsigned char b[LIGHTVEC__RECORD_BYTES];
-    uint32_t v[30];
-    float f[29];
-    int i, c;
+    uint32_t v[LIGHTVEC__RECORD_FLOATS + 1];
+    float f[LIGHTVEC__RECORD_FLOATS];
+    int i;
     lightvec__get(r, b, sizeof b);
-    for (i = 0; i < 30; i++)
+    for (i = 0; i <= LIGHTVEC__RECORD_FLOATS; i++)
         v[i] = (uint32_t)b[4 * i] | ((uint32_t)b[4 * i + 1] << 8) | ((uint32_t)b[4 * i + 2] << 16) |
                ((uint32_t)b[4 * i + 3] << 24);
     memcpy(f, v, sizeof f);
-    memcpy(rec->position, f, 12);
-    memcpy(rec->normal, f + 3, 12);
-    memcpy(rec->outgoing, f + 6, 12);
-    memcpy(rec->vector.direction, f + 9, 12);
-    memcpy(rec->vector.magnitude, f + 12, 12);
-    memcpy(rec->irradiance, f + 15, 12);
-    for (c = 0; c < 3; c++) memcpy(rec->gradient[c], f + 18 + 3 * c, 12);
-    rec->distance = f[27];
-    rec->visibility = f[28];
-    rec->flags = v[29];
+    lightvec__floats_record(f, rec);
+    rec->flags = v[LIGHTVEC__RECORD_FLOATS];
 }
 
 LIGHTVEC_API lightvec_result lightvec_save(const lightvec_cache *c, lightvec_write_fn write, void *user)
@@ -3344,7 +3916,7 @@ LIGHTVEC_API lightvec_result lightvec_save(const lightvec_cache *c, lightvec_wri
     n = c->record_count;
     lightvec__put(&w, lightvec__magic, 8);
     lightvec__put_u32(&w, LIGHTVEC_FILE_FORMAT_VERSION);
-    lightvec__put_u64(&w, 36u + 8u + (uint64_t)n * LIGHTVEC__RECORD_BYTES);
+    lightvec__put_u64(&w, LIGHTVEC__SETTINGS_BYTES + 8u + (uint64_t)n * LIGHTVEC__RECORD_BYTES);
     lightvec__put_u32(&w, (uint32_t)c->p.kind);
     lightvec__put_f32(&w, c->p.radius_scale);
     lightvec__put_f32(&w, c->p.max_change);
@@ -3354,8 +3926,15 @@ LIGHTVEC_API lightvec_result lightvec_save(const lightvec_cache *c, lightvec_wri
     lightvec__put_u32(&w, c->p.split_threshold);
     lightvec__put_u32(&w, c->p.max_depth);
     lightvec__put_u32(&w, (uint32_t)c->p.interpolation);
+    lightvec__put_u32(&w, c->p.max_neighbors);
+    lightvec__put_f32(&w, c->p.front);
+    lightvec__put_u32(&w, c->p.flags);
     lightvec__put_u64(&w, n);
-    for (i = 0; i < n && !w.failed; i++) lightvec__put_record(&w, lightvec__record_at(c, i));
+    for (i = 0; i < n && !w.failed; i++) {
+        lightvec_record rec = *lightvec__record_at(c, i);
+        rec.radius = *lightvec__radius_at(c, i);
+        lightvec__put_record(&w, &rec);
+    }
     lightvec__put_u32(&w, lightvec__crc_final(&w.crc));
     return w.failed ? LIGHTVEC_ERROR_IO : LIGHTVEC_OK;
 }
@@ -3440,11 +4019,15 @@ LIGHTVEC_API lightvec_result lightvec_load(const lightvec_cache_desc *desc, ligh
     d.max_face_depth = lightvec__get_u32(&r);
     interp = lightvec__get_u32(&r);
     d.interpolation = interp >= 1u && interp <= 3u ? (lightvec_interpolation)interp : (lightvec_interpolation)99;
+    d.max_neighbors = lightvec__get_u32(&r);
+    d.front_tolerance = lightvec__get_f32(&r);
+    d.flags = lightvec__get_u32(&r);
     count = lightvec__get_u64(&r);
     if (r.failed || !lightvec__can_hold(&r, count, LIGHTVEC__RECORD_BYTES) || count >= 0xFFFFFFFFu ||
         r.remaining != count * LIGHTVEC__RECORD_BYTES || !(d.radius_scale > 0.0f) ||
         !(d.max_irradiance_change > 0.0f) || !(d.max_normal_angle > 0.0f) || !(d.max_direction_angle > 0.0f) ||
-        d.min_valid == 0 || d.face_split_threshold == 0 || d.max_face_depth == 0)
+        d.min_valid == 0 || d.face_split_threshold == 0 || d.max_face_depth == 0 || d.max_neighbors == 0 ||
+        !(d.front_tolerance > 0.0f))
         return LIGHTVEC_ERROR_CORRUPT_DATA;
     res = lightvec__cache_new(&d, &c);
     if (res == LIGHTVEC_ERROR_INVALID_ARGUMENT && lightvec__allocator_valid(&d.allocator))
@@ -3453,10 +4036,16 @@ LIGHTVEC_API lightvec_result lightvec_load(const lightvec_cache_desc *desc, ligh
     for (i = 0; i < count; i++) {
         lightvec_record rec, clean, *slot;
         lightvec__get_record(&r, &rec);
-        if (r.failed || !lightvec__record_clean(&rec, &clean)) { res = LIGHTVEC_ERROR_CORRUPT_DATA; break; }
+        if (r.failed || !lightvec__record_clean(&c->p, &rec, &clean) || !isfinite(rec.radius) ||
+            !(rec.radius > 0.0f)) {
+            res = LIGHTVEC_ERROR_CORRUPT_DATA;
+            break;
+        }
+        clean.radius = rec.radius; /* as neighbour clamping left it */
         slot = lightvec__record_reserve(c, (uint32_t)i);
         if (!slot) { res = LIGHTVEC_ERROR_OUT_OF_MEMORY; break; }
         *slot = clean;
+        *lightvec__radius_at(c, (uint32_t)i) = clean.radius;
         c->record_count = (uint32_t)i + 1u;
     }
     if (res == LIGHTVEC_OK) {
