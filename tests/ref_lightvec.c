@@ -6,7 +6,12 @@
    - the cache on the Cornell box walls: interpolated indirect radiance
      against gathering at every point, mean relative error below 5% with the
      default parameters, hit rate reported; a second, moved camera reuses the
-     cache through the directional criterion. */
+     cache through the directional criterion;
+   - a glossy Cornell floor (0.3 Lambert + 0.4 normalized Phong, exponent 20)
+     seen by a camera that moves 15 cm, then turns 10 degrees: mean error at
+     most 5% against a converged gather at a hit rate of at least 85%; a
+     purely glossy floor (specular 0.7): median error at most 10% after the
+     move, every value finite. */
 #define LIGHTVEC_IMPLEMENTATION
 #include "lightvec.h"
 #include "tests/reference/ref.h"
@@ -309,6 +314,233 @@ static void test_cornell_walls_cache_error(void)
     lightvec_cache_destroy(cache);
 }
 
+/* ---- a glossy floor ---------------------------------------------------------------------- */
+
+#define GRES 256
+
+typedef struct glossy_frame { float eye[3], target[3]; } glossy_frame;
+
+static lightvec_scene *g_glossy_scene;
+static lightvec_material g_glossy_mats[16];
+static uint32_t *g_glossy_tri_mat;
+static pixel g_gpx[GRES * GRES];
+static int g_gfloor[GRES * GRES];
+static float g_grgb[GRES * GRES * 3];
+
+/* The Cornell box with its floor made of material `floor` (an extra material). */
+static int glossy_setup(const lightvec_material *floor)
+{
+    lightvec_scene_desc d;
+    uint32_t i, fm = g_obj.material_count;
+    int fg = obj_find_group(&g_obj, "floor");
+    lightvec_scene_destroy(g_glossy_scene);
+    g_glossy_scene = NULL;
+    if (!CHECK(fm < 16)) return 0;
+    memcpy(g_glossy_mats, g_mats, fm * sizeof *g_mats);
+    g_glossy_mats[fm] = *floor;
+    if (!g_glossy_tri_mat) g_glossy_tri_mat = (uint32_t *)malloc(g_obj.tri_count * sizeof(uint32_t));
+    for (i = 0; i < g_obj.tri_count; i++)
+        g_glossy_tri_mat[i] = (int)g_obj.face_group[g_obj.tri_face[i]] == fg ? fm : g_obj.tri_material[i];
+    memset(&d, 0, sizeof d);
+    d.positions = g_obj.positions;
+    d.vertex_count = g_obj.vertex_count;
+    d.indices = g_obj.tri_indices;
+    d.triangle_count = g_obj.tri_count;
+    d.material_ids = g_glossy_tri_mat;
+    d.materials = g_glossy_mats;
+    d.material_count = fm + 1;
+    return CHECK(lightvec_scene_create(&d, &g_glossy_scene) == LIGHTVEC_OK);
+}
+
+/* Primary hits of a camera on the glossy scene (front faces, no emitters). */
+static void glossy_trace(const glossy_frame *fr)
+{
+    float up[3] = { 0, 1, 0 };
+    ex_camera cam = ex_camera_look_at(fr->eye, fr->target, up, 39.3f, GRES, GRES);
+    uint32_t k;
+    for (k = 0; k < GRES * GRES; k++) {
+        pixel *p = &g_gpx[k];
+        lightvec_hit h;
+        float d[3], e1[3], e2[3], n[3], l;
+        const float *a, *b, *c;
+        uint32_t t, m;
+        int j;
+        memset(p, 0, sizeof *p);
+        g_gfloor[k] = 0;
+        ex_camera_ray(&cam, (float)(k % GRES) + 0.5f, (float)(k / GRES) + 0.5f, d);
+        if (!lightvec_scene_intersect(g_glossy_scene, cam.eye, d, 1e30f, &h)) continue;
+        t = h.triangle;
+        a = g_obj.positions + 3 * g_obj.tri_indices[3 * t];
+        b = g_obj.positions + 3 * g_obj.tri_indices[3 * t + 1];
+        c = g_obj.positions + 3 * g_obj.tri_indices[3 * t + 2];
+        for (j = 0; j < 3; j++) { e1[j] = b[j] - a[j]; e2[j] = c[j] - a[j]; }
+        n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+        n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+        n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        l = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        m = g_glossy_tri_mat[t];
+        if (n[0] * d[0] + n[1] * d[1] + n[2] * d[2] >= 0 || lum(g_glossy_mats[m].emission) > 0) continue;
+        for (j = 0; j < 3; j++) {
+            p->s.position[j] = cam.eye[j] + h.t * d[j];
+            p->s.normal[j] = n[j] / l;
+            p->s.outgoing[j] = -d[j];
+        }
+        p->s.material = g_glossy_mats[m];
+        p->valid = 1;
+        g_gfloor[k] = m == g_obj.material_count;
+    }
+}
+
+typedef struct glossy_stats { uint32_t visible, hits, floor, floor_hits, nonfinite; } glossy_stats;
+
+/* Figure 2 over a frame of the glossy scene in a random pixel order. */
+static glossy_stats glossy_pass(lightvec_cache *cache, uint64_t seed)
+{
+    static uint32_t order[GRES * GRES];
+    glossy_stats st;
+    lightvec_gather_desc gd;
+    uint64_t s = seed;
+    uint32_t i;
+    memset(&st, 0, sizeof st);
+    memset(&gd, 0, sizeof gd); /* default parameters */
+    for (i = 0; i < GRES * GRES; i++) order[i] = i;
+    for (i = GRES * GRES - 1; i > 0; i--) {
+        uint32_t j = (uint32_t)(rnd(&s) * (i + 1)), t = order[i];
+        order[i] = order[j];
+        order[j] = t;
+    }
+    for (i = 0; i < GRES * GRES; i++) {
+        uint32_t k = order[i];
+        pixel *p = &g_gpx[k];
+        lightvec_lookup_result lr;
+        if (!p->valid) continue;
+        st.visible++;
+        CHECK(lightvec_lookup(cache, p->s.position, p->s.normal, p->s.outgoing, &lr) == LIGHTVEC_OK);
+        if (!lr.hit) {
+            lightvec_record rec;
+            CHECK(lightvec_gather(g_glossy_scene, &gd, &p->s, seed * 1000003u + k, &rec) == LIGHTVEC_OK);
+            CHECK(lightvec_insert(cache, &rec, NULL) == LIGHTVEC_OK);
+            lr.vector = rec.vector;
+        }
+        st.hits += (uint32_t)lr.hit;
+        st.floor += (uint32_t)g_gfloor[k];
+        st.floor_hits += (uint32_t)(g_gfloor[k] && lr.hit);
+        lightvec_radiance(&p->s.material, p->s.normal, p->s.outgoing, &lr.vector, g_grgb + 3 * k);
+        st.nonfinite += !(isfinite(g_grgb[3 * k]) && isfinite(g_grgb[3 * k + 1]) && isfinite(g_grgb[3 * k + 2]));
+    }
+    return st;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* Relative luminance errors of `count` random floor pixels against a
+   converged gather: 60 x 180 strata and 8,192 lobe rays. Two such gathers
+   differ by 1.8% (mean, 0.3 Lambert + 0.4 gloss) and 3.2% (pure gloss): each
+   is within about 1.3% and 2.3%. Returns the mean; *median gets the median. */
+static double floor_error(uint32_t count, uint64_t seed, double *median)
+{
+    static double err[1000];
+    lightvec_gather_desc gd;
+    uint64_t s = seed;
+    uint32_t n = 0, tries = 0;
+    double sum = 0;
+    memset(&gd, 0, sizeof gd);
+    gd.strata_theta = 60;
+    gd.glossy_samples = 8192;
+    gd.seed = seed;
+    while (n < count && n < 1000 && tries++ < 100 * count) {
+        uint32_t k = (uint32_t)(rnd(&s) * GRES * GRES) % (GRES * GRES);
+        lightvec_record rec;
+        float ref[3];
+        if (!g_gfloor[k]) continue;
+        CHECK(lightvec_gather(g_glossy_scene, &gd, &g_gpx[k].s, k, &rec) == LIGHTVEC_OK);
+        lightvec_radiance(&g_gpx[k].s.material, g_gpx[k].s.normal, g_gpx[k].s.outgoing, &rec.vector, ref);
+        err[n] = fabs(lum(g_grgb + 3 * k) - lum(ref)) / lum(ref);
+        sum += err[n++];
+    }
+    qsort(err, n, sizeof *err, cmp_double);
+    *median = n ? err[n / 2] : 1.0;
+    return n ? sum / n : 1.0;
+}
+
+/* The three frames: the Cornell camera, moved 15 cm to the right, then
+   turned 10 degrees to the left about the vertical. */
+static void glossy_frames(glossy_frame fr[3])
+{
+    double a = 10.0 * PI / 180.0;
+    int k;
+    for (k = 0; k < 3; k++) {
+        fr[k].eye[0] = k ? 0.428f : 0.278f;
+        fr[k].eye[1] = 0.273f;
+        fr[k].eye[2] = -0.8f;
+        fr[k].target[0] = fr[k].eye[0];
+        fr[k].target[1] = 0.273f;
+        fr[k].target[2] = 0.0f;
+    }
+    fr[2].target[0] = fr[2].eye[0] - 0.8f * (float)sin(a);
+    fr[2].target[2] = fr[2].eye[2] + 0.8f * (float)cos(a);
+}
+
+static void test_glossy_floor(void)
+{
+    lightvec_material floor;
+    lightvec_cache *cache = NULL;
+    glossy_frame fr[3];
+    int f;
+    if (!setup()) return;
+    memset(&floor, 0, sizeof floor);
+    floor.diffuse[0] = floor.diffuse[1] = floor.diffuse[2] = 0.3f;
+    floor.specular[0] = floor.specular[1] = floor.specular[2] = 0.4f;
+    floor.exponent = 20.0f;
+    if (!glossy_setup(&floor) || !CHECK(lightvec_cache_create(NULL, &cache) == LIGHTVEC_OK)) return;
+    glossy_frames(fr);
+    for (f = 0; f < 3; f++) {
+        glossy_stats st;
+        double mean, median;
+        glossy_trace(&fr[f]);
+        st = glossy_pass(cache, 1 + (uint64_t)f);
+        mean = floor_error(300, 100 + (uint64_t)f, &median);
+        test_note("glossy floor, frame %d (%s): hit rate %.1f%% (floor %.1f%%), floor error mean %.2f%% median %.2f%%",
+                  f + 1, f == 0 ? "first" : f == 1 ? "moved 15 cm" : "turned 10 degrees", 100.0 * st.hits / st.visible,
+                  100.0 * st.floor_hits / st.floor, 100 * mean, 100 * median);
+        CHECK_EQ_INT(st.nonfinite, 0);
+        if (f == 0) continue; /* the acceptance is on the frames that reuse the cache */
+        CHECK(mean <= 0.05);
+        CHECK(st.hits >= st.visible * 85 / 100);
+    }
+    lightvec_cache_destroy(cache);
+}
+
+static void test_pure_glossy_floor(void)
+{
+    lightvec_material floor;
+    lightvec_cache *cache = NULL;
+    glossy_frame fr[3];
+    glossy_stats st;
+    double mean, median;
+    if (!setup()) return;
+    memset(&floor, 0, sizeof floor);
+    floor.specular[0] = floor.specular[1] = floor.specular[2] = 0.7f;
+    floor.exponent = 20.0f;
+    if (!glossy_setup(&floor) || !CHECK(lightvec_cache_create(NULL, &cache) == LIGHTVEC_OK)) return;
+    glossy_frames(fr);
+    glossy_trace(&fr[0]);
+    st = glossy_pass(cache, 1);
+    CHECK_EQ_INT(st.nonfinite, 0);
+    glossy_trace(&fr[1]);
+    st = glossy_pass(cache, 2);
+    mean = floor_error(300, 101, &median);
+    test_note("purely glossy floor, moved 15 cm: hit rate %.1f%% (floor %.1f%%), floor error median %.2f%% (mean %.2f%%)",
+              100.0 * st.hits / st.visible, 100.0 * st.floor_hits / st.floor, 100 * median, 100 * mean);
+    CHECK_EQ_INT(st.nonfinite, 0);
+    CHECK(median <= 0.10);
+    lightvec_cache_destroy(cache);
+}
+
 int main(int argc, char **argv)
 {
     TEST_INIT(argc, argv);
@@ -316,7 +548,11 @@ int main(int argc, char **argv)
     RUN(test_gather_through_embree);
     RUN(test_renderer_matches_reference_gi);
     RUN(test_cornell_walls_cache_error);
+    RUN(test_glossy_floor);
+    RUN(test_pure_glossy_floor);
     lightvec_scene_destroy(g_scene);
+    lightvec_scene_destroy(g_glossy_scene);
+    free(g_glossy_tri_mat);
     lightvec_scene_destroy(g_scene_rtc);
     ref_scene_destroy(g_ref);
     free(g_mats);
