@@ -370,6 +370,14 @@ static double compare_with_brute_force(const lightvec_cache *cache, const lightv
 
 static lightvec_record *g_stored;
 
+/* Records a cache clamps against each other (see test_neighbor_clamping). */
+static int clamp_compatible(const lightvec_record *a, const lightvec_record *b, float cos_dir)
+{
+    int ai = (a->flags & LIGHTVEC_RECORD_VIEW_INDEPENDENT) != 0, bi = (b->flags & LIGHTVEC_RECORD_VIEW_INDEPENDENT) != 0;
+    if (ai != bi) return 0;
+    return ai || a->outgoing[0] * b->outgoing[0] + a->outgoing[1] * b->outgoing[1] + a->outgoing[2] * b->outgoing[2] > cos_dir;
+}
+
 static void fill_cache(lightvec_cache *cache, uint32_t count, uint64_t seed, double radius)
 {
     rng r;
@@ -682,6 +690,202 @@ static void test_interpolation(void)
     lightvec_cache_destroy(cache);
 }
 
+/* ---- neighbour clamping, the k-nearest cap, Ward's in-front test ------------------------ */
+
+/* The radii neighbour clamping leaves, written out: in insertion order,
+   R_i = min(R_i, R_j + |B_i - B_j|) over the earlier compatible records j
+   (view independent with view independent, 5D with 5D when their sigmas are
+   within the cache's max_direction_angle), then R_j = min(R_j, R_i + |B_i -
+   B_j|) for each of them. Same float operations as the header. */
+static void brute_clamp(const lightvec_record *recs, uint32_t n, float scale, float cos_dir, float *radius)
+{
+    uint32_t i, j;
+    for (i = 0; i < n; i++) {
+        radius[i] = scale * recs[i].distance;
+        for (j = 0; j < i; j++) {
+            float dx = recs[i].position[0] - recs[j].position[0], dy = recs[i].position[1] - recs[j].position[1];
+            float dz = recs[i].position[2] - recs[j].position[2], d = sqrtf(dx * dx + dy * dy + dz * dz);
+            if (!clamp_compatible(&recs[i], &recs[j], cos_dir)) continue;
+            if (radius[j] + d < radius[i]) radius[i] = radius[j] + d;
+        }
+        for (j = 0; j < i; j++) {
+            float dx = recs[i].position[0] - recs[j].position[0], dy = recs[i].position[1] - recs[j].position[1];
+            float dz = recs[i].position[2] - recs[j].position[2], d = sqrtf(dx * dx + dy * dy + dz * dz);
+            if (!clamp_compatible(&recs[i], &recs[j], cos_dir)) continue;
+            if (radius[i] + d < radius[j]) radius[j] = radius[i] + d;
+        }
+    }
+}
+
+static void test_neighbor_clamping(void)
+{
+    const uint32_t n = 3000;
+    lightvec_record *recs = (lightvec_record *)malloc(n * sizeof *recs);
+    float *expect = (float *)malloc(n * sizeof(float));
+    lightvec_cache_desc d;
+    lightvec_cache *cache = NULL;
+    lightvec_cache_stats st;
+    uint32_t i, clamped = 0, wrong = 0;
+    rng r;
+    if (!CHECK(recs && expect)) return;
+    r.s = 21;
+    for (i = 0; i < n; i++) {
+        random_record(&r, &recs[i], 0.3);
+        /* d_avg over two orders of magnitude: most records get clamped */
+        recs[i].distance *= (float)(0.05 + 3.0 * rnd(&r) * rnd(&r));
+    }
+    memset(&d, 0, sizeof d);
+    d.face_split_threshold = 256; /* splits and merges during the insertions */
+    if (!CHECK(lightvec_cache_create(&d, &cache) == LIGHTVEC_OK)) return;
+    lightvec_cache_info(cache, &st);
+    for (i = 0; i < n; i++) CHECK(lightvec_insert(cache, &recs[i], NULL) == LIGHTVEC_OK);
+    for (i = 0; i < n; i++) lightvec_cache_record(cache, i, &recs[i]); /* normalised as the cache compares them */
+    brute_clamp(recs, n, st.radius_scale, st.cos_direction, expect);
+    for (i = 0; i < n; i++) {
+        clamped += expect[i] < st.radius_scale * recs[i].distance;
+        wrong += recs[i].radius != expect[i];
+    }
+    test_note("neighbour clamping: %u of %u radii clamped, %u differ from the brute force", clamped, n, wrong);
+    CHECK(clamped > n / 10);
+    CHECK_EQ_INT(wrong, 0);
+    /* the same radii after a save and a load, and after optimize */
+    {
+        void *data = NULL;
+        size_t size = 0;
+        lightvec_cache *loaded = NULL;
+        lightvec_record a;
+        CHECK(lightvec_cache_optimize(cache) == LIGHTVEC_OK);
+        if (CHECK(lightvec_save_to_memory(cache, NULL, &data, &size) == LIGHTVEC_OK) &&
+            CHECK(lightvec_load_from_memory(data, size, NULL, &loaded) == LIGHTVEC_OK)) {
+            for (i = 0, wrong = 0; i < n; i++) {
+                lightvec_cache_record(loaded, i, &a);
+                wrong += a.radius != expect[i];
+            }
+            CHECK_EQ_INT(wrong, 0);
+            lightvec_cache_destroy(loaded);
+        }
+        lightvec_free_memory(NULL, data);
+    }
+    lightvec_cache_destroy(cache);
+    /* LIGHTVEC_CACHE_NO_NEIGHBOR_CLAMP keeps radius_scale * d_avg */
+    d.flags = LIGHTVEC_CACHE_NO_NEIGHBOR_CLAMP;
+    if (CHECK(lightvec_cache_create(&d, &cache) == LIGHTVEC_OK)) {
+        lightvec_record a;
+        for (i = 0; i < 500; i++) CHECK(lightvec_insert(cache, &recs[i], NULL) == LIGHTVEC_OK);
+        for (i = 0, wrong = 0; i < 500; i++) {
+            lightvec_cache_record(cache, i, &a);
+            wrong += a.radius != st.radius_scale * recs[i].distance;
+        }
+        CHECK_EQ_INT(wrong, 0);
+        lightvec_cache_destroy(cache);
+    }
+    free(recs);
+    free(expect);
+}
+
+/* A lookup interpolates the max_neighbors valid records of largest weight;
+   the brute force keeps the same ones. */
+static void test_neighbor_cap(void)
+{
+    const uint32_t n = 20000;
+    lightvec_cache_desc d;
+    lightvec_cache *cache = NULL;
+    int mismatches = 0;
+    double per_query;
+    memset(&d, 0, sizeof d);
+    d.max_neighbors = 3;
+    d.min_valid = 2;
+    g_stored = (lightvec_record *)malloc(n * sizeof *g_stored);
+    if (!CHECK(g_stored != NULL) || !CHECK(lightvec_cache_create(&d, &cache) == LIGHTVEC_OK)) return;
+    fill_cache(cache, n, 31, 2.0);
+    per_query = compare_with_brute_force(cache, g_stored, n, 300, 17, 15.0f, &mismatches);
+    CHECK(per_query > 6.0); /* the cap of 3 binds on most queries */
+    CHECK_EQ_INT(mismatches, 0);
+    lightvec_cache_destroy(cache);
+    free(g_stored);
+}
+
+/* Ward's "in front" test: a record 2 cm above A's plane (a step, same
+   normal) is skipped, 4 mm above is kept (tolerance 0.05 R_B = 5 mm), and
+   one below A (A in front of it) is kept. */
+static void test_in_front(void)
+{
+    lightvec_cache *cache = NULL;
+    lightvec_record b;
+    lightvec_lookup_result lr;
+    float a[3] = { 0, 0, 0 }, n[3] = { 0, 0, 1 };
+    float heights[3] = { 0.02f, 0.004f, -0.02f };
+    int expect[3] = { 0, 1, 1 }, i;
+    for (i = 0; i < 3; i++) {
+        if (!CHECK(lightvec_cache_create(NULL, &cache) == LIGHTVEC_OK)) return;
+        memset(&b, 0, sizeof b);
+        b.position[0] = 0.01f;
+        b.position[2] = heights[i];
+        b.normal[2] = 1.0f;
+        b.vector.direction[2] = 1.0f;
+        b.vector.magnitude[0] = b.irradiance[0] = 1.0f;
+        b.distance = 0.1f / 0.3f; /* R_B = 0.1 */
+        b.visibility = 1.0f;
+        b.flags = LIGHTVEC_RECORD_VIEW_INDEPENDENT;
+        CHECK(lightvec_insert(cache, &b, NULL) == LIGHTVEC_OK);
+        CHECK(lightvec_lookup(cache, a, n, NULL, &lr) == LIGHTVEC_OK);
+        CHECK_EQ_INT(lr.valid_count, expect[i]);
+        lightvec_cache_destroy(cache);
+    }
+}
+
+/* The glossy part carried to a new view by its view gradient: two records
+   at A for views 2 degrees apart (the lobe tolerates 11.6 degrees), G linear
+   in the view: the lookup between them gives the line's value, whatever
+   the weights. */
+static void test_glossy_extrapolation(void)
+{
+    lightvec_cache_desc d;
+    lightvec_cache *cache = NULL;
+    lightvec_record b;
+    lightvec_lookup_result lr;
+    lightvec_material m;
+    float a[3] = { 0, 0, 0 }, n[3] = { 0, 0, 1 }, w[3], rgb[3];
+    double g0 = 0.5, slope = 2.0; /* G = g0 + slope * (w_x - 0.5) */
+    int i, k;
+    memset(&d, 0, sizeof d);
+    d.min_valid = 2;
+    if (!CHECK(lightvec_cache_create(&d, &cache) == LIGHTVEC_OK)) return;
+    for (i = 0; i < 2; i++) {
+        double t = (30.0 + (i ? 2.0 : 0.0)) * PI / 180.0;
+        memset(&b, 0, sizeof b);
+        b.position[1] = i ? 0.01f : -0.01f;
+        b.normal[2] = 1.0f;
+        b.outgoing[0] = (float)sin(t);
+        b.outgoing[2] = (float)cos(t);
+        b.vector.direction[2] = 1.0f;
+        b.irradiance[0] = b.irradiance[1] = b.irradiance[2] = 1.0f;
+        for (k = 0; k < 3; k++) {
+            b.glossy[k] = (float)(g0 + slope * (b.outgoing[0] - 0.5));
+            /* d/dw of slope * w_x, taken off sigma */
+            b.glossy_gradient[k][0] = (float)(slope * (1.0 - b.outgoing[0] * b.outgoing[0]));
+            b.glossy_gradient[k][2] = (float)(slope * (-b.outgoing[0] * b.outgoing[2]));
+        }
+        b.distance = 1.0f;
+        b.glossy_distance = 1e6f; /* no parallax to speak of */
+        b.exponent = 20.0f;
+        b.visibility = 1.0f;
+        CHECK(lightvec_insert(cache, &b, NULL) == LIGHTVEC_OK);
+    }
+    w[0] = (float)sin(31.0 * PI / 180.0); w[1] = 0; w[2] = (float)cos(31.0 * PI / 180.0);
+    if (CHECK(lightvec_lookup(cache, a, n, w, &lr) == LIGHTVEC_OK) && CHECK(lr.hit)) {
+        memset(&m, 0, sizeof m);
+        m.specular[0] = m.specular[1] = m.specular[2] = 1.0f;
+        m.exponent = 20.0f;
+        lightvec_radiance(&m, n, w, &lr.vector, rgb);
+        /* first order in the chord w - sigma, whose part along sigma is
+           cos(1 degree) - 1: slope sigma_x (1 - cos 1 degree) = 1.5e-4 off;
+           twice that */
+        CHECK_CLOSE(rgb[0], g0 + slope * (w[0] - 0.5), 0, 3e-4);
+    }
+    lightvec_cache_destroy(cache);
+}
+
 /* ---- save / load: hostile input ---------------------------------------------------------- */
 
 typedef struct fail_writer { size_t left; } fail_writer;
@@ -899,6 +1103,10 @@ int main(int argc, char **argv)
     RUN(test_icosahedron);
     RUN(test_split_threshold);
     RUN(test_interpolation);
+    RUN(test_neighbor_clamping);
+    RUN(test_neighbor_cap);
+    RUN(test_in_front);
+    RUN(test_glossy_extrapolation);
     RUN(test_load_hostile);
     RUN(test_allocation_failures);
     RUN(test_optimize_cancel);
