@@ -1226,6 +1226,7 @@ static void lightvec__run_jobs(void (*parallel_for)(void *, lightvec_job_fn, voi
    reader counters (see THREADS in the documentation)
    ---------------------------------------------------------------------- */
 #if defined(__GNUC__) || defined(__clang__)
+#define LIGHTVEC__PREFETCH(p) __builtin_prefetch(p)
 static uint32_t lightvec__load_u32(const uint32_t *p) { return __atomic_load_n(p, __ATOMIC_ACQUIRE); }
 static void lightvec__store_u32(uint32_t *p, uint32_t v) { __atomic_store_n(p, v, __ATOMIC_RELEASE); }
 static void *lightvec__load_ptr(void *const *p) { return __atomic_load_n(p, __ATOMIC_ACQUIRE); }
@@ -1237,6 +1238,7 @@ static float lightvec__load_f32(const float *p) { float v; __atomic_load(p, &v, 
 static void lightvec__store_f32(float *p, float v) { __atomic_store(p, &v, __ATOMIC_RELAXED); }
 #elif defined(_MSC_VER)
 #include <intrin.h>
+#define LIGHTVEC__PREFETCH(p) ((void)(p))
 /* Interlocked operations are full barriers: stronger than needed, still correct. */
 static uint32_t lightvec__load_sc(const uint32_t *p) { return (uint32_t)_InterlockedOr((volatile long *)p, 0); }
 static void lightvec__store_sc(uint32_t *p, uint32_t v) { (void)_InterlockedExchange((volatile long *)p, (long)v); }
@@ -1252,6 +1254,7 @@ static void lightvec__store_ptr(void **p, void *v) { (void)_InterlockedExchangeP
 static float lightvec__load_f32(const float *p) { return *(const volatile float *)p; }
 static void lightvec__store_f32(float *p, float v) { *(volatile float *)p = v; }
 #else
+#define LIGHTVEC__PREFETCH(p) ((void)(p))
 /* No atomics known for this compiler: single-threaded use only. */
 static uint32_t lightvec__load_u32(const uint32_t *p) { return *p; }
 static void lightvec__store_u32(uint32_t *p, uint32_t v) { *p = v; }
@@ -2304,16 +2307,35 @@ typedef struct lightvec__item {
 } lightvec__item;
 
 /* A balanced kd-tree over items (median splits on the axis of largest
-   extent of the positions). Node i has children 2i+1, 2i+2 and covers a
-   range of the item array: [lo, hi) splits at lo + (hi - lo) / 2; a range of
-   at most LEAF items is a leaf. Each node stores the box of its items'
-   validity spheres (B +- R_B), so a query for A descends only into boxes that
-   contain A. */
+   extent of the positions), its leaves LEAF consecutive items, every leaf
+   full but the last. Node i has children 2i+1, 2i+2 and covers a range of
+   leaves: [a, b) splits at a + (b - a) / 2; one leaf is a leaf. Each node
+   stores the box of its items' validity spheres (B +- R_B), so a query for A
+   descends only into boxes that contain A. What the criteria read of a
+   leaf's items is one block of rows (LIGHTVEC__ROW_*, LEAF floats each):
+   a leaf's tests read a few consecutive cache lines, and an item's 192 bytes
+   only for the records that pass them. */
+#define LIGHTVEC__ROW_X 0
+#define LIGHTVEC__ROW_Y 1
+#define LIGHTVEC__ROW_Z 2
+#define LIGHTVEC__ROW_R 3            /* R_B: atomic (neighbour clamping shrinks it under readers) */
+#define LIGHTVEC__ROW_SX 4           /* sigma */
+#define LIGHTVEC__ROW_SY 5
+#define LIGHTVEC__ROW_SZ 6
+#define LIGHTVEC__ROW_NX 7           /* n_B */
+#define LIGHTVEC__ROW_NY 8
+#define LIGHTVEC__ROW_NZ 9
+#define LIGHTVEC__ROW_REL 10         /* |grad Y| / Y */
+#define LIGHTVEC__ROW_GLOSSY 11      /* 1 / d_g; 0 = no glossy part */
+#define LIGHTVEC__ROW_ID 12          /* the record's id, its uint32_t bits */
+#define LIGHTVEC__ROWS 13
+#define LIGHTVEC__BLOCK (LIGHTVEC__ROWS * LIGHTVEC__LEAF)
+
 typedef struct lightvec__tree {
     uint32_t count, node_count;
     float *boxes;                    /* 6 per node: lo xyz, hi xyz */
-    float *spheres;                  /* 4 per item: B, R_B (what a leaf reads for every item) */
-    lightvec__item *items;           /* the rest, read for items inside their sphere */
+    float *blocks;                   /* a block of BLOCK floats per leaf */
+    lightvec__item *items;           /* count items, leaf after leaf */
     size_t bytes;
 } lightvec__tree;
 
@@ -2321,7 +2343,7 @@ typedef struct lightvec__index {
     uint32_t tree_count;
     uint32_t tail_count;             /* atomic: items of tail[] published */
     lightvec__tree *trees[LIGHTVEC__MAX_TREES];   /* ascending sizes */
-    float tail_spheres[LIGHTVEC__TAIL][4];
+    float tail_blocks[LIGHTVEC__TAIL / LIGHTVEC__LEAF][LIGHTVEC__BLOCK];
     lightvec__item tail[LIGHTVEC__TAIL];
 } lightvec__index;
 
@@ -2569,18 +2591,32 @@ static lightvec_record *lightvec__record_reserve(lightvec_cache *c, uint32_t id)
 
 /* ---- kd-tree ------------------------------------------------------------------- */
 
-static void lightvec__sphere_of(const lightvec__item *it, float *sphere)
+/* Writes item it into slot k of a leaf block. */
+static void lightvec__block_put(float *block, uint32_t k, const lightvec__item *it)
 {
-    sphere[0] = it->pos[0];
-    sphere[1] = it->pos[1];
-    sphere[2] = it->pos[2];
-    sphere[3] = it->radius;
+    float *b = block + k;
+    b[LIGHTVEC__ROW_X * LIGHTVEC__LEAF] = it->pos[0];
+    b[LIGHTVEC__ROW_Y * LIGHTVEC__LEAF] = it->pos[1];
+    b[LIGHTVEC__ROW_Z * LIGHTVEC__LEAF] = it->pos[2];
+    b[LIGHTVEC__ROW_R * LIGHTVEC__LEAF] = it->radius;
+    b[LIGHTVEC__ROW_SX * LIGHTVEC__LEAF] = it->outgoing[0];
+    b[LIGHTVEC__ROW_SY * LIGHTVEC__LEAF] = it->outgoing[1];
+    b[LIGHTVEC__ROW_SZ * LIGHTVEC__LEAF] = it->outgoing[2];
+    b[LIGHTVEC__ROW_NX * LIGHTVEC__LEAF] = it->normal[0];
+    b[LIGHTVEC__ROW_NY * LIGHTVEC__LEAF] = it->normal[1];
+    b[LIGHTVEC__ROW_NZ * LIGHTVEC__LEAF] = it->normal[2];
+    b[LIGHTVEC__ROW_REL * LIGHTVEC__LEAF] = it->rel_gradient;
+    b[LIGHTVEC__ROW_GLOSSY * LIGHTVEC__LEAF] = it->inv_glossy_distance;
+    memcpy(&b[LIGHTVEC__ROW_ID * LIGHTVEC__LEAF], &it->id, sizeof it->id);
 }
 
-static uint32_t lightvec__tree_levels(uint32_t n)
+/* Leaves over n items: every leaf full but the last. */
+static uint32_t lightvec__leaf_count(uint32_t n) { return (n + LIGHTVEC__LEAF - 1) / LIGHTVEC__LEAF; }
+
+static uint32_t lightvec__tree_levels(uint32_t leaves)
 {
     uint32_t d = 0;
-    while (n > LIGHTVEC__LEAF) { n -= n / 2; d++; }
+    while (leaves > 1) { leaves -= leaves / 2; d++; }
     return d;
 }
 
@@ -2631,25 +2667,30 @@ static int lightvec__tree_box(float *box, const uint32_t *perm, const lightvec__
     return axis;
 }
 
+/* Node `node` over leaves [a, b): its box, then its halves. */
 static void lightvec__tree_build_node(lightvec__tree *t, const lightvec__item *src, uint32_t *perm, uint32_t node,
-                                      uint32_t lo, uint32_t hi)
+                                      uint32_t a, uint32_t b)
 {
+    uint32_t lo = a * LIGHTVEC__LEAF, hi = b * LIGHTVEC__LEAF < t->count ? b * LIGHTVEC__LEAF : t->count;
+    uint32_t m = a + (b - a) / 2;
     int axis = lightvec__tree_box(t->boxes + 6 * (size_t)node, perm, src, lo, hi);
-    uint32_t mid = lo + (hi - lo) / 2;
-    if (hi - lo <= LIGHTVEC__LEAF) return;
-    lightvec__select(perm, src, axis, lo, hi, mid);
-    lightvec__tree_build_node(t, src, perm, 2 * node + 1, lo, mid);
-    lightvec__tree_build_node(t, src, perm, 2 * node + 2, mid, hi);
+    if (b - a <= 1) return;
+    lightvec__select(perm, src, axis, lo, hi, m * LIGHTVEC__LEAF);
+    lightvec__tree_build_node(t, src, perm, 2 * node + 1, a, m);
+    lightvec__tree_build_node(t, src, perm, 2 * node + 2, m, b);
 }
 
 static lightvec__tree *lightvec__tree_build(const lightvec_allocator *a, const lightvec__item *src, uint32_t n)
 {
-    uint32_t levels = lightvec__tree_levels(n), nodes = (2u << levels) - 1u, i, *perm;
-    size_t head = (sizeof(lightvec__tree) + 15u) & ~(size_t)15u, box_bytes = (size_t)nodes * 6u * sizeof(float);
-    size_t bytes, item_bytes = sizeof(lightvec__item) + 4u * sizeof(float), items_at;
+    uint32_t leaves = lightvec__leaf_count(n), nodes = (2u << lightvec__tree_levels(leaves)) - 1u, i, *perm;
+    size_t head = (sizeof(lightvec__tree) + 63u) & ~(size_t)63u, box_bytes = (size_t)nodes * 6u * sizeof(float);
+    size_t block_bytes = (size_t)leaves * LIGHTVEC__BLOCK * sizeof(float), bytes;
     lightvec__tree *t;
-    if ((size_t)n > (SIZE_MAX - head - box_bytes - 64u) / item_bytes) return NULL;
-    bytes = head + box_bytes + (size_t)n * item_bytes + 64u; /* + room to align the items */
+    if ((size_t)leaves > (SIZE_MAX - head - box_bytes - 128u) / (LIGHTVEC__BLOCK * sizeof(float) +
+                                                                   LIGHTVEC__LEAF * sizeof(lightvec__item)))
+        return NULL;
+    box_bytes = (box_bytes + 63u) & ~(size_t)63u;
+    bytes = head + box_bytes + block_bytes + (size_t)n * sizeof(lightvec__item) + 64u; /* + room to align */
     t = (lightvec__tree *)lightvec__alloc(a, bytes);
     perm = (uint32_t *)lightvec__alloc_array(a, n, sizeof(uint32_t));
     if (!t || !perm) {
@@ -2660,16 +2701,16 @@ static lightvec__tree *lightvec__tree_build(const lightvec_allocator *a, const l
     t->count = n;
     t->node_count = nodes;
     t->boxes = (float *)((char *)t + head);
-    t->spheres = (float *)((char *)t + head + box_bytes);
-    items_at = head + box_bytes + (size_t)n * 4u * sizeof(float);
-    items_at += (64u - (size_t)(((uintptr_t)t + items_at) & 63u)) & 63u;
-    t->items = (lightvec__item *)((char *)t + items_at);
+    t->blocks = (float *)((char *)t + head + box_bytes);
+    t->items = (lightvec__item *)((char *)t + head + box_bytes + block_bytes);
+    t->items = (lightvec__item *)((char *)t->items + ((64u - ((uintptr_t)t->items & 63u)) & 63u));
     t->bytes = bytes;
+    memset(t->blocks, 0, block_bytes); /* the last leaf's empty slots: radius 0, never inside */
     for (i = 0; i < n; i++) perm[i] = i;
-    if (n) lightvec__tree_build_node(t, src, perm, 0, 0, n);
+    if (n) lightvec__tree_build_node(t, src, perm, 0, 0, leaves);
     for (i = 0; i < n; i++) {
         t->items[i] = src[perm[i]];
-        lightvec__sphere_of(&t->items[i], t->spheres + 4 * (size_t)i);
+        lightvec__block_put(t->blocks + (size_t)(i / LIGHTVEC__LEAF) * LIGHTVEC__BLOCK, i % LIGHTVEC__LEAF, &t->items[i]);
     }
     lightvec__free(a, perm);
     return t;
@@ -2708,12 +2749,13 @@ typedef struct lightvec__query {
    bound, used for validity only. The view change itself is extrapolated
    with the view gradient, the parallax is not (a single distance cannot
    say how a lobe that sees near and far surfaces shifts). */
-static float lightvec__glossy_angle(const lightvec__query *q, const lightvec__item *it, float dx, float dy, float dz)
+static float lightvec__glossy_angle(const lightvec__query *q, const float sigma[3], float inv_dg, float dx, float dy,
+                                    float dz)
 {
-    float vx = q->w[0] - it->outgoing[0], vy = q->w[1] - it->outgoing[1], vz = q->w[2] - it->outgoing[2];
+    float vx = q->w[0] - sigma[0], vy = q->w[1] - sigma[1], vz = q->w[2] - sigma[2];
     float along = dx * q->mirror[0] + dy * q->mirror[1] + dz * q->mirror[2];
     float px = dx - along * q->mirror[0], py = dy - along * q->mirror[1], pz = dz - along * q->mirror[2];
-    return sqrtf(vx * vx + vy * vy + vz * vz) + sqrtf(px * px + py * py + pz * pz) * it->inv_glossy_distance;
+    return sqrtf(vx * vx + vy * vy + vz * vz) + sqrtf(px * px + py * py + pz * pz) * inv_dg;
 }
 
 static int lightvec__heap_less(const lightvec__candidate *a, const lightvec__candidate *b)
@@ -2736,10 +2778,10 @@ static void lightvec__heap_down(lightvec__candidate *h, uint32_t n, uint32_t i)
 
 /* Keeps a valid record: in the ids of lightvec_find, or among the
    max_neighbors of largest weight (ties: the smaller id) of lightvec_lookup. */
-static void lightvec__keep(lightvec__query *q, const lightvec__item *it, float w, float wg)
+static void lightvec__keep(lightvec__query *q, const lightvec__item *it, uint32_t id, float w, float wg)
 {
     if (q->ids && q->count < q->capacity) {
-        q->ids[q->count] = it->id;
+        q->ids[q->count] = id;
         q->weights[q->count] = w;
     }
     q->count++;
@@ -2747,7 +2789,7 @@ static void lightvec__keep(lightvec__query *q, const lightvec__item *it, float w
         lightvec__candidate c;
         c.w = w;
         c.wg = wg;
-        c.id = it->id;
+        c.id = id;
         c.it = it;
         if (q->heap_count < q->heap_capacity) {
             uint32_t i = q->heap_count++;
@@ -2763,86 +2805,123 @@ static void lightvec__keep(lightvec__query *q, const lightvec__item *it, float w
     }
 }
 
-/* The criteria of 4.2 for one record inside its sphere (|AB| < R_B, tested
-   by the caller; dx = A - B), with Ward's "in front" test. The diffuse
-   vector's weight is the paper's w = w_B * w_sigma with the cache's S_dir.
-   The glossy part's is w_g = w_B * w_sigma,B / (1 + psi |grad G_B| / G_B)
-   with the record's own S_dir (from its lobe), psi from
-   lightvec__glossy_angle (cos psi = 1 - psi^2 / 2, the paper's cos(w, sigma)
-   exactly without parallax), valid while psi < acos S_dir,B and
-   psi |grad G_B| / G_B < I_B: the irradiance-change criterion and weight of
-   4.2.1, applied to G along the angle. w_g = 0 when either fails. */
-static void lightvec__visit(lightvec__query *q, const lightvec__item *it, float radius, float dx, float dy, float dz,
-                            float d2)
+/* The rest of the criteria of 4.2 for item k of a leaf block, inside its
+   sphere, in the direction cone and within S_curv (tested by the caller,
+   which passes dx = A - B, d^2, cos(w, sigma) and cos(n_A, n_B)), with
+   Ward's "in front" test. The diffuse vector's weight is the paper's
+   w = w_B * w_sigma with the cache's S_dir. The glossy part's is
+   w_g = w_B * w_sigma,B / (1 + psi |grad G_B| / G_B) with the record's own
+   S_dir (from its lobe), psi from lightvec__glossy_angle (cos psi =
+   1 - psi^2 / 2, the paper's cos(w, sigma) exactly without parallax), valid
+   while psi < acos S_dir,B and psi |grad G_B| / G_B < I_B: the
+   irradiance-change criterion and weight of 4.2.1, applied to G along the
+   angle. w_g = 0 when either fails. */
+static void lightvec__visit(lightvec__query *q, const float *block, uint32_t k, const lightvec__item *it, float radius,
+                            float dx, float dy, float dz, float d2, float cs, float cn)
 {
     const lightvec__params *p = q->p;
-    float ws = 1.0f, wg = 0.0f, wb, cn, d, change, front;
-    if (q->directional) {                                            /* 4.2.2: cos(w, sigma) > S_dir */
-        float cs = q->w[0] * it->outgoing[0] + q->w[1] * it->outgoing[1] + q->w[2] * it->outgoing[2];
-        if (!(cs > p->cos_dir)) return;
-        ws = (cs - p->cos_dir) * p->inv_dir;
-    }
-    cn = q->n[0] * it->normal[0] + q->n[1] * it->normal[1] + q->n[2] * it->normal[2];
-    if (!(cn > p->cos_normal)) return;                               /* curvature: S_curv */
-    front = 0.5f * (dx * (q->n[0] + it->normal[0]) + dy * (q->n[1] + it->normal[1]) + dz * (q->n[2] + it->normal[2]));
+    const float *b = block + k;
+    float ws = 1.0f, wg = 0.0f, wb, d, change, front, inv_dg;
+    front = 0.5f * (dx * (q->n[0] + b[LIGHTVEC__ROW_NX * LIGHTVEC__LEAF]) + dy * (q->n[1] + b[LIGHTVEC__ROW_NY * LIGHTVEC__LEAF]) +
+                    dz * (q->n[2] + b[LIGHTVEC__ROW_NZ * LIGHTVEC__LEAF]));
     if (!(front >= -p->front * radius)) return;                      /* B in front of A (Ward 1988) */
     d = sqrtf(d2);
-    change = d * it->rel_gradient;                                   /* |AB| |grad E| / E_B < I_B */
+    change = d * b[LIGHTVEC__ROW_REL * LIGHTVEC__LEAF];              /* |AB| |grad E| / E_B < I_B */
     if (!(change < p->max_change)) return;
     wb = (1.0f - d / radius) * (1.0f / (1.0f + change)) * ((cn - p->cos_normal) * p->inv_normal);
-    if (q->directional && it->inv_glossy_distance > 0.0f) {          /* the glossy part */
-        float psi = lightvec__glossy_angle(q, it, dx, dy, dz), cos_psi = 1.0f - 0.5f * psi * psi;
+    if (q->directional) ws = (cs - p->cos_dir) * p->inv_dir;        /* 4.2.2 */
+    inv_dg = b[LIGHTVEC__ROW_GLOSSY * LIGHTVEC__LEAF];
+    if (q->directional && inv_dg > 0.0f) {                           /* the glossy part */
+        float psi = lightvec__glossy_angle(q, it->outgoing, inv_dg, dx, dy, dz), cos_psi = 1.0f - 0.5f * psi * psi;
         float gchange = psi * it->rel_glossy_gradient;
         if (cos_psi > it->cos_dir && gchange < p->max_change)
             wg = wb * ((cos_psi - it->cos_dir) / (1.0f - it->cos_dir)) * (1.0f / (1.0f + gchange));
     }
-    lightvec__keep(q, it, wb * ws, wg);
+    {
+        uint32_t id;
+        memcpy(&id, &b[LIGHTVEC__ROW_ID * LIGHTVEC__LEAF], sizeof id);
+        lightvec__keep(q, it, id, wb * ws, wg);
+    }
 }
 
-/* |AB| < R_B for items[lo, hi), then the other criteria. R_B is read
-   atomically: neighbour clamping may shrink it while readers run. */
-static void lightvec__visit_range(lightvec__query *q, const float *spheres, const lightvec__item *items, uint32_t lo,
-                                  uint32_t hi)
+/* The first `count` items of a leaf block: |AB| < R_B, the direction cone,
+   S_curv from the block's rows, the rest (lightvec__visit) for those that
+   pass. R_B is read atomically: neighbour clamping may shrink it while
+   readers run. */
+static void lightvec__visit_block(lightvec__query *q, const float *block, const lightvec__item *items, uint32_t count)
 {
-    uint32_t i;
-    for (i = lo; i < hi; i++) {
-        const float *s = spheres + 4 * (size_t)i;
-        float dx = q->a[0] - s[0], dy = q->a[1] - s[1], dz = q->a[2] - s[2];
-        float d2 = dx * dx + dy * dy + dz * dz, r = lightvec__load_f32(s + 3);
-        if (d2 < r * r) lightvec__visit(q, &items[i], r, dx, dy, dz, d2);
+    const float *x = block + LIGHTVEC__ROW_X * LIGHTVEC__LEAF, *y = block + LIGHTVEC__ROW_Y * LIGHTVEC__LEAF;
+    const float *z = block + LIGHTVEC__ROW_Z * LIGHTVEC__LEAF, *r = block + LIGHTVEC__ROW_R * LIGHTVEC__LEAF;
+    const float *sx = block + LIGHTVEC__ROW_SX * LIGHTVEC__LEAF, *sy = block + LIGHTVEC__ROW_SY * LIGHTVEC__LEAF;
+    const float *sz = block + LIGHTVEC__ROW_SZ * LIGHTVEC__LEAF, *nx = block + LIGHTVEC__ROW_NX * LIGHTVEC__LEAF;
+    const float *ny = block + LIGHTVEC__ROW_NY * LIGHTVEC__LEAF, *nz = block + LIGHTVEC__ROW_NZ * LIGHTVEC__LEAF;
+    float cos_dir = q->directional ? q->p->cos_dir : -2.0f; /* a 3D query has w = 0: cs = 0 passes */
+    uint32_t k;
+    for (k = 0; k < count; k++) {
+        float dx = q->a[0] - x[k], dy = q->a[1] - y[k], dz = q->a[2] - z[k];
+        float d2 = dx * dx + dy * dy + dz * dz, rk = lightvec__load_f32(r + k), cs, cn;
+        if (!(d2 < rk * rk)) continue;
+        cs = q->w[0] * sx[k] + q->w[1] * sy[k] + q->w[2] * sz[k];
+        if (!(cs > cos_dir)) continue;                               /* 4.2.2: cos(w, sigma) > S_dir */
+        cn = q->n[0] * nx[k] + q->n[1] * ny[k] + q->n[2] * nz[k];
+        if (!(cn > q->p->cos_normal)) continue;                      /* curvature: S_curv */
+        lightvec__visit(q, block, k, &items[k], rk, dx, dy, dz, d2, cs, cn);
     }
 }
 
 static void lightvec__tree_query(const lightvec__tree *t, lightvec__query *q)
 {
     uint32_t stack[64][3], top = 1;
-    stack[0][0] = 0; stack[0][1] = 0; stack[0][2] = t->count;
+    stack[0][0] = 0; stack[0][1] = 0; stack[0][2] = lightvec__leaf_count(t->count);
     while (top) {
-        uint32_t node, lo, hi, mid;
+        uint32_t node, a, b, m;
         const float *box;
         top--;
-        node = stack[top][0]; lo = stack[top][1]; hi = stack[top][2];
+        node = stack[top][0]; a = stack[top][1]; b = stack[top][2];
         box = t->boxes + 6 * (size_t)node;
         /* one branch for the six comparisons: box tests are hard to predict */
         if (!((q->a[0] >= box[0]) & (q->a[1] >= box[1]) & (q->a[2] >= box[2]) & (q->a[0] <= box[3]) &
               (q->a[1] <= box[4]) & (q->a[2] <= box[5])))
             continue;
-        if (hi - lo <= LIGHTVEC__LEAF) {
-            lightvec__visit_range(q, t->spheres, t->items, lo, hi);
+        if (b - a <= 1) {
+            uint32_t first = a * LIGHTVEC__LEAF, count = t->count - first;
+            lightvec__visit_block(q, t->blocks + (size_t)a * LIGHTVEC__BLOCK, t->items + first,
+                                  count < LIGHTVEC__LEAF ? count : LIGHTVEC__LEAF);
             continue;
         }
-        mid = lo + (hi - lo) / 2;
-        stack[top][0] = 2 * node + 2; stack[top][1] = mid; stack[top][2] = hi; top++;
-        stack[top][0] = 2 * node + 1; stack[top][1] = lo; stack[top][2] = mid; top++;
+        m = a + (b - a) / 2;
+        if (m - a <= 1) { /* leaves next: their blocks' first rows */
+            LIGHTVEC__PREFETCH(t->blocks + (size_t)a * LIGHTVEC__BLOCK);
+            LIGHTVEC__PREFETCH(t->blocks + (size_t)a * LIGHTVEC__BLOCK + 16);
+            LIGHTVEC__PREFETCH(t->blocks + (size_t)m * LIGHTVEC__BLOCK);
+            LIGHTVEC__PREFETCH(t->blocks + (size_t)m * LIGHTVEC__BLOCK + 16);
+        } else {
+            LIGHTVEC__PREFETCH(t->boxes + 6 * (size_t)(2 * node + 1));
+            LIGHTVEC__PREFETCH(t->boxes + 6 * (size_t)(4 * node + 3));
+            LIGHTVEC__PREFETCH(t->boxes + 6 * (size_t)(4 * node + 5));
+        }
+        stack[top][0] = 2 * node + 2; stack[top][1] = m; stack[top][2] = b; top++;
+        stack[top][0] = 2 * node + 1; stack[top][1] = a; stack[top][2] = m; top++;
+    }
+}
+
+/* The tail's published items (tail_count, acquire), block by block. */
+static void lightvec__tail_query(const lightvec__index *idx, lightvec__query *q)
+{
+    uint32_t n = lightvec__load_u32(&idx->tail_count), i;
+    for (i = 0; i * LIGHTVEC__LEAF < n; i++) {
+        uint32_t count = n - i * LIGHTVEC__LEAF;
+        lightvec__visit_block(q, idx->tail_blocks[i], idx->tail + i * LIGHTVEC__LEAF,
+                              count < LIGHTVEC__LEAF ? count : LIGHTVEC__LEAF);
     }
 }
 
 static void lightvec__index_query(void *ctx, const lightvec__index *idx)
 {
     lightvec__query *q = (lightvec__query *)ctx;
-    uint32_t i, n = lightvec__load_u32(&idx->tail_count);
+    uint32_t i;
     for (i = 0; i < idx->tree_count; i++) lightvec__tree_query(idx->trees[i], q);
-    lightvec__visit_range(q, &idx->tail_spheres[0][0], idx->tail, 0, n);
+    lightvec__tail_query(idx, q);
 }
 
 /* ---- icosahedron ------------------------------------------------------------------- */
@@ -3246,7 +3325,7 @@ static void lightvec__face_push(lightvec__face *f, const lightvec__item *it)
     lightvec__index *idx = (lightvec__index *)f->index;
     uint32_t n = idx->tail_count;
     idx->tail[n] = *it;
-    lightvec__sphere_of(it, idx->tail_spheres[n]);
+    lightvec__block_put(idx->tail_blocks[n / LIGHTVEC__LEAF], n % LIGHTVEC__LEAF, it);
     lightvec__store_u32(&idx->tail_count, n + 1u); /* publishes the item */
     f->count++;
 }
@@ -3517,11 +3596,13 @@ typedef struct lightvec__clamp {
     int directional, pass;
 } lightvec__clamp;
 
-static void lightvec__clamp_item(lightvec__clamp *k, float *sphere, lightvec__item *other)
+static void lightvec__clamp_item(lightvec__clamp *k, float *block, uint32_t slot, lightvec__item *other)
 {
     lightvec__item *it = k->it;
-    float dx = it->pos[0] - sphere[0], dy = it->pos[1] - sphere[1], dz = it->pos[2] - sphere[2];
-    float d = sqrtf(dx * dx + dy * dy + dz * dz), r = sphere[3];
+    float *b = block + slot;
+    float dx = it->pos[0] - b[LIGHTVEC__ROW_X * LIGHTVEC__LEAF], dy = it->pos[1] - b[LIGHTVEC__ROW_Y * LIGHTVEC__LEAF];
+    float dz = it->pos[2] - b[LIGHTVEC__ROW_Z * LIGHTVEC__LEAF];
+    float d = sqrtf(dx * dx + dy * dy + dz * dz), r = b[LIGHTVEC__ROW_R * LIGHTVEC__LEAF];
     if (k->directional && !(it->outgoing[0] * other->outgoing[0] + it->outgoing[1] * other->outgoing[1] +
                                 it->outgoing[2] * other->outgoing[2] > k->c->p.cos_dir))
         return;
@@ -3529,7 +3610,7 @@ static void lightvec__clamp_item(lightvec__clamp *k, float *sphere, lightvec__it
         if (r + d < it->radius) it->radius = r + d;
     } else if (it->radius + d < r) {
         r = it->radius + d;
-        lightvec__store_f32(sphere + 3, r);   /* readers may be reading it */
+        lightvec__store_f32(b + LIGHTVEC__ROW_R * LIGHTVEC__LEAF, r);  /* readers may be reading it */
         lightvec__store_f32(lightvec__radius_at(k->c, other->id), r);
         other->radius = r;                   /* what the next rebuild of its tree copies */
     }
@@ -3541,27 +3622,28 @@ static void lightvec__clamp_tree(lightvec__clamp *k, lightvec__tree *t, float re
 {
     uint32_t stack[64][3], top = 1, i;
     const float *p = k->it->pos;
-    stack[0][0] = 0; stack[0][1] = 0; stack[0][2] = t->count;
+    stack[0][0] = 0; stack[0][1] = 0; stack[0][2] = lightvec__leaf_count(t->count);
     while (top) {
-        uint32_t node, lo, hi, mid;
+        uint32_t node, a, b, m;
         const float *box;
         float d2 = 0.0f;
-        int a;
+        int axis;
         top--;
-        node = stack[top][0]; lo = stack[top][1]; hi = stack[top][2];
+        node = stack[top][0]; a = stack[top][1]; b = stack[top][2];
         box = t->boxes + 6 * (size_t)node;
-        for (a = 0; a < 3; a++) {
-            float e = p[a] < box[a] ? box[a] - p[a] : (p[a] > box[3 + a] ? p[a] - box[3 + a] : 0.0f);
+        for (axis = 0; axis < 3; axis++) {
+            float e = p[axis] < box[axis] ? box[axis] - p[axis] : (p[axis] > box[3 + axis] ? p[axis] - box[3 + axis] : 0.0f);
             d2 += e * e;
         }
         if (!(d2 <= reach * reach)) continue;
-        if (hi - lo <= LIGHTVEC__LEAF) {
-            for (i = lo; i < hi; i++) lightvec__clamp_item(k, t->spheres + 4 * (size_t)i, &t->items[i]);
+        if (b - a <= 1) {
+            for (i = a * LIGHTVEC__LEAF; i < t->count && i < b * LIGHTVEC__LEAF; i++)
+                lightvec__clamp_item(k, t->blocks + (size_t)a * LIGHTVEC__BLOCK, i % LIGHTVEC__LEAF, &t->items[i]);
             continue;
         }
-        mid = lo + (hi - lo) / 2;
-        stack[top][0] = 2 * node + 2; stack[top][1] = mid; stack[top][2] = hi; top++;
-        stack[top][0] = 2 * node + 1; stack[top][1] = lo; stack[top][2] = mid; top++;
+        m = a + (b - a) / 2;
+        stack[top][0] = 2 * node + 2; stack[top][1] = m; stack[top][2] = b; top++;
+        stack[top][0] = 2 * node + 1; stack[top][1] = a; stack[top][2] = m; top++;
     }
 }
 
@@ -3572,7 +3654,8 @@ static void lightvec__clamp_index(void *ctx, const lightvec__index *cidx)
     float reach = k->pass == 1 ? k->it->radius : 0.0f;
     uint32_t i;
     for (i = 0; i < idx->tree_count; i++) lightvec__clamp_tree(k, idx->trees[i], reach);
-    for (i = 0; i < idx->tail_count; i++) lightvec__clamp_item(k, idx->tail_spheres[i], &idx->tail[i]);
+    for (i = 0; i < idx->tail_count; i++)
+        lightvec__clamp_item(k, idx->tail_blocks[i / LIGHTVEC__LEAF], i % LIGHTVEC__LEAF, &idx->tail[i]);
 }
 
 static void lightvec__clamp_pass(lightvec_cache *c, lightvec__item *it, int directional, int pass)
