@@ -2791,6 +2791,10 @@ static void lightvec__keep(lightvec__query *q, const lightvec__item *it, uint32_
         c.wg = wg;
         c.id = id;
         c.it = it;
+        /* the interpolation reads the item: start loading it now */
+        LIGHTVEC__PREFETCH(it);
+        LIGHTVEC__PREFETCH((const char *)it + 64);
+        LIGHTVEC__PREFETCH((const char *)it + 128);
         if (q->heap_count < q->heap_capacity) {
             uint32_t i = q->heap_count++;
             while (i && lightvec__heap_less(&c, &q->heap[(i - 1) / 2])) {
