@@ -2328,7 +2328,8 @@ typedef struct lightvec__item {
 #define LIGHTVEC__ROW_REL 10         /* |grad Y| / Y */
 #define LIGHTVEC__ROW_GLOSSY 11      /* 1 / d_g; 0 = no glossy part */
 #define LIGHTVEC__ROW_ID 12          /* the record's id, its uint32_t bits */
-#define LIGHTVEC__ROWS 13
+#define LIGHTVEC__ROW_R0 13          /* R_B when the block was written: never changes (R_B <= R0) */
+#define LIGHTVEC__ROWS 14
 #define LIGHTVEC__BLOCK (LIGHTVEC__ROWS * LIGHTVEC__LEAF)
 
 typedef struct lightvec__tree {
@@ -2599,6 +2600,7 @@ static void lightvec__block_put(float *block, uint32_t k, const lightvec__item *
     b[LIGHTVEC__ROW_Y * LIGHTVEC__LEAF] = it->pos[1];
     b[LIGHTVEC__ROW_Z * LIGHTVEC__LEAF] = it->pos[2];
     b[LIGHTVEC__ROW_R * LIGHTVEC__LEAF] = it->radius;
+    b[LIGHTVEC__ROW_R0 * LIGHTVEC__LEAF] = it->radius;
     b[LIGHTVEC__ROW_SX * LIGHTVEC__LEAF] = it->outgoing[0];
     b[LIGHTVEC__ROW_SY * LIGHTVEC__LEAF] = it->outgoing[1];
     b[LIGHTVEC__ROW_SZ * LIGHTVEC__LEAF] = it->outgoing[2];
@@ -2848,26 +2850,54 @@ static void lightvec__visit(lightvec__query *q, const float *block, uint32_t k, 
     }
 }
 
-/* The first `count` items of a leaf block: |AB| < R_B, the direction cone,
-   S_curv from the block's rows, the rest (lightvec__visit) for those that
-   pass. R_B is read atomically: neighbour clamping may shrink it while
-   readers run. */
-static void lightvec__visit_block(lightvec__query *q, const float *block, const lightvec__item *items, uint32_t count)
+/* The cheap tests of slot k of a leaf block, a little wider than the exact
+   ones (which follow for the slots that pass): inside the sphere as the
+   block was built (R_B only shrinks later), in the direction cone, within
+   S_curv. Plain reads of rows that never change once published, so that the
+   loop over a full block vectorizes. */
+static int lightvec__block_pass(const lightvec__query *q, const float *block, uint32_t k, float cos_dir)
 {
-    const float *x = block + LIGHTVEC__ROW_X * LIGHTVEC__LEAF, *y = block + LIGHTVEC__ROW_Y * LIGHTVEC__LEAF;
-    const float *z = block + LIGHTVEC__ROW_Z * LIGHTVEC__LEAF, *r = block + LIGHTVEC__ROW_R * LIGHTVEC__LEAF;
-    const float *sx = block + LIGHTVEC__ROW_SX * LIGHTVEC__LEAF, *sy = block + LIGHTVEC__ROW_SY * LIGHTVEC__LEAF;
-    const float *sz = block + LIGHTVEC__ROW_SZ * LIGHTVEC__LEAF, *nx = block + LIGHTVEC__ROW_NX * LIGHTVEC__LEAF;
-    const float *ny = block + LIGHTVEC__ROW_NY * LIGHTVEC__LEAF, *nz = block + LIGHTVEC__ROW_NZ * LIGHTVEC__LEAF;
+    const float *b = block + k;
+    float dx = q->a[0] - b[LIGHTVEC__ROW_X * LIGHTVEC__LEAF], dy = q->a[1] - b[LIGHTVEC__ROW_Y * LIGHTVEC__LEAF];
+    float dz = q->a[2] - b[LIGHTVEC__ROW_Z * LIGHTVEC__LEAF], r0 = b[LIGHTVEC__ROW_R0 * LIGHTVEC__LEAF];
+    float cs = q->w[0] * b[LIGHTVEC__ROW_SX * LIGHTVEC__LEAF] + q->w[1] * b[LIGHTVEC__ROW_SY * LIGHTVEC__LEAF] +
+               q->w[2] * b[LIGHTVEC__ROW_SZ * LIGHTVEC__LEAF];
+    float cn = q->n[0] * b[LIGHTVEC__ROW_NX * LIGHTVEC__LEAF] + q->n[1] * b[LIGHTVEC__ROW_NY * LIGHTVEC__LEAF] +
+               q->n[2] * b[LIGHTVEC__ROW_NZ * LIGHTVEC__LEAF];
+    return (dx * dx + dy * dy + dz * dz < r0 * r0 * 1.00001f) & (cs > cos_dir - 1e-6f) & (cn > q->p->cos_normal - 1e-6f);
+}
+
+/* The first `count` items of a leaf block: the cheap tests over the whole
+   block at once when it is a full, published one (a kd-tree leaf; the tail's
+   slots past its count may be being written), then for the slots that pass
+   |AB| < R_B (R_B read atomically: neighbour clamping may shrink it while
+   readers run), cos(w, sigma) > S_dir, S_curv exactly, and the rest
+   (lightvec__visit). */
+static void lightvec__visit_block(lightvec__query *q, const float *block, const lightvec__item *items, uint32_t count,
+                                  int full)
+{
+    int pass[LIGHTVEC__LEAF];
     float cos_dir = q->directional ? q->p->cos_dir : -2.0f; /* a 3D query has w = 0: cs = 0 passes */
     uint32_t k;
+    if (full)
+        for (k = 0; k < LIGHTVEC__LEAF; k++) pass[k] = lightvec__block_pass(q, block, k, cos_dir);
+    else
+        for (k = 0; k < count; k++) pass[k] = lightvec__block_pass(q, block, k, cos_dir);
     for (k = 0; k < count; k++) {
-        float dx = q->a[0] - x[k], dy = q->a[1] - y[k], dz = q->a[2] - z[k];
-        float d2 = dx * dx + dy * dy + dz * dz, rk = lightvec__load_f32(r + k), cs, cn;
+        const float *b = block + k;
+        float dx, dy, dz, d2, rk, cs, cn;
+        if (!pass[k]) continue;
+        dx = q->a[0] - b[LIGHTVEC__ROW_X * LIGHTVEC__LEAF];
+        dy = q->a[1] - b[LIGHTVEC__ROW_Y * LIGHTVEC__LEAF];
+        dz = q->a[2] - b[LIGHTVEC__ROW_Z * LIGHTVEC__LEAF];
+        d2 = dx * dx + dy * dy + dz * dz;
+        rk = lightvec__load_f32(b + LIGHTVEC__ROW_R * LIGHTVEC__LEAF);
         if (!(d2 < rk * rk)) continue;
-        cs = q->w[0] * sx[k] + q->w[1] * sy[k] + q->w[2] * sz[k];
+        cs = q->w[0] * b[LIGHTVEC__ROW_SX * LIGHTVEC__LEAF] + q->w[1] * b[LIGHTVEC__ROW_SY * LIGHTVEC__LEAF] +
+             q->w[2] * b[LIGHTVEC__ROW_SZ * LIGHTVEC__LEAF];
         if (!(cs > cos_dir)) continue;                               /* 4.2.2: cos(w, sigma) > S_dir */
-        cn = q->n[0] * nx[k] + q->n[1] * ny[k] + q->n[2] * nz[k];
+        cn = q->n[0] * b[LIGHTVEC__ROW_NX * LIGHTVEC__LEAF] + q->n[1] * b[LIGHTVEC__ROW_NY * LIGHTVEC__LEAF] +
+             q->n[2] * b[LIGHTVEC__ROW_NZ * LIGHTVEC__LEAF];
         if (!(cn > q->p->cos_normal)) continue;                      /* curvature: S_curv */
         lightvec__visit(q, block, k, &items[k], rk, dx, dy, dz, d2, cs, cn);
     }
@@ -2890,7 +2920,7 @@ static void lightvec__tree_query(const lightvec__tree *t, lightvec__query *q)
         if (b - a <= 1) {
             uint32_t first = a * LIGHTVEC__LEAF, count = t->count - first;
             lightvec__visit_block(q, t->blocks + (size_t)a * LIGHTVEC__BLOCK, t->items + first,
-                                  count < LIGHTVEC__LEAF ? count : LIGHTVEC__LEAF);
+                                  count < LIGHTVEC__LEAF ? count : LIGHTVEC__LEAF, 1);
             continue;
         }
         m = a + (b - a) / 2;
@@ -2916,7 +2946,7 @@ static void lightvec__tail_query(const lightvec__index *idx, lightvec__query *q)
     for (i = 0; i * LIGHTVEC__LEAF < n; i++) {
         uint32_t count = n - i * LIGHTVEC__LEAF;
         lightvec__visit_block(q, idx->tail_blocks[i], idx->tail + i * LIGHTVEC__LEAF,
-                              count < LIGHTVEC__LEAF ? count : LIGHTVEC__LEAF);
+                              count < LIGHTVEC__LEAF ? count : LIGHTVEC__LEAF, 0);
     }
 }
 

@@ -101,22 +101,59 @@ static void random_record(rng *r, lightvec_record *rec, double radius)
     rec->visibility = 1.0f;
 }
 
+static int cmp_cell(const void *a, const void *b)
+{
+    const float *x = (const float *)a, *y = (const float *)b;
+    int k;
+    for (k = 0; k < 3; k++) {
+        int cx = (int)(x[k] * 64.0f), cy = (int)(y[k] * 64.0f);
+        if (cx != cy) return cx < cy ? -1 : 1;
+    }
+    return 0;
+}
+
+/* Median time per lookup over 5 passes of the queries qp[0, nq). */
+static double lookup_time(const lightvec_cache *cache, float (*qp)[9], uint32_t nq, uint32_t *valid, uint32_t *hits)
+{
+    double times[5];
+    int rep;
+    *valid = *hits = 0;
+    for (rep = 0; rep < 5; rep++) {
+        double t0 = now();
+        uint32_t q;
+        for (q = 0; q < nq; q++) {
+            lightvec_lookup_result lr;
+            lightvec_lookup(cache, qp[q], qp[q] + 3, qp[q] + 6, &lr);
+            if (rep == 0) { *valid += lr.valid_count; *hits += (uint32_t)lr.hit; }
+        }
+        times[rep] = (now() - t0) / nq;
+    }
+    return median(times, 5);
+}
+
+/* Sparse caches (a wall point inside about 12 validity disks before the
+   criteria: ~6 valid records per query) at 1e4 .. 1e6 records, dense ones
+   (~90 disks: ~45 valid) at 1e5 and 1e6. Queries in a random order (every
+   one a cache miss at 1e5 records and more) and sorted by position (as the
+   pixels of a frame come), before and after optimize. */
 static void bench_lookups(void)
 {
-    static const uint32_t sizes[3] = { 10000, 100000, 1000000 };
+    static const uint32_t sizes[5] = { 10000, 100000, 1000000, 100000, 1000000 };
+    static const double cover[5] = { 12, 12, 12, 90, 90 };
     int s;
-    printf("lookup time (paper: 10-15 ms per query, nearly independent of the size; target < 2 us at 1e5)\n");
-    printf("  %9s %12s %14s %14s %12s %10s\n", "records", "insert [us]", "lookup [us]", "optimized", "valid/query", "hit rate");
-    for (s = 0; s < 3; s++) {
+    printf("lookup time, us, thread CPU time, median of 5 passes (paper, 3.3: 10-15 ms per query on a 1.2 GHz\n"
+           "Athlon, nearly independent of the size; issue 15's target: < 2 us at 1e5 records, sparse and dense)\n");
+    printf("  %9s %7s %11s %9s %9s %9s %9s %8s %8s\n", "records", "cover", "insert[us]", "random", "sorted", "opt rand",
+           "opt sort", "valid", "hits");
+    for (s = 0; s < 5; s++) {
         lightvec_cache *cache = NULL;
         lightvec_record rec;
         rng r;
-        uint32_t i, q, nq = 200000, valid = 0, hits = 0;
-        /* disks of radius r cover a wall point about 12 times: n/6 pi r^2 = 12 */
-        double radius = sqrt(12.0 * 6.0 / (PI * sizes[s])), t0, t_insert, times[5], opt[5];
-        float (*qp)[9] = (float (*)[9])malloc(sizeof(float[9]) * nq);
-        int rep;
-        if (!qp || lightvec_cache_create(NULL, &cache) != LIGHTVEC_OK) return;
+        uint32_t i, q, nq = 200000, valid = 0, hits = 0, v2, h2;
+        /* disks of radius r cover a wall point about `cover` times: n/6 pi r^2 = cover */
+        double radius = sqrt(cover[s] * 6.0 / (PI * sizes[s])), t0, t_insert, t[4];
+        float (*qp)[9] = (float (*)[9])malloc(sizeof(float[9]) * nq), (*sorted)[9] = (float (*)[9])malloc(sizeof(float[9]) * nq);
+        if (!qp || !sorted || lightvec_cache_create(NULL, &cache) != LIGHTVEC_OK) return;
         r.s = 1234;
         t0 = now();
         for (i = 0; i < sizes[s]; i++) {
@@ -128,20 +165,17 @@ static void bench_lookups(void)
             wall_point(&r, qp[q], qp[q] + 3);
             toward_eye(&r, qp[q], qp[q] + 6);
         }
-        for (rep = 0; rep < 10; rep++) {
-            lightvec_lookup_result lr;
-            t0 = now();
-            for (q = 0; q < nq; q++) {
-                lightvec_lookup(cache, qp[q], qp[q] + 3, qp[q] + 6, &lr);
-                if (rep == 0) { valid += lr.valid_count; hits += (uint32_t)lr.hit; }
-            }
-            if (rep < 5) times[rep] = (now() - t0) / nq;
-            else opt[rep - 5] = (now() - t0) / nq;
-            if (rep == 4) lightvec_cache_optimize(cache);
-        }
-        printf("  %9u %12.2f %14.3f %14.3f %12.1f %9.1f%%\n", sizes[s], 1e6 * t_insert, 1e6 * median(times, 5),
-               1e6 * median(opt, 5), (double)valid / nq, 100.0 * hits / nq);
+        memcpy(sorted, qp, sizeof(float[9]) * nq);
+        qsort(sorted, nq, sizeof(float[9]), cmp_cell);
+        t[0] = lookup_time(cache, qp, nq, &valid, &hits);
+        t[1] = lookup_time(cache, sorted, nq, &v2, &h2);
+        lightvec_cache_optimize(cache);
+        t[2] = lookup_time(cache, qp, nq, &v2, &h2);
+        t[3] = lookup_time(cache, sorted, nq, &v2, &h2);
+        printf("  %9u %7.0f %11.2f %9.3f %9.3f %9.3f %9.3f %8.1f %7.1f%%\n", sizes[s], cover[s], 1e6 * t_insert, 1e6 * t[0],
+               1e6 * t[1], 1e6 * t[2], 1e6 * t[3], (double)valid / nq, 100.0 * hits / nq);
         free(qp);
+        free(sorted);
         lightvec_cache_destroy(cache);
     }
 }
