@@ -272,11 +272,127 @@ static void test_magnitudes_finite(void)
     CHECK_EQ_INT(bad, 0);
 }
 
+/* ---- what each function checks (the FUNCTION REFERENCE) ------------------------------------ */
+
+static lightvec_record good_record(void)
+{
+    lightvec_record r;
+    memset(&r, 0, sizeof r);
+    r.normal[2] = 1.0f;
+    r.outgoing[2] = 1.0f;
+    r.vector.direction[2] = 1.0f;
+    r.vector.magnitude[0] = r.irradiance[0] = 1.0f;
+    r.glossy[0] = 0.5f;
+    r.glossy_distance = 1.0f;
+    r.exponent = 20.0f;
+    r.distance = 1.0f;
+    r.visibility = 1.0f;
+    return r;
+}
+
+static void test_contract_cache_settings(void)
+{
+    lightvec_cache_desc d;
+    lightvec_cache *c = NULL;
+    memset(&d, 0, sizeof d);
+    d.max_neighbors = 257;
+    CHECK(lightvec_cache_create(&d, &c) == LIGHTVEC_ERROR_INVALID_ARGUMENT && c == NULL);
+    d.max_neighbors = 256;
+    CHECK(lightvec_cache_create(&d, &c) == LIGHTVEC_OK);
+    lightvec_cache_destroy(c);
+    d.max_neighbors = 0;
+    d.front_tolerance = -1.0f;
+    CHECK(lightvec_cache_create(&d, &c) == LIGHTVEC_ERROR_INVALID_ARGUMENT);
+    d.front_tolerance = NAN;
+    CHECK(lightvec_cache_create(&d, &c) == LIGHTVEC_ERROR_INVALID_ARGUMENT);
+    d.front_tolerance = 0.0f;
+    d.flags = 0x8u;
+    CHECK(lightvec_cache_create(&d, &c) == LIGHTVEC_ERROR_INVALID_ARGUMENT);
+    d.flags = 0;
+    d.max_direction_angle = 0.05f;
+    CHECK(lightvec_cache_create(&d, &c) == LIGHTVEC_ERROR_INVALID_ARGUMENT);
+    CHECK(c == NULL);
+}
+
+/* Every bad field of a record is refused, and a refused insert leaves the
+   cache as it was; the radius a caller sets is ignored. */
+static void test_contract_insert(void)
+{
+    lightvec_cache *c = NULL;
+    const lightvec_cache *cc;
+    lightvec_record r, got;
+    lightvec_cache_stats st;
+    lightvec_lookup_result lr;
+    float p[3] = { 0, 0, 0 }, n[3] = { 0, 0, 1 };
+    int i;
+    if (!CHECK(lightvec_cache_create(NULL, &c) == LIGHTVEC_OK)) return;
+    for (i = 0; i < 14; i++) {
+        r = good_record();
+        switch (i) {
+        case 0: r.glossy_share = 1.5f; break;
+        case 1: r.glossy_share = -0.1f; break;
+        case 2: r.exponent = -1.0f; break;
+        case 3: r.exponent = 2e6f; break;
+        case 4: r.glossy_distance = -1.0f; break;
+        case 5: r.glossy_distance = INFINITY; break;
+        case 6: r.vector.glossy_direction[1] = NAN; break;
+        case 7: r.vector.glossy_magnitude[2] = -1.0f; break;
+        case 8: r.glossy[1] = -0.5f; break;
+        case 9: r.glossy_gradient[2][0] = INFINITY; break;
+        case 10: r.vector.magnitude[0] = INFINITY; break;
+        case 11: r.distance = 0.0f; break;
+        case 12: r.outgoing[2] = 0.0f; break;
+        default: r.flags = 0x4u; break;
+        }
+        CHECK_MSG(lightvec_insert(c, &r, NULL) == LIGHTVEC_ERROR_INVALID_ARGUMENT, "bad record %d accepted", i);
+    }
+    lightvec_cache_info(c, &st);
+    CHECK_EQ_INT(st.record_count, 0);
+    r = good_record();
+    r.radius = NAN; /* set by the cache */
+    CHECK(lightvec_insert(c, &r, NULL) == LIGHTVEC_OK);
+    cc = c; /* the readers take a const cache */
+    CHECK(lightvec_cache_record(cc, 0, &got) == LIGHTVEC_OK);
+    CHECK(got.radius == st.radius_scale * r.distance);
+    CHECK(lightvec_lookup(cc, p, n, n, &lr) == LIGHTVEC_OK);
+    CHECK_EQ_INT(lr.valid_count, 1);
+    CHECK(lightvec_cache_record(cc, 1, &got) == LIGHTVEC_ERROR_INVALID_ARGUMENT);
+    lightvec_cache_destroy(c);
+}
+
+static void test_contract_gather_and_angles(void)
+{
+    lightvec_gather_desc gd;
+    lightvec_surface sf;
+    lightvec_record rec;
+    memset(&gd, 0, sizeof gd);
+    gd.incoming_radiance = source_and_sky;
+    gd.strata_theta = 4;
+    memset(&sf, 0, sizeof sf);
+    sf.normal[2] = sf.outgoing[2] = 1.0f;
+    sf.material.specular[0] = 0.5f;
+    sf.material.exponent = 10.0f;
+    gd.glossy_samples = 65537;
+    CHECK(lightvec_gather(NULL, &gd, &sf, 0, &rec) == LIGHTVEC_ERROR_INVALID_ARGUMENT);
+    gd.glossy_samples = 64;
+    CHECK(lightvec_gather(NULL, &gd, &sf, 0, &rec) == LIGHTVEC_OK);
+    CHECK(rec.glossy_distance == 1.0f && rec.exponent == 10.0f && rec.glossy_share == 1.0f);
+    /* the derivation's numbers: 0.909 acos(exp(-1 / 2n)) */
+    CHECK_CLOSE(lightvec_direction_angle(20.0f), 0.90915 * acos(exp(-1.0 / 40.0)) * 180.0 / 3.14159265358979, 1e-5, 0);
+    CHECK_CLOSE(lightvec_direction_angle(20.0f), 11.6, 0.01, 0);
+    CHECK(lightvec_direction_angle(0.0f) == 180.0f && lightvec_direction_angle(NAN) == 180.0f);
+    CHECK(lightvec_direction_angle(1e6f) >= 0.1f);
+    CHECK(lightvec_direction_angle(100.0f) < lightvec_direction_angle(20.0f)); /* narrower lobe, tighter bound */
+}
+
 int main(int argc, char **argv)
 {
     TEST_INIT(argc, argv);
     RUN(test_triangle_count_wraps_32_bits);
     RUN(test_split_and_optimize_out_of_memory);
     RUN(test_magnitudes_finite);
+    RUN(test_contract_cache_settings);
+    RUN(test_contract_insert);
+    RUN(test_contract_gather_and_angles);
     return test_finish();
 }
