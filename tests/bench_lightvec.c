@@ -192,10 +192,26 @@ static lightvec_scene *g_scene;
 
 typedef struct pixel { int valid, wall, floor; lightvec_surface s; } pixel;
 
+/* g_scene over the box's triangles with g_tri_mat and g_mats[0, materials). */
+static int make_scene(uint32_t materials)
+{
+    lightvec_scene_desc d;
+    lightvec_scene_destroy(g_scene);
+    g_scene = NULL;
+    memset(&d, 0, sizeof d);
+    d.positions = g_obj.positions;
+    d.vertex_count = g_obj.vertex_count;
+    d.indices = g_obj.tri_indices;
+    d.triangle_count = g_obj.tri_count;
+    d.material_ids = g_tri_mat;
+    d.materials = g_mats;
+    d.material_count = materials;
+    return lightvec_scene_create(&d, &g_scene) == LIGHTVEC_OK ? 0 : -1;
+}
+
 static int load_cornell(void)
 {
     char err[256];
-    lightvec_scene_desc d;
     uint32_t i;
     if (obj_load("examples/data/cornell_box.obj", &g_obj, err, sizeof err) != 0) {
         fprintf(stderr, "%s\n", err);
@@ -211,37 +227,18 @@ static int load_cornell(void)
         memcpy(g_mats[i].emission, g_obj.materials[i].ke, sizeof g_mats[i].emission);
         g_mats[i].exponent = g_obj.materials[i].ns;
     }
-    memset(&d, 0, sizeof d);
-    d.positions = g_obj.positions;
-    d.vertex_count = g_obj.vertex_count;
-    d.indices = g_obj.tri_indices;
-    d.triangle_count = g_obj.tri_count;
-    d.material_ids = g_tri_mat;
-    d.materials = g_mats;
-    d.material_count = g_obj.material_count;
-    return lightvec_scene_create(&d, &g_scene) == LIGHTVEC_OK ? 0 : -1;
+    return make_scene(g_obj.material_count);
 }
 
 /* The box again with its floor made of `floor`. */
 static int glossy_floor(const lightvec_material *floor)
 {
-    lightvec_scene_desc d;
     uint32_t i, fm = g_obj.material_count;
     int fg = obj_find_group(&g_obj, "floor");
     g_mats[fm] = *floor;
     for (i = 0; i < g_obj.tri_count; i++)
         if ((int)g_obj.face_group[g_obj.tri_face[i]] == fg) g_tri_mat[i] = fm;
-    lightvec_scene_destroy(g_scene);
-    g_scene = NULL;
-    memset(&d, 0, sizeof d);
-    d.positions = g_obj.positions;
-    d.vertex_count = g_obj.vertex_count;
-    d.indices = g_obj.tri_indices;
-    d.triangle_count = g_obj.tri_count;
-    d.material_ids = g_tri_mat;
-    d.materials = g_mats;
-    d.material_count = fm + 1;
-    return lightvec_scene_create(&d, &g_scene) == LIGHTVEC_OK ? 0 : -1;
+    return make_scene(fm + 1);
 }
 
 static float lum(const float *c) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
@@ -400,51 +397,6 @@ static void bench_frame_512(void)
     free(rgb);
 }
 
-/* 30 frames: the eye slides across the whole opening of the box (55 cm, at
-   70 cm from it) while looking at its centre, so that a wall point is seen
-   from directions up to 30 degrees apart over the path. */
-static void bench_path(uint32_t flags, int size)
-{
-    uint32_t n = (uint32_t)(size * size), hits, visible, gathers, total_hits = 0, total_visible = 0;
-    pixel *px = (pixel *)malloc(n * sizeof *px);
-    float *rgb = (float *)calloc(3 * (size_t)n, sizeof(float));
-    float up[3] = { 0, 1, 0 }, target[3] = { 0.278f, 0.25f, 0.28f };
-    lightvec_cache *cache = NULL;
-    double t_gather = 0, err, t_frames = 0, t_later = 0, t_first = 0, rates[30];
-    int f;
-    if (!px || !rgb || lightvec_cache_create(NULL, &cache) != LIGHTVEC_OK) return;
-    printf("\n30-frame camera path, %dx%d, %s light vectors\n", size, size, flags ? "3D (view-independent)" : "5D");
-    for (f = 0; f < 30; f++) {
-        float eye[3];
-        ex_camera cam;
-        double t;
-        eye[0] = 0.0f + 0.556f * (float)f / 29.0f;
-        eye[1] = 0.273f;
-        eye[2] = -0.7f;
-        cam = ex_camera_look_at(eye, target, up, 39.3f, size, size);
-        trace_pixels(&cam, px, flags);
-        t = cache_frame(cache, px, n, rgb, &hits, &visible, &gathers, 10 + (uint64_t)f);
-        if (f == 0) t_gather = gather_time(px, n, rgb, &err) * visible;
-        rates[f] = 100.0 * hits / visible;
-        total_hits += hits;
-        total_visible += visible;
-        t_frames += t;
-        if (f == 0) t_first = t;
-        else t_later += t;
-        if (f == 0 || f == 1 || f == 29) printf("  frame %2d: hit rate %6.2f%%, %5u gathers, %.2f s\n", f, rates[f], gathers, t);
-    }
-    printf("  mean hit rate %.2f%% (frames 1-29: median %.2f%%)\n", 100.0 * total_hits / total_visible,
-           median(rates + 1, 29));
-    printf("  frame time: first %.2f s, later ones %.2f s on average; gathering everywhere %.1f s per frame\n",
-           t_first, t_later / 29, t_gather);
-    printf("  time saved vs. gathering everywhere: %.1f%% over the path, %.1f%% on frames 1-29 "
-           "(paper: 66%% vs. the render cache alone)\n",
-           100.0 * (1.0 - t_frames / (30 * t_gather)), 100.0 * (1.0 - t_later / (29 * t_gather)));
-    lightvec_cache_destroy(cache);
-    free(px);
-    free(rgb);
-}
-
 /* Mean relative error of the floor pixels of rgb against a converged
    gather (60 x 180 strata, 8,192 lobe rays; within about 1.3% itself), over
    `count` pixels spread across the frame. */
@@ -469,36 +421,42 @@ static double floor_error(const pixel *px, uint32_t n, const float *rgb, uint32_
     return m ? err / m : 0;
 }
 
-/* The 30-frame path over a glossy floor (0.3 Lambert + 0.4 normalized Phong,
-   exponent 20: issue 15's floor): frame time against gathering every pixel,
-   hit rates, and the floor's error in the last frame. */
-static void bench_glossy_walk(int size)
+/* 30 frames: the eye slides across the whole opening of the box (55 cm, at
+   70 cm from it) while looking at its centre, so that a wall point is seen
+   from directions up to 30 degrees apart over the path. With floor_report
+   (the box's floor made glossy first): how much of the floor the cache
+   covers after each frame, and the floor's error in the last frame. */
+static void bench_path(uint32_t flags, int size, int floor_report)
 {
-    uint32_t n = (uint32_t)(size * size), hits, visible, gathers, floor_hits, floor_px;
+    uint32_t n = (uint32_t)(size * size), hits, visible, gathers, total_hits = 0, total_visible = 0, k;
     pixel *px = (pixel *)malloc(n * sizeof *px);
     float *rgb = (float *)calloc(3 * (size_t)n, sizeof(float));
     float up[3] = { 0, 1, 0 }, target[3] = { 0.278f, 0.25f, 0.28f };
     lightvec_cache *cache = NULL;
-    double t_gather = 0, err, t_later = 0, t_first = 0, rates[30], floor_rates[30];
+    double t_gather = 0, err, t_frames = 0, t_later = 0, t_first = 0, rates[30], floor_rates[30];
     int f;
-    uint32_t k;
     if (!px || !rgb || lightvec_cache_create(NULL, &cache) != LIGHTVEC_OK) return;
-    printf("\n30-frame camera path over a glossy floor (0.3 Lambert + 0.4 Phong, exponent 20), %dx%d, 5D\n", size, size);
+    printf("\n30-frame camera path, %dx%d, %s light vectors%s\n", size, size, flags ? "3D (view-independent)" : "5D",
+           floor_report ? ", a glossy floor (0.3 Lambert + 0.4 Phong, exponent 20)" : "");
     for (f = 0; f < 30; f++) {
         float eye[3];
         ex_camera cam;
         double t;
+        uint32_t floor_hits = 0, floor_px = 0;
         eye[0] = 0.0f + 0.556f * (float)f / 29.0f;
         eye[1] = 0.273f;
         eye[2] = -0.7f;
         cam = ex_camera_look_at(eye, target, up, 39.3f, size, size);
-        trace_pixels(&cam, px, 0);
+        trace_pixels(&cam, px, flags);
         t = cache_frame(cache, px, n, rgb, &hits, &visible, &gathers, 10 + (uint64_t)f);
         if (f == 0) t_gather = gather_time(px, n, rgb, &err) * visible;
         rates[f] = 100.0 * hits / visible;
-        /* how much of the floor the cache covers once the frame is done */
-        floor_hits = floor_px = 0;
-        for (k = 0; k < n; k++)
+        total_hits += hits;
+        total_visible += visible;
+        t_frames += t;
+        if (f == 0) t_first = t;
+        else t_later += t;
+        for (k = 0; floor_report && k < n; k++) /* how much of the floor the cache covers once the frame is done */
             if (px[k].valid && px[k].floor) {
                 lightvec_lookup_result lr;
                 floor_px++;
@@ -506,19 +464,22 @@ static void bench_glossy_walk(int size)
                 floor_hits += (uint32_t)lr.hit;
             }
         floor_rates[f] = floor_px ? 100.0 * floor_hits / floor_px : 0.0;
-        if (f == 0) t_first = t;
-        else t_later += t;
-        if (f == 0 || f == 1 || f == 29)
-            printf("  frame %2d: hit rate %6.2f%%, %5u gathers, %.2f s\n", f, rates[f], gathers, t);
+        if (f == 0 || f == 1 || f == 29) printf("  frame %2d: hit rate %6.2f%%, %5u gathers, %.2f s\n", f, rates[f], gathers, t);
     }
-    err = floor_error(px, n, rgb, 200);
-    printf("  hit rate, frames 1-29: median %.2f%% (floor pixels covered after each frame: median %.2f%%)\n",
-           median(rates + 1, 29), median(floor_rates + 1, 29));
-    printf("  frame time: first %.2f s, later ones %.2f s on average; gathering everywhere %.1f s per frame: %.1fx\n",
+    printf("  mean hit rate %.2f%% (frames 1-29: median %.2f%%)\n", 100.0 * total_hits / total_visible,
+           median(rates + 1, 29));
+    printf("  frame time: first %.2f s, later ones %.2f s on average; gathering everywhere %.1f s per frame (%.1fx)\n",
            t_first, t_later / 29, t_gather, t_gather / (t_later / 29));
-    printf("  floor error in the last frame: %.2f%% mean against a converged gather (issue 15: <= 5%%)\n", 100 * err);
-    printf("  (paper, table 1, Cornell box 1: next pictures 46 s ray traced, 13 s with the render cache, 4.4 s with\n"
-           "   5D light vectors and the render cache; Lambertian boxes, 512x512, 1.2 GHz Athlon)\n");
+    printf("  time saved vs. gathering everywhere: %.1f%% over the path, %.1f%% on frames 1-29 "
+           "(paper: 66%% vs. the render cache alone)\n",
+           100.0 * (1.0 - t_frames / (30 * t_gather)), 100.0 * (1.0 - t_later / (29 * t_gather)));
+    if (floor_report) {
+        printf("  floor pixels the cache covers after each frame: median %.2f%%\n", median(floor_rates + 1, 29));
+        printf("  floor error in the last frame: %.2f%% mean against a converged gather (issue 15: <= 5%%)\n",
+               100 * floor_error(px, n, rgb, 200));
+        printf("  (paper, table 1, Cornell box 1: next pictures 46 s ray traced, 13 s with the render cache, 4.4 s\n"
+               "   with 5D light vectors and the render cache; Lambertian boxes, 512x512, 1.2 GHz Athlon)\n");
+    }
     lightvec_cache_destroy(cache);
     free(px);
     free(rgb);
@@ -531,8 +492,8 @@ int main(int argc, char **argv)
     if (load_cornell() != 0) return 1;
     if (argc > 1 && !strcmp(argv[1], "--glossy")) goto glossy;
     bench_frame_512();
-    bench_path(0, 256);
-    bench_path(LIGHTVEC_RECORD_VIEW_INDEPENDENT, 256);
+    bench_path(0, 256, 0);
+    bench_path(LIGHTVEC_RECORD_VIEW_INDEPENDENT, 256, 0);
 glossy:
     {
         lightvec_material floor;
@@ -541,7 +502,7 @@ glossy:
         floor.specular[0] = floor.specular[1] = floor.specular[2] = 0.4f;
         floor.exponent = 20.0f;
         if (glossy_floor(&floor) != 0) return 1;
-        bench_glossy_walk(256);
+        bench_path(0, 256, 1);
     }
     lightvec_scene_destroy(g_scene);
     free(g_mats);
