@@ -2446,7 +2446,8 @@ LIGHTVEC_API lightvec_result lightvec_gather_direct(const lightvec_scene *s, con
    to 8 times what has been merged so far) into one new balanced kd-tree, so
    the trees of a face grow more than 8-fold from one to the next (at most
    log8(n / 16) + 1 of them) and an item is rebuilt O(log n) times.
-   Trees are immutable once published: readers never see a half-built one.
+   Trees are immutable once published (but for the radii neighbour clamping
+   shrinks, read and written atomically): readers never see a half-built one.
    ---------------------------------------------------------------------- */
 #define LIGHTVEC__LEAF 8u            /* items per kd-tree leaf */
 #define LIGHTVEC__TAIL 16u           /* items a face holds outside its kd-trees */
@@ -2471,14 +2472,15 @@ typedef struct lightvec__params {
     lightvec_interpolation interpolation;  /* never DEFAULT */
 } lightvec__params;
 
-/* 192 bytes; what the criteria read comes first, so that in a kd-tree
-   (items aligned to 64 bytes) rejecting a record touches one cache line. */
+/* 192 bytes, aligned to 64 in a kd-tree: what a valid record's weight
+   reads (beyond its leaf block's rows) comes first, then what the
+   interpolation reads. */
 typedef struct lightvec__item {
     float outgoing[3], cos_dir;      /* sigma and this record's S_dir (from its lobe) */
     float normal[3], rel_gradient;   /* n_B and |grad Y| / Y (luminance) */
     float inv_glossy_distance;       /* 1 / d_g; 0 = no glossy part */
     float visibility;
-    float radius;                    /* R_B as the writer knows it; readers read the sphere's copy */
+    float radius;                    /* R_B as the writer knows it; readers read the leaf block's row */
     uint32_t id;
     float pos[3];                    /* B */
     float exponent;                  /* of the lobe of G */
