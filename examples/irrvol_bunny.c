@@ -312,7 +312,7 @@ static double bunny_light(bunny *b, const irrvol *vol, float x, float z, float y
         wn[0] = c * n[0] + s * n[2];     wn[1] = n[1]; wn[2] = -s * n[0] + c * n[2];
     }
     t0 = now();
-    irrvol_query_many(vol, IRRVOL_FILTER_DEFAULT, b->vertex_count, b->world_pos, 0, b->world_normal, 0, b->rgb);
+    irrvol_query_many(vol, IRRVOL_FILTER_DEFAULT, IRRVOL_WEIGHTING_DEFAULT, b->vertex_count, b->world_pos, 0, b->world_normal, 0, b->rgb);
     t0 = now() - t0;
     for (v = 0; v < 3 * b->vertex_count; v++) b->rgb[v] *= BUNNY_KD / 3.14159265f * b->visibility[v / 3];
     return t0;

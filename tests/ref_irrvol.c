@@ -155,7 +155,7 @@ static void test_irradiance_at_samples(void)
     irrvol *v = office_volume(3, 17);
     irrvol_volume_info info;
     float *h;
-    uint32_t s, j, checked = 0, outside = 0;
+    uint32_t s, j, checked = 0, outside = 0, skipped = 0;
     double worst = 0.0, sum_rel = 0.0;
     if (!CHECK(v != NULL)) return;
     irrvol_info(v, &info);
@@ -163,6 +163,10 @@ static void test_irradiance_at_samples(void)
     for (s = 0; s < info.sample_count; s += 31) {
         irrvol_sample_info si;
         irrvol_sample(v, s, &si);
+        /* invalid samples hold their neighbours' mean and hanging ones a
+           blend of first-level samples: neither is a gather to compare */
+        if (si.state == IRRVOL_SAMPLE_INVALID || si.state == IRRVOL_SAMPLE_HANGING) { skipped++; continue; }
+        memcpy(si.position, si.origin, sizeof si.position);   /* a relocated sample gathered there */
         irrvol_sample_values(v, s, h, NULL);
         for (j = 0; j < 4; j++) {
             uint32_t bin = (s * 37u + j * 151u) % info.bins;
@@ -191,8 +195,8 @@ static void test_irradiance_at_samples(void)
         }
     }
     test_note("irradiance at %u (sample, bin) pairs vs Embree (2^17 cosine rays each): mean relative difference "
-              "%.2f %%, largest %.2f %%, %u channels outside 3 SE + 2 %%", checked, 100.0 * sum_rel / (3.0 * checked),
-              100.0 * worst, outside);
+              "%.2f %%, largest %.2f %%, %u channels outside 3 SE + 2 %% (%u invalid or hanging samples skipped)",
+              checked, 100.0 * sum_rel / (3.0 * checked), 100.0 * worst, outside, skipped);
     CHECK_EQ_INT(outside, 0);
     free(h);
     irrvol_destroy(v);
@@ -255,7 +259,7 @@ static void test_interpolation_error_table(void)
                 uint32_t refined = 0, x, y;
                 for (i = 0; i < TABLE_POINTS; i++) {
                     float h[3];
-                    irrvol_query_filter(v, (irrvol_filter)f, pos[i], dir[i], h);
+                    irrvol_query_filter(v, (irrvol_filter)f, IRRVOL_WEIGHTING_TRILINEAR, pos[i], dir[i], h);
                     err[i] = fabs(ref_luminance(h) - expect[i]) / expect[i];
                     sum += fabs(ref_luminance(h) - expect[i]);
                     total += expect[i];

@@ -125,6 +125,10 @@ static void test_visibility_bad_inputs(void)
     BAD(d.ray_offset = -1.0f);
     BAD(d.max_distance = NAN);
     BAD(d.normals = s.pos; d.normal_stride = 2);
+    {   /* issue 17: 3 * 0x55555556 triangles wraps to 2 indices in 32 bits */
+        uint32_t few[9] = {0, 1, 2, 0, 2, 3, 0, 1, 99};
+        BAD(d.indices = few; d.triangle_count = 0x55555556u);
+    }
 #undef BAD
     s.pos[5] = NAN;
     d = good;
