@@ -118,11 +118,15 @@
    cell holds 2^3 sub-cells). Neighbouring second-level grids share the
    samples on their common faces.
 
-   Refinement by light (6.1.1). The first level is gathered first; a cell
-   whose eight corners' irradiance spheres differ, sum over bins of (largest
-   - smallest corner luminance) over the sum of their mean, by more than
-   desc.refine_threshold (default 0.25) is refined too, a shadow edge across
-   it as much as a light's falloff. info.light_refined_cells counts them and
+   Refinement by light (6.1.1). The first level is gathered first. Trilinear
+   interpolation is exact where light changes linearly, so what counts is
+   how far the first-level samples bend away from a straight line: along
+   each axis through a sample, the second difference of its neighbours'
+   irradiance spheres (luminance, summed over the bins) over 8 times their
+   level, the error a parabola through the three leaves midway. A cell is
+   refined when that predicted error exceeds desc.refine_threshold (default
+   0.05) at one of its corners: near lights, across shadow edges, not along
+   smooth gradients. info.light_refined_cells counts those cells and
    info.bytes reports the memory; a negative threshold refines only where
    geometry is (the thesis).
 
@@ -163,27 +167,38 @@
    the built-in BVH) for its hit distance. IMPORTANT sampling always uses a
    small internal BVH over the IMPORTANT triangles, also with desc.trace.
 
-   Leak-safe queries (the default weighting, VISIBILITY). Each sample keeps,
-   per texel of an n x n octahedral map (desc.visibility_resolution, default
-   16), the mean and mean square distance its rays travelled, averaged with a
-   cos^p lobe around the texel (p ~ 50 at 16 x 16). A query weighs each
-   corner by its trilinear weight times (Majercik et al. 2019, DDGI)
-   ((1 + n . toward the sample) / 2)^2 + 0.2 and, beyond the mean distance
-   mu, the Chebyshev bound (sigma^2 / (sigma^2 + (r - mu)^2))^3, and
-   renormalises; r is the distance from the sample to the query point moved
-   info.normal_bias (desc.normal_bias, default 0.02, times the finest sample
-   spacing) along the query direction. The weighting needs hit distances:
-   without triangles every weight is 1 and only the backface term remains.
+   Leak-safe queries (the default weighting, VISIBILITY). Each sample keeps
+   what its rays saw of the surfaces around it, per texel of an n x n
+   octahedral map (desc.visibility_resolution, default 16): where DDGI
+   (Majercik et al. 2019) keeps the mean and mean square hit distance, this
+   keeps a least-squares fit of the inverse hit distance s = 1 / d over a
+   cos^p lobe around the texel (p ~ 50 at 16 x 16), s(w) = g . w, and the
+   variance the fit leaves. 1 / d of a plane is exactly linear in the
+   direction, so a wall is predicted exactly at any angle, however close the
+   sample stands to it, where averaged distances blur it by the lobe's
+   width. A query weighs each corner by its trilinear weight times
+   ((1 + n . toward the sample) / 2)^2 + 0.2 (DDGI's backface term) and,
+   when the test point lies beyond the predicted surface (1/r < g . w), the
+   Chebyshev bound (var / (var + (g . w - 1/r)^2))^3; weights under 0.2 fade
+   as w^3 / 0.04 and the weights are renormalised. The test point is the
+   query point moved info.normal_bias (desc.normal_bias, default 0.02, times
+   the finest sample spacing) along the query direction. When no corner is
+   visible, or an input is NaN, the plain weights stand. Without triangles
+   no sample sees a surface: only the backface term remains.
    IRRVOL_WEIGHTING_TRILINEAR is the thesis's plain trilinear interpolation.
+   Two closed rooms behind a 2 cm wall, one lit, one dark: the leak-safe
+   query gives 0.00 % of the lit side 1 cm and 10 cm into the dark room
+   where the plain query gives 81 % and 70 % (tests/test_irrvol_levels.c).
 
    Samples inside geometry. A triangle's front is the side from which it
    winds counter-clockwise ((v1 - v0) x (v2 - v0) points out of solids and
-   into rooms); materials flagged TWO_SIDED have two fronts. A sample whose
-   bin rays meet back faces more than a quarter of the time is inside
-   geometry: it moves through the nearest back face it saw to 5 % of its
-   spacing in front of that surface and gathers again (DDGI's relocation,
-   Unity's virtual offset) if that is within 45 % of its spacing; otherwise,
-   or if it is still inside, it is invalid. Invalid samples never enter a
+   into rooms); materials flagged TWO_SIDED have two fronts. A sample that
+   sees back faces over more than a quarter of its sphere (each bin counts
+   its solid angle) is inside geometry: it moves through the nearest back
+   face it saw to 5 % of its spacing in front of that surface and gathers
+   again (DDGI's relocation, Unity's virtual offset) if that is within 45 %
+   of its spacing; otherwise, or if it is still inside, it is invalid.
+   Invalid samples never enter a
    leak-safe query; their stored values are the mean of their valid
    neighbours (dilation), which plain trilinear queries and the harmonics
    use. Scenes whose triangles wind at random make samples invalid: fix the
@@ -314,9 +329,10 @@
    shadows and do not see themselves: irrvol_visibility_ratio gives the
    fraction of each vertex's hemisphere its own mesh leaves open
    (cosine-weighted), a factor for the queried irradiance (thesis 5.1.3,
-   6.1.3). Leak prevention is statistical (a Chebyshev bound on distances
-   averaged over a texel): a wall thinner than the normal bias, or seen
-   very obliquely from far samples, can still let a little light through.
+   6.1.3). Leak prevention is statistical where the surfaces around a
+   sample are not planar within a texel's lobe (edges, curved objects):
+   there the fit's variance softens the test and a little light can pass;
+   a wall thinner than the normal bias can let light through as well.
    Harmonics of order 2 cannot hold sharp lobes: high moments and small
    bright lights lose detail in them (the bins keep it).
 
@@ -539,8 +555,9 @@ typedef struct irrvol_gpu_layout {
     uint32_t ids_at;                 /* index: the tables of sample ids, side^3 per cell, x fastest */
     uint32_t parents_at;             /* index: 4 first-level parents per hanging sample */
     uint32_t origins_at;             /* data: per sample xyz of its origin and 1 (valid) or 0 (invalid) */
-    uint32_t visibility_at;          /* data: per sample before the hanging ones, n x n texels x (mean, mean
-                                        square) hit distance, row-major octahedral */
+    uint32_t visibility_at;          /* data: per sample before the hanging ones, (n + 2)^2 texels, row-major
+                                        octahedral with a border of mirrored texels, each the fit of the
+                                        inverse hit distance: gradient xyz and residual variance */
     uint32_t sh_at;                  /* data: per sample, coefficients x rgb of the irradiance */
     uint32_t parent_weights_at;      /* data: 4 weights per hanging sample */
 } irrvol_gpu_layout;
@@ -666,6 +683,15 @@ IRRVOL_API const char *irrvol_result_string(irrvol_result r);
 #  define IRRVOL__PREFETCH(p) ((void)(p))
 #endif
 #define IRRVOL__AHEAD 8   /* queries prepared ahead in irrvol_query_many */
+
+/* SSE2 (every x86-64 compiler offers it) computes four visibility weights
+   and the rgb sums at once; the portable scalar code computes the same
+   operations in the same order, so both give the same bits.
+   IRRVOL_NO_SIMD keeps to the scalar code. */
+#if !defined(IRRVOL_NO_SIMD) && (defined(__SSE2__) || defined(_M_X64) || (defined(_M_IX86_FP) && _M_IX86_FP >= 2))
+#  include <emmintrin.h>
+#  define IRRVOL__SSE2 1
+#endif
 
 #if defined(__cplusplus)
 #  if defined(__GNUC__) || defined(__clang__) || defined(_MSC_VER)
@@ -1556,8 +1582,10 @@ struct irrvol {
     float *sh;             /* per sample 9 coefficients x rgb of the irradiance, l <= 2 */
     uint32_t vis_res;      /* n: n x n octahedral visibility texels per sample */
     uint32_t texels;       /* n^2 */
-    float *visibility;     /* per sample before hanging_begin: texels x the fit of the inverse hit distance,
-                              gradient xyz and residual variance (section 13) */
+    uint32_t map_texels;   /* (n + 2)^2: the map with a border of mirrored texels, as stored */
+    float *visibility;     /* per sample before hanging_begin: an (n + 2)^2 map of the fit of the inverse hit
+                              distance, gradient xyz and residual variance (section 13), its border the
+                              mirrored texels across the octahedral square's edges */
     float bias;            /* the visibility test point moves this far along the query direction */
     uint64_t rays;
     uint32_t degenerate, invalid_count, relocated_count;
@@ -1824,16 +1852,18 @@ static irrvol_result irrvol__alloc_samples(irrvol *v, int keep_radiance)
 {
     const irrvol_allocator *a = &v->allocator;
     uint64_t floats = (uint64_t)v->sample_count * v->bins * 3;
-    uint64_t vis = (uint64_t)v->hanging_begin * v->texels * 4;
+    uint64_t vis = (uint64_t)v->hanging_begin * v->map_texels * 4;
     if (floats > SIZE_MAX / sizeof(float) || vis > SIZE_MAX / sizeof(float)) return IRRVOL_ERROR_OUT_OF_MEMORY;
     v->irradiance = (float *)irrvol__alloc_array(a, (size_t)floats + 1, sizeof(float));
     if (keep_radiance) v->radiance = (float *)irrvol__alloc_array(a, (size_t)floats, sizeof(float));
-    v->sh = (float *)irrvol__alloc_array(a, v->sample_count, IRRVOL__SH_FLOATS * sizeof(float));
+    v->sh = (float *)irrvol__alloc_array(a, (size_t)v->sample_count * IRRVOL__SH_FLOATS + 1, sizeof(float));
     v->origins = (float *)irrvol__alloc_array(a, v->sample_count, 4 * sizeof(float));
     v->visibility = (float *)irrvol__alloc_array(a, (size_t)vis, sizeof(float));
     if (!v->irradiance || (keep_radiance && !v->radiance) || !v->sh || !v->origins || !v->visibility)
         return IRRVOL_ERROR_OUT_OF_MEMORY;
-    v->irradiance[floats] = 0.0f;   /* a query may load one float past the last sample's rgb */
+    /* the rgb sums load four floats at a time: one past the last sample's */
+    v->irradiance[floats] = 0.0f;
+    v->sh[(size_t)v->sample_count * IRRVOL__SH_FLOATS] = 0.0f;
     return IRRVOL_OK;
 }
 
@@ -1844,7 +1874,7 @@ static size_t irrvol__bytes(const irrvol *v)
     return sizeof *v + v->cell_count * (sizeof(irrvol__cell) + 1) + v->id_count * sizeof(uint32_t) +
            (size_t)v->sample_count * (7 * sizeof(float) + IRRVOL__SH_FLOATS * sizeof(float) +
                                       per_sample * (v->radiance ? 2 : 1)) +
-           hanging * 4 * (sizeof(uint32_t) + sizeof(float)) + (size_t)v->hanging_begin * v->texels * 4 * sizeof(float);
+           hanging * 4 * (sizeof(uint32_t) + sizeof(float)) + (size_t)v->hanging_begin * v->map_texels * 4 * sizeof(float);
 }
 
 IRRVOL_API void irrvol_destroy(irrvol *vol)
@@ -1875,6 +1905,23 @@ static irrvol *irrvol__create(const irrvol_allocator *a)
     return v;
 }
 
+/* Fills the border of one sample's (n + 2)^2 visibility map from its
+   interior: past an edge of the octahedral square lies the mirrored texel
+   of the same edge (irrvol__oct_texel), so a bilinear lookup anywhere in
+   the square reads four stored texels and needs no wrapping. */
+static void irrvol__map_border(const irrvol *v, float *map)
+{
+    int n = (int)v->vis_res, w = n + 2, i, j;
+    for (j = 0; j < w; j++)
+        for (i = 0; i < w; i++) {
+            uint32_t from;
+            if (i > 0 && i <= n && j > 0 && j <= n) continue;
+            from = irrvol__oct_texel(i - 1, j - 1, n);
+            memcpy(map + 4 * (size_t)(j * w + i), map + 4 * ((from / (uint32_t)n + 1) * (uint32_t)w + from % (uint32_t)n + 1),
+                   4 * sizeof(float));
+        }
+}
+
 /* Volume-wide settings that follow from the resolutions. */
 static void irrvol__set_resolutions(irrvol *v, uint32_t k, uint32_t vis_res)
 {
@@ -1883,6 +1930,7 @@ static void irrvol__set_resolutions(irrvol *v, uint32_t k, uint32_t vis_res)
     v->kf = (float)k;
     v->vis_res = vis_res;
     v->texels = vis_res * vis_res;
+    v->map_texels = (vis_res + 2) * (vis_res + 2);
 }
 
 /* ======================================================================
@@ -2738,7 +2786,7 @@ static void irrvol__store_sample(const irrvol__build *b, uint32_t s, const irrvo
     const irrvol *v = b->vol;
     const irrvol__sink *k = &b->sink;
     uint32_t bins = v->bins, bin, j, t;
-    float *vis = k->visibility + (size_t)s * v->texels * 4;
+    float *vis = k->visibility + (size_t)s * v->map_texels * 4;
     int c;
     irrvol__matrix_product(b->weights, bins, bins, sc->radiance, sc->irradiance, sc->rows);
     irrvol__matrix_product(b->sh_weights, bins, IRRVOL__SH_COEFFS, sc->radiance, sc->sh, sc->rows);
@@ -2758,10 +2806,12 @@ static void irrvol__store_sample(const irrvol__build *b, uint32_t s, const irrvo
                 sc->sh[(size_t)c * IRRVOL__SH_COEFFS + j] + sc->sh_direct[(size_t)c * IRRVOL__SH_COEFFS + j];
     for (t = 0; t < v->texels; t++) {   /* the fit: g = (sum lobe w w^T)^-1 sum lobe s w, and its residual */
         const float *m = b->vis_inverse + 9 * (size_t)t, *bt = sc->moments + 4 * (size_t)t;
-        float mean2 = sc->moments[4 * (size_t)v->texels + 4 * (size_t)t + 3], *out = vis + 4 * (size_t)t;
+        float mean2 = sc->moments[4 * (size_t)v->texels + 4 * (size_t)t + 3];
+        float *out = vis + 4 * ((t / v->vis_res + 1) * (v->vis_res + 2) + t % v->vis_res + 1);
         for (c = 0; c < 3; c++) out[c] = m[3 * c] * bt[0] + m[3 * c + 1] * bt[1] + m[3 * c + 2] * bt[2];
         out[3] = irrvol__maxf(mean2 - (out[0] * bt[0] + out[1] * bt[1] + out[2] * bt[2]), 0.0f);
     }
+    irrvol__map_border(v, vis);
 }
 
 /* One sample: gather (4.2.2); a sample that sees back faces over more than
@@ -3050,7 +3100,7 @@ static irrvol_result irrvol__sink_alloc(irrvol__build *b, irrvol__sink *k, uint3
     if (b->desc->keep_radiance) k->radiance = (float *)irrvol__alloc_array(a, (size_t)count * v->bins, 3 * sizeof(float));
     k->sh = (float *)irrvol__alloc_array(a, count, IRRVOL__SH_FLOATS * sizeof(float));
     k->origins = (float *)irrvol__alloc_array(a, count, 4 * sizeof(float));
-    k->visibility = (float *)irrvol__alloc_array(a, (size_t)count * v->texels, 4 * sizeof(float));
+    k->visibility = (float *)irrvol__alloc_array(a, (size_t)count * v->map_texels, 4 * sizeof(float));
     k->rays = (uint32_t *)irrvol__alloc_array(a, count, sizeof(uint32_t));
     k->state = (unsigned char *)irrvol__alloc(a, count);
     if (!k->irradiance || (b->desc->keep_radiance && !k->radiance) || !k->sh || !k->origins || !k->visibility ||
@@ -3235,7 +3285,7 @@ static void irrvol__take_first_level(irrvol *v, const irrvol__sink *t, irrvol__s
     }
     memcpy(k->sh, t->sh, (size_t)n * IRRVOL__SH_FLOATS * sizeof(float));
     memcpy(k->origins, t->origins, (size_t)n * 4 * sizeof(float));
-    memcpy(k->visibility, t->visibility, (size_t)n * v->texels * 4 * sizeof(float));
+    memcpy(k->visibility, t->visibility, (size_t)n * v->map_texels * 4 * sizeof(float));
     memcpy(k->rays, t->rays, (size_t)n * sizeof(uint32_t));
     memcpy(k->state, t->state, n);
 }
@@ -3478,70 +3528,160 @@ IRRVOL__HOT void irrvol__bilinear_bins(const irrvol *v, float u, float t, uint32
     w[3] = tu * tv;
 }
 
-/* What sample s knows of the surfaces toward d (any length): the fit of
-   the inverse hit distance around that direction, bilinear between the four
-   nearest octahedral texels: g (1 / s = g . w predicts the distance along
-   the unit direction w) and the residual variance var of the inverse
-   distances the fit leaves. */
-IRRVOL__HOT void irrvol__visibility_fit(const irrvol *v, uint32_t s, float dx, float dy, float dz, float g[3],
-                                        float *var)
-{
-    const float *m = v->visibility + (size_t)s * v->texels * 4;
-    int n = (int)v->vis_res, i0, j0, k;
-    float u, t, fu, ft, w[4];
-    uint32_t at[4];
-    irrvol__oct_encode(dx, dy, dz, &u, &t);
-    u = u * (float)n - 0.5f;                  /* in [-0.5, n - 0.5] */
-    t = t * (float)n - 0.5f;
-    i0 = (int)(u + 1.0f) - 1;                 /* floor for u > -1 */
-    j0 = (int)(t + 1.0f) - 1;
-    fu = u - (float)i0;
-    ft = t - (float)j0;
-    at[0] = 4 * irrvol__oct_texel(i0, j0, n);
-    at[1] = 4 * irrvol__oct_texel(i0 + 1, j0, n);
-    at[2] = 4 * irrvol__oct_texel(i0, j0 + 1, n);
-    at[3] = 4 * irrvol__oct_texel(i0 + 1, j0 + 1, n);
-    w[0] = (1.0f - fu) * (1.0f - ft);
-    w[1] = fu * (1.0f - ft);
-    w[2] = (1.0f - fu) * ft;
-    w[3] = fu * ft;
-    g[0] = g[1] = g[2] = *var = 0.0f;
-    for (k = 0; k < 4; k++) {
-        const float *x = m + at[k];
-        g[0] += w[k] * x[0]; g[1] += w[k] * x[1]; g[2] += w[k] * x[2];
-        *var += w[k] * x[3];
-    }
-}
-
 /* The visibility weight of sample s for the test point x of a surface
    with unit normal n, after DDGI (Majercik et al. 2019):
-   - backface: ((dot(to the sample, n) + 1) / 2)^2 + 0.2, samples behind
-     the surface count less;
-   - Chebyshev: the sample predicts the inverse distance of the surface
-     toward x as mu = g . w (section 13's fit, exact for a plane: 1/d of a
-     plane is linear in the direction), with variance var; a point beyond
-     it, 1/r < mu, is visible with probability at most
-     var / (var + (mu - 1/r)^2), cubed: a sample behind a wall, however
-     thin and however oblique, all but drops out;
-   - weights under 0.2 fade as w^3 / 0.04, invalid samples weigh 0. */
+   - backface: (dot(to the sample, n) + 1) / 2 + 0.2, samples behind the
+     surface count less (DDGI squares the first term; unsquared it bends
+     the trilinear weights less where no surface is: on the office, the
+     relative L1 error of random queries is 4.9 % against 5.9 %);
+   - Chebyshev: the sample's fit of the inverse hit distance around the
+     direction w toward x (section 13, bilinear between the four nearest
+     texels of its bordered octahedral map) predicts the surface there at
+     1 / (g . w), exactly for a plane; a point beyond it, 1/r < g . w, is
+     visible with probability at most var / (var + (g . w - 1/r)^2), cubed:
+     a sample behind a wall, however thin and however oblique, all but
+     drops out;
+   - weights under 0.2 fade as w^3 / 0.04, invalid samples weigh 0.
+   This scalar code defines the weight; irrvol__visibility4 computes four
+   with SSE2 in the same operations and order, and the GLSL follows it. */
 IRRVOL__HOT float irrvol__visibility_weight(const irrvol *v, uint32_t s, const float x[3], const float n[3])
 {
-    const float *o = v->origins + 4 * (size_t)s;
-    float dx = x[0] - o[0], dy = x[1] - o[1], dz = x[2] - o[2];
-    float r = sqrtf(dx * dx + dy * dy + dz * dz), w = 1.0f, g[3], var;
-    if (r > 0.0f) {
-        float beyond;
-        w = 0.5f - 0.5f * (dx * n[0] + dy * n[1] + dz * n[2]) / r;
-        w = w * w + 0.2f;
-        irrvol__visibility_fit(v, s, dx, dy, dz, g, &var);
-        beyond = (g[0] * dx + g[1] * dy + g[2] * dz - 1.0f) / r;   /* mu - 1/r */
-        if (beyond > 0.0f) {
-            float den = var + beyond * beyond, cheb = den > 0.0f ? var / den : 1.0f;
-            w *= cheb * cheb * cheb;
-        }
-        if (w < 0.2f) w *= w * w * 25.0f;
+    const float *o = v->origins + 4 * (size_t)s, *m, *t00, *t01;
+    float dx = x[0] - o[0], dy = x[1] - o[1], dz = x[2] - o[2], fn = (float)v->vis_res;
+    float r2 = dx * dx + dy * dy + dz * dz, r, inv_r, w, a, inv_a, px, py, u, t, fu, ft, g[4], gd, beyond;
+    int i0, j0, c;
+    if (!(r2 > 0.0f)) return o[3];
+    r = sqrtf(r2);
+    inv_r = 1.0f / r;
+    w = 0.5f - 0.5f * ((dx * n[0] + dy * n[1] + dz * n[2]) * inv_r);
+    w = w + 0.2f;
+    /* the octahedral map: direction -> [0.5, n + 0.5] in the bordered map */
+    a = fabsf(dx) + fabsf(dy) + fabsf(dz);
+    inv_a = 1.0f / a;
+    px = dx * inv_a;
+    py = dy * inv_a;
+    if (dz < 0.0f) {
+        float qx = (1.0f - fabsf(py)) * (px < 0.0f ? -1.0f : 1.0f);
+        py = (1.0f - fabsf(px)) * (py < 0.0f ? -1.0f : 1.0f);
+        px = qx;
     }
+    u = irrvol__minf(irrvol__maxf((px * 0.5f + 0.5f) * fn + 0.5f, 0.5f), fn + 0.5f);
+    t = irrvol__minf(irrvol__maxf((py * 0.5f + 0.5f) * fn + 0.5f, 0.5f), fn + 0.5f);
+    i0 = (int)u;
+    j0 = (int)t;
+    fu = u - (float)i0;
+    ft = t - (float)j0;
+    m = v->visibility + ((size_t)s * v->map_texels + (size_t)j0 * (v->vis_res + 2) + (size_t)i0) * 4;
+    t00 = m;
+    t01 = m + 4 * (v->vis_res + 2);
+    for (c = 0; c < 4; c++)
+        g[c] = (t00[c] * (1.0f - fu) + t00[4 + c] * fu) * (1.0f - ft) + (t01[c] * (1.0f - fu) + t01[4 + c] * fu) * ft;
+    gd = g[0] * dx + g[1] * dy + g[2] * dz;
+    beyond = (gd - 1.0f) * inv_r;   /* g . w - 1/r */
+    if (beyond > 0.0f) {
+        float den = g[3] + beyond * beyond, cheb = den > 0.0f ? g[3] / den : 1.0f;
+        w = w * (cheb * cheb * cheb);
+    }
+    if (w < 0.2f) w = w * (w * w * 25.0f);
     return w * o[3];
+}
+
+#ifdef IRRVOL__SSE2
+IRRVOL__HOT __m128 irrvol__select(__m128 mask, __m128 a, __m128 b)
+{
+    return _mm_or_ps(_mm_and_ps(mask, a), _mm_andnot_ps(mask, b));
+}
+
+/* The test point and normal of irrvol__visibility4, each coordinate in
+   all four lanes. */
+typedef struct irrvol__point4 { __m128 x, y, z, nx, ny, nz; } irrvol__point4;
+
+IRRVOL__HOT irrvol__point4 irrvol__point4_set(const float x[3], const float n[3])
+{
+    irrvol__point4 p;
+    p.x = _mm_set1_ps(x[0]); p.y = _mm_set1_ps(x[1]); p.z = _mm_set1_ps(x[2]);
+    p.nx = _mm_set1_ps(n[0]); p.ny = _mm_set1_ps(n[1]); p.nz = _mm_set1_ps(n[2]);
+    return p;
+}
+
+/* irrvol__visibility_weight of samples s[0..3] at once. */
+IRRVOL__HOT void irrvol__visibility4(const irrvol *v, const uint32_t s[4], const irrvol__point4 *p, float out[4])
+{
+    const __m128 one = _mm_set1_ps(1.0f), half = _mm_set1_ps(0.5f), zero = _mm_setzero_ps();
+    const __m128 sign = _mm_set1_ps(-0.0f), fn = _mm_set1_ps((float)v->vis_res);
+    __m128 ox = _mm_loadu_ps(v->origins + 4 * (size_t)s[0]), oy = _mm_loadu_ps(v->origins + 4 * (size_t)s[1]);
+    __m128 oz = _mm_loadu_ps(v->origins + 4 * (size_t)s[2]), ok = _mm_loadu_ps(v->origins + 4 * (size_t)s[3]);
+    __m128 dx, dy, dz, r2, pos, inv_r, w, a, inv_a, px, py, neg, qx, qy, u, t, fu, ft, g0, g1, g2, g3, beyond, den, cheb;
+    __m128i i0, j0;
+    int iu[4], ju[4], k;
+    float fus[4], fts[4];
+    _MM_TRANSPOSE4_PS(ox, oy, oz, ok);
+    dx = _mm_sub_ps(p->x, ox);
+    dy = _mm_sub_ps(p->y, oy);
+    dz = _mm_sub_ps(p->z, oz);
+    r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+    pos = _mm_cmpgt_ps(r2, zero);
+    inv_r = _mm_div_ps(one, _mm_sqrt_ps(r2));
+    w = _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, p->nx), _mm_mul_ps(dy, p->ny)), _mm_mul_ps(dz, p->nz));
+    w = _mm_sub_ps(half, _mm_mul_ps(half, _mm_mul_ps(w, inv_r)));
+    w = _mm_add_ps(w, _mm_set1_ps(0.2f));
+    a = _mm_add_ps(_mm_add_ps(_mm_andnot_ps(sign, dx), _mm_andnot_ps(sign, dy)), _mm_andnot_ps(sign, dz));
+    inv_a = _mm_div_ps(one, a);
+    px = _mm_mul_ps(dx, inv_a);
+    py = _mm_mul_ps(dy, inv_a);
+    neg = _mm_cmplt_ps(dz, zero);
+    qx = _mm_mul_ps(_mm_sub_ps(one, _mm_andnot_ps(sign, py)), irrvol__select(_mm_cmplt_ps(px, zero), _mm_set1_ps(-1.0f), one));
+    qy = _mm_mul_ps(_mm_sub_ps(one, _mm_andnot_ps(sign, px)), irrvol__select(_mm_cmplt_ps(py, zero), _mm_set1_ps(-1.0f), one));
+    px = irrvol__select(neg, qx, px);
+    py = irrvol__select(neg, qy, py);
+    u = _mm_add_ps(_mm_mul_ps(_mm_add_ps(_mm_mul_ps(px, half), half), fn), half);
+    t = _mm_add_ps(_mm_mul_ps(_mm_add_ps(_mm_mul_ps(py, half), half), fn), half);
+    u = _mm_min_ps(_mm_max_ps(u, half), _mm_add_ps(fn, half));   /* as irrvol__minf / maxf: NaN gives the bound */
+    t = _mm_min_ps(_mm_max_ps(t, half), _mm_add_ps(fn, half));
+    i0 = _mm_cvttps_epi32(u);
+    j0 = _mm_cvttps_epi32(t);
+    fu = _mm_sub_ps(u, _mm_cvtepi32_ps(i0));
+    ft = _mm_sub_ps(t, _mm_cvtepi32_ps(j0));
+    _mm_storeu_si128((__m128i *)(void *)iu, i0);
+    _mm_storeu_si128((__m128i *)(void *)ju, j0);
+    _mm_storeu_ps(fus, fu);
+    _mm_storeu_ps(fts, ft);
+    {   /* each lane's four texels, blended: (gx, gy, gz, var) */
+        __m128 lane[4];
+        for (k = 0; k < 4; k++) {
+            const float *m = v->visibility + ((size_t)s[k] * v->map_texels + (size_t)ju[k] * (v->vis_res + 2) + (size_t)iu[k]) * 4;
+            const float *m1 = m + 4 * (v->vis_res + 2);
+            __m128 su = _mm_set1_ps(fus[k]), sv = _mm_set1_ps(fts[k]);
+            __m128 cu = _mm_sub_ps(one, su), cv = _mm_sub_ps(one, sv);
+            __m128 r0 = _mm_add_ps(_mm_mul_ps(_mm_loadu_ps(m), cu), _mm_mul_ps(_mm_loadu_ps(m + 4), su));
+            __m128 r1 = _mm_add_ps(_mm_mul_ps(_mm_loadu_ps(m1), cu), _mm_mul_ps(_mm_loadu_ps(m1 + 4), su));
+            lane[k] = _mm_add_ps(_mm_mul_ps(r0, cv), _mm_mul_ps(r1, sv));
+        }
+        g0 = lane[0]; g1 = lane[1]; g2 = lane[2]; g3 = lane[3];
+        _MM_TRANSPOSE4_PS(g0, g1, g2, g3);
+    }
+    beyond = _mm_add_ps(_mm_add_ps(_mm_mul_ps(g0, dx), _mm_mul_ps(g1, dy)), _mm_mul_ps(g2, dz));
+    beyond = _mm_mul_ps(_mm_sub_ps(beyond, one), inv_r);
+    den = _mm_add_ps(g3, _mm_mul_ps(beyond, beyond));
+    cheb = irrvol__select(_mm_cmpgt_ps(den, zero), _mm_div_ps(g3, den), one);
+    cheb = _mm_mul_ps(_mm_mul_ps(cheb, cheb), cheb);
+    w = irrvol__select(_mm_cmpgt_ps(beyond, zero), _mm_mul_ps(w, cheb), w);
+    w = irrvol__select(_mm_cmplt_ps(w, _mm_set1_ps(0.2f)), _mm_mul_ps(w, _mm_mul_ps(_mm_mul_ps(w, w), _mm_set1_ps(25.0f))), w);
+    w = irrvol__select(pos, _mm_mul_ps(w, ok), ok);
+    _mm_storeu_ps(out, w);
+}
+#endif
+
+/* The visibility weights of count samples into out. */
+IRRVOL__HOT void irrvol__visibility_weights(const irrvol *v, const uint32_t *s, uint32_t count, const float x[3],
+                                            const float n[3], float *out)
+{
+    uint32_t i = 0;
+#ifdef IRRVOL__SSE2
+    irrvol__point4 p = irrvol__point4_set(x, n);
+    for (; i + 4 <= count; i += 4) irrvol__visibility4(v, s + i, &p, out + i);
+#endif
+    for (; i < count; i++) out[i] = irrvol__visibility_weight(v, s[i], x, n);
 }
 
 /* A query reduced to the samples it reads, their weights and the bins:
@@ -3557,33 +3697,24 @@ typedef struct irrvol__prepared {
     float scale;       /* 1 / the sum of the weights */
 } irrvol__prepared;
 
-/* The plain trilinear terms: the eight corners as they are. */
-IRRVOL__HOT void irrvol__plain_terms(const uint32_t ids[8], const float w[8], irrvol__prepared *q)
-{
-    uint32_t i;
-    for (i = 0; i < 8; i++) { q->id[i] = ids[i]; q->w[i] = w[i]; }
-    q->count = 8;
-    q->scale = 1.0f;
-}
-
-/* Leak-safe weights: each corner's trilinear weight times its visibility
-   for the test point pos + bias * n, a hanging corner replaced by its
-   parents (section 9), renormalised. When no sample is visible (every
-   corner invalid) or an input is NaN, the plain trilinear weights stand. */
-IRRVOL__HOT void irrvol__visibility_terms(const irrvol *v, const uint32_t ids[8], const float w[8], const float pos[3],
-                                          const float normal[3], irrvol__prepared *q)
+/* Leak-safe weights: each corner's trilinear weight (q holds the eight)
+   times its visibility for the test point pos + bias * n, a hanging corner
+   replaced by its parents (section 9), renormalised. When no sample is
+   visible (every corner invalid) or an input is NaN, the plain trilinear
+   weights stand. */
+IRRVOL__HOT void irrvol__visibility_terms(const irrvol *v, const float pos[3], const float normal[3], irrvol__prepared *q)
 {
     float n[3], x[3], len2 = normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2], inv, sum = 0.0f;
-    uint32_t i, j, m = 0;
+    float vis[IRRVOL__MAX_TERMS], w[8];
+    uint32_t i, j, m = 0, ids[8];
     inv = len2 > 0.0f ? 1.0f / sqrtf(len2) : 0.0f;
     for (j = 0; j < 3; j++) {
         n[j] = normal[j] * inv;
         x[j] = pos[j] + v->bias * n[j];
     }
-    if (!irrvol__finite3(x) || !irrvol__finite3(n)) {   /* NaN or infinite: plain */
-        irrvol__plain_terms(ids, w, q);
-        return;
-    }
+    if (!irrvol__finite3(x) || !irrvol__finite3(n)) return;   /* NaN or infinite: the plain weights stand */
+    memcpy(ids, q->id, sizeof ids);
+    memcpy(w, q->w, sizeof w);
     for (i = 0; i < 8; i++) {
         if (ids[i] >= v->hanging_begin) {
             size_t h = 4 * (size_t)(ids[i] - v->hanging_begin);
@@ -3597,15 +3728,17 @@ IRRVOL__HOT void irrvol__visibility_terms(const irrvol *v, const uint32_t ids[8]
             q->w[m++] = w[i];
         }
     }
+    irrvol__visibility_weights(v, q->id, m, x, n, vis);
     for (i = 0; i < m; i++) {
-        q->w[i] *= irrvol__visibility_weight(v, q->id[i], x, n);
+        q->w[i] *= vis[i];
         sum += q->w[i];
     }
     if (sum >= FLT_MIN && sum <= FLT_MAX) {   /* 1 / sum is finite */
         q->count = m;
         q->scale = 1.0f / sum;
-    } else {
-        irrvol__plain_terms(ids, w, q);
+    } else {   /* the plain weights */
+        memcpy(q->id, ids, sizeof ids);
+        memcpy(q->w, w, sizeof w);
     }
 }
 
@@ -3614,12 +3747,11 @@ IRRVOL__HOT void irrvol__visibility_terms(const irrvol *v, const uint32_t ids[8]
 IRRVOL__HOT void irrvol__prepare_in_cell(const irrvol *v, irrvol_weighting weighting, const uint32_t c[3],
                                          const float o[3], const float pos[3], const float normal[3], irrvol__prepared *q)
 {
-    uint32_t ids[8];
-    float w[8];
-    irrvol__cell_corners(v, c, o, ids, w);
+    irrvol__cell_corners(v, c, o, q->id, q->w);   /* the plain trilinear terms */
+    q->count = 8;
+    q->scale = 1.0f;
     if (weighting == IRRVOL_WEIGHTING_DEFAULT) weighting = v->weighting;
-    if (weighting == IRRVOL_WEIGHTING_VISIBILITY) irrvol__visibility_terms(v, ids, w, pos, normal, q);
-    else irrvol__plain_terms(ids, w, q);
+    if (weighting == IRRVOL_WEIGHTING_VISIBILITY) irrvol__visibility_terms(v, pos, normal, q);
 }
 
 /* The bin (NEAREST) or four bins (BILINEAR) of a direction. */
@@ -3644,26 +3776,60 @@ IRRVOL__HOT void irrvol__prepare(const irrvol *v, irrvol_filter filter, irrvol_w
 {
     uint32_t c[3];
     float o[3];
+    irrvol__direction_bins(v, filter, dir, q);
     irrvol__cell_coords(v, pos, c, o);
     irrvol__prepare_in_cell(v, weighting, c, o, pos, normal, q);
-    irrvol__direction_bins(v, filter, dir, q);
 }
 
-/* sum over bins and samples of weight x value, times the scale. */
+/* sum over samples of weight x (sum over bins of bin weight x value),
+   times the scale. NEAREST reads one bin, BILINEAR blends four per sample
+   first. With SSE2 the rgb of a value and the next float share a register:
+   the same products and sums. */
 IRRVOL__HOT void irrvol__finish(const irrvol *v, const irrvol__prepared *q, float rgb[3])
 {
     size_t stride = (size_t)v->sample_count * 3;   /* one bin of all samples */
-    float r = 0.0f, g = 0.0f, b = 0.0f;
-    uint32_t k, i;
-    for (k = 0; k < q->bins; k++) {
-        const float *base = v->irradiance + q->bin[k] * stride;
+    const float *b0 = v->irradiance + q->bin[0] * stride, *b1 = b0, *b2 = b0, *b3 = b0;
+    uint32_t i;
+#ifdef IRRVOL__SSE2
+    __m128 sum = _mm_setzero_ps();
+    float out[4];
+    if (q->bins == 1) {
+        for (i = 0; i < q->count; i++)
+            sum = _mm_add_ps(sum, _mm_mul_ps(_mm_set1_ps(q->w[i]), _mm_loadu_ps(b0 + 3 * (size_t)q->id[i])));
+    } else {
+        __m128 w0 = _mm_set1_ps(q->bw[0]), w1 = _mm_set1_ps(q->bw[1]), w2 = _mm_set1_ps(q->bw[2]), w3 = _mm_set1_ps(q->bw[3]);
+        b1 = v->irradiance + q->bin[1] * stride;
+        b2 = v->irradiance + q->bin[2] * stride;
+        b3 = v->irradiance + q->bin[3] * stride;
         for (i = 0; i < q->count; i++) {
-            const float *p = base + 3 * (size_t)q->id[i];
-            float x = q->w[i] * q->bw[k];
-            r += x * p[0]; g += x * p[1]; b += x * p[2];
+            size_t at = 3 * (size_t)q->id[i];
+            __m128 x = _mm_add_ps(_mm_add_ps(_mm_mul_ps(w0, _mm_loadu_ps(b0 + at)), _mm_mul_ps(w1, _mm_loadu_ps(b1 + at))),
+                                  _mm_add_ps(_mm_mul_ps(w2, _mm_loadu_ps(b2 + at)), _mm_mul_ps(w3, _mm_loadu_ps(b3 + at))));
+            sum = _mm_add_ps(sum, _mm_mul_ps(_mm_set1_ps(q->w[i]), x));
         }
     }
-    rgb[0] = r * q->scale; rgb[1] = g * q->scale; rgb[2] = b * q->scale;
+    _mm_storeu_ps(out, _mm_mul_ps(sum, _mm_set1_ps(q->scale)));
+    rgb[0] = out[0]; rgb[1] = out[1]; rgb[2] = out[2];
+#else
+    float sum[3] = {0.0f, 0.0f, 0.0f};
+    int c;
+    if (q->bins != 1) {
+        b1 = v->irradiance + q->bin[1] * stride;
+        b2 = v->irradiance + q->bin[2] * stride;
+        b3 = v->irradiance + q->bin[3] * stride;
+    }
+    for (i = 0; i < q->count; i++) {
+        size_t at = 3 * (size_t)q->id[i];
+        for (c = 0; c < 3; c++) {
+            float x = b0[at + (size_t)c];
+            if (q->bins != 1)
+                x = (q->bw[0] * b0[at + (size_t)c] + q->bw[1] * b1[at + (size_t)c]) +
+                    (q->bw[2] * b2[at + (size_t)c] + q->bw[3] * b3[at + (size_t)c]);
+            sum[c] += q->w[i] * x;
+        }
+    }
+    for (c = 0; c < 3; c++) rgb[c] = sum[c] * q->scale;
+#endif
 }
 
 IRRVOL_API void irrvol_query_filter(const irrvol *vol, irrvol_filter filter, irrvol_weighting weighting,
@@ -3962,7 +4128,7 @@ static irrvol_result irrvol__write_all(const irrvol *v, irrvol__writer *w)
 {
     uint64_t bins = (uint64_t)v->sample_count * v->bins * 3;
     uint64_t payload = IRRVOL__HEADER_FIELDS + v->cell_count + 4 * irrvol__payload_floats(v, v->radiance != NULL);
-    uint32_t k;
+    uint32_t k, s;
     irrvol__crc_init(&w->crc);
     irrvol__put(w, irrvol__magic, 8);
     irrvol__put_u32(w, IRRVOL_FILE_FORMAT_VERSION);
@@ -3987,7 +4153,10 @@ static irrvol_result irrvol__write_all(const irrvol *v, irrvol__writer *w)
     irrvol__put_f32_array(w, v->origins, 4 * (size_t)v->hanging_begin);
     irrvol__put_f32_array(w, v->irradiance, (size_t)bins);
     irrvol__put_f32_array(w, v->sh, (size_t)v->sample_count * IRRVOL__SH_FLOATS);
-    irrvol__put_f32_array(w, v->visibility, (size_t)v->hanging_begin * v->texels * 4);
+    for (s = 0; s < v->hanging_begin; s++)   /* the maps' interiors, row by row: load rebuilds the borders */
+        for (k = 0; k < v->vis_res; k++)
+            irrvol__put_f32_array(w, v->visibility + ((size_t)s * v->map_texels + (k + 1) * (v->vis_res + 2) + 1) * 4,
+                                  4 * (size_t)v->vis_res);
     if (v->radiance) irrvol__put_f32_array(w, v->radiance, (size_t)bins);
     irrvol__put_u32(w, irrvol__crc_final(&w->crc));
     return w->failed ? IRRVOL_ERROR_IO : IRRVOL_OK;
@@ -4059,12 +4228,21 @@ static int irrvol__read_fields(irrvol__reader *r, irrvol *v, uint32_t *flags, ui
     return 0;
 }
 
-/* Every fit's residual variance (each fourth float) is >= 0. */
-static int irrvol__variances_valid(const irrvol *v)
+/* Reads the interiors of the visibility maps (every float finite, every
+   residual variance >= 0) and rebuilds their borders. */
+static int irrvol__read_maps(irrvol__reader *r, irrvol *v)
 {
-    size_t i, n = (size_t)v->hanging_begin * v->texels;
-    for (i = 0; i < n; i++)
-        if (!(v->visibility[4 * i + 3] >= 0.0f)) return 0;
+    uint32_t s, k, t;
+    for (s = 0; s < v->hanging_begin; s++) {
+        float *map = v->visibility + (size_t)s * v->map_texels * 4;
+        for (k = 0; k < v->vis_res; k++) {
+            float *row = map + ((k + 1) * (v->vis_res + 2) + 1) * 4;
+            if (!irrvol__get_floats(r, row, 4 * (size_t)v->vis_res, -FLT_MAX)) return 0;
+            for (t = 0; t < v->vis_res; t++)
+                if (!(row[4 * t + 3] >= 0.0f)) return 0;
+        }
+        irrvol__map_border(v, map);
+    }
     return 1;
 }
 
@@ -4121,8 +4299,7 @@ static irrvol_result irrvol__read_all(irrvol *v, irrvol__reader *r)
     if (!irrvol__get_floats(r, v->origins, 4 * (size_t)v->hanging_begin, -FLT_MAX) || !irrvol__origins_consistent(v) ||
         !irrvol__get_floats(r, v->irradiance, (size_t)v->sample_count * v->bins * 3, -FLT_MAX) ||
         !irrvol__get_floats(r, v->sh, (size_t)v->sample_count * IRRVOL__SH_FLOATS, -FLT_MAX) ||
-        !irrvol__get_floats(r, v->visibility, (size_t)v->hanging_begin * v->texels * 4, -FLT_MAX) ||
-        !irrvol__variances_valid(v) ||
+        !irrvol__read_maps(r, v) ||
         (flags && !irrvol__get_floats(r, v->radiance, (size_t)v->sample_count * v->bins * 3, -FLT_MAX)))
         return IRRVOL_ERROR_CORRUPT_DATA;
     if (r->remaining != 0) return IRRVOL_ERROR_CORRUPT_DATA;   /* payload longer than its contents */
@@ -4242,79 +4419,56 @@ IRRVOL_API const char *irrvol_result_string(irrvol_result r)
 #define IRRVOL__GPU_FORMAT 1u       /* index[0]: the layout's version */
 #define IRRVOL__GPU_HEADER 16u      /* entries of each array's header */
 
-/* Shared GLSL / C text, part 1: octahedral texels and the visibility fit. */
+/* Shared GLSL / C text, part 1: the visibility weight of a sample
+   (irrvol__visibility_weight, operation by operation). */
 #define IRRVOL__GLSL_PART1(X) X( \
 struct IrrvolRGB { float r; float g; float b; }; \
-struct IrrvolFit { float gx; float gy; float gz; float var; }; \
-uint irrvol_oct_texel(int i, int j, int n) \
-{ \
-    if (i < 0) { i = 0; j = n - 1 - j; } else if (i >= n) { i = n - 1; j = n - 1 - j; } \
-    if (j < 0) { j = 0; i = n - 1 - i; } else if (j >= n) { j = n - 1; i = n - 1 - i; } \
-    return IRRVOL_U(j * n + i); \
-} \
-IrrvolFit irrvol_visibility_fit(uint base, int n, float dx, float dy, float dz) \
-{ \
-    float a = IRRVOL_ABS(dx) + IRRVOL_ABS(dy) + IRRVOL_ABS(dz); \
-    float px = a > 0.0f ? dx / a : 0.0f; \
-    float py = a > 0.0f ? dy / a : 0.0f; \
-    if (dz < 0.0f) { \
-        float qx = (1.0f - IRRVOL_ABS(py)) * (px >= 0.0f ? 1.0f : -1.0f); \
-        py = (1.0f - IRRVOL_ABS(px)) * (py >= 0.0f ? 1.0f : -1.0f); \
-        px = qx; \
-    } \
-    float u = (px * 0.5f + 0.5f) * IRRVOL_F(n) - 0.5f; \
-    float t = (py * 0.5f + 0.5f) * IRRVOL_F(n) - 0.5f; \
-    int i0 = IRRVOL_I(u + 1.0f) - 1; \
-    int j0 = IRRVOL_I(t + 1.0f) - 1; \
-    float fu = u - IRRVOL_F(i0); \
-    float ft = t - IRRVOL_F(j0); \
-    uint at[4]; \
-    float w[4]; \
-    at[0] = base + 4u * irrvol_oct_texel(i0, j0, n); \
-    at[1] = base + 4u * irrvol_oct_texel(i0 + 1, j0, n); \
-    at[2] = base + 4u * irrvol_oct_texel(i0, j0 + 1, n); \
-    at[3] = base + 4u * irrvol_oct_texel(i0 + 1, j0 + 1, n); \
-    w[0] = (1.0f - fu) * (1.0f - ft); \
-    w[1] = fu * (1.0f - ft); \
-    w[2] = (1.0f - fu) * ft; \
-    w[3] = fu * ft; \
-    IrrvolFit f; \
-    f.gx = 0.0f; f.gy = 0.0f; f.gz = 0.0f; f.var = 0.0f; \
-    for (uint k = 0u; k < 4u; k++) { \
-        f.gx += w[k] * IRRVOL_DATA(at[k]); \
-        f.gy += w[k] * IRRVOL_DATA(at[k] + 1u); \
-        f.gz += w[k] * IRRVOL_DATA(at[k] + 2u); \
-        f.var += w[k] * IRRVOL_DATA(at[k] + 3u); \
-    } \
-    return f; \
-} \
-)
-
-/* Part 2: a sample's visibility weight and its harmonics toward n. */
-#define IRRVOL__GLSL_PART2(X) X( \
 float irrvol_visibility(uint s, float x, float y, float z, float nx, float ny, float nz) \
 { \
     uint o = IRRVOL_INDEX(11u) + 4u * s; \
     float dx = x - IRRVOL_DATA(o); \
     float dy = y - IRRVOL_DATA(o + 1u); \
     float dz = z - IRRVOL_DATA(o + 2u); \
-    float r = IRRVOL_SQRT(dx * dx + dy * dy + dz * dz); \
-    float w = 1.0f; \
-    if (r > 0.0f) { \
-        uint n = IRRVOL_INDEX(6u); \
-        w = 0.5f - 0.5f * (dx * nx + dy * ny + dz * nz) / r; \
-        w = w * w + 0.2f; \
-        IrrvolFit f = irrvol_visibility_fit(IRRVOL_INDEX(12u) + s * 4u * n * n, IRRVOL_I(n), dx, dy, dz); \
-        float beyond = (f.gx * dx + f.gy * dy + f.gz * dz - 1.0f) / r; \
-        if (beyond > 0.0f) { \
-            float den = f.var + beyond * beyond; \
-            float cheb = den > 0.0f ? f.var / den : 1.0f; \
-            w *= cheb * cheb * cheb; \
-        } \
-        if (w < 0.2f) w *= w * w * 25.0f; \
+    float r2 = dx * dx + dy * dy + dz * dz; \
+    if (!(r2 > 0.0f)) return IRRVOL_DATA(o + 3u); \
+    float inv_r = 1.0f / IRRVOL_SQRT(r2); \
+    float w = 0.5f - 0.5f * ((dx * nx + dy * ny + dz * nz) * inv_r); \
+    w = w + 0.2f; \
+    float inv_a = 1.0f / (IRRVOL_ABS(dx) + IRRVOL_ABS(dy) + IRRVOL_ABS(dz)); \
+    float px = dx * inv_a; \
+    float py = dy * inv_a; \
+    if (dz < 0.0f) { \
+        float qx = (1.0f - IRRVOL_ABS(py)) * (px < 0.0f ? -1.0f : 1.0f); \
+        py = (1.0f - IRRVOL_ABS(px)) * (py < 0.0f ? -1.0f : 1.0f); \
+        px = qx; \
     } \
+    uint n = IRRVOL_INDEX(6u); \
+    float fn = IRRVOL_F(n); \
+    float u = IRRVOL_MIN(IRRVOL_MAX((px * 0.5f + 0.5f) * fn + 0.5f, 0.5f), fn + 0.5f); \
+    float t = IRRVOL_MIN(IRRVOL_MAX((py * 0.5f + 0.5f) * fn + 0.5f, 0.5f), fn + 0.5f); \
+    uint i0 = IRRVOL_U(u); \
+    uint j0 = IRRVOL_U(t); \
+    float fu = u - IRRVOL_F(i0); \
+    float ft = t - IRRVOL_F(j0); \
+    uint m = IRRVOL_INDEX(12u) + 4u * (s * (n + 2u) * (n + 2u) + j0 * (n + 2u) + i0); \
+    uint m1 = m + 4u * (n + 2u); \
+    float g[4]; \
+    for (uint c = 0u; c < 4u; c++) \
+        g[c] = (IRRVOL_DATA(m + c) * (1.0f - fu) + IRRVOL_DATA(m + 4u + c) * fu) * (1.0f - ft) + \
+               (IRRVOL_DATA(m1 + c) * (1.0f - fu) + IRRVOL_DATA(m1 + 4u + c) * fu) * ft; \
+    float beyond = (g[0] * dx + g[1] * dy + g[2] * dz - 1.0f) * inv_r; \
+    if (beyond > 0.0f) { \
+        float den = g[3] + beyond * beyond; \
+        float cheb = den > 0.0f ? g[3] / den : 1.0f; \
+        w = w * (cheb * cheb * cheb); \
+    } \
+    if (w < 0.2f) w = w * (w * w * 25.0f); \
     return w * IRRVOL_DATA(o + 3u); \
 } \
+)
+
+/* Part 2: a sample's harmonics toward n. */
+#define IRRVOL__GLSL_PART2(X) X( \
 IrrvolRGB irrvol_sh_value(uint s, float y0, float y1, float y2, float y3, float y4, float y5, float y6, float y7, \
                           float y8) \
 { \
@@ -4441,7 +4595,8 @@ static const char *const irrvol__glsl_parts[] = {
     "#define IRRVOL_DATA(i) irrvol_data[i]\n"
     "#endif\n"
     "#define IRRVOL_U(x) uint(x)\n#define IRRVOL_I(x) int(x)\n#define IRRVOL_F(x) float(x)\n"
-    "#define IRRVOL_ABS(x) abs(x)\n#define IRRVOL_SQRT(x) sqrt(x)\n#define IRRVOL_MAX(a, b) max(a, b)\n",
+    "#define IRRVOL_ABS(x) abs(x)\n#define IRRVOL_SQRT(x) sqrt(x)\n"
+    "#define IRRVOL_MIN(a, b) ((a) < (b) ? (a) : (b))\n#define IRRVOL_MAX(a, b) ((a) > (b) ? (a) : (b))\n",
     IRRVOL__GLSL_PART1(IRRVOL__GLSL_STRING),
     "\n",
     IRRVOL__GLSL_PART2(IRRVOL__GLSL_STRING),
@@ -4488,7 +4643,7 @@ static int irrvol__gpu_layout(const irrvol *v, uint32_t coeffs, irrvol_gpu_layou
     l->origins_at = (uint32_t)at;
     at += 4 * (uint64_t)v->sample_count;
     l->visibility_at = (uint32_t)(at <= UINT32_MAX ? at : 0);
-    at += (uint64_t)v->hanging_begin * v->texels * 4;
+    at += (uint64_t)v->hanging_begin * v->map_texels * 4;
     l->sh_at = (uint32_t)(at <= UINT32_MAX ? at : 0);
     at += (uint64_t)v->sample_count * 3 * coeffs;
     l->parent_weights_at = (uint32_t)(at <= UINT32_MAX ? at : 0);
@@ -4529,7 +4684,7 @@ static void irrvol__gpu_fill(const irrvol *v, const irrvol_gpu_layout *l, uint32
     memcpy(index + l->ids_at, v->ids, v->id_count * sizeof(uint32_t));
     memcpy(index + l->parents_at, v->parents, 4 * ((size_t)v->sample_count - v->hanging_begin) * sizeof(uint32_t));
     memcpy(data + l->origins_at, v->origins, 4 * (size_t)v->sample_count * sizeof(float));
-    memcpy(data + l->visibility_at, v->visibility, (size_t)v->hanging_begin * v->texels * 4 * sizeof(float));
+    memcpy(data + l->visibility_at, v->visibility, (size_t)v->hanging_begin * v->map_texels * 4 * sizeof(float));
     for (s = 0; s < v->sample_count; s++)
         for (j = 0; j < l->coefficients; j++)
             memcpy(data + l->sh_at + ((size_t)s * l->coefficients + j) * 3, v->sh + (size_t)s * IRRVOL__SH_FLOATS + 3 * j,

@@ -508,6 +508,47 @@ static void test_sh_point_light(void)
     irrvol_destroy(v);
 }
 
+/* The SSE2 weights of four samples at once equal the scalar definition's,
+   bit for bit, on the two rooms' relocated samples and everywhere else. */
+static void test_simd_visibility_is_scalar(void)
+{
+#ifdef IRRVOL__SSE2
+    sc_scene s;
+    irrvol_material m[2];
+    irrvol_desc d;
+    irrvol *v;
+    uint32_t i, differ = 0, visible = 0;
+    two_rooms(&s, m);
+    scene_desc(&d, &s, m, 2);
+    d.resolution = 5;
+    d.visibility_resolution = 6;
+    if (!CHECK_EQ_INT(irrvol_build(&d, &v), IRRVOL_OK)) return;
+    for (i = 0; i < 20000; i++) {
+        float x[3], n[3], four[4];
+        uint32_t id[4], k;
+        set3(x, 8.4f * frand() - 4.2f, 3.2f * frand() - 0.1f, 4.2f * frand() - 0.1f);
+        random_dir(n);
+        for (k = 0; k < 4; k++) id[k] = (uint32_t)(frand() * (float)v->hanging_begin) % v->hanging_begin;
+        if (i % 100 == 0) memcpy(x, v->origins + 4 * (size_t)id[1], 3 * sizeof(float));   /* at a sample: r = 0 */
+        {
+            irrvol__point4 p = irrvol__point4_set(x, n);
+            irrvol__visibility4(v, id, &p, four);
+        }
+        for (k = 0; k < 4; k++) {
+            float one = irrvol__visibility_weight(v, id[k], x, n);
+            differ += memcmp(&one, &four[k], sizeof one) != 0;
+            visible += one > 0.5f;
+        }
+    }
+    test_note("SSE2 visibility weights vs the scalar code: %u of 80,000 differ (%u weights above 0.5)", differ, visible);
+    CHECK_EQ_INT(differ, 0);
+    CHECK(visible > 1000 && visible < 79000);   /* both visible and hidden samples were compared */
+    irrvol_destroy(v);
+#else
+    test_note("no SSE2 here: the scalar code is the only one");
+#endif
+}
+
 int main(int argc, char **argv)
 {
     TEST_INIT(argc, argv);
@@ -519,5 +560,6 @@ int main(int argc, char **argv)
     RUN(test_refinement_by_light_furnace);
     RUN(test_sh_furnace);
     RUN(test_sh_point_light);
+    RUN(test_simd_visibility_is_scalar);
     return test_finish();
 }
