@@ -12,35 +12,18 @@
 /* ---- helpers ------------------------------------------------------------ */
 
 static uint32_t rng_state = 12345u;
-static float frand(void) /* uniform [0, 1) */
-{
-    rng_state = rng_state * 1664525u + 1013904223u;
-    return (float)(rng_state >> 8) * (1.0f / 16777216.0f);
-}
-static void random_dir(float d[3])
-{
-    float z = 2.0f * frand() - 1.0f, phi = 2.0f * (float)PI * frand(), s = sqrtf(1.0f - z * z);
-    d[0] = s * cosf(phi); d[1] = s * sinf(phi); d[2] = z;
-}
-
-static void set3(float *v, float x, float y, float z) { v[0] = x; v[1] = y; v[2] = z; }
+static float frand(void) { return sc_frand(&rng_state); }
+static void random_dir(float d[3]) { sc_random_dir(&rng_state, d); }
 
 static void cube_bounds(irrvol_desc *d, float h)
 {
-    set3(d->bounds_min, -h, -h, -h);
-    set3(d->bounds_max, h, h, h);
+    sc_set3(d->bounds_min, -h, -h, -h);
+    sc_set3(d->bounds_max, h, h, h);
 }
 
 static void scene_desc(irrvol_desc *d, const sc_scene *s, const irrvol_material *m, uint32_t nm)
 {
-    memset(d, 0, sizeof *d);
-    d->positions = s->pos;
-    d->vertex_count = s->nv;
-    d->indices = s->idx;
-    d->triangle_count = s->nt;
-    d->triangle_materials = s->mat;
-    d->materials = m;
-    d->material_count = nm;
+    sc_scene_desc(d, s, m, nm);
     d->grid_samples[0] = d->grid_samples[1] = d->grid_samples[2] = 3;
 }
 
@@ -96,8 +79,8 @@ static irrvol *callback_volume(uint32_t k, const float l[3])
     d.radiance_user = (void *)(uintptr_t)l;
     d.resolution = k;
     d.grid_samples[0] = d.grid_samples[1] = d.grid_samples[2] = 2;
-    set3(d.bounds_min, 0, 0, 0);
-    set3(d.bounds_max, 1, 1, 1);
+    sc_set3(d.bounds_min, 0, 0, 0);
+    sc_set3(d.bounds_max, 1, 1, 1);
     if (irrvol_build(&d, &v) != IRRVOL_OK) return NULL;
     return v;
 }
@@ -114,8 +97,8 @@ static void test_inverse_concentric_map(void)
     for (b = 0; b < 578; b++) {   /* every bin centre maps back to its bin, at any length */
         float d[3], big[3], tiny[3];
         irrvol_bin_direction(v, b, d);
-        set3(big, 3.7f * d[0], 3.7f * d[1], 3.7f * d[2]);
-        set3(tiny, 1e-3f * d[0], 1e-3f * d[1], 1e-3f * d[2]);
+        sc_set3(big, 3.7f * d[0], 3.7f * d[1], 3.7f * d[2]);
+        sc_set3(tiny, 1e-3f * d[0], 1e-3f * d[1], 1e-3f * d[2]);
         if (irrvol_direction_bin(v, d) != b || irrvol_direction_bin(v, big) != b || irrvol_direction_bin(v, tiny) != b)
             wrong++;
     }
@@ -124,7 +107,7 @@ static void test_inverse_concentric_map(void)
         float u = frand(), w = frand(), u2, w2, d[3];
         uint32_t h = frand() < 0.5f;
         irrvol__vec3 p = irrvol__square_to_hemisphere(u, w);
-        set3(d, p.x, p.y, h ? -p.z : p.z);
+        sc_set3(d, p.x, p.y, h ? -p.z : p.z);
         irrvol__direction_to_square(d, &u2, &w2, &hemisphere);
         if (fabsf(u2 - u) > worst) worst = fabsf(u2 - u);
         if (fabsf(w2 - w) > worst) worst = fabsf(w2 - w);
@@ -135,8 +118,8 @@ static void test_inverse_concentric_map(void)
     CHECK_EQ_INT(wrong, 0);
     {   /* zero, NaN and infinite directions still give a bin in range */
         float z[3] = {0, 0, 0}, n[3], inf[3];
-        set3(n, NAN, 0.0f, 1.0f);
-        set3(inf, INFINITY, -INFINITY, 1.0f);
+        sc_set3(n, NAN, 0.0f, 1.0f);
+        sc_set3(inf, INFINITY, -INFINITY, 1.0f);
         CHECK(irrvol_direction_bin(v, z) < 578);
         CHECK(irrvol_direction_bin(v, n) < 578);
         CHECK(irrvol_direction_bin(v, inf) < 578);
@@ -155,7 +138,7 @@ static void test_furnace(void)
     int f, filter;
     sc_cube(&s);
     memset(m, 0, sizeof m);
-    for (f = 0; f < 6; f++) set3(m[f].radiance, 1.0f, 2.0f, 0.5f);
+    for (f = 0; f < 6; f++) sc_set3(m[f].radiance, 1.0f, 2.0f, 0.5f);
     scene_desc(&d, &s, m, 6);
     if (!CHECK_EQ_INT(irrvol_build(&d, &v), IRRVOL_OK)) return;
     for (filter = 0; filter < 6; filter++) {   /* every filter (default too) with either weighting */
@@ -166,7 +149,7 @@ static void test_furnace(void)
         for (i = 0; i < 2000; i++) {
             float p[3], dir[3], h[3];
             /* inside the room and past its walls: outside points clamp */
-            set3(p, 2.4f * frand() - 1.2f, 2.4f * frand() - 1.2f, 2.4f * frand() - 1.2f);
+            sc_set3(p, 2.4f * frand() - 1.2f, 2.4f * frand() - 1.2f, 2.4f * frand() - 1.2f);
             random_dir(dir);
             irrvol_query_filter(v, f, g, p, dir, h);
             for (c = 0; c < 3; c++) {
@@ -197,14 +180,14 @@ static void test_furnace_moments_and_weights(void)
         d.radiance = constant_radiance;
         d.radiance_user = (void *)(uintptr_t)l;
         d.grid_samples[0] = d.grid_samples[1] = d.grid_samples[2] = 2;
-        set3(d.bounds_min, 0, 0, 0);
-        set3(d.bounds_max, 1, 1, 1);
+        sc_set3(d.bounds_min, 0, 0, 0);
+        sc_set3(d.bounds_max, 1, 1, 1);
         if (i < 4) d.moment = moments[i];
         else d.weight_subdivisions = 1;   /* eq. 4.3 evaluated literally at bin centres */
         if (!CHECK_EQ_INT(irrvol_build(&d, &v), IRRVOL_OK)) return;
         for (j = 0; j < 1000; j++) {
             float p[3], dir[3], h[3];
-            set3(p, frand(), frand(), frand());
+            sc_set3(p, frand(), frand(), frand());
             random_dir(dir);
             /* the bin a direction falls in, as the thesis stores it (bilinear would average the bins' errors) */
             irrvol_query_filter(v, IRRVOL_FILTER_NEAREST, IRRVOL_WEIGHTING_DEFAULT, p, dir, h);
@@ -228,7 +211,7 @@ static void emitting_cube(sc_scene *s, irrvol_material m[6], irrvol_desc *d, flo
 {
     sc_cube(s);
     memset(m, 0, 6 * sizeof *m);
-    set3(m[5].radiance, l, l, l);   /* +z */
+    sc_set3(m[5].radiance, l, l, l);   /* +z */
     scene_desc(d, s, m, 6);
     cube_bounds(d, 0.5f);           /* samples at -0.5, 0, 0.5: the centre is one */
     d->supersamples = 4;            /* 4 x 4 jittered rays: partly covered bins average */
@@ -289,16 +272,16 @@ static void test_linear_field_both_levels(void)
     d.triangle_count = s.nt;
     d.radiance = linear_radiance;
     d.grid_samples[0] = d.grid_samples[1] = d.grid_samples[2] = 4;
-    set3(d.bounds_min, 0, 0, 0);
-    set3(d.bounds_max, 1, 1, 1);
+    sc_set3(d.bounds_min, 0, 0, 0);
+    sc_set3(d.bounds_max, 1, 1, 1);
     if (!CHECK_EQ_INT(irrvol_build(&d, &v), IRRVOL_OK)) return;
     irrvol_info(v, &info);
     CHECK(info.refined_cells >= 1);
     CHECK(info.second_level_samples > 0);
     for (i = 0; i < 3000; i++) {
         float p[3], dir[3], h[3], l;
-        if (i % 2) set3(p, 0.25f + 0.1f * frand(), 0.25f + 0.1f * frand(), 0.25f + 0.1f * frand()); /* refined */
-        else set3(p, frand(), frand(), frand());
+        if (i % 2) sc_set3(p, 0.25f + 0.1f * frand(), 0.25f + 0.1f * frand(), 0.25f + 0.1f * frand()); /* refined */
+        else sc_set3(p, frand(), frand(), frand());
         random_dir(dir);
         irrvol_query_filter(v, IRRVOL_FILTER_DEFAULT, IRRVOL_WEIGHTING_TRILINEAR, p, dir, h);
         l = 1.0f + 0.5f * p[0] + 0.25f * p[1] - 0.3f * p[2];
@@ -348,8 +331,8 @@ static irrvol_result structure_volume(const sc_scene *s, irrvol **v)
     d.radiance_user = (void *)(uintptr_t)one;
     d.resolution = 2;
     d.grid_samples[0] = d.grid_samples[1] = d.grid_samples[2] = 3;   /* 2 x 2 x 2 cells of size 1 */
-    set3(d.bounds_min, 0, 0, 0);
-    set3(d.bounds_max, 2, 2, 2);
+    sc_set3(d.bounds_min, 0, 0, 0);
+    sc_set3(d.bounds_max, 2, 2, 2);
     return irrvol_build(&d, v);
 }
 
@@ -491,7 +474,7 @@ static void test_moments_weight_towards_direction(void)
     for (i = 0; i < (int)s.nt; i++) s.mat[i] = 0;
     sc_square_facing(&s, 2, 0.99f, 0.0f, 0.0f, 0.1f, 1, -1);
     memset(m, 0, sizeof m);
-    set3(m[1].radiance, 50, 50, 50);
+    sc_set3(m[1].radiance, 50, 50, 50);
     m[1].flags = IRRVOL_MATERIAL_IMPORTANT;   /* integrated exactly over its solid angle */
     for (i = 0; i < 5; i++) {
         irrvol *v;
@@ -539,7 +522,7 @@ static double small_lamp_error(uint32_t k, int important)
     for (i = 0; i < s.nt; i++) s.mat[i] = 0;
     sc_square(&s, 1, 0.9f, 0.0f, 0.0f, 0.05f, 1);
     memset(m, 0, sizeof m);
-    set3(m[1].radiance, 100, 100, 100);
+    sc_set3(m[1].radiance, 100, 100, 100);
     if (important) m[1].flags = IRRVOL_MATERIAL_IMPORTANT;
     scene_desc(&d, &s, m, 2);
     d.subgrid_samples = 2;
@@ -599,7 +582,7 @@ static void test_ignore_and_linearity(void)
     int f;
     sc_cube(&s);
     memset(m, 0, sizeof m);
-    for (f = 0; f < 6; f++) set3(m[f].radiance, 1.0f + f, 0.5f * f, 2.0f);
+    for (f = 0; f < 6; f++) sc_set3(m[f].radiance, 1.0f + f, 0.5f * f, 2.0f);
     scene_desc(&d, &s, m, 6);
     d.refine_threshold = -1.0f;   /* the same grid whatever the light: samples compare one to one */
     if (!CHECK_EQ_INT(irrvol_build(&d, &all), IRRVOL_OK)) return;
@@ -639,7 +622,7 @@ static void test_mirror_chain(void)
     /* the -z face mirrors the emitting +z face: facing -z, the centre sees
        the emitter's image, a square of half-size 1 at distance 3, times 0.5 */
     emitting_cube(&s, m, &d, 2.0f);
-    set3(m[4].specular, 0.5f, 0.5f, 0.5f);
+    sc_set3(m[4].specular, 0.5f, 0.5f, 0.5f);
     if (!CHECK_EQ_INT(irrvol_build(&d, &v), IRRVOL_OK)) return;
     irrvol_query(v, c, down, h);
     expect = 0.5 * sc_square_irradiance(p, n, 2, 3.0, 0.0, 0.0, 1.0, 2.0, 0.0, 600);
@@ -650,10 +633,10 @@ static void test_mirror_chain(void)
        cuts every chain at 0.5^4 = 0.0625 < 0.1 */
     sc_cube(&s);
     memset(m, 0, sizeof m);
-    for (f = 0; f < 6; f++) set3(m[f].specular, 0.5f, 0.5f, 0.5f);
+    for (f = 0; f < 6; f++) sc_set3(m[f].specular, 0.5f, 0.5f, 0.5f);
     scene_desc(&d, &s, m, 6);
     d.resolution = 9;   /* bin centres of the exact corners and edges of the cube included */
-    set3(d.background, 1, 1, 1);
+    sc_set3(d.background, 1, 1, 1);
     d.min_weight = 0.1f;
     d.max_depth = 100;
     if (!CHECK_EQ_INT(irrvol_build(&d, &v), IRRVOL_OK)) return;
@@ -681,9 +664,9 @@ static void test_background_and_open_scene(void)
     sc_square(&s, 1, 0.0f, 0.0f, 0.0f, 1000.0f, 0);   /* a floor, nothing else */
     memset(m, 0, sizeof m);
     scene_desc(&d, &s, m, 1);
-    set3(d.background, 0.25f, 0.5f, 1.0f);           /* the sky */
-    set3(d.bounds_min, -1, 0.25f, -1);
-    set3(d.bounds_max, 1, 0.75f, 1);
+    sc_set3(d.background, 0.25f, 0.5f, 1.0f);           /* the sky */
+    sc_set3(d.bounds_min, -1, 0.25f, -1);
+    sc_set3(d.bounds_max, 1, 0.75f, 1);
     if (!CHECK_EQ_INT(irrvol_build(&d, &v), IRRVOL_OK)) return;
     irrvol_query(v, c, up, h);
     CHECK_CLOSE(h[2], PI, 0.005, 0.0);   /* facing the sky: pi B */
@@ -704,7 +687,7 @@ static void test_vertex_radiance(void)
     lv = (float *)calloc(s.nv, 3 * sizeof(float));
     for (i = 20; i < 24; i++) {   /* the +z face's vertices: L = 2 + x */
         float l = 2.0f + s.pos[3 * i];
-        set3(lv + 3 * i, l, l, l);
+        sc_set3(lv + 3 * i, l, l, l);
     }
     d.vertex_radiance = lv;
     if (!CHECK_EQ_INT(irrvol_build(&d, &v), IRRVOL_OK)) { free(lv); return; }
@@ -743,7 +726,7 @@ static void test_filters_and_queries(void)
        jumps bin to bin, bilinear varies continuously */
     for (i = 0; i <= 360; i++) {
         float a = (float)(i - 180) * (float)PI / 720.0f, dir[3];   /* -45 to +45 degrees, 1/4 degree steps */
-        set3(dir, cosf(a), 0.3f, sinf(a));
+        sc_set3(dir, cosf(a), 0.3f, sinf(a));
         irrvol_query_filter(v, IRRVOL_FILTER_NEAREST, IRRVOL_WEIGHTING_TRILINEAR, c, dir, h);
         irrvol_query_filter(v, IRRVOL_FILTER_BILINEAR, IRRVOL_WEIGHTING_TRILINEAR, c, dir, g);
         if (i) {
@@ -765,17 +748,17 @@ static void test_filters_and_queries(void)
     for (i = 0; i < 200; i++) {
         float p[3], out[3], eye[3], n[3] = {0, 1, 0}, mirrored[3];
         irrvol__prepared q;
-        set3(p, 2.0f * frand() - 1.0f, 2.0f * frand() - 1.0f, 2.0f * frand() - 1.0f);
+        sc_set3(p, 2.0f * frand() - 1.0f, 2.0f * frand() - 1.0f, 2.0f * frand() - 1.0f);
         random_dir(eye);
         /* glossy: the bins of the view vector mirrored about the normal, here
            exactly (-x, y, -z), the visibility weights of the normal */
         irrvol_query_glossy(v, p, n, eye, h);
-        set3(mirrored, -eye[0], eye[1], -eye[2]);
+        sc_set3(mirrored, -eye[0], eye[1], -eye[2]);
         irrvol__prepare(v, IRRVOL_FILTER_DEFAULT, IRRVOL_WEIGHTING_DEFAULT, p, n, mirrored, &q);
         irrvol__finish(v, &q, g);
         CHECK(memcmp(h, g, sizeof h) == 0);
         /* outside the bounds, plain trilinear: the same as the nearest boundary point */
-        set3(out, p[0] * 3.0f, p[1], p[2]);
+        sc_set3(out, p[0] * 3.0f, p[1], p[2]);
         irrvol_query_filter(v, IRRVOL_FILTER_DEFAULT, IRRVOL_WEIGHTING_TRILINEAR, out, eye, h);
         out[0] = out[0] < -0.5f ? -0.5f : (out[0] > 0.5f ? 0.5f : out[0]);
         out[1] = out[1] < -0.5f ? -0.5f : (out[1] > 0.5f ? 0.5f : out[1]);
@@ -848,11 +831,11 @@ static void busy_scene(sc_scene *s, irrvol_material m[8], irrvol_desc *d)
     sc_square(s, 1, -0.3f, 0.2f, 0.1f, 0.25f, 6);   /* a table */
     sc_square(s, 1, 0.8f, -0.5f, 0.5f, 0.1f, 7);    /* a lamp */
     memset(m, 0, 8 * sizeof *m);
-    set3(m[0].radiance, 0.3f, 0.2f, 0.1f);
-    set3(m[3].radiance, 0.5f, 0.5f, 0.5f);
-    set3(m[2].specular, 0.4f, 0.4f, 0.4f);
-    set3(m[6].radiance, 0.2f, 0.4f, 0.1f);
-    set3(m[7].radiance, 30, 28, 20);
+    sc_set3(m[0].radiance, 0.3f, 0.2f, 0.1f);
+    sc_set3(m[3].radiance, 0.5f, 0.5f, 0.5f);
+    sc_set3(m[2].specular, 0.4f, 0.4f, 0.4f);
+    sc_set3(m[6].radiance, 0.2f, 0.4f, 0.1f);
+    sc_set3(m[7].radiance, 30, 28, 20);
     m[7].flags = IRRVOL_MATERIAL_IMPORTANT;
     scene_desc(d, s, m, 8);
     d->grid_samples[0] = 5;
@@ -1043,8 +1026,8 @@ static void test_bad_inputs(void)
     BAD(d.inset = 0.5f);
     BAD(d.inset = -0.1f);
     BAD(d.inset = NAN);
-    BAD(set3(d.bounds_min, 0, 0, 0); set3(d.bounds_max, 1, 0, 1));   /* zero size */
-    BAD(set3(d.bounds_min, 0, 0, 0); set3(d.bounds_max, 1, NAN, 1));
+    BAD(sc_set3(d.bounds_min, 0, 0, 0); sc_set3(d.bounds_max, 1, 0, 1));   /* zero size */
+    BAD(sc_set3(d.bounds_min, 0, 0, 0); sc_set3(d.bounds_max, 1, NAN, 1));
     BAD(d.filter = (irrvol_filter)7);
     BAD(d.background[0] = -1.0f);
     BAD(d.min_weight = NAN);
@@ -1091,7 +1074,7 @@ static void test_bad_inputs(void)
         d = good;
         d.trace = bad_trace;
         d.resolution = 17;
-        set3(d.background, 1, 1, 1);
+        sc_set3(d.background, 1, 1, 1);
         if (CHECK_EQ_INT(irrvol_build(&d, &v), IRRVOL_OK)) {
             irrvol_query(v, p, dir, h);
             CHECK_CLOSE(h[0], PI, 0.005, 0.0);

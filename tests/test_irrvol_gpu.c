@@ -42,12 +42,7 @@ IRRVOL__GLSL_PART3(GLSL_AS_C)
 /* ---- a scene with everything the evaluator must handle ------------------------- */
 
 static uint32_t rng_state = 777u;
-static float frand(void)
-{
-    rng_state = rng_state * 1664525u + 1013904223u;
-    return (float)(rng_state >> 8) * (1.0f / 16777216.0f);
-}
-static void set3(float *v, float x, float y, float z) { v[0] = x; v[1] = y; v[2] = z; }
+static float frand(void) { return sc_frand(&rng_state); }
 
 /* Two rooms behind a 2 cm wall, samples in the wall (relocated), a closed
    box around a sample (invalid), a lamp (refinement by geometry and by
@@ -60,18 +55,18 @@ static irrvol *level_volume(ex_pool *pool)
     irrvol_desc d;
     irrvol *v = NULL;
     memset(&s, 0, sizeof s);
-    set3(lo, -4.0f, 0.0f, 0.0f); set3(hi, -0.01f, 3.0f, 4.0f);
+    sc_set3(lo, -4.0f, 0.0f, 0.0f); sc_set3(hi, -0.01f, 3.0f, 4.0f);
     sc_box(&s, lo, hi, 0, 1);
-    set3(lo, 0.01f, 0.0f, 0.0f); set3(hi, 4.0f, 3.0f, 4.0f);
+    sc_set3(lo, 0.01f, 0.0f, 0.0f); sc_set3(hi, 4.0f, 3.0f, 4.0f);
     sc_box(&s, lo, hi, 1, 1);
-    set3(lo, -2.25f, 0.7f, 1.75f); set3(hi, -1.75f, 1.3f, 2.25f);   /* around the sample (-2, 1, 2) */
+    sc_set3(lo, -2.25f, 0.7f, 1.75f); sc_set3(hi, -1.75f, 1.3f, 2.25f);   /* around the sample (-2, 1, 2) */
     sc_box(&s, lo, hi, 1, 0);
-    set3(lo, 2.2f, 2.2f, 1.0f); set3(hi, 2.5f, 2.4f, 1.3f);
+    sc_set3(lo, 2.2f, 2.2f, 1.0f); sc_set3(hi, 2.5f, 2.4f, 1.3f);
     sc_box(&s, lo, hi, 2, 0);
     memset(m, 0, sizeof m);
-    set3(m[0].radiance, 0.5f, 0.45f, 0.4f);
-    set3(m[1].radiance, 0.1f, 0.12f, 0.15f);
-    set3(m[2].radiance, 30.0f, 25.0f, 20.0f);
+    sc_set3(m[0].radiance, 0.5f, 0.45f, 0.4f);
+    sc_set3(m[1].radiance, 0.1f, 0.12f, 0.15f);
+    sc_set3(m[2].radiance, 30.0f, 25.0f, 20.0f);
     m[2].flags = IRRVOL_MATERIAL_IMPORTANT;
     memset(&d, 0, sizeof d);
     d.positions = s.pos;
@@ -83,8 +78,8 @@ static irrvol *level_volume(ex_pool *pool)
     d.material_count = 3;
     d.resolution = 9;
     d.grid_samples[0] = 7; d.grid_samples[1] = 5; d.grid_samples[2] = 3;
-    set3(d.bounds_min, -3.0f, 0.5f, 1.0f);
-    set3(d.bounds_max, 3.0f, 2.5f, 3.0f);   /* samples at x = 0 (in the wall) and at (-2, 1, 2) */
+    sc_set3(d.bounds_min, -3.0f, 0.5f, 1.0f);
+    sc_set3(d.bounds_max, 3.0f, 2.5f, 3.0f);   /* samples at x = 0 (in the wall) and at (-2, 1, 2) */
     d.refine_threshold = 0.02f;
     d.parallel_for = ex_pool_parallel_for;
     d.parallel_user = pool;
@@ -134,8 +129,8 @@ static void test_glsl_equals_c_query(void)
             float p[3], n[3], c[3], len;
             IrrvolRGB e;
             /* anywhere in the grid and a little past it, any direction */
-            set3(p, 6.4f * frand() - 3.2f, 2.4f * frand() + 0.3f, 2.4f * frand() + 0.8f);
-            set3(n, frand() - 0.5f, frand() - 0.5f, frand() - 0.5f);
+            sc_set3(p, 6.4f * frand() - 3.2f, 2.4f * frand() + 0.3f, 2.4f * frand() + 0.8f);
+            sc_set3(n, frand() - 0.5f, frand() - 0.5f, frand() - 0.5f);
             len = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
             for (k = 0; k < 3; k++) n[k] /= len;
             irrvol_query_sh(v, order, IRRVOL_WEIGHTING_VISIBILITY, p, n, c);

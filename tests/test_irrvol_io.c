@@ -6,7 +6,6 @@
 #include "tests/test.h"
 #include "tests/test_irrvol_scenes.h"
 
-static void set3(float *v, float x, float y, float z) { v[0] = x; v[1] = y; v[2] = z; }
 
 /* CRC-32 (IEEE, reflected), written here independently of the header. */
 static uint32_t crc32_of(const unsigned char *p, size_t n)
@@ -67,8 +66,8 @@ static irrvol *small_volume(int keep_radiance)
     d.filter = IRRVOL_FILTER_BILINEAR;
     d.keep_radiance = keep_radiance;
     d.grid_samples[0] = 2; d.grid_samples[1] = 3; d.grid_samples[2] = 2;
-    set3(d.bounds_min, 0, 0, 0);
-    set3(d.bounds_max, 1, 1, 1);
+    sc_set3(d.bounds_min, 0, 0, 0);
+    sc_set3(d.bounds_max, 1, 1, 1);
     if (irrvol_build(&d, &v) != IRRVOL_OK) return NULL;
     return v;
 }

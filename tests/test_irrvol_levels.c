@@ -13,29 +13,22 @@
 #define PI SC_PI
 
 static uint32_t rng_state = 4242u;
-static float frand(void) /* uniform [0, 1) */
-{
-    rng_state = rng_state * 1664525u + 1013904223u;
-    return (float)(rng_state >> 8) * (1.0f / 16777216.0f);
-}
-static void random_dir(float d[3])
-{
-    float z = 2.0f * frand() - 1.0f, phi = 2.0f * (float)PI * frand(), s = sqrtf(1.0f - z * z);
-    d[0] = s * cosf(phi); d[1] = s * sinf(phi); d[2] = z;
-}
-static void set3(float *v, float x, float y, float z) { v[0] = x; v[1] = y; v[2] = z; }
+static float frand(void) { return sc_frand(&rng_state); }
+static void random_dir(float d[3]) { sc_random_dir(&rng_state, d); }
 static float luminance(const float *rgb) { return 0.2126f * rgb[0] + 0.7152f * rgb[1] + 0.0722f * rgb[2]; }
 
-static void scene_desc(irrvol_desc *d, const sc_scene *s, const irrvol_material *m, uint32_t nm)
+/* The scene's volume, default settings, built on a pool of all cores. */
+static irrvol_result build_defaults(const sc_scene *s, const irrvol_material *m, uint32_t nm, irrvol **v)
 {
-    memset(d, 0, sizeof *d);
-    d->positions = s->pos;
-    d->vertex_count = s->nv;
-    d->indices = s->idx;
-    d->triangle_count = s->nt;
-    d->triangle_materials = s->mat;
-    d->materials = m;
-    d->material_count = nm;
+    irrvol_desc d;
+    ex_pool *pool = ex_pool_create(0);
+    irrvol_result r;
+    sc_scene_desc(&d, s, m, nm);
+    d.parallel_for = ex_pool_parallel_for;
+    d.parallel_user = pool;
+    r = irrvol_build(&d, v);
+    ex_pool_destroy(pool);
+    return r;
 }
 
 /* ---- two rooms and a 2 cm wall ------------------------------------------------ */
@@ -47,12 +40,12 @@ static void two_rooms(sc_scene *s, irrvol_material m[2])
 {
     float lo[3], hi[3];
     memset(s, 0, sizeof *s);
-    set3(lo, -4.0f, 0.0f, 0.0f); set3(hi, -0.01f, 3.0f, 4.0f);
+    sc_set3(lo, -4.0f, 0.0f, 0.0f); sc_set3(hi, -0.01f, 3.0f, 4.0f);
     sc_box(s, lo, hi, 0, 1);
-    set3(lo, 0.01f, 0.0f, 0.0f); set3(hi, 4.0f, 3.0f, 4.0f);
+    sc_set3(lo, 0.01f, 0.0f, 0.0f); sc_set3(hi, 4.0f, 3.0f, 4.0f);
     sc_box(s, lo, hi, 1, 1);
     memset(m, 0, 2 * sizeof *m);
-    set3(m[0].radiance, 1, 1, 1);
+    sc_set3(m[0].radiance, 1, 1, 1);
 }
 
 /* Mean over a 24 x 24 grid of points on the plane x = at (y, z across the
@@ -68,7 +61,7 @@ static double plane_leak(const irrvol *v, irrvol_weighting weighting, float at, 
         for (i = 0; i < 24; i++) {
             float p[3], dir[3], h[3];
             double leak;
-            set3(p, at, 0.1f + 2.8f * ((float)i + 0.5f) / 24.0f, 0.1f + 3.8f * ((float)j + 0.5f) / 24.0f);
+            sc_set3(p, at, 0.1f + 2.8f * ((float)i + 0.5f) / 24.0f, 0.1f + 3.8f * ((float)j + 0.5f) / 24.0f);
             random_dir(dir);
             irrvol_query_filter(v, IRRVOL_FILTER_DEFAULT, weighting, p, dir, h);
             leak = luminance(h) / PI;
@@ -82,16 +75,11 @@ static void test_leak_through_thin_wall(void)
 {
     sc_scene s;
     irrvol_material m[2];
-    irrvol_desc d;
     irrvol *v;
     irrvol_volume_info info;
     double leak1, leak10, worst1, worst10, plain1, plain10, lit, worst_lit, w;
-    ex_pool *pool = ex_pool_create(0);
     two_rooms(&s, m);
-    scene_desc(&d, &s, m, 2);   /* default settings */
-    d.parallel_for = ex_pool_parallel_for;
-    d.parallel_user = pool;
-    if (!CHECK_EQ_INT(irrvol_build(&d, &v), IRRVOL_OK)) { ex_pool_destroy(pool); return; }
+    if (!CHECK_EQ_INT(build_defaults(&s, m, 2, &v), IRRVOL_OK)) return;
     irrvol_info(v, &info);
     leak1 = plane_leak(v, IRRVOL_WEIGHTING_DEFAULT, 0.02f, &worst1);
     leak10 = plane_leak(v, IRRVOL_WEIGHTING_DEFAULT, 0.11f, &worst10);
@@ -108,7 +96,6 @@ static void test_leak_through_thin_wall(void)
     CHECK(plain1 > 0.2);     /* the thesis's query leaks: the test can fail */
     CHECK(lit > 0.97);       /* and the lit side keeps its light */
     irrvol_destroy(v);
-    ex_pool_destroy(pool);
 }
 
 /* A sample exactly in the middle of the wall (x = 0) sees back faces all
@@ -122,11 +109,11 @@ static void test_relocation_out_of_wall(void)
     irrvol_volume_info info;
     uint32_t i, moved = 0;
     two_rooms(&s, m);
-    scene_desc(&d, &s, m, 2);
+    sc_scene_desc(&d, &s, m, 2);
     d.resolution = 9;
     d.grid_samples[0] = 5; d.grid_samples[1] = d.grid_samples[2] = 3;
-    set3(d.bounds_min, -3.0f, 0.5f, 0.5f);
-    set3(d.bounds_max, 3.0f, 2.5f, 3.5f);   /* samples at x = 0: in the wall */
+    sc_set3(d.bounds_min, -3.0f, 0.5f, 0.5f);
+    sc_set3(d.bounds_max, 3.0f, 2.5f, 3.5f);   /* samples at x = 0: in the wall */
     if (!CHECK_EQ_INT(irrvol_build(&d, &v), IRRVOL_OK)) return;
     irrvol_info(v, &info);
     for (i = 0; i < info.sample_count; i++) {
@@ -183,9 +170,9 @@ static void test_sample_in_closed_box(void)
     uint32_t i, centre = 13, different = 0;
     int k;
     memset(&s, 0, sizeof s);
-    set3(lo, -2, -2, -2); set3(hi, 2, 2, 2);
+    sc_set3(lo, -2, -2, -2); sc_set3(hi, 2, 2, 2);
     sc_box(&s, lo, hi, 0, 1);
-    set3(lo, -box_half, -box_half, -box_half); set3(hi, box_half, box_half, box_half);
+    sc_set3(lo, -box_half, -box_half, -box_half); sc_set3(hi, box_half, box_half, box_half);
     sc_box(&s, lo, hi, 0, 0);
     memset(&d, 0, sizeof d);
     d.positions = s.pos;
@@ -196,8 +183,8 @@ static void test_sample_in_closed_box(void)
     d.radiance_user = (void *)(uintptr_t)&dark;
     d.resolution = 8;
     d.grid_samples[0] = d.grid_samples[1] = d.grid_samples[2] = 3;
-    set3(d.bounds_min, -1.5f, -1.5f, -1.5f);
-    set3(d.bounds_max, 1.5f, 1.5f, 1.5f);
+    sc_set3(d.bounds_min, -1.5f, -1.5f, -1.5f);
+    sc_set3(d.bounds_max, 1.5f, 1.5f, 1.5f);
     if (!CHECK_EQ_INT(irrvol_build(&d, &a), IRRVOL_OK)) return;
     d.radiance_user = (void *)(uintptr_t)&bright;
     if (!CHECK_EQ_INT(irrvol_build(&d, &b), IRRVOL_OK)) { irrvol_destroy(a); return; }
@@ -239,17 +226,17 @@ static void lamp_room(sc_scene *s, irrvol_material m[3])
 {
     float lo[3], hi[3];
     memset(s, 0, sizeof *s);
-    set3(lo, 0, 0, 0); set3(hi, 4, 3, 4);
+    sc_set3(lo, 0, 0, 0); sc_set3(hi, 4, 3, 4);
     sc_box(s, lo, hi, 0, 1);
-    set3(lo, 1.45f, 2.0f, 1.75f); set3(hi, 1.85f, 2.3f, 2.15f);
+    sc_set3(lo, 1.45f, 2.0f, 1.75f); sc_set3(hi, 1.85f, 2.3f, 2.15f);
     sc_box(s, lo, hi, 1, 0);
-    set3(lo, 1.63f, 2.3f, 1.93f); set3(hi, 1.67f, 3.0f, 1.97f);
+    sc_set3(lo, 1.63f, 2.3f, 1.93f); sc_set3(hi, 1.67f, 3.0f, 1.97f);
     sc_box(s, lo, hi, 2, 0);
     memset(m, 0, 3 * sizeof *m);
-    set3(m[0].radiance, 0.2f, 0.2f, 0.2f);
-    set3(m[1].radiance, 20.0f, 18.0f, 14.0f);
+    sc_set3(m[0].radiance, 0.2f, 0.2f, 0.2f);
+    sc_set3(m[1].radiance, 20.0f, 18.0f, 14.0f);
     m[1].flags = IRRVOL_MATERIAL_IMPORTANT;
-    set3(m[2].radiance, 0.05f, 0.05f, 0.05f);
+    sc_set3(m[2].radiance, 0.05f, 0.05f, 0.05f);
 }
 
 /* The query in a given cell at the given offsets: what either side of a
@@ -281,17 +268,12 @@ static void test_continuity_across_faces(void)
 {
     sc_scene s;
     irrvol_material m[3];
-    irrvol_desc d;
     irrvol *v;
     irrvol_volume_info info;
-    ex_pool *pool = ex_pool_create(0);
     uint32_t c[3], axis, faces = 0, mixed = 0, points = 0, beyond = 0;
     double worst = 0.0;
     lamp_room(&s, m);
-    scene_desc(&d, &s, m, 3);   /* default settings */
-    d.parallel_for = ex_pool_parallel_for;
-    d.parallel_user = pool;
-    if (!CHECK_EQ_INT(irrvol_build(&d, &v), IRRVOL_OK)) { ex_pool_destroy(pool); return; }
+    if (!CHECK_EQ_INT(build_defaults(&s, m, 3, &v), IRRVOL_OK)) return;
     irrvol_info(v, &info);
     for (axis = 0; axis < 3; axis++)
         for (c[2] = 0; c[2] < v->cells[2] - (axis == 2); c[2]++)
@@ -334,7 +316,6 @@ static void test_continuity_across_faces(void)
     CHECK(mixed > 20 && info.hanging_samples > 0);   /* the test meets the seams it is about */
     CHECK_EQ_INT(beyond, 0);   /* float rounding: relative 1e-4 */
     irrvol_destroy(v);
-    ex_pool_destroy(pool);
 }
 
 /* ---- refinement by light (6.1.1) ---------------------------------------------- */
@@ -346,11 +327,11 @@ static void panel_room(sc_scene *s, irrvol_material m[2])
 {
     float lo[3], hi[3];
     memset(s, 0, sizeof *s);
-    set3(lo, 0, 0, 0); set3(hi, 6, 3, 6);
+    sc_set3(lo, 0, 0, 0); sc_set3(hi, 6, 3, 6);
     sc_box(s, lo, hi, 0, 1);
     sc_square_facing(s, 1, 2.5f, 2.2f, 2.2f, 0.15f, 1, -1);
     memset(m, 0, 2 * sizeof *m);
-    set3(m[1].radiance, 50, 50, 50);
+    sc_set3(m[1].radiance, 50, 50, 50);
     m[1].flags = IRRVOL_MATERIAL_IMPORTANT;
 }
 
@@ -364,7 +345,7 @@ static double panel_error(const irrvol *v)
     for (i = 0; i < 1500; i++) {
         float p[3], dir[3], h[3];
         double pd[3], nd[3], exact;
-        set3(p, 0.3f + 5.4f * frand(), 0.3f + 1.9f * frand(), 0.3f + 5.4f * frand());
+        sc_set3(p, 0.3f + 5.4f * frand(), 0.3f + 1.9f * frand(), 0.3f + 5.4f * frand());
         random_dir(dir);
         irrvol_query_filter(v, IRRVOL_FILTER_BILINEAR, IRRVOL_WEIGHTING_TRILINEAR, p, dir, h);
         pd[0] = p[0]; pd[1] = p[1]; pd[2] = p[2];
@@ -386,7 +367,7 @@ static void test_refinement_by_light(void)
     ex_pool *pool = ex_pool_create(0);
     double eg, el;
     panel_room(&s, m);
-    scene_desc(&d, &s, m, 2);
+    sc_scene_desc(&d, &s, m, 2);
     d.resolution = 9;
     d.parallel_for = ex_pool_parallel_for;
     d.parallel_user = pool;
@@ -422,9 +403,9 @@ static void test_refinement_by_light_furnace(void)
     int lit;
     for (lit = 0; lit < 2; lit++) {
         panel_room(&s, m);
-        set3(m[0].radiance, (float)lit, (float)lit, (float)lit);
-        set3(m[1].radiance, (float)lit, (float)lit, (float)lit);
-        scene_desc(&d, &s, m, 2);
+        sc_set3(m[0].radiance, (float)lit, (float)lit, (float)lit);
+        sc_set3(m[1].radiance, (float)lit, (float)lit, (float)lit);
+        sc_scene_desc(&d, &s, m, 2);
         d.resolution = 5;
         if (!CHECK_EQ_INT(irrvol_build(&d, &v), IRRVOL_OK)) return;
         irrvol_info(v, &info);
@@ -452,15 +433,15 @@ static void test_sh_furnace(void)
     d.radiance = constant_radiance;
     d.radiance_user = (void *)(uintptr_t)l;
     d.grid_samples[0] = d.grid_samples[1] = d.grid_samples[2] = 2;
-    set3(d.bounds_min, 0, 0, 0);
-    set3(d.bounds_max, 1, 1, 1);
+    sc_set3(d.bounds_min, 0, 0, 0);
+    sc_set3(d.bounds_max, 1, 1, 1);
     if (!CHECK_EQ_INT(irrvol_build(&d, &v), IRRVOL_OK)) return;
     for (order = 1; order <= 2; order++) {
         double worst = 0.0;
         int i, c;
         for (i = 0; i < 2000; i++) {
             float p[3], dir[3], h[3];
-            set3(p, frand(), frand(), frand());
+            sc_set3(p, frand(), frand(), frand());
             random_dir(dir);
             irrvol_query_sh(v, order, IRRVOL_WEIGHTING_DEFAULT, p, dir, h);
             for (c = 0; c < 3; c++)
@@ -488,12 +469,12 @@ static void test_sh_point_light(void)
     memset(s.mat, 0, sizeof s.mat);
     sc_square_facing(&s, 1, 0.95f, 0.0f, 0.0f, 0.01f, 1, -1);
     memset(m, 0, sizeof m);
-    set3(m[1].radiance, 1000, 1000, 1000);
+    sc_set3(m[1].radiance, 1000, 1000, 1000);
     m[1].flags = IRRVOL_MATERIAL_IMPORTANT;
-    scene_desc(&d, &s, m, 2);
+    sc_scene_desc(&d, &s, m, 2);
     d.grid_samples[0] = d.grid_samples[1] = d.grid_samples[2] = 3;
-    set3(d.bounds_min, -0.5f, -0.5f, -0.5f);
-    set3(d.bounds_max, 0.5f, 0.5f, 0.5f);
+    sc_set3(d.bounds_min, -0.5f, -0.5f, -0.5f);
+    sc_set3(d.bounds_max, 0.5f, 0.5f, 0.5f);
     if (!CHECK_EQ_INT(irrvol_build(&d, &v), IRRVOL_OK)) return;
     irrvol_query(v, c, up, hb);
     irrvol_query_sh(v, 1, IRRVOL_WEIGHTING_DEFAULT, c, up, h1);
@@ -519,14 +500,14 @@ static void test_simd_visibility_is_scalar(void)
     irrvol *v;
     uint32_t i, differ = 0, visible = 0;
     two_rooms(&s, m);
-    scene_desc(&d, &s, m, 2);
+    sc_scene_desc(&d, &s, m, 2);
     d.resolution = 5;
     d.visibility_resolution = 6;
     if (!CHECK_EQ_INT(irrvol_build(&d, &v), IRRVOL_OK)) return;
     for (i = 0; i < 20000; i++) {
         float x[3], n[3], four[4];
         uint32_t id[4], k;
-        set3(x, 8.4f * frand() - 4.2f, 3.2f * frand() - 0.1f, 4.2f * frand() - 0.1f);
+        sc_set3(x, 8.4f * frand() - 4.2f, 3.2f * frand() - 0.1f, 4.2f * frand() - 0.1f);
         random_dir(n);
         for (k = 0; k < 4; k++) id[k] = (uint32_t)(frand() * (float)v->hanging_begin) % v->hanging_begin;
         if (i % 100 == 0) memcpy(x, v->origins + 4 * (size_t)id[1], 3 * sizeof(float));   /* at a sample: r = 0 */

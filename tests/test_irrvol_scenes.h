@@ -6,6 +6,8 @@
 #include <stdint.h>
 #include <string.h>
 
+#include "irrvol.h"
+
 #if defined(__GNUC__) || defined(__clang__)
 #  define SC_FN static __attribute__((unused))
 #else
@@ -14,6 +16,22 @@
 
 #define SC_PI 3.14159265358979323846
 #define SC_MAX_QUADS 64
+
+SC_FN void sc_set3(float *v, float x, float y, float z) { v[0] = x; v[1] = y; v[2] = z; }
+
+/* Uniform in [0, 1) from a linear congruential stream. */
+SC_FN float sc_frand(uint32_t *state)
+{
+    *state = *state * 1664525u + 1013904223u;
+    return (float)(*state >> 8) * (1.0f / 16777216.0f);
+}
+
+/* A direction uniform on the sphere. */
+SC_FN void sc_random_dir(uint32_t *state, float d[3])
+{
+    float z = 2.0f * sc_frand(state) - 1.0f, phi = 2.0f * (float)SC_PI * sc_frand(state), s = sqrtf(1.0f - z * z);
+    d[0] = s * cosf(phi); d[1] = s * sinf(phi); d[2] = z;
+}
 
 /* A triangle soup of quadrilaterals, each with its own four vertices. */
 typedef struct sc_scene {
@@ -114,6 +132,19 @@ SC_FN double sc_square_irradiance(const double p[3], const double n[3], int axis
             sum += (l0 + l1 * x[a1]) * cr * ce / r2 * da;
         }
     return sum;
+}
+
+/* A desc of the scene's triangles and materials; everything else default. */
+SC_FN void sc_scene_desc(irrvol_desc *d, const sc_scene *s, const irrvol_material *m, uint32_t nm)
+{
+    memset(d, 0, sizeof *d);
+    d->positions = s->pos;
+    d->vertex_count = s->nv;
+    d->indices = s->idx;
+    d->triangle_count = s->nt;
+    d->triangle_materials = s->mat;
+    d->materials = m;
+    d->material_count = nm;
 }
 
 #endif /* TESTS_IRRVOL_SCENES_H */

@@ -40,7 +40,6 @@
 #define QUERIES 1500u
 #define ROUNDS 8
 
-static void set3(float *v, float x, float y, float z) { v[0] = x; v[1] = y; v[2] = z; }
 
 static uint64_t mix(uint64_t z)
 {
@@ -71,11 +70,11 @@ static void make_scene(scene *s, irrvol_desc *d)
     sc_square(&s->mesh, 1, -0.3f, 0.2f, 0.1f, 0.25f, 6);   /* a table */
     sc_square(&s->mesh, 1, 0.8f, -0.5f, 0.5f, 0.1f, 7);    /* a lamp */
     memset(s->mats, 0, sizeof s->mats);
-    set3(s->mats[0].radiance, 0.3f, 0.2f, 0.1f);
-    set3(s->mats[3].radiance, 0.5f, 0.5f, 0.5f);
-    set3(s->mats[2].specular, 0.4f, 0.4f, 0.4f);
-    set3(s->mats[6].radiance, 0.2f, 0.4f, 0.1f);
-    set3(s->mats[7].radiance, 30, 28, 20);
+    sc_set3(s->mats[0].radiance, 0.3f, 0.2f, 0.1f);
+    sc_set3(s->mats[3].radiance, 0.5f, 0.5f, 0.5f);
+    sc_set3(s->mats[2].specular, 0.4f, 0.4f, 0.4f);
+    sc_set3(s->mats[6].radiance, 0.2f, 0.4f, 0.1f);
+    sc_set3(s->mats[7].radiance, 30, 28, 20);
     s->mats[7].flags = IRRVOL_MATERIAL_IMPORTANT;
     memset(d, 0, sizeof *d);
     d->positions = s->mesh.pos;
@@ -107,7 +106,7 @@ typedef struct query_set {
 static void random_unit(uint64_t *s, float d[3])
 {
     float z = 2.0f * unitf(s) - 1.0f, phi = 6.2831853f * unitf(s), r = sqrtf(1.0f - z * z);
-    set3(d, r * cosf(phi), r * sinf(phi), z);
+    sc_set3(d, r * cosf(phi), r * sinf(phi), z);
 }
 
 static void make_queries(query_set *q)
