@@ -235,7 +235,7 @@ int main(void)
     printf("the default volume: %u samples (%u hanging: no gather), %u relocated, %u invalid; %.1f KB per sample of "
            "which bins %.1f, visibility %.1f, harmonics %.2f\n\n", info.sample_count, info.hanging_samples,
            info.relocated_samples, info.invalid_samples, info.bytes / 1e3 / info.sample_count, info.bins * 12 / 1e3,
-           info.visibility_resolution * info.visibility_resolution * 16 / 1e3, 27 * 4 / 1e3);
+           (info.visibility_resolution + 2) * (info.visibility_resolution + 2) * 16 / 1e3, 27 * 4 / 1e3);
 
     /* queries: random positions in the room and random directions; the bunny's vertices */
     queries = (float *)malloc(6 * sizeof(float) * QUERIES);
