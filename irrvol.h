@@ -136,7 +136,8 @@
    of the first-level samples around it, so both sides of every cell face
    interpolate the same values. Leak-safe queries replace a hanging sample by
    those first-level samples, each weighed by its own visibility, so they are
-   seamless too. A few hundredths of a percent of float rounding remain.
+   seamless too; float rounding remains (largest relative jump 9e-7 over the
+   faces of a room with a lamp, tests/test_irrvol_levels.c).
 
    Bins. Bin b of a sample: hemisphere h = b / k^2 (0: z >= 0, 1: z < 0),
    row j = (b / k) % k, column i = b % k of the k x k square of the concentric
@@ -177,11 +178,14 @@
    the direction, so a wall is predicted exactly at any angle, however close
    the sample stands to it, where averaged distances blur it by the lobe's
    width; so 8 x 8 texels (1.6 KB a sample with their mirrored border) do
-   what 16 x 16 do on the office (relative L1 error 5.1 % against 4.9 %). A query weighs each corner by its trilinear weight times
-   ((1 + n . toward the sample) / 2)^2 + 0.2 (DDGI's backface term) and,
-   when the test point lies beyond the predicted surface (1/r < g . w), the
-   Chebyshev bound (var / (var + (g . w - 1/r)^2))^3; weights under 0.2 fade
-   as w^3 / 0.04 and the weights are renormalised. The test point is the
+   what 16 x 16 do on the office (relative L1 error 5.1 % against 4.9 %).
+   A query weighs each corner by its trilinear weight times
+   (1 + n . toward the sample) / 2 + 0.2 (DDGI's backface term, which
+   squares the first part; unsquared it bends the weights less where no
+   surface is: 4.9 % against 5.9 % on the office) and, when the test point
+   lies beyond the predicted surface (1/r < g . w), the Chebyshev bound
+   (var / (var + (g . w - 1/r)^2))^3; weights under 0.2 fade as w^3 / 0.04
+   and the weights are renormalised. The test point is the
    query point moved info.normal_bias (desc.normal_bias, default 0.02, times
    the finest sample spacing) along the query direction. When no corner is
    visible, or an input is NaN, the plain weights stand. Without triangles
@@ -199,11 +203,13 @@
    face it saw to 5 % of its spacing in front of that surface and gathers
    again (DDGI's relocation, Unity's virtual offset) if that is within 45 %
    of its spacing; otherwise, or if it is still inside, it is invalid.
-   Invalid samples never enter a
-   leak-safe query; their stored values are the mean of their valid
-   neighbours (dilation), which plain trilinear queries and the harmonics
-   use. Scenes whose triangles wind at random make samples invalid: fix the
-   winding or flag the materials TWO_SIDED.
+   Invalid samples never enter a leak-safe query; their stored values are
+   the mean of their valid neighbours (dilation), which plain trilinear
+   queries and the harmonics use. Scenes whose triangles wind at random
+   make samples invalid: fix the winding or flag the materials TWO_SIDED.
+   irrvol_sample reports each sample's state (valid, relocated, invalid,
+   hanging) and origin, where it gathered; irrvol_sample_values gives an
+   invalid sample's dilated values and a hanging sample's blend.
 
    Irradiance (4.2.3, 4.4). H^n(w_j) = sum_i L_i W(i, j), with W(i, j) =
    (n+1)/2 times the integral of max(0, w . w_j)^n over bin i (eq. 4.1 with
@@ -223,7 +229,29 @@
    weighting (clamped at zero); irrvol_gpu_export writes them with the
    grid, the hanging samples and the visibility moments into two flat
    arrays, and irrvol_glsl_source gives the GLSL function that evaluates
-   them like irrvol_query_sh.
+   them like irrvol_query_sh. On the office the L2 harmonics give the bins'
+   irradiance with a median difference of 1.7 % (L1: 8 %).
+
+   On the GPU.
+
+       irrvol_gpu_layout l;
+       irrvol_gpu_export(vol, 2, &l, NULL, 0, NULL, 0);             // sizes
+       uint32_t *index = malloc(l.index_count * 4);
+       float *data = malloc(l.data_count * 4);
+       irrvol_gpu_export(vol, 2, &l, index, l.index_count, data, l.data_count);
+       // upload index to storage buffer binding 0, data to binding 1
+       size_t n = irrvol_glsl_source(NULL, 0);
+       char *glsl = malloc(n + 1);
+       irrvol_glsl_source(glsl, n + 1);
+       // shader text: "#version 430\n" + glsl, then in any stage:
+       //     vec3 e = irrvol_irradiance(position, normal);   // W/m^2
+
+   The text defines IRRVOL_INDEX(i) and IRRVOL_DATA(i) to read the buffers
+   unless the engine defines them first (a texture fetch, other bindings:
+   IRRVOL_INDEX_BINDING, IRRVOL_DATA_BINDING). The arrays hold the volume's
+   own tables: the first-level samples first in x-fastest order, each
+   sample's origin and validity, its bordered visibility map and its
+   harmonics; irrvol_gpu_layout names the offsets.
 
    Informed sampling (6.1.1). Triangles of IMPORTANT materials (light
    sources) are never missed: for each sample, points are sampled on every
@@ -287,7 +315,7 @@
                          positions clamp to the boundary, NaN directions
                          give a bin in range, unknown filter values act as
                          NEAREST and unknown weightings as TRILINEAR, order
-                         1 reads L1 and any other order L2. Contract: vol is
+                         0 or 1 reads L1, any other L2. Contract: vol is
                          a built volume; pos, dir, normal, to_eye hold 3
                          floats, rgb 3 (irrvol_query_many: count of each at
                          their strides).
