@@ -1503,24 +1503,13 @@ static irrvol__vec3 irrvol__bin_point(uint32_t k, uint32_t bin, float fu, float 
     return d;
 }
 
-/* Octahedral map (Cigolle et al. 2014) of the visibility texels: direction
-   -> point of [0,1]^2, the lower hemisphere folded over the corners. Cheaper
-   than the concentric map (one division, no arctangent), and its square
-   wraps onto itself along the edges, which the bilinear texel lookup needs. */
+/* Octahedral map (Cigolle et al. 2014) of the visibility texels: the
+   point (u, t) of [0,1]^2 -> direction, the lower hemisphere folded over
+   the corners. Cheaper than the concentric map (one division, no
+   arctangent); its square folds onto itself along the edges, which the
+   bordered maps of section 13 copy. The forward map lives in
+   irrvol__visibility_weight (and its SSE2 steps, and the GLSL). */
 IRRVOL__HOT float irrvol__sign1(float x) { return x >= 0.0f ? 1.0f : -1.0f; }
-
-IRRVOL__HOT void irrvol__oct_encode(float x, float y, float z, float *u, float *t)
-{
-    float a = fabsf(x) + fabsf(y) + fabsf(z);
-    float px = a > 0.0f ? x / a : 0.0f, py = a > 0.0f ? y / a : 0.0f;
-    if (z < 0.0f) {
-        float qx = (1.0f - fabsf(py)) * irrvol__sign1(px);
-        py = (1.0f - fabsf(px)) * irrvol__sign1(py);
-        px = qx;
-    }
-    *u = px * 0.5f + 0.5f;
-    *t = py * 0.5f + 0.5f;
-}
 
 static irrvol__vec3 irrvol__oct_decode(float u, float t)
 {
@@ -3576,8 +3565,8 @@ IRRVOL__HOT void irrvol__bilinear_bins(const irrvol *v, float u, float t, uint32
      a sample behind a wall, however thin and however oblique, all but
      drops out;
    - weights under 0.2 fade as w^3 / 0.04, invalid samples weigh 0.
-   This scalar code defines the weight; irrvol__visibility4 computes four
-   with SSE2 in the same operations and order, and the GLSL follows it. */
+   This scalar code defines the weight; the irrvol__lanes4 steps compute
+   four with SSE2 in the same operations and order, and the GLSL follows it. */
 IRRVOL__HOT float irrvol__visibility_weight(const irrvol *v, uint32_t s, const float x[3], const float n[3])
 {
     const float *o = v->origins + 4 * (size_t)s, *m, *t00, *t01;
@@ -3628,7 +3617,7 @@ IRRVOL__HOT __m128 irrvol__select(__m128 mask, __m128 a, __m128 b)
     return _mm_or_ps(_mm_and_ps(mask, a), _mm_andnot_ps(mask, b));
 }
 
-/* The test point and normal of irrvol__visibility4, each coordinate in
+/* The test point and normal of the irrvol__lanes4 steps, each coordinate in
    all four lanes. */
 typedef struct irrvol__point4 { __m128 x, y, z, nx, ny, nz; } irrvol__point4;
 
@@ -3724,14 +3713,6 @@ IRRVOL__HOT void irrvol__lanes4_weigh(irrvol__lanes4 *l, float out[4])
     _mm_storeu_ps(out, w);
 }
 
-/* irrvol__visibility_weight of samples s[0..3] at once. */
-IRRVOL__HOT void irrvol__visibility4(const irrvol *v, const uint32_t s[4], const irrvol__point4 *p, float out[4])
-{
-    irrvol__lanes4 l;
-    irrvol__lanes4_locate(v, s, p, &l);
-    irrvol__lanes4_fetch(v, &l);
-    irrvol__lanes4_weigh(&l, out);
-}
 #endif
 
 /* The visibility weights of count samples into out. With SSE2, four at a

@@ -511,9 +511,12 @@ static void test_simd_visibility_is_scalar(void)
         random_dir(n);
         for (k = 0; k < 4; k++) id[k] = (uint32_t)(frand() * (float)v->hanging_begin) % v->hanging_begin;
         if (i % 100 == 0) memcpy(x, v->origins + 4 * (size_t)id[1], 3 * sizeof(float));   /* at a sample: r = 0 */
-        {
+        {   /* the SSE2 steps */
             irrvol__point4 p = irrvol__point4_set(x, n);
-            irrvol__visibility4(v, id, &p, four);
+            irrvol__lanes4 l;
+            irrvol__lanes4_locate(v, id, &p, &l);
+            irrvol__lanes4_fetch(v, &l);
+            irrvol__lanes4_weigh(&l, four);
         }
         for (k = 0; k < 4; k++) {
             float one = irrvol__visibility_weight(v, id[k], x, n);
