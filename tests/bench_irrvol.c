@@ -78,17 +78,18 @@ static irrvol *build_row(const char *name, irrvol_desc *d, ex_pool *two, int run
     irrvol_destroy(vol);
     t2 = time_build(d, two, runs, &vol);
     irrvol_info(vol, &info);
-    printf("%-40s %7u %6u %6u %10.2f s %10.2f s %8.1f MB %7.2f M\n", name, info.sample_count, info.refined_cells,
-           info.light_refined_cells, t1, t2, info.bytes / 1e6, info.rays / t1 / 1e6);
+    printf("%-40s %7u %6u %6u %10.2f s %10.2f s %8.1f MB %7.2f M %5u %5u\n", name, info.sample_count,
+           info.refined_cells, info.light_refined_cells, t1, t2, info.bytes / 1e6, info.rays / t1 / 1e6,
+           info.relocated_samples, info.invalid_samples);
     return vol;
 }
 
 static void build_header(void)
 {
-    printf("%-40s %7s %6s %6s %12s %12s %11s %9s\n", "", "samples", "refin.", "light", "build 1 thr", "build 2 thr",
-           "memory", "rays/s");
-    printf("%-40s %7s %6s %6s %12s %12s %11s %9s\n", "", "", "cells", "cells", "(CPU time)", "(wall clock)", "",
-           "1 thread");
+    printf("%-40s %7s %6s %6s %12s %12s %11s %9s %5s %5s\n", "", "samples", "refin.", "light", "build 1 thr",
+           "build 2 thr", "memory", "rays/s", "moved", "inval");
+    printf("%-40s %7s %6s %6s %12s %12s %11s %9s %5s %5s\n", "", "", "cells", "cells", "(CPU time)", "(wall clock)", "",
+           "1 thread", "", "id");
 }
 
 #define QUERIES 2000000u

@@ -62,6 +62,7 @@ static irrvol *small_volume(int keep_radiance)
     d.triangle_count = s.nt;
     d.radiance = constant_radiance;
     d.resolution = 2;
+    d.visibility_resolution = 3;   /* small maps: every byte of the file is loaded twice per length */
     d.moment = 3;
     d.filter = IRRVOL_FILTER_BILINEAR;
     d.keep_radiance = keep_radiance;
@@ -209,15 +210,18 @@ static void test_hostile_headers(void)
     irrvol *v = small_volume(0), *w;
     void *data;
     unsigned char *c;
-    size_t size;
+    size_t size, irradiance_at;
     tracking t;
     irrvol_allocator a;
+    irrvol_volume_info info;
     if (!CHECK(v != NULL)) return;
     CHECK_EQ_INT(irrvol_save_to_memory(v, NULL, &data, &size), IRRVOL_OK);
     c = (unsigned char *)malloc(size);
     a.alloc = tracking_alloc;
     a.free = tracking_free;
     a.user = &t;
+    irrvol_info(v, &info);   /* the irradiance follows the cell flags and the gathered samples' origins */
+    irradiance_at = OFF_FLAGS + info.cell_count + 16 * (info.sample_count - info.hanging_samples);
 #define CORRUPTED(stmt, expected, limit) do { memcpy(c, data, size); stmt; fix_crc(c, size); \
         t.largest = 0; t.live = 0; w = (irrvol *)c; \
         CHECK_EQ_INT(irrvol_load_from_memory(c, size, &a, &w), expected); \
@@ -225,7 +229,7 @@ static void test_hostile_headers(void)
     /* sizes that lie: refused before anything large is allocated */
 #define HOSTILE(stmt, expected) CORRUPTED(stmt, expected, 4096)
     /* values out of range, found while reading: allocations in proportion to the input (the
-       visibility maps gain their borders: (16 + 2)^2 / 16^2 of what was read) */
+       visibility maps gain their borders: (n + 2)^2 / n^2 of what was read) */
 #define BAD_VALUE(stmt) CORRUPTED(stmt, IRRVOL_ERROR_CORRUPT_DATA, 2 * size)
     HOSTILE(put_le32(c + OFF_SAMPLES_X, 1024); put_le32(c + OFF_SAMPLES_X + 4, 1024);
             put_le32(c + OFF_SAMPLES_X + 8, 1024), IRRVOL_ERROR_CORRUPT_DATA);   /* a billion cells */
@@ -247,11 +251,12 @@ static void test_hostile_headers(void)
     BAD_VALUE(put_le32(c + OFF_INVALID, 1));                                     /* counts disagree with the origins */
     BAD_VALUE(put_le32(c + OFF_FLAGS + 2 + 12, 0x3F000000u));                    /* a validity of 0.5 */
     BAD_VALUE(put_le32(c + OFF_FLAGS + 2, 0x3F000000u));                         /* moved, against the count */
-    BAD_VALUE(put_le32(c + size - 8, 0xBF800000u));                              /* a negative distance moment */
+    BAD_VALUE(put_le32(c + size - 8, 0xBF800000u));                              /* a negative fit variance */
     HOSTILE(put_le32(c + 12, (uint32_t)size), IRRVOL_ERROR_CORRUPT_DATA);         /* payload size too large */
     HOSTILE(put_le32(c + 12, 30), IRRVOL_ERROR_CORRUPT_DATA);                     /* too small */
-    BAD_VALUE(put_le32(c + size - 8, 0x7F800000u));                              /* an infinite moment */
-    BAD_VALUE(put_le32(c + OFF_FLAGS + 2 + 16 * 12, 0x7F800000u));              /* infinite irradiance */
+    BAD_VALUE(put_le32(c + size - 8, 0x7F800000u));                              /* an infinite fit variance */
+    BAD_VALUE(put_le32(c + irradiance_at, 0x7F800000u));                         /* infinite irradiance */
+    BAD_VALUE(put_le32(c + irradiance_at - 4, 0x40000000u));                     /* a validity of 2 */
     HOSTILE(put_le32(c + OFF_VERSION, IRRVOL_FILE_FORMAT_VERSION + 1), IRRVOL_ERROR_VERSION);
 #undef HOSTILE
 #undef BAD_VALUE
