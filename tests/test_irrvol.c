@@ -265,11 +265,7 @@ static void test_linear_field_both_levels(void)
     int i, c;
     memset(&s, 0, sizeof s);
     sc_square(&s, 1, 0.3f, 0.3f, 0.3f, 0.05f, 0);   /* geometry in one cell: refines it */
-    memset(&d, 0, sizeof d);
-    d.positions = s.pos;
-    d.vertex_count = s.nv;
-    d.indices = s.idx;
-    d.triangle_count = s.nt;
+    sc_geometry_desc(&d, &s);
     d.radiance = linear_radiance;
     d.grid_samples[0] = d.grid_samples[1] = d.grid_samples[2] = 4;
     sc_set3(d.bounds_min, 0, 0, 0);
@@ -322,11 +318,7 @@ static irrvol_result structure_volume(const sc_scene *s, irrvol **v)
 {
     static const float one[3] = {1, 1, 1};
     irrvol_desc d;
-    memset(&d, 0, sizeof d);
-    d.positions = s->pos;
-    d.vertex_count = s->nv;
-    d.indices = s->idx;
-    d.triangle_count = s->nt;
+    sc_geometry_desc(&d, s);
     d.radiance = constant_radiance;
     d.radiance_user = (void *)(uintptr_t)one;
     d.resolution = 2;

@@ -68,14 +68,7 @@ static irrvol *level_volume(ex_pool *pool)
     sc_set3(m[1].radiance, 0.1f, 0.12f, 0.15f);
     sc_set3(m[2].radiance, 30.0f, 25.0f, 20.0f);
     m[2].flags = IRRVOL_MATERIAL_IMPORTANT;
-    memset(&d, 0, sizeof d);
-    d.positions = s.pos;
-    d.vertex_count = s.nv;
-    d.indices = s.idx;
-    d.triangle_count = s.nt;
-    d.triangle_materials = s.mat;
-    d.materials = m;
-    d.material_count = 3;
+    sc_scene_desc(&d, &s, m, 3);
     d.resolution = 9;
     d.grid_samples[0] = 7; d.grid_samples[1] = 5; d.grid_samples[2] = 3;
     sc_set3(d.bounds_min, -3.0f, 0.5f, 1.0f);

@@ -55,11 +55,7 @@ static irrvol *small_volume(int keep_radiance)
     irrvol *v = NULL;
     memset(&s, 0, sizeof s);
     sc_square(&s, 1, 0.3f, 0.3f, 0.3f, 0.05f, 0);
-    memset(&d, 0, sizeof d);
-    d.positions = s.pos;
-    d.vertex_count = s.nv;
-    d.indices = s.idx;
-    d.triangle_count = s.nt;
+    sc_geometry_desc(&d, &s);
     d.radiance = constant_radiance;
     d.resolution = 2;
     d.visibility_resolution = 3;   /* small maps: every byte of the file is loaded twice per length */

@@ -174,11 +174,7 @@ static void test_sample_in_closed_box(void)
     sc_box(&s, lo, hi, 0, 1);
     sc_set3(lo, -box_half, -box_half, -box_half); sc_set3(hi, box_half, box_half, box_half);
     sc_box(&s, lo, hi, 0, 0);
-    memset(&d, 0, sizeof d);
-    d.positions = s.pos;
-    d.vertex_count = s.nv;
-    d.indices = s.idx;
-    d.triangle_count = s.nt;
+    sc_geometry_desc(&d, &s);
     d.radiance = inside_box_radiance;
     d.radiance_user = (void *)(uintptr_t)&dark;
     d.resolution = 8;

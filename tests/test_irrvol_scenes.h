@@ -134,14 +134,21 @@ SC_FN double sc_square_irradiance(const double p[3], const double n[3], int axis
     return sum;
 }
 
-/* A desc of the scene's triangles and materials; everything else default. */
-SC_FN void sc_scene_desc(irrvol_desc *d, const sc_scene *s, const irrvol_material *m, uint32_t nm)
+/* A desc of the scene's triangles alone (for a radiance callback);
+   everything else default. */
+SC_FN void sc_geometry_desc(irrvol_desc *d, const sc_scene *s)
 {
     memset(d, 0, sizeof *d);
     d->positions = s->pos;
     d->vertex_count = s->nv;
     d->indices = s->idx;
     d->triangle_count = s->nt;
+}
+
+/* A desc of the scene's triangles and materials; everything else default. */
+SC_FN void sc_scene_desc(irrvol_desc *d, const sc_scene *s, const irrvol_material *m, uint32_t nm)
+{
+    sc_geometry_desc(d, s);
     d->triangle_materials = s->mat;
     d->materials = m;
     d->material_count = nm;
