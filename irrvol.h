@@ -4646,7 +4646,11 @@ IrrvolRGB irrvol_irradiance_sh(float px, float py, float pz, float nx, float ny,
 
 #define IRRVOL__GLSL_STRING(...) #__VA_ARGS__
 
-static const char *const irrvol__glsl_parts[] = {
+/* The GLSL text: the prelude, the three stringified parts (code: one
+   line each, broken at statements when copied out) and the vec3 wrapper. */
+typedef struct irrvol__glsl_part { const char *text; int code; } irrvol__glsl_part;
+static const irrvol__glsl_part irrvol__glsl_parts[] = {
+    {
     "/* irrvol.h - the irradiance volume in GLSL: irrvol_irradiance(position, normal)\n"
     "   returns the leak-safe irradiance of the harmonics exported by irrvol_gpu_export.\n"
     "   Needs GLSL 4.30 or newer (storage buffers); define IRRVOL_INDEX(i) and\n"
@@ -4661,27 +4665,45 @@ static const char *const irrvol__glsl_parts[] = {
     "#endif\n"
     "#define IRRVOL_U(x) uint(x)\n#define IRRVOL_I(x) int(x)\n#define IRRVOL_F(x) float(x)\n"
     "#define IRRVOL_ABS(x) abs(x)\n#define IRRVOL_SQRT(x) sqrt(x)\n"
-    "#define IRRVOL_MIN(a, b) ((a) < (b) ? (a) : (b))\n#define IRRVOL_MAX(a, b) ((a) > (b) ? (a) : (b))\n",
-    IRRVOL__GLSL_PART1(IRRVOL__GLSL_STRING),
-    "\n",
-    IRRVOL__GLSL_PART2(IRRVOL__GLSL_STRING),
-    "\n",
-    IRRVOL__GLSL_PART3(IRRVOL__GLSL_STRING),
-    "\nvec3 irrvol_irradiance(vec3 p, vec3 n)\n{\n"
-    "    IrrvolRGB e = irrvol_irradiance_sh(p.x, p.y, p.z, n.x, n.y, n.z);\n"
-    "    return vec3(e.r, e.g, e.b);\n}\n"
+    "#define IRRVOL_MIN(a, b) ((a) < (b) ? (a) : (b))\n#define IRRVOL_MAX(a, b) ((a) > (b) ? (a) : (b))\n", 0},
+    {IRRVOL__GLSL_PART1(IRRVOL__GLSL_STRING), 1},
+    {IRRVOL__GLSL_PART2(IRRVOL__GLSL_STRING), 1},
+    {IRRVOL__GLSL_PART3(IRRVOL__GLSL_STRING), 1},
+    {"vec3 irrvol_irradiance(vec3 p, vec3 n)\n{\n"
+     "    IrrvolRGB e = irrvol_irradiance_sh(p.x, p.y, p.z, n.x, n.y, n.z);\n"
+     "    return vec3(e.r, e.g, e.b);\n}\n", 0}
 };
+
+static void irrvol__glsl_put(char *buffer, size_t capacity, size_t *length, char c)
+{
+    if (buffer && *length + 1 < capacity) buffer[*length] = c;
+    (*length)++;
+}
 
 IRRVOL_API size_t irrvol_glsl_source(char *buffer, size_t capacity)
 {
     size_t length = 0, i;
     for (i = 0; i < sizeof irrvol__glsl_parts / sizeof irrvol__glsl_parts[0]; i++) {
-        size_t n = strlen(irrvol__glsl_parts[i]);
-        if (buffer && length < capacity) {
-            size_t room = capacity - 1 - length;
-            memcpy(buffer + length, irrvol__glsl_parts[i], n < room ? n : room);
+        const char *c = irrvol__glsl_parts[i].text;
+        int code = irrvol__glsl_parts[i].code, depth = 0, braces = 0, line_start = 1, k;
+        for (; *c; c++) {
+            if (code && line_start) {   /* a new line: indented by the braces around it */
+                if (*c == ' ') continue;
+                braces -= *c == '}';
+                for (k = 0; k < 4 * braces; k++) irrvol__glsl_put(buffer, capacity, &length, ' ');
+                braces += *c == '{';
+            } else if (code) {
+                braces += (*c == '{') - (*c == '}');
+            }
+            line_start = 0;
+            irrvol__glsl_put(buffer, capacity, &length, *c);
+            if (!code) continue;
+            depth += (*c == '(') - (*c == ')');
+            if (depth == 0 && (*c == ';' || *c == '{' || *c == '}')) {
+                irrvol__glsl_put(buffer, capacity, &length, '\n');
+                line_start = 1;
+            }
         }
-        length += n;
     }
     if (buffer && capacity) buffer[length < capacity ? length : capacity - 1] = '\0';
     return length;

@@ -208,6 +208,11 @@ static void test_glsl_source_compiles(void)
     CHECK_EQ_INT(irrvol_glsl_source(text, n + 1), n);
     CHECK(text[n] == '\0' && strlen(text) == n);
     CHECK(strstr(text, "irrvol_irradiance_sh") != NULL && strstr(text, "vec3 irrvol_irradiance(") != NULL);
+    {   /* one statement a line, indented: a shader compiler's messages point somewhere */
+        size_t lines = 0, k;
+        for (k = 0; k < n; k++) lines += text[k] == '\n';
+        CHECK(lines > 150 && strstr(text, "\n        float den = ") != NULL);
+    }
     m = irrvol_glsl_source(small, sizeof small);
     CHECK(m == n && small[15] == '\0' && memcmp(small, text, 15) == 0);   /* truncated, terminated */
     CHECK_EQ_INT(irrvol_glsl_source(small, 0), n);
