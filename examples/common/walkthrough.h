@@ -2910,7 +2910,7 @@ EX_FN void wt_bunny_light(const wt_world *w, const irrvol *vol, const float *vis
         l = sqrtf(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
         if (l > 0.0f) { q[0] /= l; q[1] /= l; q[2] /= l; }
     }
-    irrvol_query_many(vol, IRRVOL_FILTER_DEFAULT, n, world_pos, 0, world_normals, 0, rgb);
+    irrvol_query_many(vol, IRRVOL_FILTER_DEFAULT, IRRVOL_WEIGHTING_DEFAULT, n, world_pos, 0, world_normals, 0, rgb);
     for (v = 0; v < 3 * n; v++) rgb[v] *= WT_BUNNY_KD / WT_PI * (visibility ? visibility[v / 3] : 1.0f);
 }
 
