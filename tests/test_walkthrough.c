@@ -41,6 +41,7 @@ static wt_options small_options(wt_mode mode)
     wt_options o;
     wt_options_default(&o);
     o.mode = mode;
+    o.scene = "office";
     o.width = REF_W;
     o.height = REF_H;
     o.frames = 24;
@@ -151,11 +152,11 @@ static void test_bunny_path(void)
     };
     float clearance = 1e9f, under = -1e9f, divider = 1e9f, p[3], heading;
     int i, b, open_start;
-    wt_bunny_position(0.0, p, &heading);
+    wt_bunny_position(NULL, 0.0, p, &heading);
     open_start = box_distance(p[0], p[2], 1.0f, 2.6f, 2.9f, 3.7f) > 0.5f;
     CHECK_MSG(open_start, "the bunny starts at (%.2f, %.2f), not on the open floor", (double)p[0], (double)p[2]);
     for (i = 0; i <= 1000; i++) {
-        wt_bunny_position(i / 1000.0, p, &heading);
+        wt_bunny_position(NULL, i / 1000.0, p, &heading);
         CHECK(isfinite(heading));
         for (b = 0; b < 5; b++) {
             float d = box_distance(p[0], p[2], boxes[b][0], boxes[b][1], boxes[b][2], boxes[b][3]);
@@ -182,7 +183,7 @@ static void test_camera_path(void)
         double t = wt_frame_time(&o, f);
         rendercache_camera c = wt_camera(&o, t, 640, 480);
         float p[3], px, py, depth;
-        wt_bunny_position(t, p, NULL);
+        wt_bunny_position(&o, t, p, NULL);
         p[1] = 0.15f;   /* the bunny's middle */
         CHECK(c.eye[0] > 0.2f && c.eye[0] < 4.8f && c.eye[1] > 0.2f && c.eye[1] < 2.6f && c.eye[2] > 0.2f && c.eye[2] < 3.8f);
         CHECK_MSG(rendercache_camera_project(&c, p, &px, &py, &depth) && px > 32 && px < 608 && py > 32 && py < 448,
