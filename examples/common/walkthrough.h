@@ -2638,12 +2638,12 @@ static int wt__raytrace_create(wt_renderer *r, char *err, size_t err_size)
 
 /* One frame of the render cache: reproject, request, shade, insert. The
    first frame requests every pixel (the render cache starts empty). */
-static int wt__raytrace_frame(wt_renderer *r, int frame, float *rgb, wt_frame_stats *st)
+static int wt__raytrace_view(wt_renderer *r, const rendercache_camera *camera, const rendercache_camera *next, double t,
+                             int frame, float *rgb, wt_frame_stats *st)
 {
     wt_world *w = r->w;
-    const wt_options *o = &w->opt;
-    double t = wt_frame_time(o, frame), t0 = wt_seconds(), a;
-    rendercache_camera cam = wt_camera(o, t, r->width, r->height);
+    double t0 = wt_seconds(), a;
+    rendercache_camera cam = *camera;
     wt_light_stats ls = { 0, 0, 0, 0 };
     uint32_t n = 0, i;
     int full = r->frames_done == 0;
@@ -2662,10 +2662,8 @@ static int wt__raytrace_frame(wt_renderer *r, int frame, float *rgb, wt_frame_st
         }
         n = r->width * r->height;
     } else {
-        if (frame + 1 < o->frames) {   /* predictive sampling (WDG02): the holes the next camera will see */
-            rendercache_camera next = wt_camera(o, wt_frame_time(o, frame + 1), r->width, r->height);
-            if (rendercache_predict(r->rc, &next) != RENDERCACHE_OK) return -1;
-        }
+        if (next && rendercache_predict(r->rc, next) != RENDERCACHE_OK)   /* predictive sampling (WDG02): */
+            return -1;                                                     /* the holes the next camera will see */
         if (rendercache_request(r->rc, r->req, r->budget, &n) != RENDERCACHE_OK) return -1;
     }
     st->phase[0] += wt_seconds() - a;
@@ -2709,6 +2707,15 @@ static int wt__raytrace_frame(wt_renderer *r, int frame, float *rgb, wt_frame_st
     st->bunny_gathers = ls.bunny_gathers;
     st->total = wt_seconds() - t0;
     return 0;
+}
+
+static int wt__raytrace_frame(wt_renderer *r, int frame, float *rgb, wt_frame_stats *st)
+{
+    const wt_options *o = &r->w->opt;
+    double t = wt_frame_time(o, frame);
+    rendercache_camera cam = wt_camera(o, t, r->width, r->height), next;
+    if (frame + 1 < o->frames) next = wt_camera(o, wt_frame_time(o, frame + 1), r->width, r->height);
+    return wt__raytrace_view(r, &cam, frame + 1 < o->frames ? &next : NULL, t, frame, rgb, st);
 }
 
 /* ---- mode baseviews ----------------------------------------------------- */
@@ -3689,11 +3696,11 @@ static void wt__pixel_band(void *ctx, uint32_t band)
     }
 }
 
-static int wt__radiosity_frame(wt_renderer *r, int frame, float *rgb, wt_frame_stats *st)
+static int wt__radiosity_view(wt_renderer *r, const rendercache_camera *camera, double t, float *rgb, wt_frame_stats *st)
 {
     wt_world *w = r->w;
-    double t = wt_frame_time(&w->opt, frame), t0 = wt_seconds(), a;
-    rendercache_camera cam = wt_camera(&w->opt, t, r->width, r->height);
+    double t0 = wt_seconds(), a;
+    rendercache_camera cam = *camera;
     ex_camera ec = wt_ex_camera(&cam);
     wt__pixel_job j;
     wt_set_time(w, t);
@@ -3717,6 +3724,13 @@ static int wt__radiosity_frame(wt_renderer *r, int frame, float *rgb, wt_frame_s
     st->samples = w->bunny.vertex_count;
     st->total = wt_seconds() - t0;
     return 0;
+}
+
+static int wt__radiosity_frame(wt_renderer *r, int frame, float *rgb, wt_frame_stats *st)
+{
+    double t = wt_frame_time(&r->w->opt, frame);
+    rendercache_camera cam = wt_camera(&r->w->opt, t, r->width, r->height);
+    return wt__radiosity_view(r, &cam, t, rgb, st);
 }
 
 /* ---- the renderer ------------------------------------------------------- */
@@ -3785,6 +3799,22 @@ EX_FN int wt_renderer_create(wt_world *w, wt_renderer **out, char *err, size_t e
     return 0;
 }
 
+/* The end of a frame: "other" is the time no named phase took. */
+static int wt__frame_done(wt_renderer *r, int result, wt_frame_stats *st)
+{
+    if (result == 0) {
+        double known = 0.0;
+        int k;
+        for (k = 0; k < WT_PHASES; k++)
+            if (wt_phase_name(r->mode, k) && strcmp(wt_phase_name(r->mode, k), "other") != 0) known += st->phase[k];
+        for (k = 0; k < WT_PHASES; k++)
+            if (wt_phase_name(r->mode, k) && !strcmp(wt_phase_name(r->mode, k), "other"))
+                st->phase[k] = st->total > known ? st->total - known : 0.0;
+        r->frames_done++;
+    }
+    return result;
+}
+
 /* Renders frame `frame` of the path into rgb (width x height x 3 floats,
    linear radiance). Mode raytrace must be given its frames in order. */
 EX_FN int wt_render_frame(wt_renderer *r, int frame, float *rgb, wt_frame_stats *st)
@@ -3797,17 +3827,23 @@ EX_FN int wt_render_frame(wt_renderer *r, int frame, float *rgb, wt_frame_stats 
     case WT_MODE_BASEVIEWS: result = wt__baseviews_frame(r, frame, rgb, st); break;
     default: result = wt__radiosity_frame(r, frame, rgb, st); break;
     }
-    if (result == 0) {
-        double known = 0.0;
-        int k;
-        for (k = 0; k < WT_PHASES; k++)
-            if (wt_phase_name(r->mode, k) && strcmp(wt_phase_name(r->mode, k), "other") != 0) known += st->phase[k];
-        for (k = 0; k < WT_PHASES; k++)
-            if (wt_phase_name(r->mode, k) && !strcmp(wt_phase_name(r->mode, k), "other"))
-                st->phase[k] = st->total > known ? st->total - known : 0.0;
-        r->frames_done++;
-    }
-    return result;
+    return wt__frame_done(r, result, st);
+}
+
+/* Renders the view of any camera (of the renderer's size) with the bunny
+   at time t: the interactive viewer's free camera. Modes radiosity and
+   raytrace (the render cache reprojects its points into whatever camera
+   comes next); mode baseviews reconstructs views near its base views
+   only, along the path: -1. */
+EX_FN int wt_render_view(wt_renderer *r, const rendercache_camera *camera, double t, float *rgb, wt_frame_stats *st)
+{
+    int result;
+    memset(st, 0, sizeof *st);
+    st->lrms = -1.0;
+    if (!camera || camera->width != r->width || camera->height != r->height || r->mode == WT_MODE_BASEVIEWS) return -1;
+    result = r->mode == WT_MODE_RAYTRACE ? wt__raytrace_view(r, camera, NULL, t, r->frames_done, rgb, st)
+                                         : wt__radiosity_view(r, camera, t, rgb, st);
+    return wt__frame_done(r, result, st);
 }
 
 #endif /* EXAMPLES_COMMON_WALKTHROUGH_H */
