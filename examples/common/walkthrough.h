@@ -1449,7 +1449,7 @@ static int wt__path_plan(wt_world *w, char *err, size_t err_size)
     if (ngoals < 0) return wt__fail(err, err_size, "%.200s: nothing to walk to (no stairs, no room without a lamp)", w->layout_path);
     for (g = 0; g < ngoals; g++) {
         long to_cell;
-        float target[3];
+        float target[3] = { 0.0f, 0.0f, 0.0f };
         const float *lo, *hi;
         int to_storey;
         if (goals[g] == -2) {   /* walk to the foot of the stairs, climb, step onto the landing */
@@ -1588,9 +1588,9 @@ EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t
     w->material_count = w->office.material_count + 1;
     w->bunny_material = w->office.material_count;
     w->materials = (lightvec_material *)calloc(w->material_count, sizeof *w->materials);
-    w->pool = ex_pool_create(o->threads);
+    w->pool = o->threads == 1 ? NULL : ex_pool_create(o->threads);   /* one thread: no pool, all work here */
     w->tracer = ex_tracer_create(&w->office);
-    if (!w->bunny_normals || !w->materials || !w->pool || !w->tracer) {
+    if (!w->bunny_normals || !w->materials || (o->threads != 1 && !w->pool) || !w->tracer) {
         wt_world_destroy(w);
         return wt__fail(err, err_size, "%s", "out of memory");
     }
@@ -3527,14 +3527,20 @@ EX_FN void wt_bunny_light(const wt_world *w, const irrvol *vol, const float *vis
 }
 
 /* Rasterizes the static mesh (ids 0 .. static_count-1) and the posed bunny
-   (ids static_count + triangle) into ra. */
+   (ids static_count + triangle) into ra. The clear is done by the first
+   draw's tile jobs, and ra->tile_done (when set) runs after the last draw
+   only, on each finished tile. */
 EX_FN int wt_raster_scene(const wt_world *w, ex_raster *ra, const rendercache_camera *c, const float *static_positions,
                           const uint32_t *static_indices, uint32_t static_count, const float *bunny_world)
 {
     ex_camera ec = wt_ex_camera(c);
-    ex_raster_clear(ra);
-    if (ex_raster_draw(ra, &ec, static_positions, static_indices, static_count, 0) != 0) return -1;
-    return ex_raster_draw(ra, &ec, bunny_world, w->bunny.tri_indices, w->bunny.tri_count, static_count);
+    void (*tile_done)(void *, int, int, int, int) = ra->tile_done;
+    int result;
+    ex_raster_clear_deferred(ra);
+    ra->tile_done = NULL;
+    result = ex_raster_draw(ra, &ec, static_positions, static_indices, static_count, 0);
+    ra->tile_done = tile_done;
+    return result != 0 ? -1 : ex_raster_draw(ra, &ec, bunny_world, w->bunny.tri_indices, w->bunny.tri_count, static_count);
 }
 
 /* The bunny as a sphere for its occlusion blob: the sphere of its volume
@@ -3650,32 +3656,31 @@ typedef struct wt__pixel_job {
     int blob;
 } wt__pixel_job;
 
-#define WT__PIXEL_ROWS 8   /* rows per job of the pixel pass */
-
-/* The pixel pass over a band of rows: static pixels get their radiosity B
-   (radinterp_shade), then radiance (E + (B - E) * blob) / pi; the bunny's
-   the Gouraud blend of its vertex radiances; empty pixels black. */
-static void wt__pixel_band(void *ctx, uint32_t band)
+/* The pixel pass over the pixels [x0, x1) x [y0, y1) of a finished raster
+   tile (ex_raster.tile_done: fused with the raster while the tile is in the
+   cache): static pixels get their radiosity B (radinterp_shade), then
+   radiance (E + (B - E) * blob) / pi; the bunny's the Gouraud blend of its
+   vertex radiances; empty pixels black. */
+static void wt__shade_tile(void *ctx, int x0, int y0, int x1, int y1)
 {
     const wt__pixel_job *j = (const wt__pixel_job *)ctx;
     const wt_renderer *r = j->r;
     const wt_static_shading *s = &r->statics;
     const ex_raster *ra = &r->raster;
     const uint32_t *bunny = r->w->bunny.tri_indices, nt = s->data.triangle_count, nb = r->w->bunny.tri_count;
-    uint32_t y0 = band * WT__PIXEL_ROWS, y1 = y0 + WT__PIXEL_ROWS, x, y;
-    if (y1 > r->height) y1 = r->height;
-    wt_static_shading_shade(s, ra, (size_t)y0 * r->width, (size_t)(y1 - y0) * r->width, r->w->opt.gouraud, j->rgb);
+    int x, y;
     for (y = y0; y < y1; y++) {
-        int blob_row = j->blob && (int)y >= r->blob_box[1] && (int)y < r->blob_box[3];
-        for (x = 0; x < r->width; x++) {
-            size_t p = (size_t)y * r->width + x;
+        int blob_row = j->blob && y >= r->blob_box[1] && y < r->blob_box[3];
+        wt_static_shading_shade(s, ra, (size_t)y * r->width + (size_t)x0, (size_t)(x1 - x0), r->w->opt.gouraud, j->rgb);
+        for (x = x0; x < x1; x++) {
+            size_t p = (size_t)y * r->width + (size_t)x;
             uint32_t id = ra->id[p];
             float *out = j->rgb + 3 * p, u = ra->bary[2 * p], v = ra->bary[2 * p + 1], o = 1.0f - u - v;
             int k;
             if (id < nt) {
                 const float *e = s->data.emission + 3 * (size_t)id;
                 float keep = 1.0f;
-                if (blob_row && (int)x >= r->blob_box[0] && (int)x < r->blob_box[2]) {
+                if (blob_row && x >= r->blob_box[0] && x < r->blob_box[2]) {
                     const uint32_t *tri = s->data.indices + 3 * (size_t)id;
                     const float *a = s->data.positions + 3 * (size_t)tri[0], *b = s->data.positions + 3 * (size_t)tri[1];
                     const float *c = s->data.positions + 3 * (size_t)tri[2];
@@ -3708,19 +3713,20 @@ static int wt__radiosity_view(wt_renderer *r, const rendercache_camera *camera, 
     wt_bunny_light(w, r->volume, r->visibility, w->pose, r->bunny_world, r->bunny_world_normals, r->bunny_rgb);
     st->phase[2] = wt_seconds() - a;
     a = wt_seconds();
-    if (wt_raster_scene(w, &r->raster, &cam, r->statics.data.positions, r->statics.data.indices,
-                        r->statics.data.triangle_count, r->bunny_world) != 0)
-        return -1;
-    st->phase[0] = wt_seconds() - a;
-    a = wt_seconds();
     ex__affine_point(w->pose, r->bunny_centre, r->sphere);
     r->sphere[3] = r->bunny_radius;
     j.r = r;
     j.rgb = rgb;
     j.blob = w->opt.bunny_shadow;
     if (j.blob) wt__blob_box(r, &ec);
-    ex_pool_parallel_for(w->pool, wt__pixel_band, &j, (r->height + WT__PIXEL_ROWS - 1) / WT__PIXEL_ROWS);
-    st->phase[1] = wt_seconds() - a;
+    r->raster.tile_done = wt__shade_tile;   /* shading fused with the last draw's tile jobs */
+    r->raster.tile_user = &j;
+    if (wt_raster_scene(w, &r->raster, &cam, r->statics.data.positions, r->statics.data.indices,
+                        r->statics.data.triangle_count, r->bunny_world) != 0)
+        return -1;
+    r->raster.tile_done = NULL;
+    st->phase[0] = r->raster.seconds_draw - a;     /* the clear and the static mesh */
+    st->phase[1] = wt_seconds() - r->raster.seconds_draw;   /* the bunny and the shading, tile by tile */
     st->samples = w->bunny.vertex_count;
     st->total = wt_seconds() - t0;
     return 0;
