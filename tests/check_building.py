@@ -3,7 +3,8 @@
 deterministic (the committed presets are byte for byte what it writes), its
 triangles have area, no two coplanar faces with the same facing overlap (an
 exporter's duplicate faces make tracers pick either per pixel), and every
-room, door, stair and lamp of the layout lies inside the building. Prints
+room, door, stair and lamp of the layout lies inside the building; by day
+(--daylight) every window has its pane of glass and the layout its sky. Prints
 "N passed, N failed" like the C test programs."""
 import collections
 import os
@@ -103,6 +104,8 @@ def layout_inside(path, lo, hi):
         elif w[0] == 'lamp':
             x, y, z = (float(v) for v in w[4:7])
             box = [x, x, y, y, z, z]
+        elif w[0] == 'sky' and len(w) == 4 and all(float(v) > 0 for v in w[1:]):
+            continue
         else:
             bad.append(line.strip())
             continue
@@ -113,26 +116,42 @@ def layout_inside(path, lo, hi):
     return bad
 
 
+def daylight_ok(stem):
+    """Two glass triangles per window, one sky line, no emitting material."""
+    glass, material = 0, None
+    for line in open(stem + '.obj'):
+        if line.startswith('usemtl '):
+            material = line.split()[1]
+        elif line.startswith('f ') and material == 'glass':
+            glass += 1
+    layout = [l.split()[0] for l in open(stem + '.layout') if l.strip() and not l.startswith('#')]
+    emitting = [l for l in open(stem + '.mtl') if l.startswith('Ke ')]
+    return glass == 2 * layout.count('window') and layout.count('sky') == 1 and not emitting
+
+
 def main():
     script = os.path.join(DATA, 'make_building.py')
     with tempfile.TemporaryDirectory() as tmp:
-        for preset in ('1k', '4k'):
+        for preset in ('1k', '4k', '1k_daylight'):
             out = os.path.join(tmp, 'building_' + preset)
-            subprocess.run([sys.executable, script, '--preset', preset, '--out', out],
-                           check=True, stdout=subprocess.DEVNULL)
+            subprocess.run([sys.executable, script, '--preset', preset[:2], '--out', out] +
+                           (['--daylight'] if 'daylight' in preset else []), check=True, stdout=subprocess.DEVNULL)
             for ext in ('.obj', '.mtl', '.layout'):
                 committed = os.path.join(DATA, 'building_' + preset + ext)
                 same = os.path.exists(committed) and open(committed, 'rb').read() == open(out + ext, 'rb').read()
                 check('preset %s%s is what make_building.py writes' % (preset, ext), same,
-                      'regenerate it: cd examples/data && python3 make_building.py --preset ' + preset)
+                      'regenerate it: cd examples/data && python3 make_building.py --preset ' +
+                      preset.replace('_daylight', ' --daylight'))
             n, zero, skew, dups, lo, hi = geometry(out + '.obj')
-            target = {'1k': 1000, '4k': 4000}[preset]
+            target = {'1k': 1000, '4k': 4000}[preset[:2]]
             check('preset %s: %d triangles, about %d' % (preset, n, target), 0.7 * target <= n <= 1.4 * target)
             check('preset %s: no zero-area triangle' % preset, zero == 0, '%d' % zero)
             check('preset %s: every face axis-aligned' % preset, skew == 0, '%d' % skew)
             check('preset %s: no coplanar overlapping faces with the same facing' % preset, dups == 0, '%d pairs' % dups)
             bad = layout_inside(out + '.layout', lo, hi)
             check('preset %s: the layout lies inside the building' % preset, not bad, '; '.join(bad[:3]))
+            if 'daylight' in preset:
+                check('preset %s: a pane of glass in every window, a sky, no lamp on' % preset, daylight_ok(out))
         # Another seed and shape: the same checks hold beyond the presets.
         out = os.path.join(tmp, 'other')
         subprocess.run([sys.executable, script, '--floors', '3', '--rooms-x', '2', '--rooms-z', '3',

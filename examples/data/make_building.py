@@ -6,6 +6,7 @@ bytes on every machine.
 
     python3 make_building.py --preset 4k              # building_4k.obj/.mtl/.layout here
     python3 make_building.py --floors 3 --rooms-x 4 --rooms-z 3 --seed 7 --out b
+    python3 make_building.py --preset 1k --daylight   # building_1k_daylight.*
 
 The building is a grid of rooms per storey (column widths and row depths vary
 with the seed), stacked storeys with floor slabs 20 cm thick, and:
@@ -34,6 +35,14 @@ line, so tests and examples can place cameras, probes and moving objects:
     window STOREY X0 X1 Y0 Y1 Z0 Z1
     stair STOREY X0 X1 Y0 Y1 Z0 Z1                 (bottom step at X0, rising to +x)
     lamp STOREY I J X Y Z KIND                     (centre of the emitting face)
+    sky R G B                                      (--daylight: the sky's radiance)
+
+--daylight writes the same building by day: a pane of glass (Tf 0.85, illum 4:
+thin glass, see examples/common/obj.h) in the middle of every window, facing
+out; the lamps switched off (no Ke); a ground around the building at the
+bottom of the ground slab, as wide as the building on each side; and a
+constant overcast sky, given as the layout's `sky` line in W/(m^2 sr), which
+lights the interior through the windows.
 
 Presets: 1k (2 storeys of 2 x 1 rooms, 1,250 triangles), 4k (2 storeys of
 3 x 3 rooms, 4,282), 16k (4 storeys of 5 x 4 rooms, 14,836) and 64k (8 storeys
@@ -109,6 +118,39 @@ Ke 30 27 21
 '''
 
 
+DAYLIGHT_SKY = (4.0, 4.3, 5.0)   # an overcast sky, a little blue, W/(m^2 sr)
+DAYLIGHT_MATERIALS = '''newmtl glass
+Kd 0 0 0
+Ks 0.08 0.08 0.08
+Ns 2000
+Tf 0.85 0.87 0.86
+illum 4
+newmtl ground
+Kd 0.24 0.22 0.18
+'''
+
+
+def daylight_materials():
+    """The materials by day: lamps off, glass and the ground added."""
+    lines = [l for l in MATERIALS.split('\n') if not l.startswith('Ke ')]
+    lines[1] = '# Ks/Ns = glossy Phong lobe; by day the lamps are off (no Ke), Tf = glass.'
+    return '\n'.join(lines) + DAYLIGHT_MATERIALS
+
+
+def box_faces(lo, hi):
+    """The six faces of an axis-aligned box, counter-clockwise seen from outside."""
+    x0, y0, z0 = lo
+    x1, y1, z1 = hi
+    return {
+        '-x': [(x0, y0, z0), (x0, y0, z1), (x0, y1, z1), (x0, y1, z0)],
+        '+x': [(x1, y0, z0), (x1, y1, z0), (x1, y1, z1), (x1, y0, z1)],
+        '-y': [(x0, y0, z0), (x1, y0, z0), (x1, y0, z1), (x0, y0, z1)],
+        '+y': [(x0, y1, z0), (x0, y1, z1), (x1, y1, z1), (x1, y1, z0)],
+        '-z': [(x0, y0, z0), (x0, y1, z0), (x1, y1, z0), (x1, y0, z0)],
+        '+z': [(x0, y0, z1), (x1, y0, z1), (x1, y1, z1), (x0, y1, z1)],
+    }
+
+
 class Mesh:
     """Positions and triangles grouped by object name and material."""
 
@@ -137,18 +179,9 @@ class Mesh:
         """An axis-aligned solid as up to six faces facing out, each two
         triangles. skip names faces to leave out ('-x', '+x', ...): faces lying
         flat against another surface, or between boxes of one solid."""
-        x0, y0, z0 = lo
-        x1, y1, z1 = hi
-        if x1 - x0 <= 1e-6 or y1 - y0 <= 1e-6 or z1 - z0 <= 1e-6:
+        if any(hi[k] - lo[k] <= 1e-6 for k in range(3)):
             return
-        faces = {
-            '-x': [(x0, y0, z0), (x0, y0, z1), (x0, y1, z1), (x0, y1, z0)],
-            '+x': [(x1, y0, z0), (x1, y1, z0), (x1, y1, z1), (x1, y0, z1)],
-            '-y': [(x0, y0, z0), (x1, y0, z0), (x1, y0, z1), (x0, y0, z1)],
-            '+y': [(x0, y1, z0), (x0, y1, z1), (x1, y1, z1), (x1, y1, z0)],
-            '-z': [(x0, y0, z0), (x0, y1, z0), (x1, y1, z0), (x1, y0, z0)],
-            '+z': [(x0, y0, z1), (x1, y0, z1), (x1, y1, z1), (x0, y1, z1)],
-        }
+        faces = box_faces(lo, hi)
         for name in ('-y', '+y', '-x', '+x', '-z', '+z'):
             if name not in skip:
                 self.quad(faces[name])
@@ -179,8 +212,9 @@ def fmt(v):
 
 
 class Building:
-    def __init__(self, floors, rooms_x, rooms_z, seed):
+    def __init__(self, floors, rooms_x, rooms_z, seed, daylight=False):
         self.floors, self.nx, self.nz = floors, rooms_x, rooms_z
+        self.daylight = daylight
         self.rng = random.Random(seed)
         self.mesh = Mesh()
         self.layout = []
@@ -504,6 +538,33 @@ class Building:
                         t = self.thick_z(g)
                         box = (self.X[g] - t / 2, self.X[g] + t / 2, y0 + v0, y0 + v1, u0, u1)
                     self.layout.append('%s %d %s' % (kind, s, ' '.join(fmt(v) for v in box)))
+                    if kind == 'window' and self.daylight:
+                        self.pane(axis, g, box)
+
+    def pane(self, axis, g, box):
+        """By day: the glass of a window, one face across the opening in the
+        middle of the wall, facing out of the building."""
+        x0, x1, y0, y1, z0, z1 = box
+        if axis == 'x':
+            c = (z0 + z1) / 2
+            lo, hi, side = (x0, y0, c), (x1, y1, c), '-z' if g == 0 else '+z'
+        else:
+            c = (x0 + x1) / 2
+            lo, hi, side = (c, y0, z0), (c, y1, z1), '-x' if g == 0 else '+x'
+        self.mesh.group('window', 'glass')
+        self.mesh.quad(box_faces(lo, hi)[side])
+
+    def ground(self):
+        """By day: the ground round the building at the bottom of the ground
+        slab, as wide as the building on each side (four strips: none under
+        the building, where it would lie against the slab)."""
+        X0, X1 = self.X[0] - T_EXT / 2, self.X[-1] + T_EXT / 2
+        Z0, Z1 = self.Z[0] - T_EXT / 2, self.Z[-1] + T_EXT / 2
+        w, y = max(X1 - X0, Z1 - Z0), -SLAB
+        self.mesh.group('ground', 'ground')
+        for (ax, az), (bx, bz) in (((X0 - w, Z0 - w), (X1 + w, Z0)), ((X0 - w, Z1), (X1 + w, Z1 + w)),
+                                   ((X0 - w, Z0), (X0, Z1)), ((X1, Z0), (X1 + w, Z1))):
+            self.mesh.quad(box_faces((ax, y, az), (bx, y, bz))['+y'])
 
     # --- furniture -----------------------------------------------------------
     def keepouts(self, s, i, j, doors, wins):
@@ -675,6 +736,8 @@ class Building:
             dark.update(c for c in candidates if rng.random() < 0.08)
         for s in range(self.floors + 1):
             self.slab(s)
+        if self.daylight:
+            self.ground()
         room_lines = []
         for s in range(self.floors):
             doors = self.plan_doors(s)
@@ -698,7 +761,8 @@ class Building:
                     room_lines.append('room %d %d %d %s %s %d' % (
                         s, i, j, ' '.join(fmt(v) for v in (r.x0, r.x1, y0, y0 + STOREY - SLAB, r.z0, r.z1)),
                         kind, stair))
-        self.layout = room_lines + self.layout
+        sky = ['sky %s' % ' '.join(fmt(v) for v in DAYLIGHT_SKY)] if self.daylight else []
+        self.layout = sky + room_lines + self.layout
 
     def write(self, stem):
         name = stem.split('/')[-1]
@@ -707,12 +771,14 @@ class Building:
             f.write('# Generated building, written by make_building.py (%d storeys of %d x %d rooms).\n'
                     % (self.floors, self.nx, self.nz))
             f.write('# Metres, +y up, %d triangles. Layout in %s.layout.\n' % (m.triangles, name))
+            if self.daylight:
+                f.write('# By day: glass in the windows, lamps off, a ground; the sky is in the layout.\n')
             f.write('mtllib %s.mtl\n' % name)
             for v in m.verts:
                 f.write('v %s %s %s\n' % tuple(fmt(c) for c in v))
             f.write('\n'.join(m.lines) + '\n')
         with open(stem + '.mtl', 'w') as f:
-            f.write(MATERIALS)
+            f.write(daylight_materials() if self.daylight else MATERIALS)
         with open(stem + '.layout', 'w') as f:
             f.write('# Layout of %s.obj: see make_building.py for the line formats.\n' % name)
             f.write('\n'.join(self.layout) + '\n')
@@ -725,7 +791,9 @@ def main(argv):
     ap.add_argument('--rooms-x', type=int)
     ap.add_argument('--rooms-z', type=int)
     ap.add_argument('--seed', type=int)
-    ap.add_argument('--out', help='output path without extension (default building_<preset> or building)')
+    ap.add_argument('--daylight', action='store_true',
+                    help='by day: glass in the windows, lamps off, a ground and a sky (see above)')
+    ap.add_argument('--out', help='output path without extension (default building_<preset>[_daylight] or building)')
     a = ap.parse_args(argv)
     p = dict(PRESETS[a.preset]) if a.preset else dict(floors=2, rooms_x=3, rooms_z=2, seed=1)
     for k in ('floors', 'rooms_x', 'rooms_z', 'seed'):
@@ -735,12 +803,12 @@ def main(argv):
         ap.error('floors, rooms-x and rooms-z must be at least 1')
     if p['floors'] * p['rooms_x'] * p['rooms_z'] > 4096:
         ap.error('at most 4096 rooms')
-    b = Building(p['floors'], p['rooms_x'], p['rooms_z'], p['seed'])
+    b = Building(p['floors'], p['rooms_x'], p['rooms_z'], p['seed'], a.daylight)
     b.build()
-    out = a.out or ('building_' + a.preset if a.preset else 'building')
+    out = a.out or (('building_' + a.preset if a.preset else 'building') + ('_daylight' if a.daylight else ''))
     b.write(out)
-    print('%s.obj: %d storeys of %d x %d rooms, %d triangles' %
-          (out, p['floors'], p['rooms_x'], p['rooms_z'], b.mesh.triangles))
+    print('%s.obj: %d storeys of %d x %d rooms, %d triangles%s' %
+          (out, p['floors'], p['rooms_x'], p['rooms_z'], b.mesh.triangles, ', by day' if a.daylight else ''))
 
 
 if __name__ == '__main__':
