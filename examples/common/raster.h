@@ -37,16 +37,11 @@
 #ifndef EXAMPLES_COMMON_RASTER_H
 #define EXAMPLES_COMMON_RASTER_H
 
-#if !defined(_POSIX_C_SOURCE) || _POSIX_C_SOURCE < 200809L
-#  undef _POSIX_C_SOURCE
-#  define _POSIX_C_SOURCE 200809L   /* clock_gettime */
-#endif
 #include <float.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
 #include "camera.h"
 #include "pool.h"
@@ -98,7 +93,6 @@ typedef struct ex_raster {
        while the tile's buffers are in the cache */
     void (*tile_done)(void *user, int x0, int y0, int x1, int y1);
     void *tile_user;
-    double seconds_draw;        /* wall clock when the latest draw began (CLOCK_MONOTONIC) */
 } ex_raster;
 
 EX_FN void ex_raster_free(ex_raster *r)
@@ -185,13 +179,6 @@ EX_FN void ex_raster_clear(ex_raster *r)
 EX_FN void ex_raster_clear_deferred(ex_raster *r)
 {
     r->clear_pending = 1;
-}
-
-static double ex__raster_clock(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
 /* ---- clipping in view space ----------------------------------------------- */
@@ -546,7 +533,6 @@ static int ex__raster_run(ex_raster *r, const ex_camera *c, const float *positio
         return -1;
     if (tri_count > 0 && !positions) return -1;
     if (tri_count > 0 && !indices) return -1;
-    r->seconds_draw = ex__raster_clock();
     if (ex__raster_setup(r, c, positions, indices, tri_count, id_base) != 0 || ex__raster_bin(r) != 0)
         return -1;
     if (r->counting) r->coverage_used = 1;

@@ -3529,9 +3529,11 @@ EX_FN void wt_bunny_light(const wt_world *w, const irrvol *vol, const float *vis
 /* Rasterizes the static mesh (ids 0 .. static_count-1) and the posed bunny
    (ids static_count + triangle) into ra. The clear is done by the first
    draw's tile jobs, and ra->tile_done (when set) runs after the last draw
-   only, on each finished tile. */
+   only, on each finished tile. *static_done (optional): the clock
+   (wt_seconds) when the static mesh was in. */
 EX_FN int wt_raster_scene(const wt_world *w, ex_raster *ra, const rendercache_camera *c, const float *static_positions,
-                          const uint32_t *static_indices, uint32_t static_count, const float *bunny_world)
+                          const uint32_t *static_indices, uint32_t static_count, const float *bunny_world,
+                          double *static_done)
 {
     ex_camera ec = wt_ex_camera(c);
     void (*tile_done)(void *, int, int, int, int) = ra->tile_done;
@@ -3540,6 +3542,7 @@ EX_FN int wt_raster_scene(const wt_world *w, ex_raster *ra, const rendercache_ca
     ra->tile_done = NULL;
     result = ex_raster_draw(ra, &ec, static_positions, static_indices, static_count, 0);
     ra->tile_done = tile_done;
+    if (static_done) *static_done = wt_seconds();
     return result != 0 ? -1 : ex_raster_draw(ra, &ec, bunny_world, w->bunny.tri_indices, w->bunny.tri_count, static_count);
 }
 
@@ -3704,7 +3707,7 @@ static void wt__shade_tile(void *ctx, int x0, int y0, int x1, int y1)
 static int wt__radiosity_view(wt_renderer *r, const rendercache_camera *camera, double t, float *rgb, wt_frame_stats *st)
 {
     wt_world *w = r->w;
-    double t0 = wt_seconds(), a;
+    double t0 = wt_seconds(), a, b = 0.0;
     rendercache_camera cam = *camera;
     ex_camera ec = wt_ex_camera(&cam);
     wt__pixel_job j;
@@ -3722,11 +3725,11 @@ static int wt__radiosity_view(wt_renderer *r, const rendercache_camera *camera, 
     r->raster.tile_done = wt__shade_tile;   /* shading fused with the last draw's tile jobs */
     r->raster.tile_user = &j;
     if (wt_raster_scene(w, &r->raster, &cam, r->statics.data.positions, r->statics.data.indices,
-                        r->statics.data.triangle_count, r->bunny_world) != 0)
+                        r->statics.data.triangle_count, r->bunny_world, &b) != 0)
         return -1;
     r->raster.tile_done = NULL;
-    st->phase[0] = r->raster.seconds_draw - a;     /* the clear and the static mesh */
-    st->phase[1] = wt_seconds() - r->raster.seconds_draw;   /* the bunny and the shading, tile by tile */
+    st->phase[0] = b - a;                /* the clear and the static mesh */
+    st->phase[1] = wt_seconds() - b;     /* the bunny and the shading, tile by tile */
     st->samples = w->bunny.vertex_count;
     st->total = wt_seconds() - t0;
     return 0;
