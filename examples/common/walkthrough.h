@@ -42,10 +42,13 @@
                 agree on a fraction q of their pixels (base views), key
                 times are refined with the same test (a fish-eye at the lamp
                 and the base views), base images are traced with the shading
-                above and saved; a frame blends the base images of the two
-                views around its eye to its time, moving the bunny by its
-                transforms, and warps them into its camera with both fills
-                (pixels still empty are traced).
+                above and saved; the bunny's indirect light is solved at key
+                times of its own (rendercache_keytimes_create, section 4.3)
+                and interpolated in time for the base images. A frame blends
+                the base images of the two views around its eye to its time,
+                moving the bunny by its transforms, and warps them into its
+                camera with both fills, averaging the views that see a
+                surface (pinterp -a); gaps wider than 8 pixels are traced.
      radiosity  the static office shaded per pixel by Hardt's quadratic
                 irradiance interpolants (radinterp.h) from an ID +
                 barycentric buffer (examples/common/raster.h), the bunny
@@ -119,6 +122,8 @@
 #define WT_BUNNY_NORMAL_ANGLE 30.0f  /* degrees: light vectors valid between the bunny's normals */
 #define WT_BUNNY_PRIORITY 4.0f      /* render-cache priority scale of the bunny's points */
 #define WT_PHASES 4
+#define WT_BASEVIEWS_MAX_FILL 8u   /* baseviews: background fill reaches this many pixels; farther ones are traced */
+#define WT_KEY_EPSILON 0.1f        /* baseviews: a bunny vertex changed when its radiance moved by more than 10% */
 
 typedef enum wt_mode {
     WT_MODE_RAYTRACE = 0,
@@ -2451,6 +2456,14 @@ typedef struct wt_renderer {
     ex_baseviews_reconstructor rec;
     rendercache_range_image *blend[8], *out;
     uint32_t fill_frame;
+    rendercache_keytimes *bunny_light;   /* the bunny's indirect light at key times (Nimeroff 4.3) */
+    float *bunny_indirect;      /* per bunny vertex: its indirect radiance (RGB) at bunny_time */
+    double bunny_time;
+    uint32_t saved_key_count;   /* key solutions read from the precompute cache, replayed by the solve */
+    double *saved_key_times;
+    float *saved_key_values;
+    int key_replay_missed;      /* a solve found no saved key: the cache entry is stale */
+    double seconds_keys;
     /* radiosity */
     wt_static_shading statics;
     irrvol *volume;
@@ -2658,6 +2671,7 @@ static int wt__raytrace_view(wt_renderer *r, const rendercache_camera *camera, c
             q->x = i % r->width;
             q->y = i / r->width;
             q->flags = 0;
+            q->frame = 0;   /* the current frame */
             rendercache_camera_ray(&cam, (float)q->x + 0.5f, (float)q->y + 0.5f, q->org, q->dir);
         }
         n = r->width * r->height;
@@ -2679,6 +2693,7 @@ static int wt__raytrace_view(wt_renderer *r, const rendercache_camera *camera, c
     for (i = 0; i < n; i++) {
         const wt_point *p = &r->points[i];
         rendercache_sample *s = &r->samples[i];
+        s->frame = r->req[i].frame;
         s->x = r->req[i].x;
         s->y = r->req[i].y;
         s->flags = r->req[i].flags;
@@ -2696,7 +2711,7 @@ static int wt__raytrace_view(wt_renderer *r, const rendercache_camera *camera, c
         if (p->object == WT_OBJECT_BUNNY || p->bunny_shadow) s->priority_scale *= WT_BUNNY_PRIORITY;
     }
     a = wt_seconds();
-    if (rendercache_insert(r->rc, r->samples, n) != RENDERCACHE_OK) return -1;
+    if (rendercache_insert(r->rc, r->samples, n, NULL) != RENDERCACHE_OK) return -1;
     st->phase[0] += wt_seconds() - a;
     memcpy(rgb, rendercache_image(r->rc), sizeof(float) * 3 * r->width * r->height);
     st->samples = n;
@@ -2817,7 +2832,143 @@ static uint64_t wt__baseviews_key(const wt_renderer *r)
     h = wt_hash_f32(h, o->quality);
     h = wt_hash_u64(h, (uint64_t)o->light_samples);
     h = wt_hash_u64(h, (uint64_t)o->bunny_strata);
+    h = wt_hash_f32(h, WT_KEY_EPSILON);   /* the bunny's key-time solutions are saved with the images */
     return h;
+}
+
+/* ---- the bunny's indirect light in time (Nimeroff 4.3) ------------------
+   The object-space solution: the indirect radiance of each of the bunny's
+   vertices (a light vector gathered at the posed vertex, in the office
+   with the posed bunny, through the Lambertian bunny's BRDF). It is solved
+   at key times that rendercache_keytimes_create chooses (an interval is
+   halved while more than 1 - q of the vertices change by more than 5%),
+   and base images and traced pixels interpolate it linearly in time and
+   across each triangle. Its intervals are halved at most once more than
+   the base images' initial key intervals (--keys) need to be (--keys 5: 9
+   key times at most). The office's indirect light comes from its static
+   light vectors, as in the other modes. The gathers use one random stream
+   per vertex at every time, so that the changes the test sees are the
+   light's, not the noise's. */
+
+typedef struct wt__key_job {
+    wt_world *w;
+    float *values;
+} wt__key_job;
+
+static void wt__bunny_vertex_job(void *ctx, uint32_t batch)
+{
+    const wt__key_job *j = (const wt__key_job *)ctx;
+    wt_world *w = j->w;
+    uint32_t v, end = batch * WT__BATCH + WT__BATCH;
+    if (end > w->bunny.vertex_count) end = w->bunny.vertex_count;
+    for (v = batch * WT__BATCH; v < end; v++) {
+        lightvec_surface s;
+        lightvec_record rec;
+        float *out = j->values + 3 * (size_t)v, n[3], l;
+        int k;
+        memset(&s, 0, sizeof s);
+        ex__affine_point(w->pose, w->bunny.positions + 3 * (size_t)v, s.position);
+        ex__affine_vector(w->pose, w->bunny_normals + 3 * (size_t)v, n);
+        l = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        for (k = 0; k < 3; k++) s.normal[k] = l > 0.0f ? n[k] / l : (k == 1 ? 1.0f : 0.0f);
+        s.flags = LIGHTVEC_RECORD_VIEW_INDEPENDENT;
+        s.material = w->materials[w->bunny_material];
+        out[0] = out[1] = out[2] = 0.0f;
+        if (lightvec_gather(w->posed_scene, &w->bunny_gather, &s, wt__stream(WT_STREAM_BASE, 0xFFFFFFu, v), &rec) ==
+            LIGHTVEC_OK)
+            lightvec_radiance(&w->materials[w->bunny_material], s.normal, NULL, &rec.vector, out);
+    }
+}
+
+/* rendercache_solve_fn: the bunny's vertex radiances at time t; a solution
+   saved in the precompute cache is taken as it is. */
+static int wt__bunny_solve(void *user, double t, float *values)
+{
+    wt_renderer *r = (wt_renderer *)user;
+    wt_world *w = r->w;
+    wt__key_job j;
+    uint32_t k, n = 3 * w->bunny.vertex_count;
+    for (k = 0; k < r->saved_key_count; k++)
+        if (r->saved_key_times[k] == t) {
+            memcpy(values, r->saved_key_values + (size_t)k * n, n * sizeof(float));
+            return 0;
+        }
+    r->key_replay_missed |= r->saved_key_count > 0;
+    wt_set_time(w, t);
+    if (wt__ensure_pose(w) != 0) return 1;
+    j.w = w;
+    j.values = values;
+    ex_pool_parallel_for(w->pool, wt__bunny_vertex_job, &j, (w->bunny.vertex_count + WT__BATCH - 1) / WT__BATCH);
+    return 0;
+}
+
+/* Halvings of [0, 1] at most for the bunny's key times (see above). */
+static uint32_t wt__key_depth(const wt_options *o)
+{
+    uint32_t depth = 1;
+    while ((1 << (depth - 1)) < o->keys - 1) depth++;
+    return depth;
+}
+
+static int wt__bunny_keys(wt_renderer *r)
+{
+    rendercache_keytime_desc d;
+    double t0 = wt_seconds();
+    memset(&d, 0, sizeof d);
+    d.element_count = r->w->bunny.vertex_count;
+    d.components = 3;
+    d.t0 = 0.0;
+    d.t1 = 1.0;
+    d.quality = r->w->opt.quality;
+    d.epsilon = WT_KEY_EPSILON;
+    d.max_depth = wt__key_depth(&r->w->opt);
+    d.solve = wt__bunny_solve;
+    d.user = r;
+    rendercache_keytimes_destroy(r->bunny_light);
+    r->bunny_light = NULL;
+    if (rendercache_keytimes_create(&d, &r->bunny_light) != RENDERCACHE_OK) return -1;
+    r->seconds_keys = wt_seconds() - t0;
+    r->bunny_time = -1.0;
+    return 0;
+}
+
+/* The bunny's indirect light of points lit by it (p->object == the bunny):
+   the vertex radiances at the current time, interpolated across the hit
+   triangle (barycentric coordinates of the posed hit point). */
+static void wt__bunny_indirect_at(wt_renderer *r, wt_point *p)
+{
+    const wt_world *w = r->w;
+    const uint32_t tri = p->polygon - w->office.face_count, *v = w->bunny.tri_indices + 3 * (size_t)tri;
+    float a[3], b[3], c[3], e0[3], e1[3], e2[3], d00 = 0, d01 = 0, d11 = 0, d20 = 0, d21 = 0, den, bv, bw, bu;
+    int k;
+    ex__affine_point(w->pose, w->bunny.positions + 3 * (size_t)v[0], a);
+    ex__affine_point(w->pose, w->bunny.positions + 3 * (size_t)v[1], b);
+    ex__affine_point(w->pose, w->bunny.positions + 3 * (size_t)v[2], c);
+    for (k = 0; k < 3; k++) {
+        e0[k] = b[k] - a[k];
+        e1[k] = c[k] - a[k];
+        e2[k] = p->pos[k] - a[k];
+        d00 += e0[k] * e0[k]; d01 += e0[k] * e1[k]; d11 += e1[k] * e1[k];
+        d20 += e2[k] * e0[k]; d21 += e2[k] * e1[k];
+    }
+    den = d00 * d11 - d01 * d01;
+    bv = den != 0.0f ? (d11 * d20 - d01 * d21) / den : 0.0f;
+    bw = den != 0.0f ? (d00 * d21 - d01 * d20) / den : 0.0f;
+    bu = 1.0f - bv - bw;
+    for (k = 0; k < 3; k++)
+        p->indirect[k] = bu * r->bunny_indirect[3 * v[0] + k] + bv * r->bunny_indirect[3 * v[1] + k] +
+                         bw * r->bunny_indirect[3 * v[2] + k];
+}
+
+/* The vertex radiances at time t, interpolated between the key times. */
+static int wt__bunny_light_at(wt_renderer *r, double t)
+{
+    if (t == r->bunny_time) return 0;
+    if (rendercache_keytimes_eval(r->bunny_light, t, r->bunny_indirect, 3 * (size_t)r->w->bunny.vertex_count) !=
+        RENDERCACHE_OK)
+        return -1;
+    r->bunny_time = t;
+    return 0;
 }
 
 /* Renders base image (view, key) with the frames' shading. */
@@ -2831,14 +2982,21 @@ static int wt__render_base(wt_renderer *r, uint32_t view, uint32_t key, renderca
     if (rendercache_range_image_create(&c, NULL, &img) != RENDERCACHE_OK) return -1;
     img->time = r->bv.times[key];
     wt_set_time(w, img->time);
-    if (wt__shade_camera(w, &c, WT_STREAM_BASE, view * r->bv.time_count + key, WT_SHADE_DIRECT | WT_SHADE_INSERT,
-                         r->points, r->index, &st) != 0) {
+    /* the office's light vectors; the bunny's indirect light from its key-time solution */
+    if (wt__shade_camera(w, &c, WT_STREAM_BASE, view * r->bv.time_count + key,
+                         WT_SHADE_DIRECT | WT_SHADE_INSERT | WT_SHADE_STATIC_ONLY, r->points, r->index, &st) != 0 ||
+        wt__bunny_light_at(r, img->time) != 0) {
         rendercache_range_image_destroy(img);
         return -1;
     }
     for (i = 0; i < n; i++) {
-        const wt_point *p = &r->points[i];
+        wt_point *p = &r->points[i];
+        int k;
         if (p->t < 0.0f) continue;   /* outside the fish-eye's circle: RENDERCACHE_NO_SAMPLE */
+        if (p->object == WT_OBJECT_BUNNY && p->t < FLT_MAX) {
+            wt__bunny_indirect_at(r, p);
+            for (k = 0; k < 3; k++) p->rgb[k] = p->direct[k] + p->indirect[k];
+        }
         memcpy(img->rgb + 3 * (size_t)i, p->rgb, 3 * sizeof(float));
         img->object[i] = p->object;
         img->depth[i] = p->object == RENDERCACHE_MISS ? RENDERCACHE_FAR_DEPTH : p->t;
@@ -2847,11 +3005,18 @@ static int wt__render_base(wt_renderer *r, uint32_t view, uint32_t key, renderca
     return 0;
 }
 
-/* Base images from the precompute cache: the decomposition must match. */
+static void wt__put_floats(wt_bytes *b, const float *v, size_t n);
+static int wt__get_floats(wt_bytes *b, float *v, size_t n);
+
+/* Base images from the precompute cache: the decomposition must match.
+   After them, the key solutions of the bunny's indirect light (count,
+   then per key its time and its vertex radiances), kept in
+   r->saved_key_* for wt__bunny_solve to replay. */
 static int wt__load_bases(wt_renderer *r, const void *data, size_t size)
 {
+    const size_t per_key = 3 * (size_t)r->w->bunny.vertex_count;
     wt_bytes b;
-    uint64_t views, times, bits, n;
+    uint64_t views, times, bits, n, keys;
     uint32_t i;
     memset(&b, 0, sizeof b);
     b.data = (unsigned char *)data;
@@ -2871,6 +3036,15 @@ static int wt__load_bases(wt_renderer *r, const void *data, size_t size)
             return -1;
         b.read += (size_t)n;
     }
+    if (!wt_bytes_get_u64(&b, &keys) || keys < 2 || keys > (1u << wt__key_depth(&r->w->opt)) + 1) return -1;
+    r->saved_key_times = (double *)malloc(sizeof(double) * (size_t)keys);
+    r->saved_key_values = (float *)malloc(sizeof(float) * per_key * (size_t)keys);
+    if (!r->saved_key_times || !r->saved_key_values) return -1;
+    for (i = 0; i < keys; i++) {
+        if (!wt_bytes_get_u64(&b, &bits) || !wt__get_floats(&b, r->saved_key_values + per_key * i, per_key)) return -1;
+        memcpy(&r->saved_key_times[i], &bits, sizeof bits);
+    }
+    r->saved_key_count = (uint32_t)keys;
     return b.read == b.size ? 0 : -1;
 }
 
@@ -2892,6 +3066,13 @@ static int wt__save_bases(const wt_renderer *r, wt_bytes *b)
         wt_bytes_put(b, data, size);
         rendercache_free_memory(NULL, data);
     }
+    wt_bytes_put_u64(b, rendercache_keytimes_count(r->bunny_light));
+    for (i = 0; i < rendercache_keytimes_count(r->bunny_light); i++) {
+        uint64_t bits;
+        memcpy(&bits, &rendercache_keytimes_times(r->bunny_light)[i], sizeof bits);
+        wt_bytes_put_u64(b, bits);
+        wt__put_floats(b, rendercache_keytimes_values(r->bunny_light, i), 3 * (size_t)r->w->bunny.vertex_count);
+    }
     return b->failed ? -1 : 0;
 }
 
@@ -2912,17 +3093,15 @@ static int wt__fill_pixel(void *user, uint32_t x, uint32_t y, const float org[3]
     memcpy(p.dir, dir, sizeof p.dir);
     p.stream = wt__stream(WT_STREAM_FILL, r->fill_frame, y * r->width + x);
     wt__trace_point(w, &p, 1);
-    if (!p.lit) {
+    if (!p.lit && p.light == WT_LIGHT_BUNNY) {   /* the key-time solution, at the frame's time (wt__baseviews_frame) */
+        wt__bunny_indirect_at(r, &p);
+    } else if (!p.lit) {
         out = wt__outgoing(&p, wo);
-        if (p.light == WT_LIGHT_BUNNY && wt__ensure_pose(w) != 0) return 0;
         if (lightvec_lookup(wt__cache_of(w, &p), p.pos, p.normal, out, &lr) == LIGHTVEC_OK && lr.hit) {
             rec.vector = lr.vector;
         } else {
             wt__surface_of(w, &p, &s);
-            if (lightvec_gather(p.light == WT_LIGHT_BUNNY ? w->posed_scene : w->office_scene,
-                                p.light == WT_LIGHT_BUNNY ? &w->bunny_gather : &w->static_gather, &s, p.stream,
-                                &rec) != LIGHTVEC_OK)
-                return 0;
+            if (lightvec_gather(w->office_scene, &w->static_gather, &s, p.stream, &rec) != LIGHTVEC_OK) return 0;
         }
         lightvec_radiance(&w->materials[p.material], p.normal, out, &rec.vector, p.indirect);
     }
@@ -2991,7 +3170,24 @@ static int wt__baseviews_create(wt_renderer *r, char *err, size_t err_size)
             rendercache_range_image_destroy(r->bv.base[i]);
             r->bv.base[i] = NULL;
         }
+        r->saved_key_count = 0;
         wt__say(w, "base images: %s is damaged or stale, rebuilding it\n", path);
+    }
+    /* the bunny's indirect light at key times, before the base images that use it */
+    r->bunny_indirect = (float *)malloc(3 * sizeof(float) * w->bunny.vertex_count);
+    if (!r->bunny_indirect || wt__bunny_keys(r) != 0)
+        return wt__fail(err, err_size, "%s", "the bunny's indirect light failed (out of memory)");
+    if (r->key_replay_missed && r->reused_baseviews) {   /* a stale entry: trace and save anew */
+        for (i = 0; i < r->bv.view_count * r->bv.time_count; i++) {
+            rendercache_range_image_destroy(r->bv.base[i]);
+            r->bv.base[i] = NULL;
+        }
+        r->reused_baseviews = 0;
+    }
+    if (o->verbose) {
+        printf("bunny's indirect light: %u key times (q = %.2f, %s in %.1f s)\n", rendercache_keytimes_count(r->bunny_light),
+               (double)o->quality, r->reused_baseviews ? "replayed" : "solved", r->seconds_keys);
+        fflush(stdout);
     }
     if (!r->reused_baseviews) {
         /* base images add light vectors to a copy of the static cache, so that
@@ -3039,6 +3235,8 @@ static int wt__baseviews_create(wt_renderer *r, char *err, size_t err_size)
     if (rendercache_warper_create(&wd, &r->rec.blender) != RENDERCACHE_OK) return wt__fail(err, err_size, "%s", "out of memory");
     wd.fill_pixel = wt__fill_pixel;
     wd.fill_user = r;
+    wd.average = 1;                     /* the corner views that see a surface are averaged (pinterp -a) */
+    wd.max_fill_distance = WT_BASEVIEWS_MAX_FILL;   /* wider gaps are traced, not smeared (pinterp -fs) */
     if (rendercache_warper_create(&wd, &r->rec.warper) != RENDERCACHE_OK) return wt__fail(err, err_size, "%s", "out of memory");
     r->rec.object_count = 2;
     r->rec.motion = wt__object_transforms;
@@ -3067,6 +3265,7 @@ static int wt__baseviews_frame(wt_renderer *r, int frame, float *rgb, wt_frame_s
     rendercache_warp_stats ws;
     wt_set_time(w, t);   /* the fill traces the scene as it is at t */
     r->fill_frame = (uint32_t)frame;
+    if (wt__bunny_light_at(r, t) != 0) return -1;
     if (ex_baseviews_reconstruct(&r->bv, &r->rec, &cam, t, r->blend, r->out) != 0) return -1;
     memcpy(rgb, r->out->rgb, sizeof(float) * 3 * r->width * r->height);
     rendercache_warp_get_stats(r->rec.warper, &ws);
@@ -3752,6 +3951,10 @@ EX_FN void wt_renderer_destroy(wt_renderer *r)
     free(r->req);
     free(r->samples);
     ex_baseviews_free(&r->bv);
+    rendercache_keytimes_destroy(r->bunny_light);
+    free(r->bunny_indirect);
+    free(r->saved_key_times);
+    free(r->saved_key_values);
     rendercache_warper_destroy(r->rec.blender);
     rendercache_warper_destroy(r->rec.warper);
     for (i = 0; i < 8; i++) rendercache_range_image_destroy(r->blend[i]);
