@@ -1,12 +1,12 @@
-/* viewer.c - the walkthrough in a window: walk the building (or the office)
+/* viewer.c - the walkthrough in a window: walk the office (or a building)
    with the mouse and WASD while the bunny walks its route, switch between
    the three rendering modes, and read what each frame cost. Needs SDL2
    (Debian: libsdl2-dev); `make view` installs it when it can, builds this
    and starts it. Every other example and header stays dependency-free.
 
        cc -O2 -I. examples/viewer.c -o viewer $(sdl2-config --cflags --libs) -lm -lpthread
-       ./viewer                       # the building, mode radiosity
-       ./viewer --mode raytrace --scene office --size 960x540
+       ./viewer                       # the office, mode radiosity
+       ./viewer --mode raytrace --scene building --size 960x540
 
    Keys: W A S D walk (Shift: faster), Q / E down / up, left mouse button
    held: look around, M next mode (radiosity, raytrace with the render

@@ -1,6 +1,6 @@
 /* Benchmark of the walkthrough (examples/common/walkthrough.h) in the
-   demo's scene (what `make demo` shows: wt_options_default, the building;
-   WT_BENCH_SCENE=office or an OBJ path benches another): frames per second
+   demo's scene (what `make demo` shows: wt_options_default, the office;
+   WT_BENCH_SCENE=building or an OBJ path benches another): frames per second
    along the 48-frame path, mode radiosity at 640x480, 1280x720 and
    1920x1080, modes raytrace and baseviews at 640x480, each on 1 and 2
    threads, with the published figures beside them:
@@ -144,7 +144,7 @@ int main(void)
     const char *scene = getenv("WT_BENCH_SCENE");
     int threads, s;
     printf("walkthrough in %s, %d frames along the path (medians per frame)\n",
-           scene && scene[0] ? scene : "the demo's scene (the building)", FRAMES);
+           scene && scene[0] ? scene : "the demo's scene (the office)", FRAMES);
     printf("  paper: Greger 1996 fig. 5.8: 5.3 frames/s (1162-polygon rabbit, 601 queries/frame, 1996 hardware);\n"
            "         Hardt 1996: 2.3 updates/s at 640x480; target for mode radiosity: 60 frames/s at 1920x1080 on 2 cores\n");
     for (s = 0; s < 3; s++)

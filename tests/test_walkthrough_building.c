@@ -1,5 +1,5 @@
 /* Tests of the walkthrough in a generated building (examples/data/
-   building_4k.*, the default scene of `make demo`; building_1k.* where a
+   building_4k.*, `--scene building`; building_1k.* where a
    second building helps): the layout file, the walk planned through it (a
    lit room, a room without a lamp, up the stairs; never through anything;
    the camera inside the building and seeing the bunny), mode raytrace's

@@ -1,9 +1,9 @@
 /* walkthrough.h - the frame pipeline of examples/walkthrough.c and
-   examples/viewer.c: a generated building (make_building.py's OBJ, MTL and
-   layout; the walk is planned from the layout: a lit room, a room without
-   a lamp, up the stairs, the camera following the bunny) or the office
-   (the bunny under the desk and past the yellow divider, the camera along
-   the front wall), rendered in one of three modes that compose the
+   examples/viewer.c: the office (the default: the bunny under the desk and
+   past the yellow divider, the camera along the front wall) or a generated
+   building (--scene building: make_building.py's OBJ, MTL and layout; the
+   walk is planned from the layout: a lit room, a room without a lamp, up
+   the stairs, the camera following the bunny), rendered in one of three modes that compose the
    project's four headers. Tests and the benchmark drive it too.
 
        wt_options o;  wt_world *w;  wt_renderer *r;  wt_frame_stats st;
@@ -147,7 +147,8 @@ typedef struct wt_options {
     const char *out;          /* PNG frames, contact sheet */
     const char *cache_dir;    /* precompute cache */
     const char *data_dir;     /* bunny.obj, and the scenes named by scene */
-    const char *scene;        /* "building" (data_dir/building_4k.*), "office" (data_dir/office.*), or the path
+    const char *scene;        /* "office" (data_dir/office.*; the default until radinterp solves the building
+                                 within memory), "building" (data_dir/building_4k.*), or the path
                                  of an OBJ with a .layout file beside it (make_building.py's format) */
     const struct wt_path *path;   /* set by wt_world_create in the world's copy: the walk planned through the
                                      scene's layout; NULL: the office's built-in walk */
@@ -206,7 +207,7 @@ EX_FN void wt_options_default(wt_options *o)
     o->out = "build/out";
     o->cache_dir = "build/cache";
     o->data_dir = "examples/data";
-    o->scene = "building";
+    o->scene = "office";      /* the building's radiosity precompute needs radinterp at building scale */
     o->frames = 48;
     o->width = 640;
     o->height = 480;
@@ -253,7 +254,7 @@ EX_FN const char *wt_phase_name(wt_mode m, int phase)
 EX_FN void wt_usage(FILE *f)
 {
     fputs("usage: walkthrough [options]\n"
-          "A walkthrough of a building (or the office) with a bunny walking from room to room,\n"
+          "A walkthrough of the office (or a building) with a bunny walking from room to room,\n"
           "rendered interactively with global illumination. Writes PNG frames, a contact sheet and\n"
           "a per-frame timing table; precomputed data is cached on disk and reused.\n"
           "\n"
@@ -266,8 +267,8 @@ EX_FN void wt_usage(FILE *f)
           "  --out DIR            where frames go (default build/out)\n"
           "  --cache DIR          precompute cache (default build/cache)\n"
           "  --no-cache           neither read nor write the precompute cache\n"
-          "  --scene S            building (default: DIR/building_4k.obj, .mtl, .layout), office\n"
-          "                       (DIR/office.obj, .mtl), or an OBJ with a make_building.py layout beside it\n"
+          "  --scene S            office (default: DIR/office.obj, .mtl), building (DIR/building_4k.obj,\n"
+          "                       .mtl, .layout), or an OBJ with a make_building.py layout beside it\n"
           "  --data DIR           bunny.obj and the scenes (default examples/data)\n"
           "  --threads N          threads, 0 = one per core (default 0)\n"
           "  --seed N             random seed (default 1)\n"
@@ -892,7 +893,7 @@ static int wt__find_lights(wt_world *w)
    building its layout (.layout; "" for the office, whose walk is built in). */
 static void wt__scene_files(const wt_options *o, char *obj, char *mtl, char *layout, size_t size)
 {
-    const char *scene = o->scene ? o->scene : "building";
+    const char *scene = o->scene ? o->scene : "office";
     size_t n;
     if (!strcmp(scene, "office") || !strcmp(scene, "building"))
         snprintf(obj, size, "%.900s/%s.obj", o->data_dir, !strcmp(scene, "office") ? "office" : "building_4k");
