@@ -14,9 +14,12 @@
        wt_renderer_destroy(r);  wt_world_destroy(w);
 
    Shading (modes raytrace and baseviews). A primary hit gets its emission,
-   direct light from the lamp's emitting polygons (stratified area samples
-   with shadow rays through examples/common/trace.h, so the bunny casts
-   shadows; Lambert + normalized Phong) and indirect light from a light
+   direct light from the emitting polygons (many-light sampling: a fixed
+   number of shadow rays per point, --light-samples, each choosing a light
+   by an importance bound of power, distance and both cosines and divided
+   by the choice's probability; shadow rays through
+   examples/common/trace.h, so the bunny casts shadows; Lambert +
+   normalized Phong) and indirect light from a light
    vector (lightvec.h, Crespin & Peroche 2004): looked up in a cache, and
    gathered and inserted where the cache has too few valid vectors. Glossy
    materials (floor, desk, lamp pole) use 5D light vectors (position and
@@ -123,6 +126,7 @@
 #define WT_BUNNY_PRIORITY 4.0f      /* render-cache priority scale of the bunny's points */
 #define WT_PHASES 4
 #define WT_BASEVIEWS_MAX_FILL 8u   /* baseviews: background fill reaches this many pixels; farther ones are traced */
+#define WT__MAX_LIGHT_SAMPLES 1024  /* bound of --light-samples: shadow rays per shaded point */
 #define WT_KEY_EPSILON 0.1f        /* baseviews: a bunny vertex changed when its radiance moved by more than 10% */
 
 typedef enum wt_mode {
@@ -156,7 +160,7 @@ typedef struct wt_options {
     int threads;              /* 0 = one per core */
     uint64_t seed;
     /* shading (every mode that ray traces) */
-    int light_samples;        /* samples per emitting triangle per shaded point */
+    int light_samples;        /* direct light: shadow rays per shaded point, over all the lights (wt__direct) */
     int strata;               /* light-vector gathers on the office: zenith strata (azimuth: 3x) */
     int bunny_strata;         /* gathers on the bunny */
     int bounces;              /* reflections of the gathered light (lightvec_gather_desc.bounces);
@@ -212,7 +216,7 @@ EX_FN void wt_options_default(wt_options *o)
     o->width = 640;
     o->height = 480;
     o->seed = 1;
-    o->light_samples = 4;
+    o->light_samples = 8;
     o->strata = 16;
     o->bunny_strata = 8;
     o->bounces = 2;
@@ -273,7 +277,8 @@ EX_FN void wt_usage(FILE *f)
           "  --threads N          threads, 0 = one per core (default 0)\n"
           "  --seed N             random seed (default 1)\n"
           "  --budget F           raytrace: share of the pixels sampled per frame (default 0.08)\n"
-          "  --light-samples N    direct light: samples per emitting triangle (default 4)\n"
+          "  --light-samples N    direct light: shadow rays per shaded point, lights chosen by importance\n"
+          "                       (default 8)\n"
           "  --strata N           light-vector gathers: N x 3N rays (default 16)\n"
           "  --base N             baseviews: fish-eye base images N x N (default 512)\n"
           "  --keys N             baseviews: key times before refinement (default 5)\n"
@@ -369,7 +374,7 @@ EX_FN int wt_parse_options(int argc, char **argv, wt_options *o, char *err, size
             ok = wt__parse_int(v, 0, 2147483647, &s);
             o->seed = (uint64_t)s;
         } else if (!strcmp(a, "--budget")) ok = wt__parse_float(v, 1e-4f, 1.0f, &o->budget);
-        else if (!strcmp(a, "--light-samples")) ok = wt__parse_int(v, 1, 1024, &o->light_samples);
+        else if (!strcmp(a, "--light-samples")) ok = wt__parse_int(v, 1, WT__MAX_LIGHT_SAMPLES, &o->light_samples);
         else if (!strcmp(a, "--strata")) ok = wt__parse_int(v, 2, 128, &o->strata);
         else if (!strcmp(a, "--base")) ok = wt__parse_int(v, 16, 4096, &o->base_size);
         else if (!strcmp(a, "--keys")) ok = wt__parse_int(v, 2, 257, &o->keys);
@@ -713,10 +718,15 @@ typedef struct wt_point {
     unsigned char bunny_shadow;   /* the bunny blocked some of its direct light */
 } wt_point;
 
-/* An emitting polygon of the office (its fan triangles are consecutive). */
+/* An emitting polygon of the office (its fan triangles are consecutive),
+   with the bounds of the many-light sampler (wt__light_importance): its
+   area-weighted centroid (on its plane), the radius of the sphere about it
+   that holds the polygon, and its power up to a constant (luminance of Ke
+   times area). */
 typedef struct wt_light {
     uint32_t first_tri, tri_count;
     float area, normal[3], point[3], ke[3];
+    float centre[3], radius, power;
 } wt_light;
 
 /* The layout of a generated building (make_building.py's .layout file):
@@ -865,6 +875,29 @@ EX_FN void wt_world_destroy(wt_world *w)
     free(w);
 }
 
+/* A light's centroid, bounding radius about it and power (see wt_light). */
+static void wt__light_bounds(const wt_world *w, wt_light *L)
+{
+    const float *pos = w->office.positions;
+    uint32_t i;
+    int k, c;
+    memset(L->centre, 0, sizeof L->centre);
+    for (i = L->first_tri; i < L->first_tri + L->tri_count; i++)
+        for (c = 0; c < 3; c++)
+            for (k = 0; k < 3; k++)
+                L->centre[k] += w->tracer->tri_area[i] / (3.0f * L->area) * pos[3 * (size_t)w->office.tri_indices[3 * i + c] + k];
+    L->radius = 0.0f;
+    for (i = L->first_tri; i < L->first_tri + L->tri_count; i++)
+        for (c = 0; c < 3; c++) {
+            const float *v = pos + 3 * (size_t)w->office.tri_indices[3 * i + c];
+            float d = sqrtf((v[0] - L->centre[0]) * (v[0] - L->centre[0]) + (v[1] - L->centre[1]) * (v[1] - L->centre[1]) +
+                            (v[2] - L->centre[2]) * (v[2] - L->centre[2]));
+            if (d > L->radius) L->radius = d;
+        }
+    L->radius *= 1.0f + 1e-5f;   /* rounding of the centroid: the sphere still holds every corner */
+    L->power = (0.2126f * L->ke[0] + 0.7152f * L->ke[1] + 0.0722f * L->ke[2]) * L->area;
+}
+
 /* The emitting polygons: runs of consecutive triangles of one emitting face. */
 static int wt__find_lights(wt_world *w)
 {
@@ -886,6 +919,7 @@ static int wt__find_lights(wt_world *w)
         L->tri_count++;
         L->area += w->tracer->tri_area[i];
     }
+    for (i = 0; i < w->light_count; i++) wt__light_bounds(w, &w->lights[i]);
     return 0;
 }
 
@@ -1666,7 +1700,7 @@ EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t
    follows it along the same route, that far behind, at eye height.
    ---------------------------------------------------------------------- */
 #define WT_PATH_VERSION 2u     /* bump when the paths change: precompute keys depend on them */
-#define WT_SHADING_VERSION 1u  /* bump when the shading changes: cached light vectors and base images */
+#define WT_SHADING_VERSION 2u  /* bump when the shading changes: cached light vectors and base images */
 #define WT__WAYPOINTS 9
 static const float wt__waypoints[WT__WAYPOINTS][2] = {   /* (x, z) on the floor */
     { 1.35f, 1.55f }, { 1.65f, 2.35f }, { 1.80f, 3.15f }, { 2.15f, 3.35f }, { 2.40f, 2.80f },
@@ -1937,59 +1971,122 @@ static int wt__occluded(const ex_tracer *t, int bunny, const float org[3], const
     return 1;
 }
 
-/* Direct light reflected at a hit towards -dir: every emitting polygon of
-   the office sampled at opt.light_samples stratified points (side x side
-   cells when it is a square) with shadow rays through the tracer, so the
-   bunny casts shadows; polygons facing away are skipped without a ray.
-   Lambert + normalized Phong. */
+/* The many-light sampler's importance of light L at a point x with normal
+   n: an upper bound of what L can send there, power * cos_x * cos_y /
+   d^2 with both cosines bounded over L's bounding sphere (centre c, radius
+   r, seen from x under the half angle a, sin a = r / d: the cosine of the
+   angle to the normal less a, 1 when that is below zero; Conty Estevez &
+   Kulla 2018, eq. 3 for one light) and d^2 no less than r^2. It is 0 only
+   where L sends nothing: x behind L's plane (one-sided emitters) or all of
+   the sphere below x's horizon; elsewhere it is positive, so the estimator
+   that divides by the selection probability is unbiased. */
+static float wt__cos_bound(float cos_t, float cos_a, float sin_a)
+{
+    float sin_t;
+    if (cos_t >= cos_a) return 1.0f;             /* the normal points into the sphere's cone */
+    sin_t = sqrtf(fmaxf(0.0f, 1.0f - cos_t * cos_t));
+    return cos_t * cos_a + sin_t * sin_a;        /* cos(theta - a) */
+}
+
+static float wt__light_importance(const wt_light *L, const float x[3], const float n[3])
+{
+    float v[3] = { L->centre[0] - x[0], L->centre[1] - x[1], L->centre[2] - x[2] };
+    float d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2], r2 = L->radius * L->radius, d, sin_a, cos_a, cx, cy;
+    float front = (x[0] - L->point[0]) * L->normal[0] + (x[1] - L->point[1]) * L->normal[1] +
+                  (x[2] - L->point[2]) * L->normal[2];
+    if (front <= 0.0f) return 0.0f;              /* behind the emitter: one-sided */
+    if (d2 <= r2) return L->power / r2;           /* inside the sphere: both cosines bounded by 1 */
+    d = sqrtf(d2);
+    sin_a = L->radius / d;
+    cos_a = sqrtf(1.0f - sin_a * sin_a);
+    cx = wt__cos_bound((v[0] * n[0] + v[1] * n[1] + v[2] * n[2]) / d, cos_a, sin_a);
+    if (cx <= 0.0f) return 0.0f;                 /* the whole sphere below the horizon */
+    cy = wt__cos_bound(-(v[0] * L->normal[0] + v[1] * L->normal[1] + v[2] * L->normal[2]) / d, cos_a, sin_a);
+    return cy > 0.0f ? L->power * cx * cy / d2 : 0.0f;
+}
+
+/* One shadow-ray sample of light L for direct light at org (normal n,
+   mirror: the view direction reflected): a point of L chosen uniformly
+   from u1 (by area over its fan triangles, then the square root of what
+   remains: uniform on the triangle) and u2, added to rgb with weight
+   L->area * scale (scale = 1 / (selection probability * samples)). */
+static void wt__light_sample(const wt_world *w, const wt_light *L, const float org[3], const float n[3],
+                             const float mirror[3], const lightvec_material *m, float u1, float u2, float scale,
+                             float rgb[3], int *bunny_shadow)
+{
+    const ex_tracer *t = w->tracer;
+    const float *pos = w->office.positions, *ln = L->normal, *a, *b, *c;
+    const uint32_t *v;
+    float su, y[3], wi[3], d2, d, cos_x, cos_y, g, f, c_m = 0.0f;
+    uint32_t i = 0;
+    int k;
+    u1 *= L->area;
+    while (i + 1 < L->tri_count && u1 >= t->tri_area[L->first_tri + i]) u1 -= t->tri_area[L->first_tri + i++];
+    v = w->office.tri_indices + 3 * (size_t)(L->first_tri + i);
+    a = pos + 3 * (size_t)v[0];
+    b = pos + 3 * (size_t)v[1];
+    c = pos + 3 * (size_t)v[2];
+    su = sqrtf(fminf(u1 / t->tri_area[L->first_tri + i], 1.0f));   /* uniform on the triangle */
+    for (k = 0; k < 3; k++) y[k] = (1.0f - su) * a[k] + su * (1.0f - u2) * b[k] + su * u2 * c[k];
+    for (k = 0; k < 3; k++) wi[k] = y[k] - org[k];
+    d2 = wi[0] * wi[0] + wi[1] * wi[1] + wi[2] * wi[2];
+    if (!(d2 > 0.0f)) return;
+    d = sqrtf(d2);
+    for (k = 0; k < 3; k++) wi[k] /= d;
+    cos_x = wi[0] * n[0] + wi[1] * n[1] + wi[2] * n[2];
+    cos_y = -(wi[0] * ln[0] + wi[1] * ln[1] + wi[2] * ln[2]);
+    if (cos_x <= 0.0f || cos_y <= 0.0f) return;
+    if (wt__occluded(t, w->bunny_instance, org, wi, d * (1.0f - 1e-4f) - t->epsilon, bunny_shadow)) return;
+    g = cos_x * cos_y / d2 * L->area * scale;
+    for (k = 0; k < 3; k++) c_m += mirror[k] * wi[k];
+    f = c_m > 0.0f && m->exponent > 0.0f ? (m->exponent + 2.0f) / (2.0f * WT_PI) * powf(c_m, m->exponent) : 0.0f;
+    for (k = 0; k < 3; k++) rgb[k] += L->ke[k] * (m->diffuse[k] / WT_PI + m->specular[k] * f) * g;
+}
+
+/* Direct light reflected at a hit towards -dir (Lambert + normalized
+   Phong), by many-light sampling as a production renderer does it: a fixed
+   number n = opt.light_samples of shadow rays per point, whatever the
+   number of emitting polygons. Each sample picks a light with probability
+   p = importance / total (wt__light_importance) and a uniform point on it,
+   and is weighted by 1 / (p n): an unbiased estimate of the sum over every
+   light. The n picks are stratified over the importance CDF (sample s at
+   (s + xi) / n, so a light of probability p gets n p picks up to one), and
+   what is left of a pick's stratum inside its light's interval, uniform in
+   [0, 1), places the point on the light: one light alone (the office's
+   lamp face) gets n stratified points. The CDF is never stored: the picks
+   are sorted, so one sweep over the lights meets them in order (a second
+   pass recomputes the same importances, bit for bit). Shadow rays go
+   through the tracer, so the bunny casts shadows. */
 static void wt__direct(const wt_world *w, const ex_trace_hit *h, const float dir[3], const lightvec_material *m,
                        ex_rng *r, float rgb[3], int *bunny_shadow)
 {
-    const ex_tracer *t = w->tracer;
-    const float *pos = w->office.positions;
-    int n = w->opt.light_samples, side = (int)sqrtf((float)n + 0.5f), s, k;
-    float org[3], mirror[3], vn = -(dir[0] * h->normal[0] + dir[1] * h->normal[1] + dir[2] * h->normal[2]);
-    uint32_t e;
+    float pick[WT__MAX_LIGHT_SAMPLES], org[3], mirror[3], total = 0.0f, below = 0.0f;
+    float vn = -(dir[0] * h->normal[0] + dir[1] * h->normal[1] + dir[2] * h->normal[2]);
+    int n = w->opt.light_samples, s = 0, k;
+    uint32_t e, last = 0;
     rgb[0] = rgb[1] = rgb[2] = 0.0f;
-    if (side * side != n) side = 1;
+    if (n < 1 || n > WT__MAX_LIGHT_SAMPLES) return;
     for (k = 0; k < 3; k++) {
-        org[k] = h->pos[k] + t->epsilon * h->normal[k];
+        org[k] = h->pos[k] + w->tracer->epsilon * h->normal[k];
         mirror[k] = dir[k] + 2.0f * vn * h->normal[k];   /* the view direction reflected */
     }
     for (e = 0; e < w->light_count; e++) {
-        const wt_light *L = &w->lights[e];
-        const float *ln = L->normal;
-        float front = (org[0] - L->point[0]) * ln[0] + (org[1] - L->point[1]) * ln[1] + (org[2] - L->point[2]) * ln[2];
-        float weight = L->area / (float)n;
-        if (front <= 0.0f) continue;   /* behind the emitter: one-sided */
-        for (s = 0; s < n; s++) {
-            float u1 = ((float)(s % side) + ex_rng_float(r)) / (float)side * L->area;
-            float u2 = ((float)(s / side) + ex_rng_float(r)) / (float)(n / side), su, y[3], wi[3];
-            float d2, d, cos_x, cos_y, g, f, c_m = 0.0f;
-            const float *a, *b, *c;
-            const uint32_t *v;
-            uint32_t i = 0;
-            while (i + 1 < L->tri_count && u1 >= t->tri_area[L->first_tri + i]) u1 -= t->tri_area[L->first_tri + i++];
-            v = w->office.tri_indices + 3 * (size_t)(L->first_tri + i);
-            a = pos + 3 * (size_t)v[0];
-            b = pos + 3 * (size_t)v[1];
-            c = pos + 3 * (size_t)v[2];
-            su = sqrtf(u1 / t->tri_area[L->first_tri + i]);   /* uniform on the triangle */
-            for (k = 0; k < 3; k++) y[k] = (1.0f - su) * a[k] + su * (1.0f - u2) * b[k] + su * u2 * c[k];
-            for (k = 0; k < 3; k++) wi[k] = y[k] - org[k];
-            d2 = wi[0] * wi[0] + wi[1] * wi[1] + wi[2] * wi[2];
-            if (!(d2 > 0.0f)) continue;
-            d = sqrtf(d2);
-            for (k = 0; k < 3; k++) wi[k] /= d;
-            cos_x = wi[0] * h->normal[0] + wi[1] * h->normal[1] + wi[2] * h->normal[2];
-            cos_y = -(wi[0] * ln[0] + wi[1] * ln[1] + wi[2] * ln[2]);
-            if (cos_x <= 0.0f || cos_y <= 0.0f) continue;
-            if (wt__occluded(t, w->bunny_instance, org, wi, d * (1.0f - 1e-4f) - t->epsilon, bunny_shadow)) continue;
-            g = cos_x * cos_y / d2 * weight;
-            for (k = 0; k < 3; k++) c_m += mirror[k] * wi[k];
-            f = c_m > 0.0f && m->exponent > 0.0f ? (m->exponent + 2.0f) / (2.0f * WT_PI) * powf(c_m, m->exponent) : 0.0f;
-            for (k = 0; k < 3; k++) rgb[k] += L->ke[k] * (m->diffuse[k] / WT_PI + m->specular[k] * f) * g;
-        }
+        float imp = wt__light_importance(&w->lights[e], org, h->normal);
+        if (imp > 0.0f) last = e;
+        total += imp;
+    }
+    if (!(total > 0.0f) || !isfinite(total)) return;
+    for (s = 0; s < n; s++) pick[s] = ((float)s + ex_rng_float(r)) / (float)n * total;
+    s = 0;
+    for (e = 0; e < w->light_count && s < n; e++) {
+        float imp = wt__light_importance(&w->lights[e], org, h->normal), above = below + imp;
+        if (imp > 0.0f)   /* the picks in [below, above); the last light takes what rounding leaves */
+            for (; s < n && (pick[s] < above || e == last); s++) {
+                float u1 = fminf(fmaxf((pick[s] - below) / imp, 0.0f), 0.99999994f);
+                wt__light_sample(w, &w->lights[e], org, h->normal, mirror, m, u1, ex_rng_float(r),
+                                 total / (imp * (float)n), rgb, bunny_shadow);
+            }
+        below = above;
     }
 }
 
