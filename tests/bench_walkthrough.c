@@ -28,7 +28,8 @@
    other. Mode raytrace reports the displayed rate (frames after the first,
    which is traced in full) and the sampled rate; mode baseviews the rate of
    reconstructed frames. Phases are wall time. Precomputed data comes from
-   (or goes to) build/cache, as in the example. */
+   (or goes to) build/cache, as in the example. Arguments select lines: a
+   mode, a size and a thread count, e.g. `radiosity 1920x1080 1t`. */
 #define _POSIX_C_SOURCE 200809L
 #include "examples/common/walkthrough.h"
 
@@ -138,18 +139,46 @@ static void report(wt_mode mode, int threads, int width, int height)
     fflush(stdout);
 }
 
-int main(void)
+/* Whether the command line selects this line: no arguments select every
+   line; else a mode name, a size WxH or a thread count "1t" / "2t" given
+   restricts the lines to those (e.g. `bench_walkthrough radiosity 1920x1080 1t`). */
+static int selected(int argc, char **argv, wt_mode mode, int threads, int width, int height)
+{
+    int i, want_mode = 0, want_size = 0, want_threads = 0, mode_ok = 0, size_ok = 0, threads_ok = 0;
+    for (i = 1; i < argc; i++) {
+        int w = 0, h = 0, t = 0;
+        char c = 0;
+        if (sscanf(argv[i], "%dx%d%c", &w, &h, &c) == 2) {
+            want_size = 1;
+            size_ok |= w == width && h == height;
+        } else if (sscanf(argv[i], "%dt%c", &t, &c) == 1) {
+            want_threads = 1;
+            threads_ok |= t == threads;
+        } else {
+            want_mode = 1;
+            mode_ok |= !strcmp(argv[i], wt_mode_name(mode));
+        }
+    }
+    return (!want_mode || mode_ok) && (!want_size || size_ok) && (!want_threads || threads_ok);
+}
+
+int main(int argc, char **argv)
 {
     static const int sizes[3][2] = { { 640, 480 }, { 1280, 720 }, { 1920, 1080 } };
     const char *scene = getenv("WT_BENCH_SCENE");
-    int threads, s;
+    int threads, s, m;
     printf("walkthrough in %s, %d frames along the path (medians per frame)\n",
            scene && scene[0] ? scene : "the demo's scene (the office)", FRAMES);
     printf("  paper: Greger 1996 fig. 5.8: 5.3 frames/s (1162-polygon rabbit, 601 queries/frame, 1996 hardware);\n"
            "         Hardt 1996: 2.3 updates/s at 640x480; target for mode radiosity: 60 frames/s at 1920x1080 on 2 cores\n");
     for (s = 0; s < 3; s++)
-        for (threads = 1; threads <= 2; threads++) report(WT_MODE_RADIOSITY, threads, sizes[s][0], sizes[s][1]);
-    for (threads = 1; threads <= 2; threads++) report(WT_MODE_RAYTRACE, threads, 640, 480);
-    for (threads = 1; threads <= 2; threads++) report(WT_MODE_BASEVIEWS, threads, 640, 480);
+        for (threads = 1; threads <= 2; threads++)
+            if (selected(argc, argv, WT_MODE_RADIOSITY, threads, sizes[s][0], sizes[s][1]))
+                report(WT_MODE_RADIOSITY, threads, sizes[s][0], sizes[s][1]);
+    for (m = 0; m < 2; m++)
+        for (threads = 1; threads <= 2; threads++) {
+            wt_mode mode = m ? WT_MODE_BASEVIEWS : WT_MODE_RAYTRACE;
+            if (selected(argc, argv, mode, threads, 640, 480)) report(mode, threads, 640, 480);
+        }
     return 0;
 }
