@@ -8,6 +8,7 @@
 #   make demo     run the main example
 #   make fuzz     run every fuzz target for FUZZ_SECONDS (default 60) with libFuzzer
 #   make fuzz-corpus  rewrite the fuzz seeds from the headers' save functions
+#   make view     the walkthrough in a window (installs SDL2 if needed and it can)
 #   make clean
 #
 # Files are found by name, so adding one needs no edit here:
@@ -16,6 +17,7 @@
 #   tests/ref_*.c     reference tests: linked with tests/reference (Embree, OpenEXR)
 #   tests/bench_*.c   benchmarks: optimised, linked with tests/reference
 #   examples/*.c      examples: one program each, `cc examples/x.c -lm` builds it
+#                     (but examples/viewer.c, built with SDL2 when sdl2-config is found)
 #   tests/check_*.py  checks of the generated data (python3), run by make test
 #   tests/assimp_*.c  unit tests that need Assimp: built and run only when it is present
 #   tests/fuzz/fuzz_*.c  fuzz targets (tests/fuzz/fuzz.h), corpus tests/fuzz/corpus/*
@@ -42,7 +44,10 @@ UNIT_BINS    := $(patsubst tests/%.c,$(BUILD)/tests/%,$(wildcard tests/test_*.c)
 TSAN_BINS    := $(patsubst tests/%.c,$(BUILD)/tests/%,$(wildcard tests/tsan_*.c))
 REF_BINS     := $(patsubst tests/%.c,$(BUILD)/tests/%,$(wildcard tests/ref_*.c))
 BENCH_BINS   := $(patsubst tests/%.c,$(BUILD)/bench/%,$(wildcard tests/bench_*.c))
-EXAMPLE_BINS := $(patsubst examples/%.c,$(BUILD)/examples/%,$(wildcard examples/*.c))
+EXAMPLE_BINS := $(patsubst examples/%.c,$(BUILD)/examples/%,$(filter-out examples/viewer.c,$(wildcard examples/*.c)))
+# The interactive viewer and its sanitized build for tests/test_viewer.c,
+# only where SDL2 is installed (tests/deps_viewer.sh installs it when it can).
+VIEWER_BINS  := $(if $(shell command -v sdl2-config 2>/dev/null),$(BUILD)/examples/viewer $(BUILD)/tests/viewer_asan)
 REF_OBJS     := $(patsubst tests/reference/%.c,$(BUILD)/ref/%.o,$(wildcard tests/reference/*.c))
 LINKAGE_BIN  := $(BUILD)/tests/linkage
 DATA_CHECKS  := $(wildcard tests/check_*.py)
@@ -108,12 +113,12 @@ REF_CFLAGS = $(shell pkg-config --cflags OpenEXR 2>/dev/null)
 REF_LIBS   = -lembree3 $(shell pkg-config --libs OpenEXR 2>/dev/null)
 
 .SECONDARY:
-.PHONY: all examples test test-build test-run bench bench-build demo deps clean fuzz fuzz-build fuzz-corpus
+.PHONY: all examples test test-build test-run bench bench-build demo view deps viewer-deps clean fuzz fuzz-build fuzz-corpus
 
 all: examples
-examples: $(EXAMPLE_BINS)
+examples: $(EXAMPLE_BINS) $(filter $(BUILD)/examples/%,$(VIEWER_BINS))
 
-test: deps
+test: deps viewer-deps
 	@$(MAKE) --no-print-directory -j$(NPROC) test-build
 	@$(MAKE) --no-print-directory test-run
 
@@ -123,7 +128,7 @@ test-run:
 	    $(REF_BINS) $(ASSIMP_BINS)
 
 test-build: $(CHECK_OBJS) $(LINKAGE_BIN) $(UNIT_BINS) $(CLANG_UBSAN_BINS) $(REPLAY_BINS) $(TSAN_BINS) $(REF_BINS) \
-            $(ASSIMP_BINS) $(EXAMPLE_BINS)
+            $(ASSIMP_BINS) $(EXAMPLE_BINS) $(VIEWER_BINS)
 
 bench: deps
 	@$(MAKE) --no-print-directory -j$(NPROC) bench-build $(BUILDINGS)
@@ -136,6 +141,15 @@ DEMO := $(if $(wildcard examples/walkthrough.c),$(BUILD)/examples/walkthrough,$(
 demo: $(DEMO)
 	@mkdir -p $(BUILD)/demo
 	$(DEMO) --out $(BUILD)/demo
+
+# The walkthrough in a window: mouse and WASD, M switches the mode (see examples/viewer.c).
+view: viewer-deps
+	@command -v sdl2-config >/dev/null 2>&1 || { echo "make view: SDL2 is missing (apt-get install libsdl2-dev)" >&2; exit 1; }
+	@$(MAKE) --no-print-directory $(BUILD)/examples/viewer
+	$(BUILD)/examples/viewer
+
+viewer-deps:
+	@tests/deps_viewer.sh
 
 deps: $(BUILD)/.deps-ok $(BUILD)/.deps-assimp-tried
 $(BUILD)/.deps-ok: tests/deps.sh
@@ -222,6 +236,12 @@ $(BUILD)/fuzz/make_corpus: tests/fuzz/make_corpus.c tests/fuzz/fuzz.h $(ALL_H) |
 # --- examples -------------------------------------------------------------
 $(BUILD)/examples/%: examples/%.c $(ALL_H) $(ASSIMP_STAMP) | $(BUILD)/examples
 	$(CC) $(CFLAGS_PROJECT) $(OPT) $(ASSIMP_FLAGS) $< -o $@ $(LIBS) $(ASSIMP_LIBS)
+
+$(BUILD)/examples/viewer: examples/viewer.c $(ALL_H) $(ASSIMP_STAMP) | $(BUILD)/examples
+	$(CC) $(CFLAGS_PROJECT) $(OPT) $(ASSIMP_FLAGS) $$(sdl2-config --cflags) $< -o $@ $$(sdl2-config --libs) $(LIBS) $(ASSIMP_LIBS)
+
+$(BUILD)/tests/viewer_asan: examples/viewer.c $(ALL_H) | $(BUILD)/tests
+	$(CC) $(CFLAGS_PROJECT) -O1 -g $(SAN) $$(sdl2-config --cflags) $< -o $@ $$(sdl2-config --libs) $(LIBS)
 
 $(BUILD)/check $(BUILD)/tests $(BUILD)/ref $(BUILD)/bench $(BUILD)/examples $(BUILD)/data $(BUILD)/clang-ubsan $(BUILD)/fuzz:
 	@mkdir -p $@
