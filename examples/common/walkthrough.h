@@ -825,6 +825,7 @@ static void wt__materials_from_obj(const obj_scene *s, lightvec_material *m)
         memcpy(m[i].diffuse, s->materials[i].kd, sizeof m[i].diffuse);
         memcpy(m[i].specular, s->materials[i].ks, sizeof m[i].specular);
         memcpy(m[i].emission, s->materials[i].ke, sizeof m[i].emission);
+        memcpy(m[i].transmittance, s->materials[i].tf, sizeof m[i].transmittance);   /* glass passes light */
         m[i].exponent = s->materials[i].ns;
     }
 }
