@@ -300,6 +300,10 @@ int main(int argc, char **argv)
         SDL_Quit();
         return 1;
     }
+    /* Frames are drawn in software: the window's surface is blitted as it is,
+       without SDL opening OpenGL behind it to upload it (which loads the
+       system's GL driver only to unload it again). */
+    SDL_SetHint(SDL_HINT_FRAMEBUFFER_ACCELERATION, "0");
     win = SDL_CreateWindow("walkthrough", SDL_WINDOWPOS_CENTERED, SDL_WINDOWPOS_CENTERED, v.o.width, v.o.height, 0);
     ren = win ? SDL_CreateRenderer(win, -1, SDL_RENDERER_SOFTWARE) : NULL;
     tex = ren ? SDL_CreateTexture(ren, SDL_PIXELFORMAT_RGB24, SDL_TEXTUREACCESS_STREAMING, v.o.width, v.o.height) : NULL;

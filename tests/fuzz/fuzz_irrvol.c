@@ -30,6 +30,27 @@ static void query_point(const irrvol_volume_info *info, int i, float p[3])
     }
 }
 
+/* The GPU arrays of a loaded volume: the sizes first, then the arrays,
+   which must fill exactly the sizes it gave; one entry too few is refused. */
+static void export_to_gpu(const irrvol *v)
+{
+    irrvol_gpu_layout l;
+    uint32_t *index;
+    float *data;
+    if (irrvol_gpu_export(v, 2, &l, NULL, 0, NULL, 0) != IRRVOL_OK) return;
+    index = (uint32_t *)malloc((l.index_count ? l.index_count : 1) * sizeof *index);
+    data = (float *)malloc((l.data_count ? l.data_count : 1) * sizeof *data);
+    if (index && data) {
+        fuzz_require(irrvol_gpu_export(v, 2, &l, index, l.index_count, data, l.data_count) == IRRVOL_OK,
+                     "irrvol_gpu_export refused the sizes it gave");
+        if (l.data_count)
+            fuzz_require(irrvol_gpu_export(v, 2, &l, index, l.index_count, data, l.data_count - 1) != IRRVOL_OK,
+                         "irrvol_gpu_export accepted a data array one float short");
+    }
+    free(index);
+    free(data);
+}
+
 static void use_volume(const irrvol *v, const irrvol_volume_info *info)
 {
     static const float dirs[8][3] = { { 1, 0, 0 }, { -1, 0, 0 }, { 0, 1, 0 }, { 0, -1, 0 },
@@ -43,11 +64,14 @@ static void use_volume(const irrvol *v, const irrvol_volume_info *info)
         query_point(info, i, pos[i]);
         memcpy(dir[i], dirs[i % 8], sizeof dir[i]);
         irrvol_query(v, pos[i], dir[i], rgb);
-        irrvol_query_filter(v, IRRVOL_FILTER_NEAREST, pos[i], dir[i], rgb);
-        irrvol_query_filter(v, IRRVOL_FILTER_BILINEAR, pos[i], dir[i], rgb);
+        irrvol_query_filter(v, IRRVOL_FILTER_NEAREST, IRRVOL_WEIGHTING_TRILINEAR, pos[i], dir[i], rgb);
+        irrvol_query_filter(v, IRRVOL_FILTER_BILINEAR, IRRVOL_WEIGHTING_VISIBILITY, pos[i], dir[i], rgb);
         irrvol_query_glossy(v, pos[i], dir[i], dirs[(i + 3) % 8], rgb);
+        irrvol_query_sh(v, 1 + (uint32_t)(i & 1), IRRVOL_WEIGHTING_DEFAULT, pos[i], dir[i], rgb);
     }
-    irrvol_query_many(v, IRRVOL_FILTER_BILINEAR, 64, &pos[0][0], 0, &dir[0][0], 0, &many[0][0]);
+    irrvol_query_many(v, IRRVOL_FILTER_BILINEAR, IRRVOL_WEIGHTING_DEFAULT, 64, &pos[0][0], 0, &dir[0][0], 0,
+                      &many[0][0]);
+    export_to_gpu(v);
     fuzz_require(irrvol_sample(v, 0, &si) == IRRVOL_OK && irrvol_sample(v, last, &si) == IRRVOL_OK,
                  "irrvol_sample refused a sample the volume has");
     fuzz_require(irrvol_sample(v, info->sample_count, &si) == IRRVOL_ERROR_INVALID_ARGUMENT,
