@@ -48,6 +48,27 @@ static double now_seconds(void *user)
 
 static int g_cpu_clock = 1;
 
+/* CPU time of the whole process, every thread's. */
+static double process_cpu_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* "load 1.23 0.98 0.77" from /proc/loadavg, or "load ?": the machine is
+   shared, and wall times (2 threads) mean little without it. */
+static const char *load_average(void)
+{
+    static char text[64];
+    double a = 0, b = 0, c = 0;
+    FILE *f = fopen("/proc/loadavg", "r");
+    if (f && fscanf(f, "%lf %lf %lf", &a, &b, &c) == 3) snprintf(text, sizeof text, "load %.2f %.2f %.2f", a, b, c);
+    else snprintf(text, sizeof text, "load ?");
+    if (f) fclose(f);
+    return text;
+}
+
 /* An allocator that counts the bytes live (for the memory per pixel). */
 typedef struct counted { size_t live, peak; } counted;
 static void *counted_alloc(size_t size, void *user)
@@ -154,7 +175,7 @@ static void run(const ex_tracer *tracer, ex_pool *shade_pool, uint32_t w, uint32
        two run interleaved, timed together under cull */
     static const char *names[P_COUNT] = { "project+z-buffer", "cull(+interp on 1 thread)", "interp+priority",
                                           "predict", "request", "insert", "total" };
-    double times[P_COUNT][FRAMES];
+    double times[P_COUNT][FRAMES], cpu[FRAMES];
     rendercache_desc d;
     rendercache *rc;
     rendercache_pixel_request *req = (rendercache_pixel_request *)malloc(sizeof *req * w * h);
@@ -191,15 +212,19 @@ static void run(const ex_tracer *tracer, ex_pool *shade_pool, uint32_t w, uint32
     for (f = 0; f < FRAMES; f++) {
         rendercache_camera c = path_camera(f + 1, w, h), next = path_camera(f + 2, w, h);
         rendercache_stats st;
-        double t0;
+        double t0, c0;
+        c0 = process_cpu_seconds();
         rendercache_begin_frame(rc, &c);
         rendercache_predict(rc, &next);   /* WDG02: the holes of the next camera, from a quarter of the budget */
         rendercache_request(rc, req, budget, &n);
+        cpu[f] = process_cpu_seconds() - c0;
         t0 = now_seconds(NULL);
         shade_all(shade_pool, tracer, req, samples, n, (uint32_t)f + 1, 1);   /* direct + one bounce */
         shade_time += now_seconds(NULL) - t0;
         shaded += n;
+        c0 = process_cpu_seconds();
         rendercache_insert(rc, samples, n, NULL);
+        cpu[f] += process_cpu_seconds() - c0;
         rendercache_get_stats(rc, &st);
         times[P_PROJECT][f] = st.time_project;
         times[P_CULL][f] = st.time_cull;
@@ -218,6 +243,9 @@ static void run(const ex_tracer *tracer, ex_pool *shade_pool, uint32_t w, uint32
         printf(" %s %.2f%s", names[k], m, k + 1 < P_COUNT ? "," : " ms (medians)\n");
         if (k == P_TOTAL) *frame_ms = m;
     }
+    if (threads > 1)   /* the work done, whoever waited: wall time on a loaded machine counts the waits too */
+        printf("%9s %d threads: the frame's cpu time summed over the threads %.2f ms (median; %s)\n", "", threads,
+               median(cpu, FRAMES) * 1e3, load_average());
     *sample_us = shaded ? shade_time / (double)shaded * 1e6 : 0.0;
     rendercache_destroy(rc);
     ex_pool_destroy(pool);
@@ -954,9 +982,34 @@ static void cache_summary(double frame_ms[2][2], double sample_us, int shade_thr
            sample_us, shade_threads, full_ms, cache_ms, full_ms / cache_ms);
 }
 
+/* Whether the cache line of size w x h on that many threads runs: with
+   "cache" followed by sizes WxH and thread counts "1t" / "2t", only those
+   (e.g. `bench_rendercache cache 1920x1080 2t`); "cache" alone or "quick":
+   512x512 on one thread; no argument: every line. */
+static int cache_selected(int argc, char **argv, uint32_t w, uint32_t h, int threads)
+{
+    int i, size_given = 0, size_ok = 0, threads_given = 0, threads_ok = 0;
+    for (i = 2; i < argc; i++) {
+        unsigned sw, sh;
+        int t;
+        char c;
+        if (sscanf(argv[i], "%ux%u%c", &sw, &sh, &c) == 2) {
+            size_given = 1;
+            size_ok |= sw == w && sh == h;
+        } else if (sscanf(argv[i], "%dt%c", &t, &c) == 1) {
+            threads_given = 1;
+            threads_ok |= t == threads;
+        }
+    }
+    if (argc < 2) return 1;
+    if (!size_given && !threads_given) return w == 512 && threads == 1;
+    return (!size_given || size_ok) && (!threads_given || threads_ok);
+}
+
 /* Arguments: "quick" (any argument but the three below) runs 512x512 and
    the warps on one thread only; "cache", "warp" or "tables" runs that part
-   only, quick (e.g. under valgrind --tool=callgrind). */
+   only, quick (e.g. under valgrind --tool=callgrind); "cache" takes sizes
+   and thread counts (cache_selected). */
 int main(int argc, char **argv)
 {
     static const uint32_t sizes[2][2] = { { 512, 512 }, { 1920, 1080 } };
@@ -969,6 +1022,7 @@ int main(int argc, char **argv)
     if (quick && strcmp(argv[1], "cache") == 0) warp = tables = 0;
     if (quick && strcmp(argv[1], "warp") == 0) cache = tables = 0;
     if (quick && strcmp(argv[1], "tables") == 0) cache = warp = 0;
+    printf("%s at the start\n", load_average());
     if (obj_load("examples/data/cornell_box.obj", &scene, err, sizeof err) != 0) {
         printf("cannot load the Cornell box: %s\n", err);
         return 1;
@@ -978,12 +1032,14 @@ int main(int argc, char **argv)
     if (!tracer || !shade_pool) return 1;
     if (cache) printf("render cache per-frame overhead, Cornell box camera path, %d frames, budget %.0f%% of the pixels\n",
                       FRAMES, BUDGET * 100);
-    for (s = 0; cache && s < (quick ? 1 : 2); s++)
-        for (threads = 1; threads <= (quick ? 1 : 2); threads++) {
+    for (s = 0; cache && s < 2; s++)
+        for (threads = 1; threads <= 2; threads++) {
+            if (!cache_selected(argc, argv, sizes[s][0], sizes[s][1], threads)) continue;
             run(tracer, shade_pool, sizes[s][0], sizes[s][1], threads, &frame_ms[s][threads - 1], &sample_us, &b);
             if (b > bytes[s]) bytes[s] = b;
         }
     if (cache) cache_summary(frame_ms, sample_us, ex_pool_threads(shade_pool), bytes);
+    printf("%s at the end\n", load_average());
     if (warp) bench_walkthrough(shade_pool, quick);
     if (tables) {
         printf("\nNimeroff, Dorsey and Rushmeier 1996, tables 1-4, beside ours\n");
