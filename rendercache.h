@@ -2337,9 +2337,27 @@ typedef struct rendercache__projector {
     const rendercache *rc;
     const rendercache__view *view;
     const float *obj_camera;
+    float sky[12];           /* the view's rotation without translation: background points are directions */
     uint32_t shift, stride;  /* the index a point lands in: (y >> shift) * stride + (x >> shift); pixels:
                                 0 and the width; prediction's cells: RENDERCACHE__CELL_SHIFT */
 } rendercache__projector;
+
+/* A projector into view v through the object-to-camera matrices obj_camera,
+   onto cells of 2^shift x 2^shift pixels. */
+static void rendercache__projector_init(rendercache__projector *pr, const rendercache *rc, const rendercache__view *v,
+                                        const float *obj_camera, uint32_t shift)
+{
+    int k;
+    pr->rc = rc;
+    pr->view = v;
+    pr->obj_camera = obj_camera;
+    pr->shift = shift;
+    pr->stride = (v->width + (1u << shift) - 1) >> shift;
+    for (k = 0; k < 3; k++) {
+        memcpy(pr->sky + 4 * k, v->axis[k], 3 * sizeof(float));
+        pr->sky[4 * k + 3] = 0.0f;
+    }
+}
 
 /* Reprojection of a point x (WDP99) through the 3x4 matrix m into camera
    space, then to the perspective view v: the index of the pixel (or cell
@@ -2368,17 +2386,11 @@ static RENDERCACHE__INLINE uint32_t rendercache__pixel_through(const float *m, c
 static uint32_t rendercache__project_point(const rendercache__projector *pr, const rendercache__geo *g, float *depth2)
 {
     const rendercache__view *v = pr->view;
-    float sky[12];
     uint32_t p;
-    int k;
     if (g->object == RENDERCACHE__FREE_SLOT) return RENDERCACHE__NONE;
     if (g->object != RENDERCACHE_MISS)
         return rendercache__pixel_through(pr->obj_camera + 12 * (size_t)g->object, g->pos, v, pr->shift, pr->stride, depth2);
-    for (k = 0; k < 3; k++) {   /* the view's rotation, no translation */
-        memcpy(sky + 4 * k, v->axis[k], 3 * sizeof(float));
-        sky[4 * k + 3] = 0.0f;
-    }
-    p = rendercache__pixel_through(sky, g->pos, v, pr->shift, pr->stride, depth2);
+    p = rendercache__pixel_through(pr->sky, g->pos, v, pr->shift, pr->stride, depth2);
     *depth2 = RENDERCACHE__FAR2;
     return p;
 }
@@ -2408,37 +2420,58 @@ static void rendercache__project_perspective(const rendercache__geo *g, uint32_t
     for (i = 0; i < n; i++) pix[i] = rendercache__pixel_through(m, g[i].pos, v, shift, stride, &depth2[i]);
 }
 
-/* The one object of the points [begin, end) other than background points,
-   RENDERCACHE__NONE when there are several or free slots; *background
-   tells whether background points are among them. */
-static uint32_t rendercache__batch_object_or_background(const rendercache__geo *geo, uint32_t begin, uint32_t end,
-                                                        int *background)
+/* The background points and free slots of n points that
+   project_perspective projected through an object's matrix: background
+   points again, as directions (through the sky matrix), at distance
+   RENDERCACHE__FAR; free slots land nowhere. Every point is projected and
+   the results selected, without branches, so that it vectorises too. */
+static void rendercache__project_others(const rendercache__geo *g, uint32_t n, const rendercache__projector *pr,
+                                        uint32_t *RENDERCACHE__RESTRICT pix, float *RENDERCACHE__RESTRICT depth2)
 {
-    uint32_t o = RENDERCACHE__NONE, i;
-    *background = 0;
+    const rendercache__view *v = pr->view;
+    const uint32_t shift = pr->shift, stride = pr->stride;
+    uint32_t i;
+    for (i = 0; i < n; i++) {
+        float d;
+        uint32_t q = rendercache__pixel_through(pr->sky, g[i].pos, v, shift, stride, &d), o = g[i].object;
+        pix[i] = o == RENDERCACHE__FREE_SLOT ? RENDERCACHE__NONE : o == RENDERCACHE_MISS ? q : pix[i];
+        depth2[i] = o == RENDERCACHE_MISS ? RENDERCACHE__FAR2 : depth2[i];
+    }
+}
+
+/* The one object of the points [begin, end) other than background points
+   and free slots (RENDERCACHE_MISS when there is none), RENDERCACHE__NONE
+   when there are several; *others tells whether background points or free
+   slots are among them. */
+static uint32_t rendercache__batch_object(const rendercache__geo *geo, uint32_t begin, uint32_t end, int *others)
+{
+    uint32_t o = RENDERCACHE_MISS, i, other = 0;
     for (i = begin; i < end; i++) {
         uint32_t g = geo[i].object;
-        if (g == RENDERCACHE_MISS) { *background = 1; continue; }
-        if (g == RENDERCACHE__FREE_SLOT || (o != RENDERCACHE__NONE && g != o)) return RENDERCACHE__NONE;
+        int special = g == RENDERCACHE_MISS || g == RENDERCACHE__FREE_SLOT;
+        other |= (uint32_t)special;
+        if (special) continue;
+        if (o != RENDERCACHE_MISS && g != o) return RENDERCACHE__NONE;
         o = g;
     }
+    *others = (int)other;
     return o;
 }
 
 /* The splat source of the render cache: cache slots [begin, end). Batches
-   of one object (with or without background points) under a perspective
-   view take the vectorised path; the rest goes point by point. */
+   of one object (with or without background points and free slots) under
+   a perspective view take the vectorised path; the rest goes point by
+   point. */
 static uint32_t rendercache__project_points(const void *src, uint32_t begin, uint32_t end, uint32_t *pix, float *depth2)
 {
     const rendercache__projector *pr = (const rendercache__projector *)src;
     const rendercache__geo *geo = pr->rc->geo;
-    int background;
-    uint32_t i, o = rendercache__batch_object_or_background(geo, begin, end, &background);
+    int others;
+    uint32_t i, o = rendercache__batch_object(geo, begin, end, &others);
     if (pr->view->kind == RENDERCACHE_CAMERA_PERSPECTIVE && o != RENDERCACHE__NONE) {
-        rendercache__project_perspective(geo + begin, end - begin, pr->obj_camera + 12 * (size_t)o, pr, pix, depth2);
-        if (background)   /* the few background points, again, as directions */
-            for (i = begin; i < end; i++)
-                if (geo[i].object == RENDERCACHE_MISS) pix[i - begin] = rendercache__project_point(pr, &geo[i], &depth2[i - begin]);
+        const float *m = o == RENDERCACHE_MISS ? pr->sky : pr->obj_camera + 12 * (size_t)o;
+        rendercache__project_perspective(geo + begin, end - begin, m, pr, pix, depth2);
+        if (others) rendercache__project_others(geo + begin, end - begin, pr, pix, depth2);
         return end - begin;
     }
     for (i = begin; i < end; i++) pix[i - begin] = rendercache__project_point(pr, &geo[i], &depth2[i - begin]);
@@ -2462,11 +2495,7 @@ static void rendercache__splat_points(rendercache *rc, const rendercache__view *
 {
     rendercache__projector pr;
     double t0 = rendercache__now(rc);
-    pr.rc = rc;
-    pr.view = v;
-    pr.obj_camera = obj_camera;
-    pr.shift = 0;
-    pr.stride = rc->width;
+    rendercache__projector_init(&pr, rc, v, obj_camera, 0);
     rendercache__splat_run(&rc->splat, rc->parallel_for, rc->parallel_user, rendercache__project_points, NULL, &pr,
                            rc->capacity, 1);
     if (t_project) *t_project += rendercache__now(rc) - t0;
@@ -2893,11 +2922,7 @@ RENDERCACHE_API rendercache_result rendercache_predict(rendercache *rc, const re
     rc->history[rc->frame % ((uint64_t)rc->max_latency + 1)].has_prediction = 1;
     rendercache__compose_objects(rc, &rc->predicted, rc->obj_predicted);
     job.rc = rc;
-    job.pr.rc = rc;
-    job.pr.view = &rc->predicted;
-    job.pr.obj_camera = rc->obj_predicted;
-    job.pr.shift = RENDERCACHE__CELL_SHIFT;
-    job.pr.stride = rc->cells_x;
+    rendercache__projector_init(&job.pr, rc, &rc->predicted, rc->obj_predicted, RENDERCACHE__CELL_SHIFT);
     job.jobs = rc->parallel_for ? RENDERCACHE__SPLAT_JOBS : 1u;
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__occupancy_job, &job, job.jobs);
     rc->pred_cells = 0;
@@ -3574,11 +3599,7 @@ static int rendercache__insert_other(rendercache *rc, const rendercache__new_poi
     uint32_t p, slot;
     float d2 = 0.0f, nd[8];
     int show;
-    pr.rc = rc;
-    pr.view = &rc->view;
-    pr.obj_camera = rc->obj_camera;
-    pr.shift = 0;
-    pr.stride = rc->width;
+    rendercache__projector_init(&pr, rc, &rc->view, rc->obj_camera, 0);
     p = rendercache__project_point(&pr, &np->g, &d2);
     if (p != RENDERCACHE__NONE && rc->px_index[p] != RENDERCACHE__NONE) {
         uint32_t k = rc->px_index[p];
