@@ -1558,16 +1558,18 @@ static void rendercache__view_compose(const rendercache__view *v, const float m[
    depth cull.
    Parallel and deterministic: when the caller gives parallel_for, the
    elements are split into RENDERCACHE__SPLAT_JOBS ranges, each z-buffered
-   into its own raster, and the rasters are merged tile by tile (warps
-   merge them within their extraction pass, rendercache__splat_least); a
-   splat of keys only (the render cache) splits them into
-   RENDERCACHE__SHARED_JOBS ranges that share one raster through an atomic
-   minimum, when the compiler has the GNU atomic builtins. The winner of a
-   pixel is the least (depth, element index) in every case, so the result
-   does not depend on the split or on the thread count. (Sorting the
-   elements into image bands first, as the tiled cache of Walter et al. 2002
-   does, let any number of threads share the z-buffer but cost three times
-   as much memory traffic here.)
+   into its own z-buffer, which the warps' extraction pass merges as it
+   reads them (rendercache__splat_least); a splat of keys only (the render
+   cache) splits them into RENDERCACHE__SHARED_JOBS ranges that share one
+   z-buffer through an atomic minimum, when the compiler has the GNU atomic
+   builtins (else it runs as one job). The winner of a pixel is the least
+   (depth, element index) in every case, so the result does not depend on
+   the split or on the thread count. The render cache's depth cull reads
+   the keys themselves (no merged copy of depths and indices), and on one
+   thread clears them as it goes, so the next splat needs no clearing pass.
+   (Sorting the elements into image bands first, as the tiled cache of
+   Walter et al. 2002 does, let any number of threads share the z-buffer
+   but cost three times as much memory traffic here.)
    ---------------------------------------------------------------------- */
 #define RENDERCACHE__SPLAT_JOBS 2u   /* partial z-buffers when running in parallel */
 #define RENDERCACHE__SHARED_JOBS 8u  /* jobs of a splat into one shared z-buffer (atomic min) */
@@ -1605,14 +1607,6 @@ struct rendercache__zbuffer;
 typedef uint32_t (*rendercache__cover_fn)(const void *src, uint32_t job, uint32_t begin, uint32_t end,
                                           struct rendercache__zbuffer *zb, uint32_t width, uint32_t height);
 
-/* The result of a splat: per pixel the nearest depth (FLT_MAX when empty),
-   the element (RENDERCACHE__NONE when empty) and its payload. */
-typedef struct rendercache__raster {
-    float *depth;
-    uint32_t *index;
-    float *payload;          /* 4 per pixel */
-} rendercache__raster;
-
 /* One job's z-buffer: per pixel the key (depth bits << 32 | element; depths
    are non-negative, so their bits order as the values do, and one compare
    settles depth and then index) and the payload. One random access per test.
@@ -1628,7 +1622,7 @@ typedef struct rendercache__splat {
     uint32_t width, height, pixel_count, tile_count;
     uint32_t jobs;           /* z-buffers allocated: 1, or SPLAT_JOBS with parallel_for */
     int shared;              /* keys only, in parallel: SHARED_JOBS jobs share z-buffer 0 (atomic min) */
-    rendercache__raster final;                        /* payload is job 0's */
+    int clean;               /* z-buffer 0 holds only empty keys (its last user cleared it) */
     rendercache__zbuffer zb[RENDERCACHE__SPLAT_JOBS];
     uint32_t projected;      /* elements that landed in the image in the last run */
     uint32_t ran_jobs;       /* z-buffers the last run filled */
@@ -1638,8 +1632,6 @@ typedef struct rendercache__splat {
 static void rendercache__splat_free(rendercache__splat *s, const rendercache_allocator *a)
 {
     uint32_t j;
-    rendercache__free(a, s->final.depth);
-    rendercache__free(a, s->final.index);
     for (j = 0; j < RENDERCACHE__SPLAT_JOBS; j++) {
         rendercache__free(a, s->zb[j].key);
         rendercache__free(a, s->zb[j].payload);
@@ -1654,22 +1646,18 @@ static int rendercache__splat_alloc(rendercache__splat *s, uint32_t width, uint3
                                     int payload, const rendercache_allocator *a)
 {
     uint32_t j;
-    int failed;
+    int failed = 0;
     memset(s, 0, sizeof *s);
     s->jobs = jobs;
     s->width = width;
     s->height = height;
     s->pixel_count = width * height;
     s->tile_count = (height + RENDERCACHE__TILE_ROWS - 1) / RENDERCACHE__TILE_ROWS;
-    s->final.depth = (float *)rendercache__alloc_array(a, s->pixel_count, sizeof(float));
-    s->final.index = (uint32_t *)rendercache__alloc_array(a, s->pixel_count, sizeof(uint32_t));
-    failed = !s->final.depth || !s->final.index;
     for (j = 0; j < jobs; j++) {
         s->zb[j].key = (uint64_t *)rendercache__alloc_array(a, (size_t)s->pixel_count + 1, sizeof(uint64_t));
         s->zb[j].payload = payload ? (float *)rendercache__alloc_array(a, s->pixel_count, 4 * sizeof(float)) : NULL;
         failed |= !s->zb[j].key || (payload && !s->zb[j].payload);
     }
-    s->final.payload = s->zb[0].payload;
     if (failed) rendercache__splat_free(s, a);
     return failed ? -1 : 0;
 }
@@ -1681,18 +1669,31 @@ typedef struct rendercache__splat_job {
     rendercache__cover_fn cover;       /* instead of source and payload */
     const void *src;
     uint32_t element_count, jobs;
-    int merge;                         /* 0: s->final is not written; the caller reads the z-buffers */
     int shared;                        /* the jobs share z-buffer 0 (s->shared, in parallel) */
 } rendercache__splat_job;
 
-/* Job per tile: clears the shared z-buffer (its last key too, past the pixels). */
-static void rendercache__splat_clear(void *ctx, uint32_t tile)
+/* Clears the keys of z-buffer 0 in the rows of tile (the last tile's also
+   the key past the pixels). */
+static void rendercache__splat_clear_tile(rendercache__splat *s, uint32_t tile)
 {
-    const rendercache__splat_job *job = (const rendercache__splat_job *)ctx;
-    const rendercache__splat *s = job->s;
     uint32_t p0 = tile * RENDERCACHE__TILE_ROWS * s->width, p1 = p0 + RENDERCACHE__TILE_ROWS * s->width, p;
     if (p1 >= s->pixel_count) p1 = s->pixel_count + 1;
     for (p = p0; p < p1; p++) s->zb[0].key[p] = RENDERCACHE__EMPTY_KEY;
+}
+
+/* Job per tile: clears the shared z-buffer. */
+static void rendercache__splat_clear(void *ctx, uint32_t tile)
+{
+    rendercache__splat_clear_tile(((const rendercache__splat_job *)ctx)->s, tile);
+}
+
+/* The squared distance a render cache key holds, FLT_MAX for the empty key. */
+static RENDERCACHE__INLINE float rendercache__key_depth(uint64_t k)
+{
+    uint32_t bits = (uint32_t)(k >> 32);
+    float d;
+    memcpy(&d, &bits, sizeof d);
+    return k == RENDERCACHE__EMPTY_KEY ? FLT_MAX : d;
 }
 
 static uint64_t rendercache__key(float depth, uint32_t element)
@@ -1757,7 +1758,8 @@ static void rendercache__splat_range(void *ctx, uint32_t j)
         return;
     }
 #endif
-    for (i = 0; i <= s->pixel_count; i++) key[i] = RENDERCACHE__EMPTY_KEY;
+    if (j > 0 || !s->clean)
+        for (i = 0; i <= s->pixel_count; i++) key[i] = RENDERCACHE__EMPTY_KEY;
     if (job->cover) {
         s->job_projected[j] = job->cover(job->src, j, begin, end, &s->zb[j], s->width, s->height);
         return;
@@ -1787,7 +1789,7 @@ static void rendercache__splat_range(void *ctx, uint32_t j)
 
 /* The least key of pixel p over the z-buffers of the last run, and the
    payload of the z-buffer that holds it (keys are unique but for the empty
-   one, so this is the key and payload rendercache__splat_merge keeps). */
+   one, so the split of the elements does not matter). */
 static RENDERCACHE__INLINE uint64_t rendercache__splat_least(const rendercache__splat *s, uint32_t p, const float **payload)
 {
     uint64_t k = s->zb[0].key[p];
@@ -1801,33 +1803,6 @@ static RENDERCACHE__INLINE uint64_t rendercache__splat_least(const rendercache__
     return k;
 }
 
-/* Job per tile: the least key over the jobs' z-buffers becomes the final
-   depth and element (with its payload). */
-static void rendercache__splat_merge(void *ctx, uint32_t tile)
-{
-    const rendercache__splat_job *job = (const rendercache__splat_job *)ctx;
-    rendercache__splat *s = job->s;
-    uint32_t p0 = tile * RENDERCACHE__TILE_ROWS * s->width, p1 = p0 + RENDERCACHE__TILE_ROWS * s->width, j, p;
-    if (p1 > s->pixel_count) p1 = s->pixel_count;
-    for (p = p0; p < p1; p++) {
-        uint64_t k = s->zb[0].key[p];
-        uint32_t bits;
-        for (j = 1; j < job->jobs; j++) {
-            if (!(s->zb[j].key[p] < k)) continue;
-            k = s->zb[j].key[p];
-            if (job->payload || job->cover) memcpy(s->final.payload + 4 * (size_t)p, s->zb[j].payload + 4 * (size_t)p, 4 * sizeof(float));
-        }
-        if (k == RENDERCACHE__EMPTY_KEY) {
-            s->final.depth[p] = FLT_MAX;
-            s->final.index[p] = RENDERCACHE__NONE;
-            continue;
-        }
-        bits = (uint32_t)(k >> 32);
-        memcpy(&s->final.depth[p], &bits, sizeof bits);
-        s->final.index[p] = (uint32_t)k;
-    }
-}
-
 static void rendercache__splat_execute(rendercache__splat_job *job,
                                        void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t), void *user)
 {
@@ -1835,26 +1810,20 @@ static void rendercache__splat_execute(rendercache__splat_job *job,
     uint32_t j;
     job->shared = parallel_for && s->shared && !job->cover && !job->payload;
     job->jobs = job->shared ? RENDERCACHE__SHARED_JOBS : parallel_for ? s->jobs : 1u;
-    if (job->shared) rendercache__run_jobs(parallel_for, user, rendercache__splat_clear, job, s->tile_count);
+    if (job->shared && !s->clean) rendercache__run_jobs(parallel_for, user, rendercache__splat_clear, job, s->tile_count);
     rendercache__run_jobs(parallel_for, user, rendercache__splat_range, job, job->jobs);
     s->ran_jobs = job->shared ? 1u : job->jobs;
-    if (job->merge) {
-        uint32_t jobs = job->jobs;
-        job->jobs = s->ran_jobs;   /* the z-buffers to merge */
-        rendercache__run_jobs(parallel_for, user, rendercache__splat_merge, job, s->tile_count);
-        job->jobs = jobs;
-    }
+    s->clean = 0;
     s->projected = 0;
     for (j = 0; j < job->jobs; j++) s->projected += s->job_projected[j];
 }
 
-/* Runs the splat over elements [0, count) into s->final; parallel_for only
-   when the splat was allocated for several jobs. merge = 0: s->final is
-   not written, and the caller takes the least key of each pixel over the
-   z-buffers itself (rendercache__splat_least), in a pass it makes anyway. */
+/* Runs the splat over elements [0, count) into the z-buffers of s; the
+   caller takes the least key of each pixel over the z-buffers of the run
+   (s->ran_jobs; rendercache__splat_least) in a pass it makes anyway. */
 static void rendercache__splat_run(rendercache__splat *s, void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t),
                                    void *user, rendercache__source_fn source, rendercache__payload_fn payload,
-                                   const void *src, uint32_t count, int merge)
+                                   const void *src, uint32_t count)
 {
     rendercache__splat_job job;
     job.s = s;
@@ -1863,14 +1832,13 @@ static void rendercache__splat_run(rendercache__splat *s, void (*parallel_for)(v
     job.cover = NULL;
     job.src = src;
     job.element_count = count;
-    job.merge = merge;
     rendercache__splat_execute(&job, parallel_for, user);
 }
 
 /* The same with a cover function (payload always kept). */
 static void rendercache__splat_run_cover(rendercache__splat *s,
                                          void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t), void *user,
-                                         rendercache__cover_fn cover, const void *src, uint32_t count, int merge)
+                                         rendercache__cover_fn cover, const void *src, uint32_t count)
 {
     rendercache__splat_job job;
     job.s = s;
@@ -1879,7 +1847,6 @@ static void rendercache__splat_run_cover(rendercache__splat *s,
     job.cover = cover;
     job.src = src;
     job.element_count = count;
-    job.merge = merge;
     rendercache__splat_execute(&job, parallel_for, user);
 }
 
@@ -2129,8 +2096,7 @@ static int rendercache__alloc_buffers(rendercache *rc)
         !rc->priority || !rc->occupancy || !rc->kind || !rc->count || !rc->tile_stats || !rc->hist ||
         !rc->select_v || !rc->chosen || !rc->err_rows || !rc->bands)
         return -1;
-    if (rendercache__splat_alloc(&rc->splat, rc->width, rc->height,
-                                 rc->parallel_for && !RENDERCACHE__ATOMICS ? RENDERCACHE__SPLAT_JOBS : 1u, 0, a) != 0)
+    if (rendercache__splat_alloc(&rc->splat, rc->width, rc->height, 1u, 0, a) != 0)   /* one z-buffer: the cull reads its keys */
         return -1;
     rc->splat.shared = rc->parallel_for != NULL && RENDERCACHE__ATOMICS;
     return 0;
@@ -2497,7 +2463,7 @@ static void rendercache__splat_points(rendercache *rc, const rendercache__view *
     double t0 = rendercache__now(rc);
     rendercache__projector_init(&pr, rc, v, obj_camera, 0);
     rendercache__splat_run(&rc->splat, rc->parallel_for, rc->parallel_user, rendercache__project_points, NULL, &pr,
-                           rc->capacity, 1);
+                           rc->capacity);
     if (t_project) *t_project += rendercache__now(rc) - t0;
 }
 
@@ -2596,6 +2562,19 @@ static void rendercache__cull_decisions(const rendercache *rc, const float *dept
     }
 }
 
+/* Job per tile: the depths of the z-buffer's keys as floats (FLT_MAX where
+   empty), into select_v (request scratch, free until the requests), for
+   the depth cull, which reads each depth nine times. */
+static void rendercache__depth_job(void *ctx, uint32_t tile)
+{
+    rendercache *rc = (rendercache *)ctx;
+    const uint64_t *RENDERCACHE__RESTRICT key = rc->splat.zb[0].key;
+    float *RENDERCACHE__RESTRICT depth = rc->select_v;
+    uint32_t p0 = tile * RENDERCACHE__TILE_ROWS * rc->width, p1 = p0 + RENDERCACHE__TILE_ROWS * rc->width, p;
+    if (p1 > rc->pixel_count) p1 = rc->pixel_count;
+    for (p = p0; p < p1; p++) depth[p] = rendercache__key_depth(key[p]);
+}
+
 /* Colour and priority of the points that won the pixels [p0, p1) of a row,
    culled or not (a culled pixel is a hole, which the filling writes again).
    The slots are anywhere in the cache, so each read is a cache miss: the
@@ -2603,17 +2582,17 @@ static void rendercache__cull_decisions(const rendercache *rc, const float *dept
    ahead of time, so that many misses are under way at once. A pixel
    without a point reads the empty slot after the last (rc->capacity):
    no branch, which points and holes along silhouettes would mispredict. */
-static void rendercache__gather_points(rendercache *rc, const uint32_t *index, uint32_t p0, uint32_t p1)
+static void rendercache__gather_points(rendercache *rc, const uint64_t *key, uint32_t p0, uint32_t p1)
 {
     const uint32_t empty = rc->capacity;
     const rendercache__point *data = rc->data;
     float *image = rc->image, *priority = rc->priority;
     uint32_t p;
-    for (p = p0; p < p1; p++) {
-        uint32_t k = index[p] == RENDERCACHE__NONE ? empty : index[p];
+    for (p = p0; p < p1; p++) {   /* a key's low half is the slot, RENDERCACHE__NONE in the empty key */
+        uint32_t k = (uint32_t)key[p] == RENDERCACHE__NONE ? empty : (uint32_t)key[p];
         uint32_t motion = rc->obj_motion[rendercache__motion_index(rc, data[k].object)];
         if (p + RENDERCACHE__GATHER_AHEAD < rc->pixel_count) {   /* (into the next row or tile too) */
-            uint32_t next = index[p + RENDERCACHE__GATHER_AHEAD];
+            uint32_t next = (uint32_t)key[p + RENDERCACHE__GATHER_AHEAD];
             const rendercache__point *q = &data[next == RENDERCACHE__NONE ? empty : next];
             RENDERCACHE__PREFETCH(q);
             RENDERCACHE__PREFETCH((const char *)q + sizeof *q - 1);   /* a record may straddle two cache lines */
@@ -2629,9 +2608,9 @@ static void rendercache__gather_points(rendercache *rc, const uint32_t *index, u
 static void rendercache__cull_job(void *ctx, uint32_t tile)
 {
     rendercache *rc = (rendercache *)ctx;
-    const rendercache__raster *s = &rc->splat.final;
-    const float *depth = s->depth;
-    const uint32_t *index = s->index, w = rc->width, h = rc->height;
+    const uint64_t *key = rc->splat.zb[0].key;
+    const float *depth = rc->select_v;   /* rendercache__depth_job's */
+    const uint32_t w = rc->width, h = rc->height;
     uint32_t *px_index = rc->px_index;
     float *px_depth = rc->px_depth;
     unsigned char *kind = rc->kind, *count = rc->count, *shown = rc->shown, mark = rendercache__mark(rc->frame);
@@ -2642,10 +2621,10 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
     if (y1 > h) y1 = h;
     for (y = y0; y < y1; y++) {
         unsigned char *occ = kind + (size_t)y * w;
-        rendercache__gather_points(rc, index, y * w, y * w + w);
+        rendercache__gather_points(rc, key, y * w, y * w + w);
         rendercache__cull_decisions(rc, depth, y, tol2, occ);
         for (x = 0; x < w; x++) {   /* without branches, as gather_points */
-            uint32_t p = y * w + x, k = index[p], has = k != RENDERCACHE__NONE, shows = has & !occ[x];
+            uint32_t p = y * w + x, k = (uint32_t)key[p], has = k != RENDERCACHE__NONE, shows = has & !occ[x];
             px_index[p] = shows ? k : RENDERCACHE__NONE;
             px_depth[p] = shows ? depth[p] : FLT_MAX;
             shown[shows ? k : sink] = mark;   /* spared by the eviction in this frame */
@@ -2791,16 +2770,24 @@ static void rendercache__interpolate_job(void *ctx, uint32_t tile)
    miss per hole and row. A hole reads at most wide_radius (<= 7) rows
    below its own, which the cull of the next tile (TILE_ROWS = 8 rows) has
    written, so the filling reads what it read after a full cull pass: the
-   same image, bit for bit. The two are timed together (stats.time_cull):
-   a clock read per tile would cost more than the saving. */
+   same image, bit for bit. The keys of tile t are cleared right after its
+   cull, while they are in cache, for the next frame's projection (the
+   neighbours' culls read the depths, converted a tile ahead). The two are timed together (stats.time_cull): a
+   clock read per tile would cost more than the saving. */
 static void rendercache__cull_and_interpolate(rendercache *rc)
 {
     uint32_t t;
     double t0 = rendercache__now(rc);
     for (t = 0; t <= rc->tile_count; t++) {
-        if (t < rc->tile_count) rendercache__cull_job(rc, t);
+        if (t == 0) rendercache__depth_job(rc, 0);
+        if (t + 1 < rc->tile_count) rendercache__depth_job(rc, t + 1);   /* the rows below tile t */
+        if (t < rc->tile_count) {
+            rendercache__cull_job(rc, t);
+            rendercache__splat_clear_tile(&rc->splat, t);   /* its keys are read (its depths are in select_v) */
+        }
         if (t > 0) rendercache__interpolate_job(rc, t - 1);
     }
+    rc->splat.clean = 1;
     rc->stats.time_cull = rendercache__now(rc) - t0;
     rc->stats.time_interpolate = 0.0;
 }
@@ -2849,6 +2836,7 @@ RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, cons
     rendercache__splat_points(rc, &rc->view, rc->obj_camera, &rc->stats.time_project);
     if (rc->parallel_for) {
         t1 = rendercache__now(rc);
+        rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__depth_job, rc, rc->tile_count);
         rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__cull_job, rc, rc->tile_count);
         t2 = rendercache__now(rc);
         rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__interpolate_job, rc, rc->tile_count);
@@ -5140,10 +5128,10 @@ static void rendercache__warp_splat(rendercache_warper *w, const rendercache__wa
     const rendercache__warp_src *last = &set->src[set->count - 1];
     const uint32_t count = last->first + last->count;
     if (foreground)
-        rendercache__splat_run_cover(&w->splat, w->parallel_for, w->parallel_user, rendercache__warp_cover, set, count, 0);
+        rendercache__splat_run_cover(&w->splat, w->parallel_for, w->parallel_user, rendercache__warp_cover, set, count);
     else
         rendercache__splat_run(&w->splat, w->parallel_for, w->parallel_user, rendercache__warp_source,
-                               rendercache__warp_payload, set, count, 0);
+                               rendercache__warp_payload, set, count);
     w->stats.projected += w->splat.projected;
     memset(&job, 0, sizeof job);
     job.w = w;
