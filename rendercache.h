@@ -1565,8 +1565,8 @@ static void rendercache__view_compose(const rendercache__view *v, const float m[
    builtins (else it runs as one job). The winner of a pixel is the least
    (depth, element index) in every case, so the result does not depend on
    the split or on the thread count. The render cache's depth cull reads
-   the keys themselves (no merged copy of depths and indices), and on one
-   thread clears them as it goes, so the next splat needs no clearing pass.
+   the keys themselves (no merged copy of depths and indices) and clears
+   them tile by tile as it goes, so the next splat needs no clearing pass.
    (Sorting the elements into image bands first, as the tiled cache of
    Walter et al. 2002 does, let any number of threads share the z-buffer
    but cost three times as much memory traffic here.)
@@ -1862,6 +1862,9 @@ static void rendercache__splat_run_cover(rendercache__splat *s,
                                                 image of 1/16 the resolution (WDG02) */
 #define RENDERCACHE__CELL (1u << RENDERCACHE__CELL_SHIFT)
 #define RENDERCACHE__CELL_FEW 4u             /* points in a cell below which it is a hole: a quarter covered */
+#define RENDERCACHE__CELL_JOBS 8u            /* jobs of the occupancy count with parallel_for, each with its own
+                                                bytes (1/16 byte per pixel each): fine enough that a thread
+                                                the system holds back holds back little */
 #define RENDERCACHE__BAND_ROWS 128u          /* rows per band of the error diffusion: 9 bands at 1080p */
 
 /* Priority image values (WDP99 priority image, extended to [0, 1]): a point
@@ -1965,7 +1968,7 @@ struct rendercache {
     float *err_rows;         /* per band, two rows of diffused error */
     rendercache__band *bands;   /* per band: its count and marginal choices */
     uint32_t band_count;
-    unsigned char *occupancy; /* predictive sampling, per job (splat.jobs) cell_count + 1 bytes: the points
+    unsigned char *occupancy; /* predictive sampling, per job (CELL_JOBS) cell_count + 1 bytes: the points
                                 that land in the cell, up to 255 (the last byte takes the points that
                                 miss); after rendercache_predict job 0's: the sum over the jobs, and
                                 255 once the cell was requested */
@@ -2081,7 +2084,7 @@ static int rendercache__alloc_buffers(rendercache *rc)
     rc->image = (float *)rendercache__alloc_array(a, px, 3 * sizeof(float));
     rc->priority = (float *)rendercache__alloc_array(a, px, sizeof(float));
     rc->occupancy = (unsigned char *)rendercache__alloc_array(a, (size_t)rc->cell_count + 1,
-                                                              rc->parallel_for ? RENDERCACHE__SPLAT_JOBS : 1u);
+                                                              rc->parallel_for ? RENDERCACHE__CELL_JOBS : 1u);
     rc->kind = (unsigned char *)rendercache__alloc_array(a, px, 1);
     rc->count = (unsigned char *)rendercache__alloc_array(a, px, 1);
     rc->tile_stats = (uint32_t *)rendercache__alloc_array(a, rc->tile_count, RENDERCACHE__TILE_STATS * sizeof(uint32_t));
@@ -2582,7 +2585,7 @@ static void rendercache__depth_job(void *ctx, uint32_t tile)
    ahead of time, so that many misses are under way at once. A pixel
    without a point reads the empty slot after the last (rc->capacity):
    no branch, which points and holes along silhouettes would mispredict. */
-static void rendercache__gather_points(rendercache *rc, const uint64_t *key, uint32_t p0, uint32_t p1)
+static void rendercache__gather_points(rendercache *rc, const uint64_t *key, uint32_t p0, uint32_t p1, uint32_t tile_end)
 {
     const uint32_t empty = rc->capacity;
     const rendercache__point *data = rc->data;
@@ -2591,7 +2594,8 @@ static void rendercache__gather_points(rendercache *rc, const uint64_t *key, uin
     for (p = p0; p < p1; p++) {   /* a key's low half is the slot, RENDERCACHE__NONE in the empty key */
         uint32_t k = (uint32_t)key[p] == RENDERCACHE__NONE ? empty : (uint32_t)key[p];
         uint32_t motion = rc->obj_motion[rendercache__motion_index(rc, data[k].object)];
-        if (p + RENDERCACHE__GATHER_AHEAD < rc->pixel_count) {   /* (into the next row or tile too) */
+        if (p + RENDERCACHE__GATHER_AHEAD < tile_end) {   /* (into the next row too; the next tile's keys may be
+                                                             cleared meanwhile by its own cull) */
             uint32_t next = (uint32_t)key[p + RENDERCACHE__GATHER_AHEAD];
             const rendercache__point *q = &data[next == RENDERCACHE__NONE ? empty : next];
             RENDERCACHE__PREFETCH(q);
@@ -2621,7 +2625,7 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
     if (y1 > h) y1 = h;
     for (y = y0; y < y1; y++) {
         unsigned char *occ = kind + (size_t)y * w;
-        rendercache__gather_points(rc, key, y * w, y * w + w);
+        rendercache__gather_points(rc, key, y * w, y * w + w, y1 * w);
         rendercache__cull_decisions(rc, depth, y, tol2, occ);
         for (x = 0; x < w; x++) {   /* without branches, as gather_points */
             uint32_t p = y * w + x, k = (uint32_t)key[p], has = k != RENDERCACHE__NONE, shows = has & !occ[x];
@@ -2636,6 +2640,7 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
     }
     stats[0] = visible;
     stats[1] = culled;
+    rendercache__splat_clear_tile(&rc->splat, tile);   /* read (the depths are in select_v): clean for the next frame */
 }
 
 /* Interpolation of a hole (WDP99 3x3 weighted filter; WDG02 wider filter
@@ -2770,9 +2775,8 @@ static void rendercache__interpolate_job(void *ctx, uint32_t tile)
    miss per hole and row. A hole reads at most wide_radius (<= 7) rows
    below its own, which the cull of the next tile (TILE_ROWS = 8 rows) has
    written, so the filling reads what it read after a full cull pass: the
-   same image, bit for bit. The keys of tile t are cleared right after its
-   cull, while they are in cache, for the next frame's projection (the
-   neighbours' culls read the depths, converted a tile ahead). The two are timed together (stats.time_cull): a
+   same image, bit for bit. The depths of tile t + 1 are converted from
+   the keys just before the cull of tile t reads them. The two are timed together (stats.time_cull): a
    clock read per tile would cost more than the saving. */
 static void rendercache__cull_and_interpolate(rendercache *rc)
 {
@@ -2783,11 +2787,9 @@ static void rendercache__cull_and_interpolate(rendercache *rc)
         if (t + 1 < rc->tile_count) rendercache__depth_job(rc, t + 1);   /* the rows below tile t */
         if (t < rc->tile_count) {
             rendercache__cull_job(rc, t);
-            rendercache__splat_clear_tile(&rc->splat, t);   /* its keys are read (its depths are in select_v) */
         }
         if (t > 0) rendercache__interpolate_job(rc, t - 1);
     }
-    rc->splat.clean = 1;
     rc->stats.time_cull = rendercache__now(rc) - t0;
     rc->stats.time_interpolate = 0.0;
 }
@@ -2845,6 +2847,7 @@ RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, cons
     } else {
         rendercache__cull_and_interpolate(rc);
     }
+    rc->splat.clean = 1;   /* every cull job cleared its keys */
     rc->stats.projected = rc->splat.projected;
     rc->stats.visible = rendercache__tile_sum(rc, 0);
     rc->stats.culled = rendercache__tile_sum(rc, 1);
@@ -2911,7 +2914,7 @@ RENDERCACHE_API rendercache_result rendercache_predict(rendercache *rc, const re
     rendercache__compose_objects(rc, &rc->predicted, rc->obj_predicted);
     job.rc = rc;
     rendercache__projector_init(&job.pr, rc, &rc->predicted, rc->obj_predicted, RENDERCACHE__CELL_SHIFT);
-    job.jobs = rc->parallel_for ? RENDERCACHE__SPLAT_JOBS : 1u;
+    job.jobs = rc->parallel_for ? RENDERCACHE__CELL_JOBS : 1u;
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__occupancy_job, &job, job.jobs);
     rc->pred_cells = 0;
     for (c = 0; c < rc->cell_count; c++) {   /* job 0's bytes become the sum */
@@ -3648,7 +3651,9 @@ RENDERCACHE_API rendercache_result rendercache_insert(rendercache *rc, const ren
         const rendercache__frame_record *record;
         int predicted = (s->flags & RENDERCACHE_REQUEST_PREDICTED) != 0;
         uint64_t f;
-        if (i % 32 == 0) rc->touched += rendercache__touch_slots(rc, s, n - i < 32 ? n - i : 32);
+        if (i == 0) rc->touched += rendercache__touch_slots(rc, s, n < 32 ? n : 32);
+        if (i % 32 == 0 && n - i > 32)   /* a batch ahead, so that the misses complete before the stores */
+            rc->touched += rendercache__touch_slots(rc, s + 32, n - i - 32 < 32 ? n - i - 32 : 32);
         if (!rendercache__sample_valid(rc, s)) { bad++; continue; }
         f = rendercache__sample_frame(rc, s);
         if (rc->frame - f > rc->max_latency) { rc->stats.dropped++; continue; }
