@@ -175,7 +175,7 @@ static void run(const ex_tracer *tracer, ex_pool *shade_pool, uint32_t w, uint32
        two run interleaved, timed together under cull */
     static const char *names[P_COUNT] = { "project+z-buffer", "cull(+interp on 1 thread)", "interp+priority",
                                           "predict", "request", "insert", "total" };
-    double times[P_COUNT][FRAMES], cpu[FRAMES];
+    double times[P_COUNT][FRAMES], cpu[FRAMES], wall[FRAMES];
     rendercache_desc d;
     rendercache *rc;
     rendercache_pixel_request *req = (rendercache_pixel_request *)malloc(sizeof *req * w * h);
@@ -214,17 +214,21 @@ static void run(const ex_tracer *tracer, ex_pool *shade_pool, uint32_t w, uint32
         rendercache_stats st;
         double t0, c0;
         c0 = process_cpu_seconds();
+        t0 = now_seconds(NULL);
         rendercache_begin_frame(rc, &c);
         rendercache_predict(rc, &next);   /* WDG02: the holes of the next camera, from a quarter of the budget */
         rendercache_request(rc, req, budget, &n);
         cpu[f] = process_cpu_seconds() - c0;
+        wall[f] = now_seconds(NULL) - t0;
         t0 = now_seconds(NULL);
         shade_all(shade_pool, tracer, req, samples, n, (uint32_t)f + 1, 1);   /* direct + one bounce */
         shade_time += now_seconds(NULL) - t0;
         shaded += n;
         c0 = process_cpu_seconds();
+        t0 = now_seconds(NULL);
         rendercache_insert(rc, samples, n, NULL);
         cpu[f] += process_cpu_seconds() - c0;
+        wall[f] += now_seconds(NULL) - t0;
         rendercache_get_stats(rc, &st);
         times[P_PROJECT][f] = st.time_project;
         times[P_CULL][f] = st.time_cull;
@@ -243,9 +247,10 @@ static void run(const ex_tracer *tracer, ex_pool *shade_pool, uint32_t w, uint32
         printf(" %s %.2f%s", names[k], m, k + 1 < P_COUNT ? "," : " ms (medians)\n");
         if (k == P_TOTAL) *frame_ms = m;
     }
-    if (threads > 1)   /* the work done, whoever waited: wall time on a loaded machine counts the waits too */
-        printf("%9s %d threads: the frame's cpu time summed over the threads %.2f ms (median; %s)\n", "", threads,
-               median(cpu, FRAMES) * 1e3, load_average());
+    /* the same frames in wall time (which counts the moments other processes held the cores) and in cpu time
+       summed over the threads (the work done, whoever waited) */
+    printf("%9s %d thread%s: the same frames %.2f ms wall, %.2f ms cpu summed over the threads (medians; %s)\n", "",
+           threads, threads > 1 ? "s" : " ", median(wall, FRAMES) * 1e3, median(cpu, FRAMES) * 1e3, load_average());
     *sample_us = shaded ? shade_time / (double)shaded * 1e6 : 0.0;
     rendercache_destroy(rc);
     ex_pool_destroy(pool);
