@@ -1,4 +1,4 @@
-/* rendercache.h - v0.4.0 - render cache and range-image walkthroughs - public domain or MIT, see end of file
+/* rendercache.h - v0.4.1 - render cache and range-image walkthroughs - public domain or MIT, see end of file
 
    RENDERCACHE.H: an image-space point cache that reprojects and resamples, and range-image walkthroughs of animated scenes.
 
@@ -164,9 +164,9 @@
        begin_frame: every point is projected into the camera and z-buffered,
        one point per pixel (WDP99 reprojection; with parallel_for, 8 jobs of
        points share the z-buffer through an atomic minimum of a key that
-       orders by depth, then slot, so any schedule keeps the same point); a
-       point much farther than
-       the average depth of its 3x3 neighbourhood, with nearer points on
+       orders by depth, then slot, so any schedule keeps the same point; the
+       depth cull reads these keys and clears them for the next frame); a
+       point much farther than the average depth of its 3x3 neighbourhood, with nearer points on
        opposite sides, is dropped (WDP99 depth cull); holes are filled by a
        3x3 tent filter, or a 7x7 one where points are sparse (WDG02), from
        the nearest or the farthest depth layer only, never a blend; the
@@ -343,10 +343,11 @@
 
        Render cache: image up to 2^28 pixels, cache up to 2^31 points, up to
        2^24 objects, samples up to 64 frames late. Memory: 41 bytes per cache
-       point (2 per pixel by default), 51 bytes per pixel (59 with
-       parallel_for from a compiler without the GNU atomic builtins), and
-       about 48 (max_latency + 8) bytes per object: 133 bytes per pixel in
-       all, 35 MB for 512x512 and 276 MB for 1920x1080. Point
+       point (2 per pixel by default), 43 bytes per pixel (43.5 with
+       parallel_for), and about 48 (max_latency + 8) bytes per object: 125
+       bytes per pixel in all, 33 MB for 512x512 and 260 MB for 1920x1080.
+       A compiler without the GNU atomic builtins projects the points in one
+       job (the rest of the frame still runs in parallel). Point
        colours are fixed when they are inserted (the cache ages them so that
        they get refreshed, and faster where samples find a colour changed);
        view-dependent shading changes only as points are resampled, as in
@@ -383,7 +384,7 @@
 
 #define RENDERCACHE_VERSION_MAJOR 0
 #define RENDERCACHE_VERSION_MINOR 4
-#define RENDERCACHE_VERSION_PATCH 0
+#define RENDERCACHE_VERSION_PATCH 1
 
 #ifndef RENDERCACHE_API
 #  ifdef RENDERCACHE_STATIC
