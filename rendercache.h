@@ -992,11 +992,14 @@ static void rendercache__free(const rendercache_allocator *a, void *p)
 /* Zero means default: the documented default replaces a zero field. */
 #define rendercache__def(v, d) ((v) ? (v) : (d))
 
-/* A hint to load a cache line ahead of its use (compilers without one: nothing). */
+/* A hint to load a cache line ahead of its use, or (_WRITE) ahead of a
+   store to it (compilers without one: nothing). */
 #if defined(__GNUC__) || defined(__clang__)
 #  define RENDERCACHE__PREFETCH(p) __builtin_prefetch(p)
+#  define RENDERCACHE__PREFETCH_WRITE(p) __builtin_prefetch((p), 1)
 #else
 #  define RENDERCACHE__PREFETCH(p) ((void)(p))
+#  define RENDERCACHE__PREFETCH_WRITE(p) ((void)(p))
 #endif
 
 /* Small functions that loops call and must inline to vectorise. */
@@ -2605,6 +2608,7 @@ static void rendercache__gather_points(rendercache *rc, const uint64_t *key, uin
             const rendercache__point *q = &data[next == RENDERCACHE__NONE ? empty : next];
             RENDERCACHE__PREFETCH(q);
             RENDERCACHE__PREFETCH((const char *)q + sizeof *q - 1);   /* a record may straddle two cache lines */
+            RENDERCACHE__PREFETCH_WRITE(&rc->shown[next == RENDERCACHE__NONE ? empty : next]);   /* cull_job marks it */
         }
         memcpy(image + 3 * (size_t)p, data[k].rgb, 3 * sizeof(float));
         priority[p] = rendercache__point_priority(rc, &data[k], motion);
