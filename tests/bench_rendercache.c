@@ -24,6 +24,9 @@
    motion-compensated (table 4).
 
    Medians over the frames of the paths. */
+#if defined(__linux__) && !defined(_DEFAULT_SOURCE)
+#  define _DEFAULT_SOURCE 1   /* madvise(MADV_HUGEPAGE) for the huge-page allocator */
+#endif
 #include "examples/common/baseviews.h"
 #include "examples/common/pool.h"
 #include "examples/common/trace.h"
@@ -32,6 +35,9 @@
 
 #include <stdio.h>
 #include <time.h>
+#if defined(__linux__)
+#  include <sys/mman.h>
+#endif
 
 #define FRAMES 48
 #define BUDGET 0.08
@@ -69,13 +75,34 @@ static const char *load_average(void)
     return text;
 }
 
-/* An allocator that counts the bytes live (for the memory per pixel). */
-typedef struct counted { size_t live, peak; } counted;
+/* An allocator that counts the bytes live (for the memory per pixel).
+   With huge set, blocks of 2 MB or more are aligned to 2 MB and asked to
+   be backed by huge pages (Linux transparent huge pages, madvise mode):
+   the cache's reads and writes at random over tens of megabytes then miss
+   the TLB far less. */
+typedef struct counted { size_t live, peak; int huge; } counted;
+#define HUGE_PAGE ((size_t)2 << 20)
 static void *counted_alloc(size_t size, void *user)
 {
     counted *c = (counted *)user;
-    size_t *p = (size_t *)malloc(size + sizeof(size_t) * 2);
+    size_t *p = NULL;
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    if (c->huge && size >= HUGE_PAGE) {
+        void *block = NULL;
+        size_t total = (size + HUGE_PAGE + HUGE_PAGE - 1) / HUGE_PAGE * HUGE_PAGE;
+        if (posix_memalign(&block, HUGE_PAGE, total) != 0) return NULL;
+        madvise(block, total, MADV_HUGEPAGE);
+        p = (size_t *)((char *)block + HUGE_PAGE - sizeof(size_t) * 2);   /* the data starts on a huge page */
+        p[0] = size;
+        p[1] = HUGE_PAGE;   /* offset back to the block */
+        c->live += size;
+        if (c->live > c->peak) c->peak = c->live;
+        return p + 2;
+    }
+#endif
+    p = (size_t *)malloc(size + sizeof(size_t) * 2);
     if (!p) return NULL;
+    p[1] = 0;
     p[0] = size;
     c->live += size;
     if (c->live > c->peak) c->peak = c->live;
@@ -87,7 +114,8 @@ static void counted_free(void *ptr, void *user)
     size_t *p = (size_t *)ptr;
     if (!p) return;
     c->live -= p[-2];
-    free(p - 2);
+    if (p[-1]) free((char *)(p - 2) - (p[-1] - sizeof(size_t) * 2));
+    else free(p - 2);
 }
 
 static int compare_doubles(const void *a, const void *b)
@@ -169,7 +197,7 @@ static void shade_all(ex_pool *pool, const ex_tracer *t, const rendercache_pixel
 enum { P_PROJECT, P_CULL, P_INTERP, P_PREDICT, P_REQUEST, P_INSERT, P_TOTAL, P_COUNT };
 
 static void run(const ex_tracer *tracer, ex_pool *shade_pool, uint32_t w, uint32_t h, int threads,
-                double *frame_ms, double *sample_us, double *bytes_per_pixel)
+                double *frame_ms, double *sample_us, double *bytes_per_pixel, int huge)
 {
     /* priority is computed inside cull (pixels with a point) and interp (holes); on one thread the
        two run interleaved, timed together under cull */
@@ -184,13 +212,14 @@ static void run(const ex_tracer *tracer, ex_pool *shade_pool, uint32_t w, uint32
     uint32_t n = 0, budget = (uint32_t)(BUDGET * w * h + 0.5);
     double shade_time = 0.0;
     uint64_t shaded = 0;
-    counted memory = { 0, 0 };
+    counted memory = { 0, 0, 0 };
     int f, k;
     memset(&d, 0, sizeof d);
     d.allocator.alloc = counted_alloc;
     d.allocator.free = counted_free;
     d.allocator.user = &memory;
     if (getenv("BENCH_NOCHANGE")) d.change_threshold = FLT_MAX;
+    memory.huge = huge;
     d.width = w;
     d.height = h;
     d.clock = now_seconds;
@@ -241,7 +270,8 @@ static void run(const ex_tracer *tracer, ex_pool *shade_pool, uint32_t w, uint32
                             st.time_request + st.time_insert;
     }
     *bytes_per_pixel = (double)memory.peak / ((double)w * h);
-    printf("%4ux%-4u %d thread%s (%s):", w, h, threads, threads > 1 ? "s" : " ", threads > 1 ? "wall" : "cpu ");
+    printf("%4ux%-4u %d thread%s (%s%s):", w, h, threads, threads > 1 ? "s" : " ", threads > 1 ? "wall" : "cpu ",
+           huge ? ", huge pages" : "");
     for (k = 0; k < P_COUNT; k++) {
         double m = median(times[k], FRAMES) * 1e3;
         printf(" %s %.2f%s", names[k], m, k + 1 < P_COUNT ? "," : " ms (medians)\n");
@@ -1011,10 +1041,22 @@ static int cache_selected(int argc, char **argv, uint32_t w, uint32_t h, int thr
     return (!size_given || size_ok) && (!threads_given || threads_ok);
 }
 
+/* Whether the cache line of size w x h on that many threads runs again
+   with the huge-page allocator: with no argument 512x512 on one thread and
+   1920x1080 on two; with "cache ... huge", the lines cache_selected runs. */
+static int huge_selected(int argc, char **argv, uint32_t w, uint32_t h, int threads)
+{
+    int i;
+    if (argc < 2) return (w == 512 && threads == 1) || (w == 1920 && threads == 2);
+    for (i = 2; i < argc; i++)
+        if (strcmp(argv[i], "huge") == 0) return cache_selected(argc, argv, w, h, threads);
+    return 0;
+}
+
 /* Arguments: "quick" (any argument but the three below) runs 512x512 and
    the warps on one thread only; "cache", "warp" or "tables" runs that part
    only, quick (e.g. under valgrind --tool=callgrind); "cache" takes sizes
-   and thread counts (cache_selected). */
+   and thread counts (cache_selected), and "huge" (huge_selected). */
 int main(int argc, char **argv)
 {
     static const uint32_t sizes[2][2] = { { 512, 512 }, { 1920, 1080 } };
@@ -1040,8 +1082,16 @@ int main(int argc, char **argv)
     for (s = 0; cache && s < 2; s++)
         for (threads = 1; threads <= 2; threads++) {
             if (!cache_selected(argc, argv, sizes[s][0], sizes[s][1], threads)) continue;
-            run(tracer, shade_pool, sizes[s][0], sizes[s][1], threads, &frame_ms[s][threads - 1], &sample_us, &b);
+            run(tracer, shade_pool, sizes[s][0], sizes[s][1], threads, &frame_ms[s][threads - 1], &sample_us, &b, 0);
             if (b > bytes[s]) bytes[s] = b;
+        }
+    /* the same with an allocator that backs large blocks with huge pages (an engine's allocator may;
+       the library takes whatever its desc's allocator gives) */
+    for (s = 0; cache && s < 2; s++)
+        for (threads = 1; threads <= 2; threads++) {
+            double ms, us;
+            if (huge_selected(argc, argv, sizes[s][0], sizes[s][1], threads))
+                run(tracer, shade_pool, sizes[s][0], sizes[s][1], threads, &ms, &us, &b, 1);
         }
     if (cache) cache_summary(frame_ms, sample_us, ex_pool_threads(shade_pool), bytes);
     printf("%s at the end\n", load_average());
