@@ -560,20 +560,21 @@ static float irrvol__rng_float(irrvol__rng *r)
 
 /* ======================================================================
    4. BVH over triangles
-   A 4-wide BVH (Embree's BVH4: Wald et al. 2014). Build: a binary tree by
+   An 8-wide BVH (Embree's BVH8: Wald et al. 2014). Build: a binary tree by
    binned SAH (IRRVOL_BVH_BINS bins over the centroid bounds, all three axes
    binned in one pass; a leaf costs one test per block of four triangles),
-   then collapsed into 4-wide nodes by opening, again and again, the child of
-   largest surface area. A node keeps its four child boxes in rows (structure
-   of arrays) and a leaf is a run of blocks of four triangles in rows, so one
-   SIMD instruction tests four boxes or four triangles. Nodes are stored depth
-   first; the blocks hold copies of the vertices, nothing of the caller's data
-   is kept. Traversal: nearest child first, every stack entry keeps its entry
-   distance so that entries behind a closer hit are dropped; the watertight
-   ray/triangle test (Woop, Benthin, Wald 2013); any-hit for shadow rays.
-   IRRVOL_BVH_SIMD selects the SSE2 (x86-64) or NEON (AArch64) kernels. The
-   scalar kernels do the same float operations lane by lane, are always
-   compiled, and find the same hits bit for bit (bvh->simd = 0 selects them).
+   then collapsed into 8-wide nodes by opening, again and again, the child of
+   largest surface area. A node keeps its eight child boxes in rows
+   (structure of arrays) and a leaf is a run of blocks of four triangles in
+   rows, so one SIMD instruction tests four boxes or four triangles. Nodes are
+   stored depth first; the blocks hold copies of the vertices, nothing of the
+   caller's data is kept. Traversal: nearest child first, every stack entry
+   keeps its entry distance so that entries behind a closer hit are dropped;
+   the watertight ray/triangle test (Woop, Benthin, Wald 2013); any-hit for
+   shadow rays. IRRVOL_BVH_SIMD selects the SSE2 (x86-64) or NEON (AArch64)
+   kernels. The scalar kernels do the same float operations lane by lane, are
+   always compiled, and find the same hits bit for bit (bvh->simd = 0 selects
+   them).
    ---------------------------------------------------------------------- */
 #ifndef IRRVOL_BVH_BINS
 #define IRRVOL_BVH_BINS 16
@@ -594,11 +595,12 @@ static float irrvol__rng_float(irrvol__rng *r)
 #define IRRVOL__SIMD 0
 #endif
 
-#define IRRVOL__BVH_LEAF_MAX 8     /* triangles per leaf: two blocks */
-#define IRRVOL__BVH_NODE_COST 1.0f /* SAH cost of a binary node, in block tests */
+#define IRRVOL__BVH_WIDTH 8        /* children per node */
+#define IRRVOL__BVH_LEAF_MAX 16    /* triangles per leaf: four blocks */
+#define IRRVOL__BVH_NODE_COST 2.0f /* SAH cost of a binary node, in block tests (measured best of 0.5-4) */
 #define IRRVOL__BVH_MAX_DEPTH 60   /* deeper nodes split at the median: bounds the stacks */
 #define IRRVOL__BVH_MAX_BINARY_DEPTH (IRRVOL__BVH_MAX_DEPTH + 33) /* + 32 halvings of a uint32_t count */
-#define IRRVOL__BVH_STACK (3 * IRRVOL__BVH_MAX_BINARY_DEPTH + 4)  /* a wide level pushes <= 3 (4 the last) */
+#define IRRVOL__BVH_STACK ((IRRVOL__BVH_WIDTH - 1) * IRRVOL__BVH_MAX_BINARY_DEPTH + IRRVOL__BVH_WIDTH)
 #define IRRVOL__BVH_LEAF 0x80000000u /* a leaf's child reference: LEAF | first block << 3 | blocks - 1 */
 #define IRRVOL__BVH_MAX_BLOCKS (1u << 28)
 #define IRRVOL__BVH_NONE 0xFFFFFFFFu
@@ -607,9 +609,9 @@ static float irrvol__rng_float(irrvol__rng *r)
 #define IRRVOL__BVH_ROUND_UP 1.00000036f
 
 typedef struct irrvol__bvh_node {
-    float box[6][4];    /* rows lo x, hi x, lo y, hi y, lo z, hi z; column = child.
+    float box[6][IRRVOL__BVH_WIDTH]; /* rows lo x, hi x, lo y, hi y, lo z, hi z; column = child.
                            An unused child has lo = +inf, hi = -inf: no ray enters it */
-    uint32_t child[4];  /* inner node index, or a leaf reference (IRRVOL__BVH_LEAF) */
+    uint32_t child[IRRVOL__BVH_WIDTH]; /* inner node index, or a leaf reference (IRRVOL__BVH_LEAF) */
 } irrvol__bvh_node;
 
 typedef struct irrvol__bvh_tris {
@@ -833,12 +835,12 @@ static uint32_t irrvol__bvh_build_binary(irrvol__bvh_bnode *bn, irrvol__bvh_ref 
 
 /* The children of the wide node made from binary node i: i's two children,
    then again and again the inner one of largest area replaced by its two. */
-static int irrvol__bvh_open(const irrvol__bvh_bnode *bn, uint32_t i, uint32_t kids[4])
+static int irrvol__bvh_open(const irrvol__bvh_bnode *bn, uint32_t i, uint32_t kids[IRRVOL__BVH_WIDTH])
 {
     int k = 2;
     kids[0] = i + 1;
     kids[1] = bn[i].first;
-    while (k < 4) {
+    while (k < IRRVOL__BVH_WIDTH) {
         int j, best = -1;
         float best_area = -1.0f;
         for (j = 0; j < k; j++) {
@@ -888,12 +890,12 @@ static void irrvol__bvh_collapse(irrvol__bvh *bvh, const irrvol__bvh_bnode *bn, 
             if (bvh->nodes) irrvol__bvh_store_leaf(bvh, m, refs + b->first, b->count, blocks);
             blocks += irrvol__bvh_blocks(b->count);
         } else {
-            uint32_t kids[4];
+            uint32_t kids[IRRVOL__BVH_WIDTH];
             int k = irrvol__bvh_open(bn, p.bnode, kids), j, r;
             ref = nodes++;
             if (bvh->nodes) {
                 irrvol__bvh_node *node = &bvh->nodes[ref];
-                for (j = 0; j < 4; j++) {
+                for (j = 0; j < IRRVOL__BVH_WIDTH; j++) {
                     for (r = 0; r < 3; r++) {
                         node->box[2 * r][j] = j < k ? bn[kids[j]].lo[r] : INFINITY;
                         node->box[2 * r + 1][j] = j < k ? bn[kids[j]].hi[r] : -INFINITY;
@@ -1004,7 +1006,7 @@ typedef struct irrvol__ray {
     float org[3], dir[3], inv[3];
     int kx, ky, kz;          /* dir[kz] has the largest magnitude */
     float sx, sy, sz;        /* shear that maps dir to +z */
-    int near[3];             /* box row offset (in floats) of the entry plane per axis; far = near ^ 4 */
+    int near[3];             /* box row offset (in floats) of the entry plane per axis; far = near ^ WIDTH */
 #if IRRVOL__SIMD
     irrvol__f4 org4[3], inv4[3], sx4, sy4, sz4;
 #endif
@@ -1020,7 +1022,7 @@ static void irrvol__ray_setup(irrvol__ray *r, const float org[3], const float di
         r->org[k] = org[k];
         r->dir[k] = dir[k];
         r->inv[k] = 1.0f / d;
-        r->near[k] = 8 * k + (r->inv[k] < 0.0f ? 4 : 0);
+        r->near[k] = 2 * IRRVOL__BVH_WIDTH * k + (r->inv[k] < 0.0f ? IRRVOL__BVH_WIDTH : 0);
     }
     r->kz = fabsf(dir[0]) > fabsf(dir[1]) ? (fabsf(dir[0]) > fabsf(dir[2]) ? 0 : 2)
                                           : (fabsf(dir[1]) > fabsf(dir[2]) ? 1 : 2);
@@ -1044,18 +1046,18 @@ static void irrvol__ray_setup(irrvol__ray *r, const float org[3], const float di
 /* Entry distances t[i] of the ray into a node's child boxes, clipped to
    [tmin, tmax]; returns the mask of the children it enters. */
 static unsigned irrvol__node_hits_scalar(const irrvol__ray *r, const irrvol__bvh_node *n, float tmin, float tmax,
-                                         float t[4])
+                                         float t[IRRVOL__BVH_WIDTH])
 {
     const float *box = n->box[0];
     unsigned mask = 0;
     int i;
-    for (i = 0; i < 4; i++) {
+    for (i = 0; i < IRRVOL__BVH_WIDTH; i++) {
         float nx = (box[r->near[0] + i] - r->org[0]) * r->inv[0];
         float ny = (box[r->near[1] + i] - r->org[1]) * r->inv[1];
         float nz = (box[r->near[2] + i] - r->org[2]) * r->inv[2];
-        float fx = (box[(r->near[0] ^ 4) + i] - r->org[0]) * r->inv[0];
-        float fy = (box[(r->near[1] ^ 4) + i] - r->org[1]) * r->inv[1];
-        float fz = (box[(r->near[2] ^ 4) + i] - r->org[2]) * r->inv[2];
+        float fx = (box[(r->near[0] ^ IRRVOL__BVH_WIDTH) + i] - r->org[0]) * r->inv[0];
+        float fy = (box[(r->near[1] ^ IRRVOL__BVH_WIDTH) + i] - r->org[1]) * r->inv[1];
+        float fz = (box[(r->near[2] ^ IRRVOL__BVH_WIDTH) + i] - r->org[2]) * r->inv[2];
         float tn = irrvol__maxf(irrvol__maxf(nx, ny), irrvol__maxf(nz, tmin));
         float tf = irrvol__minf(irrvol__minf(fx, fy), irrvol__minf(fz, tmax)) * IRRVOL__BVH_ROUND_UP;
         t[i] = tn;
@@ -1104,22 +1106,27 @@ static int irrvol__leaf_hit_scalar(const irrvol__ray *r, const irrvol__bvh_tris 
 }
 
 #if IRRVOL__SIMD
-/* irrvol__node_hits_scalar on four lanes at once. */
+/* irrvol__node_hits_scalar four lanes at a time. */
 static unsigned irrvol__node_hits_simd(const irrvol__ray *r, const irrvol__bvh_node *n, float tmin, float tmax,
-                                       float t[4])
+                                       float t[IRRVOL__BVH_WIDTH])
 {
-    const float *box = n->box[0];
-    irrvol__f4 nx = irrvol__f4_mul(irrvol__f4_sub(irrvol__f4_load(box + r->near[0]), r->org4[0]), r->inv4[0]);
-    irrvol__f4 ny = irrvol__f4_mul(irrvol__f4_sub(irrvol__f4_load(box + r->near[1]), r->org4[1]), r->inv4[1]);
-    irrvol__f4 nz = irrvol__f4_mul(irrvol__f4_sub(irrvol__f4_load(box + r->near[2]), r->org4[2]), r->inv4[2]);
-    irrvol__f4 fx = irrvol__f4_mul(irrvol__f4_sub(irrvol__f4_load(box + (r->near[0] ^ 4)), r->org4[0]), r->inv4[0]);
-    irrvol__f4 fy = irrvol__f4_mul(irrvol__f4_sub(irrvol__f4_load(box + (r->near[1] ^ 4)), r->org4[1]), r->inv4[1]);
-    irrvol__f4 fz = irrvol__f4_mul(irrvol__f4_sub(irrvol__f4_load(box + (r->near[2] ^ 4)), r->org4[2]), r->inv4[2]);
-    irrvol__f4 tn = irrvol__f4_max(irrvol__f4_max(nx, ny), irrvol__f4_max(nz, irrvol__f4_set(tmin)));
-    irrvol__f4 tf = irrvol__f4_mul(irrvol__f4_min(irrvol__f4_min(fx, fy), irrvol__f4_min(fz, irrvol__f4_set(tmax))),
-                                   irrvol__f4_set(IRRVOL__BVH_ROUND_UP));
-    irrvol__f4_store(t, tn);
-    return irrvol__m4_bits(irrvol__f4_le(tn, tf));
+    const irrvol__f4 lo = irrvol__f4_set(tmin), hi = irrvol__f4_set(tmax), up = irrvol__f4_set(IRRVOL__BVH_ROUND_UP);
+    unsigned mask = 0;
+    int i;
+    for (i = 0; i < IRRVOL__BVH_WIDTH; i += 4) {
+        const float *box = n->box[0] + i;
+        irrvol__f4 nx = irrvol__f4_mul(irrvol__f4_sub(irrvol__f4_load(box + r->near[0]), r->org4[0]), r->inv4[0]);
+        irrvol__f4 ny = irrvol__f4_mul(irrvol__f4_sub(irrvol__f4_load(box + r->near[1]), r->org4[1]), r->inv4[1]);
+        irrvol__f4 nz = irrvol__f4_mul(irrvol__f4_sub(irrvol__f4_load(box + r->near[2]), r->org4[2]), r->inv4[2]);
+        irrvol__f4 fx = irrvol__f4_mul(irrvol__f4_sub(irrvol__f4_load(box + (r->near[0] ^ IRRVOL__BVH_WIDTH)), r->org4[0]), r->inv4[0]);
+        irrvol__f4 fy = irrvol__f4_mul(irrvol__f4_sub(irrvol__f4_load(box + (r->near[1] ^ IRRVOL__BVH_WIDTH)), r->org4[1]), r->inv4[1]);
+        irrvol__f4 fz = irrvol__f4_mul(irrvol__f4_sub(irrvol__f4_load(box + (r->near[2] ^ IRRVOL__BVH_WIDTH)), r->org4[2]), r->inv4[2]);
+        irrvol__f4 tn = irrvol__f4_max(irrvol__f4_max(nx, ny), irrvol__f4_max(nz, lo));
+        irrvol__f4 tf = irrvol__f4_mul(irrvol__f4_min(irrvol__f4_min(fx, fy), irrvol__f4_min(fz, hi)), up);
+        irrvol__f4_store(t + i, tn);
+        mask |= irrvol__m4_bits(irrvol__f4_le(tn, tf)) << i;
+    }
+    return mask;
 }
 
 /* irrvol__leaf_hit_scalar on four lanes at once; the closest accepted lane
@@ -1187,7 +1194,7 @@ static int irrvol__leaf_hit_simd(const irrvol__ray *r, const irrvol__bvh_tris *b
 #endif
 
 static unsigned irrvol__bvh_node_hits(const irrvol__bvh *bvh, const irrvol__ray *r, const irrvol__bvh_node *n,
-                                      float tmin, float tmax, float t[4])
+                                      float tmin, float tmax, float t[IRRVOL__BVH_WIDTH])
 {
 #if IRRVOL__SIMD
     if (bvh->simd) return irrvol__node_hits_simd(r, n, tmin, tmax, t);
@@ -1208,15 +1215,36 @@ static int irrvol__bvh_leaf_hit(const irrvol__bvh *bvh, const irrvol__ray *r, co
 
 typedef struct irrvol__bvh_entry { uint32_t ref; float t; } irrvol__bvh_entry;
 
+/* Index of the lowest set bit of a non-zero mask. */
+static uint32_t irrvol__bvh_first_bit(unsigned mask)
+{
+#if defined(__GNUC__) || defined(__clang__)
+    return (uint32_t)__builtin_ctz(mask);
+#else
+    uint32_t i = 0;
+    while (!(mask >> i & 1)) i++;
+    return i;
+#endif
+}
+
 /* Pushes the children in mask, the farthest first, so that they pop nearest
    first (equal distances in child order); returns the nearest, not pushed. */
-static uint32_t irrvol__bvh_push_children(const irrvol__bvh_node *n, unsigned mask, const float t[4],
+static uint32_t irrvol__bvh_push_children(const irrvol__bvh_node *n, unsigned mask, const float t[IRRVOL__BVH_WIDTH],
                                           irrvol__bvh_entry *stack, uint32_t *top)
 {
-    irrvol__bvh_entry e[4];
-    uint32_t k = 0, i, j;
-    for (i = 0; i < 4; i++) {
-        if (!(mask >> i & 1)) continue;
+    irrvol__bvh_entry e[IRRVOL__BVH_WIDTH];
+    uint32_t k = 0, i = irrvol__bvh_first_bit(mask), j, rest = mask & (mask - 1);
+    if (!rest) return n->child[i];   /* one child: nothing to push */
+    j = irrvol__bvh_first_bit(rest);
+    if (!(rest & (rest - 1))) {      /* two children */
+        uint32_t near = t[j] < t[i] ? j : i, far = near == i ? j : i;
+        stack[*top].ref = n->child[far];
+        stack[*top].t = t[far];
+        (*top)++;
+        return n->child[near];
+    }
+    for (; mask; mask &= mask - 1) {   /* insertion sort, stable */
+        i = irrvol__bvh_first_bit(mask);
         for (j = k++; j > 0 && e[j - 1].t > t[i]; j--) e[j] = e[j - 1];
         e[j].ref = n->child[i];
         e[j].t = t[i];
@@ -1237,7 +1265,7 @@ static int irrvol__bvh_traverse(const irrvol__bvh *bvh, const irrvol__ray *r, fl
             for (; b < end; b++)
                 if (irrvol__bvh_leaf_hit(bvh, r, &bvh->blocks[b], tmin, hit) && any_hit) return 1;
         } else {
-            float t[4];
+            float t[IRRVOL__BVH_WIDTH];
             const irrvol__bvh_node *n = &bvh->nodes[ref];
             unsigned mask = irrvol__bvh_node_hits(bvh, r, n, tmin, hit->t, t);
             if (mask) {

@@ -2,7 +2,7 @@
    quality, one thread): incoherent closest-hit rays (random origins in the
    scene's box, uniformly random directions), the same rays for both, rounds
    interleaved (ours, Embree, ours, ...), each round timed in this thread's CPU
-   time; the medians and their ratio. Build times of both (process CPU time:
+   time; the medians, and the median of the rounds' ratios. Build times of both (process CPU time:
    Embree builds on a one-thread device). Scenes: the office with the bunny on
    its floor (the reference tests' scene) and the bunny subdivided three times
    (235,136 triangles). */
@@ -12,8 +12,12 @@
 #include <embree3/rtcore.h>
 #include <time.h>
 
+#ifndef ROUNDS
 #define ROUNDS 7
+#endif
+#ifndef RAYS
 #define RAYS 1000000u
+#endif
 
 static double thread_cpu(void)
 {
@@ -171,9 +175,11 @@ static double ours_trace(const irrvol__bvh *bvh, const float *rays, uint32_t n, 
     return thread_cpu() - t0;
 }
 
+static const char *filter;   /* argv[1]: run only the scenes whose name contains it */
+
 static void bench(RTCDevice dev, const bench_scene *s)
 {
-    double ours[ROUNDS], theirs[ROUNDS], scalar[ROUNDS], b_ours[ROUNDS], b_theirs[ROUNDS];
+    double ours[ROUNDS], theirs[ROUNDS], scalar[ROUNDS], ratio[ROUNDS], b_ours[ROUNDS], b_theirs[ROUNDS];
     double sum_ours = 0, sum_theirs = 0, sum_scalar = 0;
     float *rays = make_rays(s, RAYS);
     irrvol__mesh_view m;
@@ -187,6 +193,7 @@ static void bench(RTCDevice dev, const bench_scene *s)
     m.indices = s->indices;
     m.tri_count = s->tri_count;
     if (!rays) { fprintf(stderr, "out of memory\n"); exit(1); }
+    if (filter && !strstr(s->name, filter)) { free(rays); return; }
     for (r = 0; r < ROUNDS; r++) {
         double t0 = process_cpu();
         if (r) irrvol__bvh_free(&bvh, &a);
@@ -200,16 +207,17 @@ static void bench(RTCDevice dev, const bench_scene *s)
     for (r = 0; r < ROUNDS; r++) {
         ours[r] = ours_trace(&bvh, rays, RAYS, &sum_ours);
         theirs[r] = embree_trace(sc, rays, RAYS, &sum_theirs);
+        ratio[r] = theirs[r] / ours[r];
         bvh.simd = 0;
         scalar[r] = ours_trace(&bvh, rays, RAYS / 4, &sum_scalar) * 4.0;
         bvh.simd = 1;
     }
     {
-        double to = median(ours, ROUNDS), te = median(theirs, ROUNDS);
+        double to = median(ours, ROUNDS), te = median(theirs, ROUNDS), ra = median(ratio, ROUNDS);
         double bo = median(b_ours, ROUNDS), be = median(b_theirs, ROUNDS);
         printf("%-22s %7u tris  rays/s: ours %5.2f M (scalar path %5.2f M)  Embree %5.2f M  ours/Embree %.2f   "
                "build: ours %6.1f ms  Embree %6.1f ms  Embree/ours %.2f\n",
-               s->name, s->tri_count, RAYS / to / 1e6, RAYS / median(scalar, ROUNDS) / 1e6, RAYS / te / 1e6, te / to,
+               s->name, s->tri_count, RAYS / to / 1e6, RAYS / median(scalar, ROUNDS) / 1e6, RAYS / te / 1e6, ra,
                1e3 * bo, 1e3 * be, be / bo);
         if (fabs(sum_ours - sum_theirs) > 1e-5 * sum_theirs) printf("  hit distances differ: sums %.9g / %.9g\n", sum_ours, sum_theirs);
     }
@@ -218,7 +226,7 @@ static void bench(RTCDevice dev, const bench_scene *s)
     free(rays);
 }
 
-int main(void)
+int main(int argc, char **argv)
 {
     office_scene office;
     mesh big;
@@ -227,6 +235,7 @@ int main(void)
     double load[3] = {0, 0, 0};
     FILE *f = fopen("/proc/loadavg", "r");
     (void)office_scene_desc;
+    filter = argc > 1 ? argv[1] : NULL;
     if (f) { if (fscanf(f, "%lf %lf %lf", &load[0], &load[1], &load[2]) != 3) load[0] = -1; fclose(f); }
     printf("BVH vs Embree %d.%d.%d rtcIntersect1 (default quality), one thread, %u incoherent rays, "
            "medians of %d interleaved rounds, thread CPU time; load average %.2f\n",

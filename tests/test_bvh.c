@@ -146,14 +146,16 @@ static void scene_soup(bvh_scene *s)
     scene_bounds(s);
 }
 
-/* Triangles at x = 1.25^i, each larger than the last: the SAH cuts one off
-   at a time, so the build reaches its depth cap and halves by count. */
+/* 400 triangles at x = 1.1^-i, each smaller than the last: every split
+   cuts a few of the largest off (one block: the SAH), so the binary tree
+   grows about 100 levels deep, past the build's depth cap (60), where it
+   halves by count. */
 static void scene_chain(bvh_scene *s)
 {
-    uint32_t t, n = 100;
+    uint32_t t, n = 400;
     scene_alloc(s, "chain past the depth cap", 3 * n, n);
     for (t = 0; t < n; t++) {
-        float x = powf(1.25f, (float)t), h = 0.5f * x;
+        float x = powf(1.1f, -(float)t), h = 0.5f * x;
         float *p = s->positions + 9 * t;
         p[0] = x; p[1] = 0.0f; p[2] = 0.0f;
         p[3] = x; p[4] = h; p[5] = 0.0f;
@@ -268,11 +270,13 @@ static void failing_free(void *p, void *user)
 
 #define BVH(x) irrvol__##x
 #define BVH_NO_HIT IRRVOL__NO_HIT
+#define BVH_LEAF IRRVOL__BVH_LEAF
 #define BVH_ALLOCATOR irrvol_allocator
 #define T(x) irrvol_test_##x
 #include "tests/test_bvh.h"
 #undef BVH
 #undef BVH_NO_HIT
+#undef BVH_LEAF
 #undef BVH_ALLOCATOR
 #undef T
 

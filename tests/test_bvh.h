@@ -2,6 +2,7 @@
    the BVH. Included by tests/test_bvh.c once per header, with
        BVH(x)         the header's private BVH name of x (irrvol__##x)
        BVH_NO_HIT     its miss marker
+       BVH_LEAF       its leaf reference flag
        BVH_ALLOCATOR  its allocator type
        T(x)           this instance's name of test helper x
    and the scenes of tests/test_bvh.c (bvh_scene, make_ray). */
@@ -23,6 +24,20 @@ static void T(release)(BVH(bvh) *bvh)
     BVH_ALLOCATOR a;
     memset(&a, 0, sizeof a);
     BVH(bvh_free)(bvh, &a);
+}
+
+/* Levels of the wide tree (0: a root leaf or no tree). */
+static uint32_t T(depth)(const BVH(bvh) *bvh, uint32_t ref)
+{
+    uint32_t i, deepest = 0;
+    if (bvh->tri_count == 0 || (ref & BVH_LEAF)) return 0;
+    for (i = 0; i < sizeof bvh->nodes[ref].child / sizeof bvh->nodes[ref].child[0]; i++) {
+        uint32_t d;
+        if (bvh->nodes[ref].box[0][i] > bvh->nodes[ref].box[1][i]) continue;   /* an unused slot */
+        d = T(depth)(bvh, bvh->nodes[ref].child[i]);
+        if (d > deepest) deepest = d;
+    }
+    return deepest + 1;
 }
 
 /* The closest hit without the tree: every block through the scalar kernel. */
@@ -60,7 +75,7 @@ static void T(trace)(BVH(bvh) *bvh, int simd, const float o[3], const float d[3]
 static void T(compare)(const char *header, const bvh_scene *s, uint32_t rays, uint32_t checked)
 {
     BVH(bvh) bvh;
-    uint32_t i, hits = 0, differ = 0, any_wrong = 0, brute_wrong = 0, ties = 0;
+    uint32_t i, hits = 0, differ = 0, any_wrong = 0, noise = 0, brute_wrong = 0, ties = 0;
     if (!CHECK(T(build)(&bvh, s) == 0)) return;
     CHECK_EQ_INT(bvh.tri_count + bvh.degenerate_count, s->tri_count);
     CHECK_EQ_INT(bvh.degenerate_count, s->degenerate_count);
@@ -74,16 +89,24 @@ static void T(compare)(const char *header, const bvh_scene *s, uint32_t rays, ui
         hit = h[1].tri != BVH_NO_HIT;
         hits += (uint32_t)hit;
         if (memcmp(&h[0], &h[1], sizeof h[0]) != 0 || memcmp(any[0], any[1], sizeof any[0]) != 0) differ++;
-        if (any[1][0] != 0 || any[1][1] != hit) any_wrong++;
+        /* a hit within rounding of the origin (a ray leaving a triangle
+           hits it again near t = 0) has a distance of pure rounding error,
+           which boxes need not agree with: not judged closer than 100 ulp */
+        if (hit && h[1].t * (fabsf(d[0]) + fabsf(d[1]) + fabsf(d[2])) <
+                       1e-5f * (fabsf(o[0]) + fabsf(o[1]) + fabsf(o[2])))
+            noise++;
+        else if (any[1][0] != 0 || any[1][1] != hit) any_wrong++;
         if (i >= checked) continue;
         T(brute_force)(&bvh, o, d, &b);
         if (memcmp(&b.t, &h[1].t, sizeof b.t) != 0) brute_wrong++;
         else if (b.tri != h[1].tri) ties++;
     }
-    test_note("%s BVH, %s (%u triangles, %u degenerate, %u nodes, %u blocks): %u rays, %u hit, "
-              "SIMD/scalar differences %u, any-hit disagreements %u; %u checked by brute force: %u different, %u ties",
-              header, s->name, s->tri_count, bvh.degenerate_count, bvh.node_count, bvh.block_count, rays, hits,
-              differ, any_wrong, checked, brute_wrong, ties);
+    test_note("%s BVH, %s (%u triangles, %u degenerate, %u nodes, %u levels, %u blocks): %u rays, %u hit, "
+              "SIMD/scalar differences %u, any-hit disagreements %u (%u self hits at t ~ 0 not judged); "
+              "%u checked by brute force: %u different, %u ties",
+              header, s->name, s->tri_count, bvh.degenerate_count, bvh.node_count, T(depth)(&bvh, bvh.root),
+              bvh.block_count, rays, hits,
+              differ, any_wrong, noise, checked, brute_wrong, ties);
     CHECK_EQ_INT(differ, 0);
     CHECK_EQ_INT(any_wrong, 0);
     CHECK_EQ_INT(brute_wrong, 0);
