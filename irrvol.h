@@ -597,7 +597,7 @@ static float irrvol__rng_float(irrvol__rng *r)
 
 #define IRRVOL__BVH_WIDTH 8        /* children per node */
 #define IRRVOL__BVH_LEAF_MAX 16    /* triangles per leaf: four blocks */
-#define IRRVOL__BVH_NODE_COST 2.0f /* SAH cost of a binary node, in block tests (measured best of 0.5-4) */
+#define IRRVOL__BVH_NODE_COST 2.0f /* SAH cost of a binary node, in block tests (measured best of 0.5-4) */ /* SAH cost of a binary node, in block tests (measured best of 0.5-4) */
 #define IRRVOL__BVH_MAX_DEPTH 60   /* deeper nodes split at the median: bounds the stacks */
 #define IRRVOL__BVH_MAX_BINARY_DEPTH (IRRVOL__BVH_MAX_DEPTH + 33) /* + 32 halvings of a uint32_t count */
 #define IRRVOL__BVH_STACK ((IRRVOL__BVH_WIDTH - 1) * IRRVOL__BVH_MAX_BINARY_DEPTH + IRRVOL__BVH_WIDTH)
@@ -620,8 +620,9 @@ typedef struct irrvol__bvh_tris {
 } irrvol__bvh_tris;
 
 typedef struct irrvol__bvh {
-    irrvol__bvh_node *nodes;
+    irrvol__bvh_node *nodes;    /* both in one allocation, from a cache line boundary */
     irrvol__bvh_tris *blocks;
+    char *memory;
     uint32_t node_count, block_count, tri_count;
     uint32_t root;              /* a node index or a leaf reference; unused when tri_count is 0 */
     uint32_t degenerate_count;  /* zero-area triangles skipped by the build */
@@ -931,16 +932,20 @@ static int irrvol__bvh_build(irrvol__bvh *bvh, const irrvol__mesh_view *m, const
         irrvol__bvh_build_binary(bn, refs, n, &bvh->block_count);
         irrvol__bvh_collapse(bvh, bn, refs, m);   /* counts the nodes */
         if (bvh->block_count <= IRRVOL__BVH_MAX_BLOCKS) {
-            bvh->nodes = (irrvol__bvh_node *)irrvol__alloc_array(a, bvh->node_count, sizeof *bvh->nodes);
-            bvh->blocks = (irrvol__bvh_tris *)irrvol__alloc_array(a, bvh->block_count, sizeof *bvh->blocks);
+            size_t nb = (size_t)bvh->node_count * sizeof *bvh->nodes, bb = (size_t)bvh->block_count * sizeof *bvh->blocks;
+            bvh->memory = (char *)irrvol__alloc(a, nb + bb + 64);
+            if (bvh->memory) {   /* nodes and blocks from a cache line boundary */
+                char *p = bvh->memory + (64 - (size_t)((uintptr_t)bvh->memory % 64)) % 64;
+                bvh->nodes = (irrvol__bvh_node *)(void *)p;
+                bvh->blocks = (irrvol__bvh_tris *)(void *)(p + nb);
+            }
         }
         if (bvh->nodes && bvh->blocks) irrvol__bvh_collapse(bvh, bn, refs, m);
     }
     irrvol__free(a, refs);
     irrvol__free(a, bn);
     if (n && (!bvh->nodes || !bvh->blocks)) {
-        irrvol__free(a, bvh->nodes);
-        irrvol__free(a, bvh->blocks);
+        irrvol__free(a, bvh->memory);
         memset(bvh, 0, sizeof *bvh);
         return -1;
     }
@@ -950,8 +955,7 @@ static int irrvol__bvh_build(irrvol__bvh *bvh, const irrvol__mesh_view *m, const
 
 static void irrvol__bvh_free(irrvol__bvh *bvh, const irrvol_allocator *a)
 {
-    irrvol__free(a, bvh->nodes);
-    irrvol__free(a, bvh->blocks);
+    irrvol__free(a, bvh->memory);
     memset(bvh, 0, sizeof *bvh);
 }
 

@@ -4,8 +4,9 @@
    interleaved (ours, Embree, ours, ...), each round timed in this thread's CPU
    time; the medians, and the median of the rounds' ratios. Build times of both (process CPU time:
    Embree builds on a one-thread device). Scenes: the office with the bunny on
-   its floor (the reference tests' scene) and the bunny subdivided three times
-   (235,136 triangles). */
+   its floor (the reference tests' scene), the bunny subdivided three times
+   (235,136 triangles), and four copies of the 64k building preset side by
+   side (264,320 triangles; origins in their box: mostly inside rooms). */
 #define IRRVOL_IMPLEMENTATION
 #include "irrvol.h"
 #include "tests/ref_irrvol_scene.h"
@@ -104,6 +105,49 @@ typedef struct bench_scene {
     uint32_t vertex_count, tri_count;
     float lo[3], hi[3];   /* ray origins are uniform in this box */
 } bench_scene;
+
+/* Copies of a scene side by side on an nx x nz grid (x and z), a gap of 2 m
+   between them. */
+static int mesh_replicate(const float *positions, uint32_t vertex_count, const uint32_t *indices, uint32_t tri_count,
+                          uint32_t nx, uint32_t nz, mesh *out)
+{
+    float lo[3] = {FLT_MAX, FLT_MAX, FLT_MAX}, hi[3] = {-FLT_MAX, -FLT_MAX, -FLT_MAX};
+    uint32_t c, i;
+    int k;
+    for (i = 0; i < vertex_count; i++)
+        for (k = 0; k < 3; k++) {
+            lo[k] = fminf(lo[k], positions[3 * i + (uint32_t)k]);
+            hi[k] = fmaxf(hi[k], positions[3 * i + (uint32_t)k]);
+        }
+    out->vertex_count = vertex_count * nx * nz;
+    out->tri_count = tri_count * nx * nz;
+    out->positions = (float *)malloc((size_t)out->vertex_count * 3 * sizeof(float));
+    out->indices = (uint32_t *)malloc((size_t)out->tri_count * 3 * sizeof(uint32_t));
+    if (!out->positions || !out->indices) return -1;
+    for (c = 0; c < nx * nz; c++) {
+        float dx = (float)(c % nx) * (hi[0] - lo[0] + 2.0f), dz = (float)(c / nx) * (hi[2] - lo[2] + 2.0f);
+        for (i = 0; i < vertex_count; i++) {
+            float *q = out->positions + 3 * ((size_t)c * vertex_count + i);
+            q[0] = positions[3 * i] + dx;
+            q[1] = positions[3 * i + 1];
+            q[2] = positions[3 * i + 2] + dz;
+        }
+        for (i = 0; i < 3 * tri_count; i++) out->indices[(size_t)c * 3 * tri_count + i] = indices[i] + c * vertex_count;
+    }
+    return 0;
+}
+
+static void mesh_bounds(const mesh *m, float lo[3], float hi[3])
+{
+    uint32_t i;
+    int k;
+    for (k = 0; k < 3; k++) { lo[k] = FLT_MAX; hi[k] = -FLT_MAX; }
+    for (i = 0; i < m->vertex_count; i++)
+        for (k = 0; k < 3; k++) {
+            lo[k] = fminf(lo[k], m->positions[3 * i + (uint32_t)k]);
+            hi[k] = fmaxf(hi[k], m->positions[3 * i + (uint32_t)k]);
+        }
+}
 
 static float *make_rays(const bench_scene *s, uint32_t n)
 {
@@ -229,6 +273,8 @@ static void bench(RTCDevice dev, const bench_scene *s)
 int main(int argc, char **argv)
 {
     office_scene office;
+    obj_scene building;
+    char err[256];
     mesh big;
     bench_scene s;
     RTCDevice dev = rtcNewDevice("threads=1");
@@ -260,6 +306,21 @@ int main(int argc, char **argv)
     bench(dev, &s);
     free(big.positions);
     free(big.indices);
+    if (obj_load("build/data/building_64k.obj", &building, err, sizeof err) != 0) {
+        printf("building 64k x 4: %s (make bench writes it)\n", err);
+    } else {
+        if (mesh_replicate(building.positions, building.vertex_count, building.tri_indices, building.tri_count, 2, 2, &big) != 0) return 1;
+        s.name = "building 64k x 4";
+        s.positions = big.positions;
+        s.indices = big.indices;
+        s.vertex_count = big.vertex_count;
+        s.tri_count = big.tri_count;
+        mesh_bounds(&big, s.lo, s.hi);
+        bench(dev, &s);
+        free(big.positions);
+        free(big.indices);
+        obj_free(&building);
+    }
     office_scene_free(&office);
     rtcReleaseDevice(dev);
     return 0;
