@@ -597,7 +597,7 @@ static float irrvol__rng_float(irrvol__rng *r)
 
 #define IRRVOL__BVH_WIDTH 8        /* children per node */
 #define IRRVOL__BVH_LEAF_MAX 16    /* triangles per leaf: four blocks */
-#define IRRVOL__BVH_NODE_COST 2.0f /* SAH cost of a binary node, in block tests (measured best of 0.5-4) */ /* SAH cost of a binary node, in block tests (measured best of 0.5-4) */
+#define IRRVOL__BVH_NODE_COST 2.0f /* SAH cost of a binary node, in block tests (measured best of 0.5-4) */
 #define IRRVOL__BVH_MAX_DEPTH 60   /* deeper nodes split at the median: bounds the stacks */
 #define IRRVOL__BVH_MAX_BINARY_DEPTH (IRRVOL__BVH_MAX_DEPTH + 33) /* + 32 halvings of a uint32_t count */
 #define IRRVOL__BVH_STACK ((IRRVOL__BVH_WIDTH - 1) * IRRVOL__BVH_MAX_BINARY_DEPTH + IRRVOL__BVH_WIDTH)
