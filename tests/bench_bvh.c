@@ -1,12 +1,15 @@
-/* The headers' built-in BVH against Embree 3 (rtcIntersect1, default build
-   quality, one thread): incoherent closest-hit rays (random origins in the
-   scene's box, uniformly random directions), the same rays for both, rounds
-   interleaved (ours, Embree, ours, ...), each round timed in this thread's CPU
-   time; the medians, and the median of the rounds' ratios. Build times of both (process CPU time:
-   Embree builds on a one-thread device). Scenes: the office with the bunny on
-   its floor (the reference tests' scene), the bunny subdivided three times
-   (235,136 triangles), and four copies of the 64k building preset side by
-   side (264,320 triangles; origins in their box: mostly inside rooms). */
+/* The headers' built-in BVH against Embree 3: rtcIntersect1 on one thread,
+   default build quality, and again with RTC_SCENE_FLAG_ROBUST (Embree's
+   watertight mode, the one that compares with our watertight test).
+   Incoherent closest-hit rays (random origins in the scene's box, uniformly
+   random directions), the same rays for all, rounds interleaved (ours,
+   Embree, Embree robust, ours scalar path, ...), each timed in this thread's
+   CPU time: the medians, and the medians of the rounds' ratios. Build times
+   in process CPU time (Embree builds on a one-thread device). Scenes: the
+   office with the bunny on its floor (the reference tests' scene), the bunny
+   subdivided three times (235,136 triangles), and four copies of the 64k
+   building preset side by side (264,320 triangles; origins in their box,
+   mostly inside rooms). */
 #define IRRVOL_IMPLEMENTATION
 #include "irrvol.h"
 #include "tests/ref_irrvol_scene.h"
@@ -165,9 +168,10 @@ static float *make_rays(const bench_scene *s, uint32_t n)
     return r;
 }
 
-static RTCScene embree_build(RTCDevice dev, const bench_scene *s)
+static RTCScene embree_build(RTCDevice dev, const bench_scene *s, int robust)
 {
     RTCScene sc = rtcNewScene(dev);
+    if (robust) rtcSetSceneFlags(sc, RTC_SCENE_FLAG_ROBUST);
     RTCGeometry g = rtcNewGeometry(dev, RTC_GEOMETRY_TYPE_TRIANGLE);
     float *vb = (float *)rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                                  3 * sizeof(float), s->vertex_count);
@@ -223,21 +227,22 @@ static const char *filter;   /* argv[1]: run only the scenes whose name contains
 
 static void bench(RTCDevice dev, const bench_scene *s)
 {
-    double ours[ROUNDS], theirs[ROUNDS], scalar[ROUNDS], ratio[ROUNDS], b_ours[ROUNDS], b_theirs[ROUNDS];
-    double sum_ours = 0, sum_theirs = 0, sum_scalar = 0;
-    float *rays = make_rays(s, RAYS);
+    double ours[ROUNDS], theirs[ROUNDS], robust[ROUNDS], scalar[ROUNDS], ratio[ROUNDS], ratio_robust[ROUNDS];
+    double b_ours[ROUNDS], b_theirs[ROUNDS], sum_ours = 0, sum_theirs = 0, sum_robust = 0, sum_scalar = 0;
+    float *rays;
     irrvol__mesh_view m;
     irrvol_allocator a;
     irrvol__bvh bvh;
-    RTCScene sc = NULL;
+    RTCScene sc = NULL, sc_robust;
     int r;
+    if (filter && !strstr(s->name, filter)) return;
+    rays = make_rays(s, RAYS);
+    if (!rays) { fprintf(stderr, "out of memory\n"); exit(1); }
     memset(&a, 0, sizeof a);
     m.positions = s->positions;
     m.stride = 0;
     m.indices = s->indices;
     m.tri_count = s->tri_count;
-    if (!rays) { fprintf(stderr, "out of memory\n"); exit(1); }
-    if (filter && !strstr(s->name, filter)) { free(rays); return; }
     for (r = 0; r < ROUNDS; r++) {
         double t0 = process_cpu();
         if (r) irrvol__bvh_free(&bvh, &a);
@@ -245,27 +250,29 @@ static void bench(RTCDevice dev, const bench_scene *s)
         b_ours[r] = process_cpu() - t0;
         t0 = process_cpu();
         if (sc) rtcReleaseScene(sc);
-        sc = embree_build(dev, s);
+        sc = embree_build(dev, s, 0);
         b_theirs[r] = process_cpu() - t0;
     }
+    sc_robust = embree_build(dev, s, 1);
     for (r = 0; r < ROUNDS; r++) {
         ours[r] = ours_trace(&bvh, rays, RAYS, &sum_ours);
         theirs[r] = embree_trace(sc, rays, RAYS, &sum_theirs);
+        robust[r] = embree_trace(sc_robust, rays, RAYS, &sum_robust);
         ratio[r] = theirs[r] / ours[r];
+        ratio_robust[r] = robust[r] / ours[r];
         bvh.simd = 0;
         scalar[r] = ours_trace(&bvh, rays, RAYS / 4, &sum_scalar) * 4.0;
         bvh.simd = 1;
     }
-    {
-        double to = median(ours, ROUNDS), te = median(theirs, ROUNDS), ra = median(ratio, ROUNDS);
-        double bo = median(b_ours, ROUNDS), be = median(b_theirs, ROUNDS);
-        printf("%-22s %7u tris  rays/s: ours %5.2f M (scalar path %5.2f M)  Embree %5.2f M  ours/Embree %.2f   "
-               "build: ours %6.1f ms  Embree %6.1f ms  Embree/ours %.2f\n",
-               s->name, s->tri_count, RAYS / to / 1e6, RAYS / median(scalar, ROUNDS) / 1e6, RAYS / te / 1e6, ra,
-               1e3 * bo, 1e3 * be, be / bo);
-        if (fabs(sum_ours - sum_theirs) > 1e-5 * sum_theirs) printf("  hit distances differ: sums %.9g / %.9g\n", sum_ours, sum_theirs);
-    }
+    printf("%-18s %7u tris  Mrays/s: ours %5.2f (scalar path %5.2f)  Embree %5.2f  robust %5.2f  "
+           "ours/Embree %.2f  ours/robust %.2f   build ms: ours %6.1f  Embree %6.1f\n",
+           s->name, s->tri_count, RAYS / median(ours, ROUNDS) / 1e6, RAYS / median(scalar, ROUNDS) / 1e6,
+           RAYS / median(theirs, ROUNDS) / 1e6, RAYS / median(robust, ROUNDS) / 1e6, median(ratio, ROUNDS),
+           median(ratio_robust, ROUNDS), 1e3 * median(b_ours, ROUNDS), 1e3 * median(b_theirs, ROUNDS));
+    if (fabs(sum_ours - sum_theirs) > 1e-5 * sum_theirs || fabs(sum_ours - sum_robust) > 1e-5 * sum_robust)
+        printf("  hit distances differ: sums %.9g / %.9g / %.9g\n", sum_ours, sum_theirs, sum_robust);
     rtcReleaseScene(sc);
+    rtcReleaseScene(sc_robust);
     irrvol__bvh_free(&bvh, &a);
     free(rays);
 }
@@ -283,8 +290,9 @@ int main(int argc, char **argv)
     (void)office_scene_desc;
     filter = argc > 1 ? argv[1] : NULL;
     if (f) { if (fscanf(f, "%lf %lf %lf", &load[0], &load[1], &load[2]) != 3) load[0] = -1; fclose(f); }
-    printf("BVH vs Embree %d.%d.%d rtcIntersect1 (default quality), one thread, %u incoherent rays, "
-           "medians of %d interleaved rounds, thread CPU time; load average %.2f\n",
+    printf("BVH vs Embree %d.%d.%d rtcIntersect1 (default quality; robust: RTC_SCENE_FLAG_ROBUST, watertight as ours), "
+           "one thread, %u incoherent rays, medians of %d interleaved rounds (ratios: median of the rounds'), thread CPU "
+           "time; builds in process CPU time (Embree on a one-thread device); load average %.2f\n",
            RTC_VERSION_MAJOR, RTC_VERSION_MINOR, RTC_VERSION_PATCH, RAYS, ROUNDS, load[0]);
     if (!dev || office_scene_load(&office, "examples/data", 2.5f, 2.0f) != 0) return 1;
     memset(&s, 0, sizeof s);
