@@ -1,4 +1,4 @@
-/* irrvol.h - v0.2.0 - irradiance volume for lighting moving objects - public domain or MIT, see end of file
+/* irrvol.h - v0.3.0 - irradiance volume for lighting moving objects - public domain or MIT, see end of file
 
    IRRVOL.H: a bilevel grid of directional irradiance samples that lights moving objects by interpolation.
 
@@ -51,6 +51,9 @@
        IRRVOL_API                 linkage of public functions (default: extern)
        IRRVOL_MALLOC, IRRVOL_FREE replace malloc/free (define both or neither)
        IRRVOL_BVH_BINS            SAH bins of the BVH build (default 16)
+       IRRVOL_BVH_SIMD            1 (default): SSE2 (x86-64) or NEON (AArch64) BVH kernels
+                                  when the compiler offers them; 0: the portable scalar
+                                  kernels only (the same hits, bit for bit)
        IRRVOL_MAX_RESOLUTION      largest k accepted (default 64; the shared
                                   weight matrix holds (2k^2)^2 floats)
        IRRVOL_MAX_GRID_SAMPLES    largest first-level samples per axis (default 1024)
@@ -179,7 +182,7 @@
 #include <stdint.h>
 
 #define IRRVOL_VERSION_MAJOR 0
-#define IRRVOL_VERSION_MINOR 2
+#define IRRVOL_VERSION_MINOR 3
 #define IRRVOL_VERSION_PATCH 0
 #define IRRVOL_FILE_FORMAT_VERSION 1
 
@@ -585,7 +588,7 @@ static float irrvol__rng_float(irrvol__rng *r)
 #if IRRVOL_BVH_SIMD && (defined(__SSE2__) || defined(_M_X64) || defined(_M_AMD64))
 #define IRRVOL__SSE 1
 #include <emmintrin.h>
-#elif IRRVOL_BVH_SIMD && (defined(__aarch64__) || defined(_M_ARM64))
+#elif IRRVOL_BVH_SIMD && defined(__aarch64__) && (defined(__GNUC__) || defined(__clang__))
 #define IRRVOL__NEON 1
 #include <arm_neon.h>
 #endif
@@ -593,6 +596,18 @@ static float irrvol__rng_float(irrvol__rng *r)
 #define IRRVOL__SIMD 1
 #else
 #define IRRVOL__SIMD 0
+#endif
+/* Where the target fuses a * b + c (FMA on x86 with -mfma, every AArch64),
+   both kernels fuse it explicitly: a compiler that contracts on its own
+   (GCC's -ffp-contract=fast, clang's default) then has nothing left to fuse
+   differently in the scalar kernel. Without FMA nothing can be fused. */
+#if (defined(__GNUC__) || defined(__clang__)) && (defined(__FMA__) || defined(__aarch64__))
+#define IRRVOL__BVH_FMA 1
+#if defined(IRRVOL__SSE)
+#include <immintrin.h>
+#endif
+#else
+#define IRRVOL__BVH_FMA 0
 #endif
 
 #define IRRVOL__BVH_WIDTH 8        /* children per node */
@@ -970,6 +985,20 @@ static irrvol__f4 irrvol__f4_add(irrvol__f4 a, irrvol__f4 b) { return _mm_add_ps
 static irrvol__f4 irrvol__f4_sub(irrvol__f4 a, irrvol__f4 b) { return _mm_sub_ps(a, b); }
 static irrvol__f4 irrvol__f4_mul(irrvol__f4 a, irrvol__f4 b) { return _mm_mul_ps(a, b); }
 static irrvol__f4 irrvol__f4_div(irrvol__f4 a, irrvol__f4 b) { return _mm_div_ps(a, b); }
+#if IRRVOL__BVH_FMA
+static irrvol__f4 irrvol__f4_madd(irrvol__f4 a, irrvol__f4 b, irrvol__f4 c) { return _mm_fmadd_ps(a, b, c); }
+static irrvol__f4 irrvol__f4_det2(irrvol__f4 a, irrvol__f4 b, irrvol__f4 c, irrvol__f4 d)
+{
+    irrvol__f4 w = _mm_mul_ps(c, d);
+    return _mm_sub_ps(_mm_fmsub_ps(a, b, w), _mm_fmsub_ps(c, d, w));
+}
+#else
+static irrvol__f4 irrvol__f4_madd(irrvol__f4 a, irrvol__f4 b, irrvol__f4 c) { return _mm_add_ps(_mm_mul_ps(a, b), c); }
+static irrvol__f4 irrvol__f4_det2(irrvol__f4 a, irrvol__f4 b, irrvol__f4 c, irrvol__f4 d)
+{
+    return _mm_sub_ps(_mm_mul_ps(a, b), _mm_mul_ps(c, d));
+}
+#endif
 static irrvol__f4 irrvol__f4_min(irrvol__f4 a, irrvol__f4 b) { return _mm_min_ps(a, b); }  /* a < b ? a : b */
 static irrvol__f4 irrvol__f4_max(irrvol__f4 a, irrvol__f4 b) { return _mm_max_ps(a, b); }  /* a > b ? a : b */
 static irrvol__m4 irrvol__f4_lt(irrvol__f4 a, irrvol__f4 b) { return _mm_cmplt_ps(a, b); }
@@ -989,6 +1018,12 @@ static irrvol__f4 irrvol__f4_add(irrvol__f4 a, irrvol__f4 b) { return vaddq_f32(
 static irrvol__f4 irrvol__f4_sub(irrvol__f4 a, irrvol__f4 b) { return vsubq_f32(a, b); }
 static irrvol__f4 irrvol__f4_mul(irrvol__f4 a, irrvol__f4 b) { return vmulq_f32(a, b); }
 static irrvol__f4 irrvol__f4_div(irrvol__f4 a, irrvol__f4 b) { return vdivq_f32(a, b); }
+static irrvol__f4 irrvol__f4_madd(irrvol__f4 a, irrvol__f4 b, irrvol__f4 c) { return vfmaq_f32(c, a, b); }
+static irrvol__f4 irrvol__f4_det2(irrvol__f4 a, irrvol__f4 b, irrvol__f4 c, irrvol__f4 d)   /* Kahan, as the scalar */
+{
+    irrvol__f4 w = vmulq_f32(c, d), nw = vnegq_f32(w);
+    return vsubq_f32(vfmaq_f32(nw, a, b), vfmaq_f32(nw, c, d));
+}
 /* compare and select: the scalar kernels' a < b ? a : b, NaN included (vminq_f32 differs) */
 static irrvol__f4 irrvol__f4_min(irrvol__f4 a, irrvol__f4 b) { return vbslq_f32(vcltq_f32(a, b), a, b); }
 static irrvol__f4 irrvol__f4_max(irrvol__f4 a, irrvol__f4 b) { return vbslq_f32(vcgtq_f32(a, b), a, b); }
@@ -1005,14 +1040,25 @@ static unsigned irrvol__m4_bits(irrvol__m4 a)
 }
 #endif
 
+/* a * b + c, fused where IRRVOL__BVH_FMA (the shear and the distance). */
+static float irrvol__bvh_madd(float a, float b, float c)
+{
+#if IRRVOL__BVH_FMA
+    return fmaf(a, b, c);
+#else
+    return a * b + c;
+#endif
+}
+
 /* Per-ray constants of the watertight test and of the slab test. */
 typedef struct irrvol__ray {
     float org[3], dir[3], inv[3];
     int kx, ky, kz;          /* dir[kz] has the largest magnitude */
     float sx, sy, sz;        /* shear that maps dir to +z */
+    float nsx, nsy;          /* -sx, -sy */
     int near[3];             /* box row offset (in floats) of the entry plane per axis; far = near ^ WIDTH */
 #if IRRVOL__SIMD
-    irrvol__f4 org4[3], inv4[3], sx4, sy4, sz4;
+    irrvol__f4 org4[3], inv4[3], nsx4, nsy4, sz4;
 #endif
 } irrvol__ray;
 
@@ -1036,13 +1082,15 @@ static void irrvol__ray_setup(irrvol__ray *r, const float org[3], const float di
     r->sx = dir[r->kx] / dir[r->kz];
     r->sy = dir[r->ky] / dir[r->kz];
     r->sz = 1.0f / dir[r->kz];
+    r->nsx = -r->sx;
+    r->nsy = -r->sy;
 #if IRRVOL__SIMD
     for (k = 0; k < 3; k++) {
         r->org4[k] = irrvol__f4_set(r->org[k]);
         r->inv4[k] = irrvol__f4_set(r->inv[k]);
     }
-    r->sx4 = irrvol__f4_set(r->sx);
-    r->sy4 = irrvol__f4_set(r->sy);
+    r->nsx4 = irrvol__f4_set(r->nsx);
+    r->nsy4 = irrvol__f4_set(r->nsy);
     r->sz4 = irrvol__f4_set(r->sz);
 #endif
 }
@@ -1070,10 +1118,33 @@ static unsigned irrvol__node_hits_scalar(const irrvol__ray *r, const irrvol__bvh
     return mask;
 }
 
+/* An edge function a * b - c * d. With FMA, Kahan's algorithm: within two
+   ulp of the exact value, so its sign is exact. Without, the two rounded
+   products: the sign is exact or the value zero (Woop et al.), and a zero
+   is computed again exactly in double by irrvol__bvh_edges_double. */
+static float irrvol__bvh_det2(float a, float b, float c, float d)
+{
+#if IRRVOL__BVH_FMA
+    float w = c * d;
+    return fmaf(a, b, -w) - fmaf(c, d, -w);
+#else
+    return a * b - c * d;
+#endif
+}
+
+/* The edge functions u, v, w exactly (products of floats are exact in
+   double) and rounded once. */
+static void irrvol__bvh_edges_double(float ax, float ay, float bx, float by, float cx, float cy, float e[3])
+{
+    e[0] = (float)((double)cx * by - (double)cy * bx);
+    e[1] = (float)((double)ax * cy - (double)ay * cx);
+    e[2] = (float)((double)bx * ay - (double)by * ax);
+}
+
 /* Watertight ray/triangle test (Woop, Benthin, Wald 2013): edge functions in
    a sheared space where the ray is the +z axis; an edge shared by two
-   triangles is never missed by both. Double precision when an edge function
-   is exactly zero. Updates *hit when closer than hit->t; returns 1 then. */
+   triangles is never missed by both. Updates *hit when closer than hit->t;
+   returns 1 then. */
 static int irrvol__leaf_hit_scalar(const irrvol__ray *r, const irrvol__bvh_tris *b, float tmin, irrvol__hit *hit)
 {
     int i, found = 0;
@@ -1082,23 +1153,23 @@ static int irrvol__leaf_hit_scalar(const irrvol__ray *r, const irrvol__bvh_tris 
         float bx = b->v[3 + r->kx][i] - r->org[r->kx], by = b->v[3 + r->ky][i] - r->org[r->ky], bz = b->v[3 + r->kz][i] - r->org[r->kz];
         float cx = b->v[6 + r->kx][i] - r->org[r->kx], cy = b->v[6 + r->ky][i] - r->org[r->ky], cz = b->v[6 + r->kz][i] - r->org[r->kz];
         float u, v, w, det, inv_det, t;
-        ax = ax - r->sx * az; ay = ay - r->sy * az;
-        bx = bx - r->sx * bz; by = by - r->sy * bz;
-        cx = cx - r->sx * cz; cy = cy - r->sy * cz;
-        u = cx * by - cy * bx;
-        v = ax * cy - ay * cx;
-        w = bx * ay - by * ax;
-        if (u == 0.0f || v == 0.0f || w == 0.0f) {
-            u = (float)((double)cx * by - (double)cy * bx);
-            v = (float)((double)ax * cy - (double)ay * cx);
-            w = (float)((double)bx * ay - (double)by * ax);
+        ax = irrvol__bvh_madd(r->nsx, az, ax); ay = irrvol__bvh_madd(r->nsy, az, ay);
+        bx = irrvol__bvh_madd(r->nsx, bz, bx); by = irrvol__bvh_madd(r->nsy, bz, by);
+        cx = irrvol__bvh_madd(r->nsx, cz, cx); cy = irrvol__bvh_madd(r->nsy, cz, cy);
+        u = irrvol__bvh_det2(cx, by, cy, bx);
+        v = irrvol__bvh_det2(ax, cy, ay, cx);
+        w = irrvol__bvh_det2(bx, ay, by, ax);
+        if (!IRRVOL__BVH_FMA && (u == 0.0f || v == 0.0f || w == 0.0f)) {
+            float e[3];
+            irrvol__bvh_edges_double(ax, ay, bx, by, cx, cy, e);
+            u = e[0]; v = e[1]; w = e[2];
         }
         if ((u < 0.0f || v < 0.0f || w < 0.0f) && (0.0f < u || 0.0f < v || 0.0f < w)) continue;
         det = u + v + w;
         if (det == 0.0f) continue;
         inv_det = 1.0f / det;
         u = u * inv_det; v = v * inv_det; w = w * inv_det;   /* barycentrics first: u * az underflows at 1e-13 m */
-        t = (u * az + v * bz + w * cz) * r->sz;
+        t = irrvol__bvh_madd(u, az, irrvol__bvh_madd(v, bz, w * cz)) * r->sz;
         if (!(tmin < t && t < hit->t)) continue;
         hit->t = t;
         hit->u = v;
@@ -1152,23 +1223,23 @@ static int irrvol__leaf_hit_simd(const irrvol__ray *r, const irrvol__bvh_tris *b
     float tl[4], vl[4], wl[4];
     unsigned mask;
     int i, best;
-    ax = irrvol__f4_sub(ax, irrvol__f4_mul(r->sx4, az)); ay = irrvol__f4_sub(ay, irrvol__f4_mul(r->sy4, az));
-    bx = irrvol__f4_sub(bx, irrvol__f4_mul(r->sx4, bz)); by = irrvol__f4_sub(by, irrvol__f4_mul(r->sy4, bz));
-    cx = irrvol__f4_sub(cx, irrvol__f4_mul(r->sx4, cz)); cy = irrvol__f4_sub(cy, irrvol__f4_mul(r->sy4, cz));
-    u = irrvol__f4_sub(irrvol__f4_mul(cx, by), irrvol__f4_mul(cy, bx));
-    v = irrvol__f4_sub(irrvol__f4_mul(ax, cy), irrvol__f4_mul(ay, cx));
-    w = irrvol__f4_sub(irrvol__f4_mul(bx, ay), irrvol__f4_mul(by, ax));
-    if (irrvol__m4_bits(irrvol__m4_or(irrvol__m4_or(irrvol__f4_eq(u, zero), irrvol__f4_eq(v, zero)),
+    ax = irrvol__f4_madd(r->nsx4, az, ax); ay = irrvol__f4_madd(r->nsy4, az, ay);
+    bx = irrvol__f4_madd(r->nsx4, bz, bx); by = irrvol__f4_madd(r->nsy4, bz, by);
+    cx = irrvol__f4_madd(r->nsx4, cz, cx); cy = irrvol__f4_madd(r->nsy4, cz, cy);
+    u = irrvol__f4_det2(cx, by, cy, bx);
+    v = irrvol__f4_det2(ax, cy, ay, cx);
+    w = irrvol__f4_det2(bx, ay, by, ax);
+    if (!IRRVOL__BVH_FMA && irrvol__m4_bits(irrvol__m4_or(irrvol__m4_or(irrvol__f4_eq(u, zero), irrvol__f4_eq(v, zero)),
                                       irrvol__f4_eq(w, zero)))) {
         float e[9][4];   /* the lanes with a zero edge function again in double */
         irrvol__f4_store(e[0], u); irrvol__f4_store(e[1], v); irrvol__f4_store(e[2], w);
         irrvol__f4_store(e[3], ax); irrvol__f4_store(e[4], ay); irrvol__f4_store(e[5], bx);
         irrvol__f4_store(e[6], by); irrvol__f4_store(e[7], cx); irrvol__f4_store(e[8], cy);
         for (i = 0; i < 4; i++) {
+            float exact[3];
             if (e[0][i] != 0.0f && e[1][i] != 0.0f && e[2][i] != 0.0f) continue;
-            e[0][i] = (float)((double)e[7][i] * e[6][i] - (double)e[8][i] * e[5][i]);
-            e[1][i] = (float)((double)e[3][i] * e[8][i] - (double)e[4][i] * e[7][i]);
-            e[2][i] = (float)((double)e[5][i] * e[4][i] - (double)e[6][i] * e[3][i]);
+            irrvol__bvh_edges_double(e[3][i], e[4][i], e[5][i], e[6][i], e[7][i], e[8][i], exact);
+            e[0][i] = exact[0]; e[1][i] = exact[1]; e[2][i] = exact[2];
         }
         u = irrvol__f4_load(e[0]); v = irrvol__f4_load(e[1]); w = irrvol__f4_load(e[2]);
     }
@@ -1180,8 +1251,7 @@ static int irrvol__leaf_hit_simd(const irrvol__ray *r, const irrvol__bvh_tris *b
     ok = irrvol__m4_andnot(irrvol__f4_eq(det, zero), ok);
     inv_det = irrvol__f4_div(irrvol__f4_set(1.0f), det);
     u = irrvol__f4_mul(u, inv_det); v = irrvol__f4_mul(v, inv_det); w = irrvol__f4_mul(w, inv_det);
-    t = irrvol__f4_mul(irrvol__f4_add(irrvol__f4_add(irrvol__f4_mul(u, az), irrvol__f4_mul(v, bz)), irrvol__f4_mul(w, cz)),
-                       r->sz4);
+    t = irrvol__f4_mul(irrvol__f4_madd(u, az, irrvol__f4_madd(v, bz, irrvol__f4_mul(w, cz))), r->sz4);
     ok = irrvol__m4_and(ok, irrvol__m4_and(irrvol__f4_lt(irrvol__f4_set(tmin), t), irrvol__f4_lt(t, irrvol__f4_set(hit->t))));
     mask = irrvol__m4_bits(ok);
     if (!mask) return 0;

@@ -1,4 +1,4 @@
-/* lightvec.h - v0.2.0 - cached 5D indirect light vectors - public domain or MIT, see end of file
+/* lightvec.h - v0.3.0 - cached 5D indirect light vectors - public domain or MIT, see end of file
 
    LIGHTVEC.H: cached light vectors over position and direction for interactive glossy global illumination.
 
@@ -56,6 +56,9 @@
        LIGHTVEC_API             linkage of public functions (default: extern)
        LIGHTVEC_MALLOC, LIGHTVEC_FREE  replace malloc/free (define both or neither)
        LIGHTVEC_BVH_BINS        SAH bins of the built-in BVH (default 16)
+       LIGHTVEC_BVH_SIMD        1 (default): SSE2 (x86-64) or NEON (AArch64) BVH kernels
+                                when the compiler offers them; 0: the portable scalar
+                                kernels only (the same hits, bit for bit)
 
    FUNCTION REFERENCE
 
@@ -188,7 +191,7 @@
 #include <stdint.h>
 
 #define LIGHTVEC_VERSION_MAJOR 0
-#define LIGHTVEC_VERSION_MINOR 2
+#define LIGHTVEC_VERSION_MINOR 3
 #define LIGHTVEC_VERSION_PATCH 0
 #define LIGHTVEC_FILE_FORMAT_VERSION 1
 
@@ -618,7 +621,7 @@ static float lightvec__rng_float(lightvec__rng *r)
 #if LIGHTVEC_BVH_SIMD && (defined(__SSE2__) || defined(_M_X64) || defined(_M_AMD64))
 #define LIGHTVEC__SSE 1
 #include <emmintrin.h>
-#elif LIGHTVEC_BVH_SIMD && (defined(__aarch64__) || defined(_M_ARM64))
+#elif LIGHTVEC_BVH_SIMD && defined(__aarch64__) && (defined(__GNUC__) || defined(__clang__))
 #define LIGHTVEC__NEON 1
 #include <arm_neon.h>
 #endif
@@ -626,6 +629,18 @@ static float lightvec__rng_float(lightvec__rng *r)
 #define LIGHTVEC__SIMD 1
 #else
 #define LIGHTVEC__SIMD 0
+#endif
+/* Where the target fuses a * b + c (FMA on x86 with -mfma, every AArch64),
+   both kernels fuse it explicitly: a compiler that contracts on its own
+   (GCC's -ffp-contract=fast, clang's default) then has nothing left to fuse
+   differently in the scalar kernel. Without FMA nothing can be fused. */
+#if (defined(__GNUC__) || defined(__clang__)) && (defined(__FMA__) || defined(__aarch64__))
+#define LIGHTVEC__BVH_FMA 1
+#if defined(LIGHTVEC__SSE)
+#include <immintrin.h>
+#endif
+#else
+#define LIGHTVEC__BVH_FMA 0
 #endif
 
 #define LIGHTVEC__BVH_WIDTH 8        /* children per node */
@@ -1003,6 +1018,20 @@ static lightvec__f4 lightvec__f4_add(lightvec__f4 a, lightvec__f4 b) { return _m
 static lightvec__f4 lightvec__f4_sub(lightvec__f4 a, lightvec__f4 b) { return _mm_sub_ps(a, b); }
 static lightvec__f4 lightvec__f4_mul(lightvec__f4 a, lightvec__f4 b) { return _mm_mul_ps(a, b); }
 static lightvec__f4 lightvec__f4_div(lightvec__f4 a, lightvec__f4 b) { return _mm_div_ps(a, b); }
+#if LIGHTVEC__BVH_FMA
+static lightvec__f4 lightvec__f4_madd(lightvec__f4 a, lightvec__f4 b, lightvec__f4 c) { return _mm_fmadd_ps(a, b, c); }
+static lightvec__f4 lightvec__f4_det2(lightvec__f4 a, lightvec__f4 b, lightvec__f4 c, lightvec__f4 d)
+{
+    lightvec__f4 w = _mm_mul_ps(c, d);
+    return _mm_sub_ps(_mm_fmsub_ps(a, b, w), _mm_fmsub_ps(c, d, w));
+}
+#else
+static lightvec__f4 lightvec__f4_madd(lightvec__f4 a, lightvec__f4 b, lightvec__f4 c) { return _mm_add_ps(_mm_mul_ps(a, b), c); }
+static lightvec__f4 lightvec__f4_det2(lightvec__f4 a, lightvec__f4 b, lightvec__f4 c, lightvec__f4 d)
+{
+    return _mm_sub_ps(_mm_mul_ps(a, b), _mm_mul_ps(c, d));
+}
+#endif
 static lightvec__f4 lightvec__f4_min(lightvec__f4 a, lightvec__f4 b) { return _mm_min_ps(a, b); }  /* a < b ? a : b */
 static lightvec__f4 lightvec__f4_max(lightvec__f4 a, lightvec__f4 b) { return _mm_max_ps(a, b); }  /* a > b ? a : b */
 static lightvec__m4 lightvec__f4_lt(lightvec__f4 a, lightvec__f4 b) { return _mm_cmplt_ps(a, b); }
@@ -1022,6 +1051,12 @@ static lightvec__f4 lightvec__f4_add(lightvec__f4 a, lightvec__f4 b) { return va
 static lightvec__f4 lightvec__f4_sub(lightvec__f4 a, lightvec__f4 b) { return vsubq_f32(a, b); }
 static lightvec__f4 lightvec__f4_mul(lightvec__f4 a, lightvec__f4 b) { return vmulq_f32(a, b); }
 static lightvec__f4 lightvec__f4_div(lightvec__f4 a, lightvec__f4 b) { return vdivq_f32(a, b); }
+static lightvec__f4 lightvec__f4_madd(lightvec__f4 a, lightvec__f4 b, lightvec__f4 c) { return vfmaq_f32(c, a, b); }
+static lightvec__f4 lightvec__f4_det2(lightvec__f4 a, lightvec__f4 b, lightvec__f4 c, lightvec__f4 d)   /* Kahan, as the scalar */
+{
+    lightvec__f4 w = vmulq_f32(c, d), nw = vnegq_f32(w);
+    return vsubq_f32(vfmaq_f32(nw, a, b), vfmaq_f32(nw, c, d));
+}
 /* compare and select: the scalar kernels' a < b ? a : b, NaN included (vminq_f32 differs) */
 static lightvec__f4 lightvec__f4_min(lightvec__f4 a, lightvec__f4 b) { return vbslq_f32(vcltq_f32(a, b), a, b); }
 static lightvec__f4 lightvec__f4_max(lightvec__f4 a, lightvec__f4 b) { return vbslq_f32(vcgtq_f32(a, b), a, b); }
@@ -1038,14 +1073,25 @@ static unsigned lightvec__m4_bits(lightvec__m4 a)
 }
 #endif
 
+/* a * b + c, fused where LIGHTVEC__BVH_FMA (the shear and the distance). */
+static float lightvec__bvh_madd(float a, float b, float c)
+{
+#if LIGHTVEC__BVH_FMA
+    return fmaf(a, b, c);
+#else
+    return a * b + c;
+#endif
+}
+
 /* Per-ray constants of the watertight test and of the slab test. */
 typedef struct lightvec__ray {
     float org[3], dir[3], inv[3];
     int kx, ky, kz;          /* dir[kz] has the largest magnitude */
     float sx, sy, sz;        /* shear that maps dir to +z */
+    float nsx, nsy;          /* -sx, -sy */
     int near[3];             /* box row offset (in floats) of the entry plane per axis; far = near ^ WIDTH */
 #if LIGHTVEC__SIMD
-    lightvec__f4 org4[3], inv4[3], sx4, sy4, sz4;
+    lightvec__f4 org4[3], inv4[3], nsx4, nsy4, sz4;
 #endif
 } lightvec__ray;
 
@@ -1069,13 +1115,15 @@ static void lightvec__ray_setup(lightvec__ray *r, const float org[3], const floa
     r->sx = dir[r->kx] / dir[r->kz];
     r->sy = dir[r->ky] / dir[r->kz];
     r->sz = 1.0f / dir[r->kz];
+    r->nsx = -r->sx;
+    r->nsy = -r->sy;
 #if LIGHTVEC__SIMD
     for (k = 0; k < 3; k++) {
         r->org4[k] = lightvec__f4_set(r->org[k]);
         r->inv4[k] = lightvec__f4_set(r->inv[k]);
     }
-    r->sx4 = lightvec__f4_set(r->sx);
-    r->sy4 = lightvec__f4_set(r->sy);
+    r->nsx4 = lightvec__f4_set(r->nsx);
+    r->nsy4 = lightvec__f4_set(r->nsy);
     r->sz4 = lightvec__f4_set(r->sz);
 #endif
 }
@@ -1103,10 +1151,33 @@ static unsigned lightvec__node_hits_scalar(const lightvec__ray *r, const lightve
     return mask;
 }
 
+/* An edge function a * b - c * d. With FMA, Kahan's algorithm: within two
+   ulp of the exact value, so its sign is exact. Without, the two rounded
+   products: the sign is exact or the value zero (Woop et al.), and a zero
+   is computed again exactly in double by lightvec__bvh_edges_double. */
+static float lightvec__bvh_det2(float a, float b, float c, float d)
+{
+#if LIGHTVEC__BVH_FMA
+    float w = c * d;
+    return fmaf(a, b, -w) - fmaf(c, d, -w);
+#else
+    return a * b - c * d;
+#endif
+}
+
+/* The edge functions u, v, w exactly (products of floats are exact in
+   double) and rounded once. */
+static void lightvec__bvh_edges_double(float ax, float ay, float bx, float by, float cx, float cy, float e[3])
+{
+    e[0] = (float)((double)cx * by - (double)cy * bx);
+    e[1] = (float)((double)ax * cy - (double)ay * cx);
+    e[2] = (float)((double)bx * ay - (double)by * ax);
+}
+
 /* Watertight ray/triangle test (Woop, Benthin, Wald 2013): edge functions in
    a sheared space where the ray is the +z axis; an edge shared by two
-   triangles is never missed by both. Double precision when an edge function
-   is exactly zero. Updates *hit when closer than hit->t; returns 1 then. */
+   triangles is never missed by both. Updates *hit when closer than hit->t;
+   returns 1 then. */
 static int lightvec__leaf_hit_scalar(const lightvec__ray *r, const lightvec__bvh_tris *b, float tmin, lightvec__hit *hit)
 {
     int i, found = 0;
@@ -1115,23 +1186,23 @@ static int lightvec__leaf_hit_scalar(const lightvec__ray *r, const lightvec__bvh
         float bx = b->v[3 + r->kx][i] - r->org[r->kx], by = b->v[3 + r->ky][i] - r->org[r->ky], bz = b->v[3 + r->kz][i] - r->org[r->kz];
         float cx = b->v[6 + r->kx][i] - r->org[r->kx], cy = b->v[6 + r->ky][i] - r->org[r->ky], cz = b->v[6 + r->kz][i] - r->org[r->kz];
         float u, v, w, det, inv_det, t;
-        ax = ax - r->sx * az; ay = ay - r->sy * az;
-        bx = bx - r->sx * bz; by = by - r->sy * bz;
-        cx = cx - r->sx * cz; cy = cy - r->sy * cz;
-        u = cx * by - cy * bx;
-        v = ax * cy - ay * cx;
-        w = bx * ay - by * ax;
-        if (u == 0.0f || v == 0.0f || w == 0.0f) {
-            u = (float)((double)cx * by - (double)cy * bx);
-            v = (float)((double)ax * cy - (double)ay * cx);
-            w = (float)((double)bx * ay - (double)by * ax);
+        ax = lightvec__bvh_madd(r->nsx, az, ax); ay = lightvec__bvh_madd(r->nsy, az, ay);
+        bx = lightvec__bvh_madd(r->nsx, bz, bx); by = lightvec__bvh_madd(r->nsy, bz, by);
+        cx = lightvec__bvh_madd(r->nsx, cz, cx); cy = lightvec__bvh_madd(r->nsy, cz, cy);
+        u = lightvec__bvh_det2(cx, by, cy, bx);
+        v = lightvec__bvh_det2(ax, cy, ay, cx);
+        w = lightvec__bvh_det2(bx, ay, by, ax);
+        if (!LIGHTVEC__BVH_FMA && (u == 0.0f || v == 0.0f || w == 0.0f)) {
+            float e[3];
+            lightvec__bvh_edges_double(ax, ay, bx, by, cx, cy, e);
+            u = e[0]; v = e[1]; w = e[2];
         }
         if ((u < 0.0f || v < 0.0f || w < 0.0f) && (0.0f < u || 0.0f < v || 0.0f < w)) continue;
         det = u + v + w;
         if (det == 0.0f) continue;
         inv_det = 1.0f / det;
         u = u * inv_det; v = v * inv_det; w = w * inv_det;   /* barycentrics first: u * az underflows at 1e-13 m */
-        t = (u * az + v * bz + w * cz) * r->sz;
+        t = lightvec__bvh_madd(u, az, lightvec__bvh_madd(v, bz, w * cz)) * r->sz;
         if (!(tmin < t && t < hit->t)) continue;
         hit->t = t;
         hit->u = v;
@@ -1185,23 +1256,23 @@ static int lightvec__leaf_hit_simd(const lightvec__ray *r, const lightvec__bvh_t
     float tl[4], vl[4], wl[4];
     unsigned mask;
     int i, best;
-    ax = lightvec__f4_sub(ax, lightvec__f4_mul(r->sx4, az)); ay = lightvec__f4_sub(ay, lightvec__f4_mul(r->sy4, az));
-    bx = lightvec__f4_sub(bx, lightvec__f4_mul(r->sx4, bz)); by = lightvec__f4_sub(by, lightvec__f4_mul(r->sy4, bz));
-    cx = lightvec__f4_sub(cx, lightvec__f4_mul(r->sx4, cz)); cy = lightvec__f4_sub(cy, lightvec__f4_mul(r->sy4, cz));
-    u = lightvec__f4_sub(lightvec__f4_mul(cx, by), lightvec__f4_mul(cy, bx));
-    v = lightvec__f4_sub(lightvec__f4_mul(ax, cy), lightvec__f4_mul(ay, cx));
-    w = lightvec__f4_sub(lightvec__f4_mul(bx, ay), lightvec__f4_mul(by, ax));
-    if (lightvec__m4_bits(lightvec__m4_or(lightvec__m4_or(lightvec__f4_eq(u, zero), lightvec__f4_eq(v, zero)),
+    ax = lightvec__f4_madd(r->nsx4, az, ax); ay = lightvec__f4_madd(r->nsy4, az, ay);
+    bx = lightvec__f4_madd(r->nsx4, bz, bx); by = lightvec__f4_madd(r->nsy4, bz, by);
+    cx = lightvec__f4_madd(r->nsx4, cz, cx); cy = lightvec__f4_madd(r->nsy4, cz, cy);
+    u = lightvec__f4_det2(cx, by, cy, bx);
+    v = lightvec__f4_det2(ax, cy, ay, cx);
+    w = lightvec__f4_det2(bx, ay, by, ax);
+    if (!LIGHTVEC__BVH_FMA && lightvec__m4_bits(lightvec__m4_or(lightvec__m4_or(lightvec__f4_eq(u, zero), lightvec__f4_eq(v, zero)),
                                       lightvec__f4_eq(w, zero)))) {
         float e[9][4];   /* the lanes with a zero edge function again in double */
         lightvec__f4_store(e[0], u); lightvec__f4_store(e[1], v); lightvec__f4_store(e[2], w);
         lightvec__f4_store(e[3], ax); lightvec__f4_store(e[4], ay); lightvec__f4_store(e[5], bx);
         lightvec__f4_store(e[6], by); lightvec__f4_store(e[7], cx); lightvec__f4_store(e[8], cy);
         for (i = 0; i < 4; i++) {
+            float exact[3];
             if (e[0][i] != 0.0f && e[1][i] != 0.0f && e[2][i] != 0.0f) continue;
-            e[0][i] = (float)((double)e[7][i] * e[6][i] - (double)e[8][i] * e[5][i]);
-            e[1][i] = (float)((double)e[3][i] * e[8][i] - (double)e[4][i] * e[7][i]);
-            e[2][i] = (float)((double)e[5][i] * e[4][i] - (double)e[6][i] * e[3][i]);
+            lightvec__bvh_edges_double(e[3][i], e[4][i], e[5][i], e[6][i], e[7][i], e[8][i], exact);
+            e[0][i] = exact[0]; e[1][i] = exact[1]; e[2][i] = exact[2];
         }
         u = lightvec__f4_load(e[0]); v = lightvec__f4_load(e[1]); w = lightvec__f4_load(e[2]);
     }
@@ -1213,8 +1284,7 @@ static int lightvec__leaf_hit_simd(const lightvec__ray *r, const lightvec__bvh_t
     ok = lightvec__m4_andnot(lightvec__f4_eq(det, zero), ok);
     inv_det = lightvec__f4_div(lightvec__f4_set(1.0f), det);
     u = lightvec__f4_mul(u, inv_det); v = lightvec__f4_mul(v, inv_det); w = lightvec__f4_mul(w, inv_det);
-    t = lightvec__f4_mul(lightvec__f4_add(lightvec__f4_add(lightvec__f4_mul(u, az), lightvec__f4_mul(v, bz)), lightvec__f4_mul(w, cz)),
-                       r->sz4);
+    t = lightvec__f4_mul(lightvec__f4_madd(u, az, lightvec__f4_madd(v, bz, lightvec__f4_mul(w, cz))), r->sz4);
     ok = lightvec__m4_and(ok, lightvec__m4_and(lightvec__f4_lt(lightvec__f4_set(tmin), t), lightvec__f4_lt(t, lightvec__f4_set(hit->t))));
     mask = lightvec__m4_bits(ok);
     if (!mask) return 0;

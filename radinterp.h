@@ -1,4 +1,4 @@
-/* radinterp.h - v0.3.1 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
+/* radinterp.h - v0.4.0 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
 
    RADINTERP.H: hierarchical radiosity, ranked discontinuities and quadratic irradiance interpolants evaluated per pixel.
 
@@ -263,6 +263,9 @@
        RADINTERP_API             linkage of public functions (default: extern)
        RADINTERP_MALLOC, RADINTERP_FREE  replace malloc/free (define both or neither)
        RADINTERP_BVH_BINS        SAH bins of the built-in BVH (default 16)
+       RADINTERP_BVH_SIMD        1 (default): SSE2 (x86-64) or NEON (AArch64) BVH kernels
+                                 when the compiler offers them; 0: the portable scalar
+                                 kernels only (the same hits, bit for bit)
 
    FUNCTION REFERENCE
 
@@ -386,8 +389,8 @@
 #define RADINTERP_H
 
 #define RADINTERP_VERSION_MAJOR 0
-#define RADINTERP_VERSION_MINOR 3
-#define RADINTERP_VERSION_PATCH 1
+#define RADINTERP_VERSION_MINOR 4
+#define RADINTERP_VERSION_PATCH 0
 #define RADINTERP_FILE_FORMAT_VERSION 1   /* of saved meshes */
 
 #include <stddef.h>
@@ -860,7 +863,7 @@ static float radinterp__rng_float(radinterp__rng *r)
 #if RADINTERP_BVH_SIMD && (defined(__SSE2__) || defined(_M_X64) || defined(_M_AMD64))
 #define RADINTERP__SSE 1
 #include <emmintrin.h>
-#elif RADINTERP_BVH_SIMD && (defined(__aarch64__) || defined(_M_ARM64))
+#elif RADINTERP_BVH_SIMD && defined(__aarch64__) && (defined(__GNUC__) || defined(__clang__))
 #define RADINTERP__NEON 1
 #include <arm_neon.h>
 #endif
@@ -868,6 +871,18 @@ static float radinterp__rng_float(radinterp__rng *r)
 #define RADINTERP__SIMD 1
 #else
 #define RADINTERP__SIMD 0
+#endif
+/* Where the target fuses a * b + c (FMA on x86 with -mfma, every AArch64),
+   both kernels fuse it explicitly: a compiler that contracts on its own
+   (GCC's -ffp-contract=fast, clang's default) then has nothing left to fuse
+   differently in the scalar kernel. Without FMA nothing can be fused. */
+#if (defined(__GNUC__) || defined(__clang__)) && (defined(__FMA__) || defined(__aarch64__))
+#define RADINTERP__BVH_FMA 1
+#if defined(RADINTERP__SSE)
+#include <immintrin.h>
+#endif
+#else
+#define RADINTERP__BVH_FMA 0
 #endif
 
 #define RADINTERP__BVH_WIDTH 8        /* children per node */
@@ -1245,6 +1260,20 @@ static radinterp__f4 radinterp__f4_add(radinterp__f4 a, radinterp__f4 b) { retur
 static radinterp__f4 radinterp__f4_sub(radinterp__f4 a, radinterp__f4 b) { return _mm_sub_ps(a, b); }
 static radinterp__f4 radinterp__f4_mul(radinterp__f4 a, radinterp__f4 b) { return _mm_mul_ps(a, b); }
 static radinterp__f4 radinterp__f4_div(radinterp__f4 a, radinterp__f4 b) { return _mm_div_ps(a, b); }
+#if RADINTERP__BVH_FMA
+static radinterp__f4 radinterp__f4_madd(radinterp__f4 a, radinterp__f4 b, radinterp__f4 c) { return _mm_fmadd_ps(a, b, c); }
+static radinterp__f4 radinterp__f4_det2(radinterp__f4 a, radinterp__f4 b, radinterp__f4 c, radinterp__f4 d)
+{
+    radinterp__f4 w = _mm_mul_ps(c, d);
+    return _mm_sub_ps(_mm_fmsub_ps(a, b, w), _mm_fmsub_ps(c, d, w));
+}
+#else
+static radinterp__f4 radinterp__f4_madd(radinterp__f4 a, radinterp__f4 b, radinterp__f4 c) { return _mm_add_ps(_mm_mul_ps(a, b), c); }
+static radinterp__f4 radinterp__f4_det2(radinterp__f4 a, radinterp__f4 b, radinterp__f4 c, radinterp__f4 d)
+{
+    return _mm_sub_ps(_mm_mul_ps(a, b), _mm_mul_ps(c, d));
+}
+#endif
 static radinterp__f4 radinterp__f4_min(radinterp__f4 a, radinterp__f4 b) { return _mm_min_ps(a, b); }  /* a < b ? a : b */
 static radinterp__f4 radinterp__f4_max(radinterp__f4 a, radinterp__f4 b) { return _mm_max_ps(a, b); }  /* a > b ? a : b */
 static radinterp__m4 radinterp__f4_lt(radinterp__f4 a, radinterp__f4 b) { return _mm_cmplt_ps(a, b); }
@@ -1264,6 +1293,12 @@ static radinterp__f4 radinterp__f4_add(radinterp__f4 a, radinterp__f4 b) { retur
 static radinterp__f4 radinterp__f4_sub(radinterp__f4 a, radinterp__f4 b) { return vsubq_f32(a, b); }
 static radinterp__f4 radinterp__f4_mul(radinterp__f4 a, radinterp__f4 b) { return vmulq_f32(a, b); }
 static radinterp__f4 radinterp__f4_div(radinterp__f4 a, radinterp__f4 b) { return vdivq_f32(a, b); }
+static radinterp__f4 radinterp__f4_madd(radinterp__f4 a, radinterp__f4 b, radinterp__f4 c) { return vfmaq_f32(c, a, b); }
+static radinterp__f4 radinterp__f4_det2(radinterp__f4 a, radinterp__f4 b, radinterp__f4 c, radinterp__f4 d)   /* Kahan, as the scalar */
+{
+    radinterp__f4 w = vmulq_f32(c, d), nw = vnegq_f32(w);
+    return vsubq_f32(vfmaq_f32(nw, a, b), vfmaq_f32(nw, c, d));
+}
 /* compare and select: the scalar kernels' a < b ? a : b, NaN included (vminq_f32 differs) */
 static radinterp__f4 radinterp__f4_min(radinterp__f4 a, radinterp__f4 b) { return vbslq_f32(vcltq_f32(a, b), a, b); }
 static radinterp__f4 radinterp__f4_max(radinterp__f4 a, radinterp__f4 b) { return vbslq_f32(vcgtq_f32(a, b), a, b); }
@@ -1280,14 +1315,25 @@ static unsigned radinterp__m4_bits(radinterp__m4 a)
 }
 #endif
 
+/* a * b + c, fused where RADINTERP__BVH_FMA (the shear and the distance). */
+static float radinterp__bvh_madd(float a, float b, float c)
+{
+#if RADINTERP__BVH_FMA
+    return fmaf(a, b, c);
+#else
+    return a * b + c;
+#endif
+}
+
 /* Per-ray constants of the watertight test and of the slab test. */
 typedef struct radinterp__ray {
     float org[3], dir[3], inv[3];
     int kx, ky, kz;          /* dir[kz] has the largest magnitude */
     float sx, sy, sz;        /* shear that maps dir to +z */
+    float nsx, nsy;          /* -sx, -sy */
     int near[3];             /* box row offset (in floats) of the entry plane per axis; far = near ^ WIDTH */
 #if RADINTERP__SIMD
-    radinterp__f4 org4[3], inv4[3], sx4, sy4, sz4;
+    radinterp__f4 org4[3], inv4[3], nsx4, nsy4, sz4;
 #endif
 } radinterp__ray;
 
@@ -1311,13 +1357,15 @@ static void radinterp__ray_setup(radinterp__ray *r, const float org[3], const fl
     r->sx = dir[r->kx] / dir[r->kz];
     r->sy = dir[r->ky] / dir[r->kz];
     r->sz = 1.0f / dir[r->kz];
+    r->nsx = -r->sx;
+    r->nsy = -r->sy;
 #if RADINTERP__SIMD
     for (k = 0; k < 3; k++) {
         r->org4[k] = radinterp__f4_set(r->org[k]);
         r->inv4[k] = radinterp__f4_set(r->inv[k]);
     }
-    r->sx4 = radinterp__f4_set(r->sx);
-    r->sy4 = radinterp__f4_set(r->sy);
+    r->nsx4 = radinterp__f4_set(r->nsx);
+    r->nsy4 = radinterp__f4_set(r->nsy);
     r->sz4 = radinterp__f4_set(r->sz);
 #endif
 }
@@ -1345,10 +1393,33 @@ static unsigned radinterp__node_hits_scalar(const radinterp__ray *r, const radin
     return mask;
 }
 
+/* An edge function a * b - c * d. With FMA, Kahan's algorithm: within two
+   ulp of the exact value, so its sign is exact. Without, the two rounded
+   products: the sign is exact or the value zero (Woop et al.), and a zero
+   is computed again exactly in double by radinterp__bvh_edges_double. */
+static float radinterp__bvh_det2(float a, float b, float c, float d)
+{
+#if RADINTERP__BVH_FMA
+    float w = c * d;
+    return fmaf(a, b, -w) - fmaf(c, d, -w);
+#else
+    return a * b - c * d;
+#endif
+}
+
+/* The edge functions u, v, w exactly (products of floats are exact in
+   double) and rounded once. */
+static void radinterp__bvh_edges_double(float ax, float ay, float bx, float by, float cx, float cy, float e[3])
+{
+    e[0] = (float)((double)cx * by - (double)cy * bx);
+    e[1] = (float)((double)ax * cy - (double)ay * cx);
+    e[2] = (float)((double)bx * ay - (double)by * ax);
+}
+
 /* Watertight ray/triangle test (Woop, Benthin, Wald 2013): edge functions in
    a sheared space where the ray is the +z axis; an edge shared by two
-   triangles is never missed by both. Double precision when an edge function
-   is exactly zero. Updates *hit when closer than hit->t; returns 1 then. */
+   triangles is never missed by both. Updates *hit when closer than hit->t;
+   returns 1 then. */
 static int radinterp__leaf_hit_scalar(const radinterp__ray *r, const radinterp__bvh_tris *b, float tmin, radinterp__hit *hit)
 {
     int i, found = 0;
@@ -1357,23 +1428,23 @@ static int radinterp__leaf_hit_scalar(const radinterp__ray *r, const radinterp__
         float bx = b->v[3 + r->kx][i] - r->org[r->kx], by = b->v[3 + r->ky][i] - r->org[r->ky], bz = b->v[3 + r->kz][i] - r->org[r->kz];
         float cx = b->v[6 + r->kx][i] - r->org[r->kx], cy = b->v[6 + r->ky][i] - r->org[r->ky], cz = b->v[6 + r->kz][i] - r->org[r->kz];
         float u, v, w, det, inv_det, t;
-        ax = ax - r->sx * az; ay = ay - r->sy * az;
-        bx = bx - r->sx * bz; by = by - r->sy * bz;
-        cx = cx - r->sx * cz; cy = cy - r->sy * cz;
-        u = cx * by - cy * bx;
-        v = ax * cy - ay * cx;
-        w = bx * ay - by * ax;
-        if (u == 0.0f || v == 0.0f || w == 0.0f) {
-            u = (float)((double)cx * by - (double)cy * bx);
-            v = (float)((double)ax * cy - (double)ay * cx);
-            w = (float)((double)bx * ay - (double)by * ax);
+        ax = radinterp__bvh_madd(r->nsx, az, ax); ay = radinterp__bvh_madd(r->nsy, az, ay);
+        bx = radinterp__bvh_madd(r->nsx, bz, bx); by = radinterp__bvh_madd(r->nsy, bz, by);
+        cx = radinterp__bvh_madd(r->nsx, cz, cx); cy = radinterp__bvh_madd(r->nsy, cz, cy);
+        u = radinterp__bvh_det2(cx, by, cy, bx);
+        v = radinterp__bvh_det2(ax, cy, ay, cx);
+        w = radinterp__bvh_det2(bx, ay, by, ax);
+        if (!RADINTERP__BVH_FMA && (u == 0.0f || v == 0.0f || w == 0.0f)) {
+            float e[3];
+            radinterp__bvh_edges_double(ax, ay, bx, by, cx, cy, e);
+            u = e[0]; v = e[1]; w = e[2];
         }
         if ((u < 0.0f || v < 0.0f || w < 0.0f) && (0.0f < u || 0.0f < v || 0.0f < w)) continue;
         det = u + v + w;
         if (det == 0.0f) continue;
         inv_det = 1.0f / det;
         u = u * inv_det; v = v * inv_det; w = w * inv_det;   /* barycentrics first: u * az underflows at 1e-13 m */
-        t = (u * az + v * bz + w * cz) * r->sz;
+        t = radinterp__bvh_madd(u, az, radinterp__bvh_madd(v, bz, w * cz)) * r->sz;
         if (!(tmin < t && t < hit->t)) continue;
         hit->t = t;
         hit->u = v;
@@ -1427,23 +1498,23 @@ static int radinterp__leaf_hit_simd(const radinterp__ray *r, const radinterp__bv
     float tl[4], vl[4], wl[4];
     unsigned mask;
     int i, best;
-    ax = radinterp__f4_sub(ax, radinterp__f4_mul(r->sx4, az)); ay = radinterp__f4_sub(ay, radinterp__f4_mul(r->sy4, az));
-    bx = radinterp__f4_sub(bx, radinterp__f4_mul(r->sx4, bz)); by = radinterp__f4_sub(by, radinterp__f4_mul(r->sy4, bz));
-    cx = radinterp__f4_sub(cx, radinterp__f4_mul(r->sx4, cz)); cy = radinterp__f4_sub(cy, radinterp__f4_mul(r->sy4, cz));
-    u = radinterp__f4_sub(radinterp__f4_mul(cx, by), radinterp__f4_mul(cy, bx));
-    v = radinterp__f4_sub(radinterp__f4_mul(ax, cy), radinterp__f4_mul(ay, cx));
-    w = radinterp__f4_sub(radinterp__f4_mul(bx, ay), radinterp__f4_mul(by, ax));
-    if (radinterp__m4_bits(radinterp__m4_or(radinterp__m4_or(radinterp__f4_eq(u, zero), radinterp__f4_eq(v, zero)),
+    ax = radinterp__f4_madd(r->nsx4, az, ax); ay = radinterp__f4_madd(r->nsy4, az, ay);
+    bx = radinterp__f4_madd(r->nsx4, bz, bx); by = radinterp__f4_madd(r->nsy4, bz, by);
+    cx = radinterp__f4_madd(r->nsx4, cz, cx); cy = radinterp__f4_madd(r->nsy4, cz, cy);
+    u = radinterp__f4_det2(cx, by, cy, bx);
+    v = radinterp__f4_det2(ax, cy, ay, cx);
+    w = radinterp__f4_det2(bx, ay, by, ax);
+    if (!RADINTERP__BVH_FMA && radinterp__m4_bits(radinterp__m4_or(radinterp__m4_or(radinterp__f4_eq(u, zero), radinterp__f4_eq(v, zero)),
                                       radinterp__f4_eq(w, zero)))) {
         float e[9][4];   /* the lanes with a zero edge function again in double */
         radinterp__f4_store(e[0], u); radinterp__f4_store(e[1], v); radinterp__f4_store(e[2], w);
         radinterp__f4_store(e[3], ax); radinterp__f4_store(e[4], ay); radinterp__f4_store(e[5], bx);
         radinterp__f4_store(e[6], by); radinterp__f4_store(e[7], cx); radinterp__f4_store(e[8], cy);
         for (i = 0; i < 4; i++) {
+            float exact[3];
             if (e[0][i] != 0.0f && e[1][i] != 0.0f && e[2][i] != 0.0f) continue;
-            e[0][i] = (float)((double)e[7][i] * e[6][i] - (double)e[8][i] * e[5][i]);
-            e[1][i] = (float)((double)e[3][i] * e[8][i] - (double)e[4][i] * e[7][i]);
-            e[2][i] = (float)((double)e[5][i] * e[4][i] - (double)e[6][i] * e[3][i]);
+            radinterp__bvh_edges_double(e[3][i], e[4][i], e[5][i], e[6][i], e[7][i], e[8][i], exact);
+            e[0][i] = exact[0]; e[1][i] = exact[1]; e[2][i] = exact[2];
         }
         u = radinterp__f4_load(e[0]); v = radinterp__f4_load(e[1]); w = radinterp__f4_load(e[2]);
     }
@@ -1455,8 +1526,7 @@ static int radinterp__leaf_hit_simd(const radinterp__ray *r, const radinterp__bv
     ok = radinterp__m4_andnot(radinterp__f4_eq(det, zero), ok);
     inv_det = radinterp__f4_div(radinterp__f4_set(1.0f), det);
     u = radinterp__f4_mul(u, inv_det); v = radinterp__f4_mul(v, inv_det); w = radinterp__f4_mul(w, inv_det);
-    t = radinterp__f4_mul(radinterp__f4_add(radinterp__f4_add(radinterp__f4_mul(u, az), radinterp__f4_mul(v, bz)), radinterp__f4_mul(w, cz)),
-                       r->sz4);
+    t = radinterp__f4_mul(radinterp__f4_madd(u, az, radinterp__f4_madd(v, bz, radinterp__f4_mul(w, cz))), r->sz4);
     ok = radinterp__m4_and(ok, radinterp__m4_and(radinterp__f4_lt(radinterp__f4_set(tmin), t), radinterp__f4_lt(t, radinterp__f4_set(hit->t))));
     mask = radinterp__m4_bits(ok);
     if (!mask) return 0;
