@@ -1,7 +1,7 @@
-/* What the walkthrough's two test files share (tests/test_walkthrough.c,
-   tests/test_walkthrough_radiosity.c): luminance, the stored reference
-   frames' paths, the moment the bunny is deepest under the desk, and
-   temporary cache directories. Include after examples/common/walkthrough.h. */
+/* What the walkthrough's test files share (tests/test_walkthrough*.c,
+   tests/test_viewer.c): luminance, the stored reference frames' paths, the
+   moment the bunny is deepest under the desk, the bunny's luminance in a
+   full render, and temporary cache directories. Include after examples/common/walkthrough.h. */
 #ifndef TESTS_WALKTHROUGH_TEST_H
 #define TESTS_WALKTHROUGH_TEST_H
 
@@ -30,6 +30,29 @@ TEST__FN double time_under_desk(void)
         if (d > depth) { depth = d; best = i / 200.0; }
     }
     return best;
+}
+
+/* Mean luminance of the bunny's pixels in a full render at time t (the
+   raytrace mode's shading: direct light with shadow rays, light vectors),
+   96 x 72 pixels; *count = how many pixels show the bunny. */
+TEST__FN double bunny_pixels(wt_world *w, double t, int *count)
+{
+    const int W = 96, H = 72;
+    rendercache_camera c = wt_camera(&w->opt, t, W, H);
+    float *rgb = (float *)malloc(sizeof(float) * 3 * W * H);
+    uint32_t *obj = (uint32_t *)malloc(sizeof(uint32_t) * W * H);
+    double sum = 0.0;
+    int i;
+    *count = 0;
+    if (rgb && obj && wt_render_full(w, &c, t, 0, rgb, obj) == 0)
+        for (i = 0; i < W * H; i++)
+            if (obj[i] == WT_OBJECT_BUNNY) {
+                sum += luminance(rgb + 3 * i);
+                ++*count;
+            }
+    free(rgb);
+    free(obj);
+    return *count ? sum / *count : 0.0;
 }
 
 /* A new empty directory under /tmp, its path into dir; 0 when none could be made. */
