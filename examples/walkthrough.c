@@ -33,7 +33,9 @@
                 light vectors (Crespin & Peroche 2004): a pixel lit by an
                 interpolated vector of weight W gets 1/W times the priority;
                 a fixed sample budget per frame (8% of the pixels). The first
-                frame is traced in full.
+                frame is traced in full. Near the bunny the office's
+                indirect light is dimmed by the share of the hemisphere the
+                bunny covers (ray-traced contact shadows; also in baseviews).
      baseviews  range-image reconstruction (Nimeroff, Dorsey & Rushmeier 1996):
                 fish-eye base views and key times chosen by coherence tests,
                 motion-compensated time blends, warps with both fills.

@@ -22,7 +22,11 @@
    examples/common/trace.h, so the bunny casts shadows; Lambert +
    normalized Phong) and indirect light from a light
    vector (lightvec.h, Crespin & Peroche 2004): looked up in a cache, and
-   gathered and inserted where the cache has too few valid vectors. Glossy
+   gathered and inserted where the cache has too few valid vectors. Near
+   the bunny, the office's indirect light is dimmed by the share of the
+   hemisphere the bunny covers, ray traced against the bunny within reach
+   (contact shadows, wt__contact_occlusion; --no-bunny-shadow turns them
+   off). Glossy
    materials (floor, desk, lamp pole) use 5D light vectors (position and
    viewing direction), Lambertian ones view-independent 3D vectors. The
    office's vectors live in a static cache, warmed up along the path in the
@@ -215,7 +219,8 @@ typedef struct wt_options {
     float min_leaf_area;      /* radinterp_mesh_desc.min_leaf_area, m^2; 0 = every leaf */
     int volume_resolution;    /* irradiance volume k */
     int visibility_rays;      /* self-occlusion rays per bunny vertex */
-    int bunny_shadow;         /* the bunny's occlusion blob on the office */
+    int bunny_shadow;         /* the bunny's contact shadow on the office: radiosity, its occlusion blob;
+                                 raytrace and baseviews, ray-traced occlusion of indirect light */
     int gouraud;              /* the office Gouraud-shaded from the mesh's corners (radinterp_shade_gouraud) */
     /* run */
     int use_cache;            /* load and save the precompute cache */
@@ -325,7 +330,8 @@ EX_FN void wt_usage(FILE *f)
           "  --eps E              radiosity: solver error bound in W/m^2 (default: radinterp's, 0.13)\n"
           "  --min-leaf-area A    radiosity: coarsest mesh leaves in m^2 (default 0: every leaf)\n"
           "  --volume-k K         radiosity: irradiance volume bins 2K^2, K <= 32 (default 17)\n"
-          "  --no-bunny-shadow    radiosity: no occlusion blob of the bunny on the office\n"
+          "  --no-bunny-shadow    no contact shadow of the bunny on the office (radiosity: its occlusion\n"
+          "                       blob; raytrace, baseviews: ray-traced occlusion of indirect light)\n"
           "  --gouraud            radiosity: Gouraud shading of the mesh instead of its interpolants\n"
           "  --exposure E         exposure before the filmic curve (default: automatic per frame)\n"
           "  --reference          also trace every frame in full and print the LRMS error\n"
@@ -749,13 +755,14 @@ typedef struct wt_point {
     float direct[3];         /* emission + direct light; on a miss, the sky */
     float indirect[3];       /* from the light vector */
     float through[3];        /* transmittance of the glass between the eye and the hit (1: none) */
-    float rgb[3];            /* out: radiance towards the eye, through * (direct + indirect) */
+    float contact;           /* share of the indirect light the bunny leaves (wt__contact_occlusion; 1: all) */
+    float rgb[3];            /* out: radiance towards the eye, through * (direct + contact * indirect) */
     float weight;            /* W of the light vector: lookup weight, 1 for a new vector */
     unsigned char light;     /* WT_LIGHT_* */
     unsigned char glossy;    /* 5D light vector (view dependent) */
     unsigned char lit;       /* indirect light known */
     unsigned char gathered;  /* its light vector was computed for it */
-    unsigned char bunny_shadow;   /* the bunny blocked some of its direct light */
+    unsigned char bunny_shadow;   /* the bunny blocked some of its direct or indirect light */
 } wt_point;
 
 /* An emitting polygon of the office (its fan triangles are consecutive),
@@ -841,6 +848,8 @@ typedef struct wt_world {
     wt_layout layout;                  /* a building's rooms, doors and stairs (none for the office) */
     wt_path path;                      /* the walk through a building (opt.path points here) */
     float bunny_lo[3], bunny_hi[3];    /* bounds of bunny.obj */
+    float bunny_bound_centre[3];       /* their centre (OBJ coordinates) */
+    float bunny_bound_radius;          /* metres: the posed bunny lies within this of the posed centre */
     float *bunny_normals;              /* smooth vertex normals, OBJ coordinates */
     ex_tracer *tracer;
     int bunny_instance;
@@ -1761,6 +1770,15 @@ EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t
         wt_world_destroy(w);
         return -1;
     }
+    {
+        float d2 = 0.0f;
+        int k;
+        for (k = 0; k < 3; k++) {
+            w->bunny_bound_centre[k] = 0.5f * (w->bunny_lo[k] + w->bunny_hi[k]);
+            d2 += (w->bunny_hi[k] - w->bunny_lo[k]) * (w->bunny_hi[k] - w->bunny_lo[k]);
+        }
+        w->bunny_bound_radius = 0.5f * sqrtf(d2) * WT_BUNNY_SCALE * (1.0f + 1e-5f);   /* rounding: still bounding */
+    }
     w->bunny_normals = (float *)malloc(3 * sizeof(float) * w->bunny.vertex_count);
     w->material_count = w->office.material_count + 1;
     w->bunny_material = w->office.material_count;
@@ -1841,7 +1859,7 @@ EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t
    follows it along the same route, that far behind, at eye height.
    ---------------------------------------------------------------------- */
 #define WT_PATH_VERSION 2u     /* bump when the paths change: precompute keys depend on them */
-#define WT_SHADING_VERSION 3u  /* bump when the shading changes: cached light vectors and base images */
+#define WT_SHADING_VERSION 4u  /* bump when the shading changes: cached light vectors and base images */
 #define WT__WAYPOINTS 9
 static const float wt__waypoints[WT__WAYPOINTS][2] = {   /* (x, z) on the floor */
     { 1.35f, 1.55f }, { 1.65f, 2.35f }, { 1.80f, 3.15f }, { 2.15f, 3.35f }, { 2.40f, 2.80f },
@@ -2242,7 +2260,65 @@ static void wt__direct(const wt_world *w, const ex_trace_hit *h, const float dir
 static void wt__point_radiance(wt_point *p)
 {
     int k;
-    for (k = 0; k < 3; k++) p->rgb[k] = p->through[k] * (p->direct[k] + p->indirect[k]);
+    for (k = 0; k < 3; k++) p->rgb[k] = p->through[k] * (p->direct[k] + p->contact * p->indirect[k]);
+}
+
+/* Contact shadows of the bunny (issue 19): the office's light vectors are
+   gathered without the bunny (one static cache for every pose), so the
+   floor under it would keep all of its indirect light, and by day, when
+   all light is indirect, the bunny would cast no shadow at all. A static
+   point within reach of the posed bunny loses the share of its indirect
+   light that the bunny hides: the cosine-weighted share of its hemisphere
+   that the bunny covers, estimated with WT_CONTACT_RAYS rays (4 x 8
+   strata of the cosine-weighted hemisphere, jittered from the point's
+   stream) cast against the bunny alone and stopped at the reach
+   (WT_CONTACT_REACH bounding radii), as if the light arriving there were
+   the same from every direction (ambient occlusion of the indirect
+   light, which is how engines shadow indirect light with a moving object:
+   UE4's capsule shadows, The Last of Us' ellipsoid occluders). Beyond the
+   reach the bunny covers under (1 / (1 + 2))^2 = 11% of the hemisphere
+   seen from its bounding sphere's edge, and much less of it in practice
+   (the bounding sphere is twice the bunny's equal-volume sphere): the
+   cut-off is not seen. Points farther away cost one distance test. Direct
+   light needs none of this: its shadow rays see the bunny. */
+#define WT_CONTACT_RAYS 32
+#define WT_CONTACT_REACH 2.0f
+#define WT_CONTACT_STREAM 0xC0A7AC7ull   /* the rays' random numbers: not the direct light's */
+
+static float wt__contact_occlusion(const wt_world *w, const float pos[3], const float n[3], uint64_t stream)
+{
+    const ex_tracer *t = w->tracer;
+    const ex__instance *b = &t->instances[w->bunny_instance];
+    float c[3], v[3], u[3], s[3], org[3], o[3], d2 = 0.0f, above = 0.0f, radius = w->bunny_bound_radius;
+    float reach = WT_CONTACT_REACH * radius, l;
+    ex_rng rng;
+    int i, k, hits = 0;
+    ex__affine_point(w->pose, w->bunny_bound_centre, c);
+    for (k = 0; k < 3; k++) {
+        v[k] = c[k] - pos[k];
+        d2 += v[k] * v[k];
+        above += v[k] * n[k];
+    }
+    if (d2 >= (radius + reach) * (radius + reach) || above <= -radius) return 0.0f;   /* out of reach, or below */
+    /* a tangent frame (u, s, n) */
+    if (fabsf(n[0]) > 0.5f) { u[0] = -n[1]; u[1] = n[0]; u[2] = 0.0f; }
+    else { u[0] = 0.0f; u[1] = -n[2]; u[2] = n[1]; }
+    l = sqrtf(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    for (k = 0; k < 3; k++) u[k] /= l;
+    s[0] = n[1] * u[2] - n[2] * u[1];
+    s[1] = n[2] * u[0] - n[0] * u[2];
+    s[2] = n[0] * u[1] - n[1] * u[0];
+    for (k = 0; k < 3; k++) org[k] = pos[k] + t->epsilon * n[k];
+    ex__affine_point(b->to_object, org, o);
+    rng = ex_rng_stream(w->opt.seed ^ WT_CONTACT_STREAM, stream);
+    for (i = 0; i < WT_CONTACT_RAYS; i++) {
+        float a = ((float)(i % 4) + ex_rng_float(&rng)) / 4.0f, phi = 2.0f * WT_PI * ((float)(i / 4) + ex_rng_float(&rng)) / 8.0f;
+        float r = sqrtf(a), z = sqrtf(1.0f - a), d[3], dobj[3];   /* cosine-distributed (Malley) */
+        for (k = 0; k < 3; k++) d[k] = r * cosf(phi) * u[k] + r * sinf(phi) * s[k] + z * n[k];
+        ex__affine_vector(b->to_object, d, dobj);   /* unnormalised: the reach stays a world distance */
+        hits += tr__bvh_occluded(&b->bvh, o, dobj, 0.0f, reach);
+    }
+    return (float)hits / (float)WT_CONTACT_RAYS;
 }
 
 /* Traces a point's ray and computes its emission and direct light. Camera
@@ -2265,6 +2341,7 @@ static void wt__trace_point(const wt_world *w, wt_point *p, int direct)
     p->weight = 0.0f;
     p->material = 0;
     for (k = 0; k < 3; k++) p->direct[k] = p->indirect[k] = p->rgb[k] = 0.0f;
+    p->contact = 1.0f;
     if (!ex_tracer_intersect_through(w->tracer, p->org, p->dir, FLT_MAX, &h, p->through)) {
         p->t = FLT_MAX;
         p->object = RENDERCACHE_MISS;
@@ -2297,6 +2374,10 @@ static void wt__trace_point(const wt_world *w, wt_point *p, int direct)
         wt__direct(w, &h, p->dir, &w->materials[p->material], &rng, d, &shadow);
         p->bunny_shadow = (unsigned char)shadow;
         for (k = 0; k < 3; k++) p->direct[k] += d[k];
+    }
+    if (p->object == WT_OBJECT_OFFICE && w->opt.bunny_shadow) {
+        p->contact = 1.0f - wt__contact_occlusion(w, p->pos, p->normal, p->stream);
+        if (p->contact < 1.0f) p->bunny_shadow = 1;   /* refreshed sooner by the render cache: the shadow moves */
     }
     p->light = p->object == WT_OBJECT_BUNNY ? WT_LIGHT_BUNNY : WT_LIGHT_STATIC;
     p->glossy = (unsigned char)wt__is_glossy(&w->materials[p->material]);
@@ -3164,6 +3245,7 @@ static uint64_t wt__baseviews_key(const wt_renderer *r)
     h = wt_hash_u64(h, (uint64_t)o->light_samples);
     h = wt_hash_u64(h, (uint64_t)o->bunny_strata);
     h = wt_hash_f32(h, WT_KEY_EPSILON);   /* the bunny's key-time solutions are saved with the images */
+    h = wt_hash_u64(h, (uint64_t)o->bunny_shadow);   /* contact shadows in the base images */
     return h;
 }
 
