@@ -51,14 +51,6 @@ static wt_world *open_world(const wt_options *o)
 
 /* ---- the layout file ------------------------------------------------------ */
 
-static int write_file(const char *path, const char *text)
-{
-    FILE *f = fopen(path, "w");
-    if (!f) return 0;
-    fputs(text, f);
-    return fclose(f) == 0;
-}
-
 static void test_layout(void)
 {
     wt_layout l;

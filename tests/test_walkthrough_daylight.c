@@ -31,14 +31,6 @@ static wt_options day_options(wt_mode mode, const char *scene)
     return o;
 }
 
-static int write_file(const char *path, const char *text)
-{
-    FILE *f = fopen(path, "w");
-    if (!f) return 0;
-    fputs(text, f);
-    return fclose(f) == 0;
-}
-
 /* ---- the sky line ------------------------------------------------------------ */
 
 #define ROOM_LINE "room 0 0 0 0 1 0 2.8 0 1 panel 0\n"

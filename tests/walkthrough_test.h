@@ -1,7 +1,7 @@
 /* What the walkthrough's test files share (tests/test_walkthrough*.c,
    tests/test_viewer.c): luminance, the stored reference frames' paths, the
    moment the bunny is deepest under the desk, the bunny's luminance in a
-   full render, and temporary cache directories. Include after examples/common/walkthrough.h. */
+   full render, temporary cache directories and small files. Include after examples/common/walkthrough.h. */
 #ifndef TESTS_WALKTHROUGH_TEST_H
 #define TESTS_WALKTHROUGH_TEST_H
 
@@ -53,6 +53,15 @@ TEST__FN double bunny_pixels(wt_world *w, double t, int *count)
     free(rgb);
     free(obj);
     return *count ? sum / *count : 0.0;
+}
+
+/* Writes text to a new file at path; 0 when it cannot. */
+TEST__FN int write_file(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    if (!f) return 0;
+    fputs(text, f);
+    return fclose(f) == 0;
 }
 
 /* A new empty directory under /tmp, its path into dir; 0 when none could be made. */
