@@ -1,4 +1,4 @@
-/* irrvol.h - v0.4.0 - irradiance volume for lighting moving objects - public domain or MIT, see end of file
+/* irrvol.h - v0.4.1 - irradiance volume for lighting moving objects - public domain or MIT, see end of file
 
    IRRVOL.H: a bilevel grid of directional irradiance samples that lights moving objects by interpolation.
 
@@ -12,8 +12,9 @@
    it (eq. 4.3, or the moment of order n, eq. 4.8). A query at any position
    and normal finds the cell (eq. 4.4-4.6), the bins of the direction
    (inverse concentric map) and interpolates between the cell's eight
-   samples: tens of millions of queries per second, enough to re-light every
-   vertex of moving objects every frame. A moving object's diffuse radiance
+   samples: millions of queries per second and core (tests/bench_irrvol.c
+   prints the rates of every filter and weighting), enough to re-light
+   every vertex of moving objects every frame. A moving object's diffuse radiance
    is then reflectance * H / pi (eq. 4.7).
 
    Built for real levels, as engines expect of probe volumes today (DDGI,
@@ -321,7 +322,7 @@
    refinement by light the total is known after the first level and grows
    once, when the refined cells' samples join.
 
-   VALIDATION AND CONTRACT
+   VALIDATION AND CONTRACT (tests/test_irrvol_contract.c)
 
    What each function checks (a failed check returns the named code and
    changes nothing), and what the caller must guarantee (unchecked: breaking
@@ -335,8 +336,12 @@
                          >= 0; environment NULL, or 1..65536 texels a side
                          with every texel finite and >= 0; strides
                          >= 12 bytes; grid, resolution and option ranges;
-                         bounds finite with min < max (INVALID_ARGUMENT).
-                         Zero-area triangles are skipped and counted.
+                         bounds finite with min < max (INVALID_ARGUMENT),
+                         all before the first allocation except the scene's
+                         own bounds (zero size along an axis: a flat
+                         scene), found with the grid, which frees what it
+                         allocated. Zero-area triangles are skipped and
+                         counted.
                          Contract: positions hold vertex_count vertices at
                          the stride, indices 3 * triangle_count entries,
                          triangle_materials triangle_count entries,
@@ -350,15 +355,19 @@
      irrvol_info, irrvol_sample, irrvol_sample_values
                          check NULL pointers, the index, and that radiance
                          was kept (INVALID_ARGUMENT). Contract: irradiance and
-                         radiance hold bins x 3 floats.
-     queries             check nothing and never fail: NaN or infinite
-                         positions clamp to the boundary, NaN directions
-                         give a bin in range, unknown filter values act as
-                         NEAREST and unknown weightings as TRILINEAR, order
-                         0 or 1 reads L1, any other L2. Contract: vol is
-                         a built volume; pos, dir, normal, to_eye hold 3
-                         floats, rgb 3 (irrvol_query_many: count of each at
-                         their strides).
+                         radiance hold bins x 3 floats (either may be NULL).
+     queries             check nothing and never fail: positions outside
+                         the bounds (infinite and NaN ones too) take the
+                         boundary's cell and weights, and the leak-safe
+                         weights test the point itself when it is finite
+                         (else the plain weights stand); zero, infinite and
+                         NaN directions give a bin in range; unknown filter
+                         values act as NEAREST and unknown weightings as
+                         TRILINEAR; order 0 or 1 reads L1, any other L2.
+                         Contract: vol is a built volume; pos, dir, normal,
+                         to_eye hold 3 floats, rgb 3 (irrvol_query_many:
+                         count of each at their strides; count 0 reads
+                         nothing).
      irrvol_bin_direction, irrvol_direction_bin
                          bins past the last give +z; vol may be NULL for
                          irrvol_bin_direction. Contract: irrvol_direction_bin
@@ -376,14 +385,20 @@
                          vertex_count floats; buffers as for irrvol_build.
      irrvol_save, irrvol_save_to_memory
                          check NULL pointers (INVALID_ARGUMENT); a failing
-                         write gives IO (OUT_OF_MEMORY for memory).
+                         write gives IO (OUT_OF_MEMORY for memory). The
+                         buffer of irrvol_save_to_memory comes from the given
+                         allocator (NULL: IRRVOL_MALLOC) and goes back
+                         through irrvol_free_memory with the same one.
      irrvol_load, irrvol_load_from_memory
-                         treat the input as hostile: every size is checked
-                         against the declared payload before allocating,
-                         every value's range, finiteness and consistency,
-                         the CRC; truncation and corruption give
-                         CORRUPT_DATA, another format version VERSION.
-                         Contract: data holds size bytes.
+                         check NULL pointers and the allocator (both
+                         callbacks or neither: INVALID_ARGUMENT, *out NULL,
+                         nothing allocated), and treat the input as
+                         hostile: every size is checked against the
+                         declared payload before allocating, every value's
+                         range, finiteness and consistency, the CRC;
+                         truncation and corruption give CORRUPT_DATA,
+                         another format version VERSION. Contract: data
+                         holds size bytes.
      irrvol_free_memory  accepts NULL data; the allocator must be the one the
                          data was saved with.
 
@@ -426,7 +441,7 @@
 
 #define IRRVOL_VERSION_MAJOR 0
 #define IRRVOL_VERSION_MINOR 4
-#define IRRVOL_VERSION_PATCH 0
+#define IRRVOL_VERSION_PATCH 1
 #define IRRVOL_FILE_FORMAT_VERSION 2
 
 /* Fixed limits of the desc's fields (see LIMITS). */
