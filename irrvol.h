@@ -2090,6 +2090,9 @@ struct irrvol {
     float *visibility;     /* per sample before hanging_begin: an (n + 2)^2 map of the fit of the inverse hit
                               distance, gradient xyz and residual variance (section 13), its border the
                               mirrored texels across the octahedral square's edges */
+    float *probes;         /* what a leak-safe query reads of a sample before hanging_begin, in one 16-byte
+                              record: its origin xyz and its reach squared, a distance within which no test
+                              point lies beyond the surface its map predicts, or -1 when it is invalid */
     float bias;            /* the visibility test point moves this far along the query direction */
     uint64_t rays;
     uint32_t degenerate, invalid_count, relocated_count;
@@ -2378,7 +2381,8 @@ static size_t irrvol__bytes(const irrvol *v)
     return sizeof *v + v->cell_count * (sizeof(irrvol__cell) + 1) + v->id_count * sizeof(uint32_t) +
            (size_t)v->sample_count * (7 * sizeof(float) + IRRVOL__SH_FLOATS * sizeof(float) +
                                       per_sample * (v->radiance ? 2 : 1)) +
-           hanging * 4 * (sizeof(uint32_t) + sizeof(float)) + (size_t)v->hanging_begin * v->map_texels * 4 * sizeof(float);
+           hanging * 4 * (sizeof(uint32_t) + sizeof(float)) +
+           (size_t)v->hanging_begin * (v->map_texels + 1) * 4 * sizeof(float);
 }
 
 IRRVOL_API void irrvol_destroy(irrvol *vol)
@@ -2397,6 +2401,7 @@ IRRVOL_API void irrvol_destroy(irrvol *vol)
     irrvol__free(&a, vol->radiance);
     irrvol__free(&a, vol->sh);
     irrvol__free(&a, vol->visibility);
+    irrvol__free(&a, vol->probes);
     irrvol__free(&a, vol);
 }
 
@@ -2424,6 +2429,36 @@ static void irrvol__map_border(const irrvol *v, float *map)
             memcpy(map + 4 * (size_t)(j * w + i), map + 4 * ((from / (uint32_t)n + 1) * (uint32_t)w + from % (uint32_t)n + 1),
                    4 * sizeof(float));
         }
+}
+
+/* The probes: each sample's origin and reach in one record. A test point
+   x at distance r from the origin lies beyond the predicted surface when
+   g . (x - o) > 1 (section 13), g the bilinear blend of four texels'
+   gradients, so |g| <= G, the largest gradient of the map, and no point
+   with r G < 1 can be beyond it: there the Chebyshev test changes nothing
+   and the queries skip the map (irrvol__lanes4_fetch). The reach is
+   stored squared as (0.999 / G)^2, G rounded up: the margin dwarfs the
+   float rounding of the blend and of g . (x - o), so skipping gives the
+   same weights bit for bit. No surface seen: FLT_MAX; invalid: -1. */
+static irrvol_result irrvol__make_probes(irrvol *v)
+{
+    uint32_t s, t;
+    v->probes = (float *)irrvol__alloc_array(&v->allocator, (size_t)v->hanging_begin + 1, 4 * sizeof(float));
+    if (!v->probes) return IRRVOL_ERROR_OUT_OF_MEMORY;
+    for (s = 0; s < v->hanging_begin; s++) {
+        const float *map = v->visibility + (size_t)s * v->map_texels * 4;
+        double g2 = 0.0, reach;
+        for (t = 0; t < v->map_texels; t++) {
+            const float *g = map + 4 * (size_t)t;
+            double l2 = (double)g[0] * g[0] + (double)g[1] * g[1] + (double)g[2] * g[2];
+            g2 = l2 > g2 ? l2 : g2;
+        }
+        reach = g2 > 0.0 ? 0.999 / (sqrt(g2) * (1.0 + 1e-6)) : 0.0;
+        memcpy(v->probes + 4 * (size_t)s, v->origins + 4 * (size_t)s, 3 * sizeof(float));
+        v->probes[4 * (size_t)s + 3] = v->origins[4 * (size_t)s + 3] == 0.0f ? -1.0f
+                                       : (g2 > 0.0 ? (float)(reach * reach * (1.0 - 1e-6)) : FLT_MAX);
+    }
+    return IRRVOL_OK;
 }
 
 /* Volume-wide settings that follow from the resolutions. */
@@ -3979,6 +4014,7 @@ IRRVOL_API irrvol_result irrvol_build(const irrvol_desc *desc, irrvol **out)
         r = IRRVOL_ERROR_OUT_OF_MEMORY;
     if (r == IRRVOL_OK) r = irrvol__setup_directions(&b);
     if (r == IRRVOL_OK) r = irrvol__gather_all(&b);
+    if (r == IRRVOL_OK) r = irrvol__make_probes(v);
     irrvol__bvh_free(&b.bvh, &v->allocator);
     irrvol__free(&v->allocator, b.dirs);
     irrvol__free(&v->allocator, b.dir_soa);
@@ -4133,15 +4169,20 @@ IRRVOL__HOT void irrvol__bilinear_bins(const irrvol *v, float u, float t, uint32
    four with SSE2 in the same operations and order, and the GLSL follows it. */
 IRRVOL__HOT float irrvol__visibility_weight(const irrvol *v, uint32_t s, const float x[3], const float n[3])
 {
-    const float *o = v->origins + 4 * (size_t)s, *m, *t00, *t01;
+    const float *o = v->probes + 4 * (size_t)s, *m, *t00, *t01;
+    float ok = o[3] >= 0.0f ? 1.0f : 0.0f;
     float dx = x[0] - o[0], dy = x[1] - o[1], dz = x[2] - o[2], fn = (float)v->vis_res;
     float r2 = dx * dx + dy * dy + dz * dz, r, inv_r, w, a, inv_a, px, py, u, t, fu, ft, g[4], gd, beyond;
     int i0, j0, c;
-    if (!(r2 > 0.0f)) return o[3];
+    if (!(r2 > 0.0f)) return ok;
     r = sqrtf(r2);
     inv_r = 1.0f / r;
     w = 0.5f - 0.5f * ((dx * n[0] + dy * n[1] + dz * n[2]) * inv_r);
     w = w + 0.2f;
+    if (r2 <= o[3] || !ok) {   /* within reach (irrvol__make_probes), or invalid: no texels */
+        if (w < 0.2f) w = w * (w * w * 25.0f);
+        return w * ok;
+    }
     /* the octahedral map: direction -> [0.5, n + 0.5] in the bordered map */
     a = fabsf(dx) + fabsf(dy) + fabsf(dz);
     inv_a = 1.0f / a;
@@ -4170,7 +4211,7 @@ IRRVOL__HOT float irrvol__visibility_weight(const irrvol *v, uint32_t s, const f
         w = w * (cheb * cheb * cheb);
     }
     if (w < 0.2f) w = w * (w * w * 25.0f);
-    return w * o[3];
+    return w * ok;
 }
 
 #define IRRVOL__MAX_TERMS 32   /* a query's samples: 8 corners, each a hanging sample of up to 4 parents */
@@ -4196,6 +4237,7 @@ IRRVOL__HOT irrvol__point4 irrvol__point4_set(const float x[3], const float n[3]
 /* Four lanes of irrvol__visibility_weight between its three steps. */
 typedef struct irrvol__lanes4 {
     __m128 dx, dy, dz, inv_r, w, pos, ok;   /* toward x, 1 / r, the backface term, r > 0, valid */
+    int near;                               /* bit k: lane k within its sample's reach, or invalid: no texels */
     const float *texel[4];                  /* each lane's 2 x 2 texels: the top left one */
     float fu[4], ft[4];                     /* and the bilinear weights */
     __m128 fit[4];                          /* each lane's blended fit: gx, gy, gz, var */
@@ -4206,18 +4248,19 @@ IRRVOL__HOT void irrvol__lanes4_locate(const irrvol *v, const uint32_t s[4], con
 {
     const __m128 one = _mm_set1_ps(1.0f), half = _mm_set1_ps(0.5f), zero = _mm_setzero_ps();
     const __m128 sign = _mm_set1_ps(-0.0f), fn = _mm_set1_ps((float)v->vis_res);
-    __m128 ox = _mm_loadu_ps(v->origins + 4 * (size_t)s[0]), oy = _mm_loadu_ps(v->origins + 4 * (size_t)s[1]);
-    __m128 oz = _mm_loadu_ps(v->origins + 4 * (size_t)s[2]), ok = _mm_loadu_ps(v->origins + 4 * (size_t)s[3]);
+    __m128 ox = _mm_loadu_ps(v->probes + 4 * (size_t)s[0]), oy = _mm_loadu_ps(v->probes + 4 * (size_t)s[1]);
+    __m128 oz = _mm_loadu_ps(v->probes + 4 * (size_t)s[2]), reach2 = _mm_loadu_ps(v->probes + 4 * (size_t)s[3]);
     __m128 r2, w, inv_a, px, py, neg, qx, qy, u, t;
     __m128i i0, j0;
     int iu[4], ju[4], k;
-    _MM_TRANSPOSE4_PS(ox, oy, oz, ok);
-    l->ok = ok;
+    _MM_TRANSPOSE4_PS(ox, oy, oz, reach2);
+    l->ok = _mm_and_ps(_mm_cmpge_ps(reach2, zero), one);
     l->dx = _mm_sub_ps(p->x, ox);
     l->dy = _mm_sub_ps(p->y, oy);
     l->dz = _mm_sub_ps(p->z, oz);
     r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(l->dx, l->dx), _mm_mul_ps(l->dy, l->dy)), _mm_mul_ps(l->dz, l->dz));
     l->pos = _mm_cmpgt_ps(r2, zero);
+    l->near = _mm_movemask_ps(_mm_or_ps(_mm_cmple_ps(r2, reach2), _mm_cmplt_ps(reach2, zero)));   /* or invalid */
     l->inv_r = _mm_div_ps(one, _mm_sqrt_ps(r2));
     w = _mm_add_ps(_mm_add_ps(_mm_mul_ps(l->dx, p->nx), _mm_mul_ps(l->dy, p->ny)), _mm_mul_ps(l->dz, p->nz));
     w = _mm_sub_ps(half, _mm_mul_ps(half, _mm_mul_ps(w, l->inv_r)));
@@ -4242,20 +4285,32 @@ IRRVOL__HOT void irrvol__lanes4_locate(const irrvol *v, const uint32_t s[4], con
     _mm_storeu_si128((__m128i *)(void *)iu, i0);
     _mm_storeu_si128((__m128i *)(void *)ju, j0);
     for (k = 0; k < 4; k++)
-        l->texel[k] = v->visibility + ((size_t)s[k] * v->map_texels + (size_t)ju[k] * (v->vis_res + 2) + (size_t)iu[k]) * 4;
+        if (!(l->near >> k & 1))
+            l->texel[k] = v->visibility + ((size_t)s[k] * v->map_texels + (size_t)ju[k] * (v->vis_res + 2) + (size_t)iu[k]) * 4;
 }
 
-/* Step 2: each lane's four texels, blended. */
+/* Step 2: each lane's four texels, blended; a lane within reach takes a
+   zero fit, which predicts no surface: g . (x - o) - 1 < 0, as its texels
+   would give. */
 IRRVOL__HOT void irrvol__lanes4_fetch(const irrvol *v, irrvol__lanes4 *l)
 {
     const __m128 one = _mm_set1_ps(1.0f);
     int k;
     for (k = 0; k < 4; k++) {
-        const float *m = l->texel[k], *m1 = m + 4 * (v->vis_res + 2);
-        __m128 su = _mm_set1_ps(l->fu[k]), sv = _mm_set1_ps(l->ft[k]);
-        __m128 cu = _mm_sub_ps(one, su), cv = _mm_sub_ps(one, sv);
-        __m128 r0 = _mm_add_ps(_mm_mul_ps(_mm_loadu_ps(m), cu), _mm_mul_ps(_mm_loadu_ps(m + 4), su));
-        __m128 r1 = _mm_add_ps(_mm_mul_ps(_mm_loadu_ps(m1), cu), _mm_mul_ps(_mm_loadu_ps(m1 + 4), su));
+        const float *m, *m1;
+        __m128 su, sv, cu, cv, r0, r1;
+        if (l->near >> k & 1) {
+            l->fit[k] = _mm_setzero_ps();
+            continue;
+        }
+        m = l->texel[k];
+        m1 = m + 4 * (v->vis_res + 2);
+        su = _mm_set1_ps(l->fu[k]);
+        sv = _mm_set1_ps(l->ft[k]);
+        cu = _mm_sub_ps(one, su);
+        cv = _mm_sub_ps(one, sv);
+        r0 = _mm_add_ps(_mm_mul_ps(_mm_loadu_ps(m), cu), _mm_mul_ps(_mm_loadu_ps(m + 4), su));
+        r1 = _mm_add_ps(_mm_mul_ps(_mm_loadu_ps(m1), cu), _mm_mul_ps(_mm_loadu_ps(m1 + 4), su));
         l->fit[k] = _mm_add_ps(_mm_mul_ps(r0, cv), _mm_mul_ps(r1, sv));
     }
 }
@@ -4939,7 +4994,7 @@ static irrvol_result irrvol__read_all(irrvol *v, irrvol__reader *r)
         memcpy(v->origins + 4 * (size_t)s, v->positions + 3 * (size_t)s, 3 * sizeof(float));
         v->origins[4 * (size_t)s + 3] = 1.0f;
     }
-    return IRRVOL_OK;
+    return irrvol__make_probes(v);
 }
 
 /* A load from a stream of at most available payload bytes. */
