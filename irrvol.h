@@ -2045,7 +2045,19 @@ IRRVOL__HOT uint32_t irrvol__oct_texel(int i, int j, int n)
 typedef struct irrvol__cell {
     uint32_t offset;   /* first id of the cell's table in vol->ids */
     uint32_t side;     /* samples per axis of the table */
+    uint32_t corners;  /* its first sub-cell's record in vol->corners, (side - 1)^3 of them, x fastest */
 } irrvol__cell;
+
+/* A (sub-)cell's eight corners as the queries read them: their sample
+   ids and, for the leak-safe weights, their probes (origin and reach,
+   section 13) by coordinate, four corners to a register. Three cache lines
+   where the id table, eight probes and the cell took up to a dozen. */
+typedef struct irrvol__corners {
+    float x[8], y[8], z[8], reach2[8];   /* the corners' probes (a hanging corner's: unused) */
+    uint32_t id[8];                      /* the corner samples, x fastest (irrvol__table_corners) */
+    uint32_t hanging;                    /* non-zero: a corner is hanging, its parents stand in */
+    uint32_t pad[7];                     /* 192 bytes: three lines */
+} irrvol__corners;
 
 enum {   /* why a first-level cell is refined (vol->refined) */
     IRRVOL__UNREFINED = 0,
@@ -2090,6 +2102,8 @@ struct irrvol {
     float *visibility;     /* per sample before hanging_begin: an (n + 2)^2 map of the fit of the inverse hit
                               distance, gradient xyz and residual variance (section 13), its border the
                               mirrored texels across the octahedral square's edges */
+    irrvol__corners *corners; /* per sub-cell (of every cell), aligned to 64 bytes */
+    void *corner_block;    /* the allocation that holds them */
     float *probes;         /* what a leak-safe query reads of a sample before hanging_begin, in one 16-byte
                               record: its origin xyz and its reach squared, a distance within which no test
                               point lies beyond the surface its map predicts, or -1 when it is invalid */
@@ -2374,6 +2388,18 @@ static irrvol_result irrvol__alloc_samples(irrvol *v, int keep_radiance)
     return IRRVOL_OK;
 }
 
+/* Sub-cells of all cells: the corner records. */
+static uint64_t irrvol__corner_count(const irrvol *v)
+{
+    uint64_t n = 0;
+    uint32_t c;
+    for (c = 0; c < v->cell_count; c++) {
+        uint64_t f = v->cell[c].side - 1;
+        n += f * f * f;
+    }
+    return n;
+}
+
 static size_t irrvol__bytes(const irrvol *v)
 {
     size_t per_sample = (size_t)v->bins * 3 * sizeof(float);
@@ -2382,7 +2408,8 @@ static size_t irrvol__bytes(const irrvol *v)
            (size_t)v->sample_count * (7 * sizeof(float) + IRRVOL__SH_FLOATS * sizeof(float) +
                                       per_sample * (v->radiance ? 2 : 1)) +
            hanging * 4 * (sizeof(uint32_t) + sizeof(float)) +
-           (size_t)v->hanging_begin * (v->map_texels + 1) * 4 * sizeof(float);
+           (size_t)v->hanging_begin * (v->map_texels + 1) * 4 * sizeof(float) +
+           (v->corner_block ? (irrvol__corner_count(v) + 1) * sizeof(irrvol__corners) : 0);
 }
 
 IRRVOL_API void irrvol_destroy(irrvol *vol)
@@ -2402,6 +2429,7 @@ IRRVOL_API void irrvol_destroy(irrvol *vol)
     irrvol__free(&a, vol->sh);
     irrvol__free(&a, vol->visibility);
     irrvol__free(&a, vol->probes);
+    irrvol__free(&a, vol->corner_block);
     irrvol__free(&a, vol);
 }
 
@@ -2431,6 +2459,55 @@ static void irrvol__map_border(const irrvol *v, float *map)
         }
 }
 
+/* The 8 corner ids of sub-cell (x, y, z) of a cell's table, x fastest. */
+IRRVOL__HOT void irrvol__table_corners(const irrvol *v, const irrvol__cell *cell, uint32_t x, uint32_t y, uint32_t z,
+                                       uint32_t ids[8])
+{
+    uint32_t row = cell->side, slab = cell->side * cell->side;
+    const uint32_t *t = v->ids + cell->offset + x + row * y + slab * z;
+    ids[0] = t[0];          ids[1] = t[1];
+    ids[2] = t[row];        ids[3] = t[row + 1];
+    ids[4] = t[slab];       ids[5] = t[slab + 1];
+    ids[6] = t[slab + row]; ids[7] = t[slab + row + 1];
+}
+
+/* The corner records of every sub-cell, from the id tables and the probes. */
+static irrvol_result irrvol__make_corners(irrvol *v)
+{
+    uint64_t count = irrvol__corner_count(v);
+    uint32_t c, at = 0, x, y, z, k;
+    if (count + 1 > UINT32_MAX || count + 2 > SIZE_MAX / sizeof(irrvol__corners)) return IRRVOL_ERROR_OUT_OF_MEMORY;
+    v->corner_block = irrvol__alloc_array(&v->allocator, (size_t)count + 2, sizeof(irrvol__corners));
+    if (!v->corner_block) return IRRVOL_ERROR_OUT_OF_MEMORY;
+    v->corners = (irrvol__corners *)(void *)((unsigned char *)v->corner_block +
+                                             (64 - (uintptr_t)v->corner_block % 64) % 64);
+    for (c = 0; c < v->cell_count; c++) {
+        irrvol__cell *cell = &v->cell[c];
+        uint32_t f = cell->side - 1;
+        cell->corners = at;
+        for (z = 0; z < f; z++)
+            for (y = 0; y < f; y++)
+                for (x = 0; x < f; x++) {
+                    irrvol__corners *r = &v->corners[at++];
+                    memset(r, 0, sizeof *r);
+                    irrvol__table_corners(v, cell, x, y, z, r->id);
+                    for (k = 0; k < 8; k++) {
+                        const float *p;
+                        if (r->id[k] >= v->hanging_begin) {
+                            r->hanging = 1;
+                            continue;
+                        }
+                        p = v->probes + 4 * (size_t)r->id[k];
+                        r->x[k] = p[0];
+                        r->y[k] = p[1];
+                        r->z[k] = p[2];
+                        r->reach2[k] = p[3];
+                    }
+                }
+    }
+    return IRRVOL_OK;
+}
+
 /* The probes: each sample's origin and reach in one record. A test point
    x at distance r from the origin lies beyond the predicted surface when
    g . (x - o) > 1 (section 13), g the bilinear blend of four texels'
@@ -2458,7 +2535,7 @@ static irrvol_result irrvol__make_probes(irrvol *v)
         v->probes[4 * (size_t)s + 3] = v->origins[4 * (size_t)s + 3] == 0.0f ? -1.0f
                                        : (g2 > 0.0 ? (float)(reach * reach * (1.0 - 1e-6)) : FLT_MAX);
     }
-    return IRRVOL_OK;
+    return irrvol__make_corners(v);
 }
 
 /* Volume-wide settings that follow from the resolutions. */
@@ -3775,17 +3852,6 @@ static irrvol_result irrvol__gather(irrvol__build *b, uint32_t begin, uint32_t e
     return IRRVOL_OK;
 }
 
-/* The 8 corner ids of sub-cell (x, y, z) of a cell's table, x fastest. */
-IRRVOL__HOT void irrvol__table_corners(const irrvol *v, const irrvol__cell *cell, uint32_t x, uint32_t y, uint32_t z,
-                                       uint32_t ids[8])
-{
-    uint32_t row = cell->side, slab = cell->side * cell->side;
-    const uint32_t *t = v->ids + cell->offset + x + row * y + slab * z;
-    ids[0] = t[0];          ids[1] = t[1];
-    ids[2] = t[row];        ids[3] = t[row + 1];
-    ids[4] = t[slab];       ids[5] = t[slab + 1];
-    ids[6] = t[slab + row]; ids[7] = t[slab + row + 1];
-}
 
 /* Every value a sample holds (irradiance and radiance bins, harmonics) as
    sum_i w_i value(from_i) over n samples; to is not among them. */
@@ -4090,10 +4156,12 @@ IRRVOL__HOT void irrvol__cell_coords(const irrvol *v, const float pos[3], uint32
 
 /* The eight samples of cell c around offsets o (the same steps inside the
    cell's own table: its sub-cell at the second level) and their trilinear
-   weights. */
-IRRVOL__HOT void irrvol__cell_corners(const irrvol *v, const uint32_t c[3], const float o[3], uint32_t ids[8], float w[8])
+   weights; returns the sub-cell's corner record. */
+IRRVOL__HOT const irrvol__corners *irrvol__cell_corners(const irrvol *v, const uint32_t c[3], const float o[3],
+                                                        uint32_t ids[8], float w[8])
 {
     const irrvol__cell *cell = &v->cell[c[0] + v->cells[0] * (c[1] + v->cells[1] * c[2])];
+    const irrvol__corners *rec;
     uint32_t side = cell->side, s[3];
     float f = (float)(side - 1), t[3];
     int d;
@@ -4103,7 +4171,8 @@ IRRVOL__HOT void irrvol__cell_corners(const irrvol *v, const uint32_t c[3], cons
         s[d] = s[d] < side - 2 ? s[d] : side - 2;
         t[d] = q - (float)s[d];
     }
-    irrvol__table_corners(v, cell, s[0], s[1], s[2], ids);
+    rec = v->corners + cell->corners + s[0] + (side - 1) * (s[1] + (side - 1) * s[2]);
+    memcpy(ids, rec->id, sizeof rec->id);
     {
         float x1 = t[0], y1 = t[1], z1 = t[2], x0 = 1.0f - x1, y0 = 1.0f - y1, z0 = 1.0f - z1;
         w[0] = x0 * y0 * z0; w[1] = x1 * y0 * z0;
@@ -4111,6 +4180,7 @@ IRRVOL__HOT void irrvol__cell_corners(const irrvol *v, const uint32_t c[3], cons
         w[4] = x0 * y0 * z1; w[5] = x1 * y0 * z1;
         w[6] = x0 * y1 * z1; w[7] = x1 * y1 * z1;
     }
+    return rec;
 }
 
 /* The bin that contains the square point (u, v) of hemisphere h. */
@@ -4243,17 +4313,16 @@ typedef struct irrvol__lanes4 {
     __m128 fit[4];                          /* each lane's blended fit: gx, gy, gz, var */
 } irrvol__lanes4;
 
-/* Step 1: directions, the backface term and the texels of four samples. */
-IRRVOL__HOT void irrvol__lanes4_locate(const irrvol *v, const uint32_t s[4], const irrvol__point4 *p, irrvol__lanes4 *l)
+/* Step 1: directions, the backface term and the texels of four samples
+   s, their probes (ox, oy, oz, reach2) by lane. */
+IRRVOL__HOT void irrvol__lanes4_locate(const irrvol *v, const uint32_t s[4], __m128 ox, __m128 oy, __m128 oz,
+                                       __m128 reach2, const irrvol__point4 *p, irrvol__lanes4 *l)
 {
     const __m128 one = _mm_set1_ps(1.0f), half = _mm_set1_ps(0.5f), zero = _mm_setzero_ps();
     const __m128 sign = _mm_set1_ps(-0.0f), fn = _mm_set1_ps((float)v->vis_res);
-    __m128 ox = _mm_loadu_ps(v->probes + 4 * (size_t)s[0]), oy = _mm_loadu_ps(v->probes + 4 * (size_t)s[1]);
-    __m128 oz = _mm_loadu_ps(v->probes + 4 * (size_t)s[2]), reach2 = _mm_loadu_ps(v->probes + 4 * (size_t)s[3]);
     __m128 r2, w, inv_a, px, py, neg, qx, qy, u, t;
     __m128i i0, j0;
     int iu[4], ju[4], k;
-    _MM_TRANSPOSE4_PS(ox, oy, oz, reach2);
     l->ok = _mm_and_ps(_mm_cmpge_ps(reach2, zero), one);
     l->dx = _mm_sub_ps(p->x, ox);
     l->dy = _mm_sub_ps(p->y, oy);
@@ -4287,6 +4356,16 @@ IRRVOL__HOT void irrvol__lanes4_locate(const irrvol *v, const uint32_t s[4], con
     for (k = 0; k < 4; k++)
         if (!(l->near >> k & 1))
             l->texel[k] = v->visibility + ((size_t)s[k] * v->map_texels + (size_t)ju[k] * (v->vis_res + 2) + (size_t)iu[k]) * 4;
+}
+
+/* Step 1 for any four samples: their probes gathered by lane. */
+IRRVOL__HOT void irrvol__lanes4_locate_samples(const irrvol *v, const uint32_t s[4], const irrvol__point4 *p,
+                                               irrvol__lanes4 *l)
+{
+    __m128 ox = _mm_loadu_ps(v->probes + 4 * (size_t)s[0]), oy = _mm_loadu_ps(v->probes + 4 * (size_t)s[1]);
+    __m128 oz = _mm_loadu_ps(v->probes + 4 * (size_t)s[2]), reach2 = _mm_loadu_ps(v->probes + 4 * (size_t)s[3]);
+    _MM_TRANSPOSE4_PS(ox, oy, oz, reach2);
+    irrvol__lanes4_locate(v, s, ox, oy, oz, reach2, p, l);
 }
 
 /* Step 2: each lane's four texels, blended; a lane within reach takes a
@@ -4345,12 +4424,31 @@ IRRVOL__HOT void irrvol__visibility_weights(const irrvol *v, const uint32_t *s, 
     irrvol__lanes4 l[IRRVOL__MAX_TERMS / 4];
     irrvol__point4 p = irrvol__point4_set(x, n);
     uint32_t groups = count / 4, g;
-    for (g = 0; g < groups; g++) irrvol__lanes4_locate(v, s + 4 * g, &p, &l[g]);
+    for (g = 0; g < groups; g++) irrvol__lanes4_locate_samples(v, s + 4 * g, &p, &l[g]);
     for (g = 0; g < groups; g++) irrvol__lanes4_fetch(v, &l[g]);
     for (g = 0; g < groups; g++) irrvol__lanes4_weigh(&l[g], out + 4 * g);
     i = 4 * groups;
 #endif
     for (; i < count; i++) out[i] = irrvol__visibility_weight(v, s[i], x, n);
+}
+
+/* The visibility weights of a sub-cell's eight corners, none hanging:
+   irrvol__visibility_weights of its ids, the probes read from its record. */
+IRRVOL__HOT void irrvol__corner_weights(const irrvol *v, const irrvol__corners *r, const float x[3], const float n[3],
+                                        float out[8])
+{
+#ifdef IRRVOL__SSE2
+    irrvol__lanes4 l[2];
+    irrvol__point4 p = irrvol__point4_set(x, n);
+    int g;
+    for (g = 0; g < 2; g++)
+        irrvol__lanes4_locate(v, r->id + 4 * g, _mm_load_ps(r->x + 4 * g), _mm_load_ps(r->y + 4 * g),
+                              _mm_load_ps(r->z + 4 * g), _mm_load_ps(r->reach2 + 4 * g), &p, &l[g]);
+    for (g = 0; g < 2; g++) irrvol__lanes4_fetch(v, &l[g]);
+    for (g = 0; g < 2; g++) irrvol__lanes4_weigh(&l[g], out + 4 * g);
+#else
+    irrvol__visibility_weights(v, r->id, 8, x, n, out);
+#endif
 }
 
 /* A query reduced to the samples it reads, their weights and the bins:
@@ -4370,7 +4468,8 @@ typedef struct irrvol__prepared {
    replaced by its parents (section 9), renormalised. When no sample is
    visible (every corner invalid) or an input is NaN, the plain trilinear
    weights stand. */
-IRRVOL__HOT void irrvol__visibility_terms(const irrvol *v, const float pos[3], const float normal[3], irrvol__prepared *q)
+IRRVOL__HOT void irrvol__visibility_terms(const irrvol *v, const irrvol__corners *rec, const float pos[3],
+                                          const float normal[3], irrvol__prepared *q)
 {
     float n[3], x[3], len2 = normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2], inv, sum = 0.0f;
     float vis[IRRVOL__MAX_TERMS], w[8];
@@ -4383,20 +4482,25 @@ IRRVOL__HOT void irrvol__visibility_terms(const irrvol *v, const float pos[3], c
     if (!irrvol__finite3(x) || !irrvol__finite3(n)) return;   /* NaN or infinite: the plain weights stand */
     memcpy(ids, q->id, sizeof ids);
     memcpy(w, q->w, sizeof w);
-    for (i = 0; i < 8; i++) {
-        if (ids[i] >= v->hanging_begin) {
-            size_t h = 4 * (size_t)(ids[i] - v->hanging_begin);
-            for (j = 0; j < 4; j++)
-                if (v->parent_weights[h + j] > 0.0f) {
-                    q->id[m] = v->parents[h + j];
-                    q->w[m++] = w[i] * v->parent_weights[h + j];
-                }
-        } else {
-            q->id[m] = ids[i];
-            q->w[m++] = w[i];
+    if (!rec->hanging) {   /* the eight corners themselves */
+        m = 8;
+        irrvol__corner_weights(v, rec, x, n, vis);
+    } else {
+        for (i = 0; i < 8; i++) {
+            if (ids[i] >= v->hanging_begin) {
+                size_t h = 4 * (size_t)(ids[i] - v->hanging_begin);
+                for (j = 0; j < 4; j++)
+                    if (v->parent_weights[h + j] > 0.0f) {
+                        q->id[m] = v->parents[h + j];
+                        q->w[m++] = w[i] * v->parent_weights[h + j];
+                    }
+            } else {
+                q->id[m] = ids[i];
+                q->w[m++] = w[i];
+            }
         }
+        irrvol__visibility_weights(v, q->id, m, x, n, vis);
     }
-    irrvol__visibility_weights(v, q->id, m, x, n, vis);
     for (i = 0; i < m; i++) {
         q->w[i] *= vis[i];
         sum += q->w[i];
@@ -4415,11 +4519,11 @@ IRRVOL__HOT void irrvol__visibility_terms(const irrvol *v, const float pos[3], c
 IRRVOL__HOT void irrvol__prepare_in_cell(const irrvol *v, irrvol_weighting weighting, const uint32_t c[3],
                                          const float o[3], const float pos[3], const float normal[3], irrvol__prepared *q)
 {
-    irrvol__cell_corners(v, c, o, q->id, q->w);   /* the plain trilinear terms */
+    const irrvol__corners *rec = irrvol__cell_corners(v, c, o, q->id, q->w);   /* the plain trilinear terms */
     q->count = 8;
     q->scale = 1.0f;
     if (weighting == IRRVOL_WEIGHTING_DEFAULT) weighting = v->weighting;
-    if (weighting == IRRVOL_WEIGHTING_VISIBILITY) irrvol__visibility_terms(v, pos, normal, q);
+    if (weighting == IRRVOL_WEIGHTING_VISIBILITY) irrvol__visibility_terms(v, rec, pos, normal, q);
 }
 
 /* The bin (NEAREST) or four bins (BILINEAR) of a direction. */
