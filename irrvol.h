@@ -226,7 +226,12 @@
    query point moved info.normal_bias (desc.normal_bias, default 0.02, times
    the finest sample spacing) along the query direction. When no corner is
    visible, or an input is NaN, the plain weights stand. Without triangles
-   no sample sees a surface: only the backface term remains.
+   no sample sees a surface: only the backface term remains. The queries
+   read what these weights need in few cache lines: each sub-cell keeps a
+   record of its eight corners' ids, origins and reaches (192 bytes), and
+   a test point within its sample's reach (0.999 over the largest |g| of
+   the map: no point there can lie beyond a predicted surface) skips the
+   map, with the same result to the bit.
    IRRVOL_WEIGHTING_TRILINEAR is the thesis's plain trilinear interpolation.
    Two closed rooms behind a 2 cm wall, one lit, one dark: the leak-safe
    query gives 0.00 % of the lit side 1 cm and 10 cm into the dark room
