@@ -3166,25 +3166,27 @@ typedef struct lightvec__params {
     lightvec_interpolation interpolation;  /* never DEFAULT */
 } lightvec__params;
 
-/* 192 bytes, aligned to 64 in a kd-tree: what a valid record's weight
-   reads (beyond its leaf block's rows) comes first, then what the
-   interpolation reads. */
+/* 192 bytes, aligned to 64 in a kd-tree. The first two cache lines hold
+   what the interpolation of a diffuse vector reads (and the writer's
+   fields), the third what only a glossy part needs: a lookup loads two
+   lines of a record without a valid glossy part. */
 typedef struct lightvec__item {
-    float outgoing[3], cos_dir;      /* sigma and this record's S_dir (from its lobe) */
-    float normal[3], rel_gradient;   /* n_B and |grad Y| / Y (luminance) */
-    float inv_glossy_distance;       /* 1 / d_g; 0 = no glossy part */
-    float visibility;
-    float radius;                    /* R_B as the writer knows it; readers read the leaf block's row */
-    uint32_t id;
     float pos[3];                    /* B */
-    float exponent;                  /* of the lobe of G */
+    float visibility;
     float dir[3];                    /* D */
+    float inv_glossy_distance;       /* 1 / d_g; 0 = no glossy part */
     float mag[3];                    /* M */
     float proj[3];                   /* M cos(n_B, D) */
     float slope[3][3];               /* grad E_c / E_c per channel (0 where E_c = 0) */
+    float normal[3], rel_gradient;   /* n_B and |grad Y| / Y (luminance) */
+    float radius;                    /* R_B as the writer knows it; readers read the leaf block's row */
+    uint32_t id;
+    float cos_dir;                   /* this record's S_dir (from its lobe) */
+    float rel_glossy_gradient;       /* |dY(G)/dw_r| / Y(G) (luminance) times the glossy share */
+    float exponent;                  /* of the lobe of G; 128 bytes so far */
+    float outgoing[3];               /* sigma */
     float glossy[3];                 /* G(sigma) */
     float glossy_gradient[3][3];     /* dG/dw_r */
-    float rel_glossy_gradient;       /* |dY(G)/dw_r| / Y(G) (luminance) times the glossy share */
     float pad;
 } lightvec__item;
 
@@ -3816,10 +3818,11 @@ static void lightvec__keep(lightvec__query *q, const lightvec__item *it, uint32_
         c.wg = wg;
         c.id = id;
         c.it = it;
-        /* the interpolation reads the item: start loading it now */
+        /* the interpolation reads the item: start loading it now (its
+           third line only for a valid glossy part) */
         LIGHTVEC__PREFETCH(it);
         LIGHTVEC__PREFETCH((const char *)it + 64);
-        LIGHTVEC__PREFETCH((const char *)it + 128);
+        if (wg > 0.0f) LIGHTVEC__PREFETCH((const char *)it + 128);
         if (q->heap_count < q->heap_capacity) {
             uint32_t i = q->heap_count++;
             while (i && lightvec__heap_less(&c, &q->heap[(i - 1) / 2])) {
@@ -3834,95 +3837,94 @@ static void lightvec__keep(lightvec__query *q, const lightvec__item *it, uint32_
     }
 }
 
-/* The rest of the criteria of 4.2 for item k of a leaf block, inside its
-   sphere, in the direction cone and within S_curv (tested by the caller,
-   which passes dx = A - B, d^2, cos(w, sigma) and cos(n_A, n_B)), with
-   Ward's "in front" test. The diffuse vector's weight is the paper's
-   w = w_B * w_sigma with the cache's S_dir. The glossy part's is
-   w_g = w_B * w_sigma,B / (1 + psi |grad G_B| / G_B) with the record's own
-   S_dir (from its lobe), psi from lightvec__glossy_angle (cos psi =
-   1 - psi^2 / 2, the paper's cos(w, sigma) exactly without parallax), valid
-   while psi < acos S_dir,B and psi |grad G_B| / G_B < I_B: the
-   irradiance-change criterion and weight of 4.2.1, applied to G along the
-   angle. w_g = 0 when either fails. */
-static void lightvec__visit(lightvec__query *q, const float *block, uint32_t k, const lightvec__item *it, float radius,
-                            float dx, float dy, float dz, float d2, float cs, float cn)
+/* What the criteria of 4.2 compute for the slots of a leaf block. */
+typedef struct lightvec__slots {
+    float dx[LIGHTVEC__LEAF], dy[LIGHTVEC__LEAF], dz[LIGHTVEC__LEAF]; /* A - B */
+    float d2[LIGHTVEC__LEAF];        /* |AB|^2 */
+    float cs[LIGHTVEC__LEAF];        /* cos(w, sigma) */
+    float cn[LIGHTVEC__LEAF];        /* cos(n_A, n_B) */
+    float front[LIGHTVEC__LEAF];     /* (A - B) . (n_A + n_B) / 2 */
+} lightvec__slots;
+
+/* The tests of slot k that need no square root, with the radius R0 the
+   block was written with: |AB| < R0, cos(w, sigma) > S_dir, cos(n_A, n_B)
+   > S_curv, B not in front of A (Ward 1988: front >= -front_tolerance *
+   R0). Plain reads of rows that never change once published, no branch:
+   the loop over a block vectorizes. R_B only shrinks (neighbour clamping,
+   under readers) and a smaller radius fails more, so the slots that pass
+   are a superset of the valid ones. */
+static int lightvec__slot_pass(const lightvec__query *q, const float *block, uint32_t k, float cos_dir, lightvec__slots *s)
+{
+    const float *b = block + k;
+    float nx = b[LIGHTVEC__ROW_NX * LIGHTVEC__LEAF], ny = b[LIGHTVEC__ROW_NY * LIGHTVEC__LEAF];
+    float nz = b[LIGHTVEC__ROW_NZ * LIGHTVEC__LEAF], r0 = b[LIGHTVEC__ROW_R0 * LIGHTVEC__LEAF];
+    float dx = q->a[0] - b[LIGHTVEC__ROW_X * LIGHTVEC__LEAF], dy = q->a[1] - b[LIGHTVEC__ROW_Y * LIGHTVEC__LEAF];
+    float dz = q->a[2] - b[LIGHTVEC__ROW_Z * LIGHTVEC__LEAF], d2 = dx * dx + dy * dy + dz * dz;
+    float cs = q->w[0] * b[LIGHTVEC__ROW_SX * LIGHTVEC__LEAF] + q->w[1] * b[LIGHTVEC__ROW_SY * LIGHTVEC__LEAF] +
+               q->w[2] * b[LIGHTVEC__ROW_SZ * LIGHTVEC__LEAF];
+    float cn = q->n[0] * nx + q->n[1] * ny + q->n[2] * nz;
+    float front = 0.5f * (dx * (q->n[0] + nx) + dy * (q->n[1] + ny) + dz * (q->n[2] + nz));
+    s->dx[k] = dx; s->dy[k] = dy; s->dz[k] = dz; s->d2[k] = d2;
+    s->cs[k] = cs; s->cn[k] = cn; s->front[k] = front;
+    return (d2 < r0 * r0) & (cs > cos_dir) & (cn > q->p->cos_normal) & (front >= -q->p->front * r0);
+}
+
+/* The rest of 4.2 for slot k, which passed lightvec__slot_pass: the tests
+   again with R_B (read atomically) where it has shrunk since the block was
+   written, the irradiance change |AB| |grad E_B| / E_B < I_B, and the
+   weights. The diffuse vector's is the paper's w = w_B * w_sigma with the
+   cache's S_dir. The glossy part's is w_g = w_B * w_sigma,B / (1 + psi
+   |grad G_B| / G_B) with the record's own S_dir (from its lobe), psi from
+   lightvec__glossy_angle (cos psi = 1 - psi^2 / 2, the paper's cos(w,
+   sigma) exactly without parallax), valid while psi < acos S_dir,B and
+   psi |grad G_B| / G_B < I_B: the irradiance-change criterion and weight
+   of 4.2.1, applied to G along the angle. w_g = 0 when either fails. */
+static void lightvec__visit(lightvec__query *q, const float *block, uint32_t k, const lightvec__item *it,
+                            const lightvec__slots *s, float cos_dir)
 {
     const lightvec__params *p = q->p;
     const float *b = block + k;
-    float ws = 1.0f, wg = 0.0f, wb, d, change, front, inv_dg;
-    front = 0.5f * (dx * (q->n[0] + b[LIGHTVEC__ROW_NX * LIGHTVEC__LEAF]) + dy * (q->n[1] + b[LIGHTVEC__ROW_NY * LIGHTVEC__LEAF]) +
-                    dz * (q->n[2] + b[LIGHTVEC__ROW_NZ * LIGHTVEC__LEAF]));
-    if (!(front >= -p->front * radius)) return;                      /* B in front of A (Ward 1988) */
-    d = sqrtf(d2);
+    float ws = 1.0f, wg = 0.0f, wb, d, change, inv_dg, radius;
+    uint32_t id;
+    radius = lightvec__load_f32(b + LIGHTVEC__ROW_R * LIGHTVEC__LEAF);
+    if (radius != b[LIGHTVEC__ROW_R0 * LIGHTVEC__LEAF] &&
+        !(s->d2[k] < radius * radius && s->front[k] >= -p->front * radius))
+        return;
+    d = sqrtf(s->d2[k]);
     change = d * b[LIGHTVEC__ROW_REL * LIGHTVEC__LEAF];              /* |AB| |grad E| / E_B < I_B */
     if (!(change < p->max_change)) return;
-    wb = (1.0f - d / radius) * (1.0f / (1.0f + change)) * ((cn - p->cos_normal) * p->inv_normal);
-    if (q->directional) ws = (cs - p->cos_dir) * p->inv_dir;        /* 4.2.2 */
+    wb = (1.0f - d / radius) * (1.0f / (1.0f + change)) * ((s->cn[k] - p->cos_normal) * p->inv_normal);
+    if (q->directional) ws = (s->cs[k] - cos_dir) * p->inv_dir;      /* 4.2.2 */
     inv_dg = b[LIGHTVEC__ROW_GLOSSY * LIGHTVEC__LEAF];
     if (q->directional && inv_dg > 0.0f) {                           /* the glossy part */
-        float psi = lightvec__glossy_angle(q, it->outgoing, inv_dg, dx, dy, dz), cos_psi = 1.0f - 0.5f * psi * psi;
-        float gchange = psi * it->rel_glossy_gradient;
+        float psi = lightvec__glossy_angle(q, it->outgoing, inv_dg, s->dx[k], s->dy[k], s->dz[k]);
+        float cos_psi = 1.0f - 0.5f * psi * psi, gchange = psi * it->rel_glossy_gradient;
         if (cos_psi > it->cos_dir && gchange < p->max_change)
             wg = wb * ((cos_psi - it->cos_dir) / (1.0f - it->cos_dir)) * (1.0f / (1.0f + gchange));
     }
-    {
-        uint32_t id;
-        memcpy(&id, &b[LIGHTVEC__ROW_ID * LIGHTVEC__LEAF], sizeof id);
-        lightvec__keep(q, it, id, wb * ws, wg);
-    }
+    memcpy(&id, &b[LIGHTVEC__ROW_ID * LIGHTVEC__LEAF], sizeof id);
+    lightvec__keep(q, it, id, wb * ws, wg);
 }
 
-/* The cheap tests of slot k of a leaf block, a little wider than the exact
-   ones (which follow for the slots that pass): inside the sphere as the
-   block was built (R_B only shrinks later), in the direction cone, within
-   S_curv. Plain reads of rows that never change once published, so that the
-   loop over a full block vectorizes. */
-static int lightvec__block_pass(const lightvec__query *q, const float *block, uint32_t k, float cos_dir)
-{
-    const float *b = block + k;
-    float dx = q->a[0] - b[LIGHTVEC__ROW_X * LIGHTVEC__LEAF], dy = q->a[1] - b[LIGHTVEC__ROW_Y * LIGHTVEC__LEAF];
-    float dz = q->a[2] - b[LIGHTVEC__ROW_Z * LIGHTVEC__LEAF], r0 = b[LIGHTVEC__ROW_R0 * LIGHTVEC__LEAF];
-    float cs = q->w[0] * b[LIGHTVEC__ROW_SX * LIGHTVEC__LEAF] + q->w[1] * b[LIGHTVEC__ROW_SY * LIGHTVEC__LEAF] +
-               q->w[2] * b[LIGHTVEC__ROW_SZ * LIGHTVEC__LEAF];
-    float cn = q->n[0] * b[LIGHTVEC__ROW_NX * LIGHTVEC__LEAF] + q->n[1] * b[LIGHTVEC__ROW_NY * LIGHTVEC__LEAF] +
-               q->n[2] * b[LIGHTVEC__ROW_NZ * LIGHTVEC__LEAF];
-    return (dx * dx + dy * dy + dz * dz < r0 * r0 * 1.00001f) & (cs > cos_dir - 1e-6f) & (cn > q->p->cos_normal - 1e-6f);
-}
-
-/* The first `count` items of a leaf block: the cheap tests over the whole
-   block at once when it is a full, published one (a kd-tree leaf; the tail's
-   slots past its count may be being written), then for the slots that pass
-   |AB| < R_B (R_B read atomically: neighbour clamping may shrink it while
-   readers run), cos(w, sigma) > S_dir, S_curv exactly, and the rest
-   (lightvec__visit). */
+/* The first `count` items of a leaf block: lightvec__slot_pass over the
+   whole block at once when it is a full, published one (a kd-tree leaf,
+   its empty slots of radius 0; the tail's slots past its count may be
+   being written), then lightvec__visit for the slots that passed, one
+   branch per passing slot. */
 static void lightvec__visit_block(lightvec__query *q, const float *block, const lightvec__item *items, uint32_t count,
                                   int full)
 {
-    int pass[LIGHTVEC__LEAF];
+    lightvec__slots s;
     float cos_dir = q->directional ? q->p->cos_dir : -2.0f; /* a 3D query has w = 0: cs = 0 passes */
+    unsigned mask = 0;
     uint32_t k;
     if (full)
-        for (k = 0; k < LIGHTVEC__LEAF; k++) pass[k] = lightvec__block_pass(q, block, k, cos_dir);
+        for (k = 0; k < LIGHTVEC__LEAF; k++) mask |= (unsigned)lightvec__slot_pass(q, block, k, cos_dir, &s) << k;
     else
-        for (k = 0; k < count; k++) pass[k] = lightvec__block_pass(q, block, k, cos_dir);
-    for (k = 0; k < count; k++) {
-        const float *b = block + k;
-        float dx, dy, dz, d2, rk, cs, cn;
-        if (!pass[k]) continue;
-        dx = q->a[0] - b[LIGHTVEC__ROW_X * LIGHTVEC__LEAF];
-        dy = q->a[1] - b[LIGHTVEC__ROW_Y * LIGHTVEC__LEAF];
-        dz = q->a[2] - b[LIGHTVEC__ROW_Z * LIGHTVEC__LEAF];
-        d2 = dx * dx + dy * dy + dz * dz;
-        rk = lightvec__load_f32(b + LIGHTVEC__ROW_R * LIGHTVEC__LEAF);
-        if (!(d2 < rk * rk)) continue;
-        cs = q->w[0] * b[LIGHTVEC__ROW_SX * LIGHTVEC__LEAF] + q->w[1] * b[LIGHTVEC__ROW_SY * LIGHTVEC__LEAF] +
-             q->w[2] * b[LIGHTVEC__ROW_SZ * LIGHTVEC__LEAF];
-        if (!(cs > cos_dir)) continue;                               /* 4.2.2: cos(w, sigma) > S_dir */
-        cn = q->n[0] * b[LIGHTVEC__ROW_NX * LIGHTVEC__LEAF] + q->n[1] * b[LIGHTVEC__ROW_NY * LIGHTVEC__LEAF] +
-             q->n[2] * b[LIGHTVEC__ROW_NZ * LIGHTVEC__LEAF];
-        if (!(cn > q->p->cos_normal)) continue;                      /* curvature: S_curv */
-        lightvec__visit(q, block, k, &items[k], rk, dx, dy, dz, d2, cs, cn);
+        for (k = 0; k < count; k++) mask |= (unsigned)lightvec__slot_pass(q, block, k, cos_dir, &s) << k;
+    for (; mask; mask &= mask - 1) {
+        k = lightvec__bvh_first_bit(mask);
+        lightvec__visit(q, block, k, &items[k], &s, cos_dir);
     }
 }
 
