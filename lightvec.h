@@ -3754,9 +3754,9 @@ static void lightvec__tree_walk(const lightvec__tree *t, const float p[3], float
 
 /* A valid record kept for the interpolation. */
 typedef struct lightvec__candidate {
+    uint64_t rank;                   /* the bits of w (>= +0: they order as w does) above ~id */
     float w;                         /* the diffuse vector's weight, w_B w_sigma (the cache's S_dir) */
     float wg;                        /* the glossy part's, w_B w_sigma (the record's S_dir); 0 = not valid */
-    uint32_t id;
     const lightvec__item *it;
 } lightvec__candidate;
 
@@ -3792,9 +3792,11 @@ static float lightvec__glossy_angle(const lightvec__query *q, const float sigma[
     return sqrtf(vx * vx + vy * vy + vz * vz) + sqrtf(px * px + py * py + pz * pz) * inv_dg;
 }
 
+/* a ranks below b: a smaller weight, or the same and a larger id (one
+   integer compare). */
 static int lightvec__heap_less(const lightvec__candidate *a, const lightvec__candidate *b)
 {
-    return a->w < b->w || (a->w == b->w && a->id > b->id);
+    return a->rank < b->rank;
 }
 
 static void lightvec__heap_down(lightvec__candidate *h, uint32_t n, uint32_t i)
@@ -3821,9 +3823,11 @@ static void lightvec__keep(lightvec__query *q, const lightvec__item *it, uint32_
     q->count++;
     if (q->heap) {
         lightvec__candidate c;
+        uint32_t bits;
+        memcpy(&bits, &w, sizeof bits);
+        c.rank = (uint64_t)bits << 32 | (uint64_t)(0xFFFFFFFFu - id);
         c.w = w;
         c.wg = wg;
-        c.id = id;
         c.it = it;
         /* the interpolation reads the item: start loading it now (its
            third line only for a valid glossy part) */
