@@ -163,9 +163,10 @@
 
        begin_frame: first an eighth of the cache is re-sorted into the
        camera's image order (slot ranges of 16384 points grouped by the run
-       of pixels each point projects to), so that the cache stays nearly in
-       image order and the passes below read and write memory in runs
-       rather than at random (after WDG02's memory coherence); then every
+       of pixels each point projects to; 2 jobs with parallel_for), so that
+       the cache stays nearly in image order and the passes below read and
+       write memory in runs rather than at random (after WDG02's memory
+       coherence); then every
        point is projected into the camera and z-buffered,
        one point per pixel (WDP99 reprojection; with parallel_for, 8 jobs of
        points share the z-buffer through an atomic minimum of a key that
@@ -349,7 +350,8 @@
        Render cache: image up to 2^28 pixels, cache up to 2^31 points, up to
        2^24 objects, samples up to 64 frames late. Memory: 41 bytes per cache
        point (2 per pixel by default), 43 bytes per pixel (43.5 with
-       parallel_for), and about 48 (max_latency + 8) bytes per object: 125
+       parallel_for), about 48 (max_latency + 8) bytes per object, and 512
+       KB for the re-sort into image order (1 MB with parallel_for): 125
        bytes per pixel in all, 33 MB for 512x512 and 260 MB for 1920x1080.
        A compiler without the GNU atomic builtins projects the points in one
        job (the rest of the frame still runs in parallel). A frame reads and
@@ -1883,6 +1885,7 @@ static void rendercache__splat_run_cover(rendercache__splat *s,
 #define RENDERCACHE__SORT_RANGE 16384u       /* slots re-sorted together: a range (656 KB of points) and its
                                                 scratch stay in a core's L2 cache */
 #define RENDERCACHE__SORT_SHARE 8u           /* a frame re-sorts 1/8 of the cache, so all of it every 8 frames */
+#define RENDERCACHE__SORT_JOBS 2u           /* jobs (and scratches) of the re-sort with parallel_for */
 #define RENDERCACHE__SORT_KEYS 2048u         /* sort keys: blocks of pixels, and one for points outside the image */
 
 /* Priority image values (WDP99 priority image, extended to [0, 1]): a point
@@ -1950,7 +1953,7 @@ struct rendercache {
                                 stays in cache where data would not. After the slots, one byte per
                                 tile that the tile's pixels without a point write instead */
     uint32_t hand;           /* clock hand of the eviction */
-    uint32_t *sort_scratch;  /* rendercache__sort_range: 2 words and a point record per slot of a range */
+    uint32_t *sort_scratch;  /* rendercache__sort_range: 2 words and a point record per slot of a range, per job */
     uint32_t sort_next;      /* the range re-sorted next */
     uint32_t sort_shift;     /* sort keys: pixel >> sort_shift, below RENDERCACHE__SORT_KEYS - 1 */
     uint32_t live;
@@ -2062,10 +2065,25 @@ static void rendercache__reset_points(rendercache *rc)
     rc->sort_next = 0;
 }
 
-/* Slots in a range of the re-sort (the scratch holds one range). */
+/* Slots in a range of the re-sort (a job's scratch holds one range). */
 static uint32_t rendercache__sort_range_size(const rendercache *rc)
 {
     return rc->capacity < RENDERCACHE__SORT_RANGE ? rc->capacity : RENDERCACHE__SORT_RANGE;
+}
+
+/* Ranges re-sorted per frame: a SORT_SHARE of them, at least one. */
+static uint32_t rendercache__sort_todo(const rendercache *rc)
+{
+    const uint32_t range = rendercache__sort_range_size(rc), ranges = (rc->capacity + range - 1) / range;
+    return (ranges + RENDERCACHE__SORT_SHARE - 1) / RENDERCACHE__SORT_SHARE;
+}
+
+/* Jobs of the re-sort, each with its own scratch: SORT_JOBS with
+   parallel_for (or fewer, when fewer ranges are sorted per frame), else 1. */
+static uint32_t rendercache__sort_jobs(const rendercache *rc)
+{
+    uint32_t todo = rendercache__sort_todo(rc);
+    return rc->parallel_for ? (todo < RENDERCACHE__SORT_JOBS ? todo : RENDERCACHE__SORT_JOBS) : 1u;
 }
 
 static void rendercache__release(rendercache *rc)
@@ -2122,7 +2140,7 @@ static int rendercache__alloc_buffers(rendercache *rc)
     rc->chosen = (unsigned char *)rendercache__alloc_array(a, px, 1);
     rc->err_rows = (float *)rendercache__alloc_array(a, 2 * (size_t)rc->band_count * ((size_t)rc->width + 2), sizeof(float));
     rc->bands = (rendercache__band *)rendercache__alloc_array(a, rc->band_count, sizeof *rc->bands);
-    rc->sort_scratch = (uint32_t *)rendercache__alloc_array(a, rendercache__sort_range_size(rc),
+    rc->sort_scratch = (uint32_t *)rendercache__alloc_array(a, (size_t)rendercache__sort_range_size(rc) * rendercache__sort_jobs(rc),
                                                             2 * sizeof(uint32_t) + sizeof(rendercache__point));
     if (!rc->geo || !rc->data || !rc->shown || !rc->obj_predicted || !rc->obj_motion || !rc->obj_world ||
         !rc->obj_local || !rc->obj_next || !rc->obj_since || !rc->obj_history || !rc->history ||
@@ -2854,13 +2872,12 @@ static void rendercache__cull_and_interpolate(rendercache *rc)
 /* Re-sorts slots [r0, r0 + n) by the pixel block their points project to
    in the current view (rendercache__project_points: where the z-buffer
    will test them). */
-static void rendercache__sort_range(rendercache *rc, uint32_t r0, uint32_t n)
+static void rendercache__sort_range(rendercache *rc, uint32_t r0, uint32_t n, uint32_t *scratch)
 {
     const uint32_t range = rendercache__sort_range_size(rc), none_key = (rc->pixel_count >> rc->sort_shift) + 1u;
-    uint32_t count[RENDERCACHE__SORT_KEYS], *pix = rc->sort_scratch, *to = pix + range, b, i, k, sum;
+    uint32_t count[RENDERCACHE__SORT_KEYS], *pix = scratch, *to = pix + range, b, i, k, sum;
     rendercache__point *data = (rendercache__point *)(to + range);   /* the records in their new order */
     rendercache__geo *geo = (rendercache__geo *)(void *)data;
-    unsigned char *shown = (unsigned char *)data;
     float depth2[RENDERCACHE__BATCH];
     rendercache__projector pr;
     rendercache__projector_init(&pr, rc, &rc->view, rc->obj_camera, 0);
@@ -2885,23 +2902,33 @@ static void rendercache__sort_range(rendercache *rc, uint32_t r0, uint32_t n)
     memcpy(rc->data + r0, data, (size_t)n * sizeof *data);
     for (i = 0; i < n; i++) geo[to[i]] = rc->geo[r0 + i];
     memcpy(rc->geo + r0, geo, (size_t)n * sizeof *geo);
-    for (i = 0; i < n; i++) shown[to[i]] = rc->shown[r0 + i];
-    memcpy(rc->shown + r0, shown, n);
+    /* (the shown marks stay: before the cull every mark is an earlier frame's, which no test compares equal) */
 }
 
-/* This frame's share of the re-sort: the next ceil(ranges / SORT_SHARE)
-   ranges, round the cache. */
+/* Job j of the re-sort: its part of this frame's share of ranges (those
+   from rc->sort_next on), in its own scratch. */
+static void rendercache__sort_job(void *ctx, uint32_t j)
+{
+    rendercache *rc = (rendercache *)ctx;
+    const uint32_t range = rendercache__sort_range_size(rc), ranges = (rc->capacity + range - 1) / range;
+    const uint32_t todo = rendercache__sort_todo(rc), jobs = rendercache__sort_jobs(rc);
+    const size_t scratch_words = (size_t)range * (2 + sizeof(rendercache__point) / sizeof(uint32_t));
+    uint32_t k;
+    for (k = todo * j / jobs; k < todo * (j + 1) / jobs; k++) {
+        uint32_t r = (rc->sort_next + k) % ranges, r0 = r * range, n = rc->capacity - r0 < range ? rc->capacity - r0 : range;
+        rendercache__sort_range(rc, r0, n, rc->sort_scratch + scratch_words * j);
+    }
+}
+
+/* This frame's share of the re-sort: the next sort_todo ranges round the
+   cache, in sort_jobs jobs (ranges are disjoint: any schedule gives the
+   same cache). */
 static void rendercache__sort_share(rendercache *rc)
 {
-    const uint32_t range = rendercache__sort_range_size(rc);
-    const uint32_t ranges = (rc->capacity + range - 1) / range;
-    uint32_t k, todo = (ranges + RENDERCACHE__SORT_SHARE - 1) / RENDERCACHE__SORT_SHARE;
+    const uint32_t range = rendercache__sort_range_size(rc), ranges = (rc->capacity + range - 1) / range;
     double t0 = rendercache__now(rc);
-    for (k = 0; k < todo; k++) {
-        uint32_t r0 = rc->sort_next * range, n = rc->capacity - r0 < range ? rc->capacity - r0 : range;
-        rendercache__sort_range(rc, r0, n);
-        rc->sort_next = rc->sort_next + 1 == ranges ? 0 : rc->sort_next + 1;
-    }
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__sort_job, rc, rendercache__sort_jobs(rc));
+    rc->sort_next = (rc->sort_next + rendercache__sort_todo(rc)) % ranges;
     rc->stats.time_sort = rendercache__now(rc) - t0;
 }
 
