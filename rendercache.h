@@ -352,7 +352,8 @@
        point (2 per pixel by default), 43 bytes per pixel (43.5 with
        parallel_for), about 48 (max_latency + 8) bytes per object, and 512
        KB for the re-sort into image order (1 MB with parallel_for): 125
-       bytes per pixel in all, 33 MB for 512x512 and 260 MB for 1920x1080.
+       bytes per pixel in all and the re-sort's scratch, 34 MB for 512x512
+       (129 bytes per pixel) and 260 MB for 1920x1080.
        A compiler without the GNU atomic builtins projects the points in one
        job (the rest of the frame still runs in parallel). A frame reads and
        writes at random over these tens of megabytes: an allocator (desc.
