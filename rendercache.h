@@ -1956,6 +1956,7 @@ struct rendercache {
     uint32_t hand;           /* clock hand of the eviction */
     uint32_t *sort_scratch;  /* rendercache__sort_range: 2 words and a point record per slot of a range, per job */
     uint32_t sort_next;      /* the range re-sorted next */
+    uint32_t sort_taken;     /* ranges of this frame's share taken by the re-sort's jobs (atomic) */
     uint32_t sort_shift;     /* sort keys: pixel >> sort_shift, below RENDERCACHE__SORT_KEYS - 1 */
     uint32_t live;
     int hand_exhausted;      /* a full turn found no invisible slot in this frame */
@@ -2906,18 +2907,29 @@ static void rendercache__sort_range(rendercache *rc, uint32_t r0, uint32_t n, ui
     /* (the shown marks stay: before the cull every mark is an earlier frame's, which no test compares equal) */
 }
 
-/* Job j of the re-sort: its part of this frame's share of ranges (those
-   from rc->sort_next on), in its own scratch. */
+/* Job j of the re-sort: ranges of this frame's share (the k-th from
+   rc->sort_next on), in its own scratch. With atomics each job takes the
+   next range left until none is, so that a job the system holds back
+   holds back one range, not half of them; else job j takes its half. */
 static void rendercache__sort_job(void *ctx, uint32_t j)
 {
     rendercache *rc = (rendercache *)ctx;
     const uint32_t range = rendercache__sort_range_size(rc), ranges = (rc->capacity + range - 1) / range;
     const uint32_t todo = rendercache__sort_todo(rc), jobs = rendercache__sort_jobs(rc);
     const size_t scratch_words = (size_t)range * (2 + sizeof(rendercache__point) / sizeof(uint32_t));
-    uint32_t k;
-    for (k = todo * j / jobs; k < todo * (j + 1) / jobs; k++) {
+    uint32_t k = todo * j / jobs, end = todo * (j + 1) / jobs;
+#if RENDERCACHE__ATOMICS
+    k = __atomic_fetch_add(&rc->sort_taken, 1u, __ATOMIC_RELAXED);
+    end = todo;
+#endif
+    while (k < end) {
         uint32_t r = (rc->sort_next + k) % ranges, r0 = r * range, n = rc->capacity - r0 < range ? rc->capacity - r0 : range;
         rendercache__sort_range(rc, r0, n, rc->sort_scratch + scratch_words * j);
+#if RENDERCACHE__ATOMICS
+        k = __atomic_fetch_add(&rc->sort_taken, 1u, __ATOMIC_RELAXED);
+#else
+        k++;
+#endif
     }
 }
 
@@ -2928,6 +2940,7 @@ static void rendercache__sort_share(rendercache *rc)
 {
     const uint32_t range = rendercache__sort_range_size(rc), ranges = (rc->capacity + range - 1) / range;
     double t0 = rendercache__now(rc);
+    rc->sort_taken = 0;
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__sort_job, rc, rendercache__sort_jobs(rc));
     rc->sort_next = (rc->sort_next + rendercache__sort_todo(rc)) % ranges;
     rc->stats.time_sort = rendercache__now(rc) - t0;
