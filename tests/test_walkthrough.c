@@ -38,25 +38,14 @@
    disk cache. */
 static wt_options small_options(wt_mode mode)
 {
-    wt_options o;
-    wt_options_default(&o);
-    o.mode = mode;
-    o.scene = "office";
-    o.width = REF_W;
-    o.height = REF_H;
-    o.frames = 24;
-    o.threads = 2;
+    wt_options o = quiet_options(mode, "office", REF_W, REF_H, 24);
     o.strata = 6;
     o.bunny_strata = 4;
-    o.light_samples = 4;      /* shadow rays per point, over all the lights */
     o.warmup_divisor = 4;
     o.base_size = 64;
     o.id_size = 24;
     o.keys = 3;
     o.quality = 0.6f;
-    o.use_cache = 0;
-    o.progress = 0;
-    o.verbose = 0;
     return o;
 }
 

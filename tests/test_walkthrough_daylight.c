@@ -16,19 +16,7 @@
 
 static wt_options day_options(wt_mode mode, const char *scene)
 {
-    wt_options o;
-    wt_options_default(&o);
-    o.mode = mode;
-    o.scene = scene;
-    o.width = DAY_W;
-    o.height = DAY_H;
-    o.frames = 12;
-    o.threads = 2;
-    o.light_samples = 4;
-    o.use_cache = 0;
-    o.progress = 0;
-    o.verbose = 0;
-    return o;
+    return quiet_options(mode, scene, DAY_W, DAY_H, 12);
 }
 
 /* ---- the sky line ------------------------------------------------------------ */

@@ -1,12 +1,32 @@
 /* What the walkthrough's test files share (tests/test_walkthrough*.c,
    tests/test_viewer.c): luminance, the stored reference frames' paths, the
-   moment the bunny is deepest under the desk, the bunny's luminance in a
+   moment the bunny is deepest under the desk, the tests' common settings, the bunny's luminance in a
    full render, temporary cache directories and small files. Include after examples/common/walkthrough.h. */
 #ifndef TESTS_WALKTHROUGH_TEST_H
 #define TESTS_WALKTHROUGH_TEST_H
 
 #include <stdio.h>
 #include <stdlib.h>
+
+/* The settings every walkthrough test starts from: the scene, mode and frame
+   size it names, 2 threads (the frames are the same on any count), 4 shadow
+   rays per point over all the lights, and no disk cache, progress or log. */
+TEST__FN wt_options quiet_options(wt_mode mode, const char *scene, int width, int height, int frames)
+{
+    wt_options o;
+    wt_options_default(&o);
+    o.mode = mode;
+    o.scene = scene;
+    o.width = width;
+    o.height = height;
+    o.frames = frames;
+    o.threads = 2;
+    o.light_samples = 4;
+    o.use_cache = 0;
+    o.progress = 0;
+    o.verbose = 0;
+    return o;
+}
 
 /* Rec. 709 luminance of a linear RGB triple. */
 TEST__FN float luminance(const float *c) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
