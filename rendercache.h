@@ -2074,7 +2074,7 @@ static uint32_t rendercache__sort_range_size(const rendercache *rc)
 }
 
 /* Ranges re-sorted per frame: a SORT_SHARE of them, at least one. */
-static uint32_t rendercache__sort_todo(const rendercache *rc)
+static uint32_t rendercache__sort_range_count(const rendercache *rc)
 {
     const uint32_t range = rendercache__sort_range_size(rc), ranges = (rc->capacity + range - 1) / range;
     return (ranges + RENDERCACHE__SORT_SHARE - 1) / RENDERCACHE__SORT_SHARE;
@@ -2084,8 +2084,8 @@ static uint32_t rendercache__sort_todo(const rendercache *rc)
    parallel_for (or fewer, when fewer ranges are sorted per frame), else 1. */
 static uint32_t rendercache__sort_jobs(const rendercache *rc)
 {
-    uint32_t todo = rendercache__sort_todo(rc);
-    return rc->parallel_for ? (todo < RENDERCACHE__SORT_JOBS ? todo : RENDERCACHE__SORT_JOBS) : 1u;
+    uint32_t count = rendercache__sort_range_count(rc);
+    return rc->parallel_for ? (count < RENDERCACHE__SORT_JOBS ? count : RENDERCACHE__SORT_JOBS) : 1u;
 }
 
 static void rendercache__release(rendercache *rc)
@@ -2915,12 +2915,12 @@ static void rendercache__sort_job(void *ctx, uint32_t j)
 {
     rendercache *rc = (rendercache *)ctx;
     const uint32_t range = rendercache__sort_range_size(rc), ranges = (rc->capacity + range - 1) / range;
-    const uint32_t todo = rendercache__sort_todo(rc), jobs = rendercache__sort_jobs(rc);
+    const uint32_t count = rendercache__sort_range_count(rc), jobs = rendercache__sort_jobs(rc);
     const size_t scratch_words = (size_t)range * (2 + sizeof(rendercache__point) / sizeof(uint32_t));
-    uint32_t k = todo * j / jobs, end = todo * (j + 1) / jobs;
+    uint32_t k = count * j / jobs, end = count * (j + 1) / jobs;
 #if RENDERCACHE__ATOMICS
     k = __atomic_fetch_add(&rc->sort_taken, 1u, __ATOMIC_RELAXED);
-    end = todo;
+    end = count;
 #endif
     while (k < end) {
         uint32_t r = (rc->sort_next + k) % ranges, r0 = r * range, n = rc->capacity - r0 < range ? rc->capacity - r0 : range;
@@ -2933,7 +2933,7 @@ static void rendercache__sort_job(void *ctx, uint32_t j)
     }
 }
 
-/* This frame's share of the re-sort: the next sort_todo ranges round the
+/* This frame's share of the re-sort: the next sort_range_count ranges round the
    cache, in sort_jobs jobs (ranges are disjoint: any schedule gives the
    same cache). */
 static void rendercache__sort_share(rendercache *rc)
@@ -2942,7 +2942,7 @@ static void rendercache__sort_share(rendercache *rc)
     double t0 = rendercache__now(rc);
     rc->sort_taken = 0;
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__sort_job, rc, rendercache__sort_jobs(rc));
-    rc->sort_next = (rc->sort_next + rendercache__sort_todo(rc)) % ranges;
+    rc->sort_next = (rc->sort_next + rendercache__sort_range_count(rc)) % ranges;
     rc->stats.time_sort = rendercache__now(rc) - t0;
 }
 
