@@ -4602,11 +4602,11 @@ IRRVOL__HOT void irrvol__expand_hanging(const irrvol *v, irrvol__prepared *q)
     for (i = 0; i < 8; i++) {
         if (ids[i] >= v->hanging_begin) {
             size_t h = 4 * (size_t)(ids[i] - v->hanging_begin);
-            for (j = 0; j < 4; j++)
-                if (v->parent_weights[h + j] > 0.0f) {
-                    q->id[m] = v->parents[h + j];
-                    q->w[m++] = w[i] * v->parent_weights[h + j];
-                }
+            for (j = 0; j < 4; j++) {   /* without a branch: an unused parent (weight 0) is overwritten next */
+                q->id[m] = v->parents[h + j];
+                q->w[m] = w[i] * v->parent_weights[h + j];
+                m += v->parent_weights[h + j] > 0.0f;
+            }
         } else {
             q->id[m] = ids[i];
             q->w[m++] = w[i];
