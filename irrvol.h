@@ -445,7 +445,7 @@
    desc.radiance the callback answers for glass and sky itself.
    Harmonics of order 2 cannot hold sharp lobes: high moments and small
    bright lights lose detail in them (the bins keep it). The compact store
-   keeps each bin to 2^-9 of its largest channel (PRECISION above): weak
+   keeps each bin to 2^-9 of its largest channel (Precision in DETAILS): weak
    channels of strongly coloured light lose relative precision, negative
    irradiance is stored as 0; desc.full_precision avoids both.
 
@@ -609,7 +609,7 @@ typedef struct irrvol_desc {
     uint32_t important_rays;         /* points on IMPORTANT triangles per sample, extra rays per bin; 0 = 64 */
     int keep_radiance;               /* non-zero: keep the gathered radiance (irrvol_sample_values) */
     int full_precision;              /* non-zero: irradiance bins as 3 floats (12 bytes); 0 = the compact
-                                        store, shared-exponent RGB9E5 (4 bytes, see PRECISION) */
+                                        store, shared-exponent RGB9E5 (4 bytes, DETAILS: Precision) */
 
     uint64_t seed;                   /* jitter streams */
     irrvol_allocator allocator;
