@@ -148,8 +148,11 @@
    patch outline runs through those on its edges where another patch's edge
    runs along it; case B cannot occur. A triangulation that fails its checks
    (outline, area) is redone without the patch's discontinuities (counted in
-   info.fallback_patches). Interpolants (3.3): IrradianceAtPoint at each
-   triangle's corners and edge midpoints, each approached from the
+   info.fallback_patches); a patch that fails them even so (one thinner than
+   weld_distance) is left out of the mesh (info.skipped_patches). The
+   restriction ignores quarter points that round onto a leaf's own corners
+   (an edge a few float steps long). Interpolants (3.3): IrradianceAtPoint
+   at each triangle's corners and edge midpoints, each approached from the
    triangle's centre, and the closed form of eq. 3.3 for (A, 2B, 2C, D, 2E,
    F) per channel. With refine, representation-based refinement (4.4.2):
    SAMPLES x SAMPLES more points per triangle measure the interpolant's
@@ -213,10 +216,11 @@
                           iteration.                                default 1e-3
        max_iterations     gather/push-pull iterations at most.       default 64
        ff_samples         receiver points per link form factor (a square
-                          number gives a jittered grid).              default 9
+                          number gives a jittered grid).  default 9, at most
+                          RADINTERP_MAX_FF_SAMPLES (1024)
        visibility_rays    shadow rays per receiver point when shaft culling
                           left blockers (weighted like the form factor).
-                                                                      default 8
+                          default 8, at most RADINTERP_MAX_VISIBILITY_RAYS (256)
        push_off           Polygon::ffPushOff: sources are moved this far behind
                           their plane in point queries (6.4). default 1e-5 * diag
        nudge              nudgeAmt: a query point moves this far toward
@@ -388,7 +392,7 @@
 #define RADINTERP_VERSION_MAJOR 0
 #define RADINTERP_VERSION_MINOR 3
 #define RADINTERP_VERSION_PATCH 1
-#define RADINTERP_FILE_FORMAT_VERSION 1   /* of saved meshes */
+#define RADINTERP_FILE_FORMAT_VERSION 2   /* of saved meshes */
 
 #include <stddef.h>
 #include <stdint.h>
@@ -415,6 +419,12 @@ typedef enum radinterp_result {
     RADINTERP_ERROR_CANCELLED,         /* the progress callback asked to stop */
     RADINTERP_ERROR_IO                 /* a read or write callback failed */
 } radinterp_result;
+
+/* Limits of radinterp_desc.ff_samples and visibility_rays: a link costs
+   ff_samples x visibility_rays shadow rays, so larger values would run for
+   hours; they give RADINTERP_ERROR_INVALID_ARGUMENT. */
+#define RADINTERP_MAX_FF_SAMPLES 1024u
+#define RADINTERP_MAX_VISIBILITY_RAYS 256u
 
 /* The 4th index of a triangular patch. */
 #define RADINTERP_NO_VERTEX 0xFFFFFFFFu
@@ -602,6 +612,8 @@ typedef struct radinterp_mesh_info {
     uint32_t hanging_vertices;        /* T-vertices inside patches closed (case A) */
     uint32_t seam_vertices;           /* outline vertices taken from neighbouring patches (case C) */
     uint32_t fallback_patches;        /* patches triangulated without their discontinuities */
+    uint32_t skipped_patches;         /* patches left out of the mesh: no triangulation of them passed its
+                                         checks (thinner than weld_distance) */
     uint32_t refine_passes;           /* representation-based passes run */
     uint32_t refined_leaves;          /* leaves they split */
     float max_fit_error;              /* largest representation error measured (refine only) */
@@ -2832,6 +2844,22 @@ static int radinterp__simplify_corners(double (*v)[3], int count, double scale)
     return count;
 }
 
+/* Area of the largest triangle of three consecutive corners: a quadrilateral
+   whose own (signed) area vanishes while this does not crosses itself. */
+static double radinterp__largest_corner(const double (*v)[3], int count)
+{
+    double best = 0.0;
+    int i;
+    for (i = 0; i < count; i++) {
+        double e1[3], e2[3], c[3];
+        radinterp__d3_sub(v[i], v[(i + count - 1) % count], e1);
+        radinterp__d3_sub(v[(i + 1) % count], v[i], e2);
+        radinterp__d3_cross(e1, e2, c);
+        if (0.5 * radinterp__d3_len(c) > best) best = 0.5 * radinterp__d3_len(c);
+    }
+    return best;
+}
+
 typedef enum radinterp__patch_check {
     RADINTERP__PATCH_OK,
     RADINTERP__PATCH_DEGENERATE,
@@ -2857,7 +2885,10 @@ static radinterp__patch_check radinterp__patch_setup(radinterp__patch *pt, doubl
     if (count < 3) return RADINTERP__PATCH_DEGENERATE;
     radinterp__newell((const double (*)[3])v, count, n);
     len = radinterp__d3_len(n);
-    if (!(len > 0.0) || 0.5 * len <= 1e-14 * scene_diag * scene_diag) return RADINTERP__PATCH_DEGENERATE;
+    if (!(len > 0.0) || 0.5 * len <= 1e-14 * scene_diag * scene_diag)
+        return radinterp__largest_corner((const double (*)[3])v, count) > 1e-14 * scene_diag * scene_diag
+                   ? RADINTERP__PATCH_NONCONVEX   /* a bow tie whose two lobes cancel */
+                   : RADINTERP__PATCH_DEGENERATE;
     n[0] /= len; n[1] /= len; n[2] /= len;
     for (i = 0; i < count; i++) { c[0] += v[i][0] / count; c[1] += v[i][1] / count; c[2] += v[i][2] / count; }
     for (i = 0; i < count; i++) {
@@ -2978,14 +3009,32 @@ static void radinterp__mid(const float *a, const float *b, float *m)
     m[2] = 0.5f * (a[2] + b[2]);
 }
 
-static void radinterp__set_corners(radinterp__node *nd, const float *a, const float *b, const float *c,
-                                   const float *d)
+/* Corners of the four children of a node with corners v (3 or 4), in the
+   order of section 11. The mesh's quadtrees split with this too, so a
+   corner shared by two nodes is one float triple in both trees. */
+static void radinterp__child_corners(const float (*v)[3], uint32_t count, float (*ch)[4][3])
 {
-    memcpy(nd->v[0], a, 3 * sizeof(float));
-    memcpy(nd->v[1], b, 3 * sizeof(float));
-    memcpy(nd->v[2], c, 3 * sizeof(float));
-    if (d) memcpy(nd->v[3], d, 3 * sizeof(float));
-    nd->count = d ? 4u : 3u;
+    float m[4][3], c[3];
+    uint32_t k;
+    if (count == 4) {
+        const float *q[4][4];
+        uint32_t i;
+        for (k = 0; k < 4; k++) radinterp__mid(v[k], v[(k + 1) % 4], m[k]);
+        for (k = 0; k < 3; k++) c[k] = 0.25f * (v[0][k] + v[1][k] + v[2][k] + v[3][k]);
+        q[0][0] = v[0]; q[0][1] = m[0]; q[0][2] = c;    q[0][3] = m[3];
+        q[1][0] = m[0]; q[1][1] = v[1]; q[1][2] = m[1]; q[1][3] = c;
+        q[2][0] = c;    q[2][1] = m[1]; q[2][2] = v[2]; q[2][3] = m[2];
+        q[3][0] = m[3]; q[3][1] = c;    q[3][2] = m[2]; q[3][3] = v[3];
+        for (k = 0; k < 4; k++)
+            for (i = 0; i < 4; i++) memcpy(ch[k][i], q[k][i], 3 * sizeof(float));
+    } else {
+        memset(ch, 0, 4 * sizeof ch[0]);   /* the unused 4th corners stay zero */
+        for (k = 0; k < 3; k++) radinterp__mid(v[k], v[(k + 1) % 3], m[k]);
+        memcpy(ch[0][0], v[0], 12); memcpy(ch[0][1], m[0], 12); memcpy(ch[0][2], m[2], 12);
+        memcpy(ch[1][0], m[0], 12); memcpy(ch[1][1], v[1], 12); memcpy(ch[1][2], m[1], 12);
+        memcpy(ch[2][0], m[2], 12); memcpy(ch[2][1], m[1], 12); memcpy(ch[2][2], v[2], 12);
+        memcpy(ch[3][0], m[1], 12); memcpy(ch[3][1], m[2], 12); memcpy(ch[3][2], m[0], 12);
+    }
 }
 
 /* Splits a leaf into four children (4.1) that start with its radiosity.
@@ -2993,7 +3042,7 @@ static void radinterp__set_corners(radinterp__node *nd, const float *a, const fl
 static int radinterp__node_split(radinterp_solution *s, uint32_t index)
 {
     radinterp__node *nd, *ch;
-    float m[4][3], c[3];
+    float corners[4][4][3];
     uint32_t first, k;
     if (s->nodes[index].child != RADINTERP__NONE) return 0;
     if (!radinterp__nodes_reserve(s, 4)) return -1;
@@ -3001,26 +3050,10 @@ static int radinterp__node_split(radinterp_solution *s, uint32_t index)
     first = s->node_count;
     ch = &s->nodes[first];
     memset(ch, 0, 4 * sizeof *ch);
-    if (nd->count == 4) {
-        radinterp__mid(nd->v[0], nd->v[1], m[0]);
-        radinterp__mid(nd->v[1], nd->v[2], m[1]);
-        radinterp__mid(nd->v[2], nd->v[3], m[2]);
-        radinterp__mid(nd->v[3], nd->v[0], m[3]);
-        for (k = 0; k < 3; k++) c[k] = 0.25f * (nd->v[0][k] + nd->v[1][k] + nd->v[2][k] + nd->v[3][k]);
-        radinterp__set_corners(&ch[0], nd->v[0], m[0], c, m[3]);
-        radinterp__set_corners(&ch[1], m[0], nd->v[1], m[1], c);
-        radinterp__set_corners(&ch[2], c, m[1], nd->v[2], m[2]);
-        radinterp__set_corners(&ch[3], m[3], c, m[2], nd->v[3]);
-    } else {
-        radinterp__mid(nd->v[0], nd->v[1], m[0]);
-        radinterp__mid(nd->v[1], nd->v[2], m[1]);
-        radinterp__mid(nd->v[2], nd->v[0], m[2]);
-        radinterp__set_corners(&ch[0], nd->v[0], m[0], m[2], NULL);
-        radinterp__set_corners(&ch[1], m[0], nd->v[1], m[1], NULL);
-        radinterp__set_corners(&ch[2], m[2], m[1], nd->v[2], NULL);
-        radinterp__set_corners(&ch[3], m[1], m[2], m[0], NULL);
-    }
+    radinterp__child_corners((const float (*)[3])nd->v, nd->count, corners);
     for (k = 0; k < 4; k++) {
+        memcpy(ch[k].v, corners[k], sizeof ch[k].v);
+        ch[k].count = nd->count;
         ch[k].patch = nd->patch;
         ch[k].parent = index;
         ch[k].child = RADINTERP__NONE;
@@ -5223,16 +5256,6 @@ static double radinterp__node_point_ff(radinterp__query *q, const radinterp__lin
     return radinterp__backproject(q, lk, Sc, nc, ps->n, ps->d - s->push_off, s->push_off, full);
 }
 
-/* Point-to-source factor of one link at the query point. */
-RADINTERP__MAYBE_UNUSED static double radinterp__link_point_ff(radinterp__query *q, const radinterp__link *lk)
-{
-    double Sc[RADINTERP__POLY_MAX][3], full;
-    int nc = radinterp__query_source(q, lk->source, Sc, &full);
-    q->blk = q->s->blockers + lk->first_blocker;
-    q->nblk = lk->blocker_count;
-    return radinterp__node_point_ff(q, lk, lk->source, (const double (*)[3])Sc, nc, full);
-}
-
 /* Are the children of a node to be taken in its place (see below)? */
 static int radinterp__take_children(const radinterp__query *q, uint32_t node, int depth_left, double full)
 {
@@ -5364,6 +5387,11 @@ static radinterp_result radinterp__check_desc(const radinterp_desc *d)
         radinterp__bad_param(d->push_off) || radinterp__bad_param(d->nudge) || radinterp__bad_param(d->min_bp_segment) ||
         radinterp__bad_param(d->epsilon) || radinterp__bad_param(d->planarity_tolerance)) {
         radinterp__log(d, "radinterp_solve: a parameter is negative, NaN or infinite");
+        return RADINTERP_ERROR_INVALID_ARGUMENT;
+    }
+    if (d->ff_samples > RADINTERP_MAX_FF_SAMPLES || d->visibility_rays > RADINTERP_MAX_VISIBILITY_RAYS) {
+        radinterp__log(d, "radinterp_solve: ff_samples %u or visibility_rays %u above its limit (%u, %u)",
+                       d->ff_samples, d->visibility_rays, RADINTERP_MAX_FF_SAMPLES, RADINTERP_MAX_VISIBILITY_RAYS);
         return RADINTERP_ERROR_INVALID_ARGUMENT;
     }
     if ((unsigned)d->visibility > (unsigned)RADINTERP_VISIBILITY_TRIANGULATION) {
@@ -6140,49 +6168,28 @@ static void radinterp__point_key(const float *p, uint32_t tag, uint32_t *key)
     key[3] = tag;
 }
 
-/* 2D frame of a patch: origin at its first corner, e1 along its first
-   edge, e2 = n x e1, so counter-clockwise in 2D is counter-clockwise seen
-   from the front. */
-typedef struct radinterp__pframe { double o[3], e1[3], e2[3]; } radinterp__pframe;
-
-static void radinterp__pframe_make(radinterp__pframe *f, const radinterp__patch *pt)
+/* The frame of a patch (section 13's frame): origin at its first corner, e1
+   along its first edge, e2 = n x e1, so counter-clockwise in 2D is
+   counter-clockwise seen from the front. */
+static void radinterp__patch_frame(radinterp__frame *f, const radinterp__patch *pt)
 {
-    double d[3], len, k;
-    radinterp__d3_from_f(pt->v[0], f->o);
-    radinterp__d3_from_f(pt->v[1], d);
-    radinterp__d3_sub(d, f->o, d);
-    k = radinterp__d3_dot(d, pt->n);
-    d[0] -= k * pt->n[0]; d[1] -= k * pt->n[1]; d[2] -= k * pt->n[2];
-    len = radinterp__d3_len(d);
-    f->e1[0] = d[0] / len; f->e1[1] = d[1] / len; f->e1[2] = d[2] / len;
-    radinterp__d3_cross(pt->n, f->e1, f->e2);
+    double v[2][3];
+    radinterp__d3_from_f(pt->v[0], v[0]);
+    radinterp__d3_from_f(pt->v[1], v[1]);
+    radinterp__frame_make(f, (const double (*)[3])v, pt->n);
 }
 
-static void radinterp__pframe_2d(const radinterp__pframe *f, const double *x, double *uv)
-{
-    double d[3];
-    radinterp__d3_sub(x, f->o, d);
-    uv[0] = radinterp__d3_dot(d, f->e1);
-    uv[1] = radinterp__d3_dot(d, f->e2);
-}
-
-static void radinterp__pframe_2df(const radinterp__pframe *f, const float *x, double *uv)
+static void radinterp__frame_to2df(const radinterp__frame *f, const float *x, double *uv)
 {
     double d[3];
     radinterp__d3_from_f(x, d);
-    radinterp__pframe_2d(f, d, uv);
+    radinterp__frame_to2d(f, d, uv);
 }
 
-static void radinterp__pframe_3d(const radinterp__pframe *f, const double *uv, double *x)
-{
-    int k;
-    for (k = 0; k < 3; k++) x[k] = f->o[k] + uv[0] * f->e1[k] + uv[1] * f->e2[k];
-}
-
-static void radinterp__pframe_3df(const radinterp__pframe *f, const double *uv, float *x)
+static void radinterp__frame_to3df(const radinterp__frame *f, const double *uv, float *x)
 {
     double d[3];
-    radinterp__pframe_3d(f, uv, d);
+    radinterp__frame_to3d(f, uv, d);
     x[0] = (float)d[0]; x[1] = (float)d[1]; x[2] = (float)d[2];
 }
 
@@ -6212,7 +6219,7 @@ static int radinterp__clip_segment2(const double (*poly)[2], int n, double inset
 }
 
 /* Distance from p to the segment (a, b), in 2D. */
-static double radinterp__seg_dist2(const double *a, const double *b, const double *p)
+static double radinterp__seg_dist(const double *a, const double *b, const double *p)
 {
     double dx = b[0] - a[0], dy = b[1] - a[1], l2 = dx * dx + dy * dy, t = 0.0, x, y;
     if (l2 > 0.0) t = ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / l2;
@@ -6298,7 +6305,7 @@ typedef struct radinterp__builder {
     uint32_t max_dsets;
     double refine_eps, refine_min_area, min_leaf_area;
     uint32_t refine_samples, refine_passes;
-    radinterp__pframe *frames;       /* per patch */
+    radinterp__frame *frames;       /* per patch */
     double *outline;                 /* per patch: corners in its frame, 8 doubles */
     /* discontinuities, grouped by receiver and by DSet inside */
     radinterp__buf discs, dsets;
@@ -6320,7 +6327,7 @@ typedef struct radinterp__builder {
     radinterp__buf pos, tris;        /* output of the pass */
     radinterp__hmap vmap;            /* point -> output vertex */
     /* statistics */
-    uint32_t balance_splits, hanging, seam, fallback, degenerate;
+    uint32_t balance_splits, hanging, seam, fallback, degenerate, skipped;
     uint64_t samples;
     int cancelled;
 } radinterp__builder;
@@ -6414,7 +6421,7 @@ static uint32_t radinterp__on_outline(const radinterp__builder *b, uint32_t R, c
     const double (*o)[2] = radinterp__outline_of(b, R);
     uint32_t i, n = b->s->patches[R].count;
     for (i = 0; i < n; i++)
-        if (radinterp__seg_dist2(o[i], o[(i + 1) % n], uv) <= b->tol) return i + 1;
+        if (radinterp__seg_dist(o[i], o[(i + 1) % n], uv) <= b->tol) return i + 1;
     return 0;
 }
 
@@ -6581,15 +6588,15 @@ typedef struct radinterp__wedge_ctx {
 static int radinterp__wedge_disc(radinterp__builder *b, const radinterp__wedge_ctx *w, int ev, const double *f,
                                  const double *l0, const double *l1, const double *p3, const double *q3)
 {
-    const radinterp__pframe *fr = &b->frames[w->R];
+    const radinterp__frame *fr = &b->frames[w->R];
     double p[2], q[2], cp[2], cq[2], r[3], geom, g2;
     uint32_t on_p, on_q;
-    radinterp__pframe_2d(fr, p3, p);
-    radinterp__pframe_2d(fr, q3, q);
+    radinterp__frame_to2d(fr, p3, p);
+    radinterp__frame_to2d(fr, q3, q);
     if (!radinterp__clip_to_region(b, w->R, w->region, w->label, w->region_n, p, q, cp, cq, &on_p, &on_q)) return 0;
-    radinterp__pframe_3d(fr, cp, r);
+    radinterp__frame_to3d(fr, cp, r);
     geom = radinterp__wedge_ratio(ev, f, l0, l1, r);
-    radinterp__pframe_3d(fr, cq, r);
+    radinterp__frame_to3d(fr, cq, r);
     g2 = radinterp__wedge_ratio(ev, f, l0, l1, r);
     if (g2 > geom) geom = g2;
     return radinterp__push_disc(b, w->R, cp, cq, on_p, on_q,
@@ -6656,7 +6663,7 @@ static int radinterp__horizon(radinterp__builder *b, uint32_t R, uint32_t S)
         on[m++] = (uint32_t)i + 1;
     }
     if (m < 2) return 0;
-    if (radinterp__seg_dist2(pts[0], pts[0], pts[1]) <= b->tol) return 0;
+    if (radinterp__seg_dist(pts[0], pts[0], pts[1]) <= b->tol) return 0;
     return radinterp__push_disc(b, R, pts[0], pts[1], on[0], on[1], RADINTERP_DISCONTINUITY_HORIZON, S,
                                 RADINTERP_NO_PATCH, 1.0);
 }
@@ -6691,8 +6698,8 @@ static int radinterp__contacts(radinterp__builder *b, uint32_t R)
             double p[2], q[2], cp[2], cq[2];
             uint32_t on_p, on_q;
             if (fabs(h[i]) > b->tol || fabs(h[j]) > b->tol) continue;
-            radinterp__pframe_2d(&b->frames[R], V[i], p);
-            radinterp__pframe_2d(&b->frames[R], V[j], q);
+            radinterp__frame_to2d(&b->frames[R], V[i], p);
+            radinterp__frame_to2d(&b->frames[R], V[j], q);
             if (!radinterp__clip_to_region(b, R, uv, labels, (int)pr->count, p, q, cp, cq, &on_p, &on_q)) continue;
             if (radinterp__push_disc(b, R, cp, cq, on_p, on_q, RADINTERP_DISCONTINUITY_CONTACT, RADINTERP_NO_PATCH, B,
                                      FLT_MAX) != 0)
@@ -6834,10 +6841,11 @@ static void radinterp__disc_on_line(radinterp__disc *x, const double *o, const d
    and tol of each other) and orders them by DSet, then along it. */
 static int radinterp__group_dsets(radinterp__builder *b, uint32_t R)
 {
-    radinterp__disc *dd = (radinterp__disc *)b->discs.data + b->disc_first[R];
+    radinterp__disc *dd;
     uint32_t n = b->disc_count[R], i, j, k;
     radinterp__dkey *key;
-    if (n == 0) return 0;
+    if (n == 0) return 0;   /* discs.data may be NULL: no pointer arithmetic on it */
+    dd = (radinterp__disc *)b->discs.data + b->disc_first[R];
     key = (radinterp__dkey *)radinterp__alloc_array(&b->a, n, sizeof *key);
     if (!key) return -1;
     for (i = 0; i < n; i++) {
@@ -6978,40 +6986,21 @@ static int radinterp__inherit_discs(radinterp__builder *b, uint32_t parent, uint
 static void radinterp__mnode_frame(const radinterp__builder *b, radinterp__mnode *nd)
 {
     uint32_t i;
-    for (i = 0; i < nd->count; i++) radinterp__pframe_2df(&b->frames[nd->patch], nd->v[i], nd->uv[i]);
+    for (i = 0; i < nd->count; i++) radinterp__frame_to2df(&b->frames[nd->patch], nd->v[i], nd->uv[i]);
 }
 
-/* Splits leaf `index` into four children exactly as radinterp__node_split
-   does (same corners, same order). */
+/* Splits leaf `index` into four children with the corners
+   radinterp__node_split gives (radinterp__child_corners). */
 static int radinterp__mnode_split(radinterp__builder *b, uint32_t index)
 {
-    radinterp__mnode nd = RADINTERP__MNODES(b)[index], ch[4];
-    float m[4][3], c[3];
+    radinterp__mnode nd = RADINTERP__MNODES(b)[index];
+    float corners[4][4][3];
     uint32_t first = (uint32_t)b->nodes.count, k, i;
-    memset(ch, 0, sizeof ch);
-    if (nd.count == 4) {
-        radinterp__mid(nd.v[0], nd.v[1], m[0]);
-        radinterp__mid(nd.v[1], nd.v[2], m[1]);
-        radinterp__mid(nd.v[2], nd.v[3], m[2]);
-        radinterp__mid(nd.v[3], nd.v[0], m[3]);
-        for (k = 0; k < 3; k++) c[k] = 0.25f * (nd.v[0][k] + nd.v[1][k] + nd.v[2][k] + nd.v[3][k]);
-        memcpy(ch[0].v[0], nd.v[0], 12); memcpy(ch[0].v[1], m[0], 12); memcpy(ch[0].v[2], c, 12); memcpy(ch[0].v[3], m[3], 12);
-        memcpy(ch[1].v[0], m[0], 12); memcpy(ch[1].v[1], nd.v[1], 12); memcpy(ch[1].v[2], m[1], 12); memcpy(ch[1].v[3], c, 12);
-        memcpy(ch[2].v[0], c, 12); memcpy(ch[2].v[1], m[1], 12); memcpy(ch[2].v[2], nd.v[2], 12); memcpy(ch[2].v[3], m[2], 12);
-        memcpy(ch[3].v[0], m[3], 12); memcpy(ch[3].v[1], c, 12); memcpy(ch[3].v[2], m[2], 12); memcpy(ch[3].v[3], nd.v[3], 12);
-    } else {
-        radinterp__mid(nd.v[0], nd.v[1], m[0]);
-        radinterp__mid(nd.v[1], nd.v[2], m[1]);
-        radinterp__mid(nd.v[2], nd.v[0], m[2]);
-        memcpy(ch[0].v[0], nd.v[0], 12); memcpy(ch[0].v[1], m[0], 12); memcpy(ch[0].v[2], m[2], 12);
-        memcpy(ch[1].v[0], m[0], 12); memcpy(ch[1].v[1], nd.v[1], 12); memcpy(ch[1].v[2], m[1], 12);
-        memcpy(ch[2].v[0], m[2], 12); memcpy(ch[2].v[1], m[1], 12); memcpy(ch[2].v[2], nd.v[2], 12);
-        memcpy(ch[3].v[0], m[1], 12); memcpy(ch[3].v[1], m[2], 12); memcpy(ch[3].v[2], m[0], 12);
-    }
+    radinterp__child_corners((const float (*)[3])nd.v, nd.count, corners);
     if (radinterp__buf_reserve(&b->a, &b->nodes, b->nodes.count + 4) != 0) return -1;
     for (k = 0; k < 4; k++) {
         radinterp__mnode *cn = (radinterp__mnode *)radinterp__buf_push(&b->a, &b->nodes);
-        memcpy(cn->v, ch[k].v, sizeof cn->v);
+        memcpy(cn->v, corners[k], sizeof cn->v);
         cn->count = nd.count;
         cn->patch = nd.patch;
         cn->parent = index;
@@ -7083,19 +7072,30 @@ static int radinterp__copy_tree(radinterp__builder *b, uint32_t R, radinterp__bu
     return 0;
 }
 
+static int radinterp__same_point(const float *a, const float *b)
+{
+    return a[0] == b[0] && a[1] == b[1] && a[2] == b[2];
+}
+
 /* A leaf must split when a neighbour is two or more levels deeper along
-   one of its edges: then a corner sits at a quarter point of that edge. */
+   one of its edges: then a corner sits at a quarter point of that edge. An
+   edge a few float steps long has quarter points that round onto its own
+   corners or midpoint; those say nothing about a neighbour (and would make
+   the leaf split forever), so only a quarter point distinct from them
+   counts. */
 static int radinterp__unbalanced(const radinterp__builder *b, const radinterp__mnode *nd)
 {
     uint32_t i;
+    int h;
     for (i = 0; i < nd->count; i++) {
         float m[3], q[3];
         const float *a = nd->v[i], *c = nd->v[(i + 1) % nd->count];
         radinterp__mid(a, c, m);
-        radinterp__mid(a, m, q);
-        if (radinterp__corner_has(b, nd->patch, q)) return 1;
-        radinterp__mid(m, c, q);
-        if (radinterp__corner_has(b, nd->patch, q)) return 1;
+        for (h = 0; h < 2; h++) {
+            radinterp__mid(h ? m : a, h ? c : m, q);
+            if (radinterp__same_point(q, a) || radinterp__same_point(q, m) || radinterp__same_point(q, c)) continue;
+            if (radinterp__corner_has(b, nd->patch, q)) return 1;
+        }
     }
     return 0;
 }
@@ -7365,8 +7365,8 @@ static int radinterp__patch_segments(radinterp__builder *b, uint32_t R)
         radinterp__seg *sg = &((radinterp__seg *)b->segs.data)[i];
         if (sg->on0) radinterp__onto_outline(b, R, sg->on0 - 1, sg->q, sg->p);
         if (sg->on1) radinterp__onto_outline(b, R, sg->on1 - 1, sg->p, sg->q);
-        radinterp__pframe_3df(&b->frames[R], sg->p, sg->a);
-        radinterp__pframe_3df(&b->frames[R], sg->q, sg->b);
+        radinterp__frame_to3df(&b->frames[R], sg->p, sg->a);
+        radinterp__frame_to3df(&b->frames[R], sg->q, sg->b);
     }
     return 0;
 }
@@ -7424,7 +7424,7 @@ static int radinterp__outline_vertices(radinterp__builder *b, uint32_t P, radint
             if (radinterp__hmap_put(&b->a, seen, key, 1u) == RADINTERP__NONE) return -1;
             if (seen->count == before) continue;
             for (k = 0; k < pt->count; k++)
-                if (radinterp__seg_dist2(o[k], o[(k + 1) % pt->count], n->uv[c]) <= b->tol) {
+                if (radinterp__seg_dist(o[k], o[(k + 1) % pt->count], n->uv[c]) <= b->tol) {
                     if (radinterp__pool_add(b, n->v[c], P, k, 0) != 0) return -1;
                     break;
                 }
@@ -7704,7 +7704,7 @@ static uint32_t radinterp__local_point(radinterp__builder *b, radinterp__tri_wor
         if (!lp) return RADINTERP__NONE;
         memcpy(lp->x, x, sizeof lp->x);
         if (uv) { lp->uv[0] = uv[0]; lp->uv[1] = uv[1]; }
-        else radinterp__pframe_2df(&b->frames[P], x, lp->uv);
+        else radinterp__frame_to2df(&b->frames[P], x, lp->uv);
     }
     return id;
 }
@@ -7743,8 +7743,8 @@ static int radinterp__on_same_outline_edge(const radinterp__builder *b, uint32_t
     const double (*o)[2] = radinterp__outline_of(b, P);
     uint32_t k, n = b->s->patches[P].count;
     for (k = 0; k < n; k++)
-        if (radinterp__seg_dist2(o[k], o[(k + 1) % n], a) <= b->tol &&
-            radinterp__seg_dist2(o[k], o[(k + 1) % n], c) <= b->tol)
+        if (radinterp__seg_dist(o[k], o[(k + 1) % n], a) <= b->tol &&
+            radinterp__seg_dist(o[k], o[(k + 1) % n], c) <= b->tol)
             return 1;
     return 0;
 }
@@ -7821,7 +7821,7 @@ static double radinterp__perimeter(const radinterp__builder *b, uint32_t P)
     const double (*o)[2] = radinterp__outline_of(b, P);
     uint32_t k, n = b->s->patches[P].count;
     double sum = 0.0;
-    for (k = 0; k < n; k++) sum += radinterp__seg_dist2(o[k], o[k], o[(k + 1) % n]);
+    for (k = 0; k < n; k++) sum += radinterp__seg_dist(o[k], o[k], o[(k + 1) % n]);
     return sum;
 }
 
@@ -7880,7 +7880,7 @@ static int radinterp__on_segment(const radinterp__builder *b, uint32_t P, const 
     const radinterp__seg *segs = (const radinterp__seg *)b->segs.data;
     uint32_t i;
     for (i = b->seg_first[P]; i < b->seg_first[P] + b->seg_count[P]; i++)
-        if (radinterp__seg_dist2(segs[i].p, segs[i].q, p) <= b->tol && radinterp__seg_dist2(segs[i].p, segs[i].q, q) <= b->tol)
+        if (radinterp__seg_dist(segs[i].p, segs[i].q, p) <= b->tol && radinterp__seg_dist(segs[i].p, segs[i].q, q) <= b->tol)
             return 1;
     return 0;
 }
@@ -7896,7 +7896,7 @@ static int radinterp__emit_patch(radinterp__builder *b, radinterp__tri_work *w, 
     v3 = (float *)w->v3.data;
     for (i = 0; i < c->vertex_count; i++) {
         float x[3];
-        radinterp__pframe_3df(&b->frames[P], radinterp__cdt_p(c, i), x);
+        radinterp__frame_to3df(&b->frames[P], radinterp__cdt_p(c, i), x);
         memcpy(v3 + 3 * (size_t)i, x, sizeof x);
     }
     for (i = (uint32_t)w->pts.count; i-- > 0;)  /* input points keep their exact position (the first of duplicates) */
@@ -7967,9 +7967,10 @@ static radinterp_result radinterp__triangulate_patch(radinterp__builder *b, radi
         if (r < 0 || w->out_of_memory) return RADINTERP_ERROR_OUT_OF_MEMORY;
         if (r == 0) break;
         b->hanging = hanging;
-        if (!with) {
-            radinterp__mesh_log(b, "radinterp_build_mesh: patch %u could not be triangulated", P);
-            return RADINTERP_ERROR_INVALID_ARGUMENT;
+        if (!with) { /* thinner than the weld distance, or its outline folds: left out */
+            radinterp__mesh_log(b, "radinterp_build_mesh: patch %u could not be triangulated: left out of the mesh", P);
+            b->skipped++;
+            return RADINTERP_OK;
         }
         radinterp__mesh_log(b, "radinterp_build_mesh: patch %u triangulated without its discontinuities", P);
         b->fallback++;
@@ -8267,7 +8268,7 @@ static radinterp_result radinterp__mesh_pass(radinterp__builder *b)
     memset(&seen, 0, sizeof seen);
     radinterp__buf_init(&tmp, sizeof(radinterp__tkey));
     b->segs.count = b->pool.count = b->chains.count = b->pos.count = b->tris.count = 0;
-    b->hanging = b->seam = b->fallback = b->degenerate = 0;
+    b->hanging = b->seam = b->fallback = b->degenerate = b->skipped = 0;
     radinterp__hmap_clear(&b->vmap);
     if (radinterp__collect_mleaves(b, &w.stack) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     if (res == RADINTERP_OK) res = radinterp__activate(b);
@@ -8441,8 +8442,8 @@ static radinterp_result radinterp__assemble(radinterp__builder *b, const float *
     for (i = 0; i < m->disc_count; i++) {
         radinterp_discontinuity *o = &m->discs[i];
         const radinterp__disc *d = &dd[i];
-        radinterp__pframe_3df(&b->frames[d->receiver], d->p, o->a);
-        radinterp__pframe_3df(&b->frames[d->receiver], d->q, o->b);
+        radinterp__frame_to3df(&b->frames[d->receiver], d->p, o->a);
+        radinterp__frame_to3df(&b->frames[d->receiver], d->q, o->b);
         o->type = d->type;
         o->receiver = d->receiver;
         o->source = d->source;
@@ -8490,6 +8491,7 @@ static radinterp_result radinterp__assemble(radinterp__builder *b, const float *
     info->hanging_vertices = b->hanging;
     info->seam_vertices = b->seam;
     info->fallback_patches = b->fallback;
+    info->skipped_patches = b->skipped;
     info->samples = b->samples;
     *out = m;
     return RADINTERP_OK;
@@ -8578,7 +8580,7 @@ static radinterp_result radinterp__builder_init(radinterp__builder *b, const rad
     radinterp__buf_init(&b->chains, sizeof(uint32_t));
     radinterp__buf_init(&b->pos, sizeof(float));
     radinterp__buf_init(&b->tris, sizeof(radinterp__otri));
-    b->frames = (radinterp__pframe *)radinterp__alloc_array(&b->a, P, sizeof *b->frames);
+    b->frames = (radinterp__frame *)radinterp__alloc_array(&b->a, P, sizeof *b->frames);
     b->outline = (double *)radinterp__alloc_array(&b->a, P, 8 * sizeof(double));
     b->disc_first = (uint32_t *)radinterp__alloc_array(&b->a, P, sizeof(uint32_t));
     b->disc_count = (uint32_t *)radinterp__alloc_array(&b->a, P, sizeof(uint32_t));
@@ -8601,8 +8603,8 @@ static radinterp_result radinterp__builder_init(radinterp__builder *b, const rad
         for (k = 0; k < 4; k++) b->chain_first[4 * i + k] = b->chain_len[4 * i + k] = 0;
         memset(b->outline + 8 * (size_t)i, 0, 8 * sizeof(double));
         if (!pt->count) continue;
-        radinterp__pframe_make(&b->frames[i], pt);
-        for (k = 0; k < pt->count; k++) radinterp__pframe_2df(&b->frames[i], pt->v[k], b->outline + 8 * (size_t)i + 2 * k);
+        radinterp__patch_frame(&b->frames[i], pt);
+        for (k = 0; k < pt->count; k++) radinterp__frame_to2df(&b->frames[i], pt->v[k], b->outline + 8 * (size_t)i + 2 * k);
     }
     return RADINTERP_OK;
 }
@@ -8735,7 +8737,7 @@ static radinterp_result radinterp__eval_table(const radinterp_mesh *m, const flo
 {
     int ch;
     if (!rgb) return RADINTERP_ERROR_INVALID_ARGUMENT;
-    if (!m || triangle >= m->triangle_count) {
+    if (!m || triangle >= m->triangle_count || !isfinite(s) || !isfinite(t)) {
         rgb[0] = rgb[1] = rgb[2] = 0.0f;
         return RADINTERP_ERROR_INVALID_ARGUMENT;
     }
@@ -8854,7 +8856,7 @@ RADINTERP_API radinterp_result radinterp_shade_gouraud(const radinterp_mesh *m, 
    ---------------------------------------------------------------------- */
 static const unsigned char radinterp__mesh_magic[8] = {'R', 'A', 'D', 'I', 'M', 'E', 'S', 'H'};
 
-#define RADINTERP__MESH_STATS 15   /* u32 statistics saved besides the counts */
+#define RADINTERP__MESH_STATS 16   /* u32 statistics saved besides the counts */
 #define RADINTERP__DISC_BYTES 52
 #define RADINTERP__LEAF_BYTES 80
 
@@ -8864,7 +8866,7 @@ static void radinterp__mesh_stats(radinterp_mesh_info *info, uint32_t **f)
     f[5] = &info->candidates; f[6] = &info->active_discontinuities; f[7] = &info->active_leaf_dsets;
     f[8] = &info->max_leaf_active_dsets; f[9] = &info->balance_splits; f[10] = &info->hanging_vertices;
     f[11] = &info->seam_vertices; f[12] = &info->fallback_patches; f[13] = &info->refine_passes;
-    f[14] = &info->refined_leaves;
+    f[14] = &info->refined_leaves; f[15] = &info->skipped_patches;
 }
 
 static uint64_t radinterp__mesh_payload(const radinterp_mesh *m)
