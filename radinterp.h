@@ -464,6 +464,14 @@ typedef enum radinterp_visibility {
     RADINTERP_VISIBILITY_TRIANGULATION = 2     /* CDT of the projected blocker edges, one ray per region */
 } radinterp_visibility;
 
+/* How the solver makes its first links (desc.clustering). */
+typedef enum radinterp_clustering {
+    RADINTERP_CLUSTERING_DEFAULT = 0,  /* = RADINTERP_CLUSTERING_ON */
+    RADINTERP_CLUSTERING_ON = 1,       /* a cluster tree over the patches, linked from the top down (scales
+                                          to buildings) */
+    RADINTERP_CLUSTERING_OFF = 2       /* one link per pair of facing patches (quadratic in the patch count) */
+} radinterp_clustering;
+
 typedef struct radinterp_desc {
     /* scene */
     const float *positions;            /* xyz per vertex */
@@ -477,6 +485,7 @@ typedef struct radinterp_desc {
 
     /* parameters, see PARAMETERS above; zero = default */
     float eps;
+    float eps_relative;
     float min_area;
     float rel_error_cutoff;
     uint32_t max_iterations;
@@ -488,6 +497,8 @@ typedef struct radinterp_desc {
     float epsilon;
     float planarity_tolerance;
     radinterp_visibility visibility;   /* point queries' visibility method, see PARAMETERS */
+    radinterp_clustering clustering;   /* initial linking, see PARAMETERS */
+    int keep_triangles;                /* non-zero: triangles are never merged into quadrilaterals */
     uint64_t seed;                     /* random choices (sample points); results depend only on it */
 
     /* optional callbacks */
@@ -507,9 +518,13 @@ typedef struct radinterp_solution radinterp_solution;
 typedef struct radinterp_info {
     uint32_t patch_count;        /* patches given */
     uint32_t skipped_patches;    /* zero-area patches left out */
+    uint32_t merged_patches;     /* triangles merged into another to make a quadrilateral patch */
     uint32_t node_count;         /* quadtree nodes, roots included */
     uint32_t leaf_count;         /* quadtree leaves (elements) */
-    uint32_t link_count;         /* links (one per receiver node and source node) */
+    uint32_t link_count;         /* links between quadtree nodes (one per receiver and source) */
+    uint32_t cluster_count;      /* clusters above the patches */
+    uint32_t cluster_link_count; /* links with a cluster at either end */
+    uint64_t culled_links;       /* links dropped because every ray between their ends was blocked */
     uint64_t blocker_entries;    /* sum of the links' blocker-list lengths */
     uint32_t iterations;         /* gather/push-pull iterations run */
     int converged;               /* the last iteration changed no leaf by more than rel_error_cutoff */
@@ -2740,10 +2755,13 @@ typedef struct radinterp__node {
     uint32_t child;           /* first of four consecutive children; NONE for a leaf */
     uint32_t depth;           /* 0 for a root */
     uint32_t first_link, link_count;   /* the links this node gathers */
+    uint32_t first_clink, clink_count; /* the cluster links it gathers (section 12) */
     float area;
     float lo[3], hi[3];
     float b[3];               /* radiosity B (W/m^2) of the node's open part, constant over it */
     float h[3];               /* irradiance gathered by this node's own links (mean over the whole node) */
+    float level;              /* irradiance (largest channel) over its open part, all links: the scale its
+                                 links' errors are measured against (relative refinement) */
     float open;               /* fraction of the node not enclosed by touching geometry (such as the
                                  floor under a box standing on it); enclosed parts receive and show nothing */
 } radinterp__node;
@@ -2759,18 +2777,43 @@ typedef struct radinterp__link {
     uint32_t flags;
 } radinterp__link;
 
+/* A cluster of patches (section 12): a node of the binary tree above the
+   patches' quadtrees. */
+typedef struct radinterp__cluster {
+    float lo[3], hi[3];         /* box of its patches */
+    uint32_t child[2];          /* elements: clusters (RADINTERP__CLUSTER | index) or patches' root nodes */
+    uint32_t parent;            /* NONE at the top */
+    uint32_t first, count;      /* its patches: cluster_order[first .. first + count) */
+    uint32_t first_link, link_count;   /* the cluster links it gathers */
+    float power[6][3];          /* sum of A open B max(0, n . a) over its patches, a = +x -x +y -y +z -z */
+    float bound;                /* largest channel of sum_k max(power[+k], power[-k]): at least its power
+                                   toward any direction */
+    float hmin;                 /* least irradiance (largest channel) of a lit leaf of its patches; 0 when none
+                                   is lit */
+    float e[6][3];              /* irradiance its own links deliver to a surface facing each a */
+    float down[6][3];           /* the same with its ancestors' (pushed to its patches) */
+} radinterp__cluster;
+
 struct radinterp_solution {
     radinterp_allocator allocator;
     /* parameters after defaults */
     double eps, min_area, rel_error_cutoff, push_off, nudge, min_bp_segment, epsilon, diag;
+    double eps_relative;               /* 0: eps alone */
+    double light_scale;                /* mean emitted radiosity (largest channel) */
+    int levels_known;                  /* the receivers' levels have been measured (a gather ran) */
+    double *patch_hmin;                /* per patch: least irradiance of a lit leaf (largest channel), 0 if none */
     uint32_t max_iterations, ff_samples, visibility_rays;
     uint32_t visibility;               /* radinterp_visibility of point queries, never DEFAULT */
+    uint32_t clustering;               /* radinterp_clustering, never DEFAULT */
     uint64_t seed;
     radinterp_trace_fn trace;
     void *trace_user;
     /* scene */
     radinterp__patch *patches;
     uint32_t patch_count, skipped_patches;
+    uint32_t caller_count, merged_patches;   /* the caller's patches, and triangles merged into another */
+    uint32_t *caller_patch;            /* the caller's patch i is patches[caller_patch[i]] */
+    uint32_t *first_caller;            /* per patch: the first caller's patch it holds */
     float scene_lo[3], scene_hi[3];
     radinterp__bvh bvh;
     uint32_t *tri_patch;               /* BVH triangle -> patch */
@@ -2781,6 +2824,14 @@ struct radinterp_solution {
     uint32_t link_count;
     uint32_t *blockers;
     uint64_t blocker_count;
+    struct radinterp__clink *clinks;   /* links with a cluster at either end, by receiver */
+    uint32_t clink_count;
+    radinterp__cluster *clusters;      /* clusters[0] is the top; parents before children */
+    uint32_t cluster_count;
+    uint32_t *cluster_order;           /* the patches in cluster order */
+    double *cluster_cdf;               /* prefix sums of their areas */
+    uint32_t *patch_cluster;           /* the cluster whose child a patch is; NONE without clusters */
+    uint64_t culled_links;             /* links dropped because every ray between their ends was blocked */
     uint32_t *leaves;                  /* leaf node indices in patch order */
     uint32_t leaf_count;
     uint32_t *leaf_link_first;         /* per node (+ 1 at the end): into leaf_links */
@@ -3258,9 +3309,11 @@ typedef struct radinterp__pending {
     uint32_t receiver, source;
     uint32_t first, count;       /* candidates in the input pool; results at the same offset of the output pool */
     uint32_t filter;             /* candidates still need the shaft test */
+    uint32_t fresh;              /* candidates from shaft culling here (else the parent link's blockers) */
     uint32_t kept;               /* blockers kept */
     float ff, dff;
-    uint32_t dead;               /* no part of either element faces the other */
+    uint32_t dead;               /* no part of either element faces the other, or every ray was blocked */
+    uint32_t hidden;             /* dead because every ray was blocked */
     uint32_t rays;
 } radinterp__pending;
 
@@ -3413,6 +3466,7 @@ static void radinterp__link_compute(radinterp_solution *s, radinterp__pending *p
     double tri_area[RADINTERP__POLY_MAX], total, ratio, sum = 0.0, lo = DBL_MAX, hi = 0.0, tiny;
     int nR = radinterp__node_poly(r, R), nS = radinterp__node_poly(src, S), nRc, nSc, clipped;
     uint32_t i, n = s->ff_samples;
+    int seen = 0;                  /* some point sees part of the source (before visibility) */
     radinterp__rng rng;
     if (pl->filter) pl->kept = radinterp__filter_blockers(s, r, src, in + pl->first, pl->count, out + pl->first);
     else {
@@ -3422,6 +3476,7 @@ static void radinterp__link_compute(radinterp_solution *s, radinterp__pending *p
     pl->ff = pl->dff = 0.0f;
     pl->rays = 0;
     pl->dead = 1;
+    pl->hidden = 0;
     nSc = radinterp__clip_poly((const double (*)[3])S, nS, pr->n, pr->d, Sc);
     nRc = radinterp__clip_poly((const double (*)[3])R, nR, ps->n, ps->d, Rc);
     tiny = 1e-12 * s->diag * s->diag;
@@ -3439,6 +3494,7 @@ static void radinterp__link_compute(radinterp_solution *s, radinterp__pending *p
         double q[3], f, w = radinterp__receiver_point((const double (*)[3])Rc, nRc, tri_area, total, i, n, &rng, q);
         f = w * radinterp__ff_poly(q, pr->n, (const double (*)[3])Sc, nSc);
         if (f < 0.0) f = 0.0;
+        seen |= f > 0.0;
         if (pl->kept && f > 0.0) {
             radinterp__rng vis = radinterp__rng_stream(s->seed ^ 0xA5A5A5A5u, ((uint64_t)pl->receiver << 32 | pl->source) * 64u + i);
             f *= radinterp__visible_fraction(s, q, pr->n, (const double (*)[3])Sc, nSc, ps->n, &vis, s->visibility_rays);
@@ -3472,6 +3528,7 @@ static void radinterp__link_compute(radinterp_solution *s, radinterp__pending *p
     }
     pl->ff = (float)(ratio * sum / n);
     pl->dff = (float)(ratio * (hi - lo));
+    if (pl->kept && seen && sum == 0.0 && hi == 0.0) pl->dead = pl->hidden = 1; /* every ray blocked: dropped */
 }
 
 static void radinterp__ff_job(void *ctx_, uint32_t index)
@@ -3529,6 +3586,7 @@ static radinterp_result radinterp__install_links(radinterp_solution *s, const ra
     uint64_t blockers = 0;
     radinterp__link *links = NULL;
     for (i = 0; i < keep_count; i++) blockers += keep[i].blocker_count;
+    for (i = 0; i < pend_count; i++) s->culled_links += pend[i].hidden;
     for (i = 0; i < pend_count; i++)
         if (!pend[i].dead) { total++; blockers += pend[i].kept; }
     if (blockers > 0xFFFFFFFFu) return RADINTERP_ERROR_OUT_OF_MEMORY;
@@ -3602,32 +3660,26 @@ static void *radinterp__grow_push(radinterp_solution *s, radinterp__grow *g)
     return (char *)g->data + g->item * g->count++;
 }
 
-/* Potential blockers of a pair of patches: the patches whose boxes meet the
-   shaft, found through the BVH (its leaves hold the patches' triangles). */
-static int radinterp__shaft_query(radinterp_solution *s, const radinterp__node *r, const radinterp__node *src,
-                                  radinterp__grow *pool, uint32_t *stamp, uint32_t mark, uint32_t *count)
+/* Walks the BVH of the patches (a query of its own: the BVH's build and ray
+   traversal stay in section 4): the nodes whose boxes pass `test`, and for
+   every triangle of the leaves reached, `visit` with its patch (a patch
+   may come once per triangle). visit returns 0 to stop the walk; the walk
+   then returns 0. */
+typedef int (*radinterp__box_test)(const void *ctx, const float *lo, const float *hi);
+typedef int (*radinterp__patch_visit)(void *ctx, uint32_t patch);
+
+static int radinterp__bvh_walk(const radinterp_solution *s, radinterp__box_test test, radinterp__patch_visit visit,
+                               void *ctx)
 {
-    radinterp__shaft sh;
     uint32_t stack[RADINTERP__BVH_STACK], top = 0, index = 0;
-    double tol = s->epsilon * s->diag;
-    radinterp__shaft_build(&sh, r->lo, r->hi, src->lo, src->hi);
-    *count = 0;
     if (s->bvh.tri_count == 0) return 1;
     for (;;) {
         const radinterp__bvh_node *node = &s->bvh.nodes[index];
-        if (!radinterp__shaft_culls(&sh, node->lo, node->hi, -tol)) {
+        if (test(ctx, node->lo, node->hi)) {
             if (node->count) {
                 uint32_t i;
-                for (i = node->first; i < node->first + node->count; i++) {
-                    uint32_t b = s->tri_patch[s->bvh.tris[i].id];
-                    uint32_t *slot;
-                    if (stamp[b] == mark || !radinterp__may_block(s, &sh, b, r, src)) continue;
-                    stamp[b] = mark;
-                    slot = (uint32_t *)radinterp__grow_push(s, pool);
-                    if (!slot) return 0;
-                    *slot = b;
-                    (*count)++;
-                }
+                for (i = node->first; i < node->first + node->count; i++)
+                    if (!visit(ctx, s->tri_patch[s->bvh.tris[i].id])) return 0;
             } else {
                 stack[top++] = node->first;
                 index = index + 1;
@@ -3640,63 +3692,60 @@ static int radinterp__shaft_query(radinterp_solution *s, const radinterp__node *
     return 1;
 }
 
-/* Initial links (4.1): one per ordered pair of patches that face each other
-   (part of each lies in front of the other's plane), with the blockers from
-   shaft culling. Sources that can never shine (black, not emitting) get none. */
-static radinterp_result radinterp__initial_links(radinterp_solution *s, const radinterp__run *run)
+typedef struct radinterp__shaft_ctx {
+    radinterp_solution *s;
+    radinterp__shaft sh;
+    const radinterp__node *r, *src;
+    radinterp__grow *pool;
+    uint32_t *stamp, mark, *count;
+    double tol;
+} radinterp__shaft_ctx;
+
+static int radinterp__shaft_box(const void *ctx_, const float *lo, const float *hi)
 {
-    radinterp__grow pend, pool;
-    uint32_t *stamp, i, j, mark = 0;
-    radinterp_result res = RADINTERP_OK;
-    double tol = s->epsilon * s->diag;
-    memset(&pend, 0, sizeof pend);
-    memset(&pool, 0, sizeof pool);
-    pend.item = sizeof(radinterp__pending);
-    pool.item = sizeof(uint32_t);
-    stamp = (uint32_t *)radinterp__alloc_array(&s->allocator, s->patch_count, sizeof *stamp);
-    if (!stamp) return RADINTERP_ERROR_OUT_OF_MEMORY;
-    memset(stamp, 0xFF, (size_t)s->patch_count * sizeof *stamp);
-    for (i = 0; i < s->patch_count && res == RADINTERP_OK; i++) {
-        const radinterp__patch *pr = &s->patches[i];
-        if (!pr->count) continue;
-        for (j = 0; j < s->patch_count; j++) {
-            const radinterp__patch *ps = &s->patches[j];
-            radinterp__pending *pl;
-            uint32_t first = (uint32_t)pool.count, count;
-            if (j == i || !ps->count) continue;
-            if (ps->rho[0] == 0.0f && ps->rho[1] == 0.0f && ps->rho[2] == 0.0f && ps->e[0] == 0.0f &&
-                ps->e[1] == 0.0f && ps->e[2] == 0.0f)
-                continue;
-            if (radinterp__patch_front(pr, ps->n, ps->d) <= tol || radinterp__patch_front(ps, pr->n, pr->d) <= tol)
-                continue;
-            if (!radinterp__shaft_query(s, &s->nodes[pr->root], &s->nodes[ps->root], &pool, stamp, mark++, &count)) {
-                res = RADINTERP_ERROR_OUT_OF_MEMORY;
-                break;
-            }
-            pl = (radinterp__pending *)radinterp__grow_push(s, &pend);
-            if (!pl) { res = RADINTERP_ERROR_OUT_OF_MEMORY; break; }
-            memset(pl, 0, sizeof *pl);
-            pl->receiver = pr->root;
-            pl->source = ps->root;
-            pl->first = first;
-            pl->count = count;
-        }
-    }
-    radinterp__free(&s->allocator, stamp);
-    if (res == RADINTERP_OK && pool.count > 0xFFFFFFFFu) res = RADINTERP_ERROR_OUT_OF_MEMORY;
-    if (res == RADINTERP_OK) {
-        uint32_t *out = (uint32_t *)radinterp__alloc_array(&s->allocator, pool.count, sizeof(uint32_t));
-        if (!out) res = RADINTERP_ERROR_OUT_OF_MEMORY;
-        if (res == RADINTERP_OK)
-            res = radinterp__compute_pending(s, run, (radinterp__pending *)pend.data, (uint32_t)pend.count,
-                                             (const uint32_t *)pool.data, out);
-        if (res == RADINTERP_OK)
-            res = radinterp__install_links(s, NULL, 0, (const radinterp__pending *)pend.data, (uint32_t)pend.count, out);
-        radinterp__free(&s->allocator, out);
-    }
-    radinterp__free(&s->allocator, pend.data);
-    radinterp__free(&s->allocator, pool.data);
-    return res;
+    const radinterp__shaft_ctx *ctx = (const radinterp__shaft_ctx *)ctx_;
+    return !radinterp__shaft_culls(&ctx->sh, lo, hi, -ctx->tol);
+}
+
+static int radinterp__shaft_visit(void *ctx_, uint32_t b)
+{
+    radinterp__shaft_ctx *ctx = (radinterp__shaft_ctx *)ctx_;
+    uint32_t *slot;
+    if (ctx->stamp[b] == ctx->mark || !radinterp__may_block(ctx->s, &ctx->sh, b, ctx->r, ctx->src)) return 1;
+    ctx->stamp[b] = ctx->mark;
+    slot = (uint32_t *)radinterp__grow_push(ctx->s, ctx->pool);
+    if (!slot) return 0;
+    *slot = b;
+    (*ctx->count)++;
+    return 1;
+}
+
+/* Potential blockers of a pair of nodes: the patches whose boxes meet the
+   shaft, found through the BVH (its leaves hold the patches' triangles). */
+static int radinterp__shaft_query(radinterp_solution *s, const radinterp__node *r, const radinterp__node *src,
+                                  radinterp__grow *pool, uint32_t *stamp, uint32_t mark, uint32_t *count)
+{
+    radinterp__shaft_ctx ctx;
+    ctx.s = s;
+    ctx.r = r;
+    ctx.src = src;
+    ctx.pool = pool;
+    ctx.stamp = stamp;
+    ctx.mark = mark;
+    ctx.count = count;
+    ctx.tol = s->epsilon * s->diag;
+    radinterp__shaft_build(&ctx.sh, r->lo, r->hi, src->lo, src->hi);
+    *count = 0;
+    return radinterp__bvh_walk(s, radinterp__shaft_box, radinterp__shaft_visit, &ctx);
+}
+
+/* The transport error a link to a receiver at irradiance `level` may make:
+   eps, or eps_relative of the level where that is more (relative
+   refinement, the default). */
+static double radinterp__tolerance(const radinterp_solution *s, double level)
+{
+    double rel = s->eps_relative * level;
+    return rel > s->eps ? rel : s->eps;
 }
 
 static int radinterp__can_split(const radinterp_solution *s, const radinterp__node *nd)
@@ -3724,35 +3773,772 @@ static double radinterp__source_spread(const radinterp_solution *s, uint32_t nod
     return spread;
 }
 
+/* ---- clusters (Smits, Arvo and Greenberg 1994; Sillion 1995) ----------
+   The patches are the leaves of a binary tree of clusters (median splits
+   of their centres along the longest axis). An element is a cluster or a
+   quadtree node; id bit RADINTERP__CLUSTER marks a cluster. Linking starts
+   at the top: every cluster joins its two children both ways, so every
+   pair of patches is represented once, by its lowest common cluster. A
+   link with a cluster at either end (a cluster link) carries light between
+   the elements' centres: the source's power toward the receiver over
+   pi r^2, times the fraction of rays between random points of the two
+   that no surface blocks; a link whose rays are all blocked is dropped
+   (nothing crosses a solid wall). A cluster's power toward a direction u
+   comes from six sums over its patches, one per axis direction a:
+   P_a = sum A open B max(0, n . a), P(u) = sum_k |u_k| P_(sign u_k) e_k,
+   exact for patches facing along the axes and an upper bound otherwise;
+   what a cluster receives is kept the same way (the irradiance of a
+   surface facing each axis direction) and pushed down to its patches. A
+   cluster link stays while the irradiance it could carry at most, the
+   source's power bound over pi times the squared distance between the two
+   boxes, is below eps; else its larger element is split (a cluster into
+   its two children, a node into its quadtree children). When both ends are
+   quadtree nodes the link becomes an ordinary link (4.2) with its blockers
+   from shaft culling. */
+#define RADINTERP__CLUSTER 0x80000000u   /* element id bit: a cluster; else a quadtree node */
+#ifndef RADINTERP__EPS_FLOOR
+#define RADINTERP__EPS_FLOOR 0.01        /* default eps: this times the mean emitted radiosity */
+#endif
+#ifndef RADINTERP__EPS_RELATIVE
+#define RADINTERP__EPS_RELATIVE 0.05     /* default eps_relative */
+#endif
+#define RADINTERP__CLUSTER_RAYS 16       /* visibility rays of a cluster link */
+#define RADINTERP__CLUSTER_TOLERANCE 0.1 /* a cluster link may carry this much of a link's tolerance at most */
+
+typedef struct radinterp__clink {
+    uint32_t receiver, source;  /* elements, one of them at least a cluster */
+    float k;                    /* visible fraction / (pi r^2), r between the elements' centres */
+    float dir[3];               /* unit vector from the receiver's centre toward the source's */
+} radinterp__clink;
+
+static int radinterp__is_cluster(uint32_t el) { return (el & RADINTERP__CLUSTER) != 0; }
+
+static const radinterp__cluster *radinterp__cl(const radinterp_solution *s, uint32_t el)
+{
+    return &s->clusters[el & ~RADINTERP__CLUSTER];
+}
+
+static void radinterp__elem_box(const radinterp_solution *s, uint32_t el, const float **lo, const float **hi)
+{
+    if (radinterp__is_cluster(el)) { *lo = radinterp__cl(s, el)->lo; *hi = radinterp__cl(s, el)->hi; }
+    else { *lo = s->nodes[el].lo; *hi = s->nodes[el].hi; }
+}
+
+static void radinterp__elem_centre(const radinterp_solution *s, uint32_t el, double *c)
+{
+    int k;
+    if (radinterp__is_cluster(el)) {
+        const radinterp__cluster *cl = radinterp__cl(s, el);
+        for (k = 0; k < 3; k++) c[k] = 0.5 * ((double)cl->lo[k] + cl->hi[k]);
+    } else {
+        const radinterp__node *nd = &s->nodes[el];
+        uint32_t i;
+        for (k = 0; k < 3; k++) {
+            c[k] = 0.0;
+            for (i = 0; i < nd->count; i++) c[k] += nd->v[i][k];
+            c[k] /= nd->count;
+        }
+    }
+}
+
+static double radinterp__elem_size(const radinterp_solution *s, uint32_t el)
+{
+    const float *lo, *hi;
+    double d2 = 0.0;
+    int k;
+    radinterp__elem_box(s, el, &lo, &hi);
+    for (k = 0; k < 3; k++) d2 += ((double)hi[k] - lo[k]) * ((double)hi[k] - lo[k]);
+    return sqrt(d2);
+}
+
+/* Power (W / sr * pi: sum of A B cos) an element sends toward unit u. */
+static void radinterp__elem_power(const radinterp_solution *s, uint32_t el, const double *u, double *p)
+{
+    int k, c;
+    p[0] = p[1] = p[2] = 0.0;
+    if (radinterp__is_cluster(el)) {
+        const radinterp__cluster *cl = radinterp__cl(s, el);
+        for (k = 0; k < 3; k++) {
+            const float *a = cl->power[2 * k + (u[k] < 0.0)];
+            for (c = 0; c < 3; c++) p[c] += fabs(u[k]) * a[c];
+        }
+    } else {
+        const radinterp__node *nd = &s->nodes[el];
+        double cosine = radinterp__d3_dot(s->patches[nd->patch].n, u), a = (double)nd->area * nd->open;
+        if (cosine > 0.0)
+            for (c = 0; c < 3; c++) p[c] = a * cosine * nd->b[c];
+    }
+}
+
+/* The most power an element sends toward any direction (largest channel). */
+static double radinterp__elem_power_bound(const radinterp_solution *s, uint32_t el)
+{
+    if (radinterp__is_cluster(el)) return radinterp__cl(s, el)->bound;
+    {
+        const radinterp__node *nd = &s->nodes[el];
+        return (double)nd->area * nd->open * radinterp__maxf(nd->b[0], radinterp__maxf(nd->b[1], nd->b[2]));
+    }
+}
+
+/* Irradiance of a surface with unit normal n under light of irradiance e
+   (on a surface facing it) from unit direction dir. */
+static double radinterp__facing(const double *n, const float *dir)
+{
+    double c = n[0] * dir[0] + n[1] * dir[1] + n[2] * dir[2];
+    return c > 0.0 ? c : 0.0;
+}
+
+/* A random point of an element with the normal of its surface: a cluster
+   picks one of its patches by area. */
+static void radinterp__elem_point(const radinterp_solution *s, uint32_t el, radinterp__rng *rng, double *p, double *n)
+{
+    double v[RADINTERP__POLY_MAX][3], tri_area[RADINTERP__POLY_MAX], total;
+    const radinterp__patch *pt;
+    int count;
+    if (radinterp__is_cluster(el)) {
+        const radinterp__cluster *cl = radinterp__cl(s, el);
+        double base = cl->first ? s->cluster_cdf[cl->first - 1] : 0.0;
+        double x = base + radinterp__rng_float(rng) * (s->cluster_cdf[cl->first + cl->count - 1] - base);
+        uint32_t lo = cl->first, hi = cl->first + cl->count - 1;
+        while (lo < hi) {  /* the first patch whose prefix area reaches x */
+            uint32_t mid = lo + (hi - lo) / 2;
+            if (s->cluster_cdf[mid] < x) lo = mid + 1;
+            else hi = mid;
+        }
+        pt = &s->patches[s->cluster_order[lo]];
+        count = radinterp__patch_poly(pt, v);
+    } else {
+        pt = &s->patches[s->nodes[el].patch];
+        count = radinterp__node_poly(&s->nodes[el], v);
+    }
+    total = radinterp__fan_areas((const double (*)[3])v, count, tri_area);
+    {
+        double u1 = radinterp__rng_float(rng), u2 = radinterp__rng_float(rng);
+        radinterp__poly_point((const double (*)[3])v, count, tri_area, total, u1, u2, p);
+    }
+    memcpy(n, pt->n, 3 * sizeof(double));
+}
+
+/* Squared distance between two boxes (0 when they touch or overlap). */
+static double radinterp__box_distance2(const float *alo, const float *ahi, const float *blo, const float *bhi)
+{
+    double d2 = 0.0;
+    int k;
+    for (k = 0; k < 3; k++) {
+        double g = (double)blo[k] - ahi[k] > (double)alo[k] - bhi[k] ? (double)blo[k] - ahi[k] : (double)alo[k] - bhi[k];
+        if (g > 0.0) d2 += g * g;
+    }
+    return d2;
+}
+
+/* Does the box lie wholly behind the plane of node nd's patch (within tol)? */
+static int radinterp__box_behind(const radinterp_solution *s, const radinterp__node *nd, const float *lo, const float *hi,
+                                 double tol)
+{
+    const radinterp__patch *pt = &s->patches[nd->patch];
+    double m = -pt->d;
+    int k;
+    for (k = 0; k < 3; k++) m += pt->n[k] * (pt->n[k] > 0.0 ? (double)hi[k] : (double)lo[k]);
+    return m <= tol;
+}
+
+static int radinterp__planes_hide(const radinterp_solution *s, const float *alo, const float *ahi, const float *blo,
+                                  const float *bhi);   /* section 13 */
+
+/* Could a cluster link from source to receiver carry more than its share
+   of the tolerance (see the clusters above)? The receiver's level is the
+   least irradiance of its lit leaves, or before the first gather the mean
+   emitted radiosity. */
+static int radinterp__clink_too_coarse(const radinterp_solution *s, uint32_t receiver, uint32_t source)
+{
+    const float *rlo, *rhi, *slo, *shi;
+    double d2, level;
+    radinterp__elem_box(s, receiver, &rlo, &rhi);
+    radinterp__elem_box(s, source, &slo, &shi);
+    d2 = radinterp__box_distance2(rlo, rhi, slo, shi);
+    if (!(d2 > 0.0)) return 1;
+    if (!s->levels_known) level = s->light_scale;
+    else level = radinterp__is_cluster(receiver) ? radinterp__cl(s, receiver)->hmin : s->patch_hmin[s->nodes[receiver].patch];
+    return radinterp__elem_power_bound(s, source) / (RADINTERP__PI * d2) >
+           RADINTERP__CLUSTER_TOLERANCE * radinterp__tolerance(s, level);
+}
+
+
+/* A cluster link waiting for its transfer factor. */
+typedef struct radinterp__cpending {
+    uint32_t receiver, source;
+    float k, dir[3];
+    uint32_t dead;      /* facing away, or hidden */
+    uint32_t hidden;    /* dead because planes between the two hide them from each other */
+    uint32_t coarse;    /* could carry too much: to be split (its transfer is not computed) */
+    uint32_t rays;
+} radinterp__cpending;
+
+/* Transfer factor of a cluster link: centres, facing, visible fraction
+   (rays between random points of the two, each weighted by cos cos / r^2
+   at its ends, as radinterp__visible_fraction). */
+static void radinterp__clink_compute(const radinterp_solution *s, radinterp__cpending *pc)
+{
+    const float *rlo, *rhi, *slo, *shi;
+    double cr[3], cs[3], d[3], r, open = 0.0, all = 0.0, off = 10.0 * s->epsilon * s->diag, tol = s->epsilon * s->diag;
+    radinterp__rng rng = radinterp__rng_stream(s->seed ^ 0xC1C1C1C1u, (uint64_t)pc->receiver << 32 | pc->source);
+    int i, k;
+    pc->dead = 1;
+    pc->hidden = pc->coarse = 0;
+    pc->rays = 0;
+    pc->k = pc->dir[0] = pc->dir[1] = pc->dir[2] = 0.0f;
+    radinterp__elem_box(s, pc->receiver, &rlo, &rhi);
+    radinterp__elem_box(s, pc->source, &slo, &shi);
+    if (!radinterp__is_cluster(pc->receiver) && radinterp__box_behind(s, &s->nodes[pc->receiver], slo, shi, tol)) return;
+    if (!radinterp__is_cluster(pc->source) && radinterp__box_behind(s, &s->nodes[pc->source], rlo, rhi, tol)) return;
+    pc->coarse = (uint32_t)radinterp__clink_too_coarse(s, pc->receiver, pc->source);
+    if (pc->coarse) { /* split unless hidden: a pair hidden as a whole is settled here */
+        pc->hidden = (uint32_t)radinterp__planes_hide(s, rlo, rhi, slo, shi);
+        pc->dead = pc->hidden;
+        return;
+    }
+    radinterp__elem_centre(s, pc->receiver, cr);
+    radinterp__elem_centre(s, pc->source, cs);
+    radinterp__d3_sub(cs, cr, d);
+    r = radinterp__d3_len(d);
+    pc->dead = 0;
+    if (!(r > 0.0)) { pc->dir[2] = 1.0f; return; } /* centres at one point: carries nothing, refined at once */
+    for (k = 0; k < 3; k++) pc->dir[k] = (float)(d[k] / r);
+    /* the visible fraction weighs the transfer; rays cannot prove a pair
+       hidden (a small close part they miss may carry most of it), so when
+       all are blocked the planes decide whether the link is dropped */
+    for (i = 0; i < RADINTERP__CLUSTER_RAYS; i++) {
+        double a[3], na[3], b[3], nb[3], ab[3], w, r2;
+        radinterp__elem_point(s, pc->receiver, &rng, a, na);
+        radinterp__elem_point(s, pc->source, &rng, b, nb);
+        radinterp__d3_sub(b, a, ab);
+        r2 = radinterp__d3_dot(ab, ab);
+        w = r2 > 0.0 ? radinterp__d3_dot(ab, na) * -radinterp__d3_dot(ab, nb) / (r2 * r2) : 0.0;
+        if (!(w > 0.0)) continue;
+        for (k = 0; k < 3; k++) { a[k] += off * na[k]; b[k] += off * nb[k]; }
+        all += w;
+        pc->rays++;
+        if (!radinterp__segment_blocked(s, a, b)) open += w;
+    }
+    if (all > 0.0 && open == 0.0 && radinterp__planes_hide(s, rlo, rhi, slo, shi)) { pc->dead = pc->hidden = 1; return; }
+    pc->k = (float)((all > 0.0 ? open / all : 1.0) / (RADINTERP__PI * r * r));
+}
+
+typedef struct radinterp__cctx {
+    const radinterp_solution *s;
+    radinterp__cpending *pending;
+    uint32_t begin, end;
+} radinterp__cctx;
+
+#define RADINTERP__CLINK_JOB 32
+
+static void radinterp__clink_job(void *ctx_, uint32_t index)
+{
+    radinterp__cctx *ctx = (radinterp__cctx *)ctx_;
+    uint32_t i = ctx->begin + index * RADINTERP__CLINK_JOB, end = i + RADINTERP__CLINK_JOB;
+    if (end > ctx->end) end = ctx->end;
+    for (; i < end; i++) radinterp__clink_compute(ctx->s, &ctx->pending[i]);
+}
+
+/* The sorting bucket of a receiver element: nodes first, then clusters. */
+static uint32_t radinterp__bucket(const radinterp_solution *s, uint32_t el)
+{
+    return radinterp__is_cluster(el) ? s->node_count + (el & ~RADINTERP__CLUSTER) : el;
+}
+
+/* Replaces the cluster links by the kept ones plus the live pending ones,
+   sorted by receiver (stable): node.first_clink / clink_count and
+   cluster.first_link / link_count. */
+static radinterp_result radinterp__install_clinks(radinterp_solution *s, const radinterp__clink *keep, uint32_t keep_count,
+                                                  const radinterp__cpending *pend, uint32_t pend_count)
+{
+    uint32_t buckets = s->node_count + s->cluster_count, total = keep_count, i;
+    uint32_t *start;
+    radinterp__clink *links;
+    for (i = 0; i < pend_count; i++) total += !pend[i].dead;
+    links = (radinterp__clink *)radinterp__alloc_array(&s->allocator, total, sizeof *links);
+    start = (uint32_t *)radinterp__alloc_array(&s->allocator, (size_t)buckets + 1, sizeof *start);
+    if (!links || !start) {
+        radinterp__free(&s->allocator, links);
+        radinterp__free(&s->allocator, start);
+        return RADINTERP_ERROR_OUT_OF_MEMORY;
+    }
+    memset(start, 0, ((size_t)buckets + 1) * sizeof *start);
+    for (i = 0; i < keep_count; i++) start[radinterp__bucket(s, keep[i].receiver) + 1]++;
+    for (i = 0; i < pend_count; i++)
+        if (!pend[i].dead) start[radinterp__bucket(s, pend[i].receiver) + 1]++;
+    for (i = 0; i < buckets; i++) {
+        if (i < s->node_count) { s->nodes[i].first_clink = start[i]; s->nodes[i].clink_count = start[i + 1]; }
+        else { s->clusters[i - s->node_count].first_link = start[i]; s->clusters[i - s->node_count].link_count = start[i + 1]; }
+        start[i + 1] += start[i];
+    }
+    for (i = 0; i < keep_count; i++) links[start[radinterp__bucket(s, keep[i].receiver)]++] = keep[i];
+    for (i = 0; i < pend_count; i++) {
+        radinterp__clink *l;
+        if (pend[i].dead) continue;
+        l = &links[start[radinterp__bucket(s, pend[i].receiver)]++];
+        l->receiver = pend[i].receiver;
+        l->source = pend[i].source;
+        l->k = pend[i].k;
+        memcpy(l->dir, pend[i].dir, sizeof l->dir);
+    }
+    radinterp__free(&s->allocator, start);
+    radinterp__free(&s->allocator, s->clinks);
+    s->clinks = links;
+    s->clink_count = total;
+    return RADINTERP_OK;
+}
+
+typedef struct radinterp__ckey { float key; uint32_t patch; } radinterp__ckey;
+
+static int radinterp__cmp_ckey(const void *a, const void *b)
+{
+    const radinterp__ckey *x = (const radinterp__ckey *)a, *y = (const radinterp__ckey *)b;
+    if (x->key != y->key) return x->key < y->key ? -1 : 1;
+    return x->patch < y->patch ? -1 : (x->patch > y->patch);
+}
+
+/* The cluster tree over the patches (see above): clusters[0] is the top, a
+   parent comes before its children. Returns 0, or -1 when out of memory. */
+static int radinterp__build_clusters(radinterp_solution *s)
+{
+    uint32_t n = 0, i, top = 0, *stack;
+    radinterp__ckey *keys;
+    double acc = 0.0;
+    s->patch_cluster = (uint32_t *)radinterp__alloc_array(&s->allocator, s->patch_count, sizeof(uint32_t));
+    s->cluster_order = (uint32_t *)radinterp__alloc_array(&s->allocator, s->patch_count, sizeof(uint32_t));
+    s->cluster_cdf = (double *)radinterp__alloc_array(&s->allocator, s->patch_count, sizeof(double));
+    if (!s->patch_cluster || !s->cluster_order || !s->cluster_cdf) return -1;
+    for (i = 0; i < s->patch_count; i++) {
+        s->patch_cluster[i] = RADINTERP__NONE;
+        if (s->patches[i].count) s->cluster_order[n++] = i;
+    }
+    if (n < 2) return 0;
+    s->clusters = (radinterp__cluster *)radinterp__alloc_array(&s->allocator, n - 1, sizeof *s->clusters);
+    keys = (radinterp__ckey *)radinterp__alloc_array(&s->allocator, n, sizeof *keys);
+    stack = (uint32_t *)radinterp__alloc_array(&s->allocator, n, sizeof *stack);
+    if (!s->clusters || !keys || !stack) {
+        radinterp__free(&s->allocator, keys);
+        radinterp__free(&s->allocator, stack);
+        return -1;
+    }
+    memset(s->clusters, 0, (size_t)(n - 1) * sizeof *s->clusters);
+    s->clusters[0].first = 0;
+    s->clusters[0].count = n;
+    s->clusters[0].parent = RADINTERP__NONE;
+    s->cluster_count = 1;
+    stack[top++] = 0;
+    while (top) {
+        uint32_t c = stack[--top], first = s->clusters[c].first, count = s->clusters[c].count, half[2], h, axis = 0;
+        float clo[3], chi[3];
+        radinterp__box_empty(clo, chi);
+        radinterp__box_empty(s->clusters[c].lo, s->clusters[c].hi);
+        for (i = first; i < first + count; i++) {
+            const radinterp__patch *pt = &s->patches[s->cluster_order[i]];
+            float ctr[3];
+            int k;
+            for (k = 0; k < 3; k++) ctr[k] = (float)pt->centre[k];
+            radinterp__box_grow(clo, chi, ctr, ctr);
+            radinterp__box_grow(s->clusters[c].lo, s->clusters[c].hi, pt->lo, pt->hi);
+        }
+        if (chi[1] - clo[1] > chi[axis] - clo[axis]) axis = 1;
+        if (chi[2] - clo[2] > chi[axis] - clo[axis]) axis = 2;
+        for (i = 0; i < count; i++) {
+            keys[i].patch = s->cluster_order[first + i];
+            keys[i].key = (float)s->patches[keys[i].patch].centre[axis];
+        }
+        qsort(keys, count, sizeof *keys, radinterp__cmp_ckey);
+        for (i = 0; i < count; i++) s->cluster_order[first + i] = keys[i].patch;
+        half[0] = count / 2;
+        half[1] = count - half[0];
+        for (h = 0; h < 2; h++) {
+            uint32_t hf = first + (h ? half[0] : 0);
+            if (half[h] == 1) {
+                s->clusters[c].child[h] = s->patches[s->cluster_order[hf]].root;
+                s->patch_cluster[s->cluster_order[hf]] = c;
+                continue;
+            }
+            s->clusters[s->cluster_count].first = hf;
+            s->clusters[s->cluster_count].count = half[h];
+            s->clusters[s->cluster_count].parent = c;
+            s->clusters[c].child[h] = RADINTERP__CLUSTER | s->cluster_count;
+            stack[top++] = s->cluster_count++;
+        }
+    }
+    for (i = 0; i < n; i++) {
+        acc += s->patches[s->cluster_order[i]].area;
+        s->cluster_cdf[i] = acc;
+    }
+    radinterp__free(&s->allocator, keys);
+    radinterp__free(&s->allocator, stack);
+    return 0;
+}
+
+/* Pull (after push-pull): each cluster's power basis from its children. */
+static void radinterp__pull_clusters(radinterp_solution *s)
+{
+    uint32_t c = s->cluster_count, h;
+    int a, ch, k;
+    while (c-- > 0) {
+        radinterp__cluster *cl = &s->clusters[c];
+        double p[6][3], bound = 0.0, hmin = 0.0;
+        memset(p, 0, sizeof p);
+        for (h = 0; h < 2; h++) {
+            uint32_t el = cl->child[h];
+            double hm = radinterp__is_cluster(el) ? radinterp__cl(s, el)->hmin : s->patch_hmin[s->nodes[el].patch];
+            if (hm > 0.0 && (hmin == 0.0 || hm < hmin)) hmin = hm;
+            if (radinterp__is_cluster(el)) {
+                const radinterp__cluster *cc = radinterp__cl(s, el);
+                for (a = 0; a < 6; a++)
+                    for (ch = 0; ch < 3; ch++) p[a][ch] += cc->power[a][ch];
+            } else {
+                const radinterp__node *nd = &s->nodes[el];
+                const double *n = s->patches[nd->patch].n;
+                double area = (double)nd->area * nd->open;
+                for (k = 0; k < 3; k++) {
+                    a = 2 * k + (n[k] < 0.0);
+                    for (ch = 0; ch < 3; ch++) p[a][ch] += area * fabs(n[k]) * nd->b[ch];
+                }
+            }
+        }
+        for (ch = 0; ch < 3; ch++) {
+            double sum = 0.0;
+            for (k = 0; k < 3; k++) sum += p[2 * k][ch] > p[2 * k + 1][ch] ? p[2 * k][ch] : p[2 * k + 1][ch];
+            bound = sum > bound ? sum : bound;
+        }
+        for (a = 0; a < 6; a++)
+            for (ch = 0; ch < 3; ch++) cl->power[a][ch] = (float)p[a][ch];
+        cl->bound = (float)bound;
+        cl->hmin = (float)hmin;
+    }
+}
+
+/* Irradiance (rgb, on a surface facing the source) a cluster link delivers. */
+static void radinterp__clink_irradiance(const radinterp_solution *s, const radinterp__clink *l, double *e)
+{
+    double u[3];
+    int k;
+    for (k = 0; k < 3; k++) u[k] = -(double)l->dir[k];
+    radinterp__elem_power(s, l->source, u, e);
+    for (k = 0; k < 3; k++) e[k] *= l->k;
+}
+
+/* Gather of the clusters' own links (per axis direction), then push: each
+   cluster's down = its parent's down + its own. */
+static void radinterp__cluster_gather_job(void *ctx_, uint32_t index)
+{
+    radinterp_solution *s = (radinterp_solution *)ctx_;
+    uint32_t c = index * 64, end = c + 64;
+    if (end > s->cluster_count) end = s->cluster_count;
+    for (; c < end; c++) {
+        radinterp__cluster *cl = &s->clusters[c];
+        double e[6][3];
+        uint32_t l;
+        int a, k, ch;
+        memset(e, 0, sizeof e);
+        for (l = cl->first_link; l < cl->first_link + cl->link_count; l++) {
+            const radinterp__clink *lk = &s->clinks[l];
+            double en[3];
+            radinterp__clink_irradiance(s, lk, en);
+            for (k = 0; k < 3; k++) {
+                a = 2 * k + (lk->dir[k] < 0.0f);
+                for (ch = 0; ch < 3; ch++) e[a][ch] += fabs((double)lk->dir[k]) * en[ch];
+            }
+        }
+        for (a = 0; a < 6; a++)
+            for (ch = 0; ch < 3; ch++) cl->e[a][ch] = (float)e[a][ch];
+    }
+}
+
+static void radinterp__push_clusters(radinterp_solution *s)
+{
+    uint32_t c;
+    int a, ch;
+    for (c = 0; c < s->cluster_count; c++) {
+        radinterp__cluster *cl = &s->clusters[c];
+        const radinterp__cluster *up = cl->parent != RADINTERP__NONE ? &s->clusters[cl->parent] : NULL;
+        for (a = 0; a < 6; a++)
+            for (ch = 0; ch < 3; ch++) cl->down[a][ch] = cl->e[a][ch] + (up ? up->down[a][ch] : 0.0f);
+    }
+}
+
+/* Irradiance the clusters above a patch deliver to it (normal n). */
+static void radinterp__cluster_down(const radinterp_solution *s, uint32_t patch, double *h)
+{
+    const double *n = s->patches[patch].n;
+    uint32_t c = s->patch_cluster ? s->patch_cluster[patch] : RADINTERP__NONE;
+    int k, ch;
+    h[0] = h[1] = h[2] = 0.0;
+    if (c == RADINTERP__NONE) return;
+    for (k = 0; k < 3; k++) {
+        const float *d = s->clusters[c].down[2 * k + (n[k] < 0.0)];
+        for (ch = 0; ch < 3; ch++) h[ch] += fabs(n[k]) * d[ch];
+    }
+}
+
+/* New links made by refinement or by the initial linking of the clusters:
+   ordinary links (their candidate blockers are their parent link's, or
+   from shaft culling for those split off a cluster link) and cluster
+   links. */
+typedef struct radinterp__linker {
+    radinterp__grow pend;     /* radinterp__pending */
+    radinterp__grow cpend;    /* radinterp__cpending */
+    radinterp__grow shaft;    /* uint32_t: candidates found by shaft culling here */
+    uint32_t *stamp, mark;    /* per patch: the query that listed it last */
+    uint64_t candidates;      /* candidates of all pending ordinary links */
+} radinterp__linker;
+
+static int radinterp__linker_init(radinterp_solution *s, radinterp__linker *L)
+{
+    memset(L, 0, sizeof *L);
+    L->pend.item = sizeof(radinterp__pending);
+    L->cpend.item = sizeof(radinterp__cpending);
+    L->shaft.item = sizeof(uint32_t);
+    L->stamp = (uint32_t *)radinterp__alloc_array(&s->allocator, s->patch_count, sizeof(uint32_t));
+    if (!L->stamp) return 0;
+    memset(L->stamp, 0xFF, (size_t)s->patch_count * sizeof(uint32_t));
+    return 1;
+}
+
+static void radinterp__linker_free(radinterp_solution *s, radinterp__linker *L)
+{
+    radinterp__free(&s->allocator, L->pend.data);
+    radinterp__free(&s->allocator, L->cpend.data);
+    radinterp__free(&s->allocator, L->shaft.data);
+    radinterp__free(&s->allocator, L->stamp);
+}
+
+/* Does this patch never shine (black and not emitting)? */
+static int radinterp__patch_dark(const radinterp__patch *pt)
+{
+    return pt->rho[0] == 0.0f && pt->rho[1] == 0.0f && pt->rho[2] == 0.0f && pt->e[0] == 0.0f && pt->e[1] == 0.0f &&
+           pt->e[2] == 0.0f;
+}
+
+/* A new link from element src to element r. Returns 0 when out of memory. */
+static int radinterp__link_elements(radinterp_solution *s, radinterp__linker *L, uint32_t r, uint32_t src)
+{
+    radinterp__pending *pl;
+    uint32_t first, count;
+    if (radinterp__is_cluster(r) || radinterp__is_cluster(src)) {
+        radinterp__cpending *pc = (radinterp__cpending *)radinterp__grow_push(s, &L->cpend);
+        if (!pc) return 0;
+        memset(pc, 0, sizeof *pc);
+        pc->receiver = r;
+        pc->source = src;
+        return 1;
+    }
+    if (radinterp__patch_dark(&s->patches[s->nodes[src].patch])) return 1;
+    first = (uint32_t)L->shaft.count;
+    if (!radinterp__shaft_query(s, &s->nodes[r], &s->nodes[src], &L->shaft, L->stamp, L->mark++, &count)) return 0;
+    if (L->shaft.count > 0xFFFFFFFFu) return 0;
+    pl = (radinterp__pending *)radinterp__grow_push(s, &L->pend);
+    if (!pl) return 0;
+    memset(pl, 0, sizeof *pl);
+    pl->receiver = r;
+    pl->source = src;
+    pl->first = first;
+    pl->count = count;
+    pl->fresh = 1;
+    L->candidates += count;
+    return 1;
+}
+
+/* The four children of a link split at one end (4.4.1): which = 0 splits
+   the receiver node, 1 the source node. Returns 0 when out of memory. */
+static int radinterp__split_link(radinterp_solution *s, radinterp__linker *L, const radinterp__link *l, int which)
+{
+    uint32_t k;
+    if (radinterp__node_split(s, which == 0 ? l->receiver : l->source) != 0) return 0;
+    for (k = 0; k < 4; k++) {
+        radinterp__pending *pl = (radinterp__pending *)radinterp__grow_push(s, &L->pend);
+        if (!pl) return 0;
+        memset(pl, 0, sizeof *pl);
+        pl->receiver = which == 0 ? s->nodes[l->receiver].child + k : l->receiver;
+        pl->source = which == 1 ? s->nodes[l->source].child + k : l->source;
+        pl->first = l->first_blocker;
+        pl->count = l->blocker_count;
+        pl->filter = 1;
+        L->candidates += l->blocker_count;
+    }
+    return 1;
+}
+
+/* Splits a cluster link at its cluster end, the larger (by box diagonal)
+   when both are clusters. A patch at the other end stays whole: how finely
+   it is divided is for the ordinary links it ends up with to decide
+   (4.4.1). Returns 0 when out of memory. */
+static int radinterp__split_clink(radinterp_solution *s, radinterp__linker *L, uint32_t receiver, uint32_t source)
+{
+    int at_receiver = radinterp__elem_size(s, receiver) >= radinterp__elem_size(s, source), k;
+    const radinterp__cluster *cl;
+    if (!radinterp__is_cluster(at_receiver ? receiver : source)) at_receiver = !at_receiver;
+    cl = radinterp__cl(s, at_receiver ? receiver : source);
+    for (k = 0; k < 2; k++)
+        if (!radinterp__link_elements(s, L, at_receiver ? cl->child[k] : receiver, at_receiver ? source : cl->child[k]))
+            return 0;
+    return 1;
+}
+
+/* Computes the pending cluster links in batches, with progress between. */
+static radinterp_result radinterp__compute_cpending(radinterp_solution *s, const radinterp__run *run,
+                                                    radinterp__cpending *pending, uint32_t count)
+{
+    const uint32_t batch = 4096;
+    uint32_t begin, i;
+    for (begin = 0; begin < count; begin += batch) {
+        radinterp__cctx ctx;
+        ctx.s = s;
+        ctx.pending = pending;
+        ctx.begin = begin;
+        ctx.end = begin + batch < count ? begin + batch : count;
+        radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__clink_job, &ctx,
+                            (ctx.end - ctx.begin + RADINTERP__CLINK_JOB - 1) / RADINTERP__CLINK_JOB);
+        for (i = ctx.begin; i < ctx.end; i++) s->shadow_rays += pending[i].rays;
+        if (radinterp__cancelled(s, run)) return RADINTERP_ERROR_CANCELLED;
+    }
+    return RADINTERP_OK;
+}
+
+/* Measures the open fractions of the nodes made since *mark. */
+static void radinterp__open_new_nodes(radinterp_solution *s, const radinterp__run *run, uint32_t *mark)
+{
+    radinterp__open_ctx oc;
+    oc.s = s;
+    oc.first = *mark;
+    oc.count = s->node_count - *mark;
+    radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__open_job, &oc, (oc.count + 63) / 64);
+    *mark = s->node_count;
+}
+
+/* The pending cluster links in waves: each wave's transfers are computed
+   together; a link whose rays were all blocked is dropped, one that could
+   carry too much is split at once (its children form the next wave, or
+   become pending ordinary links), the others are kept in *accepted. So no
+   cluster link carries more than its share of the tolerance, even for one
+   iteration. */
+static radinterp_result radinterp__resolve_clinks(radinterp_solution *s, const radinterp__run *run, radinterp__linker *L,
+                                                  radinterp__grow *accepted, uint32_t *mark)
+{
+    radinterp_result res = RADINTERP_OK;
+    while (L->cpend.count && res == RADINTERP_OK) {
+        radinterp__grow wave = L->cpend;
+        radinterp__cpending *w = (radinterp__cpending *)wave.data;
+        uint32_t i;
+        memset(&L->cpend, 0, sizeof L->cpend);
+        L->cpend.item = sizeof(radinterp__cpending);
+        radinterp__open_new_nodes(s, run, mark);
+        res = radinterp__compute_cpending(s, run, w, (uint32_t)wave.count);
+        for (i = 0; i < wave.count && res == RADINTERP_OK; i++) {
+            radinterp__cpending *slot;
+            s->culled_links += w[i].hidden;
+            if (w[i].dead) continue;
+            if (w[i].coarse) {
+                if (!radinterp__split_clink(s, L, w[i].receiver, w[i].source)) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+                continue;
+            }
+            slot = (radinterp__cpending *)radinterp__grow_push(s, accepted);
+            if (!slot) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+            else *slot = w[i];
+        }
+        radinterp__free(&s->allocator, wave.data);
+    }
+    return res;
+}
+
+/* Resolves the pending cluster links, measures the new nodes' open
+   fractions, computes every pending ordinary link and installs them all
+   beside the kept ones. */
+static radinterp_result radinterp__finish_linking(radinterp_solution *s, const radinterp__run *run, radinterp__linker *L,
+                                                  uint32_t nodes_before, const radinterp__link *keep, uint32_t nkeep,
+                                                  const radinterp__clink *ckeep, uint32_t nckeep)
+{
+    radinterp__pending *p;
+    radinterp__grow accepted;
+    uint32_t *wide = NULL, *out = NULL, i, at = 0, mark = nodes_before;
+    size_t n;
+    radinterp_result res;
+    memset(&accepted, 0, sizeof accepted);
+    accepted.item = sizeof(radinterp__cpending);
+    res = radinterp__resolve_clinks(s, run, L, &accepted, &mark);
+    if (res == RADINTERP_OK) radinterp__open_new_nodes(s, run, &mark);
+    if (res == RADINTERP_OK && L->candidates > 0xFFFFFFFFu) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    /* each pending link gets its own copy of its candidates */
+    n = L->candidates ? (size_t)L->candidates : 1;
+    p = (radinterp__pending *)L->pend.data;
+    if (res == RADINTERP_OK) {
+        wide = (uint32_t *)radinterp__alloc_array(&s->allocator, n, sizeof(uint32_t));
+        out = (uint32_t *)radinterp__alloc_array(&s->allocator, n, sizeof(uint32_t));
+        if (!wide || !out) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    }
+    for (i = 0; i < L->pend.count && res == RADINTERP_OK; i++) {
+        const uint32_t *from = p[i].fresh ? (const uint32_t *)L->shaft.data : s->blockers;
+        if (p[i].count) memcpy(wide + at, from + p[i].first, p[i].count * sizeof(uint32_t));
+        p[i].first = at;
+        at += p[i].count;
+    }
+    if (res == RADINTERP_OK) res = radinterp__compute_pending(s, run, p, (uint32_t)L->pend.count, wide, out);
+    radinterp__free(&s->allocator, wide);
+    if (res == RADINTERP_OK) res = radinterp__install_links(s, keep, nkeep, p, (uint32_t)L->pend.count, out);
+    if (res == RADINTERP_OK)
+        res = radinterp__install_clinks(s, ckeep, nckeep, (const radinterp__cpending *)accepted.data,
+                                        (uint32_t)accepted.count);
+    radinterp__free(&s->allocator, out);
+    radinterp__free(&s->allocator, accepted.data);
+    return res;
+}
+
+/* Initial links of the clustered solver: every cluster's two children,
+   both ways. */
+static radinterp_result radinterp__initial_cluster_links(radinterp_solution *s, const radinterp__run *run)
+{
+    radinterp__linker L;
+    radinterp_result res = RADINTERP_OK;
+    uint32_t c;
+    if (radinterp__build_clusters(s) != 0) return RADINTERP_ERROR_OUT_OF_MEMORY;
+    if (!radinterp__linker_init(s, &L)) { radinterp__linker_free(s, &L); return RADINTERP_ERROR_OUT_OF_MEMORY; }
+    for (c = 0; c < s->cluster_count && res == RADINTERP_OK; c++) {
+        const radinterp__cluster *cl = &s->clusters[c];
+        uint32_t a = cl->child[0], b = cl->child[1];
+        if (!radinterp__link_elements(s, &L, a, b) || !radinterp__link_elements(s, &L, b, a)) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    }
+    if (res == RADINTERP_OK) res = radinterp__finish_linking(s, run, &L, s->node_count, NULL, 0, NULL, 0);
+    radinterp__linker_free(s, &L);
+    return res;
+}
+
 /* Transport-based refinement (4.4.1): a link whose estimated transport
    error B_src * (max - min point factor) exceeds eps is replaced by four
    links to the children of its larger element (the other one when the
    larger may not be split; a link that can go no further is final). A link
    whose source has children that differ by more than eps / F is replaced by
-   links from those children.
+   links from those children. A cluster link that could carry more than eps
+   is split as radinterp__split_clink says.
    Returns the number of links split, or -1 when out of memory (*res). */
 static int radinterp__refine(radinterp_solution *s, const radinterp__run *run, radinterp_result *res)
 {
-    radinterp__grow keep, pend;
-    uint32_t i, k, split = 0, *out = NULL, nodes_before = s->node_count;
-    uint64_t cand = 0;
+    radinterp__grow keep, ckeep;
+    radinterp__linker L;
+    uint32_t i, split = 0, nodes_before = s->node_count;
     memset(&keep, 0, sizeof keep);
-    memset(&pend, 0, sizeof pend);
+    memset(&ckeep, 0, sizeof ckeep);
     keep.item = sizeof(radinterp__link);
-    pend.item = sizeof(radinterp__pending);
+    ckeep.item = sizeof(radinterp__clink);
     *res = RADINTERP_OK;
-    for (i = 0; i < s->link_count; i++) {
+    if (!radinterp__linker_init(s, &L)) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    for (i = 0; i < s->link_count && *res == RADINTERP_OK; i++) {
         radinterp__link l = s->links[i];
         const float *b = s->nodes[l.source].b;
         double bmax = b[0] > b[1] ? (b[0] > b[2] ? b[0] : b[2]) : (b[1] > b[2] ? b[1] : b[2]);
         int which = -1;
-        if (!(l.flags & RADINTERP__LINK_FINAL) && bmax * l.dff > s->eps) {
+        double tol = radinterp__tolerance(s, s->nodes[l.receiver].level);
+        if (!(l.flags & RADINTERP__LINK_FINAL) && bmax * l.dff > tol) {
             const radinterp__node *r = &s->nodes[l.receiver], *src = &s->nodes[l.source];
             int rs = radinterp__can_split(s, r), ss = radinterp__can_split(s, src);
             if (rs && (r->area >= src->area || !ss)) which = 0;
             else if (ss) which = 1;
             else l.flags |= RADINTERP__LINK_FINAL;
-        } else if (!(l.flags & RADINTERP__LINK_FINAL) && radinterp__source_spread(s, l.source) * l.ff > s->eps) {
+        } else if (!(l.flags & RADINTERP__LINK_FINAL) && radinterp__source_spread(s, l.source) * l.ff > tol) {
             /* the source is not uniform (its children differ): the link
                carries its mean where the receiver may see a brighter or
                darker part, so it goes to the children */
@@ -3760,59 +4546,60 @@ static int radinterp__refine(radinterp_solution *s, const radinterp__run *run, r
         }
         if (which < 0) {
             radinterp__link *slot = (radinterp__link *)radinterp__grow_push(s, &keep);
-            if (!slot) { *res = RADINTERP_ERROR_OUT_OF_MEMORY; break; }
-            *slot = l;
+            if (!slot) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
+            else *slot = l;
             continue;
         }
-        if (radinterp__node_split(s, which == 0 ? l.receiver : l.source) != 0) {
-            *res = RADINTERP_ERROR_OUT_OF_MEMORY;
-            break;
-        }
+        if (!radinterp__split_link(s, &L, &l, which)) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
         split++;
-        for (k = 0; k < 4; k++) {
-            radinterp__pending *pl = (radinterp__pending *)radinterp__grow_push(s, &pend);
-            if (!pl) { *res = RADINTERP_ERROR_OUT_OF_MEMORY; break; }
-            memset(pl, 0, sizeof *pl);
-            pl->receiver = which == 0 ? s->nodes[l.receiver].child + k : l.receiver;
-            pl->source = which == 1 ? s->nodes[l.source].child + k : l.source;
-            pl->first = l.first_blocker;
-            pl->count = l.blocker_count;
-            pl->filter = 1;
-            cand += l.blocker_count;
-        }
-        if (*res != RADINTERP_OK) break;
     }
-    if (*res == RADINTERP_OK && s->node_count > nodes_before) {
-        radinterp__open_ctx oc;
-        oc.s = s;
-        oc.first = nodes_before;
-        oc.count = s->node_count - nodes_before;
-        radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__open_job, &oc, (oc.count + 63) / 64);
-    }
-    if (*res == RADINTERP_OK && split) {
-        /* the four children of a link share its candidates: give each its own copy */
-        radinterp__pending *p = (radinterp__pending *)pend.data;
-        size_t n = cand ? (size_t)cand : 1;
-        uint32_t *wide = (uint32_t *)radinterp__alloc_array(&s->allocator, n, sizeof(uint32_t)), at = 0;
-        out = (uint32_t *)radinterp__alloc_array(&s->allocator, n, sizeof(uint32_t));
-        if (!wide || !out || cand > 0xFFFFFFFFu) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
-        for (i = 0; i < pend.count && *res == RADINTERP_OK; i++) {
-            if (p[i].count) memcpy(wide + at, s->blockers + p[i].first, p[i].count * sizeof(uint32_t));
-            p[i].first = at;
-            at += p[i].count;
+    for (i = 0; i < s->clink_count && *res == RADINTERP_OK; i++) {
+        radinterp__clink l = s->clinks[i];
+        if (!radinterp__clink_too_coarse(s, l.receiver, l.source)) {
+            radinterp__clink *slot = (radinterp__clink *)radinterp__grow_push(s, &ckeep);
+            if (!slot) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
+            else *slot = l;
+            continue;
         }
-        if (*res == RADINTERP_OK) *res = radinterp__compute_pending(s, run, p, (uint32_t)pend.count, wide, out);
-        radinterp__free(&s->allocator, wide);
-        if (*res == RADINTERP_OK)
-            *res = radinterp__install_links(s, (const radinterp__link *)keep.data, (uint32_t)keep.count, p,
-                                            (uint32_t)pend.count, out);
-    } else if (*res == RADINTERP_OK && keep.count) {
+        if (!radinterp__split_clink(s, &L, l.receiver, l.source)) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
+        split++;
+    }
+    if (*res == RADINTERP_OK && split)
+        *res = radinterp__finish_linking(s, run, &L, nodes_before, (const radinterp__link *)keep.data, (uint32_t)keep.count,
+                                         (const radinterp__clink *)ckeep.data, (uint32_t)ckeep.count);
+    else if (*res == RADINTERP_OK && keep.count)
         memcpy(s->links, keep.data, keep.count * sizeof(radinterp__link)); /* keeps the final flags */
-    }
-    radinterp__free(&s->allocator, out);
+    radinterp__linker_free(s, &L);
     radinterp__free(&s->allocator, keep.data);
-    radinterp__free(&s->allocator, pend.data);
+    radinterp__free(&s->allocator, ckeep.data);
     return *res == RADINTERP_OK ? (int)split : -1;
+}
+
+/* Initial links without clusters (4.1): one per ordered pair of patches
+   that face each other (part of each lies in front of the other's plane),
+   with the blockers from shaft culling. Sources that can never shine
+   (black, not emitting) get none. */
+static radinterp_result radinterp__initial_links(radinterp_solution *s, const radinterp__run *run)
+{
+    radinterp__linker L;
+    radinterp_result res = RADINTERP_OK;
+    double tol = s->epsilon * s->diag;
+    uint32_t i, j;
+    if (!radinterp__linker_init(s, &L)) { radinterp__linker_free(s, &L); return RADINTERP_ERROR_OUT_OF_MEMORY; }
+    for (i = 0; i < s->patch_count && res == RADINTERP_OK; i++) {
+        const radinterp__patch *pr = &s->patches[i];
+        if (!pr->count) continue;
+        for (j = 0; j < s->patch_count && res == RADINTERP_OK; j++) {
+            const radinterp__patch *ps = &s->patches[j];
+            if (j == i || !ps->count) continue;
+            if (radinterp__patch_front(pr, ps->n, ps->d) <= tol || radinterp__patch_front(ps, pr->n, pr->d) <= tol)
+                continue;
+            if (!radinterp__link_elements(s, &L, pr->root, ps->root)) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+        }
+    }
+    if (res == RADINTERP_OK) res = radinterp__finish_linking(s, run, &L, s->node_count, NULL, 0, NULL, 0);
+    radinterp__linker_free(s, &L);
+    return res;
 }
 
 /* ---- gather and push-pull (4.3) ---------------------------------------- */
@@ -3823,7 +4610,9 @@ typedef struct radinterp__iter_ctx {
     double *patch_change;    /* largest relative change per patch */
 } radinterp__iter_ctx;
 
-/* H = sum over the node's links of F * B_src, from last iteration's B. */
+/* H = sum over the node's links of F * B_src, and over its cluster links of
+   the irradiance they carry times the cosine at the node, from last
+   iteration's B. */
 static void radinterp__gather_job(void *ctx_, uint32_t index)
 {
     radinterp__iter_ctx *ctx = (radinterp__iter_ctx *)ctx_;
@@ -3841,6 +4630,13 @@ static void radinterp__gather_job(void *ctx_, uint32_t index)
             h[1] += (double)lk->ff * b[1];
             h[2] += (double)lk->ff * b[2];
         }
+        for (l = nd->first_clink; l < nd->first_clink + nd->clink_count; l++) {
+            double e[3], c = radinterp__facing(s->patches[nd->patch].n, s->clinks[l].dir);
+            radinterp__clink_irradiance(s, &s->clinks[l], e);
+            h[0] += c * e[0];
+            h[1] += c * e[1];
+            h[2] += c * e[2];
+        }
         nd->h[0] = (float)h[0];
         nd->h[1] = (float)h[1];
         nd->h[2] = (float)h[2];
@@ -3853,11 +4649,11 @@ static void radinterp__gather_job(void *ctx_, uint32_t index)
    the whole node, in which enclosed points count zero, so it is divided by
    the open fraction, and averages weigh children by their open areas. */
 static void radinterp__push_pull(radinterp_solution *s, uint32_t index, const double *down, double floor,
-                                 double *change, double *b_out)
+                                 double *change, double *b_out, double *hmin)
 {
     radinterp__node *nd = &s->nodes[index];
     const radinterp__patch *pt = &s->patches[nd->patch];
-    double h[3], b[3], open = nd->open;
+    double h[3], b[3], open = nd->open, level;
     int k;
     for (k = 0; k < 3; k++) h[k] = down[k] + (open > 0.0 ? nd->h[k] / open : 0.0);
     if (nd->child == RADINTERP__NONE) {
@@ -3867,30 +4663,38 @@ static void radinterp__push_pull(radinterp_solution *s, uint32_t index, const do
             rel = open > 0.0 ? fabs(b[k] - nd->b[k]) / (b[k] > floor ? b[k] : floor) : 0.0;
             if (rel > *change) *change = rel;
         }
+        level = h[0] > h[1] ? (h[0] > h[2] ? h[0] : h[2]) : (h[1] > h[2] ? h[1] : h[2]);
+        if (open > 0.0 && level > 0.0 && (*hmin == 0.0 || level < *hmin)) *hmin = level;
     } else {
         double area = 0.0, cb[3];
         uint32_t c;
         b[0] = b[1] = b[2] = 0.0;
+        level = 0.0;
         for (c = 0; c < 4; c++) {
             uint32_t ch = s->nodes[index].child + c;
             double a = (double)s->nodes[ch].area * s->nodes[ch].open;
-            radinterp__push_pull(s, ch, h, floor, change, cb);
+            radinterp__push_pull(s, ch, h, floor, change, cb, hmin);
             for (k = 0; k < 3; k++) b[k] += a * cb[k];
+            level += a * s->nodes[ch].level;
             area += a;
         }
         nd = &s->nodes[index];
         for (k = 0; k < 3; k++) b[k] = area > 0.0 ? b[k] / area : pt->e[k];
+        level = area > 0.0 ? level / area : 0.0;
     }
     for (k = 0; k < 3; k++) { nd->b[k] = (float)b[k]; b_out[k] = b[k]; }
+    nd->level = (float)level;
 }
 
 static void radinterp__push_pull_job(void *ctx_, uint32_t index)
 {
     radinterp__iter_ctx *ctx = (radinterp__iter_ctx *)ctx_;
     radinterp_solution *s = ctx->s;
-    double zero[3] = {0.0, 0.0, 0.0}, b[3], change = 0.0;
-    if (s->patches[index].count) radinterp__push_pull(s, s->patches[index].root, zero, ctx->floor, &change, b);
+    double down[3], b[3], change = 0.0, hmin = 0.0;
+    radinterp__cluster_down(s, index, down);
+    if (s->patches[index].count) radinterp__push_pull(s, s->patches[index].root, down, ctx->floor, &change, b, &hmin);
     ctx->patch_change[index] = change;
+    s->patch_hmin[index] = hmin;
 }
 
 /* Gather + push-pull until no leaf changes by more than rel_error_cutoff,
@@ -3910,14 +4714,25 @@ static radinterp_result radinterp__iterate(radinterp_solution *s, radinterp__run
     ctx.per_job = 4096;
     ctx.floor = emax > 0.0 ? 1e-4 * emax : 1e-30;
     ctx.patch_change = (double *)radinterp__alloc_array(&s->allocator, s->patch_count, sizeof(double));
-    if (!ctx.patch_change) return RADINTERP_ERROR_OUT_OF_MEMORY;
+    s->patch_hmin = (double *)radinterp__alloc_array(&s->allocator, s->patch_count, sizeof(double));
+    if (!ctx.patch_change || !s->patch_hmin) {
+        radinterp__free(&s->allocator, ctx.patch_change);
+        return RADINTERP_ERROR_OUT_OF_MEMORY;
+    }
+    memset(s->patch_hmin, 0, (size_t)s->patch_count * sizeof(double));
+    radinterp__pull_clusters(s);
     for (it = 0; it < s->max_iterations; it++) {
         double change = 0.0;
         run->iteration = it;
         radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__gather_job, &ctx,
                             (s->node_count + ctx.per_job - 1) / ctx.per_job);
+        radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__cluster_gather_job, s,
+                            (s->cluster_count + 63) / 64);
+        radinterp__push_clusters(s);
         radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__push_pull_job, &ctx,
                             s->patch_count);
+        radinterp__pull_clusters(s);
+        s->levels_known = 1;
         for (i = 0; i < s->patch_count; i++) change = ctx.patch_change[i] > change ? ctx.patch_change[i] : change;
         s->iterations = it + 1;
         s->max_relative_change = (float)change;
@@ -4305,6 +5120,7 @@ typedef struct radinterp__solid {
 typedef struct radinterp__edge_rec {
     float key[6];                    /* the edge's ends, the lexicographically smaller first */
     uint32_t patch, forward;         /* forward: the patch runs from key[0..2] to key[3..5] */
+    uint32_t corner;                 /* the edge runs from this corner of the patch to the next */
 } radinterp__edge_rec;
 
 static int radinterp__edge_cmp(const void *a_, const void *b_)
@@ -4334,23 +5150,36 @@ static uint32_t radinterp__uf_find(uint32_t *parent, uint32_t x)
    directions (a leg standing under the edge of a table top makes that edge
    a three-patch edge, which joins nothing). Returns 0, or -1 when out of
    memory. */
-static int radinterp__join_patches(const radinterp_solution *s, uint32_t *parent)
+/* The edges of the patches (of the triangles alone with only_triangles),
+   sorted so that an edge's uses are neighbours; NULL when out of memory. */
+static radinterp__edge_rec *radinterp__patch_edges(const radinterp_solution *s, int only_triangles, uint32_t *count)
 {
     radinterp__edge_rec *e = (radinterp__edge_rec *)radinterp__alloc_array(&s->allocator, (size_t)s->patch_count * 4, sizeof *e);
-    uint32_t i, k, n = 0, run;
-    if (!e) return -1;
+    uint32_t i, k, n = 0;
+    if (!e) return NULL;
     for (i = 0; i < s->patch_count; i++) {
         const radinterp__patch *pt = &s->patches[i];
+        if (only_triangles && pt->count != 3) continue;
         for (k = 0; k < pt->count; k++) {
             const float *a = pt->v[k], *b = pt->v[(k + 1) % pt->count];
             e[n].forward = (uint32_t)radinterp__point_less(a, b);
             memcpy(e[n].key, e[n].forward ? a : b, 3 * sizeof(float));
             memcpy(e[n].key + 3, e[n].forward ? b : a, 3 * sizeof(float));
             e[n].patch = i;
+            e[n].corner = k;
             n++;
         }
     }
     qsort(e, n, sizeof *e, radinterp__edge_cmp);
+    *count = n;
+    return e;
+}
+
+static int radinterp__join_patches(const radinterp_solution *s, uint32_t *parent)
+{
+    uint32_t i, n, run;
+    radinterp__edge_rec *e = radinterp__patch_edges(s, 0, &n);
+    if (!e) return -1;
     for (i = 0; i < n; i += run) {
         for (run = 1; i + run < n && radinterp__edge_cmp(&e[i], &e[i + run]) == 0; run++) {}
         if (run == 2 && e[i].forward != e[i + 1].forward && e[i].patch != e[i + 1].patch)
@@ -4360,10 +5189,11 @@ static int radinterp__join_patches(const radinterp_solution *s, uint32_t *parent
     return 0;
 }
 
-/* Area of the convex hull of n 2D points (Andrew's monotone chain). */
-static double radinterp__hull_area(double (*p)[2], int n)
+/* The convex hull of n 2D points (Andrew's monotone chain; p is sorted in
+   place) into h (room for 2 n + 2), counter-clockwise, its first corner
+   repeated at the end. Returns the corner count with that repetition. */
+static int radinterp__hull_2d(double (*p)[2], int n, double (*h)[2])
 {
-    double h[2 * RADINTERP__SOLID_VERTS + 1][2];
     int i, j, m = 0, lower;
     for (i = 1; i < n; i++) /* insertion sort by x, then y */
         for (j = i; j > 0 && (p[j][0] < p[j - 1][0] || (p[j][0] == p[j - 1][0] && p[j][1] < p[j - 1][1])); j--) {
@@ -4379,6 +5209,14 @@ static double radinterp__hull_area(double (*p)[2], int n)
         while (m >= lower && radinterp__orient2d_area(h[m - 2], h[m - 1], p[i]) <= 0.0) m--;
         h[m][0] = p[i][0]; h[m][1] = p[i][1]; m++;
     }
+    return m;
+}
+
+/* Area of the convex hull of n 2D points. */
+static double radinterp__hull_area(double (*p)[2], int n)
+{
+    double h[2 * RADINTERP__SOLID_VERTS + 2][2];
+    int m = radinterp__hull_2d(p, n, h);
     return m > 3 ? 0.5 * fabs(radinterp__area2((const double (*)[2])h, m - 1)) : 0.0;
 }
 
@@ -4859,12 +5697,12 @@ static int radinterp__pieces_apart(const radinterp__piece *a, const radinterp__p
     return radinterp__outside_an_edge(a, b, tol) || radinterp__outside_an_edge(b, a, tol);
 }
 
-/* Appends the parts of piece f outside piece P to q->piece[*top ..):
-   walking P's edges, what lies outside an edge is a part, what lies inside
-   goes on to the next edge; what is left at the end lies inside P. Parts
-   smaller than tiny (twice the area) are dropped. Returns -1 when the
-   pieces outgrow their arrays. */
-static int radinterp__subtract_piece(radinterp__query *q, const radinterp__piece *f, const radinterp__piece *P,
+/* Appends the parts of piece f outside piece P to pool[*top ..) (pool
+   holds RADINTERP__PIECES): walking P's edges, what lies outside an edge is
+   a part, what lies inside goes on to the next edge; what is left at the
+   end lies inside P. Parts smaller than tiny (twice the area) are dropped.
+   Returns -1 when the pieces outgrow their arrays. */
+static int radinterp__subtract_piece(radinterp__piece *pool, const radinterp__piece *f, const radinterp__piece *P,
                                      int *top, double tol, double tiny)
 {
     radinterp__piece rest[2];
@@ -4874,7 +5712,7 @@ static int radinterp__subtract_piece(radinterp__query *q, const radinterp__piece
         radinterp__piece *out;
         int r;
         if (*top >= RADINTERP__PIECES) return -1;
-        out = &q->piece[*top];
+        out = &pool[*top];
         r = radinterp__split_piece(cur, P->ln[j], tol, &rest[which], out);
         if (r < 0) return -1;
         if (r == 1) continue;                       /* wholly inside this edge */
@@ -4886,28 +5724,271 @@ static int radinterp__subtract_piece(radinterp__query *q, const radinterp__piece
     return 0;
 }
 
+/* Replaces the pieces pool[first .. *end) by their parts outside piece P,
+   packed in their place (*end moves). Returns -1 when the pieces outgrow
+   their array. */
+static int radinterp__pieces_minus(radinterp__piece *pool, int first, int *end, const radinterp__piece *P, double tol,
+                                   double tiny)
+{
+    int top = *end, keep = first, f;
+    for (f = first; f < *end; f++) {
+        if (radinterp__pieces_apart(&pool[f], P, tol)) continue;
+        if (radinterp__subtract_piece(pool, &pool[f], P, &top, tol, tiny) != 0) return -1;
+        pool[f].count = 0; /* replaced by its parts outside P */
+    }
+    for (f = first; f < top; f++) /* close the gaps */
+        if (pool[f].count) {
+            if (f != keep) pool[keep] = pool[f];
+            keep++;
+        }
+    *end = keep;
+    return 0;
+}
+
 /* Adds the piece q->piece[*count] (a new shadow) to the union kept as
    disjoint pieces q->piece[0 .. *count): its parts outside every piece
    already there become new pieces. Returns -1 when the pieces outgrow their
    arrays. */
 static int radinterp__union_add(radinterp__query *q, int *count, double tol, double tiny)
 {
-    int old = *count, first = old, end = old + 1, i, f;
-    for (i = 0; i < old && end > first; i++) {
-        int top = end, keep = first;
-        for (f = first; f < end; f++) {
-            if (radinterp__pieces_apart(&q->piece[f], &q->piece[i], tol)) continue;
-            if (radinterp__subtract_piece(q, &q->piece[f], &q->piece[i], &top, tol, tiny) != 0) return -1;
-            q->piece[f].count = 0; /* replaced by its parts outside piece i */
-        }
-        for (f = first; f < top; f++) /* close the gaps */
-            if (q->piece[f].count) {
-                if (f != keep) q->piece[keep] = q->piece[f];
-                keep++;
-            }
-        end = keep;
-    }
+    int old = *count, first = old, end = old + 1, i;
+    for (i = 0; i < old && end > first; i++)
+        if (radinterp__pieces_minus(q->piece, first, &end, &q->piece[i], tol, tiny) != 0) return -1;
     *count = end;
+    return 0;
+}
+
+/* ---- planar occluders between two boxes (cluster links) ------------------
+   Every segment from box A to box B crosses a plane that has A on one side
+   and B on the other (either may touch it), and does so inside the convex
+   hull of the crossings of the segments between their corners. When
+   patches lying in that plane cover this region, every segment meets one
+   of them, so nothing in A sees anything in B (the region's bounding
+   rectangle in the plane is tested). Where A touches the plane
+   (its own wall face lies in it) a segment may start on a covering patch:
+   it is blocked, or carries no light, only when that patch faces A, so
+   then only patches facing A count (and likewise for B). What the patches
+   leave uncovered may still lie inside solid matter (where a wall meets
+   another wall the plane of either passes through the other's slab, and a
+   floor's plane passes under the walls standing on it): a segment crossing
+   there is inside a closed solid and must leave it through one of its
+   faces. A part counts as inside when from a few of its points rays both
+   ways along the plane's normal first meet back faces. Walls and floors
+   between rooms are such planes: the test settles for a whole pair of
+   clusters what rays could only suggest. */
+#define RADINTERP__HIDE_PATCHES 96   /* patches in separating planes examined per pair at most */
+#define RADINTERP__HIDE_VISITS 1024  /* triangles the search may visit per pair */
+#define RADINTERP__HIDE_INSIDE 8     /* uncovered parts that may be shown inside solids */
+
+typedef struct radinterp__hide_ctx {
+    const radinterp_solution *s;
+    float ulo[3], uhi[3];            /* the union of the two boxes */
+    float ilo[2][3], ihi[2][3];      /* their interiors (shrunk by tol): nothing wholly inside can separate */
+    const float *lo[2], *hi[2];
+    double tol;
+    uint32_t found[RADINTERP__HIDE_PATCHES], count, visits;
+} radinterp__hide_ctx;
+
+/* Least and greatest n . x - d over a box. */
+static void radinterp__box_range(const double *n, double d, const float *lo, const float *hi, double *mn, double *mx)
+{
+    int k;
+    *mn = *mx = -d;
+    for (k = 0; k < 3; k++) {
+        *mn += n[k] * (n[k] > 0.0 ? (double)lo[k] : (double)hi[k]);
+        *mx += n[k] * (n[k] > 0.0 ? (double)hi[k] : (double)lo[k]);
+    }
+}
+
+/* Does the plane have one box on each side (touching allowed, not both)? */
+static int radinterp__plane_separates(const radinterp__hide_ctx *c, const double *n, double d)
+{
+    double amn, amx, bmn, bmx, t = c->tol;
+    radinterp__box_range(n, d, c->lo[0], c->hi[0], &amn, &amx);
+    radinterp__box_range(n, d, c->lo[1], c->hi[1], &bmn, &bmx);
+    return (amx <= t && bmn >= -t && (amx < -t || bmn > t)) || (bmx <= t && amn >= -t && (bmx < -t || amn > t));
+}
+
+static int radinterp__inside_box(const float *lo, const float *hi, const float *ilo, const float *ihi)
+{
+    return lo[0] > ilo[0] && lo[1] > ilo[1] && lo[2] > ilo[2] && hi[0] < ihi[0] && hi[1] < ihi[1] && hi[2] < ihi[2];
+}
+
+static int radinterp__hide_box(const void *ctx_, const float *lo, const float *hi)
+{
+    const radinterp__hide_ctx *c = (const radinterp__hide_ctx *)ctx_;
+    int k;
+    for (k = 0; k < 3; k++)
+        if (lo[k] > c->uhi[k] || hi[k] < c->ulo[k]) return 0;
+    return !radinterp__inside_box(lo, hi, c->ilo[0], c->ihi[0]) && !radinterp__inside_box(lo, hi, c->ilo[1], c->ihi[1]);
+}
+
+static int radinterp__hide_visit(void *ctx_, uint32_t b)
+{
+    radinterp__hide_ctx *c = (radinterp__hide_ctx *)ctx_;
+    const radinterp__patch *pt = &c->s->patches[b];
+    uint32_t i;
+    if (++c->visits > RADINTERP__HIDE_VISITS) return 0;
+    if (!radinterp__plane_separates(c, pt->n, pt->d)) return 1;
+    for (i = 0; i < c->count; i++)
+        if (c->found[i] == b) return 1;
+    if (c->count == RADINTERP__HIDE_PATCHES) return 0;
+    c->found[c->count++] = b;
+    return 1;
+}
+
+/* A convex polygon (counter-clockwise) as a piece: its corners and edge
+   lines, edges shorter than tol left out. Returns 0 when it has too many
+   corners or too few. */
+static int radinterp__piece_from_poly(const double (*v)[2], int n, double tol, radinterp__piece *out)
+{
+    int i;
+    out->count = 0;
+    for (i = 0; i < n; i++) {
+        const double *a = v[i], *b = v[(i + 1) % n];
+        double dx = b[0] - a[0], dy = b[1] - a[1], len = sqrt(dx * dx + dy * dy), ln[3];
+        if (!(len > tol)) continue;
+        if (out->count == RADINTERP__PIECE_VERTS) return 0;
+        ln[0] = -dy / len;
+        ln[1] = dx / len;
+        ln[2] = -(ln[0] * a[0] + ln[1] * a[1]);
+        radinterp__piece_add(out, a, ln, 1.0);
+    }
+    if (out->count < 3) return 0;
+    radinterp__piece_bounds(out);
+    return 1;
+}
+
+/* Is x inside closed geometry: do rays from it both ways along n first
+   meet back faces? */
+static int radinterp__inside_solid(const radinterp_solution *s, const double *x, const double *n)
+{
+    float org[3], dir[3];
+    int k, sign;
+    for (k = 0; k < 3; k++) org[k] = (float)x[k];
+    for (sign = -1; sign <= 1; sign += 2) {
+        radinterp__hit hit;
+        const double *hn;
+        for (k = 0; k < 3; k++) dir[k] = (float)(sign * n[k]);
+        if (!radinterp__bvh_intersect(&s->bvh, org, dir, 0.0f, FLT_MAX, &hit)) return 0;
+        hn = s->patches[s->tri_patch[hit.tri]].n;
+        if (!(hn[0] * dir[0] + hn[1] * dir[1] + hn[2] * dir[2] > 0.0)) return 0;   /* a front face, or edge-on */
+    }
+    return 1;
+}
+
+/* Do the patches of c->found lying in the plane of c->found[first] cover
+   the crossings of the segments between the two boxes? */
+static int radinterp__plane_covers(const radinterp__hide_ctx *c, uint32_t first, unsigned char *used)
+{
+    const radinterp_solution *s = c->s;
+    const radinterp__patch *p0 = &s->patches[c->found[first]];
+    double rect[4][2], lo[2] = {DBL_MAX, DBL_MAX}, hi[2] = {-DBL_MAX, -DBL_MAX}, e1[3], e2[3], len;
+    radinterp__piece work[RADINTERP__PIECES], cover;
+    int i, j, k, end = 1, whole = 1, facing = 0;
+    uint32_t g;
+    {   /* a box touching the plane admits only patches facing it */
+        double amn, amx, bmn, bmx;
+        radinterp__box_range(p0->n, p0->d, c->lo[0], c->hi[0], &amn, &amx);
+        radinterp__box_range(p0->n, p0->d, c->lo[1], c->hi[1], &bmn, &bmx);
+        if (amx <= c->tol && amx >= -c->tol) facing = -1;       /* A touches from below: normals must point down */
+        else if (amn >= -c->tol && amn <= c->tol) facing = 1;   /* A touches from above */
+        else if (bmx <= c->tol && bmx >= -c->tol) facing = -1;
+        else if (bmn >= -c->tol && bmn <= c->tol) facing = 1;
+    }
+    e1[0] = fabs(p0->n[0]) < 0.6 ? 1.0 : 0.0;
+    e1[1] = e1[0] == 0.0 ? 1.0 : 0.0;
+    e1[2] = 0.0;
+    radinterp__d3_cross(p0->n, e1, e2);
+    len = radinterp__d3_len(e2);
+    for (k = 0; k < 3; k++) e2[k] /= len;
+    radinterp__d3_cross(e2, p0->n, e1);   /* e1 x e2 = n: counter-clockwise seen from the front */
+    for (i = 0; i < 8; i++)
+        for (j = 0; j < 8; j++) {
+            double a[3], b[3], ta, tb, t, x[3];
+            for (k = 0; k < 3; k++) {
+                a[k] = (i >> k) & 1 ? c->hi[0][k] : c->lo[0][k];
+                b[k] = (j >> k) & 1 ? c->hi[1][k] : c->lo[1][k];
+            }
+            ta = radinterp__d3_dot(p0->n, a) - p0->d;
+            tb = radinterp__d3_dot(p0->n, b) - p0->d;
+            t = ta != tb ? ta / (ta - tb) : 0.0;
+            t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
+            for (k = 0; k < 3; k++) x[k] = a[k] + t * (b[k] - a[k]);
+            for (k = 0; k < 2; k++) {
+                double u = radinterp__d3_dot(x, k ? e2 : e1);
+                lo[k] = u < lo[k] ? u : lo[k];
+                hi[k] = u > hi[k] ? u : hi[k];
+            }
+        }
+    /* the crossings' bounding rectangle in the plane (a little more than
+       their hull: covering it is enough) */
+    rect[0][0] = lo[0]; rect[0][1] = lo[1];
+    rect[1][0] = hi[0]; rect[1][1] = lo[1];
+    rect[2][0] = hi[0]; rect[2][1] = hi[1];
+    rect[3][0] = lo[0]; rect[3][1] = hi[1];
+    if (!radinterp__piece_from_poly((const double (*)[2])rect, 4, c->tol, &work[0])) return 0;
+    for (g = first; g < c->count && end > 0; g++) {
+        const radinterp__patch *pt = &s->patches[c->found[g]];
+        double v[4][2];
+        if (used[g] || fabs(fabs(radinterp__d3_dot(pt->n, p0->n)) - 1.0) > 1e-9) continue;
+        if (fabs(radinterp__d3_dot(pt->n, p0->n) > 0.0 ? pt->d - p0->d : pt->d + p0->d) > c->tol) continue;
+        used[g] = 1;
+        if (facing && (radinterp__d3_dot(pt->n, p0->n) > 0.0 ? 1 : -1) != facing) continue;
+        for (k = 0; k < (int)pt->count; k++) {  /* counter-clockwise in the frame whichever way it faces */
+            int from = radinterp__d3_dot(pt->n, p0->n) > 0.0 ? k : (int)pt->count - 1 - k;
+            double x[3];
+            radinterp__d3_from_f(pt->v[from], x);
+            v[k][0] = radinterp__d3_dot(x, e1);
+            v[k][1] = radinterp__d3_dot(x, e2);
+        }
+        if (!radinterp__piece_from_poly((const double (*)[2])v, (int)pt->count, c->tol, &cover)) continue;
+        if (radinterp__pieces_minus(work, 0, &end, &cover, c->tol, c->tol * c->tol) != 0) whole = 0;
+        if (!whole) break;
+    }
+    if (!whole || end > RADINTERP__HIDE_INSIDE) return 0;
+    for (i = 0; i < end; i++) {   /* what is left must lie inside solids */
+        double centre[2] = {0.0, 0.0};
+        for (k = 0; k < work[i].count; k++) {
+            centre[0] += work[i].v[k][0] / work[i].count;
+            centre[1] += work[i].v[k][1] / work[i].count;
+        }
+        for (k = -1; k < work[i].count; k++) {
+            double uv[2], x[3];
+            int a;
+            for (a = 0; a < 2; a++) uv[a] = k < 0 ? centre[a] : 0.5 * (centre[a] + work[i].v[k][a]);
+            for (a = 0; a < 3; a++) x[a] = p0->d * p0->n[a] + uv[0] * e1[a] + uv[1] * e2[a];
+            if (!radinterp__inside_solid(s, x, p0->n)) return 0;
+        }
+    }
+    return 1;
+}
+
+/* Are boxes a and b hidden from each other by patches in one plane between
+   them (see above)? A search that finds too much answers no. */
+static int radinterp__planes_hide(const radinterp_solution *s, const float *alo, const float *ahi, const float *blo,
+                                  const float *bhi)
+{
+    radinterp__hide_ctx c;
+    unsigned char used[RADINTERP__HIDE_PATCHES];
+    uint32_t i;
+    int k, h;
+    c.s = s;
+    c.tol = s->epsilon * s->diag;
+    c.lo[0] = alo; c.hi[0] = ahi; c.lo[1] = blo; c.hi[1] = bhi;
+    for (k = 0; k < 3; k++) {
+        c.ulo[k] = radinterp__minf(alo[k], blo[k]);
+        c.uhi[k] = radinterp__maxf(ahi[k], bhi[k]);
+        for (h = 0; h < 2; h++) {
+            c.ilo[h][k] = (float)((double)c.lo[h][k] + c.tol);
+            c.ihi[h][k] = (float)((double)c.hi[h][k] - c.tol);
+        }
+    }
+    c.count = c.visits = 0;
+    if (!radinterp__bvh_walk(s, radinterp__hide_box, radinterp__hide_visit, &c)) return 0;
+    memset(used, 0, sizeof used);
+    for (i = 0; i < c.count; i++)
+        if (!used[i] && radinterp__plane_covers(&c, i, used)) return 1;
     return 0;
 }
 
@@ -5383,7 +6464,7 @@ static radinterp_result radinterp__check_desc(const radinterp_desc *d)
         radinterp__log(d, "radinterp_solve: too many patches");
         return RADINTERP_ERROR_INVALID_ARGUMENT;
     }
-    if (radinterp__bad_param(d->eps) || radinterp__bad_param(d->min_area) || radinterp__bad_param(d->rel_error_cutoff) ||
+    if (radinterp__bad_param(d->eps) || radinterp__bad_param(d->eps_relative) || radinterp__bad_param(d->min_area) || radinterp__bad_param(d->rel_error_cutoff) ||
         radinterp__bad_param(d->push_off) || radinterp__bad_param(d->nudge) || radinterp__bad_param(d->min_bp_segment) ||
         radinterp__bad_param(d->epsilon) || radinterp__bad_param(d->planarity_tolerance)) {
         radinterp__log(d, "radinterp_solve: a parameter is negative, NaN or infinite");
@@ -5392,6 +6473,10 @@ static radinterp_result radinterp__check_desc(const radinterp_desc *d)
     if (d->ff_samples > RADINTERP_MAX_FF_SAMPLES || d->visibility_rays > RADINTERP_MAX_VISIBILITY_RAYS) {
         radinterp__log(d, "radinterp_solve: ff_samples %u or visibility_rays %u above its limit (%u, %u)",
                        d->ff_samples, d->visibility_rays, RADINTERP_MAX_FF_SAMPLES, RADINTERP_MAX_VISIBILITY_RAYS);
+        return RADINTERP_ERROR_INVALID_ARGUMENT;
+    }
+    if ((unsigned)d->clustering > (unsigned)RADINTERP_CLUSTERING_OFF) {
+        radinterp__log(d, "radinterp_solve: clustering %u is not a radinterp_clustering", (unsigned)d->clustering);
         return RADINTERP_ERROR_INVALID_ARGUMENT;
     }
     if ((unsigned)d->visibility > (unsigned)RADINTERP_VISIBILITY_TRIANGULATION) {
@@ -5492,6 +6577,104 @@ static radinterp_result radinterp__build_patches(radinterp_solution *s, const ra
         return RADINTERP_ERROR_INVALID_ARGUMENT;
     }
     return RADINTERP_OK;
+}
+
+/* ---- merging triangles into quadrilaterals ------------------------------
+   An engine exports a level as triangles: two per rectangle of a wall. Two
+   triangles of one material that share an edge (run in opposite
+   directions by them alone), lie in one plane (normals within 1e-5 rad,
+   the fourth corner within 1e-6 of the pair's size of the plane) and
+   together form a convex quadrilateral are the same surface as that
+   quadrilateral, which is then one patch: half the patches, links and
+   blockers. Pairs are taken greedily, longest shared edge first (the
+   diagonal of a split rectangle). The caller's indices stay valid: each
+   names the patch it became part of (desc.keep_triangles turns this off). */
+typedef struct radinterp__merge_cand { double len; uint32_t a, b, ea, eb; } radinterp__merge_cand;
+
+static int radinterp__cmp_merge(const void *x_, const void *y_)
+{
+    const radinterp__merge_cand *x = (const radinterp__merge_cand *)x_, *y = (const radinterp__merge_cand *)y_;
+    if (x->len != y->len) return x->len > y->len ? -1 : 1;
+    if (x->a != y->a) return x->a < y->a ? -1 : 1;
+    return x->b < y->b ? -1 : (x->b > y->b);
+}
+
+/* The quadrilateral of triangle a (edge ea shared) and triangle b (edge eb),
+   counter-clockwise; 1 when it is a valid convex patch (into *out). */
+static int radinterp__merged_quad(const radinterp_solution *s, uint32_t a, uint32_t ea, uint32_t b, uint32_t eb,
+                                  radinterp__patch *out)
+{
+    const radinterp__patch *pa = &s->patches[a], *pb = &s->patches[b];
+    double v[4][3], dev;
+    radinterp__d3_from_f(pa->v[ea], v[0]);
+    radinterp__d3_from_f(pb->v[(eb + 2) % 3], v[1]);   /* b's corner off the shared edge */
+    radinterp__d3_from_f(pa->v[(ea + 1) % 3], v[2]);
+    radinterp__d3_from_f(pa->v[(ea + 2) % 3], v[3]);
+    *out = *pa;
+    if (radinterp__d3_dot(pa->n, pb->n) < 1.0 - 5e-11) return 0;
+    if (fabs(radinterp__d3_dot(pa->n, v[1]) - pa->d) > 1e-6 * (pa->radius + pb->radius)) return 0;
+    return radinterp__patch_setup(out, v, 4, s->diag, 1e-6, &dev) == RADINTERP__PATCH_OK &&
+           fabs(out->area - pa->area - pb->area) <= 1e-9 * out->area;
+}
+
+/* Merges the triangle pairs (see above) and compacts the patches: a merged
+   pair's second triangle leaves the array; caller_patch maps the caller's
+   indices. Returns 0, or -1 when out of memory. */
+static int radinterp__merge_triangles(radinterp_solution *s, int merge)
+{
+    uint32_t n = 0, i, run, nc = 0, at = 0, *partner;
+    radinterp__edge_rec *e = NULL;
+    radinterp__merge_cand *cand = NULL;
+    s->caller_count = s->patch_count;
+    s->caller_patch = (uint32_t *)radinterp__alloc_array(&s->allocator, s->patch_count, sizeof(uint32_t));
+    s->first_caller = (uint32_t *)radinterp__alloc_array(&s->allocator, s->patch_count, sizeof(uint32_t));
+    partner = (uint32_t *)radinterp__alloc_array(&s->allocator, s->patch_count, sizeof(uint32_t));
+    if (!s->caller_patch || !s->first_caller || !partner) { radinterp__free(&s->allocator, partner); return -1; }
+    for (i = 0; i < s->patch_count; i++) partner[i] = RADINTERP__NONE;
+    if (merge) {
+        e = radinterp__patch_edges(s, 1, &n);
+        cand = (radinterp__merge_cand *)radinterp__alloc_array(&s->allocator, n / 2 + 1, sizeof *cand);
+        if (!e || !cand) { radinterp__free(&s->allocator, e); radinterp__free(&s->allocator, cand); radinterp__free(&s->allocator, partner); return -1; }
+        for (i = 0; i < n; i += run) {
+            const radinterp__edge_rec *x, *y;
+            double d[3];
+            for (run = 1; i + run < n && radinterp__edge_cmp(&e[i], &e[i + run]) == 0; run++) {}
+            if (run != 2) continue;
+            x = &e[i];
+            y = &e[i + 1];
+            if (x->forward == y->forward || x->patch == y->patch ||
+                s->patches[x->patch].material != s->patches[y->patch].material)
+                continue;
+            d[0] = (double)x->key[3] - x->key[0]; d[1] = (double)x->key[4] - x->key[1]; d[2] = (double)x->key[5] - x->key[2];
+            cand[nc].len = radinterp__d3_len(d);
+            cand[nc].a = x->patch < y->patch ? x->patch : y->patch;
+            cand[nc].b = x->patch < y->patch ? y->patch : x->patch;
+            cand[nc].ea = x->patch < y->patch ? x->corner : y->corner;
+            cand[nc].eb = x->patch < y->patch ? y->corner : x->corner;
+            nc++;
+        }
+        qsort(cand, nc, sizeof *cand, radinterp__cmp_merge);
+        for (i = 0; i < nc; i++) {
+            radinterp__patch q;
+            if (partner[cand[i].a] != RADINTERP__NONE || partner[cand[i].b] != RADINTERP__NONE) continue;
+            if (!radinterp__merged_quad(s, cand[i].a, cand[i].ea, cand[i].b, cand[i].eb, &q)) continue;
+            s->patches[cand[i].a] = q;
+            partner[cand[i].a] = cand[i].b;
+            partner[cand[i].b] = cand[i].a;
+            s->merged_patches++;
+        }
+    }
+    for (i = 0; i < s->patch_count; i++) {   /* compact: a pair's second triangle goes */
+        if (partner[i] != RADINTERP__NONE && partner[i] < i) { s->caller_patch[i] = s->caller_patch[partner[i]]; continue; }
+        s->caller_patch[i] = at;
+        s->first_caller[at] = i;
+        s->patches[at++] = s->patches[i];
+    }
+    s->patch_count = at;
+    radinterp__free(&s->allocator, e);
+    radinterp__free(&s->allocator, cand);
+    radinterp__free(&s->allocator, partner);
+    return 0;
 }
 
 /* The BVH over the patches' triangles (a quadrilateral gives two). */
@@ -5727,12 +6910,20 @@ RADINTERP_API void radinterp_solution_destroy(radinterp_solution *s)
     if (!s) return;
     a = s->allocator;
     radinterp__free(&a, s->patches);
+    radinterp__free(&a, s->caller_patch);
+    radinterp__free(&a, s->first_caller);
     radinterp__bvh_free(&s->bvh, &a);
     radinterp__free(&a, s->tri_patch);
     radinterp__free(&a, s->nodes);
     radinterp__free(&a, s->links);
     radinterp__free(&a, s->blockers);
     radinterp__free(&a, s->leaves);
+    radinterp__free(&a, s->clinks);
+    radinterp__free(&a, s->clusters);
+    radinterp__free(&a, s->cluster_order);
+    radinterp__free(&a, s->cluster_cdf);
+    radinterp__free(&a, s->patch_cluster);
+    radinterp__free(&a, s->patch_hmin);
     radinterp__free(&a, s->patch_solid);
     radinterp__free(&a, s->solids);
     radinterp__free(&a, s->solid_planes);
@@ -5773,8 +6964,11 @@ RADINTERP_API radinterp_result radinterp_solve(const radinterp_desc *desc, radin
             power += e * pt->area;
             area += pt->area;
         }
-        /* half the mean emitted radiosity: the scale of the light in the scene */
-        s->eps = desc->eps > 0.0f ? desc->eps : (area > 0.0 && power > 0.0 ? 0.5 * power / area : 1.0);
+        /* the mean emitted radiosity is the scale of the light in the scene */
+        double mean = area > 0.0 && power > 0.0 ? power / area : 1.0;
+        s->light_scale = mean;
+        s->eps = desc->eps > 0.0f ? desc->eps : RADINTERP__EPS_FLOOR * mean;
+        s->eps_relative = desc->eps_relative > 0.0f ? desc->eps_relative : desc->eps > 0.0f ? 0.0 : RADINTERP__EPS_RELATIVE;
         s->min_area = desc->min_area > 0.0f ? desc->min_area : (diag / 200.0) * (diag / 200.0);
         s->rel_error_cutoff = radinterp__def(desc->rel_error_cutoff, 1e-3f);
         s->max_iterations = radinterp__def(desc->max_iterations, 64u);
@@ -5786,11 +6980,15 @@ RADINTERP_API radinterp_result radinterp_solve(const radinterp_desc *desc, radin
         s->min_bp_segment = desc->min_bp_segment > 0.0f ? desc->min_bp_segment : 1e-9 * diag;
         s->seed = desc->seed;
         s->visibility = desc->visibility ? (uint32_t)desc->visibility : (uint32_t)RADINTERP_VISIBILITY_SHADOWS;
-        res = radinterp__build_bvh(s);
+        s->clustering = desc->clustering ? (uint32_t)desc->clustering : (uint32_t)RADINTERP_CLUSTERING_ON;
+        res = radinterp__merge_triangles(s, !desc->keep_triangles) != 0 ? RADINTERP_ERROR_OUT_OF_MEMORY : RADINTERP_OK;
+        if (res == RADINTERP_OK) res = radinterp__build_bvh(s);
         if (res == RADINTERP_OK && radinterp__find_solids(s) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     }
     if (res == RADINTERP_OK) res = radinterp__make_roots(s, &run);
-    if (res == RADINTERP_OK) res = radinterp__initial_links(s, &run);
+    if (res == RADINTERP_OK)
+        res = s->clustering == RADINTERP_CLUSTERING_OFF ? radinterp__initial_links(s, &run)
+                                                          : radinterp__initial_cluster_links(s, &run);
     if (res == RADINTERP_OK) res = radinterp__iterate(s, &run);
     if (res == RADINTERP_OK) res = radinterp__collect_leaves(s);
     if (res == RADINTERP_OK) res = radinterp__build_leaf_lists(s, &run);
@@ -5808,11 +7006,15 @@ RADINTERP_API void radinterp_solution_info(const radinterp_solution *s, radinter
     if (!info) return;
     memset(info, 0, sizeof *info);
     if (!s) return;
-    info->patch_count = s->patch_count;
+    info->patch_count = s->caller_count;
     info->skipped_patches = s->skipped_patches;
+    info->merged_patches = s->merged_patches;
     info->node_count = s->node_count;
     info->leaf_count = s->leaf_count;
     info->link_count = s->link_count;
+    info->cluster_count = s->cluster_count;
+    info->cluster_link_count = s->clink_count;
+    info->culled_links = s->culled_links;
     info->blocker_entries = s->blocker_count;
     info->iterations = s->iterations;
     info->converged = s->converged;
@@ -5821,6 +7023,8 @@ RADINTERP_API void radinterp_solution_info(const radinterp_solution *s, radinter
     info->bytes = sizeof *s + (size_t)s->patch_count * sizeof(radinterp__patch) +
                   (size_t)s->node_cap * sizeof(radinterp__node) + (size_t)s->link_count * sizeof(radinterp__link) +
                   (size_t)s->blocker_count * sizeof(uint32_t) + (size_t)s->leaf_count * sizeof(uint32_t) +
+                  (size_t)s->clink_count * sizeof(radinterp__clink) + (size_t)s->cluster_count * sizeof(radinterp__cluster) +
+                  (size_t)s->patch_count * (2 * sizeof(uint32_t) + sizeof(double)) +
                   (size_t)s->patch_count * sizeof(uint32_t) + (size_t)s->solid_count * sizeof(radinterp__solid) +
                   (size_t)s->solid_plane_count * (sizeof s->solid_planes[0] + sizeof(uint32_t)) +
                   (size_t)s->solid_member_count * sizeof(uint32_t) +
@@ -5835,8 +7039,16 @@ static int radinterp__patch_ok(const radinterp_solution *s, uint32_t patch)
     return s && patch < s->patch_count && s->patches[patch].count != 0;
 }
 
-RADINTERP_API radinterp_result radinterp_patch_radiosity(const radinterp_solution *s, uint32_t patch, float rgb[3])
+/* The patch the caller's patch became (merged triangles share one), or
+   NONE when out of range. */
+static uint32_t radinterp__patch_of(const radinterp_solution *s, uint32_t caller)
 {
+    return s && caller < s->caller_count ? s->caller_patch[caller] : RADINTERP__NONE;
+}
+
+RADINTERP_API radinterp_result radinterp_patch_radiosity(const radinterp_solution *s, uint32_t caller, float rgb[3])
+{
+    uint32_t patch = radinterp__patch_of(s, caller);
     if (!rgb) return RADINTERP_ERROR_INVALID_ARGUMENT;
     rgb[0] = rgb[1] = rgb[2] = 0.0f;
     if (!radinterp__patch_ok(s, patch)) return RADINTERP_ERROR_INVALID_ARGUMENT;
@@ -5871,7 +7083,7 @@ RADINTERP_API radinterp_result radinterp_get_leaf(const radinterp_solution *s, u
     memset(leaf, 0, sizeof *leaf);
     if (!s || index >= s->leaf_count) return RADINTERP_ERROR_INVALID_ARGUMENT;
     nd = &s->nodes[s->leaves[index]];
-    leaf->patch = nd->patch;
+    leaf->patch = s->first_caller[nd->patch];
     leaf->depth = nd->depth;
     leaf->vertex_count = nd->count;
     memcpy(leaf->vertices, nd->v, sizeof nd->v);
@@ -5890,8 +7102,33 @@ static int radinterp__near_box(const radinterp__node *nd, const double *x, doubl
     return 1;
 }
 
+/* Irradiance (rgb) the cluster links deliver to a point of patch in leaf:
+   those of the leaf, of its ancestors and of the clusters above the patch,
+   each times the cosine at the point. */
+static void radinterp__cluster_links_add(const radinterp_solution *s, uint32_t patch, uint32_t leaf, double *h)
+{
+    const double *n = s->patches[patch].n;
+    uint32_t node, c, l;
+    int k;
+    for (node = leaf; node != RADINTERP__NONE; node = s->nodes[node].parent)
+        for (l = s->nodes[node].first_clink; l < s->nodes[node].first_clink + s->nodes[node].clink_count; l++) {
+            double e[3], f = radinterp__facing(n, s->clinks[l].dir);
+            if (!(f > 0.0)) continue;
+            radinterp__clink_irradiance(s, &s->clinks[l], e);
+            for (k = 0; k < 3; k++) h[k] += f * e[k];
+        }
+    for (c = s->patch_cluster ? s->patch_cluster[patch] : RADINTERP__NONE; c != RADINTERP__NONE; c = s->clusters[c].parent)
+        for (l = s->clusters[c].first_link; l < s->clusters[c].first_link + s->clusters[c].link_count; l++) {
+            double e[3], f = radinterp__facing(n, s->clinks[l].dir);
+            if (!(f > 0.0)) continue;
+            radinterp__clink_irradiance(s, &s->clinks[l], e);
+            for (k = 0; k < 3; k++) h[k] += f * e[k];
+        }
+}
+
 /* Irradiance at p on a patch, summed over the links of its leaf and of the
-   leaf's ancestors (6.2), past the blockers of the leaf lists. */
+   leaf's ancestors (6.2), past the blockers of the leaf lists, and over the
+   cluster links above it. */
 static radinterp_result radinterp__irradiance(const radinterp_solution *s, uint32_t patch, const float p[3],
                                               const float toward[3], double *h, uint32_t *triangulated)
 {
@@ -5944,6 +7181,7 @@ static radinterp_result radinterp__irradiance(const radinterp_solution *s, uint3
             }
         }
     }
+    radinterp__cluster_links_add(s, patch, leaf, h);
     if (q->cdt_ready) radinterp__cdt_free(&q->cdt);
     if (triangulated) *triangulated = q->triangulated;
     return q->failed ? RADINTERP_ERROR_OUT_OF_MEMORY : RADINTERP_OK;
@@ -5955,7 +7193,7 @@ RADINTERP_API radinterp_result radinterp_irradiance_at_point(const radinterp_sol
     double h[3];
     radinterp_result r;
     if (!rgb) return RADINTERP_ERROR_INVALID_ARGUMENT;
-    r = radinterp__irradiance(s, patch, p, toward, h, NULL);
+    r = radinterp__irradiance(s, radinterp__patch_of(s, patch), p, toward, h, NULL);
     rgb[0] = (float)h[0];
     rgb[1] = (float)h[1];
     rgb[2] = (float)h[2];
@@ -5969,6 +7207,7 @@ RADINTERP_API radinterp_result radinterp_radiosity_at_point(const radinterp_solu
     radinterp_result r;
     int k;
     if (!rgb) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    patch = radinterp__patch_of(s, patch);
     r = radinterp__irradiance(s, patch, p, toward, h, NULL);
     if (r != RADINTERP_OK && r != RADINTERP_ERROR_OUT_OF_MEMORY) { rgb[0] = rgb[1] = rgb[2] = 0.0f; return r; }
     for (k = 0; k < 3; k++) rgb[k] = (float)(s->patches[patch].e[k] + s->patches[patch].rho[k] * h[k]);
@@ -7968,11 +9207,11 @@ static radinterp_result radinterp__triangulate_patch(radinterp__builder *b, radi
         if (r == 0) break;
         b->hanging = hanging;
         if (!with) { /* thinner than the weld distance, or its outline folds: left out */
-            radinterp__mesh_log(b, "radinterp_build_mesh: patch %u could not be triangulated: left out of the mesh", P);
+            radinterp__mesh_log(b, "radinterp_build_mesh: patch %u could not be triangulated: left out of the mesh", b->s->first_caller[P]);
             b->skipped++;
             return RADINTERP_OK;
         }
-        radinterp__mesh_log(b, "radinterp_build_mesh: patch %u triangulated without its discontinuities", P);
+        radinterp__mesh_log(b, "radinterp_build_mesh: patch %u triangulated without its discontinuities", b->s->first_caller[P]);
         b->fallback++;
         with = 0;
     }
@@ -8422,7 +9661,7 @@ static radinterp_result radinterp__assemble(radinterp__builder *b, const float *
     m->parallel_user = b->desc->parallel_user;
     m->vertex_count = (uint32_t)(b->pos.count / 3);
     m->triangle_count = (uint32_t)b->tris.count;
-    m->patch_count = s->patch_count;
+    m->patch_count = s->caller_count;
     m->disc_count = (uint32_t)b->discs.count;
     m->leaf_count = (uint32_t)b->leaves.count;
     if (radinterp__mesh_alloc(m) != 0) { radinterp_mesh_destroy(m); return RADINTERP_ERROR_OUT_OF_MEMORY; }
@@ -8430,13 +9669,13 @@ static radinterp_result radinterp__assemble(radinterp__builder *b, const float *
     memcpy(m->irr, coeff, (size_t)m->triangle_count * 18 * sizeof(float));
     for (i = 0; i < m->triangle_count; i++) {
         memcpy(m->indices + 3 * (size_t)i, tris[i].v, 3 * sizeof(uint32_t));
-        m->tri_patch[i] = tris[i].patch;
+        m->tri_patch[i] = s->first_caller[tris[i].patch];
         m->tri_leaf[i] = RADINTERP__MNODES(b)[tris[i].node].leaf;
         m->edge_flags[i] = (unsigned char)tris[i].flags;
     }
-    for (i = 0; i < s->patch_count; i++) {
-        memcpy(m->patch_rho + 3 * (size_t)i, s->patches[i].rho, 3 * sizeof(float));
-        memcpy(m->patch_e + 3 * (size_t)i, s->patches[i].e, 3 * sizeof(float));
+    for (i = 0; i < s->caller_count; i++) {
+        memcpy(m->patch_rho + 3 * (size_t)i, s->patches[s->caller_patch[i]].rho, 3 * sizeof(float));
+        memcpy(m->patch_e + 3 * (size_t)i, s->patches[s->caller_patch[i]].e, 3 * sizeof(float));
     }
     info = &m->info;
     for (i = 0; i < m->disc_count; i++) {
@@ -8445,9 +9684,9 @@ static radinterp_result radinterp__assemble(radinterp__builder *b, const float *
         radinterp__frame_to3df(&b->frames[d->receiver], d->p, o->a);
         radinterp__frame_to3df(&b->frames[d->receiver], d->q, o->b);
         o->type = d->type;
-        o->receiver = d->receiver;
-        o->source = d->source;
-        o->blocker = d->blocker;
+        o->receiver = s->first_caller[d->receiver];
+        o->source = d->source != RADINTERP_NO_PATCH ? s->first_caller[d->source] : RADINTERP_NO_PATCH;
+        o->blocker = d->blocker != RADINTERP_NO_PATCH ? s->first_caller[d->blocker] : RADINTERP_NO_PATCH;
         o->dset = d->dset;
         o->weight = radinterp__disc_weight(s, &dd[i]);
         o->active = (int)d->active;
@@ -8462,7 +9701,7 @@ static radinterp_result radinterp__assemble(radinterp__builder *b, const float *
         const radinterp__mnode *nd = &RADINTERP__MNODES(b)[RADINTERP__U32(b->leaves)[i]];
         radinterp_mesh_leaf *l = &m->leaves[i];
         memset(l, 0, sizeof *l);
-        l->patch = nd->patch;
+        l->patch = s->first_caller[nd->patch];
         l->depth = nd->depth;
         l->vertex_count = nd->count;
         memcpy(l->vertices, nd->v, sizeof l->vertices);
