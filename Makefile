@@ -13,6 +13,8 @@
 #   tests/ref_*.c     reference tests: linked with tests/reference (Embree, OpenEXR)
 #   tests/bench_*.c   benchmarks: optimised, linked with tests/reference
 #   examples/*.c      examples: one program each, `cc examples/x.c -lm` builds it
+#   tests/check_*.py  checks of the generated data (python3), run by make test
+#   tests/assimp_*.c  unit tests that need Assimp: built and run only when it is present
 
 CC      ?= cc
 CXX     ?= g++
@@ -39,6 +41,22 @@ BENCH_BINS   := $(patsubst tests/%.c,$(BUILD)/bench/%,$(wildcard tests/bench_*.c
 EXAMPLE_BINS := $(patsubst examples/%.c,$(BUILD)/examples/%,$(wildcard examples/*.c))
 REF_OBJS     := $(patsubst tests/reference/%.c,$(BUILD)/ref/%.o,$(wildcard tests/reference/*.c))
 LINKAGE_BIN  := $(BUILD)/tests/linkage
+DATA_CHECKS  := $(wildcard tests/check_*.py)
+
+# The generated buildings: the 1k and 4k presets are committed under
+# examples/data, the larger ones are written here for the benchmarks.
+BUILDINGS    := $(BUILD)/data/building_16k.obj $(BUILD)/data/building_64k.obj
+
+# Assimp (optional): when libassimp-dev is present (make deps installs it when
+# it can) the examples read every format it reads and tests/assimp_*.c run.
+ASSIMP_OK    := $(shell pkg-config --exists assimp 2>/dev/null && echo yes)
+ASSIMP_FLAGS := $(if $(ASSIMP_OK),-DEX_HAVE_ASSIMP $(shell pkg-config --cflags assimp))
+ASSIMP_LIBS  := $(if $(ASSIMP_OK),$(shell pkg-config --libs assimp))
+ASSIMP_BINS  := $(if $(ASSIMP_OK),$(patsubst tests/%.c,$(BUILD)/tests/%,$(wildcard tests/assimp_*.c)))
+# Programs are built again when Assimp comes or goes: this file changes then.
+ASSIMP_STAMP := $(BUILD)/.assimp-flags
+$(shell mkdir -p $(BUILD) && echo '$(ASSIMP_FLAGS) $(ASSIMP_LIBS)' | cmp -s - $(ASSIMP_STAMP) || \
+        echo '$(ASSIMP_FLAGS) $(ASSIMP_LIBS)' > $(ASSIMP_STAMP))
 
 # Compile checks: each header with its implementation, as C99, C11 and C++,
 # with gcc and (when present) clang, and once as static.
@@ -56,19 +74,23 @@ REF_CFLAGS = $(shell pkg-config --cflags OpenEXR 2>/dev/null)
 REF_LIBS   = -lembree3 $(shell pkg-config --libs OpenEXR 2>/dev/null)
 
 .SECONDARY:
-.PHONY: all examples test test-build bench bench-build demo deps clean
+.PHONY: all examples test test-build test-run bench bench-build demo deps clean
 
 all: examples
 examples: $(EXAMPLE_BINS)
 
 test: deps
 	@$(MAKE) --no-print-directory -j$(NPROC) test-build
-	@tests/run.sh $(LINKAGE_BIN) $(UNIT_BINS) $(TSAN_BINS) $(REF_BINS)
+	@$(MAKE) --no-print-directory test-run
 
-test-build: $(CHECK_OBJS) $(LINKAGE_BIN) $(UNIT_BINS) $(TSAN_BINS) $(REF_BINS) $(EXAMPLE_BINS)
+# A make of its own after deps: Assimp may just have been installed.
+test-run:
+	@tests/run.sh $(DATA_CHECKS) $(LINKAGE_BIN) $(UNIT_BINS) $(TSAN_BINS) $(REF_BINS) $(ASSIMP_BINS)
+
+test-build: $(CHECK_OBJS) $(LINKAGE_BIN) $(UNIT_BINS) $(TSAN_BINS) $(REF_BINS) $(ASSIMP_BINS) $(EXAMPLE_BINS)
 
 bench: deps
-	@$(MAKE) --no-print-directory -j$(NPROC) bench-build
+	@$(MAKE) --no-print-directory -j$(NPROC) bench-build $(BUILDINGS)
 	@for b in $(BENCH_BINS); do echo "== $$(basename $$b)"; $$b || exit 1; done
 
 bench-build: $(BENCH_BINS)
@@ -79,9 +101,12 @@ demo: $(DEMO)
 	@mkdir -p $(BUILD)/demo
 	$(DEMO) --out $(BUILD)/demo
 
-deps: $(BUILD)/.deps-ok
+deps: $(BUILD)/.deps-ok $(BUILD)/.deps-assimp-tried
 $(BUILD)/.deps-ok: tests/deps.sh
 	@CC=$(CC) tests/deps.sh
+	@mkdir -p $(BUILD) && touch $@
+$(BUILD)/.deps-assimp-tried: tests/deps_assimp.sh
+	@CC=$(CC) tests/deps_assimp.sh
 	@mkdir -p $(BUILD) && touch $@
 
 # --- compile checks -------------------------------------------------------
@@ -108,6 +133,9 @@ $(LINKAGE_BIN): tests/linkage/impl.c tests/linkage/main.c $(ALL_H) | $(BUILD)/te
 $(BUILD)/tests/test_%: tests/test_%.c $(ALL_H) | $(BUILD)/tests
 	$(CC) $(CFLAGS_PROJECT) -O1 -g $(SAN) $< -o $@ $(LIBS)
 
+$(BUILD)/tests/assimp_%: tests/assimp_%.c $(ALL_H) | $(BUILD)/tests
+	$(CC) $(CFLAGS_PROJECT) -O1 -g $(SAN) $(ASSIMP_FLAGS) $< -o $@ $(LIBS) $(ASSIMP_LIBS)
+
 $(BUILD)/tests/tsan_%: tests/tsan_%.c $(ALL_H) | $(BUILD)/tests
 	$(CC) $(CFLAGS_PROJECT) -O1 -g -fsanitize=thread $< -o $@ $(LIBS)
 
@@ -121,11 +149,14 @@ $(BUILD)/ref/%.o: tests/reference/%.c $(ALL_H) | $(BUILD)/ref
 $(BUILD)/bench/bench_%: tests/bench_%.c $(REF_OBJS) $(ALL_H) | $(BUILD)/bench
 	$(CC) $(CFLAGS_PROJECT) $(BENCH_OPT) $(REF_CFLAGS) $< $(REF_OBJS) -o $@ $(REF_LIBS) $(LIBS)
 
-# --- examples -------------------------------------------------------------
-$(BUILD)/examples/%: examples/%.c $(ALL_H) | $(BUILD)/examples
-	$(CC) $(CFLAGS_PROJECT) $(OPT) $< -o $@ $(LIBS)
+$(BUILD)/data/building_%.obj: examples/data/make_building.py | $(BUILD)/data
+	python3 examples/data/make_building.py --preset $* --out $(BUILD)/data/building_$*
 
-$(BUILD)/check $(BUILD)/tests $(BUILD)/ref $(BUILD)/bench $(BUILD)/examples:
+# --- examples -------------------------------------------------------------
+$(BUILD)/examples/%: examples/%.c $(ALL_H) $(ASSIMP_STAMP) | $(BUILD)/examples
+	$(CC) $(CFLAGS_PROJECT) $(OPT) $(ASSIMP_FLAGS) $< -o $@ $(LIBS) $(ASSIMP_LIBS)
+
+$(BUILD)/check $(BUILD)/tests $(BUILD)/ref $(BUILD)/bench $(BUILD)/examples $(BUILD)/data:
 	@mkdir -p $@
 
 clean:

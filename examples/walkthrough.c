@@ -36,9 +36,17 @@
    prints a per-frame timing table in the style of Greger's figure 5.8. With
    --reference every frame is also traced in full with the same shading
    (<out>/walkthrough_<mode>_NNN_full.png) and the table shows the LRMS error
-   of the displayed range. --help lists the options. */
+   of the displayed range. --help lists the options.
+
+   --scene FILE (with --up, --scale, --drop-coincident; scene_load.h) walks
+   through a user's scene instead of the office: any format the build reads
+   (OBJ; glTF, FBX, IFC, ... with Assimp), turned to y-up metres and written
+   as the OBJ + MTL pair the walkthrough reads, beside a copy of the bunny,
+   in a directory under --cache that becomes the data directory. The camera
+   and the bunny keep the office's paths. */
 #define _POSIX_C_SOURCE 200809L
 #include "examples/common/walkthrough.h"
+#include "examples/common/scene_load.h"
 
 #define SHEET_FRAMES 8
 #define SHEET_COLUMNS 4
@@ -178,18 +186,96 @@ static void table_summary(const run *u)
     if (o->reference) printf("  mean LRMS against full renders: %.4f\n", lrms / n);
 }
 
+/* ---- a user's scene ------------------------------------------------------- */
+
+/* Takes the scene options out of argv (they are not the walkthrough's own);
+   returns -1 on a bad value, else whether --scene was given. */
+static int take_scene_options(int *argc, char **argv, ex_scene_options *so, char *err, size_t err_size)
+{
+    int i, kept = 1, r;
+    ex_scene_options_default(so, NULL);
+    for (i = 1; i < *argc; i++) {
+        int first = i;
+        if ((r = ex_scene_option(*argc, argv, &i, so, err, err_size)) < 0) return -1;
+        if (r == 0) argv[kept++] = argv[first];
+    }
+    *argc = kept;
+    argv[kept] = NULL;
+    return so->path != NULL;
+}
+
+static int copy_file(const char *from, const char *to)
+{
+    FILE *in = fopen(from, "rb"), *out = in ? fopen(to, "wb") : NULL;
+    char buf[65536];
+    size_t n;
+    int ok = in && out;
+    while (ok && (n = fread(buf, 1, sizeof buf, in)) > 0) ok = fwrite(buf, 1, n, out) == n;
+    if (in) {
+        ok = ok && !ferror(in);
+        fclose(in);
+    }
+    if (out && fclose(out) != 0) ok = 0;
+    return ok ? 0 : -1;
+}
+
+/* Loads the user's scene and writes it, with the bunny, as the walkthrough's
+   data directory <cache>/scene_<hash of the file and the options>. */
+static int prepare_scene(const ex_scene_options *so, wt_options *o, char *dir, size_t dir_size, char *err, size_t err_size)
+{
+    obj_scene s;
+    char path[1280], bunny[1280];
+    uint64_t h = 1469598103934665603ull;
+    const char *c;
+    for (c = so->path; *c; c++) h = (h ^ (unsigned char)*c) * 1099511628211ull;
+    h = (h ^ (unsigned char)so->up) * 1099511628211ull;
+    h = (h ^ (uint64_t)(so->scale * 1e6f)) * 1099511628211ull;
+    h = (h ^ (uint64_t)so->drop_coincident) * 1099511628211ull;
+    snprintf(dir, dir_size, "%s/scene_%016llx", o->cache_dir, (unsigned long long)h);
+    if (wt_make_dirs(dir) != 0) {
+        snprintf(err, err_size, "cannot create %.900s: %s", dir, strerror(errno));
+        return -1;
+    }
+    if (ex_scene_load(so, &s, err, err_size) != 0) return -1;
+    if (o->verbose)
+        printf("walkthrough: %s: %u triangles, %u faces, %u materials; %u pairs of coincident faces\n", so->path, s.tri_count,
+               s.face_count, s.material_count, s.coincident_pairs);
+    snprintf(path, sizeof path, "%s/office.obj", dir);
+    snprintf(bunny, sizeof bunny, "%s/bunny.obj", o->data_dir);
+    if (obj_write(&s, path, err, err_size) != 0) { obj_free(&s); return -1; }
+    obj_free(&s);
+    snprintf(path, sizeof path, "%s/bunny.obj", dir);
+    if (copy_file(bunny, path) != 0) {
+        snprintf(err, err_size, "cannot copy %.500s to %.500s", bunny, path);
+        return -1;
+    }
+    o->data_dir = dir;
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     run u;
-    char err[1024];
-    int f, i, parsed;
+    char err[1024], scene_dir[1024];
+    int f, i, parsed, user_scene;
+    ex_scene_options so;
     double t0;
     memset(&u, 0, sizeof u);
     wt_options_default(&u.o);
+    user_scene = take_scene_options(&argc, argv, &so, err, sizeof err);
+    if (user_scene < 0) {
+        fprintf(stderr, "walkthrough: %s (see --help)\n", err);
+        return 2;
+    }
     parsed = wt_parse_options(argc, argv, &u.o, err, sizeof err);
     if (parsed <= 0) {
         if (parsed < 0) fprintf(stderr, "walkthrough: %s\n", err);
+        else fputs(ex_scene_options_help(), stdout);
         return parsed < 0 ? 2 : 0;
+    }
+    if (user_scene && prepare_scene(&so, &u.o, scene_dir, sizeof scene_dir, err, sizeof err) != 0) {
+        fprintf(stderr, "walkthrough: %s\n", err);
+        return 1;
     }
     wt_install_interrupt_handler();
     if (u.o.write_frames && wt_make_dirs(u.o.out) != 0) {

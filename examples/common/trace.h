@@ -13,8 +13,20 @@
 
    Surfaces are one-sided as in radiosity: a back face is black and does not
    emit. Materials: Kd (Lambert), Ks/Ns (normalized Phong, direct light only),
-   Ke (emitted radiance). Queries are thread-safe; set_transform is not (call
-   it between frames). */
+   Ke (emitted radiance), tf (straight-through transmittance: thin glass).
+   Queries are thread-safe; set_transform and set_sky are not (call them
+   between frames).
+
+   Glass and sky: a surface with transmittance tf passes tf of the light
+   straight through, from either side (no refraction); shadow rays are
+   attenuated by every such surface they cross (ex_tracer_transmittance),
+   and a path crossing one goes on through it or bounces, chosen in
+   proportion to tf and Kd, without using up a bounce. A sky
+   (ex_tracer_set_sky, scene_sky.h: constant or an environment map) is seen
+   by camera rays that leave the scene and lights every diffuse hit as
+   direct light: one cosine-distributed ray per hit, attenuated by the glass
+   it crosses. Scenes without glass or sky trace exactly as before (no extra
+   random numbers). */
 #ifndef EXAMPLES_COMMON_TRACE_H
 #define EXAMPLES_COMMON_TRACE_H
 
@@ -26,6 +38,7 @@
 #include <string.h>
 
 #include "obj.h"
+#include "scene_sky.h"
 
 #include "base.h"
 
@@ -599,6 +612,7 @@ TR__FN void tr__hemisphere_to_square(tr__vec3 d, float *u, float *v)
    ---------------------------------------------------------------------- */
 #define EX_TRACE_STATIC 0xFFFFFFFFu   /* instance index of the static scene */
 #define EX_TRACE_MAX_INSTANCES 16
+#define EX_TRACE_MAX_PASSES 16        /* glass surfaces a ray crosses before it counts as blocked */
 
 typedef tr__rng ex_rng;
 TR__FN ex_rng ex_rng_stream(uint64_t seed, uint64_t stream) { return tr__rng_stream(seed, stream); }
@@ -634,6 +648,9 @@ typedef struct ex_tracer {
     float epsilon;              /* ray offset: 1e-5 of the scene's size */
     ex__instance instances[EX_TRACE_MAX_INSTANCES];
     int instance_count;
+    int has_glass;              /* some material has tf > 0 */
+    int has_sky;
+    ex_sky sky;
 } ex_tracer;
 
 /* Cosine-weighted direction around +z: a concentric-disk point lifted to the
@@ -739,6 +756,8 @@ EX_FN ex_tracer *ex_tracer_create(const obj_scene *scene)
         t->emitter_cdf[t->emitter_count++] = sum;
     }
     t->emitter_power = sum;
+    for (i = 0; i < scene->material_count; i++)
+        t->has_glass |= scene->materials[i].tf[0] > 0 || scene->materials[i].tf[1] > 0 || scene->materials[i].tf[2] > 0;
     t->epsilon = 1e-5f;
     if (obj_bounds(scene, lo, hi))
         t->epsilon = 1e-5f * sqrtf((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
@@ -777,6 +796,17 @@ EX_FN int ex_tracer_set_transform(ex_tracer *t, int instance, const float m[12])
     if (!t || instance < 0 || instance >= t->instance_count || !ex__affine_invert(m, inv)) return -1;
     memcpy(t->instances[instance].to_world, m, sizeof inv);
     memcpy(t->instances[instance].to_object, inv, sizeof inv);
+    return 0;
+}
+
+/* The environment seen by rays that leave the scene (scene_sky.h); NULL or
+   a black constant sky turns it off. The map must outlive the tracer.
+   Returns -1 when the sky is invalid (negative, NaN, bad map size). */
+EX_FN int ex_tracer_set_sky(ex_tracer *t, const ex_sky *sky)
+{
+    if (!t || (sky && !ex_sky_valid(sky))) return -1;
+    t->has_sky = sky && (sky->map || sky->radiance[0] > 0 || sky->radiance[1] > 0 || sky->radiance[2] > 0);
+    if (sky) t->sky = *sky;
     return 0;
 }
 
@@ -846,6 +876,57 @@ EX_FN int ex_tracer_occluded(const ex_tracer *t, const float org[3], const float
     return 0;
 }
 
+/* The transmittance of a hit's surface: glass of the static scene, else 0. */
+static const float *ex__tracer_tf(const ex_tracer *t, const ex_trace_hit *h)
+{
+    static const float opaque[3] = { 0, 0, 0 };
+    return h->instance == EX_TRACE_STATIC ? t->scene->materials[t->scene->tri_material[h->tri]].tf : opaque;
+}
+
+static int ex__passes(const float tf[3]) { return tf[0] > 0 || tf[1] > 0 || tf[2] > 0; }
+
+/* Moves a ray's origin o (direction dir) just past the surface of its hit h,
+   along the ray so that the ray stays the same line: to a distance epsilon
+   behind the surface (the step capped at 100 epsilon for grazing rays).
+   Returns the step in units of |dir|. */
+static float ex__tracer_step_through(const ex_tracer *t, const ex_trace_hit *h, const float dir[3], float o[3])
+{
+    float cos_n = fabsf(h->normal[0] * dir[0] + h->normal[1] * dir[1] + h->normal[2] * dir[2]);
+    float step = h->t + t->epsilon / tr__maxf(cos_n, 0.01f * tr__length(tr__v3_load(dir)));
+    int k;
+    for (k = 0; k < 3; k++) o[k] += step * dir[k];
+    return step;
+}
+
+/* What reaches org + tmax dir from org: rgb = the product of the
+   transmittances of the glass crossed, 0 when something opaque is in the
+   way (or more than EX_TRACE_MAX_PASSES panes). Returns whether any light
+   gets through. Without glass in the scene, a shadow ray. */
+EX_FN int ex_tracer_transmittance(const ex_tracer *t, const float org[3], const float dir[3], float tmax, float rgb[3])
+{
+    float o[3];
+    int pass, k;
+    rgb[0] = rgb[1] = rgb[2] = 1.0f;
+    if (!t->has_glass) {
+        if (!ex_tracer_occluded(t, org, dir, tmax)) return 1;
+        rgb[0] = rgb[1] = rgb[2] = 0.0f;
+        return 0;
+    }
+    memcpy(o, org, sizeof o);
+    for (pass = 0; pass <= EX_TRACE_MAX_PASSES; pass++) {
+        ex_trace_hit h;
+        const float *tf;
+        if (!ex_tracer_intersect(t, o, dir, tmax, &h)) return 1;
+        tf = ex__tracer_tf(t, &h);
+        if (!ex__passes(tf) || pass == EX_TRACE_MAX_PASSES) break;
+        for (k = 0; k < 3; k++) rgb[k] *= tf[k];
+        tmax -= ex__tracer_step_through(t, &h, dir, o);
+        if (!(tmax > 0)) return 1;
+    }
+    rgb[0] = rgb[1] = rgb[2] = 0.0f;
+    return 0;
+}
+
 /* Material of a hit: reflectances and emission. */
 static void ex__tracer_material(const ex_tracer *t, const ex_trace_hit *h, const float **kd,
                                 const float **ks, float *ns, const float **ke)
@@ -869,7 +950,7 @@ static void ex__tracer_material(const ex_tracer *t, const ex_trace_hit *h, const
 static void ex__tracer_direct(const ex_tracer *t, const ex_trace_hit *h, const float dir[3], ex_rng *r, float rgb[3])
 {
     const float *kd, *ks, *ke, *lke;
-    float ns, pick = ex_rng_float(r) * t->emitter_power, su, sv, y[3], wi[3], d2, d, cos_x, cos_y, f, g, org[3];
+    float ns, pick = ex_rng_float(r) * t->emitter_power, su, sv, y[3], wi[3], d2, d, cos_x, cos_y, f, g, org[3], through[3];
     uint32_t lo = 0, hi, tri;
     const uint32_t *v;
     const float *p = t->scene->positions;
@@ -899,7 +980,7 @@ static void ex__tracer_direct(const ex_tracer *t, const ex_trace_hit *h, const f
     cos_x = wi[0] * h->normal[0] + wi[1] * h->normal[1] + wi[2] * h->normal[2];
     cos_y = -(wi[0] * t->tri_normal[3 * tri] + wi[1] * t->tri_normal[3 * tri + 1] + wi[2] * t->tri_normal[3 * tri + 2]);
     if (cos_x <= 0 || cos_y <= 0) return;
-    if (ex_tracer_occluded(t, org, wi, d * (1.0f - 1e-4f) - t->epsilon)) return;
+    if (!ex_tracer_transmittance(t, org, wi, d * (1.0f - 1e-4f) - t->epsilon, through)) return;
     ex__tracer_material(t, h, &kd, &ks, &ns, &ke);
     lke = t->scene->materials[t->scene->tri_material[tri]].ke;
     g = cos_x * cos_y / d2 * t->emitter_power / ex__luminance(lke); /* pdf_area = lum/power */
@@ -910,43 +991,102 @@ static void ex__tracer_direct(const ex_tracer *t, const ex_trace_hit *h, const f
         f = c > 0 ? (ns + 2) / (float)(2 * TR__PI) * powf(c, ns) : 0;
     }
     for (k = 0; k < 3; k++) rgb[k] = lke[k] * (kd[k] / (float)TR__PI + ks[k] * f) * g;
+    if (t->has_glass)
+        for (k = 0; k < 3; k++) rgb[k] *= through[k];
 }
 
-/* Radiance towards the ray's origin: emission seen directly, direct light,
-   and `bounces` more cosine-sampled diffuse bounces (each with direct light).
+/* Sky light reflected at a hit by its diffuse lobe: one cosine-distributed
+   direction (weight f cos / pdf = kd), through the glass on its way out. */
+static void ex__tracer_sky(const ex_tracer *t, const ex_trace_hit *h, const float kd[3], ex_rng *r, float rgb[3])
+{
+    tr__vec3 n = tr__v3_load(h->normal), tb, bb, s;
+    float org[3], dir[3], through[3], sky[3];
+    int k;
+    rgb[0] = rgb[1] = rgb[2] = 0;
+    tr__basis(n, &tb, &bb);
+    s = ex__sample_cosine(r);
+    s = tr__add(tr__add(tr__scale(tb, s.x), tr__scale(bb, s.y)), tr__scale(n, s.z));
+    dir[0] = s.x; dir[1] = s.y; dir[2] = s.z;
+    for (k = 0; k < 3; k++) org[k] = h->pos[k] + t->epsilon * h->normal[k];
+    if (!ex_tracer_transmittance(t, org, dir, FLT_MAX, through)) return;
+    ex_sky_radiance(&t->sky, dir, sky);
+    for (k = 0; k < 3; k++) rgb[k] = kd[k] * through[k] * sky[k];
+}
+
+/* Whether the path goes straight on through glass at a hit (from the back
+   side always, else chosen in proportion to tf against kd, or always when
+   no bounce is left to take); scales throughput by what it chose. */
+static int ex__tracer_pass_through(const float tf[3], const float kd[3], int front, int last, ex_rng *r,
+                                   float throughput[3])
+{
+    float p = 1.0f, lt = ex__luminance(tf), ld = ex__luminance(kd);
+    int k;
+    if (front && !last) p = lt + ld > 0 ? lt / (lt + ld) : 1.0f;
+    if (p < 1.0f && ex_rng_float(r) >= p) {
+        for (k = 0; k < 3; k++) throughput[k] *= kd[k] / (1.0f - p);   /* the bounce */
+        return 0;
+    }
+    for (k = 0; k < 3; k++) throughput[k] *= tf[k] / p;
+    return 1;
+}
+
+/* Radiance towards the ray's origin: emission seen directly, direct light
+   (emitters, and the sky when set), and `bounces` more cosine-sampled
+   diffuse bounces (each with direct light); glass is crossed on the way.
    first (optional) receives the first hit; returns whether there was one. */
 EX_FN int ex_tracer_shade(const ex_tracer *t, const float org[3], const float dir[3], int bounces,
                           ex_rng *r, float rgb[3], ex_trace_hit *first)
 {
     float o[3], d[3], throughput[3] = { 1, 1, 1 };
-    int depth, k;
+    int depth = 0, passes = 0, k;
     memcpy(o, org, sizeof o);
     memcpy(d, dir, sizeof d);
     rgb[0] = rgb[1] = rgb[2] = 0;
-    for (depth = 0; depth <= bounces; depth++) {
+    if (first) first->tri = TR__NO_HIT;
+    while (depth <= bounces) {
         ex_trace_hit h;
-        const float *kd, *ks, *ke;
+        const float *kd, *ks, *ke, *tf;
         float ns, direct[3];
         tr__vec3 n, tb, bb, s;
         if (!ex_tracer_intersect(t, o, d, FLT_MAX, &h)) {
-            if (depth == 0 && first) first->tri = TR__NO_HIT;
-            return depth > 0;
+            if (depth == 0 && t->has_sky) {   /* the sky seen from the camera, maybe through glass */
+                float sky[3];
+                ex_sky_radiance(&t->sky, d, sky);
+                for (k = 0; k < 3; k++) rgb[k] += throughput[k] * sky[k];
+            }
+            return depth > 0 || passes > 0;
         }
-        if (depth == 0 && first) *first = h;
-        if (!h.front) return 1;
+        if (depth == 0 && passes == 0 && first) *first = h;
+        tf = ex__tracer_tf(t, &h);
+        if (!h.front && !ex__passes(tf)) return 1;
         ex__tracer_material(t, &h, &kd, &ks, &ns, &ke);
-        if (depth == 0)
-            for (k = 0; k < 3; k++) rgb[k] += ke[k];
-        ex__tracer_direct(t, &h, d, r, direct);
-        for (k = 0; k < 3; k++) rgb[k] += throughput[k] * direct[k];
-        /* cosine-sampled continuation: weight f cos / pdf = kd */
-        for (k = 0; k < 3; k++) throughput[k] *= kd[k];
+        if (h.front) {
+            if (depth == 0)
+                for (k = 0; k < 3; k++) rgb[k] += throughput[k] * ke[k];
+            ex__tracer_direct(t, &h, d, r, direct);
+            for (k = 0; k < 3; k++) rgb[k] += throughput[k] * direct[k];
+            if (t->has_sky) {
+                ex__tracer_sky(t, &h, kd, r, direct);
+                for (k = 0; k < 3; k++) rgb[k] += throughput[k] * direct[k];
+            }
+        }
+        if (ex__passes(tf) && passes < EX_TRACE_MAX_PASSES) {
+            if (ex__tracer_pass_through(tf, kd, h.front, depth == bounces, r, throughput)) {
+                passes++;
+                ex__tracer_step_through(t, &h, d, o);
+                continue;
+            }
+        } else {   /* cosine-sampled continuation: weight f cos / pdf = kd */
+            for (k = 0; k < 3; k++) throughput[k] *= kd[k];
+        }
+        if (!h.front) break;
         n = tr__v3_load(h.normal);
         tr__basis(n, &tb, &bb);
         s = ex__sample_cosine(r);
         s = tr__add(tr__add(tr__scale(tb, s.x), tr__scale(bb, s.y)), tr__scale(n, s.z));
         d[0] = s.x; d[1] = s.y; d[2] = s.z;
         for (k = 0; k < 3; k++) o[k] = h.pos[k] + t->epsilon * h.normal[k];
+        depth++;
     }
     return 1;
 }

@@ -14,6 +14,7 @@
 #define REF_CHUNKS 64         /* fixed split of the samples: results do not depend on threads */
 #define REF_MIN_BOUNCES 3     /* Russian roulette starts after this many bounces */
 #define REF_MAX_BOUNCES 256   /* a safety net; roulette ends paths long before */
+#define REF_MAX_PASSES 64     /* panes a next-event ray crosses before it counts as blocked */
 
 typedef struct ref_vec { double x, y, z; } ref_vec;
 
@@ -33,6 +34,9 @@ struct ref_scene {
     uint32_t emitter_count;
     double emitter_power;
     double epsilon;           /* ray offset, relative to the scene size */
+    int has_glass;            /* some material has tf > 0 */
+    int has_sky;
+    ex_sky sky;
     ex_pool *pool;
 };
 
@@ -160,7 +164,7 @@ ref_scene *ref_scene_create(const float *positions, uint32_t vertex_count, const
                             uint32_t tri_count, const uint32_t *tri_material,
                             const ref_material *materials, uint32_t material_count)
 {
-    static const ref_material grey = { { 0.5f, 0.5f, 0.5f }, { 0, 0, 0 }, 1.0f, { 0, 0, 0 } };
+    static const ref_material grey = { { 0.5f, 0.5f, 0.5f }, { 0, 0, 0 }, 1.0f, { 0, 0, 0 }, { 0, 0, 0 } };
     ref_scene *s;
     uint32_t i;
     double lo[3] = { DBL_MAX, DBL_MAX, DBL_MAX }, hi[3] = { -DBL_MAX, -DBL_MAX, -DBL_MAX }, diag;
@@ -175,6 +179,11 @@ ref_scene *ref_scene_create(const float *positions, uint32_t vertex_count, const
     if (tri_material && materials)
         for (i = 0; i < tri_count; i++)
             if (tri_material[i] >= material_count) { fprintf(stderr, "ref_scene_create: material out of range\n"); return NULL; }
+    for (i = 0; materials && i < 3 * material_count; i++)
+        if (!(materials[i / 3].tf[i % 3] >= 0.0f && materials[i / 3].tf[i % 3] <= 1.0f)) {
+            fprintf(stderr, "ref_scene_create: transmittance outside [0, 1]\n");
+            return NULL;
+        }
     s = (ref_scene *)calloc(1, sizeof *s);
     if (!s) return NULL;
     s->tri_count = tri_count;
@@ -194,6 +203,7 @@ ref_scene *ref_scene_create(const float *positions, uint32_t vertex_count, const
     if (materials) memcpy(s->materials, materials, sizeof(ref_material) * material_count);
     else s->materials[0] = grey;
     if (tri_material && materials) memcpy(s->tri_material, tri_material, sizeof(uint32_t) * tri_count);
+    for (i = 0; i < 3 * s->material_count; i++) s->has_glass |= s->materials[i / 3].tf[i % 3] > 0.0f;
     for (i = 0; i < vertex_count; i++) {
         int k;
         for (k = 0; k < 3; k++) {
@@ -232,6 +242,7 @@ ref_scene *ref_scene_from_obj(const obj_scene *o)
         memcpy(m[i].kd, o->materials[i].kd, sizeof m[i].kd);
         memcpy(m[i].ks, o->materials[i].ks, sizeof m[i].ks);
         memcpy(m[i].ke, o->materials[i].ke, sizeof m[i].ke);
+        memcpy(m[i].tf, o->materials[i].tf, sizeof m[i].tf);
         m[i].ns = o->materials[i].ns;
     }
     s = ref_scene_create(o->positions, o->vertex_count, o->tri_indices, o->tri_count,
@@ -258,6 +269,14 @@ void ref_scene_destroy(ref_scene *s)
 }
 
 uint32_t ref_scene_triangle_count(const ref_scene *s) { return s ? s->tri_count : 0; }
+
+int ref_scene_set_sky(ref_scene *s, const ex_sky *sky)
+{
+    if (!s || (sky && !ex_sky_valid(sky))) return -1;
+    s->has_sky = sky && (sky->map || sky->radiance[0] > 0 || sky->radiance[1] > 0 || sky->radiance[2] > 0);
+    if (sky) s->sky = *sky;
+    return 0;
+}
 
 /* ---- rays ----------------------------------------------------------------- */
 
@@ -313,14 +332,46 @@ static int ref_trace(const ref_scene *s, ref_vec org, ref_vec dir, ref_hit *hit)
     return ref_intersect(s, o, d, 0.0f, FLT_MAX, hit);
 }
 
-/* Visibility between two points, both pushed off their surfaces. */
-static int ref_visible(const ref_scene *s, ref_vec a, ref_vec b)
+static int ref_passes(const float tf[3]) { return tf[0] > 0 || tf[1] > 0 || tf[2] > 0; }
+
+/* The distance a ray steps past a surface it crosses, along itself: to
+   epsilon behind the surface (capped at 100 epsilon for grazing rays). */
+static double ref_step_past(const ref_scene *s, uint32_t tri, ref_vec unit_dir)
 {
-    ref_vec d = rv_sub(b, a);
-    float o[3], dir[3];
+    double c = fabs(rv_dot(s->normal[tri], unit_dir));
+    return s->epsilon / (c > 0.01 ? c : 0.01);
+}
+
+/* What of the light leaving b reaches a (both pushed off their surfaces):
+   the product of the transmittances of the panes between them, or 0 when
+   something opaque is in the way (or more than REF_MAX_PASSES panes). */
+static int ref_transmittance(const ref_scene *s, ref_vec a, ref_vec b, double through[3])
+{
+    ref_vec d = rv_sub(b, a), unit;
+    float o[3], dir[3], tnear = 0.0f, tfar = 1.0f - 1e-4f;
+    double len = sqrt(rv_dot(d, d));
+    int pass, k;
+    through[0] = through[1] = through[2] = 1.0;
     o[0] = (float)a.x; o[1] = (float)a.y; o[2] = (float)a.z;
     dir[0] = (float)d.x; dir[1] = (float)d.y; dir[2] = (float)d.z;
-    return !ref_occluded(s, o, dir, 0.0f, 1.0f - 1e-4f);
+    if (!s->has_glass) {
+        if (!ref_occluded(s, o, dir, tnear, tfar)) return 1;
+        through[0] = through[1] = through[2] = 0.0;
+        return 0;
+    }
+    unit = rv_scale(d, len > 0 ? 1.0 / len : 0.0);
+    for (pass = 0; pass <= REF_MAX_PASSES; pass++) {
+        ref_hit h;
+        const float *tf;
+        if (!ref_intersect(s, o, dir, tnear, tfar, &h)) return 1;
+        tf = s->materials[s->tri_material[h.tri]].tf;
+        if (!ref_passes(tf) || pass == REF_MAX_PASSES) break;
+        for (k = 0; k < 3; k++) through[k] *= tf[k];
+        tnear = (float)(h.t + ref_step_past(s, h.tri, unit) / len);
+        if (!(tnear < tfar)) return 1;
+    }
+    through[0] = through[1] = through[2] = 0.0;
+    return 0;
 }
 
 static ref_vec ref_hit_point(const ref_scene *s, const ref_hit *h)
@@ -351,6 +402,7 @@ typedef struct ref_surface {
     ref_vec n, wo;           /* normal, direction towards the viewer */
     const ref_material *m;   /* NULL: the irradiance weight */
     int diffuse_only;        /* ignore the glossy lobe */
+    double reflect;          /* probability that a path reflects here rather than passing: 1 when opaque */
 } ref_surface;
 
 static ref_vec ref_mirror(const ref_surface *sf)
@@ -377,7 +429,8 @@ static void ref_brdf_eval(const ref_surface *sf, ref_vec wi, double f[3])
     for (k = 0; k < 3; k++) f[k] = sf->m->kd[k] / REF_PI + sf->m->ks[k] * glossy;
 }
 
-/* Solid-angle density with which ref_brdf_sample picks wi. */
+/* Solid-angle density with which ref_brdf_sample picks wi (given that the
+   path reflects). */
 static double ref_brdf_pdf(const ref_surface *sf, ref_vec wi)
 {
     double cos_i = rv_dot(sf->n, wi), pg = ref_glossy_weight(sf), pdf, c;
@@ -386,6 +439,17 @@ static double ref_brdf_pdf(const ref_surface *sf, ref_vec wi)
     if (pg > 0 && (c = rv_dot(ref_mirror(sf), wi)) > 0)
         pdf += pg * (sf->m->ns + 1) / (2 * REF_PI) * pow(c, sf->m->ns);
     return pdf;
+}
+
+/* The share of the paths at a surface that reflect: luminance of kd (+ ks)
+   against tf; 1 on an opaque surface or the irradiance weight. */
+static double ref_reflect_share(const ref_material *m, int diffuse_only)
+{
+    double lt, lr;
+    if (!m || !ref_passes(m->tf)) return 1.0;
+    lt = ref_luminance(m->tf);
+    lr = ref_luminance(m->kd) + (diffuse_only ? 0.0 : ref_luminance(m->ks));
+    return lr / (lr + lt);
 }
 
 /* Picks the next direction from the mix of the diffuse and glossy lobes.
@@ -421,7 +485,7 @@ static double ref_mis(double a, double b) { return a + b > 0 ? a / (a + b) : 0; 
    finding the same light by sampling the BRDF. */
 static void ref_direct(const ref_scene *s, ref_vec x, const ref_surface *sf, ref_rng *r, double out[3])
 {
-    double pick = ref_rand(r) * s->emitter_power, d2, cos_x, cos_y, g, w, f[3];
+    double pick = ref_rand(r) * s->emitter_power, d2, cos_x, cos_y, g, w, f[3], through[3];
     uint32_t lo = 0, hi = s->emitter_count - 1, tri;
     ref_vec y, wi;
     const float *ke;
@@ -441,48 +505,74 @@ static void ref_direct(const ref_scene *s, ref_vec x, const ref_surface *sf, ref
     cos_x = rv_dot(sf->n, wi);
     cos_y = -rv_dot(s->normal[tri], wi);
     if (cos_x <= 0 || cos_y <= 0) return; /* behind x, or the emitter's back face */
-    if (!ref_visible(s, rv_add(x, rv_scale(sf->n, s->epsilon)), rv_add(y, rv_scale(s->normal[tri], s->epsilon))))
+    if (!ref_transmittance(s, rv_add(x, rv_scale(sf->n, s->epsilon)), rv_add(y, rv_scale(s->normal[tri], s->epsilon)), through))
         return;
     ke = s->materials[s->tri_material[tri]].ke;
-    w = ref_mis(ref_light_pdf(s, tri, d2, cos_y), ref_brdf_pdf(sf, wi));
+    /* the path's own strategy finds this light with the density of
+       reflecting and then picking wi */
+    w = ref_mis(ref_light_pdf(s, tri, d2, cos_y), sf->reflect * ref_brdf_pdf(sf, wi));
     g = cos_x * cos_y / (d2 * (ref_luminance(ke) / s->emitter_power)) * w;
     ref_brdf_eval(sf, wi, f);
-    out[0] = ke[0] * f[0] * g;
-    out[1] = ke[1] * f[1] * g;
-    out[2] = ke[2] * f[2] * g;
+    out[0] = ke[0] * f[0] * g * through[0];
+    out[1] = ke[1] * f[1] * g * through[1];
+    out[2] = ke[2] * f[2] * g * through[2];
 }
 
 /* Radiance arriving at org along unit dir. pdf is the solid-angle density with
    which dir was sampled at org by a vertex that also did next-event
    estimation (its emission hit is then MIS-weighted), or 0 for a camera ray
-   (emission seen in full). Sky and back faces are black. */
+   (emission seen in full). Rays that leave the scene see the sky; back faces
+   are black. Through glass the path goes on in the same direction: the
+   last scattering vertex's pdf and distance still weigh the emitter it
+   finds, as its next-event ray crossed the same panes. */
 static void ref_radiance(const ref_scene *s, ref_vec org, ref_vec dir, int diffuse_only, double pdf,
                          ref_rng *r, double out[3])
 {
-    double throughput[3] = { 1, 1, 1 };
-    int depth;
+    double throughput[3] = { 1, 1, 1 }, travelled = 0;
+    int depth, k;
     out[0] = out[1] = out[2] = 0;
     for (depth = 0; depth < REF_MAX_BOUNCES; depth++) {
         ref_hit h;
         ref_surface sf;
         ref_vec x;
-        double direct[3], w[3], em;
-        int k;
-        if (!ref_trace(s, org, dir, &h) || !h.front) return;
+        double direct[3], w[3], em, dist;
+        if (!ref_trace(s, org, dir, &h)) {
+            if (s->has_sky) {
+                float d[3], sky[3];
+                d[0] = (float)dir.x; d[1] = (float)dir.y; d[2] = (float)dir.z;
+                ex_sky_radiance(&s->sky, d, sky);
+                for (k = 0; k < 3; k++) out[k] += throughput[k] * sky[k];
+            }
+            return;
+        }
         x = ref_hit_point(s, &h);
         sf.n = s->normal[h.tri];
         sf.wo = rv_scale(dir, -1);
         sf.m = &s->materials[s->tri_material[h.tri]];
         sf.diffuse_only = diffuse_only;
-        if (ref_luminance(sf.m->ke) > 0) {
-            em = pdf > 0 ? ref_mis(pdf, ref_light_pdf(s, h.tri, (double)h.t * h.t, rv_dot(sf.wo, sf.n))) : 1;
+        sf.reflect = h.front ? ref_reflect_share(sf.m, diffuse_only) : 0.0;
+        if (!h.front && !ref_passes(sf.m->tf)) return;
+        dist = travelled + h.t;
+        if (h.front && ref_luminance(sf.m->ke) > 0) {
+            em = pdf > 0 ? ref_mis(pdf, ref_light_pdf(s, h.tri, dist * dist, rv_dot(sf.wo, sf.n))) : 1;
             for (k = 0; k < 3; k++) out[k] += throughput[k] * sf.m->ke[k] * em;
         }
-        ref_direct(s, x, &sf, r, direct);
-        for (k = 0; k < 3; k++) out[k] += throughput[k] * direct[k];
+        if (h.front) {
+            ref_direct(s, x, &sf, r, direct);
+            for (k = 0; k < 3; k++) out[k] += throughput[k] * direct[k];
+        }
+        if (sf.reflect < 1.0 && ref_rand(r) >= sf.reflect) {   /* straight through */
+            double step = ref_step_past(s, h.tri, dir);
+            for (k = 0; k < 3; k++) throughput[k] *= sf.m->tf[k] / (1.0 - sf.reflect);
+            org = rv_add(x, rv_scale(dir, step));
+            travelled = dist + step;
+            continue;
+        }
         pdf = ref_brdf_sample(&sf, r, &dir, w);
         if (pdf <= 0) return;
-        for (k = 0; k < 3; k++) throughput[k] *= w[k];
+        pdf *= sf.reflect;
+        travelled = 0;
+        for (k = 0; k < 3; k++) throughput[k] *= w[k] / sf.reflect;
         if (depth + 1 >= REF_MIN_BOUNCES) { /* Russian roulette keeps the estimate unbiased */
             double q = throughput[0] > throughput[1] ? throughput[0] : throughput[1];
             if (throughput[2] > q) q = throughput[2];
@@ -642,6 +732,7 @@ static void ref_gi_irradiance(const ref_scene *s, ref_vec p, ref_vec n, ref_rng 
     sf.wo = n;
     sf.m = NULL;
     sf.diffuse_only = 1;
+    sf.reflect = 1.0;
     ref_direct(s, p, &sf, r, direct);
     pdf = ref_brdf_sample(&sf, r, &dir, w);
     if (pdf > 0) ref_radiance(s, rv_add(p, rv_scale(n, s->epsilon)), dir, 1, pdf, r, incoming);

@@ -11,6 +11,13 @@
        next-event estimation and Russian roulette (unbiased, all bounces).
    (c) ref_render: a path-traced image (Lambert + normalized Phong glossy, area
        lights from emissive triangles) for a pinhole camera.
+   (b) and (c) see thin glass and a sky: a material's tf passes that share
+   of the light straight through, from either side (a thin dielectric, no
+   refraction: next-event rays are attenuated by every pane they cross,
+   paths go through or reflect in proportion to tf against kd + ks), and
+   ref_scene_set_sky gives the radiance of rays that leave the scene
+   (examples/common/scene_sky.h: constant, or an environment map), found by
+   the paths' own directions.
 
    Conventions, shared with the headers:
    - Surfaces are one-sided as in radiosity: a triangle's front is the side its
@@ -35,12 +42,14 @@
 #include <stdint.h>
 
 #include "examples/common/obj.h"
+#include "examples/common/scene_sky.h"
 
 typedef struct ref_material {
     float kd[3];   /* diffuse reflectance */
     float ks[3];   /* glossy reflectance */
     float ns;      /* Phong exponent */
     float ke[3];   /* emitted radiance */
+    float tf[3];   /* straight-through transmittance in [0, 1] (thin glass); 0 = opaque */
 } ref_material;
 
 typedef struct ref_scene ref_scene;
@@ -73,6 +82,10 @@ ref_scene *ref_scene_create(const float *positions, uint32_t vertex_count, const
                             const ref_material *materials, uint32_t material_count);
 /* All triangles and materials of a loaded OBJ scene. */
 ref_scene *ref_scene_from_obj(const obj_scene *s);
+/* The radiance of rays that leave the scene in (b) and (c); NULL = black.
+   The sky is copied; its map must outlive the scene. Returns 0, or -1 when
+   the sky is invalid (ex_sky_valid). */
+int ref_scene_set_sky(ref_scene *scene, const ex_sky *sky);
 void ref_scene_destroy(ref_scene *scene);
 uint32_t ref_scene_triangle_count(const ref_scene *scene);
 
