@@ -811,6 +811,66 @@ static void radinterp__free(const radinterp_allocator *a, void *p)
     else RADINTERP_FREE(p);
 }
 
+/* A growable array of items of one size (the solver's and the mesher's). */
+typedef struct radinterp__buf {
+    void *data;
+    size_t count, cap, item;
+} radinterp__buf;
+
+static void radinterp__buf_init(radinterp__buf *b, size_t item)
+{
+    b->data = NULL;
+    b->count = b->cap = 0;
+    b->item = item;
+}
+
+static int radinterp__buf_reserve(const radinterp_allocator *a, radinterp__buf *b, size_t n)
+{
+    size_t cap;
+    void *p;
+    if (n <= b->cap) return 0;
+    cap = b->cap ? b->cap : 64;
+    while (cap < n) {
+        if (cap > SIZE_MAX / 2 / b->item) return -1;
+        cap *= 2;
+    }
+    p = radinterp__alloc_array(a, cap, b->item);
+    if (!p) return -1;
+    if (b->count) memcpy(p, b->data, b->count * b->item);
+    radinterp__free(a, b->data);
+    b->data = p;
+    b->cap = cap;
+    return 0;
+}
+
+/* A new zeroed item at the end, or NULL when out of memory. */
+static void *radinterp__buf_push(const radinterp_allocator *a, radinterp__buf *b)
+{
+    void *p;
+    if (b->count == b->cap && radinterp__buf_reserve(a, b, b->count + 1) != 0) return NULL;
+    p = (char *)b->data + b->count * b->item;
+    memset(p, 0, b->item);
+    b->count++;
+    return p;
+}
+
+static int radinterp__buf_u32(const radinterp_allocator *a, radinterp__buf *b, uint32_t v)
+{
+    uint32_t *p = (uint32_t *)radinterp__buf_push(a, b);
+    if (!p) return -1;
+    *p = v;
+    return 0;
+}
+
+static void radinterp__buf_free(const radinterp_allocator *a, radinterp__buf *b)
+{
+    radinterp__free(a, b->data);
+    b->data = NULL;
+    b->count = b->cap = 0;
+}
+
+#define RADINTERP__U32(b) ((uint32_t *)(b).data)
+
 /* Zero means default: the documented default replaces a zero field. */
 #define radinterp__def(v, d) ((v) ? (v) : (d))
 
@@ -3302,6 +3362,9 @@ static int radinterp__may_block(const radinterp_solution *s, const radinterp__sh
 /* ======================================================================
    12. hierarchical radiosity (Hardt chapter 4, after Hanrahan et al.)
    ---------------------------------------------------------------------- */
+static int radinterp__planes_hide(const radinterp_solution *s, const float *alo, const float *ahi, const float *blo,
+                                  const float *bhi);   /* section 13 */
+
 /* A link waiting for its form factor: made by the initial linking or by
    splitting a link. Its candidate blockers are its parent's (filtered here
    by the new, narrower shaft) or the shaft culling result. */
@@ -3528,7 +3591,10 @@ static void radinterp__link_compute(radinterp_solution *s, radinterp__pending *p
     }
     pl->ff = (float)(ratio * sum / n);
     pl->dff = (float)(ratio * (hi - lo));
-    if (pl->kept && seen && sum == 0.0 && hi == 0.0) pl->dead = pl->hidden = 1; /* every ray blocked: dropped */
+    /* every ray blocked: dropped when planes between them prove it (rays
+       miss the visible part of a large element too easily) */
+    if (pl->kept && seen && sum == 0.0 && hi == 0.0 && radinterp__planes_hide(s, r->lo, r->hi, src->lo, src->hi))
+        pl->dead = pl->hidden = 1;
 }
 
 static void radinterp__ff_job(void *ctx_, uint32_t index)
@@ -3640,25 +3706,6 @@ static radinterp_result radinterp__install_links(radinterp_solution *s, const ra
     return RADINTERP_OK;
 }
 
-/* Growable arrays for the serial parts of linking and refinement. */
-typedef struct radinterp__grow {
-    void *data;
-    size_t count, cap, item;
-} radinterp__grow;
-
-static void *radinterp__grow_push(radinterp_solution *s, radinterp__grow *g)
-{
-    if (g->count == g->cap) {
-        size_t cap = g->cap ? 2 * g->cap : 1024;
-        void *p = radinterp__alloc_array(&s->allocator, cap, g->item);
-        if (!p) return NULL;
-        if (g->count) memcpy(p, g->data, g->count * g->item);
-        radinterp__free(&s->allocator, g->data);
-        g->data = p;
-        g->cap = cap;
-    }
-    return (char *)g->data + g->item * g->count++;
-}
 
 /* Walks the BVH of the patches (a query of its own: the BVH's build and ray
    traversal stay in section 4): the nodes whose boxes pass `test`, and for
@@ -3692,11 +3739,69 @@ static int radinterp__bvh_walk(const radinterp_solution *s, radinterp__box_test 
     return 1;
 }
 
+static int radinterp__cmp_u32(const void *a, const void *b)
+{
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return x < y ? -1 : (x > y);
+}
+
+typedef struct radinterp__near_ctx {
+    const radinterp_solution *s;
+    const radinterp_allocator *a;
+    float lo[3], hi[3];          /* the box grown by the margin */
+    radinterp__buf *out;
+} radinterp__near_ctx;
+
+static int radinterp__boxes_meet(const float *alo, const float *ahi, const float *blo, const float *bhi)
+{
+    return alo[0] <= bhi[0] && blo[0] <= ahi[0] && alo[1] <= bhi[1] && blo[1] <= ahi[1] && alo[2] <= bhi[2] &&
+           blo[2] <= ahi[2];
+}
+
+static int radinterp__near_test(const void *ctx_, const float *lo, const float *hi)
+{
+    const radinterp__near_ctx *c = (const radinterp__near_ctx *)ctx_;
+    return radinterp__boxes_meet(lo, hi, c->lo, c->hi);
+}
+
+static int radinterp__near_visit(void *ctx_, uint32_t patch)
+{
+    radinterp__near_ctx *c = (radinterp__near_ctx *)ctx_;
+    const radinterp__patch *pt = &c->s->patches[patch];
+    if (!radinterp__boxes_meet(pt->lo, pt->hi, c->lo, c->hi)) return 1;
+    return radinterp__buf_u32(c->a, c->out, patch) == 0;
+}
+
+/* The patches whose boxes come within margin of the box [lo, hi], each
+   once, in ascending order, into out (uint32_t). Returns -1 when out of
+   memory. */
+static int radinterp__patches_near(const radinterp_solution *s, const radinterp_allocator *a, const float *lo,
+                                   const float *hi, double margin, radinterp__buf *out)
+{
+    radinterp__near_ctx c;
+    uint32_t i, n = 0;
+    int k;
+    c.s = s;
+    c.a = a;
+    c.out = out;
+    for (k = 0; k < 3; k++) {
+        c.lo[k] = (float)((double)lo[k] - margin);
+        c.hi[k] = (float)((double)hi[k] + margin);
+    }
+    out->count = 0;
+    if (!radinterp__bvh_walk(s, radinterp__near_test, radinterp__near_visit, &c)) return -1;
+    if (out->count > 1) qsort(out->data, out->count, sizeof(uint32_t), radinterp__cmp_u32);
+    for (i = 0; i < out->count; i++)
+        if (n == 0 || RADINTERP__U32(*out)[n - 1] != RADINTERP__U32(*out)[i]) RADINTERP__U32(*out)[n++] = RADINTERP__U32(*out)[i];
+    out->count = n;
+    return 0;
+}
+
 typedef struct radinterp__shaft_ctx {
     radinterp_solution *s;
     radinterp__shaft sh;
     const radinterp__node *r, *src;
-    radinterp__grow *pool;
+    radinterp__buf *pool;
     uint32_t *stamp, mark, *count;
     double tol;
 } radinterp__shaft_ctx;
@@ -3713,7 +3818,7 @@ static int radinterp__shaft_visit(void *ctx_, uint32_t b)
     uint32_t *slot;
     if (ctx->stamp[b] == ctx->mark || !radinterp__may_block(ctx->s, &ctx->sh, b, ctx->r, ctx->src)) return 1;
     ctx->stamp[b] = ctx->mark;
-    slot = (uint32_t *)radinterp__grow_push(ctx->s, ctx->pool);
+    slot = (uint32_t *)radinterp__buf_push(&ctx->s->allocator, ctx->pool);
     if (!slot) return 0;
     *slot = b;
     (*ctx->count)++;
@@ -3723,7 +3828,7 @@ static int radinterp__shaft_visit(void *ctx_, uint32_t b)
 /* Potential blockers of a pair of nodes: the patches whose boxes meet the
    shaft, found through the BVH (its leaves hold the patches' triangles). */
 static int radinterp__shaft_query(radinterp_solution *s, const radinterp__node *r, const radinterp__node *src,
-                                  radinterp__grow *pool, uint32_t *stamp, uint32_t mark, uint32_t *count)
+                                  radinterp__buf *pool, uint32_t *stamp, uint32_t mark, uint32_t *count)
 {
     radinterp__shaft_ctx ctx;
     ctx.s = s;
@@ -3942,8 +4047,6 @@ static int radinterp__box_behind(const radinterp_solution *s, const radinterp__n
     return m <= tol;
 }
 
-static int radinterp__planes_hide(const radinterp_solution *s, const float *alo, const float *ahi, const float *blo,
-                                  const float *bhi);   /* section 13 */
 
 /* Could a cluster link from source to receiver carry more than its share
    of the tolerance (see the clusters above)? The receiver's level is the
@@ -4281,9 +4384,9 @@ static void radinterp__cluster_down(const radinterp_solution *s, uint32_t patch,
    from shaft culling for those split off a cluster link) and cluster
    links. */
 typedef struct radinterp__linker {
-    radinterp__grow pend;     /* radinterp__pending */
-    radinterp__grow cpend;    /* radinterp__cpending */
-    radinterp__grow shaft;    /* uint32_t: candidates found by shaft culling here */
+    radinterp__buf pend;     /* radinterp__pending */
+    radinterp__buf cpend;    /* radinterp__cpending */
+    radinterp__buf shaft;    /* uint32_t: candidates found by shaft culling here */
     uint32_t *stamp, mark;    /* per patch: the query that listed it last */
     uint64_t candidates;      /* candidates of all pending ordinary links */
 } radinterp__linker;
@@ -4321,7 +4424,7 @@ static int radinterp__link_elements(radinterp_solution *s, radinterp__linker *L,
     radinterp__pending *pl;
     uint32_t first, count;
     if (radinterp__is_cluster(r) || radinterp__is_cluster(src)) {
-        radinterp__cpending *pc = (radinterp__cpending *)radinterp__grow_push(s, &L->cpend);
+        radinterp__cpending *pc = (radinterp__cpending *)radinterp__buf_push(&s->allocator, &L->cpend);
         if (!pc) return 0;
         memset(pc, 0, sizeof *pc);
         pc->receiver = r;
@@ -4332,7 +4435,7 @@ static int radinterp__link_elements(radinterp_solution *s, radinterp__linker *L,
     first = (uint32_t)L->shaft.count;
     if (!radinterp__shaft_query(s, &s->nodes[r], &s->nodes[src], &L->shaft, L->stamp, L->mark++, &count)) return 0;
     if (L->shaft.count > 0xFFFFFFFFu) return 0;
-    pl = (radinterp__pending *)radinterp__grow_push(s, &L->pend);
+    pl = (radinterp__pending *)radinterp__buf_push(&s->allocator, &L->pend);
     if (!pl) return 0;
     memset(pl, 0, sizeof *pl);
     pl->receiver = r;
@@ -4351,7 +4454,7 @@ static int radinterp__split_link(radinterp_solution *s, radinterp__linker *L, co
     uint32_t k;
     if (radinterp__node_split(s, which == 0 ? l->receiver : l->source) != 0) return 0;
     for (k = 0; k < 4; k++) {
-        radinterp__pending *pl = (radinterp__pending *)radinterp__grow_push(s, &L->pend);
+        radinterp__pending *pl = (radinterp__pending *)radinterp__buf_push(&s->allocator, &L->pend);
         if (!pl) return 0;
         memset(pl, 0, sizeof *pl);
         pl->receiver = which == 0 ? s->nodes[l->receiver].child + k : l->receiver;
@@ -4418,11 +4521,11 @@ static void radinterp__open_new_nodes(radinterp_solution *s, const radinterp__ru
    cluster link carries more than its share of the tolerance, even for one
    iteration. */
 static radinterp_result radinterp__resolve_clinks(radinterp_solution *s, const radinterp__run *run, radinterp__linker *L,
-                                                  radinterp__grow *accepted, uint32_t *mark)
+                                                  radinterp__buf *accepted, uint32_t *mark)
 {
     radinterp_result res = RADINTERP_OK;
     while (L->cpend.count && res == RADINTERP_OK) {
-        radinterp__grow wave = L->cpend;
+        radinterp__buf wave = L->cpend;
         radinterp__cpending *w = (radinterp__cpending *)wave.data;
         uint32_t i;
         memset(&L->cpend, 0, sizeof L->cpend);
@@ -4437,7 +4540,7 @@ static radinterp_result radinterp__resolve_clinks(radinterp_solution *s, const r
                 if (!radinterp__split_clink(s, L, w[i].receiver, w[i].source)) res = RADINTERP_ERROR_OUT_OF_MEMORY;
                 continue;
             }
-            slot = (radinterp__cpending *)radinterp__grow_push(s, accepted);
+            slot = (radinterp__cpending *)radinterp__buf_push(&s->allocator, accepted);
             if (!slot) res = RADINTERP_ERROR_OUT_OF_MEMORY;
             else *slot = w[i];
         }
@@ -4454,7 +4557,7 @@ static radinterp_result radinterp__finish_linking(radinterp_solution *s, const r
                                                   const radinterp__clink *ckeep, uint32_t nckeep)
 {
     radinterp__pending *p;
-    radinterp__grow accepted;
+    radinterp__buf accepted;
     uint32_t *wide = NULL, *out = NULL, i, at = 0, mark = nodes_before;
     size_t n;
     radinterp_result res;
@@ -4517,7 +4620,7 @@ static radinterp_result radinterp__initial_cluster_links(radinterp_solution *s, 
    Returns the number of links split, or -1 when out of memory (*res). */
 static int radinterp__refine(radinterp_solution *s, const radinterp__run *run, radinterp_result *res)
 {
-    radinterp__grow keep, ckeep;
+    radinterp__buf keep, ckeep;
     radinterp__linker L;
     uint32_t i, split = 0, nodes_before = s->node_count;
     memset(&keep, 0, sizeof keep);
@@ -4545,7 +4648,7 @@ static int radinterp__refine(radinterp_solution *s, const radinterp__run *run, r
             which = 1;
         }
         if (which < 0) {
-            radinterp__link *slot = (radinterp__link *)radinterp__grow_push(s, &keep);
+            radinterp__link *slot = (radinterp__link *)radinterp__buf_push(&s->allocator, &keep);
             if (!slot) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
             else *slot = l;
             continue;
@@ -4556,7 +4659,7 @@ static int radinterp__refine(radinterp_solution *s, const radinterp__run *run, r
     for (i = 0; i < s->clink_count && *res == RADINTERP_OK; i++) {
         radinterp__clink l = s->clinks[i];
         if (!radinterp__clink_too_coarse(s, l.receiver, l.source)) {
-            radinterp__clink *slot = (radinterp__clink *)radinterp__grow_push(s, &ckeep);
+            radinterp__clink *slot = (radinterp__clink *)radinterp__buf_push(&s->allocator, &ckeep);
             if (!slot) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
             else *slot = l;
             continue;
@@ -5327,12 +5430,22 @@ static int radinterp__facet_covered(const radinterp_solution *s, const uint32_t 
 /* A patch outside the group that lies in the plane pl and contains every
    corner of v in that plane (the hole's facet), or NONE. */
 static uint32_t radinterp__find_plug(const radinterp_solution *s, const uint32_t *members, uint32_t count,
-                                     const double (*v)[3], int nv, const double *pl, double tol)
+                                     const double (*v)[3], int nv, const double *pl, double tol, radinterp__buf *near)
 {
-    uint32_t i, j, k;
-    for (i = 0; i < s->patch_count; i++) {
-        const radinterp__patch *pt = &s->patches[i];
-        int l, inside = 1;
+    float lo[3], hi[3];
+    uint32_t i, j, k, m;
+    int l;
+    radinterp__box_empty(lo, hi);
+    for (l = 0; l < nv; l++)   /* the hole's corners: a plug's box holds them all */
+        if (fabs(radinterp__plane_dist(pl, v[l])) <= tol) {
+            float x[3];
+            for (k = 0; k < 3; k++) x[k] = (float)v[l][k];
+            radinterp__box_grow(lo, hi, x, x);
+        }
+    if (!(lo[0] <= hi[0]) || radinterp__patches_near(s, &s->allocator, lo, hi, tol, near) != 0) return RADINTERP__NONE;
+    for (m = 0; m < near->count; m++) {
+        const radinterp__patch *pt = &s->patches[i = RADINTERP__U32(*near)[m]];
+        int inside = 1;
         if (pt->count == 0 || fabs(fabs(radinterp__d3_dot(pt->n, pl)) - 1.0) > 1e-9) continue;
         for (k = 0; k < pt->count && inside; k++) {
             double x[3];
@@ -5358,7 +5471,8 @@ static uint32_t radinterp__find_plug(const radinterp_solution *s, const uint32_t
 }
 
 static int radinterp__solid_examine(const radinterp_solution *s, const uint32_t *members, uint32_t count,
-                                    double (*planes)[4], uint32_t *plugs, uint32_t *faces, uint32_t *holes)
+                                    double (*planes)[4], uint32_t *plugs, uint32_t *faces, uint32_t *holes,
+                                    radinterp__buf *near)
 {
     double v[RADINTERP__SOLID_VERTS][3], hull[RADINTERP__SOLID_PLANES][4], tol = s->epsilon * s->diag;
     int nv = 0, nh, i, l;
@@ -5385,7 +5499,7 @@ static int radinterp__solid_examine(const radinterp_solution *s, const uint32_t 
         if (radinterp__facet_covered(s, members, count, (const double (*)[3])v, nv, hull[i], tol)) {
             nf++;
         } else {
-            plugs[no] = radinterp__find_plug(s, members, count, (const double (*)[3])v, nv, hull[i], tol);
+            plugs[no] = radinterp__find_plug(s, members, count, (const double (*)[3])v, nv, hull[i], tol, near);
             memcpy(planes[no++], hull[i], sizeof hull[i]);
         }
     }
@@ -5400,6 +5514,8 @@ static int radinterp__find_solids(radinterp_solution *s)
 {
     uint32_t n = s->patch_count, i, pass, *parent, *next, *head;
     int res = 0;
+    radinterp__buf near;   /* patches near a hole (a plug; when out of memory for it, a hole counts unplugged) */
+    radinterp__buf_init(&near, sizeof(uint32_t));
     parent = (uint32_t *)radinterp__alloc_array(&s->allocator, n, sizeof(uint32_t));
     next = (uint32_t *)radinterp__alloc_array(&s->allocator, n, sizeof(uint32_t));
     head = (uint32_t *)radinterp__alloc_array(&s->allocator, n, sizeof(uint32_t));
@@ -5420,7 +5536,7 @@ static int radinterp__find_solids(radinterp_solution *s)
             double pl[RADINTERP__SOLID_PLANES][4];
             if (head[i] == RADINTERP__NONE || next[head[i]] == RADINTERP__NONE) continue; /* not a root, or alone */
             for (m = head[i]; m != RADINTERP__NONE && count < RADINTERP__SOLID_PATCHES; m = next[m]) members[count++] = m;
-            if (m != RADINTERP__NONE || !radinterp__solid_examine(s, members, count, pl, plugs, &faces, &holes)) continue;
+            if (m != RADINTERP__NONE || !radinterp__solid_examine(s, members, count, pl, plugs, &faces, &holes, &near)) continue;
             if (pass == 1) {
                 radinterp__solid *so = &s->solids[solids];
                 so->first_plane = planes;
@@ -5448,6 +5564,7 @@ static int radinterp__find_solids(radinterp_solution *s)
             s->solid_member_count = members_total;
         }
     }
+    radinterp__buf_free(&s->allocator, &near);
     radinterp__free(&s->allocator, parent);
     radinterp__free(&s->allocator, next);
     radinterp__free(&s->allocator, head);
@@ -7235,64 +7352,6 @@ RADINTERP_API const char *radinterp_result_string(radinterp_result r)
    radinterp__irradiance) and never changes it: the mesh keeps its own copy
    of the quadtrees, which it restricts and refines.
    ---------------------------------------------------------------------- */
-typedef struct radinterp__buf {
-    void *data;
-    size_t count, cap, item;
-} radinterp__buf;
-
-static void radinterp__buf_init(radinterp__buf *b, size_t item)
-{
-    b->data = NULL;
-    b->count = b->cap = 0;
-    b->item = item;
-}
-
-static int radinterp__buf_reserve(const radinterp_allocator *a, radinterp__buf *b, size_t n)
-{
-    size_t cap;
-    void *p;
-    if (n <= b->cap) return 0;
-    cap = b->cap ? b->cap : 64;
-    while (cap < n) {
-        if (cap > SIZE_MAX / 2 / b->item) return -1;
-        cap *= 2;
-    }
-    p = radinterp__alloc_array(a, cap, b->item);
-    if (!p) return -1;
-    if (b->count) memcpy(p, b->data, b->count * b->item);
-    radinterp__free(a, b->data);
-    b->data = p;
-    b->cap = cap;
-    return 0;
-}
-
-/* A new zeroed item at the end, or NULL when out of memory. */
-static void *radinterp__buf_push(const radinterp_allocator *a, radinterp__buf *b)
-{
-    void *p;
-    if (b->count == b->cap && radinterp__buf_reserve(a, b, b->count + 1) != 0) return NULL;
-    p = (char *)b->data + b->count * b->item;
-    memset(p, 0, b->item);
-    b->count++;
-    return p;
-}
-
-static int radinterp__buf_u32(const radinterp_allocator *a, radinterp__buf *b, uint32_t v)
-{
-    uint32_t *p = (uint32_t *)radinterp__buf_push(a, b);
-    if (!p) return -1;
-    *p = v;
-    return 0;
-}
-
-static void radinterp__buf_free(const radinterp_allocator *a, radinterp__buf *b)
-{
-    radinterp__free(a, b->data);
-    b->data = NULL;
-    b->count = b->cap = 0;
-}
-
-#define RADINTERP__U32(b) ((uint32_t *)(b).data)
 
 /* Open addressing from keys of `words` 32-bit words to values (NONE marks
    an empty slot, so it cannot be stored). */
@@ -7560,7 +7619,7 @@ typedef struct radinterp__builder {
     uint32_t *seg_first, *seg_count;
     radinterp__buf pool;             /* radinterp__bvert */
     radinterp__hmap canon;           /* point -> pool index of its representative */
-    radinterp__buf reps;             /* pool entries sorted by x */
+    uint32_t *pool_first;            /* per patch (+ 1): its outline vertices in pool */
     radinterp__buf chains;           /* per patch edge: representatives along it */
     uint32_t *chain_first, *chain_len;
     radinterp__buf pos, tris;        /* output of the pass */
@@ -7909,21 +7968,20 @@ static int radinterp__horizon(radinterp__builder *b, uint32_t R, uint32_t S)
 
 /* Contact: edges of other patches lying on R, with the patch rising in
    front of R (or lying flat on it, facing the same way). */
-static int radinterp__contacts(radinterp__builder *b, uint32_t R)
+static int radinterp__contacts(radinterp__builder *b, uint32_t R, radinterp__buf *near)
 {
     const radinterp_solution *s = b->s;
     const radinterp__patch *pr = &s->patches[R];
     const double (*uv)[2] = radinterp__outline_of(b, R);
     int labels[4] = {0, 1, 2, 3};
-    uint32_t B;
-    for (B = 0; B < s->patch_count; B++) {
+    uint32_t m;
+    if (radinterp__patches_near(s, &b->a, pr->lo, pr->hi, b->tol, near) != 0) return -1;
+    for (m = 0; m < near->count; m++) {
+        uint32_t B = RADINTERP__U32(*near)[m];
         const radinterp__patch *pb = &s->patches[B];
         double V[4][3], h[4], lo = DBL_MAX, hi = -DBL_MAX;
-        int n, i, k, apart = 0;
+        int n, i;
         if (B == R || !pb->count) continue;
-        for (k = 0; k < 3; k++)
-            if ((double)pb->lo[k] > (double)pr->hi[k] + b->tol || (double)pb->hi[k] < (double)pr->lo[k] - b->tol) apart = 1;
-        if (apart) continue;
         n = radinterp__patch_poly(pb, V);
         for (i = 0; i < n; i++) {
             h[i] = radinterp__d3_dot(pr->n, V[i]) - pr->d;
@@ -8014,7 +8072,7 @@ static int radinterp__receiver_discs(radinterp__builder *b, uint32_t R, radinter
         }
         i = j;
     }
-    return radinterp__contacts(b, R);
+    return radinterp__contacts(b, R, stack);
 }
 
 /* ---- DSets: collinear discontinuities on a receiver (5.5.4) ------------ */
@@ -8686,49 +8744,78 @@ static uint32_t radinterp__find_rep(radinterp__bvert *v, uint32_t i)
     return i;
 }
 
-/* qsort has no context argument: the pool is sorted through a key array. */
-typedef struct radinterp__xkey { float x; uint32_t id; } radinterp__xkey;
+/* Outline vertices in cells of the weld distance: a cell's vertices are
+   neighbours in the sorted order. */
+typedef struct radinterp__cellkey { int64_t c[3]; uint32_t id; } radinterp__cellkey;
 
-static int radinterp__cmp_xkey(const void *a, const void *b)
+static int radinterp__cmp_cellkey(const void *a, const void *b)
 {
-    const radinterp__xkey *p = (const radinterp__xkey *)a, *q = (const radinterp__xkey *)b;
-    if (p->x != q->x) return p->x < q->x ? -1 : 1;
+    const radinterp__cellkey *p = (const radinterp__cellkey *)a, *q = (const radinterp__cellkey *)b;
+    int k;
+    for (k = 0; k < 3; k++)
+        if (p->c[k] != q->c[k]) return p->c[k] < q->c[k] ? -1 : 1;
     return p->id < q->id ? -1 : (p->id > q->id);
 }
 
-/* Welds outline vertices closer than weld_distance (to the one listed
-   first), maps every point to its representative, and lists the entries
-   by x. */
+/* First sorted key at cell c or after it. */
+static uint32_t radinterp__cell_lower(const radinterp__cellkey *keys, uint32_t n, const int64_t *c)
+{
+    uint32_t lo = 0, hi = n;
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        radinterp__cellkey probe;
+        memcpy(probe.c, c, sizeof probe.c);
+        probe.id = 0;
+        if (radinterp__cmp_cellkey(&keys[mid], &probe) < 0) lo = mid + 1;
+        else hi = mid;
+    }
+    return lo;
+}
+
+/* Welds outline vertices closer than weld_distance (each component to its
+   first listed vertex, so the result does not depend on the order of the
+   tests) and maps every point to its representative. Vertices are found
+   in the 27 cells around each one's cell (cells of the weld distance), so
+   vertices sharing a coordinate, as a building's walls do, cost no more
+   than others. */
 static int radinterp__weld(radinterp__builder *b)
 {
     radinterp__bvert *v = RADINTERP__BVERTS(b);
     uint32_t n = (uint32_t)b->pool.count, i, j, key[4];
-    radinterp__xkey *xs = (radinterp__xkey *)radinterp__alloc_array(&b->a, n ? n : 1, sizeof *xs);
+    radinterp__cellkey *keys = (radinterp__cellkey *)radinterp__alloc_array(&b->a, n ? n : 1, sizeof *keys);
     double w2 = b->weld * b->weld;
-    if (!xs) return -1;
-    for (i = 0; i < n; i++) { xs[i].x = v[i].x[0]; xs[i].id = i; }
-    qsort(xs, n, sizeof *xs, radinterp__cmp_xkey);
+    int k, dc;
+    if (!keys) return -1;
+    for (i = 0; i < n; i++) {
+        for (k = 0; k < 3; k++) keys[i].c[k] = (int64_t)floor((double)v[i].x[k] / b->weld);
+        keys[i].id = i;
+    }
+    qsort(keys, n, sizeof *keys, radinterp__cmp_cellkey);
     for (i = 0; i < n; i++)
-        for (j = i + 1; j < n && (double)xs[j].x - (double)xs[i].x <= b->weld; j++) {
-            const float *p = v[xs[i].id].x, *q = v[xs[j].id].x;
-            double dx = (double)p[0] - q[0], dy = (double)p[1] - q[1], dz = (double)p[2] - q[2];
-            if (dx * dx + dy * dy + dz * dz <= w2) {
-                uint32_t ri = radinterp__find_rep(v, xs[i].id), rj = radinterp__find_rep(v, xs[j].id);
-                if (ri < rj) v[rj].rep = ri;
-                else if (rj < ri) v[ri].rep = rj;
+        for (dc = 0; dc < 27; dc++) {
+            int64_t c[3];
+            c[0] = keys[i].c[0] + dc % 3 - 1;
+            c[1] = keys[i].c[1] + (dc / 3) % 3 - 1;
+            c[2] = keys[i].c[2] + dc / 9 - 1;
+            for (j = radinterp__cell_lower(keys, n, c); j < n && keys[j].c[0] == c[0] && keys[j].c[1] == c[1] && keys[j].c[2] == c[2]; j++) {
+                const float *p = v[keys[i].id].x, *q = v[keys[j].id].x;
+                double dx = (double)p[0] - q[0], dy = (double)p[1] - q[1], dz = (double)p[2] - q[2];
+                if (keys[j].id <= keys[i].id || dx * dx + dy * dy + dz * dz > w2) continue;
+                {
+                    uint32_t ri = radinterp__find_rep(v, keys[i].id), rj = radinterp__find_rep(v, keys[j].id);
+                    if (ri < rj) v[rj].rep = ri;
+                    else if (rj < ri) v[ri].rep = rj;
+                }
             }
         }
+    radinterp__free(&b->a, keys);
     radinterp__hmap_clear(&b->canon);
-    b->reps.count = 0;
     for (i = 0; i < n; i++) {
         uint32_t r = radinterp__find_rep(v, i);
         v[i].rep = r;
         radinterp__point_key(v[i].x, 0, key);
-        if (radinterp__hmap_put(&b->a, &b->canon, key, r) == RADINTERP__NONE) { radinterp__free(&b->a, xs); return -1; }
+        if (radinterp__hmap_put(&b->a, &b->canon, key, r) == RADINTERP__NONE) return -1;
     }
-    for (i = 0; i < n; i++)
-        if (radinterp__buf_u32(&b->a, &b->reps, xs[i].id) != 0) { radinterp__free(&b->a, xs); return -1; }
-    radinterp__free(&b->a, xs);
     return 0;
 }
 
@@ -8806,28 +8893,29 @@ static int radinterp__edges_collinear(const radinterp_solution *s, uint32_t P, u
    within weld_distance + tol of it, strictly between its corners, nearer to
    it than to P's other edges, and on an edge of its own patch collinear
    with it (a vertex of a patch that meets P's edge at an angle stays out). */
-static int radinterp__make_chain(radinterp__builder *b, uint32_t P, uint32_t k, const uint32_t *own, radinterp__buf *tmp)
+static int radinterp__make_chain(radinterp__builder *b, uint32_t P, uint32_t k, const uint32_t *own, radinterp__buf *tmp,
+                                 radinterp__buf *near)
 {
     const radinterp__patch *pt = &b->s->patches[P];
-    const uint32_t *sorted = RADINTERP__U32(b->reps);
     const radinterp__bvert *v = RADINTERP__BVERTS(b);
-    uint32_t n = (uint32_t)b->reps.count, lo = 0, hi = n, i, a_rep, c_rep, key[4];
-    double a[3], c[3], d[3], len2, reach = b->weld + b->tol, xlo, xhi;
+    uint32_t i, m, a_rep, c_rep, key[4];
+    double a[3], c[3], d[3], len2, reach = b->weld + b->tol;
+    float elo[3], ehi[3];
     int e;
     radinterp__d3_from_f(pt->v[k], a);
     radinterp__d3_from_f(pt->v[(k + 1) % pt->count], c);
     radinterp__d3_sub(c, a, d);
     len2 = radinterp__d3_dot(d, d);
-    xlo = (a[0] < c[0] ? a[0] : c[0]) - 2.0 * reach;
-    xhi = (a[0] > c[0] ? a[0] : c[0]) + 2.0 * reach;
-    while (lo < hi) {  /* first entry with x >= xlo */
-        uint32_t mid = (lo + hi) / 2;
-        if ((double)v[sorted[mid]].x[0] < xlo) lo = mid + 1;
-        else hi = mid;
-    }
+    radinterp__box_empty(elo, ehi);
+    radinterp__box_grow(elo, ehi, pt->v[k], pt->v[k]);
+    radinterp__box_grow(elo, ehi, pt->v[(k + 1) % pt->count], pt->v[(k + 1) % pt->count]);
+    /* a vertex within reach of the edge lies in its patch's box, which then
+       comes within reach of the edge's */
+    if (radinterp__patches_near(b->s, &b->a, elo, ehi, 2.0 * reach, near) != 0) return -1;
     tmp->count = 0;
-    for (i = lo; i < n && (double)v[sorted[i]].x[0] <= xhi; i++) {
-        const radinterp__bvert *ent = &v[sorted[i]];
+    for (m = 0; m < near->count; m++)
+    for (i = b->pool_first[RADINTERP__U32(*near)[m]]; i < b->pool_first[RADINTERP__U32(*near)[m] + 1]; i++) {
+        const radinterp__bvert *ent = &v[i];
         const radinterp__patch *pq = &b->s->patches[ent->patch];
         uint32_t r = ent->rep, prev = (ent->edge + pq->count - 1) % pq->count;
         double x[3], w[3], t, dist;
@@ -9499,13 +9587,14 @@ static radinterp_result radinterp__mesh_pass(radinterp__builder *b)
     const radinterp_solution *s = b->s;
     radinterp__tri_work w;
     radinterp__hmap seen;
-    radinterp__buf tmp;
+    radinterp__buf tmp, near;
     uint32_t P, k, *own = NULL;
     size_t at;
     radinterp_result res = RADINTERP_OK;
     radinterp__tri_work_init(&w, &b->a);
     memset(&seen, 0, sizeof seen);
     radinterp__buf_init(&tmp, sizeof(radinterp__tkey));
+    radinterp__buf_init(&near, sizeof(uint32_t));
     b->segs.count = b->pool.count = b->chains.count = b->pos.count = b->tris.count = 0;
     b->hanging = b->seam = b->fallback = b->degenerate = b->skipped = 0;
     radinterp__hmap_clear(&b->vmap);
@@ -9519,6 +9608,16 @@ static radinterp_result radinterp__mesh_pass(radinterp__builder *b)
         if (radinterp__outline_vertices(b, P, &seen) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     }
     if (res == RADINTERP_OK && radinterp__weld(b) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    if (res == RADINTERP_OK) {   /* the pool is in patch order */
+        size_t i;
+        if (!b->pool_first) b->pool_first = (uint32_t *)radinterp__alloc_array(&b->a, (size_t)s->patch_count + 1, sizeof(uint32_t));
+        if (!b->pool_first) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+        else {
+            memset(b->pool_first, 0, ((size_t)s->patch_count + 1) * sizeof(uint32_t));
+            for (i = 0; i < b->pool.count; i++) b->pool_first[RADINTERP__BVERTS(b)[i].patch + 1]++;
+            for (P = 0; P < s->patch_count; P++) b->pool_first[P + 1] += b->pool_first[P];
+        }
+    }
     if (res == RADINTERP_OK) {
         own = (uint32_t *)radinterp__alloc_array(&b->a, b->pool.count ? b->pool.count : 1, sizeof(uint32_t));
         if (!own) res = RADINTERP_ERROR_OUT_OF_MEMORY;
@@ -9530,13 +9629,14 @@ static radinterp_result radinterp__mesh_pass(radinterp__builder *b)
         while (at < b->pool.count && RADINTERP__BVERTS(b)[at].patch < P) at++;   /* the pool is in patch order */
         for (i = at; i < b->pool.count && RADINTERP__BVERTS(b)[i].patch == P; i++) own[RADINTERP__BVERTS(b)[i].rep] = P + 1u;
         for (k = 0; k < s->patches[P].count && res == RADINTERP_OK; k++)
-            if (radinterp__make_chain(b, P, k, own, &tmp) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+            if (radinterp__make_chain(b, P, k, own, &tmp, &near) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     }
     if (res == RADINTERP_OK && radinterp__hmap_init(&b->a, &w.lmap, 4, 256) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     for (P = 0; P < s->patch_count && res == RADINTERP_OK; P++)
         if (s->patches[P].count) res = radinterp__triangulate_patch(b, &w, P);
     radinterp__free(&b->a, own);
     radinterp__buf_free(&b->a, &tmp);
+    radinterp__buf_free(&b->a, &near);
     radinterp__hmap_free(&b->a, &seen);
     radinterp__tri_work_free(&b->a, &w);
     return res;
@@ -9777,7 +9877,7 @@ static void radinterp__builder_free(radinterp__builder *b)
     radinterp__buf_free(a, &b->leaves);
     radinterp__buf_free(a, &b->segs);
     radinterp__buf_free(a, &b->pool);
-    radinterp__buf_free(a, &b->reps);
+    radinterp__free(a, b->pool_first);
     radinterp__buf_free(a, &b->chains);
     radinterp__buf_free(a, &b->pos);
     radinterp__buf_free(a, &b->tris);
@@ -9815,7 +9915,6 @@ static radinterp_result radinterp__builder_init(radinterp__builder *b, const rad
     radinterp__buf_init(&b->leaves, sizeof(uint32_t));
     radinterp__buf_init(&b->segs, sizeof(radinterp__seg));
     radinterp__buf_init(&b->pool, sizeof(radinterp__bvert));
-    radinterp__buf_init(&b->reps, sizeof(uint32_t));
     radinterp__buf_init(&b->chains, sizeof(uint32_t));
     radinterp__buf_init(&b->pos, sizeof(float));
     radinterp__buf_init(&b->tris, sizeof(radinterp__otri));
