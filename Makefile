@@ -2,9 +2,13 @@
 #
 #   make          build the examples
 #   make test     install the reference libraries if needed, compile-check every
-#                 header, run unit tests (ASan+UBSan) and reference tests
+#                 header, run unit tests (ASan+UBSan; again with clang's UBSan
+#                 when clang is present), replay the fuzz corpora, run reference tests
 #   make bench    run the benchmarks (throughput next to the papers' figures)
 #   make demo     run the main example
+#   make fuzz     run every fuzz target for FUZZ_SECONDS (default 60) with libFuzzer
+#   make fuzz-corpus  rewrite the fuzz seeds from the headers' save functions
+#   make view     the walkthrough in a window (installs SDL2 if needed and it can)
 #   make clean
 #
 # Files are found by name, so adding one needs no edit here:
@@ -13,8 +17,10 @@
 #   tests/ref_*.c     reference tests: linked with tests/reference (Embree, OpenEXR)
 #   tests/bench_*.c   benchmarks: optimised, linked with tests/reference
 #   examples/*.c      examples: one program each, `cc examples/x.c -lm` builds it
+#                     (but examples/viewer.c, built with SDL2 when sdl2-config is found)
 #   tests/check_*.py  checks of the generated data (python3), run by make test
 #   tests/assimp_*.c  unit tests that need Assimp: built and run only when it is present
+#   tests/fuzz/fuzz_*.c  fuzz targets (tests/fuzz/fuzz.h), corpus tests/fuzz/corpus/*
 
 CC      ?= cc
 CXX     ?= g++
@@ -38,7 +44,10 @@ UNIT_BINS    := $(patsubst tests/%.c,$(BUILD)/tests/%,$(wildcard tests/test_*.c)
 TSAN_BINS    := $(patsubst tests/%.c,$(BUILD)/tests/%,$(wildcard tests/tsan_*.c))
 REF_BINS     := $(patsubst tests/%.c,$(BUILD)/tests/%,$(wildcard tests/ref_*.c))
 BENCH_BINS   := $(patsubst tests/%.c,$(BUILD)/bench/%,$(wildcard tests/bench_*.c))
-EXAMPLE_BINS := $(patsubst examples/%.c,$(BUILD)/examples/%,$(wildcard examples/*.c))
+EXAMPLE_BINS := $(patsubst examples/%.c,$(BUILD)/examples/%,$(filter-out examples/viewer.c,$(wildcard examples/*.c)))
+# The interactive viewer and its sanitized build for tests/test_viewer.c,
+# only where SDL2 is installed (tests/deps_viewer.sh installs it when it can).
+VIEWER_BINS  := $(if $(shell command -v sdl2-config 2>/dev/null),$(BUILD)/examples/viewer $(BUILD)/tests/viewer_asan)
 REF_OBJS     := $(patsubst tests/reference/%.c,$(BUILD)/ref/%.o,$(wildcard tests/reference/*.c))
 LINKAGE_BIN  := $(BUILD)/tests/linkage
 DATA_CHECKS  := $(wildcard tests/check_*.py)
@@ -58,6 +67,36 @@ ASSIMP_STAMP := $(BUILD)/.assimp-flags
 $(shell mkdir -p $(BUILD) && echo '$(ASSIMP_FLAGS) $(ASSIMP_LIBS)' | cmp -s - $(ASSIMP_STAMP) || \
         echo '$(ASSIMP_FLAGS) $(ASSIMP_LIBS)' > $(ASSIMP_STAMP))
 
+# Fuzz targets (tests/fuzz/fuzz.h), each built twice: replay_NAME replays the
+# committed corpus tests/fuzz/corpus/NAME under ASan+UBSan with any compiler
+# (make test); fuzz_NAME is the libFuzzer program (clang, make fuzz).
+FUZZ_NAMES   := $(patsubst tests/fuzz/fuzz_%.c,%,$(wildcard tests/fuzz/fuzz_*.c))
+REPLAY_BINS  := $(patsubst %,$(BUILD)/fuzz/replay_%,$(FUZZ_NAMES))
+FUZZ_BINS    := $(patsubst %,$(BUILD)/fuzz/fuzz_%,$(FUZZ_NAMES))
+FUZZ_SECONDS ?= 60
+
+# With clang present, make test runs the unit tests a second time, built by
+# clang with UBSan alone (ASan is the gcc run's job), for the checks gcc's
+# -fsanitize=undefined lacks; the fuzz targets use the same checks:
+# - float-cast-overflow (in clang's "undefined" group): a float converted to
+#   an integer type that cannot hold it, e.g. (int)ceilf of a huge projection;
+# - pointer-overflow's "applying zero offset to null pointer";
+# - implicit-conversion: implicit integer conversions that change the value
+#   (truncation to a narrower type, a negative value made unsigned), the
+#   32/64-bit size mistakes a loader must not make. Explicit casts are not
+#   checked, so narrowing on purpose is written as a cast.
+# Left out: unsigned-integer-overflow and unsigned-shift-base (defined
+# behaviour the hashes, CRCs and counter-based random streams rely on: the
+# unit tests report about 80 places) and float-divide-by-zero (IEEE 754
+# gives inf; branchless code divides first and masks the result after, as
+# rendercache's projection of points behind the eye does).
+CLANG_UBSAN := -fsanitize=undefined,implicit-conversion -fno-sanitize-recover=all -fno-omit-frame-pointer
+# The unit tests' run leaves pointer-overflow out until radinterp_build_mesh no
+# longer adds 0 to a null pointer for a patch without discontinuities (issue
+# 17, item 7); gcc's run checks every other pointer overflow meanwhile.
+CLANG_UBSAN_PENDING := -fno-sanitize=pointer-overflow
+CLANG_UBSAN_BINS := $(if $(CLANG),$(patsubst tests/%.c,$(BUILD)/clang-ubsan/%-clang-ubsan,$(wildcard tests/test_*.c)))
+
 # Compile checks: each header with its implementation, as C99, C11 and C++,
 # with gcc and (when present) clang, and once as static.
 CHECK_KINDS := c99 c11 cxx static
@@ -74,20 +113,22 @@ REF_CFLAGS = $(shell pkg-config --cflags OpenEXR 2>/dev/null)
 REF_LIBS   = -lembree3 $(shell pkg-config --libs OpenEXR 2>/dev/null)
 
 .SECONDARY:
-.PHONY: all examples test test-build test-run bench bench-build demo deps clean
+.PHONY: all examples test test-build test-run bench bench-build demo view deps viewer-deps clean fuzz fuzz-build fuzz-corpus
 
 all: examples
-examples: $(EXAMPLE_BINS)
+examples: $(EXAMPLE_BINS) $(filter $(BUILD)/examples/%,$(VIEWER_BINS))
 
-test: deps
+test: deps viewer-deps
 	@$(MAKE) --no-print-directory -j$(NPROC) test-build
 	@$(MAKE) --no-print-directory test-run
 
 # A make of its own after deps: Assimp may just have been installed.
 test-run:
-	@tests/run.sh $(DATA_CHECKS) $(LINKAGE_BIN) $(UNIT_BINS) $(TSAN_BINS) $(REF_BINS) $(ASSIMP_BINS)
+	@tests/run.sh $(DATA_CHECKS) $(LINKAGE_BIN) $(UNIT_BINS) $(CLANG_UBSAN_BINS) $(REPLAY_BINS) $(TSAN_BINS) \
+	    $(REF_BINS) $(ASSIMP_BINS)
 
-test-build: $(CHECK_OBJS) $(LINKAGE_BIN) $(UNIT_BINS) $(TSAN_BINS) $(REF_BINS) $(ASSIMP_BINS) $(EXAMPLE_BINS)
+test-build: $(CHECK_OBJS) $(LINKAGE_BIN) $(UNIT_BINS) $(CLANG_UBSAN_BINS) $(REPLAY_BINS) $(TSAN_BINS) $(REF_BINS) \
+            $(ASSIMP_BINS) $(EXAMPLE_BINS) $(VIEWER_BINS)
 
 bench: deps
 	@$(MAKE) --no-print-directory -j$(NPROC) bench-build $(BUILDINGS)
@@ -100,6 +141,15 @@ DEMO := $(if $(wildcard examples/walkthrough.c),$(BUILD)/examples/walkthrough,$(
 demo: $(DEMO)
 	@mkdir -p $(BUILD)/demo
 	$(DEMO) --out $(BUILD)/demo
+
+# The walkthrough in a window: mouse and WASD, M switches the mode (see examples/viewer.c).
+view: viewer-deps
+	@command -v sdl2-config >/dev/null 2>&1 || { echo "make view: SDL2 is missing (apt-get install libsdl2-dev)" >&2; exit 1; }
+	@$(MAKE) --no-print-directory $(BUILD)/examples/viewer
+	$(BUILD)/examples/viewer
+
+viewer-deps:
+	@tests/deps_viewer.sh
 
 deps: $(BUILD)/.deps-ok $(BUILD)/.deps-assimp-tried
 $(BUILD)/.deps-ok: tests/deps.sh
@@ -149,14 +199,51 @@ $(BUILD)/ref/%.o: tests/reference/%.c $(ALL_H) | $(BUILD)/ref
 $(BUILD)/bench/bench_%: tests/bench_%.c $(REF_OBJS) $(ALL_H) | $(BUILD)/bench
 	$(CC) $(CFLAGS_PROJECT) $(BENCH_OPT) $(REF_CFLAGS) $< $(REF_OBJS) -o $@ $(REF_LIBS) $(LIBS)
 
+# irrvol's query rates are promised with the flags a user would build with.
+$(BUILD)/bench/bench_irrvol: BENCH_OPT = -O2
+
 $(BUILD)/data/building_%.obj: examples/data/make_building.py | $(BUILD)/data
 	python3 examples/data/make_building.py --preset $* --out $(BUILD)/data/building_$*
+
+# --- clang's UBSan run and fuzzing ----------------------------------------
+$(BUILD)/clang-ubsan/%-clang-ubsan: tests/%.c $(ALL_H) | $(BUILD)/clang-ubsan
+	$(CLANG) $(CFLAGS_PROJECT) -O1 -g $(CLANG_UBSAN) $(CLANG_UBSAN_PENDING) $< -o $@ $(LIBS)
+
+# The replays use the fuzzers' sanitizers when clang is present, else gcc's.
+REPLAY_CC := $(if $(CLANG),$(CLANG) $(CFLAGS_PROJECT) -O1 -g -fsanitize=address $(CLANG_UBSAN),$(CC) $(CFLAGS_PROJECT) -O1 -g $(SAN))
+$(BUILD)/fuzz/replay_%: tests/fuzz/fuzz_%.c tests/fuzz/replay.c tests/fuzz/fuzz.h $(ALL_H) | $(BUILD)/fuzz
+	$(REPLAY_CC) $< tests/fuzz/replay.c -o $@ $(LIBS)
+
+$(BUILD)/fuzz/fuzz_%: tests/fuzz/fuzz_%.c tests/fuzz/fuzz.h $(ALL_H) | $(BUILD)/fuzz
+	$(CLANG) $(CFLAGS_PROJECT) -O1 -g -fsanitize=fuzzer,address $(CLANG_UBSAN) $< -o $@ $(LIBS)
+
+# Installs clang's fuzzer runtime when it is missing and it can
+# (tests/deps_fuzz.sh); otherwise says what to install and skips.
+fuzz:
+	@if tests/deps_fuzz.sh; then \
+	    $(MAKE) --no-print-directory -j$(NPROC) fuzz-build && \
+	    tests/fuzz/run.sh $(FUZZ_SECONDS) $(BUILD) $(FUZZ_BINS); \
+	 else echo "fuzz: skipped: clang cannot build libFuzzer programs here (see above)"; fi
+
+fuzz-build: $(FUZZ_BINS) $(REPLAY_BINS)
+
+fuzz-corpus: $(BUILD)/fuzz/make_corpus
+	$(BUILD)/fuzz/make_corpus tests/fuzz/corpus
+
+$(BUILD)/fuzz/make_corpus: tests/fuzz/make_corpus.c tests/fuzz/fuzz.h $(ALL_H) | $(BUILD)/fuzz
+	$(CC) $(CFLAGS_PROJECT) -O1 -g $(SAN) $< -o $@ $(LIBS)
 
 # --- examples -------------------------------------------------------------
 $(BUILD)/examples/%: examples/%.c $(ALL_H) $(ASSIMP_STAMP) | $(BUILD)/examples
 	$(CC) $(CFLAGS_PROJECT) $(OPT) $(ASSIMP_FLAGS) $< -o $@ $(LIBS) $(ASSIMP_LIBS)
 
-$(BUILD)/check $(BUILD)/tests $(BUILD)/ref $(BUILD)/bench $(BUILD)/examples $(BUILD)/data:
+$(BUILD)/examples/viewer: examples/viewer.c $(ALL_H) $(ASSIMP_STAMP) | $(BUILD)/examples
+	$(CC) $(CFLAGS_PROJECT) $(OPT) $(ASSIMP_FLAGS) $$(sdl2-config --cflags) $< -o $@ $$(sdl2-config --libs) $(LIBS) $(ASSIMP_LIBS)
+
+$(BUILD)/tests/viewer_asan: examples/viewer.c $(ALL_H) | $(BUILD)/tests
+	$(CC) $(CFLAGS_PROJECT) -O1 -g $(SAN) $$(sdl2-config --cflags) $< -o $@ $$(sdl2-config --libs) $(LIBS)
+
+$(BUILD)/check $(BUILD)/tests $(BUILD)/ref $(BUILD)/bench $(BUILD)/examples $(BUILD)/data $(BUILD)/clang-ubsan $(BUILD)/fuzz:
 	@mkdir -p $@
 
 clean:

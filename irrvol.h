@@ -1,19 +1,27 @@
-/* irrvol.h - v0.2.0 - irradiance volume for lighting moving objects - public domain or MIT, see end of file
+/* irrvol.h - v0.3.0 - irradiance volume for lighting moving objects - public domain or MIT, see end of file
 
    IRRVOL.H: a bilevel grid of directional irradiance samples that lights moving objects by interpolation.
 
    The irradiance volume (Greger 1996) samples the irradiance distribution
    function H(x, w) of a static scene at the vertices of a bilevel grid: a
    regular first-level grid over the scene, refined by a second-level grid in
-   every cell that contains geometry. At each grid vertex ("sample") radiance
-   is gathered along 2k^2 equal-area directions of the Shirley-Chiu concentric
-   map (k x k bins per hemisphere), and the irradiance of a surface facing each
-   bin direction is summed from it (eq. 4.3, or the moment of order n, eq. 4.8).
-   A query at any position and normal finds the cell (eq. 4.4-4.6), the bin of
-   the direction (inverse concentric map) and interpolates trilinearly between
-   the cell's eight samples: tens of millions of queries per second, enough to
-   re-light every vertex of moving objects every frame. A moving object's
-   diffuse radiance is then reflectance * H / pi (eq. 4.7).
+   every cell that contains geometry or across which the light changes. At
+   each grid vertex ("sample") radiance is gathered along 2k^2 equal-area
+   directions of the Shirley-Chiu concentric map (k x k bins per hemisphere),
+   and the irradiance of a surface facing each bin direction is summed from
+   it (eq. 4.3, or the moment of order n, eq. 4.8). A query at any position
+   and normal finds the cell (eq. 4.4-4.6), the bins of the direction
+   (inverse concentric map) and interpolates between the cell's eight
+   samples: tens of millions of queries per second, enough to re-light every
+   vertex of moving objects every frame. A moving object's diffuse radiance
+   is then reflectance * H / pi (eq. 4.7).
+
+   Built for real levels, as engines expect of probe volumes today (DDGI,
+   Unity's adaptive probe volumes, EEVEE): no light through walls (each
+   sample keeps the distances its rays travelled and queries weigh samples
+   by a visibility test, samples inside walls move out or drop out), no
+   seams between the levels (hanging samples), compact spherical-harmonic
+   encodings with a GLSL evaluator, refinement where the light changes.
 
    Radiance comes from the header's own ray caster (a BVH over the caller's
    triangles: per-material radiance, optional per-vertex radiance, mirror
@@ -34,14 +42,14 @@
        irrvol_desc d = {0};
        irrvol *vol;
        d.positions = xyz;  d.vertex_count = nv;
-       d.indices = idx;    d.triangle_count = nt;
+       d.indices = idx;    d.triangle_count = nt;   // front faces wind counter-clockwise
        d.triangle_materials = mat_of_tri;
        d.materials = mats; d.material_count = 2;
        mats[1].flags = IRRVOL_MATERIAL_IMPORTANT;   // the lamp: never missed
        if (irrvol_build(&d, &vol) != IRRVOL_OK) ...;
        for each vertex of a moving object:
            float h[3];
-           irrvol_query(vol, p, n, h);              // irradiance W/m^2
+           irrvol_query(vol, p, n, h);              // irradiance W/m^2, leak-safe
            colour = reflectance * h / pi;           // eq. 4.7
        irrvol_destroy(vol);
 
@@ -66,19 +74,26 @@
      query (thread-safe, no allocation, no failure: positions outside the
      bounds clamp to the boundary, NaN inputs give finite lookups)
        void     irrvol_query(const irrvol *vol, const float pos[3], const float dir[3], float rgb[3]);
-       void     irrvol_query_filter(const irrvol *vol, irrvol_filter filter, const float pos[3],
-                                    const float dir[3], float rgb[3]);
+       void     irrvol_query_filter(const irrvol *vol, irrvol_filter filter, irrvol_weighting weighting,
+                                    const float pos[3], const float dir[3], float rgb[3]);
        void     irrvol_query_glossy(const irrvol *vol, const float pos[3], const float normal[3],
                                     const float to_eye[3], float rgb[3]);
-       void     irrvol_query_many(const irrvol *vol, irrvol_filter filter, uint32_t count,
-                                  const float *pos, size_t pos_stride, const float *dir,
+       void     irrvol_query_many(const irrvol *vol, irrvol_filter filter, irrvol_weighting weighting,
+                                  uint32_t count, const float *pos, size_t pos_stride, const float *dir,
                                   size_t dir_stride, float *rgb);
+       void     irrvol_query_sh(const irrvol *vol, uint32_t order, irrvol_weighting weighting,
+                                const float pos[3], const float dir[3], float rgb[3]);
      samples and bins (inspection, irradiance spheres, tests)
        irrvol_result irrvol_sample(const irrvol *vol, uint32_t index, irrvol_sample_info *info);
        irrvol_result irrvol_sample_values(const irrvol *vol, uint32_t index, float *irradiance,
                                           float *radiance);   // bins x rgb each, or NULL
        void     irrvol_bin_direction(const irrvol *vol, uint32_t bin, float dir[3]);
        uint32_t irrvol_direction_bin(const irrvol *vol, const float dir[3]);
+     the volume on the GPU
+       irrvol_result irrvol_gpu_export(const irrvol *vol, uint32_t sh_order, irrvol_gpu_layout *layout,
+                                       uint32_t *index, size_t index_capacity, float *data,
+                                       size_t data_capacity);
+       size_t   irrvol_glsl_source(char *buffer, size_t capacity);
      self-occlusion of dynamic meshes (thesis 6.1.3)
        irrvol_result irrvol_visibility_ratio(const irrvol_visibility_desc *desc, float *ratio);
      serialization
@@ -100,9 +115,29 @@
    Every first-level cell that a non-degenerate triangle overlaps (separating
    axis test of Akenine-Moller) gets a second-level grid of
    desc.subgrid_samples per axis, corners included (Greger: 3^3, so a refined
-   cell holds 2^3 sub-cells). Neighbouring second-level grids share the samples
-   on their common faces. A cell face between a refined and an unrefined cell
-   interpolates differently from its two sides (as in the thesis).
+   cell holds 2^3 sub-cells). Neighbouring second-level grids share the
+   samples on their common faces.
+
+   Refinement by light (6.1.1). The first level is gathered first. Trilinear
+   interpolation is exact where light changes linearly, so what counts is
+   how far the first-level samples bend away from a straight line: along
+   each axis through a sample, the second difference of its neighbours'
+   irradiance spheres (luminance, summed over the bins) over 8 times their
+   level, the error a parabola through the three leaves midway. A cell is
+   refined when that predicted error exceeds desc.refine_threshold (default
+   0.05) at one of its corners: near lights, across shadow edges, not along
+   smooth gradients. info.light_refined_cells counts those cells and
+   info.bytes reports the memory; a negative threshold refines only where
+   geometry is (the thesis).
+
+   No seams. A second-level sample on a face or an edge of an unrefined cell
+   is a hanging sample (as in adaptive finite elements): it gathers nothing
+   and holds the unrefined cell's own bilinear (face) or linear (edge) blend
+   of the first-level samples around it, so both sides of every cell face
+   interpolate the same values. Leak-safe queries replace a hanging sample by
+   those first-level samples, each weighed by its own visibility, so they are
+   seamless too; float rounding remains (largest relative jump 9e-7 over the
+   faces of a room with a lamp, tests/test_irrvol_levels.c).
 
    Bins. Bin b of a sample: hemisphere h = b / k^2 (0: z >= 0, 1: z < 0),
    row j = (b / k) % k, column i = b % k of the k x k square of the concentric
@@ -116,10 +151,65 @@
    transfer exploration, 5.4); else the radiance is the material's radiance (or
    the per-vertex radiance interpolated with the hit's barycentrics) plus, for
    a mirror coefficient specular > 0, specular times the radiance along the
-   reflected ray. The chain follows at most desc.max_depth reflections and
-   stops when the remaining weight falls under desc.min_weight; a cut chain and
-   a ray that leaves the scene see desc.background. With desc.supersamples = s
-   > 1, each bin averages s x s jittered rays (one stratum each).
+   reflected ray. Emitters are two-sided: either side of a triangle has its
+   material's radiance. The chain follows at most desc.max_depth reflections
+   and stops when the remaining weight falls under desc.min_weight; a cut
+   chain and a ray that leaves the scene see desc.background. With
+   desc.supersamples = s > 1, each bin averages s x s jittered rays (one
+   stratum each).
+
+   Rays and desc.trace. Gather rays start at a sample with a unit direction
+   and tmax = FLT_MAX; hit.t is the distance along it, hit.u and hit.v the
+   barycentric weights of the triangle's second and third vertex, and
+   hit.triangle the triangle's index (out of range, negative or non-finite
+   answers count as misses). desc.trace and desc.radiance are called from
+   the parallel_for jobs at once: they must be thread-safe. With
+   desc.radiance and triangles, each gather ray is also traced (desc.trace or
+   the built-in BVH) for its hit distance. IMPORTANT sampling always uses a
+   small internal BVH over the IMPORTANT triangles, also with desc.trace.
+
+   Leak-safe queries (the default weighting, VISIBILITY). Each sample keeps
+   what its rays saw of the surfaces around it, per texel of an n x n
+   octahedral map (desc.visibility_resolution, default 8): where DDGI
+   (Majercik et al. 2019) keeps the mean and mean square hit distance, this
+   keeps a least-squares fit of the inverse hit distance s = 1 / d over a
+   cos^p lobe around the texel (p ~ 13 at 8 x 8, 50 at 16 x 16), s(w) = g . w,
+   and the variance the fit leaves. 1 / d of a plane is exactly linear in
+   the direction, so a wall is predicted exactly at any angle, however close
+   the sample stands to it, where averaged distances blur it by the lobe's
+   width; so 8 x 8 texels (1.6 KB a sample with their mirrored border) do
+   what 16 x 16 do on the office (relative L1 error 5.1 % against 4.9 %).
+   A query weighs each corner by its trilinear weight times
+   (1 + n . toward the sample) / 2 + 0.2 (DDGI's backface term, which
+   squares the first part; unsquared it bends the weights less where no
+   surface is: 4.9 % against 5.9 % on the office) and, when the test point
+   lies beyond the predicted surface (1/r < g . w), the Chebyshev bound
+   (var / (var + (g . w - 1/r)^2))^3; weights under 0.2 fade as w^3 / 0.04
+   and the weights are renormalised. The test point is the
+   query point moved info.normal_bias (desc.normal_bias, default 0.02, times
+   the finest sample spacing) along the query direction. When no corner is
+   visible, or an input is NaN, the plain weights stand. Without triangles
+   no sample sees a surface: only the backface term remains.
+   IRRVOL_WEIGHTING_TRILINEAR is the thesis's plain trilinear interpolation.
+   Two closed rooms behind a 2 cm wall, one lit, one dark: the leak-safe
+   query gives 0.00 % of the lit side 1 cm and 10 cm into the dark room
+   where the plain query gives 81 % and 70 % (tests/test_irrvol_levels.c).
+
+   Samples inside geometry. A triangle's front is the side from which it
+   winds counter-clockwise ((v1 - v0) x (v2 - v0) points out of solids and
+   into rooms); materials flagged TWO_SIDED have two fronts. A sample that
+   sees back faces over more than a quarter of its sphere (each bin counts
+   its solid angle) is inside geometry: it moves through the nearest back
+   face it saw to 5 % of its spacing in front of that surface and gathers
+   again (DDGI's relocation, Unity's virtual offset) if that is within 45 %
+   of its spacing; otherwise, or if it is still inside, it is invalid.
+   Invalid samples never enter a leak-safe query; their stored values are
+   the mean of their valid neighbours (dilation), which plain trilinear
+   queries and the harmonics use. Scenes whose triangles wind at random
+   make samples invalid: fix the winding or flag the materials TWO_SIDED.
+   irrvol_sample reports each sample's state (valid, relocated, invalid,
+   hanging) and origin, where it gathered; irrvol_sample_values gives an
+   invalid sample's dilated values and a hanging sample's blend.
 
    Irradiance (4.2.3, 4.4). H^n(w_j) = sum_i L_i W(i, j), with W(i, j) =
    (n+1)/2 times the integral of max(0, w . w_j)^n over bin i (eq. 4.1 with
@@ -130,6 +220,38 @@
    bin centres (0.7 % off at k = 17). The weights form one (2k^2)^2 matrix
    shared by all samples; each sample's irradiance is a matrix product,
    summed exactly, never approximated.
+
+   Harmonics (Ramamoorthi and Hanrahan 2001). Each sample also holds the
+   radiance projected on the real spherical harmonics of order l <= 2 (the
+   bins integrated like the weights), each band scaled by the lobe's A_l:
+   irradiance E(n) = sum A_l L_lm Y_lm(n), nine coefficients x rgb (L2) or
+   the first four (L1). irrvol_query_sh evaluates them with the volume's
+   weighting (clamped at zero); irrvol_gpu_export writes them with the
+   grid, the hanging samples and the visibility moments into two flat
+   arrays, and irrvol_glsl_source gives the GLSL function that evaluates
+   them like irrvol_query_sh. On the office the L2 harmonics give the bins'
+   irradiance with a median difference of 1.7 % (L1: 8 %).
+
+   On the GPU.
+
+       irrvol_gpu_layout l;
+       irrvol_gpu_export(vol, 2, &l, NULL, 0, NULL, 0);             // sizes
+       uint32_t *index = malloc(l.index_count * 4);
+       float *data = malloc(l.data_count * 4);
+       irrvol_gpu_export(vol, 2, &l, index, l.index_count, data, l.data_count);
+       // upload index to storage buffer binding 0, data to binding 1
+       size_t n = irrvol_glsl_source(NULL, 0);
+       char *glsl = malloc(n + 1);
+       irrvol_glsl_source(glsl, n + 1);
+       // shader text: "#version 430\n" + glsl, then in any stage:
+       //     vec3 e = irrvol_irradiance(position, normal);   // W/m^2
+
+   The text defines IRRVOL_INDEX(i) and IRRVOL_DATA(i) to read the buffers
+   unless the engine defines them first (a texture fetch, other bindings:
+   IRRVOL_INDEX_BINDING, IRRVOL_DATA_BINDING). The arrays hold the volume's
+   own tables: the first-level samples first in x-fastest order, each
+   sample's origin and validity, its bordered visibility map and its
+   harmonics; irrvol_gpu_layout names the offsets.
 
    Informed sampling (6.1.1). Triangles of IMPORTANT materials (light
    sources) are never missed: for each sample, points are sampled on every
@@ -142,35 +264,116 @@
    about 0.1 % at any k, where plain sampling misses it or overweights it.
 
    Queries. NEAREST (the thesis) returns the bin that contains the direction;
-   BILINEAR (future work, 6.1.2) interpolates the four nearest bin centres on
-   the concentric square, across the equator too: 4x the memory reads.
-   irrvol_query_glossy mirrors the view vector about the normal (fig. 4.17) for
-   moment volumes (desc.moment > 1). irrvol_query_many answers a batch (the
-   vertices of a moving object) with the same results, faster: it prepares
-   each query a few ahead and prefetches the values it will read.
+   BILINEAR (future work 6.1.2, the default) interpolates the four nearest
+   bin centres on the concentric square, across the equator too: 4x the
+   memory reads. irrvol_query_glossy mirrors the view vector about the normal
+   (fig. 4.17) for moment volumes (desc.moment > 1). irrvol_query_many answers
+   a batch (the vertices of a moving object) with the same results, faster:
+   it prepares each query a few ahead and prefetches the values it will read.
 
    Determinism. Each sample draws its jitter from a stream seeded by
    (desc.seed, sample index): a volume is bit-identical for any thread count.
 
    Threads. Every function taking a const irrvol * (queries, irrvol_info,
-   irrvol_sample, irrvol_sample_values, the bin functions, irrvol_save and
-   irrvol_save_to_memory) only reads the volume, so any number of threads may
-   call them on one volume at once, and irrvol_visibility_ratio keeps no
-   shared state, so concurrent calls on one const desc with distinct ratio
-   arrays are safe too.
+   irrvol_sample, irrvol_sample_values, the bin functions, irrvol_gpu_export,
+   irrvol_save and irrvol_save_to_memory) only reads the volume, so any
+   number of threads may call them on one volume at once, and
+   irrvol_visibility_ratio keeps no shared state, so concurrent calls on one
+   const desc with distinct ratio arrays are safe too.
+
+   Progress. desc.progress(user, done, total) counts gathered samples; with
+   refinement by light the total is known after the first level and grows
+   once, when the refined cells' samples join.
+
+   VALIDATION AND CONTRACT
+
+   What each function checks (a failed check returns the named code and
+   changes nothing), and what the caller must guarantee (unchecked: breaking
+   it is undefined behaviour).
+     irrvol_build        checks: desc and out non-NULL; allocator both or
+                         neither; every position finite; every index below
+                         vertex_count and triangle_count <= UINT32_MAX / 3;
+                         every material index below material_count; material
+                         values and vertex radiance finite and >= 0; strides
+                         >= 12 bytes; grid, resolution and option ranges;
+                         bounds finite with min < max (INVALID_ARGUMENT).
+                         Zero-area triangles are skipped and counted.
+                         Contract: positions hold vertex_count vertices at
+                         the stride, indices 3 * triangle_count entries,
+                         triangle_materials triangle_count entries,
+                         materials material_count entries, vertex_radiance
+                         vertex_count entries; none change during the build;
+                         trace and radiance are thread-safe under
+                         parallel_for.
+     irrvol_destroy      accepts NULL. Contract: vol came from build or load
+                         and is destroyed once.
+     irrvol_info, irrvol_sample, irrvol_sample_values
+                         check NULL pointers, the index, and that radiance
+                         was kept (INVALID_ARGUMENT). Contract: irradiance and
+                         radiance hold bins x 3 floats.
+     queries             check nothing and never fail: NaN or infinite
+                         positions clamp to the boundary, NaN directions
+                         give a bin in range, unknown filter values act as
+                         NEAREST and unknown weightings as TRILINEAR, order
+                         0 or 1 reads L1, any other L2. Contract: vol is
+                         a built volume; pos, dir, normal, to_eye hold 3
+                         floats, rgb 3 (irrvol_query_many: count of each at
+                         their strides).
+     irrvol_bin_direction, irrvol_direction_bin
+                         bins past the last give +z; vol may be NULL for
+                         irrvol_bin_direction. Contract: irrvol_direction_bin
+                         needs a volume.
+     irrvol_gpu_export   checks vol and layout non-NULL, sh_order 1 or 2,
+                         both arrays NULL (sizes only) or both given with
+                         capacities of at least layout counts
+                         (INVALID_ARGUMENT); offsets past 32 bits give
+                         OUT_OF_MEMORY. Contract: the capacities are true.
+     irrvol_glsl_source  writes at most capacity bytes, zero-terminated when
+                         capacity > 0; returns the full length.
+     irrvol_visibility_ratio
+                         checks like irrvol_build (positions, normals,
+                         indices, strides, ranges). Contract: ratio holds
+                         vertex_count floats; buffers as for irrvol_build.
+     irrvol_save, irrvol_save_to_memory
+                         check NULL pointers (INVALID_ARGUMENT); a failing
+                         write gives IO (OUT_OF_MEMORY for memory).
+     irrvol_load, irrvol_load_from_memory
+                         treat the input as hostile: every size is checked
+                         against the declared payload before allocating,
+                         every value's range, finiteness and consistency,
+                         the CRC; truncation and corruption give
+                         CORRUPT_DATA, another format version VERSION.
+                         Contract: data holds size bytes.
+     irrvol_free_memory  accepts NULL data; the allocator must be the one the
+                         data was saved with.
 
    LIMITS
 
-   k <= IRRVOL_MAX_RESOLUTION (64). Objects lit from the volume cast no shadows
-   and do not see themselves: irrvol_visibility_ratio gives the fraction of
-   each vertex's hemisphere its own mesh leaves open (cosine-weighted), a
-   factor for the queried irradiance (thesis 5.1.3, 6.1.3). A sample that lies
-   inside a closed object sees its inside.
+   k <= IRRVOL_MAX_RESOLUTION (64); supersamples <= IRRVOL_MAX_SUPERSAMPLES
+   (16 x 16 rays per bin); weight_subdivisions <=
+   IRRVOL_MAX_WEIGHT_SUBDIVISIONS (16); important_rays <=
+   IRRVOL_MAX_IMPORTANT_RAYS (256, so at most 16 x 16 extra rays per bin);
+   visibility_resolution <= IRRVOL_MAX_VISIBILITY_RESOLUTION (64);
+   triangle_count <= UINT32_MAX / 3. Objects lit from the volume cast no
+   shadows and do not see themselves: irrvol_visibility_ratio gives the
+   fraction of each vertex's hemisphere its own mesh leaves open
+   (cosine-weighted), a factor for the queried irradiance (thesis 5.1.3,
+   6.1.3). Leak prevention is statistical where the surfaces around a
+   sample are not planar within a texel's lobe (edges, curved objects):
+   there the fit's variance softens the test and a little light can pass;
+   a wall thinner than the normal bias can let light through as well.
+   Harmonics of order 2 cannot hold sharp lobes: high moments and small
+   bright lights lose detail in them (the bins keep it).
 
    PAPER
 
        Gene S. Greger, The Irradiance Volume, M.S. thesis, Cornell University, 1996.
-       Equation numbers in comments refer to it.
+       Equation numbers in comments refer to it. Leak prevention after
+       Z. Majercik, J.-P. Guertin, D. Nowrouzezahrai, M. McGuire, Dynamic
+       Diffuse Global Illumination with Ray-Traced Irradiance Fields, JCGT
+       8(2), 2019; harmonics after R. Ramamoorthi and P. Hanrahan, An
+       Efficient Representation for Irradiance Environment Maps, SIGGRAPH
+       2001.
 */
 #ifndef IRRVOL_H
 #define IRRVOL_H
@@ -179,9 +382,15 @@
 #include <stdint.h>
 
 #define IRRVOL_VERSION_MAJOR 0
-#define IRRVOL_VERSION_MINOR 2
+#define IRRVOL_VERSION_MINOR 3
 #define IRRVOL_VERSION_PATCH 0
-#define IRRVOL_FILE_FORMAT_VERSION 1
+#define IRRVOL_FILE_FORMAT_VERSION 2
+
+/* Fixed limits of the desc's fields (see LIMITS). */
+#define IRRVOL_MAX_SUPERSAMPLES 16             /* s x s rays per bin */
+#define IRRVOL_MAX_WEIGHT_SUBDIVISIONS 16      /* w x w sub-directions per bin */
+#define IRRVOL_MAX_IMPORTANT_RAYS 256          /* 16 x 16 */
+#define IRRVOL_MAX_VISIBILITY_RESOLUTION 64    /* n x n visibility texels per sample */
 
 #ifndef IRRVOL_API
 #  ifdef IRRVOL_STATIC
@@ -219,17 +428,18 @@ typedef void (*irrvol_job_fn)(void *ctx, uint32_t index);
 
 /* A ray hit reported by a caller's ray caster. */
 typedef struct irrvol_hit {
-    float t;            /* distance along the ray in units of |dir| */
+    float t;            /* distance along the ray in units of |dir| (dir is unit length) */
     float u, v;         /* barycentric weights of the triangle's 2nd and 3rd vertex */
     uint32_t triangle;  /* index into desc.indices / 3 */
 } irrvol_hit;
 
-/* Closest hit along org + t dir, 0 < t < tmax; returns 1 on a hit. */
+/* Closest hit along org + t dir, 0 < t < tmax; returns 1 on a hit. Called
+   concurrently from the build's jobs. */
 typedef int (*irrvol_trace_fn)(void *user, const float org[3], const float dir[3], float tmax,
                                irrvol_hit *hit);
 
 /* Radiance seen from org looking along the unit direction dir: the light
-   that arrives at org from that direction. */
+   that arrives at org from that direction. Called concurrently. */
 typedef void (*irrvol_radiance_fn)(void *user, const float org[3], const float dir[3], float rgb[3]);
 
 typedef int (*irrvol_write_fn)(void *user, const void *bytes, size_t n); /* 0 = ok */
@@ -237,30 +447,37 @@ typedef int (*irrvol_read_fn)(void *user, void *bytes, size_t n);        /* 0 = 
 
 enum {
     IRRVOL_MATERIAL_IGNORE = 1u,     /* rays that hit it see zero radiance (light transfer exploration) */
-    IRRVOL_MATERIAL_IMPORTANT = 2u   /* informed sampling: bins that see it get extra rays */
+    IRRVOL_MATERIAL_IMPORTANT = 2u,  /* informed sampling: bins that see it get extra rays */
+    IRRVOL_MATERIAL_TWO_SIDED = 4u   /* both sides are front faces (foliage, cloth, unclosed planes) */
 };
 
 typedef struct irrvol_material {
-    float radiance[3];   /* outgoing diffuse radiance (emitted + reflected), W/(m^2 sr) */
+    float radiance[3];   /* outgoing diffuse radiance (emitted + reflected), W/(m^2 sr), both sides */
     float specular[3];   /* mirror coefficient: reflected radiance is added with this weight */
     uint32_t flags;      /* IRRVOL_MATERIAL_* */
 } irrvol_material;
 
 typedef enum irrvol_filter {
-    IRRVOL_FILTER_DEFAULT = 0,  /* the volume's filter (desc.filter), NEAREST if unset */
+    IRRVOL_FILTER_DEFAULT = 0,  /* the volume's filter (desc.filter), BILINEAR if unset */
     IRRVOL_FILTER_NEAREST,      /* the bin containing the direction (thesis 4.3) */
     IRRVOL_FILTER_BILINEAR      /* bilinear between the four nearest bins (thesis 6.1.2) */
 } irrvol_filter;
 
+typedef enum irrvol_weighting {
+    IRRVOL_WEIGHTING_DEFAULT = 0,  /* the volume's weighting (desc.weighting), VISIBILITY if unset */
+    IRRVOL_WEIGHTING_VISIBILITY,   /* leak-safe: trilinear x visibility x backface, renormalised */
+    IRRVOL_WEIGHTING_TRILINEAR     /* plain trilinear interpolation (thesis 4.3) */
+} irrvol_weighting;
+
 typedef struct irrvol_desc {
     /* Scene: triangles with per-triangle materials. Needed for the built-in
-       radiance and for the second level; may be empty with desc.radiance and
-       explicit bounds. */
+       radiance, the second level and leak prevention; may be empty with
+       desc.radiance and explicit bounds. */
     const float *positions;          /* xyz per vertex */
     size_t position_stride;          /* bytes between vertices; 0 = 3 floats */
     uint32_t vertex_count;
-    const uint32_t *indices;         /* 3 per triangle, < vertex_count */
-    uint32_t triangle_count;
+    const uint32_t *indices;         /* 3 per triangle, < vertex_count; front faces counter-clockwise */
+    uint32_t triangle_count;         /* <= UINT32_MAX / 3 */
     const uint32_t *triangle_materials; /* material of each triangle; NULL = material 0 */
     const irrvol_material *materials;
     uint32_t material_count;
@@ -272,13 +489,21 @@ typedef struct irrvol_desc {
     uint32_t subgrid_samples;        /* second-level samples per axis, corners included; 0 = 3; 2 = none */
     float inset;                     /* fraction of the scene extent kept free on each side; 0 = 0.01 */
     float bounds_min[3], bounds_max[3]; /* grid bounds used as given; all zero = scene bounds with inset */
+    float refine_threshold;          /* refine cells whose corners' light differs more (6.1.1); 0 = 0.25;
+                                        negative = refine only where geometry is */
 
     /* Directions. */
     uint32_t resolution;             /* k: 2k^2 bins per sample; 0 = 17 (578 bins) */
     uint32_t supersamples;           /* s x s jittered rays per bin; 0 = 1 ray through the bin centre */
     uint32_t moment;                 /* n of eq. 4.8; 0 = 1 (irradiance, eq. 4.3) */
     uint32_t weight_subdivisions;    /* w x w sub-directions integrate each bin's weight; 0 = 4 */
-    irrvol_filter filter;            /* filter of irrvol_query; 0 = NEAREST */
+    irrvol_filter filter;            /* filter of irrvol_query; 0 = BILINEAR */
+
+    /* Leak prevention. */
+    irrvol_weighting weighting;      /* weighting of irrvol_query; 0 = VISIBILITY */
+    uint32_t visibility_resolution;  /* n: n x n octahedral texels of hit distances per sample; 0 = 8 */
+    float normal_bias;               /* the visibility test point moves this fraction of the finest sample
+                                        spacing along the query direction; 0 = 0.02, negative = none */
 
     /* Radiance. */
     irrvol_radiance_fn radiance;     /* replaces the built-in radiance when set */
@@ -290,13 +515,13 @@ typedef struct irrvol_desc {
     float min_weight;                /* chain weight floor; 0 = 0.01 */
     float ray_offset;                /* reflected rays start this far off the surface; 0 = 1e-4 * diagonal */
     uint32_t important_rays;         /* points on IMPORTANT triangles per sample, extra rays per bin; 0 = 64 */
-    int keep_radiance;               /* non-zero: keep the gathered radiance (irrvol_sample) */
+    int keep_radiance;               /* non-zero: keep the gathered radiance (irrvol_sample_values) */
 
     uint64_t seed;                   /* jitter streams */
     irrvol_allocator allocator;
     void (*parallel_for)(void *user, irrvol_job_fn job, void *ctx, uint32_t count);
     void *parallel_user;
-    int (*progress)(void *user, uint64_t done, uint64_t total); /* samples; non-zero cancels */
+    int (*progress)(void *user, uint64_t done, uint64_t total); /* samples gathered; non-zero cancels */
     void *progress_user;
     void (*log)(void *user, const char *message);
     void *log_user;
@@ -308,14 +533,21 @@ typedef struct irrvol_volume_info {
     uint32_t sample_count;           /* all samples */
     uint32_t first_level_samples;    /* grid_samples[0] * [1] * [2] */
     uint32_t second_level_samples;   /* samples added by second-level grids (shared ones once) */
+    uint32_t hanging_samples;        /* second-level samples on faces of unrefined cells: no gather */
+    uint32_t invalid_samples;        /* inside geometry, left out of leak-safe queries */
+    uint32_t relocated_samples;      /* moved out of geometry */
     uint32_t grid_samples[3];
     uint32_t subgrid_samples;
     uint32_t cell_count;             /* first-level cells */
     uint32_t refined_cells;          /* cells with a second-level grid */
+    uint32_t light_refined_cells;    /* of which refined for their light alone (6.1.1) */
     uint32_t resolution;             /* k */
     uint32_t bins;                   /* 2k^2 */
     uint32_t moment;
+    uint32_t visibility_resolution;  /* n */
     irrvol_filter filter;
+    irrvol_weighting weighting;
+    float normal_bias;               /* in world units */
     float bounds_min[3], bounds_max[3];
     uint64_t rays;                   /* rays cast by the build (kept by save/load) */
     uint32_t degenerate_triangles;   /* zero-area triangles skipped by the build */
@@ -323,10 +555,41 @@ typedef struct irrvol_volume_info {
     size_t bytes;                    /* memory held by the volume */
 } irrvol_volume_info;
 
+enum {   /* irrvol_sample_info.state */
+    IRRVOL_SAMPLE_VALID = 0,
+    IRRVOL_SAMPLE_RELOCATED,         /* moved out of geometry: origin differs from position */
+    IRRVOL_SAMPLE_INVALID,           /* inside geometry: never in a leak-safe query */
+    IRRVOL_SAMPLE_HANGING            /* the blend of first-level samples (no seams) */
+};
+
 typedef struct irrvol_sample_info {
-    float position[3];
+    float position[3];               /* on the grid: interpolation weights refer to it */
+    float origin[3];                 /* where it gathered, and where visibility is measured from */
     int level;                       /* 1 or 2 */
+    int state;                       /* IRRVOL_SAMPLE_* */
 } irrvol_sample_info;
+
+/* The flat arrays of irrvol_gpu_export. The index array (uint32) starts
+   with a header of 16 entries: [0] layout version, [1..3] first-level
+   cells per axis, [4] samples, [5] the first hanging sample, [6] n of the
+   visibility texels, [7] coefficients per sample, [8..14] the offsets
+   below; the data array (float) with 16: [0..2] bounds min, [3..5] cells
+   per unit length, [6..8] cells per axis, [9] the normal bias. */
+typedef struct irrvol_gpu_layout {
+    size_t index_count;              /* uint32 entries of the index array */
+    size_t data_count;               /* floats of the data array */
+    uint32_t sh_order;               /* 1 or 2 */
+    uint32_t coefficients;           /* 4 or 9 per sample and channel */
+    uint32_t cells_at;               /* index: per first-level cell, its table's offset in the ids and its side */
+    uint32_t ids_at;                 /* index: the tables of sample ids, side^3 per cell, x fastest */
+    uint32_t parents_at;             /* index: 4 first-level parents per hanging sample */
+    uint32_t origins_at;             /* data: per sample xyz of its origin and 1 (valid) or 0 (invalid) */
+    uint32_t visibility_at;          /* data: per sample before the hanging ones, (n + 2)^2 texels, row-major
+                                        octahedral with a border of mirrored texels, each the fit of the
+                                        inverse hit distance: gradient xyz and residual variance */
+    uint32_t sh_at;                  /* data: per sample, coefficients x rgb of the irradiance */
+    uint32_t parent_weights_at;      /* data: 4 weights per hanging sample */
+} irrvol_gpu_layout;
 
 /* Self-occlusion of a dynamic mesh (thesis 6.1.3): for each vertex, the
    cosine-weighted fraction of the hemisphere around its normal that the mesh
@@ -336,7 +599,7 @@ typedef struct irrvol_visibility_desc {
     size_t position_stride;          /* 0 = 3 floats */
     uint32_t vertex_count;
     const uint32_t *indices;         /* 3 per triangle */
-    uint32_t triangle_count;
+    uint32_t triangle_count;         /* <= UINT32_MAX / 3 */
     const float *normals;            /* optional xyz per vertex; NULL = area-weighted face normals */
     size_t normal_stride;            /* 0 = 3 floats */
     uint32_t rays;                   /* per vertex, rounded up to a square; 0 = 64 */
@@ -357,19 +620,26 @@ IRRVOL_API void irrvol_destroy(irrvol *vol);
 IRRVOL_API irrvol_result irrvol_info(const irrvol *vol, irrvol_volume_info *info);
 
 IRRVOL_API void irrvol_query(const irrvol *vol, const float pos[3], const float dir[3], float rgb[3]);
-IRRVOL_API void irrvol_query_filter(const irrvol *vol, irrvol_filter filter, const float pos[3],
-                                    const float dir[3], float rgb[3]);
+IRRVOL_API void irrvol_query_filter(const irrvol *vol, irrvol_filter filter, irrvol_weighting weighting,
+                                    const float pos[3], const float dir[3], float rgb[3]);
 IRRVOL_API void irrvol_query_glossy(const irrvol *vol, const float pos[3], const float normal[3],
                                     const float to_eye[3], float rgb[3]);
-IRRVOL_API void irrvol_query_many(const irrvol *vol, irrvol_filter filter, uint32_t count,
-                                  const float *pos, size_t pos_stride, const float *dir,
+IRRVOL_API void irrvol_query_many(const irrvol *vol, irrvol_filter filter, irrvol_weighting weighting,
+                                  uint32_t count, const float *pos, size_t pos_stride, const float *dir,
                                   size_t dir_stride, float *rgb);
+IRRVOL_API void irrvol_query_sh(const irrvol *vol, uint32_t order, irrvol_weighting weighting, const float pos[3],
+                                const float dir[3], float rgb[3]);
 
 IRRVOL_API irrvol_result irrvol_sample(const irrvol *vol, uint32_t index, irrvol_sample_info *info);
 IRRVOL_API irrvol_result irrvol_sample_values(const irrvol *vol, uint32_t index, float *irradiance,
                                               float *radiance);
 IRRVOL_API void irrvol_bin_direction(const irrvol *vol, uint32_t bin, float dir[3]);
 IRRVOL_API uint32_t irrvol_direction_bin(const irrvol *vol, const float dir[3]);
+
+IRRVOL_API irrvol_result irrvol_gpu_export(const irrvol *vol, uint32_t sh_order, irrvol_gpu_layout *layout,
+                                           uint32_t *index, size_t index_capacity, float *data,
+                                           size_t data_capacity);
+IRRVOL_API size_t irrvol_glsl_source(char *buffer, size_t capacity);
 
 IRRVOL_API irrvol_result irrvol_visibility_ratio(const irrvol_visibility_desc *desc, float *ratio);
 
@@ -422,9 +692,11 @@ IRRVOL_API const char *irrvol_result_string(irrvol_result r);
 #if (IRRVOL_MAX_GRID_SAMPLES) * ((IRRVOL_MAX_SUBGRID_SAMPLES) - 1) >= (1 << 21)
 #  error "irrvol.h: the fine lattice must fit 21 bits per axis (grid samples x subgrid cells)"
 #endif
-#define IRRVOL__MAX_SUPERSAMPLES 16      /* s x s rays per bin */
-#define IRRVOL__MAX_WEIGHT_SUBDIVISIONS 16
-#define IRRVOL__IMPORTANT_MAX_SIDE 16    /* at most 16 x 16 extra rays per bin */
+#define IRRVOL__NORMAL_BIAS 0.02f         /* default desc.normal_bias: of the finest sample spacing */
+#define IRRVOL__REFINE_THRESHOLD 0.05f    /* default desc.refine_threshold: predicted interpolation error */
+#ifndef IRRVOL__VISIBILITY_RESOLUTION
+#define IRRVOL__VISIBILITY_RESOLUTION 8u  /* default desc.visibility_resolution */
+#endif
 #define IRRVOL__BATCH_BYTES ((size_t)8 << 20) /* scratch of one batch of sample jobs */
 
 /* The query path is a handful of small functions: force them inline. */
@@ -443,6 +715,15 @@ IRRVOL_API const char *irrvol_result_string(irrvol_result r);
 #  define IRRVOL__PREFETCH(p) ((void)(p))
 #endif
 #define IRRVOL__AHEAD 8   /* queries prepared ahead in irrvol_query_many */
+
+/* SSE2 (every x86-64 compiler offers it) computes four visibility weights
+   and the rgb sums at once; the portable scalar code computes the same
+   operations in the same order, so both give the same bits.
+   IRRVOL_NO_SIMD keeps to the scalar code. */
+#if !defined(IRRVOL_NO_SIMD) && (defined(__SSE2__) || defined(_M_X64) || (defined(_M_IX86_FP) && _M_IX86_FP >= 2))
+#  include <emmintrin.h>
+#  define IRRVOL__SSE2 1
+#endif
 
 #if defined(__cplusplus)
 #  if defined(__GNUC__) || defined(__clang__) || defined(_MSC_VER)
@@ -511,7 +792,8 @@ static irrvol__vec3 irrvol__normalize(irrvol__vec3 a)
 }
 static float irrvol__minf(float a, float b) { return a < b ? a : b; }
 static float irrvol__maxf(float a, float b) { return a > b ? a : b; }
-static int irrvol__finite3(const float *p) { return isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]); }
+/* All three finite: x - x is 0 for a finite x and NaN for an infinite or NaN one. */
+IRRVOL__HOT int irrvol__finite3(const float *p) { return (p[0] - p[0]) + (p[1] - p[1]) + (p[2] - p[2]) == 0.0f; }
 
 /* An orthonormal basis (t, b, n) around unit n (Duff et al. 2017, branchless). */
 static void irrvol__basis(irrvol__vec3 n, irrvol__vec3 *t, irrvol__vec3 *b)
@@ -1046,6 +1328,7 @@ typedef struct irrvol__reader {
     void *user;
     irrvol__crc crc;
     uint64_t remaining;  /* payload bytes not yet read, from the header */
+    uint64_t available;  /* payload bytes the input can hold at most, when known (memory) */
     int failed;          /* short read or a size past the payload: corrupt */
 } irrvol__reader;
 
@@ -1220,21 +1503,76 @@ static irrvol__vec3 irrvol__bin_point(uint32_t k, uint32_t bin, float fu, float 
     return d;
 }
 
+/* Octahedral map (Cigolle et al. 2014) of the visibility texels: the
+   point (u, t) of [0,1]^2 -> direction, the lower hemisphere folded over
+   the corners. Cheaper than the concentric map (one division, no
+   arctangent); its square folds onto itself along the edges, which the
+   bordered maps of section 13 copy. The forward map lives in
+   irrvol__visibility_weight (and its SSE2 steps, and the GLSL). */
+IRRVOL__HOT float irrvol__sign1(float x) { return x >= 0.0f ? 1.0f : -1.0f; }
+
+static irrvol__vec3 irrvol__oct_decode(float u, float t)
+{
+    float px = 2.0f * u - 1.0f, py = 2.0f * t - 1.0f, z = 1.0f - fabsf(px) - fabsf(py);
+    if (z < 0.0f) {
+        float qx = (1.0f - fabsf(py)) * irrvol__sign1(px);
+        py = (1.0f - fabsf(px)) * irrvol__sign1(py);
+        px = qx;
+    }
+    return irrvol__normalize(irrvol__v3(px, py, z));
+}
+
+/* Texel (i, j) of an n x n octahedral square, one step past an edge
+   included: the square's border folds onto itself mirrored (the points
+   (0, v) and (0, 1 - v) are one direction), so the neighbour across an edge
+   is the mirrored texel on the same edge, and past a corner the opposite
+   corner (all four corners are the -z pole). */
+IRRVOL__HOT uint32_t irrvol__oct_texel(int i, int j, int n)
+{
+    if (i < 0) { i = 0; j = n - 1 - j; }
+    else if (i >= n) { i = n - 1; j = n - 1 - j; }
+    if (j < 0) { j = 0; i = n - 1 - i; }
+    else if (j >= n) { j = n - 1; i = n - 1 - i; }
+    return (uint32_t)(j * n + i);
+}
 /* ======================================================================
-   9. the volume: bilevel grid (4.1, 4.3)
-   Samples are numbered first level first (x fastest), then the new samples
-   of the second-level grids in cell order. Every first-level cell has a
-   table of side^3 sample ids (side 2 for an unrefined cell: its corners;
-   subgrid_samples for a refined one), so a query runs the same code at either
-   level. Irradiance is stored bin-major: for each bin, rgb of every sample.
-   The eight corners of a query read the same bin of eight samples, and the
-   two corners along x are usually consecutive samples, so a query touches
-   four to six cache lines instead of eight.
+   9. the volume: bilevel grid (4.1, 4.3) without seams
+   Samples are numbered first level first (x fastest: a dense 3D array),
+   then the second-level samples that carry data of their own, then the
+   hanging ones (below). Every first-level cell has a table of side^3
+   sample ids (side 2 for an unrefined cell: its corners; subgrid_samples
+   for a refined one), so a query runs the same code at either level.
+   Irradiance is stored bin-major: for each bin, rgb of every sample. The
+   eight corners of a query read the same bin of eight samples, and the two
+   corners along x are usually consecutive samples, so a query touches four
+   to six cache lines instead of eight.
+
+   Hanging samples. A second-level sample that lies on a face or an edge of
+   an unrefined cell would make the two sides of that face interpolate
+   different data: the refined side its own samples, the unrefined side the
+   cell's corners (the thesis's seams). Such a sample is a hanging node, as
+   in adaptive finite elements: it gathers nothing, and its value is the
+   unrefined cell's own interpolation at its position, the bilinear (on a
+   face, four coarse parents) or linear (on an edge, two) blend of the
+   first-level samples around it. Trilinear interpolation reproduces a
+   bilinear face exactly, so both sides of every face agree. Leak-safe
+   queries weigh samples by visibility, which is not linear: they replace a
+   hanging corner by its parents, each weighed on its own, and both sides
+   again evaluate the same parents with the same weights.
    ---------------------------------------------------------------------- */
 typedef struct irrvol__cell {
     uint32_t offset;   /* first id of the cell's table in vol->ids */
     uint32_t side;     /* samples per axis of the table */
 } irrvol__cell;
+
+enum {   /* why a first-level cell is refined (vol->refined) */
+    IRRVOL__UNREFINED = 0,
+    IRRVOL__REFINED_GEOMETRY = 1,   /* a triangle overlaps it (4.1) */
+    IRRVOL__REFINED_LIGHT = 2       /* its corners' irradiance differs (6.1.1) */
+};
+
+#define IRRVOL__SH_COEFFS 9        /* spherical harmonics l <= 2 */
+#define IRRVOL__SH_FLOATS 27       /* 9 coefficients x rgb per sample */
 
 struct irrvol {
     irrvol_allocator allocator;
@@ -1244,20 +1582,35 @@ struct irrvol {
     uint32_t samples[3];   /* first-level samples per axis */
     uint32_t cells[3];     /* first-level cells per axis */
     uint32_t subgrid;      /* second-level samples per axis, corners included */
-    uint32_t cell_count, refined_count;
+    uint32_t cell_count, refined_count, light_refined_count;
+    unsigned char *refined;   /* per cell: IRRVOL__UNREFINED, _GEOMETRY or _LIGHT */
     irrvol__cell *cell;
     uint32_t *ids;
     size_t id_count;
     uint32_t sample_count, first_level_count;
-    float *positions;      /* xyz per sample */
+    uint32_t hanging_begin;   /* samples [hanging_begin, sample_count) are hanging */
+    float *positions;      /* grid position xyz per sample */
+    float *origins;        /* per sample: where it gathered (xyz; moved out of geometry when relocated)
+                              and w = 1 for a valid sample, 0 for an invalid one */
+    uint32_t *parents;     /* 4 first-level sample ids per hanging sample */
+    float *parent_weights; /* their weights (unused slots 0) */
     uint32_t k, bins;
     float kf;
     uint32_t moment;
     irrvol_filter filter;
+    irrvol_weighting weighting;
     float *irradiance;     /* bins x sample_count x rgb */
     float *radiance;       /* same layout, or NULL */
+    float *sh;             /* per sample 9 coefficients x rgb of the irradiance, l <= 2 */
+    uint32_t vis_res;      /* n: n x n octahedral visibility texels per sample */
+    uint32_t texels;       /* n^2 */
+    uint32_t map_texels;   /* (n + 2)^2: the map with a border of mirrored texels, as stored */
+    float *visibility;     /* per sample before hanging_begin: an (n + 2)^2 map of the fit of the inverse hit
+                              distance, gradient xyz and residual variance (section 13), its border the
+                              mirrored texels across the octahedral square's edges */
+    float bias;            /* the visibility test point moves this far along the query direction */
     uint64_t rays;
-    uint32_t degenerate;
+    uint32_t degenerate, invalid_count, relocated_count;
 };
 
 static void irrvol__log(void (*log)(void *, const char *), void *user, const char *message)
@@ -1310,6 +1663,18 @@ static void irrvol__grid_dims(irrvol *v, const uint32_t samples[3], uint32_t sub
     v->first_level_count = samples[0] * samples[1] * samples[2];
 }
 
+/* The smallest distance between neighbouring samples of the finest level. */
+static double irrvol__finest_spacing(const irrvol *v)
+{
+    double s = DBL_MAX;
+    int d;
+    for (d = 0; d < 3; d++) {
+        double c = ((double)v->hi[d] - (double)v->lo[d]) / v->cells[d] / (v->refined_count ? v->subgrid - 1 : 1);
+        if (c < s) s = c;
+    }
+    return s;
+}
+
 /* Fills the cells' id tables in cell order. A refined cell's table holds
    its side^3 points of the global fine lattice (f sub-cells per cell); a
    point on the coarse lattice is a first-level sample, any other point gets
@@ -1347,6 +1712,89 @@ static uint32_t irrvol__fill_tables(irrvol *v, const unsigned char *refined, irr
     return next;
 }
 
+/* Whether the fine lattice point g lies on the closure of an unrefined
+   cell; if so, its first-level parents and their weights: the coarse
+   lattice points around g, blended linearly along the axes where g lies
+   between them (two parents on a coarse edge, four on a coarse face).
+   Unused slots get weight 0 and the first parent's id. */
+static int irrvol__hanging_parents(const irrvol *v, const unsigned char *refined, const uint32_t g[3],
+                                   uint32_t parent[4], float weight[4])
+{
+    uint32_t f = v->subgrid - 1, q[3], r[3], lo[3], hi[3], x, y, z, n = 0, corner;
+    int d, hanging = 0;
+    for (d = 0; d < 3; d++) {
+        q[d] = g[d] / f;
+        r[d] = g[d] % f;
+        /* on a coarse plane the point touches the cells on both sides */
+        lo[d] = r[d] == 0 && q[d] > 0 ? q[d] - 1 : q[d];
+        hi[d] = q[d] < v->cells[d] ? q[d] : v->cells[d] - 1;
+    }
+    for (z = lo[2]; z <= hi[2]; z++)
+        for (y = lo[1]; y <= hi[1]; y++)
+            for (x = lo[0]; x <= hi[0]; x++)
+                if (!refined[x + v->cells[0] * (y + v->cells[1] * z)]) hanging = 1;
+    if (!hanging) return 0;
+    for (corner = 0; corner < 8; corner++) {
+        uint32_t at[3];
+        double w = 1.0;
+        int skip = 0;
+        for (d = 0; d < 3; d++) {
+            uint32_t bit = (corner >> d) & 1u;
+            if (r[d] == 0) { skip |= (int)bit; at[d] = q[d]; continue; }
+            at[d] = q[d] + bit;
+            w *= bit ? (double)r[d] / f : 1.0 - (double)r[d] / f;
+        }
+        if (skip) continue;
+        parent[n] = at[0] + v->samples[0] * (at[1] + v->samples[1] * at[2]);
+        weight[n] = (float)w;
+        n++;
+    }
+    for (; n < 4; n++) { parent[n] = parent[0]; weight[n] = 0.0f; }
+    return 1;
+}
+
+/* Numbers the hanging samples after the others, keeping creation order
+   within each group: perm[i] is the new id - first_level_count of fine
+   sample i. Sets hanging_begin. */
+static void irrvol__number_hanging(irrvol *v, const unsigned char *refined, const uint32_t *fine, uint32_t *perm)
+{
+    uint32_t fine_count = v->sample_count - v->first_level_count, i, next = 0, parent[4];
+    float weight[4];
+    for (i = 0; i < fine_count; i++) {
+        int hanging = irrvol__hanging_parents(v, refined, &fine[3 * (size_t)i], parent, weight);
+        perm[i] = hanging ? UINT32_MAX : next++;
+    }
+    v->hanging_begin = v->first_level_count + next;
+    for (i = 0; i < fine_count; i++)
+        if (perm[i] == UINT32_MAX) perm[i] = next++;
+}
+
+/* Renumbers the tables and moves the fine coordinates along with perm, then
+   records the hanging samples' parents. perm is used up. */
+static void irrvol__apply_numbering(irrvol *v, const unsigned char *refined, uint32_t *fine, uint32_t *perm)
+{
+    uint32_t first = v->first_level_count, fine_count = v->sample_count - first, i, h;
+    size_t at;
+    for (at = 0; at < v->id_count; at++)
+        if (v->ids[at] >= first) v->ids[at] = first + perm[v->ids[at] - first];
+    for (i = 0; i < fine_count; i++) {   /* place each cycle of the permutation */
+        uint32_t g[3], to;
+        if (perm[i] & 0x80000000u) continue;   /* placed by an earlier cycle */
+        memcpy(g, &fine[3 * (size_t)i], sizeof g);
+        for (to = perm[i];; to = perm[to] & 0x7FFFFFFFu) {
+            uint32_t next[3];
+            memcpy(next, &fine[3 * (size_t)to], sizeof next);
+            memcpy(&fine[3 * (size_t)to], g, sizeof g);
+            memcpy(g, next, sizeof g);
+            perm[to] |= 0x80000000u;
+            if (to == i) break;
+        }
+    }
+    for (h = 0; v->hanging_begin + h < v->sample_count; h++)
+        irrvol__hanging_parents(v, refined, &fine[3 * ((size_t)v->hanging_begin - first + h)], v->parents + 4 * (size_t)h,
+                                v->parent_weights + 4 * (size_t)h);
+}
+
 /* Sample positions from their fine-lattice coordinates. */
 static void irrvol__sample_positions(irrvol *v, const uint32_t *fine)
 {
@@ -1369,20 +1817,23 @@ static void irrvol__sample_positions(irrvol *v, const uint32_t *fine)
     }
 }
 
-/* Builds the id tables and sample positions of a grid whose dimensions are
-   set, given which cells are refined. */
+/* Builds the id tables, the hanging samples and the sample positions of a
+   grid whose dimensions are set, given which cells are refined. */
 static irrvol_result irrvol__make_grid(irrvol *v, const unsigned char *refined)
 {
     const irrvol_allocator *a = &v->allocator;
     uint64_t side3 = (uint64_t)v->subgrid * v->subgrid * v->subgrid, ids, upper, capacity = 16;
-    uint32_t *fine, c;
+    uint32_t *fine, *perm, c;
     irrvol__id_map map;
     irrvol_result r = IRRVOL_OK;
-    v->refined_count = 0;
-    for (c = 0; c < v->cell_count; c++) v->refined_count += refined[c] ? 1u : 0u;
+    v->refined_count = v->light_refined_count = 0;
+    for (c = 0; c < v->cell_count; c++) {
+        v->refined_count += refined[c] ? 1u : 0u;
+        v->light_refined_count += refined[c] == IRRVOL__REFINED_LIGHT ? 1u : 0u;
+    }
     ids = (uint64_t)(v->cell_count - v->refined_count) * 8u + (uint64_t)v->refined_count * side3;
     upper = (uint64_t)v->first_level_count + (uint64_t)v->refined_count * (side3 - 8u);   /* nothing shared */
-    if (ids > UINT32_MAX || upper >= UINT32_MAX || ids > SIZE_MAX / 8 || upper > SIZE_MAX / 16)
+    if (ids > UINT32_MAX || upper >= UINT32_MAX || ids > SIZE_MAX / 8 || upper > SIZE_MAX / 32)
         return IRRVOL_ERROR_OUT_OF_MEMORY;
     while (capacity < 2 * (uint64_t)v->refined_count * side3) capacity *= 2;
     v->id_count = (size_t)ids;
@@ -1393,11 +1844,22 @@ static irrvol_result irrvol__make_grid(irrvol *v, const unsigned char *refined)
     map.values = (uint32_t *)irrvol__alloc_array(a, (size_t)capacity, sizeof(uint32_t));
     map.mask = (size_t)capacity - 1;
     if (v->cell && v->ids && fine && map.keys && map.values) {
+        size_t fine_count;
         memset(map.keys, 0xFF, (size_t)capacity * sizeof(uint64_t));
         v->sample_count = irrvol__fill_tables(v, refined, &map, fine);
+        fine_count = (size_t)v->sample_count - v->first_level_count;
+        perm = (uint32_t *)irrvol__alloc_array(a, fine_count, sizeof(uint32_t));
+        if (perm) irrvol__number_hanging(v, refined, fine, perm);
+        v->parents = (uint32_t *)irrvol__alloc_array(a, v->sample_count - v->hanging_begin, 4 * sizeof(uint32_t));
+        v->parent_weights = (float *)irrvol__alloc_array(a, v->sample_count - v->hanging_begin, 4 * sizeof(float));
         v->positions = (float *)irrvol__alloc_array(a, (size_t)v->sample_count * 3, sizeof(float));
-        if (v->positions) irrvol__sample_positions(v, fine);
-        else r = IRRVOL_ERROR_OUT_OF_MEMORY;
+        if (perm && v->parents && v->parent_weights && v->positions) {
+            irrvol__apply_numbering(v, refined, fine, perm);
+            irrvol__sample_positions(v, fine);
+        } else {
+            r = IRRVOL_ERROR_OUT_OF_MEMORY;
+        }
+        irrvol__free(a, perm);
     } else {
         r = IRRVOL_ERROR_OUT_OF_MEMORY;
     }
@@ -1407,11 +1869,34 @@ static irrvol_result irrvol__make_grid(irrvol *v, const unsigned char *refined)
     return r;
 }
 
+/* Per-sample arrays sized by the grid: values, origins, visibility. */
+static irrvol_result irrvol__alloc_samples(irrvol *v, int keep_radiance)
+{
+    const irrvol_allocator *a = &v->allocator;
+    uint64_t floats = (uint64_t)v->sample_count * v->bins * 3;
+    uint64_t vis = (uint64_t)v->hanging_begin * v->map_texels * 4;
+    if (floats > SIZE_MAX / sizeof(float) || vis > SIZE_MAX / sizeof(float)) return IRRVOL_ERROR_OUT_OF_MEMORY;
+    v->irradiance = (float *)irrvol__alloc_array(a, (size_t)floats + 1, sizeof(float));
+    if (keep_radiance) v->radiance = (float *)irrvol__alloc_array(a, (size_t)floats, sizeof(float));
+    v->sh = (float *)irrvol__alloc_array(a, (size_t)v->sample_count * IRRVOL__SH_FLOATS + 1, sizeof(float));
+    v->origins = (float *)irrvol__alloc_array(a, v->sample_count, 4 * sizeof(float));
+    v->visibility = (float *)irrvol__alloc_array(a, (size_t)vis, sizeof(float));
+    if (!v->irradiance || (keep_radiance && !v->radiance) || !v->sh || !v->origins || !v->visibility)
+        return IRRVOL_ERROR_OUT_OF_MEMORY;
+    /* the rgb sums load four floats at a time: one past the last sample's */
+    v->irradiance[floats] = 0.0f;
+    v->sh[(size_t)v->sample_count * IRRVOL__SH_FLOATS] = 0.0f;
+    return IRRVOL_OK;
+}
+
 static size_t irrvol__bytes(const irrvol *v)
 {
     size_t per_sample = (size_t)v->bins * 3 * sizeof(float);
-    return sizeof *v + v->cell_count * sizeof(irrvol__cell) + v->id_count * sizeof(uint32_t) +
-           (size_t)v->sample_count * (3 * sizeof(float) + per_sample * (v->radiance ? 2 : 1));
+    size_t hanging = (size_t)v->sample_count - v->hanging_begin;
+    return sizeof *v + v->cell_count * (sizeof(irrvol__cell) + 1) + v->id_count * sizeof(uint32_t) +
+           (size_t)v->sample_count * (7 * sizeof(float) + IRRVOL__SH_FLOATS * sizeof(float) +
+                                      per_sample * (v->radiance ? 2 : 1)) +
+           hanging * 4 * (sizeof(uint32_t) + sizeof(float)) + (size_t)v->hanging_begin * v->map_texels * 4 * sizeof(float);
 }
 
 IRRVOL_API void irrvol_destroy(irrvol *vol)
@@ -1419,11 +1904,17 @@ IRRVOL_API void irrvol_destroy(irrvol *vol)
     irrvol_allocator a;
     if (!vol) return;
     a = vol->allocator;
+    irrvol__free(&a, vol->refined);
     irrvol__free(&a, vol->cell);
     irrvol__free(&a, vol->ids);
     irrvol__free(&a, vol->positions);
+    irrvol__free(&a, vol->origins);
+    irrvol__free(&a, vol->parents);
+    irrvol__free(&a, vol->parent_weights);
     irrvol__free(&a, vol->irradiance);
     irrvol__free(&a, vol->radiance);
+    irrvol__free(&a, vol->sh);
+    irrvol__free(&a, vol->visibility);
     irrvol__free(&a, vol);
 }
 
@@ -1436,8 +1927,37 @@ static irrvol *irrvol__create(const irrvol_allocator *a)
     return v;
 }
 
+/* Fills the border of one sample's (n + 2)^2 visibility map from its
+   interior: past an edge of the octahedral square lies the mirrored texel
+   of the same edge (irrvol__oct_texel), so a bilinear lookup anywhere in
+   the square reads four stored texels and needs no wrapping. */
+static void irrvol__map_border(const irrvol *v, float *map)
+{
+    int n = (int)v->vis_res, w = n + 2, i, j;
+    for (j = 0; j < w; j++)
+        for (i = 0; i < w; i++) {
+            uint32_t from;
+            if (i > 0 && i <= n && j > 0 && j <= n) continue;
+            from = irrvol__oct_texel(i - 1, j - 1, n);
+            memcpy(map + 4 * (size_t)(j * w + i), map + 4 * ((from / (uint32_t)n + 1) * (uint32_t)w + from % (uint32_t)n + 1),
+                   4 * sizeof(float));
+        }
+}
+
+/* Volume-wide settings that follow from the resolutions. */
+static void irrvol__set_resolutions(irrvol *v, uint32_t k, uint32_t vis_res)
+{
+    v->k = k;
+    v->bins = 2 * k * k;
+    v->kf = (float)k;
+    v->vis_res = vis_res;
+    v->texels = vis_res * vis_res;
+    v->map_texels = (vis_res + 2) * (vis_res + 2);
+}
+
 /* ======================================================================
-   10. second-level refinement: triangle/box overlap
+   10. second-level refinement: where geometry is (4.1), where the light
+   changes (6.1.1)
    ---------------------------------------------------------------------- */
 /* Separating axis test of Akenine-Moller ("Fast 3D triangle-box overlap
    testing", 2001): the three box normals, the triangle normal and the nine
@@ -1523,35 +2043,197 @@ static void irrvol__mark_refined(const irrvol *v, const irrvol__mesh_view *m, un
                         half[d] = 0.5 * size[d];
                         centre[d] = (double)v->lo[d] + ((double)cc[d] + 0.5) * size[d];
                     }
-                    if (irrvol__tri_box_overlap(centre, half, tri)) refined[c] = 1;
+                    if (irrvol__tri_box_overlap(centre, half, tri)) refined[c] = IRRVOL__REFINED_GEOMETRY;
                 }
     }
 }
 
+
+static float irrvol__luminance(const float *rgb)
+{
+    return 0.2126f * rgb[0] + 0.7152f * rgb[1] + 0.0722f * rgb[2];
+}
+
+/* Adaptive refinement by light (6.1.1: "if the eight samples surrounding
+   each cell differed by a specified tolerance, the cell would be
+   subdivided"). Trilinear interpolation is exact for light that changes
+   linearly, so the metric is how far the samples along each axis bend away
+   from a straight line: for a first-level sample s and its two neighbours
+   a and b along an axis, the luminance of every bin j gives the second
+   difference D_j = Y_a,j - 2 Y_s,j + Y_b,j, and
+
+       E = sum_j |D_j| / 8 / sum_j (Y_a,j + 2 Y_s,j + Y_b,j) / 4
+
+   is the interpolation error a parabola through the three would leave
+   midway (h^2 f'' / 8 against the level). A cell is refined when E exceeds
+   the threshold at any of its corners along any axis: where a light falls
+   off fast and across shadow edges, not along a smooth gradient. Invalid
+   samples do not count. irradiance holds the first-level samples bin-major
+   (bin * first_level_count + sample); valid[4 s + 3] is 0 for invalid
+   ones. bend is scratch for one float per first-level sample. */
+static void irrvol__mark_light(const irrvol *v, const float *irradiance, const float *valid, float threshold,
+                               unsigned char *refined, float *bend)
+{
+    uint32_t n = v->first_level_count, s, cx, cy, cz, c = 0, bin;
+    for (s = 0; s < n; s++) {
+        uint32_t g[3], step = 1, d;
+        g[0] = s % v->samples[0];
+        g[1] = (s / v->samples[0]) % v->samples[1];
+        g[2] = s / (v->samples[0] * v->samples[1]);
+        bend[s] = 0.0f;
+        for (d = 0; d < 3; step *= v->samples[d], d++) {
+            uint32_t a = s - step, b = s + step;
+            double dev = 0.0, level = 0.0;
+            if (g[d] == 0 || g[d] + 1 == v->samples[d] || valid[4 * (size_t)s + 3] == 0.0f ||
+                valid[4 * (size_t)a + 3] == 0.0f || valid[4 * (size_t)b + 3] == 0.0f)
+                continue;
+            for (bin = 0; bin < v->bins; bin++) {
+                const float *h = irradiance + 3 * (size_t)bin * n;
+                double ya = irrvol__luminance(h + 3 * (size_t)a), ys = irrvol__luminance(h + 3 * (size_t)s);
+                double yb = irrvol__luminance(h + 3 * (size_t)b);
+                dev += fabs(ya - 2.0 * ys + yb);
+                level += ya + 2.0 * ys + yb;
+            }
+            if (level > 0.0 && dev / 8.0 / (level / 4.0) > bend[s]) bend[s] = (float)(dev / 8.0 / (level / 4.0));
+        }
+    }
+    for (cz = 0; cz < v->cells[2]; cz++)
+        for (cy = 0; cy < v->cells[1]; cy++)
+            for (cx = 0; cx < v->cells[0]; cx++, c++) {
+                uint32_t i;
+                if (refined[c]) continue;
+                for (i = 0; i < 8; i++) {
+                    uint32_t t = (cx + (i & 1u)) + v->samples[0] * ((cy + ((i >> 1) & 1u)) + v->samples[1] * (cz + (i >> 2)));
+                    if (bend[t] > threshold) refined[c] = IRRVOL__REFINED_LIGHT;
+                }
+            }
+}
+
 /* ======================================================================
-   11. build: radiance gathering (4.2.1, 4.2.2) and irradiance (4.2.3, 4.4)
+   11. spherical harmonics of the irradiance (Ramamoorthi and Hanrahan 2001)
+   The compact encoding for shaders: the radiance projected on the real
+   harmonics Y_lm, l <= 2, each band scaled by the lobe's A_l (eq. 7-8 of
+   the paper: pi, 2 pi / 3, pi / 4 for the cosine). E(n) = sum A_l L_lm
+   Y_lm(n) then costs nine multiply-adds per channel; L1 keeps the first
+   four coefficients.
    ---------------------------------------------------------------------- */
+/* Y_lm of a unit direction, ordered (0,0), (1,-1), (1,0), (1,1), (2,-2),
+   (2,-1), (2,0), (2,1), (2,2). */
+IRRVOL__HOT void irrvol__sh_basis(float x, float y, float z, float ylm[IRRVOL__SH_COEFFS])
+{
+    ylm[0] = 0.282094792f;
+    ylm[1] = 0.488602512f * y;
+    ylm[2] = 0.488602512f * z;
+    ylm[3] = 0.488602512f * x;
+    ylm[4] = 1.092548431f * x * y;
+    ylm[5] = 1.092548431f * y * z;
+    ylm[6] = 0.315391565f * (3.0f * z * z - 1.0f);
+    ylm[7] = 1.092548431f * x * z;
+    ylm[8] = 0.546274215f * (x * x - y * y);
+}
+
+/* A_l of the moment-n lobe (n+1)/2 max(0, cos)^n (eq. 4.8):
+   2 pi (n+1)/2 integral_0^1 t^n P_l(t) dt; n = 1 gives pi, 2 pi / 3, pi / 4. */
+static double irrvol__sh_lobe(uint32_t n, uint32_t l)
+{
+    double m = (double)n;
+    if (l == 0) return IRRVOL__PI;
+    if (l == 1) return IRRVOL__PI * (m + 1.0) / (m + 2.0);
+    return 0.5 * IRRVOL__PI * (3.0 * (m + 1.0) / (m + 3.0) - 1.0);
+}
+
+/* The band l of coefficient j. */
+static uint32_t irrvol__sh_band(uint32_t j) { return j == 0 ? 0u : (j < 4 ? 1u : 2u); }
+
+/* ======================================================================
+   12. build: radiance gathering (4.2.1, 4.2.2), validity and relocation,
+   irradiance (4.2.3, 4.4), harmonics and visibility moments; invalid
+   samples dilated, hanging samples constrained
+   ---------------------------------------------------------------------- */
+#define IRRVOL__BACK_FRACTION 0.25  /* back faces over more of the sphere: the sample is inside geometry */
+#define IRRVOL__RELOCATE_LIMIT 0.45f  /* a sample moves at most this fraction of its local spacing */
+#define IRRVOL__RELOCATE_MARGIN 0.05f /* and ends this fraction of it in front of the surface it crossed */
+
+/* Where the sample jobs of a pass store their results: irradiance and
+   radiance bin-major ((bin * stride + sample) * 3), the rest per sample. */
+typedef struct irrvol__sink {
+    float *irradiance, *radiance, *sh, *origins, *visibility;
+    uint32_t *rays;
+    unsigned char *state;     /* IRRVOL_SAMPLE_VALID, _RELOCATED or _INVALID */
+    uint32_t stride;
+} irrvol__sink;
+
 typedef struct irrvol__build {
     const irrvol_desc *desc;
     irrvol *vol;
     irrvol__mesh_view mesh;
+    int can_trace;             /* hit distances exist: triangles through the BVH or desc.trace */
     irrvol__bvh bvh;
     irrvol__bvh important_bvh; /* over the IMPORTANT triangles; ids index b->important */
     uint32_t *important_indices;
     uint32_t supersamples, weight_subdivisions, max_depth, important_side;
     float min_weight, ray_offset;
+    float coarse_spacing, fine_spacing;   /* smallest sample spacing of each level */
     float *dirs;            /* bin centre directions, xyz per bin */
     float *dir_soa;         /* the same: all x, all y, all z */
     float *weights;         /* bins x bins: row i = radiance bin, column j = irradiance bin */
+    float *sh_weights;      /* bins x 9: A_l times the integral of Y_lm over bin i */
+    float *vis_weights;     /* bins x 4 texels: per texel the lobe around its direction times the bin
+                               direction (x, y, z) and the lobe alone; the lobe sums to 1 */
+    float *vis_inverse;     /* per texel the inverse of sum lobe w w^T over the bin directions w (3 x 3) */
+    float vis_lobe;         /* exponent of that lobe */
+    double sh_lobe[3];      /* A_l, l = 0, 1, 2 */
     uint32_t *important;    /* triangles of IMPORTANT materials */
     uint32_t important_count;
     float bin_solid_angle;  /* 4 pi / bins, eq. 4.2 */
     float bin_angle;        /* sqrt of it: the angular size of a bin */
     unsigned char *scratch; /* per job of a batch */
-    size_t scratch_stride;
+    size_t scratch_stride;  /* bytes per job */
+    uint32_t scratch_jobs;  /* jobs it has room for */
     uint32_t batch_begin;
-    uint32_t *ray_counts;   /* per sample, summed after the build */
+    irrvol__sink sink;
 } irrvol__build;
+
+/* One sample job's scratch: every array it needs, carved from one block. */
+typedef struct irrvol__scratch {
+    double *part;          /* bins x rgb: the important part's radiance integral per bin */
+    float *direct;         /* 3 x bins, planar rgb: the important part's irradiance */
+    float *sh_direct;      /* 3 x 9, planar rgb: the important part's harmonics */
+    float *radiance;       /* 3 x bins, planar rgb */
+    float *irradiance;     /* 3 x bins, planar rgb */
+    float *inverse;        /* 3 x bins, planar: mean and mean square inverse hit distance, zeros */
+    float *moments;        /* 3 x 4 texels, planar: the lobe's sums for the visibility fit */
+    float *sh;             /* 3 x 9, planar rgb */
+    float *lobe;           /* bins: one direction's lobe over the bin directions */
+    uint32_t *rows;        /* bins: the non-zero rows of a matrix product */
+    unsigned char *extra;  /* bins: the bins an important triangle overlaps */
+} irrvol__scratch;
+
+static void *irrvol__carve(unsigned char *base, size_t *at, size_t bytes)
+{
+    void *p = base ? (void *)(base + *at) : NULL;
+    *at += (bytes + 15) & ~(size_t)15;
+    return p;
+}
+
+/* The layout of one job's scratch in base (or, base NULL, only its size).
+   Returns the bytes it takes, a multiple of a cache line. */
+static size_t irrvol__scratch_layout(unsigned char *base, uint32_t bins, uint32_t texels, irrvol__scratch *sc)
+{
+    size_t at = 0, planar = 3 * (size_t)bins * sizeof(float);
+    sc->part = (double *)irrvol__carve(base, &at, 3 * (size_t)bins * sizeof(double));
+    sc->direct = (float *)irrvol__carve(base, &at, planar);
+    sc->sh_direct = (float *)irrvol__carve(base, &at, IRRVOL__SH_FLOATS * sizeof(float));
+    sc->radiance = (float *)irrvol__carve(base, &at, planar);
+    sc->irradiance = (float *)irrvol__carve(base, &at, planar);
+    sc->inverse = (float *)irrvol__carve(base, &at, planar);
+    sc->moments = (float *)irrvol__carve(base, &at, 12 * (size_t)texels * sizeof(float));
+    sc->sh = (float *)irrvol__carve(base, &at, IRRVOL__SH_FLOATS * sizeof(float));
+    sc->lobe = (float *)irrvol__carve(base, &at, (size_t)bins * sizeof(float));
+    sc->rows = (uint32_t *)irrvol__carve(base, &at, (size_t)bins * sizeof(uint32_t));
+    sc->extra = (unsigned char *)irrvol__carve(base, &at, bins);
+    return (at + 63) & ~(size_t)63;
+}
 
 /* x^n by squaring. */
 static double irrvol__powi(double x, uint32_t n)
@@ -1565,22 +2247,31 @@ static double irrvol__powi(double x, uint32_t n)
     return r;
 }
 
-/* Row i of the weight matrix: W(i, j) = (n+1)/2 * integral over bin i of
-   max(0, w . w_j)^n dw, by w x w equal-area sub-directions (eq. 4.8 with the
-   radiance constant over bin i; one sub-direction is eq. 4.8 at the bin
-   centre, eq. 4.3 for n = 1). */
+/* Row i of the three matrices, from w x w equal-area sub-directions of bin
+   i (the radiance is taken constant over the bin):
+   - irradiance: W(i, j) = (n+1)/2 * integral over bin i of max(0, w . w_j)^n
+     dw (eq. 4.8; one sub-direction is eq. 4.8 at the bin centre, eq. 4.3
+     for n = 1);
+   - harmonics: A_l * integral over bin i of Y_lm;
+   - visibility: the lobe max(0, w_i . t)^p of each texel direction t at
+     the bin centre, times w_i and alone (normalised afterwards). */
 static void irrvol__weight_row_job(void *ctx, uint32_t i)
 {
     const irrvol__build *b = (const irrvol__build *)ctx;
     const irrvol *v = b->vol;
-    uint32_t w = b->weight_subdivisions, n = v->moment, bins = v->bins, s, j;
-    float sub[IRRVOL__MAX_WEIGHT_SUBDIVISIONS * IRRVOL__MAX_WEIGHT_SUBDIVISIONS][3];
-    double scale = 0.5 * (n + 1.0) * 4.0 * IRRVOL__PI / ((double)bins * w * w);
+    uint32_t w = b->weight_subdivisions, n = v->moment, bins = v->bins, s, j, t;
+    float sub[IRRVOL_MAX_WEIGHT_SUBDIVISIONS * IRRVOL_MAX_WEIGHT_SUBDIVISIONS][3];
+    double quad = 4.0 * IRRVOL__PI / ((double)bins * w * w), scale = 0.5 * (n + 1.0) * quad;
+    double sh[IRRVOL__SH_COEFFS] = {0};
+    const float *di = b->dirs + 3 * (size_t)i;
     float *row = b->weights + (size_t)i * bins;
     for (s = 0; s < w * w; s++) {
         irrvol__vec3 d = irrvol__bin_point(v->k, i, ((float)(s % w) + 0.5f) / (float)w,
                                            ((float)(s / w) + 0.5f) / (float)w);
+        float ylm[IRRVOL__SH_COEFFS];
         sub[s][0] = d.x; sub[s][1] = d.y; sub[s][2] = d.z;
+        irrvol__sh_basis(d.x, d.y, d.z, ylm);
+        for (j = 0; j < IRRVOL__SH_COEFFS; j++) sh[j] += ylm[j];
     }
     for (j = 0; j < bins; j++) {
         const float *dj = b->dirs + 3 * (size_t)j;
@@ -1591,34 +2282,100 @@ static void irrvol__weight_row_job(void *ctx, uint32_t i)
         }
         row[j] = (float)(scale * sum);
     }
+    for (j = 0; j < IRRVOL__SH_COEFFS; j++)
+        b->sh_weights[(size_t)i * IRRVOL__SH_COEFFS + j] = (float)(b->sh_lobe[irrvol__sh_band(j)] * quad * sh[j]);
+    for (t = 0; t < v->texels; t++) {
+        irrvol__vec3 c = irrvol__oct_decode(((float)(t % v->vis_res) + 0.5f) / (float)v->vis_res,
+                                            ((float)(t / v->vis_res) + 0.5f) / (float)v->vis_res);
+        double cs = (double)c.x * di[0] + (double)c.y * di[1] + (double)c.z * di[2];
+        float *out = b->vis_weights + 4 * ((size_t)i * v->texels + t), lobe = cs > 0.0 ? (float)pow(cs, b->vis_lobe) : 0.0f;
+        out[0] = lobe * di[0];
+        out[1] = lobe * di[1];
+        out[2] = lobe * di[2];
+        out[3] = lobe;
+    }
 }
 
-/* Eq. 4.3 / 4.8 for every irradiance bin at once: H = W^T L, summed over
-   all radiance bins (zero-radiance bins add nothing and are skipped). L and H
-   are planar (all red, all green, all blue) so that the inner loop is a
-   contiguous multiply-add the compiler vectorizes; four radiance bins per
-   pass over H load and store H a quarter as often. rows is scratch for the
-   indices of the non-zero radiance bins. */
-static void irrvol__irradiance(const float *IRRVOL__RESTRICT weights, uint32_t bins,
-                              const float *IRRVOL__RESTRICT radiance, float *IRRVOL__RESTRICT out, uint32_t *rows)
+/* Inverts the symmetric 3 x 3 matrix m (row-major) into inv; a small
+   multiple of the trace on the diagonal keeps a lobe of nearly parallel
+   directions solvable (it then shrinks the fitted gradient a little). */
+static void irrvol__invert3(const double m[9], float inv[9])
+{
+    double a[9], det, k = 1e-6 * (m[0] + m[4] + m[8]);
+    int i;
+    for (i = 0; i < 9; i++) a[i] = m[i] + (i % 4 == 0 ? k : 0.0);
+    det = a[0] * (a[4] * a[8] - a[5] * a[7]) - a[1] * (a[3] * a[8] - a[5] * a[6]) + a[2] * (a[3] * a[7] - a[4] * a[6]);
+    if (!(fabs(det) > 0.0)) { for (i = 0; i < 9; i++) inv[i] = 0.0f; return; }
+    inv[0] = (float)((a[4] * a[8] - a[5] * a[7]) / det);
+    inv[1] = (float)((a[2] * a[7] - a[1] * a[8]) / det);
+    inv[2] = (float)((a[1] * a[5] - a[2] * a[4]) / det);
+    inv[3] = (float)((a[5] * a[6] - a[3] * a[8]) / det);
+    inv[4] = (float)((a[0] * a[8] - a[2] * a[6]) / det);
+    inv[5] = (float)((a[2] * a[3] - a[0] * a[5]) / det);
+    inv[6] = (float)((a[3] * a[7] - a[4] * a[6]) / det);
+    inv[7] = (float)((a[1] * a[6] - a[0] * a[7]) / det);
+    inv[8] = (float)((a[0] * a[4] - a[1] * a[3]) / det);
+}
+
+/* Scales each texel's lobe to sum 1 (a texel that no bin centre reaches,
+   possible only at tiny k, takes its nearest bin) and inverts the texel's
+   sum lobe w w^T, the normal matrix of the fit (section 13). */
+static void irrvol__finish_visibility_weights(irrvol__build *b)
+{
+    const irrvol *v = b->vol;
+    uint32_t t, i;
+    for (t = 0; t < v->texels; t++) {
+        double sum = 0.0, m[9] = {0};
+        int j, k;
+        for (i = 0; i < v->bins; i++) sum += b->vis_weights[4 * ((size_t)i * v->texels + t) + 3];
+        if (!(sum > 0.0)) {
+            irrvol__vec3 c = irrvol__oct_decode(((float)(t % v->vis_res) + 0.5f) / (float)v->vis_res,
+                                                ((float)(t / v->vis_res) + 0.5f) / (float)v->vis_res);
+            float dir[3], *w;
+            dir[0] = c.x; dir[1] = c.y; dir[2] = c.z;
+            i = irrvol_direction_bin(v, dir);
+            w = b->vis_weights + 4 * ((size_t)i * v->texels + t);
+            for (j = 0; j < 3; j++) w[j] = b->dirs[3 * (size_t)i + (size_t)j];
+            w[3] = 1.0f;
+            sum = 1.0;
+        }
+        for (i = 0; i < v->bins; i++) {
+            float *w = b->vis_weights + 4 * ((size_t)i * v->texels + t);
+            const float *d = b->dirs + 3 * (size_t)i;
+            for (j = 0; j < 4; j++) w[j] = (float)(w[j] / sum);
+            for (j = 0; j < 3; j++)
+                for (k = 0; k < 3; k++) m[3 * j + k] += (double)w[3] * d[j] * d[k];
+        }
+        irrvol__invert3(m, b->vis_inverse + 9 * (size_t)t);
+    }
+}
+
+/* out = W^T in for a rows x cols matrix W and three planar channels: eq.
+   4.3 / 4.8 for every irradiance bin at once (W the weight matrix), the
+   harmonics and the visibility moments alike. Zero rows of in add nothing
+   and are skipped. The inner loop is a contiguous multiply-add the compiler
+   vectorizes; four rows per pass over out load and store it a quarter as
+   often. nonzero is scratch for the indices of the non-zero rows. */
+static void irrvol__matrix_product(const float *IRRVOL__RESTRICT weights, uint32_t rows, uint32_t cols,
+                                   const float *IRRVOL__RESTRICT in, float *IRRVOL__RESTRICT out, uint32_t *nonzero)
 {
     float *IRRVOL__RESTRICT hr = out;
-    float *IRRVOL__RESTRICT hg = out + bins;
-    float *IRRVOL__RESTRICT hb = out + 2 * (size_t)bins;
-    const float *lr = radiance, *lg = radiance + bins, *lb = radiance + 2 * (size_t)bins;
+    float *IRRVOL__RESTRICT hg = out + cols;
+    float *IRRVOL__RESTRICT hb = out + 2 * (size_t)cols;
+    const float *lr = in, *lg = in + rows, *lb = in + 2 * (size_t)rows;
     uint32_t i, j, n = 0, r;
-    memset(out, 0, 3 * (size_t)bins * sizeof(float));
-    for (i = 0; i < bins; i++)
-        if (lr[i] != 0.0f || lg[i] != 0.0f || lb[i] != 0.0f) rows[n++] = i;
+    memset(out, 0, 3 * (size_t)cols * sizeof(float));
+    for (i = 0; i < rows; i++)
+        if (lr[i] != 0.0f || lg[i] != 0.0f || lb[i] != 0.0f) nonzero[n++] = i;
     for (r = 0; r + 4 <= n; r += 4) {
-        const float *IRRVOL__RESTRICT w0 = weights + (size_t)rows[r] * bins;
-        const float *IRRVOL__RESTRICT w1 = weights + (size_t)rows[r + 1] * bins;
-        const float *IRRVOL__RESTRICT w2 = weights + (size_t)rows[r + 2] * bins;
-        const float *IRRVOL__RESTRICT w3 = weights + (size_t)rows[r + 3] * bins;
-        float r0 = lr[rows[r]], r1 = lr[rows[r + 1]], r2 = lr[rows[r + 2]], r3 = lr[rows[r + 3]];
-        float g0 = lg[rows[r]], g1 = lg[rows[r + 1]], g2 = lg[rows[r + 2]], g3 = lg[rows[r + 3]];
-        float b0 = lb[rows[r]], b1 = lb[rows[r + 1]], b2 = lb[rows[r + 2]], b3 = lb[rows[r + 3]];
-        for (j = 0; j < bins; j++) {
+        const float *IRRVOL__RESTRICT w0 = weights + (size_t)nonzero[r] * cols;
+        const float *IRRVOL__RESTRICT w1 = weights + (size_t)nonzero[r + 1] * cols;
+        const float *IRRVOL__RESTRICT w2 = weights + (size_t)nonzero[r + 2] * cols;
+        const float *IRRVOL__RESTRICT w3 = weights + (size_t)nonzero[r + 3] * cols;
+        float r0 = lr[nonzero[r]], r1 = lr[nonzero[r + 1]], r2 = lr[nonzero[r + 2]], r3 = lr[nonzero[r + 3]];
+        float g0 = lg[nonzero[r]], g1 = lg[nonzero[r + 1]], g2 = lg[nonzero[r + 2]], g3 = lg[nonzero[r + 3]];
+        float b0 = lb[nonzero[r]], b1 = lb[nonzero[r + 1]], b2 = lb[nonzero[r + 2]], b3 = lb[nonzero[r + 3]];
+        for (j = 0; j < cols; j++) {
             float x0 = w0[j], x1 = w1[j], x2 = w2[j], x3 = w3[j];
             hr[j] += (r0 * x0 + r1 * x1) + (r2 * x2 + r3 * x3);
             hg[j] += (g0 * x0 + g1 * x1) + (g2 * x2 + g3 * x3);
@@ -1626,9 +2383,9 @@ static void irrvol__irradiance(const float *IRRVOL__RESTRICT weights, uint32_t b
         }
     }
     for (; r < n; r++) {
-        const float *IRRVOL__RESTRICT w0 = weights + (size_t)rows[r] * bins;
-        float r0 = lr[rows[r]], g0 = lg[rows[r]], b0 = lb[rows[r]];
-        for (j = 0; j < bins; j++) {
+        const float *IRRVOL__RESTRICT w0 = weights + (size_t)nonzero[r] * cols;
+        float r0 = lr[nonzero[r]], g0 = lg[nonzero[r]], b0 = lb[nonzero[r]];
+        for (j = 0; j < cols; j++) {
             hr[j] += r0 * w0[j];
             hg[j] += g0 * w0[j];
             hb[j] += b0 * w0[j];
@@ -1637,13 +2394,15 @@ static void irrvol__irradiance(const float *IRRVOL__RESTRICT weights, uint32_t b
 }
 
 /* First hit through the caller's ray caster or the built-in BVH. A hit on
-   a triangle index out of range counts as a miss. */
+   a triangle index out of range, or at a negative or non-finite distance,
+   counts as a miss. */
 static int irrvol__trace(const irrvol__build *b, const float org[3], const float dir[3], irrvol_hit *hit)
 {
     const irrvol_desc *d = b->desc;
     if (d->trace) {
         if (!d->trace(d->trace_user, org, dir, FLT_MAX, hit)) return 0;
-        return hit->triangle < d->triangle_count && isfinite(hit->t) && isfinite(hit->u) && isfinite(hit->v);
+        return hit->triangle < d->triangle_count && hit->t >= 0.0f && isfinite(hit->t) && isfinite(hit->u) &&
+               isfinite(hit->v);
     } else {
         irrvol__hit h;
         if (!irrvol__bvh_intersect(&b->bvh, org, dir, 0.0f, FLT_MAX, &h)) return 0;
@@ -1652,8 +2411,34 @@ static int irrvol__trace(const irrvol__build *b, const float org[3], const float
     }
 }
 
+static const irrvol_material *irrvol__hit_material(const irrvol_desc *d, uint32_t triangle)
+{
+    if (!d->materials) return NULL;
+    return &d->materials[d->triangle_materials ? d->triangle_materials[triangle] : 0];
+}
+
+/* The geometric normal of a triangle, (v1 - v0) x (v2 - v0): it points to
+   the front side, the side from which the triangle winds counter-clockwise. */
+static irrvol__vec3 irrvol__triangle_normal(const irrvol__build *b, uint32_t triangle)
+{
+    const uint32_t *tri = b->desc->indices + 3 * (size_t)triangle;
+    irrvol__vec3 p0 = irrvol__v3_load(irrvol__vertex(&b->mesh, tri[0]));
+    return irrvol__cross(irrvol__sub(irrvol__v3_load(irrvol__vertex(&b->mesh, tri[1])), p0),
+                         irrvol__sub(irrvol__v3_load(irrvol__vertex(&b->mesh, tri[2])), p0));
+}
+
+/* Whether a ray along dir meets the hit triangle from behind; never for
+   TWO_SIDED materials. */
+static int irrvol__back_face(const irrvol__build *b, const irrvol_hit *hit, const float dir[3])
+{
+    const irrvol_material *mat = irrvol__hit_material(b->desc, hit->triangle);
+    if (mat && (mat->flags & IRRVOL_MATERIAL_TWO_SIDED)) return 0;
+    return irrvol__dot(irrvol__triangle_normal(b, hit->triangle), irrvol__v3_load(dir)) > 0.0f;
+}
+
 /* The diffuse radiance of the surface at a hit: per-vertex radiance
-   interpolated with the barycentrics, or the material's. */
+   interpolated with the barycentrics, or the material's. Either side of a
+   triangle emits it (emitters are two-sided). */
 static void irrvol__surface_radiance(const irrvol__build *b, const irrvol_hit *hit,
                                      const irrvol_material *mat, float rgb[3])
 {
@@ -1674,11 +2459,13 @@ static void irrvol__surface_radiance(const irrvol__build *b, const irrvol_hit *h
     }
 }
 
-/* Built-in radiance along a ray (4.2.2): the first surface's radiance plus,
-   through mirror surfaces, the specularly reflected radiance weighted by the
-   product of the specular coefficients, until a diffuse surface, the depth
-   limit or the weight floor (then the background stands for the rest). */
-static void irrvol__builtin_radiance(const irrvol__build *b, const float org[3], const float dir[3], float rgb[3])
+/* Built-in radiance along a ray (4.2.2) whose first hit is known (NULL:
+   it leaves the scene): the first surface's radiance plus, through mirror
+   surfaces, the specularly reflected radiance weighted by the product of
+   the specular coefficients, until a diffuse surface, the depth limit or
+   the weight floor (then the background stands for the rest). */
+static void irrvol__builtin_radiance(const irrvol__build *b, const float org[3], const float dir[3],
+                                     const irrvol_hit *first, float rgb[3])
 {
     const irrvol_desc *d = b->desc;
     float o[3], w[3] = {1.0f, 1.0f, 1.0f};
@@ -1689,17 +2476,17 @@ static void irrvol__builtin_radiance(const irrvol__build *b, const float org[3],
     rgb[0] = rgb[1] = rgb[2] = 0.0f;
     for (;;) {
         irrvol_hit hit;
-        const irrvol_material *mat = NULL;
+        const irrvol_material *mat;
         float le[3], dirf[3];
-        irrvol__vec3 p0, n, p;
+        irrvol__vec3 n, p;
         float dn;
         dirf[0] = dv.x; dirf[1] = dv.y; dirf[2] = dv.z;
-        if (!irrvol__trace(b, o, dirf, &hit)) {
+        if (reflections == 0 ? first == NULL : !irrvol__trace(b, o, dirf, &hit)) {
             for (c = 0; c < 3; c++) rgb[c] += w[c] * d->background[c];
             return;
         }
-        if (d->materials)
-            mat = &d->materials[d->triangle_materials ? d->triangle_materials[hit.triangle] : 0];
+        if (reflections == 0) hit = *first;
+        mat = irrvol__hit_material(d, hit.triangle);
         if (mat && (mat->flags & IRRVOL_MATERIAL_IGNORE)) return;   /* 5.4: contributes zero */
         irrvol__surface_radiance(b, &hit, mat, le);
         for (c = 0; c < 3; c++) rgb[c] += w[c] * le[c];
@@ -1714,10 +2501,7 @@ static void irrvol__builtin_radiance(const irrvol__build *b, const float org[3],
            surface on the side the ray came from and a little back along it,
            so that a hit on the edge of a concave corner still finds the
            other face instead of leaving through it */
-        p0 = irrvol__v3_load(irrvol__vertex(&b->mesh, d->indices[3 * (size_t)hit.triangle]));
-        n = irrvol__normalize(irrvol__cross(
-            irrvol__sub(irrvol__v3_load(irrvol__vertex(&b->mesh, d->indices[3 * (size_t)hit.triangle + 1])), p0),
-            irrvol__sub(irrvol__v3_load(irrvol__vertex(&b->mesh, d->indices[3 * (size_t)hit.triangle + 2])), p0)));
+        n = irrvol__normalize(irrvol__triangle_normal(b, hit.triangle));
         p = irrvol__add(irrvol__v3_load(o), irrvol__scale(dv, hit.t - b->ray_offset));
         dn = irrvol__dot(dv, n);
         dv = irrvol__normalize(irrvol__sub(dv, irrvol__scale(n, 2.0f * dn)));
@@ -1726,15 +2510,33 @@ static void irrvol__builtin_radiance(const irrvol__build *b, const float org[3],
     }
 }
 
-static void irrvol__ray_radiance(const irrvol__build *b, const float org[3], irrvol__vec3 dir, float rgb[3])
+/* The first surface along a ray: its distance t (FLT_MAX when the ray
+   leaves the scene or nothing can be traced) and whether it is met from
+   behind. Fills *hit and returns 1 on a hit. */
+static int irrvol__first_hit(const irrvol__build *b, const float org[3], const float dir[3], irrvol_hit *hit,
+                             float *t, int *back)
 {
-    float d[3];
-    d[0] = dir.x; d[1] = dir.y; d[2] = dir.z;
-    if (b->desc->radiance) b->desc->radiance(b->desc->radiance_user, org, d, rgb);
-    else irrvol__builtin_radiance(b, org, d, rgb);
+    *t = FLT_MAX;
+    *back = 0;
+    if (!b->can_trace || !irrvol__trace(b, org, dir, hit)) return 0;
+    *t = hit->t;
+    *back = irrvol__back_face(b, hit, dir);
+    return 1;
 }
 
-static uint32_t irrvol__nearest_bin(const irrvol *v, const float dir[3]);
+/* A gather ray: the radiance from the caller's callback or the built-in
+   shading, and the first hit's distance and side. */
+static void irrvol__gather_ray(const irrvol__build *b, const float org[3], irrvol__vec3 dir, float rgb[3], float *t,
+                               int *back)
+{
+    irrvol_hit hit;
+    float d[3];
+    int found;
+    d[0] = dir.x; d[1] = dir.y; d[2] = dir.z;
+    found = irrvol__first_hit(b, org, d, &hit, t, back);
+    if (b->desc->radiance) b->desc->radiance(b->desc->radiance_user, org, d, rgb);
+    else irrvol__builtin_radiance(b, org, d, found ? &hit : NULL, rgb);
+}
 
 /* Informed sampling (6.1.1). The directions that point at IMPORTANT
    triangles (light sources: the "important set") are integrated apart, from
@@ -1798,63 +2600,61 @@ static void irrvol__mark_important_bins(const irrvol__build *b, const float p[3]
                 double s = (double)i / steps, r = (double)j / steps;
                 float dir[3];
                 for (c = 0; c < 3; c++) dir[c] = (float)(q[0][c] + s * (q[1][c] - q[0][c]) + r * (q[2][c] - q[0][c]));
-                extra[irrvol__nearest_bin(b->vol, dir)] = 1;
+                extra[irrvol_direction_bin(b->vol, dir)] = 1;
             }
     }
 }
 
-/* Adds (n+1)/2 w L max(0, dir . w_j)^n to every irradiance bin j (eq. 4.8
-   for one direction). Bin directions are stored by component so that the
-   loop over bins is a contiguous multiply-add. */
-/* h += max(0, dir . d_j) * rgb for every bin j: restrict parameters, so
-   that compilers vectorize it. */
-static void irrvol__cosine_axpy(uint32_t bins, const float *IRRVOL__RESTRICT dx, const float *IRRVOL__RESTRICT dy,
-                                const float *IRRVOL__RESTRICT dz, float x, float y, float z, float r, float g,
-                                float bl, float *IRRVOL__RESTRICT hr, float *IRRVOL__RESTRICT hg,
-                                float *IRRVOL__RESTRICT hb)
-{
-    uint32_t j;
-    for (j = 0; j < bins; j++) {
-        float cs = x * dx[j] + y * dy[j] + z * dz[j];
-        cs = cs > 0.0f ? cs : 0.0f;
-        hr[j] += cs * r;
-        hg[j] += cs * g;
-        hb[j] += cs * bl;
-    }
-}
-
-static void irrvol__add_lobe(const irrvol__build *b, const float dir[3], const double wl[3], float *direct)
+/* One direction of the important part, radiance w L arriving along the
+   unit dir: adds (n+1)/2 w L max(0, dir . w_j)^n to every irradiance bin j
+   (eq. 4.8 for a single direction; direct is planar rgb) and A_l w L
+   Y_lm(dir) to the harmonics (sh_direct, planar rgb). Bin directions are
+   stored by component, so the loops over bins are contiguous and vectorize. */
+static void irrvol__add_direction(const irrvol__build *b, const float dir[3], const double wl[3],
+                                  const irrvol__scratch *sc)
 {
     const irrvol *v = b->vol;
     uint32_t bins = v->bins, j;
-    const float *dx = b->dir_soa, *dy = dx + bins, *dz = dy + bins;
-    double lobe = 0.5 * (v->moment + 1.0);
-    float r = (float)(lobe * wl[0]), g = (float)(lobe * wl[1]), bl = (float)(lobe * wl[2]);
-    if (v->moment == 1) {
-        irrvol__cosine_axpy(bins, dx, dy, dz, dir[0], dir[1], dir[2], r, g, bl, direct, direct + bins,
-                            direct + 2 * (size_t)bins);
-        return;
-    }
+    const float *IRRVOL__RESTRICT dx = b->dir_soa;
+    const float *IRRVOL__RESTRICT dy = dx + bins;
+    const float *IRRVOL__RESTRICT dz = dy + bins;
+    float *IRRVOL__RESTRICT lobe = sc->lobe;
+    float *IRRVOL__RESTRICT hr = sc->direct;
+    float *IRRVOL__RESTRICT hg = hr + bins;
+    float *IRRVOL__RESTRICT hb = hg + bins;
+    double scale = 0.5 * (v->moment + 1.0);
+    float r = (float)(scale * wl[0]), g = (float)(scale * wl[1]), bl = (float)(scale * wl[2]);
+    float ylm[IRRVOL__SH_COEFFS];
     for (j = 0; j < bins; j++) {
         float cs = dir[0] * dx[j] + dir[1] * dy[j] + dir[2] * dz[j];
-        float f = cs > 0.0f ? (float)irrvol__powi(cs, v->moment) : 0.0f;
-        direct[j] += f * r;
-        direct[bins + j] += f * g;
-        direct[2 * (size_t)bins + j] += f * bl;
+        lobe[j] = cs > 0.0f ? cs : 0.0f;
+    }
+    if (v->moment > 1)
+        for (j = 0; j < bins; j++) lobe[j] = (float)irrvol__powi(lobe[j], v->moment);
+    for (j = 0; j < bins; j++) {
+        hr[j] += lobe[j] * r;
+        hg[j] += lobe[j] * g;
+        hb[j] += lobe[j] * bl;
+    }
+    irrvol__sh_basis(dir[0], dir[1], dir[2], ylm);
+    for (j = 0; j < IRRVOL__SH_COEFFS; j++) {
+        double a = b->sh_lobe[irrvol__sh_band(j)] * ylm[j];
+        sc->sh_direct[j] += (float)(a * wl[0]);
+        sc->sh_direct[IRRVOL__SH_COEFFS + j] += (float)(a * wl[1]);
+        sc->sh_direct[2 * IRRVOL__SH_COEFFS + j] += (float)(a * wl[2]);
     }
 }
 
 /* The important set's part: stratified points uniform in area on each
    important triangle, weighted by their solid angle A cos(theta) / (r^2 M).
-   Each adds w L to its bin's radiance integral (part, for the kept radiance)
-   and (n+1)/2 w L max(0, w . w_j)^n to every irradiance bin j (direct, planar
-   rgb). desc.important_rays points per sample, shared among the triangles by
+   Each adds w L to its bin's radiance integral (sc->part, for the kept
+   radiance) and its lobe to the irradiance and harmonics (add_direction).
+   desc.important_rays points per sample, shared among the triangles by
    solid angle, plus 16 per bin they cover; at least 2 x 2 per triangle.
    Returns the rays cast. */
-static uint32_t irrvol__important_part(const irrvol__build *b, const float p[3], irrvol__rng *rng, double *part,
-                                       float *direct)
+static uint32_t irrvol__important_part(const irrvol__build *b, const float p[3], irrvol__rng *rng,
+                                       const irrvol__scratch *sc)
 {
-    const irrvol *v = b->vol;
     uint32_t t, rays = 0;
     double total = 0.0;
     for (t = 0; t < b->important_count; t++) {   /* the solid angle of the whole important set */
@@ -1879,9 +2679,10 @@ static uint32_t irrvol__important_part(const irrvol__build *b, const float p[3],
             for (x = 0; x < side; x++) {
                 double u1 = ((double)x + irrvol__rng_float(rng)) / side, u2 = ((double)y + irrvol__rng_float(rng)) / side;
                 double sq = sqrt(u1), w0 = 1.0 - sq, w1 = sq * (1.0 - u2), w2 = sq * u2, pt[3], r2, r, weight, wl[3];
-                float dir[3], rgb[3];
+                float dir[3], rgb[3], dist;
                 double *acc;
                 irrvol__hit hit;
+                int back;
                 for (c = 0; c < 3; c++) pt[c] = w0 * q[0][c] + w1 * q[1][c] + w2 * q[2][c];
                 r2 = pt[0] * pt[0] + pt[1] * pt[1] + pt[2] * pt[2];
                 r = sqrt(r2);
@@ -1890,83 +2691,194 @@ static uint32_t irrvol__important_part(const irrvol__build *b, const float p[3],
                 weight = 0.5 * fabs(n[0] * pt[0] + n[1] * pt[1] + n[2] * pt[2]) / (r * r2) / ((double)side * side);
                 /* count the direction here only if this triangle is the first important one along it */
                 if (!irrvol__bvh_intersect(&b->important_bvh, p, dir, 0.0f, FLT_MAX, &hit) || hit.tri != t) continue;
-                irrvol__ray_radiance(b, p, irrvol__v3_load(dir), rgb);
+                irrvol__gather_ray(b, p, irrvol__v3_load(dir), rgb, &dist, &back);
                 rays++;
                 for (c = 0; c < 3; c++) wl[c] = weight * rgb[c];
                 if (wl[0] == 0.0 && wl[1] == 0.0 && wl[2] == 0.0) continue;
-                acc = part + 3 * (size_t)irrvol__nearest_bin(v, dir);
+                acc = sc->part + 3 * (size_t)irrvol_direction_bin(b->vol, dir);
                 acc[0] += wl[0]; acc[1] += wl[1]; acc[2] += wl[2];
-                irrvol__add_lobe(b, dir, wl, direct);
+                irrvol__add_direction(b, dir, wl, sc);
             }
     }
     return rays;
 }
 
-/* One sample: gather radiance in every bin (4.2.2), s x s jittered rays per
-   bin (or one through the centre) plus the important part, then the
-   irradiance (4.2.3). */
-static void irrvol__sample_job(void *ctx, uint32_t index)
+/* What a gather saw, for the validity test. */
+typedef struct irrvol__gather_stats {
+    uint32_t rays;          /* rays cast */
+    double back;            /* the fraction of the sphere where the bin rays met back faces */
+    float back_t;           /* the nearest back-face hit */
+    float back_dir[3];      /* and its direction */
+} irrvol__gather_stats;
+
+/* Gathers radiance at p in every bin (4.2.2): s x s jittered rays per bin
+   (or one through the centre), extra rays in the bins an important triangle
+   overlaps, and the important part. Leaves in sc the bin radiance (planar),
+   the important part, and the mean and mean square inverse hit distance of
+   each bin's rays. */
+static void irrvol__gather_at(const irrvol__build *b, const float p[3], irrvol__rng *rng, const irrvol__scratch *sc,
+                              irrvol__gather_stats *st)
 {
-    irrvol__build *b = (irrvol__build *)ctx;
-    irrvol *v = b->vol;
-    uint32_t s = b->batch_begin + index, bins = v->bins, bin, rays = 0;
-    double *part = (double *)(b->scratch + (size_t)index * b->scratch_stride);
-    float *direct = (float *)(part + 3 * (size_t)bins);
-    float *radiance = direct + 3 * (size_t)bins;
-    float *irradiance = radiance + 3 * (size_t)bins;
-    uint32_t *rows = (uint32_t *)(irradiance + 3 * (size_t)bins);
-    unsigned char *extra = (unsigned char *)(rows + bins);
-    const float *p = v->positions + 3 * (size_t)s;
-    irrvol__rng rng = irrvol__rng_stream(b->desc->seed, s);
+    const irrvol *v = b->vol;
+    uint32_t bins = v->bins, bin;
     int c;
-    memset(extra, 0, bins);
+    memset(st, 0, sizeof *st);
+    st->back_t = FLT_MAX;
+    memset(sc->extra, 0, bins);
+    memset(sc->part, 0, 3 * (size_t)bins * sizeof(double));
+    memset(sc->direct, 0, 3 * (size_t)bins * sizeof(float));
+    memset(sc->sh_direct, 0, IRRVOL__SH_FLOATS * sizeof(float));
     if (b->important_count) {
-        memset(part, 0, 3 * (size_t)bins * sizeof(double));
-        memset(direct, 0, 3 * (size_t)bins * sizeof(float));
-        irrvol__mark_important_bins(b, p, extra);
-        rays += irrvol__important_part(b, p, &rng, part, direct);
+        irrvol__mark_important_bins(b, p, sc->extra);
+        st->rays += irrvol__important_part(b, p, rng, sc);
     }
     for (bin = 0; bin < bins; bin++) {
-        double sum[3] = {0.0, 0.0, 0.0};
-        uint32_t ss = b->supersamples, count = 0, pass;
+        double sum[3] = {0.0, 0.0, 0.0}, inv = 0.0, inv2 = 0.0;
+        uint32_t ss = b->supersamples, count = 0, back_count = 0, pass;
         for (pass = 0; pass < 2; pass++) {
-            uint32_t side = pass == 0 ? ss : (extra[bin] ? b->important_side : 0), x, y;
+            uint32_t side = pass == 0 ? ss : (sc->extra[bin] ? b->important_side : 0), x, y;
             for (y = 0; y < side; y++)
                 for (x = 0; x < side; x++) {
-                    float rgb[3], dir[3], fu = 0.5f, fv = 0.5f;
+                    float rgb[3], dir[3], fu = 0.5f, fv = 0.5f, t;
+                    irrvol_hit hit;
                     irrvol__vec3 d;
+                    int back;
                     if (pass == 1 || ss > 1) {   /* jitter in stratum (x, y) */
-                        fu = ((float)x + irrvol__rng_float(&rng)) / (float)side;
-                        fv = ((float)y + irrvol__rng_float(&rng)) / (float)side;
+                        fu = ((float)x + irrvol__rng_float(rng)) / (float)side;
+                        fv = ((float)y + irrvol__rng_float(rng)) / (float)side;
                     }
                     d = irrvol__bin_point(v->k, bin, fu, fv);
                     dir[0] = d.x; dir[1] = d.y; dir[2] = d.z;
                     count++;
-                    if (b->important_count && irrvol__bvh_occluded(&b->important_bvh, p, dir, 0.0f, FLT_MAX))
-                        continue;   /* an important direction: integrated by the important part */
-                    irrvol__ray_radiance(b, p, d, rgb);
-                    sum[0] += rgb[0]; sum[1] += rgb[1]; sum[2] += rgb[2];
-                    rays++;
+                    if (b->important_count && irrvol__bvh_occluded(&b->important_bvh, p, dir, 0.0f, FLT_MAX)) {
+                        /* an important direction: its radiance comes from the important part */
+                        irrvol__first_hit(b, p, dir, &hit, &t, &back);
+                    } else {
+                        irrvol__gather_ray(b, p, d, rgb, &t, &back);
+                        sum[0] += rgb[0]; sum[1] += rgb[1]; sum[2] += rgb[2];
+                    }
+                    st->rays++;
+                    if (t < FLT_MAX) {   /* a miss is infinitely far: 1 / t = 0 */
+                        double s = 1.0 / irrvol__maxf(t, b->ray_offset);
+                        inv += s;
+                        inv2 += s * s;
+                    }
+                    if (back) {
+                        back_count++;
+                        if (t < st->back_t) { st->back_t = t; memcpy(st->back_dir, dir, sizeof dir); }
+                    }
                 }
         }
-        for (c = 0; c < 3; c++) radiance[(size_t)c * bins + bin] = (float)(sum[c] / count);
+        for (c = 0; c < 3; c++) sc->radiance[(size_t)c * bins + bin] = (float)(sum[c] / count);
+        sc->inverse[bin] = (float)(inv / count);
+        sc->inverse[bins + bin] = (float)(inv2 / count);
+        sc->inverse[2 * (size_t)bins + bin] = 0.0f;
+        st->back += (double)back_count / count / bins;   /* equal-area bins: the extra rays do not tip it */
     }
-    irrvol__irradiance(b->weights, bins, radiance, irradiance, rows);
+}
+
+/* The smallest spacing between p's neighbours: the second level's where a
+   cell around a first-level sample holds geometry (relocation moves samples
+   out of geometry by a fraction of it). */
+static float irrvol__local_spacing(const irrvol__build *b, uint32_t s)
+{
+    const irrvol *v = b->vol;
+    uint32_t g[3], x, y, z, lo[3], hi[3];
+    int d;
+    if (s >= v->first_level_count) return b->fine_spacing;
+    g[0] = s % v->samples[0];
+    g[1] = (s / v->samples[0]) % v->samples[1];
+    g[2] = s / (v->samples[0] * v->samples[1]);
+    for (d = 0; d < 3; d++) {
+        lo[d] = g[d] > 0 ? g[d] - 1 : 0;
+        hi[d] = g[d] < v->cells[d] ? g[d] : v->cells[d] - 1;
+    }
+    for (z = lo[2]; z <= hi[2]; z++)
+        for (y = lo[1]; y <= hi[1]; y++)
+            for (x = lo[0]; x <= hi[0]; x++)
+                if (v->refined[x + v->cells[0] * (y + v->cells[1] * z)] == IRRVOL__REFINED_GEOMETRY) return b->fine_spacing;
+    return b->coarse_spacing;
+}
+
+/* The results of a sample's gather: eq. 4.3 / 4.8 by the weight matrix
+   plus the important part, the kept radiance, the harmonics and the
+   visibility fit, into the sink. */
+static void irrvol__store_sample(const irrvol__build *b, uint32_t s, const irrvol__scratch *sc)
+{
+    const irrvol *v = b->vol;
+    const irrvol__sink *k = &b->sink;
+    uint32_t bins = v->bins, bin, j, t;
+    float *vis = k->visibility + (size_t)s * v->map_texels * 4;
+    int c;
+    irrvol__matrix_product(b->weights, bins, bins, sc->radiance, sc->irradiance, sc->rows);
+    irrvol__matrix_product(b->sh_weights, bins, IRRVOL__SH_COEFFS, sc->radiance, sc->sh, sc->rows);
+    irrvol__matrix_product(b->vis_weights, bins, 4 * v->texels, sc->inverse, sc->moments, sc->rows);
     for (bin = 0; bin < bins; bin++) {
-        float *out = v->irradiance + ((size_t)bin * v->sample_count + s) * 3;
-        for (c = 0; c < 3; c++) {
-            size_t at = (size_t)c * bins + bin;
-            out[c] = b->important_count ? irradiance[at] + direct[at] : irradiance[at];
-        }
-        if (v->radiance) {
-            out = v->radiance + ((size_t)bin * v->sample_count + s) * 3;
+        float *out = k->irradiance + ((size_t)bin * k->stride + s) * 3;
+        for (c = 0; c < 3; c++) out[c] = sc->irradiance[(size_t)c * bins + bin] + sc->direct[(size_t)c * bins + bin];
+        if (k->radiance) {
+            out = k->radiance + ((size_t)bin * k->stride + s) * 3;
             for (c = 0; c < 3; c++)
-                out[c] = b->important_count ? (float)(radiance[(size_t)c * bins + bin] + part[3 * (size_t)bin + (size_t)c] /
-                                                                                          b->bin_solid_angle)
-                                            : radiance[(size_t)c * bins + bin];
+                out[c] = (float)(sc->radiance[(size_t)c * bins + bin] + sc->part[3 * (size_t)bin + (size_t)c] / b->bin_solid_angle);
         }
     }
-    b->ray_counts[s] = rays;
+    for (j = 0; j < IRRVOL__SH_COEFFS; j++)
+        for (c = 0; c < 3; c++)
+            k->sh[(size_t)s * IRRVOL__SH_FLOATS + 3 * j + (size_t)c] =
+                sc->sh[(size_t)c * IRRVOL__SH_COEFFS + j] + sc->sh_direct[(size_t)c * IRRVOL__SH_COEFFS + j];
+    for (t = 0; t < v->texels; t++) {   /* the fit: g = (sum lobe w w^T)^-1 sum lobe s w, and its residual */
+        const float *m = b->vis_inverse + 9 * (size_t)t, *bt = sc->moments + 4 * (size_t)t;
+        float mean2 = sc->moments[4 * (size_t)v->texels + 4 * (size_t)t + 3];
+        float *out = vis + 4 * ((t / v->vis_res + 1) * (v->vis_res + 2) + t % v->vis_res + 1);
+        for (c = 0; c < 3; c++) out[c] = m[3 * c] * bt[0] + m[3 * c + 1] * bt[1] + m[3 * c + 2] * bt[2];
+        out[3] = irrvol__maxf(mean2 - (out[0] * bt[0] + out[1] * bt[1] + out[2] * bt[2]), 0.0f);
+    }
+    irrvol__map_border(v, vis);
+}
+
+/* One sample: gather (4.2.2); a sample that sees back faces over more than
+   a quarter of its sphere is inside geometry (DDGI's classification).
+   It moves through the nearest back face it saw, to a margin in front of
+   that surface, and gathers again (DDGI's relocation, Unity's virtual
+   offset) when that is within IRRVOL__RELOCATE_LIMIT of its spacing;
+   otherwise, or if it is still inside, it is invalid: it never enters a
+   leak-safe query and its values are dilated from its neighbours. */
+static void irrvol__sample_job(void *ctx, uint32_t index)
+{
+    irrvol__build *b = (irrvol__build *)ctx;
+    const irrvol *v = b->vol;
+    uint32_t s = b->batch_begin + index;
+    irrvol__scratch sc;
+    irrvol__gather_stats st;
+    irrvol__rng rng = irrvol__rng_stream(b->desc->seed, s);
+    float p[3], *origin = b->sink.origins + 4 * (size_t)s;
+    unsigned char state = IRRVOL_SAMPLE_VALID;
+    uint32_t rays;
+    irrvol__scratch_layout(b->scratch + (size_t)index * b->scratch_stride, v->bins, v->texels, &sc);
+    memcpy(p, v->positions + 3 * (size_t)s, sizeof p);
+    irrvol__gather_at(b, p, &rng, &sc, &st);
+    rays = st.rays;
+    if (st.back > IRRVOL__BACK_FRACTION) {
+        float spacing = irrvol__local_spacing(b, s);
+        float move = st.back_t + IRRVOL__RELOCATE_MARGIN * spacing;
+        state = IRRVOL_SAMPLE_INVALID;
+        if (move <= IRRVOL__RELOCATE_LIMIT * spacing) {
+            float q[3];
+            int c;
+            for (c = 0; c < 3; c++) q[c] = p[c] + move * st.back_dir[c];
+            irrvol__gather_at(b, q, &rng, &sc, &st);
+            rays += st.rays;
+            if (st.back <= IRRVOL__BACK_FRACTION) {
+                state = IRRVOL_SAMPLE_RELOCATED;
+                memcpy(p, q, sizeof p);
+            }
+        }
+    }
+    irrvol__store_sample(b, s, &sc);
+    origin[0] = p[0]; origin[1] = p[1]; origin[2] = p[2];
+    origin[3] = state == IRRVOL_SAMPLE_INVALID ? 0.0f : 1.0f;
+    b->sink.state[s] = state;
+    b->sink.rays[s] = rays;
 }
 
 #define IRRVOL__REJECT(log, user, message) \
@@ -1985,6 +2897,20 @@ static int irrvol__nonnegative3(const float *p)
     return irrvol__finite3(p) && p[0] >= 0.0f && p[1] >= 0.0f && p[2] >= 0.0f;
 }
 
+/* Whether every one of the 3 * triangle_count indices is below
+   vertex_count. The count of indices is taken in 64 bits and the triangle
+   count is capped at UINT32_MAX / 3, so that 3 * t indexes in uint32_t
+   everywhere after validation (0x55555556 triangles would wrap to 2
+   indices in 32 bits and let the build read past the buffer). */
+static int irrvol__indices_valid(const uint32_t *indices, uint32_t triangle_count, uint32_t vertex_count)
+{
+    uint64_t i, n = 3 * (uint64_t)triangle_count;
+    if (triangle_count > UINT32_MAX / 3) return 0;
+    for (i = 0; i < n; i++)
+        if (indices[i] >= vertex_count) return 0;
+    return 1;
+}
+
 static irrvol_result irrvol__validate_scene(const irrvol_desc *d)
 {
     size_t stride = d->position_stride ? d->position_stride : 3 * sizeof(float);
@@ -1996,9 +2922,8 @@ static irrvol_result irrvol__validate_scene(const irrvol_desc *d)
     for (i = 0; i < d->vertex_count; i++)
         if (!irrvol__finite3((const float *)((const char *)d->positions + (size_t)i * stride)))
             IRRVOL__REJECT(d->log, d->log_user, "irrvol_build: a position is NaN or infinite");
-    for (i = 0; i < 3 * d->triangle_count; i++)
-        if (d->indices[i] >= d->vertex_count)
-            IRRVOL__REJECT(d->log, d->log_user, "irrvol_build: a vertex index is out of range");
+    if (!irrvol__indices_valid(d->indices, d->triangle_count, d->vertex_count))
+        IRRVOL__REJECT(d->log, d->log_user, "irrvol_build: a vertex index is out of range (or over UINT32_MAX / 3 triangles)");
     if (!d->radiance && !d->materials && !d->vertex_radiance)
         IRRVOL__REJECT(d->log, d->log_user, "irrvol_build: built-in radiance needs materials or vertex_radiance");
     if (d->triangle_materials) {
@@ -2049,28 +2974,35 @@ static irrvol_result irrvol__validate(const irrvol_desc *d)
         for (k = 0; k < 3; k++)
             if (!isfinite(d->bounds_min[k]) || !isfinite(d->bounds_max[k]) || !(d->bounds_min[k] < d->bounds_max[k]))
                 IRRVOL__REJECT(d->log, d->log_user, "irrvol_build: bounds must be finite with min < max");
-    if (d->resolution > IRRVOL_MAX_RESOLUTION || d->supersamples > IRRVOL__MAX_SUPERSAMPLES ||
-        d->moment > IRRVOL_MAX_MOMENT || d->weight_subdivisions > IRRVOL__MAX_WEIGHT_SUBDIVISIONS ||
-        d->important_rays > IRRVOL__IMPORTANT_MAX_SIDE * IRRVOL__IMPORTANT_MAX_SIDE)
-        IRRVOL__REJECT(d->log, d->log_user, "irrvol_build: resolution, supersamples, moment, weight_subdivisions "
-                                            "or important_rays too large");
+    if (d->resolution > IRRVOL_MAX_RESOLUTION || d->supersamples > IRRVOL_MAX_SUPERSAMPLES ||
+        d->moment > IRRVOL_MAX_MOMENT || d->weight_subdivisions > IRRVOL_MAX_WEIGHT_SUBDIVISIONS ||
+        d->important_rays > IRRVOL_MAX_IMPORTANT_RAYS || d->visibility_resolution > IRRVOL_MAX_VISIBILITY_RESOLUTION)
+        IRRVOL__REJECT(d->log, d->log_user, "irrvol_build: resolution, supersamples, moment, weight_subdivisions, "
+                                            "important_rays or visibility_resolution too large");
     if ((int)d->filter < 0 || (int)d->filter > (int)IRRVOL_FILTER_BILINEAR)
         IRRVOL__REJECT(d->log, d->log_user, "irrvol_build: unknown filter");
+    if ((int)d->weighting < 0 || (int)d->weighting > (int)IRRVOL_WEIGHTING_TRILINEAR)
+        IRRVOL__REJECT(d->log, d->log_user, "irrvol_build: unknown weighting");
     if (!irrvol__nonnegative3(d->background) || !(d->min_weight >= 0.0f) || !isfinite(d->min_weight) ||
         !(d->ray_offset >= 0.0f) || !isfinite(d->ray_offset))
         IRRVOL__REJECT(d->log, d->log_user, "irrvol_build: background, min_weight or ray_offset negative, NaN or infinite");
+    if (!isfinite(d->normal_bias) || d->normal_bias > 1.0f || !isfinite(d->refine_threshold))
+        IRRVOL__REJECT(d->log, d->log_user, "irrvol_build: normal_bias above 1, or normal_bias or refine_threshold NaN "
+                                            "or infinite");
     return IRRVOL_OK;
 }
 
 /* Bounds of the vertices the triangles use. */
 static void irrvol__scene_bounds(const irrvol__mesh_view *m, float lo[3], float hi[3])
 {
-    uint32_t i;
+    uint32_t t;
+    int e;
     irrvol__box_empty(lo, hi);
-    for (i = 0; i < 3 * m->tri_count; i++) {
-        const float *p = irrvol__vertex(m, m->indices[i]);
-        irrvol__box_grow(lo, hi, p, p);
-    }
+    for (t = 0; t < m->tri_count; t++)
+        for (e = 0; e < 3; e++) {
+            const float *p = irrvol__vertex(m, m->indices[3 * (size_t)t + (size_t)e]);
+            irrvol__box_grow(lo, hi, p, p);
+        }
 }
 
 static uint32_t irrvol__count_degenerate(const irrvol__mesh_view *m)
@@ -2086,15 +3018,15 @@ static uint32_t irrvol__count_degenerate(const irrvol__mesh_view *m)
 }
 
 /* Grid bounds (4.1: inset from the scene bounds so samples stay off the
-   outer walls), dimensions, refined cells and samples. */
+   outer walls), dimensions and the cells geometry refines; the distances
+   that follow from them. */
 static irrvol_result irrvol__setup_grid(irrvol__build *b)
 {
     const irrvol_desc *d = b->desc;
     irrvol *v = b->vol;
     uint32_t samples[3];
-    unsigned char *refined;
-    float slo[3], shi[3], diag2 = 0.0f;
-    irrvol_result r;
+    float slo[3], shi[3];
+    double diag2 = 0.0;
     int k;
     if (d->triangle_count) irrvol__scene_bounds(&b->mesh, slo, shi);
     for (k = 0; k < 3; k++) {
@@ -2109,49 +3041,64 @@ static irrvol_result irrvol__setup_grid(irrvol__build *b)
         if (!(v->lo[k] < v->hi[k]) || !isfinite(v->hi[k] - v->lo[k]))
             IRRVOL__REJECT(d->log, d->log_user, "irrvol_build: the grid has zero or infinite size along an axis");
         samples[k] = irrvol__def(d->grid_samples[k], 7u);
-        diag2 += (v->hi[k] - v->lo[k]) * (v->hi[k] - v->lo[k]);
+        diag2 += ((double)v->hi[k] - v->lo[k]) * ((double)v->hi[k] - v->lo[k]);
     }
-    b->ray_offset = d->ray_offset > 0.0f ? d->ray_offset : 1e-4f * sqrtf(diag2);
+    b->ray_offset = d->ray_offset > 0.0f ? d->ray_offset : 1e-4f * (float)sqrt(diag2);
     irrvol__grid_dims(v, samples, irrvol__def(d->subgrid_samples, 3u));
-    refined = (unsigned char *)irrvol__alloc(&v->allocator, v->cell_count);
-    if (!refined) return IRRVOL_ERROR_OUT_OF_MEMORY;
-    memset(refined, 0, v->cell_count);
-    if (v->subgrid > 2) irrvol__mark_refined(v, &b->mesh, refined);
-    r = irrvol__make_grid(v, refined);
-    irrvol__free(&v->allocator, refined);
-    return r;
+    v->refined = (unsigned char *)irrvol__alloc(&v->allocator, v->cell_count);
+    if (!v->refined) return IRRVOL_ERROR_OUT_OF_MEMORY;
+    memset(v->refined, 0, v->cell_count);
+    if (v->subgrid > 2) irrvol__mark_refined(v, &b->mesh, v->refined);
+    b->coarse_spacing = FLT_MAX;
+    for (k = 0; k < 3; k++)
+        b->coarse_spacing = irrvol__minf(b->coarse_spacing, (float)(((double)v->hi[k] - v->lo[k]) / v->cells[k]));
+    b->fine_spacing = b->coarse_spacing / (float)(v->subgrid - 1);
+    return IRRVOL_OK;
 }
 
-/* Bin directions, the shared weight matrix and the informed-sampling list. */
+/* Bin directions, the three weight matrices and the informed-sampling list. */
 static irrvol_result irrvol__setup_directions(irrvol__build *b)
 {
     const irrvol_desc *d = b->desc;
     irrvol *v = b->vol;
     const irrvol_allocator *a = &v->allocator;
-    uint32_t i;
+    uint32_t i, l;
+    double texel_angle;
     b->dirs = (float *)irrvol__alloc_array(a, (size_t)v->bins * 3, sizeof(float));
     b->dir_soa = (float *)irrvol__alloc_array(a, (size_t)v->bins * 3, sizeof(float));
     b->weights = (float *)irrvol__alloc_array(a, (size_t)v->bins * v->bins, sizeof(float));
-    if (!b->dirs || !b->dir_soa || !b->weights) return IRRVOL_ERROR_OUT_OF_MEMORY;
+    b->sh_weights = (float *)irrvol__alloc_array(a, (size_t)v->bins * IRRVOL__SH_COEFFS, sizeof(float));
+    b->vis_weights = (float *)irrvol__alloc_array(a, (size_t)v->bins * v->texels, 4 * sizeof(float));
+    b->vis_inverse = (float *)irrvol__alloc_array(a, v->texels, 9 * sizeof(float));
+    if (!b->dirs || !b->dir_soa || !b->weights || !b->sh_weights || !b->vis_weights || !b->vis_inverse)
+        return IRRVOL_ERROR_OUT_OF_MEMORY;
     for (i = 0; i < v->bins; i++) {
         irrvol__vec3 dir = irrvol__bin_point(v->k, i, 0.5f, 0.5f);
         b->dirs[3 * i] = dir.x; b->dirs[3 * i + 1] = dir.y; b->dirs[3 * i + 2] = dir.z;
         b->dir_soa[i] = dir.x; b->dir_soa[v->bins + i] = dir.y; b->dir_soa[2 * v->bins + i] = dir.z;
     }
-    irrvol__run_jobs(d->parallel_for, d->parallel_user, irrvol__weight_row_job, b, v->bins);
     b->bin_solid_angle = (float)(4.0 * IRRVOL__PI / v->bins);   /* eq. 4.2 */
     b->bin_angle = sqrtf(b->bin_solid_angle);
+    for (l = 0; l < 3; l++) b->sh_lobe[l] = irrvol__sh_lobe(v->moment, l);
+    /* the visibility lobe's half width at half maximum: three quarters of
+       a texel (DDGI's cos^50 at 16 x 16), at least a bin, at most a radian */
+    texel_angle = 0.75 * sqrt(4.0 * IRRVOL__PI / v->texels);
+    if (texel_angle < b->bin_angle) texel_angle = b->bin_angle;
+    if (texel_angle > 1.0) texel_angle = 1.0;
+    b->vis_lobe = (float)(log(0.5) / log(cos(texel_angle)));
+    irrvol__run_jobs(d->parallel_for, d->parallel_user, irrvol__weight_row_job, b, v->bins);
+    irrvol__finish_visibility_weights(b);
     if (d->materials && d->triangle_count) {
         uint32_t t, n = 0;
         for (t = 0; t < d->triangle_count; t++)
-            if (d->materials[d->triangle_materials ? d->triangle_materials[t] : 0].flags & IRRVOL_MATERIAL_IMPORTANT) n++;
+            if (irrvol__hit_material(d, t)->flags & IRRVOL_MATERIAL_IMPORTANT) n++;
         if (n) {
             irrvol__mesh_view m = b->mesh;
             b->important = (uint32_t *)irrvol__alloc_array(a, n, sizeof(uint32_t));
             b->important_indices = (uint32_t *)irrvol__alloc_array(a, n, 3 * sizeof(uint32_t));
             if (!b->important || !b->important_indices) return IRRVOL_ERROR_OUT_OF_MEMORY;
             for (t = 0; t < d->triangle_count; t++)
-                if (d->materials[d->triangle_materials ? d->triangle_materials[t] : 0].flags & IRRVOL_MATERIAL_IMPORTANT) {
+                if (irrvol__hit_material(d, t)->flags & IRRVOL_MATERIAL_IMPORTANT) {
                     memcpy(b->important_indices + 3 * (size_t)b->important_count, d->indices + 3 * (size_t)t,
                            3 * sizeof(uint32_t));
                     b->important[b->important_count++] = t;
@@ -2164,34 +3111,272 @@ static irrvol_result irrvol__setup_directions(irrvol__build *b)
     return IRRVOL_OK;
 }
 
-/* Runs the sample jobs in batches; progress and cancel between batches. */
-static irrvol_result irrvol__gather(irrvol__build *b)
+/* Arrays of a sink for count samples (the first level of the light pass). */
+static irrvol_result irrvol__sink_alloc(irrvol__build *b, irrvol__sink *k, uint32_t count)
+{
+    const irrvol *v = b->vol;
+    const irrvol_allocator *a = &v->allocator;
+    memset(k, 0, sizeof *k);
+    k->stride = count;
+    k->irradiance = (float *)irrvol__alloc_array(a, (size_t)count * v->bins, 3 * sizeof(float));
+    if (b->desc->keep_radiance) k->radiance = (float *)irrvol__alloc_array(a, (size_t)count * v->bins, 3 * sizeof(float));
+    k->sh = (float *)irrvol__alloc_array(a, count, IRRVOL__SH_FLOATS * sizeof(float));
+    k->origins = (float *)irrvol__alloc_array(a, count, 4 * sizeof(float));
+    k->visibility = (float *)irrvol__alloc_array(a, (size_t)count * v->map_texels, 4 * sizeof(float));
+    k->rays = (uint32_t *)irrvol__alloc_array(a, count, sizeof(uint32_t));
+    k->state = (unsigned char *)irrvol__alloc(a, count);
+    if (!k->irradiance || (b->desc->keep_radiance && !k->radiance) || !k->sh || !k->origins || !k->visibility ||
+        !k->rays || !k->state)
+        return IRRVOL_ERROR_OUT_OF_MEMORY;
+    return IRRVOL_OK;
+}
+
+static void irrvol__sink_free(const irrvol_allocator *a, irrvol__sink *k)
+{
+    irrvol__free(a, k->irradiance);
+    irrvol__free(a, k->radiance);
+    irrvol__free(a, k->sh);
+    irrvol__free(a, k->origins);
+    irrvol__free(a, k->visibility);
+    irrvol__free(a, k->rays);
+    irrvol__free(a, k->state);
+    memset(k, 0, sizeof *k);
+}
+
+/* Runs the sample jobs of samples [begin, end) into b->sink, in batches;
+   progress (done counts on from *done, out of total) and cancel between
+   batches. */
+static irrvol_result irrvol__gather(irrvol__build *b, uint32_t begin, uint32_t end, uint64_t *done, uint64_t total)
 {
     const irrvol_desc *d = b->desc;
-    irrvol *v = b->vol;
-    const irrvol_allocator *a = &v->allocator;
-    size_t batch;
-    uint32_t s;
-    b->scratch_stride = (3 * (size_t)v->bins * sizeof(double) + 10 * (size_t)v->bins * sizeof(float) + v->bins + 63) &
-                        ~(size_t)63;
-    batch = IRRVOL__BATCH_BYTES / b->scratch_stride;
+    const irrvol_allocator *a = &b->vol->allocator;
+    irrvol__scratch sc;
+    uint32_t s, batch;
+    b->scratch_stride = irrvol__scratch_layout(NULL, b->vol->bins, b->vol->texels, &sc);
+    batch = (uint32_t)(IRRVOL__BATCH_BYTES / b->scratch_stride);
     batch = batch < 1 ? 1 : (batch > 256 ? 256 : batch);
-    if (batch > v->sample_count) batch = v->sample_count;
-    b->scratch = (unsigned char *)irrvol__alloc_array(a, batch, b->scratch_stride);
-    b->ray_counts = (uint32_t *)irrvol__alloc_array(a, v->sample_count, sizeof(uint32_t));
-    if (!b->scratch || !b->ray_counts) return IRRVOL_ERROR_OUT_OF_MEMORY;
-    for (s = 0; s < v->sample_count;) {
-        uint32_t n = v->sample_count - s < batch ? v->sample_count - s : (uint32_t)batch;
+    if (batch > end - begin) batch = end - begin;
+    if (batch > b->scratch_jobs) {   /* scratch for one batch of jobs */
+        irrvol__free(a, b->scratch);
+        b->scratch = (unsigned char *)irrvol__alloc_array(a, batch, b->scratch_stride);
+        b->scratch_jobs = b->scratch ? batch : 0;
+        if (!b->scratch) return IRRVOL_ERROR_OUT_OF_MEMORY;
+    }
+    for (s = begin; s < end;) {
+        uint32_t n = end - s < batch ? end - s : batch;
         b->batch_begin = s;
         irrvol__run_jobs(d->parallel_for, d->parallel_user, irrvol__sample_job, b, n);
         s += n;
-        if (d->progress && d->progress(d->progress_user, s, v->sample_count)) {
+        *done += n;
+        if (d->progress && d->progress(d->progress_user, *done, total)) {
             irrvol__log(d->log, d->log_user, "irrvol_build: cancelled by the progress callback");
             return IRRVOL_ERROR_CANCELLED;
         }
     }
-    for (s = 0; s < v->sample_count; s++) v->rays += b->ray_counts[s];
     return IRRVOL_OK;
+}
+
+/* The 8 corner ids of sub-cell (x, y, z) of a cell's table, x fastest. */
+IRRVOL__HOT void irrvol__table_corners(const irrvol *v, const irrvol__cell *cell, uint32_t x, uint32_t y, uint32_t z,
+                                       uint32_t ids[8])
+{
+    uint32_t row = cell->side, slab = cell->side * cell->side;
+    const uint32_t *t = v->ids + cell->offset + x + row * y + slab * z;
+    ids[0] = t[0];          ids[1] = t[1];
+    ids[2] = t[row];        ids[3] = t[row + 1];
+    ids[4] = t[slab];       ids[5] = t[slab + 1];
+    ids[6] = t[slab + row]; ids[7] = t[slab + row + 1];
+}
+
+/* Every value a sample holds (irradiance and radiance bins, harmonics) as
+   sum_i w_i value(from_i) over n samples; to is not among them. */
+static void irrvol__blend_values(irrvol *v, uint32_t to, const uint32_t *from, const float *w, uint32_t n)
+{
+    uint32_t bin, i, j;
+    int c;
+    for (bin = 0; bin < v->bins; bin++) {
+        size_t base = (size_t)bin * v->sample_count;
+        for (c = 0; c < 3; c++) {
+            float h = 0.0f, l = 0.0f;
+            for (i = 0; i < n; i++) {
+                h += w[i] * v->irradiance[(base + from[i]) * 3 + (size_t)c];
+                if (v->radiance) l += w[i] * v->radiance[(base + from[i]) * 3 + (size_t)c];
+            }
+            v->irradiance[(base + to) * 3 + (size_t)c] = h;
+            if (v->radiance) v->radiance[(base + to) * 3 + (size_t)c] = l;
+        }
+    }
+    for (j = 0; j < IRRVOL__SH_FLOATS; j++) {
+        float s = 0.0f;
+        for (i = 0; i < n; i++) s += w[i] * v->sh[(size_t)from[i] * IRRVOL__SH_FLOATS + j];
+        v->sh[(size_t)to * IRRVOL__SH_FLOATS + j] = s;
+    }
+}
+
+/* Dilation (Unity's adaptive probe volumes): an invalid sample takes the
+   mean of the valid samples it shares a sub-cell with, counted once per
+   shared sub-cell; samples no valid one touches wait for the next pass,
+   when the ones just filled count as valid. So the plain trilinear query
+   and the exported harmonics never blend in what a sample saw inside
+   geometry. Leak-safe queries never read an invalid sample's values. */
+static irrvol_result irrvol__dilate(irrvol *v)
+{
+    const irrvol_allocator *a = &v->allocator;
+    uint32_t n = v->hanging_begin, s, c;
+    unsigned char *filled = (unsigned char *)irrvol__alloc(a, n);
+    uint32_t *first = (uint32_t *)irrvol__alloc_array(a, (size_t)n + 1, sizeof(uint32_t));
+    uint32_t *from = NULL;
+    float *w = NULL;
+    irrvol_result r = IRRVOL_OK;
+    if (!filled || !first) r = IRRVOL_ERROR_OUT_OF_MEMORY;
+    for (s = 0; s < n && r == IRRVOL_OK; s++) filled[s] = v->origins[4 * (size_t)s + 3] != 0.0f;
+    while (r == IRRVOL_OK) {
+        uint32_t total = 0, step;
+        memset(first, 0, ((size_t)n + 1) * sizeof(uint32_t));
+        for (step = 0; step < 2; step++) {   /* count the neighbours, then list them */
+            for (c = 0; c < v->cell_count; c++) {
+                const irrvol__cell *cell = &v->cell[c];
+                uint32_t x, y, z, ids[8], i, j;
+                for (z = 0; z + 1 < cell->side; z++)
+                    for (y = 0; y + 1 < cell->side; y++)
+                        for (x = 0; x + 1 < cell->side; x++) {
+                            irrvol__table_corners(v, cell, x, y, z, ids);
+                            for (i = 0; i < 8; i++) {
+                                if (ids[i] >= n || filled[ids[i]]) continue;
+                                for (j = 0; j < 8; j++) {
+                                    if (ids[j] >= n || !filled[ids[j]]) continue;
+                                    if (step == 0) first[ids[i] + 1]++;
+                                    else from[first[ids[i]]++] = ids[j];
+                                }
+                            }
+                        }
+            }
+            if (step == 0) {
+                for (s = 0; s < n; s++) first[s + 1] += first[s];
+                total = first[n];
+                if (total == 0) break;
+                irrvol__free(a, from);
+                from = (uint32_t *)irrvol__alloc_array(a, total, sizeof(uint32_t));
+                if (!from) { r = IRRVOL_ERROR_OUT_OF_MEMORY; break; }
+            }
+        }
+        if (r != IRRVOL_OK || total == 0) break;
+        /* first[s] now ends s's list, which starts where s - 1's ends */
+        irrvol__free(a, w);
+        w = (float *)irrvol__alloc_array(a, total, sizeof(float));
+        if (!w) { r = IRRVOL_ERROR_OUT_OF_MEMORY; break; }
+        for (s = n; s-- > 0;) {
+            uint32_t begin = s ? first[s - 1] : 0, end = first[s], i;
+            if (end == begin) continue;
+            for (i = begin; i < end; i++) w[i] = 1.0f / (float)(end - begin);
+            irrvol__blend_values(v, s, from + begin, w + begin, end - begin);
+        }
+        for (s = 0; s < n; s++)
+            if (!filled[s] && first[s] > (s ? first[s - 1] : 0)) filled[s] = 2;   /* filled in this pass */
+        for (s = 0; s < n; s++) filled[s] = filled[s] != 0;
+    }
+    irrvol__free(a, filled);
+    irrvol__free(a, first);
+    irrvol__free(a, from);
+    irrvol__free(a, w);
+    return r;
+}
+
+/* Hanging samples take their parents' blend (section 9), after dilation so
+   that an invalid parent contributes its dilated values. */
+static void irrvol__constrain_hanging(irrvol *v)
+{
+    uint32_t s;
+    for (s = v->hanging_begin; s < v->sample_count; s++) {
+        size_t h = (size_t)(s - v->hanging_begin);
+        float *o = v->origins + 4 * (size_t)s;
+        irrvol__blend_values(v, s, v->parents + 4 * h, v->parent_weights + 4 * h, 4);
+        memcpy(o, v->positions + 3 * (size_t)s, 3 * sizeof(float));
+        o[3] = 1.0f;
+    }
+}
+
+/* Moves the light pass's first-level results into the volume's arrays. */
+static void irrvol__take_first_level(irrvol *v, const irrvol__sink *t, irrvol__sink *k)
+{
+    uint32_t n = v->first_level_count, bin;
+    for (bin = 0; bin < v->bins; bin++) {
+        memcpy(k->irradiance + (size_t)bin * k->stride * 3, t->irradiance + (size_t)bin * n * 3, (size_t)n * 3 * sizeof(float));
+        if (k->radiance)
+            memcpy(k->radiance + (size_t)bin * k->stride * 3, t->radiance + (size_t)bin * n * 3, (size_t)n * 3 * sizeof(float));
+    }
+    memcpy(k->sh, t->sh, (size_t)n * IRRVOL__SH_FLOATS * sizeof(float));
+    memcpy(k->origins, t->origins, (size_t)n * 4 * sizeof(float));
+    memcpy(k->visibility, t->visibility, (size_t)n * v->map_texels * 4 * sizeof(float));
+    memcpy(k->rays, t->rays, (size_t)n * sizeof(uint32_t));
+    memcpy(k->state, t->state, n);
+}
+
+/* The gather passes: with light refinement, the first level alone, then
+   the cells whose corners differ get their second level too; then every
+   sample that carries data, dilation and the hanging samples. */
+static irrvol_result irrvol__gather_all(irrvol__build *b)
+{
+    const irrvol_desc *d = b->desc;
+    irrvol *v = b->vol;
+    const irrvol_allocator *a = &v->allocator;
+    irrvol__sink first;
+    uint64_t done = 0;
+    uint32_t s, begin = 0;
+    int light = v->subgrid > 2 && !(d->refine_threshold < 0.0f);
+    irrvol_result r = IRRVOL_OK;
+    memset(&first, 0, sizeof first);
+    if (light) {
+        v->positions = (float *)irrvol__alloc_array(a, v->first_level_count, 3 * sizeof(float));
+        r = v->positions ? irrvol__sink_alloc(b, &first, v->first_level_count) : IRRVOL_ERROR_OUT_OF_MEMORY;
+        if (r == IRRVOL_OK) {
+            v->sample_count = v->first_level_count;
+            irrvol__sample_positions(v, NULL);
+            b->sink = first;
+            r = irrvol__gather(b, 0, v->first_level_count, &done, v->first_level_count);
+            memset(&b->sink, 0, sizeof b->sink);   /* first owns those arrays */
+        }
+        if (r == IRRVOL_OK) {
+            float *bend = (float *)irrvol__alloc_array(a, v->first_level_count, sizeof(float));
+            if (bend) irrvol__mark_light(v, first.irradiance, first.origins, irrvol__def(d->refine_threshold, IRRVOL__REFINE_THRESHOLD),
+                                         v->refined, bend);
+            else r = IRRVOL_ERROR_OUT_OF_MEMORY;
+            irrvol__free(a, bend);
+        }
+        irrvol__free(a, v->positions);
+        v->positions = NULL;
+        begin = v->first_level_count;
+    }
+    if (r == IRRVOL_OK) r = irrvol__make_grid(v, v->refined);
+    if (r == IRRVOL_OK) r = irrvol__alloc_samples(v, d->keep_radiance);
+    if (r == IRRVOL_OK) {
+        b->sink.irradiance = v->irradiance;
+        b->sink.radiance = v->radiance;
+        b->sink.sh = v->sh;
+        b->sink.origins = v->origins;
+        b->sink.visibility = v->visibility;
+        b->sink.stride = v->sample_count;
+        b->sink.rays = (uint32_t *)irrvol__alloc_array(a, v->hanging_begin, sizeof(uint32_t));
+        b->sink.state = (unsigned char *)irrvol__alloc(a, v->hanging_begin);
+        if (!b->sink.rays || !b->sink.state) r = IRRVOL_ERROR_OUT_OF_MEMORY;
+    }
+    if (r == IRRVOL_OK) {
+        if (light) irrvol__take_first_level(v, &first, &b->sink);
+        r = irrvol__gather(b, begin, v->hanging_begin, &done, v->hanging_begin);
+    }
+    if (r == IRRVOL_OK) {
+        for (s = 0; s < v->hanging_begin; s++) {
+            v->rays += b->sink.rays[s];
+            v->invalid_count += b->sink.state[s] == IRRVOL_SAMPLE_INVALID;
+            v->relocated_count += b->sink.state[s] == IRRVOL_SAMPLE_RELOCATED;
+        }
+        r = irrvol__dilate(v);
+    }
+    if (r == IRRVOL_OK) irrvol__constrain_hanging(v);
+    irrvol__sink_free(a, &first);
+    irrvol__free(a, b->sink.rays);
+    irrvol__free(a, b->sink.state);
+    return r;
 }
 
 IRRVOL_API irrvol_result irrvol_build(const irrvol_desc *desc, irrvol **out)
@@ -2199,7 +3384,7 @@ IRRVOL_API irrvol_result irrvol_build(const irrvol_desc *desc, irrvol **out)
     irrvol__build b;
     irrvol *v;
     irrvol_result r;
-    uint64_t floats;
+    float bias;
     if (out) *out = NULL;
     if (!desc || !out) return IRRVOL_ERROR_INVALID_ARGUMENT;
     r = irrvol__validate(desc);
@@ -2210,6 +3395,7 @@ IRRVOL_API irrvol_result irrvol_build(const irrvol_desc *desc, irrvol **out)
     b.mesh.stride = desc->position_stride;
     b.mesh.indices = desc->indices;
     b.mesh.tri_count = desc->triangle_count;
+    b.can_trace = desc->triangle_count > 0;
     b.supersamples = irrvol__def(desc->supersamples, 1u);
     b.weight_subdivisions = irrvol__def(desc->weight_subdivisions, 4u);
     b.max_depth = irrvol__def(desc->max_depth, 6u);
@@ -2218,39 +3404,32 @@ IRRVOL_API irrvol_result irrvol_build(const irrvol_desc *desc, irrvol **out)
         b.important_side++;
     v = b.vol = irrvol__create(&desc->allocator);
     if (!v) return IRRVOL_ERROR_OUT_OF_MEMORY;
-    v->k = irrvol__def(desc->resolution, 17u);
-    v->bins = 2 * v->k * v->k;
-    v->kf = (float)v->k;
+    irrvol__set_resolutions(v, irrvol__def(desc->resolution, 17u),
+                            irrvol__def(desc->visibility_resolution, IRRVOL__VISIBILITY_RESOLUTION));
     v->moment = irrvol__def(desc->moment, 1u);
-    v->filter = desc->filter == IRRVOL_FILTER_DEFAULT ? IRRVOL_FILTER_NEAREST : desc->filter;
+    v->filter = desc->filter == IRRVOL_FILTER_DEFAULT ? IRRVOL_FILTER_BILINEAR : desc->filter;
+    v->weighting = desc->weighting == IRRVOL_WEIGHTING_DEFAULT ? IRRVOL_WEIGHTING_VISIBILITY : desc->weighting;
     if (desc->triangle_count) v->degenerate = irrvol__count_degenerate(&b.mesh);
     r = irrvol__setup_grid(&b);
-    if (r == IRRVOL_OK) {
-        floats = (uint64_t)v->sample_count * v->bins * 3;
-        if (floats > SIZE_MAX / sizeof(float)) r = IRRVOL_ERROR_OUT_OF_MEMORY;
-    }
-    if (r == IRRVOL_OK) {
-        v->irradiance = (float *)irrvol__alloc_array(&v->allocator, (size_t)floats, sizeof(float));
-        if (desc->keep_radiance)
-            v->radiance = (float *)irrvol__alloc_array(&v->allocator, (size_t)floats, sizeof(float));
-        if (!v->irradiance || (desc->keep_radiance && !v->radiance)) r = IRRVOL_ERROR_OUT_OF_MEMORY;
-    }
-    if (r == IRRVOL_OK && desc->triangle_count && !desc->radiance && !desc->trace &&
-        irrvol__bvh_build(&b.bvh, &b.mesh, &v->allocator) != 0)
+    if (r == IRRVOL_OK && desc->triangle_count && !desc->trace && irrvol__bvh_build(&b.bvh, &b.mesh, &v->allocator) != 0)
         r = IRRVOL_ERROR_OUT_OF_MEMORY;
     if (r == IRRVOL_OK) r = irrvol__setup_directions(&b);
-    if (r == IRRVOL_OK) r = irrvol__gather(&b);
+    if (r == IRRVOL_OK) r = irrvol__gather_all(&b);
     irrvol__bvh_free(&b.bvh, &v->allocator);
     irrvol__free(&v->allocator, b.dirs);
     irrvol__free(&v->allocator, b.dir_soa);
     irrvol__free(&v->allocator, b.weights);
+    irrvol__free(&v->allocator, b.sh_weights);
+    irrvol__free(&v->allocator, b.vis_weights);
+    irrvol__free(&v->allocator, b.vis_inverse);
     irrvol__free(&v->allocator, b.important);
     irrvol__free(&v->allocator, b.important_indices);
     irrvol__bvh_free(&b.important_bvh, &v->allocator);
     irrvol__free(&v->allocator, b.scratch);
-    irrvol__free(&v->allocator, b.ray_counts);
     if (r == IRRVOL_ERROR_OUT_OF_MEMORY) irrvol__log(desc->log, desc->log_user, "irrvol_build: out of memory");
     if (r != IRRVOL_OK) { irrvol_destroy(v); return r; }
+    bias = desc->normal_bias < 0.0f ? 0.0f : irrvol__def(desc->normal_bias, IRRVOL__NORMAL_BIAS);
+    v->bias = bias * (float)irrvol__finest_spacing(v);
     *out = v;
     return IRRVOL_OK;
 }
@@ -2263,6 +3442,9 @@ IRRVOL_API irrvol_result irrvol_info(const irrvol *vol, irrvol_volume_info *info
     info->sample_count = vol->sample_count;
     info->first_level_samples = vol->first_level_count;
     info->second_level_samples = vol->sample_count - vol->first_level_count;
+    info->hanging_samples = vol->sample_count - vol->hanging_begin;
+    info->invalid_samples = vol->invalid_count;
+    info->relocated_samples = vol->relocated_count;
     for (k = 0; k < 3; k++) {
         info->grid_samples[k] = vol->samples[k];
         info->bounds_min[k] = vol->lo[k];
@@ -2271,10 +3453,14 @@ IRRVOL_API irrvol_result irrvol_info(const irrvol *vol, irrvol_volume_info *info
     info->subgrid_samples = vol->subgrid;
     info->cell_count = vol->cell_count;
     info->refined_cells = vol->refined_count;
+    info->light_refined_cells = vol->light_refined_count;
     info->resolution = vol->k;
     info->bins = vol->bins;
     info->moment = vol->moment;
+    info->visibility_resolution = vol->vis_res;
     info->filter = vol->filter;
+    info->weighting = vol->weighting;
+    info->normal_bias = vol->bias;
     info->rays = vol->rays;
     info->degenerate_triangles = vol->degenerate;
     info->has_radiance = vol->radiance != NULL;
@@ -2283,17 +3469,14 @@ IRRVOL_API irrvol_result irrvol_info(const irrvol *vol, irrvol_volume_info *info
 }
 
 /* ======================================================================
-   12. queries (4.3): eq. 4.4-4.6 at either level, the bin of the direction,
-   trilinear interpolation of the eight corner samples
+   13. queries (4.3): eq. 4.4-4.6 at either level, trilinear weights of
+   the cell's eight samples, times their visibility (leak-safe), the bin
+   of the direction
    ---------------------------------------------------------------------- */
-/* The eight samples around pos and their trilinear weights. Positions
-   outside the bounds (and NaN) clamp to the boundary. */
-IRRVOL__HOT void irrvol__locate(const irrvol *v, const float pos[3], uint32_t ids[8], float w[8])
+/* Eq. 4.4-4.6: the first-level cell containing pos and the offsets in it.
+   Positions outside the bounds (and NaN) clamp to the boundary. */
+IRRVOL__HOT void irrvol__cell_coords(const irrvol *v, const float pos[3], uint32_t c[3], float o[3])
 {
-    const irrvol__cell *cell;
-    const uint32_t *t;
-    uint32_t c[3], side, row, slab;
-    float o[3], f;
     int d;
     for (d = 0; d < 3; d++) {
         float q = (pos[d] - v->lo[d]) * v->scale[d];            /* eq. 4.4 */
@@ -2303,24 +3486,26 @@ IRRVOL__HOT void irrvol__locate(const irrvol *v, const float pos[3], uint32_t id
         c[d] = c[d] < v->cells[d] ? c[d] : v->cells[d] - 1;     /* the upper face */
         o[d] = q - (float)c[d];                                 /* eq. 4.6 */
     }
-    cell = &v->cell[c[0] + v->cells[0] * (c[1] + v->cells[1] * c[2])];
-    side = cell->side;
-    f = (float)(side - 1);
-    for (d = 0; d < 3; d++) {   /* the same steps inside the cell's own table */
+}
+
+/* The eight samples of cell c around offsets o (the same steps inside the
+   cell's own table: its sub-cell at the second level) and their trilinear
+   weights. */
+IRRVOL__HOT void irrvol__cell_corners(const irrvol *v, const uint32_t c[3], const float o[3], uint32_t ids[8], float w[8])
+{
+    const irrvol__cell *cell = &v->cell[c[0] + v->cells[0] * (c[1] + v->cells[1] * c[2])];
+    uint32_t side = cell->side, s[3];
+    float f = (float)(side - 1), t[3];
+    int d;
+    for (d = 0; d < 3; d++) {
         float q = o[d] * f;
-        c[d] = (uint32_t)q;
-        c[d] = c[d] < side - 2 ? c[d] : side - 2;
-        o[d] = q - (float)c[d];
+        s[d] = (uint32_t)q;
+        s[d] = s[d] < side - 2 ? s[d] : side - 2;
+        t[d] = q - (float)s[d];
     }
-    row = side;
-    slab = side * side;
-    t = v->ids + cell->offset + c[0] + side * (c[1] + side * c[2]);
-    ids[0] = t[0];          ids[1] = t[1];
-    ids[2] = t[row];        ids[3] = t[row + 1];
-    ids[4] = t[slab];       ids[5] = t[slab + 1];
-    ids[6] = t[slab + row]; ids[7] = t[slab + row + 1];
+    irrvol__table_corners(v, cell, s[0], s[1], s[2], ids);
     {
-        float x1 = o[0], y1 = o[1], z1 = o[2], x0 = 1.0f - x1, y0 = 1.0f - y1, z0 = 1.0f - z1;
+        float x1 = t[0], y1 = t[1], z1 = t[2], x0 = 1.0f - x1, y0 = 1.0f - y1, z0 = 1.0f - z1;
         w[0] = x0 * y0 * z0; w[1] = x1 * y0 * z0;
         w[2] = x0 * y1 * z0; w[3] = x1 * y1 * z0;
         w[4] = x0 * y0 * z1; w[5] = x1 * y0 * z1;
@@ -2335,14 +3520,6 @@ IRRVOL__HOT uint32_t irrvol__square_bin(const irrvol *v, float u, float w, uint3
     i = i < v->k ? i : v->k - 1;
     j = j < v->k ? j : v->k - 1;
     return (h * v->k + j) * v->k + i;
-}
-
-static uint32_t irrvol__nearest_bin(const irrvol *v, const float dir[3])
-{
-    float u, w;
-    uint32_t h;
-    irrvol__direction_to_square(dir, &u, &w, &h);
-    return irrvol__square_bin(v, u, w, h);
 }
 
 /* The four bins around the square point (u, t) of hemisphere h and their
@@ -2374,146 +3551,447 @@ IRRVOL__HOT void irrvol__bilinear_bins(const irrvol *v, float u, float t, uint32
     w[3] = tu * tv;
 }
 
-/* A query reduced to the values it reads and their weights: eight corner
-   samples times one bin (NEAREST) or four bins (BILINEAR), for the
-   pipelined irrvol_query_many. */
+/* The visibility weight of sample s for the test point x of a surface
+   with unit normal n, after DDGI (Majercik et al. 2019):
+   - backface: (dot(to the sample, n) + 1) / 2 + 0.2, samples behind the
+     surface count less (DDGI squares the first term; unsquared it bends
+     the trilinear weights less where no surface is: on the office, the
+     relative L1 error of random queries is 4.9 % against 5.9 %);
+   - Chebyshev: the sample's fit of the inverse hit distance around the
+     direction w toward x (section 13, bilinear between the four nearest
+     texels of its bordered octahedral map) predicts the surface there at
+     1 / (g . w), exactly for a plane; a point beyond it, 1/r < g . w, is
+     visible with probability at most var / (var + (g . w - 1/r)^2), cubed:
+     a sample behind a wall, however thin and however oblique, all but
+     drops out;
+   - weights under 0.2 fade as w^3 / 0.04, invalid samples weigh 0.
+   This scalar code defines the weight; the irrvol__lanes4 steps compute
+   four with SSE2 in the same operations and order, and the GLSL follows it. */
+IRRVOL__HOT float irrvol__visibility_weight(const irrvol *v, uint32_t s, const float x[3], const float n[3])
+{
+    const float *o = v->origins + 4 * (size_t)s, *m, *t00, *t01;
+    float dx = x[0] - o[0], dy = x[1] - o[1], dz = x[2] - o[2], fn = (float)v->vis_res;
+    float r2 = dx * dx + dy * dy + dz * dz, r, inv_r, w, a, inv_a, px, py, u, t, fu, ft, g[4], gd, beyond;
+    int i0, j0, c;
+    if (!(r2 > 0.0f)) return o[3];
+    r = sqrtf(r2);
+    inv_r = 1.0f / r;
+    w = 0.5f - 0.5f * ((dx * n[0] + dy * n[1] + dz * n[2]) * inv_r);
+    w = w + 0.2f;
+    /* the octahedral map: direction -> [0.5, n + 0.5] in the bordered map */
+    a = fabsf(dx) + fabsf(dy) + fabsf(dz);
+    inv_a = 1.0f / a;
+    px = dx * inv_a;
+    py = dy * inv_a;
+    if (dz < 0.0f) {
+        float qx = (1.0f - fabsf(py)) * (px < 0.0f ? -1.0f : 1.0f);
+        py = (1.0f - fabsf(px)) * (py < 0.0f ? -1.0f : 1.0f);
+        px = qx;
+    }
+    u = irrvol__minf(irrvol__maxf((px * 0.5f + 0.5f) * fn + 0.5f, 0.5f), fn + 0.5f);
+    t = irrvol__minf(irrvol__maxf((py * 0.5f + 0.5f) * fn + 0.5f, 0.5f), fn + 0.5f);
+    i0 = (int)u;
+    j0 = (int)t;
+    fu = u - (float)i0;
+    ft = t - (float)j0;
+    m = v->visibility + ((size_t)s * v->map_texels + (size_t)j0 * (v->vis_res + 2) + (size_t)i0) * 4;
+    t00 = m;
+    t01 = m + 4 * (v->vis_res + 2);
+    for (c = 0; c < 4; c++)
+        g[c] = (t00[c] * (1.0f - fu) + t00[4 + c] * fu) * (1.0f - ft) + (t01[c] * (1.0f - fu) + t01[4 + c] * fu) * ft;
+    gd = g[0] * dx + g[1] * dy + g[2] * dz;
+    beyond = (gd - 1.0f) * inv_r;   /* g . w - 1/r */
+    if (beyond > 0.0f) {
+        float den = g[3] + beyond * beyond, cheb = den > 0.0f ? g[3] / den : 1.0f;
+        w = w * (cheb * cheb * cheb);
+    }
+    if (w < 0.2f) w = w * (w * w * 25.0f);
+    return w * o[3];
+}
+
+#define IRRVOL__MAX_TERMS 32   /* a query's samples: 8 corners, each a hanging sample of up to 4 parents */
+
+#ifdef IRRVOL__SSE2
+IRRVOL__HOT __m128 irrvol__select(__m128 mask, __m128 a, __m128 b)
+{
+    return _mm_or_ps(_mm_and_ps(mask, a), _mm_andnot_ps(mask, b));
+}
+
+/* The test point and normal of the irrvol__lanes4 steps, each coordinate in
+   all four lanes. */
+typedef struct irrvol__point4 { __m128 x, y, z, nx, ny, nz; } irrvol__point4;
+
+IRRVOL__HOT irrvol__point4 irrvol__point4_set(const float x[3], const float n[3])
+{
+    irrvol__point4 p;
+    p.x = _mm_set1_ps(x[0]); p.y = _mm_set1_ps(x[1]); p.z = _mm_set1_ps(x[2]);
+    p.nx = _mm_set1_ps(n[0]); p.ny = _mm_set1_ps(n[1]); p.nz = _mm_set1_ps(n[2]);
+    return p;
+}
+
+/* Four lanes of irrvol__visibility_weight between its three steps. */
+typedef struct irrvol__lanes4 {
+    __m128 dx, dy, dz, inv_r, w, pos, ok;   /* toward x, 1 / r, the backface term, r > 0, valid */
+    const float *texel[4];                  /* each lane's 2 x 2 texels: the top left one */
+    float fu[4], ft[4];                     /* and the bilinear weights */
+    __m128 fit[4];                          /* each lane's blended fit: gx, gy, gz, var */
+} irrvol__lanes4;
+
+/* Step 1: directions, the backface term and the texels of four samples. */
+IRRVOL__HOT void irrvol__lanes4_locate(const irrvol *v, const uint32_t s[4], const irrvol__point4 *p, irrvol__lanes4 *l)
+{
+    const __m128 one = _mm_set1_ps(1.0f), half = _mm_set1_ps(0.5f), zero = _mm_setzero_ps();
+    const __m128 sign = _mm_set1_ps(-0.0f), fn = _mm_set1_ps((float)v->vis_res);
+    __m128 ox = _mm_loadu_ps(v->origins + 4 * (size_t)s[0]), oy = _mm_loadu_ps(v->origins + 4 * (size_t)s[1]);
+    __m128 oz = _mm_loadu_ps(v->origins + 4 * (size_t)s[2]), ok = _mm_loadu_ps(v->origins + 4 * (size_t)s[3]);
+    __m128 r2, w, inv_a, px, py, neg, qx, qy, u, t;
+    __m128i i0, j0;
+    int iu[4], ju[4], k;
+    _MM_TRANSPOSE4_PS(ox, oy, oz, ok);
+    l->ok = ok;
+    l->dx = _mm_sub_ps(p->x, ox);
+    l->dy = _mm_sub_ps(p->y, oy);
+    l->dz = _mm_sub_ps(p->z, oz);
+    r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(l->dx, l->dx), _mm_mul_ps(l->dy, l->dy)), _mm_mul_ps(l->dz, l->dz));
+    l->pos = _mm_cmpgt_ps(r2, zero);
+    l->inv_r = _mm_div_ps(one, _mm_sqrt_ps(r2));
+    w = _mm_add_ps(_mm_add_ps(_mm_mul_ps(l->dx, p->nx), _mm_mul_ps(l->dy, p->ny)), _mm_mul_ps(l->dz, p->nz));
+    w = _mm_sub_ps(half, _mm_mul_ps(half, _mm_mul_ps(w, l->inv_r)));
+    l->w = _mm_add_ps(w, _mm_set1_ps(0.2f));
+    inv_a = _mm_div_ps(one, _mm_add_ps(_mm_add_ps(_mm_andnot_ps(sign, l->dx), _mm_andnot_ps(sign, l->dy)),
+                                       _mm_andnot_ps(sign, l->dz)));
+    px = _mm_mul_ps(l->dx, inv_a);
+    py = _mm_mul_ps(l->dy, inv_a);
+    neg = _mm_cmplt_ps(l->dz, zero);
+    qx = _mm_mul_ps(_mm_sub_ps(one, _mm_andnot_ps(sign, py)), irrvol__select(_mm_cmplt_ps(px, zero), _mm_set1_ps(-1.0f), one));
+    qy = _mm_mul_ps(_mm_sub_ps(one, _mm_andnot_ps(sign, px)), irrvol__select(_mm_cmplt_ps(py, zero), _mm_set1_ps(-1.0f), one));
+    px = irrvol__select(neg, qx, px);
+    py = irrvol__select(neg, qy, py);
+    u = _mm_add_ps(_mm_mul_ps(_mm_add_ps(_mm_mul_ps(px, half), half), fn), half);
+    t = _mm_add_ps(_mm_mul_ps(_mm_add_ps(_mm_mul_ps(py, half), half), fn), half);
+    u = _mm_min_ps(_mm_max_ps(u, half), _mm_add_ps(fn, half));   /* as irrvol__minf / maxf: NaN gives the bound */
+    t = _mm_min_ps(_mm_max_ps(t, half), _mm_add_ps(fn, half));
+    i0 = _mm_cvttps_epi32(u);
+    j0 = _mm_cvttps_epi32(t);
+    _mm_storeu_ps(l->fu, _mm_sub_ps(u, _mm_cvtepi32_ps(i0)));
+    _mm_storeu_ps(l->ft, _mm_sub_ps(t, _mm_cvtepi32_ps(j0)));
+    _mm_storeu_si128((__m128i *)(void *)iu, i0);
+    _mm_storeu_si128((__m128i *)(void *)ju, j0);
+    for (k = 0; k < 4; k++)
+        l->texel[k] = v->visibility + ((size_t)s[k] * v->map_texels + (size_t)ju[k] * (v->vis_res + 2) + (size_t)iu[k]) * 4;
+}
+
+/* Step 2: each lane's four texels, blended. */
+IRRVOL__HOT void irrvol__lanes4_fetch(const irrvol *v, irrvol__lanes4 *l)
+{
+    const __m128 one = _mm_set1_ps(1.0f);
+    int k;
+    for (k = 0; k < 4; k++) {
+        const float *m = l->texel[k], *m1 = m + 4 * (v->vis_res + 2);
+        __m128 su = _mm_set1_ps(l->fu[k]), sv = _mm_set1_ps(l->ft[k]);
+        __m128 cu = _mm_sub_ps(one, su), cv = _mm_sub_ps(one, sv);
+        __m128 r0 = _mm_add_ps(_mm_mul_ps(_mm_loadu_ps(m), cu), _mm_mul_ps(_mm_loadu_ps(m + 4), su));
+        __m128 r1 = _mm_add_ps(_mm_mul_ps(_mm_loadu_ps(m1), cu), _mm_mul_ps(_mm_loadu_ps(m1 + 4), su));
+        l->fit[k] = _mm_add_ps(_mm_mul_ps(r0, cv), _mm_mul_ps(r1, sv));
+    }
+}
+
+/* Step 3: the Chebyshev bound, the fade, validity. */
+IRRVOL__HOT void irrvol__lanes4_weigh(irrvol__lanes4 *l, float out[4])
+{
+    const __m128 one = _mm_set1_ps(1.0f), zero = _mm_setzero_ps();
+    __m128 g0 = l->fit[0], g1 = l->fit[1], g2 = l->fit[2], g3 = l->fit[3], beyond, den, cheb, w = l->w;
+    _MM_TRANSPOSE4_PS(g0, g1, g2, g3);
+    beyond = _mm_add_ps(_mm_add_ps(_mm_mul_ps(g0, l->dx), _mm_mul_ps(g1, l->dy)), _mm_mul_ps(g2, l->dz));
+    beyond = _mm_mul_ps(_mm_sub_ps(beyond, one), l->inv_r);
+    den = _mm_add_ps(g3, _mm_mul_ps(beyond, beyond));
+    cheb = irrvol__select(_mm_cmpgt_ps(den, zero), _mm_div_ps(g3, den), one);
+    cheb = _mm_mul_ps(_mm_mul_ps(cheb, cheb), cheb);
+    w = irrvol__select(_mm_cmpgt_ps(beyond, zero), _mm_mul_ps(w, cheb), w);
+    w = irrvol__select(_mm_cmplt_ps(w, _mm_set1_ps(0.2f)), _mm_mul_ps(w, _mm_mul_ps(_mm_mul_ps(w, w), _mm_set1_ps(25.0f))), w);
+    w = irrvol__select(l->pos, _mm_mul_ps(w, l->ok), l->ok);
+    _mm_storeu_ps(out, w);
+}
+
+#endif
+
+/* The visibility weights of count samples into out. With SSE2, four at a
+   time, each step for every group before the next step: the groups' long
+   chains of divisions and loads overlap. */
+IRRVOL__HOT void irrvol__visibility_weights(const irrvol *v, const uint32_t *s, uint32_t count, const float x[3],
+                                            const float n[3], float *out)
+{
+    uint32_t i = 0;
+#ifdef IRRVOL__SSE2
+    irrvol__lanes4 l[IRRVOL__MAX_TERMS / 4];
+    irrvol__point4 p = irrvol__point4_set(x, n);
+    uint32_t groups = count / 4, g;
+    for (g = 0; g < groups; g++) irrvol__lanes4_locate(v, s + 4 * g, &p, &l[g]);
+    for (g = 0; g < groups; g++) irrvol__lanes4_fetch(v, &l[g]);
+    for (g = 0; g < groups; g++) irrvol__lanes4_weigh(&l[g], out + 4 * g);
+    i = 4 * groups;
+#endif
+    for (; i < count; i++) out[i] = irrvol__visibility_weight(v, s[i], x, n);
+}
+
+/* A query reduced to the samples it reads, their weights and the bins:
+   the one piece of code behind every query. */
 typedef struct irrvol__prepared {
-    const float *value[32];
-    float weight[32];
+    uint32_t id[IRRVOL__MAX_TERMS];
+    float w[IRRVOL__MAX_TERMS];
     uint32_t count;
+    uint32_t bin[4];
+    float bw[4];
+    uint32_t bins;     /* 1 (NEAREST) or 4 (BILINEAR) */
+    float scale;       /* 1 / the sum of the weights */
 } irrvol__prepared;
 
-IRRVOL__HOT void irrvol__prepare(const irrvol *vol, irrvol_filter filter, const float pos[3], const float dir[3],
-                                 irrvol__prepared *q)
+/* Leak-safe weights: each corner's trilinear weight (q holds the eight)
+   times its visibility for the test point pos + bias * n, a hanging corner
+   replaced by its parents (section 9), renormalised. When no sample is
+   visible (every corner invalid) or an input is NaN, the plain trilinear
+   weights stand. */
+IRRVOL__HOT void irrvol__visibility_terms(const irrvol *v, const float pos[3], const float normal[3], irrvol__prepared *q)
 {
-    uint32_t ids[8], c, h;
-    float w[8], u, t;
-    size_t stride = (size_t)vol->sample_count * 3;   /* one bin of all samples */
-    irrvol__locate(vol, pos, ids, w);
-    irrvol__direction_to_square(dir, &u, &t, &h);
-    if (filter == IRRVOL_FILTER_DEFAULT) filter = vol->filter;
-    if (filter == IRRVOL_FILTER_BILINEAR) {
-        uint32_t bins[4], b;
-        float bw[4];
-        irrvol__bilinear_bins(vol, u, t, h, bins, bw);
-        for (b = 0; b < 4; b++) {
-            const float *s = vol->irradiance + bins[b] * stride;
-            for (c = 0; c < 8; c++) {
-                q->value[8 * b + c] = s + 3 * (size_t)ids[c];
-                q->weight[8 * b + c] = w[c] * bw[b];
-            }
+    float n[3], x[3], len2 = normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2], inv, sum = 0.0f;
+    float vis[IRRVOL__MAX_TERMS], w[8];
+    uint32_t i, j, m = 0, ids[8];
+    inv = len2 > 0.0f ? 1.0f / sqrtf(len2) : 0.0f;
+    for (j = 0; j < 3; j++) {
+        n[j] = normal[j] * inv;
+        x[j] = pos[j] + v->bias * n[j];
+    }
+    if (!irrvol__finite3(x) || !irrvol__finite3(n)) return;   /* NaN or infinite: the plain weights stand */
+    memcpy(ids, q->id, sizeof ids);
+    memcpy(w, q->w, sizeof w);
+    for (i = 0; i < 8; i++) {
+        if (ids[i] >= v->hanging_begin) {
+            size_t h = 4 * (size_t)(ids[i] - v->hanging_begin);
+            for (j = 0; j < 4; j++)
+                if (v->parent_weights[h + j] > 0.0f) {
+                    q->id[m] = v->parents[h + j];
+                    q->w[m++] = w[i] * v->parent_weights[h + j];
+                }
+        } else {
+            q->id[m] = ids[i];
+            q->w[m++] = w[i];
         }
-        q->count = 32;
-    } else {
-        const float *s = vol->irradiance + irrvol__square_bin(vol, u, t, h) * stride;
-        for (c = 0; c < 8; c++) {
-            q->value[c] = s + 3 * (size_t)ids[c];
-            q->weight[c] = w[c];
-        }
-        q->count = 8;
+    }
+    irrvol__visibility_weights(v, q->id, m, x, n, vis);
+    for (i = 0; i < m; i++) {
+        q->w[i] *= vis[i];
+        sum += q->w[i];
+    }
+    if (sum >= FLT_MIN && sum <= FLT_MAX) {   /* 1 / sum is finite */
+        q->count = m;
+        q->scale = 1.0f / sum;
+    } else {   /* the plain weights */
+        memcpy(q->id, ids, sizeof ids);
+        memcpy(q->w, w, sizeof w);
     }
 }
 
-IRRVOL__HOT void irrvol__finish(const irrvol__prepared *q, float rgb[3])
+/* The samples and weights of a query in cell c at offsets o; normal is the
+   surface normal the visibility weights use. */
+IRRVOL__HOT void irrvol__prepare_in_cell(const irrvol *v, irrvol_weighting weighting, const uint32_t c[3],
+                                         const float o[3], const float pos[3], const float normal[3], irrvol__prepared *q)
 {
-    float r = 0.0f, g = 0.0f, b = 0.0f;
+    irrvol__cell_corners(v, c, o, q->id, q->w);   /* the plain trilinear terms */
+    q->count = 8;
+    q->scale = 1.0f;
+    if (weighting == IRRVOL_WEIGHTING_DEFAULT) weighting = v->weighting;
+    if (weighting == IRRVOL_WEIGHTING_VISIBILITY) irrvol__visibility_terms(v, pos, normal, q);
+}
+
+/* The bin (NEAREST) or four bins (BILINEAR) of a direction. */
+IRRVOL__HOT void irrvol__direction_bins(const irrvol *v, irrvol_filter filter, const float dir[3], irrvol__prepared *q)
+{
+    float u, t;
+    uint32_t h;
+    irrvol__direction_to_square(dir, &u, &t, &h);
+    if (filter == IRRVOL_FILTER_DEFAULT) filter = v->filter;
+    if (filter == IRRVOL_FILTER_BILINEAR) {
+        irrvol__bilinear_bins(v, u, t, h, q->bin, q->bw);
+        q->bins = 4;
+    } else {
+        q->bin[0] = irrvol__square_bin(v, u, t, h);
+        q->bw[0] = 1.0f;
+        q->bins = 1;
+    }
+}
+
+IRRVOL__HOT void irrvol__prepare(const irrvol *v, irrvol_filter filter, irrvol_weighting weighting, const float pos[3],
+                                 const float normal[3], const float dir[3], irrvol__prepared *q)
+{
+    uint32_t c[3];
+    float o[3];
+    irrvol__direction_bins(v, filter, dir, q);
+    irrvol__cell_coords(v, pos, c, o);
+    irrvol__prepare_in_cell(v, weighting, c, o, pos, normal, q);
+}
+
+/* sum over samples of weight x (sum over bins of bin weight x value),
+   times the scale. NEAREST reads one bin, BILINEAR blends four per sample
+   first. With SSE2 the rgb of a value and the next float share a register:
+   the same products and sums. */
+IRRVOL__HOT void irrvol__finish(const irrvol *v, const irrvol__prepared *q, float rgb[3])
+{
+    size_t stride = (size_t)v->sample_count * 3;   /* one bin of all samples */
+    const float *b0 = v->irradiance + q->bin[0] * stride, *b1 = b0, *b2 = b0, *b3 = b0;
     uint32_t i;
-    for (i = 0; i < q->count; i++) {
-        const float *p = q->value[i];
-        float x = q->weight[i];
-        r += x * p[0]; g += x * p[1]; b += x * p[2];
-    }
-    rgb[0] = r; rgb[1] = g; rgb[2] = b;
-}
-
-/* One query: eight corner samples, the bin(s) of the direction, trilinear
-   (and bilinear) weights. The same sums in the same order as prepare and
-   finish, written out so that the single query keeps everything in
-   registers. */
-IRRVOL__HOT void irrvol__query(const irrvol *vol, irrvol_filter filter, const float pos[3],
-                               const float dir[3], float rgb[3])
-{
-    uint32_t ids[8], c, h;
-    float w[8], u, t, r = 0.0f, g = 0.0f, b = 0.0f;
-    size_t stride = (size_t)vol->sample_count * 3;   /* one bin of all samples */
-    irrvol__locate(vol, pos, ids, w);
-    irrvol__direction_to_square(dir, &u, &t, &h);
-    if (filter == IRRVOL_FILTER_DEFAULT) filter = vol->filter;
-    if (filter == IRRVOL_FILTER_BILINEAR) {
-        uint32_t bins[4], q;
-        float bw[4];
-        irrvol__bilinear_bins(vol, u, t, h, bins, bw);
-        for (q = 0; q < 4; q++) {
-            const float *s = vol->irradiance + bins[q] * stride;
-            for (c = 0; c < 8; c++) {
-                const float *p = s + 3 * (size_t)ids[c];
-                float x = w[c] * bw[q];
-                r += x * p[0]; g += x * p[1]; b += x * p[2];
-            }
-        }
+#ifdef IRRVOL__SSE2
+    __m128 sum = _mm_setzero_ps();
+    float out[4];
+    if (q->bins == 1) {
+        for (i = 0; i < q->count; i++)
+            sum = _mm_add_ps(sum, _mm_mul_ps(_mm_set1_ps(q->w[i]), _mm_loadu_ps(b0 + 3 * (size_t)q->id[i])));
     } else {
-        const float *s = vol->irradiance + irrvol__square_bin(vol, u, t, h) * stride;
-        for (c = 0; c < 8; c++) {
-            const float *p = s + 3 * (size_t)ids[c];
-            r += w[c] * p[0]; g += w[c] * p[1]; b += w[c] * p[2];
+        __m128 w0 = _mm_set1_ps(q->bw[0]), w1 = _mm_set1_ps(q->bw[1]), w2 = _mm_set1_ps(q->bw[2]), w3 = _mm_set1_ps(q->bw[3]);
+        b1 = v->irradiance + q->bin[1] * stride;
+        b2 = v->irradiance + q->bin[2] * stride;
+        b3 = v->irradiance + q->bin[3] * stride;
+        for (i = 0; i < q->count; i++) {
+            size_t at = 3 * (size_t)q->id[i];
+            __m128 x = _mm_add_ps(_mm_add_ps(_mm_mul_ps(w0, _mm_loadu_ps(b0 + at)), _mm_mul_ps(w1, _mm_loadu_ps(b1 + at))),
+                                  _mm_add_ps(_mm_mul_ps(w2, _mm_loadu_ps(b2 + at)), _mm_mul_ps(w3, _mm_loadu_ps(b3 + at))));
+            sum = _mm_add_ps(sum, _mm_mul_ps(_mm_set1_ps(q->w[i]), x));
         }
     }
-    rgb[0] = r; rgb[1] = g; rgb[2] = b;
+    _mm_storeu_ps(out, _mm_mul_ps(sum, _mm_set1_ps(q->scale)));
+    rgb[0] = out[0]; rgb[1] = out[1]; rgb[2] = out[2];
+#else
+    float sum[3] = {0.0f, 0.0f, 0.0f};
+    int c;
+    if (q->bins != 1) {
+        b1 = v->irradiance + q->bin[1] * stride;
+        b2 = v->irradiance + q->bin[2] * stride;
+        b3 = v->irradiance + q->bin[3] * stride;
+    }
+    for (i = 0; i < q->count; i++) {
+        size_t at = 3 * (size_t)q->id[i];
+        for (c = 0; c < 3; c++) {
+            float x = b0[at + (size_t)c];
+            if (q->bins != 1)
+                x = (q->bw[0] * b0[at + (size_t)c] + q->bw[1] * b1[at + (size_t)c]) +
+                    (q->bw[2] * b2[at + (size_t)c] + q->bw[3] * b3[at + (size_t)c]);
+            sum[c] += q->w[i] * x;
+        }
+    }
+    for (c = 0; c < 3; c++) rgb[c] = sum[c] * q->scale;
+#endif
 }
 
-IRRVOL_API void irrvol_query_filter(const irrvol *vol, irrvol_filter filter, const float pos[3],
-                                    const float dir[3], float rgb[3])
+IRRVOL_API void irrvol_query_filter(const irrvol *vol, irrvol_filter filter, irrvol_weighting weighting,
+                                    const float pos[3], const float dir[3], float rgb[3])
 {
-    irrvol__query(vol, filter, pos, dir, rgb);
+    irrvol__prepared q;
+    irrvol__prepare(vol, filter, weighting, pos, dir, dir, &q);
+    irrvol__finish(vol, &q, rgb);
 }
 
 IRRVOL_API void irrvol_query(const irrvol *vol, const float pos[3], const float dir[3], float rgb[3])
 {
-    irrvol__query(vol, IRRVOL_FILTER_DEFAULT, pos, dir, rgb);
+    irrvol_query_filter(vol, IRRVOL_FILTER_DEFAULT, IRRVOL_WEIGHTING_DEFAULT, pos, dir, rgb);
 }
 
 /* Fig. 4.17: a moment volume is queried along the view vector mirrored
-   about the normal, Q = 2 (N . V) N - V. */
+   about the normal, Q = 2 (N . V) N - V; the visibility weights take the
+   surface normal. */
 IRRVOL_API void irrvol_query_glossy(const irrvol *vol, const float pos[3], const float normal[3],
                                     const float to_eye[3], float rgb[3])
 {
     float n2 = normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2];
     float s = n2 > 0.0f ? 2.0f * (normal[0] * to_eye[0] + normal[1] * to_eye[1] + normal[2] * to_eye[2]) / n2 : 0.0f;
-    float q[3];
-    q[0] = s * normal[0] - to_eye[0];
-    q[1] = s * normal[1] - to_eye[1];
-    q[2] = s * normal[2] - to_eye[2];
-    irrvol__query(vol, IRRVOL_FILTER_DEFAULT, pos, q, rgb);
+    float d[3];
+    irrvol__prepared q;
+    d[0] = s * normal[0] - to_eye[0];
+    d[1] = s * normal[1] - to_eye[1];
+    d[2] = s * normal[2] - to_eye[2];
+    irrvol__prepare(vol, IRRVOL_FILTER_DEFAULT, IRRVOL_WEIGHTING_DEFAULT, pos, normal, d, &q);
+    irrvol__finish(vol, &q, rgb);
 }
 
 /* Many queries, pipelined: each query is prepared IRRVOL__AHEAD queries
    before it is summed and its values are prefetched meanwhile, so the
    memory latency of one query overlaps the work of the next ones. The
    results equal irrvol_query_filter's bit for bit. */
-IRRVOL_API void irrvol_query_many(const irrvol *vol, irrvol_filter filter, uint32_t count,
-                                  const float *pos, size_t pos_stride, const float *dir,
-                                  size_t dir_stride, float *rgb)
+IRRVOL_API void irrvol_query_many(const irrvol *vol, irrvol_filter filter, irrvol_weighting weighting, uint32_t count,
+                                  const float *pos, size_t pos_stride, const float *dir, size_t dir_stride, float *rgb)
 {
     irrvol__prepared ring[IRRVOL__AHEAD];
-    uint32_t i, j;
+    size_t stride = (size_t)vol->sample_count * 3;
+    uint32_t i, j, k;
     if (!pos_stride) pos_stride = 3 * sizeof(float);
     if (!dir_stride) dir_stride = 3 * sizeof(float);
     for (i = 0; i < count; i++) {
         irrvol__prepared *q = &ring[i % IRRVOL__AHEAD];
-        if (i >= IRRVOL__AHEAD) irrvol__finish(q, rgb + 3 * (size_t)(i - IRRVOL__AHEAD));
-        irrvol__prepare(vol, filter, (const float *)((const char *)pos + i * pos_stride),
-                        (const float *)((const char *)dir + i * dir_stride), q);
-        for (j = 0; j < q->count; j++) IRRVOL__PREFETCH(q->value[j]);
+        const float *d = (const float *)((const char *)dir + i * dir_stride);
+        if (i >= IRRVOL__AHEAD) irrvol__finish(vol, q, rgb + 3 * (size_t)(i - IRRVOL__AHEAD));
+        irrvol__prepare(vol, filter, weighting, (const float *)((const char *)pos + i * pos_stride), d, d, q);
+        for (k = 0; k < q->bins; k++)
+            for (j = 0; j < q->count; j++) IRRVOL__PREFETCH(vol->irradiance + q->bin[k] * stride + 3 * (size_t)q->id[j]);
     }
     for (i = count > IRRVOL__AHEAD ? count - IRRVOL__AHEAD : 0; i < count; i++)
-        irrvol__finish(&ring[i % IRRVOL__AHEAD], rgb + 3 * (size_t)i);
+        irrvol__finish(vol, &ring[i % IRRVOL__AHEAD], rgb + 3 * (size_t)i);
+}
+
+/* Ramamoorthi and Hanrahan's E(n) = sum A_l L_lm Y_lm(n) at each term's
+   sample, weighted like the bins; order 1 reads the first 4 coefficients,
+   order 2 all 9. Clamped at zero: a bright light's truncated harmonics
+   dip below zero on its far side. */
+IRRVOL_API void irrvol_query_sh(const irrvol *vol, uint32_t order, irrvol_weighting weighting, const float pos[3],
+                                const float dir[3], float rgb[3])
+{
+    irrvol__prepared q;
+    uint32_t c[3], i, j, coeffs = order <= 1 ? 4u : IRRVOL__SH_COEFFS;
+    float o[3], ylm[IRRVOL__SH_COEFFS], n[3] = {0.0f, 0.0f, 1.0f}, sum[3] = {0.0f, 0.0f, 0.0f};
+    float len2 = dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2];
+    if (len2 > 0.0f && len2 <= FLT_MAX) {   /* zero, infinite and NaN directions look up +z */
+        float inv = 1.0f / sqrtf(len2);
+        n[0] = dir[0] * inv; n[1] = dir[1] * inv; n[2] = dir[2] * inv;
+    }
+    irrvol__cell_coords(vol, pos, c, o);
+    irrvol__prepare_in_cell(vol, weighting, c, o, pos, n, &q);
+    irrvol__sh_basis(n[0], n[1], n[2], ylm);
+#ifdef IRRVOL__SSE2
+    {   /* a coefficient's rgb and the next float in one register: the same products and sums */
+        __m128 y[IRRVOL__SH_COEFFS], total = _mm_setzero_ps();
+        float out[4];
+        for (j = 0; j < coeffs; j++) y[j] = _mm_set1_ps(ylm[j]);
+        for (i = 0; i < q.count; i++) {
+            const float *s = vol->sh + (size_t)q.id[i] * IRRVOL__SH_FLOATS;
+            __m128 e = _mm_setzero_ps();
+            for (j = 0; j < coeffs; j++) e = _mm_add_ps(e, _mm_mul_ps(_mm_loadu_ps(s + 3 * j), y[j]));
+            total = _mm_add_ps(total, _mm_mul_ps(_mm_set1_ps(q.w[i]), e));
+        }
+        _mm_storeu_ps(out, total);
+        memcpy(sum, out, sizeof sum);
+    }
+#else
+    for (i = 0; i < q.count; i++) {
+        const float *s = vol->sh + (size_t)q.id[i] * IRRVOL__SH_FLOATS;
+        float e[3] = {0.0f, 0.0f, 0.0f};
+        for (j = 0; j < coeffs; j++) {
+            e[0] += s[3 * j] * ylm[j];
+            e[1] += s[3 * j + 1] * ylm[j];
+            e[2] += s[3 * j + 2] * ylm[j];
+        }
+        for (j = 0; j < 3; j++) sum[j] += q.w[i] * e[j];
+    }
+#endif
+    for (j = 0; j < 3; j++) rgb[j] = irrvol__maxf(sum[j] * q.scale, 0.0f);
 }
 
 IRRVOL_API irrvol_result irrvol_sample(const irrvol *vol, uint32_t index, irrvol_sample_info *info)
 {
     if (!vol || !info || index >= vol->sample_count) return IRRVOL_ERROR_INVALID_ARGUMENT;
     memcpy(info->position, vol->positions + 3 * (size_t)index, sizeof info->position);
+    memcpy(info->origin, vol->origins + 4 * (size_t)index, sizeof info->origin);
     info->level = index < vol->first_level_count ? 1 : 2;
+    if (index >= vol->hanging_begin) info->state = IRRVOL_SAMPLE_HANGING;
+    else if (vol->origins[4 * (size_t)index + 3] == 0.0f) info->state = IRRVOL_SAMPLE_INVALID;
+    else if (memcmp(info->position, info->origin, sizeof info->origin) != 0) info->state = IRRVOL_SAMPLE_RELOCATED;
+    else info->state = IRRVOL_SAMPLE_VALID;
     return IRRVOL_OK;
 }
 
@@ -2539,11 +4017,14 @@ IRRVOL_API void irrvol_bin_direction(const irrvol *vol, uint32_t bin, float dir[
 
 IRRVOL_API uint32_t irrvol_direction_bin(const irrvol *vol, const float dir[3])
 {
-    return irrvol__nearest_bin(vol, dir);
+    float u, w;
+    uint32_t h;
+    irrvol__direction_to_square(dir, &u, &w, &h);
+    return irrvol__square_bin(vol, u, w, h);
 }
 
 /* ======================================================================
-   13. self-occlusion of dynamic meshes (6.1.3)
+   14. self-occlusion of dynamic meshes (6.1.3)
    For each vertex, cosine-weighted stratified rays over the hemisphere
    around its normal (concentric disk lifted to the hemisphere, Malley's
    method) against the mesh's own BVH; the unoccluded fraction estimates the
@@ -2615,9 +4096,9 @@ static irrvol_result irrvol__validate_visibility(const irrvol_visibility_desc *d
         if (d->normals && !irrvol__finite3((const float *)((const char *)d->normals + (size_t)i * nstride)))
             IRRVOL__REJECT(d->log, d->log_user, "irrvol_visibility_ratio: a normal is NaN or infinite");
     }
-    for (i = 0; i < 3 * d->triangle_count; i++)
-        if (d->indices[i] >= d->vertex_count)
-            IRRVOL__REJECT(d->log, d->log_user, "irrvol_visibility_ratio: a vertex index is out of range");
+    if (!irrvol__indices_valid(d->indices, d->triangle_count, d->vertex_count))
+        IRRVOL__REJECT(d->log, d->log_user,
+                       "irrvol_visibility_ratio: a vertex index is out of range (or over UINT32_MAX / 3 triangles)");
     return IRRVOL_OK;
 }
 
@@ -2681,26 +4162,38 @@ IRRVOL_API irrvol_result irrvol_visibility_ratio(const irrvol_visibility_desc *d
     irrvol__free(&desc->allocator, c.normals);
     return r;
 }
-
 /* ======================================================================
-   14. save and load (file format version 1)
+   15. save and load (file format version 2)
    magic "IRRVOL\x1a\n", version u32, payload size u64, payload, CRC32.
-   Payload: k, moment, filter, flags (bit 0: radiance stored), first-level
-   samples x y z, subgrid samples, bounds min xyz, max xyz, sample count,
-   rays (u64), degenerate triangles, one byte per first-level cell (1 =
-   refined), irradiance floats (bin-major: for each bin, rgb of every
-   sample), radiance floats when flagged. The grid
-   tables and sample positions are rebuilt from these on load.
+   Payload: k, moment, filter, weighting, flags (bit 0: radiance stored),
+   first-level samples x y z, subgrid samples, visibility resolution (u32
+   each), bounds min xyz, max xyz, the visibility test's normal bias (f32),
+   sample count, rays (u64), degenerate triangles, invalid and relocated
+   samples, one byte per first-level cell (0 unrefined, 1 refined by
+   geometry, 2 by light), then floats: the origins (xyz, valid) of the
+   samples before the hanging ones, irradiance (bin-major: for each bin, rgb
+   of every sample), harmonics (27 per sample), visibility fits (4 per
+   texel of the samples before the hanging ones), radiance when flagged.
+   The grid tables, the hanging samples and the sample positions are
+   rebuilt from these on load.
    ---------------------------------------------------------------------- */
 static const unsigned char irrvol__magic[8] = {'I', 'R', 'R', 'V', 'O', 'L', 0x1a, '\n'};
-#define IRRVOL__HEADER_FIELDS 72u   /* payload bytes before the cell flags */
+#define IRRVOL__HEADER_FIELDS 92u   /* payload bytes before the cell flags */
+
+/* The floats after the cell flags: origins, irradiance, harmonics,
+   visibility, radiance. */
+static uint64_t irrvol__payload_floats(const irrvol *v, int radiance)
+{
+    uint64_t bins = (uint64_t)v->sample_count * v->bins * 3;
+    return 4 * (uint64_t)v->hanging_begin + bins * (radiance ? 2 : 1) + (uint64_t)v->sample_count * IRRVOL__SH_FLOATS +
+           (uint64_t)v->hanging_begin * v->texels * 4;
+}
 
 static irrvol_result irrvol__write_all(const irrvol *v, irrvol__writer *w)
 {
-    uint64_t floats = (uint64_t)v->sample_count * v->bins * 3;
-    uint64_t payload = IRRVOL__HEADER_FIELDS + v->cell_count + floats * 4 * (v->radiance ? 2 : 1);
-    unsigned char flags[256];
-    uint32_t c, k;
+    uint64_t bins = (uint64_t)v->sample_count * v->bins * 3;
+    uint64_t payload = IRRVOL__HEADER_FIELDS + v->cell_count + 4 * irrvol__payload_floats(v, v->radiance != NULL);
+    uint32_t k, s;
     irrvol__crc_init(&w->crc);
     irrvol__put(w, irrvol__magic, 8);
     irrvol__put_u32(w, IRRVOL_FILE_FORMAT_VERSION);
@@ -2708,22 +4201,28 @@ static irrvol_result irrvol__write_all(const irrvol *v, irrvol__writer *w)
     irrvol__put_u32(w, v->k);
     irrvol__put_u32(w, v->moment);
     irrvol__put_u32(w, (uint32_t)v->filter);
+    irrvol__put_u32(w, (uint32_t)v->weighting);
     irrvol__put_u32(w, v->radiance ? 1u : 0u);
     for (k = 0; k < 3; k++) irrvol__put_u32(w, v->samples[k]);
     irrvol__put_u32(w, v->subgrid);
+    irrvol__put_u32(w, v->vis_res);
     for (k = 0; k < 3; k++) irrvol__put_f32(w, v->lo[k]);
     for (k = 0; k < 3; k++) irrvol__put_f32(w, v->hi[k]);
+    irrvol__put_f32(w, v->bias);
     irrvol__put_u32(w, v->sample_count);
     irrvol__put_u64(w, v->rays);
     irrvol__put_u32(w, v->degenerate);
-    for (c = 0; c < v->cell_count;) {   /* refined flags, 256 at a time */
-        uint32_t n = v->cell_count - c < 256 ? v->cell_count - c : 256, i;
-        for (i = 0; i < n; i++) flags[i] = v->cell[c + i].side > 2 ? 1 : 0;
-        irrvol__put(w, flags, n);
-        c += n;
-    }
-    irrvol__put_f32_array(w, v->irradiance, (size_t)floats);
-    if (v->radiance) irrvol__put_f32_array(w, v->radiance, (size_t)floats);
+    irrvol__put_u32(w, v->invalid_count);
+    irrvol__put_u32(w, v->relocated_count);
+    irrvol__put(w, v->refined, v->cell_count);
+    irrvol__put_f32_array(w, v->origins, 4 * (size_t)v->hanging_begin);
+    irrvol__put_f32_array(w, v->irradiance, (size_t)bins);
+    irrvol__put_f32_array(w, v->sh, (size_t)v->sample_count * IRRVOL__SH_FLOATS);
+    for (s = 0; s < v->hanging_begin; s++)   /* the maps' interiors, row by row: load rebuilds the borders */
+        for (k = 0; k < v->vis_res; k++)
+            irrvol__put_f32_array(w, v->visibility + ((size_t)s * v->map_texels + (k + 1) * (v->vis_res + 2) + 1) * 4,
+                                  4 * (size_t)v->vis_res);
+    if (v->radiance) irrvol__put_f32_array(w, v->radiance, (size_t)bins);
     irrvol__put_u32(w, irrvol__crc_final(&w->crc));
     return w->failed ? IRRVOL_ERROR_IO : IRRVOL_OK;
 }
@@ -2738,8 +4237,8 @@ IRRVOL_API irrvol_result irrvol_save(const irrvol *vol, irrvol_write_fn write, v
     return irrvol__write_all(vol, &w);
 }
 
-/* Reads n floats (little-endian) and checks they are finite. */
-static int irrvol__get_finite_array(irrvol__reader *r, float *f, size_t n)
+/* Reads n floats (little-endian); each must be finite, and at least lower. */
+static int irrvol__get_floats(irrvol__reader *r, float *f, size_t n, float lower)
 {
     unsigned char buf[4096];
     size_t i = 0;
@@ -2750,7 +4249,7 @@ static int irrvol__get_finite_array(irrvol__reader *r, float *f, size_t n)
             const unsigned char *b = buf + 4 * j;
             uint32_t u = (uint32_t)b[0] | ((uint32_t)b[1] << 8) | ((uint32_t)b[2] << 16) | ((uint32_t)b[3] << 24);
             memcpy(&f[i], &u, 4);
-            if (!isfinite(f[i])) { r->failed = 1; return 0; }
+            if (!isfinite(f[i]) || f[i] < lower) { r->failed = 1; return 0; }
         }
     }
     return !r->failed;
@@ -2759,84 +4258,129 @@ static int irrvol__get_finite_array(irrvol__reader *r, float *f, size_t n)
 /* Header fields; 0 when they describe a volume this version can hold. */
 static int irrvol__read_fields(irrvol__reader *r, irrvol *v, uint32_t *flags, uint32_t *declared_samples)
 {
-    uint32_t samples[3], filter, subgrid;
-    int k;
-    v->k = irrvol__get_u32(r);
+    uint32_t samples[3], filter, weighting, subgrid, k, vis_res;
+    int d;
+    k = irrvol__get_u32(r);
     v->moment = irrvol__get_u32(r);
     filter = irrvol__get_u32(r);
+    weighting = irrvol__get_u32(r);
     *flags = irrvol__get_u32(r);
-    for (k = 0; k < 3; k++) samples[k] = irrvol__get_u32(r);
+    for (d = 0; d < 3; d++) samples[d] = irrvol__get_u32(r);
     subgrid = irrvol__get_u32(r);
-    for (k = 0; k < 3; k++) v->lo[k] = irrvol__get_f32(r);
-    for (k = 0; k < 3; k++) v->hi[k] = irrvol__get_f32(r);
+    vis_res = irrvol__get_u32(r);
+    for (d = 0; d < 3; d++) v->lo[d] = irrvol__get_f32(r);
+    for (d = 0; d < 3; d++) v->hi[d] = irrvol__get_f32(r);
+    v->bias = irrvol__get_f32(r);
     *declared_samples = irrvol__get_u32(r);
     v->rays = irrvol__get_u64(r);
     v->degenerate = irrvol__get_u32(r);
-    if (r->failed || v->k < 1 || v->k > IRRVOL_MAX_RESOLUTION || v->moment < 1 || v->moment > IRRVOL_MAX_MOMENT ||
-        (filter != IRRVOL_FILTER_NEAREST && filter != IRRVOL_FILTER_BILINEAR) || *flags > 1u ||
-        subgrid < 2 || subgrid > IRRVOL_MAX_SUBGRID_SAMPLES)
+    v->invalid_count = irrvol__get_u32(r);
+    v->relocated_count = irrvol__get_u32(r);
+    if (r->failed || k < 1 || k > IRRVOL_MAX_RESOLUTION || v->moment < 1 || v->moment > IRRVOL_MAX_MOMENT ||
+        (filter != IRRVOL_FILTER_NEAREST && filter != IRRVOL_FILTER_BILINEAR) ||
+        (weighting != IRRVOL_WEIGHTING_VISIBILITY && weighting != IRRVOL_WEIGHTING_TRILINEAR) || *flags > 1u ||
+        subgrid < 2 || subgrid > IRRVOL_MAX_SUBGRID_SAMPLES || vis_res < 1 ||
+        vis_res > IRRVOL_MAX_VISIBILITY_RESOLUTION || !isfinite(v->bias) || !(v->bias >= 0.0f))
         return -1;
-    for (k = 0; k < 3; k++)
-        if (samples[k] < 2 || samples[k] > IRRVOL_MAX_GRID_SAMPLES || !isfinite(v->lo[k]) || !isfinite(v->hi[k]) ||
-            !(v->lo[k] < v->hi[k]) || !isfinite(v->hi[k] - v->lo[k]))
+    for (d = 0; d < 3; d++)
+        if (samples[d] < 2 || samples[d] > IRRVOL_MAX_GRID_SAMPLES || !isfinite(v->lo[d]) || !isfinite(v->hi[d]) ||
+            !(v->lo[d] < v->hi[d]) || !isfinite(v->hi[d] - v->lo[d]))
             return -1;
     v->filter = (irrvol_filter)filter;
-    v->bins = 2 * v->k * v->k;
-    v->kf = (float)v->k;
+    v->weighting = (irrvol_weighting)weighting;
+    irrvol__set_resolutions(v, k, vis_res);
     irrvol__grid_dims(v, samples, subgrid);
     return 0;
+}
+
+/* Reads the interiors of the visibility maps (every float finite, every
+   residual variance >= 0) and rebuilds their borders. */
+static int irrvol__read_maps(irrvol__reader *r, irrvol *v)
+{
+    uint32_t s, k, t;
+    for (s = 0; s < v->hanging_begin; s++) {
+        float *map = v->visibility + (size_t)s * v->map_texels * 4;
+        for (k = 0; k < v->vis_res; k++) {
+            float *row = map + ((k + 1) * (v->vis_res + 2) + 1) * 4;
+            if (!irrvol__get_floats(r, row, 4 * (size_t)v->vis_res, -FLT_MAX)) return 0;
+            for (t = 0; t < v->vis_res; t++)
+                if (!(row[4 * t + 3] >= 0.0f)) return 0;
+        }
+        irrvol__map_border(v, map);
+    }
+    return 1;
+}
+
+/* The origins read back must be finite, flagged 0 or 1, and agree with
+   the invalid and relocated counts of the header. */
+static int irrvol__origins_consistent(const irrvol *v)
+{
+    uint32_t s, invalid = 0, relocated = 0;
+    for (s = 0; s < v->hanging_begin; s++) {
+        const float *o = v->origins + 4 * (size_t)s;
+        if (o[3] != 0.0f && o[3] != 1.0f) return 0;
+        if (o[3] == 0.0f) invalid++;
+        else if (memcmp(o, v->positions + 3 * (size_t)s, 3 * sizeof(float)) != 0) relocated++;
+    }
+    return invalid == v->invalid_count && relocated == v->relocated_count;
 }
 
 static irrvol_result irrvol__read_all(irrvol *v, irrvol__reader *r)
 {
     const irrvol_allocator *a = &v->allocator;
-    unsigned char magic[8], *refined;
-    uint32_t version, flags, declared, c, refined_count = 0, expected_crc;
-    uint64_t floats, inner;
+    unsigned char magic[8];
+    uint32_t version, flags, declared, c, refined_count = 0, expected_crc, s;
+    uint64_t inner;
     irrvol_result res;
     irrvol__crc_init(&r->crc);
     r->remaining = 20;
     irrvol__get(r, magic, 8);
     version = irrvol__get_u32(r);
     r->remaining = irrvol__get_u64(r);
-    if (r->failed || memcmp(magic, irrvol__magic, 8) != 0) return IRRVOL_ERROR_CORRUPT_DATA;
+    if (r->failed || memcmp(magic, irrvol__magic, 8) != 0 || r->remaining > r->available)
+        return IRRVOL_ERROR_CORRUPT_DATA;
     if (version != IRRVOL_FILE_FORMAT_VERSION) return IRRVOL_ERROR_VERSION;
     if (irrvol__read_fields(r, v, &flags, &declared) != 0) return IRRVOL_ERROR_CORRUPT_DATA;
     /* every size is checked against the payload before anything is allocated */
     if (!irrvol__can_hold(r, v->cell_count, 1)) return IRRVOL_ERROR_CORRUPT_DATA;
-    refined = (unsigned char *)irrvol__alloc(a, v->cell_count);
-    if (!refined) return IRRVOL_ERROR_OUT_OF_MEMORY;
-    irrvol__get(r, refined, v->cell_count);
+    v->refined = (unsigned char *)irrvol__alloc(a, v->cell_count);
+    if (!v->refined) return IRRVOL_ERROR_OUT_OF_MEMORY;
+    irrvol__get(r, v->refined, v->cell_count);
     for (c = 0; c < v->cell_count; c++) {
-        if (refined[c] > 1 || (refined[c] && v->subgrid == 2)) r->failed = 1;
-        refined_count += refined[c];
+        if (v->refined[c] > IRRVOL__REFINED_LIGHT || (v->refined[c] && v->subgrid == 2)) r->failed = 1;
+        refined_count += v->refined[c] ? 1u : 0u;
     }
     /* each refined cell owns its (side - 2)^3 interior samples: a lower bound */
     inner = (uint64_t)(v->subgrid - 2) * (v->subgrid - 2) * (v->subgrid - 2);
-    floats = (uint64_t)declared * v->bins * 3;
     if (r->failed || (uint64_t)v->first_level_count + refined_count * inner > declared ||
-        !irrvol__can_hold(r, floats, flags ? 8 : 4)) {
-        irrvol__free(a, refined);
+        !irrvol__can_hold(r, (uint64_t)declared * v->bins * 3 + (uint64_t)declared * IRRVOL__SH_FLOATS, 4))
         return IRRVOL_ERROR_CORRUPT_DATA;
-    }
-    res = irrvol__make_grid(v, refined);
-    irrvol__free(a, refined);
+    res = irrvol__make_grid(v, v->refined);
     if (res != IRRVOL_OK) return res;
-    if (v->sample_count != declared) return IRRVOL_ERROR_CORRUPT_DATA;
-    v->irradiance = (float *)irrvol__alloc_array(a, (size_t)floats, sizeof(float));
-    if (flags) v->radiance = (float *)irrvol__alloc_array(a, (size_t)floats, sizeof(float));
-    if (!v->irradiance || (flags && !v->radiance)) return IRRVOL_ERROR_OUT_OF_MEMORY;
-    if (!irrvol__get_finite_array(r, v->irradiance, (size_t)floats)) return IRRVOL_ERROR_CORRUPT_DATA;
-    if (flags && !irrvol__get_finite_array(r, v->radiance, (size_t)floats)) return IRRVOL_ERROR_CORRUPT_DATA;
+    if (v->sample_count != declared || !irrvol__can_hold(r, irrvol__payload_floats(v, flags != 0), 4))
+        return IRRVOL_ERROR_CORRUPT_DATA;
+    res = irrvol__alloc_samples(v, flags != 0);
+    if (res != IRRVOL_OK) return res;
+    if (!irrvol__get_floats(r, v->origins, 4 * (size_t)v->hanging_begin, -FLT_MAX) || !irrvol__origins_consistent(v) ||
+        !irrvol__get_floats(r, v->irradiance, (size_t)v->sample_count * v->bins * 3, -FLT_MAX) ||
+        !irrvol__get_floats(r, v->sh, (size_t)v->sample_count * IRRVOL__SH_FLOATS, -FLT_MAX) ||
+        !irrvol__read_maps(r, v) ||
+        (flags && !irrvol__get_floats(r, v->radiance, (size_t)v->sample_count * v->bins * 3, -FLT_MAX)))
+        return IRRVOL_ERROR_CORRUPT_DATA;
     if (r->remaining != 0) return IRRVOL_ERROR_CORRUPT_DATA;   /* payload longer than its contents */
     expected_crc = irrvol__crc_final(&r->crc);
     r->remaining = 4;
     if (irrvol__get_u32(r) != expected_crc || r->failed) return IRRVOL_ERROR_CORRUPT_DATA;
+    for (s = v->hanging_begin; s < v->sample_count; s++) {   /* hanging origins: their grid positions */
+        memcpy(v->origins + 4 * (size_t)s, v->positions + 3 * (size_t)s, 3 * sizeof(float));
+        v->origins[4 * (size_t)s + 3] = 1.0f;
+    }
     return IRRVOL_OK;
 }
 
-IRRVOL_API irrvol_result irrvol_load(const irrvol_allocator *allocator, irrvol_read_fn read, void *user,
-                                     irrvol **out)
+/* A load from a stream of at most available payload bytes. */
+static irrvol_result irrvol__load(const irrvol_allocator *allocator, irrvol_read_fn read, void *user,
+                                  uint64_t available, irrvol **out)
 {
     irrvol_allocator a;
     irrvol__reader r;
@@ -2852,10 +4396,17 @@ IRRVOL_API irrvol_result irrvol_load(const irrvol_allocator *allocator, irrvol_r
     memset(&r, 0, sizeof r);
     r.read = read;
     r.user = user;
+    r.available = available;
     res = irrvol__read_all(v, &r);
     if (res != IRRVOL_OK) { irrvol_destroy(v); return res; }
     *out = v;
     return IRRVOL_OK;
+}
+
+IRRVOL_API irrvol_result irrvol_load(const irrvol_allocator *allocator, irrvol_read_fn read, void *user,
+                                     irrvol **out)
+{
+    return irrvol__load(allocator, read, user, UINT64_MAX, out);
 }
 
 IRRVOL_API irrvol_result irrvol_save_to_memory(const irrvol *vol, const irrvol_allocator *allocator,
@@ -2891,7 +4442,9 @@ IRRVOL_API irrvol_result irrvol_load_from_memory(const void *data, size_t size,
     memset(&m, 0, sizeof m);
     m.data = (unsigned char *)(uintptr_t)data;   /* read only */
     m.size = size;
-    return irrvol_load(allocator, irrvol__membuf_read, &m, out);
+    /* the payload fits between the 20 header bytes and the 4 of the CRC:
+       a larger claim is refused before anything is allocated */
+    return irrvol__load(allocator, irrvol__membuf_read, &m, size > 24 ? (uint64_t)size - 24 : 0, out);
 }
 
 IRRVOL_API void irrvol_free_memory(const irrvol_allocator *allocator, void *data)
@@ -2915,6 +4468,328 @@ IRRVOL_API const char *irrvol_result_string(irrvol_result r)
     case IRRVOL_ERROR_IO: return "read or write callback failed";
     }
     return "unknown result";
+}
+
+/* ======================================================================
+   16. the volume on the GPU: flat arrays and a GLSL evaluator
+   irrvol_gpu_export writes the volume's own tables into two flat arrays, a
+   uint32 index array and a float data array, for two storage buffers (or,
+   section by section, for textures: the first-level samples come first in
+   x-fastest order, a dense 3D grid). The GLSL below evaluates harmonics
+   with the leak-safe weights of irrvol_query_sh, hanging samples included.
+   It is written in the subset GLSL and C share (scalars, structs, loops;
+   conversions, abs, sqrt, max and the array reads through macros), so the
+   tests compile the very same text as C and compare it with the C query.
+   ---------------------------------------------------------------------- */
+#define IRRVOL__GPU_FORMAT 1u       /* index[0]: the layout's version */
+#define IRRVOL__GPU_HEADER 16u      /* entries of each array's header */
+
+/* Shared GLSL / C text, part 1: the visibility weight of a sample
+   (irrvol__visibility_weight, operation by operation). */
+#define IRRVOL__GLSL_PART1(X) X( \
+struct IrrvolRGB { float r; float g; float b; }; \
+float irrvol_visibility(uint s, float x, float y, float z, float nx, float ny, float nz) \
+{ \
+    uint o = IRRVOL_INDEX(11u) + 4u * s; \
+    float dx = x - IRRVOL_DATA(o); \
+    float dy = y - IRRVOL_DATA(o + 1u); \
+    float dz = z - IRRVOL_DATA(o + 2u); \
+    float r2 = dx * dx + dy * dy + dz * dz; \
+    if (!(r2 > 0.0f)) return IRRVOL_DATA(o + 3u); \
+    float inv_r = 1.0f / IRRVOL_SQRT(r2); \
+    float w = 0.5f - 0.5f * ((dx * nx + dy * ny + dz * nz) * inv_r); \
+    w = w + 0.2f; \
+    float inv_a = 1.0f / (IRRVOL_ABS(dx) + IRRVOL_ABS(dy) + IRRVOL_ABS(dz)); \
+    float px = dx * inv_a; \
+    float py = dy * inv_a; \
+    if (dz < 0.0f) { \
+        float qx = (1.0f - IRRVOL_ABS(py)) * (px < 0.0f ? -1.0f : 1.0f); \
+        py = (1.0f - IRRVOL_ABS(px)) * (py < 0.0f ? -1.0f : 1.0f); \
+        px = qx; \
+    } \
+    uint n = IRRVOL_INDEX(6u); \
+    float fn = IRRVOL_F(n); \
+    float u = IRRVOL_MIN(IRRVOL_MAX((px * 0.5f + 0.5f) * fn + 0.5f, 0.5f), fn + 0.5f); \
+    float t = IRRVOL_MIN(IRRVOL_MAX((py * 0.5f + 0.5f) * fn + 0.5f, 0.5f), fn + 0.5f); \
+    uint i0 = IRRVOL_U(u); \
+    uint j0 = IRRVOL_U(t); \
+    float fu = u - IRRVOL_F(i0); \
+    float ft = t - IRRVOL_F(j0); \
+    uint m = IRRVOL_INDEX(12u) + 4u * (s * (n + 2u) * (n + 2u) + j0 * (n + 2u) + i0); \
+    uint m1 = m + 4u * (n + 2u); \
+    float g[4]; \
+    for (uint c = 0u; c < 4u; c++) \
+        g[c] = (IRRVOL_DATA(m + c) * (1.0f - fu) + IRRVOL_DATA(m + 4u + c) * fu) * (1.0f - ft) + \
+               (IRRVOL_DATA(m1 + c) * (1.0f - fu) + IRRVOL_DATA(m1 + 4u + c) * fu) * ft; \
+    float beyond = (g[0] * dx + g[1] * dy + g[2] * dz - 1.0f) * inv_r; \
+    if (beyond > 0.0f) { \
+        float den = g[3] + beyond * beyond; \
+        float cheb = den > 0.0f ? g[3] / den : 1.0f; \
+        w = w * (cheb * cheb * cheb); \
+    } \
+    if (w < 0.2f) w = w * (w * w * 25.0f); \
+    return w * IRRVOL_DATA(o + 3u); \
+} \
+)
+
+/* Part 2: a sample's harmonics toward n. */
+#define IRRVOL__GLSL_PART2(X) X( \
+IrrvolRGB irrvol_sh_value(uint s, float y0, float y1, float y2, float y3, float y4, float y5, float y6, float y7, \
+                          float y8) \
+{ \
+    uint coeffs = IRRVOL_INDEX(7u); \
+    uint c = IRRVOL_INDEX(13u) + s * 3u * coeffs; \
+    float ylm[9]; \
+    ylm[0] = y0; ylm[1] = y1; ylm[2] = y2; ylm[3] = y3; ylm[4] = y4; ylm[5] = y5; ylm[6] = y6; ylm[7] = y7; ylm[8] = y8; \
+    IrrvolRGB e; \
+    e.r = 0.0f; e.g = 0.0f; e.b = 0.0f; \
+    for (uint j = 0u; j < coeffs; j++) { \
+        e.r += IRRVOL_DATA(c + 3u * j) * ylm[j]; \
+        e.g += IRRVOL_DATA(c + 3u * j + 1u) * ylm[j]; \
+        e.b += IRRVOL_DATA(c + 3u * j + 2u) * ylm[j]; \
+    } \
+    return e; \
+} \
+)
+
+/* Part 3: the query. */
+#define IRRVOL__GLSL_PART3(X) X( \
+IrrvolRGB irrvol_irradiance_sh(float px, float py, float pz, float nx, float ny, float nz) \
+{ \
+    float len2 = nx * nx + ny * ny + nz * nz; \
+    if (len2 > 0.0f && len2 <= 3.40282347e38f) { \
+        float inv = 1.0f / IRRVOL_SQRT(len2); \
+        nx *= inv; ny *= inv; nz *= inv; \
+    } else { \
+        nx = 0.0f; ny = 0.0f; nz = 1.0f; \
+    } \
+    float y0 = 0.282094792f, y1 = 0.488602512f * ny, y2 = 0.488602512f * nz, y3 = 0.488602512f * nx; \
+    float y4 = 1.092548431f * nx * ny, y5 = 1.092548431f * ny * nz, y6 = 0.315391565f * (3.0f * nz * nz - 1.0f); \
+    float y7 = 1.092548431f * nx * nz, y8 = 0.546274215f * (nx * nx - ny * ny); \
+    float p[3]; \
+    p[0] = px; p[1] = py; p[2] = pz; \
+    uint c[3]; \
+    float t[3]; \
+    for (uint d = 0u; d < 3u; d++) { \
+        float q = (p[d] - IRRVOL_DATA(d)) * IRRVOL_DATA(3u + d); \
+        q = q > 0.0f ? q : 0.0f; \
+        q = q < IRRVOL_DATA(6u + d) ? q : IRRVOL_DATA(6u + d); \
+        c[d] = IRRVOL_U(q); \
+        c[d] = c[d] < IRRVOL_INDEX(1u + d) ? c[d] : IRRVOL_INDEX(1u + d) - 1u; \
+        t[d] = q - IRRVOL_F(c[d]); \
+    } \
+    uint cell = IRRVOL_INDEX(8u) + 2u * (c[0] + IRRVOL_INDEX(1u) * (c[1] + IRRVOL_INDEX(2u) * c[2])); \
+    uint side = IRRVOL_INDEX(cell + 1u); \
+    for (uint d = 0u; d < 3u; d++) { \
+        float q = t[d] * IRRVOL_F(side - 1u); \
+        c[d] = IRRVOL_U(q); \
+        c[d] = c[d] < side - 2u ? c[d] : side - 2u; \
+        t[d] = q - IRRVOL_F(c[d]); \
+    } \
+    uint table = IRRVOL_INDEX(9u) + IRRVOL_INDEX(cell) + c[0] + side * (c[1] + side * c[2]); \
+    uint ids[8]; \
+    float w[8]; \
+    for (uint i = 0u; i < 8u; i++) { \
+        uint bx = i & 1u, by = (i >> 1u) & 1u, bz = i >> 2u; \
+        ids[i] = IRRVOL_INDEX(table + bx + side * (by + side * bz)); \
+        w[i] = (bx == 1u ? t[0] : 1.0f - t[0]) * (by == 1u ? t[1] : 1.0f - t[1]) * (bz == 1u ? t[2] : 1.0f - t[2]); \
+    } \
+    float bias = IRRVOL_DATA(9u); \
+    float x = px + bias * nx, y = py + bias * ny, z = pz + bias * nz; \
+    uint hanging = IRRVOL_INDEX(5u); \
+    uint terms[32]; \
+    float tw[32]; \
+    uint m = 0u; \
+    for (uint i = 0u; i < 8u; i++) { \
+        if (ids[i] >= hanging) { \
+            for (uint j = 0u; j < 4u; j++) { \
+                uint h = 4u * (ids[i] - hanging) + j; \
+                float pw = IRRVOL_DATA(IRRVOL_INDEX(14u) + h); \
+                if (pw > 0.0f) { \
+                    terms[m] = IRRVOL_INDEX(IRRVOL_INDEX(10u) + h); \
+                    tw[m] = w[i] * pw; \
+                    m++; \
+                } \
+            } \
+        } else { \
+            terms[m] = ids[i]; \
+            tw[m] = w[i]; \
+            m++; \
+        } \
+    } \
+    float sum = 0.0f; \
+    for (uint i = 0u; i < m; i++) { \
+        tw[i] *= irrvol_visibility(terms[i], x, y, z, nx, ny, nz); \
+        sum += tw[i]; \
+    } \
+    IrrvolRGB e; \
+    e.r = 0.0f; e.g = 0.0f; e.b = 0.0f; \
+    for (uint i = 0u; i < m; i++) { \
+        IrrvolRGB v = irrvol_sh_value(terms[i], y0, y1, y2, y3, y4, y5, y6, y7, y8); \
+        e.r += tw[i] * v.r; e.g += tw[i] * v.g; e.b += tw[i] * v.b; \
+    } \
+    float scale = 1.0f / sum; \
+    if (!(sum >= 1.17549435e-38f && sum <= 3.40282347e38f)) { \
+        e.r = 0.0f; e.g = 0.0f; e.b = 0.0f; \
+        scale = 1.0f; \
+        for (uint i = 0u; i < 8u; i++) { \
+            IrrvolRGB v = irrvol_sh_value(ids[i], y0, y1, y2, y3, y4, y5, y6, y7, y8); \
+            e.r += w[i] * v.r; e.g += w[i] * v.g; e.b += w[i] * v.b; \
+        } \
+    } \
+    e.r = IRRVOL_MAX(e.r * scale, 0.0f); \
+    e.g = IRRVOL_MAX(e.g * scale, 0.0f); \
+    e.b = IRRVOL_MAX(e.b * scale, 0.0f); \
+    return e; \
+} \
+)
+
+#define IRRVOL__GLSL_STRING(...) #__VA_ARGS__
+
+/* The GLSL text: the prelude, the three stringified parts (code: one
+   line each, broken at statements when copied out) and the vec3 wrapper. */
+typedef struct irrvol__glsl_part { const char *text; int code; } irrvol__glsl_part;
+static const irrvol__glsl_part irrvol__glsl_parts[] = {
+    {
+    "/* irrvol.h - the irradiance volume in GLSL: irrvol_irradiance(position, normal)\n"
+    "   returns the leak-safe irradiance of the harmonics exported by irrvol_gpu_export.\n"
+    "   Needs GLSL 4.30 or newer (storage buffers); define IRRVOL_INDEX(i) and\n"
+    "   IRRVOL_DATA(i) to read the two arrays from elsewhere. */\n"
+    "#ifndef IRRVOL_INDEX\n"
+    "#ifndef IRRVOL_INDEX_BINDING\n#define IRRVOL_INDEX_BINDING 0\n#endif\n"
+    "#ifndef IRRVOL_DATA_BINDING\n#define IRRVOL_DATA_BINDING 1\n#endif\n"
+    "layout(std430, binding = IRRVOL_INDEX_BINDING) readonly buffer IrrvolIndexBuffer { uint irrvol_index[]; };\n"
+    "layout(std430, binding = IRRVOL_DATA_BINDING) readonly buffer IrrvolDataBuffer { float irrvol_data[]; };\n"
+    "#define IRRVOL_INDEX(i) irrvol_index[i]\n"
+    "#define IRRVOL_DATA(i) irrvol_data[i]\n"
+    "#endif\n"
+    "#define IRRVOL_U(x) uint(x)\n#define IRRVOL_I(x) int(x)\n#define IRRVOL_F(x) float(x)\n"
+    "#define IRRVOL_ABS(x) abs(x)\n#define IRRVOL_SQRT(x) sqrt(x)\n"
+    "#define IRRVOL_MIN(a, b) ((a) < (b) ? (a) : (b))\n#define IRRVOL_MAX(a, b) ((a) > (b) ? (a) : (b))\n", 0},
+    {IRRVOL__GLSL_PART1(IRRVOL__GLSL_STRING), 1},
+    {IRRVOL__GLSL_PART2(IRRVOL__GLSL_STRING), 1},
+    {IRRVOL__GLSL_PART3(IRRVOL__GLSL_STRING), 1},
+    {"vec3 irrvol_irradiance(vec3 p, vec3 n)\n{\n"
+     "    IrrvolRGB e = irrvol_irradiance_sh(p.x, p.y, p.z, n.x, n.y, n.z);\n"
+     "    return vec3(e.r, e.g, e.b);\n}\n", 0}
+};
+
+static void irrvol__glsl_put(char *buffer, size_t capacity, size_t *length, char c)
+{
+    if (buffer && *length + 1 < capacity) buffer[*length] = c;
+    (*length)++;
+}
+
+IRRVOL_API size_t irrvol_glsl_source(char *buffer, size_t capacity)
+{
+    size_t length = 0, i;
+    for (i = 0; i < sizeof irrvol__glsl_parts / sizeof irrvol__glsl_parts[0]; i++) {
+        const char *c = irrvol__glsl_parts[i].text;
+        int code = irrvol__glsl_parts[i].code, depth = 0, braces = 0, line_start = 1, k;
+        for (; *c; c++) {
+            if (code && line_start) {   /* a new line: indented by the braces around it */
+                if (*c == ' ') continue;
+                braces -= *c == '}';
+                for (k = 0; k < 4 * braces; k++) irrvol__glsl_put(buffer, capacity, &length, ' ');
+                braces += *c == '{';
+            } else if (code) {
+                braces += (*c == '{') - (*c == '}');
+            }
+            line_start = 0;
+            irrvol__glsl_put(buffer, capacity, &length, *c);
+            if (!code) continue;
+            depth += (*c == '(') - (*c == ')');
+            if (depth == 0 && (*c == ';' || *c == '{' || *c == '}')) {
+                irrvol__glsl_put(buffer, capacity, &length, '\n');
+                line_start = 1;
+            }
+        }
+    }
+    if (buffer && capacity) buffer[length < capacity ? length : capacity - 1] = '\0';
+    return length;
+}
+
+/* The sizes and section offsets of the export. 0, or -1 when an offset
+   would not fit the 32 bits a shader indexes with. */
+static int irrvol__gpu_layout(const irrvol *v, uint32_t coeffs, irrvol_gpu_layout *l)
+{
+    uint64_t hanging = (uint64_t)v->sample_count - v->hanging_begin, at;
+    memset(l, 0, sizeof *l);
+    l->coefficients = coeffs;
+    l->sh_order = coeffs == 4 ? 1u : 2u;
+    at = IRRVOL__GPU_HEADER;
+    l->cells_at = (uint32_t)at;
+    at += 2 * (uint64_t)v->cell_count;
+    l->ids_at = (uint32_t)at;
+    at += v->id_count;
+    l->parents_at = (uint32_t)(at <= UINT32_MAX ? at : 0);
+    at += 4 * hanging;
+    l->index_count = (size_t)at;
+    if (at > UINT32_MAX) return -1;
+    at = IRRVOL__GPU_HEADER;
+    l->origins_at = (uint32_t)at;
+    at += 4 * (uint64_t)v->sample_count;
+    l->visibility_at = (uint32_t)(at <= UINT32_MAX ? at : 0);
+    at += (uint64_t)v->hanging_begin * v->map_texels * 4;
+    l->sh_at = (uint32_t)(at <= UINT32_MAX ? at : 0);
+    at += (uint64_t)v->sample_count * 3 * coeffs;
+    l->parent_weights_at = (uint32_t)(at <= UINT32_MAX ? at : 0);
+    at += 4 * hanging;
+    l->data_count = (size_t)at;
+    return at > UINT32_MAX ? -1 : 0;
+}
+
+static void irrvol__gpu_fill(const irrvol *v, const irrvol_gpu_layout *l, uint32_t *index, float *data)
+{
+    uint32_t c, s, j;
+    int d;
+    memset(index, 0, IRRVOL__GPU_HEADER * sizeof(uint32_t));
+    memset(data, 0, IRRVOL__GPU_HEADER * sizeof(float));
+    index[0] = IRRVOL__GPU_FORMAT;
+    for (d = 0; d < 3; d++) {
+        index[1 + d] = v->cells[d];
+        data[d] = v->lo[d];
+        data[3 + d] = v->scale[d];
+        data[6 + d] = v->cell_limit[d];
+    }
+    index[4] = v->sample_count;
+    index[5] = v->hanging_begin;
+    index[6] = v->vis_res;
+    index[7] = l->coefficients;
+    index[8] = l->cells_at;
+    index[9] = l->ids_at;
+    index[10] = l->parents_at;
+    index[11] = l->origins_at;
+    index[12] = l->visibility_at;
+    index[13] = l->sh_at;
+    index[14] = l->parent_weights_at;
+    data[9] = v->bias;
+    for (c = 0; c < v->cell_count; c++) {
+        index[l->cells_at + 2 * c] = v->cell[c].offset;
+        index[l->cells_at + 2 * c + 1] = v->cell[c].side;
+    }
+    memcpy(index + l->ids_at, v->ids, v->id_count * sizeof(uint32_t));
+    memcpy(index + l->parents_at, v->parents, 4 * ((size_t)v->sample_count - v->hanging_begin) * sizeof(uint32_t));
+    memcpy(data + l->origins_at, v->origins, 4 * (size_t)v->sample_count * sizeof(float));
+    memcpy(data + l->visibility_at, v->visibility, (size_t)v->hanging_begin * v->map_texels * 4 * sizeof(float));
+    for (s = 0; s < v->sample_count; s++)
+        for (j = 0; j < l->coefficients; j++)
+            memcpy(data + l->sh_at + ((size_t)s * l->coefficients + j) * 3, v->sh + (size_t)s * IRRVOL__SH_FLOATS + 3 * j,
+                   3 * sizeof(float));
+    memcpy(data + l->parent_weights_at, v->parent_weights,
+           4 * ((size_t)v->sample_count - v->hanging_begin) * sizeof(float));
+}
+
+IRRVOL_API irrvol_result irrvol_gpu_export(const irrvol *vol, uint32_t sh_order, irrvol_gpu_layout *layout,
+                                           uint32_t *index, size_t index_capacity, float *data, size_t data_capacity)
+{
+    if (!vol || !layout || (sh_order != 1 && sh_order != 2)) return IRRVOL_ERROR_INVALID_ARGUMENT;
+    if (irrvol__gpu_layout(vol, sh_order == 1 ? 4u : IRRVOL__SH_COEFFS, layout) != 0) return IRRVOL_ERROR_OUT_OF_MEMORY;
+    if (!index && !data) return IRRVOL_OK;   /* sizes only */
+    if (!index || !data || index_capacity < layout->index_count || data_capacity < layout->data_count)
+        return IRRVOL_ERROR_INVALID_ARGUMENT;
+    irrvol__gpu_fill(vol, layout, index, data);
+    return IRRVOL_OK;
 }
 
 #endif /* IRRVOL_IMPLEMENTATION */

@@ -1,4 +1,4 @@
-/* rendercache.h - v0.3.1 - render cache and range-image walkthroughs - public domain or MIT, see end of file
+/* rendercache.h - v0.4.0 - render cache and range-image walkthroughs - public domain or MIT, see end of file
 
    RENDERCACHE.H: an image-space point cache that reprojects and resamples, and range-image walkthroughs of animated scenes.
 
@@ -10,8 +10,14 @@
    builds a priority image (old points, sparse and empty regions). Error
    diffusion of the thresholded priority image picks the pixels that deserve
    a new ray within the caller's budget; the caller shades them with any
-   renderer and inserts the results. Objects may move: each point belongs to
-   an object whose transform the caller updates, and the point moves with it.
+   renderer and inserts the results, in the same frame or frames later (an
+   asynchronous renderer): a late sample is stored at its own point. A
+   sample whose colour differs from the point it replaces ages the points
+   around it, so that changed lighting is found and resampled first (or the
+   engine says so: rendercache_invalidate). Objects may move: each point
+   belongs to an object whose transform the caller updates, and the point
+   moves with it. Range images can seed the cache (rendercache_seed), so
+   that precomputed views warm-start an interactive session.
 
    Range-image walkthroughs (Nimeroff, Dorsey and Rushmeier 1996) precompute
    instead: a range image is what a camera sees (radiance, distance along
@@ -46,15 +52,23 @@
        while (running) {
            uint32_t i, n;
            rendercache_begin_frame(rc, &camera);      // reproject, cull, fill, prioritise
+           rendercache_predict(rc, &next_camera);     // optional: seed what the motion will uncover
            rendercache_request(rc, req, budget, &n);  // the pixels that deserve a ray
            for (i = 0; i < n; i++) {
+               memset(&s[i], 0, sizeof s[i]);         // priority_scale 0: 1
+               s[i].frame = req[i].frame;             // the request's frame, x, y and flags
                s[i].x = req[i].x; s[i].y = req[i].y; s[i].flags = req[i].flags;
                shade(req[i].org, req[i].dir, s[i].position, s[i].rgb, &s[i].object);
            }
-           rendercache_insert(rc, s, n);
+           rendercache_insert(rc, s, n, NULL);        // now, or frames later from a render thread
            show(rendercache_image(rc));               // width * height RGB floats, top row first
        }
        rendercache_destroy(rc);
+
+   An asynchronous renderer returns the samples of frame f's requests after
+   begin_frame(f + 1) or later: insert them then, with the frame field
+   copied (desc.max_latency frames at most). Each is stored where its own
+   ray hit, seen with its objects' transforms of frame f.
 
    EXAMPLE: A WALKTHROUGH FROM BASE VIEWS
 
@@ -90,7 +104,9 @@
        rendercache_begin_frame(rc, camera)                            reproject into a new camera
        rendercache_predict(rc, next_camera)                           optional: sample what it will uncover
        rendercache_request(rc, out, max, &count)                      pixels to shade this frame
-       rendercache_insert(rc, samples, n)                             shaded samples become points
+       rendercache_insert(rc, samples, n, &taken)                     shaded samples become points (late too)
+       rendercache_invalidate(rc, object)                             an object's (or all) lighting changed
+       rendercache_seed(rc, images, n, &taken)                        range images become points
        rendercache_image(rc)                                          the current RGB float image
        rendercache_priority_image(rc), rendercache_pixel_kinds(rc),
        rendercache_depth_image(rc)                                    per-pixel internals (inspection)
@@ -119,7 +135,7 @@
        rendercache_subdivide_time(desc, &times, &count)               key times of id images
        rendercache_keytimes_create(desc, &kt) / _destroy(kt)          key times of an object-space solution
        rendercache_keytimes_count(kt), _times(kt), _values(kt, k)     the keys
-       rendercache_keytimes_eval(kt, time, values)                    linear interpolation in time
+       rendercache_keytimes_eval(kt, time, values, count)             linear interpolation in time
      error
        rendercache_lrms(reference, image, w, h, &lrms)                relative luminance RMS
 
@@ -136,13 +152,20 @@
        and Chiu. Range-image pixels whose ray left the scene have object
        RENDERCACHE_MISS and are warped as directions (background at
        infinity). One rendercache, warper, view space or keytimes object is
-       used by one thread at a time; per-frame work runs in parallel through
-       desc.parallel_for and gives bit-identical results for any thread count.
+       used by one thread at a time (an asynchronous renderer hands its
+       samples to the thread that calls insert); per-frame work runs in
+       parallel through desc.parallel_for and gives bit-identical results
+       for any thread count. Frames are numbered from 1 by begin_frame;
+       requests carry their frame's number, and a sample whose frame field
+       is 0 belongs to the current frame.
 
    HOW A FRAME WORKS (and which published step each part is)
 
        begin_frame: every point is projected into the camera and z-buffered,
-       one point per pixel (WDP99 reprojection); a point much farther than
+       one point per pixel (WDP99 reprojection; with parallel_for, 8 jobs of
+       points share the z-buffer through an atomic minimum of a key that
+       orders by depth, then slot, so any schedule keeps the same point); a
+       point much farther than
        the average depth of its 3x3 neighbourhood, with nearer points on
        opposite sides, is dropped (WDP99 depth cull); holes are filled by a
        3x3 tent filter, or a 7x7 one where points are sparse (WDG02), from
@@ -152,10 +175,23 @@
        around, the higher), and pixels with nothing near at 1 (WDP99).
        request: the levels of the priority image above a threshold are all
        requested, the level at the threshold gets the rest of the budget,
-       spread by Floyd-Steinberg error diffusion (WDP99); with predict, up to
-       desc.predict_fraction of the budget goes to the holes of the next
-       camera (WDG02 predictive sampling). insert: a sample replaces the
-       point its pixel showed, or the oldest point not visible (clock).
+       spread by Floyd-Steinberg error diffusion (WDP99) in bands of 128 rows
+       diffused in parallel; with predict, up to
+       desc.predict_fraction of the budget goes to the regions the next
+       camera uncovers: the points are counted in an occupancy image of 1/16
+       the resolution (cells of 4x4 pixels) of that camera, and a cell with
+       fewer than 4 is seeded with one request (WDG02 predictive sampling).
+       insert: a sample of the current frame replaces the point its pixel
+       showed, or takes the slot of the oldest point not visible (clock); a
+       late or predicted sample is stored at its own point, replaces the
+       point of the same surface where that lands now, and is shown there
+       (the holes around it filled again) when nothing nearer is. A sample
+       whose colour differs from the point it replaces by more than
+       desc.change_threshold (and by more than three standard deviations of
+       the last frame's resample differences: a noisy renderer does not
+       trigger it) ages the points shown within RENDERCACHE_CHANGE_RADIUS
+       pixels to the top of the age ramp (WDG02): a new shadow is found by
+       the samples that land in it and filled in by the next requests.
 
    HOW A WARP WORKS (NDR96 section 4.4, after Radiance's pinterp)
 
@@ -182,27 +218,151 @@
        eye. With foreground fill, runs of 8 pixels of a later input whose
        quads and points would all fail their z-tests (against a coarse
        z-buffer of what the nearer inputs drew) are skipped too, with the
-       same result. blend_motion warps both
+       same result. With desc.average (pinterp's -a), each input is warped
+       alone and every pixel averages the inputs that see the surface the
+       ranked z-buffer keeps (squared distances within the tolerance),
+       weighted by 1 / sin of the angle between each input's ray and the
+       target's (at most 1000): views from nearly the target's direction
+       count most, and the inputs' noise and staircases average out.
+       desc.max_fill_distance bounds the background fill (pinterp's -fs):
+       farther gaps stay for fill_pixel. Positions more than 2^24 pixels
+       from the image have no projection, squared distances are capped at
+       the background's and distances below 1e-18 written as 1e-18, so any
+       valid inputs give a valid image. blend_motion warps both
        images into the output's camera with each object's motion (pixels of
        static objects in their own camera stay in place, exactly), blends
        where both show the same object at the same depth, and keeps the
        nearer surface elsewhere.
 
+   VALIDATION AND CONTRACTS
+
+       What each call checks (a failed check returns
+       RENDERCACHE_ERROR_INVALID_ARGUMENT, or CORRUPT_DATA/VERSION for data
+       read, and changes nothing) and what the caller must guarantee (the
+       library cannot check it: breaking it is undefined behaviour).
+       Callbacks (alloc, free, parallel_for, clock, log, render_ids, solve,
+       fill_pixel, write, read) must do what their comments say; parallel_for
+       must run every index once and return when all are done.
+
+       create(desc, &out): checks desc and out non-NULL; width, height > 0 and
+         at most 2^28 pixels; alloc and free both or neither;
+         points_per_pixel > 0 and finite, at most 2^31 points; depth_tolerance
+         >= 0 and finite; predict_fraction in [0, 1]; change_threshold >= 0;
+         max_latency <= 64; object_count <= 2^24; sparse_neighbours <= 8;
+         wide_radius <= 7; background finite. *out is NULL on failure.
+       destroy(rc), clear(rc): rc NULL does nothing. Contract: rc came from
+         create and is not used after destroy.
+       set_object_transform(rc, object, m): checks rc and m non-NULL, object
+         < object_count, m finite and invertible. Contract: m holds 12 floats.
+       begin_frame(rc, camera), predict(rc, next): check a perspective camera
+         of the cache's size with finite eye, look_at and up, up not
+         parallel to the view, vfov in (0, 180); predict needs a frame.
+       request(rc, out, max, &count): checks rc and count non-NULL, out
+         non-NULL when max > 0, a frame begun. Contract: out holds max
+         requests.
+       insert(rc, samples, n, &taken): checks rc, and samples non-NULL when n
+         > 0; each sample: frame begun and not in the future, pixel inside
+         the image, only known flags (a predicted one from a frame with a
+         prediction), object < object_count or RENDERCACHE_MISS, finite
+         position (hits), finite colour, priority_scale >= 0 and finite;
+         the others are stored and the call reports INVALID_ARGUMENT.
+         Contract: samples holds n samples.
+       invalidate(rc, object): checks rc, and object < object_count,
+         RENDERCACHE_MISS or RENDERCACHE_ALL_OBJECTS.
+       seed(rc, images, count, &taken): checks rc, a frame begun, images
+         non-NULL when count > 0, each image's arrays non-NULL and camera
+         valid; pixels of unknown objects, without a positive finite depth or
+         with a non-finite colour are skipped. Contract: images holds count
+         pointers, each image's rgb 3 w h floats, depth and object w h.
+       image, priority_image, pixel_kinds, depth_image(rc): NULL for rc NULL.
+         Contract: the pointer is read before the next call that changes the
+         cache (begin_frame, request, insert, seed, invalidate, clear,
+         destroy).
+       get_stats(rc, &out): out NULL does nothing, rc NULL gives zeros.
+       camera_ray(camera, px, py, org, dir): checks the camera (any kind; a
+         sphere at least 2 pixels wide), px and py finite, org and dir
+         non-NULL; a point outside a fish-eye's circle has no ray.
+         camera_project(camera, p, ...) returns 0 for a bad camera or p NULL
+         or not finite; its outputs may be NULL.
+       range_image_create(camera, allocator, &out): checks out, the camera
+         and the allocator (NULL: default). range_image_destroy(img): NULL
+         does nothing. Contract: img came from create or load (an image the
+         caller assembled is the caller's to free).
+       range_image_save(img, write, user): checks img's arrays and camera,
+         write non-NULL, time finite, every colour finite and every surface
+         depth positive and finite (what a loader accepts). Contract: the
+         arrays hold w h pixels (rgb 3 w h floats).
+       range_image_load(allocator, read, user, &out), load_from_memory(data,
+         size, ...): the input is hostile: every size is checked against the
+         payload, the CRC, the camera, every colour and depth; truncated or
+         altered data gives CORRUPT_DATA, another format VERSION, never a
+         crash. Contract: data holds size bytes.
+       save_to_memory(img, allocator, &data, &size) as save; free_memory(a,
+         data): contract: data came from save_to_memory or subdivide_time
+         with the same allocator.
+       warper_create(desc, &out): checks desc and out, the allocator,
+         depth_tolerance in [0, 1e6), background finite.
+       warp(w, images, n, camera, fill, out): checks w, images non-NULL and n
+         > 0, each input's arrays and camera, out's arrays and camera (camera
+         NULL: out's), the sizes of camera and out, no input being out, the
+         fill mode, at most 2^32 - 1 input pixels; input pixels that are
+         RENDERCACHE_NO_SAMPLE or have no positive finite depth are skipped,
+         and any valid inputs give a valid output (see HOW A WARP WORKS).
+         Contract: every array holds its image's pixels; input colours are
+         finite (as save and load ensure).
+       blend(a, b, t, out): checks the three images' arrays and cameras,
+         equal sizes, t in [0, 1]. blend_motion(w, a, b, t, motion, fill,
+         out): as blend, and out is neither a nor b, the fill mode, a
+         motion's arrays non-NULL, its transforms finite and invertible,
+         object_count <= 2^24. Contract: world_a, world_b and world_t hold 12
+         object_count floats.
+       fitness(ids, count, w, h, &f): checks ids and each image non-NULL,
+         count, w, h > 0, at most 2^28 pixels. Contract: each image holds w h
+         ids.
+       view_space_create(desc, &out): checks desc and out, the camera, lo and
+         hi finite with lo <= hi, quality in [0, 1], max_depth <= 20,
+         render_ids, the allocator, time finite. Contract: render_ids writes
+         camera->width * camera->height ids. The accessors check vs and
+         indices; locate checks a finite eye (clamped into the box).
+       subdivide_time(desc, &times, &count): checks the cameras, at least 2
+         finite strictly increasing times, quality, max_depth <= 20,
+         render_ids, the allocator. Contract: as view_space_create.
+       keytimes_create(desc, &out): checks solve, element_count > 0, finite
+         t0 < t1, quality in [0, 1], epsilon and min_value >= 0 and finite,
+         max_depth <= 20, the solution's size; a solve that returns
+         non-finite values fails with INVALID_ARGUMENT. Contract: solve
+         writes element_count * components floats. keytimes_eval(kt, time,
+         values, count): checks kt, values, a finite time and count >=
+         element_count * components; keytimes_values(kt, key) is NULL for a key
+         out of range.
+       lrms(reference, image, w, h, &lrms): checks the pointers, w, h > 0,
+         at most 2^28 pixels, a positive finite mean luminance of reference
+         and a finite sum. Contract: both images hold 3 w h floats.
+
    LIMITS
 
        Render cache: image up to 2^28 pixels, cache up to 2^31 points, up to
-       2^24 objects. Memory: 41 bytes per cache point (2 per pixel by
-       default) and about 71 bytes per pixel, 95 with parallel_for: 40 MB for
-       512x512. Point colours are fixed when they are inserted (the cache ages
-       them so that they get refreshed); view-dependent shading changes only
-       as points are resampled, as in the paper. Error diffusion is
-       sequential by nature and runs on the calling thread; the rest of a
-       frame runs in parallel.
+       2^24 objects, samples up to 64 frames late. Memory: 41 bytes per cache
+       point (2 per pixel by default), 51 bytes per pixel (59 with
+       parallel_for from a compiler without the GNU atomic builtins), and
+       about 48 (max_latency + 8) bytes per object: 133 bytes per pixel in
+       all, 35 MB for 512x512 and 276 MB for 1920x1080. Point
+       colours are fixed when they are inserted (the cache ages them so that
+       they get refreshed, and faster where samples find a colour changed);
+       view-dependent shading changes only as points are resampled, as in
+       the paper. A late sample of a moving object is placed with the
+       transform of its frame, which the cache keeps for max_latency frames.
+       Colour-change detection compares a sample with the one point it
+       replaces: with a renderer as noisy as the changes it should see, it
+       sees nothing (its threshold rises with the noise). Error diffusion
+       runs in bands of 128 rows whose error does not cross into the next
+       band (seams a 2-pixel-tall image would not have); the rest of a frame
+       runs in parallel too.
        Walkthroughs: a range image takes 20 bytes per pixel; a warper about
        37 bytes per target pixel (61 with parallel_for, 20 more after a
-       motion blend) plus, with foreground fill, 52 bytes per pixel of the
-       widest input's row and half a byte per target pixel per job, and 10
-       bytes per 16x16 tile of the inputs. At most 2^32 - 1 input pixels per
+       motion blend, and 20 per input when averaging) plus, with foreground
+       fill, 52 bytes per pixel of the widest input's row and half a byte per
+       target pixel per job, and 10 bytes per 16x16 tile of the inputs. At most 2^32 - 1 input pixels per
        warp. Warps reproduce no view-dependent shading the inputs lack, and a
        pixelwise blend ghosts moving objects; the motion-compensated blend
        moves objects but not their shadows or reflections on static surfaces
@@ -222,8 +382,8 @@
 #include <stdint.h>
 
 #define RENDERCACHE_VERSION_MAJOR 0
-#define RENDERCACHE_VERSION_MINOR 3
-#define RENDERCACHE_VERSION_PATCH 1
+#define RENDERCACHE_VERSION_MINOR 4
+#define RENDERCACHE_VERSION_PATCH 0
 
 #ifndef RENDERCACHE_API
 #  ifdef RENDERCACHE_STATIC
@@ -266,6 +426,15 @@ typedef enum rendercache_result {
 /* rendercache_pixel_request.flags: the ray belongs to the predicted camera
    given to rendercache_predict, not to the current one. */
 #define RENDERCACHE_REQUEST_PREDICTED 1u
+
+/* rendercache_invalidate: every object, and the background points. */
+#define RENDERCACHE_ALL_OBJECTS 0xFFFFFFFDu
+
+/* Colour-change detection (rendercache_insert): a sample that changed the
+   colour of its point ages the points shown within this many pixels of it
+   (a window of 7 x 7: at an 8% budget, requests lie about 3.5 pixels apart,
+   so the windows of one frame's changed samples cover a changed region). */
+#define RENDERCACHE_CHANGE_RADIUS 3
 
 typedef struct rendercache rendercache;
 
@@ -316,6 +485,12 @@ typedef struct rendercache_desc {
     uint32_t wide_radius;        /* half width of the wide filter: default 3 (7x7), at most 7 */
     float predict_fraction;      /* share of the budget for predicted samples when
                                     rendercache_predict was called; default 0.25, at most 1 */
+    uint32_t max_latency;        /* frames a sample may come back late (its request's frame before
+                                    the current one); later ones are dropped; default 4, at most 64 */
+    float change_threshold;      /* a sample whose colour differs from the point it replaces by more
+                                    than this share of the brighter of the two (largest channel
+                                    difference over largest channel) ages the points shown around it
+                                    (WDG02); default 0.25; FLT_MAX never */
     float background[3];         /* colour of pixels nothing covers; default black */
     rendercache_allocator allocator;
     void (*parallel_for)(void *user, rendercache_job_fn job, void *ctx, uint32_t count);
@@ -328,18 +503,23 @@ typedef struct rendercache_desc {
 
 /* A pixel that deserves a new sample, with its primary ray (unit dir). */
 typedef struct rendercache_pixel_request {
+    uint64_t frame;          /* the frame it was made in (rendercache_stats.frame then) */
     uint32_t x, y;
     uint32_t flags;          /* RENDERCACHE_REQUEST_PREDICTED or 0 */
     float org[3], dir[3];
 } rendercache_pixel_request;
 
-/* A shaded sample: copy x, y and flags from its request. */
+/* A shaded sample: copy frame, x, y and flags from its request. It may come
+   back frames later (an asynchronous renderer): it is then stored at its
+   own point, as seen in its request's frame. */
 typedef struct rendercache_sample {
+    uint64_t frame;          /* the request's frame; 0 means the current frame */
     uint32_t x, y;           /* the requested pixel */
     uint32_t flags;          /* the request's flags */
     uint32_t object;         /* id of the object hit (< desc.object_count), or RENDERCACHE_MISS */
-    float position[3];       /* world-space hit point; ignored for a miss */
-    float rgb[3];            /* radiance towards the eye, linear RGB */
+    float position[3];       /* world-space hit point at the request's frame (the object where it
+                                was then); ignored for a miss */
+    float rgb[3];            /* radiance towards the eye, linear RGB, finite */
     float priority_scale;    /* multiplies the point's priority, e.g. lightvec_priority(1, W);
                                 0 means 1 */
 } rendercache_sample;
@@ -367,7 +547,11 @@ typedef struct rendercache_stats {
     uint32_t inserted;           /* samples accepted since begin_frame */
     uint32_t replaced;           /* of which replaced the point their pixel showed */
     uint32_t evicted;            /* of which overwrote a point not visible in this frame */
+    uint32_t late;               /* of which came from an earlier frame's requests */
+    uint32_t changed;            /* of which changed the colour of the point they replaced */
     uint32_t rejected;           /* samples ignored since begin_frame (bad values or pixel) */
+    uint32_t dropped;            /* samples ignored: later than desc.max_latency, or late or
+                                    predicted ones finding no slot the frame does not show */
     /* seconds spent in each phase of the last frame (0 without desc.clock) */
     double time_project;         /* projection and z-buffer of every point */
     double time_cull;            /* depth cull, with the colour and priority of the pixels showing points;
@@ -411,13 +595,32 @@ RENDERCACHE_API rendercache_result rendercache_predict(rendercache *rc, const re
 RENDERCACHE_API rendercache_result rendercache_request(rendercache *rc, rendercache_pixel_request *out,
                                                        uint32_t max, uint32_t *count);
 
-/* Adds shaded samples as points. A sample for a current-frame pixel
-   replaces the point that pixel shows (and updates the image at once);
-   other samples take the slot of the oldest point not visible in this
-   frame. Samples with non-finite values, unknown objects or pixels outside
-   the image are ignored and counted in stats.rejected. n = 0 does nothing. */
+/* Adds shaded samples as points and writes to *taken (may be NULL) how
+   many were stored. A sample of the current frame replaces the point its
+   pixel shows (and updates the image at once). A late sample (its
+   request's frame before the current one) is stored at its own point: its
+   hit point, or for a miss the direction of its request's ray; where that
+   point lands in the current image it replaces the point shown there when
+   that is the same surface (within the depth tolerance) and is shown when
+   nothing nearer is; otherwise, and for predicted samples, it takes the
+   slot of the oldest point the frame does not show. A sample that replaces
+   a point of another colour (desc.change_threshold) ages the points shown
+   within RENDERCACHE_CHANGE_RADIUS pixels of it, so that they are
+   requested next. Returns RENDERCACHE_ERROR_INVALID_ARGUMENT when some
+   sample was malformed (pixel outside the image, unknown object or flag,
+   non-finite value, a frame not yet begun, a predicted sample of a frame
+   without prediction): those are skipped and counted in stats.rejected,
+   the others are stored. Samples later than desc.max_latency frames are
+   dropped (stats.dropped; not an error). n = 0 does nothing. */
 RENDERCACHE_API rendercache_result rendercache_insert(rendercache *rc, const rendercache_sample *samples,
-                                                      uint32_t n);
+                                                      uint32_t n, uint32_t *taken);
+
+/* The lighting of an object changed (or of everything, object =
+   RENDERCACHE_ALL_OBJECTS; the background points: RENDERCACHE_MISS): its
+   points are aged to the top of the age ramp, so that they are resampled
+   before every point that is merely old, from the priority image of the
+   current frame on. */
+RENDERCACHE_API rendercache_result rendercache_invalidate(rendercache *rc, uint32_t object);
 
 /* The current image: width * height * 3 floats, valid until the next call
    that changes the cache. */
@@ -502,6 +705,13 @@ typedef struct rendercache_warp_desc {
     float background[3];         /* colour of the pixels left empty; default black */
     rendercache_fill_fn fill_pixel;  /* optional: computes the pixels still empty after the fill */
     void *fill_user;
+    uint32_t max_fill_distance;  /* background fill: an empty pixel takes a filled pixel at most this many
+                                    pixels away along its row or column, else stays empty (for
+                                    fill_pixel: pinterp's -fs); default 0: any distance */
+    int average;                 /* non-zero: several inputs that see the same surface (within the
+                                    tolerance) are averaged, each weighted by how nearly its ray
+                                    agrees with the target's (pinterp's -a); costs a warp of each
+                                    input alone and 20 bytes per target pixel and input */
     rendercache_allocator allocator;
     void (*parallel_for)(void *user, rendercache_job_fn job, void *ctx, uint32_t count);
     void *parallel_user;
@@ -649,6 +859,17 @@ RENDERCACHE_API rendercache_result rendercache_warp(rendercache_warper *w, const
                                                     uint32_t n, const rendercache_camera *camera, rendercache_fill fill,
                                                     rendercache_range_image *out);
 
+/* Seeds the cache from range images (e.g. rendercache_warp's output, or
+   base views), after rendercache_begin_frame: every pixel of an image
+   whose object is one of the cache's (or RENDERCACHE_MISS) and that shows
+   in the current frame (lands in the image, in front of or on the surface
+   shown there, or in a hole it is not hidden in) becomes a point, as old
+   as the top of the age ramp (real samples replace it first), and the
+   image is updated at once. Objects are taken where their current
+   transforms put them. *taken (may be NULL): the points stored. */
+RENDERCACHE_API rendercache_result rendercache_seed(rendercache *rc, const rendercache_range_image *const *images,
+                                                    uint32_t count, uint32_t *taken);
+
 /* Time interpolation, pixelwise (as Radiance's pcomb): rgb = (1 - t) a + t b;
    depth and object of the image nearer in time (a when t < 0.5); time
    interpolated. a, b and out have one size; out may be a or b. */
@@ -705,8 +926,10 @@ RENDERCACHE_API const double *rendercache_keytimes_times(const rendercache_keyti
 /* The stored solution of key k: element_count * components floats. */
 RENDERCACHE_API const float *rendercache_keytimes_values(const rendercache_keytimes *kt, uint32_t key);
 /* The solution at time, interpolated linearly between the key times around
-   it (clamped to [t0, t1]). */
-RENDERCACHE_API rendercache_result rendercache_keytimes_eval(const rendercache_keytimes *kt, double time, float *values);
+   it (clamped to [t0, t1]), into values[0 .. count): count must be at
+   least element_count * components. */
+RENDERCACHE_API rendercache_result rendercache_keytimes_eval(const rendercache_keytimes *kt, double time, float *values,
+                                                             size_t count);
 
 /* Relative luminance RMS error (section 5): the RMS of the per-pixel
    luminance difference (Rec. 709 weights) divided by the mean luminance of
@@ -795,6 +1018,11 @@ static void rendercache__free(const rendercache_allocator *a, void *p)
    2. small math
    ---------------------------------------------------------------------- */
 static int rendercache__iabs(int v) { return v < 0 ? -v : v; }
+static RENDERCACHE__INLINE float rendercache__minf(float a, float b) { return a < b ? a : b; }
+static RENDERCACHE__INLINE float rendercache__maxf(float a, float b) { return a > b ? a : b; }
+/* x clamped to the finite floats: a weighted mean of finite colours that
+   rounds past FLT_MAX stays finite (NaN passes, and cannot arise there). */
+static float rendercache__finitef(float x) { return x < -FLT_MAX ? -FLT_MAX : x > FLT_MAX ? FLT_MAX : x; }
 static int rendercache__finite3(const float *p) { return isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]); }
 
 static double rendercache__dot3d(const double a[3], const double b[3])
@@ -1069,6 +1297,7 @@ static void rendercache__run_jobs(void (*parallel_for)(void *, rendercache_job_f
 #define RENDERCACHE__MAX_PIXELS (1u << 28)
 #define RENDERCACHE__MAX_CAPACITY (1u << 31)
 #define RENDERCACHE__MAX_OBJECTS (1u << 24)
+#define RENDERCACHE__MAX_LATENCY 64u
 
 typedef struct rendercache__view {
     rendercache_camera_kind kind;
@@ -1330,14 +1559,32 @@ static void rendercache__view_compose(const rendercache__view *v, const float m[
    Parallel and deterministic: when the caller gives parallel_for, the
    elements are split into RENDERCACHE__SPLAT_JOBS ranges, each z-buffered
    into its own raster, and the rasters are merged tile by tile (warps
-   merge them within their extraction pass, rendercache__splat_least). The winner
-   of a pixel is the least (depth, element index) in every case, so the
-   result does not depend on the split or on the thread count. (Sorting the
+   merge them within their extraction pass, rendercache__splat_least); a
+   splat of keys only (the render cache) splits them into
+   RENDERCACHE__SHARED_JOBS ranges that share one raster through an atomic
+   minimum, when the compiler has the GNU atomic builtins. The winner of a
+   pixel is the least (depth, element index) in every case, so the result
+   does not depend on the split or on the thread count. (Sorting the
    elements into image bands first, as the tiled cache of Walter et al. 2002
    does, let any number of threads share the z-buffer but cost three times
    as much memory traffic here.)
    ---------------------------------------------------------------------- */
 #define RENDERCACHE__SPLAT_JOBS 2u   /* partial z-buffers when running in parallel */
+#define RENDERCACHE__SHARED_JOBS 8u  /* jobs of a splat into one shared z-buffer (atomic min) */
+
+/* The z-test of a shared z-buffer is an atomic minimum of 64-bit keys
+   (compare and swap): any order of the jobs leaves the same least key.
+   Without the GNU builtins, splats run with one partial z-buffer per job. */
+#if defined(__GNUC__) || defined(__clang__)
+#  define RENDERCACHE__ATOMICS 1
+static void rendercache__atomic_min(uint64_t *p, uint64_t k)
+{
+    uint64_t old = __atomic_load_n(p, __ATOMIC_RELAXED);
+    while (k < old && !__atomic_compare_exchange_n(p, &old, k, 1, __ATOMIC_RELAXED, __ATOMIC_RELAXED)) {}
+}
+#else
+#  define RENDERCACHE__ATOMICS 0
+#endif
 #define RENDERCACHE__BATCH 256u      /* elements per source call */
 #define RENDERCACHE__TILE_ROWS 8u    /* image rows per tile job */
 
@@ -1380,11 +1627,12 @@ typedef struct rendercache__zbuffer {
 typedef struct rendercache__splat {
     uint32_t width, height, pixel_count, tile_count;
     uint32_t jobs;           /* z-buffers allocated: 1, or SPLAT_JOBS with parallel_for */
+    int shared;              /* keys only, in parallel: SHARED_JOBS jobs share z-buffer 0 (atomic min) */
     rendercache__raster final;                        /* payload is job 0's */
     rendercache__zbuffer zb[RENDERCACHE__SPLAT_JOBS];
     uint32_t projected;      /* elements that landed in the image in the last run */
     uint32_t ran_jobs;       /* z-buffers the last run filled */
-    uint32_t job_projected[RENDERCACHE__SPLAT_JOBS];
+    uint32_t job_projected[RENDERCACHE__SHARED_JOBS];
 } rendercache__splat;
 
 static void rendercache__splat_free(rendercache__splat *s, const rendercache_allocator *a)
@@ -1400,9 +1648,10 @@ static void rendercache__splat_free(rendercache__splat *s, const rendercache_all
 }
 
 /* Allocates a splat for a width x height raster, run by jobs (1 or
-   RENDERCACHE__SPLAT_JOBS) z-buffers. Returns 0, or -1 when out of memory. */
+   RENDERCACHE__SPLAT_JOBS) z-buffers, with payloads (warps) or without
+   (the render cache). Returns 0, or -1 when out of memory. */
 static int rendercache__splat_alloc(rendercache__splat *s, uint32_t width, uint32_t height, uint32_t jobs,
-                                    const rendercache_allocator *a)
+                                    int payload, const rendercache_allocator *a)
 {
     uint32_t j;
     int failed;
@@ -1417,8 +1666,8 @@ static int rendercache__splat_alloc(rendercache__splat *s, uint32_t width, uint3
     failed = !s->final.depth || !s->final.index;
     for (j = 0; j < jobs; j++) {
         s->zb[j].key = (uint64_t *)rendercache__alloc_array(a, (size_t)s->pixel_count + 1, sizeof(uint64_t));
-        s->zb[j].payload = (float *)rendercache__alloc_array(a, s->pixel_count, 4 * sizeof(float));
-        failed |= !s->zb[j].key || !s->zb[j].payload;
+        s->zb[j].payload = payload ? (float *)rendercache__alloc_array(a, s->pixel_count, 4 * sizeof(float)) : NULL;
+        failed |= !s->zb[j].key || (payload && !s->zb[j].payload);
     }
     s->final.payload = s->zb[0].payload;
     if (failed) rendercache__splat_free(s, a);
@@ -1433,7 +1682,18 @@ typedef struct rendercache__splat_job {
     const void *src;
     uint32_t element_count, jobs;
     int merge;                         /* 0: s->final is not written; the caller reads the z-buffers */
+    int shared;                        /* the jobs share z-buffer 0 (s->shared, in parallel) */
 } rendercache__splat_job;
+
+/* Job per tile: clears the shared z-buffer (its last key too, past the pixels). */
+static void rendercache__splat_clear(void *ctx, uint32_t tile)
+{
+    const rendercache__splat_job *job = (const rendercache__splat_job *)ctx;
+    const rendercache__splat *s = job->s;
+    uint32_t p0 = tile * RENDERCACHE__TILE_ROWS * s->width, p1 = p0 + RENDERCACHE__TILE_ROWS * s->width, p;
+    if (p1 >= s->pixel_count) p1 = s->pixel_count + 1;
+    for (p = p0; p < p1; p++) s->zb[0].key[p] = RENDERCACHE__EMPTY_KEY;
+}
 
 static uint64_t rendercache__key(float depth, uint32_t element)
 {
@@ -1476,12 +1736,27 @@ static void rendercache__splat_range(void *ctx, uint32_t j)
 {
     const rendercache__splat_job *job = (const rendercache__splat_job *)ctx;
     rendercache__splat *s = job->s;
-    uint64_t *key = s->zb[j].key;
-    float *payload = s->zb[j].payload;
+    uint64_t *key = s->zb[job->shared ? 0 : j].key;
+    float *payload = job->shared ? NULL : s->zb[j].payload;
     uint32_t pix[RENDERCACHE__BATCH], begin, end, b, i, projected = 0;
     float d[RENDERCACHE__BATCH], pay[4 * RENDERCACHE__BATCH];
     begin = (uint32_t)((uint64_t)job->element_count * j / job->jobs);
     end = (uint32_t)((uint64_t)job->element_count * (j + 1) / job->jobs);
+#if RENDERCACHE__ATOMICS
+    if (job->shared) {   /* keys only, z-buffer 0 cleared already */
+        for (b = begin; b < end; b += RENDERCACHE__BATCH) {
+            uint32_t n = end - b < RENDERCACHE__BATCH ? end - b : RENDERCACHE__BATCH;
+            if (!job->source(job->src, b, b + n, pix, d)) continue;
+            for (i = 0; i < n; i++) {
+                if (pix[i] == RENDERCACHE__NONE) continue;
+                rendercache__atomic_min(&key[pix[i]], rendercache__key(d[i], b + i));
+                projected++;
+            }
+        }
+        s->job_projected[j] = projected;
+        return;
+    }
+#endif
     for (i = 0; i <= s->pixel_count; i++) key[i] = RENDERCACHE__EMPTY_KEY;
     if (job->cover) {
         s->job_projected[j] = job->cover(job->src, j, begin, end, &s->zb[j], s->width, s->height);
@@ -1558,10 +1833,17 @@ static void rendercache__splat_execute(rendercache__splat_job *job,
 {
     rendercache__splat *s = job->s;
     uint32_t j;
-    job->jobs = parallel_for ? s->jobs : 1u;
+    job->shared = parallel_for && s->shared && !job->cover && !job->payload;
+    job->jobs = job->shared ? RENDERCACHE__SHARED_JOBS : parallel_for ? s->jobs : 1u;
+    if (job->shared) rendercache__run_jobs(parallel_for, user, rendercache__splat_clear, job, s->tile_count);
     rendercache__run_jobs(parallel_for, user, rendercache__splat_range, job, job->jobs);
-    if (job->merge) rendercache__run_jobs(parallel_for, user, rendercache__splat_merge, job, s->tile_count);
-    s->ran_jobs = job->jobs;
+    s->ran_jobs = job->shared ? 1u : job->jobs;
+    if (job->merge) {
+        uint32_t jobs = job->jobs;
+        job->jobs = s->ran_jobs;   /* the z-buffers to merge */
+        rendercache__run_jobs(parallel_for, user, rendercache__splat_merge, job, s->tile_count);
+        job->jobs = jobs;
+    }
     s->projected = 0;
     for (j = 0; j < job->jobs; j++) s->projected += s->job_projected[j];
 }
@@ -1608,6 +1890,12 @@ static void rendercache__splat_run_cover(rendercache__splat *s,
 #define RENDERCACHE__LEVELS 1024u            /* priority levels of the threshold histogram */
 #define RENDERCACHE__TILE_STATS 6u           /* visible, culled, interpolated, sparse, empty, scratch */
 #define RENDERCACHE__GATHER_AHEAD 64u        /* pixels between a slot's prefetch and its read */
+#define RENDERCACHE__CHANGE_BINS 64u         /* histogram of relative colour differences in [0, 2] */
+#define RENDERCACHE__CELL_SHIFT 2u           /* predictive sampling: cells of 4 x 4 pixels, an occupancy
+                                                image of 1/16 the resolution (WDG02) */
+#define RENDERCACHE__CELL (1u << RENDERCACHE__CELL_SHIFT)
+#define RENDERCACHE__CELL_FEW 4u             /* points in a cell below which it is a hole: a quarter covered */
+#define RENDERCACHE__BAND_ROWS 128u          /* rows per band of the error diffusion: 9 bands at 1080p */
 
 /* Priority image values (WDP99 priority image, extended to [0, 1]): a point
    rises with age to POINT_MAX; holes rank above every point, the sparser the
@@ -1634,6 +1922,20 @@ typedef struct rendercache__point {
     uint32_t object;         /* geo's object, here too for the priority */
 } rendercache__point;
 
+/* A band of the error diffusion (rendercache__diffuse): its count and its
+   marginal choices. */
+typedef struct rendercache__band {
+    uint32_t count, best_add, best_drop;
+    float add_v, drop_v;
+} rendercache__band;
+
+/* What insert needs of a frame whose samples may still come back. */
+typedef struct rendercache__frame_record {
+    uint64_t frame;          /* 0: no frame here yet */
+    rendercache__view view, predicted;
+    int has_prediction;
+} rendercache__frame_record;
+
 struct rendercache {
     rendercache_allocator alloc;
     void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t);
@@ -1645,9 +1947,10 @@ struct rendercache {
 
     uint32_t width, height, pixel_count, tile_count;
     uint32_t capacity, object_count;
-    float depth_tolerance, predict_fraction, background[3];
-    uint32_t age_ramp, moving_age_step, sparse_neighbours, wide_radius;
+    float depth_tolerance, predict_fraction, change_threshold, background[3];
+    uint32_t age_ramp, moving_age_step, sparse_neighbours, wide_radius, max_latency;
     float inv_age_ramp;
+    float window_scale[8];   /* per interpolation radius: the power of two that scales its weights */
 
     /* point cache: slot order is insertion order; the projection streams
        through geo. One more slot after the last stays empty (see cull_job). */
@@ -1656,28 +1959,35 @@ struct rendercache {
     unsigned char *shown;    /* per slot: the frame's mark (rendercache__mark) when the point was
                                 inserted or shown in a pixel in that frame; the eviction spares it.
                                 Apart from data: the cull writes it at random, and a byte array
-                                stays in cache where data would not */
+                                stays in cache where data would not. After the slots, one byte per
+                                tile that the tile's pixels without a point write instead */
     uint32_t hand;           /* clock hand of the eviction */
     uint32_t live;
     int hand_exhausted;      /* a full turn found no invisible slot in this frame */
 
     /* objects */
-    float *obj_world;        /* 12 per object: object to world */
-    float *obj_local;        /* 12 per object: world to object */
+    float *obj_world;        /* 12 per object: object to world, in force since frame obj_since */
+    float *obj_local;        /* 12 per object: world to object, the same */
+    float *obj_next;         /* 24 per object: object to world and back set for the next frame */
+    uint64_t *obj_since;     /* per object: the first frame of its transform */
+    float *obj_history;      /* 12 per object and history slot: world to object in the frame of that
+                                slot (rendercache__object_local) */
     float *obj_camera;       /* 12 per object: object to camera space of the current view */
     float *obj_predicted;    /* 12 per object: object to camera space of the predicted view */
-    uint32_t *obj_motion;    /* extra age the object's points gathered while it moved */
-    unsigned char *obj_moved;
+    uint32_t *obj_motion;    /* per object, then the background: extra age its points gathered while
+                                it moved or since its light changed */
+    unsigned char *obj_moved;   /* a transform waits in obj_next */
 
-    /* current frame */
-    uint32_t frame;
+    /* current frame, and the frames whose samples may still come back */
+    uint64_t frame;
     int has_frame, has_prediction;
     rendercache__view view, predicted;
+    rendercache__frame_record *history;   /* max_latency + 1 slots, frame f in slot f % that */
     rendercache__splat splat;
     uint32_t *px_index;      /* per pixel: the slot shown, after the depth cull */
     float *px_depth;         /* per pixel: its squared distance, FLT_MAX without a point */
     float *depth_out;        /* rendercache_depth_image: distances, filled on request */
-    float *image, *priority, *pred_priority;
+    float *image, *priority;
     unsigned char *kind, *count;
     uint32_t *tile_stats;    /* RENDERCACHE__TILE_STATS per tile */
 
@@ -1685,17 +1995,28 @@ struct rendercache {
     uint32_t *hist;          /* RENDERCACHE__LEVELS per tile, then the merged histogram */
     float *select_v;         /* per pixel: value plus diffused error of the fractional pixels */
     unsigned char *chosen;   /* per pixel: 1 chosen, 2 fractional (error-diffused) */
-    float *err_rows;         /* two rows of diffused error */
-    uint32_t pred_holes;
+    float *err_rows;         /* per band, two rows of diffused error */
+    rendercache__band *bands;   /* per band: its count and marginal choices */
+    uint32_t band_count;
+    unsigned char *occupancy; /* predictive sampling, per job (splat.jobs) cell_count + 1 bytes: the points
+                                that land in the cell, up to 255 (the last byte takes the points that
+                                miss); after rendercache_predict job 0's: the sum over the jobs, and
+                                255 once the cell was requested */
+    uint32_t cells_x, cells_y, cell_count, pred_cells;   /* the cells, and those empty not yet requested */
+    uint32_t change_hist[RENDERCACHE__CHANGE_BINS];   /* relative colour differences of this frame's replacements */
+    float change_level;      /* colour changes above this age the points around (this frame) */
+    uint32_t refill_rows[2];  /* rows [first, end) holding holes marked RENDERCACHE__REFILL */
     uint32_t touched;        /* rendercache__touch_slots' results, kept so its reads stay */
 
     rendercache_stats stats;
 };
 
+static void rendercache__change_level(rendercache *rc);   /* section 15 */
+
 /* The byte that marks slots in use in a frame: 1 .. 255, the same for no
    two frames of a run of 255; begin_frame clears the marks when a run
    starts, so that a mark left 255 frames ago never passes for a new one. */
-static unsigned char rendercache__mark(uint32_t frame)
+static unsigned char rendercache__mark(uint64_t frame)
 {
     return (unsigned char)(frame % 255u + 1u);
 }
@@ -1730,7 +2051,6 @@ static void rendercache__reset_image(rendercache *rc)
         rc->image[3 * p + 1] = rc->background[1];
         rc->image[3 * p + 2] = rc->background[2];
         rc->priority[p] = 1.0f;
-        rc->pred_priority[p] = 0.0f;
         rc->kind[p] = RENDERCACHE_PIXEL_EMPTY;
         rc->count[p] = 0;
         rc->px_index[p] = RENDERCACHE__NONE;
@@ -1742,7 +2062,7 @@ static void rendercache__reset_points(rendercache *rc)
 {
     uint32_t i;
     for (i = 0; i < rc->capacity; i++) rc->geo[i].object = RENDERCACHE__FREE_SLOT;
-    memset(rc->shown, 0, (size_t)rc->capacity + 1);   /* no mark */
+    memset(rc->shown, 0, (size_t)rc->capacity + rc->tile_count);   /* no mark */
     memset(&rc->geo[rc->capacity], 0, sizeof rc->geo[0]);   /* the empty slot (what holes read): black, priority 0 */
     memset(&rc->data[rc->capacity], 0, sizeof rc->data[0]);
     rc->geo[rc->capacity].object = RENDERCACHE_MISS;
@@ -1753,15 +2073,18 @@ static void rendercache__reset_points(rendercache *rc)
 static void rendercache__release(rendercache *rc)
 {
     const rendercache_allocator a = rc->alloc;
-    void *blocks[22];
+    void *blocks[27];
     size_t i;
     blocks[0] = rc->geo; blocks[1] = rc->data; blocks[2] = rc->obj_predicted; blocks[3] = rc->obj_motion;
     blocks[4] = rc->depth_out; blocks[5] = rc->obj_world; blocks[6] = rc->obj_local;
     blocks[7] = rc->obj_camera; blocks[8] = rc->obj_moved; blocks[9] = rc->px_index;
     blocks[10] = rc->px_depth; blocks[11] = rc->image; blocks[12] = rc->priority;
-    blocks[13] = rc->pred_priority; blocks[14] = rc->kind; blocks[15] = rc->count;
+    blocks[13] = rc->occupancy; blocks[14] = rc->kind; blocks[15] = rc->count;
     blocks[16] = rc->tile_stats; blocks[17] = rc->hist; blocks[18] = rc->select_v;
     blocks[19] = rc->chosen; blocks[20] = rc->err_rows; blocks[21] = rc->shown;
+    blocks[22] = rc->obj_next; blocks[23] = rc->obj_since; blocks[24] = rc->obj_history;
+    blocks[25] = rc->history;
+    blocks[26] = rc->bands;
     for (i = 0; i < sizeof blocks / sizeof blocks[0]; i++) rendercache__free(&a, blocks[i]);
     rendercache__splat_free(&rc->splat, &a);
     rendercache__free(&a, rc);
@@ -1771,13 +2094,18 @@ static int rendercache__alloc_buffers(rendercache *rc)
 {
     const rendercache_allocator *a = &rc->alloc;
     size_t n = rc->capacity, px = rc->pixel_count, no = rc->object_count;
+    size_t slots = (size_t)rc->max_latency + 1;
     rc->geo = (rendercache__geo *)rendercache__alloc_array(a, n + 1, sizeof(rendercache__geo));   /* + the empty slot */
     rc->data = (rendercache__point *)rendercache__alloc_array(a, n + 1, sizeof(rendercache__point));
-    rc->shown = (unsigned char *)rendercache__alloc_array(a, n + 1, 1);
+    rc->shown = (unsigned char *)rendercache__alloc_array(a, n + rc->tile_count, 1);
     rc->obj_predicted = (float *)rendercache__alloc_array(a, no, 12 * sizeof(float));
-    rc->obj_motion = (uint32_t *)rendercache__alloc_array(a, no, sizeof(uint32_t));
+    rc->obj_motion = (uint32_t *)rendercache__alloc_array(a, no + 1, sizeof(uint32_t));
     rc->obj_world = (float *)rendercache__alloc_array(a, no, 12 * sizeof(float));
     rc->obj_local = (float *)rendercache__alloc_array(a, no, 12 * sizeof(float));
+    rc->obj_next = (float *)rendercache__alloc_array(a, no, 24 * sizeof(float));
+    rc->obj_since = (uint64_t *)rendercache__alloc_array(a, no, sizeof(uint64_t));
+    rc->obj_history = (float *)rendercache__alloc_array(a, no * slots, 12 * sizeof(float));
+    rc->history = (rendercache__frame_record *)rendercache__alloc_array(a, slots, sizeof(rendercache__frame_record));
     rc->obj_camera = (float *)rendercache__alloc_array(a, no, 12 * sizeof(float));
     rc->obj_moved = (unsigned char *)rendercache__alloc_array(a, no, 1);
     rc->px_index = (uint32_t *)rendercache__alloc_array(a, px, sizeof(uint32_t));
@@ -1785,33 +2113,41 @@ static int rendercache__alloc_buffers(rendercache *rc)
     rc->depth_out = (float *)rendercache__alloc_array(a, px, sizeof(float));
     rc->image = (float *)rendercache__alloc_array(a, px, 3 * sizeof(float));
     rc->priority = (float *)rendercache__alloc_array(a, px, sizeof(float));
-    rc->pred_priority = (float *)rendercache__alloc_array(a, px, sizeof(float));
+    rc->occupancy = (unsigned char *)rendercache__alloc_array(a, (size_t)rc->cell_count + 1,
+                                                              rc->parallel_for ? RENDERCACHE__SPLAT_JOBS : 1u);
     rc->kind = (unsigned char *)rendercache__alloc_array(a, px, 1);
     rc->count = (unsigned char *)rendercache__alloc_array(a, px, 1);
     rc->tile_stats = (uint32_t *)rendercache__alloc_array(a, rc->tile_count, RENDERCACHE__TILE_STATS * sizeof(uint32_t));
     rc->hist = (uint32_t *)rendercache__alloc_array(a, (size_t)rc->tile_count + 1, RENDERCACHE__LEVELS * sizeof(uint32_t));
     rc->select_v = (float *)rendercache__alloc_array(a, px, sizeof(float));
     rc->chosen = (unsigned char *)rendercache__alloc_array(a, px, 1);
-    rc->err_rows = (float *)rendercache__alloc_array(a, 2 * ((size_t)rc->width + 2), sizeof(float));
+    rc->err_rows = (float *)rendercache__alloc_array(a, 2 * (size_t)rc->band_count * ((size_t)rc->width + 2), sizeof(float));
+    rc->bands = (rendercache__band *)rendercache__alloc_array(a, rc->band_count, sizeof *rc->bands);
     if (!rc->geo || !rc->data || !rc->shown || !rc->obj_predicted || !rc->obj_motion || !rc->obj_world ||
-        !rc->obj_local || !rc->obj_camera || !rc->obj_moved || !rc->px_index || !rc->px_depth || !rc->depth_out || !rc->image ||
-        !rc->priority || !rc->pred_priority || !rc->kind || !rc->count || !rc->tile_stats || !rc->hist ||
-        !rc->select_v || !rc->chosen || !rc->err_rows)
+        !rc->obj_local || !rc->obj_next || !rc->obj_since || !rc->obj_history || !rc->history ||
+        !rc->obj_camera || !rc->obj_moved || !rc->px_index || !rc->px_depth || !rc->depth_out || !rc->image ||
+        !rc->priority || !rc->occupancy || !rc->kind || !rc->count || !rc->tile_stats || !rc->hist ||
+        !rc->select_v || !rc->chosen || !rc->err_rows || !rc->bands)
         return -1;
-    return rendercache__splat_alloc(&rc->splat, rc->width, rc->height,
-                                    rc->parallel_for ? RENDERCACHE__SPLAT_JOBS : 1u, a);
+    if (rendercache__splat_alloc(&rc->splat, rc->width, rc->height,
+                                 rc->parallel_for && !RENDERCACHE__ATOMICS ? RENDERCACHE__SPLAT_JOBS : 1u, 0, a) != 0)
+        return -1;
+    rc->splat.shared = rc->parallel_for != NULL && RENDERCACHE__ATOMICS;
+    return 0;
 }
 
 /* Applies the defaults and checks the ranges of a desc; 0 on bad input. */
 static int rendercache__configure(rendercache *rc, const rendercache_desc *d)
 {
     double capacity;
+    uint32_t r;
     float ppp = rendercache__def(d->points_per_pixel, 2.0f);
     if (d->width == 0 || d->height == 0 || (uint64_t)d->width * d->height > RENDERCACHE__MAX_PIXELS) return 0;
     if (!rendercache__allocator_valid(&d->allocator)) return 0;
     if (!(ppp > 0.0f) || !isfinite(ppp)) return 0;
     if (!(d->depth_tolerance >= 0.0f) || !isfinite(d->depth_tolerance)) return 0;
     if (!(d->predict_fraction >= 0.0f && d->predict_fraction <= 1.0f)) return 0;
+    if (!(d->change_threshold >= 0.0f) || d->max_latency > RENDERCACHE__MAX_LATENCY) return 0;
     if (!rendercache__finite3(d->background)) return 0;
     if (d->object_count > RENDERCACHE__MAX_OBJECTS || d->sparse_neighbours > 8 || d->wide_radius > 7) return 0;
     capacity = ceil((double)ppp * d->width * d->height);
@@ -1827,16 +2163,28 @@ static int rendercache__configure(rendercache *rc, const rendercache_desc *d)
     rc->height = d->height;
     rc->pixel_count = d->width * d->height;
     rc->tile_count = (d->height + RENDERCACHE__TILE_ROWS - 1) / RENDERCACHE__TILE_ROWS;
+    rc->band_count = (d->height + RENDERCACHE__BAND_ROWS - 1) / RENDERCACHE__BAND_ROWS;
+    rc->cells_x = (d->width + RENDERCACHE__CELL - 1) >> RENDERCACHE__CELL_SHIFT;
+    rc->cells_y = (d->height + RENDERCACHE__CELL - 1) >> RENDERCACHE__CELL_SHIFT;
+    rc->cell_count = rc->cells_x * rc->cells_y;
     rc->capacity = (uint32_t)capacity;
     rc->object_count = rendercache__def(d->object_count, 256u);
     rc->depth_tolerance = rendercache__def(d->depth_tolerance, 0.1f);
     rc->predict_fraction = rendercache__def(d->predict_fraction, 0.25f);
+    rc->change_threshold = rendercache__def(d->change_threshold, 0.25f);
+    rc->max_latency = rendercache__def(d->max_latency, 4u);
     rc->age_ramp = rendercache__def(d->age_ramp_frames, 32u);
     rc->inv_age_ramp = 1.0f / (float)rc->age_ramp;
     rc->moving_age_step = rendercache__def(d->moving_age_step, 4u);
     if (rc->moving_age_step > 65536u) rc->moving_age_step = 65536u;
     rc->sparse_neighbours = rendercache__def(d->sparse_neighbours, 2u);
     rc->wide_radius = rendercache__def(d->wide_radius, 3u);
+    for (r = 0; r < 8; r++) {   /* tent weights of radius r sum to ((r + 1)^2)^2 at most */
+        uint32_t total = (r + 1) * (r + 1) * (r + 1) * (r + 1);
+        int e = 0;
+        while ((1u << e) < total) e++;
+        rc->window_scale[r] = ldexpf(1.0f, -e);
+    }
     memcpy(rc->background, d->background, sizeof rc->background);
     return 1;
 }
@@ -1873,9 +2221,13 @@ RENDERCACHE_API rendercache_result rendercache_create(const rendercache_desc *de
         rendercache__identity(rc->obj_local + 12 * (size_t)o);
         rc->obj_moved[o] = 0;
         rc->obj_motion[o] = 0;
+        rc->obj_since[o] = 0;
     }
+    rc->obj_motion[rc->object_count] = 0;   /* the background */
+    memset(rc->history, 0, ((size_t)rc->max_latency + 1) * sizeof *rc->history);
     rendercache__reset_points(rc);
     rendercache__reset_image(rc);
+    rc->refill_rows[0] = rc->height;
     rc->stats.capacity = rc->capacity;
     *out = rc;
     return RENDERCACHE_OK;
@@ -1921,16 +2273,56 @@ static int rendercache__invert_affine(const float m[12], float out[12])
 RENDERCACHE_API rendercache_result rendercache_set_object_transform(rendercache *rc, uint32_t object,
                                                                     const float m[12])
 {
-    float inv[12];
+    float inv[12], *next;
     int k;
     if (!rc || !m || object >= rc->object_count) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
     for (k = 0; k < 12; k++)
         if (!isfinite(m[k])) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
     if (!rendercache__invert_affine(m, inv)) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
-    if (memcmp(m, rc->obj_world + 12 * (size_t)object, 12 * sizeof(float)) != 0) rc->obj_moved[object] = 1;
-    memcpy(rc->obj_world + 12 * (size_t)object, m, 12 * sizeof(float));
-    memcpy(rc->obj_local + 12 * (size_t)object, inv, 12 * sizeof(float));
+    next = rc->obj_next + 24 * (size_t)object;
+    if (!rc->obj_moved[object] && memcmp(m, rc->obj_world + 12 * (size_t)object, 12 * sizeof(float)) == 0)
+        return RENDERCACHE_OK;   /* a still transform is not motion */
+    memcpy(next, m, 12 * sizeof(float));
+    memcpy(next + 12, inv, 12 * sizeof(float));
+    rc->obj_moved[object] = 1;
     return RENDERCACHE_OK;
+}
+
+/* The transforms set since the last frame come into force in frame
+   rc->frame; the frames of the history window that saw an object's old
+   transform keep it in obj_history (rendercache__object_local). Points of
+   moving objects age faster. */
+static void rendercache__commit_transforms(rendercache *rc)
+{
+    const uint64_t f = rc->frame, slots = (uint64_t)rc->max_latency + 1;
+    const uint64_t first = f > rc->max_latency ? f - rc->max_latency : 1;   /* the oldest frame kept */
+    uint32_t o;
+    for (o = 0; o < rc->object_count; o++) {
+        float *local = rc->obj_local + 12 * (size_t)o, *next = rc->obj_next + 24 * (size_t)o;
+        uint64_t g;
+        if (!rc->obj_moved[o]) continue;
+        for (g = rc->obj_since[o] > first ? rc->obj_since[o] : first; g < f; g++)
+            memcpy(rc->obj_history + 12 * ((size_t)o * slots + g % slots), local, 12 * sizeof(float));
+        memcpy(rc->obj_world + 12 * (size_t)o, next, 12 * sizeof(float));
+        memcpy(local, next + 12, 12 * sizeof(float));
+        rc->obj_since[o] = f;
+        rc->obj_motion[o] += rc->moving_age_step - 1u;
+        rc->obj_moved[o] = 0;
+    }
+}
+
+/* World to object space of object o in frame f of the history window. */
+static const float *rendercache__object_local(const rendercache *rc, uint32_t o, uint64_t f)
+{
+    const size_t slots = (size_t)rc->max_latency + 1;
+    if (f >= rc->obj_since[o]) return rc->obj_local + 12 * (size_t)o;
+    return rc->obj_history + 12 * ((size_t)o * slots + (size_t)(f % slots));
+}
+
+/* The index of a point's object in obj_motion: the background after the objects. */
+static uint32_t rendercache__motion_index(const rendercache *rc, uint32_t object)
+{
+    return object < rc->object_count ? object : rc->object_count;
 }
 
 /* ======================================================================
@@ -1945,16 +2337,19 @@ typedef struct rendercache__projector {
     const rendercache *rc;
     const rendercache__view *view;
     const float *obj_camera;
+    uint32_t shift, stride;  /* the index a point lands in: (y >> shift) * stride + (x >> shift); pixels:
+                                0 and the width; prediction's cells: RENDERCACHE__CELL_SHIFT */
 } rendercache__projector;
 
 /* Reprojection of a point x (WDP99) through the 3x4 matrix m into camera
-   space, then to a pixel of the perspective view v: the pixel index or
+   space, then to the perspective view v: the index of the pixel (or cell
+   of 2^shift x 2^shift pixels, stride per row) it lands in, or
    RENDERCACHE__NONE, and the squared distance (the z-buffer only compares
    them). Both the loop that vectorises and the point-by-point path go
    through this one function, so that a point lands in the same pixel
    whichever projects it (batches differ with the number of jobs). */
 static RENDERCACHE__INLINE uint32_t rendercache__pixel_through(const float *m, const float x[3], const rendercache__view *v,
-                                                               float *depth2)
+                                                               uint32_t shift, uint32_t stride, float *depth2)
 {
     const float w = (float)v->width, h = (float)v->height;
     float c0 = m[0] * x[0] + m[1] * x[1] + m[2] * x[2] + m[3];
@@ -1964,7 +2359,7 @@ static RENDERCACHE__INLINE uint32_t rendercache__pixel_through(const float *m, c
     int inside = (c2 > 0.0f) & (px >= 0.0f) & (px < w) & (py >= 0.0f) & (py < h);
     float xs = inside ? px : 0.0f, ys = inside ? py : 0.0f;
     *depth2 = c0 * c0 + c1 * c1 + c2 * c2;
-    return inside ? (uint32_t)ys * v->width + (uint32_t)xs : RENDERCACHE__NONE;
+    return inside ? ((uint32_t)ys >> shift) * stride + ((uint32_t)xs >> shift) : RENDERCACHE__NONE;
 }
 
 /* Reprojection of one cache point: object space -> camera space through
@@ -1978,12 +2373,12 @@ static uint32_t rendercache__project_point(const rendercache__projector *pr, con
     int k;
     if (g->object == RENDERCACHE__FREE_SLOT) return RENDERCACHE__NONE;
     if (g->object != RENDERCACHE_MISS)
-        return rendercache__pixel_through(pr->obj_camera + 12 * (size_t)g->object, g->pos, v, depth2);
+        return rendercache__pixel_through(pr->obj_camera + 12 * (size_t)g->object, g->pos, v, pr->shift, pr->stride, depth2);
     for (k = 0; k < 3; k++) {   /* the view's rotation, no translation */
         memcpy(sky + 4 * k, v->axis[k], 3 * sizeof(float));
         sky[4 * k + 3] = 0.0f;
     }
-    p = rendercache__pixel_through(sky, g->pos, v, depth2);
+    p = rendercache__pixel_through(sky, g->pos, v, pr->shift, pr->stride, depth2);
     *depth2 = RENDERCACHE__FAR2;
     return p;
 }
@@ -1994,7 +2389,7 @@ static uint32_t rendercache__project_point(const rendercache__projector *pr, con
    2004, section 4.2.4), in [0, 1]. motion: the object's obj_motion. */
 static float rendercache__point_priority(const rendercache *rc, const rendercache__point *pt, uint32_t motion)
 {
-    uint32_t age = rc->frame + motion - pt->base;
+    uint32_t age = (uint32_t)rc->frame + motion - pt->base;
     float pr = (float)age * rc->inv_age_ramp;
     pr = (pr < 1.0f ? pr : 1.0f) * (RENDERCACHE__PRIORITY_POINT_MAX * pt->scale);
     return pr < 1.0f ? pr : 1.0f;
@@ -2004,11 +2399,13 @@ static float rendercache__point_priority(const rendercache *rc, const rendercach
    without branches or library calls so that compilers vectorise it; this
    loop is the hottest of the frame. */
 static void rendercache__project_perspective(const rendercache__geo *g, uint32_t n, const float *m,
-                                             const rendercache__view *v, uint32_t *RENDERCACHE__RESTRICT pix,
+                                             const rendercache__projector *pr, uint32_t *RENDERCACHE__RESTRICT pix,
                                              float *RENDERCACHE__RESTRICT depth2)
 {
+    const rendercache__view *v = pr->view;
+    const uint32_t shift = pr->shift, stride = pr->stride;
     uint32_t i;
-    for (i = 0; i < n; i++) pix[i] = rendercache__pixel_through(m, g[i].pos, v, &depth2[i]);
+    for (i = 0; i < n; i++) pix[i] = rendercache__pixel_through(m, g[i].pos, v, shift, stride, &depth2[i]);
 }
 
 /* The one object of the points [begin, end) other than background points,
@@ -2038,8 +2435,7 @@ static uint32_t rendercache__project_points(const void *src, uint32_t begin, uin
     int background;
     uint32_t i, o = rendercache__batch_object_or_background(geo, begin, end, &background);
     if (pr->view->kind == RENDERCACHE_CAMERA_PERSPECTIVE && o != RENDERCACHE__NONE) {
-        rendercache__project_perspective(geo + begin, end - begin, pr->obj_camera + 12 * (size_t)o, pr->view, pix,
-                                         depth2);
+        rendercache__project_perspective(geo + begin, end - begin, pr->obj_camera + 12 * (size_t)o, pr, pix, depth2);
         if (background)   /* the few background points, again, as directions */
             for (i = begin; i < end; i++)
                 if (geo[i].object == RENDERCACHE_MISS) pix[i - begin] = rendercache__project_point(pr, &geo[i], &depth2[i - begin]);
@@ -2069,6 +2465,8 @@ static void rendercache__splat_points(rendercache *rc, const rendercache__view *
     pr.rc = rc;
     pr.view = v;
     pr.obj_camera = obj_camera;
+    pr.shift = 0;
+    pr.stride = rc->width;
     rendercache__splat_run(&rc->splat, rc->parallel_for, rc->parallel_user, rendercache__project_points, NULL, &pr,
                            rc->capacity, 1);
     if (t_project) *t_project += rendercache__now(rc) - t0;
@@ -2103,19 +2501,22 @@ static const int rendercache__ny[8] = { 0, 0, -1, 1, -1, -1, 1, 1 };
    right, above and below, or both diagonals), as they do when a far point
    falls into a gap of a nearer surface; a point beside a silhouette has its
    nearer neighbours on one side only and is kept, so a static view keeps
-   every sampled point. nd: the 8 neighbours' depths. */
-static int rendercache__occluded(const float nd[8], float d, float tol2)
+   every sampled point. d: the point's depth (FLT_MAX: no point, never
+   culled); nd: the 8 neighbours' depths (order of rendercache__nx).
+   Without branches: cull_row's loop over a row vectorises with it. */
+static RENDERCACHE__INLINE int rendercache__occluded(float d, const float nd[8], float tol2)
 {
-    uint32_t nearer = 0, n = 0, k;
-    float sum = 0.0f;
+    float sum = 0.0f, n = 0.0f;
+    int k, e01, e23, ediag;
     for (k = 0; k < 8; k++) {
-        int filled = nd[k] < FLT_MAX;
-        sum += filled ? nd[k] : 0.0f;
-        n += (uint32_t)filled;
-        nearer |= (uint32_t)(d > nd[k] * tol2) << k;
+        sum += nd[k] < FLT_MAX ? nd[k] : 0.0f;
+        n += nd[k] < FLT_MAX ? 1.0f : 0.0f;
     }
-    if (!(((nearer & 3u) == 3u) || ((nearer & 12u) == 12u) || ((nearer & 0xF0u) == 0xF0u))) return 0;
-    return d * (float)n > sum * tol2;   /* d > mean * tol2, as rendercache__cull_row computes it */
+    e01 = (d > nd[0] * tol2) & (d > nd[1] * tol2);
+    e23 = (d > nd[2] * tol2) & (d > nd[3] * tol2);
+    ediag = (d > nd[4] * tol2) & (d > nd[5] * tol2) & (d > nd[6] * tol2) & (d > nd[7] * tol2);
+    /* enclosed implies n >= 2, so the mean is defined where it matters */
+    return (e01 | e23 | ediag) & (d < FLT_MAX) & (d * n > sum * tol2);
 }
 
 /* The depths of the 8 neighbours of (x, y), FLT_MAX outside the image. */
@@ -2135,39 +2536,24 @@ static void rendercache__neighbour_depths(const float *depth, uint32_t w, uint32
     }
 }
 
-/* The depth cull of the interior pixels x in [1, w-1) of row y, written
-   without branches so that compilers vectorise it: occ[x] = 1 where the
-   pixel's point is culled. Same test as rendercache__occluded. */
+/* The depth cull of the interior pixels x in [1, w-1) of row y: occ[x] = 1
+   where the pixel's point is culled. */
 static void rendercache__cull_row(const float *depth, uint32_t w, uint32_t y, float tol2, unsigned char *occ)
 {
     const float *c = depth + (size_t)y * w, *u = c - w, *l = c + w;
     uint32_t x;
     for (x = 1; x + 1 < w; x++) {
-        float d = c[x], sum = 0.0f, n = 0.0f;
-        float nd0 = c[x - 1], nd1 = c[x + 1], nd2 = u[x], nd3 = l[x];
-        float nd4 = u[x - 1], nd5 = u[x + 1], nd6 = l[x - 1], nd7 = l[x + 1];
-        int e01, e23, ediag, enclosed;
-        sum += nd0 < FLT_MAX ? nd0 : 0.0f; n += nd0 < FLT_MAX ? 1.0f : 0.0f;
-        sum += nd1 < FLT_MAX ? nd1 : 0.0f; n += nd1 < FLT_MAX ? 1.0f : 0.0f;
-        sum += nd2 < FLT_MAX ? nd2 : 0.0f; n += nd2 < FLT_MAX ? 1.0f : 0.0f;
-        sum += nd3 < FLT_MAX ? nd3 : 0.0f; n += nd3 < FLT_MAX ? 1.0f : 0.0f;
-        sum += nd4 < FLT_MAX ? nd4 : 0.0f; n += nd4 < FLT_MAX ? 1.0f : 0.0f;
-        sum += nd5 < FLT_MAX ? nd5 : 0.0f; n += nd5 < FLT_MAX ? 1.0f : 0.0f;
-        sum += nd6 < FLT_MAX ? nd6 : 0.0f; n += nd6 < FLT_MAX ? 1.0f : 0.0f;
-        sum += nd7 < FLT_MAX ? nd7 : 0.0f; n += nd7 < FLT_MAX ? 1.0f : 0.0f;
-        e01 = (d > nd0 * tol2) & (d > nd1 * tol2);
-        e23 = (d > nd2 * tol2) & (d > nd3 * tol2);
-        ediag = (d > nd4 * tol2) & (d > nd5 * tol2) & (d > nd6 * tol2) & (d > nd7 * tol2);
-        enclosed = e01 | e23 | ediag;
-        /* enclosed implies n >= 2, so the mean is defined where it matters */
-        occ[x] = (unsigned char)(enclosed & (d < FLT_MAX) & (d * (n > 0.0f ? n : 1.0f) > sum * tol2));
+        float nd[8];
+        nd[0] = c[x - 1]; nd[1] = c[x + 1]; nd[2] = u[x]; nd[3] = l[x];
+        nd[4] = u[x - 1]; nd[5] = u[x + 1]; nd[6] = l[x - 1]; nd[7] = l[x + 1];
+        occ[x] = (unsigned char)rendercache__occluded(c[x], nd, tol2);
     }
 }
 
 /* The cull decisions of row y (occ[x] = 1: the point at x is culled):
    the interior by rendercache__cull_row, the image border by the general test. */
-static void rendercache__cull_decisions(const rendercache *rc, const float *depth, const uint32_t *index, uint32_t y,
-                                        float tol2, unsigned char *occ)
+static void rendercache__cull_decisions(const rendercache *rc, const float *depth, uint32_t y, float tol2,
+                                        unsigned char *occ)
 {
     const uint32_t w = rc->width, h = rc->height;
     uint32_t x;
@@ -2176,10 +2562,8 @@ static void rendercache__cull_decisions(const rendercache *rc, const float *dept
     for (x = 0; x < w; x = interior_row && x == 0 && w > 1 ? w - 1 : x + 1) {   /* border pixels */
         float nd[8];
         uint32_t p = y * w + x;
-        occ[x] = 0;
-        if (index[p] == RENDERCACHE__NONE) continue;
         rendercache__neighbour_depths(depth, w, h, x, y, nd);
-        occ[x] = (unsigned char)rendercache__occluded(nd, depth[p], tol2);
+        occ[x] = (unsigned char)rendercache__occluded(depth[p], nd, tol2);
     }
 }
 
@@ -2197,8 +2581,8 @@ static void rendercache__gather_points(rendercache *rc, const uint32_t *index, u
     float *image = rc->image, *priority = rc->priority;
     uint32_t p;
     for (p = p0; p < p1; p++) {
-        uint32_t k = index[p] == RENDERCACHE__NONE ? empty : index[p], o = data[k].object;
-        uint32_t motion = o == RENDERCACHE_MISS ? 0u : rc->obj_motion[o < rc->object_count ? o : 0u];
+        uint32_t k = index[p] == RENDERCACHE__NONE ? empty : index[p];
+        uint32_t motion = rc->obj_motion[rendercache__motion_index(rc, data[k].object)];
         if (p + RENDERCACHE__GATHER_AHEAD < rc->pixel_count) {   /* (into the next row or tile too) */
             uint32_t next = index[p + RENDERCACHE__GATHER_AHEAD];
             const rendercache__point *q = &data[next == RENDERCACHE__NONE ? empty : next];
@@ -2218,10 +2602,11 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
     rendercache *rc = (rendercache *)ctx;
     const rendercache__raster *s = &rc->splat.final;
     const float *depth = s->depth;
-    const uint32_t *index = s->index, w = rc->width, h = rc->height, empty = rc->capacity;
+    const uint32_t *index = s->index, w = rc->width, h = rc->height;
     uint32_t *px_index = rc->px_index;
     float *px_depth = rc->px_depth;
     unsigned char *kind = rc->kind, *count = rc->count, *shown = rc->shown, mark = rendercache__mark(rc->frame);
+    const uint32_t sink = rc->capacity + tile;   /* this tile's byte for pixels without a point */
     uint32_t y0 = tile * RENDERCACHE__TILE_ROWS, y1 = y0 + RENDERCACHE__TILE_ROWS, x, y;
     uint32_t visible = 0, culled = 0, *stats = rc->tile_stats + RENDERCACHE__TILE_STATS * (size_t)tile;
     float tol2 = (1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance);
@@ -2229,12 +2614,12 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
     for (y = y0; y < y1; y++) {
         unsigned char *occ = kind + (size_t)y * w;
         rendercache__gather_points(rc, index, y * w, y * w + w);
-        rendercache__cull_decisions(rc, depth, index, y, tol2, occ);
+        rendercache__cull_decisions(rc, depth, y, tol2, occ);
         for (x = 0; x < w; x++) {   /* without branches, as gather_points */
             uint32_t p = y * w + x, k = index[p], has = k != RENDERCACHE__NONE, shows = has & !occ[x];
             px_index[p] = shows ? k : RENDERCACHE__NONE;
             px_depth[p] = shows ? depth[p] : FLT_MAX;
-            shown[shows ? k : empty] = mark;   /* spared by the eviction in this frame */
+            shown[shows ? k : sink] = mark;   /* spared by the eviction in this frame */
             kind[p] = (unsigned char)(shows ? (unsigned)RENDERCACHE_PIXEL_POINT : occ[x]);   /* holes: set by the filling */
             count[p] = 0;
             visible += shows;
@@ -2253,12 +2638,19 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
    of the maximum) is used, whichever carries more weight (the far one on a
    tie: a hole beside an edge is more often uncovered background). Returns
    the number of points in the window; rgb is set when it is not zero.
-   Depths are squared distances, compared with the squared tolerance. */
+   Depths are squared distances, compared with the squared tolerance.
+   Weights are scaled by a power of two that brings their sum below 1, so
+   that the sums of finite colours do not overflow and the mean is what it
+   would be unscaled, bit for bit. Holes' colours are never read: the
+   filling of another tile may be writing them. */
+static const float rendercache__black[3] = { 0.0f, 0.0f, 0.0f };
+
 static RENDERCACHE__INLINE uint32_t rendercache__interpolate_window(const rendercache *rc, uint32_t x, uint32_t y, int r,
                                                                     int x0, int x1, int y0, int y1, float rgb[3])
 {
     const float *depth = rc->px_depth, *image = rc->image;
     const uint32_t w = rc->width;
+    const float scale = rc->window_scale[r];
     int qx, qy;
     float dmin = FLT_MAX, dmax = 0.0f, tol2 = (1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance);
     float near_sum[4] = { 0, 0, 0, 0 }, far_sum[4] = { 0, 0, 0, 0 };
@@ -2278,12 +2670,12 @@ static RENDERCACHE__INLINE uint32_t rendercache__interpolate_window(const render
     if (n == 0) return 0;
     for (qy = y0; qy <= y1; qy++) {
         const float *row = depth + (size_t)qy * w;
-        float wy = (float)(r + 1 - rendercache__iabs(qy - (int)y));
+        float wy = (float)(r + 1 - rendercache__iabs(qy - (int)y)) * scale;
         for (qx = x0; qx <= x1; qx++) {
             float d = row[qx], wgt = wy * (float)(r + 1 - rendercache__iabs(qx - (int)x));
-            const float *c = image + 3 * ((size_t)qy * w + (size_t)qx);
             int point = d != FLT_MAX, near = point & (d <= dmin * tol2);
             int far = point & !near & (d * tol2 >= dmax);   /* a middle layer: neither side of the choice */
+            const float *c = point ? image + 3 * ((size_t)qy * w + (size_t)qx) : rendercache__black;
             float wn = near ? wgt : 0.0f, wf = far ? wgt : 0.0f;
             near_sum[0] += wn * c[0]; near_sum[1] += wn * c[1]; near_sum[2] += wn * c[2]; near_sum[3] += wn;
             far_sum[0] += wf * c[0]; far_sum[1] += wf * c[1]; far_sum[2] += wf * c[2]; far_sum[3] += wf;
@@ -2291,9 +2683,9 @@ static RENDERCACHE__INLINE uint32_t rendercache__interpolate_window(const render
     }
     chosen = (far_sum[3] >= near_sum[3]) ? far_sum : near_sum;
     if (dmax <= dmin * tol2) chosen = near_sum;   /* one layer: every point was counted as near */
-    rgb[0] = chosen[0] / chosen[3];
-    rgb[1] = chosen[1] / chosen[3];
-    rgb[2] = chosen[2] / chosen[3];
+    rgb[0] = rendercache__finitef(chosen[0] / chosen[3]);
+    rgb[1] = rendercache__finitef(chosen[1] / chosen[3]);
+    rgb[2] = rendercache__finitef(chosen[2] / chosen[3]);
     return n;
 }
 
@@ -2316,48 +2708,51 @@ static uint32_t rendercache__interpolate3(const rendercache *rc, uint32_t x, uin
     return rendercache__interpolate_window(rc, x, y, 1, (int)x - 1, (int)x + 1, (int)y - 1, (int)y + 1, rgb);
 }
 
+/* Fills hole (x, y) (a pixel showing no point) from the points around it
+   and ranks it; returns its kind. */
+static unsigned char rendercache__fill_hole(rendercache *rc, uint32_t x, uint32_t y)
+{
+    const uint32_t w = rc->width, h = rc->height, p = y * w + x;
+    uint32_t n;
+    unsigned char kind;
+    float rgb[3];
+    n = x > 0 && y > 0 && x + 1 < w && y + 1 < h ? rendercache__interpolate3(rc, x, y, rgb)
+                                                 : rendercache__interpolate(rc, x, y, 1, rgb);
+    if (n >= rc->sparse_neighbours) {
+        kind = RENDERCACHE_PIXEL_INTERPOLATED;
+    } else {
+        n = rendercache__interpolate(rc, x, y, (int)rc->wide_radius, rgb);
+        kind = n ? RENDERCACHE_PIXEL_SPARSE : RENDERCACHE_PIXEL_EMPTY;
+        if (!n) memcpy(rgb, rc->background, sizeof rgb);
+    }
+    rc->kind[p] = kind;
+    rc->count[p] = (unsigned char)(n > 255 ? 255 : n);
+    rc->priority[p] = rendercache__hole_priority(rc, kind, rc->count[p]);
+    rc->image[3 * (size_t)p + 0] = rgb[0];   /* stores a race detector sees, unlike an inlined memcpy */
+    rc->image[3 * (size_t)p + 1] = rgb[1];
+    rc->image[3 * (size_t)p + 2] = rgb[2];
+    return kind;
+}
+
 /* Job per tile: fill the holes left by projection and cull, and rank them. */
 static void rendercache__interpolate_job(void *ctx, uint32_t tile)
 {
     rendercache *rc = (rendercache *)ctx;
     const uint32_t w = rc->width, h = rc->height, *px_index = rc->px_index;
     uint32_t y0 = tile * RENDERCACHE__TILE_ROWS, y1 = y0 + RENDERCACHE__TILE_ROWS, x, y;
-    uint32_t counts[3] = { 0, 0, 0 }, *stats = rc->tile_stats + RENDERCACHE__TILE_STATS * (size_t)tile;
+    uint32_t counts[4] = { 0, 0, 0, 0 }, *stats = rc->tile_stats + RENDERCACHE__TILE_STATS * (size_t)tile;
     if (y1 > h) y1 = h;
     for (y = y0; y < y1; y++) {
         const uint32_t *row = px_index + (size_t)y * w;
         for (x = 0;; x++) {
-            uint32_t p, n;
-            unsigned char kind;
-            float rgb[3];
             while (x < w && row[x] != RENDERCACHE__NONE) x++;   /* to the next hole (a few percent of the pixels) */
             if (x == w) break;
-            p = y * w + x;
-            n = x > 0 && y > 0 && x + 1 < w && y + 1 < h ? rendercache__interpolate3(rc, x, y, rgb)
-                                                         : rendercache__interpolate(rc, x, y, 1, rgb);
-            if (n >= rc->sparse_neighbours) {
-                kind = RENDERCACHE_PIXEL_INTERPOLATED;
-                counts[0]++;
-            } else {
-                n = rendercache__interpolate(rc, x, y, (int)rc->wide_radius, rgb);
-                if (n) {
-                    kind = RENDERCACHE_PIXEL_SPARSE;
-                    counts[1]++;
-                } else {
-                    memcpy(rgb, rc->background, sizeof rgb);
-                    kind = RENDERCACHE_PIXEL_EMPTY;
-                    counts[2]++;
-                }
-            }
-            rc->kind[p] = kind;
-            rc->count[p] = (unsigned char)(n > 255 ? 255 : n);
-            rc->priority[p] = rendercache__hole_priority(rc, kind, rc->count[p]);
-            memcpy(rc->image + 3 * (size_t)p, rgb, sizeof rgb);
+            counts[rendercache__fill_hole(rc, x, y)]++;
         }
     }
-    stats[2] = counts[0];
-    stats[3] = counts[1];
-    stats[4] = counts[2];
+    stats[2] = counts[RENDERCACHE_PIXEL_INTERPOLATED];
+    stats[3] = counts[RENDERCACHE_PIXEL_SPARSE];
+    stats[4] = counts[RENDERCACHE_PIXEL_EMPTY];
 }
 
 /* The cull and the hole filling on the calling thread, interleaved: the
@@ -2394,6 +2789,7 @@ static void rendercache__start_stats(rendercache *rc)
     rendercache_stats *s = &rc->stats;
     s->frame = rc->frame;
     s->requested = s->predicted = s->inserted = s->replaced = s->evicted = s->rejected = 0;
+    s->late = s->changed = s->dropped = 0;
     s->time_project = s->time_cull = s->time_interpolate = 0.0;
     s->time_predict = s->time_request = s->time_insert = 0.0;
 }
@@ -2401,23 +2797,25 @@ static void rendercache__start_stats(rendercache *rc)
 RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, const rendercache_camera *camera)
 {
     rendercache__view v;
+    rendercache__frame_record *record;
     double t1, t2;
-    uint32_t o;
     if (!rc || !rendercache__view_init(&v, camera) || camera->width != rc->width || camera->height != rc->height ||
         camera->kind != RENDERCACHE_CAMERA_PERSPECTIVE) {
         if (rc && rc->log) rc->log(rc->log_user, "rendercache_begin_frame: invalid camera or image size");
         return RENDERCACHE_ERROR_INVALID_ARGUMENT;
     }
     rc->frame++;
-    if (rendercache__mark(rc->frame) == 1u) memset(rc->shown, 0, rc->capacity);
+    if (rendercache__mark(rc->frame) == 1u) memset(rc->shown, 0, (size_t)rc->capacity + rc->tile_count);
     rc->view = v;
     rc->has_prediction = 0;
     rc->hand_exhausted = 0;
+    record = &rc->history[rc->frame % ((uint64_t)rc->max_latency + 1)];
+    memset(record, 0, sizeof *record);
+    record->frame = rc->frame;
+    record->view = v;
     rendercache__start_stats(rc);
-    for (o = 0; o < rc->object_count; o++) {   /* points of moving objects age faster */
-        if (rc->obj_moved[o]) rc->obj_motion[o] += rc->moving_age_step - 1u;
-        rc->obj_moved[o] = 0;
-    }
+    rendercache__change_level(rc);
+    rendercache__commit_transforms(rc);
     rendercache__compose_objects(rc, &rc->view, rc->obj_camera);
     rendercache__splat_points(rc, &rc->view, rc->obj_camera, &rc->stats.time_project);
     if (rc->parallel_for) {
@@ -2443,43 +2841,72 @@ RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, cons
 
 /* ======================================================================
    13. predictive sampling (Walter et al. 2002): the cache projected into
-   the camera expected next; pixels with no point in their 3x3
-   neighbourhood there are regions the motion will uncover.
+   the camera expected next, into an occupancy image of 1/16 the
+   resolution (cells of 4 x 4 pixels, no depth): cells that fewer than
+   RENDERCACHE__CELL_FEW points land in are regions the motion will
+   uncover (where the cache shows a surface, about one point lands per
+   pixel). A request goes to one pixel of such a cell (its place in the
+   cell varies from frame to frame), so a share of the budget seeds a large
+   uncovered region sparsely, and the wide filter fills it when it comes
+   into view.
    ---------------------------------------------------------------------- */
-static void rendercache__predict_job(void *ctx, uint32_t tile)
+typedef struct rendercache__predict_job {
+    rendercache *rc;
+    rendercache__projector pr;
+    uint32_t jobs;
+} rendercache__predict_job;
+
+/* Job j: counts the points of its range in each cell, in its own bytes. */
+static void rendercache__occupancy_job(void *ctx, uint32_t j)
 {
-    rendercache *rc = (rendercache *)ctx;
-    const rendercache__raster *s = &rc->splat.final;
-    uint32_t y0 = tile * RENDERCACHE__TILE_ROWS, y1 = y0 + RENDERCACHE__TILE_ROWS, x, y, holes = 0;
-    if (y1 > rc->height) y1 = rc->height;
-    for (y = y0; y < y1; y++) {
-        uint32_t ya = y > 0 ? y - 1 : 0, yb = y + 1 < rc->height ? y + 1 : y;
-        for (x = 0; x < rc->width; x++) {
-            uint32_t xa = x > 0 ? x - 1 : 0, xb = x + 1 < rc->width ? x + 1 : x, qx, qy;
-            int covered = 0;
-            for (qy = ya; qy <= yb && !covered; qy++)
-                for (qx = xa; qx <= xb; qx++)
-                    if (s->index[qy * rc->width + qx] != RENDERCACHE__NONE) { covered = 1; break; }
-            rc->pred_priority[y * rc->width + x] = covered ? 0.0f : 1.0f;
-            holes += !covered;
+    const rendercache__predict_job *job = (const rendercache__predict_job *)ctx;
+    const rendercache *rc = job->rc;
+    const uint32_t cells = rc->cell_count;
+    unsigned char *occ = rc->occupancy + (size_t)j * (cells + 1);
+    uint32_t cell[RENDERCACHE__BATCH], b, i, begin, end;
+    float d[RENDERCACHE__BATCH];
+    begin = (uint32_t)((uint64_t)rc->capacity * j / job->jobs);
+    end = (uint32_t)((uint64_t)rc->capacity * (j + 1) / job->jobs);
+    memset(occ, 0, (size_t)cells + 1);
+    for (b = begin; b < end; b += RENDERCACHE__BATCH) {
+        uint32_t n = end - b < RENDERCACHE__BATCH ? end - b : RENDERCACHE__BATCH;
+        rendercache__project_points(&job->pr, b, b + n, cell, d);
+        for (i = 0; i < n; i++) {   /* without a branch */
+            unsigned char *o = &occ[cell[i] == RENDERCACHE__NONE ? cells : cell[i]];
+            *o = (unsigned char)(*o + (*o < 255u));
         }
     }
-    rc->tile_stats[RENDERCACHE__TILE_STATS * (size_t)tile + 5] = holes;
 }
 
 RENDERCACHE_API rendercache_result rendercache_predict(rendercache *rc, const rendercache_camera *next)
 {
+    rendercache__predict_job job;
     rendercache__view v;
+    uint32_t j, c;
     double t0;
     if (!rc || !rc->has_frame || !rendercache__view_init(&v, next) || next->width != rc->width ||
         next->height != rc->height || next->kind != RENDERCACHE_CAMERA_PERSPECTIVE)
         return RENDERCACHE_ERROR_INVALID_ARGUMENT;
     t0 = rendercache__now(rc);
     rc->predicted = v;
+    rc->history[rc->frame % ((uint64_t)rc->max_latency + 1)].predicted = v;
+    rc->history[rc->frame % ((uint64_t)rc->max_latency + 1)].has_prediction = 1;
     rendercache__compose_objects(rc, &rc->predicted, rc->obj_predicted);
-    rendercache__splat_points(rc, &rc->predicted, rc->obj_predicted, NULL);
-    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__predict_job, rc, rc->tile_count);
-    rc->pred_holes = rendercache__tile_sum(rc, 5);
+    job.rc = rc;
+    job.pr.rc = rc;
+    job.pr.view = &rc->predicted;
+    job.pr.obj_camera = rc->obj_predicted;
+    job.pr.shift = RENDERCACHE__CELL_SHIFT;
+    job.pr.stride = rc->cells_x;
+    job.jobs = rc->parallel_for ? RENDERCACHE__SPLAT_JOBS : 1u;
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__occupancy_job, &job, job.jobs);
+    rc->pred_cells = 0;
+    for (c = 0; c < rc->cell_count; c++) {   /* job 0's bytes become the sum */
+        uint32_t sum = rc->occupancy[c];
+        for (j = 1; j < job.jobs; j++) sum += rc->occupancy[(size_t)j * (rc->cell_count + 1) + c];
+        rc->occupancy[c] = (unsigned char)(sum < 255u ? sum : 255u);
+        rc->pred_cells += sum < RENDERCACHE__CELL_FEW;
+    }
     rc->has_prediction = 1;
     rc->stats.time_predict += rendercache__now(rc) - t0;
     return RENDERCACHE_OK;
@@ -2497,11 +2924,11 @@ RENDERCACHE_API rendercache_result rendercache_predict(rendercache *rc, const re
    spreads the fractional level's requests evenly (with a modulated
    threshold for sparse levels, see below). Pixels of value 0 or 1 are
    decided outright and pass incoming error on unchanged; error that would
-   leave the image goes to the next pixel in scan order instead, so the
-   count equals the budget up to the last pixel's residual, which a final
-   pass corrects with the pixels closest to the threshold. Each decision
-   depends on the previous ones, so this step is serial; everything around
-   it runs in tiles.
+   leave the image (or its band) goes to the next pixel in scan order
+   instead, so the count equals the budget up to each band's last residual,
+   which a final pass corrects with the pixels closest to the threshold.
+   Each decision depends on the previous ones, so a band is serial; the
+   bands of 128 rows run in parallel, and everything around them in tiles.
    ---------------------------------------------------------------------- */
 typedef struct rendercache__select_job {
     rendercache *rc;
@@ -2614,10 +3041,10 @@ static int rendercache__fractional(const rendercache *rc, uint32_t q)
    neighbours keep their weight, renormalised, so error never lands on a
    pixel whose choice is already made (it would be lost there). Returns the
    part that found no taker, for the next fractional pixel in scan order. */
-static float rendercache__spread_error(const rendercache *rc, float *cur, float *next, uint32_t y, int x, int dir,
-                                       float e)
+static float rendercache__spread_error(const rendercache *rc, float *cur, float *next, uint32_t y, uint32_t y_end, int x,
+                                       int dir, float e)
 {
-    int w = (int)rc->width, ax = x + dir, bx = x - dir, below = y + 1 < rc->height;
+    int w = (int)rc->width, ax = x + dir, bx = x - dir, below = y + 1 < y_end;
     float wt[4] = { 7.0f, 3.0f, 5.0f, 1.0f }, sum, s;   /* ahead, behind-below, below, ahead-below */
     uint32_t row = y * rc->width, row_below = row + rc->width;
     if (!below) {   /* last row: everything ahead, if there is an ahead */
@@ -2652,36 +3079,56 @@ static float rendercache__spread_error(const rendercache *rc, float *cur, float 
 #define RENDERCACHE__MODULATION 0.4f          /* amplitude at density 0 */
 #define RENDERCACHE__MODULATION_FADE 0.1f     /* density where it reaches 0 */
 
-static float rendercache__threshold(uint32_t p, uint32_t frame, float amp)
+/* A 32-bit integer hash (lowbias32, Wellons): the serial loop is this one. */
+static uint32_t rendercache__hash(uint32_t z)
 {
-    /* a 32-bit integer hash (lowbias32, Wellons): the serial loop is this one */
-    uint32_t z = p * 0x9E3779B9u ^ frame * 0x85EBCA6Bu;
     z ^= z >> 16;
     z *= 0x7FEB352Du;
     z ^= z >> 15;
     z *= 0x846CA68Bu;
     z ^= z >> 16;
+    return z;
+}
+
+static float rendercache__threshold(uint32_t p, uint32_t frame, float amp)
+{
+    uint32_t z = rendercache__hash(p * 0x9E3779B9u ^ frame * 0x85EBCA6Bu);
     return 0.5f + amp * ((float)(z >> 8) * (1.0f / 8388608.0f) - 1.0f);
 }
 
-/* Serial serpentine Floyd-Steinberg pass over the fractional pixels (of
-   value fraction, the cut level's share); marks rc->chosen and returns the
-   count. Pixels of value 0 or 1 are decided outright; the error moves
-   among the fractional pixels only, so their count is their total value up
-   to the last carry. Fractional pixels keep value + incoming error in select_v
-   for the count correction. The threshold pass marked them (chosen & 2)
-   and counted the pixels chosen outright (tile statistics column 5). */
-static uint32_t rendercache__diffuse(rendercache *rc, float fraction, uint32_t *best_add, uint32_t *best_drop)
+/* Serpentine Floyd-Steinberg over the fractional pixels (of value
+   fraction, the cut level's share), in bands of RENDERCACHE__BAND_ROWS
+   rows diffused each on its own (in parallel, and the same for any number
+   of threads: the bands do not depend on it): error does not cross from a
+   band into the next, as it does not leave the image at its bottom. Marks
+   rc->chosen and counts the picks per band. Pixels of value 0 or 1 are
+   decided outright; the error moves among the fractional pixels only, so a
+   band's count is its total value up to its last carry. Fractional pixels
+   keep value + incoming error in select_v for the count correction, and
+   each band its marginal choices (the unpicked pixel nearest a pick, the
+   picked one nearest a miss). */
+typedef struct rendercache__diffuse_job {
+    rendercache *rc;
+    float fraction, amp;
+} rendercache__diffuse_job;
+
+static void rendercache__diffuse_band(void *ctx, uint32_t band)
 {
-    uint32_t w = rc->width, h = rc->height, y, count = rendercache__tile_sum(rc, 5);
+    const rendercache__diffuse_job *j = (const rendercache__diffuse_job *)ctx;
+    rendercache *rc = j->rc;
+    rendercache__band *out = &rc->bands[band];
+    const uint32_t w = rc->width, y0 = band * RENDERCACHE__BAND_ROWS;
+    const uint32_t y1 = y0 + RENDERCACHE__BAND_ROWS < rc->height ? y0 + RENDERCACHE__BAND_ROWS : rc->height;
     unsigned char *chosen = rc->chosen;
-    float *select_v = rc->select_v;
-    float add_v = -FLT_MAX, drop_v = FLT_MAX;
-    float *cur = rc->err_rows, *next = rc->err_rows + (w + 2), carry = 0.0f;
-    float amp = RENDERCACHE__MODULATION * (1.0f - fraction / RENDERCACHE__MODULATION_FADE);
-    if (amp < 0.0f) amp = 0.0f;
+    float *select_v = rc->select_v, carry = 0.0f;
+    float *cur = rc->err_rows + 2 * (size_t)band * (w + 2), *next = cur + (w + 2);
+    uint32_t y;
+    out->count = 0;
+    out->best_add = out->best_drop = RENDERCACHE__NONE;
+    out->add_v = -FLT_MAX;
+    out->drop_v = FLT_MAX;
     memset(cur, 0, (w + 2) * sizeof *cur);
-    for (y = 0; y < h; y++) {
+    for (y = y0; y < y1; y++) {
         int dir = (y & 1u) ? -1 : 1, end = dir > 0 ? (int)w : -1, x = dir > 0 ? 0 : (int)w - 1;
         float *t;
         memset(next, 0, (w + 2) * sizeof *next);
@@ -2692,19 +3139,39 @@ static uint32_t rendercache__diffuse(rendercache *rc, float fraction, uint32_t *
             x = rendercache__next_marked(chosen + (size_t)y * w, x, end, dir, 2u);   /* the rest was decided by the threshold */
             if (x == end) break;
             p = y * w + (uint32_t)x;
-            total = fraction + cur[x + 1] + carry;
-            pick = total >= rendercache__threshold(p, rc->frame, amp) ? 1u : 0u;
+            total = j->fraction + cur[x + 1] + carry;
+            pick = total >= rendercache__threshold(p, (uint32_t)rc->frame, j->amp) ? 1u : 0u;
             e = total - (float)pick;
             select_v[p] = total;
             chosen[p] = (unsigned char)(2u | pick);
-            count += pick;
-            if (pick ? total < drop_v : total > add_v) {   /* the marginal choices, for the correction */
-                if (pick) { drop_v = total; *best_drop = p; }
-                else { add_v = total; *best_add = p; }
+            out->count += pick;
+            if (pick ? total < out->drop_v : total > out->add_v) {   /* the marginal choices, for the correction */
+                if (pick) { out->drop_v = total; out->best_drop = p; }
+                else { out->add_v = total; out->best_add = p; }
             }
-            carry = rendercache__spread_error(rc, cur, next, y, x, dir, e);
+            carry = rendercache__spread_error(rc, cur, next, y, y1, x, dir, e);
         }
         t = cur; cur = next; next = t;
+    }
+}
+
+/* The diffusion of every band; returns the count of the pixels chosen and
+   the image's marginal choices. */
+static uint32_t rendercache__diffuse(rendercache *rc, float fraction, uint32_t *best_add, uint32_t *best_drop)
+{
+    rendercache__diffuse_job job;
+    uint32_t b, count = rendercache__tile_sum(rc, 5);
+    float add_v = -FLT_MAX, drop_v = FLT_MAX;
+    job.rc = rc;
+    job.fraction = fraction;
+    job.amp = RENDERCACHE__MODULATION * (1.0f - fraction / RENDERCACHE__MODULATION_FADE);
+    if (job.amp < 0.0f) job.amp = 0.0f;
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__diffuse_band, &job, rc->band_count);
+    for (b = 0; b < rc->band_count; b++) {   /* in band order: the same for any thread count */
+        const rendercache__band *band = &rc->bands[b];
+        count += band->count;
+        if (band->best_add != RENDERCACHE__NONE && band->add_v > add_v) { add_v = band->add_v; *best_add = band->best_add; }
+        if (band->best_drop != RENDERCACHE__NONE && band->drop_v < drop_v) { drop_v = band->drop_v; *best_drop = band->best_drop; }
     }
     return count;
 }
@@ -2777,10 +3244,47 @@ static uint32_t rendercache__emit(rendercache *rc, const rendercache__view *v, f
         r->x = p % rc->width;
         r->y = p / rc->width;
         r->flags = flags;
+        r->frame = rc->frame;
         memcpy(r->org, v->eye, sizeof r->org);
         rendercache__view_ray(v, (float)r->x + 0.5f, (float)r->y + 0.5f, r->dir);
         priority[p] = 0.0f;
     }
+    return n;
+}
+
+/* Requests for min(max, empty cells) empty cells of the prediction,
+   spread evenly over them in serpentine scan order (the k-th empty cell
+   is taken when floor(k max / E) steps, from an offset that changes with
+   the frame), one pixel each at a place in its cell that also changes
+   with the frame. Returns the count. */
+static uint32_t rendercache__emit_predicted(rendercache *rc, rendercache_pixel_request *out, uint32_t max)
+{
+    const uint64_t e = rc->pred_cells, want = max < rc->pred_cells ? max : rc->pred_cells;
+    const uint64_t offset = e ? rendercache__hash((uint32_t)rc->frame * 0x9E3779B9u) % e : 0;
+    uint64_t k = offset;
+    uint32_t cy, i, n = 0;
+    for (cy = 0; cy < rc->cells_y && n < want; cy++)
+        for (i = 0; i < rc->cells_x && n < want; i++) {
+            uint32_t cx = cy & 1u ? rc->cells_x - 1 - i : i, c = cy * rc->cells_x + cx, h, x, y;
+            rendercache_pixel_request *r;
+            if (rc->occupancy[c] >= RENDERCACHE__CELL_FEW) continue;
+            k++;
+            if ((k * want) / e == ((k - 1) * want) / e) continue;
+            rc->occupancy[c] = 255;   /* requested: not again in this frame */
+            h = rendercache__hash(c * 0x85EBCA6Bu ^ (uint32_t)rc->frame * 0x632BE5ABu);
+            x = (cx << RENDERCACHE__CELL_SHIFT) + (h & (RENDERCACHE__CELL - 1));
+            y = (cy << RENDERCACHE__CELL_SHIFT) + ((h >> 8) & (RENDERCACHE__CELL - 1));
+            if (x >= rc->width) x = rc->width - 1;   /* the last cells may be narrower */
+            if (y >= rc->height) y = rc->height - 1;
+            r = &out[n++];
+            r->x = x;
+            r->y = y;
+            r->flags = RENDERCACHE_REQUEST_PREDICTED;
+            r->frame = rc->frame;
+            memcpy(r->org, rc->predicted.eye, sizeof r->org);
+            rendercache__view_ray(&rc->predicted, (float)x + 0.5f, (float)y + 0.5f, r->dir);
+        }
+    rc->pred_cells -= n;
     return n;
 }
 
@@ -2795,14 +3299,12 @@ RENDERCACHE_API rendercache_result rendercache_request(rendercache *rc, renderca
     t0 = rendercache__now(rc);
     if (rc->has_prediction) {
         pred_budget = (uint32_t)((double)max * rc->predict_fraction);
-        if (pred_budget > rc->pred_holes) pred_budget = rc->pred_holes;
+        if (pred_budget > rc->pred_cells) pred_budget = rc->pred_cells;
     }
     if (rendercache__select(rc, rc->priority, max - pred_budget))
         n = rendercache__emit(rc, &rc->view, rc->priority, 0u, out, max - pred_budget);
-    if (rc->has_prediction && n < max && rendercache__select(rc, rc->pred_priority, max - n)) {
-        uint32_t m = rendercache__emit(rc, &rc->predicted, rc->pred_priority, RENDERCACHE_REQUEST_PREDICTED,
-                                       out + n, max - n);
-        rc->pred_holes -= m;
+    if (rc->has_prediction && n < max && rc->pred_cells) {   /* the share, and what the priority image left */
+        uint32_t m = rendercache__emit_predicted(rc, out + n, max - n);
         rc->stats.predicted += m;
         n += m;
     }
@@ -2842,50 +3344,261 @@ static uint32_t rendercache__victim(rendercache *rc)
     return slot;
 }
 
+/* The frame a sample was requested in (0: the current one). */
+static uint64_t rendercache__sample_frame(const rendercache *rc, const rendercache_sample *s)
+{
+    return s->frame ? s->frame : rc->frame;
+}
+
+/* Whether a sample is well formed: a pixel of the image, known flags and
+   object, finite values, a frame begun already. */
 static int rendercache__sample_valid(const rendercache *rc, const rendercache_sample *s)
 {
+    if (!rc->has_frame || s->frame > rc->frame) return 0;
     if (s->x >= rc->width || s->y >= rc->height) return 0;
     if (s->flags & ~RENDERCACHE_REQUEST_PREDICTED) return 0;
-    if ((s->flags & RENDERCACHE_REQUEST_PREDICTED) && !rc->has_prediction) return 0;
     if (s->object != RENDERCACHE_MISS && s->object >= rc->object_count) return 0;
     if (s->object != RENDERCACHE_MISS && !rendercache__finite3(s->position)) return 0;
     if (!rendercache__finite3(s->rgb) || !(s->priority_scale >= 0.0f) || !isfinite(s->priority_scale)) return 0;
     return 1;
 }
 
-/* Stores sample s in slot; returns its squared distance from the eye of view v. */
-static float rendercache__store(rendercache *rc, uint32_t slot, const rendercache_sample *s, const rendercache__view *v)
+/* The point of sample s as a slot stores it: its object and its position
+   in object space (through the object's transform in frame f), or for a
+   miss the unit world direction of its ray in view v. */
+static void rendercache__sample_point(const rendercache *rc, const rendercache_sample *s, uint64_t f,
+                                      const rendercache__view *v, rendercache__geo *g)
 {
-    rendercache__geo *g = &rc->geo[slot];
-    rendercache__point *pt = &rc->data[slot];
-    float *pos = g->pos, d;
-    if (g->object == RENDERCACHE__FREE_SLOT) rc->live++;
-    if (s->object == RENDERCACHE_MISS) {
-        rendercache__view_ray(v, (float)s->x + 0.5f, (float)s->y + 0.5f, pos);
-        d = RENDERCACHE__FAR2;
-    } else {
-        float dx = s->position[0] - v->eye[0], dy = s->position[1] - v->eye[1], dz = s->position[2] - v->eye[2];
-        rendercache__affine(rc->obj_local + 12 * (size_t)s->object, s->position, pos);
-        d = dx * dx + dy * dy + dz * dz;
-    }
     g->object = s->object;
-    memcpy(pt->rgb, s->rgb, sizeof pt->rgb);
-    pt->scale = s->priority_scale > 0.0f ? s->priority_scale : 1.0f;
-    pt->base = rc->frame + (s->object == RENDERCACHE_MISS ? 0u : rc->obj_motion[s->object]);   /* age 0 */
-    rc->shown[slot] = rendercache__mark(rc->frame);   /* new points are not evicted in their own frame */
-    pt->object = s->object;
-    return d;
+    if (s->object == RENDERCACHE_MISS) rendercache__view_ray(v, (float)s->x + 0.5f, (float)s->y + 0.5f, g->pos);
+    else rendercache__affine(rendercache__object_local(rc, s->object, f), s->position, g->pos);
 }
 
-/* A current-frame sample also becomes its pixel's point at once. */
-static void rendercache__show(rendercache *rc, uint32_t p, uint32_t slot, float depth, const float rgb[3])
+/* A point on its way into the cache: a sample's (age 0) or a seed's. */
+typedef struct rendercache__new_point {
+    rendercache__geo g;      /* object and object-space position, or the background's direction */
+    float rgb[3];
+    float scale;             /* priority scale, > 0 */
+    uint32_t age;            /* the age it starts with (frames) */
+} rendercache__new_point;
+
+/* The new point of a sample requested in frame f through view v. */
+static void rendercache__sample_new_point(const rendercache *rc, const rendercache_sample *s, uint64_t f,
+                                          const rendercache__view *v, rendercache__new_point *np)
+{
+    rendercache__sample_point(rc, s, f, v, &np->g);
+    memcpy(np->rgb, s->rgb, sizeof np->rgb);
+    np->scale = s->priority_scale > 0.0f ? s->priority_scale : 1.0f;
+    np->age = 0;
+}
+
+/* Stores a new point in slot. */
+static void rendercache__store(rendercache *rc, uint32_t slot, const rendercache__new_point *np)
+{
+    rendercache__point *pt = &rc->data[slot];
+    if (rc->geo[slot].object == RENDERCACHE__FREE_SLOT) rc->live++;
+    rc->geo[slot] = np->g;
+    memcpy(pt->rgb, np->rgb, sizeof pt->rgb);
+    pt->scale = np->scale;
+    pt->base = (uint32_t)rc->frame + rc->obj_motion[rendercache__motion_index(rc, np->g.object)] - np->age;
+    pt->object = np->g.object;
+    rc->shown[slot] = rendercache__mark(rc->frame);   /* new points are not evicted in their own frame */
+}
+
+/* Holes around a new point are filled again when an insert call ends
+   (rendercache__refill): the point is one more for their filters. The
+   holes wait with this bit set in their kind. */
+#define RENDERCACHE__REFILL 0x80u
+
+/* Marks the holes whose filters reach pixel p (within wide_radius). */
+static void rendercache__mark_refill(rendercache *rc, uint32_t p)
+{
+    const int r = (int)rc->wide_radius, x = (int)(p % rc->width), y = (int)(p / rc->width);
+    int x0 = x - r < 0 ? 0 : x - r, x1 = x + r >= (int)rc->width ? (int)rc->width - 1 : x + r, qx, qy;
+    int y0 = y - r < 0 ? 0 : y - r, y1 = y + r >= (int)rc->height ? (int)rc->height - 1 : y + r;
+    for (qy = y0; qy <= y1; qy++)
+        for (qx = x0; qx <= x1; qx++) {
+            uint32_t q = (uint32_t)qy * rc->width + (uint32_t)qx;
+            if (rc->px_index[q] == RENDERCACHE__NONE) rc->kind[q] = (unsigned char)(rc->kind[q] | RENDERCACHE__REFILL);
+        }
+    rc->refill_rows[0] = (uint32_t)y0 < rc->refill_rows[0] ? (uint32_t)y0 : rc->refill_rows[0];
+    rc->refill_rows[1] = (uint32_t)y1 + 1 > rc->refill_rows[1] ? (uint32_t)y1 + 1 : rc->refill_rows[1];
+}
+
+/* Fills the marked holes again. */
+static void rendercache__refill(rendercache *rc)
+{
+    uint32_t x, y;
+    for (y = rc->refill_rows[0]; y < rc->refill_rows[1]; y++)
+        for (x = 0; x < rc->width; x++) {
+            uint32_t q = y * rc->width + x;
+            if (!(rc->kind[q] & RENDERCACHE__REFILL)) continue;
+            rc->kind[q] = (unsigned char)(rc->kind[q] & ~RENDERCACHE__REFILL);
+            if (rc->px_index[q] == RENDERCACHE__NONE) rendercache__fill_hole(rc, x, y);
+        }
+    rc->refill_rows[0] = rc->height;
+    rc->refill_rows[1] = 0;
+}
+
+/* A sample also becomes the point pixel p shows, at once. */
+static void rendercache__show(rendercache *rc, uint32_t p, uint32_t slot, float depth2, const float rgb[3])
 {
     rc->px_index[p] = slot;
-    rc->px_depth[p] = depth;
+    rc->px_depth[p] = depth2;
     memcpy(rc->image + 3 * (size_t)p, rgb, 3 * sizeof(float));
     rc->kind[p] = RENDERCACHE_PIXEL_POINT;
     rc->count[p] = 0;
     rc->priority[p] = 0.0f;
+}
+
+/* Whether a new colour differs from the old one by more than the
+   threshold: the largest channel difference against the largest channel
+   of either. A renderer's noise makes resamples of unchanged points
+   differ too, so the differences of each frame's replacements are
+   counted (rendercache__change_level): a change must also lie three
+   standard deviations out in the previous frame's differences. */
+static int rendercache__colour_changed(rendercache *rc, const float old_rgb[3], const float rgb[3])
+{
+    float d = 0.0f, m = 0.0f, r;
+    int k;
+    for (k = 0; k < 3; k++) {
+        float a = fabsf(old_rgb[k]), b = fabsf(rgb[k]), e = fabsf(rgb[k] - old_rgb[k]);
+        m = a > m ? a : m;
+        m = b > m ? b : m;
+        d = e > d ? e : d;
+    }
+    r = m > 0.0f ? d / m : 0.0f;   /* in [0, 2] for finite colours; inf when the difference overflows */
+    rc->change_hist[r < 2.0f ? (uint32_t)(r * (0.5f * RENDERCACHE__CHANGE_BINS)) : RENDERCACHE__CHANGE_BINS - 1]++;
+    return r > rc->change_level;
+}
+
+/* At the start of a frame: the threshold of colour changes for the frame,
+   the larger of desc.change_threshold and three standard deviations of
+   the last frame's replacement differences (the renderer's noise),
+   estimated robustly from their median (sigma = 1.4826 median absolute
+   deviation), when it had 64 or more. A deterministic renderer's median
+   is 0: the desc's threshold alone counts. */
+#define RENDERCACHE__NOISE_SIGMAS (3.0f * 1.4826f)
+static void rendercache__change_level(rendercache *rc)
+{
+    uint32_t b, total = 0, below = 0;
+    for (b = 0; b < RENDERCACHE__CHANGE_BINS; b++) total += rc->change_hist[b];
+    rc->change_level = rc->change_threshold;
+    for (b = 0; total >= 64 && b < RENDERCACHE__CHANGE_BINS; b++) {
+        below += rc->change_hist[b];
+        if (2 * below >= total) {
+            float median = (float)b * (2.0f / RENDERCACHE__CHANGE_BINS);   /* the bin's lower end: 0 when most are 0 */
+            if (RENDERCACHE__NOISE_SIGMAS * median > rc->change_level) rc->change_level = RENDERCACHE__NOISE_SIGMAS * median;
+            break;
+        }
+    }
+    memset(rc->change_hist, 0, sizeof rc->change_hist);
+}
+
+/* Colour-change detection (WDG02): the points shown within
+   RENDERCACHE_CHANGE_RADIUS pixels of pixel p are aged to the top of the
+   age ramp (at least), so that the next requests look around the change. */
+static void rendercache__age_around(rendercache *rc, uint32_t p)
+{
+    const int r = RENDERCACHE_CHANGE_RADIUS, x = (int)(p % rc->width), y = (int)(p / rc->width);
+    int qx, qy;
+    for (qy = y - r; qy <= y + r; qy++) {
+        if (qy < 0 || qy >= (int)rc->height) continue;
+        for (qx = x - r; qx <= x + r; qx++) {
+            uint32_t q = (uint32_t)qy * rc->width + (uint32_t)qx, k, motion;
+            rendercache__point *pt;
+            if (qx < 0 || qx >= (int)rc->width || q == p || rc->px_index[q] == RENDERCACHE__NONE || rc->count[q]) continue;
+            rc->count[q] = 1;   /* aged in this frame (count is 0 for every pixel showing a point) */
+            k = rc->px_index[q];
+            pt = &rc->data[k];
+            motion = rc->obj_motion[rendercache__motion_index(rc, pt->object)];
+            if ((uint32_t)rc->frame + motion - pt->base < rc->age_ramp) pt->base = (uint32_t)rc->frame + motion - rc->age_ramp;
+            rc->priority[q] = rendercache__point_priority(rc, pt, motion);
+        }
+    }
+}
+
+/* Puts sample s in slot, replacing the point that was there (replacing:
+   the slot held a point of the same surface, whose colour it compares),
+   and shows it in pixel p (RENDERCACHE__NONE: not shown). A sample that
+   comes after its frame's hole filling (refill: late or predicted) and
+   lands in a hole has the holes around it filled again: the frame it
+   shows in was filled without it. The requests of the current frame were
+   made knowing the filling; their neighbours wait for the next frame. */
+static void rendercache__place(rendercache *rc, uint32_t slot, int replacing, int refill,
+                               const rendercache__new_point *np, uint32_t p, float depth2)
+{
+    int changed = replacing && np->age == 0 && rendercache__colour_changed(rc, rc->data[slot].rgb, np->rgb);
+    if (replacing) rc->stats.replaced++;
+    else if (rc->geo[slot].object != RENDERCACHE__FREE_SLOT) rc->stats.evicted++;
+    rendercache__store(rc, slot, np);
+    if (p != RENDERCACHE__NONE && refill && rc->px_index[p] == RENDERCACHE__NONE) rendercache__mark_refill(rc, p);
+    if (p != RENDERCACHE__NONE) rendercache__show(rc, p, slot, depth2, np->rgb);
+    if (changed) {
+        rc->stats.changed++;
+        rendercache__age_around(rc, p);
+    }
+}
+
+/* A sample of the current frame: it replaces the point its pixel shows, or
+   fills the hole there (the hit point projects into its own pixel). */
+static void rendercache__insert_current(rendercache *rc, const rendercache_sample *s)
+{
+    uint32_t p = s->y * rc->width + s->x, slot = rc->px_index[p];
+    rendercache__new_point np;
+    float d;
+    rendercache__sample_new_point(rc, s, rc->frame, &rc->view, &np);
+    if (s->object == RENDERCACHE_MISS) {
+        d = RENDERCACHE__FAR2;
+    } else {
+        float dx = s->position[0] - rc->view.eye[0], dy = s->position[1] - rc->view.eye[1];
+        float dz = s->position[2] - rc->view.eye[2];
+        d = dx * dx + dy * dy + dz * dz;
+    }
+    rendercache__place(rc, slot != RENDERCACHE__NONE ? slot : rendercache__victim(rc), slot != RENDERCACHE__NONE, 0, &np,
+                       p, d);
+}
+
+/* A late sample (requested in frame f < the current one), a predicted
+   one or a seed: its point is where its own ray hit, which the current
+   camera sees in another pixel, if at all. Where it lands on the same
+   surface it replaces the point shown there; where it lands in front of
+   what is shown, or in a hole it is not hidden in, it is shown in a new
+   slot; elsewhere it only joins the cache (unless shown_only: a seed). A
+   new slot is never one the current frame shows. Returns 1 when stored,
+   0 when no such slot is left (or not shown, for shown_only). */
+static int rendercache__insert_other(rendercache *rc, const rendercache__new_point *np, int shown_only)
+{
+    const float tol2 = (1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance);
+    rendercache__projector pr;
+    uint32_t p, slot;
+    float d2 = 0.0f, nd[8];
+    int show;
+    pr.rc = rc;
+    pr.view = &rc->view;
+    pr.obj_camera = rc->obj_camera;
+    pr.shift = 0;
+    pr.stride = rc->width;
+    p = rendercache__project_point(&pr, &np->g, &d2);
+    if (p != RENDERCACHE__NONE && rc->px_index[p] != RENDERCACHE__NONE) {
+        uint32_t k = rc->px_index[p];
+        float dk = rc->px_depth[p];
+        if (rc->data[k].object == np->g.object && d2 <= dk * tol2 && dk <= d2 * tol2) {   /* the same surface */
+            rendercache__place(rc, k, 1, 1, np, p, d2);
+            return 1;
+        }
+        show = d2 * tol2 < dk;   /* in front of what is shown there */
+    } else if (p != RENDERCACHE__NONE) {   /* a hole: shown unless nearer points around enclose it */
+        rendercache__neighbour_depths(rc->px_depth, rc->width, rc->height, p % rc->width, p / rc->width, nd);
+        show = !rendercache__occluded(d2, nd, tol2);
+    } else {
+        show = 0;
+    }
+    if (shown_only && !show) return 0;
+    slot = rendercache__victim(rc);
+    if (rendercache__slot_in_use(rc, slot)) return 0;
+    rendercache__place(rc, slot, 0, 1, np, show ? p : RENDERCACHE__NONE, d2);
+    return 1;
 }
 
 /* Prefetches the slots that the next samples will replace in place, all at
@@ -2899,7 +3612,9 @@ static uint32_t rendercache__touch_slots(const rendercache *rc, const rendercach
     for (i = 0; i < n; i++) {
         const rendercache_sample *s = &samples[i];
         uint32_t slot;
-        if (s->x >= rc->width || s->y >= rc->height || (s->flags & RENDERCACHE_REQUEST_PREDICTED)) continue;
+        if (s->x >= rc->width || s->y >= rc->height || (s->flags & RENDERCACHE_REQUEST_PREDICTED) ||
+            rendercache__sample_frame(rc, s) != rc->frame)
+            continue;
         slot = rc->px_index[s->y * rc->width + s->x];
         if (slot == RENDERCACHE__NONE) continue;
         sum += slot;
@@ -2910,34 +3625,64 @@ static uint32_t rendercache__touch_slots(const rendercache *rc, const rendercach
     return sum;
 }
 
-RENDERCACHE_API rendercache_result rendercache_insert(rendercache *rc, const rendercache_sample *samples, uint32_t n)
+RENDERCACHE_API rendercache_result rendercache_insert(rendercache *rc, const rendercache_sample *samples, uint32_t n,
+                                                      uint32_t *taken)
 {
-    uint32_t i;
+    const uint64_t slots = rc ? (uint64_t)rc->max_latency + 1 : 1;
+    uint32_t i, stored = 0, bad = 0;
     double t0;
+    if (taken) *taken = 0;
     if (!rc || (!samples && n)) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
     t0 = rendercache__now(rc);
     for (i = 0; i < n; i++) {
         const rendercache_sample *s = &samples[i];
+        const rendercache__frame_record *record;
         int predicted = (s->flags & RENDERCACHE_REQUEST_PREDICTED) != 0;
-        const rendercache__view *v = predicted ? &rc->predicted : &rc->view;
-        uint32_t p, slot;
-        float d;
+        uint64_t f;
         if (i % 32 == 0) rc->touched += rendercache__touch_slots(rc, s, n - i < 32 ? n - i : 32);
-        if (!rendercache__sample_valid(rc, s) || (!predicted && !rc->has_frame)) { rc->stats.rejected++; continue; }
-        p = s->y * rc->width + s->x;
-        slot = predicted ? RENDERCACHE__NONE : rc->px_index[p];
-        if (slot != RENDERCACHE__NONE) {
-            rc->stats.replaced++;
+        if (!rendercache__sample_valid(rc, s)) { bad++; continue; }
+        f = rendercache__sample_frame(rc, s);
+        if (rc->frame - f > rc->max_latency) { rc->stats.dropped++; continue; }
+        record = &rc->history[f % slots];
+        if (record->frame != f || (predicted && !record->has_prediction)) { bad++; continue; }
+        if (f == rc->frame && !predicted) {
+            rendercache__insert_current(rc, s);
         } else {
-            slot = rendercache__victim(rc);
-            if (rc->geo[slot].object != RENDERCACHE__FREE_SLOT) rc->stats.evicted++;
+            rendercache__new_point np;
+            rendercache__sample_new_point(rc, s, f, predicted ? &record->predicted : &record->view, &np);
+            if (!rendercache__insert_other(rc, &np, 0)) {
+                rc->stats.dropped++;
+                continue;
+            }
         }
-        d = rendercache__store(rc, slot, s, v);
-        if (!predicted) rendercache__show(rc, p, slot, d, s->rgb);
-        rc->stats.inserted++;
+        rc->stats.late += f != rc->frame;
+        stored++;
     }
+    rendercache__refill(rc);
+    rc->stats.inserted += stored;
+    rc->stats.rejected += bad;
     rc->stats.live_points = rc->live;
     rc->stats.time_insert += rendercache__now(rc) - t0;
+    if (taken) *taken = stored;
+    if (bad && rc->log) rc->log(rc->log_user, "rendercache_insert: malformed samples skipped (see stats.rejected)");
+    return bad ? RENDERCACHE_ERROR_INVALID_ARGUMENT : RENDERCACHE_OK;
+}
+
+RENDERCACHE_API rendercache_result rendercache_invalidate(rendercache *rc, uint32_t object)
+{
+    uint32_t o, p;
+    if (!rc || (object != RENDERCACHE_ALL_OBJECTS && object != RENDERCACHE_MISS && object >= rc->object_count))
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    for (o = 0; o <= rc->object_count; o++)   /* a point's age includes its object's motion counter */
+        if (object == RENDERCACHE_ALL_OBJECTS || o == rendercache__motion_index(rc, object)) rc->obj_motion[o] += rc->age_ramp;
+    if (!rc->has_frame) return RENDERCACHE_OK;
+    for (p = 0; p < rc->pixel_count; p++) {   /* and the priorities of this frame's pixels showing them */
+        const rendercache__point *pt;
+        if (rc->px_index[p] == RENDERCACHE__NONE) continue;
+        pt = &rc->data[rc->px_index[p]];
+        if (object != RENDERCACHE_ALL_OBJECTS && pt->object != object) continue;
+        rc->priority[p] = rendercache__point_priority(rc, pt, rc->obj_motion[rendercache__motion_index(rc, pt->object)]);
+    }
     return RENDERCACHE_OK;
 }
 
@@ -3065,6 +3810,70 @@ static int rendercache__range_valid(const rendercache_range_image *img, renderca
     return img && img->rgb && img->depth && img->object && rendercache__view_init(v, &img->camera);
 }
 
+/* The render cache seeded from range images (the bridge between the two
+   halves of this header): each pixel becomes a point as a late sample
+   does (rendercache__insert_other), but only where it shows in the
+   current frame, and as old as the top of the age ramp, so that the
+   cache shows the precomputed view at once and real samples replace it
+   first. */
+static uint32_t rendercache__seed_image(rendercache *rc, const rendercache_range_image *img, const rendercache__view *v)
+{
+    uint32_t x, y, stored = 0;
+    for (y = 0; y < v->height; y++)
+        for (x = 0; x < v->width; x++) {
+            const size_t p = (size_t)y * v->width + x;
+            const uint32_t o = img->object[p];
+            const float d = img->depth[p];
+            rendercache__new_point np;
+            float dir[3];
+            if (o == RENDERCACHE_NO_SAMPLE || (o != RENDERCACHE_MISS && (o >= rc->object_count || !(d > 0.0f && d <= FLT_MAX))))
+                continue;
+            if (!rendercache__finite3(img->rgb + 3 * p) || !rendercache__view_ray(v, (float)x + 0.5f, (float)y + 0.5f, dir))
+                continue;
+            np.g.object = o;
+            if (o == RENDERCACHE_MISS) {
+                memcpy(np.g.pos, dir, sizeof dir);
+            } else {
+                float world[3];
+                int k;
+                for (k = 0; k < 3; k++) world[k] = v->eye[k] + dir[k] * d;
+                rendercache__affine(rendercache__object_local(rc, o, rc->frame), world, np.g.pos);
+                if (!rendercache__finite3(np.g.pos)) continue;
+            }
+            memcpy(np.rgb, img->rgb + 3 * p, sizeof np.rgb);
+            np.scale = 1.0f;
+            np.age = rc->age_ramp;
+            stored += (uint32_t)rendercache__insert_other(rc, &np, 1);
+        }
+    return stored;
+}
+
+RENDERCACHE_API rendercache_result rendercache_seed(rendercache *rc, const rendercache_range_image *const *images,
+                                                    uint32_t count, uint32_t *taken)
+{
+    rendercache__view v;
+    uint32_t i, stored = 0;
+    double t0;
+    if (taken) *taken = 0;
+    if (!rc || !rc->has_frame || (!images && count)) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    for (i = 0; i < count; i++)
+        if (!rendercache__range_valid(images[i], &v)) {
+            if (rc->log) rc->log(rc->log_user, "rendercache_seed: an image is NULL, incomplete or has an invalid camera");
+            return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+        }
+    t0 = rendercache__now(rc);
+    for (i = 0; i < count; i++) {
+        rendercache__view_init(&v, &images[i]->camera);
+        stored += rendercache__seed_image(rc, images[i], &v);
+    }
+    rendercache__refill(rc);
+    rc->stats.inserted += stored;
+    rc->stats.live_points = rc->live;
+    rc->stats.time_insert += rendercache__now(rc) - t0;
+    if (taken) *taken = stored;
+    return RENDERCACHE_OK;
+}
+
 /* ======================================================================
    18. view interpolation (section 4.4, as Radiance's pinterp): every pixel
    of every range image is a point in space, reprojected into the new
@@ -3085,6 +3894,11 @@ static int rendercache__range_valid(const rendercache_range_image *img, renderca
 #define RENDERCACHE__HIDDEN_BLOCK 4u             /* target pixels per side of a block of the coarse z-buffer */
 #define RENDERCACHE__HIDDEN_RUN 8u               /* source pixels of a row tested at once against it */
 #define RENDERCACHE__IN_PLACE 2                  /* a projected pixel that stays on itself (warp_project's ok) */
+#define RENDERCACHE__MIN_DEPTH 1e-18f           /* least distance a warp writes (squares of smaller ones underflow) */
+#define RENDERCACHE__MAX_PLANE 16777216.0f       /* 2^24: a pixel projected farther than this from the image's
+                                                    origin has no projection (float positions are no longer
+                                                    whole pixels there, and every position in this range
+                                                    converts to an int) */
 
 /* What filled a target pixel (warper.how). */
 enum { RENDERCACHE__HOW_EMPTY = 0, RENDERCACHE__HOW_WARPED, RENDERCACHE__HOW_BACKGROUND, RENDERCACHE__HOW_COMPUTED };
@@ -3108,6 +3922,8 @@ struct rendercache_warper {
     rendercache_fill_fn fill_pixel;
     void *fill_user;
     float tolerance, background[3];
+    uint32_t max_fill;           /* background fill: farthest source in pixels, 0 unlimited */
+    int average;                 /* average the inputs that see the same surface */
 
     /* buffers of the current target size (0 x 0 before the first warp) */
     uint32_t width, height, pixel_count, tile_count;
@@ -3135,6 +3951,9 @@ struct rendercache_warper {
     size_t skip_depths_cap;
     uint64_t *hidden;            /* foreground quads: the coarse z-buffers */
     size_t hidden_cap;
+    float *layers;               /* averaging: per input, the warp of it alone (3 colour, squared
+                                    distance and object bits per pixel) */
+    size_t layers_cap;
 
     rendercache__view target;
     rendercache_warp_stats stats;
@@ -3178,7 +3997,7 @@ static int rendercache__warper_reserve(rendercache_warper *w, uint32_t width, ui
     w->column = (uint32_t *)rendercache__alloc_array(a, n, sizeof(uint32_t));
     w->tile_counts = (uint32_t *)rendercache__alloc_array(a, w->tile_count, 4 * sizeof(uint32_t));
     if (!w->how || !w->column || !w->tile_counts ||
-        rendercache__splat_alloc(&w->splat, width, height, w->parallel_for ? RENDERCACHE__SPLAT_JOBS : 1u, a) != 0) {
+        rendercache__splat_alloc(&w->splat, width, height, w->parallel_for ? RENDERCACHE__SPLAT_JOBS : 1u, 1, a) != 0) {
         rendercache__warper_free_buffers(w);
         return 0;
     }
@@ -3235,6 +4054,8 @@ RENDERCACHE_API rendercache_result rendercache_warper_create(const rendercache_w
     w->fill_pixel = desc->fill_pixel;
     w->fill_user = desc->fill_user;
     w->tolerance = rendercache__def(desc->depth_tolerance, RENDERCACHE__DEFAULT_WARP_TOLERANCE);
+    w->max_fill = desc->max_fill_distance;
+    w->average = desc->average != 0;
     memcpy(w->background, desc->background, sizeof w->background);
     *out = w;
     return RENDERCACHE_OK;
@@ -3254,6 +4075,7 @@ RENDERCACHE_API void rendercache_warper_destroy(rendercache_warper *w)
     rendercache__free(&a, w->skip);
     rendercache__free(&a, w->skip_depths);
     rendercache__free(&a, w->hidden);
+    rendercache__free(&a, w->layers);
     rendercache__free(&a, w);
 }
 
@@ -3665,11 +4487,13 @@ static void rendercache__warp_project_static(const rendercache__warp_src *ws, co
         float c0 = m[0] * x0 + m[1] * x1 + m[2] * x2 + off * m[3];
         float c1 = m[4] * x0 + m[5] * x1 + m[6] * x2 + off * m[7];
         float c2 = m[8] * x0 + m[9] * x1 + m[10] * x2 + off * m[11];
-        float inv = 1.0f / c2;
-        px[i] = cx + f * c0 * inv;
-        py[i] = cy - f * c1 * inv;
-        d2[i] = point ? (c0 * c0 + c1 * c1 + c2 * c2) * bias : RENDERCACHE__FAR2;
-        ok[i] = (unsigned char)(valid & (c2 > 0.0f));
+        float inv = 1.0f / c2, x = cx + f * c0 * inv, y = cy - f * c1 * inv;
+        float e = (c0 * c0 + c1 * c1 + c2 * c2) * bias;   /* may overflow: capped at the background's */
+        px[i] = x;
+        py[i] = y;
+        d2[i] = point ? rendercache__minf(e, RENDERCACHE__FAR2) : RENDERCACHE__FAR2;
+        ok[i] = (unsigned char)(valid & (c2 > 0.0f) & (fabsf(x) < RENDERCACHE__MAX_PLANE) &
+                                (fabsf(y) < RENDERCACHE__MAX_PLANE));   /* and not NaN */
     }
 }
 
@@ -3771,7 +4595,7 @@ static uint32_t rendercache__warp_project(const rendercache__warp_src *ws, uint3
             uint32_t e = begin + i, y = e / sw;
             px[i] = (float)(e - y * sw) + 0.5f;
             py[i] = (float)y + 0.5f;
-            d2[i] = point ? d * d * bias : RENDERCACHE__FAR2;
+            d2[i] = point ? rendercache__minf(d * d * bias, RENDERCACHE__FAR2) : RENDERCACHE__FAR2;
             ok[i] = RENDERCACHE__IN_PLACE;
             continue;
         }
@@ -3780,14 +4604,15 @@ static uint32_t rendercache__warp_project(const rendercache__warp_src *ws, uint3
             x[0] *= d; x[1] *= d; x[2] *= d;
             if (ws->motion && o < ws->motion_count) m = ws->motion + 12 * (size_t)o;
             rendercache__affine(m, x, c);
-            d2[i] = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) * bias;
+            d2[i] = rendercache__minf((c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) * bias, RENDERCACHE__FAR2);
         } else {   /* a direction: rotated only */
             c[0] = m[0] * x[0] + m[1] * x[1] + m[2] * x[2];
             c[1] = m[4] * x[0] + m[5] * x[1] + m[6] * x[2];
             c[2] = m[8] * x[0] + m[9] * x[1] + m[10] * x[2];
             d2[i] = RENDERCACHE__FAR2;
         }
-        ok[i] = (unsigned char)rendercache__view_to_plane(t, c, &px[i], &py[i]);
+        ok[i] = (unsigned char)(rendercache__view_to_plane(t, c, &px[i], &py[i]) && fabsf(px[i]) < RENDERCACHE__MAX_PLANE &&
+                                fabsf(py[i]) < RENDERCACHE__MAX_PLANE);
     }
     return n;
 }
@@ -3848,8 +4673,6 @@ static void rendercache__warp_payload(const void *src, uint32_t begin, uint32_t 
 /* A projected pixel in a row of warp_project_row (the same 4 floats). */
 typedef struct rendercache__corner { float x, y, d, k; } rendercache__corner;
 
-static RENDERCACHE__INLINE float rendercache__minf(float a, float b) { return a < b ? a : b; }
-static RENDERCACHE__INLINE float rendercache__maxf(float a, float b) { return a > b ? a : b; }
 
 /* Row y of an input projected into the target's image plane, 4 floats per
    pixel: x, y, biased squared distance, 1 when it has a projection (else
@@ -3935,9 +4758,9 @@ static RENDERCACHE__INLINE void rendercache__warp_shade(const rendercache__warp_
     wu *= s; wv *= s; ww *= s;
     d = wu * u[2] + wv * v[2] + ww * w[2];
     if (!(rendercache__key(d, e) < zb->key[pixel])) return;   /* hidden: no colour to interpolate */
-    payload[0] = wu * cu[0] + wv * cv[0] + ww * cw[0];
-    payload[1] = wu * cu[1] + wv * cv[1] + ww * cw[1];
-    payload[2] = wu * cu[2] + wv * cv[2] + ww * cw[2];
+    payload[0] = rendercache__finitef(wu * cu[0] + wv * cv[0] + ww * cw[0]);
+    payload[1] = rendercache__finitef(wu * cu[1] + wv * cv[1] + ww * cw[1]);
+    payload[2] = rendercache__finitef(wu * cu[2] + wv * cv[2] + ww * cw[2]);
     o = wu >= wv && wu >= ww ? img->object[eu] : (wv >= ww ? img->object[ev] : img->object[ew]);
     memcpy(payload + 3, &o, sizeof o);
     rendercache__zbuffer_test(zb, pixel, d, e, payload);
@@ -4416,6 +5239,121 @@ static int rendercache__warp_set_init(rendercache_warper *w, rendercache__warp_s
     return 1;
 }
 
+/* ---- averaging (pinterp's -a) ---------------------------------------
+   Each input is warped alone into a layer of its own; then every target
+   pixel takes the surface the ranked z-buffer would have kept (the least
+   biased squared distance, the nearer rank on a tie) and averages the
+   colours of the layers that see it too (distances within the tolerance),
+   each weighted as pinterp weighs a pixel: 1 / sin of the angle between
+   its input's ray to the point and the target's ray (at most 1000), so
+   that views that look from nearly the same direction count most. The
+   result does not depend on the order of the jobs or their number. */
+#define RENDERCACHE__MAX_AVERAGE_WEIGHT 1000.0f
+
+typedef struct rendercache__average_job {
+    rendercache_warper *w;
+    rendercache__accum acc;
+    const float *layers;
+    uint32_t n;
+} rendercache__average_job;
+
+/* The layer of input i: colour, squared distance, object (float bits). */
+static rendercache__accum rendercache__layer(const rendercache_warper *w, float *layers, uint32_t i)
+{
+    rendercache__accum a;
+    float *base = layers + (size_t)i * 5 * w->pixel_count;
+    a.rgb = base;
+    a.depth2 = base + 3 * (size_t)w->pixel_count;
+    a.object = (uint32_t *)(void *)(base + 4 * (size_t)w->pixel_count);
+    return a;
+}
+
+static void rendercache__average_job_run(void *ctx, uint32_t tile)
+{
+    const rendercache__average_job *j = (const rendercache__average_job *)ctx;
+    rendercache_warper *w = j->w;
+    const rendercache__view *t = &w->target;
+    const float tol2 = (1.0f + w->tolerance) * (1.0f + w->tolerance);
+    float dx[RENDERCACHE__BATCH], dy[RENDERCACHE__BATCH], dz[RENDERCACHE__BATCH];
+    unsigned char ok[RENDERCACHE__BATCH];
+    uint32_t y0 = tile * RENDERCACHE__TILE_ROWS, y1 = y0 + RENDERCACHE__TILE_ROWS, x, y, x0, i;
+    if (y1 > w->height) y1 = w->height;
+    for (y = y0; y < y1; y++)
+        for (x0 = 0; x0 < w->width; x0 += RENDERCACHE__BATCH) {
+            uint32_t m = w->width - x0 < RENDERCACHE__BATCH ? w->width - x0 : RENDERCACHE__BATCH;
+            rendercache__view_row_dirs(t, y, x0, m, dx, dy, dz, ok);
+            for (x = 0; x < m; x++) {
+                const uint32_t p = y * w->width + x0 + x;
+                uint32_t best = RENDERCACHE__NONE;
+                float best_key = FLT_MAX, dbest, sum[3] = { 0, 0, 0 }, total = 0.0f, ray[3], bias = 1.0f;
+                int k;
+                for (i = 0; i < j->n; i++, bias = bias * tol2 < (float)RENDERCACHE__MAX_BIAS ? bias * tol2 : (float)RENDERCACHE__MAX_BIAS) {
+                    rendercache__accum a = rendercache__layer(w, (float *)j->layers, i);
+                    float d = a.depth2[p], key = d == FLT_MAX ? FLT_MAX : a.object[p] == RENDERCACHE_MISS ? d : d * bias;
+                    if (key < best_key) { best_key = key; best = i; }
+                }
+                if (best == RENDERCACHE__NONE) {
+                    j->acc.depth2[p] = FLT_MAX;
+                    j->acc.object[p] = RENDERCACHE_NO_SAMPLE;
+                    w->how[p] = RENDERCACHE__HOW_EMPTY;
+                    continue;
+                }
+                for (k = 0; k < 3; k++) ray[k] = dx[x] * t->axis[0][k] + dy[x] * t->axis[1][k] + dz[x] * t->axis[2][k];
+                dbest = rendercache__layer(w, (float *)j->layers, best).depth2[p];
+                for (i = 0; i < j->n; i++) {
+                    rendercache__accum a = rendercache__layer(w, (float *)j->layers, i);
+                    const float d = a.depth2[p], *e = w->src[i].source.eye;
+                    float wgt = RENDERCACHE__MAX_AVERAGE_WEIGHT;
+                    if (d == FLT_MAX || d > dbest * tol2 || dbest > d * tol2) continue;   /* another surface */
+                    if (a.object[p] != RENDERCACHE_MISS) {   /* the angle at the point between the two rays */
+                        float r = sqrtf(dbest), q[3], l2 = 0.0f, c = 0.0f, s2;
+                        for (k = 0; k < 3; k++) {
+                            q[k] = t->eye[k] + ray[k] * r - e[k];
+                            l2 += q[k] * q[k];
+                            c += q[k] * ray[k];
+                        }
+                        s2 = l2 > 0.0f ? 1.0f - c * c / l2 : 0.0f;
+                        if (s2 > 1.0f / (RENDERCACHE__MAX_AVERAGE_WEIGHT * RENDERCACHE__MAX_AVERAGE_WEIGHT)) wgt = 1.0f / sqrtf(s2);
+                    }
+                    for (k = 0; k < 3; k++) sum[k] += wgt * a.rgb[3 * (size_t)p + k];
+                    total += wgt;
+                }
+                {
+                    rendercache__accum b = rendercache__layer(w, (float *)j->layers, best);
+                    for (k = 0; k < 3; k++) j->acc.rgb[3 * (size_t)p + k] = rendercache__finitef(sum[k] / total);
+                    j->acc.depth2[p] = dbest;
+                    j->acc.object[p] = b.object[p];
+                    w->how[p] = RENDERCACHE__HOW_WARPED;
+                }
+            }
+        }
+}
+
+/* The averaging warp of the n prepared inputs w->src (in rank order) into acc. */
+static rendercache_result rendercache__warp_average(rendercache_warper *w, uint32_t n, int foreground,
+                                                   const rendercache__accum *acc)
+{
+    rendercache__average_job job;
+    rendercache__warp_set set;
+    rendercache__warp_src one;
+    uint32_t i;
+    if ((size_t)n > SIZE_MAX / 5 / w->pixel_count ||
+        !rendercache__reserve(&w->alloc, (void **)&w->layers, &w->layers_cap, (size_t)n * 5 * w->pixel_count, sizeof(float)))
+        return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+    for (i = 0; i < n; i++) {   /* each input alone, unbiased */
+        rendercache__accum layer = rendercache__layer(w, w->layers, i);
+        rendercache__warp_prepare(w, &one, w->src[i].image, NULL, 0, NULL, NULL, 0, 1.0f);
+        if (!rendercache__warp_set_init(w, &set, &one, 1, foreground)) return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+        rendercache__warp_splat(w, &set, foreground, &layer);
+    }
+    job.w = w;
+    job.acc = *acc;
+    job.layers = w->layers;
+    job.n = n;
+    rendercache__run_jobs(w->parallel_for, w->parallel_user, rendercache__average_job_run, &job, w->tile_count);
+    return RENDERCACHE_OK;
+}
+
 /* ---- background fill (pinterp's "background" algorithm) -------------- */
 
 /* Job per strip of columns: for each run of empty pixels in a column, the
@@ -4476,13 +5414,16 @@ static void rendercache__row_job(void *ctx, uint32_t tile)
             rc = left;
             if (right != RENDERCACHE__NONE && (left == RENDERCACHE__NONE || d2[left] < d2[right])) rc = right;
             for (k = xa; k < xb; k++) {
-                uint32_t p = row + k, cc = w->column[p], src;
+                uint32_t p = row + k, cc = w->column[p], src, reach;
                 if (rc == RENDERCACHE__NONE && cc == RENDERCACHE__NONE) continue;
                 if (cc == RENDERCACHE__NONE) src = rc;
                 else if (rc == RENDERCACHE__NONE) src = cc;
                 else if ((rc == left && k == xa) || (rc == right && k + 1 == xb)) src = rc;   /* next to the pixel */
                 else if (cc == p - w->width || cc == p + w->width) src = cc;
                 else src = d2[cc] < d2[rc] ? rc : cc;
+                /* pinterp's -fs: a source too far away leaves the pixel to fill_pixel */
+                reach = src == left ? k + 1 - xa : src == right ? xb - k : (src > p ? src - p : p - src) / w->width;
+                if (w->max_fill && reach > w->max_fill) continue;
                 d2[p] = d2[src];   /* candidates are pixels filled before this pass: never written here */
                 memcpy(rgb + 3 * (size_t)p, rgb + 3 * (size_t)src, 3 * sizeof(float));
                 obj[p] = obj[src];
@@ -4536,7 +5477,8 @@ static void rendercache__finish_job(void *ctx, uint32_t tile)
             continue;
         }
         counts[w->how[p] > 0 ? w->how[p] - 1 : 0]++;
-        j->acc.depth2[p] = j->acc.object[p] == RENDERCACHE_MISS ? RENDERCACHE__FAR : sqrtf(j->acc.depth2[p]);
+        j->acc.depth2[p] = j->acc.object[p] == RENDERCACHE_MISS ? RENDERCACHE__FAR
+                                                                 : rendercache__maxf(sqrtf(j->acc.depth2[p]), RENDERCACHE__MIN_DEPTH);
     }
 }
 
@@ -4662,11 +5604,16 @@ RENDERCACHE_API rendercache_result rendercache_warp(rendercache_warper *w, const
         elements += w->src[i].count;
         bias = bias * tol2 < RENDERCACHE__MAX_BIAS ? bias * tol2 : RENDERCACHE__MAX_BIAS;
     }
-    if (!rendercache__warp_set_init(w, &set, w->src, n, rendercache__has_foreground(fill))) return RENDERCACHE_ERROR_OUT_OF_MEMORY;
     acc.rgb = out->rgb;
     acc.depth2 = out->depth;
     acc.object = out->object;
-    rendercache__warp_splat(w, &set, rendercache__has_foreground(fill), &acc);
+    if (w->average && n > 1) {
+        r = rendercache__warp_average(w, n, rendercache__has_foreground(fill), &acc);
+        if (r != RENDERCACHE_OK) return r;
+    } else {
+        if (!rendercache__warp_set_init(w, &set, w->src, n, rendercache__has_foreground(fill))) return RENDERCACHE_ERROR_OUT_OF_MEMORY;
+        rendercache__warp_splat(w, &set, rendercache__has_foreground(fill), &acc);
+    }
     t1 = rendercache__warp_now(w);
     rendercache__warp_finish(w, &acc, fill);
     out->time = images[w->order[0]]->time;
@@ -4695,7 +5642,7 @@ RENDERCACHE_API rendercache_result rendercache_blend(const rendercache_range_ima
         return RENDERCACHE_ERROR_INVALID_ARGUMENT;
     n = (size_t)a->camera.width * a->camera.height;
     nearer = t < 0.5f ? a : b;
-    for (p = 0; p < 3 * n; p++) out->rgb[p] = (1.0f - t) * a->rgb[p] + t * b->rgb[p];
+    for (p = 0; p < 3 * n; p++) out->rgb[p] = rendercache__finitef((1.0f - t) * a->rgb[p] + t * b->rgb[p]);
     if (nearer != out) {
         memcpy(out->depth, nearer->depth, n * sizeof(float));
         memcpy(out->object, nearer->object, n * sizeof(uint32_t));
@@ -4724,7 +5671,7 @@ static void rendercache__combine_job(void *ctx, uint32_t tile)
         if (db == FLT_MAX) continue;   /* only a */
         if (da != FLT_MAX && a->object[p] == b->object[p] && da <= db * tol2 && db <= da * tol2) {
             int k;
-            for (k = 0; k < 3; k++) a->rgb[3 * p + k] = (1.0f - t) * a->rgb[3 * p + k] + t * b->rgb[3 * p + k];
+            for (k = 0; k < 3; k++) a->rgb[3 * p + k] = rendercache__finitef((1.0f - t) * a->rgb[3 * p + k] + t * b->rgb[3 * p + k]);
             a->depth2[p] = (1.0f - t) * da + t * db;
             continue;
         }
@@ -5432,13 +6379,14 @@ RENDERCACHE_API const float *rendercache_keytimes_values(const rendercache_keyti
     return kt && key < kt->count ? kt->values + kt->stride * key : NULL;
 }
 
-RENDERCACHE_API rendercache_result rendercache_keytimes_eval(const rendercache_keytimes *kt, double time, float *values)
+RENDERCACHE_API rendercache_result rendercache_keytimes_eval(const rendercache_keytimes *kt, double time, float *values,
+                                                             size_t count)
 {
     uint32_t lo = 0, hi;
     const float *a, *b;
     float w;
     size_t i;
-    if (!kt || !values || !isfinite(time)) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    if (!kt || !values || !isfinite(time) || count < kt->stride) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
     hi = kt->count - 1;
     if (time <= kt->times[0]) { memcpy(values, kt->values, kt->stride * sizeof(float)); return RENDERCACHE_OK; }
     if (time >= kt->times[hi]) { memcpy(values, kt->values + kt->stride * hi, kt->stride * sizeof(float)); return RENDERCACHE_OK; }

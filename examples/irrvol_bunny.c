@@ -12,18 +12,24 @@
       gets a radiance: its emission plus Kd/pi times the irradiance there,
       direct light from the lamp (area samples with shadow rays) plus one
       bounce (cosine rays), through the examples' ray tracer.
-   2. irrvol builds the volume from that per-vertex radiance with Greger's
-      settings (7^3 first level, 3^3 second level, k = 17), the lamp IMPORTANT.
+   2. irrvol builds the volume from that per-vertex radiance with its
+      defaults (Greger's 7^3 first level and 3^3 second level, k = 17, the
+      second level also where the light changes), the lamp IMPORTANT.
    3. Every frame the bunny's vertices query the volume (eq. 4.7: radiance =
-      Kd H / pi), scaled by each vertex's self-occlusion ratio (thesis 6.1.3,
-      computed once: it does not change as the bunny moves rigidly), and the
-      software rasterizer draws the office and the bunny Gouraud-shaded.
+      Kd H / pi) with the leak-safe default weighting, scaled by each
+      vertex's self-occlusion ratio (thesis 6.1.3, computed once: it does not
+      change as the bunny moves rigidly), and the software rasterizer draws
+      the office and the bunny Gouraud-shaded. The walk past the divider is
+      drawn a second time with the thesis's plain trilinear query: samples
+      behind the 5 cm panel light the bunny through it.
    4. Light transfer (5.4): the same field split into its emitted (direct)
       and reflected (indirect) parts gives two more volumes whose sum is the
-      full one, and a volume that IGNOREs the divider loses its colour bleeding.
+      full one (all on one grid: refined where geometry is), and a volume
+      that IGNOREs the divider loses its colour bleeding.
 
-   Writes irrvol_desk_NN.png, irrvol_divider_NN.png, contact sheets
-   irrvol_desk.png, irrvol_divider.png and irrvol_transfer.png. */
+   Writes irrvol_desk_NN.png, irrvol_divider_NN.png, irrvol_divider_plain_NN.png,
+   contact sheets irrvol_desk.png, irrvol_divider.png, irrvol_divider_plain.png
+   and irrvol_transfer.png. */
 #define _POSIX_C_SOURCE 200809L /* clock_gettime */
 #include <stdio.h>
 #include <stdlib.h>
@@ -300,7 +306,7 @@ static void bunny_free(bunny *b)
 
 /* Places the bunny at (x, 0, z) turned by yaw and lights its vertices from
    the volume: Kd H / pi (eq. 4.7) times the self-occlusion ratio. */
-static double bunny_light(bunny *b, const irrvol *vol, float x, float z, float yaw)
+static double bunny_light(bunny *b, const irrvol *vol, irrvol_weighting weighting, float x, float z, float yaw)
 {
     float c = cosf(yaw), s = sinf(yaw);
     double t0;
@@ -312,7 +318,7 @@ static double bunny_light(bunny *b, const irrvol *vol, float x, float z, float y
         wn[0] = c * n[0] + s * n[2];     wn[1] = n[1]; wn[2] = -s * n[0] + c * n[2];
     }
     t0 = now();
-    irrvol_query_many(vol, IRRVOL_FILTER_DEFAULT, b->vertex_count, b->world_pos, 0, b->world_normal, 0, b->rgb);
+    irrvol_query_many(vol, IRRVOL_FILTER_DEFAULT, weighting, b->vertex_count, b->world_pos, 0, b->world_normal, 0, b->rgb);
     t0 = now() - t0;
     for (v = 0; v < 3 * b->vertex_count; v++) b->rgb[v] *= BUNNY_KD / 3.14159265f * b->visibility[v / 3];
     return t0;
@@ -348,13 +354,13 @@ static int draw(scene *s, const ex_camera *cam)
 }
 
 typedef struct walk {
-    const char *name;
+    const char *name;          /* the images' name */
     float eye[3], target[3];
     float from[2], to[2];      /* bunny path on the floor (x, z) */
     float yaw;
 } walk;
 
-static int run_walk(scene *s, const irrvol *vol, const walk *w, int frames, const char *out)
+static int run_walk(scene *s, const irrvol *vol, irrvol_weighting weighting, const walk *w, int frames, const char *out)
 {
     ex_camera cam;
     static const float up[3] = {0, 1, 0};
@@ -367,7 +373,7 @@ static int run_walk(scene *s, const irrvol *vol, const walk *w, int frames, cons
     cam = ex_camera_look_at(w->eye, w->target, up, 55.0f, s->width, s->height);
     for (f = 0; f < frames && rc == 0; f++) {
         float a = frames > 1 ? (float)f / (float)(frames - 1) : 0.0f;
-        query_time += bunny_light(&s->rabbit, vol, w->from[0] + a * (w->to[0] - w->from[0]),
+        query_time += bunny_light(&s->rabbit, vol, weighting, w->from[0] + a * (w->to[0] - w->from[0]),
                                   w->from[1] + a * (w->to[1] - w->from[1]), w->yaw);
         {
             double sum[3] = {0, 0, 0};
@@ -401,7 +407,7 @@ static int run_walk(scene *s, const irrvol *vol, const walk *w, int frames, cons
 /* ---- volumes ---------------------------------------------------------------- */
 
 static irrvol *build_volume(const mesh *m, const float *vertex_radiance, irrvol_material *mats, uint32_t nmat,
-                            ex_pool *pool, const char *label)
+                            float refine_threshold, ex_pool *pool, const char *label)
 {
     irrvol_desc d;
     irrvol *vol = NULL;
@@ -417,18 +423,16 @@ static irrvol *build_volume(const mesh *m, const float *vertex_radiance, irrvol_
     d.materials = mats;
     d.material_count = nmat;
     d.vertex_radiance = vertex_radiance;
-    d.grid_samples[0] = d.grid_samples[1] = d.grid_samples[2] = 7;   /* Greger's office volume */
-    d.subgrid_samples = 3;
-    d.resolution = 17;
-    d.filter = IRRVOL_FILTER_BILINEAR;   /* smooth shading across bins (6.1.2) */
+    d.refine_threshold = refine_threshold;   /* 0: the default; negative: where geometry is only */
     d.parallel_for = ex_pool_parallel_for;
     d.parallel_user = pool;
     r = irrvol_build(&d, &vol);
     if (r != IRRVOL_OK) { fprintf(stderr, "irrvol_build: %s\n", irrvol_result_string(r)); return NULL; }
     irrvol_info(vol, &info);
-    printf("volume %-22s %u samples (%u second level, %u refined cells), %u bins, %.1f Mrays, %.2f s, %.1f MB\n", label,
-           info.sample_count, info.second_level_samples, info.refined_cells, info.bins, info.rays / 1e6, now() - t0,
-           info.bytes / 1e6);
+    printf("volume %-22s %u samples (%u second level, %u refined cells, %u for light; %u moved out of geometry, %u "
+           "invalid), %u bins, %.1f Mrays, %.2f s, %.1f MB\n", label, info.sample_count, info.second_level_samples,
+           info.refined_cells, info.light_refined_cells, info.relocated_samples, info.invalid_samples, info.bins,
+           info.rays / 1e6, now() - t0, info.bytes / 1e6);
     return vol;
 }
 
@@ -443,13 +447,14 @@ int main(int argc, char **argv)
     scene s;
     radiance_job job;
     irrvol_material *mats = NULL;
-    irrvol *full = NULL, *direct = NULL, *indirect = NULL, *no_divider = NULL;
+    irrvol *full = NULL, *same_grid = NULL, *direct = NULL, *indirect = NULL, *no_divider = NULL;
     float *total = NULL;
     uint32_t v, m;
     double t0;
     static const walk desk = {"desk", {1.8f, 1.0f, 0.7f}, {1.8f, 0.3f, 3.0f}, {1.8f, 1.7f}, {1.8f, 3.35f}, 1.5708f};
     /* along the divider's lit face, seen from ahead so that its divider side shows */
     static const walk divider = {"divider", {3.1f, 0.6f, 3.25f}, {3.5f, 0.12f, 1.6f}, {3.42f, 0.8f}, {3.42f, 2.4f}, -0.6f};
+    walk divider_plain = divider;
     memset(&s, 0, sizeof s);
     memset(&job, 0, sizeof job);
     s.width = 480;
@@ -491,18 +496,20 @@ int main(int argc, char **argv)
     printf("office: %u patch vertices, %u triangles; radiance (direct + one bounce) in %.2f s\n", s.office.vertex_count,
            s.office.tri_count, now() - t0);
 
-    /* 2. the volumes: full, and for light transfer (5.4) direct, indirect, no divider */
+    /* 2. the volumes: full, and for light transfer (5.4) full, direct, indirect
+          and no divider on one grid, refined where geometry is */
     mats = (irrvol_material *)calloc(office.material_count, sizeof *mats);
     if (!mats) goto done;
     for (m = 0; m < office.material_count; m++)
         if (is_emitter(&office.materials[m])) mats[m].flags = IRRVOL_MATERIAL_IMPORTANT;   /* the lamp: never missed */
-    full = build_volume(&s.office, total, mats, office.material_count, pool, "(full)");
-    direct = build_volume(&s.office, job.emitted, mats, office.material_count, pool, "(emitted: direct)");
-    indirect = build_volume(&s.office, job.reflected, mats, office.material_count, pool, "(reflected: indirect)");
+    full = build_volume(&s.office, total, mats, office.material_count, 0.0f, pool, "(full, defaults)");
+    same_grid = build_volume(&s.office, total, mats, office.material_count, -1.0f, pool, "(full)");
+    direct = build_volume(&s.office, job.emitted, mats, office.material_count, -1.0f, pool, "(emitted: direct)");
+    indirect = build_volume(&s.office, job.reflected, mats, office.material_count, -1.0f, pool, "(reflected: indirect)");
     i = obj_find_material(&office, "yellow");
     if (i >= 0) mats[i].flags |= IRRVOL_MATERIAL_IGNORE;
-    no_divider = build_volume(&s.office, total, mats, office.material_count, pool, "(divider ignored)");
-    if (!full || !direct || !indirect || !no_divider) goto done;
+    no_divider = build_volume(&s.office, total, mats, office.material_count, -1.0f, pool, "(divider ignored)");
+    if (!full || !same_grid || !direct || !indirect || !no_divider) goto done;
 
     /* 3. the walks of figures 5.3 and 5.4 */
     if (ex_raster_init(&s.raster, s.width, s.height) != 0) goto done;
@@ -510,8 +517,10 @@ int main(int argc, char **argv)
     s.image = (float *)malloc(3 * sizeof(float) * (size_t)s.width * (size_t)s.height);
     s.bytes = (unsigned char *)malloc(3 * (size_t)s.width * (size_t)s.height);
     if (!s.image || !s.bytes) goto done;
-    if (run_walk(&s, full, &desk, frames, out) != 0) goto done;
-    if (run_walk(&s, full, &divider, frames, out) != 0) goto done;
+    if (run_walk(&s, full, IRRVOL_WEIGHTING_DEFAULT, &desk, frames, out) != 0) goto done;
+    if (run_walk(&s, full, IRRVOL_WEIGHTING_DEFAULT, &divider, frames, out) != 0) goto done;
+    divider_plain.name = "divider_plain";
+    if (run_walk(&s, full, IRRVOL_WEIGHTING_TRILINEAR, &divider_plain, frames, out) != 0) goto done;
 
     /* 4. light transfer: the bunny beside the divider under four volumes */
     {
@@ -525,10 +534,10 @@ int main(int argc, char **argv)
         static const float up[3] = {0, 1, 0};
         double worst = 0.0;
         float *h = (float *)malloc(3 * 3 * sizeof(float) * s.rabbit.vertex_count);
-        vols[0] = full; vols[1] = direct; vols[2] = indirect; vols[3] = no_divider;
+        vols[0] = same_grid; vols[1] = direct; vols[2] = indirect; vols[3] = no_divider;
         cam = ex_camera_look_at(divider.eye, divider.target, up, 55.0f, s.width, s.height);
         for (i = 0; i < 4; i++) {
-            bunny_light(&s.rabbit, vols[i], 3.42f, 2.1f, divider.yaw);
+            bunny_light(&s.rabbit, vols[i], IRRVOL_WEIGHTING_DEFAULT, 3.42f, 2.1f, divider.yaw);
             if (h && i < 3) memcpy(h + 3 * (size_t)i * s.rabbit.vertex_count, s.rabbit.rgb, 3 * sizeof(float) * s.rabbit.vertex_count);
             {   /* the mean colour of the vertices that face the divider (+x) */
                 uint32_t count = 0;
@@ -569,7 +578,8 @@ int main(int argc, char **argv)
     rc = 0;
 done:
     if (rc) fprintf(stderr, "irrvol_bunny failed (is %s writable? run from the repository root)\n", out);
-    irrvol_destroy(full); irrvol_destroy(direct); irrvol_destroy(indirect); irrvol_destroy(no_divider);
+    irrvol_destroy(full); irrvol_destroy(same_grid); irrvol_destroy(direct); irrvol_destroy(indirect);
+    irrvol_destroy(no_divider);
     free(mats); free(total); free(job.emitted); free(job.reflected);
     free(s.image); free(s.bytes);
     ex_raster_free(&s.raster);

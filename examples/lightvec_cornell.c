@@ -3,7 +3,7 @@
    again gathering indirect light at every pixel, and compares the two.
 
        cc -O2 -I. examples/lightvec_cornell.c -o lightvec_cornell -lm -lpthread
-       ./lightvec_cornell [--size 512] [--out build/out] [--no-reference] [--3d]
+       ./lightvec_cornell [--size 512] [--out build/out] [--no-reference] [--3d] [--glossy]
 
    Direct light comes from lightvec_gather_direct at every pixel (area
    sampling of the light with shadow rays), indirect light from the cache: a
@@ -11,7 +11,9 @@
    the next pixels. Pixels are visited in a random order (the paper's remedy
    for scan-line bias) by all cores; inserts are serialized by a mutex while
    lookups run concurrently (the cache's one-writer, many-readers model).
-   --3d treats the (Lambertian) surfaces as view independent.
+   --3d treats the (Lambertian) surfaces as view independent. --glossy makes
+   the floor glossy (0.3 Lambert + 0.4 normalized Phong, exponent 20): its
+   light vectors carry a glossy part that follows the viewer.
    Writes lightvec_cache.png, lightvec_gather.png and the indirect components
    lightvec_indirect_cache.png, lightvec_indirect_gather.png under --out. */
 #define _POSIX_C_SOURCE 200809L
@@ -34,13 +36,14 @@ typedef struct pixel {
 
 typedef struct app {
     obj_scene obj;
-    lightvec_material *mats;
+    lightvec_material *mats;       /* the file's, and the glossy floor's last */
+    uint32_t *tri_material;
     lightvec_scene *scene;
     lightvec_cache *cache;
     pthread_mutex_t insert_lock;
     lightvec_gather_desc gather;
     ex_camera cam;
-    int size, view_independent;
+    int size, view_independent, glossy;
     pixel *px;
     uint32_t *order;
     float *direct, *ind_cache, *ind_gather;
@@ -66,8 +69,19 @@ static int load_scene(app *a)
         fprintf(stderr, "%s\n", err);
         return -1;
     }
-    a->mats = (lightvec_material *)calloc(a->obj.material_count, sizeof *a->mats);
-    if (!a->mats) return -1;
+    a->mats = (lightvec_material *)calloc(a->obj.material_count + 1, sizeof *a->mats);
+    a->tri_material = (uint32_t *)malloc(a->obj.tri_count * sizeof *a->tri_material);
+    if (!a->mats || !a->tri_material) return -1;
+    memcpy(a->tri_material, a->obj.tri_material, a->obj.tri_count * sizeof *a->tri_material);
+    if (a->glossy) {
+        lightvec_material *f = &a->mats[a->obj.material_count];
+        int floor = obj_find_group(&a->obj, "floor");
+        f->diffuse[0] = f->diffuse[1] = f->diffuse[2] = 0.3f;
+        f->specular[0] = f->specular[1] = f->specular[2] = 0.4f;
+        f->exponent = 20.0f;
+        for (i = 0; i < a->obj.tri_count; i++)
+            if ((int)a->obj.face_group[a->obj.tri_face[i]] == floor) a->tri_material[i] = a->obj.material_count;
+    }
     for (i = 0; i < a->obj.material_count; i++) {
         memcpy(a->mats[i].diffuse, a->obj.materials[i].kd, sizeof a->mats[i].diffuse);
         memcpy(a->mats[i].specular, a->obj.materials[i].ks, sizeof a->mats[i].specular);
@@ -79,9 +93,9 @@ static int load_scene(app *a)
     d.vertex_count = a->obj.vertex_count;
     d.indices = a->obj.tri_indices;
     d.triangle_count = a->obj.tri_count;
-    d.material_ids = a->obj.tri_material;
+    d.material_ids = a->tri_material;
     d.materials = a->mats;
-    d.material_count = a->obj.material_count;
+    d.material_count = a->obj.material_count + (a->glossy ? 1u : 0u);
     r = lightvec_scene_create(&d, &a->scene);
     if (r != LIGHTVEC_OK) {
         fprintf(stderr, "lightvec_scene_create: %s\n", lightvec_result_string(r));
@@ -114,7 +128,7 @@ static void primary_job(void *ctx, uint32_t i)
     n[2] = e1[0] * e2[1] - e1[1] * e2[0];
     l = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
     if (!(l > 0.0f) || n[0] * d[0] + n[1] * d[1] + n[2] * d[2] >= 0.0f) return; /* back faces are black */
-    m = a->obj.tri_material[t];
+    m = a->tri_material[t];
     for (k = 0; k < 3; k++) {
         p->s.position[k] = a->cam.eye[k] + h.t * d[k];
         p->s.normal[k] = n[k] / l;
@@ -242,10 +256,15 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[i], "--size") && i + 1 < argc) a.size = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--no-reference")) reference = 0;
         else if (!strcmp(argv[i], "--3d")) a.view_independent = 1;
+        else if (!strcmp(argv[i], "--glossy")) a.glossy = 1;
         else {
-            fprintf(stderr, "usage: %s [--size N] [--out DIR] [--no-reference] [--3d]\n", argv[0]);
+            fprintf(stderr, "usage: %s [--size N] [--out DIR] [--no-reference] [--3d] [--glossy]\n", argv[0]);
             return 2;
         }
+    }
+    if (a.glossy && a.view_independent) {
+        fprintf(stderr, "--glossy and --3d exclude each other: a glossy surface depends on the viewer\n");
+        return 2;
     }
     if (a.size < 8 || a.size > 8192) {
         fprintf(stderr, "--size must be in 8..8192\n");
@@ -284,8 +303,8 @@ int main(int argc, char **argv)
         hits += (uint32_t)a.hit[k];
     }
     lightvec_cache_info(a.cache, &st);
-    printf("%dx%d Cornell box, %s light vectors: indirect light from the cache in %.2f s\n", a.size, a.size,
-           a.view_independent ? "3D" : "5D", t_cache);
+    printf("%dx%d Cornell box%s, %s light vectors: indirect light from the cache in %.2f s\n", a.size, a.size,
+           a.glossy ? " with a glossy floor" : "", a.view_independent ? "3D" : "5D", t_cache);
     printf("  hit rate %.2f%% (%u of %u pixels), %llu records, %u faces, %.1f MB\n", 100.0 * hits / visible, hits,
            visible, (unsigned long long)st.record_count, st.face_count, st.bytes / 1048576.0);
 
@@ -330,7 +349,7 @@ int main(int argc, char **argv)
     lightvec_cache_destroy(a.cache);
     lightvec_scene_destroy(a.scene);
     obj_free(&a.obj);
-    free(a.mats); free(a.px); free(a.order); free(a.direct); free(a.ind_cache); free(a.ind_gather); free(a.hit);
+    free(a.mats); free(a.tri_material); free(a.px); free(a.order); free(a.direct); free(a.ind_cache); free(a.ind_gather); free(a.hit);
     free(full);
     return 0;
 }

@@ -12,7 +12,10 @@
        ./rendercache_cornell --out build/out
 
    Options: --out DIR, --frames N, --size WxH, --budget FRACTION, --spp N
-   (paths per requested pixel), --no-bunny, --no-predict. */
+   (paths per requested pixel), --no-bunny, --no-predict, --late (an
+   asynchronous renderer one frame behind: the samples of a frame's requests
+   are inserted after the next begin_frame, each stored where its own ray
+   hit). */
 #define _POSIX_C_SOURCE 200809L /* clock_gettime, mkdir */
 #include <stdio.h>
 #include <stdlib.h>
@@ -30,7 +33,7 @@
 
 typedef struct options {
     const char *out;
-    int frames, width, height, spp, bunny, predict;
+    int frames, width, height, spp, bunny, predict, late;
     float budget;
 } options;
 
@@ -108,6 +111,7 @@ static void shade_batch(void *ctx, uint32_t index)
         s->x = r->x;
         s->y = r->y;
         s->flags = r->flags;
+        s->frame = r->frame;
         s->object = RENDERCACHE_MISS;
         for (n = 0; n < j->spp; n++) {
             float rgb[3];
@@ -141,7 +145,7 @@ static void shade(ex_pool *pool, const ex_tracer *t, const rendercache_pixel_req
 static void usage(void)
 {
     puts("usage: rendercache_cornell [--out DIR] [--frames N] [--size WxH] [--budget FRACTION] [--spp N]\n"
-         "                           [--no-bunny] [--no-predict]\n"
+         "                           [--no-bunny] [--no-predict] [--late]\n"
          "Renders a camera path through the Cornell box with the render cache and writes\n"
          "DIR/rendercache_cornell_NNN.png for every frame and DIR/rendercache_cornell_full.png,\n"
          "the last view traced in full. Defaults: build/out, 48 frames, 320x320, budget 0.08, 4 spp.");
@@ -156,10 +160,12 @@ static int parse(int argc, char **argv, options *o)
     o->budget = 0.08f;
     o->spp = 4;
     o->bunny = o->predict = 1;
+    o->late = 0;
     for (i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) { usage(); exit(0); }
         if (!strcmp(argv[i], "--no-bunny")) { o->bunny = 0; continue; }
         if (!strcmp(argv[i], "--no-predict")) { o->predict = 0; continue; }
+        if (!strcmp(argv[i], "--late")) { o->late = 1; continue; }
         if (i + 1 >= argc) { fprintf(stderr, "rendercache_cornell: %s needs a value (see --help)\n", argv[i]); return 0; }
         if (!strcmp(argv[i], "--out")) o->out = argv[++i];
         else if (!strcmp(argv[i], "--frames")) o->frames = atoi(argv[++i]);
@@ -215,13 +221,14 @@ int main(int argc, char **argv)
     rendercache_desc desc;
     rendercache *rc;
     rendercache_pixel_request *req;
-    rendercache_sample *samples;
+    rendercache_sample *samples, *pending;
     unsigned char *rgb8;
     float *full, exposure = 1.0f, lo[3], hi[3], m[12];
     char err[512], name[64];
     uint32_t pixels, budget;
     double cache_total = 0.0, trace_total = 0.0, full_time;
     uint64_t sample_total = 0;
+    uint32_t waiting = 0;   /* --late: samples of the last frame, not yet inserted */
     int frame, bunny_instance = -1;
     if (!parse(argc, argv, &o)) return 2;
     mkdir(o.out, 0777);   /* may exist already; writing the first PNG tells */
@@ -253,15 +260,17 @@ int main(int argc, char **argv)
     desc.parallel_user = pool;
     req = (rendercache_pixel_request *)malloc(sizeof *req * pixels);
     samples = (rendercache_sample *)malloc(sizeof *samples * pixels);
+    pending = (rendercache_sample *)malloc(sizeof *pending * pixels);
     rgb8 = (unsigned char *)malloc(3 * (size_t)pixels);
     full = (float *)malloc(3 * sizeof(float) * pixels);
-    if (!req || !samples || !rgb8 || !full || rendercache_create(&desc, &rc) != RENDERCACHE_OK) {
+    if (!req || !samples || !pending || !rgb8 || !full || rendercache_create(&desc, &rc) != RENDERCACHE_OK) {
         fprintf(stderr, "rendercache_cornell: out of memory\n");
         return 1;
     }
     printf("rendercache_cornell: %dx%d, %d frames, budget %u samples per frame (%.1f%%), %d spp, %d threads%s%s\n",
            o.width, o.height, o.frames, budget, 100.0 * budget / pixels, o.spp, ex_pool_threads(pool),
            o.bunny ? ", moving bunny" : "", o.predict ? ", predictive sampling" : "");
+    if (o.late) printf("samples arrive one frame late (inserted after the next begin_frame)\n");
     printf("frame  cache ms  trace ms  samples  (predicted)  filled holes  empty\n");
     for (frame = 0; frame < o.frames; frame++) {
         rendercache_camera cam = camera_at(&o, frame), next = camera_at(&o, frame + 1);
@@ -275,13 +284,24 @@ int main(int argc, char **argv)
         }
         t0 = seconds();
         rendercache_begin_frame(rc, &cam);
+        if (o.late && waiting) {   /* last frame's samples, back from the renderer now */
+            rendercache_insert(rc, pending, waiting, NULL);
+            waiting = 0;
+        }
         if (o.predict && frame > 0 && frame + 1 < o.frames) rendercache_predict(rc, &next);
         /* the first frame is traced in full, as in the paper */
         rendercache_request(rc, req, frame == 0 ? pixels : budget, &n);
         t1 = seconds();
         shade(pool, tracer, req, samples, n, (uint32_t)frame + 1, &o);
         t2 = seconds();
-        rendercache_insert(rc, samples, n);
+        if (o.late && frame > 0) {   /* they come back in the next frame */
+            rendercache_sample *t = pending;
+            pending = samples;
+            samples = t;
+            waiting = n;
+        } else {
+            rendercache_insert(rc, samples, n, NULL);
+        }
         t3 = seconds();
         rendercache_get_stats(rc, &st);
         if (frame == 0) exposure = ex_auto_exposure(rendercache_image(rc), o.width, o.height, 0.97f);
@@ -316,6 +336,7 @@ int main(int argc, char **argv)
     if (o.bunny) obj_free(&bunny);
     free(req);
     free(samples);
+    free(pending);
     free(rgb8);
     free(full);
     return 0;

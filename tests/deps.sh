@@ -10,6 +10,13 @@ packages="libembree-dev libopenexr-dev pkg-config"
 have_embree() { printf '#include <embree3/rtcore.h>\nint main(void){return 0;}\n' | "$CC" -x c - -o /dev/null -lembree3 >/dev/null 2>&1; }
 have_openexr() { command -v pkg-config >/dev/null 2>&1 && pkg-config --exists OpenEXR; }
 
+# Optional: glslangValidator compiles irrvol.h's GLSL evaluator in the tests
+# (without it a C transliteration checks the same text).
+if ! command -v glslangValidator >/dev/null 2>&1 && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -q glslang-tools </dev/null >/dev/null 2>&1 ||
+        echo "deps: glslang-tools not installed (optional: the GLSL test compiles it as C only)"
+fi
+
 if have_embree && have_openexr; then exit 0; fi
 
 if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then

@@ -86,10 +86,39 @@ static void test_pfm_rejects(void)
     remove(path);
 }
 
+/* The filmic pipeline: Narkowicz's ACES fit at known points (its
+   rational function evaluated by hand), monotonic, saturating at white;
+   the key exposure of a uniform image maps it to middle grey. */
+static void test_filmic(void)
+{
+    float x, prev = -1.0f, img[3 * 16], black[3 * 16];
+    unsigned char out[3 * 16];
+    int i, monotonic = 1;
+    CHECK(ex_filmic(0.0f) == 0.0f && ex_filmic(-1.0f) == 0.0f && ex_filmic(NAN) == 0.0f);
+    /* 0.18 (2.51 0.18 + 0.03) / (0.18 (2.43 0.18 + 0.59) + 0.14) = 0.08672 / 0.32493 */
+    CHECK_CLOSE(ex_filmic(0.18f), 0.086724 / 0.324929, 1e-5, 0.0);
+    CHECK_CLOSE(ex_filmic(1.0f), 2.54 / 3.16, 1e-5, 0.0);
+    CHECK(ex_filmic(1e6f) == 1.0f);
+    for (x = 0.0f; x < 64.0f; x += 0.01f) {
+        monotonic &= ex_filmic(x) >= prev;
+        prev = ex_filmic(x);
+    }
+    CHECK(monotonic);
+    for (i = 0; i < 3 * 16; i++) {
+        img[i] = 2.5f;
+        black[i] = 0.0f;
+    }
+    CHECK_CLOSE(ex_exposure_key(img, 4, 4), 0.18 / 2.5, 2e-4, 0.0);   /* delta = 1e-4 of the peak */
+    CHECK(ex_exposure_key(black, 4, 4) == 1.0f);
+    ex_tonemap_filmic(img, 4, 4, ex_exposure_key(img, 4, 4), out);
+    CHECK(out[0] >= 139 && out[0] <= 141);   /* middle grey: filmic 0.267, sRGB 0.553 */
+}
+
 int main(int argc, char **argv)
 {
     TEST_INIT(argc, argv);
     RUN(test_pfm_round_trip);
     RUN(test_pfm_rejects);
+    RUN(test_filmic);
     return test_finish();
 }

@@ -6,7 +6,6 @@
 #include "tests/test.h"
 #include "tests/test_irrvol_scenes.h"
 
-static void set3(float *v, float x, float y, float z) { v[0] = x; v[1] = y; v[2] = z; }
 
 /* CRC-32 (IEEE, reflected), written here independently of the header. */
 static uint32_t crc32_of(const unsigned char *p, size_t n)
@@ -28,8 +27,8 @@ static void put_le32(unsigned char *p, uint32_t v)
 static void fix_crc(unsigned char *data, size_t size) { put_le32(data + size - 4, crc32_of(data, size - 4)); }
 
 /* Payload offsets (after magic 8, version 4, size 8). */
-enum { OFF_VERSION = 8, OFF_PAYLOAD = 20, OFF_K = 20, OFF_SAMPLES_X = 36, OFF_SUBGRID = 48, OFF_LO_X = 52,
-       OFF_COUNT = 76, OFF_FLAGS = 92 };
+enum { OFF_VERSION = 8, OFF_PAYLOAD = 20, OFF_K = 20, OFF_WEIGHTING = 32, OFF_SAMPLES_X = 40, OFF_SUBGRID = 52,
+       OFF_VIS_RES = 56, OFF_LO_X = 60, OFF_BIAS = 84, OFF_COUNT = 88, OFF_INVALID = 104, OFF_FLAGS = 112 };
 
 /* Largest single allocation, to prove hostile sizes are refused first. */
 typedef struct tracking { size_t largest; long live; } tracking;
@@ -56,19 +55,16 @@ static irrvol *small_volume(int keep_radiance)
     irrvol *v = NULL;
     memset(&s, 0, sizeof s);
     sc_square(&s, 1, 0.3f, 0.3f, 0.3f, 0.05f, 0);
-    memset(&d, 0, sizeof d);
-    d.positions = s.pos;
-    d.vertex_count = s.nv;
-    d.indices = s.idx;
-    d.triangle_count = s.nt;
+    sc_geometry_desc(&d, &s);
     d.radiance = constant_radiance;
     d.resolution = 2;
+    d.visibility_resolution = 3;   /* small maps: every byte of the file is loaded twice per length */
     d.moment = 3;
     d.filter = IRRVOL_FILTER_BILINEAR;
     d.keep_radiance = keep_radiance;
     d.grid_samples[0] = 2; d.grid_samples[1] = 3; d.grid_samples[2] = 2;
-    set3(d.bounds_min, 0, 0, 0);
-    set3(d.bounds_max, 1, 1, 1);
+    sc_set3(d.bounds_min, 0, 0, 0);
+    sc_set3(d.bounds_max, 1, 1, 1);
     if (irrvol_build(&d, &v) != IRRVOL_OK) return NULL;
     return v;
 }
@@ -109,9 +105,12 @@ static int same_queries(const irrvol *a, const irrvol *b)
             s = s * 1664525u + 1013904223u;
             d[k] = (float)(s >> 8) / 16777216.0f - 0.5f;
         }
-        for (f = 0; f <= 2; f++) {
-            irrvol_query_filter(a, (irrvol_filter)f, p, d, ha);
-            irrvol_query_filter(b, (irrvol_filter)f, p, d, hb);
+        for (f = 0; f < 9; f++) {   /* every filter with every weighting, and the harmonics */
+            irrvol_query_filter(a, (irrvol_filter)(f % 3), (irrvol_weighting)(f / 3), p, d, ha);
+            irrvol_query_filter(b, (irrvol_filter)(f % 3), (irrvol_weighting)(f / 3), p, d, hb);
+            if (memcmp(ha, hb, sizeof ha) != 0) return 0;
+            irrvol_query_sh(a, (uint32_t)(1 + f % 2), (irrvol_weighting)(f / 3), p, d, ha);
+            irrvol_query_sh(b, (uint32_t)(1 + f % 2), (irrvol_weighting)(f / 3), p, d, hb);
             if (memcmp(ha, hb, sizeof ha) != 0) return 0;
         }
     }
@@ -207,19 +206,27 @@ static void test_hostile_headers(void)
     irrvol *v = small_volume(0), *w;
     void *data;
     unsigned char *c;
-    size_t size;
+    size_t size, irradiance_at;
     tracking t;
     irrvol_allocator a;
+    irrvol_volume_info info;
     if (!CHECK(v != NULL)) return;
     CHECK_EQ_INT(irrvol_save_to_memory(v, NULL, &data, &size), IRRVOL_OK);
     c = (unsigned char *)malloc(size);
     a.alloc = tracking_alloc;
     a.free = tracking_free;
     a.user = &t;
-#define HOSTILE(stmt, expected) do { memcpy(c, data, size); stmt; fix_crc(c, size); \
+    irrvol_info(v, &info);   /* the irradiance follows the cell flags and the gathered samples' origins */
+    irradiance_at = OFF_FLAGS + info.cell_count + 16 * (info.sample_count - info.hanging_samples);
+#define CORRUPTED(stmt, expected, limit) do { memcpy(c, data, size); stmt; fix_crc(c, size); \
         t.largest = 0; t.live = 0; w = (irrvol *)c; \
         CHECK_EQ_INT(irrvol_load_from_memory(c, size, &a, &w), expected); \
-        CHECK(w == NULL && t.live == 0 && t.largest < 4096); } while (0)
+        CHECK(w == NULL && t.live == 0 && t.largest < (limit)); } while (0)
+    /* sizes that lie: refused before anything large is allocated */
+#define HOSTILE(stmt, expected) CORRUPTED(stmt, expected, 4096)
+    /* values out of range, found while reading: allocations in proportion to the input (the
+       visibility maps gain their borders: (n + 2)^2 / n^2 of what was read) */
+#define BAD_VALUE(stmt) CORRUPTED(stmt, IRRVOL_ERROR_CORRUPT_DATA, 2 * size)
     HOSTILE(put_le32(c + OFF_SAMPLES_X, 1024); put_le32(c + OFF_SAMPLES_X + 4, 1024);
             put_le32(c + OFF_SAMPLES_X + 8, 1024), IRRVOL_ERROR_CORRUPT_DATA);   /* a billion cells */
     HOSTILE(put_le32(c + OFF_K, 64), IRRVOL_ERROR_CORRUPT_DATA);                 /* 8192 bins per sample */
@@ -230,12 +237,26 @@ static void test_hostile_headers(void)
     HOSTILE(put_le32(c + OFF_COUNT, 12), IRRVOL_ERROR_CORRUPT_DATA);              /* fewer than the grid has */
     HOSTILE(put_le32(c + OFF_LO_X, 0x7FC00000u), IRRVOL_ERROR_CORRUPT_DATA);      /* NaN bound */
     HOSTILE(put_le32(c + OFF_LO_X, 0x3F800000u), IRRVOL_ERROR_CORRUPT_DATA);      /* min = max = 1 */
-    HOSTILE(c[OFF_FLAGS] = 2, IRRVOL_ERROR_CORRUPT_DATA);                        /* a cell flag not 0 or 1 */
+    HOSTILE(c[OFF_FLAGS] = 3, IRRVOL_ERROR_CORRUPT_DATA);                        /* a cell flag not 0, 1 or 2 */
+    HOSTILE(put_le32(c + OFF_WEIGHTING, 7), IRRVOL_ERROR_CORRUPT_DATA);          /* no such weighting */
+    HOSTILE(put_le32(c + OFF_VIS_RES, 0), IRRVOL_ERROR_CORRUPT_DATA);
+    HOSTILE(put_le32(c + OFF_VIS_RES, IRRVOL_MAX_VISIBILITY_RESOLUTION + 1), IRRVOL_ERROR_CORRUPT_DATA);
+    HOSTILE(put_le32(c + OFF_VIS_RES, 4096), IRRVOL_ERROR_CORRUPT_DATA);         /* 16 M texels per sample */
+    HOSTILE(put_le32(c + OFF_BIAS, 0x7FC00000u), IRRVOL_ERROR_CORRUPT_DATA);     /* NaN bias */
+    HOSTILE(put_le32(c + OFF_BIAS, 0xBF800000u), IRRVOL_ERROR_CORRUPT_DATA);     /* negative bias */
+    BAD_VALUE(put_le32(c + OFF_INVALID, 1));                                     /* counts disagree with the origins */
+    BAD_VALUE(put_le32(c + OFF_FLAGS + 2 + 12, 0x3F000000u));                    /* a validity of 0.5 */
+    BAD_VALUE(put_le32(c + OFF_FLAGS + 2, 0x3F000000u));                         /* moved, against the count */
+    BAD_VALUE(put_le32(c + size - 8, 0xBF800000u));                              /* a negative fit variance */
     HOSTILE(put_le32(c + 12, (uint32_t)size), IRRVOL_ERROR_CORRUPT_DATA);         /* payload size too large */
     HOSTILE(put_le32(c + 12, 30), IRRVOL_ERROR_CORRUPT_DATA);                     /* too small */
-    HOSTILE(put_le32(c + size - 8, 0x7F800000u), IRRVOL_ERROR_CORRUPT_DATA);      /* infinite irradiance */
+    BAD_VALUE(put_le32(c + size - 8, 0x7F800000u));                              /* an infinite fit variance */
+    BAD_VALUE(put_le32(c + irradiance_at, 0x7F800000u));                         /* infinite irradiance */
+    BAD_VALUE(put_le32(c + irradiance_at - 4, 0x40000000u));                     /* a validity of 2 */
     HOSTILE(put_le32(c + OFF_VERSION, IRRVOL_FILE_FORMAT_VERSION + 1), IRRVOL_ERROR_VERSION);
 #undef HOSTILE
+#undef BAD_VALUE
+#undef CORRUPTED
     free(c);
     irrvol_free_memory(NULL, data);
     irrvol_destroy(v);

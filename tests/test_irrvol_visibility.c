@@ -8,7 +8,6 @@
 #include "tests/test_irrvol_scenes.h"
 #include "examples/common/pool.h"
 
-static void set3(float *v, float x, float y, float z) { v[0] = x; v[1] = y; v[2] = z; }
 
 /* Open box: floor [-1, 1]^2 at y = 0 as four quads meeting at the centre
    vertex (vertex 2 of the first quad), walls up to y = 2, no top. */
@@ -21,7 +20,7 @@ static void open_box(sc_scene *s)
         for (qx = 0; qx < 2; qx++) {
             float x0 = qx ? 0.0f : -1.0f, z0 = qz ? 0.0f : -1.0f;
             /* first quad's third vertex is the centre (0, 0, 0) */
-            set3(a, x0, 0, z0); set3(b, x0 + 1, 0, z0); set3(c, x0 + 1, 0, z0 + 1); set3(d, x0, 0, z0 + 1);
+            sc_set3(a, x0, 0, z0); sc_set3(b, x0 + 1, 0, z0); sc_set3(c, x0 + 1, 0, z0 + 1); sc_set3(d, x0, 0, z0 + 1);
             sc_quad(s, a, b, c, d, 0);
         }
     sc_square(s, 0, -1.0f, 1.0f, 0.0f, 1.0f, 0);   /* x = -1: y in [0, 2], z in [-1, 1] */
@@ -40,7 +39,7 @@ static void test_open_box_floor_centre(void)
     double x = 0.5, f = 4.0 * (2.0 * x / sqrt(1 + x * x) * atan(x / sqrt(1 + x * x))) / (2.0 * SC_PI);
     uint32_t i;
     open_box(&s);
-    for (i = 0; i < s.nv; i++) set3(normals + 3 * i, 0, 1, 0);
+    for (i = 0; i < s.nv; i++) sc_set3(normals + 3 * i, 0, 1, 0);
     memset(&d, 0, sizeof d);
     d.positions = s.pos;
     d.vertex_count = s.nv;
@@ -87,7 +86,7 @@ static void test_sheet_and_closed_cube(void)
     sc_cube(&s);   /* closed: every hemisphere facing the inside is blocked */
     for (i = 0; i < s.nv; i++) {
         const float *p = s.pos + 3 * i;
-        set3(inward + 3 * i, -p[0], -p[1], -p[2]);   /* corner vertices: the inward diagonal */
+        sc_set3(inward + 3 * i, -p[0], -p[1], -p[2]);   /* corner vertices: the inward diagonal */
     }
     d.positions = s.pos;
     d.vertex_count = s.nv;
@@ -125,6 +124,10 @@ static void test_visibility_bad_inputs(void)
     BAD(d.ray_offset = -1.0f);
     BAD(d.max_distance = NAN);
     BAD(d.normals = s.pos; d.normal_stride = 2);
+    {   /* issue 17: 3 * 0x55555556 triangles wraps to 2 indices in 32 bits */
+        uint32_t few[9] = {0, 1, 2, 0, 2, 3, 0, 1, 99};
+        BAD(d.indices = few; d.triangle_count = 0x55555556u);
+    }
 #undef BAD
     s.pos[5] = NAN;
     d = good;

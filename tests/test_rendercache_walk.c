@@ -417,6 +417,148 @@ static int solve_irradiance(void *user, double t, float *values)
     return 0;
 }
 
+/* ---------------------------------------------------------------------
+   The trends of Nimeroff et al.'s tables 3 and 4 in a ray-cast scene: a
+   room of 6 x 3 x 8 m with three pieces of furniture (every face its own
+   id, as the paper's id images). Table 3: a 1D view space 4 m long across
+   the room, 48x48 fish-eyes; table 4: a cabinet sliding 2 m across a fixed
+   48x48 view of 60 degrees (the paper's Cornell box sequence), with a
+   fish-eye at the ceiling light. As q rises, more base views and more key
+   times.
+   --------------------------------------------------------------------- */
+typedef struct room_box { float lo[3], hi[3]; } room_box;
+
+typedef struct room {
+    room_box furniture[3];
+    room_box slider;         /* at time 0; moves along +x by 2 m over [0, 1] */
+    int with_slider;
+} room;
+
+/* Entry (outside: the nearest face) or exit (inside) of a ray and a box:
+   distance and face id (2 per axis, + base), or 0 when missed. */
+static uint32_t room_hit(const room_box *b, float shift, const float o[3], const float d[3], int inside, float *t,
+                         uint32_t base)
+{
+    float t0 = -FLT_MAX, t1 = FLT_MAX;
+    uint32_t f0 = 0, f1 = 0;
+    int k;
+    for (k = 0; k < 3; k++) {
+        float lo = b->lo[k] + (k == 0 ? shift : 0.0f), hi = b->hi[k] + (k == 0 ? shift : 0.0f), a, c;
+        uint32_t fa = base + 2u * (uint32_t)k, fc = fa + 1u;
+        if (d[k] == 0.0f) {
+            if (o[k] < lo || o[k] > hi) return 0;
+            continue;
+        }
+        a = (lo - o[k]) / d[k];
+        c = (hi - o[k]) / d[k];
+        if (a > c) { float x = a; a = c; c = x; fa = fc; fc = base + 2u * (uint32_t)k; }
+        if (a > t0) { t0 = a; f0 = fa; }
+        if (c < t1) { t1 = c; f1 = fc; }
+    }
+    if (t0 > t1) return 0;
+    if (inside) { *t = t1; return f1; }
+    if (t0 <= 0.0f) return 0;
+    *t = t0;
+    return f0;
+}
+
+static int render_room(void *user, const rendercache_camera *camera, double time, uint32_t *ids)
+{
+    static const room_box walls = { { 0, 0, 0 }, { 6, 3, 8 } };
+    const room *r = (const room *)user;
+    uint32_t x, y;
+    for (y = 0; y < camera->height; y++)
+        for (x = 0; x < camera->width; x++) {
+            float o[3], d[3], best = FLT_MAX, t;
+            uint32_t id = 0, f, i;
+            if (rendercache_camera_ray(camera, (float)x + 0.5f, (float)y + 0.5f, o, d) != RENDERCACHE_OK) {
+                ids[y * camera->width + x] = RENDERCACHE_NO_SAMPLE;
+                continue;
+            }
+            if ((f = room_hit(&walls, 0.0f, o, d, 1, &t, 10)) != 0) { best = t; id = f; }
+            for (i = 0; i < 3; i++)
+                if ((f = room_hit(&r->furniture[i], 0.0f, o, d, 0, &t, 20 + 10 * i)) != 0 && t < best) { best = t; id = f; }
+            if (r->with_slider && (f = room_hit(&r->slider, 2.0f * (float)time, o, d, 0, &t, 60)) != 0 && t < best) id = f;
+            ids[y * camera->width + x] = id;
+        }
+    return 0;
+}
+
+static room make_room(void)
+{
+    static const room_box pieces[3] = { { { 0.5f, 0, 5.0f }, { 2.5f, 0.8f, 6.0f } },     /* a desk */
+                                        { { 4.0f, 0, 3.0f }, { 4.3f, 1.8f, 6.5f } },     /* a divider */
+                                        { { 0.0f, 0, 7.4f }, { 3.0f, 2.2f, 8.0f } } };   /* shelves */
+    room r;
+    memset(&r, 0, sizeof r);
+    memcpy(r.furniture, pieces, sizeof pieces);
+    r.slider.lo[0] = 1.2f; r.slider.lo[1] = 0.0f; r.slider.lo[2] = 1.6f;
+    r.slider.hi[0] = 2.6f; r.slider.hi[1] = 2.0f; r.slider.hi[2] = 2.2f;
+    return r;
+}
+
+static rendercache_camera room_fisheye(float x, float y, float z, float lx, float ly, float lz)
+{
+    rendercache_camera c;
+    memset(&c, 0, sizeof c);
+    c.kind = RENDERCACHE_CAMERA_FISHEYE;
+    c.eye[0] = x; c.eye[1] = y; c.eye[2] = z;
+    c.look_at[0] = lx; c.look_at[1] = ly; c.look_at[2] = lz;
+    c.up[1] = 1.0f;
+    if (lx == x && lz == z) { c.up[1] = 0.0f; c.up[2] = 1.0f; }
+    c.width = c.height = 48;
+    return c;
+}
+
+static void test_more_views_and_key_times_as_quality_rises(void)
+{
+    static const float qs[3] = { 0.3f, 0.6f, 0.9f };
+    room r = make_room();
+    uint32_t views[3], keys[3];
+    int i;
+    for (i = 0; i < 3; i++) {   /* table 3: base views of a 1D view space */
+        rendercache_view_space_desc d;
+        rendercache_view_space *vs = NULL;
+        memset(&d, 0, sizeof d);
+        d.camera = room_fisheye(1.0f, 1.5f, 1.0f, 1.0f, 1.3f, 2.0f);
+        d.lo[0] = 1.0f; d.lo[1] = 1.5f; d.lo[2] = 1.0f;
+        d.hi[0] = 5.0f; d.hi[1] = 1.5f; d.hi[2] = 1.0f;
+        d.quality = qs[i];
+        d.max_depth = 6;
+        d.render_ids = render_room;
+        d.user = &r;
+        views[i] = 0;
+        if (CHECK_EQ_INT(rendercache_view_space_create(&d, &vs), RENDERCACHE_OK)) views[i] = rendercache_view_space_count(vs);
+        rendercache_view_space_destroy(vs);
+    }
+    r.with_slider = 1;
+    for (i = 0; i < 3; i++) {   /* table 4: key times of a motion before a fixed view and the light */
+        rendercache_camera cams[2];
+        rendercache_time_desc d;
+        double ends[2] = { 0.0, 1.0 }, *times = NULL;
+        cams[0] = room_fisheye(3.0f, 1.2f, 0.0f, 3.0f, 1.2f, 1.0f);
+        cams[0].kind = RENDERCACHE_CAMERA_PERSPECTIVE;
+        cams[0].vfov_degrees = 60.0f;
+        cams[1] = room_fisheye(3.0f, 2.9f, 4.0f, 3.0f, 0.0f, 4.0f);   /* the light, looking down */
+        memset(&d, 0, sizeof d);
+        d.cameras = cams;
+        d.camera_count = 2;
+        d.times = ends;
+        d.time_count = 2;
+        d.quality = qs[i];
+        d.max_depth = 6;
+        d.render_ids = render_room;
+        d.user = &r;
+        keys[i] = 0;
+        CHECK_EQ_INT(rendercache_subdivide_time(&d, &times, &keys[i]), RENDERCACHE_OK);
+        rendercache_free_memory(NULL, times);
+    }
+    test_note("tables 3-4 in a ray-cast room, q = 0.3 / 0.6 / 0.9: %u / %u / %u base views (paper: 2 / 3 / 5), "
+              "%u / %u / %u key times (paper: 2 / 3 / 5)", views[0], views[1], views[2], keys[0], keys[1], keys[2]);
+    CHECK(views[0] >= 2 && views[0] < views[1] && views[1] < views[2]);
+    CHECK(keys[0] >= 2 && keys[0] < keys[1] && keys[1] < keys[2]);
+}
+
 static void test_key_times_reproduce_the_signal(void)
 {
     static const float qs[4] = { 0.3f, 0.6f, 0.9f, 1.0f };
@@ -455,7 +597,7 @@ static void test_key_times_reproduce_the_signal(void)
         for (i = 0; i <= 200; i++) {
             double t = (double)i / 200.0;
             uint32_t lo = 0, off = 0;
-            CHECK_EQ_INT(rendercache_keytimes_eval(kt, t, values), RENDERCACHE_OK);
+            CHECK_EQ_INT(rendercache_keytimes_eval(kt, t, values, sizeof values / sizeof values[0]), RENDERCACHE_OK);
             while (lo + 2 < keys && times[lo + 1] <= t) lo++;
             for (v = 0; v < VERTS; v++) {
                 double a = irradiance(v, times[lo]), b = irradiance(v, times[lo + 1]);
@@ -471,11 +613,14 @@ static void test_key_times_reproduce_the_signal(void)
         /* at the key times themselves, the stored solution */
         for (i = 0; i < (int)keys; i++) {
             const float *kv = rendercache_keytimes_values(kt, (uint32_t)i);
-            CHECK_EQ_INT(rendercache_keytimes_eval(kt, times[i], values), RENDERCACHE_OK);
+            CHECK_EQ_INT(rendercache_keytimes_eval(kt, times[i], values, sizeof values / sizeof values[0]), RENDERCACHE_OK);
             CHECK(memcmp(values, kv, VERTS * s.components * sizeof(float)) == 0);
         }
         /* clamped outside [t0, t1] */
-        CHECK_EQ_INT(rendercache_keytimes_eval(kt, -5.0, values), RENDERCACHE_OK);
+        CHECK_EQ_INT(rendercache_keytimes_eval(kt, -5.0, values, sizeof values / sizeof values[0]), RENDERCACHE_OK);
+        /* a buffer shorter than the solution */
+        CHECK_EQ_INT(rendercache_keytimes_eval(kt, 0.5, values, (size_t)VERTS * s.components - 1),
+                     RENDERCACHE_ERROR_INVALID_ARGUMENT);
         CHECK(values[0] == rendercache_keytimes_values(kt, 0)[0]);
         rendercache_keytimes_destroy(kt);
         kt = NULL;
@@ -497,7 +642,7 @@ static void test_key_times_reproduce_the_signal(void)
     d.element_count = VERTS;
     d.epsilon = NAN;
     CHECK_EQ_INT(rendercache_keytimes_create(&d, &kt), RENDERCACHE_ERROR_INVALID_ARGUMENT);
-    CHECK_EQ_INT(rendercache_keytimes_eval(NULL, 0.0, values), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(rendercache_keytimes_eval(NULL, 0.0, values, sizeof values / sizeof values[0]), RENDERCACHE_ERROR_INVALID_ARGUMENT);
     rendercache_keytimes_destroy(NULL);
 }
 
@@ -723,6 +868,7 @@ int main(int argc, char **argv)
     RUN(test_view_space_subdivision_matches_reference);
     RUN(test_view_space_edge_cases);
     RUN(test_time_subdivision_matches_reference);
+    RUN(test_more_views_and_key_times_as_quality_rises);
     RUN(test_key_times_reproduce_the_signal);
     RUN(test_key_times_reject_non_finite_solutions);
     RUN(test_lrms_known_answers);

@@ -627,7 +627,7 @@ static void test_fill_modes_at_a_disocclusion(void)
 
 /* The fill callback computes the pixels still empty. */
 static const scene *g_fill_scene;
-static unsigned char g_computed[64 * 48];
+static unsigned char g_computed[64 * 48], g_far[64 * 48];
 static int fill_by_tracing(void *user, uint32_t x, uint32_t y, const float org[3], const float dir[3], float rgb[3],
                            float *depth, uint32_t *object)
 {
@@ -672,6 +672,40 @@ static void test_fill_callback_computes_the_rest(void)
     }
     CHECK_EQ_INT(wrong, 0);
     CHECK_EQ_INT(calls, 0);   /* one call per computed pixel */
+    /* background fill at most 2 pixels from its source (pinterp's -fs 2): the pixels farther
+       from every filled pixel of their row and column go to the callback */
+    {
+        rendercache_warp_stats full, near2;
+        rendercache_warper *w2 = NULL;
+        uint32_t x, y, far = 0, far_computed = 0;
+        CHECK_EQ_INT(rendercache_warp(w, in, 1, NULL, RENDERCACHE_FILL_BACKGROUND, out), RENDERCACHE_OK);
+        rendercache_warp_get_stats(w, &full);
+        d.max_fill_distance = 2;
+        CHECK_EQ_INT(rendercache_warper_create(&d, &w2), RENDERCACHE_OK);
+        memset(g_computed, 0, sizeof g_computed);
+        CHECK_EQ_INT(rendercache_warp(w2, in, 1, NULL, RENDERCACHE_FILL_NONE, out), RENDERCACHE_OK);
+        memcpy(g_far, g_computed, sizeof g_far);   /* what no-fill leaves empty */
+        memset(g_computed, 0, sizeof g_computed);
+        CHECK_EQ_INT(rendercache_warp(w2, in, 1, NULL, RENDERCACHE_FILL_BACKGROUND, out), RENDERCACHE_OK);
+        rendercache_warp_get_stats(w2, &near2);
+        CHECK(near2.computed > 0 && near2.background < full.background);
+        CHECK_EQ_INT(near2.background + near2.computed, full.background + full.computed);
+        for (y = 0; y < 48; y++)
+            for (x = 0; x < 64; x++) {   /* an empty pixel 3 or more pixels from filled ones in all four directions */
+                int dx, reach = 1;
+                if (!g_far[y * 64 + x]) continue;
+                for (dx = -2; dx <= 2; dx++) {
+                    int qx = (int)x + dx, qy = (int)y + dx;
+                    if (qx >= 0 && qx < 64 && !g_far[y * 64 + (uint32_t)qx]) reach = 0;
+                    if (qy >= 0 && qy < 48 && !g_far[(uint32_t)qy * 64 + x]) reach = 0;
+                }
+                far += (uint32_t)reach;
+                far_computed += (uint32_t)(reach && g_computed[y * 64 + x]);
+            }
+        CHECK(far > 0);
+        CHECK_EQ_INT(far_computed, far);
+        rendercache_warper_destroy(w2);
+    }
     rendercache_range_image_destroy(src);
     rendercache_range_image_destroy(ref);
     rendercache_range_image_destroy(out);
@@ -966,6 +1000,296 @@ static void lone_free(void *ptr, void *user)
     free(ptr);
 }
 
+/* pinterp's weight of a view with eye e for the target ray (o, dir) to a
+   point at distance dist: 1 / sin of the angle between the two rays. */
+static float average_weight(const float e[3], const float o[3], const float dir[3], float dist)
+{
+    float q[3], l2 = 0.0f, c = 0.0f;
+    int k;
+    for (k = 0; k < 3; k++) {
+        q[k] = o[k] + dir[k] * dist - e[k];
+        l2 += q[k] * q[k];
+        c += q[k] * dir[k];
+    }
+    return 1.0f / sqrtf(1.0f - c * c / l2);
+}
+
+/* Averaging (pinterp's -a): two views of the scene from eyes at x = -1
+   and x = +1, the second with every colour doubled, warped to x = 0.
+   Where both see the wall, the weighted mean (1 wa + 2 wb) / (wa + wb) of
+   the colour; without averaging the nearer (first) input's colour stays;
+   where one alone sees it (the disocclusions of the boxes), its colour. */
+static void test_averaging_weighs_inputs_by_ray_angle(void)
+{
+    scene s = boxes_scene();
+    rendercache_camera a = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, -1.0f, 0, 0, -1.0f, 0, 10, 80, 96, 72);
+    rendercache_camera b = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, 1.0f, 0, 0, 1.0f, 0, 10, 80, 96, 72);
+    rendercache_camera t = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, -0.01f, 0, 0, -0.01f, 0, 10, 50, 64, 48);
+    rendercache_range_image *in[2], *out = NULL, *avg = NULL;
+    rendercache_warp_desc d;
+    rendercache_warper *plain = make_warper(NULL, NULL), *mean = NULL, *mean2 = NULL;
+    ex_pool *pool = ex_pool_create(3);
+    uint32_t x, y, both = 0, mixed = 0, only = 0, kept = 0, p;
+    in[0] = render(&s, &a, 0.0);
+    in[1] = render(&s, &b, 0.0);
+    memset(&d, 0, sizeof d);
+    d.average = 1;
+    if (!CHECK(in[0] && in[1] && plain) || !CHECK_EQ_INT(rendercache_warper_create(&d, &mean), RENDERCACHE_OK)) return;
+    d.parallel_for = pool ? ex_pool_parallel_for : NULL;
+    d.parallel_user = pool;
+    CHECK_EQ_INT(rendercache_warper_create(&d, &mean2), RENDERCACHE_OK);
+    for (p = 0; p < 96 * 72 * 3; p++) in[1]->rgb[p] *= 2.0f;
+    CHECK_EQ_INT(rendercache_range_image_create(&t, NULL, &out), RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_range_image_create(&t, NULL, &avg), RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_warp(plain, (const rendercache_range_image *const *)in, 2, &t, RENDERCACHE_FILL_FOREGROUND, out),
+                 RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_warp(mean, (const rendercache_range_image *const *)in, 2, &t, RENDERCACHE_FILL_FOREGROUND, avg),
+                 RENDERCACHE_OK);
+    for (y = 0; y < 48; y++)
+        for (x = 0; x < 64; x++) {
+            float o[3], dir[3], rgb[3], dist, point[3];
+            uint32_t id, k;
+            p = y * 64 + x;
+            if (!far_from_edges(&s, &t, x, y, &id) || id != 0) continue;
+            rendercache_camera_ray(&t, (float)x + 0.5f, (float)y + 0.5f, o, dir);
+            trace(&s, o, dir, &dist, rgb);
+            for (k = 0; k < 3; k++) point[k] = o[k] + dist * dir[k];
+            if (visible_from(&s, &a, point, 0) && visible_from(&s, &b, point, 0)) {
+                float wa = average_weight(a.eye, o, dir, dist), wb = average_weight(b.eye, o, dir, dist);
+                both++;
+                /* the quads interpolate the colour linearly, exact on the plane but for rounding: 1e-4 */
+                mixed += fabsf(avg->rgb[3 * p] / rgb[0] - (wa + 2.0f * wb) / (wa + wb)) < 1e-4f;
+                kept += fabsf(out->rgb[3 * p] / rgb[0] - 1.0f) < 0.01f || fabsf(out->rgb[3 * p] / rgb[0] - 2.0f) < 0.02f;
+            } else if (visible_from(&s, &a, point, 0) != visible_from(&s, &b, point, 0)) {
+                float expect = visible_from(&s, &a, point, 0) ? 1.0f : 2.0f;
+                only += fabsf(avg->rgb[3 * p] / rgb[0] - expect) < 1e-4f * expect;
+            }
+        }
+    test_note("averaging: %u wall pixels seen by both views, %u of them the weighted mean (plain warp: %u kept one view); "
+              "%u seen by one view keep its colour", both, mixed, kept, only);
+    CHECK(both > 500);
+    /* a few wall pixels next to a disocclusion of one view get that view's edge points instead of quads */
+    CHECK(mixed >= both - both / 30);
+    CHECK(kept >= both - both / 100);
+    CHECK(only > 0);
+    /* any number of threads: the same image, bit for bit */
+    CHECK_EQ_INT(rendercache_warp(mean2, (const rendercache_range_image *const *)in, 2, &t, RENDERCACHE_FILL_BOTH, out),
+                 RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_warp(mean, (const rendercache_range_image *const *)in, 2, &t, RENDERCACHE_FILL_BOTH, avg),
+                 RENDERCACHE_OK);
+    CHECK(memcmp(out->rgb, avg->rgb, sizeof(float) * 3 * 64 * 48) == 0);
+    CHECK(memcmp(out->depth, avg->depth, sizeof(float) * 64 * 48) == 0);
+    rendercache_range_image_destroy(in[0]);
+    rendercache_range_image_destroy(in[1]);
+    rendercache_range_image_destroy(out);
+    rendercache_range_image_destroy(avg);
+    rendercache_warper_destroy(plain);
+    rendercache_warper_destroy(mean);
+    rendercache_warper_destroy(mean2);
+    ex_pool_destroy(pool);
+}
+
+/* ---------------------------------------------------------------------
+   A render cache seeded from base views (rendercache_seed): the first
+   frame of an interactive session shows the precomputed views at once,
+   and sampling then replaces them.
+   --------------------------------------------------------------------- */
+/* Pixels of an image of cam whose colour lies outside the range of the
+   exact colours at the centres of the 3x3 pixels around it (+- 0.01). */
+static uint32_t wrong_against_scene(const scene *s, const rendercache_camera *cam, const float *img)
+{
+    uint32_t x, y, wrong = 0;
+    for (y = 0; y < cam->height; y++)
+        for (x = 0; x < cam->width; x++) {
+            float lo[3] = { FLT_MAX, FLT_MAX, FLT_MAX }, hi[3] = { -FLT_MAX, -FLT_MAX, -FLT_MAX };
+            const float *c = img + 3 * ((size_t)y * cam->width + x);
+            int dx, dy, k, bad = 0;
+            for (dy = -1; dy <= 1; dy++)
+                for (dx = -1; dx <= 1; dx++) {
+                    float o[3], d[3], rgb[3], dist;
+                    rendercache_camera_ray(cam, (float)x + 0.5f + (float)dx, (float)y + 0.5f + (float)dy, o, d);
+                    trace(s, o, d, &dist, rgb);
+                    for (k = 0; k < 3; k++) {
+                        lo[k] = rgb[k] < lo[k] ? rgb[k] : lo[k];
+                        hi[k] = rgb[k] > hi[k] ? rgb[k] : hi[k];
+                    }
+                }
+            for (k = 0; k < 3; k++) bad |= c[k] < lo[k] - 0.01f || c[k] > hi[k] + 0.01f;
+            wrong += (uint32_t)bad;
+        }
+    return wrong;
+}
+
+static void test_seed_render_cache_from_base_views(void)
+{
+    const uint32_t w = 64, h = 48, n = w * h;
+    scene s = boxes_scene();
+    rendercache_camera cam = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, 0.3f, 0.1f, 0.5f, 0.5f, 0.0f, 10.0f, 60.0f, w, h);
+    rendercache_camera fish[2];
+    rendercache_range_image *base[2] = { NULL, NULL }, *bad = NULL;
+    rendercache_desc d;
+    rendercache *rc = NULL;
+    rendercache_stats st;
+    static rendercache_pixel_request req[64 * 48];
+    static rendercache_sample smp[64 * 48];
+    uint32_t taken = 0, wrong_seeded, empty = 0, p, got, i, f, wrong_after;
+    fish[0] = make_camera(RENDERCACHE_CAMERA_FISHEYE, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 10.0f, 0, 160, 160);
+    fish[1] = make_camera(RENDERCACHE_CAMERA_FISHEYE, 0.8f, 0.2f, 0.8f, 0.8f, 0.2f, 10.8f, 0, 160, 160);
+    base[0] = render(&s, &fish[0], 0.0);
+    base[1] = render(&s, &fish[1], 0.0);
+    memset(&d, 0, sizeof d);
+    d.width = w;
+    d.height = h;
+    d.object_count = 4;
+    if (!CHECK(base[0] && base[1]) || !CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+    CHECK_EQ_INT(rendercache_seed(rc, (const rendercache_range_image *const *)base, 2, &taken),
+                 RENDERCACHE_ERROR_INVALID_ARGUMENT);   /* no frame yet */
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
+    for (p = 0; p < n; p++) empty += rendercache_pixel_kinds(rc)[p] == RENDERCACHE_PIXEL_EMPTY;
+    CHECK_EQ_INT(empty, n);   /* an empty cache */
+    CHECK_EQ_INT(rendercache_seed(rc, (const rendercache_range_image *const *)base, 2, &taken), RENDERCACHE_OK);
+    CHECK(taken > n / 2);   /* (seeds of one surface that land in one pixel replace each other) */
+    empty = 0;
+    for (p = 0; p < n; p++) empty += rendercache_pixel_kinds(rc)[p] == RENDERCACHE_PIXEL_EMPTY;
+    wrong_seeded = wrong_against_scene(&s, &cam, rendercache_image(rc));
+    /* the seeded frame is nearly right (disocclusions of both base views, and edges of their
+       coarser pixels, stay wrong) and nothing is empty */
+    CHECK_EQ_INT(empty, 0);
+    CHECK_MSG(wrong_seeded < n / 25, "%u of %u pixels wrong after seeding", wrong_seeded, n);
+    /* the seeds are old: the first requests of the next frames go to them, and they make way */
+    for (f = 0; f < 14; f++) {
+        CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
+        CHECK_EQ_INT(rendercache_request(rc, req, n / 12, &got), RENDERCACHE_OK);
+        for (i = 0; i < got; i++) {
+            float dist;
+            memset(&smp[i], 0, sizeof smp[i]);
+            smp[i].x = req[i].x; smp[i].y = req[i].y; smp[i].frame = req[i].frame;
+            smp[i].object = trace(&s, req[i].org, req[i].dir, &dist, smp[i].rgb);
+            for (p = 0; p < 3; p++) smp[i].position[p] = req[i].org[p] + dist * req[i].dir[p];
+        }
+        CHECK_EQ_INT(rendercache_insert(rc, smp, got, NULL), RENDERCACHE_OK);
+    }
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
+    wrong_after = wrong_against_scene(&s, &cam, rendercache_image(rc));
+    rendercache_get_stats(rc, &st);
+    test_note("seeding a %ux%u cache from 2 fish-eyes: %u points, %u pixels wrong, %u after 14 frames at 8%%",
+              w, h, taken, wrong_seeded, wrong_after);
+    CHECK(wrong_after < wrong_seeded || wrong_after == 0);
+    CHECK(st.live_points <= st.capacity);
+    /* bad input */
+    CHECK_EQ_INT(rendercache_seed(NULL, (const rendercache_range_image *const *)base, 2, &taken), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(rendercache_seed(rc, NULL, 2, &taken), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(rendercache_seed(rc, NULL, 0, &taken), RENDERCACHE_OK);
+    CHECK_EQ_INT(taken, 0);
+    CHECK_EQ_INT(rendercache_range_image_create(&fish[0], NULL, &bad), RENDERCACHE_OK);
+    bad->camera.vfov_degrees = 0.0f;
+    bad->camera.kind = (rendercache_camera_kind)9;
+    CHECK_EQ_INT(rendercache_seed(rc, (const rendercache_range_image *const *)&bad, 1, &taken), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    rendercache_range_image_destroy(bad);
+    rendercache_range_image_destroy(base[0]);
+    rendercache_range_image_destroy(base[1]);
+    rendercache_destroy(rc);
+}
+
+/* Whether a range image is one the library accepts: what save validates
+   (finite colours, depths finite and positive where there is a surface). */
+static int image_valid(const rendercache_range_image *img)
+{
+    void *data = NULL;
+    size_t size = 0;
+    int ok = rendercache_range_image_save_to_memory(img, NULL, &data, &size) == RENDERCACHE_OK;
+    rendercache_free_memory(NULL, data);
+    return ok;
+}
+
+/* Depths at the ends of the float range (a denormal 2e-41 next to 2.7e23 in
+   one 2x2 block) and colours near FLT_MAX: the projected positions leave
+   every integer range and the squared distances overflow, and the warp must
+   still give a valid image (no float-to-int overflow: compile with clang
+   -fsanitize=float-cast-overflow to see the conversions themselves). */
+static void test_extreme_depths_and_colours(void)
+{
+    static const rendercache_fill fills[4] = { RENDERCACHE_FILL_NONE, RENDERCACHE_FILL_FOREGROUND,
+                                               RENDERCACHE_FILL_BACKGROUND, RENDERCACHE_FILL_BOTH };
+    rendercache_camera src = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, 0, 0, 0, 0, 0, 10, 60.0f, 4, 4);
+    /* the source's eye lies 1e-20 in front of the target's eye plane: its nearest pixels project to x ~ -1e21 */
+    rendercache_camera dst = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, -1.0f, 0.0f, -1e-20f, -1.0f, 0.0f, 10.0f, 60.0f, 16, 12);
+    rendercache_range_image *in = NULL, *out = NULL, *other = NULL, *blend = NULL;
+    rendercache_warper *w = make_warper(NULL, NULL);
+    const rendercache_range_image *list[2];
+    uint64_t seed = 12345;
+    uint32_t p, f, trial, invalid = 0;
+    if (!w || !CHECK_EQ_INT(rendercache_range_image_create(&src, NULL, &in), RENDERCACHE_OK) ||
+        !CHECK_EQ_INT(rendercache_range_image_create(&dst, NULL, &out), RENDERCACHE_OK))
+        return;
+    for (p = 0; p < 16; p++) {
+        in->object[p] = 0;
+        in->depth[p] = 5.0f;
+        in->rgb[3 * p] = in->rgb[3 * p + 1] = in->rgb[3 * p + 2] = 0.5f;
+    }
+    in->depth[5] = in->depth[6] = in->depth[9] = 2e-41f;   /* the 2x2 block of pixels (1..2, 1..2) */
+    in->depth[10] = 2.7e23f;
+    for (f = 0; f < 4; f++) {
+        CHECK_EQ_INT(rendercache_warp(w, (const rendercache_range_image *const *)&in, 1, &dst, fills[f], out), RENDERCACHE_OK);
+        CHECK_MSG(image_valid(out), "fill %u: an invalid output image", f);
+    }
+    /* random images: depths log-uniform over the floats (denormals included), colours up to 3e38 */
+    src = make_camera(RENDERCACHE_CAMERA_FISHEYE, 0, 0, 0, 0, 0, 10, 60.0f, 24, 24);
+    rendercache_range_image_destroy(in);
+    in = NULL;
+    CHECK_EQ_INT(rendercache_range_image_create(&src, NULL, &in), RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_range_image_create(&src, NULL, &other), RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_range_image_create(&src, NULL, &blend), RENDERCACHE_OK);
+    for (trial = 0; trial < 24; trial++) {
+        rendercache_range_image *imgs[2];
+        imgs[0] = in;
+        imgs[1] = other;
+        for (f = 0; f < 2; f++)
+            for (p = 0; p < 24 * 24; p++) {
+                rendercache_range_image *img = imgs[f];
+                float u;
+                int k;
+                seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+                u = (float)(seed >> 40) / 16777216.0f;
+                if (img->object[p] == RENDERCACHE_NO_SAMPLE && f == 0 && trial == 0) continue;   /* outside the circle */
+                img->object[p] = (seed >> 20) % 5 == 0 ? RENDERCACHE_MISS : (uint32_t)((seed >> 24) % 2);
+                img->depth[p] = img->object[p] == RENDERCACHE_MISS ? RENDERCACHE_FAR_DEPTH : powf(10.0f, -41.0f + 79.5f * u);
+                if (!(img->depth[p] > 0.0f && img->depth[p] <= FLT_MAX)) img->depth[p] = 1.0f;
+                for (k = 0; k < 3; k++) img->rgb[3 * p + k] = (seed >> (30 + k)) & 1 ? 3e38f : -3e38f * u;
+            }
+        other->camera.eye[0] = 0.3f * (float)(trial % 5);
+        other->camera.look_at[0] = other->camera.eye[0];
+        dst = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, -1.0f + 0.1f * (float)trial, 0.2f, trial % 3 ? -1e-20f : 0.5f,
+                          0.3f * (float)trial, 0.0f, 10.0f, 60.0f, 16, 12);
+        list[0] = in;
+        list[1] = other;
+        CHECK_EQ_INT(rendercache_warp(w, list, 2, &dst, fills[trial % 4], out), RENDERCACHE_OK);
+        invalid += !image_valid(out);
+        {
+            float world[36];
+            rendercache_motion m;
+            int k;
+            memset(world, 0, sizeof world);
+            for (k = 0; k < 3; k++) world[12 * k] = world[12 * k + 5] = world[12 * k + 10] = 1.0f;
+            world[12 + 3] = 2.0f;   /* object 0 moves */
+            m.object_count = 1;
+            m.world_a = world;
+            m.world_b = world + 12;
+            m.world_t = world + 24;
+            CHECK_EQ_INT(rendercache_blend_motion(w, in, in, 0.5f, &m, fills[trial % 4], blend), RENDERCACHE_OK);
+            invalid += !image_valid(blend);
+            CHECK_EQ_INT(rendercache_blend(in, in, 0.3f, blend), RENDERCACHE_OK);
+            invalid += !image_valid(blend);
+        }
+    }
+    CHECK_EQ_INT(invalid, 0);
+    rendercache_range_image_destroy(in);
+    rendercache_range_image_destroy(other);
+    rendercache_range_image_destroy(blend);
+    rendercache_range_image_destroy(out);
+    rendercache_warper_destroy(w);
+}
+
 static void test_warp_rejects_bad_input(void)
 {
     scene s = boxes_scene();
@@ -1046,6 +1370,9 @@ int main(int argc, char **argv)
     RUN(test_motion_blend_does_not_ghost);
     RUN(test_motion_blend_keeps_objects_apart);
     RUN(test_warp_deterministic_for_any_thread_count);
+    RUN(test_averaging_weighs_inputs_by_ray_angle);
+    RUN(test_seed_render_cache_from_base_views);
+    RUN(test_extreme_depths_and_colours);
     RUN(test_warp_rejects_bad_input);
     return test_finish();
 }

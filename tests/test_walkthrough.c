@@ -41,13 +41,14 @@ static wt_options small_options(wt_mode mode)
     wt_options o;
     wt_options_default(&o);
     o.mode = mode;
+    o.scene = "office";
     o.width = REF_W;
     o.height = REF_H;
     o.frames = 24;
     o.threads = 2;
     o.strata = 6;
     o.bunny_strata = 4;
-    o.light_samples = 1;
+    o.light_samples = 4;      /* shadow rays per point, over all the lights */
     o.warmup_divisor = 4;
     o.base_size = 64;
     o.id_size = 24;
@@ -151,11 +152,11 @@ static void test_bunny_path(void)
     };
     float clearance = 1e9f, under = -1e9f, divider = 1e9f, p[3], heading;
     int i, b, open_start;
-    wt_bunny_position(0.0, p, &heading);
+    wt_bunny_position(NULL, 0.0, p, &heading);
     open_start = box_distance(p[0], p[2], 1.0f, 2.6f, 2.9f, 3.7f) > 0.5f;
     CHECK_MSG(open_start, "the bunny starts at (%.2f, %.2f), not on the open floor", (double)p[0], (double)p[2]);
     for (i = 0; i <= 1000; i++) {
-        wt_bunny_position(i / 1000.0, p, &heading);
+        wt_bunny_position(NULL, i / 1000.0, p, &heading);
         CHECK(isfinite(heading));
         for (b = 0; b < 5; b++) {
             float d = box_distance(p[0], p[2], boxes[b][0], boxes[b][1], boxes[b][2], boxes[b][3]);
@@ -182,7 +183,7 @@ static void test_camera_path(void)
         double t = wt_frame_time(&o, f);
         rendercache_camera c = wt_camera(&o, t, 640, 480);
         float p[3], px, py, depth;
-        wt_bunny_position(t, p, NULL);
+        wt_bunny_position(&o, t, p, NULL);
         p[1] = 0.15f;   /* the bunny's middle */
         CHECK(c.eye[0] > 0.2f && c.eye[0] < 4.8f && c.eye[1] > 0.2f && c.eye[1] < 2.6f && c.eye[2] > 0.2f && c.eye[2] < 3.8f);
         CHECK_MSG(rendercache_camera_project(&c, p, &px, &py, &depth) && px > 32 && px < 608 && py > 32 && py < 448,
@@ -316,6 +317,27 @@ static void test_reference_frames(void)
         CHECK(other > 0.0);   /* the comparison sees a change of random numbers */
         CHECK_MSG(lrms >= 0.0 && lrms <= tol, "%s: LRMS %.4f", wt_mode_name((wt_mode)m), lrms);
     }
+}
+
+/* Direct light by many-light sampling has the mean of sampling every light
+   (tests/walkthrough_test.h): the office's lamp, at the hits of a 16 x 12
+   view of frame 0 and of the bunny under the desk. */
+static void test_direct_light_unbiased(void)
+{
+    wt_options o = small_options(WT_MODE_RAYTRACE);
+    wt_world *w = NULL;
+    char err[512];
+    int i;
+    o.light_samples = 8;
+    if (!CHECK(wt_world_create(&o, &w, err, sizeof err) == 0)) return;
+    for (i = 0; i < 2; i++) {
+        double sigmas = 0.0, noise[2], rays = 0.0, t = i ? time_under_desk() : 0.0;
+        double bias = direct_light_bias(w, t, 16, 12, 64, 4, &sigmas, noise, &rays);
+        test_note("office, t %.2f: many-light mean %.4f from every light's (%.1f sigma); relative RMS noise "
+                  "%.3f at 8 rays against %.3f at 4 rays per light (%.1f rays)", t, bias, sigmas, noise[0], noise[1], rays);
+        CHECK_MSG(bias >= 0.0 && sigmas < 4.0, "office t %.2f: relative difference %.4f, %.1f sigma", t, bias, sigmas);
+    }
+    wt_world_destroy(w);
 }
 
 /* Frames are bit-identical on 1 and 2 threads. */
@@ -454,7 +476,7 @@ static void test_bunny_darkens_in_volume(void)
                         wt_bunny_transform(w, t[k], m);
                         wt_bunny_light(w, vol, vis, m, pos, nrm, rgb);
                         CHECK(wt_raster_scene(w, &ra, &c, w->office.positions, w->office.tri_indices,
-                                              w->office.tri_count, pos) == 0);
+                                              w->office.tri_count, pos, NULL) == 0);
                         ex_raster_resolve_gouraud(&ra, w->bunny.tri_indices, w->bunny.tri_count, w->office.tri_count,
                                                   rgb, img);
                         for (p = 0; p < W * H; p++)
@@ -500,7 +522,7 @@ static void test_raster_matches_tracer(void)
         rendercache_camera c = wt_camera(&o, t, W, H);
         wt_set_time(w, t);
         for (v = 0; v < w->bunny.vertex_count; v++) ex__affine_point(w->pose, w->bunny.positions + 3 * (size_t)v, pos + 3 * (size_t)v);
-        CHECK(wt_raster_scene(w, &ra, &c, w->office.positions, w->office.tri_indices, w->office.tri_count, pos) == 0);
+        CHECK(wt_raster_scene(w, &ra, &c, w->office.positions, w->office.tri_indices, w->office.tri_count, pos, NULL) == 0);
         for (y = 0; y < H; y++)
             for (x = 0; x < W; x++) {
                 float org[3], dir[3];
@@ -546,6 +568,7 @@ int main(int argc, char **argv)
     RUN(test_cache_files);
     RUN(test_precompute_reuse);
     RUN(test_reference_frames);
+    RUN(test_direct_light_unbiased);
     RUN(test_threads);
     RUN(test_bunny_darkens_in_frames);
     RUN(test_bunny_darkens_in_volume);

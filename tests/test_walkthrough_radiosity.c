@@ -51,6 +51,7 @@ static wt_options small_options(void)
     wt_options o;
     wt_options_default(&o);
     o.mode = WT_MODE_RADIOSITY;
+    o.scene = "office";
     o.width = REF_W;
     o.height = REF_H;
     o.frames = 24;

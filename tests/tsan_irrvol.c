@@ -1,8 +1,9 @@
 /* Concurrency test of irrvol.h under ThreadSanitizer.
    1. Three threads use one shared volume at once: single queries (nearest,
-      bilinear, the volume's filter, glossy), irrvol_query_many batches,
-      irrvol_info, irrvol_sample / irrvol_sample_values, the bin functions
-      and irrvol_save_to_memory, while irrvol_visibility_ratio runs on one
+      bilinear, the volume's filter, glossy, plain trilinear, harmonics),
+      irrvol_query_many batches, irrvol_info, irrvol_sample /
+      irrvol_sample_values, the bin functions, irrvol_gpu_export and
+      irrvol_save_to_memory, while irrvol_visibility_ratio runs on one
       shared const desc. Every answer must equal, bit for bit, the same call
       made serially beforehand.
    2. A volume built through desc.parallel_for driven by a real thread pool
@@ -39,7 +40,6 @@
 #define QUERIES 1500u
 #define ROUNDS 8
 
-static void set3(float *v, float x, float y, float z) { v[0] = x; v[1] = y; v[2] = z; }
 
 static uint64_t mix(uint64_t z)
 {
@@ -70,11 +70,11 @@ static void make_scene(scene *s, irrvol_desc *d)
     sc_square(&s->mesh, 1, -0.3f, 0.2f, 0.1f, 0.25f, 6);   /* a table */
     sc_square(&s->mesh, 1, 0.8f, -0.5f, 0.5f, 0.1f, 7);    /* a lamp */
     memset(s->mats, 0, sizeof s->mats);
-    set3(s->mats[0].radiance, 0.3f, 0.2f, 0.1f);
-    set3(s->mats[3].radiance, 0.5f, 0.5f, 0.5f);
-    set3(s->mats[2].specular, 0.4f, 0.4f, 0.4f);
-    set3(s->mats[6].radiance, 0.2f, 0.4f, 0.1f);
-    set3(s->mats[7].radiance, 30, 28, 20);
+    sc_set3(s->mats[0].radiance, 0.3f, 0.2f, 0.1f);
+    sc_set3(s->mats[3].radiance, 0.5f, 0.5f, 0.5f);
+    sc_set3(s->mats[2].specular, 0.4f, 0.4f, 0.4f);
+    sc_set3(s->mats[6].radiance, 0.2f, 0.4f, 0.1f);
+    sc_set3(s->mats[7].radiance, 30, 28, 20);
     s->mats[7].flags = IRRVOL_MATERIAL_IMPORTANT;
     memset(d, 0, sizeof *d);
     d->positions = s->mesh.pos;
@@ -106,7 +106,7 @@ typedef struct query_set {
 static void random_unit(uint64_t *s, float d[3])
 {
     float z = 2.0f * unitf(s) - 1.0f, phi = 6.2831853f * unitf(s), r = sqrtf(1.0f - z * z);
-    set3(d, r * cosf(phi), r * sinf(phi), z);
+    sc_set3(d, r * cosf(phi), r * sinf(phi), z);
 }
 
 static void make_queries(query_set *q)
@@ -124,12 +124,16 @@ static void make_queries(query_set *q)
 /* Every answer a thread computes from the shared volume. */
 typedef struct answers {
     float nearest[3 * QUERIES], bilinear[3 * QUERIES], plain[3 * QUERIES], glossy[3 * QUERIES];
+    float trilinear[3 * QUERIES], sh[3 * QUERIES];
     float many_nearest[3 * QUERIES], many_bilinear[3 * QUERIES];
     irrvol_volume_info info;
     float *values;            /* irrvol_sample_values of every sample: irradiance, radiance */
     uint32_t *bin_of_dir;     /* irrvol_direction_bin of every query direction */
     float *bin_dirs;          /* irrvol_bin_direction of every bin */
     void *saved;              /* irrvol_save_to_memory */
+    uint32_t *gpu_index;      /* irrvol_gpu_export */
+    float *gpu_data;
+    irrvol_gpu_layout gpu;
     size_t saved_size;
     float *ratio;             /* irrvol_visibility_ratio of the scene mesh */
     irrvol_result results;    /* OR of every result code: IRRVOL_OK when all were */
@@ -144,14 +148,17 @@ typedef struct shared {
     int racy;
 } shared;
 
-static int answers_alloc(answers *a, const irrvol_volume_info *info, uint32_t vertices)
+static int answers_alloc(answers *a, const irrvol *vol, const irrvol_volume_info *info, uint32_t vertices)
 {
     memset(a, 0, sizeof *a);
     a->values = (float *)malloc((size_t)info->sample_count * info->bins * 6 * sizeof(float));
     a->bin_of_dir = (uint32_t *)malloc(QUERIES * sizeof(uint32_t));
     a->bin_dirs = (float *)malloc((size_t)info->bins * 3 * sizeof(float));
     a->ratio = (float *)malloc((size_t)vertices * sizeof(float));
-    return a->values && a->bin_of_dir && a->bin_dirs && a->ratio;
+    if (irrvol_gpu_export(vol, 2, &a->gpu, NULL, 0, NULL, 0) != IRRVOL_OK) return 0;
+    a->gpu_index = (uint32_t *)calloc(a->gpu.index_count, sizeof(uint32_t));
+    a->gpu_data = (float *)calloc(a->gpu.data_count, sizeof(float));
+    return a->values && a->bin_of_dir && a->bin_dirs && a->ratio && a->gpu_index && a->gpu_data;
 }
 
 static void answers_free(answers *a)
@@ -160,6 +167,8 @@ static void answers_free(answers *a)
     free(a->bin_of_dir);
     free(a->bin_dirs);
     free(a->ratio);
+    free(a->gpu_index);
+    free(a->gpu_data);
     irrvol_free_memory(NULL, a->saved);
     memset(a, 0, sizeof *a);
 }
@@ -175,14 +184,16 @@ static void compute_answers(const shared *sh, answers *a, uint32_t offset)
     for (n = 0; n < QUERIES; n++) {
         uint32_t j = (n + offset) % QUERIES;
         const float *p = q->pos + 3 * j, *d = q->dir + 3 * j;
-        irrvol_query_filter(v, IRRVOL_FILTER_NEAREST, p, d, a->nearest + 3 * j);
-        irrvol_query_filter(v, IRRVOL_FILTER_BILINEAR, p, d, a->bilinear + 3 * j);
+        irrvol_query_filter(v, IRRVOL_FILTER_NEAREST, IRRVOL_WEIGHTING_DEFAULT, p, d, a->nearest + 3 * j);
+        irrvol_query_filter(v, IRRVOL_FILTER_BILINEAR, IRRVOL_WEIGHTING_DEFAULT, p, d, a->bilinear + 3 * j);
         irrvol_query(v, p, d, a->plain + 3 * j);
         irrvol_query_glossy(v, p, q->normal + 3 * j, q->eye + 3 * j, a->glossy + 3 * j);
+        irrvol_query_filter(v, IRRVOL_FILTER_DEFAULT, IRRVOL_WEIGHTING_TRILINEAR, p, d, a->trilinear + 3 * j);
+        irrvol_query_sh(v, 2, IRRVOL_WEIGHTING_DEFAULT, p, d, a->sh + 3 * j);
         a->bin_of_dir[j] = irrvol_direction_bin(v, d);
     }
-    irrvol_query_many(v, IRRVOL_FILTER_NEAREST, QUERIES, q->pos, 0, q->dir, 0, a->many_nearest);
-    irrvol_query_many(v, IRRVOL_FILTER_BILINEAR, QUERIES, q->pos, 0, q->dir, 0, a->many_bilinear);
+    irrvol_query_many(v, IRRVOL_FILTER_NEAREST, IRRVOL_WEIGHTING_DEFAULT, QUERIES, q->pos, 0, q->dir, 0, a->many_nearest);
+    irrvol_query_many(v, IRRVOL_FILTER_BILINEAR, IRRVOL_WEIGHTING_DEFAULT, QUERIES, q->pos, 0, q->dir, 0, a->many_bilinear);
     a->results |= irrvol_info(v, &a->info);
     for (i = 0; i < a->info.sample_count; i++) {
         float *at = a->values + (size_t)i * a->info.bins * 6;
@@ -193,6 +204,7 @@ static void compute_answers(const shared *sh, answers *a, uint32_t offset)
     for (b = 0; b < a->info.bins; b++) irrvol_bin_direction(v, b, a->bin_dirs + 3 * b);
     irrvol_free_memory(NULL, a->saved);
     a->results |= irrvol_save_to_memory(v, NULL, &a->saved, &a->saved_size);
+    a->results |= irrvol_gpu_export(v, 2, &a->gpu, a->gpu_index, a->gpu.index_count, a->gpu_data, a->gpu.data_count);
     a->results |= irrvol_visibility_ratio(sh->vis, a->ratio);
 }
 
@@ -205,6 +217,9 @@ static int answers_equal(const answers *x, const answers *y, uint32_t vertices)
     return x->results == IRRVOL_OK && y->results == IRRVOL_OK &&
            same_floats(x->nearest, y->nearest, n) && same_floats(x->bilinear, y->bilinear, n) &&
            same_floats(x->plain, y->plain, n) && same_floats(x->glossy, y->glossy, n) &&
+           same_floats(x->trilinear, y->trilinear, n) && same_floats(x->sh, y->sh, n) &&
+           memcmp(x->gpu_index, y->gpu_index, x->gpu.index_count * sizeof(uint32_t)) == 0 &&
+           same_floats(x->gpu_data, y->gpu_data, x->gpu.data_count) &&
            same_floats(x->many_nearest, y->many_nearest, n) && same_floats(x->many_bilinear, y->many_bilinear, n) &&
            memcmp(&x->info, &y->info, sizeof x->info) == 0 &&
            same_floats(x->values, y->values, (size_t)x->info.sample_count * x->info.bins * 6) &&
@@ -250,7 +265,7 @@ static int run_workers(shared *sh, const answers *serial, const irrvol_volume_in
         w[i].index = (uint32_t)i;
         w[i].vertices = vertices;
         w[i].mismatched_rounds = 0;
-        ok &= answers_alloc(&w[i].mine, info, vertices);
+        ok &= answers_alloc(&w[i].mine, sh->vol, info, vertices);
     }
     if (ok && pthread_barrier_init(&sh->start, NULL, THREADS) == 0) {
         for (started = 0; started < THREADS; started++)
@@ -302,7 +317,7 @@ static void test_concurrent_reads(void)
     sh.vol = vol;
     sh.q = &q;
     sh.vis = &vd;
-    if (CHECK(answers_alloc(&serial, &info, s.mesh.nv))) {
+    if (CHECK(answers_alloc(&serial, vol, &info, s.mesh.nv))) {
         compute_answers(&sh, &serial, 0);
         CHECK_EQ_INT(serial.results, IRRVOL_OK);
         t0 = seconds();
@@ -414,7 +429,7 @@ static int racy_main(void)
     sh.q = &q;
     sh.vis = &vd;
     sh.racy = 1;
-    if (!answers_alloc(&serial, &info, s.mesh.nv)) return 2;
+    if (!answers_alloc(&serial, vol, &info, s.mesh.nv)) return 2;
     compute_answers(&sh, &serial, 0);
     run_workers(&sh, &serial, &info, s.mesh.nv);
     printf("racy sum %g\n", sh.racy_sum);

@@ -1,6 +1,7 @@
 /* Concurrency test of lightvec.h under ThreadSanitizer: one writer inserts
    records (tail appends, Bentley-Saxe merges, face splits, deferred frees,
-   an optimize) while three readers look up continuously. Afterwards every
+   an optimize, neighbour clamping shrinking published radii) while three
+   readers look up continuously. Afterwards every
    reader's view must be explainable: a lookup made while n records were
    visible returns only ids below the final count, and the final cache answers
    exactly like a brute-force scan. */
@@ -41,7 +42,7 @@ static void make_record(uint32_t i, lightvec_record *r)
     r->vector.direction[2] = 1.0f;
     r->vector.magnitude[0] = r->vector.magnitude[1] = r->vector.magnitude[2] = 1.0f + (float)(i % 7);
     r->irradiance[0] = r->irradiance[1] = r->irradiance[2] = 1.0f;
-    r->distance = 0.15f;
+    r->distance = 0.05f + 0.2f * unitf(&s); /* radii that neighbour clamping shrinks */
     r->visibility = 1.0f;
 }
 

@@ -19,15 +19,36 @@
 
    The caller owns the rendering (ray tracer, shading) and the base images'
    storage policy (all precomputed, or traced when first needed); this file
-   owns the decomposition and the per-frame reconstruction. */
+   owns the decomposition and the per-frame reconstruction.
+
+   Indirect light sampled in space and time (section 4.3), for the shading
+   of base images: irradiance at the nodes of a grid on every face of the
+   tracer's scene and of its moving instances, gathered by ex_indirect_gather
+   at key times that rendercache_keytimes_create chooses; ex_indirect_at
+   gives a hit its face's bilinear interpolation.
+
+       ex_indirect ind;
+       ex_indirect_desc id = {0};
+       id.tracer = tracer; id.scene = &office; id.spacing = 0.3f; id.rays = 256;
+       ex_indirect_init(&id, &ind);
+       keytime desc: element_count = ind.node_count, components = 3, solve = a
+           callback that poses the scene at t and calls ex_indirect_gather
+       per image: rendercache_keytimes_eval(kt, t, E, 3 * ind.node_count);
+           indirect radiance of a Lambertian hit = kd / pi * ex_indirect_at(&ind, E, &hit)
+       ex_indirect_free(&ind); */
 #ifndef EXAMPLES_COMMON_BASEVIEWS_H
 #define EXAMPLES_COMMON_BASEVIEWS_H
 
+#include <float.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
 #include "base.h"
+#include "obj.h"
+#include "pool.h"
+#include "trace.h"
 #include "rendercache.h"
 
 typedef struct ex_baseviews_desc {
@@ -201,6 +222,7 @@ EX_FN int ex_baseviews_reconstruct(const ex_baseviews *bv, ex_baseviews_reconstr
     for (i = 0; i < n && ok; i++) {
         const rendercache_range_image *a = bv->base[corners[i] * bv->time_count + k];
         const rendercache_range_image *b = bv->base[corners[i] * bv->time_count + k + 1];
+        blend[i]->camera = a->camera;   /* the blend stays in the corner view's camera */
         if (r->object_count)
             ok = rendercache_blend_motion(r->blender, a, b, (float)s, &motion,
                                           r->blend_fill ? r->blend_fill : RENDERCACHE_FILL_FOREGROUND,
@@ -216,6 +238,220 @@ EX_FN int ex_baseviews_reconstruct(const ex_baseviews *bv, ex_baseviews_reconstr
     ok = rendercache_warp(r->warper, in, n, camera, r->fill ? r->fill : RENDERCACHE_FILL_BOTH, out) == RENDERCACHE_OK;
     r->seconds_warp = ex__baseviews_seconds() - t0;
     return ok ? 0 : -1;
+}
+
+
+/* ---- indirect light sampled in space and time ------------------------- */
+
+typedef struct ex_indirect_desc {
+    const ex_tracer *tracer;
+    const obj_scene *scene;          /* the tracer's static scene */
+    const obj_scene *const *meshes;  /* instance i's mesh, i < mesh_count: its grids move with it */
+    uint32_t mesh_count;
+    float spacing;                   /* grid spacing in scene units (0 = 0.25) */
+    float min_area;                  /* faces smaller than this get one node at their centre (0: none) */
+    uint32_t rays;                   /* gather rays per node (0 = 128) */
+    uint64_t seed;
+    ex_pool *pool;
+} ex_indirect_desc;
+
+typedef struct ex_indirect_face {
+    float origin[3], u[3], v[3], n[3];   /* the face's plane: origin + a u + b v, normal n (object space) */
+    float du, dv;                        /* node spacing along u and v */
+    uint32_t nu, nv, first;              /* nodes along u and v (1 x 1: one at the centre), first node */
+    uint32_t instance;                   /* EX_TRACE_STATIC or its instance */
+} ex_indirect_face;
+
+typedef struct ex_indirect {
+    ex_indirect_desc desc;
+    ex_indirect_face *faces;             /* the static scene's, then each mesh's */
+    uint32_t face_count, *mesh_first;    /* mesh_first[i]: instance i's first face */
+    uint32_t node_count;
+    double seconds;                      /* time of the gathers so far */
+} ex_indirect;
+
+EX_FN void ex_indirect_free(ex_indirect *ind)
+{
+    free(ind->faces);
+    free(ind->mesh_first);
+    memset(ind, 0, sizeof *ind);
+}
+
+/* The plane frame and grid of face f of mesh m. */
+static void ex__indirect_face(const obj_scene *m, uint32_t f, const ex_indirect_desc *d, ex_indirect_face *out)
+{
+    const uint32_t *fv = m->face_vertices + m->face_start[f], count = m->face_start[f + 1] - m->face_start[f];
+    const float *p0 = m->positions + 3 * (size_t)fv[0];
+    float lo[2] = { FLT_MAX, FLT_MAX }, hi[2] = { -FLT_MAX, -FLT_MAX }, area = 0.0f, l, spacing = d->spacing > 0.0f ? d->spacing : 0.25f;
+    uint32_t i;
+    int k;
+    memset(out->n, 0, sizeof out->n);
+    for (i = 1; i + 1 < count; i++) {   /* the fan's normal, area weighted */
+        const float *a = m->positions + 3 * (size_t)fv[i], *b = m->positions + 3 * (size_t)fv[i + 1];
+        float e0[3], e1[3];
+        for (k = 0; k < 3; k++) { e0[k] = a[k] - p0[k]; e1[k] = b[k] - p0[k]; }
+        out->n[0] += e0[1] * e1[2] - e0[2] * e1[1];
+        out->n[1] += e0[2] * e1[0] - e0[0] * e1[2];
+        out->n[2] += e0[0] * e1[1] - e0[1] * e1[0];
+    }
+    l = sqrtf(out->n[0] * out->n[0] + out->n[1] * out->n[1] + out->n[2] * out->n[2]);
+    area = 0.5f * l;
+    for (k = 0; k < 3; k++) out->n[k] = l > 0.0f ? out->n[k] / l : (k == 1 ? 1.0f : 0.0f);
+    for (k = 0; k < 3; k++) out->u[k] = m->positions[3 * (size_t)fv[1] + k] - p0[k];
+    l = sqrtf(out->u[0] * out->u[0] + out->u[1] * out->u[1] + out->u[2] * out->u[2]);
+    for (k = 0; k < 3; k++) out->u[k] = l > 0.0f ? out->u[k] / l : (k == 0 ? 1.0f : 0.0f);
+    out->v[0] = out->n[1] * out->u[2] - out->n[2] * out->u[1];
+    out->v[1] = out->n[2] * out->u[0] - out->n[0] * out->u[2];
+    out->v[2] = out->n[0] * out->u[1] - out->n[1] * out->u[0];
+    for (i = 0; i < count; i++) {   /* the face's extent in its frame */
+        const float *q = m->positions + 3 * (size_t)fv[i];
+        float a = 0.0f, b = 0.0f;
+        for (k = 0; k < 3; k++) { a += (q[k] - p0[k]) * out->u[k]; b += (q[k] - p0[k]) * out->v[k]; }
+        lo[0] = a < lo[0] ? a : lo[0]; hi[0] = a > hi[0] ? a : hi[0];
+        lo[1] = b < lo[1] ? b : lo[1]; hi[1] = b > hi[1] ? b : hi[1];
+    }
+    for (k = 0; k < 3; k++) out->origin[k] = p0[k] + lo[0] * out->u[k] + lo[1] * out->v[k];
+    if (area < d->min_area) {   /* simplified to one node at the centre of its box */
+        for (k = 0; k < 3; k++) out->origin[k] += 0.5f * (hi[0] - lo[0]) * out->u[k] + 0.5f * (hi[1] - lo[1]) * out->v[k];
+        out->nu = out->nv = 1;
+        out->du = out->dv = 1.0f;
+        return;
+    }
+    out->nu = (uint32_t)ceilf((hi[0] - lo[0]) / spacing) + 1;
+    out->nv = (uint32_t)ceilf((hi[1] - lo[1]) / spacing) + 1;
+    out->du = out->nu > 1 ? (hi[0] - lo[0]) / (float)(out->nu - 1) : 1.0f;
+    out->dv = out->nv > 1 ? (hi[1] - lo[1]) / (float)(out->nv - 1) : 1.0f;
+}
+
+/* Lays the grids. Returns 0, or -1 when out of memory. */
+EX_FN int ex_indirect_init(const ex_indirect_desc *d, ex_indirect *ind)
+{
+    uint32_t f, m, faces = d->scene->face_count, at = 0;
+    memset(ind, 0, sizeof *ind);
+    ind->desc = *d;
+    for (m = 0; m < d->mesh_count; m++) faces += d->meshes[m]->face_count;
+    ind->faces = (ex_indirect_face *)calloc(faces ? faces : 1, sizeof *ind->faces);
+    ind->mesh_first = (uint32_t *)calloc(d->mesh_count + 1, sizeof *ind->mesh_first);
+    if (!ind->faces || !ind->mesh_first) { ex_indirect_free(ind); return -1; }
+    for (m = 0; m <= d->mesh_count; m++) {
+        const obj_scene *mesh = m == 0 ? d->scene : d->meshes[m - 1];
+        if (m > 0) ind->mesh_first[m - 1] = at;
+        for (f = 0; f < mesh->face_count; f++, at++) {
+            ex__indirect_face(mesh, f, d, &ind->faces[at]);
+            ind->faces[at].instance = m == 0 ? EX_TRACE_STATIC : m - 1;
+            ind->faces[at].first = ind->node_count;
+            ind->node_count += ind->faces[at].nu * ind->faces[at].nv;
+        }
+    }
+    ind->face_count = faces;
+    return 0;
+}
+
+typedef struct ex__indirect_job {
+    const ex_indirect *ind;
+    float *values;
+    uint32_t faces_per_job;
+} ex__indirect_job;
+
+/* Irradiance at node (a, b) of face f: cosine-sampled rays, each bringing
+   the direct light its hit reflects (one bounce of indirect light). */
+static void ex__indirect_node(const ex_indirect *ind, const ex_indirect_face *f, uint32_t a, uint32_t b, float out[3])
+{
+    const ex_tracer *t = ind->desc.tracer;
+    const uint32_t rays = ind->desc.rays ? ind->desc.rays : 128, node = f->first + b * f->nu + a;
+    float p[3], n[3], org[3], sum[3] = { 0, 0, 0 };
+    tr__vec3 tn, tb, bb;
+    ex_rng rng = ex_rng_stream(ind->desc.seed, node);   /* one stream per node, at every time */
+    uint32_t r;
+    int k;
+    for (k = 0; k < 3; k++) p[k] = f->origin[k] + (float)a * f->du * f->u[k] + (float)b * f->dv * f->v[k];
+    memcpy(n, f->n, sizeof n);
+    if (f->instance != EX_TRACE_STATIC) {
+        const float *m = t->instances[f->instance].to_world;
+        float q[3], l;
+        memcpy(q, p, sizeof q);
+        ex__affine_point(m, q, p);
+        memcpy(q, n, sizeof q);
+        ex__affine_vector(m, q, n);
+        l = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        for (k = 0; k < 3; k++) n[k] /= l > 0.0f ? l : 1.0f;
+    }
+    for (k = 0; k < 3; k++) org[k] = p[k] + 1e-3f * n[k];
+    tn = tr__v3_load(n);
+    tr__basis(tn, &tb, &bb);
+    for (r = 0; r < rays; r++) {
+        tr__vec3 s = ex__sample_cosine(&rng);
+        float d[3], l[3];
+        ex_trace_hit h;
+        s = tr__add(tr__add(tr__scale(tb, s.x), tr__scale(bb, s.y)), tr__scale(tn, s.z));
+        d[0] = s.x; d[1] = s.y; d[2] = s.z;
+        if (!ex_tracer_intersect(t, org, d, FLT_MAX, &h) || !h.front) continue;
+        ex__tracer_direct(t, &h, d, &rng, l);
+        for (k = 0; k < 3; k++) sum[k] += l[k];
+    }
+    for (k = 0; k < 3; k++) out[k] = (float)TR__PI * sum[k] / (float)rays;   /* E = pi mean(L) for cosine sampling */
+}
+
+static void ex__indirect_run(void *ctx, uint32_t job)
+{
+    const ex__indirect_job *j = (const ex__indirect_job *)ctx;
+    uint32_t f, end = (job + 1) * j->faces_per_job, a, b;
+    if (end > j->ind->face_count) end = j->ind->face_count;
+    for (f = job * j->faces_per_job; f < end; f++) {
+        const ex_indirect_face *face = &j->ind->faces[f];
+        for (b = 0; b < face->nv; b++)
+            for (a = 0; a < face->nu; a++) ex__indirect_node(j->ind, face, a, b, j->values + 3 * (size_t)(face->first + b * face->nu + a));
+    }
+}
+
+/* Gathers the irradiance of every node (3 floats each) with the tracer as
+   it is posed now. */
+EX_FN void ex_indirect_gather(ex_indirect *ind, float *values)
+{
+    ex__indirect_job j;
+    double t0 = ex__baseviews_seconds();
+    j.ind = ind;
+    j.values = values;
+    j.faces_per_job = 1;
+    ex_pool_parallel_for(ind->desc.pool, ex__indirect_run, &j, ind->face_count);
+    ind->seconds += ex__baseviews_seconds() - t0;
+}
+
+/* The irradiance at a hit: its face's nodes, interpolated bilinearly at the
+   hit point (clamped to the grid). */
+EX_FN void ex_indirect_at(const ex_indirect *ind, const float *values, const ex_trace_hit *h, float rgb[3])
+{
+    const ex_tracer *t = ind->desc.tracer;
+    const ex_indirect_face *f;
+    float p[3], a = 0.0f, b = 0.0f, fa, fb;
+    uint32_t ia, ib, i0, i1, i2, i3;
+    int k;
+    if (h->instance == EX_TRACE_STATIC) {
+        f = &ind->faces[ind->desc.scene->tri_face[h->tri]];
+        memcpy(p, h->pos, sizeof p);
+    } else {
+        f = &ind->faces[ind->mesh_first[h->instance] + ind->desc.meshes[h->instance]->tri_face[h->tri]];
+        ex__affine_point(t->instances[h->instance].to_object, h->pos, p);
+    }
+    for (k = 0; k < 3; k++) {
+        a += (p[k] - f->origin[k]) * f->u[k];
+        b += (p[k] - f->origin[k]) * f->v[k];
+    }
+    a /= f->du;
+    b /= f->dv;
+    a = a < 0.0f ? 0.0f : a > (float)(f->nu - 1) ? (float)(f->nu - 1) : a;
+    b = b < 0.0f ? 0.0f : b > (float)(f->nv - 1) ? (float)(f->nv - 1) : b;
+    ia = (uint32_t)a < f->nu - 1 ? (uint32_t)a : (f->nu > 1 ? f->nu - 2 : 0);
+    ib = (uint32_t)b < f->nv - 1 ? (uint32_t)b : (f->nv > 1 ? f->nv - 2 : 0);
+    fa = f->nu > 1 ? a - (float)ia : 0.0f;
+    fb = f->nv > 1 ? b - (float)ib : 0.0f;
+    i0 = f->first + ib * f->nu + ia;
+    i1 = f->nu > 1 ? i0 + 1 : i0;
+    i2 = f->nv > 1 ? i0 + f->nu : i0;
+    i3 = f->nv > 1 ? i1 + f->nu : i1;
+    for (k = 0; k < 3; k++)
+        rgb[k] = (1.0f - fb) * ((1.0f - fa) * values[3 * i0 + k] + fa * values[3 * i1 + k]) +
+                 fb * ((1.0f - fa) * values[3 * i2 + k] + fa * values[3 * i3 + k]);
 }
 
 #endif /* EXAMPLES_COMMON_BASEVIEWS_H */

@@ -3,7 +3,8 @@
    viewer), plus the tone mapping the examples use.
 
        unsigned char *rgb8 = malloc(3 * w * h);
-       ex_tonemap(hdr, w, h, exposure, rgb8);   // linear float RGB -> sRGB bytes
+       ex_tonemap(hdr, w, h, exposure, rgb8);   // linear float RGB -> sRGB bytes, clipped
+       ex_tonemap_filmic(hdr, w, h, ex_exposure_key(hdr, w, h), rgb8);   // or exposed and filmic
        ex_write_png("frame.png", w, h, rgb8);
        ex_write_pfm("frame.pfm", w, h, hdr);   // ex_read_pfm reads it back
 
@@ -193,6 +194,58 @@ EX_FN void ex_tonemap(const float *rgb, int w, int h, float exposure, unsigned c
 {
     size_t i, n = 3 * (size_t)w * (size_t)h;
     for (i = 0; i < n; i++) out[i] = ex__srgb8(rgb[i] * exposure);
+}
+
+/* ---- the filmic pipeline (the walkthrough and its viewer) -----------------
+   Scene radiance reaches the screen in three steps, the same in the PNG
+   frames and the interactive window:
+     1. exposure: radiance times an exposure e, chosen so that the frame's
+        log-average luminance (Reinhard et al. 2002, eq. 1: exp of the mean of
+        log(delta + L) over the pixels) lands on middle grey, key 0.18;
+     2. a filmic tone curve per channel, the ACES reference rendering fitted
+        by Narkowicz (2015): f(x) = x (2.51 x + 0.03) / (x (2.43 x + 0.59) + 0.14),
+        clamped to [0, 1]: a toe that keeps shadows from going flat, a
+        shoulder that rolls highlights off towards white instead of
+        clipping them, so a lamp's hotspot on a wall keeps its gradient;
+     3. the sRGB transfer function, to bytes.
+   Middle grey 0.18 comes out as 0.27 (sRGB 140 of 255); an exposed radiance
+   of 1 as 0.80, 4 as 0.98: the curve reaches white only towards 10. */
+#define EX_FILMIC_KEY 0.18f
+
+EX_FN float ex_filmic(float x)
+{
+    float y;
+    if (!(x > 0.0f)) return 0.0f;   /* also NaN */
+    y = x * (2.51f * x + 0.03f) / (x * (2.43f * x + 0.59f) + 0.14f);
+    return y < 1.0f ? y : 1.0f;
+}
+
+/* Linear RGB times exposure, through the filmic curve, to sRGB bytes. */
+EX_FN void ex_tonemap_filmic(const float *rgb, int w, int h, float exposure, unsigned char *out)
+{
+    size_t i, n = 3 * (size_t)w * (size_t)h;
+    for (i = 0; i < n; i++) out[i] = ex__srgb8(ex_filmic(rgb[i] * exposure));
+}
+
+/* The exposure that brings the log-average luminance of the pixels to
+   EX_FILMIC_KEY (black pixels count as delta = 1e-4 of the brightest);
+   1 for an empty or black image. */
+EX_FN float ex_exposure_key(const float *rgb, int w, int h)
+{
+    size_t n = (size_t)w * (size_t)h, i;
+    double sum = 0.0, delta, peak = 0.0;
+    if (!rgb || n == 0) return 1.0f;
+    for (i = 0; i < n; i++) {
+        double l = 0.2126 * rgb[3 * i] + 0.7152 * rgb[3 * i + 1] + 0.0722 * rgb[3 * i + 2];
+        if (l > peak) peak = l;
+    }
+    if (!(peak > 0.0) || !isfinite(peak)) return 1.0f;
+    delta = 1e-4 * peak;
+    for (i = 0; i < n; i++) {
+        double l = 0.2126 * rgb[3 * i] + 0.7152 * rgb[3 * i + 1] + 0.0722 * rgb[3 * i + 2];
+        sum += log(delta + (l > 0.0 ? l : 0.0));
+    }
+    return (float)(EX_FILMIC_KEY / exp(sum / (double)n));
 }
 
 /* Exposure that maps the image's given luminance percentile (e.g. 0.95) to 1. */

@@ -1177,7 +1177,8 @@ EX_FN int obj_drop_coincident(obj_scene *s)
     for (t = 0; t < s->tri_count; t++) {
         size_t first = i;
         while (i < pairs.count && pr[i].lower == t) i++;
-        covered[t] = (unsigned char)obj__covered(s, t, pr + first, i - first);
+        /* no pairs: pr may be NULL, and NULL + 0 is undefined */
+        covered[t] = (unsigned char)obj__covered(s, t, i > first ? pr + first : NULL, i - first);
     }
     for (f = 0, t = 0; f < s->face_count; f++) {
         uint32_t end = t + (s->face_start[f + 1] - s->face_start[f] - 2);

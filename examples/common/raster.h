@@ -11,6 +11,12 @@
        ... r.id[p] (EX_RASTER_EMPTY or id_base + triangle), r.bary[2p], r.bary[2p+1]
        ex_raster_free(&r);
 
+   A frame can instead leave the clear to its first draw
+   (ex_raster_clear_deferred: each tile job clears its tile just before
+   drawing into it) and shade in the last draw's tile jobs (r.tile_done,
+   called on each finished tile while its buffers are in the cache): the
+   buffers are then written once and read once per frame.
+
    The barycentric pair of a pixel holds the weights of the triangle's second
    and third vertex at the pixel centre (the first vertex gets 1 - u - v),
    interpolated perspective-correctly. Depth is the distance along the view
@@ -21,7 +27,9 @@
    pixel centre by an infinitesimal fixed offset (the top-left rule up to
    convention), so a pixel centre inside a mesh is covered by exactly one of
    its triangles: no cracks, no double coverage along shared edges or at shared
-   vertices. ex_raster_count() counts coverage instead of depth testing, to
+   vertices. Each row's covered span is found by solving the three edge
+   inequalities for x in the same integers, so only covered pixels are
+   visited. ex_raster_count() counts coverage instead of depth testing, to
    check exactly that. Triangles are clipped against the near plane and a
    guard band in view space (clip points computed the same way for both
    triangles of a shared edge). Both faces are drawn (no culling). Only
@@ -77,6 +85,14 @@ typedef struct ex_raster {
     uint32_t *bin_start, *bin_items, bin_capacity;   /* items: batch << EX__RASTER_BATCH_BITS | index */
     int tiles_x, tiles_y;
     int counting;
+    int clear_pending;           /* ex_raster_clear_deferred: the next draw's tile jobs clear their tiles */
+    int coverage_used;           /* ex_raster_count ran since coverage was last zeroed */
+    /* optional, set by the caller: run at the end of each tile job of every
+       draw, on that tile's pixels (x0, y0 inclusive, x1, y1 exclusive) once
+       the tile's triangles are in; a shading pass fused with the raster
+       while the tile's buffers are in the cache */
+    void (*tile_done)(void *user, int x0, int y0, int x1, int y1);
+    void *tile_user;
 } ex_raster;
 
 EX_FN void ex_raster_free(ex_raster *r)
@@ -118,25 +134,51 @@ EX_FN int ex_raster_init(ex_raster *r, int width, int height)
     return 0;
 }
 
+/* Empties the pixels [x0, x1) x [y0, y1): depth, id, barycentrics, and
+   the coverage counts when ex_raster_count has used them. */
+static void ex__raster_clear_box(ex_raster *r, int x0, int y0, int x1, int y1)
+{
+    int x, y;
+    for (y = y0; y < y1; y++) {
+        size_t row = (size_t)y * (size_t)r->width;
+        for (x = x0; x < x1; x++) {
+            r->depth[row + (size_t)x] = FLT_MAX;
+            r->id[row + (size_t)x] = EX_RASTER_EMPTY;
+            r->bary[2 * (row + (size_t)x)] = r->bary[2 * (row + (size_t)x) + 1] = 0.0f;
+        }
+        if (r->coverage_used) memset(r->coverage + row + x0, 0, (size_t)(x1 - x0) * sizeof(uint32_t));
+    }
+}
+
 /* Clears one row of tiles (a job of ex_raster_clear). */
 static void ex__raster_clear_band(void *ctx, uint32_t band)
 {
     ex_raster *r = (ex_raster *)ctx;
     int y0 = (int)band * EX_RASTER_TILE, y1 = y0 + EX_RASTER_TILE < r->height ? y0 + EX_RASTER_TILE : r->height;
-    size_t i, i0 = (size_t)y0 * (size_t)r->width, i1 = (size_t)y1 * (size_t)r->width;
-    for (i = i0; i < i1; i++) {
-        r->depth[i] = FLT_MAX;
-        r->id[i] = EX_RASTER_EMPTY;
-        r->bary[2 * i] = r->bary[2 * i + 1] = 0.0f;
-    }
-    memset(r->coverage + i0, 0, (i1 - i0) * sizeof(uint32_t));
+    ex__raster_clear_box(r, 0, y0, r->width, y1);
 }
 
-/* Empties every buffer, in parallel on the pool when there is one (20
-   bytes per pixel: 6 MB at 640x480, every frame). */
-EX_FN void ex_raster_clear(ex_raster *r)
+static void ex__raster_clear_now(ex_raster *r)
 {
     ex_pool_parallel_for(r->pool, ex__raster_clear_band, r, (uint32_t)r->tiles_y);
+    r->coverage_used = 0;
+    r->clear_pending = 0;
+}
+
+/* Empties every buffer, in parallel on the pool when there is one (16
+   bytes per pixel, and the coverage counts after ex_raster_count). */
+EX_FN void ex_raster_clear(ex_raster *r)
+{
+    ex__raster_clear_now(r);
+}
+
+/* The same, done by the next draw: each of its tile jobs clears its tile
+   just before drawing into it, while the tile is in the cache (a frame then
+   writes its buffers once instead of twice). Reading the buffers before a
+   draw, or an empty draw, clears at once. */
+EX_FN void ex_raster_clear_deferred(ex_raster *r)
+{
+    r->clear_pending = 1;
 }
 
 /* ---- clipping in view space ----------------------------------------------- */
@@ -391,9 +433,35 @@ static int ex__raster_bin(ex_raster *r)
    by an infinitesimal (-1, -eta). */
 static int ex__edge_owns_ties(int64_t dx, int64_t dy) { return dy > 0 || (dy == 0 && dx < 0); }
 
+/* Floor of a / b for b > 0, exact in 64-bit integers. */
+static int64_t ex__floor_div(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+/* Narrows the span [*lo, *hi] (pixel offsets from the row's first pixel) to
+   the pixels where edge value w(x) = w0 - step * x satisfies w(x) + bias > 0,
+   i.e. w0 + bias - step * x >= 1: solved exactly for x, so the span holds
+   exactly the pixels a per-pixel test would accept. */
+static void ex__edge_span(int64_t w0, int64_t step, int bias, int64_t *lo, int64_t *hi)
+{
+    int64_t room = w0 + bias - 1;   /* step * x <= room */
+    if (step == 0) {
+        if (room < 0) *hi = -1;     /* the whole row is outside this edge */
+    } else if (step > 0) {
+        int64_t x = ex__floor_div(room, step);
+        if (x < *hi) *hi = x;
+    } else {
+        int64_t x = -ex__floor_div(room, -step);   /* x >= ceil(room / step) = -floor(room / -step) */
+        if (x > *lo) *lo = x;
+    }
+}
+
+/* Rasterizes triangle t inside the tile's pixel box. Each row's covered
+   pixels are found by solving the three edge inequalities for x (exact
+   integer arithmetic, the same pixels as testing each one), so the loop
+   over a row runs over covered pixels only; there, the edge values give the
+   barycentric weights as before. */
 static void ex__raster_tri_in_tile(ex_raster *r, const ex_raster_tri *t, int tx0, int ty0, int tx1, int ty1)
 {
-    int64_t e_dx[3], e_dy[3], row[3];
+    int64_t e_dx[3], e_dy[3], row[3], step[3];
     int bias[3], k, x, y;
     int x0 = t->x0 > tx0 ? t->x0 : tx0, x1 = t->x1 < tx1 ? t->x1 : tx1;
     int y0 = t->y0 > ty0 ? t->y0 : ty0, y1 = t->y1 < ty1 ? t->y1 : ty1;
@@ -409,31 +477,30 @@ static void ex__raster_tri_in_tile(ex_raster *r, const ex_raster_tri *t, int tx0
         e_dy[k] = t->y[b] - t->y[a];
         row[k] = e_dx[k] * (py0 - t->y[a]) - e_dy[k] * (px0 - t->x[a]);
         bias[k] = ex__edge_owns_ties(e_dx[k], e_dy[k]);
+        step[k] = e_dy[k] * EX_RASTER_SUBPIXEL;
     }
     /* twice the area: edge 0's value at vertex 0 */
     inv_area = 1.0f / (float)(e_dx[0] * (t->y[0] - t->y[1]) - e_dy[0] * (t->x[0] - t->x[1]));
     for (y = y0; y <= y1; y++) {
-        int64_t w0 = row[0], w1 = row[1], w2 = row[2];
-        for (x = x0; x <= x1; x++) {
-            if (w0 + bias[0] > 0 && w1 + bias[1] > 0 && w2 + bias[2] > 0) {
-                size_t p = (size_t)y * (size_t)r->width + (size_t)x;
-                if (r->counting) {
-                    r->coverage[p]++;
-                } else {
-                    float l0 = (float)w0 * inv_area, l1 = (float)w1 * inv_area, l2 = (float)w2 * inv_area;
-                    float iz = l0 * t->inv_z[0] + l1 * t->inv_z[1] + l2 * t->inv_z[2];
-                    float z = 1.0f / iz;
-                    if (z < r->depth[p]) {
-                        r->depth[p] = z;
-                        r->id[p] = t->id;
-                        r->bary[2 * p] = (l0 * t->inv_z[0] * t->u[0] + l1 * t->inv_z[1] * t->u[1] + l2 * t->inv_z[2] * t->u[2]) * z;
-                        r->bary[2 * p + 1] = (l0 * t->inv_z[0] * t->v[0] + l1 * t->inv_z[1] * t->v[1] + l2 * t->inv_z[2] * t->v[2]) * z;
-                    }
+        int64_t lo = 0, hi = x1 - x0;
+        for (k = 0; k < 3; k++) ex__edge_span(row[k], step[k], bias[k], &lo, &hi);
+        for (x = x0 + (int)lo; x <= x0 + (int)hi; x++) {
+            int64_t dx = x - x0;
+            size_t p = (size_t)y * (size_t)r->width + (size_t)x;
+            if (r->counting) {
+                r->coverage[p]++;
+            } else {
+                float l0 = (float)(row[0] - step[0] * dx) * inv_area, l1 = (float)(row[1] - step[1] * dx) * inv_area;
+                float l2 = (float)(row[2] - step[2] * dx) * inv_area;
+                float a0 = l0 * t->inv_z[0], a1 = l1 * t->inv_z[1], a2 = l2 * t->inv_z[2];
+                float z = 1.0f / (a0 + a1 + a2);
+                if (z < r->depth[p]) {
+                    r->depth[p] = z;
+                    r->id[p] = t->id;
+                    r->bary[2 * p] = (a0 * t->u[0] + a1 * t->u[1] + a2 * t->u[2]) * z;
+                    r->bary[2 * p + 1] = (a0 * t->v[0] + a1 * t->v[1] + a2 * t->v[2]) * z;
                 }
             }
-            w0 -= e_dy[0] * EX_RASTER_SUBPIXEL;
-            w1 -= e_dy[1] * EX_RASTER_SUBPIXEL;
-            w2 -= e_dy[2] * EX_RASTER_SUBPIXEL;
         }
         row[0] += e_dx[0] * EX_RASTER_SUBPIXEL;
         row[1] += e_dx[1] * EX_RASTER_SUBPIXEL;
@@ -450,11 +517,13 @@ static void ex__raster_tile_job(void *ctx, uint32_t tile)
     uint32_t i;
     if (x1 >= r->width) x1 = r->width - 1;
     if (y1 >= r->height) y1 = r->height - 1;
+    if (r->clear_pending) ex__raster_clear_box(r, x0, y0, x1 + 1, y1 + 1);
     for (i = r->bin_start[tile]; i < r->bin_start[tile + 1]; i++) {
         uint32_t item = r->bin_items[i];
         const ex__raster_batch *batch = &r->batches[item >> EX__RASTER_BATCH_BITS];
         ex__raster_tri_in_tile(r, &batch->tris[item & ((1u << EX__RASTER_BATCH_BITS) - 1u)], x0, y0, x1, y1);
     }
+    if (r->tile_done) r->tile_done(r->tile_user, x0, y0, x1 + 1, y1 + 1);
 }
 
 static int ex__raster_run(ex_raster *r, const ex_camera *c, const float *positions,
@@ -462,11 +531,17 @@ static int ex__raster_run(ex_raster *r, const ex_camera *c, const float *positio
 {
     if (!r || !c || c->kind != EX_CAMERA_PERSPECTIVE || c->width != r->width || c->height != r->height)
         return -1;
-    if (tri_count == 0) return 0;
-    if (!positions || !indices) return -1;
+    if (tri_count > 0 && !positions) return -1;
+    if (tri_count > 0 && !indices) return -1;
     if (ex__raster_setup(r, c, positions, indices, tri_count, id_base) != 0 || ex__raster_bin(r) != 0)
         return -1;
+    if (r->counting) r->coverage_used = 1;
+    if (tri_count == 0 && !r->tile_done) {   /* nothing to draw: at most the clear */
+        if (r->clear_pending) ex__raster_clear_now(r);
+        return 0;
+    }
     ex_pool_parallel_for(r->pool, ex__raster_tile_job, r, (uint32_t)(r->tiles_x * r->tiles_y));
+    r->clear_pending = 0;
     return 0;
 }
 

@@ -1,8 +1,10 @@
-/* walkthrough.h - the frame pipeline of examples/walkthrough.c: the office
-   with a bunny walking from the open floor under the desk and past the
-   yellow divider, seen from a camera moving along the front wall, rendered
-   in one of three modes that compose the project's four headers. Tests and
-   the benchmark drive it too.
+/* walkthrough.h - the frame pipeline of examples/walkthrough.c and
+   examples/viewer.c: the office (the default: the bunny under the desk and
+   past the yellow divider, the camera along the front wall) or a generated
+   building (--scene building: make_building.py's OBJ, MTL and layout; the
+   walk is planned from the layout: a lit room, a room without a lamp, up
+   the stairs, the camera following the bunny), rendered in one of three modes that compose the
+   project's four headers. Tests and the benchmark drive it too.
 
        wt_options o;  wt_world *w;  wt_renderer *r;  wt_frame_stats st;
        wt_options_default(&o);                         // or wt_parse_options
@@ -12,9 +14,12 @@
        wt_renderer_destroy(r);  wt_world_destroy(w);
 
    Shading (modes raytrace and baseviews). A primary hit gets its emission,
-   direct light from the lamp's emitting polygons (stratified area samples
-   with shadow rays through examples/common/trace.h, so the bunny casts
-   shadows; Lambert + normalized Phong) and indirect light from a light
+   direct light from the emitting polygons (many-light sampling: a fixed
+   number of shadow rays per point, --light-samples, each choosing a light
+   by an importance bound of power, distance and both cosines and divided
+   by the choice's probability; shadow rays through
+   examples/common/trace.h, so the bunny casts shadows; Lambert +
+   normalized Phong) and indirect light from a light
    vector (lightvec.h, Crespin & Peroche 2004): looked up in a cache, and
    gathered and inserted where the cache has too few valid vectors. Glossy
    materials (floor, desk, lamp pole) use 5D light vectors (position and
@@ -40,10 +45,13 @@
                 agree on a fraction q of their pixels (base views), key
                 times are refined with the same test (a fish-eye at the lamp
                 and the base views), base images are traced with the shading
-                above and saved; a frame blends the base images of the two
-                views around its eye to its time, moving the bunny by its
-                transforms, and warps them into its camera with both fills
-                (pixels still empty are traced).
+                above and saved; the bunny's indirect light is solved at key
+                times of its own (rendercache_keytimes_create, section 4.3)
+                and interpolated in time for the base images. A frame blends
+                the base images of the two views around its eye to its time,
+                moving the bunny by its transforms, and warps them into its
+                camera with both fills, averaging the views that see a
+                surface (pinterp -a); gaps wider than 8 pixels are traced.
      radiosity  the static office shaded per pixel by Hardt's quadratic
                 irradiance interpolants (radinterp.h) from an ID +
                 barycentric buffer (examples/common/raster.h), the bunny
@@ -117,6 +125,9 @@
 #define WT_BUNNY_NORMAL_ANGLE 30.0f  /* degrees: light vectors valid between the bunny's normals */
 #define WT_BUNNY_PRIORITY 4.0f      /* render-cache priority scale of the bunny's points */
 #define WT_PHASES 4
+#define WT_BASEVIEWS_MAX_FILL 8u   /* baseviews: background fill reaches this many pixels; farther ones are traced */
+#define WT__MAX_LIGHT_SAMPLES 1024  /* bound of --light-samples: shadow rays per shaded point */
+#define WT_KEY_EPSILON 0.1f        /* baseviews: a bunny vertex changed when its radiance moved by more than 10% */
 
 typedef enum wt_mode {
     WT_MODE_RAYTRACE = 0,
@@ -133,16 +144,23 @@ typedef enum wt_mode {
 
 /* Everything a run depends on. Fields that change pictures also change the
    keys of the precompute cache. */
+struct wt_path;
+
 typedef struct wt_options {
     wt_mode mode;
     const char *out;          /* PNG frames, contact sheet */
     const char *cache_dir;    /* precompute cache */
-    const char *data_dir;     /* office.obj, office.mtl, bunny.obj */
+    const char *data_dir;     /* bunny.obj, and the scenes named by scene */
+    const char *scene;        /* "office" (data_dir/office.*; the default until radinterp solves the building
+                                 within memory), "building" (data_dir/building_4k.*), or the path
+                                 of an OBJ with a .layout file beside it (make_building.py's format) */
+    const struct wt_path *path;   /* set by wt_world_create in the world's copy: the walk planned through the
+                                     scene's layout; NULL: the office's built-in walk */
     int frames, width, height;
     int threads;              /* 0 = one per core */
     uint64_t seed;
     /* shading (every mode that ray traces) */
-    int light_samples;        /* samples per emitting triangle per shaded point */
+    int light_samples;        /* direct light: shadow rays per shaded point, over all the lights (wt__direct) */
     int strata;               /* light-vector gathers on the office: zenith strata (azimuth: 3x) */
     int bunny_strata;         /* gathers on the bunny */
     int bounces;              /* reflections of the gathered light (lightvec_gather_desc.bounces);
@@ -168,7 +186,7 @@ typedef struct wt_options {
     int progress;             /* progress bars on stderr */
     int verbose;              /* messages on stdout */
     int reference;            /* trace every frame in full too and report LRMS */
-    float exposure;           /* 0 = automatic, from the first frame */
+    float exposure;           /* 0 = automatic per frame (wt_exposure) */
 } wt_options;
 
 /* What a frame cost. phase[] by mode (wt_phase_name). */
@@ -193,11 +211,12 @@ EX_FN void wt_options_default(wt_options *o)
     o->out = "build/out";
     o->cache_dir = "build/cache";
     o->data_dir = "examples/data";
+    o->scene = "office";      /* the building's radiosity precompute needs radinterp at building scale */
     o->frames = 48;
     o->width = 640;
     o->height = 480;
     o->seed = 1;
-    o->light_samples = 4;
+    o->light_samples = 8;
     o->strata = 16;
     o->bunny_strata = 8;
     o->bounces = 2;
@@ -239,7 +258,7 @@ EX_FN const char *wt_phase_name(wt_mode m, int phase)
 EX_FN void wt_usage(FILE *f)
 {
     fputs("usage: walkthrough [options]\n"
-          "A walkthrough of the office with a bunny walking under the desk and past the divider,\n"
+          "A walkthrough of the office (or a building) with a bunny walking from room to room,\n"
           "rendered interactively with global illumination. Writes PNG frames, a contact sheet and\n"
           "a per-frame timing table; precomputed data is cached on disk and reused.\n"
           "\n"
@@ -252,11 +271,14 @@ EX_FN void wt_usage(FILE *f)
           "  --out DIR            where frames go (default build/out)\n"
           "  --cache DIR          precompute cache (default build/cache)\n"
           "  --no-cache           neither read nor write the precompute cache\n"
-          "  --data DIR           office.obj, office.mtl, bunny.obj (default examples/data)\n"
+          "  --scene S            office (default: DIR/office.obj, .mtl), building (DIR/building_4k.obj,\n"
+          "                       .mtl, .layout), or an OBJ with a make_building.py layout beside it\n"
+          "  --data DIR           bunny.obj and the scenes (default examples/data)\n"
           "  --threads N          threads, 0 = one per core (default 0)\n"
           "  --seed N             random seed (default 1)\n"
           "  --budget F           raytrace: share of the pixels sampled per frame (default 0.08)\n"
-          "  --light-samples N    direct light: samples per emitting triangle (default 4)\n"
+          "  --light-samples N    direct light: shadow rays per shaded point, lights chosen by importance\n"
+          "                       (default 8)\n"
           "  --strata N           light-vector gathers: N x 3N rays (default 16)\n"
           "  --base N             baseviews: fish-eye base images N x N (default 512)\n"
           "  --keys N             baseviews: key times before refinement (default 5)\n"
@@ -266,7 +288,7 @@ EX_FN void wt_usage(FILE *f)
           "  --volume-k K         radiosity: irradiance volume bins 2K^2, K <= 32 (default 17)\n"
           "  --no-bunny-shadow    radiosity: no occlusion blob of the bunny on the office\n"
           "  --gouraud            radiosity: Gouraud shading of the mesh instead of its interpolants\n"
-          "  --exposure E         tone-mapping scale (default: automatic from the first frame)\n"
+          "  --exposure E         exposure before the filmic curve (default: automatic per frame)\n"
           "  --reference          also trace every frame in full and print the LRMS error\n"
           "  --no-frames          do not write PNG frames\n"
           "  --quiet              no progress bars or messages, only the timing table\n"
@@ -317,7 +339,7 @@ EX_FN int wt_parse_options(int argc, char **argv, wt_options *o, char *err, size
         }
         if (!v) {
             if (!strcmp(a, "--mode") || !strcmp(a, "--frames") || !strcmp(a, "--size") || !strcmp(a, "--out") ||
-                !strcmp(a, "--cache") || !strcmp(a, "--data") || !strcmp(a, "--threads") || !strcmp(a, "--seed") ||
+                !strcmp(a, "--cache") || !strcmp(a, "--data") || !strcmp(a, "--scene") || !strcmp(a, "--threads") || !strcmp(a, "--seed") ||
                 !strcmp(a, "--budget") || !strcmp(a, "--light-samples") || !strcmp(a, "--strata") ||
                 !strcmp(a, "--base") || !strcmp(a, "--keys") || !strcmp(a, "--quality") || !strcmp(a, "--exposure") ||
                 !strcmp(a, "--eps") || !strcmp(a, "--min-leaf-area") || !strcmp(a, "--volume-k"))
@@ -345,13 +367,14 @@ EX_FN int wt_parse_options(int argc, char **argv, wt_options *o, char *err, size
         } else if (!strcmp(a, "--out")) o->out = v;
         else if (!strcmp(a, "--cache")) o->cache_dir = v;
         else if (!strcmp(a, "--data")) o->data_dir = v;
+        else if (!strcmp(a, "--scene")) o->scene = v;
         else if (!strcmp(a, "--threads")) ok = wt__parse_int(v, 0, EX_POOL_MAX_THREADS, &o->threads);
         else if (!strcmp(a, "--seed")) {
             int s;
             ok = wt__parse_int(v, 0, 2147483647, &s);
             o->seed = (uint64_t)s;
         } else if (!strcmp(a, "--budget")) ok = wt__parse_float(v, 1e-4f, 1.0f, &o->budget);
-        else if (!strcmp(a, "--light-samples")) ok = wt__parse_int(v, 1, 1024, &o->light_samples);
+        else if (!strcmp(a, "--light-samples")) ok = wt__parse_int(v, 1, WT__MAX_LIGHT_SAMPLES, &o->light_samples);
         else if (!strcmp(a, "--strata")) ok = wt__parse_int(v, 2, 128, &o->strata);
         else if (!strcmp(a, "--base")) ok = wt__parse_int(v, 16, 4096, &o->base_size);
         else if (!strcmp(a, "--keys")) ok = wt__parse_int(v, 2, 257, &o->keys);
@@ -695,17 +718,77 @@ typedef struct wt_point {
     unsigned char bunny_shadow;   /* the bunny blocked some of its direct light */
 } wt_point;
 
-/* An emitting polygon of the office (its fan triangles are consecutive). */
+/* An emitting polygon of the office (its fan triangles are consecutive),
+   with the bounds of the many-light sampler (wt__light_importance): its
+   area-weighted centroid (on its plane), the radius of the sphere about it
+   that holds the polygon, and its power up to a constant (luminance of Ke
+   times area). */
 typedef struct wt_light {
     uint32_t first_tri, tri_count;
     float area, normal[3], point[3], ke[3];
+    float centre[3], radius, power;
 } wt_light;
+
+/* The layout of a generated building (make_building.py's .layout file):
+   rooms, doors and stairs as boxes, metres. */
+typedef struct wt_room {
+    int storey, i, j;
+    int lamp;                  /* the room has a lamp of its own */
+    int stair;                 /* a flight of stairs starts in it */
+    float lo[3], hi[3];
+} wt_room;
+
+typedef struct wt_box {
+    int storey;
+    float lo[3], hi[3];
+} wt_box;
+
+typedef struct wt_layout {
+    wt_room *rooms;
+    wt_box *doors, *stairs;    /* a stair rises along +x from lo[0] to hi[0] */
+    uint32_t room_count, door_count, stair_count, lamp_count, window_count;
+} wt_layout;
+
+/* The walk through a building: the bunny's route as points every
+   WT_PATH_STEP metres, its feet on whatever supports them (floors, the
+   stairs' treads), and the camera trailing it along the same route. */
+#define WT_PATH_STEP 0.02f
+#define WT_CAMERA_TRAIL 1.5f       /* metres of route between the camera and the bunny */
+#define WT_EYE_HEIGHT 1.5f         /* above the floor under the camera, smoothed over the stairs */
+#define WT_PATH_MAX_ROOMS 8
+
+typedef struct wt_path {
+    float *points;             /* 3 per point: the bunny's feet */
+    float *eye;                /* 1 per point: the camera's eye height when it stands there */
+    uint32_t count;
+    float length;              /* metres along the route (in plan) */
+    float start;               /* the bunny's place on the route at t = 0: the camera starts at 0 */
+    int rooms[WT_PATH_MAX_ROOMS];   /* layout rooms the route was planned through, in order */
+    int room_count;
+} wt_path;
+
+EX_FN void wt_layout_free(wt_layout *l)
+{
+    free(l->rooms);
+    free(l->doors);
+    free(l->stairs);
+    memset(l, 0, sizeof *l);
+}
+
+EX_FN void wt_path_free(wt_path *p)
+{
+    free(p->points);
+    free(p->eye);
+    memset(p, 0, sizeof *p);
+}
 
 typedef struct wt_world {
     wt_options opt;
-    char office_path[1024], bunny_path[1024];
-    uint64_t scene_hash;               /* the bytes of office.obj, office.mtl, bunny.obj */
-    obj_scene office, bunny;
+    char office_path[1024], bunny_path[1024], layout_path[1024];
+    uint64_t scene_hash;               /* the bytes of the scene's files and bunny.obj */
+    obj_scene office, bunny;           /* office: the static scene, the office or a building */
+    wt_layout layout;                  /* a building's rooms, doors and stairs (none for the office) */
+    wt_path path;                      /* the walk through a building (opt.path points here) */
     float bunny_lo[3], bunny_hi[3];    /* bounds of bunny.obj */
     float *bunny_normals;              /* smooth vertex normals, OBJ coordinates */
     ex_tracer *tracer;
@@ -787,7 +870,32 @@ EX_FN void wt_world_destroy(wt_world *w)
     free(w->picks);
     free(w->cells);
     free(w->records);
+    wt_layout_free(&w->layout);
+    wt_path_free(&w->path);
     free(w);
+}
+
+/* A light's centroid, bounding radius about it and power (see wt_light). */
+static void wt__light_bounds(const wt_world *w, wt_light *L)
+{
+    const float *pos = w->office.positions;
+    uint32_t i;
+    int k, c;
+    memset(L->centre, 0, sizeof L->centre);
+    for (i = L->first_tri; i < L->first_tri + L->tri_count; i++)
+        for (c = 0; c < 3; c++)
+            for (k = 0; k < 3; k++)
+                L->centre[k] += w->tracer->tri_area[i] / (3.0f * L->area) * pos[3 * (size_t)w->office.tri_indices[3 * i + c] + k];
+    L->radius = 0.0f;
+    for (i = L->first_tri; i < L->first_tri + L->tri_count; i++)
+        for (c = 0; c < 3; c++) {
+            const float *v = pos + 3 * (size_t)w->office.tri_indices[3 * i + c];
+            float d = sqrtf((v[0] - L->centre[0]) * (v[0] - L->centre[0]) + (v[1] - L->centre[1]) * (v[1] - L->centre[1]) +
+                            (v[2] - L->centre[2]) * (v[2] - L->centre[2]));
+            if (d > L->radius) L->radius = d;
+        }
+    L->radius *= 1.0f + 1e-5f;   /* rounding of the centroid: the sphere still holds every corner */
+    L->power = (0.2126f * L->ke[0] + 0.7152f * L->ke[1] + 0.0722f * L->ke[2]) * L->area;
 }
 
 /* The emitting polygons: runs of consecutive triangles of one emitting face. */
@@ -811,12 +919,669 @@ static int wt__find_lights(wt_world *w)
         L->tri_count++;
         L->area += w->tracer->tri_area[i];
     }
+    for (i = 0; i < w->light_count; i++) wt__light_bounds(w, &w->lights[i]);
     return 0;
+}
+
+/* The files of o->scene: the OBJ, its MTL (same name, .mtl) and for a
+   building its layout (.layout; "" for the office, whose walk is built in). */
+static void wt__scene_files(const wt_options *o, char *obj, char *mtl, char *layout, size_t size)
+{
+    const char *scene = o->scene ? o->scene : "office";
+    size_t n;
+    if (!strcmp(scene, "office") || !strcmp(scene, "building"))
+        snprintf(obj, size, "%.900s/%s.obj", o->data_dir, !strcmp(scene, "office") ? "office" : "building_4k");
+    else
+        snprintf(obj, size, "%.1000s", scene);
+    n = strlen(obj);
+    if (n > 4 && !strcmp(obj + n - 4, ".obj")) n -= 4;
+    snprintf(mtl, size, "%.*s.mtl", (int)n, obj);
+    if (!strcmp(scene, "office")) layout[0] = 0;
+    else snprintf(layout, size, "%.*s.layout", (int)n, obj);
 }
 
 static int wt__fail(char *err, size_t n, const char *fmt, const char *what)
 {
     snprintf(err, n, fmt, what);
+    return -1;
+}
+
+/* ======================================================================
+   a building's layout and the walk through it
+   The route visits a lit room, a room without a lamp of its own and the
+   stairs: it starts in a lit room next to the dark room (by doors), walks
+   into the dark room, to the foot of the stairs, up them, and into the
+   room above (or on to the dark room when it is upstairs). Between those
+   goals the route is planned on a walkable grid of each storey: cells of
+   WT__CELL metres whose column from just above the floor to above the
+   camera's eye is free of geometry and which have floor under them,
+   eroded by the bunny's radius and a margin; A* finds the shortest
+   8-connected route, which is then pulled straight where the grid allows
+   and smoothed. The climb is the stair's centre line. The bunny's feet
+   stand on the highest surface under its footprint (rays cast down), so it
+   hops from tread to tread.
+   ---------------------------------------------------------------------- */
+#define WT__CELL 0.05f             /* metres per walkable-grid cell */
+#define WT__CLEARANCE 0.26f        /* from the route to any obstacle: the bunny's radius and 10 cm */
+#define WT__HEADROOM 1.8f          /* the column kept free above the floor: the camera's eye and more */
+#define WT__SMOOTH 0.2f            /* metres each side: the route's moving average */
+
+static int wt__push(void **items, uint32_t *count, size_t size, const void *item)
+{
+    if ((*count & (*count - 1)) == 0) {   /* grow at powers of two */
+        void *p = realloc(*items, size * (*count ? 2 * (size_t)*count : 4));
+        if (!p) return -1;
+        *items = p;
+    }
+    memcpy((char *)*items + size * *count, item, size);
+    ++*count;
+    return 0;
+}
+
+/* Reads a .layout file. Returns 0, or -1 with a message naming the line. */
+EX_FN int wt_layout_load(const char *path, wt_layout *l, char *err, size_t err_size)
+{
+    FILE *f = fopen(path, "r");
+    char line[512];
+    int number = 0;
+    memset(l, 0, sizeof *l);
+    if (!f) {
+        snprintf(err, err_size, "cannot read %.200s: %s", path, strerror(errno));
+        return -1;
+    }
+    while (fgets(line, sizeof line, f)) {
+        char kind[16], lamp[16];
+        float v[6];
+        int storey, i, j, stair, n, ok = 1, k;
+        number++;
+        if (sscanf(line, "%15s", kind) != 1 || kind[0] == '#') continue;
+        if (!strcmp(kind, "room")) {
+            wt_room r;
+            n = sscanf(line, "%*s %d %d %d %f %f %f %f %f %f %15s %d", &storey, &i, &j, &v[0], &v[1], &v[2], &v[3],
+                       &v[4], &v[5], lamp, &stair);
+            ok = n == 11;
+            memset(&r, 0, sizeof r);
+            r.storey = storey;
+            r.i = i;
+            r.j = j;
+            r.lamp = ok && strcmp(lamp, "none") != 0;
+            r.stair = stair;
+            for (k = 0; k < 3 && ok; k++) {
+                r.lo[k] = v[2 * k];
+                r.hi[k] = v[2 * k + 1];
+            }
+            ok = ok && wt__push((void **)&l->rooms, &l->room_count, sizeof r, &r) == 0;
+        } else if (!strcmp(kind, "door") || !strcmp(kind, "stair") || !strcmp(kind, "window")) {
+            wt_box b;
+            n = sscanf(line, "%*s %d %f %f %f %f %f %f", &storey, &v[0], &v[1], &v[2], &v[3], &v[4], &v[5]);
+            ok = n == 7;
+            b.storey = storey;
+            for (k = 0; k < 3 && ok; k++) {
+                b.lo[k] = v[2 * k];
+                b.hi[k] = v[2 * k + 1];
+            }
+            if (ok && kind[0] == 'd') ok = wt__push((void **)&l->doors, &l->door_count, sizeof b, &b) == 0;
+            else if (ok && kind[0] == 's') ok = wt__push((void **)&l->stairs, &l->stair_count, sizeof b, &b) == 0;
+            else l->window_count += ok;
+        } else if (!strcmp(kind, "lamp")) {
+            l->lamp_count++;
+        } else {
+            ok = 0;
+        }
+        for (k = 0; k < 6 && ok; k++) ok = isfinite(v[k]) && (k % 2 == 0 || v[k] >= v[k - 1]);
+        if (!ok) {
+            snprintf(err, err_size, "%.200s:%d: not a room, door, window, stair or lamp line of make_building.py",
+                     path, number);
+            fclose(f);
+            wt_layout_free(l);
+            return -1;
+        }
+    }
+    fclose(f);
+    if (l->room_count == 0) {
+        snprintf(err, err_size, "%.200s: no rooms", path);
+        wt_layout_free(l);
+        return -1;
+    }
+    return 0;
+}
+
+/* The room that holds point p (feet height within its storey), or -1. */
+EX_FN int wt_layout_room_at(const wt_layout *l, const float p[3])
+{
+    uint32_t i;
+    for (i = 0; i < l->room_count; i++) {
+        const wt_room *r = &l->rooms[i];
+        if (p[0] >= r->lo[0] && p[0] <= r->hi[0] && p[2] >= r->lo[2] && p[2] <= r->hi[2] && p[1] >= r->lo[1] - 0.3f &&
+            p[1] < r->hi[1])
+            return (int)i;
+    }
+    return -1;
+}
+
+/* Whether a door joins rooms a and b (it lies on the boundary of both). */
+static int wt__door_joins(const wt_layout *l, int a, int b)
+{
+    uint32_t d;
+    for (d = 0; d < l->door_count; d++) {
+        const wt_box *o = &l->doors[d];
+        int k, both = 1, s;
+        for (s = 0; s < 2; s++) {
+            const wt_room *r = &l->rooms[s ? b : a];
+            if (r->storey != o->storey) both = 0;
+            for (k = 0; k < 3; k += 2)
+                if (o->hi[k] < r->lo[k] - 0.05f || o->lo[k] > r->hi[k] + 0.05f) both = 0;
+        }
+        if (both) return 1;
+    }
+    return 0;
+}
+
+/* Rooms one door apart from `from` through rooms of its storey: hops per
+   room (-1 where unreachable). */
+static void wt__room_hops(const wt_layout *l, int from, int *hops)
+{
+    uint32_t i, j, changed = 1;
+    for (i = 0; i < l->room_count; i++) hops[i] = -1;
+    hops[from] = 0;
+    while (changed) {
+        changed = 0;
+        for (i = 0; i < l->room_count; i++)
+            for (j = 0; j < l->room_count; j++)
+                if (hops[i] >= 0 && (hops[j] < 0 || hops[j] > hops[i] + 1) && wt__door_joins(l, (int)i, (int)j)) {
+                    hops[j] = hops[i] + 1;
+                    changed = 1;
+                }
+    }
+}
+
+/* ---- the walkable grid of one storey ------------------------------------ */
+typedef struct wt__grid {
+    int nx, nz;
+    float x0, z0, floor;          /* corner of cell (0, 0); the storey's floor height */
+    unsigned char *open;          /* 1: the bunny may stand here (eroded by the clearance) */
+} wt__grid;
+
+static float wt__cell_x(const wt__grid *g, int i) { return g->x0 + ((float)i + 0.5f) * WT__CELL; }
+static float wt__cell_z(const wt__grid *g, int j) { return g->z0 + ((float)j + 0.5f) * WT__CELL; }
+
+/* Marks the cells under the part of triangle t inside the height band
+   (floor + 3 cm, floor + headroom): its clipped outline's bounding box. */
+static void wt__grid_block_triangle(const wt_world *w, wt__grid *g, uint32_t t, unsigned char *blocked)
+{
+    float poly[2][9][3], lo[2] = { FLT_MAX, FLT_MAX }, hi[2] = { -FLT_MAX, -FLT_MAX };
+    float band[2] = { g->floor + 0.03f, g->floor + WT__HEADROOM };
+    int n = 3, k, side, i0, i1, j0, j1, i, j;
+    for (k = 0; k < 3; k++) memcpy(poly[0][k], w->office.positions + 3 * (size_t)w->office.tri_indices[3 * t + k], 12);
+    for (side = 0; side < 2 && n > 0; side++) {   /* keep y >= band[0], then y <= band[1] */
+        const float (*in)[3] = (const float (*)[3])poly[side];
+        float (*out)[3] = poly[1 - side];
+        int m = 0, a;
+        for (a = 0; a < n; a++) {
+            const float *p = in[a], *q = in[(a + 1) % n];
+            float dp = side ? band[1] - p[1] : p[1] - band[0], dq = side ? band[1] - q[1] : q[1] - band[0];
+            if (dp >= 0.0f) memcpy(out[m++], p, 12);
+            if ((dp >= 0.0f) != (dq >= 0.0f)) {
+                float s = dp / (dp - dq);
+                for (k = 0; k < 3; k++) out[m][k] = p[k] + s * (q[k] - p[k]);
+                m++;
+            }
+        }
+        n = m;
+    }
+    if (n == 0) return;
+    for (k = 0; k < n; k++) {   /* after two passes the polygon is back in poly[0] */
+        lo[0] = fminf(lo[0], poly[0][k][0]);
+        hi[0] = fmaxf(hi[0], poly[0][k][0]);
+        lo[1] = fminf(lo[1], poly[0][k][2]);
+        hi[1] = fmaxf(hi[1], poly[0][k][2]);
+    }
+    i0 = (int)floorf((lo[0] - g->x0) / WT__CELL);
+    i1 = (int)floorf((hi[0] - g->x0) / WT__CELL);
+    j0 = (int)floorf((lo[1] - g->z0) / WT__CELL);
+    j1 = (int)floorf((hi[1] - g->z0) / WT__CELL);
+    if (i0 < 0) i0 = 0;
+    if (j0 < 0) j0 = 0;
+    if (i1 >= g->nx) i1 = g->nx - 1;
+    if (j1 >= g->nz) j1 = g->nz - 1;
+    for (j = j0; j <= j1; j++)
+        for (i = i0; i <= i1; i++) blocked[(size_t)j * (size_t)g->nx + (size_t)i] = 1;
+}
+
+static void wt__grid_free(wt__grid *g)
+{
+    free(g->open);
+    memset(g, 0, sizeof *g);
+}
+
+/* The walkable grid of the storey whose floor is at height `floor`. */
+static int wt__grid_build(const wt_world *w, float floor, wt__grid *g)
+{
+    float lo[3], hi[3], down[3] = { 0.0f, -1.0f, 0.0f };
+    int i, j, di, dj, r = (int)ceilf(WT__CLEARANCE / WT__CELL);
+    uint32_t t;
+    unsigned char *blocked;
+    memset(g, 0, sizeof *g);
+    obj_bounds(&w->office, lo, hi);
+    g->x0 = lo[0];
+    g->z0 = lo[2];
+    g->floor = floor;
+    g->nx = (int)ceilf((hi[0] - lo[0]) / WT__CELL) + 1;
+    g->nz = (int)ceilf((hi[2] - lo[2]) / WT__CELL) + 1;
+    if (g->nx > 8192 || g->nz > 8192) return -1;   /* a building over 400 m: not walked */
+    g->open = (unsigned char *)malloc((size_t)g->nx * (size_t)g->nz);
+    blocked = (unsigned char *)calloc((size_t)g->nx * (size_t)g->nz, 1);
+    if (!g->open || !blocked) {
+        free(blocked);
+        wt__grid_free(g);
+        return -1;
+    }
+    for (t = 0; t < w->office.tri_count; t++) wt__grid_block_triangle(w, g, t, blocked);
+    for (j = 0; j < g->nz; j++)   /* no floor just under the cell: a hole, a stairwell, outside */
+        for (i = 0; i < g->nx; i++) {
+            float org[3] = { wt__cell_x(g, i), floor + 0.02f, wt__cell_z(g, j) };
+            tr__hit h;
+            size_t c = (size_t)j * (size_t)g->nx + (size_t)i;
+            if (!blocked[c] && !tr__bvh_intersect(&w->tracer->bvh, org, down, 0.0f, 0.05f, &h)) blocked[c] = 1;
+        }
+    memset(g->open, 1, (size_t)g->nx * (size_t)g->nz);
+    for (j = 0; j < g->nz; j++)   /* erode by the clearance: a disc around every blocked cell */
+        for (i = 0; i < g->nx; i++) {
+            if (!blocked[(size_t)j * (size_t)g->nx + (size_t)i]) continue;
+            for (dj = -r; dj <= r; dj++)
+                for (di = -r; di <= r; di++)
+                    if (di * di + dj * dj <= r * r && i + di >= 0 && i + di < g->nx && j + dj >= 0 && j + dj < g->nz)
+                        g->open[(size_t)(j + dj) * (size_t)g->nx + (size_t)(i + di)] = 0;
+        }
+    free(blocked);
+    return 0;
+}
+
+static int wt__grid_cell(const wt__grid *g, float x, float z, int *i, int *j)
+{
+    *i = (int)floorf((x - g->x0) / WT__CELL);
+    *j = (int)floorf((z - g->z0) / WT__CELL);
+    return *i >= 0 && *i < g->nx && *j >= 0 && *j < g->nz;
+}
+
+/* The open cell nearest to (x, z) within the box [lo, hi] of the plan (a
+   room), or -1. */
+static long wt__grid_nearest_open(const wt__grid *g, float x, float z, const float lo[3], const float hi[3])
+{
+    long best = -1;
+    float best_d = FLT_MAX;
+    int i, j, i0, j0, i1, j1;
+    wt__grid_cell(g, lo[0], lo[2], &i0, &j0);
+    wt__grid_cell(g, hi[0], hi[2], &i1, &j1);
+    for (j = j0 > 0 ? j0 : 0; j <= j1 && j < g->nz; j++)
+        for (i = i0 > 0 ? i0 : 0; i <= i1 && i < g->nx; i++) {
+            float dx = wt__cell_x(g, i) - x, dz = wt__cell_z(g, j) - z;
+            if (g->open[(size_t)j * (size_t)g->nx + (size_t)i] && dx * dx + dz * dz < best_d) {
+                best_d = dx * dx + dz * dz;
+                best = (long)j * g->nx + i;
+            }
+        }
+    return best;
+}
+
+/* Whether the straight segment between two cells crosses open cells only. */
+static int wt__grid_visible(const wt__grid *g, long a, long b)
+{
+    float ax = (float)(a % g->nx), az = (float)(a / g->nx), bx = (float)(b % g->nx), bz = (float)(b / g->nx);
+    int n = (int)(2.0f * fmaxf(fabsf(bx - ax), fabsf(bz - az))) + 1, s;
+    for (s = 0; s <= n; s++) {
+        float u = (float)s / (float)n;
+        long i = (long)floorf(ax + u * (bx - ax) + 0.5f), j = (long)floorf(az + u * (bz - az) + 0.5f);
+        if (!g->open[j * g->nx + i]) return 0;
+    }
+    return 1;
+}
+
+/* The shortest 8-connected routes over open cells from cell a (Dijkstra;
+   diagonal moves cost sqrt 2 and never cut a blocked corner), then the goal:
+   the reached cell of the box [lo, hi] (a room, the stairs' foot) that
+   minimizes the route's length plus twice its distance to target (x, z),
+   so a goal behind furniture is not reached by a detour through other
+   rooms. Appends the route's corners (the cell path pulled straight where
+   open cells allow) to xyz as points at the storey's floor height, from a's
+   centre to the goal's; returns the goal cell, or -1 when no cell of the
+   box is reached or memory runs out. */
+static long wt__grid_route(const wt__grid *g, long a, const float target[2], const float lo[3], const float hi[3],
+                           float **xyz, uint32_t *count)
+{
+    size_t n = (size_t)g->nx * (size_t)g->nz, heap_n = 0;
+    float *cost = (float *)malloc(n * sizeof(float)), *key = (float *)malloc(8 * n * sizeof(float)), best = FLT_MAX;
+    long *from = (long *)malloc(n * sizeof(long)), *heap = (long *)malloc(8 * n * sizeof(long)), *cells = NULL, c;
+    long ncells = 0, i, anchor, goal = -1, result = -1;
+    int k, i0, j0, i1, j1, ci, cj;
+    size_t x;
+    static const int step[8][2] = { { 1, 0 }, { -1, 0 }, { 0, 1 }, { 0, -1 }, { 1, 1 }, { 1, -1 }, { -1, 1 }, { -1, -1 } };
+    if (!cost || !from || !heap || !key) goto done;
+    for (x = 0; x < n; x++) {
+        cost[x] = FLT_MAX;
+        from[x] = -1;
+    }
+    cost[a] = 0.0f;
+    heap[heap_n] = a;
+    key[heap_n++] = 0.0f;
+    while (heap_n > 0) {
+        size_t p = 0;
+        long cur = heap[0];
+        float f = key[0];
+        heap[0] = heap[--heap_n];   /* pop the least key */
+        key[0] = key[heap_n];
+        for (;;) {
+            size_t l = 2 * p + 1, m = p;
+            if (l < heap_n && key[l] < key[m]) m = l;
+            if (l + 1 < heap_n && key[l + 1] < key[m]) m = l + 1;
+            if (m == p) break;
+            { long tc = heap[p]; float tk = key[p]; heap[p] = heap[m]; key[p] = key[m]; heap[m] = tc; key[m] = tk; }
+            p = m;
+        }
+        if (f > cost[cur]) continue;   /* a stale entry */
+        ci = (int)(cur % g->nx);
+        cj = (int)(cur / g->nx);
+        for (k = 0; k < 8; k++) {
+            int ni = ci + step[k][0], nj = cj + step[k][1];
+            long nb;
+            float nc;
+            if (ni < 0 || nj < 0 || ni >= g->nx || nj >= g->nz) continue;
+            nb = (long)nj * g->nx + ni;
+            if (!g->open[nb]) continue;
+            if (k >= 4 && (!g->open[(long)cj * g->nx + ni] || !g->open[(long)nj * g->nx + ci])) continue;
+            nc = cost[cur] + (k >= 4 ? 1.41421356f : 1.0f);
+            if (nc >= cost[nb] || heap_n >= 8 * n) continue;
+            cost[nb] = nc;
+            from[nb] = cur;
+            p = heap_n++;
+            heap[p] = nb;
+            key[p] = nc;
+            while (p > 0 && key[(p - 1) / 2] > key[p]) {
+                size_t q = (p - 1) / 2;
+                long tc = heap[p];
+                float tk = key[p];
+                heap[p] = heap[q]; key[p] = key[q]; heap[q] = tc; key[q] = tk;
+                p = q;
+            }
+        }
+    }
+    wt__grid_cell(g, lo[0], lo[2], &i0, &j0);
+    wt__grid_cell(g, hi[0], hi[2], &i1, &j1);
+    for (cj = j0 > 0 ? j0 : 0; cj <= j1 && cj < g->nz; cj++)
+        for (ci = i0 > 0 ? i0 : 0; ci <= i1 && ci < g->nx; ci++) {
+            long cell = (long)cj * g->nx + ci;
+            float score = cost[cell] * WT__CELL + 2.0f * hypotf(wt__cell_x(g, ci) - target[0], wt__cell_z(g, cj) - target[1]);
+            if (cost[cell] < FLT_MAX && score < best) {
+                best = score;
+                goal = cell;
+            }
+        }
+    if (goal < 0) goto done;
+    for (c = goal; c >= 0; c = c == a ? -1 : from[c]) ncells++;
+    cells = (long *)malloc((size_t)ncells * sizeof(long));
+    if (!cells) goto done;
+    for (c = goal, i = ncells; c >= 0; c = c == a ? -1 : from[c]) cells[--i] = c;
+    for (anchor = 0; anchor < ncells;) {   /* pull straight: the farthest cell still in view */
+        long next = anchor + 1;
+        float p[3];
+        p[0] = wt__cell_x(g, (int)(cells[anchor] % g->nx));
+        p[1] = g->floor;
+        p[2] = wt__cell_z(g, (int)(cells[anchor] / g->nx));
+        if (wt__push((void **)xyz, count, sizeof p, p) != 0) goto done;
+        if (anchor == ncells - 1) break;
+        while (next + 1 < ncells && wt__grid_visible(g, cells[anchor], cells[next + 1])) next++;
+        anchor = next;
+    }
+    result = goal;
+done:
+    free(cost);
+    free(from);
+    free(heap);
+    free(key);
+    free(cells);
+    return result;
+}
+
+/* The storey floors of the layout, lowest first (the rooms' floor heights). */
+static float wt__storey_floor(const wt_layout *l, int storey)
+{
+    uint32_t i;
+    for (i = 0; i < l->room_count; i++)
+        if (l->rooms[i].storey == storey) return l->rooms[i].lo[1];
+    return 0.0f;
+}
+
+/* Chooses the rooms of the route: the dark room (no lamp; the lowest
+   storey's first, one the stairs reach), a lit start room a door away from
+   it (or from the stair room, when the dark room is upstairs), the stair
+   room. Fills goals (room indices, -2 for "climb the stairs"). */
+static int wt__route_rooms(const wt_layout *l, int *goals, int *stair_index)
+{
+    int *hops = (int *)malloc(sizeof(int) * l->room_count), dark = -1, stair_room = -1, start = -1, n = 0;
+    uint32_t i, s;
+    *stair_index = -1;
+    if (!hops) return -1;
+    for (s = 0; s < l->stair_count && stair_room < 0; s++)
+        if (l->stairs[s].storey == 0) {
+            float foot[3] = { l->stairs[s].lo[0] - 0.1f, l->stairs[s].lo[1], 0.5f * (l->stairs[s].lo[2] + l->stairs[s].hi[2]) };
+            stair_room = wt_layout_room_at(l, foot);
+            *stair_index = (int)s;
+        }
+    for (i = 0; i < l->room_count && dark < 0; i++)   /* storey 0 first, then storey 1 */
+        if (!l->rooms[i].lamp && l->rooms[i].storey == 0 && (int)i != stair_room) dark = (int)i;
+    for (i = 0; i < l->room_count && dark < 0; i++)
+        if (!l->rooms[i].lamp && l->rooms[i].storey == 1 && stair_room >= 0) dark = (int)i;
+    if (dark >= 0 && l->rooms[dark].storey == 0) {
+        wt__room_hops(l, dark, hops);
+        for (i = 0; i < l->room_count && start < 0; i++)   /* a lit neighbour, not the stair room if it can */
+            if (hops[i] == 1 && l->rooms[i].lamp && (int)i != stair_room) start = (int)i;
+        if (start < 0 && stair_room >= 0 && hops[stair_room] == 1) start = stair_room;
+        if (start >= 0) goals[n++] = start;
+        goals[n++] = dark;
+        if (stair_room >= 0) {
+            const wt_box *st = &l->stairs[*stair_index];
+            float top[3] = { st->hi[0] + 0.45f, st->hi[1] + 0.1f, 0.5f * (st->lo[2] + st->hi[2]) };
+            int above = wt_layout_room_at(l, top);
+            goals[n++] = -2;
+            if (above >= 0) goals[n++] = above;   /* into the room above */
+        }
+    } else if (stair_room >= 0) {
+        wt__room_hops(l, stair_room, hops);
+        for (i = 0; i < l->room_count && start < 0; i++)
+            if (hops[i] == 1 && l->rooms[i].lamp) start = (int)i;
+        goals[n++] = start >= 0 ? start : stair_room;
+        goals[n++] = -2;
+        if (dark >= 0) goals[n++] = dark;
+    }
+    free(hops);
+    return n >= 2 ? n : -1;
+}
+
+/* Where the feet stand at (x, z) near height guess: the highest surface
+   hit by rays cast down over the bunny's footprint, within 35 cm of the
+   guess (else the guess). */
+static float wt__support(const wt_world *w, float x, float z, float guess)
+{
+    static const float probe[5][2] = { { 0, 0 }, { 0.1f, 0 }, { -0.1f, 0 }, { 0, 0.1f }, { 0, -0.1f } };
+    float down[3] = { 0.0f, -1.0f, 0.0f }, best = -FLT_MAX;
+    int k;
+    for (k = 0; k < 5; k++) {
+        float org[3] = { x + probe[k][0], guess + 0.35f, z + probe[k][1] };
+        tr__hit h;
+        if (tr__bvh_intersect(&w->tracer->bvh, org, down, 0.0f, 0.7f, &h) && org[1] - h.t > best) best = org[1] - h.t;
+    }
+    return best > -FLT_MAX ? best : guess;
+}
+
+/* Resamples the corners every WT_PATH_STEP (in plan), smooths the plan
+   positions (a moving average over WT__SMOOTH each side, which cuts a
+   corner by less than the clearance's margin), stands the feet on what
+   supports them and sets the camera's eye height. */
+static int wt__path_finish(const wt_world *w, wt_path *p, const float *corners, uint32_t ncorners)
+{
+    uint32_t i, k, half = (uint32_t)(WT__SMOOTH / WT_PATH_STEP + 0.5f), eye_half = (uint32_t)(0.8f / WT_PATH_STEP);
+    float total = 0.0f, *raw;
+    for (i = 1; i < ncorners; i++)
+        total += hypotf(corners[3 * i] - corners[3 * i - 3], corners[3 * i + 2] - corners[3 * i - 1]);
+    p->count = (uint32_t)(total / WT_PATH_STEP) + 1;
+    p->length = (float)(p->count - 1) * WT_PATH_STEP;
+    p->points = (float *)malloc(3 * sizeof(float) * p->count);
+    p->eye = (float *)malloc(sizeof(float) * p->count);
+    raw = (float *)malloc(3 * sizeof(float) * p->count);
+    if (!p->points || !p->eye || !raw) {
+        free(raw);
+        return -1;
+    }
+    {   /* walk the corners at constant speed */
+        float along = 0.0f;
+        uint32_t c = 1;
+        for (i = 0; i < p->count; i++) {
+            float target = (float)i * WT_PATH_STEP, seg = 0.0f, u;
+            while (c < ncorners) {
+                seg = hypotf(corners[3 * c] - corners[3 * c - 3], corners[3 * c + 2] - corners[3 * c - 1]);
+                if (target <= along + seg || c + 1 == ncorners) break;
+                along += seg;
+                c++;
+            }
+            u = seg > 0.0f ? (target - along) / seg : 0.0f;
+            if (u > 1.0f) u = 1.0f;
+            for (k = 0; k < 3; k++) raw[3 * i + k] = corners[3 * c - 3 + k] + u * (corners[3 * c + k] - corners[3 * c - 3 + k]);
+        }
+    }
+    for (i = 0; i < p->count; i++) {   /* the moving average, its window shrunk at the ends */
+        uint32_t h = i < half ? i : half, lo, hi;
+        float sum[2] = { 0, 0 };
+        if (p->count - 1 - i < h) h = p->count - 1 - i;
+        lo = i - h;
+        hi = i + h;
+        for (k = lo; k <= hi; k++) {
+            sum[0] += raw[3 * k];
+            sum[1] += raw[3 * k + 2];
+        }
+        p->points[3 * i] = sum[0] / (float)(hi - lo + 1);
+        p->points[3 * i + 2] = sum[1] / (float)(hi - lo + 1);
+        p->points[3 * i + 1] = wt__support(w, p->points[3 * i], p->points[3 * i + 2], raw[3 * i + 1]);
+    }
+    for (i = 0; i < p->count; i++) {   /* the eye: the floor smoothed over 0.8 m each side */
+        uint32_t lo = i > eye_half ? i - eye_half : 0, hi = i + eye_half < p->count ? i + eye_half : p->count - 1;
+        float sum = 0.0f;
+        for (k = lo; k <= hi; k++) sum += p->points[3 * k + 1];
+        p->eye[i] = sum / (float)(hi - lo + 1) + WT_EYE_HEIGHT;
+    }
+    free(raw);
+    return 0;
+}
+
+/* Plans the walk through w's layout (see the section's comment). Returns 0,
+   or -1 with a message. */
+static int wt__path_plan(wt_world *w, char *err, size_t err_size)
+{
+    const wt_layout *l = &w->layout;
+    wt_path *p = &w->path;
+    int goals[6], ngoals, stair = -1, g, storey = -1;
+    float *corners = NULL, here[3] = { 0, 0, 0 };
+    uint32_t ncorners = 0;
+    wt__grid grid;
+    long from_cell = -1;
+    memset(p, 0, sizeof *p);
+    memset(&grid, 0, sizeof grid);
+    ngoals = wt__route_rooms(l, goals, &stair);
+    if (ngoals < 0) return wt__fail(err, err_size, "%.200s: nothing to walk to (no stairs, no room without a lamp)", w->layout_path);
+    for (g = 0; g < ngoals; g++) {
+        long to_cell;
+        float target[3] = { 0.0f, 0.0f, 0.0f };
+        const float *lo, *hi;
+        int to_storey;
+        if (goals[g] == -2) {   /* walk to the foot of the stairs, climb, step onto the landing */
+            const wt_box *s = &l->stairs[stair];
+            to_storey = s->storey;
+            target[0] = s->lo[0] - 0.45f;
+            target[2] = 0.5f * (s->lo[2] + s->hi[2]);
+            lo = s->lo;
+            hi = s->hi;
+        } else {
+            const wt_room *r = &l->rooms[goals[g]];
+            if (p->room_count < WT_PATH_MAX_ROOMS) p->rooms[p->room_count++] = goals[g];
+            to_storey = r->storey;
+            target[0] = 0.5f * (r->lo[0] + r->hi[0]);
+            target[2] = 0.5f * (r->lo[2] + r->hi[2]);
+            lo = r->lo;
+            hi = r->hi;
+        }
+        if (to_storey != storey) {
+            wt__grid_free(&grid);
+            storey = to_storey;
+            if (wt__grid_build(w, wt__storey_floor(l, storey), &grid) != 0) goto fail_memory;
+            from_cell = -1;
+            if (ncorners > 0) {   /* only the stairs lead to another storey */
+                snprintf(err, err_size, "%.200s: room %d is on another storey and no stairs lead there", w->layout_path, goals[g]);
+                goto fail;
+            }
+        }
+        {
+            float box_lo[3], box_hi[3], xz[2] = { target[0], target[2] };
+            int k;
+            for (k = 0; k < 3; k++) {   /* the goal's room, or around the stairs' foot */
+                box_lo[k] = goals[g] == -2 ? target[k] - 0.6f : lo[k] + 0.05f;
+                box_hi[k] = goals[g] == -2 ? target[k] + 0.2f : hi[k] - 0.05f;
+            }
+            if (from_cell < 0) {   /* the start: the open cell nearest the target */
+                float c[3];
+                to_cell = wt__grid_nearest_open(&grid, target[0], target[2], box_lo, box_hi);
+                if (to_cell >= 0) {
+                    c[0] = wt__cell_x(&grid, (int)(to_cell % grid.nx));
+                    c[1] = grid.floor;
+                    c[2] = wt__cell_z(&grid, (int)(to_cell / grid.nx));
+                    if (wt__push((void **)&corners, &ncorners, sizeof c, c) != 0) goto fail_memory;
+                }
+            } else {
+                ncorners--;   /* the segment's first corner is the last one already there */
+                to_cell = wt__grid_route(&grid, from_cell, xz, box_lo, box_hi, &corners, &ncorners);
+            }
+        }
+        if (to_cell < 0) {
+            snprintf(err, err_size, "%.200s: no walkable route to %s %d (storey %d)", w->layout_path,
+                     goals[g] == -2 ? "the stairs of storey" : "room", goals[g] == -2 ? storey : goals[g], storey);
+            goto fail;
+        }
+        from_cell = to_cell;
+        memcpy(here, corners + 3 * (ncorners - 1), sizeof here);
+        if (goals[g] == -2) {   /* the climb: the stair's centre line, onto the floor above */
+            const wt_box *s = &l->stairs[stair];
+            float foot[3] = { s->lo[0] - 0.45f, s->lo[1], 0.5f * (s->lo[2] + s->hi[2]) };
+            float top[3] = { s->hi[0] + 0.45f, s->hi[1], foot[2] };
+            if (wt__push((void **)&corners, &ncorners, sizeof foot, foot) != 0 ||
+                wt__push((void **)&corners, &ncorners, sizeof top, top) != 0)
+                goto fail_memory;
+            memcpy(here, top, sizeof here);
+            storey++;
+            wt__grid_free(&grid);
+            if (wt__grid_build(w, wt__storey_floor(l, storey), &grid) != 0) goto fail_memory;
+            {
+                float box_lo[3] = { top[0] - 0.3f, top[1], top[2] - 0.6f }, box_hi[3] = { top[0] + 1.0f, top[1], top[2] + 0.6f };
+                from_cell = wt__grid_nearest_open(&grid, top[0], top[2], box_lo, box_hi);
+            }
+            if (from_cell < 0) {
+                snprintf(err, err_size, "%.200s: no free floor at the top of the stairs", w->layout_path);
+                goto fail;
+            }
+        }
+    }
+    wt__grid_free(&grid);
+    if (ncorners < 2 || wt__path_finish(w, p, corners, ncorners) != 0) {
+        free(corners);
+        wt_path_free(p);
+        return wt__fail(err, err_size, "%s", ncorners < 2 ? "the planned walk is empty" : "out of memory");
+    }
+    free(corners);
+    p->start = p->length > 3.0f * WT_CAMERA_TRAIL ? WT_CAMERA_TRAIL : p->length / 3.0f;
+    return 0;
+fail_memory:
+    snprintf(err, err_size, "out of memory");
+fail:
+    wt__grid_free(&grid);
+    free(corners);
+    wt_path_free(p);
     return -1;
 }
 
@@ -833,14 +1598,16 @@ EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t
     *out = NULL;
     if (!w) return wt__fail(err, err_size, "%s", "out of memory");
     w->opt = *o;
+    w->opt.path = NULL;
     pthread_mutex_init(&w->pose_lock, NULL);
-    snprintf(w->office_path, sizeof w->office_path, "%s/office.obj", o->data_dir);
-    snprintf(mtl_path, sizeof mtl_path, "%s/office.mtl", o->data_dir);
+    wt__scene_files(o, w->office_path, mtl_path, w->layout_path, sizeof mtl_path);
     snprintf(w->bunny_path, sizeof w->bunny_path, "%s/bunny.obj", o->data_dir);
     if (!wt__hash_file(w->office_path, &w->scene_hash) || !wt__hash_file(mtl_path, &w->scene_hash) ||
+        (w->layout_path[0] && !wt__hash_file(w->layout_path, &w->scene_hash)) ||
         !wt__hash_file(w->bunny_path, &w->scene_hash)) {
         const char *missing = access(w->office_path, R_OK) != 0 ? w->office_path
-                              : access(mtl_path, R_OK) != 0   ? mtl_path : w->bunny_path;
+                              : access(mtl_path, R_OK) != 0   ? mtl_path
+                              : w->layout_path[0] && access(w->layout_path, R_OK) != 0 ? w->layout_path : w->bunny_path;
         snprintf(err, err_size, "cannot read %.200s: %s (run from the repository root, or pass --data DIR)", missing,
                  strerror(errno));
         wt_world_destroy(w);
@@ -861,9 +1628,9 @@ EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t
     w->material_count = w->office.material_count + 1;
     w->bunny_material = w->office.material_count;
     w->materials = (lightvec_material *)calloc(w->material_count, sizeof *w->materials);
-    w->pool = ex_pool_create(o->threads);
+    w->pool = o->threads == 1 ? NULL : ex_pool_create(o->threads);   /* one thread: no pool, all work here */
     w->tracer = ex_tracer_create(&w->office);
-    if (!w->bunny_normals || !w->materials || !w->pool || !w->tracer) {
+    if (!w->bunny_normals || !w->materials || (o->threads != 1 && !w->pool) || !w->tracer) {
         wt_world_destroy(w);
         return wt__fail(err, err_size, "%s", "out of memory");
     }
@@ -872,6 +1639,12 @@ EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t
         wt_world_destroy(w);
         return wt__fail(err, err_size, "%s", "out of memory");
     }
+    if (w->layout_path[0] &&
+        (wt_layout_load(w->layout_path, &w->layout, err, err_size) != 0 || wt__path_plan(w, err, err_size) != 0)) {
+        wt_world_destroy(w);
+        return -1;
+    }
+    if (w->layout_path[0]) w->opt.path = &w->path;
     w->bunny_instance = ex_tracer_add_instance(w->tracer, &w->bunny, grey);
     wt__materials_from_obj(&w->office, w->materials);
     memcpy(w->materials[w->bunny_material].diffuse, grey, sizeof grey);
@@ -916,15 +1689,18 @@ EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t
 
 /* ======================================================================
    the paths
-   The bunny walks from the open floor in front of the desk under the desk
-   (x 1.0-2.6, z 2.9-3.7, its top at 0.72-0.75 m), out again and along the
-   yellow divider (x 3.6-3.65, z 1.3-2.6): a Catmull-Rom spline through
-   waypoints, at constant speed, facing where it goes. The camera moves
-   along the front of the room at eye height and looks at where the bunny
-   is about to be.
+   In the office (the built-in walk) the bunny walks from the open floor in
+   front of the desk under the desk (x 1.0-2.6, z 2.9-3.7, its top at
+   0.72-0.75 m), out again and along the yellow divider (x 3.6-3.65, z
+   1.3-2.6): a Catmull-Rom spline through waypoints, at constant speed,
+   facing where it goes. The camera moves along the front of the room at
+   eye height and looks at where the bunny is about to be. In a building
+   (wt_path, planned from its layout by wt_world_create) the bunny walks the
+   route at constant speed from WT_CAMERA_TRAIL metres in, and the camera
+   follows it along the same route, that far behind, at eye height.
    ---------------------------------------------------------------------- */
-#define WT_PATH_VERSION 1u     /* bump when the paths change: precompute keys depend on them */
-#define WT_SHADING_VERSION 1u  /* bump when the shading changes: cached light vectors and base images */
+#define WT_PATH_VERSION 2u     /* bump when the paths change: precompute keys depend on them */
+#define WT_SHADING_VERSION 2u  /* bump when the shading changes: cached light vectors and base images */
 #define WT__WAYPOINTS 9
 static const float wt__waypoints[WT__WAYPOINTS][2] = {   /* (x, z) on the floor */
     { 1.35f, 1.55f }, { 1.65f, 2.35f }, { 1.80f, 3.15f }, { 2.15f, 3.35f }, { 2.40f, 2.80f },
@@ -948,9 +1724,8 @@ static void wt__spline(float s, float xz[2])
     }
 }
 
-/* The bunny's floor position (x, 0, z) and heading (radians about +y, 0 =
-   facing +z) at time t in [0, 1], at constant speed along the spline. */
-EX_FN void wt_bunny_position(double t, float pos[3], float *heading)
+/* The office's walk: the floor position (x, 0, z) and heading at time t. */
+static void wt__office_position(double t, float pos[3], float *heading)
 {
     float len[(WT__WAYPOINTS - 1) * WT__PATH_STEPS + 1], prev[2], xz[2], target, s, a[2], b[2];
     int n = (WT__WAYPOINTS - 1) * WT__PATH_STEPS, i;
@@ -962,8 +1737,6 @@ EX_FN void wt_bunny_position(double t, float pos[3], float *heading)
         prev[0] = xz[0];
         prev[1] = xz[1];
     }
-    if (t < 0.0) t = 0.0;
-    if (t > 1.0) t = 1.0;
     target = (float)t * len[n];
     for (i = 1; i < n && len[i] < target; i++) {}
     s = ((float)(i - 1) + (len[i] > len[i - 1] ? (target - len[i - 1]) / (len[i] - len[i - 1]) : 0.0f)) / WT__PATH_STEPS;
@@ -976,6 +1749,42 @@ EX_FN void wt_bunny_position(double t, float pos[3], float *heading)
     if (heading) *heading = atan2f(b[0] - a[0], b[1] - a[1]);
 }
 
+/* The point of a planned route at arc s (metres, clamped to the route),
+   linear between its points; and the camera's eye height there. */
+static void wt__path_at(const wt_path *p, float s, float pos[3], float *eye)
+{
+    float x = s / WT_PATH_STEP, u;
+    uint32_t i;
+    int k;
+    if (!(x > 0.0f)) x = 0.0f;
+    if (x > (float)(p->count - 1)) x = (float)(p->count - 1);
+    i = (uint32_t)x;
+    if (i + 1 >= p->count) i = p->count > 1 ? p->count - 2 : 0;
+    u = p->count > 1 ? x - (float)i : 0.0f;
+    for (k = 0; k < 3; k++) pos[k] = p->points[3 * i + k] + u * (p->points[3 * (i + (p->count > 1)) + k] - p->points[3 * i + k]);
+    if (eye) *eye = p->eye[i] + u * (p->eye[i + (p->count > 1)] - p->eye[i]);
+}
+
+/* The bunny's place on a planned route at time t. */
+static float wt__path_arc(const wt_path *p, double t) { return p->start + (float)t * (p->length - p->start); }
+
+/* The bunny's feet (x, y, z) and heading (radians about +y, 0 = facing +z)
+   at time t in [0, 1]: on o->path when it is set, else on the office's walk. */
+EX_FN void wt_bunny_position(const wt_options *o, double t, float pos[3], float *heading)
+{
+    if (t < 0.0) t = 0.0;
+    if (t > 1.0) t = 1.0;
+    if (o && o->path) {
+        float s = wt__path_arc(o->path, t), a[3], b[3];
+        wt__path_at(o->path, s, pos, NULL);
+        wt__path_at(o->path, s - 0.2f, a, NULL);
+        wt__path_at(o->path, s + 0.2f, b, NULL);
+        if (heading) *heading = atan2f(b[0] - a[0], b[2] - a[2]);
+        return;
+    }
+    wt__office_position(t, pos, heading);
+}
+
 /* The heading of the nose of bunny.obj in its own coordinates: -x. */
 #define WT_BUNNY_NOSE_HEADING (-0.5f * WT_PI)
 
@@ -986,13 +1795,13 @@ EX_FN void wt_bunny_transform(const wt_world *w, double t, float m[12])
 {
     float p[3], heading, yaw, c, s, k = WT_BUNNY_SCALE;
     float cx = 0.5f * (w->bunny_lo[0] + w->bunny_hi[0]), cz = 0.5f * (w->bunny_lo[2] + w->bunny_hi[2]);
-    wt_bunny_position(t, p, &heading);
+    wt_bunny_position(&w->opt, t, p, &heading);
     yaw = heading - WT_BUNNY_NOSE_HEADING;
     c = cosf(yaw);
     s = sinf(yaw);
     /* world = R_y(yaw) k (q - (cx, lo_y, cz)) + p, R_y maps +z to (sin, 0, cos) */
     m[0] = k * c;  m[1] = 0.0f; m[2] = k * s;  m[3] = p[0] - k * (c * cx + s * cz);
-    m[4] = 0.0f;   m[5] = k;    m[6] = 0.0f;   m[7] = -k * w->bunny_lo[1];
+    m[4] = 0.0f;   m[5] = k;    m[6] = 0.0f;   m[7] = p[1] - k * w->bunny_lo[1];
     m[8] = -k * s; m[9] = 0.0f; m[10] = k * c; m[11] = p[2] - k * (-s * cx + c * cz);
 }
 
@@ -1001,29 +1810,46 @@ EX_FN double wt_frame_time(const wt_options *o, int frame)
     return o->frames > 1 ? (double)frame / (double)(o->frames - 1) : 0.0;
 }
 
-/* The camera at time t: eye height 1.35 m along the front wall (a line: a
-   one-dimensional view space for the base views),
-   looking at the bunny's path a little ahead and behind (smoothed). */
+/* The camera at time t. In the office: eye height 1.35 m along the front
+   wall (a line: a one-dimensional view space for the base views), looking
+   at the bunny's path a little ahead and behind (smoothed). On a planned
+   route: WT_CAMERA_TRAIL metres behind the bunny on its route, at eye
+   height, looking at the bunny's back a little ahead (smoothed). */
 EX_FN rendercache_camera wt_camera(const wt_options *o, double t, uint32_t width, uint32_t height)
 {
     rendercache_camera c;
     float s = (float)(t * t * (3.0 - 2.0 * t)), look[3] = { 0, 0, 0 };
     int j;
     memset(&c, 0, sizeof c);
-    (void)o;
     c.kind = RENDERCACHE_CAMERA_PERSPECTIVE;
-    c.eye[0] = 1.10f + 1.30f * s;
-    c.eye[1] = 1.35f;
-    c.eye[2] = 0.30f;
-    for (j = -2; j <= 2; j++) {
-        float p[3];
-        wt_bunny_position(t + 0.04 * j, p, NULL);
-        look[0] += 0.2f * p[0];
-        look[2] += 0.2f * p[2];
+    if (o && o->path) {
+        const wt_path *p = o->path;
+        float arc = wt__path_arc(p, t < 0.0 ? 0.0 : t > 1.0 ? 1.0 : t);
+        wt__path_at(p, arc - WT_CAMERA_TRAIL, c.eye, &c.eye[1]);
+        for (j = -2; j <= 2; j++) {
+            float q[3];
+            wt__path_at(p, arc + 0.25f * (float)(j + 2), q, NULL);   /* the bunny and 1 m ahead */
+            look[0] += 0.2f * q[0];
+            look[1] += 0.2f * q[1];
+            look[2] += 0.2f * q[2];
+        }
+        c.look_at[0] = look[0];
+        c.look_at[1] = look[1] + 0.25f;
+        c.look_at[2] = look[2];
+    } else {
+        c.eye[0] = 1.10f + 1.30f * s;
+        c.eye[1] = 1.35f;
+        c.eye[2] = 0.30f;
+        for (j = -2; j <= 2; j++) {
+            float p[3];
+            wt_bunny_position(o, t + 0.04 * j, p, NULL);
+            look[0] += 0.2f * p[0];
+            look[2] += 0.2f * p[2];
+        }
+        c.look_at[0] = look[0];
+        c.look_at[1] = 0.60f;
+        c.look_at[2] = look[2];
     }
-    c.look_at[0] = look[0];
-    c.look_at[1] = 0.60f;
-    c.look_at[2] = look[2];
     c.up[1] = 1.0f;
     c.vfov_degrees = WT_CAMERA_VFOV;
     c.width = width;
@@ -1145,59 +1971,122 @@ static int wt__occluded(const ex_tracer *t, int bunny, const float org[3], const
     return 1;
 }
 
-/* Direct light reflected at a hit towards -dir: every emitting polygon of
-   the office sampled at opt.light_samples stratified points (side x side
-   cells when it is a square) with shadow rays through the tracer, so the
-   bunny casts shadows; polygons facing away are skipped without a ray.
-   Lambert + normalized Phong. */
+/* The many-light sampler's importance of light L at a point x with normal
+   n: an upper bound of what L can send there, power * cos_x * cos_y /
+   d^2 with both cosines bounded over L's bounding sphere (centre c, radius
+   r, seen from x under the half angle a, sin a = r / d: the cosine of the
+   angle to the normal less a, 1 when that is below zero; Conty Estevez &
+   Kulla 2018, eq. 3 for one light) and d^2 no less than r^2. It is 0 only
+   where L sends nothing: x behind L's plane (one-sided emitters) or all of
+   the sphere below x's horizon; elsewhere it is positive, so the estimator
+   that divides by the selection probability is unbiased. */
+static float wt__cos_bound(float cos_t, float cos_a, float sin_a)
+{
+    float sin_t;
+    if (cos_t >= cos_a) return 1.0f;             /* the normal points into the sphere's cone */
+    sin_t = sqrtf(fmaxf(0.0f, 1.0f - cos_t * cos_t));
+    return cos_t * cos_a + sin_t * sin_a;        /* cos(theta - a) */
+}
+
+static float wt__light_importance(const wt_light *L, const float x[3], const float n[3])
+{
+    float v[3] = { L->centre[0] - x[0], L->centre[1] - x[1], L->centre[2] - x[2] };
+    float d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2], r2 = L->radius * L->radius, d, sin_a, cos_a, cx, cy;
+    float front = (x[0] - L->point[0]) * L->normal[0] + (x[1] - L->point[1]) * L->normal[1] +
+                  (x[2] - L->point[2]) * L->normal[2];
+    if (front <= 0.0f) return 0.0f;              /* behind the emitter: one-sided */
+    if (d2 <= r2) return L->power / r2;           /* inside the sphere: both cosines bounded by 1 */
+    d = sqrtf(d2);
+    sin_a = L->radius / d;
+    cos_a = sqrtf(1.0f - sin_a * sin_a);
+    cx = wt__cos_bound((v[0] * n[0] + v[1] * n[1] + v[2] * n[2]) / d, cos_a, sin_a);
+    if (cx <= 0.0f) return 0.0f;                 /* the whole sphere below the horizon */
+    cy = wt__cos_bound(-(v[0] * L->normal[0] + v[1] * L->normal[1] + v[2] * L->normal[2]) / d, cos_a, sin_a);
+    return cy > 0.0f ? L->power * cx * cy / d2 : 0.0f;
+}
+
+/* One shadow-ray sample of light L for direct light at org (normal n,
+   mirror: the view direction reflected): a point of L chosen uniformly
+   from u1 (by area over its fan triangles, then the square root of what
+   remains: uniform on the triangle) and u2, added to rgb with weight
+   L->area * scale (scale = 1 / (selection probability * samples)). */
+static void wt__light_sample(const wt_world *w, const wt_light *L, const float org[3], const float n[3],
+                             const float mirror[3], const lightvec_material *m, float u1, float u2, float scale,
+                             float rgb[3], int *bunny_shadow)
+{
+    const ex_tracer *t = w->tracer;
+    const float *pos = w->office.positions, *ln = L->normal, *a, *b, *c;
+    const uint32_t *v;
+    float su, y[3], wi[3], d2, d, cos_x, cos_y, g, f, c_m = 0.0f;
+    uint32_t i = 0;
+    int k;
+    u1 *= L->area;
+    while (i + 1 < L->tri_count && u1 >= t->tri_area[L->first_tri + i]) u1 -= t->tri_area[L->first_tri + i++];
+    v = w->office.tri_indices + 3 * (size_t)(L->first_tri + i);
+    a = pos + 3 * (size_t)v[0];
+    b = pos + 3 * (size_t)v[1];
+    c = pos + 3 * (size_t)v[2];
+    su = sqrtf(fminf(u1 / t->tri_area[L->first_tri + i], 1.0f));   /* uniform on the triangle */
+    for (k = 0; k < 3; k++) y[k] = (1.0f - su) * a[k] + su * (1.0f - u2) * b[k] + su * u2 * c[k];
+    for (k = 0; k < 3; k++) wi[k] = y[k] - org[k];
+    d2 = wi[0] * wi[0] + wi[1] * wi[1] + wi[2] * wi[2];
+    if (!(d2 > 0.0f)) return;
+    d = sqrtf(d2);
+    for (k = 0; k < 3; k++) wi[k] /= d;
+    cos_x = wi[0] * n[0] + wi[1] * n[1] + wi[2] * n[2];
+    cos_y = -(wi[0] * ln[0] + wi[1] * ln[1] + wi[2] * ln[2]);
+    if (cos_x <= 0.0f || cos_y <= 0.0f) return;
+    if (wt__occluded(t, w->bunny_instance, org, wi, d * (1.0f - 1e-4f) - t->epsilon, bunny_shadow)) return;
+    g = cos_x * cos_y / d2 * L->area * scale;
+    for (k = 0; k < 3; k++) c_m += mirror[k] * wi[k];
+    f = c_m > 0.0f && m->exponent > 0.0f ? (m->exponent + 2.0f) / (2.0f * WT_PI) * powf(c_m, m->exponent) : 0.0f;
+    for (k = 0; k < 3; k++) rgb[k] += L->ke[k] * (m->diffuse[k] / WT_PI + m->specular[k] * f) * g;
+}
+
+/* Direct light reflected at a hit towards -dir (Lambert + normalized
+   Phong), by many-light sampling as a production renderer does it: a fixed
+   number n = opt.light_samples of shadow rays per point, whatever the
+   number of emitting polygons. Each sample picks a light with probability
+   p = importance / total (wt__light_importance) and a uniform point on it,
+   and is weighted by 1 / (p n): an unbiased estimate of the sum over every
+   light. The n picks are stratified over the importance CDF (sample s at
+   (s + xi) / n, so a light of probability p gets n p picks up to one), and
+   what is left of a pick's stratum inside its light's interval, uniform in
+   [0, 1), places the point on the light: one light alone (the office's
+   lamp face) gets n stratified points. The CDF is never stored: the picks
+   are sorted, so one sweep over the lights meets them in order (a second
+   pass recomputes the same importances, bit for bit). Shadow rays go
+   through the tracer, so the bunny casts shadows. */
 static void wt__direct(const wt_world *w, const ex_trace_hit *h, const float dir[3], const lightvec_material *m,
                        ex_rng *r, float rgb[3], int *bunny_shadow)
 {
-    const ex_tracer *t = w->tracer;
-    const float *pos = w->office.positions;
-    int n = w->opt.light_samples, side = (int)sqrtf((float)n + 0.5f), s, k;
-    float org[3], mirror[3], vn = -(dir[0] * h->normal[0] + dir[1] * h->normal[1] + dir[2] * h->normal[2]);
-    uint32_t e;
+    float pick[WT__MAX_LIGHT_SAMPLES], org[3], mirror[3], total = 0.0f, below = 0.0f;
+    float vn = -(dir[0] * h->normal[0] + dir[1] * h->normal[1] + dir[2] * h->normal[2]);
+    int n = w->opt.light_samples, s = 0, k;
+    uint32_t e, last = 0;
     rgb[0] = rgb[1] = rgb[2] = 0.0f;
-    if (side * side != n) side = 1;
+    if (n < 1 || n > WT__MAX_LIGHT_SAMPLES) return;
     for (k = 0; k < 3; k++) {
-        org[k] = h->pos[k] + t->epsilon * h->normal[k];
+        org[k] = h->pos[k] + w->tracer->epsilon * h->normal[k];
         mirror[k] = dir[k] + 2.0f * vn * h->normal[k];   /* the view direction reflected */
     }
     for (e = 0; e < w->light_count; e++) {
-        const wt_light *L = &w->lights[e];
-        const float *ln = L->normal;
-        float front = (org[0] - L->point[0]) * ln[0] + (org[1] - L->point[1]) * ln[1] + (org[2] - L->point[2]) * ln[2];
-        float weight = L->area / (float)n;
-        if (front <= 0.0f) continue;   /* behind the emitter: one-sided */
-        for (s = 0; s < n; s++) {
-            float u1 = ((float)(s % side) + ex_rng_float(r)) / (float)side * L->area;
-            float u2 = ((float)(s / side) + ex_rng_float(r)) / (float)(n / side), su, y[3], wi[3];
-            float d2, d, cos_x, cos_y, g, f, c_m = 0.0f;
-            const float *a, *b, *c;
-            const uint32_t *v;
-            uint32_t i = 0;
-            while (i + 1 < L->tri_count && u1 >= t->tri_area[L->first_tri + i]) u1 -= t->tri_area[L->first_tri + i++];
-            v = w->office.tri_indices + 3 * (size_t)(L->first_tri + i);
-            a = pos + 3 * (size_t)v[0];
-            b = pos + 3 * (size_t)v[1];
-            c = pos + 3 * (size_t)v[2];
-            su = sqrtf(u1 / t->tri_area[L->first_tri + i]);   /* uniform on the triangle */
-            for (k = 0; k < 3; k++) y[k] = (1.0f - su) * a[k] + su * (1.0f - u2) * b[k] + su * u2 * c[k];
-            for (k = 0; k < 3; k++) wi[k] = y[k] - org[k];
-            d2 = wi[0] * wi[0] + wi[1] * wi[1] + wi[2] * wi[2];
-            if (!(d2 > 0.0f)) continue;
-            d = sqrtf(d2);
-            for (k = 0; k < 3; k++) wi[k] /= d;
-            cos_x = wi[0] * h->normal[0] + wi[1] * h->normal[1] + wi[2] * h->normal[2];
-            cos_y = -(wi[0] * ln[0] + wi[1] * ln[1] + wi[2] * ln[2]);
-            if (cos_x <= 0.0f || cos_y <= 0.0f) continue;
-            if (wt__occluded(t, w->bunny_instance, org, wi, d * (1.0f - 1e-4f) - t->epsilon, bunny_shadow)) continue;
-            g = cos_x * cos_y / d2 * weight;
-            for (k = 0; k < 3; k++) c_m += mirror[k] * wi[k];
-            f = c_m > 0.0f && m->exponent > 0.0f ? (m->exponent + 2.0f) / (2.0f * WT_PI) * powf(c_m, m->exponent) : 0.0f;
-            for (k = 0; k < 3; k++) rgb[k] += L->ke[k] * (m->diffuse[k] / WT_PI + m->specular[k] * f) * g;
-        }
+        float imp = wt__light_importance(&w->lights[e], org, h->normal);
+        if (imp > 0.0f) last = e;
+        total += imp;
+    }
+    if (!(total > 0.0f) || !isfinite(total)) return;
+    for (s = 0; s < n; s++) pick[s] = ((float)s + ex_rng_float(r)) / (float)n * total;
+    s = 0;
+    for (e = 0; e < w->light_count && s < n; e++) {
+        float imp = wt__light_importance(&w->lights[e], org, h->normal), above = below + imp;
+        if (imp > 0.0f)   /* the picks in [below, above); the last light takes what rounding leaves */
+            for (; s < n && (pick[s] < above || e == last); s++) {
+                float u1 = fminf(fmaxf((pick[s] - below) / imp, 0.0f), 0.99999994f);
+                wt__light_sample(w, &w->lights[e], org, h->normal, mirror, m, u1, ex_rng_float(r),
+                                 total / (imp * (float)n), rgb, bunny_shadow);
+            }
+        below = above;
     }
 }
 
@@ -1583,6 +2472,24 @@ EX_FN int wt_render_full(wt_world *w, const rendercache_camera *c, double t, uin
     return result;
 }
 
+/* The exposure of a frame (examples/common/image.h's filmic pipeline):
+   opt.exposure when set, else the frame's own key exposure (log-average
+   luminance to middle grey), at most WT_EXPOSURE_RANGE times `reference`,
+   the first frame's (when > 0): a camera stops down freely in a bright
+   room, but opens up only so far, so a room without a lamp still looks
+   darker than a lit one. Every frame's exposure depends on its own pixels and the first
+   frame's only: the PNGs and the viewer agree for any frame order. */
+#define WT_EXPOSURE_RANGE 2.0f
+
+EX_FN float wt_exposure(const wt_options *o, const float *rgb, float reference)
+{
+    float e;
+    if (o->exposure > 0.0f) return o->exposure;
+    e = ex_exposure_key(rgb, o->width, o->height);
+    if (reference > 0.0f && e > reference * WT_EXPOSURE_RANGE) e = reference * WT_EXPOSURE_RANGE;
+    return e;
+}
+
 /* Relative luminance RMS error (Nimeroff et al.) of what is displayed:
    both images clamped at the white point 1 / exposure first, so that the
    few pixels of the lamp (radiance 40, a hundred times the room's) weigh
@@ -1647,6 +2554,14 @@ typedef struct wt_renderer {
     ex_baseviews_reconstructor rec;
     rendercache_range_image *blend[8], *out;
     uint32_t fill_frame;
+    rendercache_keytimes *bunny_light;   /* the bunny's indirect light at key times (Nimeroff 4.3) */
+    float *bunny_indirect;      /* per bunny vertex: its indirect radiance (RGB) at bunny_time */
+    double bunny_time;
+    uint32_t saved_key_count;   /* key solutions read from the precompute cache, replayed by the solve */
+    double *saved_key_times;
+    float *saved_key_values;
+    int key_replay_missed;      /* a solve found no saved key: the cache entry is stale */
+    double seconds_keys;
     /* radiosity */
     wt_static_shading statics;
     irrvol *volume;
@@ -1834,12 +2749,12 @@ static int wt__raytrace_create(wt_renderer *r, char *err, size_t err_size)
 
 /* One frame of the render cache: reproject, request, shade, insert. The
    first frame requests every pixel (the render cache starts empty). */
-static int wt__raytrace_frame(wt_renderer *r, int frame, float *rgb, wt_frame_stats *st)
+static int wt__raytrace_view(wt_renderer *r, const rendercache_camera *camera, const rendercache_camera *next, double t,
+                             int frame, float *rgb, wt_frame_stats *st)
 {
     wt_world *w = r->w;
-    const wt_options *o = &w->opt;
-    double t = wt_frame_time(o, frame), t0 = wt_seconds(), a;
-    rendercache_camera cam = wt_camera(o, t, r->width, r->height);
+    double t0 = wt_seconds(), a;
+    rendercache_camera cam = *camera;
     wt_light_stats ls = { 0, 0, 0, 0 };
     uint32_t n = 0, i;
     int full = r->frames_done == 0;
@@ -1854,14 +2769,13 @@ static int wt__raytrace_frame(wt_renderer *r, int frame, float *rgb, wt_frame_st
             q->x = i % r->width;
             q->y = i / r->width;
             q->flags = 0;
+            q->frame = 0;   /* the current frame */
             rendercache_camera_ray(&cam, (float)q->x + 0.5f, (float)q->y + 0.5f, q->org, q->dir);
         }
         n = r->width * r->height;
     } else {
-        if (frame + 1 < o->frames) {   /* predictive sampling (WDG02): the holes the next camera will see */
-            rendercache_camera next = wt_camera(o, wt_frame_time(o, frame + 1), r->width, r->height);
-            if (rendercache_predict(r->rc, &next) != RENDERCACHE_OK) return -1;
-        }
+        if (next && rendercache_predict(r->rc, next) != RENDERCACHE_OK)   /* predictive sampling (WDG02): */
+            return -1;                                                     /* the holes the next camera will see */
         if (rendercache_request(r->rc, r->req, r->budget, &n) != RENDERCACHE_OK) return -1;
     }
     st->phase[0] += wt_seconds() - a;
@@ -1877,6 +2791,7 @@ static int wt__raytrace_frame(wt_renderer *r, int frame, float *rgb, wt_frame_st
     for (i = 0; i < n; i++) {
         const wt_point *p = &r->points[i];
         rendercache_sample *s = &r->samples[i];
+        s->frame = r->req[i].frame;
         s->x = r->req[i].x;
         s->y = r->req[i].y;
         s->flags = r->req[i].flags;
@@ -1894,7 +2809,7 @@ static int wt__raytrace_frame(wt_renderer *r, int frame, float *rgb, wt_frame_st
         if (p->object == WT_OBJECT_BUNNY || p->bunny_shadow) s->priority_scale *= WT_BUNNY_PRIORITY;
     }
     a = wt_seconds();
-    if (rendercache_insert(r->rc, r->samples, n) != RENDERCACHE_OK) return -1;
+    if (rendercache_insert(r->rc, r->samples, n, NULL) != RENDERCACHE_OK) return -1;
     st->phase[0] += wt_seconds() - a;
     memcpy(rgb, rendercache_image(r->rc), sizeof(float) * 3 * r->width * r->height);
     st->samples = n;
@@ -1905,6 +2820,15 @@ static int wt__raytrace_frame(wt_renderer *r, int frame, float *rgb, wt_frame_st
     st->bunny_gathers = ls.bunny_gathers;
     st->total = wt_seconds() - t0;
     return 0;
+}
+
+static int wt__raytrace_frame(wt_renderer *r, int frame, float *rgb, wt_frame_stats *st)
+{
+    const wt_options *o = &r->w->opt;
+    double t = wt_frame_time(o, frame);
+    rendercache_camera cam = wt_camera(o, t, r->width, r->height), next;
+    if (frame + 1 < o->frames) next = wt_camera(o, wt_frame_time(o, frame + 1), r->width, r->height);
+    return wt__raytrace_view(r, &cam, frame + 1 < o->frames ? &next : NULL, t, frame, rgb, st);
 }
 
 /* ---- mode baseviews ----------------------------------------------------- */
@@ -2006,7 +2930,143 @@ static uint64_t wt__baseviews_key(const wt_renderer *r)
     h = wt_hash_f32(h, o->quality);
     h = wt_hash_u64(h, (uint64_t)o->light_samples);
     h = wt_hash_u64(h, (uint64_t)o->bunny_strata);
+    h = wt_hash_f32(h, WT_KEY_EPSILON);   /* the bunny's key-time solutions are saved with the images */
     return h;
+}
+
+/* ---- the bunny's indirect light in time (Nimeroff 4.3) ------------------
+   The object-space solution: the indirect radiance of each of the bunny's
+   vertices (a light vector gathered at the posed vertex, in the office
+   with the posed bunny, through the Lambertian bunny's BRDF). It is solved
+   at key times that rendercache_keytimes_create chooses (an interval is
+   halved while more than 1 - q of the vertices change by more than 5%),
+   and base images and traced pixels interpolate it linearly in time and
+   across each triangle. Its intervals are halved at most once more than
+   the base images' initial key intervals (--keys) need to be (--keys 5: 9
+   key times at most). The office's indirect light comes from its static
+   light vectors, as in the other modes. The gathers use one random stream
+   per vertex at every time, so that the changes the test sees are the
+   light's, not the noise's. */
+
+typedef struct wt__key_job {
+    wt_world *w;
+    float *values;
+} wt__key_job;
+
+static void wt__bunny_vertex_job(void *ctx, uint32_t batch)
+{
+    const wt__key_job *j = (const wt__key_job *)ctx;
+    wt_world *w = j->w;
+    uint32_t v, end = batch * WT__BATCH + WT__BATCH;
+    if (end > w->bunny.vertex_count) end = w->bunny.vertex_count;
+    for (v = batch * WT__BATCH; v < end; v++) {
+        lightvec_surface s;
+        lightvec_record rec;
+        float *out = j->values + 3 * (size_t)v, n[3], l;
+        int k;
+        memset(&s, 0, sizeof s);
+        ex__affine_point(w->pose, w->bunny.positions + 3 * (size_t)v, s.position);
+        ex__affine_vector(w->pose, w->bunny_normals + 3 * (size_t)v, n);
+        l = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        for (k = 0; k < 3; k++) s.normal[k] = l > 0.0f ? n[k] / l : (k == 1 ? 1.0f : 0.0f);
+        s.flags = LIGHTVEC_RECORD_VIEW_INDEPENDENT;
+        s.material = w->materials[w->bunny_material];
+        out[0] = out[1] = out[2] = 0.0f;
+        if (lightvec_gather(w->posed_scene, &w->bunny_gather, &s, wt__stream(WT_STREAM_BASE, 0xFFFFFFu, v), &rec) ==
+            LIGHTVEC_OK)
+            lightvec_radiance(&w->materials[w->bunny_material], s.normal, NULL, &rec.vector, out);
+    }
+}
+
+/* rendercache_solve_fn: the bunny's vertex radiances at time t; a solution
+   saved in the precompute cache is taken as it is. */
+static int wt__bunny_solve(void *user, double t, float *values)
+{
+    wt_renderer *r = (wt_renderer *)user;
+    wt_world *w = r->w;
+    wt__key_job j;
+    uint32_t k, n = 3 * w->bunny.vertex_count;
+    for (k = 0; k < r->saved_key_count; k++)
+        if (r->saved_key_times[k] == t) {
+            memcpy(values, r->saved_key_values + (size_t)k * n, n * sizeof(float));
+            return 0;
+        }
+    r->key_replay_missed |= r->saved_key_count > 0;
+    wt_set_time(w, t);
+    if (wt__ensure_pose(w) != 0) return 1;
+    j.w = w;
+    j.values = values;
+    ex_pool_parallel_for(w->pool, wt__bunny_vertex_job, &j, (w->bunny.vertex_count + WT__BATCH - 1) / WT__BATCH);
+    return 0;
+}
+
+/* Halvings of [0, 1] at most for the bunny's key times (see above). */
+static uint32_t wt__key_depth(const wt_options *o)
+{
+    uint32_t depth = 1;
+    while ((1 << (depth - 1)) < o->keys - 1) depth++;
+    return depth;
+}
+
+static int wt__bunny_keys(wt_renderer *r)
+{
+    rendercache_keytime_desc d;
+    double t0 = wt_seconds();
+    memset(&d, 0, sizeof d);
+    d.element_count = r->w->bunny.vertex_count;
+    d.components = 3;
+    d.t0 = 0.0;
+    d.t1 = 1.0;
+    d.quality = r->w->opt.quality;
+    d.epsilon = WT_KEY_EPSILON;
+    d.max_depth = wt__key_depth(&r->w->opt);
+    d.solve = wt__bunny_solve;
+    d.user = r;
+    rendercache_keytimes_destroy(r->bunny_light);
+    r->bunny_light = NULL;
+    if (rendercache_keytimes_create(&d, &r->bunny_light) != RENDERCACHE_OK) return -1;
+    r->seconds_keys = wt_seconds() - t0;
+    r->bunny_time = -1.0;
+    return 0;
+}
+
+/* The bunny's indirect light of points lit by it (p->object == the bunny):
+   the vertex radiances at the current time, interpolated across the hit
+   triangle (barycentric coordinates of the posed hit point). */
+static void wt__bunny_indirect_at(wt_renderer *r, wt_point *p)
+{
+    const wt_world *w = r->w;
+    const uint32_t tri = p->polygon - w->office.face_count, *v = w->bunny.tri_indices + 3 * (size_t)tri;
+    float a[3], b[3], c[3], e0[3], e1[3], e2[3], d00 = 0, d01 = 0, d11 = 0, d20 = 0, d21 = 0, den, bv, bw, bu;
+    int k;
+    ex__affine_point(w->pose, w->bunny.positions + 3 * (size_t)v[0], a);
+    ex__affine_point(w->pose, w->bunny.positions + 3 * (size_t)v[1], b);
+    ex__affine_point(w->pose, w->bunny.positions + 3 * (size_t)v[2], c);
+    for (k = 0; k < 3; k++) {
+        e0[k] = b[k] - a[k];
+        e1[k] = c[k] - a[k];
+        e2[k] = p->pos[k] - a[k];
+        d00 += e0[k] * e0[k]; d01 += e0[k] * e1[k]; d11 += e1[k] * e1[k];
+        d20 += e2[k] * e0[k]; d21 += e2[k] * e1[k];
+    }
+    den = d00 * d11 - d01 * d01;
+    bv = den != 0.0f ? (d11 * d20 - d01 * d21) / den : 0.0f;
+    bw = den != 0.0f ? (d00 * d21 - d01 * d20) / den : 0.0f;
+    bu = 1.0f - bv - bw;
+    for (k = 0; k < 3; k++)
+        p->indirect[k] = bu * r->bunny_indirect[3 * v[0] + k] + bv * r->bunny_indirect[3 * v[1] + k] +
+                         bw * r->bunny_indirect[3 * v[2] + k];
+}
+
+/* The vertex radiances at time t, interpolated between the key times. */
+static int wt__bunny_light_at(wt_renderer *r, double t)
+{
+    if (t == r->bunny_time) return 0;
+    if (rendercache_keytimes_eval(r->bunny_light, t, r->bunny_indirect, 3 * (size_t)r->w->bunny.vertex_count) !=
+        RENDERCACHE_OK)
+        return -1;
+    r->bunny_time = t;
+    return 0;
 }
 
 /* Renders base image (view, key) with the frames' shading. */
@@ -2020,14 +3080,21 @@ static int wt__render_base(wt_renderer *r, uint32_t view, uint32_t key, renderca
     if (rendercache_range_image_create(&c, NULL, &img) != RENDERCACHE_OK) return -1;
     img->time = r->bv.times[key];
     wt_set_time(w, img->time);
-    if (wt__shade_camera(w, &c, WT_STREAM_BASE, view * r->bv.time_count + key, WT_SHADE_DIRECT | WT_SHADE_INSERT,
-                         r->points, r->index, &st) != 0) {
+    /* the office's light vectors; the bunny's indirect light from its key-time solution */
+    if (wt__shade_camera(w, &c, WT_STREAM_BASE, view * r->bv.time_count + key,
+                         WT_SHADE_DIRECT | WT_SHADE_INSERT | WT_SHADE_STATIC_ONLY, r->points, r->index, &st) != 0 ||
+        wt__bunny_light_at(r, img->time) != 0) {
         rendercache_range_image_destroy(img);
         return -1;
     }
     for (i = 0; i < n; i++) {
-        const wt_point *p = &r->points[i];
+        wt_point *p = &r->points[i];
+        int k;
         if (p->t < 0.0f) continue;   /* outside the fish-eye's circle: RENDERCACHE_NO_SAMPLE */
+        if (p->object == WT_OBJECT_BUNNY && p->t < FLT_MAX) {
+            wt__bunny_indirect_at(r, p);
+            for (k = 0; k < 3; k++) p->rgb[k] = p->direct[k] + p->indirect[k];
+        }
         memcpy(img->rgb + 3 * (size_t)i, p->rgb, 3 * sizeof(float));
         img->object[i] = p->object;
         img->depth[i] = p->object == RENDERCACHE_MISS ? RENDERCACHE_FAR_DEPTH : p->t;
@@ -2036,11 +3103,18 @@ static int wt__render_base(wt_renderer *r, uint32_t view, uint32_t key, renderca
     return 0;
 }
 
-/* Base images from the precompute cache: the decomposition must match. */
+static void wt__put_floats(wt_bytes *b, const float *v, size_t n);
+static int wt__get_floats(wt_bytes *b, float *v, size_t n);
+
+/* Base images from the precompute cache: the decomposition must match.
+   After them, the key solutions of the bunny's indirect light (count,
+   then per key its time and its vertex radiances), kept in
+   r->saved_key_* for wt__bunny_solve to replay. */
 static int wt__load_bases(wt_renderer *r, const void *data, size_t size)
 {
+    const size_t per_key = 3 * (size_t)r->w->bunny.vertex_count;
     wt_bytes b;
-    uint64_t views, times, bits, n;
+    uint64_t views, times, bits, n, keys;
     uint32_t i;
     memset(&b, 0, sizeof b);
     b.data = (unsigned char *)data;
@@ -2060,6 +3134,15 @@ static int wt__load_bases(wt_renderer *r, const void *data, size_t size)
             return -1;
         b.read += (size_t)n;
     }
+    if (!wt_bytes_get_u64(&b, &keys) || keys < 2 || keys > (1u << wt__key_depth(&r->w->opt)) + 1) return -1;
+    r->saved_key_times = (double *)malloc(sizeof(double) * (size_t)keys);
+    r->saved_key_values = (float *)malloc(sizeof(float) * per_key * (size_t)keys);
+    if (!r->saved_key_times || !r->saved_key_values) return -1;
+    for (i = 0; i < keys; i++) {
+        if (!wt_bytes_get_u64(&b, &bits) || !wt__get_floats(&b, r->saved_key_values + per_key * i, per_key)) return -1;
+        memcpy(&r->saved_key_times[i], &bits, sizeof bits);
+    }
+    r->saved_key_count = (uint32_t)keys;
     return b.read == b.size ? 0 : -1;
 }
 
@@ -2081,6 +3164,13 @@ static int wt__save_bases(const wt_renderer *r, wt_bytes *b)
         wt_bytes_put(b, data, size);
         rendercache_free_memory(NULL, data);
     }
+    wt_bytes_put_u64(b, rendercache_keytimes_count(r->bunny_light));
+    for (i = 0; i < rendercache_keytimes_count(r->bunny_light); i++) {
+        uint64_t bits;
+        memcpy(&bits, &rendercache_keytimes_times(r->bunny_light)[i], sizeof bits);
+        wt_bytes_put_u64(b, bits);
+        wt__put_floats(b, rendercache_keytimes_values(r->bunny_light, i), 3 * (size_t)r->w->bunny.vertex_count);
+    }
     return b->failed ? -1 : 0;
 }
 
@@ -2101,17 +3191,15 @@ static int wt__fill_pixel(void *user, uint32_t x, uint32_t y, const float org[3]
     memcpy(p.dir, dir, sizeof p.dir);
     p.stream = wt__stream(WT_STREAM_FILL, r->fill_frame, y * r->width + x);
     wt__trace_point(w, &p, 1);
-    if (!p.lit) {
+    if (!p.lit && p.light == WT_LIGHT_BUNNY) {   /* the key-time solution, at the frame's time (wt__baseviews_frame) */
+        wt__bunny_indirect_at(r, &p);
+    } else if (!p.lit) {
         out = wt__outgoing(&p, wo);
-        if (p.light == WT_LIGHT_BUNNY && wt__ensure_pose(w) != 0) return 0;
         if (lightvec_lookup(wt__cache_of(w, &p), p.pos, p.normal, out, &lr) == LIGHTVEC_OK && lr.hit) {
             rec.vector = lr.vector;
         } else {
             wt__surface_of(w, &p, &s);
-            if (lightvec_gather(p.light == WT_LIGHT_BUNNY ? w->posed_scene : w->office_scene,
-                                p.light == WT_LIGHT_BUNNY ? &w->bunny_gather : &w->static_gather, &s, p.stream,
-                                &rec) != LIGHTVEC_OK)
-                return 0;
+            if (lightvec_gather(w->office_scene, &w->static_gather, &s, p.stream, &rec) != LIGHTVEC_OK) return 0;
         }
         lightvec_radiance(&w->materials[p.material], p.normal, out, &rec.vector, p.indirect);
     }
@@ -2180,7 +3268,24 @@ static int wt__baseviews_create(wt_renderer *r, char *err, size_t err_size)
             rendercache_range_image_destroy(r->bv.base[i]);
             r->bv.base[i] = NULL;
         }
+        r->saved_key_count = 0;
         wt__say(w, "base images: %s is damaged or stale, rebuilding it\n", path);
+    }
+    /* the bunny's indirect light at key times, before the base images that use it */
+    r->bunny_indirect = (float *)malloc(3 * sizeof(float) * w->bunny.vertex_count);
+    if (!r->bunny_indirect || wt__bunny_keys(r) != 0)
+        return wt__fail(err, err_size, "%s", "the bunny's indirect light failed (out of memory)");
+    if (r->key_replay_missed && r->reused_baseviews) {   /* a stale entry: trace and save anew */
+        for (i = 0; i < r->bv.view_count * r->bv.time_count; i++) {
+            rendercache_range_image_destroy(r->bv.base[i]);
+            r->bv.base[i] = NULL;
+        }
+        r->reused_baseviews = 0;
+    }
+    if (o->verbose) {
+        printf("bunny's indirect light: %u key times (q = %.2f, %s in %.1f s)\n", rendercache_keytimes_count(r->bunny_light),
+               (double)o->quality, r->reused_baseviews ? "replayed" : "solved", r->seconds_keys);
+        fflush(stdout);
     }
     if (!r->reused_baseviews) {
         /* base images add light vectors to a copy of the static cache, so that
@@ -2228,6 +3333,8 @@ static int wt__baseviews_create(wt_renderer *r, char *err, size_t err_size)
     if (rendercache_warper_create(&wd, &r->rec.blender) != RENDERCACHE_OK) return wt__fail(err, err_size, "%s", "out of memory");
     wd.fill_pixel = wt__fill_pixel;
     wd.fill_user = r;
+    wd.average = 1;                     /* the corner views that see a surface are averaged (pinterp -a) */
+    wd.max_fill_distance = WT_BASEVIEWS_MAX_FILL;   /* wider gaps are traced, not smeared (pinterp -fs) */
     if (rendercache_warper_create(&wd, &r->rec.warper) != RENDERCACHE_OK) return wt__fail(err, err_size, "%s", "out of memory");
     r->rec.object_count = 2;
     r->rec.motion = wt__object_transforms;
@@ -2256,6 +3363,7 @@ static int wt__baseviews_frame(wt_renderer *r, int frame, float *rgb, wt_frame_s
     rendercache_warp_stats ws;
     wt_set_time(w, t);   /* the fill traces the scene as it is at t */
     r->fill_frame = (uint32_t)frame;
+    if (wt__bunny_light_at(r, t) != 0) return -1;
     if (ex_baseviews_reconstruct(&r->bv, &r->rec, &cam, t, r->blend, r->out) != 0) return -1;
     memcpy(rgb, r->out->rgb, sizeof(float) * 3 * r->width * r->height);
     rendercache_warp_get_stats(r->rec.warper, &ws);
@@ -2711,19 +3819,28 @@ EX_FN void wt_bunny_light(const wt_world *w, const irrvol *vol, const float *vis
         l = sqrtf(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
         if (l > 0.0f) { q[0] /= l; q[1] /= l; q[2] /= l; }
     }
-    irrvol_query_many(vol, IRRVOL_FILTER_DEFAULT, n, world_pos, 0, world_normals, 0, rgb);
+    irrvol_query_many(vol, IRRVOL_FILTER_DEFAULT, IRRVOL_WEIGHTING_DEFAULT, n, world_pos, 0, world_normals, 0, rgb);
     for (v = 0; v < 3 * n; v++) rgb[v] *= WT_BUNNY_KD / WT_PI * (visibility ? visibility[v / 3] : 1.0f);
 }
 
 /* Rasterizes the static mesh (ids 0 .. static_count-1) and the posed bunny
-   (ids static_count + triangle) into ra. */
+   (ids static_count + triangle) into ra. The clear is done by the first
+   draw's tile jobs, and ra->tile_done (when set) runs after the last draw
+   only, on each finished tile. *static_done (optional): the clock
+   (wt_seconds) when the static mesh was in. */
 EX_FN int wt_raster_scene(const wt_world *w, ex_raster *ra, const rendercache_camera *c, const float *static_positions,
-                          const uint32_t *static_indices, uint32_t static_count, const float *bunny_world)
+                          const uint32_t *static_indices, uint32_t static_count, const float *bunny_world,
+                          double *static_done)
 {
     ex_camera ec = wt_ex_camera(c);
-    ex_raster_clear(ra);
-    if (ex_raster_draw(ra, &ec, static_positions, static_indices, static_count, 0) != 0) return -1;
-    return ex_raster_draw(ra, &ec, bunny_world, w->bunny.tri_indices, w->bunny.tri_count, static_count);
+    void (*tile_done)(void *, int, int, int, int) = ra->tile_done;
+    int result;
+    ex_raster_clear_deferred(ra);
+    ra->tile_done = NULL;
+    result = ex_raster_draw(ra, &ec, static_positions, static_indices, static_count, 0);
+    ra->tile_done = tile_done;
+    if (static_done) *static_done = wt_seconds();
+    return result != 0 ? -1 : ex_raster_draw(ra, &ec, bunny_world, w->bunny.tri_indices, w->bunny.tri_count, static_count);
 }
 
 /* The bunny as a sphere for its occlusion blob: the sphere of its volume
@@ -2839,32 +3956,31 @@ typedef struct wt__pixel_job {
     int blob;
 } wt__pixel_job;
 
-#define WT__PIXEL_ROWS 8   /* rows per job of the pixel pass */
-
-/* The pixel pass over a band of rows: static pixels get their radiosity B
-   (radinterp_shade), then radiance (E + (B - E) * blob) / pi; the bunny's
-   the Gouraud blend of its vertex radiances; empty pixels black. */
-static void wt__pixel_band(void *ctx, uint32_t band)
+/* The pixel pass over the pixels [x0, x1) x [y0, y1) of a finished raster
+   tile (ex_raster.tile_done: fused with the raster while the tile is in the
+   cache): static pixels get their radiosity B (radinterp_shade), then
+   radiance (E + (B - E) * blob) / pi; the bunny's the Gouraud blend of its
+   vertex radiances; empty pixels black. */
+static void wt__shade_tile(void *ctx, int x0, int y0, int x1, int y1)
 {
     const wt__pixel_job *j = (const wt__pixel_job *)ctx;
     const wt_renderer *r = j->r;
     const wt_static_shading *s = &r->statics;
     const ex_raster *ra = &r->raster;
     const uint32_t *bunny = r->w->bunny.tri_indices, nt = s->data.triangle_count, nb = r->w->bunny.tri_count;
-    uint32_t y0 = band * WT__PIXEL_ROWS, y1 = y0 + WT__PIXEL_ROWS, x, y;
-    if (y1 > r->height) y1 = r->height;
-    wt_static_shading_shade(s, ra, (size_t)y0 * r->width, (size_t)(y1 - y0) * r->width, r->w->opt.gouraud, j->rgb);
+    int x, y;
     for (y = y0; y < y1; y++) {
-        int blob_row = j->blob && (int)y >= r->blob_box[1] && (int)y < r->blob_box[3];
-        for (x = 0; x < r->width; x++) {
-            size_t p = (size_t)y * r->width + x;
+        int blob_row = j->blob && y >= r->blob_box[1] && y < r->blob_box[3];
+        wt_static_shading_shade(s, ra, (size_t)y * r->width + (size_t)x0, (size_t)(x1 - x0), r->w->opt.gouraud, j->rgb);
+        for (x = x0; x < x1; x++) {
+            size_t p = (size_t)y * r->width + (size_t)x;
             uint32_t id = ra->id[p];
             float *out = j->rgb + 3 * p, u = ra->bary[2 * p], v = ra->bary[2 * p + 1], o = 1.0f - u - v;
             int k;
             if (id < nt) {
                 const float *e = s->data.emission + 3 * (size_t)id;
                 float keep = 1.0f;
-                if (blob_row && (int)x >= r->blob_box[0] && (int)x < r->blob_box[2]) {
+                if (blob_row && x >= r->blob_box[0] && x < r->blob_box[2]) {
                     const uint32_t *tri = s->data.indices + 3 * (size_t)id;
                     const float *a = s->data.positions + 3 * (size_t)tri[0], *b = s->data.positions + 3 * (size_t)tri[1];
                     const float *c = s->data.positions + 3 * (size_t)tri[2];
@@ -2885,11 +4001,11 @@ static void wt__pixel_band(void *ctx, uint32_t band)
     }
 }
 
-static int wt__radiosity_frame(wt_renderer *r, int frame, float *rgb, wt_frame_stats *st)
+static int wt__radiosity_view(wt_renderer *r, const rendercache_camera *camera, double t, float *rgb, wt_frame_stats *st)
 {
     wt_world *w = r->w;
-    double t = wt_frame_time(&w->opt, frame), t0 = wt_seconds(), a;
-    rendercache_camera cam = wt_camera(&w->opt, t, r->width, r->height);
+    double t0 = wt_seconds(), a, b = 0.0;
+    rendercache_camera cam = *camera;
     ex_camera ec = wt_ex_camera(&cam);
     wt__pixel_job j;
     wt_set_time(w, t);
@@ -2897,22 +4013,30 @@ static int wt__radiosity_frame(wt_renderer *r, int frame, float *rgb, wt_frame_s
     wt_bunny_light(w, r->volume, r->visibility, w->pose, r->bunny_world, r->bunny_world_normals, r->bunny_rgb);
     st->phase[2] = wt_seconds() - a;
     a = wt_seconds();
-    if (wt_raster_scene(w, &r->raster, &cam, r->statics.data.positions, r->statics.data.indices,
-                        r->statics.data.triangle_count, r->bunny_world) != 0)
-        return -1;
-    st->phase[0] = wt_seconds() - a;
-    a = wt_seconds();
     ex__affine_point(w->pose, r->bunny_centre, r->sphere);
     r->sphere[3] = r->bunny_radius;
     j.r = r;
     j.rgb = rgb;
     j.blob = w->opt.bunny_shadow;
     if (j.blob) wt__blob_box(r, &ec);
-    ex_pool_parallel_for(w->pool, wt__pixel_band, &j, (r->height + WT__PIXEL_ROWS - 1) / WT__PIXEL_ROWS);
-    st->phase[1] = wt_seconds() - a;
+    r->raster.tile_done = wt__shade_tile;   /* shading fused with the last draw's tile jobs */
+    r->raster.tile_user = &j;
+    if (wt_raster_scene(w, &r->raster, &cam, r->statics.data.positions, r->statics.data.indices,
+                        r->statics.data.triangle_count, r->bunny_world, &b) != 0)
+        return -1;
+    r->raster.tile_done = NULL;
+    st->phase[0] = b - a;                /* the clear and the static mesh */
+    st->phase[1] = wt_seconds() - b;     /* the bunny and the shading, tile by tile */
     st->samples = w->bunny.vertex_count;
     st->total = wt_seconds() - t0;
     return 0;
+}
+
+static int wt__radiosity_frame(wt_renderer *r, int frame, float *rgb, wt_frame_stats *st)
+{
+    double t = wt_frame_time(&r->w->opt, frame);
+    rendercache_camera cam = wt_camera(&r->w->opt, t, r->width, r->height);
+    return wt__radiosity_view(r, &cam, t, rgb, st);
 }
 
 /* ---- the renderer ------------------------------------------------------- */
@@ -2925,6 +4049,10 @@ EX_FN void wt_renderer_destroy(wt_renderer *r)
     free(r->req);
     free(r->samples);
     ex_baseviews_free(&r->bv);
+    rendercache_keytimes_destroy(r->bunny_light);
+    free(r->bunny_indirect);
+    free(r->saved_key_times);
+    free(r->saved_key_values);
     rendercache_warper_destroy(r->rec.blender);
     rendercache_warper_destroy(r->rec.warper);
     for (i = 0; i < 8; i++) rendercache_range_image_destroy(r->blend[i]);
@@ -2981,6 +4109,22 @@ EX_FN int wt_renderer_create(wt_world *w, wt_renderer **out, char *err, size_t e
     return 0;
 }
 
+/* The end of a frame: "other" is the time no named phase took. */
+static int wt__frame_done(wt_renderer *r, int result, wt_frame_stats *st)
+{
+    if (result == 0) {
+        double known = 0.0;
+        int k;
+        for (k = 0; k < WT_PHASES; k++)
+            if (wt_phase_name(r->mode, k) && strcmp(wt_phase_name(r->mode, k), "other") != 0) known += st->phase[k];
+        for (k = 0; k < WT_PHASES; k++)
+            if (wt_phase_name(r->mode, k) && !strcmp(wt_phase_name(r->mode, k), "other"))
+                st->phase[k] = st->total > known ? st->total - known : 0.0;
+        r->frames_done++;
+    }
+    return result;
+}
+
 /* Renders frame `frame` of the path into rgb (width x height x 3 floats,
    linear radiance). Mode raytrace must be given its frames in order. */
 EX_FN int wt_render_frame(wt_renderer *r, int frame, float *rgb, wt_frame_stats *st)
@@ -2993,17 +4137,23 @@ EX_FN int wt_render_frame(wt_renderer *r, int frame, float *rgb, wt_frame_stats 
     case WT_MODE_BASEVIEWS: result = wt__baseviews_frame(r, frame, rgb, st); break;
     default: result = wt__radiosity_frame(r, frame, rgb, st); break;
     }
-    if (result == 0) {
-        double known = 0.0;
-        int k;
-        for (k = 0; k < WT_PHASES; k++)
-            if (wt_phase_name(r->mode, k) && strcmp(wt_phase_name(r->mode, k), "other") != 0) known += st->phase[k];
-        for (k = 0; k < WT_PHASES; k++)
-            if (wt_phase_name(r->mode, k) && !strcmp(wt_phase_name(r->mode, k), "other"))
-                st->phase[k] = st->total > known ? st->total - known : 0.0;
-        r->frames_done++;
-    }
-    return result;
+    return wt__frame_done(r, result, st);
+}
+
+/* Renders the view of any camera (of the renderer's size) with the bunny
+   at time t: the interactive viewer's free camera. Modes radiosity and
+   raytrace (the render cache reprojects its points into whatever camera
+   comes next); mode baseviews reconstructs views near its base views
+   only, along the path: -1. */
+EX_FN int wt_render_view(wt_renderer *r, const rendercache_camera *camera, double t, float *rgb, wt_frame_stats *st)
+{
+    int result;
+    memset(st, 0, sizeof *st);
+    st->lrms = -1.0;
+    if (!camera || camera->width != r->width || camera->height != r->height || r->mode == WT_MODE_BASEVIEWS) return -1;
+    result = r->mode == WT_MODE_RAYTRACE ? wt__raytrace_view(r, camera, NULL, t, r->frames_done, rgb, st)
+                                         : wt__radiosity_view(r, camera, t, rgb, st);
+    return wt__frame_done(r, result, st);
 }
 
 #endif /* EXAMPLES_COMMON_WALKTHROUGH_H */

@@ -101,7 +101,7 @@ static void test_rendercache_links(void)
         s[i].object = RENDERCACHE_MISS;
         s[i].rgb[0] = 1.0f;
     }
-    CHECK(rendercache_insert(rc, s, n) == RENDERCACHE_OK);
+    CHECK(rendercache_insert(rc, s, n, NULL) == RENDERCACHE_OK);
     CHECK(rendercache_image(rc)[3 * (req[0].y * 8 + req[0].x)] == 1.0f);
     rendercache_destroy(rc);
 }

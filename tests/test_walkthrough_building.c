@@ -1,0 +1,456 @@
+/* Tests of the walkthrough in a generated building (examples/data/
+   building_4k.*, `--scene building`; building_1k.* where a
+   second building helps): the layout file, the walk planned through it (a
+   lit room, a room without a lamp, up the stairs; never through anything;
+   the camera inside the building and seeing the bunny), mode raytrace's
+   frames against stored references and across thread counts, and the
+   bunny darker in the room without a lamp than in a lit one.
+
+   Reference frames (tests/data/walkthrough_building_<mode>_f<frame>.pfm,
+   64x48) were written by this program from the repository root with
+
+       WT_WRITE_REFERENCE=1 build/tests/test_walkthrough_building reference
+
+   and are compared by LRMS within half the LRMS of another seed, for the
+   reasons tests/test_walkthrough.c gives for the office's raytrace frames. */
+#define _POSIX_C_SOURCE 200809L
+#include "examples/common/walkthrough.h"
+#include "tests/test.h"
+#include "tests/walkthrough_test.h"
+
+#define REF_W 64
+#define REF_H 48
+#define REF_TOLERANCE_SHARE 0.5   /* of the seed-to-seed LRMS */
+
+static wt_options small_options(wt_mode mode, const char *scene)
+{
+    wt_options o;
+    wt_options_default(&o);
+    o.mode = mode;
+    o.scene = scene;
+    o.width = REF_W;
+    o.height = REF_H;
+    o.frames = 24;
+    o.threads = 2;
+    o.strata = 6;
+    o.bunny_strata = 4;
+    o.light_samples = 4;      /* shadow rays per point, over all the lights */
+    o.use_cache = 0;
+    o.progress = 0;
+    o.verbose = 0;
+    return o;
+}
+
+static wt_world *open_world(const wt_options *o)
+{
+    wt_world *w = NULL;
+    char err[512];
+    if (wt_world_create(o, &w, err, sizeof err) != 0) fprintf(stderr, "  %s\n", err);
+    return w;
+}
+
+/* ---- the layout file ------------------------------------------------------ */
+
+static int write_file(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    if (!f) return 0;
+    fputs(text, f);
+    return fclose(f) == 0;
+}
+
+static void test_layout(void)
+{
+    wt_layout l;
+    char err[512], dir[256], path[512];
+    uint32_t i, dark = 0, stair = 0;
+    float inside[3] = { 8.0f, 0.5f, 2.0f }, above[3] = { 8.0f, 3.5f, 2.0f }, outside[3] = { -5.0f, 0.5f, 2.0f };
+    static const char *bad[] = {
+        "room 0 0 0 0 1 0 2.8 0 1 panel\n",             /* a field short */
+        "room 0 0 0 1 0 0 2.8 0 1 panel 0\n",           /* x1 < x0 */
+        "door 0 1 2 0 nan 0 1\n",                        /* not finite */
+        "sofa 0 1 2 0 2 0 1\n",                          /* unknown */
+        "# nothing but a comment\n"                      /* no rooms */
+    };
+    if (!CHECK(wt_layout_load("examples/data/building_4k.layout", &l, err, sizeof err) == 0)) return;
+    for (i = 0; i < l.room_count; i++) {
+        dark += !l.rooms[i].lamp;
+        stair += l.rooms[i].stair;
+    }
+    test_note("building_4k.layout: %u rooms (%u without a lamp, %u with stairs), %u doors, %u windows, %u stairs, %u lamps",
+              l.room_count, dark, stair, l.door_count, l.window_count, l.stair_count, l.lamp_count);
+    CHECK_EQ_INT(l.room_count, 18);   /* 2 storeys of 3 x 3 rooms */
+    CHECK(dark >= 1 && stair == 1 && l.stair_count == 1 && l.door_count >= 8 && l.lamp_count == l.room_count - dark);
+    CHECK(wt_layout_room_at(&l, inside) >= 0 && l.rooms[wt_layout_room_at(&l, inside)].storey == 0);
+    CHECK(wt_layout_room_at(&l, above) >= 0 && l.rooms[wt_layout_room_at(&l, above)].storey == 1);
+    CHECK_EQ_INT(wt_layout_room_at(&l, outside), -1);
+    wt_layout_free(&l);
+    if (!CHECK(make_temp_dir(dir, sizeof dir))) return;
+    snprintf(path, sizeof path, "%s/b.layout", dir);
+    for (i = 0; i < sizeof bad / sizeof *bad; i++) {
+        err[0] = 0;
+        CHECK(write_file(path, bad[i]));
+        CHECK_MSG(wt_layout_load(path, &l, err, sizeof err) == -1 && strstr(err, path) != NULL && l.rooms == NULL,
+                  "'%s' gave '%s'", bad[i], err);
+    }
+    CHECK(wt_layout_load("tests/no-such.layout", &l, err, sizeof err) == -1 && strstr(err, "no-such.layout"));
+    remove_dir(dir);
+}
+
+/* A building with neither stairs nor a room without a lamp has nothing to
+   walk to; one without a dark room is still walked (up the stairs); a
+   missing layout is named. */
+static void test_scene_errors(void)
+{
+    wt_options o = small_options(WT_MODE_RAYTRACE, NULL);
+    char dir[256], path[512], cmd[1200], err[512];
+    wt_world *w = NULL;
+    if (!CHECK(make_temp_dir(dir, sizeof dir))) return;
+    snprintf(cmd, sizeof cmd, "cp examples/data/building_1k.obj examples/data/building_1k.mtl '%s'/ && "
+             "sed 's/ none / panel /' examples/data/building_1k.layout > '%s'/building_1k.layout", dir, dir);
+    CHECK(system(cmd) == 0);
+    snprintf(path, sizeof path, "%s/building_1k.obj", dir);
+    o.scene = path;
+    if (CHECK(wt_world_create(&o, &w, err, sizeof err) == 0)) {
+        CHECK(w->path.room_count >= 1 && w->path.length > 3.0f);
+        wt_world_destroy(w);
+        w = NULL;
+    }
+    snprintf(cmd, sizeof cmd, "sed -i '/^stair/d' '%s'/building_1k.layout", dir);
+    CHECK(system(cmd) == 0);
+    CHECK(wt_world_create(&o, &w, err, sizeof err) == -1 && w == NULL);
+    CHECK_MSG(strstr(err, "nothing to walk to") != NULL, "message: %s", err);
+    snprintf(cmd, sizeof cmd, "rm '%s'/building_1k.layout", dir);
+    CHECK(system(cmd) == 0);
+    CHECK(wt_world_create(&o, &w, err, sizeof err) == -1 && w == NULL);
+    CHECK_MSG(strstr(err, "building_1k.layout") != NULL, "message: %s", err);
+    remove_dir(dir);
+}
+
+/* ---- the walk -------------------------------------------------------------- */
+
+/* The nearest surface from p along n horizontal directions at height h
+   above p. */
+static float horizontal_clearance(const wt_world *w, const float p[3], float h, int n)
+{
+    float best = FLT_MAX;
+    int k;
+    for (k = 0; k < n; k++) {
+        float a = 2.0f * WT_PI * (float)k / (float)n, org[3] = { p[0], p[1] + h, p[2] }, dir[3] = { cosf(a), 0.0f, sinf(a) };
+        tr__hit hit;
+        if (tr__bvh_intersect(&w->tracer->bvh, org, dir, 0.0f, 10.0f, &hit) && hit.t < best) best = hit.t;
+    }
+    return best;
+}
+
+/* Whether p is on the stairs or within 0.6 m of their ends. */
+static int near_stairs(const wt_layout *l, const float p[3])
+{
+    uint32_t s;
+    for (s = 0; s < l->stair_count; s++) {
+        const wt_box *b = &l->stairs[s];
+        if (p[0] > b->lo[0] - 0.6f && p[0] < b->hi[0] + 0.6f && p[2] > b->lo[2] - 0.05f && p[2] < b->hi[2] + 0.05f &&
+            p[1] > b->lo[1] - 0.05f && p[1] < b->hi[1] + 0.05f)
+            return 1;
+    }
+    return 0;
+}
+
+/* The time when the bunny is deepest inside a room of the given kind (lit
+   or dark); its depth (metres from the room's walls) into *depth. */
+static double deepest_in_room(const wt_world *w, int lit, float *depth)
+{
+    double best = -1.0;
+    int i;
+    *depth = -1.0f;
+    for (i = 0; i <= 400; i++) {
+        float p[3], d;
+        int room;
+        const wt_room *r;
+        wt_bunny_position(&w->opt, i / 400.0, p, NULL);
+        room = wt_layout_room_at(&w->layout, p);
+        if (room < 0) continue;
+        r = &w->layout.rooms[room];
+        if (r->lamp != lit) continue;
+        d = fminf(fminf(p[0] - r->lo[0], r->hi[0] - p[0]), fminf(p[2] - r->lo[2], r->hi[2] - p[2]));
+        if (d > *depth) {
+            *depth = d;
+            best = i / 400.0;
+        }
+    }
+    return best;
+}
+
+static void check_walk(const char *scene)
+{
+    wt_options o = small_options(WT_MODE_RAYTRACE, scene);
+    wt_world *w = open_world(&o);
+    float clearance = FLT_MAX, eye_clearance = FLT_MAX, lo_y = FLT_MAX, hi_y = -FLT_MAX, lit_depth, dark_depth;
+    int i, f, outside = 0, seen = 0, eye_outside = 0;
+    if (!CHECK(w != NULL)) return;
+    CHECK(w->opt.path == &w->path && w->path.length > 5.0f);
+    for (i = 0; i <= 1000; i++) {
+        float p[3], heading;
+        wt_bunny_position(&w->opt, i / 1000.0, p, &heading);
+        CHECK(isfinite(heading));
+        if (!near_stairs(&w->layout, p))   /* a riser is in front of the feet on the stairs, by design */
+            clearance = fminf(clearance, fminf(horizontal_clearance(w, p, 0.05f, 16), horizontal_clearance(w, p, 0.25f, 16)));
+        outside += wt_layout_room_at(&w->layout, p) < 0;
+        lo_y = fminf(lo_y, p[1]);
+        hi_y = fmaxf(hi_y, p[1]);
+    }
+    for (f = 0; f < o.frames; f++) {
+        double t = wt_frame_time(&o, f);
+        rendercache_camera c = wt_camera(&w->opt, t, 640, 480);
+        float p[3], px, py, depth, dir[3], d;
+        wt_bunny_position(&w->opt, t, p, NULL);
+        p[1] += 0.15f;   /* the bunny's middle */
+        eye_outside += wt_layout_room_at(&w->layout, c.eye) < 0 && wt_layout_room_at(&w->layout, (float[3]){ c.eye[0], c.eye[1] - WT_EYE_HEIGHT, c.eye[2] }) < 0;
+        eye_clearance = fminf(eye_clearance, horizontal_clearance(w, c.eye, 0.0f, 16));
+        for (i = 0; i < 3; i++) dir[i] = p[i] - c.eye[i];
+        d = sqrtf(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+        for (i = 0; i < 3; i++) dir[i] /= d;
+        if (rendercache_camera_project(&c, p, &px, &py, &depth) && px > 0 && px < 640 && py > 0 && py < 480 &&
+            !tr__bvh_occluded(&w->tracer->bvh, c.eye, dir, 0.0f, d))
+            seen++;
+    }
+    deepest_in_room(w, 1, &lit_depth);
+    deepest_in_room(w, 0, &dark_depth);
+    test_note("%s: walk of %.1f m through %d rooms, feet from %.2f to %.2f m; clearance %.3f m (bunny radius %.2f); "
+              "%d of 1001 points outside rooms; camera: %.2f m from walls at worst, sees the bunny in %d of %d frames; "
+              "deepest %.2f m into a lit room, %.2f m into a dark one", scene, (double)w->path.length, w->path.room_count,
+              (double)lo_y, (double)hi_y, (double)clearance, (double)WT_BUNNY_RADIUS, outside, (double)eye_clearance,
+              seen, o.frames, (double)lit_depth, (double)dark_depth);
+    CHECK(clearance > WT_BUNNY_RADIUS);              /* never walks through anything */
+    CHECK(lo_y < 0.05f && hi_y > 2.9f);              /* from the ground floor up the stairs to the first */
+    CHECK(outside < 60);                             /* in rooms but for the doorways and the stairwell */
+    CHECK_EQ_INT(eye_outside, 0);
+    CHECK(eye_clearance > 0.1f);                     /* the near plane never cuts a wall */
+    CHECK(seen >= o.frames * 3 / 4);                 /* the bunny in view, but for moments behind a door jamb */
+    CHECK(lit_depth > 0.8f && dark_depth > 0.8f);    /* well inside a lit room and a dark one */
+    wt_world_destroy(w);
+}
+
+static void test_walk(void)
+{
+    check_walk("examples/data/building_4k.obj");
+    check_walk("examples/data/building_1k.obj");
+}
+
+/* ---- frames ----------------------------------------------------------------- */
+
+static int render_frames(const wt_options *o, int count, float *frames)
+{
+    wt_world *w = open_world(o);
+    wt_renderer *r = NULL;
+    wt_frame_stats st;
+    char err[512];
+    int f, ok = w != NULL;
+    if (ok && wt_renderer_create(w, &r, err, sizeof err) != 0) {
+        fprintf(stderr, "  %s\n", err);
+        ok = 0;
+    }
+    for (f = 0; f < count && ok; f++)
+        ok = wt_render_frame(r, f, frames + (size_t)f * 3 * (size_t)o->width * (size_t)o->height, &st) == 0;
+    wt_renderer_destroy(r);
+    wt_world_destroy(w);
+    return ok;
+}
+
+static void building_reference_path(char *path, size_t size, wt_mode mode, int frame)
+{
+    snprintf(path, size, "tests/data/walkthrough_building_%s_f%d.pfm", wt_mode_name(mode), frame);
+}
+
+/* Direct light by many-light sampling has the mean of sampling every one
+   of the building's lights (tests/walkthrough_test.h), at the hits of a
+   16 x 12 view at three moments of the walk (the lit room, the room
+   without a lamp, the stairs). */
+static void test_direct_light_unbiased(void)
+{
+    wt_options o = small_options(WT_MODE_RAYTRACE, "building");
+    wt_world *w;
+    int i;
+    o.light_samples = 8;
+    w = open_world(&o);
+    if (!CHECK(w != NULL)) return;
+    for (i = 0; i < 3; i++) {
+        double sigmas = 0.0, noise[2], rays = 0.0, t = 0.15 + 0.35 * i;
+        double bias = direct_light_bias(w, t, 16, 12, 64, 4, &sigmas, noise, &rays);
+        test_note("building (%u lights), t %.2f: many-light mean %.4f from every light's (%.1f sigma); "
+                  "relative RMS noise %.3f at 8 rays against %.3f at 4 rays per light (%.1f rays)", w->light_count, t,
+                  bias, sigmas, noise[0], noise[1], rays);
+        CHECK_MSG(bias >= 0.0 && sigmas < 4.0, "building t %.2f: relative difference %.4f, %.1f sigma", t, bias, sigmas);
+    }
+    wt_world_destroy(w);
+}
+
+/* Worst LRMS of frames 0 and 1 against the references; writes them instead
+   when write is set. -1 on failure. */
+static double frames_vs_reference(wt_mode mode, uint64_t seed, int write)
+{
+    wt_options o = small_options(mode, "building");
+    size_t n = 3 * (size_t)REF_W * REF_H;
+    float *frames = (float *)malloc(sizeof(float) * 2 * n), *ref = (float *)malloc(sizeof(float) * n);
+    double worst = -1.0, lrms;
+    int f;
+    o.seed = seed;
+    if (frames && ref && render_frames(&o, 2, frames)) {
+        worst = 0.0;
+        for (f = 0; f < 2 && worst >= 0.0; f++) {
+            char path[256];
+            building_reference_path(path, sizeof path, mode, f);
+            if (write) {
+                if (ex_write_pfm(path, REF_W, REF_H, frames + (size_t)f * n) != 0) worst = -1.0;
+                else printf("  wrote %s\n", path);
+            } else if (ex_read_pfm(path, REF_W, REF_H, ref) != 0 ||
+                       rendercache_lrms(ref, frames + (size_t)f * n, REF_W, REF_H, &lrms) != RENDERCACHE_OK) {
+                worst = -1.0;
+            } else if (lrms > worst) {
+                worst = lrms;
+            }
+        }
+    }
+    free(frames);
+    free(ref);
+    return worst;
+}
+
+static void test_reference_frames(void)
+{
+    double other = frames_vs_reference(WT_MODE_RAYTRACE, 2, 0), lrms = frames_vs_reference(WT_MODE_RAYTRACE, 1, 0);
+    double tol = REF_TOLERANCE_SHARE * other;
+    test_note("building raytrace: frames 0 and 1 against the references: LRMS %.4f; with another seed %.4f "
+              "(tolerance %.4f)", lrms, other, tol);
+    CHECK(other > 0.0);
+    CHECK_MSG(lrms >= 0.0 && lrms <= tol, "LRMS %.4f", lrms);
+}
+
+static void test_threads(void)
+{
+    wt_options o = small_options(WT_MODE_RAYTRACE, "building");
+    size_t n = 6 * (size_t)REF_W * REF_H;
+    float *a = (float *)malloc(sizeof(float) * n), *b = (float *)malloc(sizeof(float) * n);
+    if (CHECK(a && b)) {
+        o.threads = 1;
+        CHECK(render_frames(&o, 2, a));
+        o.threads = 2;
+        CHECK(render_frames(&o, 2, b));
+        CHECK_MSG(memcmp(a, b, sizeof(float) * n) == 0, "building raytrace frames differ between 1 and 2 threads");
+    }
+    free(a);
+    free(b);
+}
+
+/* ---- the bunny in the room without a lamp ---------------------------------- */
+
+/* Mean luminance of the bunny's pixels in a full render (the raytrace
+   mode's shading: direct light with shadow rays, light vectors) at time t. */
+static double bunny_pixels(wt_world *w, double t, int *count)
+{
+    const int W = 96, H = 72;
+    rendercache_camera c = wt_camera(&w->opt, t, W, H);
+    float *rgb = (float *)malloc(sizeof(float) * 3 * W * H);
+    uint32_t *obj = (uint32_t *)malloc(sizeof(uint32_t) * W * H);
+    double sum = 0.0;
+    int i;
+    *count = 0;
+    if (rgb && obj && wt_render_full(w, &c, t, 0, rgb, obj) == 0)
+        for (i = 0; i < W * H; i++)
+            if (obj[i] == WT_OBJECT_BUNNY) {
+                sum += luminance(rgb + 3 * i);
+                ++*count;
+            }
+    free(rgb);
+    free(obj);
+    return *count ? sum / *count : 0.0;
+}
+
+/* The issue's acceptance: the bunny's mean luminance in a room without a
+   lamp is at most half of its mean luminance in a lit room, in the
+   ray-traced frames and through an irradiance volume of the building's
+   lamps (the volume that lights the bunny in mode radiosity, here of the
+   emitters alone, IMPORTANT: light reaches the dark room only through its
+   door, so a volume that leaks through walls fails). */
+static void test_dark_room(void)
+{
+    wt_options o = small_options(WT_MODE_RAYTRACE, "building");
+    wt_world *w = open_world(&o);
+    wt_renderer *r = NULL;
+    irrvol *vol = NULL;
+    irrvol_desc src;
+    irrvol_material *mats = NULL;
+    char err[512];
+    double t[2], pix[2], vert[2] = { 0, 0 };
+    float depth, m[12], *pos = NULL, *nrm = NULL, *rgb = NULL;
+    int n[2], k, reused;
+    uint32_t i, v;
+    if (!CHECK(w != NULL)) return;
+    t[0] = deepest_in_room(w, 1, &depth);
+    t[1] = deepest_in_room(w, 0, &depth);
+    if (CHECK(wt_renderer_create(w, &r, err, sizeof err) == 0)) {
+        for (k = 0; k < 2; k++) pix[k] = bunny_pixels(w, t[k], &n[k]);
+        test_note("bunny pixels (ray traced): mean luminance %.4f in a lit room (%d pixels), %.4f in the room without "
+                  "a lamp (%d): ratio %.3f", pix[0], n[0], pix[1], n[1], pix[1] / pix[0]);
+        CHECK(n[0] > 20 && n[1] > 20);
+        CHECK(pix[1] <= 0.5 * pix[0]);
+    }
+    mats = (irrvol_material *)calloc(w->office.material_count, sizeof *mats);
+    pos = (float *)malloc(3 * sizeof(float) * w->bunny.vertex_count);
+    nrm = (float *)malloc(3 * sizeof(float) * w->bunny.vertex_count);
+    rgb = (float *)malloc(3 * sizeof(float) * w->bunny.vertex_count);
+    if (CHECK(mats && pos && nrm && rgb)) {
+        for (i = 0; i < w->office.material_count; i++) {
+            memcpy(mats[i].radiance, w->office.materials[i].ke, sizeof mats[i].radiance);
+            if (mats[i].radiance[0] > 0.0f) mats[i].flags = IRRVOL_MATERIAL_IMPORTANT;
+        }
+        memset(&src, 0, sizeof src);
+        src.positions = w->office.positions;
+        src.vertex_count = w->office.vertex_count;
+        src.indices = w->office.tri_indices;
+        src.triangle_count = w->office.tri_count;
+        src.triangle_materials = w->office.tri_material;
+        src.materials = mats;
+        src.material_count = w->office.material_count;
+        w->opt.volume_resolution = 6;
+        if (CHECK(wt_volume_build(w, &src, 1, &vol, &reused, err, sizeof err) == 0)) {
+            for (k = 0; k < 2; k++) {
+                wt_bunny_transform(w, t[k], m);
+                wt_bunny_light(w, vol, NULL, m, pos, nrm, rgb);
+                for (v = 0; v < w->bunny.vertex_count; v++) vert[k] += luminance(rgb + 3 * v) / w->bunny.vertex_count;
+            }
+            test_note("bunny vertices lit by the lamps' irradiance volume: %.4f in a lit room, %.4f in the room "
+                      "without a lamp: ratio %.3f", vert[0], vert[1], vert[1] / vert[0]);
+            CHECK(vert[1] <= 0.5 * vert[0]);
+            irrvol_destroy(vol);
+        }
+    }
+    free(mats);
+    free(pos);
+    free(nrm);
+    free(rgb);
+    wt_renderer_destroy(r);
+    wt_world_destroy(w);
+}
+
+static void write_references(void)
+{
+    CHECK(frames_vs_reference(WT_MODE_RAYTRACE, 1, 1) == 0.0);
+}
+
+int main(int argc, char **argv)
+{
+    TEST_INIT(argc, argv);
+    if (getenv("WT_WRITE_REFERENCE")) {
+        RUN(write_references);
+        return test_finish();
+    }
+    RUN(test_layout);
+    RUN(test_scene_errors);
+    RUN(test_walk);
+    RUN(test_reference_frames);
+    RUN(test_direct_light_unbiased);
+    RUN(test_threads);
+    RUN(test_dark_room);
+    return test_finish();
+}
