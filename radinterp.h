@@ -4902,6 +4902,7 @@ typedef struct radinterp__query {
     radinterp__cdt cdt;
     int cdt_ready;        /* cdt initialised (on mem) */
     int depth_left;       /* how much deeper into a source's children a query may go */
+    double child_tol;     /* a source's children are taken when its mean may be off by more than this */
     uint32_t triangulated; /* sources partly hidden: shadow union or triangulation (statistics) */
     int failed;           /* out of memory in a triangulation */
     double mem[RADINTERP__BP_BYTES / sizeof(double)];
@@ -6459,7 +6460,7 @@ static int radinterp__take_children(const radinterp__query *q, uint32_t node, in
 {
     const radinterp_solution *s = q->s;
     return s->nodes[node].child != RADINTERP__NONE && depth_left > 0 &&
-           radinterp__source_spread(s, node) * full > 0.1 * s->eps;
+           radinterp__source_spread(s, node) * full > q->child_tol;
 }
 
 /* B_src * F for the four children of node (its polygon as the query sees
@@ -6906,8 +6907,10 @@ typedef struct radinterp__leaf_link {
 
 typedef struct radinterp__leaf_ctx {
     radinterp_solution *s;
-    uint32_t *wide;          /* room for every link blocker of each leaf's path */
+    uint32_t *wide;          /* room for every link blocker of each leaf's path, for one batch of leaves */
     const uint64_t *wide_first;
+    uint64_t base;           /* wide_first of the batch's first leaf: wide[0] (entries hold offsets into wide) */
+    uint32_t first, end;     /* the batch's leaves */
     uint32_t per_job;
 } radinterp__leaf_ctx;
 
@@ -6925,11 +6928,11 @@ static void radinterp__leaf_lists_job(void *ctx_, uint32_t index)
 {
     radinterp__leaf_ctx *ctx = (radinterp__leaf_ctx *)ctx_;
     radinterp_solution *s = ctx->s;
-    uint32_t i = index * ctx->per_job, end = i + ctx->per_job;
-    if (end > s->leaf_count) end = s->leaf_count;
+    uint32_t i = ctx->first + index * ctx->per_job, end = i + ctx->per_job;
+    if (end > ctx->end) end = ctx->end;
     for (; i < end; i++) {
         uint32_t leaf = s->leaves[i], node, e = s->leaf_link_first[leaf];
-        uint64_t at = ctx->wide_first[i];
+        uint64_t at = ctx->wide_first[i] - ctx->base;
         float llo[3], lhi[3];
         radinterp__grown_box(&s->nodes[leaf], s->leaf_margin, llo, lhi);
         for (node = leaf; node != RADINTERP__NONE; node = s->nodes[node].parent) {
@@ -6959,12 +6962,22 @@ static void radinterp__leaf_lists_job(void *ctx_, uint32_t index)
 }
 
 /* Builds the leaf lists (see above): entries and room counted serially,
-   lists filled per leaf in parallel, then packed. */
+   then, batch by batch of leaves whose links' blockers fit in
+   RADINTERP__LEAF_BATCH entries (a leaf with more alone), lists filled per
+   leaf in parallel and packed onto the end of those kept. The room summed
+   over all leaves grows with leaves x links x blockers (billions on a
+   building), what is kept with what really lies between leaf and source. */
+#ifndef RADINTERP__LEAF_BATCH
+#define RADINTERP__LEAF_BATCH (1u << 24)
+#endif
 static radinterp_result radinterp__build_leaf_lists(radinterp_solution *s, const radinterp__run *run)
 {
-    uint64_t entries = 0, room = 0, *wide_first, kept = 0;
-    uint32_t i, *wide;
+    uint64_t entries = 0, room = 0, *wide_first, widest = RADINTERP__LEAF_BATCH;
+    uint32_t i, *wide = NULL;
+    radinterp__buf kept;
     radinterp__leaf_ctx ctx;
+    radinterp_result res = RADINTERP_OK;
+    radinterp__buf_init(&kept, sizeof(uint32_t));
     s->leaf_margin = 10.0 * (s->nudge + s->epsilon * s->diag);
     s->leaf_link_first = (uint32_t *)radinterp__alloc_array(&s->allocator, (size_t)s->node_count + 1, sizeof(uint32_t));
     wide_first = (uint64_t *)radinterp__alloc_array(&s->allocator, (size_t)s->leaf_count + 1, sizeof(uint64_t));
@@ -6975,6 +6988,7 @@ static radinterp_result radinterp__build_leaf_lists(radinterp_solution *s, const
     memset(s->leaf_link_first, 0, ((size_t)s->node_count + 1) * sizeof(uint32_t));
     for (i = 0; i < s->leaf_count; i++) { /* entries per leaf, by leaf node index */
         uint32_t node;
+        uint64_t own = room;
         wide_first[i] = room;
         for (node = s->leaves[i]; node != RADINTERP__NONE; node = s->nodes[node].parent) {
             const radinterp__node *nd = &s->nodes[node];
@@ -6982,8 +6996,10 @@ static radinterp_result radinterp__build_leaf_lists(radinterp_solution *s, const
             s->leaf_link_first[s->leaves[i]] += nd->link_count;
             for (l = nd->first_link; l < nd->first_link + nd->link_count; l++) room += s->links[l].blocker_count;
         }
+        if (room - own > widest) widest = room - own;
     }
     wide_first[s->leaf_count] = room;
+    if (widest > room) widest = room ? room : 1;
     for (i = 0; i <= s->node_count; i++) { /* counts to offsets */
         uint32_t c = i < s->node_count ? s->leaf_link_first[i] : 0;
         if (entries + c > 0xFFFFFFFFu) { radinterp__free(&s->allocator, wide_first); return RADINTERP_ERROR_OUT_OF_MEMORY; }
@@ -6992,33 +7008,44 @@ static radinterp_result radinterp__build_leaf_lists(radinterp_solution *s, const
     }
     s->leaf_link_count = entries;
     s->leaf_links = (radinterp__leaf_link *)radinterp__alloc_array(&s->allocator, (size_t)entries, sizeof *s->leaf_links);
-    wide = (uint32_t *)radinterp__alloc_array(&s->allocator, (size_t)room, sizeof(uint32_t));
-    if (!s->leaf_links || !wide || room > (uint64_t)SIZE_MAX / sizeof(uint32_t)) {
-        radinterp__free(&s->allocator, wide);
-        radinterp__free(&s->allocator, wide_first);
-        return RADINTERP_ERROR_OUT_OF_MEMORY;
-    }
+    if (widest <= (uint64_t)SIZE_MAX / sizeof(uint32_t))
+        wide = (uint32_t *)radinterp__alloc_array(&s->allocator, (size_t)widest, sizeof(uint32_t));
+    if (!s->leaf_links || !wide) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     ctx.s = s;
     ctx.wide = wide;
     ctx.wide_first = wide_first;
     ctx.per_job = 16;
-    radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__leaf_lists_job, &ctx,
-                        (s->leaf_count + ctx.per_job - 1) / ctx.per_job);
-    for (i = 0; i < entries; i++) kept += s->leaf_links[i].count;
-    s->leaf_blockers = (uint32_t *)radinterp__alloc_array(&s->allocator, (size_t)kept, sizeof(uint32_t));
-    if (s->leaf_blockers) {
-        uint64_t at = 0;
-        for (i = 0; i < entries; i++) { /* pack */
-            radinterp__leaf_link *ll = &s->leaf_links[i];
-            if (ll->count) memcpy(s->leaf_blockers + at, wide + ll->first, (size_t)ll->count * sizeof(uint32_t));
-            ll->first = at;
-            at += ll->count;
+    for (ctx.end = 0; res == RADINTERP_OK && ctx.end < s->leaf_count;) {
+        ctx.first = ctx.end;
+        ctx.base = wide_first[ctx.first];
+        while (ctx.end < s->leaf_count && wide_first[ctx.end + 1] - ctx.base <= widest) ctx.end++;
+        radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__leaf_lists_job, &ctx,
+                            (ctx.end - ctx.first + ctx.per_job - 1) / ctx.per_job);
+        for (i = ctx.first; i < ctx.end && res == RADINTERP_OK; i++) { /* pack */
+            uint32_t leaf = s->leaves[i], e;
+            for (e = s->leaf_link_first[leaf]; e < s->leaf_link_first[leaf + 1]; e++) {
+                radinterp__leaf_link *ll = &s->leaf_links[e];
+                size_t at = kept.count;
+                if (ll->count && radinterp__buf_reserve(&s->allocator, &kept, at + ll->count) != 0) {
+                    res = RADINTERP_ERROR_OUT_OF_MEMORY;
+                    break;
+                }
+                if (ll->count) memcpy((uint32_t *)kept.data + at, wide + ll->first, (size_t)ll->count * sizeof(uint32_t));
+                kept.count += ll->count;
+                ll->first = at;
+            }
         }
-        s->leaf_blocker_count = kept;
+        if (res == RADINTERP_OK && radinterp__cancelled(s, run)) res = RADINTERP_ERROR_CANCELLED;
     }
     radinterp__free(&s->allocator, wide);
     radinterp__free(&s->allocator, wide_first);
-    return s->leaf_blockers ? RADINTERP_OK : RADINTERP_ERROR_OUT_OF_MEMORY;
+    s->leaf_blockers = (uint32_t *)kept.data;
+    s->leaf_blocker_count = kept.count;
+    if (res == RADINTERP_OK && !s->leaf_blockers) { /* no blockers at all: an empty list, not a missing one */
+        s->leaf_blockers = (uint32_t *)radinterp__alloc(&s->allocator, sizeof(uint32_t));
+        if (!s->leaf_blockers) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    }
+    return res;
 }
 
 RADINTERP_API void radinterp_solution_destroy(radinterp_solution *s)
@@ -7278,6 +7305,7 @@ static radinterp_result radinterp__irradiance(const radinterp_solution *s, uint3
         }
     }
     leaf = radinterp__locate_leaf(s, patch, q->pv);
+    q->child_tol = 0.02 * radinterp__tolerance(s, s->nodes[leaf].level);
     if (s->leaf_link_first && radinterp__near_box(&s->nodes[leaf], q->pv, 0.5 * s->leaf_margin) &&
         radinterp__near_box(&s->nodes[leaf], q->p, 0.5 * s->leaf_margin)) {
         uint32_t e;

@@ -6,7 +6,11 @@
    Cornell box, on the backprojection scenes of test_radinterp.c (one and two
    blockers, crossing blockers, a blocker touching the source plane), and on
    many overlapping blockers, which also make the union outgrow its arrays
-   so that the default falls back to the triangulation. */
+   so that the default falls back to the triangulation.
+   The leaf lists are built here in batches of at most 4,096 candidate
+   blockers (millions in the library), so the office's lists take many
+   batches and test_leaf_lists checks the packing across them. */
+#define RADINTERP__LEAF_BATCH 4096u
 #define RADINTERP_IMPLEMENTATION
 #include "../radinterp.h"
 #include "examples/common/obj.h"
