@@ -1,4 +1,4 @@
-/* lightvec.h - v0.3.0 - cached 5D indirect light vectors - public domain or MIT, see end of file
+/* lightvec.h - v0.4.0 - cached 5D indirect light vectors - public domain or MIT, see end of file
 
    LIGHTVEC.H: cached light vectors over position and direction for interactive glossy global illumination.
 
@@ -75,10 +75,13 @@
            LIGHTVEC_MAX_TRIANGLES; stride 0 or a multiple of 4 >= 12; every
            vertex finite; every index < vertex_count; every material id <
            material_count; every material finite and non-negative, exponent
-           <= 1e6; allocator both callbacks or none. Zero-area triangles are
+           <= 1e6, transmittance <= 1; sky finite and non-negative;
+           environment NULL or 1..65536 texels a side, every texel finite and
+           non-negative; allocator both callbacks or none. Zero-area triangles are
            skipped and counted. Contract: positions holds vertex_count vertices
            at `stride`, indices 3 * triangle_count, material_ids triangle_count
-           (or NULL), materials material_count. The scene copies what it keeps;
+           (or NULL), materials material_count, environment 3 * width *
+           height floats. The scene copies what it keeps (the map too);
            the caller's arrays may go once it returns.
        lightvec_scene_destroy(scene)          NULL: nothing.
        lightvec_scene_info(scene, &info)      counts and bounds.
@@ -318,6 +321,46 @@
      Caustic light vectors (CLV) are not implemented: the built-in renderer has
      no specular transport.
 
+   GLASS AND SKY
+
+     A scene material with transmittance t > 0 (any channel) is thin glass,
+     as in the examples' tracer and the reference renderer: light passes
+     straight through it (no refraction), times t per RGB channel, from
+     either side. The built-in renderer crosses panes without using up a
+     bounce: a path that meets a pane from the front goes through with
+     probability lum(t) / (lum(t) + lum(diffuse)) and otherwise reflects
+     off it (always through when no bounce is left, or from the back);
+     shadow rays to the emitters and to the sky are attenuated by every
+     pane they cross. At most LIGHTVEC_MAX_GLASS_LAYERS (16) panes along a
+     ray; the next one blocks it. Rays that leave the scene see the sky:
+     desc.sky, a constant radiance, or desc.environment, a small HDR map of
+     environment_width x environment_height rgb floats, latitude-longitude
+     with +y up: row r covers the angle theta from +y in [pi r / height,
+     pi (r + 1) / height) (row 0 at the zenith), column c the azimuth
+     phi = atan2(z, x) in [2 pi c / width - pi, 2 pi (c + 1) / width - pi);
+     a direction takes its texel (no filtering; a map of one radiance L is
+     the constant sky L bit for bit). It is the layout of the examples'
+     ex_sky (examples/common/scene_sky.h). The sky counts as light at every
+     hit of a path (one cosine-distributed ray, through glass) and, seen
+     straight along a gather ray, through windows or not, it is part of the
+     indirect light vector: the direct light vectors hold the emitters'
+     light only, so a sky-lit room needs no DLV for its daylight.
+     Validity and glass: a gather ray's distance is that of the first
+     surface it meets, a pane included, so d_avg (and every radius) is what
+     it would be with the window opaque: the light through a window changes
+     across the window's edges, which stand where the pane is; a radius
+     never grows because there is glass. For direct light vectors a sample
+     seen through glass counts as visible (dimmed by t): a pane dims evenly
+     and casts no shadow edge of its own (its frame does). Measured against
+     the reference (tests/ref_lightvec_glass.c: a closed grey room lit only
+     through a window in the ceiling, single and double glazing, a
+     reflecting pane, an environment map): gathered irradiance on the floor
+     within 0.6 % under the constant sky (standard error 0.5 %), looked up
+     within 0.5 %; under the environment map 0.5 % and 2.6 % (standard
+     error 1.1 %, the map's bright texels seen through few strata). Materials
+     with transmittance 0 and a black sky give the results of v0.3 bit for
+     bit. With incoming_radiance the callback answers for glass and sky.
+
    PERFORMANCE
 
      Lookups at 10^5 records on the walls of a room (tests/bench_lightvec.c,
@@ -337,7 +380,10 @@
      points as Lambertian (direct light by area sampling of the emitters plus
      `bounces - 1` cosine-sampled bounces); surfaces are one-sided as in
      radiosity (the front is the side the counter-clockwise winding faces; a
-     back face is black and emits nothing); rays that escape bring no light.
+     back face is black and emits nothing, unless it is glass); rays that
+     escape see the sky (black by default). Glass is thin and straight-through:
+     no refraction, no caustics, no frosted glass, at most
+     LIGHTVEC_MAX_GLASS_LAYERS panes along a ray.
      A glossy part is exact at the viewer it was computed for and first-order
      around it; highlights sharper than the lobe's gradient can follow are
      gathered anew. Records of different materials are interpolated together:
@@ -374,7 +420,7 @@
 #include <stdint.h>
 
 #define LIGHTVEC_VERSION_MAJOR 0
-#define LIGHTVEC_VERSION_MINOR 3
+#define LIGHTVEC_VERSION_MINOR 4
 #define LIGHTVEC_VERSION_PATCH 0
 #define LIGHTVEC_FILE_FORMAT_VERSION 2
 
@@ -441,6 +487,8 @@ typedef struct lightvec_material {
     float specular[3];   /* Phong reflectance */
     float exponent;      /* Phong exponent, >= 0 */
     float emission[3];   /* emitted radiance W/(m^2 sr), front face only (scene materials) */
+    float transmittance[3]; /* thin glass (scene materials): this share of the light passes straight
+                               through, in [0, 1] per channel; 0 = opaque (see GLASS AND SKY) */
 } lightvec_material;
 
 /* The light arriving at a point as two virtual lights (see GLOSSY SURFACES):
@@ -486,6 +534,8 @@ typedef struct lightvec_record {
 
 /* Largest triangle_count: 3 * count indices stay addressable in 32 bits. */
 #define LIGHTVEC_MAX_TRIANGLES 0x55555555u
+#define LIGHTVEC_MAX_ENVIRONMENT_SIZE 65536u  /* texels per side of the sky map */
+#define LIGHTVEC_MAX_GLASS_LAYERS 16u         /* panes a ray crosses; one more blocks it */
 
 typedef struct lightvec_scene_desc {
     const float *positions;      /* xyz per vertex */
@@ -498,6 +548,11 @@ typedef struct lightvec_scene_desc {
     uint32_t material_count;
     lightvec_trace_fn trace;     /* NULL = the built-in BVH */
     void *trace_user;
+    float sky[3];                /* radiance of rays that leave the scene (a constant sky); 0 = none */
+    const float *environment;    /* optional sky map (copied), rgb per texel, latitude-longitude with +y
+                                    up (GLASS AND SKY); replaces sky; NULL = the constant sky */
+    uint32_t environment_width;  /* texels per row, 1..LIGHTVEC_MAX_ENVIRONMENT_SIZE */
+    uint32_t environment_height; /* rows, from the zenith (+y) down to the nadir */
     lightvec_allocator allocator;
     lightvec_log_fn log;
     void *log_user;
@@ -1496,19 +1551,22 @@ static int lightvec__unit(const float *in, lightvec__vec3 *out)
     return 1;
 }
 
-static int lightvec__finite_nonneg(const float *v, int n)
+static int lightvec__finite_nonneg_n(const float *v, size_t n)
 {
-    int i;
+    size_t i;
     for (i = 0; i < n; i++)
         if (!isfinite(v[i]) || v[i] < 0.0f) return 0;
     return 1;
 }
 
+static int lightvec__finite_nonneg(const float *v, int n) { return lightvec__finite_nonneg_n(v, (size_t)n); }
+
 static int lightvec__material_valid(const lightvec_material *m)
 {
     return lightvec__finite_nonneg(m->diffuse, 3) && lightvec__finite_nonneg(m->specular, 3) &&
            lightvec__finite_nonneg(m->emission, 3) && isfinite(m->exponent) && m->exponent >= 0.0f &&
-           m->exponent <= 1e6f;
+           m->exponent <= 1e6f && lightvec__finite_nonneg(m->transmittance, 3) && m->transmittance[0] <= 1.0f &&
+           m->transmittance[1] <= 1.0f && m->transmittance[2] <= 1.0f;
 }
 
 /* A double as a float, saturated at FLT_MAX: a magnitude computed in double
@@ -1663,7 +1721,25 @@ struct lightvec_scene {
     uint32_t *emit_material;
     float lo[3], hi[3];
     float eps;                      /* ray origin offset */
+    int has_glass;                  /* some material transmits */
+    int has_sky;                    /* escaping rays bring light: a map, or a sky above 0 */
+    float sky[3];
+    float *environment;             /* the copied map, or NULL */
+    uint32_t env_width, env_height;
 };
+
+/* No map, or a map of sensible size whose texels are finite and >= 0. */
+static int lightvec__environment_valid(const lightvec_scene_desc *d)
+{
+    size_t n;
+    if (!d->environment) return 1;
+    if (d->environment_width < 1 || d->environment_height < 1 || d->environment_width > LIGHTVEC_MAX_ENVIRONMENT_SIZE ||
+        d->environment_height > LIGHTVEC_MAX_ENVIRONMENT_SIZE)
+        return 0;
+    if (d->environment_height > (size_t)-1 / (3 * sizeof(float)) / d->environment_width) return 0; /* 32-bit size_t */
+    n = 3 * (size_t)d->environment_width * d->environment_height;
+    return lightvec__finite_nonneg_n(d->environment, n);
+}
 
 static lightvec_result lightvec__scene_validate(const lightvec_scene_desc *d)
 {
@@ -1699,10 +1775,16 @@ static lightvec_result lightvec__scene_validate(const lightvec_scene_desc *d)
             if (d->material_ids[i] >= d->material_count) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
     for (i = 0; i < d->material_count; i++)
         if (!lightvec__material_valid(&d->materials[i])) {
-            lightvec__logf(d->log, d->log_user, "lightvec: material %lld of %lld has a negative or non-finite value",
+            lightvec__logf(d->log, d->log_user,
+                           "lightvec: material %lld of %lld has a negative or non-finite value (or transmittance > 1)",
                            (long long)i, (long long)d->material_count);
             return LIGHTVEC_ERROR_INVALID_ARGUMENT;
         }
+    if (!lightvec__finite_nonneg(d->sky, 3) || !lightvec__environment_valid(d)) {
+        lightvec__logf(d->log, d->log_user, "lightvec: sky negative or non-finite, or a bad environment map (%lld x %lld)",
+                       (long long)d->environment_width, (long long)d->environment_height);
+        return LIGHTVEC_ERROR_INVALID_ARGUMENT;
+    }
     return LIGHTVEC_OK;
 }
 
@@ -1755,6 +1837,26 @@ static int lightvec__scene_fill(lightvec_scene *s, const lightvec_scene_desc *d,
     return 0;
 }
 
+/* The sky and the glass flag: the map copied (the caller's may go). Returns
+   -1 when the copy cannot get memory. */
+static int lightvec__scene_sky(lightvec_scene *s, const lightvec_scene_desc *d)
+{
+    uint32_t i;
+    for (i = 0; i < d->material_count; i++) {
+        const float *t = d->materials[i].transmittance;
+        s->has_glass |= t[0] > 0.0f || t[1] > 0.0f || t[2] > 0.0f;
+    }
+    memcpy(s->sky, d->sky, sizeof s->sky);
+    s->has_sky = d->environment || d->sky[0] > 0.0f || d->sky[1] > 0.0f || d->sky[2] > 0.0f;
+    if (!d->environment) return 0;
+    s->env_width = d->environment_width;
+    s->env_height = d->environment_height;
+    s->environment = (float *)lightvec__alloc_array(&s->a, (size_t)s->env_width * s->env_height, 3 * sizeof(float));
+    if (!s->environment) return -1;
+    memcpy(s->environment, d->environment, (size_t)s->env_width * s->env_height * 3 * sizeof(float));
+    return 0;
+}
+
 LIGHTVEC_API lightvec_result lightvec_scene_create(const lightvec_scene_desc *desc, lightvec_scene **out)
 {
     lightvec_scene *s;
@@ -1789,6 +1891,10 @@ LIGHTVEC_API lightvec_result lightvec_scene_create(const lightvec_scene_desc *de
         return LIGHTVEC_ERROR_OUT_OF_MEMORY;
     }
     memcpy(s->materials, desc->materials, desc->material_count * sizeof(lightvec_material));
+    if (lightvec__scene_sky(s, desc) != 0) {
+        lightvec_scene_destroy(s);
+        return LIGHTVEC_ERROR_OUT_OF_MEMORY;
+    }
     m.positions = desc->positions;
     m.stride = desc->stride;
     m.indices = desc->indices;
@@ -1826,6 +1932,7 @@ LIGHTVEC_API void lightvec_scene_destroy(lightvec_scene *s)
     lightvec__free(&a, s->emit_cdf);
     lightvec__free(&a, s->emit_inv_pdf);
     lightvec__free(&a, s->emit_material);
+    lightvec__free(&a, s->environment);
     lightvec__free(&a, s);
 }
 
@@ -1888,6 +1995,123 @@ LIGHTVEC_API int lightvec_scene_intersect(const lightvec_scene *s, const float o
     return 1;
 }
 
+/* ---- glass and sky (GLASS AND SKY) ---- */
+
+/* The transmittance of a triangle's material, or NULL when it is opaque. */
+static const float *lightvec__glass(const lightvec_scene *s, uint32_t tri)
+{
+    const float *t = s->materials[s->tri_material[tri]].transmittance;
+    return (t[0] > 0.0f || t[1] > 0.0f || t[2] > 0.0f) ? t : NULL;
+}
+
+/* The origin of a ray that goes on straight through the surface of its
+   hit: the hit point moved eps off the surface, on the far side. */
+static lightvec__vec3 lightvec__step_through(const lightvec_scene *s, lightvec__vec3 org, lightvec__vec3 dir,
+                                             const lightvec__hit *hit)
+{
+    lightvec__vec3 n = lightvec__v3_load(s->normals + (size_t)3 * hit->tri);
+    lightvec__vec3 y = lightvec__add(org, lightvec__scale(dir, hit->t));
+    return lightvec__add(y, lightvec__scale(n, lightvec__dot(n, dir) < 0.0f ? -s->eps : s->eps));
+}
+
+/* What reaches org + tmax dir from org (dir unit): through = the product of
+   the transmittances of the panes crossed, 0 when something opaque is in
+   the way or more than LIGHTVEC_MAX_GLASS_LAYERS panes. Returns whether
+   any light gets through. Without glass in the scene, a shadow ray. */
+static int lightvec__transmittance(const lightvec_scene *s, lightvec__vec3 org, lightvec__vec3 dir, float tmax,
+                                   float through[3])
+{
+    uint32_t layers;
+    through[0] = through[1] = through[2] = 1.0f;
+    if (!s->has_glass) {
+        if (!lightvec__occluded(s, org, dir, tmax)) return 1;
+    } else {
+        for (layers = 0; layers <= LIGHTVEC_MAX_GLASS_LAYERS; layers++) {
+            lightvec__hit hit;
+            const float *t;
+            if (!lightvec__trace(s, org, dir, tmax, &hit)) return 1;
+            t = lightvec__glass(s, hit.tri);
+            if (!t || layers == LIGHTVEC_MAX_GLASS_LAYERS) break;
+            through[0] *= t[0]; through[1] *= t[1]; through[2] *= t[2];
+            org = lightvec__step_through(s, org, dir, &hit);
+            tmax -= hit.t;
+            if (!(tmax > 0.0f)) return 1;
+        }
+    }
+    through[0] = through[1] = through[2] = 0.0f;
+    return 0;
+}
+
+/* The sky along the unit direction dir: the texel of the map it falls in
+   (latitude-longitude, +y up: row = floor(theta / pi * height) with theta
+   the angle from +y, column = floor((phi + pi) / (2 pi) * width) with
+   phi = atan2(z, x); no filtering), or the constant sky. */
+static void lightvec__sky(const lightvec_scene *s, lightvec__vec3 dir, float rgb[3])
+{
+    const float *src = s->sky;
+    if (s->environment) {
+        double cos_theta = dir.y, theta, phi;
+        uint32_t row, col;
+        if (!(cos_theta >= -1.0)) cos_theta = -1.0;   /* NaN too */
+        if (cos_theta > 1.0) cos_theta = 1.0;
+        theta = acos(cos_theta);
+        phi = atan2((double)dir.z, (double)dir.x);
+        if (!(phi >= -LIGHTVEC__PI)) phi = -LIGHTVEC__PI;
+        row = (uint32_t)(theta / LIGHTVEC__PI * s->env_height);
+        col = (uint32_t)((phi + LIGHTVEC__PI) / LIGHTVEC__TWO_PI * s->env_width);
+        if (row >= s->env_height) row = s->env_height - 1;
+        if (col >= s->env_width) col = s->env_width - 1;
+        src = s->environment + 3 * ((size_t)row * s->env_width + col);
+    }
+    rgb[0] = src[0];
+    rgb[1] = src[1];
+    rgb[2] = src[2];
+}
+
+/* A cosine-distributed direction around n from two uniform numbers. */
+static lightvec__vec3 lightvec__cosine_direction(lightvec__vec3 n, float u1, float u2)
+{
+    lightvec__vec3 t, bt, d;
+    float r = sqrtf(u1), phi = (float)LIGHTVEC__TWO_PI * u2;
+    lightvec__basis(n, &t, &bt);
+    d = lightvec__add(lightvec__add(lightvec__scale(t, r * cosf(phi)), lightvec__scale(bt, r * sinf(phi))),
+                      lightvec__scale(n, sqrtf(lightvec__maxf(0.0f, 1.0f - u1))));
+    return lightvec__normalize(d);
+}
+
+/* Sky light at y (normal n) per unit Lambertian reflectance: one
+   cosine-distributed direction (weight f cos / pdf = rho), through the glass
+   on its way out: rho times this is the radiance y reflects. */
+static void lightvec__sky_light(const lightvec_scene *s, lightvec__rng *rng, lightvec__vec3 y, lightvec__vec3 n,
+                                double e[3])
+{
+    float u1 = lightvec__rng_float(rng), u2 = lightvec__rng_float(rng), through[3], sky[3];
+    lightvec__vec3 dir = lightvec__cosine_direction(n, u1, u2);
+    int c;
+    e[0] = e[1] = e[2] = 0.0;
+    if (!lightvec__transmittance(s, lightvec__add(y, lightvec__scale(n, s->eps)), dir, FLT_MAX, through)) return;
+    lightvec__sky(s, dir, sky);
+    for (c = 0; c < 3; c++) e[c] = (double)through[c] * sky[c];
+}
+
+/* Whether a path goes on straight through the glass it hit (from the back
+   always, else chosen in proportion to the luminance of the transmittance
+   against the diffuse reflectance, or always when no bounce is left);
+   scales the path's weight by what it chose over its probability. */
+static int lightvec__pass_through(const float tf[3], const float rho[3], int front, int last, lightvec__rng *rng,
+                                  double through[3])
+{
+    float p = 1.0f, lt = lightvec__lumf(tf), ld = lightvec__lumf(rho);
+    int c;
+    if (front && !last) p = lt + ld > 0.0f ? lt / (lt + ld) : 1.0f;
+    if (p < 1.0f && lightvec__rng_float(rng) >= p) {
+        for (c = 0; c < 3; c++) through[c] *= rho[c] / (1.0 - p);   /* the bounce */
+        return 0;
+    }
+    for (c = 0; c < 3; c++) through[c] *= tf[c] / p;
+    return 1;
+}
+
 /* Emitter chosen by u in [0, 1) through the CDF (binary search). */
 static uint32_t lightvec__pick_emitter(const lightvec_scene *s, float u)
 {
@@ -1942,13 +2166,18 @@ static int lightvec__sample_light(const lightvec_scene *s, lightvec__vec3 x, lig
 }
 
 static int lightvec__light_visible(const lightvec_scene *s, lightvec__vec3 x, lightvec__vec3 n,
-                                   const lightvec__light_sample *ls)
+                                   const lightvec__light_sample *ls, float through[3])
 {
     /* from the offset origin to the light point itself, stopping 1e-4 short
-       of it (relative) so that the emitter does not shadow itself */
+       of it (relative) so that the emitter does not shadow itself; glass on
+       the way lets its transmittance through */
     lightvec__vec3 org = lightvec__add(x, lightvec__scale(n, s->eps)), d = lightvec__sub(ls->point, org);
     float len = lightvec__length(d);
-    return !(len > 0.0f) || !lightvec__occluded(s, org, lightvec__scale(d, 1.0f / len), len * (1.0f - 1e-4f));
+    if (!(len > 0.0f)) {
+        through[0] = through[1] = through[2] = 1.0f;
+        return 1;
+    }
+    return lightvec__transmittance(s, org, lightvec__scale(d, 1.0f / len), len * (1.0f - 1e-4f), through);
 }
 
 /* Direct irradiance at x (normal n) from the emitters, `samples` samples. */
@@ -1960,52 +2189,76 @@ static void lightvec__direct_irradiance(const lightvec_scene *s, lightvec__rng *
     if (!s->emitter_count) return;
     for (i = 0; i < samples; i++) {
         lightvec__light_sample ls;
-        float u1 = lightvec__rng_float(rng), u2 = lightvec__rng_float(rng), u3 = lightvec__rng_float(rng);
-        if (lightvec__sample_light(s, x, n, u1, u2, u3, &ls) && lightvec__light_visible(s, x, n, &ls)) {
+        float u1 = lightvec__rng_float(rng), u2 = lightvec__rng_float(rng), u3 = lightvec__rng_float(rng), t[3];
+        if (lightvec__sample_light(s, x, n, u1, u2, u3, &ls) && lightvec__light_visible(s, x, n, &ls, t)) {
             const float *le = s->materials[s->emit_material[ls.emitter]].emission;
             double g = (double)ls.cos_x * ls.cos_l * ls.inv_pdf / ((double)ls.dist * ls.dist);
-            e[0] += le[0] * g; e[1] += le[1] * g; e[2] += le[2] * g;
+            e[0] += le[0] * t[0] * g; e[1] += le[1] * t[1] * g; e[2] += le[2] * t[2] * g;
         }
     }
     e[0] /= samples; e[1] /= samples; e[2] /= samples;
 }
 
-/* Radiance leaving the front face hit by the ray (org, dir) back toward org,
+/* Radiance leaving the surface hit by the ray (org, dir) back toward org,
    emission excluded (light straight from an emitter is direct light at the
    gathering point, not indirect): Lambertian reflection of the direct light
-   at the hit, plus (bounces - 1) cosine-sampled diffuse bounces, each adding
-   the direct light reflected at its own hit. */
+   (and of the sky) at the hit, plus (bounces - 1) cosine-sampled diffuse
+   bounces, each adding the direct light reflected at its own hit. Glass is
+   crossed on the way without using up a bounce (a pane met from the front
+   may reflect instead, chosen at random: lightvec__pass_through); the sky
+   seen through glass straight along the gather ray counts, a bounce ray's
+   sky was counted at its origin (lightvec__sky_light). */
 static void lightvec__path_radiance(const lightvec_scene *s, lightvec__rng *rng, lightvec__vec3 org,
                                     lightvec__vec3 dir, const lightvec__hit *first, uint32_t bounces,
                                     uint32_t light_samples, double out[3])
 {
     double through[3] = { 1.0, 1.0, 1.0 };
     lightvec__hit hit = *first;
-    uint32_t b;
+    uint32_t b = 0, layers = 0;
     out[0] = out[1] = out[2] = 0.0;
-    for (b = 0; b < bounces; b++) {
+    for (;;) {
         lightvec__vec3 y = lightvec__add(org, lightvec__scale(dir, hit.t));
-        lightvec__vec3 n = lightvec__v3_load(s->normals + (size_t)3 * hit.tri), t, bt, d;
+        lightvec__vec3 n = lightvec__v3_load(s->normals + (size_t)3 * hit.tri);
         const float *rho = s->materials[s->tri_material[hit.tri]].diffuse;
+        const float *glass = s->has_glass ? lightvec__glass(s, hit.tri) : NULL;
+        int front = lightvec__dot(n, dir) < 0.0f, last = b + 1 == bounces;
         double e[3];
-        float u1, u2, r, phi;
         int c;
-        if (!(lightvec__dot(n, dir) < 0.0f)) break; /* back faces are black (one-sided, as in radiosity) */
-        lightvec__direct_irradiance(s, rng, y, n, light_samples, e);
-        for (c = 0; c < 3; c++) out[c] += through[c] * rho[c] * (1.0 / LIGHTVEC__PI) * e[c];
-        if (b + 1 == bounces) break;
-        for (c = 0; c < 3; c++) through[c] *= rho[c]; /* cosine sampling: f cos / pdf = rho */
+        if (!front && !glass) break; /* back faces are black (one-sided, as in radiosity) */
+        if (front) {
+            lightvec__direct_irradiance(s, rng, y, n, light_samples, e);
+            for (c = 0; c < 3; c++) out[c] += through[c] * rho[c] * (1.0 / LIGHTVEC__PI) * e[c];
+            if (s->has_sky) {
+                lightvec__sky_light(s, rng, y, n, e);
+                for (c = 0; c < 3; c++) out[c] += through[c] * rho[c] * e[c];
+            }
+        }
+        if (glass && layers < LIGHTVEC_MAX_GLASS_LAYERS && lightvec__pass_through(glass, rho, front, last, rng, through)) {
+            layers++;
+            org = lightvec__step_through(s, org, dir, &hit);
+            if (!lightvec__trace(s, org, dir, FLT_MAX, &hit)) {
+                if (b == 0 && s->has_sky) {   /* the gather ray itself leaves through the glass */
+                    float sky[3];
+                    lightvec__sky(s, dir, sky);
+                    for (c = 0; c < 3; c++) out[c] += through[c] * sky[c];
+                }
+                break;
+            }
+            continue;
+        }
+        if (!front) break;   /* past the layer limit */
+        if (!glass || layers >= LIGHTVEC_MAX_GLASS_LAYERS) {   /* (else the choice above scaled through) */
+            if (last) break;
+            for (c = 0; c < 3; c++) through[c] *= rho[c]; /* cosine sampling: f cos / pdf = rho */
+        }
         if (through[0] == 0.0 && through[1] == 0.0 && through[2] == 0.0) break;
-        u1 = lightvec__rng_float(rng);
-        u2 = lightvec__rng_float(rng);
-        r = sqrtf(u1);
-        phi = (float)LIGHTVEC__TWO_PI * u2;
-        lightvec__basis(n, &t, &bt);
-        d = lightvec__add(lightvec__add(lightvec__scale(t, r * cosf(phi)), lightvec__scale(bt, r * sinf(phi))),
-                          lightvec__scale(n, sqrtf(lightvec__maxf(0.0f, 1.0f - u1))));
-        org = lightvec__add(y, lightvec__scale(n, s->eps));
-        dir = lightvec__normalize(d);
-        if (!lightvec__trace(s, org, dir, FLT_MAX, &hit)) break;
+        {
+            float u1 = lightvec__rng_float(rng), u2 = lightvec__rng_float(rng);
+            org = lightvec__add(y, lightvec__scale(n, s->eps));
+            dir = lightvec__cosine_direction(n, u1, u2);
+        }
+        b++;
+        if (!lightvec__trace(s, org, dir, FLT_MAX, &hit)) break;   /* its sky: counted at y */
     }
 }
 
@@ -2245,8 +2498,12 @@ static lightvec_result lightvec__incoming(const lightvec_scene *s, const lightve
         double l[3] = { 0.0, 0.0, 0.0 };
         cell->r = LIGHTVEC__FAR;
         if (lightvec__trace(s, org, dir, FLT_MAX, &hit)) {
-            cell->r = hit.t;
+            cell->r = hit.t;   /* glass included: a pane counts at its own distance (GLASS AND SKY) */
             lightvec__path_radiance(s, rng, org, dir, &hit, g->bounces, g->light_samples, l);
+        } else if (s->has_sky) {
+            float sky[3];
+            lightvec__sky(s, dir, sky);
+            l[0] = sky[0]; l[1] = sky[1]; l[2] = sky[2];
         }
         cell->l[0] = (float)l[0]; cell->l[1] = (float)l[1]; cell->l[2] = (float)l[2];
     }
@@ -2404,7 +2661,8 @@ LIGHTVEC_API lightvec_result lightvec_gather_direct(const lightvec_scene *s, con
             float u = ((float)k + lightvec__rng_float(&rng)) / (float)g.n;
             float v = ((float)j + lightvec__rng_float(&rng)) / (float)g.m, lo, hi;
             uint32_t e = lightvec__pick_emitter(s, u);
-            const float *le;
+            const float *emitted;
+            float le[3], through[3];
             double solid, y, sc;
             lightvec__vec3 nl, dg;
             lo = e ? s->emit_cdf[e - 1] : 0.0f;
@@ -2414,9 +2672,10 @@ LIGHTVEC_API lightvec_result lightvec_gather_direct(const lightvec_scene *s, con
             if (!lightvec__sample_emitter(s, e, x, n, u, v, &ls)) continue;
             facing++;
             sums.inv_r += 1.0 / ls.dist;
-            if (!lightvec__light_visible(s, x, n, &ls)) continue;
-            visible++;
-            le = s->materials[s->emit_material[ls.emitter]].emission;
+            if (!lightvec__light_visible(s, x, n, &ls, through)) continue;
+            visible++;   /* through glass too: a pane dims the light evenly, it casts no shadow edge */
+            emitted = s->materials[s->emit_material[ls.emitter]].emission;
+            for (c = 0; c < 3; c++) le[c] = emitted[c] * through[c];
             solid = (double)ls.cos_l * ls.inv_pdf / ((double)ls.dist * ls.dist) / total;
             for (c = 0; c < 3; c++) sums.irr[c] += le[c] * solid * ls.cos_x;
             y = lightvec__lumf(le) * solid;

@@ -86,6 +86,7 @@ static int load_scene(app *a)
         memcpy(a->mats[i].diffuse, a->obj.materials[i].kd, sizeof a->mats[i].diffuse);
         memcpy(a->mats[i].specular, a->obj.materials[i].ks, sizeof a->mats[i].specular);
         memcpy(a->mats[i].emission, a->obj.materials[i].ke, sizeof a->mats[i].emission);
+        memcpy(a->mats[i].transmittance, a->obj.materials[i].tf, sizeof a->mats[i].transmittance);
         a->mats[i].exponent = a->obj.materials[i].ns;
     }
     memset(&d, 0, sizeof d);

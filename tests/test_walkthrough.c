@@ -383,6 +383,61 @@ static double bunny_pixels(wt_world *w, double t, int *count)
     return *count ? sum / *count : 0.0;
 }
 
+/* Issue 19's measure of the raytrace mode: the LRMS of its frames against
+   converged renders (wt_render_converged: a gather at every pixel, 32
+   shadow rays, no interpolation, no render-cache reuse), at the demo's
+   shading settings (default strata and light samples) on a small image.
+   The converged render is itself noisy at CONVERGED_STRATA (its LRMS
+   against one of 48 x 144 rays is 0.048 at 80x60), so the error printed
+   includes that noise in quadrature. The bound is the error measured when
+   the test was written (0.21 at frame 23 at 64x48) plus 15% for a
+   compiler flipping a light-vector decision (a flip redraws at most the 8%
+   of a frame's pixels requested after it); a frame without its indirect
+   light (63% of the luminance) is at 0.7. The issue's target (0.07) is not
+   met: the bound guards against regressions. */
+#define CONVERGED_STRATA 12
+#define CONVERGED_LIGHT_SAMPLES 32
+#define CONVERGED_MAX_LRMS 0.24
+static void test_raytrace_against_converged(void)
+{
+    wt_options o = small_options(WT_MODE_RAYTRACE), d;
+    wt_world *w = NULL;
+    wt_renderer *r = NULL;
+    wt_frame_stats st;
+    char err[512];
+    float *rgb = (float *)malloc(sizeof(float) * 3 * REF_W * REF_H), *ref = (float *)malloc(sizeof(float) * 3 * REF_W * REF_H);
+    float e0 = 0.0f;
+    int f, checked = 0;
+    wt_options_default(&d);
+    o.strata = d.strata;
+    o.bunny_strata = d.bunny_strata;
+    o.light_samples = d.light_samples;
+    if (!CHECK(rgb && ref) || !CHECK(wt_world_create(&o, &w, err, sizeof err) == 0 && wt_renderer_create(w, &r, err, sizeof err) == 0))
+        goto done;
+    for (f = 0; f < o.frames; f++) {
+        float e;
+        if (!CHECK(wt_render_frame(r, f, rgb, &st) == 0)) break;
+        e = wt_exposure(&o, rgb, e0);
+        if (f == 0) e0 = e;
+        if (f == o.frames - 1) {
+            double t = wt_frame_time(&o, f), lrms = -1.0;
+            rendercache_camera c = wt_camera(&w->opt, t, REF_W, REF_H);
+            CHECK(wt_render_converged(w, &c, t, CONVERGED_STRATA, CONVERGED_LIGHT_SAMPLES, ref) == 0 &&
+                  wt_display_lrms(ref, rgb, REF_W, REF_H, e, &lrms) == 0);
+            test_note("raytrace frame %d against a converged render: LRMS %.4f (bound %.2f, issue target 0.07)", f, lrms,
+                      CONVERGED_MAX_LRMS);
+            CHECK_MSG(lrms >= 0.0 && lrms <= CONVERGED_MAX_LRMS, "frame %d: LRMS %.4f", f, lrms);
+            checked++;
+        }
+    }
+    CHECK(checked == 1);
+done:
+    wt_renderer_destroy(r);
+    wt_world_destroy(w);
+    free(rgb);
+    free(ref);
+}
+
 /* Greger's figure 5.3: the rabbit darkens as it enters the desk's shadow.
    In the ray-traced frames: direct light and light vectors on its pixels. */
 static void test_bunny_darkens_in_frames(void)
@@ -570,6 +625,7 @@ int main(int argc, char **argv)
     RUN(test_reference_frames);
     RUN(test_direct_light_unbiased);
     RUN(test_threads);
+    RUN(test_raytrace_against_converged);
     RUN(test_bunny_darkens_in_frames);
     RUN(test_bunny_darkens_in_volume);
     RUN(test_raster_matches_tracer);
