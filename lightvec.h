@@ -58,6 +58,9 @@
        LIGHTVEC_API             linkage of public functions (default: extern)
        LIGHTVEC_MALLOC, LIGHTVEC_FREE  replace malloc/free (define both or neither)
        LIGHTVEC_BVH_BINS        SAH bins of the built-in BVH (default 16)
+       LIGHTVEC_BVH_SIMD        1 (default): SSE2 (x86-64) or NEON (AArch64) BVH kernels
+                                when the compiler offers them; 0: the portable scalar
+                                kernels only (the same hits, bit for bit)
 
    FUNCTION REFERENCE (what each checks; what the caller guarantees)
 
@@ -869,37 +872,85 @@ static float lightvec__rng_float(lightvec__rng *r)
 
 /* ======================================================================
    4. BVH over triangles
-   Binned SAH build (LIGHTVEC_BVH_BINS bins over centroid bounds), nodes flattened
-   depth first (left child follows its parent), ordered traversal (nearer
-   child box first), watertight ray/triangle test (Woop, Benthin, Wald 2013),
-   any-hit for shadow rays. Triangles are copied into leaf order (9 floats and
-   the caller's triangle index) because the traversal reads them in that order;
-   nothing else of the caller's data is kept.
+   An 8-wide BVH (Embree's BVH8: Wald et al. 2014). Build: a binary tree by
+   binned SAH (LIGHTVEC_BVH_BINS bins over the centroid bounds, all three axes
+   binned in one pass; a leaf costs one test per block of four triangles),
+   then collapsed into 8-wide nodes by opening, again and again, the child of
+   largest surface area. A node keeps its eight child boxes in rows
+   (structure of arrays) and a leaf is a run of blocks of four triangles in
+   rows, so one SIMD instruction tests four boxes or four triangles. Nodes are
+   stored depth first; the blocks hold copies of the vertices, nothing of the
+   caller's data is kept. Traversal: nearest child first, every stack entry
+   keeps its entry distance so that entries behind a closer hit are dropped;
+   the watertight ray/triangle test (Woop, Benthin, Wald 2013); any-hit for
+   shadow rays. LIGHTVEC_BVH_SIMD selects the SSE2 (x86-64) or NEON (AArch64)
+   kernels. The scalar kernels do the same float operations lane by lane, are
+   always compiled, and find the same hits bit for bit (bvh->simd = 0 selects
+   them).
    ---------------------------------------------------------------------- */
 #ifndef LIGHTVEC_BVH_BINS
 #define LIGHTVEC_BVH_BINS 16
 #endif
-#define LIGHTVEC__BVH_LEAF_MAX 4    /* triangles per leaf */
-#define LIGHTVEC__BVH_MAX_DEPTH 60  /* deeper nodes split at the median: bounds the traversal stack */
-#define LIGHTVEC__BVH_STACK (LIGHTVEC__BVH_MAX_DEPTH + 34) /* + 32 median halvings of a uint32_t count */
+#ifndef LIGHTVEC_BVH_SIMD
+#define LIGHTVEC_BVH_SIMD 1
+#endif
+#if LIGHTVEC_BVH_SIMD && (defined(__SSE2__) || defined(_M_X64) || defined(_M_AMD64))
+#define LIGHTVEC__SSE 1
+#include <emmintrin.h>
+#elif LIGHTVEC_BVH_SIMD && defined(__aarch64__) && (defined(__GNUC__) || defined(__clang__))
+#define LIGHTVEC__NEON 1
+#include <arm_neon.h>
+#endif
+#if defined(LIGHTVEC__SSE) || defined(LIGHTVEC__NEON)
+#define LIGHTVEC__SIMD 1
+#else
+#define LIGHTVEC__SIMD 0
+#endif
+/* Where the target fuses a * b + c (FMA on x86 with -mfma, every AArch64),
+   both kernels fuse it explicitly: a compiler that contracts on its own
+   (GCC's -ffp-contract=fast, clang's default) then has nothing left to fuse
+   differently in the scalar kernel. Without FMA nothing can be fused. */
+#if (defined(__GNUC__) || defined(__clang__)) && (defined(__FMA__) || defined(__aarch64__))
+#define LIGHTVEC__BVH_FMA 1
+#if defined(LIGHTVEC__SSE)
+#include <immintrin.h>
+#endif
+#else
+#define LIGHTVEC__BVH_FMA 0
+#endif
+
+#define LIGHTVEC__BVH_WIDTH 8        /* children per node */
+#define LIGHTVEC__BVH_LEAF_MAX 16    /* triangles per leaf: four blocks */
+#define LIGHTVEC__BVH_NODE_COST 2.0f /* SAH cost of a binary node, in block tests (measured best of 0.5-4) */
+#define LIGHTVEC__BVH_MAX_DEPTH 60   /* deeper nodes split at the median: bounds the stacks */
+#define LIGHTVEC__BVH_MAX_BINARY_DEPTH (LIGHTVEC__BVH_MAX_DEPTH + 33) /* + 32 halvings of a uint32_t count */
+#define LIGHTVEC__BVH_STACK ((LIGHTVEC__BVH_WIDTH - 1) * LIGHTVEC__BVH_MAX_BINARY_DEPTH + LIGHTVEC__BVH_WIDTH)
+#define LIGHTVEC__BVH_LEAF 0x80000000u /* a leaf's child reference: LEAF | first block << 3 | blocks - 1 */
+#define LIGHTVEC__BVH_MAX_BLOCKS (1u << 28)
+#define LIGHTVEC__BVH_NONE 0xFFFFFFFFu
+/* Far plane distances are rounded up by 1 + 2 gamma_3 (Ize 2013): a box that
+   the ray touches is never lost to the rounding of three operations. */
+#define LIGHTVEC__BVH_ROUND_UP 1.00000036f
 
 typedef struct lightvec__bvh_node {
-    float lo[3];
-    uint32_t first;  /* leaf: first triangle; inner: index of the right child */
-    float hi[3];
-    uint32_t count;  /* leaf: triangle count (>0); inner: 0 */
+    float box[6][LIGHTVEC__BVH_WIDTH]; /* rows lo x, hi x, lo y, hi y, lo z, hi z; column = child.
+                           An unused child has lo = +inf, hi = -inf: no ray enters it */
+    uint32_t child[LIGHTVEC__BVH_WIDTH]; /* inner node index, or a leaf reference (LIGHTVEC__BVH_LEAF) */
 } lightvec__bvh_node;
 
-typedef struct lightvec__bvh_tri {
-    float v0[3], v1[3], v2[3];
-    uint32_t id;     /* the caller's triangle index */
-} lightvec__bvh_tri;
+typedef struct lightvec__bvh_tris {
+    float v[9][4];      /* rows x, y, z of vertex 0, of vertex 1, of vertex 2; column = triangle */
+    uint32_t id[4];     /* the caller's triangle indices; unused columns repeat the last triangle */
+} lightvec__bvh_tris;
 
 typedef struct lightvec__bvh {
-    lightvec__bvh_node *nodes;
-    lightvec__bvh_tri *tris;
-    uint32_t node_count, tri_count;
+    lightvec__bvh_node *nodes;    /* both in one allocation, from a cache line boundary */
+    lightvec__bvh_tris *blocks;
+    char *memory;
+    uint32_t node_count, block_count, tri_count;
+    uint32_t root;              /* a node index or a leaf reference; unused when tri_count is 0 */
     uint32_t degenerate_count;  /* zero-area triangles skipped by the build */
+    int simd;                   /* 1: the SIMD kernels (when compiled in); 0: the scalar ones */
 } lightvec__bvh;
 
 typedef struct lightvec__hit {
@@ -928,6 +979,13 @@ typedef struct lightvec__bvh_ref {   /* build-time record of one triangle */
     uint32_t tri;
 } lightvec__bvh_ref;
 
+typedef struct lightvec__bvh_bnode { /* build-time binary node, flattened depth first */
+    float lo[3];
+    uint32_t first;  /* leaf: first ref; inner: index of the right child (the left is next) */
+    float hi[3];
+    uint32_t count;  /* leaf: ref count (> 0); inner: 0 */
+} lightvec__bvh_bnode;
+
 typedef struct lightvec__bvh_bin { float lo[3], hi[3]; uint32_t count; } lightvec__bvh_bin;
 
 static void lightvec__box_empty(float lo[3], float hi[3])
@@ -950,97 +1008,85 @@ static float lightvec__box_area(const float lo[3], const float hi[3])
     return dx * dy + dy * dz + dz * dx;
 }
 
-/* Chooses the binned-SAH split of refs[0..n); returns 0 when no split beats a
-   leaf, else the axis (1-based in *axis) and the bin boundary in *split_bin. */
-static int lightvec__bvh_find_split(const lightvec__bvh_ref *refs, uint32_t n, const float clo[3],
-                              const float chi[3], int *axis, int *split_bin)
+static uint32_t lightvec__bvh_blocks(uint32_t n) { return (n + 3) / 4; }
+
+/* The bin of a centroid coordinate. */
+static int lightvec__bvh_bin_of(float c, float lo, float scale)
 {
-    float best = FLT_MAX, leaf_cost = (float)n;
-    float node_lo[3], node_hi[3];
+    float f = (c - lo) * scale;   /* NaN or inf when a denormal extent overflows scale */
+    return f >= (float)(LIGHTVEC_BVH_BINS - 1) ? LIGHTVEC_BVH_BINS - 1 : f > 0.0f ? (int)f : 0;
+}
+
+/* Chooses the binned-SAH split of refs[0..n) (node box lo..hi, centroid box
+   clo..chi): returns 0 when a leaf is cheaper or no axis can split, else the
+   axis in *axis and the first bin of the right side in *split_bin. */
+static int lightvec__bvh_find_split(const lightvec__bvh_ref *refs, uint32_t n, const float lo[3], const float hi[3],
+                                  const float clo[3], const float chi[3], int *axis, int *split_bin)
+{
+    lightvec__bvh_bin bins[3][LIGHTVEC_BVH_BINS];
+    float scale[3], right_area[LIGHTVEC_BVH_BINS], best = FLT_MAX;
+    float leaf_cost = (float)lightvec__bvh_blocks(n), inv_area = 1.0f / lightvec__box_area(lo, hi);
+    uint32_t right_count[LIGHTVEC_BVH_BINS], i;
     int k, b, found = 0;
-    uint32_t i;
-    lightvec__box_empty(node_lo, node_hi);
-    for (i = 0; i < n; i++) lightvec__box_grow(node_lo, node_hi, refs[i].lo, refs[i].hi);
     for (k = 0; k < 3; k++) {
-        lightvec__bvh_bin bins[LIGHTVEC_BVH_BINS];
-        float right_area[LIGHTVEC_BVH_BINS];
-        uint32_t right_count[LIGHTVEC_BVH_BINS];
-        float extent = chi[k] - clo[k], scale, lo[3], hi[3];
-        uint32_t count;
-        if (!(extent > 0.0f)) continue;
-        scale = (float)LIGHTVEC_BVH_BINS / extent;
-        for (b = 0; b < LIGHTVEC_BVH_BINS; b++) { lightvec__box_empty(bins[b].lo, bins[b].hi); bins[b].count = 0; }
-        for (i = 0; i < n; i++) {
-            int bin = (int)((refs[i].c[k] - clo[k]) * scale);
-            if (bin >= LIGHTVEC_BVH_BINS) bin = LIGHTVEC_BVH_BINS - 1;
-            if (bin < 0) bin = 0;
-            bins[bin].count++;
-            lightvec__box_grow(bins[bin].lo, bins[bin].hi, refs[i].lo, refs[i].hi);
+        scale[k] = chi[k] > clo[k] ? (float)LIGHTVEC_BVH_BINS / (chi[k] - clo[k]) : 0.0f;
+        for (b = 0; b < LIGHTVEC_BVH_BINS; b++) { lightvec__box_empty(bins[k][b].lo, bins[k][b].hi); bins[k][b].count = 0; }
+    }
+    for (i = 0; i < n; i++)
+        for (k = 0; k < 3; k++) {
+            lightvec__bvh_bin *bin = &bins[k][lightvec__bvh_bin_of(refs[i].c[k], clo[k], scale[k])];
+            bin->count++;
+            lightvec__box_grow(bin->lo, bin->hi, refs[i].lo, refs[i].hi);
         }
+    for (k = 0; k < 3; k++) {
+        float blo[3], bhi[3];
+        uint32_t count = 0;
+        if (scale[k] == 0.0f) continue;   /* all centroids in one plane across k */
         /* sweep from the right, then from the left evaluating each boundary */
-        lightvec__box_empty(lo, hi);
-        count = 0;
+        lightvec__box_empty(blo, bhi);
         for (b = LIGHTVEC_BVH_BINS - 1; b > 0; b--) {
-            lightvec__box_grow(lo, hi, bins[b].lo, bins[b].hi);
-            count += bins[b].count;
-            right_area[b] = lightvec__box_area(lo, hi);
+            lightvec__box_grow(blo, bhi, bins[k][b].lo, bins[k][b].hi);
+            count += bins[k][b].count;
+            right_area[b] = lightvec__box_area(blo, bhi);
             right_count[b] = count;
         }
-        lightvec__box_empty(lo, hi);
+        lightvec__box_empty(blo, bhi);
         count = 0;
         for (b = 1; b < LIGHTVEC_BVH_BINS; b++) {
             float cost;
-            lightvec__box_grow(lo, hi, bins[b - 1].lo, bins[b - 1].hi);
-            count += bins[b - 1].count;
+            lightvec__box_grow(blo, bhi, bins[k][b - 1].lo, bins[k][b - 1].hi);
+            count += bins[k][b - 1].count;
             if (count == 0 || right_count[b] == 0) continue;
-            cost = 1.0f + (lightvec__box_area(lo, hi) * (float)count +
-                           right_area[b] * (float)right_count[b]) / lightvec__box_area(node_lo, node_hi);
+            cost = LIGHTVEC__BVH_NODE_COST + (lightvec__box_area(blo, bhi) * (float)lightvec__bvh_blocks(count) +
+                                            right_area[b] * (float)lightvec__bvh_blocks(right_count[b])) * inv_area;
             if (cost < best) { best = cost; *axis = k; *split_bin = b; found = 1; }
         }
     }
     return found && (best < leaf_cost || n > LIGHTVEC__BVH_LEAF_MAX);
 }
 
-/* Partitions refs[0..n) so that the first part lies left of the chosen
-   boundary. Returns the size of the left part (always in 1..n-1). */
-static uint32_t lightvec__bvh_partition(lightvec__bvh_ref *refs, uint32_t n, const float clo[3],
-                                  const float chi[3], int depth)
+/* Splits refs[0..n) in two: by the SAH when it pays, else (coincident
+   centroids, the depth cap) by count. Returns the size of the left part, 0
+   when the refs should stay a leaf. */
+static uint32_t lightvec__bvh_partition(lightvec__bvh_ref *refs, uint32_t n, const float lo[3], const float hi[3],
+                                      const float clo[3], const float chi[3], uint32_t depth)
 {
     int axis = 0, split_bin = 0;
     uint32_t i, j;
-    if (depth < LIGHTVEC__BVH_MAX_DEPTH && lightvec__bvh_find_split(refs, n, clo, chi, &axis, &split_bin)) {
+    if (depth < LIGHTVEC__BVH_MAX_DEPTH && lightvec__bvh_find_split(refs, n, lo, hi, clo, chi, &axis, &split_bin)) {
         float scale = (float)LIGHTVEC_BVH_BINS / (chi[axis] - clo[axis]);
         for (i = 0, j = n; i < j;) {
-            int bin = (int)((refs[i].c[axis] - clo[axis]) * scale);
-            if (bin >= LIGHTVEC_BVH_BINS) bin = LIGHTVEC_BVH_BINS - 1;
-            if (bin < split_bin) i++;
+            if (lightvec__bvh_bin_of(refs[i].c[axis], clo[axis], scale) < split_bin) i++;
             else { lightvec__bvh_ref t = refs[i]; refs[i] = refs[--j]; refs[j] = t; }
         }
-        if (i > 0 && i < n) return i;
+        return i;   /* both sides hold refs: the split's bins are not empty */
     }
-    return n / 2; /* no useful SAH split (coincident centroids, depth cap): halve by count */
+    return n <= LIGHTVEC__BVH_LEAF_MAX ? 0 : n / 2;
 }
 
-typedef struct lightvec__bvh_task {
-    uint32_t parent, begin, end, depth;
-    int is_right;    /* the parent learns a right child's index when it is popped */
-} lightvec__bvh_task;
-
-/* Copies the triangles into leaf order. */
-static void lightvec__bvh_store_tris(lightvec__bvh *bvh, const lightvec__mesh_view *m, const lightvec__bvh_ref *refs)
-{
-    uint32_t i;
-    for (i = 0; i < bvh->tri_count; i++) {
-        lightvec__bvh_tri *t = &bvh->tris[i];
-        uint32_t tri = refs[i].tri;
-        memcpy(t->v0, lightvec__vertex(m, m->indices[3 * tri + 0]), sizeof t->v0);
-        memcpy(t->v1, lightvec__vertex(m, m->indices[3 * tri + 1]), sizeof t->v1);
-        memcpy(t->v2, lightvec__vertex(m, m->indices[3 * tri + 2]), sizeof t->v2);
-        t->id = tri;
-    }
-}
-
-/* Bounds of every non-degenerate triangle; counts the degenerate ones. */
+/* Bounds of every non-degenerate triangle; counts the degenerate ones. The
+   area test runs in double: a tiny triangle (a scene at scale 1e-12) is not
+   zero because its float cross product underflows. */
 static uint32_t lightvec__bvh_collect(lightvec__bvh *bvh, const lightvec__mesh_view *m, lightvec__bvh_ref *refs)
 {
     uint32_t i, n = 0;
@@ -1048,10 +1094,16 @@ static uint32_t lightvec__bvh_collect(lightvec__bvh *bvh, const lightvec__mesh_v
         const float *p0 = lightvec__vertex(m, m->indices[3 * i + 0]);
         const float *p1 = lightvec__vertex(m, m->indices[3 * i + 1]);
         const float *p2 = lightvec__vertex(m, m->indices[3 * i + 2]);
-        lightvec__vec3 c = lightvec__cross(lightvec__sub(lightvec__v3_load(p1), lightvec__v3_load(p0)),
-                               lightvec__sub(lightvec__v3_load(p2), lightvec__v3_load(p0)));
+        double e1[3], e2[3], cx, cy, cz;
         int k;
-        if (lightvec__dot(c, c) == 0.0f) { bvh->degenerate_count++; continue; }
+        for (k = 0; k < 3; k++) {
+            e1[k] = (double)p1[k] - p0[k];
+            e2[k] = (double)p2[k] - p0[k];
+        }
+        cx = e1[1] * e2[2] - e1[2] * e2[1];
+        cy = e1[2] * e2[0] - e1[0] * e2[2];
+        cz = e1[0] * e2[1] - e1[1] * e2[0];
+        if (cx == 0.0 && cy == 0.0 && cz == 0.0) { bvh->degenerate_count++; continue; }
         for (k = 0; k < 3; k++) {
             refs[n].lo[k] = lightvec__minf(p0[k], lightvec__minf(p1[k], p2[k]));
             refs[n].hi[k] = lightvec__maxf(p0[k], lightvec__maxf(p1[k], p2[k]));
@@ -1063,70 +1115,248 @@ static uint32_t lightvec__bvh_collect(lightvec__bvh *bvh, const lightvec__mesh_v
     return n;
 }
 
-/* Builds the BVH of m's non-degenerate triangles. Indices must be in range and
-   coordinates finite (validate first). Returns 0, or -1 when out of memory. */
-static int lightvec__bvh_build(lightvec__bvh *bvh, const lightvec__mesh_view *m, const lightvec_allocator *a)
+typedef struct lightvec__bvh_task {
+    uint32_t parent, begin, end, depth;
+    int is_right;    /* the parent learns a right child's index when it is popped */
+} lightvec__bvh_task;
+
+/* The binary tree over refs[0..n) (n > 0) into bn (room for 2n - 1 nodes).
+   Returns the node count; *blocks receives the leaves' block count. */
+static uint32_t lightvec__bvh_build_binary(lightvec__bvh_bnode *bn, lightvec__bvh_ref *refs, uint32_t n, uint32_t *blocks)
 {
-    lightvec__bvh_task stack[LIGHTVEC__BVH_STACK];
-    lightvec__bvh_ref *refs;
-    uint32_t i, n, top = 0;
-    memset(bvh, 0, sizeof *bvh);
-    refs = (lightvec__bvh_ref *)lightvec__alloc_array(a, m->tri_count, sizeof *refs);
-    if (!refs) return -1;
-    n = lightvec__bvh_collect(bvh, m, refs);
-    bvh->nodes = (lightvec__bvh_node *)lightvec__alloc_array(a, n ? 2 * (size_t)n - 1 : 1, sizeof(lightvec__bvh_node));
-    bvh->tris = (lightvec__bvh_tri *)lightvec__alloc_array(a, n, sizeof(lightvec__bvh_tri));
-    if (!bvh->nodes || !bvh->tris) {
-        lightvec__free(a, refs);
-        lightvec__free(a, bvh->nodes);
-        lightvec__free(a, bvh->tris);
-        memset(bvh, 0, sizeof *bvh);
-        return -1;
-    }
-    bvh->tri_count = n;
-    if (n == 0) { /* an empty root leaf: every ray misses */
-        lightvec__box_empty(bvh->nodes[0].lo, bvh->nodes[0].hi);
-        bvh->nodes[0].first = bvh->nodes[0].count = 0;
-        bvh->node_count = 1;
-    } else {
-        stack[top].parent = 0; stack[top].begin = 0; stack[top].end = n;
-        stack[top].depth = 0; stack[top].is_right = 0; top++;
-    }
+    lightvec__bvh_task stack[LIGHTVEC__BVH_MAX_BINARY_DEPTH + 1];
+    uint32_t top = 0, count = 0, i;
+    *blocks = 0;
+    stack[top].parent = 0; stack[top].begin = 0; stack[top].end = n;
+    stack[top].depth = 0; stack[top].is_right = 0; top++;
     while (top) {
         lightvec__bvh_task t = stack[--top];
-        uint32_t index = bvh->node_count++, count = t.end - t.begin;
-        lightvec__bvh_node *node = &bvh->nodes[index];
+        uint32_t index = count++, mid;
+        lightvec__bvh_bnode *node = &bn[index];
         float clo[3], chi[3];
-        if (t.is_right) bvh->nodes[t.parent].first = index;
+        if (t.is_right) bn[t.parent].first = index;
         lightvec__box_empty(node->lo, node->hi);
         lightvec__box_empty(clo, chi);
         for (i = t.begin; i < t.end; i++) {
             lightvec__box_grow(node->lo, node->hi, refs[i].lo, refs[i].hi);
             lightvec__box_grow(clo, chi, refs[i].c, refs[i].c);
         }
-        if (count <= LIGHTVEC__BVH_LEAF_MAX) {
+        mid = t.end - t.begin < 2 ? 0 : lightvec__bvh_partition(refs + t.begin, t.end - t.begin, node->lo, node->hi, clo, chi, t.depth);
+        if (mid == 0) {
             node->first = t.begin;
-            node->count = count;
-        } else {
-            uint32_t mid = t.begin + lightvec__bvh_partition(refs + t.begin, count, clo, chi, (int)t.depth);
-            node->count = 0;
-            /* right pushed first so the left child is popped next: left = index + 1 */
-            stack[top].parent = index; stack[top].begin = mid; stack[top].end = t.end;
-            stack[top].depth = t.depth + 1; stack[top].is_right = 1; top++;
-            stack[top].parent = index; stack[top].begin = t.begin; stack[top].end = mid;
-            stack[top].depth = t.depth + 1; stack[top].is_right = 0; top++;
+            node->count = t.end - t.begin;
+            *blocks += lightvec__bvh_blocks(node->count);
+            continue;
         }
+        node->count = 0;
+        /* right pushed first so the left child is popped next: left = index + 1 */
+        stack[top].parent = index; stack[top].begin = t.begin + mid; stack[top].end = t.end;
+        stack[top].depth = t.depth + 1; stack[top].is_right = 1; top++;
+        stack[top].parent = index; stack[top].begin = t.begin; stack[top].end = t.begin + mid;
+        stack[top].depth = t.depth + 1; stack[top].is_right = 0; top++;
     }
-    lightvec__bvh_store_tris(bvh, m, refs);
+    return count;
+}
+
+/* The children of the wide node made from binary node i: i's two children,
+   then again and again the inner one of largest area replaced by its two. */
+static int lightvec__bvh_open(const lightvec__bvh_bnode *bn, uint32_t i, uint32_t kids[LIGHTVEC__BVH_WIDTH])
+{
+    int k = 2;
+    kids[0] = i + 1;
+    kids[1] = bn[i].first;
+    while (k < LIGHTVEC__BVH_WIDTH) {
+        int j, best = -1;
+        float best_area = -1.0f;
+        for (j = 0; j < k; j++) {
+            float area = lightvec__box_area(bn[kids[j]].lo, bn[kids[j]].hi);
+            if (bn[kids[j]].count == 0 && area > best_area) { best_area = area; best = j; }
+        }
+        if (best < 0) break;
+        kids[k++] = bn[kids[best]].first;
+        kids[best] = kids[best] + 1;
+    }
+    return k;
+}
+
+/* A leaf's triangles into blocks of four from bvh->blocks[first]. */
+static void lightvec__bvh_store_leaf(lightvec__bvh *bvh, const lightvec__mesh_view *m, const lightvec__bvh_ref *refs,
+                                   uint32_t count, uint32_t first)
+{
+    uint32_t i;
+    for (i = 0; i < 4 * lightvec__bvh_blocks(count); i++) {
+        lightvec__bvh_tris *b = &bvh->blocks[first + i / 4];
+        uint32_t tri = refs[i < count ? i : count - 1].tri;
+        int j, k;
+        for (j = 0; j < 3; j++) {
+            const float *p = lightvec__vertex(m, m->indices[3 * (size_t)tri + (uint32_t)j]);
+            for (k = 0; k < 3; k++) b->v[3 * j + k][i % 4] = p[k];
+        }
+        b->id[i % 4] = tri;
+    }
+}
+
+typedef struct lightvec__bvh_place { uint32_t bnode, parent, slot; } lightvec__bvh_place;
+
+/* Collapses the binary tree into 4-wide nodes, depth first. With
+   bvh->nodes NULL it only counts them (into bvh->node_count). */
+static void lightvec__bvh_collapse(lightvec__bvh *bvh, const lightvec__bvh_bnode *bn, const lightvec__bvh_ref *refs,
+                                 const lightvec__mesh_view *m)
+{
+    lightvec__bvh_place stack[LIGHTVEC__BVH_STACK];
+    uint32_t top = 0, nodes = 0, blocks = 0;
+    stack[top].bnode = 0; stack[top].parent = LIGHTVEC__BVH_NONE; stack[top].slot = 0; top++;
+    while (top) {
+        lightvec__bvh_place p = stack[--top];
+        const lightvec__bvh_bnode *b = &bn[p.bnode];
+        uint32_t ref;
+        if (b->count) {
+            ref = LIGHTVEC__BVH_LEAF | blocks << 3 | (lightvec__bvh_blocks(b->count) - 1);
+            if (bvh->nodes) lightvec__bvh_store_leaf(bvh, m, refs + b->first, b->count, blocks);
+            blocks += lightvec__bvh_blocks(b->count);
+        } else {
+            uint32_t kids[LIGHTVEC__BVH_WIDTH];
+            int k = lightvec__bvh_open(bn, p.bnode, kids), j, r;
+            ref = nodes++;
+            if (bvh->nodes) {
+                lightvec__bvh_node *node = &bvh->nodes[ref];
+                for (j = 0; j < LIGHTVEC__BVH_WIDTH; j++) {
+                    for (r = 0; r < 3; r++) {
+                        node->box[2 * r][j] = j < k ? bn[kids[j]].lo[r] : INFINITY;
+                        node->box[2 * r + 1][j] = j < k ? bn[kids[j]].hi[r] : -INFINITY;
+                    }
+                    node->child[j] = 0;
+                }
+            }
+            for (j = k - 1; j >= 0; j--) {   /* the first child is placed next */
+                stack[top].bnode = kids[j]; stack[top].parent = ref; stack[top].slot = (uint32_t)j; top++;
+            }
+        }
+        if (!bvh->nodes) continue;
+        if (p.parent == LIGHTVEC__BVH_NONE) bvh->root = ref;
+        else bvh->nodes[p.parent].child[p.slot] = ref;
+    }
+    bvh->node_count = nodes;
+}
+
+/* Builds the BVH of m's non-degenerate triangles. Indices must be in range and
+   coordinates finite (validate first). Returns 0, or -1 when out of memory. */
+static int lightvec__bvh_build(lightvec__bvh *bvh, const lightvec__mesh_view *m, const lightvec_allocator *a)
+{
+    lightvec__bvh_ref *refs;
+    lightvec__bvh_bnode *bn = NULL;
+    uint32_t n;
+    memset(bvh, 0, sizeof *bvh);
+    bvh->simd = LIGHTVEC__SIMD;
+    refs = (lightvec__bvh_ref *)lightvec__alloc_array(a, m->tri_count, sizeof *refs);
+    if (!refs) return -1;
+    n = lightvec__bvh_collect(bvh, m, refs);
+    if (n) bn = (lightvec__bvh_bnode *)lightvec__alloc_array(a, 2 * (size_t)n - 1, sizeof *bn);
+    if (n && bn) {
+        lightvec__bvh_build_binary(bn, refs, n, &bvh->block_count);
+        lightvec__bvh_collapse(bvh, bn, refs, m);   /* counts the nodes */
+        if (bvh->block_count <= LIGHTVEC__BVH_MAX_BLOCKS) {
+            size_t nb = (size_t)bvh->node_count * sizeof *bvh->nodes, bb = (size_t)bvh->block_count * sizeof *bvh->blocks;
+            bvh->memory = (char *)lightvec__alloc(a, nb + bb + 64);
+            if (bvh->memory) {   /* nodes and blocks from a cache line boundary */
+                char *p = bvh->memory + (64 - (size_t)((uintptr_t)bvh->memory % 64)) % 64;
+                bvh->nodes = (lightvec__bvh_node *)(void *)p;
+                bvh->blocks = (lightvec__bvh_tris *)(void *)(p + nb);
+            }
+        }
+        if (bvh->nodes && bvh->blocks) lightvec__bvh_collapse(bvh, bn, refs, m);
+    }
     lightvec__free(a, refs);
+    lightvec__free(a, bn);
+    if (n && (!bvh->nodes || !bvh->blocks)) {
+        lightvec__free(a, bvh->memory);
+        memset(bvh, 0, sizeof *bvh);
+        return -1;
+    }
+    bvh->tri_count = n;   /* 0: an empty tree, every ray misses */
     return 0;
 }
 
 static void lightvec__bvh_free(lightvec__bvh *bvh, const lightvec_allocator *a)
 {
-    lightvec__free(a, bvh->nodes);
-    lightvec__free(a, bvh->tris);
+    lightvec__free(a, bvh->memory);
     memset(bvh, 0, sizeof *bvh);
+}
+
+/* Four floats, and a mask of four lanes, for the SIMD kernels. */
+#if defined(LIGHTVEC__SSE)
+typedef __m128 lightvec__f4;
+typedef __m128 lightvec__m4;
+static lightvec__f4 lightvec__f4_load(const float *p) { return _mm_loadu_ps(p); }
+static void lightvec__f4_store(float *p, lightvec__f4 a) { _mm_storeu_ps(p, a); }
+static lightvec__f4 lightvec__f4_set(float x) { return _mm_set1_ps(x); }
+static lightvec__f4 lightvec__f4_add(lightvec__f4 a, lightvec__f4 b) { return _mm_add_ps(a, b); }
+static lightvec__f4 lightvec__f4_sub(lightvec__f4 a, lightvec__f4 b) { return _mm_sub_ps(a, b); }
+static lightvec__f4 lightvec__f4_mul(lightvec__f4 a, lightvec__f4 b) { return _mm_mul_ps(a, b); }
+static lightvec__f4 lightvec__f4_div(lightvec__f4 a, lightvec__f4 b) { return _mm_div_ps(a, b); }
+#if LIGHTVEC__BVH_FMA
+static lightvec__f4 lightvec__f4_madd(lightvec__f4 a, lightvec__f4 b, lightvec__f4 c) { return _mm_fmadd_ps(a, b, c); }
+static lightvec__f4 lightvec__f4_det2(lightvec__f4 a, lightvec__f4 b, lightvec__f4 c, lightvec__f4 d)
+{
+    lightvec__f4 w = _mm_mul_ps(c, d);
+    return _mm_sub_ps(_mm_fmsub_ps(a, b, w), _mm_fmsub_ps(c, d, w));
+}
+#else
+static lightvec__f4 lightvec__f4_madd(lightvec__f4 a, lightvec__f4 b, lightvec__f4 c) { return _mm_add_ps(_mm_mul_ps(a, b), c); }
+static lightvec__f4 lightvec__f4_det2(lightvec__f4 a, lightvec__f4 b, lightvec__f4 c, lightvec__f4 d)
+{
+    return _mm_sub_ps(_mm_mul_ps(a, b), _mm_mul_ps(c, d));
+}
+#endif
+static lightvec__f4 lightvec__f4_min(lightvec__f4 a, lightvec__f4 b) { return _mm_min_ps(a, b); }  /* a < b ? a : b */
+static lightvec__f4 lightvec__f4_max(lightvec__f4 a, lightvec__f4 b) { return _mm_max_ps(a, b); }  /* a > b ? a : b */
+static lightvec__m4 lightvec__f4_lt(lightvec__f4 a, lightvec__f4 b) { return _mm_cmplt_ps(a, b); }
+static lightvec__m4 lightvec__f4_le(lightvec__f4 a, lightvec__f4 b) { return _mm_cmple_ps(a, b); }
+static lightvec__m4 lightvec__f4_eq(lightvec__f4 a, lightvec__f4 b) { return _mm_cmpeq_ps(a, b); }
+static lightvec__m4 lightvec__m4_and(lightvec__m4 a, lightvec__m4 b) { return _mm_and_ps(a, b); }
+static lightvec__m4 lightvec__m4_or(lightvec__m4 a, lightvec__m4 b) { return _mm_or_ps(a, b); }
+static lightvec__m4 lightvec__m4_andnot(lightvec__m4 a, lightvec__m4 b) { return _mm_andnot_ps(a, b); } /* ~a & b */
+static unsigned lightvec__m4_bits(lightvec__m4 a) { return (unsigned)_mm_movemask_ps(a); }
+#elif defined(LIGHTVEC__NEON)
+typedef float32x4_t lightvec__f4;
+typedef uint32x4_t lightvec__m4;
+static lightvec__f4 lightvec__f4_load(const float *p) { return vld1q_f32(p); }
+static void lightvec__f4_store(float *p, lightvec__f4 a) { vst1q_f32(p, a); }
+static lightvec__f4 lightvec__f4_set(float x) { return vdupq_n_f32(x); }
+static lightvec__f4 lightvec__f4_add(lightvec__f4 a, lightvec__f4 b) { return vaddq_f32(a, b); }
+static lightvec__f4 lightvec__f4_sub(lightvec__f4 a, lightvec__f4 b) { return vsubq_f32(a, b); }
+static lightvec__f4 lightvec__f4_mul(lightvec__f4 a, lightvec__f4 b) { return vmulq_f32(a, b); }
+static lightvec__f4 lightvec__f4_div(lightvec__f4 a, lightvec__f4 b) { return vdivq_f32(a, b); }
+static lightvec__f4 lightvec__f4_madd(lightvec__f4 a, lightvec__f4 b, lightvec__f4 c) { return vfmaq_f32(c, a, b); }
+static lightvec__f4 lightvec__f4_det2(lightvec__f4 a, lightvec__f4 b, lightvec__f4 c, lightvec__f4 d)   /* Kahan, as the scalar */
+{
+    lightvec__f4 w = vmulq_f32(c, d), nw = vnegq_f32(w);
+    return vsubq_f32(vfmaq_f32(nw, a, b), vfmaq_f32(nw, c, d));
+}
+/* compare and select: the scalar kernels' a < b ? a : b, NaN included (vminq_f32 differs) */
+static lightvec__f4 lightvec__f4_min(lightvec__f4 a, lightvec__f4 b) { return vbslq_f32(vcltq_f32(a, b), a, b); }
+static lightvec__f4 lightvec__f4_max(lightvec__f4 a, lightvec__f4 b) { return vbslq_f32(vcgtq_f32(a, b), a, b); }
+static lightvec__m4 lightvec__f4_lt(lightvec__f4 a, lightvec__f4 b) { return vcltq_f32(a, b); }
+static lightvec__m4 lightvec__f4_le(lightvec__f4 a, lightvec__f4 b) { return vcleq_f32(a, b); }
+static lightvec__m4 lightvec__f4_eq(lightvec__f4 a, lightvec__f4 b) { return vceqq_f32(a, b); }
+static lightvec__m4 lightvec__m4_and(lightvec__m4 a, lightvec__m4 b) { return vandq_u32(a, b); }
+static lightvec__m4 lightvec__m4_or(lightvec__m4 a, lightvec__m4 b) { return vorrq_u32(a, b); }
+static lightvec__m4 lightvec__m4_andnot(lightvec__m4 a, lightvec__m4 b) { return vbicq_u32(b, a); } /* ~a & b */
+static unsigned lightvec__m4_bits(lightvec__m4 a)
+{
+    static const uint32_t weight[4] = {1, 2, 4, 8};
+    return vaddvq_u32(vandq_u32(a, vld1q_u32(weight)));
+}
+#endif
+
+/* a * b + c, fused where LIGHTVEC__BVH_FMA (the shear and the distance). */
+static float lightvec__bvh_madd(float a, float b, float c)
+{
+#if LIGHTVEC__BVH_FMA
+    return fmaf(a, b, c);
+#else
+    return a * b + c;
+#endif
 }
 
 /* Per-ray constants of the watertight test and of the slab test. */
@@ -1134,6 +1364,11 @@ typedef struct lightvec__ray {
     float org[3], dir[3], inv[3];
     int kx, ky, kz;          /* dir[kz] has the largest magnitude */
     float sx, sy, sz;        /* shear that maps dir to +z */
+    float nsx, nsy;          /* -sx, -sy */
+    int near[3];             /* box row offset (in floats) of the entry plane per axis; far = near ^ WIDTH */
+#if LIGHTVEC__SIMD
+    lightvec__f4 org4[3], inv4[3], nsx4, nsy4, sz4;
+#endif
 } lightvec__ray;
 
 static void lightvec__ray_setup(lightvec__ray *r, const float org[3], const float dir[3])
@@ -1146,6 +1381,7 @@ static void lightvec__ray_setup(lightvec__ray *r, const float org[3], const floa
         r->org[k] = org[k];
         r->dir[k] = dir[k];
         r->inv[k] = 1.0f / d;
+        r->near[k] = 2 * LIGHTVEC__BVH_WIDTH * k + (r->inv[k] < 0.0f ? LIGHTVEC__BVH_WIDTH : 0);
     }
     r->kz = fabsf(dir[0]) > fabsf(dir[1]) ? (fabsf(dir[0]) > fabsf(dir[2]) ? 0 : 2)
                                           : (fabsf(dir[1]) > fabsf(dir[2]) ? 1 : 2);
@@ -1155,119 +1391,302 @@ static void lightvec__ray_setup(lightvec__ray *r, const float org[3], const floa
     r->sx = dir[r->kx] / dir[r->kz];
     r->sy = dir[r->ky] / dir[r->kz];
     r->sz = 1.0f / dir[r->kz];
+    r->nsx = -r->sx;
+    r->nsy = -r->sy;
+#if LIGHTVEC__SIMD
+    for (k = 0; k < 3; k++) {
+        r->org4[k] = lightvec__f4_set(r->org[k]);
+        r->inv4[k] = lightvec__f4_set(r->inv[k]);
+    }
+    r->nsx4 = lightvec__f4_set(r->nsx);
+    r->nsy4 = lightvec__f4_set(r->nsy);
+    r->sz4 = lightvec__f4_set(r->sz);
+#endif
 }
 
-/* Entry distance of the ray into the box, or FLT_MAX when it misses within
-   [tmin, tmax]. The tmax bound is widened by 2 ulp-ish factors so that a hit
-   exactly on a box face is not lost to rounding (Ize 2013). */
-static float lightvec__ray_box(const lightvec__ray *r, const float lo[3], const float hi[3], float tmin, float tmax)
+/* Entry distances t[i] of the ray into a node's child boxes, clipped to
+   [tmin, tmax]; returns the mask of the children it enters. */
+static unsigned lightvec__node_hits_scalar(const lightvec__ray *r, const lightvec__bvh_node *n, float tmin, float tmax,
+                                         float t[LIGHTVEC__BVH_WIDTH])
 {
-    int k;
-    for (k = 0; k < 3; k++) {
-        float t0 = (lo[k] - r->org[k]) * r->inv[k];
-        float t1 = (hi[k] - r->org[k]) * r->inv[k];
-        if (t0 > t1) { float t = t0; t0 = t1; t1 = t; }
-        tmin = lightvec__maxf(tmin, t0);
-        tmax = lightvec__minf(tmax, t1 * 1.00000024f);
+    const float *box = n->box[0];
+    unsigned mask = 0;
+    int i;
+    for (i = 0; i < LIGHTVEC__BVH_WIDTH; i++) {
+        float nx = (box[r->near[0] + i] - r->org[0]) * r->inv[0];
+        float ny = (box[r->near[1] + i] - r->org[1]) * r->inv[1];
+        float nz = (box[r->near[2] + i] - r->org[2]) * r->inv[2];
+        float fx = (box[(r->near[0] ^ LIGHTVEC__BVH_WIDTH) + i] - r->org[0]) * r->inv[0];
+        float fy = (box[(r->near[1] ^ LIGHTVEC__BVH_WIDTH) + i] - r->org[1]) * r->inv[1];
+        float fz = (box[(r->near[2] ^ LIGHTVEC__BVH_WIDTH) + i] - r->org[2]) * r->inv[2];
+        float tn = lightvec__maxf(lightvec__maxf(nx, ny), lightvec__maxf(nz, tmin));
+        float tf = lightvec__minf(lightvec__minf(fx, fy), lightvec__minf(fz, tmax)) * LIGHTVEC__BVH_ROUND_UP;
+        t[i] = tn;
+        if (tn <= tf) mask |= 1u << i;
     }
-    return tmin <= tmax ? tmin : FLT_MAX;
+    return mask;
+}
+
+/* An edge function a * b - c * d. With FMA, Kahan's algorithm: within two
+   ulp of the exact value, so its sign is exact. Without, the two rounded
+   products: the sign is exact or the value zero (Woop et al.), and a zero
+   is computed again exactly in double by lightvec__bvh_edges_double. */
+static float lightvec__bvh_det2(float a, float b, float c, float d)
+{
+#if LIGHTVEC__BVH_FMA
+    float w = c * d;
+    return fmaf(a, b, -w) - fmaf(c, d, -w);
+#else
+    return a * b - c * d;
+#endif
+}
+
+/* The edge functions u, v, w exactly (products of floats are exact in
+   double) and rounded once. */
+static void lightvec__bvh_edges_double(float ax, float ay, float bx, float by, float cx, float cy, float e[3])
+{
+    e[0] = (float)((double)cx * by - (double)cy * bx);
+    e[1] = (float)((double)ax * cy - (double)ay * cx);
+    e[2] = (float)((double)bx * ay - (double)by * ax);
 }
 
 /* Watertight ray/triangle test (Woop, Benthin, Wald 2013): edge functions in
-   a sheared space where the ray is the +z axis; edges shared by two triangles
-   are hit by exactly one of them. Double precision only when an edge function
-   is exactly zero. Updates *hit when closer than hit->t. */
-static int lightvec__ray_tri(const lightvec__ray *r, const lightvec__bvh_tri *tri, float tmin, lightvec__hit *hit)
+   a sheared space where the ray is the +z axis; an edge shared by two
+   triangles is never missed by both. Updates *hit when closer than hit->t;
+   returns 1 then. */
+static int lightvec__leaf_hit_scalar(const lightvec__ray *r, const lightvec__bvh_tris *b, float tmin, lightvec__hit *hit)
 {
-    float ax = tri->v0[r->kx] - r->org[r->kx], ay = tri->v0[r->ky] - r->org[r->ky], az = tri->v0[r->kz] - r->org[r->kz];
-    float bx = tri->v1[r->kx] - r->org[r->kx], by = tri->v1[r->ky] - r->org[r->ky], bz = tri->v1[r->kz] - r->org[r->kz];
-    float cx = tri->v2[r->kx] - r->org[r->kx], cy = tri->v2[r->ky] - r->org[r->ky], cz = tri->v2[r->kz] - r->org[r->kz];
-    float u, v, w, det, t;
-    ax -= r->sx * az; ay -= r->sy * az;
-    bx -= r->sx * bz; by -= r->sy * bz;
-    cx -= r->sx * cz; cy -= r->sy * cz;
-    u = cx * by - cy * bx;
-    v = ax * cy - ay * cx;
-    w = bx * ay - by * ax;
-    if (u == 0.0f || v == 0.0f || w == 0.0f) {
-        u = (float)((double)cx * by - (double)cy * bx);
-        v = (float)((double)ax * cy - (double)ay * cx);
-        w = (float)((double)bx * ay - (double)by * ax);
+    int i, found = 0;
+    for (i = 0; i < 4; i++) {
+        float ax = b->v[r->kx][i] - r->org[r->kx], ay = b->v[r->ky][i] - r->org[r->ky], az = b->v[r->kz][i] - r->org[r->kz];
+        float bx = b->v[3 + r->kx][i] - r->org[r->kx], by = b->v[3 + r->ky][i] - r->org[r->ky], bz = b->v[3 + r->kz][i] - r->org[r->kz];
+        float cx = b->v[6 + r->kx][i] - r->org[r->kx], cy = b->v[6 + r->ky][i] - r->org[r->ky], cz = b->v[6 + r->kz][i] - r->org[r->kz];
+        float u, v, w, det, inv_det, t;
+        ax = lightvec__bvh_madd(r->nsx, az, ax); ay = lightvec__bvh_madd(r->nsy, az, ay);
+        bx = lightvec__bvh_madd(r->nsx, bz, bx); by = lightvec__bvh_madd(r->nsy, bz, by);
+        cx = lightvec__bvh_madd(r->nsx, cz, cx); cy = lightvec__bvh_madd(r->nsy, cz, cy);
+        u = lightvec__bvh_det2(cx, by, cy, bx);
+        v = lightvec__bvh_det2(ax, cy, ay, cx);
+        w = lightvec__bvh_det2(bx, ay, by, ax);
+        if (!LIGHTVEC__BVH_FMA && (u == 0.0f || v == 0.0f || w == 0.0f)) {
+            float e[3];
+            lightvec__bvh_edges_double(ax, ay, bx, by, cx, cy, e);
+            u = e[0]; v = e[1]; w = e[2];
+        }
+        if ((u < 0.0f || v < 0.0f || w < 0.0f) && (0.0f < u || 0.0f < v || 0.0f < w)) continue;
+        det = u + v + w;
+        if (det == 0.0f) continue;
+        inv_det = 1.0f / det;
+        u = u * inv_det; v = v * inv_det; w = w * inv_det;   /* barycentrics first: u * az underflows at 1e-13 m */
+        t = lightvec__bvh_madd(u, az, lightvec__bvh_madd(v, bz, w * cz)) * r->sz;
+        if (!(tmin < t && t < hit->t)) continue;
+        hit->t = t;
+        hit->u = v;
+        hit->v = w;
+        hit->tri = b->id[i];
+        found = 1;
     }
-    if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f)) return 0;
-    det = u + v + w;
-    if (det == 0.0f) return 0;
-    t = (u * az + v * bz + w * cz) * r->sz / det;
-    if (!(t > tmin && t < hit->t)) return 0;
-    hit->t = t;
-    hit->u = v / det;
-    hit->v = w / det;
-    hit->tri = tri->id;
+    return found;
+}
+
+#if LIGHTVEC__SIMD
+/* lightvec__node_hits_scalar four lanes at a time. */
+static unsigned lightvec__node_hits_simd(const lightvec__ray *r, const lightvec__bvh_node *n, float tmin, float tmax,
+                                       float t[LIGHTVEC__BVH_WIDTH])
+{
+    const lightvec__f4 lo = lightvec__f4_set(tmin), hi = lightvec__f4_set(tmax), up = lightvec__f4_set(LIGHTVEC__BVH_ROUND_UP);
+    unsigned mask = 0;
+    int i;
+    for (i = 0; i < LIGHTVEC__BVH_WIDTH; i += 4) {
+        const float *box = n->box[0] + i;
+        lightvec__f4 nx = lightvec__f4_mul(lightvec__f4_sub(lightvec__f4_load(box + r->near[0]), r->org4[0]), r->inv4[0]);
+        lightvec__f4 ny = lightvec__f4_mul(lightvec__f4_sub(lightvec__f4_load(box + r->near[1]), r->org4[1]), r->inv4[1]);
+        lightvec__f4 nz = lightvec__f4_mul(lightvec__f4_sub(lightvec__f4_load(box + r->near[2]), r->org4[2]), r->inv4[2]);
+        lightvec__f4 fx = lightvec__f4_mul(lightvec__f4_sub(lightvec__f4_load(box + (r->near[0] ^ LIGHTVEC__BVH_WIDTH)), r->org4[0]), r->inv4[0]);
+        lightvec__f4 fy = lightvec__f4_mul(lightvec__f4_sub(lightvec__f4_load(box + (r->near[1] ^ LIGHTVEC__BVH_WIDTH)), r->org4[1]), r->inv4[1]);
+        lightvec__f4 fz = lightvec__f4_mul(lightvec__f4_sub(lightvec__f4_load(box + (r->near[2] ^ LIGHTVEC__BVH_WIDTH)), r->org4[2]), r->inv4[2]);
+        lightvec__f4 tn = lightvec__f4_max(lightvec__f4_max(nx, ny), lightvec__f4_max(nz, lo));
+        lightvec__f4 tf = lightvec__f4_mul(lightvec__f4_min(lightvec__f4_min(fx, fy), lightvec__f4_min(fz, hi)), up);
+        lightvec__f4_store(t + i, tn);
+        mask |= lightvec__m4_bits(lightvec__f4_le(tn, tf)) << i;
+    }
+    return mask;
+}
+
+/* lightvec__leaf_hit_scalar on four lanes at once; the closest accepted lane
+   (the first of equals, as the scalar loop keeps it) updates *hit. */
+static int lightvec__leaf_hit_simd(const lightvec__ray *r, const lightvec__bvh_tris *b, float tmin, lightvec__hit *hit)
+{
+    const lightvec__f4 zero = lightvec__f4_set(0.0f);
+    lightvec__f4 ax = lightvec__f4_sub(lightvec__f4_load(b->v[r->kx]), r->org4[r->kx]);
+    lightvec__f4 ay = lightvec__f4_sub(lightvec__f4_load(b->v[r->ky]), r->org4[r->ky]);
+    lightvec__f4 az = lightvec__f4_sub(lightvec__f4_load(b->v[r->kz]), r->org4[r->kz]);
+    lightvec__f4 bx = lightvec__f4_sub(lightvec__f4_load(b->v[3 + r->kx]), r->org4[r->kx]);
+    lightvec__f4 by = lightvec__f4_sub(lightvec__f4_load(b->v[3 + r->ky]), r->org4[r->ky]);
+    lightvec__f4 bz = lightvec__f4_sub(lightvec__f4_load(b->v[3 + r->kz]), r->org4[r->kz]);
+    lightvec__f4 cx = lightvec__f4_sub(lightvec__f4_load(b->v[6 + r->kx]), r->org4[r->kx]);
+    lightvec__f4 cy = lightvec__f4_sub(lightvec__f4_load(b->v[6 + r->ky]), r->org4[r->ky]);
+    lightvec__f4 cz = lightvec__f4_sub(lightvec__f4_load(b->v[6 + r->kz]), r->org4[r->kz]);
+    lightvec__f4 u, v, w, det, inv_det, t;
+    lightvec__m4 ok;
+    float tl[4], vl[4], wl[4];
+    unsigned mask;
+    int i, best;
+    ax = lightvec__f4_madd(r->nsx4, az, ax); ay = lightvec__f4_madd(r->nsy4, az, ay);
+    bx = lightvec__f4_madd(r->nsx4, bz, bx); by = lightvec__f4_madd(r->nsy4, bz, by);
+    cx = lightvec__f4_madd(r->nsx4, cz, cx); cy = lightvec__f4_madd(r->nsy4, cz, cy);
+    u = lightvec__f4_det2(cx, by, cy, bx);
+    v = lightvec__f4_det2(ax, cy, ay, cx);
+    w = lightvec__f4_det2(bx, ay, by, ax);
+    if (!LIGHTVEC__BVH_FMA && lightvec__m4_bits(lightvec__m4_or(lightvec__m4_or(lightvec__f4_eq(u, zero), lightvec__f4_eq(v, zero)),
+                                      lightvec__f4_eq(w, zero)))) {
+        float e[9][4];   /* the lanes with a zero edge function again in double */
+        lightvec__f4_store(e[0], u); lightvec__f4_store(e[1], v); lightvec__f4_store(e[2], w);
+        lightvec__f4_store(e[3], ax); lightvec__f4_store(e[4], ay); lightvec__f4_store(e[5], bx);
+        lightvec__f4_store(e[6], by); lightvec__f4_store(e[7], cx); lightvec__f4_store(e[8], cy);
+        for (i = 0; i < 4; i++) {
+            float exact[3];
+            if (e[0][i] != 0.0f && e[1][i] != 0.0f && e[2][i] != 0.0f) continue;
+            lightvec__bvh_edges_double(e[3][i], e[4][i], e[5][i], e[6][i], e[7][i], e[8][i], exact);
+            e[0][i] = exact[0]; e[1][i] = exact[1]; e[2][i] = exact[2];
+        }
+        u = lightvec__f4_load(e[0]); v = lightvec__f4_load(e[1]); w = lightvec__f4_load(e[2]);
+    }
+    ok = lightvec__m4_andnot(
+        lightvec__m4_and(lightvec__m4_or(lightvec__m4_or(lightvec__f4_lt(u, zero), lightvec__f4_lt(v, zero)), lightvec__f4_lt(w, zero)),
+                       lightvec__m4_or(lightvec__m4_or(lightvec__f4_lt(zero, u), lightvec__f4_lt(zero, v)), lightvec__f4_lt(zero, w))),
+        lightvec__f4_eq(zero, zero));
+    det = lightvec__f4_add(lightvec__f4_add(u, v), w);
+    ok = lightvec__m4_andnot(lightvec__f4_eq(det, zero), ok);
+    inv_det = lightvec__f4_div(lightvec__f4_set(1.0f), det);
+    u = lightvec__f4_mul(u, inv_det); v = lightvec__f4_mul(v, inv_det); w = lightvec__f4_mul(w, inv_det);
+    t = lightvec__f4_mul(lightvec__f4_madd(u, az, lightvec__f4_madd(v, bz, lightvec__f4_mul(w, cz))), r->sz4);
+    ok = lightvec__m4_and(ok, lightvec__m4_and(lightvec__f4_lt(lightvec__f4_set(tmin), t), lightvec__f4_lt(t, lightvec__f4_set(hit->t))));
+    mask = lightvec__m4_bits(ok);
+    if (!mask) return 0;
+    lightvec__f4_store(tl, t);
+    for (best = -1, i = 0; i < 4; i++)
+        if ((mask >> i & 1) && (best < 0 || tl[i] < tl[best])) best = i;
+    lightvec__f4_store(vl, v); lightvec__f4_store(wl, w);
+    hit->t = tl[best];
+    hit->u = vl[best];
+    hit->v = wl[best];
+    hit->tri = b->id[best];
     return 1;
+}
+#endif
+
+static unsigned lightvec__bvh_node_hits(const lightvec__bvh *bvh, const lightvec__ray *r, const lightvec__bvh_node *n,
+                                      float tmin, float tmax, float t[LIGHTVEC__BVH_WIDTH])
+{
+#if LIGHTVEC__SIMD
+    if (bvh->simd) return lightvec__node_hits_simd(r, n, tmin, tmax, t);
+#endif
+    (void)bvh;
+    return lightvec__node_hits_scalar(r, n, tmin, tmax, t);
+}
+
+static int lightvec__bvh_leaf_hit(const lightvec__bvh *bvh, const lightvec__ray *r, const lightvec__bvh_tris *b, float tmin,
+                                lightvec__hit *hit)
+{
+#if LIGHTVEC__SIMD
+    if (bvh->simd) return lightvec__leaf_hit_simd(r, b, tmin, hit);
+#endif
+    (void)bvh;
+    return lightvec__leaf_hit_scalar(r, b, tmin, hit);
+}
+
+typedef struct lightvec__bvh_entry { uint32_t ref; float t; } lightvec__bvh_entry;
+
+/* Index of the lowest set bit of a non-zero mask. */
+static uint32_t lightvec__bvh_first_bit(unsigned mask)
+{
+#if defined(__GNUC__) || defined(__clang__)
+    return (uint32_t)__builtin_ctz(mask);
+#else
+    uint32_t i = 0;
+    while (!(mask >> i & 1)) i++;
+    return i;
+#endif
+}
+
+/* Pushes the children in mask, the farthest first, so that they pop nearest
+   first (equal distances in child order); returns the nearest, not pushed. */
+static uint32_t lightvec__bvh_push_children(const lightvec__bvh_node *n, unsigned mask, const float t[LIGHTVEC__BVH_WIDTH],
+                                          lightvec__bvh_entry *stack, uint32_t *top)
+{
+    lightvec__bvh_entry e[LIGHTVEC__BVH_WIDTH];
+    uint32_t k = 0, i = lightvec__bvh_first_bit(mask), j, rest = mask & (mask - 1);
+    if (!rest) return n->child[i];   /* one child: nothing to push */
+    j = lightvec__bvh_first_bit(rest);
+    if (!(rest & (rest - 1))) {      /* two children */
+        uint32_t near = t[j] < t[i] ? j : i, far = near == i ? j : i;
+        stack[*top].ref = n->child[far];
+        stack[*top].t = t[far];
+        (*top)++;
+        return n->child[near];
+    }
+    for (; mask; mask &= mask - 1) {   /* insertion sort, stable */
+        i = lightvec__bvh_first_bit(mask);
+        for (j = k++; j > 0 && e[j - 1].t > t[i]; j--) e[j] = e[j - 1];
+        e[j].ref = n->child[i];
+        e[j].t = t[i];
+    }
+    while (--k) stack[(*top)++] = e[k];
+    return e[0].ref;
+}
+
+/* Closest hit in (tmin, hit->t), or with any_hit the first hit found. */
+static int lightvec__bvh_traverse(const lightvec__bvh *bvh, const lightvec__ray *r, float tmin, lightvec__hit *hit, int any_hit)
+{
+    lightvec__bvh_entry stack[LIGHTVEC__BVH_STACK];
+    uint32_t top = 0, ref = bvh->root;
+    if (bvh->tri_count == 0) return 0;   /* an empty tree: no root to enter */
+    for (;;) {
+        if (ref & LIGHTVEC__BVH_LEAF) {
+            uint32_t b = (ref & ~LIGHTVEC__BVH_LEAF) >> 3, end = b + (ref & 7u) + 1;
+            for (; b < end; b++)
+                if (lightvec__bvh_leaf_hit(bvh, r, &bvh->blocks[b], tmin, hit) && any_hit) return 1;
+        } else {
+            float t[LIGHTVEC__BVH_WIDTH];
+            const lightvec__bvh_node *n = &bvh->nodes[ref];
+            unsigned mask = lightvec__bvh_node_hits(bvh, r, n, tmin, hit->t, t);
+            if (mask) {
+                ref = lightvec__bvh_push_children(n, mask, t, stack, &top);
+                continue;
+            }
+        }
+        do {   /* entries behind the closest hit are skipped */
+            if (!top) return hit->tri != LIGHTVEC__NO_HIT;
+            top--;
+        } while (stack[top].t > hit->t * LIGHTVEC__BVH_ROUND_UP);
+        ref = stack[top].ref;
+    }
 }
 
 /* Closest hit in (tmin, tmax). Returns 1 and fills *hit, else hit->tri = LIGHTVEC__NO_HIT. */
 static int lightvec__bvh_intersect(const lightvec__bvh *bvh, const float org[3], const float dir[3],
-                             float tmin, float tmax, lightvec__hit *hit)
+                                 float tmin, float tmax, lightvec__hit *hit)
 {
-    uint32_t stack[LIGHTVEC__BVH_STACK], top = 0, index = 0;
     lightvec__ray r;
     lightvec__ray_setup(&r, org, dir);
     hit->t = tmax;
     hit->u = hit->v = 0.0f;
     hit->tri = LIGHTVEC__NO_HIT;
-    if (lightvec__ray_box(&r, bvh->nodes[0].lo, bvh->nodes[0].hi, tmin, tmax) == FLT_MAX) return 0;
-    for (;;) {
-        const lightvec__bvh_node *node = &bvh->nodes[index];
-        if (node->count) {
-            uint32_t i;
-            for (i = node->first; i < node->first + node->count; i++)
-                lightvec__ray_tri(&r, &bvh->tris[i], tmin, hit);
-        } else {
-            uint32_t left = index + 1, right = node->first;
-            float tl = lightvec__ray_box(&r, bvh->nodes[left].lo, bvh->nodes[left].hi, tmin, hit->t);
-            float tr = lightvec__ray_box(&r, bvh->nodes[right].lo, bvh->nodes[right].hi, tmin, hit->t);
-            if (tl != FLT_MAX && tr != FLT_MAX) {
-                if (tr < tl) { uint32_t t = left; left = right; right = t; }
-                stack[top++] = right; /* the farther child waits */
-                index = left;
-                continue;
-            }
-            if (tl != FLT_MAX) { index = left; continue; }
-            if (tr != FLT_MAX) { index = right; continue; }
-        }
-        if (!top) break;
-        index = stack[--top];
-    }
-    return hit->tri != LIGHTVEC__NO_HIT;
+    return lightvec__bvh_traverse(bvh, &r, tmin, hit, 0);
 }
 
 /* Any hit in (tmin, tmax): for shadow rays. */
 static int lightvec__bvh_occluded(const lightvec__bvh *bvh, const float org[3], const float dir[3],
-                            float tmin, float tmax)
+                                float tmin, float tmax)
 {
-    uint32_t stack[LIGHTVEC__BVH_STACK], top = 0, index = 0;
     lightvec__ray r;
     lightvec__hit hit;
     lightvec__ray_setup(&r, org, dir);
     hit.t = tmax;
+    hit.u = hit.v = 0.0f;
     hit.tri = LIGHTVEC__NO_HIT;
-    for (;;) {
-        const lightvec__bvh_node *node = &bvh->nodes[index];
-        if (lightvec__ray_box(&r, node->lo, node->hi, tmin, tmax) != FLT_MAX) {
-            if (node->count) {
-                uint32_t i;
-                for (i = node->first; i < node->first + node->count; i++)
-                    if (lightvec__ray_tri(&r, &bvh->tris[i], tmin, &hit)) return 1;
-            } else {
-                stack[top++] = node->first;
-                index = index + 1;
-                continue;
-            }
-        }
-        if (!top) return 0;
-        index = stack[--top];
-    }
+    return lightvec__bvh_traverse(bvh, &r, tmin, &hit, 1);
 }
 
 /* ======================================================================

@@ -1,4 +1,4 @@
-/* rendercache.h - v0.4.0 - render cache and range-image walkthroughs - public domain or MIT, see end of file
+/* rendercache.h - v0.4.1 - render cache and range-image walkthroughs - public domain or MIT, see end of file
 
    RENDERCACHE.H: an image-space point cache that reprojects and resamples, and range-image walkthroughs of animated scenes.
 
@@ -164,9 +164,9 @@
        begin_frame: every point is projected into the camera and z-buffered,
        one point per pixel (WDP99 reprojection; with parallel_for, 8 jobs of
        points share the z-buffer through an atomic minimum of a key that
-       orders by depth, then slot, so any schedule keeps the same point); a
-       point much farther than
-       the average depth of its 3x3 neighbourhood, with nearer points on
+       orders by depth, then slot, so any schedule keeps the same point; the
+       depth cull reads these keys and clears them for the next frame); a
+       point much farther than the average depth of its 3x3 neighbourhood, with nearer points on
        opposite sides, is dropped (WDP99 depth cull); holes are filled by a
        3x3 tent filter, or a 7x7 one where points are sparse (WDG02), from
        the nearest or the farthest depth layer only, never a blend; the
@@ -343,10 +343,15 @@
 
        Render cache: image up to 2^28 pixels, cache up to 2^31 points, up to
        2^24 objects, samples up to 64 frames late. Memory: 41 bytes per cache
-       point (2 per pixel by default), 51 bytes per pixel (59 with
-       parallel_for from a compiler without the GNU atomic builtins), and
-       about 48 (max_latency + 8) bytes per object: 133 bytes per pixel in
-       all, 35 MB for 512x512 and 276 MB for 1920x1080. Point
+       point (2 per pixel by default), 43 bytes per pixel (43.5 with
+       parallel_for), and about 48 (max_latency + 8) bytes per object: 125
+       bytes per pixel in all, 33 MB for 512x512 and 260 MB for 1920x1080.
+       A compiler without the GNU atomic builtins projects the points in one
+       job (the rest of the frame still runs in parallel). A frame reads and
+       writes at random over these tens of megabytes: an allocator (desc.
+       allocator) that backs blocks of 2 MB or more with huge pages (on
+       Linux, 2 MB aligned and madvise(MADV_HUGEPAGE)) saves TLB misses,
+       5-10% of a frame in bench_rendercache. Point
        colours are fixed when they are inserted (the cache ages them so that
        they get refreshed, and faster where samples find a colour changed);
        view-dependent shading changes only as points are resampled, as in
@@ -383,7 +388,7 @@
 
 #define RENDERCACHE_VERSION_MAJOR 0
 #define RENDERCACHE_VERSION_MINOR 4
-#define RENDERCACHE_VERSION_PATCH 0
+#define RENDERCACHE_VERSION_PATCH 1
 
 #ifndef RENDERCACHE_API
 #  ifdef RENDERCACHE_STATIC
@@ -991,11 +996,14 @@ static void rendercache__free(const rendercache_allocator *a, void *p)
 /* Zero means default: the documented default replaces a zero field. */
 #define rendercache__def(v, d) ((v) ? (v) : (d))
 
-/* A hint to load a cache line ahead of its use (compilers without one: nothing). */
+/* A hint to load a cache line ahead of its use, or (_WRITE) ahead of a
+   store to it (compilers without one: nothing). */
 #if defined(__GNUC__) || defined(__clang__)
 #  define RENDERCACHE__PREFETCH(p) __builtin_prefetch(p)
+#  define RENDERCACHE__PREFETCH_WRITE(p) __builtin_prefetch((p), 1)
 #else
 #  define RENDERCACHE__PREFETCH(p) ((void)(p))
+#  define RENDERCACHE__PREFETCH_WRITE(p) ((void)(p))
 #endif
 
 /* Small functions that loops call and must inline to vectorise. */
@@ -1558,16 +1566,18 @@ static void rendercache__view_compose(const rendercache__view *v, const float m[
    depth cull.
    Parallel and deterministic: when the caller gives parallel_for, the
    elements are split into RENDERCACHE__SPLAT_JOBS ranges, each z-buffered
-   into its own raster, and the rasters are merged tile by tile (warps
-   merge them within their extraction pass, rendercache__splat_least); a
-   splat of keys only (the render cache) splits them into
-   RENDERCACHE__SHARED_JOBS ranges that share one raster through an atomic
-   minimum, when the compiler has the GNU atomic builtins. The winner of a
-   pixel is the least (depth, element index) in every case, so the result
-   does not depend on the split or on the thread count. (Sorting the
-   elements into image bands first, as the tiled cache of Walter et al. 2002
-   does, let any number of threads share the z-buffer but cost three times
-   as much memory traffic here.)
+   into its own z-buffer, which the warps' extraction pass merges as it
+   reads them (rendercache__splat_least); a splat of keys only (the render
+   cache) splits them into RENDERCACHE__SHARED_JOBS ranges that share one
+   z-buffer through an atomic minimum, when the compiler has the GNU atomic
+   builtins (else it runs as one job). The winner of a pixel is the least
+   (depth, element index) in every case, so the result does not depend on
+   the split or on the thread count. The render cache's depth cull reads
+   the keys themselves (no merged copy of depths and indices) and clears
+   them tile by tile as it goes, so the next splat needs no clearing pass.
+   (Sorting the elements into image bands first, as the tiled cache of
+   Walter et al. 2002 does, let any number of threads share the z-buffer
+   but cost three times as much memory traffic here.)
    ---------------------------------------------------------------------- */
 #define RENDERCACHE__SPLAT_JOBS 2u   /* partial z-buffers when running in parallel */
 #define RENDERCACHE__SHARED_JOBS 8u  /* jobs of a splat into one shared z-buffer (atomic min) */
@@ -1605,14 +1615,6 @@ struct rendercache__zbuffer;
 typedef uint32_t (*rendercache__cover_fn)(const void *src, uint32_t job, uint32_t begin, uint32_t end,
                                           struct rendercache__zbuffer *zb, uint32_t width, uint32_t height);
 
-/* The result of a splat: per pixel the nearest depth (FLT_MAX when empty),
-   the element (RENDERCACHE__NONE when empty) and its payload. */
-typedef struct rendercache__raster {
-    float *depth;
-    uint32_t *index;
-    float *payload;          /* 4 per pixel */
-} rendercache__raster;
-
 /* One job's z-buffer: per pixel the key (depth bits << 32 | element; depths
    are non-negative, so their bits order as the values do, and one compare
    settles depth and then index) and the payload. One random access per test.
@@ -1628,7 +1630,7 @@ typedef struct rendercache__splat {
     uint32_t width, height, pixel_count, tile_count;
     uint32_t jobs;           /* z-buffers allocated: 1, or SPLAT_JOBS with parallel_for */
     int shared;              /* keys only, in parallel: SHARED_JOBS jobs share z-buffer 0 (atomic min) */
-    rendercache__raster final;                        /* payload is job 0's */
+    int clean;               /* z-buffer 0 holds only empty keys (its last user cleared it) */
     rendercache__zbuffer zb[RENDERCACHE__SPLAT_JOBS];
     uint32_t projected;      /* elements that landed in the image in the last run */
     uint32_t ran_jobs;       /* z-buffers the last run filled */
@@ -1638,8 +1640,6 @@ typedef struct rendercache__splat {
 static void rendercache__splat_free(rendercache__splat *s, const rendercache_allocator *a)
 {
     uint32_t j;
-    rendercache__free(a, s->final.depth);
-    rendercache__free(a, s->final.index);
     for (j = 0; j < RENDERCACHE__SPLAT_JOBS; j++) {
         rendercache__free(a, s->zb[j].key);
         rendercache__free(a, s->zb[j].payload);
@@ -1654,22 +1654,18 @@ static int rendercache__splat_alloc(rendercache__splat *s, uint32_t width, uint3
                                     int payload, const rendercache_allocator *a)
 {
     uint32_t j;
-    int failed;
+    int failed = 0;
     memset(s, 0, sizeof *s);
     s->jobs = jobs;
     s->width = width;
     s->height = height;
     s->pixel_count = width * height;
     s->tile_count = (height + RENDERCACHE__TILE_ROWS - 1) / RENDERCACHE__TILE_ROWS;
-    s->final.depth = (float *)rendercache__alloc_array(a, s->pixel_count, sizeof(float));
-    s->final.index = (uint32_t *)rendercache__alloc_array(a, s->pixel_count, sizeof(uint32_t));
-    failed = !s->final.depth || !s->final.index;
     for (j = 0; j < jobs; j++) {
         s->zb[j].key = (uint64_t *)rendercache__alloc_array(a, (size_t)s->pixel_count + 1, sizeof(uint64_t));
         s->zb[j].payload = payload ? (float *)rendercache__alloc_array(a, s->pixel_count, 4 * sizeof(float)) : NULL;
         failed |= !s->zb[j].key || (payload && !s->zb[j].payload);
     }
-    s->final.payload = s->zb[0].payload;
     if (failed) rendercache__splat_free(s, a);
     return failed ? -1 : 0;
 }
@@ -1681,18 +1677,31 @@ typedef struct rendercache__splat_job {
     rendercache__cover_fn cover;       /* instead of source and payload */
     const void *src;
     uint32_t element_count, jobs;
-    int merge;                         /* 0: s->final is not written; the caller reads the z-buffers */
     int shared;                        /* the jobs share z-buffer 0 (s->shared, in parallel) */
 } rendercache__splat_job;
 
-/* Job per tile: clears the shared z-buffer (its last key too, past the pixels). */
-static void rendercache__splat_clear(void *ctx, uint32_t tile)
+/* Clears the keys of z-buffer 0 in the rows of tile (the last tile's also
+   the key past the pixels). */
+static void rendercache__splat_clear_tile(rendercache__splat *s, uint32_t tile)
 {
-    const rendercache__splat_job *job = (const rendercache__splat_job *)ctx;
-    const rendercache__splat *s = job->s;
     uint32_t p0 = tile * RENDERCACHE__TILE_ROWS * s->width, p1 = p0 + RENDERCACHE__TILE_ROWS * s->width, p;
     if (p1 >= s->pixel_count) p1 = s->pixel_count + 1;
     for (p = p0; p < p1; p++) s->zb[0].key[p] = RENDERCACHE__EMPTY_KEY;
+}
+
+/* Job per tile: clears the shared z-buffer. */
+static void rendercache__splat_clear(void *ctx, uint32_t tile)
+{
+    rendercache__splat_clear_tile(((const rendercache__splat_job *)ctx)->s, tile);
+}
+
+/* The squared distance a render cache key holds, FLT_MAX for the empty key. */
+static RENDERCACHE__INLINE float rendercache__key_depth(uint64_t k)
+{
+    uint32_t bits = (uint32_t)(k >> 32);
+    float d;
+    memcpy(&d, &bits, sizeof d);
+    return k == RENDERCACHE__EMPTY_KEY ? FLT_MAX : d;
 }
 
 static uint64_t rendercache__key(float depth, uint32_t element)
@@ -1757,7 +1766,8 @@ static void rendercache__splat_range(void *ctx, uint32_t j)
         return;
     }
 #endif
-    for (i = 0; i <= s->pixel_count; i++) key[i] = RENDERCACHE__EMPTY_KEY;
+    if (j > 0 || !s->clean)
+        for (i = 0; i <= s->pixel_count; i++) key[i] = RENDERCACHE__EMPTY_KEY;
     if (job->cover) {
         s->job_projected[j] = job->cover(job->src, j, begin, end, &s->zb[j], s->width, s->height);
         return;
@@ -1787,7 +1797,7 @@ static void rendercache__splat_range(void *ctx, uint32_t j)
 
 /* The least key of pixel p over the z-buffers of the last run, and the
    payload of the z-buffer that holds it (keys are unique but for the empty
-   one, so this is the key and payload rendercache__splat_merge keeps). */
+   one, so the split of the elements does not matter). */
 static RENDERCACHE__INLINE uint64_t rendercache__splat_least(const rendercache__splat *s, uint32_t p, const float **payload)
 {
     uint64_t k = s->zb[0].key[p];
@@ -1801,33 +1811,6 @@ static RENDERCACHE__INLINE uint64_t rendercache__splat_least(const rendercache__
     return k;
 }
 
-/* Job per tile: the least key over the jobs' z-buffers becomes the final
-   depth and element (with its payload). */
-static void rendercache__splat_merge(void *ctx, uint32_t tile)
-{
-    const rendercache__splat_job *job = (const rendercache__splat_job *)ctx;
-    rendercache__splat *s = job->s;
-    uint32_t p0 = tile * RENDERCACHE__TILE_ROWS * s->width, p1 = p0 + RENDERCACHE__TILE_ROWS * s->width, j, p;
-    if (p1 > s->pixel_count) p1 = s->pixel_count;
-    for (p = p0; p < p1; p++) {
-        uint64_t k = s->zb[0].key[p];
-        uint32_t bits;
-        for (j = 1; j < job->jobs; j++) {
-            if (!(s->zb[j].key[p] < k)) continue;
-            k = s->zb[j].key[p];
-            if (job->payload || job->cover) memcpy(s->final.payload + 4 * (size_t)p, s->zb[j].payload + 4 * (size_t)p, 4 * sizeof(float));
-        }
-        if (k == RENDERCACHE__EMPTY_KEY) {
-            s->final.depth[p] = FLT_MAX;
-            s->final.index[p] = RENDERCACHE__NONE;
-            continue;
-        }
-        bits = (uint32_t)(k >> 32);
-        memcpy(&s->final.depth[p], &bits, sizeof bits);
-        s->final.index[p] = (uint32_t)k;
-    }
-}
-
 static void rendercache__splat_execute(rendercache__splat_job *job,
                                        void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t), void *user)
 {
@@ -1835,26 +1818,20 @@ static void rendercache__splat_execute(rendercache__splat_job *job,
     uint32_t j;
     job->shared = parallel_for && s->shared && !job->cover && !job->payload;
     job->jobs = job->shared ? RENDERCACHE__SHARED_JOBS : parallel_for ? s->jobs : 1u;
-    if (job->shared) rendercache__run_jobs(parallel_for, user, rendercache__splat_clear, job, s->tile_count);
+    if (job->shared && !s->clean) rendercache__run_jobs(parallel_for, user, rendercache__splat_clear, job, s->tile_count);
     rendercache__run_jobs(parallel_for, user, rendercache__splat_range, job, job->jobs);
     s->ran_jobs = job->shared ? 1u : job->jobs;
-    if (job->merge) {
-        uint32_t jobs = job->jobs;
-        job->jobs = s->ran_jobs;   /* the z-buffers to merge */
-        rendercache__run_jobs(parallel_for, user, rendercache__splat_merge, job, s->tile_count);
-        job->jobs = jobs;
-    }
+    s->clean = 0;
     s->projected = 0;
     for (j = 0; j < job->jobs; j++) s->projected += s->job_projected[j];
 }
 
-/* Runs the splat over elements [0, count) into s->final; parallel_for only
-   when the splat was allocated for several jobs. merge = 0: s->final is
-   not written, and the caller takes the least key of each pixel over the
-   z-buffers itself (rendercache__splat_least), in a pass it makes anyway. */
+/* Runs the splat over elements [0, count) into the z-buffers of s; the
+   caller takes the least key of each pixel over the z-buffers of the run
+   (s->ran_jobs; rendercache__splat_least) in a pass it makes anyway. */
 static void rendercache__splat_run(rendercache__splat *s, void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t),
                                    void *user, rendercache__source_fn source, rendercache__payload_fn payload,
-                                   const void *src, uint32_t count, int merge)
+                                   const void *src, uint32_t count)
 {
     rendercache__splat_job job;
     job.s = s;
@@ -1863,14 +1840,13 @@ static void rendercache__splat_run(rendercache__splat *s, void (*parallel_for)(v
     job.cover = NULL;
     job.src = src;
     job.element_count = count;
-    job.merge = merge;
     rendercache__splat_execute(&job, parallel_for, user);
 }
 
 /* The same with a cover function (payload always kept). */
 static void rendercache__splat_run_cover(rendercache__splat *s,
                                          void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t), void *user,
-                                         rendercache__cover_fn cover, const void *src, uint32_t count, int merge)
+                                         rendercache__cover_fn cover, const void *src, uint32_t count)
 {
     rendercache__splat_job job;
     job.s = s;
@@ -1879,7 +1855,6 @@ static void rendercache__splat_run_cover(rendercache__splat *s,
     job.cover = cover;
     job.src = src;
     job.element_count = count;
-    job.merge = merge;
     rendercache__splat_execute(&job, parallel_for, user);
 }
 
@@ -1895,6 +1870,9 @@ static void rendercache__splat_run_cover(rendercache__splat *s,
                                                 image of 1/16 the resolution (WDG02) */
 #define RENDERCACHE__CELL (1u << RENDERCACHE__CELL_SHIFT)
 #define RENDERCACHE__CELL_FEW 4u             /* points in a cell below which it is a hole: a quarter covered */
+#define RENDERCACHE__CELL_JOBS 8u            /* jobs of the occupancy count with parallel_for, each with its own
+                                                bytes (1/16 byte per pixel each): fine enough that a thread
+                                                the system holds back holds back little */
 #define RENDERCACHE__BAND_ROWS 128u          /* rows per band of the error diffusion: 9 bands at 1080p */
 
 /* Priority image values (WDP99 priority image, extended to [0, 1]): a point
@@ -1998,7 +1976,7 @@ struct rendercache {
     float *err_rows;         /* per band, two rows of diffused error */
     rendercache__band *bands;   /* per band: its count and marginal choices */
     uint32_t band_count;
-    unsigned char *occupancy; /* predictive sampling, per job (splat.jobs) cell_count + 1 bytes: the points
+    unsigned char *occupancy; /* predictive sampling, per job (CELL_JOBS) cell_count + 1 bytes: the points
                                 that land in the cell, up to 255 (the last byte takes the points that
                                 miss); after rendercache_predict job 0's: the sum over the jobs, and
                                 255 once the cell was requested */
@@ -2114,7 +2092,7 @@ static int rendercache__alloc_buffers(rendercache *rc)
     rc->image = (float *)rendercache__alloc_array(a, px, 3 * sizeof(float));
     rc->priority = (float *)rendercache__alloc_array(a, px, sizeof(float));
     rc->occupancy = (unsigned char *)rendercache__alloc_array(a, (size_t)rc->cell_count + 1,
-                                                              rc->parallel_for ? RENDERCACHE__SPLAT_JOBS : 1u);
+                                                              rc->parallel_for ? RENDERCACHE__CELL_JOBS : 1u);
     rc->kind = (unsigned char *)rendercache__alloc_array(a, px, 1);
     rc->count = (unsigned char *)rendercache__alloc_array(a, px, 1);
     rc->tile_stats = (uint32_t *)rendercache__alloc_array(a, rc->tile_count, RENDERCACHE__TILE_STATS * sizeof(uint32_t));
@@ -2129,8 +2107,7 @@ static int rendercache__alloc_buffers(rendercache *rc)
         !rc->priority || !rc->occupancy || !rc->kind || !rc->count || !rc->tile_stats || !rc->hist ||
         !rc->select_v || !rc->chosen || !rc->err_rows || !rc->bands)
         return -1;
-    if (rendercache__splat_alloc(&rc->splat, rc->width, rc->height,
-                                 rc->parallel_for && !RENDERCACHE__ATOMICS ? RENDERCACHE__SPLAT_JOBS : 1u, 0, a) != 0)
+    if (rendercache__splat_alloc(&rc->splat, rc->width, rc->height, 1u, 0, a) != 0)   /* one z-buffer: the cull reads its keys */
         return -1;
     rc->splat.shared = rc->parallel_for != NULL && RENDERCACHE__ATOMICS;
     return 0;
@@ -2337,9 +2314,27 @@ typedef struct rendercache__projector {
     const rendercache *rc;
     const rendercache__view *view;
     const float *obj_camera;
+    float sky[12];           /* the view's rotation without translation: background points are directions */
     uint32_t shift, stride;  /* the index a point lands in: (y >> shift) * stride + (x >> shift); pixels:
                                 0 and the width; prediction's cells: RENDERCACHE__CELL_SHIFT */
 } rendercache__projector;
+
+/* A projector into view v through the object-to-camera matrices obj_camera,
+   onto cells of 2^shift x 2^shift pixels. */
+static void rendercache__projector_init(rendercache__projector *pr, const rendercache *rc, const rendercache__view *v,
+                                        const float *obj_camera, uint32_t shift)
+{
+    int k;
+    pr->rc = rc;
+    pr->view = v;
+    pr->obj_camera = obj_camera;
+    pr->shift = shift;
+    pr->stride = (v->width + (1u << shift) - 1) >> shift;
+    for (k = 0; k < 3; k++) {
+        memcpy(pr->sky + 4 * k, v->axis[k], 3 * sizeof(float));
+        pr->sky[4 * k + 3] = 0.0f;
+    }
+}
 
 /* Reprojection of a point x (WDP99) through the 3x4 matrix m into camera
    space, then to the perspective view v: the index of the pixel (or cell
@@ -2368,17 +2363,11 @@ static RENDERCACHE__INLINE uint32_t rendercache__pixel_through(const float *m, c
 static uint32_t rendercache__project_point(const rendercache__projector *pr, const rendercache__geo *g, float *depth2)
 {
     const rendercache__view *v = pr->view;
-    float sky[12];
     uint32_t p;
-    int k;
     if (g->object == RENDERCACHE__FREE_SLOT) return RENDERCACHE__NONE;
     if (g->object != RENDERCACHE_MISS)
         return rendercache__pixel_through(pr->obj_camera + 12 * (size_t)g->object, g->pos, v, pr->shift, pr->stride, depth2);
-    for (k = 0; k < 3; k++) {   /* the view's rotation, no translation */
-        memcpy(sky + 4 * k, v->axis[k], 3 * sizeof(float));
-        sky[4 * k + 3] = 0.0f;
-    }
-    p = rendercache__pixel_through(sky, g->pos, v, pr->shift, pr->stride, depth2);
+    p = rendercache__pixel_through(pr->sky, g->pos, v, pr->shift, pr->stride, depth2);
     *depth2 = RENDERCACHE__FAR2;
     return p;
 }
@@ -2408,37 +2397,62 @@ static void rendercache__project_perspective(const rendercache__geo *g, uint32_t
     for (i = 0; i < n; i++) pix[i] = rendercache__pixel_through(m, g[i].pos, v, shift, stride, &depth2[i]);
 }
 
-/* The one object of the points [begin, end) other than background points,
-   RENDERCACHE__NONE when there are several or free slots; *background
-   tells whether background points are among them. */
-static uint32_t rendercache__batch_object_or_background(const rendercache__geo *geo, uint32_t begin, uint32_t end,
-                                                        int *background)
+/* The background points and free slots of n points that
+   project_perspective projected through an object's matrix: background
+   points again, as directions (through the sky matrix), at distance
+   RENDERCACHE__FAR; free slots land nowhere. Every point is projected and
+   the results selected, without branches, so that it vectorises too. */
+static void rendercache__project_others(const rendercache__geo *g, uint32_t n, const rendercache__projector *pr,
+                                        uint32_t *RENDERCACHE__RESTRICT pix, float *RENDERCACHE__RESTRICT depth2)
 {
-    uint32_t o = RENDERCACHE__NONE, i;
-    *background = 0;
+    const rendercache__view *v = pr->view;
+    const uint32_t shift = pr->shift, stride = pr->stride;
+    uint32_t i;
+    for (i = 0; i < n; i++) {
+        float d;
+        uint32_t q = rendercache__pixel_through(pr->sky, g[i].pos, v, shift, stride, &d), o = g[i].object;
+        pix[i] = o == RENDERCACHE__FREE_SLOT ? RENDERCACHE__NONE : o == RENDERCACHE_MISS ? q : pix[i];
+        depth2[i] = o == RENDERCACHE_MISS ? RENDERCACHE__FAR2 : depth2[i];
+    }
+}
+
+/* The one object of the points [begin, end) other than background points
+   and free slots (RENDERCACHE_MISS when there is none), RENDERCACHE__NONE
+   when there are several; *others tells whether background points or free
+   slots are among them. */
+static uint32_t rendercache__batch_object(const rendercache__geo *geo, uint32_t begin, uint32_t end, int *others)
+{
+    uint32_t o = RENDERCACHE_MISS, i, other = 0;
     for (i = begin; i < end; i++) {
         uint32_t g = geo[i].object;
-        if (g == RENDERCACHE_MISS) { *background = 1; continue; }
-        if (g == RENDERCACHE__FREE_SLOT || (o != RENDERCACHE__NONE && g != o)) return RENDERCACHE__NONE;
+        int special = g == RENDERCACHE_MISS || g == RENDERCACHE__FREE_SLOT;
+        other |= (uint32_t)special;
+        if (special) continue;
+        if (o != RENDERCACHE_MISS && g != o) return RENDERCACHE__NONE;
         o = g;
     }
+    *others = (int)other;
     return o;
 }
 
 /* The splat source of the render cache: cache slots [begin, end). Batches
-   of one object (with or without background points) under a perspective
-   view take the vectorised path; the rest goes point by point. */
+   of one object (with or without background points and free slots) under
+   a perspective view take the vectorised path; the rest goes point by
+   point. */
 static uint32_t rendercache__project_points(const void *src, uint32_t begin, uint32_t end, uint32_t *pix, float *depth2)
 {
     const rendercache__projector *pr = (const rendercache__projector *)src;
     const rendercache__geo *geo = pr->rc->geo;
-    int background;
-    uint32_t i, o = rendercache__batch_object_or_background(geo, begin, end, &background);
+    int others;
+    uint32_t i, o, ahead = end + (end - begin) < pr->rc->capacity ? end - begin : pr->rc->capacity - end;
+    /* the next batch's points, a cache line at a time: the stream through the
+       points is the projection's bottleneck, more than its arithmetic */
+    for (i = 0; i < ahead; i += 64 / sizeof *geo) RENDERCACHE__PREFETCH(&geo[end + i]);
+    o = rendercache__batch_object(geo, begin, end, &others);
     if (pr->view->kind == RENDERCACHE_CAMERA_PERSPECTIVE && o != RENDERCACHE__NONE) {
-        rendercache__project_perspective(geo + begin, end - begin, pr->obj_camera + 12 * (size_t)o, pr, pix, depth2);
-        if (background)   /* the few background points, again, as directions */
-            for (i = begin; i < end; i++)
-                if (geo[i].object == RENDERCACHE_MISS) pix[i - begin] = rendercache__project_point(pr, &geo[i], &depth2[i - begin]);
+        const float *m = o == RENDERCACHE_MISS ? pr->sky : pr->obj_camera + 12 * (size_t)o;
+        rendercache__project_perspective(geo + begin, end - begin, m, pr, pix, depth2);
+        if (others) rendercache__project_others(geo + begin, end - begin, pr, pix, depth2);
         return end - begin;
     }
     for (i = begin; i < end; i++) pix[i - begin] = rendercache__project_point(pr, &geo[i], &depth2[i - begin]);
@@ -2462,13 +2476,9 @@ static void rendercache__splat_points(rendercache *rc, const rendercache__view *
 {
     rendercache__projector pr;
     double t0 = rendercache__now(rc);
-    pr.rc = rc;
-    pr.view = v;
-    pr.obj_camera = obj_camera;
-    pr.shift = 0;
-    pr.stride = rc->width;
+    rendercache__projector_init(&pr, rc, v, obj_camera, 0);
     rendercache__splat_run(&rc->splat, rc->parallel_for, rc->parallel_user, rendercache__project_points, NULL, &pr,
-                           rc->capacity, 1);
+                           rc->capacity);
     if (t_project) *t_project += rendercache__now(rc) - t0;
 }
 
@@ -2567,6 +2577,19 @@ static void rendercache__cull_decisions(const rendercache *rc, const float *dept
     }
 }
 
+/* Job per tile: the depths of the z-buffer's keys as floats (FLT_MAX where
+   empty), into select_v (request scratch, free until the requests), for
+   the depth cull, which reads each depth nine times. */
+static void rendercache__depth_job(void *ctx, uint32_t tile)
+{
+    rendercache *rc = (rendercache *)ctx;
+    const uint64_t *RENDERCACHE__RESTRICT key = rc->splat.zb[0].key;
+    float *RENDERCACHE__RESTRICT depth = rc->select_v;
+    uint32_t p0 = tile * RENDERCACHE__TILE_ROWS * rc->width, p1 = p0 + RENDERCACHE__TILE_ROWS * rc->width, p;
+    if (p1 > rc->pixel_count) p1 = rc->pixel_count;
+    for (p = p0; p < p1; p++) depth[p] = rendercache__key_depth(key[p]);
+}
+
 /* Colour and priority of the points that won the pixels [p0, p1) of a row,
    culled or not (a culled pixel is a hole, which the filling writes again).
    The slots are anywhere in the cache, so each read is a cache miss: the
@@ -2574,20 +2597,22 @@ static void rendercache__cull_decisions(const rendercache *rc, const float *dept
    ahead of time, so that many misses are under way at once. A pixel
    without a point reads the empty slot after the last (rc->capacity):
    no branch, which points and holes along silhouettes would mispredict. */
-static void rendercache__gather_points(rendercache *rc, const uint32_t *index, uint32_t p0, uint32_t p1)
+static void rendercache__gather_points(rendercache *rc, const uint64_t *key, uint32_t p0, uint32_t p1, uint32_t tile_end)
 {
     const uint32_t empty = rc->capacity;
     const rendercache__point *data = rc->data;
     float *image = rc->image, *priority = rc->priority;
     uint32_t p;
-    for (p = p0; p < p1; p++) {
-        uint32_t k = index[p] == RENDERCACHE__NONE ? empty : index[p];
+    for (p = p0; p < p1; p++) {   /* a key's low half is the slot, RENDERCACHE__NONE in the empty key */
+        uint32_t k = (uint32_t)key[p] == RENDERCACHE__NONE ? empty : (uint32_t)key[p];
         uint32_t motion = rc->obj_motion[rendercache__motion_index(rc, data[k].object)];
-        if (p + RENDERCACHE__GATHER_AHEAD < rc->pixel_count) {   /* (into the next row or tile too) */
-            uint32_t next = index[p + RENDERCACHE__GATHER_AHEAD];
+        if (p + RENDERCACHE__GATHER_AHEAD < tile_end) {   /* (into the next row too; the next tile's keys may be
+                                                             cleared meanwhile by its own cull) */
+            uint32_t next = (uint32_t)key[p + RENDERCACHE__GATHER_AHEAD];
             const rendercache__point *q = &data[next == RENDERCACHE__NONE ? empty : next];
             RENDERCACHE__PREFETCH(q);
             RENDERCACHE__PREFETCH((const char *)q + sizeof *q - 1);   /* a record may straddle two cache lines */
+            RENDERCACHE__PREFETCH_WRITE(&rc->shown[next == RENDERCACHE__NONE ? empty : next]);   /* cull_job marks it */
         }
         memcpy(image + 3 * (size_t)p, data[k].rgb, 3 * sizeof(float));
         priority[p] = rendercache__point_priority(rc, &data[k], motion);
@@ -2600,9 +2625,9 @@ static void rendercache__gather_points(rendercache *rc, const uint32_t *index, u
 static void rendercache__cull_job(void *ctx, uint32_t tile)
 {
     rendercache *rc = (rendercache *)ctx;
-    const rendercache__raster *s = &rc->splat.final;
-    const float *depth = s->depth;
-    const uint32_t *index = s->index, w = rc->width, h = rc->height;
+    const uint64_t *key = rc->splat.zb[0].key;
+    const float *depth = rc->select_v;   /* rendercache__depth_job's */
+    const uint32_t w = rc->width, h = rc->height;
     uint32_t *px_index = rc->px_index;
     float *px_depth = rc->px_depth;
     unsigned char *kind = rc->kind, *count = rc->count, *shown = rc->shown, mark = rendercache__mark(rc->frame);
@@ -2613,10 +2638,10 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
     if (y1 > h) y1 = h;
     for (y = y0; y < y1; y++) {
         unsigned char *occ = kind + (size_t)y * w;
-        rendercache__gather_points(rc, index, y * w, y * w + w);
+        rendercache__gather_points(rc, key, y * w, y * w + w, y1 * w);
         rendercache__cull_decisions(rc, depth, y, tol2, occ);
         for (x = 0; x < w; x++) {   /* without branches, as gather_points */
-            uint32_t p = y * w + x, k = index[p], has = k != RENDERCACHE__NONE, shows = has & !occ[x];
+            uint32_t p = y * w + x, k = (uint32_t)key[p], has = k != RENDERCACHE__NONE, shows = has & !occ[x];
             px_index[p] = shows ? k : RENDERCACHE__NONE;
             px_depth[p] = shows ? depth[p] : FLT_MAX;
             shown[shows ? k : sink] = mark;   /* spared by the eviction in this frame */
@@ -2628,6 +2653,7 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
     }
     stats[0] = visible;
     stats[1] = culled;
+    rendercache__splat_clear_tile(&rc->splat, tile);   /* read (the depths are in select_v): clean for the next frame */
 }
 
 /* Interpolation of a hole (WDP99 3x3 weighted filter; WDG02 wider filter
@@ -2762,14 +2788,19 @@ static void rendercache__interpolate_job(void *ctx, uint32_t tile)
    miss per hole and row. A hole reads at most wide_radius (<= 7) rows
    below its own, which the cull of the next tile (TILE_ROWS = 8 rows) has
    written, so the filling reads what it read after a full cull pass: the
-   same image, bit for bit. The two are timed together (stats.time_cull):
-   a clock read per tile would cost more than the saving. */
+   same image, bit for bit. The depths of tile t + 1 are converted from
+   the keys just before the cull of tile t reads them. The two are timed together (stats.time_cull): a
+   clock read per tile would cost more than the saving. */
 static void rendercache__cull_and_interpolate(rendercache *rc)
 {
     uint32_t t;
     double t0 = rendercache__now(rc);
     for (t = 0; t <= rc->tile_count; t++) {
-        if (t < rc->tile_count) rendercache__cull_job(rc, t);
+        if (t == 0) rendercache__depth_job(rc, 0);
+        if (t + 1 < rc->tile_count) rendercache__depth_job(rc, t + 1);   /* the rows below tile t */
+        if (t < rc->tile_count) {
+            rendercache__cull_job(rc, t);
+        }
         if (t > 0) rendercache__interpolate_job(rc, t - 1);
     }
     rc->stats.time_cull = rendercache__now(rc) - t0;
@@ -2820,6 +2851,7 @@ RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, cons
     rendercache__splat_points(rc, &rc->view, rc->obj_camera, &rc->stats.time_project);
     if (rc->parallel_for) {
         t1 = rendercache__now(rc);
+        rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__depth_job, rc, rc->tile_count);
         rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__cull_job, rc, rc->tile_count);
         t2 = rendercache__now(rc);
         rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__interpolate_job, rc, rc->tile_count);
@@ -2828,6 +2860,7 @@ RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, cons
     } else {
         rendercache__cull_and_interpolate(rc);
     }
+    rc->splat.clean = 1;   /* every cull job cleared its keys */
     rc->stats.projected = rc->splat.projected;
     rc->stats.visible = rendercache__tile_sum(rc, 0);
     rc->stats.culled = rendercache__tile_sum(rc, 1);
@@ -2893,12 +2926,8 @@ RENDERCACHE_API rendercache_result rendercache_predict(rendercache *rc, const re
     rc->history[rc->frame % ((uint64_t)rc->max_latency + 1)].has_prediction = 1;
     rendercache__compose_objects(rc, &rc->predicted, rc->obj_predicted);
     job.rc = rc;
-    job.pr.rc = rc;
-    job.pr.view = &rc->predicted;
-    job.pr.obj_camera = rc->obj_predicted;
-    job.pr.shift = RENDERCACHE__CELL_SHIFT;
-    job.pr.stride = rc->cells_x;
-    job.jobs = rc->parallel_for ? RENDERCACHE__SPLAT_JOBS : 1u;
+    rendercache__projector_init(&job.pr, rc, &rc->predicted, rc->obj_predicted, RENDERCACHE__CELL_SHIFT);
+    job.jobs = rc->parallel_for ? RENDERCACHE__CELL_JOBS : 1u;
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__occupancy_job, &job, job.jobs);
     rc->pred_cells = 0;
     for (c = 0; c < rc->cell_count; c++) {   /* job 0's bytes become the sum */
@@ -3574,11 +3603,7 @@ static int rendercache__insert_other(rendercache *rc, const rendercache__new_poi
     uint32_t p, slot;
     float d2 = 0.0f, nd[8];
     int show;
-    pr.rc = rc;
-    pr.view = &rc->view;
-    pr.obj_camera = rc->obj_camera;
-    pr.shift = 0;
-    pr.stride = rc->width;
+    rendercache__projector_init(&pr, rc, &rc->view, rc->obj_camera, 0);
     p = rendercache__project_point(&pr, &np->g, &d2);
     if (p != RENDERCACHE__NONE && rc->px_index[p] != RENDERCACHE__NONE) {
         uint32_t k = rc->px_index[p];
@@ -3639,7 +3664,9 @@ RENDERCACHE_API rendercache_result rendercache_insert(rendercache *rc, const ren
         const rendercache__frame_record *record;
         int predicted = (s->flags & RENDERCACHE_REQUEST_PREDICTED) != 0;
         uint64_t f;
-        if (i % 32 == 0) rc->touched += rendercache__touch_slots(rc, s, n - i < 32 ? n - i : 32);
+        if (i == 0) rc->touched += rendercache__touch_slots(rc, s, n < 32 ? n : 32);
+        if (i % 32 == 0 && n - i > 32)   /* a batch ahead, so that the misses complete before the stores */
+            rc->touched += rendercache__touch_slots(rc, s + 32, n - i - 32 < 32 ? n - i - 32 : 32);
         if (!rendercache__sample_valid(rc, s)) { bad++; continue; }
         f = rendercache__sample_frame(rc, s);
         if (rc->frame - f > rc->max_latency) { rc->stats.dropped++; continue; }
@@ -5119,10 +5146,10 @@ static void rendercache__warp_splat(rendercache_warper *w, const rendercache__wa
     const rendercache__warp_src *last = &set->src[set->count - 1];
     const uint32_t count = last->first + last->count;
     if (foreground)
-        rendercache__splat_run_cover(&w->splat, w->parallel_for, w->parallel_user, rendercache__warp_cover, set, count, 0);
+        rendercache__splat_run_cover(&w->splat, w->parallel_for, w->parallel_user, rendercache__warp_cover, set, count);
     else
         rendercache__splat_run(&w->splat, w->parallel_for, w->parallel_user, rendercache__warp_source,
-                               rendercache__warp_payload, set, count, 0);
+                               rendercache__warp_payload, set, count);
     w->stats.projected += w->splat.projected;
     memset(&job, 0, sizeof job);
     job.w = w;
