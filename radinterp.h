@@ -69,7 +69,12 @@
    three) and non-convex or self-intersecting quadrilaterals give
    RADINTERP_ERROR_INVALID_ARGUMENT, with the patch named through the log
    callback. Zero-area patches are skipped and counted (info.skipped_patches);
-   repeated or collinear corners reduce a quadrilateral to a triangle.
+   repeated or collinear corners reduce a quadrilateral to a triangle. Two
+   triangles of one material that share an edge and together form a planar
+   convex quadrilateral become one patch, as an engine's export of a
+   rectangle as two triangles is one surface (info.merged_patches; every
+   caller's patch index still names the patch it became part of;
+   desc.keep_triangles turns this off).
 
    METHOD
 
@@ -82,9 +87,15 @@
    BVH or desc.trace), with horizon clipping of both elements (4.2); Jacobi
    gather + push-pull iterations (4.3); after each, transport refinement
    (4.4.1): a link whose B_src times the spread of the point factors over
-   its receiver (taken at fixed points) exceeds eps is split at its larger
-   element, and a link whose source's children differ by more than eps / F
-   is split at the source. Parts of a patch enclosed by geometry resting on
+   its receiver exceeds its tolerance (eps, or eps_relative of the
+   receiver's irradiance where that is more) is split at its larger
+   element, and a link whose source's children differ by more than the
+   tolerance / F is split at the source. The spread is taken at fixed
+   points: the receiver's corners pulled a fifth toward its centre, the
+   centre, and the receiver point nearest to the source's centre, where
+   the factor peaks when the source is small and close (a block standing
+   on a large floor: without that point such a link could stay unrefined
+   at a third of its form factor). Parts of a patch enclosed by geometry resting on
    it (the floor under a box) are found by rays and left out of its
    radiosity (radinterp_leaf.open).
 
@@ -205,10 +216,18 @@
 
        eps                Gur::eps, transport error bound in W/m^2: a link is
                           refined while B_src * (max - min of the point form
-                          factors over its receiver) exceeds it.
-                          default half the mean emitted radiosity (emitted
-                          power / total area): 0.13 W/m^2 for the office,
-                          near the paper's 0.1
+                          factors over its receiver) exceeds its tolerance,
+                          the larger of eps and eps_relative times the
+                          receiver's irradiance.  default 1% of the mean
+                          emitted radiosity (emitted power / total area): a
+                          floor under the relative bound, so that unlit
+                          corners still get a bound
+       eps_relative       relative transport error: a link's tolerance is at
+                          least this fraction of its receiver's irradiance,
+                          so shadows are resolved in dim rooms as in bright
+                          ones.  default 0.05; 0 (relative bound off) when
+                          eps is given and eps_relative is not, so an
+                          explicit eps means what it meant before
        min_area           Gur::aeps, no node is split into children smaller
                           than this (m^2).          default (diagonal / 200)^2
        rel_error_cutoff   Basis::relErrorCutoff, convergence: every leaf's
@@ -230,6 +249,14 @@
        epsilon            _m_eps_f: coordinates closer than epsilon * diag are
                           equal (facing and coplanarity tests). default 1e-6
        planarity_tolerance  see validation.                      default 1e-3
+       clustering         RADINTERP_CLUSTERING_ON (the default): the first
+                          links join clusters of patches (see METHOD),
+                          refined down to patches where they could carry
+                          more than a tenth of the receiver's tolerance;
+                          RADINTERP_CLUSTERING_OFF: one link per facing
+                          pair of patches (quadratic in the patch count)
+       keep_triangles     non-zero: triangles are never merged into
+                          quadrilateral patches (see SCENE AND UNITS)
        visibility         how point queries find the visible part of a partly
                           hidden source: RADINTERP_VISIBILITY_SHADOWS (the
                           default) or RADINTERP_VISIBILITY_TRIANGULATION
@@ -3943,6 +3970,37 @@ static uint32_t radinterp__filter_blockers(const radinterp_solution *s, const ra
     return kept;
 }
 
+/* The point of a convex polygon (normal n) nearest to p: p's projection
+   onto its plane when that falls inside, else the nearest point of its
+   outline. */
+static void radinterp__poly_nearest(const double (*v)[3], int count, const double *n, const double *p, double *out)
+{
+    double d[3], q[3], best = DBL_MAX;
+    int i, k, inside = 1;
+    radinterp__d3_sub(p, v[0], d);
+    for (k = 0; k < 3; k++) q[k] = p[k] - radinterp__d3_dot(d, n) * n[k];
+    for (i = 0; i < count && inside; i++) {
+        double e[3], w[3], c[3];
+        radinterp__d3_sub(v[(i + 1) % count], v[i], e);
+        radinterp__d3_sub(q, v[i], w);
+        radinterp__d3_cross(e, w, c);
+        inside = radinterp__d3_dot(c, n) >= 0.0;
+    }
+    if (inside) { memcpy(out, q, sizeof q); return; }
+    for (i = 0; i < count; i++) {
+        double e[3], w[3], t, ee, x[3], dx[3], d2;
+        radinterp__d3_sub(v[(i + 1) % count], v[i], e);
+        radinterp__d3_sub(q, v[i], w);
+        ee = radinterp__d3_dot(e, e);
+        t = ee > 0.0 ? radinterp__d3_dot(w, e) / ee : 0.0;
+        t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
+        for (k = 0; k < 3; k++) x[k] = v[i][k] + t * e[k];
+        radinterp__d3_sub(q, x, dx);
+        d2 = radinterp__d3_dot(dx, dx);
+        if (d2 < best) { best = d2; memcpy(out, x, sizeof x); }
+    }
+}
+
 /* Link form factor (4.2, method 3): the mean of the point-to-polygon factors
    (eq. 6.1) at stratified points of the receiver, times the visible fraction
    of the source at each point when blockers remain. Each polygon is first
@@ -3993,18 +4051,23 @@ static void radinterp__link_compute(radinterp_solution *s, radinterp__pending *p
         sum += f;
     }
     /* The refinement estimate comes from fixed points, the receiver's
-       corners pulled a fifth toward its centre, and the centre: if it came
-       from the random points, the links whose points happened to miss a peak
-       of the factor (near a shared edge) would be the ones kept, and the kept
-       factors would be biased low. */
+       corners pulled a fifth toward its centre, its centre, and its point
+       nearest to the source's centre (where the factor peaks when the source
+       is close: a block standing on a large floor), pulled a hundredth toward
+       the centre: if it came from the random points, the links whose points
+       happened to miss a peak of the factor (near a shared edge) would be the
+       ones kept, and the kept factors would be biased low. */
     {
-        double c[3] = {0.0, 0.0, 0.0};
+        double c[3] = {0.0, 0.0, 0.0}, cs[3] = {0.0, 0.0, 0.0}, near[3];
         int k, j;
         for (k = 0; k < nRc; k++)
             for (j = 0; j < 3; j++) c[j] += Rc[k][j] / nRc;
-        for (k = 0; k <= nRc; k++) {
+        for (k = 0; k < nSc; k++)
+            for (j = 0; j < 3; j++) cs[j] += Sc[k][j] / nSc;
+        radinterp__poly_nearest((const double (*)[3])Rc, nRc, pr->n, cs, near);
+        for (k = 0; k <= nRc + 1; k++) {
             double q[3], f;
-            for (j = 0; j < 3; j++) q[j] = k < nRc ? 0.8 * Rc[k][j] + 0.2 * c[j] : c[j];
+            for (j = 0; j < 3; j++) q[j] = k < nRc ? 0.8 * Rc[k][j] + 0.2 * c[j] : k == nRc ? c[j] : 0.99 * near[j] + 0.01 * c[j];
             f = radinterp__ff_poly(q, pr->n, (const double (*)[3])Sc, nSc);
             if (f < 0.0) f = 0.0;
             if (pl->kept && f > 0.0) {
