@@ -68,7 +68,10 @@
    planarity_tolerance times the patch diagonal from the plane of the other
    three) and non-convex or self-intersecting quadrilaterals give
    RADINTERP_ERROR_INVALID_ARGUMENT, with the patch named through the log
-   callback. Zero-area patches are skipped and counted (info.skipped_patches);
+   callback, and so does a scene whose size (the diagonal of its bounding
+   box) lies outside [RADINTERP_MIN_SCENE_SIZE, RADINTERP_MAX_SCENE_SIZE] =
+   [1e-17, 1e18] (element areas are floats; results do not depend on the
+   scale inside it). Zero-area patches are skipped and counted (info.skipped_patches);
    repeated or collinear corners reduce a quadrilateral to a triangle. Two
    triangles of one material that share an edge and together form a planar
    convex quadrilateral become one patch, as an engine's export of a
@@ -355,6 +358,74 @@
                                     const radinterp_allocator *a, radinterp_mesh **out);
        void radinterp_free_memory(const radinterp_allocator *a, void *data);
 
+   CHECKS AND CONTRACTS
+
+   Every function checks what it can and returns INVALID_ARGUMENT (a
+   query: zeros in its output) instead of reading or writing past it; what
+   it cannot check is the caller's contract: an array holds as many
+   elements as its count says, callbacks behave as documented, objects are
+   not used after destroy, and the THREADS rules.
+
+     radinterp_solve(desc, &s)  Checks: out and desc non-NULL; positions,
+         patches, materials non-NULL with non-zero counts; position_stride 0
+         or at least 12; patch_count <= 2^30; every parameter finite and not
+         negative; ff_samples, visibility_rays within their limits;
+         clustering and visibility known; allocator both callbacks or none;
+         every index < vertex_count (the 4th may be RADINTERP_NO_VERTEX);
+         every used vertex finite; every material id < material_count;
+         reflectance in [0, 1], emission finite and >= 0; quadrilaterals
+         planar and convex; the scene's size in [RADINTERP_MIN_SCENE_SIZE,
+         RADINTERP_MAX_SCENE_SIZE]; not every patch of zero area. Zero-area
+         patches are skipped and counted. Contract: positions holds
+         vertex_count vertices at position_stride, patches 4 * patch_count
+         indices, patch_materials patch_count ids (or NULL), materials
+         material_count; patches do not interpenetrate. The solution copies
+         what it keeps: the caller's arrays may go once it returns. CANCELLED
+         when progress asks, OUT_OF_MEMORY when an allocation fails: nothing
+         is leaked and *s is NULL.
+     radinterp_solution_destroy(s), radinterp_mesh_destroy(m)   NULL: nothing.
+     radinterp_solution_info(s, &info), radinterp_mesh_get_info(m, &info),
+     radinterp_mesh_get_data(m, &data)   NULL object: zeros.
+     radinterp_patch_radiosity(s, patch, rgb)   Checks: s, rgb non-NULL;
+         patch < patch_count and not skipped. Patch indices are the caller's.
+     radinterp_get_leaf(s, i, &leaf), radinterp_mesh_get_leaf(m, i, &leaf),
+     radinterp_mesh_get_discontinuity(m, i, &d)   Checks: object and output
+         non-NULL, i below the count.
+     radinterp_irradiance_at_point(s, patch, p, toward, rgb),
+     radinterp_radiosity_at_point(...)   Checks: s, p, rgb non-NULL; patch
+         valid as above; p (and toward when given) finite. Contract: p lies on
+         the patch (it is used as given, not projected), toward on the patch.
+         OUT_OF_MEMORY (rgb still the best estimate) when a large
+         triangulation cannot get memory.
+     radinterp_form_factor_point_polygon(p, n, verts, count)   0 for NULL
+         arguments, count < 3, non-finite input or a zero normal. Contract:
+         verts holds count xyz vertices of a planar convex polygon.
+     radinterp_build_mesh(s, desc, &m)   Checks: s, desc, out non-NULL;
+         parameters finite and not negative; max_leaf_dsets <= 4096,
+         refine_samples and refine_passes <= 64; allocator both or none.
+         Contract: s is a solution from radinterp_solve, left unchanged
+         (several meshes may be built from it at once). CANCELLED and
+         OUT_OF_MEMORY as for the solve.
+     radinterp_fit_quadratic(r, c)   NULL: nothing. Contract: r holds 6 floats.
+     radinterp_eval(m, tri, s, t, rgb), radinterp_eval_irradiance(...)   Checks:
+         m, rgb non-NULL, tri < triangle count, s and t finite (any finite
+         (s, t) is evaluated: the quadratic extends past the triangle).
+     radinterp_shade(m, ids, st, count, rgb_out), radinterp_shade_gouraud(...)
+         Checks: m non-NULL; ids, st, rgb_out non-NULL when count > 0. Pixels
+         whose id is not a triangle of the mesh are left as they are.
+         Contract: ids holds count ids, st 2 * count finite floats, rgb_out
+         3 * count floats.
+     radinterp_mesh_set_parallel_for(m, fn, user)   NULL m: nothing. Not
+         while radinterp_shade runs on the mesh.
+     radinterp_mesh_save(m, write, user), radinterp_mesh_save_to_memory(m, a,
+         &data, &size)   Checks: all non-NULL, allocator both or none; IO when
+         write fails. radinterp_free_memory(a, data) frees with the allocator
+         the save used.
+     radinterp_mesh_load(a, read, user, &m), radinterp_mesh_load_from_memory(
+         data, size, a, &m)   Input is hostile: every size, index and float
+         checked before use, the CRC at the end: CORRUPT_DATA for anything
+         off, VERSION for another format version, never a crash.
+
    SAVED MESHES
 
    radinterp_mesh_save writes magic "RADIMESH", RADINTERP_FILE_FORMAT_VERSION,
@@ -470,6 +541,13 @@ typedef enum radinterp_result {
    hours; they give RADINTERP_ERROR_INVALID_ARGUMENT. */
 #define RADINTERP_MAX_FF_SAMPLES 1024u
 #define RADINTERP_MAX_VISIBILITY_RAYS 256u
+/* The scene's size (diagonal of its bounding box) radinterp_solve accepts:
+   element areas are floats, so a scene of 1e20 m (areas past FLT_MAX) or of
+   1e-20 m (areas below the normal floats) cannot be represented. Each limit
+   is ten times inside the scales measured to work (the Cornell box scaled
+   by 1e19 and by 1e-18 solves to the same radiosities). */
+#define RADINTERP_MAX_SCENE_SIZE 1e18
+#define RADINTERP_MIN_SCENE_SIZE 1e-17
 
 /* The 4th index of a triangular patch. */
 #define RADINTERP_NO_VERTEX 0xFFFFFFFFu
@@ -3979,6 +4057,7 @@ static void radinterp__poly_nearest(const double (*v)[3], int count, const doubl
     int i, k, inside = 1;
     radinterp__d3_sub(p, v[0], d);
     for (k = 0; k < 3; k++) q[k] = p[k] - radinterp__d3_dot(d, n) * n[k];
+    memcpy(out, v[0], sizeof q);
     for (i = 0; i < count && inside; i++) {
         double e[3], w[3], c[3];
         radinterp__d3_sub(v[(i + 1) % count], v[i], e);
@@ -4058,7 +4137,7 @@ static void radinterp__link_compute(radinterp_solution *s, radinterp__pending *p
        happened to miss a peak of the factor (near a shared edge) would be the
        ones kept, and the kept factors would be biased low. */
     {
-        double c[3] = {0.0, 0.0, 0.0}, cs[3] = {0.0, 0.0, 0.0}, near[3];
+        double c[3] = {0.0, 0.0, 0.0}, cs[3] = {0.0, 0.0, 0.0}, near[3] = {0.0, 0.0, 0.0};
         int k, j;
         for (k = 0; k < nRc; k++)
             for (j = 0; j < 3; j++) c[j] += Rc[k][j] / nRc;
@@ -4396,8 +4475,10 @@ static double radinterp__source_spread(const radinterp_solution *s, uint32_t nod
    link with a cluster at either end (a cluster link) carries light between
    the elements' centres: the source's power toward the receiver over
    pi r^2, times the fraction of rays between random points of the two
-   that no surface blocks; a link whose rays are all blocked is dropped
-   (nothing crosses a solid wall). A cluster's power toward a direction u
+   that no surface blocks; a link whose rays are all blocked, or none of
+   whose point pairs face each other, is dropped when patches in one plane
+   between the two hide them from each other (nothing crosses a solid
+   wall), else kept at the fraction measured. A cluster's power toward a direction u
    comes from six sums over its patches, one per axis direction a:
    P_a = sum A open B max(0, n . a), P(u) = sum_k |u_k| P_(sign u_k) e_k,
    exact for patches facing along the axes and an upper bound otherwise;
@@ -4632,7 +4713,10 @@ static void radinterp__clink_compute(const radinterp_solution *s, radinterp__cpe
         pc->rays++;
         if (!radinterp__segment_blocked(s, a, b)) open += w;
     }
-    if (all > 0.0 && open == 0.0 && radinterp__planes_hide(s, rlo, rhi, slo, shi)) { pc->dead = pc->hidden = 1; return; }
+    /* no ray got through, or no pair of points faced each other (then the
+       rays say nothing and the transfer would count as unblocked: a desk
+       leg's cluster link to the next room through the wall carried light) */
+    if (open == 0.0 && radinterp__planes_hide(s, rlo, rhi, slo, shi)) { pc->dead = pc->hidden = 1; return; }
     pc->k = (float)((all > 0.0 ? open / all : 1.0) / (RADINTERP__PI * r * r));
 }
 
@@ -7167,7 +7251,12 @@ static radinterp_result radinterp__build_patches(radinterp_solution *s, const ra
         }
     for (k = 0; k < 3; k++) { s->scene_lo[k] = (float)lo[k]; s->scene_hi[k] = (float)hi[k]; }
     s->diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
-    if (!(s->diag > 0.0)) s->diag = 1.0;
+    if (s->diag > RADINTERP_MAX_SCENE_SIZE || (s->diag > 0.0 && s->diag < RADINTERP_MIN_SCENE_SIZE)) {
+        radinterp__log(d, "radinterp_solve: the scene's size %g is outside [%g, %g]", s->diag, RADINTERP_MIN_SCENE_SIZE,
+                       RADINTERP_MAX_SCENE_SIZE);
+        return RADINTERP_ERROR_INVALID_ARGUMENT;
+    }
+    if (!(s->diag > 0.0)) s->diag = 1.0;   /* every corner at one point: every patch is skipped */
     planarity = radinterp__def(d->planarity_tolerance, 1e-3f);
     for (i = 0; i < d->patch_count; i++) {
         radinterp__patch *pt = &s->patches[i];

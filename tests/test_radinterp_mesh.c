@@ -1134,7 +1134,7 @@ static radinterp_result mesh_with_patch(const float (*q)[2], radinterp_mesh_desc
     radinterp_solution *sol = NULL;
     radinterp_mesh *m = NULL;
     radinterp_result r;
-    budget bud;
+    static budget bud;   /* a kept mesh frees through it after this returns */
     float c[4][3];
     uint32_t grey, light, k;
     memset(&s, 0, sizeof s);
