@@ -154,7 +154,7 @@ static void test_reference_frames(void)
         if (render_frames(&s, 2, frames)) seed = against_references(frames);
         close_session(&s);
     }
-    test_note("radiosity: frames 0 and 1 against the references: LRMS %.4f (tolerance %.2f); another seed %.4f; "
+    test_note("radiosity: frames 0 and 1 against the references: LRMS %.4f (tolerance %.3f); another seed %.4f; "
               "Gouraud instead of quadratic interpolants %.4f; no occlusion blob %.4f; no self-occlusion ratio %.4f",
               lrms, REF_TOLERANCE, seed, gouraud, blob, occlusion);
     CHECK_MSG(lrms >= 0.0 && lrms <= REF_TOLERANCE, "LRMS %.4f", lrms);
