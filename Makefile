@@ -5,7 +5,7 @@
 #                 header, run unit tests (ASan+UBSan; again with clang's UBSan
 #                 when clang is present), replay the fuzz corpora, run reference tests
 #   make bench    run the benchmarks (throughput next to the papers' figures)
-#   make demo     run the main example
+#   make demo     run the main example (make demo-daylight: the building by day)
 #   make fuzz     run every fuzz target for FUZZ_SECONDS (default 60) with libFuzzer
 #   make fuzz-corpus  rewrite the fuzz seeds from the headers' save functions
 #   make view     the walkthrough in a window (installs SDL2 if needed and it can)
@@ -113,7 +113,7 @@ REF_CFLAGS = $(shell pkg-config --cflags OpenEXR 2>/dev/null)
 REF_LIBS   = -lembree3 $(shell pkg-config --libs OpenEXR 2>/dev/null)
 
 .SECONDARY:
-.PHONY: all examples test test-build test-run bench bench-build demo view deps viewer-deps clean fuzz fuzz-build fuzz-corpus
+.PHONY: all examples test test-build test-run bench bench-build demo demo-daylight view deps viewer-deps clean fuzz fuzz-build fuzz-corpus
 
 all: examples
 examples: $(EXAMPLE_BINS) $(filter $(BUILD)/examples/%,$(VIEWER_BINS))
@@ -141,6 +141,11 @@ DEMO := $(if $(wildcard examples/walkthrough.c),$(BUILD)/examples/walkthrough,$(
 demo: $(DEMO)
 	@mkdir -p $(BUILD)/demo
 	$(DEMO) --out $(BUILD)/demo
+
+# The building by day: glass in the windows, a sky (mode raytrace).
+demo-daylight: $(BUILD)/examples/walkthrough
+	@mkdir -p $(BUILD)/demo
+	$(BUILD)/examples/walkthrough --scene daylight --mode raytrace --out $(BUILD)/demo
 
 # The walkthrough in a window: mouse and WASD, M switches the mode (see examples/viewer.c).
 view: viewer-deps

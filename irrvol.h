@@ -1,4 +1,4 @@
-/* irrvol.h - v0.4.0 - irradiance volume for lighting moving objects - public domain or MIT, see end of file
+/* irrvol.h - v0.4.1 - irradiance volume for lighting moving objects - public domain or MIT, see end of file
 
    IRRVOL.H: a bilevel grid of directional irradiance samples that lights moving objects by interpolation.
 
@@ -12,8 +12,9 @@
    it (eq. 4.3, or the moment of order n, eq. 4.8). A query at any position
    and normal finds the cell (eq. 4.4-4.6), the bins of the direction
    (inverse concentric map) and interpolates between the cell's eight
-   samples: tens of millions of queries per second, enough to re-light every
-   vertex of moving objects every frame. A moving object's diffuse radiance
+   samples: millions of queries per second and core (tests/bench_irrvol.c
+   prints the rates of every filter and weighting), enough to re-light
+   every vertex of moving objects every frame. A moving object's diffuse radiance
    is then reflectance * H / pi (eq. 4.7).
 
    Built for real levels, as engines expect of probe volumes today (DDGI,
@@ -225,7 +226,12 @@
    query point moved info.normal_bias (desc.normal_bias, default 0.02, times
    the finest sample spacing) along the query direction. When no corner is
    visible, or an input is NaN, the plain weights stand. Without triangles
-   no sample sees a surface: only the backface term remains.
+   no sample sees a surface: only the backface term remains. The queries
+   read what these weights need in few cache lines: each sub-cell keeps a
+   record of its eight corners' ids, origins and reaches (192 bytes), and
+   a test point within its sample's reach (0.999 over the largest |g| of
+   the map: no point there can lie beyond a predicted surface) skips the
+   map, with the same result to the bit.
    IRRVOL_WEIGHTING_TRILINEAR is the thesis's plain trilinear interpolation.
    Two closed rooms behind a 2 cm wall, one lit, one dark: the leak-safe
    query gives 0.00 % of the lit side 1 cm and 10 cm into the dark room
@@ -321,7 +327,7 @@
    refinement by light the total is known after the first level and grows
    once, when the refined cells' samples join.
 
-   VALIDATION AND CONTRACT
+   VALIDATION AND CONTRACT (tests/test_irrvol_contract.c)
 
    What each function checks (a failed check returns the named code and
    changes nothing), and what the caller must guarantee (unchecked: breaking
@@ -335,8 +341,12 @@
                          >= 0; environment NULL, or 1..65536 texels a side
                          with every texel finite and >= 0; strides
                          >= 12 bytes; grid, resolution and option ranges;
-                         bounds finite with min < max (INVALID_ARGUMENT).
-                         Zero-area triangles are skipped and counted.
+                         bounds finite with min < max (INVALID_ARGUMENT),
+                         all before the first allocation except the scene's
+                         own bounds (zero size along an axis: a flat
+                         scene), found with the grid, which frees what it
+                         allocated. Zero-area triangles are skipped and
+                         counted.
                          Contract: positions hold vertex_count vertices at
                          the stride, indices 3 * triangle_count entries,
                          triangle_materials triangle_count entries,
@@ -350,15 +360,19 @@
      irrvol_info, irrvol_sample, irrvol_sample_values
                          check NULL pointers, the index, and that radiance
                          was kept (INVALID_ARGUMENT). Contract: irradiance and
-                         radiance hold bins x 3 floats.
-     queries             check nothing and never fail: NaN or infinite
-                         positions clamp to the boundary, NaN directions
-                         give a bin in range, unknown filter values act as
-                         NEAREST and unknown weightings as TRILINEAR, order
-                         0 or 1 reads L1, any other L2. Contract: vol is
-                         a built volume; pos, dir, normal, to_eye hold 3
-                         floats, rgb 3 (irrvol_query_many: count of each at
-                         their strides).
+                         radiance hold bins x 3 floats (either may be NULL).
+     queries             check nothing and never fail: positions outside
+                         the bounds (infinite and NaN ones too) take the
+                         boundary's cell and weights, and the leak-safe
+                         weights test the point itself when it is finite
+                         (else the plain weights stand); zero, infinite and
+                         NaN directions give a bin in range; unknown filter
+                         values act as NEAREST and unknown weightings as
+                         TRILINEAR; order 0 or 1 reads L1, any other L2.
+                         Contract: vol is a built volume; pos, dir, normal,
+                         to_eye hold 3 floats, rgb 3 (irrvol_query_many:
+                         count of each at their strides; count 0 reads
+                         nothing).
      irrvol_bin_direction, irrvol_direction_bin
                          bins past the last give +z; vol may be NULL for
                          irrvol_bin_direction. Contract: irrvol_direction_bin
@@ -376,14 +390,20 @@
                          vertex_count floats; buffers as for irrvol_build.
      irrvol_save, irrvol_save_to_memory
                          check NULL pointers (INVALID_ARGUMENT); a failing
-                         write gives IO (OUT_OF_MEMORY for memory).
+                         write gives IO (OUT_OF_MEMORY for memory). The
+                         buffer of irrvol_save_to_memory comes from the given
+                         allocator (NULL: IRRVOL_MALLOC) and goes back
+                         through irrvol_free_memory with the same one.
      irrvol_load, irrvol_load_from_memory
-                         treat the input as hostile: every size is checked
-                         against the declared payload before allocating,
-                         every value's range, finiteness and consistency,
-                         the CRC; truncation and corruption give
-                         CORRUPT_DATA, another format version VERSION.
-                         Contract: data holds size bytes.
+                         check NULL pointers and the allocator (both
+                         callbacks or neither: INVALID_ARGUMENT, *out NULL,
+                         nothing allocated), and treat the input as
+                         hostile: every size is checked against the
+                         declared payload before allocating, every value's
+                         range, finiteness and consistency, the CRC;
+                         truncation and corruption give CORRUPT_DATA,
+                         another format version VERSION. Contract: data
+                         holds size bytes.
      irrvol_free_memory  accepts NULL data; the allocator must be the one the
                          data was saved with.
 
@@ -426,7 +446,7 @@
 
 #define IRRVOL_VERSION_MAJOR 0
 #define IRRVOL_VERSION_MINOR 4
-#define IRRVOL_VERSION_PATCH 0
+#define IRRVOL_VERSION_PATCH 1
 #define IRRVOL_FILE_FORMAT_VERSION 2
 
 /* Fixed limits of the desc's fields (see LIMITS). */
@@ -2030,7 +2050,19 @@ IRRVOL__HOT uint32_t irrvol__oct_texel(int i, int j, int n)
 typedef struct irrvol__cell {
     uint32_t offset;   /* first id of the cell's table in vol->ids */
     uint32_t side;     /* samples per axis of the table */
+    uint32_t corners;  /* its first sub-cell's record in vol->corners, (side - 1)^3 of them, x fastest */
 } irrvol__cell;
+
+/* A (sub-)cell's eight corners as the queries read them: their sample
+   ids and, for the leak-safe weights, their probes (origin and reach,
+   section 13) by coordinate, four corners to a register. Three cache lines
+   where the id table, eight probes and the cell took up to a dozen. */
+typedef struct irrvol__corners {
+    float x[8], y[8], z[8], reach2[8];   /* the corners' probes (a hanging corner's: unused) */
+    uint32_t id[8];                      /* the corner samples, x fastest (irrvol__table_corners) */
+    uint32_t hanging;                    /* non-zero: a corner is hanging, its parents stand in */
+    uint32_t pad[7];                     /* 192 bytes: three lines */
+} irrvol__corners;
 
 enum {   /* why a first-level cell is refined (vol->refined) */
     IRRVOL__UNREFINED = 0,
@@ -2075,6 +2107,11 @@ struct irrvol {
     float *visibility;     /* per sample before hanging_begin: an (n + 2)^2 map of the fit of the inverse hit
                               distance, gradient xyz and residual variance (section 13), its border the
                               mirrored texels across the octahedral square's edges */
+    irrvol__corners *corners; /* per sub-cell (of every cell), aligned to 64 bytes */
+    void *corner_block;    /* the allocation that holds them */
+    float *probes;         /* what a leak-safe query reads of a sample before hanging_begin, in one 16-byte
+                              record: its origin xyz and its reach squared, a distance within which no test
+                              point lies beyond the surface its map predicts, or -1 when it is invalid */
     float bias;            /* the visibility test point moves this far along the query direction */
     uint64_t rays;
     uint32_t degenerate, invalid_count, relocated_count;
@@ -2356,6 +2393,18 @@ static irrvol_result irrvol__alloc_samples(irrvol *v, int keep_radiance)
     return IRRVOL_OK;
 }
 
+/* Sub-cells of all cells: the corner records. */
+static uint64_t irrvol__corner_count(const irrvol *v)
+{
+    uint64_t n = 0;
+    uint32_t c;
+    for (c = 0; c < v->cell_count; c++) {
+        uint64_t f = v->cell[c].side - 1;
+        n += f * f * f;
+    }
+    return n;
+}
+
 static size_t irrvol__bytes(const irrvol *v)
 {
     size_t per_sample = (size_t)v->bins * 3 * sizeof(float);
@@ -2363,7 +2412,9 @@ static size_t irrvol__bytes(const irrvol *v)
     return sizeof *v + v->cell_count * (sizeof(irrvol__cell) + 1) + v->id_count * sizeof(uint32_t) +
            (size_t)v->sample_count * (7 * sizeof(float) + IRRVOL__SH_FLOATS * sizeof(float) +
                                       per_sample * (v->radiance ? 2 : 1)) +
-           hanging * 4 * (sizeof(uint32_t) + sizeof(float)) + (size_t)v->hanging_begin * v->map_texels * 4 * sizeof(float);
+           hanging * 4 * (sizeof(uint32_t) + sizeof(float)) +
+           (size_t)v->hanging_begin * (v->map_texels + 1) * 4 * sizeof(float) +
+           (v->corner_block ? (irrvol__corner_count(v) + 1) * sizeof(irrvol__corners) : 0);
 }
 
 IRRVOL_API void irrvol_destroy(irrvol *vol)
@@ -2382,6 +2433,8 @@ IRRVOL_API void irrvol_destroy(irrvol *vol)
     irrvol__free(&a, vol->radiance);
     irrvol__free(&a, vol->sh);
     irrvol__free(&a, vol->visibility);
+    irrvol__free(&a, vol->probes);
+    irrvol__free(&a, vol->corner_block);
     irrvol__free(&a, vol);
 }
 
@@ -2409,6 +2462,85 @@ static void irrvol__map_border(const irrvol *v, float *map)
             memcpy(map + 4 * (size_t)(j * w + i), map + 4 * ((from / (uint32_t)n + 1) * (uint32_t)w + from % (uint32_t)n + 1),
                    4 * sizeof(float));
         }
+}
+
+/* The 8 corner ids of sub-cell (x, y, z) of a cell's table, x fastest. */
+IRRVOL__HOT void irrvol__table_corners(const irrvol *v, const irrvol__cell *cell, uint32_t x, uint32_t y, uint32_t z,
+                                       uint32_t ids[8])
+{
+    uint32_t row = cell->side, slab = cell->side * cell->side;
+    const uint32_t *t = v->ids + cell->offset + x + row * y + slab * z;
+    ids[0] = t[0];          ids[1] = t[1];
+    ids[2] = t[row];        ids[3] = t[row + 1];
+    ids[4] = t[slab];       ids[5] = t[slab + 1];
+    ids[6] = t[slab + row]; ids[7] = t[slab + row + 1];
+}
+
+/* The corner records of every sub-cell, from the id tables and the probes. */
+static irrvol_result irrvol__make_corners(irrvol *v)
+{
+    uint64_t count = irrvol__corner_count(v);
+    uint32_t c, at = 0, x, y, z, k;
+    if (count + 1 > UINT32_MAX || count + 2 > SIZE_MAX / sizeof(irrvol__corners)) return IRRVOL_ERROR_OUT_OF_MEMORY;
+    v->corner_block = irrvol__alloc_array(&v->allocator, (size_t)count + 2, sizeof(irrvol__corners));
+    if (!v->corner_block) return IRRVOL_ERROR_OUT_OF_MEMORY;
+    v->corners = (irrvol__corners *)(void *)((unsigned char *)v->corner_block +
+                                             (64 - (uintptr_t)v->corner_block % 64) % 64);
+    for (c = 0; c < v->cell_count; c++) {
+        irrvol__cell *cell = &v->cell[c];
+        uint32_t f = cell->side - 1;
+        cell->corners = at;
+        for (z = 0; z < f; z++)
+            for (y = 0; y < f; y++)
+                for (x = 0; x < f; x++) {
+                    irrvol__corners *r = &v->corners[at++];
+                    memset(r, 0, sizeof *r);
+                    irrvol__table_corners(v, cell, x, y, z, r->id);
+                    for (k = 0; k < 8; k++) {
+                        const float *p;
+                        if (r->id[k] >= v->hanging_begin) {
+                            r->hanging = 1;
+                            continue;
+                        }
+                        p = v->probes + 4 * (size_t)r->id[k];
+                        r->x[k] = p[0];
+                        r->y[k] = p[1];
+                        r->z[k] = p[2];
+                        r->reach2[k] = p[3];
+                    }
+                }
+    }
+    return IRRVOL_OK;
+}
+
+/* The probes: each sample's origin and reach in one record. A test point
+   x at distance r from the origin lies beyond the predicted surface when
+   g . (x - o) > 1 (section 13), g the bilinear blend of four texels'
+   gradients, so |g| <= G, the largest gradient of the map, and no point
+   with r G < 1 can be beyond it: there the Chebyshev test changes nothing
+   and the queries skip the map (irrvol__lanes4_fetch). The reach is
+   stored squared as (0.999 / G)^2, G rounded up: the margin dwarfs the
+   float rounding of the blend and of g . (x - o), so skipping gives the
+   same weights bit for bit. No surface seen: FLT_MAX; invalid: -1. */
+static irrvol_result irrvol__make_probes(irrvol *v)
+{
+    uint32_t s, t;
+    v->probes = (float *)irrvol__alloc_array(&v->allocator, (size_t)v->hanging_begin + 1, 4 * sizeof(float));
+    if (!v->probes) return IRRVOL_ERROR_OUT_OF_MEMORY;
+    for (s = 0; s < v->hanging_begin; s++) {
+        const float *map = v->visibility + (size_t)s * v->map_texels * 4;
+        double g2 = 0.0, reach;
+        for (t = 0; t < v->map_texels; t++) {
+            const float *g = map + 4 * (size_t)t;
+            double l2 = (double)g[0] * g[0] + (double)g[1] * g[1] + (double)g[2] * g[2];
+            g2 = l2 > g2 ? l2 : g2;
+        }
+        reach = g2 > 0.0 ? 0.999 / (sqrt(g2) * (1.0 + 1e-6)) : 0.0;
+        memcpy(v->probes + 4 * (size_t)s, v->origins + 4 * (size_t)s, 3 * sizeof(float));
+        v->probes[4 * (size_t)s + 3] = v->origins[4 * (size_t)s + 3] == 0.0f ? -1.0f
+                                       : (g2 > 0.0 ? (float)(reach * reach * (1.0 - 1e-6)) : FLT_MAX);
+    }
+    return irrvol__make_corners(v);
 }
 
 /* Volume-wide settings that follow from the resolutions. */
@@ -3725,17 +3857,6 @@ static irrvol_result irrvol__gather(irrvol__build *b, uint32_t begin, uint32_t e
     return IRRVOL_OK;
 }
 
-/* The 8 corner ids of sub-cell (x, y, z) of a cell's table, x fastest. */
-IRRVOL__HOT void irrvol__table_corners(const irrvol *v, const irrvol__cell *cell, uint32_t x, uint32_t y, uint32_t z,
-                                       uint32_t ids[8])
-{
-    uint32_t row = cell->side, slab = cell->side * cell->side;
-    const uint32_t *t = v->ids + cell->offset + x + row * y + slab * z;
-    ids[0] = t[0];          ids[1] = t[1];
-    ids[2] = t[row];        ids[3] = t[row + 1];
-    ids[4] = t[slab];       ids[5] = t[slab + 1];
-    ids[6] = t[slab + row]; ids[7] = t[slab + row + 1];
-}
 
 /* Every value a sample holds (irradiance and radiance bins, harmonics) as
    sum_i w_i value(from_i) over n samples; to is not among them. */
@@ -3964,6 +4085,7 @@ IRRVOL_API irrvol_result irrvol_build(const irrvol_desc *desc, irrvol **out)
         r = IRRVOL_ERROR_OUT_OF_MEMORY;
     if (r == IRRVOL_OK) r = irrvol__setup_directions(&b);
     if (r == IRRVOL_OK) r = irrvol__gather_all(&b);
+    if (r == IRRVOL_OK) r = irrvol__make_probes(v);
     irrvol__bvh_free(&b.bvh, &v->allocator);
     irrvol__free(&v->allocator, b.dirs);
     irrvol__free(&v->allocator, b.dir_soa);
@@ -4039,10 +4161,12 @@ IRRVOL__HOT void irrvol__cell_coords(const irrvol *v, const float pos[3], uint32
 
 /* The eight samples of cell c around offsets o (the same steps inside the
    cell's own table: its sub-cell at the second level) and their trilinear
-   weights. */
-IRRVOL__HOT void irrvol__cell_corners(const irrvol *v, const uint32_t c[3], const float o[3], uint32_t ids[8], float w[8])
+   weights; returns the sub-cell's corner record. */
+IRRVOL__HOT const irrvol__corners *irrvol__cell_corners(const irrvol *v, const uint32_t c[3], const float o[3],
+                                                        uint32_t ids[8], float w[8])
 {
     const irrvol__cell *cell = &v->cell[c[0] + v->cells[0] * (c[1] + v->cells[1] * c[2])];
+    const irrvol__corners *rec;
     uint32_t side = cell->side, s[3];
     float f = (float)(side - 1), t[3];
     int d;
@@ -4052,7 +4176,8 @@ IRRVOL__HOT void irrvol__cell_corners(const irrvol *v, const uint32_t c[3], cons
         s[d] = s[d] < side - 2 ? s[d] : side - 2;
         t[d] = q - (float)s[d];
     }
-    irrvol__table_corners(v, cell, s[0], s[1], s[2], ids);
+    rec = v->corners + cell->corners + s[0] + (side - 1) * (s[1] + (side - 1) * s[2]);
+    memcpy(ids, rec->id, sizeof rec->id);
     {
         float x1 = t[0], y1 = t[1], z1 = t[2], x0 = 1.0f - x1, y0 = 1.0f - y1, z0 = 1.0f - z1;
         w[0] = x0 * y0 * z0; w[1] = x1 * y0 * z0;
@@ -4060,6 +4185,7 @@ IRRVOL__HOT void irrvol__cell_corners(const irrvol *v, const uint32_t c[3], cons
         w[4] = x0 * y0 * z1; w[5] = x1 * y0 * z1;
         w[6] = x0 * y1 * z1; w[7] = x1 * y1 * z1;
     }
+    return rec;
 }
 
 /* The bin that contains the square point (u, v) of hemisphere h. */
@@ -4118,15 +4244,20 @@ IRRVOL__HOT void irrvol__bilinear_bins(const irrvol *v, float u, float t, uint32
    four with SSE2 in the same operations and order, and the GLSL follows it. */
 IRRVOL__HOT float irrvol__visibility_weight(const irrvol *v, uint32_t s, const float x[3], const float n[3])
 {
-    const float *o = v->origins + 4 * (size_t)s, *m, *t00, *t01;
+    const float *o = v->probes + 4 * (size_t)s, *m, *t00, *t01;
+    float ok = o[3] >= 0.0f ? 1.0f : 0.0f;
     float dx = x[0] - o[0], dy = x[1] - o[1], dz = x[2] - o[2], fn = (float)v->vis_res;
     float r2 = dx * dx + dy * dy + dz * dz, r, inv_r, w, a, inv_a, px, py, u, t, fu, ft, g[4], gd, beyond;
     int i0, j0, c;
-    if (!(r2 > 0.0f)) return o[3];
+    if (!(r2 > 0.0f)) return ok;
     r = sqrtf(r2);
     inv_r = 1.0f / r;
     w = 0.5f - 0.5f * ((dx * n[0] + dy * n[1] + dz * n[2]) * inv_r);
     w = w + 0.2f;
+    if (r2 <= o[3] || !ok) {   /* within reach (irrvol__make_probes), or invalid: no texels */
+        if (w < 0.2f) w = w * (w * w * 25.0f);
+        return w * ok;
+    }
     /* the octahedral map: direction -> [0.5, n + 0.5] in the bordered map */
     a = fabsf(dx) + fabsf(dy) + fabsf(dz);
     inv_a = 1.0f / a;
@@ -4155,7 +4286,7 @@ IRRVOL__HOT float irrvol__visibility_weight(const irrvol *v, uint32_t s, const f
         w = w * (cheb * cheb * cheb);
     }
     if (w < 0.2f) w = w * (w * w * 25.0f);
-    return w * o[3];
+    return w * ok;
 }
 
 #define IRRVOL__MAX_TERMS 32   /* a query's samples: 8 corners, each a hanging sample of up to 4 parents */
@@ -4181,28 +4312,29 @@ IRRVOL__HOT irrvol__point4 irrvol__point4_set(const float x[3], const float n[3]
 /* Four lanes of irrvol__visibility_weight between its three steps. */
 typedef struct irrvol__lanes4 {
     __m128 dx, dy, dz, inv_r, w, pos, ok;   /* toward x, 1 / r, the backface term, r > 0, valid */
+    int near;                               /* bit k: lane k within its sample's reach, or invalid: no texels */
     const float *texel[4];                  /* each lane's 2 x 2 texels: the top left one */
     float fu[4], ft[4];                     /* and the bilinear weights */
     __m128 fit[4];                          /* each lane's blended fit: gx, gy, gz, var */
 } irrvol__lanes4;
 
-/* Step 1: directions, the backface term and the texels of four samples. */
-IRRVOL__HOT void irrvol__lanes4_locate(const irrvol *v, const uint32_t s[4], const irrvol__point4 *p, irrvol__lanes4 *l)
+/* Step 1: directions, the backface term and the texels of four samples
+   s, their probes (ox, oy, oz, reach2) by lane. */
+IRRVOL__HOT void irrvol__lanes4_locate(const irrvol *v, const uint32_t s[4], __m128 ox, __m128 oy, __m128 oz,
+                                       __m128 reach2, const irrvol__point4 *p, irrvol__lanes4 *l)
 {
     const __m128 one = _mm_set1_ps(1.0f), half = _mm_set1_ps(0.5f), zero = _mm_setzero_ps();
     const __m128 sign = _mm_set1_ps(-0.0f), fn = _mm_set1_ps((float)v->vis_res);
-    __m128 ox = _mm_loadu_ps(v->origins + 4 * (size_t)s[0]), oy = _mm_loadu_ps(v->origins + 4 * (size_t)s[1]);
-    __m128 oz = _mm_loadu_ps(v->origins + 4 * (size_t)s[2]), ok = _mm_loadu_ps(v->origins + 4 * (size_t)s[3]);
     __m128 r2, w, inv_a, px, py, neg, qx, qy, u, t;
     __m128i i0, j0;
     int iu[4], ju[4], k;
-    _MM_TRANSPOSE4_PS(ox, oy, oz, ok);
-    l->ok = ok;
+    l->ok = _mm_and_ps(_mm_cmpge_ps(reach2, zero), one);
     l->dx = _mm_sub_ps(p->x, ox);
     l->dy = _mm_sub_ps(p->y, oy);
     l->dz = _mm_sub_ps(p->z, oz);
     r2 = _mm_add_ps(_mm_add_ps(_mm_mul_ps(l->dx, l->dx), _mm_mul_ps(l->dy, l->dy)), _mm_mul_ps(l->dz, l->dz));
     l->pos = _mm_cmpgt_ps(r2, zero);
+    l->near = _mm_movemask_ps(_mm_or_ps(_mm_cmple_ps(r2, reach2), _mm_cmplt_ps(reach2, zero)));   /* or invalid */
     l->inv_r = _mm_div_ps(one, _mm_sqrt_ps(r2));
     w = _mm_add_ps(_mm_add_ps(_mm_mul_ps(l->dx, p->nx), _mm_mul_ps(l->dy, p->ny)), _mm_mul_ps(l->dz, p->nz));
     w = _mm_sub_ps(half, _mm_mul_ps(half, _mm_mul_ps(w, l->inv_r)));
@@ -4227,20 +4359,42 @@ IRRVOL__HOT void irrvol__lanes4_locate(const irrvol *v, const uint32_t s[4], con
     _mm_storeu_si128((__m128i *)(void *)iu, i0);
     _mm_storeu_si128((__m128i *)(void *)ju, j0);
     for (k = 0; k < 4; k++)
-        l->texel[k] = v->visibility + ((size_t)s[k] * v->map_texels + (size_t)ju[k] * (v->vis_res + 2) + (size_t)iu[k]) * 4;
+        if (!(l->near >> k & 1))
+            l->texel[k] = v->visibility + ((size_t)s[k] * v->map_texels + (size_t)ju[k] * (v->vis_res + 2) + (size_t)iu[k]) * 4;
 }
 
-/* Step 2: each lane's four texels, blended. */
+/* Step 1 for any four samples: their probes gathered by lane. */
+IRRVOL__HOT void irrvol__lanes4_locate_samples(const irrvol *v, const uint32_t s[4], const irrvol__point4 *p,
+                                               irrvol__lanes4 *l)
+{
+    __m128 ox = _mm_loadu_ps(v->probes + 4 * (size_t)s[0]), oy = _mm_loadu_ps(v->probes + 4 * (size_t)s[1]);
+    __m128 oz = _mm_loadu_ps(v->probes + 4 * (size_t)s[2]), reach2 = _mm_loadu_ps(v->probes + 4 * (size_t)s[3]);
+    _MM_TRANSPOSE4_PS(ox, oy, oz, reach2);
+    irrvol__lanes4_locate(v, s, ox, oy, oz, reach2, p, l);
+}
+
+/* Step 2: each lane's four texels, blended; a lane within reach takes a
+   zero fit, which predicts no surface: g . (x - o) - 1 < 0, as its texels
+   would give. */
 IRRVOL__HOT void irrvol__lanes4_fetch(const irrvol *v, irrvol__lanes4 *l)
 {
     const __m128 one = _mm_set1_ps(1.0f);
     int k;
     for (k = 0; k < 4; k++) {
-        const float *m = l->texel[k], *m1 = m + 4 * (v->vis_res + 2);
-        __m128 su = _mm_set1_ps(l->fu[k]), sv = _mm_set1_ps(l->ft[k]);
-        __m128 cu = _mm_sub_ps(one, su), cv = _mm_sub_ps(one, sv);
-        __m128 r0 = _mm_add_ps(_mm_mul_ps(_mm_loadu_ps(m), cu), _mm_mul_ps(_mm_loadu_ps(m + 4), su));
-        __m128 r1 = _mm_add_ps(_mm_mul_ps(_mm_loadu_ps(m1), cu), _mm_mul_ps(_mm_loadu_ps(m1 + 4), su));
+        const float *m, *m1;
+        __m128 su, sv, cu, cv, r0, r1;
+        if (l->near >> k & 1) {
+            l->fit[k] = _mm_setzero_ps();
+            continue;
+        }
+        m = l->texel[k];
+        m1 = m + 4 * (v->vis_res + 2);
+        su = _mm_set1_ps(l->fu[k]);
+        sv = _mm_set1_ps(l->ft[k]);
+        cu = _mm_sub_ps(one, su);
+        cv = _mm_sub_ps(one, sv);
+        r0 = _mm_add_ps(_mm_mul_ps(_mm_loadu_ps(m), cu), _mm_mul_ps(_mm_loadu_ps(m + 4), su));
+        r1 = _mm_add_ps(_mm_mul_ps(_mm_loadu_ps(m1), cu), _mm_mul_ps(_mm_loadu_ps(m1 + 4), su));
         l->fit[k] = _mm_add_ps(_mm_mul_ps(r0, cv), _mm_mul_ps(r1, sv));
     }
 }
@@ -4275,12 +4429,31 @@ IRRVOL__HOT void irrvol__visibility_weights(const irrvol *v, const uint32_t *s, 
     irrvol__lanes4 l[IRRVOL__MAX_TERMS / 4];
     irrvol__point4 p = irrvol__point4_set(x, n);
     uint32_t groups = count / 4, g;
-    for (g = 0; g < groups; g++) irrvol__lanes4_locate(v, s + 4 * g, &p, &l[g]);
+    for (g = 0; g < groups; g++) irrvol__lanes4_locate_samples(v, s + 4 * g, &p, &l[g]);
     for (g = 0; g < groups; g++) irrvol__lanes4_fetch(v, &l[g]);
     for (g = 0; g < groups; g++) irrvol__lanes4_weigh(&l[g], out + 4 * g);
     i = 4 * groups;
 #endif
     for (; i < count; i++) out[i] = irrvol__visibility_weight(v, s[i], x, n);
+}
+
+/* The visibility weights of a sub-cell's eight corners, none hanging:
+   irrvol__visibility_weights of its ids, the probes read from its record. */
+IRRVOL__HOT void irrvol__corner_weights(const irrvol *v, const irrvol__corners *r, const float x[3], const float n[3],
+                                        float out[8])
+{
+#ifdef IRRVOL__SSE2
+    irrvol__lanes4 l[2];
+    irrvol__point4 p = irrvol__point4_set(x, n);
+    int g;
+    for (g = 0; g < 2; g++)
+        irrvol__lanes4_locate(v, r->id + 4 * g, _mm_load_ps(r->x + 4 * g), _mm_load_ps(r->y + 4 * g),
+                              _mm_load_ps(r->z + 4 * g), _mm_load_ps(r->reach2 + 4 * g), &p, &l[g]);
+    for (g = 0; g < 2; g++) irrvol__lanes4_fetch(v, &l[g]);
+    for (g = 0; g < 2; g++) irrvol__lanes4_weigh(&l[g], out + 4 * g);
+#else
+    irrvol__visibility_weights(v, r->id, 8, x, n, out);
+#endif
 }
 
 /* A query reduced to the samples it reads, their weights and the bins:
@@ -4300,7 +4473,8 @@ typedef struct irrvol__prepared {
    replaced by its parents (section 9), renormalised. When no sample is
    visible (every corner invalid) or an input is NaN, the plain trilinear
    weights stand. */
-IRRVOL__HOT void irrvol__visibility_terms(const irrvol *v, const float pos[3], const float normal[3], irrvol__prepared *q)
+IRRVOL__HOT void irrvol__visibility_terms(const irrvol *v, const irrvol__corners *rec, const float pos[3],
+                                          const float normal[3], irrvol__prepared *q)
 {
     float n[3], x[3], len2 = normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2], inv, sum = 0.0f;
     float vis[IRRVOL__MAX_TERMS], w[8];
@@ -4313,20 +4487,25 @@ IRRVOL__HOT void irrvol__visibility_terms(const irrvol *v, const float pos[3], c
     if (!irrvol__finite3(x) || !irrvol__finite3(n)) return;   /* NaN or infinite: the plain weights stand */
     memcpy(ids, q->id, sizeof ids);
     memcpy(w, q->w, sizeof w);
-    for (i = 0; i < 8; i++) {
-        if (ids[i] >= v->hanging_begin) {
-            size_t h = 4 * (size_t)(ids[i] - v->hanging_begin);
-            for (j = 0; j < 4; j++)
-                if (v->parent_weights[h + j] > 0.0f) {
-                    q->id[m] = v->parents[h + j];
-                    q->w[m++] = w[i] * v->parent_weights[h + j];
-                }
-        } else {
-            q->id[m] = ids[i];
-            q->w[m++] = w[i];
+    if (!rec->hanging) {   /* the eight corners themselves */
+        m = 8;
+        irrvol__corner_weights(v, rec, x, n, vis);
+    } else {
+        for (i = 0; i < 8; i++) {
+            if (ids[i] >= v->hanging_begin) {
+                size_t h = 4 * (size_t)(ids[i] - v->hanging_begin);
+                for (j = 0; j < 4; j++)
+                    if (v->parent_weights[h + j] > 0.0f) {
+                        q->id[m] = v->parents[h + j];
+                        q->w[m++] = w[i] * v->parent_weights[h + j];
+                    }
+            } else {
+                q->id[m] = ids[i];
+                q->w[m++] = w[i];
+            }
         }
+        irrvol__visibility_weights(v, q->id, m, x, n, vis);
     }
-    irrvol__visibility_weights(v, q->id, m, x, n, vis);
     for (i = 0; i < m; i++) {
         q->w[i] *= vis[i];
         sum += q->w[i];
@@ -4345,11 +4524,11 @@ IRRVOL__HOT void irrvol__visibility_terms(const irrvol *v, const float pos[3], c
 IRRVOL__HOT void irrvol__prepare_in_cell(const irrvol *v, irrvol_weighting weighting, const uint32_t c[3],
                                          const float o[3], const float pos[3], const float normal[3], irrvol__prepared *q)
 {
-    irrvol__cell_corners(v, c, o, q->id, q->w);   /* the plain trilinear terms */
+    const irrvol__corners *rec = irrvol__cell_corners(v, c, o, q->id, q->w);   /* the plain trilinear terms */
     q->count = 8;
     q->scale = 1.0f;
     if (weighting == IRRVOL_WEIGHTING_DEFAULT) weighting = v->weighting;
-    if (weighting == IRRVOL_WEIGHTING_VISIBILITY) irrvol__visibility_terms(v, pos, normal, q);
+    if (weighting == IRRVOL_WEIGHTING_VISIBILITY) irrvol__visibility_terms(v, rec, pos, normal, q);
 }
 
 /* The bin (NEAREST) or four bins (BILINEAR) of a direction. */
@@ -4924,7 +5103,7 @@ static irrvol_result irrvol__read_all(irrvol *v, irrvol__reader *r)
         memcpy(v->origins + 4 * (size_t)s, v->positions + 3 * (size_t)s, 3 * sizeof(float));
         v->origins[4 * (size_t)s + 3] = 1.0f;
     }
-    return IRRVOL_OK;
+    return irrvol__make_probes(v);
 }
 
 /* A load from a stream of at most available payload bytes. */

@@ -1,4 +1,4 @@
-/* lightvec.h - v0.4.0 - cached 5D indirect light vectors - public domain or MIT, see end of file
+/* lightvec.h - v0.4.1 - cached 5D indirect light vectors - public domain or MIT, see end of file
 
    LIGHTVEC.H: cached light vectors over position and direction for interactive glossy global illumination.
 
@@ -367,14 +367,21 @@
    PERFORMANCE
 
      Lookups at 10^5 records on the walls of a room (tests/bench_lightvec.c,
-     one thread, CPU time, a shared machine): 6 valid records per query
-     2.0 us in a random query order (every one a cache miss), 0.9 us sorted by
-     position (as a frame's pixels come); 45 valid 5.0 us random, 3.2 us
-     sorted (after lightvec_cache_optimize 4.0 and 2.6 us). A leaf of a
-     kd-tree is a block of 8 records whose tested fields sit together; a
-     record's 192 bytes are read only when it passes, and prefetched when it
-     is kept. Insertion with neighbour clamping: 8 us at 10^5 records, 21 us
-     in the dense cache (a gather takes about 1 ms).
+     one thread, CPU time, medians, a shared 2-core machine): 6 valid
+     records per query 1.1 us in a random query order (every one a cache
+     miss), 0.64 us sorted by position (as a frame's pixels come); 45 valid
+     3.3 us random, 2.2 us sorted (after lightvec_cache_optimize 2.9 and
+     1.9 us). At 10^6 records, 6 valid: 4.2 us random (memory latency),
+     1.4 us sorted. A kd-tree node holds eight child boxes in rows (three
+     binary levels), tested with a few SIMD compares; a leaf is a block of 8
+     records whose tested fields sit together, and the tests that need no
+     square root run over the whole block at once; a record's diffuse fields
+     are read (two cache lines, prefetched) only when it is kept. The cost of
+     a dense lookup is now mostly per valid record (the exact tests, the
+     k-nearest selection, the interpolation): the cap bounds what is
+     interpolated, not what is tested. Insertion with neighbour clamping:
+     5 us at 10^5 records, 10.5 us in the dense cache (a gather takes about
+     1 ms).
 
    LIMITS
 
@@ -424,7 +431,7 @@
 
 #define LIGHTVEC_VERSION_MAJOR 0
 #define LIGHTVEC_VERSION_MINOR 4
-#define LIGHTVEC_VERSION_PATCH 0
+#define LIGHTVEC_VERSION_PATCH 1
 #define LIGHTVEC_FILE_FORMAT_VERSION 2
 
 #ifndef LIGHTVEC_API
@@ -1597,6 +1604,18 @@ static int lightvec__bvh_leaf_hit(const lightvec__bvh *bvh, const lightvec__ray 
 }
 
 typedef struct lightvec__bvh_entry { uint32_t ref; float t; } lightvec__bvh_entry;
+
+/* Index of the highest set bit of a non-zero mask. */
+static uint32_t lightvec__kd_last_bit(unsigned mask)
+{
+#if defined(__GNUC__) || defined(__clang__)
+    return 31u - (uint32_t)__builtin_clz(mask);
+#else
+    uint32_t i = 31;
+    while (!(mask >> i & 1)) i--;
+    return i;
+#endif
+}
 
 /* Index of the lowest set bit of a non-zero mask. */
 static uint32_t lightvec__bvh_first_bit(unsigned mask)
@@ -3154,34 +3173,41 @@ typedef struct lightvec__params {
     lightvec_interpolation interpolation;  /* never DEFAULT */
 } lightvec__params;
 
-/* 192 bytes, aligned to 64 in a kd-tree: what a valid record's weight
-   reads (beyond its leaf block's rows) comes first, then what the
-   interpolation reads. */
+/* 192 bytes, aligned to 64 in a kd-tree. The first two cache lines hold
+   what the interpolation of a diffuse vector reads (and the writer's
+   fields), the third what only a glossy part needs: a lookup loads two
+   lines of a record without a valid glossy part. */
 typedef struct lightvec__item {
-    float outgoing[3], cos_dir;      /* sigma and this record's S_dir (from its lobe) */
-    float normal[3], rel_gradient;   /* n_B and |grad Y| / Y (luminance) */
-    float inv_glossy_distance;       /* 1 / d_g; 0 = no glossy part */
-    float visibility;
-    float radius;                    /* R_B as the writer knows it; readers read the leaf block's row */
-    uint32_t id;
     float pos[3];                    /* B */
-    float exponent;                  /* of the lobe of G */
+    float visibility;
     float dir[3];                    /* D */
+    float inv_glossy_distance;       /* 1 / d_g; 0 = no glossy part */
     float mag[3];                    /* M */
     float proj[3];                   /* M cos(n_B, D) */
     float slope[3][3];               /* grad E_c / E_c per channel (0 where E_c = 0) */
+    float normal[3], rel_gradient;   /* n_B and |grad Y| / Y (luminance) */
+    float radius;                    /* R_B as the writer knows it; readers read the leaf block's row */
+    uint32_t id;
+    float cos_dir;                   /* this record's S_dir (from its lobe) */
+    float rel_glossy_gradient;       /* |dY(G)/dw_r| / Y(G) (luminance) times the glossy share */
+    float exponent;                  /* of the lobe of G; 128 bytes so far */
+    float outgoing[3];               /* sigma */
     float glossy[3];                 /* G(sigma) */
     float glossy_gradient[3][3];     /* dG/dw_r */
-    float rel_glossy_gradient;       /* |dY(G)/dw_r| / Y(G) (luminance) times the glossy share */
     float pad;
 } lightvec__item;
 
 /* A balanced kd-tree over items (median splits on the axis of largest
    extent of the positions), its leaves LEAF consecutive items, every leaf
-   full but the last. Node i has children 2i+1, 2i+2 and covers a range of
-   leaves: [a, b) splits at a + (b - a) / 2; one leaf is a leaf. Each node
-   stores the box of its items' validity spheres (B +- R_B), so a query for A
-   descends only into boxes that contain A. What the criteria read of a
+   full but the last. It is built binary: node i has children 2i+1, 2i+2
+   and covers a range of leaves: [a, b) splits at a + (b - a) / 2; one leaf
+   is a leaf. Each node has the box of its items' validity spheres
+   (B +- R_B), so a query for A descends only into boxes that contain A.
+   Stored, three binary levels make one node of up to eight children (the
+   binary descendants three levels down, or the leaves above them), their
+   boxes in rows, so that a query tests eight boxes with a few SIMD
+   compares and one branch per child that holds A (the binary descent
+   took one unpredictable branch per box). What the criteria read of a
    leaf's items is one block of rows (LIGHTVEC__ROW_*, LEAF floats each):
    a leaf's tests read a few consecutive cache lines, and an item's 192 bytes
    only for the records that pass them. */
@@ -3202,9 +3228,20 @@ typedef struct lightvec__item {
 #define LIGHTVEC__ROWS 14
 #define LIGHTVEC__BLOCK (LIGHTVEC__ROWS * LIGHTVEC__LEAF)
 
+#define LIGHTVEC__KD_WIDTH 8         /* children per stored kd-tree node: three binary levels */
+#define LIGHTVEC__KD_LEAF 0x80000000u /* a child reference to a leaf: KD_LEAF | leaf index */
+#define LIGHTVEC__KD_STACK ((LIGHTVEC__KD_WIDTH - 1) * 11 + 1) /* 11 >= levels / 3 + 1 for 2^29 leaves */
+
+typedef struct lightvec__kd_node {
+    float box[6][LIGHTVEC__KD_WIDTH];    /* rows lo x, lo y, lo z, hi x, hi y, hi z; column = child.
+                                            An unused child has lo = +inf, hi = -inf */
+    uint32_t child[LIGHTVEC__KD_WIDTH];  /* node index or KD_LEAF | leaf index */
+    uint32_t pad[LIGHTVEC__KD_WIDTH];    /* 256 bytes: a node on four cache lines of its own */
+} lightvec__kd_node;
+
 typedef struct lightvec__tree {
     uint32_t count, node_count;
-    float *boxes;                    /* 6 per node: lo xyz, hi xyz */
+    lightvec__kd_node *nodes;        /* node 0 is the root */
     float *blocks;                   /* a block of BLOCK floats per leaf */
     lightvec__item *items;           /* count items, leaf after leaf */
     size_t bytes;
@@ -3539,62 +3576,187 @@ static int lightvec__tree_box(float *box, const uint32_t *perm, const lightvec__
     return axis;
 }
 
-/* Node `node` over leaves [a, b): its box, then its halves. */
-static void lightvec__tree_build_node(lightvec__tree *t, const lightvec__item *src, uint32_t *perm, uint32_t node,
+/* Binary node `node` over leaves [a, b) of n items: its box (6 floats at
+   boxes + 6 node), then its halves. */
+static void lightvec__tree_build_node(float *boxes, uint32_t n, const lightvec__item *src, uint32_t *perm, uint32_t node,
                                       uint32_t a, uint32_t b)
 {
-    uint32_t lo = a * LIGHTVEC__LEAF, hi = b * LIGHTVEC__LEAF < t->count ? b * LIGHTVEC__LEAF : t->count;
+    uint32_t lo = a * LIGHTVEC__LEAF, hi = b * LIGHTVEC__LEAF < n ? b * LIGHTVEC__LEAF : n;
     uint32_t m = a + (b - a) / 2;
-    int axis = lightvec__tree_box(t->boxes + 6 * (size_t)node, perm, src, lo, hi);
+    int axis = lightvec__tree_box(boxes + 6 * (size_t)node, perm, src, lo, hi);
     if (b - a <= 1) return;
     lightvec__select(perm, src, axis, lo, hi, m * LIGHTVEC__LEAF);
-    lightvec__tree_build_node(t, src, perm, 2 * node + 1, a, m);
-    lightvec__tree_build_node(t, src, perm, 2 * node + 2, m, b);
+    lightvec__tree_build_node(boxes, n, src, perm, 2 * node + 1, a, m);
+    lightvec__tree_build_node(boxes, n, src, perm, 2 * node + 2, m, b);
+}
+
+typedef struct lightvec__kd_span { uint32_t node, a, b; } lightvec__kd_span; /* binary node over leaves [a, b) */
+
+/* The children of the stored node made of binary node s: its descendants
+   three levels down, a leaf above them standing for itself, left to right. */
+static uint32_t lightvec__kd_frontier(lightvec__kd_span s, lightvec__kd_span out[LIGHTVEC__KD_WIDTH])
+{
+    lightvec__kd_span cur[LIGHTVEC__KD_WIDTH];
+    uint32_t n = 1, level, i;
+    cur[0] = s;
+    for (level = 0; level < 3; level++) {
+        uint32_t m = 0;
+        for (i = 0; i < n; i++) {
+            lightvec__kd_span c = cur[i];
+            uint32_t mid = c.a + (c.b - c.a) / 2;
+            if (c.b - c.a <= 1) { out[m++] = c; continue; }
+            out[m].node = 2 * c.node + 1; out[m].a = c.a; out[m].b = mid; m++;
+            out[m].node = 2 * c.node + 2; out[m].a = mid; out[m].b = c.b; m++;
+        }
+        memcpy(cur, out, m * sizeof *cur);
+        n = m;
+    }
+    return n;
+}
+
+/* The stored node of binary node s at t->nodes[*next], its subtrees after
+   it (depth first). With t->nodes NULL it only counts the nodes. */
+static void lightvec__kd_collapse(lightvec__tree *t, const float *boxes, lightvec__kd_span s, uint32_t *next)
+{
+    lightvec__kd_span f[LIGHTVEC__KD_WIDTH];
+    uint32_t n = lightvec__kd_frontier(s, f), self = (*next)++, j, r;
+    for (j = 0; j < n; j++) {
+        uint32_t ref = LIGHTVEC__KD_LEAF | f[j].a;
+        if (f[j].b - f[j].a > 1) {
+            ref = *next;
+            lightvec__kd_collapse(t, boxes, f[j], next);
+        }
+        if (t->nodes) t->nodes[self].child[j] = ref;
+    }
+    if (!t->nodes) return;
+    for (j = 0; j < LIGHTVEC__KD_WIDTH; j++) {
+        for (r = 0; r < 3; r++) {
+            t->nodes[self].box[r][j] = j < n ? boxes[6 * (size_t)f[j].node + r] : INFINITY;
+            t->nodes[self].box[3 + r][j] = j < n ? boxes[6 * (size_t)f[j].node + 3 + r] : -INFINITY;
+        }
+        if (j >= n) t->nodes[self].child[j] = 0;
+        t->nodes[self].pad[j] = 0;
+    }
 }
 
 static lightvec__tree *lightvec__tree_build(const lightvec_allocator *a, const lightvec__item *src, uint32_t n)
 {
-    uint32_t leaves = lightvec__leaf_count(n), nodes = (2u << lightvec__tree_levels(leaves)) - 1u, i, *perm;
-    size_t head = (sizeof(lightvec__tree) + 63u) & ~(size_t)63u, box_bytes = (size_t)nodes * 6u * sizeof(float);
-    size_t block_bytes = (size_t)leaves * LIGHTVEC__BLOCK * sizeof(float), bytes;
-    lightvec__tree *t;
-    if ((size_t)leaves > (SIZE_MAX - head - box_bytes - 128u) / (LIGHTVEC__BLOCK * sizeof(float) +
-                                                                   LIGHTVEC__LEAF * sizeof(lightvec__item)))
+    uint32_t leaves = lightvec__leaf_count(n), binary = (2u << lightvec__tree_levels(leaves)) - 1u, nodes = 0, i, *perm;
+    size_t head = (sizeof(lightvec__tree) + 63u) & ~(size_t)63u, node_bytes, block_bytes, bytes;
+    lightvec__kd_span root;
+    lightvec__tree *t, shape;
+    float *boxes;
+    if ((size_t)leaves > (SIZE_MAX - head - 128u) / (sizeof(lightvec__kd_node) + LIGHTVEC__BLOCK * sizeof(float) +
+                                                      LIGHTVEC__LEAF * sizeof(lightvec__item)))
         return NULL;
-    box_bytes = (box_bytes + 63u) & ~(size_t)63u;
-    bytes = head + box_bytes + block_bytes + (size_t)n * sizeof(lightvec__item) + 64u; /* + room to align */
+    root.node = 0; root.a = 0; root.b = leaves;
+    shape.nodes = NULL;
+    if (n) lightvec__kd_collapse(&shape, NULL, root, &nodes);   /* at most leaves nodes */
+    node_bytes = (size_t)nodes * sizeof(lightvec__kd_node);
+    block_bytes = (size_t)leaves * LIGHTVEC__BLOCK * sizeof(float);
+    bytes = head + node_bytes + block_bytes + (size_t)n * sizeof(lightvec__item) + 64u; /* + room to align */
     t = (lightvec__tree *)lightvec__alloc(a, bytes);
     perm = (uint32_t *)lightvec__alloc_array(a, n, sizeof(uint32_t));
-    if (!t || !perm) {
+    boxes = (float *)lightvec__alloc_array(a, binary, 6u * sizeof(float));
+    if (!t || !perm || !boxes) {
         lightvec__free(a, t);
         lightvec__free(a, perm);
+        lightvec__free(a, boxes);
         return NULL;
     }
     t->count = n;
     t->node_count = nodes;
-    t->boxes = (float *)((char *)t + head);
-    t->blocks = (float *)((char *)t + head + box_bytes);
-    t->items = (lightvec__item *)((char *)t + head + box_bytes + block_bytes);
-    t->items = (lightvec__item *)((char *)t->items + ((64u - ((uintptr_t)t->items & 63u)) & 63u));
+    t->nodes = (lightvec__kd_node *)((char *)t + head);   /* 256-byte nodes after a 64-byte aligned head */
+    t->nodes = (lightvec__kd_node *)((char *)t->nodes + ((64u - ((uintptr_t)t->nodes & 63u)) & 63u));
+    t->blocks = (float *)((char *)t->nodes + node_bytes);
+    t->items = (lightvec__item *)((char *)t->blocks + block_bytes);
     t->bytes = bytes;
     memset(t->blocks, 0, block_bytes); /* the last leaf's empty slots: radius 0, never inside */
     for (i = 0; i < n; i++) perm[i] = i;
-    if (n) lightvec__tree_build_node(t, src, perm, 0, 0, leaves);
+    if (n) {
+        lightvec__tree_build_node(boxes, n, src, perm, 0, 0, leaves);
+        nodes = 0;
+        lightvec__kd_collapse(t, boxes, root, &nodes);
+    }
     for (i = 0; i < n; i++) {
         t->items[i] = src[perm[i]];
         lightvec__block_put(t->blocks + (size_t)(i / LIGHTVEC__LEAF) * LIGHTVEC__BLOCK, i % LIGHTVEC__LEAF, &t->items[i]);
     }
+    lightvec__free(a, boxes);
     lightvec__free(a, perm);
     return t;
+}
+
+/* The children of node nd whose box, grown by reach on every side, holds p
+   (reach 0: the boxes holding p), as a bit mask. Exact compares: the SIMD
+   and the scalar kernel agree bit for bit. */
+static unsigned lightvec__kd_hits(const lightvec__kd_node *nd, const float p[3], float reach)
+{
+    unsigned mask = 0;
+#if LIGHTVEC__SIMD
+    const lightvec__f4 px = lightvec__f4_set(p[0]), py = lightvec__f4_set(p[1]), pz = lightvec__f4_set(p[2]);
+    const lightvec__f4 g = lightvec__f4_set(reach);
+    int i;
+    for (i = 0; i < LIGHTVEC__KD_WIDTH; i += 4) {
+        lightvec__m4 in = lightvec__m4_and(
+            lightvec__m4_and(lightvec__f4_le(lightvec__f4_sub(lightvec__f4_load(nd->box[0] + i), g), px),
+                             lightvec__f4_le(lightvec__f4_sub(lightvec__f4_load(nd->box[1] + i), g), py)),
+            lightvec__m4_and(lightvec__f4_le(lightvec__f4_sub(lightvec__f4_load(nd->box[2] + i), g), pz),
+                             lightvec__f4_le(px, lightvec__f4_add(lightvec__f4_load(nd->box[3] + i), g))));
+        in = lightvec__m4_and(in, lightvec__m4_and(lightvec__f4_le(py, lightvec__f4_add(lightvec__f4_load(nd->box[4] + i), g)),
+                                                   lightvec__f4_le(pz, lightvec__f4_add(lightvec__f4_load(nd->box[5] + i), g))));
+        mask |= lightvec__m4_bits(in) << i;
+    }
+#else
+    int i;
+    for (i = 0; i < LIGHTVEC__KD_WIDTH; i++)
+        mask |= (unsigned)((nd->box[0][i] - reach <= p[0]) & (nd->box[1][i] - reach <= p[1]) &
+                           (nd->box[2][i] - reach <= p[2]) & (p[0] <= nd->box[3][i] + reach) &
+                           (p[1] <= nd->box[4][i] + reach) & (p[2] <= nd->box[5][i] + reach)) << i;
+#endif
+    return mask;
+}
+
+typedef void (*lightvec__leaf_fn)(void *ctx, const lightvec__tree *t, uint32_t leaf);
+
+/* Calls leaf(ctx, t, i) for every leaf i of t whose box, grown by reach,
+   holds p, in the order of the leaves. Children are pushed last first, so
+   that they pop in order; the nodes and blocks about to be read are
+   prefetched as they are pushed. */
+static void lightvec__tree_walk(const lightvec__tree *t, const float p[3], float reach, lightvec__leaf_fn leaf, void *ctx)
+{
+    uint32_t stack[LIGHTVEC__KD_STACK], top = 0;
+    if (!t->count) return;
+    stack[top++] = 0;
+    while (top) {
+        uint32_t ref = stack[--top];
+        unsigned mask;
+        if (ref & LIGHTVEC__KD_LEAF) {
+            leaf(ctx, t, ref & ~LIGHTVEC__KD_LEAF);
+            continue;
+        }
+        mask = lightvec__kd_hits(&t->nodes[ref], p, reach);
+        while (mask) {
+            uint32_t j = lightvec__kd_last_bit(mask), child = t->nodes[ref].child[j];
+            const char *next = child & LIGHTVEC__KD_LEAF
+                ? (const char *)(t->blocks + (size_t)(child & ~LIGHTVEC__KD_LEAF) * LIGHTVEC__BLOCK)
+                : (const char *)&t->nodes[child];
+            LIGHTVEC__PREFETCH(next);
+            LIGHTVEC__PREFETCH(next + 64);
+            LIGHTVEC__PREFETCH(next + 128);
+            stack[top++] = child;
+            mask &= ~(1u << j);
+        }
+    }
 }
 
 /* ---- queries -------------------------------------------------------------------- */
 
 /* A valid record kept for the interpolation. */
 typedef struct lightvec__candidate {
+    uint64_t rank;                   /* the bits of w (>= +0: they order as w does) above ~id */
     float w;                         /* the diffuse vector's weight, w_B w_sigma (the cache's S_dir) */
     float wg;                        /* the glossy part's, w_B w_sigma (the record's S_dir); 0 = not valid */
-    uint32_t id;
     const lightvec__item *it;
 } lightvec__candidate;
 
@@ -3630,9 +3792,11 @@ static float lightvec__glossy_angle(const lightvec__query *q, const float sigma[
     return sqrtf(vx * vx + vy * vy + vz * vz) + sqrtf(px * px + py * py + pz * pz) * inv_dg;
 }
 
+/* a ranks below b: a smaller weight, or the same and a larger id (one
+   integer compare). */
 static int lightvec__heap_less(const lightvec__candidate *a, const lightvec__candidate *b)
 {
-    return a->w < b->w || (a->w == b->w && a->id > b->id);
+    return a->rank < b->rank;
 }
 
 static void lightvec__heap_down(lightvec__candidate *h, uint32_t n, uint32_t i)
@@ -3659,14 +3823,17 @@ static void lightvec__keep(lightvec__query *q, const lightvec__item *it, uint32_
     q->count++;
     if (q->heap) {
         lightvec__candidate c;
+        uint32_t bits;
+        memcpy(&bits, &w, sizeof bits);
+        c.rank = (uint64_t)bits << 32 | (uint64_t)(0xFFFFFFFFu - id);
         c.w = w;
         c.wg = wg;
-        c.id = id;
         c.it = it;
-        /* the interpolation reads the item: start loading it now */
+        /* the interpolation reads the item: start loading it now (its
+           third line only for a valid glossy part) */
         LIGHTVEC__PREFETCH(it);
         LIGHTVEC__PREFETCH((const char *)it + 64);
-        LIGHTVEC__PREFETCH((const char *)it + 128);
+        if (wg > 0.0f) LIGHTVEC__PREFETCH((const char *)it + 128);
         if (q->heap_count < q->heap_capacity) {
             uint32_t i = q->heap_count++;
             while (i && lightvec__heap_less(&c, &q->heap[(i - 1) / 2])) {
@@ -3681,132 +3848,102 @@ static void lightvec__keep(lightvec__query *q, const lightvec__item *it, uint32_
     }
 }
 
-/* The rest of the criteria of 4.2 for item k of a leaf block, inside its
-   sphere, in the direction cone and within S_curv (tested by the caller,
-   which passes dx = A - B, d^2, cos(w, sigma) and cos(n_A, n_B)), with
-   Ward's "in front" test. The diffuse vector's weight is the paper's
-   w = w_B * w_sigma with the cache's S_dir. The glossy part's is
-   w_g = w_B * w_sigma,B / (1 + psi |grad G_B| / G_B) with the record's own
-   S_dir (from its lobe), psi from lightvec__glossy_angle (cos psi =
-   1 - psi^2 / 2, the paper's cos(w, sigma) exactly without parallax), valid
-   while psi < acos S_dir,B and psi |grad G_B| / G_B < I_B: the
-   irradiance-change criterion and weight of 4.2.1, applied to G along the
-   angle. w_g = 0 when either fails. */
-static void lightvec__visit(lightvec__query *q, const float *block, uint32_t k, const lightvec__item *it, float radius,
-                            float dx, float dy, float dz, float d2, float cs, float cn)
+/* What the criteria of 4.2 compute for the slots of a leaf block. */
+typedef struct lightvec__slots {
+    float dx[LIGHTVEC__LEAF], dy[LIGHTVEC__LEAF], dz[LIGHTVEC__LEAF]; /* A - B */
+    float d2[LIGHTVEC__LEAF];        /* |AB|^2 */
+    float cs[LIGHTVEC__LEAF];        /* cos(w, sigma) */
+    float cn[LIGHTVEC__LEAF];        /* cos(n_A, n_B) */
+    float front[LIGHTVEC__LEAF];     /* (A - B) . (n_A + n_B) / 2 */
+} lightvec__slots;
+
+/* The tests of slot k that need no square root, with the radius R0 the
+   block was written with: |AB| < R0, cos(w, sigma) > S_dir, cos(n_A, n_B)
+   > S_curv, B not in front of A (Ward 1988: front >= -front_tolerance *
+   R0). Plain reads of rows that never change once published, no branch:
+   the loop over a block vectorizes. R_B only shrinks (neighbour clamping,
+   under readers) and a smaller radius fails more, so the slots that pass
+   are a superset of the valid ones. */
+static int lightvec__slot_pass(const lightvec__query *q, const float *block, uint32_t k, float cos_dir, lightvec__slots *s)
+{
+    const float *b = block + k;
+    float nx = b[LIGHTVEC__ROW_NX * LIGHTVEC__LEAF], ny = b[LIGHTVEC__ROW_NY * LIGHTVEC__LEAF];
+    float nz = b[LIGHTVEC__ROW_NZ * LIGHTVEC__LEAF], r0 = b[LIGHTVEC__ROW_R0 * LIGHTVEC__LEAF];
+    float dx = q->a[0] - b[LIGHTVEC__ROW_X * LIGHTVEC__LEAF], dy = q->a[1] - b[LIGHTVEC__ROW_Y * LIGHTVEC__LEAF];
+    float dz = q->a[2] - b[LIGHTVEC__ROW_Z * LIGHTVEC__LEAF], d2 = dx * dx + dy * dy + dz * dz;
+    float cs = q->w[0] * b[LIGHTVEC__ROW_SX * LIGHTVEC__LEAF] + q->w[1] * b[LIGHTVEC__ROW_SY * LIGHTVEC__LEAF] +
+               q->w[2] * b[LIGHTVEC__ROW_SZ * LIGHTVEC__LEAF];
+    float cn = q->n[0] * nx + q->n[1] * ny + q->n[2] * nz;
+    float front = 0.5f * (dx * (q->n[0] + nx) + dy * (q->n[1] + ny) + dz * (q->n[2] + nz));
+    s->dx[k] = dx; s->dy[k] = dy; s->dz[k] = dz; s->d2[k] = d2;
+    s->cs[k] = cs; s->cn[k] = cn; s->front[k] = front;
+    return (d2 < r0 * r0) & (cs > cos_dir) & (cn > q->p->cos_normal) & (front >= -q->p->front * r0);
+}
+
+/* The rest of 4.2 for slot k, which passed lightvec__slot_pass: the tests
+   again with R_B (read atomically) where it has shrunk since the block was
+   written, the irradiance change |AB| |grad E_B| / E_B < I_B, and the
+   weights. The diffuse vector's is the paper's w = w_B * w_sigma with the
+   cache's S_dir. The glossy part's is w_g = w_B * w_sigma,B / (1 + psi
+   |grad G_B| / G_B) with the record's own S_dir (from its lobe), psi from
+   lightvec__glossy_angle (cos psi = 1 - psi^2 / 2, the paper's cos(w,
+   sigma) exactly without parallax), valid while psi < acos S_dir,B and
+   psi |grad G_B| / G_B < I_B: the irradiance-change criterion and weight
+   of 4.2.1, applied to G along the angle. w_g = 0 when either fails. */
+static void lightvec__visit(lightvec__query *q, const float *block, uint32_t k, const lightvec__item *it,
+                            const lightvec__slots *s, float cos_dir)
 {
     const lightvec__params *p = q->p;
     const float *b = block + k;
-    float ws = 1.0f, wg = 0.0f, wb, d, change, front, inv_dg;
-    front = 0.5f * (dx * (q->n[0] + b[LIGHTVEC__ROW_NX * LIGHTVEC__LEAF]) + dy * (q->n[1] + b[LIGHTVEC__ROW_NY * LIGHTVEC__LEAF]) +
-                    dz * (q->n[2] + b[LIGHTVEC__ROW_NZ * LIGHTVEC__LEAF]));
-    if (!(front >= -p->front * radius)) return;                      /* B in front of A (Ward 1988) */
-    d = sqrtf(d2);
+    float ws = 1.0f, wg = 0.0f, wb, d, change, inv_dg, radius;
+    uint32_t id;
+    radius = lightvec__load_f32(b + LIGHTVEC__ROW_R * LIGHTVEC__LEAF);
+    if (radius != b[LIGHTVEC__ROW_R0 * LIGHTVEC__LEAF] &&
+        !(s->d2[k] < radius * radius && s->front[k] >= -p->front * radius))
+        return;
+    d = sqrtf(s->d2[k]);
     change = d * b[LIGHTVEC__ROW_REL * LIGHTVEC__LEAF];              /* |AB| |grad E| / E_B < I_B */
     if (!(change < p->max_change)) return;
-    wb = (1.0f - d / radius) * (1.0f / (1.0f + change)) * ((cn - p->cos_normal) * p->inv_normal);
-    if (q->directional) ws = (cs - p->cos_dir) * p->inv_dir;        /* 4.2.2 */
+    wb = (1.0f - d / radius) * (1.0f / (1.0f + change)) * ((s->cn[k] - p->cos_normal) * p->inv_normal);
+    if (q->directional) ws = (s->cs[k] - cos_dir) * p->inv_dir;      /* 4.2.2 */
     inv_dg = b[LIGHTVEC__ROW_GLOSSY * LIGHTVEC__LEAF];
     if (q->directional && inv_dg > 0.0f) {                           /* the glossy part */
-        float psi = lightvec__glossy_angle(q, it->outgoing, inv_dg, dx, dy, dz), cos_psi = 1.0f - 0.5f * psi * psi;
-        float gchange = psi * it->rel_glossy_gradient;
+        float psi = lightvec__glossy_angle(q, it->outgoing, inv_dg, s->dx[k], s->dy[k], s->dz[k]);
+        float cos_psi = 1.0f - 0.5f * psi * psi, gchange = psi * it->rel_glossy_gradient;
         if (cos_psi > it->cos_dir && gchange < p->max_change)
             wg = wb * ((cos_psi - it->cos_dir) / (1.0f - it->cos_dir)) * (1.0f / (1.0f + gchange));
     }
-    {
-        uint32_t id;
-        memcpy(&id, &b[LIGHTVEC__ROW_ID * LIGHTVEC__LEAF], sizeof id);
-        lightvec__keep(q, it, id, wb * ws, wg);
-    }
+    memcpy(&id, &b[LIGHTVEC__ROW_ID * LIGHTVEC__LEAF], sizeof id);
+    lightvec__keep(q, it, id, wb * ws, wg);
 }
 
-/* The cheap tests of slot k of a leaf block, a little wider than the exact
-   ones (which follow for the slots that pass): inside the sphere as the
-   block was built (R_B only shrinks later), in the direction cone, within
-   S_curv. Plain reads of rows that never change once published, so that the
-   loop over a full block vectorizes. */
-static int lightvec__block_pass(const lightvec__query *q, const float *block, uint32_t k, float cos_dir)
-{
-    const float *b = block + k;
-    float dx = q->a[0] - b[LIGHTVEC__ROW_X * LIGHTVEC__LEAF], dy = q->a[1] - b[LIGHTVEC__ROW_Y * LIGHTVEC__LEAF];
-    float dz = q->a[2] - b[LIGHTVEC__ROW_Z * LIGHTVEC__LEAF], r0 = b[LIGHTVEC__ROW_R0 * LIGHTVEC__LEAF];
-    float cs = q->w[0] * b[LIGHTVEC__ROW_SX * LIGHTVEC__LEAF] + q->w[1] * b[LIGHTVEC__ROW_SY * LIGHTVEC__LEAF] +
-               q->w[2] * b[LIGHTVEC__ROW_SZ * LIGHTVEC__LEAF];
-    float cn = q->n[0] * b[LIGHTVEC__ROW_NX * LIGHTVEC__LEAF] + q->n[1] * b[LIGHTVEC__ROW_NY * LIGHTVEC__LEAF] +
-               q->n[2] * b[LIGHTVEC__ROW_NZ * LIGHTVEC__LEAF];
-    return (dx * dx + dy * dy + dz * dz < r0 * r0 * 1.00001f) & (cs > cos_dir - 1e-6f) & (cn > q->p->cos_normal - 1e-6f);
-}
-
-/* The first `count` items of a leaf block: the cheap tests over the whole
-   block at once when it is a full, published one (a kd-tree leaf; the tail's
-   slots past its count may be being written), then for the slots that pass
-   |AB| < R_B (R_B read atomically: neighbour clamping may shrink it while
-   readers run), cos(w, sigma) > S_dir, S_curv exactly, and the rest
-   (lightvec__visit). */
+/* The first `count` items of a leaf block: lightvec__slot_pass over the
+   whole block at once when it is a full, published one (a kd-tree leaf,
+   its empty slots of radius 0; the tail's slots past its count may be
+   being written), then lightvec__visit for the slots that passed, one
+   branch per passing slot. */
 static void lightvec__visit_block(lightvec__query *q, const float *block, const lightvec__item *items, uint32_t count,
                                   int full)
 {
-    int pass[LIGHTVEC__LEAF];
+    lightvec__slots s;
     float cos_dir = q->directional ? q->p->cos_dir : -2.0f; /* a 3D query has w = 0: cs = 0 passes */
+    unsigned mask = 0;
     uint32_t k;
     if (full)
-        for (k = 0; k < LIGHTVEC__LEAF; k++) pass[k] = lightvec__block_pass(q, block, k, cos_dir);
+        for (k = 0; k < LIGHTVEC__LEAF; k++) mask |= (unsigned)lightvec__slot_pass(q, block, k, cos_dir, &s) << k;
     else
-        for (k = 0; k < count; k++) pass[k] = lightvec__block_pass(q, block, k, cos_dir);
-    for (k = 0; k < count; k++) {
-        const float *b = block + k;
-        float dx, dy, dz, d2, rk, cs, cn;
-        if (!pass[k]) continue;
-        dx = q->a[0] - b[LIGHTVEC__ROW_X * LIGHTVEC__LEAF];
-        dy = q->a[1] - b[LIGHTVEC__ROW_Y * LIGHTVEC__LEAF];
-        dz = q->a[2] - b[LIGHTVEC__ROW_Z * LIGHTVEC__LEAF];
-        d2 = dx * dx + dy * dy + dz * dz;
-        rk = lightvec__load_f32(b + LIGHTVEC__ROW_R * LIGHTVEC__LEAF);
-        if (!(d2 < rk * rk)) continue;
-        cs = q->w[0] * b[LIGHTVEC__ROW_SX * LIGHTVEC__LEAF] + q->w[1] * b[LIGHTVEC__ROW_SY * LIGHTVEC__LEAF] +
-             q->w[2] * b[LIGHTVEC__ROW_SZ * LIGHTVEC__LEAF];
-        if (!(cs > cos_dir)) continue;                               /* 4.2.2: cos(w, sigma) > S_dir */
-        cn = q->n[0] * b[LIGHTVEC__ROW_NX * LIGHTVEC__LEAF] + q->n[1] * b[LIGHTVEC__ROW_NY * LIGHTVEC__LEAF] +
-             q->n[2] * b[LIGHTVEC__ROW_NZ * LIGHTVEC__LEAF];
-        if (!(cn > q->p->cos_normal)) continue;                      /* curvature: S_curv */
-        lightvec__visit(q, block, k, &items[k], rk, dx, dy, dz, d2, cs, cn);
+        for (k = 0; k < count; k++) mask |= (unsigned)lightvec__slot_pass(q, block, k, cos_dir, &s) << k;
+    for (; mask; mask &= mask - 1) {
+        k = lightvec__bvh_first_bit(mask);
+        lightvec__visit(q, block, k, &items[k], &s, cos_dir);
     }
 }
 
-static void lightvec__tree_query(const lightvec__tree *t, lightvec__query *q)
+static void lightvec__query_leaf(void *ctx, const lightvec__tree *t, uint32_t leaf)
 {
-    uint32_t stack[64][3], top = 1;
-    stack[0][0] = 0; stack[0][1] = 0; stack[0][2] = lightvec__leaf_count(t->count);
-    while (top) {
-        uint32_t node, a, b, m;
-        const float *box;
-        top--;
-        node = stack[top][0]; a = stack[top][1]; b = stack[top][2];
-        box = t->boxes + 6 * (size_t)node;
-        /* one branch for the six comparisons: box tests are hard to predict */
-        if (!((q->a[0] >= box[0]) & (q->a[1] >= box[1]) & (q->a[2] >= box[2]) & (q->a[0] <= box[3]) &
-              (q->a[1] <= box[4]) & (q->a[2] <= box[5])))
-            continue;
-        if (b - a <= 1) {
-            uint32_t first = a * LIGHTVEC__LEAF, count = t->count - first;
-            lightvec__visit_block(q, t->blocks + (size_t)a * LIGHTVEC__BLOCK, t->items + first,
-                                  count < LIGHTVEC__LEAF ? count : LIGHTVEC__LEAF, 1);
-            continue;
-        }
-        m = a + (b - a) / 2;
-        if (m - a <= 1) { /* leaves next: their blocks' first rows */
-            LIGHTVEC__PREFETCH(t->blocks + (size_t)a * LIGHTVEC__BLOCK);
-            LIGHTVEC__PREFETCH(t->blocks + (size_t)a * LIGHTVEC__BLOCK + 16);
-            LIGHTVEC__PREFETCH(t->blocks + (size_t)m * LIGHTVEC__BLOCK);
-            LIGHTVEC__PREFETCH(t->blocks + (size_t)m * LIGHTVEC__BLOCK + 16);
-        } else {
-            LIGHTVEC__PREFETCH(t->boxes + 6 * (size_t)(2 * node + 1));
-            LIGHTVEC__PREFETCH(t->boxes + 6 * (size_t)(4 * node + 3));
-            LIGHTVEC__PREFETCH(t->boxes + 6 * (size_t)(4 * node + 5));
-        }
-        stack[top][0] = 2 * node + 2; stack[top][1] = m; stack[top][2] = b; top++;
-        stack[top][0] = 2 * node + 1; stack[top][1] = a; stack[top][2] = m; top++;
-    }
+    uint32_t first = leaf * LIGHTVEC__LEAF, count = t->count - first;
+    lightvec__visit_block((lightvec__query *)ctx, t->blocks + (size_t)leaf * LIGHTVEC__BLOCK, t->items + first,
+                          count < LIGHTVEC__LEAF ? count : LIGHTVEC__LEAF, 1);
 }
 
 /* The tail's published items (tail_count, acquire), block by block. */
@@ -3824,7 +3961,7 @@ static void lightvec__index_query(void *ctx, const lightvec__index *idx)
 {
     lightvec__query *q = (lightvec__query *)ctx;
     uint32_t i;
-    for (i = 0; i < idx->tree_count; i++) lightvec__tree_query(idx->trees[i], q);
+    for (i = 0; i < idx->tree_count; i++) lightvec__tree_walk(idx->trees[i], q->a, 0.0f, lightvec__query_leaf, q);
     lightvec__tail_query(idx, q);
 }
 
@@ -4520,35 +4657,17 @@ static void lightvec__clamp_item(lightvec__clamp *k, float *block, uint32_t slot
     }
 }
 
-/* The items of a kd-tree whose sphere box meets the ball of radius reach
-   around the new record (reach 0: the boxes holding its position). */
-static void lightvec__clamp_tree(lightvec__clamp *k, lightvec__tree *t, float reach)
+/* The items of a kd-tree leaf whose sphere box, grown by reach, holds the
+   new record (pass 1: reach R_i; pass 2: 0): a superset of the records
+   either pass can clamp (r + d < R_i needs d < R_i; R_i + d < r needs
+   d < r). */
+static void lightvec__clamp_leaf(void *ctx, const lightvec__tree *ct, uint32_t leaf)
 {
-    uint32_t stack[64][3], top = 1, i;
-    const float *p = k->it->pos;
-    stack[0][0] = 0; stack[0][1] = 0; stack[0][2] = lightvec__leaf_count(t->count);
-    while (top) {
-        uint32_t node, a, b, m;
-        const float *box;
-        float d2 = 0.0f;
-        int axis;
-        top--;
-        node = stack[top][0]; a = stack[top][1]; b = stack[top][2];
-        box = t->boxes + 6 * (size_t)node;
-        for (axis = 0; axis < 3; axis++) {
-            float e = p[axis] < box[axis] ? box[axis] - p[axis] : (p[axis] > box[3 + axis] ? p[axis] - box[3 + axis] : 0.0f);
-            d2 += e * e;
-        }
-        if (!(d2 <= reach * reach)) continue;
-        if (b - a <= 1) {
-            for (i = a * LIGHTVEC__LEAF; i < t->count && i < b * LIGHTVEC__LEAF; i++)
-                lightvec__clamp_item(k, t->blocks + (size_t)a * LIGHTVEC__BLOCK, i % LIGHTVEC__LEAF, &t->items[i]);
-            continue;
-        }
-        m = a + (b - a) / 2;
-        stack[top][0] = 2 * node + 2; stack[top][1] = m; stack[top][2] = b; top++;
-        stack[top][0] = 2 * node + 1; stack[top][1] = a; stack[top][2] = m; top++;
-    }
+    lightvec__tree *t = (lightvec__tree *)(uintptr_t)ct; /* the writer's own memory */
+    uint32_t i;
+    for (i = leaf * LIGHTVEC__LEAF; i < t->count && i < (leaf + 1) * LIGHTVEC__LEAF; i++)
+        lightvec__clamp_item((lightvec__clamp *)ctx, t->blocks + (size_t)leaf * LIGHTVEC__BLOCK, i % LIGHTVEC__LEAF,
+                             &t->items[i]);
 }
 
 static void lightvec__clamp_index(void *ctx, const lightvec__index *cidx)
@@ -4557,7 +4676,7 @@ static void lightvec__clamp_index(void *ctx, const lightvec__index *cidx)
     lightvec__index *idx = (lightvec__index *)(uintptr_t)cidx; /* the writer's own memory */
     float reach = k->pass == 1 ? k->it->radius : 0.0f;
     uint32_t i;
-    for (i = 0; i < idx->tree_count; i++) lightvec__clamp_tree(k, idx->trees[i], reach);
+    for (i = 0; i < idx->tree_count; i++) lightvec__tree_walk(idx->trees[i], k->it->pos, reach, lightvec__clamp_leaf, k);
     for (i = 0; i < idx->tail_count; i++)
         lightvec__clamp_item(k, idx->tail_blocks[i / LIGHTVEC__LEAF], i % LIGHTVEC__LEAF, &idx->tail[i]);
 }

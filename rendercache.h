@@ -1,4 +1,4 @@
-/* rendercache.h - v0.4.1 - render cache and range-image walkthroughs - public domain or MIT, see end of file
+/* rendercache.h - v0.4.2 - render cache and range-image walkthroughs - public domain or MIT, see end of file
 
    RENDERCACHE.H: an image-space point cache that reprojects and resamples, and range-image walkthroughs of animated scenes.
 
@@ -161,7 +161,13 @@
 
    HOW A FRAME WORKS (and which published step each part is)
 
-       begin_frame: every point is projected into the camera and z-buffered,
+       begin_frame: first an eighth of the cache is re-sorted into the
+       camera's image order (slot ranges of 16384 points grouped by the run
+       of pixels each point projects to; 2 jobs with parallel_for), so that
+       the cache stays nearly in image order and the passes below read and
+       write memory in runs rather than at random (after WDG02's memory
+       coherence); then every
+       point is projected into the camera and z-buffered,
        one point per pixel (WDP99 reprojection; with parallel_for, 8 jobs of
        points share the z-buffer through an atomic minimum of a key that
        orders by depth, then slot, so any schedule keeps the same point; the
@@ -344,8 +350,10 @@
        Render cache: image up to 2^28 pixels, cache up to 2^31 points, up to
        2^24 objects, samples up to 64 frames late. Memory: 41 bytes per cache
        point (2 per pixel by default), 43 bytes per pixel (43.5 with
-       parallel_for), and about 48 (max_latency + 8) bytes per object: 125
-       bytes per pixel in all, 33 MB for 512x512 and 260 MB for 1920x1080.
+       parallel_for), about 48 (max_latency + 8) bytes per object, and 512
+       KB for the re-sort into image order (1 MB with parallel_for): 125
+       bytes per pixel in all and the re-sort's scratch, 34 MB for 512x512
+       (129 bytes per pixel) and 260 MB for 1920x1080.
        A compiler without the GNU atomic builtins projects the points in one
        job (the rest of the frame still runs in parallel). A frame reads and
        writes at random over these tens of megabytes: an allocator (desc.
@@ -388,7 +396,7 @@
 
 #define RENDERCACHE_VERSION_MAJOR 0
 #define RENDERCACHE_VERSION_MINOR 4
-#define RENDERCACHE_VERSION_PATCH 1
+#define RENDERCACHE_VERSION_PATCH 2
 
 #ifndef RENDERCACHE_API
 #  ifdef RENDERCACHE_STATIC
@@ -565,6 +573,7 @@ typedef struct rendercache_stats {
     double time_predict;         /* rendercache_predict */
     double time_request;         /* threshold and error diffusion (all request calls) */
     double time_insert;
+    double time_sort;            /* re-sorting a share of the cache into image order (end of begin_frame) */
 } rendercache_stats;
 
 RENDERCACHE_API const char *rendercache_result_string(rendercache_result r);
@@ -1874,6 +1883,11 @@ static void rendercache__splat_run_cover(rendercache__splat *s,
                                                 bytes (1/16 byte per pixel each): fine enough that a thread
                                                 the system holds back holds back little */
 #define RENDERCACHE__BAND_ROWS 128u          /* rows per band of the error diffusion: 9 bands at 1080p */
+#define RENDERCACHE__SORT_RANGE 16384u       /* slots re-sorted together: a range (656 KB of points) and its
+                                                scratch stay in a core's L2 cache */
+#define RENDERCACHE__SORT_SHARE 8u           /* a frame re-sorts 1/8 of the cache, so all of it every 8 frames */
+#define RENDERCACHE__SORT_JOBS 2u           /* jobs (and scratches) of the re-sort with parallel_for */
+#define RENDERCACHE__SORT_KEYS 2048u         /* sort keys: blocks of pixels, and one for points outside the image */
 
 /* Priority image values (WDP99 priority image, extended to [0, 1]): a point
    rises with age to POINT_MAX; holes rank above every point, the sparser the
@@ -1940,6 +1954,10 @@ struct rendercache {
                                 stays in cache where data would not. After the slots, one byte per
                                 tile that the tile's pixels without a point write instead */
     uint32_t hand;           /* clock hand of the eviction */
+    uint32_t *sort_scratch;  /* rendercache__sort_range: 2 words and a point record per slot of a range, per job */
+    uint32_t sort_next;      /* the range re-sorted next */
+    uint32_t sort_taken;     /* ranges of this frame's share taken by the re-sort's jobs (atomic) */
+    uint32_t sort_shift;     /* sort keys: pixel >> sort_shift, below RENDERCACHE__SORT_KEYS - 1 */
     uint32_t live;
     int hand_exhausted;      /* a full turn found no invisible slot in this frame */
 
@@ -2046,12 +2064,34 @@ static void rendercache__reset_points(rendercache *rc)
     rc->geo[rc->capacity].object = RENDERCACHE_MISS;
     rc->hand = 0;
     rc->live = 0;
+    rc->sort_next = 0;
+}
+
+/* Slots in a range of the re-sort (a job's scratch holds one range). */
+static uint32_t rendercache__sort_range_size(const rendercache *rc)
+{
+    return rc->capacity < RENDERCACHE__SORT_RANGE ? rc->capacity : RENDERCACHE__SORT_RANGE;
+}
+
+/* Ranges re-sorted per frame: a SORT_SHARE of them, at least one. */
+static uint32_t rendercache__sort_range_count(const rendercache *rc)
+{
+    const uint32_t range = rendercache__sort_range_size(rc), ranges = (rc->capacity + range - 1) / range;
+    return (ranges + RENDERCACHE__SORT_SHARE - 1) / RENDERCACHE__SORT_SHARE;
+}
+
+/* Jobs of the re-sort, each with its own scratch: SORT_JOBS with
+   parallel_for (or fewer, when fewer ranges are sorted per frame), else 1. */
+static uint32_t rendercache__sort_jobs(const rendercache *rc)
+{
+    uint32_t count = rendercache__sort_range_count(rc);
+    return rc->parallel_for ? (count < RENDERCACHE__SORT_JOBS ? count : RENDERCACHE__SORT_JOBS) : 1u;
 }
 
 static void rendercache__release(rendercache *rc)
 {
     const rendercache_allocator a = rc->alloc;
-    void *blocks[27];
+    void *blocks[28];
     size_t i;
     blocks[0] = rc->geo; blocks[1] = rc->data; blocks[2] = rc->obj_predicted; blocks[3] = rc->obj_motion;
     blocks[4] = rc->depth_out; blocks[5] = rc->obj_world; blocks[6] = rc->obj_local;
@@ -2063,6 +2103,7 @@ static void rendercache__release(rendercache *rc)
     blocks[22] = rc->obj_next; blocks[23] = rc->obj_since; blocks[24] = rc->obj_history;
     blocks[25] = rc->history;
     blocks[26] = rc->bands;
+    blocks[27] = rc->sort_scratch;
     for (i = 0; i < sizeof blocks / sizeof blocks[0]; i++) rendercache__free(&a, blocks[i]);
     rendercache__splat_free(&rc->splat, &a);
     rendercache__free(&a, rc);
@@ -2101,11 +2142,13 @@ static int rendercache__alloc_buffers(rendercache *rc)
     rc->chosen = (unsigned char *)rendercache__alloc_array(a, px, 1);
     rc->err_rows = (float *)rendercache__alloc_array(a, 2 * (size_t)rc->band_count * ((size_t)rc->width + 2), sizeof(float));
     rc->bands = (rendercache__band *)rendercache__alloc_array(a, rc->band_count, sizeof *rc->bands);
+    rc->sort_scratch = (uint32_t *)rendercache__alloc_array(a, (size_t)rendercache__sort_range_size(rc) * rendercache__sort_jobs(rc),
+                                                            2 * sizeof(uint32_t) + sizeof(rendercache__point));
     if (!rc->geo || !rc->data || !rc->shown || !rc->obj_predicted || !rc->obj_motion || !rc->obj_world ||
         !rc->obj_local || !rc->obj_next || !rc->obj_since || !rc->obj_history || !rc->history ||
         !rc->obj_camera || !rc->obj_moved || !rc->px_index || !rc->px_depth || !rc->depth_out || !rc->image ||
         !rc->priority || !rc->occupancy || !rc->kind || !rc->count || !rc->tile_stats || !rc->hist ||
-        !rc->select_v || !rc->chosen || !rc->err_rows || !rc->bands)
+        !rc->select_v || !rc->chosen || !rc->err_rows || !rc->bands || !rc->sort_scratch)
         return -1;
     if (rendercache__splat_alloc(&rc->splat, rc->width, rc->height, 1u, 0, a) != 0)   /* one z-buffer: the cull reads its keys */
         return -1;
@@ -2145,6 +2188,8 @@ static int rendercache__configure(rendercache *rc, const rendercache_desc *d)
     rc->cells_y = (d->height + RENDERCACHE__CELL - 1) >> RENDERCACHE__CELL_SHIFT;
     rc->cell_count = rc->cells_x * rc->cells_y;
     rc->capacity = (uint32_t)capacity;
+    rc->sort_shift = 0;
+    while ((rc->pixel_count >> rc->sort_shift) + 1u >= RENDERCACHE__SORT_KEYS) rc->sort_shift++;
     rc->object_count = rendercache__def(d->object_count, 256u);
     rc->depth_tolerance = rendercache__def(d->depth_tolerance, 0.1f);
     rc->predict_fraction = rendercache__def(d->predict_fraction, 0.25f);
@@ -2807,6 +2852,100 @@ static void rendercache__cull_and_interpolate(rendercache *rc)
     rc->stats.time_interpolate = 0.0;
 }
 
+/* ---- image order of the point cache -----------------------------------
+   Points are stored in slots in the order they came (insertion, eviction),
+   so the projection's z-tests and the cull's reads of the points that win
+   a pixel land at random in tens of megabytes: one cache miss each. Where
+   the slots of neighbouring pixels are neighbours too, the same accesses
+   share cache lines and pages. So each frame, before the projection,
+   re-sorts a share of the cache (RENDERCACHE__SORT_SHARE: all of it every
+   8 frames), range by range of RENDERCACHE__SORT_RANGE slots: the points
+   of a range are grouped by the block of pixels (a run of at most 1/2048
+   of the image, half a row at 512x512) they project to in the frame's
+   camera, those outside the image and free slots last, in a stable
+   counting sort whose scratch stays in cache. Points never leave their
+   range, so a frame sorts a fixed amount at a fixed cost; a camera that
+   moves a little keeps a sorted range nearly in image order. Nothing
+   refers to a slot between frames (the pixels' slots are found again by
+   the projection that follows), and which slot holds a point changes the
+   image only through the z-buffer's tie-break of equal depths and the
+   order in which the eviction's clock meets points not visible. */
+
+/* Re-sorts slots [r0, r0 + n) by the pixel block their points project to
+   in the current view (rendercache__project_points: where the z-buffer
+   will test them). */
+static void rendercache__sort_range(rendercache *rc, uint32_t r0, uint32_t n, uint32_t *scratch)
+{
+    const uint32_t range = rendercache__sort_range_size(rc), none_key = (rc->pixel_count >> rc->sort_shift) + 1u;
+    uint32_t count[RENDERCACHE__SORT_KEYS], *pix = scratch, *to = pix + range, b, i, k, sum;
+    rendercache__point *data = (rendercache__point *)(to + range);   /* the records in their new order */
+    rendercache__geo *geo = (rendercache__geo *)(void *)data;
+    float depth2[RENDERCACHE__BATCH];
+    rendercache__projector pr;
+    rendercache__projector_init(&pr, rc, &rc->view, rc->obj_camera, 0);
+    for (b = 0; b < n; b += RENDERCACHE__BATCH) {
+        uint32_t m = n - b < RENDERCACHE__BATCH ? n - b : RENDERCACHE__BATCH;
+        rendercache__project_points(&pr, r0 + b, r0 + b + m, pix + b, depth2);
+    }
+    memset(count, 0, sizeof count);
+    for (i = 0; i < n; i++) {   /* the key of each slot, and how many slots each key has */
+        pix[i] = pix[i] == RENDERCACHE__NONE ? none_key : pix[i] >> rc->sort_shift;
+        count[pix[i]]++;
+    }
+    for (k = 0, sum = 0; k <= none_key; k++) {
+        uint32_t c = count[k];
+        count[k] = sum;
+        sum += c;
+    }
+    for (i = 0; i < n; i++) to[i] = count[pix[i]]++;   /* the new place of each slot (stable) */
+    /* the points move in their order, read as a stream (the range is not in cache yet), and land in the
+       scratch, which is */
+    for (i = 0; i < n; i++) data[to[i]] = rc->data[r0 + i];
+    memcpy(rc->data + r0, data, (size_t)n * sizeof *data);
+    for (i = 0; i < n; i++) geo[to[i]] = rc->geo[r0 + i];
+    memcpy(rc->geo + r0, geo, (size_t)n * sizeof *geo);
+    /* (the shown marks stay: before the cull every mark is an earlier frame's, which no test compares equal) */
+}
+
+/* Job j of the re-sort: ranges of this frame's share (the k-th from
+   rc->sort_next on), in its own scratch. With atomics each job takes the
+   next range left until none is, so that a job the system holds back
+   holds back one range, not half of them; else job j takes its half. */
+static void rendercache__sort_job(void *ctx, uint32_t j)
+{
+    rendercache *rc = (rendercache *)ctx;
+    const uint32_t range = rendercache__sort_range_size(rc), ranges = (rc->capacity + range - 1) / range;
+    const uint32_t count = rendercache__sort_range_count(rc), jobs = rendercache__sort_jobs(rc);
+    const size_t scratch_words = (size_t)range * (2 + sizeof(rendercache__point) / sizeof(uint32_t));
+    uint32_t k = count * j / jobs, end = count * (j + 1) / jobs;
+#if RENDERCACHE__ATOMICS
+    k = __atomic_fetch_add(&rc->sort_taken, 1u, __ATOMIC_RELAXED);
+    end = count;
+#endif
+    while (k < end) {
+        uint32_t r = (rc->sort_next + k) % ranges, r0 = r * range, n = rc->capacity - r0 < range ? rc->capacity - r0 : range;
+        rendercache__sort_range(rc, r0, n, rc->sort_scratch + scratch_words * j);
+#if RENDERCACHE__ATOMICS
+        k = __atomic_fetch_add(&rc->sort_taken, 1u, __ATOMIC_RELAXED);
+#else
+        k++;
+#endif
+    }
+}
+
+/* This frame's share of the re-sort: the next sort_range_count ranges round the
+   cache, in sort_jobs jobs (ranges are disjoint: any schedule gives the
+   same cache). */
+static void rendercache__sort_share(rendercache *rc)
+{
+    const uint32_t range = rendercache__sort_range_size(rc), ranges = (rc->capacity + range - 1) / range;
+    double t0 = rendercache__now(rc);
+    rc->sort_taken = 0;
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__sort_job, rc, rendercache__sort_jobs(rc));
+    rc->sort_next = (rc->sort_next + rendercache__sort_range_count(rc)) % ranges;
+    rc->stats.time_sort = rendercache__now(rc) - t0;
+}
+
 /* Sums one column of the per-tile statistics. */
 static uint32_t rendercache__tile_sum(const rendercache *rc, uint32_t column)
 {
@@ -2822,7 +2961,7 @@ static void rendercache__start_stats(rendercache *rc)
     s->requested = s->predicted = s->inserted = s->replaced = s->evicted = s->rejected = 0;
     s->late = s->changed = s->dropped = 0;
     s->time_project = s->time_cull = s->time_interpolate = 0.0;
-    s->time_predict = s->time_request = s->time_insert = 0.0;
+    s->time_predict = s->time_request = s->time_insert = s->time_sort = 0.0;
 }
 
 RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, const rendercache_camera *camera)
@@ -2848,6 +2987,7 @@ RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, cons
     rendercache__change_level(rc);
     rendercache__commit_transforms(rc);
     rendercache__compose_objects(rc, &rc->view, rc->obj_camera);
+    rendercache__sort_share(rc);
     rendercache__splat_points(rc, &rc->view, rc->obj_camera, &rc->stats.time_project);
     if (rc->parallel_for) {
         t1 = rendercache__now(rc);

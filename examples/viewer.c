@@ -7,6 +7,7 @@
        cc -O2 -I. examples/viewer.c -o viewer $(sdl2-config --cflags --libs) -lm -lpthread
        ./viewer                       # the office, mode radiosity
        ./viewer --mode raytrace --scene building --size 960x540
+       ./viewer --mode raytrace --scene daylight   # by day (M skips mode radiosity)
 
    Keys: W A S D walk (Shift: faster), Q / E down / up, left mouse button
    held: look around, M next mode (radiosity, raytrace with the render
@@ -132,15 +133,18 @@ static void viewer_close(viewer *v)
     v->w = NULL;
 }
 
-/* The world and the renderer of v->o.mode (precomputed data from the cache). */
+/* The world and the renderer of v->o.mode (precomputed data from the cache).
+   Returns 0, -1, or WT_ERROR_UNSUPPORTED when the mode cannot render the
+   scene (radiosity by day). */
 static int viewer_open(viewer *v, char *err, size_t err_size)
 {
+    int result;
     viewer_close(v);
     if (wt_world_create(&v->o, &v->w, err, err_size) != 0) return -1;
-    if (wt_renderer_create(v->w, &v->r, err, err_size) != 0) {
+    if ((result = wt_renderer_create(v->w, &v->r, err, err_size)) != 0) {
         wt_world_destroy(v->w);
         v->w = NULL;
-        return -1;
+        return result;
     }
     return 0;
 }
@@ -348,11 +352,16 @@ int main(int argc, char **argv)
                     v.follow = !v.follow;
                     if (!v.follow) viewer_camera_from_path(&v, v.bunny_t);
                 } else if (k == SDLK_m) {
-                    v.o.mode = v.o.mode == WT_MODE_RADIOSITY ? WT_MODE_RAYTRACE
-                               : v.o.mode == WT_MODE_RAYTRACE ? WT_MODE_BASEVIEWS : WT_MODE_RADIOSITY;
-                    printf("viewer: mode %s (precompute from %s)\n", wt_mode_name(v.o.mode), v.o.cache_dir);
-                    fflush(stdout);
-                    if (viewer_open(&v, err, sizeof err) != 0) {
+                    int opened;
+                    do {   /* the next mode this scene has (radiosity has no glass or sky) */
+                        v.o.mode = v.o.mode == WT_MODE_RADIOSITY ? WT_MODE_RAYTRACE
+                                   : v.o.mode == WT_MODE_RAYTRACE ? WT_MODE_BASEVIEWS : WT_MODE_RADIOSITY;
+                        printf("viewer: mode %s (precompute from %s)\n", wt_mode_name(v.o.mode), v.o.cache_dir);
+                        fflush(stdout);
+                        opened = viewer_open(&v, err, sizeof err);
+                        if (opened == WT_ERROR_UNSUPPORTED) printf("viewer: %s; the next mode\n", err);
+                    } while (opened == WT_ERROR_UNSUPPORTED);
+                    if (opened != 0) {
                         fprintf(stderr, "viewer: %s\n", err);
                         status = 1;
                         goto done;

@@ -194,14 +194,14 @@ static void shade_all(ex_pool *pool, const ex_tracer *t, const rendercache_pixel
     ex_pool_parallel_for(pool, shade_one, &j, (n + 255) / 256);
 }
 
-enum { P_PROJECT, P_CULL, P_INTERP, P_PREDICT, P_REQUEST, P_INSERT, P_TOTAL, P_COUNT };
+enum { P_PROJECT, P_CULL, P_INTERP, P_SORT, P_PREDICT, P_REQUEST, P_INSERT, P_TOTAL, P_COUNT };
 
 static void run(const ex_tracer *tracer, ex_pool *shade_pool, uint32_t w, uint32_t h, int threads,
                 double *frame_ms, double *sample_us, double *bytes_per_pixel, int huge)
 {
     /* priority is computed inside cull (pixels with a point) and interp (holes); on one thread the
        two run interleaved, timed together under cull */
-    static const char *names[P_COUNT] = { "project+z-buffer", "cull(+interp on 1 thread)", "interp+priority",
+    static const char *names[P_COUNT] = { "project+z-buffer", "cull(+interp on 1 thread)", "interp+priority", "sort",
                                           "predict", "request", "insert", "total" };
     double times[P_COUNT][FRAMES], cpu[FRAMES], wall[FRAMES];
     rendercache_desc d;
@@ -265,8 +265,9 @@ static void run(const ex_tracer *tracer, ex_pool *shade_pool, uint32_t w, uint32
         times[P_PREDICT][f] = st.time_predict;
         times[P_REQUEST][f] = st.time_request;
         times[P_INSERT][f] = st.time_insert;
+        times[P_SORT][f] = st.time_sort;
         if (getenv("BENCH_DEBUG")) printf("frame %d: inserted %u replaced %u changed %u\n", f, st.inserted, st.replaced, st.changed);
-        times[P_TOTAL][f] = st.time_project + st.time_cull + st.time_interpolate + st.time_predict +
+        times[P_TOTAL][f] = st.time_project + st.time_cull + st.time_interpolate + st.time_sort + st.time_predict +
                             st.time_request + st.time_insert;
     }
     *bytes_per_pixel = (double)memory.peak / ((double)w * h);

@@ -494,7 +494,7 @@ static void test_simd_visibility_is_scalar(void)
     irrvol_material m[2];
     irrvol_desc d;
     irrvol *v;
-    uint32_t i, differ = 0, visible = 0;
+    uint32_t i, differ = 0, visible = 0, near = 0, records = 0;
     two_rooms(&s, m);
     sc_scene_desc(&d, &s, m, 2);
     d.resolution = 5;
@@ -510,19 +510,36 @@ static void test_simd_visibility_is_scalar(void)
         {   /* the SSE2 steps */
             irrvol__point4 p = irrvol__point4_set(x, n);
             irrvol__lanes4 l;
-            irrvol__lanes4_locate(v, id, &p, &l);
+            irrvol__lanes4_locate_samples(v, id, &p, &l);
             irrvol__lanes4_fetch(v, &l);
             irrvol__lanes4_weigh(&l, four);
+            for (k = 0; k < 4; k++) near += l.near >> k & 1;
         }
         for (k = 0; k < 4; k++) {
             float one = irrvol__visibility_weight(v, id[k], x, n);
             differ += memcmp(&one, &four[k], sizeof one) != 0;
             visible += one > 0.5f;
         }
+        {   /* a sub-cell's record read by irrvol__corner_weights: its corners' weights, as scalar */
+            const irrvol__cell *cell = &v->cell[(uint32_t)(frand() * (float)v->cell_count) % v->cell_count];
+            uint32_t f = cell->side - 1, sub = (uint32_t)(frand() * (float)(f * f * f)) % (f * f * f);
+            const irrvol__corners *r = v->corners + cell->corners + sub;
+            float eight[8];
+            if (r->hanging) continue;
+            records++;
+            irrvol__corner_weights(v, r, x, n, eight);
+            for (k = 0; k < 8; k++) {
+                float one = irrvol__visibility_weight(v, r->id[k], x, n);
+                differ += memcmp(&one, &eight[k], sizeof one) != 0;
+            }
+        }
     }
-    test_note("SSE2 visibility weights vs the scalar code: %u of 80,000 differ (%u weights above 0.5)", differ, visible);
+    test_note("SSE2 visibility weights vs the scalar code: %u of %u differ (%u of the 80,000 random ones above 0.5, "
+              "%u within their sample's reach)", differ, 80000 + 8 * records, visible, near);
     CHECK_EQ_INT(differ, 0);
     CHECK(visible > 1000 && visible < 79000);   /* both visible and hidden samples were compared */
+    CHECK(near > 200 && near < 79000);          /* and both sides of the reach (806 measured) */
+    CHECK(records > 1000);
     irrvol_destroy(v);
 #else
     test_note("no SSE2 here: the scalar code is the only one");

@@ -1356,7 +1356,10 @@ static uint64_t hash_bytes(uint64_t h, const void *p, size_t n)
     return h;
 }
 
-static uint64_t run_sequence(void (*pf)(void *, rendercache_job_fn, void *, uint32_t), void *user)
+/* ppp: points per pixel (0: the default, one range of the re-sort into
+   image order; 24: 12 ranges, 2 re-sorted per frame, in 2 jobs with a
+   parallel_for). */
+static uint64_t run_sequence(void (*pf)(void *, rendercache_job_fn, void *, uint32_t), void *user, float ppp)
 {
     const uint32_t w = 96, h = 80;
     rendercache_desc d = make_desc(w, h);
@@ -1368,6 +1371,7 @@ static uint64_t run_sequence(void (*pf)(void *, rendercache_job_fn, void *, uint
     memset(&s, 0, sizeof s);
     d.parallel_for = pf;
     d.parallel_user = user;
+    d.points_per_pixel = ppp;
     if (rendercache_create(&d, &rc) != RENDERCACHE_OK) return 0;
     for (f = 0; f < 12; f++) {
         float t = (float)f * 0.1f;
@@ -1393,13 +1397,15 @@ static uint64_t run_sequence(void (*pf)(void *, rendercache_job_fn, void *, uint
 static void test_deterministic_for_any_thread_count(void)
 {
     ex_pool *pool = ex_pool_create(3);
-    uint64_t serial = run_sequence(NULL, NULL);
-    CHECK(serial != 0);
-    CHECK(run_sequence(reversed_parallel_for, NULL) == serial);
-    if (pool) {
-        CHECK(run_sequence(ex_pool_parallel_for, pool) == serial);
-        ex_pool_destroy(pool);
+    float ppp[2] = { 0.0f, 24.0f };
+    int k;
+    for (k = 0; k < 2; k++) {
+        uint64_t serial = run_sequence(NULL, NULL, ppp[k]);
+        CHECK(serial != 0);
+        CHECK(run_sequence(reversed_parallel_for, NULL, ppp[k]) == serial);
+        if (pool) CHECK(run_sequence(ex_pool_parallel_for, pool, ppp[k]) == serial);
     }
+    ex_pool_destroy(pool);
 }
 
 int main(int argc, char **argv)

@@ -38,25 +38,14 @@
    disk cache. */
 static wt_options small_options(wt_mode mode)
 {
-    wt_options o;
-    wt_options_default(&o);
-    o.mode = mode;
-    o.scene = "office";
-    o.width = REF_W;
-    o.height = REF_H;
-    o.frames = 24;
-    o.threads = 2;
+    wt_options o = quiet_options(mode, "office", REF_W, REF_H, 24);
     o.strata = 6;
     o.bunny_strata = 4;
-    o.light_samples = 4;      /* shadow rays per point, over all the lights */
     o.warmup_divisor = 4;
     o.base_size = 64;
     o.id_size = 24;
     o.keys = 3;
     o.quality = 0.6f;
-    o.use_cache = 0;
-    o.progress = 0;
-    o.verbose = 0;
     return o;
 }
 
@@ -362,26 +351,6 @@ static void test_threads(void)
 
 /* ---- the bunny under the desk ------------------------------------------------- */
 
-/* Mean luminance of the bunny's pixels in a full render at time t. */
-static double bunny_pixels(wt_world *w, double t, int *count)
-{
-    const int W = 96, H = 72;
-    rendercache_camera c = wt_camera(&w->opt, t, W, H);
-    float *rgb = (float *)malloc(sizeof(float) * 3 * W * H);
-    uint32_t *obj = (uint32_t *)malloc(sizeof(uint32_t) * W * H);
-    double sum = 0.0;
-    int i;
-    *count = 0;
-    if (rgb && obj && wt_render_full(w, &c, t, 0, rgb, obj) == 0)
-        for (i = 0; i < W * H; i++)
-            if (obj[i] == WT_OBJECT_BUNNY) {
-                sum += luminance(rgb + 3 * i);
-                ++*count;
-            }
-    free(rgb);
-    free(obj);
-    return *count ? sum / *count : 0.0;
-}
 
 /* Issue 19's measure of the raytrace mode: the LRMS of its frames against
    converged renders (wt_render_converged: a gather at every pixel, 32

@@ -24,20 +24,9 @@
 
 static wt_options small_options(wt_mode mode, const char *scene)
 {
-    wt_options o;
-    wt_options_default(&o);
-    o.mode = mode;
-    o.scene = scene;
-    o.width = REF_W;
-    o.height = REF_H;
-    o.frames = 24;
-    o.threads = 2;
+    wt_options o = quiet_options(mode, scene, REF_W, REF_H, 24);
     o.strata = 6;
     o.bunny_strata = 4;
-    o.light_samples = 4;      /* shadow rays per point, over all the lights */
-    o.use_cache = 0;
-    o.progress = 0;
-    o.verbose = 0;
     return o;
 }
 
@@ -50,14 +39,6 @@ static wt_world *open_world(const wt_options *o)
 }
 
 /* ---- the layout file ------------------------------------------------------ */
-
-static int write_file(const char *path, const char *text)
-{
-    FILE *f = fopen(path, "w");
-    if (!f) return 0;
-    fputs(text, f);
-    return fclose(f) == 0;
-}
 
 static void test_layout(void)
 {
@@ -344,27 +325,6 @@ static void test_threads(void)
 
 /* ---- the bunny in the room without a lamp ---------------------------------- */
 
-/* Mean luminance of the bunny's pixels in a full render (the raytrace
-   mode's shading: direct light with shadow rays, light vectors) at time t. */
-static double bunny_pixels(wt_world *w, double t, int *count)
-{
-    const int W = 96, H = 72;
-    rendercache_camera c = wt_camera(&w->opt, t, W, H);
-    float *rgb = (float *)malloc(sizeof(float) * 3 * W * H);
-    uint32_t *obj = (uint32_t *)malloc(sizeof(uint32_t) * W * H);
-    double sum = 0.0;
-    int i;
-    *count = 0;
-    if (rgb && obj && wt_render_full(w, &c, t, 0, rgb, obj) == 0)
-        for (i = 0; i < W * H; i++)
-            if (obj[i] == WT_OBJECT_BUNNY) {
-                sum += luminance(rgb + 3 * i);
-                ++*count;
-            }
-    free(rgb);
-    free(obj);
-    return *count ? sum / *count : 0.0;
-}
 
 /* The issue's acceptance: the bunny's mean luminance in a room without a
    lamp is at most half of its mean luminance in a lit room, in the

@@ -67,7 +67,8 @@ static uint64_t hash_bytes(uint64_t h, const void *p, size_t n)
 }
 
 /* ---- the render cache ---------------------------------------------- */
-static uint64_t run_cache(ex_pool *pool)
+/* The frame sequence with points_per_pixel ppp (0: the default). */
+static uint64_t run_cache(ex_pool *pool, float ppp)
 {
     static rendercache_pixel_request req[W * H];
     static rendercache_sample late[W * H], now[W * H];
@@ -78,6 +79,7 @@ static uint64_t run_cache(ex_pool *pool)
     memset(&d, 0, sizeof d);
     d.width = W;
     d.height = H;
+    d.points_per_pixel = ppp;
     d.parallel_for = pool ? ex_pool_parallel_for : NULL;
     d.parallel_user = pool;
     if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return 0;
@@ -215,10 +217,23 @@ static uint64_t run_warps(ex_pool *pool)
 static void test_parallel_frame_matches_serial(void)
 {
     ex_pool *pool = ex_pool_create(3);
-    uint64_t serial = run_cache(NULL);
+    uint64_t serial = run_cache(NULL, 0.0f);
     if (!CHECK(pool != NULL)) return;
     CHECK(serial != 0);
-    CHECK(run_cache(pool) == serial);
+    CHECK(run_cache(pool, 0.0f) == serial);
+    ex_pool_destroy(pool);
+}
+
+/* With 3 points per pixel the cache has 9 ranges of the re-sort into image
+   order, so each frame re-sorts 2 of them in 2 jobs (one range, as with the
+   default, runs as a single job). */
+static void test_parallel_resort_matches_serial(void)
+{
+    ex_pool *pool = ex_pool_create(3);
+    uint64_t serial = run_cache(NULL, 3.0f);
+    if (!CHECK(pool != NULL)) return;
+    CHECK(serial != 0);
+    CHECK(run_cache(pool, 3.0f) == serial);
     ex_pool_destroy(pool);
 }
 
@@ -236,6 +251,7 @@ int main(int argc, char **argv)
 {
     TEST_INIT(argc, argv);
     RUN(test_parallel_frame_matches_serial);
+    RUN(test_parallel_resort_matches_serial);
     RUN(test_parallel_warps_match_serial);
     return test_finish();
 }

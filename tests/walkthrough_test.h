@@ -1,12 +1,32 @@
-/* What the walkthrough's two test files share (tests/test_walkthrough.c,
-   tests/test_walkthrough_radiosity.c): luminance, the stored reference
-   frames' paths, the moment the bunny is deepest under the desk, and
-   temporary cache directories. Include after examples/common/walkthrough.h. */
+/* What the walkthrough's test files share (tests/test_walkthrough*.c,
+   tests/test_viewer.c): luminance, the stored reference frames' paths, the
+   moment the bunny is deepest under the desk, the tests' common settings, the bunny's luminance in a
+   full render, temporary cache directories and small files. Include after examples/common/walkthrough.h. */
 #ifndef TESTS_WALKTHROUGH_TEST_H
 #define TESTS_WALKTHROUGH_TEST_H
 
 #include <stdio.h>
 #include <stdlib.h>
+
+/* The settings every walkthrough test starts from: the scene, mode and frame
+   size it names, 2 threads (the frames are the same on any count), 4 shadow
+   rays per point over all the lights, and no disk cache, progress or log. */
+TEST__FN wt_options quiet_options(wt_mode mode, const char *scene, int width, int height, int frames)
+{
+    wt_options o;
+    wt_options_default(&o);
+    o.mode = mode;
+    o.scene = scene;
+    o.width = width;
+    o.height = height;
+    o.frames = frames;
+    o.threads = 2;
+    o.light_samples = 4;
+    o.use_cache = 0;
+    o.progress = 0;
+    o.verbose = 0;
+    return o;
+}
 
 /* Rec. 709 luminance of a linear RGB triple. */
 TEST__FN float luminance(const float *c) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
@@ -30,6 +50,38 @@ TEST__FN double time_under_desk(void)
         if (d > depth) { depth = d; best = i / 200.0; }
     }
     return best;
+}
+
+/* Mean luminance of the bunny's pixels in a full render at time t (the
+   raytrace mode's shading: direct light with shadow rays, light vectors),
+   96 x 72 pixels; *count = how many pixels show the bunny. */
+TEST__FN double bunny_pixels(wt_world *w, double t, int *count)
+{
+    const int W = 96, H = 72;
+    rendercache_camera c = wt_camera(&w->opt, t, W, H);
+    float *rgb = (float *)malloc(sizeof(float) * 3 * W * H);
+    uint32_t *obj = (uint32_t *)malloc(sizeof(uint32_t) * W * H);
+    double sum = 0.0;
+    int i;
+    *count = 0;
+    if (rgb && obj && wt_render_full(w, &c, t, 0, rgb, obj) == 0)
+        for (i = 0; i < W * H; i++)
+            if (obj[i] == WT_OBJECT_BUNNY) {
+                sum += luminance(rgb + 3 * i);
+                ++*count;
+            }
+    free(rgb);
+    free(obj);
+    return *count ? sum / *count : 0.0;
+}
+
+/* Writes text to a new file at path; 0 when it cannot. */
+TEST__FN int write_file(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    if (!f) return 0;
+    fputs(text, f);
+    return fclose(f) == 0;
 }
 
 /* A new empty directory under /tmp, its path into dir; 0 when none could be made. */

@@ -6,7 +6,7 @@
        ex_tonemap(hdr, w, h, exposure, rgb8);   // linear float RGB -> sRGB bytes, clipped
        ex_tonemap_filmic(hdr, w, h, ex_exposure_key(hdr, w, h), rgb8);   // or exposed and filmic
        ex_write_png("frame.png", w, h, rgb8);
-       ex_write_pfm("frame.pfm", w, h, hdr);   // ex_read_pfm reads it back
+       ex_write_pfm("frame.pfm", w, h, hdr);   // ex_read_pfm reads it back (ex_load_pfm: any size)
 
    Rows are stored top to bottom everywhere (PFM's bottom-up order is handled
    on write). Every writer returns 0 on success and -1 when the file cannot be
@@ -149,22 +149,12 @@ EX_FN int ex_write_pfm(const char *path, int w, int h, const float *rgb)
     return ok ? 0 : -1;
 }
 
-/* Reads a little-endian PFM of exactly w x h pixels written by
-   ex_write_pfm (the tests' stored reference frames) into rgb, rows top to
-   bottom. Returns 0, or -1 when the file is missing, of another size or
-   format, or short. */
-EX_FN int ex_read_pfm(const char *path, int w, int h, float *rgb)
+/* The pixels of an open PFM after its header: w x h RGB floats,
+   little-endian, rows bottom to top in the file, top to bottom in rgb. */
+static int ex__read_pfm_pixels(FILE *f, int w, int h, float *rgb)
 {
-    FILE *f;
-    char magic[3] = { 0 };
-    int fw, fh, y, ok;
-    float scale;
-    if (w <= 0 || h <= 0 || !rgb) return -1;
-    f = fopen(path, "rb");
-    if (!f) return -1;
-    ok = fscanf(f, "%2s %d %d %f", magic, &fw, &fh, &scale) == 4 && strcmp(magic, "PF") == 0 && fw == w &&
-         fh == h && scale < 0.0f && fgetc(f) != EOF;   /* the one whitespace byte before the data */
-    for (y = h - 1; ok && y >= 0; y--) {   /* rows bottom to top */
+    int y, ok = 1;
+    for (y = h - 1; ok && y >= 0; y--) {
         int i;
         for (i = 0; ok && i < 3 * w; i++) {
             unsigned char b[4];
@@ -174,7 +164,51 @@ EX_FN int ex_read_pfm(const char *path, int w, int h, float *rgb)
             if (ok) memcpy(&rgb[3 * (size_t)y * (size_t)w + (size_t)i], &u, 4);
         }
     }
+    return ok;
+}
+
+/* The header of a little-endian RGB PFM: its size. */
+static int ex__read_pfm_header(FILE *f, int *w, int *h)
+{
+    char magic[3] = { 0 };
+    float scale;
+    return fscanf(f, "%2s %d %d %f", magic, w, h, &scale) == 4 && strcmp(magic, "PF") == 0 && *w > 0 && *h > 0 &&
+           scale < 0.0f && fgetc(f) != EOF;   /* the one whitespace byte before the data */
+}
+
+/* Reads a little-endian PFM of exactly w x h pixels written by
+   ex_write_pfm (the tests' stored reference frames) into rgb, rows top to
+   bottom. Returns 0, or -1 when the file is missing, of another size or
+   format, or short. */
+EX_FN int ex_read_pfm(const char *path, int w, int h, float *rgb)
+{
+    FILE *f;
+    int fw, fh, ok;
+    if (w <= 0 || h <= 0 || !rgb) return -1;
+    f = fopen(path, "rb");
+    if (!f) return -1;
+    ok = ex__read_pfm_header(f, &fw, &fh) && fw == w && fh == h && ex__read_pfm_pixels(f, w, h, rgb);
     fclose(f);
+    return ok ? 0 : -1;
+}
+
+/* Reads a little-endian RGB PFM of any size up to max_texels pixels into
+   a new array (*rgb, free() it; rows top to bottom). Returns 0, or -1 when
+   the file is missing, too large, of another format, or short. */
+EX_FN int ex_load_pfm(const char *path, size_t max_texels, int *w, int *h, float **rgb)
+{
+    FILE *f = fopen(path, "rb");
+    int ok;
+    *rgb = NULL;
+    if (!f) return -1;
+    ok = ex__read_pfm_header(f, w, h) && (size_t)*w <= max_texels / (size_t)*h;
+    if (ok) *rgb = (float *)malloc(3 * sizeof(float) * (size_t)*w * (size_t)*h);
+    ok = ok && *rgb && ex__read_pfm_pixels(f, *w, *h, *rgb);
+    fclose(f);
+    if (!ok) {
+        free(*rgb);
+        *rgb = NULL;
+    }
     return ok ? 0 : -1;
 }
 

@@ -1196,23 +1196,76 @@ EX_FN int obj_drop_coincident(obj_scene *s)
 
 /* ---- writing ------------------------------------------------------------ */
 
-/* name as an OBJ/MTL token (whitespace and controls become '_'), different
-   from the names[0..count) before it and from the parser's "default". */
-static void obj__unique_name(const char *name, char (*names)[OBJ_NAME_MAX], uint32_t count, char *out)
+/* The names given so far (names[0..count), and names[count] = the parser's
+   "default", which no written name may take), hashed, each with the last
+   suffix given to a name made from it: naming n equal names costs O(n)
+   hash probes, where comparing each with all before it, suffix by suffix,
+   cost O(n^3) (a file of 5,000 unnamed groups took minutes). */
+typedef struct {
+    char (*names)[OBJ_NAME_MAX];
+    uint32_t *slot;          /* 1 + index into names, 0 when empty */
+    uint32_t *last_suffix;   /* per name */
+    uint32_t mask;
+} obj__name_set;
+
+static uint32_t obj__name_hash(const char *s)
+{
+    uint32_t h = 2166136261u;   /* FNV-1a */
+    while (*s) h = (h ^ (unsigned char)*s++) * 16777619u;
+    return h;
+}
+
+/* The index of name in t, or UINT32_MAX; *at is its slot or where it goes. */
+static uint32_t obj__name_find(const obj__name_set *t, const char *name, uint32_t *at)
+{
+    uint32_t i = obj__name_hash(name) & t->mask;
+    while (t->slot[i] && strcmp(t->names[t->slot[i] - 1], name) != 0) i = (i + 1) & t->mask;
+    *at = i;
+    return t->slot[i] ? t->slot[i] - 1 : UINT32_MAX;
+}
+
+/* Room for count names (names has count + 1 entries); 0, or -1 out of memory. */
+static int obj__name_set_init(obj__name_set *t, char (*names)[OBJ_NAME_MAX], uint32_t count)
+{
+    uint32_t size = 4, at;
+    while (size < 2 * ((uint64_t)count + 1)) size *= 2;
+    t->names = names;
+    t->mask = size - 1;
+    t->slot = (uint32_t *)calloc(size, sizeof *t->slot);
+    t->last_suffix = (uint32_t *)calloc((size_t)count + 1, sizeof *t->last_suffix);
+    if (!t->slot || !t->last_suffix) return -1;
+    snprintf(names[count], OBJ_NAME_MAX, "default");
+    obj__name_find(t, names[count], &at);
+    t->slot[at] = count + 1;
+    return 0;
+}
+
+static void obj__name_set_free(obj__name_set *t)
+{
+    free(t->slot);
+    free(t->last_suffix);
+}
+
+/* names[i] = name as an OBJ/MTL token (whitespace and controls become '_'),
+   different from the names given before it and from "default". */
+static void obj__unique_name(obj__name_set *t, const char *name, uint32_t i)
 {
     char base[OBJ_NAME_MAX];
-    uint32_t i, suffix = 0;
-    int clash;
+    uint32_t at, owner, suffix;
     size_t k;
     snprintf(base, sizeof base, "%.50s", name[0] ? name : "unnamed");
     for (k = 0; base[k]; k++)
         if ((unsigned char)base[k] <= ' ' || base[k] == 127) base[k] = '_';
-    memcpy(out, base, sizeof base);
-    do {
-        clash = strcmp(out, "default") == 0;
-        for (i = 0; i < count && !clash; i++) clash = strcmp(out, names[i]) == 0;
-        if (clash) snprintf(out, OBJ_NAME_MAX, "%.50s_%u", base, ++suffix);
-    } while (clash);
+    owner = obj__name_find(t, base, &at);
+    if (owner == UINT32_MAX) {
+        memcpy(t->names[i], base, sizeof base);
+    } else {
+        suffix = t->last_suffix[owner];
+        do snprintf(t->names[i], OBJ_NAME_MAX, "%.50s_%u", base, ++suffix);
+        while (obj__name_find(t, t->names[i], &at) != UINT32_MAX);
+        t->last_suffix[owner] = suffix;
+    }
+    t->slot[at] = i + 1;
 }
 
 /* Writes the materials as MTL that obj__parse_mtl reads back to the same
@@ -1289,8 +1342,9 @@ EX_FN int obj_write(const obj_scene *s, const char *obj_path, char *err, size_t 
     const char *base;
     size_t n = obj_path ? strlen(obj_path) : 0;
     FILE *fo = NULL, *fm = NULL;
+    obj__name_set mat_set = {NULL, NULL, NULL, 0}, group_set = {NULL, NULL, NULL, 0};
     uint32_t i;
-    int r = -1;
+    int r = -1, named;
     if (!s || n < 5 || strcmp(obj_path + n - 4, ".obj") != 0 || n >= sizeof mtl_path) {
         if (err && err_size) snprintf(err, err_size, "obj_write: the path must end in .obj");
         return -1;
@@ -1300,16 +1354,20 @@ EX_FN int obj_write(const obj_scene *s, const char *obj_path, char *err, size_t 
     base = strrchr(mtl_path, '/') ? strrchr(mtl_path, '/') + 1 : mtl_path;
     mat_names = (char (*)[OBJ_NAME_MAX])malloc(OBJ_NAME_MAX * ((size_t)s->material_count + 1));
     group_names = (char (*)[OBJ_NAME_MAX])malloc(OBJ_NAME_MAX * ((size_t)s->group_count + 1));
-    if (mat_names && group_names) {
-        for (i = 0; i < s->material_count; i++) obj__unique_name(s->materials[i].name, mat_names, i, mat_names[i]);
-        for (i = 0; i < s->group_count; i++) obj__unique_name(s->groups[i], group_names, i, group_names[i]);
+    named = mat_names && group_names && obj__name_set_init(&mat_set, mat_names, s->material_count) == 0 &&
+            obj__name_set_init(&group_set, group_names, s->group_count) == 0;
+    if (named) {
+        for (i = 0; i < s->material_count; i++) obj__unique_name(&mat_set, s->materials[i].name, i);
+        for (i = 0; i < s->group_count; i++) obj__unique_name(&group_set, s->groups[i], i);
         fo = fopen(obj_path, "w");
         fm = fopen(mtl_path, "w");
         if (fo && fm) r = obj__write_mtl(fm, s, mat_names) | obj__write_obj(fo, s, base, mat_names, group_names);
     }
     if (fo && fclose(fo) != 0) r = -1;
     if (fm && fclose(fm) != 0) r = -1;
-    if (r != 0 && err && err_size) snprintf(err, err_size, "%s: cannot write (%s)", obj_path, mat_names && group_names ? strerror(errno) : "out of memory");
+    if (r != 0 && err && err_size) snprintf(err, err_size, "%s: cannot write (%s)", obj_path, named ? strerror(errno) : "out of memory");
+    obj__name_set_free(&mat_set);
+    obj__name_set_free(&group_set);
     free(mat_names);
     free(group_names);
     return r;

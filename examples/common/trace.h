@@ -25,8 +25,10 @@
    (ex_tracer_set_sky, scene_sky.h: constant or an environment map) is seen
    by camera rays that leave the scene and lights every diffuse hit as
    direct light: one cosine-distributed ray per hit, attenuated by the glass
-   it crosses. Scenes without glass or sky trace exactly as before (no extra
-   random numbers). */
+   it crosses. ex_tracer_intersect_through finds the first opaque surface
+   behind the panes along a ray, with the panes' transmittance (what a
+   camera sees through a window). Scenes without glass or sky trace
+   exactly as before (no extra random numbers). */
 #ifndef EXAMPLES_COMMON_TRACE_H
 #define EXAMPLES_COMMON_TRACE_H
 
@@ -898,30 +900,47 @@ static float ex__tracer_step_through(const ex_tracer *t, const ex_trace_hit *h, 
     return step;
 }
 
+/* The first opaque surface along org + t dir, t in (0, tmax), seen through
+   glass: every pane met on the way multiplies through (rgb, starting at 1)
+   by its transmittance and the ray goes on straight past it; hit->t is the
+   distance from org. Returns 1 with that surface in hit, or 0 when the ray
+   leaves the scene (through: what the glass passes of the sky). The pane
+   after EX_TRACE_MAX_PASSES crossed counts as opaque (it is the hit). */
+EX_FN int ex_tracer_intersect_through(const ex_tracer *t, const float org[3], const float dir[3], float tmax,
+                                      ex_trace_hit *hit, float through[3])
+{
+    float o[3], travelled = 0.0f;
+    int pass, k;
+    through[0] = through[1] = through[2] = 1.0f;
+    memcpy(o, org, sizeof o);
+    for (pass = 0;; pass++) {
+        const float *tf;
+        float step;
+        if (!ex_tracer_intersect(t, o, dir, tmax, hit)) return 0;
+        tf = ex__tracer_tf(t, hit);
+        if (!ex__passes(tf) || pass == EX_TRACE_MAX_PASSES) break;
+        for (k = 0; k < 3; k++) through[k] *= tf[k];
+        step = ex__tracer_step_through(t, hit, dir, o);
+        travelled += step;
+        tmax -= step;
+        if (!(tmax > 0)) return 0;
+    }
+    hit->t += travelled;
+    return 1;
+}
+
 /* What reaches org + tmax dir from org: rgb = the product of the
    transmittances of the glass crossed, 0 when something opaque is in the
    way (or more than EX_TRACE_MAX_PASSES panes). Returns whether any light
    gets through. Without glass in the scene, a shadow ray. */
 EX_FN int ex_tracer_transmittance(const ex_tracer *t, const float org[3], const float dir[3], float tmax, float rgb[3])
 {
-    float o[3];
-    int pass, k;
-    rgb[0] = rgb[1] = rgb[2] = 1.0f;
+    ex_trace_hit h;
     if (!t->has_glass) {
+        rgb[0] = rgb[1] = rgb[2] = 1.0f;
         if (!ex_tracer_occluded(t, org, dir, tmax)) return 1;
-        rgb[0] = rgb[1] = rgb[2] = 0.0f;
-        return 0;
-    }
-    memcpy(o, org, sizeof o);
-    for (pass = 0; pass <= EX_TRACE_MAX_PASSES; pass++) {
-        ex_trace_hit h;
-        const float *tf;
-        if (!ex_tracer_intersect(t, o, dir, tmax, &h)) return 1;
-        tf = ex__tracer_tf(t, &h);
-        if (!ex__passes(tf) || pass == EX_TRACE_MAX_PASSES) break;
-        for (k = 0; k < 3; k++) rgb[k] *= tf[k];
-        tmax -= ex__tracer_step_through(t, &h, dir, o);
-        if (!(tmax > 0)) return 1;
+    } else if (!ex_tracer_intersect_through(t, org, dir, tmax, &h, rgb)) {
+        return 1;
     }
     rgb[0] = rgb[1] = rgb[2] = 0.0f;
     return 0;

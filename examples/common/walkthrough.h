@@ -3,7 +3,8 @@
    past the yellow divider, the camera along the front wall) or a generated
    building (--scene building: make_building.py's OBJ, MTL and layout; the
    walk is planned from the layout: a lit room, a room without a lamp, up
-   the stairs, the camera following the bunny), rendered in one of three modes that compose the
+   the stairs, the camera following the bunny) or the building by day
+   (--scene daylight, below), rendered in one of three modes that compose the
    project's four headers. Tests and the benchmark drive it too.
 
        wt_options o;  wt_world *w;  wt_renderer *r;  wt_frame_stats st;
@@ -21,7 +22,11 @@
    examples/common/trace.h, so the bunny casts shadows; Lambert +
    normalized Phong) and indirect light from a light
    vector (lightvec.h, Crespin & Peroche 2004): looked up in a cache, and
-   gathered and inserted where the cache has too few valid vectors. Glossy
+   gathered and inserted where the cache has too few valid vectors. Near
+   the bunny, the office's indirect light is dimmed by the share of the
+   hemisphere the bunny covers, ray traced against the bunny within reach
+   (contact shadows, wt__contact_occlusion; --no-bunny-shadow turns them
+   off). Glossy
    materials (floor, desk, lamp pole) use 5D light vectors (position and
    viewing direction), Lambertian ones view-independent 3D vectors. The
    office's vectors live in a static cache, warmed up along the path in the
@@ -64,6 +69,27 @@
                 wt_volume_build, wt_bunny_light, wt_raster_scene) and
                 tested, and wt_static_shading_build/_shade are where
                 radinterp_build_mesh and radinterp_shade go.
+
+   Daylight. A layout may name a sky ("sky R G B", W/(m^2 sr), or "sky R G
+   B MAP.pfm": R G B times an equirectangular little-endian RGB PFM beside
+   the layout, rows from the zenith down as in scene_sky.h; wt_layout_load
+   refuses a malformed line, a second sky, a negative or non-finite value
+   and an unreadable map, naming the line). Materials with Tf > 0 are thin
+   glass. In modes raytrace and baseviews the sky and the glass reach every
+   part: camera rays go straight through the panes, dimmed by their
+   transmittance, to the surface behind them or the sky
+   (ex_tracer_intersect_through; a pane's own reflection is not drawn);
+   shadow rays to the lamps are dimmed by the panes they cross; the
+   light-vector scenes get the sky (lightvec_scene_desc.sky or
+   .environment), so gathers see it through the windows: daylight is
+   indirect light, in the light vectors, as lightvec.h's GLASS AND SKY
+   describes. --scene daylight is make_building.py --daylight's
+   building_1k_daylight (glass in every window, lamps off, a ground, an
+   overcast sky). Mode radiosity refuses glass and a sky with
+   WT_ERROR_UNSUPPORTED: radinterp.h has no transmitting patch and no sky
+   yet, and its irradiance volume (irrvol.h, which handles both) is built
+   from the radiosity solution, so irrvol lights a daylight bunny only once
+   radinterp does.
 
    Precompute cache. Files <cache_dir>/walkthrough-<what>-<key>.bin, key =
    FNV-1a hash of the scene files' bytes, the paths (every frame's camera,
@@ -151,6 +177,11 @@ typedef enum wt_mode {
    light and its LRMS against the radiosity frames is 0.42 instead of 0.10). */
 #define WT_REFERENCE_BOUNCES 8
 
+/* What wt_renderer_create returns besides 0 and -1: the mode cannot
+   render this scene (radiosity and glass or a sky: radinterp.h has no
+   transmitting patch). */
+#define WT_ERROR_UNSUPPORTED (-2)
+
 /* Everything a run depends on. Fields that change pictures also change the
    keys of the precompute cache. */
 struct wt_path;
@@ -161,7 +192,8 @@ typedef struct wt_options {
     const char *cache_dir;    /* precompute cache */
     const char *data_dir;     /* bunny.obj, and the scenes named by scene */
     const char *scene;        /* "office" (data_dir/office.*; the default until radinterp solves the building
-                                 within memory), "building" (data_dir/building_4k.*), or the path
+                                 within memory), "building" (data_dir/building_4k.*), "daylight"
+                                 (data_dir/building_1k_daylight.*: glass and a sky), or the path
                                  of an OBJ with a .layout file beside it (make_building.py's format) */
     const struct wt_path *path;   /* set by wt_world_create in the world's copy: the walk planned through the
                                      scene's layout; NULL: the office's built-in walk */
@@ -187,7 +219,8 @@ typedef struct wt_options {
     float min_leaf_area;      /* radinterp_mesh_desc.min_leaf_area, m^2; 0 = every leaf */
     int volume_resolution;    /* irradiance volume k */
     int visibility_rays;      /* self-occlusion rays per bunny vertex */
-    int bunny_shadow;         /* the bunny's occlusion blob on the office */
+    int bunny_shadow;         /* the bunny's contact shadow on the office: radiosity, its occlusion blob;
+                                 raytrace and baseviews, ray-traced occlusion of indirect light */
     int gouraud;              /* the office Gouraud-shaded from the mesh's corners (radinterp_shade_gouraud) */
     /* run */
     int use_cache;            /* load and save the precompute cache */
@@ -281,7 +314,9 @@ EX_FN void wt_usage(FILE *f)
           "  --cache DIR          precompute cache (default build/cache)\n"
           "  --no-cache           neither read nor write the precompute cache\n"
           "  --scene S            office (default: DIR/office.obj, .mtl), building (DIR/building_4k.obj,\n"
-          "                       .mtl, .layout), or an OBJ with a make_building.py layout beside it\n"
+          "                       .mtl, .layout), daylight (DIR/building_1k_daylight.*: glass in the windows\n"
+          "                       and a sky; modes raytrace and baseviews), or an OBJ with a\n"
+          "                       make_building.py layout beside it (a sky line makes it daylight)\n"
           "  --data DIR           bunny.obj and the scenes (default examples/data)\n"
           "  --threads N          threads, 0 = one per core (default 0)\n"
           "  --seed N             random seed (default 1)\n"
@@ -295,7 +330,8 @@ EX_FN void wt_usage(FILE *f)
           "  --eps E              radiosity: solver error bound in W/m^2 (default: radinterp's, 0.13)\n"
           "  --min-leaf-area A    radiosity: coarsest mesh leaves in m^2 (default 0: every leaf)\n"
           "  --volume-k K         radiosity: irradiance volume bins 2K^2, K <= 32 (default 17)\n"
-          "  --no-bunny-shadow    radiosity: no occlusion blob of the bunny on the office\n"
+          "  --no-bunny-shadow    no contact shadow of the bunny on the office (radiosity: its occlusion\n"
+          "                       blob; raytrace, baseviews: ray-traced occlusion of indirect light)\n"
           "  --gouraud            radiosity: Gouraud shading of the mesh instead of its interpolants\n"
           "  --exposure E         exposure before the filmic curve (default: automatic per frame)\n"
           "  --reference          also trace every frame in full and print the LRMS error\n"
@@ -716,15 +752,17 @@ typedef struct wt_point {
     uint32_t object;         /* WT_OBJECT_* or RENDERCACHE_MISS */
     uint32_t polygon;        /* office face, or the bunny triangle + office face count (id images) */
     uint32_t material;       /* index into wt_world.materials */
-    float direct[3];         /* emission + direct light */
+    float direct[3];         /* emission + direct light; on a miss, the sky */
     float indirect[3];       /* from the light vector */
-    float rgb[3];            /* out: radiance towards the eye */
+    float through[3];        /* transmittance of the glass between the eye and the hit (1: none) */
+    float contact;           /* share of the indirect light the bunny leaves (wt__contact_occlusion; 1: all) */
+    float rgb[3];            /* out: radiance towards the eye, through * (direct + contact * indirect) */
     float weight;            /* W of the light vector: lookup weight, 1 for a new vector */
     unsigned char light;     /* WT_LIGHT_* */
     unsigned char glossy;    /* 5D light vector (view dependent) */
     unsigned char lit;       /* indirect light known */
     unsigned char gathered;  /* its light vector was computed for it */
-    unsigned char bunny_shadow;   /* the bunny blocked some of its direct light */
+    unsigned char bunny_shadow;   /* the bunny blocked some of its direct or indirect light */
 } wt_point;
 
 /* An emitting polygon of the office (its fan triangles are consecutive),
@@ -752,10 +790,20 @@ typedef struct wt_box {
     float lo[3], hi[3];
 } wt_box;
 
+/* The layout's sky (`sky R G B [MAP]`): what rays that leave the building
+   see, R G B times the environment map's texel (a PFM file beside the
+   layout, latitude-longitude with +y up, scene_sky.h's layout), or the
+   constant R G B without a map. */
+#define WT_SKY_MAX_TEXELS (1u << 22)   /* an environment map's texels: 4M, 48 MB of floats */
+
 typedef struct wt_layout {
     wt_room *rooms;
     wt_box *doors, *stairs;    /* a stair rises along +x from lo[0] to hi[0] */
     uint32_t room_count, door_count, stair_count, lamp_count, window_count;
+    int has_sky;               /* a sky line: daylight */
+    ex_sky sky;                /* its map (when any) points into sky_map */
+    float *sky_map;            /* owned */
+    char sky_map_path[1024];   /* "" without a map */
 } wt_layout;
 
 /* The walk through a building: the bunny's route as points every
@@ -781,6 +829,7 @@ EX_FN void wt_layout_free(wt_layout *l)
     free(l->rooms);
     free(l->doors);
     free(l->stairs);
+    free(l->sky_map);
     memset(l, 0, sizeof *l);
 }
 
@@ -799,6 +848,8 @@ typedef struct wt_world {
     wt_layout layout;                  /* a building's rooms, doors and stairs (none for the office) */
     wt_path path;                      /* the walk through a building (opt.path points here) */
     float bunny_lo[3], bunny_hi[3];    /* bounds of bunny.obj */
+    float bunny_bound_centre[3];       /* their centre (OBJ coordinates) */
+    float bunny_bound_radius;          /* metres: the posed bunny lies within this of the posed centre */
     float *bunny_normals;              /* smooth vertex normals, OBJ coordinates */
     ex_tracer *tracer;
     int bunny_instance;
@@ -933,14 +984,37 @@ static int wt__find_lights(wt_world *w)
     return 0;
 }
 
+/* The light-vector scene of the static geometry: its triangles, the
+   materials (glass passes light), and the layout's sky (GLASS AND SKY in
+   lightvec.h: gather rays that leave the building see it, through the
+   panes). */
+static void wt__scene_desc(const wt_world *w, lightvec_scene_desc *sd)
+{
+    memset(sd, 0, sizeof *sd);
+    sd->positions = w->office.positions;
+    sd->vertex_count = w->office.vertex_count;
+    sd->indices = w->office.tri_indices;
+    sd->triangle_count = w->office.tri_count;
+    sd->material_ids = w->office.tri_material;
+    sd->materials = w->materials;
+    sd->material_count = w->material_count;
+    if (!w->layout.has_sky) return;
+    memcpy(sd->sky, w->layout.sky.radiance, sizeof sd->sky);
+    sd->environment = w->layout.sky.map;
+    sd->environment_width = (uint32_t)w->layout.sky.width;
+    sd->environment_height = (uint32_t)w->layout.sky.height;
+}
+
 /* The files of o->scene: the OBJ, its MTL (same name, .mtl) and for a
-   building its layout (.layout; "" for the office, whose walk is built in). */
+   building its layout (.layout; "" for the office, whose walk is built in).
+   "daylight" is building_1k_daylight (make_building.py --daylight). */
 static void wt__scene_files(const wt_options *o, char *obj, char *mtl, char *layout, size_t size)
 {
     const char *scene = o->scene ? o->scene : "office";
     size_t n;
-    if (!strcmp(scene, "office") || !strcmp(scene, "building"))
-        snprintf(obj, size, "%.900s/%s.obj", o->data_dir, !strcmp(scene, "office") ? "office" : "building_4k");
+    if (!strcmp(scene, "office") || !strcmp(scene, "building") || !strcmp(scene, "daylight"))
+        snprintf(obj, size, "%.900s/%s.obj", o->data_dir,
+                 !strcmp(scene, "office") ? "office" : !strcmp(scene, "building") ? "building_4k" : "building_1k_daylight");
     else
         snprintf(obj, size, "%.1000s", scene);
     n = strlen(obj);
@@ -988,6 +1062,61 @@ static int wt__push(void **items, uint32_t *count, size_t size, const void *item
     return 0;
 }
 
+/* The sky line's environment map: a little-endian RGB PFM (ex_write_pfm's
+   format) named relative to the layout's directory. Returns 0, or -1 with
+   a message. */
+static int wt__sky_map_load(const char *layout_path, int number, const char *name, wt_layout *l, char *err,
+                            size_t err_size)
+{
+    const char *slash = strrchr(layout_path, '/');
+    int w, h;
+    if (name[0] == '/' || !slash)
+        snprintf(l->sky_map_path, sizeof l->sky_map_path, "%.1000s", name);
+    else
+        snprintf(l->sky_map_path, sizeof l->sky_map_path, "%.*s/%.500s", (int)(slash - layout_path), layout_path, name);
+    if (ex_load_pfm(l->sky_map_path, WT_SKY_MAX_TEXELS, &w, &h, &l->sky_map) != 0) {
+        snprintf(err, err_size, "%.150s:%d: the sky map %.150s is not a readable little-endian RGB PFM of at most %u texels",
+                 layout_path, number, l->sky_map_path, WT_SKY_MAX_TEXELS);
+        return -1;
+    }
+    l->sky.map = l->sky_map;
+    l->sky.width = w;
+    l->sky.height = h;
+    return 0;
+}
+
+/* A sky line, "sky R G B [MAP]" (see wt_layout): radiance finite and >= 0,
+   one sky per layout. Returns 0, or -1 with a message naming the line. */
+static int wt__sky_line(const char *path, int number, const char *line, wt_layout *l, char *err, size_t err_size)
+{
+    char map[512], extra[2];
+    float v[3];
+    int n = sscanf(line, "%*s %f %f %f %511s %1s", &v[0], &v[1], &v[2], map, extra), k;
+    if (n < 3 || n > 4 || l->has_sky) {
+        snprintf(err, err_size, "%.200s:%d: %s", path, number,
+                 l->has_sky ? "a second sky line" : "a sky line is 'sky R G B' or 'sky R G B MAP.pfm'");
+        return -1;
+    }
+    for (k = 0; k < 3; k++)
+        if (!(v[k] >= 0.0f && v[k] <= 3.4e38f)) {
+            snprintf(err, err_size, "%.200s:%d: the sky's radiance must be finite and >= 0", path, number);
+            return -1;
+        }
+    memcpy(l->sky.radiance, v, sizeof v);
+    if (n == 4 && wt__sky_map_load(path, number, map, l, err, err_size) != 0) return -1;
+    if (l->sky_map) {   /* the map times R G B: the headers take one array */
+        size_t i, texels = (size_t)l->sky.width * (size_t)l->sky.height;
+        for (i = 0; i < texels; i++)
+            for (k = 0; k < 3; k++) l->sky_map[3 * i + k] *= v[k];
+    }
+    if (!ex_sky_valid(&l->sky)) {
+        snprintf(err, err_size, "%.200s:%d: the sky map has a negative or non-finite texel", path, number);
+        return -1;
+    }
+    l->has_sky = 1;
+    return 0;
+}
+
 /* Reads a .layout file. Returns 0, or -1 with a message naming the line. */
 EX_FN int wt_layout_load(const char *path, wt_layout *l, char *err, size_t err_size)
 {
@@ -1001,7 +1130,7 @@ EX_FN int wt_layout_load(const char *path, wt_layout *l, char *err, size_t err_s
     }
     while (fgets(line, sizeof line, f)) {
         char kind[16], lamp[16];
-        float v[6];
+        float v[6] = { 0, 0, 0, 0, 0, 0 };   /* lamp lines set none */
         int storey, i, j, stair, n, ok = 1, k;
         number++;
         if (sscanf(line, "%15s", kind) != 1 || kind[0] == '#') continue;
@@ -1035,12 +1164,19 @@ EX_FN int wt_layout_load(const char *path, wt_layout *l, char *err, size_t err_s
             else l->window_count += ok;
         } else if (!strcmp(kind, "lamp")) {
             l->lamp_count++;
+        } else if (!strcmp(kind, "sky")) {
+            if (wt__sky_line(path, number, line, l, err, err_size) != 0) {
+                fclose(f);
+                wt_layout_free(l);
+                return -1;
+            }
+            continue;
         } else {
             ok = 0;
         }
         for (k = 0; k < 6 && ok; k++) ok = isfinite(v[k]) && (k % 2 == 0 || v[k] >= v[k - 1]);
         if (!ok) {
-            snprintf(err, err_size, "%.200s:%d: not a room, door, window, stair or lamp line of make_building.py",
+            snprintf(err, err_size, "%.200s:%d: not a room, door, window, stair, lamp or sky line of make_building.py",
                      path, number);
             fclose(f);
             wt_layout_free(l);
@@ -1634,6 +1770,15 @@ EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t
         wt_world_destroy(w);
         return -1;
     }
+    {
+        float d2 = 0.0f;
+        int k;
+        for (k = 0; k < 3; k++) {
+            w->bunny_bound_centre[k] = 0.5f * (w->bunny_lo[k] + w->bunny_hi[k]);
+            d2 += (w->bunny_hi[k] - w->bunny_lo[k]) * (w->bunny_hi[k] - w->bunny_lo[k]);
+        }
+        w->bunny_bound_radius = 0.5f * sqrtf(d2) * WT_BUNNY_SCALE * (1.0f + 1e-5f);   /* rounding: still bounding */
+    }
     w->bunny_normals = (float *)malloc(3 * sizeof(float) * w->bunny.vertex_count);
     w->material_count = w->office.material_count + 1;
     w->bunny_material = w->office.material_count;
@@ -1655,6 +1800,16 @@ EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t
         return -1;
     }
     if (w->layout_path[0]) w->opt.path = &w->path;
+    if (w->layout.sky_map_path[0] && !wt__hash_file(w->layout.sky_map_path, &w->scene_hash)) {
+        wt__fail(err, err_size, "cannot read %.200s", w->layout.sky_map_path);
+        wt_world_destroy(w);
+        return -1;
+    }
+    if (w->layout.has_sky && ex_tracer_set_sky(w->tracer, &w->layout.sky) != 0) {   /* checked by the reader */
+        wt__fail(err, err_size, "%.200s: an invalid sky", w->layout_path);
+        wt_world_destroy(w);
+        return -1;
+    }
     w->bunny_instance = ex_tracer_add_instance(w->tracer, &w->bunny, grey);
     wt__materials_from_obj(&w->office, w->materials);
     memcpy(w->materials[w->bunny_material].diffuse, grey, sizeof grey);
@@ -1665,14 +1820,7 @@ EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t
             w->materials[i].exponent = 0.0f;
         }
     }
-    memset(&sd, 0, sizeof sd);
-    sd.positions = w->office.positions;
-    sd.vertex_count = w->office.vertex_count;
-    sd.indices = w->office.tri_indices;
-    sd.triangle_count = w->office.tri_count;
-    sd.material_ids = w->office.tri_material;
-    sd.materials = w->materials;
-    sd.material_count = w->material_count;
+    wt__scene_desc(w, &sd);
     lr = lightvec_scene_create(&sd, &w->office_scene);
     if (w->bunny_instance < 0 || lr != LIGHTVEC_OK) {
         snprintf(err, err_size, "cannot build the scene: %s", lr != LIGHTVEC_OK ? lightvec_result_string(lr) : "out of memory");
@@ -1711,7 +1859,7 @@ EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t
    follows it along the same route, that far behind, at eye height.
    ---------------------------------------------------------------------- */
 #define WT_PATH_VERSION 2u     /* bump when the paths change: precompute keys depend on them */
-#define WT_SHADING_VERSION 3u  /* bump when the shading changes: cached light vectors and base images */
+#define WT_SHADING_VERSION 4u  /* bump when the shading changes: cached light vectors and base images */
 #define WT__WAYPOINTS 9
 static const float wt__waypoints[WT__WAYPOINTS][2] = {   /* (x, z) on the floor */
     { 1.35f, 1.55f }, { 1.65f, 2.35f }, { 1.80f, 3.15f }, { 2.15f, 3.35f }, { 2.40f, 2.80f },
@@ -1920,14 +2068,12 @@ static int wt__ensure_pose(wt_world *w)
             for (i = 0; i < w->bunny.vertex_count; i++)
                 ex__affine_point(w->pose, w->bunny.positions + 3 * (size_t)i,
                                  w->posed_positions + 3 * ((size_t)w->office.vertex_count + i));
-            memset(&sd, 0, sizeof sd);
+            wt__scene_desc(w, &sd);
             sd.positions = w->posed_positions;
             sd.vertex_count = nv;
             sd.indices = w->posed_indices;
             sd.triangle_count = nt;
             sd.material_ids = w->posed_materials;
-            sd.materials = w->materials;
-            sd.material_count = w->material_count;
             ok = lightvec_scene_create(&sd, &w->posed_scene) == LIGHTVEC_OK;
             w->bunny_cache = ok ? wt__new_cache(w, 1) : NULL;
             ok = ok && w->bunny_cache;
@@ -1969,17 +2115,25 @@ static void wt__bunny_normal(const wt_world *w, const ex_trace_hit *h, float n[3
     for (k = 0; k < 3; k++) n[k] = l > 0.0f ? n[k] / l : h->normal[k];
 }
 
-/* Shadow ray test through the tracer; *by_bunny is set when the bunny (not
-   the office) blocks it. */
-static int wt__occluded(const ex_tracer *t, int bunny, const float org[3], const float dir[3], float tmax, int *by_bunny)
+/* Shadow ray test through the tracer: 1 when something opaque blocks the
+   ray (*by_bunny set when the bunny does), else 0 with through = the
+   transmittance of the glass it crosses (ex_tracer_transmittance; 1
+   without glass in the scene). */
+static int wt__occluded(const wt_world *w, const float org[3], const float dir[3], float tmax, float through[3],
+                        int *by_bunny)
 {
+    const ex_tracer *t = w->tracer;
+    const ex__instance *b = &t->instances[w->bunny_instance];
     float o[3], d[3];
-    if (tr__bvh_occluded(&t->bvh, org, dir, 0.0f, tmax)) return 1;
-    ex__affine_point(t->instances[bunny].to_object, org, o);
-    ex__affine_vector(t->instances[bunny].to_object, dir, d);
-    if (!tr__bvh_occluded(&t->instances[bunny].bvh, o, d, 0.0f, tmax)) return 0;
-    *by_bunny = 1;
-    return 1;
+    through[0] = through[1] = through[2] = 1.0f;
+    if (!t->has_glass && tr__bvh_occluded(&t->bvh, org, dir, 0.0f, tmax)) return 1;
+    ex__affine_point(b->to_object, org, o);
+    ex__affine_vector(b->to_object, dir, d);
+    if (tr__bvh_occluded(&b->bvh, o, d, 0.0f, tmax)) {
+        *by_bunny = 1;
+        return 1;
+    }
+    return t->has_glass && !ex_tracer_transmittance(t, org, dir, tmax, through);
 }
 
 /* The many-light sampler's importance of light L at a point x with normal
@@ -2028,7 +2182,7 @@ static void wt__light_sample(const wt_world *w, const wt_light *L, const float o
     const ex_tracer *t = w->tracer;
     const float *pos = w->office.positions, *ln = L->normal, *a, *b, *c;
     const uint32_t *v;
-    float su, y[3], wi[3], d2, d, cos_x, cos_y, g, f, c_m = 0.0f;
+    float su, y[3], wi[3], through[3], d2, d, cos_x, cos_y, g, f, c_m = 0.0f;
     uint32_t i = 0;
     int k;
     u1 *= L->area;
@@ -2047,11 +2201,11 @@ static void wt__light_sample(const wt_world *w, const wt_light *L, const float o
     cos_x = wi[0] * n[0] + wi[1] * n[1] + wi[2] * n[2];
     cos_y = -(wi[0] * ln[0] + wi[1] * ln[1] + wi[2] * ln[2]);
     if (cos_x <= 0.0f || cos_y <= 0.0f) return;
-    if (wt__occluded(t, w->bunny_instance, org, wi, d * (1.0f - 1e-4f) - t->epsilon, bunny_shadow)) return;
+    if (wt__occluded(w, org, wi, d * (1.0f - 1e-4f) - t->epsilon, through, bunny_shadow)) return;
     g = cos_x * cos_y / d2 * L->area * scale;
     for (k = 0; k < 3; k++) c_m += mirror[k] * wi[k];
     f = c_m > 0.0f && m->exponent > 0.0f ? (m->exponent + 2.0f) / (2.0f * WT_PI) * powf(c_m, m->exponent) : 0.0f;
-    for (k = 0; k < 3; k++) rgb[k] += L->ke[k] * (m->diffuse[k] / WT_PI + m->specular[k] * f) * g;
+    for (k = 0; k < 3; k++) rgb[k] += L->ke[k] * (m->diffuse[k] / WT_PI + m->specular[k] * f) * g * through[k];
 }
 
 /* Direct light reflected at a hit towards -dir (Lambert + normalized
@@ -2101,7 +2255,78 @@ static void wt__direct(const wt_world *w, const ex_trace_hit *h, const float dir
     }
 }
 
-/* Traces a point's ray and computes its emission and direct light. */
+/* A point's radiance towards the eye: what it sends, dimmed by the glass
+   in front of it. */
+static void wt__point_radiance(wt_point *p)
+{
+    int k;
+    for (k = 0; k < 3; k++) p->rgb[k] = p->through[k] * (p->direct[k] + p->contact * p->indirect[k]);
+}
+
+/* Contact shadows of the bunny (issue 19): the office's light vectors are
+   gathered without the bunny (one static cache for every pose), so the
+   floor under it would keep all of its indirect light, and by day, when
+   all light is indirect, the bunny would cast no shadow at all. A static
+   point within reach of the posed bunny loses the share of its indirect
+   light that the bunny hides: the cosine-weighted share of its hemisphere
+   that the bunny covers, estimated with WT_CONTACT_RAYS rays (4 x 8
+   strata of the cosine-weighted hemisphere, jittered from the point's
+   stream) cast against the bunny alone and stopped at the reach
+   (WT_CONTACT_REACH bounding radii), as if the light arriving there were
+   the same from every direction (ambient occlusion of the indirect
+   light, which is how engines shadow indirect light with a moving object:
+   UE4's capsule shadows, The Last of Us' ellipsoid occluders). Beyond the
+   reach the bunny covers under (1 / (1 + 2))^2 = 11% of the hemisphere
+   seen from its bounding sphere's edge, and much less of it in practice
+   (the bounding sphere is twice the bunny's equal-volume sphere): the
+   cut-off is not seen. Points farther away cost one distance test. Direct
+   light needs none of this: its shadow rays see the bunny. */
+#define WT_CONTACT_RAYS 32
+#define WT_CONTACT_REACH 2.0f
+#define WT_CONTACT_STREAM 0xC0A7AC7ull   /* the rays' random numbers: not the direct light's */
+
+static float wt__contact_occlusion(const wt_world *w, const float pos[3], const float n[3], uint64_t stream)
+{
+    const ex_tracer *t = w->tracer;
+    const ex__instance *b = &t->instances[w->bunny_instance];
+    float c[3], v[3], u[3], s[3], org[3], o[3], d2 = 0.0f, above = 0.0f, radius = w->bunny_bound_radius;
+    float reach = WT_CONTACT_REACH * radius, l;
+    ex_rng rng;
+    int i, k, hits = 0;
+    ex__affine_point(w->pose, w->bunny_bound_centre, c);
+    for (k = 0; k < 3; k++) {
+        v[k] = c[k] - pos[k];
+        d2 += v[k] * v[k];
+        above += v[k] * n[k];
+    }
+    if (d2 >= (radius + reach) * (radius + reach) || above <= -radius) return 0.0f;   /* out of reach, or below */
+    /* a tangent frame (u, s, n) */
+    if (fabsf(n[0]) > 0.5f) { u[0] = -n[1]; u[1] = n[0]; u[2] = 0.0f; }
+    else { u[0] = 0.0f; u[1] = -n[2]; u[2] = n[1]; }
+    l = sqrtf(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    for (k = 0; k < 3; k++) u[k] /= l;
+    s[0] = n[1] * u[2] - n[2] * u[1];
+    s[1] = n[2] * u[0] - n[0] * u[2];
+    s[2] = n[0] * u[1] - n[1] * u[0];
+    for (k = 0; k < 3; k++) org[k] = pos[k] + t->epsilon * n[k];
+    ex__affine_point(b->to_object, org, o);
+    rng = ex_rng_stream(w->opt.seed ^ WT_CONTACT_STREAM, stream);
+    for (i = 0; i < WT_CONTACT_RAYS; i++) {
+        float a = ((float)(i % 4) + ex_rng_float(&rng)) / 4.0f, phi = 2.0f * WT_PI * ((float)(i / 4) + ex_rng_float(&rng)) / 8.0f;
+        float r = sqrtf(a), z = sqrtf(1.0f - a), d[3], dobj[3];   /* cosine-distributed (Malley) */
+        for (k = 0; k < 3; k++) d[k] = r * cosf(phi) * u[k] + r * sinf(phi) * s[k] + z * n[k];
+        ex__affine_vector(b->to_object, d, dobj);   /* unnormalised: the reach stays a world distance */
+        hits += tr__bvh_occluded(&b->bvh, o, dobj, 0.0f, reach);
+    }
+    return (float)hits / (float)WT_CONTACT_RAYS;
+}
+
+/* Traces a point's ray and computes its emission and direct light. Camera
+   rays see through glass (ex_tracer_intersect_through): the point is the
+   first opaque surface behind the panes, or the sky, its radiance dimmed
+   by their transmittance. A pane's own reflection is not drawn (the
+   daylight building's glass has Kd 0; its faint mirror term, Ks 0.08, is
+   left out). */
 static void wt__trace_point(const wt_world *w, wt_point *p, int direct)
 {
     ex_trace_hit h;
@@ -2116,10 +2341,13 @@ static void wt__trace_point(const wt_world *w, wt_point *p, int direct)
     p->weight = 0.0f;
     p->material = 0;
     for (k = 0; k < 3; k++) p->direct[k] = p->indirect[k] = p->rgb[k] = 0.0f;
-    if (!ex_tracer_intersect(w->tracer, p->org, p->dir, FLT_MAX, &h)) {
+    p->contact = 1.0f;
+    if (!ex_tracer_intersect_through(w->tracer, p->org, p->dir, FLT_MAX, &h, p->through)) {
         p->t = FLT_MAX;
         p->object = RENDERCACHE_MISS;
         p->polygon = RENDERCACHE_MISS;
+        if (w->tracer->has_sky) ex_sky_radiance(&w->tracer->sky, p->dir, p->direct);
+        wt__point_radiance(p);
         return;
     }
     p->t = h.t;
@@ -2138,12 +2366,18 @@ static void wt__trace_point(const wt_world *w, wt_point *p, int direct)
     }
     memcpy(p->normal, h.normal, sizeof p->normal);
     if (!h.front) return;                 /* one-sided surfaces: a back face is black */
+    if (h.instance == EX_TRACE_STATIC && ex__passes(w->office.materials[p->material].tf))
+        return;                           /* the pane after EX_TRACE_MAX_PASSES others: seen as black */
     for (k = 0; k < 3; k++) p->direct[k] = w->materials[p->material].emission[k];
     if (direct) {
         rng = ex_rng_stream(w->opt.seed, p->stream);
         wt__direct(w, &h, p->dir, &w->materials[p->material], &rng, d, &shadow);
         p->bunny_shadow = (unsigned char)shadow;
         for (k = 0; k < 3; k++) p->direct[k] += d[k];
+    }
+    if (p->object == WT_OBJECT_OFFICE && w->opt.bunny_shadow) {
+        p->contact = 1.0f - wt__contact_occlusion(w, p->pos, p->normal, p->stream);
+        if (p->contact < 1.0f) p->bunny_shadow = 1;   /* refreshed sooner by the render cache: the shadow moves */
     }
     p->light = p->object == WT_OBJECT_BUNNY ? WT_LIGHT_BUNNY : WT_LIGHT_STATIC;
     p->glossy = (unsigned char)wt__is_glossy(&w->materials[p->material]);
@@ -2362,7 +2596,6 @@ EX_FN int wt_shade_points(wt_world *w, wt_point *points, uint32_t count, int fla
     wt__job j;
     double t0 = wt_seconds();
     uint32_t i;
-    int k;
     j.w = w;
     j.points = points;
     j.count = count;
@@ -2378,7 +2611,7 @@ EX_FN int wt_shade_points(wt_world *w, wt_point *points, uint32_t count, int fla
     t0 = wt_seconds();
     if (wt__light_points(w, points, count, (flags & WT_SHADE_INSERT) != 0, st) != 0) return -1;
     for (i = 0; i < count; i++)
-        for (k = 0; k < 3; k++) points[i].rgb[k] = points[i].direct[k] + points[i].indirect[k];
+        wt__point_radiance(&points[i]);
     if (seconds_light) *seconds_light += wt_seconds() - t0;
     return 0;
 }
@@ -2502,14 +2735,13 @@ static void wt__converged_gather_job(void *ctx, uint32_t batch)
         lightvec_surface s;
         lightvec_record rec;
         float wo[3];
-        int k;
         if (p->light == WT_LIGHT_NONE) continue;
         wt__surface_of(j->w, p, &s);
         if (lightvec_gather(p->light == WT_LIGHT_BUNNY ? j->w->posed_scene : j->w->office_scene,
                             p->light == WT_LIGHT_BUNNY ? &j->bunny : &j->office, &s, p->stream, &rec) != LIGHTVEC_OK)
             continue;
         lightvec_radiance(&j->w->materials[p->material], p->normal, wt__outgoing(p, wo), &rec.vector, p->indirect);
-        for (k = 0; k < 3; k++) p->rgb[k] = p->direct[k] + p->indirect[k];
+        wt__point_radiance(p);
     }
 }
 
@@ -2538,7 +2770,7 @@ EX_FN int wt_render_converged(wt_world *w, const rendercache_camera *c, double t
         tj.direct = 1;
         ex_pool_parallel_for(w->pool, wt__trace_job, &tj, (n + WT__BATCH - 1) / WT__BATCH);
         w->opt.light_samples = saved;
-        for (i = 0; i < n; i++) memcpy(points[i].rgb, points[i].direct, sizeof points[i].rgb);
+        for (i = 0; i < n; i++) wt__point_radiance(&points[i]);
         j.w = w;
         j.points = points;
         j.count = n;
@@ -2927,13 +3159,13 @@ static void wt__ids_row(void *ctx, uint32_t y)
     const rendercache_camera *c = j->camera;
     uint32_t x;
     for (x = 0; x < c->width; x++) {
-        float org[3], dir[3];
+        float org[3], dir[3], through[3];
         ex_trace_hit h;
         uint32_t *id = &j->ids[(size_t)y * c->width + x];
         if (rendercache_camera_ray(c, (float)x + 0.5f, (float)y + 0.5f, org, dir) != RENDERCACHE_OK)
             *id = RENDERCACHE_NO_SAMPLE;
-        else if (!ex_tracer_intersect(j->w->tracer, org, dir, FLT_MAX, &h))
-            *id = RENDERCACHE_MISS;
+        else if (!ex_tracer_intersect_through(j->w->tracer, org, dir, FLT_MAX, &h, through))
+            *id = RENDERCACHE_MISS;   /* what the frames show: the surface behind the glass */
         else   /* one id per polygon, as the paper's id images */
             *id = h.instance == EX_TRACE_STATIC ? j->w->office.tri_face[h.tri] : j->w->office.face_count + h.tri;
     }
@@ -3013,6 +3245,7 @@ static uint64_t wt__baseviews_key(const wt_renderer *r)
     h = wt_hash_u64(h, (uint64_t)o->light_samples);
     h = wt_hash_u64(h, (uint64_t)o->bunny_strata);
     h = wt_hash_f32(h, WT_KEY_EPSILON);   /* the bunny's key-time solutions are saved with the images */
+    h = wt_hash_u64(h, (uint64_t)o->bunny_shadow);   /* contact shadows in the base images */
     return h;
 }
 
@@ -3171,11 +3404,10 @@ static int wt__render_base(wt_renderer *r, uint32_t view, uint32_t key, renderca
     }
     for (i = 0; i < n; i++) {
         wt_point *p = &r->points[i];
-        int k;
         if (p->t < 0.0f) continue;   /* outside the fish-eye's circle: RENDERCACHE_NO_SAMPLE */
         if (p->object == WT_OBJECT_BUNNY && p->t < FLT_MAX) {
             wt__bunny_indirect_at(r, p);
-            for (k = 0; k < 3; k++) p->rgb[k] = p->direct[k] + p->indirect[k];
+            wt__point_radiance(p);
         }
         memcpy(img->rgb + 3 * (size_t)i, p->rgb, 3 * sizeof(float));
         img->object[i] = p->object;
@@ -3285,9 +3517,8 @@ static int wt__fill_pixel(void *user, uint32_t x, uint32_t y, const float org[3]
         }
         lightvec_radiance(&w->materials[p.material], p.normal, out, &rec.vector, p.indirect);
     }
-    rgb[0] = p.direct[0] + p.indirect[0];
-    rgb[1] = p.direct[1] + p.indirect[1];
-    rgb[2] = p.direct[2] + p.indirect[2];
+    wt__point_radiance(&p);
+    memcpy(rgb, p.rgb, sizeof p.rgb);
     *depth = p.object == RENDERCACHE_MISS ? RENDERCACHE_FAR_DEPTH : p.t;
     *object = p.object;
     return 1;
@@ -4153,7 +4384,9 @@ EX_FN void wt_renderer_destroy(wt_renderer *r)
 
 /* The renderer of w's mode, with its precompute (loaded from the cache
    directory when it holds the data for these scene files and parameters,
-   else computed and saved there). Returns 0, or -1 with a message. */
+   else computed and saved there). Returns 0, or -1 with a message, or
+   WT_ERROR_UNSUPPORTED when the mode cannot render the scene (radiosity
+   and a scene with glass or a sky). */
 EX_FN int wt_renderer_create(wt_world *w, wt_renderer **out, char *err, size_t err_size)
 {
     wt_renderer *r = (wt_renderer *)calloc(1, sizeof *r);
@@ -4164,6 +4397,12 @@ EX_FN int wt_renderer_create(wt_world *w, wt_renderer **out, char *err, size_t e
     *out = NULL;
     err[0] = 0;
     if (!r) return wt__fail(err, err_size, "%s", "out of memory");
+    if (o->mode == WT_MODE_RADIOSITY && (w->layout.has_sky || w->tracer->has_glass)) {
+        free(r);
+        snprintf(err, err_size, "mode radiosity cannot light a scene with %s: radinterp.h has no transmitting patch "
+                 "or sky yet (use --mode raytrace or baseviews)", w->tracer->has_glass ? "glass" : "a sky");
+        return WT_ERROR_UNSUPPORTED;
+    }
     r->w = w;
     r->mode = o->mode;
     r->width = (uint32_t)o->width;

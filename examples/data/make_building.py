@@ -35,7 +35,8 @@ line, so tests and examples can place cameras, probes and moving objects:
     window STOREY X0 X1 Y0 Y1 Z0 Z1
     stair STOREY X0 X1 Y0 Y1 Z0 Z1                 (bottom step at X0, rising to +x)
     lamp STOREY I J X Y Z KIND                     (centre of the emitting face)
-    sky R G B                                      (--daylight: the sky's radiance)
+    sky R G B [MAP]                                (--daylight: the sky's radiance; the walkthrough
+                                                    also reads R G B times an equirectangular PFM map)
 
 --daylight writes the same building by day: a pane of glass (Tf 0.85, illum 4:
 thin glass, see examples/common/obj.h) in the middle of every window, facing
