@@ -9845,6 +9845,82 @@ static int radinterp__on_segment(const radinterp__builder *b, uint32_t P, const 
     return 0;
 }
 
+/* Twice the area of the triangle (x0, x1, x2) seen along P's normal, and
+   its longest edge squared: the triangle as it is drawn, at float
+   positions. */
+static double radinterp__float_area2(const radinterp__builder *b, uint32_t P, const float *x0, const float *x1,
+                                     const float *x2, double *longest2)
+{
+    double e1[3], e2[3], e3[3], n[3];
+    int k;
+    for (k = 0; k < 3; k++) {
+        e1[k] = (double)x1[k] - x0[k];
+        e2[k] = (double)x2[k] - x0[k];
+        e3[k] = (double)x2[k] - x1[k];
+    }
+    radinterp__d3_cross(e1, e2, n);
+    *longest2 = radinterp__d3_dot(e1, e1);
+    if (radinterp__d3_dot(e2, e2) > *longest2) *longest2 = radinterp__d3_dot(e2, e2);
+    if (radinterp__d3_dot(e3, e3) > *longest2) *longest2 = radinterp__d3_dot(e3, e3);
+    return radinterp__d3_dot(n, b->s->patches[P].n);
+}
+
+/* Is the triangle flat: its height under RADINTERP__FLAT times its longest
+   edge (turned over counts as flat)? */
+#define RADINTERP__FLAT 1e-6
+static int radinterp__float_flat(const radinterp__builder *b, uint32_t P, const float *v3, const uint32_t *v)
+{
+    double l2, a2 = radinterp__float_area2(b, P, v3 + 3 * (size_t)v[0], v3 + 3 * (size_t)v[1], v3 + 3 * (size_t)v[2], &l2);
+    return a2 <= RADINTERP__FLAT * l2;
+}
+
+/* The triangulation is exact in the patch's plane, but its vertices are
+   drawn at float positions: a vertex within rounding of the opposite edge
+   (where a discontinuity crosses a leaf edge at a shallow angle, or ends
+   next to one) makes a triangle that is flat or turned over once rounded,
+   and it then overlaps its neighbours on screen (a pixel counted twice).
+   Each such inside triangle has its longest edge flipped with the inside
+   neighbour across it, when both triangles of the flip then face the front
+   and are not flat; a constraint on the flipped edge carries over to the
+   two edges through the vertex that lay on it. */
+static void radinterp__unfold(const radinterp__builder *b, radinterp__tri_work *w, uint32_t P, const float *v3)
+{
+    radinterp__cdt *c = &w->cdt;
+    const unsigned char *inside = (const unsigned char *)w->inside.data;
+    uint32_t t, flips = 0, pass;
+    for (pass = 0; pass < 4; pass++) {
+        uint32_t before = flips;
+        for (t = 0; t < c->tri_count; t++) {
+            const radinterp__cdt_tri *T = &c->tri[t];
+            uint32_t u, q[3], far;
+            double best = -1.0;
+            int k = 0, e, j, constrained;
+            if (!inside[t] || !radinterp__float_flat(b, P, v3, T->v)) continue;
+            for (e = 0; e < 3; e++) {   /* the longest edge is opposite v[k] */
+                const float *p0 = v3 + 3 * (size_t)T->v[(e + 1) % 3], *p1 = v3 + 3 * (size_t)T->v[(e + 2) % 3];
+                double d2 = 0.0;
+                for (j = 0; j < 3; j++) d2 += ((double)p1[j] - p0[j]) * ((double)p1[j] - p0[j]);
+                if (d2 > best) { best = d2; k = e; }
+            }
+            u = T->n[k];
+            if (u >= c->tri_count || !inside[u]) continue;
+            far = c->tri[u].v[radinterp__cdt_neighbour_index(c, u, t)];
+            q[0] = T->v[k]; q[1] = T->v[(k + 1) % 3]; q[2] = far;         /* (a, b, d) */
+            if (radinterp__float_flat(b, P, v3, q)) continue;
+            q[1] = far; q[2] = T->v[(k + 2) % 3];                           /* (a, d, c) */
+            if (radinterp__float_flat(b, P, v3, q)) continue;
+            constrained = (int)((T->flags >> k) & 1u);
+            radinterp__cdt_flip(c, t, k);                      /* t = (a, b, d), u = (a, d, c) */
+            if (constrained) {
+                radinterp__cdt_mark(c, t, 2, 1);
+                radinterp__cdt_mark(c, u, 1, 1);
+            }
+            flips++;
+        }
+        if (flips == before) break;
+    }
+}
+
 /* Appends P's inside triangles to the pass output, ordered by leaf. */
 static int radinterp__emit_patch(radinterp__builder *b, radinterp__tri_work *w, uint32_t P, int with_segments)
 {
@@ -9861,13 +9937,20 @@ static int radinterp__emit_patch(radinterp__builder *b, radinterp__tri_work *w, 
     }
     for (i = (uint32_t)w->pts.count; i-- > 0;)  /* input points keep their exact position (the first of duplicates) */
         memcpy(v3 + 3 * (size_t)RADINTERP__U32(w->ids)[i], ((radinterp__lpoint *)w->pts.data)[i].x, 3 * sizeof(float));
+    radinterp__unfold(b, w, P, v3);
     w->order.count = 0;
     for (t = 0; t < c->tri_count; t++) {
         const radinterp__cdt_tri *T = &c->tri[t];
         radinterp__otri *o;
         uint32_t g[3], key[4];
-        double uv[2];
+        double uv[2], l2;
         if (!inside[t]) continue;
+        /* flat or turned over once rounded where no flip could mend it (on
+           the outline): it covers nothing, or overlaps whether kept or not */
+        if (radinterp__float_area2(b, P, v3 + 3 * (size_t)T->v[0], v3 + 3 * (size_t)T->v[1], v3 + 3 * (size_t)T->v[2], &l2) <= 0.0) {
+            b->degenerate++;
+            continue;
+        }
         for (k = 0; k < 3; k++) {
             radinterp__point_key(v3 + 3 * (size_t)T->v[k], 0, key);
             g[k] = radinterp__hmap_put(&b->a, &b->vmap, key, (uint32_t)(b->pos.count / 3));
