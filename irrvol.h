@@ -1,4 +1,4 @@
-/* irrvol.h - v0.4.1 - irradiance volume for lighting moving objects - public domain or MIT, see end of file
+/* irrvol.h - v0.5.0 - irradiance volume for lighting moving objects - public domain or MIT, see end of file
 
    IRRVOL.H: a bilevel grid of directional irradiance samples that lights moving objects by interpolation.
 
@@ -263,6 +263,24 @@
    shared by all samples; each sample's irradiance is a matrix product,
    summed exactly, never approximated.
 
+   Precision (the compact store, the default). The bins are kept in
+   32-bit RGB9E5 words, the shared-exponent format GPUs filter: three 9-bit
+   mantissas under the largest channel's 5-bit exponent, the volume scaled
+   by a power of two that puts its largest value at the top of the range.
+   Rounding to the nearest mantissa errs by at most 2^-9 (0.2 %) of a bin's
+   largest channel, in every channel: a channel 1/4 of the largest can be
+   0.8 % off, one 1/64 of it 12 %; a query, a weighted mean of bins, errs by
+   at most 2^-9 of the sum of its channels (test_compact_store in
+   tests/test_irrvol.c). Values below 2^-40 of the volume's largest,
+   negative ones (a radiance callback can return them) and NaN are stored
+   as 0. A third of the memory (4 bytes a bin instead of 12: 2.3 KB a
+   sample at k = 17), so random queries miss the caches and the TLB less.
+   The gather, refinement by light, dilation and the harmonics work in
+   floats; only the stored bins are rounded, once, at the end of the build.
+   desc.full_precision keeps three floats a bin (an engine that reads the
+   bins back for its own processing, tests of the gather's accuracy);
+   info.bin_bytes says which store a volume has, and saved volumes keep it.
+
    Harmonics (Ramamoorthi and Hanrahan 2001). Each sample also holds the
    radiance projected on the real spherical harmonics of order l <= 2 (the
    bins integrated like the weights), each band scaled by the lobe's A_l:
@@ -426,7 +444,10 @@
    frosted glass, at most IRRVOL_MAX_GLASS_LAYERS panes along a ray. With
    desc.radiance the callback answers for glass and sky itself.
    Harmonics of order 2 cannot hold sharp lobes: high moments and small
-   bright lights lose detail in them (the bins keep it).
+   bright lights lose detail in them (the bins keep it). The compact store
+   keeps each bin to 2^-9 of its largest channel (Precision in DETAILS): weak
+   channels of strongly coloured light lose relative precision, negative
+   irradiance is stored as 0; desc.full_precision avoids both.
 
    PAPER
 
@@ -445,9 +466,9 @@
 #include <stdint.h>
 
 #define IRRVOL_VERSION_MAJOR 0
-#define IRRVOL_VERSION_MINOR 4
-#define IRRVOL_VERSION_PATCH 1
-#define IRRVOL_FILE_FORMAT_VERSION 2
+#define IRRVOL_VERSION_MINOR 5
+#define IRRVOL_VERSION_PATCH 0
+#define IRRVOL_FILE_FORMAT_VERSION 3
 
 /* Fixed limits of the desc's fields (see LIMITS). */
 #define IRRVOL_MAX_SUPERSAMPLES 16             /* s x s rays per bin */
@@ -587,6 +608,8 @@ typedef struct irrvol_desc {
     float ray_offset;                /* reflected rays start this far off the surface; 0 = 1e-4 * diagonal */
     uint32_t important_rays;         /* points on IMPORTANT triangles per sample, extra rays per bin; 0 = 64 */
     int keep_radiance;               /* non-zero: keep the gathered radiance (irrvol_sample_values) */
+    int full_precision;              /* non-zero: irradiance bins as 3 floats (12 bytes); 0 = the compact
+                                        store, shared-exponent RGB9E5 (4 bytes, DETAILS: Precision) */
 
     uint64_t seed;                   /* jitter streams */
     irrvol_allocator allocator;
@@ -623,6 +646,7 @@ typedef struct irrvol_volume_info {
     uint64_t rays;                   /* rays cast by the build (kept by save/load) */
     uint32_t degenerate_triangles;   /* zero-area triangles skipped by the build */
     int has_radiance;                /* built with keep_radiance */
+    uint32_t bin_bytes;              /* bytes of one irradiance bin: 4 (RGB9E5, the default) or 12 (full_precision) */
     size_t bytes;                    /* memory held by the volume */
 } irrvol_volume_info;
 
@@ -1792,17 +1816,18 @@ static void irrvol__put_f32(irrvol__writer *w, float f)
     memcpy(&v, &f, 4);
     irrvol__put_u32(w, v);
 }
-/* Little-endian bytes a buffer at a time: one write callback per 4 KiB,
-   not per float. */
-static void irrvol__put_f32_array(irrvol__writer *w, const float *f, size_t n)
+/* n 4-byte items (floats or uint32), little-endian bytes a buffer at a
+   time: one write callback per 4 KiB, not per item. */
+static void irrvol__put_array32(irrvol__writer *w, const void *items, size_t n)
 {
     unsigned char buf[4096];
+    const unsigned char *f = (const unsigned char *)items;
     size_t i = 0;
     while (i < n) {
         size_t m = n - i < sizeof buf / 4 ? n - i : sizeof buf / 4, j;
         for (j = 0; j < m; j++) {
             uint32_t v;
-            memcpy(&v, &f[i + j], 4);
+            memcpy(&v, f + 4 * (i + j), 4);
             buf[4 * j] = (unsigned char)v; buf[4 * j + 1] = (unsigned char)(v >> 8);
             buf[4 * j + 2] = (unsigned char)(v >> 16); buf[4 * j + 3] = (unsigned char)(v >> 24);
         }
@@ -2029,7 +2054,8 @@ IRRVOL__HOT uint32_t irrvol__oct_texel(int i, int j, int n)
    hanging ones (below). Every first-level cell has a table of side^3
    sample ids (side 2 for an unrefined cell: its corners; subgrid_samples
    for a refined one), so a query runs the same code at either level.
-   Irradiance is stored bin-major: for each bin, rgb of every sample. The
+   Irradiance is stored bin-major: for each bin, every sample's rgb (one
+   RGB9E5 word in the compact store, three floats at full precision). The
    eight corners of a query read the same bin of eight samples, and the two
    corners along x are usually consecutive samples, so a query touches four
    to six cache lines instead of eight.
@@ -2042,10 +2068,12 @@ IRRVOL__HOT uint32_t irrvol__oct_texel(int i, int j, int n)
    unrefined cell's own interpolation at its position, the bilinear (on a
    face, four coarse parents) or linear (on an edge, two) blend of the
    first-level samples around it. Trilinear interpolation reproduces a
-   bilinear face exactly, so both sides of every face agree. Leak-safe
-   queries weigh samples by visibility, which is not linear: they replace a
-   hanging corner by its parents, each weighed on its own, and both sides
-   again evaluate the same parents with the same weights.
+   bilinear face exactly, so both sides of every face agree. Queries
+   replace a hanging corner by its parents (its weight times theirs): the
+   compact store rounds a hanging sample's blend on its own, and leak-safe
+   queries weigh samples by visibility, which is not linear, each parent on
+   its own; both sides again evaluate the same parents with the same
+   weights.
    ---------------------------------------------------------------------- */
 typedef struct irrvol__cell {
     uint32_t offset;   /* first id of the cell's table in vol->ids */
@@ -2098,7 +2126,11 @@ struct irrvol {
     uint32_t moment;
     irrvol_filter filter;
     irrvol_weighting weighting;
-    float *irradiance;     /* bins x sample_count x rgb */
+    float *irradiance;     /* bins x sample_count x rgb during the build, and after it with full precision;
+                              else NULL: the compact store holds it */
+    uint32_t *packed;      /* the compact store: bins x sample_count RGB9E5 words, bin-major like irradiance */
+    int32_t pack_shift;    /* the words hold the irradiance times 2^-pack_shift (irrvol__pack_shift) */
+    float unpack[32];      /* a word's mantissas times unpack[its exponent field] are its irradiance */
     float *radiance;       /* same layout, or NULL */
     float *sh;             /* per sample 9 coefficients x rgb of the irradiance, l <= 2 */
     uint32_t vis_res;      /* n: n x n octahedral visibility texels per sample */
@@ -2374,21 +2406,24 @@ static irrvol_result irrvol__make_grid(irrvol *v, const unsigned char *refined)
 }
 
 /* Per-sample arrays sized by the grid: values, origins, visibility. */
-static irrvol_result irrvol__alloc_samples(irrvol *v, int keep_radiance)
+/* The per-sample arrays; compact: the irradiance in the compact store
+   (a volume being loaded), else as floats (every build gathers floats). */
+static irrvol_result irrvol__alloc_samples(irrvol *v, int keep_radiance, int compact)
 {
     const irrvol_allocator *a = &v->allocator;
     uint64_t floats = (uint64_t)v->sample_count * v->bins * 3;
     uint64_t vis = (uint64_t)v->hanging_begin * v->map_texels * 4;
     if (floats > SIZE_MAX / sizeof(float) || vis > SIZE_MAX / sizeof(float)) return IRRVOL_ERROR_OUT_OF_MEMORY;
-    v->irradiance = (float *)irrvol__alloc_array(a, (size_t)floats + 1, sizeof(float));
+    if (compact) v->packed = (uint32_t *)irrvol__alloc_array(a, (size_t)floats / 3, sizeof(uint32_t));
+    else v->irradiance = (float *)irrvol__alloc_array(a, (size_t)floats + 1, sizeof(float));
     if (keep_radiance) v->radiance = (float *)irrvol__alloc_array(a, (size_t)floats, sizeof(float));
     v->sh = (float *)irrvol__alloc_array(a, (size_t)v->sample_count * IRRVOL__SH_FLOATS + 1, sizeof(float));
     v->origins = (float *)irrvol__alloc_array(a, v->sample_count, 4 * sizeof(float));
     v->visibility = (float *)irrvol__alloc_array(a, (size_t)vis, sizeof(float));
-    if (!v->irradiance || (keep_radiance && !v->radiance) || !v->sh || !v->origins || !v->visibility)
+    if (!(v->irradiance || v->packed) || (keep_radiance && !v->radiance) || !v->sh || !v->origins || !v->visibility)
         return IRRVOL_ERROR_OUT_OF_MEMORY;
     /* the rgb sums load four floats at a time: one past the last sample's */
-    v->irradiance[floats] = 0.0f;
+    if (v->irradiance) v->irradiance[floats] = 0.0f;
     v->sh[(size_t)v->sample_count * IRRVOL__SH_FLOATS] = 0.0f;
     return IRRVOL_OK;
 }
@@ -2405,13 +2440,16 @@ static uint64_t irrvol__corner_count(const irrvol *v)
     return n;
 }
 
+/* Bytes of one irradiance bin: an RGB9E5 word or three floats. */
+static uint32_t irrvol__bin_bytes(const irrvol *v) { return v->packed ? 4u : 12u; }
+
 static size_t irrvol__bytes(const irrvol *v)
 {
     size_t per_sample = (size_t)v->bins * 3 * sizeof(float);
     size_t hanging = (size_t)v->sample_count - v->hanging_begin;
     return sizeof *v + v->cell_count * (sizeof(irrvol__cell) + 1) + v->id_count * sizeof(uint32_t) +
            (size_t)v->sample_count * (7 * sizeof(float) + IRRVOL__SH_FLOATS * sizeof(float) +
-                                      per_sample * (v->radiance ? 2 : 1)) +
+                                      (size_t)v->bins * irrvol__bin_bytes(v) + (v->radiance ? per_sample : 0)) +
            hanging * 4 * (sizeof(uint32_t) + sizeof(float)) +
            (size_t)v->hanging_begin * (v->map_texels + 1) * 4 * sizeof(float) +
            (v->corner_block ? (irrvol__corner_count(v) + 1) * sizeof(irrvol__corners) : 0);
@@ -2430,6 +2468,7 @@ IRRVOL_API void irrvol_destroy(irrvol *vol)
     irrvol__free(&a, vol->parents);
     irrvol__free(&a, vol->parent_weights);
     irrvol__free(&a, vol->irradiance);
+    irrvol__free(&a, vol->packed);
     irrvol__free(&a, vol->radiance);
     irrvol__free(&a, vol->sh);
     irrvol__free(&a, vol->visibility);
@@ -3858,6 +3897,84 @@ static irrvol_result irrvol__gather(irrvol__build *b, uint32_t begin, uint32_t e
 }
 
 
+/* The compact store (the default; desc.full_precision keeps floats). Each
+   bin's rgb is one RGB9E5 word, the shared-exponent format of GPUs
+   (EXT_texture_shared_exponent): three 9-bit mantissas m and a 5-bit
+   exponent e, each channel m 2^(e - 24). The exponent is the largest
+   channel's, whose mantissa then lies in [256, 511]; rounding to the
+   nearest mantissa errs by at most half a unit: 2^-9 of the largest
+   channel, for every channel (a channel far below the largest keeps that
+   absolute error). The words hold the irradiance times 2^-pack_shift, the
+   power of two that brings the volume's largest value into [2^14, 2^15):
+   the format's exponents reach 2^-40 of it; smaller values, negative ones
+   (a radiance callback can give them) and NaN store 0. A third of the
+   memory, so random queries miss the caches and the TLB less. */
+static int32_t irrvol__pack_shift(const float *x, size_t n)
+{
+    float m = 0.0f;
+    size_t i;
+    int e;
+    for (i = 0; i < n; i++)
+        if (x[i] > m && x[i] <= FLT_MAX) m = x[i];
+    if (m == 0.0f) return 0;
+    (void)frexpf(m, &e);   /* m = f 2^e, f in [0.5, 1) */
+    return e - 15;
+}
+
+static void irrvol__set_unpack(irrvol *v, int32_t shift)
+{
+    int e;
+    v->pack_shift = shift;
+    for (e = 0; e < 32; e++) v->unpack[e] = ldexpf(1.0f, e - 24 + shift);
+}
+
+static uint32_t irrvol__rgb9e5(const float rgb[3], int32_t shift)
+{
+    float c[3], m = 0.0f, unit;
+    uint32_t word;
+    int i, e;
+    for (i = 0; i < 3; i++) {
+        float x = ldexpf(rgb[i], -shift);
+        c[i] = x > 0.0f ? (x < 65408.0f ? x : 65408.0f) : 0.0f;   /* 65408: the largest word; NaN gives 0 */
+        m = c[i] > m ? c[i] : m;
+    }
+    (void)frexpf(m, &e);                    /* floor(log2 m) = e - 1 */
+    e = (e - 1 > -16 ? e - 1 : -16) + 16;   /* the shared exponent: bias 15, plus 1 for 9-bit mantissas */
+    unit = ldexpf(1.0f, e - 24);
+    if (floorf(m / unit + 0.5f) >= 512.0f) {   /* the largest mantissa rounds up to 2^9 */
+        e++;
+        unit *= 2.0f;
+    }
+    word = (uint32_t)e << 27;
+    for (i = 0; i < 3; i++) word |= (uint32_t)floorf(c[i] / unit + 0.5f) << (9 * i);
+    return word;
+}
+
+/* The irradiance of one bin of one sample, from either store. */
+static void irrvol__bin_value(const irrvol *v, size_t at, float rgb[3])
+{
+    if (v->packed) {
+        uint32_t word = v->packed[at];
+        int c;
+        for (c = 0; c < 3; c++) rgb[c] = (float)(word >> (9 * c) & 0x1FFu) * v->unpack[word >> 27];
+    } else {
+        memcpy(rgb, v->irradiance + 3 * at, 3 * sizeof(float));
+    }
+}
+
+/* Moves the gathered irradiance into the compact store. */
+static irrvol_result irrvol__pack(irrvol *v)
+{
+    size_t n = (size_t)v->sample_count * v->bins, i;
+    v->packed = (uint32_t *)irrvol__alloc_array(&v->allocator, n, sizeof(uint32_t));
+    if (!v->packed) return IRRVOL_ERROR_OUT_OF_MEMORY;
+    irrvol__set_unpack(v, irrvol__pack_shift(v->irradiance, 3 * n));
+    for (i = 0; i < n; i++) v->packed[i] = irrvol__rgb9e5(v->irradiance + 3 * i, v->pack_shift);
+    irrvol__free(&v->allocator, v->irradiance);
+    v->irradiance = NULL;
+    return IRRVOL_OK;
+}
+
 /* Every value a sample holds (irradiance and radiance bins, harmonics) as
    sum_i w_i value(from_i) over n samples; to is not among them. */
 static void irrvol__blend_values(irrvol *v, uint32_t to, const uint32_t *from, const float *w, uint32_t n)
@@ -4018,7 +4135,7 @@ static irrvol_result irrvol__gather_all(irrvol__build *b)
         begin = v->first_level_count;
     }
     if (r == IRRVOL_OK) r = irrvol__make_grid(v, v->refined);
-    if (r == IRRVOL_OK) r = irrvol__alloc_samples(v, d->keep_radiance);
+    if (r == IRRVOL_OK) r = irrvol__alloc_samples(v, d->keep_radiance, 0);
     if (r == IRRVOL_OK) {
         b->sink.irradiance = v->irradiance;
         b->sink.radiance = v->radiance;
@@ -4043,6 +4160,7 @@ static irrvol_result irrvol__gather_all(irrvol__build *b)
         r = irrvol__dilate(v);
     }
     if (r == IRRVOL_OK) irrvol__constrain_hanging(v);
+    if (r == IRRVOL_OK && !d->full_precision) r = irrvol__pack(v);
     irrvol__sink_free(a, &first);
     irrvol__free(a, b->sink.rays);
     irrvol__free(a, b->sink.state);
@@ -4135,6 +4253,7 @@ IRRVOL_API irrvol_result irrvol_info(const irrvol *vol, irrvol_volume_info *info
     info->rays = vol->rays;
     info->degenerate_triangles = vol->degenerate;
     info->has_radiance = vol->radiance != NULL;
+    info->bin_bytes = irrvol__bin_bytes(vol);
     info->bytes = irrvol__bytes(vol);
     return IRRVOL_OK;
 }
@@ -4468,54 +4587,59 @@ typedef struct irrvol__prepared {
     float scale;       /* 1 / the sum of the weights */
 } irrvol__prepared;
 
-/* Leak-safe weights: each corner's trilinear weight (q holds the eight)
-   times its visibility for the test point pos + bias * n, a hanging corner
-   replaced by its parents (section 9), renormalised. When no sample is
-   visible (every corner invalid) or an input is NaN, the plain trilinear
-   weights stand. */
+/* A sub-cell with hanging corners (section 9): each hanging corner's
+   term becomes its parents' terms, the corner's weight times theirs, so
+   both sides of a face between the levels read the same first-level
+   samples (the stored blend of a hanging sample is rounded on its own in
+   the compact store), and the leak-safe weights weigh each parent by its
+   own visibility. */
+IRRVOL__HOT void irrvol__expand_hanging(const irrvol *v, irrvol__prepared *q)
+{
+    uint32_t ids[8], i, j, m = 0;
+    float w[8];
+    memcpy(ids, q->id, sizeof ids);
+    memcpy(w, q->w, sizeof w);
+    for (i = 0; i < 8; i++) {
+        if (ids[i] >= v->hanging_begin) {
+            size_t h = 4 * (size_t)(ids[i] - v->hanging_begin);
+            for (j = 0; j < 4; j++) {   /* without a branch: an unused parent (weight 0) is overwritten next */
+                q->id[m] = v->parents[h + j];
+                q->w[m] = w[i] * v->parent_weights[h + j];
+                m += v->parent_weights[h + j] > 0.0f;
+            }
+        } else {
+            q->id[m] = ids[i];
+            q->w[m++] = w[i];
+        }
+    }
+    q->count = m;
+}
+
+/* Leak-safe weights: each term's trilinear weight times its sample's
+   visibility for the test point pos + bias * n, renormalised. When no
+   sample is visible (every corner invalid) or an input is NaN, the plain
+   trilinear weights stand. */
 IRRVOL__HOT void irrvol__visibility_terms(const irrvol *v, const irrvol__corners *rec, const float pos[3],
                                           const float normal[3], irrvol__prepared *q)
 {
     float n[3], x[3], len2 = normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2], inv, sum = 0.0f;
-    float vis[IRRVOL__MAX_TERMS], w[8];
-    uint32_t i, j, m = 0, ids[8];
+    float vis[IRRVOL__MAX_TERMS], w[IRRVOL__MAX_TERMS];
+    uint32_t i, j;
     inv = len2 > 0.0f ? 1.0f / sqrtf(len2) : 0.0f;
     for (j = 0; j < 3; j++) {
         n[j] = normal[j] * inv;
         x[j] = pos[j] + v->bias * n[j];
     }
     if (!irrvol__finite3(x) || !irrvol__finite3(n)) return;   /* NaN or infinite: the plain weights stand */
-    memcpy(ids, q->id, sizeof ids);
-    memcpy(w, q->w, sizeof w);
-    if (!rec->hanging) {   /* the eight corners themselves */
-        m = 8;
-        irrvol__corner_weights(v, rec, x, n, vis);
-    } else {
-        for (i = 0; i < 8; i++) {
-            if (ids[i] >= v->hanging_begin) {
-                size_t h = 4 * (size_t)(ids[i] - v->hanging_begin);
-                for (j = 0; j < 4; j++)
-                    if (v->parent_weights[h + j] > 0.0f) {
-                        q->id[m] = v->parents[h + j];
-                        q->w[m++] = w[i] * v->parent_weights[h + j];
-                    }
-            } else {
-                q->id[m] = ids[i];
-                q->w[m++] = w[i];
-            }
-        }
-        irrvol__visibility_weights(v, q->id, m, x, n, vis);
-    }
-    for (i = 0; i < m; i++) {
-        q->w[i] *= vis[i];
-        sum += q->w[i];
+    if (!rec->hanging) irrvol__corner_weights(v, rec, x, n, vis);   /* the eight corners, probes from the record */
+    else irrvol__visibility_weights(v, q->id, q->count, x, n, vis);
+    for (i = 0; i < q->count; i++) {
+        w[i] = q->w[i] * vis[i];
+        sum += w[i];
     }
     if (sum >= FLT_MIN && sum <= FLT_MAX) {   /* 1 / sum is finite */
-        q->count = m;
+        memcpy(q->w, w, q->count * sizeof(float));
         q->scale = 1.0f / sum;
-    } else {   /* the plain weights */
-        memcpy(q->id, ids, sizeof ids);
-        memcpy(q->w, w, sizeof w);
     }
 }
 
@@ -4527,6 +4651,7 @@ IRRVOL__HOT void irrvol__prepare_in_cell(const irrvol *v, irrvol_weighting weigh
     const irrvol__corners *rec = irrvol__cell_corners(v, c, o, q->id, q->w);   /* the plain trilinear terms */
     q->count = 8;
     q->scale = 1.0f;
+    if (rec->hanging) irrvol__expand_hanging(v, q);
     if (weighting == IRRVOL_WEIGHTING_DEFAULT) weighting = v->weighting;
     if (weighting == IRRVOL_WEIGHTING_VISIBILITY) irrvol__visibility_terms(v, rec, pos, normal, q);
 }
@@ -4558,55 +4683,120 @@ IRRVOL__HOT void irrvol__prepare(const irrvol *v, irrvol_filter filter, irrvol_w
     irrvol__prepare_in_cell(v, weighting, c, o, pos, normal, q);
 }
 
-/* sum over samples of weight x (sum over bins of bin weight x value),
-   times the scale. NEAREST reads one bin, BILINEAR blends four per sample
-   first. With SSE2 the rgb of a value and the next float share a register:
-   the same products and sums. */
-IRRVOL__HOT void irrvol__finish(const irrvol *v, const irrvol__prepared *q, float rgb[3])
+/* irrvol__finish from the floats (full precision). With SSE2 the rgb of
+   a value and the next float share a register: the same products and
+   sums. */
+IRRVOL__HOT void irrvol__finish_floats(const irrvol *v, const irrvol__prepared *q, float rgb[3])
 {
     size_t stride = (size_t)v->sample_count * 3;   /* one bin of all samples */
     const float *b0 = v->irradiance + q->bin[0] * stride, *b1 = b0, *b2 = b0, *b3 = b0;
     uint32_t i;
-#ifdef IRRVOL__SSE2
-    __m128 sum = _mm_setzero_ps();
-    float out[4];
-    if (q->bins == 1) {
-        for (i = 0; i < q->count; i++)
-            sum = _mm_add_ps(sum, _mm_mul_ps(_mm_set1_ps(q->w[i]), _mm_loadu_ps(b0 + 3 * (size_t)q->id[i])));
-    } else {
-        __m128 w0 = _mm_set1_ps(q->bw[0]), w1 = _mm_set1_ps(q->bw[1]), w2 = _mm_set1_ps(q->bw[2]), w3 = _mm_set1_ps(q->bw[3]);
-        b1 = v->irradiance + q->bin[1] * stride;
-        b2 = v->irradiance + q->bin[2] * stride;
-        b3 = v->irradiance + q->bin[3] * stride;
-        for (i = 0; i < q->count; i++) {
-            size_t at = 3 * (size_t)q->id[i];
-            __m128 x = _mm_add_ps(_mm_add_ps(_mm_mul_ps(w0, _mm_loadu_ps(b0 + at)), _mm_mul_ps(w1, _mm_loadu_ps(b1 + at))),
-                                  _mm_add_ps(_mm_mul_ps(w2, _mm_loadu_ps(b2 + at)), _mm_mul_ps(w3, _mm_loadu_ps(b3 + at))));
-            sum = _mm_add_ps(sum, _mm_mul_ps(_mm_set1_ps(q->w[i]), x));
-        }
-    }
-    _mm_storeu_ps(out, _mm_mul_ps(sum, _mm_set1_ps(q->scale)));
-    rgb[0] = out[0]; rgb[1] = out[1]; rgb[2] = out[2];
-#else
-    float sum[3] = {0.0f, 0.0f, 0.0f};
-    int c;
     if (q->bins != 1) {
         b1 = v->irradiance + q->bin[1] * stride;
         b2 = v->irradiance + q->bin[2] * stride;
         b3 = v->irradiance + q->bin[3] * stride;
     }
-    for (i = 0; i < q->count; i++) {
-        size_t at = 3 * (size_t)q->id[i];
-        for (c = 0; c < 3; c++) {
-            float x = b0[at + (size_t)c];
-            if (q->bins != 1)
-                x = (q->bw[0] * b0[at + (size_t)c] + q->bw[1] * b1[at + (size_t)c]) +
-                    (q->bw[2] * b2[at + (size_t)c] + q->bw[3] * b3[at + (size_t)c]);
-            sum[c] += q->w[i] * x;
+#ifdef IRRVOL__SSE2
+    {
+        __m128 sum = _mm_setzero_ps();
+        float out[4];
+        if (q->bins == 1) {
+            for (i = 0; i < q->count; i++)
+                sum = _mm_add_ps(sum, _mm_mul_ps(_mm_set1_ps(q->w[i]), _mm_loadu_ps(b0 + 3 * (size_t)q->id[i])));
+        } else {
+            __m128 w0 = _mm_set1_ps(q->bw[0]), w1 = _mm_set1_ps(q->bw[1]), w2 = _mm_set1_ps(q->bw[2]), w3 = _mm_set1_ps(q->bw[3]);
+            for (i = 0; i < q->count; i++) {
+                size_t at = 3 * (size_t)q->id[i];
+                __m128 x = _mm_add_ps(_mm_add_ps(_mm_mul_ps(w0, _mm_loadu_ps(b0 + at)), _mm_mul_ps(w1, _mm_loadu_ps(b1 + at))),
+                                      _mm_add_ps(_mm_mul_ps(w2, _mm_loadu_ps(b2 + at)), _mm_mul_ps(w3, _mm_loadu_ps(b3 + at))));
+                sum = _mm_add_ps(sum, _mm_mul_ps(_mm_set1_ps(q->w[i]), x));
+            }
         }
+        _mm_storeu_ps(out, _mm_mul_ps(sum, _mm_set1_ps(q->scale)));
+        rgb[0] = out[0]; rgb[1] = out[1]; rgb[2] = out[2];
     }
-    for (c = 0; c < 3; c++) rgb[c] = sum[c] * q->scale;
+#else
+    {
+        float sum[3] = {0.0f, 0.0f, 0.0f};
+        int c;
+        for (i = 0; i < q->count; i++) {
+            size_t at = 3 * (size_t)q->id[i];
+            for (c = 0; c < 3; c++) {
+                float x = b0[at + (size_t)c];
+                if (q->bins != 1)
+                    x = (q->bw[0] * b0[at + (size_t)c] + q->bw[1] * b1[at + (size_t)c]) +
+                        (q->bw[2] * b2[at + (size_t)c] + q->bw[3] * b3[at + (size_t)c]);
+                sum[c] += q->w[i] * x;
+            }
+        }
+        for (c = 0; c < 3; c++) rgb[c] = sum[c] * q->scale;
+    }
 #endif
+}
+
+/* irrvol__finish from the compact store. A word's mantissas stay where
+   they are (green and blue 2^9 and 2^18 times their value, exact as
+   floats) and are scaled by the weight times unpack[its exponent]; the
+   place values come off once, at the end. With SSE2 a word's three
+   channels share a register: the same products and sums. */
+IRRVOL__HOT void irrvol__finish_packed(const irrvol *v, const irrvol__prepared *q, float rgb[3])
+{
+    const uint32_t *b[4];
+    uint32_t i, k, bins = q->bins == 1 ? 1u : 4u;
+    for (k = 0; k < 4; k++) b[k] = v->packed + (size_t)q->bin[k < bins ? k : 0] * v->sample_count;
+#ifdef IRRVOL__SSE2
+    {
+        const __m128i mask = _mm_set_epi32(0, 0x1FF << 18, 0x1FF << 9, 0x1FF);
+        const __m128 place = _mm_set_ps(0.0f, 1.0f / 262144.0f, 1.0f / 512.0f, 1.0f);
+        __m128 sum = _mm_setzero_ps();
+        float out[4];
+        if (bins == 1) {
+            for (i = 0; i < q->count; i++) {
+                uint32_t word = b[0][q->id[i]];
+                __m128 m = _mm_cvtepi32_ps(_mm_and_si128(_mm_set1_epi32((int)word), mask));
+                sum = _mm_add_ps(sum, _mm_mul_ps(m, _mm_set1_ps(q->w[i] * v->unpack[word >> 27])));
+            }
+        } else {
+            for (i = 0; i < q->count; i++) {
+                __m128 t[4];
+                for (k = 0; k < 4; k++) {
+                    uint32_t word = b[k][q->id[i]];
+                    t[k] = _mm_mul_ps(_mm_cvtepi32_ps(_mm_and_si128(_mm_set1_epi32((int)word), mask)),
+                                      _mm_set1_ps(q->bw[k] * v->unpack[word >> 27]));
+                }
+                sum = _mm_add_ps(sum, _mm_mul_ps(_mm_set1_ps(q->w[i]), _mm_add_ps(_mm_add_ps(t[0], t[1]), _mm_add_ps(t[2], t[3]))));
+            }
+        }
+        _mm_storeu_ps(out, _mm_mul_ps(_mm_mul_ps(sum, place), _mm_set1_ps(q->scale)));
+        rgb[0] = out[0]; rgb[1] = out[1]; rgb[2] = out[2];
+    }
+#else
+    {
+        static const float place[3] = {1.0f, 1.0f / 512.0f, 1.0f / 262144.0f};
+        float sum[3] = {0.0f, 0.0f, 0.0f};
+        int c;
+        for (i = 0; i < q->count; i++) {
+            float t[4][3], s[4];
+            for (k = 0; k < bins; k++) {
+                uint32_t word = b[k][q->id[i]];
+                s[k] = (bins == 1 ? q->w[i] : q->bw[k]) * v->unpack[word >> 27];
+                for (c = 0; c < 3; c++) t[k][c] = (float)(word & (0x1FFu << (9 * c))) * s[k];
+            }
+            for (c = 0; c < 3; c++)
+                sum[c] += bins == 1 ? t[0][c] : q->w[i] * ((t[0][c] + t[1][c]) + (t[2][c] + t[3][c]));
+        }
+        for (c = 0; c < 3; c++) rgb[c] = sum[c] * place[c] * q->scale;
+    }
+#endif
+}
+
+/* sum over samples of weight x (sum over bins of bin weight x value),
+   times the scale. NEAREST reads one bin, BILINEAR blends four per sample
+   first. */
+IRRVOL__HOT void irrvol__finish(const irrvol *v, const irrvol__prepared *q, float rgb[3])
+{
+    if (v->packed) irrvol__finish_packed(v, q, rgb);
+    else irrvol__finish_floats(v, q, rgb);
 }
 
 IRRVOL_API void irrvol_query_filter(const irrvol *vol, irrvol_filter filter, irrvol_weighting weighting,
@@ -4647,7 +4837,6 @@ IRRVOL_API void irrvol_query_many(const irrvol *vol, irrvol_filter filter, irrvo
                                   const float *pos, size_t pos_stride, const float *dir, size_t dir_stride, float *rgb)
 {
     irrvol__prepared ring[IRRVOL__AHEAD];
-    size_t stride = (size_t)vol->sample_count * 3;
     uint32_t i, j, k;
     if (!pos_stride) pos_stride = 3 * sizeof(float);
     if (!dir_stride) dir_stride = 3 * sizeof(float);
@@ -4657,7 +4846,11 @@ IRRVOL_API void irrvol_query_many(const irrvol *vol, irrvol_filter filter, irrvo
         if (i >= IRRVOL__AHEAD) irrvol__finish(vol, q, rgb + 3 * (size_t)(i - IRRVOL__AHEAD));
         irrvol__prepare(vol, filter, weighting, (const float *)((const char *)pos + i * pos_stride), d, d, q);
         for (k = 0; k < q->bins; k++)
-            for (j = 0; j < q->count; j++) IRRVOL__PREFETCH(vol->irradiance + q->bin[k] * stride + 3 * (size_t)q->id[j]);
+            for (j = 0; j < q->count; j++) {
+                size_t at = (size_t)q->bin[k] * vol->sample_count + q->id[j];
+                if (vol->packed) IRRVOL__PREFETCH(vol->packed + at);
+                else IRRVOL__PREFETCH(vol->irradiance + 3 * at);
+            }
     }
     for (i = count > IRRVOL__AHEAD ? count - IRRVOL__AHEAD : 0; i < count; i++)
         irrvol__finish(vol, &ring[i % IRRVOL__AHEAD], rgb + 3 * (size_t)i);
@@ -4729,7 +4922,7 @@ IRRVOL_API irrvol_result irrvol_sample_values(const irrvol *vol, uint32_t index,
     if (!vol || index >= vol->sample_count || (radiance && !vol->radiance)) return IRRVOL_ERROR_INVALID_ARGUMENT;
     for (bin = 0; bin < vol->bins; bin++) {
         size_t at = ((size_t)bin * vol->sample_count + index) * 3;
-        if (irradiance) memcpy(irradiance + 3 * (size_t)bin, vol->irradiance + at, 3 * sizeof(float));
+        if (irradiance) irrvol__bin_value(vol, at / 3, irradiance + 3 * (size_t)bin);
         if (radiance) memcpy(radiance + 3 * (size_t)bin, vol->radiance + at, 3 * sizeof(float));
     }
     return IRRVOL_OK;
@@ -4891,16 +5084,18 @@ IRRVOL_API irrvol_result irrvol_visibility_ratio(const irrvol_visibility_desc *d
     return r;
 }
 /* ======================================================================
-   15. save and load (file format version 2)
+   15. save and load (file format version 3)
    magic "IRRVOL\x1a\n", version u32, payload size u64, payload, CRC32.
-   Payload: k, moment, filter, weighting, flags (bit 0: radiance stored),
-   first-level samples x y z, subgrid samples, visibility resolution (u32
-   each), bounds min xyz, max xyz, the visibility test's normal bias (f32),
-   sample count, rays (u64), degenerate triangles, invalid and relocated
-   samples, one byte per first-level cell (0 unrefined, 1 refined by
-   geometry, 2 by light), then floats: the origins (xyz, valid) of the
-   samples before the hanging ones, irradiance (bin-major: for each bin, rgb
-   of every sample), harmonics (27 per sample), visibility fits (4 per
+   Payload: k, moment, filter, weighting, flags (bit 0: radiance stored,
+   bit 1: the compact store), first-level samples x y z, subgrid samples,
+   visibility resolution (u32 each), bounds min xyz, max xyz, the
+   visibility test's normal bias (f32), sample count, rays (u64),
+   degenerate triangles, invalid and relocated samples, one byte per
+   first-level cell (0 unrefined, 1 refined by geometry, 2 by light), then
+   floats: the origins (xyz, valid) of the samples before the hanging ones,
+   irradiance (bin-major: for each bin, rgb of every sample; the compact
+   store: its shift, an int32, then one RGB9E5 word per bin and sample, a
+   third of the bytes), harmonics (27 per sample), visibility fits (4 per
    texel of the samples before the hanging ones), radiance when flagged.
    The grid tables, the hanging samples and the sample positions are
    rebuilt from these on load.
@@ -4908,19 +5103,29 @@ IRRVOL_API irrvol_result irrvol_visibility_ratio(const irrvol_visibility_desc *d
 static const unsigned char irrvol__magic[8] = {'I', 'R', 'R', 'V', 'O', 'L', 0x1a, '\n'};
 #define IRRVOL__HEADER_FIELDS 92u   /* payload bytes before the cell flags */
 
-/* The floats after the cell flags: origins, irradiance, harmonics,
+/* The header's flags. */
+#define IRRVOL__FILE_RADIANCE 1u   /* the radiance follows the visibility maps */
+#define IRRVOL__FILE_COMPACT 2u    /* the irradiance is the compact store: its shift, then a word a bin */
+
+/* The 4-byte items after the cell flags: origins, irradiance, harmonics,
    visibility, radiance. */
-static uint64_t irrvol__payload_floats(const irrvol *v, int radiance)
+static uint64_t irrvol__payload_floats(const irrvol *v, uint32_t flags)
 {
-    uint64_t bins = (uint64_t)v->sample_count * v->bins * 3;
-    return 4 * (uint64_t)v->hanging_begin + bins * (radiance ? 2 : 1) + (uint64_t)v->sample_count * IRRVOL__SH_FLOATS +
-           (uint64_t)v->hanging_begin * v->texels * 4;
+    uint64_t bins = (uint64_t)v->sample_count * v->bins;
+    uint64_t irradiance = flags & IRRVOL__FILE_COMPACT ? 1 + bins : 3 * bins;
+    return 4 * (uint64_t)v->hanging_begin + irradiance + (flags & IRRVOL__FILE_RADIANCE ? 3 * bins : 0) +
+           (uint64_t)v->sample_count * IRRVOL__SH_FLOATS + (uint64_t)v->hanging_begin * v->texels * 4;
+}
+
+static uint32_t irrvol__file_flags(const irrvol *v)
+{
+    return (v->radiance ? IRRVOL__FILE_RADIANCE : 0u) | (v->packed ? IRRVOL__FILE_COMPACT : 0u);
 }
 
 static irrvol_result irrvol__write_all(const irrvol *v, irrvol__writer *w)
 {
     uint64_t bins = (uint64_t)v->sample_count * v->bins * 3;
-    uint64_t payload = IRRVOL__HEADER_FIELDS + v->cell_count + 4 * irrvol__payload_floats(v, v->radiance != NULL);
+    uint64_t payload = IRRVOL__HEADER_FIELDS + v->cell_count + 4 * irrvol__payload_floats(v, irrvol__file_flags(v));
     uint32_t k, s;
     irrvol__crc_init(&w->crc);
     irrvol__put(w, irrvol__magic, 8);
@@ -4930,7 +5135,7 @@ static irrvol_result irrvol__write_all(const irrvol *v, irrvol__writer *w)
     irrvol__put_u32(w, v->moment);
     irrvol__put_u32(w, (uint32_t)v->filter);
     irrvol__put_u32(w, (uint32_t)v->weighting);
-    irrvol__put_u32(w, v->radiance ? 1u : 0u);
+    irrvol__put_u32(w, irrvol__file_flags(v));
     for (k = 0; k < 3; k++) irrvol__put_u32(w, v->samples[k]);
     irrvol__put_u32(w, v->subgrid);
     irrvol__put_u32(w, v->vis_res);
@@ -4943,14 +5148,19 @@ static irrvol_result irrvol__write_all(const irrvol *v, irrvol__writer *w)
     irrvol__put_u32(w, v->invalid_count);
     irrvol__put_u32(w, v->relocated_count);
     irrvol__put(w, v->refined, v->cell_count);
-    irrvol__put_f32_array(w, v->origins, 4 * (size_t)v->hanging_begin);
-    irrvol__put_f32_array(w, v->irradiance, (size_t)bins);
-    irrvol__put_f32_array(w, v->sh, (size_t)v->sample_count * IRRVOL__SH_FLOATS);
+    irrvol__put_array32(w, v->origins, 4 * (size_t)v->hanging_begin);
+    if (v->packed) {
+        irrvol__put_u32(w, (uint32_t)v->pack_shift);
+        irrvol__put_array32(w, v->packed, (size_t)bins / 3);
+    } else {
+        irrvol__put_array32(w, v->irradiance, (size_t)bins);
+    }
+    irrvol__put_array32(w, v->sh, (size_t)v->sample_count * IRRVOL__SH_FLOATS);
     for (s = 0; s < v->hanging_begin; s++)   /* the maps' interiors, row by row: load rebuilds the borders */
         for (k = 0; k < v->vis_res; k++)
-            irrvol__put_f32_array(w, v->visibility + ((size_t)s * v->map_texels + (k + 1) * (v->vis_res + 2) + 1) * 4,
+            irrvol__put_array32(w, v->visibility + ((size_t)s * v->map_texels + (k + 1) * (v->vis_res + 2) + 1) * 4,
                                   4 * (size_t)v->vis_res);
-    if (v->radiance) irrvol__put_f32_array(w, v->radiance, (size_t)bins);
+    if (v->radiance) irrvol__put_array32(w, v->radiance, (size_t)bins);
     irrvol__put_u32(w, irrvol__crc_final(&w->crc));
     return w->failed ? IRRVOL_ERROR_IO : IRRVOL_OK;
 }
@@ -4965,10 +5175,10 @@ IRRVOL_API irrvol_result irrvol_save(const irrvol *vol, irrvol_write_fn write, v
     return irrvol__write_all(vol, &w);
 }
 
-/* Reads n floats (little-endian); each must be finite, and at least lower. */
-static int irrvol__get_floats(irrvol__reader *r, float *f, size_t n, float lower)
+/* Reads n 4-byte items (little-endian) into items. */
+static int irrvol__get_array32(irrvol__reader *r, void *items, size_t n)
 {
-    unsigned char buf[4096];
+    unsigned char buf[4096], *f = (unsigned char *)items;
     size_t i = 0;
     while (i < n && !r->failed) {
         size_t m = n - i < sizeof buf / 4 ? n - i : sizeof buf / 4, j;
@@ -4976,11 +5186,20 @@ static int irrvol__get_floats(irrvol__reader *r, float *f, size_t n, float lower
         for (j = 0; j < m; j++, i++) {
             const unsigned char *b = buf + 4 * j;
             uint32_t u = (uint32_t)b[0] | ((uint32_t)b[1] << 8) | ((uint32_t)b[2] << 16) | ((uint32_t)b[3] << 24);
-            memcpy(&f[i], &u, 4);
-            if (!isfinite(f[i]) || f[i] < lower) { r->failed = 1; return 0; }
+            memcpy(f + 4 * i, &u, 4);
         }
     }
     return !r->failed;
+}
+
+/* Reads n floats; each must be finite, and at least lower. */
+static int irrvol__get_floats(irrvol__reader *r, float *f, size_t n, float lower)
+{
+    size_t i;
+    if (!irrvol__get_array32(r, f, n)) return 0;
+    for (i = 0; i < n; i++)
+        if (!isfinite(f[i]) || f[i] < lower) { r->failed = 1; return 0; }
+    return 1;
 }
 
 /* Header fields; 0 when they describe a volume this version can hold. */
@@ -5006,7 +5225,8 @@ static int irrvol__read_fields(irrvol__reader *r, irrvol *v, uint32_t *flags, ui
     v->relocated_count = irrvol__get_u32(r);
     if (r->failed || k < 1 || k > IRRVOL_MAX_RESOLUTION || v->moment < 1 || v->moment > IRRVOL_MAX_MOMENT ||
         (filter != IRRVOL_FILTER_NEAREST && filter != IRRVOL_FILTER_BILINEAR) ||
-        (weighting != IRRVOL_WEIGHTING_VISIBILITY && weighting != IRRVOL_WEIGHTING_TRILINEAR) || *flags > 1u ||
+        (weighting != IRRVOL_WEIGHTING_VISIBILITY && weighting != IRRVOL_WEIGHTING_TRILINEAR) ||
+        *flags > (IRRVOL__FILE_RADIANCE | IRRVOL__FILE_COMPACT) ||
         subgrid < 2 || subgrid > IRRVOL_MAX_SUBGRID_SAMPLES || vis_res < 1 ||
         vis_res > IRRVOL_MAX_VISIBILITY_RESOLUTION || !isfinite(v->bias) || !(v->bias >= 0.0f))
         return -1;
@@ -5037,6 +5257,20 @@ static int irrvol__read_maps(irrvol__reader *r, irrvol *v)
         irrvol__map_border(v, map);
     }
     return 1;
+}
+
+/* The irradiance: finite floats, or the compact store's shift (within
+   what irrvol__pack_shift gives for finite floats: frexpf exponents
+   -148..128, less 15) and its words (any word is a finite value). */
+static int irrvol__read_irradiance(irrvol__reader *r, irrvol *v)
+{
+    size_t n = (size_t)v->sample_count * v->bins;
+    int32_t shift;
+    if (!v->packed) return irrvol__get_floats(r, v->irradiance, 3 * n, -FLT_MAX);
+    shift = (int32_t)irrvol__get_u32(r);
+    if (r->failed || shift < -163 || shift > 113) return 0;
+    irrvol__set_unpack(v, shift);
+    return irrvol__get_array32(r, v->packed, n);
 }
 
 /* The origins read back must be finite, flagged 0 or 1, and agree with
@@ -5085,15 +5319,16 @@ static irrvol_result irrvol__read_all(irrvol *v, irrvol__reader *r)
         return IRRVOL_ERROR_CORRUPT_DATA;
     res = irrvol__make_grid(v, v->refined);
     if (res != IRRVOL_OK) return res;
-    if (v->sample_count != declared || !irrvol__can_hold(r, irrvol__payload_floats(v, flags != 0), 4))
+    if (v->sample_count != declared || !irrvol__can_hold(r, irrvol__payload_floats(v, flags), 4))
         return IRRVOL_ERROR_CORRUPT_DATA;
-    res = irrvol__alloc_samples(v, flags != 0);
+    res = irrvol__alloc_samples(v, flags & IRRVOL__FILE_RADIANCE, flags & IRRVOL__FILE_COMPACT);
     if (res != IRRVOL_OK) return res;
     if (!irrvol__get_floats(r, v->origins, 4 * (size_t)v->hanging_begin, -FLT_MAX) || !irrvol__origins_consistent(v) ||
-        !irrvol__get_floats(r, v->irradiance, (size_t)v->sample_count * v->bins * 3, -FLT_MAX) ||
+        !irrvol__read_irradiance(r, v) ||
         !irrvol__get_floats(r, v->sh, (size_t)v->sample_count * IRRVOL__SH_FLOATS, -FLT_MAX) ||
         !irrvol__read_maps(r, v) ||
-        (flags && !irrvol__get_floats(r, v->radiance, (size_t)v->sample_count * v->bins * 3, -FLT_MAX)))
+        ((flags & IRRVOL__FILE_RADIANCE) &&
+         !irrvol__get_floats(r, v->radiance, (size_t)v->sample_count * v->bins * 3, -FLT_MAX)))
         return IRRVOL_ERROR_CORRUPT_DATA;
     if (r->remaining != 0) return IRRVOL_ERROR_CORRUPT_DATA;   /* payload longer than its contents */
     expected_crc = irrvol__crc_final(&r->crc);

@@ -78,6 +78,7 @@ static void test_nested_glass_furnace(void)
     memset(m, 0, sizeof m);
     for (i = 0; i < 3; i++) memcpy(m[i].transmittance, tf[i], sizeof tf[i]);
     nested_boxes(&s, &d, m, 3);
+    d.full_precision = 1;   /* the gather's 0.05 %: the compact store rounds each channel to 2^-9 of the largest */
     if (!CHECK(irrvol_build(&d, &vol) == IRRVOL_OK)) return;
     for (k = 0; k < 3; k++) expected[k] = PI * sky[k] * tf[0][k] * tf[1][k] * tf[2][k];
     {

@@ -48,7 +48,7 @@ static void constant_radiance(void *user, const float org[3], const float dir[3]
 }
 
 /* A small volume with a second level, kept radiance and a moment. */
-static irrvol *small_volume(int keep_radiance)
+static irrvol *small_volume_stored(int keep_radiance, int full_precision)
 {
     sc_scene s;
     irrvol_desc d;
@@ -62,11 +62,19 @@ static irrvol *small_volume(int keep_radiance)
     d.moment = 3;
     d.filter = IRRVOL_FILTER_BILINEAR;
     d.keep_radiance = keep_radiance;
+    d.full_precision = full_precision;
     d.grid_samples[0] = 2; d.grid_samples[1] = 3; d.grid_samples[2] = 2;
     sc_set3(d.bounds_min, 0, 0, 0);
     sc_set3(d.bounds_max, 1, 1, 1);
     if (irrvol_build(&d, &v) != IRRVOL_OK) return NULL;
     return v;
+}
+
+/* keep_radiance also keeps the irradiance at full precision: the files of
+   both irradiance stores are tested. */
+static irrvol *small_volume(int keep_radiance)
+{
+    return small_volume_stored(keep_radiance, keep_radiance);
 }
 
 /* Streams that move a few bytes at a time, as a file or socket might. */
@@ -200,10 +208,10 @@ static void test_truncation_and_corruption(void)
 }
 
 /* Headers that lie, with a valid checksum: refused before any large
-   allocation. */
-static void test_hostile_headers(void)
+   allocation. Destroys v. */
+static void hostile_headers(irrvol *v)
 {
-    irrvol *v = small_volume(0), *w;
+    irrvol *w;
     void *data;
     unsigned char *c;
     size_t size, irradiance_at;
@@ -251,7 +259,8 @@ static void test_hostile_headers(void)
     HOSTILE(put_le32(c + 12, (uint32_t)size), IRRVOL_ERROR_CORRUPT_DATA);         /* payload size too large */
     HOSTILE(put_le32(c + 12, 30), IRRVOL_ERROR_CORRUPT_DATA);                     /* too small */
     BAD_VALUE(put_le32(c + size - 8, 0x7F800000u));                              /* an infinite fit variance */
-    BAD_VALUE(put_le32(c + irradiance_at, 0x7F800000u));                         /* infinite irradiance */
+    BAD_VALUE(put_le32(c + irradiance_at, 0x7F800000u));   /* infinite irradiance, or a compact store's shift
+                                                              past any finite float's */
     BAD_VALUE(put_le32(c + irradiance_at - 4, 0x40000000u));                     /* a validity of 2 */
     HOSTILE(put_le32(c + OFF_VERSION, IRRVOL_FILE_FORMAT_VERSION + 1), IRRVOL_ERROR_VERSION);
 #undef HOSTILE
@@ -260,6 +269,23 @@ static void test_hostile_headers(void)
     free(c);
     irrvol_free_memory(NULL, data);
     irrvol_destroy(v);
+}
+
+static void test_hostile_headers(void)
+{
+    irrvol_volume_info info;
+    irrvol *v = small_volume(0);
+    if (CHECK(v != NULL)) {
+        irrvol_info(v, &info);
+        CHECK_EQ_INT(info.bin_bytes, 4);   /* the compact store */
+        hostile_headers(v);
+    }
+    v = small_volume_stored(0, 1);   /* no radiance: the file ends with the visibility fits */
+    if (CHECK(v != NULL)) {
+        irrvol_info(v, &info);
+        CHECK_EQ_INT(info.bin_bytes, 12);   /* full precision */
+        hostile_headers(v);
+    }
 }
 
 static void test_write_failures(void)
