@@ -354,7 +354,8 @@
        2^24 objects, samples up to 64 frames late. Memory: 41 bytes per cache
        point (2 per pixel by default), 43 bytes per pixel (43.5 with
        parallel_for), about 48 (max_latency + 8) bytes per object, and 512
-       KB for the re-sort into image order (1 MB with parallel_for): 125
+       KB for the re-sort into image order (1 MB with parallel_for, and 260
+       bytes per 16384 points for where each band of the image starts): 125
        bytes per pixel in all and the re-sort's scratch, 34 MB for 512x512
        (129 bytes per pixel) and 260 MB for 1920x1080.
        A compiler without the GNU atomic builtins projects the points in one
@@ -1591,9 +1592,9 @@ static void rendercache__view_compose(const rendercache__view *v, const float m[
    Walter et al. 2002 does, let any number of threads share the z-buffer
    but cost three times as much memory traffic here.) The render cache
    keeps its points nearly in image order instead (its re-sort, section
-   12) and runs them in chunks, band of the image by band
-   (rendercache__splat_run_chunks), so that the z-tests of a band land in
-   keys that stay in cache.
+   12) and runs them in chunks, band of the image by band (a chunk
+   function), so that the z-tests of a band land in keys that stay in
+   cache.
    ---------------------------------------------------------------------- */
 #define RENDERCACHE__SPLAT_JOBS 2u   /* partial z-buffers when running in parallel */
 #define RENDERCACHE__SHARED_JOBS 8u  /* jobs of a splat into one shared z-buffer (atomic min) */
@@ -1687,8 +1688,8 @@ static int rendercache__splat_alloc(rendercache__splat *s, uint32_t width, uint3
 }
 
 /* Elements [*begin, *end) of chunk c of a splat that runs its elements in
-   chunks (rendercache__splat_run_chunks); chunks are numbered so that
-   chunks of nearby numbers land in nearby pixels. */
+   chunks (rendercache__splat_run); chunks are numbered so that chunks of
+   nearby numbers land in nearby pixels. */
 typedef void (*rendercache__chunk_fn)(const void *src, uint32_t c, uint32_t *begin, uint32_t *end);
 
 typedef struct rendercache__splat_job {
@@ -1869,41 +1870,25 @@ static void rendercache__splat_execute(rendercache__splat_job *job,
     for (j = 0; j < job->jobs; j++) s->projected += s->job_projected[j];
 }
 
-/* Runs the splat over elements [0, count) into the z-buffers of s; the
-   caller takes the least key of each pixel over the z-buffers of the run
-   (s->ran_jobs; rendercache__splat_least) in a pass it makes anyway. */
+/* Runs the splat over elements [0, count) into the z-buffers of s, or
+   (chunk non-NULL, keys only) over chunk_count chunks of them, chunk by
+   chunk (chunk gives each chunk's elements; the jobs split the chunks in
+   order); the caller takes the least key of each pixel over the z-buffers
+   of the run (s->ran_jobs; rendercache__splat_least) in a pass it makes
+   anyway. */
 static void rendercache__splat_run(rendercache__splat *s, void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t),
                                    void *user, rendercache__source_fn source, rendercache__payload_fn payload,
-                                   const void *src, uint32_t count)
+                                   rendercache__chunk_fn chunk, uint32_t chunk_count, const void *src, uint32_t count)
 {
     rendercache__splat_job job;
+    memset(&job, 0, sizeof job);
     job.s = s;
     job.source = source;
-    job.chunk = NULL;
-    job.chunk_count = 0;
     job.payload = payload;
-    job.cover = NULL;
-    job.src = src;
-    job.element_count = count;
-    rendercache__splat_execute(&job, parallel_for, user);
-}
-
-/* The same, keys only, with the elements taken chunk by chunk (chunk
-   gives each chunk's elements; the jobs split the chunks in order). */
-static void rendercache__splat_run_chunks(rendercache__splat *s,
-                                          void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t), void *user,
-                                          rendercache__source_fn source, rendercache__chunk_fn chunk, const void *src,
-                                          uint32_t chunk_count, uint32_t element_count)
-{
-    rendercache__splat_job job;
-    job.s = s;
-    job.source = source;
     job.chunk = chunk;
     job.chunk_count = chunk_count;
-    job.payload = NULL;
-    job.cover = NULL;
     job.src = src;
-    job.element_count = element_count;
+    job.element_count = count;
     rendercache__splat_execute(&job, parallel_for, user);
 }
 
@@ -1913,11 +1898,8 @@ static void rendercache__splat_run_cover(rendercache__splat *s,
                                          rendercache__cover_fn cover, const void *src, uint32_t count)
 {
     rendercache__splat_job job;
+    memset(&job, 0, sizeof job);
     job.s = s;
-    job.source = NULL;
-    job.chunk = NULL;
-    job.chunk_count = 0;
-    job.payload = NULL;
     job.cover = cover;
     job.src = src;
     job.element_count = count;
@@ -2625,8 +2607,8 @@ static void rendercache__splat_points(rendercache *rc, const rendercache__view *
     rendercache__projector pr;
     double t0 = rendercache__now(rc);
     rendercache__projector_init(&pr, rc, v, obj_camera, 0);
-    rendercache__splat_run_chunks(&rc->splat, rc->parallel_for, rc->parallel_user, rendercache__project_points,
-                                  rendercache__point_chunk, &pr, rendercache__chunk_count(rc), rc->capacity);
+    rendercache__splat_run(&rc->splat, rc->parallel_for, rc->parallel_user, rendercache__project_points, NULL,
+                           rendercache__point_chunk, rendercache__chunk_count(rc), &pr, rc->capacity);
     if (t_project) *t_project += rendercache__now(rc) - t0;
 }
 
@@ -5395,7 +5377,7 @@ static void rendercache__warp_splat(rendercache_warper *w, const rendercache__wa
         rendercache__splat_run_cover(&w->splat, w->parallel_for, w->parallel_user, rendercache__warp_cover, set, count);
     else
         rendercache__splat_run(&w->splat, w->parallel_for, w->parallel_user, rendercache__warp_source,
-                               rendercache__warp_payload, set, count);
+                               rendercache__warp_payload, NULL, 0, set, count);
     w->stats.projected += w->splat.projected;
     memset(&job, 0, sizeof job);
     job.w = w;
