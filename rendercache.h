@@ -1,4 +1,4 @@
-/* rendercache.h - v0.4.2 - render cache and range-image walkthroughs - public domain or MIT, see end of file
+/* rendercache.h - v0.4.3 - render cache and range-image walkthroughs - public domain or MIT, see end of file
 
    RENDERCACHE.H: an image-space point cache that reprojects and resamples, and range-image walkthroughs of animated scenes.
 
@@ -168,9 +168,12 @@
        write memory in runs rather than at random (after WDG02's memory
        coherence); then every
        point is projected into the camera and z-buffered,
-       one point per pixel (WDP99 reprojection; with parallel_for, 8 jobs of
-       points share the z-buffer through an atomic minimum of a key that
-       orders by depth, then slot, so any schedule keeps the same point; the
+       one point per pixel (WDP99 reprojection), band of 1/64 of the image by
+       band: each range's points of a band (where the re-sort put them) are
+       z-tested together, so that the band's part of the z-buffer stays in
+       cache (after WDG02's tiles; with parallel_for, 8 jobs of bands share
+       the z-buffer through an atomic minimum of a key that orders by depth,
+       then slot, so any schedule and any order keep the same point; the
        depth cull reads these keys and clears them for the next frame); a
        point much farther than the average depth of its 3x3 neighbourhood, with nearer points on
        opposite sides, is dropped (WDP99 depth cull); holes are filled by a
@@ -351,7 +354,8 @@
        2^24 objects, samples up to 64 frames late. Memory: 41 bytes per cache
        point (2 per pixel by default), 43 bytes per pixel (43.5 with
        parallel_for), about 48 (max_latency + 8) bytes per object, and 512
-       KB for the re-sort into image order (1 MB with parallel_for): 125
+       KB for the re-sort into image order (1 MB with parallel_for, and 260
+       bytes per 16384 points for where each band of the image starts): 125
        bytes per pixel in all and the re-sort's scratch, 34 MB for 512x512
        (129 bytes per pixel) and 260 MB for 1920x1080.
        A compiler without the GNU atomic builtins projects the points in one
@@ -396,7 +400,7 @@
 
 #define RENDERCACHE_VERSION_MAJOR 0
 #define RENDERCACHE_VERSION_MINOR 4
-#define RENDERCACHE_VERSION_PATCH 2
+#define RENDERCACHE_VERSION_PATCH 3
 
 #ifndef RENDERCACHE_API
 #  ifdef RENDERCACHE_STATIC
@@ -1586,7 +1590,11 @@ static void rendercache__view_compose(const rendercache__view *v, const float m[
    them tile by tile as it goes, so the next splat needs no clearing pass.
    (Sorting the elements into image bands first, as the tiled cache of
    Walter et al. 2002 does, let any number of threads share the z-buffer
-   but cost three times as much memory traffic here.)
+   but cost three times as much memory traffic here.) The render cache
+   keeps its points nearly in image order instead (its re-sort, section
+   12) and runs them in chunks, band of the image by band (a chunk
+   function), so that the z-tests of a band land in keys that stay in
+   cache.
    ---------------------------------------------------------------------- */
 #define RENDERCACHE__SPLAT_JOBS 2u   /* partial z-buffers when running in parallel */
 #define RENDERCACHE__SHARED_JOBS 8u  /* jobs of a splat into one shared z-buffer (atomic min) */
@@ -1679,9 +1687,16 @@ static int rendercache__splat_alloc(rendercache__splat *s, uint32_t width, uint3
     return failed ? -1 : 0;
 }
 
+/* Elements [*begin, *end) of chunk c of a splat that runs its elements in
+   chunks (rendercache__splat_run); chunks are numbered so that chunks of
+   nearby numbers land in nearby pixels. */
+typedef void (*rendercache__chunk_fn)(const void *src, uint32_t c, uint32_t *begin, uint32_t *end);
+
 typedef struct rendercache__splat_job {
     rendercache__splat *s;
     rendercache__source_fn source;
+    rendercache__chunk_fn chunk;       /* non-NULL: jobs split chunk_count chunks instead of the elements */
+    uint32_t chunk_count;
     rendercache__payload_fn payload;   /* NULL: no payload */
     rendercache__cover_fn cover;       /* instead of source and payload */
     const void *src;
@@ -1749,7 +1764,32 @@ static uint32_t rendercache__zbuffer_keys(uint64_t *key, uint32_t sink, const ui
     return landed;
 }
 
-/* Job j: z-buffers its range of elements into its own z-buffer. */
+/* Z-buffers the keys of elements [begin, end) (no payload) into key,
+   through the atomic minimum when shared; returns how many landed. */
+static uint32_t rendercache__splat_keys(const rendercache__splat_job *job, uint64_t *key, uint32_t begin, uint32_t end)
+{
+    uint32_t pix[RENDERCACHE__BATCH], b, i, projected = 0;
+    float d[RENDERCACHE__BATCH];
+    for (b = begin; b < end; b += RENDERCACHE__BATCH) {
+        uint32_t n = end - b < RENDERCACHE__BATCH ? end - b : RENDERCACHE__BATCH;
+        if (!job->source(job->src, b, b + n, pix, d)) continue;   /* nothing landed */
+#if RENDERCACHE__ATOMICS
+        if (job->shared) {
+            for (i = 0; i < n; i++) {
+                if (pix[i] == RENDERCACHE__NONE) continue;
+                rendercache__atomic_min(&key[pix[i]], rendercache__key(d[i], b + i));
+                projected++;
+            }
+            continue;
+        }
+#endif
+        projected += rendercache__zbuffer_keys(key, job->s->pixel_count, pix, d, b, n);
+    }
+    return projected;
+}
+
+/* Job j: z-buffers its range of elements (or of chunks) into its own
+   z-buffer, or with the others into the shared one. */
 static void rendercache__splat_range(void *ctx, uint32_t j)
 {
     const rendercache__splat_job *job = (const rendercache__splat_job *)ctx;
@@ -1758,36 +1798,31 @@ static void rendercache__splat_range(void *ctx, uint32_t j)
     float *payload = job->shared ? NULL : s->zb[j].payload;
     uint32_t pix[RENDERCACHE__BATCH], begin, end, b, i, projected = 0;
     float d[RENDERCACHE__BATCH], pay[4 * RENDERCACHE__BATCH];
-    begin = (uint32_t)((uint64_t)job->element_count * j / job->jobs);
-    end = (uint32_t)((uint64_t)job->element_count * (j + 1) / job->jobs);
-#if RENDERCACHE__ATOMICS
-    if (job->shared) {   /* keys only, z-buffer 0 cleared already */
-        for (b = begin; b < end; b += RENDERCACHE__BATCH) {
-            uint32_t n = end - b < RENDERCACHE__BATCH ? end - b : RENDERCACHE__BATCH;
-            if (!job->source(job->src, b, b + n, pix, d)) continue;
-            for (i = 0; i < n; i++) {
-                if (pix[i] == RENDERCACHE__NONE) continue;
-                rendercache__atomic_min(&key[pix[i]], rendercache__key(d[i], b + i));
-                projected++;
-            }
+    const uint32_t count = job->chunk ? job->chunk_count : job->element_count;
+    begin = (uint32_t)((uint64_t)count * j / job->jobs);
+    end = (uint32_t)((uint64_t)count * (j + 1) / job->jobs);
+    if (!job->shared && (j > 0 || !s->clean))   /* (a shared z-buffer was cleared already) */
+        for (i = 0; i <= s->pixel_count; i++) key[i] = RENDERCACHE__EMPTY_KEY;
+    if (job->chunk) {   /* keys only */
+        for (i = begin; i < end; i++) {
+            uint32_t e0, e1;
+            job->chunk(job->src, i, &e0, &e1);
+            projected += rendercache__splat_keys(job, key, e0, e1);
         }
         s->job_projected[j] = projected;
         return;
     }
-#endif
-    if (j > 0 || !s->clean)
-        for (i = 0; i <= s->pixel_count; i++) key[i] = RENDERCACHE__EMPTY_KEY;
     if (job->cover) {
         s->job_projected[j] = job->cover(job->src, j, begin, end, &s->zb[j], s->width, s->height);
+        return;
+    }
+    if (!job->payload) {
+        s->job_projected[j] = rendercache__splat_keys(job, key, begin, end);
         return;
     }
     for (b = begin; b < end; b += RENDERCACHE__BATCH) {
         uint32_t n = end - b < RENDERCACHE__BATCH ? end - b : RENDERCACHE__BATCH;
         if (!job->source(job->src, b, b + n, pix, d)) continue;   /* nothing landed */
-        if (!job->payload) {
-            projected += rendercache__zbuffer_keys(key, s->pixel_count, pix, d, b, n);
-            continue;
-        }
         job->payload(job->src, b, b + n, pix, pay);
         for (i = 0; i < n; i++) {
             uint32_t p = pix[i];
@@ -1797,7 +1832,7 @@ static void rendercache__splat_range(void *ctx, uint32_t j)
             k = rendercache__key(d[i], b + i);
             if (k < key[p]) {
                 key[p] = k;
-                if (job->payload) memcpy(payload + 4 * (size_t)p, pay + 4 * i, 4 * sizeof(float));
+                memcpy(payload + 4 * (size_t)p, pay + 4 * i, 4 * sizeof(float));
             }
         }
     }
@@ -1835,18 +1870,23 @@ static void rendercache__splat_execute(rendercache__splat_job *job,
     for (j = 0; j < job->jobs; j++) s->projected += s->job_projected[j];
 }
 
-/* Runs the splat over elements [0, count) into the z-buffers of s; the
-   caller takes the least key of each pixel over the z-buffers of the run
-   (s->ran_jobs; rendercache__splat_least) in a pass it makes anyway. */
+/* Runs the splat over elements [0, count) into the z-buffers of s, or
+   (chunk non-NULL, keys only) over chunk_count chunks of them, chunk by
+   chunk (chunk gives each chunk's elements; the jobs split the chunks in
+   order); the caller takes the least key of each pixel over the z-buffers
+   of the run (s->ran_jobs; rendercache__splat_least) in a pass it makes
+   anyway. */
 static void rendercache__splat_run(rendercache__splat *s, void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t),
                                    void *user, rendercache__source_fn source, rendercache__payload_fn payload,
-                                   const void *src, uint32_t count)
+                                   rendercache__chunk_fn chunk, uint32_t chunk_count, const void *src, uint32_t count)
 {
     rendercache__splat_job job;
+    memset(&job, 0, sizeof job);
     job.s = s;
     job.source = source;
     job.payload = payload;
-    job.cover = NULL;
+    job.chunk = chunk;
+    job.chunk_count = chunk_count;
     job.src = src;
     job.element_count = count;
     rendercache__splat_execute(&job, parallel_for, user);
@@ -1858,9 +1898,8 @@ static void rendercache__splat_run_cover(rendercache__splat *s,
                                          rendercache__cover_fn cover, const void *src, uint32_t count)
 {
     rendercache__splat_job job;
+    memset(&job, 0, sizeof job);
     job.s = s;
-    job.source = NULL;
-    job.payload = NULL;
     job.cover = cover;
     job.src = src;
     job.element_count = count;
@@ -1888,6 +1927,9 @@ static void rendercache__splat_run_cover(rendercache__splat *s,
 #define RENDERCACHE__SORT_SHARE 8u           /* a frame re-sorts 1/8 of the cache, so all of it every 8 frames */
 #define RENDERCACHE__SORT_JOBS 2u           /* jobs (and scratches) of the re-sort with parallel_for */
 #define RENDERCACHE__SORT_KEYS 2048u         /* sort keys: blocks of pixels, and one for points outside the image */
+#define RENDERCACHE__SORT_BANDS 64u          /* bands of rows whose points the projection z-buffers together: a
+                                                band's keys (32 KB at 512x512, 260 KB at 1920x1080) stay in a
+                                                core's L1 or L2 cache while its points from every range land */
 
 /* Priority image values (WDP99 priority image, extended to [0, 1]): a point
    rises with age to POINT_MAX; holes rank above every point, the sparser the
@@ -1955,6 +1997,9 @@ struct rendercache {
                                 tile that the tile's pixels without a point write instead */
     uint32_t hand;           /* clock hand of the eviction */
     uint32_t *sort_scratch;  /* rendercache__sort_range: 2 words and a point record per slot of a range, per job */
+    uint32_t *sort_bands;    /* per range, SORT_BANDS + 1 offsets into it: where the points of each band of the
+                                image begin at its last re-sort, and (the last) those outside the image; all 0
+                                for a range not sorted yet (all of it "outside") */
     uint32_t sort_next;      /* the range re-sorted next */
     uint32_t sort_taken;     /* ranges of this frame's share taken by the re-sort's jobs (atomic) */
     uint32_t sort_shift;     /* sort keys: pixel >> sort_shift, below RENDERCACHE__SORT_KEYS - 1 */
@@ -2054,6 +2099,19 @@ static void rendercache__reset_image(rendercache *rc)
     }
 }
 
+/* Slots in a range of the re-sort (a job's scratch holds one range). */
+static uint32_t rendercache__sort_range_size(const rendercache *rc)
+{
+    return rc->capacity < RENDERCACHE__SORT_RANGE ? rc->capacity : RENDERCACHE__SORT_RANGE;
+}
+
+/* Ranges of the cache. */
+static uint32_t rendercache__sort_ranges(const rendercache *rc)
+{
+    const uint32_t range = rendercache__sort_range_size(rc);
+    return (rc->capacity + range - 1) / range;
+}
+
 static void rendercache__reset_points(rendercache *rc)
 {
     uint32_t i;
@@ -2065,19 +2123,13 @@ static void rendercache__reset_points(rendercache *rc)
     rc->hand = 0;
     rc->live = 0;
     rc->sort_next = 0;
-}
-
-/* Slots in a range of the re-sort (a job's scratch holds one range). */
-static uint32_t rendercache__sort_range_size(const rendercache *rc)
-{
-    return rc->capacity < RENDERCACHE__SORT_RANGE ? rc->capacity : RENDERCACHE__SORT_RANGE;
+    memset(rc->sort_bands, 0, (size_t)rendercache__sort_ranges(rc) * (RENDERCACHE__SORT_BANDS + 1) * sizeof(uint32_t));
 }
 
 /* Ranges re-sorted per frame: a SORT_SHARE of them, at least one. */
 static uint32_t rendercache__sort_range_count(const rendercache *rc)
 {
-    const uint32_t range = rendercache__sort_range_size(rc), ranges = (rc->capacity + range - 1) / range;
-    return (ranges + RENDERCACHE__SORT_SHARE - 1) / RENDERCACHE__SORT_SHARE;
+    return (rendercache__sort_ranges(rc) + RENDERCACHE__SORT_SHARE - 1) / RENDERCACHE__SORT_SHARE;
 }
 
 /* Jobs of the re-sort, each with its own scratch: SORT_JOBS with
@@ -2091,7 +2143,7 @@ static uint32_t rendercache__sort_jobs(const rendercache *rc)
 static void rendercache__release(rendercache *rc)
 {
     const rendercache_allocator a = rc->alloc;
-    void *blocks[28];
+    void *blocks[29];
     size_t i;
     blocks[0] = rc->geo; blocks[1] = rc->data; blocks[2] = rc->obj_predicted; blocks[3] = rc->obj_motion;
     blocks[4] = rc->depth_out; blocks[5] = rc->obj_world; blocks[6] = rc->obj_local;
@@ -2104,6 +2156,7 @@ static void rendercache__release(rendercache *rc)
     blocks[25] = rc->history;
     blocks[26] = rc->bands;
     blocks[27] = rc->sort_scratch;
+    blocks[28] = rc->sort_bands;
     for (i = 0; i < sizeof blocks / sizeof blocks[0]; i++) rendercache__free(&a, blocks[i]);
     rendercache__splat_free(&rc->splat, &a);
     rendercache__free(&a, rc);
@@ -2144,11 +2197,13 @@ static int rendercache__alloc_buffers(rendercache *rc)
     rc->bands = (rendercache__band *)rendercache__alloc_array(a, rc->band_count, sizeof *rc->bands);
     rc->sort_scratch = (uint32_t *)rendercache__alloc_array(a, (size_t)rendercache__sort_range_size(rc) * rendercache__sort_jobs(rc),
                                                             2 * sizeof(uint32_t) + sizeof(rendercache__point));
+    rc->sort_bands = (uint32_t *)rendercache__alloc_array(a, rendercache__sort_ranges(rc),
+                                                          (RENDERCACHE__SORT_BANDS + 1) * sizeof(uint32_t));
     if (!rc->geo || !rc->data || !rc->shown || !rc->obj_predicted || !rc->obj_motion || !rc->obj_world ||
         !rc->obj_local || !rc->obj_next || !rc->obj_since || !rc->obj_history || !rc->history ||
         !rc->obj_camera || !rc->obj_moved || !rc->px_index || !rc->px_depth || !rc->depth_out || !rc->image ||
         !rc->priority || !rc->occupancy || !rc->kind || !rc->count || !rc->tile_stats || !rc->hist ||
-        !rc->select_v || !rc->chosen || !rc->err_rows || !rc->bands || !rc->sort_scratch)
+        !rc->select_v || !rc->chosen || !rc->err_rows || !rc->bands || !rc->sort_scratch || !rc->sort_bands)
         return -1;
     if (rendercache__splat_alloc(&rc->splat, rc->width, rc->height, 1u, 0, a) != 0)   /* one z-buffer: the cull reads its keys */
         return -1;
@@ -2516,14 +2571,44 @@ static void rendercache__compose_objects(const rendercache *rc, const rendercach
    them into rc->splat. Keys only: the points that win a pixel give their
    colour and priority in the depth cull, so that the others (about half)
    cost no read of their colour and no write. */
+/* The chunks of the projection, band by band of the image: chunk c of
+   block b = c / (R + q) (R ranges, q = ceil(R / SORT_BANDS)) is, for i =
+   c % (R + q) < R, the points of range i that fell in band b at its last
+   re-sort, else the points of range (i - R) SORT_BANDS + b outside the
+   image then (or not sorted yet; empty past the last range). So the
+   z-tests of a block land mostly in one band's keys, which stay in cache,
+   instead of sweeping the whole z-buffer once per range; the outside
+   chunks are spread over the blocks so that the parallel jobs, which take
+   blocks in order, get even shares. */
+static uint32_t rendercache__chunk_count(const rendercache *rc)
+{
+    const uint32_t ranges = rendercache__sort_ranges(rc);
+    return RENDERCACHE__SORT_BANDS * (ranges + (ranges + RENDERCACHE__SORT_BANDS - 1) / RENDERCACHE__SORT_BANDS);
+}
+
+static void rendercache__point_chunk(const void *src, uint32_t c, uint32_t *begin, uint32_t *end)
+{
+    const rendercache *rc = ((const rendercache__projector *)src)->rc;
+    const uint32_t range = rendercache__sort_range_size(rc), ranges = rendercache__sort_ranges(rc);
+    const uint32_t block = ranges + (ranges + RENDERCACHE__SORT_BANDS - 1) / RENDERCACHE__SORT_BANDS;
+    const uint32_t b = c / block, i = c % block;
+    const uint32_t r = i < ranges ? i : (i - ranges) * RENDERCACHE__SORT_BANDS + b, r0 = r * range;
+    const uint32_t *bands = rc->sort_bands + (size_t)r * (RENDERCACHE__SORT_BANDS + 1);
+    uint32_t n;
+    if (r >= ranges) { *begin = *end = 0; return; }
+    n = rc->capacity - r0 < range ? rc->capacity - r0 : range;
+    *begin = r0 + (i < ranges ? bands[b] : bands[RENDERCACHE__SORT_BANDS]);
+    *end = i < ranges ? r0 + bands[b + 1] : r0 + n;
+}
+
 static void rendercache__splat_points(rendercache *rc, const rendercache__view *v, const float *obj_camera,
                                       double *t_project)
 {
     rendercache__projector pr;
     double t0 = rendercache__now(rc);
     rendercache__projector_init(&pr, rc, v, obj_camera, 0);
-    rendercache__splat_run(&rc->splat, rc->parallel_for, rc->parallel_user, rendercache__project_points, NULL, &pr,
-                           rc->capacity);
+    rendercache__splat_run(&rc->splat, rc->parallel_for, rc->parallel_user, rendercache__project_points, NULL,
+                           rendercache__point_chunk, rendercache__chunk_count(rc), &pr, rc->capacity);
     if (t_project) *t_project += rendercache__now(rc) - t0;
 }
 
@@ -2878,6 +2963,7 @@ static void rendercache__sort_range(rendercache *rc, uint32_t r0, uint32_t n, ui
 {
     const uint32_t range = rendercache__sort_range_size(rc), none_key = (rc->pixel_count >> rc->sort_shift) + 1u;
     uint32_t count[RENDERCACHE__SORT_KEYS], *pix = scratch, *to = pix + range, b, i, k, sum;
+    uint32_t *bands = rc->sort_bands + (size_t)(r0 / range) * (RENDERCACHE__SORT_BANDS + 1);
     rendercache__point *data = (rendercache__point *)(to + range);   /* the records in their new order */
     rendercache__geo *geo = (rendercache__geo *)(void *)data;
     float depth2[RENDERCACHE__BATCH];
@@ -2897,6 +2983,8 @@ static void rendercache__sort_range(rendercache *rc, uint32_t r0, uint32_t n, ui
         count[k] = sum;
         sum += c;
     }
+    for (b = 0; b <= RENDERCACHE__SORT_BANDS; b++)   /* band b: the keys from ceil(b none_key / BANDS) on */
+        bands[b] = count[(uint32_t)(((uint64_t)b * none_key + RENDERCACHE__SORT_BANDS - 1) / RENDERCACHE__SORT_BANDS)];
     for (i = 0; i < n; i++) to[i] = count[pix[i]]++;   /* the new place of each slot (stable) */
     /* the points move in their order, read as a stream (the range is not in cache yet), and land in the
        scratch, which is */
@@ -2914,7 +3002,7 @@ static void rendercache__sort_range(rendercache *rc, uint32_t r0, uint32_t n, ui
 static void rendercache__sort_job(void *ctx, uint32_t j)
 {
     rendercache *rc = (rendercache *)ctx;
-    const uint32_t range = rendercache__sort_range_size(rc), ranges = (rc->capacity + range - 1) / range;
+    const uint32_t range = rendercache__sort_range_size(rc), ranges = rendercache__sort_ranges(rc);
     const uint32_t count = rendercache__sort_range_count(rc), jobs = rendercache__sort_jobs(rc);
     const size_t scratch_words = (size_t)range * (2 + sizeof(rendercache__point) / sizeof(uint32_t));
     uint32_t k = count * j / jobs, end = count * (j + 1) / jobs;
@@ -2938,7 +3026,7 @@ static void rendercache__sort_job(void *ctx, uint32_t j)
    same cache). */
 static void rendercache__sort_share(rendercache *rc)
 {
-    const uint32_t range = rendercache__sort_range_size(rc), ranges = (rc->capacity + range - 1) / range;
+    const uint32_t ranges = rendercache__sort_ranges(rc);
     double t0 = rendercache__now(rc);
     rc->sort_taken = 0;
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__sort_job, rc, rendercache__sort_jobs(rc));
@@ -5289,7 +5377,7 @@ static void rendercache__warp_splat(rendercache_warper *w, const rendercache__wa
         rendercache__splat_run_cover(&w->splat, w->parallel_for, w->parallel_user, rendercache__warp_cover, set, count);
     else
         rendercache__splat_run(&w->splat, w->parallel_for, w->parallel_user, rendercache__warp_source,
-                               rendercache__warp_payload, set, count);
+                               rendercache__warp_payload, NULL, 0, set, count);
     w->stats.projected += w->splat.projected;
     memset(&job, 0, sizeof job);
     job.w = w;
