@@ -400,7 +400,7 @@ EX_FN int wt_parse_options(int argc, char **argv, wt_options *o, char *err, size
             else { snprintf(err, err_size, "--mode must be raytrace, baseviews or radiosity, not '%s'", v); return -1; }
         } else if (!strcmp(a, "--frames")) ok = wt__parse_int(v, 1, 100000, &o->frames);
         else if (!strcmp(a, "--size")) {
-            char *x = strchr(v, 'x');
+            const char *x = strchr(v, 'x');
             char w[32];
             size_t n = x ? (size_t)(x - v) : 0;
             ok = x && n > 0 && n < sizeof w;
