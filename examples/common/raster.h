@@ -558,23 +558,6 @@ static void ex__raster_edges_next_row(ex__raster_edges *e)
     e->row[2] += e->down[2];
 }
 
-/* The perspective weights a[k] = (edge k / twice the area) / z_k at pixel
-   (x, y) of triangle t: 1 / z there is their sum (depth is interpolated as
-   1/z, linear in the screen), and vertex k's perspective-correct weight is
-   a[k] z. The edge values are exact integers, so this gives the same bits
-   as the raster loop's at that pixel. */
-static void ex__raster_weights(const ex_raster_tri *t, int x, int y, float a[3])
-{
-    int64_t px = (int64_t)x * EX_RASTER_SUBPIXEL + EX_RASTER_SUBPIXEL / 2;
-    int64_t py = (int64_t)y * EX_RASTER_SUBPIXEL + EX_RASTER_SUBPIXEL / 2;
-    int k;
-    for (k = 0; k < 3; k++) {
-        int i = (k + 1) % 3, j = (k + 2) % 3;
-        int64_t w = (t->x[j] - t->x[i]) * (py - t->y[i]) - (t->y[j] - t->y[i]) * (px - t->x[i]);
-        a[k] = (float)w * t->inv_area * t->inv_z[k];
-    }
-}
-
 /* Counts triangle t's coverage of the tile's pixels (ex_raster_count). */
 static void ex__raster_tri_count(ex_raster *r, const ex_raster_tri *t, int tx0, int ty0, int tx1, int ty1)
 {
@@ -681,22 +664,51 @@ static void ex__raster_tri_depth(ex__raster_local *L, const ex_raster_tri *t, ui
 }
 
 /* The winners' ids and perspective-correct barycentrics (the vertex weights
-   a[k] z, blending the corners' original weights). */
+   a[k] z, blending the corners' original weights), a run of pixels of one
+   triangle in a row at a time: its edge values start exact at the run's
+   first pixel and step in doubles (as in ex__raster_tri_depth), so every
+   pixel gets the bits of its own exact 64-bit edge values. */
 static void ex__raster_resolve(const ex_raster *r, ex__raster_local *L, int x0, int y0, int x1, int y1)
 {
-    int x, y;
-    for (y = y0; y <= y1; y++)
-        for (x = x0; x <= x1; x++) {
-            int q = (y - y0) * EX_RASTER_TILE + (x - x0);
-            if (L->ref[q] != EX__RASTER_NONE) {
-                const ex_raster_tri *t = ex__raster_item(r, L->ref[q]);
-                float a[3], z = L->z[q];
-                ex__raster_weights(t, x, y, a);
-                L->id[q] = t->id;
-                L->bary[2 * q] = (a[0] * t->u[0] + a[1] * t->u[1] + a[2] * t->u[2]) * z;
-                L->bary[2 * q + 1] = (a[0] * t->v[0] + a[1] * t->v[1] + a[2] * t->v[2]) * z;
+    int x, y, n = x1 - x0 + 1;
+    for (y = y0; y <= y1; y++) {
+        const int q = (y - y0) * EX_RASTER_TILE;
+        const uint32_t *refs = L->ref + q;
+        for (x = 0; x < n;) {
+            const ex_raster_tri *t;
+            const float *z;
+            float *bary, area, iz[3], u[3], v[3];
+            double w[3], d[3];
+            int64_t px, py;
+            int end = x + 1, i, k;
+            if (refs[x] == EX__RASTER_NONE) { x++; continue; }
+            while (end < n && refs[end] == refs[x]) end++;
+            t = ex__raster_item(r, refs[x]);
+            px = (int64_t)(x0 + x) * EX_RASTER_SUBPIXEL + EX_RASTER_SUBPIXEL / 2;
+            py = (int64_t)y * EX_RASTER_SUBPIXEL + EX_RASTER_SUBPIXEL / 2;
+            for (k = 0; k < 3; k++) {
+                int a = (k + 1) % 3, b = (k + 2) % 3;
+                w[k] = (double)((t->x[b] - t->x[a]) * (py - t->y[a]) - (t->y[b] - t->y[a]) * (px - t->x[a]));
+                d[k] = (double)((t->y[b] - t->y[a]) * EX_RASTER_SUBPIXEL);
+                iz[k] = t->inv_z[k];
+                u[k] = t->u[k];
+                v[k] = t->v[k];
             }
+            area = t->inv_area;
+            z = L->z + q + x;
+            bary = L->bary + 2 * (q + x);
+            for (i = 0; i < end - x; i++) {
+                double s = (double)i;
+                float a0 = (float)(w[0] - d[0] * s) * area * iz[0];
+                float a1 = (float)(w[1] - d[1] * s) * area * iz[1];
+                float a2 = (float)(w[2] - d[2] * s) * area * iz[2];
+                bary[2 * i] = (a0 * u[0] + a1 * u[1] + a2 * u[2]) * z[i];
+                bary[2 * i + 1] = (a0 * v[0] + a1 * v[1] + a2 * v[2]) * z[i];
+            }
+            for (i = x; i < end; i++) L->id[q + i] = t->id;
+            x = end;
         }
+    }
 }
 
 /* Copies the tile to the frame buffers r->skip does not name. */
