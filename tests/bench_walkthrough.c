@@ -131,6 +131,9 @@ static void report(wt_mode mode, int threads, int width, int height)
     if (!run_mode(mode, threads, width, height, &res)) return;
     printf("  %-9s %4dx%-4d %d thread%s: %6.1f ms/frame = %5.1f frames/s (%s)", wt_mode_name(mode), width, height,
            threads, threads > 1 ? "s" : " ", res.ms, 1e3 / res.ms, threads > 1 ? "wall" : "thread CPU, no pool");
+    if (mode == WT_MODE_RADIOSITY && width == 1920 && height == 1080)
+        printf(" {target: 60 frames/s = 16.7 ms wall on 2 threads%s}",
+               threads == 1 ? "" : res.ms <= 1e3 / 60.0 ? ": met" : ": not met");
     if (mode == WT_MODE_RAYTRACE)
         printf(" displayed, %.0f samples/s (%u per frame; first frame, all pixels: %.0f ms)", res.samples / (res.ms * 1e-3),
                res.samples, res.first_ms);
