@@ -1,4 +1,4 @@
-/* radinterp.h - v0.4.0 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
+/* radinterp.h - v0.5.0 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
 
    RADINTERP.H: hierarchical radiosity, ranked discontinuities and quadratic irradiance interpolants evaluated per pixel.
 
@@ -68,8 +68,16 @@
    planarity_tolerance times the patch diagonal from the plane of the other
    three) and non-convex or self-intersecting quadrilaterals give
    RADINTERP_ERROR_INVALID_ARGUMENT, with the patch named through the log
-   callback. Zero-area patches are skipped and counted (info.skipped_patches);
-   repeated or collinear corners reduce a quadrilateral to a triangle.
+   callback, and so does a scene whose size (the diagonal of its bounding
+   box) lies outside [RADINTERP_MIN_SCENE_SIZE, RADINTERP_MAX_SCENE_SIZE] =
+   [1e-17, 1e18] (element areas are floats; results do not depend on the
+   scale inside it). Zero-area patches are skipped and counted (info.skipped_patches);
+   repeated or collinear corners reduce a quadrilateral to a triangle. Two
+   triangles of one material that share an edge and together form a planar
+   convex quadrilateral become one patch, as an engine's export of a
+   rectangle as two triangles is one surface (info.merged_patches; every
+   caller's patch index still names the patch it became part of;
+   desc.keep_triangles turns this off).
 
    METHOD
 
@@ -82,9 +90,15 @@
    BVH or desc.trace), with horizon clipping of both elements (4.2); Jacobi
    gather + push-pull iterations (4.3); after each, transport refinement
    (4.4.1): a link whose B_src times the spread of the point factors over
-   its receiver (taken at fixed points) exceeds eps is split at its larger
-   element, and a link whose source's children differ by more than eps / F
-   is split at the source. Parts of a patch enclosed by geometry resting on
+   its receiver exceeds its tolerance (eps, or eps_relative of the
+   receiver's irradiance where that is more) is split at its larger
+   element, and a link whose source's children differ by more than the
+   tolerance / F is split at the source. The spread is taken at fixed
+   points: the receiver's corners pulled a fifth toward its centre, the
+   centre, and the receiver point nearest to the source's centre, where
+   the factor peaks when the source is small and close (a block standing
+   on a large floor: without that point such a link could stay unrefined
+   at a third of its form factor). Parts of a patch enclosed by geometry resting on
    it (the floor under a box) are found by rays and left out of its
    radiosity (radinterp_leaf.open).
 
@@ -148,8 +162,11 @@
    patch outline runs through those on its edges where another patch's edge
    runs along it; case B cannot occur. A triangulation that fails its checks
    (outline, area) is redone without the patch's discontinuities (counted in
-   info.fallback_patches). Interpolants (3.3): IrradianceAtPoint at each
-   triangle's corners and edge midpoints, each approached from the
+   info.fallback_patches); a patch that fails them even so (one thinner than
+   weld_distance) is left out of the mesh (info.skipped_patches). The
+   restriction ignores quarter points that round onto a leaf's own corners
+   (an edge a few float steps long). Interpolants (3.3): IrradianceAtPoint
+   at each triangle's corners and edge midpoints, each approached from the
    triangle's centre, and the closed form of eq. 3.3 for (A, 2B, 2C, D, 2E,
    F) per channel. With refine, representation-based refinement (4.4.2):
    SAMPLES x SAMPLES more points per triangle measure the interpolant's
@@ -202,10 +219,18 @@
 
        eps                Gur::eps, transport error bound in W/m^2: a link is
                           refined while B_src * (max - min of the point form
-                          factors over its receiver) exceeds it.
-                          default half the mean emitted radiosity (emitted
-                          power / total area): 0.13 W/m^2 for the office,
-                          near the paper's 0.1
+                          factors over its receiver) exceeds its tolerance,
+                          the larger of eps and eps_relative times the
+                          receiver's irradiance.  default 1% of the mean
+                          emitted radiosity (emitted power / total area): a
+                          floor under the relative bound, so that unlit
+                          corners still get a bound
+       eps_relative       relative transport error: a link's tolerance is at
+                          least this fraction of its receiver's irradiance,
+                          so shadows are resolved in dim rooms as in bright
+                          ones.  default 0.05; 0 (relative bound off) when
+                          eps is given and eps_relative is not, so an
+                          explicit eps means what it meant before
        min_area           Gur::aeps, no node is split into children smaller
                           than this (m^2).          default (diagonal / 200)^2
        rel_error_cutoff   Basis::relErrorCutoff, convergence: every leaf's
@@ -213,10 +238,11 @@
                           iteration.                                default 1e-3
        max_iterations     gather/push-pull iterations at most.       default 64
        ff_samples         receiver points per link form factor (a square
-                          number gives a jittered grid).              default 9
+                          number gives a jittered grid).  default 9, at most
+                          RADINTERP_MAX_FF_SAMPLES (1024)
        visibility_rays    shadow rays per receiver point when shaft culling
                           left blockers (weighted like the form factor).
-                                                                      default 8
+                          default 8, at most RADINTERP_MAX_VISIBILITY_RAYS (256)
        push_off           Polygon::ffPushOff: sources are moved this far behind
                           their plane in point queries (6.4). default 1e-5 * diag
        nudge              nudgeAmt: a query point moves this far toward
@@ -226,6 +252,14 @@
        epsilon            _m_eps_f: coordinates closer than epsilon * diag are
                           equal (facing and coplanarity tests). default 1e-6
        planarity_tolerance  see validation.                      default 1e-3
+       clustering         RADINTERP_CLUSTERING_ON (the default): the first
+                          links join clusters of patches (see METHOD),
+                          refined down to patches where they could carry
+                          more than a tenth of the receiver's tolerance;
+                          RADINTERP_CLUSTERING_OFF: one link per facing
+                          pair of patches (quadratic in the patch count)
+       keep_triangles     non-zero: triangles are never merged into
+                          quadrilateral patches (see SCENE AND UNITS)
        visibility         how point queries find the visible part of a partly
                           hidden source: RADINTERP_VISIBILITY_SHADOWS (the
                           default) or RADINTERP_VISIBILITY_TRIANGULATION
@@ -324,6 +358,74 @@
                                     const radinterp_allocator *a, radinterp_mesh **out);
        void radinterp_free_memory(const radinterp_allocator *a, void *data);
 
+   CHECKS AND CONTRACTS
+
+   Every function checks what it can and returns INVALID_ARGUMENT (a
+   query: zeros in its output) instead of reading or writing past it; what
+   it cannot check is the caller's contract: an array holds as many
+   elements as its count says, callbacks behave as documented, objects are
+   not used after destroy, and the THREADS rules.
+
+     radinterp_solve(desc, &s)  Checks: out and desc non-NULL; positions,
+         patches, materials non-NULL with non-zero counts; position_stride 0
+         or at least 12; patch_count <= 2^30; every parameter finite and not
+         negative; ff_samples, visibility_rays within their limits;
+         clustering and visibility known; allocator both callbacks or none;
+         every index < vertex_count (the 4th may be RADINTERP_NO_VERTEX);
+         every used vertex finite; every material id < material_count;
+         reflectance in [0, 1], emission finite and >= 0; quadrilaterals
+         planar and convex; the scene's size in [RADINTERP_MIN_SCENE_SIZE,
+         RADINTERP_MAX_SCENE_SIZE]; not every patch of zero area. Zero-area
+         patches are skipped and counted. Contract: positions holds
+         vertex_count vertices at position_stride, patches 4 * patch_count
+         indices, patch_materials patch_count ids (or NULL), materials
+         material_count; patches do not interpenetrate. The solution copies
+         what it keeps: the caller's arrays may go once it returns. CANCELLED
+         when progress asks, OUT_OF_MEMORY when an allocation fails: nothing
+         is leaked and *s is NULL.
+     radinterp_solution_destroy(s), radinterp_mesh_destroy(m)   NULL: nothing.
+     radinterp_solution_info(s, &info), radinterp_mesh_get_info(m, &info),
+     radinterp_mesh_get_data(m, &data)   NULL object: zeros.
+     radinterp_patch_radiosity(s, patch, rgb)   Checks: s, rgb non-NULL;
+         patch < patch_count and not skipped. Patch indices are the caller's.
+     radinterp_get_leaf(s, i, &leaf), radinterp_mesh_get_leaf(m, i, &leaf),
+     radinterp_mesh_get_discontinuity(m, i, &d)   Checks: object and output
+         non-NULL, i below the count.
+     radinterp_irradiance_at_point(s, patch, p, toward, rgb),
+     radinterp_radiosity_at_point(...)   Checks: s, p, rgb non-NULL; patch
+         valid as above; p (and toward when given) finite. Contract: p lies on
+         the patch (it is used as given, not projected), toward on the patch.
+         OUT_OF_MEMORY (rgb still the best estimate) when a large
+         triangulation cannot get memory.
+     radinterp_form_factor_point_polygon(p, n, verts, count)   0 for NULL
+         arguments, count < 3, non-finite input or a zero normal. Contract:
+         verts holds count xyz vertices of a planar convex polygon.
+     radinterp_build_mesh(s, desc, &m)   Checks: s, desc, out non-NULL;
+         parameters finite and not negative; max_leaf_dsets <= 4096,
+         refine_samples and refine_passes <= 64; allocator both or none.
+         Contract: s is a solution from radinterp_solve, left unchanged
+         (several meshes may be built from it at once). CANCELLED and
+         OUT_OF_MEMORY as for the solve.
+     radinterp_fit_quadratic(r, c)   NULL: nothing. Contract: r holds 6 floats.
+     radinterp_eval(m, tri, s, t, rgb), radinterp_eval_irradiance(...)   Checks:
+         m, rgb non-NULL, tri < triangle count, s and t finite (any finite
+         (s, t) is evaluated: the quadratic extends past the triangle).
+     radinterp_shade(m, ids, st, count, rgb_out), radinterp_shade_gouraud(...)
+         Checks: m non-NULL; ids, st, rgb_out non-NULL when count > 0. Pixels
+         whose id is not a triangle of the mesh are left as they are.
+         Contract: ids holds count ids, st 2 * count finite floats, rgb_out
+         3 * count floats.
+     radinterp_mesh_set_parallel_for(m, fn, user)   NULL m: nothing. Not
+         while radinterp_shade runs on the mesh.
+     radinterp_mesh_save(m, write, user), radinterp_mesh_save_to_memory(m, a,
+         &data, &size)   Checks: all non-NULL, allocator both or none; IO when
+         write fails. radinterp_free_memory(a, data) frees with the allocator
+         the save used.
+     radinterp_mesh_load(a, read, user, &m), radinterp_mesh_load_from_memory(
+         data, size, a, &m)   Input is hostile: every size, index and float
+         checked before use, the CRC at the end: CORRUPT_DATA for anything
+         off, VERSION for another format version, never a crash.
+
    SAVED MESHES
 
    radinterp_mesh_save writes magic "RADIMESH", RADINTERP_FILE_FORMAT_VERSION,
@@ -354,10 +456,32 @@
 
    Patches are planar convex polygons of 3 or 4 vertices (curved surfaces must
    be tessellated by the caller). Links are directional (one per receiver and
-   source) and there is no clustering, so the initial linking is quadratic in
-   the patch count: the method suits scenes of hundreds to a few thousand
-   patches, as the paper's. Radiosity is constant over each element, so
-   points a few millimetres from a corner, or at the foot of an object, see
+   source); the first links join clusters of patches (see clusters in the
+   implementation), so the initial linking is no longer quadratic in the
+   patch count, but with the default relative tolerances the refined
+   solution of a building is fine and large. Clustering changes the path
+   refinement takes, not the tolerance: on the Cornell box the clustered and
+   unclustered solves differ by 0.6% on average over the patches (2% at
+   most, where another seed moves a patch by 1%), but on the office the
+   lamp's pole, which touches the lamp shade, comes out 5% darker clustered
+   (clustering OFF for such a scene). Measured on a 2-core machine
+   (tests/bench_radinterp_building.c, one thread, thread CPU time, before
+   the refinement estimate's nearest point was added: it adds about 15% of
+   links on the Cornell box):
+   building_1k (1,250 triangles) solves in about 9 s (23,000 leaves, 212,000
+   links, 210 MB held, 450 MB peak); building_4k (4,282 triangles) in about
+   105 s (65,000 leaves, 684,000 links and 150,000 cluster links, 2.4 GB
+   held, 2.7 GB peak: the per-leaf blocker lists are most of it; they are
+   built in batches of at most RADINTERP__LEAF_BATCH (16M) candidates, so
+   the transient room no longer grows with leaves x links x blockers). The
+   mesh build does not finish in reasonable time at that scale: a point
+   query in a building sums hundreds of partly hidden sources (about 620 a
+   point on building_4k, 155 queries per second), and the mesh samples six
+   points per triangle of every leaf (even one leaf per patch would take
+   tens of thousands of queries). For such scenes use the solution's leaves
+   (radinterp_get_leaf, radinterp_patch_radiosity); the office (55
+   polygons) meshes in about 30 s. Radiosity is constant over each element,
+   so points a few millimetres from a corner, or at the foot of an object, see
    their nearest sources at the elements' mean: expect errors of several
    percent there (about 2% on average elsewhere in the Cornell box with
    eps = 5 mW/m^2). A point query costs a shadow union per partly visible
@@ -389,9 +513,9 @@
 #define RADINTERP_H
 
 #define RADINTERP_VERSION_MAJOR 0
-#define RADINTERP_VERSION_MINOR 4
+#define RADINTERP_VERSION_MINOR 5
 #define RADINTERP_VERSION_PATCH 0
-#define RADINTERP_FILE_FORMAT_VERSION 1   /* of saved meshes */
+#define RADINTERP_FILE_FORMAT_VERSION 2   /* of saved meshes */
 
 #include <stddef.h>
 #include <stdint.h>
@@ -418,6 +542,19 @@ typedef enum radinterp_result {
     RADINTERP_ERROR_CANCELLED,         /* the progress callback asked to stop */
     RADINTERP_ERROR_IO                 /* a read or write callback failed */
 } radinterp_result;
+
+/* Limits of radinterp_desc.ff_samples and visibility_rays: a link costs
+   ff_samples x visibility_rays shadow rays, so larger values would run for
+   hours; they give RADINTERP_ERROR_INVALID_ARGUMENT. */
+#define RADINTERP_MAX_FF_SAMPLES 1024u
+#define RADINTERP_MAX_VISIBILITY_RAYS 256u
+/* The scene's size (diagonal of its bounding box) radinterp_solve accepts:
+   element areas are floats, so a scene of 1e20 m (areas past FLT_MAX) or of
+   1e-20 m (areas below the normal floats) cannot be represented. Each limit
+   is ten times inside the scales measured to work (the Cornell box scaled
+   by 1e19 and by 1e-18 solves to the same radiosities). */
+#define RADINTERP_MAX_SCENE_SIZE 1e18
+#define RADINTERP_MIN_SCENE_SIZE 1e-17
 
 /* The 4th index of a triangular patch. */
 #define RADINTERP_NO_VERTEX 0xFFFFFFFFu
@@ -457,6 +594,14 @@ typedef enum radinterp_visibility {
     RADINTERP_VISIBILITY_TRIANGULATION = 2     /* CDT of the projected blocker edges, one ray per region */
 } radinterp_visibility;
 
+/* How the solver makes its first links (desc.clustering). */
+typedef enum radinterp_clustering {
+    RADINTERP_CLUSTERING_DEFAULT = 0,  /* = RADINTERP_CLUSTERING_ON */
+    RADINTERP_CLUSTERING_ON = 1,       /* a cluster tree over the patches, linked from the top down (scales
+                                          to buildings) */
+    RADINTERP_CLUSTERING_OFF = 2       /* one link per pair of facing patches (quadratic in the patch count) */
+} radinterp_clustering;
+
 typedef struct radinterp_desc {
     /* scene */
     const float *positions;            /* xyz per vertex */
@@ -470,6 +615,7 @@ typedef struct radinterp_desc {
 
     /* parameters, see PARAMETERS above; zero = default */
     float eps;
+    float eps_relative;
     float min_area;
     float rel_error_cutoff;
     uint32_t max_iterations;
@@ -481,6 +627,8 @@ typedef struct radinterp_desc {
     float epsilon;
     float planarity_tolerance;
     radinterp_visibility visibility;   /* point queries' visibility method, see PARAMETERS */
+    radinterp_clustering clustering;   /* initial linking, see PARAMETERS */
+    int keep_triangles;                /* non-zero: triangles are never merged into quadrilaterals */
     uint64_t seed;                     /* random choices (sample points); results depend only on it */
 
     /* optional callbacks */
@@ -500,9 +648,13 @@ typedef struct radinterp_solution radinterp_solution;
 typedef struct radinterp_info {
     uint32_t patch_count;        /* patches given */
     uint32_t skipped_patches;    /* zero-area patches left out */
+    uint32_t merged_patches;     /* triangles merged into another to make a quadrilateral patch */
     uint32_t node_count;         /* quadtree nodes, roots included */
     uint32_t leaf_count;         /* quadtree leaves (elements) */
-    uint32_t link_count;         /* links (one per receiver node and source node) */
+    uint32_t link_count;         /* links between quadtree nodes (one per receiver and source) */
+    uint32_t cluster_count;      /* clusters above the patches */
+    uint32_t cluster_link_count; /* links with a cluster at either end */
+    uint64_t culled_links;       /* links dropped because every ray between their ends was blocked */
     uint64_t blocker_entries;    /* sum of the links' blocker-list lengths */
     uint32_t iterations;         /* gather/push-pull iterations run */
     int converged;               /* the last iteration changed no leaf by more than rel_error_cutoff */
@@ -605,6 +757,8 @@ typedef struct radinterp_mesh_info {
     uint32_t hanging_vertices;        /* T-vertices inside patches closed (case A) */
     uint32_t seam_vertices;           /* outline vertices taken from neighbouring patches (case C) */
     uint32_t fallback_patches;        /* patches triangulated without their discontinuities */
+    uint32_t skipped_patches;         /* patches left out of the mesh: no triangulation of them passed its
+                                         checks (thinner than weld_distance) */
     uint32_t refine_passes;           /* representation-based passes run */
     uint32_t refined_leaves;          /* leaves they split */
     float max_fit_error;              /* largest representation error measured (refine only) */
@@ -786,6 +940,66 @@ static void radinterp__free(const radinterp_allocator *a, void *p)
     if (a->free) a->free(p, a->user);
     else RADINTERP_FREE(p);
 }
+
+/* A growable array of items of one size (the solver's and the mesher's). */
+typedef struct radinterp__buf {
+    void *data;
+    size_t count, cap, item;
+} radinterp__buf;
+
+static void radinterp__buf_init(radinterp__buf *b, size_t item)
+{
+    b->data = NULL;
+    b->count = b->cap = 0;
+    b->item = item;
+}
+
+static int radinterp__buf_reserve(const radinterp_allocator *a, radinterp__buf *b, size_t n)
+{
+    size_t cap;
+    void *p;
+    if (n <= b->cap) return 0;
+    cap = b->cap ? b->cap : 64;
+    while (cap < n) {
+        if (cap > SIZE_MAX / 2 / b->item) return -1;
+        cap *= 2;
+    }
+    p = radinterp__alloc_array(a, cap, b->item);
+    if (!p) return -1;
+    if (b->count) memcpy(p, b->data, b->count * b->item);
+    radinterp__free(a, b->data);
+    b->data = p;
+    b->cap = cap;
+    return 0;
+}
+
+/* A new zeroed item at the end, or NULL when out of memory. */
+static void *radinterp__buf_push(const radinterp_allocator *a, radinterp__buf *b)
+{
+    void *p;
+    if (b->count == b->cap && radinterp__buf_reserve(a, b, b->count + 1) != 0) return NULL;
+    p = (char *)b->data + b->count * b->item;
+    memset(p, 0, b->item);
+    b->count++;
+    return p;
+}
+
+static int radinterp__buf_u32(const radinterp_allocator *a, radinterp__buf *b, uint32_t v)
+{
+    uint32_t *p = (uint32_t *)radinterp__buf_push(a, b);
+    if (!p) return -1;
+    *p = v;
+    return 0;
+}
+
+static void radinterp__buf_free(const radinterp_allocator *a, radinterp__buf *b)
+{
+    radinterp__free(a, b->data);
+    b->data = NULL;
+    b->count = b->cap = 0;
+}
+
+#define RADINTERP__U32(b) ((uint32_t *)(b).data)
 
 /* Zero means default: the documented default replaces a zero field. */
 #define radinterp__def(v, d) ((v) ? (v) : (d))
@@ -3140,10 +3354,13 @@ typedef struct radinterp__node {
     uint32_t child;           /* first of four consecutive children; NONE for a leaf */
     uint32_t depth;           /* 0 for a root */
     uint32_t first_link, link_count;   /* the links this node gathers */
+    uint32_t first_clink, clink_count; /* the cluster links it gathers (section 12) */
     float area;
     float lo[3], hi[3];
     float b[3];               /* radiosity B (W/m^2) of the node's open part, constant over it */
     float h[3];               /* irradiance gathered by this node's own links (mean over the whole node) */
+    float level;              /* irradiance (largest channel) over its open part, all links: the scale its
+                                 links' errors are measured against (relative refinement) */
     float open;               /* fraction of the node not enclosed by touching geometry (such as the
                                  floor under a box standing on it); enclosed parts receive and show nothing */
 } radinterp__node;
@@ -3159,18 +3376,43 @@ typedef struct radinterp__link {
     uint32_t flags;
 } radinterp__link;
 
+/* A cluster of patches (section 12): a node of the binary tree above the
+   patches' quadtrees. */
+typedef struct radinterp__cluster {
+    float lo[3], hi[3];         /* box of its patches */
+    uint32_t child[2];          /* elements: clusters (RADINTERP__CLUSTER | index) or patches' root nodes */
+    uint32_t parent;            /* NONE at the top */
+    uint32_t first, count;      /* its patches: cluster_order[first .. first + count) */
+    uint32_t first_link, link_count;   /* the cluster links it gathers */
+    float power[6][3];          /* sum of A open B max(0, n . a) over its patches, a = +x -x +y -y +z -z */
+    float bound;                /* largest channel of sum_k max(power[+k], power[-k]): at least its power
+                                   toward any direction */
+    float hmin;                 /* least irradiance (largest channel) of a lit leaf of its patches; 0 when none
+                                   is lit */
+    float e[6][3];              /* irradiance its own links deliver to a surface facing each a */
+    float down[6][3];           /* the same with its ancestors' (pushed to its patches) */
+} radinterp__cluster;
+
 struct radinterp_solution {
     radinterp_allocator allocator;
     /* parameters after defaults */
     double eps, min_area, rel_error_cutoff, push_off, nudge, min_bp_segment, epsilon, diag;
+    double eps_relative;               /* 0: eps alone */
+    double light_scale;                /* mean emitted radiosity (largest channel) */
+    int levels_known;                  /* the receivers' levels have been measured (a gather ran) */
+    double *patch_hmin;                /* per patch: least irradiance of a lit leaf (largest channel), 0 if none */
     uint32_t max_iterations, ff_samples, visibility_rays;
     uint32_t visibility;               /* radinterp_visibility of point queries, never DEFAULT */
+    uint32_t clustering;               /* radinterp_clustering, never DEFAULT */
     uint64_t seed;
     radinterp_trace_fn trace;
     void *trace_user;
     /* scene */
     radinterp__patch *patches;
     uint32_t patch_count, skipped_patches;
+    uint32_t caller_count, merged_patches;   /* the caller's patches, and triangles merged into another */
+    uint32_t *caller_patch;            /* the caller's patch i is patches[caller_patch[i]] */
+    uint32_t *first_caller;            /* per patch: the first caller's patch it holds */
     float scene_lo[3], scene_hi[3];
     radinterp__bvh bvh;
     uint32_t *tri_patch;               /* BVH triangle -> patch */
@@ -3181,6 +3423,14 @@ struct radinterp_solution {
     uint32_t link_count;
     uint32_t *blockers;
     uint64_t blocker_count;
+    struct radinterp__clink *clinks;   /* links with a cluster at either end, by receiver */
+    uint32_t clink_count;
+    radinterp__cluster *clusters;      /* clusters[0] is the top; parents before children */
+    uint32_t cluster_count;
+    uint32_t *cluster_order;           /* the patches in cluster order */
+    double *cluster_cdf;               /* prefix sums of their areas */
+    uint32_t *patch_cluster;           /* the cluster whose child a patch is; NONE without clusters */
+    uint64_t culled_links;             /* links dropped because every ray between their ends was blocked */
     uint32_t *leaves;                  /* leaf node indices in patch order */
     uint32_t leaf_count;
     uint32_t *leaf_link_first;         /* per node (+ 1 at the end): into leaf_links */
@@ -3244,6 +3494,22 @@ static int radinterp__simplify_corners(double (*v)[3], int count, double scale)
     return count;
 }
 
+/* Area of the largest triangle of three consecutive corners: a quadrilateral
+   whose own (signed) area vanishes while this does not crosses itself. */
+static double radinterp__largest_corner(const double (*v)[3], int count)
+{
+    double best = 0.0;
+    int i;
+    for (i = 0; i < count; i++) {
+        double e1[3], e2[3], c[3];
+        radinterp__d3_sub(v[i], v[(i + count - 1) % count], e1);
+        radinterp__d3_sub(v[(i + 1) % count], v[i], e2);
+        radinterp__d3_cross(e1, e2, c);
+        if (0.5 * radinterp__d3_len(c) > best) best = 0.5 * radinterp__d3_len(c);
+    }
+    return best;
+}
+
 typedef enum radinterp__patch_check {
     RADINTERP__PATCH_OK,
     RADINTERP__PATCH_DEGENERATE,
@@ -3269,7 +3535,10 @@ static radinterp__patch_check radinterp__patch_setup(radinterp__patch *pt, doubl
     if (count < 3) return RADINTERP__PATCH_DEGENERATE;
     radinterp__newell((const double (*)[3])v, count, n);
     len = radinterp__d3_len(n);
-    if (!(len > 0.0) || 0.5 * len <= 1e-14 * scene_diag * scene_diag) return RADINTERP__PATCH_DEGENERATE;
+    if (!(len > 0.0) || 0.5 * len <= 1e-14 * scene_diag * scene_diag)
+        return radinterp__largest_corner((const double (*)[3])v, count) > 1e-14 * scene_diag * scene_diag
+                   ? RADINTERP__PATCH_NONCONVEX   /* a bow tie whose two lobes cancel */
+                   : RADINTERP__PATCH_DEGENERATE;
     n[0] /= len; n[1] /= len; n[2] /= len;
     for (i = 0; i < count; i++) { c[0] += v[i][0] / count; c[1] += v[i][1] / count; c[2] += v[i][2] / count; }
     for (i = 0; i < count; i++) {
@@ -3390,14 +3659,32 @@ static void radinterp__mid(const float *a, const float *b, float *m)
     m[2] = 0.5f * (a[2] + b[2]);
 }
 
-static void radinterp__set_corners(radinterp__node *nd, const float *a, const float *b, const float *c,
-                                   const float *d)
+/* Corners of the four children of a node with corners v (3 or 4), in the
+   order of section 11. The mesh's quadtrees split with this too, so a
+   corner shared by two nodes is one float triple in both trees. */
+static void radinterp__child_corners(const float (*v)[3], uint32_t count, float (*ch)[4][3])
 {
-    memcpy(nd->v[0], a, 3 * sizeof(float));
-    memcpy(nd->v[1], b, 3 * sizeof(float));
-    memcpy(nd->v[2], c, 3 * sizeof(float));
-    if (d) memcpy(nd->v[3], d, 3 * sizeof(float));
-    nd->count = d ? 4u : 3u;
+    float m[4][3], c[3];
+    uint32_t k;
+    if (count == 4) {
+        const float *q[4][4];
+        uint32_t i;
+        for (k = 0; k < 4; k++) radinterp__mid(v[k], v[(k + 1) % 4], m[k]);
+        for (k = 0; k < 3; k++) c[k] = 0.25f * (v[0][k] + v[1][k] + v[2][k] + v[3][k]);
+        q[0][0] = v[0]; q[0][1] = m[0]; q[0][2] = c;    q[0][3] = m[3];
+        q[1][0] = m[0]; q[1][1] = v[1]; q[1][2] = m[1]; q[1][3] = c;
+        q[2][0] = c;    q[2][1] = m[1]; q[2][2] = v[2]; q[2][3] = m[2];
+        q[3][0] = m[3]; q[3][1] = c;    q[3][2] = m[2]; q[3][3] = v[3];
+        for (k = 0; k < 4; k++)
+            for (i = 0; i < 4; i++) memcpy(ch[k][i], q[k][i], 3 * sizeof(float));
+    } else {
+        memset(ch, 0, 4 * sizeof ch[0]);   /* the unused 4th corners stay zero */
+        for (k = 0; k < 3; k++) radinterp__mid(v[k], v[(k + 1) % 3], m[k]);
+        memcpy(ch[0][0], v[0], 12); memcpy(ch[0][1], m[0], 12); memcpy(ch[0][2], m[2], 12);
+        memcpy(ch[1][0], m[0], 12); memcpy(ch[1][1], v[1], 12); memcpy(ch[1][2], m[1], 12);
+        memcpy(ch[2][0], m[2], 12); memcpy(ch[2][1], m[1], 12); memcpy(ch[2][2], v[2], 12);
+        memcpy(ch[3][0], m[1], 12); memcpy(ch[3][1], m[2], 12); memcpy(ch[3][2], m[0], 12);
+    }
 }
 
 /* Splits a leaf into four children (4.1) that start with its radiosity.
@@ -3405,7 +3692,7 @@ static void radinterp__set_corners(radinterp__node *nd, const float *a, const fl
 static int radinterp__node_split(radinterp_solution *s, uint32_t index)
 {
     radinterp__node *nd, *ch;
-    float m[4][3], c[3];
+    float corners[4][4][3];
     uint32_t first, k;
     if (s->nodes[index].child != RADINTERP__NONE) return 0;
     if (!radinterp__nodes_reserve(s, 4)) return -1;
@@ -3413,26 +3700,10 @@ static int radinterp__node_split(radinterp_solution *s, uint32_t index)
     first = s->node_count;
     ch = &s->nodes[first];
     memset(ch, 0, 4 * sizeof *ch);
-    if (nd->count == 4) {
-        radinterp__mid(nd->v[0], nd->v[1], m[0]);
-        radinterp__mid(nd->v[1], nd->v[2], m[1]);
-        radinterp__mid(nd->v[2], nd->v[3], m[2]);
-        radinterp__mid(nd->v[3], nd->v[0], m[3]);
-        for (k = 0; k < 3; k++) c[k] = 0.25f * (nd->v[0][k] + nd->v[1][k] + nd->v[2][k] + nd->v[3][k]);
-        radinterp__set_corners(&ch[0], nd->v[0], m[0], c, m[3]);
-        radinterp__set_corners(&ch[1], m[0], nd->v[1], m[1], c);
-        radinterp__set_corners(&ch[2], c, m[1], nd->v[2], m[2]);
-        radinterp__set_corners(&ch[3], m[3], c, m[2], nd->v[3]);
-    } else {
-        radinterp__mid(nd->v[0], nd->v[1], m[0]);
-        radinterp__mid(nd->v[1], nd->v[2], m[1]);
-        radinterp__mid(nd->v[2], nd->v[0], m[2]);
-        radinterp__set_corners(&ch[0], nd->v[0], m[0], m[2], NULL);
-        radinterp__set_corners(&ch[1], m[0], nd->v[1], m[1], NULL);
-        radinterp__set_corners(&ch[2], m[2], m[1], nd->v[2], NULL);
-        radinterp__set_corners(&ch[3], m[1], m[2], m[0], NULL);
-    }
+    radinterp__child_corners((const float (*)[3])nd->v, nd->count, corners);
     for (k = 0; k < 4; k++) {
+        memcpy(ch[k].v, corners[k], sizeof ch[k].v);
+        ch[k].count = nd->count;
         ch[k].patch = nd->patch;
         ch[k].parent = index;
         ch[k].child = RADINTERP__NONE;
@@ -3630,6 +3901,9 @@ static int radinterp__may_block(const radinterp_solution *s, const radinterp__sh
 /* ======================================================================
    12. hierarchical radiosity (Hardt chapter 4, after Hanrahan et al.)
    ---------------------------------------------------------------------- */
+static int radinterp__planes_hide(const radinterp_solution *s, const float *alo, const float *ahi, const float *blo,
+                                  const float *bhi);   /* section 13 */
+
 /* A link waiting for its form factor: made by the initial linking or by
    splitting a link. Its candidate blockers are its parent's (filtered here
    by the new, narrower shaft) or the shaft culling result. */
@@ -3637,9 +3911,11 @@ typedef struct radinterp__pending {
     uint32_t receiver, source;
     uint32_t first, count;       /* candidates in the input pool; results at the same offset of the output pool */
     uint32_t filter;             /* candidates still need the shaft test */
+    uint32_t fresh;              /* candidates from shaft culling here (else the parent link's blockers) */
     uint32_t kept;               /* blockers kept */
     float ff, dff;
-    uint32_t dead;               /* no part of either element faces the other */
+    uint32_t dead;               /* no part of either element faces the other, or every ray was blocked */
+    uint32_t hidden;             /* dead because every ray was blocked */
     uint32_t rays;
 } radinterp__pending;
 
@@ -3779,6 +4055,38 @@ static uint32_t radinterp__filter_blockers(const radinterp_solution *s, const ra
     return kept;
 }
 
+/* The point of a convex polygon (normal n) nearest to p: p's projection
+   onto its plane when that falls inside, else the nearest point of its
+   outline. */
+static void radinterp__poly_nearest(const double (*v)[3], int count, const double *n, const double *p, double *out)
+{
+    double d[3], q[3], best = DBL_MAX;
+    int i, k, inside = 1;
+    radinterp__d3_sub(p, v[0], d);
+    for (k = 0; k < 3; k++) q[k] = p[k] - radinterp__d3_dot(d, n) * n[k];
+    memcpy(out, v[0], sizeof q);
+    for (i = 0; i < count && inside; i++) {
+        double e[3], w[3], c[3];
+        radinterp__d3_sub(v[(i + 1) % count], v[i], e);
+        radinterp__d3_sub(q, v[i], w);
+        radinterp__d3_cross(e, w, c);
+        inside = radinterp__d3_dot(c, n) >= 0.0;
+    }
+    if (inside) { memcpy(out, q, sizeof q); return; }
+    for (i = 0; i < count; i++) {
+        double e[3], w[3], t, ee, x[3], dx[3], d2;
+        radinterp__d3_sub(v[(i + 1) % count], v[i], e);
+        radinterp__d3_sub(q, v[i], w);
+        ee = radinterp__d3_dot(e, e);
+        t = ee > 0.0 ? radinterp__d3_dot(w, e) / ee : 0.0;
+        t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
+        for (k = 0; k < 3; k++) x[k] = v[i][k] + t * e[k];
+        radinterp__d3_sub(q, x, dx);
+        d2 = radinterp__d3_dot(dx, dx);
+        if (d2 < best) { best = d2; memcpy(out, x, sizeof x); }
+    }
+}
+
 /* Link form factor (4.2, method 3): the mean of the point-to-polygon factors
    (eq. 6.1) at stratified points of the receiver, times the visible fraction
    of the source at each point when blockers remain. Each polygon is first
@@ -3792,6 +4100,7 @@ static void radinterp__link_compute(radinterp_solution *s, radinterp__pending *p
     double tri_area[RADINTERP__POLY_MAX], total, ratio, sum = 0.0, lo = DBL_MAX, hi = 0.0, tiny;
     int nR = radinterp__node_poly(r, R), nS = radinterp__node_poly(src, S), nRc, nSc, clipped;
     uint32_t i, n = s->ff_samples;
+    int seen = 0;                  /* some point sees part of the source (before visibility) */
     radinterp__rng rng;
     if (pl->filter) pl->kept = radinterp__filter_blockers(s, r, src, in + pl->first, pl->count, out + pl->first);
     else {
@@ -3801,6 +4110,7 @@ static void radinterp__link_compute(radinterp_solution *s, radinterp__pending *p
     pl->ff = pl->dff = 0.0f;
     pl->rays = 0;
     pl->dead = 1;
+    pl->hidden = 0;
     nSc = radinterp__clip_poly((const double (*)[3])S, nS, pr->n, pr->d, Sc);
     nRc = radinterp__clip_poly((const double (*)[3])R, nR, ps->n, ps->d, Rc);
     tiny = 1e-12 * s->diag * s->diag;
@@ -3818,6 +4128,7 @@ static void radinterp__link_compute(radinterp_solution *s, radinterp__pending *p
         double q[3], f, w = radinterp__receiver_point((const double (*)[3])Rc, nRc, tri_area, total, i, n, &rng, q);
         f = w * radinterp__ff_poly(q, pr->n, (const double (*)[3])Sc, nSc);
         if (f < 0.0) f = 0.0;
+        seen |= f > 0.0;
         if (pl->kept && f > 0.0) {
             radinterp__rng vis = radinterp__rng_stream(s->seed ^ 0xA5A5A5A5u, ((uint64_t)pl->receiver << 32 | pl->source) * 64u + i);
             f *= radinterp__visible_fraction(s, q, pr->n, (const double (*)[3])Sc, nSc, ps->n, &vis, s->visibility_rays);
@@ -3826,18 +4137,23 @@ static void radinterp__link_compute(radinterp_solution *s, radinterp__pending *p
         sum += f;
     }
     /* The refinement estimate comes from fixed points, the receiver's
-       corners pulled a fifth toward its centre, and the centre: if it came
-       from the random points, the links whose points happened to miss a peak
-       of the factor (near a shared edge) would be the ones kept, and the kept
-       factors would be biased low. */
+       corners pulled a fifth toward its centre, its centre, and its point
+       nearest to the source's centre (where the factor peaks when the source
+       is close: a block standing on a large floor), pulled a hundredth toward
+       the centre: if it came from the random points, the links whose points
+       happened to miss a peak of the factor (near a shared edge) would be the
+       ones kept, and the kept factors would be biased low. */
     {
-        double c[3] = {0.0, 0.0, 0.0};
+        double c[3] = {0.0, 0.0, 0.0}, cs[3] = {0.0, 0.0, 0.0}, near[3] = {0.0, 0.0, 0.0};
         int k, j;
         for (k = 0; k < nRc; k++)
             for (j = 0; j < 3; j++) c[j] += Rc[k][j] / nRc;
-        for (k = 0; k <= nRc; k++) {
+        for (k = 0; k < nSc; k++)
+            for (j = 0; j < 3; j++) cs[j] += Sc[k][j] / nSc;
+        radinterp__poly_nearest((const double (*)[3])Rc, nRc, pr->n, cs, near);
+        for (k = 0; k <= nRc + 1; k++) {
             double q[3], f;
-            for (j = 0; j < 3; j++) q[j] = k < nRc ? 0.8 * Rc[k][j] + 0.2 * c[j] : c[j];
+            for (j = 0; j < 3; j++) q[j] = k < nRc ? 0.8 * Rc[k][j] + 0.2 * c[j] : k == nRc ? c[j] : 0.99 * near[j] + 0.01 * c[j];
             f = radinterp__ff_poly(q, pr->n, (const double (*)[3])Sc, nSc);
             if (f < 0.0) f = 0.0;
             if (pl->kept && f > 0.0) {
@@ -3851,6 +4167,10 @@ static void radinterp__link_compute(radinterp_solution *s, radinterp__pending *p
     }
     pl->ff = (float)(ratio * sum / n);
     pl->dff = (float)(ratio * (hi - lo));
+    /* every ray blocked: dropped when planes between them prove it (rays
+       miss the visible part of a large element too easily) */
+    if (pl->kept && seen && sum == 0.0 && hi == 0.0 && radinterp__planes_hide(s, r->lo, r->hi, src->lo, src->hi))
+        pl->dead = pl->hidden = 1;
 }
 
 static void radinterp__ff_job(void *ctx_, uint32_t index)
@@ -3908,6 +4228,7 @@ static radinterp_result radinterp__install_links(radinterp_solution *s, const ra
     uint64_t blockers = 0;
     radinterp__link *links = NULL;
     for (i = 0; i < keep_count; i++) blockers += keep[i].blocker_count;
+    for (i = 0; i < pend_count; i++) s->culled_links += pend[i].hidden;
     for (i = 0; i < pend_count; i++)
         if (!pend[i].dead) { total++; blockers += pend[i].kept; }
     if (blockers > 0xFFFFFFFFu) return RADINTERP_ERROR_OUT_OF_MEMORY;
@@ -3961,59 +4282,50 @@ static radinterp_result radinterp__install_links(radinterp_solution *s, const ra
     return RADINTERP_OK;
 }
 
-/* Growable arrays for the serial parts of linking and refinement. */
-typedef struct radinterp__grow {
-    void *data;
-    size_t count, cap, item;
-} radinterp__grow;
 
-static void *radinterp__grow_push(radinterp_solution *s, radinterp__grow *g)
-{
-    if (g->count == g->cap) {
-        size_t cap = g->cap ? 2 * g->cap : 1024;
-        void *p = radinterp__alloc_array(&s->allocator, cap, g->item);
-        if (!p) return NULL;
-        if (g->count) memcpy(p, g->data, g->count * g->item);
-        radinterp__free(&s->allocator, g->data);
-        g->data = p;
-        g->cap = cap;
-    }
-    return (char *)g->data + g->item * g->count++;
-}
+/* Walks the BVH of the patches (a query of its own: the BVH's build and ray
+   traversal stay in section 4): the nodes whose boxes pass `test`, and for
+   every triangle of the leaves reached, `visit` with its patch (a patch
+   may come once per triangle). visit returns 0 to stop the walk; the walk
+   then returns 0. */
+typedef int (*radinterp__box_test)(const void *ctx, const float *lo, const float *hi);
+typedef int (*radinterp__patch_visit)(void *ctx, uint32_t patch);
 
-/* Potential blockers of a pair of patches: the patches whose boxes meet the
-   shaft, found through the BVH (its leaves hold the patches' triangles). */
-static int radinterp__shaft_query(radinterp_solution *s, const radinterp__node *r, const radinterp__node *src,
-                                  radinterp__grow *pool, uint32_t *stamp, uint32_t mark, uint32_t *count)
+static int radinterp__bvh_walk(const radinterp_solution *s, radinterp__box_test test, radinterp__patch_visit visit,
+                               void *ctx)
 {
-    radinterp__shaft sh;
     uint32_t stack[RADINTERP__BVH_STACK], top = 0, ref = s->bvh.root;
-    double tol = s->epsilon * s->diag;
-    radinterp__shaft_build(&sh, r->lo, r->hi, src->lo, src->hi);
-    *count = 0;
-    if (s->bvh.tri_count == 0) return 1;
+    if (s->bvh.tri_count == 0) return 1;   /* an empty tree: no root to enter */
+    if (ref & RADINTERP__BVH_LEAF) {   /* a root leaf has no node box: its triangles' box is tested */
+        float lo[3], hi[3];
+        uint32_t block = (ref & ~RADINTERP__BVH_LEAF) >> 3, end = block + (ref & 7u) + 1, i, k;
+        radinterp__box_empty(lo, hi);
+        for (; block < end; block++)
+            for (i = 0; i < 4; i++)
+                for (k = 0; k < 9; k++) {
+                    float x = s->bvh.blocks[block].v[k][i];
+                    lo[k % 3] = radinterp__minf(lo[k % 3], x);
+                    hi[k % 3] = radinterp__maxf(hi[k % 3], x);
+                }
+        if (!test(ctx, lo, hi)) return 1;
+    }
     for (;;) {
-        if (ref & RADINTERP__BVH_LEAF) {   /* a leaf: its blocks' triangles (repeats are stamped) */
+        if (ref & RADINTERP__BVH_LEAF) {   /* a leaf: its blocks' triangles (unused columns repeat the last) */
             uint32_t block = (ref & ~RADINTERP__BVH_LEAF) >> 3, end = block + (ref & 7u) + 1, i;
             for (; block < end; block++)
                 for (i = 0; i < 4; i++) {
-                    uint32_t b = s->tri_patch[s->bvh.blocks[block].id[i]];
-                    uint32_t *slot;
-                    if (stamp[b] == mark || !radinterp__may_block(s, &sh, b, r, src)) continue;
-                    stamp[b] = mark;
-                    slot = (uint32_t *)radinterp__grow_push(s, pool);
-                    if (!slot) return 0;
-                    *slot = b;
-                    (*count)++;
+                    const uint32_t *id = s->bvh.blocks[block].id;
+                    if (i > 0 && id[i] == id[i - 1]) continue;
+                    if (!visit(ctx, s->tri_patch[id[i]])) return 0;
                 }
-        } else {   /* a node: the children whose boxes meet the shaft */
+        } else {   /* a node: the children whose boxes pass the test */
             const radinterp__bvh_node *node = &s->bvh.nodes[ref];
             int i;
-            for (i = 0; i < RADINTERP__BVH_WIDTH; i++) {
+            for (i = RADINTERP__BVH_WIDTH - 1; i >= 0; i--) {   /* pushed last to first: walked in order */
                 float lo[3], hi[3];
                 lo[0] = node->box[0][i]; lo[1] = node->box[2][i]; lo[2] = node->box[4][i];
                 hi[0] = node->box[1][i]; hi[1] = node->box[3][i]; hi[2] = node->box[5][i];
-                if (lo[0] <= hi[0] && !radinterp__shaft_culls(&sh, lo, hi, -tol)) stack[top++] = node->child[i];
+                if (lo[0] <= hi[0] && test(ctx, lo, hi)) stack[top++] = node->child[i];
             }
         }
         if (!top) break;
@@ -4022,63 +4334,118 @@ static int radinterp__shaft_query(radinterp_solution *s, const radinterp__node *
     return 1;
 }
 
-/* Initial links (4.1): one per ordered pair of patches that face each other
-   (part of each lies in front of the other's plane), with the blockers from
-   shaft culling. Sources that can never shine (black, not emitting) get none. */
-static radinterp_result radinterp__initial_links(radinterp_solution *s, const radinterp__run *run)
+static int radinterp__cmp_u32(const void *a, const void *b)
 {
-    radinterp__grow pend, pool;
-    uint32_t *stamp, i, j, mark = 0;
-    radinterp_result res = RADINTERP_OK;
-    double tol = s->epsilon * s->diag;
-    memset(&pend, 0, sizeof pend);
-    memset(&pool, 0, sizeof pool);
-    pend.item = sizeof(radinterp__pending);
-    pool.item = sizeof(uint32_t);
-    stamp = (uint32_t *)radinterp__alloc_array(&s->allocator, s->patch_count, sizeof *stamp);
-    if (!stamp) return RADINTERP_ERROR_OUT_OF_MEMORY;
-    memset(stamp, 0xFF, (size_t)s->patch_count * sizeof *stamp);
-    for (i = 0; i < s->patch_count && res == RADINTERP_OK; i++) {
-        const radinterp__patch *pr = &s->patches[i];
-        if (!pr->count) continue;
-        for (j = 0; j < s->patch_count; j++) {
-            const radinterp__patch *ps = &s->patches[j];
-            radinterp__pending *pl;
-            uint32_t first = (uint32_t)pool.count, count;
-            if (j == i || !ps->count) continue;
-            if (ps->rho[0] == 0.0f && ps->rho[1] == 0.0f && ps->rho[2] == 0.0f && ps->e[0] == 0.0f &&
-                ps->e[1] == 0.0f && ps->e[2] == 0.0f)
-                continue;
-            if (radinterp__patch_front(pr, ps->n, ps->d) <= tol || radinterp__patch_front(ps, pr->n, pr->d) <= tol)
-                continue;
-            if (!radinterp__shaft_query(s, &s->nodes[pr->root], &s->nodes[ps->root], &pool, stamp, mark++, &count)) {
-                res = RADINTERP_ERROR_OUT_OF_MEMORY;
-                break;
-            }
-            pl = (radinterp__pending *)radinterp__grow_push(s, &pend);
-            if (!pl) { res = RADINTERP_ERROR_OUT_OF_MEMORY; break; }
-            memset(pl, 0, sizeof *pl);
-            pl->receiver = pr->root;
-            pl->source = ps->root;
-            pl->first = first;
-            pl->count = count;
-        }
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return x < y ? -1 : (x > y);
+}
+
+typedef struct radinterp__near_ctx {
+    const radinterp_solution *s;
+    const radinterp_allocator *a;
+    float lo[3], hi[3];          /* the box grown by the margin */
+    radinterp__buf *out;
+} radinterp__near_ctx;
+
+static int radinterp__boxes_meet(const float *alo, const float *ahi, const float *blo, const float *bhi)
+{
+    return alo[0] <= bhi[0] && blo[0] <= ahi[0] && alo[1] <= bhi[1] && blo[1] <= ahi[1] && alo[2] <= bhi[2] &&
+           blo[2] <= ahi[2];
+}
+
+static int radinterp__near_test(const void *ctx_, const float *lo, const float *hi)
+{
+    const radinterp__near_ctx *c = (const radinterp__near_ctx *)ctx_;
+    return radinterp__boxes_meet(lo, hi, c->lo, c->hi);
+}
+
+static int radinterp__near_visit(void *ctx_, uint32_t patch)
+{
+    radinterp__near_ctx *c = (radinterp__near_ctx *)ctx_;
+    const radinterp__patch *pt = &c->s->patches[patch];
+    if (!radinterp__boxes_meet(pt->lo, pt->hi, c->lo, c->hi)) return 1;
+    return radinterp__buf_u32(c->a, c->out, patch) == 0;
+}
+
+/* The patches whose boxes come within margin of the box [lo, hi], each
+   once, in ascending order, into out (uint32_t). Returns -1 when out of
+   memory. */
+static int radinterp__patches_near(const radinterp_solution *s, const radinterp_allocator *a, const float *lo,
+                                   const float *hi, double margin, radinterp__buf *out)
+{
+    radinterp__near_ctx c;
+    uint32_t i, n = 0;
+    int k;
+    c.s = s;
+    c.a = a;
+    c.out = out;
+    for (k = 0; k < 3; k++) {
+        c.lo[k] = (float)((double)lo[k] - margin);
+        c.hi[k] = (float)((double)hi[k] + margin);
     }
-    radinterp__free(&s->allocator, stamp);
-    if (res == RADINTERP_OK && pool.count > 0xFFFFFFFFu) res = RADINTERP_ERROR_OUT_OF_MEMORY;
-    if (res == RADINTERP_OK) {
-        uint32_t *out = (uint32_t *)radinterp__alloc_array(&s->allocator, pool.count, sizeof(uint32_t));
-        if (!out) res = RADINTERP_ERROR_OUT_OF_MEMORY;
-        if (res == RADINTERP_OK)
-            res = radinterp__compute_pending(s, run, (radinterp__pending *)pend.data, (uint32_t)pend.count,
-                                             (const uint32_t *)pool.data, out);
-        if (res == RADINTERP_OK)
-            res = radinterp__install_links(s, NULL, 0, (const radinterp__pending *)pend.data, (uint32_t)pend.count, out);
-        radinterp__free(&s->allocator, out);
-    }
-    radinterp__free(&s->allocator, pend.data);
-    radinterp__free(&s->allocator, pool.data);
-    return res;
+    out->count = 0;
+    if (!radinterp__bvh_walk(s, radinterp__near_test, radinterp__near_visit, &c)) return -1;
+    if (out->count > 1) qsort(out->data, out->count, sizeof(uint32_t), radinterp__cmp_u32);
+    for (i = 0; i < out->count; i++)
+        if (n == 0 || RADINTERP__U32(*out)[n - 1] != RADINTERP__U32(*out)[i]) RADINTERP__U32(*out)[n++] = RADINTERP__U32(*out)[i];
+    out->count = n;
+    return 0;
+}
+
+typedef struct radinterp__shaft_ctx {
+    radinterp_solution *s;
+    radinterp__shaft sh;
+    const radinterp__node *r, *src;
+    radinterp__buf *pool;
+    uint32_t *stamp, mark, *count;
+    double tol;
+} radinterp__shaft_ctx;
+
+static int radinterp__shaft_box(const void *ctx_, const float *lo, const float *hi)
+{
+    const radinterp__shaft_ctx *ctx = (const radinterp__shaft_ctx *)ctx_;
+    return !radinterp__shaft_culls(&ctx->sh, lo, hi, -ctx->tol);
+}
+
+static int radinterp__shaft_visit(void *ctx_, uint32_t b)
+{
+    radinterp__shaft_ctx *ctx = (radinterp__shaft_ctx *)ctx_;
+    uint32_t *slot;
+    if (ctx->stamp[b] == ctx->mark || !radinterp__may_block(ctx->s, &ctx->sh, b, ctx->r, ctx->src)) return 1;
+    ctx->stamp[b] = ctx->mark;
+    slot = (uint32_t *)radinterp__buf_push(&ctx->s->allocator, ctx->pool);
+    if (!slot) return 0;
+    *slot = b;
+    (*ctx->count)++;
+    return 1;
+}
+
+/* Potential blockers of a pair of nodes: the patches whose boxes meet the
+   shaft, found through the BVH (its leaves hold the patches' triangles). */
+static int radinterp__shaft_query(radinterp_solution *s, const radinterp__node *r, const radinterp__node *src,
+                                  radinterp__buf *pool, uint32_t *stamp, uint32_t mark, uint32_t *count)
+{
+    radinterp__shaft_ctx ctx;
+    ctx.s = s;
+    ctx.r = r;
+    ctx.src = src;
+    ctx.pool = pool;
+    ctx.stamp = stamp;
+    ctx.mark = mark;
+    ctx.count = count;
+    ctx.tol = s->epsilon * s->diag;
+    radinterp__shaft_build(&ctx.sh, r->lo, r->hi, src->lo, src->hi);
+    *count = 0;
+    return radinterp__bvh_walk(s, radinterp__shaft_box, radinterp__shaft_visit, &ctx);
+}
+
+/* The transport error a link to a receiver at irradiance `level` may make:
+   eps, or eps_relative of the level where that is more (relative
+   refinement, the default). */
+static double radinterp__tolerance(const radinterp_solution *s, double level)
+{
+    double rel = s->eps_relative * level;
+    return rel > s->eps ? rel : s->eps;
 }
 
 static int radinterp__can_split(const radinterp_solution *s, const radinterp__node *nd)
@@ -4106,95 +4473,836 @@ static double radinterp__source_spread(const radinterp_solution *s, uint32_t nod
     return spread;
 }
 
+/* ---- clusters (Smits, Arvo and Greenberg 1994; Sillion 1995) ----------
+   The patches are the leaves of a binary tree of clusters (median splits
+   of their centres along the longest axis). An element is a cluster or a
+   quadtree node; id bit RADINTERP__CLUSTER marks a cluster. Linking starts
+   at the top: every cluster joins its two children both ways, so every
+   pair of patches is represented once, by its lowest common cluster. A
+   link with a cluster at either end (a cluster link) carries light between
+   the elements' centres: the source's power toward the receiver over
+   pi r^2, times the fraction of rays between random points of the two
+   that no surface blocks; a link whose rays are all blocked, or none of
+   whose point pairs face each other, is dropped when patches in one plane
+   between the two hide them from each other (nothing crosses a solid
+   wall), else kept at the fraction measured. A cluster's power toward a direction u
+   comes from six sums over its patches, one per axis direction a:
+   P_a = sum A open B max(0, n . a), P(u) = sum_k |u_k| P_(sign u_k) e_k,
+   exact for patches facing along the axes and an upper bound otherwise;
+   what a cluster receives is kept the same way (the irradiance of a
+   surface facing each axis direction) and pushed down to its patches. A
+   cluster link stays while the irradiance it could carry at most, the
+   source's power bound over pi times the squared distance between the two
+   boxes, is below eps; else its larger element is split (a cluster into
+   its two children, a node into its quadtree children). When both ends are
+   quadtree nodes the link becomes an ordinary link (4.2) with its blockers
+   from shaft culling. */
+#define RADINTERP__CLUSTER 0x80000000u   /* element id bit: a cluster; else a quadtree node */
+#ifndef RADINTERP__EPS_FLOOR
+#define RADINTERP__EPS_FLOOR 0.01        /* default eps: this times the mean emitted radiosity */
+#endif
+#ifndef RADINTERP__EPS_RELATIVE
+#define RADINTERP__EPS_RELATIVE 0.05     /* default eps_relative */
+#endif
+#define RADINTERP__CLUSTER_RAYS 16       /* visibility rays of a cluster link */
+#define RADINTERP__CLUSTER_TOLERANCE 0.1 /* a cluster link may carry this much of a link's tolerance at most */
+
+typedef struct radinterp__clink {
+    uint32_t receiver, source;  /* elements, one of them at least a cluster */
+    float k;                    /* visible fraction / (pi r^2), r between the elements' centres */
+    float dir[3];               /* unit vector from the receiver's centre toward the source's */
+} radinterp__clink;
+
+static int radinterp__is_cluster(uint32_t el) { return (el & RADINTERP__CLUSTER) != 0; }
+
+static const radinterp__cluster *radinterp__cl(const radinterp_solution *s, uint32_t el)
+{
+    return &s->clusters[el & ~RADINTERP__CLUSTER];
+}
+
+static void radinterp__elem_box(const radinterp_solution *s, uint32_t el, const float **lo, const float **hi)
+{
+    if (radinterp__is_cluster(el)) { *lo = radinterp__cl(s, el)->lo; *hi = radinterp__cl(s, el)->hi; }
+    else { *lo = s->nodes[el].lo; *hi = s->nodes[el].hi; }
+}
+
+static void radinterp__elem_centre(const radinterp_solution *s, uint32_t el, double *c)
+{
+    int k;
+    if (radinterp__is_cluster(el)) {
+        const radinterp__cluster *cl = radinterp__cl(s, el);
+        for (k = 0; k < 3; k++) c[k] = 0.5 * ((double)cl->lo[k] + cl->hi[k]);
+    } else {
+        const radinterp__node *nd = &s->nodes[el];
+        uint32_t i;
+        for (k = 0; k < 3; k++) {
+            c[k] = 0.0;
+            for (i = 0; i < nd->count; i++) c[k] += nd->v[i][k];
+            c[k] /= nd->count;
+        }
+    }
+}
+
+static double radinterp__elem_size(const radinterp_solution *s, uint32_t el)
+{
+    const float *lo, *hi;
+    double d2 = 0.0;
+    int k;
+    radinterp__elem_box(s, el, &lo, &hi);
+    for (k = 0; k < 3; k++) d2 += ((double)hi[k] - lo[k]) * ((double)hi[k] - lo[k]);
+    return sqrt(d2);
+}
+
+/* Power (W / sr * pi: sum of A B cos) an element sends toward unit u. */
+static void radinterp__elem_power(const radinterp_solution *s, uint32_t el, const double *u, double *p)
+{
+    int k, c;
+    p[0] = p[1] = p[2] = 0.0;
+    if (radinterp__is_cluster(el)) {
+        const radinterp__cluster *cl = radinterp__cl(s, el);
+        for (k = 0; k < 3; k++) {
+            const float *a = cl->power[2 * k + (u[k] < 0.0)];
+            for (c = 0; c < 3; c++) p[c] += fabs(u[k]) * a[c];
+        }
+    } else {
+        const radinterp__node *nd = &s->nodes[el];
+        double cosine = radinterp__d3_dot(s->patches[nd->patch].n, u), a = (double)nd->area * nd->open;
+        if (cosine > 0.0)
+            for (c = 0; c < 3; c++) p[c] = a * cosine * nd->b[c];
+    }
+}
+
+/* The most power an element sends toward any direction (largest channel). */
+static double radinterp__elem_power_bound(const radinterp_solution *s, uint32_t el)
+{
+    if (radinterp__is_cluster(el)) return radinterp__cl(s, el)->bound;
+    {
+        const radinterp__node *nd = &s->nodes[el];
+        return (double)nd->area * nd->open * radinterp__maxf(nd->b[0], radinterp__maxf(nd->b[1], nd->b[2]));
+    }
+}
+
+/* Irradiance of a surface with unit normal n under light of irradiance e
+   (on a surface facing it) from unit direction dir. */
+static double radinterp__facing(const double *n, const float *dir)
+{
+    double c = n[0] * dir[0] + n[1] * dir[1] + n[2] * dir[2];
+    return c > 0.0 ? c : 0.0;
+}
+
+/* A random point of an element with the normal of its surface: a cluster
+   picks one of its patches by area. */
+static void radinterp__elem_point(const radinterp_solution *s, uint32_t el, radinterp__rng *rng, double *p, double *n)
+{
+    double v[RADINTERP__POLY_MAX][3], tri_area[RADINTERP__POLY_MAX], total;
+    const radinterp__patch *pt;
+    int count;
+    if (radinterp__is_cluster(el)) {
+        const radinterp__cluster *cl = radinterp__cl(s, el);
+        double base = cl->first ? s->cluster_cdf[cl->first - 1] : 0.0;
+        double x = base + radinterp__rng_float(rng) * (s->cluster_cdf[cl->first + cl->count - 1] - base);
+        uint32_t lo = cl->first, hi = cl->first + cl->count - 1;
+        while (lo < hi) {  /* the first patch whose prefix area reaches x */
+            uint32_t mid = lo + (hi - lo) / 2;
+            if (s->cluster_cdf[mid] < x) lo = mid + 1;
+            else hi = mid;
+        }
+        pt = &s->patches[s->cluster_order[lo]];
+        count = radinterp__patch_poly(pt, v);
+    } else {
+        pt = &s->patches[s->nodes[el].patch];
+        count = radinterp__node_poly(&s->nodes[el], v);
+    }
+    total = radinterp__fan_areas((const double (*)[3])v, count, tri_area);
+    {
+        double u1 = radinterp__rng_float(rng), u2 = radinterp__rng_float(rng);
+        radinterp__poly_point((const double (*)[3])v, count, tri_area, total, u1, u2, p);
+    }
+    memcpy(n, pt->n, 3 * sizeof(double));
+}
+
+/* Squared distance between two boxes (0 when they touch or overlap). */
+static double radinterp__box_distance2(const float *alo, const float *ahi, const float *blo, const float *bhi)
+{
+    double d2 = 0.0;
+    int k;
+    for (k = 0; k < 3; k++) {
+        double g = (double)blo[k] - ahi[k] > (double)alo[k] - bhi[k] ? (double)blo[k] - ahi[k] : (double)alo[k] - bhi[k];
+        if (g > 0.0) d2 += g * g;
+    }
+    return d2;
+}
+
+/* Does the box lie wholly behind the plane of node nd's patch (within tol)? */
+static int radinterp__box_behind(const radinterp_solution *s, const radinterp__node *nd, const float *lo, const float *hi,
+                                 double tol)
+{
+    const radinterp__patch *pt = &s->patches[nd->patch];
+    double m = -pt->d;
+    int k;
+    for (k = 0; k < 3; k++) m += pt->n[k] * (pt->n[k] > 0.0 ? (double)hi[k] : (double)lo[k]);
+    return m <= tol;
+}
+
+
+/* Could a cluster link from source to receiver carry more than its share
+   of the tolerance (see the clusters above)? The receiver's level is the
+   least irradiance of its lit leaves, or before the first gather the mean
+   emitted radiosity. */
+static int radinterp__clink_too_coarse(const radinterp_solution *s, uint32_t receiver, uint32_t source)
+{
+    const float *rlo, *rhi, *slo, *shi;
+    double d2, level;
+    radinterp__elem_box(s, receiver, &rlo, &rhi);
+    radinterp__elem_box(s, source, &slo, &shi);
+    d2 = radinterp__box_distance2(rlo, rhi, slo, shi);
+    if (!(d2 > 0.0)) return 1;
+    if (!s->levels_known) level = s->light_scale;
+    else level = radinterp__is_cluster(receiver) ? radinterp__cl(s, receiver)->hmin : s->patch_hmin[s->nodes[receiver].patch];
+    return radinterp__elem_power_bound(s, source) / (RADINTERP__PI * d2) >
+           RADINTERP__CLUSTER_TOLERANCE * radinterp__tolerance(s, level);
+}
+
+
+/* A cluster link waiting for its transfer factor. */
+typedef struct radinterp__cpending {
+    uint32_t receiver, source;
+    float k, dir[3];
+    uint32_t dead;      /* facing away, or hidden */
+    uint32_t hidden;    /* dead because planes between the two hide them from each other */
+    uint32_t coarse;    /* could carry too much: to be split (its transfer is not computed) */
+    uint32_t rays;
+} radinterp__cpending;
+
+/* Transfer factor of a cluster link: centres, facing, visible fraction
+   (rays between random points of the two, each weighted by cos cos / r^2
+   at its ends, as radinterp__visible_fraction). */
+static void radinterp__clink_compute(const radinterp_solution *s, radinterp__cpending *pc)
+{
+    const float *rlo, *rhi, *slo, *shi;
+    double cr[3], cs[3], d[3], r, open = 0.0, all = 0.0, off = 10.0 * s->epsilon * s->diag, tol = s->epsilon * s->diag;
+    radinterp__rng rng = radinterp__rng_stream(s->seed ^ 0xC1C1C1C1u, (uint64_t)pc->receiver << 32 | pc->source);
+    int i, k;
+    pc->dead = 1;
+    pc->hidden = pc->coarse = 0;
+    pc->rays = 0;
+    pc->k = pc->dir[0] = pc->dir[1] = pc->dir[2] = 0.0f;
+    radinterp__elem_box(s, pc->receiver, &rlo, &rhi);
+    radinterp__elem_box(s, pc->source, &slo, &shi);
+    if (!radinterp__is_cluster(pc->receiver) && radinterp__box_behind(s, &s->nodes[pc->receiver], slo, shi, tol)) return;
+    if (!radinterp__is_cluster(pc->source) && radinterp__box_behind(s, &s->nodes[pc->source], rlo, rhi, tol)) return;
+    pc->coarse = (uint32_t)radinterp__clink_too_coarse(s, pc->receiver, pc->source);
+    if (pc->coarse) { /* split unless hidden: a pair hidden as a whole is settled here */
+        pc->hidden = (uint32_t)radinterp__planes_hide(s, rlo, rhi, slo, shi);
+        pc->dead = pc->hidden;
+        return;
+    }
+    radinterp__elem_centre(s, pc->receiver, cr);
+    radinterp__elem_centre(s, pc->source, cs);
+    radinterp__d3_sub(cs, cr, d);
+    r = radinterp__d3_len(d);
+    pc->dead = 0;
+    if (!(r > 0.0)) { pc->dir[2] = 1.0f; return; } /* centres at one point: carries nothing, refined at once */
+    for (k = 0; k < 3; k++) pc->dir[k] = (float)(d[k] / r);
+    /* the visible fraction weighs the transfer; rays cannot prove a pair
+       hidden (a small close part they miss may carry most of it), so when
+       all are blocked the planes decide whether the link is dropped */
+    for (i = 0; i < RADINTERP__CLUSTER_RAYS; i++) {
+        double a[3], na[3], b[3], nb[3], ab[3], w, r2;
+        radinterp__elem_point(s, pc->receiver, &rng, a, na);
+        radinterp__elem_point(s, pc->source, &rng, b, nb);
+        radinterp__d3_sub(b, a, ab);
+        r2 = radinterp__d3_dot(ab, ab);
+        w = r2 > 0.0 ? radinterp__d3_dot(ab, na) * -radinterp__d3_dot(ab, nb) / (r2 * r2) : 0.0;
+        if (!(w > 0.0)) continue;
+        for (k = 0; k < 3; k++) { a[k] += off * na[k]; b[k] += off * nb[k]; }
+        all += w;
+        pc->rays++;
+        if (!radinterp__segment_blocked(s, a, b)) open += w;
+    }
+    /* no ray got through, or no pair of points faced each other (then the
+       rays say nothing and the transfer would count as unblocked: a desk
+       leg's cluster link to the next room through the wall carried light) */
+    if (open == 0.0 && radinterp__planes_hide(s, rlo, rhi, slo, shi)) { pc->dead = pc->hidden = 1; return; }
+    pc->k = (float)((all > 0.0 ? open / all : 1.0) / (RADINTERP__PI * r * r));
+}
+
+typedef struct radinterp__cctx {
+    const radinterp_solution *s;
+    radinterp__cpending *pending;
+    uint32_t begin, end;
+} radinterp__cctx;
+
+#define RADINTERP__CLINK_JOB 32
+
+static void radinterp__clink_job(void *ctx_, uint32_t index)
+{
+    radinterp__cctx *ctx = (radinterp__cctx *)ctx_;
+    uint32_t i = ctx->begin + index * RADINTERP__CLINK_JOB, end = i + RADINTERP__CLINK_JOB;
+    if (end > ctx->end) end = ctx->end;
+    for (; i < end; i++) radinterp__clink_compute(ctx->s, &ctx->pending[i]);
+}
+
+/* The sorting bucket of a receiver element: nodes first, then clusters. */
+static uint32_t radinterp__bucket(const radinterp_solution *s, uint32_t el)
+{
+    return radinterp__is_cluster(el) ? s->node_count + (el & ~RADINTERP__CLUSTER) : el;
+}
+
+/* Replaces the cluster links by the kept ones plus the live pending ones,
+   sorted by receiver (stable): node.first_clink / clink_count and
+   cluster.first_link / link_count. */
+static radinterp_result radinterp__install_clinks(radinterp_solution *s, const radinterp__clink *keep, uint32_t keep_count,
+                                                  const radinterp__cpending *pend, uint32_t pend_count)
+{
+    uint32_t buckets = s->node_count + s->cluster_count, total = keep_count, i;
+    uint32_t *start;
+    radinterp__clink *links;
+    for (i = 0; i < pend_count; i++) total += !pend[i].dead;
+    links = (radinterp__clink *)radinterp__alloc_array(&s->allocator, total, sizeof *links);
+    start = (uint32_t *)radinterp__alloc_array(&s->allocator, (size_t)buckets + 1, sizeof *start);
+    if (!links || !start) {
+        radinterp__free(&s->allocator, links);
+        radinterp__free(&s->allocator, start);
+        return RADINTERP_ERROR_OUT_OF_MEMORY;
+    }
+    memset(start, 0, ((size_t)buckets + 1) * sizeof *start);
+    for (i = 0; i < keep_count; i++) start[radinterp__bucket(s, keep[i].receiver) + 1]++;
+    for (i = 0; i < pend_count; i++)
+        if (!pend[i].dead) start[radinterp__bucket(s, pend[i].receiver) + 1]++;
+    for (i = 0; i < buckets; i++) {
+        if (i < s->node_count) { s->nodes[i].first_clink = start[i]; s->nodes[i].clink_count = start[i + 1]; }
+        else { s->clusters[i - s->node_count].first_link = start[i]; s->clusters[i - s->node_count].link_count = start[i + 1]; }
+        start[i + 1] += start[i];
+    }
+    for (i = 0; i < keep_count; i++) links[start[radinterp__bucket(s, keep[i].receiver)]++] = keep[i];
+    for (i = 0; i < pend_count; i++) {
+        radinterp__clink *l;
+        if (pend[i].dead) continue;
+        l = &links[start[radinterp__bucket(s, pend[i].receiver)]++];
+        l->receiver = pend[i].receiver;
+        l->source = pend[i].source;
+        l->k = pend[i].k;
+        memcpy(l->dir, pend[i].dir, sizeof l->dir);
+    }
+    radinterp__free(&s->allocator, start);
+    radinterp__free(&s->allocator, s->clinks);
+    s->clinks = links;
+    s->clink_count = total;
+    return RADINTERP_OK;
+}
+
+typedef struct radinterp__ckey { float key; uint32_t patch; } radinterp__ckey;
+
+static int radinterp__cmp_ckey(const void *a, const void *b)
+{
+    const radinterp__ckey *x = (const radinterp__ckey *)a, *y = (const radinterp__ckey *)b;
+    if (x->key != y->key) return x->key < y->key ? -1 : 1;
+    return x->patch < y->patch ? -1 : (x->patch > y->patch);
+}
+
+/* The cluster tree over the patches (see above): clusters[0] is the top, a
+   parent comes before its children. Returns 0, or -1 when out of memory. */
+static int radinterp__build_clusters(radinterp_solution *s)
+{
+    uint32_t n = 0, i, top = 0, *stack;
+    radinterp__ckey *keys;
+    double acc = 0.0;
+    s->patch_cluster = (uint32_t *)radinterp__alloc_array(&s->allocator, s->patch_count, sizeof(uint32_t));
+    s->cluster_order = (uint32_t *)radinterp__alloc_array(&s->allocator, s->patch_count, sizeof(uint32_t));
+    s->cluster_cdf = (double *)radinterp__alloc_array(&s->allocator, s->patch_count, sizeof(double));
+    if (!s->patch_cluster || !s->cluster_order || !s->cluster_cdf) return -1;
+    for (i = 0; i < s->patch_count; i++) {
+        s->patch_cluster[i] = RADINTERP__NONE;
+        if (s->patches[i].count) s->cluster_order[n++] = i;
+    }
+    if (n < 2) return 0;
+    s->clusters = (radinterp__cluster *)radinterp__alloc_array(&s->allocator, n - 1, sizeof *s->clusters);
+    keys = (radinterp__ckey *)radinterp__alloc_array(&s->allocator, n, sizeof *keys);
+    stack = (uint32_t *)radinterp__alloc_array(&s->allocator, n, sizeof *stack);
+    if (!s->clusters || !keys || !stack) {
+        radinterp__free(&s->allocator, keys);
+        radinterp__free(&s->allocator, stack);
+        return -1;
+    }
+    memset(s->clusters, 0, (size_t)(n - 1) * sizeof *s->clusters);
+    s->clusters[0].first = 0;
+    s->clusters[0].count = n;
+    s->clusters[0].parent = RADINTERP__NONE;
+    s->cluster_count = 1;
+    stack[top++] = 0;
+    while (top) {
+        uint32_t c = stack[--top], first = s->clusters[c].first, count = s->clusters[c].count, half[2], h, axis = 0;
+        float clo[3], chi[3];
+        radinterp__box_empty(clo, chi);
+        radinterp__box_empty(s->clusters[c].lo, s->clusters[c].hi);
+        for (i = first; i < first + count; i++) {
+            const radinterp__patch *pt = &s->patches[s->cluster_order[i]];
+            float ctr[3];
+            int k;
+            for (k = 0; k < 3; k++) ctr[k] = (float)pt->centre[k];
+            radinterp__box_grow(clo, chi, ctr, ctr);
+            radinterp__box_grow(s->clusters[c].lo, s->clusters[c].hi, pt->lo, pt->hi);
+        }
+        if (chi[1] - clo[1] > chi[axis] - clo[axis]) axis = 1;
+        if (chi[2] - clo[2] > chi[axis] - clo[axis]) axis = 2;
+        for (i = 0; i < count; i++) {
+            keys[i].patch = s->cluster_order[first + i];
+            keys[i].key = (float)s->patches[keys[i].patch].centre[axis];
+        }
+        qsort(keys, count, sizeof *keys, radinterp__cmp_ckey);
+        for (i = 0; i < count; i++) s->cluster_order[first + i] = keys[i].patch;
+        half[0] = count / 2;
+        half[1] = count - half[0];
+        for (h = 0; h < 2; h++) {
+            uint32_t hf = first + (h ? half[0] : 0);
+            if (half[h] == 1) {
+                s->clusters[c].child[h] = s->patches[s->cluster_order[hf]].root;
+                s->patch_cluster[s->cluster_order[hf]] = c;
+                continue;
+            }
+            s->clusters[s->cluster_count].first = hf;
+            s->clusters[s->cluster_count].count = half[h];
+            s->clusters[s->cluster_count].parent = c;
+            s->clusters[c].child[h] = RADINTERP__CLUSTER | s->cluster_count;
+            stack[top++] = s->cluster_count++;
+        }
+    }
+    for (i = 0; i < n; i++) {
+        acc += s->patches[s->cluster_order[i]].area;
+        s->cluster_cdf[i] = acc;
+    }
+    radinterp__free(&s->allocator, keys);
+    radinterp__free(&s->allocator, stack);
+    return 0;
+}
+
+/* Pull (after push-pull): each cluster's power basis from its children. */
+static void radinterp__pull_clusters(radinterp_solution *s)
+{
+    uint32_t c = s->cluster_count, h;
+    int a, ch, k;
+    while (c-- > 0) {
+        radinterp__cluster *cl = &s->clusters[c];
+        double p[6][3], bound = 0.0, hmin = 0.0;
+        memset(p, 0, sizeof p);
+        for (h = 0; h < 2; h++) {
+            uint32_t el = cl->child[h];
+            double hm = radinterp__is_cluster(el) ? radinterp__cl(s, el)->hmin : s->patch_hmin[s->nodes[el].patch];
+            if (hm > 0.0 && (hmin == 0.0 || hm < hmin)) hmin = hm;
+            if (radinterp__is_cluster(el)) {
+                const radinterp__cluster *cc = radinterp__cl(s, el);
+                for (a = 0; a < 6; a++)
+                    for (ch = 0; ch < 3; ch++) p[a][ch] += cc->power[a][ch];
+            } else {
+                const radinterp__node *nd = &s->nodes[el];
+                const double *n = s->patches[nd->patch].n;
+                double area = (double)nd->area * nd->open;
+                for (k = 0; k < 3; k++) {
+                    a = 2 * k + (n[k] < 0.0);
+                    for (ch = 0; ch < 3; ch++) p[a][ch] += area * fabs(n[k]) * nd->b[ch];
+                }
+            }
+        }
+        for (ch = 0; ch < 3; ch++) {
+            double sum = 0.0;
+            for (k = 0; k < 3; k++) sum += p[2 * k][ch] > p[2 * k + 1][ch] ? p[2 * k][ch] : p[2 * k + 1][ch];
+            bound = sum > bound ? sum : bound;
+        }
+        for (a = 0; a < 6; a++)
+            for (ch = 0; ch < 3; ch++) cl->power[a][ch] = (float)p[a][ch];
+        cl->bound = (float)bound;
+        cl->hmin = (float)hmin;
+    }
+}
+
+/* Irradiance (rgb, on a surface facing the source) a cluster link delivers. */
+static void radinterp__clink_irradiance(const radinterp_solution *s, const radinterp__clink *l, double *e)
+{
+    double u[3];
+    int k;
+    for (k = 0; k < 3; k++) u[k] = -(double)l->dir[k];
+    radinterp__elem_power(s, l->source, u, e);
+    for (k = 0; k < 3; k++) e[k] *= l->k;
+}
+
+/* Gather of the clusters' own links (per axis direction), then push: each
+   cluster's down = its parent's down + its own. */
+static void radinterp__cluster_gather_job(void *ctx_, uint32_t index)
+{
+    radinterp_solution *s = (radinterp_solution *)ctx_;
+    uint32_t c = index * 64, end = c + 64;
+    if (end > s->cluster_count) end = s->cluster_count;
+    for (; c < end; c++) {
+        radinterp__cluster *cl = &s->clusters[c];
+        double e[6][3];
+        uint32_t l;
+        int a, k, ch;
+        memset(e, 0, sizeof e);
+        for (l = cl->first_link; l < cl->first_link + cl->link_count; l++) {
+            const radinterp__clink *lk = &s->clinks[l];
+            double en[3];
+            radinterp__clink_irradiance(s, lk, en);
+            for (k = 0; k < 3; k++) {
+                a = 2 * k + (lk->dir[k] < 0.0f);
+                for (ch = 0; ch < 3; ch++) e[a][ch] += fabs((double)lk->dir[k]) * en[ch];
+            }
+        }
+        for (a = 0; a < 6; a++)
+            for (ch = 0; ch < 3; ch++) cl->e[a][ch] = (float)e[a][ch];
+    }
+}
+
+static void radinterp__push_clusters(radinterp_solution *s)
+{
+    uint32_t c;
+    int a, ch;
+    for (c = 0; c < s->cluster_count; c++) {
+        radinterp__cluster *cl = &s->clusters[c];
+        const radinterp__cluster *up = cl->parent != RADINTERP__NONE ? &s->clusters[cl->parent] : NULL;
+        for (a = 0; a < 6; a++)
+            for (ch = 0; ch < 3; ch++) cl->down[a][ch] = cl->e[a][ch] + (up ? up->down[a][ch] : 0.0f);
+    }
+}
+
+/* Irradiance the clusters above a patch deliver to it (normal n). */
+static void radinterp__cluster_down(const radinterp_solution *s, uint32_t patch, double *h)
+{
+    const double *n = s->patches[patch].n;
+    uint32_t c = s->patch_cluster ? s->patch_cluster[patch] : RADINTERP__NONE;
+    int k, ch;
+    h[0] = h[1] = h[2] = 0.0;
+    if (c == RADINTERP__NONE) return;
+    for (k = 0; k < 3; k++) {
+        const float *d = s->clusters[c].down[2 * k + (n[k] < 0.0)];
+        for (ch = 0; ch < 3; ch++) h[ch] += fabs(n[k]) * d[ch];
+    }
+}
+
+/* New links made by refinement or by the initial linking of the clusters:
+   ordinary links (their candidate blockers are their parent link's, or
+   from shaft culling for those split off a cluster link) and cluster
+   links. */
+typedef struct radinterp__linker {
+    radinterp__buf pend;     /* radinterp__pending */
+    radinterp__buf cpend;    /* radinterp__cpending */
+    radinterp__buf shaft;    /* uint32_t: candidates found by shaft culling here */
+    uint32_t *stamp, mark;    /* per patch: the query that listed it last */
+    uint64_t candidates;      /* candidates of all pending ordinary links */
+} radinterp__linker;
+
+static int radinterp__linker_init(radinterp_solution *s, radinterp__linker *L)
+{
+    memset(L, 0, sizeof *L);
+    L->pend.item = sizeof(radinterp__pending);
+    L->cpend.item = sizeof(radinterp__cpending);
+    L->shaft.item = sizeof(uint32_t);
+    L->stamp = (uint32_t *)radinterp__alloc_array(&s->allocator, s->patch_count, sizeof(uint32_t));
+    if (!L->stamp) return 0;
+    memset(L->stamp, 0xFF, (size_t)s->patch_count * sizeof(uint32_t));
+    return 1;
+}
+
+static void radinterp__linker_free(radinterp_solution *s, radinterp__linker *L)
+{
+    radinterp__free(&s->allocator, L->pend.data);
+    radinterp__free(&s->allocator, L->cpend.data);
+    radinterp__free(&s->allocator, L->shaft.data);
+    radinterp__free(&s->allocator, L->stamp);
+}
+
+/* Does this patch never shine (black and not emitting)? */
+static int radinterp__patch_dark(const radinterp__patch *pt)
+{
+    return pt->rho[0] == 0.0f && pt->rho[1] == 0.0f && pt->rho[2] == 0.0f && pt->e[0] == 0.0f && pt->e[1] == 0.0f &&
+           pt->e[2] == 0.0f;
+}
+
+/* A new link from element src to element r. Returns 0 when out of memory. */
+static int radinterp__link_elements(radinterp_solution *s, radinterp__linker *L, uint32_t r, uint32_t src)
+{
+    radinterp__pending *pl;
+    uint32_t first, count;
+    if (radinterp__is_cluster(r) || radinterp__is_cluster(src)) {
+        radinterp__cpending *pc = (radinterp__cpending *)radinterp__buf_push(&s->allocator, &L->cpend);
+        if (!pc) return 0;
+        memset(pc, 0, sizeof *pc);
+        pc->receiver = r;
+        pc->source = src;
+        return 1;
+    }
+    if (radinterp__patch_dark(&s->patches[s->nodes[src].patch])) return 1;
+    first = (uint32_t)L->shaft.count;
+    if (!radinterp__shaft_query(s, &s->nodes[r], &s->nodes[src], &L->shaft, L->stamp, L->mark++, &count)) return 0;
+    if (L->shaft.count > 0xFFFFFFFFu) return 0;
+    pl = (radinterp__pending *)radinterp__buf_push(&s->allocator, &L->pend);
+    if (!pl) return 0;
+    memset(pl, 0, sizeof *pl);
+    pl->receiver = r;
+    pl->source = src;
+    pl->first = first;
+    pl->count = count;
+    pl->fresh = 1;
+    L->candidates += count;
+    return 1;
+}
+
+/* The four children of a link split at one end (4.4.1): which = 0 splits
+   the receiver node, 1 the source node. Returns 0 when out of memory. */
+static int radinterp__split_link(radinterp_solution *s, radinterp__linker *L, const radinterp__link *l, int which)
+{
+    uint32_t k;
+    if (radinterp__node_split(s, which == 0 ? l->receiver : l->source) != 0) return 0;
+    for (k = 0; k < 4; k++) {
+        radinterp__pending *pl = (radinterp__pending *)radinterp__buf_push(&s->allocator, &L->pend);
+        if (!pl) return 0;
+        memset(pl, 0, sizeof *pl);
+        pl->receiver = which == 0 ? s->nodes[l->receiver].child + k : l->receiver;
+        pl->source = which == 1 ? s->nodes[l->source].child + k : l->source;
+        pl->first = l->first_blocker;
+        pl->count = l->blocker_count;
+        pl->filter = 1;
+        L->candidates += l->blocker_count;
+    }
+    return 1;
+}
+
+/* Splits a cluster link at its cluster end, the larger (by box diagonal)
+   when both are clusters. A patch at the other end stays whole: how finely
+   it is divided is for the ordinary links it ends up with to decide
+   (4.4.1). Returns 0 when out of memory. */
+static int radinterp__split_clink(radinterp_solution *s, radinterp__linker *L, uint32_t receiver, uint32_t source)
+{
+    int at_receiver = radinterp__elem_size(s, receiver) >= radinterp__elem_size(s, source), k;
+    const radinterp__cluster *cl;
+    if (!radinterp__is_cluster(at_receiver ? receiver : source)) at_receiver = !at_receiver;
+    cl = radinterp__cl(s, at_receiver ? receiver : source);
+    for (k = 0; k < 2; k++)
+        if (!radinterp__link_elements(s, L, at_receiver ? cl->child[k] : receiver, at_receiver ? source : cl->child[k]))
+            return 0;
+    return 1;
+}
+
+/* Computes the pending cluster links in batches, with progress between. */
+static radinterp_result radinterp__compute_cpending(radinterp_solution *s, const radinterp__run *run,
+                                                    radinterp__cpending *pending, uint32_t count)
+{
+    const uint32_t batch = 4096;
+    uint32_t begin, i;
+    for (begin = 0; begin < count; begin += batch) {
+        radinterp__cctx ctx;
+        ctx.s = s;
+        ctx.pending = pending;
+        ctx.begin = begin;
+        ctx.end = begin + batch < count ? begin + batch : count;
+        radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__clink_job, &ctx,
+                            (ctx.end - ctx.begin + RADINTERP__CLINK_JOB - 1) / RADINTERP__CLINK_JOB);
+        for (i = ctx.begin; i < ctx.end; i++) s->shadow_rays += pending[i].rays;
+        if (radinterp__cancelled(s, run)) return RADINTERP_ERROR_CANCELLED;
+    }
+    return RADINTERP_OK;
+}
+
+/* Measures the open fractions of the nodes made since *mark. */
+static void radinterp__open_new_nodes(radinterp_solution *s, const radinterp__run *run, uint32_t *mark)
+{
+    radinterp__open_ctx oc;
+    oc.s = s;
+    oc.first = *mark;
+    oc.count = s->node_count - *mark;
+    radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__open_job, &oc, (oc.count + 63) / 64);
+    *mark = s->node_count;
+}
+
+/* The pending cluster links in waves: each wave's transfers are computed
+   together; a link whose rays were all blocked is dropped, one that could
+   carry too much is split at once (its children form the next wave, or
+   become pending ordinary links), the others are kept in *accepted. So no
+   cluster link carries more than its share of the tolerance, even for one
+   iteration. */
+static radinterp_result radinterp__resolve_clinks(radinterp_solution *s, const radinterp__run *run, radinterp__linker *L,
+                                                  radinterp__buf *accepted, uint32_t *mark)
+{
+    radinterp_result res = RADINTERP_OK;
+    while (L->cpend.count && res == RADINTERP_OK) {
+        radinterp__buf wave = L->cpend;
+        radinterp__cpending *w = (radinterp__cpending *)wave.data;
+        uint32_t i;
+        memset(&L->cpend, 0, sizeof L->cpend);
+        L->cpend.item = sizeof(radinterp__cpending);
+        radinterp__open_new_nodes(s, run, mark);
+        res = radinterp__compute_cpending(s, run, w, (uint32_t)wave.count);
+        for (i = 0; i < wave.count && res == RADINTERP_OK; i++) {
+            radinterp__cpending *slot;
+            s->culled_links += w[i].hidden;
+            if (w[i].dead) continue;
+            if (w[i].coarse) {
+                if (!radinterp__split_clink(s, L, w[i].receiver, w[i].source)) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+                continue;
+            }
+            slot = (radinterp__cpending *)radinterp__buf_push(&s->allocator, accepted);
+            if (!slot) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+            else *slot = w[i];
+        }
+        radinterp__free(&s->allocator, wave.data);
+    }
+    return res;
+}
+
+/* Resolves the pending cluster links, measures the new nodes' open
+   fractions, computes every pending ordinary link and installs them all
+   beside the kept ones. */
+static radinterp_result radinterp__finish_linking(radinterp_solution *s, const radinterp__run *run, radinterp__linker *L,
+                                                  uint32_t nodes_before, const radinterp__link *keep, uint32_t nkeep,
+                                                  const radinterp__clink *ckeep, uint32_t nckeep)
+{
+    radinterp__pending *p;
+    radinterp__buf accepted;
+    uint32_t *wide = NULL, *out = NULL, i, at = 0, mark = nodes_before;
+    size_t n;
+    radinterp_result res;
+    memset(&accepted, 0, sizeof accepted);
+    accepted.item = sizeof(radinterp__cpending);
+    res = radinterp__resolve_clinks(s, run, L, &accepted, &mark);
+    if (res == RADINTERP_OK) radinterp__open_new_nodes(s, run, &mark);
+    if (res == RADINTERP_OK && L->candidates > 0xFFFFFFFFu) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    /* each pending link gets its own copy of its candidates */
+    n = L->candidates ? (size_t)L->candidates : 1;
+    p = (radinterp__pending *)L->pend.data;
+    if (res == RADINTERP_OK) {
+        wide = (uint32_t *)radinterp__alloc_array(&s->allocator, n, sizeof(uint32_t));
+        out = (uint32_t *)radinterp__alloc_array(&s->allocator, n, sizeof(uint32_t));
+        if (!wide || !out) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    }
+    for (i = 0; i < L->pend.count && res == RADINTERP_OK; i++) {
+        const uint32_t *from = p[i].fresh ? (const uint32_t *)L->shaft.data : s->blockers;
+        if (p[i].count) memcpy(wide + at, from + p[i].first, p[i].count * sizeof(uint32_t));
+        p[i].first = at;
+        at += p[i].count;
+    }
+    if (res == RADINTERP_OK) res = radinterp__compute_pending(s, run, p, (uint32_t)L->pend.count, wide, out);
+    radinterp__free(&s->allocator, wide);
+    if (res == RADINTERP_OK) res = radinterp__install_links(s, keep, nkeep, p, (uint32_t)L->pend.count, out);
+    if (res == RADINTERP_OK)
+        res = radinterp__install_clinks(s, ckeep, nckeep, (const radinterp__cpending *)accepted.data,
+                                        (uint32_t)accepted.count);
+    radinterp__free(&s->allocator, out);
+    radinterp__free(&s->allocator, accepted.data);
+    return res;
+}
+
+/* Initial links of the clustered solver: every cluster's two children,
+   both ways. */
+static radinterp_result radinterp__initial_cluster_links(radinterp_solution *s, const radinterp__run *run)
+{
+    radinterp__linker L;
+    radinterp_result res = RADINTERP_OK;
+    uint32_t c;
+    if (radinterp__build_clusters(s) != 0) return RADINTERP_ERROR_OUT_OF_MEMORY;
+    if (!radinterp__linker_init(s, &L)) { radinterp__linker_free(s, &L); return RADINTERP_ERROR_OUT_OF_MEMORY; }
+    for (c = 0; c < s->cluster_count && res == RADINTERP_OK; c++) {
+        const radinterp__cluster *cl = &s->clusters[c];
+        uint32_t a = cl->child[0], b = cl->child[1];
+        if (!radinterp__link_elements(s, &L, a, b) || !radinterp__link_elements(s, &L, b, a)) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    }
+    if (res == RADINTERP_OK) res = radinterp__finish_linking(s, run, &L, s->node_count, NULL, 0, NULL, 0);
+    radinterp__linker_free(s, &L);
+    return res;
+}
+
 /* Transport-based refinement (4.4.1): a link whose estimated transport
    error B_src * (max - min point factor) exceeds eps is replaced by four
    links to the children of its larger element (the other one when the
    larger may not be split; a link that can go no further is final). A link
    whose source has children that differ by more than eps / F is replaced by
-   links from those children.
+   links from those children. A cluster link that could carry more than eps
+   is split as radinterp__split_clink says.
    Returns the number of links split, or -1 when out of memory (*res). */
 static int radinterp__refine(radinterp_solution *s, const radinterp__run *run, radinterp_result *res)
 {
-    radinterp__grow keep, pend;
-    uint32_t i, k, split = 0, *out = NULL, nodes_before = s->node_count;
-    uint64_t cand = 0;
+    radinterp__buf keep, ckeep;
+    radinterp__linker L;
+    uint32_t i, split = 0, nodes_before = s->node_count;
     memset(&keep, 0, sizeof keep);
-    memset(&pend, 0, sizeof pend);
+    memset(&ckeep, 0, sizeof ckeep);
     keep.item = sizeof(radinterp__link);
-    pend.item = sizeof(radinterp__pending);
+    ckeep.item = sizeof(radinterp__clink);
     *res = RADINTERP_OK;
-    for (i = 0; i < s->link_count; i++) {
+    if (!radinterp__linker_init(s, &L)) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    for (i = 0; i < s->link_count && *res == RADINTERP_OK; i++) {
         radinterp__link l = s->links[i];
         const float *b = s->nodes[l.source].b;
         double bmax = b[0] > b[1] ? (b[0] > b[2] ? b[0] : b[2]) : (b[1] > b[2] ? b[1] : b[2]);
         int which = -1;
-        if (!(l.flags & RADINTERP__LINK_FINAL) && bmax * l.dff > s->eps) {
+        double tol = radinterp__tolerance(s, s->nodes[l.receiver].level);
+        if (!(l.flags & RADINTERP__LINK_FINAL) && bmax * l.dff > tol) {
             const radinterp__node *r = &s->nodes[l.receiver], *src = &s->nodes[l.source];
             int rs = radinterp__can_split(s, r), ss = radinterp__can_split(s, src);
             if (rs && (r->area >= src->area || !ss)) which = 0;
             else if (ss) which = 1;
             else l.flags |= RADINTERP__LINK_FINAL;
-        } else if (!(l.flags & RADINTERP__LINK_FINAL) && radinterp__source_spread(s, l.source) * l.ff > s->eps) {
+        } else if (!(l.flags & RADINTERP__LINK_FINAL) && radinterp__source_spread(s, l.source) * l.ff > tol) {
             /* the source is not uniform (its children differ): the link
                carries its mean where the receiver may see a brighter or
                darker part, so it goes to the children */
             which = 1;
         }
         if (which < 0) {
-            radinterp__link *slot = (radinterp__link *)radinterp__grow_push(s, &keep);
-            if (!slot) { *res = RADINTERP_ERROR_OUT_OF_MEMORY; break; }
-            *slot = l;
+            radinterp__link *slot = (radinterp__link *)radinterp__buf_push(&s->allocator, &keep);
+            if (!slot) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
+            else *slot = l;
             continue;
         }
-        if (radinterp__node_split(s, which == 0 ? l.receiver : l.source) != 0) {
-            *res = RADINTERP_ERROR_OUT_OF_MEMORY;
-            break;
-        }
+        if (!radinterp__split_link(s, &L, &l, which)) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
         split++;
-        for (k = 0; k < 4; k++) {
-            radinterp__pending *pl = (radinterp__pending *)radinterp__grow_push(s, &pend);
-            if (!pl) { *res = RADINTERP_ERROR_OUT_OF_MEMORY; break; }
-            memset(pl, 0, sizeof *pl);
-            pl->receiver = which == 0 ? s->nodes[l.receiver].child + k : l.receiver;
-            pl->source = which == 1 ? s->nodes[l.source].child + k : l.source;
-            pl->first = l.first_blocker;
-            pl->count = l.blocker_count;
-            pl->filter = 1;
-            cand += l.blocker_count;
-        }
-        if (*res != RADINTERP_OK) break;
     }
-    if (*res == RADINTERP_OK && s->node_count > nodes_before) {
-        radinterp__open_ctx oc;
-        oc.s = s;
-        oc.first = nodes_before;
-        oc.count = s->node_count - nodes_before;
-        radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__open_job, &oc, (oc.count + 63) / 64);
-    }
-    if (*res == RADINTERP_OK && split) {
-        /* the four children of a link share its candidates: give each its own copy */
-        radinterp__pending *p = (radinterp__pending *)pend.data;
-        size_t n = cand ? (size_t)cand : 1;
-        uint32_t *wide = (uint32_t *)radinterp__alloc_array(&s->allocator, n, sizeof(uint32_t)), at = 0;
-        out = (uint32_t *)radinterp__alloc_array(&s->allocator, n, sizeof(uint32_t));
-        if (!wide || !out || cand > 0xFFFFFFFFu) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
-        for (i = 0; i < pend.count && *res == RADINTERP_OK; i++) {
-            if (p[i].count) memcpy(wide + at, s->blockers + p[i].first, p[i].count * sizeof(uint32_t));
-            p[i].first = at;
-            at += p[i].count;
+    for (i = 0; i < s->clink_count && *res == RADINTERP_OK; i++) {
+        radinterp__clink l = s->clinks[i];
+        if (!radinterp__clink_too_coarse(s, l.receiver, l.source)) {
+            radinterp__clink *slot = (radinterp__clink *)radinterp__buf_push(&s->allocator, &ckeep);
+            if (!slot) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
+            else *slot = l;
+            continue;
         }
-        if (*res == RADINTERP_OK) *res = radinterp__compute_pending(s, run, p, (uint32_t)pend.count, wide, out);
-        radinterp__free(&s->allocator, wide);
-        if (*res == RADINTERP_OK)
-            *res = radinterp__install_links(s, (const radinterp__link *)keep.data, (uint32_t)keep.count, p,
-                                            (uint32_t)pend.count, out);
-    } else if (*res == RADINTERP_OK && keep.count) {
+        if (!radinterp__split_clink(s, &L, l.receiver, l.source)) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
+        split++;
+    }
+    if (*res == RADINTERP_OK && split)
+        *res = radinterp__finish_linking(s, run, &L, nodes_before, (const radinterp__link *)keep.data, (uint32_t)keep.count,
+                                         (const radinterp__clink *)ckeep.data, (uint32_t)ckeep.count);
+    else if (*res == RADINTERP_OK && keep.count)
         memcpy(s->links, keep.data, keep.count * sizeof(radinterp__link)); /* keeps the final flags */
-    }
-    radinterp__free(&s->allocator, out);
+    radinterp__linker_free(s, &L);
     radinterp__free(&s->allocator, keep.data);
-    radinterp__free(&s->allocator, pend.data);
+    radinterp__free(&s->allocator, ckeep.data);
     return *res == RADINTERP_OK ? (int)split : -1;
+}
+
+/* Initial links without clusters (4.1): one per ordered pair of patches
+   that face each other (part of each lies in front of the other's plane),
+   with the blockers from shaft culling. Sources that can never shine
+   (black, not emitting) get none. */
+static radinterp_result radinterp__initial_links(radinterp_solution *s, const radinterp__run *run)
+{
+    radinterp__linker L;
+    radinterp_result res = RADINTERP_OK;
+    double tol = s->epsilon * s->diag;
+    uint32_t i, j;
+    if (!radinterp__linker_init(s, &L)) { radinterp__linker_free(s, &L); return RADINTERP_ERROR_OUT_OF_MEMORY; }
+    for (i = 0; i < s->patch_count && res == RADINTERP_OK; i++) {
+        const radinterp__patch *pr = &s->patches[i];
+        if (!pr->count) continue;
+        for (j = 0; j < s->patch_count && res == RADINTERP_OK; j++) {
+            const radinterp__patch *ps = &s->patches[j];
+            if (j == i || !ps->count) continue;
+            if (radinterp__patch_front(pr, ps->n, ps->d) <= tol || radinterp__patch_front(ps, pr->n, pr->d) <= tol)
+                continue;
+            if (!radinterp__link_elements(s, &L, pr->root, ps->root)) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+        }
+    }
+    if (res == RADINTERP_OK) res = radinterp__finish_linking(s, run, &L, s->node_count, NULL, 0, NULL, 0);
+    radinterp__linker_free(s, &L);
+    return res;
 }
 
 /* ---- gather and push-pull (4.3) ---------------------------------------- */
@@ -4205,7 +5313,9 @@ typedef struct radinterp__iter_ctx {
     double *patch_change;    /* largest relative change per patch */
 } radinterp__iter_ctx;
 
-/* H = sum over the node's links of F * B_src, from last iteration's B. */
+/* H = sum over the node's links of F * B_src, and over its cluster links of
+   the irradiance they carry times the cosine at the node, from last
+   iteration's B. */
 static void radinterp__gather_job(void *ctx_, uint32_t index)
 {
     radinterp__iter_ctx *ctx = (radinterp__iter_ctx *)ctx_;
@@ -4223,6 +5333,13 @@ static void radinterp__gather_job(void *ctx_, uint32_t index)
             h[1] += (double)lk->ff * b[1];
             h[2] += (double)lk->ff * b[2];
         }
+        for (l = nd->first_clink; l < nd->first_clink + nd->clink_count; l++) {
+            double e[3], c = radinterp__facing(s->patches[nd->patch].n, s->clinks[l].dir);
+            radinterp__clink_irradiance(s, &s->clinks[l], e);
+            h[0] += c * e[0];
+            h[1] += c * e[1];
+            h[2] += c * e[2];
+        }
         nd->h[0] = (float)h[0];
         nd->h[1] = (float)h[1];
         nd->h[2] = (float)h[2];
@@ -4235,11 +5352,11 @@ static void radinterp__gather_job(void *ctx_, uint32_t index)
    the whole node, in which enclosed points count zero, so it is divided by
    the open fraction, and averages weigh children by their open areas. */
 static void radinterp__push_pull(radinterp_solution *s, uint32_t index, const double *down, double floor,
-                                 double *change, double *b_out)
+                                 double *change, double *b_out, double *hmin)
 {
     radinterp__node *nd = &s->nodes[index];
     const radinterp__patch *pt = &s->patches[nd->patch];
-    double h[3], b[3], open = nd->open;
+    double h[3], b[3], open = nd->open, level;
     int k;
     for (k = 0; k < 3; k++) h[k] = down[k] + (open > 0.0 ? nd->h[k] / open : 0.0);
     if (nd->child == RADINTERP__NONE) {
@@ -4249,30 +5366,38 @@ static void radinterp__push_pull(radinterp_solution *s, uint32_t index, const do
             rel = open > 0.0 ? fabs(b[k] - nd->b[k]) / (b[k] > floor ? b[k] : floor) : 0.0;
             if (rel > *change) *change = rel;
         }
+        level = h[0] > h[1] ? (h[0] > h[2] ? h[0] : h[2]) : (h[1] > h[2] ? h[1] : h[2]);
+        if (open > 0.0 && level > 0.0 && (*hmin == 0.0 || level < *hmin)) *hmin = level;
     } else {
         double area = 0.0, cb[3];
         uint32_t c;
         b[0] = b[1] = b[2] = 0.0;
+        level = 0.0;
         for (c = 0; c < 4; c++) {
             uint32_t ch = s->nodes[index].child + c;
             double a = (double)s->nodes[ch].area * s->nodes[ch].open;
-            radinterp__push_pull(s, ch, h, floor, change, cb);
+            radinterp__push_pull(s, ch, h, floor, change, cb, hmin);
             for (k = 0; k < 3; k++) b[k] += a * cb[k];
+            level += a * s->nodes[ch].level;
             area += a;
         }
         nd = &s->nodes[index];
         for (k = 0; k < 3; k++) b[k] = area > 0.0 ? b[k] / area : pt->e[k];
+        level = area > 0.0 ? level / area : 0.0;
     }
     for (k = 0; k < 3; k++) { nd->b[k] = (float)b[k]; b_out[k] = b[k]; }
+    nd->level = (float)level;
 }
 
 static void radinterp__push_pull_job(void *ctx_, uint32_t index)
 {
     radinterp__iter_ctx *ctx = (radinterp__iter_ctx *)ctx_;
     radinterp_solution *s = ctx->s;
-    double zero[3] = {0.0, 0.0, 0.0}, b[3], change = 0.0;
-    if (s->patches[index].count) radinterp__push_pull(s, s->patches[index].root, zero, ctx->floor, &change, b);
+    double down[3], b[3], change = 0.0, hmin = 0.0;
+    radinterp__cluster_down(s, index, down);
+    if (s->patches[index].count) radinterp__push_pull(s, s->patches[index].root, down, ctx->floor, &change, b, &hmin);
     ctx->patch_change[index] = change;
+    s->patch_hmin[index] = hmin;
 }
 
 /* Gather + push-pull until no leaf changes by more than rel_error_cutoff,
@@ -4292,14 +5417,25 @@ static radinterp_result radinterp__iterate(radinterp_solution *s, radinterp__run
     ctx.per_job = 4096;
     ctx.floor = emax > 0.0 ? 1e-4 * emax : 1e-30;
     ctx.patch_change = (double *)radinterp__alloc_array(&s->allocator, s->patch_count, sizeof(double));
-    if (!ctx.patch_change) return RADINTERP_ERROR_OUT_OF_MEMORY;
+    s->patch_hmin = (double *)radinterp__alloc_array(&s->allocator, s->patch_count, sizeof(double));
+    if (!ctx.patch_change || !s->patch_hmin) {
+        radinterp__free(&s->allocator, ctx.patch_change);
+        return RADINTERP_ERROR_OUT_OF_MEMORY;
+    }
+    memset(s->patch_hmin, 0, (size_t)s->patch_count * sizeof(double));
+    radinterp__pull_clusters(s);
     for (it = 0; it < s->max_iterations; it++) {
         double change = 0.0;
         run->iteration = it;
         radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__gather_job, &ctx,
                             (s->node_count + ctx.per_job - 1) / ctx.per_job);
+        radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__cluster_gather_job, s,
+                            (s->cluster_count + 63) / 64);
+        radinterp__push_clusters(s);
         radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__push_pull_job, &ctx,
                             s->patch_count);
+        radinterp__pull_clusters(s);
+        s->levels_known = 1;
         for (i = 0; i < s->patch_count; i++) change = ctx.patch_change[i] > change ? ctx.patch_change[i] : change;
         s->iterations = it + 1;
         s->max_relative_change = (float)change;
@@ -4366,6 +5502,7 @@ typedef struct radinterp__query {
     radinterp__cdt cdt;
     int cdt_ready;        /* cdt initialised (on mem) */
     int depth_left;       /* how much deeper into a source's children a query may go */
+    double child_tol;     /* a source's children are taken when its mean may be off by more than this */
     uint32_t triangulated; /* sources partly hidden: shadow union or triangulation (statistics) */
     int failed;           /* out of memory in a triangulation */
     double mem[RADINTERP__BP_BYTES / sizeof(double)];
@@ -4687,6 +5824,7 @@ typedef struct radinterp__solid {
 typedef struct radinterp__edge_rec {
     float key[6];                    /* the edge's ends, the lexicographically smaller first */
     uint32_t patch, forward;         /* forward: the patch runs from key[0..2] to key[3..5] */
+    uint32_t corner;                 /* the edge runs from this corner of the patch to the next */
 } radinterp__edge_rec;
 
 static int radinterp__edge_cmp(const void *a_, const void *b_)
@@ -4716,23 +5854,36 @@ static uint32_t radinterp__uf_find(uint32_t *parent, uint32_t x)
    directions (a leg standing under the edge of a table top makes that edge
    a three-patch edge, which joins nothing). Returns 0, or -1 when out of
    memory. */
-static int radinterp__join_patches(const radinterp_solution *s, uint32_t *parent)
+/* The edges of the patches (of the triangles alone with only_triangles),
+   sorted so that an edge's uses are neighbours; NULL when out of memory. */
+static radinterp__edge_rec *radinterp__patch_edges(const radinterp_solution *s, int only_triangles, uint32_t *count)
 {
     radinterp__edge_rec *e = (radinterp__edge_rec *)radinterp__alloc_array(&s->allocator, (size_t)s->patch_count * 4, sizeof *e);
-    uint32_t i, k, n = 0, run;
-    if (!e) return -1;
+    uint32_t i, k, n = 0;
+    if (!e) return NULL;
     for (i = 0; i < s->patch_count; i++) {
         const radinterp__patch *pt = &s->patches[i];
+        if (only_triangles && pt->count != 3) continue;
         for (k = 0; k < pt->count; k++) {
             const float *a = pt->v[k], *b = pt->v[(k + 1) % pt->count];
             e[n].forward = (uint32_t)radinterp__point_less(a, b);
             memcpy(e[n].key, e[n].forward ? a : b, 3 * sizeof(float));
             memcpy(e[n].key + 3, e[n].forward ? b : a, 3 * sizeof(float));
             e[n].patch = i;
+            e[n].corner = k;
             n++;
         }
     }
     qsort(e, n, sizeof *e, radinterp__edge_cmp);
+    *count = n;
+    return e;
+}
+
+static int radinterp__join_patches(const radinterp_solution *s, uint32_t *parent)
+{
+    uint32_t i, n, run;
+    radinterp__edge_rec *e = radinterp__patch_edges(s, 0, &n);
+    if (!e) return -1;
     for (i = 0; i < n; i += run) {
         for (run = 1; i + run < n && radinterp__edge_cmp(&e[i], &e[i + run]) == 0; run++) {}
         if (run == 2 && e[i].forward != e[i + 1].forward && e[i].patch != e[i + 1].patch)
@@ -4742,10 +5893,11 @@ static int radinterp__join_patches(const radinterp_solution *s, uint32_t *parent
     return 0;
 }
 
-/* Area of the convex hull of n 2D points (Andrew's monotone chain). */
-static double radinterp__hull_area(double (*p)[2], int n)
+/* The convex hull of n 2D points (Andrew's monotone chain; p is sorted in
+   place) into h (room for 2 n + 2), counter-clockwise, its first corner
+   repeated at the end. Returns the corner count with that repetition. */
+static int radinterp__hull_2d(double (*p)[2], int n, double (*h)[2])
 {
-    double h[2 * RADINTERP__SOLID_VERTS + 1][2];
     int i, j, m = 0, lower;
     for (i = 1; i < n; i++) /* insertion sort by x, then y */
         for (j = i; j > 0 && (p[j][0] < p[j - 1][0] || (p[j][0] == p[j - 1][0] && p[j][1] < p[j - 1][1])); j--) {
@@ -4761,6 +5913,14 @@ static double radinterp__hull_area(double (*p)[2], int n)
         while (m >= lower && radinterp__orient2d_area(h[m - 2], h[m - 1], p[i]) <= 0.0) m--;
         h[m][0] = p[i][0]; h[m][1] = p[i][1]; m++;
     }
+    return m;
+}
+
+/* Area of the convex hull of n 2D points. */
+static double radinterp__hull_area(double (*p)[2], int n)
+{
+    double h[2 * RADINTERP__SOLID_VERTS + 2][2];
+    int m = radinterp__hull_2d(p, n, h);
     return m > 3 ? 0.5 * fabs(radinterp__area2((const double (*)[2])h, m - 1)) : 0.0;
 }
 
@@ -4871,12 +6031,22 @@ static int radinterp__facet_covered(const radinterp_solution *s, const uint32_t 
 /* A patch outside the group that lies in the plane pl and contains every
    corner of v in that plane (the hole's facet), or NONE. */
 static uint32_t radinterp__find_plug(const radinterp_solution *s, const uint32_t *members, uint32_t count,
-                                     const double (*v)[3], int nv, const double *pl, double tol)
+                                     const double (*v)[3], int nv, const double *pl, double tol, radinterp__buf *near)
 {
-    uint32_t i, j, k;
-    for (i = 0; i < s->patch_count; i++) {
-        const radinterp__patch *pt = &s->patches[i];
-        int l, inside = 1;
+    float lo[3], hi[3];
+    uint32_t i, j, k, m;
+    int l;
+    radinterp__box_empty(lo, hi);
+    for (l = 0; l < nv; l++)   /* the hole's corners: a plug's box holds them all */
+        if (fabs(radinterp__plane_dist(pl, v[l])) <= tol) {
+            float x[3];
+            for (k = 0; k < 3; k++) x[k] = (float)v[l][k];
+            radinterp__box_grow(lo, hi, x, x);
+        }
+    if (!(lo[0] <= hi[0]) || radinterp__patches_near(s, &s->allocator, lo, hi, tol, near) != 0) return RADINTERP__NONE;
+    for (m = 0; m < near->count; m++) {
+        const radinterp__patch *pt = &s->patches[i = RADINTERP__U32(*near)[m]];
+        int inside = 1;
         if (pt->count == 0 || fabs(fabs(radinterp__d3_dot(pt->n, pl)) - 1.0) > 1e-9) continue;
         for (k = 0; k < pt->count && inside; k++) {
             double x[3];
@@ -4902,7 +6072,8 @@ static uint32_t radinterp__find_plug(const radinterp_solution *s, const uint32_t
 }
 
 static int radinterp__solid_examine(const radinterp_solution *s, const uint32_t *members, uint32_t count,
-                                    double (*planes)[4], uint32_t *plugs, uint32_t *faces, uint32_t *holes)
+                                    double (*planes)[4], uint32_t *plugs, uint32_t *faces, uint32_t *holes,
+                                    radinterp__buf *near)
 {
     double v[RADINTERP__SOLID_VERTS][3], hull[RADINTERP__SOLID_PLANES][4], tol = s->epsilon * s->diag;
     int nv = 0, nh, i, l;
@@ -4929,7 +6100,7 @@ static int radinterp__solid_examine(const radinterp_solution *s, const uint32_t 
         if (radinterp__facet_covered(s, members, count, (const double (*)[3])v, nv, hull[i], tol)) {
             nf++;
         } else {
-            plugs[no] = radinterp__find_plug(s, members, count, (const double (*)[3])v, nv, hull[i], tol);
+            plugs[no] = radinterp__find_plug(s, members, count, (const double (*)[3])v, nv, hull[i], tol, near);
             memcpy(planes[no++], hull[i], sizeof hull[i]);
         }
     }
@@ -4944,6 +6115,8 @@ static int radinterp__find_solids(radinterp_solution *s)
 {
     uint32_t n = s->patch_count, i, pass, *parent, *next, *head;
     int res = 0;
+    radinterp__buf near;   /* patches near a hole (a plug; when out of memory for it, a hole counts unplugged) */
+    radinterp__buf_init(&near, sizeof(uint32_t));
     parent = (uint32_t *)radinterp__alloc_array(&s->allocator, n, sizeof(uint32_t));
     next = (uint32_t *)radinterp__alloc_array(&s->allocator, n, sizeof(uint32_t));
     head = (uint32_t *)radinterp__alloc_array(&s->allocator, n, sizeof(uint32_t));
@@ -4964,7 +6137,7 @@ static int radinterp__find_solids(radinterp_solution *s)
             double pl[RADINTERP__SOLID_PLANES][4];
             if (head[i] == RADINTERP__NONE || next[head[i]] == RADINTERP__NONE) continue; /* not a root, or alone */
             for (m = head[i]; m != RADINTERP__NONE && count < RADINTERP__SOLID_PATCHES; m = next[m]) members[count++] = m;
-            if (m != RADINTERP__NONE || !radinterp__solid_examine(s, members, count, pl, plugs, &faces, &holes)) continue;
+            if (m != RADINTERP__NONE || !radinterp__solid_examine(s, members, count, pl, plugs, &faces, &holes, &near)) continue;
             if (pass == 1) {
                 radinterp__solid *so = &s->solids[solids];
                 so->first_plane = planes;
@@ -4992,6 +6165,7 @@ static int radinterp__find_solids(radinterp_solution *s)
             s->solid_member_count = members_total;
         }
     }
+    radinterp__buf_free(&s->allocator, &near);
     radinterp__free(&s->allocator, parent);
     radinterp__free(&s->allocator, next);
     radinterp__free(&s->allocator, head);
@@ -5241,12 +6415,12 @@ static int radinterp__pieces_apart(const radinterp__piece *a, const radinterp__p
     return radinterp__outside_an_edge(a, b, tol) || radinterp__outside_an_edge(b, a, tol);
 }
 
-/* Appends the parts of piece f outside piece P to q->piece[*top ..):
-   walking P's edges, what lies outside an edge is a part, what lies inside
-   goes on to the next edge; what is left at the end lies inside P. Parts
-   smaller than tiny (twice the area) are dropped. Returns -1 when the
-   pieces outgrow their arrays. */
-static int radinterp__subtract_piece(radinterp__query *q, const radinterp__piece *f, const radinterp__piece *P,
+/* Appends the parts of piece f outside piece P to pool[*top ..) (pool
+   holds RADINTERP__PIECES): walking P's edges, what lies outside an edge is
+   a part, what lies inside goes on to the next edge; what is left at the
+   end lies inside P. Parts smaller than tiny (twice the area) are dropped.
+   Returns -1 when the pieces outgrow their arrays. */
+static int radinterp__subtract_piece(radinterp__piece *pool, const radinterp__piece *f, const radinterp__piece *P,
                                      int *top, double tol, double tiny)
 {
     radinterp__piece rest[2];
@@ -5256,7 +6430,7 @@ static int radinterp__subtract_piece(radinterp__query *q, const radinterp__piece
         radinterp__piece *out;
         int r;
         if (*top >= RADINTERP__PIECES) return -1;
-        out = &q->piece[*top];
+        out = &pool[*top];
         r = radinterp__split_piece(cur, P->ln[j], tol, &rest[which], out);
         if (r < 0) return -1;
         if (r == 1) continue;                       /* wholly inside this edge */
@@ -5268,28 +6442,271 @@ static int radinterp__subtract_piece(radinterp__query *q, const radinterp__piece
     return 0;
 }
 
+/* Replaces the pieces pool[first .. *end) by their parts outside piece P,
+   packed in their place (*end moves). Returns -1 when the pieces outgrow
+   their array. */
+static int radinterp__pieces_minus(radinterp__piece *pool, int first, int *end, const radinterp__piece *P, double tol,
+                                   double tiny)
+{
+    int top = *end, keep = first, f;
+    for (f = first; f < *end; f++) {
+        if (radinterp__pieces_apart(&pool[f], P, tol)) continue;
+        if (radinterp__subtract_piece(pool, &pool[f], P, &top, tol, tiny) != 0) return -1;
+        pool[f].count = 0; /* replaced by its parts outside P */
+    }
+    for (f = first; f < top; f++) /* close the gaps */
+        if (pool[f].count) {
+            if (f != keep) pool[keep] = pool[f];
+            keep++;
+        }
+    *end = keep;
+    return 0;
+}
+
 /* Adds the piece q->piece[*count] (a new shadow) to the union kept as
    disjoint pieces q->piece[0 .. *count): its parts outside every piece
    already there become new pieces. Returns -1 when the pieces outgrow their
    arrays. */
 static int radinterp__union_add(radinterp__query *q, int *count, double tol, double tiny)
 {
-    int old = *count, first = old, end = old + 1, i, f;
-    for (i = 0; i < old && end > first; i++) {
-        int top = end, keep = first;
-        for (f = first; f < end; f++) {
-            if (radinterp__pieces_apart(&q->piece[f], &q->piece[i], tol)) continue;
-            if (radinterp__subtract_piece(q, &q->piece[f], &q->piece[i], &top, tol, tiny) != 0) return -1;
-            q->piece[f].count = 0; /* replaced by its parts outside piece i */
-        }
-        for (f = first; f < top; f++) /* close the gaps */
-            if (q->piece[f].count) {
-                if (f != keep) q->piece[keep] = q->piece[f];
-                keep++;
-            }
-        end = keep;
-    }
+    int old = *count, first = old, end = old + 1, i;
+    for (i = 0; i < old && end > first; i++)
+        if (radinterp__pieces_minus(q->piece, first, &end, &q->piece[i], tol, tiny) != 0) return -1;
     *count = end;
+    return 0;
+}
+
+/* ---- planar occluders between two boxes (cluster links) ------------------
+   Every segment from box A to box B crosses a plane that has A on one side
+   and B on the other (either may touch it), and does so inside the convex
+   hull of the crossings of the segments between their corners. When
+   patches lying in that plane cover this region, every segment meets one
+   of them, so nothing in A sees anything in B (the region's bounding
+   rectangle in the plane is tested). Where A touches the plane
+   (its own wall face lies in it) a segment may start on a covering patch:
+   it is blocked, or carries no light, only when that patch faces A, so
+   then only patches facing A count (and likewise for B). What the patches
+   leave uncovered may still lie inside solid matter (where a wall meets
+   another wall the plane of either passes through the other's slab, and a
+   floor's plane passes under the walls standing on it): a segment crossing
+   there is inside a closed solid and must leave it through one of its
+   faces. A part counts as inside when from a few of its points rays both
+   ways along the plane's normal first meet back faces. Walls and floors
+   between rooms are such planes: the test settles for a whole pair of
+   clusters what rays could only suggest. */
+#define RADINTERP__HIDE_PATCHES 96   /* patches in separating planes examined per pair at most */
+#define RADINTERP__HIDE_VISITS 1024  /* triangles the search may visit per pair */
+#define RADINTERP__HIDE_INSIDE 8     /* uncovered parts that may be shown inside solids */
+
+typedef struct radinterp__hide_ctx {
+    const radinterp_solution *s;
+    float ulo[3], uhi[3];            /* the union of the two boxes */
+    float ilo[2][3], ihi[2][3];      /* their interiors (shrunk by tol): nothing wholly inside can separate */
+    const float *lo[2], *hi[2];
+    double tol;
+    uint32_t found[RADINTERP__HIDE_PATCHES], count, visits;
+} radinterp__hide_ctx;
+
+/* Least and greatest n . x - d over a box. */
+static void radinterp__box_range(const double *n, double d, const float *lo, const float *hi, double *mn, double *mx)
+{
+    int k;
+    *mn = *mx = -d;
+    for (k = 0; k < 3; k++) {
+        *mn += n[k] * (n[k] > 0.0 ? (double)lo[k] : (double)hi[k]);
+        *mx += n[k] * (n[k] > 0.0 ? (double)hi[k] : (double)lo[k]);
+    }
+}
+
+/* Does the plane have one box on each side (touching allowed, not both)? */
+static int radinterp__plane_separates(const radinterp__hide_ctx *c, const double *n, double d)
+{
+    double amn, amx, bmn, bmx, t = c->tol;
+    radinterp__box_range(n, d, c->lo[0], c->hi[0], &amn, &amx);
+    radinterp__box_range(n, d, c->lo[1], c->hi[1], &bmn, &bmx);
+    return (amx <= t && bmn >= -t && (amx < -t || bmn > t)) || (bmx <= t && amn >= -t && (bmx < -t || amn > t));
+}
+
+static int radinterp__inside_box(const float *lo, const float *hi, const float *ilo, const float *ihi)
+{
+    return lo[0] > ilo[0] && lo[1] > ilo[1] && lo[2] > ilo[2] && hi[0] < ihi[0] && hi[1] < ihi[1] && hi[2] < ihi[2];
+}
+
+static int radinterp__hide_box(const void *ctx_, const float *lo, const float *hi)
+{
+    const radinterp__hide_ctx *c = (const radinterp__hide_ctx *)ctx_;
+    int k;
+    for (k = 0; k < 3; k++)
+        if (lo[k] > c->uhi[k] || hi[k] < c->ulo[k]) return 0;
+    return !radinterp__inside_box(lo, hi, c->ilo[0], c->ihi[0]) && !radinterp__inside_box(lo, hi, c->ilo[1], c->ihi[1]);
+}
+
+static int radinterp__hide_visit(void *ctx_, uint32_t b)
+{
+    radinterp__hide_ctx *c = (radinterp__hide_ctx *)ctx_;
+    const radinterp__patch *pt = &c->s->patches[b];
+    uint32_t i;
+    if (++c->visits > RADINTERP__HIDE_VISITS) return 0;
+    if (!radinterp__plane_separates(c, pt->n, pt->d)) return 1;
+    for (i = 0; i < c->count; i++)
+        if (c->found[i] == b) return 1;
+    if (c->count == RADINTERP__HIDE_PATCHES) return 0;
+    c->found[c->count++] = b;
+    return 1;
+}
+
+/* A convex polygon (counter-clockwise) as a piece: its corners and edge
+   lines, edges shorter than tol left out. Returns 0 when it has too many
+   corners or too few. */
+static int radinterp__piece_from_poly(const double (*v)[2], int n, double tol, radinterp__piece *out)
+{
+    int i;
+    out->count = 0;
+    for (i = 0; i < n; i++) {
+        const double *a = v[i], *b = v[(i + 1) % n];
+        double dx = b[0] - a[0], dy = b[1] - a[1], len = sqrt(dx * dx + dy * dy), ln[3];
+        if (!(len > tol)) continue;
+        if (out->count == RADINTERP__PIECE_VERTS) return 0;
+        ln[0] = -dy / len;
+        ln[1] = dx / len;
+        ln[2] = -(ln[0] * a[0] + ln[1] * a[1]);
+        radinterp__piece_add(out, a, ln, 1.0);
+    }
+    if (out->count < 3) return 0;
+    radinterp__piece_bounds(out);
+    return 1;
+}
+
+/* Is x inside closed geometry: do rays from it both ways along n first
+   meet back faces? */
+static int radinterp__inside_solid(const radinterp_solution *s, const double *x, const double *n)
+{
+    float org[3], dir[3];
+    int k, sign;
+    for (k = 0; k < 3; k++) org[k] = (float)x[k];
+    for (sign = -1; sign <= 1; sign += 2) {
+        radinterp__hit hit;
+        const double *hn;
+        for (k = 0; k < 3; k++) dir[k] = (float)(sign * n[k]);
+        if (!radinterp__bvh_intersect(&s->bvh, org, dir, 0.0f, FLT_MAX, &hit)) return 0;
+        hn = s->patches[s->tri_patch[hit.tri]].n;
+        if (!(hn[0] * dir[0] + hn[1] * dir[1] + hn[2] * dir[2] > 0.0)) return 0;   /* a front face, or edge-on */
+    }
+    return 1;
+}
+
+/* Do the patches of c->found lying in the plane of c->found[first] cover
+   the crossings of the segments between the two boxes? */
+static int radinterp__plane_covers(const radinterp__hide_ctx *c, uint32_t first, unsigned char *used)
+{
+    const radinterp_solution *s = c->s;
+    const radinterp__patch *p0 = &s->patches[c->found[first]];
+    double rect[4][2], lo[2] = {DBL_MAX, DBL_MAX}, hi[2] = {-DBL_MAX, -DBL_MAX}, e1[3], e2[3], len;
+    radinterp__piece work[RADINTERP__PIECES], cover;
+    int i, j, k, end = 1, whole = 1, facing = 0;
+    uint32_t g;
+    {   /* a box touching the plane admits only patches facing it */
+        double amn, amx, bmn, bmx;
+        radinterp__box_range(p0->n, p0->d, c->lo[0], c->hi[0], &amn, &amx);
+        radinterp__box_range(p0->n, p0->d, c->lo[1], c->hi[1], &bmn, &bmx);
+        if (amx <= c->tol && amx >= -c->tol) facing = -1;       /* A touches from below: normals must point down */
+        else if (amn >= -c->tol && amn <= c->tol) facing = 1;   /* A touches from above */
+        else if (bmx <= c->tol && bmx >= -c->tol) facing = -1;
+        else if (bmn >= -c->tol && bmn <= c->tol) facing = 1;
+    }
+    e1[0] = fabs(p0->n[0]) < 0.6 ? 1.0 : 0.0;
+    e1[1] = e1[0] == 0.0 ? 1.0 : 0.0;
+    e1[2] = 0.0;
+    radinterp__d3_cross(p0->n, e1, e2);
+    len = radinterp__d3_len(e2);
+    for (k = 0; k < 3; k++) e2[k] /= len;
+    radinterp__d3_cross(e2, p0->n, e1);   /* e1 x e2 = n: counter-clockwise seen from the front */
+    for (i = 0; i < 8; i++)
+        for (j = 0; j < 8; j++) {
+            double a[3], b[3], ta, tb, t, x[3];
+            for (k = 0; k < 3; k++) {
+                a[k] = (i >> k) & 1 ? c->hi[0][k] : c->lo[0][k];
+                b[k] = (j >> k) & 1 ? c->hi[1][k] : c->lo[1][k];
+            }
+            ta = radinterp__d3_dot(p0->n, a) - p0->d;
+            tb = radinterp__d3_dot(p0->n, b) - p0->d;
+            t = ta != tb ? ta / (ta - tb) : 0.0;
+            t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
+            for (k = 0; k < 3; k++) x[k] = a[k] + t * (b[k] - a[k]);
+            for (k = 0; k < 2; k++) {
+                double u = radinterp__d3_dot(x, k ? e2 : e1);
+                lo[k] = u < lo[k] ? u : lo[k];
+                hi[k] = u > hi[k] ? u : hi[k];
+            }
+        }
+    /* the crossings' bounding rectangle in the plane (a little more than
+       their hull: covering it is enough) */
+    rect[0][0] = lo[0]; rect[0][1] = lo[1];
+    rect[1][0] = hi[0]; rect[1][1] = lo[1];
+    rect[2][0] = hi[0]; rect[2][1] = hi[1];
+    rect[3][0] = lo[0]; rect[3][1] = hi[1];
+    if (!radinterp__piece_from_poly((const double (*)[2])rect, 4, c->tol, &work[0])) return 0;
+    for (g = first; g < c->count && end > 0; g++) {
+        const radinterp__patch *pt = &s->patches[c->found[g]];
+        double v[4][2];
+        if (used[g] || fabs(fabs(radinterp__d3_dot(pt->n, p0->n)) - 1.0) > 1e-9) continue;
+        if (fabs(radinterp__d3_dot(pt->n, p0->n) > 0.0 ? pt->d - p0->d : pt->d + p0->d) > c->tol) continue;
+        used[g] = 1;
+        if (facing && (radinterp__d3_dot(pt->n, p0->n) > 0.0 ? 1 : -1) != facing) continue;
+        for (k = 0; k < (int)pt->count; k++) {  /* counter-clockwise in the frame whichever way it faces */
+            int from = radinterp__d3_dot(pt->n, p0->n) > 0.0 ? k : (int)pt->count - 1 - k;
+            double x[3];
+            radinterp__d3_from_f(pt->v[from], x);
+            v[k][0] = radinterp__d3_dot(x, e1);
+            v[k][1] = radinterp__d3_dot(x, e2);
+        }
+        if (!radinterp__piece_from_poly((const double (*)[2])v, (int)pt->count, c->tol, &cover)) continue;
+        if (radinterp__pieces_minus(work, 0, &end, &cover, c->tol, c->tol * c->tol) != 0) whole = 0;
+        if (!whole) break;
+    }
+    if (!whole || end > RADINTERP__HIDE_INSIDE) return 0;
+    for (i = 0; i < end; i++) {   /* what is left must lie inside solids */
+        double centre[2] = {0.0, 0.0};
+        for (k = 0; k < work[i].count; k++) {
+            centre[0] += work[i].v[k][0] / work[i].count;
+            centre[1] += work[i].v[k][1] / work[i].count;
+        }
+        for (k = -1; k < work[i].count; k++) {
+            double uv[2], x[3];
+            int a;
+            for (a = 0; a < 2; a++) uv[a] = k < 0 ? centre[a] : 0.5 * (centre[a] + work[i].v[k][a]);
+            for (a = 0; a < 3; a++) x[a] = p0->d * p0->n[a] + uv[0] * e1[a] + uv[1] * e2[a];
+            if (!radinterp__inside_solid(s, x, p0->n)) return 0;
+        }
+    }
+    return 1;
+}
+
+/* Are boxes a and b hidden from each other by patches in one plane between
+   them (see above)? A search that finds too much answers no. */
+static int radinterp__planes_hide(const radinterp_solution *s, const float *alo, const float *ahi, const float *blo,
+                                  const float *bhi)
+{
+    radinterp__hide_ctx c;
+    unsigned char used[RADINTERP__HIDE_PATCHES];
+    uint32_t i;
+    int k, h;
+    c.s = s;
+    c.tol = s->epsilon * s->diag;
+    c.lo[0] = alo; c.hi[0] = ahi; c.lo[1] = blo; c.hi[1] = bhi;
+    for (k = 0; k < 3; k++) {
+        c.ulo[k] = radinterp__minf(alo[k], blo[k]);
+        c.uhi[k] = radinterp__maxf(ahi[k], bhi[k]);
+        for (h = 0; h < 2; h++) {
+            c.ilo[h][k] = (float)((double)c.lo[h][k] + c.tol);
+            c.ihi[h][k] = (float)((double)c.hi[h][k] - c.tol);
+        }
+    }
+    c.count = c.visits = 0;
+    if (!radinterp__bvh_walk(s, radinterp__hide_box, radinterp__hide_visit, &c)) return 0;
+    memset(used, 0, sizeof used);
+    for (i = 0; i < c.count; i++)
+        if (!used[i] && radinterp__plane_covers(&c, i, used)) return 1;
     return 0;
 }
 
@@ -5638,22 +7055,12 @@ static double radinterp__node_point_ff(radinterp__query *q, const radinterp__lin
     return radinterp__backproject(q, lk, Sc, nc, ps->n, ps->d - s->push_off, s->push_off, full);
 }
 
-/* Point-to-source factor of one link at the query point. */
-RADINTERP__MAYBE_UNUSED static double radinterp__link_point_ff(radinterp__query *q, const radinterp__link *lk)
-{
-    double Sc[RADINTERP__POLY_MAX][3], full;
-    int nc = radinterp__query_source(q, lk->source, Sc, &full);
-    q->blk = q->s->blockers + lk->first_blocker;
-    q->nblk = lk->blocker_count;
-    return radinterp__node_point_ff(q, lk, lk->source, (const double (*)[3])Sc, nc, full);
-}
-
 /* Are the children of a node to be taken in its place (see below)? */
 static int radinterp__take_children(const radinterp__query *q, uint32_t node, int depth_left, double full)
 {
     const radinterp_solution *s = q->s;
     return s->nodes[node].child != RADINTERP__NONE && depth_left > 0 &&
-           radinterp__source_spread(s, node) * full > 0.1 * s->eps;
+           radinterp__source_spread(s, node) * full > q->child_tol;
 }
 
 /* B_src * F for the four children of node (its polygon as the query sees
@@ -5775,10 +7182,19 @@ static radinterp_result radinterp__check_desc(const radinterp_desc *d)
         radinterp__log(d, "radinterp_solve: too many patches");
         return RADINTERP_ERROR_INVALID_ARGUMENT;
     }
-    if (radinterp__bad_param(d->eps) || radinterp__bad_param(d->min_area) || radinterp__bad_param(d->rel_error_cutoff) ||
+    if (radinterp__bad_param(d->eps) || radinterp__bad_param(d->eps_relative) || radinterp__bad_param(d->min_area) || radinterp__bad_param(d->rel_error_cutoff) ||
         radinterp__bad_param(d->push_off) || radinterp__bad_param(d->nudge) || radinterp__bad_param(d->min_bp_segment) ||
         radinterp__bad_param(d->epsilon) || radinterp__bad_param(d->planarity_tolerance)) {
         radinterp__log(d, "radinterp_solve: a parameter is negative, NaN or infinite");
+        return RADINTERP_ERROR_INVALID_ARGUMENT;
+    }
+    if (d->ff_samples > RADINTERP_MAX_FF_SAMPLES || d->visibility_rays > RADINTERP_MAX_VISIBILITY_RAYS) {
+        radinterp__log(d, "radinterp_solve: ff_samples %u or visibility_rays %u above its limit (%u, %u)",
+                       d->ff_samples, d->visibility_rays, RADINTERP_MAX_FF_SAMPLES, RADINTERP_MAX_VISIBILITY_RAYS);
+        return RADINTERP_ERROR_INVALID_ARGUMENT;
+    }
+    if ((unsigned)d->clustering > (unsigned)RADINTERP_CLUSTERING_OFF) {
+        radinterp__log(d, "radinterp_solve: clustering %u is not a radinterp_clustering", (unsigned)d->clustering);
         return RADINTERP_ERROR_INVALID_ARGUMENT;
     }
     if ((unsigned)d->visibility > (unsigned)RADINTERP_VISIBILITY_TRIANGULATION) {
@@ -5842,7 +7258,12 @@ static radinterp_result radinterp__build_patches(radinterp_solution *s, const ra
         }
     for (k = 0; k < 3; k++) { s->scene_lo[k] = (float)lo[k]; s->scene_hi[k] = (float)hi[k]; }
     s->diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
-    if (!(s->diag > 0.0)) s->diag = 1.0;
+    if (s->diag > RADINTERP_MAX_SCENE_SIZE || (s->diag > 0.0 && s->diag < RADINTERP_MIN_SCENE_SIZE)) {
+        radinterp__log(d, "radinterp_solve: the scene's size %g is outside [%g, %g]", s->diag, RADINTERP_MIN_SCENE_SIZE,
+                       RADINTERP_MAX_SCENE_SIZE);
+        return RADINTERP_ERROR_INVALID_ARGUMENT;
+    }
+    if (!(s->diag > 0.0)) s->diag = 1.0;   /* every corner at one point: every patch is skipped */
     planarity = radinterp__def(d->planarity_tolerance, 1e-3f);
     for (i = 0; i < d->patch_count; i++) {
         radinterp__patch *pt = &s->patches[i];
@@ -5879,6 +7300,104 @@ static radinterp_result radinterp__build_patches(radinterp_solution *s, const ra
         return RADINTERP_ERROR_INVALID_ARGUMENT;
     }
     return RADINTERP_OK;
+}
+
+/* ---- merging triangles into quadrilaterals ------------------------------
+   An engine exports a level as triangles: two per rectangle of a wall. Two
+   triangles of one material that share an edge (run in opposite
+   directions by them alone), lie in one plane (normals within 1e-5 rad,
+   the fourth corner within 1e-6 of the pair's size of the plane) and
+   together form a convex quadrilateral are the same surface as that
+   quadrilateral, which is then one patch: half the patches, links and
+   blockers. Pairs are taken greedily, longest shared edge first (the
+   diagonal of a split rectangle). The caller's indices stay valid: each
+   names the patch it became part of (desc.keep_triangles turns this off). */
+typedef struct radinterp__merge_cand { double len; uint32_t a, b, ea, eb; } radinterp__merge_cand;
+
+static int radinterp__cmp_merge(const void *x_, const void *y_)
+{
+    const radinterp__merge_cand *x = (const radinterp__merge_cand *)x_, *y = (const radinterp__merge_cand *)y_;
+    if (x->len != y->len) return x->len > y->len ? -1 : 1;
+    if (x->a != y->a) return x->a < y->a ? -1 : 1;
+    return x->b < y->b ? -1 : (x->b > y->b);
+}
+
+/* The quadrilateral of triangle a (edge ea shared) and triangle b (edge eb),
+   counter-clockwise; 1 when it is a valid convex patch (into *out). */
+static int radinterp__merged_quad(const radinterp_solution *s, uint32_t a, uint32_t ea, uint32_t b, uint32_t eb,
+                                  radinterp__patch *out)
+{
+    const radinterp__patch *pa = &s->patches[a], *pb = &s->patches[b];
+    double v[4][3], dev;
+    radinterp__d3_from_f(pa->v[ea], v[0]);
+    radinterp__d3_from_f(pb->v[(eb + 2) % 3], v[1]);   /* b's corner off the shared edge */
+    radinterp__d3_from_f(pa->v[(ea + 1) % 3], v[2]);
+    radinterp__d3_from_f(pa->v[(ea + 2) % 3], v[3]);
+    *out = *pa;
+    if (radinterp__d3_dot(pa->n, pb->n) < 1.0 - 5e-11) return 0;
+    if (fabs(radinterp__d3_dot(pa->n, v[1]) - pa->d) > 1e-6 * (pa->radius + pb->radius)) return 0;
+    return radinterp__patch_setup(out, v, 4, s->diag, 1e-6, &dev) == RADINTERP__PATCH_OK &&
+           fabs(out->area - pa->area - pb->area) <= 1e-9 * out->area;
+}
+
+/* Merges the triangle pairs (see above) and compacts the patches: a merged
+   pair's second triangle leaves the array; caller_patch maps the caller's
+   indices. Returns 0, or -1 when out of memory. */
+static int radinterp__merge_triangles(radinterp_solution *s, int merge)
+{
+    uint32_t n = 0, i, run, nc = 0, at = 0, *partner;
+    radinterp__edge_rec *e = NULL;
+    radinterp__merge_cand *cand = NULL;
+    s->caller_count = s->patch_count;
+    s->caller_patch = (uint32_t *)radinterp__alloc_array(&s->allocator, s->patch_count, sizeof(uint32_t));
+    s->first_caller = (uint32_t *)radinterp__alloc_array(&s->allocator, s->patch_count, sizeof(uint32_t));
+    partner = (uint32_t *)radinterp__alloc_array(&s->allocator, s->patch_count, sizeof(uint32_t));
+    if (!s->caller_patch || !s->first_caller || !partner) { radinterp__free(&s->allocator, partner); return -1; }
+    for (i = 0; i < s->patch_count; i++) partner[i] = RADINTERP__NONE;
+    if (merge) {
+        e = radinterp__patch_edges(s, 1, &n);
+        cand = (radinterp__merge_cand *)radinterp__alloc_array(&s->allocator, n / 2 + 1, sizeof *cand);
+        if (!e || !cand) { radinterp__free(&s->allocator, e); radinterp__free(&s->allocator, cand); radinterp__free(&s->allocator, partner); return -1; }
+        for (i = 0; i < n; i += run) {
+            const radinterp__edge_rec *x, *y;
+            double d[3];
+            for (run = 1; i + run < n && radinterp__edge_cmp(&e[i], &e[i + run]) == 0; run++) {}
+            if (run != 2) continue;
+            x = &e[i];
+            y = &e[i + 1];
+            if (x->forward == y->forward || x->patch == y->patch ||
+                s->patches[x->patch].material != s->patches[y->patch].material)
+                continue;
+            d[0] = (double)x->key[3] - x->key[0]; d[1] = (double)x->key[4] - x->key[1]; d[2] = (double)x->key[5] - x->key[2];
+            cand[nc].len = radinterp__d3_len(d);
+            cand[nc].a = x->patch < y->patch ? x->patch : y->patch;
+            cand[nc].b = x->patch < y->patch ? y->patch : x->patch;
+            cand[nc].ea = x->patch < y->patch ? x->corner : y->corner;
+            cand[nc].eb = x->patch < y->patch ? y->corner : x->corner;
+            nc++;
+        }
+        qsort(cand, nc, sizeof *cand, radinterp__cmp_merge);
+        for (i = 0; i < nc; i++) {
+            radinterp__patch q;
+            if (partner[cand[i].a] != RADINTERP__NONE || partner[cand[i].b] != RADINTERP__NONE) continue;
+            if (!radinterp__merged_quad(s, cand[i].a, cand[i].ea, cand[i].b, cand[i].eb, &q)) continue;
+            s->patches[cand[i].a] = q;
+            partner[cand[i].a] = cand[i].b;
+            partner[cand[i].b] = cand[i].a;
+            s->merged_patches++;
+        }
+    }
+    for (i = 0; i < s->patch_count; i++) {   /* compact: a pair's second triangle goes */
+        if (partner[i] != RADINTERP__NONE && partner[i] < i) { s->caller_patch[i] = s->caller_patch[partner[i]]; continue; }
+        s->caller_patch[i] = at;
+        s->first_caller[at] = i;
+        s->patches[at++] = s->patches[i];
+    }
+    s->patch_count = at;
+    radinterp__free(&s->allocator, e);
+    radinterp__free(&s->allocator, cand);
+    radinterp__free(&s->allocator, partner);
+    return 0;
 }
 
 /* The BVH over the patches' triangles (a quadrilateral gives two). */
@@ -5993,8 +7512,10 @@ typedef struct radinterp__leaf_link {
 
 typedef struct radinterp__leaf_ctx {
     radinterp_solution *s;
-    uint32_t *wide;          /* room for every link blocker of each leaf's path */
+    uint32_t *wide;          /* room for every link blocker of each leaf's path, for one batch of leaves */
     const uint64_t *wide_first;
+    uint64_t base;           /* wide_first of the batch's first leaf: wide[0] (entries hold offsets into wide) */
+    uint32_t first, end;     /* the batch's leaves */
     uint32_t per_job;
 } radinterp__leaf_ctx;
 
@@ -6012,11 +7533,11 @@ static void radinterp__leaf_lists_job(void *ctx_, uint32_t index)
 {
     radinterp__leaf_ctx *ctx = (radinterp__leaf_ctx *)ctx_;
     radinterp_solution *s = ctx->s;
-    uint32_t i = index * ctx->per_job, end = i + ctx->per_job;
-    if (end > s->leaf_count) end = s->leaf_count;
+    uint32_t i = ctx->first + index * ctx->per_job, end = i + ctx->per_job;
+    if (end > ctx->end) end = ctx->end;
     for (; i < end; i++) {
         uint32_t leaf = s->leaves[i], node, e = s->leaf_link_first[leaf];
-        uint64_t at = ctx->wide_first[i];
+        uint64_t at = ctx->wide_first[i] - ctx->base;
         float llo[3], lhi[3];
         radinterp__grown_box(&s->nodes[leaf], s->leaf_margin, llo, lhi);
         for (node = leaf; node != RADINTERP__NONE; node = s->nodes[node].parent) {
@@ -6046,12 +7567,22 @@ static void radinterp__leaf_lists_job(void *ctx_, uint32_t index)
 }
 
 /* Builds the leaf lists (see above): entries and room counted serially,
-   lists filled per leaf in parallel, then packed. */
+   then, batch by batch of leaves whose links' blockers fit in
+   RADINTERP__LEAF_BATCH entries (a leaf with more alone), lists filled per
+   leaf in parallel and packed onto the end of those kept. The room summed
+   over all leaves grows with leaves x links x blockers (billions on a
+   building), what is kept with what really lies between leaf and source. */
+#ifndef RADINTERP__LEAF_BATCH
+#define RADINTERP__LEAF_BATCH (1u << 24)
+#endif
 static radinterp_result radinterp__build_leaf_lists(radinterp_solution *s, const radinterp__run *run)
 {
-    uint64_t entries = 0, room = 0, *wide_first, kept = 0;
-    uint32_t i, *wide;
+    uint64_t entries = 0, room = 0, *wide_first, widest = RADINTERP__LEAF_BATCH;
+    uint32_t i, *wide = NULL;
+    radinterp__buf kept;
     radinterp__leaf_ctx ctx;
+    radinterp_result res = RADINTERP_OK;
+    radinterp__buf_init(&kept, sizeof(uint32_t));
     s->leaf_margin = 10.0 * (s->nudge + s->epsilon * s->diag);
     s->leaf_link_first = (uint32_t *)radinterp__alloc_array(&s->allocator, (size_t)s->node_count + 1, sizeof(uint32_t));
     wide_first = (uint64_t *)radinterp__alloc_array(&s->allocator, (size_t)s->leaf_count + 1, sizeof(uint64_t));
@@ -6062,6 +7593,7 @@ static radinterp_result radinterp__build_leaf_lists(radinterp_solution *s, const
     memset(s->leaf_link_first, 0, ((size_t)s->node_count + 1) * sizeof(uint32_t));
     for (i = 0; i < s->leaf_count; i++) { /* entries per leaf, by leaf node index */
         uint32_t node;
+        uint64_t own = room;
         wide_first[i] = room;
         for (node = s->leaves[i]; node != RADINTERP__NONE; node = s->nodes[node].parent) {
             const radinterp__node *nd = &s->nodes[node];
@@ -6069,8 +7601,10 @@ static radinterp_result radinterp__build_leaf_lists(radinterp_solution *s, const
             s->leaf_link_first[s->leaves[i]] += nd->link_count;
             for (l = nd->first_link; l < nd->first_link + nd->link_count; l++) room += s->links[l].blocker_count;
         }
+        if (room - own > widest) widest = room - own;
     }
     wide_first[s->leaf_count] = room;
+    if (widest > room) widest = room ? room : 1;
     for (i = 0; i <= s->node_count; i++) { /* counts to offsets */
         uint32_t c = i < s->node_count ? s->leaf_link_first[i] : 0;
         if (entries + c > 0xFFFFFFFFu) { radinterp__free(&s->allocator, wide_first); return RADINTERP_ERROR_OUT_OF_MEMORY; }
@@ -6079,33 +7613,44 @@ static radinterp_result radinterp__build_leaf_lists(radinterp_solution *s, const
     }
     s->leaf_link_count = entries;
     s->leaf_links = (radinterp__leaf_link *)radinterp__alloc_array(&s->allocator, (size_t)entries, sizeof *s->leaf_links);
-    wide = (uint32_t *)radinterp__alloc_array(&s->allocator, (size_t)room, sizeof(uint32_t));
-    if (!s->leaf_links || !wide || room > (uint64_t)SIZE_MAX / sizeof(uint32_t)) {
-        radinterp__free(&s->allocator, wide);
-        radinterp__free(&s->allocator, wide_first);
-        return RADINTERP_ERROR_OUT_OF_MEMORY;
-    }
+    if (widest <= (uint64_t)SIZE_MAX / sizeof(uint32_t))
+        wide = (uint32_t *)radinterp__alloc_array(&s->allocator, (size_t)widest, sizeof(uint32_t));
+    if (!s->leaf_links || !wide) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     ctx.s = s;
     ctx.wide = wide;
     ctx.wide_first = wide_first;
     ctx.per_job = 16;
-    radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__leaf_lists_job, &ctx,
-                        (s->leaf_count + ctx.per_job - 1) / ctx.per_job);
-    for (i = 0; i < entries; i++) kept += s->leaf_links[i].count;
-    s->leaf_blockers = (uint32_t *)radinterp__alloc_array(&s->allocator, (size_t)kept, sizeof(uint32_t));
-    if (s->leaf_blockers) {
-        uint64_t at = 0;
-        for (i = 0; i < entries; i++) { /* pack */
-            radinterp__leaf_link *ll = &s->leaf_links[i];
-            if (ll->count) memcpy(s->leaf_blockers + at, wide + ll->first, (size_t)ll->count * sizeof(uint32_t));
-            ll->first = at;
-            at += ll->count;
+    for (ctx.end = 0; res == RADINTERP_OK && ctx.end < s->leaf_count;) {
+        ctx.first = ctx.end;
+        ctx.base = wide_first[ctx.first];
+        while (ctx.end < s->leaf_count && wide_first[ctx.end + 1] - ctx.base <= widest) ctx.end++;
+        radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__leaf_lists_job, &ctx,
+                            (ctx.end - ctx.first + ctx.per_job - 1) / ctx.per_job);
+        for (i = ctx.first; i < ctx.end && res == RADINTERP_OK; i++) { /* pack */
+            uint32_t leaf = s->leaves[i], e;
+            for (e = s->leaf_link_first[leaf]; e < s->leaf_link_first[leaf + 1]; e++) {
+                radinterp__leaf_link *ll = &s->leaf_links[e];
+                size_t at = kept.count;
+                if (ll->count && radinterp__buf_reserve(&s->allocator, &kept, at + ll->count) != 0) {
+                    res = RADINTERP_ERROR_OUT_OF_MEMORY;
+                    break;
+                }
+                if (ll->count) memcpy((uint32_t *)kept.data + at, wide + ll->first, (size_t)ll->count * sizeof(uint32_t));
+                kept.count += ll->count;
+                ll->first = at;
+            }
         }
-        s->leaf_blocker_count = kept;
+        if (res == RADINTERP_OK && radinterp__cancelled(s, run)) res = RADINTERP_ERROR_CANCELLED;
     }
     radinterp__free(&s->allocator, wide);
     radinterp__free(&s->allocator, wide_first);
-    return s->leaf_blockers ? RADINTERP_OK : RADINTERP_ERROR_OUT_OF_MEMORY;
+    s->leaf_blockers = (uint32_t *)kept.data;
+    s->leaf_blocker_count = kept.count;
+    if (res == RADINTERP_OK && !s->leaf_blockers) { /* no blockers at all: an empty list, not a missing one */
+        s->leaf_blockers = (uint32_t *)radinterp__alloc(&s->allocator, sizeof(uint32_t));
+        if (!s->leaf_blockers) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    }
+    return res;
 }
 
 RADINTERP_API void radinterp_solution_destroy(radinterp_solution *s)
@@ -6114,12 +7659,20 @@ RADINTERP_API void radinterp_solution_destroy(radinterp_solution *s)
     if (!s) return;
     a = s->allocator;
     radinterp__free(&a, s->patches);
+    radinterp__free(&a, s->caller_patch);
+    radinterp__free(&a, s->first_caller);
     radinterp__bvh_free(&s->bvh, &a);
     radinterp__free(&a, s->tri_patch);
     radinterp__free(&a, s->nodes);
     radinterp__free(&a, s->links);
     radinterp__free(&a, s->blockers);
     radinterp__free(&a, s->leaves);
+    radinterp__free(&a, s->clinks);
+    radinterp__free(&a, s->clusters);
+    radinterp__free(&a, s->cluster_order);
+    radinterp__free(&a, s->cluster_cdf);
+    radinterp__free(&a, s->patch_cluster);
+    radinterp__free(&a, s->patch_hmin);
     radinterp__free(&a, s->patch_solid);
     radinterp__free(&a, s->solids);
     radinterp__free(&a, s->solid_planes);
@@ -6160,8 +7713,11 @@ RADINTERP_API radinterp_result radinterp_solve(const radinterp_desc *desc, radin
             power += e * pt->area;
             area += pt->area;
         }
-        /* half the mean emitted radiosity: the scale of the light in the scene */
-        s->eps = desc->eps > 0.0f ? desc->eps : (area > 0.0 && power > 0.0 ? 0.5 * power / area : 1.0);
+        /* the mean emitted radiosity is the scale of the light in the scene */
+        double mean = area > 0.0 && power > 0.0 ? power / area : 1.0;
+        s->light_scale = mean;
+        s->eps = desc->eps > 0.0f ? desc->eps : RADINTERP__EPS_FLOOR * mean;
+        s->eps_relative = desc->eps_relative > 0.0f ? desc->eps_relative : desc->eps > 0.0f ? 0.0 : RADINTERP__EPS_RELATIVE;
         s->min_area = desc->min_area > 0.0f ? desc->min_area : (diag / 200.0) * (diag / 200.0);
         s->rel_error_cutoff = radinterp__def(desc->rel_error_cutoff, 1e-3f);
         s->max_iterations = radinterp__def(desc->max_iterations, 64u);
@@ -6173,11 +7729,15 @@ RADINTERP_API radinterp_result radinterp_solve(const radinterp_desc *desc, radin
         s->min_bp_segment = desc->min_bp_segment > 0.0f ? desc->min_bp_segment : 1e-9 * diag;
         s->seed = desc->seed;
         s->visibility = desc->visibility ? (uint32_t)desc->visibility : (uint32_t)RADINTERP_VISIBILITY_SHADOWS;
-        res = radinterp__build_bvh(s);
+        s->clustering = desc->clustering ? (uint32_t)desc->clustering : (uint32_t)RADINTERP_CLUSTERING_ON;
+        res = radinterp__merge_triangles(s, !desc->keep_triangles) != 0 ? RADINTERP_ERROR_OUT_OF_MEMORY : RADINTERP_OK;
+        if (res == RADINTERP_OK) res = radinterp__build_bvh(s);
         if (res == RADINTERP_OK && radinterp__find_solids(s) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     }
     if (res == RADINTERP_OK) res = radinterp__make_roots(s, &run);
-    if (res == RADINTERP_OK) res = radinterp__initial_links(s, &run);
+    if (res == RADINTERP_OK)
+        res = s->clustering == RADINTERP_CLUSTERING_OFF ? radinterp__initial_links(s, &run)
+                                                          : radinterp__initial_cluster_links(s, &run);
     if (res == RADINTERP_OK) res = radinterp__iterate(s, &run);
     if (res == RADINTERP_OK) res = radinterp__collect_leaves(s);
     if (res == RADINTERP_OK) res = radinterp__build_leaf_lists(s, &run);
@@ -6195,11 +7755,15 @@ RADINTERP_API void radinterp_solution_info(const radinterp_solution *s, radinter
     if (!info) return;
     memset(info, 0, sizeof *info);
     if (!s) return;
-    info->patch_count = s->patch_count;
+    info->patch_count = s->caller_count;
     info->skipped_patches = s->skipped_patches;
+    info->merged_patches = s->merged_patches;
     info->node_count = s->node_count;
     info->leaf_count = s->leaf_count;
     info->link_count = s->link_count;
+    info->cluster_count = s->cluster_count;
+    info->cluster_link_count = s->clink_count;
+    info->culled_links = s->culled_links;
     info->blocker_entries = s->blocker_count;
     info->iterations = s->iterations;
     info->converged = s->converged;
@@ -6208,6 +7772,8 @@ RADINTERP_API void radinterp_solution_info(const radinterp_solution *s, radinter
     info->bytes = sizeof *s + (size_t)s->patch_count * sizeof(radinterp__patch) +
                   (size_t)s->node_cap * sizeof(radinterp__node) + (size_t)s->link_count * sizeof(radinterp__link) +
                   (size_t)s->blocker_count * sizeof(uint32_t) + (size_t)s->leaf_count * sizeof(uint32_t) +
+                  (size_t)s->clink_count * sizeof(radinterp__clink) + (size_t)s->cluster_count * sizeof(radinterp__cluster) +
+                  (size_t)s->patch_count * (2 * sizeof(uint32_t) + sizeof(double)) +
                   (size_t)s->patch_count * sizeof(uint32_t) + (size_t)s->solid_count * sizeof(radinterp__solid) +
                   (size_t)s->solid_plane_count * (sizeof s->solid_planes[0] + sizeof(uint32_t)) +
                   (size_t)s->solid_member_count * sizeof(uint32_t) +
@@ -6222,8 +7788,16 @@ static int radinterp__patch_ok(const radinterp_solution *s, uint32_t patch)
     return s && patch < s->patch_count && s->patches[patch].count != 0;
 }
 
-RADINTERP_API radinterp_result radinterp_patch_radiosity(const radinterp_solution *s, uint32_t patch, float rgb[3])
+/* The patch the caller's patch became (merged triangles share one), or
+   NONE when out of range. */
+static uint32_t radinterp__patch_of(const radinterp_solution *s, uint32_t caller)
 {
+    return s && caller < s->caller_count ? s->caller_patch[caller] : RADINTERP__NONE;
+}
+
+RADINTERP_API radinterp_result radinterp_patch_radiosity(const radinterp_solution *s, uint32_t caller, float rgb[3])
+{
+    uint32_t patch = radinterp__patch_of(s, caller);
     if (!rgb) return RADINTERP_ERROR_INVALID_ARGUMENT;
     rgb[0] = rgb[1] = rgb[2] = 0.0f;
     if (!radinterp__patch_ok(s, patch)) return RADINTERP_ERROR_INVALID_ARGUMENT;
@@ -6258,7 +7832,7 @@ RADINTERP_API radinterp_result radinterp_get_leaf(const radinterp_solution *s, u
     memset(leaf, 0, sizeof *leaf);
     if (!s || index >= s->leaf_count) return RADINTERP_ERROR_INVALID_ARGUMENT;
     nd = &s->nodes[s->leaves[index]];
-    leaf->patch = nd->patch;
+    leaf->patch = s->first_caller[nd->patch];
     leaf->depth = nd->depth;
     leaf->vertex_count = nd->count;
     memcpy(leaf->vertices, nd->v, sizeof nd->v);
@@ -6277,8 +7851,33 @@ static int radinterp__near_box(const radinterp__node *nd, const double *x, doubl
     return 1;
 }
 
+/* Irradiance (rgb) the cluster links deliver to a point of patch in leaf:
+   those of the leaf, of its ancestors and of the clusters above the patch,
+   each times the cosine at the point. */
+static void radinterp__cluster_links_add(const radinterp_solution *s, uint32_t patch, uint32_t leaf, double *h)
+{
+    const double *n = s->patches[patch].n;
+    uint32_t node, c, l;
+    int k;
+    for (node = leaf; node != RADINTERP__NONE; node = s->nodes[node].parent)
+        for (l = s->nodes[node].first_clink; l < s->nodes[node].first_clink + s->nodes[node].clink_count; l++) {
+            double e[3], f = radinterp__facing(n, s->clinks[l].dir);
+            if (!(f > 0.0)) continue;
+            radinterp__clink_irradiance(s, &s->clinks[l], e);
+            for (k = 0; k < 3; k++) h[k] += f * e[k];
+        }
+    for (c = s->patch_cluster ? s->patch_cluster[patch] : RADINTERP__NONE; c != RADINTERP__NONE; c = s->clusters[c].parent)
+        for (l = s->clusters[c].first_link; l < s->clusters[c].first_link + s->clusters[c].link_count; l++) {
+            double e[3], f = radinterp__facing(n, s->clinks[l].dir);
+            if (!(f > 0.0)) continue;
+            radinterp__clink_irradiance(s, &s->clinks[l], e);
+            for (k = 0; k < 3; k++) h[k] += f * e[k];
+        }
+}
+
 /* Irradiance at p on a patch, summed over the links of its leaf and of the
-   leaf's ancestors (6.2), past the blockers of the leaf lists. */
+   leaf's ancestors (6.2), past the blockers of the leaf lists, and over the
+   cluster links above it. */
 static radinterp_result radinterp__irradiance(const radinterp_solution *s, uint32_t patch, const float p[3],
                                               const float toward[3], double *h, uint32_t *triangulated)
 {
@@ -6311,6 +7910,7 @@ static radinterp_result radinterp__irradiance(const radinterp_solution *s, uint3
         }
     }
     leaf = radinterp__locate_leaf(s, patch, q->pv);
+    q->child_tol = 0.02 * radinterp__tolerance(s, s->nodes[leaf].level);
     if (s->leaf_link_first && radinterp__near_box(&s->nodes[leaf], q->pv, 0.5 * s->leaf_margin) &&
         radinterp__near_box(&s->nodes[leaf], q->p, 0.5 * s->leaf_margin)) {
         uint32_t e;
@@ -6331,6 +7931,7 @@ static radinterp_result radinterp__irradiance(const radinterp_solution *s, uint3
             }
         }
     }
+    radinterp__cluster_links_add(s, patch, leaf, h);
     if (q->cdt_ready) radinterp__cdt_free(&q->cdt);
     if (triangulated) *triangulated = q->triangulated;
     return q->failed ? RADINTERP_ERROR_OUT_OF_MEMORY : RADINTERP_OK;
@@ -6342,7 +7943,7 @@ RADINTERP_API radinterp_result radinterp_irradiance_at_point(const radinterp_sol
     double h[3];
     radinterp_result r;
     if (!rgb) return RADINTERP_ERROR_INVALID_ARGUMENT;
-    r = radinterp__irradiance(s, patch, p, toward, h, NULL);
+    r = radinterp__irradiance(s, radinterp__patch_of(s, patch), p, toward, h, NULL);
     rgb[0] = (float)h[0];
     rgb[1] = (float)h[1];
     rgb[2] = (float)h[2];
@@ -6356,6 +7957,7 @@ RADINTERP_API radinterp_result radinterp_radiosity_at_point(const radinterp_solu
     radinterp_result r;
     int k;
     if (!rgb) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    patch = radinterp__patch_of(s, patch);
     r = radinterp__irradiance(s, patch, p, toward, h, NULL);
     if (r != RADINTERP_OK && r != RADINTERP_ERROR_OUT_OF_MEMORY) { rgb[0] = rgb[1] = rgb[2] = 0.0f; return r; }
     for (k = 0; k < 3; k++) rgb[k] = (float)(s->patches[patch].e[k] + s->patches[patch].rho[k] * h[k]);
@@ -6383,64 +7985,6 @@ RADINTERP_API const char *radinterp_result_string(radinterp_result r)
    radinterp__irradiance) and never changes it: the mesh keeps its own copy
    of the quadtrees, which it restricts and refines.
    ---------------------------------------------------------------------- */
-typedef struct radinterp__buf {
-    void *data;
-    size_t count, cap, item;
-} radinterp__buf;
-
-static void radinterp__buf_init(radinterp__buf *b, size_t item)
-{
-    b->data = NULL;
-    b->count = b->cap = 0;
-    b->item = item;
-}
-
-static int radinterp__buf_reserve(const radinterp_allocator *a, radinterp__buf *b, size_t n)
-{
-    size_t cap;
-    void *p;
-    if (n <= b->cap) return 0;
-    cap = b->cap ? b->cap : 64;
-    while (cap < n) {
-        if (cap > SIZE_MAX / 2 / b->item) return -1;
-        cap *= 2;
-    }
-    p = radinterp__alloc_array(a, cap, b->item);
-    if (!p) return -1;
-    if (b->count) memcpy(p, b->data, b->count * b->item);
-    radinterp__free(a, b->data);
-    b->data = p;
-    b->cap = cap;
-    return 0;
-}
-
-/* A new zeroed item at the end, or NULL when out of memory. */
-static void *radinterp__buf_push(const radinterp_allocator *a, radinterp__buf *b)
-{
-    void *p;
-    if (b->count == b->cap && radinterp__buf_reserve(a, b, b->count + 1) != 0) return NULL;
-    p = (char *)b->data + b->count * b->item;
-    memset(p, 0, b->item);
-    b->count++;
-    return p;
-}
-
-static int radinterp__buf_u32(const radinterp_allocator *a, radinterp__buf *b, uint32_t v)
-{
-    uint32_t *p = (uint32_t *)radinterp__buf_push(a, b);
-    if (!p) return -1;
-    *p = v;
-    return 0;
-}
-
-static void radinterp__buf_free(const radinterp_allocator *a, radinterp__buf *b)
-{
-    radinterp__free(a, b->data);
-    b->data = NULL;
-    b->count = b->cap = 0;
-}
-
-#define RADINTERP__U32(b) ((uint32_t *)(b).data)
 
 /* Open addressing from keys of `words` 32-bit words to values (NONE marks
    an empty slot, so it cannot be stored). */
@@ -6555,49 +8099,28 @@ static void radinterp__point_key(const float *p, uint32_t tag, uint32_t *key)
     key[3] = tag;
 }
 
-/* 2D frame of a patch: origin at its first corner, e1 along its first
-   edge, e2 = n x e1, so counter-clockwise in 2D is counter-clockwise seen
-   from the front. */
-typedef struct radinterp__pframe { double o[3], e1[3], e2[3]; } radinterp__pframe;
-
-static void radinterp__pframe_make(radinterp__pframe *f, const radinterp__patch *pt)
+/* The frame of a patch (section 13's frame): origin at its first corner, e1
+   along its first edge, e2 = n x e1, so counter-clockwise in 2D is
+   counter-clockwise seen from the front. */
+static void radinterp__patch_frame(radinterp__frame *f, const radinterp__patch *pt)
 {
-    double d[3], len, k;
-    radinterp__d3_from_f(pt->v[0], f->o);
-    radinterp__d3_from_f(pt->v[1], d);
-    radinterp__d3_sub(d, f->o, d);
-    k = radinterp__d3_dot(d, pt->n);
-    d[0] -= k * pt->n[0]; d[1] -= k * pt->n[1]; d[2] -= k * pt->n[2];
-    len = radinterp__d3_len(d);
-    f->e1[0] = d[0] / len; f->e1[1] = d[1] / len; f->e1[2] = d[2] / len;
-    radinterp__d3_cross(pt->n, f->e1, f->e2);
+    double v[2][3];
+    radinterp__d3_from_f(pt->v[0], v[0]);
+    radinterp__d3_from_f(pt->v[1], v[1]);
+    radinterp__frame_make(f, (const double (*)[3])v, pt->n);
 }
 
-static void radinterp__pframe_2d(const radinterp__pframe *f, const double *x, double *uv)
-{
-    double d[3];
-    radinterp__d3_sub(x, f->o, d);
-    uv[0] = radinterp__d3_dot(d, f->e1);
-    uv[1] = radinterp__d3_dot(d, f->e2);
-}
-
-static void radinterp__pframe_2df(const radinterp__pframe *f, const float *x, double *uv)
+static void radinterp__frame_to2df(const radinterp__frame *f, const float *x, double *uv)
 {
     double d[3];
     radinterp__d3_from_f(x, d);
-    radinterp__pframe_2d(f, d, uv);
+    radinterp__frame_to2d(f, d, uv);
 }
 
-static void radinterp__pframe_3d(const radinterp__pframe *f, const double *uv, double *x)
-{
-    int k;
-    for (k = 0; k < 3; k++) x[k] = f->o[k] + uv[0] * f->e1[k] + uv[1] * f->e2[k];
-}
-
-static void radinterp__pframe_3df(const radinterp__pframe *f, const double *uv, float *x)
+static void radinterp__frame_to3df(const radinterp__frame *f, const double *uv, float *x)
 {
     double d[3];
-    radinterp__pframe_3d(f, uv, d);
+    radinterp__frame_to3d(f, uv, d);
     x[0] = (float)d[0]; x[1] = (float)d[1]; x[2] = (float)d[2];
 }
 
@@ -6627,7 +8150,7 @@ static int radinterp__clip_segment2(const double (*poly)[2], int n, double inset
 }
 
 /* Distance from p to the segment (a, b), in 2D. */
-static double radinterp__seg_dist2(const double *a, const double *b, const double *p)
+static double radinterp__seg_dist(const double *a, const double *b, const double *p)
 {
     double dx = b[0] - a[0], dy = b[1] - a[1], l2 = dx * dx + dy * dy, t = 0.0, x, y;
     if (l2 > 0.0) t = ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / l2;
@@ -6713,7 +8236,7 @@ typedef struct radinterp__builder {
     uint32_t max_dsets;
     double refine_eps, refine_min_area, min_leaf_area;
     uint32_t refine_samples, refine_passes;
-    radinterp__pframe *frames;       /* per patch */
+    radinterp__frame *frames;       /* per patch */
     double *outline;                 /* per patch: corners in its frame, 8 doubles */
     /* discontinuities, grouped by receiver and by DSet inside */
     radinterp__buf discs, dsets;
@@ -6729,13 +8252,13 @@ typedef struct radinterp__builder {
     uint32_t *seg_first, *seg_count;
     radinterp__buf pool;             /* radinterp__bvert */
     radinterp__hmap canon;           /* point -> pool index of its representative */
-    radinterp__buf reps;             /* pool entries sorted by x */
+    uint32_t *pool_first;            /* per patch (+ 1): its outline vertices in pool */
     radinterp__buf chains;           /* per patch edge: representatives along it */
     uint32_t *chain_first, *chain_len;
     radinterp__buf pos, tris;        /* output of the pass */
     radinterp__hmap vmap;            /* point -> output vertex */
     /* statistics */
-    uint32_t balance_splits, hanging, seam, fallback, degenerate;
+    uint32_t balance_splits, hanging, seam, fallback, degenerate, skipped;
     uint64_t samples;
     int cancelled;
 } radinterp__builder;
@@ -6829,7 +8352,7 @@ static uint32_t radinterp__on_outline(const radinterp__builder *b, uint32_t R, c
     const double (*o)[2] = radinterp__outline_of(b, R);
     uint32_t i, n = b->s->patches[R].count;
     for (i = 0; i < n; i++)
-        if (radinterp__seg_dist2(o[i], o[(i + 1) % n], uv) <= b->tol) return i + 1;
+        if (radinterp__seg_dist(o[i], o[(i + 1) % n], uv) <= b->tol) return i + 1;
     return 0;
 }
 
@@ -6996,15 +8519,15 @@ typedef struct radinterp__wedge_ctx {
 static int radinterp__wedge_disc(radinterp__builder *b, const radinterp__wedge_ctx *w, int ev, const double *f,
                                  const double *l0, const double *l1, const double *p3, const double *q3)
 {
-    const radinterp__pframe *fr = &b->frames[w->R];
+    const radinterp__frame *fr = &b->frames[w->R];
     double p[2], q[2], cp[2], cq[2], r[3], geom, g2;
     uint32_t on_p, on_q;
-    radinterp__pframe_2d(fr, p3, p);
-    radinterp__pframe_2d(fr, q3, q);
+    radinterp__frame_to2d(fr, p3, p);
+    radinterp__frame_to2d(fr, q3, q);
     if (!radinterp__clip_to_region(b, w->R, w->region, w->label, w->region_n, p, q, cp, cq, &on_p, &on_q)) return 0;
-    radinterp__pframe_3d(fr, cp, r);
+    radinterp__frame_to3d(fr, cp, r);
     geom = radinterp__wedge_ratio(ev, f, l0, l1, r);
-    radinterp__pframe_3d(fr, cq, r);
+    radinterp__frame_to3d(fr, cq, r);
     g2 = radinterp__wedge_ratio(ev, f, l0, l1, r);
     if (g2 > geom) geom = g2;
     return radinterp__push_disc(b, w->R, cp, cq, on_p, on_q,
@@ -7071,28 +8594,27 @@ static int radinterp__horizon(radinterp__builder *b, uint32_t R, uint32_t S)
         on[m++] = (uint32_t)i + 1;
     }
     if (m < 2) return 0;
-    if (radinterp__seg_dist2(pts[0], pts[0], pts[1]) <= b->tol) return 0;
+    if (radinterp__seg_dist(pts[0], pts[0], pts[1]) <= b->tol) return 0;
     return radinterp__push_disc(b, R, pts[0], pts[1], on[0], on[1], RADINTERP_DISCONTINUITY_HORIZON, S,
                                 RADINTERP_NO_PATCH, 1.0);
 }
 
 /* Contact: edges of other patches lying on R, with the patch rising in
    front of R (or lying flat on it, facing the same way). */
-static int radinterp__contacts(radinterp__builder *b, uint32_t R)
+static int radinterp__contacts(radinterp__builder *b, uint32_t R, radinterp__buf *near)
 {
     const radinterp_solution *s = b->s;
     const radinterp__patch *pr = &s->patches[R];
     const double (*uv)[2] = radinterp__outline_of(b, R);
     int labels[4] = {0, 1, 2, 3};
-    uint32_t B;
-    for (B = 0; B < s->patch_count; B++) {
+    uint32_t m;
+    if (radinterp__patches_near(s, &b->a, pr->lo, pr->hi, b->tol, near) != 0) return -1;
+    for (m = 0; m < near->count; m++) {
+        uint32_t B = RADINTERP__U32(*near)[m];
         const radinterp__patch *pb = &s->patches[B];
         double V[4][3], h[4], lo = DBL_MAX, hi = -DBL_MAX;
-        int n, i, k, apart = 0;
+        int n, i;
         if (B == R || !pb->count) continue;
-        for (k = 0; k < 3; k++)
-            if ((double)pb->lo[k] > (double)pr->hi[k] + b->tol || (double)pb->hi[k] < (double)pr->lo[k] - b->tol) apart = 1;
-        if (apart) continue;
         n = radinterp__patch_poly(pb, V);
         for (i = 0; i < n; i++) {
             h[i] = radinterp__d3_dot(pr->n, V[i]) - pr->d;
@@ -7106,8 +8628,8 @@ static int radinterp__contacts(radinterp__builder *b, uint32_t R)
             double p[2], q[2], cp[2], cq[2];
             uint32_t on_p, on_q;
             if (fabs(h[i]) > b->tol || fabs(h[j]) > b->tol) continue;
-            radinterp__pframe_2d(&b->frames[R], V[i], p);
-            radinterp__pframe_2d(&b->frames[R], V[j], q);
+            radinterp__frame_to2d(&b->frames[R], V[i], p);
+            radinterp__frame_to2d(&b->frames[R], V[j], q);
             if (!radinterp__clip_to_region(b, R, uv, labels, (int)pr->count, p, q, cp, cq, &on_p, &on_q)) continue;
             if (radinterp__push_disc(b, R, cp, cq, on_p, on_q, RADINTERP_DISCONTINUITY_CONTACT, RADINTERP_NO_PATCH, B,
                                      FLT_MAX) != 0)
@@ -7183,7 +8705,7 @@ static int radinterp__receiver_discs(radinterp__builder *b, uint32_t R, radinter
         }
         i = j;
     }
-    return radinterp__contacts(b, R);
+    return radinterp__contacts(b, R, stack);
 }
 
 /* ---- DSets: collinear discontinuities on a receiver (5.5.4) ------------ */
@@ -7249,10 +8771,11 @@ static void radinterp__disc_on_line(radinterp__disc *x, const double *o, const d
    and tol of each other) and orders them by DSet, then along it. */
 static int radinterp__group_dsets(radinterp__builder *b, uint32_t R)
 {
-    radinterp__disc *dd = (radinterp__disc *)b->discs.data + b->disc_first[R];
+    radinterp__disc *dd;
     uint32_t n = b->disc_count[R], i, j, k;
     radinterp__dkey *key;
-    if (n == 0) return 0;
+    if (n == 0) return 0;   /* discs.data may be NULL: no pointer arithmetic on it */
+    dd = (radinterp__disc *)b->discs.data + b->disc_first[R];
     key = (radinterp__dkey *)radinterp__alloc_array(&b->a, n, sizeof *key);
     if (!key) return -1;
     for (i = 0; i < n; i++) {
@@ -7393,40 +8916,21 @@ static int radinterp__inherit_discs(radinterp__builder *b, uint32_t parent, uint
 static void radinterp__mnode_frame(const radinterp__builder *b, radinterp__mnode *nd)
 {
     uint32_t i;
-    for (i = 0; i < nd->count; i++) radinterp__pframe_2df(&b->frames[nd->patch], nd->v[i], nd->uv[i]);
+    for (i = 0; i < nd->count; i++) radinterp__frame_to2df(&b->frames[nd->patch], nd->v[i], nd->uv[i]);
 }
 
-/* Splits leaf `index` into four children exactly as radinterp__node_split
-   does (same corners, same order). */
+/* Splits leaf `index` into four children with the corners
+   radinterp__node_split gives (radinterp__child_corners). */
 static int radinterp__mnode_split(radinterp__builder *b, uint32_t index)
 {
-    radinterp__mnode nd = RADINTERP__MNODES(b)[index], ch[4];
-    float m[4][3], c[3];
+    radinterp__mnode nd = RADINTERP__MNODES(b)[index];
+    float corners[4][4][3];
     uint32_t first = (uint32_t)b->nodes.count, k, i;
-    memset(ch, 0, sizeof ch);
-    if (nd.count == 4) {
-        radinterp__mid(nd.v[0], nd.v[1], m[0]);
-        radinterp__mid(nd.v[1], nd.v[2], m[1]);
-        radinterp__mid(nd.v[2], nd.v[3], m[2]);
-        radinterp__mid(nd.v[3], nd.v[0], m[3]);
-        for (k = 0; k < 3; k++) c[k] = 0.25f * (nd.v[0][k] + nd.v[1][k] + nd.v[2][k] + nd.v[3][k]);
-        memcpy(ch[0].v[0], nd.v[0], 12); memcpy(ch[0].v[1], m[0], 12); memcpy(ch[0].v[2], c, 12); memcpy(ch[0].v[3], m[3], 12);
-        memcpy(ch[1].v[0], m[0], 12); memcpy(ch[1].v[1], nd.v[1], 12); memcpy(ch[1].v[2], m[1], 12); memcpy(ch[1].v[3], c, 12);
-        memcpy(ch[2].v[0], c, 12); memcpy(ch[2].v[1], m[1], 12); memcpy(ch[2].v[2], nd.v[2], 12); memcpy(ch[2].v[3], m[2], 12);
-        memcpy(ch[3].v[0], m[3], 12); memcpy(ch[3].v[1], c, 12); memcpy(ch[3].v[2], m[2], 12); memcpy(ch[3].v[3], nd.v[3], 12);
-    } else {
-        radinterp__mid(nd.v[0], nd.v[1], m[0]);
-        radinterp__mid(nd.v[1], nd.v[2], m[1]);
-        radinterp__mid(nd.v[2], nd.v[0], m[2]);
-        memcpy(ch[0].v[0], nd.v[0], 12); memcpy(ch[0].v[1], m[0], 12); memcpy(ch[0].v[2], m[2], 12);
-        memcpy(ch[1].v[0], m[0], 12); memcpy(ch[1].v[1], nd.v[1], 12); memcpy(ch[1].v[2], m[1], 12);
-        memcpy(ch[2].v[0], m[2], 12); memcpy(ch[2].v[1], m[1], 12); memcpy(ch[2].v[2], nd.v[2], 12);
-        memcpy(ch[3].v[0], m[1], 12); memcpy(ch[3].v[1], m[2], 12); memcpy(ch[3].v[2], m[0], 12);
-    }
+    radinterp__child_corners((const float (*)[3])nd.v, nd.count, corners);
     if (radinterp__buf_reserve(&b->a, &b->nodes, b->nodes.count + 4) != 0) return -1;
     for (k = 0; k < 4; k++) {
         radinterp__mnode *cn = (radinterp__mnode *)radinterp__buf_push(&b->a, &b->nodes);
-        memcpy(cn->v, ch[k].v, sizeof cn->v);
+        memcpy(cn->v, corners[k], sizeof cn->v);
         cn->count = nd.count;
         cn->patch = nd.patch;
         cn->parent = index;
@@ -7498,19 +9002,30 @@ static int radinterp__copy_tree(radinterp__builder *b, uint32_t R, radinterp__bu
     return 0;
 }
 
+static int radinterp__same_point(const float *a, const float *b)
+{
+    return a[0] == b[0] && a[1] == b[1] && a[2] == b[2];
+}
+
 /* A leaf must split when a neighbour is two or more levels deeper along
-   one of its edges: then a corner sits at a quarter point of that edge. */
+   one of its edges: then a corner sits at a quarter point of that edge. An
+   edge a few float steps long has quarter points that round onto its own
+   corners or midpoint; those say nothing about a neighbour (and would make
+   the leaf split forever), so only a quarter point distinct from them
+   counts. */
 static int radinterp__unbalanced(const radinterp__builder *b, const radinterp__mnode *nd)
 {
     uint32_t i;
+    int h;
     for (i = 0; i < nd->count; i++) {
         float m[3], q[3];
         const float *a = nd->v[i], *c = nd->v[(i + 1) % nd->count];
         radinterp__mid(a, c, m);
-        radinterp__mid(a, m, q);
-        if (radinterp__corner_has(b, nd->patch, q)) return 1;
-        radinterp__mid(m, c, q);
-        if (radinterp__corner_has(b, nd->patch, q)) return 1;
+        for (h = 0; h < 2; h++) {
+            radinterp__mid(h ? m : a, h ? c : m, q);
+            if (radinterp__same_point(q, a) || radinterp__same_point(q, m) || radinterp__same_point(q, c)) continue;
+            if (radinterp__corner_has(b, nd->patch, q)) return 1;
+        }
     }
     return 0;
 }
@@ -7780,8 +9295,8 @@ static int radinterp__patch_segments(radinterp__builder *b, uint32_t R)
         radinterp__seg *sg = &((radinterp__seg *)b->segs.data)[i];
         if (sg->on0) radinterp__onto_outline(b, R, sg->on0 - 1, sg->q, sg->p);
         if (sg->on1) radinterp__onto_outline(b, R, sg->on1 - 1, sg->p, sg->q);
-        radinterp__pframe_3df(&b->frames[R], sg->p, sg->a);
-        radinterp__pframe_3df(&b->frames[R], sg->q, sg->b);
+        radinterp__frame_to3df(&b->frames[R], sg->p, sg->a);
+        radinterp__frame_to3df(&b->frames[R], sg->q, sg->b);
     }
     return 0;
 }
@@ -7839,7 +9354,7 @@ static int radinterp__outline_vertices(radinterp__builder *b, uint32_t P, radint
             if (radinterp__hmap_put(&b->a, seen, key, 1u) == RADINTERP__NONE) return -1;
             if (seen->count == before) continue;
             for (k = 0; k < pt->count; k++)
-                if (radinterp__seg_dist2(o[k], o[(k + 1) % pt->count], n->uv[c]) <= b->tol) {
+                if (radinterp__seg_dist(o[k], o[(k + 1) % pt->count], n->uv[c]) <= b->tol) {
                     if (radinterp__pool_add(b, n->v[c], P, k, 0) != 0) return -1;
                     break;
                 }
@@ -7862,49 +9377,78 @@ static uint32_t radinterp__find_rep(radinterp__bvert *v, uint32_t i)
     return i;
 }
 
-/* qsort has no context argument: the pool is sorted through a key array. */
-typedef struct radinterp__xkey { float x; uint32_t id; } radinterp__xkey;
+/* Outline vertices in cells of the weld distance: a cell's vertices are
+   neighbours in the sorted order. */
+typedef struct radinterp__cellkey { int64_t c[3]; uint32_t id; } radinterp__cellkey;
 
-static int radinterp__cmp_xkey(const void *a, const void *b)
+static int radinterp__cmp_cellkey(const void *a, const void *b)
 {
-    const radinterp__xkey *p = (const radinterp__xkey *)a, *q = (const radinterp__xkey *)b;
-    if (p->x != q->x) return p->x < q->x ? -1 : 1;
+    const radinterp__cellkey *p = (const radinterp__cellkey *)a, *q = (const radinterp__cellkey *)b;
+    int k;
+    for (k = 0; k < 3; k++)
+        if (p->c[k] != q->c[k]) return p->c[k] < q->c[k] ? -1 : 1;
     return p->id < q->id ? -1 : (p->id > q->id);
 }
 
-/* Welds outline vertices closer than weld_distance (to the one listed
-   first), maps every point to its representative, and lists the entries
-   by x. */
+/* First sorted key at cell c or after it. */
+static uint32_t radinterp__cell_lower(const radinterp__cellkey *keys, uint32_t n, const int64_t *c)
+{
+    uint32_t lo = 0, hi = n;
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        radinterp__cellkey probe;
+        memcpy(probe.c, c, sizeof probe.c);
+        probe.id = 0;
+        if (radinterp__cmp_cellkey(&keys[mid], &probe) < 0) lo = mid + 1;
+        else hi = mid;
+    }
+    return lo;
+}
+
+/* Welds outline vertices closer than weld_distance (each component to its
+   first listed vertex, so the result does not depend on the order of the
+   tests) and maps every point to its representative. Vertices are found
+   in the 27 cells around each one's cell (cells of the weld distance), so
+   vertices sharing a coordinate, as a building's walls do, cost no more
+   than others. */
 static int radinterp__weld(radinterp__builder *b)
 {
     radinterp__bvert *v = RADINTERP__BVERTS(b);
     uint32_t n = (uint32_t)b->pool.count, i, j, key[4];
-    radinterp__xkey *xs = (radinterp__xkey *)radinterp__alloc_array(&b->a, n ? n : 1, sizeof *xs);
+    radinterp__cellkey *keys = (radinterp__cellkey *)radinterp__alloc_array(&b->a, n ? n : 1, sizeof *keys);
     double w2 = b->weld * b->weld;
-    if (!xs) return -1;
-    for (i = 0; i < n; i++) { xs[i].x = v[i].x[0]; xs[i].id = i; }
-    qsort(xs, n, sizeof *xs, radinterp__cmp_xkey);
+    int k, dc;
+    if (!keys) return -1;
+    for (i = 0; i < n; i++) {
+        for (k = 0; k < 3; k++) keys[i].c[k] = (int64_t)floor((double)v[i].x[k] / b->weld);
+        keys[i].id = i;
+    }
+    qsort(keys, n, sizeof *keys, radinterp__cmp_cellkey);
     for (i = 0; i < n; i++)
-        for (j = i + 1; j < n && (double)xs[j].x - (double)xs[i].x <= b->weld; j++) {
-            const float *p = v[xs[i].id].x, *q = v[xs[j].id].x;
-            double dx = (double)p[0] - q[0], dy = (double)p[1] - q[1], dz = (double)p[2] - q[2];
-            if (dx * dx + dy * dy + dz * dz <= w2) {
-                uint32_t ri = radinterp__find_rep(v, xs[i].id), rj = radinterp__find_rep(v, xs[j].id);
-                if (ri < rj) v[rj].rep = ri;
-                else if (rj < ri) v[ri].rep = rj;
+        for (dc = 0; dc < 27; dc++) {
+            int64_t c[3];
+            c[0] = keys[i].c[0] + dc % 3 - 1;
+            c[1] = keys[i].c[1] + (dc / 3) % 3 - 1;
+            c[2] = keys[i].c[2] + dc / 9 - 1;
+            for (j = radinterp__cell_lower(keys, n, c); j < n && keys[j].c[0] == c[0] && keys[j].c[1] == c[1] && keys[j].c[2] == c[2]; j++) {
+                const float *p = v[keys[i].id].x, *q = v[keys[j].id].x;
+                double dx = (double)p[0] - q[0], dy = (double)p[1] - q[1], dz = (double)p[2] - q[2];
+                if (keys[j].id <= keys[i].id || dx * dx + dy * dy + dz * dz > w2) continue;
+                {
+                    uint32_t ri = radinterp__find_rep(v, keys[i].id), rj = radinterp__find_rep(v, keys[j].id);
+                    if (ri < rj) v[rj].rep = ri;
+                    else if (rj < ri) v[ri].rep = rj;
+                }
             }
         }
+    radinterp__free(&b->a, keys);
     radinterp__hmap_clear(&b->canon);
-    b->reps.count = 0;
     for (i = 0; i < n; i++) {
         uint32_t r = radinterp__find_rep(v, i);
         v[i].rep = r;
         radinterp__point_key(v[i].x, 0, key);
-        if (radinterp__hmap_put(&b->a, &b->canon, key, r) == RADINTERP__NONE) { radinterp__free(&b->a, xs); return -1; }
+        if (radinterp__hmap_put(&b->a, &b->canon, key, r) == RADINTERP__NONE) return -1;
     }
-    for (i = 0; i < n; i++)
-        if (radinterp__buf_u32(&b->a, &b->reps, xs[i].id) != 0) { radinterp__free(&b->a, xs); return -1; }
-    radinterp__free(&b->a, xs);
     return 0;
 }
 
@@ -7982,28 +9526,29 @@ static int radinterp__edges_collinear(const radinterp_solution *s, uint32_t P, u
    within weld_distance + tol of it, strictly between its corners, nearer to
    it than to P's other edges, and on an edge of its own patch collinear
    with it (a vertex of a patch that meets P's edge at an angle stays out). */
-static int radinterp__make_chain(radinterp__builder *b, uint32_t P, uint32_t k, const uint32_t *own, radinterp__buf *tmp)
+static int radinterp__make_chain(radinterp__builder *b, uint32_t P, uint32_t k, const uint32_t *own, radinterp__buf *tmp,
+                                 radinterp__buf *near)
 {
     const radinterp__patch *pt = &b->s->patches[P];
-    const uint32_t *sorted = RADINTERP__U32(b->reps);
     const radinterp__bvert *v = RADINTERP__BVERTS(b);
-    uint32_t n = (uint32_t)b->reps.count, lo = 0, hi = n, i, a_rep, c_rep, key[4];
-    double a[3], c[3], d[3], len2, reach = b->weld + b->tol, xlo, xhi;
+    uint32_t i, m, a_rep, c_rep, key[4];
+    double a[3], c[3], d[3], len2, reach = b->weld + b->tol;
+    float elo[3], ehi[3];
     int e;
     radinterp__d3_from_f(pt->v[k], a);
     radinterp__d3_from_f(pt->v[(k + 1) % pt->count], c);
     radinterp__d3_sub(c, a, d);
     len2 = radinterp__d3_dot(d, d);
-    xlo = (a[0] < c[0] ? a[0] : c[0]) - 2.0 * reach;
-    xhi = (a[0] > c[0] ? a[0] : c[0]) + 2.0 * reach;
-    while (lo < hi) {  /* first entry with x >= xlo */
-        uint32_t mid = (lo + hi) / 2;
-        if ((double)v[sorted[mid]].x[0] < xlo) lo = mid + 1;
-        else hi = mid;
-    }
+    radinterp__box_empty(elo, ehi);
+    radinterp__box_grow(elo, ehi, pt->v[k], pt->v[k]);
+    radinterp__box_grow(elo, ehi, pt->v[(k + 1) % pt->count], pt->v[(k + 1) % pt->count]);
+    /* a vertex within reach of the edge lies in its patch's box, which then
+       comes within reach of the edge's */
+    if (radinterp__patches_near(b->s, &b->a, elo, ehi, 2.0 * reach, near) != 0) return -1;
     tmp->count = 0;
-    for (i = lo; i < n && (double)v[sorted[i]].x[0] <= xhi; i++) {
-        const radinterp__bvert *ent = &v[sorted[i]];
+    for (m = 0; m < near->count; m++)
+    for (i = b->pool_first[RADINTERP__U32(*near)[m]]; i < b->pool_first[RADINTERP__U32(*near)[m] + 1]; i++) {
+        const radinterp__bvert *ent = &v[i];
         const radinterp__patch *pq = &b->s->patches[ent->patch];
         uint32_t r = ent->rep, prev = (ent->edge + pq->count - 1) % pq->count;
         double x[3], w[3], t, dist;
@@ -8119,7 +9664,7 @@ static uint32_t radinterp__local_point(radinterp__builder *b, radinterp__tri_wor
         if (!lp) return RADINTERP__NONE;
         memcpy(lp->x, x, sizeof lp->x);
         if (uv) { lp->uv[0] = uv[0]; lp->uv[1] = uv[1]; }
-        else radinterp__pframe_2df(&b->frames[P], x, lp->uv);
+        else radinterp__frame_to2df(&b->frames[P], x, lp->uv);
     }
     return id;
 }
@@ -8158,8 +9703,8 @@ static int radinterp__on_same_outline_edge(const radinterp__builder *b, uint32_t
     const double (*o)[2] = radinterp__outline_of(b, P);
     uint32_t k, n = b->s->patches[P].count;
     for (k = 0; k < n; k++)
-        if (radinterp__seg_dist2(o[k], o[(k + 1) % n], a) <= b->tol &&
-            radinterp__seg_dist2(o[k], o[(k + 1) % n], c) <= b->tol)
+        if (radinterp__seg_dist(o[k], o[(k + 1) % n], a) <= b->tol &&
+            radinterp__seg_dist(o[k], o[(k + 1) % n], c) <= b->tol)
             return 1;
     return 0;
 }
@@ -8236,7 +9781,7 @@ static double radinterp__perimeter(const radinterp__builder *b, uint32_t P)
     const double (*o)[2] = radinterp__outline_of(b, P);
     uint32_t k, n = b->s->patches[P].count;
     double sum = 0.0;
-    for (k = 0; k < n; k++) sum += radinterp__seg_dist2(o[k], o[k], o[(k + 1) % n]);
+    for (k = 0; k < n; k++) sum += radinterp__seg_dist(o[k], o[k], o[(k + 1) % n]);
     return sum;
 }
 
@@ -8295,9 +9840,85 @@ static int radinterp__on_segment(const radinterp__builder *b, uint32_t P, const 
     const radinterp__seg *segs = (const radinterp__seg *)b->segs.data;
     uint32_t i;
     for (i = b->seg_first[P]; i < b->seg_first[P] + b->seg_count[P]; i++)
-        if (radinterp__seg_dist2(segs[i].p, segs[i].q, p) <= b->tol && radinterp__seg_dist2(segs[i].p, segs[i].q, q) <= b->tol)
+        if (radinterp__seg_dist(segs[i].p, segs[i].q, p) <= b->tol && radinterp__seg_dist(segs[i].p, segs[i].q, q) <= b->tol)
             return 1;
     return 0;
+}
+
+/* Twice the area of the triangle (x0, x1, x2) seen along P's normal, and
+   its longest edge squared: the triangle as it is drawn, at float
+   positions. */
+static double radinterp__float_area2(const radinterp__builder *b, uint32_t P, const float *x0, const float *x1,
+                                     const float *x2, double *longest2)
+{
+    double e1[3], e2[3], e3[3], n[3];
+    int k;
+    for (k = 0; k < 3; k++) {
+        e1[k] = (double)x1[k] - x0[k];
+        e2[k] = (double)x2[k] - x0[k];
+        e3[k] = (double)x2[k] - x1[k];
+    }
+    radinterp__d3_cross(e1, e2, n);
+    *longest2 = radinterp__d3_dot(e1, e1);
+    if (radinterp__d3_dot(e2, e2) > *longest2) *longest2 = radinterp__d3_dot(e2, e2);
+    if (radinterp__d3_dot(e3, e3) > *longest2) *longest2 = radinterp__d3_dot(e3, e3);
+    return radinterp__d3_dot(n, b->s->patches[P].n);
+}
+
+/* Is the triangle flat: its height under RADINTERP__FLAT times its longest
+   edge (turned over counts as flat)? */
+#define RADINTERP__FLAT 1e-6
+static int radinterp__float_flat(const radinterp__builder *b, uint32_t P, const float *v3, const uint32_t *v)
+{
+    double l2, a2 = radinterp__float_area2(b, P, v3 + 3 * (size_t)v[0], v3 + 3 * (size_t)v[1], v3 + 3 * (size_t)v[2], &l2);
+    return a2 <= RADINTERP__FLAT * l2;
+}
+
+/* The triangulation is exact in the patch's plane, but its vertices are
+   drawn at float positions: a vertex within rounding of the opposite edge
+   (where a discontinuity crosses a leaf edge at a shallow angle, or ends
+   next to one) makes a triangle that is flat or turned over once rounded,
+   and it then overlaps its neighbours on screen (a pixel counted twice).
+   Each such inside triangle has its longest edge flipped with the inside
+   neighbour across it, when both triangles of the flip then face the front
+   and are not flat; a constraint on the flipped edge carries over to the
+   two edges through the vertex that lay on it. */
+static void radinterp__unfold(const radinterp__builder *b, radinterp__tri_work *w, uint32_t P, const float *v3)
+{
+    radinterp__cdt *c = &w->cdt;
+    const unsigned char *inside = (const unsigned char *)w->inside.data;
+    uint32_t t, flips = 0, pass;
+    for (pass = 0; pass < 4; pass++) {
+        uint32_t before = flips;
+        for (t = 0; t < c->tri_count; t++) {
+            const radinterp__cdt_tri *T = &c->tri[t];
+            uint32_t u, q[3], far;
+            double best = -1.0;
+            int k = 0, e, j, constrained;
+            if (!inside[t] || !radinterp__float_flat(b, P, v3, T->v)) continue;
+            for (e = 0; e < 3; e++) {   /* the longest edge is opposite v[k] */
+                const float *p0 = v3 + 3 * (size_t)T->v[(e + 1) % 3], *p1 = v3 + 3 * (size_t)T->v[(e + 2) % 3];
+                double d2 = 0.0;
+                for (j = 0; j < 3; j++) d2 += ((double)p1[j] - p0[j]) * ((double)p1[j] - p0[j]);
+                if (d2 > best) { best = d2; k = e; }
+            }
+            u = T->n[k];
+            if (u >= c->tri_count || !inside[u]) continue;
+            far = c->tri[u].v[radinterp__cdt_neighbour_index(c, u, t)];
+            q[0] = T->v[k]; q[1] = T->v[(k + 1) % 3]; q[2] = far;         /* (a, b, d) */
+            if (radinterp__float_flat(b, P, v3, q)) continue;
+            q[1] = far; q[2] = T->v[(k + 2) % 3];                           /* (a, d, c) */
+            if (radinterp__float_flat(b, P, v3, q)) continue;
+            constrained = (int)((T->flags >> k) & 1u);
+            radinterp__cdt_flip(c, t, k);                      /* t = (a, b, d), u = (a, d, c) */
+            if (constrained) {
+                radinterp__cdt_mark(c, t, 2, 1);
+                radinterp__cdt_mark(c, u, 1, 1);
+            }
+            flips++;
+        }
+        if (flips == before) break;
+    }
 }
 
 /* Appends P's inside triangles to the pass output, ordered by leaf. */
@@ -8311,18 +9932,25 @@ static int radinterp__emit_patch(radinterp__builder *b, radinterp__tri_work *w, 
     v3 = (float *)w->v3.data;
     for (i = 0; i < c->vertex_count; i++) {
         float x[3];
-        radinterp__pframe_3df(&b->frames[P], radinterp__cdt_p(c, i), x);
+        radinterp__frame_to3df(&b->frames[P], radinterp__cdt_p(c, i), x);
         memcpy(v3 + 3 * (size_t)i, x, sizeof x);
     }
     for (i = (uint32_t)w->pts.count; i-- > 0;)  /* input points keep their exact position (the first of duplicates) */
         memcpy(v3 + 3 * (size_t)RADINTERP__U32(w->ids)[i], ((radinterp__lpoint *)w->pts.data)[i].x, 3 * sizeof(float));
+    radinterp__unfold(b, w, P, v3);
     w->order.count = 0;
     for (t = 0; t < c->tri_count; t++) {
         const radinterp__cdt_tri *T = &c->tri[t];
         radinterp__otri *o;
         uint32_t g[3], key[4];
-        double uv[2];
+        double uv[2], l2;
         if (!inside[t]) continue;
+        /* flat or turned over once rounded where no flip could mend it (on
+           the outline): it covers nothing, or overlaps whether kept or not */
+        if (radinterp__float_area2(b, P, v3 + 3 * (size_t)T->v[0], v3 + 3 * (size_t)T->v[1], v3 + 3 * (size_t)T->v[2], &l2) <= 0.0) {
+            b->degenerate++;
+            continue;
+        }
         for (k = 0; k < 3; k++) {
             radinterp__point_key(v3 + 3 * (size_t)T->v[k], 0, key);
             g[k] = radinterp__hmap_put(&b->a, &b->vmap, key, (uint32_t)(b->pos.count / 3));
@@ -8382,11 +10010,12 @@ static radinterp_result radinterp__triangulate_patch(radinterp__builder *b, radi
         if (r < 0 || w->out_of_memory) return RADINTERP_ERROR_OUT_OF_MEMORY;
         if (r == 0) break;
         b->hanging = hanging;
-        if (!with) {
-            radinterp__mesh_log(b, "radinterp_build_mesh: patch %u could not be triangulated", P);
-            return RADINTERP_ERROR_INVALID_ARGUMENT;
+        if (!with) { /* thinner than the weld distance, or its outline folds: left out */
+            radinterp__mesh_log(b, "radinterp_build_mesh: patch %u could not be triangulated: left out of the mesh", b->s->first_caller[P]);
+            b->skipped++;
+            return RADINTERP_OK;
         }
-        radinterp__mesh_log(b, "radinterp_build_mesh: patch %u triangulated without its discontinuities", P);
+        radinterp__mesh_log(b, "radinterp_build_mesh: patch %u triangulated without its discontinuities", b->s->first_caller[P]);
         b->fallback++;
         with = 0;
     }
@@ -8455,7 +10084,8 @@ RADINTERP_API void radinterp_fit_quadratic(const float r[6], float coefficients[
 }
 
 #define RADINTERP__SAMPLE_TRIS 4      /* triangles per job */
-#define RADINTERP__SAMPLE_BATCH 512   /* jobs between progress calls */
+#define RADINTERP__SAMPLE_BATCH 64    /* jobs between progress calls: 256 triangles, 1,536 point queries (an
+                                         office batch took 7 s of wall time at 512 on a loaded machine) */
 
 typedef struct radinterp__sample_ctx {
     const radinterp__builder *b;
@@ -8674,15 +10304,16 @@ static radinterp_result radinterp__mesh_pass(radinterp__builder *b)
     const radinterp_solution *s = b->s;
     radinterp__tri_work w;
     radinterp__hmap seen;
-    radinterp__buf tmp;
+    radinterp__buf tmp, near;
     uint32_t P, k, *own = NULL;
     size_t at;
     radinterp_result res = RADINTERP_OK;
     radinterp__tri_work_init(&w, &b->a);
     memset(&seen, 0, sizeof seen);
     radinterp__buf_init(&tmp, sizeof(radinterp__tkey));
+    radinterp__buf_init(&near, sizeof(uint32_t));
     b->segs.count = b->pool.count = b->chains.count = b->pos.count = b->tris.count = 0;
-    b->hanging = b->seam = b->fallback = b->degenerate = 0;
+    b->hanging = b->seam = b->fallback = b->degenerate = b->skipped = 0;
     radinterp__hmap_clear(&b->vmap);
     if (radinterp__collect_mleaves(b, &w.stack) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     if (res == RADINTERP_OK) res = radinterp__activate(b);
@@ -8694,6 +10325,16 @@ static radinterp_result radinterp__mesh_pass(radinterp__builder *b)
         if (radinterp__outline_vertices(b, P, &seen) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     }
     if (res == RADINTERP_OK && radinterp__weld(b) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    if (res == RADINTERP_OK) {   /* the pool is in patch order */
+        size_t i;
+        if (!b->pool_first) b->pool_first = (uint32_t *)radinterp__alloc_array(&b->a, (size_t)s->patch_count + 1, sizeof(uint32_t));
+        if (!b->pool_first) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+        else {
+            memset(b->pool_first, 0, ((size_t)s->patch_count + 1) * sizeof(uint32_t));
+            for (i = 0; i < b->pool.count; i++) b->pool_first[RADINTERP__BVERTS(b)[i].patch + 1]++;
+            for (P = 0; P < s->patch_count; P++) b->pool_first[P + 1] += b->pool_first[P];
+        }
+    }
     if (res == RADINTERP_OK) {
         own = (uint32_t *)radinterp__alloc_array(&b->a, b->pool.count ? b->pool.count : 1, sizeof(uint32_t));
         if (!own) res = RADINTERP_ERROR_OUT_OF_MEMORY;
@@ -8705,13 +10346,14 @@ static radinterp_result radinterp__mesh_pass(radinterp__builder *b)
         while (at < b->pool.count && RADINTERP__BVERTS(b)[at].patch < P) at++;   /* the pool is in patch order */
         for (i = at; i < b->pool.count && RADINTERP__BVERTS(b)[i].patch == P; i++) own[RADINTERP__BVERTS(b)[i].rep] = P + 1u;
         for (k = 0; k < s->patches[P].count && res == RADINTERP_OK; k++)
-            if (radinterp__make_chain(b, P, k, own, &tmp) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+            if (radinterp__make_chain(b, P, k, own, &tmp, &near) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     }
     if (res == RADINTERP_OK && radinterp__hmap_init(&b->a, &w.lmap, 4, 256) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     for (P = 0; P < s->patch_count && res == RADINTERP_OK; P++)
         if (s->patches[P].count) res = radinterp__triangulate_patch(b, &w, P);
     radinterp__free(&b->a, own);
     radinterp__buf_free(&b->a, &tmp);
+    radinterp__buf_free(&b->a, &near);
     radinterp__hmap_free(&b->a, &seen);
     radinterp__tri_work_free(&b->a, &w);
     return res;
@@ -8836,7 +10478,7 @@ static radinterp_result radinterp__assemble(radinterp__builder *b, const float *
     m->parallel_user = b->desc->parallel_user;
     m->vertex_count = (uint32_t)(b->pos.count / 3);
     m->triangle_count = (uint32_t)b->tris.count;
-    m->patch_count = s->patch_count;
+    m->patch_count = s->caller_count;
     m->disc_count = (uint32_t)b->discs.count;
     m->leaf_count = (uint32_t)b->leaves.count;
     if (radinterp__mesh_alloc(m) != 0) { radinterp_mesh_destroy(m); return RADINTERP_ERROR_OUT_OF_MEMORY; }
@@ -8844,24 +10486,24 @@ static radinterp_result radinterp__assemble(radinterp__builder *b, const float *
     memcpy(m->irr, coeff, (size_t)m->triangle_count * 18 * sizeof(float));
     for (i = 0; i < m->triangle_count; i++) {
         memcpy(m->indices + 3 * (size_t)i, tris[i].v, 3 * sizeof(uint32_t));
-        m->tri_patch[i] = tris[i].patch;
+        m->tri_patch[i] = s->first_caller[tris[i].patch];
         m->tri_leaf[i] = RADINTERP__MNODES(b)[tris[i].node].leaf;
         m->edge_flags[i] = (unsigned char)tris[i].flags;
     }
-    for (i = 0; i < s->patch_count; i++) {
-        memcpy(m->patch_rho + 3 * (size_t)i, s->patches[i].rho, 3 * sizeof(float));
-        memcpy(m->patch_e + 3 * (size_t)i, s->patches[i].e, 3 * sizeof(float));
+    for (i = 0; i < s->caller_count; i++) {
+        memcpy(m->patch_rho + 3 * (size_t)i, s->patches[s->caller_patch[i]].rho, 3 * sizeof(float));
+        memcpy(m->patch_e + 3 * (size_t)i, s->patches[s->caller_patch[i]].e, 3 * sizeof(float));
     }
     info = &m->info;
     for (i = 0; i < m->disc_count; i++) {
         radinterp_discontinuity *o = &m->discs[i];
         const radinterp__disc *d = &dd[i];
-        radinterp__pframe_3df(&b->frames[d->receiver], d->p, o->a);
-        radinterp__pframe_3df(&b->frames[d->receiver], d->q, o->b);
+        radinterp__frame_to3df(&b->frames[d->receiver], d->p, o->a);
+        radinterp__frame_to3df(&b->frames[d->receiver], d->q, o->b);
         o->type = d->type;
-        o->receiver = d->receiver;
-        o->source = d->source;
-        o->blocker = d->blocker;
+        o->receiver = s->first_caller[d->receiver];
+        o->source = d->source != RADINTERP_NO_PATCH ? s->first_caller[d->source] : RADINTERP_NO_PATCH;
+        o->blocker = d->blocker != RADINTERP_NO_PATCH ? s->first_caller[d->blocker] : RADINTERP_NO_PATCH;
         o->dset = d->dset;
         o->weight = radinterp__disc_weight(s, &dd[i]);
         o->active = (int)d->active;
@@ -8876,7 +10518,7 @@ static radinterp_result radinterp__assemble(radinterp__builder *b, const float *
         const radinterp__mnode *nd = &RADINTERP__MNODES(b)[RADINTERP__U32(b->leaves)[i]];
         radinterp_mesh_leaf *l = &m->leaves[i];
         memset(l, 0, sizeof *l);
-        l->patch = nd->patch;
+        l->patch = s->first_caller[nd->patch];
         l->depth = nd->depth;
         l->vertex_count = nd->count;
         memcpy(l->vertices, nd->v, sizeof l->vertices);
@@ -8905,6 +10547,7 @@ static radinterp_result radinterp__assemble(radinterp__builder *b, const float *
     info->hanging_vertices = b->hanging;
     info->seam_vertices = b->seam;
     info->fallback_patches = b->fallback;
+    info->skipped_patches = b->skipped;
     info->samples = b->samples;
     *out = m;
     return RADINTERP_OK;
@@ -8951,7 +10594,7 @@ static void radinterp__builder_free(radinterp__builder *b)
     radinterp__buf_free(a, &b->leaves);
     radinterp__buf_free(a, &b->segs);
     radinterp__buf_free(a, &b->pool);
-    radinterp__buf_free(a, &b->reps);
+    radinterp__free(a, b->pool_first);
     radinterp__buf_free(a, &b->chains);
     radinterp__buf_free(a, &b->pos);
     radinterp__buf_free(a, &b->tris);
@@ -8989,11 +10632,10 @@ static radinterp_result radinterp__builder_init(radinterp__builder *b, const rad
     radinterp__buf_init(&b->leaves, sizeof(uint32_t));
     radinterp__buf_init(&b->segs, sizeof(radinterp__seg));
     radinterp__buf_init(&b->pool, sizeof(radinterp__bvert));
-    radinterp__buf_init(&b->reps, sizeof(uint32_t));
     radinterp__buf_init(&b->chains, sizeof(uint32_t));
     radinterp__buf_init(&b->pos, sizeof(float));
     radinterp__buf_init(&b->tris, sizeof(radinterp__otri));
-    b->frames = (radinterp__pframe *)radinterp__alloc_array(&b->a, P, sizeof *b->frames);
+    b->frames = (radinterp__frame *)radinterp__alloc_array(&b->a, P, sizeof *b->frames);
     b->outline = (double *)radinterp__alloc_array(&b->a, P, 8 * sizeof(double));
     b->disc_first = (uint32_t *)radinterp__alloc_array(&b->a, P, sizeof(uint32_t));
     b->disc_count = (uint32_t *)radinterp__alloc_array(&b->a, P, sizeof(uint32_t));
@@ -9016,8 +10658,8 @@ static radinterp_result radinterp__builder_init(radinterp__builder *b, const rad
         for (k = 0; k < 4; k++) b->chain_first[4 * i + k] = b->chain_len[4 * i + k] = 0;
         memset(b->outline + 8 * (size_t)i, 0, 8 * sizeof(double));
         if (!pt->count) continue;
-        radinterp__pframe_make(&b->frames[i], pt);
-        for (k = 0; k < pt->count; k++) radinterp__pframe_2df(&b->frames[i], pt->v[k], b->outline + 8 * (size_t)i + 2 * k);
+        radinterp__patch_frame(&b->frames[i], pt);
+        for (k = 0; k < pt->count; k++) radinterp__frame_to2df(&b->frames[i], pt->v[k], b->outline + 8 * (size_t)i + 2 * k);
     }
     return RADINTERP_OK;
 }
@@ -9150,7 +10792,7 @@ static radinterp_result radinterp__eval_table(const radinterp_mesh *m, const flo
 {
     int ch;
     if (!rgb) return RADINTERP_ERROR_INVALID_ARGUMENT;
-    if (!m || triangle >= m->triangle_count) {
+    if (!m || triangle >= m->triangle_count || !isfinite(s) || !isfinite(t)) {
         rgb[0] = rgb[1] = rgb[2] = 0.0f;
         return RADINTERP_ERROR_INVALID_ARGUMENT;
     }
@@ -9269,7 +10911,7 @@ RADINTERP_API radinterp_result radinterp_shade_gouraud(const radinterp_mesh *m, 
    ---------------------------------------------------------------------- */
 static const unsigned char radinterp__mesh_magic[8] = {'R', 'A', 'D', 'I', 'M', 'E', 'S', 'H'};
 
-#define RADINTERP__MESH_STATS 15   /* u32 statistics saved besides the counts */
+#define RADINTERP__MESH_STATS 16   /* u32 statistics saved besides the counts */
 #define RADINTERP__DISC_BYTES 52
 #define RADINTERP__LEAF_BYTES 80
 
@@ -9279,7 +10921,7 @@ static void radinterp__mesh_stats(radinterp_mesh_info *info, uint32_t **f)
     f[5] = &info->candidates; f[6] = &info->active_discontinuities; f[7] = &info->active_leaf_dsets;
     f[8] = &info->max_leaf_active_dsets; f[9] = &info->balance_splits; f[10] = &info->hanging_vertices;
     f[11] = &info->seam_vertices; f[12] = &info->fallback_patches; f[13] = &info->refine_passes;
-    f[14] = &info->refined_leaves;
+    f[14] = &info->refined_leaves; f[15] = &info->skipped_patches;
 }
 
 static uint64_t radinterp__mesh_payload(const radinterp_mesh *m)

@@ -321,6 +321,15 @@ static void test_validation(void)
     CHECK_EQ_INT(solve_status(&d), RADINTERP_ERROR_INVALID_ARGUMENT);
     d = scene_desc(sc); d.allocator.free = free_unused_marker;
     CHECK_EQ_INT(solve_status(&d), RADINTERP_ERROR_INVALID_ARGUMENT);
+    /* sample counts past their caps would run for hours: refused at once */
+    d = scene_desc(sc); d.ff_samples = 0x80000000u;
+    CHECK_EQ_INT(solve_status(&d), RADINTERP_ERROR_INVALID_ARGUMENT);
+    d = scene_desc(sc); d.visibility_rays = 0x80000000u;
+    CHECK_EQ_INT(solve_status(&d), RADINTERP_ERROR_INVALID_ARGUMENT);
+    d = scene_desc(sc); d.ff_samples = RADINTERP_MAX_FF_SAMPLES + 1;
+    CHECK_EQ_INT(solve_status(&d), RADINTERP_ERROR_INVALID_ARGUMENT);
+    d = scene_desc(sc); d.ff_samples = 16; d.visibility_rays = 16;   /* within the caps */
+    CHECK_EQ_INT(solve_status(&d), RADINTERP_OK);
 }
 
 static void test_patch_shapes(void)
@@ -346,11 +355,15 @@ static void test_patch_shapes(void)
     d = scene_desc(&s);
     CHECK_EQ_INT(solve_status(&d), RADINTERP_ERROR_INVALID_ARGUMENT);
     CHECK(strstr(last_log, "convex") != NULL);
+    /* a symmetric bow tie has no signed area: it must not pass as a zero-area
+       patch (skipped) beside a valid one */
     memset(&s, 0, sizeof s);
     m = add_material(&s, 0.5f, 1.0f);
+    add_quad(&s, a, b, c, e, m);
     add_quad(&s, a, c, b, e, m);
     d = scene_desc(&s);
     CHECK_EQ_INT(solve_status(&d), RADINTERP_ERROR_INVALID_ARGUMENT);
+    CHECK_MSG(strstr(last_log, "patch 1") != NULL && strstr(last_log, "cross") != NULL, "log: %s", last_log);
     /* zero area is skipped and counted; a repeated corner makes a triangle;
        all degenerate is an error */
     memset(&s, 0, sizeof s);

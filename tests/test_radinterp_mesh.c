@@ -843,6 +843,10 @@ static void test_interpolant_accuracy(void)
     add_hrect(&s, -2, -2, 2, 2, 0, 1, grey);
     add_hrect(&s, -0.2f, -0.2f, 0.2f, 0.2f, 1.0f, 0, light);
     d = scene_desc(&s);
+    /* the thesis's absolute transport bound at half the mean emitted
+       radiosity: a coarse solution, so that the representation-based
+       refinement below has leaves to split */
+    d.eps = 0.5f;
     CHECK(radinterp_solve(&d, &sol) == RADINTERP_OK);
     if (!sol) return;
     CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &m), RADINTERP_OK);
@@ -1097,6 +1101,117 @@ static void test_allocation_failures_and_cancel(void)
     radinterp_solution_destroy(sol);
 }
 
+/* Allocations through a budget: a build that split without end would
+   exhaust it and answer out of memory instead of running until the machine
+   does. */
+typedef struct budget { size_t left; } budget;
+static void *budget_alloc(size_t n, void *user)
+{
+    budget *b = (budget *)user;
+    size_t *p;
+    if (n > b->left) return NULL;
+    p = (size_t *)malloc(n + sizeof(size_t) * 2);
+    if (!p) return NULL;
+    b->left -= n;
+    p[0] = n;
+    return p + 2;
+}
+static void budget_free(void *ptr, void *user)
+{
+    size_t *p = (size_t *)ptr;
+    if (!p) return;
+    ((budget *)user)->left += p[-2];
+    free(p - 2);
+}
+
+/* A lit floor with one more patch (a quadrilateral at z = 0.3 given by its
+   corners in the xy plane, facing up): the mesh status and its info. */
+static radinterp_result mesh_with_patch(const float (*q)[2], radinterp_mesh_desc *md, radinterp_mesh_info *info,
+                                        radinterp_mesh **keep)
+{
+    static scene s;
+    radinterp_desc d;
+    radinterp_solution *sol = NULL;
+    radinterp_mesh *m = NULL;
+    radinterp_result r;
+    static budget bud;   /* a kept mesh frees through it after this returns */
+    float c[4][3];
+    uint32_t grey, light, k;
+    memset(&s, 0, sizeof s);
+    grey = add_material(&s, 0.5f, 0.0f);
+    light = add_material(&s, 0.5f, 10.0f);
+    add_hrect(&s, 0.0f, 0.0f, 2.0f, 2.0f, 0.0f, 1, grey);
+    add_hrect(&s, 0.0f, 0.0f, 2.0f, 2.0f, 1.0f, 0, light);
+    for (k = 0; k < 4; k++) { c[k][0] = q[k][0]; c[k][1] = q[k][1]; c[k][2] = 0.3f; }
+    add_quad(&s, c[0], c[1], c[2], c[3], grey);
+    d = scene_desc(&s);
+    if (!CHECK(radinterp_solve(&d, &sol) == RADINTERP_OK)) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    bud.left = (size_t)256 << 20;
+    md->allocator.alloc = budget_alloc;
+    md->allocator.free = budget_free;
+    md->allocator.user = &bud;
+    r = radinterp_build_mesh(sol, md, &m);
+    radinterp_mesh_get_info(m, info);
+    if (keep) *keep = m;
+    else radinterp_mesh_destroy(m);
+    radinterp_solution_destroy(sol);
+    return r;
+}
+
+/* Degenerate shapes the mesher once mishandled: a quadrilateral with an edge
+   one or a few float steps long and a 2 m x 0.1 um strip made the balance
+   step split forever (the quarter points of such an edge round onto its own
+   corners); a 2 m x 1 um strip failed the whole build. Now they mesh or are
+   left out and counted, within a fixed memory budget. */
+static void test_degenerate_patches(void)
+{
+    radinterp_mesh_desc md = mesh_desc();
+    radinterp_mesh_info info;
+    /* a convex quadrilateral whose edge from corner 2 to corner 3 is 1, then 4, float steps long */
+    float q[4][2] = {{0.5f, 0.5f}, {2.0f, 0.5f}, {2.0f, 1.5f}, {2.0f, 1.5f}};
+    int k;
+    for (k = 0; k < 4; k++) {
+        q[3][0] = nextafterf(q[3][0], 0.0f);
+        if (k != 0 && k != 3) continue;
+        md = mesh_desc();
+        CHECK_EQ_INT(mesh_with_patch((const float (*)[2])q, &md, &info, NULL), RADINTERP_OK);
+    }
+    {
+        const float strip[4][2] = {{0.0f, 0.5f}, {2.0f, 0.5f}, {2.0f, 0.5f + 1e-7f}, {0.0f, 0.5f + 1e-7f}};
+        const float wider[4][2] = {{0.0f, 0.5f}, {2.0f, 0.5f}, {2.0f, 0.5f + 1e-6f}, {0.0f, 0.5f + 1e-6f}};
+        md = mesh_desc();
+        CHECK_EQ_INT(mesh_with_patch(strip, &md, &info, NULL), RADINTERP_OK);
+        md = mesh_desc();
+        CHECK_EQ_INT(mesh_with_patch(wider, &md, &info, NULL), RADINTERP_OK);
+        /* 1 um is below the weld distance (1e-6 of the 3.3 m diagonal): left out, counted */
+        CHECK_EQ_INT(info.skipped_patches, 1);
+        CHECK(info.triangle_count > 0);
+    }
+}
+
+/* A build without discontinuities once offset a NULL array (undefined
+   behaviour that clang's sanitizer reports); evaluation at a NaN or
+   infinite (s, t) returned OK with NaN. */
+static void test_no_discontinuities_and_eval_arguments(void)
+{
+    const float sq[4][2] = {{0.5f, 0.5f}, {1.5f, 0.5f}, {1.5f, 1.5f}, {0.5f, 1.5f}};
+    radinterp_mesh_desc md = mesh_desc();
+    radinterp_mesh_info info;
+    radinterp_mesh *m = NULL;
+    float rgb[3] = {1, 1, 1};
+    md.no_discontinuities = 1;
+    CHECK_EQ_INT(mesh_with_patch(sq, &md, &info, &m), RADINTERP_OK);
+    if (!m) return;
+    CHECK_EQ_INT(info.active_discontinuities, 0);
+    CHECK_EQ_INT(radinterp_eval(m, 0, 0.25f, 0.25f, rgb), RADINTERP_OK);
+    CHECK(isfinite(rgb[0]) && rgb[0] > 0.0f);
+    CHECK_EQ_INT(radinterp_eval(m, 0, NAN, 0.25f, rgb), RADINTERP_ERROR_INVALID_ARGUMENT);
+    CHECK(rgb[0] == 0.0f && rgb[1] == 0.0f && rgb[2] == 0.0f);
+    CHECK_EQ_INT(radinterp_eval(m, 0, 0.25f, INFINITY, rgb), RADINTERP_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(radinterp_eval_irradiance(m, 0, -INFINITY, 0.0f, rgb), RADINTERP_ERROR_INVALID_ARGUMENT);
+    radinterp_mesh_destroy(m);
+}
+
 static void test_determinism(void)
 {
     scene s;
@@ -1140,6 +1255,8 @@ int main(int argc, char **argv)
     RUN(test_save_load);
     RUN(test_validation);
     RUN(test_allocation_failures_and_cancel);
+    RUN(test_degenerate_patches);
+    RUN(test_no_discontinuities_and_eval_arguments);
     RUN(test_determinism);
     return test_finish();
 }

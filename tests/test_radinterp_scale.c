@@ -1,0 +1,472 @@
+/* Unit tests of radinterp.h part 5, the solver at scale (issue 13's
+   acceptance tests that fit in make test; buildings are in
+   tests/bench_radinterp_building.c): the clustered solve against the
+   unclustered one on the Cornell box, no light through a
+   solid wall between two rooms, triangle-soup input (T-junctions, slivers,
+   zero-area triangles, duplicates, coplanar overlaps), cancel from every
+   progress call of the solve and of the mesh build without a leak, and the
+   accepted coordinate range. */
+#define RADINTERP_IMPLEMENTATION
+#include "../radinterp.h"
+#include "examples/common/obj.h"
+#include "test.h"
+#include "test_radinterp_scenes.h"
+
+#define PI 3.14159265358979323846
+
+/* ---- scenes ---------------------------------------------------------------- */
+/* Scenes are tests/test_radinterp_scenes.h's (its building and its box
+   faces), a few shapes of their own, and the examples' OBJ files. */
+static void add_tri(rb_scene *s, const float *a, const float *b, const float *c, uint32_t mat)
+{
+    uint32_t *q;
+    rb__grow(s, 3, 1);
+    q = s->patch + 4 * s->np;
+    q[0] = rb__vertex(s, a); q[1] = rb__vertex(s, b); q[2] = rb__vertex(s, c); q[3] = RADINTERP_NO_VERTEX;
+    s->mat[s->np++] = mat;
+}
+
+static void grey_material(rb_scene *s, int i, float rho, float e) { rb_material(s, i, rho, rho, rho, e); }
+
+/* An OBJ+MTL scene as patches (faces of 3 or 4 corners, emission pi Ke);
+   its materials into *mats (malloc'd). */
+static int load_scene(rb_scene *s, radinterp_material **mats, uint32_t *material_count, const char *path)
+{
+    char err[256];
+    obj_scene obj;
+    uint32_t f, k;
+    memset(s, 0, sizeof *s);
+    *mats = NULL;
+    if (obj_load(path, &obj, err, sizeof err) != 0) {
+        CHECK_MSG(0, "%s", err);
+        return 0;
+    }
+    rb__grow(s, obj.vertex_count, obj.face_count);
+    for (k = 0; k < obj.vertex_count; k++) rb__vertex(s, obj.positions + 3 * k);
+    for (f = 0; f < obj.face_count; f++) {
+        uint32_t n = obj.face_start[f + 1] - obj.face_start[f];
+        for (k = 0; k < 4; k++) s->patch[4 * f + k] = k < n ? obj.face_vertices[obj.face_start[f] + k] : RADINTERP_NO_VERTEX;
+        s->mat[f] = obj.face_material[f];
+    }
+    s->np = obj.face_count;
+    *mats = (radinterp_material *)malloc(sizeof **mats * obj.material_count);
+    *material_count = obj.material_count;
+    for (f = 0; f < obj.material_count; f++)
+        for (k = 0; k < 3; k++) {
+            (*mats)[f].reflectance[k] = obj.materials[f].kd[k];
+            (*mats)[f].emission[k] = (float)PI * obj.materials[f].ke[k];
+        }
+    obj_free(&obj);
+    return 1;
+}
+
+static double lum(const float *c) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; }
+
+/* Patch radiosities (luminance) of a solve, or NULL when it failed. */
+static double *solve_patches(const radinterp_desc *d, radinterp_info *info)
+{
+    radinterp_solution *sol;
+    double *b;
+    uint32_t i;
+    if (!CHECK_EQ_INT(radinterp_solve(d, &sol), RADINTERP_OK)) return NULL;
+    b = (double *)malloc(sizeof(double) * d->patch_count);
+    for (i = 0; i < d->patch_count; i++) {
+        float rgb[3] = {0, 0, 0};
+        CHECK_EQ_INT(radinterp_patch_radiosity(sol, i, rgb), RADINTERP_OK);
+        b[i] = lum(rgb);
+    }
+    if (info) radinterp_solution_info(sol, info);
+    radinterp_solution_destroy(sol);
+    return b;
+}
+
+/* ---- clustered = unclustered ---------------------------------------------- */
+/* The clustered solve against the unclustered one, same eps. Two solves
+   differ by where refinement stopped (links within their tolerance, 5% of
+   the receiver's irradiance by default, are left as they are), so the
+   unclustered solver is compared with itself first, with another seed: its
+   spread is what two equally good solutions of this eps differ by (up to
+   3% on faces that stand on the floor in the Cornell box, whose light
+   comes through hundreds of links at min_area). A patch passes within 1%
+   of its radiosity (of a fifth of the scene's mean where it is darker)
+   plus twice that spread; the mean difference over the patches, where the
+   spread averages out, is held to 1% alone. Before the refinement estimate
+   sampled the receiver point nearest the source, the Cornell box's short
+   block face was 3.7% darker clustered (eps 0.005) while its spread was
+   under 0.5%. */
+static void compare_clustering(const char *path, float eps)
+{
+    rb_scene s;
+    radinterp_desc d;
+    radinterp_info ic, iu;
+    double *bc, *bu, *bs, mean = 0.0, sum_rel = 0.0, worst = 0.0;
+    uint32_t i, n = 0, worst_patch = 0;
+    radinterp_material *mats;
+    uint32_t nm;
+    if (!load_scene(&s, &mats, &nm, path)) { rb_free(&s); return; }
+    d = rb_desc(&s);
+    d.materials = mats;
+    d.material_count = nm;
+    d.eps = eps;
+    d.clustering = RADINTERP_CLUSTERING_ON;
+    bc = solve_patches(&d, &ic);
+    d.clustering = RADINTERP_CLUSTERING_OFF;
+    bu = solve_patches(&d, &iu);
+    d.seed = 1;
+    bs = solve_patches(&d, NULL);
+    if (bc && bu && bs) {
+        CHECK(ic.cluster_count > 0);
+        CHECK_EQ_INT(iu.cluster_count, 0);
+        for (i = 0; i < s.np; i++)
+            if (lum(mats[s.mat[i]].emission) == 0.0f) { mean += bu[i]; n++; }
+        mean = n ? mean / n : 1.0;
+        for (i = 0; i < s.np; i++) {
+            double scale = bu[i] > 0.2 * mean ? bu[i] : 0.2 * mean, diff = fabs(bc[i] - bu[i]), spread = fabs(bs[i] - bu[i]);
+            CHECK_MSG(diff <= 0.01 * scale + 2.0 * spread, "%s patch %u: clustered %.5f, unclustered %.5f (another seed %.5f)",
+                      path, i, bc[i], bu[i], bs[i]);
+            sum_rel += diff / scale;
+            if (diff / scale > worst) { worst = diff / scale; worst_patch = i; }
+        }
+        CHECK_MSG(sum_rel / s.np <= 0.01, "%s: mean difference %.2f%%", path, 100.0 * sum_rel / s.np);
+        test_note("%s: clustered vs unclustered: mean %.2f%%, largest %.2f%% (patch %u; another seed differs by %.2f%% there); "
+                  "links %u + %u cluster links vs %u", path, 100.0 * sum_rel / s.np, 100.0 * worst, worst_patch,
+                  100.0 * fabs(bs[worst_patch] - bu[worst_patch]) / (bu[worst_patch] > 0.2 * mean ? bu[worst_patch] : 0.2 * mean),
+                  ic.link_count, ic.cluster_link_count, iu.link_count);
+    }
+    free(bc);
+    free(bu);
+    free(bs);
+    free(mats);
+    rb_free(&s);
+}
+
+/* The Cornell box with the defaults. The office is not held to it: there
+   the clustered solve leaves the lamp's pole 5% darker than the
+   unclustered one (12% with eps_relative 0.02), while another seed moves
+   it by 0.2%: the near field of the lamp shade, which the pole touches, is
+   refined differently, and that is not resolved yet. */
+static void test_clustered_equals_unclustered(void)
+{
+    compare_clustering("examples/data/cornell_box.obj", 0.0f);
+}
+
+/* ---- a solid wall between two rooms ------------------------------------- */
+/* Which rooms of a two-room building (tests/test_radinterp_scenes.h) a
+   patch is inside: bit 0 the left room, bit 1 the right one, 0 for the
+   building's outer faces. */
+static unsigned patch_room(const rb_scene *b, uint32_t p)
+{
+    const float split = RB_WALL + RB_ROOM_W + 0.5f * RB_WALL;   /* the middle of the wall between them */
+    float x = 0.0f;
+    uint32_t k, n = 0;
+    if (b->mat[p] == RB_OUTSIDE) return 0;
+    for (k = 0; k < 4 && b->patch[4 * p + k] != RADINTERP_NO_VERTEX; k++, n++) x += b->pos[3 * b->patch[4 * p + k]];
+    return x / n < split ? 1u : 2u;
+}
+
+/* The rooms an element (a quadtree node or a cluster) holds patches of. */
+static unsigned element_rooms(const radinterp_solution *sol, const rb_scene *b, uint32_t el)
+{
+    unsigned rooms = 0;
+    uint32_t i;
+    if (!radinterp__is_cluster(el)) return patch_room(b, sol->first_caller[sol->nodes[el].patch]);
+    for (i = 0; i < radinterp__cl(sol, el)->count; i++)
+        rooms |= patch_room(b, sol->first_caller[sol->cluster_order[radinterp__cl(sol, el)->first + i]]);
+    return rooms;
+}
+
+/* Two rooms of the generated building (desk, cabinet, lamp each; exported
+   as triangles) with the wall between them solid, the right room's lamp
+   switched off. The right room must stay exactly black, and no link may
+   carry light between patches of the two rooms: with clustering the first
+   links join clusters that span both, and those must be dropped or split
+   until nothing crosses (a cluster link whose rays were all blocked but
+   that planes could not prove hidden is kept at a transfer of zero, to be
+   split if it could ever carry more). */
+static void test_wall_between_rooms(void)
+{
+    rb_scene s;
+    radinterp_desc d;
+    radinterp_solution *sol;
+    radinterp_info info;
+    uint32_t i, crossing = 0, lit = 0, right = 0;
+    rb_building(&s, 2, 1, 1, RB_NO_DOORS | RB_TRIANGLES);
+    for (i = 0; i < s.np; i++)
+        if (s.mat[i] == RB_LAMP && patch_room(&s, i) == 2) s.mat[i] = RB_LAMP_FRAME;
+    d = rb_desc(&s);
+    if (!CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_OK)) { rb_free(&s); return; }
+    radinterp_solution_info(sol, &info);
+    for (i = 0; i < sol->link_count; i++)
+        crossing += sol->links[i].ff > 0.0f &&
+                    (element_rooms(sol, &s, sol->links[i].receiver) | element_rooms(sol, &s, sol->links[i].source)) == 3u;
+    for (i = 0; i < sol->clink_count; i++)
+        crossing += sol->clinks[i].k > 0.0f &&
+                    (element_rooms(sol, &s, sol->clinks[i].receiver) | element_rooms(sol, &s, sol->clinks[i].source)) == 3u;
+    CHECK_EQ_INT(crossing, 0);
+    for (i = 0; i < radinterp_leaf_count(sol); i++) {
+        radinterp_leaf leaf;
+        radinterp_get_leaf(sol, i, &leaf);
+        if (patch_room(&s, leaf.patch) != 2) continue;
+        right++;
+        lit += leaf.radiosity[0] != 0.0f || leaf.radiosity[1] != 0.0f || leaf.radiosity[2] != 0.0f;
+    }
+    CHECK(right > 0);
+    CHECK_EQ_INT(lit, 0);
+    {   /* and the left room is lit: its floor (about 0.26 W/m^2) */
+        float rgb[3] = {0, 0, 0};
+        for (i = 0; i < s.np; i++)
+            if (s.mat[i] == RB_FLOOR && patch_room(&s, i) == 1) break;
+        radinterp_patch_radiosity(sol, i, rgb);
+        CHECK(rgb[0] > 0.1f);
+    }
+    test_note("two rooms (%u patches): %u links, %u cluster links, %llu pairs dropped as hidden, %u crossing, "
+              "%u of %u right-room leaves lit", s.np, info.link_count, info.cluster_link_count,
+              (unsigned long long)info.culled_links, crossing, lit, right);
+    radinterp_solution_destroy(sol);
+    rb_free(&s);
+}
+
+/* ---- triangle soup ----------------------------------------------------------- */
+static void v3(float *v, float x, float y, float z) { v[0] = x; v[1] = y; v[2] = z; }
+
+/* A closed room 4 x 3 x 2.5 m as an engine exports it: every rectangle two
+   triangles, the floor's left half three triangles meeting the right
+   half's edge at a T-junction, a lamp panel, a cabinet one of whose faces
+   comes twice (a duplicate), a rug lying on the floor (a coplanar overlap),
+   a sliver (1 m x 0.1 um), a triangle with three collinear corners and one
+   with a repeated corner (zero area). */
+static void soup_room(rb_scene *s, int soup)
+{
+    float a[3], b[3], c[3], d[3], lo[3], hi[3];
+    const uint32_t grey = 0, lamp = 1, rug = 2;
+    int axis;
+    memset(s, 0, sizeof *s);
+    grey_material(s, grey, 0.7f, 0.0f);
+    grey_material(s, lamp, 0.5f, 20.0f);
+    grey_material(s, rug, 0.4f, 0.0f);
+    s->flags = soup ? RB_TRIANGLES : 0;
+    /* walls and ceiling: two triangles per rectangle (the inward box faces split) */
+    lo[0] = 0; lo[1] = 0; lo[2] = 0; hi[0] = 4; hi[1] = 3; hi[2] = 2.5f;
+    for (axis = 0; axis < 3; axis++) {
+        int side;
+        for (side = 0; side < 2; side++)
+            if (axis != 2 || side != 0) rb_box_face(s, lo, hi, axis, side, 1, grey);   /* the floor comes below */
+    }
+    if (soup) {   /* floor (facing +z): left half with a T-junction at (2, 1.5) */
+        v3(a, 0, 0, 0); v3(b, 2, 0, 0); v3(c, 2, 1.5f, 0); v3(d, 0, 3, 0);
+        add_tri(s, a, b, c, grey);
+        add_tri(s, a, c, d, grey);
+        v3(a, 2, 1.5f, 0); v3(b, 2, 3, 0);
+        add_tri(s, a, b, d, grey);
+        v3(a, 2, 0, 0); v3(b, 4, 0, 0); v3(c, 4, 3, 0); v3(d, 2, 3, 0);
+        add_tri(s, a, b, c, grey);
+        add_tri(s, a, c, d, grey);
+    } else rb_box_face(s, lo, hi, 2, 0, 1, grey);
+    s->flags = 0;   /* the rest as quadrilaterals */
+    lo[0] = 1.5f; lo[1] = 1.0f; lo[2] = 2.45f; hi[0] = 2.5f; hi[1] = 2.0f; hi[2] = 2.5f;
+    rb_box_face(s, lo, hi, 2, 0, 0, lamp);
+    lo[0] = 2.8f; lo[1] = 0.5f; lo[2] = 0.0f; hi[0] = 3.6f; hi[1] = 1.1f; hi[2] = 0.9f;
+    rb_box(s, lo, hi, RB_ALL_FACES, grey);
+    if (!soup) return;
+    rb_box_face(s, lo, hi, 0, 0, 0, grey);                             /* the cabinet's -x face again */
+    v3(a, 0.5f, 1.5f, 0); v3(b, 1.5f, 1.5f, 0); v3(c, 1.5f, 2.5f, 0); v3(d, 0.5f, 2.5f, 0);
+    rb_quad(s, a, b, c, d, rug);                                       /* the rug, on the floor */
+    v3(a, 1.0f, 2.0f, 1.0f); v3(b, 2.0f, 2.0f, 1.0f); v3(c, 1.5f, 2.0f, 1.0f + 1e-7f);
+    add_tri(s, a, b, c, grey);                                         /* the sliver */
+    v3(a, 1.0f, 1.0f, 1.2f); v3(b, 2.0f, 1.0f, 1.2f); v3(c, 3.0f, 1.0f, 1.2f);
+    add_tri(s, a, b, c, grey);                                         /* collinear corners */
+    add_tri(s, a, b, a, grey);                                         /* a repeated corner */
+}
+
+static void test_triangle_soup(void)
+{
+    rb_scene soup, clean;
+    radinterp_desc d;
+    radinterp_solution *sol = NULL, *ref = NULL;
+    radinterp_info info;
+    radinterp_mesh *mesh = NULL;
+    radinterp_mesh_desc md;
+    radinterp_mesh_info mi;
+    uint32_t i, bad = 0;
+    float rs[3], rc[3];
+    soup_room(&soup, 1);
+    soup_room(&clean, 0);
+    d = rb_desc(&soup);
+    if (!CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_OK)) goto done;
+    d = rb_desc(&clean);
+    if (!CHECK_EQ_INT(radinterp_solve(&d, &ref), RADINTERP_OK)) goto done;
+    radinterp_solution_info(sol, &info);
+    CHECK_EQ_INT(info.skipped_patches, 2);        /* the collinear and the repeated-corner triangles */
+    /* the four walls', the ceiling's and the floor's right half's triangle
+       pairs at least (the left half's triangles may pair too: 7 measured) */
+    CHECK(info.merged_patches >= 6);
+    /* bounded: every radiosity finite, at most the emission over (1 - rho);
+       the memory held is that of a small room */
+    for (i = 0; i < radinterp_leaf_count(sol); i++) {
+        radinterp_leaf leaf;
+        int k;
+        radinterp_get_leaf(sol, i, &leaf);
+        for (k = 0; k < 3; k++) bad += !(leaf.radiosity[k] >= 0.0f && leaf.radiosity[k] <= 20.0f / (1.0f - 0.7f));
+    }
+    CHECK_EQ_INT(bad, 0);
+    CHECK(info.bytes < (size_t)64 << 20);
+    /* handled: the far wall (x = 4, away from every defect) as in the clean
+       room within 3% (the duplicate face and the rug change the light a
+       little: about 1%) */
+    radinterp_patch_radiosity(sol, 2, rs);
+    radinterp_patch_radiosity(ref, 1, rc);
+    CHECK_MSG(fabs(rs[0] - rc[0]) <= 0.03 * rc[0], "far wall: soup %.4f, clean %.4f", rs[0], rc[0]);
+    /* and it meshes */
+    memset(&md, 0, sizeof md);
+    md.min_leaf_area = 0.25f;   /* coarse: this is about the input, not the mesh's accuracy */
+    if (CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &mesh), RADINTERP_OK)) {
+        radinterp_mesh_data data;
+        radinterp_mesh_get_info(mesh, &mi);
+        radinterp_mesh_get_data(mesh, &data);
+        for (i = 0; i < 18 * mi.triangle_count; i++) bad += !isfinite(data.coefficients[i]);
+        CHECK_EQ_INT(bad, 0);
+        CHECK(mi.triangle_count > 0);
+        test_note("soup room: %u patches given, %u merged, %u skipped; far wall %.4f (clean %.4f); mesh %u triangles, "
+                  "%u patches left out", info.patch_count, info.merged_patches, info.skipped_patches, rs[0], rc[0],
+                  mi.triangle_count, mi.skipped_patches);
+    }
+done:
+    radinterp_mesh_destroy(mesh);
+    radinterp_solution_destroy(sol);
+    radinterp_solution_destroy(ref);
+    rb_free(&soup);
+    rb_free(&clean);
+}
+
+/* ---- progress and cancel ----------------------------------------------------- */
+typedef struct counting { long live, calls; } counting;
+static void *count_alloc(size_t n, void *user) { ((counting *)user)->live++; return malloc(n); }
+static void count_free(void *p, void *user) { if (p) ((counting *)user)->live--; free(p); }
+
+typedef struct progress_state { long calls, cancel_at; uint64_t last_done; int backwards; } progress_state;
+static int progress_cb(void *user, uint64_t done, uint64_t total)
+{
+    progress_state *p = (progress_state *)user;
+    p->backwards |= done > total;
+    p->last_done = done;
+    return ++p->calls == p->cancel_at;
+}
+
+/* Cancel from progress calls spread over the run (every one up to 8, else
+   8 evenly spaced): the solve and the mesh build return CANCELLED and free
+   everything they allocated. */
+static void test_cancel_everywhere(void)
+{
+    rb_scene s;
+    radinterp_desc d;
+    radinterp_mesh_desc md;
+    radinterp_solution *sol = NULL;
+    radinterp_mesh *mesh = NULL;
+    counting cnt;
+    progress_state ps;
+    long n, k, step, solve_step;
+    soup_room(&s, 1);
+    memset(&cnt, 0, sizeof cnt);
+    d = rb_desc(&s);
+    d.allocator.alloc = count_alloc;
+    d.allocator.free = count_free;
+    d.allocator.user = &cnt;
+    d.progress = progress_cb;
+    d.progress_user = &ps;
+    memset(&ps, 0, sizeof ps);
+    if (!CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_OK)) { rb_free(&s); return; }
+    n = ps.calls;
+    CHECK(n >= 3);
+    CHECK(!ps.backwards);
+    solve_step = step = (n + 7) / 8;
+    for (k = 1; k <= n; k += step) {
+        radinterp_solution *c = NULL;
+        memset(&ps, 0, sizeof ps);
+        ps.cancel_at = k;
+        CHECK_EQ_INT(radinterp_solve(&d, &c), RADINTERP_ERROR_CANCELLED);
+        CHECK(c == NULL);
+    }
+    memset(&md, 0, sizeof md);
+    md.min_leaf_area = 0.25f;
+    md.allocator = d.allocator;
+    md.progress = progress_cb;
+    md.progress_user = &ps;
+    memset(&ps, 0, sizeof ps);
+    if (CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &mesh), RADINTERP_OK)) {
+        long m = ps.calls;
+        CHECK(m >= 3);
+        CHECK(!ps.backwards);
+        radinterp_mesh_destroy(mesh);
+        step = (m + 7) / 8;
+        for (k = 1; k <= m; k += step) {
+            radinterp_mesh *c = NULL;
+            memset(&ps, 0, sizeof ps);
+            ps.cancel_at = k;
+            CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &c), RADINTERP_ERROR_CANCELLED);
+            CHECK(c == NULL);
+        }
+        test_note("cancelled from %ld of %ld solve progress calls and %ld of %ld mesh ones", (n + solve_step - 1) / solve_step, n,
+                  (m + step - 1) / step, m);
+    }
+    radinterp_solution_destroy(sol);
+    CHECK_EQ_INT(cnt.live, 0);
+    rb_free(&s);
+}
+
+/* ---- coordinate range ----------------------------------------------------------- */
+/* Radiosity does not depend on the scene's scale: the room scaled by 1e-15
+   and by 1e15 (inside the accepted range) gives the radiosities of the
+   unscaled room, within the spread of another seed plus 1%; scaled out of
+   the range (1e20, 1e-20) it is INVALID_ARGUMENT, as are coordinates a
+   float cannot square. */
+static void test_coordinate_range(void)
+{
+    static const double scales[] = {1e-15, 1e15};
+    rb_scene s;
+    radinterp_desc d;
+    radinterp_solution *sol;
+    double *base, *other;
+    float *orig;
+    uint32_t i, k;
+    soup_room(&s, 0);
+    orig = (float *)malloc(sizeof(float) * 3 * s.nv);
+    memcpy(orig, s.pos, sizeof(float) * 3 * s.nv);
+    d = rb_desc(&s);
+    base = solve_patches(&d, NULL);
+    d.seed = 7;
+    other = solve_patches(&d, NULL);
+    d.seed = 0;
+    for (k = 0; k < 2 && base && other; k++) {
+        double *b, worst = 0.0;
+        for (i = 0; i < 3 * s.nv; i++) s.pos[i] = (float)(orig[i] * scales[k]);
+        b = solve_patches(&d, NULL);
+        for (i = 0; b && i < s.np; i++) {
+            double diff = fabs(b[i] - base[i]), spread = fabs(other[i] - base[i]);
+            CHECK_MSG(diff <= 0.01 * base[i] + 2.0 * spread, "scale %g, patch %u: %.5f, unscaled %.5f (another seed %.5f)",
+                      scales[k], i, b[i], base[i], other[i]);
+            if (diff / base[i] > worst) worst = diff / base[i];
+        }
+        test_note("room scaled by %g: largest patch difference %.2f%%", scales[k], 100.0 * worst);
+        free(b);
+    }
+    for (k = 0; k < 2; k++) {
+        double sc = k ? 1e-20 : 1e20;
+        for (i = 0; i < 3 * s.nv; i++) s.pos[i] = (float)(orig[i] * sc);
+        CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_ERROR_INVALID_ARGUMENT);
+    }
+    free(base);
+    free(other);
+    free(orig);
+    rb_free(&s);
+}
+
+int main(int argc, char **argv)
+{
+    TEST_INIT(argc, argv);
+    RUN(test_wall_between_rooms);
+    RUN(test_triangle_soup);
+    RUN(test_cancel_everywhere);
+    RUN(test_coordinate_range);
+    RUN(test_clustered_equals_unclustered);
+    return test_finish();
+}
