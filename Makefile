@@ -107,6 +107,11 @@ ifneq ($(CLANGXX),)
 CHECK_KINDS += clang-cxx
 endif
 CHECK_OBJS := $(foreach h,$(basename $(HEADERS)),$(foreach k,$(CHECK_KINDS),$(BUILD)/check/$(h).$(k).o))
+# The examples' headers as C++ too (g++ and clang++), each included twice;
+# scene_assimp.h only where Assimp is present, with its flags.
+EXAMPLE_CHECK_H := $(basename $(notdir $(filter-out $(if $(ASSIMP_OK),,examples/common/scene_assimp.h),\
+                     $(wildcard examples/common/*.h))))
+CHECK_OBJS += $(foreach h,$(EXAMPLE_CHECK_H),$(foreach k,$(filter cxx clang-cxx,$(CHECK_KINDS)),$(BUILD)/check/example_$(h).$(k).o))
 
 # The reference libraries are looked up only after tests/deps.sh ran.
 REF_CFLAGS = $(shell pkg-config --cflags OpenEXR 2>/dev/null)
@@ -180,6 +185,12 @@ $(BUILD)/check/%.clang-c99.o: $(BUILD)/check/%.c %.h
 	$(CLANG) -std=c99 $(WARN) -I. -c $< -o $@
 $(BUILD)/check/%.clang-cxx.o: $(BUILD)/check/%.c %.h
 	$(CLANGXX) -x c++ $(WARN) -I. -c $< -o $@
+$(BUILD)/check/example_%.cpp: | $(BUILD)/check
+	@printf '#include "examples/common/%s.h"\n#include "examples/common/%s.h" /* included twice on purpose */\n' $* $* > $@
+$(BUILD)/check/example_%.cxx.o: $(BUILD)/check/example_%.cpp $(ALL_H) $(ASSIMP_STAMP)
+	$(CXX) -x c++ $(WARN) -I. $(ASSIMP_FLAGS) -c $< -o $@
+$(BUILD)/check/example_%.clang-cxx.o: $(BUILD)/check/example_%.cpp $(ALL_H) $(ASSIMP_STAMP)
+	$(CLANGXX) -x c++ $(WARN) -I. $(ASSIMP_FLAGS) -c $< -o $@
 
 # --- tests ----------------------------------------------------------------
 $(LINKAGE_BIN): tests/linkage/impl.c tests/linkage/main.c $(ALL_H) | $(BUILD)/tests

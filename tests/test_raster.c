@@ -1,7 +1,8 @@
 /* Unit tests of examples/common/camera.h and raster.h: exact coverage (each
    pixel centre inside a mesh covered by exactly one triangle, also where
    triangles are clipped by the near plane), depth order, perspective-correct
-   barycentrics, and parallel = serial. */
+   barycentrics, parallel = serial, and meshes drawn in one pass = drawn
+   one by one. */
 #include "examples/common/raster.h"
 #include "tests/test.h"
 
@@ -211,6 +212,85 @@ static void test_parallel_equals_serial(void)
     free_grid(&g);
 }
 
+/* What tile_done saw, gathered into whole frames. */
+typedef struct tiles_seen { int width; float *depth, *bary; uint32_t *id; int tiles; } tiles_seen;
+
+static void gather_tile(void *user, const ex_raster_tile *t)
+{
+    tiles_seen *seen = (tiles_seen *)user;
+    int x, y;
+    for (y = t->y0; y < t->y1; y++)
+        for (x = t->x0; x < t->x1; x++) {
+            size_t p = (size_t)y * (size_t)seen->width + (size_t)x;
+            int q = (y - t->y0) * EX_RASTER_TILE + (x - t->x0);
+            seen->depth[p] = t->depth[q];
+            seen->id[p] = t->id[q];
+            seen->bary[2 * p] = t->bary[2 * q];
+            seen->bary[2 * p + 1] = t->bary[2 * q + 1];
+        }
+    seen->tiles++;   /* serial: the raster below has no pool */
+}
+
+/* Drawing meshes in one pass gives the frames of drawing them one after the
+   other, bit for bit: a floor, a raised patch over part of it (overdraw in
+   both orders) and the floor again, whose exact depth ties the first copy
+   keeps (ids below 100000 everywhere). The tiles tile_done sees are those
+   frames, also when the raster leaves its depth and barycentric buffers
+   unwritten. */
+static void test_draw_meshes_equals_draws(void)
+{
+    float eye[3] = { 0.2f, 3.0f, -4.0f }, target[3] = { 0.0f, 0.0f, 1.0f }, up[3] = { 0, 1, 0 };
+    const int W = 150, H = 110;
+    ex_camera c = ex_camera_look_at(eye, target, up, 70.0f, W, H);
+    grid floor = make_grid(30, 30, -6, -3, 6, 9, 0, 0.8f), patch = make_grid(9, 7, -2, 0, 2, 4, 0.7f, 0.6f);
+    ex_raster_mesh m[3];
+    ex_raster a, b;
+    tiles_seen seen;
+    size_t n = (size_t)W * (size_t)H, p, far = 0, patch_pixels = 0;
+    int k;
+    seen.width = W;
+    seen.tiles = 0;
+    seen.depth = (float *)malloc(n * sizeof(float));
+    seen.bary = (float *)malloc(2 * n * sizeof(float));
+    seen.id = (uint32_t *)malloc(n * sizeof(uint32_t));
+    if (!CHECK(seen.depth && seen.bary && seen.id && ex_raster_init(&a, W, H) == 0 && ex_raster_init(&b, W, H) == 0))
+        return;
+    m[0].positions = floor.pos; m[0].indices = floor.idx; m[0].tri_count = floor.tris; m[0].id_base = 0;
+    m[1].positions = patch.pos; m[1].indices = patch.idx; m[1].tri_count = patch.tris; m[1].id_base = 50000;
+    m[2] = m[0];
+    m[2].id_base = 100000;
+    ex_raster_clear(&a);
+    for (k = 0; k < 3; k++) CHECK(ex_raster_draw(&a, &c, m[k].positions, m[k].indices, m[k].tri_count, m[k].id_base) == 0);
+    for (k = 0; k < 2; k++) {
+        memset(seen.id, 0xAB, n * sizeof(uint32_t));
+        ex_raster_clear_deferred(&b);
+        b.skip = k ? EX_RASTER_SKIP_DEPTH | EX_RASTER_SKIP_BARY : 0;
+        b.tile_done = gather_tile;
+        b.tile_user = &seen;
+        seen.tiles = 0;
+        CHECK(ex_raster_draw_meshes(&b, &c, m, 3) == 0);
+        CHECK(seen.tiles == b.tiles_x * b.tiles_y);
+        CHECK(memcmp(a.id, b.id, n * sizeof(uint32_t)) == 0);
+        if (!k) CHECK(memcmp(a.bary, b.bary, 2 * n * sizeof(float)) == 0 && memcmp(a.depth, b.depth, n * sizeof(float)) == 0);
+        CHECK(memcmp(a.id, seen.id, n * sizeof(uint32_t)) == 0);
+        CHECK(memcmp(a.bary, seen.bary, 2 * n * sizeof(float)) == 0);
+        CHECK(memcmp(a.depth, seen.depth, n * sizeof(float)) == 0);
+    }
+    for (p = 0; p < n; p++) {
+        far += a.id[p] != EX_RASTER_EMPTY && a.id[p] >= 100000;
+        patch_pixels += a.id[p] >= 50000 && a.id[p] < 100000;
+    }
+    CHECK(far == 0);
+    CHECK(patch_pixels > n / 20);   /* the patch is in view, over the floor */
+    ex_raster_free(&a);
+    ex_raster_free(&b);
+    free(seen.depth);
+    free(seen.bary);
+    free(seen.id);
+    free_grid(&floor);
+    free_grid(&patch);
+}
+
 static void test_camera_round_trip(void)
 {
     float eye[3] = { 1, 2, 3 }, target[3] = { -2, 0.5f, 7 }, up[3] = { 0, 1, 0 };
@@ -259,6 +339,7 @@ int main(int argc, char **argv)
     RUN(test_perspective_correct_barycentrics);
     RUN(test_depth_order);
     RUN(test_parallel_equals_serial);
+    RUN(test_draw_meshes_equals_draws);
     RUN(test_camera_round_trip);
     RUN(test_bad_arguments);
     return test_finish();

@@ -9,13 +9,26 @@
        ex_raster_draw(&r, &camera, positions, indices, tri_count, 0);
        ex_raster_draw(&r, &camera, bunny_pos, bunny_idx, bunny_tris, tri_count);
        ... r.id[p] (EX_RASTER_EMPTY or id_base + triangle), r.bary[2p], r.bary[2p+1]
+       // or both meshes in one pass: ex_raster_draw_meshes(&r, &camera, meshes, 2)
        ex_raster_free(&r);
 
-   A frame can instead leave the clear to its first draw
-   (ex_raster_clear_deferred: each tile job clears its tile just before
-   drawing into it) and shade in the last draw's tile jobs (r.tile_done,
-   called on each finished tile while its buffers are in the cache): the
-   buffers are then written once and read once per frame.
+   A frame can instead leave the clear to its draw (ex_raster_clear_deferred:
+   each tile job starts its tile empty), draw all its meshes in one pass
+   (ex_raster_draw_meshes) and shade in the tile jobs (r.tile_done, called
+   on each finished tile with the tile's own depth, id and barycentric
+   buffers while they are in the cache); r.skip then spares the frame
+   buffers nobody else reads.
+
+   How a tile is drawn: triangles are set up in parallel batches and binned
+   to the 64 x 64 tiles they overlap, in input order; each tile job draws
+   its bin into a visibility buffer of its own (depth and the winning
+   triangle per pixel; only depth is tested, as 1/z, and z divided out only
+   where a triangle may win), then computes ids and barycentrics once per
+   visible pixel, so overdraw costs a depth test and nothing more. The
+   inner loops over a row's covered span are branchless, SIMD where the
+   compiler can vectorize them; edge values step in doubles, exact for
+   these integers. Tiles are independent and triangles keep input order in
+   every tile, so frames are bit-identical for any thread count.
 
    The barycentric pair of a pixel holds the weights of the triangle's second
    and third vertex at the pixel centre (the first vertex gets 1 - u - v),
@@ -54,18 +67,46 @@
 typedef struct ex_raster_tri {
     int64_t x[3], y[3];          /* snapped screen positions, 1/256 pixel */
     float inv_z[3];              /* 1 / view depth at each corner */
+    float inv_area;              /* 1 / twice the snapped area, in (1/256 pixel)^2 */
     float u[3], v[3];            /* original barycentric weights at each corner */
     uint32_t id;
     int x0, y0, x1, y1;          /* pixel bounds, inclusive, inside the image */
 } ex_raster_tri;
 
-/* The snapped triangles of one batch of EX__RASTER_BATCH input triangles:
-   the setup's parallel jobs each fill one, in input order. */
+/* Triangles of one draw: xyz positions, 3 indices per triangle; their pixel
+   ids are id_base + triangle index. */
+typedef struct ex_raster_mesh {
+    const float *positions;
+    const uint32_t *indices;
+    uint32_t tri_count, id_base;
+} ex_raster_mesh;
+
+/* The snapped triangles of one batch of at most EX__RASTER_BATCH input
+   triangles of one mesh: the setup's parallel jobs each fill one, in input
+   order. */
 typedef struct ex__raster_batch {
     ex_raster_tri *tris;
     uint32_t count, capacity;
+    const ex_raster_mesh *mesh;  /* its input: triangles [first, end) of mesh */
+    uint32_t first, end;
     int failed;                  /* out of memory */
 } ex__raster_batch;
+
+/* A finished tile as ex_raster.tile_done sees it: its pixels [x0, x1) x
+   [y0, y1) with their depth, id and barycentrics in the tile job's own
+   buffers (in the cache), pixel (x, y) at index
+   (y - y0) * EX_RASTER_TILE + (x - x0), twice that for bary. */
+typedef struct ex_raster_tile {
+    int x0, y0, x1, y1;
+    const float *depth;
+    const uint32_t *id;
+    const float *bary;
+} ex_raster_tile;
+
+/* ex_raster.skip: frame buffers the draws leave unwritten */
+#define EX_RASTER_SKIP_DEPTH 1
+#define EX_RASTER_SKIP_ID 2
+#define EX_RASTER_SKIP_BARY 4
 
 typedef struct ex_raster {
     int width, height;
@@ -79,20 +120,22 @@ typedef struct ex_raster {
     ex__raster_batch *batches;
     uint32_t batch_count, batch_capacity;
     const ex_camera *camera;     /* the draw in progress (read by the setup jobs) */
-    const float *positions;
-    const uint32_t *indices;
-    uint32_t tri_count, id_base;
     uint32_t *bin_start, *bin_items, bin_capacity;   /* items: batch << EX__RASTER_BATCH_BITS | index */
     int tiles_x, tiles_y;
     int counting;
     int clear_pending;           /* ex_raster_clear_deferred: the next draw's tile jobs clear their tiles */
     int coverage_used;           /* ex_raster_count ran since coverage was last zeroed */
     /* optional, set by the caller: run at the end of each tile job of every
-       draw, on that tile's pixels (x0, y0 inclusive, x1, y1 exclusive) once
-       the tile's triangles are in; a shading pass fused with the raster
+       draw, on the finished tile; a shading pass fused with the raster
        while the tile's buffers are in the cache */
-    void (*tile_done)(void *user, int x0, int y0, int x1, int y1);
+    void (*tile_done)(void *user, const ex_raster_tile *tile);
     void *tile_user;
+    /* optional: EX_RASTER_SKIP_* of frame buffers the draws need not fill
+       (memory traffic saved when tile_done is all that reads them). A draw
+       with no clear before it starts from the frame buffers, so a skipping
+       frame clears first (ex_raster_clear_deferred) and draws all its
+       meshes in one ex_raster_draw_meshes. */
+    int skip;
 } ex_raster;
 
 EX_FN void ex_raster_free(ex_raster *r)
@@ -314,25 +357,27 @@ static void ex__raster_emit(const ex_raster *r, ex__raster_batch *batch, const e
     if (hi_x > r->width - 1) hi_x = r->width - 1;
     if (hi_y > r->height - 1) hi_y = r->height - 1;
     if (lo_x > hi_x || lo_y > hi_y) return;
+    /* edge 0 (vertex 1 to 2) at vertex 0: twice the area, positive */
+    t->inv_area = 1.0f / (float)((t->x[2] - t->x[1]) * (t->y[0] - t->y[1]) - (t->y[2] - t->y[1]) * (t->x[0] - t->x[1]));
     t->x0 = (int)lo_x; t->x1 = (int)hi_x;
     t->y0 = (int)lo_y; t->y1 = (int)hi_y;
     t->id = id;
     batch->count++;
 }
 
-/* One setup job: input triangles [batch * EX__RASTER_BATCH, ...) into
-   r->batches[batch], transformed to view space, clipped and snapped. */
+/* One setup job: the batch's input triangles into r->batches[index],
+   transformed to view space, clipped and snapped. */
 static void ex__raster_setup_job(void *ctx, uint32_t index)
 {
     ex_raster *r = (ex_raster *)ctx;
     const ex_camera *c = r->camera;
     ex__raster_batch *batch = &r->batches[index];
+    const ex_raster_mesh *mesh = batch->mesh;
     float aspect = (float)r->width / (float)r->height, ax = c->tan_half * aspect, ay = c->tan_half;
-    uint32_t i, end = index * EX__RASTER_BATCH + EX__RASTER_BATCH;
+    uint32_t i;
     batch->count = 0;
     batch->failed = 0;
-    if (end > r->tri_count) end = r->tri_count;
-    for (i = index * EX__RASTER_BATCH; i < end; i++) {
+    for (i = batch->first; i < batch->end; i++) {
         ex__clip_vertex poly[16];
         int k, n;
         if (ex__raster_reserve(batch, batch->count + 6) != 0) {
@@ -340,7 +385,7 @@ static void ex__raster_setup_job(void *ctx, uint32_t index)
             return;
         }
         for (k = 0; k < 3; k++) {
-            const float *p = r->positions + 3 * (size_t)r->indices[3 * (size_t)i + (size_t)k];
+            const float *p = mesh->positions + 3 * (size_t)mesh->indices[3 * (size_t)i + (size_t)k];
             float d[3];
             d[0] = p[0] - c->eye[0];
             d[1] = p[1] - c->eye[1];
@@ -352,17 +397,21 @@ static void ex__raster_setup_job(void *ctx, uint32_t index)
             poly[k].v = k == 2 ? 1.0f : 0.0f;
         }
         n = ex__clip_polygon(poly, 3, r->near_plane, ax, ay);
-        for (k = 1; k + 1 < n; k++) ex__raster_emit(r, batch, &poly[0], &poly[k], &poly[k + 1], r->id_base + i);
+        for (k = 1; k + 1 < n; k++) ex__raster_emit(r, batch, &poly[0], &poly[k], &poly[k + 1], mesh->id_base + i);
     }
 }
 
-/* Sets up the draw's triangles in batches, in parallel on the pool; the
-   batches keep input order, so the result does not depend on the thread
-   count. */
-static int ex__raster_setup(ex_raster *r, const ex_camera *c, const float *positions,
-                            const uint32_t *indices, uint32_t tri_count, uint32_t id_base)
+/* Sets up the meshes' triangles in batches, in parallel on the pool; the
+   batches keep input order (meshes in turn), so the result does not depend
+   on the thread count. */
+static int ex__raster_setup(ex_raster *r, const ex_camera *c, const ex_raster_mesh *meshes, uint32_t mesh_count)
 {
-    uint32_t batches = (tri_count + EX__RASTER_BATCH - 1) / EX__RASTER_BATCH, i;
+    uint32_t batches = 0, i, m, b;
+    for (m = 0; m < mesh_count; m++) {
+        uint32_t n = meshes[m].tri_count / EX__RASTER_BATCH + (meshes[m].tri_count % EX__RASTER_BATCH != 0);
+        if (n >= (1u << (32 - EX__RASTER_BATCH_BITS)) - batches) return -1;   /* bin items would overflow */
+        batches += n;
+    }
     if (batches > r->batch_capacity) {
         ex__raster_batch *p = (ex__raster_batch *)realloc(r->batches, (size_t)batches * sizeof *p);
         if (!p) return -1;
@@ -372,10 +421,12 @@ static int ex__raster_setup(ex_raster *r, const ex_camera *c, const float *posit
     }
     r->batch_count = batches;
     r->camera = c;
-    r->positions = positions;
-    r->indices = indices;
-    r->tri_count = tri_count;
-    r->id_base = id_base;
+    for (m = 0, b = 0; m < mesh_count; m++)
+        for (i = 0; i < meshes[m].tri_count; i += EX__RASTER_BATCH, b++) {
+            r->batches[b].mesh = &meshes[m];
+            r->batches[b].first = i;
+            r->batches[b].end = meshes[m].tri_count - i > EX__RASTER_BATCH ? i + EX__RASTER_BATCH : meshes[m].tri_count;
+        }
     ex_pool_parallel_for(r->pool, ex__raster_setup_job, r, batches);
     for (i = 0; i < batches; i++)
         if (r->batches[i].failed) return -1;
@@ -454,60 +505,226 @@ static void ex__edge_span(int64_t w0, int64_t step, int bias, int64_t *lo, int64
     }
 }
 
-/* Rasterizes triangle t inside the tile's pixel box. Each row's covered
-   pixels are found by solving the three edge inequalities for x (exact
-   integer arithmetic, the same pixels as testing each one), so the loop
-   over a row runs over covered pixels only; there, the edge values give the
-   barycentric weights as before. */
-static void ex__raster_tri_in_tile(ex_raster *r, const ex_raster_tri *t, int tx0, int ty0, int tx1, int ty1)
+/* A triangle's edge functions over its pixels in one tile. Edge k goes from
+   vertex k+1 to k+2; it is zero on that edge and positive at vertex k, so its
+   value over the area, times inv_area, is vertex k's weight. */
+typedef struct ex__raster_edges {
+    int64_t row[3];              /* values at the current row's first pixel centre */
+    int64_t step[3];             /* decrease per pixel to the right */
+    int64_t down[3];             /* increase per row down */
+    int bias[3];                 /* tie rule (ex__edge_owns_ties) */
+    int x0, y0, x1, y1;          /* the triangle's pixel box in the tile, inclusive */
+} ex__raster_edges;
+
+/* Starts triangle t's edges at the top-left pixel of its box within the
+   tile's [tx0, tx1] x [ty0, ty1]; 0 when the boxes do not meet. */
+static int ex__raster_edges_begin(const ex_raster_tri *t, int tx0, int ty0, int tx1, int ty1, ex__raster_edges *e)
 {
-    int64_t e_dx[3], e_dy[3], row[3], step[3];
-    int bias[3], k, x, y;
-    int x0 = t->x0 > tx0 ? t->x0 : tx0, x1 = t->x1 < tx1 ? t->x1 : tx1;
-    int y0 = t->y0 > ty0 ? t->y0 : ty0, y1 = t->y1 < ty1 ? t->y1 : ty1;
-    int64_t px0 = (int64_t)x0 * EX_RASTER_SUBPIXEL + EX_RASTER_SUBPIXEL / 2;
-    int64_t py0 = (int64_t)y0 * EX_RASTER_SUBPIXEL + EX_RASTER_SUBPIXEL / 2;
-    float inv_area;
-    if (x0 > x1 || y0 > y1) return;
-    /* edge k goes from vertex k+1 to k+2; it is zero on that edge and positive
-       at vertex k, so its value over the area is vertex k's weight */
+    int64_t px0, py0;
+    int k;
+    e->x0 = t->x0 > tx0 ? t->x0 : tx0;
+    e->x1 = t->x1 < tx1 ? t->x1 : tx1;
+    e->y0 = t->y0 > ty0 ? t->y0 : ty0;
+    e->y1 = t->y1 < ty1 ? t->y1 : ty1;
+    if (e->x0 > e->x1 || e->y0 > e->y1) return 0;
+    px0 = (int64_t)e->x0 * EX_RASTER_SUBPIXEL + EX_RASTER_SUBPIXEL / 2;
+    py0 = (int64_t)e->y0 * EX_RASTER_SUBPIXEL + EX_RASTER_SUBPIXEL / 2;
     for (k = 0; k < 3; k++) {
         int a = (k + 1) % 3, b = (k + 2) % 3;
-        e_dx[k] = t->x[b] - t->x[a];
-        e_dy[k] = t->y[b] - t->y[a];
-        row[k] = e_dx[k] * (py0 - t->y[a]) - e_dy[k] * (px0 - t->x[a]);
-        bias[k] = ex__edge_owns_ties(e_dx[k], e_dy[k]);
-        step[k] = e_dy[k] * EX_RASTER_SUBPIXEL;
+        int64_t dx = t->x[b] - t->x[a], dy = t->y[b] - t->y[a];
+        e->row[k] = dx * (py0 - t->y[a]) - dy * (px0 - t->x[a]);
+        e->bias[k] = ex__edge_owns_ties(dx, dy);
+        e->step[k] = dy * EX_RASTER_SUBPIXEL;
+        e->down[k] = dx * EX_RASTER_SUBPIXEL;
     }
-    /* twice the area: edge 0's value at vertex 0 */
-    inv_area = 1.0f / (float)(e_dx[0] * (t->y[0] - t->y[1]) - e_dy[0] * (t->x[0] - t->x[1]));
-    for (y = y0; y <= y1; y++) {
-        int64_t lo = 0, hi = x1 - x0;
-        for (k = 0; k < 3; k++) ex__edge_span(row[k], step[k], bias[k], &lo, &hi);
-        for (x = x0 + (int)lo; x <= x0 + (int)hi; x++) {
-            int64_t dx = x - x0;
-            size_t p = (size_t)y * (size_t)r->width + (size_t)x;
-            if (r->counting) {
-                r->coverage[p]++;
-            } else {
-                float l0 = (float)(row[0] - step[0] * dx) * inv_area, l1 = (float)(row[1] - step[1] * dx) * inv_area;
-                float l2 = (float)(row[2] - step[2] * dx) * inv_area;
-                float a0 = l0 * t->inv_z[0], a1 = l1 * t->inv_z[1], a2 = l2 * t->inv_z[2];
-                float z = 1.0f / (a0 + a1 + a2);
-                if (z < r->depth[p]) {
-                    r->depth[p] = z;
-                    r->id[p] = t->id;
-                    r->bary[2 * p] = (a0 * t->u[0] + a1 * t->u[1] + a2 * t->u[2]) * z;
-                    r->bary[2 * p + 1] = (a0 * t->v[0] + a1 * t->v[1] + a2 * t->v[2]) * z;
-                }
-            }
-        }
-        row[0] += e_dx[0] * EX_RASTER_SUBPIXEL;
-        row[1] += e_dx[1] * EX_RASTER_SUBPIXEL;
-        row[2] += e_dx[2] * EX_RASTER_SUBPIXEL;
+    return 1;
+}
+
+/* The current row's covered pixels, as offsets [*lo, *hi] from e->x0 (empty
+   when *lo > *hi): the three edge inequalities solved for x in exact
+   integers, the same pixels as testing each one. */
+static void ex__raster_edges_span(const ex__raster_edges *e, int64_t *lo, int64_t *hi)
+{
+    int k;
+    *lo = 0;
+    *hi = e->x1 - e->x0;
+    for (k = 0; k < 3; k++) ex__edge_span(e->row[k], e->step[k], e->bias[k], lo, hi);
+}
+
+static void ex__raster_edges_next_row(ex__raster_edges *e)
+{
+    e->row[0] += e->down[0];
+    e->row[1] += e->down[1];
+    e->row[2] += e->down[2];
+}
+
+/* Counts triangle t's coverage of the tile's pixels (ex_raster_count). */
+static void ex__raster_tri_count(ex_raster *r, const ex_raster_tri *t, int tx0, int ty0, int tx1, int ty1)
+{
+    ex__raster_edges e;
+    int y;
+    if (!ex__raster_edges_begin(t, tx0, ty0, tx1, ty1, &e)) return;
+    for (y = e.y0; y <= e.y1; y++, ex__raster_edges_next_row(&e)) {
+        uint32_t *row = r->coverage + (size_t)y * (size_t)r->width + (size_t)e.x0;
+        int64_t lo, hi, x;
+        ex__raster_edges_span(&e, &lo, &hi);
+        for (x = lo; x <= hi; x++) row[x]++;
     }
 }
 
+#define EX__RASTER_TILE_PIXELS (EX_RASTER_TILE * EX_RASTER_TILE)
+#define EX__RASTER_NONE 0xFFFFFFFFu
+
+/* One tile's buffers, in the tile job's own memory (they stay in the
+   core's cache): per pixel, the nearest triangle drawn so far in this pass
+   (a visibility buffer). Only depth is tested while triangles are drawn;
+   ids and barycentrics are computed afterwards, once per pixel, for the
+   triangle that won, so overdraw costs a depth test and nothing more.
+   Pixel (x, y) of the tile is index (y - y0) * EX_RASTER_TILE + (x - x0). */
+typedef struct ex__raster_local {
+    float inv_z[EX__RASTER_TILE_PIXELS];   /* 1 / depth of this pass's winner; 0 where none */
+    float z[EX__RASTER_TILE_PIXELS];       /* depth: the winner's, else the frame's (FLT_MAX cleared) */
+    uint32_t ref[EX__RASTER_TILE_PIXELS];  /* the winner's position in r->bin_items, EX__RASTER_NONE where none */
+    uint32_t id[EX__RASTER_TILE_PIXELS];   /* resolved: as the frame's id and bary */
+    float bary[2 * EX__RASTER_TILE_PIXELS];
+} ex__raster_local;
+
+static const ex_raster_tri *ex__raster_item(const ex_raster *r, uint32_t position)
+{
+    uint32_t item = r->bin_items[position];
+    return &r->batches[item >> EX__RASTER_BATCH_BITS].tris[item & ((1u << EX__RASTER_BATCH_BITS) - 1u)];
+}
+
+/* The tile's starting point: empty when the frame is to be cleared, else
+   the frame's pixels. */
+static void ex__raster_local_begin(const ex_raster *r, ex__raster_local *L, int x0, int y0, int x1, int y1)
+{
+    int x, y, n = x1 - x0 + 1;
+    memset(L->inv_z, 0, sizeof L->inv_z);
+    memset(L->ref, 0xFF, sizeof L->ref);
+    for (y = y0; y <= y1; y++) {
+        int q = (y - y0) * EX_RASTER_TILE;
+        size_t p = (size_t)y * (size_t)r->width + (size_t)x0;
+        if (r->clear_pending) {
+            for (x = 0; x < n; x++) {
+                L->z[q + x] = FLT_MAX;
+                L->id[q + x] = EX_RASTER_EMPTY;
+                L->bary[2 * (q + x)] = L->bary[2 * (q + x) + 1] = 0.0f;
+            }
+        } else {
+            memcpy(L->z + q, r->depth + p, (size_t)n * sizeof(float));
+            memcpy(L->id + q, r->id + p, (size_t)n * sizeof(uint32_t));
+            memcpy(L->bary + 2 * q, r->bary + 2 * p, 2 * (size_t)n * sizeof(float));
+        }
+    }
+}
+
+/* Depth-tests triangle t (bin position ref) on its covered pixels of the
+   tile. A pixel takes it when its depth z = 1 / sum(a) is nearer than the
+   pixel's and, where the sums (1/z) tie or fall, z cannot be nearer: the
+   test on both gives the same pixels as testing z alone, and the branchless
+   loop over a row's span runs as SIMD lanes where the compiler can. The
+   edge values step in doubles: they are integers below 2^53, exact there,
+   and rounded to float as the 64-bit integers would be. */
+static void ex__raster_tri_depth(ex__raster_local *L, const ex_raster_tri *t, uint32_t ref, int tx0, int ty0,
+                                 int tx1, int ty1)
+{
+    ex__raster_edges e;
+    const float area = t->inv_area, z0 = t->inv_z[0], z1 = t->inv_z[1], z2 = t->inv_z[2];
+    int y;
+    if (!ex__raster_edges_begin(t, tx0, ty0, tx1, ty1, &e)) return;
+    for (y = e.y0; y <= e.y1; y++, ex__raster_edges_next_row(&e)) {
+        int q = (y - ty0) * EX_RASTER_TILE + (e.x0 - tx0);
+        int64_t lo, hi;
+        int i, n;
+        double w0, w1, w2, d0 = (double)e.step[0], d1 = (double)e.step[1], d2 = (double)e.step[2];
+        float *inv_z, *z;
+        uint32_t *refs;
+        ex__raster_edges_span(&e, &lo, &hi);
+        if (lo > hi) continue;
+        n = (int)(hi - lo + 1);
+        inv_z = L->inv_z + q + lo;
+        z = L->z + q + lo;
+        refs = L->ref + q + lo;
+        w0 = (double)(e.row[0] - e.step[0] * lo);
+        w1 = (double)(e.row[1] - e.step[1] * lo);
+        w2 = (double)(e.row[2] - e.step[2] * lo);
+        for (i = 0; i < n; i++) {
+            double x = (double)i;
+            float a0 = (float)(w0 - d0 * x) * area * z0;
+            float a1 = (float)(w1 - d1 * x) * area * z1;
+            float a2 = (float)(w2 - d2 * x) * area * z2;
+            float sum = a0 + a1 + a2, depth = 1.0f / sum;
+            int win = (sum > inv_z[i]) & (depth < z[i]);
+            inv_z[i] = win ? sum : inv_z[i];
+            z[i] = win ? depth : z[i];
+            refs[i] = win ? ref : refs[i];
+        }
+    }
+}
+
+/* The winners' ids and perspective-correct barycentrics (the vertex weights
+   a[k] z, blending the corners' original weights), a run of pixels of one
+   triangle in a row at a time: its edge values start exact at the run's
+   first pixel and step in doubles (as in ex__raster_tri_depth), so every
+   pixel gets the bits of its own exact 64-bit edge values. */
+static void ex__raster_resolve(const ex_raster *r, ex__raster_local *L, int x0, int y0, int x1, int y1)
+{
+    int x, y, n = x1 - x0 + 1;
+    for (y = y0; y <= y1; y++) {
+        const int q = (y - y0) * EX_RASTER_TILE;
+        const uint32_t *refs = L->ref + q;
+        for (x = 0; x < n;) {
+            const ex_raster_tri *t;
+            const float *z;
+            float *bary, area, iz[3], u[3], v[3];
+            double w[3], d[3];
+            int64_t px, py;
+            int end = x + 1, i, k;
+            if (refs[x] == EX__RASTER_NONE) { x++; continue; }
+            while (end < n && refs[end] == refs[x]) end++;
+            t = ex__raster_item(r, refs[x]);
+            px = (int64_t)(x0 + x) * EX_RASTER_SUBPIXEL + EX_RASTER_SUBPIXEL / 2;
+            py = (int64_t)y * EX_RASTER_SUBPIXEL + EX_RASTER_SUBPIXEL / 2;
+            for (k = 0; k < 3; k++) {
+                int a = (k + 1) % 3, b = (k + 2) % 3;
+                w[k] = (double)((t->x[b] - t->x[a]) * (py - t->y[a]) - (t->y[b] - t->y[a]) * (px - t->x[a]));
+                d[k] = (double)((t->y[b] - t->y[a]) * EX_RASTER_SUBPIXEL);
+                iz[k] = t->inv_z[k];
+                u[k] = t->u[k];
+                v[k] = t->v[k];
+            }
+            area = t->inv_area;
+            z = L->z + q + x;
+            bary = L->bary + 2 * (q + x);
+            for (i = 0; i < end - x; i++) {
+                double s = (double)i;
+                float a0 = (float)(w[0] - d[0] * s) * area * iz[0];
+                float a1 = (float)(w[1] - d[1] * s) * area * iz[1];
+                float a2 = (float)(w[2] - d[2] * s) * area * iz[2];
+                bary[2 * i] = (a0 * u[0] + a1 * u[1] + a2 * u[2]) * z[i];
+                bary[2 * i + 1] = (a0 * v[0] + a1 * v[1] + a2 * v[2]) * z[i];
+            }
+            for (i = x; i < end; i++) L->id[q + i] = t->id;
+            x = end;
+        }
+    }
+}
+
+/* Copies the tile to the frame buffers r->skip does not name. */
+static void ex__raster_store(ex_raster *r, const ex__raster_local *L, int x0, int y0, int x1, int y1)
+{
+    int y, n = x1 - x0 + 1;
+    for (y = y0; y <= y1; y++) {
+        int q = (y - y0) * EX_RASTER_TILE;
+        size_t p = (size_t)y * (size_t)r->width + (size_t)x0;
+        if (!(r->skip & EX_RASTER_SKIP_DEPTH)) memcpy(r->depth + p, L->z + q, (size_t)n * sizeof(float));
+        if (!(r->skip & EX_RASTER_SKIP_ID)) memcpy(r->id + p, L->id + q, (size_t)n * sizeof(uint32_t));
+        if (!(r->skip & EX_RASTER_SKIP_BARY)) memcpy(r->bary + 2 * p, L->bary + 2 * q, 2 * (size_t)n * sizeof(float));
+    }
+}
+
+/* Draws the tile's binned triangles, in input order, and hands the tile on. */
 static void ex__raster_tile_job(void *ctx, uint32_t tile)
 {
     ex_raster *r = (ex_raster *)ctx;
@@ -515,28 +732,47 @@ static void ex__raster_tile_job(void *ctx, uint32_t tile)
     int x0 = tx * EX_RASTER_TILE, y0 = ty * EX_RASTER_TILE;
     int x1 = x0 + EX_RASTER_TILE - 1, y1 = y0 + EX_RASTER_TILE - 1;
     uint32_t i;
+    ex__raster_local L;
+    ex_raster_tile done;
     if (x1 >= r->width) x1 = r->width - 1;
     if (y1 >= r->height) y1 = r->height - 1;
-    if (r->clear_pending) ex__raster_clear_box(r, x0, y0, x1 + 1, y1 + 1);
-    for (i = r->bin_start[tile]; i < r->bin_start[tile + 1]; i++) {
-        uint32_t item = r->bin_items[i];
-        const ex__raster_batch *batch = &r->batches[item >> EX__RASTER_BATCH_BITS];
-        ex__raster_tri_in_tile(r, &batch->tris[item & ((1u << EX__RASTER_BATCH_BITS) - 1u)], x0, y0, x1, y1);
+    if (r->counting) {
+        if (r->clear_pending) ex__raster_clear_box(r, x0, y0, x1 + 1, y1 + 1);
+        for (i = r->bin_start[tile]; i < r->bin_start[tile + 1]; i++)
+            ex__raster_tri_count(r, ex__raster_item(r, i), x0, y0, x1, y1);
+        return;
     }
-    if (r->tile_done) r->tile_done(r->tile_user, x0, y0, x1 + 1, y1 + 1);
+    ex__raster_local_begin(r, &L, x0, y0, x1, y1);
+    for (i = r->bin_start[tile]; i < r->bin_start[tile + 1]; i++)
+        ex__raster_tri_depth(&L, ex__raster_item(r, i), i, x0, y0, x1, y1);
+    ex__raster_resolve(r, &L, x0, y0, x1, y1);
+    ex__raster_store(r, &L, x0, y0, x1, y1);
+    if (r->tile_done) {
+        done.x0 = x0;
+        done.y0 = y0;
+        done.x1 = x1 + 1;
+        done.y1 = y1 + 1;
+        done.depth = L.z;
+        done.id = L.id;
+        done.bary = L.bary;
+        r->tile_done(r->tile_user, &done);
+    }
 }
 
-static int ex__raster_run(ex_raster *r, const ex_camera *c, const float *positions,
-                          const uint32_t *indices, uint32_t tri_count, uint32_t id_base)
+static int ex__raster_run(ex_raster *r, const ex_camera *c, const ex_raster_mesh *meshes, uint32_t mesh_count)
 {
+    uint32_t m, drawn = 0;
     if (!r || !c || c->kind != EX_CAMERA_PERSPECTIVE || c->width != r->width || c->height != r->height)
         return -1;
-    if (tri_count > 0 && !positions) return -1;
-    if (tri_count > 0 && !indices) return -1;
-    if (ex__raster_setup(r, c, positions, indices, tri_count, id_base) != 0 || ex__raster_bin(r) != 0)
+    if (mesh_count > 0 && !meshes) return -1;
+    for (m = 0; m < mesh_count; m++) {
+        if (meshes[m].tri_count > 0 && (!meshes[m].positions || !meshes[m].indices)) return -1;
+        drawn += meshes[m].tri_count > 0;
+    }
+    if (ex__raster_setup(r, c, meshes, mesh_count) != 0 || ex__raster_bin(r) != 0)
         return -1;
     if (r->counting) r->coverage_used = 1;
-    if (tri_count == 0 && !r->tile_done) {   /* nothing to draw: at most the clear */
+    if (drawn == 0 && !r->tile_done) {   /* nothing to draw: at most the clear */
         if (r->clear_pending) ex__raster_clear_now(r);
         return 0;
     }
@@ -551,8 +787,23 @@ static int ex__raster_run(ex_raster *r, const ex_camera *c, const float *positio
 EX_FN int ex_raster_draw(ex_raster *r, const ex_camera *c, const float *positions,
                          const uint32_t *indices, uint32_t tri_count, uint32_t id_base)
 {
+    ex_raster_mesh mesh;
+    mesh.positions = positions;
+    mesh.indices = indices;
+    mesh.tri_count = tri_count;
+    mesh.id_base = id_base;
     if (r) r->counting = 0;
-    return ex__raster_run(r, c, positions, indices, tri_count, id_base);
+    return ex__raster_run(r, c, &mesh, 1);
+}
+
+/* Draws several meshes in one pass over the tiles, as if drawn one after
+   the other with ex_raster_draw (the same pixels, bit for bit), but every
+   tile is visited once: its buffers are written once and r->tile_done sees
+   the tile with everything in it. */
+EX_FN int ex_raster_draw_meshes(ex_raster *r, const ex_camera *c, const ex_raster_mesh *meshes, uint32_t mesh_count)
+{
+    if (r) r->counting = 0;
+    return ex__raster_run(r, c, meshes, mesh_count);
 }
 
 /* Adds to r->coverage how many of the triangles cover each pixel centre, with
@@ -560,10 +811,15 @@ EX_FN int ex_raster_draw(ex_raster *r, const ex_camera *c, const float *position
 EX_FN int ex_raster_count(ex_raster *r, const ex_camera *c, const float *positions,
                           const uint32_t *indices, uint32_t tri_count)
 {
+    ex_raster_mesh mesh;
     int result;
     if (!r) return -1;
+    mesh.positions = positions;
+    mesh.indices = indices;
+    mesh.tri_count = tri_count;
+    mesh.id_base = 0;
     r->counting = 1;
-    result = ex__raster_run(r, c, positions, indices, tri_count, 0);
+    result = ex__raster_run(r, c, &mesh, 1);
     r->counting = 0;
     return result;
 }

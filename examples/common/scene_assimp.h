@@ -62,7 +62,7 @@
 
 /* ---- materials ---------------------------------------------------------- */
 
-static int ex__ai_float(const struct aiMaterial *m, const char *key, unsigned type, unsigned index, float *out)
+static int ex__ai_float(const C_STRUCT aiMaterial *m, const char *key, unsigned type, unsigned index, float *out)
 {
     ai_real v;
     unsigned n = 1;
@@ -71,9 +71,9 @@ static int ex__ai_float(const struct aiMaterial *m, const char *key, unsigned ty
     return 1;
 }
 
-static int ex__ai_color(const struct aiMaterial *m, const char *key, unsigned type, unsigned index, float rgb[3])
+static int ex__ai_color(const C_STRUCT aiMaterial *m, const char *key, unsigned type, unsigned index, float rgb[3])
 {
-    struct aiColor4D c;
+    C_STRUCT aiColor4D c;
     if (aiGetMaterialColor(m, key, type, index, &c) != aiReturn_SUCCESS) return 0;
     if (!isfinite(c.r) || !isfinite(c.g) || !isfinite(c.b)) return 0;
     rgb[0] = c.r; rgb[1] = c.g; rgb[2] = c.b;
@@ -83,7 +83,7 @@ static int ex__ai_color(const struct aiMaterial *m, const char *key, unsigned ty
 static float ex__ai_clamp(float x, float lo, float hi) { return x < lo ? lo : x > hi ? hi : x; }
 
 /* An Assimp name, cut to OBJ_NAME_MAX - 1 bytes. */
-static void ex__ai_name(char *dst, const struct aiString *src)
+static void ex__ai_name(char *dst, const C_STRUCT aiString *src)
 {
     size_t n = strlen(src->data);
     if (n >= OBJ_NAME_MAX) n = OBJ_NAME_MAX - 1;
@@ -92,10 +92,10 @@ static void ex__ai_name(char *dst, const struct aiString *src)
 }
 
 /* glTF's opacity rule: OPAQUE ignores alpha, MASK cuts it at the cutoff. */
-static float ex__ai_opacity(const struct aiMaterial *m)
+static float ex__ai_opacity(const C_STRUCT aiMaterial *m)
 {
     float opacity = 1.0f, cutoff = 0.5f;
-    struct aiString mode;
+    C_STRUCT aiString mode;
     ex__ai_float(m, AI_MATKEY_OPACITY, &opacity);
     if (aiGetMaterialString(m, "$mat.gltf.alphaMode", 0, 0, &mode) == aiReturn_SUCCESS) {
         if (strcmp(mode.data, "OPAQUE") == 0) return 1.0f;
@@ -109,10 +109,10 @@ static float ex__ai_opacity(const struct aiMaterial *m)
 
 /* One Assimp material as the headers' (see the doc block). gltf_strength:
    the material's KHR_materials_emissive_strength, 1 when none. */
-static void ex__ai_material(const struct aiMaterial *m, float gltf_strength, obj_material *out)
+static void ex__ai_material(const C_STRUCT aiMaterial *m, float gltf_strength, obj_material *out)
 {
     float base[3] = { 0.8f, 0.8f, 0.8f }, metallic, roughness = 1.0f, transmission = 0.0f, strength = 1.0f, opacity;
-    struct aiString name;
+    C_STRUCT aiString name;
     int k;
     memset(out, 0, sizeof *out);
     if (aiGetMaterialString(m, AI_MATKEY_NAME, &name) == aiReturn_SUCCESS)
@@ -297,7 +297,7 @@ static void ex__gltf_strengths(const char *path, float *strength, unsigned count
 
 /* ---- axes and units ----------------------------------------------------- */
 
-static int ex__ai_meta_int(const struct aiMetadata *md, const char *key, int *out)
+static int ex__ai_meta_int(const C_STRUCT aiMetadata *md, const char *key, int *out)
 {
     unsigned i;
     for (i = 0; md && i < md->mNumProperties; i++) {
@@ -309,7 +309,7 @@ static int ex__ai_meta_int(const struct aiMetadata *md, const char *key, int *ou
     return 0;
 }
 
-static int ex__ai_meta_double(const struct aiMetadata *md, const char *key, double *out)
+static int ex__ai_meta_double(const C_STRUCT aiMetadata *md, const char *key, double *out)
 {
     unsigned i;
     for (i = 0; md && i < md->mNumProperties; i++) {
@@ -325,7 +325,7 @@ static int ex__ai_meta_double(const struct aiMetadata *md, const char *key, doub
 /* FBX's axis system as a map to x right, y up, z front: row r of m is the
    file axis (with its sign) that becomes world axis r. False when the file
    declares none, or a degenerate one. */
-static int ex__ai_fbx_axes(const struct aiMetadata *md, float m[9])
+static int ex__ai_fbx_axes(const C_STRUCT aiMetadata *md, float m[9])
 {
     int up, up_sign, front, front_sign, coord, coord_sign;
     if (!ex__ai_meta_int(md, "UpAxis", &up) || !ex__ai_meta_int(md, "UpAxisSign", &up_sign) ||
@@ -342,7 +342,7 @@ static int ex__ai_fbx_axes(const struct aiMetadata *md, float m[9])
 }
 
 /* The map from file coordinates to y-up metres (see the doc block). */
-static void ex__ai_world_map(const struct aiScene *sc, char up, float scale, float m[9])
+static void ex__ai_world_map(const C_STRUCT aiScene *sc, char up, float scale, float m[9])
 {
     static const float identity[9] = { 1, 0, 0, 0, 1, 0, 0, 0, 1 };
     static const float z_up[9] = { 1, 0, 0, 0, 0, 1, 0, -1, 0 };   /* (x, y, z) -> (x, z, -y) */
@@ -398,13 +398,13 @@ static int64_t ex__ai_vertex(ex__ai_weld *w, obj__build *b, const float p[3])
 
 /* Appends mesh me (material and group given) to b, its positions mapped by
    m; a mirroring m reverses the polygons so that fronts stay fronts. */
-static int ex__ai_mesh(obj__parser *p, const struct aiMesh *me, const float m[9], uint32_t material, uint32_t group,
+static int ex__ai_mesh(obj__parser *p, const C_STRUCT aiMesh *me, const float m[9], uint32_t material, uint32_t group,
                        ex__ai_weld *w, obj__build *b, uint32_t *map)
 {
     double det = obj__det3(m);
     unsigned v, f, k;
     for (v = 0; v < me->mNumVertices; v++) {
-        const struct aiVector3D *a = &me->mVertices[v];
+        const C_STRUCT aiVector3D *a = &me->mVertices[v];
         float q[3];
         int64_t at;
         int r;
@@ -415,7 +415,7 @@ static int ex__ai_mesh(obj__parser *p, const struct aiMesh *me, const float m[9]
         map[v] = (uint32_t)at;
     }
     for (f = 0; f < me->mNumFaces; f++) {
-        const struct aiFace *face = &me->mFaces[f];
+        const C_STRUCT aiFace *face = &me->mFaces[f];
         uint32_t start = (uint32_t)b->face_vertices.count;
         if (face->mNumIndices < 3) continue;   /* a point or a line */
         if (b->face_vertices.count + face->mNumIndices > UINT32_MAX / 2) return obj__fail(p, "too many face vertices");
@@ -432,7 +432,7 @@ static int ex__ai_mesh(obj__parser *p, const struct aiMesh *me, const float m[9]
     return 0;
 }
 
-static int ex__ai_build(obj__parser *p, const struct aiScene *sc, const float m[9], obj__build *b)
+static int ex__ai_build(obj__parser *p, const C_STRUCT aiScene *sc, const float m[9], obj__build *b)
 {
     ex__ai_weld w;
     uint32_t *map = NULL, max_vertices = 0;
@@ -463,7 +463,7 @@ static int ex__ai_build(obj__parser *p, const struct aiScene *sc, const float m[
     if (!w.slot || !map) { free(w.slot); free(map); return obj__fail(p, "out of memory"); }
     memset(w.slot, 0xFF, cap * sizeof(uint32_t));
     for (i = 0; i < sc->mNumMeshes && r == 0; i++) {
-        const struct aiMesh *me = sc->mMeshes[i];
+        const C_STRUCT aiMesh *me = sc->mMeshes[i];
         char group[OBJ_NAME_MAX];
         uint32_t g = (uint32_t)b->groups.count;
         memset(group, 0, sizeof group);
@@ -481,8 +481,8 @@ static int ex__ai_build(obj__parser *p, const struct aiScene *sc, const float m[
    Returns 0, or -1 with a message naming the file. */
 EX_FN int ex_assimp_load(const char *path, char up, float scale, obj_scene *out, char *err, size_t err_size)
 {
-    struct aiPropertyStore *props;
-    const struct aiScene *sc;
+    C_STRUCT aiPropertyStore *props;
+    const C_STRUCT aiScene *sc;
     obj__build b;
     obj__parser p;
     float m[9];

@@ -123,6 +123,10 @@
 #include <time.h>
 #include <unistd.h>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "base.h"
 #include "camera.h"
 #include "image.h"
@@ -233,7 +237,9 @@ typedef struct wt_options {
 
 /* What a frame cost. phase[] by mode (wt_phase_name). */
 typedef struct wt_frame_stats {
-    double phase[WT_PHASES];  /* seconds */
+    double phase[WT_PHASES];  /* seconds: wall time, but mode radiosity's raster, shade and volume are
+                                 CPU time summed over the threads that ran them (its "other" is the
+                                 wall time they leave, 0 when they ran on several threads) */
     double total;             /* seconds, the frame's wall time */
     uint32_t samples;         /* raytrace: pixels shaded; baseviews: pixels traced by the fill;
                                  radiosity: volume queries */
@@ -400,7 +406,7 @@ EX_FN int wt_parse_options(int argc, char **argv, wt_options *o, char *err, size
             else { snprintf(err, err_size, "--mode must be raytrace, baseviews or radiosity, not '%s'", v); return -1; }
         } else if (!strcmp(a, "--frames")) ok = wt__parse_int(v, 1, 100000, &o->frames);
         else if (!strcmp(a, "--size")) {
-            char *x = strchr(v, 'x');
+            const char *x = strchr(v, 'x');
             char w[32];
             size_t n = x ? (size_t)(x - v) : 0;
             ok = x && n > 0 && n < sizeof w;
@@ -2881,6 +2887,7 @@ typedef struct wt_renderer {
     irrvol *volume;
     float *visibility;          /* self-occlusion ratio per bunny vertex */
     float *bunny_world, *bunny_world_normals, *bunny_rgb;
+    double *tile_cpu;           /* per raster tile: its shading's thread CPU seconds this frame */
     float bunny_centre[3];      /* the bunny's occlusion sphere: centre in OBJ coordinates */
     float bunny_radius;         /* its radius in metres (wt_bunny_sphere) */
     float sphere[4];            /* this frame's: world centre, radius */
@@ -3886,18 +3893,17 @@ EX_FN int wt_static_shading_build(wt_world *w, wt_static_shading *s, char *err, 
     return wt__mesh_normals(s) == 0 ? 0 : wt__fail(err, err_size, "%s", "out of memory");
 }
 
-/* Shades pixels [first, first + count) of the raster whose id is a static
-   triangle (id < s->data.triangle_count) from their triangle's interpolant
-   at their barycentrics: rgb = radiosity B in W/m^2 (radinterp_shade, or
-   with gouraud the corners' radiosities blended linearly); other pixels are
-   left as they are. */
-EX_FN int wt_static_shading_shade(const wt_static_shading *s, const ex_raster *raster, size_t first, size_t count,
+/* Shades count pixels of a raster (ids[i], barycentrics st[2i], st[2i+1])
+   whose id is a static triangle (id < s->data.triangle_count) from their
+   triangle's interpolant: rgb[3i..] = radiosity B in W/m^2 (radinterp_shade,
+   or with gouraud the corners' radiosities blended linearly); other pixels
+   are left as they are. */
+EX_FN int wt_static_shading_shade(const wt_static_shading *s, const uint32_t *ids, const float *st, size_t count,
                                   int gouraud, float *rgb)
 {
     radinterp_result rr;
-    if (!s->mesh || first + count > (size_t)raster->width * (size_t)raster->height) return -1;
-    rr = gouraud ? radinterp_shade_gouraud(s->mesh, raster->id + first, raster->bary + 2 * first, count, rgb + 3 * first)
-                 : radinterp_shade(s->mesh, raster->id + first, raster->bary + 2 * first, count, rgb + 3 * first);
+    if (!s->mesh) return -1;
+    rr = gouraud ? radinterp_shade_gouraud(s->mesh, ids, st, count, rgb) : radinterp_shade(s->mesh, ids, st, count, rgb);
     return rr == RADINTERP_OK ? 0 : -1;
 }
 
@@ -4137,23 +4143,24 @@ EX_FN void wt_bunny_light(const wt_world *w, const irrvol *vol, const float *vis
 }
 
 /* Rasterizes the static mesh (ids 0 .. static_count-1) and the posed bunny
-   (ids static_count + triangle) into ra. The clear is done by the first
-   draw's tile jobs, and ra->tile_done (when set) runs after the last draw
-   only, on each finished tile. *static_done (optional): the clock
-   (wt_seconds) when the static mesh was in. */
+   (ids static_count + triangle) into ra in one pass over the tiles: each
+   tile job clears its tile, draws both and runs ra->tile_done (when set) on
+   the finished tile. */
 EX_FN int wt_raster_scene(const wt_world *w, ex_raster *ra, const rendercache_camera *c, const float *static_positions,
-                          const uint32_t *static_indices, uint32_t static_count, const float *bunny_world,
-                          double *static_done)
+                          const uint32_t *static_indices, uint32_t static_count, const float *bunny_world)
 {
     ex_camera ec = wt_ex_camera(c);
-    void (*tile_done)(void *, int, int, int, int) = ra->tile_done;
-    int result;
+    ex_raster_mesh meshes[2];
+    meshes[0].positions = static_positions;
+    meshes[0].indices = static_indices;
+    meshes[0].tri_count = static_count;
+    meshes[0].id_base = 0;
+    meshes[1].positions = bunny_world;
+    meshes[1].indices = w->bunny.tri_indices;
+    meshes[1].tri_count = w->bunny.tri_count;
+    meshes[1].id_base = static_count;
     ex_raster_clear_deferred(ra);
-    ra->tile_done = NULL;
-    result = ex_raster_draw(ra, &ec, static_positions, static_indices, static_count, 0);
-    ra->tile_done = tile_done;
-    if (static_done) *static_done = wt_seconds();
-    return result != 0 ? -1 : ex_raster_draw(ra, &ec, bunny_world, w->bunny.tri_indices, w->bunny.tri_count, static_count);
+    return ex_raster_draw_meshes(ra, &ec, meshes, 2);
 }
 
 /* The bunny as a sphere for its occlusion blob: the sphere of its volume
@@ -4211,7 +4218,11 @@ static int wt__radiosity_create(wt_renderer *r, char *err, size_t err_size)
     if (!r->visibility || !r->bunny_world || !r->bunny_world_normals || !r->bunny_rgb ||
         ex_raster_init(&r->raster, (int)r->width, (int)r->height) != 0)
         return wt__fail(err, err_size, "%s", "out of memory");
+    r->tile_cpu = (double *)calloc((size_t)r->raster.tiles_x * (size_t)r->raster.tiles_y, sizeof(double));
+    if (!r->tile_cpu) return wt__fail(err, err_size, "%s", "out of memory");
     r->raster.pool = w->pool;
+    /* the shading reads the tiles' own buffers */
+    r->raster.skip = EX_RASTER_SKIP_DEPTH | EX_RASTER_SKIP_ID | EX_RASTER_SKIP_BARY;
     wt_bunny_sphere(w, r->bunny_centre, &r->bunny_radius);
     return wt_bunny_visibility(w, r->visibility, &r->reused_visibility, err, err_size);
 }
@@ -4267,31 +4278,62 @@ typedef struct wt__pixel_job {
     const wt_renderer *r;
     float *rgb;
     int blob;
+    double *tile_cpu;            /* per raster tile: the thread CPU seconds its shading took */
 } wt__pixel_job;
 
-/* The pixel pass over the pixels [x0, x1) x [y0, y1) of a finished raster
-   tile (ex_raster.tile_done: fused with the raster while the tile is in the
-   cache): static pixels get their radiosity B (radinterp_shade), then
-   radiance (E + (B - E) * blob) / pi; the bunny's the Gouraud blend of its
-   vertex radiances; empty pixels black. */
-static void wt__shade_tile(void *ctx, int x0, int y0, int x1, int y1)
+/* Copies a finished row of the frame (n floats) to dst with streaming
+   stores where SSE2 and the alignment allow them: the frame is far larger
+   than the cache, and a streaming store does not first read the line it
+   writes, which halves the memory traffic of the frame's colours. */
+static void wt__store_row(float *dst, const float *src, size_t n)
+{
+#if defined(__SSE2__)
+    if (((uintptr_t)dst & 15u) == 0 && n % 4 == 0) {
+        size_t i;
+        for (i = 0; i < n; i += 4) _mm_stream_ps(dst + i, _mm_loadu_ps(src + i));
+        return;
+    }
+#endif
+    memcpy(dst, src, n * sizeof(float));
+}
+
+/* CPU time of the calling thread, in seconds. */
+static double wt__thread_cpu(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* The pixel pass over a finished raster tile (ex_raster.tile_done: fused
+   with the raster, reading the tile's own buffers while they are in the
+   cache), writing each pixel of the frame once: static pixels get their
+   radiosity B (radinterp_shade, a row at a time into a buffer on the
+   stack), then radiance (E + (B - E) * blob) / pi; the bunny's the Gouraud
+   blend of its vertex radiances; empty pixels black. */
+static void wt__shade_tile(void *ctx, const ex_raster_tile *tile)
 {
     const wt__pixel_job *j = (const wt__pixel_job *)ctx;
     const wt_renderer *r = j->r;
     const wt_static_shading *s = &r->statics;
-    const ex_raster *ra = &r->raster;
     const uint32_t *bunny = r->w->bunny.tri_indices, nt = s->data.triangle_count, nb = r->w->bunny.tri_count;
+    const int x0 = tile->x0, x1 = tile->x1;
+    float radiosity[3 * EX_RASTER_TILE];   /* one row's B */
+    float colours[3 * EX_RASTER_TILE];     /* and its radiance */
+    double cpu = wt__thread_cpu();
     int x, y;
-    for (y = y0; y < y1; y++) {
+    for (y = tile->y0; y < tile->y1; y++) {
+        const uint32_t *ids = tile->id + (y - tile->y0) * EX_RASTER_TILE;
+        const float *st = tile->bary + 2 * (y - tile->y0) * EX_RASTER_TILE;
+        float *row = colours;
         int blob_row = j->blob && y >= r->blob_box[1] && y < r->blob_box[3];
-        wt_static_shading_shade(s, ra, (size_t)y * r->width + (size_t)x0, (size_t)(x1 - x0), r->w->opt.gouraud, j->rgb);
+        wt_static_shading_shade(s, ids, st, (size_t)(x1 - x0), r->w->opt.gouraud, radiosity);
         for (x = x0; x < x1; x++) {
-            size_t p = (size_t)y * r->width + (size_t)x;
-            uint32_t id = ra->id[p];
-            float *out = j->rgb + 3 * p, u = ra->bary[2 * p], v = ra->bary[2 * p + 1], o = 1.0f - u - v;
+            uint32_t id = ids[x - x0];
+            float *out = row + 3 * (x - x0), u = st[2 * (x - x0)], v = st[2 * (x - x0) + 1], o = 1.0f - u - v;
             int k;
             if (id < nt) {
-                const float *e = s->data.emission + 3 * (size_t)id;
+                const float *e = s->data.emission + 3 * (size_t)id, *rad = radiosity + 3 * (x - x0);
                 float keep = 1.0f;
                 if (blob_row && x >= r->blob_box[0] && x < r->blob_box[2]) {
                     const uint32_t *tri = s->data.indices + 3 * (size_t)id;
@@ -4301,7 +4343,7 @@ static void wt__shade_tile(void *ctx, int x0, int y0, int x1, int y1)
                     for (k = 0; k < 3; k++) q[k] = o * a[k] + u * b[k] + v * c[k];
                     keep = wt__blob(r->sphere, q, s->normals + 3 * (size_t)id);
                 }
-                for (k = 0; k < 3; k++) out[k] = (e[k] + (out[k] - e[k]) * keep) * (1.0f / WT_PI);
+                for (k = 0; k < 3; k++) out[k] = (e[k] + (rad[k] - e[k]) * keep) * (1.0f / WT_PI);
             } else if (id != EX_RASTER_EMPTY && id - nt < nb) {
                 const uint32_t *tri = bunny + 3 * (size_t)(id - nt);
                 const float *a = r->bunny_rgb + 3 * (size_t)tri[0], *b = r->bunny_rgb + 3 * (size_t)tri[1];
@@ -4311,35 +4353,52 @@ static void wt__shade_tile(void *ctx, int x0, int y0, int x1, int y1)
                 out[0] = out[1] = out[2] = 0.0f;
             }
         }
+        wt__store_row(j->rgb + 3 * ((size_t)y * r->width + (size_t)x0), colours, 3 * (size_t)(x1 - x0));
     }
+#if defined(__SSE2__)
+    _mm_sfence();   /* the streaming stores are seen before the tile counts as done */
+#endif
+    j->tile_cpu[(tile->y0 / EX_RASTER_TILE) * r->raster.tiles_x + x0 / EX_RASTER_TILE] = wt__thread_cpu() - cpu;
+}
+
+/* CPU time of the whole process (all its threads), in seconds. */
+static double wt__process_cpu(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
 static int wt__radiosity_view(wt_renderer *r, const rendercache_camera *camera, double t, float *rgb, wt_frame_stats *st)
 {
     wt_world *w = r->w;
-    double t0 = wt_seconds(), a, b = 0.0;
+    double t0 = wt_seconds(), a, shade = 0.0;
     rendercache_camera cam = *camera;
     ex_camera ec = wt_ex_camera(&cam);
     wt__pixel_job j;
+    int tile, tiles = r->raster.tiles_x * r->raster.tiles_y, result;
     wt_set_time(w, t);
-    a = wt_seconds();
+    a = wt__thread_cpu();
     wt_bunny_light(w, r->volume, r->visibility, w->pose, r->bunny_world, r->bunny_world_normals, r->bunny_rgb);
-    st->phase[2] = wt_seconds() - a;
-    a = wt_seconds();
+    st->phase[2] = wt__thread_cpu() - a;
+    a = wt__process_cpu();
     ex__affine_point(w->pose, r->bunny_centre, r->sphere);
     r->sphere[3] = r->bunny_radius;
     j.r = r;
     j.rgb = rgb;
     j.blob = w->opt.bunny_shadow;
+    j.tile_cpu = r->tile_cpu;
     if (j.blob) wt__blob_box(r, &ec);
-    r->raster.tile_done = wt__shade_tile;   /* shading fused with the last draw's tile jobs */
+    r->raster.tile_done = wt__shade_tile;   /* shading fused with the tile jobs */
     r->raster.tile_user = &j;
-    if (wt_raster_scene(w, &r->raster, &cam, r->statics.data.positions, r->statics.data.indices,
-                        r->statics.data.triangle_count, r->bunny_world, &b) != 0)
-        return -1;
+    result = wt_raster_scene(w, &r->raster, &cam, r->statics.data.positions, r->statics.data.indices,
+                             r->statics.data.triangle_count, r->bunny_world);
     r->raster.tile_done = NULL;
-    st->phase[0] = b - a;                /* the clear and the static mesh */
-    st->phase[1] = wt_seconds() - b;     /* the bunny and the shading, tile by tile */
+    if (result != 0) return -1;
+    /* CPU seconds over all threads: the pass's, less its tiles' shading */
+    for (tile = 0; tile < tiles; tile++) shade += r->tile_cpu[tile];
+    st->phase[1] = shade;
+    st->phase[0] = wt__process_cpu() - a - shade;
     st->samples = w->bunny.vertex_count;
     st->total = wt_seconds() - t0;
     return 0;
@@ -4376,6 +4435,7 @@ EX_FN void wt_renderer_destroy(wt_renderer *r)
     free(r->bunny_world);
     free(r->bunny_world_normals);
     free(r->bunny_rgb);
+    free(r->tile_cpu);
     ex_raster_free(&r->raster);
     free(r->points);
     free(r->index);
