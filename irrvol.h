@@ -420,8 +420,10 @@
                          declared payload before allocating, every value's
                          range, finiteness and consistency, the CRC;
                          truncation and corruption give CORRUPT_DATA,
-                         another format version VERSION. Contract: data
-                         holds size bytes.
+                         another format version VERSION; the volume is
+                         read from the start of the buffer (bytes after its
+                         CRC are left alone). Contract: data holds size
+                         bytes.
      irrvol_free_memory  accepts NULL data; the allocator must be the one the
                          data was saved with.
 

@@ -158,7 +158,9 @@
            size, setting and record checked as by create and insert, the CRC at
            the end; CORRUPT_DATA for anything off, VERSION for another format.
        lightvec_save_to_memory(cache, a, &data, &size)
-       lightvec_load_from_memory(data, size, desc, &cache)   data NULL only with size 0.
+       lightvec_load_from_memory(data, size, desc, &cache)   data NULL only with size 0; reads
+                                                      the cache at the start of the buffer
+                                                      (bytes after its CRC are left alone).
        lightvec_free_memory(a, data)                  a: the allocator save used.
        lightvec_result_string(result)
 

@@ -424,7 +424,9 @@
      radinterp_mesh_load(a, read, user, &m), radinterp_mesh_load_from_memory(
          data, size, a, &m)   Input is hostile: every size, index and float
          checked before use, the CRC at the end: CORRUPT_DATA for anything
-         off, VERSION for another format version, never a crash.
+         off, VERSION for another format version, never a crash. A mesh is
+         read from the start of the buffer; bytes after its CRC are left
+         alone (objects can be packed one after another).
 
    SAVED MESHES
 

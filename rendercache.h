@@ -305,7 +305,8 @@
          size, ...): the input is hostile: every size is checked against the
          payload, the CRC, the camera, every colour and depth; truncated or
          altered data gives CORRUPT_DATA, another format VERSION, never a
-         crash. Contract: data holds size bytes.
+         crash; the image is read from the start of the buffer (bytes after
+         its CRC are left alone). Contract: data holds size bytes.
        save_to_memory(img, allocator, &data, &size) as save; free_memory(a,
          data): contract: data came from save_to_memory or subdivide_time
          with the same allocator.
