@@ -3764,6 +3764,15 @@ static void lightvec__tree_walk(const lightvec__tree *t, const float p[3], float
 
 /* ---- queries -------------------------------------------------------------------- */
 
+/* A leaf block waiting for its visit: its first `count` items. */
+#define LIGHTVEC__PENDING 64u
+typedef struct lightvec__block_ref {
+    const float *block;
+    const lightvec__item *items;
+    uint32_t count;
+    int full;                        /* a kd-tree leaf (not a tail block) */
+} lightvec__block_ref;
+
 /* A valid record kept for the interpolation (32 bytes). Its rank, kept
    apart, is the bits of w above ~id: w >= +0, whose bits order as it does,
    then the smaller id. */
@@ -3791,6 +3800,8 @@ typedef struct lightvec__query {
     uint64_t *ranks;                 /* and their ranks */
     uint32_t kept_count, best;       /* best = max_neighbors; room for best + KEPT_SLACK */
     uint64_t floor;                  /* a rank below it has `best` larger ones already (0: none yet) */
+    lightvec__block_ref *pending;    /* blocks the walk reached, not visited yet (none between searches) */
+    uint32_t pending_count;
 } lightvec__query;
 
 /* The angle psi over which record B's glossy part is carried to A's view w:
@@ -3910,27 +3921,34 @@ typedef struct lightvec__slots {
     float front[LIGHTVEC__LEAF];     /* (A - B) . (n_A + n_B) / 2 */
 } lightvec__slots;
 
-/* The tests of slot k that need no square root, with the radius R0 the
-   block was written with: |AB| < R0, cos(w, sigma) > S_dir, cos(n_A, n_B)
-   > S_curv, B not in front of A (Ward 1988: front >= -front_tolerance *
-   R0). Plain reads of rows that never change once published, no branch:
-   the loop over a block vectorizes. R_B only shrinks (neighbour clamping,
-   under readers) and a smaller radius fails more, so the slots that pass
-   are a superset of the valid ones. */
-static int lightvec__slot_pass(const lightvec__query *q, const float *block, uint32_t k, float cos_dir, lightvec__slots *s)
+/* The tests of the first n slots of a block that need no square root,
+   with the radius R0 the block was written with: |AB| < R0, cos(w, sigma)
+   > S_dir, cos(n_A, n_B) > S_curv, B not in front of A (Ward 1988: front
+   >= -front_tolerance * R0); a bit per slot that passes. Plain reads of
+   rows that never change once published, no branch: the loop vectorizes.
+   R_B only shrinks (neighbour clamping, under readers) and a smaller radius
+   fails more, so the slots that pass are a superset of the valid ones. */
+static unsigned lightvec__block_pass(const lightvec__query *q, const float *block, uint32_t n, float cos_dir,
+                                     lightvec__slots *s)
 {
-    const float *b = block + k;
-    float nx = b[LIGHTVEC__ROW_NX * LIGHTVEC__LEAF], ny = b[LIGHTVEC__ROW_NY * LIGHTVEC__LEAF];
-    float nz = b[LIGHTVEC__ROW_NZ * LIGHTVEC__LEAF], r0 = b[LIGHTVEC__ROW_R0 * LIGHTVEC__LEAF];
-    float dx = q->a[0] - b[LIGHTVEC__ROW_X * LIGHTVEC__LEAF], dy = q->a[1] - b[LIGHTVEC__ROW_Y * LIGHTVEC__LEAF];
-    float dz = q->a[2] - b[LIGHTVEC__ROW_Z * LIGHTVEC__LEAF], d2 = dx * dx + dy * dy + dz * dz;
-    float cs = q->w[0] * b[LIGHTVEC__ROW_SX * LIGHTVEC__LEAF] + q->w[1] * b[LIGHTVEC__ROW_SY * LIGHTVEC__LEAF] +
-               q->w[2] * b[LIGHTVEC__ROW_SZ * LIGHTVEC__LEAF];
-    float cn = q->n[0] * nx + q->n[1] * ny + q->n[2] * nz;
-    float front = 0.5f * (dx * (q->n[0] + nx) + dy * (q->n[1] + ny) + dz * (q->n[2] + nz));
-    s->dx[k] = dx; s->dy[k] = dy; s->dz[k] = dz; s->d2[k] = d2;
-    s->cs[k] = cs; s->cn[k] = cn; s->front[k] = front;
-    return (d2 < r0 * r0) & (cs > cos_dir) & (cn > q->p->cos_normal) & (front >= -q->p->front * r0);
+    unsigned mask = 0;
+    uint32_t k;
+    for (k = 0; k < n; k++) {
+        const float *b = block + k;
+        float nx = b[LIGHTVEC__ROW_NX * LIGHTVEC__LEAF], ny = b[LIGHTVEC__ROW_NY * LIGHTVEC__LEAF];
+        float nz = b[LIGHTVEC__ROW_NZ * LIGHTVEC__LEAF], r0 = b[LIGHTVEC__ROW_R0 * LIGHTVEC__LEAF];
+        float dx = q->a[0] - b[LIGHTVEC__ROW_X * LIGHTVEC__LEAF], dy = q->a[1] - b[LIGHTVEC__ROW_Y * LIGHTVEC__LEAF];
+        float dz = q->a[2] - b[LIGHTVEC__ROW_Z * LIGHTVEC__LEAF], d2 = dx * dx + dy * dy + dz * dz;
+        float cs = q->w[0] * b[LIGHTVEC__ROW_SX * LIGHTVEC__LEAF] + q->w[1] * b[LIGHTVEC__ROW_SY * LIGHTVEC__LEAF] +
+                   q->w[2] * b[LIGHTVEC__ROW_SZ * LIGHTVEC__LEAF];
+        float cn = q->n[0] * nx + q->n[1] * ny + q->n[2] * nz;
+        float front = 0.5f * (dx * (q->n[0] + nx) + dy * (q->n[1] + ny) + dz * (q->n[2] + nz));
+        s->dx[k] = dx; s->dy[k] = dy; s->dz[k] = dz; s->d2[k] = d2;
+        s->cs[k] = cs; s->cn[k] = cn; s->front[k] = front;
+        mask |= (unsigned)((d2 < r0 * r0) & (cs > cos_dir) & (cn > q->p->cos_normal) &
+                           (front >= -q->p->front * r0)) << k;
+    }
+    return mask;
 }
 
 /* The rest of 4.2 for slot k, which passed lightvec__slot_pass: the tests
@@ -3980,23 +3998,49 @@ static void lightvec__visit_block(lightvec__query *q, const float *block, const 
 {
     lightvec__slots s;
     float cos_dir = q->directional ? q->p->cos_dir : -2.0f; /* a 3D query has w = 0: cs = 0 passes */
-    unsigned mask = 0;
+    unsigned mask = full ? lightvec__block_pass(q, block, LIGHTVEC__LEAF, cos_dir, &s)
+                         : lightvec__block_pass(q, block, count, cos_dir, &s);
     uint32_t k;
-    if (full)
-        for (k = 0; k < LIGHTVEC__LEAF; k++) mask |= (unsigned)lightvec__slot_pass(q, block, k, cos_dir, &s) << k;
-    else
-        for (k = 0; k < count; k++) mask |= (unsigned)lightvec__slot_pass(q, block, k, cos_dir, &s) << k;
     for (; mask; mask &= mask - 1) {
         k = lightvec__bvh_first_bit(mask);
         lightvec__visit(q, block, k, &items[k], &s, cos_dir);
     }
 }
 
+/* Visits the pending blocks, in the order they came. */
+static void lightvec__drain(lightvec__query *q)
+{
+    uint32_t i;
+    for (i = 0; i < q->pending_count; i++) {
+        const lightvec__block_ref *r = &q->pending[i];
+        if (r->full) lightvec__visit_block(q, r->block, r->items, LIGHTVEC__LEAF, 1);
+        else lightvec__visit_block(q, r->block, r->items, r->count, 0);
+    }
+    q->pending_count = 0;
+}
+
+/* Queues a block for lightvec__visit_block. The walk goes on meanwhile, so
+   the blocks it prefetched arrive while it reads the next nodes: the
+   memory latencies of a lookup overlap (visiting a block as soon as the
+   walk reaches it waits for each one in turn). The order of the visits,
+   hence of every result, is the walk's. */
+static void lightvec__queue_block(lightvec__query *q, const float *block, const lightvec__item *items, uint32_t count,
+                                  int full)
+{
+    lightvec__block_ref *r;
+    if (q->pending_count == LIGHTVEC__PENDING) lightvec__drain(q);
+    r = &q->pending[q->pending_count++];
+    r->block = block;
+    r->items = items;
+    r->count = count < LIGHTVEC__LEAF ? count : LIGHTVEC__LEAF;
+    r->full = full;
+}
+
 static void lightvec__query_leaf(void *ctx, const lightvec__tree *t, uint32_t leaf)
 {
-    uint32_t first = leaf * LIGHTVEC__LEAF, count = t->count - first;
-    lightvec__visit_block((lightvec__query *)ctx, t->blocks + (size_t)leaf * LIGHTVEC__BLOCK, t->items + first,
-                          count < LIGHTVEC__LEAF ? count : LIGHTVEC__LEAF, 1);
+    uint32_t first = leaf * LIGHTVEC__LEAF;
+    lightvec__queue_block((lightvec__query *)ctx, t->blocks + (size_t)leaf * LIGHTVEC__BLOCK, t->items + first,
+                          t->count - first, 1);
 }
 
 /* The tail's published items (tail_count, acquire), block by block. */
@@ -4004,9 +4048,9 @@ static void lightvec__tail_query(const lightvec__index *idx, lightvec__query *q)
 {
     uint32_t n = lightvec__load_u32(&idx->tail_count), i;
     for (i = 0; i * LIGHTVEC__LEAF < n; i++) {
-        uint32_t count = n - i * LIGHTVEC__LEAF;
-        lightvec__visit_block(q, idx->tail_blocks[i], idx->tail + i * LIGHTVEC__LEAF,
-                              count < LIGHTVEC__LEAF ? count : LIGHTVEC__LEAF, 0);
+        LIGHTVEC__PREFETCH(&idx->tail_blocks[i][LIGHTVEC__ROW_SX * LIGHTVEC__LEAF]);
+        LIGHTVEC__PREFETCH(&idx->tail_blocks[i][LIGHTVEC__ROW_NY * LIGHTVEC__LEAF]);
+        lightvec__queue_block(q, idx->tail_blocks[i], idx->tail + i * LIGHTVEC__LEAF, n - i * LIGHTVEC__LEAF, 0);
     }
 }
 
@@ -4548,8 +4592,13 @@ static void lightvec__for_indexes(const lightvec_cache *c, int directional, cons
 /* Every record valid at the query, as a registered reader. */
 static void lightvec__search(const lightvec_cache *c, lightvec__query *q)
 {
+    lightvec__block_ref pending[LIGHTVEC__PENDING];
     uint32_t e = lightvec__enter(c->readers);
+    q->pending = pending;
+    q->pending_count = 0;
     lightvec__for_indexes(c, q->directional, q->w, lightvec__index_query, q);
+    lightvec__drain(q);
+    q->pending = NULL;
     lightvec__leave(c->readers, e);
 }
 
