@@ -3836,17 +3836,17 @@ static uint32_t lightvec__select_best(uint64_t *ranks, lightvec__candidate *kept
     uint32_t lo = 0, hi = n, i, j;
     if (n <= best) return n;
     if (n <= LIGHTVEC__COUNT_SELECT) {
-        unsigned char in[LIGHTVEC__COUNT_SELECT];
+        uint64_t above[LIGHTVEC__COUNT_SELECT];
         uint32_t m = 0;
-        for (i = 0; i < n; i++) {
-            uint32_t above = 0;
-            for (j = 0; j < n; j++) above += ranks[j] > ranks[i];
-            in[i] = above < best;
+        for (i = 0; i < n; i++) above[i] = 0;
+        for (j = 0; j < n; j++) {
+            uint64_t r = ranks[j];
+            for (i = 0; i < n; i++) above[i] += ranks[i] < r;
         }
         for (i = 0; i < n; i++) { /* m <= i: slot m is free or i itself */
             ranks[m] = ranks[i];
             kept[m] = kept[i];
-            m += in[i];
+            m += above[i] < best;
         }
         return m;
     }
