@@ -1,4 +1,4 @@
-/* lightvec.h - v0.4.1 - cached 5D indirect light vectors - public domain or MIT, see end of file
+/* lightvec.h - v0.4.2 - cached 5D indirect light vectors - public domain or MIT, see end of file
 
    LIGHTVEC.H: cached light vectors over position and direction for interactive glossy global illumination.
 
@@ -214,15 +214,17 @@
      On the glossy Cornell floor below (128 x 128) it takes the moved frame's
      error from 5.1% to 4.4%. LIGHTVEC_CACHE_NO_NEIGHBOR_CLAMP turns it off.
 
-     The k-nearest cap (max_neighbors, default 16): a lookup keeps the valid
-     records of largest weight (a bounded heap, ties to the smaller id) and
-     interpolates those; valid_count still counts all. Where more than 16 are
+     The k-nearest cap (max_neighbors, default 16): a lookup interpolates the
+     valid records of largest weight (ties to the smaller id), selected once
+     the search is done; valid_count still counts all. Where more than 16 are
      valid the ones left out weigh least (near the edge of their spheres or of
      their direction cones): on the glossy Cornell floor (128 x 128, the moved
      frame) the error is 4.38% with no cap, 4.37% with 16, 4.50% with 8; it
-     bounds the interpolation's cost (its reads of 192-byte records)
-     in dense caches. It does not bound the search, which still tests every
-     record whose sphere holds A.
+     bounds the interpolation's cost (one cache line per kept record without
+     a valid glossy part, three with one) in dense caches. It does not bound
+     the search, which still tests every record whose sphere holds A: every
+     valid record counts in valid_count, so no subtree can be skipped once
+     the k best are known.
 
      Defaults and why they differ from the paper's bare criteria: the paper
      bounds |AB| by d_avg itself (radius_scale 1) and leaves I_B, S_curv,
@@ -368,20 +370,27 @@
 
      Lookups at 10^5 records on the walls of a room (tests/bench_lightvec.c,
      one thread, CPU time, medians, a shared 2-core machine): 6 valid
-     records per query 1.1 us in a random query order (every one a cache
-     miss), 0.64 us sorted by position (as a frame's pixels come); 45 valid
-     3.3 us random, 2.2 us sorted (after lightvec_cache_optimize 2.9 and
-     1.9 us). At 10^6 records, 6 valid: 4.2 us random (memory latency),
-     1.4 us sorted. A kd-tree node holds eight child boxes in rows (three
-     binary levels), tested with a few SIMD compares; a leaf is a block of 8
-     records whose tested fields sit together, and the tests that need no
-     square root run over the whole block at once; a record's diffuse fields
-     are read (two cache lines, prefetched) only when it is kept. The cost of
-     a dense lookup is now mostly per valid record (the exact tests, the
-     k-nearest selection, the interpolation): the cap bounds what is
-     interpolated, not what is tested. Insertion with neighbour clamping:
-     5 us at 10^5 records, 10.5 us in the dense cache (a gather takes about
-     1 ms).
+     records per query 0.96 us in a random query order (every one a cache
+     miss), 0.58 us sorted by position (as a frame's pixels come); 45 valid
+     2.6 us random, 1.6 us sorted (after lightvec_cache_optimize 2.2 and
+     1.4 us). At 10^6 records, 6 valid: 3.8 us random (memory latency),
+     1.3 us sorted. (v0.4.1 on the same runs: 1.2, 0.65, 3.4, 2.1 us.)
+     A kd-tree node holds eight child boxes in rows (three binary levels),
+     tested with a few SIMD compares; a leaf is a block of 8 records whose
+     tested fields sit together, and the tests that need no square root run
+     over the whole block at once. The walk prefetches the blocks it reaches
+     whole and queues them, visiting them in the same order once a few are
+     on their way, so that their memory latencies overlap. A valid record
+     costs one prefetched cache line (what the interpolation reads); the
+     k-nearest selection runs once, over all the valid records, at the end.
+     Where a dense lookup goes (45 valid): 2.6 faces, 7 kd-trees, 26 nodes,
+     33 leaves (252 records tested, 83 inside their sphere), 16
+     interpolated, about 330 cache lines; in a random order it waits on
+     memory. Bounding the viewer directions and normals of a leaf's records
+     by cones would skip 2.5 of its 29 full leaves (records seen from
+     anywhere in a room share a leaf's cone), so the nodes keep boxes
+     alone. Insertion with neighbour clamping: 5.4 us at 10^5 records, 11.6
+     us in the dense cache (a gather takes about 1 ms).
 
    LIMITS
 
@@ -431,7 +440,7 @@
 
 #define LIGHTVEC_VERSION_MAJOR 0
 #define LIGHTVEC_VERSION_MINOR 4
-#define LIGHTVEC_VERSION_PATCH 1
+#define LIGHTVEC_VERSION_PATCH 2
 #define LIGHTVEC_FILE_FORMAT_VERSION 2
 
 #ifndef LIGHTVEC_API
@@ -3213,8 +3222,9 @@ typedef struct lightvec__item {
    compares and one branch per child that holds A (the binary descent
    took one unpredictable branch per box). What the criteria read of a
    leaf's items is one block of rows (LIGHTVEC__ROW_*, LEAF floats each):
-   a leaf's tests read a few consecutive cache lines, and an item's 192 bytes
-   only for the records that pass them. */
+   a leaf's tests read a few consecutive cache lines, and an item only for
+   the records that pass them (its first line; the others for a valid
+   glossy part). */
 #define LIGHTVEC__ROW_X 0
 #define LIGHTVEC__ROW_Y 1
 #define LIGHTVEC__ROW_Z 2
