@@ -1,4 +1,4 @@
-/* lightvec.h - v0.4.1 - cached 5D indirect light vectors - public domain or MIT, see end of file
+/* lightvec.h - v0.4.2 - cached 5D indirect light vectors - public domain or MIT, see end of file
 
    LIGHTVEC.H: cached light vectors over position and direction for interactive glossy global illumination.
 
@@ -216,15 +216,17 @@
      On the glossy Cornell floor below (128 x 128) it takes the moved frame's
      error from 5.1% to 4.4%. LIGHTVEC_CACHE_NO_NEIGHBOR_CLAMP turns it off.
 
-     The k-nearest cap (max_neighbors, default 16): a lookup keeps the valid
-     records of largest weight (a bounded heap, ties to the smaller id) and
-     interpolates those; valid_count still counts all. Where more than 16 are
+     The k-nearest cap (max_neighbors, default 16): a lookup interpolates the
+     valid records of largest weight (ties to the smaller id), selected once
+     the search is done; valid_count still counts all. Where more than 16 are
      valid the ones left out weigh least (near the edge of their spheres or of
      their direction cones): on the glossy Cornell floor (128 x 128, the moved
      frame) the error is 4.38% with no cap, 4.37% with 16, 4.50% with 8; it
-     bounds the interpolation's cost (its reads of 192-byte records)
-     in dense caches. It does not bound the search, which still tests every
-     record whose sphere holds A.
+     bounds the interpolation's cost (one cache line per kept record without
+     a valid glossy part, three with one) in dense caches. It does not bound
+     the search, which still tests every record whose sphere holds A: every
+     valid record counts in valid_count, so no subtree can be skipped once
+     the k best are known.
 
      Defaults and why they differ from the paper's bare criteria: the paper
      bounds |AB| by d_avg itself (radius_scale 1) and leaves I_B, S_curv,
@@ -370,20 +372,27 @@
 
      Lookups at 10^5 records on the walls of a room (tests/bench_lightvec.c,
      one thread, CPU time, medians, a shared 2-core machine): 6 valid
-     records per query 1.1 us in a random query order (every one a cache
-     miss), 0.64 us sorted by position (as a frame's pixels come); 45 valid
-     3.3 us random, 2.2 us sorted (after lightvec_cache_optimize 2.9 and
-     1.9 us). At 10^6 records, 6 valid: 4.2 us random (memory latency),
-     1.4 us sorted. A kd-tree node holds eight child boxes in rows (three
-     binary levels), tested with a few SIMD compares; a leaf is a block of 8
-     records whose tested fields sit together, and the tests that need no
-     square root run over the whole block at once; a record's diffuse fields
-     are read (two cache lines, prefetched) only when it is kept. The cost of
-     a dense lookup is now mostly per valid record (the exact tests, the
-     k-nearest selection, the interpolation): the cap bounds what is
-     interpolated, not what is tested. Insertion with neighbour clamping:
-     5 us at 10^5 records, 10.5 us in the dense cache (a gather takes about
-     1 ms).
+     records per query 0.96 us in a random query order (every one a cache
+     miss), 0.58 us sorted by position (as a frame's pixels come); 45 valid
+     2.6 us random, 1.6 us sorted (after lightvec_cache_optimize 2.2 and
+     1.4 us). At 10^6 records, 6 valid: 3.8 us random (memory latency),
+     1.3 us sorted. (v0.4.1 on the same runs: 1.2, 0.65, 3.4, 2.1 us.)
+     A kd-tree node holds eight child boxes in rows (three binary levels),
+     tested with a few SIMD compares; a leaf is a block of 8 records whose
+     tested fields sit together, and the tests that need no square root run
+     over the whole block at once. The walk prefetches the blocks it reaches
+     whole and queues them, visiting them in the same order once a few are
+     on their way, so that their memory latencies overlap. A valid record
+     costs one prefetched cache line (what the interpolation reads); the
+     k-nearest selection runs once, over all the valid records, at the end.
+     Where a dense lookup goes (45 valid): 2.6 faces, 7 kd-trees, 26 nodes,
+     33 leaves (252 records tested, 83 inside their sphere), 16
+     interpolated, about 330 cache lines; in a random order it waits on
+     memory. Bounding the viewer directions and normals of a leaf's records
+     by cones would skip 2.5 of its 29 full leaves (records seen from
+     anywhere in a room share a leaf's cone), so the nodes keep boxes
+     alone. Insertion with neighbour clamping: 5.4 us at 10^5 records, 11.6
+     us in the dense cache (a gather takes about 1 ms).
 
    LIMITS
 
@@ -433,7 +442,7 @@
 
 #define LIGHTVEC_VERSION_MAJOR 0
 #define LIGHTVEC_VERSION_MINOR 4
-#define LIGHTVEC_VERSION_PATCH 1
+#define LIGHTVEC_VERSION_PATCH 2
 #define LIGHTVEC_FILE_FORMAT_VERSION 2
 
 #ifndef LIGHTVEC_API
@@ -3175,29 +3184,33 @@ typedef struct lightvec__params {
     lightvec_interpolation interpolation;  /* never DEFAULT */
 } lightvec__params;
 
-/* 192 bytes, aligned to 64 in a kd-tree. The first two cache lines hold
-   what the interpolation of a diffuse vector reads (and the writer's
-   fields), the third what only a glossy part needs: a lookup loads two
-   lines of a record without a valid glossy part. */
+/* 192 bytes, aligned to 64 in a kd-tree. The first cache line holds all
+   that the interpolation of a diffuse vector reads (A - B comes from the
+   criteria), the second the writer's fields and what the glossy criteria
+   read, the third the glossy part itself: a lookup loads one line of a
+   record without a valid glossy part. */
 typedef struct lightvec__item {
-    float pos[3];                    /* B */
-    float visibility;
     float dir[3];                    /* D */
-    float inv_glossy_distance;       /* 1 / d_g; 0 = no glossy part */
-    float mag[3];                    /* M */
-    float proj[3];                   /* M cos(n_B, D) */
+    float mag[3];                    /* what `interpolation` averages: M (PLAIN) or M cos(n_B, D) */
     float slope[3][3];               /* grad E_c / E_c per channel (0 where E_c = 0) */
+    uint32_t kind;                   /* ITEM_* bits; 64 bytes so far */
+    float pos[3];                    /* B */
+    float inv_glossy_distance;       /* 1 / d_g; 0 = no glossy part */
     float normal[3], rel_gradient;   /* n_B and |grad Y| / Y (luminance) */
     float radius;                    /* R_B as the writer knows it; readers read the leaf block's row */
     uint32_t id;
     float cos_dir;                   /* this record's S_dir (from its lobe) */
     float rel_glossy_gradient;       /* |dY(G)/dw_r| / Y(G) (luminance) times the glossy share */
-    float exponent;                  /* of the lobe of G; 128 bytes so far */
-    float outgoing[3];               /* sigma */
+    float exponent;                  /* of the lobe of G */
+    float outgoing[3];               /* sigma; 128 bytes so far */
     float glossy[3];                 /* G(sigma) */
     float glossy_gradient[3][3];     /* dG/dw_r */
-    float pad;
+    float pad[4];
 } lightvec__item;
+
+#define LIGHTVEC__ITEM_LIT 1u        /* visibility 1: every light sample seen (DLV) */
+#define LIGHTVEC__ITEM_UMBRA 2u      /* visibility 0: none seen */
+#define LIGHTVEC__ITEM_GLOSSY 4u     /* a glossy part (inv_glossy_distance > 0) */
 
 /* A balanced kd-tree over items (median splits on the axis of largest
    extent of the positions), its leaves LEAF consecutive items, every leaf
@@ -3211,8 +3224,9 @@ typedef struct lightvec__item {
    compares and one branch per child that holds A (the binary descent
    took one unpredictable branch per box). What the criteria read of a
    leaf's items is one block of rows (LIGHTVEC__ROW_*, LEAF floats each):
-   a leaf's tests read a few consecutive cache lines, and an item's 192 bytes
-   only for the records that pass them. */
+   a leaf's tests read a few consecutive cache lines, and an item only for
+   the records that pass them (its first line; the others for a valid
+   glossy part). */
 #define LIGHTVEC__ROW_X 0
 #define LIGHTVEC__ROW_Y 1
 #define LIGHTVEC__ROW_Z 2
@@ -3429,12 +3443,14 @@ static void lightvec__make_item(const lightvec__params *p, const lightvec_record
     it->cos_dir = lightvec__record_cos_dir(p, r);
     it->inv_glossy_distance = r->glossy_distance > 0.0f ? 1.0f / r->glossy_distance : 0.0f;
     it->exponent = r->exponent;
-    it->visibility = r->visibility;
+    it->kind = (r->visibility >= 1.0f ? LIGHTVEC__ITEM_LIT : 0u) | (r->visibility <= 0.0f ? LIGHTVEC__ITEM_UMBRA : 0u) |
+               (it->inv_glossy_distance > 0.0f ? LIGHTVEC__ITEM_GLOSSY : 0u);
     memcpy(it->dir, r->vector.direction, sizeof it->dir);
-    memcpy(it->mag, r->vector.magnitude, sizeof it->mag);
-    {
+    if (p->interpolation == LIGHTVEC_INTERPOLATION_PLAIN) {
+        memcpy(it->mag, r->vector.magnitude, sizeof it->mag);
+    } else {
         float cos_nd = lightvec__maxf(0.0f, lightvec__dot(lightvec__v3_load(r->normal), lightvec__v3_load(r->vector.direction)));
-        for (c = 0; c < 3; c++) it->proj[c] = r->vector.magnitude[c] * cos_nd;
+        for (c = 0; c < 3; c++) it->mag[c] = r->vector.magnitude[c] * cos_nd;
     }
     for (c = 0; c < 3; c++) {
         float e = r->irradiance[c];
@@ -3746,6 +3762,12 @@ static void lightvec__tree_walk(const lightvec__tree *t, const float p[3], float
             LIGHTVEC__PREFETCH(next);
             LIGHTVEC__PREFETCH(next + 64);
             LIGHTVEC__PREFETCH(next + 128);
+            LIGHTVEC__PREFETCH(next + 192);
+            if (child & LIGHTVEC__KD_LEAF) {
+                LIGHTVEC__PREFETCH(next + 256);
+                LIGHTVEC__PREFETCH(next + 320);
+                LIGHTVEC__PREFETCH(next + 384);
+            }
             stack[top++] = child;
             mask &= ~(1u << j);
         }
@@ -3754,13 +3776,28 @@ static void lightvec__tree_walk(const lightvec__tree *t, const float p[3], float
 
 /* ---- queries -------------------------------------------------------------------- */
 
-/* A valid record kept for the interpolation. */
+/* A leaf block waiting for its visit: its first `count` items. */
+#define LIGHTVEC__PENDING 64u
+typedef struct lightvec__block_ref {
+    const float *block;
+    const lightvec__item *items;
+    uint32_t count;
+    int full;                        /* a kd-tree leaf (not a tail block) */
+} lightvec__block_ref;
+
+/* A valid record kept for the interpolation (32 bytes). Its rank, kept
+   apart, is the bits of w above ~id: w >= +0, whose bits order as it does,
+   then the smaller id. */
 typedef struct lightvec__candidate {
-    uint64_t rank;                   /* the bits of w (>= +0: they order as w does) above ~id */
     float w;                         /* the diffuse vector's weight, w_B w_sigma (the cache's S_dir) */
     float wg;                        /* the glossy part's, w_B w_sigma (the record's S_dir); 0 = not valid */
+    float d[3];                      /* A - B */
+    uint32_t pad;
     const lightvec__item *it;
 } lightvec__candidate;
+
+#define LIGHTVEC__KEPT_SLACK 48u     /* candidates a lookup gathers beyond max_neighbors before it selects */
+#define LIGHTVEC__COUNT_SELECT 64u   /* up to this many candidates, selection by counting */
 
 typedef struct lightvec__query {
     float a[3], n[3], w[3];          /* A, n_A, w */
@@ -3771,8 +3808,12 @@ typedef struct lightvec__query {
     uint32_t *ids;                   /* lightvec_find: every valid record, up to capacity */
     float *weights;
     uint32_t capacity;
-    lightvec__candidate *heap;       /* lightvec_lookup: the heap_capacity records of largest weight, */
-    uint32_t heap_count, heap_capacity;  /* a min-heap on (w, -id) */
+    lightvec__candidate *kept;       /* lightvec_lookup: candidates for the `best` of largest rank, */
+    uint64_t *ranks;                 /* and their ranks */
+    uint32_t kept_count, best;       /* best = max_neighbors; room for best + KEPT_SLACK */
+    uint64_t floor;                  /* a rank below it has `best` larger ones already (0: none yet) */
+    lightvec__block_ref *pending;    /* blocks the walk reached, not visited yet (none between searches) */
+    uint32_t pending_count;
 } lightvec__query;
 
 /* The angle psi over which record B's glossy part is carried to A's view w:
@@ -3794,58 +3835,91 @@ static float lightvec__glossy_angle(const lightvec__query *q, const float sigma[
     return sqrtf(vx * vx + vy * vy + vz * vz) + sqrtf(px * px + py * py + pz * pz) * inv_dg;
 }
 
-/* a ranks below b: a smaller weight, or the same and a larger id (one
-   integer compare). */
-static int lightvec__heap_less(const lightvec__candidate *a, const lightvec__candidate *b)
+/* Keeps the `best` candidates of largest rank of kept[0, n) (all n when
+   fewer) in kept[0, best) and returns how many. Ranks are distinct (ids
+   are), so the set is the one a bounded heap would keep. Up to
+   COUNT_SELECT candidates, a candidate is kept when fewer than `best` ranks
+   exceed its own: n^2 compares without a branch (they vectorize), and the
+   kept ones stay in their order. More (a max_neighbors above 16), by
+   quickselect. Either way the result depends on the candidates' order
+   alone. */
+static uint32_t lightvec__select_best(uint64_t *ranks, lightvec__candidate *kept, uint32_t n, uint32_t best)
 {
-    return a->rank < b->rank;
-}
-
-static void lightvec__heap_down(lightvec__candidate *h, uint32_t n, uint32_t i)
-{
-    for (;;) {
-        uint32_t l = 2 * i + 1, m = i;
-        lightvec__candidate t;
-        if (l < n && lightvec__heap_less(&h[l], &h[m])) m = l;
-        if (l + 1 < n && lightvec__heap_less(&h[l + 1], &h[m])) m = l + 1;
-        if (m == i) return;
-        t = h[i]; h[i] = h[m]; h[m] = t;
-        i = m;
+    uint32_t lo = 0, hi = n, i, j;
+    if (n <= best) return n;
+    if (n <= LIGHTVEC__COUNT_SELECT) {
+        uint64_t above[LIGHTVEC__COUNT_SELECT];
+        uint32_t m = 0;
+        for (i = 0; i < n; i++) above[i] = 0;
+        for (j = 0; j < n; j++) {
+            uint64_t r = ranks[j];
+            for (i = 0; i < n; i++) above[i] += ranks[i] < r;
+        }
+        for (i = 0; i < n; i++) { /* m <= i: slot m is free or i itself */
+            ranks[m] = ranks[i];
+            kept[m] = kept[i];
+            m += above[i] < best;
+        }
+        return m;
     }
+    while (hi - lo > 1) {
+        uint64_t a = ranks[lo], b = ranks[lo + (hi - lo) / 2], c = ranks[hi - 1], pivot, tr;
+        lightvec__candidate t;
+        pivot = a < b ? (b < c ? b : (a < c ? c : a)) : (a < c ? a : (b < c ? c : b));
+        for (i = lo, j = lo; j < hi; j++) /* ranks above the pivot first, then the pivot, then the rest */
+            if (ranks[j] > pivot) {
+                tr = ranks[i]; ranks[i] = ranks[j]; ranks[j] = tr;
+                t = kept[i]; kept[i] = kept[j]; kept[j] = t;
+                i++;
+            }
+        for (j = i; ranks[j] != pivot; j++) {}
+        tr = ranks[i]; ranks[i] = ranks[j]; ranks[j] = tr;
+        t = kept[i]; kept[i] = kept[j]; kept[j] = t;
+        if (i == best || i + 1 == best) break;
+        if (i > best) hi = i;
+        else lo = i + 1;
+    }
+    return best;
 }
 
 /* Keeps a valid record: in the ids of lightvec_find, or among the
-   max_neighbors of largest weight (ties: the smaller id) of lightvec_lookup. */
-static void lightvec__keep(lightvec__query *q, const lightvec__item *it, uint32_t id, float w, float wg)
+   candidates for the max_neighbors of largest weight (ties: the smaller
+   id) of lightvec_lookup. A candidate is appended unless `best` larger ones
+   are known; when the room is full, the best are selected and the rest
+   dropped (amortised: once per KEPT_SLACK candidates at most). */
+static void lightvec__keep(lightvec__query *q, const lightvec__item *it, uint32_t id, float w, float wg, float dx,
+                           float dy, float dz)
 {
     if (q->ids && q->count < q->capacity) {
         q->ids[q->count] = id;
         q->weights[q->count] = w;
     }
     q->count++;
-    if (q->heap) {
-        lightvec__candidate c;
-        uint32_t bits;
+    if (q->kept) {
+        lightvec__candidate *c;
+        uint32_t bits, i;
+        uint64_t rank;
         memcpy(&bits, &w, sizeof bits);
-        c.rank = (uint64_t)bits << 32 | (uint64_t)(0xFFFFFFFFu - id);
-        c.w = w;
-        c.wg = wg;
-        c.it = it;
-        /* the interpolation reads the item: start loading it now (its
-           third line only for a valid glossy part) */
+        rank = (uint64_t)bits << 32 | (uint64_t)(0xFFFFFFFFu - id);
+        if (rank < q->floor) return;
+        if (q->kept_count == q->best + LIGHTVEC__KEPT_SLACK) {
+            q->kept_count = lightvec__select_best(q->ranks, q->kept, q->kept_count, q->best);
+            for (q->floor = q->ranks[0], i = 1; i < q->kept_count; i++)
+                q->floor = q->ranks[i] < q->floor ? q->ranks[i] : q->floor;
+            if (rank < q->floor) return;
+        }
+        q->ranks[q->kept_count] = rank;
+        c = &q->kept[q->kept_count++];
+        c->w = w;
+        c->wg = wg;
+        c->d[0] = dx; c->d[1] = dy; c->d[2] = dz;
+        c->it = it;
+        /* the interpolation reads the item: start loading it now (the
+           lines of the glossy part only when it is valid) */
         LIGHTVEC__PREFETCH(it);
-        LIGHTVEC__PREFETCH((const char *)it + 64);
-        if (wg > 0.0f) LIGHTVEC__PREFETCH((const char *)it + 128);
-        if (q->heap_count < q->heap_capacity) {
-            uint32_t i = q->heap_count++;
-            while (i && lightvec__heap_less(&c, &q->heap[(i - 1) / 2])) {
-                q->heap[i] = q->heap[(i - 1) / 2];
-                i = (i - 1) / 2;
-            }
-            q->heap[i] = c;
-        } else if (lightvec__heap_less(&q->heap[0], &c)) {
-            q->heap[0] = c;
-            lightvec__heap_down(q->heap, q->heap_count, 0);
+        if (wg > 0.0f) {
+            LIGHTVEC__PREFETCH((const char *)it + 64);
+            LIGHTVEC__PREFETCH((const char *)it + 128);
         }
     }
 }
@@ -3859,27 +3933,34 @@ typedef struct lightvec__slots {
     float front[LIGHTVEC__LEAF];     /* (A - B) . (n_A + n_B) / 2 */
 } lightvec__slots;
 
-/* The tests of slot k that need no square root, with the radius R0 the
-   block was written with: |AB| < R0, cos(w, sigma) > S_dir, cos(n_A, n_B)
-   > S_curv, B not in front of A (Ward 1988: front >= -front_tolerance *
-   R0). Plain reads of rows that never change once published, no branch:
-   the loop over a block vectorizes. R_B only shrinks (neighbour clamping,
-   under readers) and a smaller radius fails more, so the slots that pass
-   are a superset of the valid ones. */
-static int lightvec__slot_pass(const lightvec__query *q, const float *block, uint32_t k, float cos_dir, lightvec__slots *s)
+/* The tests of the first n slots of a block that need no square root,
+   with the radius R0 the block was written with: |AB| < R0, cos(w, sigma)
+   > S_dir, cos(n_A, n_B) > S_curv, B not in front of A (Ward 1988: front
+   >= -front_tolerance * R0); a bit per slot that passes. Plain reads of
+   rows that never change once published, no branch: the loop vectorizes.
+   R_B only shrinks (neighbour clamping, under readers) and a smaller radius
+   fails more, so the slots that pass are a superset of the valid ones. */
+static unsigned lightvec__block_pass(const lightvec__query *q, const float *block, uint32_t n, float cos_dir,
+                                     lightvec__slots *s)
 {
-    const float *b = block + k;
-    float nx = b[LIGHTVEC__ROW_NX * LIGHTVEC__LEAF], ny = b[LIGHTVEC__ROW_NY * LIGHTVEC__LEAF];
-    float nz = b[LIGHTVEC__ROW_NZ * LIGHTVEC__LEAF], r0 = b[LIGHTVEC__ROW_R0 * LIGHTVEC__LEAF];
-    float dx = q->a[0] - b[LIGHTVEC__ROW_X * LIGHTVEC__LEAF], dy = q->a[1] - b[LIGHTVEC__ROW_Y * LIGHTVEC__LEAF];
-    float dz = q->a[2] - b[LIGHTVEC__ROW_Z * LIGHTVEC__LEAF], d2 = dx * dx + dy * dy + dz * dz;
-    float cs = q->w[0] * b[LIGHTVEC__ROW_SX * LIGHTVEC__LEAF] + q->w[1] * b[LIGHTVEC__ROW_SY * LIGHTVEC__LEAF] +
-               q->w[2] * b[LIGHTVEC__ROW_SZ * LIGHTVEC__LEAF];
-    float cn = q->n[0] * nx + q->n[1] * ny + q->n[2] * nz;
-    float front = 0.5f * (dx * (q->n[0] + nx) + dy * (q->n[1] + ny) + dz * (q->n[2] + nz));
-    s->dx[k] = dx; s->dy[k] = dy; s->dz[k] = dz; s->d2[k] = d2;
-    s->cs[k] = cs; s->cn[k] = cn; s->front[k] = front;
-    return (d2 < r0 * r0) & (cs > cos_dir) & (cn > q->p->cos_normal) & (front >= -q->p->front * r0);
+    unsigned mask = 0;
+    uint32_t k;
+    for (k = 0; k < n; k++) {
+        const float *b = block + k;
+        float nx = b[LIGHTVEC__ROW_NX * LIGHTVEC__LEAF], ny = b[LIGHTVEC__ROW_NY * LIGHTVEC__LEAF];
+        float nz = b[LIGHTVEC__ROW_NZ * LIGHTVEC__LEAF], r0 = b[LIGHTVEC__ROW_R0 * LIGHTVEC__LEAF];
+        float dx = q->a[0] - b[LIGHTVEC__ROW_X * LIGHTVEC__LEAF], dy = q->a[1] - b[LIGHTVEC__ROW_Y * LIGHTVEC__LEAF];
+        float dz = q->a[2] - b[LIGHTVEC__ROW_Z * LIGHTVEC__LEAF], d2 = dx * dx + dy * dy + dz * dz;
+        float cs = q->w[0] * b[LIGHTVEC__ROW_SX * LIGHTVEC__LEAF] + q->w[1] * b[LIGHTVEC__ROW_SY * LIGHTVEC__LEAF] +
+                   q->w[2] * b[LIGHTVEC__ROW_SZ * LIGHTVEC__LEAF];
+        float cn = q->n[0] * nx + q->n[1] * ny + q->n[2] * nz;
+        float front = 0.5f * (dx * (q->n[0] + nx) + dy * (q->n[1] + ny) + dz * (q->n[2] + nz));
+        s->dx[k] = dx; s->dy[k] = dy; s->dz[k] = dz; s->d2[k] = d2;
+        s->cs[k] = cs; s->cn[k] = cn; s->front[k] = front;
+        mask |= (unsigned)((d2 < r0 * r0) & (cs > cos_dir) & (cn > q->p->cos_normal) &
+                           (front >= -q->p->front * r0)) << k;
+    }
+    return mask;
 }
 
 /* The rest of 4.2 for slot k, which passed lightvec__slot_pass: the tests
@@ -3916,7 +3997,7 @@ static void lightvec__visit(lightvec__query *q, const float *block, uint32_t k, 
             wg = wb * ((cos_psi - it->cos_dir) / (1.0f - it->cos_dir)) * (1.0f / (1.0f + gchange));
     }
     memcpy(&id, &b[LIGHTVEC__ROW_ID * LIGHTVEC__LEAF], sizeof id);
-    lightvec__keep(q, it, id, wb * ws, wg);
+    lightvec__keep(q, it, id, wb * ws, wg, s->dx[k], s->dy[k], s->dz[k]);
 }
 
 /* The first `count` items of a leaf block: lightvec__slot_pass over the
@@ -3929,23 +4010,49 @@ static void lightvec__visit_block(lightvec__query *q, const float *block, const 
 {
     lightvec__slots s;
     float cos_dir = q->directional ? q->p->cos_dir : -2.0f; /* a 3D query has w = 0: cs = 0 passes */
-    unsigned mask = 0;
+    unsigned mask = full ? lightvec__block_pass(q, block, LIGHTVEC__LEAF, cos_dir, &s)
+                         : lightvec__block_pass(q, block, count, cos_dir, &s);
     uint32_t k;
-    if (full)
-        for (k = 0; k < LIGHTVEC__LEAF; k++) mask |= (unsigned)lightvec__slot_pass(q, block, k, cos_dir, &s) << k;
-    else
-        for (k = 0; k < count; k++) mask |= (unsigned)lightvec__slot_pass(q, block, k, cos_dir, &s) << k;
     for (; mask; mask &= mask - 1) {
         k = lightvec__bvh_first_bit(mask);
         lightvec__visit(q, block, k, &items[k], &s, cos_dir);
     }
 }
 
+/* Visits the pending blocks, in the order they came. */
+static void lightvec__drain(lightvec__query *q)
+{
+    uint32_t i;
+    for (i = 0; i < q->pending_count; i++) {
+        const lightvec__block_ref *r = &q->pending[i];
+        if (r->full) lightvec__visit_block(q, r->block, r->items, LIGHTVEC__LEAF, 1);
+        else lightvec__visit_block(q, r->block, r->items, r->count, 0);
+    }
+    q->pending_count = 0;
+}
+
+/* Queues a block for lightvec__visit_block. The walk goes on meanwhile, so
+   the blocks it prefetched arrive while it reads the next nodes: the
+   memory latencies of a lookup overlap (visiting a block as soon as the
+   walk reaches it waits for each one in turn). The order of the visits,
+   hence of every result, is the walk's. */
+static void lightvec__queue_block(lightvec__query *q, const float *block, const lightvec__item *items, uint32_t count,
+                                  int full)
+{
+    lightvec__block_ref *r;
+    if (q->pending_count == LIGHTVEC__PENDING) lightvec__drain(q);
+    r = &q->pending[q->pending_count++];
+    r->block = block;
+    r->items = items;
+    r->count = count < LIGHTVEC__LEAF ? count : LIGHTVEC__LEAF;
+    r->full = full;
+}
+
 static void lightvec__query_leaf(void *ctx, const lightvec__tree *t, uint32_t leaf)
 {
-    uint32_t first = leaf * LIGHTVEC__LEAF, count = t->count - first;
-    lightvec__visit_block((lightvec__query *)ctx, t->blocks + (size_t)leaf * LIGHTVEC__BLOCK, t->items + first,
-                          count < LIGHTVEC__LEAF ? count : LIGHTVEC__LEAF, 1);
+    uint32_t first = leaf * LIGHTVEC__LEAF;
+    lightvec__queue_block((lightvec__query *)ctx, t->blocks + (size_t)leaf * LIGHTVEC__BLOCK, t->items + first,
+                          t->count - first, 1);
 }
 
 /* The tail's published items (tail_count, acquire), block by block. */
@@ -3953,9 +4060,9 @@ static void lightvec__tail_query(const lightvec__index *idx, lightvec__query *q)
 {
     uint32_t n = lightvec__load_u32(&idx->tail_count), i;
     for (i = 0; i * LIGHTVEC__LEAF < n; i++) {
-        uint32_t count = n - i * LIGHTVEC__LEAF;
-        lightvec__visit_block(q, idx->tail_blocks[i], idx->tail + i * LIGHTVEC__LEAF,
-                              count < LIGHTVEC__LEAF ? count : LIGHTVEC__LEAF, 0);
+        LIGHTVEC__PREFETCH(&idx->tail_blocks[i][LIGHTVEC__ROW_SX * LIGHTVEC__LEAF]);
+        LIGHTVEC__PREFETCH(&idx->tail_blocks[i][LIGHTVEC__ROW_NY * LIGHTVEC__LEAF]);
+        lightvec__queue_block(q, idx->tail_blocks[i], idx->tail + i * LIGHTVEC__LEAF, n - i * LIGHTVEC__LEAF, 0);
     }
 }
 
@@ -4497,8 +4604,13 @@ static void lightvec__for_indexes(const lightvec_cache *c, int directional, cons
 /* Every record valid at the query, as a registered reader. */
 static void lightvec__search(const lightvec_cache *c, lightvec__query *q)
 {
+    lightvec__block_ref pending[LIGHTVEC__PENDING];
     uint32_t e = lightvec__enter(c->readers);
+    q->pending = pending;
+    q->pending_count = 0;
     lightvec__for_indexes(c, q->directional, q->w, lightvec__index_query, q);
+    lightvec__drain(q);
+    q->pending = NULL;
     lightvec__leave(c->readers, e);
 }
 
@@ -4517,24 +4629,24 @@ static void lightvec__interpolate(const lightvec__query *q, lightvec_lookup_resu
 {
     const lightvec__params *p = q->p;
     double wsum = 0.0, msum[3] = { 0, 0, 0 }, dsum[3] = { 0, 0, 0 }, gsum[3] = { 0, 0, 0 }, gw = 0.0, esum = 0.0, scale;
-    uint32_t i, lit = 0, shadow = 0, partial = 0, glossy = 0, glossy_valid = 0;
+    uint32_t i, used = q->kept_count, lit = 0, shadow = 0, partial = 0, glossy = 0, glossy_valid = 0;
     lightvec__vec3 d, n = lightvec__v3_load(q->n);
     int k;
-    for (i = 0; i < q->heap_count; i++) {
-        const lightvec__item *it = q->heap[i].it;
-        double w = q->heap[i].w, wg = q->heap[i].wg;
-        float dx = q->a[0] - it->pos[0], dy = q->a[1] - it->pos[1], dz = q->a[2] - it->pos[2];
+    for (i = 0; i < used; i++) {
+        const lightvec__candidate *c = &q->kept[i];
+        const lightvec__item *it = c->it;
+        double w = c->w, wg = c->wg;
         wsum += w;
         for (k = 0; k < 3; k++) {
-            float m = p->interpolation == LIGHTVEC_INTERPOLATION_PLAIN ? it->mag[k] : it->proj[k];
+            float m = it->mag[k];
             if (p->interpolation == LIGHTVEC_INTERPOLATION_GRADIENT) {
-                float f = 1.0f + (it->slope[k][0] * dx + it->slope[k][1] * dy + it->slope[k][2] * dz);
+                float f = 1.0f + (it->slope[k][0] * c->d[0] + it->slope[k][1] * c->d[1] + it->slope[k][2] * c->d[2]);
                 m *= f > 0.0f ? f : 0.0f;
             }
             msum[k] += w * m;
             dsum[k] += w * it->dir[k];
         }
-        glossy += q->directional && it->inv_glossy_distance > 0.0f;
+        glossy += q->directional && (it->kind & LIGHTVEC__ITEM_GLOSSY);
         if (wg > 0.0) {
             float v[3];
             v[0] = q->w[0] - it->outgoing[0]; v[1] = q->w[1] - it->outgoing[1]; v[2] = q->w[2] - it->outgoing[2];
@@ -4547,15 +4659,15 @@ static void lightvec__interpolate(const lightvec__query *q, lightvec_lookup_resu
             esum += wg * it->exponent;
             glossy_valid++;
         }
-        if (it->visibility >= 1.0f) lit++;
-        else if (it->visibility <= 0.0f) shadow++;
+        if (it->kind & LIGHTVEC__ITEM_LIT) lit++;
+        else if (it->kind & LIGHTVEC__ITEM_UMBRA) shadow++;
         else partial++;
     }
-    out->used_count = q->heap_count;
-    out->weight = q->heap_count ? (float)(wsum / q->heap_count) : 0.0f; /* 4.3: average of the weights */
+    out->used_count = used;
+    out->weight = used ? (float)(wsum / used) : 0.0f; /* 4.3: average of the weights */
     /* where the kept records have glossy parts, min_valid of them must be
        valid for the glossy part too */
-    out->hit = q->heap_count >= p->min_valid && wsum > 0.0 && (!glossy || glossy_valid >= p->min_valid);
+    out->hit = used >= p->min_valid && wsum > 0.0 && (!glossy || glossy_valid >= p->min_valid);
     if (p->kind == LIGHTVEC_KIND_DIRECT && (partial || (lit && shadow))) out->hit = 0;
     if (!out->hit) return;
     d = lightvec__v3((float)dsum[0], (float)dsum[1], (float)dsum[2]);
@@ -4580,17 +4692,20 @@ static void lightvec__interpolate(const lightvec__query *q, lightvec_lookup_resu
 LIGHTVEC_API lightvec_result lightvec_lookup(const lightvec_cache *c, const float position[3], const float normal[3],
                                              const float *outgoing, lightvec_lookup_result *out)
 {
-    lightvec__candidate heap[LIGHTVEC__MAX_NEIGHBORS];
+    lightvec__candidate kept[LIGHTVEC__MAX_NEIGHBORS + LIGHTVEC__KEPT_SLACK];
+    uint64_t ranks[LIGHTVEC__MAX_NEIGHBORS + LIGHTVEC__KEPT_SLACK];
     lightvec__query q;
     lightvec_result r;
     if (!out) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
     memset(out, 0, sizeof *out);
     r = lightvec__query_init(c, position, normal, outgoing, &q);
     if (r != LIGHTVEC_OK) return r;
-    q.heap = heap;
-    q.heap_capacity = c->p.max_neighbors;
+    q.kept = kept;
+    q.ranks = ranks;
+    q.best = c->p.max_neighbors;
     lightvec__search(c, &q);
     out->valid_count = q.count;
+    q.kept_count = lightvec__select_best(q.ranks, q.kept, q.kept_count, q.best);
     lightvec__interpolate(&q, out);
     return LIGHTVEC_OK;
 }
