@@ -98,6 +98,18 @@ TEST__FN int test_check_int(long long actual, long long expected, const char *fi
 }
 
 /* A measured figure worth reporting; printed, never judged. */
+/* A copy of n saved bytes with one more byte after them (free it): what a
+   loader given a buffer that goes on past the object sees. NULL when out of
+   memory. */
+TEST__FN unsigned char *test_with_byte_after(const void *bytes, size_t n)
+{
+    unsigned char *longer = (unsigned char *)malloc(n + 1);
+    if (!longer) return NULL;
+    memcpy(longer, bytes, n);
+    longer[n] = 0xEE;
+    return longer;
+}
+
 TEST__FN void test_note(const char *fmt, ...)
 {
     va_list ap;
