@@ -3184,16 +3184,21 @@ typedef struct lightvec__params {
     lightvec_interpolation interpolation;  /* never DEFAULT */
 } lightvec__params;
 
-/* 192 bytes, aligned to 64 in a kd-tree. The first cache line holds all
-   that the interpolation of a diffuse vector reads (A - B comes from the
-   criteria), the second the writer's fields and what the glossy criteria
-   read, the third the glossy part itself: a lookup loads one line of a
-   record without a valid glossy part. */
-typedef struct lightvec__item {
+/* All that the interpolation of a diffuse vector reads of a record (A - B
+   comes from the criteria): one cache line. */
+typedef struct lightvec__head {
     float dir[3];                    /* D */
     float mag[3];                    /* what `interpolation` averages: M (PLAIN) or M cos(n_B, D) */
     float slope[3][3];               /* grad E_c / E_c per channel (0 where E_c = 0) */
-    uint32_t kind;                   /* ITEM_* bits; 64 bytes so far */
+    uint32_t kind;                   /* ITEM_* bits */
+} lightvec__head;
+
+/* 192 bytes, aligned to 64 in a kd-tree. The first cache line is the head
+   (a kd-tree leaf holds a copy of it beside its block: a lookup reads that
+   one), the second the writer's fields and what the glossy criteria read,
+   the third the glossy part itself. */
+typedef struct lightvec__item {
+    lightvec__head head;
     float pos[3];                    /* B */
     float inv_glossy_distance;       /* 1 / d_g; 0 = no glossy part */
     float normal[3], rel_gradient;   /* n_B and |grad Y| / Y (luminance) */
@@ -3244,6 +3249,16 @@ typedef struct lightvec__item {
 #define LIGHTVEC__ROWS 14
 #define LIGHTVEC__BLOCK (LIGHTVEC__ROWS * LIGHTVEC__LEAF)
 
+/* A leaf's block: its rows, then a copy of its items' heads. The
+   interpolation reads a kept record's head here, beside the rows the
+   criteria have just read (the same page, in the hardware prefetchers'
+   stream), instead of from the record itself: one memory round trip less
+   per valid record in a random query order. */
+typedef struct lightvec__block {
+    float row[LIGHTVEC__BLOCK];
+    lightvec__head head[LIGHTVEC__LEAF];
+} lightvec__block;
+
 #define LIGHTVEC__KD_WIDTH 8         /* children per stored kd-tree node: three binary levels */
 #define LIGHTVEC__KD_LEAF 0x80000000u /* a child reference to a leaf: KD_LEAF | leaf index */
 #define LIGHTVEC__KD_STACK ((LIGHTVEC__KD_WIDTH - 1) * 11 + 1) /* 11 >= levels / 3 + 1 for 2^29 leaves */
@@ -3258,7 +3273,7 @@ typedef struct lightvec__kd_node {
 typedef struct lightvec__tree {
     uint32_t count, node_count;
     lightvec__kd_node *nodes;        /* node 0 is the root */
-    float *blocks;                   /* a block of BLOCK floats per leaf */
+    lightvec__block *blocks;         /* one per leaf */
     lightvec__item *items;           /* count items, leaf after leaf */
     size_t bytes;
 } lightvec__tree;
@@ -3267,7 +3282,7 @@ typedef struct lightvec__index {
     uint32_t tree_count;
     uint32_t tail_count;             /* atomic: items of tail[] published */
     lightvec__tree *trees[LIGHTVEC__MAX_TREES];   /* ascending sizes */
-    float tail_blocks[LIGHTVEC__TAIL / LIGHTVEC__LEAF][LIGHTVEC__BLOCK];
+    lightvec__block tail_blocks[LIGHTVEC__TAIL / LIGHTVEC__LEAF];
     lightvec__item tail[LIGHTVEC__TAIL];
 } lightvec__index;
 
@@ -3443,20 +3458,21 @@ static void lightvec__make_item(const lightvec__params *p, const lightvec_record
     it->cos_dir = lightvec__record_cos_dir(p, r);
     it->inv_glossy_distance = r->glossy_distance > 0.0f ? 1.0f / r->glossy_distance : 0.0f;
     it->exponent = r->exponent;
-    it->kind = (r->visibility >= 1.0f ? LIGHTVEC__ITEM_LIT : 0u) | (r->visibility <= 0.0f ? LIGHTVEC__ITEM_UMBRA : 0u) |
-               (it->inv_glossy_distance > 0.0f ? LIGHTVEC__ITEM_GLOSSY : 0u);
-    memcpy(it->dir, r->vector.direction, sizeof it->dir);
+    it->head.kind = (r->visibility >= 1.0f ? LIGHTVEC__ITEM_LIT : 0u) | (r->visibility <= 0.0f ? LIGHTVEC__ITEM_UMBRA : 0u) |
+                    (it->inv_glossy_distance > 0.0f ? LIGHTVEC__ITEM_GLOSSY : 0u);
+    memcpy(it->head.dir, r->vector.direction, sizeof it->head.dir);
     if (p->interpolation == LIGHTVEC_INTERPOLATION_PLAIN) {
-        memcpy(it->mag, r->vector.magnitude, sizeof it->mag);
+        memcpy(it->head.mag, r->vector.magnitude, sizeof it->head.mag);
     } else {
         float cos_nd = lightvec__maxf(0.0f, lightvec__dot(lightvec__v3_load(r->normal), lightvec__v3_load(r->vector.direction)));
-        for (c = 0; c < 3; c++) it->mag[c] = r->vector.magnitude[c] * cos_nd;
+        for (c = 0; c < 3; c++) it->head.mag[c] = r->vector.magnitude[c] * cos_nd;
     }
     for (c = 0; c < 3; c++) {
         float e = r->irradiance[c];
         int k;
-        for (k = 0; k < 3; k++) it->slope[c][k] = e > 0.0f ? r->gradient[c][k] / e : 0.0f;
-        if (!lightvec__finite3(it->slope[c])) it->slope[c][0] = it->slope[c][1] = it->slope[c][2] = 0.0f;
+        float *slope = it->head.slope[c];
+        for (k = 0; k < 3; k++) slope[k] = e > 0.0f ? r->gradient[c][k] / e : 0.0f;
+        if (!lightvec__finite3(slope)) slope[0] = slope[1] = slope[2] = 0.0f;
     }
     memcpy(it->glossy, r->glossy, sizeof it->glossy);
     memcpy(it->glossy_gradient, r->glossy_gradient, sizeof it->glossy_gradient);
@@ -3518,9 +3534,10 @@ static lightvec_record *lightvec__record_reserve(lightvec_cache *c, uint32_t id)
 /* ---- kd-tree ------------------------------------------------------------------- */
 
 /* Writes item it into slot k of a leaf block. */
-static void lightvec__block_put(float *block, uint32_t k, const lightvec__item *it)
+static void lightvec__block_put(lightvec__block *block, uint32_t k, const lightvec__item *it)
 {
-    float *b = block + k;
+    float *b = block->row + k;
+    block->head[k] = it->head;
     b[LIGHTVEC__ROW_X * LIGHTVEC__LEAF] = it->pos[0];
     b[LIGHTVEC__ROW_Y * LIGHTVEC__LEAF] = it->pos[1];
     b[LIGHTVEC__ROW_Z * LIGHTVEC__LEAF] = it->pos[2];
@@ -3664,14 +3681,14 @@ static lightvec__tree *lightvec__tree_build(const lightvec_allocator *a, const l
     lightvec__kd_span root;
     lightvec__tree *t, shape;
     float *boxes;
-    if ((size_t)leaves > (SIZE_MAX - head - 128u) / (sizeof(lightvec__kd_node) + LIGHTVEC__BLOCK * sizeof(float) +
+    if ((size_t)leaves > (SIZE_MAX - head - 128u) / (sizeof(lightvec__kd_node) + sizeof(lightvec__block) +
                                                       LIGHTVEC__LEAF * sizeof(lightvec__item)))
         return NULL;
     root.node = 0; root.a = 0; root.b = leaves;
     shape.nodes = NULL;
     if (n) lightvec__kd_collapse(&shape, NULL, root, &nodes);   /* at most leaves nodes */
     node_bytes = (size_t)nodes * sizeof(lightvec__kd_node);
-    block_bytes = (size_t)leaves * LIGHTVEC__BLOCK * sizeof(float);
+    block_bytes = (size_t)leaves * sizeof(lightvec__block);
     bytes = head + node_bytes + block_bytes + (size_t)n * sizeof(lightvec__item) + 64u; /* + room to align */
     t = (lightvec__tree *)lightvec__alloc(a, bytes);
     perm = (uint32_t *)lightvec__alloc_array(a, n, sizeof(uint32_t));
@@ -3686,7 +3703,7 @@ static lightvec__tree *lightvec__tree_build(const lightvec_allocator *a, const l
     t->node_count = nodes;
     t->nodes = (lightvec__kd_node *)((char *)t + head);   /* 256-byte nodes after a 64-byte aligned head */
     t->nodes = (lightvec__kd_node *)((char *)t->nodes + ((64u - ((uintptr_t)t->nodes & 63u)) & 63u));
-    t->blocks = (float *)((char *)t->nodes + node_bytes);
+    t->blocks = (lightvec__block *)(void *)((char *)t->nodes + node_bytes);
     t->items = (lightvec__item *)((char *)t->blocks + block_bytes);
     t->bytes = bytes;
     memset(t->blocks, 0, block_bytes); /* the last leaf's empty slots: radius 0, never inside */
@@ -3698,7 +3715,7 @@ static lightvec__tree *lightvec__tree_build(const lightvec_allocator *a, const l
     }
     for (i = 0; i < n; i++) {
         t->items[i] = src[perm[i]];
-        lightvec__block_put(t->blocks + (size_t)(i / LIGHTVEC__LEAF) * LIGHTVEC__BLOCK, i % LIGHTVEC__LEAF, &t->items[i]);
+        lightvec__block_put(&t->blocks[i / LIGHTVEC__LEAF], i % LIGHTVEC__LEAF, &t->items[i]);
     }
     lightvec__free(a, boxes);
     lightvec__free(a, perm);
@@ -3757,7 +3774,7 @@ static void lightvec__tree_walk(const lightvec__tree *t, const float p[3], float
         while (mask) {
             uint32_t j = lightvec__kd_last_bit(mask), child = t->nodes[ref].child[j];
             const char *next = child & LIGHTVEC__KD_LEAF
-                ? (const char *)(t->blocks + (size_t)(child & ~LIGHTVEC__KD_LEAF) * LIGHTVEC__BLOCK)
+                ? (const char *)&t->blocks[child & ~LIGHTVEC__KD_LEAF]
                 : (const char *)&t->nodes[child];
             LIGHTVEC__PREFETCH(next);
             LIGHTVEC__PREFETCH(next + 64);
@@ -3779,20 +3796,20 @@ static void lightvec__tree_walk(const lightvec__tree *t, const float p[3], float
 /* A leaf block waiting for its visit: its first `count` items. */
 #define LIGHTVEC__PENDING 64u
 typedef struct lightvec__block_ref {
-    const float *block;
+    const lightvec__block *block;
     const lightvec__item *items;
     uint32_t count;
     int full;                        /* a kd-tree leaf (not a tail block) */
 } lightvec__block_ref;
 
-/* A valid record kept for the interpolation (32 bytes). Its rank, kept
+/* A valid record kept for the interpolation (40 bytes). Its rank, kept
    apart, is the bits of w above ~id: w >= +0, whose bits order as it does,
    then the smaller id. */
 typedef struct lightvec__candidate {
     float w;                         /* the diffuse vector's weight, w_B w_sigma (the cache's S_dir) */
     float wg;                        /* the glossy part's, w_B w_sigma (the record's S_dir); 0 = not valid */
     float d[3];                      /* A - B */
-    uint32_t pad;
+    const lightvec__head *head;      /* the copy in its leaf block */
     const lightvec__item *it;
 } lightvec__candidate;
 
@@ -3887,8 +3904,8 @@ static uint32_t lightvec__select_best(uint64_t *ranks, lightvec__candidate *kept
    id) of lightvec_lookup. A candidate is appended unless `best` larger ones
    are known; when the room is full, the best are selected and the rest
    dropped (amortised: once per KEPT_SLACK candidates at most). */
-static void lightvec__keep(lightvec__query *q, const lightvec__item *it, uint32_t id, float w, float wg, float dx,
-                           float dy, float dz)
+static void lightvec__keep(lightvec__query *q, const lightvec__item *it, const lightvec__head *head, uint32_t id,
+                           float w, float wg, float dx, float dy, float dz)
 {
     if (q->ids && q->count < q->capacity) {
         q->ids[q->count] = id;
@@ -3913,10 +3930,11 @@ static void lightvec__keep(lightvec__query *q, const lightvec__item *it, uint32_
         c->w = w;
         c->wg = wg;
         c->d[0] = dx; c->d[1] = dy; c->d[2] = dz;
+        c->head = head;
         c->it = it;
-        /* the interpolation reads the item: start loading it now (the
-           lines of the glossy part only when it is valid) */
-        LIGHTVEC__PREFETCH(it);
+        /* the interpolation reads the head: start loading it now (and the
+           item's lines of the glossy part when it is valid) */
+        LIGHTVEC__PREFETCH(head);
         if (wg > 0.0f) {
             LIGHTVEC__PREFETCH((const char *)it + 64);
             LIGHTVEC__PREFETCH((const char *)it + 128);
@@ -3974,7 +3992,7 @@ static unsigned lightvec__block_pass(const lightvec__query *q, const float *bloc
    psi |grad G_B| / G_B < I_B: the irradiance-change criterion and weight
    of 4.2.1, applied to G along the angle. w_g = 0 when either fails. */
 static void lightvec__visit(lightvec__query *q, const float *block, uint32_t k, const lightvec__item *it,
-                            const lightvec__slots *s, float cos_dir)
+                            const lightvec__head *head, const lightvec__slots *s, float cos_dir)
 {
     const lightvec__params *p = q->p;
     const float *b = block + k;
@@ -3997,7 +4015,7 @@ static void lightvec__visit(lightvec__query *q, const float *block, uint32_t k, 
             wg = wb * ((cos_psi - it->cos_dir) / (1.0f - it->cos_dir)) * (1.0f / (1.0f + gchange));
     }
     memcpy(&id, &b[LIGHTVEC__ROW_ID * LIGHTVEC__LEAF], sizeof id);
-    lightvec__keep(q, it, id, wb * ws, wg, s->dx[k], s->dy[k], s->dz[k]);
+    lightvec__keep(q, it, head, id, wb * ws, wg, s->dx[k], s->dy[k], s->dz[k]);
 }
 
 /* The first `count` items of a leaf block: lightvec__slot_pass over the
@@ -4005,17 +4023,17 @@ static void lightvec__visit(lightvec__query *q, const float *block, uint32_t k, 
    its empty slots of radius 0; the tail's slots past its count may be
    being written), then lightvec__visit for the slots that passed, one
    branch per passing slot. */
-static void lightvec__visit_block(lightvec__query *q, const float *block, const lightvec__item *items, uint32_t count,
-                                  int full)
+static void lightvec__visit_block(lightvec__query *q, const lightvec__block *block, const lightvec__item *items,
+                                  uint32_t count, int full)
 {
     lightvec__slots s;
     float cos_dir = q->directional ? q->p->cos_dir : -2.0f; /* a 3D query has w = 0: cs = 0 passes */
-    unsigned mask = full ? lightvec__block_pass(q, block, LIGHTVEC__LEAF, cos_dir, &s)
-                         : lightvec__block_pass(q, block, count, cos_dir, &s);
+    unsigned mask = full ? lightvec__block_pass(q, block->row, LIGHTVEC__LEAF, cos_dir, &s)
+                         : lightvec__block_pass(q, block->row, count, cos_dir, &s);
     uint32_t k;
     for (; mask; mask &= mask - 1) {
         k = lightvec__bvh_first_bit(mask);
-        lightvec__visit(q, block, k, &items[k], &s, cos_dir);
+        lightvec__visit(q, block->row, k, &items[k], &block->head[k], &s, cos_dir);
     }
 }
 
@@ -4036,8 +4054,8 @@ static void lightvec__drain(lightvec__query *q)
    memory latencies of a lookup overlap (visiting a block as soon as the
    walk reaches it waits for each one in turn). The order of the visits,
    hence of every result, is the walk's. */
-static void lightvec__queue_block(lightvec__query *q, const float *block, const lightvec__item *items, uint32_t count,
-                                  int full)
+static void lightvec__queue_block(lightvec__query *q, const lightvec__block *block, const lightvec__item *items,
+                                  uint32_t count, int full)
 {
     lightvec__block_ref *r;
     if (q->pending_count == LIGHTVEC__PENDING) lightvec__drain(q);
@@ -4051,8 +4069,7 @@ static void lightvec__queue_block(lightvec__query *q, const float *block, const 
 static void lightvec__query_leaf(void *ctx, const lightvec__tree *t, uint32_t leaf)
 {
     uint32_t first = leaf * LIGHTVEC__LEAF;
-    lightvec__queue_block((lightvec__query *)ctx, t->blocks + (size_t)leaf * LIGHTVEC__BLOCK, t->items + first,
-                          t->count - first, 1);
+    lightvec__queue_block((lightvec__query *)ctx, &t->blocks[leaf], t->items + first, t->count - first, 1);
 }
 
 /* The tail's published items (tail_count, acquire), block by block. */
@@ -4060,9 +4077,9 @@ static void lightvec__tail_query(const lightvec__index *idx, lightvec__query *q)
 {
     uint32_t n = lightvec__load_u32(&idx->tail_count), i;
     for (i = 0; i * LIGHTVEC__LEAF < n; i++) {
-        LIGHTVEC__PREFETCH(&idx->tail_blocks[i][LIGHTVEC__ROW_SX * LIGHTVEC__LEAF]);
-        LIGHTVEC__PREFETCH(&idx->tail_blocks[i][LIGHTVEC__ROW_NY * LIGHTVEC__LEAF]);
-        lightvec__queue_block(q, idx->tail_blocks[i], idx->tail + i * LIGHTVEC__LEAF, n - i * LIGHTVEC__LEAF, 0);
+        LIGHTVEC__PREFETCH(&idx->tail_blocks[i].row[LIGHTVEC__ROW_SX * LIGHTVEC__LEAF]);
+        LIGHTVEC__PREFETCH(&idx->tail_blocks[i].row[LIGHTVEC__ROW_NY * LIGHTVEC__LEAF]);
+        lightvec__queue_block(q, &idx->tail_blocks[i], idx->tail + i * LIGHTVEC__LEAF, n - i * LIGHTVEC__LEAF, 0);
     }
 }
 
@@ -4475,7 +4492,7 @@ static void lightvec__face_push(lightvec__face *f, const lightvec__item *it)
     lightvec__index *idx = (lightvec__index *)f->index;
     uint32_t n = idx->tail_count;
     idx->tail[n] = *it;
-    lightvec__block_put(idx->tail_blocks[n / LIGHTVEC__LEAF], n % LIGHTVEC__LEAF, it);
+    lightvec__block_put(&idx->tail_blocks[n / LIGHTVEC__LEAF], n % LIGHTVEC__LEAF, it);
     lightvec__store_u32(&idx->tail_count, n + 1u); /* publishes the item */
     f->count++;
 }
@@ -4634,19 +4651,20 @@ static void lightvec__interpolate(const lightvec__query *q, lightvec_lookup_resu
     int k;
     for (i = 0; i < used; i++) {
         const lightvec__candidate *c = &q->kept[i];
+        const lightvec__head *h = c->head;
         const lightvec__item *it = c->it;
         double w = c->w, wg = c->wg;
         wsum += w;
         for (k = 0; k < 3; k++) {
-            float m = it->mag[k];
+            float m = h->mag[k];
             if (p->interpolation == LIGHTVEC_INTERPOLATION_GRADIENT) {
-                float f = 1.0f + (it->slope[k][0] * c->d[0] + it->slope[k][1] * c->d[1] + it->slope[k][2] * c->d[2]);
+                float f = 1.0f + (h->slope[k][0] * c->d[0] + h->slope[k][1] * c->d[1] + h->slope[k][2] * c->d[2]);
                 m *= f > 0.0f ? f : 0.0f;
             }
             msum[k] += w * m;
-            dsum[k] += w * it->dir[k];
+            dsum[k] += w * h->dir[k];
         }
-        glossy += q->directional && (it->kind & LIGHTVEC__ITEM_GLOSSY);
+        glossy += q->directional && (h->kind & LIGHTVEC__ITEM_GLOSSY);
         if (wg > 0.0) {
             float v[3];
             v[0] = q->w[0] - it->outgoing[0]; v[1] = q->w[1] - it->outgoing[1]; v[2] = q->w[2] - it->outgoing[2];
@@ -4659,8 +4677,8 @@ static void lightvec__interpolate(const lightvec__query *q, lightvec_lookup_resu
             esum += wg * it->exponent;
             glossy_valid++;
         }
-        if (it->kind & LIGHTVEC__ITEM_LIT) lit++;
-        else if (it->kind & LIGHTVEC__ITEM_UMBRA) shadow++;
+        if (h->kind & LIGHTVEC__ITEM_LIT) lit++;
+        else if (h->kind & LIGHTVEC__ITEM_UMBRA) shadow++;
         else partial++;
     }
     out->used_count = used;
@@ -4783,7 +4801,7 @@ static void lightvec__clamp_leaf(void *ctx, const lightvec__tree *ct, uint32_t l
     lightvec__tree *t = (lightvec__tree *)(uintptr_t)ct; /* the writer's own memory */
     uint32_t i;
     for (i = leaf * LIGHTVEC__LEAF; i < t->count && i < (leaf + 1) * LIGHTVEC__LEAF; i++)
-        lightvec__clamp_item((lightvec__clamp *)ctx, t->blocks + (size_t)leaf * LIGHTVEC__BLOCK, i % LIGHTVEC__LEAF,
+        lightvec__clamp_item((lightvec__clamp *)ctx, t->blocks[leaf].row, i % LIGHTVEC__LEAF,
                              &t->items[i]);
 }
 
@@ -4795,7 +4813,7 @@ static void lightvec__clamp_index(void *ctx, const lightvec__index *cidx)
     uint32_t i;
     for (i = 0; i < idx->tree_count; i++) lightvec__tree_walk(idx->trees[i], k->it->pos, reach, lightvec__clamp_leaf, k);
     for (i = 0; i < idx->tail_count; i++)
-        lightvec__clamp_item(k, idx->tail_blocks[i / LIGHTVEC__LEAF], i % LIGHTVEC__LEAF, &idx->tail[i]);
+        lightvec__clamp_item(k, idx->tail_blocks[i / LIGHTVEC__LEAF].row, i % LIGHTVEC__LEAF, &idx->tail[i]);
 }
 
 static void lightvec__clamp_pass(lightvec_cache *c, lightvec__item *it, int directional, int pass)
