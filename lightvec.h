@@ -223,7 +223,8 @@
      their direction cones): on the glossy Cornell floor (128 x 128, the moved
      frame) the error is 4.38% with no cap, 4.37% with 16, 4.50% with 8; it
      bounds the interpolation's cost (one cache line per kept record without
-     a valid glossy part, three with one) in dense caches. It does not bound
+     a valid glossy part, in its leaf's block; two more with one) in dense
+     caches. It does not bound
      the search, which still tests every record whose sphere holds A: every
      valid record counts in valid_count, so no subtree can be skipped once
      the k best are known.
@@ -3193,12 +3194,11 @@ typedef struct lightvec__head {
     uint32_t kind;                   /* ITEM_* bits */
 } lightvec__head;
 
-/* 192 bytes, aligned to 64 in a kd-tree. The first cache line is the head
-   (a kd-tree leaf holds a copy of it beside its block: a lookup reads that
-   one), the second the writer's fields and what the glossy criteria read,
-   the third the glossy part itself. */
+/* The rest of a record as the index keeps it: 128 bytes, aligned to 64 in
+   a kd-tree. The first cache line holds the writer's fields and what the
+   glossy criteria read, the second the glossy part itself. Its head lives
+   in its leaf block. */
 typedef struct lightvec__item {
-    lightvec__head head;
     float pos[3];                    /* B */
     float inv_glossy_distance;       /* 1 / d_g; 0 = no glossy part */
     float normal[3], rel_gradient;   /* n_B and |grad Y| / Y (luminance) */
@@ -3207,11 +3207,17 @@ typedef struct lightvec__item {
     float cos_dir;                   /* this record's S_dir (from its lobe) */
     float rel_glossy_gradient;       /* |dY(G)/dw_r| / Y(G) (luminance) times the glossy share */
     float exponent;                  /* of the lobe of G */
-    float outgoing[3];               /* sigma; 128 bytes so far */
+    float outgoing[3];               /* sigma; 64 bytes so far */
     float glossy[3];                 /* G(sigma) */
     float glossy_gradient[3][3];     /* dG/dw_r */
     float pad[4];
 } lightvec__item;
+
+/* A record's head and item together: what the writer builds and moves. */
+typedef struct lightvec__entry {
+    lightvec__head head;
+    lightvec__item item;
+} lightvec__entry;
 
 #define LIGHTVEC__ITEM_LIT 1u        /* visibility 1: every light sample seen (DLV) */
 #define LIGHTVEC__ITEM_UMBRA 2u      /* visibility 0: none seen */
@@ -3229,9 +3235,9 @@ typedef struct lightvec__item {
    compares and one branch per child that holds A (the binary descent
    took one unpredictable branch per box). What the criteria read of a
    leaf's items is one block of rows (LIGHTVEC__ROW_*, LEAF floats each):
-   a leaf's tests read a few consecutive cache lines, and an item only for
-   the records that pass them (its first line; the others for a valid
-   glossy part). */
+   a leaf's tests read a few consecutive cache lines. The block holds its
+   items' heads too, so the interpolation of a valid record reads a line
+   next to them, and an item only for a valid glossy part. */
 #define LIGHTVEC__ROW_X 0
 #define LIGHTVEC__ROW_Y 1
 #define LIGHTVEC__ROW_Z 2
@@ -3441,13 +3447,15 @@ static float lightvec__record_cos_dir(const lightvec__params *p, const lightvec_
 }
 
 static void lightvec__make_item(const lightvec__params *p, const lightvec_record *r, uint32_t id,
-                                lightvec__item *it)
+                                lightvec__entry *e)
 {
+    lightvec__item *it = &e->item;
+    lightvec__head *h = &e->head;
     lightvec__vec3 g = lightvec__v3(0.0f, 0.0f, 0.0f);
     float y = lightvec__lumf(r->irradiance), gl;
     int c;
     static const float w[3] = { 0.2126f, 0.7152f, 0.0722f };
-    memset(it, 0, sizeof *it);
+    memset(e, 0, sizeof *e);
     for (c = 0; c < 3; c++) g = lightvec__add(g, lightvec__scale(lightvec__v3_load(r->gradient[c]), w[c]));
     gl = lightvec__length(g);
     memcpy(it->pos, r->position, sizeof it->pos);
@@ -3458,19 +3466,19 @@ static void lightvec__make_item(const lightvec__params *p, const lightvec_record
     it->cos_dir = lightvec__record_cos_dir(p, r);
     it->inv_glossy_distance = r->glossy_distance > 0.0f ? 1.0f / r->glossy_distance : 0.0f;
     it->exponent = r->exponent;
-    it->head.kind = (r->visibility >= 1.0f ? LIGHTVEC__ITEM_LIT : 0u) | (r->visibility <= 0.0f ? LIGHTVEC__ITEM_UMBRA : 0u) |
+    h->kind = (r->visibility >= 1.0f ? LIGHTVEC__ITEM_LIT : 0u) | (r->visibility <= 0.0f ? LIGHTVEC__ITEM_UMBRA : 0u) |
                     (it->inv_glossy_distance > 0.0f ? LIGHTVEC__ITEM_GLOSSY : 0u);
-    memcpy(it->head.dir, r->vector.direction, sizeof it->head.dir);
+    memcpy(h->dir, r->vector.direction, sizeof h->dir);
     if (p->interpolation == LIGHTVEC_INTERPOLATION_PLAIN) {
-        memcpy(it->head.mag, r->vector.magnitude, sizeof it->head.mag);
+        memcpy(h->mag, r->vector.magnitude, sizeof h->mag);
     } else {
         float cos_nd = lightvec__maxf(0.0f, lightvec__dot(lightvec__v3_load(r->normal), lightvec__v3_load(r->vector.direction)));
-        for (c = 0; c < 3; c++) it->head.mag[c] = r->vector.magnitude[c] * cos_nd;
+        for (c = 0; c < 3; c++) h->mag[c] = r->vector.magnitude[c] * cos_nd;
     }
     for (c = 0; c < 3; c++) {
         float e = r->irradiance[c];
         int k;
-        float *slope = it->head.slope[c];
+        float *slope = h->slope[c];
         for (k = 0; k < 3; k++) slope[k] = e > 0.0f ? r->gradient[c][k] / e : 0.0f;
         if (!lightvec__finite3(slope)) slope[0] = slope[1] = slope[2] = 0.0f;
     }
@@ -3534,10 +3542,11 @@ static lightvec_record *lightvec__record_reserve(lightvec_cache *c, uint32_t id)
 /* ---- kd-tree ------------------------------------------------------------------- */
 
 /* Writes item it into slot k of a leaf block. */
-static void lightvec__block_put(lightvec__block *block, uint32_t k, const lightvec__item *it)
+static void lightvec__block_put(lightvec__block *block, uint32_t k, const lightvec__entry *e)
 {
+    const lightvec__item *it = &e->item;
     float *b = block->row + k;
-    block->head[k] = it->head;
+    block->head[k] = e->head;
     b[LIGHTVEC__ROW_X * LIGHTVEC__LEAF] = it->pos[0];
     b[LIGHTVEC__ROW_Y * LIGHTVEC__LEAF] = it->pos[1];
     b[LIGHTVEC__ROW_Z * LIGHTVEC__LEAF] = it->pos[2];
@@ -3567,16 +3576,16 @@ static uint32_t lightvec__tree_levels(uint32_t leaves)
 /* Quickselect on perm[lo, hi) by item position on axis: afterwards the
    k-th smallest is at k, smaller keys before, larger after. Three-way
    partition around a median-of-three pivot, robust to equal keys. */
-static void lightvec__select(uint32_t *perm, const lightvec__item *src, int axis, uint32_t lo, uint32_t hi,
+static void lightvec__select(uint32_t *perm, const lightvec__entry *src, int axis, uint32_t lo, uint32_t hi,
                              uint32_t k)
 {
     while (hi - lo > 1) {
-        float a = src[perm[lo]].pos[axis], b = src[perm[lo + (hi - lo) / 2]].pos[axis];
-        float c = src[perm[hi - 1]].pos[axis], pivot;
+        float a = src[perm[lo]].item.pos[axis], b = src[perm[lo + (hi - lo) / 2]].item.pos[axis];
+        float c = src[perm[hi - 1]].item.pos[axis], pivot;
         uint32_t lt = lo, i = lo, gt = hi;
         pivot = a < b ? (b < c ? b : (a < c ? c : a)) : (a < c ? a : (b < c ? c : b));
         while (i < gt) {
-            float key = src[perm[i]].pos[axis];
+            float key = src[perm[i]].item.pos[axis];
             if (key < pivot) { uint32_t t = perm[lt]; perm[lt] = perm[i]; perm[i] = t; lt++; i++; }
             else if (key > pivot) { uint32_t t; gt--; t = perm[gt]; perm[gt] = perm[i]; perm[i] = t; }
             else i++;
@@ -3589,7 +3598,7 @@ static void lightvec__select(uint32_t *perm, const lightvec__item *src, int axis
 
 /* Box of the validity spheres of perm[lo, hi), widened by a relative 1e-6 so
    that the float test d^2 < R^2 never accepts a point the box rejects. */
-static int lightvec__tree_box(float *box, const uint32_t *perm, const lightvec__item *src, uint32_t lo, uint32_t hi)
+static int lightvec__tree_box(float *box, const uint32_t *perm, const lightvec__entry *src, uint32_t lo, uint32_t hi)
 {
     float clo[3], chi[3];
     uint32_t i;
@@ -3597,7 +3606,7 @@ static int lightvec__tree_box(float *box, const uint32_t *perm, const lightvec__
     lightvec__box_empty(box, box + 3);
     lightvec__box_empty(clo, chi);
     for (i = lo; i < hi; i++) {
-        const lightvec__item *it = &src[perm[i]];
+        const lightvec__item *it = &src[perm[i]].item;
         for (k = 0; k < 3; k++) {
             float tol = (fabsf(it->pos[k]) + it->radius) * 1e-6f;
             box[k] = lightvec__minf(box[k], it->pos[k] - it->radius - tol);
@@ -3613,7 +3622,7 @@ static int lightvec__tree_box(float *box, const uint32_t *perm, const lightvec__
 
 /* Binary node `node` over leaves [a, b) of n items: its box (6 floats at
    boxes + 6 node), then its halves. */
-static void lightvec__tree_build_node(float *boxes, uint32_t n, const lightvec__item *src, uint32_t *perm, uint32_t node,
+static void lightvec__tree_build_node(float *boxes, uint32_t n, const lightvec__entry *src, uint32_t *perm, uint32_t node,
                                       uint32_t a, uint32_t b)
 {
     uint32_t lo = a * LIGHTVEC__LEAF, hi = b * LIGHTVEC__LEAF < n ? b * LIGHTVEC__LEAF : n;
@@ -3674,7 +3683,7 @@ static void lightvec__kd_collapse(lightvec__tree *t, const float *boxes, lightve
     }
 }
 
-static lightvec__tree *lightvec__tree_build(const lightvec_allocator *a, const lightvec__item *src, uint32_t n)
+static lightvec__tree *lightvec__tree_build(const lightvec_allocator *a, const lightvec__entry *src, uint32_t n)
 {
     uint32_t leaves = lightvec__leaf_count(n), binary = (2u << lightvec__tree_levels(leaves)) - 1u, nodes = 0, i, *perm;
     size_t head = (sizeof(lightvec__tree) + 63u) & ~(size_t)63u, node_bytes, block_bytes, bytes;
@@ -3714,8 +3723,8 @@ static lightvec__tree *lightvec__tree_build(const lightvec_allocator *a, const l
         lightvec__kd_collapse(t, boxes, root, &nodes);
     }
     for (i = 0; i < n; i++) {
-        t->items[i] = src[perm[i]];
-        lightvec__block_put(&t->blocks[i / LIGHTVEC__LEAF], i % LIGHTVEC__LEAF, &t->items[i]);
+        t->items[i] = src[perm[i]].item;
+        lightvec__block_put(&t->blocks[i / LIGHTVEC__LEAF], i % LIGHTVEC__LEAF, &src[perm[i]]);
     }
     lightvec__free(a, boxes);
     lightvec__free(a, perm);
@@ -3936,8 +3945,8 @@ static void lightvec__keep(lightvec__query *q, const lightvec__item *it, const l
            item's lines of the glossy part when it is valid) */
         LIGHTVEC__PREFETCH(head);
         if (wg > 0.0f) {
+            LIGHTVEC__PREFETCH(it);
             LIGHTVEC__PREFETCH((const char *)it + 64);
-            LIGHTVEC__PREFETCH((const char *)it + 128);
         }
     }
 }
@@ -4289,7 +4298,7 @@ static void lightvec__retire(lightvec_cache *c, void *ptr, size_t bytes)
 
 static void lightvec__maybe_reclaim(lightvec_cache *c)
 {
-    size_t live = (size_t)c->record_count * sizeof(lightvec__item);
+    size_t live = (size_t)c->record_count * sizeof(lightvec__entry);
     if (c->retired_bytes > LIGHTVEC__RECLAIM_BYTES + live / 4) lightvec__reclaim(c);
 }
 
@@ -4329,19 +4338,26 @@ static lightvec__index *lightvec__index_new(lightvec_cache *c)
     return idx;
 }
 
-/* Copies the tail and the first `trees` kd-trees of idx to dst; returns the count. */
-static uint32_t lightvec__index_items(const lightvec__index *idx, uint32_t trees, lightvec__item *dst)
+/* Copies the tail and the first `trees` kd-trees of idx to dst, each item
+   with its head from its block; returns the count. */
+static uint32_t lightvec__index_items(const lightvec__index *idx, uint32_t trees, lightvec__entry *dst)
 {
-    uint32_t i, n = idx->tail_count;
-    memcpy(dst, idx->tail, n * sizeof *dst);
+    uint32_t i, k, n = idx->tail_count;
+    for (k = 0; k < n; k++) {
+        dst[k].head = idx->tail_blocks[k / LIGHTVEC__LEAF].head[k % LIGHTVEC__LEAF];
+        dst[k].item = idx->tail[k];
+    }
     for (i = 0; i < trees; i++) {
-        memcpy(dst + n, idx->trees[i]->items, idx->trees[i]->count * sizeof *dst);
-        n += idx->trees[i]->count;
+        const lightvec__tree *t = idx->trees[i];
+        for (k = 0; k < t->count; k++, n++) {
+            dst[n].head = t->blocks[k / LIGHTVEC__LEAF].head[k % LIGHTVEC__LEAF];
+            dst[n].item = t->items[k];
+        }
     }
     return n;
 }
 
-static lightvec__index *lightvec__index_single(lightvec_cache *c, const lightvec__item *items, uint32_t n)
+static lightvec__index *lightvec__index_single(lightvec_cache *c, const lightvec__entry *items, uint32_t n)
 {
     lightvec__index *idx = lightvec__index_new(c);
     lightvec__tree *t = lightvec__tree_build(&c->a, items, n);
@@ -4355,17 +4371,17 @@ static lightvec__index *lightvec__index_single(lightvec_cache *c, const lightvec
     return idx;
 }
 
-static int lightvec__face_fill(lightvec_cache *c, lightvec__face *f, lightvec__item *items, uint32_t n);
+static int lightvec__face_fill(lightvec_cache *c, lightvec__face *f, lightvec__entry *items, uint32_t n);
 
 /* The four children of f holding items[0, n) (figure 4), split again while a
    child still holds more than the threshold. Not published: the caller stores
    the pointer into f->children when the rest of its change is ready. NULL
    when out of memory (nothing is left allocated). */
-static lightvec__face *lightvec__face_children(lightvec_cache *c, lightvec__face *f, const lightvec__item *items,
+static lightvec__face *lightvec__face_children(lightvec_cache *c, lightvec__face *f, const lightvec__entry *items,
                                                uint32_t n)
 {
     lightvec__face *ch = (lightvec__face *)lightvec__alloc_array(&c->a, 4, sizeof(lightvec__face));
-    lightvec__item *tmp = (lightvec__item *)lightvec__alloc_array(&c->a, n, sizeof(lightvec__item));
+    lightvec__entry *tmp = (lightvec__entry *)lightvec__alloc_array(&c->a, n, sizeof(lightvec__entry));
     uint32_t count[4] = { 0, 0, 0, 0 }, start[4], i;
     int k, failed = 0;
     if (!ch || !tmp) {
@@ -4374,10 +4390,10 @@ static lightvec__face *lightvec__face_children(lightvec_cache *c, lightvec__face
         return NULL;
     }
     lightvec__make_children(f, ch);
-    for (i = 0; i < n; i++) count[lightvec__child_of(f, items[i].outgoing)]++;
+    for (i = 0; i < n; i++) count[lightvec__child_of(f, items[i].item.outgoing)]++;
     start[0] = 0;
     for (k = 1; k < 4; k++) start[k] = start[k - 1] + count[k - 1];
-    for (i = 0; i < n; i++) tmp[start[lightvec__child_of(f, items[i].outgoing)]++] = items[i];
+    for (i = 0; i < n; i++) tmp[start[lightvec__child_of(f, items[i].item.outgoing)]++] = items[i];
     for (k = 0; k < 4; k++) start[k] -= count[k];
     for (k = 0; k < 4 && !failed; k++) failed = lightvec__face_fill(c, &ch[k], tmp + start[k], count[k]) != 0;
     lightvec__free(&c->a, tmp);
@@ -4391,7 +4407,7 @@ static lightvec__face *lightvec__face_children(lightvec_cache *c, lightvec__face
 
 /* Fills an empty face with items[0, n): children while the threshold allows,
    else one kd-tree. */
-static int lightvec__face_fill(lightvec_cache *c, lightvec__face *f, lightvec__item *items, uint32_t n)
+static int lightvec__face_fill(lightvec_cache *c, lightvec__face *f, lightvec__entry *items, uint32_t n)
 {
     if (n > c->p.split_threshold && lightvec__can_split(c, f)) {
         lightvec__face *ch = lightvec__face_children(c, f, items, n);
@@ -4417,14 +4433,14 @@ static int lightvec__face_fill(lightvec_cache *c, lightvec__face *f, lightvec__i
 static int lightvec__merge(lightvec_cache *c, lightvec__face *f)
 {
     lightvec__index *old = (lightvec__index *)f->index, *idx;
-    lightvec__item *items;
+    lightvec__entry *items;
     lightvec__tree *t;
     uint64_t acc = old->tail_count;
     uint32_t take = 0, i;
     while (take < old->tree_count &&
            (old->trees[take]->count <= LIGHTVEC__MERGE_RATIO * acc || old->tree_count - take >= LIGHTVEC__MAX_TREES))
         acc += old->trees[take++]->count;
-    items = (lightvec__item *)lightvec__alloc_array(&c->a, (size_t)acc, sizeof *items);
+    items = (lightvec__entry *)lightvec__alloc_array(&c->a, (size_t)acc, sizeof *items);
     if (!items) return -1;
     lightvec__index_items(old, take, items);
     t = lightvec__tree_build(&c->a, items, (uint32_t)acc);
@@ -4446,10 +4462,10 @@ static int lightvec__merge(lightvec_cache *c, lightvec__face *f)
 
 /* The children of leaf f holding its items and one more (section 3.2,
    figure 4), unpublished; NULL when out of memory. */
-static lightvec__face *lightvec__split_with(lightvec_cache *c, lightvec__face *f, const lightvec__item *extra)
+static lightvec__face *lightvec__split_with(lightvec_cache *c, lightvec__face *f, const lightvec__entry *extra)
 {
     const lightvec__index *old = (const lightvec__index *)f->index;
-    lightvec__item *items = (lightvec__item *)lightvec__alloc_array(&c->a, (size_t)f->count + 1u, sizeof *items);
+    lightvec__entry *items = (lightvec__entry *)lightvec__alloc_array(&c->a, (size_t)f->count + 1u, sizeof *items);
     lightvec__face *ch;
     uint32_t n = 0;
     if (!items) return NULL;
@@ -4487,12 +4503,12 @@ static int lightvec__face_prepare(lightvec_cache *c, lightvec__face *f)
     return idx->tail_count == LIGHTVEC__TAIL ? lightvec__merge(c, f) : 0;
 }
 
-static void lightvec__face_push(lightvec__face *f, const lightvec__item *it)
+static void lightvec__face_push(lightvec__face *f, const lightvec__entry *e)
 {
     lightvec__index *idx = (lightvec__index *)f->index;
     uint32_t n = idx->tail_count;
-    idx->tail[n] = *it;
-    lightvec__block_put(&idx->tail_blocks[n / LIGHTVEC__LEAF], n % LIGHTVEC__LEAF, it);
+    idx->tail[n] = e->item;
+    lightvec__block_put(&idx->tail_blocks[n / LIGHTVEC__LEAF], n % LIGHTVEC__LEAF, e);
     lightvec__store_u32(&idx->tail_count, n + 1u); /* publishes the item */
     f->count++;
 }
@@ -4829,7 +4845,7 @@ static void lightvec__clamp_pass(lightvec_cache *c, lightvec__item *it, int dire
 LIGHTVEC_API lightvec_result lightvec_insert(lightvec_cache *c, const lightvec_record *rec, uint32_t *id_out)
 {
     lightvec_record clean, *slot;
-    lightvec__item it;
+    lightvec__entry e;
     lightvec__face *f;
     uint32_t id;
     int directional, clamp;
@@ -4842,14 +4858,14 @@ LIGHTVEC_API lightvec_result lightvec_insert(lightvec_cache *c, const lightvec_r
     directional = !(clean.flags & LIGHTVEC_RECORD_VIEW_INDEPENDENT);
     clamp = !(c->p.flags & LIGHTVEC_CACHE_NO_NEIGHBOR_CLAMP);
     f = lightvec__leaf_for(c, &clean);
-    lightvec__make_item(&c->p, &clean, id, &it);
-    if (clamp) lightvec__clamp_pass(c, &it, directional, 1);
-    clean.radius = it.radius;
+    lightvec__make_item(&c->p, &clean, id, &e);
+    if (clamp) lightvec__clamp_pass(c, &e.item, directional, 1);
+    clean.radius = e.item.radius;
     /* Everything that can fail happens before the record is published: on an
        error the cache is as it was. The record count is published before the
        item, so a reader that finds the item can read its record. */
     if (f->count + 1u > c->p.split_threshold && lightvec__can_split(c, f)) {
-        lightvec__face *ch = lightvec__split_with(c, f, &it);
+        lightvec__face *ch = lightvec__split_with(c, f, &e);
         if (!ch) return LIGHTVEC_ERROR_OUT_OF_MEMORY;
         *slot = clean;
         lightvec__store_f32(lightvec__radius_at(c, id), clean.radius);
@@ -4860,9 +4876,9 @@ LIGHTVEC_API lightvec_result lightvec_insert(lightvec_cache *c, const lightvec_r
         *slot = clean;
         lightvec__store_f32(lightvec__radius_at(c, id), clean.radius);
         lightvec__store_u32(&c->record_count, id + 1u);
-        lightvec__face_push(f, &it);
+        lightvec__face_push(f, &e);
     }
-    if (clamp) lightvec__clamp_pass(c, &it, directional, 2);
+    if (clamp) lightvec__clamp_pass(c, &e.item, directional, 2);
     lightvec__maybe_reclaim(c);
     if (id_out) *id_out = id;
     return LIGHTVEC_OK;
@@ -4996,7 +5012,7 @@ static void lightvec__rebuild_job(void *ctx, uint32_t i)
 {
     lightvec__rebuild *r = (lightvec__rebuild *)ctx;
     const lightvec__index *old = (const lightvec__index *)r->faces[i]->index;
-    lightvec__item *items = (lightvec__item *)lightvec__alloc_array(&r->c->a, r->faces[i]->count, sizeof *items);
+    lightvec__entry *items = (lightvec__entry *)lightvec__alloc_array(&r->c->a, r->faces[i]->count, sizeof *items);
     r->built[i] = NULL;
     if (!items) return;
     lightvec__index_items(old, old->tree_count, items);
@@ -5184,7 +5200,7 @@ LIGHTVEC_API lightvec_result lightvec_save(const lightvec_cache *c, lightvec_wri
    (or the view-independent leaf); each root is filled as one job. */
 typedef struct lightvec__bulk {
     lightvec_cache *c;
-    lightvec__item *items;
+    lightvec__entry *items;
     uint32_t start[22];              /* 20 roots, the view-independent leaf, end */
     int failed[21];
 } lightvec__bulk;
@@ -5208,7 +5224,7 @@ static lightvec_result lightvec__bulk_index(lightvec_cache *c)
     int k, failed = 0;
     memset(&b, 0, sizeof b);
     b.c = c;
-    b.items = (lightvec__item *)lightvec__alloc_array(&c->a, n, sizeof *b.items);
+    b.items = (lightvec__entry *)lightvec__alloc_array(&c->a, n, sizeof *b.items);
     if (!b.items) return LIGHTVEC_ERROR_OUT_OF_MEMORY;
     for (i = 0; i < n; i++) b.start[lightvec__slot_of(c, lightvec__record_at(c, i)) + 1]++;
     for (k = 1; k < 22; k++) b.start[k] += b.start[k - 1];
