@@ -1,4 +1,4 @@
-/* lightvec.h - v0.4.2 - cached 5D indirect light vectors - public domain or MIT, see end of file
+/* lightvec.h - v0.4.3 - cached 5D indirect light vectors - public domain or MIT, see end of file
 
    LIGHTVEC.H: cached light vectors over position and direction for interactive glossy global illumination.
 
@@ -372,28 +372,39 @@
    PERFORMANCE
 
      Lookups at 10^5 records on the walls of a room (tests/bench_lightvec.c,
-     one thread, CPU time, medians, a shared 2-core machine): 6 valid
-     records per query 0.96 us in a random query order (every one a cache
-     miss), 0.58 us sorted by position (as a frame's pixels come); 45 valid
-     2.6 us random, 1.6 us sorted (after lightvec_cache_optimize 2.2 and
-     1.4 us). At 10^6 records, 6 valid: 3.8 us random (memory latency),
-     1.3 us sorted. (v0.4.1 on the same runs: 1.2, 0.65, 3.4, 2.1 us.)
+     one thread, CPU time, medians of 3 runs, a shared 2-core machine at a
+     load of 7 to 8): 6 valid records per query 0.81 us in a random query
+     order (every one a cache miss), 0.54 us sorted by position (as a
+     frame's pixels come); 45 valid 2.25 us random, 1.57 us sorted (after
+     lightvec_cache_optimize 1.91 and 1.35 us). At 10^6 records, 6 valid:
+     2.7 us random (memory latency), 1.07 us sorted. (v0.4.2 on the same
+     runs: 0.92, 0.56, 2.41, 1.58, 2.12, 1.35, 3.45, 1.21 us.)
      A kd-tree node holds eight child boxes in rows (three binary levels),
      tested with a few SIMD compares; a leaf is a block of 8 records whose
      tested fields sit together, and the tests that need no square root run
      over the whole block at once. The walk prefetches the blocks it reaches
      whole and queues them, visiting them in the same order once a few are
-     on their way, so that their memory latencies overlap. A valid record
-     costs one prefetched cache line (what the interpolation reads); the
-     k-nearest selection runs once, over all the valid records, at the end.
-     Where a dense lookup goes (45 valid): 2.6 faces, 7 kd-trees, 26 nodes,
-     33 leaves (252 records tested, 83 inside their sphere), 16
-     interpolated, about 330 cache lines; in a random order it waits on
-     memory. Bounding the viewer directions and normals of a leaf's records
-     by cones would skip 2.5 of its 29 full leaves (records seen from
-     anywhere in a room share a leaf's cone), so the nodes keep boxes
-     alone. Insertion with neighbour clamping: 5.4 us at 10^5 records, 11.6
-     us in the dense cache (a gather takes about 1 ms).
+     on their way, so that their memory latencies overlap. What the
+     interpolation reads of a valid record (its head, one cache line) sits
+     in its leaf's block after the rows, so it comes from the page the
+     criteria have just read; the k-nearest selection runs once, over all
+     the valid records, at the end. Where a dense lookup goes (45 valid):
+     2.6 faces, 7 kd-trees, 26 nodes, 33 leaves (about 260 records
+     tested, 83 inside their sphere; 12 leaves hold A in none), 16
+     interpolated, about 330 cache lines; in a random order it waits on memory (the same
+     lookups with their data in cache take 1.2 us). These left the time as
+     it was or made it longer, with the same results: walking all the
+     kd-trees of a lookup together level by level; loading a leaf's other
+     rows only where A lies in one of its spheres; the other criteria from
+     the item rather than from rows; nodes of 4 or 16 children; and, last
+     round, bounding a leaf's viewer directions and normals by cones (they
+     would skip 2.5 of 29 full leaves). Transparent huge pages for the
+     trees (an allocator that asks for them, or glibc's
+     glibc.malloc.hugetlb=1) took about 5% off the dense random figure.
+     Memory: 551 bytes per record at 10^5 (records, radii, items, blocks,
+     nodes). Insertion with neighbour clamping: 4.8 us at 10^5 records,
+     10.5 us in the dense cache (a gather takes about 1 ms);
+     lightvec_cache_optimize of 10^5 records 28 ms (22 ms dense).
 
    LIMITS
 
@@ -443,7 +454,7 @@
 
 #define LIGHTVEC_VERSION_MAJOR 0
 #define LIGHTVEC_VERSION_MINOR 4
-#define LIGHTVEC_VERSION_PATCH 2
+#define LIGHTVEC_VERSION_PATCH 3
 #define LIGHTVEC_FILE_FORMAT_VERSION 2
 
 #ifndef LIGHTVEC_API
