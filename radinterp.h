@@ -3374,6 +3374,7 @@ typedef struct radinterp__link {
     uint32_t receiver, source;         /* nodes */
     float ff;                          /* F: mean point-to-source factor over the receiver (4.2) */
     float dff;                         /* max - min of the point factors: transport error / B_src */
+    float vis;                         /* F over its value with no blockers: the visible fraction */
     uint32_t first_blocker, blocker_count;
     uint32_t flags;
 } radinterp__link;
@@ -3915,7 +3916,7 @@ typedef struct radinterp__pending {
     uint32_t filter;             /* candidates still need the shaft test */
     uint32_t fresh;              /* candidates from shaft culling here (else the parent link's blockers) */
     uint32_t kept;               /* blockers kept */
-    float ff, dff;
+    float ff, dff, vis;
     uint32_t dead;               /* no part of either element faces the other, or every ray was blocked */
     uint32_t hidden;             /* dead because every ray was blocked */
     uint32_t rays;
@@ -4099,7 +4100,7 @@ static void radinterp__link_compute(radinterp_solution *s, radinterp__pending *p
     const radinterp__node *r = &s->nodes[pl->receiver], *src = &s->nodes[pl->source];
     const radinterp__patch *pr = &s->patches[r->patch], *ps = &s->patches[src->patch];
     double R[RADINTERP__POLY_MAX][3], S[RADINTERP__POLY_MAX][3], Rc[RADINTERP__POLY_MAX][3], Sc[RADINTERP__POLY_MAX][3];
-    double tri_area[RADINTERP__POLY_MAX], total, ratio, sum = 0.0, lo = DBL_MAX, hi = 0.0, tiny;
+    double tri_area[RADINTERP__POLY_MAX], total, ratio, sum = 0.0, open_sum = 0.0, lo = DBL_MAX, hi = 0.0, tiny;
     int nR = radinterp__node_poly(r, R), nS = radinterp__node_poly(src, S), nRc, nSc, clipped;
     uint32_t i, n = s->ff_samples;
     int seen = 0;                  /* some point sees part of the source (before visibility) */
@@ -4110,6 +4111,7 @@ static void radinterp__link_compute(radinterp_solution *s, radinterp__pending *p
         pl->kept = pl->count;
     }
     pl->ff = pl->dff = 0.0f;
+    pl->vis = 1.0f;
     pl->rays = 0;
     pl->dead = 1;
     pl->hidden = 0;
@@ -4131,6 +4133,7 @@ static void radinterp__link_compute(radinterp_solution *s, radinterp__pending *p
         f = w * radinterp__ff_poly(q, pr->n, (const double (*)[3])Sc, nSc);
         if (f < 0.0) f = 0.0;
         seen |= f > 0.0;
+        open_sum += f;
         if (pl->kept && f > 0.0) {
             radinterp__rng vis = radinterp__rng_stream(s->seed ^ 0xA5A5A5A5u, ((uint64_t)pl->receiver << 32 | pl->source) * 64u + i);
             f *= radinterp__visible_fraction(s, q, pr->n, (const double (*)[3])Sc, nSc, ps->n, &vis, s->visibility_rays);
@@ -4169,6 +4172,7 @@ static void radinterp__link_compute(radinterp_solution *s, radinterp__pending *p
     }
     pl->ff = (float)(ratio * sum / n);
     pl->dff = (float)(ratio * (hi - lo));
+    if (open_sum > 0.0) pl->vis = (float)(sum / open_sum);
     /* every ray blocked: dropped when planes between them prove it (rays
        miss the visible part of a large element too easily) */
     if (pl->kept && seen && sum == 0.0 && hi == 0.0 && radinterp__planes_hide(s, r->lo, r->hi, src->lo, src->hi))
@@ -4268,6 +4272,7 @@ static radinterp_result radinterp__install_links(radinterp_solution *s, const ra
         l->source = pend[i].source;
         l->ff = pend[i].ff;
         l->dff = pend[i].dff;
+        l->vis = pend[i].vis;
         l->flags = 0;
         l->blocker_count = pend[i].kept;
         if (l->blocker_count) memcpy(pool + at, pend_pool + pend[i].first, l->blocker_count * sizeof *pool);
@@ -8211,6 +8216,7 @@ typedef struct radinterp__seg {
     double p[2], q[2];
     float a[3], b[3];
     uint32_t on0, on1;        /* 1 + outline edge of each end; 0 inside */
+    uint32_t jump;            /* it holds a contact discontinuity: the irradiance may jump across it */
 } radinterp__seg;
 
 /* A vertex on a patch outline: a patch corner, a leaf corner on an outline
@@ -8225,8 +8231,9 @@ typedef struct radinterp__bvert {
 typedef struct radinterp__otri {
     uint32_t v[3];
     uint32_t patch, node;
-    uint32_t flags;
+    uint32_t flags;           /* the edge flags of radinterp_mesh_data, and RADINTERP__EDGE_JUMP << k */
 } radinterp__otri;
+#define RADINTERP__EDGE_JUMP 64u  /* << k: edge k lies on a contact discontinuity (not exported) */
 
 typedef struct radinterp__builder {
     const radinterp_solution *s;
@@ -9264,13 +9271,14 @@ static int radinterp__patch_segments(radinterp__builder *b, uint32_t R)
     while (i < end) {
         uint32_t dset = dd[i].dset, j = i;
         double t0 = 0.0, t1 = 0.0;
-        uint32_t on0 = 0, on1 = 0;
+        uint32_t on0 = 0, on1 = 0, jump = 0;
         int open = 0;
         for (; j < end && dd[j].dset == dset; j++) {
             const radinterp__disc *d = &dd[j];
             if (!d->active) continue;
             if (open && d->t0 <= t1 + b->tol) {
                 if (d->t1 > t1) { t1 = d->t1; on1 = d->on1; }
+                jump |= d->type == RADINTERP_DISCONTINUITY_CONTACT;
                 continue;
             }
             if (open) {
@@ -9278,17 +9286,18 @@ static int radinterp__patch_segments(radinterp__builder *b, uint32_t R)
                 if (!sg) return -1;
                 sg->p[0] = ds[dset].o[0] + t0 * ds[dset].d[0]; sg->p[1] = ds[dset].o[1] + t0 * ds[dset].d[1];
                 sg->q[0] = ds[dset].o[0] + t1 * ds[dset].d[0]; sg->q[1] = ds[dset].o[1] + t1 * ds[dset].d[1];
-                sg->on0 = on0; sg->on1 = on1;
+                sg->on0 = on0; sg->on1 = on1; sg->jump = jump;
             }
             open = 1;
             t0 = d->t0; t1 = d->t1; on0 = d->on0; on1 = d->on1;
+            jump = d->type == RADINTERP_DISCONTINUITY_CONTACT;
         }
         if (open) {
             radinterp__seg *sg = (radinterp__seg *)radinterp__buf_push(&b->a, &b->segs);
             if (!sg) return -1;
             sg->p[0] = ds[dset].o[0] + t0 * ds[dset].d[0]; sg->p[1] = ds[dset].o[1] + t0 * ds[dset].d[1];
             sg->q[0] = ds[dset].o[0] + t1 * ds[dset].d[0]; sg->q[1] = ds[dset].o[1] + t1 * ds[dset].d[1];
-            sg->on0 = on0; sg->on1 = on1;
+            sg->on0 = on0; sg->on1 = on1; sg->jump = jump;
         }
         i = j;
     }
@@ -9843,7 +9852,7 @@ static int radinterp__on_segment(const radinterp__builder *b, uint32_t P, const 
     uint32_t i;
     for (i = b->seg_first[P]; i < b->seg_first[P] + b->seg_count[P]; i++)
         if (radinterp__seg_dist(segs[i].p, segs[i].q, p) <= b->tol && radinterp__seg_dist(segs[i].p, segs[i].q, q) <= b->tol)
-            return 1;
+            return segs[i].jump ? 2 : 1;
     return 0;
 }
 
@@ -9977,7 +9986,11 @@ static int radinterp__emit_patch(radinterp__builder *b, radinterp__tri_work *w, 
             const double *p = radinterp__cdt_p(c, T->v[(k + 1) % 3]), *q = radinterp__cdt_p(c, T->v[(k + 2) % 3]);
             if (!((T->flags >> k) & 1u)) continue;
             o->flags |= 1u << k;
-            if (with_segments && radinterp__on_segment(b, P, p, q)) o->flags |= 8u << k;
+            if (with_segments) {
+                int on = radinterp__on_segment(b, P, p, q);
+                if (on) o->flags |= 8u << k;
+                if (on == 2) o->flags |= RADINTERP__EDGE_JUMP << k;
+            }
         }
     }
     /* leaf by leaf, in triangulation order inside a leaf */
@@ -10085,18 +10098,37 @@ RADINTERP_API void radinterp_fit_quadratic(const float r[6], float coefficients[
     radinterp__fit_channel(d, coefficients, 1);
 }
 
-#define RADINTERP__SAMPLE_TRIS 4      /* triangles per job */
-#define RADINTERP__SAMPLE_BATCH 64    /* jobs between progress calls: 256 triangles, 1,536 point queries (an
-                                         office batch took 7 s of wall time at 512 on a loaded machine) */
+#define RADINTERP__SAMPLE_JOB 2       /* points (or triangles) per job */
+#define RADINTERP__SAMPLE_BATCH 64    /* jobs between progress calls: 128 point queries (at building scale a
+                                         query in a penumbra takes up to about 20 ms of one core) */
+
+/* Where the six samples of a triangle lie, in (s, t): its corners 0, 1, 2
+   at sample 0, 2, 4 and the midpoints of its edges at 1, 3, 5. */
+static const double radinterp__sample_at[6][2] = {{0, 0}, {0.5, 0}, {1, 0}, {0.5, 0.5}, {0, 1}, {0, 0.5}};
+static const unsigned char radinterp__sample_corner[6][2] = {{0, 0}, {0, 1}, {1, 1}, {1, 2}, {2, 2}, {0, 2}};
+
+/* A point the interpolants sample. Triangles of one patch meeting at a
+   vertex or an edge take one sample there, so that neighbouring
+   interpolants agree where they meet (C0 across leaf edges, inside a leaf
+   and across discontinuities of the derivatives) and the build queries
+   each point once. At points on a contact discontinuity, where the
+   irradiance may jump, each triangle keeps its own sample, taken toward
+   its own centroid so that it sees its own side. */
+typedef struct radinterp__spoint {
+    float x[3], toward[3];
+    uint32_t patch;
+} radinterp__spoint;
 
 typedef struct radinterp__sample_ctx {
     const radinterp__builder *b;
-    const radinterp__otri *tris;
-    const float *pos;
-    const uint32_t *unsampled;   /* triangles with no samples from an earlier pass */
-    uint32_t first, count;       /* this batch: unsampled[first .. first + count) */
-    float *coeff, *error;        /* 18 and 1 per triangle */
-    radinterp_result *status;    /* per job of the batch */
+    const radinterp__spoint *pts;   /* the points to sample; their values go to value (3 per point) */
+    double *value;
+    const radinterp__otri *tris;    /* the triangles whose representation error is measured (refine) */
+    const uint32_t *unsampled;
+    const float *coeff;
+    float *error;
+    uint32_t first, count;          /* this batch: items first .. first + count */
+    radinterp_result status[RADINTERP__SAMPLE_BATCH];   /* per job of the batch */
 } radinterp__sample_ctx;
 
 static void radinterp__point_in(const float *p0, const float *p1, const float *p2, double s, double t, float *out)
@@ -10106,95 +10138,192 @@ static void radinterp__point_in(const float *p0, const float *p1, const float *p
         out[k] = (float)((double)p0[k] + s * ((double)p1[k] - p0[k]) + t * ((double)p2[k] - p0[k]));
 }
 
-/* The six samples and the coefficients of one triangle; with refinement
-   also its representation error. */
-static radinterp_result radinterp__sample_triangle(const radinterp__builder *b, const radinterp__otri *t, const float *pos,
-                                                   float *c, float *err)
-{
-    static const double at[6][2] = {{0, 0}, {0.5, 0}, {1, 0}, {0.5, 0.5}, {0, 1}, {0, 0.5}};
-    const float *p0 = pos + 3 * (size_t)t->v[0], *p1 = pos + 3 * (size_t)t->v[1], *p2 = pos + 3 * (size_t)t->v[2];
-    float toward[3], x[3];
-    double r[6][3], v[6];
-    int i, j, ch;
-    radinterp__point_in(p0, p1, p2, 1.0 / 3.0, 1.0 / 3.0, toward);
-    for (i = 0; i < 6; i++) {
-        radinterp_result res;
-        if (at[i][0] == 0 && at[i][1] == 0) memcpy(x, p0, sizeof x);
-        else if (at[i][0] == 1) memcpy(x, p1, sizeof x);
-        else if (at[i][1] == 1) memcpy(x, p2, sizeof x);
-        else radinterp__point_in(p0, p1, p2, at[i][0], at[i][1], x);
-        res = radinterp__irradiance(b->s, t->patch, x, toward, r[i], NULL);
-        if (res != RADINTERP_OK) return res;
-    }
-    for (ch = 0; ch < 3; ch++) {
-        for (i = 0; i < 6; i++) v[i] = r[i][ch];
-        radinterp__fit_channel(v, c + ch, 3);
-    }
-    *err = -1.0f;
-    if (b->desc->refine) {
-        uint32_t n = b->refine_samples;
-        double worst = 0.0;
-        for (i = 0; i < (int)n; i++)
-            for (j = 0; j < (int)n; j++) {
-                double s = (i + 0.5) / n, tt = (j + 0.5) / n, h[3];
-                radinterp_result res;
-                if (s + tt > 1.0) { s = 1.0 - s; tt = 1.0 - tt; }
-                radinterp__point_in(p0, p1, p2, s, tt, x);
-                res = radinterp__irradiance(b->s, t->patch, x, toward, h, NULL);
-                if (res != RADINTERP_OK) return res;
-                for (ch = 0; ch < 3; ch++) {
-                    double e = fabs(radinterp__quad_eval(c + ch, 3, (float)s, (float)tt) - h[ch]);
-                    worst = e > worst ? e : worst;
-                }
-            }
-        *err = (float)worst;
-    }
-    return RADINTERP_OK;
-}
-
-static void radinterp__sample_job(void *ctx_, uint32_t index)
+static void radinterp__point_job(void *ctx_, uint32_t index)
 {
     radinterp__sample_ctx *ctx = (radinterp__sample_ctx *)ctx_;
-    uint32_t i = index * RADINTERP__SAMPLE_TRIS, end = i + RADINTERP__SAMPLE_TRIS;
-    if (end > ctx->count) end = ctx->count;
+    uint32_t i = ctx->first + index * RADINTERP__SAMPLE_JOB, end = i + RADINTERP__SAMPLE_JOB;
+    if (end > ctx->first + ctx->count) end = ctx->first + ctx->count;
     ctx->status[index] = RADINTERP_OK;
     for (; i < end; i++) {
-        uint32_t t = ctx->unsampled[ctx->first + i];
-        radinterp_result r = radinterp__sample_triangle(ctx->b, &ctx->tris[t], ctx->pos, ctx->coeff + 18 * (size_t)t,
-                                                        ctx->error + t);
+        const radinterp__spoint *p = &ctx->pts[i];
+        radinterp_result r = radinterp__irradiance(ctx->b->s, p->patch, p->x, p->toward, ctx->value + 3 * (size_t)i, NULL);
         if (r != RADINTERP_OK) ctx->status[index] = r;
     }
 }
 
-/* Samples the listed triangles in batches of jobs, with progress calls
-   between batches. */
+/* Largest difference between a triangle's interpolant and IrradianceAtPoint
+   at SAMPLES x SAMPLES test points (4.4.2 step 2). */
+static radinterp_result radinterp__fit_error(const radinterp__builder *b, const radinterp__otri *t, const float *c,
+                                             float *err)
+{
+    const float *pos = (const float *)b->pos.data;
+    const float *p0 = pos + 3 * (size_t)t->v[0], *p1 = pos + 3 * (size_t)t->v[1], *p2 = pos + 3 * (size_t)t->v[2];
+    uint32_t n = b->refine_samples;
+    float toward[3], x[3];
+    double worst = 0.0;
+    int i, j, ch;
+    radinterp__point_in(p0, p1, p2, 1.0 / 3.0, 1.0 / 3.0, toward);
+    for (i = 0; i < (int)n; i++)
+        for (j = 0; j < (int)n; j++) {
+            double s = (i + 0.5) / n, tt = (j + 0.5) / n, h[3];
+            radinterp_result res;
+            if (s + tt > 1.0) { s = 1.0 - s; tt = 1.0 - tt; }
+            radinterp__point_in(p0, p1, p2, s, tt, x);
+            res = radinterp__irradiance(b->s, t->patch, x, toward, h, NULL);
+            if (res != RADINTERP_OK) return res;
+            for (ch = 0; ch < 3; ch++) {
+                double e = fabs(radinterp__quad_eval(c + ch, 3, (float)s, (float)tt) - h[ch]);
+                worst = e > worst ? e : worst;
+            }
+        }
+    *err = (float)worst;
+    return RADINTERP_OK;
+}
+
+static void radinterp__error_job(void *ctx_, uint32_t index)
+{
+    radinterp__sample_ctx *ctx = (radinterp__sample_ctx *)ctx_;
+    uint32_t i = ctx->first + index * RADINTERP__SAMPLE_JOB, end = i + RADINTERP__SAMPLE_JOB;
+    if (end > ctx->first + ctx->count) end = ctx->first + ctx->count;
+    ctx->status[index] = RADINTERP_OK;
+    for (; i < end; i++) {
+        uint32_t t = ctx->unsampled[i];
+        radinterp_result r = radinterp__fit_error(ctx->b, &ctx->tris[t], ctx->coeff + 18 * (size_t)t, ctx->error + t);
+        if (r != RADINTERP_OK) ctx->status[index] = r;
+    }
+}
+
+/* Runs job over n items in batches of jobs, with a progress call after
+   each batch (done counted from *done toward total). */
+static radinterp_result radinterp__run_batches(radinterp__builder *b, radinterp_job_fn job, radinterp__sample_ctx *ctx,
+                                               uint32_t n, uint64_t *done, uint64_t total)
+{
+    uint32_t at = 0, i;
+    while (at < n) {
+        uint32_t count = n - at, jobs;
+        if (count > RADINTERP__SAMPLE_BATCH * RADINTERP__SAMPLE_JOB) count = RADINTERP__SAMPLE_BATCH * RADINTERP__SAMPLE_JOB;
+        jobs = (count + RADINTERP__SAMPLE_JOB - 1) / RADINTERP__SAMPLE_JOB;
+        ctx->first = at;
+        ctx->count = count;
+        radinterp__run_jobs(b->desc->parallel_for, b->desc->parallel_user, job, ctx, jobs);
+        for (i = 0; i < jobs; i++)
+            if (ctx->status[i] != RADINTERP_OK) return ctx->status[i];
+        at += count;
+        *done += count;
+        if (b->desc->progress && b->desc->progress(b->desc->progress_user, *done, total)) return RADINTERP_ERROR_CANCELLED;
+    }
+    return RADINTERP_OK;
+}
+
+/* Marks the vertices of triangle edges on contact discontinuities. */
+static void radinterp__mark_disc_vertices(const radinterp__builder *b, const uint32_t *list, uint32_t n,
+                                          unsigned char *on_disc)
+{
+    const radinterp__otri *tris = (const radinterp__otri *)b->tris.data;
+    uint32_t i, k;
+    for (i = 0; i < n; i++) {
+        const radinterp__otri *t = &tris[list[i]];
+        for (k = 0; k < 3; k++)
+            if (t->flags & (RADINTERP__EDGE_JUMP << k)) on_disc[t->v[(k + 1) % 3]] = on_disc[t->v[(k + 2) % 3]] = 1;
+    }
+}
+
+/* The sample points of the listed triangles, into pts, and for each
+   triangle the indices of its six (tri_pt, 6 per listed triangle), in
+   triangle order so that the points and the centroids they are taken
+   toward do not depend on the thread count. Returns -1 when out of
+   memory. */
+static int radinterp__sample_points(radinterp__builder *b, const uint32_t *list, uint32_t n, radinterp__buf *pts,
+                                    uint32_t *tri_pt)
+{
+    const radinterp__otri *tris = (const radinterp__otri *)b->tris.data;
+    const float *pos = (const float *)b->pos.data;
+    unsigned char *on_disc = (unsigned char *)radinterp__alloc(&b->a, b->pos.count / 3 + 1);
+    radinterp__hmap shared;
+    uint32_t i, j, key[3];
+    int failed = 0;
+    memset(&shared, 0, sizeof shared);
+    if (!on_disc || radinterp__hmap_init(&b->a, &shared, 3, 2 * n + 16) != 0) failed = 1;
+    if (!failed) {
+        memset(on_disc, 0, b->pos.count / 3 + 1);
+        radinterp__mark_disc_vertices(b, list, n, on_disc);
+    }
+    for (i = 0; i < n && !failed; i++) {
+        const radinterp__otri *t = &tris[list[i]];
+        float toward[3];
+        radinterp__point_in(pos + 3 * (size_t)t->v[0], pos + 3 * (size_t)t->v[1], pos + 3 * (size_t)t->v[2],
+                            1.0 / 3.0, 1.0 / 3.0, toward);
+        for (j = 0; j < 6 && !failed; j++) {
+            uint32_t a = t->v[radinterp__sample_corner[j][0]], c = t->v[radinterp__sample_corner[j][1]];
+            uint32_t edge = 3u - radinterp__sample_corner[j][0] - radinterp__sample_corner[j][1];  /* opposite corner */
+            uint32_t next = (uint32_t)pts->count, got = next;
+            int own = a == c ? on_disc[a] : (t->flags & (RADINTERP__EDGE_JUMP << edge)) != 0;
+            radinterp__spoint *sp;
+            if (!own) {
+                key[0] = a < c ? a : c;
+                key[1] = a < c ? c : a;
+                key[2] = t->patch;
+                got = radinterp__hmap_put(&b->a, &shared, key, next);
+                if (got == RADINTERP__NONE) { failed = 1; break; }
+            }
+            tri_pt[6 * (size_t)i + j] = got;
+            if (got != next) continue;
+            if (!(sp = (radinterp__spoint *)radinterp__buf_push(&b->a, pts))) { failed = 1; break; }
+            if (a == c) memcpy(sp->x, pos + 3 * (size_t)a, sizeof sp->x);
+            else if (own) radinterp__point_in(pos + 3 * (size_t)t->v[0], pos + 3 * (size_t)t->v[1], pos + 3 * (size_t)t->v[2],
+                                              radinterp__sample_at[j][0], radinterp__sample_at[j][1], sp->x);
+            else radinterp__point_in(pos + 3 * (size_t)key[0], pos + 3 * (size_t)key[1], pos + 3 * (size_t)key[0], 0.5, 0.0, sp->x);
+            memcpy(sp->toward, toward, sizeof toward);
+            sp->patch = t->patch;
+        }
+    }
+    radinterp__free(&b->a, on_disc);
+    radinterp__hmap_free(&b->a, &shared);
+    return failed ? -1 : 0;
+}
+
+/* The coefficients (eq. 3.3) of the listed triangles from their six
+   samples, with refinement their representation error too. */
 static radinterp_result radinterp__sample_all(radinterp__builder *b, const uint32_t *unsampled, uint32_t n,
                                               float *coeff, float *error)
 {
     radinterp__sample_ctx ctx;
-    radinterp_result status[RADINTERP__SAMPLE_BATCH];
-    uint32_t done = 0, i;
+    radinterp__buf pts;
+    uint32_t *tri_pt = (uint32_t *)radinterp__alloc_array(&b->a, (size_t)n * 6 + 1, sizeof(uint32_t));
+    uint64_t done = 0, total;
+    radinterp_result res = RADINTERP_OK;
+    uint32_t i, j, ch;
+    memset(&ctx, 0, sizeof ctx);
+    radinterp__buf_init(&pts, sizeof(radinterp__spoint));
+    if (!tri_pt || radinterp__sample_points(b, unsampled, n, &pts, tri_pt) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    if (res == RADINTERP_OK && !(ctx.value = (double *)radinterp__alloc_array(&b->a, pts.count * 3 + 1, sizeof(double))))
+        res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    total = pts.count + (b->desc->refine ? n : 0u);
     ctx.b = b;
-    ctx.tris = (const radinterp__otri *)b->tris.data;
-    ctx.pos = (const float *)b->pos.data;
-    ctx.unsampled = unsampled;
-    ctx.coeff = coeff;
-    ctx.error = error;
-    ctx.status = status;
-    while (done < n) {
-        uint32_t count = n - done, jobs;
-        if (count > RADINTERP__SAMPLE_BATCH * RADINTERP__SAMPLE_TRIS) count = RADINTERP__SAMPLE_BATCH * RADINTERP__SAMPLE_TRIS;
-        jobs = (count + RADINTERP__SAMPLE_TRIS - 1) / RADINTERP__SAMPLE_TRIS;
-        ctx.first = done;
-        ctx.count = count;
-        radinterp__run_jobs(b->desc->parallel_for, b->desc->parallel_user, radinterp__sample_job, &ctx, jobs);
-        for (i = 0; i < jobs; i++)
-            if (status[i] != RADINTERP_OK) return status[i];
-        done += count;
-        b->samples += (uint64_t)count * (6u + (b->desc->refine ? b->refine_samples * b->refine_samples : 0u));
-        if (b->desc->progress && b->desc->progress(b->desc->progress_user, done, n)) return RADINTERP_ERROR_CANCELLED;
+    ctx.pts = (const radinterp__spoint *)pts.data;
+    if (res == RADINTERP_OK) res = radinterp__run_batches(b, radinterp__point_job, &ctx, (uint32_t)pts.count, &done, total);
+    for (i = 0; i < n && res == RADINTERP_OK; i++) {
+        float *c = coeff + 18 * (size_t)unsampled[i];
+        for (ch = 0; ch < 3; ch++) {
+            double v[6];
+            for (j = 0; j < 6; j++) v[j] = ctx.value[3 * (size_t)tri_pt[6 * (size_t)i + j] + ch];
+            radinterp__fit_channel(v, c + ch, 3);
+        }
+        error[unsampled[i]] = -1.0f;
     }
-    return RADINTERP_OK;
+    b->samples += pts.count;
+    if (res == RADINTERP_OK && b->desc->refine) {
+        ctx.tris = (const radinterp__otri *)b->tris.data;
+        ctx.unsampled = unsampled;
+        ctx.coeff = coeff;
+        ctx.error = error;
+        res = radinterp__run_batches(b, radinterp__error_job, &ctx, n, &done, total);
+        b->samples += (uint64_t)n * b->refine_samples * b->refine_samples;
+    }
+    radinterp__free(&b->a, tri_pt);
+    radinterp__free(&b->a, ctx.value);
+    radinterp__buf_free(&b->a, &pts);
+    return res;
 }
 
 /* Key of a triangle for reusing its samples in the next pass. */
@@ -10490,7 +10619,7 @@ static radinterp_result radinterp__assemble(radinterp__builder *b, const float *
         memcpy(m->indices + 3 * (size_t)i, tris[i].v, 3 * sizeof(uint32_t));
         m->tri_patch[i] = s->first_caller[tris[i].patch];
         m->tri_leaf[i] = RADINTERP__MNODES(b)[tris[i].node].leaf;
-        m->edge_flags[i] = (unsigned char)tris[i].flags;
+        m->edge_flags[i] = (unsigned char)(tris[i].flags & 63u);
     }
     for (i = 0; i < s->caller_count; i++) {
         memcpy(m->patch_rho + 3 * (size_t)i, s->patches[s->caller_patch[i]].rho, 3 * sizeof(float));
