@@ -8,7 +8,8 @@
    6); the discontinuities of the irradiance (shadow boundaries, horizons,
    contacts) ranked by weight, the strongest of which the quadtree leaves
    are triangulated along (chapter 5); one quadratic irradiance interpolant
-   per triangle from six point queries (chapter 3). Online: an ID buffer
+   per triangle through six point samples at its corners and edge midpoints,
+   shared with its neighbours (chapter 3). Online: an ID buffer
    and a barycentric buffer from any rasterizer become radiosity per pixel
    at 5 multiplies and 5 adds a channel (radinterp_shade), or the triangles
    and their coefficients go to a shader. The output mesh is crack-free.
@@ -166,8 +167,11 @@
    weld_distance) is left out of the mesh (info.skipped_patches). The
    restriction ignores quarter points that round onto a leaf's own corners
    (an edge a few float steps long). Interpolants (3.3): IrradianceAtPoint
-   at each triangle's corners and edge midpoints, each approached from the
-   triangle's centre, and the closed form of eq. 3.3 for (A, 2B, 2C, D, 2E,
+   at each triangle's corners and edge midpoints, one query per point of a
+   patch shared by every triangle that meets there (so neighbours agree
+   along their common edge), except on a contact discontinuity, where each
+   triangle approaches the point from its own centre and so takes its own
+   side of the jump; then the closed form of eq. 3.3 for (A, 2B, 2C, D, 2E,
    F) per channel. With refine, representation-based refinement (4.4.2):
    SAMPLES x SAMPLES more points per triangle measure the interpolant's
    error, leaves above refine_eps are split (children inherit their parent's
@@ -507,9 +511,10 @@
    out), and about 500,000 per second where none is; with the triangulation
    method about 2,300.
 
-   The mesh build costs six point queries per triangle (more with refine):
-   the office's 12,000 triangles take 72,000 queries, nearly all of the
-   build time. Interpolants are only as accurate as IrradianceAtPoint, whose
+   The mesh build costs a point query per vertex and edge midpoint of its
+   triangles (more with refine), about 2.2 per triangle: the office's 59,576
+   triangles take 131,571 queries (six a triangle before v0.6.0), nearly all
+   of the build time. Interpolants are only as accurate as IrradianceAtPoint, whose
    sources are the solution's elements: for a more accurate image solve
    with a smaller eps and mesh with a larger min_leaf_area. Discontinuity
    edges that nearly graze a patch outline can make a triangulation fail
@@ -6752,15 +6757,17 @@ static double radinterp__ff_frame(const radinterp__query *q, const radinterp__fr
 /* The union of the shadows on the source of bp as disjoint convex pieces
    q->piece[0 .. *count). Shadows of faces turned toward the point go in
    first: those of one convex object do not overlap, and its faces turned
-   away then fall inside them. Returns 1; 0 when one shadow alone hides the
-   whole source; -1 when a shadow cannot be represented or the pieces
-   outgrow their arrays (the caller triangulates). */
+   away then fall inside them. Returns 1; 0 when the shadows hide the whole
+   source (one alone, or the pieces together leave less than 1e-12 of its
+   area, like radinterp__visible_rest: a source behind a wall of several
+   patches); -1 when a shadow cannot be represented or the pieces outgrow
+   their arrays (the caller triangulates). */
 static int radinterp__bp_union(radinterp__query *q, const radinterp__bp *bp, int *count_out)
 {
     const radinterp_solution *s = q->s;
-    double tiny, tol = bp->tol;
+    double tiny, tol = bp->tol, covered = 0.0, whole = fabs(radinterp__area2((const double (*)[2])bp->sc2, bp->nc));
     uint32_t later[RADINTERP__BP_MAX_SURVIVORS], nlater = 0, i;
-    int pass, count = 0;
+    int pass, count = 0, k;
     /* a piece of area below tiny / 2 subtends less than 1e-12 / pi: dropped */
     tiny = 2e-12 * bp->hp * bp->hp;
     *count_out = 0;
@@ -6785,7 +6792,10 @@ static int radinterp__bp_union(radinterp__query *q, const radinterp__bp *bp, int
             if (r == 0) continue;
             if (radinterp__covers((const double (*)[2])sh->v, sh->count, (const double (*)[2])bp->sc2, bp->nc))
                 return 0; /* this blocker alone hides the whole source */
+            k = count;
             if (radinterp__union_add(q, &count, tol, tiny) != 0) return -1;
+            for (; k < count; k++) covered += fabs(radinterp__area2((const double (*)[2])q->piece[k].v, q->piece[k].count));
+            if (covered >= (1.0 - 1e-12) * whole) return 0;   /* the pieces are disjoint and inside the source */
         }
     }
     *count_out = count;
@@ -10149,9 +10159,11 @@ static radinterp_result radinterp__triangulate_patch(radinterp__builder *b, radi
 /* ======================================================================
    20. interpolants (Hardt 3.3) and representation-based refinement (4.4.2)
    Each triangle gets six IrradianceAtPoint samples, at its corners and
-   edge midpoints, each approached from the triangle's centre (so a sample
-   on a discontinuity takes the value of this triangle's side), and the
-   quadratic through them in closed form. With refinement, SAMPLES x SAMPLES
+   edge midpoints, and the quadratic through them in closed form. The
+   triangles of a patch share the samples at the points where they meet
+   (taken toward the centre of the first triangle in triangle order), but on
+   a contact discontinuity each takes its own, approached from its own
+   centre so that it takes its side's value. With refinement, SAMPLES x SAMPLES
    more points per triangle compare the interpolant with IrradianceAtPoint;
    a leaf whose worst difference exceeds eps is split and the pass repeats
    (triangles that did not change keep their samples).
