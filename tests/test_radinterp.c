@@ -319,6 +319,15 @@ static void test_validation(void)
     CHECK_EQ_INT(solve_status(&d), RADINTERP_ERROR_INVALID_ARGUMENT);
     d = scene_desc(sc); d.push_off = nanv;
     CHECK_EQ_INT(solve_status(&d), RADINTERP_ERROR_INVALID_ARGUMENT);
+    /* point_rest is a fraction of the irradiance: in [0, 1] */
+    d = scene_desc(sc); d.point_rest = -0.5f;
+    CHECK_EQ_INT(solve_status(&d), RADINTERP_ERROR_INVALID_ARGUMENT);
+    d = scene_desc(sc); d.point_rest = 1.5f;
+    CHECK_EQ_INT(solve_status(&d), RADINTERP_ERROR_INVALID_ARGUMENT);
+    d = scene_desc(sc); d.point_rest = nanv;
+    CHECK_EQ_INT(solve_status(&d), RADINTERP_ERROR_INVALID_ARGUMENT);
+    d = scene_desc(sc); d.point_rest = 1.0f;
+    CHECK_EQ_INT(solve_status(&d), RADINTERP_OK);
     d = scene_desc(sc); d.allocator.free = free_unused_marker;
     CHECK_EQ_INT(solve_status(&d), RADINTERP_ERROR_INVALID_ARGUMENT);
     /* sample counts past their caps would run for hours: refused at once */
