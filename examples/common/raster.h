@@ -41,11 +41,12 @@
    convention), so a pixel centre inside a mesh is covered by exactly one of
    its triangles: no cracks, no double coverage along shared edges or at shared
    vertices. Each row's covered span is found by solving the three edge
-   inequalities for x in the same integers, so only covered pixels are
-   visited. ex_raster_count() counts coverage instead of depth testing, to
+   inequalities for x in the same integers (the quotients stepped from row
+   to row, no division per row), so only covered pixels are visited. ex_raster_count() counts coverage instead of depth testing, to
    check exactly that. Triangles are clipped against the near plane and a
    guard band in view space (clip points computed the same way for both
-   triangles of a shared edge). Both faces are drawn (no culling). Only
+   triangles of a shared edge); one wholly beside the screen is dropped
+   before its projection. Both faces are drawn (no culling). Only
    perspective cameras rasterize. */
 #ifndef EXAMPLES_COMMON_RASTER_H
 #define EXAMPLES_COMMON_RASTER_H
@@ -261,10 +262,30 @@ static ex__clip_vertex ex__clip_cross(const ex__clip_vertex *a, float da, const 
     return out;
 }
 
+/* Whether a polygon that needs no clipping lies wholly beyond one side of
+   the screen widened by two pixels (sx = ax (1 + 4 / width), sy likewise):
+   its corners then project at least two pixels outside the image, far more
+   than the projection's rounding, so its box holds no pixel centre and it
+   would be dropped after its projection; most of a level's triangles lie
+   beside the view, and this spares their projection and snapping. */
+static int ex__clip_off_screen(const ex__clip_vertex *poly, int n, float sx, float sy)
+{
+    int i, right = 0, left = 0, below = 0, above = 0;
+    for (i = 0; i < n; i++) {
+        right += poly[i].p[0] > sx * poly[i].p[2];
+        left += poly[i].p[0] < -sx * poly[i].p[2];
+        above += poly[i].p[1] > sy * poly[i].p[2];
+        below += poly[i].p[1] < -sy * poly[i].p[2];
+    }
+    return right == n || left == n || above == n || below == n;
+}
+
 /* Sutherland-Hodgman against the five planes; returns the vertex count.
    Most triangles lie wholly inside every plane or wholly outside one: they
-   are answered before any pass (with what the passes would give). */
-static int ex__clip_polygon(ex__clip_vertex *poly, int n, float near_plane, float ax, float ay)
+   are answered before any pass (with what the passes would give), and one
+   inside them all but beside the screen (ex__clip_off_screen, sx and sy)
+   counts as outside. */
+static int ex__clip_polygon(ex__clip_vertex *poly, int n, float near_plane, float ax, float ay, float sx, float sy)
 {
     ex__clip_vertex tmp[16];
     int plane, crossed = 0;
@@ -274,7 +295,7 @@ static int ex__clip_polygon(ex__clip_vertex *poly, int n, float near_plane, floa
         if (inside == 0) return 0;
         crossed |= inside < n;
     }
-    if (!crossed) return n;
+    if (!crossed) return ex__clip_off_screen(poly, n, sx, sy) ? 0 : n;
     for (plane = 0; plane < 5 && n > 0; plane++) {
         int i, m = 0;
         for (i = 0; i < n; i++) {
@@ -374,6 +395,7 @@ static void ex__raster_setup_job(void *ctx, uint32_t index)
     ex__raster_batch *batch = &r->batches[index];
     const ex_raster_mesh *mesh = batch->mesh;
     float aspect = (float)r->width / (float)r->height, ax = c->tan_half * aspect, ay = c->tan_half;
+    float sx = ax * (1.0f + 4.0f / (float)r->width), sy = ay * (1.0f + 4.0f / (float)r->height);
     uint32_t i;
     batch->count = 0;
     batch->failed = 0;
@@ -396,7 +418,7 @@ static void ex__raster_setup_job(void *ctx, uint32_t index)
             poly[k].u = k == 1 ? 1.0f : 0.0f;
             poly[k].v = k == 2 ? 1.0f : 0.0f;
         }
-        n = ex__clip_polygon(poly, 3, r->near_plane, ax, ay);
+        n = ex__clip_polygon(poly, 3, r->near_plane, ax, ay, sx, sy);
         for (k = 1; k + 1 < n; k++) ex__raster_emit(r, batch, &poly[0], &poly[k], &poly[k + 1], mesh->id_base + i);
     }
 }
@@ -487,31 +509,25 @@ static int ex__edge_owns_ties(int64_t dx, int64_t dy) { return dy > 0 || (dy == 
 /* Floor of a / b for b > 0, exact in 64-bit integers. */
 static int64_t ex__floor_div(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 
-/* Narrows the span [*lo, *hi] (pixel offsets from the row's first pixel) to
-   the pixels where edge value w(x) = w0 - step * x satisfies w(x) + bias > 0,
-   i.e. w0 + bias - step * x >= 1: solved exactly for x, so the span holds
-   exactly the pixels a per-pixel test would accept. */
-static void ex__edge_span(int64_t w0, int64_t step, int bias, int64_t *lo, int64_t *hi)
-{
-    int64_t room = w0 + bias - 1;   /* step * x <= room */
-    if (step == 0) {
-        if (room < 0) *hi = -1;     /* the whole row is outside this edge */
-    } else if (step > 0) {
-        int64_t x = ex__floor_div(room, step);
-        if (x < *hi) *hi = x;
-    } else {
-        int64_t x = -ex__floor_div(room, -step);   /* x >= ceil(room / step) = -floor(room / -step) */
-        if (x > *lo) *lo = x;
-    }
-}
-
 /* A triangle's edge functions over its pixels in one tile. Edge k goes from
    vertex k+1 to k+2; it is zero on that edge and positive at vertex k, so its
-   value over the area, times inv_area, is vertex k's weight. */
+   value over the area, times inv_area, is vertex k's weight.
+
+   A pixel at offset x from the row's first one is inside edge k when
+   w(x) + bias > 0 with w(x) = row - step * x, i.e. step * x <= room with
+   room = row + bias - 1: for step > 0 that bounds the span above by
+   floor(room / step), for step < 0 below by -floor(room / -step), for
+   step = 0 it holds on the whole row or nowhere. Row to row room grows by
+   down, so the bound's quotient and remainder are stepped exactly in
+   integers (a Bresenham walk: the quotient of down once, then an add and
+   a carry per row) instead of dividing on every row. */
 typedef struct ex__raster_edges {
     int64_t row[3];              /* values at the current row's first pixel centre */
     int64_t step[3];             /* decrease per pixel to the right */
     int64_t down[3];             /* increase per row down */
+    int64_t quot[3], rem[3];     /* floor(room / |step|) and its remainder, in [0, |step|) */
+    int64_t down_quot[3], down_rem[3];   /* the same for down */
+    int64_t div[3];              /* |step|, or INT64_MAX (no carry ever) when step = 0 */
     int bias[3];                 /* tie rule (ex__edge_owns_ties) */
     int x0, y0, x1, y1;          /* the triangle's pixel box in the tile, inclusive */
 } ex__raster_edges;
@@ -531,31 +547,53 @@ static int ex__raster_edges_begin(const ex_raster_tri *t, int tx0, int ty0, int 
     py0 = (int64_t)e->y0 * EX_RASTER_SUBPIXEL + EX_RASTER_SUBPIXEL / 2;
     for (k = 0; k < 3; k++) {
         int a = (k + 1) % 3, b = (k + 2) % 3;
-        int64_t dx = t->x[b] - t->x[a], dy = t->y[b] - t->y[a];
+        int64_t dx = t->x[b] - t->x[a], dy = t->y[b] - t->y[a], div = dy < 0 ? -dy : dy;
         e->row[k] = dx * (py0 - t->y[a]) - dy * (px0 - t->x[a]);
         e->bias[k] = ex__edge_owns_ties(dx, dy);
         e->step[k] = dy * EX_RASTER_SUBPIXEL;
         e->down[k] = dx * EX_RASTER_SUBPIXEL;
+        e->quot[k] = e->rem[k] = e->down_quot[k] = e->down_rem[k] = 0;
+        e->div[k] = INT64_MAX;
+        if (div != 0) {
+            int64_t room = e->row[k] + e->bias[k] - 1;
+            div *= EX_RASTER_SUBPIXEL;
+            e->div[k] = div;
+            e->quot[k] = ex__floor_div(room, div);
+            e->rem[k] = room - e->quot[k] * div;
+            e->down_quot[k] = ex__floor_div(e->down[k], div);
+            e->down_rem[k] = e->down[k] - e->down_quot[k] * div;
+        }
     }
     return 1;
 }
 
 /* The current row's covered pixels, as offsets [*lo, *hi] from e->x0 (empty
-   when *lo > *hi): the three edge inequalities solved for x in exact
-   integers, the same pixels as testing each one. */
+   when *lo > *hi): exactly the pixels whose three edge tests pass. */
 static void ex__raster_edges_span(const ex__raster_edges *e, int64_t *lo, int64_t *hi)
 {
     int k;
     *lo = 0;
     *hi = e->x1 - e->x0;
-    for (k = 0; k < 3; k++) ex__edge_span(e->row[k], e->step[k], e->bias[k], lo, hi);
+    for (k = 0; k < 3; k++) {
+        if (e->step[k] > 0) {
+            if (e->quot[k] < *hi) *hi = e->quot[k];
+        } else if (e->step[k] < 0) {
+            if (-e->quot[k] > *lo) *lo = -e->quot[k];
+        } else if (e->row[k] + e->bias[k] - 1 < 0) {
+            *hi = -1;   /* the whole row is outside this edge */
+        }
+    }
 }
 
 static void ex__raster_edges_next_row(ex__raster_edges *e)
 {
-    e->row[0] += e->down[0];
-    e->row[1] += e->down[1];
-    e->row[2] += e->down[2];
+    int k;
+    for (k = 0; k < 3; k++) {
+        int64_t rem = e->rem[k] + e->down_rem[k], carry = rem >= e->div[k];   /* branchless: a carry is a coin toss */
+        e->row[k] += e->down[k];
+        e->quot[k] += e->down_quot[k] + carry;
+        e->rem[k] = rem - (e->div[k] & -carry);
+    }
 }
 
 /* Counts triangle t's coverage of the tile's pixels (ex_raster_count). */
@@ -574,6 +612,7 @@ static void ex__raster_tri_count(ex_raster *r, const ex_raster_tri *t, int tx0, 
 
 #define EX__RASTER_TILE_PIXELS (EX_RASTER_TILE * EX_RASTER_TILE)
 #define EX__RASTER_NONE 0xFFFFFFFFu
+#define EX__RASTER_LANES 8        /* pixels of a span depth-tested together (SIMD lanes where the compiler makes them) */
 
 /* One tile's buffers, in the tile job's own memory (they stay in the
    core's cache): per pixel, the nearest triangle drawn so far in this pass
@@ -582,9 +621,11 @@ static void ex__raster_tri_count(ex_raster *r, const ex_raster_tri *t, int tx0, 
    triangle that won, so overdraw costs a depth test and nothing more.
    Pixel (x, y) of the tile is index (y - y0) * EX_RASTER_TILE + (x - x0). */
 typedef struct ex__raster_local {
-    float inv_z[EX__RASTER_TILE_PIXELS];   /* 1 / depth of this pass's winner; 0 where none */
-    float z[EX__RASTER_TILE_PIXELS];       /* depth: the winner's, else the frame's (FLT_MAX cleared) */
-    uint32_t ref[EX__RASTER_TILE_PIXELS];  /* the winner's position in r->bin_items, EX__RASTER_NONE where none */
+    /* the depth test's buffers run EX__RASTER_LANES - 1 past the tile's
+       last pixel: a span is tested a whole group of lanes at a time */
+    float inv_z[EX__RASTER_TILE_PIXELS + EX__RASTER_LANES];   /* 1 / depth of this pass's winner; 0 where none */
+    float z[EX__RASTER_TILE_PIXELS + EX__RASTER_LANES];       /* depth: the winner's, else the frame's (FLT_MAX cleared) */
+    uint32_t ref[EX__RASTER_TILE_PIXELS + EX__RASTER_LANES];  /* the winner's position in r->bin_items, EX__RASTER_NONE where none */
     uint32_t id[EX__RASTER_TILE_PIXELS];   /* resolved: as the frame's id and bary */
     float bary[2 * EX__RASTER_TILE_PIXELS];
 } ex__raster_local;
@@ -602,6 +643,7 @@ static void ex__raster_local_begin(const ex_raster *r, ex__raster_local *L, int 
     int x, y, n = x1 - x0 + 1;
     memset(L->inv_z, 0, sizeof L->inv_z);
     memset(L->ref, 0xFF, sizeof L->ref);
+    for (x = 0; x < EX__RASTER_LANES; x++) L->z[EX__RASTER_TILE_PIXELS + x] = 0.0f;   /* lanes past the tile */
     for (y = y0; y <= y1; y++) {
         int q = (y - y0) * EX_RASTER_TILE;
         size_t p = (size_t)y * (size_t)r->width + (size_t)x0;
@@ -636,7 +678,7 @@ static void ex__raster_tri_depth(ex__raster_local *L, const ex_raster_tri *t, ui
     for (y = e.y0; y <= e.y1; y++, ex__raster_edges_next_row(&e)) {
         int q = (y - ty0) * EX_RASTER_TILE + (e.x0 - tx0);
         int64_t lo, hi;
-        int i, n;
+        int c, i, n;
         double w0, w1, w2, d0 = (double)e.step[0], d1 = (double)e.step[1], d2 = (double)e.step[2];
         float *inv_z, *z;
         uint32_t *refs;
@@ -649,17 +691,18 @@ static void ex__raster_tri_depth(ex__raster_local *L, const ex_raster_tri *t, ui
         w0 = (double)(e.row[0] - e.step[0] * lo);
         w1 = (double)(e.row[1] - e.step[1] * lo);
         w2 = (double)(e.row[2] - e.step[2] * lo);
-        for (i = 0; i < n; i++) {
-            double x = (double)i;
-            float a0 = (float)(w0 - d0 * x) * area * z0;
-            float a1 = (float)(w1 - d1 * x) * area * z1;
-            float a2 = (float)(w2 - d2 * x) * area * z2;
-            float sum = a0 + a1 + a2, depth = 1.0f / sum;
-            int win = (sum > inv_z[i]) & (depth < z[i]);
-            inv_z[i] = win ? sum : inv_z[i];
-            z[i] = win ? depth : z[i];
-            refs[i] = win ? ref : refs[i];
-        }
+        for (c = 0; c < n; c += EX__RASTER_LANES)   /* whole groups of lanes: no scalar tail (lanes past the span lose) */
+            for (i = c; i < c + EX__RASTER_LANES; i++) {
+                double x = (double)i;
+                float a0 = (float)(w0 - d0 * x) * area * z0;
+                float a1 = (float)(w1 - d1 * x) * area * z1;
+                float a2 = (float)(w2 - d2 * x) * area * z2;
+                float sum = a0 + a1 + a2, depth = 1.0f / sum;
+                int win = (i < n) & (sum > inv_z[i]) & (depth < z[i]);
+                inv_z[i] = win ? sum : inv_z[i];
+                z[i] = win ? depth : z[i];
+                refs[i] = win ? ref : refs[i];
+            }
     }
 }
 
