@@ -152,7 +152,7 @@ static void reference_count(ex_raster *r, const ex_camera *c, const float *pos, 
         poly[k].u = poly[k].v = 0.0f;
     }
     r->camera = c;
-    n = ex__clip_polygon(poly, 3, r->near_plane, c->tan_half * aspect, c->tan_half, FLT_MAX, FLT_MAX);
+    n = ex__clip_polygon(poly, 3, r->near_plane, c->tan_half * aspect, c->tan_half);
     for (k = 1; k + 1 < n; k++) ex__raster_emit(r, &batch, &poly[0], &poly[k], &poly[k + 1], tri);
     for (i = 0; i < batch.count; i++) {
         const ex_raster_tri *t = &batch.tris[i];
@@ -354,7 +354,9 @@ static void test_draw_meshes_equals_draws(void)
     if (!CHECK(seen.depth && seen.bary && seen.id && ex_raster_init(&a, W, H) == 0 && ex_raster_init(&b, W, H) == 0))
         return;
     m[0].positions = floor.pos; m[0].indices = floor.idx; m[0].tri_count = floor.tris; m[0].id_base = 0;
+    m[0].vertex_count = floor.verts;
     m[1].positions = patch.pos; m[1].indices = patch.idx; m[1].tri_count = patch.tris; m[1].id_base = 50000;
+    m[1].vertex_count = 0;   /* found from the indices */
     m[2] = m[0];
     m[2].id_base = 100000;
     ex_raster_clear(&a);
@@ -425,6 +427,15 @@ static void test_bad_arguments(void)
     CHECK(ex_raster_draw(&r, &wrong, NULL, NULL, 1, 0) != 0);
     CHECK(ex_raster_draw(&r, &c, NULL, NULL, 1, 0) != 0);
     CHECK(ex_raster_draw(&r, &c, NULL, NULL, 0, 0) == 0);
+    {   /* an index past the vertex count given */
+        static const float pos[] = { -1, -1, 2, 1, -1, 2, 0, 1, 2 };
+        static const uint32_t idx[] = { 0, 1, 2 };
+        ex_raster_mesh m;
+        m.positions = pos; m.indices = idx; m.tri_count = 1; m.id_base = 0; m.vertex_count = 2;
+        CHECK(ex_raster_draw_meshes(&r, &c, &m, 1) != 0);
+        m.vertex_count = 3;
+        CHECK(ex_raster_draw_meshes(&r, &c, &m, 1) == 0);
+    }
     ex_raster_free(&r);
 }
 

@@ -9,7 +9,8 @@
        ex_raster_draw(&r, &camera, positions, indices, tri_count, 0);
        ex_raster_draw(&r, &camera, bunny_pos, bunny_idx, bunny_tris, tri_count);
        ... r.id[p] (EX_RASTER_EMPTY or id_base + triangle), r.bary[2p], r.bary[2p+1]
-       // or both meshes in one pass: ex_raster_draw_meshes(&r, &camera, meshes, 2)
+       // or both meshes in one pass: ex_raster_draw_meshes(&r, &camera, meshes, 2),
+       // each ex_raster_mesh with its vertex_count (0: found from the indices)
        ex_raster_free(&r);
 
    A frame can instead leave the clear to its draw (ex_raster_clear_deferred:
@@ -19,7 +20,10 @@
    buffers while they are in the cache); r.skip then spares the frame
    buffers nobody else reads.
 
-   How a tile is drawn: triangles are set up in parallel batches and binned
+   How a tile is drawn: each mesh vertex is taken to view space, tested
+   against the clip planes and snapped to the screen once per draw (the
+   walkthrough's vertices are shared by six triangles on average);
+   triangles are set up from their corners in parallel batches and binned
    to the 64 x 64 tiles they overlap, in input order; each tile job draws
    its bin into a visibility buffer of its own (depth and the winning
    triangle per pixel; only depth is tested, as 1/z, and z divided out only
@@ -75,12 +79,35 @@ typedef struct ex_raster_tri {
 } ex_raster_tri;
 
 /* Triangles of one draw: xyz positions, 3 indices per triangle; their pixel
-   ids are id_base + triangle index. */
+   ids are id_base + triangle index. vertex_count is the number of
+   positions (a draw with an index at or past it fails), or 0: one more
+   than the largest index, found by reading the indices. */
 typedef struct ex_raster_mesh {
     const float *positions;
     const uint32_t *indices;
     uint32_t tri_count, id_base;
+    uint32_t vertex_count;
 } ex_raster_mesh;
+
+/* A mesh vertex as every triangle that shares it sees it: in view space,
+   which clip planes and sides of the screen it lies beyond, and, when it
+   lies inside every clip plane, snapped to the screen. The setup computes
+   each vertex once per draw instead of once per triangle corner. */
+typedef struct ex__raster_vertex {
+    float p[3];                  /* view space */
+    float inv_z;                 /* 1 / p[2] (where snapped) */
+    int64_t x, y;                /* snapped screen position, 1/256 pixel (where clip = 0) */
+    unsigned clip;               /* bit k: outside clip plane k (ex__clip_distance) */
+    unsigned side;               /* bits: beyond the widened screen's right, left, top, bottom (ex__raster_side) */
+} ex__raster_vertex;
+
+/* The vertices of one mesh, or the part of them one setup job transforms. */
+typedef struct ex__raster_vertices {
+    const ex_raster_mesh *mesh;
+    ex__raster_vertex *v;        /* the mesh's vertex 0 */
+    uint32_t count;              /* the mesh's vertex count */
+    uint32_t first, end;         /* this job's vertices */
+} ex__raster_vertices;
 
 /* The snapped triangles of one batch of at most EX__RASTER_BATCH input
    triangles of one mesh: the setup's parallel jobs each fill one, in input
@@ -89,8 +116,9 @@ typedef struct ex__raster_batch {
     ex_raster_tri *tris;
     uint32_t count, capacity;
     const ex_raster_mesh *mesh;  /* its input: triangles [first, end) of mesh */
+    const ex__raster_vertices *vertices;   /* the mesh's transformed vertices */
     uint32_t first, end;
-    int failed;                  /* out of memory */
+    int failed;                  /* out of memory, or an index past the vertices */
 } ex__raster_batch;
 
 /* A finished tile as ex_raster.tile_done sees it: its pixels [x0, x1) x
@@ -120,6 +148,10 @@ typedef struct ex_raster {
     /* scratch reused by every draw */
     ex__raster_batch *batches;
     uint32_t batch_count, batch_capacity;
+    ex__raster_vertex *vertices;           /* every mesh's, in turn */
+    size_t vertex_capacity;
+    ex__raster_vertices *vertex_jobs;      /* one per mesh and EX__RASTER_BATCH vertices */
+    uint32_t vertex_job_capacity;
     const ex_camera *camera;     /* the draw in progress (read by the setup jobs) */
     uint32_t *bin_start, *bin_items, bin_capacity;   /* items: batch << EX__RASTER_BATCH_BITS | index */
     int tiles_x, tiles_y;
@@ -150,6 +182,8 @@ EX_FN void ex_raster_free(ex_raster *r)
     if (r->batches)
         for (i = 0; i < r->batch_capacity; i++) free(r->batches[i].tris);
     free(r->batches);
+    free(r->vertices);
+    free(r->vertex_jobs);
     free(r->bin_start);
     free(r->bin_items);
     memset(r, 0, sizeof *r);
@@ -230,14 +264,14 @@ EX_FN void ex_raster_clear_deferred(ex_raster *r)
 typedef struct ex__clip_vertex { float p[3]; float u, v; } ex__clip_vertex;
 
 /* Signed distance to a clip plane (inside >= 0). Planes: 0 near, 1-4 guard band. */
-static float ex__clip_distance(const ex__clip_vertex *v, int plane, float near_plane, float ax, float ay)
+static inline float ex__clip_distance(const float p[3], int plane, float near_plane, float ax, float ay)
 {
     switch (plane) {
-    case 0: return v->p[2] - near_plane;
-    case 1: return EX_RASTER_GUARD * ax * v->p[2] - v->p[0];
-    case 2: return EX_RASTER_GUARD * ax * v->p[2] + v->p[0];
-    case 3: return EX_RASTER_GUARD * ay * v->p[2] - v->p[1];
-    default: return EX_RASTER_GUARD * ay * v->p[2] + v->p[1];
+    case 0: return p[2] - near_plane;
+    case 1: return EX_RASTER_GUARD * ax * p[2] - p[0];
+    case 2: return EX_RASTER_GUARD * ax * p[2] + p[0];
+    case 3: return EX_RASTER_GUARD * ay * p[2] - p[1];
+    default: return EX_RASTER_GUARD * ay * p[2] + p[1];
     }
 }
 
@@ -262,46 +296,49 @@ static ex__clip_vertex ex__clip_cross(const ex__clip_vertex *a, float da, const 
     return out;
 }
 
-/* Whether a polygon that needs no clipping lies wholly beyond one side of
-   the screen widened by two pixels (sx = ax (1 + 4 / width), sy likewise):
-   its corners then project at least two pixels outside the image, far more
-   than the projection's rounding, so its box holds no pixel centre and it
-   would be dropped after its projection; most of a level's triangles lie
-   beside the view, and this spares their projection and snapping. */
-static int ex__clip_off_screen(const ex__clip_vertex *poly, int n, float sx, float sy)
+/* Which clip planes (bit k for plane k of ex__clip_distance) a point in
+   view space lies outside. */
+static inline unsigned ex__clip_outside(const float p[3], float near_plane, float ax, float ay)
 {
-    int i, right = 0, left = 0, below = 0, above = 0;
-    for (i = 0; i < n; i++) {
-        right += poly[i].p[0] > sx * poly[i].p[2];
-        left += poly[i].p[0] < -sx * poly[i].p[2];
-        above += poly[i].p[1] > sy * poly[i].p[2];
-        below += poly[i].p[1] < -sy * poly[i].p[2];
-    }
-    return right == n || left == n || above == n || below == n;
+    unsigned bits = 0;
+    int plane;
+    for (plane = 0; plane < 5; plane++) bits |= (unsigned)(ex__clip_distance(p, plane, near_plane, ax, ay) < 0) << plane;
+    return bits;
+}
+
+/* Which sides of the screen widened by two pixels (sx = ax (1 + 4 / width),
+   sy likewise) a point in view space lies beyond: right, left, top,
+   bottom. A triangle needing no clipping whose corners all lie beyond one
+   side projects at least two pixels outside the image, far more than the
+   projection's rounding, so its box holds no pixel centre and it would be
+   dropped after its projection; most of a level's triangles lie beside
+   the view, and this spares their projection and snapping. */
+static inline unsigned ex__raster_side(const float p[3], float sx, float sy)
+{
+    return (unsigned)(p[0] > sx * p[2]) | (unsigned)(p[0] < -sx * p[2]) << 1 | (unsigned)(p[1] > sy * p[2]) << 2 |
+           (unsigned)(p[1] < -sy * p[2]) << 3;
 }
 
 /* Sutherland-Hodgman against the five planes; returns the vertex count.
    Most triangles lie wholly inside every plane or wholly outside one: they
-   are answered before any pass (with what the passes would give), and one
-   inside them all but beside the screen (ex__clip_off_screen, sx and sy)
-   counts as outside. */
-static int ex__clip_polygon(ex__clip_vertex *poly, int n, float near_plane, float ax, float ay, float sx, float sy)
+   are answered before any pass (with what the passes would give). */
+static int ex__clip_polygon(ex__clip_vertex *poly, int n, float near_plane, float ax, float ay)
 {
     ex__clip_vertex tmp[16];
     int plane, crossed = 0;
     for (plane = 0; plane < 5; plane++) {
         int i, inside = 0;
-        for (i = 0; i < n; i++) inside += ex__clip_distance(&poly[i], plane, near_plane, ax, ay) >= 0;
+        for (i = 0; i < n; i++) inside += ex__clip_distance(poly[i].p, plane, near_plane, ax, ay) >= 0;
         if (inside == 0) return 0;
         crossed |= inside < n;
     }
-    if (!crossed) return ex__clip_off_screen(poly, n, sx, sy) ? 0 : n;
+    if (!crossed) return n;
     for (plane = 0; plane < 5 && n > 0; plane++) {
         int i, m = 0;
         for (i = 0; i < n; i++) {
             const ex__clip_vertex *a = &poly[i], *b = &poly[(i + 1) % n];
-            float da = ex__clip_distance(a, plane, near_plane, ax, ay);
-            float db = ex__clip_distance(b, plane, near_plane, ax, ay);
+            float da = ex__clip_distance(a->p, plane, near_plane, ax, ay);
+            float db = ex__clip_distance(b->p, plane, near_plane, ax, ay);
             if (da >= 0) tmp[m++] = *a;
             if ((da >= 0) != (db >= 0)) tmp[m++] = ex__clip_cross(a, da, b, db);
         }
@@ -331,28 +368,26 @@ static int ex__raster_reserve(ex__raster_batch *batch, uint32_t tris)
     return 0;
 }
 
-/* Snaps one clipped triangle to the screen and appends it when it covers any
-   pixel centre's bounding box. */
-static void ex__raster_emit(const ex_raster *r, ex__raster_batch *batch, const ex__clip_vertex *a,
-                            const ex__clip_vertex *b, const ex__clip_vertex *d, uint32_t id)
+/* A point in view space snapped to the screen: 1/256 pixel, and 1 / depth. */
+static inline void ex__raster_snap(const ex_raster *r, const float p[3], int64_t *x, int64_t *y, float *inv_z)
 {
     const ex_camera *c = r->camera;
-    const ex__clip_vertex *cv[3];
+    float aspect = (float)r->width / (float)r->height, z = p[2];
+    float sx = (p[0] / (z * c->tan_half * aspect) + 1.0f) * 0.5f * (float)r->width;
+    float sy = (1.0f - p[1] / (z * c->tan_half)) * 0.5f * (float)r->height;
+    *x = (int64_t)floor((double)sx * EX_RASTER_SUBPIXEL + 0.5);
+    *y = (int64_t)floor((double)sy * EX_RASTER_SUBPIXEL + 0.5);
+    *inv_z = 1.0f / z;
+}
+
+/* Appends the snapped triangle at batch->tris[batch->count] (corners,
+   1 / depth and weights filled in) when it covers any pixel centre's
+   bounding box: turned to positive area, boxed, given its id. */
+static void ex__raster_finish(const ex_raster *r, ex__raster_batch *batch, uint32_t id)
+{
     ex_raster_tri *t = &batch->tris[batch->count];
-    float aspect = (float)r->width / (float)r->height;
     int64_t area, lo_x, hi_x, lo_y, hi_y;
     int k;
-    cv[0] = a; cv[1] = b; cv[2] = d;
-    for (k = 0; k < 3; k++) {
-        float z = cv[k]->p[2];
-        float sx = (cv[k]->p[0] / (z * c->tan_half * aspect) + 1.0f) * 0.5f * (float)r->width;
-        float sy = (1.0f - cv[k]->p[1] / (z * c->tan_half)) * 0.5f * (float)r->height;
-        t->x[k] = (int64_t)floor((double)sx * EX_RASTER_SUBPIXEL + 0.5);
-        t->y[k] = (int64_t)floor((double)sy * EX_RASTER_SUBPIXEL + 0.5);
-        t->inv_z[k] = 1.0f / z;
-        t->u[k] = cv[k]->u;
-        t->v[k] = cv[k]->v;
-    }
     area = (t->x[1] - t->x[0]) * (t->y[2] - t->y[0]) - (t->y[1] - t->y[0]) * (t->x[2] - t->x[0]);
     if (area == 0) return;
     if (area < 0) { /* make the edge functions positive inside */
@@ -386,49 +421,156 @@ static void ex__raster_emit(const ex_raster *r, ex__raster_batch *batch, const e
     batch->count++;
 }
 
+/* Snaps one clipped triangle to the screen and appends it when it covers any
+   pixel centre's bounding box. */
+static void ex__raster_emit(const ex_raster *r, ex__raster_batch *batch, const ex__clip_vertex *a,
+                            const ex__clip_vertex *b, const ex__clip_vertex *d, uint32_t id)
+{
+    ex_raster_tri *t = &batch->tris[batch->count];
+    const ex__clip_vertex *cv[3];
+    int k;
+    cv[0] = a; cv[1] = b; cv[2] = d;
+    for (k = 0; k < 3; k++) {
+        ex__raster_snap(r, cv[k]->p, &t->x[k], &t->y[k], &t->inv_z[k]);
+        t->u[k] = cv[k]->u;
+        t->v[k] = cv[k]->v;
+    }
+    ex__raster_finish(r, batch, id);
+}
+
+/* One vertex job: its vertices into view space, their clip planes and
+   screen sides, and those inside every clip plane snapped. */
+static void ex__raster_vertex_job(void *ctx, uint32_t index)
+{
+    ex_raster *r = (ex_raster *)ctx;
+    const ex_camera *c = r->camera;
+    const ex__raster_vertices *job = &r->vertex_jobs[index];
+    float aspect = (float)r->width / (float)r->height, ax = c->tan_half * aspect, ay = c->tan_half;
+    float sx = ax * (1.0f + 4.0f / (float)r->width), sy = ay * (1.0f + 4.0f / (float)r->height);
+    uint32_t i;
+    for (i = job->first; i < job->end; i++) {
+        const float *p = job->mesh->positions + 3 * (size_t)i;
+        ex__raster_vertex *v = &job->v[i];
+        float d[3];
+        d[0] = p[0] - c->eye[0];
+        d[1] = p[1] - c->eye[1];
+        d[2] = p[2] - c->eye[2];
+        v->p[0] = ex__dot(d, c->right);
+        v->p[1] = ex__dot(d, c->up);
+        v->p[2] = ex__dot(d, c->forward);
+        v->clip = ex__clip_outside(v->p, r->near_plane, ax, ay);
+        v->side = ex__raster_side(v->p, sx, sy);
+        if (v->clip == 0) ex__raster_snap(r, v->p, &v->x, &v->y, &v->inv_z);
+    }
+}
+
 /* One setup job: the batch's input triangles into r->batches[index],
-   transformed to view space, clipped and snapped. */
+   clipped and snapped. A triangle outside one clip plane is dropped, one
+   inside them all takes its corners' snapped positions (or is dropped
+   beside the screen), the others are clipped. */
 static void ex__raster_setup_job(void *ctx, uint32_t index)
 {
     ex_raster *r = (ex_raster *)ctx;
     const ex_camera *c = r->camera;
     ex__raster_batch *batch = &r->batches[index];
     const ex_raster_mesh *mesh = batch->mesh;
+    const ex__raster_vertex *vertices = batch->vertices->v;
+    uint32_t vertex_count = batch->vertices->count, i;
     float aspect = (float)r->width / (float)r->height, ax = c->tan_half * aspect, ay = c->tan_half;
-    float sx = ax * (1.0f + 4.0f / (float)r->width), sy = ay * (1.0f + 4.0f / (float)r->height);
-    uint32_t i;
     batch->count = 0;
     batch->failed = 0;
     for (i = batch->first; i < batch->end; i++) {
-        ex__clip_vertex poly[16];
+        const uint32_t *corner = mesh->indices + 3 * (size_t)i;
+        const ex__raster_vertex *v[3];
         int k, n;
-        if (ex__raster_reserve(batch, batch->count + 6) != 0) {
+        if (corner[0] >= vertex_count || corner[1] >= vertex_count || corner[2] >= vertex_count ||
+            ex__raster_reserve(batch, batch->count + 6) != 0) {
             batch->failed = 1;
             return;
         }
-        for (k = 0; k < 3; k++) {
-            const float *p = mesh->positions + 3 * (size_t)mesh->indices[3 * (size_t)i + (size_t)k];
-            float d[3];
-            d[0] = p[0] - c->eye[0];
-            d[1] = p[1] - c->eye[1];
-            d[2] = p[2] - c->eye[2];
-            poly[k].p[0] = ex__dot(d, c->right);
-            poly[k].p[1] = ex__dot(d, c->up);
-            poly[k].p[2] = ex__dot(d, c->forward);
-            poly[k].u = k == 1 ? 1.0f : 0.0f;
-            poly[k].v = k == 2 ? 1.0f : 0.0f;
+        for (k = 0; k < 3; k++) v[k] = &vertices[corner[k]];
+        if (v[0]->clip & v[1]->clip & v[2]->clip) continue;        /* outside one plane */
+        if ((v[0]->clip | v[1]->clip | v[2]->clip) == 0) {         /* nothing to clip */
+            ex_raster_tri *t = &batch->tris[batch->count];
+            if (v[0]->side & v[1]->side & v[2]->side) continue;    /* beside the screen */
+            for (k = 0; k < 3; k++) {
+                t->x[k] = v[k]->x;
+                t->y[k] = v[k]->y;
+                t->inv_z[k] = v[k]->inv_z;
+                t->u[k] = k == 1 ? 1.0f : 0.0f;
+                t->v[k] = k == 2 ? 1.0f : 0.0f;
+            }
+            ex__raster_finish(r, batch, mesh->id_base + i);
+        } else {
+            ex__clip_vertex poly[16];
+            for (k = 0; k < 3; k++) {
+                memcpy(poly[k].p, v[k]->p, sizeof poly[k].p);
+                poly[k].u = k == 1 ? 1.0f : 0.0f;
+                poly[k].v = k == 2 ? 1.0f : 0.0f;
+            }
+            n = ex__clip_polygon(poly, 3, r->near_plane, ax, ay);
+            for (k = 1; k + 1 < n; k++) ex__raster_emit(r, batch, &poly[0], &poly[k], &poly[k + 1], mesh->id_base + i);
         }
-        n = ex__clip_polygon(poly, 3, r->near_plane, ax, ay, sx, sy);
-        for (k = 1; k + 1 < n; k++) ex__raster_emit(r, batch, &poly[0], &poly[k], &poly[k + 1], mesh->id_base + i);
     }
 }
 
-/* Sets up the meshes' triangles in batches, in parallel on the pool; the
-   batches keep input order (meshes in turn), so the result does not depend
-   on the thread count. */
+/* A mesh's vertex count: as given, or one more than its largest index. */
+static uint32_t ex__raster_vertex_count(const ex_raster_mesh *mesh)
+{
+    uint32_t n = 0, i;
+    if (mesh->vertex_count > 0 || mesh->tri_count == 0) return mesh->vertex_count;
+    for (i = 0; i < 3 * mesh->tri_count; i++)
+        if (mesh->indices[i] >= n) n = mesh->indices[i] + 1;
+    return n;
+}
+
+/* Lays out the vertex jobs (one per mesh and EX__RASTER_BATCH vertices) and
+   room for every mesh's vertices; -1 when out of memory. */
+static int ex__raster_plan_vertices(ex_raster *r, const ex_raster_mesh *meshes, uint32_t mesh_count, uint32_t *jobs)
+{
+    size_t total = 0;
+    uint32_t m, i, count = 0;
+    for (m = 0; m < mesh_count; m++) {
+        uint32_t n = ex__raster_vertex_count(&meshes[m]);
+        if (meshes[m].tri_count == 0) continue;
+        total += n;
+        count += n / EX__RASTER_BATCH + 1;   /* + 1: a mesh always has a job, its vertex count */
+    }
+    if (total > r->vertex_capacity) {
+        ex__raster_vertex *p = (ex__raster_vertex *)realloc(r->vertices, total * sizeof *p);
+        if (!p) return -1;
+        r->vertices = p;
+        r->vertex_capacity = total;
+    }
+    if (count > r->vertex_job_capacity) {
+        ex__raster_vertices *p = (ex__raster_vertices *)realloc(r->vertex_jobs, (size_t)count * sizeof *p);
+        if (!p) return -1;
+        r->vertex_jobs = p;
+        r->vertex_job_capacity = count;
+    }
+    for (m = 0, total = 0, count = 0; m < mesh_count; m++) {
+        uint32_t n = ex__raster_vertex_count(&meshes[m]);
+        if (meshes[m].tri_count == 0) continue;
+        for (i = 0; i == 0 || i < n; i += EX__RASTER_BATCH, count++) {
+            ex__raster_vertices *job = &r->vertex_jobs[count];
+            job->mesh = &meshes[m];
+            job->v = r->vertices + total;
+            job->count = n;
+            job->first = i;
+            job->end = n - i > EX__RASTER_BATCH ? i + EX__RASTER_BATCH : n;
+        }
+        total += n;
+    }
+    *jobs = count;
+    return 0;
+}
+
+/* Sets up the meshes' triangles in batches, in parallel on the pool, after
+   their vertices; the batches keep input order (meshes in turn), so the
+   result does not depend on the thread count. */
 static int ex__raster_setup(ex_raster *r, const ex_camera *c, const ex_raster_mesh *meshes, uint32_t mesh_count)
 {
-    uint32_t batches = 0, i, m, b;
+    uint32_t batches = 0, jobs, i, m, b, j;
     for (m = 0; m < mesh_count; m++) {
         uint32_t n = meshes[m].tri_count / EX__RASTER_BATCH + (meshes[m].tri_count % EX__RASTER_BATCH != 0);
         if (n >= (1u << (32 - EX__RASTER_BATCH_BITS)) - batches) return -1;   /* bin items would overflow */
@@ -441,14 +583,20 @@ static int ex__raster_setup(ex_raster *r, const ex_camera *c, const ex_raster_me
         r->batches = p;
         r->batch_capacity = batches;
     }
+    if (ex__raster_plan_vertices(r, meshes, mesh_count, &jobs) != 0) return -1;
     r->batch_count = batches;
     r->camera = c;
-    for (m = 0, b = 0; m < mesh_count; m++)
+    for (m = 0, b = 0, j = 0; m < mesh_count; m++) {
+        if (meshes[m].tri_count == 0) continue;
         for (i = 0; i < meshes[m].tri_count; i += EX__RASTER_BATCH, b++) {
             r->batches[b].mesh = &meshes[m];
+            r->batches[b].vertices = &r->vertex_jobs[j];
             r->batches[b].first = i;
             r->batches[b].end = meshes[m].tri_count - i > EX__RASTER_BATCH ? i + EX__RASTER_BATCH : meshes[m].tri_count;
         }
+        while (j < jobs && r->vertex_jobs[j].mesh == &meshes[m]) j++;
+    }
+    ex_pool_parallel_for(r->pool, ex__raster_vertex_job, r, jobs);
     ex_pool_parallel_for(r->pool, ex__raster_setup_job, r, batches);
     for (i = 0; i < batches; i++)
         if (r->batches[i].failed) return -1;
@@ -534,7 +682,7 @@ typedef struct ex__raster_edges {
 
 /* Starts triangle t's edges at the top-left pixel of its box within the
    tile's [tx0, tx1] x [ty0, ty1]; 0 when the boxes do not meet. */
-static int ex__raster_edges_begin(const ex_raster_tri *t, int tx0, int ty0, int tx1, int ty1, ex__raster_edges *e)
+static inline int ex__raster_edges_begin(const ex_raster_tri *t, int tx0, int ty0, int tx1, int ty1, ex__raster_edges *e)
 {
     int64_t px0, py0;
     int k;
@@ -569,7 +717,7 @@ static int ex__raster_edges_begin(const ex_raster_tri *t, int tx0, int ty0, int 
 
 /* The current row's covered pixels, as offsets [*lo, *hi] from e->x0 (empty
    when *lo > *hi): exactly the pixels whose three edge tests pass. */
-static void ex__raster_edges_span(const ex__raster_edges *e, int64_t *lo, int64_t *hi)
+static inline void ex__raster_edges_span(const ex__raster_edges *e, int64_t *lo, int64_t *hi)
 {
     int k;
     *lo = 0;
@@ -585,7 +733,7 @@ static void ex__raster_edges_span(const ex__raster_edges *e, int64_t *lo, int64_
     }
 }
 
-static void ex__raster_edges_next_row(ex__raster_edges *e)
+static inline void ex__raster_edges_next_row(ex__raster_edges *e)
 {
     int k;
     for (k = 0; k < 3; k++) {
@@ -612,7 +760,6 @@ static void ex__raster_tri_count(ex_raster *r, const ex_raster_tri *t, int tx0, 
 
 #define EX__RASTER_TILE_PIXELS (EX_RASTER_TILE * EX_RASTER_TILE)
 #define EX__RASTER_NONE 0xFFFFFFFFu
-#define EX__RASTER_LANES 8        /* pixels of a span depth-tested together (SIMD lanes where the compiler makes them) */
 
 /* One tile's buffers, in the tile job's own memory (they stay in the
    core's cache): per pixel, the nearest triangle drawn so far in this pass
@@ -621,11 +768,9 @@ static void ex__raster_tri_count(ex_raster *r, const ex_raster_tri *t, int tx0, 
    triangle that won, so overdraw costs a depth test and nothing more.
    Pixel (x, y) of the tile is index (y - y0) * EX_RASTER_TILE + (x - x0). */
 typedef struct ex__raster_local {
-    /* the depth test's buffers run EX__RASTER_LANES - 1 past the tile's
-       last pixel: a span is tested a whole group of lanes at a time */
-    float inv_z[EX__RASTER_TILE_PIXELS + EX__RASTER_LANES];   /* 1 / depth of this pass's winner; 0 where none */
-    float z[EX__RASTER_TILE_PIXELS + EX__RASTER_LANES];       /* depth: the winner's, else the frame's (FLT_MAX cleared) */
-    uint32_t ref[EX__RASTER_TILE_PIXELS + EX__RASTER_LANES];  /* the winner's position in r->bin_items, EX__RASTER_NONE where none */
+    float inv_z[EX__RASTER_TILE_PIXELS];   /* 1 / depth of this pass's winner; 0 where none */
+    float z[EX__RASTER_TILE_PIXELS];       /* depth: the winner's, else the frame's (FLT_MAX cleared) */
+    uint32_t ref[EX__RASTER_TILE_PIXELS];  /* the winner's position in r->bin_items, EX__RASTER_NONE where none */
     uint32_t id[EX__RASTER_TILE_PIXELS];   /* resolved: as the frame's id and bary */
     float bary[2 * EX__RASTER_TILE_PIXELS];
 } ex__raster_local;
@@ -643,7 +788,6 @@ static void ex__raster_local_begin(const ex_raster *r, ex__raster_local *L, int 
     int x, y, n = x1 - x0 + 1;
     memset(L->inv_z, 0, sizeof L->inv_z);
     memset(L->ref, 0xFF, sizeof L->ref);
-    for (x = 0; x < EX__RASTER_LANES; x++) L->z[EX__RASTER_TILE_PIXELS + x] = 0.0f;   /* lanes past the tile */
     for (y = y0; y <= y1; y++) {
         int q = (y - y0) * EX_RASTER_TILE;
         size_t p = (size_t)y * (size_t)r->width + (size_t)x0;
@@ -678,7 +822,7 @@ static void ex__raster_tri_depth(ex__raster_local *L, const ex_raster_tri *t, ui
     for (y = e.y0; y <= e.y1; y++, ex__raster_edges_next_row(&e)) {
         int q = (y - ty0) * EX_RASTER_TILE + (e.x0 - tx0);
         int64_t lo, hi;
-        int c, i, n;
+        int i, n;
         double w0, w1, w2, d0 = (double)e.step[0], d1 = (double)e.step[1], d2 = (double)e.step[2];
         float *inv_z, *z;
         uint32_t *refs;
@@ -691,18 +835,17 @@ static void ex__raster_tri_depth(ex__raster_local *L, const ex_raster_tri *t, ui
         w0 = (double)(e.row[0] - e.step[0] * lo);
         w1 = (double)(e.row[1] - e.step[1] * lo);
         w2 = (double)(e.row[2] - e.step[2] * lo);
-        for (c = 0; c < n; c += EX__RASTER_LANES)   /* whole groups of lanes: no scalar tail (lanes past the span lose) */
-            for (i = c; i < c + EX__RASTER_LANES; i++) {
-                double x = (double)i;
-                float a0 = (float)(w0 - d0 * x) * area * z0;
-                float a1 = (float)(w1 - d1 * x) * area * z1;
-                float a2 = (float)(w2 - d2 * x) * area * z2;
-                float sum = a0 + a1 + a2, depth = 1.0f / sum;
-                int win = (i < n) & (sum > inv_z[i]) & (depth < z[i]);
-                inv_z[i] = win ? sum : inv_z[i];
-                z[i] = win ? depth : z[i];
-                refs[i] = win ? ref : refs[i];
-            }
+        for (i = 0; i < n; i++) {
+            double x = (double)i;
+            float a0 = (float)(w0 - d0 * x) * area * z0;
+            float a1 = (float)(w1 - d1 * x) * area * z1;
+            float a2 = (float)(w2 - d2 * x) * area * z2;
+            float sum = a0 + a1 + a2, depth = 1.0f / sum;
+            int win = (sum > inv_z[i]) & (depth < z[i]);
+            inv_z[i] = win ? sum : inv_z[i];
+            z[i] = win ? depth : z[i];
+            refs[i] = win ? ref : refs[i];
+        }
     }
 }
 
@@ -835,6 +978,7 @@ EX_FN int ex_raster_draw(ex_raster *r, const ex_camera *c, const float *position
     mesh.indices = indices;
     mesh.tri_count = tri_count;
     mesh.id_base = id_base;
+    mesh.vertex_count = 0;
     if (r) r->counting = 0;
     return ex__raster_run(r, c, &mesh, 1);
 }
@@ -861,6 +1005,7 @@ EX_FN int ex_raster_count(ex_raster *r, const ex_camera *c, const float *positio
     mesh.indices = indices;
     mesh.tri_count = tri_count;
     mesh.id_base = 0;
+    mesh.vertex_count = 0;
     r->counting = 1;
     result = ex__raster_run(r, c, &mesh, 1);
     r->counting = 0;
