@@ -791,12 +791,8 @@ static void ex__raster_local_begin(const ex_raster *r, ex__raster_local *L, int 
     for (y = y0; y <= y1; y++) {
         int q = (y - y0) * EX_RASTER_TILE;
         size_t p = (size_t)y * (size_t)r->width + (size_t)x0;
-        if (r->clear_pending) {
-            for (x = 0; x < n; x++) {
-                L->z[q + x] = FLT_MAX;
-                L->id[q + x] = EX_RASTER_EMPTY;
-                L->bary[2 * (q + x)] = L->bary[2 * (q + x) + 1] = 0.0f;
-            }
+        if (r->clear_pending) {   /* ids and barycentrics: ex__raster_resolve writes every pixel */
+            for (x = 0; x < n; x++) L->z[q + x] = FLT_MAX;
         } else {
             memcpy(L->z + q, r->depth + p, (size_t)n * sizeof(float));
             memcpy(L->id + q, r->id + p, (size_t)n * sizeof(uint32_t));
@@ -867,7 +863,14 @@ static void ex__raster_resolve(const ex_raster *r, ex__raster_local *L, int x0, 
             double w[3], d[3];
             int64_t px, py;
             int end = x + 1, i, k;
-            if (refs[x] == EX__RASTER_NONE) { x++; continue; }
+            if (refs[x] == EX__RASTER_NONE) {   /* not drawn: the frame's pixel, or empty when cleared */
+                if (r->clear_pending) {
+                    L->id[q + x] = EX_RASTER_EMPTY;
+                    L->bary[2 * (q + x)] = L->bary[2 * (q + x) + 1] = 0.0f;
+                }
+                x++;
+                continue;
+            }
             while (end < n && refs[end] == refs[x]) end++;
             t = ex__raster_item(r, refs[x]);
             px = (int64_t)(x0 + x) * EX_RASTER_SUBPIXEL + EX_RASTER_SUBPIXEL / 2;
