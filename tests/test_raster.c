@@ -128,6 +128,104 @@ static void test_clipped_floor_covers_once(void)
     free_grid(&g);
 }
 
+/* The reference for one input triangle: transformed, clipped with nothing
+   counted off screen, snapped as the raster snaps (ex__raster_emit), and
+   each pixel centre in the image tested against the three edge functions
+   in 64-bit integers with the tie rule: the coverage a per-pixel
+   rasterizer gives, to compare with the span walk and the early rejection. */
+static void reference_count(ex_raster *r, const ex_camera *c, const float *pos, const uint32_t *idx, uint32_t tri,
+                            uint32_t *coverage)
+{
+    float aspect = (float)r->width / (float)r->height;
+    ex__clip_vertex poly[16];
+    ex__raster_batch batch;
+    uint32_t i;
+    int k, n, x, y;
+    memset(&batch, 0, sizeof batch);
+    if (ex__raster_reserve(&batch, 6) != 0) return;
+    for (k = 0; k < 3; k++) {
+        const float *p = pos + 3 * (size_t)idx[3 * tri + (uint32_t)k];
+        float d[3] = { p[0] - c->eye[0], p[1] - c->eye[1], p[2] - c->eye[2] };
+        poly[k].p[0] = ex__dot(d, c->right);
+        poly[k].p[1] = ex__dot(d, c->up);
+        poly[k].p[2] = ex__dot(d, c->forward);
+        poly[k].u = poly[k].v = 0.0f;
+    }
+    r->camera = c;
+    n = ex__clip_polygon(poly, 3, r->near_plane, c->tan_half * aspect, c->tan_half);
+    for (k = 1; k + 1 < n; k++) ex__raster_emit(r, &batch, &poly[0], &poly[k], &poly[k + 1], tri);
+    for (i = 0; i < batch.count; i++) {
+        const ex_raster_tri *t = &batch.tris[i];
+        for (y = 0; y < r->height; y++)
+            for (x = 0; x < r->width; x++) {
+                int64_t px = (int64_t)x * EX_RASTER_SUBPIXEL + EX_RASTER_SUBPIXEL / 2;
+                int64_t py = (int64_t)y * EX_RASTER_SUBPIXEL + EX_RASTER_SUBPIXEL / 2;
+                int inside = 1;
+                for (k = 0; k < 3; k++) {
+                    int a = (k + 1) % 3, b = (k + 2) % 3;
+                    int64_t dx = t->x[b] - t->x[a], dy = t->y[b] - t->y[a];
+                    inside &= dx * (py - t->y[a]) - dy * (px - t->x[a]) + ex__edge_owns_ties(dx, dy) > 0;
+                }
+                coverage[y * r->width + x] += (uint32_t)inside;
+            }
+    }
+    free(batch.tris);
+}
+
+/* Random triangles of every kind (slivers, large ones crossing the guard
+   band and the near plane, ones just beside the screen within and beyond
+   its two-pixel margin, ones behind the eye) cover exactly the pixels the
+   per-pixel reference covers: the rows' spans, stepped from row to row,
+   and the rejection of triangles beside the screen drop no pixel and add
+   none. */
+static void test_spans_equal_pixel_tests(void)
+{
+    const int W = 61, H = 47;
+    float eye[3] = { 0.5f, 1.0f, -2.0f }, target[3] = { 0.2f, 0.8f, 3.0f }, up[3] = { 0, 1, 0 };
+    ex_camera c = ex_camera_look_at(eye, target, up, 65.0f, W, H);
+    ex_raster r;
+    float *pos = (float *)malloc(sizeof(float) * 9 * 4000);
+    uint32_t *idx = (uint32_t *)malloc(sizeof(uint32_t) * 3 * 4000), *ref = (uint32_t *)calloc((size_t)(W * H), sizeof(uint32_t));
+    uint64_t state = 12345;
+    uint32_t t, tris = 4000;
+    int p, mismatches = 0, covered = 0;
+    if (!CHECK(pos && idx && ref && ex_raster_init(&r, W, H) == 0)) return;
+    for (t = 0; t < tris; t++) {
+        int kind = (int)(t % 5), k;
+        float cx = 0, cy = 0;
+        for (k = 0; k < 3; k++) {
+            float px, py, depth, d[3], u[4];
+            int j;
+            for (j = 0; j < 4; j++) {
+                state = state * 6364136223846793005ull + 1442695040888963407ull;
+                u[j] = (float)(state >> 40) / (float)(1ull << 24);
+            }
+            if (k == 0) { cx = (u[0] * 1.6f - 0.3f) * (float)W; cy = (u[1] * 1.6f - 0.3f) * (float)H; }
+            if (kind == 0) { px = cx + 6.0f * u[2]; py = cy + 6.0f * u[3]; depth = 2.0f + u[0]; }              /* small */
+            else if (kind == 1) { px = cx + 0.3f * u[2]; py = cy + 40.0f * u[3]; depth = 1.0f + 9.0f * u[1]; } /* sliver */
+            else if (kind == 2) { px = (u[2] * 40.0f - 20.0f) * (float)W; py = (u[3] * 40.0f - 20.0f) * (float)H; depth = 50.0f * u[0] - 5.0f; }
+            else if (kind == 3) { px = (float)W + 0.05f + 3.5f * u[2]; py = cy + 8.0f * u[3]; depth = 1.0f + u[1]; } /* beside, right */
+            else { px = cx + 8.0f * u[2]; py = -0.05f - 3.5f * u[3]; depth = 1.0f + u[1]; }                       /* above */
+            ex_camera_ray(&c, px, py, d);
+            for (j = 0; j < 3; j++) pos[9 * t + 3 * (uint32_t)k + (uint32_t)j] = eye[j] + depth * d[j];
+            idx[3 * t + (uint32_t)k] = 3 * t + (uint32_t)k;
+        }
+        reference_count(&r, &c, pos, idx, t, ref);
+    }
+    ex_raster_clear(&r);
+    CHECK(ex_raster_count(&r, &c, pos, idx, tris) == 0);
+    for (p = 0; p < W * H; p++) {
+        mismatches += r.coverage[p] != ref[p];
+        covered += ref[p] > 0;
+    }
+    CHECK_EQ_INT(mismatches, 0);
+    CHECK(covered > W * H / 2);
+    ex_raster_free(&r);
+    free(pos);
+    free(idx);
+    free(ref);
+}
+
 /* Barycentrics reconstruct a point that projects back onto the pixel centre,
    and the depth buffer holds its view depth. */
 static void test_perspective_correct_barycentrics(void)
@@ -256,7 +354,9 @@ static void test_draw_meshes_equals_draws(void)
     if (!CHECK(seen.depth && seen.bary && seen.id && ex_raster_init(&a, W, H) == 0 && ex_raster_init(&b, W, H) == 0))
         return;
     m[0].positions = floor.pos; m[0].indices = floor.idx; m[0].tri_count = floor.tris; m[0].id_base = 0;
+    m[0].vertex_count = floor.verts;
     m[1].positions = patch.pos; m[1].indices = patch.idx; m[1].tri_count = patch.tris; m[1].id_base = 50000;
+    m[1].vertex_count = 0;   /* found from the indices */
     m[2] = m[0];
     m[2].id_base = 100000;
     ex_raster_clear(&a);
@@ -327,6 +427,15 @@ static void test_bad_arguments(void)
     CHECK(ex_raster_draw(&r, &wrong, NULL, NULL, 1, 0) != 0);
     CHECK(ex_raster_draw(&r, &c, NULL, NULL, 1, 0) != 0);
     CHECK(ex_raster_draw(&r, &c, NULL, NULL, 0, 0) == 0);
+    {   /* an index past the vertex count given */
+        static const float pos[] = { -1, -1, 2, 1, -1, 2, 0, 1, 2 };
+        static const uint32_t idx[] = { 0, 1, 2 };
+        ex_raster_mesh m;
+        m.positions = pos; m.indices = idx; m.tri_count = 1; m.id_base = 0; m.vertex_count = 2;
+        CHECK(ex_raster_draw_meshes(&r, &c, &m, 1) != 0);
+        m.vertex_count = 3;
+        CHECK(ex_raster_draw_meshes(&r, &c, &m, 1) == 0);
+    }
     ex_raster_free(&r);
 }
 
@@ -336,6 +445,7 @@ int main(int argc, char **argv)
     RUN(test_mesh_covers_every_pixel_once);
     RUN(test_ties_on_pixel_centres);
     RUN(test_clipped_floor_covers_once);
+    RUN(test_spans_equal_pixel_tests);
     RUN(test_perspective_correct_barycentrics);
     RUN(test_depth_order);
     RUN(test_parallel_equals_serial);

@@ -500,7 +500,7 @@ static void test_bunny_darkens_in_volume(void)
                         wt_bunny_transform(w, t[k], m);
                         wt_bunny_light(w, vol, vis, m, pos, nrm, rgb);
                         CHECK(wt_raster_scene(w, &ra, &c, w->office.positions, w->office.tri_indices,
-                                              w->office.tri_count, pos) == 0);
+                                              w->office.tri_count, w->office.vertex_count, pos) == 0);
                         ex_raster_resolve_gouraud(&ra, w->bunny.tri_indices, w->bunny.tri_count, w->office.tri_count,
                                                   rgb, img);
                         for (p = 0; p < W * H; p++)
@@ -546,7 +546,8 @@ static void test_raster_matches_tracer(void)
         rendercache_camera c = wt_camera(&o, t, W, H);
         wt_set_time(w, t);
         for (v = 0; v < w->bunny.vertex_count; v++) ex__affine_point(w->pose, w->bunny.positions + 3 * (size_t)v, pos + 3 * (size_t)v);
-        CHECK(wt_raster_scene(w, &ra, &c, w->office.positions, w->office.tri_indices, w->office.tri_count, pos) == 0);
+        CHECK(wt_raster_scene(w, &ra, &c, w->office.positions, w->office.tri_indices, w->office.tri_count,
+                              w->office.vertex_count, pos) == 0);
         for (y = 0; y < H; y++)
             for (x = 0; x < W; x++) {
                 float org[3], dir[3];

@@ -9,7 +9,8 @@
        ex_raster_draw(&r, &camera, positions, indices, tri_count, 0);
        ex_raster_draw(&r, &camera, bunny_pos, bunny_idx, bunny_tris, tri_count);
        ... r.id[p] (EX_RASTER_EMPTY or id_base + triangle), r.bary[2p], r.bary[2p+1]
-       // or both meshes in one pass: ex_raster_draw_meshes(&r, &camera, meshes, 2)
+       // or both meshes in one pass: ex_raster_draw_meshes(&r, &camera, meshes, 2),
+       // each ex_raster_mesh with its vertex_count (0: found from the indices)
        ex_raster_free(&r);
 
    A frame can instead leave the clear to its draw (ex_raster_clear_deferred:
@@ -19,7 +20,10 @@
    buffers while they are in the cache); r.skip then spares the frame
    buffers nobody else reads.
 
-   How a tile is drawn: triangles are set up in parallel batches and binned
+   How a tile is drawn: each mesh vertex is taken to view space, tested
+   against the clip planes and snapped to the screen once per draw (the
+   walkthrough's vertices are shared by six triangles on average);
+   triangles are set up from their corners in parallel batches and binned
    to the 64 x 64 tiles they overlap, in input order; each tile job draws
    its bin into a visibility buffer of its own (depth and the winning
    triangle per pixel; only depth is tested, as 1/z, and z divided out only
@@ -41,11 +45,12 @@
    convention), so a pixel centre inside a mesh is covered by exactly one of
    its triangles: no cracks, no double coverage along shared edges or at shared
    vertices. Each row's covered span is found by solving the three edge
-   inequalities for x in the same integers, so only covered pixels are
-   visited. ex_raster_count() counts coverage instead of depth testing, to
+   inequalities for x in the same integers (the quotients stepped from row
+   to row, no division per row), so only covered pixels are visited. ex_raster_count() counts coverage instead of depth testing, to
    check exactly that. Triangles are clipped against the near plane and a
    guard band in view space (clip points computed the same way for both
-   triangles of a shared edge). Both faces are drawn (no culling). Only
+   triangles of a shared edge); one wholly beside the screen is dropped
+   before its projection. Both faces are drawn (no culling). Only
    perspective cameras rasterize. */
 #ifndef EXAMPLES_COMMON_RASTER_H
 #define EXAMPLES_COMMON_RASTER_H
@@ -74,12 +79,35 @@ typedef struct ex_raster_tri {
 } ex_raster_tri;
 
 /* Triangles of one draw: xyz positions, 3 indices per triangle; their pixel
-   ids are id_base + triangle index. */
+   ids are id_base + triangle index. vertex_count is the number of
+   positions (a draw with an index at or past it fails), or 0: one more
+   than the largest index, found by reading the indices. */
 typedef struct ex_raster_mesh {
     const float *positions;
     const uint32_t *indices;
     uint32_t tri_count, id_base;
+    uint32_t vertex_count;
 } ex_raster_mesh;
+
+/* A mesh vertex as every triangle that shares it sees it: in view space,
+   which clip planes and sides of the screen it lies beyond, and, when it
+   lies inside every clip plane, snapped to the screen. The setup computes
+   each vertex once per draw instead of once per triangle corner. */
+typedef struct ex__raster_vertex {
+    float p[3];                  /* view space */
+    float inv_z;                 /* 1 / p[2] (where snapped) */
+    int64_t x, y;                /* snapped screen position, 1/256 pixel (where clip = 0) */
+    unsigned clip;               /* bit k: outside clip plane k (ex__clip_distance) */
+    unsigned side;               /* bits: beyond the widened screen's right, left, top, bottom (ex__raster_side) */
+} ex__raster_vertex;
+
+/* The vertices of one mesh, or the part of them one setup job transforms. */
+typedef struct ex__raster_vertices {
+    const ex_raster_mesh *mesh;
+    ex__raster_vertex *v;        /* the mesh's vertex 0 */
+    uint32_t count;              /* the mesh's vertex count */
+    uint32_t first, end;         /* this job's vertices */
+} ex__raster_vertices;
 
 /* The snapped triangles of one batch of at most EX__RASTER_BATCH input
    triangles of one mesh: the setup's parallel jobs each fill one, in input
@@ -88,8 +116,9 @@ typedef struct ex__raster_batch {
     ex_raster_tri *tris;
     uint32_t count, capacity;
     const ex_raster_mesh *mesh;  /* its input: triangles [first, end) of mesh */
+    const ex__raster_vertices *vertices;   /* the mesh's transformed vertices */
     uint32_t first, end;
-    int failed;                  /* out of memory */
+    int failed;                  /* out of memory, or an index past the vertices */
 } ex__raster_batch;
 
 /* A finished tile as ex_raster.tile_done sees it: its pixels [x0, x1) x
@@ -119,6 +148,10 @@ typedef struct ex_raster {
     /* scratch reused by every draw */
     ex__raster_batch *batches;
     uint32_t batch_count, batch_capacity;
+    ex__raster_vertex *vertices;           /* every mesh's, in turn */
+    size_t vertex_capacity;
+    ex__raster_vertices *vertex_jobs;      /* one per mesh and EX__RASTER_BATCH vertices */
+    uint32_t vertex_job_capacity;
     const ex_camera *camera;     /* the draw in progress (read by the setup jobs) */
     uint32_t *bin_start, *bin_items, bin_capacity;   /* items: batch << EX__RASTER_BATCH_BITS | index */
     int tiles_x, tiles_y;
@@ -149,6 +182,8 @@ EX_FN void ex_raster_free(ex_raster *r)
     if (r->batches)
         for (i = 0; i < r->batch_capacity; i++) free(r->batches[i].tris);
     free(r->batches);
+    free(r->vertices);
+    free(r->vertex_jobs);
     free(r->bin_start);
     free(r->bin_items);
     memset(r, 0, sizeof *r);
@@ -229,14 +264,14 @@ EX_FN void ex_raster_clear_deferred(ex_raster *r)
 typedef struct ex__clip_vertex { float p[3]; float u, v; } ex__clip_vertex;
 
 /* Signed distance to a clip plane (inside >= 0). Planes: 0 near, 1-4 guard band. */
-static float ex__clip_distance(const ex__clip_vertex *v, int plane, float near_plane, float ax, float ay)
+static inline float ex__clip_distance(const float p[3], int plane, float near_plane, float ax, float ay)
 {
     switch (plane) {
-    case 0: return v->p[2] - near_plane;
-    case 1: return EX_RASTER_GUARD * ax * v->p[2] - v->p[0];
-    case 2: return EX_RASTER_GUARD * ax * v->p[2] + v->p[0];
-    case 3: return EX_RASTER_GUARD * ay * v->p[2] - v->p[1];
-    default: return EX_RASTER_GUARD * ay * v->p[2] + v->p[1];
+    case 0: return p[2] - near_plane;
+    case 1: return EX_RASTER_GUARD * ax * p[2] - p[0];
+    case 2: return EX_RASTER_GUARD * ax * p[2] + p[0];
+    case 3: return EX_RASTER_GUARD * ay * p[2] - p[1];
+    default: return EX_RASTER_GUARD * ay * p[2] + p[1];
     }
 }
 
@@ -261,6 +296,29 @@ static ex__clip_vertex ex__clip_cross(const ex__clip_vertex *a, float da, const 
     return out;
 }
 
+/* Which clip planes (bit k for plane k of ex__clip_distance) a point in
+   view space lies outside. */
+static inline unsigned ex__clip_outside(const float p[3], float near_plane, float ax, float ay)
+{
+    unsigned bits = 0;
+    int plane;
+    for (plane = 0; plane < 5; plane++) bits |= (unsigned)(ex__clip_distance(p, plane, near_plane, ax, ay) < 0) << plane;
+    return bits;
+}
+
+/* Which sides of the screen widened by two pixels (sx = ax (1 + 4 / width),
+   sy likewise) a point in view space lies beyond: right, left, top,
+   bottom. A triangle needing no clipping whose corners all lie beyond one
+   side projects at least two pixels outside the image, far more than the
+   projection's rounding, so its box holds no pixel centre and it would be
+   dropped after its projection; most of a level's triangles lie beside
+   the view, and this spares their projection and snapping. */
+static inline unsigned ex__raster_side(const float p[3], float sx, float sy)
+{
+    return (unsigned)(p[0] > sx * p[2]) | (unsigned)(p[0] < -sx * p[2]) << 1 | (unsigned)(p[1] > sy * p[2]) << 2 |
+           (unsigned)(p[1] < -sy * p[2]) << 3;
+}
+
 /* Sutherland-Hodgman against the five planes; returns the vertex count.
    Most triangles lie wholly inside every plane or wholly outside one: they
    are answered before any pass (with what the passes would give). */
@@ -270,7 +328,7 @@ static int ex__clip_polygon(ex__clip_vertex *poly, int n, float near_plane, floa
     int plane, crossed = 0;
     for (plane = 0; plane < 5; plane++) {
         int i, inside = 0;
-        for (i = 0; i < n; i++) inside += ex__clip_distance(&poly[i], plane, near_plane, ax, ay) >= 0;
+        for (i = 0; i < n; i++) inside += ex__clip_distance(poly[i].p, plane, near_plane, ax, ay) >= 0;
         if (inside == 0) return 0;
         crossed |= inside < n;
     }
@@ -279,8 +337,8 @@ static int ex__clip_polygon(ex__clip_vertex *poly, int n, float near_plane, floa
         int i, m = 0;
         for (i = 0; i < n; i++) {
             const ex__clip_vertex *a = &poly[i], *b = &poly[(i + 1) % n];
-            float da = ex__clip_distance(a, plane, near_plane, ax, ay);
-            float db = ex__clip_distance(b, plane, near_plane, ax, ay);
+            float da = ex__clip_distance(a->p, plane, near_plane, ax, ay);
+            float db = ex__clip_distance(b->p, plane, near_plane, ax, ay);
             if (da >= 0) tmp[m++] = *a;
             if ((da >= 0) != (db >= 0)) tmp[m++] = ex__clip_cross(a, da, b, db);
         }
@@ -310,28 +368,26 @@ static int ex__raster_reserve(ex__raster_batch *batch, uint32_t tris)
     return 0;
 }
 
-/* Snaps one clipped triangle to the screen and appends it when it covers any
-   pixel centre's bounding box. */
-static void ex__raster_emit(const ex_raster *r, ex__raster_batch *batch, const ex__clip_vertex *a,
-                            const ex__clip_vertex *b, const ex__clip_vertex *d, uint32_t id)
+/* A point in view space snapped to the screen: 1/256 pixel, and 1 / depth. */
+static inline void ex__raster_snap(const ex_raster *r, const float p[3], int64_t *x, int64_t *y, float *inv_z)
 {
     const ex_camera *c = r->camera;
-    const ex__clip_vertex *cv[3];
+    float aspect = (float)r->width / (float)r->height, z = p[2];
+    float sx = (p[0] / (z * c->tan_half * aspect) + 1.0f) * 0.5f * (float)r->width;
+    float sy = (1.0f - p[1] / (z * c->tan_half)) * 0.5f * (float)r->height;
+    *x = (int64_t)floor((double)sx * EX_RASTER_SUBPIXEL + 0.5);
+    *y = (int64_t)floor((double)sy * EX_RASTER_SUBPIXEL + 0.5);
+    *inv_z = 1.0f / z;
+}
+
+/* Appends the snapped triangle at batch->tris[batch->count] (corners,
+   1 / depth and weights filled in) when it covers any pixel centre's
+   bounding box: turned to positive area, boxed, given its id. */
+static void ex__raster_finish(const ex_raster *r, ex__raster_batch *batch, uint32_t id)
+{
     ex_raster_tri *t = &batch->tris[batch->count];
-    float aspect = (float)r->width / (float)r->height;
     int64_t area, lo_x, hi_x, lo_y, hi_y;
     int k;
-    cv[0] = a; cv[1] = b; cv[2] = d;
-    for (k = 0; k < 3; k++) {
-        float z = cv[k]->p[2];
-        float sx = (cv[k]->p[0] / (z * c->tan_half * aspect) + 1.0f) * 0.5f * (float)r->width;
-        float sy = (1.0f - cv[k]->p[1] / (z * c->tan_half)) * 0.5f * (float)r->height;
-        t->x[k] = (int64_t)floor((double)sx * EX_RASTER_SUBPIXEL + 0.5);
-        t->y[k] = (int64_t)floor((double)sy * EX_RASTER_SUBPIXEL + 0.5);
-        t->inv_z[k] = 1.0f / z;
-        t->u[k] = cv[k]->u;
-        t->v[k] = cv[k]->v;
-    }
     area = (t->x[1] - t->x[0]) * (t->y[2] - t->y[0]) - (t->y[1] - t->y[0]) * (t->x[2] - t->x[0]);
     if (area == 0) return;
     if (area < 0) { /* make the edge functions positive inside */
@@ -365,48 +421,156 @@ static void ex__raster_emit(const ex_raster *r, ex__raster_batch *batch, const e
     batch->count++;
 }
 
+/* Snaps one clipped triangle to the screen and appends it when it covers any
+   pixel centre's bounding box. */
+static void ex__raster_emit(const ex_raster *r, ex__raster_batch *batch, const ex__clip_vertex *a,
+                            const ex__clip_vertex *b, const ex__clip_vertex *d, uint32_t id)
+{
+    ex_raster_tri *t = &batch->tris[batch->count];
+    const ex__clip_vertex *cv[3];
+    int k;
+    cv[0] = a; cv[1] = b; cv[2] = d;
+    for (k = 0; k < 3; k++) {
+        ex__raster_snap(r, cv[k]->p, &t->x[k], &t->y[k], &t->inv_z[k]);
+        t->u[k] = cv[k]->u;
+        t->v[k] = cv[k]->v;
+    }
+    ex__raster_finish(r, batch, id);
+}
+
+/* One vertex job: its vertices into view space, their clip planes and
+   screen sides, and those inside every clip plane snapped. */
+static void ex__raster_vertex_job(void *ctx, uint32_t index)
+{
+    ex_raster *r = (ex_raster *)ctx;
+    const ex_camera *c = r->camera;
+    const ex__raster_vertices *job = &r->vertex_jobs[index];
+    float aspect = (float)r->width / (float)r->height, ax = c->tan_half * aspect, ay = c->tan_half;
+    float sx = ax * (1.0f + 4.0f / (float)r->width), sy = ay * (1.0f + 4.0f / (float)r->height);
+    uint32_t i;
+    for (i = job->first; i < job->end; i++) {
+        const float *p = job->mesh->positions + 3 * (size_t)i;
+        ex__raster_vertex *v = &job->v[i];
+        float d[3];
+        d[0] = p[0] - c->eye[0];
+        d[1] = p[1] - c->eye[1];
+        d[2] = p[2] - c->eye[2];
+        v->p[0] = ex__dot(d, c->right);
+        v->p[1] = ex__dot(d, c->up);
+        v->p[2] = ex__dot(d, c->forward);
+        v->clip = ex__clip_outside(v->p, r->near_plane, ax, ay);
+        v->side = ex__raster_side(v->p, sx, sy);
+        if (v->clip == 0) ex__raster_snap(r, v->p, &v->x, &v->y, &v->inv_z);
+    }
+}
+
 /* One setup job: the batch's input triangles into r->batches[index],
-   transformed to view space, clipped and snapped. */
+   clipped and snapped. A triangle outside one clip plane is dropped, one
+   inside them all takes its corners' snapped positions (or is dropped
+   beside the screen), the others are clipped. */
 static void ex__raster_setup_job(void *ctx, uint32_t index)
 {
     ex_raster *r = (ex_raster *)ctx;
     const ex_camera *c = r->camera;
     ex__raster_batch *batch = &r->batches[index];
     const ex_raster_mesh *mesh = batch->mesh;
+    const ex__raster_vertex *vertices = batch->vertices->v;
+    uint32_t vertex_count = batch->vertices->count, i;
     float aspect = (float)r->width / (float)r->height, ax = c->tan_half * aspect, ay = c->tan_half;
-    uint32_t i;
     batch->count = 0;
     batch->failed = 0;
     for (i = batch->first; i < batch->end; i++) {
-        ex__clip_vertex poly[16];
+        const uint32_t *corner = mesh->indices + 3 * (size_t)i;
+        const ex__raster_vertex *v[3];
         int k, n;
-        if (ex__raster_reserve(batch, batch->count + 6) != 0) {
+        if (corner[0] >= vertex_count || corner[1] >= vertex_count || corner[2] >= vertex_count ||
+            ex__raster_reserve(batch, batch->count + 6) != 0) {
             batch->failed = 1;
             return;
         }
-        for (k = 0; k < 3; k++) {
-            const float *p = mesh->positions + 3 * (size_t)mesh->indices[3 * (size_t)i + (size_t)k];
-            float d[3];
-            d[0] = p[0] - c->eye[0];
-            d[1] = p[1] - c->eye[1];
-            d[2] = p[2] - c->eye[2];
-            poly[k].p[0] = ex__dot(d, c->right);
-            poly[k].p[1] = ex__dot(d, c->up);
-            poly[k].p[2] = ex__dot(d, c->forward);
-            poly[k].u = k == 1 ? 1.0f : 0.0f;
-            poly[k].v = k == 2 ? 1.0f : 0.0f;
+        for (k = 0; k < 3; k++) v[k] = &vertices[corner[k]];
+        if (v[0]->clip & v[1]->clip & v[2]->clip) continue;        /* outside one plane */
+        if ((v[0]->clip | v[1]->clip | v[2]->clip) == 0) {         /* nothing to clip */
+            ex_raster_tri *t = &batch->tris[batch->count];
+            if (v[0]->side & v[1]->side & v[2]->side) continue;    /* beside the screen */
+            for (k = 0; k < 3; k++) {
+                t->x[k] = v[k]->x;
+                t->y[k] = v[k]->y;
+                t->inv_z[k] = v[k]->inv_z;
+                t->u[k] = k == 1 ? 1.0f : 0.0f;
+                t->v[k] = k == 2 ? 1.0f : 0.0f;
+            }
+            ex__raster_finish(r, batch, mesh->id_base + i);
+        } else {
+            ex__clip_vertex poly[16];
+            for (k = 0; k < 3; k++) {
+                memcpy(poly[k].p, v[k]->p, sizeof poly[k].p);
+                poly[k].u = k == 1 ? 1.0f : 0.0f;
+                poly[k].v = k == 2 ? 1.0f : 0.0f;
+            }
+            n = ex__clip_polygon(poly, 3, r->near_plane, ax, ay);
+            for (k = 1; k + 1 < n; k++) ex__raster_emit(r, batch, &poly[0], &poly[k], &poly[k + 1], mesh->id_base + i);
         }
-        n = ex__clip_polygon(poly, 3, r->near_plane, ax, ay);
-        for (k = 1; k + 1 < n; k++) ex__raster_emit(r, batch, &poly[0], &poly[k], &poly[k + 1], mesh->id_base + i);
     }
 }
 
-/* Sets up the meshes' triangles in batches, in parallel on the pool; the
-   batches keep input order (meshes in turn), so the result does not depend
-   on the thread count. */
+/* A mesh's vertex count: as given, or one more than its largest index. */
+static uint32_t ex__raster_vertex_count(const ex_raster_mesh *mesh)
+{
+    uint32_t n = 0, i;
+    if (mesh->vertex_count > 0 || mesh->tri_count == 0) return mesh->vertex_count;
+    for (i = 0; i < 3 * mesh->tri_count; i++)
+        if (mesh->indices[i] >= n) n = mesh->indices[i] + 1;
+    return n;
+}
+
+/* Lays out the vertex jobs (one per mesh and EX__RASTER_BATCH vertices) and
+   room for every mesh's vertices; -1 when out of memory. */
+static int ex__raster_plan_vertices(ex_raster *r, const ex_raster_mesh *meshes, uint32_t mesh_count, uint32_t *jobs)
+{
+    size_t total = 0;
+    uint32_t m, i, count = 0;
+    for (m = 0; m < mesh_count; m++) {
+        uint32_t n = ex__raster_vertex_count(&meshes[m]);
+        if (meshes[m].tri_count == 0) continue;
+        total += n;
+        count += n / EX__RASTER_BATCH + 1;   /* + 1: a mesh always has a job, its vertex count */
+    }
+    if (total > r->vertex_capacity) {
+        ex__raster_vertex *p = (ex__raster_vertex *)realloc(r->vertices, total * sizeof *p);
+        if (!p) return -1;
+        r->vertices = p;
+        r->vertex_capacity = total;
+    }
+    if (count > r->vertex_job_capacity) {
+        ex__raster_vertices *p = (ex__raster_vertices *)realloc(r->vertex_jobs, (size_t)count * sizeof *p);
+        if (!p) return -1;
+        r->vertex_jobs = p;
+        r->vertex_job_capacity = count;
+    }
+    for (m = 0, total = 0, count = 0; m < mesh_count; m++) {
+        uint32_t n = ex__raster_vertex_count(&meshes[m]);
+        if (meshes[m].tri_count == 0) continue;
+        for (i = 0; i == 0 || i < n; i += EX__RASTER_BATCH, count++) {
+            ex__raster_vertices *job = &r->vertex_jobs[count];
+            job->mesh = &meshes[m];
+            job->v = r->vertices + total;
+            job->count = n;
+            job->first = i;
+            job->end = n - i > EX__RASTER_BATCH ? i + EX__RASTER_BATCH : n;
+        }
+        total += n;
+    }
+    *jobs = count;
+    return 0;
+}
+
+/* Sets up the meshes' triangles in batches, in parallel on the pool, after
+   their vertices; the batches keep input order (meshes in turn), so the
+   result does not depend on the thread count. */
 static int ex__raster_setup(ex_raster *r, const ex_camera *c, const ex_raster_mesh *meshes, uint32_t mesh_count)
 {
-    uint32_t batches = 0, i, m, b;
+    uint32_t batches = 0, jobs, i, m, b, j;
     for (m = 0; m < mesh_count; m++) {
         uint32_t n = meshes[m].tri_count / EX__RASTER_BATCH + (meshes[m].tri_count % EX__RASTER_BATCH != 0);
         if (n >= (1u << (32 - EX__RASTER_BATCH_BITS)) - batches) return -1;   /* bin items would overflow */
@@ -419,14 +583,20 @@ static int ex__raster_setup(ex_raster *r, const ex_camera *c, const ex_raster_me
         r->batches = p;
         r->batch_capacity = batches;
     }
+    if (ex__raster_plan_vertices(r, meshes, mesh_count, &jobs) != 0) return -1;
     r->batch_count = batches;
     r->camera = c;
-    for (m = 0, b = 0; m < mesh_count; m++)
+    for (m = 0, b = 0, j = 0; m < mesh_count; m++) {
+        if (meshes[m].tri_count == 0) continue;
         for (i = 0; i < meshes[m].tri_count; i += EX__RASTER_BATCH, b++) {
             r->batches[b].mesh = &meshes[m];
+            r->batches[b].vertices = &r->vertex_jobs[j];
             r->batches[b].first = i;
             r->batches[b].end = meshes[m].tri_count - i > EX__RASTER_BATCH ? i + EX__RASTER_BATCH : meshes[m].tri_count;
         }
+        while (j < jobs && r->vertex_jobs[j].mesh == &meshes[m]) j++;
+    }
+    ex_pool_parallel_for(r->pool, ex__raster_vertex_job, r, jobs);
     ex_pool_parallel_for(r->pool, ex__raster_setup_job, r, batches);
     for (i = 0; i < batches; i++)
         if (r->batches[i].failed) return -1;
@@ -487,38 +657,32 @@ static int ex__edge_owns_ties(int64_t dx, int64_t dy) { return dy > 0 || (dy == 
 /* Floor of a / b for b > 0, exact in 64-bit integers. */
 static int64_t ex__floor_div(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 
-/* Narrows the span [*lo, *hi] (pixel offsets from the row's first pixel) to
-   the pixels where edge value w(x) = w0 - step * x satisfies w(x) + bias > 0,
-   i.e. w0 + bias - step * x >= 1: solved exactly for x, so the span holds
-   exactly the pixels a per-pixel test would accept. */
-static void ex__edge_span(int64_t w0, int64_t step, int bias, int64_t *lo, int64_t *hi)
-{
-    int64_t room = w0 + bias - 1;   /* step * x <= room */
-    if (step == 0) {
-        if (room < 0) *hi = -1;     /* the whole row is outside this edge */
-    } else if (step > 0) {
-        int64_t x = ex__floor_div(room, step);
-        if (x < *hi) *hi = x;
-    } else {
-        int64_t x = -ex__floor_div(room, -step);   /* x >= ceil(room / step) = -floor(room / -step) */
-        if (x > *lo) *lo = x;
-    }
-}
-
 /* A triangle's edge functions over its pixels in one tile. Edge k goes from
    vertex k+1 to k+2; it is zero on that edge and positive at vertex k, so its
-   value over the area, times inv_area, is vertex k's weight. */
+   value over the area, times inv_area, is vertex k's weight.
+
+   A pixel at offset x from the row's first one is inside edge k when
+   w(x) + bias > 0 with w(x) = row - step * x, i.e. step * x <= room with
+   room = row + bias - 1: for step > 0 that bounds the span above by
+   floor(room / step), for step < 0 below by -floor(room / -step), for
+   step = 0 it holds on the whole row or nowhere. Row to row room grows by
+   down, so the bound's quotient and remainder are stepped exactly in
+   integers (a Bresenham walk: the quotient of down once, then an add and
+   a carry per row) instead of dividing on every row. */
 typedef struct ex__raster_edges {
     int64_t row[3];              /* values at the current row's first pixel centre */
     int64_t step[3];             /* decrease per pixel to the right */
     int64_t down[3];             /* increase per row down */
+    int64_t quot[3], rem[3];     /* floor(room / |step|) and its remainder, in [0, |step|) */
+    int64_t down_quot[3], down_rem[3];   /* the same for down */
+    int64_t div[3];              /* |step|, or INT64_MAX (no carry ever) when step = 0 */
     int bias[3];                 /* tie rule (ex__edge_owns_ties) */
     int x0, y0, x1, y1;          /* the triangle's pixel box in the tile, inclusive */
 } ex__raster_edges;
 
 /* Starts triangle t's edges at the top-left pixel of its box within the
    tile's [tx0, tx1] x [ty0, ty1]; 0 when the boxes do not meet. */
-static int ex__raster_edges_begin(const ex_raster_tri *t, int tx0, int ty0, int tx1, int ty1, ex__raster_edges *e)
+static inline int ex__raster_edges_begin(const ex_raster_tri *t, int tx0, int ty0, int tx1, int ty1, ex__raster_edges *e)
 {
     int64_t px0, py0;
     int k;
@@ -531,31 +695,53 @@ static int ex__raster_edges_begin(const ex_raster_tri *t, int tx0, int ty0, int 
     py0 = (int64_t)e->y0 * EX_RASTER_SUBPIXEL + EX_RASTER_SUBPIXEL / 2;
     for (k = 0; k < 3; k++) {
         int a = (k + 1) % 3, b = (k + 2) % 3;
-        int64_t dx = t->x[b] - t->x[a], dy = t->y[b] - t->y[a];
+        int64_t dx = t->x[b] - t->x[a], dy = t->y[b] - t->y[a], div = dy < 0 ? -dy : dy;
         e->row[k] = dx * (py0 - t->y[a]) - dy * (px0 - t->x[a]);
         e->bias[k] = ex__edge_owns_ties(dx, dy);
         e->step[k] = dy * EX_RASTER_SUBPIXEL;
         e->down[k] = dx * EX_RASTER_SUBPIXEL;
+        e->quot[k] = e->rem[k] = e->down_quot[k] = e->down_rem[k] = 0;
+        e->div[k] = INT64_MAX;
+        if (div != 0) {
+            int64_t room = e->row[k] + e->bias[k] - 1;
+            div *= EX_RASTER_SUBPIXEL;
+            e->div[k] = div;
+            e->quot[k] = ex__floor_div(room, div);
+            e->rem[k] = room - e->quot[k] * div;
+            e->down_quot[k] = ex__floor_div(e->down[k], div);
+            e->down_rem[k] = e->down[k] - e->down_quot[k] * div;
+        }
     }
     return 1;
 }
 
 /* The current row's covered pixels, as offsets [*lo, *hi] from e->x0 (empty
-   when *lo > *hi): the three edge inequalities solved for x in exact
-   integers, the same pixels as testing each one. */
-static void ex__raster_edges_span(const ex__raster_edges *e, int64_t *lo, int64_t *hi)
+   when *lo > *hi): exactly the pixels whose three edge tests pass. */
+static inline void ex__raster_edges_span(const ex__raster_edges *e, int64_t *lo, int64_t *hi)
 {
     int k;
     *lo = 0;
     *hi = e->x1 - e->x0;
-    for (k = 0; k < 3; k++) ex__edge_span(e->row[k], e->step[k], e->bias[k], lo, hi);
+    for (k = 0; k < 3; k++) {
+        if (e->step[k] > 0) {
+            if (e->quot[k] < *hi) *hi = e->quot[k];
+        } else if (e->step[k] < 0) {
+            if (-e->quot[k] > *lo) *lo = -e->quot[k];
+        } else if (e->row[k] + e->bias[k] - 1 < 0) {
+            *hi = -1;   /* the whole row is outside this edge */
+        }
+    }
 }
 
-static void ex__raster_edges_next_row(ex__raster_edges *e)
+static inline void ex__raster_edges_next_row(ex__raster_edges *e)
 {
-    e->row[0] += e->down[0];
-    e->row[1] += e->down[1];
-    e->row[2] += e->down[2];
+    int k;
+    for (k = 0; k < 3; k++) {
+        int64_t rem = e->rem[k] + e->down_rem[k], carry = rem >= e->div[k];   /* branchless: a carry is a coin toss */
+        e->row[k] += e->down[k];
+        e->quot[k] += e->down_quot[k] + carry;
+        e->rem[k] = rem - (e->div[k] & -carry);
+    }
 }
 
 /* Counts triangle t's coverage of the tile's pixels (ex_raster_count). */
@@ -605,12 +791,8 @@ static void ex__raster_local_begin(const ex_raster *r, ex__raster_local *L, int 
     for (y = y0; y <= y1; y++) {
         int q = (y - y0) * EX_RASTER_TILE;
         size_t p = (size_t)y * (size_t)r->width + (size_t)x0;
-        if (r->clear_pending) {
-            for (x = 0; x < n; x++) {
-                L->z[q + x] = FLT_MAX;
-                L->id[q + x] = EX_RASTER_EMPTY;
-                L->bary[2 * (q + x)] = L->bary[2 * (q + x) + 1] = 0.0f;
-            }
+        if (r->clear_pending) {   /* ids and barycentrics: ex__raster_resolve writes every pixel */
+            for (x = 0; x < n; x++) L->z[q + x] = FLT_MAX;
         } else {
             memcpy(L->z + q, r->depth + p, (size_t)n * sizeof(float));
             memcpy(L->id + q, r->id + p, (size_t)n * sizeof(uint32_t));
@@ -681,7 +863,14 @@ static void ex__raster_resolve(const ex_raster *r, ex__raster_local *L, int x0, 
             double w[3], d[3];
             int64_t px, py;
             int end = x + 1, i, k;
-            if (refs[x] == EX__RASTER_NONE) { x++; continue; }
+            if (refs[x] == EX__RASTER_NONE) {   /* not drawn: the frame's pixel, or empty when cleared */
+                if (r->clear_pending) {
+                    L->id[q + x] = EX_RASTER_EMPTY;
+                    L->bary[2 * (q + x)] = L->bary[2 * (q + x) + 1] = 0.0f;
+                }
+                x++;
+                continue;
+            }
             while (end < n && refs[end] == refs[x]) end++;
             t = ex__raster_item(r, refs[x]);
             px = (int64_t)(x0 + x) * EX_RASTER_SUBPIXEL + EX_RASTER_SUBPIXEL / 2;
@@ -792,6 +981,7 @@ EX_FN int ex_raster_draw(ex_raster *r, const ex_camera *c, const float *position
     mesh.indices = indices;
     mesh.tri_count = tri_count;
     mesh.id_base = id_base;
+    mesh.vertex_count = 0;
     if (r) r->counting = 0;
     return ex__raster_run(r, c, &mesh, 1);
 }
@@ -818,6 +1008,7 @@ EX_FN int ex_raster_count(ex_raster *r, const ex_camera *c, const float *positio
     mesh.indices = indices;
     mesh.tri_count = tri_count;
     mesh.id_base = 0;
+    mesh.vertex_count = 0;
     r->counting = 1;
     result = ex__raster_run(r, c, &mesh, 1);
     r->counting = 0;

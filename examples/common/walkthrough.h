@@ -4142,12 +4142,13 @@ EX_FN void wt_bunny_light(const wt_world *w, const irrvol *vol, const float *vis
     for (v = 0; v < 3 * n; v++) rgb[v] *= WT_BUNNY_KD / WT_PI * (visibility ? visibility[v / 3] : 1.0f);
 }
 
-/* Rasterizes the static mesh (ids 0 .. static_count-1) and the posed bunny
-   (ids static_count + triangle) into ra in one pass over the tiles: each
-   tile job clears its tile, draws both and runs ra->tile_done (when set) on
-   the finished tile. */
+/* Rasterizes the static mesh (ids 0 .. static_count-1, its indices below
+   static_vertex_count) and the posed bunny (ids static_count + triangle)
+   into ra in one pass over the tiles: each tile job clears its tile, draws
+   both and runs ra->tile_done (when set) on the finished tile. */
 EX_FN int wt_raster_scene(const wt_world *w, ex_raster *ra, const rendercache_camera *c, const float *static_positions,
-                          const uint32_t *static_indices, uint32_t static_count, const float *bunny_world)
+                          const uint32_t *static_indices, uint32_t static_count, uint32_t static_vertex_count,
+                          const float *bunny_world)
 {
     ex_camera ec = wt_ex_camera(c);
     ex_raster_mesh meshes[2];
@@ -4155,10 +4156,12 @@ EX_FN int wt_raster_scene(const wt_world *w, ex_raster *ra, const rendercache_ca
     meshes[0].indices = static_indices;
     meshes[0].tri_count = static_count;
     meshes[0].id_base = 0;
+    meshes[0].vertex_count = static_vertex_count;
     meshes[1].positions = bunny_world;
     meshes[1].indices = w->bunny.tri_indices;
     meshes[1].tri_count = w->bunny.tri_count;
     meshes[1].id_base = static_count;
+    meshes[1].vertex_count = w->bunny.vertex_count;
     ex_raster_clear_deferred(ra);
     return ex_raster_draw_meshes(ra, &ec, meshes, 2);
 }
@@ -4392,7 +4395,7 @@ static int wt__radiosity_view(wt_renderer *r, const rendercache_camera *camera, 
     r->raster.tile_done = wt__shade_tile;   /* shading fused with the tile jobs */
     r->raster.tile_user = &j;
     result = wt_raster_scene(w, &r->raster, &cam, r->statics.data.positions, r->statics.data.indices,
-                             r->statics.data.triangle_count, r->bunny_world);
+                             r->statics.data.triangle_count, r->statics.data.vertex_count, r->bunny_world);
     r->raster.tile_done = NULL;
     if (result != 0) return -1;
     /* CPU seconds over all threads: the pass's, less its tiles' shading */
