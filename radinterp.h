@@ -134,7 +134,13 @@
    its own direction), measured when the element is made, and adds it to
    the irradiance it gathers at every iteration: the sky is a constant
    source, as emission is, and everything it lights passes its light on
-   through the links. A point query adds E_sky at the point itself, with
+   through the links. Transport refinement treats the sky as a source: an
+   element over which E_sky varies by more than its tolerance (max - min
+   at its corners pulled a fifth toward its centre and at its centre, each
+   from the patch's own sky_rays / 4 directions, so that points differ by
+   what they see and not by sampling noise) is split, so the patch of
+   light under a window gets elements of its size (building_1k_daylight:
+   7,800 leaves instead of 4,400). A point query adds E_sky at the point itself, with
    the same directions for every point of a patch, so the interpolants are
    smooth. Everything is deterministic for any thread count. The
    estimate's error is that of stratified sampling: a window that covers a
@@ -145,7 +151,12 @@
    sunlit patches. The default error bound eps counts the sky's pi L as
    emitted radiosity (see PARAMETERS). Measured against the reference
    (tests/ref_radinterp_glass.c, a closed room with a glass window in its
-   ceiling under a sky, single and double glazing): see there.
+   ceiling under a sky of radiance (1, 2, 3) and walls of known emission,
+   single and double glazing, panes facing in and out, an environment
+   map; 4096 sky rays): the irradiance at floor points in the window's
+   light and off it, and the floor's mean radiosity, all within 2% + 3
+   reference standard errors (the largest 0.63 of that tolerance); with
+   the default 1024 rays the window's centre is 1.9% off.
 
    METHOD
 
@@ -3464,8 +3475,8 @@ typedef struct radinterp__node {
                                  links' errors are measured against (relative refinement) */
     float open;               /* fraction of the node not enclosed by touching geometry (such as the
                                  floor under a box standing on it); enclosed parts receive and show nothing */
-    float sky[3];             /* irradiance from the sky (mean over the whole node) of a leaf; sky[0] < 0:
-                                 not measured yet */
+    float sky[3];             /* irradiance from the sky (mean over the whole node), measured when made */
+    float sky_spread;         /* max - min of the sky's irradiance at fixed points of the node (refinement) */
 } radinterp__node;
 
 #define RADINTERP__LINK_FINAL 1u   /* may not be refined further */
@@ -3926,7 +3937,7 @@ static float radinterp__node_openness(const radinterp_solution *s, const radinte
     return (float)open / 9.0f;
 }
 
-static void radinterp__node_sky(const radinterp_solution *s, uint32_t index, float out[3]);   /* section 12 */
+static void radinterp__node_sky(radinterp_solution *s, uint32_t index);   /* section 12 */
 
 typedef struct radinterp__open_ctx { radinterp_solution *s; uint32_t first, count; } radinterp__open_ctx;
 
@@ -3937,7 +3948,7 @@ static void radinterp__open_job(void *ctx_, uint32_t index)
     if (end > ctx->first + ctx->count) end = ctx->first + ctx->count;
     for (; i < end; i++) {
         ctx->s->nodes[i].open = radinterp__node_openness(ctx->s, &ctx->s->nodes[i]);
-        if (ctx->s->has_sky) radinterp__node_sky(ctx->s, i, ctx->s->nodes[i].sky);
+        if (ctx->s->has_sky) radinterp__node_sky(ctx->s, i);
     }
 }
 
@@ -4305,13 +4316,38 @@ static void radinterp__sky_arriving(const radinterp_solution *s, const double *x
     for (k = 0; k < 3; k++) rgb[k] *= T[k];
 }
 
+/* The sky's irradiance at the point x of a patch, added to e: n
+   stratified directions, the same for every point of the patch (so that
+   neighbouring points, and the interpolants through them, see the sky
+   alike, and differences between points are differences of visibility,
+   not of sampling), E = pi / n sum L T (GLASS AND SKY). */
+static void radinterp__sky_at(const radinterp_solution *s, uint32_t patch, const double *x, uint32_t n, double *e)
+{
+    const double *nrm = s->patches[patch].n;
+    radinterp__rng rng = radinterp__rng_stream(s->seed ^ 0x5C5C5C5Cu, (uint64_t)1 << 40 | patch);
+    double sum[3] = {0.0, 0.0, 0.0};
+    uint32_t j;
+    int k;
+    for (j = 0; j < n; j++) {
+        double dir[3], l[3];
+        radinterp__sky_dir(nrm, j, n, &rng, dir);
+        radinterp__sky_arriving(s, x, nrm, dir, l);
+        for (k = 0; k < 3; k++) sum[k] += l[k];
+    }
+    for (k = 0; k < 3; k++) e[k] += RADINTERP__PI * sum[k] / n;
+}
+
 /* The sky's irradiance on a node, as a mean over the whole node (enclosed
    parts receive none): sky_rays rays from stratified points of the node,
    each along its own stratified direction (point stratum i, direction
-   stratum 7919 i mod n: the pairing decorrelates them), eq. E = pi / n sum L T. */
-static void radinterp__node_sky(const radinterp_solution *s, uint32_t index, float out[3])
+   stratum 7919 i mod n: the pairing decorrelates them), eq. E = pi / n sum
+   L T. And its spread for refinement: max - min (largest channel) of the
+   sky at the node's corners pulled a fifth toward its centre and at its
+   centre, each from the patch's own sky_rays / 4 directions (at least 16),
+   so that the points differ by what they see, not by sampling noise. */
+static void radinterp__node_sky(radinterp_solution *s, uint32_t index)
 {
-    const radinterp__node *nd = &s->nodes[index];
+    radinterp__node *nd = &s->nodes[index];
     const double *nrm = s->patches[nd->patch].n;
     double v[RADINTERP__POLY_MAX][3], tri_area[RADINTERP__POLY_MAX], total, e[3] = {0.0, 0.0, 0.0};
     uint32_t i, n = s->sky_rays;
@@ -4325,27 +4361,29 @@ static void radinterp__node_sky(const radinterp_solution *s, uint32_t index, flo
         radinterp__sky_arriving(s, q, nrm, dir, l);
         for (k = 0; k < 3; k++) e[k] += w * l[k];
     }
-    for (k = 0; k < 3; k++) out[k] = (float)(RADINTERP__PI * e[k] / n);
+    for (k = 0; k < 3; k++) nd->sky[k] = (float)(RADINTERP__PI * e[k] / n);
+    {
+        double c[3] = {0.0, 0.0, 0.0}, lo = DBL_MAX, hi = 0.0;
+        uint32_t rays = n / 4 > 16 ? n / 4 : 16;
+        int j, m;
+        for (j = 0; j < count; j++)
+            for (m = 0; m < 3; m++) c[m] += v[j][m] / count;
+        for (j = 0; j <= count; j++) {
+            double q[3], at[3] = {0.0, 0.0, 0.0}, most;
+            for (m = 0; m < 3; m++) q[m] = j < count ? 0.8 * v[j][m] + 0.2 * c[m] : c[m];
+            radinterp__sky_at(s, nd->patch, q, rays, at);
+            most = radinterp__max3(at);
+            lo = most < lo ? most : lo;
+            hi = most > hi ? most : hi;
+        }
+        nd->sky_spread = (float)(hi - lo);
+    }
 }
 
-/* The sky's irradiance at the point x of a patch, added to h: sky_rays
-   stratified directions, the same for every point of the patch (so that
-   neighbouring points, and the interpolants through them, see the sky
-   alike), E = pi / n sum L T (GLASS AND SKY). */
+/* The point query's sky term: sky_rays directions. */
 static void radinterp__sky_point_add(const radinterp_solution *s, uint32_t patch, const double *x, double *h)
 {
-    const double *nrm = s->patches[patch].n;
-    radinterp__rng rng = radinterp__rng_stream(s->seed ^ 0x5C5C5C5Cu, (uint64_t)1 << 40 | patch);
-    double e[3] = {0.0, 0.0, 0.0};
-    uint32_t j, n = s->sky_rays;
-    int k;
-    for (j = 0; j < n; j++) {
-        double dir[3], l[3];
-        radinterp__sky_dir(nrm, j, n, &rng, dir);
-        radinterp__sky_arriving(s, x, nrm, dir, l);
-        for (k = 0; k < 3; k++) e[k] += l[k];
-    }
-    for (k = 0; k < 3; k++) h[k] += RADINTERP__PI * e[k] / n;
+    radinterp__sky_at(s, patch, x, s->sky_rays, h);
 }
 
 /* Visible fraction of the source seen from q (on the receiver), weighted
@@ -5592,6 +5630,26 @@ static double radinterp__link_ff_max(const radinterp__link *l)
     return l->gff > 0.0f ? (double)l->ff + (double)l->gff * radinterp__max3(t) : (double)l->ff;
 }
 
+/* The sky's share of transport refinement: a leaf (made before this pass)
+   over which the sky's irradiance varies by more than its tolerance (the
+   window's light on a floor) is split, as a link to the sky would be; its
+   ancestors' links deliver to the children. Returns the leaves split, or
+   -1 when out of memory. */
+static int radinterp__refine_sky(radinterp_solution *s, uint32_t nodes_before)
+{
+    uint32_t i;
+    int split = 0;
+    for (i = 0; i < nodes_before; i++) {
+        const radinterp__node *nd = &s->nodes[i];
+        if (nd->child != RADINTERP__NONE || !((double)nd->sky_spread > radinterp__tolerance(s, nd->level)) ||
+            !radinterp__can_split(s, nd))
+            continue;
+        if (radinterp__node_split(s, i) != 0) return -1;
+        split++;
+    }
+    return split;
+}
+
 /* Transport-based refinement (4.4.1): a link whose estimated transport
    error B_src * (max - min point factor) exceeds eps is replaced by four
    links to the children of its larger element (the other one when the
@@ -5637,6 +5695,11 @@ static int radinterp__refine(radinterp_solution *s, const radinterp__run *run, r
         }
         if (!radinterp__split_link(s, &L, &l, which)) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
         split++;
+    }
+    if (s->has_sky && *res == RADINTERP_OK) {
+        int more = radinterp__refine_sky(s, nodes_before);
+        if (more < 0) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
+        else split += (uint32_t)more;
     }
     for (i = 0; i < s->clink_count && *res == RADINTERP_OK; i++) {
         radinterp__clink l = s->clinks[i];
