@@ -24,9 +24,9 @@
    EXAMPLE
 
        radinterp_material mat[2] = {
-           {{0.7f, 0.7f, 0.7f}, {0, 0, 0}},            // grey wall
-           {{0.8f, 0.8f, 0.8f}, {100.f, 100.f, 100.f}} // emitter: E = pi * Ke
-       };
+           {{0.7f, 0.7f, 0.7f}, {0, 0, 0}, {0, 0, 0}},            // grey wall
+           {{0.8f, 0.8f, 0.8f}, {100.f, 100.f, 100.f}, {0, 0, 0}} // emitter: E = pi * Ke
+       };                                   // (a third triple tf > 0 makes glass)
        radinterp_desc d = {0};
        radinterp_solution *sol;
        float rgb[3];
