@@ -1,4 +1,4 @@
-/* lightvec.h - v0.4.2 - cached 5D indirect light vectors - public domain or MIT, see end of file
+/* lightvec.h - v0.4.3 - cached 5D indirect light vectors - public domain or MIT, see end of file
 
    LIGHTVEC.H: cached light vectors over position and direction for interactive glossy global illumination.
 
@@ -223,7 +223,8 @@
      their direction cones): on the glossy Cornell floor (128 x 128, the moved
      frame) the error is 4.38% with no cap, 4.37% with 16, 4.50% with 8; it
      bounds the interpolation's cost (one cache line per kept record without
-     a valid glossy part, three with one) in dense caches. It does not bound
+     a valid glossy part, in its leaf's block; two more with one) in dense
+     caches. It does not bound
      the search, which still tests every record whose sphere holds A: every
      valid record counts in valid_count, so no subtree can be skipped once
      the k best are known.
@@ -371,28 +372,39 @@
    PERFORMANCE
 
      Lookups at 10^5 records on the walls of a room (tests/bench_lightvec.c,
-     one thread, CPU time, medians, a shared 2-core machine): 6 valid
-     records per query 0.96 us in a random query order (every one a cache
-     miss), 0.58 us sorted by position (as a frame's pixels come); 45 valid
-     2.6 us random, 1.6 us sorted (after lightvec_cache_optimize 2.2 and
-     1.4 us). At 10^6 records, 6 valid: 3.8 us random (memory latency),
-     1.3 us sorted. (v0.4.1 on the same runs: 1.2, 0.65, 3.4, 2.1 us.)
+     one thread, CPU time, medians of 3 runs, a shared 2-core machine at a
+     load of 7 to 8): 6 valid records per query 0.81 us in a random query
+     order (every one a cache miss), 0.54 us sorted by position (as a
+     frame's pixels come); 45 valid 2.25 us random, 1.57 us sorted (after
+     lightvec_cache_optimize 1.91 and 1.35 us). At 10^6 records, 6 valid:
+     2.7 us random (memory latency), 1.07 us sorted. (v0.4.2 on the same
+     runs: 0.92, 0.56, 2.41, 1.58, 2.12, 1.35, 3.45, 1.21 us.)
      A kd-tree node holds eight child boxes in rows (three binary levels),
      tested with a few SIMD compares; a leaf is a block of 8 records whose
      tested fields sit together, and the tests that need no square root run
      over the whole block at once. The walk prefetches the blocks it reaches
      whole and queues them, visiting them in the same order once a few are
-     on their way, so that their memory latencies overlap. A valid record
-     costs one prefetched cache line (what the interpolation reads); the
-     k-nearest selection runs once, over all the valid records, at the end.
-     Where a dense lookup goes (45 valid): 2.6 faces, 7 kd-trees, 26 nodes,
-     33 leaves (252 records tested, 83 inside their sphere), 16
-     interpolated, about 330 cache lines; in a random order it waits on
-     memory. Bounding the viewer directions and normals of a leaf's records
-     by cones would skip 2.5 of its 29 full leaves (records seen from
-     anywhere in a room share a leaf's cone), so the nodes keep boxes
-     alone. Insertion with neighbour clamping: 5.4 us at 10^5 records, 11.6
-     us in the dense cache (a gather takes about 1 ms).
+     on their way, so that their memory latencies overlap. What the
+     interpolation reads of a valid record (its head, one cache line) sits
+     in its leaf's block after the rows, so it comes from the page the
+     criteria have just read; the k-nearest selection runs once, over all
+     the valid records, at the end. Where a dense lookup goes (45 valid):
+     2.6 faces, 7 kd-trees, 26 nodes, 33 leaves (about 260 records
+     tested, 83 inside their sphere; 12 leaves hold A in none), 16
+     interpolated, about 330 cache lines; in a random order it waits on memory (the same
+     lookups with their data in cache take 1.2 us). These left the time as
+     it was or made it longer, with the same results: walking all the
+     kd-trees of a lookup together level by level; loading a leaf's other
+     rows only where A lies in one of its spheres; the other criteria from
+     the item rather than from rows; nodes of 4 or 16 children; and, last
+     round, bounding a leaf's viewer directions and normals by cones (they
+     would skip 2.5 of 29 full leaves). Transparent huge pages for the
+     trees (an allocator that asks for them, or glibc's
+     glibc.malloc.hugetlb=1) took about 5% off the dense random figure.
+     Memory: 551 bytes per record at 10^5 (records, radii, items, blocks,
+     nodes). Insertion with neighbour clamping: 4.8 us at 10^5 records,
+     10.5 us in the dense cache (a gather takes about 1 ms);
+     lightvec_cache_optimize of 10^5 records 28 ms (22 ms dense).
 
    LIMITS
 
@@ -442,7 +454,7 @@
 
 #define LIGHTVEC_VERSION_MAJOR 0
 #define LIGHTVEC_VERSION_MINOR 4
-#define LIGHTVEC_VERSION_PATCH 2
+#define LIGHTVEC_VERSION_PATCH 3
 #define LIGHTVEC_FILE_FORMAT_VERSION 2
 
 #ifndef LIGHTVEC_API
@@ -3184,16 +3196,20 @@ typedef struct lightvec__params {
     lightvec_interpolation interpolation;  /* never DEFAULT */
 } lightvec__params;
 
-/* 192 bytes, aligned to 64 in a kd-tree. The first cache line holds all
-   that the interpolation of a diffuse vector reads (A - B comes from the
-   criteria), the second the writer's fields and what the glossy criteria
-   read, the third the glossy part itself: a lookup loads one line of a
-   record without a valid glossy part. */
-typedef struct lightvec__item {
+/* All that the interpolation of a diffuse vector reads of a record (A - B
+   comes from the criteria): one cache line. */
+typedef struct lightvec__head {
     float dir[3];                    /* D */
     float mag[3];                    /* what `interpolation` averages: M (PLAIN) or M cos(n_B, D) */
     float slope[3][3];               /* grad E_c / E_c per channel (0 where E_c = 0) */
-    uint32_t kind;                   /* ITEM_* bits; 64 bytes so far */
+    uint32_t kind;                   /* ITEM_* bits */
+} lightvec__head;
+
+/* The rest of a record as the index keeps it: 128 bytes, aligned to 64 in
+   a kd-tree. The first cache line holds the writer's fields and what the
+   glossy criteria read, the second the glossy part itself. Its head lives
+   in its leaf block. */
+typedef struct lightvec__item {
     float pos[3];                    /* B */
     float inv_glossy_distance;       /* 1 / d_g; 0 = no glossy part */
     float normal[3], rel_gradient;   /* n_B and |grad Y| / Y (luminance) */
@@ -3202,11 +3218,17 @@ typedef struct lightvec__item {
     float cos_dir;                   /* this record's S_dir (from its lobe) */
     float rel_glossy_gradient;       /* |dY(G)/dw_r| / Y(G) (luminance) times the glossy share */
     float exponent;                  /* of the lobe of G */
-    float outgoing[3];               /* sigma; 128 bytes so far */
+    float outgoing[3];               /* sigma; 64 bytes so far */
     float glossy[3];                 /* G(sigma) */
     float glossy_gradient[3][3];     /* dG/dw_r */
     float pad[4];
 } lightvec__item;
+
+/* A record's head and item together: what the writer builds and moves. */
+typedef struct lightvec__entry {
+    lightvec__head head;
+    lightvec__item item;
+} lightvec__entry;
 
 #define LIGHTVEC__ITEM_LIT 1u        /* visibility 1: every light sample seen (DLV) */
 #define LIGHTVEC__ITEM_UMBRA 2u      /* visibility 0: none seen */
@@ -3224,9 +3246,9 @@ typedef struct lightvec__item {
    compares and one branch per child that holds A (the binary descent
    took one unpredictable branch per box). What the criteria read of a
    leaf's items is one block of rows (LIGHTVEC__ROW_*, LEAF floats each):
-   a leaf's tests read a few consecutive cache lines, and an item only for
-   the records that pass them (its first line; the others for a valid
-   glossy part). */
+   a leaf's tests read a few consecutive cache lines. The block holds its
+   items' heads too, so the interpolation of a valid record reads a line
+   next to them, and an item only for a valid glossy part. */
 #define LIGHTVEC__ROW_X 0
 #define LIGHTVEC__ROW_Y 1
 #define LIGHTVEC__ROW_Z 2
@@ -3244,6 +3266,16 @@ typedef struct lightvec__item {
 #define LIGHTVEC__ROWS 14
 #define LIGHTVEC__BLOCK (LIGHTVEC__ROWS * LIGHTVEC__LEAF)
 
+/* A leaf's block: its rows, then a copy of its items' heads. The
+   interpolation reads a kept record's head here, beside the rows the
+   criteria have just read (the same page, in the hardware prefetchers'
+   stream), instead of from the record itself: one memory round trip less
+   per valid record in a random query order. */
+typedef struct lightvec__block {
+    float row[LIGHTVEC__BLOCK];
+    lightvec__head head[LIGHTVEC__LEAF];
+} lightvec__block;
+
 #define LIGHTVEC__KD_WIDTH 8         /* children per stored kd-tree node: three binary levels */
 #define LIGHTVEC__KD_LEAF 0x80000000u /* a child reference to a leaf: KD_LEAF | leaf index */
 #define LIGHTVEC__KD_STACK ((LIGHTVEC__KD_WIDTH - 1) * 11 + 1) /* 11 >= levels / 3 + 1 for 2^29 leaves */
@@ -3258,7 +3290,7 @@ typedef struct lightvec__kd_node {
 typedef struct lightvec__tree {
     uint32_t count, node_count;
     lightvec__kd_node *nodes;        /* node 0 is the root */
-    float *blocks;                   /* a block of BLOCK floats per leaf */
+    lightvec__block *blocks;         /* one per leaf */
     lightvec__item *items;           /* count items, leaf after leaf */
     size_t bytes;
 } lightvec__tree;
@@ -3267,7 +3299,7 @@ typedef struct lightvec__index {
     uint32_t tree_count;
     uint32_t tail_count;             /* atomic: items of tail[] published */
     lightvec__tree *trees[LIGHTVEC__MAX_TREES];   /* ascending sizes */
-    float tail_blocks[LIGHTVEC__TAIL / LIGHTVEC__LEAF][LIGHTVEC__BLOCK];
+    lightvec__block tail_blocks[LIGHTVEC__TAIL / LIGHTVEC__LEAF];
     lightvec__item tail[LIGHTVEC__TAIL];
 } lightvec__index;
 
@@ -3426,13 +3458,15 @@ static float lightvec__record_cos_dir(const lightvec__params *p, const lightvec_
 }
 
 static void lightvec__make_item(const lightvec__params *p, const lightvec_record *r, uint32_t id,
-                                lightvec__item *it)
+                                lightvec__entry *e)
 {
+    lightvec__item *it = &e->item;
+    lightvec__head *h = &e->head;
     lightvec__vec3 g = lightvec__v3(0.0f, 0.0f, 0.0f);
     float y = lightvec__lumf(r->irradiance), gl;
     int c;
     static const float w[3] = { 0.2126f, 0.7152f, 0.0722f };
-    memset(it, 0, sizeof *it);
+    memset(e, 0, sizeof *e);
     for (c = 0; c < 3; c++) g = lightvec__add(g, lightvec__scale(lightvec__v3_load(r->gradient[c]), w[c]));
     gl = lightvec__length(g);
     memcpy(it->pos, r->position, sizeof it->pos);
@@ -3443,20 +3477,21 @@ static void lightvec__make_item(const lightvec__params *p, const lightvec_record
     it->cos_dir = lightvec__record_cos_dir(p, r);
     it->inv_glossy_distance = r->glossy_distance > 0.0f ? 1.0f / r->glossy_distance : 0.0f;
     it->exponent = r->exponent;
-    it->kind = (r->visibility >= 1.0f ? LIGHTVEC__ITEM_LIT : 0u) | (r->visibility <= 0.0f ? LIGHTVEC__ITEM_UMBRA : 0u) |
-               (it->inv_glossy_distance > 0.0f ? LIGHTVEC__ITEM_GLOSSY : 0u);
-    memcpy(it->dir, r->vector.direction, sizeof it->dir);
+    h->kind = (r->visibility >= 1.0f ? LIGHTVEC__ITEM_LIT : 0u) | (r->visibility <= 0.0f ? LIGHTVEC__ITEM_UMBRA : 0u) |
+                    (it->inv_glossy_distance > 0.0f ? LIGHTVEC__ITEM_GLOSSY : 0u);
+    memcpy(h->dir, r->vector.direction, sizeof h->dir);
     if (p->interpolation == LIGHTVEC_INTERPOLATION_PLAIN) {
-        memcpy(it->mag, r->vector.magnitude, sizeof it->mag);
+        memcpy(h->mag, r->vector.magnitude, sizeof h->mag);
     } else {
         float cos_nd = lightvec__maxf(0.0f, lightvec__dot(lightvec__v3_load(r->normal), lightvec__v3_load(r->vector.direction)));
-        for (c = 0; c < 3; c++) it->mag[c] = r->vector.magnitude[c] * cos_nd;
+        for (c = 0; c < 3; c++) h->mag[c] = r->vector.magnitude[c] * cos_nd;
     }
     for (c = 0; c < 3; c++) {
         float e = r->irradiance[c];
         int k;
-        for (k = 0; k < 3; k++) it->slope[c][k] = e > 0.0f ? r->gradient[c][k] / e : 0.0f;
-        if (!lightvec__finite3(it->slope[c])) it->slope[c][0] = it->slope[c][1] = it->slope[c][2] = 0.0f;
+        float *slope = h->slope[c];
+        for (k = 0; k < 3; k++) slope[k] = e > 0.0f ? r->gradient[c][k] / e : 0.0f;
+        if (!lightvec__finite3(slope)) slope[0] = slope[1] = slope[2] = 0.0f;
     }
     memcpy(it->glossy, r->glossy, sizeof it->glossy);
     memcpy(it->glossy_gradient, r->glossy_gradient, sizeof it->glossy_gradient);
@@ -3518,9 +3553,11 @@ static lightvec_record *lightvec__record_reserve(lightvec_cache *c, uint32_t id)
 /* ---- kd-tree ------------------------------------------------------------------- */
 
 /* Writes item it into slot k of a leaf block. */
-static void lightvec__block_put(float *block, uint32_t k, const lightvec__item *it)
+static void lightvec__block_put(lightvec__block *block, uint32_t k, const lightvec__entry *e)
 {
-    float *b = block + k;
+    const lightvec__item *it = &e->item;
+    float *b = block->row + k;
+    block->head[k] = e->head;
     b[LIGHTVEC__ROW_X * LIGHTVEC__LEAF] = it->pos[0];
     b[LIGHTVEC__ROW_Y * LIGHTVEC__LEAF] = it->pos[1];
     b[LIGHTVEC__ROW_Z * LIGHTVEC__LEAF] = it->pos[2];
@@ -3550,16 +3587,16 @@ static uint32_t lightvec__tree_levels(uint32_t leaves)
 /* Quickselect on perm[lo, hi) by item position on axis: afterwards the
    k-th smallest is at k, smaller keys before, larger after. Three-way
    partition around a median-of-three pivot, robust to equal keys. */
-static void lightvec__select(uint32_t *perm, const lightvec__item *src, int axis, uint32_t lo, uint32_t hi,
+static void lightvec__select(uint32_t *perm, const lightvec__entry *src, int axis, uint32_t lo, uint32_t hi,
                              uint32_t k)
 {
     while (hi - lo > 1) {
-        float a = src[perm[lo]].pos[axis], b = src[perm[lo + (hi - lo) / 2]].pos[axis];
-        float c = src[perm[hi - 1]].pos[axis], pivot;
+        float a = src[perm[lo]].item.pos[axis], b = src[perm[lo + (hi - lo) / 2]].item.pos[axis];
+        float c = src[perm[hi - 1]].item.pos[axis], pivot;
         uint32_t lt = lo, i = lo, gt = hi;
         pivot = a < b ? (b < c ? b : (a < c ? c : a)) : (a < c ? a : (b < c ? c : b));
         while (i < gt) {
-            float key = src[perm[i]].pos[axis];
+            float key = src[perm[i]].item.pos[axis];
             if (key < pivot) { uint32_t t = perm[lt]; perm[lt] = perm[i]; perm[i] = t; lt++; i++; }
             else if (key > pivot) { uint32_t t; gt--; t = perm[gt]; perm[gt] = perm[i]; perm[i] = t; }
             else i++;
@@ -3572,7 +3609,7 @@ static void lightvec__select(uint32_t *perm, const lightvec__item *src, int axis
 
 /* Box of the validity spheres of perm[lo, hi), widened by a relative 1e-6 so
    that the float test d^2 < R^2 never accepts a point the box rejects. */
-static int lightvec__tree_box(float *box, const uint32_t *perm, const lightvec__item *src, uint32_t lo, uint32_t hi)
+static int lightvec__tree_box(float *box, const uint32_t *perm, const lightvec__entry *src, uint32_t lo, uint32_t hi)
 {
     float clo[3], chi[3];
     uint32_t i;
@@ -3580,7 +3617,7 @@ static int lightvec__tree_box(float *box, const uint32_t *perm, const lightvec__
     lightvec__box_empty(box, box + 3);
     lightvec__box_empty(clo, chi);
     for (i = lo; i < hi; i++) {
-        const lightvec__item *it = &src[perm[i]];
+        const lightvec__item *it = &src[perm[i]].item;
         for (k = 0; k < 3; k++) {
             float tol = (fabsf(it->pos[k]) + it->radius) * 1e-6f;
             box[k] = lightvec__minf(box[k], it->pos[k] - it->radius - tol);
@@ -3596,7 +3633,7 @@ static int lightvec__tree_box(float *box, const uint32_t *perm, const lightvec__
 
 /* Binary node `node` over leaves [a, b) of n items: its box (6 floats at
    boxes + 6 node), then its halves. */
-static void lightvec__tree_build_node(float *boxes, uint32_t n, const lightvec__item *src, uint32_t *perm, uint32_t node,
+static void lightvec__tree_build_node(float *boxes, uint32_t n, const lightvec__entry *src, uint32_t *perm, uint32_t node,
                                       uint32_t a, uint32_t b)
 {
     uint32_t lo = a * LIGHTVEC__LEAF, hi = b * LIGHTVEC__LEAF < n ? b * LIGHTVEC__LEAF : n;
@@ -3657,21 +3694,21 @@ static void lightvec__kd_collapse(lightvec__tree *t, const float *boxes, lightve
     }
 }
 
-static lightvec__tree *lightvec__tree_build(const lightvec_allocator *a, const lightvec__item *src, uint32_t n)
+static lightvec__tree *lightvec__tree_build(const lightvec_allocator *a, const lightvec__entry *src, uint32_t n)
 {
     uint32_t leaves = lightvec__leaf_count(n), binary = (2u << lightvec__tree_levels(leaves)) - 1u, nodes = 0, i, *perm;
     size_t head = (sizeof(lightvec__tree) + 63u) & ~(size_t)63u, node_bytes, block_bytes, bytes;
     lightvec__kd_span root;
     lightvec__tree *t, shape;
     float *boxes;
-    if ((size_t)leaves > (SIZE_MAX - head - 128u) / (sizeof(lightvec__kd_node) + LIGHTVEC__BLOCK * sizeof(float) +
+    if ((size_t)leaves > (SIZE_MAX - head - 128u) / (sizeof(lightvec__kd_node) + sizeof(lightvec__block) +
                                                       LIGHTVEC__LEAF * sizeof(lightvec__item)))
         return NULL;
     root.node = 0; root.a = 0; root.b = leaves;
     shape.nodes = NULL;
     if (n) lightvec__kd_collapse(&shape, NULL, root, &nodes);   /* at most leaves nodes */
     node_bytes = (size_t)nodes * sizeof(lightvec__kd_node);
-    block_bytes = (size_t)leaves * LIGHTVEC__BLOCK * sizeof(float);
+    block_bytes = (size_t)leaves * sizeof(lightvec__block);
     bytes = head + node_bytes + block_bytes + (size_t)n * sizeof(lightvec__item) + 64u; /* + room to align */
     t = (lightvec__tree *)lightvec__alloc(a, bytes);
     perm = (uint32_t *)lightvec__alloc_array(a, n, sizeof(uint32_t));
@@ -3686,7 +3723,7 @@ static lightvec__tree *lightvec__tree_build(const lightvec_allocator *a, const l
     t->node_count = nodes;
     t->nodes = (lightvec__kd_node *)((char *)t + head);   /* 256-byte nodes after a 64-byte aligned head */
     t->nodes = (lightvec__kd_node *)((char *)t->nodes + ((64u - ((uintptr_t)t->nodes & 63u)) & 63u));
-    t->blocks = (float *)((char *)t->nodes + node_bytes);
+    t->blocks = (lightvec__block *)(void *)((char *)t->nodes + node_bytes);
     t->items = (lightvec__item *)((char *)t->blocks + block_bytes);
     t->bytes = bytes;
     memset(t->blocks, 0, block_bytes); /* the last leaf's empty slots: radius 0, never inside */
@@ -3697,8 +3734,8 @@ static lightvec__tree *lightvec__tree_build(const lightvec_allocator *a, const l
         lightvec__kd_collapse(t, boxes, root, &nodes);
     }
     for (i = 0; i < n; i++) {
-        t->items[i] = src[perm[i]];
-        lightvec__block_put(t->blocks + (size_t)(i / LIGHTVEC__LEAF) * LIGHTVEC__BLOCK, i % LIGHTVEC__LEAF, &t->items[i]);
+        t->items[i] = src[perm[i]].item;
+        lightvec__block_put(&t->blocks[i / LIGHTVEC__LEAF], i % LIGHTVEC__LEAF, &src[perm[i]]);
     }
     lightvec__free(a, boxes);
     lightvec__free(a, perm);
@@ -3757,7 +3794,7 @@ static void lightvec__tree_walk(const lightvec__tree *t, const float p[3], float
         while (mask) {
             uint32_t j = lightvec__kd_last_bit(mask), child = t->nodes[ref].child[j];
             const char *next = child & LIGHTVEC__KD_LEAF
-                ? (const char *)(t->blocks + (size_t)(child & ~LIGHTVEC__KD_LEAF) * LIGHTVEC__BLOCK)
+                ? (const char *)&t->blocks[child & ~LIGHTVEC__KD_LEAF]
                 : (const char *)&t->nodes[child];
             LIGHTVEC__PREFETCH(next);
             LIGHTVEC__PREFETCH(next + 64);
@@ -3779,20 +3816,20 @@ static void lightvec__tree_walk(const lightvec__tree *t, const float p[3], float
 /* A leaf block waiting for its visit: its first `count` items. */
 #define LIGHTVEC__PENDING 64u
 typedef struct lightvec__block_ref {
-    const float *block;
+    const lightvec__block *block;
     const lightvec__item *items;
     uint32_t count;
     int full;                        /* a kd-tree leaf (not a tail block) */
 } lightvec__block_ref;
 
-/* A valid record kept for the interpolation (32 bytes). Its rank, kept
+/* A valid record kept for the interpolation (40 bytes). Its rank, kept
    apart, is the bits of w above ~id: w >= +0, whose bits order as it does,
    then the smaller id. */
 typedef struct lightvec__candidate {
     float w;                         /* the diffuse vector's weight, w_B w_sigma (the cache's S_dir) */
     float wg;                        /* the glossy part's, w_B w_sigma (the record's S_dir); 0 = not valid */
     float d[3];                      /* A - B */
-    uint32_t pad;
+    const lightvec__head *head;      /* the copy in its leaf block */
     const lightvec__item *it;
 } lightvec__candidate;
 
@@ -3887,8 +3924,8 @@ static uint32_t lightvec__select_best(uint64_t *ranks, lightvec__candidate *kept
    id) of lightvec_lookup. A candidate is appended unless `best` larger ones
    are known; when the room is full, the best are selected and the rest
    dropped (amortised: once per KEPT_SLACK candidates at most). */
-static void lightvec__keep(lightvec__query *q, const lightvec__item *it, uint32_t id, float w, float wg, float dx,
-                           float dy, float dz)
+static void lightvec__keep(lightvec__query *q, const lightvec__item *it, const lightvec__head *head, uint32_t id,
+                           float w, float wg, float dx, float dy, float dz)
 {
     if (q->ids && q->count < q->capacity) {
         q->ids[q->count] = id;
@@ -3913,13 +3950,14 @@ static void lightvec__keep(lightvec__query *q, const lightvec__item *it, uint32_
         c->w = w;
         c->wg = wg;
         c->d[0] = dx; c->d[1] = dy; c->d[2] = dz;
+        c->head = head;
         c->it = it;
-        /* the interpolation reads the item: start loading it now (the
-           lines of the glossy part only when it is valid) */
-        LIGHTVEC__PREFETCH(it);
+        /* the interpolation reads the head: start loading it now (and the
+           item's lines of the glossy part when it is valid) */
+        LIGHTVEC__PREFETCH(head);
         if (wg > 0.0f) {
+            LIGHTVEC__PREFETCH(it);
             LIGHTVEC__PREFETCH((const char *)it + 64);
-            LIGHTVEC__PREFETCH((const char *)it + 128);
         }
     }
 }
@@ -3974,7 +4012,7 @@ static unsigned lightvec__block_pass(const lightvec__query *q, const float *bloc
    psi |grad G_B| / G_B < I_B: the irradiance-change criterion and weight
    of 4.2.1, applied to G along the angle. w_g = 0 when either fails. */
 static void lightvec__visit(lightvec__query *q, const float *block, uint32_t k, const lightvec__item *it,
-                            const lightvec__slots *s, float cos_dir)
+                            const lightvec__head *head, const lightvec__slots *s, float cos_dir)
 {
     const lightvec__params *p = q->p;
     const float *b = block + k;
@@ -3997,7 +4035,7 @@ static void lightvec__visit(lightvec__query *q, const float *block, uint32_t k, 
             wg = wb * ((cos_psi - it->cos_dir) / (1.0f - it->cos_dir)) * (1.0f / (1.0f + gchange));
     }
     memcpy(&id, &b[LIGHTVEC__ROW_ID * LIGHTVEC__LEAF], sizeof id);
-    lightvec__keep(q, it, id, wb * ws, wg, s->dx[k], s->dy[k], s->dz[k]);
+    lightvec__keep(q, it, head, id, wb * ws, wg, s->dx[k], s->dy[k], s->dz[k]);
 }
 
 /* The first `count` items of a leaf block: lightvec__slot_pass over the
@@ -4005,17 +4043,17 @@ static void lightvec__visit(lightvec__query *q, const float *block, uint32_t k, 
    its empty slots of radius 0; the tail's slots past its count may be
    being written), then lightvec__visit for the slots that passed, one
    branch per passing slot. */
-static void lightvec__visit_block(lightvec__query *q, const float *block, const lightvec__item *items, uint32_t count,
-                                  int full)
+static void lightvec__visit_block(lightvec__query *q, const lightvec__block *block, const lightvec__item *items,
+                                  uint32_t count, int full)
 {
     lightvec__slots s;
     float cos_dir = q->directional ? q->p->cos_dir : -2.0f; /* a 3D query has w = 0: cs = 0 passes */
-    unsigned mask = full ? lightvec__block_pass(q, block, LIGHTVEC__LEAF, cos_dir, &s)
-                         : lightvec__block_pass(q, block, count, cos_dir, &s);
+    unsigned mask = full ? lightvec__block_pass(q, block->row, LIGHTVEC__LEAF, cos_dir, &s)
+                         : lightvec__block_pass(q, block->row, count, cos_dir, &s);
     uint32_t k;
     for (; mask; mask &= mask - 1) {
         k = lightvec__bvh_first_bit(mask);
-        lightvec__visit(q, block, k, &items[k], &s, cos_dir);
+        lightvec__visit(q, block->row, k, &items[k], &block->head[k], &s, cos_dir);
     }
 }
 
@@ -4036,8 +4074,8 @@ static void lightvec__drain(lightvec__query *q)
    memory latencies of a lookup overlap (visiting a block as soon as the
    walk reaches it waits for each one in turn). The order of the visits,
    hence of every result, is the walk's. */
-static void lightvec__queue_block(lightvec__query *q, const float *block, const lightvec__item *items, uint32_t count,
-                                  int full)
+static void lightvec__queue_block(lightvec__query *q, const lightvec__block *block, const lightvec__item *items,
+                                  uint32_t count, int full)
 {
     lightvec__block_ref *r;
     if (q->pending_count == LIGHTVEC__PENDING) lightvec__drain(q);
@@ -4051,8 +4089,7 @@ static void lightvec__queue_block(lightvec__query *q, const float *block, const 
 static void lightvec__query_leaf(void *ctx, const lightvec__tree *t, uint32_t leaf)
 {
     uint32_t first = leaf * LIGHTVEC__LEAF;
-    lightvec__queue_block((lightvec__query *)ctx, t->blocks + (size_t)leaf * LIGHTVEC__BLOCK, t->items + first,
-                          t->count - first, 1);
+    lightvec__queue_block((lightvec__query *)ctx, &t->blocks[leaf], t->items + first, t->count - first, 1);
 }
 
 /* The tail's published items (tail_count, acquire), block by block. */
@@ -4060,9 +4097,9 @@ static void lightvec__tail_query(const lightvec__index *idx, lightvec__query *q)
 {
     uint32_t n = lightvec__load_u32(&idx->tail_count), i;
     for (i = 0; i * LIGHTVEC__LEAF < n; i++) {
-        LIGHTVEC__PREFETCH(&idx->tail_blocks[i][LIGHTVEC__ROW_SX * LIGHTVEC__LEAF]);
-        LIGHTVEC__PREFETCH(&idx->tail_blocks[i][LIGHTVEC__ROW_NY * LIGHTVEC__LEAF]);
-        lightvec__queue_block(q, idx->tail_blocks[i], idx->tail + i * LIGHTVEC__LEAF, n - i * LIGHTVEC__LEAF, 0);
+        LIGHTVEC__PREFETCH(&idx->tail_blocks[i].row[LIGHTVEC__ROW_SX * LIGHTVEC__LEAF]);
+        LIGHTVEC__PREFETCH(&idx->tail_blocks[i].row[LIGHTVEC__ROW_NY * LIGHTVEC__LEAF]);
+        lightvec__queue_block(q, &idx->tail_blocks[i], idx->tail + i * LIGHTVEC__LEAF, n - i * LIGHTVEC__LEAF, 0);
     }
 }
 
@@ -4272,7 +4309,7 @@ static void lightvec__retire(lightvec_cache *c, void *ptr, size_t bytes)
 
 static void lightvec__maybe_reclaim(lightvec_cache *c)
 {
-    size_t live = (size_t)c->record_count * sizeof(lightvec__item);
+    size_t live = (size_t)c->record_count * sizeof(lightvec__entry);
     if (c->retired_bytes > LIGHTVEC__RECLAIM_BYTES + live / 4) lightvec__reclaim(c);
 }
 
@@ -4312,19 +4349,26 @@ static lightvec__index *lightvec__index_new(lightvec_cache *c)
     return idx;
 }
 
-/* Copies the tail and the first `trees` kd-trees of idx to dst; returns the count. */
-static uint32_t lightvec__index_items(const lightvec__index *idx, uint32_t trees, lightvec__item *dst)
+/* Copies the tail and the first `trees` kd-trees of idx to dst, each item
+   with its head from its block; returns the count. */
+static uint32_t lightvec__index_items(const lightvec__index *idx, uint32_t trees, lightvec__entry *dst)
 {
-    uint32_t i, n = idx->tail_count;
-    memcpy(dst, idx->tail, n * sizeof *dst);
+    uint32_t i, k, n = idx->tail_count;
+    for (k = 0; k < n; k++) {
+        dst[k].head = idx->tail_blocks[k / LIGHTVEC__LEAF].head[k % LIGHTVEC__LEAF];
+        dst[k].item = idx->tail[k];
+    }
     for (i = 0; i < trees; i++) {
-        memcpy(dst + n, idx->trees[i]->items, idx->trees[i]->count * sizeof *dst);
-        n += idx->trees[i]->count;
+        const lightvec__tree *t = idx->trees[i];
+        for (k = 0; k < t->count; k++, n++) {
+            dst[n].head = t->blocks[k / LIGHTVEC__LEAF].head[k % LIGHTVEC__LEAF];
+            dst[n].item = t->items[k];
+        }
     }
     return n;
 }
 
-static lightvec__index *lightvec__index_single(lightvec_cache *c, const lightvec__item *items, uint32_t n)
+static lightvec__index *lightvec__index_single(lightvec_cache *c, const lightvec__entry *items, uint32_t n)
 {
     lightvec__index *idx = lightvec__index_new(c);
     lightvec__tree *t = lightvec__tree_build(&c->a, items, n);
@@ -4338,17 +4382,17 @@ static lightvec__index *lightvec__index_single(lightvec_cache *c, const lightvec
     return idx;
 }
 
-static int lightvec__face_fill(lightvec_cache *c, lightvec__face *f, lightvec__item *items, uint32_t n);
+static int lightvec__face_fill(lightvec_cache *c, lightvec__face *f, lightvec__entry *items, uint32_t n);
 
 /* The four children of f holding items[0, n) (figure 4), split again while a
    child still holds more than the threshold. Not published: the caller stores
    the pointer into f->children when the rest of its change is ready. NULL
    when out of memory (nothing is left allocated). */
-static lightvec__face *lightvec__face_children(lightvec_cache *c, lightvec__face *f, const lightvec__item *items,
+static lightvec__face *lightvec__face_children(lightvec_cache *c, lightvec__face *f, const lightvec__entry *items,
                                                uint32_t n)
 {
     lightvec__face *ch = (lightvec__face *)lightvec__alloc_array(&c->a, 4, sizeof(lightvec__face));
-    lightvec__item *tmp = (lightvec__item *)lightvec__alloc_array(&c->a, n, sizeof(lightvec__item));
+    lightvec__entry *tmp = (lightvec__entry *)lightvec__alloc_array(&c->a, n, sizeof(lightvec__entry));
     uint32_t count[4] = { 0, 0, 0, 0 }, start[4], i;
     int k, failed = 0;
     if (!ch || !tmp) {
@@ -4357,10 +4401,10 @@ static lightvec__face *lightvec__face_children(lightvec_cache *c, lightvec__face
         return NULL;
     }
     lightvec__make_children(f, ch);
-    for (i = 0; i < n; i++) count[lightvec__child_of(f, items[i].outgoing)]++;
+    for (i = 0; i < n; i++) count[lightvec__child_of(f, items[i].item.outgoing)]++;
     start[0] = 0;
     for (k = 1; k < 4; k++) start[k] = start[k - 1] + count[k - 1];
-    for (i = 0; i < n; i++) tmp[start[lightvec__child_of(f, items[i].outgoing)]++] = items[i];
+    for (i = 0; i < n; i++) tmp[start[lightvec__child_of(f, items[i].item.outgoing)]++] = items[i];
     for (k = 0; k < 4; k++) start[k] -= count[k];
     for (k = 0; k < 4 && !failed; k++) failed = lightvec__face_fill(c, &ch[k], tmp + start[k], count[k]) != 0;
     lightvec__free(&c->a, tmp);
@@ -4374,7 +4418,7 @@ static lightvec__face *lightvec__face_children(lightvec_cache *c, lightvec__face
 
 /* Fills an empty face with items[0, n): children while the threshold allows,
    else one kd-tree. */
-static int lightvec__face_fill(lightvec_cache *c, lightvec__face *f, lightvec__item *items, uint32_t n)
+static int lightvec__face_fill(lightvec_cache *c, lightvec__face *f, lightvec__entry *items, uint32_t n)
 {
     if (n > c->p.split_threshold && lightvec__can_split(c, f)) {
         lightvec__face *ch = lightvec__face_children(c, f, items, n);
@@ -4400,14 +4444,14 @@ static int lightvec__face_fill(lightvec_cache *c, lightvec__face *f, lightvec__i
 static int lightvec__merge(lightvec_cache *c, lightvec__face *f)
 {
     lightvec__index *old = (lightvec__index *)f->index, *idx;
-    lightvec__item *items;
+    lightvec__entry *items;
     lightvec__tree *t;
     uint64_t acc = old->tail_count;
     uint32_t take = 0, i;
     while (take < old->tree_count &&
            (old->trees[take]->count <= LIGHTVEC__MERGE_RATIO * acc || old->tree_count - take >= LIGHTVEC__MAX_TREES))
         acc += old->trees[take++]->count;
-    items = (lightvec__item *)lightvec__alloc_array(&c->a, (size_t)acc, sizeof *items);
+    items = (lightvec__entry *)lightvec__alloc_array(&c->a, (size_t)acc, sizeof *items);
     if (!items) return -1;
     lightvec__index_items(old, take, items);
     t = lightvec__tree_build(&c->a, items, (uint32_t)acc);
@@ -4429,10 +4473,10 @@ static int lightvec__merge(lightvec_cache *c, lightvec__face *f)
 
 /* The children of leaf f holding its items and one more (section 3.2,
    figure 4), unpublished; NULL when out of memory. */
-static lightvec__face *lightvec__split_with(lightvec_cache *c, lightvec__face *f, const lightvec__item *extra)
+static lightvec__face *lightvec__split_with(lightvec_cache *c, lightvec__face *f, const lightvec__entry *extra)
 {
     const lightvec__index *old = (const lightvec__index *)f->index;
-    lightvec__item *items = (lightvec__item *)lightvec__alloc_array(&c->a, (size_t)f->count + 1u, sizeof *items);
+    lightvec__entry *items = (lightvec__entry *)lightvec__alloc_array(&c->a, (size_t)f->count + 1u, sizeof *items);
     lightvec__face *ch;
     uint32_t n = 0;
     if (!items) return NULL;
@@ -4470,12 +4514,12 @@ static int lightvec__face_prepare(lightvec_cache *c, lightvec__face *f)
     return idx->tail_count == LIGHTVEC__TAIL ? lightvec__merge(c, f) : 0;
 }
 
-static void lightvec__face_push(lightvec__face *f, const lightvec__item *it)
+static void lightvec__face_push(lightvec__face *f, const lightvec__entry *e)
 {
     lightvec__index *idx = (lightvec__index *)f->index;
     uint32_t n = idx->tail_count;
-    idx->tail[n] = *it;
-    lightvec__block_put(idx->tail_blocks[n / LIGHTVEC__LEAF], n % LIGHTVEC__LEAF, it);
+    idx->tail[n] = e->item;
+    lightvec__block_put(&idx->tail_blocks[n / LIGHTVEC__LEAF], n % LIGHTVEC__LEAF, e);
     lightvec__store_u32(&idx->tail_count, n + 1u); /* publishes the item */
     f->count++;
 }
@@ -4634,19 +4678,20 @@ static void lightvec__interpolate(const lightvec__query *q, lightvec_lookup_resu
     int k;
     for (i = 0; i < used; i++) {
         const lightvec__candidate *c = &q->kept[i];
+        const lightvec__head *h = c->head;
         const lightvec__item *it = c->it;
         double w = c->w, wg = c->wg;
         wsum += w;
         for (k = 0; k < 3; k++) {
-            float m = it->mag[k];
+            float m = h->mag[k];
             if (p->interpolation == LIGHTVEC_INTERPOLATION_GRADIENT) {
-                float f = 1.0f + (it->slope[k][0] * c->d[0] + it->slope[k][1] * c->d[1] + it->slope[k][2] * c->d[2]);
+                float f = 1.0f + (h->slope[k][0] * c->d[0] + h->slope[k][1] * c->d[1] + h->slope[k][2] * c->d[2]);
                 m *= f > 0.0f ? f : 0.0f;
             }
             msum[k] += w * m;
-            dsum[k] += w * it->dir[k];
+            dsum[k] += w * h->dir[k];
         }
-        glossy += q->directional && (it->kind & LIGHTVEC__ITEM_GLOSSY);
+        glossy += q->directional && (h->kind & LIGHTVEC__ITEM_GLOSSY);
         if (wg > 0.0) {
             float v[3];
             v[0] = q->w[0] - it->outgoing[0]; v[1] = q->w[1] - it->outgoing[1]; v[2] = q->w[2] - it->outgoing[2];
@@ -4659,8 +4704,8 @@ static void lightvec__interpolate(const lightvec__query *q, lightvec_lookup_resu
             esum += wg * it->exponent;
             glossy_valid++;
         }
-        if (it->kind & LIGHTVEC__ITEM_LIT) lit++;
-        else if (it->kind & LIGHTVEC__ITEM_UMBRA) shadow++;
+        if (h->kind & LIGHTVEC__ITEM_LIT) lit++;
+        else if (h->kind & LIGHTVEC__ITEM_UMBRA) shadow++;
         else partial++;
     }
     out->used_count = used;
@@ -4783,7 +4828,7 @@ static void lightvec__clamp_leaf(void *ctx, const lightvec__tree *ct, uint32_t l
     lightvec__tree *t = (lightvec__tree *)(uintptr_t)ct; /* the writer's own memory */
     uint32_t i;
     for (i = leaf * LIGHTVEC__LEAF; i < t->count && i < (leaf + 1) * LIGHTVEC__LEAF; i++)
-        lightvec__clamp_item((lightvec__clamp *)ctx, t->blocks + (size_t)leaf * LIGHTVEC__BLOCK, i % LIGHTVEC__LEAF,
+        lightvec__clamp_item((lightvec__clamp *)ctx, t->blocks[leaf].row, i % LIGHTVEC__LEAF,
                              &t->items[i]);
 }
 
@@ -4795,7 +4840,7 @@ static void lightvec__clamp_index(void *ctx, const lightvec__index *cidx)
     uint32_t i;
     for (i = 0; i < idx->tree_count; i++) lightvec__tree_walk(idx->trees[i], k->it->pos, reach, lightvec__clamp_leaf, k);
     for (i = 0; i < idx->tail_count; i++)
-        lightvec__clamp_item(k, idx->tail_blocks[i / LIGHTVEC__LEAF], i % LIGHTVEC__LEAF, &idx->tail[i]);
+        lightvec__clamp_item(k, idx->tail_blocks[i / LIGHTVEC__LEAF].row, i % LIGHTVEC__LEAF, &idx->tail[i]);
 }
 
 static void lightvec__clamp_pass(lightvec_cache *c, lightvec__item *it, int directional, int pass)
@@ -4811,7 +4856,7 @@ static void lightvec__clamp_pass(lightvec_cache *c, lightvec__item *it, int dire
 LIGHTVEC_API lightvec_result lightvec_insert(lightvec_cache *c, const lightvec_record *rec, uint32_t *id_out)
 {
     lightvec_record clean, *slot;
-    lightvec__item it;
+    lightvec__entry e;
     lightvec__face *f;
     uint32_t id;
     int directional, clamp;
@@ -4824,14 +4869,14 @@ LIGHTVEC_API lightvec_result lightvec_insert(lightvec_cache *c, const lightvec_r
     directional = !(clean.flags & LIGHTVEC_RECORD_VIEW_INDEPENDENT);
     clamp = !(c->p.flags & LIGHTVEC_CACHE_NO_NEIGHBOR_CLAMP);
     f = lightvec__leaf_for(c, &clean);
-    lightvec__make_item(&c->p, &clean, id, &it);
-    if (clamp) lightvec__clamp_pass(c, &it, directional, 1);
-    clean.radius = it.radius;
+    lightvec__make_item(&c->p, &clean, id, &e);
+    if (clamp) lightvec__clamp_pass(c, &e.item, directional, 1);
+    clean.radius = e.item.radius;
     /* Everything that can fail happens before the record is published: on an
        error the cache is as it was. The record count is published before the
        item, so a reader that finds the item can read its record. */
     if (f->count + 1u > c->p.split_threshold && lightvec__can_split(c, f)) {
-        lightvec__face *ch = lightvec__split_with(c, f, &it);
+        lightvec__face *ch = lightvec__split_with(c, f, &e);
         if (!ch) return LIGHTVEC_ERROR_OUT_OF_MEMORY;
         *slot = clean;
         lightvec__store_f32(lightvec__radius_at(c, id), clean.radius);
@@ -4842,9 +4887,9 @@ LIGHTVEC_API lightvec_result lightvec_insert(lightvec_cache *c, const lightvec_r
         *slot = clean;
         lightvec__store_f32(lightvec__radius_at(c, id), clean.radius);
         lightvec__store_u32(&c->record_count, id + 1u);
-        lightvec__face_push(f, &it);
+        lightvec__face_push(f, &e);
     }
-    if (clamp) lightvec__clamp_pass(c, &it, directional, 2);
+    if (clamp) lightvec__clamp_pass(c, &e.item, directional, 2);
     lightvec__maybe_reclaim(c);
     if (id_out) *id_out = id;
     return LIGHTVEC_OK;
@@ -4978,7 +5023,7 @@ static void lightvec__rebuild_job(void *ctx, uint32_t i)
 {
     lightvec__rebuild *r = (lightvec__rebuild *)ctx;
     const lightvec__index *old = (const lightvec__index *)r->faces[i]->index;
-    lightvec__item *items = (lightvec__item *)lightvec__alloc_array(&r->c->a, r->faces[i]->count, sizeof *items);
+    lightvec__entry *items = (lightvec__entry *)lightvec__alloc_array(&r->c->a, r->faces[i]->count, sizeof *items);
     r->built[i] = NULL;
     if (!items) return;
     lightvec__index_items(old, old->tree_count, items);
@@ -5166,7 +5211,7 @@ LIGHTVEC_API lightvec_result lightvec_save(const lightvec_cache *c, lightvec_wri
    (or the view-independent leaf); each root is filled as one job. */
 typedef struct lightvec__bulk {
     lightvec_cache *c;
-    lightvec__item *items;
+    lightvec__entry *items;
     uint32_t start[22];              /* 20 roots, the view-independent leaf, end */
     int failed[21];
 } lightvec__bulk;
@@ -5190,7 +5235,7 @@ static lightvec_result lightvec__bulk_index(lightvec_cache *c)
     int k, failed = 0;
     memset(&b, 0, sizeof b);
     b.c = c;
-    b.items = (lightvec__item *)lightvec__alloc_array(&c->a, n, sizeof *b.items);
+    b.items = (lightvec__entry *)lightvec__alloc_array(&c->a, n, sizeof *b.items);
     if (!b.items) return LIGHTVEC_ERROR_OUT_OF_MEMORY;
     for (i = 0; i < n; i++) b.start[lightvec__slot_of(c, lightvec__record_at(c, i)) + 1]++;
     for (k = 1; k < 22; k++) b.start[k] += b.start[k - 1];

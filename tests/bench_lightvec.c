@@ -146,16 +146,18 @@ static void bench_lookups(void)
     double at_1e5[2][2] = { { 0, 0 }, { 0, 0 } }, valid_1e5[2] = { 0, 0 }; /* [sparse, dense][random, sorted] */
     int s;
     printf("lookup time, us, thread CPU time, median of 5 passes (paper, 3.3: 10-15 ms per query on a 1.2 GHz\n"
-           "Athlon, nearly independent of the size; issue 15's target: < 2 us at 1e5 records, sparse and dense)\n");
-    printf("  %9s %7s %11s %9s %9s %9s %9s %8s %8s\n", "records", "cover", "insert[us]", "random", "sorted", "opt rand",
-           "opt sort", "valid", "hits");
+           "Athlon, nearly independent of the size; issue 15's target: < 2 us at 1e5 records, sparse and dense);\n"
+           "opt[ms]: lightvec_cache_optimize, CPU time; B/rec: memory the cache holds per record as inserted\n");
+    printf("  %9s %7s %11s %9s %9s %9s %9s %8s %8s %8s %8s\n", "records", "cover", "insert[us]", "random", "sorted",
+           "opt rand", "opt sort", "valid", "hits", "opt[ms]", "B/rec");
     for (s = 0; s < 4; s++) {
         lightvec_cache *cache = NULL;
         lightvec_record rec;
         rng r;
+        lightvec_cache_stats st;
         uint32_t i, q, nq = 100000, valid = 0, hits = 0, v2, h2;
         /* disks of radius r cover a wall point about `cover` times: n/6 pi r^2 = cover */
-        double radius = sqrt(cover[s] * 6.0 / (PI * sizes[s])), t0, t_insert, t[4];
+        double radius = sqrt(cover[s] * 6.0 / (PI * sizes[s])), t0, t_insert, t_optimize, t[4];
         float (*qp)[9] = (float (*)[9])malloc(sizeof(float[9]) * nq), (*sorted)[9] = (float (*)[9])malloc(sizeof(float[9]) * nq);
         if (!qp || !sorted || lightvec_cache_create(NULL, &cache) != LIGHTVEC_OK) return;
         r.s = 1234;
@@ -173,11 +175,15 @@ static void bench_lookups(void)
         qsort(sorted, nq, sizeof(float[9]), cmp_cell);
         t[0] = lookup_time(cache, qp, nq, &valid, &hits);
         t[1] = lookup_time(cache, sorted, nq, &v2, &h2);
+        lightvec_cache_info(cache, &st); /* memory held as inserted: records, trees, faces */
+        t0 = now();
         lightvec_cache_optimize(cache);
+        t_optimize = now() - t0;
         t[2] = lookup_time(cache, qp, nq, &v2, &h2);
         t[3] = lookup_time(cache, sorted, nq, &v2, &h2);
-        printf("  %9u %7.0f %11.2f %9.3f %9.3f %9.3f %9.3f %8.1f %7.1f%%\n", sizes[s], cover[s], 1e6 * t_insert, 1e6 * t[0],
-               1e6 * t[1], 1e6 * t[2], 1e6 * t[3], (double)valid / nq, 100.0 * hits / nq);
+        printf("  %9u %7.0f %11.2f %9.3f %9.3f %9.3f %9.3f %8.1f %7.1f%% %8.1f %8.0f\n", sizes[s], cover[s],
+               1e6 * t_insert, 1e6 * t[0], 1e6 * t[1], 1e6 * t[2], 1e6 * t[3], (double)valid / nq, 100.0 * hits / nq,
+               1e3 * t_optimize, (double)st.bytes / sizes[s]);
         if (sizes[s] == 100000) {
             at_1e5[s == 3][0] = t[0];
             at_1e5[s == 3][1] = t[1];
