@@ -168,7 +168,7 @@ int main(int argc, char **argv)
 
     /* the scene as patches: one per polygon face, E = pi * Ke */
     patches = (uint32_t *)malloc(4 * sizeof(uint32_t) * scene.face_count);
-    mats = (radinterp_material *)malloc(sizeof(radinterp_material) * (scene.material_count ? scene.material_count : 1));
+    mats = (radinterp_material *)calloc(scene.material_count ? scene.material_count : 1, sizeof(radinterp_material));
     pool = ex_pool_create(0);
     if (!patches || !mats || !pool) { fprintf(stderr, "radinterp_office: out of memory\n"); return 1; }
     for (f = 0; f < scene.face_count; f++) {

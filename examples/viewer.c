@@ -135,7 +135,7 @@ static void viewer_close(viewer *v)
 
 /* The world and the renderer of v->o.mode (precomputed data from the cache).
    Returns 0, -1, or WT_ERROR_UNSUPPORTED when the mode cannot render the
-   scene (radiosity by day). */
+   scene (no mode refuses one today). */
 static int viewer_open(viewer *v, char *err, size_t err_size)
 {
     int result;

@@ -51,9 +51,10 @@
    of the displayed range. --help lists the options.
 
    --scene daylight walks the building by day (building_1k_daylight.*:
-   glass in the windows, lamps off, a sky named by its layout; modes
-   raytrace and baseviews: radinterp.h has no transmitting patch yet, so
-   mode radiosity refuses it).
+   glass in the windows, lamps off, a sky named by its layout; every mode:
+   radiosity passes light through the panes and lights the rooms with the
+   sky, radinterp.h's GLASS AND SKY; at this size its interpolant mesh
+   takes long to build).
 
    --scene FILE (with --up, --scale, --drop-coincident; scene_load.h; but
    --scene building, daylight and office, the built-in scenes) walks through

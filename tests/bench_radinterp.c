@@ -302,7 +302,7 @@ int main(void)
         return 1;
     }
     patches = (uint32_t *)malloc(4 * sizeof(uint32_t) * office.face_count);
-    mats = (radinterp_material *)malloc(sizeof(radinterp_material) * office.material_count);
+    mats = (radinterp_material *)calloc(office.material_count, sizeof(radinterp_material));
     for (f = 0; f < office.face_count; f++) {
         uint32_t c = office.face_start[f + 1] - office.face_start[f], k;
         for (k = 0; k < 4; k++) patches[4 * f + k] = k < c ? office.face_vertices[office.face_start[f] + k] : RADINTERP_NO_VERTEX;

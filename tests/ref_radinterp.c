@@ -29,7 +29,7 @@ static int setup(void)
     ref = ref_scene_from_obj(&box);
     if (!CHECK(ref != NULL)) return 0;
     patches = (uint32_t *)malloc(4 * sizeof(uint32_t) * box.face_count);
-    mats = (radinterp_material *)malloc(sizeof(radinterp_material) * box.material_count);
+    mats = (radinterp_material *)calloc(box.material_count, sizeof(radinterp_material));
     for (f = 0; f < box.face_count; f++) {
         uint32_t n = box.face_start[f + 1] - box.face_start[f], k;
         for (k = 0; k < 4; k++) patches[4 * f + k] = k < n ? box.face_vertices[box.face_start[f] + k] : RADINTERP_NO_VERTEX;

@@ -48,7 +48,7 @@ static int load_scene(loaded *l, const char *path, float eps, float min_leaf_are
         return 0;
     }
     l->patches = (uint32_t *)malloc(4 * sizeof(uint32_t) * l->obj.face_count);
-    l->mats = (radinterp_material *)malloc(sizeof(radinterp_material) * l->obj.material_count);
+    l->mats = (radinterp_material *)calloc(l->obj.material_count, sizeof(radinterp_material));
     for (f = 0; f < l->obj.face_count; f++) {
         uint32_t n = l->obj.face_start[f + 1] - l->obj.face_start[f];
         for (k = 0; k < 4; k++) l->patches[4 * f + k] = k < n ? l->obj.face_vertices[l->obj.face_start[f] + k] : RADINTERP_NO_VERTEX;

@@ -852,7 +852,7 @@ static int load_office(void)
         return 0;
     }
     office_patches = (uint32_t *)malloc(4 * sizeof(uint32_t) * office.face_count);
-    office_mats = (radinterp_material *)malloc(sizeof(radinterp_material) * office.material_count);
+    office_mats = (radinterp_material *)calloc(office.material_count, sizeof(radinterp_material));
     for (f = 0; f < office.face_count; f++) {
         uint32_t n = office.face_start[f + 1] - office.face_start[f], k;
         for (k = 0; k < 4; k++)

@@ -49,7 +49,7 @@ static int load_scene(rb_scene *s, radinterp_material **mats, uint32_t *material
         s->mat[f] = obj.face_material[f];
     }
     s->np = obj.face_count;
-    *mats = (radinterp_material *)malloc(sizeof **mats * obj.material_count);
+    *mats = (radinterp_material *)calloc(obj.material_count, sizeof **mats);
     *material_count = obj.material_count;
     for (f = 0; f < obj.material_count; f++)
         for (k = 0; k < 3; k++) {

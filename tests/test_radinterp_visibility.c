@@ -188,7 +188,7 @@ static int load_scene(const char *path, obj_scene *o, uint32_t **patches, radint
         return 0;
     }
     *patches = (uint32_t *)malloc(4 * sizeof(uint32_t) * o->face_count);
-    *mats = (radinterp_material *)malloc(sizeof(radinterp_material) * o->material_count);
+    *mats = (radinterp_material *)calloc(o->material_count, sizeof(radinterp_material));
     for (f = 0; f < o->face_count; f++) {
         uint32_t c = o->face_start[f + 1] - o->face_start[f], k;
         for (k = 0; k < 4; k++) (*patches)[4 * f + k] = k < c ? o->face_vertices[o->face_start[f] + k] : RADINTERP_NO_VERTEX;

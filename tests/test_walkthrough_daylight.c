@@ -4,7 +4,7 @@
    layout reader's sky lines, camera rays through the panes, daylight
    reaching the rooms only through the glass (nothing with the panes made
    opaque), the raytrace mode's frames against converged renders, mode
-   radiosity refusing glass and a sky with WT_ERROR_UNSUPPORTED, and the
+   radiosity lighting a room through a glass pane in its ceiling, and the
    bunny's contact shadow on the floor (by day, its only shadow). */
 #define _POSIX_C_SOURCE 200809L
 #include "examples/common/walkthrough.h"
@@ -364,31 +364,96 @@ static void test_light_only_through_glass(void)
     free(ref);
 }
 
-/* Mode radiosity has no transmitting patch: glass, or a sky without glass,
-   is refused with WT_ERROR_UNSUPPORTED and a message naming it. */
-static void test_radiosity_refuses(void)
+/* Mode radiosity by day (radinterp.h's glass and sky): a room 4 x 2.8 x 4 m
+   (two rooms in the layout, for the bunny's walk) with a 1.2 m square glass pane (Tf 0.85) in the middle of its ceiling
+   under the daylight building's sky (4, 4.3, 5), written here. The floor
+   under the window has at least rho tf pi L F of the sky straight through
+   the pane, F the closed-form factor of the window from the floor's centre
+   (the rest is light from the walls, which the sky lit), and less in the
+   room's corner; with the pane opaque (Tf 0, no other light) every floor
+   triangle is black. The frames render. */
+#define DAY_ROOM_LAYOUT                                                                                  \
+    "room 0 0 0 0 2 0 2.8 0 4 panel 0\nroom 0 0 1 2 4 0 2.8 0 4 none 0\ndoor 0 1.95 2.05 0 2.1 1.5 2.5\nsky 4 4.3 5\n"
+
+static void write_day_room(const char *dir, float tf)
 {
-    wt_options o = day_options(WT_MODE_RADIOSITY, "daylight");
-    wt_world *w = NULL;
-    wt_renderer *r = NULL;
-    char err[512], dir[256], obj[512], cmd[1400];
-    if (CHECK_MSG(wt_world_create(&o, &w, err, sizeof err) == 0, "%s", err)) {
-        CHECK(wt_renderer_create(w, &r, err, sizeof err) == WT_ERROR_UNSUPPORTED && r == NULL);
-        CHECK_MSG(strstr(err, "radiosity") && strstr(err, "glass"), "%s", err);
-        wt_world_destroy(w);
-        w = NULL;
+    static const char *obj =
+        "mtllib room.mtl\n"
+        "v 0 0 0\nv 4 0 0\nv 4 0 4\nv 0 0 4\nv 0 2.8 0\nv 4 2.8 0\nv 4 2.8 4\nv 0 2.8 4\n"
+        "v 1.4 2.8 1.4\nv 2.6 2.8 1.4\nv 2.6 2.8 2.6\nv 1.4 2.8 2.6\n"
+        "usemtl floor\nf 1 4 3 2\n"
+        "usemtl wall\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n"
+        "f 5 6 10 9\nf 6 7 11 10\nf 7 8 12 11\nf 8 5 9 12\n"
+        "usemtl glass\nf 9 10 11 12\n";
+    char path[512], mtl[256];
+    snprintf(path, sizeof path, "%s/room.obj", dir);
+    CHECK(write_file(path, obj));
+    snprintf(mtl, sizeof mtl, "newmtl floor\nKd 0.5 0.5 0.5\nnewmtl wall\nKd 0.6 0.6 0.6\n"
+             "newmtl glass\nKd 0 0 0\nTf %g %g %g\nillum 4\n", tf, tf, tf);
+    snprintf(path, sizeof path, "%s/room.mtl", dir);
+    CHECK(write_file(path, mtl));
+    snprintf(path, sizeof path, "%s/room.layout", dir);
+    CHECK(write_file(path, DAY_ROOM_LAYOUT));
+}
+
+/* The radiosity B (green) of the floor's mesh at (x, 0, z): the
+   interpolant of the floor triangle containing it, at its barycentrics. */
+static float floor_radiosity(const wt_renderer *r, float x, float z)
+{
+    const radinterp_mesh_data *d = &r->statics.data;
+    uint32_t t;
+    float rgb[3] = { -1.0f, -1.0f, -1.0f };
+    for (t = 0; t < d->triangle_count; t++) {
+        const float *a = d->positions + 3 * (size_t)d->indices[3 * t], *b = d->positions + 3 * (size_t)d->indices[3 * t + 1];
+        const float *c = d->positions + 3 * (size_t)d->indices[3 * t + 2];
+        float e1x = b[0] - a[0], e1z = b[2] - a[2], e2x = c[0] - a[0], e2z = c[2] - a[2], px = x - a[0], pz = z - a[2];
+        float det = e1x * e2z - e1z * e2x, u, v;
+        if (d->triangle_patch[t] != 0 || det == 0.0f) continue;   /* the floor is the OBJ's first face */
+        u = (px * e2z - pz * e2x) / det;
+        v = (e1x * pz - e1z * px) / det;
+        if (u < -1e-6f || v < -1e-6f || u + v > 1.0f + 1e-6f) continue;
+        radinterp_eval(r->statics.mesh, t, u, v, rgb);
+        break;
     }
-    if (!CHECK(make_temp_dir(dir, sizeof dir))) return;
-    snprintf(cmd, sizeof cmd, "cp examples/data/building_1k.obj examples/data/building_1k.mtl '%s'/ && "
-             "cp examples/data/building_1k_daylight.layout '%s'/building_1k.layout", dir, dir);
-    snprintf(obj, sizeof obj, "%s/building_1k.obj", dir);
-    o.scene = obj;
-    if (CHECK(system(cmd) == 0) && CHECK_MSG(wt_world_create(&o, &w, err, sizeof err) == 0, "%s", err)) {
-        CHECK(wt_renderer_create(w, &r, err, sizeof err) == WT_ERROR_UNSUPPORTED && r == NULL);
-        CHECK_MSG(strstr(err, "a sky") != NULL, "%s", err);
+    return rgb[1];
+}
+
+static void test_radiosity_by_day(void)
+{
+    static const float sky_green = 4.3f, tf = 0.85f, rho = 0.5f;
+    char dir[256], obj[512], err[512];
+    float *rgb = (float *)malloc(3 * sizeof(float) * DAY_W * DAY_H);
+    int opaque;
+    /* F of a 1.2 m square at 2.8 m from the point under its centre (eq. 6.1 in closed form) */
+    double x = 0.6 / 2.8, f = 4.0 / 3.14159265358979 * (x / sqrt(1 + x * x) * atan(x / sqrt(1 + x * x)));
+    if (!CHECK(rgb && make_temp_dir(dir, sizeof dir))) { free(rgb); return; }
+    snprintf(obj, sizeof obj, "%s/room.obj", dir);
+    for (opaque = 0; opaque < 2; opaque++) {
+        wt_options o = day_options(WT_MODE_RADIOSITY, obj);
+        wt_world *w = NULL;
+        wt_renderer *r = NULL;
+        wt_frame_stats st;
+        write_day_room(dir, opaque ? 0.0f : tf);
+        if (!CHECK_MSG(wt_world_create(&o, &w, err, sizeof err) == 0, "%s", err)) continue;
+        if (CHECK_MSG(wt_renderer_create(w, &r, err, sizeof err) == 0, "%s", err)) {
+            float centre = floor_radiosity(r, 2.0f, 2.0f), corner = floor_radiosity(r, 0.2f, 0.2f);
+            double direct = rho * tf * 3.14159265358979 * sky_green * f;
+            if (!opaque) {
+                /* the direct sky alone is a floor: 3% under it for the sky's sampling (1024 rays) */
+                CHECK_MSG(centre >= 0.97 * direct, "under the window B = %.4f, direct sky alone %.4f", centre, direct);
+                CHECK_MSG(corner > 0.0f && corner < centre, "corner %.4f, centre %.4f", corner, centre);
+                test_note("radiosity by day: floor B %.4f under the window (direct sky through the pane %.4f), %.4f in "
+                          "the corner", centre, direct, corner);
+            } else {
+                CHECK_MSG(centre == 0.0f && corner == 0.0f, "opaque pane: %.4g, %.4g", centre, corner);
+            }
+            CHECK(wt_render_frame(r, 0, rgb, &st) == 0);
+            wt_renderer_destroy(r);
+        }
         wt_world_destroy(w);
     }
     remove_dir(dir);
+    free(rgb);
 }
 
 /* ---- contact shadows ------------------------------------------------------ */
@@ -475,7 +540,7 @@ int main(int argc, char **argv)
     test_init(argc, argv);
     RUN(test_sky_lines);
     RUN(test_camera_through_glass);
-    RUN(test_radiosity_refuses);
+    RUN(test_radiosity_by_day);
     RUN(test_light_only_through_glass);
     RUN(test_daylight_frames);
     RUN(test_contact_shadow);

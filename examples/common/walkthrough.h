@@ -85,11 +85,11 @@
    indirect light, in the light vectors, as lightvec.h's GLASS AND SKY
    describes. --scene daylight is make_building.py --daylight's
    building_1k_daylight (glass in every window, lamps off, a ground, an
-   overcast sky). Mode radiosity refuses glass and a sky with
-   WT_ERROR_UNSUPPORTED: radinterp.h has no transmitting patch and no sky
-   yet, and its irradiance volume (irrvol.h, which handles both) is built
-   from the radiosity solution, so irrvol lights a daylight bunny only once
-   radinterp does.
+   overcast sky). In mode radiosity the solution gets the materials'
+   transmittance and the sky (radinterp.h's GLASS AND SKY: light crosses
+   the panes, the sky lights every element and point through them), and
+   the bunny's irradiance volume, built from the solution's mesh, gets the
+   sky and the panes (irrvol's transmittance, from the patch's material).
 
    Precompute cache. Files <cache_dir>/walkthrough-<what>-<key>.bin, key =
    FNV-1a hash of the scene files' bytes, the paths (every frame's camera,
@@ -182,8 +182,8 @@ typedef enum wt_mode {
 #define WT_REFERENCE_BOUNCES 8
 
 /* What wt_renderer_create returns besides 0 and -1: the mode cannot
-   render this scene (radiosity and glass or a sky: radinterp.h has no
-   transmitting patch). */
+   render this scene. Every mode renders glass and a sky now; the viewer
+   still passes to the next mode on it. */
 #define WT_ERROR_UNSUPPORTED (-2)
 
 /* Everything a run depends on. Fields that change pictures also change the
@@ -321,8 +321,8 @@ EX_FN void wt_usage(FILE *f)
           "  --no-cache           neither read nor write the precompute cache\n"
           "  --scene S            office (default: DIR/office.obj, .mtl), building (DIR/building_4k.obj,\n"
           "                       .mtl, .layout), daylight (DIR/building_1k_daylight.*: glass in the windows\n"
-          "                       and a sky; modes raytrace and baseviews), or an OBJ with a\n"
-          "                       make_building.py layout beside it (a sky line makes it daylight)\n"
+          "                       and a sky), or an OBJ with a make_building.py layout beside it (a sky\n"
+          "                       line makes it daylight)\n"
           "  --data DIR           bunny.obj and the scenes (default examples/data)\n"
           "  --threads N          threads, 0 = one per core (default 0)\n"
           "  --seed N             random seed (default 1)\n"
@@ -3777,8 +3777,15 @@ static int wt__radiosity_solve(wt_world *w, radinterp_solution **sol, char *err,
         for (k = 0; k < 3; k++) {
             mats[f].reflectance[k] = s->materials[f].kd[k];
             mats[f].emission[k] = WT_PI * s->materials[f].ke[k];
+            mats[f].transmittance[k] = s->materials[f].tf[k];   /* glass passes light */
         }
     memset(&d, 0, sizeof d);
+    if (w->layout.has_sky) {   /* daylight: the sky lights the rooms through the windows */
+        memcpy(d.sky, w->layout.sky.radiance, sizeof d.sky);
+        d.environment = w->layout.sky.map;
+        d.environment_width = (uint32_t)w->layout.sky.width;
+        d.environment_height = (uint32_t)w->layout.sky.height;
+    }
     d.positions = s->positions;
     d.vertex_count = s->vertex_count;
     d.patches = patches;
@@ -3924,6 +3931,7 @@ typedef struct wt_volume_scene {
     float *positions, *radiance;
     uint32_t *indices, *materials;
     irrvol_material material[2];   /* 0: reflector, 1: emitter (flags only: vertex radiance replaces theirs) */
+    irrvol_material *panes;        /* by day: the two above, then one per scene material (its transmittance) */
     uint32_t negative;             /* corner radiosities below 0 (or NaN) clamped */
 } wt_volume_scene;
 
@@ -3933,7 +3941,42 @@ EX_FN void wt_volume_scene_free(wt_volume_scene *v)
     free(v->radiance);
     free(v->indices);
     free(v->materials);
+    free(v->panes);
     memset(v, 0, sizeof *v);
+}
+
+/* The volume's scene by day: the sky (irrvol's background or environment)
+   and the glass. A mesh triangle of a pane (its patch's material has a
+   transmittance) takes material 2 + that material, which passes light as
+   the scene's does; its radiance stays the pane's own radiosity. Scenes
+   without either are left as they are. Returns 0, or -1 out of memory. */
+static int wt__volume_daylight(const wt_world *w, const wt_static_shading *st, wt_volume_scene *v, irrvol_desc *src)
+{
+    const obj_scene *s = &w->office;
+    uint32_t t, m;
+    if (w->layout.has_sky) {
+        memcpy(src->background, w->layout.sky.radiance, sizeof src->background);
+        src->environment = w->layout.sky.map;
+        src->environment_width = (uint32_t)w->layout.sky.width;
+        src->environment_height = (uint32_t)w->layout.sky.height;
+    }
+    if (!w->tracer->has_glass) return 0;
+    v->panes = (irrvol_material *)calloc(2 + (size_t)s->material_count, sizeof *v->panes);
+    if (!v->panes) return -1;
+    memcpy(v->panes, v->material, sizeof v->material);
+    for (m = 0; m < s->material_count; m++) {
+        v->panes[2 + m] = v->material[0];
+        memcpy(v->panes[2 + m].transmittance, s->materials[m].tf, sizeof v->panes[2 + m].transmittance);
+    }
+    for (t = 0; t < st->data.triangle_count; t++) {
+        uint32_t f = st->data.triangle_patch[t], mat = f < s->face_count ? s->face_material[f] : s->material_count;
+        if (mat < s->material_count && (s->materials[mat].tf[0] > 0.0f || s->materials[mat].tf[1] > 0.0f ||
+                                        s->materials[mat].tf[2] > 0.0f))
+            v->materials[t] = 2 + mat;
+    }
+    src->materials = v->panes;
+    src->material_count = 2 + s->material_count;
+    return 0;
 }
 
 EX_FN int wt_volume_scene_make(const wt_static_shading *s, wt_volume_scene *v, irrvol_desc *src)
@@ -4208,7 +4251,10 @@ static int wt__radiosity_create(wt_renderer *r, char *err, size_t err_size)
     int result;
     if (wt_static_shading_build(w, &r->statics, err, err_size) != 0) return -1;
     /* the volume's radiance: the radiosity solution through the mesh */
-    if (wt_volume_scene_make(&r->statics, &vs, &source) != 0) return wt__fail(err, err_size, "%s", "out of memory");
+    if (wt_volume_scene_make(&r->statics, &vs, &source) != 0 || wt__volume_daylight(w, &r->statics, &vs, &source) != 0) {
+        wt_volume_scene_free(&vs);
+        return wt__fail(err, err_size, "%s", "out of memory");
+    }
 
     result = wt_volume_build(w, &source, wt_hash_str(r->statics.key, "mesh corners"), &r->volume, &r->reused_volume,
                              err, err_size);
@@ -4447,9 +4493,7 @@ EX_FN void wt_renderer_destroy(wt_renderer *r)
 
 /* The renderer of w's mode, with its precompute (loaded from the cache
    directory when it holds the data for these scene files and parameters,
-   else computed and saved there). Returns 0, or -1 with a message, or
-   WT_ERROR_UNSUPPORTED when the mode cannot render the scene (radiosity
-   and a scene with glass or a sky). */
+   else computed and saved there). Returns 0, or -1 with a message. */
 EX_FN int wt_renderer_create(wt_world *w, wt_renderer **out, char *err, size_t err_size)
 {
     wt_renderer *r = (wt_renderer *)calloc(1, sizeof *r);
@@ -4460,12 +4504,6 @@ EX_FN int wt_renderer_create(wt_world *w, wt_renderer **out, char *err, size_t e
     *out = NULL;
     err[0] = 0;
     if (!r) return wt__fail(err, err_size, "%s", "out of memory");
-    if (o->mode == WT_MODE_RADIOSITY && (w->layout.has_sky || w->tracer->has_glass)) {
-        free(r);
-        snprintf(err, err_size, "mode radiosity cannot light a scene with %s: radinterp.h has no transmitting patch "
-                 "or sky yet (use --mode raytrace or baseviews)", w->tracer->has_glass ? "glass" : "a sky");
-        return WT_ERROR_UNSUPPORTED;
-    }
     r->w = w;
     r->mode = o->mode;
     r->width = (uint32_t)o->width;

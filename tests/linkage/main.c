@@ -21,7 +21,7 @@ static void test_radinterp_link(void)
     float pos[24] = {-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0, -1, -1, 1, -1, 1, 1, 1, 1, 1, 1, -1, 1};
     uint32_t quads[8] = {0, 1, 2, 3, 4, 5, 6, 7};
     uint32_t mat[2] = {0, 1};
-    radinterp_material m[2] = {{{0.5f, 0.5f, 0.5f}, {0, 0, 0}}, {{0, 0, 0}, {1, 1, 1}}};
+    radinterp_material m[2] = {{{0.5f, 0.5f, 0.5f}, {0, 0, 0}, {0, 0, 0}}, {{0, 0, 0}, {1, 1, 1}, {0, 0, 0}}};
     radinterp_desc d;
     radinterp_solution *s = NULL;
     /* a 2 x 2 square at height 1 above the element: Howell's 0.554126 */
