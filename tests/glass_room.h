@@ -1,5 +1,5 @@
 /* glass_room.h - the closed room with a glass window of the headers' glass
-   tests (tests/ref_irrvol_glass.c, tests/ref_lightvec_glass.c), as plain
+   tests (tests/ref_irrvol_glass.c, ref_lightvec_glass.c, ref_radinterp_glass.c), as plain
    arrays: the room [-1,1] x [0,2] x [-1,1], every surface facing in, a
    window [-0.5,0.5]^2 in the ceiling (the rest of the ceiling in four
    quadrilaterals around it), and optionally a second pane 0.1 below the
@@ -78,6 +78,19 @@ static void glass_room_make(glass_room *r, int window_faces_up, int double_glazi
     glass_room_rect(r, 0.5f, 1, -0.5f, 0.5f, 2, -1, GLASS_ROOM_WALL);
     glass_room_rect(r, -0.5f, 0.5f, -0.5f, 0.5f, 2, pane_facing, GLASS_ROOM_PANE);
     if (double_glazing) glass_room_rect(r, -0.5f, 0.5f, -0.5f, 0.5f, 1.9f, pane_facing, GLASS_ROOM_INNER_PANE);
+}
+
+/* The environment map of the glass tests, 8 x 4 texels (rgb), a
+   latitude-longitude map as examples/common/scene_sky.h reads it: a brighter
+   zenith row, green rising with the column, and a blue column. */
+static void glass_room_map(float map[8 * 4 * 3])
+{
+    int i;
+    for (i = 0; i < 8 * 4; i++) {
+        map[3 * i] = i / 8 == 0 ? 4.0f : 1.0f;
+        map[3 * i + 1] = 1.0f + 0.25f * (float)(i % 8);
+        map[3 * i + 2] = i % 8 == 5 ? 6.0f : 0.5f;
+    }
 }
 
 #endif /* TESTS_GLASS_ROOM_H */

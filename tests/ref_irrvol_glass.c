@@ -151,12 +151,7 @@ static void test_window_under_environment_map(void)
     ref_scene *ref;
     irrvol *vol;
     ex_sky sky;
-    int i;
-    for (i = 0; i < 8 * 4; i++) {
-        map[3 * i] = i / 8 == 0 ? 4.0f : 1.0f;
-        map[3 * i + 1] = 1.0f + 0.25f * (float)(i % 8);
-        map[3 * i + 2] = i % 8 == 5 ? 6.0f : 0.5f;
-    }
+    glass_room_map(map);
     memset(&sky, 0, sizeof sky);
     sky.map = map;
     sky.width = 8;
