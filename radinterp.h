@@ -558,10 +558,11 @@
    fractions, gathers, push-pull) through desc.parallel_for when given;
    results are bit-identical for any thread count. A trace callback must then
    be thread-safe. Queries on a finished solution are const and may run from
-   many threads at once; each uses up to about 100 KB of stack (its
-   triangulation moves to the allocator only when it outgrows 32 KB).
+   many threads at once; each uses up to about 120 KB of stack (its
+   triangulation moves to the allocator only when it outgrows 32 KB; 20 KB
+   rank its sources).
    radinterp_build_mesh samples its interpolants through
-   mesh_desc.parallel_for (jobs of 4 triangles, progress between batches);
+   mesh_desc.parallel_for (jobs of 2 sample points, progress every 128);
    the mesh is bit-identical for any thread count. radinterp_shade splits
    its pixels into jobs of 16384 through the mesh's parallel_for (the
    build's, or radinterp_mesh_set_parallel_for). Queries on a mesh are const.
@@ -8482,7 +8483,7 @@ static void radinterp__link_point_glass(radinterp__query *q, const radinterp__li
    so measured over a larger receiver), an error of at most that fraction of
    the result (s->point_rest, PARAMETERS). A point whose leaf gathers more
    than RADINTERP__POINT_LINKS links takes them all exactly. */
-#define RADINTERP__POINT_LINKS 1024
+#define RADINTERP__POINT_LINKS 512
 
 typedef struct radinterp__plink {
     const radinterp__link *lk;
@@ -8563,12 +8564,12 @@ static void radinterp__sum_links(radinterp__query *q, radinterp__plink *pl, uint
 
 /* Irradiance at p on a patch, summed over the links of its leaf and of the
    leaf's ancestors (6.2), past the blockers of the leaf lists, and over the
-   cluster links above it. */
-static radinterp_result radinterp__irradiance(const radinterp_solution *s, uint32_t patch, const float p[3],
-                                              const float toward[3], double *h, uint32_t *triangulated)
+   cluster links above it; pl holds max links for the ranking (see above). */
+static radinterp_result radinterp__irradiance_in(const radinterp_solution *s, uint32_t patch, const float p[3],
+                                                 const float toward[3], double *h, uint32_t *triangulated,
+                                                 radinterp__plink *pl, uint32_t max)
 {
     radinterp__query query, *q = &query;  /* about 40 KB of stack: no allocation in the common case */
-    radinterp__plink pl[RADINTERP__POINT_LINKS];
     uint32_t leaf, n;
     int k, leaf_lists;
     h[0] = h[1] = h[2] = 0.0;
@@ -8603,18 +8604,25 @@ static radinterp_result radinterp__irradiance(const radinterp_solution *s, uint3
     /* first: they count in the sum the ranking compares with */
     radinterp__cluster_links_add(s, patch, leaf, h);
     if (s->has_sky) radinterp__sky_point_add(s, patch, q->pv, h);
-    n = radinterp__point_links(q, leaf, leaf_lists, 0, pl, RADINTERP__POINT_LINKS);
-    if (n <= RADINTERP__POINT_LINKS) radinterp__sum_links(q, pl, n, 1, h);
+    n = radinterp__point_links(q, leaf, leaf_lists, 0, pl, max);
+    if (n <= max) radinterp__sum_links(q, pl, n, 1, h);
     else {   /* too many to rank: every one exactly, a chunk at a time */
         uint32_t at;
-        for (at = 0; at < n; at += RADINTERP__POINT_LINKS) {
-            if (at) radinterp__point_links(q, leaf, leaf_lists, at, pl, RADINTERP__POINT_LINKS);
-            radinterp__sum_links(q, pl, n - at < RADINTERP__POINT_LINKS ? n - at : RADINTERP__POINT_LINKS, 0, h);
+        for (at = 0; at < n; at += max) {
+            if (at) radinterp__point_links(q, leaf, leaf_lists, at, pl, max);
+            radinterp__sum_links(q, pl, n - at < max ? n - at : max, 0, h);
         }
     }
     if (q->cdt_ready) radinterp__cdt_free(&q->cdt);
     if (triangulated) *triangulated = q->triangulated;
     return q->failed ? RADINTERP_ERROR_OUT_OF_MEMORY : RADINTERP_OK;
+}
+
+static radinterp_result radinterp__irradiance(const radinterp_solution *s, uint32_t patch, const float p[3],
+                                              const float toward[3], double *h, uint32_t *triangulated)
+{
+    radinterp__plink pl[RADINTERP__POINT_LINKS];   /* 20 KB */
+    return radinterp__irradiance_in(s, patch, p, toward, h, triangulated, pl, RADINTERP__POINT_LINKS);
 }
 
 RADINTERP_API radinterp_result radinterp_irradiance_at_point(const radinterp_solution *s, uint32_t patch,
