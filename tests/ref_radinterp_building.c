@@ -217,6 +217,7 @@ typedef struct patch_row {
     double b[3], ref[3], se[3];
     double excess;          /* largest |B - ref| / (5% scale + 3 SE) over the channels: > 1 fails */
     double rel;             /* largest |B - ref| / scale */
+    double bias;            /* (B - ref) / ref of the luminance (ref at least the floor): its sign says which way */
 } patch_row;
 
 static int cmp_row_excess(const void *a, const void *b)
@@ -255,7 +256,7 @@ static void check_patch_radiosities(scene_case *c)
 {
     uint32_t np = c->sol->patch_count, p, t, n, *start, *tris, *at, rows = 0, fails = 0;
     patch_row *row;
-    double *lum, median, floor_level, t0 = wall_seconds(), *rel_se, worst = 0.0, med_se, med_rel, p90_rel;
+    double *lum, median, floor_level, t0 = wall_seconds(), *rel_se, worst = 0.0, med_se, med_rel, p90_rel, med_bias;
     start = (uint32_t *)calloc(np + 1, sizeof(uint32_t));
     at = (uint32_t *)calloc(np + 1, sizeof(uint32_t));
     tris = (uint32_t *)malloc(sizeof(uint32_t) * c->obj.tri_count);
@@ -320,6 +321,7 @@ static void check_patch_radiosities(scene_case *c)
             if (d / (0.05 * scale + 3.0 * r->se[k]) > r->excess) r->excess = d / (0.05 * scale + 3.0 * r->se[k]);
             if (d / scale > r->rel) r->rel = d / scale;
         }
+        r->bias = (luminance3(r->b) - luminance3(r->ref)) / (luminance3(r->ref) > floor_level ? luminance3(r->ref) : floor_level);
         fails += r->excess > 1.0;
         if (r->rel > worst) worst = r->rel;
     }
@@ -328,6 +330,8 @@ static void check_patch_radiosities(scene_case *c)
     for (p = 0; p < rows; p++) rel_se[p] = row[p].rel;
     med_rel = quantile(rel_se, rows, 0.5);
     p90_rel = quantile(rel_se, rows, 0.9);
+    for (p = 0; p < rows; p++) rel_se[p] = row[p].bias;
+    med_bias = quantile(rel_se, rows, 0.5);
     qsort(row, rows, sizeof *row, cmp_row_excess);
     for (p = 0; p < rows && p < 10; p++) {
         const patch_row *r = &row[p];
@@ -341,8 +345,9 @@ static void check_patch_radiosities(scene_case *c)
                   ctr[2], r->b[0], r->b[1], r->b[2], r->ref[0], r->ref[1], r->ref[2], r->se[1], 100 * r->rel, r->excess);
     }
     test_note("%s: %u patches, %u beyond 5%% + 3 SE; relative difference median %.2f%%, 90th percentile %.2f%%, largest "
-              "%.2f%%; median patch luminance %.4f W/m^2 (floor %.4f), median reference SE %.2f%%; %.1f s", c->path, rows,
-              fails, 100 * med_rel, 100 * p90_rel, 100 * worst, median, floor_level, 100 * med_se, wall_seconds() - t0);
+              "%.2f%%; median signed difference of the luminance %+.2f%%; median patch luminance %.4f W/m^2 (floor %.4f), "
+              "median reference SE %.2f%%; %.1f s", c->path, rows, fails, 100 * med_rel, 100 * p90_rel, 100 * worst,
+              100 * med_bias, median, floor_level, 100 * med_se, wall_seconds() - t0);
 done:
     free(start);
     free(at);
@@ -385,11 +390,11 @@ static void check_irradiance_at_points(scene_case *c)
 {
     double *cdf = (double *)malloc(sizeof(double) * c->obj.tri_count), total = 0.0, median, floor_level;
     double *errs = (double *)malloc(sizeof(double) * POINT_COUNT), *refs = (double *)malloc(sizeof(double) * POINT_COUNT);
-    double *ses = (double *)malloc(sizeof(double) * POINT_COUNT), med_err, p90, t0 = wall_seconds(), query_s = 0.0;
+    double *ses = (double *)malloc(sizeof(double) * POINT_COUNT), *bias = (double *)malloc(sizeof(double) * POINT_COUNT), med_err, p90, t0 = wall_seconds(), query_s = 0.0;
     point_row *row = (point_row *)calloc(POINT_COUNT, sizeof *row);
     uint64_t rng = 20261127;
     uint32_t t, i, drawn = 0, unlit = 0, used = 0, dim = 0;
-    if (!CHECK(cdf && errs && refs && ses && row)) goto done;
+    if (!CHECK(cdf && errs && refs && ses && bias && row)) goto done;
     for (t = 0; t < c->obj.tri_count; t++) {
         double n[3];
         if (!is_emitter(c, c->obj.tri_material[t])) total += triangle_area(c, t, n);
@@ -440,6 +445,7 @@ static void check_irradiance_at_points(scene_case *c)
     for (t = 0; t < i; t++) {
         if (row[t].ref < floor_level) { dim++; row[t].rel = -1.0; continue; }
         row[t].rel = fabs(row[t].h - row[t].ref) / row[t].ref;
+        bias[used] = (row[t].h - row[t].ref) / row[t].ref;
         errs[used] = row[t].rel;
         ses[used] = row[t].se / row[t].ref;
         used++;
@@ -461,15 +467,17 @@ static void check_irradiance_at_points(scene_case *c)
                   r->p[1], r->p[2], r->h, r->ref, r->se, 100 * r->rel);
     }
     test_note("%s: IrradianceAtPoint at %u points (%u drawn: %u unlit drawn again, %u below the floor %.4f W/m^2 left out): "
-              "median error %.2f%% (bound 2%%), 90th percentile %.2f%% (bound 5%%), largest %.2f%%; median reference SE "
-              "%.2f%%; %.2f ms a query, %.1f s in all", c->path, used, drawn, unlit, dim, floor_level, 100 * med_err,
-              100 * p90, 100 * quantile(errs, used, 1.0), 100 * quantile(ses, used, 0.5),
+              "median error %.2f%% (bound 2%%), 90th percentile %.2f%% (bound 5%%), largest %.2f%%; median signed error "
+              "%+.2f%%; median reference SE %.2f%%; %.2f ms a query, %.1f s in all", c->path, used, drawn, unlit, dim,
+              floor_level, 100 * med_err, 100 * p90, 100 * quantile(errs, used, 1.0), 100 * quantile(bias, used, 0.5),
+              100 * quantile(ses, used, 0.5),
               1e3 * query_s / (i ? i : 1), wall_seconds() - t0);
 done:
     free(cdf);
     free(errs);
     free(refs);
     free(ses);
+    free(bias);
     free(row);
 }
 
