@@ -11,9 +11,10 @@
    of 1,250 triangles (examples/data/building_1k.obj), about 2 minutes of
    wall time on a loaded 2-core machine. The 4,282-triangle building
    (building_4k.obj) is the issue's scene, but its default solve holds
-   about 2.4 GB and takes minutes of CPU time, more than make test can give
-   one test: it runs only when the environment variable RADINTERP_REF_4K is
-   1, and is then held to the issue's bounds.
+   3.0 GB (5.1 GB peak for the whole run) and took 13 minutes of wall time
+   on the loaded machine (about 3 minutes of CPU time), more than make test
+   can give one test: it runs only when the environment variable
+   RADINTERP_REF_4K is 1, and is then held to the issue's bounds.
 
    radinterp v0.6.0 does not meet the issue's bounds on the office or on
    building_1k with its defaults (see UNMET_PATCHES below): by default
@@ -506,7 +507,7 @@ int main(int argc, char **argv)
         RUN(test_building_4k_irradiance_at_point);
         unload(&building_4k);
     } else
-        test_note("building_4k: set RADINTERP_REF_4K=1 to run it (minutes of solve, about 2.4 GB)");
+        test_note("building_4k: set RADINTERP_REF_4K=1 to run it (minutes of solve, 5 GB peak)");
     ex_pool_destroy(pool);
     return test_finish();
 }
