@@ -2779,32 +2779,51 @@ static void rendercache__depth_job(void *ctx, uint32_t tile)
     for (p = p0; p < p1; p++) depth[p] = rendercache__key_depth(key[p]);
 }
 
-/* Colour and priority of the points that won the pixels [p0, p1) of a row,
-   culled or not (a culled pixel is a hole, which the filling writes again).
-   The slots are anywhere in the cache, so each read is a cache miss: the
-   loop does nothing else, and asks for the slot of a pixel further on
-   ahead of time, so that many misses are under way at once. A pixel
-   without a point reads the empty slot after the last (rc->capacity):
+/* What the cull of a tile counts. */
+typedef struct rendercache__cull_counts {
+    uint32_t visible, culled;
+} rendercache__cull_counts;
+
+/* Writes the pixels [p0, p1) of a row after its cull decisions occ (of
+   pixel p at occ[p - p0]): a surviving point gives its slot, depth, colour and
+   priority to the pixel and is marked as shown; a culled point or no
+   point leaves a hole (kind: the decision, for the filling, which writes
+   its colour and priority). The slots are anywhere in the cache, so each
+   read of a point is a cache miss: the loop asks for the slot of a pixel
+   further on ahead of time, so that many misses are under way at once,
+   and it does all of a pixel's writing in the same pass, while they
+   complete. A hole reads the empty slot after the last (rc->capacity):
    no branch, which points and holes along silhouettes would mispredict. */
-static void rendercache__gather_points(rendercache *rc, const uint64_t *key, uint32_t p0, uint32_t p1, uint32_t tile_end)
+static void rendercache__write_row(rendercache *rc, const uint64_t *key, const float *depth, uint32_t p0, uint32_t p1,
+                                   uint32_t tile_end, const unsigned char *occ, uint32_t sink, rendercache__cull_counts *n)
 {
     const uint32_t empty = rc->capacity;
     const rendercache__point *data = rc->data;
-    float *image = rc->image, *priority = rc->priority;
+    float *image = rc->image, *priority = rc->priority, *px_depth = rc->px_depth;
+    uint32_t *px_index = rc->px_index;
+    unsigned char *kind = rc->kind, *count = rc->count, *shown = rc->shown, mark = rendercache__mark(rc->frame);
     uint32_t p;
     for (p = p0; p < p1; p++) {   /* a key's low half is the slot, RENDERCACHE__NONE in the empty key */
-        uint32_t k = (uint32_t)key[p] == RENDERCACHE__NONE ? empty : (uint32_t)key[p];
-        uint32_t motion = rc->obj_motion[rendercache__motion_index(rc, data[k].object)];
+        const uint32_t k = (uint32_t)key[p], has = k != RENDERCACHE__NONE, cull = occ[p - p0], shows = has & !cull;
+        const uint32_t slot = shows ? k : empty;
+        uint32_t motion = rc->obj_motion[rendercache__motion_index(rc, data[slot].object)];
         if (p + RENDERCACHE__GATHER_AHEAD < tile_end) {   /* (into the next row too; the next tile's keys may be
                                                              cleared meanwhile by its own cull) */
             uint32_t next = (uint32_t)key[p + RENDERCACHE__GATHER_AHEAD];
             const rendercache__point *q = &data[next == RENDERCACHE__NONE ? empty : next];
             RENDERCACHE__PREFETCH(q);
             RENDERCACHE__PREFETCH((const char *)q + sizeof *q - 1);   /* a record may straddle two cache lines */
-            RENDERCACHE__PREFETCH_WRITE(&rc->shown[next == RENDERCACHE__NONE ? empty : next]);   /* cull_job marks it */
+            RENDERCACHE__PREFETCH_WRITE(&shown[next == RENDERCACHE__NONE ? empty : next]);
         }
-        memcpy(image + 3 * (size_t)p, data[k].rgb, 3 * sizeof(float));
-        priority[p] = rendercache__point_priority(rc, &data[k], motion);
+        memcpy(image + 3 * (size_t)p, data[slot].rgb, 3 * sizeof(float));
+        priority[p] = rendercache__point_priority(rc, &data[slot], motion);
+        px_index[p] = shows ? k : RENDERCACHE__NONE;
+        px_depth[p] = shows ? depth[p] : FLT_MAX;
+        shown[shows ? k : sink] = mark;   /* spared by the eviction in this frame */
+        kind[p] = (unsigned char)(shows ? (unsigned)RENDERCACHE_PIXEL_POINT : cull);   /* holes: set by the filling */
+        count[p] = 0;
+        n->visible += shows;
+        n->culled += has & cull;
     }
 }
 
@@ -2817,31 +2836,19 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
     const uint64_t *key = rc->splat.zb[0].key;
     const float *depth = rc->select_v;   /* rendercache__depth_job's */
     const uint32_t w = rc->width, h = rc->height;
-    uint32_t *px_index = rc->px_index;
-    float *px_depth = rc->px_depth;
-    unsigned char *kind = rc->kind, *count = rc->count, *shown = rc->shown, mark = rendercache__mark(rc->frame);
     const uint32_t sink = rc->capacity + tile;   /* this tile's byte for pixels without a point */
-    uint32_t y0 = tile * RENDERCACHE__TILE_ROWS, y1 = y0 + RENDERCACHE__TILE_ROWS, x, y;
-    uint32_t visible = 0, culled = 0, *stats = rc->tile_stats + RENDERCACHE__TILE_STATS * (size_t)tile;
+    uint32_t y0 = tile * RENDERCACHE__TILE_ROWS, y1 = y0 + RENDERCACHE__TILE_ROWS, y;
+    uint32_t *stats = rc->tile_stats + RENDERCACHE__TILE_STATS * (size_t)tile;
+    rendercache__cull_counts n = { 0, 0 };
     float tol2 = (1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance);
     if (y1 > h) y1 = h;
     for (y = y0; y < y1; y++) {
-        unsigned char *occ = kind + (size_t)y * w;
-        rendercache__gather_points(rc, key, y * w, y * w + w, y1 * w);
+        unsigned char *occ = rc->kind + (size_t)y * w;
         rendercache__cull_decisions(rc, depth, y, tol2, occ);
-        for (x = 0; x < w; x++) {   /* without branches, as gather_points */
-            uint32_t p = y * w + x, k = (uint32_t)key[p], has = k != RENDERCACHE__NONE, shows = has & !occ[x];
-            px_index[p] = shows ? k : RENDERCACHE__NONE;
-            px_depth[p] = shows ? depth[p] : FLT_MAX;
-            shown[shows ? k : sink] = mark;   /* spared by the eviction in this frame */
-            kind[p] = (unsigned char)(shows ? (unsigned)RENDERCACHE_PIXEL_POINT : occ[x]);   /* holes: set by the filling */
-            count[p] = 0;
-            visible += shows;
-            culled += has & occ[x];
-        }
+        rendercache__write_row(rc, key, depth, y * w, y * w + w, y1 * w, occ, sink, &n);
     }
-    stats[0] = visible;
-    stats[1] = culled;
+    stats[0] = n.visible;
+    stats[1] = n.culled;
     rendercache__splat_clear_tile(&rc->splat, tile);   /* read (the depths are in select_v): clean for the next frame */
 }
 
