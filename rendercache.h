@@ -3930,8 +3930,9 @@ static int rendercache__insert_other(rendercache *rc, const rendercache__new_poi
     return 1;
 }
 
-/* Prefetches the slots that the next samples will replace in place, all at
-   once, so that their cache misses overlap instead of coming one by one
+/* Prefetches the slots that the next samples will replace in place, and
+   the pixels they show in, all at once, so that their cache misses overlap
+   instead of coming one by one
    (prefetches rather than loads: they need not complete before the
    insertion goes on). Returns a value that depends on the pixels' slots
    (for the caller to keep). */
@@ -3940,11 +3941,16 @@ static uint32_t rendercache__touch_slots(const rendercache *rc, const rendercach
     uint32_t i, sum = 0;
     for (i = 0; i < n; i++) {
         const rendercache_sample *s = &samples[i];
-        uint32_t slot;
+        uint32_t slot, p;
         if (s->x >= rc->width || s->y >= rc->height || (s->flags & RENDERCACHE_REQUEST_PREDICTED) ||
             rendercache__sample_frame(rc, s) != rc->frame)
             continue;
-        slot = rc->px_index[s->y * rc->width + s->x];
+        p = s->y * rc->width + s->x;
+        RENDERCACHE__PREFETCH_WRITE(&rc->image[3 * (size_t)p]);   /* the pixel's lines, which show writes */
+        RENDERCACHE__PREFETCH_WRITE(&rc->image[3 * (size_t)p + 2]);
+        RENDERCACHE__PREFETCH_WRITE(&rc->priority[p]);
+        RENDERCACHE__PREFETCH_WRITE(&rc->px_depth[p]);
+        slot = rc->px_index[p];
         if (slot == RENDERCACHE__NONE) continue;
         sum += slot;
         RENDERCACHE__PREFETCH(&rc->geo.x[slot]);
