@@ -2867,16 +2867,46 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
    filling of another tile may be writing them. */
 static const float rendercache__black[3] = { 0.0f, 0.0f, 0.0f };
 
-static RENDERCACHE__INLINE uint32_t rendercache__interpolate_window(const rendercache *rc, uint32_t x, uint32_t y, int r,
-                                                                    int x0, int x1, int y0, int y1, float rgb[3])
+/* The weighted sums of the colours of the points in the window [x0, x1] x
+   [y0, y1] around (x, y) (weights and colour sums, [3] the weight): of the
+   nearest layer into near_sum, and when two_layers (a constant where it is
+   inlined, so that one window drops the other sums) of the farthest into
+   far_sum. */
+static RENDERCACHE__INLINE void rendercache__window_sums(const rendercache *rc, uint32_t x, uint32_t y, int r, int x0,
+                                                         int x1, int y0, int y1, float dmin, float dmax, int two_layers,
+                                                         float near_sum[4], float far_sum[4])
 {
     const float *depth = rc->px_depth, *image = rc->image;
     const uint32_t w = rc->width;
-    const float scale = rc->window_scale[r];
+    const float scale = rc->window_scale[r], tol2 = (1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance);
+    int qx, qy;
+    for (qy = y0; qy <= y1; qy++) {
+        const float *row = depth + (size_t)qy * w;
+        float wy = (float)(r + 1 - rendercache__iabs(qy - (int)y)) * scale;
+        for (qx = x0; qx <= x1; qx++) {
+            float d = row[qx], wgt = wy * (float)(r + 1 - rendercache__iabs(qx - (int)x));
+            int point = d != FLT_MAX, near = point & (d <= dmin * tol2);
+            const float *c = point ? image + 3 * ((size_t)qy * w + (size_t)qx) : rendercache__black;
+            float wn = near ? wgt : 0.0f;
+            near_sum[0] += wn * c[0]; near_sum[1] += wn * c[1]; near_sum[2] += wn * c[2]; near_sum[3] += wn;
+            if (two_layers) {
+                int far = point & !near & (d * tol2 >= dmax);   /* a middle layer: neither side of the choice */
+                float wf = far ? wgt : 0.0f;
+                far_sum[0] += wf * c[0]; far_sum[1] += wf * c[1]; far_sum[2] += wf * c[2]; far_sum[3] += wf;
+            }
+        }
+    }
+}
+
+static RENDERCACHE__INLINE uint32_t rendercache__interpolate_window(const rendercache *rc, uint32_t x, uint32_t y, int r,
+                                                                    int x0, int x1, int y0, int y1, float rgb[3])
+{
+    const float *depth = rc->px_depth;
+    const uint32_t w = rc->width;
     int qx, qy;
     float dmin = FLT_MAX, dmax = 0.0f, tol2 = (1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance);
     float near_sum[4] = { 0, 0, 0, 0 }, far_sum[4] = { 0, 0, 0, 0 };
-    const float *chosen;
+    const float *chosen = near_sum;
     uint32_t n = 0;
     /* without branches (points and holes alternate at random around a hole): selects, then min and max */
     for (qy = y0; qy <= y1; qy++) {
@@ -2890,21 +2920,12 @@ static RENDERCACHE__INLINE uint32_t rendercache__interpolate_window(const render
         }
     }
     if (n == 0) return 0;
-    for (qy = y0; qy <= y1; qy++) {
-        const float *row = depth + (size_t)qy * w;
-        float wy = (float)(r + 1 - rendercache__iabs(qy - (int)y)) * scale;
-        for (qx = x0; qx <= x1; qx++) {
-            float d = row[qx], wgt = wy * (float)(r + 1 - rendercache__iabs(qx - (int)x));
-            int point = d != FLT_MAX, near = point & (d <= dmin * tol2);
-            int far = point & !near & (d * tol2 >= dmax);   /* a middle layer: neither side of the choice */
-            const float *c = point ? image + 3 * ((size_t)qy * w + (size_t)qx) : rendercache__black;
-            float wn = near ? wgt : 0.0f, wf = far ? wgt : 0.0f;
-            near_sum[0] += wn * c[0]; near_sum[1] += wn * c[1]; near_sum[2] += wn * c[2]; near_sum[3] += wn;
-            far_sum[0] += wf * c[0]; far_sum[1] += wf * c[1]; far_sum[2] += wf * c[2]; far_sum[3] += wf;
-        }
+    if (dmax <= dmin * tol2) {   /* one layer (most holes): every point is near */
+        rendercache__window_sums(rc, x, y, r, x0, x1, y0, y1, dmin, dmax, 0, near_sum, far_sum);
+    } else {
+        rendercache__window_sums(rc, x, y, r, x0, x1, y0, y1, dmin, dmax, 1, near_sum, far_sum);
+        chosen = (far_sum[3] >= near_sum[3]) ? far_sum : near_sum;
     }
-    chosen = (far_sum[3] >= near_sum[3]) ? far_sum : near_sum;
-    if (dmax <= dmin * tol2) chosen = near_sum;   /* one layer: every point was counted as near */
     rgb[0] = rendercache__finitef(chosen[0] / chosen[3]);
     rgb[1] = rendercache__finitef(chosen[1] / chosen[3]);
     rgb[2] = rendercache__finitef(chosen[2] / chosen[3]);
