@@ -3398,27 +3398,31 @@ static int rendercache__fractional(const rendercache *rc, uint32_t q)
 static float rendercache__spread_error(const rendercache *rc, float *cur, float *next, uint32_t y, uint32_t y_end, int x,
                                        int dir, float e)
 {
-    int w = (int)rc->width, ax = x + dir, bx = x - dir, below = y + 1 < y_end;
-    float wt[4] = { 7.0f, 3.0f, 5.0f, 1.0f }, sum, s;   /* ahead, behind-below, below, ahead-below */
-    uint32_t row = y * rc->width, row_below = row + rc->width;
-    if (!below) {   /* last row: everything ahead, if there is an ahead */
-        if (ax < 0 || ax >= w || !rendercache__fractional(rc, row + (uint32_t)ax)) return e;
+    const int w = (int)rc->width, ax = x + dir, bx = x - dir, ahead = ax >= 0 && ax < w, behind = bx >= 0 && bx < w;
+    const uint32_t row = y * rc->width, row_below = row + rc->width;
+    float w_ahead, w_behind_below, w_below, w_ahead_below, sum, s;
+    if (y + 1 >= y_end) {   /* last row: everything ahead, if there is an ahead */
+        if (!ahead || !rendercache__fractional(rc, row + (uint32_t)ax)) return e;
         cur[ax + 1] += e;
         return 0.0f;
     }
-    if (ax < 0 || ax >= w) { wt[2] += wt[0] + wt[3]; wt[0] = wt[3] = 0.0f; }
-    if (bx < 0 || bx >= w) { wt[2] += wt[1]; wt[1] = 0.0f; }
-    if (wt[0] > 0.0f && !rendercache__fractional(rc, row + (uint32_t)ax)) wt[0] = 0.0f;
-    if (wt[1] > 0.0f && !rendercache__fractional(rc, row_below + (uint32_t)bx)) wt[1] = 0.0f;
-    if (wt[2] > 0.0f && !rendercache__fractional(rc, row_below + (uint32_t)x)) wt[2] = 0.0f;
-    if (wt[3] > 0.0f && !rendercache__fractional(rc, row_below + (uint32_t)ax)) wt[3] = 0.0f;
-    sum = wt[0] + wt[1] + wt[2] + wt[3];
+    /* Without branches on the neighbours, which are fractional or not at random along the level's edges
+       (a miss predicted wrong costs more than the loads): weight 0 where the neighbour is outside (its
+       weight went below) or decided already. The out-of-range index reads x instead (the weight is 0
+       anyway), and an addition of 0 times s lands in a cell no fractional pixel reads (or the row's
+       padding), so every cell a later pixel reads gets what it got with branches, bit for bit. */
+    w_ahead = ahead & rendercache__fractional(rc, row + (uint32_t)(ahead ? ax : x)) ? 7.0f : 0.0f;
+    w_behind_below = behind & rendercache__fractional(rc, row_below + (uint32_t)(behind ? bx : x)) ? 3.0f : 0.0f;
+    w_below = rendercache__fractional(rc, row_below + (uint32_t)x) ? 5.0f + (ahead ? 0.0f : 8.0f) + (behind ? 0.0f : 3.0f)
+                                                                  : 0.0f;
+    w_ahead_below = ahead & rendercache__fractional(rc, row_below + (uint32_t)(ahead ? ax : x)) ? 1.0f : 0.0f;
+    sum = w_ahead + w_behind_below + w_below + w_ahead_below;
     if (sum == 0.0f) return e;
     s = e / sum;
-    if (wt[0] > 0.0f) cur[ax + 1] += wt[0] * s;
-    if (wt[1] > 0.0f) next[bx + 1] += wt[1] * s;
-    if (wt[2] > 0.0f) next[x + 1] += wt[2] * s;
-    if (wt[3] > 0.0f) next[ax + 1] += wt[3] * s;
+    cur[ax + 1] += w_ahead * s;
+    next[bx + 1] += w_behind_below * s;
+    next[x + 1] += w_below * s;
+    next[ax + 1] += w_ahead_below * s;
     return 0.0f;
 }
 
@@ -3494,7 +3498,8 @@ static void rendercache__diffuse_band(void *ctx, uint32_t band)
             if (x == end) break;
             p = y * w + (uint32_t)x;
             total = j->fraction + cur[x + 1] + carry;
-            pick = total >= rendercache__threshold(p, (uint32_t)rc->frame, j->amp) ? 1u : 0u;
+            /* (without modulation the threshold is 0.5 exactly: no hash) */
+            pick = total >= (j->amp > 0.0f ? rendercache__threshold(p, (uint32_t)rc->frame, j->amp) : 0.5f) ? 1u : 0u;
             e = total - (float)pick;
             select_v[p] = total;
             chosen[p] = (unsigned char)(2u | pick);
