@@ -2199,7 +2199,7 @@ static int rendercache__alloc_buffers(rendercache *rc)
     size_t n = rc->capacity, px = rc->pixel_count, no = rc->object_count;
     size_t slots = (size_t)rc->max_latency + 1;
     const size_t stride = (n + 1 + RENDERCACHE__SLOT_ALIGN - 1) / RENDERCACHE__SLOT_ALIGN * RENDERCACHE__SLOT_ALIGN;
-    rc->geo.x = (float *)rendercache__alloc_array(a, 4 * stride, sizeof(float));   /* + the empty slot */
+    rc->geo.x = (float *)rendercache__alloc_array(a, stride, 4 * sizeof(float));   /* + the empty slot */
     if (rc->geo.x) {   /* (an allocator aligns to 16 bytes at least: the arrays follow at multiples of 64) */
         rc->geo.y = rc->geo.x + stride;
         rc->geo.z = rc->geo.y + stride;
