@@ -1,4 +1,4 @@
-/* radinterp.h - v0.6.0 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
+/* radinterp.h - v0.7.0 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
 
    RADINTERP.H: hierarchical radiosity, ranked discontinuities and quadratic irradiance interpolants evaluated per pixel.
 
@@ -587,7 +587,7 @@
    fractions, gathers, push-pull) through desc.parallel_for when given;
    results are bit-identical for any thread count. A trace callback must then
    be thread-safe. Queries on a finished solution are const and may run from
-   many threads at once; each uses up to about 120 KB of stack (its
+   many threads at once; each uses up to about 160 KB of stack (its
    triangulation moves to the allocator only when it outgrows 32 KB; 20 KB
    rank its sources).
    radinterp_build_mesh samples its interpolants through
@@ -626,7 +626,7 @@
    points per triangle of every leaf (even one leaf per patch would take
    tens of thousands of queries). For such scenes use the solution's leaves
    (radinterp_get_leaf, radinterp_patch_radiosity); the office (55
-   polygons) meshes in about 30 s. Radiosity is constant over each element,
+   polygons) meshes in about 15 s of one core. Radiosity is constant over each element,
    so points a few millimetres from a corner, or at the foot of an object, see
    their nearest sources at the elements' mean: expect errors of several
    percent there (about 2% on average elsewhere in the Cornell box with
@@ -638,9 +638,12 @@
    method about 2,300.
 
    The mesh build costs a point query per vertex and edge midpoint of its
-   triangles (more with refine), about 2.2 per triangle: the office's 59,576
-   triangles take 131,571 queries (six a triangle before v0.6.0), nearly all
-   of the build time. Interpolants are only as accurate as IrradianceAtPoint, whose
+   triangles (more with refine), about 2.2 per triangle: the office's 37,879
+   triangles take 85,051 queries (131,571 before v0.7.0 dropped hidden and
+   faint discontinuities, 357,456 before v0.6.0 shared them), nearly all of
+   the build time. building_1k's mesh needs 369,949 queries (1.12 M before
+   v0.7.0) at about 900 per second of one core: several minutes on two
+   threads, too slow still for a level loaded at run time. Interpolants are only as accurate as IrradianceAtPoint, whose
    sources are the solution's elements: for a more accurate image solve
    with a smaller eps and mesh with a larger min_leaf_area. Discontinuity
    edges that nearly graze a patch outline can make a triangulation fail
@@ -660,7 +663,7 @@
 #define RADINTERP_H
 
 #define RADINTERP_VERSION_MAJOR 0
-#define RADINTERP_VERSION_MINOR 6
+#define RADINTERP_VERSION_MINOR 7
 #define RADINTERP_VERSION_PATCH 0
 #define RADINTERP_FILE_FORMAT_VERSION 2   /* of saved meshes */
 
@@ -6031,6 +6034,8 @@ typedef struct radinterp__query {
     int shadow_count[RADINTERP__BP_MAX_SURVIVORS];
     unsigned char flags[2048];
     radinterp__piece piece[RADINTERP__PIECES];
+    radinterp__piece staged[RADINTERP__BP_MAX_SURVIVORS];   /* the shadows before their union */
+    unsigned char order[RADINTERP__BP_MAX_SURVIVORS];       /* the order they enter it */
     const uint32_t *blk;  /* the blockers of the link being summed (a leaf list or the link's own) */
     uint32_t nblk;
     uint32_t solid_tag[RADINTERP__SOLID_CACHE];  /* solids whose back faces' verdict at pv is known */
@@ -7247,49 +7252,90 @@ static double radinterp__ff_frame(const radinterp__query *q, const radinterp__fr
     return fabs(sum) / (2.0 * RADINTERP__PI);
 }
 
-/* The union of the shadows on the source of bp as disjoint convex pieces
-   q->piece[0 .. *count). Shadows of faces turned toward the point go in
-   first: those of one convex object do not overlap, and its faces turned
-   away then fall inside them. Returns 1; 0 when the shadows hide the whole
-   source (one alone, or the pieces together leave less than 1e-12 of its
-   area, like radinterp__visible_rest: a source behind a wall of several
-   patches); -1 when a shadow cannot be represented or the pieces outgrow
-   their arrays (the caller triangulates). */
-static int radinterp__bp_union(radinterp__query *q, const radinterp__bp *bp, int *count_out)
+/* The shadows of bp's blockers, as pieces, into q->staged: faces turned
+   toward the point first, largest first (ties in list order), then the
+   faces turned away that radinterp__back_face_covered cannot settle.
+   Largest first: a small shadow inside a large one already in the union is
+   dropped after one pass over the large one's edges, while a large shadow
+   added after many small ones is cut into parts around each of them (the
+   1k building's mesh samples took 1.7 times as long in list order). Returns the count; 0 with *hides set when one shadow alone
+   hides the whole source; -1 when a shadow cannot be represented or there
+   are more than RADINTERP__BP_MAX_SURVIVORS. */
+static int radinterp__bp_stage(radinterp__query *q, const radinterp__bp *bp, int *hides)
 {
     const radinterp_solution *s = q->s;
-    double tiny, tol = bp->tol, covered = 0.0, whole = fabs(radinterp__area2((const double (*)[2])bp->sc2, bp->nc));
     uint32_t later[RADINTERP__BP_MAX_SURVIVORS], nlater = 0, i;
-    int pass, count = 0, k;
+    double area[RADINTERP__BP_MAX_SURVIVORS];
+    int n = 0, front, k, j;
+    *hides = 0;
+    for (i = 0; i < bp->nblk; i++) {
+        uint32_t b = bp->blk[i];
+        const radinterp__patch *pb = &s->patches[b];
+        int r;
+        if (!(radinterp__d3_dot(pb->n, bp->pv) > pb->d)) {   /* turned away: after the others */
+            if (radinterp__back_face_covered(q, bp, b)) continue;
+            if (nlater == RADINTERP__BP_MAX_SURVIVORS) return -1;
+            later[nlater++] = b;
+            continue;
+        }
+        if (n == RADINTERP__BP_MAX_SURVIVORS) return -1;
+        r = radinterp__bp_shadow_piece(s, bp, pb, &q->staged[n]);
+        if (r < 0) return -1;
+        if (r == 0) continue;
+        if (radinterp__covers((const double (*)[2])q->staged[n].v, q->staged[n].count, (const double (*)[2])bp->sc2, bp->nc)) {
+            *hides = 1;
+            return 0;
+        }
+        area[n] = fabs(radinterp__area2((const double (*)[2])q->staged[n].v, q->staged[n].count));
+        q->order[n] = (unsigned char)n;
+        n++;
+    }
+    front = n;
+    for (k = 1; k < front; k++) {   /* insertion sort, largest first, stable */
+        unsigned char o = q->order[k];
+        for (j = k; j > 0 && area[q->order[j - 1]] < area[o]; j--) q->order[j] = q->order[j - 1];
+        q->order[j] = o;
+    }
+    for (i = 0; i < nlater; i++) {
+        int r;
+        if (n == RADINTERP__BP_MAX_SURVIVORS) return -1;
+        r = radinterp__bp_shadow_piece(s, bp, &s->patches[later[i]], &q->staged[n]);
+        if (r < 0) return -1;
+        if (r == 0) continue;
+        if (radinterp__covers((const double (*)[2])q->staged[n].v, q->staged[n].count, (const double (*)[2])bp->sc2, bp->nc)) {
+            *hides = 1;
+            return 0;
+        }
+        q->order[n] = (unsigned char)n;
+        n++;
+    }
+    return n;
+}
+
+/* The union of the shadows on the source of bp as disjoint convex pieces
+   q->piece[0 .. *count), the shadows taken in radinterp__bp_stage's order:
+   those of one convex object's faces turned toward the point do not
+   overlap, and its faces turned away then fall inside them. Returns 1; 0
+   when the shadows hide the whole source (one alone, or the pieces together
+   leave less than 1e-12 of its area, like radinterp__visible_rest: a source
+   behind a wall of several patches); -1 when a shadow cannot be represented
+   or the pieces outgrow their arrays (the caller triangulates). */
+static int radinterp__bp_union(radinterp__query *q, const radinterp__bp *bp, int *count_out)
+{
+    double tiny, tol = bp->tol, covered = 0.0, whole = fabs(radinterp__area2((const double (*)[2])bp->sc2, bp->nc));
+    int count = 0, k, i, hides, n = radinterp__bp_stage(q, bp, &hides);
     /* a piece of area below tiny / 2 subtends less than 1e-12 / pi: dropped */
     tiny = 2e-12 * bp->hp * bp->hp;
     *count_out = 0;
-    /* faces turned away wait in `later`: one pass over the list */
-    for (pass = 0; pass < 2; pass++) {
-        uint32_t n = pass ? nlater : bp->nblk;
-        for (i = 0; i < n; i++) {
-            uint32_t b = pass ? later[i] : bp->blk[i];
-            const radinterp__patch *pb = &s->patches[b];
-            radinterp__piece *sh;
-            int r;
-            if (!pass && !(radinterp__d3_dot(pb->n, bp->pv) > pb->d)) {
-                if (radinterp__back_face_covered(q, bp, b)) continue;
-                if (nlater == RADINTERP__BP_MAX_SURVIVORS) return -1;
-                later[nlater++] = b;
-                continue;
-            }
-            if (count >= RADINTERP__PIECES) return -1;
-            sh = &q->piece[count];
-            r = radinterp__bp_shadow_piece(s, bp, pb, sh);
-            if (r < 0) return -1;
-            if (r == 0) continue;
-            if (radinterp__covers((const double (*)[2])sh->v, sh->count, (const double (*)[2])bp->sc2, bp->nc))
-                return 0; /* this blocker alone hides the whole source */
-            k = count;
-            if (radinterp__union_add(q, &count, tol, tiny) != 0) return -1;
-            for (; k < count; k++) covered += fabs(radinterp__area2((const double (*)[2])q->piece[k].v, q->piece[k].count));
-            if (covered >= (1.0 - 1e-12) * whole) return 0;   /* the pieces are disjoint and inside the source */
-        }
+    if (n < 0) return -1;
+    if (hides) return 0;
+    for (i = 0; i < n; i++) {
+        if (count >= RADINTERP__PIECES) return -1;
+        q->piece[count] = q->staged[q->order[i]];
+        k = count;
+        if (radinterp__union_add(q, &count, tol, tiny) != 0) return -1;
+        for (; k < count; k++) covered += fabs(radinterp__area2((const double (*)[2])q->piece[k].v, q->piece[k].count));
+        if (covered >= (1.0 - 1e-12) * whole) return 0;   /* the pieces are disjoint and inside the source */
     }
     *count_out = count;
     return 1;
@@ -8601,7 +8647,7 @@ static radinterp_result radinterp__irradiance_in(const radinterp_solution *s, ui
                                                  const float toward[3], double *h, uint32_t *triangulated,
                                                  radinterp__plink *pl, uint32_t max)
 {
-    radinterp__query query, *q = &query;  /* about 40 KB of stack: no allocation in the common case */
+    radinterp__query query, *q = &query;  /* about 110 KB of stack: no allocation in the common case */
     uint32_t leaf, n;
     int k, leaf_lists;
     h[0] = h[1] = h[2] = 0.0;
