@@ -7252,63 +7252,58 @@ static double radinterp__ff_frame(const radinterp__query *q, const radinterp__fr
     return fabs(sum) / (2.0 * RADINTERP__PI);
 }
 
-/* The shadows of bp's blockers, as pieces, into q->staged: faces turned
-   toward the point first, largest first (ties in list order), then the
-   faces turned away that radinterp__back_face_covered cannot settle.
-   Largest first: a small shadow inside a large one already in the union is
-   dropped after one pass over the large one's edges, while a large shadow
-   added after many small ones is cut into parts around each of them (the
-   1k building's mesh samples took 1.7 times as long in list order). Returns the count; 0 with *hides set when one shadow alone
-   hides the whole source; -1 when a shadow cannot be represented or there
-   are more than RADINTERP__BP_MAX_SURVIVORS. */
+/* Appends blocker b's shadow on bp's source to q->staged[*n] when it casts
+   one. Returns 1 when it alone hides the whole source, -1 when it cannot be
+   represented or the array is full, else 0. */
+static int radinterp__stage_shadow(radinterp__query *q, const radinterp__bp *bp, uint32_t b, int *n)
+{
+    radinterp__piece *sh = &q->staged[*n];
+    int r;
+    if (*n == RADINTERP__BP_MAX_SURVIVORS) return -1;
+    r = radinterp__bp_shadow_piece(q->s, bp, &q->s->patches[b], sh);
+    if (r <= 0) return r;
+    if (radinterp__covers((const double (*)[2])sh->v, sh->count, (const double (*)[2])bp->sc2, bp->nc)) return 1;
+    q->order[*n] = (unsigned char)*n;
+    (*n)++;
+    return 0;
+}
+
+/* The shadows of bp's blockers, as pieces, into q->staged, in the order
+   q->order gives: faces turned toward the point first, largest first (ties
+   in list order), then the faces turned away that
+   radinterp__back_face_covered cannot settle. Largest first: a small shadow
+   inside a large one already in the union is dropped after one pass over
+   the large one's edges, while a large shadow added after many small ones
+   is cut into parts around each of them (the 1k building's mesh samples
+   took 1.7 times as long in list order). Returns the count; 0 with *hides
+   set when one shadow alone hides the whole source; -1 when a shadow cannot
+   be represented or there are more than RADINTERP__BP_MAX_SURVIVORS. */
 static int radinterp__bp_stage(radinterp__query *q, const radinterp__bp *bp, int *hides)
 {
-    const radinterp_solution *s = q->s;
     uint32_t later[RADINTERP__BP_MAX_SURVIVORS], nlater = 0, i;
     double area[RADINTERP__BP_MAX_SURVIVORS];
-    int n = 0, front, k, j;
+    int n = 0, k, j, r;
     *hides = 0;
     for (i = 0; i < bp->nblk; i++) {
         uint32_t b = bp->blk[i];
-        const radinterp__patch *pb = &s->patches[b];
-        int r;
+        const radinterp__patch *pb = &q->s->patches[b];
         if (!(radinterp__d3_dot(pb->n, bp->pv) > pb->d)) {   /* turned away: after the others */
             if (radinterp__back_face_covered(q, bp, b)) continue;
             if (nlater == RADINTERP__BP_MAX_SURVIVORS) return -1;
             later[nlater++] = b;
             continue;
         }
-        if (n == RADINTERP__BP_MAX_SURVIVORS) return -1;
-        r = radinterp__bp_shadow_piece(s, bp, pb, &q->staged[n]);
-        if (r < 0) return -1;
-        if (r == 0) continue;
-        if (radinterp__covers((const double (*)[2])q->staged[n].v, q->staged[n].count, (const double (*)[2])bp->sc2, bp->nc)) {
-            *hides = 1;
-            return 0;
-        }
-        area[n] = fabs(radinterp__area2((const double (*)[2])q->staged[n].v, q->staged[n].count));
-        q->order[n] = (unsigned char)n;
-        n++;
+        k = n;
+        if ((r = radinterp__stage_shadow(q, bp, b, &n)) != 0) { *hides = r > 0; return r > 0 ? 0 : -1; }
+        if (n > k) area[k] = fabs(radinterp__area2((const double (*)[2])q->staged[k].v, q->staged[k].count));
     }
-    front = n;
-    for (k = 1; k < front; k++) {   /* insertion sort, largest first, stable */
+    for (k = 1; k < n; k++) {   /* insertion sort, largest first, stable */
         unsigned char o = q->order[k];
         for (j = k; j > 0 && area[q->order[j - 1]] < area[o]; j--) q->order[j] = q->order[j - 1];
         q->order[j] = o;
     }
-    for (i = 0; i < nlater; i++) {
-        int r;
-        if (n == RADINTERP__BP_MAX_SURVIVORS) return -1;
-        r = radinterp__bp_shadow_piece(s, bp, &s->patches[later[i]], &q->staged[n]);
-        if (r < 0) return -1;
-        if (r == 0) continue;
-        if (radinterp__covers((const double (*)[2])q->staged[n].v, q->staged[n].count, (const double (*)[2])bp->sc2, bp->nc)) {
-            *hides = 1;
-            return 0;
-        }
-        q->order[n] = (unsigned char)n;
-        n++;
-    }
+    for (i = 0; i < nlater; i++)
+        if ((r = radinterp__stage_shadow(q, bp, later[i], &n)) != 0) { *hides = r > 0; return r > 0 ? 0 : -1; }
     return n;
 }
 
