@@ -1,4 +1,4 @@
-/* irrvol.h - v0.5.0 - irradiance volume for lighting moving objects - public domain or MIT, see end of file
+/* irrvol.h - v0.5.1 - irradiance volume for lighting moving objects - public domain or MIT, see end of file
 
    IRRVOL.H: a bilevel grid of directional irradiance samples that lights moving objects by interpolation.
 
@@ -469,7 +469,7 @@
 
 #define IRRVOL_VERSION_MAJOR 0
 #define IRRVOL_VERSION_MINOR 5
-#define IRRVOL_VERSION_PATCH 0
+#define IRRVOL_VERSION_PATCH 1
 #define IRRVOL_FILE_FORMAT_VERSION 3
 
 /* Fixed limits of the desc's fields (see LIMITS). */
@@ -5293,7 +5293,7 @@ static irrvol_result irrvol__read_all(irrvol *v, irrvol__reader *r)
 {
     const irrvol_allocator *a = &v->allocator;
     unsigned char magic[8];
-    uint32_t version, flags, declared, c, refined_count = 0, expected_crc, s;
+    uint32_t version, flags, declared, c, refined_count = 0, expected_crc, s, bin_words;
     uint64_t inner;
     irrvol_result res;
     irrvol__crc_init(&r->crc);
@@ -5314,10 +5314,12 @@ static irrvol_result irrvol__read_all(irrvol *v, irrvol__reader *r)
         if (v->refined[c] > IRRVOL__REFINED_LIGHT || (v->refined[c] && v->subgrid == 2)) r->failed = 1;
         refined_count += v->refined[c] ? 1u : 0u;
     }
-    /* each refined cell owns its (side - 2)^3 interior samples: a lower bound */
+    /* each refined cell owns its (side - 2)^3 interior samples: a lower bound; a sample's bins take
+       one word each in the compact store, three floats at full precision */
     inner = (uint64_t)(v->subgrid - 2) * (v->subgrid - 2) * (v->subgrid - 2);
+    bin_words = flags & IRRVOL__FILE_COMPACT ? 1u : 3u;
     if (r->failed || (uint64_t)v->first_level_count + refined_count * inner > declared ||
-        !irrvol__can_hold(r, (uint64_t)declared * v->bins * 3 + (uint64_t)declared * IRRVOL__SH_FLOATS, 4))
+        !irrvol__can_hold(r, (uint64_t)declared * v->bins * bin_words + (uint64_t)declared * IRRVOL__SH_FLOATS, 4))
         return IRRVOL_ERROR_CORRUPT_DATA;
     res = irrvol__make_grid(v, v->refined);
     if (res != IRRVOL_OK) return res;
