@@ -1986,12 +1986,45 @@ IRRVOL__HOT float irrvol__unit_clamp(float x)
     return x < 1.0f ? x : 1.0f;
 }
 
+#ifdef IRRVOL__SSE2
+/* mask ? a : b, lane by lane, for a comparison's mask: no branch. */
+IRRVOL__HOT __m128 irrvol__select(__m128 mask, __m128 a, __m128 b)
+{
+    return _mm_or_ps(_mm_and_ps(mask, a), _mm_andnot_ps(mask, b));
+}
+#endif
+
 /* Inverse of irrvol__square_to_hemisphere for any non-zero direction (not
    necessarily unit length); hemisphere 1 is z < 0, mirrored. Zero, infinite
    and NaN directions land on a valid square point. The disk radius
    sqrt(1 - |z| / |d|) and the ratio of the minor to the major component are
    independent: two short dependency chains instead of a normalization
-   followed by both. */
+   followed by both. With SSE2 the same operations in lane 0, every choice a
+   select: random directions take each side of each choice half the time,
+   which as branches (compilers do not turn these into selects) cost a query
+   about three mispredictions. */
+#ifdef IRRVOL__SSE2
+IRRVOL__HOT void irrvol__direction_to_square(const float dir[3], float *u, float *v, uint32_t *hemisphere)
+{
+    const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f), half = _mm_set1_ps(0.5f);
+    const __m128 sign = _mm_set1_ps(-0.0f);
+    __m128 x = _mm_load_ss(dir), y = _mm_load_ss(dir + 1), z = _mm_load_ss(dir + 2);
+    __m128 len = _mm_sqrt_ss(_mm_add_ss(_mm_add_ss(_mm_mul_ss(x, x), _mm_mul_ss(y, y)), _mm_mul_ss(z, z)));
+    __m128 pos = _mm_cmpgt_ss(len, zero), ax = _mm_andnot_ps(sign, x), ay = _mm_andnot_ps(sign, y);
+    __m128 one_minus_z = irrvol__select(pos, _mm_sub_ss(one, _mm_div_ss(_mm_andnot_ps(sign, z), irrvol__select(pos, len, one))), one);
+    __m128 r = _mm_sqrt_ss(_mm_max_ss(one_minus_z, zero));
+    __m128 xmajor = _mm_cmpge_ss(ax, ay), num = irrvol__select(xmajor, y, x), den = irrvol__select(xmajor, x, y);
+    __m128 nonzero = _mm_cmpneq_ss(den, zero);
+    __m128 t = _mm_and_ps(nonzero, _mm_div_ss(num, irrvol__select(nonzero, den, one)));
+    __m128 major = _mm_xor_ps(r, _mm_and_ps(_mm_cmplt_ss(den, zero), sign));
+    __m128 minor = _mm_mul_ss(_mm_mul_ss(major, _mm_set_ss((float)(4.0 / IRRVOL__PI))), _mm_set_ss(irrvol__atan_unit(_mm_cvtss_f32(t))));
+    __m128 fu = _mm_mul_ss(half, _mm_add_ss(irrvol__select(xmajor, major, minor), one));
+    __m128 fv = _mm_mul_ss(half, _mm_add_ss(irrvol__select(xmajor, minor, major), one));
+    *hemisphere = (uint32_t)_mm_movemask_ps(_mm_cmplt_ss(z, zero)) & 1u;
+    *u = _mm_cvtss_f32(_mm_min_ss(_mm_max_ss(fu, zero), one));   /* as irrvol__unit_clamp: NaN gives 0 */
+    *v = _mm_cvtss_f32(_mm_min_ss(_mm_max_ss(fv, zero), one));
+}
+#else
 IRRVOL__HOT void irrvol__direction_to_square(const float dir[3], float *u, float *v, uint32_t *hemisphere)
 {
     float x = dir[0], y = dir[1], z = dir[2];
@@ -2007,6 +2040,7 @@ IRRVOL__HOT void irrvol__direction_to_square(const float dir[3], float *u, float
     *u = irrvol__unit_clamp(0.5f * ((xmajor ? major : minor) + 1.0f));
     *v = irrvol__unit_clamp(0.5f * ((xmajor ? minor : major) + 1.0f));
 }
+#endif
 
 /* Bin b's direction through the point (u, v) of its square. */
 static irrvol__vec3 irrvol__bin_point(uint32_t k, uint32_t bin, float fu, float fv)
@@ -2105,9 +2139,11 @@ enum {   /* why a first-level cell is refined (vol->refined) */
 
 struct irrvol {
     irrvol_allocator allocator;
-    float lo[3], hi[3];
-    float scale[3];        /* first-level cells per unit length: num_cells / (max - min), eq. 4.4 */
-    float cell_limit[3];   /* cells per axis as float: the clamp bound of q_d */
+    float lo[4], hi[4];    /* the grid's bounds; the fourth float of these and the next three is 0, so a
+                              query loads each in one register (irrvol__locate) */
+    float scale[4];        /* first-level cells per unit length: num_cells / (max - min), eq. 4.4 */
+    float cell_limit[4];   /* cells per axis as float: the clamp bound of q_d */
+    float last_cell[4];    /* cells per axis less 1, as float: the cell of q_d = num_cells */
     uint32_t samples[3];   /* first-level samples per axis */
     uint32_t cells[3];     /* first-level cells per axis */
     uint32_t subgrid;      /* second-level samples per axis, corners included */
@@ -2133,6 +2169,7 @@ struct irrvol {
     uint32_t *packed;      /* the compact store: bins x sample_count RGB9E5 words, bin-major like irradiance */
     int32_t pack_shift;    /* the words hold the irradiance times 2^-pack_shift (irrvol__pack_shift) */
     float unpack[32];      /* a word's mantissas times unpack[its exponent field] are its irradiance */
+    float unshift[2];      /* 2^pack_shift as two factors, each a normal float (queries scale their sums) */
     float *radiance;       /* same layout, or NULL */
     float *sh;             /* per sample 9 coefficients x rgb of the irradiance, l <= 2 */
     uint32_t vis_res;      /* n: n x n octahedral visibility texels per sample */
@@ -2196,6 +2233,7 @@ static void irrvol__grid_dims(irrvol *v, const uint32_t samples[3], uint32_t sub
         v->cell_count *= v->cells[d];
         v->scale[d] = (float)((double)v->cells[d] / ((double)v->hi[d] - (double)v->lo[d]));
         v->cell_limit[d] = (float)v->cells[d];
+        v->last_cell[d] = (float)(v->cells[d] - 1);
     }
     v->subgrid = subgrid;
     v->first_level_count = samples[0] * samples[1] * samples[2];
@@ -3928,6 +3966,8 @@ static void irrvol__set_unpack(irrvol *v, int32_t shift)
     int e;
     v->pack_shift = shift;
     for (e = 0; e < 32; e++) v->unpack[e] = ldexpf(1.0f, e - 24 + shift);
+    v->unshift[0] = ldexpf(1.0f, shift / 2);
+    v->unshift[1] = ldexpf(1.0f, shift - shift / 2);
 }
 
 static uint32_t irrvol__rgb9e5(const float rgb[3], int32_t shift)
@@ -4309,6 +4349,59 @@ IRRVOL__HOT const irrvol__corners *irrvol__cell_corners(const irrvol *v, const u
     return rec;
 }
 
+/* Eq. 4.4-4.6 and the sub-cell: the record of the eight samples around
+   pos and their trilinear weights. With SSE2 the three axes share a
+   register (the same operations, so the same bits): no loop, and the
+   integer clamps become float minima of whole numbers. */
+#ifdef IRRVOL__SSE2
+IRRVOL__HOT const irrvol__corners *irrvol__locate(const irrvol *v, const float pos[3], uint32_t ids[8], float w[8])
+{
+    const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f);
+    const irrvol__cell *cell;
+    const irrvol__corners *rec;
+    __m128 p = _mm_movelh_ps(_mm_unpacklo_ps(_mm_load_ss(pos), _mm_load_ss(pos + 1)), _mm_load_ss(pos + 2));
+    __m128 q = _mm_mul_ps(_mm_sub_ps(p, _mm_loadu_ps(v->lo)), _mm_loadu_ps(v->scale));   /* eq. 4.4 */
+    __m128 c, o, f, s, t, u, xs, ys, xy, z0, z1;
+    __m128i ci, si;
+    uint32_t side, m;
+    q = _mm_min_ps(_mm_max_ps(q, zero), _mm_loadu_ps(v->cell_limit));   /* NaN gives 0 */
+    c = _mm_min_ps(_mm_cvtepi32_ps(_mm_cvttps_epi32(q)), _mm_loadu_ps(v->last_cell));   /* eq. 4.5 */
+    o = _mm_sub_ps(q, c);                                                                /* eq. 4.6 */
+    ci = _mm_cvttps_epi32(c);
+    cell = &v->cell[(uint32_t)_mm_cvtsi128_si32(ci) +
+                    v->cells[0] * ((uint32_t)_mm_cvtsi128_si32(_mm_shuffle_epi32(ci, 0x55)) +
+                                   v->cells[1] * (uint32_t)_mm_cvtsi128_si32(_mm_shuffle_epi32(ci, 0xAA)))];
+    side = cell->side;
+    m = side - 1;
+    f = _mm_set1_ps((float)m);
+    q = _mm_mul_ps(o, f);
+    s = _mm_min_ps(_mm_cvtepi32_ps(_mm_cvttps_epi32(q)), _mm_set1_ps((float)(side - 2)));
+    t = _mm_sub_ps(q, s);
+    si = _mm_cvttps_epi32(s);
+    rec = v->corners + cell->corners + (uint32_t)_mm_cvtsi128_si32(si) +
+          m * ((uint32_t)_mm_cvtsi128_si32(_mm_shuffle_epi32(si, 0x55)) +
+               m * (uint32_t)_mm_cvtsi128_si32(_mm_shuffle_epi32(si, 0xAA)));
+    u = _mm_unpacklo_ps(_mm_sub_ps(one, t), t);      /* x0 x1 y0 y1 */
+    xs = _mm_shuffle_ps(u, u, _MM_SHUFFLE(1, 0, 1, 0));
+    ys = _mm_shuffle_ps(u, u, _MM_SHUFFLE(3, 3, 2, 2));
+    xy = _mm_mul_ps(xs, ys);
+    z1 = _mm_shuffle_ps(t, t, _MM_SHUFFLE(2, 2, 2, 2));
+    z0 = _mm_sub_ps(one, z1);
+    _mm_storeu_ps(w, _mm_mul_ps(xy, z0));
+    _mm_storeu_ps(w + 4, _mm_mul_ps(xy, z1));
+    memcpy(ids, rec->id, sizeof rec->id);
+    return rec;
+}
+#else
+IRRVOL__HOT const irrvol__corners *irrvol__locate(const irrvol *v, const float pos[3], uint32_t ids[8], float w[8])
+{
+    uint32_t c[3];
+    float o[3];
+    irrvol__cell_coords(v, pos, c, o);
+    return irrvol__cell_corners(v, c, o, ids, w);
+}
+#endif
+
 /* The bin that contains the square point (u, v) of hemisphere h. */
 IRRVOL__HOT uint32_t irrvol__square_bin(const irrvol *v, float u, float w, uint32_t h)
 {
@@ -4413,11 +4506,6 @@ IRRVOL__HOT float irrvol__visibility_weight(const irrvol *v, uint32_t s, const f
 #define IRRVOL__MAX_TERMS 32   /* a query's samples: 8 corners, each a hanging sample of up to 4 parents */
 
 #ifdef IRRVOL__SSE2
-IRRVOL__HOT __m128 irrvol__select(__m128 mask, __m128 a, __m128 b)
-{
-    return _mm_or_ps(_mm_and_ps(mask, a), _mm_andnot_ps(mask, b));
-}
-
 /* The test point and normal of the irrvol__lanes4 steps, each coordinate in
    all four lanes. */
 typedef struct irrvol__point4 { __m128 x, y, z, nx, ny, nz; } irrvol__point4;
@@ -4582,7 +4670,7 @@ IRRVOL__HOT void irrvol__corner_weights(const irrvol *v, const irrvol__corners *
 typedef struct irrvol__prepared {
     uint32_t id[IRRVOL__MAX_TERMS];
     float w[IRRVOL__MAX_TERMS];
-    uint32_t count;
+    uint32_t count;    /* a multiple of 4: terms past the corners' own have weight 0 */
     uint32_t bin[4];
     float bw[4];
     uint32_t bins;     /* 1 (NEAREST) or 4 (BILINEAR) */
@@ -4613,6 +4701,10 @@ IRRVOL__HOT void irrvol__expand_hanging(const irrvol *v, irrvol__prepared *q)
             q->id[m] = ids[i];
             q->w[m++] = w[i];
         }
+    }
+    for (; m % 4; m++) {   /* pad to whole groups of four (irrvol__finish_packed): weight 0, a sample read anyway */
+        q->id[m] = q->id[0];
+        q->w[m] = 0.0f;
     }
     q->count = m;
 }
@@ -4645,17 +4737,31 @@ IRRVOL__HOT void irrvol__visibility_terms(const irrvol *v, const irrvol__corners
     }
 }
 
-/* The samples and weights of a query in cell c at offsets o; normal is the
-   surface normal the visibility weights use. */
-IRRVOL__HOT void irrvol__prepare_in_cell(const irrvol *v, irrvol_weighting weighting, const uint32_t c[3],
-                                         const float o[3], const float pos[3], const float normal[3], irrvol__prepared *q)
+/* The terms of a query at pos from the plain trilinear terms of its
+   sub-cell rec in q; normal is the surface normal the visibility weights
+   use. */
+IRRVOL__HOT void irrvol__prepare_terms(const irrvol *v, const irrvol__corners *rec, irrvol_weighting weighting,
+                                       const float pos[3], const float normal[3], irrvol__prepared *q)
 {
-    const irrvol__corners *rec = irrvol__cell_corners(v, c, o, q->id, q->w);   /* the plain trilinear terms */
     q->count = 8;
     q->scale = 1.0f;
     if (rec->hanging) irrvol__expand_hanging(v, q);
     if (weighting == IRRVOL_WEIGHTING_DEFAULT) weighting = v->weighting;
     if (weighting == IRRVOL_WEIGHTING_VISIBILITY) irrvol__visibility_terms(v, rec, pos, normal, q);
+}
+
+/* The terms of a query at pos. */
+IRRVOL__HOT void irrvol__prepare_at(const irrvol *v, irrvol_weighting weighting, const float pos[3],
+                                    const float normal[3], irrvol__prepared *q)
+{
+    irrvol__prepare_terms(v, irrvol__locate(v, pos, q->id, q->w), weighting, pos, normal, q);
+}
+
+/* The terms of a query in cell c at offsets o (pos: the same point). */
+IRRVOL__HOT void irrvol__prepare_in_cell(const irrvol *v, irrvol_weighting weighting, const uint32_t c[3],
+                                         const float o[3], const float pos[3], const float normal[3], irrvol__prepared *q)
+{
+    irrvol__prepare_terms(v, irrvol__cell_corners(v, c, o, q->id, q->w), weighting, pos, normal, q);
 }
 
 /* The bin (NEAREST) or four bins (BILINEAR) of a direction. */
@@ -4678,11 +4784,8 @@ IRRVOL__HOT void irrvol__direction_bins(const irrvol *v, irrvol_filter filter, c
 IRRVOL__HOT void irrvol__prepare(const irrvol *v, irrvol_filter filter, irrvol_weighting weighting, const float pos[3],
                                  const float normal[3], const float dir[3], irrvol__prepared *q)
 {
-    uint32_t c[3];
-    float o[3];
     irrvol__direction_bins(v, filter, dir, q);
-    irrvol__cell_coords(v, pos, c, o);
-    irrvol__prepare_in_cell(v, weighting, c, o, pos, normal, q);
+    irrvol__prepare_at(v, weighting, pos, normal, q);
 }
 
 /* irrvol__finish from the floats (full precision). With SSE2 the rgb of
@@ -4736,61 +4839,98 @@ IRRVOL__HOT void irrvol__finish_floats(const irrvol *v, const irrvol__prepared *
 #endif
 }
 
-/* irrvol__finish from the compact store. A word's mantissas stay where
-   they are (green and blue 2^9 and 2^18 times their value, exact as
-   floats) and are scaled by the weight times unpack[its exponent]; the
-   place values come off once, at the end. With SSE2 a word's three
-   channels share a register: the same products and sums. */
+/* irrvol__finish from the compact store, four terms at a time (the term
+   list is padded to a multiple of four with weight 0, irrvol__pad_terms).
+   A word's channel m (9 bits) and exponent field e give m 2^(e - 24)
+   2^pack_shift: the power 2^(e - 24) is built from its bits (always a
+   normal float), scaled by the term's weight (or the bin's), and the sums
+   are scaled by 2^pack_shift once, at the end; powers of two multiply
+   exactly, so this equals m times unpack[e] times the weight. Each lane
+   sums every fourth term; the lanes are added pairwise at the end: a
+   short chain of additions instead of one per term. With SSE2 a lane is
+   a term, and the scalar code computes the same operations in the same
+   order. */
+#ifdef IRRVOL__SSE2
+/* Four terms' words of one bin, b[id[0..3]]: their channels times 2^(e - 24) times s, by lane. */
+IRRVOL__HOT void irrvol__words4(const uint32_t *b, const uint32_t *id, __m128 s, __m128 *r, __m128 *g, __m128 *bl)
+{
+    const __m128i nine = _mm_set1_epi32(0x1FF);
+    __m128i w = _mm_set_epi32((int)b[id[3]], (int)b[id[2]], (int)b[id[1]], (int)b[id[0]]);
+    __m128i pow2 = _mm_slli_epi32(_mm_add_epi32(_mm_srli_epi32(w, 27), _mm_set1_epi32(127 - 24)), 23);
+    __m128 scale = _mm_mul_ps(s, _mm_castsi128_ps(pow2));
+    *r = _mm_mul_ps(_mm_cvtepi32_ps(_mm_and_si128(w, nine)), scale);
+    *g = _mm_mul_ps(_mm_cvtepi32_ps(_mm_and_si128(_mm_srli_epi32(w, 9), nine)), scale);
+    *bl = _mm_mul_ps(_mm_cvtepi32_ps(_mm_and_si128(_mm_srli_epi32(w, 18), nine)), scale);
+}
+
+/* One group of four terms of a BILINEAR query: per lane the weight times
+   the sum of the four bins. */
+IRRVOL__HOT void irrvol__words4_bilinear(const uint32_t *const b[4], const float bw[4], const uint32_t *id, __m128 w,
+                                         __m128 *r, __m128 *g, __m128 *bl)
+{
+    __m128 r0, g0, b0, r1, g1, b1, r2, g2, b2, r3, g3, b3;
+    irrvol__words4(b[0], id, _mm_set1_ps(bw[0]), &r0, &g0, &b0);
+    irrvol__words4(b[1], id, _mm_set1_ps(bw[1]), &r1, &g1, &b1);
+    irrvol__words4(b[2], id, _mm_set1_ps(bw[2]), &r2, &g2, &b2);
+    irrvol__words4(b[3], id, _mm_set1_ps(bw[3]), &r3, &g3, &b3);
+    *r = _mm_mul_ps(w, _mm_add_ps(_mm_add_ps(r0, r1), _mm_add_ps(r2, r3)));
+    *g = _mm_mul_ps(w, _mm_add_ps(_mm_add_ps(g0, g1), _mm_add_ps(g2, g3)));
+    *bl = _mm_mul_ps(w, _mm_add_ps(_mm_add_ps(b0, b1), _mm_add_ps(b2, b3)));
+}
+
 IRRVOL__HOT void irrvol__finish_packed(const irrvol *v, const irrvol__prepared *q, float rgb[3])
 {
     const uint32_t *b[4];
-    uint32_t i, k, bins = q->bins == 1 ? 1u : 4u;
+    uint32_t g, k, bins = q->bins == 1 ? 1u : 4u;
+    __m128 ar = _mm_setzero_ps(), ag = ar, ab = ar, tr, tg, tb, z = ar;
+    float o[4];
     for (k = 0; k < 4; k++) b[k] = v->packed + (size_t)q->bin[k < bins ? k : 0] * v->sample_count;
-#ifdef IRRVOL__SSE2
-    {
-        const __m128i mask = _mm_set_epi32(0, 0x1FF << 18, 0x1FF << 9, 0x1FF);
-        const __m128 place = _mm_set_ps(0.0f, 1.0f / 262144.0f, 1.0f / 512.0f, 1.0f);
-        __m128 sum = _mm_setzero_ps();
-        float out[4];
-        if (bins == 1) {
-            for (i = 0; i < q->count; i++) {
-                uint32_t word = b[0][q->id[i]];
-                __m128 m = _mm_cvtepi32_ps(_mm_and_si128(_mm_set1_epi32((int)word), mask));
-                sum = _mm_add_ps(sum, _mm_mul_ps(m, _mm_set1_ps(q->w[i] * v->unpack[word >> 27])));
-            }
-        } else {
-            for (i = 0; i < q->count; i++) {
-                __m128 t[4];
-                for (k = 0; k < 4; k++) {
-                    uint32_t word = b[k][q->id[i]];
-                    t[k] = _mm_mul_ps(_mm_cvtepi32_ps(_mm_and_si128(_mm_set1_epi32((int)word), mask)),
-                                      _mm_set1_ps(q->bw[k] * v->unpack[word >> 27]));
-                }
-                sum = _mm_add_ps(sum, _mm_mul_ps(_mm_set1_ps(q->w[i]), _mm_add_ps(_mm_add_ps(t[0], t[1]), _mm_add_ps(t[2], t[3]))));
-            }
-        }
-        _mm_storeu_ps(out, _mm_mul_ps(_mm_mul_ps(sum, place), _mm_set1_ps(q->scale)));
-        rgb[0] = out[0]; rgb[1] = out[1]; rgb[2] = out[2];
+    for (g = 0; g < q->count; g += 4) {
+        if (bins == 1) irrvol__words4(b[0], q->id + g, _mm_loadu_ps(q->w + g), &tr, &tg, &tb);
+        else irrvol__words4_bilinear(b, q->bw, q->id + g, _mm_loadu_ps(q->w + g), &tr, &tg, &tb);
+        ar = _mm_add_ps(ar, tr);
+        ag = _mm_add_ps(ag, tg);
+        ab = _mm_add_ps(ab, tb);
     }
+    _MM_TRANSPOSE4_PS(ar, ag, ab, z);   /* rows: lane l's rgb */
+    ar = _mm_add_ps(_mm_add_ps(ar, ag), _mm_add_ps(ab, z));
+    ar = _mm_mul_ps(_mm_mul_ps(_mm_mul_ps(ar, _mm_set1_ps(v->unshift[0])), _mm_set1_ps(v->unshift[1])),
+                    _mm_set1_ps(q->scale));
+    _mm_storeu_ps(o, ar);
+    rgb[0] = o[0]; rgb[1] = o[1]; rgb[2] = o[2];
+}
 #else
-    {
-        static const float place[3] = {1.0f, 1.0f / 512.0f, 1.0f / 262144.0f};
-        float sum[3] = {0.0f, 0.0f, 0.0f};
-        int c;
-        for (i = 0; i < q->count; i++) {
-            float t[4][3], s[4];
+/* 2^(e - 24) for the exponent field e of a word, from its bits. */
+IRRVOL__HOT float irrvol__word_power(uint32_t word)
+{
+    uint32_t bits = ((word >> 27) + 127u - 24u) << 23;
+    float p;
+    memcpy(&p, &bits, sizeof p);
+    return p;
+}
+
+IRRVOL__HOT void irrvol__finish_packed(const irrvol *v, const irrvol__prepared *q, float rgb[3])
+{
+    const uint32_t *b[4];
+    uint32_t g, k, l, bins = q->bins == 1 ? 1u : 4u;
+    float acc[4][3] = {{0.0f}}, t[4][3];
+    int c;
+    for (k = 0; k < 4; k++) b[k] = v->packed + (size_t)q->bin[k < bins ? k : 0] * v->sample_count;
+    for (g = 0; g < q->count; g += 4)
+        for (l = 0; l < 4; l++) {
+            uint32_t i = g + l;
             for (k = 0; k < bins; k++) {
                 uint32_t word = b[k][q->id[i]];
-                s[k] = (bins == 1 ? q->w[i] : q->bw[k]) * v->unpack[word >> 27];
-                for (c = 0; c < 3; c++) t[k][c] = (float)(word & (0x1FFu << (9 * c))) * s[k];
+                float s = (bins == 1 ? q->w[i] : q->bw[k]) * irrvol__word_power(word);
+                for (c = 0; c < 3; c++) t[k][c] = (float)(word >> (9 * c) & 0x1FFu) * s;
             }
             for (c = 0; c < 3; c++)
-                sum[c] += bins == 1 ? t[0][c] : q->w[i] * ((t[0][c] + t[1][c]) + (t[2][c] + t[3][c]));
+                acc[l][c] += bins == 1 ? t[0][c] : q->w[i] * ((t[0][c] + t[1][c]) + (t[2][c] + t[3][c]));
         }
-        for (c = 0; c < 3; c++) rgb[c] = sum[c] * place[c] * q->scale;
-    }
-#endif
+    for (c = 0; c < 3; c++)
+        rgb[c] = (((acc[0][c] + acc[1][c]) + (acc[2][c] + acc[3][c])) * v->unshift[0]) * v->unshift[1] * q->scale;
 }
+#endif
 
 /* sum over samples of weight x (sum over bins of bin weight x value),
    times the scale. NEAREST reads one bin, BILINEAR blends four per sample
@@ -4866,15 +5006,14 @@ IRRVOL_API void irrvol_query_sh(const irrvol *vol, uint32_t order, irrvol_weight
                                 const float dir[3], float rgb[3])
 {
     irrvol__prepared q;
-    uint32_t c[3], i, j, coeffs = order <= 1 ? 4u : IRRVOL__SH_COEFFS;
-    float o[3], ylm[IRRVOL__SH_COEFFS], n[3] = {0.0f, 0.0f, 1.0f}, sum[3] = {0.0f, 0.0f, 0.0f};
+    uint32_t i, j, coeffs = order <= 1 ? 4u : IRRVOL__SH_COEFFS;
+    float ylm[IRRVOL__SH_COEFFS], n[3] = {0.0f, 0.0f, 1.0f}, sum[3] = {0.0f, 0.0f, 0.0f};
     float len2 = dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2];
     if (len2 > 0.0f && len2 <= FLT_MAX) {   /* zero, infinite and NaN directions look up +z */
         float inv = 1.0f / sqrtf(len2);
         n[0] = dir[0] * inv; n[1] = dir[1] * inv; n[2] = dir[2] * inv;
     }
-    irrvol__cell_coords(vol, pos, c, o);
-    irrvol__prepare_in_cell(vol, weighting, c, o, pos, n, &q);
+    irrvol__prepare_at(vol, weighting, pos, n, &q);
     irrvol__sh_basis(n[0], n[1], n[2], ylm);
 #ifdef IRRVOL__SSE2
     {   /* a coefficient's rgb and the next float in one register: the same products and sums */
