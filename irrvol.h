@@ -2124,9 +2124,19 @@ typedef struct irrvol__cell {
 typedef struct irrvol__corners {
     float x[8], y[8], z[8], reach2[8];   /* the corners' probes (a hanging corner's: unused) */
     uint32_t id[8];                      /* the corner samples, x fastest (irrvol__table_corners) */
-    uint32_t hanging;                    /* non-zero: a corner is hanging, its parents stand in */
-    uint32_t pad[7];                     /* 192 bytes: three lines */
+    uint32_t hanging;                    /* non-zero: a corner is hanging, its parents stand in: the number of
+                                            terms of the sub-cell, vol->terms[first...], a multiple of 4 */
+    uint32_t first;
+    uint32_t pad[6];                     /* 192 bytes: three lines */
 } irrvol__corners;
+
+/* A term of a sub-cell with hanging corners (irrvol__expand_hanging): a
+   sample, the corner it stands in for and its weight there (1 for the
+   corner itself, a parent's weight for a hanging corner's parent). */
+typedef struct irrvol__term {
+    uint32_t id, corner;
+    float weight;
+} irrvol__term;
 
 enum {   /* why a first-level cell is refined (vol->refined) */
     IRRVOL__UNREFINED = 0,
@@ -2180,6 +2190,8 @@ struct irrvol {
                               mirrored texels across the octahedral square's edges */
     irrvol__corners *corners; /* per sub-cell (of every cell), aligned to 64 bytes */
     void *corner_block;    /* the allocation that holds them */
+    irrvol__term *terms;   /* the terms of the sub-cells with hanging corners */
+    uint32_t term_count;
     float *probes;         /* what a leak-safe query reads of a sample before hanging_begin, in one 16-byte
                               record: its origin xyz and its reach squared, a distance within which no test
                               point lies beyond the surface its map predicts, or -1 when it is invalid */
@@ -2492,7 +2504,8 @@ static size_t irrvol__bytes(const irrvol *v)
                                       (size_t)v->bins * irrvol__bin_bytes(v) + (v->radiance ? per_sample : 0)) +
            hanging * 4 * (sizeof(uint32_t) + sizeof(float)) +
            (size_t)v->hanging_begin * (v->map_texels + 1) * 4 * sizeof(float) +
-           (v->corner_block ? (irrvol__corner_count(v) + 1) * sizeof(irrvol__corners) : 0);
+           (v->corner_block ? (irrvol__corner_count(v) + 1) * sizeof(irrvol__corners) : 0) +
+           (size_t)v->term_count * sizeof(irrvol__term);
 }
 
 IRRVOL_API void irrvol_destroy(irrvol *vol)
@@ -2514,6 +2527,7 @@ IRRVOL_API void irrvol_destroy(irrvol *vol)
     irrvol__free(&a, vol->visibility);
     irrvol__free(&a, vol->probes);
     irrvol__free(&a, vol->corner_block);
+    irrvol__free(&a, vol->terms);
     irrvol__free(&a, vol);
 }
 
@@ -2556,6 +2570,52 @@ IRRVOL__HOT void irrvol__table_corners(const irrvol *v, const irrvol__cell *cell
 }
 
 /* The corner records of every sub-cell, from the id tables and the probes. */
+/* The terms of sub-cell record r (irrvol__expand_hanging) into out (NULL:
+   only counted), padded to a multiple of 4 with weight 0; returns their
+   number. A hanging corner's parents of weight 0 are left out. */
+static uint32_t irrvol__record_terms(const irrvol *v, const irrvol__corners *r, irrvol__term *out)
+{
+    uint32_t k, j, m = 0;
+    for (k = 0; k < 8; k++) {
+        if (r->id[k] < v->hanging_begin) {
+            if (out) { out[m].id = r->id[k]; out[m].corner = k; out[m].weight = 1.0f; }
+            m++;
+            continue;
+        }
+        for (j = 0; j < 4; j++) {
+            size_t h = 4 * (size_t)(r->id[k] - v->hanging_begin) + j;
+            if (!(v->parent_weights[h] > 0.0f)) continue;
+            if (out) { out[m].id = v->parents[h]; out[m].corner = k; out[m].weight = v->parent_weights[h]; }
+            m++;
+        }
+    }
+    for (; m % 4; m++)
+        if (out) { out[m].id = out[0].id; out[m].corner = 0; out[m].weight = 0.0f; }
+    return m;
+}
+
+/* Every sub-cell with hanging corners gets its terms, in v->terms. */
+static irrvol_result irrvol__make_terms(irrvol *v, uint32_t records)
+{
+    uint64_t total = 0;
+    uint32_t i;
+    for (i = 0; i < records; i++)
+        if (v->corners[i].hanging) total += irrvol__record_terms(v, &v->corners[i], NULL);
+    if (total > UINT32_MAX || total > SIZE_MAX / sizeof(irrvol__term)) return IRRVOL_ERROR_OUT_OF_MEMORY;
+    v->term_count = (uint32_t)total;
+    if (!total) return IRRVOL_OK;
+    v->terms = (irrvol__term *)irrvol__alloc_array(&v->allocator, (size_t)total, sizeof(irrvol__term));
+    if (!v->terms) return IRRVOL_ERROR_OUT_OF_MEMORY;
+    for (total = 0, i = 0; i < records; i++) {
+        irrvol__corners *r = &v->corners[i];
+        if (!r->hanging) continue;
+        r->first = (uint32_t)total;
+        r->hanging = irrvol__record_terms(v, r, v->terms + total);
+        total += r->hanging;
+    }
+    return IRRVOL_OK;
+}
+
 static irrvol_result irrvol__make_corners(irrvol *v)
 {
     uint64_t count = irrvol__corner_count(v);
@@ -2589,7 +2649,7 @@ static irrvol_result irrvol__make_corners(irrvol *v)
                     }
                 }
     }
-    return IRRVOL_OK;
+    return irrvol__make_terms(v, (uint32_t)count);
 }
 
 /* The probes: each sample's origin and reach in one record. A test point
@@ -4415,6 +4475,26 @@ IRRVOL__HOT uint32_t irrvol__square_bin(const irrvol *v, float u, float w, uint3
    bilinear weights (6.1.2). Past the outer bin centres the neighbour is the
    bin with the same (i, j) in the other hemisphere: both squares share their
    boundary, the equator. */
+#ifdef IRRVOL__SSE2
+/* With SSE2 the four bins' lanes in one register: the same operations, the
+   integer ones on whole numbers held exactly as floats (bins < 2^24). */
+IRRVOL__HOT void irrvol__bilinear_bins(const irrvol *v, float u, float t, uint32_t h, uint32_t bins[4], float w[4])
+{
+    const __m128 one = _mm_set1_ps(1.0f), zero = _mm_setzero_ps(), kf = _mm_set1_ps(v->kf);
+    __m128 f = _mm_sub_ps(_mm_mul_ps(_mm_unpacklo_ps(_mm_set_ss(u), _mm_set_ss(t)), kf), _mm_set1_ps(0.5f));  /* fu fv */
+    __m128 fl = _mm_sub_ps(_mm_cvtepi32_ps(_mm_cvttps_epi32(_mm_add_ps(f, one))), one);   /* iu iv: floor for f > -1 */
+    __m128 tt = _mm_sub_ps(f, fl), next = _mm_add_ps(fl, one), last = _mm_sub_ps(kf, one);
+    __m128 ij = _mm_unpacklo_ps(_mm_max_ps(fl, zero), _mm_min_ps(next, last));          /* i0 i1 j0 j1 */
+    __m128 out = _mm_unpacklo_ps(_mm_cmplt_ps(fl, zero), _mm_cmpgt_ps(next, last));      /* ou0 ou1 ov0 ov1 */
+    __m128 tw = _mm_unpacklo_ps(_mm_sub_ps(one, tt), tt);                                 /* 1-tu tu 1-tv tv */
+    __m128 flip = _mm_or_ps(_mm_shuffle_ps(out, out, _MM_SHUFFLE(1, 0, 1, 0)), _mm_shuffle_ps(out, out, _MM_SHUFFLE(3, 3, 2, 2)));
+    __m128 hf = _mm_set1_ps((float)h), hh = irrvol__select(flip, _mm_sub_ps(one, hf), hf);   /* h ^ outside */
+    __m128 b = _mm_add_ps(_mm_mul_ps(_mm_add_ps(_mm_mul_ps(hh, kf), _mm_shuffle_ps(ij, ij, _MM_SHUFFLE(3, 3, 2, 2))), kf),
+                          _mm_shuffle_ps(ij, ij, _MM_SHUFFLE(1, 0, 1, 0)));
+    _mm_storeu_si128((__m128i *)(void *)bins, _mm_cvttps_epi32(b));
+    _mm_storeu_ps(w, _mm_mul_ps(_mm_shuffle_ps(tw, tw, _MM_SHUFFLE(1, 0, 1, 0)), _mm_shuffle_ps(tw, tw, _MM_SHUFFLE(3, 3, 2, 2))));
+}
+#else
 IRRVOL__HOT void irrvol__bilinear_bins(const irrvol *v, float u, float t, uint32_t h, uint32_t bins[4], float w[4])
 {
     uint32_t k = v->k, i0, i1, j0, j1, ou0, ou1, ov0, ov1;
@@ -4439,6 +4519,7 @@ IRRVOL__HOT void irrvol__bilinear_bins(const irrvol *v, float u, float t, uint32
     w[2] = (1.0f - tu) * tv;
     w[3] = tu * tv;
 }
+#endif
 
 /* The visibility weight of sample s for the test point x of a surface
    with unit normal n, after DDGI (Majercik et al. 2019):
@@ -4682,31 +4763,20 @@ typedef struct irrvol__prepared {
    both sides of a face between the levels read the same first-level
    samples (the stored blend of a hanging sample is rounded on its own in
    the compact store), and the leak-safe weights weigh each parent by its
-   own visibility. */
-IRRVOL__HOT void irrvol__expand_hanging(const irrvol *v, irrvol__prepared *q)
+   own visibility. The record's terms (irrvol__make_terms) list them: a
+   load and a product each, padded with weight 0 to whole groups of four
+   (irrvol__finish_packed). */
+IRRVOL__HOT void irrvol__expand_hanging(const irrvol *v, const irrvol__corners *rec, irrvol__prepared *q)
 {
-    uint32_t ids[8], i, j, m = 0;
+    const irrvol__term *t = v->terms + rec->first;
+    uint32_t i;
     float w[8];
-    memcpy(ids, q->id, sizeof ids);
     memcpy(w, q->w, sizeof w);
-    for (i = 0; i < 8; i++) {
-        if (ids[i] >= v->hanging_begin) {
-            size_t h = 4 * (size_t)(ids[i] - v->hanging_begin);
-            for (j = 0; j < 4; j++) {   /* without a branch: an unused parent (weight 0) is overwritten next */
-                q->id[m] = v->parents[h + j];
-                q->w[m] = w[i] * v->parent_weights[h + j];
-                m += v->parent_weights[h + j] > 0.0f;
-            }
-        } else {
-            q->id[m] = ids[i];
-            q->w[m++] = w[i];
-        }
+    for (i = 0; i < rec->hanging; i++) {
+        q->id[i] = t[i].id;
+        q->w[i] = w[t[i].corner] * t[i].weight;
     }
-    for (; m % 4; m++) {   /* pad to whole groups of four (irrvol__finish_packed): weight 0, a sample read anyway */
-        q->id[m] = q->id[0];
-        q->w[m] = 0.0f;
-    }
-    q->count = m;
+    q->count = rec->hanging;
 }
 
 /* Leak-safe weights: each term's trilinear weight times its sample's
@@ -4745,7 +4815,7 @@ IRRVOL__HOT void irrvol__prepare_terms(const irrvol *v, const irrvol__corners *r
 {
     q->count = 8;
     q->scale = 1.0f;
-    if (rec->hanging) irrvol__expand_hanging(v, q);
+    if (rec->hanging) irrvol__expand_hanging(v, rec, q);
     if (weighting == IRRVOL_WEIGHTING_DEFAULT) weighting = v->weighting;
     if (weighting == IRRVOL_WEIGHTING_VISIBILITY) irrvol__visibility_terms(v, rec, pos, normal, q);
 }
