@@ -4909,18 +4909,38 @@ IRRVOL__HOT void irrvol__finish_floats(const irrvol *v, const irrvol__prepared *
 #endif
 }
 
-/* irrvol__finish from the compact store, four terms at a time (the term
-   list is padded to a multiple of four with weight 0, irrvol__pad_terms).
-   A word's channel m (9 bits) and exponent field e give m 2^(e - 24)
-   2^pack_shift: the power 2^(e - 24) is built from its bits (always a
-   normal float), scaled by the term's weight (or the bin's), and the sums
-   are scaled by 2^pack_shift once, at the end; powers of two multiply
-   exactly, so this equals m times unpack[e] times the weight. Each lane
-   sums every fourth term; the lanes are added pairwise at the end: a
-   short chain of additions instead of one per term. With SSE2 a lane is
-   a term, and the scalar code computes the same operations in the same
-   order. */
+/* irrvol__finish from the compact store. A word's channel m (9 bits) and
+   exponent field e give m 2^(e - 24) 2^pack_shift.
+   NEAREST: the term's weight times unpack[e] scales the word's mantissas,
+   left in place (green and blue 2^9 and 2^18 times their value, exact as
+   floats), summed term after term; the place values come off once, at
+   the end. With SSE2 a word's three channels share a register.
+   BILINEAR, four terms at a time (the term list is padded to a multiple of
+   four with weight 0): the power 2^(e - 24) is built from the word's bits
+   (always a normal float), scaled by the bin's weight, the four bins are
+   added and scaled by the term's weight; the sums are scaled by
+   2^pack_shift once, at the end (powers of two multiply exactly). Each lane
+   sums every fourth term and the lanes are added pairwise at the end: a
+   short chain of additions instead of one per term. With SSE2 a lane is a
+   term. The scalar code computes the same operations in the same order. */
 #ifdef IRRVOL__SSE2
+IRRVOL__HOT void irrvol__finish_nearest(const irrvol *v, const irrvol__prepared *q, float rgb[3])
+{
+    const uint32_t *b = v->packed + (size_t)q->bin[0] * v->sample_count;
+    const __m128i mask = _mm_set_epi32(0, 0x1FF << 18, 0x1FF << 9, 0x1FF);
+    __m128 sum = _mm_setzero_ps();
+    float out[4];
+    uint32_t i;
+    for (i = 0; i < q->count; i++) {
+        uint32_t word = b[q->id[i]];
+        __m128 m = _mm_cvtepi32_ps(_mm_and_si128(_mm_set1_epi32((int)word), mask));
+        sum = _mm_add_ps(sum, _mm_mul_ps(m, _mm_set1_ps(q->w[i] * v->unpack[word >> 27])));
+    }
+    _mm_storeu_ps(out, _mm_mul_ps(_mm_mul_ps(sum, _mm_set_ps(0.0f, 1.0f / 262144.0f, 1.0f / 512.0f, 1.0f)),
+                                  _mm_set1_ps(q->scale)));
+    rgb[0] = out[0]; rgb[1] = out[1]; rgb[2] = out[2];
+}
+
 /* Four terms' words of one bin, b[id[0..3]]: their channels times 2^(e - 24) times s, by lane. */
 IRRVOL__HOT void irrvol__words4(const uint32_t *b, const uint32_t *id, __m128 s, __m128 *r, __m128 *g, __m128 *bl)
 {
@@ -4933,34 +4953,23 @@ IRRVOL__HOT void irrvol__words4(const uint32_t *b, const uint32_t *id, __m128 s,
     *bl = _mm_mul_ps(_mm_cvtepi32_ps(_mm_and_si128(_mm_srli_epi32(w, 18), nine)), scale);
 }
 
-/* One group of four terms of a BILINEAR query: per lane the weight times
-   the sum of the four bins. */
-IRRVOL__HOT void irrvol__words4_bilinear(const uint32_t *const b[4], const float bw[4], const uint32_t *id, __m128 w,
-                                         __m128 *r, __m128 *g, __m128 *bl)
+IRRVOL__HOT void irrvol__finish_bilinear(const irrvol *v, const irrvol__prepared *q, float rgb[3])
 {
-    __m128 r0, g0, b0, r1, g1, b1, r2, g2, b2, r3, g3, b3;
-    irrvol__words4(b[0], id, _mm_set1_ps(bw[0]), &r0, &g0, &b0);
-    irrvol__words4(b[1], id, _mm_set1_ps(bw[1]), &r1, &g1, &b1);
-    irrvol__words4(b[2], id, _mm_set1_ps(bw[2]), &r2, &g2, &b2);
-    irrvol__words4(b[3], id, _mm_set1_ps(bw[3]), &r3, &g3, &b3);
-    *r = _mm_mul_ps(w, _mm_add_ps(_mm_add_ps(r0, r1), _mm_add_ps(r2, r3)));
-    *g = _mm_mul_ps(w, _mm_add_ps(_mm_add_ps(g0, g1), _mm_add_ps(g2, g3)));
-    *bl = _mm_mul_ps(w, _mm_add_ps(_mm_add_ps(b0, b1), _mm_add_ps(b2, b3)));
-}
-
-IRRVOL__HOT void irrvol__finish_packed(const irrvol *v, const irrvol__prepared *q, float rgb[3])
-{
-    const uint32_t *b[4];
-    uint32_t g, k, bins = q->bins == 1 ? 1u : 4u;
-    __m128 ar = _mm_setzero_ps(), ag = ar, ab = ar, tr, tg, tb, z = ar;
+    const uint32_t *b0 = v->packed + (size_t)q->bin[0] * v->sample_count, *b1 = v->packed + (size_t)q->bin[1] * v->sample_count;
+    const uint32_t *b2 = v->packed + (size_t)q->bin[2] * v->sample_count, *b3 = v->packed + (size_t)q->bin[3] * v->sample_count;
+    const __m128 w0 = _mm_set1_ps(q->bw[0]), w1 = _mm_set1_ps(q->bw[1]), w2 = _mm_set1_ps(q->bw[2]), w3 = _mm_set1_ps(q->bw[3]);
+    __m128 ar = _mm_setzero_ps(), ag = ar, ab = ar, z = ar;
     float o[4];
-    for (k = 0; k < 4; k++) b[k] = v->packed + (size_t)q->bin[k < bins ? k : 0] * v->sample_count;
+    uint32_t g;
     for (g = 0; g < q->count; g += 4) {
-        if (bins == 1) irrvol__words4(b[0], q->id + g, _mm_loadu_ps(q->w + g), &tr, &tg, &tb);
-        else irrvol__words4_bilinear(b, q->bw, q->id + g, _mm_loadu_ps(q->w + g), &tr, &tg, &tb);
-        ar = _mm_add_ps(ar, tr);
-        ag = _mm_add_ps(ag, tg);
-        ab = _mm_add_ps(ab, tb);
+        __m128 w = _mm_loadu_ps(q->w + g), r0, g0, c0, r1, g1, c1, r2, g2, c2, r3, g3, c3;
+        irrvol__words4(b0, q->id + g, w0, &r0, &g0, &c0);
+        irrvol__words4(b1, q->id + g, w1, &r1, &g1, &c1);
+        irrvol__words4(b2, q->id + g, w2, &r2, &g2, &c2);
+        irrvol__words4(b3, q->id + g, w3, &r3, &g3, &c3);
+        ar = _mm_add_ps(ar, _mm_mul_ps(w, _mm_add_ps(_mm_add_ps(r0, r1), _mm_add_ps(r2, r3))));
+        ag = _mm_add_ps(ag, _mm_mul_ps(w, _mm_add_ps(_mm_add_ps(g0, g1), _mm_add_ps(g2, g3))));
+        ab = _mm_add_ps(ab, _mm_mul_ps(w, _mm_add_ps(_mm_add_ps(c0, c1), _mm_add_ps(c2, c3))));
     }
     _MM_TRANSPOSE4_PS(ar, ag, ab, z);   /* rows: lane l's rgb */
     ar = _mm_add_ps(_mm_add_ps(ar, ag), _mm_add_ps(ab, z));
@@ -4970,6 +4979,21 @@ IRRVOL__HOT void irrvol__finish_packed(const irrvol *v, const irrvol__prepared *
     rgb[0] = o[0]; rgb[1] = o[1]; rgb[2] = o[2];
 }
 #else
+IRRVOL__HOT void irrvol__finish_nearest(const irrvol *v, const irrvol__prepared *q, float rgb[3])
+{
+    static const float place[3] = {1.0f, 1.0f / 512.0f, 1.0f / 262144.0f};
+    const uint32_t *b = v->packed + (size_t)q->bin[0] * v->sample_count;
+    float sum[3] = {0.0f, 0.0f, 0.0f};
+    uint32_t i;
+    int c;
+    for (i = 0; i < q->count; i++) {
+        uint32_t word = b[q->id[i]];
+        float s = q->w[i] * v->unpack[word >> 27];
+        for (c = 0; c < 3; c++) sum[c] += (float)(word & (0x1FFu << (9 * c))) * s;
+    }
+    for (c = 0; c < 3; c++) rgb[c] = sum[c] * place[c] * q->scale;
+}
+
 /* 2^(e - 24) for the exponent field e of a word, from its bits. */
 IRRVOL__HOT float irrvol__word_power(uint32_t word)
 {
@@ -4979,28 +5003,29 @@ IRRVOL__HOT float irrvol__word_power(uint32_t word)
     return p;
 }
 
-IRRVOL__HOT void irrvol__finish_packed(const irrvol *v, const irrvol__prepared *q, float rgb[3])
+IRRVOL__HOT void irrvol__finish_bilinear(const irrvol *v, const irrvol__prepared *q, float rgb[3])
 {
-    const uint32_t *b[4];
-    uint32_t g, k, l, bins = q->bins == 1 ? 1u : 4u;
     float acc[4][3] = {{0.0f}}, t[4][3];
+    uint32_t i, k;
     int c;
-    for (k = 0; k < 4; k++) b[k] = v->packed + (size_t)q->bin[k < bins ? k : 0] * v->sample_count;
-    for (g = 0; g < q->count; g += 4)
-        for (l = 0; l < 4; l++) {
-            uint32_t i = g + l;
-            for (k = 0; k < bins; k++) {
-                uint32_t word = b[k][q->id[i]];
-                float s = (bins == 1 ? q->w[i] : q->bw[k]) * irrvol__word_power(word);
-                for (c = 0; c < 3; c++) t[k][c] = (float)(word >> (9 * c) & 0x1FFu) * s;
-            }
-            for (c = 0; c < 3; c++)
-                acc[l][c] += bins == 1 ? t[0][c] : q->w[i] * ((t[0][c] + t[1][c]) + (t[2][c] + t[3][c]));
+    for (i = 0; i < q->count; i++) {
+        for (k = 0; k < 4; k++) {
+            uint32_t word = v->packed[(size_t)q->bin[k] * v->sample_count + q->id[i]];
+            float s = q->bw[k] * irrvol__word_power(word);
+            for (c = 0; c < 3; c++) t[k][c] = (float)(word >> (9 * c) & 0x1FFu) * s;
         }
+        for (c = 0; c < 3; c++) acc[i % 4][c] += q->w[i] * ((t[0][c] + t[1][c]) + (t[2][c] + t[3][c]));
+    }
     for (c = 0; c < 3; c++)
         rgb[c] = (((acc[0][c] + acc[1][c]) + (acc[2][c] + acc[3][c])) * v->unshift[0]) * v->unshift[1] * q->scale;
 }
 #endif
+
+IRRVOL__HOT void irrvol__finish_packed(const irrvol *v, const irrvol__prepared *q, float rgb[3])
+{
+    if (q->bins == 1) irrvol__finish_nearest(v, q, rgb);
+    else irrvol__finish_bilinear(v, q, rgb);
+}
 
 /* sum over samples of weight x (sum over bins of bin weight x value),
    times the scale. NEAREST reads one bin, BILINEAR blends four per sample
