@@ -1,4 +1,4 @@
-/* irrvol.h - v0.5.1 - irradiance volume for lighting moving objects - public domain or MIT, see end of file
+/* irrvol.h - v0.5.2 - irradiance volume for lighting moving objects - public domain or MIT, see end of file
 
    IRRVOL.H: a bilevel grid of directional irradiance samples that lights moving objects by interpolation.
 
@@ -60,6 +60,7 @@
        IRRVOL_API                 linkage of public functions (default: extern)
        IRRVOL_MALLOC, IRRVOL_FREE replace malloc/free (define both or neither)
        IRRVOL_BVH_BINS            SAH bins of the BVH build (default 16)
+       IRRVOL_NO_SIMD             the queries' portable scalar code only (the same bits as SSE2)
        IRRVOL_BVH_SIMD            1 (default): SSE2 (x86-64) or NEON (AArch64) BVH kernels
                                   when the compiler offers them; 0: the portable scalar
                                   kernels only (the same hits, bit for bit)
@@ -228,7 +229,9 @@
    visible, or an input is NaN, the plain weights stand. Without triangles
    no sample sees a surface: only the backface term remains. The queries
    read what these weights need in few cache lines: each sub-cell keeps a
-   record of its eight corners' ids, origins and reaches (192 bytes), and
+   record of its eight corners' ids, origins and reaches (192 bytes; one
+   with hanging corners also the list of samples that stand in for them,
+   12 bytes a term, made at build and load), and
    a test point within its sample's reach (0.999 over the largest |g| of
    the map: no point there can lie beyond a predicted surface) skips the
    map, with the same result to the bit.
@@ -330,6 +333,14 @@
    (fig. 4.17) for moment volumes (desc.moment > 1). irrvol_query_many answers
    a batch (the vertices of a moving object) with the same results, faster:
    it prepares each query a few ahead and prefetches the values it will read.
+   With SSE2 (every x86-64 compiler) a query finds its cell and sub-cell
+   with the three axes in one register, its direction's square point with
+   selects where branches would mispredict on random directions, BILINEAR's
+   four bins in one register and their words four samples at a time; the
+   portable code (IRRVOL_NO_SIMD) gives the same bits. BILINEAR adds its
+   terms by lanes (every fourth term, the lanes pairwise at the end), which
+   differs from adding them in turn by float rounding only (at most 4.6e-7
+   of a query's largest channel on 1M random office queries).
 
    Determinism. Each sample draws its jitter from a stream seeded by
    (desc.seed, sample index): a volume is bit-identical for any thread count.
@@ -469,7 +480,7 @@
 
 #define IRRVOL_VERSION_MAJOR 0
 #define IRRVOL_VERSION_MINOR 5
-#define IRRVOL_VERSION_PATCH 1
+#define IRRVOL_VERSION_PATCH 2
 #define IRRVOL_FILE_FORMAT_VERSION 3
 
 /* Fixed limits of the desc's fields (see LIMITS). */
