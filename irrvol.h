@@ -4615,7 +4615,7 @@ typedef struct irrvol__lanes4 {
     __m128 dx, dy, dz, inv_r, w, pos, ok;   /* toward x, 1 / r, the backface term, r > 0, valid */
     int near;                               /* bit k: lane k within its sample's reach, or invalid: no texels */
     const float *texel[4];                  /* each lane's 2 x 2 texels: the top left one */
-    float fu[4], ft[4];                     /* and the bilinear weights */
+    __m128 fu, ft;                          /* and the bilinear weights, by lane */
     __m128 fit[4];                          /* each lane's blended fit: gx, gy, gz, var */
 } irrvol__lanes4;
 
@@ -4655,8 +4655,8 @@ IRRVOL__HOT void irrvol__lanes4_locate(const irrvol *v, const uint32_t s[4], __m
     t = _mm_min_ps(_mm_max_ps(t, half), _mm_add_ps(fn, half));
     i0 = _mm_cvttps_epi32(u);
     j0 = _mm_cvttps_epi32(t);
-    _mm_storeu_ps(l->fu, _mm_sub_ps(u, _mm_cvtepi32_ps(i0)));
-    _mm_storeu_ps(l->ft, _mm_sub_ps(t, _mm_cvtepi32_ps(j0)));
+    l->fu = _mm_sub_ps(u, _mm_cvtepi32_ps(i0));
+    l->ft = _mm_sub_ps(t, _mm_cvtepi32_ps(j0));
     _mm_storeu_si128((__m128i *)(void *)iu, i0);
     _mm_storeu_si128((__m128i *)(void *)ju, j0);
     for (k = 0; k < 4; k++)
@@ -4674,30 +4674,29 @@ IRRVOL__HOT void irrvol__lanes4_locate_samples(const irrvol *v, const uint32_t s
     irrvol__lanes4_locate(v, s, ox, oy, oz, reach2, p, l);
 }
 
+/* The bilinear blend of the 2 x 2 texels from m (rows row texels apart)
+   with weights su, sv (in every lane). */
+IRRVOL__HOT __m128 irrvol__texels_blend(const float *m, uint32_t row, __m128 su, __m128 sv)
+{
+    const __m128 one = _mm_set1_ps(1.0f), cu = _mm_sub_ps(one, su), cv = _mm_sub_ps(one, sv);
+    const float *m1 = m + 4 * (size_t)row;
+    __m128 r0 = _mm_add_ps(_mm_mul_ps(_mm_loadu_ps(m), cu), _mm_mul_ps(_mm_loadu_ps(m + 4), su));
+    __m128 r1 = _mm_add_ps(_mm_mul_ps(_mm_loadu_ps(m1), cu), _mm_mul_ps(_mm_loadu_ps(m1 + 4), su));
+    return _mm_add_ps(_mm_mul_ps(r0, cv), _mm_mul_ps(r1, sv));
+}
+
 /* Step 2: each lane's four texels, blended; a lane within reach takes a
    zero fit, which predicts no surface: g . (x - o) - 1 < 0, as its texels
    would give. */
 IRRVOL__HOT void irrvol__lanes4_fetch(const irrvol *v, irrvol__lanes4 *l)
 {
-    const __m128 one = _mm_set1_ps(1.0f);
-    int k;
-    for (k = 0; k < 4; k++) {
-        const float *m, *m1;
-        __m128 su, sv, cu, cv, r0, r1;
-        if (l->near >> k & 1) {
-            l->fit[k] = _mm_setzero_ps();
-            continue;
-        }
-        m = l->texel[k];
-        m1 = m + 4 * (v->vis_res + 2);
-        su = _mm_set1_ps(l->fu[k]);
-        sv = _mm_set1_ps(l->ft[k]);
-        cu = _mm_sub_ps(one, su);
-        cv = _mm_sub_ps(one, sv);
-        r0 = _mm_add_ps(_mm_mul_ps(_mm_loadu_ps(m), cu), _mm_mul_ps(_mm_loadu_ps(m + 4), su));
-        r1 = _mm_add_ps(_mm_mul_ps(_mm_loadu_ps(m1), cu), _mm_mul_ps(_mm_loadu_ps(m1 + 4), su));
-        l->fit[k] = _mm_add_ps(_mm_mul_ps(r0, cv), _mm_mul_ps(r1, sv));
-    }
+    const uint32_t row = v->vis_res + 2;
+    const __m128 zero = _mm_setzero_ps();
+    __m128 fu = l->fu, ft = l->ft;   /* each lane's weights broadcast from the register: no store and reload */
+    l->fit[0] = l->near & 1 ? zero : irrvol__texels_blend(l->texel[0], row, _mm_shuffle_ps(fu, fu, 0x00), _mm_shuffle_ps(ft, ft, 0x00));
+    l->fit[1] = l->near & 2 ? zero : irrvol__texels_blend(l->texel[1], row, _mm_shuffle_ps(fu, fu, 0x55), _mm_shuffle_ps(ft, ft, 0x55));
+    l->fit[2] = l->near & 4 ? zero : irrvol__texels_blend(l->texel[2], row, _mm_shuffle_ps(fu, fu, 0xAA), _mm_shuffle_ps(ft, ft, 0xAA));
+    l->fit[3] = l->near & 8 ? zero : irrvol__texels_blend(l->texel[3], row, _mm_shuffle_ps(fu, fu, 0xFF), _mm_shuffle_ps(ft, ft, 0xFF));
 }
 
 /* Step 3: the Chebyshev bound, the fade, validity. */
