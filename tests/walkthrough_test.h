@@ -149,10 +149,10 @@ TEST__FN double direct_light_bias(wt_world *w, double t, int cols, int rows, int
             mat = &w->materials[h.instance == EX_TRACE_STATIC ? w->office.tri_material[h.tri] : w->bunny_material];
             for (i = 0; i < streams; i++) {
                 ex_rng r = ex_rng_stream(w->opt.seed + 1000u, (uint64_t)(y * cols + x) * 4096u + (uint64_t)i);
-                float rgb[3];
+                float rgb[3], gloss[3];
                 int shadow = 0;
                 double l;
-                wt__direct(w, &h, dir, mat, &r, rgb, &shadow);
+                wt__direct(w, &h, dir, mat, &r, rgb, gloss, &shadow);
                 l = luminance(rgb);
                 m1 += l;
                 m2 += l * l;
@@ -164,19 +164,19 @@ TEST__FN double direct_light_bias(wt_world *w, double t, int cols, int rows, int
             }
             for (i = 0; i < DIRECT_REPEATS; i++) {
                 ex_rng r = ex_rng_stream(w->opt.seed + 2000u, (uint64_t)(y * cols + x) * 4096u + (uint64_t)i);
-                float rgb[3] = { 0, 0, 0 }, one[3] = { 0, 0, 0 };
+                float rgb[3] = { 0, 0, 0 }, one[3] = { 0, 0, 0 }, gloss[3] = { 0, 0, 0 };
                 uint32_t e;
                 int s, shadow = 0;
                 for (e = 0; e < w->light_count; e++)
                     for (s = 0; s < per_light; s++)
                         wt__light_sample(w, &w->lights[e], o, h.normal, mirror, mat,
                                          ((float)s + ex_rng_float(&r)) / (float)per_light, ex_rng_float(&r),
-                                         1.0f / (float)per_light, rgb, &shadow);
+                                         1.0f / (float)per_light, rgb, gloss, &shadow);
                 a1 += luminance(rgb);
                 a2 += (double)luminance(rgb) * luminance(rgb);
                 for (e = 0; e < w->light_count; e++) {   /* one sample per light: the old default's spread */
                     wt__light_sample(w, &w->lights[e], o, h.normal, mirror, mat, ex_rng_float(&r), ex_rng_float(&r),
-                                     1.0f, one, &shadow);
+                                     1.0f, one, gloss, &shadow);
                     if (i == 0) *rays += wt__light_importance(&w->lights[e], o, h.normal) > 0.0f;
                 }
                 one_old += (double)luminance(one) * luminance(one);
