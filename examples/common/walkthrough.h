@@ -63,12 +63,8 @@
                 Gouraud-shaded per vertex from an irradiance volume
                 (irrvol.h, Greger 1996) built from the radiosity solution,
                 times its self-occlusion ratio (irrvol_visibility_ratio).
-                radinterp.h does not have its mesh and online phase yet:
-                wt_static_shading_build says so and the mode does not run;
-                every other part of it is here (wt_bunny_visibility,
-                wt_volume_build, wt_bunny_light, wt_raster_scene) and
-                tested, and wt_static_shading_build/_shade are where
-                radinterp_build_mesh and radinterp_shade go.
+                The pixels are shaded in the raster's tile jobs, a run of
+                pixels of one triangle at a time (radinterp_shade_span).
 
    Daylight. A layout may name a sky ("sky R G B", W/(m^2 sr), or "sky R G
    B MAP.pfm": R G B times an equirectangular little-endian RGB PFM beside
@@ -3702,10 +3698,12 @@ static int wt__baseviews_frame(wt_renderer *r, int frame, float *rgb, wt_frame_s
    self-occlusion ratios. Per frame: the bunny's vertices query the volume
    (Greger eq. 4.7: radiance = Kd H / pi, times the vertex's self-occlusion
    ratio, thesis 6.1.3), the rasterizer draws the static mesh and the bunny
-   into the ID + barycentric buffers, and one pass over the pixels shades
-   the static ones by their triangle's interpolant (radinterp_shade, Hardt's
-   online phase; radiance B / pi) with the bunny's occlusion blob, and the
-   bunny's by Gouraud interpolation of its vertex colours.
+   into the ID + barycentric buffers, and one pass over the pixels, tile by
+   tile as the raster finishes them, shades the static ones by their
+   triangle's interpolant (radinterp_shade_span on each run of pixels of
+   one triangle, Hardt's online phase; radiance B / pi) with the bunny's
+   occlusion blob, and the bunny's by Gouraud interpolation of its vertex
+   colours.
    ------------------------------------------------------------------------ */
 #define WT_RADIOSITY_VERSION 1u  /* bump when the patches, materials or the volume's source change */
 
@@ -3834,7 +3832,7 @@ static int wt__mesh_normals(wt_static_shading *s)
    interpolant mesh, or the mesh alone from the precompute cache (file
    "radinterp": radinterp_mesh_save's bytes; a loaded mesh needs no
    solution). The mesh is left without a job system: the frame's pixel
-   pass calls radinterp_shade on bands of rows from its own jobs. */
+   pass shades runs of pixels from the raster's tile jobs. */
 EX_FN int wt_static_shading_build(wt_world *w, wt_static_shading *s, char *err, size_t err_size)
 {
     const wt_options *o = &w->opt;
