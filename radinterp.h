@@ -1,4 +1,4 @@
-/* radinterp.h - v0.6.0 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
+/* radinterp.h - v0.7.0 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
 
    RADINTERP.H: hierarchical radiosity, ranked discontinuities and quadratic irradiance interpolants evaluated per pixel.
 
@@ -225,7 +225,23 @@
    over the segment (horizon: 1 * B_src; contact: FLT_MAX); the geometric
    factor is computed once, the weight cached with the radiosity state of
    the solution it was computed for. EEE surfaces, and EV events between two
-   blockers, are ignored as in the thesis. DSets (5.5.4): collinear
+   blockers, are ignored as in the thesis. Two tests beyond the thesis keep
+   a building's mesh to the discontinuities one can see (its section 8.2
+   proposes weights that bound the change in radiosity): a source's
+   discontinuities are candidates only when B_src times its largest
+   unoccluded point form factor on the receiver (at the receiver's corners,
+   centroid and point nearest the source) is at least min_discont_contrast
+   of the receiver's mean irradiance, since hiding all of the source changes
+   the irradiance by no more; and a candidate EV or VE event must happen:
+   its generating line (receiver point, blocker feature, source) must be
+   clear of other surfaces at one of the segment's middle and quarter
+   points, as in the visibility clipping of discontinuity meshing
+   (Lischinski, Tampieri and Greenberg 1992), or the segment is not kept
+   (where another blocker stands on that line, the edge lies inside another
+   shadow, or is a crease of a solid rather than its outline seen from the
+   source). On the 1k building these take the mesh's samples from 1.12 M to
+   0.37 M; on the office the Embree comparison (ref_radinterp_mesh) is
+   unchanged to the third digit. DSets (5.5.4): collinear
    discontinuities of a receiver (direction within 1e-6 rad, offset within
    epsilon * diag) share a line. The mesh keeps its own copy of the
    solution's quadtrees (down to min_leaf_area), restricted so that
@@ -380,6 +396,19 @@
                           default 1% of the largest patch radiosity (the
                           thesis used 100 W/m^2 for its office; the brightest
                           patch here is the lamp, about 126 W/m^2)
+       min_discont_contrast a source's discontinuities are candidates when
+                          hiding all of it could change the receiver's
+                          irradiance by at least this fraction of its mean
+                          (B_src times the source's largest unoccluded point
+                          form factor there, over the receiver's mean
+                          irradiance). Measured against Embree
+                          (ref_radinterp_mesh, LRMS away from emitters
+                          without the reference's noise), thesis ranking /
+                          1/32 / 1/8: Cornell box 0.0362 / 0.0366 / 0.0371,
+                          office 0.0341 / 0.0341 / 0.0344, with the hidden
+                          events dropped in all three; samples of the 1k
+                          building 595 k / 370 k / 266 k. FLT_MIN keeps
+                          every source (the thesis).      default 1/32
        max_leaf_dsets     Tree::maxLeafDSets: active DSets per leaf at most.
                                                      default 10 (the thesis)
        min_leaf_area      the mesh stops where the solution's quadtrees split
@@ -568,7 +597,7 @@
    fractions, gathers, push-pull) through desc.parallel_for when given;
    results are bit-identical for any thread count. A trace callback must then
    be thread-safe. Queries on a finished solution are const and may run from
-   many threads at once; each uses up to about 120 KB of stack (its
+   many threads at once; each uses up to about 160 KB of stack (its
    triangulation moves to the allocator only when it outgrows 32 KB; 20 KB
    rank its sources).
    radinterp_build_mesh samples its interpolants through
@@ -607,7 +636,7 @@
    points per triangle of every leaf (even one leaf per patch would take
    tens of thousands of queries). For such scenes use the solution's leaves
    (radinterp_get_leaf, radinterp_patch_radiosity); the office (55
-   polygons) meshes in about 30 s. Radiosity is constant over each element,
+   polygons) meshes in about 15 s of one core. Radiosity is constant over each element,
    so points a few millimetres from a corner, or at the foot of an object, see
    their nearest sources at the elements' mean: expect errors of several
    percent there (about 2% on average elsewhere in the Cornell box with
@@ -619,9 +648,12 @@
    method about 2,300.
 
    The mesh build costs a point query per vertex and edge midpoint of its
-   triangles (more with refine), about 2.2 per triangle: the office's 59,576
-   triangles take 131,571 queries (six a triangle before v0.6.0), nearly all
-   of the build time. Interpolants are only as accurate as IrradianceAtPoint, whose
+   triangles (more with refine), about 2.2 per triangle: the office's 37,879
+   triangles take 85,051 queries (131,571 before v0.7.0 dropped hidden and
+   faint discontinuities, 357,456 before v0.6.0 shared them), nearly all of
+   the build time. building_1k's mesh needs 369,949 queries (1.12 M before
+   v0.7.0) at about 1,200 per second of one core: minutes on two
+   threads, too slow still for a level loaded at run time. Interpolants are only as accurate as IrradianceAtPoint, whose
    sources are the solution's elements: for a more accurate image solve
    with a smaller eps and mesh with a larger min_leaf_area. Discontinuity
    edges that nearly graze a patch outline can make a triangulation fail
@@ -641,7 +673,7 @@
 #define RADINTERP_H
 
 #define RADINTERP_VERSION_MAJOR 0
-#define RADINTERP_VERSION_MINOR 6
+#define RADINTERP_VERSION_MINOR 7
 #define RADINTERP_VERSION_PATCH 0
 #define RADINTERP_FILE_FORMAT_VERSION 2   /* of saved meshes */
 
@@ -672,6 +704,7 @@ typedef enum radinterp_result {
 } radinterp_result;
 
 #define RADINTERP__POINT_REST (1.0 / 256.0)   /* default of radinterp_desc.point_rest */
+#define RADINTERP__MIN_CONTRAST (1.0 / 32.0)  /* default of radinterp_mesh_desc.min_discont_contrast */
 
 /* Limits of radinterp_desc.ff_samples and visibility_rays: a link costs
    ff_samples x visibility_rays shadow rays, so larger values would run for
@@ -868,6 +901,7 @@ typedef struct radinterp_mesh radinterp_mesh;
 typedef struct radinterp_mesh_desc {
     /* parameters, see MESH PARAMETERS above; zero = default */
     float min_discont_weight;    /* Tree::minDiscontWeight (W/m^2) */
+    float min_discont_contrast;  /* least irradiance change a source's discontinuities can make, over the mean */
     uint32_t max_leaf_dsets;     /* Tree::maxLeafDSets */
     float min_leaf_area;         /* the mesh stops where the solution's quadtrees split into smaller nodes (m^2) */
     int no_discontinuities;      /* non-zero: leaves are triangulated without discontinuities */
@@ -896,7 +930,8 @@ typedef struct radinterp_mesh_info {
     uint32_t discontinuities;         /* found: the four kinds below */
     uint32_t ev, ve, horizon, contact;
     uint32_t dsets;                   /* lines carrying collinear discontinuities, over all patches */
-    uint32_t candidates;              /* discontinuities with weight >= min_discont_weight */
+    uint32_t candidates;              /* discontinuities with weight >= min_discont_weight and a source
+                                         reaching min_discont_contrast */
     uint32_t active_discontinuities;
     uint32_t active_leaf_dsets;       /* sum over leaves of their active DSets */
     uint32_t max_leaf_active_dsets;   /* the most on one leaf (<= max_leaf_dsets) */
@@ -6017,6 +6052,8 @@ typedef struct radinterp__query {
     int shadow_count[RADINTERP__BP_MAX_SURVIVORS];
     unsigned char flags[2048];
     radinterp__piece piece[RADINTERP__PIECES];
+    radinterp__piece staged[RADINTERP__BP_MAX_SURVIVORS];   /* the shadows before their union */
+    unsigned char order[RADINTERP__BP_MAX_SURVIVORS];       /* the order they enter it */
     const uint32_t *blk;  /* the blockers of the link being summed (a leaf list or the link's own) */
     uint32_t nblk;
     uint32_t solid_tag[RADINTERP__SOLID_CACHE];  /* solids whose back faces' verdict at pv is known */
@@ -7233,49 +7270,85 @@ static double radinterp__ff_frame(const radinterp__query *q, const radinterp__fr
     return fabs(sum) / (2.0 * RADINTERP__PI);
 }
 
+/* Appends blocker b's shadow on bp's source to q->staged[*n] when it casts
+   one. Returns 1 when it alone hides the whole source, -1 when it cannot be
+   represented or the array is full, else 0. */
+static int radinterp__stage_shadow(radinterp__query *q, const radinterp__bp *bp, uint32_t b, int *n)
+{
+    radinterp__piece *sh = &q->staged[*n];
+    int r;
+    if (*n == RADINTERP__BP_MAX_SURVIVORS) return -1;
+    r = radinterp__bp_shadow_piece(q->s, bp, &q->s->patches[b], sh);
+    if (r <= 0) return r;
+    if (radinterp__covers((const double (*)[2])sh->v, sh->count, (const double (*)[2])bp->sc2, bp->nc)) return 1;
+    q->order[*n] = (unsigned char)*n;
+    (*n)++;
+    return 0;
+}
+
+/* The shadows of bp's blockers, as pieces, into q->staged, in the order
+   q->order gives: faces turned toward the point first, largest first (ties
+   in list order), then the faces turned away that
+   radinterp__back_face_covered cannot settle. Largest first: a small shadow
+   inside a large one already in the union is dropped after one pass over
+   the large one's edges, while a large shadow added after many small ones
+   is cut into parts around each of them (the 1k building's mesh samples
+   took 1.7 times as long in list order). Returns the count; 0 with *hides
+   set when one shadow alone hides the whole source; -1 when a shadow cannot
+   be represented or there are more than RADINTERP__BP_MAX_SURVIVORS. */
+static int radinterp__bp_stage(radinterp__query *q, const radinterp__bp *bp, int *hides)
+{
+    uint32_t later[RADINTERP__BP_MAX_SURVIVORS], nlater = 0, i;
+    double area[RADINTERP__BP_MAX_SURVIVORS];
+    int n = 0, k, j, r;
+    *hides = 0;
+    for (i = 0; i < bp->nblk; i++) {
+        uint32_t b = bp->blk[i];
+        const radinterp__patch *pb = &q->s->patches[b];
+        if (!(radinterp__d3_dot(pb->n, bp->pv) > pb->d)) {   /* turned away: after the others */
+            if (radinterp__back_face_covered(q, bp, b)) continue;
+            if (nlater == RADINTERP__BP_MAX_SURVIVORS) return -1;
+            later[nlater++] = b;
+            continue;
+        }
+        k = n;
+        if ((r = radinterp__stage_shadow(q, bp, b, &n)) != 0) { *hides = r > 0; return r > 0 ? 0 : -1; }
+        if (n > k) area[k] = fabs(radinterp__area2((const double (*)[2])q->staged[k].v, q->staged[k].count));
+    }
+    for (k = 1; k < n; k++) {   /* insertion sort, largest first, stable */
+        unsigned char o = q->order[k];
+        for (j = k; j > 0 && area[q->order[j - 1]] < area[o]; j--) q->order[j] = q->order[j - 1];
+        q->order[j] = o;
+    }
+    for (i = 0; i < nlater; i++)
+        if ((r = radinterp__stage_shadow(q, bp, later[i], &n)) != 0) { *hides = r > 0; return r > 0 ? 0 : -1; }
+    return n;
+}
+
 /* The union of the shadows on the source of bp as disjoint convex pieces
-   q->piece[0 .. *count). Shadows of faces turned toward the point go in
-   first: those of one convex object do not overlap, and its faces turned
-   away then fall inside them. Returns 1; 0 when the shadows hide the whole
-   source (one alone, or the pieces together leave less than 1e-12 of its
-   area, like radinterp__visible_rest: a source behind a wall of several
-   patches); -1 when a shadow cannot be represented or the pieces outgrow
-   their arrays (the caller triangulates). */
+   q->piece[0 .. *count), the shadows taken in radinterp__bp_stage's order:
+   those of one convex object's faces turned toward the point do not
+   overlap, and its faces turned away then fall inside them. Returns 1; 0
+   when the shadows hide the whole source (one alone, or the pieces together
+   leave less than 1e-12 of its area, like radinterp__visible_rest: a source
+   behind a wall of several patches); -1 when a shadow cannot be represented
+   or the pieces outgrow their arrays (the caller triangulates). */
 static int radinterp__bp_union(radinterp__query *q, const radinterp__bp *bp, int *count_out)
 {
-    const radinterp_solution *s = q->s;
     double tiny, tol = bp->tol, covered = 0.0, whole = fabs(radinterp__area2((const double (*)[2])bp->sc2, bp->nc));
-    uint32_t later[RADINTERP__BP_MAX_SURVIVORS], nlater = 0, i;
-    int pass, count = 0, k;
+    int count = 0, k, i, hides, n = radinterp__bp_stage(q, bp, &hides);
     /* a piece of area below tiny / 2 subtends less than 1e-12 / pi: dropped */
     tiny = 2e-12 * bp->hp * bp->hp;
     *count_out = 0;
-    /* faces turned away wait in `later`: one pass over the list */
-    for (pass = 0; pass < 2; pass++) {
-        uint32_t n = pass ? nlater : bp->nblk;
-        for (i = 0; i < n; i++) {
-            uint32_t b = pass ? later[i] : bp->blk[i];
-            const radinterp__patch *pb = &s->patches[b];
-            radinterp__piece *sh;
-            int r;
-            if (!pass && !(radinterp__d3_dot(pb->n, bp->pv) > pb->d)) {
-                if (radinterp__back_face_covered(q, bp, b)) continue;
-                if (nlater == RADINTERP__BP_MAX_SURVIVORS) return -1;
-                later[nlater++] = b;
-                continue;
-            }
-            if (count >= RADINTERP__PIECES) return -1;
-            sh = &q->piece[count];
-            r = radinterp__bp_shadow_piece(s, bp, pb, sh);
-            if (r < 0) return -1;
-            if (r == 0) continue;
-            if (radinterp__covers((const double (*)[2])sh->v, sh->count, (const double (*)[2])bp->sc2, bp->nc))
-                return 0; /* this blocker alone hides the whole source */
-            k = count;
-            if (radinterp__union_add(q, &count, tol, tiny) != 0) return -1;
-            for (; k < count; k++) covered += fabs(radinterp__area2((const double (*)[2])q->piece[k].v, q->piece[k].count));
-            if (covered >= (1.0 - 1e-12) * whole) return 0;   /* the pieces are disjoint and inside the source */
-        }
+    if (n < 0) return -1;
+    if (hides) return 0;
+    for (i = 0; i < n; i++) {
+        if (count >= RADINTERP__PIECES) return -1;
+        q->piece[count] = q->staged[q->order[i]];
+        k = count;
+        if (radinterp__union_add(q, &count, tol, tiny) != 0) return -1;
+        for (; k < count; k++) covered += fabs(radinterp__area2((const double (*)[2])q->piece[k].v, q->piece[k].count));
+        if (covered >= (1.0 - 1e-12) * whole) return 0;   /* the pieces are disjoint and inside the source */
     }
     *count_out = count;
     return 1;
@@ -8587,7 +8660,7 @@ static radinterp_result radinterp__irradiance_in(const radinterp_solution *s, ui
                                                  const float toward[3], double *h, uint32_t *triangulated,
                                                  radinterp__plink *pl, uint32_t max)
 {
-    radinterp__query query, *q = &query;  /* about 40 KB of stack: no allocation in the common case */
+    radinterp__query query, *q = &query;  /* about 110 KB of stack: no allocation in the common case */
     uint32_t leaf, n;
     int k, leaf_lists;
     h[0] = h[1] = h[2] = 0.0;
@@ -8891,6 +8964,8 @@ typedef struct radinterp__disc {
     uint32_t on0, on1;        /* 1 + the receiver outline edge that p / q lies on; 0 inside */
     uint32_t receiver, source, blocker, type, dset;
     float geom;               /* max(d_sb / d_br); 1 for a horizon; FLT_MAX for a contact */
+    float reach;              /* largest unoccluded point form factor of the source on the receiver (FLT_MAX
+                                 for a contact): B_src * reach bounds the irradiance the discontinuity changes */
     float weight;             /* cached geom * B_src */
     uint32_t weight_stamp;    /* radiosity state of the cached weight; 0 = not computed */
     uint32_t active;
@@ -8941,6 +9016,8 @@ typedef struct radinterp__builder {
     double tol;                      /* geometric tolerance: epsilon * diag */
     double weld;                     /* outline vertices closer than this are one */
     float min_weight;
+    double min_contrast;             /* see min_discont_contrast */
+    uint32_t hidden_events;          /* candidate EV/VE events whose generating line is blocked (not kept) */
     uint32_t max_dsets;
     double refine_eps, refine_min_area, min_leaf_area;
     uint32_t refine_samples, refine_passes;
@@ -9007,6 +9084,19 @@ static float radinterp__disc_weight(const radinterp_solution *s, radinterp__disc
         d->weight_stamp = stamp;
     }
     return d->weight;
+}
+
+/* A candidate discontinuity (5.3, 5.5.6): weight at least min_discont_weight,
+   and a source that can change the receiver's irradiance by at least
+   min_discont_contrast of its mean (a contact always can). Uses the cached
+   weight (radinterp__disc_weight). */
+static int radinterp__candidate(const radinterp__builder *b, const radinterp__disc *d)
+{
+    const radinterp_solution *s = b->s;
+    if (!(d->weight >= b->min_weight)) return 0;
+    if (d->type == RADINTERP_DISCONTINUITY_CONTACT) return 1;
+    return (double)radinterp__brightness(s, d->source) * d->reach >=
+           b->min_contrast * s->nodes[s->patches[d->receiver].root].level;
 }
 
 static const double (*radinterp__outline_of(const radinterp__builder *b, uint32_t patch))[2]
@@ -9097,6 +9187,7 @@ static int radinterp__push_disc(radinterp__builder *b, uint32_t R, const double 
     d->blocker = B;
     d->type = type;
     d->geom = geom > FLT_MAX ? FLT_MAX : (float)geom;
+    d->reach = FLT_MAX;   /* the source's discontinuities get theirs once all are found (radinterp__receiver_discs) */
     return 0;
 }
 
@@ -9221,7 +9312,57 @@ typedef struct radinterp__wedge_ctx {
     const double (*region)[2];
     const int *label;
     int region_n;
+    int may_count;        /* the source reaches R enough for its discontinuities to be candidates */
+    double geom_min;      /* the least geometric factor of a candidate (min_discont_weight / B_src) */
 } radinterp__wedge_ctx;
+
+/* Is the open segment from a to b clear? Its ends are pulled in by a
+   millionth of its length plus tol, so that the surfaces it starts and
+   ends on, and a blocker it grazes there, do not count. Panes let it pass. */
+static int radinterp__inner_segment_open(const radinterp__builder *b, const double *a, const double *c)
+{
+    double d[3], len, t, x0[3], x1[3], T[3];
+    int k;
+    radinterp__d3_sub(c, a, d);
+    len = radinterp__d3_len(d);
+    if (!(len > 0.0)) return 1;
+    t = 1e-6 + b->tol / len;
+    if (t >= 0.5) return 1;
+    for (k = 0; k < 3; k++) {
+        x0[k] = a[k] + t * d[k];
+        x1[k] = c[k] - t * d[k];
+    }
+    return radinterp__segment_light(b->s, x0, x1, b->s->glass_patches != 0, T) >= 0;
+}
+
+/* Does the EV or VE event behind a candidate discontinuity happen? Its
+   generating line, from a point r of the discontinuity through the blocker
+   feature (vertex f of an EV, the point of the blocker edge (l0, l1) for a
+   VE) to the source (its edge (l0, l1) for an EV, its vertex f for a VE),
+   must be clear of other surfaces: where something else stands on it, the
+   blocker's shadow edge lies inside another shadow (or the edge is a crease
+   of a solid, not an outline seen from the source) and the irradiance is
+   smooth there. Tested at the segment's middle and quarter points; the
+   discontinuity is kept whole when any one of them sees the event. This is
+   the visibility clipping of discontinuity meshing (Lischinski, Tampieri and
+   Greenberg 1992) reduced to three points. */
+static int radinterp__event_seen(const radinterp__builder *b, int ev, const double *f, const double *l0,
+                                 const double *l1, const radinterp__frame *fr, const double *cp, const double *cq)
+{
+    static const double at[3] = {0.5, 0.25, 0.75};
+    int i;
+    for (i = 0; i < 3; i++) {
+        double uv[2], r[3], x[3];
+        const double *blocker_point = ev ? f : x, *source_point = ev ? x : f;
+        uv[0] = cp[0] + at[i] * (cq[0] - cp[0]);
+        uv[1] = cp[1] + at[i] * (cq[1] - cp[1]);
+        radinterp__frame_to3d(fr, uv, r);
+        if (!radinterp__line_meet(l0, l1, f, r, x)) continue;
+        if (radinterp__inner_segment_open(b, r, blocker_point) && radinterp__inner_segment_open(b, blocker_point, source_point))
+            return 1;
+    }
+    return 0;
+}
 
 /* Trace (3D ends p3, q3) -> clipped segment on R with its geometric factor. */
 static int radinterp__wedge_disc(radinterp__builder *b, const radinterp__wedge_ctx *w, int ev, const double *f,
@@ -9238,6 +9379,10 @@ static int radinterp__wedge_disc(radinterp__builder *b, const radinterp__wedge_c
     radinterp__frame_to3d(fr, cq, r);
     g2 = radinterp__wedge_ratio(ev, f, l0, l1, r);
     if (g2 > geom) geom = g2;
+    if (w->may_count && geom >= w->geom_min && !radinterp__event_seen(b, ev, f, l0, l1, fr, cp, cq)) {
+        b->hidden_events++;
+        return 0;
+    }
     return radinterp__push_disc(b, w->R, cp, cq, on_p, on_q,
                                 ev ? RADINTERP_DISCONTINUITY_EV : RADINTERP_DISCONTINUITY_VE, w->S, w->B, geom);
 }
@@ -9377,6 +9522,34 @@ static int radinterp__link_pairs(radinterp__builder *b, uint32_t R, radinterp__b
     return 0;
 }
 
+/* The largest unoccluded point form factor (eq. 6.1) of source Sc (S
+   clipped to R's front) at points of R's part in front of S (region): its
+   corners, its centroid and its point nearest to the source's centroid,
+   where a source facing R is seen largest. An estimate from below of the
+   maximum over the region, close where it matters: a source that barely
+   reaches R (small factor everywhere) is small at all these points. */
+static double radinterp__source_reach(const radinterp__builder *b, uint32_t R, const double (*region)[2], int rn,
+                                      const double (*Sc)[3], int nc)
+{
+    const radinterp__patch *pr = &b->s->patches[R];
+    double pts[RADINTERP__POLY_MAX + 2][3], c2[2] = {0.0, 0.0}, sc[3] = {0.0, 0.0, 0.0}, best = 0.0;
+    int i, k;
+    for (i = 0; i < rn; i++) {
+        radinterp__frame_to3d(&b->frames[R], region[i], pts[i]);
+        c2[0] += region[i][0] / rn;
+        c2[1] += region[i][1] / rn;
+    }
+    for (i = 0; i < nc; i++)
+        for (k = 0; k < 3; k++) sc[k] += Sc[i][k] / nc;
+    radinterp__frame_to3d(&b->frames[R], c2, pts[rn]);
+    radinterp__poly_nearest((const double (*)[3])pts, rn, pr->n, sc, pts[rn + 1]);
+    for (i = 0; i < rn + 2; i++) {
+        double f = radinterp__ff_poly(pts[i], pr->n, Sc, nc);
+        if (f > best) best = f;
+    }
+    return best;
+}
+
 /* Every discontinuity on receiver R (5.5.3: from the links, so only
    mutually visible pairs and their potential blockers are considered). */
 static int radinterp__receiver_discs(radinterp__builder *b, uint32_t R, radinterp__buf *pairs, radinterp__buf *stack)
@@ -9395,14 +9568,21 @@ static int radinterp__receiver_discs(radinterp__builder *b, uint32_t R, radinter
         if (S == R || !(radinterp__brightness(s, S) > 0.0f)) { i = j; continue; }
         rn = radinterp__front_region(b, R, S, region, label);
         if (rn >= 3) {
+            size_t from = b->discs.count, m;
+            double bright = radinterp__brightness(s, S);
+            float reach;
             if (radinterp__horizon(b, R, S) != 0) return -1;
             nc = radinterp__clip_poly((const double (*)[3])S3, radinterp__patch_poly(&s->patches[S], S3),
                                       s->patches[R].n, s->patches[R].d, Sc);
+            reach = nc >= 3 ? (float)radinterp__source_reach(b, R, (const double (*)[2])region, rn,
+                                                             (const double (*)[3])Sc, nc) : 0.0f;
             w.R = R;
             w.S = S;
             w.region = (const double (*)[2])region;
             w.label = label;
             w.region_n = rn;
+            w.may_count = bright * reach >= b->min_contrast * s->nodes[s->patches[R].root].level;
+            w.geom_min = b->min_weight / bright;
             for (; i < j && nc >= 3; i++) {
                 uint32_t B = (uint32_t)(pr[i] & 0xFFFFFFFFu);
                 if (B == RADINTERP__NONE || B == R || B == S || !s->patches[B].count) continue;
@@ -9410,6 +9590,7 @@ static int radinterp__receiver_discs(radinterp__builder *b, uint32_t R, radinter
                 w.B = B;
                 if (radinterp__wedges(b, &w, (const double (*)[3])Sc, nc) != 0) return -1;
             }
+            for (m = from; m < b->discs.count; m++) ((radinterp__disc *)b->discs.data)[m].reach = reach;
         }
         i = j;
     }
@@ -9673,7 +9854,7 @@ static int radinterp__copy_tree(radinterp__builder *b, uint32_t R, radinterp__bu
     radinterp__mnode_frame(b, root);
     root->first_disc = (uint32_t)b->node_discs.count;
     for (i = b->disc_first[R]; i < b->disc_first[R] + b->disc_count[R]; i++)
-        if (dd[i].weight >= b->min_weight && radinterp__buf_u32(&b->a, &b->node_discs, i) != 0) return -1;
+        if (radinterp__candidate(b, &dd[i]) && radinterp__buf_u32(&b->a, &b->node_discs, i) != 0) return -1;
     RADINTERP__MNODES(b)[b->roots[R]].disc_count = (uint32_t)b->node_discs.count - RADINTERP__MNODES(b)[b->roots[R]].first_disc;
     for (i = 0; i < s->patches[R].count; i++)
         if (radinterp__corner_put(b, R, s->patches[R].v[i]) != 0) return -1;
@@ -9893,7 +10074,7 @@ static int radinterp__activate_patch(radinterp__builder *b, uint32_t R, radinter
         uint32_t id = order[i].id, local = id - first, j, dset = dd[id].dset;
         int ok = 1;
         if (!(order[i].weight >= b->min_weight)) break;
-        if (start[local] == start[local + 1]) continue;   /* crosses no leaf's interior */
+        if (start[local] == start[local + 1]) continue;   /* not a candidate, or crosses no leaf's interior */
         for (j = start[local]; j < start[local + 1] && ok; j++) {
             uint32_t l = list[j];
             if (!radinterp__leaf_has_dset(act + (size_t)l * max, act_n[l], dset) && act_n[l] >= max) ok = 0;
@@ -11343,7 +11524,7 @@ static radinterp_result radinterp__assemble(radinterp__builder *b, const float *
         info->ve += d->type == RADINTERP_DISCONTINUITY_VE;
         info->horizon += d->type == RADINTERP_DISCONTINUITY_HORIZON;
         info->contact += d->type == RADINTERP_DISCONTINUITY_CONTACT;
-        info->candidates += o->weight >= b->min_weight;
+        info->candidates += radinterp__candidate(b, d);
         info->active_discontinuities += d->active;
     }
     for (i = 0; i < m->leaf_count; i++) {
@@ -11389,7 +11570,8 @@ static radinterp_result radinterp__check_mesh_desc(const radinterp_mesh_desc *d)
 {
     const char *bad = NULL;
     if (!radinterp__allocator_valid(&d->allocator)) bad = "allocator.alloc and allocator.free must both be set or both be NULL";
-    else if (radinterp__bad_param(d->min_discont_weight) || radinterp__bad_param(d->refine_eps) ||
+    else if (radinterp__bad_param(d->min_discont_weight) || radinterp__bad_param(d->min_discont_contrast) ||
+             radinterp__bad_param(d->refine_eps) ||
              radinterp__bad_param(d->refine_min_area) || radinterp__bad_param(d->weld_distance) ||
              radinterp__bad_param(d->min_leaf_area))
         bad = "a parameter is negative, NaN or infinite";
@@ -11451,6 +11633,7 @@ static radinterp_result radinterp__builder_init(radinterp__builder *b, const rad
     for (i = 0; i < P; i++)
         if (s->patches[i].count && radinterp__brightness(s, i) > brightest) brightest = radinterp__brightness(s, i);
     b->min_weight = d->min_discont_weight > 0.0f ? d->min_discont_weight : 0.01f * brightest;
+    b->min_contrast = d->min_discont_contrast > 0.0f ? d->min_discont_contrast : RADINTERP__MIN_CONTRAST;
     b->max_dsets = radinterp__def(d->max_leaf_dsets, 10u);
     b->refine_eps = d->refine_eps > 0.0f ? d->refine_eps : s->eps;
     b->refine_min_area = d->refine_min_area > 0.0f ? d->refine_min_area : s->min_area;
@@ -11526,6 +11709,9 @@ RADINTERP_API radinterp_result radinterp_build_mesh(const radinterp_solution *s,
     memset(&ip, 0, sizeof ip);
     res = radinterp__builder_init(&b, s, desc);
     if (res == RADINTERP_OK) res = radinterp__find_discontinuities(&b);
+    if (res == RADINTERP_OK && b.hidden_events)
+        radinterp__mesh_log(&b, "radinterp_build_mesh: %u discontinuity events hidden behind other surfaces left out",
+                            b.hidden_events);
     if (res == RADINTERP_OK)
         for (i = 0; i < b.discs.count; i++) radinterp__disc_weight(s, &((radinterp__disc *)b.discs.data)[i]);
     if (res == RADINTERP_OK) res = radinterp__build_trees(&b);

@@ -1,4 +1,4 @@
-/* rendercache.h - v0.4.3 - render cache and range-image walkthroughs - public domain or MIT, see end of file
+/* rendercache.h - v0.4.4 - render cache and range-image walkthroughs - public domain or MIT, see end of file
 
    RENDERCACHE.H: an image-space point cache that reprojects and resamples, and range-image walkthroughs of animated scenes.
 
@@ -167,7 +167,9 @@
        the cache stays nearly in image order and the passes below read and
        write memory in runs rather than at random (after WDG02's memory
        coherence); then every
-       point is projected into the camera and z-buffered,
+       point is projected into the camera (positions and objects kept as
+       four arrays, so that the projection's loop loads whole vectors of
+       each and vectorises without shuffles) and z-buffered,
        one point per pixel (WDP99 reprojection), band of 1/64 of the image by
        band: each range's points of a band (where the re-sort put them) are
        z-tested together, so that the band's part of the z-buffer stays in
@@ -401,7 +403,7 @@
 
 #define RENDERCACHE_VERSION_MAJOR 0
 #define RENDERCACHE_VERSION_MINOR 4
-#define RENDERCACHE_VERSION_PATCH 3
+#define RENDERCACHE_VERSION_PATCH 4
 
 #ifndef RENDERCACHE_API
 #  ifdef RENDERCACHE_STATIC
@@ -1939,11 +1941,37 @@ static void rendercache__splat_run_cover(rendercache__splat *s,
 #define RENDERCACHE__PRIORITY_INTERP 0.5f    /* + up to 0.25 as the 3x3 neighbourhood empties */
 #define RENDERCACHE__PRIORITY_SPARSE 0.75f   /* + up to 0.2 as the wide window empties */
 
-/* A cache slot as the projection reads it: 16 bytes. */
+/* A cache slot as the projection reads it: 16 bytes. The cache keeps
+   these in four arrays (rendercache__slots), one per field, so that the
+   projection loads whole vectors of each; this struct is one slot's. */
 typedef struct rendercache__geo {
     float pos[3];            /* object-space position, or the world unit direction of a background point */
     uint32_t object;         /* object id, RENDERCACHE_MISS, or RENDERCACHE__FREE_SLOT */
 } rendercache__geo;
+
+/* The geo of every slot, structure of arrays (in one block, each array
+   starting on a 64-byte boundary). */
+typedef struct rendercache__slots {
+    float *x, *y, *z;
+    uint32_t *object;
+} rendercache__slots;
+#define RENDERCACHE__SLOT_ALIGN 16u          /* slots per 64 bytes: each array of the block starts on a line */
+
+static void rendercache__slot_get(const rendercache__slots *s, uint32_t slot, rendercache__geo *g)
+{
+    g->pos[0] = s->x[slot];
+    g->pos[1] = s->y[slot];
+    g->pos[2] = s->z[slot];
+    g->object = s->object[slot];
+}
+
+static void rendercache__slot_set(rendercache__slots *s, uint32_t slot, const rendercache__geo *g)
+{
+    s->x[slot] = g->pos[0];
+    s->y[slot] = g->pos[1];
+    s->z[slot] = g->pos[2];
+    s->object[slot] = g->object;
+}
 
 /* The rest of a slot, read by the depth cull for the points that win a
    pixel: 24 bytes. A point's age is not stored but derived, so nothing is
@@ -1989,7 +2017,7 @@ struct rendercache {
 
     /* point cache: slot order is insertion order; the projection streams
        through geo. One more slot after the last stays empty (see cull_job). */
-    rendercache__geo *geo;
+    rendercache__slots geo;  /* its arrays share one block, geo.x */
     rendercache__point *data;
     unsigned char *shown;    /* per slot: the frame's mark (rendercache__mark) when the point was
                                 inserted or shown in a pixel in that frame; the eviction spares it.
@@ -2116,11 +2144,13 @@ static uint32_t rendercache__sort_ranges(const rendercache *rc)
 static void rendercache__reset_points(rendercache *rc)
 {
     uint32_t i;
-    for (i = 0; i < rc->capacity; i++) rc->geo[i].object = RENDERCACHE__FREE_SLOT;
+    rendercache__geo empty;
+    memset(&empty, 0, sizeof empty);
+    empty.object = RENDERCACHE_MISS;
+    for (i = 0; i < rc->capacity; i++) rc->geo.object[i] = RENDERCACHE__FREE_SLOT;
     memset(rc->shown, 0, (size_t)rc->capacity + rc->tile_count);   /* no mark */
-    memset(&rc->geo[rc->capacity], 0, sizeof rc->geo[0]);   /* the empty slot (what holes read): black, priority 0 */
+    rendercache__slot_set(&rc->geo, rc->capacity, &empty);   /* the empty slot (what holes read): black, priority 0 */
     memset(&rc->data[rc->capacity], 0, sizeof rc->data[0]);
-    rc->geo[rc->capacity].object = RENDERCACHE_MISS;
     rc->hand = 0;
     rc->live = 0;
     rc->sort_next = 0;
@@ -2146,7 +2176,7 @@ static void rendercache__release(rendercache *rc)
     const rendercache_allocator a = rc->alloc;
     void *blocks[29];
     size_t i;
-    blocks[0] = rc->geo; blocks[1] = rc->data; blocks[2] = rc->obj_predicted; blocks[3] = rc->obj_motion;
+    blocks[0] = rc->geo.x; blocks[1] = rc->data; blocks[2] = rc->obj_predicted; blocks[3] = rc->obj_motion;
     blocks[4] = rc->depth_out; blocks[5] = rc->obj_world; blocks[6] = rc->obj_local;
     blocks[7] = rc->obj_camera; blocks[8] = rc->obj_moved; blocks[9] = rc->px_index;
     blocks[10] = rc->px_depth; blocks[11] = rc->image; blocks[12] = rc->priority;
@@ -2168,7 +2198,13 @@ static int rendercache__alloc_buffers(rendercache *rc)
     const rendercache_allocator *a = &rc->alloc;
     size_t n = rc->capacity, px = rc->pixel_count, no = rc->object_count;
     size_t slots = (size_t)rc->max_latency + 1;
-    rc->geo = (rendercache__geo *)rendercache__alloc_array(a, n + 1, sizeof(rendercache__geo));   /* + the empty slot */
+    const size_t stride = (n + 1 + RENDERCACHE__SLOT_ALIGN - 1) / RENDERCACHE__SLOT_ALIGN * RENDERCACHE__SLOT_ALIGN;
+    rc->geo.x = (float *)rendercache__alloc_array(a, stride, 4 * sizeof(float));   /* + the empty slot */
+    if (rc->geo.x) {   /* (an allocator aligns to 16 bytes at least: the arrays follow at multiples of 64) */
+        rc->geo.y = rc->geo.x + stride;
+        rc->geo.z = rc->geo.y + stride;
+        rc->geo.object = (uint32_t *)(void *)(rc->geo.z + stride);
+    }
     rc->data = (rendercache__point *)rendercache__alloc_array(a, n + 1, sizeof(rendercache__point));
     rc->shown = (unsigned char *)rendercache__alloc_array(a, n + rc->tile_count, 1);
     rc->obj_predicted = (float *)rendercache__alloc_array(a, no, 12 * sizeof(float));
@@ -2200,7 +2236,7 @@ static int rendercache__alloc_buffers(rendercache *rc)
                                                             2 * sizeof(uint32_t) + sizeof(rendercache__point));
     rc->sort_bands = (uint32_t *)rendercache__alloc_array(a, rendercache__sort_ranges(rc),
                                                           (RENDERCACHE__SORT_BANDS + 1) * sizeof(uint32_t));
-    if (!rc->geo || !rc->data || !rc->shown || !rc->obj_predicted || !rc->obj_motion || !rc->obj_world ||
+    if (!rc->geo.x || !rc->data || !rc->shown || !rc->obj_predicted || !rc->obj_motion || !rc->obj_world ||
         !rc->obj_local || !rc->obj_next || !rc->obj_since || !rc->obj_history || !rc->history ||
         !rc->obj_camera || !rc->obj_moved || !rc->px_index || !rc->px_depth || !rc->depth_out || !rc->image ||
         !rc->priority || !rc->occupancy || !rc->kind || !rc->count || !rc->tile_stats || !rc->hist ||
@@ -2444,13 +2480,14 @@ static void rendercache__projector_init(rendercache__projector *pr, const render
    them). Both the loop that vectorises and the point-by-point path go
    through this one function, so that a point lands in the same pixel
    whichever projects it (batches differ with the number of jobs). */
-static RENDERCACHE__INLINE uint32_t rendercache__pixel_through(const float *m, const float x[3], const rendercache__view *v,
-                                                               uint32_t shift, uint32_t stride, float *depth2)
+static RENDERCACHE__INLINE uint32_t rendercache__pixel_through(const float *m, float x, float y, float z,
+                                                               const rendercache__view *v, uint32_t shift, uint32_t stride,
+                                                               float *depth2)
 {
     const float w = (float)v->width, h = (float)v->height;
-    float c0 = m[0] * x[0] + m[1] * x[1] + m[2] * x[2] + m[3];
-    float c1 = m[4] * x[0] + m[5] * x[1] + m[6] * x[2] + m[7];
-    float c2 = m[8] * x[0] + m[9] * x[1] + m[10] * x[2] + m[11];
+    float c0 = m[0] * x + m[1] * y + m[2] * z + m[3];
+    float c1 = m[4] * x + m[5] * y + m[6] * z + m[7];
+    float c2 = m[8] * x + m[9] * y + m[10] * z + m[11];
     float inv = 1.0f / c2, px = v->cx + v->focal * c0 * inv, py = v->cy - v->focal * c1 * inv;
     int inside = (c2 > 0.0f) & (px >= 0.0f) & (px < w) & (py >= 0.0f) & (py < h);
     float xs = inside ? px : 0.0f, ys = inside ? py : 0.0f;
@@ -2467,8 +2504,9 @@ static uint32_t rendercache__project_point(const rendercache__projector *pr, con
     uint32_t p;
     if (g->object == RENDERCACHE__FREE_SLOT) return RENDERCACHE__NONE;
     if (g->object != RENDERCACHE_MISS)
-        return rendercache__pixel_through(pr->obj_camera + 12 * (size_t)g->object, g->pos, v, pr->shift, pr->stride, depth2);
-    p = rendercache__pixel_through(pr->sky, g->pos, v, pr->shift, pr->stride, depth2);
+        return rendercache__pixel_through(pr->obj_camera + 12 * (size_t)g->object, g->pos[0], g->pos[1], g->pos[2], v,
+                                          pr->shift, pr->stride, depth2);
+    p = rendercache__pixel_through(pr->sky, g->pos[0], g->pos[1], g->pos[2], v, pr->shift, pr->stride, depth2);
     *depth2 = RENDERCACHE__FAR2;
     return p;
 }
@@ -2485,17 +2523,20 @@ static float rendercache__point_priority(const rendercache *rc, const rendercach
     return pr < 1.0f ? pr : 1.0f;
 }
 
-/* Perspective projection of n points of one object (matrix m): written
-   without branches or library calls so that compilers vectorise it; this
+/* Perspective projection of slots [begin, begin + n) of one object
+   (matrix m): written without branches or library calls, over arrays of
+   each coordinate, so that compilers vectorise it with whole loads; this
    loop is the hottest of the frame. */
-static void rendercache__project_perspective(const rendercache__geo *g, uint32_t n, const float *m,
+static void rendercache__project_perspective(const rendercache__slots *g, uint32_t begin, uint32_t n, const float *m,
                                              const rendercache__projector *pr, uint32_t *RENDERCACHE__RESTRICT pix,
                                              float *RENDERCACHE__RESTRICT depth2)
 {
     const rendercache__view *v = pr->view;
     const uint32_t shift = pr->shift, stride = pr->stride;
+    const float *RENDERCACHE__RESTRICT x = g->x + begin, *RENDERCACHE__RESTRICT y = g->y + begin;
+    const float *RENDERCACHE__RESTRICT z = g->z + begin;
     uint32_t i;
-    for (i = 0; i < n; i++) pix[i] = rendercache__pixel_through(m, g[i].pos, v, shift, stride, &depth2[i]);
+    for (i = 0; i < n; i++) pix[i] = rendercache__pixel_through(m, x[i], y[i], z[i], v, shift, stride, &depth2[i]);
 }
 
 /* The background points and free slots of n points that
@@ -2503,15 +2544,19 @@ static void rendercache__project_perspective(const rendercache__geo *g, uint32_t
    points again, as directions (through the sky matrix), at distance
    RENDERCACHE__FAR; free slots land nowhere. Every point is projected and
    the results selected, without branches, so that it vectorises too. */
-static void rendercache__project_others(const rendercache__geo *g, uint32_t n, const rendercache__projector *pr,
-                                        uint32_t *RENDERCACHE__RESTRICT pix, float *RENDERCACHE__RESTRICT depth2)
+static void rendercache__project_others(const rendercache__slots *g, uint32_t begin, uint32_t n,
+                                        const rendercache__projector *pr, uint32_t *RENDERCACHE__RESTRICT pix,
+                                        float *RENDERCACHE__RESTRICT depth2)
 {
     const rendercache__view *v = pr->view;
     const uint32_t shift = pr->shift, stride = pr->stride;
+    const float *RENDERCACHE__RESTRICT x = g->x + begin, *RENDERCACHE__RESTRICT y = g->y + begin;
+    const float *RENDERCACHE__RESTRICT z = g->z + begin;
+    const uint32_t *RENDERCACHE__RESTRICT object = g->object + begin;
     uint32_t i;
     for (i = 0; i < n; i++) {
         float d;
-        uint32_t q = rendercache__pixel_through(pr->sky, g[i].pos, v, shift, stride, &d), o = g[i].object;
+        uint32_t q = rendercache__pixel_through(pr->sky, x[i], y[i], z[i], v, shift, stride, &d), o = object[i];
         pix[i] = o == RENDERCACHE__FREE_SLOT ? RENDERCACHE__NONE : o == RENDERCACHE_MISS ? q : pix[i];
         depth2[i] = o == RENDERCACHE_MISS ? RENDERCACHE__FAR2 : depth2[i];
     }
@@ -2520,20 +2565,24 @@ static void rendercache__project_others(const rendercache__geo *g, uint32_t n, c
 /* The one object of the points [begin, end) other than background points
    and free slots (RENDERCACHE_MISS when there is none), RENDERCACHE__NONE
    when there are several; *others tells whether background points or free
-   slots are among them. */
-static uint32_t rendercache__batch_object(const rendercache__geo *geo, uint32_t begin, uint32_t end, int *others)
+   slots are among them. The least and the largest object id of the
+   batch, without branches, so that the loop vectorises (object ids lie
+   below both special values). */
+static uint32_t rendercache__batch_object(const uint32_t *object, uint32_t begin, uint32_t end, int *others)
 {
-    uint32_t o = RENDERCACHE_MISS, i, other = 0;
-    for (i = begin; i < end; i++) {
-        uint32_t g = geo[i].object;
-        int special = g == RENDERCACHE_MISS || g == RENDERCACHE__FREE_SLOT;
-        other |= (uint32_t)special;
-        if (special) continue;
-        if (o != RENDERCACHE_MISS && g != o) return RENDERCACHE__NONE;
-        o = g;
+    const uint32_t *o = object + begin;
+    const size_t n = end - begin;
+    uint32_t lo = RENDERCACHE_MISS, hi = 0, other = 0;
+    size_t i;
+    for (i = 0; i < n; i++) {   /* specials (RENDERCACHE_MISS, a free slot) are the largest ids: lo passes them
+                                   only when there is nothing else, and hi leaves them out */
+        uint32_t g = o[i], special = (uint32_t)-(int32_t)(g >= RENDERCACHE__FREE_SLOT);   /* all ones or zero */
+        other |= special;
+        lo = g < lo ? g : lo;
+        hi = (g & ~special) > hi ? (g & ~special) : hi;
     }
-    *others = (int)other;
-    return o;
+    *others = (int)(other & 1u);
+    return lo >= RENDERCACHE__FREE_SLOT ? RENDERCACHE_MISS : lo == hi ? lo : RENDERCACHE__NONE;
 }
 
 /* The splat source of the render cache: cache slots [begin, end). Batches
@@ -2543,20 +2592,29 @@ static uint32_t rendercache__batch_object(const rendercache__geo *geo, uint32_t 
 static uint32_t rendercache__project_points(const void *src, uint32_t begin, uint32_t end, uint32_t *pix, float *depth2)
 {
     const rendercache__projector *pr = (const rendercache__projector *)src;
-    const rendercache__geo *geo = pr->rc->geo;
+    const rendercache__slots *geo = &pr->rc->geo;
     int others;
     uint32_t i, o, ahead = end + (end - begin) < pr->rc->capacity ? end - begin : pr->rc->capacity - end;
-    /* the next batch's points, a cache line at a time: the stream through the
-       points is the projection's bottleneck, more than its arithmetic */
-    for (i = 0; i < ahead; i += 64 / sizeof *geo) RENDERCACHE__PREFETCH(&geo[end + i]);
-    o = rendercache__batch_object(geo, begin, end, &others);
+    /* the next batch's points, a cache line of each array at a time: the stream through the points is
+       the projection's bottleneck, more than its arithmetic */
+    for (i = 0; i < ahead; i += 64 / sizeof(float)) {
+        RENDERCACHE__PREFETCH(&geo->x[end + i]);
+        RENDERCACHE__PREFETCH(&geo->y[end + i]);
+        RENDERCACHE__PREFETCH(&geo->z[end + i]);
+        RENDERCACHE__PREFETCH(&geo->object[end + i]);
+    }
+    o = rendercache__batch_object(geo->object, begin, end, &others);
     if (pr->view->kind == RENDERCACHE_CAMERA_PERSPECTIVE && o != RENDERCACHE__NONE) {
         const float *m = o == RENDERCACHE_MISS ? pr->sky : pr->obj_camera + 12 * (size_t)o;
-        rendercache__project_perspective(geo + begin, end - begin, m, pr, pix, depth2);
-        if (others) rendercache__project_others(geo + begin, end - begin, pr, pix, depth2);
+        rendercache__project_perspective(geo, begin, end - begin, m, pr, pix, depth2);
+        if (others) rendercache__project_others(geo, begin, end - begin, pr, pix, depth2);
         return end - begin;
     }
-    for (i = begin; i < end; i++) pix[i - begin] = rendercache__project_point(pr, &geo[i], &depth2[i - begin]);
+    for (i = begin; i < end; i++) {
+        rendercache__geo g;
+        rendercache__slot_get(geo, i, &g);
+        pix[i - begin] = rendercache__project_point(pr, &g, &depth2[i - begin]);
+    }
     return end - begin;
 }
 
@@ -2721,32 +2779,51 @@ static void rendercache__depth_job(void *ctx, uint32_t tile)
     for (p = p0; p < p1; p++) depth[p] = rendercache__key_depth(key[p]);
 }
 
-/* Colour and priority of the points that won the pixels [p0, p1) of a row,
-   culled or not (a culled pixel is a hole, which the filling writes again).
-   The slots are anywhere in the cache, so each read is a cache miss: the
-   loop does nothing else, and asks for the slot of a pixel further on
-   ahead of time, so that many misses are under way at once. A pixel
-   without a point reads the empty slot after the last (rc->capacity):
+/* What the cull of a tile counts. */
+typedef struct rendercache__cull_counts {
+    uint32_t visible, culled;
+} rendercache__cull_counts;
+
+/* Writes the pixels [p0, p1) of a row after its cull decisions occ (of
+   pixel p at occ[p - p0]): a surviving point gives its slot, depth, colour and
+   priority to the pixel and is marked as shown; a culled point or no
+   point leaves a hole (kind: the decision, for the filling, which writes
+   its colour and priority). The slots are anywhere in the cache, so each
+   read of a point is a cache miss: the loop asks for the slot of a pixel
+   further on ahead of time, so that many misses are under way at once,
+   and it does all of a pixel's writing in the same pass, while they
+   complete. A hole reads the empty slot after the last (rc->capacity):
    no branch, which points and holes along silhouettes would mispredict. */
-static void rendercache__gather_points(rendercache *rc, const uint64_t *key, uint32_t p0, uint32_t p1, uint32_t tile_end)
+static void rendercache__write_row(rendercache *rc, const uint64_t *key, const float *depth, uint32_t p0, uint32_t p1,
+                                   uint32_t tile_end, const unsigned char *occ, uint32_t sink, rendercache__cull_counts *n)
 {
     const uint32_t empty = rc->capacity;
     const rendercache__point *data = rc->data;
-    float *image = rc->image, *priority = rc->priority;
+    float *image = rc->image, *priority = rc->priority, *px_depth = rc->px_depth;
+    uint32_t *px_index = rc->px_index;
+    unsigned char *kind = rc->kind, *count = rc->count, *shown = rc->shown, mark = rendercache__mark(rc->frame);
     uint32_t p;
     for (p = p0; p < p1; p++) {   /* a key's low half is the slot, RENDERCACHE__NONE in the empty key */
-        uint32_t k = (uint32_t)key[p] == RENDERCACHE__NONE ? empty : (uint32_t)key[p];
-        uint32_t motion = rc->obj_motion[rendercache__motion_index(rc, data[k].object)];
+        const uint32_t k = (uint32_t)key[p], has = k != RENDERCACHE__NONE, cull = occ[p - p0], shows = has & !cull;
+        const uint32_t slot = shows ? k : empty;
+        uint32_t motion = rc->obj_motion[rendercache__motion_index(rc, data[slot].object)];
         if (p + RENDERCACHE__GATHER_AHEAD < tile_end) {   /* (into the next row too; the next tile's keys may be
                                                              cleared meanwhile by its own cull) */
             uint32_t next = (uint32_t)key[p + RENDERCACHE__GATHER_AHEAD];
             const rendercache__point *q = &data[next == RENDERCACHE__NONE ? empty : next];
             RENDERCACHE__PREFETCH(q);
             RENDERCACHE__PREFETCH((const char *)q + sizeof *q - 1);   /* a record may straddle two cache lines */
-            RENDERCACHE__PREFETCH_WRITE(&rc->shown[next == RENDERCACHE__NONE ? empty : next]);   /* cull_job marks it */
+            RENDERCACHE__PREFETCH_WRITE(&shown[next == RENDERCACHE__NONE ? empty : next]);
         }
-        memcpy(image + 3 * (size_t)p, data[k].rgb, 3 * sizeof(float));
-        priority[p] = rendercache__point_priority(rc, &data[k], motion);
+        memcpy(image + 3 * (size_t)p, data[slot].rgb, 3 * sizeof(float));
+        priority[p] = rendercache__point_priority(rc, &data[slot], motion);
+        px_index[p] = shows ? k : RENDERCACHE__NONE;
+        px_depth[p] = shows ? depth[p] : FLT_MAX;
+        shown[shows ? k : sink] = mark;   /* spared by the eviction in this frame */
+        kind[p] = (unsigned char)(shows ? (unsigned)RENDERCACHE_PIXEL_POINT : cull);   /* holes: set by the filling */
+        count[p] = 0;
+        n->visible += shows;
+        n->culled += has & cull;
     }
 }
 
@@ -2759,31 +2836,19 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
     const uint64_t *key = rc->splat.zb[0].key;
     const float *depth = rc->select_v;   /* rendercache__depth_job's */
     const uint32_t w = rc->width, h = rc->height;
-    uint32_t *px_index = rc->px_index;
-    float *px_depth = rc->px_depth;
-    unsigned char *kind = rc->kind, *count = rc->count, *shown = rc->shown, mark = rendercache__mark(rc->frame);
     const uint32_t sink = rc->capacity + tile;   /* this tile's byte for pixels without a point */
-    uint32_t y0 = tile * RENDERCACHE__TILE_ROWS, y1 = y0 + RENDERCACHE__TILE_ROWS, x, y;
-    uint32_t visible = 0, culled = 0, *stats = rc->tile_stats + RENDERCACHE__TILE_STATS * (size_t)tile;
+    uint32_t y0 = tile * RENDERCACHE__TILE_ROWS, y1 = y0 + RENDERCACHE__TILE_ROWS, y;
+    uint32_t *stats = rc->tile_stats + RENDERCACHE__TILE_STATS * (size_t)tile;
+    rendercache__cull_counts n = { 0, 0 };
     float tol2 = (1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance);
     if (y1 > h) y1 = h;
     for (y = y0; y < y1; y++) {
-        unsigned char *occ = kind + (size_t)y * w;
-        rendercache__gather_points(rc, key, y * w, y * w + w, y1 * w);
+        unsigned char *occ = rc->kind + (size_t)y * w;
         rendercache__cull_decisions(rc, depth, y, tol2, occ);
-        for (x = 0; x < w; x++) {   /* without branches, as gather_points */
-            uint32_t p = y * w + x, k = (uint32_t)key[p], has = k != RENDERCACHE__NONE, shows = has & !occ[x];
-            px_index[p] = shows ? k : RENDERCACHE__NONE;
-            px_depth[p] = shows ? depth[p] : FLT_MAX;
-            shown[shows ? k : sink] = mark;   /* spared by the eviction in this frame */
-            kind[p] = (unsigned char)(shows ? (unsigned)RENDERCACHE_PIXEL_POINT : occ[x]);   /* holes: set by the filling */
-            count[p] = 0;
-            visible += shows;
-            culled += has & occ[x];
-        }
+        rendercache__write_row(rc, key, depth, y * w, y * w + w, y1 * w, occ, sink, &n);
     }
-    stats[0] = visible;
-    stats[1] = culled;
+    stats[0] = n.visible;
+    stats[1] = n.culled;
     rendercache__splat_clear_tile(&rc->splat, tile);   /* read (the depths are in select_v): clean for the next frame */
 }
 
@@ -2802,16 +2867,46 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
    filling of another tile may be writing them. */
 static const float rendercache__black[3] = { 0.0f, 0.0f, 0.0f };
 
-static RENDERCACHE__INLINE uint32_t rendercache__interpolate_window(const rendercache *rc, uint32_t x, uint32_t y, int r,
-                                                                    int x0, int x1, int y0, int y1, float rgb[3])
+/* The weighted sums of the colours of the points in the window [x0, x1] x
+   [y0, y1] around (x, y) (weights and colour sums, [3] the weight): of the
+   nearest layer into near_sum, and when two_layers (a constant where it is
+   inlined, so that one window drops the other sums) of the farthest into
+   far_sum. */
+static RENDERCACHE__INLINE void rendercache__window_sums(const rendercache *rc, uint32_t x, uint32_t y, int r, int x0,
+                                                         int x1, int y0, int y1, float dmin, float dmax, int two_layers,
+                                                         float near_sum[4], float far_sum[4])
 {
     const float *depth = rc->px_depth, *image = rc->image;
     const uint32_t w = rc->width;
-    const float scale = rc->window_scale[r];
+    const float scale = rc->window_scale[r], tol2 = (1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance);
+    int qx, qy;
+    for (qy = y0; qy <= y1; qy++) {
+        const float *row = depth + (size_t)qy * w;
+        float wy = (float)(r + 1 - rendercache__iabs(qy - (int)y)) * scale;
+        for (qx = x0; qx <= x1; qx++) {
+            float d = row[qx], wgt = wy * (float)(r + 1 - rendercache__iabs(qx - (int)x));
+            int point = d != FLT_MAX, near = point & (d <= dmin * tol2);
+            const float *c = point ? image + 3 * ((size_t)qy * w + (size_t)qx) : rendercache__black;
+            float wn = near ? wgt : 0.0f;
+            near_sum[0] += wn * c[0]; near_sum[1] += wn * c[1]; near_sum[2] += wn * c[2]; near_sum[3] += wn;
+            if (two_layers) {
+                int far = point & !near & (d * tol2 >= dmax);   /* a middle layer: neither side of the choice */
+                float wf = far ? wgt : 0.0f;
+                far_sum[0] += wf * c[0]; far_sum[1] += wf * c[1]; far_sum[2] += wf * c[2]; far_sum[3] += wf;
+            }
+        }
+    }
+}
+
+static RENDERCACHE__INLINE uint32_t rendercache__interpolate_window(const rendercache *rc, uint32_t x, uint32_t y, int r,
+                                                                    int x0, int x1, int y0, int y1, float rgb[3])
+{
+    const float *depth = rc->px_depth;
+    const uint32_t w = rc->width;
     int qx, qy;
     float dmin = FLT_MAX, dmax = 0.0f, tol2 = (1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance);
     float near_sum[4] = { 0, 0, 0, 0 }, far_sum[4] = { 0, 0, 0, 0 };
-    const float *chosen;
+    const float *chosen = near_sum;
     uint32_t n = 0;
     /* without branches (points and holes alternate at random around a hole): selects, then min and max */
     for (qy = y0; qy <= y1; qy++) {
@@ -2825,21 +2920,12 @@ static RENDERCACHE__INLINE uint32_t rendercache__interpolate_window(const render
         }
     }
     if (n == 0) return 0;
-    for (qy = y0; qy <= y1; qy++) {
-        const float *row = depth + (size_t)qy * w;
-        float wy = (float)(r + 1 - rendercache__iabs(qy - (int)y)) * scale;
-        for (qx = x0; qx <= x1; qx++) {
-            float d = row[qx], wgt = wy * (float)(r + 1 - rendercache__iabs(qx - (int)x));
-            int point = d != FLT_MAX, near = point & (d <= dmin * tol2);
-            int far = point & !near & (d * tol2 >= dmax);   /* a middle layer: neither side of the choice */
-            const float *c = point ? image + 3 * ((size_t)qy * w + (size_t)qx) : rendercache__black;
-            float wn = near ? wgt : 0.0f, wf = far ? wgt : 0.0f;
-            near_sum[0] += wn * c[0]; near_sum[1] += wn * c[1]; near_sum[2] += wn * c[2]; near_sum[3] += wn;
-            far_sum[0] += wf * c[0]; far_sum[1] += wf * c[1]; far_sum[2] += wf * c[2]; far_sum[3] += wf;
-        }
+    if (dmax <= dmin * tol2) {   /* one layer (most holes): every point is near */
+        rendercache__window_sums(rc, x, y, r, x0, x1, y0, y1, dmin, dmax, 0, near_sum, far_sum);
+    } else {
+        rendercache__window_sums(rc, x, y, r, x0, x1, y0, y1, dmin, dmax, 1, near_sum, far_sum);
+        chosen = (far_sum[3] >= near_sum[3]) ? far_sum : near_sum;
     }
-    chosen = (far_sum[3] >= near_sum[3]) ? far_sum : near_sum;
-    if (dmax <= dmin * tol2) chosen = near_sum;   /* one layer: every point was counted as near */
     rgb[0] = rendercache__finitef(chosen[0] / chosen[3]);
     rgb[1] = rendercache__finitef(chosen[1] / chosen[3]);
     rgb[2] = rendercache__finitef(chosen[2] / chosen[3]);
@@ -2957,6 +3043,15 @@ static void rendercache__cull_and_interpolate(rendercache *rc)
    image only through the z-buffer's tie-break of equal depths and the
    order in which the eviction's clock meets points not visible. */
 
+/* Moves the n 4-byte words at a to their places to[i] (through scratch,
+   n words at least). */
+static void rendercache__permute(void *a, const uint32_t *to, uint32_t n, void *scratch)
+{
+    uint32_t *w = (uint32_t *)a, *t = (uint32_t *)scratch, i;
+    for (i = 0; i < n; i++) t[to[i]] = w[i];
+    memcpy(w, t, (size_t)n * sizeof *w);
+}
+
 /* Re-sorts slots [r0, r0 + n) by the pixel block their points project to
    in the current view (rendercache__project_points: where the z-buffer
    will test them). */
@@ -2966,7 +3061,6 @@ static void rendercache__sort_range(rendercache *rc, uint32_t r0, uint32_t n, ui
     uint32_t count[RENDERCACHE__SORT_KEYS], *pix = scratch, *to = pix + range, b, i, k, sum;
     uint32_t *bands = rc->sort_bands + (size_t)(r0 / range) * (RENDERCACHE__SORT_BANDS + 1);
     rendercache__point *data = (rendercache__point *)(to + range);   /* the records in their new order */
-    rendercache__geo *geo = (rendercache__geo *)(void *)data;
     float depth2[RENDERCACHE__BATCH];
     rendercache__projector pr;
     rendercache__projector_init(&pr, rc, &rc->view, rc->obj_camera, 0);
@@ -2991,8 +3085,10 @@ static void rendercache__sort_range(rendercache *rc, uint32_t r0, uint32_t n, ui
        scratch, which is */
     for (i = 0; i < n; i++) data[to[i]] = rc->data[r0 + i];
     memcpy(rc->data + r0, data, (size_t)n * sizeof *data);
-    for (i = 0; i < n; i++) geo[to[i]] = rc->geo[r0 + i];
-    memcpy(rc->geo + r0, geo, (size_t)n * sizeof *geo);
+    rendercache__permute(rc->geo.x + r0, to, n, data);
+    rendercache__permute(rc->geo.y + r0, to, n, data);
+    rendercache__permute(rc->geo.z + r0, to, n, data);
+    rendercache__permute(rc->geo.object + r0, to, n, data);
     /* (the shown marks stay: before the cull every mark is an earlier frame's, which no test compares equal) */
 }
 
@@ -3302,27 +3398,31 @@ static int rendercache__fractional(const rendercache *rc, uint32_t q)
 static float rendercache__spread_error(const rendercache *rc, float *cur, float *next, uint32_t y, uint32_t y_end, int x,
                                        int dir, float e)
 {
-    int w = (int)rc->width, ax = x + dir, bx = x - dir, below = y + 1 < y_end;
-    float wt[4] = { 7.0f, 3.0f, 5.0f, 1.0f }, sum, s;   /* ahead, behind-below, below, ahead-below */
-    uint32_t row = y * rc->width, row_below = row + rc->width;
-    if (!below) {   /* last row: everything ahead, if there is an ahead */
-        if (ax < 0 || ax >= w || !rendercache__fractional(rc, row + (uint32_t)ax)) return e;
+    const int w = (int)rc->width, ax = x + dir, bx = x - dir, ahead = ax >= 0 && ax < w, behind = bx >= 0 && bx < w;
+    const uint32_t row = y * rc->width, row_below = row + rc->width;
+    float w_ahead, w_behind_below, w_below, w_ahead_below, sum, s;
+    if (y + 1 >= y_end) {   /* last row: everything ahead, if there is an ahead */
+        if (!ahead || !rendercache__fractional(rc, row + (uint32_t)ax)) return e;
         cur[ax + 1] += e;
         return 0.0f;
     }
-    if (ax < 0 || ax >= w) { wt[2] += wt[0] + wt[3]; wt[0] = wt[3] = 0.0f; }
-    if (bx < 0 || bx >= w) { wt[2] += wt[1]; wt[1] = 0.0f; }
-    if (wt[0] > 0.0f && !rendercache__fractional(rc, row + (uint32_t)ax)) wt[0] = 0.0f;
-    if (wt[1] > 0.0f && !rendercache__fractional(rc, row_below + (uint32_t)bx)) wt[1] = 0.0f;
-    if (wt[2] > 0.0f && !rendercache__fractional(rc, row_below + (uint32_t)x)) wt[2] = 0.0f;
-    if (wt[3] > 0.0f && !rendercache__fractional(rc, row_below + (uint32_t)ax)) wt[3] = 0.0f;
-    sum = wt[0] + wt[1] + wt[2] + wt[3];
+    /* Without branches on the neighbours, which are fractional or not at random along the level's edges
+       (a miss predicted wrong costs more than the loads): weight 0 where the neighbour is outside (its
+       weight went below) or decided already. The out-of-range index reads x instead (the weight is 0
+       anyway), and an addition of 0 times s lands in a cell no fractional pixel reads (or the row's
+       padding), so every cell a later pixel reads gets what it got with branches, bit for bit. */
+    w_ahead = ahead & rendercache__fractional(rc, row + (uint32_t)(ahead ? ax : x)) ? 7.0f : 0.0f;
+    w_behind_below = behind & rendercache__fractional(rc, row_below + (uint32_t)(behind ? bx : x)) ? 3.0f : 0.0f;
+    w_below = rendercache__fractional(rc, row_below + (uint32_t)x) ? 5.0f + (ahead ? 0.0f : 8.0f) + (behind ? 0.0f : 3.0f)
+                                                                  : 0.0f;
+    w_ahead_below = ahead & rendercache__fractional(rc, row_below + (uint32_t)(ahead ? ax : x)) ? 1.0f : 0.0f;
+    sum = w_ahead + w_behind_below + w_below + w_ahead_below;
     if (sum == 0.0f) return e;
     s = e / sum;
-    if (wt[0] > 0.0f) cur[ax + 1] += wt[0] * s;
-    if (wt[1] > 0.0f) next[bx + 1] += wt[1] * s;
-    if (wt[2] > 0.0f) next[x + 1] += wt[2] * s;
-    if (wt[3] > 0.0f) next[ax + 1] += wt[3] * s;
+    cur[ax + 1] += w_ahead * s;
+    next[bx + 1] += w_behind_below * s;
+    next[x + 1] += w_below * s;
+    next[ax + 1] += w_ahead_below * s;
     return 0.0f;
 }
 
@@ -3398,7 +3498,8 @@ static void rendercache__diffuse_band(void *ctx, uint32_t band)
             if (x == end) break;
             p = y * w + (uint32_t)x;
             total = j->fraction + cur[x + 1] + carry;
-            pick = total >= rendercache__threshold(p, (uint32_t)rc->frame, j->amp) ? 1u : 0u;
+            /* (without modulation the threshold is 0.5 exactly: no hash) */
+            pick = total >= (j->amp > 0.0f ? rendercache__threshold(p, (uint32_t)rc->frame, j->amp) : 0.5f) ? 1u : 0u;
             e = total - (float)pick;
             select_v[p] = total;
             chosen[p] = (unsigned char)(2u | pick);
@@ -3594,7 +3695,7 @@ static uint32_t rendercache__victim(rendercache *rc)
     for (scanned = 0; !rc->hand_exhausted && scanned < rc->capacity; scanned++) {
         slot = rc->hand;
         rc->hand = slot + 1 == rc->capacity ? 0 : slot + 1;
-        if (rc->geo[slot].object == RENDERCACHE__FREE_SLOT || !rendercache__slot_in_use(rc, slot)) return slot;
+        if (rc->geo.object[slot] == RENDERCACHE__FREE_SLOT || !rendercache__slot_in_use(rc, slot)) return slot;
     }
     rc->hand_exhausted = 1;
     slot = rc->hand;
@@ -3654,8 +3755,8 @@ static void rendercache__sample_new_point(const rendercache *rc, const rendercac
 static void rendercache__store(rendercache *rc, uint32_t slot, const rendercache__new_point *np)
 {
     rendercache__point *pt = &rc->data[slot];
-    if (rc->geo[slot].object == RENDERCACHE__FREE_SLOT) rc->live++;
-    rc->geo[slot] = np->g;
+    if (rc->geo.object[slot] == RENDERCACHE__FREE_SLOT) rc->live++;
+    rendercache__slot_set(&rc->geo, slot, &np->g);
     memcpy(pt->rgb, np->rgb, sizeof pt->rgb);
     pt->scale = np->scale;
     pt->base = (uint32_t)rc->frame + rc->obj_motion[rendercache__motion_index(rc, np->g.object)] - np->age;
@@ -3788,7 +3889,7 @@ static void rendercache__place(rendercache *rc, uint32_t slot, int replacing, in
 {
     int changed = replacing && np->age == 0 && rendercache__colour_changed(rc, rc->data[slot].rgb, np->rgb);
     if (replacing) rc->stats.replaced++;
-    else if (rc->geo[slot].object != RENDERCACHE__FREE_SLOT) rc->stats.evicted++;
+    else if (rc->geo.object[slot] != RENDERCACHE__FREE_SLOT) rc->stats.evicted++;
     rendercache__store(rc, slot, np);
     if (p != RENDERCACHE__NONE && refill && rc->px_index[p] == RENDERCACHE__NONE) rendercache__mark_refill(rc, p);
     if (p != RENDERCACHE__NONE) rendercache__show(rc, p, slot, depth2, np->rgb);
@@ -3855,8 +3956,9 @@ static int rendercache__insert_other(rendercache *rc, const rendercache__new_poi
     return 1;
 }
 
-/* Prefetches the slots that the next samples will replace in place, all at
-   once, so that their cache misses overlap instead of coming one by one
+/* Prefetches the slots that the next samples will replace in place, and
+   the pixels they show in, all at once, so that their cache misses overlap
+   instead of coming one by one
    (prefetches rather than loads: they need not complete before the
    insertion goes on). Returns a value that depends on the pixels' slots
    (for the caller to keep). */
@@ -3865,14 +3967,22 @@ static uint32_t rendercache__touch_slots(const rendercache *rc, const rendercach
     uint32_t i, sum = 0;
     for (i = 0; i < n; i++) {
         const rendercache_sample *s = &samples[i];
-        uint32_t slot;
+        uint32_t slot, p;
         if (s->x >= rc->width || s->y >= rc->height || (s->flags & RENDERCACHE_REQUEST_PREDICTED) ||
             rendercache__sample_frame(rc, s) != rc->frame)
             continue;
-        slot = rc->px_index[s->y * rc->width + s->x];
+        p = s->y * rc->width + s->x;
+        RENDERCACHE__PREFETCH_WRITE(&rc->image[3 * (size_t)p]);   /* the pixel's lines, which show writes */
+        RENDERCACHE__PREFETCH_WRITE(&rc->image[3 * (size_t)p + 2]);
+        RENDERCACHE__PREFETCH_WRITE(&rc->priority[p]);
+        RENDERCACHE__PREFETCH_WRITE(&rc->px_depth[p]);
+        slot = rc->px_index[p];
         if (slot == RENDERCACHE__NONE) continue;
         sum += slot;
-        RENDERCACHE__PREFETCH(&rc->geo[slot]);
+        RENDERCACHE__PREFETCH(&rc->geo.x[slot]);
+        RENDERCACHE__PREFETCH(&rc->geo.y[slot]);
+        RENDERCACHE__PREFETCH(&rc->geo.z[slot]);
+        RENDERCACHE__PREFETCH(&rc->geo.object[slot]);
         RENDERCACHE__PREFETCH(&rc->data[slot]);
         RENDERCACHE__PREFETCH((const char *)&rc->data[slot] + sizeof rc->data[0] - 1);   /* may straddle two lines */
     }

@@ -299,6 +299,122 @@ static void test_weights(void)
     radinterp_solution_destroy(sol);
 }
 
+/* EV/VE counts on the floor (receiver 0) by source and blocker patch. */
+static uint32_t events_on_floor(const radinterp_mesh *m, uint32_t source, uint32_t blocker, int active_only)
+{
+    uint32_t i, n = 0;
+    for (i = 0; i < radinterp_mesh_discontinuity_count(m); i++) {
+        radinterp_discontinuity d;
+        radinterp_mesh_get_discontinuity(m, i, &d);
+        if (d.receiver != 0 || (d.type != RADINTERP_DISCONTINUITY_EV && d.type != RADINTERP_DISCONTINUITY_VE)) continue;
+        if (d.source == source && d.blocker == blocker && (d.active || !active_only)) n++;
+    }
+    return n;
+}
+
+/* A candidate event must happen: the penumbra scene with a second, smaller
+   blocker (patch 3) at height 0.4 under the first. Every line from the
+   source through the small blocker's outline crosses z = 0.8 inside
+   [-0.0625, 0.2125] x [-0.1375, 0.1], within the large blocker
+   [-0.1, 0.3] x [-0.2, 0.15]: the small blocker stands in the large one's
+   umbra and none of its events is seen, while the lines bounding the large
+   one's penumbra pass beside it (at z = 0.4 they lie at x <= -0.2167 or
+   x >= 0.483). Without the large blocker (the control) the small one casts
+   its own shadow and its events are kept. */
+static void test_hidden_events(void)
+{
+    int with_large;
+    uint32_t small_events[2] = {0, 0}, large_events = 0, large_alone;
+    scene s;
+    radinterp_solution *sol;
+    {   /* the large blocker's events with nothing else: the count to keep */
+        radinterp_mesh_desc md = mesh_desc();
+        radinterp_mesh *m = NULL;
+        sol = penumbra_scene(&s);
+        if (!sol) return;
+        md.min_discont_weight = 1e-3f;
+        md.min_leaf_area = 4.0f;
+        CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &m), RADINTERP_OK);
+        large_alone = m ? events_on_floor(m, 1, 2, 0) : 0;
+        radinterp_mesh_destroy(m);
+        radinterp_solution_destroy(sol);
+    }
+    for (with_large = 0; with_large < 2; with_large++) {
+        radinterp_desc d;
+        radinterp_mesh_desc md = mesh_desc();
+        radinterp_mesh *m = NULL;
+        uint32_t grey, light;
+        memset(&s, 0, sizeof s);
+        grey = add_material(&s, 0.5f, 0.0f);
+        light = add_material(&s, 0.0f, 100.0f);
+        add_hrect(&s, -2, -2, 2, 2, 0, 1, grey);                                                          /* 0 */
+        add_hrect(&s, -(float)SRC_A, -(float)SRC_A, (float)SRC_A, (float)SRC_A, (float)SRC_H, 0, light);  /* 1 */
+        add_hrect(&s, with_large ? (float)blk[0] : 1.5f, with_large ? (float)blk[1] : 1.5f,               /* 2 */
+                  with_large ? (float)blk[2] : 1.6f, with_large ? (float)blk[3] : 1.6f, (float)BLK_H, 1, grey);
+        add_hrect(&s, 0.0f, -0.1f, 0.2f, 0.05f, 0.4f, 1, grey);                                            /* 3 */
+        d = scene_desc(&s);
+        CHECK(radinterp_solve(&d, &sol) == RADINTERP_OK);
+        if (!sol) return;
+        md.min_discont_weight = 1e-3f;
+        md.min_leaf_area = 4.0f;
+        CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &m), RADINTERP_OK);
+        if (m) {
+            small_events[with_large] = events_on_floor(m, 1, 3, 0);
+            if (with_large) large_events = events_on_floor(m, 1, 2, 0);
+        }
+        radinterp_mesh_destroy(m);
+        radinterp_solution_destroy(sol);
+    }
+    CHECK_MSG(small_events[0] >= 8, "the small blocker alone casts %u events", small_events[0]);
+    CHECK_EQ_INT(small_events[1], 0);
+    CHECK_EQ_INT(large_events, large_alone);
+    test_note("hidden events: the small blocker casts %u EV/VE alone and %u in the large one's umbra; the large "
+              "one %u (%u alone)", small_events[0], small_events[1], large_events, large_alone);
+}
+
+/* min_discont_contrast: a second source (patch 3, beside the first) 1000
+   times dimmer. Seen from the floor it reaches at most B F = 0.1 * 0.0195
+   (F of a 0.5 m square 2 m straight above), about 0.0024 of the floor's mean
+   irradiance (about 0.8 from the bright source), far below the default 1/32:
+   its discontinuities are not candidates, while the bright source's are
+   (B F up to 100 * 0.0195, 2.4 times the mean). FLT_MIN keeps both, as the
+   thesis does. */
+static void test_contrast(void)
+{
+    scene s;
+    radinterp_desc d;
+    radinterp_solution *sol = NULL;
+    uint32_t grey, light, dim, pass, counts[2][2];
+    memset(&s, 0, sizeof s);
+    grey = add_material(&s, 0.5f, 0.0f);
+    light = add_material(&s, 0.0f, 100.0f);
+    dim = add_material(&s, 0.0f, 0.1f);
+    add_hrect(&s, -2, -2, 2, 2, 0, 1, grey);                                                          /* 0 */
+    add_hrect(&s, -(float)SRC_A, -(float)SRC_A, (float)SRC_A, (float)SRC_A, (float)SRC_H, 0, light);  /* 1 */
+    add_hrect(&s, (float)blk[0], (float)blk[1], (float)blk[2], (float)blk[3], (float)BLK_H, 1, grey); /* 2 */
+    add_hrect(&s, 0.6f, -(float)SRC_A, 1.1f, (float)SRC_A, (float)SRC_H, 0, dim);                     /* 3 */
+    d = scene_desc(&s);
+    CHECK(radinterp_solve(&d, &sol) == RADINTERP_OK);
+    if (!sol) return;
+    for (pass = 0; pass < 2; pass++) {
+        radinterp_mesh_desc md = mesh_desc();
+        radinterp_mesh *m = NULL;
+        md.min_discont_weight = 1e-3f;   /* the weight alone would keep both sources */
+        md.min_leaf_area = 4.0f;
+        md.min_discont_contrast = pass ? FLT_MIN : 0.0f;
+        CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &m), RADINTERP_OK);
+        counts[pass][0] = m ? events_on_floor(m, 1, 2, 1) : 0;
+        counts[pass][1] = m ? events_on_floor(m, 3, 2, 1) : 0;
+        radinterp_mesh_destroy(m);
+    }
+    CHECK(counts[0][0] > 0 && counts[0][0] == counts[1][0]);
+    CHECK_EQ_INT(counts[0][1], 0);
+    CHECK(counts[1][1] > 0);
+    test_note("contrast: active events of the bright / dim source %u / %u by default, %u / %u with FLT_MIN",
+              counts[0][0], counts[0][1], counts[1][0], counts[1][1]);
+    radinterp_solution_destroy(sol);
+}
+
 /* 5.4: the geometric factor is kept, the weight cached; it is recomputed
    once the solver has run again (new radiosities), not before. */
 static void test_weight_cache(void)
@@ -1041,6 +1157,12 @@ static void test_validation(void)
     md.min_leaf_area = INFINITY;
     CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &m), RADINTERP_ERROR_INVALID_ARGUMENT);
     md = mesh_desc();
+    md.min_discont_contrast = -0.5f;
+    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &m), RADINTERP_ERROR_INVALID_ARGUMENT);
+    md.min_discont_contrast = NAN;
+    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &m), RADINTERP_ERROR_INVALID_ARGUMENT);
+    CHECK(m == NULL);
+    md = mesh_desc();
     md.max_leaf_dsets = 100000;
     CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &m), RADINTERP_ERROR_INVALID_ARGUMENT);
     md = mesh_desc();
@@ -1258,6 +1380,8 @@ int main(int argc, char **argv)
     RUN(test_penumbra_boundaries);
     RUN(test_weights);
     RUN(test_weight_cache);
+    RUN(test_hidden_events);
+    RUN(test_contrast);
     RUN(test_horizon_and_contact);
     RUN(test_activation_rules);
     RUN(test_crack_free_room);
