@@ -601,7 +601,9 @@
    triangulation moves to the allocator only when it outgrows 32 KB; 20 KB
    rank its sources).
    radinterp_build_mesh samples its interpolants through
-   mesh_desc.parallel_for (jobs of 2 sample points, progress every 128);
+   mesh_desc.parallel_for (jobs of 2 sample points, progress every 128;
+   before the samples, while discontinuities are found and patches
+   triangulated, progress is called once a patch with (0, 1));
    the mesh is bit-identical for any thread count. radinterp_shade splits
    its pixels into jobs of 16384 through the mesh's parallel_for (the
    build's, or radinterp_mesh_set_parallel_for). Queries on a mesh are const.
@@ -9717,15 +9719,25 @@ static int radinterp__group_dsets(radinterp__builder *b, uint32_t R)
 }
 
 /* All discontinuities of the scene, by receiver. */
+/* A progress call between the steps that come before the samples: (0, 1),
+   none of the sampling's count done yet. A building's discontinuities and
+   triangulations take seconds, during which the caller may still see
+   progress and cancel. Non-zero: cancel. */
+static int radinterp__mesh_cancelled(const radinterp__builder *b)
+{
+    return b->desc->progress && b->desc->progress(b->desc->progress_user, 0, 1) != 0;
+}
+
 static radinterp_result radinterp__find_discontinuities(radinterp__builder *b)
 {
     const radinterp_solution *s = b->s;
     radinterp__buf pairs, stack;
     uint32_t R;
-    int fail = 0;
+    int fail = 0, cancelled = 0;
     radinterp__buf_init(&pairs, sizeof(uint64_t));
     radinterp__buf_init(&stack, sizeof(uint32_t));
-    for (R = 0; R < s->patch_count && !fail; R++) {
+    for (R = 0; R < s->patch_count && !fail && !cancelled; R++) {
+        if ((cancelled = radinterp__mesh_cancelled(b)) != 0) break;
         b->disc_first[R] = (uint32_t)b->discs.count;
         if (s->patches[R].count && !b->desc->no_discontinuities) fail = radinterp__receiver_discs(b, R, &pairs, &stack) != 0;
         b->disc_count[R] = (uint32_t)b->discs.count - b->disc_first[R];
@@ -9734,6 +9746,7 @@ static radinterp_result radinterp__find_discontinuities(radinterp__builder *b)
     radinterp__buf_free(&b->a, &pairs);
     radinterp__buf_free(&b->a, &stack);
     if (!fail && b->discs.count > 0xFFFFFFF0u) fail = 1;
+    if (cancelled) return RADINTERP_ERROR_CANCELLED;
     return fail ? RADINTERP_ERROR_OUT_OF_MEMORY : RADINTERP_OK;
 }
 
@@ -11363,7 +11376,8 @@ static radinterp_result radinterp__mesh_pass(radinterp__builder *b)
     }
     if (res == RADINTERP_OK && radinterp__hmap_init(&b->a, &w.lmap, 4, 256) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     for (P = 0; P < s->patch_count && res == RADINTERP_OK; P++)
-        if (s->patches[P].count) res = radinterp__triangulate_patch(b, &w, P);
+        if (radinterp__mesh_cancelled(b)) res = RADINTERP_ERROR_CANCELLED;
+        else if (s->patches[P].count) res = radinterp__triangulate_patch(b, &w, P);
     radinterp__free(&b->a, own);
     radinterp__buf_free(&b->a, &tmp);
     radinterp__buf_free(&b->a, &near);

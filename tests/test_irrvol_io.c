@@ -169,6 +169,36 @@ static void test_round_trip(void)
     }
 }
 
+/* The default bins (k = 17, 578 of them) in the compact store: the bins
+   are most of the file, a word each, so a size check that counted three
+   floats a bin would refuse the file as too short. */
+static void test_round_trip_default_resolution(void)
+{
+    sc_scene s;
+    irrvol_desc d;
+    irrvol *v = NULL, *w = NULL;
+    irrvol_volume_info info;
+    void *data;
+    size_t size;
+    memset(&s, 0, sizeof s);
+    sc_square(&s, 1, 0.3f, 0.3f, 0.3f, 0.05f, 0);
+    sc_geometry_desc(&d, &s);
+    d.radiance = constant_radiance;
+    d.grid_samples[0] = 2; d.grid_samples[1] = 2; d.grid_samples[2] = 2;
+    sc_set3(d.bounds_min, 0, 0, 0);
+    sc_set3(d.bounds_max, 1, 1, 1);
+    if (!CHECK_EQ_INT(irrvol_build(&d, &v), IRRVOL_OK)) return;
+    irrvol_info(v, &info);
+    CHECK(info.bins == 578 && info.bin_bytes == 4);
+    CHECK_EQ_INT(irrvol_save_to_memory(v, NULL, &data, &size), IRRVOL_OK);
+    CHECK(size < (size_t)info.sample_count * info.bins * 12);   /* shorter than three floats a bin */
+    CHECK_EQ_INT(irrvol_load_from_memory(data, size, NULL, &w), IRRVOL_OK);
+    CHECK(w && same_queries(v, w));
+    irrvol_destroy(w);
+    irrvol_destroy(v);
+    irrvol_free_memory(NULL, data);
+}
+
 static void test_truncation_and_corruption(void)
 {
     irrvol *v = small_volume(1), *w;
@@ -314,6 +344,7 @@ int main(int argc, char **argv)
 {
     TEST_INIT(argc, argv);
     RUN(test_round_trip);
+    RUN(test_round_trip_default_resolution);
     RUN(test_truncation_and_corruption);
     RUN(test_hostile_headers);
     RUN(test_write_failures);
