@@ -485,6 +485,16 @@
                                     const float *st, size_t count, float *rgb_out);
                                     ID + barycentric buffer -> radiosity per pixel
        radinterp_result radinterp_shade_gouraud(... same ...);   the same, Gouraud-shaded
+       radinterp_result radinterp_shade_span(const radinterp_mesh *m, uint32_t triangle, const float *st,
+                                    size_t count, float *rgb_out);
+                                    a run of pixels of one triangle (a visibility buffer's run, a
+                                    rasterizer's span): the bits radinterp_shade gives them, the
+                                    coefficients loaded once, each pixel's channels in one SIMD
+                                    evaluation (SSE2/NEON with RADINTERP_BVH_SIMD, else the scalar
+                                    kernel); on the caller's thread. INVALID_ARGUMENT, rgb_out left
+                                    as it was: m NULL, triangle not below the triangle count, st or
+                                    rgb_out NULL with count > 0. Contract: st holds 2 * count finite
+                                    floats, rgb_out 3 * count
        radinterp_result radinterp_mesh_save(const radinterp_mesh *m, radinterp_write_fn write, void *user);
        radinterp_result radinterp_mesh_load(const radinterp_allocator *a, radinterp_read_fn read, void *user,
                                     radinterp_mesh **out);
@@ -1027,6 +1037,14 @@ RADINTERP_API radinterp_result radinterp_shade(const radinterp_mesh *m, const ui
 /* The same with Gouraud shading: B at the corners, blended linearly. */
 RADINTERP_API radinterp_result radinterp_shade_gouraud(const radinterp_mesh *m, const uint32_t *triangle_ids,
                                                        const float *st, size_t count, float *rgb_out);
+/* One run of pixels of one triangle: rgb_out[3 i..] = B of `triangle` at
+   (st[2 i], st[2 i + 1]), clamped at 0: the bits radinterp_shade gives
+   those pixels (when the compiler does not contract a * b + c into fused
+   multiply-adds of its own, as C's ISO modes do not). Runs on the calling
+   thread; INVALID_ARGUMENT, rgb_out untouched, for a NULL mesh, a triangle
+   not in it, or NULL arrays with count > 0. */
+RADINTERP_API radinterp_result radinterp_shade_span(const radinterp_mesh *m, uint32_t triangle, const float *st,
+                                                    size_t count, float *rgb_out);
 #define RADINTERP_NO_TRIANGLE 0xFFFFFFFFu
 
 RADINTERP_API radinterp_result radinterp_mesh_save(const radinterp_mesh *m, radinterp_write_fn write, void *user);
@@ -11913,6 +11931,67 @@ RADINTERP_API radinterp_result radinterp_shade_gouraud(const radinterp_mesh *m, 
                                                        const float *st, size_t count, float *rgb_out)
 {
     return radinterp__shade_run(m, triangle_ids, st, count, rgb_out, radinterp__gouraud_job);
+}
+
+/* A run of one triangle's pixels from its padded coefficients c (24 floats:
+   (A, 2B, 2C, D, 2E, F) x 4 lanes): radinterp__shade_job's polynomial in its
+   order of operations, channel by channel. Always compiled: the reference
+   the SIMD kernel is tested against, and the kernel of builds without one. */
+RADINTERP__MAYBE_UNUSED static void radinterp__shade_span_scalar(const float *c, const float *st, size_t count,
+                                                                  float *rgb)
+{
+    size_t i;
+    for (i = 0; i < count; i++) {
+        float s = st[2 * i], t = st[2 * i + 1];
+        int ch;
+        for (ch = 0; ch < 3; ch++) {
+            float v = s * (c[ch] * s + c[4 + ch] * t + c[8 + ch]) + t * (c[12 + ch] * t + c[16 + ch]) + c[20 + ch];
+            rgb[3 * i + ch] = v > 0.0f ? v : 0.0f;
+        }
+    }
+}
+
+#if RADINTERP__SIMD
+/* The same float operations with a pixel's three channels (and the zero
+   pad) as the lanes of one vector: 5 multiplies, 5 adds and a max per
+   pixel. Each pixel's 4-lane store spills into the next pixel's first
+   channel, which that pixel then writes; the last pixel goes through a
+   buffer, so nothing past rgb[3 count) is touched. */
+static void radinterp__shade_span_simd(const float *c, const float *st, size_t count, float *rgb)
+{
+    const radinterp__f4 a = radinterp__f4_load(c), b2 = radinterp__f4_load(c + 4), c2 = radinterp__f4_load(c + 8);
+    const radinterp__f4 d = radinterp__f4_load(c + 12), e2 = radinterp__f4_load(c + 16), f = radinterp__f4_load(c + 20);
+    const radinterp__f4 zero = radinterp__f4_set(0.0f);
+    float last[4];
+    size_t i;
+    for (i = 0; i < count; i++) {
+        radinterp__f4 s = radinterp__f4_set(st[2 * i]), t = radinterp__f4_set(st[2 * i + 1]);
+        radinterp__f4 u = radinterp__f4_add(radinterp__f4_add(radinterp__f4_mul(a, s), radinterp__f4_mul(b2, t)), c2);
+        radinterp__f4 w = radinterp__f4_add(radinterp__f4_mul(d, t), e2);
+        radinterp__f4 v = radinterp__f4_add(radinterp__f4_add(radinterp__f4_mul(s, u), radinterp__f4_mul(t, w)), f);
+        v = radinterp__f4_max(v, zero);   /* v > 0 ? v : 0, NaN to 0, as the scalar kernel */
+        if (i + 1 < count) {
+            radinterp__f4_store(rgb + 3 * i, v);
+        } else {
+            radinterp__f4_store(last, v);
+            memcpy(rgb + 3 * i, last, 3 * sizeof(float));
+        }
+    }
+}
+#endif
+
+RADINTERP_API radinterp_result radinterp_shade_span(const radinterp_mesh *m, uint32_t triangle, const float *st,
+                                                    size_t count, float *rgb_out)
+{
+    const float *c;
+    if (!m || triangle >= m->triangle_count || (count && (!st || !rgb_out))) return RADINTERP_ERROR_INVALID_ARGUMENT;
+    c = m->shade + 24 * (size_t)triangle;
+#if RADINTERP__SIMD
+    radinterp__shade_span_simd(c, st, count, rgb_out);
+#else
+    radinterp__shade_span_scalar(c, st, count, rgb_out);
+#endif
+    return RADINTERP_OK;
 }
 
 /* ======================================================================

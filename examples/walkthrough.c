@@ -23,8 +23,9 @@
      radiosity  (the default) the online phase of Hardt 1996: the office's
                 radiosity solution and discontinuity mesh are precomputed
                 (radinterp.h); per frame the rasterizer fills an ID +
-                barycentric buffer and radinterp_shade evaluates the
-                quadratic interpolants at every pixel. The bunny is lit per
+                barycentric buffer and radinterp_shade_span evaluates the
+                quadratic interpolants at every pixel, a run of pixels of
+                one triangle at a time. The bunny is lit per
                 vertex from an irradiance volume built from the radiosity
                 solution (Greger 1996, irrvol.h), attenuated by its
                 self-occlusion ratio, and casts an occlusion blob.

@@ -24,12 +24,12 @@
    Mode radiosity reports its phases as in Greger's figure, as CPU time
    summed over the threads that ran them: raster (the interpolant mesh and
    the bunny into the ID + barycentric buffers: setup, binning, depth tests,
-   barycentrics), shade (radinterp_shade per pixel, the occlusion blob, the
-   bunny's Gouraud blend, fused with the raster tile by tile), volume (the
-   bunny's vertex queries of the irradiance volume) and other (wall time
-   outside those). Mode raytrace reports the displayed rate (frames after
-   the first, which is traced in full) and the sampled rate; mode baseviews
-   the rate of reconstructed frames; their phases are wall time. Precomputed data comes from
+   barycentrics), shade (radinterp_shade_span per run of pixels of one
+   triangle, the occlusion blob, the bunny's Gouraud blend, fused with the
+   raster tile by tile), volume (the bunny's vertex queries of the
+   irradiance volume) and other (wall time outside those). Mode raytrace
+   reports the displayed rate (frames after the first, which is traced in
+   full) and the sampled rate; mode baseviews the rate of reconstructed frames; their phases are wall time. Precomputed data comes from
    (or goes to) build/cache, as in the example. Arguments select lines: a
    mode, a size and a thread count, e.g. `radiosity 1920x1080 1t`. */
 #define _POSIX_C_SOURCE 200809L

@@ -63,12 +63,8 @@
                 Gouraud-shaded per vertex from an irradiance volume
                 (irrvol.h, Greger 1996) built from the radiosity solution,
                 times its self-occlusion ratio (irrvol_visibility_ratio).
-                radinterp.h does not have its mesh and online phase yet:
-                wt_static_shading_build says so and the mode does not run;
-                every other part of it is here (wt_bunny_visibility,
-                wt_volume_build, wt_bunny_light, wt_raster_scene) and
-                tested, and wt_static_shading_build/_shade are where
-                radinterp_build_mesh and radinterp_shade go.
+                The pixels are shaded in the raster's tile jobs, a run of
+                pixels of one triangle at a time (radinterp_shade_span).
 
    Daylight. A layout may name a sky ("sky R G B", W/(m^2 sr), or "sky R G
    B MAP.pfm": R G B times an equirectangular little-endian RGB PFM beside
@@ -3776,10 +3772,12 @@ static int wt__baseviews_frame(wt_renderer *r, int frame, float *rgb, wt_frame_s
    self-occlusion ratios. Per frame: the bunny's vertices query the volume
    (Greger eq. 4.7: radiance = Kd H / pi, times the vertex's self-occlusion
    ratio, thesis 6.1.3), the rasterizer draws the static mesh and the bunny
-   into the ID + barycentric buffers, and one pass over the pixels shades
-   the static ones by their triangle's interpolant (radinterp_shade, Hardt's
-   online phase; radiance B / pi) with the bunny's occlusion blob, and the
-   bunny's by Gouraud interpolation of its vertex colours.
+   into the ID + barycentric buffers, and one pass over the pixels, tile by
+   tile as the raster finishes them, shades the static ones by their
+   triangle's interpolant (radinterp_shade_span on each run of pixels of
+   one triangle, Hardt's online phase; radiance B / pi) with the bunny's
+   occlusion blob, and the bunny's by Gouraud interpolation of its vertex
+   colours.
    ------------------------------------------------------------------------ */
 #define WT_RADIOSITY_VERSION 1u  /* bump when the patches, materials or the volume's source change */
 
@@ -3908,7 +3906,7 @@ static int wt__mesh_normals(wt_static_shading *s)
    interpolant mesh, or the mesh alone from the precompute cache (file
    "radinterp": radinterp_mesh_save's bytes; a loaded mesh needs no
    solution). The mesh is left without a job system: the frame's pixel
-   pass calls radinterp_shade on bands of rows from its own jobs. */
+   pass shades runs of pixels from the raster's tile jobs. */
 EX_FN int wt_static_shading_build(wt_world *w, wt_static_shading *s, char *err, size_t err_size)
 {
     const wt_options *o = &w->opt;
@@ -3974,17 +3972,18 @@ EX_FN int wt_static_shading_build(wt_world *w, wt_static_shading *s, char *err, 
     return wt__mesh_normals(s) == 0 ? 0 : wt__fail(err, err_size, "%s", "out of memory");
 }
 
-/* Shades count pixels of a raster (ids[i], barycentrics st[2i], st[2i+1])
-   whose id is a static triangle (id < s->data.triangle_count) from their
-   triangle's interpolant: rgb[3i..] = radiosity B in W/m^2 (radinterp_shade,
-   or with gouraud the corners' radiosities blended linearly); other pixels
-   are left as they are. */
+/* Shades a run of count pixels of one static triangle ids[0] (every
+   ids[i] the same, below s->data.triangle_count; barycentrics st[2i],
+   st[2i+1]) from the triangle's interpolant: rgb[3i..] = radiosity B in
+   W/m^2 (radinterp_shade_span: the coefficients loaded once for the run,
+   or with gouraud the corners' radiosities blended linearly). */
 EX_FN int wt_static_shading_shade(const wt_static_shading *s, const uint32_t *ids, const float *st, size_t count,
                                   int gouraud, float *rgb)
 {
     radinterp_result rr;
-    if (!s->mesh) return -1;
-    rr = gouraud ? radinterp_shade_gouraud(s->mesh, ids, st, count, rgb) : radinterp_shade(s->mesh, ids, st, count, rgb);
+    if (!s->mesh || !ids) return -1;
+    rr = gouraud ? radinterp_shade_gouraud(s->mesh, ids, st, count, rgb)
+                 : radinterp_shade_span(s->mesh, ids[0], st, count, rgb);
     return rr == RADINTERP_OK ? 0 : -1;
 }
 
@@ -4428,55 +4427,84 @@ static double wt__thread_cpu(void)
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
+/* Radiance of a run of n pixels of static triangle id starting at (x, y),
+   in place over its radiosities B: (E + (B - E) * blob) / pi, where blob
+   is the bunny's occlusion (1 outside its box). A triangle that emits
+   nothing and no blob: B / pi, the same bits, in a loop the compiler
+   vectorises. */
+static void wt__static_radiance(const wt__pixel_job *j, uint32_t id, const float *st, int x, int y, int n, float *rgb)
+{
+    const wt_renderer *r = j->r;
+    const wt_static_shading *s = &r->statics;
+    const float *e = s->data.emission + 3 * (size_t)id;
+    const int *box = r->blob_box;
+    int blob = j->blob && y >= box[1] && y < box[3] && x < box[2] && x + n > box[0], i, k;
+    if (!blob && e[0] == 0.0f && e[1] == 0.0f && e[2] == 0.0f) {
+        for (i = 0; i < 3 * n; i++) rgb[i] *= 1.0f / WT_PI;
+        return;
+    }
+    for (i = 0; i < n; i++) {
+        float keep = 1.0f, *out = rgb + 3 * i;
+        if (blob && x + i >= box[0] && x + i < box[2]) {
+            const uint32_t *tri = s->data.indices + 3 * (size_t)id;
+            const float *a = s->data.positions + 3 * (size_t)tri[0], *b = s->data.positions + 3 * (size_t)tri[1];
+            const float *c = s->data.positions + 3 * (size_t)tri[2];
+            float u = st[2 * i], v = st[2 * i + 1], o = 1.0f - u - v, q[3];
+            for (k = 0; k < 3; k++) q[k] = o * a[k] + u * b[k] + v * c[k];
+            keep = wt__blob(r->sphere, q, s->normals + 3 * (size_t)id);
+        }
+        for (k = 0; k < 3; k++) out[k] = (e[k] + (out[k] - e[k]) * keep) * (1.0f / WT_PI);
+    }
+}
+
+/* A run of n pixels of one bunny triangle: the Gouraud blend of its
+   vertices' radiances. */
+static void wt__bunny_radiance(const wt_renderer *r, uint32_t triangle, const float *st, int n, float *rgb)
+{
+    const uint32_t *tri = r->w->bunny.tri_indices + 3 * (size_t)triangle;
+    const float *a = r->bunny_rgb + 3 * (size_t)tri[0], *b = r->bunny_rgb + 3 * (size_t)tri[1];
+    const float *c = r->bunny_rgb + 3 * (size_t)tri[2];
+    int i, k;
+    for (i = 0; i < n; i++) {
+        float u = st[2 * i], v = st[2 * i + 1], o = 1.0f - u - v;
+        for (k = 0; k < 3; k++) rgb[3 * i + k] = o * a[k] + u * b[k] + v * c[k];
+    }
+}
+
 /* The pixel pass over a finished raster tile (ex_raster.tile_done: fused
    with the raster, reading the tile's own buffers while they are in the
-   cache), writing each pixel of the frame once: static pixels get their
-   radiosity B (radinterp_shade, a row at a time into a buffer on the
-   stack), then radiance (E + (B - E) * blob) / pi; the bunny's the Gouraud
-   blend of its vertex radiances; empty pixels black. */
+   cache), writing each pixel of the frame once, a row at a time into a
+   buffer on the stack, a run of pixels of one triangle at a time (about
+   10 at 1920x1080): static pixels get their radiosity B
+   (radinterp_shade_span) and then radiance (wt__static_radiance); the
+   bunny's the Gouraud blend of its vertex radiances; empty pixels black. */
 static void wt__shade_tile(void *ctx, const ex_raster_tile *tile)
 {
     const wt__pixel_job *j = (const wt__pixel_job *)ctx;
     const wt_renderer *r = j->r;
     const wt_static_shading *s = &r->statics;
-    const uint32_t *bunny = r->w->bunny.tri_indices, nt = s->data.triangle_count, nb = r->w->bunny.tri_count;
-    const int x0 = tile->x0, x1 = tile->x1;
-    float radiosity[3 * EX_RASTER_TILE];   /* one row's B */
-    float colours[3 * EX_RASTER_TILE];     /* and its radiance */
+    const uint32_t nt = s->data.triangle_count, nb = r->w->bunny.tri_count;
+    const int x0 = tile->x0;
+    float colours[3 * EX_RASTER_TILE];     /* one row's radiance */
     double cpu = wt__thread_cpu();
-    int x, y;
+    int i, n = tile->x1 - x0, y, end;
     for (y = tile->y0; y < tile->y1; y++) {
-        const uint32_t *ids = tile->id + (y - tile->y0) * EX_RASTER_TILE;
+        const uint32_t *ids = tile->id + (y - tile->y0) * EX_RASTER_TILE;   /* pixel x0 + i at i */
         const float *st = tile->bary + 2 * (y - tile->y0) * EX_RASTER_TILE;
-        float *row = colours;
-        int blob_row = j->blob && y >= r->blob_box[1] && y < r->blob_box[3];
-        wt_static_shading_shade(s, ids, st, (size_t)(x1 - x0), r->w->opt.gouraud, radiosity);
-        for (x = x0; x < x1; x++) {
-            uint32_t id = ids[x - x0];
-            float *out = row + 3 * (x - x0), u = st[2 * (x - x0)], v = st[2 * (x - x0) + 1], o = 1.0f - u - v;
-            int k;
+        for (i = 0; i < n; i = end) {
+            uint32_t id = ids[i];
+            float *out = colours + 3 * i;
+            for (end = i + 1; end < n && ids[end] == id;) end++;
             if (id < nt) {
-                const float *e = s->data.emission + 3 * (size_t)id, *rad = radiosity + 3 * (x - x0);
-                float keep = 1.0f;
-                if (blob_row && x >= r->blob_box[0] && x < r->blob_box[2]) {
-                    const uint32_t *tri = s->data.indices + 3 * (size_t)id;
-                    const float *a = s->data.positions + 3 * (size_t)tri[0], *b = s->data.positions + 3 * (size_t)tri[1];
-                    const float *c = s->data.positions + 3 * (size_t)tri[2];
-                    float q[3];
-                    for (k = 0; k < 3; k++) q[k] = o * a[k] + u * b[k] + v * c[k];
-                    keep = wt__blob(r->sphere, q, s->normals + 3 * (size_t)id);
-                }
-                for (k = 0; k < 3; k++) out[k] = (e[k] + (rad[k] - e[k]) * keep) * (1.0f / WT_PI);
+                wt_static_shading_shade(s, ids + i, st + 2 * i, (size_t)(end - i), r->w->opt.gouraud, out);
+                wt__static_radiance(j, id, st + 2 * i, x0 + i, y, end - i, out);
             } else if (id != EX_RASTER_EMPTY && id - nt < nb) {
-                const uint32_t *tri = bunny + 3 * (size_t)(id - nt);
-                const float *a = r->bunny_rgb + 3 * (size_t)tri[0], *b = r->bunny_rgb + 3 * (size_t)tri[1];
-                const float *c = r->bunny_rgb + 3 * (size_t)tri[2];
-                for (k = 0; k < 3; k++) out[k] = o * a[k] + u * b[k] + v * c[k];
+                wt__bunny_radiance(r, id - nt, st + 2 * i, end - i, out);
             } else {
-                out[0] = out[1] = out[2] = 0.0f;
+                memset(out, 0, 3 * sizeof(float) * (size_t)(end - i));
             }
         }
-        wt__store_row(j->rgb + 3 * ((size_t)y * r->width + (size_t)x0), colours, 3 * (size_t)(x1 - x0));
+        wt__store_row(j->rgb + 3 * ((size_t)y * r->width + (size_t)x0), colours, 3 * (size_t)n);
     }
 #if defined(__SSE2__)
     _mm_sfence();   /* the streaming stores are seen before the tile counts as done */
