@@ -434,8 +434,9 @@
        RADINTERP_MALLOC, RADINTERP_FREE  replace malloc/free (define both or neither)
        RADINTERP_BVH_BINS        SAH bins of the built-in BVH (default 16)
        RADINTERP_BVH_SIMD        1 (default): SSE2 (x86-64) or NEON (AArch64) BVH kernels
+                                 and shading kernel (radinterp_shade, radinterp_shade_span)
                                  when the compiler offers them; 0: the portable scalar
-                                 kernels only (the same hits, bit for bit)
+                                 kernels only (the same hits and radiosities, bit for bit)
 
    FUNCTION REFERENCE
 
@@ -11845,6 +11846,63 @@ RADINTERP_API radinterp_result radinterp_eval_irradiance(const radinterp_mesh *m
 
 #define RADINTERP__SHADE_CHUNK 16384   /* pixels per job */
 
+/* A run of one triangle's pixels from its padded coefficients c (24 floats:
+   (A, 2B, 2C, D, 2E, F) x 4 lanes): the interpolant's polynomial,
+   channel by channel. Always compiled: the reference the SIMD kernel is
+   tested against, and the kernel of builds without one. */
+RADINTERP__MAYBE_UNUSED static void radinterp__shade_span_scalar(const float *c, const float *st, size_t count,
+                                                                  float *rgb)
+{
+    size_t i;
+    for (i = 0; i < count; i++) {
+        float s = st[2 * i], t = st[2 * i + 1];
+        int ch;
+        for (ch = 0; ch < 3; ch++) {
+            float v = s * (c[ch] * s + c[4 + ch] * t + c[8 + ch]) + t * (c[12 + ch] * t + c[16 + ch]) + c[20 + ch];
+            rgb[3 * i + ch] = v > 0.0f ? v : 0.0f;
+        }
+    }
+}
+
+#if RADINTERP__SIMD
+/* The same float operations with a pixel's three channels (and the zero
+   pad) as the lanes of one vector: 5 multiplies, 5 adds and a max per
+   pixel. Each pixel's 4-lane store spills into the next pixel's first
+   channel, which that pixel then writes; the last pixel goes through a
+   buffer, so nothing past rgb[3 count) is touched. */
+static void radinterp__shade_span_simd(const float *c, const float *st, size_t count, float *rgb)
+{
+    const radinterp__f4 a = radinterp__f4_load(c), b2 = radinterp__f4_load(c + 4), c2 = radinterp__f4_load(c + 8);
+    const radinterp__f4 d = radinterp__f4_load(c + 12), e2 = radinterp__f4_load(c + 16), f = radinterp__f4_load(c + 20);
+    const radinterp__f4 zero = radinterp__f4_set(0.0f);
+    float last[4];
+    size_t i;
+    for (i = 0; i < count; i++) {
+        radinterp__f4 s = radinterp__f4_set(st[2 * i]), t = radinterp__f4_set(st[2 * i + 1]);
+        radinterp__f4 u = radinterp__f4_add(radinterp__f4_add(radinterp__f4_mul(a, s), radinterp__f4_mul(b2, t)), c2);
+        radinterp__f4 w = radinterp__f4_add(radinterp__f4_mul(d, t), e2);
+        radinterp__f4 v = radinterp__f4_add(radinterp__f4_add(radinterp__f4_mul(s, u), radinterp__f4_mul(t, w)), f);
+        v = radinterp__f4_max(v, zero);   /* v > 0 ? v : 0, NaN to 0, as the scalar kernel */
+        if (i + 1 < count) {
+            radinterp__f4_store(rgb + 3 * i, v);
+        } else {
+            radinterp__f4_store(last, v);
+            memcpy(rgb + 3 * i, last, 3 * sizeof(float));
+        }
+    }
+}
+#endif
+
+/* The kernel this build shades runs with (the same bits either way). */
+static void radinterp__shade_span_kernel(const float *c, const float *st, size_t count, float *rgb)
+{
+#if RADINTERP__SIMD
+    radinterp__shade_span_simd(c, st, count, rgb);
+#else
+    radinterp__shade_span_scalar(c, st, count, rgb);
+#endif
+}
+
 typedef struct radinterp__shade_ctx {
     const radinterp_mesh *m;
     const uint32_t *ids;
@@ -11858,25 +11916,14 @@ typedef struct radinterp__shade_ctx {
 static void radinterp__shade_job(void *ctx_, uint32_t index)
 {
     const radinterp__shade_ctx *ctx = (const radinterp__shade_ctx *)ctx_;
-    const float *table = ctx->m->shade;
     uint32_t n = ctx->m->triangle_count;
-    size_t i = (size_t)index * RADINTERP__SHADE_CHUNK, end = i + RADINTERP__SHADE_CHUNK;
+    size_t i = (size_t)index * RADINTERP__SHADE_CHUNK, end = i + RADINTERP__SHADE_CHUNK, run;
     if (end > ctx->count) end = ctx->count;
-    for (; i < end; i++) {
+    for (; i < end; i += run) {   /* runs of one triangle: its coefficients loaded once */
         uint32_t id = ctx->ids[i];
-        const float *c;
-        float s, t, v[4], *out;
-        int ch;
+        for (run = 1; i + run < end && ctx->ids[i + run] == id; run++) {}
         if (id >= n) continue;
-        c = table + 24 * (size_t)id;
-        s = ctx->st[2 * i];
-        t = ctx->st[2 * i + 1];
-        for (ch = 0; ch < 4; ch++)
-            v[ch] = s * (c[ch] * s + c[4 + ch] * t + c[8 + ch]) + t * (c[12 + ch] * t + c[16 + ch]) + c[20 + ch];
-        out = ctx->rgb + 3 * i;
-        out[0] = v[0] > 0.0f ? v[0] : 0.0f;
-        out[1] = v[1] > 0.0f ? v[1] : 0.0f;
-        out[2] = v[2] > 0.0f ? v[2] : 0.0f;
+        radinterp__shade_span_kernel(ctx->m->shade + 24 * (size_t)id, ctx->st + 2 * i, run, ctx->rgb + 3 * i);
     }
 }
 
@@ -11933,52 +11980,6 @@ RADINTERP_API radinterp_result radinterp_shade_gouraud(const radinterp_mesh *m, 
     return radinterp__shade_run(m, triangle_ids, st, count, rgb_out, radinterp__gouraud_job);
 }
 
-/* A run of one triangle's pixels from its padded coefficients c (24 floats:
-   (A, 2B, 2C, D, 2E, F) x 4 lanes): radinterp__shade_job's polynomial in its
-   order of operations, channel by channel. Always compiled: the reference
-   the SIMD kernel is tested against, and the kernel of builds without one. */
-RADINTERP__MAYBE_UNUSED static void radinterp__shade_span_scalar(const float *c, const float *st, size_t count,
-                                                                  float *rgb)
-{
-    size_t i;
-    for (i = 0; i < count; i++) {
-        float s = st[2 * i], t = st[2 * i + 1];
-        int ch;
-        for (ch = 0; ch < 3; ch++) {
-            float v = s * (c[ch] * s + c[4 + ch] * t + c[8 + ch]) + t * (c[12 + ch] * t + c[16 + ch]) + c[20 + ch];
-            rgb[3 * i + ch] = v > 0.0f ? v : 0.0f;
-        }
-    }
-}
-
-#if RADINTERP__SIMD
-/* The same float operations with a pixel's three channels (and the zero
-   pad) as the lanes of one vector: 5 multiplies, 5 adds and a max per
-   pixel. Each pixel's 4-lane store spills into the next pixel's first
-   channel, which that pixel then writes; the last pixel goes through a
-   buffer, so nothing past rgb[3 count) is touched. */
-static void radinterp__shade_span_simd(const float *c, const float *st, size_t count, float *rgb)
-{
-    const radinterp__f4 a = radinterp__f4_load(c), b2 = radinterp__f4_load(c + 4), c2 = radinterp__f4_load(c + 8);
-    const radinterp__f4 d = radinterp__f4_load(c + 12), e2 = radinterp__f4_load(c + 16), f = radinterp__f4_load(c + 20);
-    const radinterp__f4 zero = radinterp__f4_set(0.0f);
-    float last[4];
-    size_t i;
-    for (i = 0; i < count; i++) {
-        radinterp__f4 s = radinterp__f4_set(st[2 * i]), t = radinterp__f4_set(st[2 * i + 1]);
-        radinterp__f4 u = radinterp__f4_add(radinterp__f4_add(radinterp__f4_mul(a, s), radinterp__f4_mul(b2, t)), c2);
-        radinterp__f4 w = radinterp__f4_add(radinterp__f4_mul(d, t), e2);
-        radinterp__f4 v = radinterp__f4_add(radinterp__f4_add(radinterp__f4_mul(s, u), radinterp__f4_mul(t, w)), f);
-        v = radinterp__f4_max(v, zero);   /* v > 0 ? v : 0, NaN to 0, as the scalar kernel */
-        if (i + 1 < count) {
-            radinterp__f4_store(rgb + 3 * i, v);
-        } else {
-            radinterp__f4_store(last, v);
-            memcpy(rgb + 3 * i, last, 3 * sizeof(float));
-        }
-    }
-}
-#endif
 
 RADINTERP_API radinterp_result radinterp_shade_span(const radinterp_mesh *m, uint32_t triangle, const float *st,
                                                     size_t count, float *rgb_out)
@@ -11986,11 +11987,7 @@ RADINTERP_API radinterp_result radinterp_shade_span(const radinterp_mesh *m, uin
     const float *c;
     if (!m || triangle >= m->triangle_count || (count && (!st || !rgb_out))) return RADINTERP_ERROR_INVALID_ARGUMENT;
     c = m->shade + 24 * (size_t)triangle;
-#if RADINTERP__SIMD
-    radinterp__shade_span_simd(c, st, count, rgb_out);
-#else
-    radinterp__shade_span_scalar(c, st, count, rgb_out);
-#endif
+    radinterp__shade_span_kernel(c, st, count, rgb_out);
     return RADINTERP_OK;
 }
 
