@@ -287,6 +287,11 @@
    the mesh are left as they are, so other objects can be drawn around it.
    radinterp_shade_gouraud blends the corner radiosities instead, for
    comparison (the thesis's "Gouraud shading with discontinuities").
+   radinterp_shade_span shades a run of pixels of one triangle (a
+   rasterizer's span, a run of a visibility buffer) on the calling thread,
+   with the triangle's coefficients loaded once and a pixel's channels in one
+   SIMD operation: the bits radinterp_shade gives, which shades its own runs
+   of equal ids the same way.
 
    IN A SHADER
 
@@ -567,6 +572,10 @@
          whose id is not a triangle of the mesh are left as they are.
          Contract: ids holds count ids, st 2 * count finite floats, rgb_out
          3 * count floats.
+     radinterp_shade_span(m, triangle, st, count, rgb_out)   Checks: m
+         non-NULL, triangle < triangle count, st and rgb_out non-NULL when
+         count > 0; rgb_out is left as it was when a check fails. Contract:
+         st holds 2 * count finite floats, rgb_out 3 * count floats.
      radinterp_mesh_set_parallel_for(m, fn, user)   NULL m: nothing. Not
          while radinterp_shade runs on the mesh.
      radinterp_mesh_save(m, write, user), radinterp_mesh_save_to_memory(m, a,
