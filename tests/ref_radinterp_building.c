@@ -31,6 +31,7 @@
 #include "radinterp.h"
 #include "examples/common/pool.h"
 #include "tests/reference/ref.h"
+#include "tests/radinterp_obj.h"
 #include "tests/test.h"
 
 #include <time.h>
@@ -131,7 +132,6 @@ static scene_case *load(scene_case *c)
     char err[256];
     radinterp_desc d;
     radinterp_info info;
-    uint32_t f, k;
     double t0;
     if (c->loaded) return c->ok ? c : NULL;
     c->loaded = 1;
@@ -141,26 +141,7 @@ static scene_case *load(scene_case *c)
     }
     c->ref = ref_scene_from_obj(&c->obj);
     if (!CHECK(c->ref != NULL)) return NULL;
-    c->patches = (uint32_t *)malloc(4 * sizeof(uint32_t) * c->obj.face_count);
-    c->mats = (radinterp_material *)calloc(c->obj.material_count, sizeof(radinterp_material));
-    if (!CHECK(c->patches && c->mats)) return NULL;
-    for (f = 0; f < c->obj.face_count; f++) {
-        uint32_t n = c->obj.face_start[f + 1] - c->obj.face_start[f];
-        for (k = 0; k < 4; k++) c->patches[4 * f + k] = k < n ? c->obj.face_vertices[c->obj.face_start[f] + k] : RADINTERP_NO_VERTEX;
-    }
-    for (f = 0; f < c->obj.material_count; f++)
-        for (k = 0; k < 3; k++) {
-            c->mats[f].reflectance[k] = c->obj.materials[f].kd[k];
-            c->mats[f].emission[k] = (float)PI * c->obj.materials[f].ke[k]; /* Ke is emitted radiance */
-        }
-    memset(&d, 0, sizeof d);
-    d.positions = c->obj.positions;
-    d.vertex_count = c->obj.vertex_count;
-    d.patches = c->patches;
-    d.patch_count = c->obj.face_count;
-    d.patch_materials = c->obj.face_material;
-    d.materials = c->mats;
-    d.material_count = c->obj.material_count;
+    if (!CHECK(radinterp_obj_desc(&c->obj, &d, &c->patches, &c->mats) == 0)) return NULL;
     d.parallel_for = ex_pool_parallel_for;
     d.parallel_user = pool;
     t0 = wall_seconds();

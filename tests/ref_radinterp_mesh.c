@@ -11,6 +11,7 @@
 #include "examples/common/pool.h"
 #include "examples/common/raster.h"
 #include "tests/reference/ref.h"
+#include "tests/radinterp_obj.h"
 #include "tests/test.h"
 
 #define PI 3.14159265358979323846
@@ -41,31 +42,12 @@ static int load_scene(loaded *l, const char *path, float eps, float min_leaf_are
     char err[256];
     radinterp_desc d;
     radinterp_mesh_desc md;
-    uint32_t f, k;
     double t0;
     if (obj_load(path, &l->obj, err, sizeof err) != 0) {
         CHECK_MSG(0, "%s", err);
         return 0;
     }
-    l->patches = (uint32_t *)malloc(4 * sizeof(uint32_t) * l->obj.face_count);
-    l->mats = (radinterp_material *)calloc(l->obj.material_count, sizeof(radinterp_material));
-    for (f = 0; f < l->obj.face_count; f++) {
-        uint32_t n = l->obj.face_start[f + 1] - l->obj.face_start[f];
-        for (k = 0; k < 4; k++) l->patches[4 * f + k] = k < n ? l->obj.face_vertices[l->obj.face_start[f] + k] : RADINTERP_NO_VERTEX;
-    }
-    for (f = 0; f < l->obj.material_count; f++)
-        for (k = 0; k < 3; k++) {
-            l->mats[f].reflectance[k] = l->obj.materials[f].kd[k];
-            l->mats[f].emission[k] = (float)PI * l->obj.materials[f].ke[k];
-        }
-    memset(&d, 0, sizeof d);
-    d.positions = l->obj.positions;
-    d.vertex_count = l->obj.vertex_count;
-    d.patches = l->patches;
-    d.patch_count = l->obj.face_count;
-    d.patch_materials = l->obj.face_material;
-    d.materials = l->mats;
-    d.material_count = l->obj.material_count;
+    if (!CHECK(radinterp_obj_desc(&l->obj, &d, &l->patches, &l->mats) == 0)) return 0;
     d.eps = eps;
     d.parallel_for = ex_pool_parallel_for;
     d.parallel_user = pool;
