@@ -1,4 +1,4 @@
-/* irrvol.h - v0.5.2 - irradiance volume for lighting moving objects - public domain or MIT, see end of file
+/* irrvol.h - v0.5.3 - irradiance volume for lighting moving objects - public domain or MIT, see end of file
 
    IRRVOL.H: a bilevel grid of directional irradiance samples that lights moving objects by interpolation.
 
@@ -231,10 +231,19 @@
    read what these weights need in few cache lines: each sub-cell keeps a
    record of its eight corners' ids, origins and reaches (192 bytes; one
    with hanging corners also the list of samples that stand in for them,
-   12 bytes a term, made at build and load), and
+   16 bytes a term, made at build and load), and
    a test point within its sample's reach (0.999 over the largest |g| of
    the map: no point there can lie beyond a predicted surface) skips the
-   map, with the same result to the bit.
+   map, with the same result to the bit. A sub-cell with hanging corners
+   reads up to 32 terms (a corner's parents in its place), but they name
+   eight distinct samples (the parents are corners of the refined cell
+   around it), so its record holds those eight, origins and reaches, and a
+   leak-safe query adds each sample's term weights first and weighs eight
+   samples, as in any other sub-cell, instead of every term: the same
+   weights up to float rounding (largest difference 2.4e-7 of the result
+   on 1M random office queries), 1.09x the leak-safe rate on the office.
+   Plain (TRILINEAR) queries still add every term, so NEAREST's bits do
+   not change.
    IRRVOL_WEIGHTING_TRILINEAR is the thesis's plain trilinear interpolation.
    Two closed rooms behind a 2 cm wall, one lit, one dark: the leak-safe
    query gives 0.00 % of the lit side 1 cm and 10 cm into the dark room
@@ -480,7 +489,7 @@
 
 #define IRRVOL_VERSION_MAJOR 0
 #define IRRVOL_VERSION_MINOR 5
-#define IRRVOL_VERSION_PATCH 2
+#define IRRVOL_VERSION_PATCH 3
 #define IRRVOL_FILE_FORMAT_VERSION 3
 
 /* Fixed limits of the desc's fields (see LIMITS). */
@@ -2133,20 +2142,25 @@ typedef struct irrvol__cell {
    section 13) by coordinate, four corners to a register. Three cache lines
    where the id table, eight probes and the cell took up to a dozen. */
 typedef struct irrvol__corners {
-    float x[8], y[8], z[8], reach2[8];   /* the corners' probes (a hanging corner's: unused) */
-    uint32_t id[8];                      /* the corner samples, x fastest (irrvol__table_corners) */
+    float x[8], y[8], z[8], reach2[8];   /* the probes of the samples in id */
+    uint32_t id[8];                      /* the corner samples, x fastest (irrvol__table_corners); merged: the
+                                            distinct samples of the terms */
     uint32_t hanging;                    /* non-zero: a corner is hanging, its parents stand in: the number of
                                             terms of the sub-cell, vol->terms[first...], a multiple of 4 */
     uint32_t first;
-    uint32_t pad[6];                     /* 192 bytes: three lines */
+    uint32_t merged;                     /* non-zero: hanging, and its terms name at most eight samples, in id
+                                            (each term's slot): leak-safe queries weigh those (irrvol__merge_hanging) */
+    uint32_t pad[5];                     /* 192 bytes: three lines */
 } irrvol__corners;
 
 /* A term of a sub-cell with hanging corners (irrvol__expand_hanging): a
    sample, the corner it stands in for and its weight there (1 for the
-   corner itself, a parent's weight for a hanging corner's parent). */
+   corner itself, a parent's weight for a hanging corner's parent), and
+   the sample's slot among the record's distinct samples (merged records). */
 typedef struct irrvol__term {
     uint32_t id, corner;
     float weight;
+    uint32_t slot;
 } irrvol__term;
 
 enum {   /* why a first-level cell is refined (vol->refined) */
@@ -2605,6 +2619,39 @@ static uint32_t irrvol__record_terms(const irrvol *v, const irrvol__corners *r, 
     return m;
 }
 
+/* A sub-cell's terms name few samples: each hanging corner's parents are
+   first-level corners of the refined cell around it (section 9), so the
+   parents and the corners that stand for themselves are eight samples or
+   fewer (on every grid this header builds). The record then lists them in
+   id, with their probes, and each term names its sample's slot there: a
+   leak-safe query weighs eight samples, like a sub-cell without hanging
+   corners, instead of every term (up to 32). A record whose terms name
+   more samples keeps merged 0 and the queries weigh every term. */
+static void irrvol__merge_terms(const irrvol *v, irrvol__corners *r)
+{
+    irrvol__term *t = v->terms + r->first;
+    uint32_t ids[8], m = 0, i, j;
+    for (i = 0; i < r->hanging; i++) {
+        for (j = 0; j < m && ids[j] != t[i].id; j++) continue;
+        if (j == m) {
+            if (m == 8) return;   /* more than eight samples: r->merged stays 0 */
+            ids[m++] = t[i].id;
+        }
+    }
+    for (i = 0; i < r->hanging; i++)
+        for (j = 0; j < m; j++)
+            if (ids[j] == t[i].id) t[i].slot = j;
+    for (j = 0; j < 8; j++) {   /* slots past the last sample repeat the first; their weight stays 0 */
+        const float *p = v->probes + 4 * (size_t)ids[j < m ? j : 0];
+        r->id[j] = ids[j < m ? j : 0];
+        r->x[j] = p[0];
+        r->y[j] = p[1];
+        r->z[j] = p[2];
+        r->reach2[j] = p[3];
+    }
+    r->merged = 1;
+}
+
 /* Every sub-cell with hanging corners gets its terms, in v->terms. */
 static irrvol_result irrvol__make_terms(irrvol *v, uint32_t records)
 {
@@ -2622,6 +2669,7 @@ static irrvol_result irrvol__make_terms(irrvol *v, uint32_t records)
         if (!r->hanging) continue;
         r->first = (uint32_t)total;
         r->hanging = irrvol__record_terms(v, r, v->terms + total);
+        irrvol__merge_terms(v, r);
         total += r->hanging;
     }
     return IRRVOL_OK;
@@ -4789,6 +4837,21 @@ IRRVOL__HOT void irrvol__expand_hanging(const irrvol *v, const irrvol__corners *
     q->count = rec->hanging;
 }
 
+/* A merged record's terms (irrvol__merge_terms) summed per sample: each of
+   its eight samples (q->id, from the record) takes the sum of its terms'
+   weights, the corner's trilinear weight times the term's, in term order.
+   The same weights as the terms' (a sample's visibility is the same for
+   each of its terms), up to float rounding. */
+IRRVOL__HOT void irrvol__merge_hanging(const irrvol *v, const irrvol__corners *rec, irrvol__prepared *q)
+{
+    const irrvol__term *t = v->terms + rec->first;
+    float w[8], sum[8] = {0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
+    uint32_t i;
+    memcpy(w, q->w, sizeof w);
+    for (i = 0; i < rec->hanging; i++) sum[t[i].slot] += w[t[i].corner] * t[i].weight;
+    memcpy(q->w, sum, sizeof sum);
+}
+
 /* Leak-safe weights: each term's trilinear weight times its sample's
    visibility for the test point pos + bias * n, renormalised. When no
    sample is visible (every corner invalid) or an input is NaN, the plain
@@ -4805,7 +4868,7 @@ IRRVOL__HOT void irrvol__visibility_terms(const irrvol *v, const irrvol__corners
         x[j] = pos[j] + v->bias * n[j];
     }
     if (!irrvol__finite3(x) || !irrvol__finite3(n)) return;   /* NaN or infinite: the plain weights stand */
-    if (!rec->hanging) irrvol__corner_weights(v, rec, x, n, vis);   /* the eight corners, probes from the record */
+    if (!rec->hanging || rec->merged) irrvol__corner_weights(v, rec, x, n, vis);   /* eight samples, probes from the record */
     else irrvol__visibility_weights(v, q->id, q->count, x, n, vis);
     for (i = 0; i < q->count; i++) {
         w[i] = q->w[i] * vis[i];
@@ -4825,9 +4888,14 @@ IRRVOL__HOT void irrvol__prepare_terms(const irrvol *v, const irrvol__corners *r
 {
     q->count = 8;
     q->scale = 1.0f;
-    if (rec->hanging) irrvol__expand_hanging(v, rec, q);
     if (weighting == IRRVOL_WEIGHTING_DEFAULT) weighting = v->weighting;
-    if (weighting == IRRVOL_WEIGHTING_VISIBILITY) irrvol__visibility_terms(v, rec, pos, normal, q);
+    if (weighting != IRRVOL_WEIGHTING_VISIBILITY) {
+        if (rec->hanging) irrvol__expand_hanging(v, rec, q);
+        return;
+    }
+    if (rec->merged) irrvol__merge_hanging(v, rec, q);
+    else if (rec->hanging) irrvol__expand_hanging(v, rec, q);
+    irrvol__visibility_terms(v, rec, pos, normal, q);
 }
 
 /* The terms of a query at pos. */
