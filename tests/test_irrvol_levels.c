@@ -550,7 +550,7 @@ static void test_simd_visibility_is_scalar(void)
     irrvol_material m[2];
     irrvol_desc d;
     irrvol *v;
-    uint32_t i, differ = 0, visible = 0, near = 0, records = 0, merged = 0;
+    uint32_t i, differ = 0, visible = 0, near = 0, records = 0, merged = 0, clear = 0;
     two_rooms(&s, m);
     sc_scene_desc(&d, &s, m, 2);
     d.resolution = 5;
@@ -580,24 +580,40 @@ static void test_simd_visibility_is_scalar(void)
             const irrvol__cell *cell = &v->cell[(uint32_t)(frand() * (float)v->cell_count) % v->cell_count];
             uint32_t f = cell->side - 1, sub = (uint32_t)(frand() * (float)(f * f * f)) % (f * f * f);
             const irrvol__corners *r = v->corners + cell->corners + sub;
-            float eight[8];
+            float eight[8], in[3];
+            uint32_t corner[8];
+            int d;
             if (r->hanging && !r->merged) continue;   /* merged: its eight distinct samples, probes in the record */
             records++;
             merged += r->merged != 0;
-            irrvol__corner_weights(v, r, x, n, eight);
+            irrvol__corner_weights(v, r, 0u, x, n, eight);
             for (k = 0; k < 8; k++) {
                 float one = irrvol__visibility_weight(v, r->id[k], x, n);
                 differ += memcmp(&one, &eight[k], sizeof one) != 0;
             }
+            /* a test point in the sub-cell, which may skip the maps of the samples its clear mask names */
+            irrvol__table_corners(v, cell, sub % f, sub / f % f, sub / (f * f), corner);
+            for (d = 0; d < 3; d++) {
+                float lo = v->positions[3 * (size_t)corner[0] + d], hi = v->positions[3 * (size_t)corner[7] + d];
+                in[d] = lo + frand() * (hi - lo) + v->bias * n[d];
+            }
+            irrvol__corner_weights(v, r, r->clear, in, n, eight);
+            for (k = 0; k < 8; k++) {
+                float one = irrvol__visibility_weight(v, r->id[k], in, n);
+                differ += memcmp(&one, &eight[k], sizeof one) != 0;
+                clear += r->clear >> k & 1;
+            }
         }
     }
     test_note("SSE2 visibility weights vs the scalar code: %u of %u differ (%u of the 80,000 random ones above 0.5, "
-              "%u within their sample's reach; %u records with hanging corners)", differ, 80000 + 8 * records, visible, near, merged);
+              "%u within their sample's reach; %u records with hanging corners; %u weights in their sub-cell, %u "
+              "of them with the map skipped)", differ, 80000 + 16 * records, visible, near, merged, 8 * records, clear);
     CHECK_EQ_INT(differ, 0);
     CHECK(visible > 1000 && visible < 79000);   /* both visible and hidden samples were compared */
     CHECK(near > 200 && near < 79000);          /* and both sides of the reach (806 measured) */
     CHECK(records > 1000);
     CHECK(merged > 100);   /* sub-cells with hanging corners among them (their eight samples) */
+    CHECK(clear > 1000 && clear < 8 * records);   /* maps skipped and read in sub-cells */
     irrvol_destroy(v);
 #else
     test_note("no SSE2 here: the scalar code is the only one");
