@@ -231,7 +231,7 @@
    read what these weights need in few cache lines: each sub-cell keeps a
    record of its eight corners' ids, origins and reaches (192 bytes; one
    with hanging corners also the list of samples that stand in for them,
-   16 bytes a term, made at build and load), and
+   12 bytes a term, made at build and load), and
    a test point within its sample's reach (0.999 over the largest |g| of
    the map: no point there can lie beyond a predicted surface) skips the
    map, with the same result to the bit. So does a sample whose map puts
@@ -2166,9 +2166,9 @@ typedef struct irrvol__corners {
    corner itself, a parent's weight for a hanging corner's parent), and
    the sample's slot among the record's distinct samples (merged records). */
 typedef struct irrvol__term {
-    uint32_t id, corner;
+    uint32_t id;
+    uint16_t corner, slot;   /* both 0..7 */
     float weight;
-    uint32_t slot;
 } irrvol__term;
 
 enum {   /* why a first-level cell is refined (vol->refined) */
@@ -2611,14 +2611,14 @@ static uint32_t irrvol__record_terms(const irrvol *v, const irrvol__corners *r, 
     uint32_t k, j, m = 0;
     for (k = 0; k < 8; k++) {
         if (r->id[k] < v->hanging_begin) {
-            if (out) { out[m].id = r->id[k]; out[m].corner = k; out[m].weight = 1.0f; }
+            if (out) { out[m].id = r->id[k]; out[m].corner = (uint16_t)k; out[m].weight = 1.0f; }
             m++;
             continue;
         }
         for (j = 0; j < 4; j++) {
             size_t h = 4 * (size_t)(r->id[k] - v->hanging_begin) + j;
             if (!(v->parent_weights[h] > 0.0f)) continue;
-            if (out) { out[m].id = v->parents[h]; out[m].corner = k; out[m].weight = v->parent_weights[h]; }
+            if (out) { out[m].id = v->parents[h]; out[m].corner = (uint16_t)k; out[m].weight = v->parent_weights[h]; }
             m++;
         }
     }
@@ -2648,7 +2648,7 @@ static void irrvol__merge_terms(const irrvol *v, irrvol__corners *r)
     }
     for (i = 0; i < r->hanging; i++)
         for (j = 0; j < m; j++)
-            if (ids[j] == t[i].id) t[i].slot = j;
+            if (ids[j] == t[i].id) t[i].slot = (uint16_t)j;
     for (j = 0; j < 8; j++) {   /* slots past the last sample repeat the first; their weight stays 0 */
         const float *p = v->probes + 4 * (size_t)ids[j < m ? j : 0];
         r->id[j] = ids[j < m ? j : 0];
