@@ -1,4 +1,4 @@
-/* rendercache.h - v0.4.4 - render cache and range-image walkthroughs - public domain or MIT, see end of file
+/* rendercache.h - v0.4.5 - render cache and range-image walkthroughs - public domain or MIT, see end of file
 
    RENDERCACHE.H: an image-space point cache that reprojects and resamples, and range-image walkthroughs of animated scenes.
 
@@ -403,7 +403,7 @@
 
 #define RENDERCACHE_VERSION_MAJOR 0
 #define RENDERCACHE_VERSION_MINOR 4
-#define RENDERCACHE_VERSION_PATCH 4
+#define RENDERCACHE_VERSION_PATCH 5
 
 #ifndef RENDERCACHE_API
 #  ifdef RENDERCACHE_STATIC
@@ -5192,21 +5192,20 @@ static RENDERCACHE__INLINE void rendercache__warp_quad(const rendercache__warp_s
                 edges = 1;
             }
             eac = rendercache__edge_at(&ac, px, py);
-            if ((flags & 1u) && -s1 * eac >= 0.0f) {   /* T1 = a b c: edges b c, c a, a b */
-                w0 = s1 * rendercache__edge_at(&bc, px, py);
-                w2 = s1 * rendercache__edge_at(&ab, px, py);
-                w1 = -s1 * eac;
-                if (w0 >= 0.0f && w2 >= 0.0f && w0 + w1 + w2 > 0.0f) {
-                    rendercache__warp_shade(ws, zb, pixel, w0, w1, w2, a, b, c, pa, pb, pc, e);
-                    continue;
-                }
-            }
-            if ((flags & 2u) && s2 * eac >= 0.0f) {    /* T2 = a c d: edges c d, d a, a c */
-                w0 = s2 * rendercache__edge_at(&cd, px, py);
-                w1 = s2 * rendercache__edge_at(&da, px, py);
-                w2 = s2 * eac;
-                if (w0 >= 0.0f && w1 >= 0.0f && w0 + w1 + w2 > 0.0f)
-                    rendercache__warp_shade(ws, zb, pixel, w0, w1, w2, a, c, d, pa, pc, pd, e);
+            {   /* both triangles tested without branches (which one holds a pixel is a coin toss for a
+                   branch predictor), T1 = a b c (edges b c, c a, a b) before T2 = a c d (c d, d a, a c) */
+                float u0 = s1 * rendercache__edge_at(&bc, px, py), u1 = -s1 * eac;
+                float u2 = s1 * rendercache__edge_at(&ab, px, py);
+                float v0 = s2 * rendercache__edge_at(&cd, px, py), v1 = s2 * rendercache__edge_at(&da, px, py);
+                float v2 = s2 * eac;
+                int t1 = (int)(flags & 1u) & (u1 >= 0.0f) & (u0 >= 0.0f) & (u2 >= 0.0f) & (u0 + u1 + u2 > 0.0f);
+                int t2 = (int)(flags >> 1 & 1u) & (v2 >= 0.0f) & (v0 >= 0.0f) & (v1 >= 0.0f) & (v0 + v1 + v2 > 0.0f);
+                if (!(t1 | t2)) continue;
+                w0 = t1 ? u0 : v0;
+                w1 = t1 ? u1 : v1;
+                w2 = t1 ? u2 : v2;
+                rendercache__warp_shade(ws, zb, pixel, w0, w1, w2, a, t1 ? b : c, t1 ? c : d, pa, t1 ? pb : pc,
+                                        t1 ? pc : pd, e);
             }
         }
     }
