@@ -174,15 +174,20 @@
    BVH or desc.trace), with horizon clipping of both elements (4.2); Jacobi
    gather + push-pull iterations (4.3); after each, transport refinement
    (4.4.1): a link whose B_src times the spread of the point factors over
-   its receiver exceeds its tolerance (eps, or eps_relative of the
-   receiver's irradiance where that is more) is split at its larger
-   element, and a link whose source's children differ by more than the
-   tolerance / F is split at the source. The spread is taken at fixed
-   points: the receiver's corners pulled a fifth toward its centre, the
-   centre, and the receiver point nearest to the source's centre, where
-   the factor peaks when the source is small and close (a block standing
-   on a large floor: without that point such a link could stay unrefined
-   at a third of its form factor). Parts of a patch enclosed by geometry resting on
+   its receiver exceeds its tolerance (eps, or eps_relative of the least
+   irradiance over the receiver's lit parts where that is more) is split at
+   its larger element, and a link whose source's children differ by more
+   than the tolerance / F is split at the source. The least irradiance, not
+   the mean, because a link's error lands on every part of its receiver: a
+   wall that runs through two rooms, one lit and one dark, would otherwise
+   carry errors of 5% of the lit room's light into the dark one. The spread
+   is taken at fixed points: the receiver's corners pulled a fifth toward
+   its centre, the centre, and the receiver point nearest to the source's
+   centre, where the factor peaks when the source is small and close (a
+   block standing on a large floor: without that point such a link could
+   stay unrefined at a third of its form factor); a receiver cut by the
+   source's plane counts zero beyond it, so the link is split until no
+   child that cannot see the source takes its light. Parts of a patch enclosed by geometry resting on
    it (the floor under a box) are found by rays and left out of its
    radiosity (radinterp_leaf.open).
 
@@ -329,17 +334,18 @@
                           refined while B_src * (max - min of the point form
                           factors over its receiver) exceeds its tolerance,
                           the larger of eps and eps_relative times the
-                          receiver's irradiance.  default 1% of the mean
+                          receiver's least irradiance.  default 1% of the mean
                           emitted radiosity (emitted power / total area,
                           the sky counting pi times its mean radiance): a
                           floor under the relative bound, so that unlit
                           corners still get a bound
        eps_relative       relative transport error: a link's tolerance is at
-                          least this fraction of its receiver's irradiance,
-                          so shadows are resolved in dim rooms as in bright
-                          ones.  default 0.05; 0 (relative bound off) when
-                          eps is given and eps_relative is not, so an
-                          explicit eps means what it meant before
+                          least this fraction of the least irradiance over
+                          its receiver's lit parts, so shadows are resolved
+                          in dim rooms as in bright ones.  default 0.05;
+                          0 (relative bound off) when eps is given and
+                          eps_relative is not, so an explicit eps means
+                          what it meant before
        min_area           Gur::aeps, no node is split into children smaller
                           than this (m^2).          default (diagonal / 200)^2
        rel_error_cutoff   Basis::relErrorCutoff, convergence: every leaf's
@@ -3563,8 +3569,9 @@ typedef struct radinterp__node {
     float lo[3], hi[3];
     float b[3];               /* radiosity B (W/m^2) of the node's open part, constant over it */
     float h[3];               /* irradiance gathered by this node's own links (mean over the whole node) */
-    float level;              /* irradiance (largest channel) over its open part, all links: the scale its
-                                 links' errors are measured against (relative refinement) */
+    float level;              /* irradiance (largest channel) over its open part, all links (mean) */
+    float dim;                /* least irradiance (largest channel) of its lit open leaves, 0 if none: the
+                                 scale its links' errors are measured against (relative refinement) */
     float open;               /* fraction of the node not enclosed by touching geometry (such as the
                                  floor under a box standing on it); enclosed parts receive and show nothing */
     float sky[3];             /* irradiance from the sky (mean over the whole node), measured when made */
@@ -4660,7 +4667,13 @@ static void radinterp__link_compute(radinterp_solution *s, radinterp__pending *p
         }
     }
     pl->ff = (float)(ratio * sum / n);
-    pl->dff = (float)(ratio * (hi - lo));
+    /* A receiver cut by the source's plane gets nothing on the far side of
+       that plane: its factor there is zero, so the spread runs from zero to
+       the largest value. Without this a receiver that runs through a wall
+       (a wall face across two rooms, a floor under a partition) keeps one
+       link for a source on one side and pushes its mean to the part on the
+       other side, where the source cannot be seen. */
+    pl->dff = (float)(clipped ? hi : hi - lo);
     if (gsum > 0.0) {
         pl->gff = (float)(ratio * gsum / n);
         for (k = 0; k < 3; k++) pl->glass[k] = (float)(tsum[k] / gsum);
@@ -4943,9 +4956,9 @@ static int radinterp__shaft_query(radinterp_solution *s, const radinterp__node *
     return radinterp__bvh_walk(s, radinterp__shaft_box, radinterp__shaft_visit, &ctx);
 }
 
-/* The transport error a link to a receiver at irradiance `level` may make:
-   eps, or eps_relative of the level where that is more (relative
-   refinement, the default). */
+/* The transport error a link to a receiver at irradiance `level` (the
+   least over its lit parts) may make: eps, or eps_relative of the level
+   where that is more (relative refinement, the default). */
 static double radinterp__tolerance(const radinterp_solution *s, double level)
 {
     double rel = s->eps_relative * level;
@@ -5775,7 +5788,7 @@ static int radinterp__refine(radinterp_solution *s, const radinterp__run *run, r
         const float *b = s->nodes[l.source].b;
         double bmax = b[0] > b[1] ? (b[0] > b[2] ? b[0] : b[2]) : (b[1] > b[2] ? b[1] : b[2]);
         int which = -1;
-        double tol = radinterp__tolerance(s, s->nodes[l.receiver].level);
+        double tol = radinterp__tolerance(s, s->nodes[l.receiver].dim);
         if (!(l.flags & RADINTERP__LINK_FINAL) && bmax * l.dff > tol) {
             const radinterp__node *r = &s->nodes[l.receiver], *src = &s->nodes[l.source];
             int rs = radinterp__can_split(s, r), ss = radinterp__can_split(s, src);
@@ -5907,7 +5920,7 @@ static void radinterp__push_pull(radinterp_solution *s, uint32_t index, const do
 {
     radinterp__node *nd = &s->nodes[index];
     const radinterp__patch *pt = &s->patches[nd->patch];
-    double h[3], b[3], open = nd->open, level;
+    double h[3], b[3], open = nd->open, level, dim;
     int k;
     for (k = 0; k < 3; k++) h[k] = down[k] + (open > 0.0 ? nd->h[k] / open : 0.0);
     if (nd->child == RADINTERP__NONE) {
@@ -5920,19 +5933,22 @@ static void radinterp__push_pull(radinterp_solution *s, uint32_t index, const do
             if (rel > *change) *change = rel;
         }
         level = h[0] > h[1] ? (h[0] > h[2] ? h[0] : h[2]) : (h[1] > h[2] ? h[1] : h[2]);
-        if (open > 0.0 && level > 0.0 && (*hmin == 0.0 || level < *hmin)) *hmin = level;
+        dim = open > 0.0 && level > 0.0 ? level : 0.0;
+        if (dim > 0.0 && (*hmin == 0.0 || dim < *hmin)) *hmin = dim;
     } else {
         double area = 0.0, cb[3];
         uint32_t c;
         b[0] = b[1] = b[2] = 0.0;
-        level = 0.0;
+        level = dim = 0.0;
         for (c = 0; c < 4; c++) {
             uint32_t ch = s->nodes[index].child + c;
-            double a = (double)s->nodes[ch].area * s->nodes[ch].open;
+            double a = (double)s->nodes[ch].area * s->nodes[ch].open, cd;
             radinterp__push_pull(s, ch, h, floor, change, cb, hmin);
             for (k = 0; k < 3; k++) b[k] += a * cb[k];
             level += a * s->nodes[ch].level;
             area += a;
+            cd = s->nodes[ch].dim;
+            if (cd > 0.0 && (dim == 0.0 || cd < dim)) dim = cd;
         }
         nd = &s->nodes[index];
         for (k = 0; k < 3; k++) b[k] = area > 0.0 ? b[k] / area : pt->e[k];
@@ -5940,6 +5956,7 @@ static void radinterp__push_pull(radinterp_solution *s, uint32_t index, const do
     }
     for (k = 0; k < 3; k++) { nd->b[k] = (float)b[k]; b_out[k] = b[k]; }
     nd->level = (float)level;
+    nd->dim = (float)dim;
 }
 
 static void radinterp__push_pull_job(void *ctx_, uint32_t index)
@@ -8592,7 +8609,8 @@ typedef struct radinterp__plink {
     const radinterp__link *lk;
     const uint32_t *blk;      /* its blockers near the point: the leaf list's, or the link's own */
     uint32_t nblk;
-    double full, reach;       /* unoccluded factor at the point, and that times B_src (largest channel) */
+    double full, reach;       /* unoccluded factor at the point, and that times B_src (largest channel); once
+                                 ranked, what this source and those after it could carry */
 } radinterp__plink;
 
 static int radinterp__cmp_reach(const void *a_, const void *b_)
@@ -8647,13 +8665,20 @@ static void radinterp__sum_links(radinterp__query *q, radinterp__plink *pl, uint
             for (k = 0; k < 3; k++) b[k] = src->b[k];
             radinterp__query_source(q, pl[i].lk->source, Sc, &pl[i].full);
             pl[i].reach = pl[i].full * radinterp__max3(b);
-            rest += pl[i].reach;
         }
         qsort(pl, n, sizeof *pl, radinterp__cmp_reach);
+        /* each source's reach becomes what it and those after it could
+           carry, summed from the smallest: a running difference would leave
+           a rounding residue that can fall to zero or below before the last
+           sources, and FLT_MIN would then not make them all exact */
+        for (i = n; i-- > 0;) {
+            rest += pl[i].reach;
+            pl[i].reach = rest;
+        }
     }
     for (i = 0; i < n; i++) {
         const radinterp__node *src = &s->nodes[pl[i].lk->source];
-        if (ranked && rest <= s->point_rest * radinterp__max3(h)) {
+        if (ranked && pl[i].reach <= s->point_rest * radinterp__max3(h)) {
             double f = pl[i].nblk ? pl[i].full * pl[i].lk->vis : pl[i].full;
             for (k = 0; k < 3; k++) h[k] += f * src->b[k];
         } else {
@@ -8661,7 +8686,6 @@ static void radinterp__sum_links(radinterp__query *q, radinterp__plink *pl, uint
             q->nblk = pl[i].nblk;
             radinterp__link_point_glass(q, pl[i].lk, h);
         }
-        if (ranked) rest -= pl[i].reach;
     }
 }
 
