@@ -7057,9 +7057,10 @@ static int radinterp__union_add(radinterp__query *q, int *count, double tol, dou
    patches lying in that plane cover this region, every segment meets one
    of them, so nothing in A sees anything in B (the region's bounding
    rectangle in the plane is tested). Where A touches the plane
-   (its own wall face lies in it) a segment may start on a covering patch:
-   it is blocked, or carries no light, only when that patch faces A, so
-   then only patches facing A count (and likewise for B). What the patches
+   (its own wall face lies in it, or A lies flat in it) a segment may start
+   on a covering patch: it carries no light only when it leaves that patch
+   from behind, so then only patches turned away from B count (and likewise
+   for B); when both touch it, nothing is proved. What the patches
    leave uncovered may still lie inside solid matter (where a wall meets
    another wall the plane of either passes through the other's slab, and a
    floor's plane passes under the walls standing on it): a segment crossing
@@ -7180,14 +7181,23 @@ static int radinterp__plane_covers(const radinterp__hide_ctx *c, uint32_t first,
     radinterp__piece work[RADINTERP__PIECES], cover;
     int i, j, k, end = 1, whole = 1, facing = 0;
     uint32_t g;
-    {   /* a box touching the plane admits only patches facing it */
+    {   /* a box touching the plane admits only patches turned away from the
+           other box: a segment that starts on such a patch leaves it from
+           behind and carries no light, while one that starts on the front of
+           a patch turned toward the other box (a box lying flat in the plane,
+           a balustrade at a stair opening) is not blocked by it. When both
+           boxes touch the plane, segments may run in it: no proof. */
         double amn, amx, bmn, bmx;
+        int side_a, side_b, touch_a, touch_b;
         radinterp__box_range(p0->n, p0->d, c->lo[0], c->hi[0], &amn, &amx);
         radinterp__box_range(p0->n, p0->d, c->lo[1], c->hi[1], &bmn, &bmx);
-        if (amx <= c->tol && amx >= -c->tol) facing = -1;       /* A touches from below: normals must point down */
-        else if (amn >= -c->tol && amn <= c->tol) facing = 1;   /* A touches from above */
-        else if (bmx <= c->tol && bmx >= -c->tol) facing = -1;
-        else if (bmn >= -c->tol && bmn <= c->tol) facing = 1;
+        side_a = amx > c->tol ? 1 : amn < -c->tol ? -1 : 0;   /* 0: lies in the plane */
+        side_b = bmx > c->tol ? 1 : bmn < -c->tol ? -1 : 0;
+        touch_a = side_a == 0 || (side_a > 0 ? amn <= c->tol : amx >= -c->tol);
+        touch_b = side_b == 0 || (side_b > 0 ? bmn <= c->tol : bmx >= -c->tol);
+        if (touch_a && touch_b) return 0;
+        if (touch_a) facing = -side_b;
+        else if (touch_b) facing = -side_a;
     }
     e1[0] = fabs(p0->n[0]) < 0.6 ? 1.0 : 0.0;
     e1[1] = e1[0] == 0.0 ? 1.0 : 0.0;
