@@ -4666,6 +4666,12 @@ static void radinterp__link_compute(radinterp_solution *s, radinterp__pending *p
             hi = f > hi ? f : hi;
         }
     }
+    /* The fixed points can all miss what the random ones saw (a source seen
+       only through a stair opening from part of a large receiver): the
+       mean of the point factors lies between their least and largest, so
+       the spread reaches it too. */
+    if (sum / n > hi) hi = sum / n;
+    if (sum / n < lo) lo = sum / n;
     pl->ff = (float)(ratio * sum / n);
     /* A receiver cut by the source's plane gets nothing on the far side of
        that plane: its factor there is zero, so the spread runs from zero to
