@@ -7662,56 +7662,89 @@ static int radinterp__take_children(const radinterp__query *q, uint32_t node, in
            radinterp__source_spread(s, node) * full > q->child_tol;
 }
 
-/* B_src * F for the four children of node (its polygon as the query sees
-   it: Sc, nc, full) sharing one union of shadows over the node, as long as
-   none of them is to be split further: the children lie in the node, so
-   the shadows on a child are the node's cut to it. Returns 0 when they
-   cannot share one (then each is taken on its own). The triangulation
-   method takes each child on its own, so the tests comparing the two
-   methods at random points of the office and the Cornell box, where most
-   points take a source's children, check this too. */
-static int radinterp__children_add(radinterp__query *q, const radinterp__link *lk, uint32_t node,
-                                   const double (*Sc)[3], int nc, double full, double *h)
+/* One union of shadows over a source node, shared by the nodes below it
+   (the parts of the source a query takes in its place, see below): they lie
+   inside the node, so the shadows on each of them are the node's pieces cut
+   to it (radinterp__part_visible). At building scale a point takes the
+   children, grandchildren and deeper of most bright sources; a union built
+   again for each of them tests every blocker of the leaf's list again and
+   was the larger part of a mesh build's time. The triangulation method
+   takes each node on its own, so the tests comparing the two methods at
+   random points of the office and the Cornell box, where most points take a
+   source's children, check this too. */
+typedef struct radinterp__shared {
+    radinterp__bp bp;   /* the node the union is over */
+    int hidden;         /* the shadows hide it whole */
+    int count;          /* pieces q->piece[0 .. count) */
+} radinterp__shared;
+
+/* Visible factor of a node below sh's (Sc, nc, full as
+   radinterp__query_source gives them) from the shared pieces; when a cut
+   piece outgrows its array, by a backprojection of its own, after which the
+   shared union is built again (the same pieces: it is deterministic). */
+static double radinterp__shared_ff(radinterp__query *q, radinterp__shared *sh, const radinterp__link *lk,
+                                   uint32_t node, const double (*Sc)[3], int nc, double full)
+{
+    double f;
+    if (nc < 3 || sh->hidden) return 0.0;
+    if (sh->count == 0) return full;
+    f = radinterp__part_visible(q, &sh->bp, Sc, nc, full, sh->count);
+    if (f >= 0.0) return f;
+    f = radinterp__node_point_ff(q, lk, node, Sc, nc, full);
+    if (radinterp__bp_union(q, &sh->bp, &sh->count) < 0) q->failed = 1;   /* it succeeded before: cannot happen */
+    return f;
+}
+
+/* B_src * F for node (Sc, nc, full) and the nodes below it a query takes in
+   its place (see radinterp__link_point_add), their factors from sh. */
+static void radinterp__shared_add(radinterp__query *q, radinterp__shared *sh, const radinterp__link *lk, uint32_t node,
+                                  const double (*Sc)[3], int nc, double full, double *h)
+{
+    const radinterp__node *nd = &q->s->nodes[node];
+    double f;
+    if (radinterp__take_children(q, node, q->depth_left, full)) {
+        double Scc[RADINTERP__POLY_MAX][3], fullc;
+        uint32_t c;
+        q->depth_left--;
+        for (c = 0; c < 4; c++) {
+            int ncc = radinterp__query_source(q, nd->child + c, Scc, &fullc);
+            radinterp__shared_add(q, sh, lk, nd->child + c, (const double (*)[3])Scc, ncc, fullc, h);
+        }
+        q->depth_left++;
+        return;
+    }
+    if (nd->b[0] == 0.0f && nd->b[1] == 0.0f && nd->b[2] == 0.0f) return;
+    f = radinterp__shared_ff(q, sh, lk, node, Sc, nc, full);
+    h[0] += f * nd->b[0];
+    h[1] += f * nd->b[1];
+    h[2] += f * nd->b[2];
+}
+
+/* Takes the nodes below node (Sc, nc, full) with one shared union of the
+   shadows over node. Returns 0 when that union cannot be built (then each
+   is taken on its own). */
+static int radinterp__descend_shared(radinterp__query *q, const radinterp__link *lk, uint32_t node,
+                                     const double (*Sc)[3], int nc, double full, double *h)
 {
     const radinterp_solution *s = q->s;
-    const radinterp__node *nd = &s->nodes[node];
-    const radinterp__patch *ps = &s->patches[nd->patch];
-    double Scc[4][RADINTERP__POLY_MAX][3], fullc[4], f[4];
-    int ncc[4], c, count, r;
-    radinterp__bp bp;
+    const radinterp__patch *ps = &s->patches[s->nodes[node].patch];
+    radinterp__shared sh;
+    int r;
     if (s->visibility != RADINTERP_VISIBILITY_SHADOWS || q->nblk == 0 || nc < 3) return 0;
-    for (c = 0; c < 4; c++) {
-        ncc[c] = radinterp__query_source(q, nd->child + (uint32_t)c, Scc[c], &fullc[c]);
-        if (radinterp__take_children(q, nd->child + (uint32_t)c, q->depth_left - 1, fullc[c])) return 0;
-    }
-    radinterp__bp_setup(q, &bp, lk, Sc, nc, ps->n, ps->d - s->push_off, s->push_off);
-    bp.full = full;
-    r = radinterp__bp_union(q, &bp, &count);
+    radinterp__bp_setup(q, &sh.bp, lk, Sc, nc, ps->n, ps->d - s->push_off, s->push_off);
+    sh.bp.full = full;
+    r = radinterp__bp_union(q, &sh.bp, &sh.count);
     if (r < 0) return 0;
-    for (c = 0; c < 4; c++) {
-        if (ncc[c] < 3 || r == 0) f[c] = 0.0;
-        else if (count == 0) f[c] = fullc[c];
-        else f[c] = radinterp__part_visible(q, &bp, (const double (*)[3])Scc[c], ncc[c], fullc[c], count);
-    }
-    q->depth_left--;
-    for (c = 0; c < 4; c++) {
-        const radinterp__node *ch = &s->nodes[nd->child + (uint32_t)c];
-        if (ch->b[0] == 0.0f && ch->b[1] == 0.0f && ch->b[2] == 0.0f) continue;
-        if (f[c] < 0.0) /* after the shared pieces are done with */
-            f[c] = radinterp__node_point_ff(q, lk, nd->child + (uint32_t)c, (const double (*)[3])Scc[c], ncc[c], fullc[c]);
-        h[0] += f[c] * ch->b[0];
-        h[1] += f[c] * ch->b[1];
-        h[2] += f[c] * ch->b[2];
-    }
-    q->depth_left++;
+    sh.hidden = r == 0;
+    radinterp__shared_add(q, &sh, lk, node, Sc, nc, full, h);
     return 1;
 }
 
 /* B_src * F for one link. The source node's radiosity is a mean; where its
    children differ enough that the mean would misjudge the part seen from p
    (their spread times the node's unoccluded factor above a tenth of eps),
-   the children are taken instead, each with its own factor past the same
-   blockers. */
+   the children are taken instead (and theirs in turn), each with its own
+   factor past the same blockers. */
 static void radinterp__link_point_add(radinterp__query *q, const radinterp__link *lk, uint32_t node, double *h)
 {
     const radinterp_solution *s = q->s;
@@ -7722,7 +7755,7 @@ static void radinterp__link_point_add(radinterp__query *q, const radinterp__link
         nc = radinterp__query_source(q, node, Sc, &full);
         if (radinterp__take_children(q, node, q->depth_left, full)) {
             uint32_t c;
-            if (radinterp__children_add(q, lk, node, (const double (*)[3])Sc, nc, full, h)) return;
+            if (radinterp__descend_shared(q, lk, node, (const double (*)[3])Sc, nc, full, h)) return;
             q->depth_left--;
             for (c = 0; c < 4; c++) radinterp__link_point_add(q, lk, nd->child + c, h);
             q->depth_left++;
