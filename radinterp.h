@@ -6068,6 +6068,8 @@ typedef struct radinterp__query {
     unsigned char order[RADINTERP__BP_MAX_SURVIVORS];       /* the order they enter it */
     const uint32_t *blk;  /* the blockers of the link being summed (a leaf list or the link's own) */
     uint32_t nblk;
+    uint32_t known_node;  /* a node whose unoccluded factor at p the ranking found already: */
+    double known_full;    /* radinterp__query_source takes it from here */
     uint32_t solid_tag[RADINTERP__SOLID_CACHE];  /* solids whose back faces' verdict at pv is known */
     unsigned char solid_skip[RADINTERP__SOLID_CACHE];
 } radinterp__query;
@@ -6910,10 +6912,11 @@ static void radinterp__piece_add(radinterp__piece *p, const double *x, const dou
 }
 
 /* Splits piece f by line L: its part on L's positive side into pos, the
-   rest into neg (whose new edge lies on -L). Corners within tol of L count
-   as on it, so no sliver is made. Returns 1 when f lies wholly on the
-   positive side, 2 wholly on the negative side (nothing written), 0 when
-   split, -1 when a part would have too many corners. */
+   rest into neg (whose new edge lies on -L; not made when neg is NULL).
+   Corners within tol of L count as on it, so no sliver is made. Returns 1
+   when f lies wholly on the positive side, 2 wholly on the negative side
+   (nothing written), 0 when split, -1 when a part would have too many
+   corners. */
 static int radinterp__split_piece(const radinterp__piece *f, const double *L, double tol, radinterp__piece *pos,
                                   radinterp__piece *neg)
 {
@@ -6927,12 +6930,13 @@ static int radinterp__split_piece(const radinterp__piece *f, const double *L, do
     }
     if (nneg == 0) return 1;
     if (npos == 0) return 2;
-    pos->count = neg->count = 0;
+    pos->count = 0;
+    if (neg) neg->count = 0;
     for (i = 0; i < n; i++) {
         int j = (i + 1) % n;
-        if (pos->count + 2 > RADINTERP__PIECE_VERTS || neg->count + 2 > RADINTERP__PIECE_VERTS) return -1;
+        if (pos->count + 2 > RADINTERP__PIECE_VERTS || (neg && neg->count + 2 > RADINTERP__PIECE_VERTS)) return -1;
         if (d[i] >= 0.0) radinterp__piece_add(pos, f->v[i], (d[j] >= 0.0 || d[i] > 0.0) ? f->ln[i] : L, 1.0);
-        if (d[i] <= 0.0) {
+        if (d[i] <= 0.0 && neg) {
             if (d[j] <= 0.0 || d[i] < 0.0) radinterp__piece_add(neg, f->v[i], f->ln[i], 1.0);
             else radinterp__piece_add(neg, f->v[i], L, -1.0);
         }
@@ -6940,12 +6944,12 @@ static int radinterp__split_piece(const radinterp__piece *f, const double *L, do
             double t = d[i] / (d[i] - d[j]), x[2];
             x[0] = f->v[i][0] + t * (f->v[j][0] - f->v[i][0]);
             x[1] = f->v[i][1] + t * (f->v[j][1] - f->v[i][1]);
-            if (d[i] > 0.0) { radinterp__piece_add(pos, x, L, 1.0); radinterp__piece_add(neg, x, f->ln[i], 1.0); }
-            else { radinterp__piece_add(neg, x, L, -1.0); radinterp__piece_add(pos, x, f->ln[i], 1.0); }
+            radinterp__piece_add(pos, x, d[i] > 0.0 ? L : f->ln[i], 1.0);
+            if (neg) radinterp__piece_add(neg, x, d[i] > 0.0 ? f->ln[i] : L, d[i] > 0.0 ? 1.0 : -1.0);
         }
     }
     radinterp__piece_bounds(pos);
-    radinterp__piece_bounds(neg);
+    if (neg) radinterp__piece_bounds(neg);
     return 0;
 }
 
@@ -7394,18 +7398,24 @@ static double radinterp__bp_by_union(radinterp__query *q, const radinterp__bp *b
    (q->piece[0 .. count)): the part's polygon Sc (moved and clipped as the
    source, nc corners, unoccluded factor full) in the source's frame, each
    piece cut to it by its edges' lines, F(part) - sum of F over the cut
-   pieces. The four children of a source node share one union this way.
+   pieces, those whose bounding box misses the part's left out. The nodes
+   below a source node share one union this way (radinterp__shared).
    Returns -1 when a cut piece outgrows its array. */
 static double radinterp__part_visible(radinterp__query *q, const radinterp__bp *bp, const double (*Sc)[3], int nc,
                                       double full, int count)
 {
-    double c2[RADINTERP__POLY_MAX][2], L[RADINTERP__POLY_MAX][3], hidden = 0.0, area;
-    radinterp__piece buf[2], scratch;
+    double c2[RADINTERP__POLY_MAX][2], L[RADINTERP__POLY_MAX][3], hidden = 0.0, area, tol = bp->tol;
+    double lo[2] = {DBL_MAX, DBL_MAX}, hi[2] = {-DBL_MAX, -DBL_MAX};
+    radinterp__piece buf[2];
     int k, j, nl = 0, any = 0;
     for (k = 0; k < nc; k++) { /* onto the real source plane, then into the frame */
         double x[3];
         for (j = 0; j < 3; j++) x[j] = Sc[k][j] + bp->push * bp->ns[j];
         radinterp__frame_to2d(&bp->fr, x, c2[k]);
+        for (j = 0; j < 2; j++) {
+            lo[j] = c2[k][j] < lo[j] ? c2[k][j] : lo[j];
+            hi[j] = c2[k][j] > hi[j] ? c2[k][j] : hi[j];
+        }
     }
     area = radinterp__area2((const double (*)[2])c2, nc);
     if (area == 0.0) return 0.0;
@@ -7421,8 +7431,10 @@ static double radinterp__part_visible(radinterp__query *q, const radinterp__bp *
     for (k = 0; k < count; k++) {
         const radinterp__piece *cur = &q->piece[k];
         int which = 0;
+        if (cur->lo[0] >= hi[0] - tol || lo[0] >= cur->hi[0] - tol || cur->lo[1] >= hi[1] - tol || lo[1] >= cur->hi[1] - tol)
+            continue;
         for (j = 0; j < nl && cur; j++) {
-            int r = radinterp__split_piece(cur, L[j], bp->tol, &buf[which], &scratch);
+            int r = radinterp__split_piece(cur, L[j], tol, &buf[which], NULL);
             if (r < 0) return -1.0;
             if (r == 2) cur = NULL;                 /* wholly outside the part */
             else if (r == 0) { cur = &buf[which]; which = 1 - which; }
@@ -7618,8 +7630,9 @@ static double radinterp__backproject(radinterp__query *q, const radinterp__link 
 
 /* A source node as the query point sees it: moved push_off behind its
    plane (6.4) and clipped by the receiver's horizon (6.2.1), into Sc, and
-   its unoccluded factor (eq. 6.1) into *full. Returns the corner count; 0
-   when no part of it lies in front of p. */
+   its unoccluded factor (eq. 6.1) into *full (q->known_full for
+   q->known_node). Returns the corner count; 0 when no part of it lies in
+   front of p. */
 static int radinterp__query_source(const radinterp__query *q, uint32_t node, double (*Sc)[3], double *full)
 {
     const radinterp_solution *s = q->s;
@@ -7637,7 +7650,7 @@ static int radinterp__query_source(const radinterp__query *q, uint32_t node, dou
     }
     nc = radinterp__clip_poly((const double (*)[3])S, n, q->n, q->dr, Sc);  /* horizon (6.2.1) */
     if (nc < 3) return 0;
-    *full = radinterp__ff_poly(q->p, q->n, (const double (*)[3])Sc, nc);
+    *full = node == q->known_node ? q->known_full : radinterp__ff_poly(q->p, q->n, (const double (*)[3])Sc, nc);
     return nc;
 }
 
@@ -7674,7 +7687,6 @@ static int radinterp__take_children(const radinterp__query *q, uint32_t node, in
    source's children, check this too. */
 typedef struct radinterp__shared {
     radinterp__bp bp;   /* the node the union is over */
-    int hidden;         /* the shadows hide it whole */
     int count;          /* pieces q->piece[0 .. count) */
 } radinterp__shared;
 
@@ -7686,7 +7698,7 @@ static double radinterp__shared_ff(radinterp__query *q, radinterp__shared *sh, c
                                    uint32_t node, const double (*Sc)[3], int nc, double full)
 {
     double f;
-    if (nc < 3 || sh->hidden) return 0.0;
+    if (nc < 3) return 0.0;
     if (sh->count == 0) return full;
     f = radinterp__part_visible(q, &sh->bp, Sc, nc, full, sh->count);
     if (f >= 0.0) return f;
@@ -7735,7 +7747,7 @@ static int radinterp__descend_shared(radinterp__query *q, const radinterp__link 
     sh.bp.full = full;
     r = radinterp__bp_union(q, &sh.bp, &sh.count);
     if (r < 0) return 0;
-    sh.hidden = r == 0;
+    if (r == 0) return 1;   /* hidden whole: so is every node below */
     radinterp__shared_add(q, &sh, lk, node, Sc, nc, full, h);
     return 1;
 }
@@ -8692,7 +8704,12 @@ static void radinterp__sum_links(radinterp__query *q, radinterp__plink *pl, uint
         } else {
             q->blk = pl[i].blk;
             q->nblk = pl[i].nblk;
+            if (ranked) {
+                q->known_node = pl[i].lk->source;
+                q->known_full = pl[i].full;
+            }
             radinterp__link_point_glass(q, pl[i].lk, h);
+            q->known_node = RADINTERP__NONE;
         }
         if (ranked) rest -= pl[i].reach;
     }
@@ -8712,6 +8729,7 @@ static radinterp_result radinterp__irradiance_in(const radinterp_solution *s, ui
     if (!p || !radinterp__patch_ok(s, patch) || !radinterp__finite3(p) || (toward && !radinterp__finite3(toward)))
         return RADINTERP_ERROR_INVALID_ARGUMENT;
     q->s = s;
+    q->known_node = RADINTERP__NONE;
     q->cdt_ready = 0;
     q->failed = 0;
     q->depth_left = 8;
