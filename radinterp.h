@@ -6900,6 +6900,16 @@ static int radinterp__bp_shadow_piece(const radinterp_solution *s, const radinte
     return 1;
 }
 
+/* *dst = *src, its corners only (a piece is mostly unused room). */
+static void radinterp__piece_copy(radinterp__piece *dst, const radinterp__piece *src)
+{
+    dst->count = src->count;
+    memcpy(dst->lo, src->lo, sizeof dst->lo);
+    memcpy(dst->hi, src->hi, sizeof dst->hi);
+    memcpy(dst->v, src->v, (size_t)src->count * sizeof dst->v[0]);
+    memcpy(dst->ln, src->ln, (size_t)src->count * sizeof dst->ln[0]);
+}
+
 /* Appends corner x, whose leaving edge lies on line ln, to piece p. */
 static void radinterp__piece_add(radinterp__piece *p, const double *x, const double *ln, double sign)
 {
@@ -6995,7 +7005,7 @@ static int radinterp__subtract_piece(radinterp__piece *pool, const radinterp__pi
         r = radinterp__split_piece(cur, P->ln[j], tol, &rest[which], out);
         if (r < 0) return -1;
         if (r == 1) continue;                       /* wholly inside this edge */
-        if (r == 2) { *out = *cur; (*top)++; return 0; } /* wholly outside P */
+        if (r == 2) { radinterp__piece_copy(out, cur); (*top)++; return 0; } /* wholly outside P */
         if (fabs(radinterp__area2((const double (*)[2])out->v, out->count)) > tiny) (*top)++;
         cur = &rest[which];
         which = 1 - which;
@@ -7017,7 +7027,7 @@ static int radinterp__pieces_minus(radinterp__piece *pool, int first, int *end, 
     }
     for (f = first; f < top; f++) /* close the gaps */
         if (pool[f].count) {
-            if (f != keep) pool[keep] = pool[f];
+            if (f != keep) radinterp__piece_copy(&pool[keep], &pool[f]);
             keep++;
         }
     *end = keep;
@@ -7360,7 +7370,7 @@ static int radinterp__bp_union(radinterp__query *q, const radinterp__bp *bp, int
     if (hides) return 0;
     for (i = 0; i < n; i++) {
         if (count >= RADINTERP__PIECES) return -1;
-        q->piece[count] = q->staged[q->order[i]];
+        radinterp__piece_copy(&q->piece[count], &q->staged[q->order[i]]);
         k = count;
         if (radinterp__union_add(q, &count, tol, tiny) != 0) return -1;
         for (; k < count; k++) covered += fabs(radinterp__area2((const double (*)[2])q->piece[k].v, q->piece[k].count));
