@@ -314,6 +314,62 @@ static void test_continuity_across_faces(void)
     irrvol_destroy(v);
 }
 
+/* A leak-safe query in a sub-cell with hanging corners weighs its eight
+   distinct samples, each with the sum of its terms' weights: the same
+   weights, up to float rounding, as weighing every term (each parent of a
+   hanging corner on its own) and adding them per sample in double. */
+static void test_merged_terms_weigh_like_every_term(void)
+{
+    sc_scene s;
+    irrvol_material m[3];
+    irrvol *v;
+    uint32_t i, merged = 0, compared = 0;
+    double worst = 0.0;
+    lamp_room(&s, m);
+    if (!CHECK_EQ_INT(build_defaults(&s, m, 3, &v), IRRVOL_OK)) return;
+    for (i = 0; i < 20000; i++) {
+        float p[3], n[3], x[3], vis[IRRVOL__MAX_TERMS];
+        double per_sample[8] = {0, 0, 0, 0, 0, 0, 0, 0}, total = 0.0;
+        irrvol__prepared q, terms;
+        const irrvol__corners *rec;
+        uint32_t k, j;
+        int d;
+        sc_set3(p, 8.4f * frand() - 4.2f, 3.2f * frand() - 0.1f, 4.2f * frand() - 0.1f);
+        random_dir(n);
+        irrvol__prepare_at(v, IRRVOL_WEIGHTING_VISIBILITY, p, n, &q);
+        rec = irrvol__locate(v, p, terms.id, terms.w);
+        if (!rec->hanging) continue;
+        CHECK(rec->merged);   /* every record of this grid names at most eight samples */
+        if (!rec->merged) break;
+        merged++;
+        terms.count = 8;
+        irrvol__expand_hanging(v, rec, &terms);
+        for (d = 0; d < 3; d++) x[d] = p[d] + v->bias * n[d];   /* random_dir: unit length */
+        irrvol__visibility_weights(v, terms.id, terms.count, x, n, vis);
+        for (k = 0; k < terms.count; k++) {
+            double w = (double)terms.w[k] * vis[k];
+            for (j = 0; j < 8 && rec->id[j] != terms.id[k]; j++) continue;
+            if (!CHECK(j < 8)) break;   /* every term's sample is among the record's eight */
+            per_sample[j] += w;
+            total += w;
+        }
+        /* no sample visible (the weights sum below FLT_MIN): the plain weights stand; far above it, both sides
+           renormalise */
+        if (!(total > 1e-30)) continue;
+        for (j = 0; j < 8; j++) {
+            double e = fabs((double)q.w[j] * q.scale - per_sample[j] / total);
+            if (e > worst) worst = e;
+        }
+        compared++;
+    }
+    test_note("lamp room: %u of 20,000 random leak-safe queries in sub-cells with hanging corners, %u compared; "
+              "largest difference of a normalised weight %.2g", merged, compared, worst);
+    CHECK(merged > 1000 && compared > 1000);
+    /* float rounding: up to 4 products per sample and 8 sums in float, each off by 2^-24 at most */
+    CHECK(worst < 1e-5);
+    irrvol_destroy(v);
+}
+
 /* ---- refinement by light (6.1.1) ---------------------------------------------- */
 
 /* A dark 6 x 3 x 6 m room lit by a 0.3 m square panel of radiance 50 facing
@@ -494,7 +550,7 @@ static void test_simd_visibility_is_scalar(void)
     irrvol_material m[2];
     irrvol_desc d;
     irrvol *v;
-    uint32_t i, differ = 0, visible = 0, near = 0, records = 0;
+    uint32_t i, differ = 0, visible = 0, near = 0, records = 0, merged = 0, clear = 0;
     two_rooms(&s, m);
     sc_scene_desc(&d, &s, m, 2);
     d.resolution = 5;
@@ -524,22 +580,40 @@ static void test_simd_visibility_is_scalar(void)
             const irrvol__cell *cell = &v->cell[(uint32_t)(frand() * (float)v->cell_count) % v->cell_count];
             uint32_t f = cell->side - 1, sub = (uint32_t)(frand() * (float)(f * f * f)) % (f * f * f);
             const irrvol__corners *r = v->corners + cell->corners + sub;
-            float eight[8];
-            if (r->hanging) continue;
+            float eight[8], in[3];
+            uint32_t corner[8];
+            int d;
+            if (r->hanging && !r->merged) continue;   /* merged: its eight distinct samples, probes in the record */
             records++;
-            irrvol__corner_weights(v, r, x, n, eight);
+            merged += r->merged != 0;
+            irrvol__corner_weights(v, r, 0u, x, n, eight);
             for (k = 0; k < 8; k++) {
                 float one = irrvol__visibility_weight(v, r->id[k], x, n);
                 differ += memcmp(&one, &eight[k], sizeof one) != 0;
             }
+            /* a test point in the sub-cell, which may skip the maps of the samples its clear mask names */
+            irrvol__table_corners(v, cell, sub % f, sub / f % f, sub / (f * f), corner);
+            for (d = 0; d < 3; d++) {
+                float lo = v->positions[3 * (size_t)corner[0] + d], hi = v->positions[3 * (size_t)corner[7] + d];
+                in[d] = lo + frand() * (hi - lo) + v->bias * n[d];
+            }
+            irrvol__corner_weights(v, r, r->clear, in, n, eight);
+            for (k = 0; k < 8; k++) {
+                float one = irrvol__visibility_weight(v, r->id[k], in, n);
+                differ += memcmp(&one, &eight[k], sizeof one) != 0;
+                clear += r->clear >> k & 1;
+            }
         }
     }
     test_note("SSE2 visibility weights vs the scalar code: %u of %u differ (%u of the 80,000 random ones above 0.5, "
-              "%u within their sample's reach)", differ, 80000 + 8 * records, visible, near);
+              "%u within their sample's reach; %u records with hanging corners; %u weights in their sub-cell, %u "
+              "of them with the map skipped)", differ, 80000 + 16 * records, visible, near, merged, 8 * records, clear);
     CHECK_EQ_INT(differ, 0);
     CHECK(visible > 1000 && visible < 79000);   /* both visible and hidden samples were compared */
     CHECK(near > 200 && near < 79000);          /* and both sides of the reach (806 measured) */
     CHECK(records > 1000);
+    CHECK(merged > 100);   /* sub-cells with hanging corners among them (their eight samples) */
+    CHECK(clear > 1000 && clear < 8 * records);   /* maps skipped and read in sub-cells */
     irrvol_destroy(v);
 #else
     test_note("no SSE2 here: the scalar code is the only one");
@@ -553,6 +627,7 @@ int main(int argc, char **argv)
     RUN(test_relocation_out_of_wall);
     RUN(test_sample_in_closed_box);
     RUN(test_continuity_across_faces);
+    RUN(test_merged_terms_weigh_like_every_term);
     RUN(test_refinement_by_light);
     RUN(test_refinement_by_light_furnace);
     RUN(test_sh_furnace);

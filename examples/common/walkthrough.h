@@ -2227,15 +2227,31 @@ static void wt__light_sample(const wt_world *w, const wt_light *L, const float o
    (s + xi) / n, so a light of probability p gets n p picks up to one), and
    what is left of a pick's stratum inside its light's interval, uniform in
    [0, 1), places the point on the light: one light alone (the office's
-   lamp face) gets n stratified points. The CDF is never stored: the picks
+   lamp face) gets n stratified points. The point's other coordinate is the
+   van der Corput sequence of the sample's index, rotated by one random
+   offset per shaded point (Cranley-Patterson): with the first coordinate
+   stratified in n, the n points of one light form a randomized Hammersley
+   set, stratified in both directions on the light, where two independent
+   random numbers left clumps and gaps along the second. The CDF is never stored: the picks
    are sorted, so one sweep over the lights meets them in order (a second
    pass recomputes the same importances, bit for bit). Shadow rays go
    through the tracer, so the bunny casts shadows. gloss: the specular
    (view-dependent) part of rgb. */
+/* The van der Corput sequence: i's bits mirrored behind the binary point. */
+static float wt__radical_inverse(uint32_t i)
+{
+    i = (i << 16) | (i >> 16);
+    i = ((i & 0x00FF00FFu) << 8) | ((i & 0xFF00FF00u) >> 8);
+    i = ((i & 0x0F0F0F0Fu) << 4) | ((i & 0xF0F0F0F0u) >> 4);
+    i = ((i & 0x33333333u) << 2) | ((i & 0xCCCCCCCCu) >> 2);
+    i = ((i & 0x55555555u) << 1) | ((i & 0xAAAAAAAAu) >> 1);
+    return (float)(i >> 8) * (1.0f / 16777216.0f);
+}
+
 static void wt__direct(const wt_world *w, const ex_trace_hit *h, const float dir[3], const lightvec_material *m,
                        ex_rng *r, float rgb[3], float gloss[3], int *bunny_shadow)
 {
-    float pick[WT__MAX_LIGHT_SAMPLES], org[3], mirror[3], total = 0.0f, below = 0.0f;
+    float pick[WT__MAX_LIGHT_SAMPLES], org[3], mirror[3], total = 0.0f, below = 0.0f, shift;
     float vn = -(dir[0] * h->normal[0] + dir[1] * h->normal[1] + dir[2] * h->normal[2]);
     int n = w->opt.light_samples, s = 0, k;
     uint32_t e, last = 0;
@@ -2252,13 +2268,15 @@ static void wt__direct(const wt_world *w, const ex_trace_hit *h, const float dir
     }
     if (!(total > 0.0f) || !isfinite(total)) return;
     for (s = 0; s < n; s++) pick[s] = ((float)s + ex_rng_float(r)) / (float)n * total;
+    shift = ex_rng_float(r);
     s = 0;
     for (e = 0; e < w->light_count && s < n; e++) {
         float imp = wt__light_importance(&w->lights[e], org, h->normal), above = below + imp;
         if (imp > 0.0f)   /* the picks in [below, above); the last light takes what rounding leaves */
             for (; s < n && (pick[s] < above || e == last); s++) {
                 float u1 = fminf(fmaxf((pick[s] - below) / imp, 0.0f), 0.99999994f);
-                wt__light_sample(w, &w->lights[e], org, h->normal, mirror, m, u1, ex_rng_float(r),
+                float u2 = wt__radical_inverse((uint32_t)s) + shift;
+                wt__light_sample(w, &w->lights[e], org, h->normal, mirror, m, u1, u2 < 1.0f ? u2 : u2 - 1.0f,
                                  total / (imp * (float)n), rgb, gloss, bunny_shadow);
             }
         below = above;
