@@ -1,4 +1,4 @@
-/* radinterp.h - v0.7.0 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
+/* radinterp.h - v0.8.0 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
 
    RADINTERP.H: hierarchical radiosity, ranked discontinuities and quadratic irradiance interpolants evaluated per pixel.
 
@@ -691,7 +691,7 @@
 #define RADINTERP_H
 
 #define RADINTERP_VERSION_MAJOR 0
-#define RADINTERP_VERSION_MINOR 7
+#define RADINTERP_VERSION_MINOR 8
 #define RADINTERP_VERSION_PATCH 0
 #define RADINTERP_FILE_FORMAT_VERSION 2   /* of saved meshes */
 
