@@ -1,4 +1,4 @@
-/* radinterp.h - v0.7.0 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
+/* radinterp.h - v0.8.0 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
 
    RADINTERP.H: hierarchical radiosity, ranked discontinuities and quadratic irradiance interpolants evaluated per pixel.
 
@@ -174,15 +174,20 @@
    BVH or desc.trace), with horizon clipping of both elements (4.2); Jacobi
    gather + push-pull iterations (4.3); after each, transport refinement
    (4.4.1): a link whose B_src times the spread of the point factors over
-   its receiver exceeds its tolerance (eps, or eps_relative of the
-   receiver's irradiance where that is more) is split at its larger
-   element, and a link whose source's children differ by more than the
-   tolerance / F is split at the source. The spread is taken at fixed
-   points: the receiver's corners pulled a fifth toward its centre, the
-   centre, and the receiver point nearest to the source's centre, where
-   the factor peaks when the source is small and close (a block standing
-   on a large floor: without that point such a link could stay unrefined
-   at a third of its form factor). Parts of a patch enclosed by geometry resting on
+   its receiver exceeds its tolerance (eps, or eps_relative of the least
+   irradiance over the receiver's lit parts where that is more) is split at
+   its larger element, and a link whose source's children differ by more
+   than the tolerance / F is split at the source. The least irradiance, not
+   the mean, because a link's error lands on every part of its receiver: a
+   wall that runs through two rooms, one lit and one dark, would otherwise
+   carry errors of 5% of the lit room's light into the dark one. The spread
+   is taken at fixed points: the receiver's corners pulled a fifth toward
+   its centre, the centre, and the receiver point nearest to the source's
+   centre, where the factor peaks when the source is small and close (a
+   block standing on a large floor: without that point such a link could
+   stay unrefined at a third of its form factor); a receiver cut by the
+   source's plane counts zero beyond it, so the link is split until no
+   child that cannot see the source takes its light. Parts of a patch enclosed by geometry resting on
    it (the floor under a box) are found by rays and left out of its
    radiosity (radinterp_leaf.open).
 
@@ -329,17 +334,18 @@
                           refined while B_src * (max - min of the point form
                           factors over its receiver) exceeds its tolerance,
                           the larger of eps and eps_relative times the
-                          receiver's irradiance.  default 1% of the mean
+                          receiver's least irradiance.  default 1% of the mean
                           emitted radiosity (emitted power / total area,
                           the sky counting pi times its mean radiance): a
                           floor under the relative bound, so that unlit
                           corners still get a bound
        eps_relative       relative transport error: a link's tolerance is at
-                          least this fraction of its receiver's irradiance,
-                          so shadows are resolved in dim rooms as in bright
-                          ones.  default 0.05; 0 (relative bound off) when
-                          eps is given and eps_relative is not, so an
-                          explicit eps means what it meant before
+                          least this fraction of the least irradiance over
+                          its receiver's lit parts, so shadows are resolved
+                          in dim rooms as in bright ones.  default 0.05;
+                          0 (relative bound off) when eps is given and
+                          eps_relative is not, so an explicit eps means
+                          what it meant before
        min_area           Gur::aeps, no node is split into children smaller
                           than this (m^2).          default (diagonal / 200)^2
        rel_error_cutoff   Basis::relErrorCutoff, convergence: every leaf's
@@ -685,7 +691,7 @@
 #define RADINTERP_H
 
 #define RADINTERP_VERSION_MAJOR 0
-#define RADINTERP_VERSION_MINOR 7
+#define RADINTERP_VERSION_MINOR 8
 #define RADINTERP_VERSION_PATCH 0
 #define RADINTERP_FILE_FORMAT_VERSION 2   /* of saved meshes */
 
@@ -3563,8 +3569,9 @@ typedef struct radinterp__node {
     float lo[3], hi[3];
     float b[3];               /* radiosity B (W/m^2) of the node's open part, constant over it */
     float h[3];               /* irradiance gathered by this node's own links (mean over the whole node) */
-    float level;              /* irradiance (largest channel) over its open part, all links: the scale its
-                                 links' errors are measured against (relative refinement) */
+    float level;              /* irradiance (largest channel) over its open part, all links (mean) */
+    float dim;                /* least irradiance (largest channel) of its lit open leaves, 0 if none: the
+                                 scale its links' errors are measured against (relative refinement) */
     float open;               /* fraction of the node not enclosed by touching geometry (such as the
                                  floor under a box standing on it); enclosed parts receive and show nothing */
     float sky[3];             /* irradiance from the sky (mean over the whole node), measured when made */
@@ -4659,8 +4666,20 @@ static void radinterp__link_compute(radinterp_solution *s, radinterp__pending *p
             hi = f > hi ? f : hi;
         }
     }
+    /* The fixed points can all miss what the random ones saw (a source seen
+       only through a stair opening from part of a large receiver): the
+       mean of the point factors lies between their least and largest, so
+       the spread reaches it too. */
+    if (sum / n > hi) hi = sum / n;
+    if (sum / n < lo) lo = sum / n;
     pl->ff = (float)(ratio * sum / n);
-    pl->dff = (float)(ratio * (hi - lo));
+    /* A receiver cut by the source's plane gets nothing on the far side of
+       that plane: its factor there is zero, so the spread runs from zero to
+       the largest value. Without this a receiver that runs through a wall
+       (a wall face across two rooms, a floor under a partition) keeps one
+       link for a source on one side and pushes its mean to the part on the
+       other side, where the source cannot be seen. */
+    pl->dff = (float)(clipped ? hi : hi - lo);
     if (gsum > 0.0) {
         pl->gff = (float)(ratio * gsum / n);
         for (k = 0; k < 3; k++) pl->glass[k] = (float)(tsum[k] / gsum);
@@ -4943,9 +4962,9 @@ static int radinterp__shaft_query(radinterp_solution *s, const radinterp__node *
     return radinterp__bvh_walk(s, radinterp__shaft_box, radinterp__shaft_visit, &ctx);
 }
 
-/* The transport error a link to a receiver at irradiance `level` may make:
-   eps, or eps_relative of the level where that is more (relative
-   refinement, the default). */
+/* The transport error a link to a receiver at irradiance `level` (the
+   least over its lit parts) may make: eps, or eps_relative of the level
+   where that is more (relative refinement, the default). */
 static double radinterp__tolerance(const radinterp_solution *s, double level)
 {
     double rel = s->eps_relative * level;
@@ -5775,7 +5794,7 @@ static int radinterp__refine(radinterp_solution *s, const radinterp__run *run, r
         const float *b = s->nodes[l.source].b;
         double bmax = b[0] > b[1] ? (b[0] > b[2] ? b[0] : b[2]) : (b[1] > b[2] ? b[1] : b[2]);
         int which = -1;
-        double tol = radinterp__tolerance(s, s->nodes[l.receiver].level);
+        double tol = radinterp__tolerance(s, s->nodes[l.receiver].dim);
         if (!(l.flags & RADINTERP__LINK_FINAL) && bmax * l.dff > tol) {
             const radinterp__node *r = &s->nodes[l.receiver], *src = &s->nodes[l.source];
             int rs = radinterp__can_split(s, r), ss = radinterp__can_split(s, src);
@@ -5907,7 +5926,7 @@ static void radinterp__push_pull(radinterp_solution *s, uint32_t index, const do
 {
     radinterp__node *nd = &s->nodes[index];
     const radinterp__patch *pt = &s->patches[nd->patch];
-    double h[3], b[3], open = nd->open, level;
+    double h[3], b[3], open = nd->open, level, dim;
     int k;
     for (k = 0; k < 3; k++) h[k] = down[k] + (open > 0.0 ? nd->h[k] / open : 0.0);
     if (nd->child == RADINTERP__NONE) {
@@ -5920,19 +5939,22 @@ static void radinterp__push_pull(radinterp_solution *s, uint32_t index, const do
             if (rel > *change) *change = rel;
         }
         level = h[0] > h[1] ? (h[0] > h[2] ? h[0] : h[2]) : (h[1] > h[2] ? h[1] : h[2]);
-        if (open > 0.0 && level > 0.0 && (*hmin == 0.0 || level < *hmin)) *hmin = level;
+        dim = open > 0.0 && level > 0.0 ? level : 0.0;
+        if (dim > 0.0 && (*hmin == 0.0 || dim < *hmin)) *hmin = dim;
     } else {
         double area = 0.0, cb[3];
         uint32_t c;
         b[0] = b[1] = b[2] = 0.0;
-        level = 0.0;
+        level = dim = 0.0;
         for (c = 0; c < 4; c++) {
             uint32_t ch = s->nodes[index].child + c;
-            double a = (double)s->nodes[ch].area * s->nodes[ch].open;
+            double a = (double)s->nodes[ch].area * s->nodes[ch].open, cd;
             radinterp__push_pull(s, ch, h, floor, change, cb, hmin);
             for (k = 0; k < 3; k++) b[k] += a * cb[k];
             level += a * s->nodes[ch].level;
             area += a;
+            cd = s->nodes[ch].dim;
+            if (cd > 0.0 && (dim == 0.0 || cd < dim)) dim = cd;
         }
         nd = &s->nodes[index];
         for (k = 0; k < 3; k++) b[k] = area > 0.0 ? b[k] / area : pt->e[k];
@@ -5940,6 +5962,7 @@ static void radinterp__push_pull(radinterp_solution *s, uint32_t index, const do
     }
     for (k = 0; k < 3; k++) { nd->b[k] = (float)b[k]; b_out[k] = b[k]; }
     nd->level = (float)level;
+    nd->dim = (float)dim;
 }
 
 static void radinterp__push_pull_job(void *ctx_, uint32_t index)
@@ -6068,6 +6091,8 @@ typedef struct radinterp__query {
     unsigned char order[RADINTERP__BP_MAX_SURVIVORS];       /* the order they enter it */
     const uint32_t *blk;  /* the blockers of the link being summed (a leaf list or the link's own) */
     uint32_t nblk;
+    uint32_t known_node;  /* a node whose unoccluded factor at p the ranking found already: */
+    double known_full;    /* radinterp__query_source takes it from here */
     uint32_t solid_tag[RADINTERP__SOLID_CACHE];  /* solids whose back faces' verdict at pv is known */
     unsigned char solid_skip[RADINTERP__SOLID_CACHE];
 } radinterp__query;
@@ -6898,6 +6923,16 @@ static int radinterp__bp_shadow_piece(const radinterp_solution *s, const radinte
     return 1;
 }
 
+/* *dst = *src, its corners only (a piece is mostly unused room). */
+static void radinterp__piece_copy(radinterp__piece *dst, const radinterp__piece *src)
+{
+    dst->count = src->count;
+    memcpy(dst->lo, src->lo, sizeof dst->lo);
+    memcpy(dst->hi, src->hi, sizeof dst->hi);
+    memcpy(dst->v, src->v, (size_t)src->count * sizeof dst->v[0]);
+    memcpy(dst->ln, src->ln, (size_t)src->count * sizeof dst->ln[0]);
+}
+
 /* Appends corner x, whose leaving edge lies on line ln, to piece p. */
 static void radinterp__piece_add(radinterp__piece *p, const double *x, const double *ln, double sign)
 {
@@ -6910,10 +6945,11 @@ static void radinterp__piece_add(radinterp__piece *p, const double *x, const dou
 }
 
 /* Splits piece f by line L: its part on L's positive side into pos, the
-   rest into neg (whose new edge lies on -L). Corners within tol of L count
-   as on it, so no sliver is made. Returns 1 when f lies wholly on the
-   positive side, 2 wholly on the negative side (nothing written), 0 when
-   split, -1 when a part would have too many corners. */
+   rest into neg (whose new edge lies on -L; not made when neg is NULL).
+   Corners within tol of L count as on it, so no sliver is made. Returns 1
+   when f lies wholly on the positive side, 2 wholly on the negative side
+   (nothing written), 0 when split, -1 when a part would have too many
+   corners. */
 static int radinterp__split_piece(const radinterp__piece *f, const double *L, double tol, radinterp__piece *pos,
                                   radinterp__piece *neg)
 {
@@ -6927,12 +6963,13 @@ static int radinterp__split_piece(const radinterp__piece *f, const double *L, do
     }
     if (nneg == 0) return 1;
     if (npos == 0) return 2;
-    pos->count = neg->count = 0;
+    pos->count = 0;
+    if (neg) neg->count = 0;
     for (i = 0; i < n; i++) {
         int j = (i + 1) % n;
-        if (pos->count + 2 > RADINTERP__PIECE_VERTS || neg->count + 2 > RADINTERP__PIECE_VERTS) return -1;
+        if (pos->count + 2 > RADINTERP__PIECE_VERTS || (neg && neg->count + 2 > RADINTERP__PIECE_VERTS)) return -1;
         if (d[i] >= 0.0) radinterp__piece_add(pos, f->v[i], (d[j] >= 0.0 || d[i] > 0.0) ? f->ln[i] : L, 1.0);
-        if (d[i] <= 0.0) {
+        if (d[i] <= 0.0 && neg) {
             if (d[j] <= 0.0 || d[i] < 0.0) radinterp__piece_add(neg, f->v[i], f->ln[i], 1.0);
             else radinterp__piece_add(neg, f->v[i], L, -1.0);
         }
@@ -6940,12 +6977,12 @@ static int radinterp__split_piece(const radinterp__piece *f, const double *L, do
             double t = d[i] / (d[i] - d[j]), x[2];
             x[0] = f->v[i][0] + t * (f->v[j][0] - f->v[i][0]);
             x[1] = f->v[i][1] + t * (f->v[j][1] - f->v[i][1]);
-            if (d[i] > 0.0) { radinterp__piece_add(pos, x, L, 1.0); radinterp__piece_add(neg, x, f->ln[i], 1.0); }
-            else { radinterp__piece_add(neg, x, L, -1.0); radinterp__piece_add(pos, x, f->ln[i], 1.0); }
+            radinterp__piece_add(pos, x, d[i] > 0.0 ? L : f->ln[i], 1.0);
+            if (neg) radinterp__piece_add(neg, x, d[i] > 0.0 ? f->ln[i] : L, d[i] > 0.0 ? 1.0 : -1.0);
         }
     }
     radinterp__piece_bounds(pos);
-    radinterp__piece_bounds(neg);
+    if (neg) radinterp__piece_bounds(neg);
     return 0;
 }
 
@@ -6991,7 +7028,7 @@ static int radinterp__subtract_piece(radinterp__piece *pool, const radinterp__pi
         r = radinterp__split_piece(cur, P->ln[j], tol, &rest[which], out);
         if (r < 0) return -1;
         if (r == 1) continue;                       /* wholly inside this edge */
-        if (r == 2) { *out = *cur; (*top)++; return 0; } /* wholly outside P */
+        if (r == 2) { radinterp__piece_copy(out, cur); (*top)++; return 0; } /* wholly outside P */
         if (fabs(radinterp__area2((const double (*)[2])out->v, out->count)) > tiny) (*top)++;
         cur = &rest[which];
         which = 1 - which;
@@ -7013,7 +7050,7 @@ static int radinterp__pieces_minus(radinterp__piece *pool, int first, int *end, 
     }
     for (f = first; f < top; f++) /* close the gaps */
         if (pool[f].count) {
-            if (f != keep) pool[keep] = pool[f];
+            if (f != keep) radinterp__piece_copy(&pool[keep], &pool[f]);
             keep++;
         }
     *end = keep;
@@ -7040,9 +7077,10 @@ static int radinterp__union_add(radinterp__query *q, int *count, double tol, dou
    patches lying in that plane cover this region, every segment meets one
    of them, so nothing in A sees anything in B (the region's bounding
    rectangle in the plane is tested). Where A touches the plane
-   (its own wall face lies in it) a segment may start on a covering patch:
-   it is blocked, or carries no light, only when that patch faces A, so
-   then only patches facing A count (and likewise for B). What the patches
+   (its own wall face lies in it, or A lies flat in it) a segment may start
+   on a covering patch: it carries no light only when it leaves that patch
+   from behind, so then only patches turned away from B count (and likewise
+   for B); when both touch it, nothing is proved. What the patches
    leave uncovered may still lie inside solid matter (where a wall meets
    another wall the plane of either passes through the other's slab, and a
    floor's plane passes under the walls standing on it): a segment crossing
@@ -7163,14 +7201,23 @@ static int radinterp__plane_covers(const radinterp__hide_ctx *c, uint32_t first,
     radinterp__piece work[RADINTERP__PIECES], cover;
     int i, j, k, end = 1, whole = 1, facing = 0;
     uint32_t g;
-    {   /* a box touching the plane admits only patches facing it */
+    {   /* a box touching the plane admits only patches turned away from the
+           other box: a segment that starts on such a patch leaves it from
+           behind and carries no light, while one that starts on the front of
+           a patch turned toward the other box (a box lying flat in the plane,
+           a balustrade at a stair opening) is not blocked by it. When both
+           boxes touch the plane, segments may run in it: no proof. */
         double amn, amx, bmn, bmx;
+        int side_a, side_b, touch_a, touch_b;
         radinterp__box_range(p0->n, p0->d, c->lo[0], c->hi[0], &amn, &amx);
         radinterp__box_range(p0->n, p0->d, c->lo[1], c->hi[1], &bmn, &bmx);
-        if (amx <= c->tol && amx >= -c->tol) facing = -1;       /* A touches from below: normals must point down */
-        else if (amn >= -c->tol && amn <= c->tol) facing = 1;   /* A touches from above */
-        else if (bmx <= c->tol && bmx >= -c->tol) facing = -1;
-        else if (bmn >= -c->tol && bmn <= c->tol) facing = 1;
+        side_a = amx > c->tol ? 1 : amn < -c->tol ? -1 : 0;   /* 0: lies in the plane */
+        side_b = bmx > c->tol ? 1 : bmn < -c->tol ? -1 : 0;
+        touch_a = side_a == 0 || (side_a > 0 ? amn <= c->tol : amx >= -c->tol);
+        touch_b = side_b == 0 || (side_b > 0 ? bmn <= c->tol : bmx >= -c->tol);
+        if (touch_a && touch_b) return 0;
+        if (touch_a) facing = -side_b;
+        else if (touch_b) facing = -side_a;
     }
     e1[0] = fabs(p0->n[0]) < 0.6 ? 1.0 : 0.0;
     e1[1] = e1[0] == 0.0 ? 1.0 : 0.0;
@@ -7356,7 +7403,7 @@ static int radinterp__bp_union(radinterp__query *q, const radinterp__bp *bp, int
     if (hides) return 0;
     for (i = 0; i < n; i++) {
         if (count >= RADINTERP__PIECES) return -1;
-        q->piece[count] = q->staged[q->order[i]];
+        radinterp__piece_copy(&q->piece[count], &q->staged[q->order[i]]);
         k = count;
         if (radinterp__union_add(q, &count, tol, tiny) != 0) return -1;
         for (; k < count; k++) covered += fabs(radinterp__area2((const double (*)[2])q->piece[k].v, q->piece[k].count));
@@ -7394,18 +7441,24 @@ static double radinterp__bp_by_union(radinterp__query *q, const radinterp__bp *b
    (q->piece[0 .. count)): the part's polygon Sc (moved and clipped as the
    source, nc corners, unoccluded factor full) in the source's frame, each
    piece cut to it by its edges' lines, F(part) - sum of F over the cut
-   pieces. The four children of a source node share one union this way.
+   pieces, those whose bounding box misses the part's left out. The nodes
+   below a source node share one union this way (radinterp__shared).
    Returns -1 when a cut piece outgrows its array. */
 static double radinterp__part_visible(radinterp__query *q, const radinterp__bp *bp, const double (*Sc)[3], int nc,
                                       double full, int count)
 {
-    double c2[RADINTERP__POLY_MAX][2], L[RADINTERP__POLY_MAX][3], hidden = 0.0, area;
-    radinterp__piece buf[2], scratch;
+    double c2[RADINTERP__POLY_MAX][2], L[RADINTERP__POLY_MAX][3], hidden = 0.0, area, tol = bp->tol;
+    double lo[2] = {DBL_MAX, DBL_MAX}, hi[2] = {-DBL_MAX, -DBL_MAX};
+    radinterp__piece buf[2];
     int k, j, nl = 0, any = 0;
     for (k = 0; k < nc; k++) { /* onto the real source plane, then into the frame */
         double x[3];
         for (j = 0; j < 3; j++) x[j] = Sc[k][j] + bp->push * bp->ns[j];
         radinterp__frame_to2d(&bp->fr, x, c2[k]);
+        for (j = 0; j < 2; j++) {
+            lo[j] = c2[k][j] < lo[j] ? c2[k][j] : lo[j];
+            hi[j] = c2[k][j] > hi[j] ? c2[k][j] : hi[j];
+        }
     }
     area = radinterp__area2((const double (*)[2])c2, nc);
     if (area == 0.0) return 0.0;
@@ -7421,8 +7474,10 @@ static double radinterp__part_visible(radinterp__query *q, const radinterp__bp *
     for (k = 0; k < count; k++) {
         const radinterp__piece *cur = &q->piece[k];
         int which = 0;
+        if (cur->lo[0] >= hi[0] - tol || lo[0] >= cur->hi[0] - tol || cur->lo[1] >= hi[1] - tol || lo[1] >= cur->hi[1] - tol)
+            continue;
         for (j = 0; j < nl && cur; j++) {
-            int r = radinterp__split_piece(cur, L[j], bp->tol, &buf[which], &scratch);
+            int r = radinterp__split_piece(cur, L[j], tol, &buf[which], NULL);
             if (r < 0) return -1.0;
             if (r == 2) cur = NULL;                 /* wholly outside the part */
             else if (r == 0) { cur = &buf[which]; which = 1 - which; }
@@ -7618,8 +7673,9 @@ static double radinterp__backproject(radinterp__query *q, const radinterp__link 
 
 /* A source node as the query point sees it: moved push_off behind its
    plane (6.4) and clipped by the receiver's horizon (6.2.1), into Sc, and
-   its unoccluded factor (eq. 6.1) into *full. Returns the corner count; 0
-   when no part of it lies in front of p. */
+   its unoccluded factor (eq. 6.1) into *full (q->known_full for
+   q->known_node). Returns the corner count; 0 when no part of it lies in
+   front of p. */
 static int radinterp__query_source(const radinterp__query *q, uint32_t node, double (*Sc)[3], double *full)
 {
     const radinterp_solution *s = q->s;
@@ -7637,7 +7693,7 @@ static int radinterp__query_source(const radinterp__query *q, uint32_t node, dou
     }
     nc = radinterp__clip_poly((const double (*)[3])S, n, q->n, q->dr, Sc);  /* horizon (6.2.1) */
     if (nc < 3) return 0;
-    *full = radinterp__ff_poly(q->p, q->n, (const double (*)[3])Sc, nc);
+    *full = node == q->known_node ? q->known_full : radinterp__ff_poly(q->p, q->n, (const double (*)[3])Sc, nc);
     return nc;
 }
 
@@ -7662,56 +7718,88 @@ static int radinterp__take_children(const radinterp__query *q, uint32_t node, in
            radinterp__source_spread(s, node) * full > q->child_tol;
 }
 
-/* B_src * F for the four children of node (its polygon as the query sees
-   it: Sc, nc, full) sharing one union of shadows over the node, as long as
-   none of them is to be split further: the children lie in the node, so
-   the shadows on a child are the node's cut to it. Returns 0 when they
-   cannot share one (then each is taken on its own). The triangulation
-   method takes each child on its own, so the tests comparing the two
-   methods at random points of the office and the Cornell box, where most
-   points take a source's children, check this too. */
-static int radinterp__children_add(radinterp__query *q, const radinterp__link *lk, uint32_t node,
-                                   const double (*Sc)[3], int nc, double full, double *h)
+/* One union of shadows over a source node, shared by the nodes below it
+   (the parts of the source a query takes in its place, see below): they lie
+   inside the node, so the shadows on each of them are the node's pieces cut
+   to it (radinterp__part_visible). At building scale a point takes the
+   children, grandchildren and deeper of most bright sources; a union built
+   again for each of them tests every blocker of the leaf's list again and
+   was the larger part of a mesh build's time. The triangulation method
+   takes each node on its own, so the tests comparing the two methods at
+   random points of the office and the Cornell box, where most points take a
+   source's children, check this too. */
+typedef struct radinterp__shared {
+    radinterp__bp bp;   /* the node the union is over */
+    int count;          /* pieces q->piece[0 .. count) */
+} radinterp__shared;
+
+/* Visible factor of a node below sh's (Sc, nc, full as
+   radinterp__query_source gives them) from the shared pieces; when a cut
+   piece outgrows its array, by a backprojection of its own, after which the
+   shared union is built again (the same pieces: it is deterministic). */
+static double radinterp__shared_ff(radinterp__query *q, radinterp__shared *sh, const radinterp__link *lk,
+                                   uint32_t node, const double (*Sc)[3], int nc, double full)
+{
+    double f;
+    if (nc < 3) return 0.0;
+    if (sh->count == 0) return full;
+    f = radinterp__part_visible(q, &sh->bp, Sc, nc, full, sh->count);
+    if (f >= 0.0) return f;
+    f = radinterp__node_point_ff(q, lk, node, Sc, nc, full);
+    if (radinterp__bp_union(q, &sh->bp, &sh->count) < 0) q->failed = 1;   /* it succeeded before: cannot happen */
+    return f;
+}
+
+/* B_src * F for node (Sc, nc, full) and the nodes below it a query takes in
+   its place (see radinterp__link_point_add), their factors from sh. */
+static void radinterp__shared_add(radinterp__query *q, radinterp__shared *sh, const radinterp__link *lk, uint32_t node,
+                                  const double (*Sc)[3], int nc, double full, double *h)
+{
+    const radinterp__node *nd = &q->s->nodes[node];
+    double f;
+    if (radinterp__take_children(q, node, q->depth_left, full)) {
+        double Scc[RADINTERP__POLY_MAX][3], fullc;
+        uint32_t c;
+        q->depth_left--;
+        for (c = 0; c < 4; c++) {
+            int ncc = radinterp__query_source(q, nd->child + c, Scc, &fullc);
+            radinterp__shared_add(q, sh, lk, nd->child + c, (const double (*)[3])Scc, ncc, fullc, h);
+        }
+        q->depth_left++;
+        return;
+    }
+    if (nd->b[0] == 0.0f && nd->b[1] == 0.0f && nd->b[2] == 0.0f) return;
+    f = radinterp__shared_ff(q, sh, lk, node, Sc, nc, full);
+    h[0] += f * nd->b[0];
+    h[1] += f * nd->b[1];
+    h[2] += f * nd->b[2];
+}
+
+/* Takes the nodes below node (Sc, nc, full) with one shared union of the
+   shadows over node. Returns 0 when that union cannot be built (then each
+   is taken on its own). */
+static int radinterp__descend_shared(radinterp__query *q, const radinterp__link *lk, uint32_t node,
+                                     const double (*Sc)[3], int nc, double full, double *h)
 {
     const radinterp_solution *s = q->s;
-    const radinterp__node *nd = &s->nodes[node];
-    const radinterp__patch *ps = &s->patches[nd->patch];
-    double Scc[4][RADINTERP__POLY_MAX][3], fullc[4], f[4];
-    int ncc[4], c, count, r;
-    radinterp__bp bp;
+    const radinterp__patch *ps = &s->patches[s->nodes[node].patch];
+    radinterp__shared sh;
+    int r;
     if (s->visibility != RADINTERP_VISIBILITY_SHADOWS || q->nblk == 0 || nc < 3) return 0;
-    for (c = 0; c < 4; c++) {
-        ncc[c] = radinterp__query_source(q, nd->child + (uint32_t)c, Scc[c], &fullc[c]);
-        if (radinterp__take_children(q, nd->child + (uint32_t)c, q->depth_left - 1, fullc[c])) return 0;
-    }
-    radinterp__bp_setup(q, &bp, lk, Sc, nc, ps->n, ps->d - s->push_off, s->push_off);
-    bp.full = full;
-    r = radinterp__bp_union(q, &bp, &count);
+    radinterp__bp_setup(q, &sh.bp, lk, Sc, nc, ps->n, ps->d - s->push_off, s->push_off);
+    sh.bp.full = full;
+    r = radinterp__bp_union(q, &sh.bp, &sh.count);
     if (r < 0) return 0;
-    for (c = 0; c < 4; c++) {
-        if (ncc[c] < 3 || r == 0) f[c] = 0.0;
-        else if (count == 0) f[c] = fullc[c];
-        else f[c] = radinterp__part_visible(q, &bp, (const double (*)[3])Scc[c], ncc[c], fullc[c], count);
-    }
-    q->depth_left--;
-    for (c = 0; c < 4; c++) {
-        const radinterp__node *ch = &s->nodes[nd->child + (uint32_t)c];
-        if (ch->b[0] == 0.0f && ch->b[1] == 0.0f && ch->b[2] == 0.0f) continue;
-        if (f[c] < 0.0) /* after the shared pieces are done with */
-            f[c] = radinterp__node_point_ff(q, lk, nd->child + (uint32_t)c, (const double (*)[3])Scc[c], ncc[c], fullc[c]);
-        h[0] += f[c] * ch->b[0];
-        h[1] += f[c] * ch->b[1];
-        h[2] += f[c] * ch->b[2];
-    }
-    q->depth_left++;
+    if (r == 0) return 1;   /* hidden whole: so is every node below */
+    radinterp__shared_add(q, &sh, lk, node, Sc, nc, full, h);
     return 1;
 }
 
 /* B_src * F for one link. The source node's radiosity is a mean; where its
    children differ enough that the mean would misjudge the part seen from p
    (their spread times the node's unoccluded factor above a tenth of eps),
-   the children are taken instead, each with its own factor past the same
-   blockers. */
+   the children are taken instead (and theirs in turn), each with its own
+   factor past the same blockers. */
 static void radinterp__link_point_add(radinterp__query *q, const radinterp__link *lk, uint32_t node, double *h)
 {
     const radinterp_solution *s = q->s;
@@ -7722,7 +7810,7 @@ static void radinterp__link_point_add(radinterp__query *q, const radinterp__link
         nc = radinterp__query_source(q, node, Sc, &full);
         if (radinterp__take_children(q, node, q->depth_left, full)) {
             uint32_t c;
-            if (radinterp__children_add(q, lk, node, (const double (*)[3])Sc, nc, full, h)) return;
+            if (radinterp__descend_shared(q, lk, node, (const double (*)[3])Sc, nc, full, h)) return;
             q->depth_left--;
             for (c = 0; c < 4; c++) radinterp__link_point_add(q, lk, nd->child + c, h);
             q->depth_left++;
@@ -8592,7 +8680,8 @@ typedef struct radinterp__plink {
     const radinterp__link *lk;
     const uint32_t *blk;      /* its blockers near the point: the leaf list's, or the link's own */
     uint32_t nblk;
-    double full, reach;       /* unoccluded factor at the point, and that times B_src (largest channel) */
+    double full, reach;       /* unoccluded factor at the point, and that times B_src (largest channel); once
+                                 ranked, what this source and those after it could carry */
 } radinterp__plink;
 
 static int radinterp__cmp_reach(const void *a_, const void *b_)
@@ -8647,21 +8736,32 @@ static void radinterp__sum_links(radinterp__query *q, radinterp__plink *pl, uint
             for (k = 0; k < 3; k++) b[k] = src->b[k];
             radinterp__query_source(q, pl[i].lk->source, Sc, &pl[i].full);
             pl[i].reach = pl[i].full * radinterp__max3(b);
-            rest += pl[i].reach;
         }
         qsort(pl, n, sizeof *pl, radinterp__cmp_reach);
+        /* each source's reach becomes what it and those after it could
+           carry, summed from the smallest: a running difference would leave
+           a rounding residue that can fall to zero or below before the last
+           sources, and FLT_MIN would then not make them all exact */
+        for (i = n; i-- > 0;) {
+            rest += pl[i].reach;
+            pl[i].reach = rest;
+        }
     }
     for (i = 0; i < n; i++) {
         const radinterp__node *src = &s->nodes[pl[i].lk->source];
-        if (ranked && rest <= s->point_rest * radinterp__max3(h)) {
+        if (ranked && pl[i].reach <= s->point_rest * radinterp__max3(h)) {
             double f = pl[i].nblk ? pl[i].full * pl[i].lk->vis : pl[i].full;
             for (k = 0; k < 3; k++) h[k] += f * src->b[k];
         } else {
             q->blk = pl[i].blk;
             q->nblk = pl[i].nblk;
+            if (ranked) {
+                q->known_node = pl[i].lk->source;
+                q->known_full = pl[i].full;
+            }
             radinterp__link_point_glass(q, pl[i].lk, h);
+            q->known_node = RADINTERP__NONE;
         }
-        if (ranked) rest -= pl[i].reach;
     }
 }
 
@@ -8679,6 +8779,7 @@ static radinterp_result radinterp__irradiance_in(const radinterp_solution *s, ui
     if (!p || !radinterp__patch_ok(s, patch) || !radinterp__finite3(p) || (toward && !radinterp__finite3(toward)))
         return RADINTERP_ERROR_INVALID_ARGUMENT;
     q->s = s;
+    q->known_node = RADINTERP__NONE;
     q->cdt_ready = 0;
     q->failed = 0;
     q->depth_left = 8;

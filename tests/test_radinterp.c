@@ -1093,7 +1093,7 @@ static void test_cancel_and_allocation_failures(void)
     radinterp_solution_destroy(sol);
     CHECK_EQ_INT(cnt.live, 0);
     /* every allocation failing in turn: out of memory, nothing leaked */
-    for (k = 0; k < 400 && !ok; k++) {
+    for (k = 0; k < 1000 && !ok; k++) {
         radinterp_result r;
         cnt.calls = 0;
         cnt.fail_after = k;

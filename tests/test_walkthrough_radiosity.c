@@ -16,10 +16,11 @@
 
    Reference frames (tests/data/walkthrough_radiosity_f<frame>.pfm, 64x48)
    were written by this program from the repository root (again for
-   radinterp v0.7.0, whose mesh leaves out hidden and faint discontinuities:
-   0.0306 from the earlier frames, a change these coarse leaves magnify;
-   ref_radinterp_mesh's Embree comparison of the office at this leaf size is
-   0.4061 against 0.4047 before, and unchanged at the default one) with
+   radinterp v0.8.0, whose relative refinement measures a link's error
+   against the darkest lit part of its receiver: 0.0150 from v0.7.0's
+   frames; ref_radinterp_mesh's Embree comparison of the office at the
+   default leaf size went from 0.0341 to 0.0281, the Cornell box's from
+   0.0366 to 0.0359) with
 
        WT_WRITE_REFERENCE=1 build/tests/test_walkthrough_radiosity reference
 
