@@ -2201,7 +2201,14 @@ static float wt__light_importance(const wt_light *L, const float x[3], const flo
    missed (a slit of a door, a point the rays did not come near) still
    gets picks, and dividing by the actual probability keeps the estimator
    unbiased everywhere; the grid only moves shadow rays from lights behind
-   walls to lights in view. */
+   walls to lights in view. Measured at 8 rays on building_4k (82 lights;
+   17 x 7 x 14 cells, 13 lights a cell on average, built in 0.21 s of one
+   thread): the direct light's relative RMS noise 0.448 -> 0.155, 0.092 ->
+   0.069, 0.129 -> 0.103 (test_light_grid); full renders at 160x120
+   against converged ones, frames 15, 31, 47: LRMS of the direct light
+   0.189 -> 0.083 (mean), of the whole 0.193 -> 0.093; building_1k (16
+   lights) 0.093 -> 0.078, 0.078 -> 0.063, 0.030 -> 0.030; the office (6
+   lights in one room) unchanged to the bit. */
 #define WT__GRID_CELL 1.0f            /* metres: a cell's edge at most, a room's corner */
 #define WT__GRID_MAX_CELLS 8192u      /* larger scenes get larger cells */
 #define WT__GRID_RAYS 16              /* rays per cell and light, until one arrives */
