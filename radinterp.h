@@ -669,9 +669,10 @@
    triangles (more with refine), about 2.2 per triangle: the office's 37,879
    triangles take 85,051 queries (131,571 before v0.7.0 dropped hidden and
    faint discontinuities, 357,456 before v0.6.0 shared them), nearly all of
-   the build time. building_1k's mesh needs 369,949 queries (1.12 M before
-   v0.7.0) at about 1,200 per second of one core: minutes on two
-   threads, too slow still for a level loaded at run time. Interpolants are only as accurate as IrradianceAtPoint, whose
+   the build time. building_1k's mesh needs about 370,000 queries (1.12 M
+   before v0.7.0) at about 2,000 per second of one core (185 s; v0.7.0:
+   about 1,200, before a source's parts shared one union of shadows):
+   minutes on two threads, too slow still for a level loaded at run time. Interpolants are only as accurate as IrradianceAtPoint, whose
    sources are the solution's elements: for a more accurate image solve
    with a smaller eps and mesh with a larger min_leaf_area. Discontinuity
    edges that nearly graze a patch outline can make a triangulation fail

@@ -266,6 +266,74 @@ static void test_direct_light_unbiased(void)
     wt_world_destroy(w);
 }
 
+/* The grid of the lights each region sees (wt__light_grid_build) at the
+   hits of the same three views: the direct light that comes from lights
+   the grid leaves out at a point (weight WT__GRID_FLOOR: still sampled, so
+   no bias, but rarely: noise) is a small share of the whole (measured
+   0.00 % at all three: no light reaching a hit was missed by the rays of
+   the 27 cells around it; 1 % leaves room for a light a door's slit shows
+   to another seed's rays), and with
+   the grid the direct light at 8 rays is less noisy than without it
+   (measured 0.155 against 0.448 in the lit room, 0.069 against 0.092 and
+   0.103 against 0.129; a ratio of at most 0.5 in the lit room, where 82
+   lights mostly behind walls took most rays before, and no worse
+   elsewhere within the 5 % that another seed moves these figures). */
+static void test_light_grid(void)
+{
+    wt_options o = small_options(WT_MODE_RAYTRACE, "building");
+    wt_world *w;
+    float *seen;
+    int i;
+    o.light_samples = 8;
+    w = open_world(&o);
+    if (!CHECK(w != NULL)) return;
+    CHECK(w->light_seen != NULL && w->grid_cell >= WT__GRID_CELL);
+    seen = w->light_seen;
+    for (i = 0; i < 3; i++) {
+        double t = 0.15 + 0.35 * i, left = 0.0, all = 0.0, sigmas, rays, with[2], without[2];
+        rendercache_camera c = wt_camera(&w->opt, t, 16, 12);
+        int x, y;
+        uint32_t e;
+        wt_set_time(w, t);
+        for (y = 0; y < 12; y++)
+            for (x = 0; x < 16; x++) {
+                float org[3], dir[3], mirror[3], p[3], vn;
+                const float *weights;
+                const lightvec_material *mat;
+                ex_trace_hit h;
+                int k, s, shadow = 0;
+                if (rendercache_camera_ray(&c, (float)x + 0.5f, (float)y + 0.5f, org, dir) != RENDERCACHE_OK ||
+                    !ex_tracer_intersect(w->tracer, org, dir, FLT_MAX, &h) || !h.front)
+                    continue;
+                mat = &w->materials[h.instance == EX_TRACE_STATIC ? w->office.tri_material[h.tri] : w->bunny_material];
+                vn = -(dir[0] * h.normal[0] + dir[1] * h.normal[1] + dir[2] * h.normal[2]);
+                for (k = 0; k < 3; k++) {
+                    p[k] = h.pos[k] + w->tracer->epsilon * h.normal[k];
+                    mirror[k] = dir[k] + 2.0f * vn * h.normal[k];
+                }
+                weights = wt__lights_seen(w, p);
+                for (e = 0; e < w->light_count; e++) {
+                    float rgb[3] = { 0, 0, 0 }, gloss[3] = { 0, 0, 0 };
+                    for (s = 0; s < 16; s++)
+                        wt__light_sample(w, &w->lights[e], p, h.normal, mirror, mat, ((float)s + 0.5f) / 16.0f,
+                                         wt__radical_inverse((uint32_t)s), 1.0f / 16.0f, rgb, gloss, &shadow);
+                    all += luminance(rgb);
+                    if (weights[e] < 1.0f) left += luminance(rgb);
+                }
+            }
+        direct_light_bias(w, t, 16, 12, 64, 4, &sigmas, with, &rays);
+        w->light_seen = NULL;   /* the sampler without the grid: importance alone */
+        direct_light_bias(w, t, 16, 12, 64, 4, &sigmas, without, &rays);
+        w->light_seen = seen;
+        test_note("t %.2f: %.2f %% of the direct light from lights the grid leaves out; relative RMS noise at 8 rays "
+                  "%.3f with the grid, %.3f without", t, 100.0 * left / all, with[0], without[0]);
+        CHECK_MSG(all > 0.0 && left <= 0.01 * all, "t %.2f: %.4f of the direct light left out", t, left / all);
+        CHECK_MSG(with[0] <= (i == 0 ? 0.5 : 1.05) * without[0], "t %.2f: noise %.3f with the grid, %.3f without", t,
+                  with[0], without[0]);
+    }
+    wt_world_destroy(w);
+}
+
 /* Worst LRMS of frames 0 and 1 against the references; writes them instead
    when write is set. -1 on failure. */
 static double frames_vs_reference(wt_mode mode, uint64_t seed, int write)
@@ -410,6 +478,7 @@ int main(int argc, char **argv)
     RUN(test_walk);
     RUN(test_reference_frames);
     RUN(test_direct_light_unbiased);
+    RUN(test_light_grid);
     RUN(test_threads);
     RUN(test_dark_room);
     return test_finish();

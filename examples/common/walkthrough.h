@@ -17,8 +17,10 @@
    Shading (modes raytrace and baseviews). A primary hit gets its emission,
    direct light from the emitting polygons (many-light sampling: a fixed
    number of shadow rays per point, --light-samples, each choosing a light
-   by an importance bound of power, distance and both cosines and divided
-   by the choice's probability; shadow rays through
+   by an importance bound of power, distance and both cosines, times 1
+   for the lights a coarse grid's cell around the point sees and 1/16 for
+   the others (wt__light_grid_build: lights behind walls rarely take a
+   ray), and divided by the choice's probability; shadow rays through
    examples/common/trace.h, so the bunny casts shadows; Lambert +
    normalized Phong) and indirect light from a light
    vector (lightvec.h, Crespin & Peroche 2004): looked up in a cache, and
@@ -860,6 +862,10 @@ typedef struct wt_world {
     int bunny_instance;
     wt_light *lights;                  /* emitting polygons */
     uint32_t light_count;
+    /* which lights each cell of a coarse grid sees (wt__light_grid_build) */
+    float *light_seen;                 /* cell-major: light_count weights a cell, in (0, 1] */
+    float grid_lo[3], grid_cell;       /* the grid's corner and cells' edge, metres */
+    uint32_t grid_dims[3];
     ex_pool *pool;
     lightvec_material *materials;      /* the office's, then the bunny's */
     uint32_t material_count, bunny_material;
@@ -928,6 +934,7 @@ EX_FN void wt_world_destroy(wt_world *w)
     obj_free(&w->bunny);
     free(w->bunny_normals);
     free(w->lights);
+    free(w->light_seen);
     free(w->materials);
     free(w->posed_positions);
     free(w->posed_indices);
@@ -1739,6 +1746,8 @@ fail:
 /* Loads the scene files and builds what every mode shares: the ray tracer
    (office + bunny instance), the light-vector scene of the office and an
    empty static light-vector cache. Returns 0, or -1 with a message. */
+static int wt__light_grid_build(wt_world *w);
+
 EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t err_size)
 {
     wt_world *w = (wt_world *)calloc(1, sizeof *w);
@@ -1795,7 +1804,7 @@ EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t
         return wt__fail(err, err_size, "%s", "out of memory");
     }
     obj_vertex_normals(&w->bunny, w->bunny_normals);
-    if (wt__find_lights(w) != 0) {
+    if (wt__find_lights(w) != 0 || wt__light_grid_build(w) != 0) {
         wt_world_destroy(w);
         return wt__fail(err, err_size, "%s", "out of memory");
     }
@@ -2175,20 +2184,46 @@ static float wt__light_importance(const wt_light *L, const float x[3], const flo
     return cy > 0.0f ? L->power * cx * cy / d2 : 0.0f;
 }
 
-/* One shadow-ray sample of light L for direct light at org (normal n,
-   mirror: the view direction reflected): a point of L chosen uniformly
-   from u1 (by area over its fan triangles, then the square root of what
-   remains: uniform on the triangle) and u2, added to rgb with weight
-   L->area * scale (scale = 1 / (selection probability * samples)); its
-   specular (view-dependent) term is added to gloss as well. */
-static void wt__light_sample(const wt_world *w, const wt_light *L, const float org[3], const float n[3],
-                             const float mirror[3], const lightvec_material *m, float u1, float u2, float scale,
-                             float rgb[3], float gloss[3], int *bunny_shadow)
+/* ---- the lights a region sees --------------------------------------------
+   In a building most lights are behind walls from any one point, and the
+   importance above (power, distance, cosines) cannot know it: at 8 shadow
+   rays most would end on a wall. As production renderers do for many
+   lights (light lists per region of space: Ward 1994, "Adaptive Shadow
+   Testing for Ray Tracing"; a visibility cache: Georgiev et al. 2012,
+   "Importance Caching for Complex Illumination"), a coarse grid over the
+   scene keeps, for each cell, the lights that can reach it: those that
+   one of WT__GRID_RAYS rays between points of the cell and points of the
+   light reaches past everything static (glass passes light; the bunny
+   moves, so it is left out), in the cell or in one of its 26 neighbours
+   (a point near a cell's side sees what the next cell sees). The sampler
+   multiplies a light's importance by 1 for the cell's lights and by
+   WT__GRID_FLOOR for the others: never zero, so a light that every ray
+   missed (a slit of a door, a point the rays did not come near) still
+   gets picks, and dividing by the actual probability keeps the estimator
+   unbiased everywhere; the grid only moves shadow rays from lights behind
+   walls to lights in view. Measured at 8 rays on building_4k (82 lights;
+   17 x 7 x 14 cells, 13 lights a cell on average, built in 0.21 s of one
+   thread): the direct light's relative RMS noise 0.448 -> 0.155, 0.092 ->
+   0.069, 0.129 -> 0.103 (test_light_grid); full renders at 160x120
+   against converged ones, frames 15, 31, 47: LRMS of the direct light
+   0.189 -> 0.083 (mean), of the whole 0.193 -> 0.093; building_1k (16
+   lights) 0.093 -> 0.078, 0.078 -> 0.063, 0.030 -> 0.030; the office (6
+   lights in one room) unchanged to the bit. */
+#define WT__GRID_CELL 1.0f            /* metres: a cell's edge at most, a room's corner */
+#define WT__GRID_MAX_CELLS 8192u      /* larger scenes get larger cells */
+#define WT__GRID_RAYS 16              /* rays per cell and light, until one arrives */
+#define WT__GRID_FLOOR (1.0f / 16.0f) /* weight of a light no ray of the cell or its neighbours reached */
+#define WT__GRID_STREAM 0x6C16E7ull   /* the grid's random numbers: not the frames' */
+
+/* A point y of light L chosen uniformly from u1 (by area over its fan
+   triangles, then the square root of what remains: uniform on the
+   triangle) and u2. */
+static void wt__light_point(const wt_world *w, const wt_light *L, float u1, float u2, float y[3])
 {
     const ex_tracer *t = w->tracer;
-    const float *pos = w->office.positions, *ln = L->normal, *a, *b, *c;
+    const float *pos = w->office.positions, *a, *b, *c;
     const uint32_t *v;
-    float su, y[3], wi[3], through[3], d2, d, cos_x, cos_y, g, f, c_m = 0.0f;
+    float su;
     uint32_t i = 0;
     int k;
     u1 *= L->area;
@@ -2199,6 +2234,159 @@ static void wt__light_sample(const wt_world *w, const wt_light *L, const float o
     c = pos + 3 * (size_t)v[2];
     su = sqrtf(fminf(u1 / t->tri_area[L->first_tri + i], 1.0f));   /* uniform on the triangle */
     for (k = 0; k < 3; k++) y[k] = (1.0f - su) * a[k] + su * (1.0f - u2) * b[k] + su * u2 * c[k];
+}
+
+/* Whether nothing static blocks the segment from x to y (glass passes). */
+static int wt__static_visible(const wt_world *w, const float x[3], const float y[3])
+{
+    const ex_tracer *t = w->tracer;
+    float wi[3] = { y[0] - x[0], y[1] - x[1], y[2] - x[2] }, d, through[3];
+    int k;
+    d = sqrtf(wi[0] * wi[0] + wi[1] * wi[1] + wi[2] * wi[2]);
+    if (!(d > 2.0f * t->epsilon)) return 1;
+    for (k = 0; k < 3; k++) wi[k] /= d;
+    if (!t->has_glass) return !tr__bvh_occluded(&t->bvh, x, wi, 0.0f, d * (1.0f - 1e-4f) - t->epsilon);
+    return ex_tracer_transmittance(t, x, wi, d * (1.0f - 1e-4f) - t->epsilon, through);
+}
+
+/* Whether one of light L's rays from the cell with corner lo arrives:
+   cell points uniform in the cell, light points stratified over L's area.
+   A cell wholly behind L (one-sided) is never lit by it: no rays. */
+static int wt__cell_sees(const wt_world *w, const wt_light *L, const float lo[3], ex_rng *r)
+{
+    float cell = w->grid_cell, x[3], y[3];
+    int corner, k, i;
+    for (corner = 0; corner < 8; corner++) {
+        float front = 0.0f;
+        for (k = 0; k < 3; k++) front += (lo[k] + (float)((corner >> k) & 1) * cell - L->point[k]) * L->normal[k];
+        if (front > 0.0f) break;
+    }
+    if (corner == 8) return 0;
+    for (i = 0; i < WT__GRID_RAYS; i++) {
+        float front = 0.0f, u1 = fminf(((float)i + ex_rng_float(r)) / (float)WT__GRID_RAYS, 0.99999994f);
+        float u2 = ex_rng_float(r);
+        for (k = 0; k < 3; k++) x[k] = lo[k] + ex_rng_float(r) * cell;
+        for (k = 0; k < 3; k++) front += (x[k] - L->point[k]) * L->normal[k];
+        if (front <= 0.0f) continue;
+        wt__light_point(w, L, u1, u2, y);
+        if (wt__static_visible(w, x, y)) return 1;
+    }
+    return 0;
+}
+
+static void wt__grid_cell_coords(const wt_world *w, uint32_t c, int i[3])
+{
+    i[0] = (int)(c % w->grid_dims[0]);
+    i[1] = (int)(c / w->grid_dims[0] % w->grid_dims[1]);
+    i[2] = (int)(c / w->grid_dims[0] / w->grid_dims[1]);
+}
+
+typedef struct wt__grid_job {
+    wt_world *w;
+    unsigned char *sees;   /* cell-major, light_count a cell: wt__cell_sees */
+} wt__grid_job;
+
+static void wt__grid_cell_job(void *ctx, uint32_t c)
+{
+    const wt__grid_job *j = (const wt__grid_job *)ctx;
+    const wt_world *w = j->w;
+    ex_rng r = ex_rng_stream(WT__GRID_STREAM, c);   /* one stream per cell: the same for any thread count */
+    float lo[3];
+    uint32_t e;
+    int i[3], k;
+    wt__grid_cell_coords(w, c, i);
+    for (k = 0; k < 3; k++) lo[k] = w->grid_lo[k] + (float)i[k] * w->grid_cell;
+    for (e = 0; e < w->light_count; e++) j->sees[(size_t)c * w->light_count + e] = (unsigned char)wt__cell_sees(w, &w->lights[e], lo, &r);
+}
+
+/* A cell's weights: 1 for the lights that it or a neighbour sees. */
+static void wt__grid_cell_weights(const wt_world *w, const unsigned char *sees, uint32_t c)
+{
+    float *out = w->light_seen + (size_t)c * w->light_count;
+    uint32_t e;
+    int i[3], a, b, d;
+    wt__grid_cell_coords(w, c, i);
+    for (e = 0; e < w->light_count; e++) out[e] = WT__GRID_FLOOR;
+    for (a = i[2] - 1; a <= i[2] + 1; a++)
+        for (b = i[1] - 1; b <= i[1] + 1; b++)
+            for (d = i[0] - 1; d <= i[0] + 1; d++) {
+                const unsigned char *n;
+                if (a < 0 || b < 0 || d < 0 || a >= (int)w->grid_dims[2] || b >= (int)w->grid_dims[1] || d >= (int)w->grid_dims[0])
+                    continue;
+                n = sees + ((size_t)a * w->grid_dims[1] * w->grid_dims[0] + (size_t)b * w->grid_dims[0] + (size_t)d) * w->light_count;
+                for (e = 0; e < w->light_count; e++)
+                    if (n[e]) out[e] = 1.0f;
+            }
+}
+
+/* Builds the grid over the static scene's bounds (cells of WT__GRID_CELL,
+   grown until there are at most WT__GRID_MAX_CELLS). One light or none:
+   no grid (the weights would cancel). 0, or -1 when out of memory. */
+static int wt__light_grid_build(wt_world *w)
+{
+    wt__grid_job j;
+    float lo[3], hi[3], ext[3];
+    uint32_t cells, c;
+    int k;
+    if (w->light_count < 2 || !obj_bounds(&w->office, lo, hi)) return 0;
+    for (k = 0; k < 3; k++) {
+        ext[k] = fmaxf(hi[k] - lo[k], 1e-3f);
+        if (!isfinite(ext[k])) return 0;   /* no grid covers it: importance alone */
+    }
+    w->grid_cell = WT__GRID_CELL;
+    for (;;) {   /* counted in floats: a huge scene's first counts overflow no integer */
+        float n[3];
+        for (k = 0; k < 3; k++) n[k] = ceilf(ext[k] / w->grid_cell);
+        if (n[0] * n[1] * n[2] <= (float)WT__GRID_MAX_CELLS) {
+            for (k = 0; k < 3; k++) w->grid_dims[k] = (uint32_t)n[k];
+            break;
+        }
+        w->grid_cell *= 1.25f;
+    }
+    cells = w->grid_dims[0] * w->grid_dims[1] * w->grid_dims[2];
+    memcpy(w->grid_lo, lo, sizeof lo);
+    j.w = w;
+    j.sees = (unsigned char *)malloc((size_t)cells * w->light_count);
+    w->light_seen = (float *)malloc(sizeof(float) * cells * (size_t)w->light_count);
+    if (!j.sees || !w->light_seen) {
+        free(j.sees);
+        return -1;
+    }
+    ex_pool_parallel_for(w->pool, wt__grid_cell_job, &j, cells);
+    for (c = 0; c < cells; c++) wt__grid_cell_weights(w, j.sees, c);
+    free(j.sees);
+    return 0;
+}
+
+/* The weights of the lights for a point at x (the grid's cell holding it,
+   or the nearest), or NULL without a grid. */
+static const float *wt__lights_seen(const wt_world *w, const float x[3])
+{
+    size_t c = 0;
+    int k;
+    if (!w->light_seen) return NULL;
+    for (k = 2; k >= 0; k--) {
+        float f = (x[k] - w->grid_lo[k]) / w->grid_cell;
+        uint32_t i = f > 0.0f ? (uint32_t)fminf(f, (float)(w->grid_dims[k] - 1)) : 0u;
+        c = c * w->grid_dims[k] + i;
+    }
+    return w->light_seen + c * w->light_count;
+}
+
+/* One shadow-ray sample of light L for direct light at org (normal n,
+   mirror: the view direction reflected): a point of L (wt__light_point)
+   from u1 and u2, added to rgb with weight
+   L->area * scale (scale = 1 / (selection probability * samples)); its
+   specular (view-dependent) term is added to gloss as well. */
+static void wt__light_sample(const wt_world *w, const wt_light *L, const float org[3], const float n[3],
+                             const float mirror[3], const lightvec_material *m, float u1, float u2, float scale,
+                             float rgb[3], float gloss[3], int *bunny_shadow)
+{
+    const ex_tracer *t = w->tracer;
+    const float *ln = L->normal;
+    float y[3], wi[3], through[3], d2, d, cos_x, cos_y, g, f, c_m = 0.0f;
+    int k;
+    wt__light_point(w, L, u1, u2, y);
     for (k = 0; k < 3; k++) wi[k] = y[k] - org[k];
     d2 = wi[0] * wi[0] + wi[1] * wi[1] + wi[2] * wi[2];
     if (!(d2 > 0.0f)) return;
@@ -2252,6 +2440,7 @@ static void wt__direct(const wt_world *w, const ex_trace_hit *h, const float dir
                        ex_rng *r, float rgb[3], float gloss[3], int *bunny_shadow)
 {
     float pick[WT__MAX_LIGHT_SAMPLES], org[3], mirror[3], total = 0.0f, below = 0.0f, shift;
+    const float *seen;
     float vn = -(dir[0] * h->normal[0] + dir[1] * h->normal[1] + dir[2] * h->normal[2]);
     int n = w->opt.light_samples, s = 0, k;
     uint32_t e, last = 0;
@@ -2261,8 +2450,9 @@ static void wt__direct(const wt_world *w, const ex_trace_hit *h, const float dir
         org[k] = h->pos[k] + w->tracer->epsilon * h->normal[k];
         mirror[k] = dir[k] + 2.0f * vn * h->normal[k];   /* the view direction reflected */
     }
+    seen = wt__lights_seen(w, org);
     for (e = 0; e < w->light_count; e++) {
-        float imp = wt__light_importance(&w->lights[e], org, h->normal);
+        float imp = wt__light_importance(&w->lights[e], org, h->normal) * (seen ? seen[e] : 1.0f);
         if (imp > 0.0f) last = e;
         total += imp;
     }
@@ -2271,7 +2461,7 @@ static void wt__direct(const wt_world *w, const ex_trace_hit *h, const float dir
     shift = ex_rng_float(r);
     s = 0;
     for (e = 0; e < w->light_count && s < n; e++) {
-        float imp = wt__light_importance(&w->lights[e], org, h->normal), above = below + imp;
+        float imp = wt__light_importance(&w->lights[e], org, h->normal) * (seen ? seen[e] : 1.0f), above = below + imp;
         if (imp > 0.0f)   /* the picks in [below, above); the last light takes what rounding leaves */
             for (; s < n && (pick[s] < above || e == last); s++) {
                 float u1 = fminf(fmaxf((pick[s] - below) / imp, 0.0f), 0.99999994f);
