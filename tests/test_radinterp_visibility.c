@@ -14,6 +14,7 @@
 #define RADINTERP_IMPLEMENTATION
 #include "../radinterp.h"
 #include "examples/common/obj.h"
+#include "tests/radinterp_obj.h"
 #include "test.h"
 
 #define PI 3.14159265358979323846
@@ -182,33 +183,11 @@ static int load_scene(const char *path, obj_scene *o, uint32_t **patches, radint
                       radinterp_desc *d)
 {
     char err[256];
-    uint32_t f;
     if (obj_load(path, o, err, sizeof err) != 0) {
         CHECK_MSG(0, "%s", err);
         return 0;
     }
-    *patches = (uint32_t *)malloc(4 * sizeof(uint32_t) * o->face_count);
-    *mats = (radinterp_material *)calloc(o->material_count, sizeof(radinterp_material));
-    for (f = 0; f < o->face_count; f++) {
-        uint32_t c = o->face_start[f + 1] - o->face_start[f], k;
-        for (k = 0; k < 4; k++) (*patches)[4 * f + k] = k < c ? o->face_vertices[o->face_start[f] + k] : RADINTERP_NO_VERTEX;
-    }
-    for (f = 0; f < o->material_count; f++) {
-        int k;
-        for (k = 0; k < 3; k++) {
-            (*mats)[f].reflectance[k] = o->materials[f].kd[k];
-            (*mats)[f].emission[k] = (float)PI * o->materials[f].ke[k]; /* Ke is emitted radiance */
-        }
-    }
-    memset(d, 0, sizeof *d);
-    d->positions = o->positions;
-    d->vertex_count = o->vertex_count;
-    d->patches = *patches;
-    d->patch_count = o->face_count;
-    d->patch_materials = o->face_material;
-    d->materials = *mats;
-    d->material_count = o->material_count;
-    return 1;
+    return CHECK(radinterp_obj_desc(o, d, patches, mats) == 0);
 }
 
 static void check_scene_file(const char *path, const char *name, uint32_t n, double rel_tol)
