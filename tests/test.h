@@ -19,7 +19,14 @@
 
    Running "prog NAME" runs only the test cases whose name contains NAME.
    test_note() prints a measured number that belongs in an issue note (an error
-   table, a hit rate); it never affects the result. */
+   table, a hit rate); it never affects the result.
+
+   A file a test writes is named by test_scratch_path(path, size, "what"):
+   TEST_SCRATCH_DIR "<program>-what", <program> the program's file name.
+   tests/run.sh runs several programs at once (the gcc and clang builds of
+   one test among them), and a fixed name would let one overwrite a file
+   another is still reading. test_scratch_name gives the name without the
+   directory, for an OBJ's mtllib line. */
 #ifndef PROJECT_TEST_H
 #define PROJECT_TEST_H
 
@@ -40,6 +47,7 @@ typedef struct test_state {
     int case_failures;        /* failed checks in the running case */
     const char *filter;       /* run only names containing this, or NULL */
     const char *current;      /* name of the running case */
+    const char *program;      /* argv[0] without its directory */
 } test_state;
 
 static test_state test__state;
@@ -61,6 +69,28 @@ TEST__FN void test_init(int argc, char **argv)
 {
     memset(&test__state, 0, sizeof test__state);
     test__state.filter = argc > 1 ? argv[1] : NULL;
+    test__state.program = argc > 0 && argv[0] && argv[0][0] ? argv[0] : "test";
+    if (strrchr(test__state.program, '/') && strrchr(test__state.program, '/')[1])
+        test__state.program = strrchr(test__state.program, '/') + 1;
+}
+
+/* Where a test writes its files: a directory of the build, tests run from the
+   repository's root. */
+#define TEST_SCRATCH_DIR "build/tests/"
+
+/* "<program>-what" into name (size bytes); returns name. */
+TEST__FN const char *test_scratch_name(char *name, size_t size, const char *what)
+{
+    snprintf(name, size, "%s-%s", test__state.program ? test__state.program : "test", what);
+    return name;
+}
+
+/* TEST_SCRATCH_DIR "<program>-what" into path (size bytes); returns path. */
+TEST__FN const char *test_scratch_path(char *path, size_t size, const char *what)
+{
+    char name[256];
+    snprintf(path, size, "%s%s", TEST_SCRATCH_DIR, test_scratch_name(name, sizeof name, what));
+    return path;
 }
 
 /* Prints a failure and marks the running case failed. Returns ok so a caller

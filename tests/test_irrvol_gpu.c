@@ -202,7 +202,7 @@ static void test_export_layout_and_bad_arguments(void)
 static void test_glsl_source_compiles(void)
 {
     size_t n = irrvol_glsl_source(NULL, 0), m;
-    char *text = (char *)malloc(n + 1), small[16];
+    char *text = (char *)malloc(n + 1), small[16], comp[512], log[512], cmd[1200];
     FILE *f;
     if (!CHECK(n > 1000 && text)) { free(text); return; }
     CHECK_EQ_INT(irrvol_glsl_source(text, n + 1), n);
@@ -221,7 +221,7 @@ static void test_glsl_source_compiles(void)
         free(text);
         return;
     }
-    f = fopen("build/tests/irrvol_eval.comp", "w");
+    f = fopen(test_scratch_path(comp, sizeof comp, "eval.comp"), "w");
     if (!CHECK(f != NULL)) { free(text); return; }
     fprintf(f, "#version 430\n%s\n", text);
     fprintf(f, "layout(local_size_x = 64) in;\n"
@@ -231,9 +231,12 @@ static void test_glsl_source_compiles(void)
                "    results[i] = vec4(irrvol_irradiance(queries[2u * i].xyz, queries[2u * i + 1u].xyz), 1.0);\n}\n");
     fclose(f);
     {
-        int status = system("glslangValidator -S comp build/tests/irrvol_eval.comp > build/tests/irrvol_eval.log 2>&1");
-        test_note("glslangValidator -S comp build/tests/irrvol_eval.comp: %s", status == 0 ? "compiled" : "FAILED "
-                  "(see build/tests/irrvol_eval.log)");
+        int status;
+        snprintf(cmd, sizeof cmd, "glslangValidator -S comp '%s' > '%s' 2>&1", comp,
+                 test_scratch_path(log, sizeof log, "eval.log"));
+        status = system(cmd);
+        test_note("glslangValidator -S comp %s: %s%s%s", comp, status == 0 ? "compiled" : "FAILED (see ",
+                  status == 0 ? "" : log, status == 0 ? "" : ")");
         CHECK_EQ_INT(status, 0);
     }
     free(text);

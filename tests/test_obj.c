@@ -516,12 +516,14 @@ static void test_mtl_transmission(void)
         "newmtl halo\nd -halo 0.5\n"
         "newmtl both\nKd 0.5 0.5 0.5\nd 0.5\nTf 0.8\nillum 7\n"
         "newmtl max_opaque\nKd 0.3 0.3 0.3\nTf 1 1 1\nd 1\nillum 2\n";
-    const char *obj = "mtllib test_obj_glass.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl glass\nf 1 2 3\n";
+    char obj[512], name[256], path[512];
     obj_scene s;
     char err[256];
     const obj_material *m;
-    if (!CHECK(write_file("build/tests/test_obj_glass.mtl", mtl))) return;
-    if (!CHECK_MSG(obj_parse(obj, strlen(obj), "glass.obj", "build/tests/", &s, err, sizeof err) == 0, "%s", err)) return;
+    snprintf(obj, sizeof obj, "mtllib %s\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl glass\nf 1 2 3\n",
+             test_scratch_name(name, sizeof name, "glass.mtl"));
+    if (!CHECK(write_file(test_scratch_path(path, sizeof path, "glass.mtl"), mtl))) return;
+    if (!CHECK_MSG(obj_parse(obj, strlen(obj), "glass.obj", TEST_SCRATCH_DIR, &s, err, sizeof err) == 0, "%s", err)) return;
     /* float products of short decimals: 1e-6 */
     m = &s.materials[obj_find_material(&s, "glass")];
     CHECK_CLOSE(m->tf[0], 0.8, 1e-6, 0); CHECK_CLOSE(m->tf[1], 0.9, 1e-6, 0); CHECK_CLOSE(m->tf[2], 0.7, 1e-6, 0);
@@ -557,13 +559,15 @@ static void test_mtl_transmission_errors(void)
         { "newmtl a\nd nan\n", ":2:" },
         { "d 0.5\n", ":1:" },
     };
-    const char *obj = "mtllib test_obj_bad.mtl\n";
+    char obj[512], name[256], path[512];
     size_t i;
+    snprintf(obj, sizeof obj, "mtllib %s\n", test_scratch_name(name, sizeof name, "bad.mtl"));
+    test_scratch_path(path, sizeof path, "bad.mtl");
     for (i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         obj_scene s;
         char err[256] = "";
-        if (!CHECK(write_file("build/tests/test_obj_bad.mtl", bad[i].mtl))) return;
-        CHECK_MSG(obj_parse(obj, strlen(obj), "bad.obj", "build/tests/", &s, err, sizeof err) != 0, "input %u accepted", (unsigned)i);
+        if (!CHECK(write_file(path, bad[i].mtl))) return;
+        CHECK_MSG(obj_parse(obj, strlen(obj), "bad.obj", TEST_SCRATCH_DIR, &s, err, sizeof err) != 0, "input %u accepted", (unsigned)i);
         CHECK_MSG(strstr(err, bad[i].msg) != NULL, "input %u: '%s' lacks '%s'", (unsigned)i, err, bad[i].msg);
         CHECK(s.tri_count == 0 && s.materials == NULL);
     }
@@ -668,21 +672,22 @@ static void test_write_round_trip(void)
 {
     const char *mtl = "newmtl glass\nKd 0.5 0.4 0.3\nKs 0.05 0.05 0.05\nNs 200\nTf 0.8 0.7 0.6\nillum 4\n"
                       "newmtl lamp\nKd 0.1 0.1 0.1\nKe 5 4 3\nnewmtl default\nKd 0.2 0.3 0.4\n";
-    const char *obj =
-        "mtllib test_obj_rt.mtl\n"
+    const char *body =
         "v 0 0 0\nv 4 0 0\nv 4 2.1 0\nv 5 2.1 0\nv 5 0 0\nv 10 0 0\nv 10 3 0\nv 0 3 0\n"
         "v 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\nv 0.5 0.25 1\n"
         "g front\nusemtl glass\nf 1 2 3 4 5 6 7 8\n"
         "g quads\nusemtl lamp\nf 9 10 11 12\nusemtl default\nf 9 10 11 13\nf 9 10 11\n";
     obj_scene a, b;
-    char err[256];
+    char err[256], obj[1024], name[256], path[512];
     uint32_t i;
     int k;
-    if (!CHECK(write_file("build/tests/test_obj_rt.mtl", mtl))) return;
-    if (!CHECK_MSG(obj_parse(obj, strlen(obj), "rt.obj", "build/tests/", &a, err, sizeof err) == 0, "%s", err)) return;
+    snprintf(obj, sizeof obj, "mtllib %s\n%s", test_scratch_name(name, sizeof name, "rt.mtl"), body);
+    if (!CHECK(write_file(test_scratch_path(path, sizeof path, "rt.mtl"), mtl))) return;
+    if (!CHECK_MSG(obj_parse(obj, strlen(obj), "rt.obj", TEST_SCRATCH_DIR, &a, err, sizeof err) == 0, "%s", err)) return;
     strcpy(a.groups[1], "front wall");   /* not a token: written as front_wall */
-    if (!CHECK_MSG(obj_write(&a, "build/tests/test_obj_written.obj", err, sizeof err) == 0, "%s", err)) return;
-    if (!CHECK_MSG(obj_load("build/tests/test_obj_written.obj", &b, err, sizeof err) == 0, "%s", err)) return;
+    test_scratch_path(path, sizeof path, "written.obj");
+    if (!CHECK_MSG(obj_write(&a, path, err, sizeof err) == 0, "%s", err)) return;
+    if (!CHECK_MSG(obj_load(path, &b, err, sizeof err) == 0, "%s", err)) return;
     CHECK_EQ_INT(b.vertex_count, a.vertex_count);
     CHECK(memcmp(a.positions, b.positions, sizeof(float) * 3 * a.vertex_count) == 0);
     CHECK_EQ_INT(b.tri_count, a.tri_count);

@@ -72,14 +72,15 @@ static void test_obj_turned_and_scaled(void)
 static void test_drop_on_request(void)
 {
     const char *text = "v 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nf 1 4 3 2\nf 1 4 3 2\n";
-    FILE *f = fopen("build/tests/test_scene_load_twice.obj", "w");
+    char path[512];
+    FILE *f = fopen(test_scratch_path(path, sizeof path, "twice.obj"), "w");
     ex_scene_options o;
     obj_scene s;
     char err[256];
     if (!CHECK(f != NULL)) return;
     fputs(text, f);
     fclose(f);
-    ex_scene_options_default(&o, "build/tests/test_scene_load_twice.obj");
+    ex_scene_options_default(&o, path);
     if (!CHECK(ex_scene_load(&o, &s, err, sizeof err) == 0)) return;
     CHECK_EQ_INT(s.face_count, 2);
     CHECK_EQ_INT(s.coincident_pairs, 1);

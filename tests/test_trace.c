@@ -76,14 +76,13 @@ static void test_hits_equal_brute_force(void)
    L_out = kd/pi * E = kd * L * F with F = 0.554126 (Howell's catalogue). */
 static void test_direct_light_known_answer(void)
 {
-    const char *text =
-        "mtllib test_trace_light.mtl\n"
+    const char *body =
         "v -1 1 -1\nv 1 1 -1\nv 1 1 1\nv -1 1 1\n"
         "v -50 0 -50\nv 50 0 -50\nv 50 0 50\nv -50 0 50\n"
         "usemtl lamp\nf 1 2 3 4\nusemtl floor\nf 5 8 7 6\n";
-    FILE *f = fopen("build/tests/test_trace_light.mtl", "w");
+    char text[512], name[256], path[512], err[256];
+    FILE *f = fopen(test_scratch_path(path, sizeof path, "light.mtl"), "w");
     obj_scene s;
-    char err[256];
     ex_tracer *t;
     float org[3] = { 0, 0.5f, 0 }, dir[3] = { 0, -1, 0 };
     double sum = 0;
@@ -92,7 +91,8 @@ static void test_direct_light_known_answer(void)
     if (!CHECK(f != NULL)) return;
     fputs("newmtl lamp\nKd 0 0 0\nKe 2 2 2\nnewmtl floor\nKd 0.5 0.5 0.5\n", f);
     fclose(f);
-    if (!CHECK_MSG(obj_parse(text, strlen(text), "light.obj", "build/tests/", &s, err, sizeof err) == 0, "%s", err)) return;
+    snprintf(text, sizeof text, "mtllib %s\n%s", test_scratch_name(name, sizeof name, "light.mtl"), body);
+    if (!CHECK_MSG(obj_parse(text, strlen(text), "light.obj", TEST_SCRATCH_DIR, &s, err, sizeof err) == 0, "%s", err)) return;
     t = ex_tracer_create(&s);
     for (i = 0; i < n; i++) {
         float rgb[3];

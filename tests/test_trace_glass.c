@@ -18,10 +18,10 @@ static int write_file(const char *path, const char *text)
 
 static int load(const char *obj, const char *mtl, obj_scene *s)
 {
-    char err[256], text[4096];
-    snprintf(text, sizeof text, "mtllib test_trace_glass.mtl\n%s", obj);
-    if (!CHECK(write_file("build/tests/test_trace_glass.mtl", mtl))) return 0;
-    return CHECK_MSG(obj_parse(text, strlen(text), "glass.obj", "build/tests/", s, err, sizeof err) == 0, "%s", err);
+    char err[256], text[4096], name[256], path[512];
+    snprintf(text, sizeof text, "mtllib %s\n%s", test_scratch_name(name, sizeof name, "glass.mtl"), obj);
+    if (!CHECK(write_file(test_scratch_path(path, sizeof path, "glass.mtl"), mtl))) return 0;
+    return CHECK_MSG(obj_parse(text, strlen(text), "glass.obj", TEST_SCRATCH_DIR, s, err, sizeof err) == 0, "%s", err);
 }
 
 /* Form factor from a point to a rectangle a x b parallel to its surface, at
