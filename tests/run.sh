@@ -8,13 +8,20 @@
 # failure. Prints the total alone on the last line and exits non-zero when
 # anything failed.
 #
-# The programs known to run longest start first, in the order of LONG_FIRST
-# (measured with TEST_JOBS=1 on 2 cores), so that the last to end is a short
-# one and no core idles at the end while a long program runs alone.
+# The programs known to run longest start first, longest first, so that the
+# last to end is a short one and no core idles while a long program runs
+# alone. Measured one at a time on 2 cores (CPU seconds at load 15, where
+# wall time said little): test_radinterp over 100, test_lightvec_cache 53,
+# test_radinterp-clang-ubsan 43, test_lightvec_cache-clang-ubsan 24,
+# tsan_lightvec 22, test_bvh_scalar 18, test_bvh 15; ref_radinterp_building
+# (about 2 minutes of wall time by its own account, on a pool) and the
+# walkthrough's renders of the office and the buildings under ASan. A
+# program missing here only starts later; one that grows belongs here.
 set -u
-LONG_FIRST="test_walkthrough_radiosity test_walkthrough_radiosity-clang-ubsan test_walkthrough \
-test_walkthrough-clang-ubsan ref_radinterp_building test_walkthrough_building test_walkthrough_building-clang-ubsan \
-test_radinterp_mesh test_radinterp_mesh-clang-ubsan tsan_radinterp"
+LONG_FIRST="ref_radinterp_building test_radinterp test_walkthrough_building test_walkthrough_daylight \
+test_lightvec_cache test_walkthrough test_walkthrough_radiosity test_radinterp-clang-ubsan \
+test_walkthrough_building-clang-ubsan test_walkthrough_daylight-clang-ubsan test_lightvec_cache-clang-ubsan \
+tsan_lightvec test_bvh_scalar test_bvh"
 
 limit=${TEST_TIMEOUT:-900}
 jobs=${TEST_JOBS:-$(nproc 2>/dev/null || echo 1)}
