@@ -12,16 +12,16 @@
 # last to end is a short one and no core idles while a long program runs
 # alone. Measured one at a time on 2 cores (CPU seconds at load 15, where
 # wall time said little): test_radinterp over 100, test_lightvec_cache 53,
-# test_radinterp-clang-ubsan 43, test_radinterp_glass 34,
+# test_radinterp-clang-ubsan 43, test_walkthrough 36, test_radinterp_glass 34,
 # test_radinterp_visibility 32, test_lightvec_cache-clang-ubsan 24,
 # tsan_lightvec 22, test_bvh_scalar 18, test_bvh 15; ref_radinterp_building
 # (about 2 minutes of wall time by its own account, on a pool) and the
-# walkthrough's renders of the office and the buildings under ASan. A
+# walkthrough's renders of the buildings under ASan (not measured). A
 # program missing here only starts later; one that grows belongs here.
 set -u
 LONG_FIRST="ref_radinterp_building test_radinterp test_walkthrough_building test_walkthrough_daylight \
-test_lightvec_cache test_radinterp_glass test_radinterp_visibility test_walkthrough test_walkthrough_radiosity \
-test_radinterp-clang-ubsan \
+test_lightvec_cache test_radinterp-clang-ubsan test_walkthrough test_radinterp_glass test_radinterp_visibility \
+test_walkthrough_radiosity \
 test_walkthrough_building-clang-ubsan test_walkthrough_daylight-clang-ubsan test_lightvec_cache-clang-ubsan \
 tsan_lightvec test_bvh_scalar test_bvh"
 
