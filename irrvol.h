@@ -1,4 +1,4 @@
-/* irrvol.h - v0.5.3 - irradiance volume for lighting moving objects - public domain or MIT, see end of file
+/* irrvol.h - v0.5.4 - irradiance volume for lighting moving objects - public domain or MIT, see end of file
 
    IRRVOL.H: a bilevel grid of directional irradiance samples that lights moving objects by interpolation.
 
@@ -249,7 +249,9 @@
    weights up to float rounding (largest difference 2.4e-7 of the result
    on 1M random office queries), 1.09x the leak-safe rate on the office.
    Plain (TRILINEAR) queries still add every term, so NEAREST's bits do
-   not change.
+   not change. A leak-safe query asks for the bins' values it will sum as
+   soon as its texels are asked for, and computes the weights while both
+   arrive (1.09-1.12x on random office queries, the same bits).
    IRRVOL_WEIGHTING_TRILINEAR is the thesis's plain trilinear interpolation.
    Two closed rooms behind a 2 cm wall, one lit, one dark: the leak-safe
    query gives 0.00 % of the lit side 1 cm and 10 cm into the dark room
@@ -495,7 +497,7 @@
 
 #define IRRVOL_VERSION_MAJOR 0
 #define IRRVOL_VERSION_MINOR 5
-#define IRRVOL_VERSION_PATCH 3
+#define IRRVOL_VERSION_PATCH 4
 #define IRRVOL_FILE_FORMAT_VERSION 3
 
 /* Fixed limits of the desc's fields (see LIMITS). */
@@ -4893,12 +4895,30 @@ IRRVOL__HOT void irrvol__visibility_weights(const irrvol *v, const uint32_t *s, 
     for (; i < count; i++) out[i] = irrvol__visibility_weight(v, s[i], x, n);
 }
 
+/* Asks the caches for the values of samples ids in bins (the words, or
+   the floats, that the sums read), so that they arrive while other work
+   runs: a leak-safe query's visibility weights, the next queries of
+   irrvol_query_many. */
+IRRVOL__HOT void irrvol__prefetch_values(const irrvol *v, const uint32_t *bins, uint32_t bin_count, const uint32_t *ids,
+                                         uint32_t id_count)
+{
+    uint32_t j, k;
+    for (k = 0; k < bin_count; k++)
+        for (j = 0; j < id_count; j++) {
+            size_t at = (size_t)bins[k] * v->sample_count + ids[j];
+            if (v->packed) IRRVOL__PREFETCH(v->packed + at);
+            else IRRVOL__PREFETCH(v->irradiance + 3 * at);
+        }
+}
+
 /* The visibility weights of a record's eight samples (its corners, or a
    merged record's samples): irrvol__visibility_weights of its ids, the
    probes read from its record; bit k of clear: sample k skips its map (the
-   record's clear mask, when the query point is in its sub-cell). */
+   record's clear mask, when the query point is in its sub-cell). The
+   samples' values in bins (bin_count of them, 0: none) are prefetched once
+   the texels are asked for. */
 IRRVOL__HOT void irrvol__corner_weights(const irrvol *v, const irrvol__corners *r, unsigned clear, const float x[3],
-                                        const float n[3], float out[8])
+                                        const float n[3], const uint32_t *bins, uint32_t bin_count, float out[8])
 {
 #ifdef IRRVOL__SSE2
     irrvol__lanes4 l[2];
@@ -4908,9 +4928,11 @@ IRRVOL__HOT void irrvol__corner_weights(const irrvol *v, const irrvol__corners *
         irrvol__lanes4_locate(v, r->id + 4 * g, _mm_load_ps(r->x + 4 * g), _mm_load_ps(r->y + 4 * g),
                               _mm_load_ps(r->z + 4 * g), _mm_load_ps(r->reach2 + 4 * g), clear >> 4 * g & 15u, &p, &l[g]);
     for (g = 0; g < 2; g++) irrvol__lanes4_fetch(v, &l[g]);
+    irrvol__prefetch_values(v, bins, bin_count, r->id, 8);   /* queued behind the texels' loads */
     for (g = 0; g < 2; g++) irrvol__lanes4_weigh(&l[g], out + 4 * g);
 #else
     (void)clear;   /* the scalar code reads the map: the same weights */
+    irrvol__prefetch_values(v, bins, bin_count, r->id, 8);
     irrvol__visibility_weights(v, r->id, 8, x, n, out);
 #endif
 }
@@ -4968,7 +4990,7 @@ IRRVOL__HOT void irrvol__merge_hanging(const irrvol *v, const irrvol__corners *r
    sample is visible (every corner invalid) or an input is NaN, the plain
    trilinear weights stand. */
 IRRVOL__HOT void irrvol__visibility_terms(const irrvol *v, const irrvol__corners *rec, const float pos[3],
-                                          const float normal[3], irrvol__prepared *q)
+                                          const float normal[3], int prefetch, irrvol__prepared *q)
 {
     float n[3], x[3], len2 = normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2], inv, sum = 0.0f;
     float vis[IRRVOL__MAX_TERMS], w[IRRVOL__MAX_TERMS];
@@ -4982,9 +5004,12 @@ IRRVOL__HOT void irrvol__visibility_terms(const irrvol *v, const irrvol__corners
     if (!rec->hanging || rec->merged) {   /* eight samples, probes from the record */
         int inside = pos[0] >= v->lo[0] && pos[0] <= v->hi[0] && pos[1] >= v->lo[1] && pos[1] <= v->hi[1] &&
                      pos[2] >= v->lo[2] && pos[2] <= v->hi[2];   /* then pos is in rec's sub-cell */
-        irrvol__corner_weights(v, rec, inside ? rec->clear : 0u, x, n, vis);
+        irrvol__corner_weights(v, rec, inside ? rec->clear : 0u, x, n, q->bin, prefetch ? q->bins : 0u, vis);
     }
-    else irrvol__visibility_weights(v, q->id, q->count, x, n, vis);
+    else {
+        irrvol__prefetch_values(v, q->bin, prefetch ? q->bins : 0u, q->id, q->count);
+        irrvol__visibility_weights(v, q->id, q->count, x, n, vis);
+    }
     for (i = 0; i < q->count; i++) {
         w[i] = q->w[i] * vis[i];
         sum += w[i];
@@ -4997,9 +5022,14 @@ IRRVOL__HOT void irrvol__visibility_terms(const irrvol *v, const irrvol__corners
 
 /* The terms of a query at pos from the plain trilinear terms of its
    sub-cell rec in q; normal is the surface normal the visibility weights
-   use. */
+   use. prefetch: q's bins are set; the values the sums will read are
+   prefetched while the visibility weights are computed, queued behind the
+   texels' loads (which the weights wait for), so the weights' arithmetic
+   hides their cache misses: random leak-safe queries on the office ran
+   1.09-1.12x as fast (the weights change how the values are summed, never
+   which are read). */
 IRRVOL__HOT void irrvol__prepare_terms(const irrvol *v, const irrvol__corners *rec, irrvol_weighting weighting,
-                                       const float pos[3], const float normal[3], irrvol__prepared *q)
+                                       const float pos[3], const float normal[3], int prefetch, irrvol__prepared *q)
 {
     q->count = 8;
     q->scale = 1.0f;
@@ -5010,21 +5040,21 @@ IRRVOL__HOT void irrvol__prepare_terms(const irrvol *v, const irrvol__corners *r
     }
     if (rec->merged) irrvol__merge_hanging(v, rec, q);
     else if (rec->hanging) irrvol__expand_hanging(v, rec, q);
-    irrvol__visibility_terms(v, rec, pos, normal, q);
+    irrvol__visibility_terms(v, rec, pos, normal, prefetch, q);
 }
 
 /* The terms of a query at pos. */
 IRRVOL__HOT void irrvol__prepare_at(const irrvol *v, irrvol_weighting weighting, const float pos[3],
                                     const float normal[3], irrvol__prepared *q)
 {
-    irrvol__prepare_terms(v, irrvol__locate(v, pos, q->id, q->w), weighting, pos, normal, q);
+    irrvol__prepare_terms(v, irrvol__locate(v, pos, q->id, q->w), weighting, pos, normal, 0, q);
 }
 
 /* The terms of a query in cell c at offsets o (pos: the same point). */
 IRRVOL__HOT void irrvol__prepare_in_cell(const irrvol *v, irrvol_weighting weighting, const uint32_t c[3],
                                          const float o[3], const float pos[3], const float normal[3], irrvol__prepared *q)
 {
-    irrvol__prepare_terms(v, irrvol__cell_corners(v, c, o, q->id, q->w), weighting, pos, normal, q);
+    irrvol__prepare_terms(v, irrvol__cell_corners(v, c, o, q->id, q->w), weighting, pos, normal, 0, q);
 }
 
 /* The bin (NEAREST) or four bins (BILINEAR) of a direction. */
@@ -5048,7 +5078,7 @@ IRRVOL__HOT void irrvol__prepare(const irrvol *v, irrvol_filter filter, irrvol_w
                                  const float normal[3], const float dir[3], irrvol__prepared *q)
 {
     irrvol__direction_bins(v, filter, dir, q);
-    irrvol__prepare_at(v, weighting, pos, normal, q);
+    irrvol__prepare_terms(v, irrvol__locate(v, pos, q->id, q->w), weighting, pos, normal, 1, q);
 }
 
 /* irrvol__finish from the floats (full precision). With SSE2 the rgb of
@@ -5261,13 +5291,15 @@ IRRVOL_API void irrvol_query_glossy(const irrvol *vol, const float pos[3], const
 
 /* Many queries, pipelined: each query is prepared IRRVOL__AHEAD queries
    before it is summed and its values are prefetched meanwhile, so the
-   memory latency of one query overlaps the work of the next ones. The
+   memory latency of one query overlaps the work of the next ones (a
+   leak-safe query prefetches its own, irrvol__prepare_terms). The
    results equal irrvol_query_filter's bit for bit. */
 IRRVOL_API void irrvol_query_many(const irrvol *vol, irrvol_filter filter, irrvol_weighting weighting, uint32_t count,
                                   const float *pos, size_t pos_stride, const float *dir, size_t dir_stride, float *rgb)
 {
     irrvol__prepared ring[IRRVOL__AHEAD];
-    uint32_t i, j, k;
+    uint32_t i;
+    int prefetched = (weighting == IRRVOL_WEIGHTING_DEFAULT ? vol->weighting : weighting) == IRRVOL_WEIGHTING_VISIBILITY;
     if (!pos_stride) pos_stride = 3 * sizeof(float);
     if (!dir_stride) dir_stride = 3 * sizeof(float);
     for (i = 0; i < count; i++) {
@@ -5275,12 +5307,7 @@ IRRVOL_API void irrvol_query_many(const irrvol *vol, irrvol_filter filter, irrvo
         const float *d = (const float *)((const char *)dir + i * dir_stride);
         if (i >= IRRVOL__AHEAD) irrvol__finish(vol, q, rgb + 3 * (size_t)(i - IRRVOL__AHEAD));
         irrvol__prepare(vol, filter, weighting, (const float *)((const char *)pos + i * pos_stride), d, d, q);
-        for (k = 0; k < q->bins; k++)
-            for (j = 0; j < q->count; j++) {
-                size_t at = (size_t)q->bin[k] * vol->sample_count + q->id[j];
-                if (vol->packed) IRRVOL__PREFETCH(vol->packed + at);
-                else IRRVOL__PREFETCH(vol->irradiance + 3 * at);
-            }
+        if (!prefetched) irrvol__prefetch_values(vol, q->bin, q->bins, q->id, q->count);
     }
     for (i = count > IRRVOL__AHEAD ? count - IRRVOL__AHEAD : 0; i < count; i++)
         irrvol__finish(vol, &ring[i % IRRVOL__AHEAD], rgb + 3 * (size_t)i);

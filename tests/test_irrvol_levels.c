@@ -586,7 +586,7 @@ static void test_simd_visibility_is_scalar(void)
             if (r->hanging && !r->merged) continue;   /* merged: its eight distinct samples, probes in the record */
             records++;
             merged += r->merged != 0;
-            irrvol__corner_weights(v, r, 0u, x, n, eight);
+            irrvol__corner_weights(v, r, 0u, x, n, NULL, 0u, eight);
             for (k = 0; k < 8; k++) {
                 float one = irrvol__visibility_weight(v, r->id[k], x, n);
                 differ += memcmp(&one, &eight[k], sizeof one) != 0;
@@ -597,7 +597,7 @@ static void test_simd_visibility_is_scalar(void)
                 float lo = v->positions[3 * (size_t)corner[0] + d], hi = v->positions[3 * (size_t)corner[7] + d];
                 in[d] = lo + frand() * (hi - lo) + v->bias * n[d];
             }
-            irrvol__corner_weights(v, r, r->clear, in, n, eight);
+            irrvol__corner_weights(v, r, r->clear, in, n, NULL, 0u, eight);
             for (k = 0; k < 8; k++) {
                 float one = irrvol__visibility_weight(v, r->id[k], in, n);
                 differ += memcmp(&one, &eight[k], sizeof one) != 0;
