@@ -1,4 +1,4 @@
-/* lightvec.h - v0.4.4 - cached 5D indirect light vectors - public domain or MIT, see end of file
+/* lightvec.h - v0.4.5 - cached 5D indirect light vectors - public domain or MIT, see end of file
 
    LIGHTVEC.H: cached light vectors over position and direction for interactive glossy global illumination.
 
@@ -378,7 +378,20 @@
      frame's pixels come); 45 valid 2.25 us random, 1.57 us sorted (after
      lightvec_cache_optimize 1.91 and 1.35 us). At 10^6 records, 6 valid:
      2.7 us random (memory latency), 1.07 us sorted. (v0.4.2 on the same
-     runs: 0.92, 0.56, 2.41, 1.58, 2.12, 1.35, 3.45, 1.21 us.)
+     runs: 0.92, 0.56, 2.41, 1.58, 2.12, 1.35, 3.45, 1.21 us.) v0.4.5
+     merges the kd-trees of a face at a ratio of 64 instead of 8 (fewer,
+     larger trees: 4.6 instead of 7 per dense lookup). The same records
+     are kept with the same weights; only the order they are summed in (in
+     double) can differ, and all 2 x 10^5 results of the two benchmark
+     caches came out the same bit for bit. Both versions in one process,
+     alternating passes of 10^5 random lookups (thread CPU, medians of 21,
+     load 15 to 17, which inflates both): dense 2.69 us against 2.90
+     (0.93x), sparse 1.35 against 1.50 (0.90x); the benchmark itself, run
+     alternately (medians of 3, load 14 to 17): dense 2.88 us random, 1.67
+     sorted against 3.46 and 1.83, sparse 1.16 against 1.23 (v0.4.4 took
+     2.18 us dense at a load of 1: the 2 us target is not met under this
+     load, and at a low one is not shown). Insertions take 1.5x
+     (dense) to 2.4x (sparse, 10^5) as long: 26 and 18 us.
      A kd-tree node holds eight child boxes in rows (three binary levels),
      tested with a few SIMD compares; a leaf is a block of 8 records whose
      tested fields sit together, and the tests that need no square root run
@@ -392,7 +405,7 @@
      whose passes split the ranks without a branch on them (about 3n
      compares; counting, as v0.4.3 did, took n^2 and 9% of a dense lookup),
      then the records at or above it in the order the walk found them. Where a dense lookup goes (45 valid):
-     2.6 faces, 7 kd-trees, 26 nodes, 33 leaves (about 260 records
+     2.6 faces, 7 kd-trees (4.6 in v0.4.5), 26 nodes (22), 33 leaves (about 260 records
      tested, 83 inside their sphere; 12 leaves hold A in none), 16
      interpolated, about 330 cache lines; in a random order it waits on memory (the same
      lookups with their data in cache take 1.2 us). These left the time as
@@ -401,11 +414,23 @@
      rows only where A lies in one of its spheres; the other criteria from
      the item rather than from rows; nodes of 4 or 16 children; and, last
      round, bounding a leaf's viewer directions and normals by cones (they
-     would skip 2.5 of 29 full leaves). Transparent huge pages for the
+     would skip 2.5 of 29 full leaves). In v0.4.5, measured the same way:
+     a quick test per leaf on three cache lines (positions, radii, sigma in
+     16-bit fixed point) and the exact fields read only for the records
+     that pass (182 lines per dense lookup instead of about 250: 4 to 10%
+     slower, the entries' extra pages and a dependent load outweigh the
+     lines; with transparent huge pages it was 2 to 10% faster); handing
+     a node's leaf children over without pushing them (no faster: the
+     branch on leaf or node was not the cost); visiting queued blocks
+     while the walk goes on; splitting kd-trees on the radius too, and
+     finer icosahedron faces (both visit more leaves: the records within
+     reach of A share their sigmas). A dense lookup's data held in cache
+     takes 1.1 us: about half of its time in a random order is
+     arithmetic, half memory. Transparent huge pages for the
      trees (an allocator that asks for them, or glibc's
      glibc.malloc.hugetlb=1) took about 5% off the dense random figure.
-     Memory: 551 bytes per record at 10^5 (records, radii, items, blocks,
-     nodes). Insertion with neighbour clamping: 4.8 us at 10^5 records,
+     Memory: 545 bytes per record at 10^5 (records, radii, items, blocks,
+     nodes). Insertion with neighbour clamping (v0.4.4): 4.8 us at 10^5 records,
      10.5 us in the dense cache (a gather takes about 1 ms);
      lightvec_cache_optimize of 10^5 records 28 ms (22 ms dense).
 
@@ -457,7 +482,7 @@
 
 #define LIGHTVEC_VERSION_MAJOR 0
 #define LIGHTVEC_VERSION_MINOR 4
-#define LIGHTVEC_VERSION_PATCH 4
+#define LIGHTVEC_VERSION_PATCH 5
 #define LIGHTVEC_FILE_FORMAT_VERSION 2
 
 #ifndef LIGHTVEC_API
@@ -3170,16 +3195,16 @@ LIGHTVEC_API lightvec_result lightvec_gather_direct(const lightvec_scene *s, con
    of the icosahedron face that holds its direction sigma. A leaf face indexes
    its items with kd-trees built by the Bentley-Saxe scheme: new items go to a
    small tail list; a full tail is merged with the smallest kd-trees (each up
-   to 8 times what has been merged so far) into one new balanced kd-tree, so
-   the trees of a face grow more than 8-fold from one to the next (at most
-   log8(n / 16) + 1 of them) and an item is rebuilt O(log n) times.
+   to 64 times what has been merged so far) into one new balanced kd-tree,
+   so the trees of a face grow more than 64-fold from one to the next (at
+   most log64(n / 16) + 1 of them) and an item is rebuilt O(log n) times.
    Trees are immutable once published (but for the radii neighbour clamping
    shrinks, read and written atomically): readers never see a half-built one.
    ---------------------------------------------------------------------- */
 #define LIGHTVEC__LEAF 8u            /* items per kd-tree leaf */
 #define LIGHTVEC__TAIL 16u           /* items a face holds outside its kd-trees */
 #define LIGHTVEC__MAX_TREES 40u      /* > log8(2^32 / TAIL) + 1 */
-#define LIGHTVEC__MERGE_RATIO 8u     /* a merge absorbs kd-trees up to 8x its size so far */
+#define LIGHTVEC__MERGE_RATIO 64u    /* a merge absorbs kd-trees up to 64x its size so far */
 #define LIGHTVEC__CHUNK0 1024u       /* records in the first chunk; chunk k holds CHUNK0 << k */
 #define LIGHTVEC__CHUNKS 23          /* CHUNK0 * (2^23 - 1) >= 2^32 records */
 #define LIGHTVEC__RECLAIM_BYTES ((size_t)1 << 20)
@@ -4447,9 +4472,16 @@ static int lightvec__face_fill(lightvec_cache *c, lightvec__face *f, lightvec__e
 
 /* Bentley-Saxe merge of a full tail: the tail and every kd-tree not larger
    than MERGE_RATIO times what is merged so far become one new kd-tree.
-   Ratio 2 is the classic binary counter (log2 n trees); ratio 8 keeps about
-   half as many trees for lookups (3 to 4 at 10^5 .. 10^6 items per face) and
-   rebuilds each item about 3x as often (15 to 25 items per insert). */
+   Ratio 2 is the classic binary counter (log2 n trees). A lookup walks
+   every tree of the faces it searches, and each tree adds its root path and
+   the partly filled leaves at the edge of the query's reach: in the dense
+   cache of tests/bench_lightvec.c (10^5 records, 2.6 faces per lookup)
+   ratio 8 left 7.0 trees, 26 nodes and 29 leaves per lookup, ratio 64
+   leaves 4.6 trees, 22 nodes and 26.5 leaves (one tree per face, after
+   lightvec_cache_optimize: 2.6, 20 and 25), about 7% of a dense lookup,
+   for insertions 1.5x to 2.4x as long (tens of microseconds, against about
+   a millisecond for the gather that makes the record). Ratio 128 kept as
+   many trees there. */
 static int lightvec__merge(lightvec_cache *c, lightvec__face *f)
 {
     lightvec__index *old = (lightvec__index *)f->index, *idx;
