@@ -1,4 +1,4 @@
-/* rendercache.h - v0.4.5 - render cache and range-image walkthroughs - public domain or MIT, see end of file
+/* rendercache.h - v0.5.0 - render cache and range-image walkthroughs - public domain or MIT, see end of file
 
    RENDERCACHE.H: an image-space point cache that reprojects and resamples, and range-image walkthroughs of animated scenes.
 
@@ -180,7 +180,13 @@
        point much farther than the average depth of its 3x3 neighbourhood, with nearer points on
        opposite sides, is dropped (WDP99 depth cull); holes are filled by a
        3x3 tent filter, or a 7x7 one where points are sparse (WDG02), from
-       the nearest or the farthest depth layer only, never a blend; the
+       one depth layer only, never a blend: the first points along 8 rays
+       of up to 8 pixels tell the layers around a hole; one enclosing it
+       (on opposite sides, as in the cull) fills it; beside an object that
+       moved in the frame the farther one does (a disocclusion: the
+       background the object uncovered, from the rays' points where it
+       lies beyond the 7x7 window); elsewhere the layer of more weight in
+       the window (the farther on a tie); the
        priority image ranks old points (age, faster for moving objects,
        times the sample's priority_scale) below holes (the fewer points
        around, the higher), and pixels with nothing near at 1 (WDP99).
@@ -370,7 +376,9 @@
        colours are fixed when they are inserted (the cache ages them so that
        they get refreshed, and faster where samples find a colour changed);
        view-dependent shading changes only as points are resampled, as in
-       the paper. A late sample of a moving object is placed with the
+       the paper. A hole's layer is found along rays of 8 pixels: the middle
+       of a wider disocclusion stays sparse or empty until it is sampled,
+       and a sample refills the holes within wide_radius of it only. A late sample of a moving object is placed with the
        transform of its frame, which the cache keeps for max_latency frames.
        Colour-change detection compares a sample with the one point it
        replaces: with a renderer as noisy as the changes it should see, it
@@ -402,8 +410,8 @@
 #include <stdint.h>
 
 #define RENDERCACHE_VERSION_MAJOR 0
-#define RENDERCACHE_VERSION_MINOR 4
-#define RENDERCACHE_VERSION_PATCH 5
+#define RENDERCACHE_VERSION_MINOR 5
+#define RENDERCACHE_VERSION_PATCH 0
 
 #ifndef RENDERCACHE_API
 #  ifdef RENDERCACHE_STATIC
@@ -2854,12 +2862,22 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
 
 /* Interpolation of a hole (WDP99 3x3 weighted filter; WDG02 wider filter
    for sparse regions) from the points within radius r, tent weights
-   (r+1-|dx|)(r+1-|dy|). Never blends across a depth discontinuity: when the
-   neighbours' depths span more than the tolerance, only the nearest layer
-   (within tolerance of the minimum) or the farthest layer (within tolerance
-   of the maximum) is used, whichever carries more weight (the far one on a
-   tie: a hole beside an edge is more often uncovered background). Returns
-   the number of points in the window; rgb is set when it is not zero.
+   (r+1-|dx|)(r+1-|dy|). Never blends across a depth discontinuity, and
+   takes the layer the hole belongs to (depth-aware hole filling,
+   rendercache__find_layer): where the points around a hole lie at depths
+   that differ by more than the tolerance, a hole that the nearest layer
+   encloses (nearest points on opposite sides: the mirror of the depth
+   cull) is a gap of that surface, magnified or thin, and takes it; a hole
+   beside an object that moved in this frame takes the farther layer, the
+   background the object uncovered (a disocclusion). Weighing the layers,
+   as the filter still does elsewhere, filled the holes behind a moving
+   object with its colour wherever it covered more of the window than the
+   background did, and a 3x3 window that sees the object alone says
+   nothing of the background a few pixels on: the layers are found along
+   rays of RENDERCACHE__HOLE_REACH pixels. Behind the camera's own motion
+   the farther layer is no better a guess than the heavier one: a surface
+   seen from nearer spreads its points over its own silhouette as often as
+   it uncovers the background (measured in the walkthrough's building).
    Depths are squared distances, compared with the squared tolerance.
    Weights are scaled by a power of two that brings their sum below 1, so
    that the sums of finite colours do not overflow and the mean is what it
@@ -2867,88 +2885,189 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
    filling of another tile may be writing them. */
 static const float rendercache__black[3] = { 0.0f, 0.0f, 0.0f };
 
+/* How far (pixels) a hole looks for the layers around it: the rows the
+   cull of the next tile has written when the filling of a tile runs
+   (rendercache__cull_and_interpolate), and as wide as the disocclusion
+   behind an object that moves 8 pixels in a frame. */
+#define RENDERCACHE__HOLE_REACH RENDERCACHE__TILE_ROWS
+
+/* The layer a hole takes: the depths (squared) its filters take, [lo, hi]
+   (every depth when any: its rays met one layer or none, and the window
+   decides); for a disocclusion, the weighted sum of the colours of the
+   first points of the farthest layer met along the rays (rgb[3] the
+   weight), its fill where no filter window reaches one (0 otherwise: a
+   hole of a sparse region stays empty beyond the wide filter's radius). */
+typedef struct rendercache__hole_layer {
+    int any;
+    float lo, hi;
+    float rgb[4];
+} rendercache__hole_layer;
+
+/* The layer of hole (x, y). Along the 8 directions of rendercache__nx,
+   up to RENDERCACHE__HOLE_REACH pixels, the first point met on each ray.
+   A point belongs to the nearest layer when its depth is within the
+   tolerance of the nearest point's, compounded once per pixel of half the
+   distance between the two (a smooth surface's depth changes with the
+   distance across it: a slanted plane seen over 8 pixels is one layer).
+   All points of one layer, or none: the window decides. Else, when the
+   first points on both sides of the row, of the column, or on all four
+   diagonals belong to the nearest layer (the depth cull's test of
+   opposite sides, rendercache__occluded), the nearest layer; else, when
+   a nearest point belongs to an object that moved in this frame, the
+   farther points (a disocclusion: what the object uncovered); else the
+   window decides. The layers part at the geometric mean of the farthest
+   near point and the nearest far one. A ray's point
+   weighs 1/8 of the inverse of its distance (so that a sum of 8 finite
+   colours stays finite). */
+static rendercache__hole_layer rendercache__find_layer(const rendercache *rc, uint32_t x, uint32_t y, float tol2)
+{
+    const int w = (int)rc->width, h = (int)rc->height;
+    float first[8], dmin = FLT_MAX, near_max = 0.0f, far_min = FLT_MAX, tol_pow[RENDERCACHE__HOLE_REACH + 1];
+    int k, s, step[8], near[8], smin = 0, far = 0, moved = 0;
+    uint32_t at[8];
+    rendercache__hole_layer layer = { 1, 0.0f, FLT_MAX, { 0, 0, 0, 0 } };
+    for (k = 0; k < 8; k++) {
+        first[k] = FLT_MAX;
+        step[k] = 0;
+        at[k] = 0;
+        for (s = 1; s <= (int)RENDERCACHE__HOLE_REACH; s++) {
+            int qx = (int)x + s * rendercache__nx[k], qy = (int)y + s * rendercache__ny[k];
+            if (qx < 0 || qy < 0 || qx >= w || qy >= h) break;
+            at[k] = (uint32_t)qy * (uint32_t)w + (uint32_t)qx;
+            first[k] = rc->px_depth[at[k]];
+            step[k] = s;
+            if (first[k] != FLT_MAX) break;
+        }
+        if (first[k] < dmin) {
+            dmin = first[k];
+            smin = step[k];
+        }
+    }
+    if (dmin == FLT_MAX) return layer;
+    tol_pow[0] = 1.0f;
+    for (s = 1; s <= (int)RENDERCACHE__HOLE_REACH; s++) tol_pow[s] = tol_pow[s - 1] * tol2;
+    for (k = 0; k < 8; k++) {
+        int span = (step[k] + smin + 1) / 2;   /* 1 .. HOLE_REACH */
+        near[k] = first[k] <= dmin * tol_pow[span];
+        if (first[k] == FLT_MAX) continue;
+        if (near[k]) {
+            uint32_t object = rc->data[rc->px_index[at[k]]].object;
+            near_max = first[k] > near_max ? first[k] : near_max;
+            moved |= object < rc->object_count && rc->obj_since[object] == rc->frame;
+        } else {
+            far_min = first[k] < far_min ? first[k] : far_min;
+        }
+        far |= !near[k];
+    }
+    if (!far) return layer;
+    if ((near[0] & near[1]) | (near[2] & near[3]) | (near[4] & near[5] & near[6] & near[7])) {
+        layer.any = 0;
+        layer.hi = sqrtf(near_max) * sqrtf(far_min);   /* enclosed: the nearest layer */
+        return layer;
+    }
+    if (!moved) return layer;
+    layer.any = 0;
+    layer.lo = sqrtf(near_max) * sqrtf(far_min);   /* a disocclusion: the farther points */
+    for (k = 0; k < 8; k++) {
+        if (first[k] == FLT_MAX || first[k] < layer.lo) continue;
+        {
+            const float *c = rc->image + 3 * (size_t)at[k], wgt = 0.125f / (float)step[k];
+            layer.rgb[0] += wgt * c[0]; layer.rgb[1] += wgt * c[1]; layer.rgb[2] += wgt * c[2]; layer.rgb[3] += wgt;
+        }
+    }
+    return layer;
+}
+
 /* The weighted sums of the colours of the points in the window [x0, x1] x
-   [y0, y1] around (x, y) (weights and colour sums, [3] the weight): of the
-   nearest layer into near_sum, and when two_layers (a constant where it is
-   inlined, so that one window drops the other sums) of the farthest into
-   far_sum. */
-static RENDERCACHE__INLINE void rendercache__window_sums(const rendercache *rc, uint32_t x, uint32_t y, int r, int x0,
-                                                         int x1, int y0, int y1, float dmin, float dmax, int two_layers,
-                                                         float near_sum[4], float far_sum[4])
+   [y0, y1] around (x, y) whose depths lie in [lo, hi] (colour sums, [3]
+   the weight); returns their number. */
+static RENDERCACHE__INLINE uint32_t rendercache__window_sums(const rendercache *rc, uint32_t x, uint32_t y, int r,
+                                                             int x0, int x1, int y0, int y1, float lo, float hi,
+                                                             float sum[4])
 {
     const float *depth = rc->px_depth, *image = rc->image;
     const uint32_t w = rc->width;
-    const float scale = rc->window_scale[r], tol2 = (1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance);
+    const float scale = rc->window_scale[r];
+    uint32_t n = 0;
     int qx, qy;
     for (qy = y0; qy <= y1; qy++) {
         const float *row = depth + (size_t)qy * w;
         float wy = (float)(r + 1 - rendercache__iabs(qy - (int)y)) * scale;
-        for (qx = x0; qx <= x1; qx++) {
+        for (qx = x0; qx <= x1; qx++) {   /* without branches: points and holes alternate at random */
             float d = row[qx], wgt = wy * (float)(r + 1 - rendercache__iabs(qx - (int)x));
-            int point = d != FLT_MAX, near = point & (d <= dmin * tol2);
-            const float *c = point ? image + 3 * ((size_t)qy * w + (size_t)qx) : rendercache__black;
-            float wn = near ? wgt : 0.0f;
-            near_sum[0] += wn * c[0]; near_sum[1] += wn * c[1]; near_sum[2] += wn * c[2]; near_sum[3] += wn;
-            if (two_layers) {
-                int far = point & !near & (d * tol2 >= dmax);   /* a middle layer: neither side of the choice */
-                float wf = far ? wgt : 0.0f;
-                far_sum[0] += wf * c[0]; far_sum[1] += wf * c[1]; far_sum[2] += wf * c[2]; far_sum[3] += wf;
+            int take = (d != FLT_MAX) & (d >= lo) & (d <= hi);
+            const float *c = take ? image + 3 * ((size_t)qy * w + (size_t)qx) : rendercache__black;
+            float wt = take ? wgt : 0.0f;
+            sum[0] += wt * c[0]; sum[1] += wt * c[1]; sum[2] += wt * c[2]; sum[3] += wt;
+            n += (uint32_t)take;
+        }
+    }
+    return n;
+}
+
+/* The filter of radius r over the window [x0, x1] x [y0, y1] (the image's
+   part of it), of the points of the hole's layer; with no layer known
+   (any), the window's own: every point when their depths agree, else its
+   nearest layer (within the tolerance of the minimum) or its farthest
+   (within the tolerance of the maximum), whichever carries more weight
+   (the far one on a tie: a hole beside an edge is more often uncovered
+   background). Returns the number of points taken; rgb is set when it is
+   not zero. */
+static RENDERCACHE__INLINE uint32_t rendercache__interpolate_window(const rendercache *rc, uint32_t x, uint32_t y, int r,
+                                                                    int x0, int x1, int y0, int y1,
+                                                                    rendercache__hole_layer layer, float tol2, float rgb[3])
+{
+    float sum[4] = { 0, 0, 0, 0 }, far_sum[4] = { 0, 0, 0, 0 };
+    uint32_t n;
+    if (!layer.any) {
+        n = rendercache__window_sums(rc, x, y, r, x0, x1, y0, y1, layer.lo, layer.hi, sum);
+    } else {
+        float dmin = FLT_MAX, dmax = 0.0f;
+        int qx, qy;
+        for (qy = y0; qy <= y1; qy++)
+            for (qx = x0; qx <= x1; qx++) {
+                float d = rc->px_depth[(size_t)qy * rc->width + (size_t)qx];
+                dmin = d < dmin ? d : dmin;
+                dmax = d != FLT_MAX && d > dmax ? d : dmax;
+            }
+        if (dmin == FLT_MAX) return 0;
+        n = rendercache__window_sums(rc, x, y, r, x0, x1, y0, y1, 0.0f, dmin * tol2, sum);
+        if (dmax > dmin * tol2) {   /* two layers: a middle one (if any) takes neither side */
+            float far_lo = dmax / tol2 > dmin * tol2 ? dmax / tol2 : nextafterf(dmin * tol2, FLT_MAX);
+            uint32_t n_far = rendercache__window_sums(rc, x, y, r, x0, x1, y0, y1, far_lo, FLT_MAX, far_sum);
+            if (far_sum[3] >= sum[3]) {
+                memcpy(sum, far_sum, sizeof sum);
+                n = n_far;
             }
         }
     }
-}
-
-static RENDERCACHE__INLINE uint32_t rendercache__interpolate_window(const rendercache *rc, uint32_t x, uint32_t y, int r,
-                                                                    int x0, int x1, int y0, int y1, float rgb[3])
-{
-    const float *depth = rc->px_depth;
-    const uint32_t w = rc->width;
-    int qx, qy;
-    float dmin = FLT_MAX, dmax = 0.0f, tol2 = (1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance);
-    float near_sum[4] = { 0, 0, 0, 0 }, far_sum[4] = { 0, 0, 0, 0 };
-    const float *chosen = near_sum;
-    uint32_t n = 0;
-    /* without branches (points and holes alternate at random around a hole): selects, then min and max */
-    for (qy = y0; qy <= y1; qy++) {
-        const float *row = depth + (size_t)qy * w;
-        for (qx = x0; qx <= x1; qx++) {
-            float d = row[qx];
-            int point = d != FLT_MAX;   /* no point there: FLT_MAX */
-            dmin = d < dmin ? d : dmin;
-            dmax = point && d > dmax ? d : dmax;
-            n += (uint32_t)point;
-        }
-    }
     if (n == 0) return 0;
-    if (dmax <= dmin * tol2) {   /* one layer (most holes): every point is near */
-        rendercache__window_sums(rc, x, y, r, x0, x1, y0, y1, dmin, dmax, 0, near_sum, far_sum);
-    } else {
-        rendercache__window_sums(rc, x, y, r, x0, x1, y0, y1, dmin, dmax, 1, near_sum, far_sum);
-        chosen = (far_sum[3] >= near_sum[3]) ? far_sum : near_sum;
-    }
-    rgb[0] = rendercache__finitef(chosen[0] / chosen[3]);
-    rgb[1] = rendercache__finitef(chosen[1] / chosen[3]);
-    rgb[2] = rendercache__finitef(chosen[2] / chosen[3]);
+    rgb[0] = rendercache__finitef(sum[0] / sum[3]);
+    rgb[1] = rendercache__finitef(sum[1] / sum[3]);
+    rgb[2] = rendercache__finitef(sum[2] / sum[3]);
     return n;
 }
 
 /* The window of radius r around (x, y), clipped to the image. */
-static uint32_t rendercache__interpolate(const rendercache *rc, uint32_t x, uint32_t y, int r, float rgb[3])
+static uint32_t rendercache__interpolate(const rendercache *rc, uint32_t x, uint32_t y, int r, rendercache__hole_layer layer,
+                                         float tol2, float rgb[3])
 {
     int x0 = (int)x - r, x1 = (int)x + r, y0 = (int)y - r, y1 = (int)y + r;
     if (x0 < 0) x0 = 0;
     if (y0 < 0) y0 = 0;
     if (x1 >= (int)rc->width) x1 = (int)rc->width - 1;
     if (y1 >= (int)rc->height) y1 = (int)rc->height - 1;
-    return rendercache__interpolate_window(rc, x, y, r, x0, x1, y0, y1, rgb);
+    return rendercache__interpolate_window(rc, x, y, r, x0, x1, y0, y1, layer, tol2, rgb);
 }
 
 /* The 3x3 window of a hole inside the image (nearly all of them): a fixed
    window, whose loops the compiler unrolls; the same operations in the same
    order as rendercache__interpolate, so the same colour bit for bit. */
-static uint32_t rendercache__interpolate3(const rendercache *rc, uint32_t x, uint32_t y, float rgb[3])
+static uint32_t rendercache__interpolate3(const rendercache *rc, uint32_t x, uint32_t y, rendercache__hole_layer layer,
+                                          float tol2, float rgb[3])
 {
-    return rendercache__interpolate_window(rc, x, y, 1, (int)x - 1, (int)x + 1, (int)y - 1, (int)y + 1, rgb);
+    return rendercache__interpolate_window(rc, x, y, 1, (int)x - 1, (int)x + 1, (int)y - 1, (int)y + 1, layer, tol2,
+                                           rgb);
 }
 
 /* Fills hole (x, y) (a pixel showing no point) from the points around it
@@ -2958,13 +3077,21 @@ static unsigned char rendercache__fill_hole(rendercache *rc, uint32_t x, uint32_
     const uint32_t w = rc->width, h = rc->height, p = y * w + x;
     uint32_t n;
     unsigned char kind;
-    float rgb[3];
-    n = x > 0 && y > 0 && x + 1 < w && y + 1 < h ? rendercache__interpolate3(rc, x, y, rgb)
-                                                 : rendercache__interpolate(rc, x, y, 1, rgb);
-    if (n >= rc->sparse_neighbours) {
+    float rgb[3], tol2 = (1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance);
+    rendercache__hole_layer layer = rendercache__find_layer(rc, x, y, tol2);
+    n = x > 0 && y > 0 && x + 1 < w && y + 1 < h ? rendercache__interpolate3(rc, x, y, layer, tol2, rgb)
+                                                 : rendercache__interpolate(rc, x, y, 1, layer, tol2, rgb);
+    if (n >= rc->sparse_neighbours) {   /* (points of its layer: a hole beside a disocclusion's edge takes the
+                                           wide filter when its 3x3 window shows the nearer surface alone) */
         kind = RENDERCACHE_PIXEL_INTERPOLATED;
     } else {
-        n = rendercache__interpolate(rc, x, y, (int)rc->wide_radius, rgb);
+        n = rendercache__interpolate(rc, x, y, (int)rc->wide_radius, layer, tol2, rgb);
+        if (n == 0 && layer.rgb[3] > 0.0f) {   /* its layer lies beyond the wide window: the rays' points */
+            rgb[0] = rendercache__finitef(layer.rgb[0] / layer.rgb[3]);
+            rgb[1] = rendercache__finitef(layer.rgb[1] / layer.rgb[3]);
+            rgb[2] = rendercache__finitef(layer.rgb[2] / layer.rgb[3]);
+            n = 1;
+        }
         kind = n ? RENDERCACHE_PIXEL_SPARSE : RENDERCACHE_PIXEL_EMPTY;
         if (!n) memcpy(rgb, rc->background, sizeof rgb);
     }
@@ -3002,9 +3129,9 @@ static void rendercache__interpolate_job(void *ctx, uint32_t tile)
    holes of tile t - 1 are filled right after the cull of tile t, while the
    rows both touch (the depths and colours around a hole) are still in
    cache; as two passes, the filling read them back from memory, about one
-   miss per hole and row. A hole reads at most wide_radius (<= 7) rows
-   below its own, which the cull of the next tile (TILE_ROWS = 8 rows) has
-   written, so the filling reads what it read after a full cull pass: the
+   miss per hole and row. A hole reads at most RENDERCACHE__HOLE_REACH
+   (TILE_ROWS = 8) rows below its own (its rays; its filters wide_radius
+   <= 7), which the cull of the next tile has written, so the filling reads what it read after a full cull pass: the
    same image, bit for bit. The depths of tile t + 1 are converted from
    the keys just before the cull of tile t reads them. The two are timed together (stats.time_cull): a
    clock read per tile would cost more than the saving. */

@@ -684,6 +684,91 @@ static void test_moving_object_points_follow(void)
 }
 
 /* ---------------------------------------------------------------------
+   Depth-aware hole filling: a hole takes the layer it belongs to.
+   --------------------------------------------------------------------- */
+/* Counts the filled holes (3x3 or wide filter) whose footprint sees one
+   surface only, and among them those showing another surface's colour
+   (one channel per surface) or a colour off the surface's own by more than
+   tol. *sparse: how many of them the wide filter filled. */
+static uint32_t holes_of_wrong_layer(rendercache *rc, const scene *s, const rendercache_camera *cam, float tol,
+                                     uint32_t *checked, uint32_t *sparse)
+{
+    const float *img = rendercache_image(rc);
+    const unsigned char *kind = rendercache_pixel_kinds(rc);
+    uint32_t x, y, wrong = 0;
+    *checked = *sparse = 0;
+    for (y = 0; y < cam->height; y++)
+        for (x = 0; x < cam->width; x++) {
+            uint32_t p = y * cam->width + x, object, k;
+            float lo[3], hi[3];
+            const float *c = img + 3 * (size_t)p;
+            if (kind[p] != RENDERCACHE_PIXEL_INTERPOLATED && kind[p] != RENDERCACHE_PIXEL_SPARSE) continue;
+            if (!footprint(s, cam, x, y, lo, hi, &object) || object == RENDERCACHE_MISS) continue;
+            ++*checked;
+            *sparse += kind[p] == RENDERCACHE_PIXEL_SPARSE;
+            if (colour_object(c) != object || channels(c) != 1) {
+                wrong++;
+                continue;
+            }
+            for (k = 0; k < 3; k++)
+                if (c[k] < lo[k] - tol || c[k] > hi[k] + tol) {
+                    wrong++;
+                    break;
+                }
+        }
+    return wrong;
+}
+
+/* A square moving over a wall uncovers a strip of wall 8 pixels wide that
+   no point covers: after the move (before any new sample) every hole of
+   the strip shows the wall, the background it uncovered, even where only
+   the square's points are in the 3x3 window (the strip's first column) or
+   they outweigh the wall's in the wide one. A camera stepping towards the
+   square magnifies it 2x: its points spread apart, and the holes between
+   them, enclosed by the square, show the square. The tolerance: a filled
+   colour is a mean of the surface's colours within the wide filter's
+   reach (the 7x7 window; the far layer is found along rays of 3 pixels);
+   the wall's colour changes by 0.05 per unit, 0.0072 per pixel at this
+   distance, so by 0.045 at most over 6 pixels (the square's by 0.1 per
+   unit over 0.072 units a pixel when magnified: as much); 0.05 still tells
+   the wall's colour from the square's, which is 0.5 apart at the edge. */
+static void test_holes_take_the_layer_they_uncover(void)
+{
+    const uint32_t w = 96, h = 80;
+    rendercache_camera cam = make_camera(0, 0, 0, 0, 0, 10, w, h);
+    rendercache_camera closer = make_camera(0.3f, 0.2f, 2.5f, 0.3f, 0.2f, 10.0f, w, h);
+    rendercache_desc d = make_desc(w, h);
+    rendercache *rc;
+    scene before, after;
+    float m[12] = { 1, 0, 0, 0.5f, 0, 1, 0, 0.15f, 0, 0, 1, 0 };
+    uint32_t wrong, checked, sparse, wall_holes;
+    memset(&before, 0, sizeof before);
+    after = before;
+    after.shift[0] = m[3];
+    after.shift[1] = m[7];
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+    converge(rc, &before, &cam);
+    CHECK_EQ_INT(rendercache_set_object_transform(rc, 1, m), RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
+    wrong = holes_of_wrong_layer(rc, &after, &cam, 0.05f, &checked, &sparse);
+    wall_holes = checked;
+    CHECK(checked > 150 && sparse > 20);   /* the strip: 8 x 28 pixels, its middle beyond the 3x3 filter */
+    CHECK_MSG(wrong == 0, "moving square: %u of %u uncovered holes show the square or a wrong colour", wrong, checked);
+    test_note("moving square: %u uncovered holes (%u by the wide filter), %u not the wall", checked, sparse, wrong);
+    rendercache_destroy(rc);
+
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+    converge(rc, &before, &cam);
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &closer), RENDERCACHE_OK);
+    wrong = holes_of_wrong_layer(rc, &before, &closer, 0.05f, &checked, &sparse);
+    CHECK(checked > 100);
+    CHECK_MSG(wrong == 0, "magnified square: %u of %u holes show another layer or a wrong colour", wrong, checked);
+    test_note("magnified square: %u holes between its points, %u of another layer (after %u wall holes)", checked,
+              wrong, wall_holes);
+    rendercache_destroy(rc);
+}
+
+/* ---------------------------------------------------------------------
    Background points at infinity.
    --------------------------------------------------------------------- */
 static void test_misses_are_points_at_infinity(void)
@@ -1419,6 +1504,7 @@ int main(int argc, char **argv)
     RUN(test_camera_motion_reprojects_and_requests_disocclusions);
     RUN(test_depth_cull_drops_hidden_points);
     RUN(test_moving_object_points_follow);
+    RUN(test_holes_take_the_layer_they_uncover);
     RUN(test_misses_are_points_at_infinity);
     RUN(test_predictive_sampling_fills_next_holes);
     RUN(test_eviction_spares_visible_points);
