@@ -16,11 +16,11 @@
 
    Reference frames (tests/data/walkthrough_radiosity_f<frame>.pfm, 64x48)
    were written by this program from the repository root (again for
-   radinterp v0.8.0, whose relative refinement measures a link's error
-   against the darkest lit part of its receiver: 0.0150 from v0.7.0's
-   frames; ref_radinterp_mesh's Embree comparison of the office at the
-   default leaf size went from 0.0341 to 0.0281, the Cornell box's from
-   0.0366 to 0.0359) with
+   radinterp v0.8.1, which finds the strips of surfaces inside walls
+   enclosed and splits links whose random points see less than their fixed
+   ones: 0.0089 from v0.8.0's frames, where ref_radinterp_building's office
+   points went from 2.05% / 7.5% to 2.13% / 7.9% and its building's median
+   from 7.5% to 3.75%; v0.8.0's were 0.0150 from v0.7.0's) with
 
        WT_WRITE_REFERENCE=1 build/tests/test_walkthrough_radiosity reference
 
