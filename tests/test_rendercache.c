@@ -630,6 +630,25 @@ static void test_depth_cull_drops_hidden_points(void)
 /* ---------------------------------------------------------------------
    Moving object: points follow the transform, uncovered wall is requested.
    --------------------------------------------------------------------- */
+
+/* The state the moving-object tests start from: a cache converged on the
+   scene at rest (*before, cleared here), then the square moved by m (its
+   translation into *after) and the next frame begun. NULL when the cache
+   cannot be made. */
+static rendercache *cache_after_move(const rendercache_desc *d, const rendercache_camera *cam, const float m[12],
+                                     scene *before, scene *after)
+{
+    rendercache *rc;
+    memset(before, 0, sizeof *before);
+    *after = *before;
+    after->shift[0] = m[3];
+    after->shift[1] = m[7];
+    if (!CHECK_EQ_INT(rendercache_create(d, &rc), RENDERCACHE_OK)) return NULL;
+    converge(rc, before, cam);
+    CHECK_EQ_INT(rendercache_set_object_transform(rc, 1, m), RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_begin_frame(rc, cam), RENDERCACHE_OK);
+    return rc;
+}
 static void test_moving_object_points_follow(void)
 {
     const uint32_t w = 96, h = 80;
@@ -643,14 +662,8 @@ static void test_moving_object_points_follow(void)
     const unsigned char *kind;
     uint32_t fresh_count, got = 0, i, inside = 0, p, high = 0, square_px = 0;
     float wall_prio = 0.0f, square_prio = 0.0f;
-    memset(&before, 0, sizeof before);
-    after = before;
-    after.shift[0] = m[3];
-    after.shift[1] = m[7];
-    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
-    converge(rc, &before, &cam);
-    CHECK_EQ_INT(rendercache_set_object_transform(rc, 1, m), RENDERCACHE_OK);
-    CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
+    rc = cache_after_move(&d, &cam, m, &before, &after);
+    if (!rc) return;
     /* the square's points now sit where the moved square is */
     check_points_against_scene(rc, &after, &cam);
     check_holes_single_layer(rc);
@@ -742,14 +755,8 @@ static void test_holes_take_the_layer_they_uncover(void)
     scene before, after;
     float m[12] = { 1, 0, 0, 0.5f, 0, 1, 0, 0.15f, 0, 0, 1, 0 };
     uint32_t wrong, checked, sparse, wall_holes;
-    memset(&before, 0, sizeof before);
-    after = before;
-    after.shift[0] = m[3];
-    after.shift[1] = m[7];
-    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
-    converge(rc, &before, &cam);
-    CHECK_EQ_INT(rendercache_set_object_transform(rc, 1, m), RENDERCACHE_OK);
-    CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
+    rc = cache_after_move(&d, &cam, m, &before, &after);
+    if (!rc) return;
     wrong = holes_of_wrong_layer(rc, &after, &cam, 0.05f, &checked, &sparse);
     wall_holes = checked;
     CHECK(checked > 150 && sparse > 20);   /* the strip: 8 x 28 pixels, its middle beyond the 3x3 filter */
