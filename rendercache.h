@@ -2919,6 +2919,12 @@ typedef struct rendercache__hole_layer {
    near point and the nearest far one. A ray's point
    weighs 1/8 of the inverse of its distance (so that a sum of 8 finite
    colours stays finite). */
+/* Whether object's transform changed in this frame (the background never). */
+static int rendercache__moved_now(const rendercache *rc, uint32_t object)
+{
+    return object < rc->object_count && rc->obj_since[object] == rc->frame;
+}
+
 static rendercache__hole_layer rendercache__find_layer(const rendercache *rc, uint32_t x, uint32_t y, float tol2)
 {
     const int w = (int)rc->width, h = (int)rc->height;
@@ -2950,13 +2956,8 @@ static rendercache__hole_layer rendercache__find_layer(const rendercache *rc, ui
         int span = (step[k] + smin + 1) / 2;   /* 1 .. HOLE_REACH */
         near[k] = first[k] <= dmin * tol_pow[span];
         if (first[k] == FLT_MAX) continue;
-        if (near[k]) {
-            uint32_t object = rc->data[rc->px_index[at[k]]].object;
-            near_max = first[k] > near_max ? first[k] : near_max;
-            moved |= object < rc->object_count && rc->obj_since[object] == rc->frame;
-        } else {
-            far_min = first[k] < far_min ? first[k] : far_min;
-        }
+        if (near[k]) near_max = first[k] > near_max ? first[k] : near_max;
+        else far_min = first[k] < far_min ? first[k] : far_min;
         far |= !near[k];
     }
     if (!far) return layer;
@@ -2965,6 +2966,10 @@ static rendercache__hole_layer rendercache__find_layer(const rendercache *rc, ui
         layer.hi = sqrtf(near_max) * sqrtf(far_min);   /* enclosed: the nearest layer */
         return layer;
     }
+    /* only now the near points' objects: each is a read at random in the
+       cache (a miss), which most holes (one layer, or enclosed) never need */
+    for (k = 0; k < 8 && !moved; k++)
+        moved = first[k] != FLT_MAX && near[k] && rendercache__moved_now(rc, rc->data[rc->px_index[at[k]]].object);
     if (!moved) return layer;
     layer.any = 0;
     layer.lo = sqrtf(near_max) * sqrtf(far_min);   /* a disocclusion: the farther points */
