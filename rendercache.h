@@ -1932,6 +1932,12 @@ static void rendercache__splat_run_cover(rendercache__splat *s,
 #define RENDERCACHE__CELL_JOBS 8u            /* jobs of the occupancy count with parallel_for, each with its own
                                                 bytes (1/16 byte per pixel each): fine enough that a thread
                                                 the system holds back holds back little */
+/* How far (pixels) a hole looks for the layers around it: the rows the
+   cull of the next tile has written when the filling of a tile runs
+   (rendercache__cull_and_interpolate), and as wide as the disocclusion
+   behind an object that moves 8 pixels in a frame. */
+#define RENDERCACHE__HOLE_REACH RENDERCACHE__TILE_ROWS
+
 #define RENDERCACHE__BAND_ROWS 128u          /* rows per band of the error diffusion: 9 bands at 1080p */
 #define RENDERCACHE__SORT_RANGE 16384u       /* slots re-sorted together: a range (656 KB of points) and its
                                                 scratch stay in a core's L2 cache */
@@ -2022,6 +2028,8 @@ struct rendercache {
     uint32_t age_ramp, moving_age_step, sparse_neighbours, wide_radius, max_latency;
     float inv_age_ramp;
     float window_scale[8];   /* per interpolation radius: the power of two that scales its weights */
+    float tol2_pow[RENDERCACHE__HOLE_REACH + 1];   /* powers 0 .. HOLE_REACH of the squared depth tolerance
+                                                     factor (rendercache__find_layer), computed once */
 
     /* point cache: slot order is insertion order; the projection streams
        through geo. One more slot after the last stays empty (see cull_job). */
@@ -2307,6 +2315,9 @@ static int rendercache__configure(rendercache *rc, const rendercache_desc *d)
         while ((1u << e) < total) e++;
         rc->window_scale[r] = ldexpf(1.0f, -e);
     }
+    rc->tol2_pow[0] = 1.0f;
+    for (r = 1; r <= RENDERCACHE__HOLE_REACH; r++)
+        rc->tol2_pow[r] = rc->tol2_pow[r - 1] * ((1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance));
     memcpy(rc->background, d->background, sizeof rc->background);
     return 1;
 }
@@ -2885,12 +2896,6 @@ static void rendercache__cull_job(void *ctx, uint32_t tile)
    filling of another tile may be writing them. */
 static const float rendercache__black[3] = { 0.0f, 0.0f, 0.0f };
 
-/* How far (pixels) a hole looks for the layers around it: the rows the
-   cull of the next tile has written when the filling of a tile runs
-   (rendercache__cull_and_interpolate), and as wide as the disocclusion
-   behind an object that moves 8 pixels in a frame. */
-#define RENDERCACHE__HOLE_REACH RENDERCACHE__TILE_ROWS
-
 /* The layer a hole takes: the depths (squared) its filters take, [lo, hi]
    (every depth when any: its rays met one layer or none, and the window
    decides); for a disocclusion, the weighted sum of the colours of the
@@ -2925,10 +2930,11 @@ static int rendercache__moved_now(const rendercache *rc, uint32_t object)
     return object < rc->object_count && rc->obj_since[object] == rc->frame;
 }
 
-static rendercache__hole_layer rendercache__find_layer(const rendercache *rc, uint32_t x, uint32_t y, float tol2)
+static rendercache__hole_layer rendercache__find_layer(const rendercache *rc, uint32_t x, uint32_t y)
 {
     const int w = (int)rc->width, h = (int)rc->height;
-    float first[8], dmin = FLT_MAX, near_max = 0.0f, far_min = FLT_MAX, tol_pow[RENDERCACHE__HOLE_REACH + 1];
+    const float *tol_pow = rc->tol2_pow;   /* the squared tolerance factor's powers */
+    float first[8], dmin = FLT_MAX, near_max = 0.0f, far_min = FLT_MAX;
     int k, s, step[8], near[8], smin = 0, far = 0, moved = 0;
     uint32_t at[8];
     rendercache__hole_layer layer = { 1, 0.0f, FLT_MAX, { 0, 0, 0, 0 } };
@@ -2950,8 +2956,6 @@ static rendercache__hole_layer rendercache__find_layer(const rendercache *rc, ui
         }
     }
     if (dmin == FLT_MAX) return layer;
-    tol_pow[0] = 1.0f;
-    for (s = 1; s <= (int)RENDERCACHE__HOLE_REACH; s++) tol_pow[s] = tol_pow[s - 1] * tol2;
     for (k = 0; k < 8; k++) {
         int span = (step[k] + smin + 1) / 2;   /* 1 .. HOLE_REACH */
         near[k] = first[k] <= dmin * tol_pow[span];
@@ -3083,7 +3087,7 @@ static unsigned char rendercache__fill_hole(rendercache *rc, uint32_t x, uint32_
     uint32_t n;
     unsigned char kind;
     float rgb[3], tol2 = (1.0f + rc->depth_tolerance) * (1.0f + rc->depth_tolerance);
-    rendercache__hole_layer layer = rendercache__find_layer(rc, x, y, tol2);
+    rendercache__hole_layer layer = rendercache__find_layer(rc, x, y);
     n = x > 0 && y > 0 && x + 1 < w && y + 1 < h ? rendercache__interpolate3(rc, x, y, layer, tol2, rgb)
                                                  : rendercache__interpolate(rc, x, y, 1, layer, tol2, rgb);
     if (n >= rc->sparse_neighbours) {   /* (points of its layer: a hole beside a disocclusion's edge takes the
