@@ -53,6 +53,7 @@
            uint32_t i, n;
            rendercache_begin_frame(rc, &camera);      // reproject, cull, fill, prioritise
            rendercache_predict(rc, &next_camera);     // optional: seed what the motion will uncover
+           // (or both at once, reading the points once: rendercache_begin_frame_predicted(rc, &camera, &next_camera))
            rendercache_request(rc, req, budget, &n);  // the pixels that deserve a ray
            for (i = 0; i < n; i++) {
                memset(&s[i], 0, sizeof s[i]);         // priority_scale 0: 1
@@ -103,6 +104,7 @@
        rendercache_set_object_transform(rc, object, m)                object-to-world 3x4 matrix
        rendercache_begin_frame(rc, camera)                            reproject into a new camera
        rendercache_predict(rc, next_camera)                           optional: sample what it will uncover
+       rendercache_begin_frame_predicted(rc, camera, next_camera)     both in one pass over the points
        rendercache_request(rc, out, max, &count)                      pixels to shade this frame
        rendercache_insert(rc, samples, n, &taken)                     shaded samples become points (late too)
        rendercache_invalidate(rc, object)                             an object's (or all) lighting changed
@@ -197,7 +199,9 @@
        desc.predict_fraction of the budget goes to the regions the next
        camera uncovers: the points are counted in an occupancy image of 1/16
        the resolution (cells of 4x4 pixels) of that camera, and a cell with
-       fewer than 4 is seeded with one request (WDG02 predictive sampling).
+       fewer than 4 is seeded with one request (WDG02 predictive sampling);
+       begin_frame_predicted counts them in the same pass as the projection
+       into the current camera, each batch of points while it is in cache.
        insert: a sample of the current frame replaces the point its pixel
        showed, or takes the slot of the oldest point not visible (clock); a
        late or predicted sample is stored at its own point, replaces the
@@ -585,7 +589,7 @@ typedef struct rendercache_stats {
     double time_cull;            /* depth cull, with the colour and priority of the pixels showing points;
                                     without parallel_for also the hole filling, interleaved with it */
     double time_interpolate;     /* hole filling, with the priority of the holes (0 without parallel_for) */
-    double time_predict;         /* rendercache_predict */
+    double time_predict;         /* rendercache_predict (begin_frame_predicted: in time_project) */
     double time_request;         /* threshold and error diffusion (all request calls) */
     double time_insert;
     double time_sort;            /* re-sorting a share of the cache into image order (end of begin_frame) */
@@ -617,6 +621,13 @@ RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, cons
    RENDERCACHE_REQUEST_PREDICTED, rays of the predicted camera). Valid until
    the next begin_frame. */
 RENDERCACHE_API rendercache_result rendercache_predict(rendercache *rc, const rendercache_camera *next);
+
+/* begin_frame(camera) and predict(next) in one call, with the same result
+   bit for bit, and cheaper: the points are read once for both (the
+   prediction's count is then part of stats.time_project). For a caller
+   that knows the next camera when a frame starts. */
+RENDERCACHE_API rendercache_result rendercache_begin_frame_predicted(rendercache *rc, const rendercache_camera *camera,
+                                                                     const rendercache_camera *next);
 
 /* Chooses up to max pixels to sample by error diffusion of the thresholded
    priority image and writes them to out (*count of them). A second call in
@@ -1703,6 +1714,11 @@ static int rendercache__splat_alloc(rendercache__splat *s, uint32_t width, uint3
    nearby numbers land in nearby pixels. */
 typedef void (*rendercache__chunk_fn)(const void *src, uint32_t c, uint32_t *begin, uint32_t *end);
 
+/* What a splat of keys also does with elements [begin, end) in job j,
+   right after the source projected them, while they are in cache (the
+   render cache's prediction counts them in the next camera's cells). */
+typedef void (*rendercache__also_fn)(const void *also_src, uint32_t j, uint32_t begin, uint32_t end);
+
 typedef struct rendercache__splat_job {
     rendercache__splat *s;
     rendercache__source_fn source;
@@ -1710,7 +1726,8 @@ typedef struct rendercache__splat_job {
     uint32_t chunk_count;
     rendercache__payload_fn payload;   /* NULL: no payload */
     rendercache__cover_fn cover;       /* instead of source and payload */
-    const void *src;
+    rendercache__also_fn also;         /* NULL: nothing more (keys only) */
+    const void *src, *also_src;
     uint32_t element_count, jobs;
     int shared;                        /* the jobs share z-buffer 0 (s->shared, in parallel) */
 } rendercache__splat_job;
@@ -1776,14 +1793,16 @@ static uint32_t rendercache__zbuffer_keys(uint64_t *key, uint32_t sink, const ui
 }
 
 /* Z-buffers the keys of elements [begin, end) (no payload) into key,
-   through the atomic minimum when shared; returns how many landed. */
-static uint32_t rendercache__splat_keys(const rendercache__splat_job *job, uint64_t *key, uint32_t begin, uint32_t end)
+   through the atomic minimum when shared, in job j; returns how many landed. */
+static uint32_t rendercache__splat_keys(const rendercache__splat_job *job, uint32_t j, uint64_t *key, uint32_t begin,
+                                        uint32_t end)
 {
     uint32_t pix[RENDERCACHE__BATCH], b, i, projected = 0;
     float d[RENDERCACHE__BATCH];
     for (b = begin; b < end; b += RENDERCACHE__BATCH) {
-        uint32_t n = end - b < RENDERCACHE__BATCH ? end - b : RENDERCACHE__BATCH;
-        if (!job->source(job->src, b, b + n, pix, d)) continue;   /* nothing landed */
+        uint32_t n = end - b < RENDERCACHE__BATCH ? end - b : RENDERCACHE__BATCH, landed = job->source(job->src, b, b + n, pix, d);
+        if (job->also) job->also(job->also_src, j, b, b + n);
+        if (!landed) continue;   /* nothing landed */
 #if RENDERCACHE__ATOMICS
         if (job->shared) {
             for (i = 0; i < n; i++) {
@@ -1818,7 +1837,7 @@ static void rendercache__splat_range(void *ctx, uint32_t j)
         for (i = begin; i < end; i++) {
             uint32_t e0, e1;
             job->chunk(job->src, i, &e0, &e1);
-            projected += rendercache__splat_keys(job, key, e0, e1);
+            projected += rendercache__splat_keys(job, j, key, e0, e1);
         }
         s->job_projected[j] = projected;
         return;
@@ -1828,7 +1847,7 @@ static void rendercache__splat_range(void *ctx, uint32_t j)
         return;
     }
     if (!job->payload) {
-        s->job_projected[j] = rendercache__splat_keys(job, key, begin, end);
+        s->job_projected[j] = rendercache__splat_keys(job, j, key, begin, end);
         return;
     }
     for (b = begin; b < end; b += RENDERCACHE__BATCH) {
@@ -1886,10 +1905,12 @@ static void rendercache__splat_execute(rendercache__splat_job *job,
    chunk (chunk gives each chunk's elements; the jobs split the chunks in
    order); the caller takes the least key of each pixel over the z-buffers
    of the run (s->ran_jobs; rendercache__splat_least) in a pass it makes
-   anyway. */
+   anyway. A splat of keys only may also hand each batch to also (NULL:
+   none), in its job j < RENDERCACHE__SHARED_JOBS. */
 static void rendercache__splat_run(rendercache__splat *s, void (*parallel_for)(void *, rendercache_job_fn, void *, uint32_t),
                                    void *user, rendercache__source_fn source, rendercache__payload_fn payload,
-                                   rendercache__chunk_fn chunk, uint32_t chunk_count, const void *src, uint32_t count)
+                                   rendercache__chunk_fn chunk, uint32_t chunk_count, const void *src, uint32_t count,
+                                   rendercache__also_fn also, const void *also_src)
 {
     rendercache__splat_job job;
     memset(&job, 0, sizeof job);
@@ -1900,6 +1921,8 @@ static void rendercache__splat_run(rendercache__splat *s, void (*parallel_for)(v
     job.chunk_count = chunk_count;
     job.src = src;
     job.element_count = count;
+    job.also = payload ? NULL : also;
+    job.also_src = also_src;
     rendercache__splat_execute(&job, parallel_for, user);
 }
 
@@ -2645,10 +2668,6 @@ static void rendercache__compose_objects(const rendercache *rc, const rendercach
         rendercache__view_compose(v, rc->obj_world + 12 * (size_t)o, out + 12 * (size_t)o);
 }
 
-/* Projects every point into view v (matrices obj_camera) and z-buffers
-   them into rc->splat. Keys only: the points that win a pixel give their
-   colour and priority in the depth cull, so that the others (about half)
-   cost no read of their colour and no write. */
 /* The chunks of the projection, band by band of the image: chunk c of
    block b = c / (R + q) (R ranges, q = ceil(R / SORT_BANDS)) is, for i =
    c % (R + q) < R, the points of range i that fell in band b at its last
@@ -2679,14 +2698,28 @@ static void rendercache__point_chunk(const void *src, uint32_t c, uint32_t *begi
     *end = i < ranges ? r0 + bands[b + 1] : r0 + n;
 }
 
+/* Section 13: the prediction's count of points in the cells of the
+   predicted view (projector cells) in job j's bytes, and its start and end. */
+static void rendercache__count_cells(const void *cells, uint32_t j, uint32_t begin, uint32_t end);
+static void rendercache__predict_start(rendercache *rc, const rendercache__view *next);
+static void rendercache__predict_finish(rendercache *rc);
+
+/* Projects every point into view v (matrices obj_camera) and z-buffers
+   them into rc->splat. Keys only: the points that win a pixel give their
+   colour and priority in the depth cull, so that the others (about half)
+   cost no read of their colour and no write. With cells (the predicted
+   view's projector onto its cells, or NULL) each batch of points is also
+   counted in the cells it lands in, while it is in cache: the prediction
+   without a second pass over the points. */
 static void rendercache__splat_points(rendercache *rc, const rendercache__view *v, const float *obj_camera,
-                                      double *t_project)
+                                      const rendercache__projector *cells, double *t_project)
 {
     rendercache__projector pr;
     double t0 = rendercache__now(rc);
     rendercache__projector_init(&pr, rc, v, obj_camera, 0);
     rendercache__splat_run(&rc->splat, rc->parallel_for, rc->parallel_user, rendercache__project_points, NULL,
-                           rendercache__point_chunk, rendercache__chunk_count(rc), &pr, rc->capacity);
+                           rendercache__point_chunk, rendercache__chunk_count(rc), &pr, rc->capacity,
+                           cells ? rendercache__count_cells : NULL, cells);
     if (t_project) *t_project += rendercache__now(rc) - t0;
 }
 
@@ -3285,31 +3318,41 @@ static void rendercache__start_stats(rendercache *rc)
     s->time_predict = s->time_request = s->time_insert = s->time_sort = 0.0;
 }
 
-RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, const rendercache_camera *camera)
+/* Whether camera is one the cache can project into (perspective, of the
+   cache's size), into v. */
+static int rendercache__frame_view(const rendercache *rc, const rendercache_camera *camera, rendercache__view *v)
 {
-    rendercache__view v;
+    return rendercache__view_init(v, camera) && camera->width == rc->width && camera->height == rc->height &&
+           camera->kind == RENDERCACHE_CAMERA_PERSPECTIVE;
+}
+
+/* begin_frame into view v, and with next (or NULL) the prediction for
+   that view in the same pass over the points. */
+static void rendercache__begin(rendercache *rc, const rendercache__view *v, const rendercache__view *next)
+{
     rendercache__frame_record *record;
+    rendercache__projector cells;
     double t1, t2;
-    if (!rc || !rendercache__view_init(&v, camera) || camera->width != rc->width || camera->height != rc->height ||
-        camera->kind != RENDERCACHE_CAMERA_PERSPECTIVE) {
-        if (rc && rc->log) rc->log(rc->log_user, "rendercache_begin_frame: invalid camera or image size");
-        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
-    }
     rc->frame++;
     if (rendercache__mark(rc->frame) == 1u) memset(rc->shown, 0, (size_t)rc->capacity + rc->tile_count);
-    rc->view = v;
+    rc->view = *v;
     rc->has_prediction = 0;
     rc->hand_exhausted = 0;
     record = &rc->history[rc->frame % ((uint64_t)rc->max_latency + 1)];
     memset(record, 0, sizeof *record);
     record->frame = rc->frame;
-    record->view = v;
+    record->view = *v;
     rendercache__start_stats(rc);
     rendercache__change_level(rc);
     rendercache__commit_transforms(rc);
     rendercache__compose_objects(rc, &rc->view, rc->obj_camera);
     rendercache__sort_share(rc);
-    rendercache__splat_points(rc, &rc->view, rc->obj_camera, &rc->stats.time_project);
+    if (next) {
+        rendercache__predict_start(rc, next);
+        rendercache__projector_init(&cells, rc, &rc->predicted, rc->obj_predicted, RENDERCACHE__CELL_SHIFT);
+    }
+    rendercache__splat_points(rc, &rc->view, rc->obj_camera, next ? &cells : NULL, &rc->stats.time_project);
+    if (next) rendercache__predict_finish(rc);
     if (rc->parallel_for) {
         t1 = rendercache__now(rc);
         rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__depth_job, rc, rc->tile_count);
@@ -3330,6 +3373,16 @@ RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, cons
     rc->stats.empty = rendercache__tile_sum(rc, 4);
     rc->stats.live_points = rc->live;
     rc->has_frame = 1;
+}
+
+RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, const rendercache_camera *camera)
+{
+    rendercache__view v;
+    if (!rc || !rendercache__frame_view(rc, camera, &v)) {
+        if (rc && rc->log) rc->log(rc->log_user, "rendercache_begin_frame: invalid camera or image size");
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    }
+    rendercache__begin(rc, &v, NULL);
     return RENDERCACHE_OK;
 }
 
@@ -3345,26 +3398,32 @@ RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, cons
    into view.
    ---------------------------------------------------------------------- */
 typedef struct rendercache__predict_job {
-    rendercache *rc;
     rendercache__projector pr;
     uint32_t jobs;
 } rendercache__predict_job;
 
-/* Job j: counts the points of its range in each cell, in its own bytes. */
-static void rendercache__occupancy_job(void *ctx, uint32_t j)
+/* The byte arrays of the count: one per job (RENDERCACHE__CELL_JOBS with
+   parallel_for, which covers the jobs of a splat too), each a count per
+   cell up to 255 and a last byte for the points that miss. A count up to
+   255 is the same whatever the order or the split of the points. */
+static uint32_t rendercache__cell_arrays(const rendercache *rc)
 {
-    const rendercache__predict_job *job = (const rendercache__predict_job *)ctx;
-    const rendercache *rc = job->rc;
+    return rc->parallel_for ? RENDERCACHE__CELL_JOBS : 1u;
+}
+typedef char rendercache__cell_arrays_cover_splat_jobs[RENDERCACHE__SHARED_JOBS <= RENDERCACHE__CELL_JOBS ? 1 : -1];
+
+/* Counts points [begin, end) in the cells of the projector (pr; its
+   cells) they land in, in job j's bytes. */
+static void rendercache__count_cells(const void *pr, uint32_t j, uint32_t begin, uint32_t end)
+{
+    const rendercache *rc = ((const rendercache__projector *)pr)->rc;
     const uint32_t cells = rc->cell_count;
     unsigned char *occ = rc->occupancy + (size_t)j * (cells + 1);
-    uint32_t cell[RENDERCACHE__BATCH], b, i, begin, end;
+    uint32_t cell[RENDERCACHE__BATCH], b, i;
     float d[RENDERCACHE__BATCH];
-    begin = (uint32_t)((uint64_t)rc->capacity * j / job->jobs);
-    end = (uint32_t)((uint64_t)rc->capacity * (j + 1) / job->jobs);
-    memset(occ, 0, (size_t)cells + 1);
     for (b = begin; b < end; b += RENDERCACHE__BATCH) {
         uint32_t n = end - b < RENDERCACHE__BATCH ? end - b : RENDERCACHE__BATCH;
-        rendercache__project_points(&job->pr, b, b + n, cell, d);
+        rendercache__project_points(pr, b, b + n, cell, d);
         for (i = 0; i < n; i++) {   /* without a branch */
             unsigned char *o = &occ[cell[i] == RENDERCACHE__NONE ? cells : cell[i]];
             *o = (unsigned char)(*o + (*o < 255u));
@@ -3372,33 +3431,66 @@ static void rendercache__occupancy_job(void *ctx, uint32_t j)
     }
 }
 
-RENDERCACHE_API rendercache_result rendercache_predict(rendercache *rc, const rendercache_camera *next)
+/* Job j: counts the points of its range in each cell, in its own bytes. */
+static void rendercache__occupancy_job(void *ctx, uint32_t j)
 {
-    rendercache__predict_job job;
-    rendercache__view v;
-    uint32_t j, c;
-    double t0;
-    if (!rc || !rc->has_frame || !rendercache__view_init(&v, next) || next->width != rc->width ||
-        next->height != rc->height || next->kind != RENDERCACHE_CAMERA_PERSPECTIVE)
-        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
-    t0 = rendercache__now(rc);
-    rc->predicted = v;
-    rc->history[rc->frame % ((uint64_t)rc->max_latency + 1)].predicted = v;
+    const rendercache__predict_job *job = (const rendercache__predict_job *)ctx;
+    const uint32_t capacity = job->pr.rc->capacity;
+    rendercache__count_cells(&job->pr, j, (uint32_t)((uint64_t)capacity * j / job->jobs),
+                             (uint32_t)((uint64_t)capacity * (j + 1) / job->jobs));
+}
+
+/* The predicted view of this frame, its matrices, and empty counts. */
+static void rendercache__predict_start(rendercache *rc, const rendercache__view *next)
+{
+    rc->predicted = *next;
+    rc->history[rc->frame % ((uint64_t)rc->max_latency + 1)].predicted = *next;
     rc->history[rc->frame % ((uint64_t)rc->max_latency + 1)].has_prediction = 1;
     rendercache__compose_objects(rc, &rc->predicted, rc->obj_predicted);
-    job.rc = rc;
-    rendercache__projector_init(&job.pr, rc, &rc->predicted, rc->obj_predicted, RENDERCACHE__CELL_SHIFT);
-    job.jobs = rc->parallel_for ? RENDERCACHE__CELL_JOBS : 1u;
-    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__occupancy_job, &job, job.jobs);
+    memset(rc->occupancy, 0, ((size_t)rc->cell_count + 1) * rendercache__cell_arrays(rc));
+}
+
+/* The counts of the jobs summed into the first array (up to 255), and the
+   cells with fewer than RENDERCACHE__CELL_FEW points counted. */
+static void rendercache__predict_finish(rendercache *rc)
+{
+    const uint32_t arrays = rendercache__cell_arrays(rc);
+    uint32_t j, c;
     rc->pred_cells = 0;
-    for (c = 0; c < rc->cell_count; c++) {   /* job 0's bytes become the sum */
+    for (c = 0; c < rc->cell_count; c++) {
         uint32_t sum = rc->occupancy[c];
-        for (j = 1; j < job.jobs; j++) sum += rc->occupancy[(size_t)j * (rc->cell_count + 1) + c];
+        for (j = 1; j < arrays; j++) sum += rc->occupancy[(size_t)j * (rc->cell_count + 1) + c];
         rc->occupancy[c] = (unsigned char)(sum < 255u ? sum : 255u);
         rc->pred_cells += sum < RENDERCACHE__CELL_FEW;
     }
     rc->has_prediction = 1;
+}
+
+RENDERCACHE_API rendercache_result rendercache_predict(rendercache *rc, const rendercache_camera *next)
+{
+    rendercache__predict_job job;
+    rendercache__view v;
+    double t0;
+    if (!rc || !rc->has_frame || !rendercache__frame_view(rc, next, &v)) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    t0 = rendercache__now(rc);
+    rendercache__predict_start(rc, &v);
+    rendercache__projector_init(&job.pr, rc, &rc->predicted, rc->obj_predicted, RENDERCACHE__CELL_SHIFT);
+    job.jobs = rendercache__cell_arrays(rc);
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__occupancy_job, &job, job.jobs);
+    rendercache__predict_finish(rc);
     rc->stats.time_predict += rendercache__now(rc) - t0;
+    return RENDERCACHE_OK;
+}
+
+RENDERCACHE_API rendercache_result rendercache_begin_frame_predicted(rendercache *rc, const rendercache_camera *camera,
+                                                                     const rendercache_camera *next)
+{
+    rendercache__view v, n;
+    if (!rc || !rendercache__frame_view(rc, camera, &v) || !rendercache__frame_view(rc, next, &n)) {
+        if (rc && rc->log) rc->log(rc->log_user, "rendercache_begin_frame_predicted: invalid camera or image size");
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    }
+    rendercache__begin(rc, &v, &n);
     return RENDERCACHE_OK;
 }
 
@@ -5623,7 +5715,7 @@ static void rendercache__warp_splat(rendercache_warper *w, const rendercache__wa
         rendercache__splat_run_cover(&w->splat, w->parallel_for, w->parallel_user, rendercache__warp_cover, set, count);
     else
         rendercache__splat_run(&w->splat, w->parallel_for, w->parallel_user, rendercache__warp_source,
-                               rendercache__warp_payload, NULL, 0, set, count);
+                               rendercache__warp_payload, NULL, 0, set, count, NULL, NULL);
     w->stats.projected += w->splat.projected;
     memset(&job, 0, sizeof job);
     job.w = w;

@@ -1359,6 +1359,13 @@ static void test_bad_input_is_rejected(void)
     CHECK_EQ_INT(rendercache_begin_frame(rc, &bad), RENDERCACHE_ERROR_INVALID_ARGUMENT);
     CHECK_EQ_INT(rendercache_begin_frame(rc, NULL), RENDERCACHE_ERROR_INVALID_ARGUMENT);
     CHECK_EQ_INT(rendercache_begin_frame(NULL, &cam), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    bad = cam; bad.eye[0] = NAN;   /* either camera bad: nothing happens */
+    CHECK_EQ_INT(rendercache_begin_frame_predicted(rc, &cam, &bad), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(rendercache_begin_frame_predicted(rc, &bad, &cam), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    bad = cam; bad.height = h + 1;
+    CHECK_EQ_INT(rendercache_begin_frame_predicted(rc, &cam, &bad), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(rendercache_begin_frame_predicted(rc, &cam, NULL), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(rendercache_begin_frame_predicted(NULL, &cam, &cam), RENDERCACHE_ERROR_INVALID_ARGUMENT);
     bad = cam; bad.eye[0] = NAN;
     CHECK_EQ_INT(rendercache_predict(rc, &bad), RENDERCACHE_ERROR_INVALID_ARGUMENT);
     CHECK_EQ_INT(rendercache_request(rc, NULL, 10, &got), RENDERCACHE_ERROR_INVALID_ARGUMENT);
@@ -1450,8 +1457,10 @@ static uint64_t hash_bytes(uint64_t h, const void *p, size_t n)
 
 /* ppp: points per pixel (0: the default, one range of the re-sort into
    image order; 24: 12 ranges, 2 re-sorted per frame, in 2 jobs with a
-   parallel_for). */
-static uint64_t run_sequence(void (*pf)(void *, rendercache_job_fn, void *, uint32_t), void *user, float ppp)
+   parallel_for); fused: each frame starts with begin_frame_predicted
+   instead of begin_frame and predict. */
+static uint64_t run_sequence(void (*pf)(void *, rendercache_job_fn, void *, uint32_t), void *user, float ppp,
+                             int fused)
 {
     const uint32_t w = 96, h = 80;
     rendercache_desc d = make_desc(w, h);
@@ -1473,8 +1482,12 @@ static uint64_t run_sequence(void (*pf)(void *, rendercache_job_fn, void *, uint
         m[3] = 0.05f * (float)f;
         s.shift[0] = m[3];
         rendercache_set_object_transform(rc, 1, m);
-        rendercache_begin_frame(rc, &cam);
-        rendercache_predict(rc, &next);
+        if (fused) {
+            rendercache_begin_frame_predicted(rc, &cam, &next);
+        } else {
+            rendercache_begin_frame(rc, &cam);
+            rendercache_predict(rc, &next);
+        }
         rendercache_request(rc, g_req, 600, &n);
         for (i = 0; i < n; i++) shade(&s, &g_req[i], &g_samples[i]);
         rendercache_insert(rc, g_samples, n, NULL);
@@ -1492,10 +1505,29 @@ static void test_deterministic_for_any_thread_count(void)
     float ppp[2] = { 0.0f, 24.0f };
     int k;
     for (k = 0; k < 2; k++) {
-        uint64_t serial = run_sequence(NULL, NULL, ppp[k]);
+        uint64_t serial = run_sequence(NULL, NULL, ppp[k], 0);
         CHECK(serial != 0);
-        CHECK(run_sequence(reversed_parallel_for, NULL, ppp[k]) == serial);
-        if (pool) CHECK(run_sequence(ex_pool_parallel_for, pool, ppp[k]) == serial);
+        CHECK(run_sequence(reversed_parallel_for, NULL, ppp[k], 0) == serial);
+        if (pool) CHECK(run_sequence(ex_pool_parallel_for, pool, ppp[k], 0) == serial);
+    }
+    ex_pool_destroy(pool);
+}
+
+/* begin_frame_predicted counts the points in the predicted camera's cells
+   in the projection's pass over them: the requests, images and priorities
+   of begin_frame followed by predict, bit for bit, on any thread count
+   (with a moving object, so the predicted camera's object matrices count). */
+static void test_begin_frame_predicted_is_begin_frame_and_predict(void)
+{
+    ex_pool *pool = ex_pool_create(3);
+    float ppp[2] = { 0.0f, 24.0f };
+    int k;
+    for (k = 0; k < 2; k++) {
+        uint64_t separate = run_sequence(NULL, NULL, ppp[k], 0);
+        CHECK(separate != 0);
+        CHECK(run_sequence(NULL, NULL, ppp[k], 1) == separate);
+        CHECK(run_sequence(reversed_parallel_for, NULL, ppp[k], 1) == separate);
+        if (pool) CHECK(run_sequence(ex_pool_parallel_for, pool, ppp[k], 1) == separate);
     }
     ex_pool_destroy(pool);
 }
@@ -1524,5 +1556,6 @@ int main(int argc, char **argv)
     RUN(test_no_allocation_per_frame);
     RUN(test_bad_input_is_rejected);
     RUN(test_deterministic_for_any_thread_count);
+    RUN(test_begin_frame_predicted_is_begin_frame_and_predict);
     return test_finish();
 }
