@@ -622,10 +622,12 @@ RENDERCACHE_API rendercache_result rendercache_begin_frame(rendercache *rc, cons
    the next begin_frame. */
 RENDERCACHE_API rendercache_result rendercache_predict(rendercache *rc, const rendercache_camera *next);
 
-/* begin_frame(camera) and predict(next) in one call, with the same result
-   bit for bit, and cheaper: the points are read once for both (the
+/* begin_frame(camera) followed at once by predict(next), with the same
+   result bit for bit, and cheaper: the points are read once for both (the
    prediction's count is then part of stats.time_project). For a caller
-   that knows the next camera when a frame starts. */
+   that knows the next camera when a frame starts. (Late samples inserted
+   between begin_frame and predict are counted by predict; here they come
+   after the count.) */
 RENDERCACHE_API rendercache_result rendercache_begin_frame_predicted(rendercache *rc, const rendercache_camera *camera,
                                                                      const rendercache_camera *next);
 

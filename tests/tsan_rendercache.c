@@ -1,6 +1,7 @@
 /* Concurrency test of rendercache.h under ThreadSanitizer: every parallel
    part of the library runs on a pool of two workers and the calling thread
-   (the render cache's frame with prediction, requests and insertion; warps
+   (the render cache's frame with prediction, apart or counted in the
+   projection's pass, requests and insertion; warps
    of fish-eye and perspective range images with every fill mode and a fill
    callback; pixelwise and motion-compensated time blends), and its result
    must equal, bit for bit, the same calls made serially. ThreadSanitizer
@@ -89,10 +90,15 @@ static uint64_t run_cache(ex_pool *pool, float ppp)
         rendercache_camera next = camera(RENDERCACHE_CAMERA_PERSPECTIVE, 0.05f * (float)(f + 1), 0.3f * (float)(f + 1), W, H);
         m[3] = shift;
         CHECK_EQ_INT(rendercache_set_object_transform(rc, 1, m), RENDERCACHE_OK);
-        CHECK_EQ_INT(rendercache_begin_frame(rc, &c), RENDERCACHE_OK);
-        /* last frame's samples come back one frame late */
-        CHECK_EQ_INT(rendercache_insert(rc, late, pending, NULL), RENDERCACHE_OK);
-        CHECK_EQ_INT(rendercache_predict(rc, &next), RENDERCACHE_OK);
+        if (f % 2) {   /* the prediction counted in the projection's jobs */
+            CHECK_EQ_INT(rendercache_begin_frame_predicted(rc, &c, &next), RENDERCACHE_OK);
+            /* last frame's samples come back one frame late */
+            CHECK_EQ_INT(rendercache_insert(rc, late, pending, NULL), RENDERCACHE_OK);
+        } else {
+            CHECK_EQ_INT(rendercache_begin_frame(rc, &c), RENDERCACHE_OK);
+            CHECK_EQ_INT(rendercache_insert(rc, late, pending, NULL), RENDERCACHE_OK);
+            CHECK_EQ_INT(rendercache_predict(rc, &next), RENDERCACHE_OK);
+        }
         /* a quarter of the pixels first: holes everywhere, next to every tile border */
         CHECK_EQ_INT(rendercache_request(rc, req, f == 0 ? W * H / 4 : W * H / 8, &n), RENDERCACHE_OK);
         for (i = 0; i < n; i++) {   /* half of them now, half a frame later */
