@@ -314,10 +314,17 @@ int main(int argc, char **argv)
         fprintf(stderr, "walkthrough: %s\n", err);
         return 1;
     }
-    if (u.o.verbose)
-        printf("walkthrough: mode %s, %d frames of %dx%d, %d threads; %s %u triangles, bunny %u triangles\n",
-               wt_mode_name(u.o.mode), u.o.frames, u.o.width, u.o.height, ex_pool_threads(u.w->pool),
+    if (u.o.verbose) {
+        char route[96] = "";
+        if (u.o.frames <= 0) {   /* the count the world chose from the route */
+            wt_route rt = wt_route_measure(&u.w->opt);
+            snprintf(route, sizeof route, " (the route: %.1f m, %.0f degrees)", rt.length, rt.turn);
+        }
+        printf("walkthrough: mode %s, %d frames%s of %dx%d, %d threads; %s %u triangles, bunny %u triangles\n",
+               wt_mode_name(u.o.mode), u.w->opt.frames, route, u.o.width, u.o.height, ex_pool_threads(u.w->pool),
                u.w->office_path, u.w->office.tri_count, u.w->bunny.tri_count);
+    }
+    u.o.frames = u.w->opt.frames;
     fflush(stdout);
     t0 = wt_seconds();
     if (wt_renderer_create(u.w, &u.r, err, sizeof err) != 0) {
