@@ -183,7 +183,7 @@ static int viewer_render(viewer *v, int frame)
     if (frame >= 0) {
         result = wt_render_frame(v->r, frame, v->rgb, &v->st);
     } else if (v->follow || v->o.mode == WT_MODE_BASEVIEWS) {
-        int f = (int)(v->bunny_t * (v->o.frames - 1) + 0.5);
+        int f = (int)(v->bunny_t * (v->w->opt.frames - 1) + 0.5);   /* the count the world resolved */
         if (v->o.mode == WT_MODE_BASEVIEWS) {
             result = wt_render_frame(v->r, f, v->rgb, &v->st);
         } else {

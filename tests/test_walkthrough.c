@@ -180,6 +180,34 @@ static void test_camera_path(void)
     }
 }
 
+/* The default frame count follows the route (wt_route_frames): the
+   office's walk (1.3 m of eye movement, 51 degrees of turn) is shorter than
+   48 frames of 0.1 m and 1.5 degrees, so it keeps 48; wt_world_create
+   resolves the count before the precompute keys hash it, so a key of the
+   default count is the key of the same count given explicitly, and another
+   count gives another key. */
+static void test_route_frames(void)
+{
+    wt_options o = small_options(WT_MODE_RAYTRACE);
+    wt_world *w[3] = { NULL, NULL, NULL };
+    wt_route route = wt_route_measure(&o);
+    char err[512];
+    int i, ok = 1;
+    test_note("office route: %.3f m, %.1f degrees: %d frames", route.length, route.turn, wt_route_frames(&o));
+    CHECK(route.length > 1.0 && route.length < 1.6 && route.turn > 40.0 && route.turn < 60.0);   /* the walk as it is */
+    CHECK_EQ_INT(wt_route_frames(&o), WT_MIN_FRAMES);
+    for (i = 0; i < 3; i++) {
+        o.frames = i == 0 ? 0 : i == 1 ? WT_MIN_FRAMES : WT_MIN_FRAMES + 1;
+        ok = ok && CHECK(wt_world_create(&o, &w[i], err, sizeof err) == 0);
+    }
+    if (ok) {
+        CHECK_EQ_INT(w[0]->opt.frames, WT_MIN_FRAMES);
+        CHECK(wt__lightvec_key(w[0]) == wt__lightvec_key(w[1]));
+        CHECK(wt__lightvec_key(w[0]) != wt__lightvec_key(w[2]));
+    }
+    for (i = 0; i < 3; i++) wt_world_destroy(w[i]);
+}
+
 /* ---- the precompute cache on disk -------------------------------------------- */
 
 static void test_cache_files(void)
@@ -593,6 +621,7 @@ int main(int argc, char **argv)
     RUN(test_missing_files);
     RUN(test_bunny_path);
     RUN(test_camera_path);
+    RUN(test_route_frames);
     RUN(test_cache_files);
     RUN(test_precompute_reuse);
     RUN(test_reference_frames);

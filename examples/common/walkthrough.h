@@ -11,7 +11,7 @@
        wt_options_default(&o);                         // or wt_parse_options
        wt_world_create(&o, &w, err, sizeof err);       // scene files, tracer, light-vector scene
        wt_renderer_create(w, &r, err, sizeof err);     // the mode's precompute, cached on disk
-       for (f = 0; f < o.frames; f++) wt_render_frame(r, f, rgb, &st);
+       for (f = 0; f < w->opt.frames; f++) wt_render_frame(r, f, rgb, &st);   // the frame count, resolved
        wt_renderer_destroy(r);  wt_world_destroy(w);
 
    Shading (modes raytrace and baseviews). A primary hit gets its emission,
@@ -199,7 +199,9 @@ typedef struct wt_options {
                                  of an OBJ with a .layout file beside it (make_building.py's format) */
     const struct wt_path *path;   /* set by wt_world_create in the world's copy: the walk planned through the
                                      scene's layout; NULL: the office's built-in walk */
-    int frames, width, height;
+    int frames;               /* frames along the walk; 0 = from the route (wt_route_frames), which
+                                 wt_world_create sets in the world's copy */
+    int width, height;
     int threads;              /* 0 = one per core */
     uint64_t seed;
     /* shading (every mode that ray traces) */
@@ -258,7 +260,7 @@ EX_FN void wt_options_default(wt_options *o)
     o->cache_dir = "build/cache";
     o->data_dir = "examples/data";
     o->scene = "office";      /* the building's radiosity precompute needs radinterp at building scale */
-    o->frames = 48;
+    o->frames = 0;            /* from the route: wt_world_create calls wt_route_frames */
     o->width = 640;
     o->height = 480;
     o->seed = 1;
@@ -312,7 +314,8 @@ EX_FN void wt_usage(FILE *f)
           "                       an irradiance volume for the bunny\n"
           "                       raytrace: render cache + ray tracer + light vectors\n"
           "                       baseviews: warps of fish-eye base views (range images)\n"
-          "  --frames N           frames along the path (default 48)\n"
+          "  --frames N           frames along the path (default: from the route, the camera moving\n"
+          "                       0.1 m and turning 1.5 degrees a frame, at least 48)\n"
           "  --size WxH           frame size (default 640x480)\n"
           "  --out DIR            where frames go (default build/out)\n"
           "  --cache DIR          precompute cache (default build/cache)\n"
@@ -1747,6 +1750,7 @@ fail:
    (office + bunny instance), the light-vector scene of the office and an
    empty static light-vector cache. Returns 0, or -1 with a message. */
 static int wt__light_grid_build(wt_world *w);
+EX_FN int wt_route_frames(const wt_options *o);
 
 EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t err_size)
 {
@@ -1814,6 +1818,7 @@ EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t
         return -1;
     }
     if (w->layout_path[0]) w->opt.path = &w->path;
+    if (w->opt.frames <= 0) w->opt.frames = wt_route_frames(&w->opt);   /* before any key hashes the frames */
     if (w->layout.sky_map_path[0] && !wt__hash_file(w->layout.sky_map_path, &w->scene_hash)) {
         wt__fail(err, err_size, "cannot read %.200s", w->layout.sky_map_path);
         wt_world_destroy(w);
@@ -1872,7 +1877,7 @@ EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t
    route at constant speed from WT_CAMERA_TRAIL metres in, and the camera
    follows it along the same route, that far behind, at eye height.
    ---------------------------------------------------------------------- */
-#define WT_PATH_VERSION 2u     /* bump when the paths change: precompute keys depend on them */
+#define WT_PATH_VERSION 3u     /* bump when the paths change: precompute keys depend on them */
 #define WT_SHADING_VERSION 4u  /* bump when the shading changes: cached light vectors and base images */
 #define WT__WAYPOINTS 9
 static const float wt__waypoints[WT__WAYPOINTS][2] = {   /* (x, z) on the floor */
@@ -1999,11 +2004,13 @@ EX_FN rendercache_camera wt_camera(const wt_options *o, double t, uint32_t width
         const wt_path *p = o->path;
         float arc = wt__path_arc(p, t < 0.0 ? 0.0 : t > 1.0 ? 1.0 : t);
         wt__path_at(p, arc - WT_CAMERA_TRAIL, c.eye, &c.eye[1]);
-        for (j = -2; j <= 2; j++) {
-            float q[3];
-            wt__path_at(p, arc + 0.25f * (float)(j + 2), q, NULL);   /* the bunny and 1 m ahead */
+        for (j = -2; j <= 2; j++) {   /* the bunny and 1 m ahead, at the floor smoothed over the stairs'
+                                          treads: the feet's height rises a tread at a time and would
+                                          jerk the view up by 2-4 degrees at each one */
+            float q[3], eye;
+            wt__path_at(p, arc + 0.25f * (float)(j + 2), q, &eye);
             look[0] += 0.2f * q[0];
-            look[1] += 0.2f * q[1];
+            look[1] += 0.2f * (eye - WT_EYE_HEIGHT);
             look[2] += 0.2f * q[2];
         }
         c.look_at[0] = look[0];
@@ -2028,6 +2035,63 @@ EX_FN rendercache_camera wt_camera(const wt_options *o, double t, uint32_t width
     c.width = width;
     c.height = height;
     return c;
+}
+
+/* The default frame count follows the camera's route (wt_options.frames
+   = 0): enough frames that the camera moves WT_FRAME_STEP metres and turns
+   WT_FRAME_TURN degrees a frame on average over the walk, and never fewer
+   than WT_MIN_FRAMES (the office's walk of 1.3 m and 51 degrees keeps its
+   48 frames). A render cache that resamples 8 % of the pixels a frame can
+   only reuse what the last frames saw: the building's walk in 48 frames
+   moved 0.42 m a frame and left about 84 % of each frame to holes. Frames
+   are evenly spaced in t, so where the camera is faster than its average
+   (the office's eye eases in and out) a frame's step is larger than the
+   mean, by up to 1.5 times in the office. */
+#define WT_FRAME_STEP 0.1f        /* metres of eye movement per frame */
+#define WT_FRAME_TURN 1.5f        /* degrees of view direction per frame */
+#define WT_MIN_FRAMES 48
+#define WT__ROUTE_SAMPLES 2048    /* intervals of t at which the camera is sampled */
+
+/* What the camera does over the walk: the eye's path length and the view
+   direction's total turn, summed over WT__ROUTE_SAMPLES steps of t. */
+typedef struct wt_route {
+    double length;   /* metres */
+    double turn;     /* degrees */
+} wt_route;
+
+EX_FN wt_route wt_route_measure(const wt_options *o)
+{
+    wt_route r = { 0.0, 0.0 };
+    float prev_eye[3] = { 0, 0, 0 }, prev_dir[3] = { 0, 0, 0 };
+    int i, k;
+    for (i = 0; i <= WT__ROUTE_SAMPLES; i++) {
+        rendercache_camera c = wt_camera(o, (double)i / WT__ROUTE_SAMPLES, 8, 8);
+        float dir[3], len;
+        for (k = 0; k < 3; k++) dir[k] = c.look_at[k] - c.eye[k];
+        len = sqrtf(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+        for (k = 0; k < 3; k++) dir[k] = len > 0.0f ? dir[k] / len : 0.0f;
+        if (i > 0) {
+            double d2 = 0.0, cosine = 0.0;
+            for (k = 0; k < 3; k++) {
+                d2 += (double)(c.eye[k] - prev_eye[k]) * (double)(c.eye[k] - prev_eye[k]);
+                cosine += (double)dir[k] * (double)prev_dir[k];
+            }
+            r.length += sqrt(d2);
+            r.turn += acos(cosine > 1.0 ? 1.0 : cosine < -1.0 ? -1.0 : cosine) * (180.0 / EX_PI);
+        }
+        memcpy(prev_eye, c.eye, sizeof prev_eye);
+        memcpy(prev_dir, dir, sizeof prev_dir);
+    }
+    return r;
+}
+
+/* The default frame count of o's walk (o->path set as wt_world_create sets
+   it in the world's options). */
+EX_FN int wt_route_frames(const wt_options *o)
+{
+    wt_route r = wt_route_measure(o);
+    double steps = ceil(fmax(r.length / WT_FRAME_STEP, r.turn / WT_FRAME_TURN));
+    return steps + 1.0 > (double)WT_MIN_FRAMES ? (int)steps + 1 : WT_MIN_FRAMES;
 }
 
 /* The same camera for the software rasterizer. */
