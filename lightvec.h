@@ -3280,7 +3280,7 @@ typedef struct lightvec__entry {
 #define LIGHTVEC__ROW_X 0
 #define LIGHTVEC__ROW_Y 1
 #define LIGHTVEC__ROW_Z 2
-#define LIGHTVEC__ROW_R 3            /* R_B: atomic (neighbour clamping shrinks it under readers) */
+#define LIGHTVEC__ROW_R0 3           /* R_B when the block was written: never changes (R_B <= R0) */
 #define LIGHTVEC__ROW_SX 4           /* sigma */
 #define LIGHTVEC__ROW_SY 5
 #define LIGHTVEC__ROW_SZ 6
@@ -3290,7 +3290,7 @@ typedef struct lightvec__entry {
 #define LIGHTVEC__ROW_REL 10         /* |grad Y| / Y */
 #define LIGHTVEC__ROW_GLOSSY 11      /* 1 / d_g; 0 = no glossy part */
 #define LIGHTVEC__ROW_ID 12          /* the record's id, its uint32_t bits */
-#define LIGHTVEC__ROW_R0 13          /* R_B when the block was written: never changes (R_B <= R0) */
+#define LIGHTVEC__ROW_R 13           /* R_B: atomic (neighbour clamping shrinks it under readers) */
 #define LIGHTVEC__ROWS 14
 #define LIGHTVEC__BLOCK (LIGHTVEC__ROWS * LIGHTVEC__LEAF)
 
@@ -3826,12 +3826,9 @@ static void lightvec__tree_walk(const lightvec__tree *t, const float p[3], float
                 : (const char *)&t->nodes[child];
             LIGHTVEC__PREFETCH(next);
             LIGHTVEC__PREFETCH(next + 64);
-            LIGHTVEC__PREFETCH(next + 128);
-            LIGHTVEC__PREFETCH(next + 192);
-            if (child & LIGHTVEC__KD_LEAF) {
-                LIGHTVEC__PREFETCH(next + 256);
-                LIGHTVEC__PREFETCH(next + 320);
-                LIGHTVEC__PREFETCH(next + 384);
+            if (!(child & LIGHTVEC__KD_LEAF)) {
+                LIGHTVEC__PREFETCH(next + 128);
+                LIGHTVEC__PREFETCH(next + 192);
             }
             stack[top++] = child;
             mask &= ~(1u << j);
@@ -4091,11 +4088,43 @@ static void lightvec__visit_block(lightvec__query *q, const lightvec__block *blo
     }
 }
 
-/* Visits the pending blocks, in the order they came. */
+/* Whether any of the first n slots of a block holds A in its sphere of
+   radius R0: the first test of lightvec__block_pass, on the block's first
+   two cache lines (the positions and R0), the same float operations. */
+static int lightvec__block_near(const lightvec__query *q, const float *block, uint32_t n)
+{
+    unsigned near = 0;
+    uint32_t k;
+    for (k = 0; k < n; k++) {
+        const float *b = block + k;
+        float dx = q->a[0] - b[LIGHTVEC__ROW_X * LIGHTVEC__LEAF], dy = q->a[1] - b[LIGHTVEC__ROW_Y * LIGHTVEC__LEAF];
+        float dz = q->a[2] - b[LIGHTVEC__ROW_Z * LIGHTVEC__LEAF], r0 = b[LIGHTVEC__ROW_R0 * LIGHTVEC__LEAF];
+        near |= (unsigned)(dx * dx + dy * dy + dz * dz < r0 * r0);
+    }
+    return near != 0;
+}
+
+/* Visits the pending blocks, in the order they came, in two sweeps. The
+   walk prefetched only their first two lines, enough to tell whether a
+   slot can hold A (in a dense cache most blocks the walk reaches hold
+   none: each record's sphere covers about a third of its leaf's box); the
+   first sweep drops those and prefetches the rest of the others, which the
+   second visits. */
 static void lightvec__drain(lightvec__query *q)
 {
-    uint32_t i;
+    uint32_t i, kept = 0;
     for (i = 0; i < q->pending_count; i++) {
+        const lightvec__block_ref *r = &q->pending[i];
+        const char *rows = (const char *)r->block->row;
+        if (!lightvec__block_near(q, r->block->row, r->count)) continue;
+        LIGHTVEC__PREFETCH(rows + 128);
+        LIGHTVEC__PREFETCH(rows + 192);
+        LIGHTVEC__PREFETCH(rows + 256);
+        LIGHTVEC__PREFETCH(rows + 320);
+        LIGHTVEC__PREFETCH(rows + 384);
+        q->pending[kept++] = *r;
+    }
+    for (i = 0; i < kept; i++) {
         const lightvec__block_ref *r = &q->pending[i];
         if (r->full) lightvec__visit_block(q, r->block, r->items, LIGHTVEC__LEAF, 1);
         else lightvec__visit_block(q, r->block, r->items, r->count, 0);
