@@ -3312,7 +3312,8 @@ typedef struct lightvec__kd_node {
     float box[6][LIGHTVEC__KD_WIDTH];    /* rows lo x, lo y, lo z, hi x, hi y, hi z; column = child.
                                             An unused child has lo = +inf, hi = -inf */
     uint32_t child[LIGHTVEC__KD_WIDTH];  /* node index or KD_LEAF | leaf index */
-    uint32_t pad[LIGHTVEC__KD_WIDTH];    /* 256 bytes: a node on four cache lines of its own */
+    uint32_t leaves;                     /* bit j: child j is a leaf */
+    uint32_t pad[LIGHTVEC__KD_WIDTH - 1]; /* 256 bytes: a node on four cache lines of its own */
 } lightvec__kd_node;
 
 typedef struct lightvec__tree {
@@ -3718,8 +3719,10 @@ static void lightvec__kd_collapse(lightvec__tree *t, const float *boxes, lightve
             t->nodes[self].box[3 + r][j] = j < n ? boxes[6 * (size_t)f[j].node + 3 + r] : -INFINITY;
         }
         if (j >= n) t->nodes[self].child[j] = 0;
-        t->nodes[self].pad[j] = 0;
     }
+    t->nodes[self].leaves = 0;
+    for (j = 0; j < n; j++) t->nodes[self].leaves |= (unsigned)((t->nodes[self].child[j] & LIGHTVEC__KD_LEAF) != 0) << j;
+    memset(t->nodes[self].pad, 0, sizeof t->nodes[self].pad);
 }
 
 static lightvec__tree *lightvec__tree_build(const lightvec_allocator *a, const lightvec__entry *src, uint32_t n)
@@ -3802,10 +3805,30 @@ static unsigned lightvec__kd_hits(const lightvec__kd_node *nd, const float p[3],
 
 typedef void (*lightvec__leaf_fn)(void *ctx, const lightvec__tree *t, uint32_t leaf);
 
+/* The first lines of a child about to be read: a node, or the first two
+   lines of a leaf block (positions and R0, what lightvec__block_near
+   reads). */
+static void lightvec__prefetch_child(const lightvec__tree *t, uint32_t child)
+{
+    const char *next = child & LIGHTVEC__KD_LEAF ? (const char *)&t->blocks[child & ~LIGHTVEC__KD_LEAF]
+                                                 : (const char *)&t->nodes[child];
+    LIGHTVEC__PREFETCH(next);
+    LIGHTVEC__PREFETCH(next + 64);
+    if (!(child & LIGHTVEC__KD_LEAF)) {
+        LIGHTVEC__PREFETCH(next + 128);
+        LIGHTVEC__PREFETCH(next + 192);
+    }
+}
+
 /* Calls leaf(ctx, t, i) for every leaf i of t whose box, grown by reach,
-   holds p, in the order of the leaves. Children are pushed last first, so
-   that they pop in order; the nodes and blocks about to be read are
-   prefetched as they are pushed. */
+   holds p, in the order of the leaves, depth first. The children a node
+   holds p in are prefetched at once. When they are all leaves (the nodes
+   of the last level), the leaves are handed over at once, in order; when
+   they are all nodes, they are pushed last first, so that they pop in
+   order; a node with both pushes both. So the stack holds leaves only
+   under those rare nodes, and a pop is a node but for them: the branch on
+   what a pop holds, which a walk alternating between leaves and nodes
+   mispredicts, goes the same way nearly always. */
 static void lightvec__tree_walk(const lightvec__tree *t, const float p[3], float reach, lightvec__leaf_fn leaf, void *ctx)
 {
     uint32_t stack[LIGHTVEC__KD_STACK], top = 0;
@@ -3813,26 +3836,20 @@ static void lightvec__tree_walk(const lightvec__tree *t, const float p[3], float
     stack[top++] = 0;
     while (top) {
         uint32_t ref = stack[--top];
-        unsigned mask;
+        const lightvec__kd_node *nd;
+        unsigned mask, m;
         if (ref & LIGHTVEC__KD_LEAF) {
             leaf(ctx, t, ref & ~LIGHTVEC__KD_LEAF);
             continue;
         }
-        mask = lightvec__kd_hits(&t->nodes[ref], p, reach);
-        while (mask) {
-            uint32_t j = lightvec__kd_last_bit(mask), child = t->nodes[ref].child[j];
-            const char *next = child & LIGHTVEC__KD_LEAF
-                ? (const char *)&t->blocks[child & ~LIGHTVEC__KD_LEAF]
-                : (const char *)&t->nodes[child];
-            LIGHTVEC__PREFETCH(next);
-            LIGHTVEC__PREFETCH(next + 64);
-            if (!(child & LIGHTVEC__KD_LEAF)) {
-                LIGHTVEC__PREFETCH(next + 128);
-                LIGHTVEC__PREFETCH(next + 192);
-            }
-            stack[top++] = child;
-            mask &= ~(1u << j);
+        nd = &t->nodes[ref];
+        mask = lightvec__kd_hits(nd, p, reach);
+        for (m = mask; m; m &= m - 1) lightvec__prefetch_child(t, nd->child[lightvec__bvh_first_bit(m)]);
+        if ((mask & nd->leaves) == mask) {
+            for (; mask; mask &= mask - 1) leaf(ctx, t, nd->child[lightvec__bvh_first_bit(mask)] & ~LIGHTVEC__KD_LEAF);
+            continue;
         }
+        for (; mask; mask &= ~(1u << lightvec__kd_last_bit(mask))) stack[top++] = nd->child[lightvec__kd_last_bit(mask)];
     }
 }
 
