@@ -1,4 +1,4 @@
-/* lightvec.h - v0.4.5 - cached 5D indirect light vectors - public domain or MIT, see end of file
+/* lightvec.h - v0.4.6 - cached 5D indirect light vectors - public domain or MIT, see end of file
 
    LIGHTVEC.H: cached light vectors over position and direction for interactive glossy global illumination.
 
@@ -395,9 +395,14 @@
      A kd-tree node holds eight child boxes in rows (three binary levels),
      tested with a few SIMD compares; a leaf is a block of 8 records whose
      tested fields sit together, and the tests that need no square root run
-     over the whole block at once. The walk prefetches the blocks it reaches
-     whole and queues them, visiting them in the same order once a few are
-     on their way, so that their memory latencies overlap. What the
+     over the whole block at once. The walk prefetches the first two lines
+     of the blocks it reaches (positions and radii) and queues them; then a
+     first sweep drops the blocks where no sphere holds A (about half of a
+     dense lookup's: a record's sphere covers about a third of its leaf's
+     box) and prefetches the other five lines of the rest, and a second
+     visits those in the walk's order, so that their memory latencies
+     overlap. A node whose children that hold A are all leaves hands them
+     over at once instead of pushing them (v0.4.6). What the
      interpolation reads of a valid record (its head, one cache line) sits
      in its leaf's block after the rows, so it comes from the page the
      criteria have just read; the k-nearest selection runs once, over all
@@ -410,8 +415,7 @@
      interpolated, about 330 cache lines; in a random order it waits on memory (the same
      lookups with their data in cache take 1.2 us). These left the time as
      it was or made it longer, with the same results: walking all the
-     kd-trees of a lookup together level by level; loading a leaf's other
-     rows only where A lies in one of its spheres; the other criteria from
+     kd-trees of a lookup together level by level; the other criteria from
      the item rather than from rows; nodes of 4 or 16 children; and, last
      round, bounding a leaf's viewer directions and normals by cones (they
      would skip 2.5 of 29 full leaves). In v0.4.5, measured the same way:
@@ -419,9 +423,7 @@
      16-bit fixed point) and the exact fields read only for the records
      that pass (182 lines per dense lookup instead of about 250: 4 to 10%
      slower, the entries' extra pages and a dependent load outweigh the
-     lines; with transparent huge pages it was 2 to 10% faster); handing
-     a node's leaf children over without pushing them (no faster: the
-     branch on leaf or node was not the cost); visiting queued blocks
+     lines; with transparent huge pages it was 2 to 10% faster); visiting queued blocks
      while the walk goes on; splitting kd-trees on the radius too, and
      finer icosahedron faces (both visit more leaves: the records within
      reach of A share their sigmas). A dense lookup's data held in cache
@@ -429,6 +431,35 @@
      arithmetic, half memory. Transparent huge pages for the
      trees (an allocator that asks for them, or glibc's
      glibc.malloc.hugetlb=1) took about 5% off the dense random figure.
+     v0.4.6 loads a leaf's last five lines only where a sphere holds A
+     (earlier rounds measured no gain; the paired figures below say 6%)
+     and hands last-level leaves over without pushing them; every result
+     is the same bit for bit (2 x 10^5 lookups of the benchmark's sparse
+     and dense caches compared). Both versions in one process over the
+     benchmark's caches and queries, in chunks of 2,000 lookups run old,
+     new, new, old, the ratio of each chunk pair (thread CPU, load 13 to
+     15; medians, quartiles in brackets): dense random 2.94 against 3.21
+     us, 0.94x (0.89-1.00); sparse random 1.10 against 1.15, 0.94x
+     (0.91-0.98); sorted queries, whose blocks are in cache, pay for the
+     extra sweep: dense 1.70 against 1.66, 1.03x (1.01-1.04), sparse
+     1.01x (0.96-1.05). Dense random lookups stay above the 2 us target
+     (2.33 us at load 1 for v0.4.5 less 6%). Tried in v0.4.6 and left
+     out, each against v0.4.5 paired the same way: child boxes in 8 bits
+     in the node's frame (128-byte nodes, the leaves found a superset):
+     1.11x dense, 1.20x sparse, the per-axis thresholds lengthen the chain
+     of dependent loads the walk is; per-child boxes of sigma, and kd-tree
+     splits on sigma besides position (dense lookups reached 29.4 to 30
+     leaves instead of 30; more splits on sigma reached more: 37 at a
+     quarter of the weight); walking every tree of a lookup breadth first,
+     the pending blocks sorted back into depth-first order (1.02x to
+     1.36x); merging a face's kd-trees at a ratio of 256 or 512 instead of
+     64 (one tree per face at 10^5 records; with the sweep above 0.90x and
+     0.91x dense, against 0.95x for the sweep alone, but insertions from 24
+     to 44 us: the walkthrough, where every gather inserts, would lose more
+     than its lookups gain); leaves of 16 records (1.0x dense, 1.13x
+     sparse, in alternating passes of 10^5 lookups). Transparent huge pages
+     (glibc.malloc.hugetlb=1, v0.4.5) took 8 to 17% off dense random
+     lookups in three alternating runs of this round.
      Memory: 545 bytes per record at 10^5 (records, radii, items, blocks,
      nodes). Insertion with neighbour clamping (v0.4.4): 4.8 us at 10^5 records,
      10.5 us in the dense cache (a gather takes about 1 ms);
@@ -482,7 +513,7 @@
 
 #define LIGHTVEC_VERSION_MAJOR 0
 #define LIGHTVEC_VERSION_MINOR 4
-#define LIGHTVEC_VERSION_PATCH 5
+#define LIGHTVEC_VERSION_PATCH 6
 #define LIGHTVEC_FILE_FORMAT_VERSION 2
 
 #ifndef LIGHTVEC_API
@@ -3274,13 +3305,14 @@ typedef struct lightvec__entry {
    compares and one branch per child that holds A (the binary descent
    took one unpredictable branch per box). What the criteria read of a
    leaf's items is one block of rows (LIGHTVEC__ROW_*, LEAF floats each):
-   a leaf's tests read a few consecutive cache lines. The block holds its
+   a leaf's tests read a few consecutive cache lines, the first two
+   (NEAR_ROWS: positions and R0) alone where no sphere holds A. The block holds its
    items' heads too, so the interpolation of a valid record reads a line
    next to them, and an item only for a valid glossy part. */
 #define LIGHTVEC__ROW_X 0
 #define LIGHTVEC__ROW_Y 1
 #define LIGHTVEC__ROW_Z 2
-#define LIGHTVEC__ROW_R 3            /* R_B: atomic (neighbour clamping shrinks it under readers) */
+#define LIGHTVEC__ROW_R0 3           /* R_B when the block was written: never changes (R_B <= R0) */
 #define LIGHTVEC__ROW_SX 4           /* sigma */
 #define LIGHTVEC__ROW_SY 5
 #define LIGHTVEC__ROW_SZ 6
@@ -3290,8 +3322,9 @@ typedef struct lightvec__entry {
 #define LIGHTVEC__ROW_REL 10         /* |grad Y| / Y */
 #define LIGHTVEC__ROW_GLOSSY 11      /* 1 / d_g; 0 = no glossy part */
 #define LIGHTVEC__ROW_ID 12          /* the record's id, its uint32_t bits */
-#define LIGHTVEC__ROW_R0 13          /* R_B when the block was written: never changes (R_B <= R0) */
+#define LIGHTVEC__ROW_R 13           /* R_B: atomic (neighbour clamping shrinks it under readers) */
 #define LIGHTVEC__ROWS 14
+#define LIGHTVEC__NEAR_ROWS 4        /* rows X, Y, Z, R0 (the first two cache lines): can a slot's sphere hold A */
 #define LIGHTVEC__BLOCK (LIGHTVEC__ROWS * LIGHTVEC__LEAF)
 
 /* A leaf's block: its rows, then a copy of its items' heads. The
@@ -3312,7 +3345,8 @@ typedef struct lightvec__kd_node {
     float box[6][LIGHTVEC__KD_WIDTH];    /* rows lo x, lo y, lo z, hi x, hi y, hi z; column = child.
                                             An unused child has lo = +inf, hi = -inf */
     uint32_t child[LIGHTVEC__KD_WIDTH];  /* node index or KD_LEAF | leaf index */
-    uint32_t pad[LIGHTVEC__KD_WIDTH];    /* 256 bytes: a node on four cache lines of its own */
+    uint32_t leaves;                     /* bit j: child j is a leaf */
+    uint32_t pad[LIGHTVEC__KD_WIDTH - 1]; /* 256 bytes: a node on four cache lines of its own */
 } lightvec__kd_node;
 
 typedef struct lightvec__tree {
@@ -3718,8 +3752,10 @@ static void lightvec__kd_collapse(lightvec__tree *t, const float *boxes, lightve
             t->nodes[self].box[3 + r][j] = j < n ? boxes[6 * (size_t)f[j].node + 3 + r] : -INFINITY;
         }
         if (j >= n) t->nodes[self].child[j] = 0;
-        t->nodes[self].pad[j] = 0;
     }
+    t->nodes[self].leaves = 0;
+    for (j = 0; j < n; j++) t->nodes[self].leaves |= (unsigned)((t->nodes[self].child[j] & LIGHTVEC__KD_LEAF) != 0) << j;
+    memset(t->nodes[self].pad, 0, sizeof t->nodes[self].pad);
 }
 
 static lightvec__tree *lightvec__tree_build(const lightvec_allocator *a, const lightvec__entry *src, uint32_t n)
@@ -3802,10 +3838,30 @@ static unsigned lightvec__kd_hits(const lightvec__kd_node *nd, const float p[3],
 
 typedef void (*lightvec__leaf_fn)(void *ctx, const lightvec__tree *t, uint32_t leaf);
 
+/* A child about to be read: a node whole, a leaf block's NEAR_ROWS (its
+   first two lines, what lightvec__block_near reads; lightvec__drain loads
+   the rest where a sphere holds A). */
+static void lightvec__prefetch_child(const lightvec__tree *t, uint32_t child)
+{
+    const char *next = child & LIGHTVEC__KD_LEAF ? (const char *)&t->blocks[child & ~LIGHTVEC__KD_LEAF]
+                                                 : (const char *)&t->nodes[child];
+    LIGHTVEC__PREFETCH(next);
+    LIGHTVEC__PREFETCH(next + 64);
+    if (!(child & LIGHTVEC__KD_LEAF)) {
+        LIGHTVEC__PREFETCH(next + 128);
+        LIGHTVEC__PREFETCH(next + 192);
+    }
+}
+
 /* Calls leaf(ctx, t, i) for every leaf i of t whose box, grown by reach,
-   holds p, in the order of the leaves. Children are pushed last first, so
-   that they pop in order; the nodes and blocks about to be read are
-   prefetched as they are pushed. */
+   holds p, in the order of the leaves, depth first. The children a node
+   holds p in are prefetched at once. When they are all leaves (the nodes
+   of the last level), the leaves are handed over at once, in order; when
+   they are all nodes, they are pushed last first, so that they pop in
+   order; a node with both pushes both. So the stack holds leaves only
+   under those rare nodes, and a pop is a node but for them: the branch on
+   what a pop holds, which a walk alternating between leaves and nodes
+   mispredicts, goes the same way nearly always. */
 static void lightvec__tree_walk(const lightvec__tree *t, const float p[3], float reach, lightvec__leaf_fn leaf, void *ctx)
 {
     uint32_t stack[LIGHTVEC__KD_STACK], top = 0;
@@ -3813,29 +3869,20 @@ static void lightvec__tree_walk(const lightvec__tree *t, const float p[3], float
     stack[top++] = 0;
     while (top) {
         uint32_t ref = stack[--top];
-        unsigned mask;
+        const lightvec__kd_node *nd;
+        unsigned mask, m;
         if (ref & LIGHTVEC__KD_LEAF) {
             leaf(ctx, t, ref & ~LIGHTVEC__KD_LEAF);
             continue;
         }
-        mask = lightvec__kd_hits(&t->nodes[ref], p, reach);
-        while (mask) {
-            uint32_t j = lightvec__kd_last_bit(mask), child = t->nodes[ref].child[j];
-            const char *next = child & LIGHTVEC__KD_LEAF
-                ? (const char *)&t->blocks[child & ~LIGHTVEC__KD_LEAF]
-                : (const char *)&t->nodes[child];
-            LIGHTVEC__PREFETCH(next);
-            LIGHTVEC__PREFETCH(next + 64);
-            LIGHTVEC__PREFETCH(next + 128);
-            LIGHTVEC__PREFETCH(next + 192);
-            if (child & LIGHTVEC__KD_LEAF) {
-                LIGHTVEC__PREFETCH(next + 256);
-                LIGHTVEC__PREFETCH(next + 320);
-                LIGHTVEC__PREFETCH(next + 384);
-            }
-            stack[top++] = child;
-            mask &= ~(1u << j);
+        nd = &t->nodes[ref];
+        mask = lightvec__kd_hits(nd, p, reach);
+        for (m = mask; m; m &= m - 1) lightvec__prefetch_child(t, nd->child[lightvec__bvh_first_bit(m)]);
+        if ((mask & nd->leaves) == mask) {
+            for (; mask; mask &= mask - 1) leaf(ctx, t, nd->child[lightvec__bvh_first_bit(mask)] & ~LIGHTVEC__KD_LEAF);
+            continue;
         }
+        for (; mask; mask &= ~(1u << lightvec__kd_last_bit(mask))) stack[top++] = nd->child[lightvec__kd_last_bit(mask)];
     }
 }
 
@@ -4091,11 +4138,40 @@ static void lightvec__visit_block(lightvec__query *q, const lightvec__block *blo
     }
 }
 
-/* Visits the pending blocks, in the order they came. */
+/* Whether any of the first n slots of a block holds A in its sphere of
+   radius R0: the first test of lightvec__block_pass, the same float
+   operations, on the block's NEAR_ROWS. No slot of a block it rejects
+   passes lightvec__block_pass. */
+static int lightvec__block_near(const lightvec__query *q, const float *block, uint32_t n)
+{
+    unsigned near = 0;
+    uint32_t k;
+    for (k = 0; k < n; k++) {
+        const float *b = block + k;
+        float dx = q->a[0] - b[LIGHTVEC__ROW_X * LIGHTVEC__LEAF], dy = q->a[1] - b[LIGHTVEC__ROW_Y * LIGHTVEC__LEAF];
+        float dz = q->a[2] - b[LIGHTVEC__ROW_Z * LIGHTVEC__LEAF], r0 = b[LIGHTVEC__ROW_R0 * LIGHTVEC__LEAF];
+        near |= (unsigned)(dx * dx + dy * dy + dz * dz < r0 * r0);
+    }
+    return near != 0;
+}
+
+/* Visits the pending blocks, in the order they came, in two sweeps. The
+   walk prefetched only their NEAR_ROWS, enough to tell whether a slot can
+   hold A (in a dense cache half the blocks a lookup reaches hold A in no
+   sphere: a record's sphere covers about a third of its leaf's box); the
+   first sweep drops those and prefetches the other rows of the rest,
+   which the second visits: five cache lines fewer per dropped block. */
 static void lightvec__drain(lightvec__query *q)
 {
-    uint32_t i;
+    uint32_t i, line, kept = 0;
     for (i = 0; i < q->pending_count; i++) {
+        const lightvec__block_ref *r = &q->pending[i];
+        if (!lightvec__block_near(q, r->block->row, r->count)) continue;
+        for (line = LIGHTVEC__NEAR_ROWS * LIGHTVEC__LEAF * sizeof(float) / 64u; 64u * line < sizeof r->block->row; line++)
+            LIGHTVEC__PREFETCH((const char *)r->block->row + 64u * line);  /* the rows after NEAR_ROWS */
+        q->pending[kept++] = *r;
+    }
+    for (i = 0; i < kept; i++) {
         const lightvec__block_ref *r = &q->pending[i];
         if (r->full) lightvec__visit_block(q, r->block, r->items, LIGHTVEC__LEAF, 1);
         else lightvec__visit_block(q, r->block, r->items, r->count, 0);
