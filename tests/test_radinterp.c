@@ -977,7 +977,7 @@ static uint32_t budget_overruns(const radinterp_solution *sol, double margin, do
     if (!CHECK(err != NULL)) return 0;
     for (i = 0; i < sol->node_count; i++) {
         const radinterp__node *nd = &sol->nodes[i];
-        double tol = radinterp__tolerance(sol, nd->dim), budget = margin * RADINTERP__RECEIVER_BUDGET * tol, sum = 0.0, limit = DBL_MAX;
+        double tol = radinterp__tolerance(sol, nd->dim), budget = margin * RADINTERP_RECEIVER_BUDGET * tol, sum = 0.0, limit = DBL_MAX;
         for (j = 0; j < nd->link_count; j++) sum += err[j] = radinterp__link_error(sol, &sol->links[nd->first_link + j]);
         if (sum / tol > *worst) *worst = sum / tol;
         if (sum <= budget) continue;
@@ -994,7 +994,7 @@ static uint32_t budget_overruns(const radinterp_solution *sol, double margin, do
 }
 
 /* The office's leaves tile its patches; and every node's links fit its
-   error budget: the links it gathers err by at most RADINTERP__RECEIVER_BUDGET
+   error budget: the links it gathers err by at most RADINTERP_RECEIVER_BUDGET
    tolerances together, save links that can be split no further. The budget
    is checked a quarter larger than the solver's: the solver judged the links
    with the radiosities of its last refinement pass, and the iterations after
