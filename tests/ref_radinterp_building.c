@@ -16,17 +16,18 @@
    can give one test: it runs only when the environment variable
    RADINTERP_REF_4K is 1, and is then held to the issue's bounds.
 
-   radinterp v0.8.1 does not meet the issue's bounds on the office or on
+   radinterp v0.8.2 does not meet the issue's bounds on the office or on
    building_1k with its defaults (see UNMET_PATCHES below): by default
    those bounds print "NOT MET" with the measured figure, which is held to
-   a guard (v0.8.1's figure + 25%); RADINTERP_REF_STRICT=1 asserts the
+   a guard (v0.8.2's figure + 25%); RADINTERP_REF_STRICT=1 asserts the
    issue's bounds themselves. building_1k's 90th percentile of the points
-   rose from v0.8.0's 16.8% to 27.2% while its median fell from 7.5% to
-   3.8% and its patches beyond the bound from 251 to 100: v0.8.0's strips
-   of floor and ceiling inside walls made every lit room 5% dark, and the
-   lampless upper room, which is too bright (its light comes through
-   coarse links from rooms that are brighter than it), was then only 20%
-   too bright; it is now 30-90%, and it is the 90th percentile.
+   is the far corner of the lampless upper room, lit through a door and
+   the stair opening: v0.8.1 made it 30-90% too bright (27.2%); v0.8.2's
+   receiver error budget (the links one element gathers may err by 16
+   tolerances together, not each by one) brought it to 26-53% (20.3%),
+   and its patches beyond the bound from 100 to 68. With
+   RADINTERP_RECEIVER_BUDGET 8 (not the default: 2.3x the links) the
+   90th percentile was 12.0%, the median 3.10% and 39 patches.
 
        build/tests/ref_radinterp_building [NAME]     NAME filters the cases
 
@@ -53,7 +54,7 @@
    (the figures are in the notes this test prints): checked only when the
    environment variable RADINTERP_REF_STRICT is 1. Otherwise each prints
    "NOT MET" with its measured figure, and the figure is held to a guard
-   instead: what radinterp v0.8.1 measured here plus a quarter, so that a
+   instead: what radinterp v0.8.2 measured here plus a quarter, so that a
    change that makes the solution or the point query worse fails (the
    reference and the points are deterministic, so the quarter is room for
    changes in the library's own sampling, not for noise). A bound left out
@@ -70,7 +71,7 @@ typedef struct scene_case {
        the time make test can give this test on a 2-core machine. */
     uint32_t patch_samples, point_samples;
     unsigned unmet;
-    double guard[3];   /* per unmet bound (patch share, point median, point P90): v0.8.1's figure + 25% */
+    double guard[3];   /* per unmet bound (patch share, point median, point P90): v0.8.2's figure + 25% */
     int loaded, ok;
     obj_scene obj;
     uint32_t *patches;
@@ -84,10 +85,10 @@ static ex_pool *pool;
 static int strict;
 static scene_case office = { .path = "examples/data/office.obj", .patch_samples = 64000, .point_samples = 64000,
                              .unmet = UNMET_PATCHES | UNMET_POINT_MEDIAN | UNMET_POINT_P90,
-                             .guard = { 0.137, 0.027, 0.099 } }; /* measured 10.9%, 2.13%, 7.94% (v0.8.0: 12.7%, 2.05%, 7.52%) */
+                             .guard = { 0.114, 0.027, 0.097 } }; /* measured 9.1%, 2.10%, 7.77% (v0.8.1: 10.9%, 2.13%, 7.94%) */
 static scene_case building_1k = { .path = "examples/data/building_1k.obj", .patch_samples = 16000, .point_samples = 48000,
                                   .unmet = UNMET_PATCHES | UNMET_POINT_MEDIAN | UNMET_POINT_P90,
-                                  .guard = { 0.20, 0.047, 0.34 } }; /* measured 16.0%, 3.75%, 27.2% (v0.8.0: 40.2%, 7.54%, 16.8%) */
+                                  .guard = { 0.136, 0.045, 0.253 } }; /* measured 10.9%, 3.63%, 20.3% (v0.8.1: 16.0%, 3.75%, 27.2%) */
 static scene_case building_4k = { .path = "examples/data/building_4k.obj", .patch_samples = 8000, .point_samples = 32000,
                                   .unmet = 0 }; /* run on request only, held to the issue's bounds */
 
@@ -103,7 +104,7 @@ static void check_bound(const scene_case *c, unsigned bound, int which, const ch
     }
     test_note("%s %s: %s %.2f%% (bound %.0f%%)", ok ? "now met, to be asserted:" : "NOT MET (issue 13)", c->path, what,
               100 * measured, 100 * limit);
-    CHECK_MSG(measured <= c->guard[which], "%s: %s %.2f%%, worse than v0.8.1's guard %.2f%%", c->path, what,
+    CHECK_MSG(measured <= c->guard[which], "%s: %s %.2f%%, worse than its guard (v0.8.2's figure + 25%%) %.2f%%", c->path, what,
               100 * measured, 100 * c->guard[which]);
 }
 
