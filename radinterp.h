@@ -8422,12 +8422,25 @@ static radinterp_result radinterp__collect_leaves(radinterp_solution *s)
    the shaft test's epsilon * diag) into that shaft and is kept; the tests
    against the receiver's and the source's planes are those the link's list
    passed already. Queries use the lists for points within M / 2 of the
-   leaf's box (the point nudged toward `toward` lies within nudge of it). */
+   leaf's box (the point nudged toward `toward` lies within nudge of it).
+   Where one blocker of the list hides the whole source from the whole
+   grown leaf (radinterp__leaf_hides), the entry keeps no blockers and is
+   marked hidden: every query there would find the source hidden, and on
+   the buildings a wall between a leaf and a source in the next room is the
+   common case (leaf lists of partly hidden links). */
+#define RADINTERP__LEAF_HIDDEN 0xFFFFFFFFu   /* leaf_link.count of an entry whose source the leaf cannot see */
+
 typedef struct radinterp__leaf_link {
     uint32_t link;
-    uint32_t count;
+    uint32_t count;   /* blockers kept, or RADINTERP__LEAF_HIDDEN (none kept) */
     uint64_t first;   /* into leaf_blockers */
 } radinterp__leaf_link;
+
+/* Blockers an entry keeps in leaf_blockers. */
+static uint32_t radinterp__leaf_kept(const radinterp__leaf_link *ll)
+{
+    return ll->count == RADINTERP__LEAF_HIDDEN ? 0u : ll->count;
+}
 
 typedef struct radinterp__leaf_ctx {
     radinterp_solution *s;
@@ -8446,6 +8459,72 @@ static void radinterp__grown_box(const radinterp__node *nd, double margin, float
         lo[k] = (float)((double)nd->lo[k] - margin);
         hi[k] = (float)((double)nd->hi[k] + margin);
     }
+}
+
+/* Does the opaque patch b alone hide the whole source node src from every
+   point of the box lo .. hi? When the box lies in front of b's plane and
+   the source behind it, every segment from the box to the source crosses
+   the plane, and the crossings fill the convex hull of the crossings of
+   the segments between their corners (the hull of box and source meets
+   the plane in the hull of where its edges cross it, and those edges run
+   between a box corner and a source corner). b is convex, so the segments
+   all meet it when those crossings lie inside it. The source is taken at
+   its place and push_off behind it, where point queries put it (6.4), and
+   every margin is 4 epsilon * diag: no point of the box sees b edge-on
+   (radinterp__bp_shadow_piece leaves such a blocker out, at epsilon *
+   diag) and b's shadow from any point of the box covers the source with
+   room to spare, so a point query there finds the source hidden by b, a
+   factor of 0. */
+static int radinterp__leaf_hides(const radinterp_solution *s, const float *lo, const float *hi,
+                                 const radinterp__node *src, uint32_t b)
+{
+    const radinterp__patch *pb = &s->patches[b];
+    const double *ns = s->patches[src->patch].n;
+    double margin = 4.0 * s->epsilon * s->diag, mn, mx, S[8][3], pv[4][3], in[4][3];
+    int nsrc, nv, i, j, k, c;
+    if (pb->glass || pb->count < 3) return 0;
+    radinterp__box_range(pb->n, pb->d, lo, hi, &mn, &mx);
+    if (!(mn > margin)) return 0;
+    nsrc = radinterp__node_poly(src, S);
+    for (i = 0; i < nsrc; i++)
+        for (k = 0; k < 3; k++) S[nsrc + i][k] = S[i][k] - s->push_off * ns[k];
+    for (i = 0; i < 2 * nsrc; i++)
+        if (!(radinterp__d3_dot(pb->n, S[i]) - pb->d < -margin)) return 0;
+    nv = radinterp__patch_poly(pb, pv);
+    for (k = 0; k < nv; k++) { /* unit inward normals of b's edges in its plane (counter-clockwise seen from the front) */
+        double e[3], len;
+        radinterp__d3_sub(pv[(k + 1) % nv], pv[k], e);
+        radinterp__d3_cross(pb->n, e, in[k]);
+        len = radinterp__d3_len(in[k]);
+        if (!(len > 0.0)) return 0;
+        for (j = 0; j < 3; j++) in[k][j] /= len;
+    }
+    for (c = 0; c < 8; c++) {
+        double a[3], da;
+        a[0] = (c & 1) ? hi[0] : lo[0];
+        a[1] = (c & 2) ? hi[1] : lo[1];
+        a[2] = (c & 4) ? hi[2] : lo[2];
+        da = radinterp__d3_dot(pb->n, a) - pb->d;
+        for (i = 0; i < 2 * nsrc; i++) {
+            double t = da / (da - (radinterp__d3_dot(pb->n, S[i]) - pb->d)), z[3], r[3];
+            for (j = 0; j < 3; j++) z[j] = a[j] + t * (S[i][j] - a[j]);
+            for (k = 0; k < nv; k++) {
+                radinterp__d3_sub(z, pv[k], r);
+                if (!(radinterp__d3_dot(in[k], r) >= margin)) return 0;
+            }
+        }
+    }
+    return 1;
+}
+
+/* Does one of the blockers blk[0 .. n) hide src from the whole box? */
+static int radinterp__leaf_hidden(const radinterp_solution *s, const float *lo, const float *hi,
+                                  const radinterp__node *src, const uint32_t *blk, uint32_t n)
+{
+    uint32_t i;
+    for (i = 0; i < n; i++)
+        if (radinterp__leaf_hides(s, lo, hi, src, blk[i])) return 1;
+    return 0;
 }
 
 static void radinterp__leaf_lists_job(void *ctx_, uint32_t index)
@@ -8479,6 +8558,10 @@ static void radinterp__leaf_lists_job(void *ctx_, uint32_t index)
                         ctx->wide[at++] = b;
                         ll->count++;
                     }
+                }
+                if (radinterp__leaf_hidden(s, llo, lhi, &s->nodes[lk->source], ctx->wide + ll->first, ll->count)) {
+                    at = ll->first;
+                    ll->count = RADINTERP__LEAF_HIDDEN;
                 }
             }
         }
@@ -8550,12 +8633,13 @@ static radinterp_result radinterp__build_leaf_lists(radinterp_solution *s, const
             for (e = s->leaf_link_first[leaf]; e < s->leaf_link_first[leaf + 1]; e++) {
                 radinterp__leaf_link *ll = &s->leaf_links[e];
                 size_t at = kept.count;
-                if (ll->count && radinterp__buf_reserve(&s->allocator, &kept, at + ll->count) != 0) {
+                uint32_t count = radinterp__leaf_kept(ll);
+                if (count && radinterp__buf_reserve(&s->allocator, &kept, at + count) != 0) {
                     res = RADINTERP_ERROR_OUT_OF_MEMORY;
                     break;
                 }
-                if (ll->count) memcpy((uint32_t *)kept.data + at, wide + ll->first, (size_t)ll->count * sizeof(uint32_t));
-                kept.count += ll->count;
+                if (count) memcpy((uint32_t *)kept.data + at, wide + ll->first, (size_t)count * sizeof(uint32_t));
+                kept.count += count;
                 ll->first = at;
             }
         }
@@ -8872,6 +8956,7 @@ typedef struct radinterp__plink {
     const radinterp__link *lk;
     const uint32_t *blk;      /* its blockers near the point: the leaf list's, or the link's own */
     uint32_t nblk;
+    int hidden;               /* the leaf list's entry is hidden (RADINTERP__LEAF_HIDDEN): F = 0 */
     double full, reach;       /* unoccluded factor at the point, and that times B_src (largest channel); once
                                  ranked, what this source and those after it could carry */
 } radinterp__plink;
@@ -8898,7 +8983,8 @@ static uint32_t radinterp__point_links(const radinterp__query *q, uint32_t leaf,
             if (n < first || n - first >= max) continue;
             pl[n - first].lk = &s->links[ll->link];
             pl[n - first].blk = s->leaf_blockers + ll->first;
-            pl[n - first].nblk = ll->count;
+            pl[n - first].nblk = radinterp__leaf_kept(ll);
+            pl[n - first].hidden = ll->count == RADINTERP__LEAF_HIDDEN;
         }
         return n;
     }
@@ -8908,6 +8994,7 @@ static uint32_t radinterp__point_links(const radinterp__query *q, uint32_t leaf,
             pl[n - first].lk = &s->links[l];
             pl[n - first].blk = s->blockers + s->links[l].first_blocker;
             pl[n - first].nblk = s->links[l].blocker_count;
+            pl[n - first].hidden = 0;
         }
     return n;
 }
@@ -8942,9 +9029,9 @@ static void radinterp__sum_links(radinterp__query *q, radinterp__plink *pl, uint
     for (i = 0; i < n; i++) {
         const radinterp__node *src = &s->nodes[pl[i].lk->source];
         if (ranked && pl[i].reach <= s->point_rest * radinterp__max3(h)) {
-            double f = pl[i].nblk ? pl[i].full * pl[i].lk->vis : pl[i].full;
+            double f = pl[i].nblk || pl[i].hidden ? pl[i].full * pl[i].lk->vis : pl[i].full;
             for (k = 0; k < 3; k++) h[k] += f * src->b[k];
-        } else {
+        } else if (!pl[i].hidden) {   /* a hidden one adds 0, as its backprojection would */
             q->blk = pl[i].blk;
             q->nblk = pl[i].nblk;
             if (ranked) {
