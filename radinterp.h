@@ -8461,56 +8461,71 @@ static void radinterp__grown_box(const radinterp__node *nd, double margin, float
     }
 }
 
-/* Does the opaque patch b alone hide the whole source node src from every
-   point of the box lo .. hi? When the box lies in front of b's plane and
-   the source behind it, every segment from the box to the source crosses
-   the plane, and the crossings fill the convex hull of the crossings of
-   the segments between their corners (the hull of box and source meets
-   the plane in the hull of where its edges cross it, and those edges run
-   between a box corner and a source corner). b is convex, so the segments
-   all meet it when those crossings lie inside it. The source is taken at
-   its place and push_off behind it, where point queries put it (6.4), and
-   every margin is 4 epsilon * diag: no point of the box sees b edge-on
-   (radinterp__bp_shadow_piece leaves such a blocker out, at epsilon *
-   diag) and b's shadow from any point of the box covers the source with
-   room to spare, so a point query there finds the source hidden by b, a
-   factor of 0. */
-static int radinterp__leaf_hides(const radinterp_solution *s, const float *lo, const float *hi,
-                                 const radinterp__node *src, uint32_t b)
+/* A box (a leaf's, grown) and a source node as radinterp__leaf_hides
+   tests them: the box's corners and the source's, at its place and
+   push_off behind it, where point queries put it (6.4). */
+typedef struct radinterp__leaf_shaft {
+    const float *lo, *hi;
+    double box[8][3], src[8][3];
+    int nsrc;
+} radinterp__leaf_shaft;
+
+static void radinterp__leaf_shaft_make(const radinterp_solution *s, const float *lo, const float *hi,
+                                       const radinterp__node *src, radinterp__leaf_shaft *ls)
+{
+    const double *ns = s->patches[src->patch].n;
+    int i, k, n = radinterp__node_poly(src, ls->src);
+    for (i = 0; i < n; i++)
+        for (k = 0; k < 3; k++) ls->src[n + i][k] = ls->src[i][k] - s->push_off * ns[k];
+    ls->nsrc = 2 * n;
+    for (i = 0; i < 8; i++)
+        for (k = 0; k < 3; k++) ls->box[i][k] = (i >> k) & 1 ? (double)hi[k] : (double)lo[k];
+    ls->lo = lo;
+    ls->hi = hi;
+}
+
+/* Does the opaque patch b alone hide the whole source from every point of
+   the box (ls)? When the box lies in front of b's plane and the source
+   behind it, every segment from the box to the source crosses the plane,
+   and the crossings fill the convex hull of the crossings of the segments
+   between their corners (the hull of box and source meets the plane in the
+   hull of where its edges cross it, and those edges run between a box
+   corner and a source corner). b is convex, so the segments all meet it
+   when those crossings lie inside it. Every margin is 4 epsilon * diag: no
+   point of the box sees b edge-on (radinterp__bp_shadow_piece leaves such
+   a blocker out, at epsilon * diag) and b's shadow from any point of the
+   box covers the source with room to spare, so a point query there finds
+   the source hidden by b, a factor of 0. b turned toward the box is staged
+   by every query (a face turned away may be left to the front faces of its
+   solid, radinterp__back_face_covered), so only such b count. */
+static int radinterp__leaf_hides(const radinterp_solution *s, const radinterp__leaf_shaft *ls, uint32_t b)
 {
     const radinterp__patch *pb = &s->patches[b];
-    const double *ns = s->patches[src->patch].n;
-    double margin = 4.0 * s->epsilon * s->diag, mn, mx, S[8][3], pv[4][3], in[4][3];
-    int nsrc, nv, i, j, k, c;
+    double margin = 4.0 * s->epsilon * s->diag, mn, mx, dsrc[8], pv[4][3], in[4][3], far2[4];
+    int nv, i, j, k, c;
     if (pb->glass || pb->count < 3) return 0;
-    radinterp__box_range(pb->n, pb->d, lo, hi, &mn, &mx);
+    radinterp__box_range(pb->n, pb->d, ls->lo, ls->hi, &mn, &mx);
     if (!(mn > margin)) return 0;
-    nsrc = radinterp__node_poly(src, S);
-    for (i = 0; i < nsrc; i++)
-        for (k = 0; k < 3; k++) S[nsrc + i][k] = S[i][k] - s->push_off * ns[k];
-    for (i = 0; i < 2 * nsrc; i++)
-        if (!(radinterp__d3_dot(pb->n, S[i]) - pb->d < -margin)) return 0;
+    for (i = 0; i < ls->nsrc; i++)
+        if (!((dsrc[i] = radinterp__d3_dot(pb->n, ls->src[i]) - pb->d) < -margin)) return 0;
     nv = radinterp__patch_poly(pb, pv);
-    for (k = 0; k < nv; k++) { /* unit inward normals of b's edges in its plane (counter-clockwise seen from the front) */
-        double e[3], len;
+    for (k = 0; k < nv; k++) { /* inward normals of b's edges in its plane (counter-clockwise seen from the front) */
+        double e[3];
         radinterp__d3_sub(pv[(k + 1) % nv], pv[k], e);
         radinterp__d3_cross(pb->n, e, in[k]);
-        len = radinterp__d3_len(in[k]);
-        if (!(len > 0.0)) return 0;
-        for (j = 0; j < 3; j++) in[k][j] /= len;
+        far2[k] = margin * margin * radinterp__d3_dot(in[k], in[k]);   /* |in| margin, squared */
     }
     for (c = 0; c < 8; c++) {
-        double a[3], da;
-        a[0] = (c & 1) ? hi[0] : lo[0];
-        a[1] = (c & 2) ? hi[1] : lo[1];
-        a[2] = (c & 4) ? hi[2] : lo[2];
-        da = radinterp__d3_dot(pb->n, a) - pb->d;
-        for (i = 0; i < 2 * nsrc; i++) {
-            double t = da / (da - (radinterp__d3_dot(pb->n, S[i]) - pb->d)), z[3], r[3];
-            for (j = 0; j < 3; j++) z[j] = a[j] + t * (S[i][j] - a[j]);
-            for (k = 0; k < nv; k++) {
+        const double *a = ls->box[c];
+        double da = radinterp__d3_dot(pb->n, a) - pb->d;
+        for (i = 0; i < ls->nsrc; i++) {
+            double t = da / (da - dsrc[i]), z[3], r[3];
+            for (j = 0; j < 3; j++) z[j] = a[j] + t * (ls->src[i][j] - a[j]);
+            for (k = 0; k < nv; k++) { /* z at least margin inside edge k */
+                double dk;
                 radinterp__d3_sub(z, pv[k], r);
-                if (!(radinterp__d3_dot(in[k], r) >= margin)) return 0;
+                dk = radinterp__d3_dot(in[k], r);
+                if (!(dk > 0.0 && dk * dk >= far2[k])) return 0;
             }
         }
     }
@@ -8521,9 +8536,12 @@ static int radinterp__leaf_hides(const radinterp_solution *s, const float *lo, c
 static int radinterp__leaf_hidden(const radinterp_solution *s, const float *lo, const float *hi,
                                   const radinterp__node *src, const uint32_t *blk, uint32_t n)
 {
+    radinterp__leaf_shaft ls;
     uint32_t i;
+    if (n == 0) return 0;
+    radinterp__leaf_shaft_make(s, lo, hi, src, &ls);
     for (i = 0; i < n; i++)
-        if (radinterp__leaf_hides(s, lo, hi, src, blk[i])) return 1;
+        if (radinterp__leaf_hides(s, &ls, blk[i])) return 1;
     return 0;
 }
 

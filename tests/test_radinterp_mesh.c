@@ -224,6 +224,7 @@ static void test_leaf_hidden_links(void)
     radinterp_solution *sol = NULL;
     uint32_t i, k, grey, light, hidden = 0, open = 0, bad = 0;
     const radinterp__node *src;
+    radinterp__leaf_shaft ls;
     memset(&s, 0, sizeof s);
     grey = add_material(&s, 0.5f, 0.0f);
     light = add_material(&s, 0.0f, 100.0f);
@@ -246,7 +247,8 @@ static void test_leaf_hidden_links(void)
             outer = fabs(hi[j]) > outer ? fabs(hi[j]) : outer;
         }
         lo[2] = hi[2] = 0.0f;   /* flat, as a floor leaf's box */
-        verdict = radinterp__leaf_hides(sol, lo, hi, src, 2);
+        radinterp__leaf_shaft_make(sol, lo, hi, src, &ls);
+        verdict = radinterp__leaf_hides(sol, &ls, 2);
         if (outer < 1.5 - 1e-3) CHECK_MSG(verdict, "box out to %g not hidden", outer);
         if (outer > 1.5 + 1e-3) CHECK_MSG(!verdict, "box out to %g hidden", outer);
         if (!verdict) { open++; continue; }
@@ -267,8 +269,10 @@ static void test_leaf_hidden_links(void)
     {   /* above the blocker, and straddling its plane: never */
         float lo1[3] = {-0.1f, -0.1f, 1.0f}, hi1[3] = {0.1f, 0.1f, 1.2f};
         float lo2[3] = {-0.1f, -0.1f, 0.7f}, hi2[3] = {0.1f, 0.1f, 0.9f};
-        CHECK(!radinterp__leaf_hides(sol, lo1, hi1, src, 2));
-        CHECK(!radinterp__leaf_hides(sol, lo2, hi2, src, 2));
+        radinterp__leaf_shaft_make(sol, lo1, hi1, src, &ls);
+        CHECK(!radinterp__leaf_hides(sol, &ls, 2));
+        radinterp__leaf_shaft_make(sol, lo2, hi2, src, &ls);
+        CHECK(!radinterp__leaf_hides(sol, &ls, 2));
     }
     test_note("leaf verdicts: %u of 2000 random floor boxes hidden by the blocker, every one confirmed by 100 segments",
          hidden);
