@@ -681,7 +681,19 @@
    the build time. building_1k's mesh needs about 370,000 queries (1.12 M
    before v0.7.0) at about 2,000 per second of one core (185 s; v0.7.0:
    about 1,200, before a source's parts shared one union of shadows):
-   minutes on two threads, too slow still for a level loaded at run time. Interpolants are only as accurate as IrradianceAtPoint, whose
+   minutes on two threads, too slow still for a level loaded at run time.
+   The solve's leaf lists mark the links a whole leaf cannot see: one
+   opaque blocker turned toward the leaf meets every segment from the
+   leaf's box (grown by the lists' margin) to the source, as the near face
+   of a wall does between a leaf and a lamp of the next room. Point queries
+   skip those sources' backprojections, which found them hidden anyway,
+   and the lists drop their blockers: 10.5 M of the 56 M sources
+   building_1k's mesh samples evaluate exactly (the office: 0.33 M of
+   7.4 M), and 35% of its lists' blockers (solution 219 MB instead of
+   271 MB). Results are equal up to rounding (the office's mesh to the bit;
+   14 of 20,000 random points of building_1k moved, by at most 3e-14 of
+   their irradiance, most likely because a skipped source leaves the
+   query's hints as they were). Interpolants are only as accurate as IrradianceAtPoint, whose
    sources are the solution's elements: for a more accurate image solve
    with a smaller eps and mesh with a larger min_leaf_area. Discontinuity
    edges that nearly graze a patch outline can make a triangulation fail
