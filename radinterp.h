@@ -690,8 +690,8 @@
    and the lists drop their blockers: 10.5 M of the 56 M sources
    building_1k's mesh samples evaluate exactly (the office: 0.33 M of
    7.4 M), and 35% of its lists' blockers (solution 219 MB instead of
-   271 MB); its mesh built 1.14x faster (one pair in one process, thread
-   CPU time), the office's 1.03x, while the test makes the solve 1.16x
+   271 MB); its mesh built 1.14x faster (two pairs in one process, thread
+   CPU time: 1.14x and 1.15x), the office's 1.03x, while the test makes the solve 1.16x
    slower (the office's 1.06x). Results are equal up to rounding (the
    office's mesh to the bit; on building_1k 14 of 20,000 random points
    moved, by at most 3e-14 of their irradiance, and 561 of the mesh's
