@@ -190,6 +190,95 @@ static radinterp_solution *penumbra_scene(scene *s)
     return sol;
 }
 
+/* Does the segment a-b cross the rectangle r (x0, y0, x1, y1) at z = BLK_H? */
+static int crosses_rect(const double *a, const double *b, const double *r)
+{
+    double t, x, y;
+    if (!((a[2] - BLK_H) * (b[2] - BLK_H) < 0.0)) return 0;
+    t = (BLK_H - a[2]) / (b[2] - a[2]);
+    x = a[0] + t * (b[0] - a[0]);
+    y = a[1] + t * (b[1] - a[1]);
+    return x > r[0] && x < r[2] && y > r[1] && y < r[3];
+}
+
+/* Leaf lists mark a link hidden from a whole leaf when one blocker covers
+   every segment from the leaf's box, grown by the lists' margin, to the
+   source at its place and pushed off (radinterp__leaf_hides); point queries
+   then skip its backprojection. The penumbra scene with a blocker [-1, 1]^2
+   facing the floor (turned toward the points, as the library requires; at
+   BLK_H, under the source [-SRC_A, SRC_A]^2 at SRC_H): seen from a floor
+   point x, the source projects onto the blocker's plane as
+   [0.6 x - 0.1, 0.6 x + 0.1] in each axis, inside the blocker for |x| < 1.5:
+   the umbra. Random flat boxes on the floor: the verdict must be "hidden"
+   for those inside |x|, |y| < 1.5 and "not hidden" for those reaching
+   outside it, except within 1e-3 of that boundary, where the margins (a few
+   epsilon * diag, about 2e-5 m here) decide. Each "hidden" is also checked
+   by segments from random points of the box to random points of the source
+   (pushed off by up to push_off): every one must cross the blocker. Boxes
+   above the blocker, or straddling its plane, are never hidden. */
+static void test_leaf_hidden_links(void)
+{
+    static const double wide[4] = {-1.0, -1.0, 1.0, 1.0};
+    scene s;
+    radinterp_desc d;
+    radinterp_solution *sol = NULL;
+    uint32_t i, k, grey, light, hidden = 0, open = 0, bad = 0;
+    const radinterp__node *src;
+    radinterp__leaf_shaft ls;
+    memset(&s, 0, sizeof s);
+    grey = add_material(&s, 0.5f, 0.0f);
+    light = add_material(&s, 0.0f, 100.0f);
+    add_hrect(&s, -2, -2, 2, 2, 0, 1, grey);                                                              /* 0: floor */
+    add_hrect(&s, -(float)SRC_A, -(float)SRC_A, (float)SRC_A, (float)SRC_A, (float)SRC_H, 0, light);      /* 1: source */
+    add_hrect(&s, (float)wide[0], (float)wide[1], (float)wide[2], (float)wide[3], (float)BLK_H, 0, grey); /* 2: blocker */
+    d = scene_desc(&s);
+    CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_OK);
+    if (!sol) return;
+    src = &sol->nodes[sol->patches[1].root];
+    for (i = 0; i < 2000; i++) {
+        float lo[3], hi[3];
+        double outer = 0.0;   /* largest |x| or |y| of the box */
+        int j, verdict;
+        for (j = 0; j < 2; j++) {
+            double c = -2.0 + 4.0 * rnd(), w = 0.5 * rnd();
+            lo[j] = (float)(c - w);
+            hi[j] = (float)(c + w);
+            outer = fabs(lo[j]) > outer ? fabs(lo[j]) : outer;
+            outer = fabs(hi[j]) > outer ? fabs(hi[j]) : outer;
+        }
+        lo[2] = hi[2] = 0.0f;   /* flat, as a floor leaf's box */
+        radinterp__leaf_shaft_make(sol, lo, hi, src, &ls);
+        verdict = radinterp__leaf_hides(sol, &ls, 2);
+        if (outer < 1.5 - 1e-3) CHECK_MSG(verdict, "box out to %g not hidden", outer);
+        if (outer > 1.5 + 1e-3) CHECK_MSG(!verdict, "box out to %g hidden", outer);
+        if (!verdict) { open++; continue; }
+        hidden++;
+        for (k = 0; k < 100; k++) {
+            double a[3], b[3], u = rnd(), v = rnd();
+            for (j = 0; j < 3; j++) {
+                a[j] = lo[j] + rnd() * ((double)hi[j] - lo[j]);
+                b[j] = (1 - u) * (1 - v) * src->v[0][j] + u * (1 - v) * src->v[1][j] + u * v * src->v[2][j] +
+                       (1 - u) * v * src->v[3][j];
+            }
+            b[2] += rnd() * sol->push_off;   /* moved behind the source, which faces down */
+            bad += !crosses_rect(a, b, wide);
+        }
+    }
+    CHECK(hidden > 100 && open > 100);   /* both verdicts are exercised */
+    CHECK_EQ_INT(bad, 0);
+    {   /* above the blocker, and straddling its plane: never */
+        float lo1[3] = {-0.1f, -0.1f, 1.0f}, hi1[3] = {0.1f, 0.1f, 1.2f};
+        float lo2[3] = {-0.1f, -0.1f, 0.7f}, hi2[3] = {0.1f, 0.1f, 0.9f};
+        radinterp__leaf_shaft_make(sol, lo1, hi1, src, &ls);
+        CHECK(!radinterp__leaf_hides(sol, &ls, 2));
+        radinterp__leaf_shaft_make(sol, lo2, hi2, src, &ls);
+        CHECK(!radinterp__leaf_hides(sol, &ls, 2));
+    }
+    test_note("leaf verdicts: %u of 2000 random floor boxes hidden by the blocker, every one confirmed by 100 segments",
+         hidden);
+    radinterp_solution_destroy(sol);
+}
+
 /* The rays from a source edge at coordinate xs through a blocker edge at xb
    meet the floor at xb + t (xb - xs), t = h / (H - h): for xs = -a, a and
    xb = both blocker edges, four lines per axis bound the penumbra and the
@@ -1392,6 +1481,7 @@ int main(int argc, char **argv)
     TEST_INIT(argc, argv);
     RUN(test_fit_reproduces_quadratics);
     RUN(test_penumbra_boundaries);
+    RUN(test_leaf_hidden_links);
     RUN(test_weights);
     RUN(test_weight_cache);
     RUN(test_hidden_events);
