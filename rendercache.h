@@ -1,4 +1,4 @@
-/* rendercache.h - v0.5.1 - render cache and range-image walkthroughs - public domain or MIT, see end of file
+/* rendercache.h - v0.5.2 - render cache and range-image walkthroughs - public domain or MIT, see end of file
 
    RENDERCACHE.H: an image-space point cache that reprojects and resamples, and range-image walkthroughs of animated scenes.
 
