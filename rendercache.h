@@ -1,4 +1,4 @@
-/* rendercache.h - v0.5.1 - render cache and range-image walkthroughs - public domain or MIT, see end of file
+/* rendercache.h - v0.5.2 - render cache and range-image walkthroughs - public domain or MIT, see end of file
 
    RENDERCACHE.H: an image-space point cache that reprojects and resamples, and range-image walkthroughs of animated scenes.
 
@@ -415,7 +415,7 @@
 
 #define RENDERCACHE_VERSION_MAJOR 0
 #define RENDERCACHE_VERSION_MINOR 5
-#define RENDERCACHE_VERSION_PATCH 1
+#define RENDERCACHE_VERSION_PATCH 2
 
 #ifndef RENDERCACHE_API
 #  ifdef RENDERCACHE_STATIC
@@ -2189,6 +2189,12 @@ static void rendercache__reset_points(rendercache *rc)
     memset(&empty, 0, sizeof empty);
     empty.object = RENDERCACHE_MISS;
     for (i = 0; i < rc->capacity; i++) rc->geo.object[i] = RENDERCACHE__FREE_SLOT;
+    /* free slots are projected with the others, four at a time, and masked
+       after by their object: their positions must still be numbers the
+       projection may read (never used, but not left uninitialised) */
+    memset(rc->geo.x, 0, (size_t)rc->capacity * sizeof(float));
+    memset(rc->geo.y, 0, (size_t)rc->capacity * sizeof(float));
+    memset(rc->geo.z, 0, (size_t)rc->capacity * sizeof(float));
     memset(rc->shown, 0, (size_t)rc->capacity + rc->tile_count);   /* no mark */
     rendercache__slot_set(&rc->geo, rc->capacity, &empty);   /* the empty slot (what holes read): black, priority 0 */
     memset(&rc->data[rc->capacity], 0, sizeof rc->data[0]);
