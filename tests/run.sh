@@ -10,17 +10,17 @@
 #
 # The programs known to run longest start first, longest first, so that the
 # last to end is a short one and no core idles while a long program runs
-# alone. Measured one at a time on 2 cores (CPU seconds at load 15, where
-# wall time said little): test_radinterp over 100, test_lightvec_cache 53,
-# test_radinterp-clang-ubsan 43, test_walkthrough 36, test_radinterp_glass 34,
-# test_radinterp_visibility 32, test_lightvec_cache-clang-ubsan 24,
-# tsan_lightvec 22, test_bvh_scalar 18, test_bvh 15; ref_radinterp_building
-# (about 2 minutes of wall time by its own account, on a pool) and the
-# walkthrough's renders of the buildings under ASan (not measured). A
+# alone. Wall seconds in a whole make test, 2 at once, at load about 2:
+# test_radinterp 152, ref_radinterp_glass 69, test_radinterp-clang-ubsan 65,
+# test_radinterp_visibility 60, ref_radinterp_building 60 (on a pool),
+# test_walkthrough_daylight 48, test_lightvec_cache 46, test_radinterp_glass
+# 40, test_walkthrough 38, test_walkthrough_building 35, the clang-ubsan
+# builds of the walkthrough and lightvec cache tests 13-33, tsan_lightvec and
+# the BVH tests 10-20. A
 # program missing here only starts later; one that grows belongs here.
 set -u
-LONG_FIRST="ref_radinterp_building test_radinterp test_walkthrough_building test_walkthrough_daylight \
-test_lightvec_cache test_radinterp-clang-ubsan test_walkthrough test_radinterp_glass test_radinterp_visibility \
+LONG_FIRST="test_radinterp ref_radinterp_glass test_radinterp-clang-ubsan test_radinterp_visibility ref_radinterp_building \
+test_walkthrough_daylight test_lightvec_cache test_radinterp_glass test_walkthrough test_walkthrough_building \
 test_walkthrough_radiosity \
 test_walkthrough_building-clang-ubsan test_walkthrough_daylight-clang-ubsan test_lightvec_cache-clang-ubsan \
 tsan_lightvec test_bvh_scalar test_bvh"
