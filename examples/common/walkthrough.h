@@ -3421,8 +3421,11 @@ static int wt__raytrace_view(wt_renderer *r, const rendercache_camera *camera, c
     int full = r->frames_done == 0;
     wt_set_time(w, t);
     a = wt_seconds();
+    /* After the first frame, predictive sampling (WDG02): the pass that
+       reprojects the points also seeds the holes the next camera will see. */
     if (rendercache_set_object_transform(r->rc, WT_OBJECT_BUNNY, w->pose) != RENDERCACHE_OK ||
-        rendercache_begin_frame(r->rc, &cam) != RENDERCACHE_OK)
+        (!full && next ? rendercache_begin_frame_predicted(r->rc, &cam, next) : rendercache_begin_frame(r->rc, &cam)) !=
+            RENDERCACHE_OK)
         return -1;
     if (full) {
         for (i = 0; i < r->width * r->height; i++) {
@@ -3435,8 +3438,6 @@ static int wt__raytrace_view(wt_renderer *r, const rendercache_camera *camera, c
         }
         n = r->width * r->height;
     } else {
-        if (next && rendercache_predict(r->rc, next) != RENDERCACHE_OK)   /* predictive sampling (WDG02): */
-            return -1;                                                     /* the holes the next camera will see */
         if (rendercache_request(r->rc, r->req, r->budget, &n) != RENDERCACHE_OK) return -1;
     }
     st->phase[0] += wt_seconds() - a;
