@@ -2027,30 +2027,51 @@ IRRVOL__HOT __m128 irrvol__select(__m128 mask, __m128 a, __m128 b)
    and NaN directions land on a valid square point. The disk radius
    sqrt(1 - |z| / |d|) and the ratio of the minor to the major component are
    independent: two short dependency chains instead of a normalization
-   followed by both. With SSE2 the same operations in lane 0, every choice a
-   select: random directions take each side of each choice half the time,
-   which as branches (compilers do not turn these into selects) cost a query
-   about three mispredictions. */
+   followed by both. With SSE2 the same operations, every choice a select:
+   random directions take each side of each choice half the time, which as
+   branches (compilers do not turn these into selects) cost a query about
+   three mispredictions. Lane 0 works out the point as if x were the major
+   axis, lane 1 as if y were (one division, one arctangent polynomial for
+   both), and one select at the end keeps the right one: the same bits as
+   choosing the numerator and denominator first, in half the instructions. */
 #ifdef IRRVOL__SSE2
-IRRVOL__HOT void irrvol__direction_to_square(const float dir[3], float *u, float *v, uint32_t *hemisphere)
+/* c in lanes 0 and 1, for the two-lane steps below: a constant the compiler
+   keeps whole in memory and uses as an operand (GCC at -O2 broadcasts a
+   constant of four equal lanes from a scalar, two instructions). */
+#define IRRVOL__LANES2(c) _mm_set_ps(0.0f, 0.0f, (c), (c))
+
+IRRVOL__HOT __m128 irrvol__direction_to_square4(const float dir[3], uint32_t *hemisphere)
 {
-    const __m128 zero = _mm_setzero_ps(), one = _mm_set1_ps(1.0f), half = _mm_set1_ps(0.5f);
-    const __m128 sign = _mm_set1_ps(-0.0f);
+    const __m128 zero = _mm_setzero_ps(), one = IRRVOL__LANES2(1.0f), sign = IRRVOL__LANES2(-0.0f);
     __m128 x = _mm_load_ss(dir), y = _mm_load_ss(dir + 1), z = _mm_load_ss(dir + 2);
     __m128 len = _mm_sqrt_ss(_mm_add_ss(_mm_add_ss(_mm_mul_ss(x, x), _mm_mul_ss(y, y)), _mm_mul_ss(z, z)));
     __m128 pos = _mm_cmpgt_ss(len, zero), ax = _mm_andnot_ps(sign, x), ay = _mm_andnot_ps(sign, y);
     __m128 one_minus_z = irrvol__select(pos, _mm_sub_ss(one, _mm_div_ss(_mm_andnot_ps(sign, z), irrvol__select(pos, len, one))), one);
     __m128 r = _mm_sqrt_ss(_mm_max_ss(one_minus_z, zero));
-    __m128 xmajor = _mm_cmpge_ss(ax, ay), num = irrvol__select(xmajor, y, x), den = irrvol__select(xmajor, x, y);
-    __m128 nonzero = _mm_cmpneq_ss(den, zero);
-    __m128 t = _mm_and_ps(nonzero, _mm_div_ss(num, irrvol__select(nonzero, den, one)));
-    __m128 major = _mm_xor_ps(r, _mm_and_ps(_mm_cmplt_ss(den, zero), sign));
-    __m128 minor = _mm_mul_ss(_mm_mul_ss(major, _mm_set_ss((float)(4.0 / IRRVOL__PI))), _mm_set_ss(irrvol__atan_unit(_mm_cvtss_f32(t))));
-    __m128 fu = _mm_mul_ss(half, _mm_add_ss(irrvol__select(xmajor, major, minor), one));
-    __m128 fv = _mm_mul_ss(half, _mm_add_ss(irrvol__select(xmajor, minor, major), one));
+    __m128 xmajor = _mm_cmpge_ss(ax, ay);
+    __m128 den = _mm_unpacklo_ps(x, y), num = _mm_unpacklo_ps(y, x);   /* lane 0: x major, lane 1: y major */
+    __m128 nonzero = _mm_cmpneq_ps(den, zero);
+    __m128 t = _mm_and_ps(nonzero, _mm_div_ps(num, _mm_or_ps(den, _mm_andnot_ps(nonzero, one))));   /* |t| <= 1 */
+    __m128 t2 = _mm_mul_ps(t, t), t4 = _mm_mul_ps(t2, t2), t8 = _mm_mul_ps(t4, t4);   /* irrvol__atan_unit */
+    __m128 p01 = _mm_sub_ps(IRRVOL__LANES2(0.9999994372f), _mm_mul_ps(IRRVOL__LANES2(0.3333010801f), t2));
+    __m128 p23 = _mm_sub_ps(IRRVOL__LANES2(0.1994852321f), _mm_mul_ps(IRRVOL__LANES2(0.1391586880f), t2));
+    __m128 p45 = _mm_sub_ps(IRRVOL__LANES2(0.09656416154f), _mm_mul_ps(IRRVOL__LANES2(0.05606523185f), t2));
+    __m128 p67 = _mm_sub_ps(IRRVOL__LANES2(0.02194796030f), _mm_mul_ps(IRRVOL__LANES2(0.004073664390f), t2));
+    __m128 atan_t = _mm_mul_ps(t, _mm_add_ps(_mm_add_ps(p01, _mm_mul_ps(p23, t4)), _mm_mul_ps(_mm_add_ps(p45, _mm_mul_ps(p67, t4)), t8)));
+    __m128 major = _mm_xor_ps(_mm_shuffle_ps(r, r, 0), _mm_and_ps(_mm_cmplt_ps(den, zero), sign));
+    __m128 minor = _mm_mul_ps(_mm_mul_ps(major, IRRVOL__LANES2((float)(4.0 / IRRVOL__PI))), atan_t);
+    __m128 both = _mm_unpacklo_ps(major, minor);                     /* x major: u v; y major: v u */
+    __m128 uv = irrvol__select(_mm_shuffle_ps(xmajor, xmajor, 0), both, _mm_shuffle_ps(both, both, _MM_SHUFFLE(2, 3, 2, 3)));
     *hemisphere = (uint32_t)_mm_movemask_ps(_mm_cmplt_ss(z, zero)) & 1u;
-    *u = _mm_cvtss_f32(_mm_min_ss(_mm_max_ss(fu, zero), one));   /* as irrvol__unit_clamp: NaN gives 0 */
-    *v = _mm_cvtss_f32(_mm_min_ss(_mm_max_ss(fv, zero), one));
+    uv = _mm_mul_ps(IRRVOL__LANES2(0.5f), _mm_add_ps(uv, one));
+    return _mm_min_ps(_mm_max_ps(uv, zero), one);   /* as irrvol__unit_clamp: NaN gives 0 */
+}
+
+IRRVOL__HOT void irrvol__direction_to_square(const float dir[3], float *u, float *v, uint32_t *hemisphere)
+{
+    __m128 uv = irrvol__direction_to_square4(dir, hemisphere);
+    *u = _mm_cvtss_f32(uv);
+    *v = _mm_cvtss_f32(_mm_shuffle_ps(uv, uv, 1));
 }
 #else
 IRRVOL__HOT void irrvol__direction_to_square(const float dir[3], float *u, float *v, uint32_t *hemisphere)
@@ -2189,6 +2210,9 @@ struct irrvol {
     float scale[4];        /* first-level cells per unit length: num_cells / (max - min), eq. 4.4 */
     float cell_limit[4];   /* cells per axis as float: the clamp bound of q_d */
     float last_cell[4];    /* cells per axis less 1, as float: the cell of q_d = num_cells */
+    float sub_cells[4];    /* sub-cells per axis of a refined cell (subgrid - 1), as float, in three lanes */
+    float sub_last[4];     /* sub_cells less 1: the sub-cell of a point on a refined cell's upper face */
+    float sub_stride[4];   /* 1, sub_cells, sub_cells^2: a sub-cell's record from its coordinates */
     uint32_t samples[3];   /* first-level samples per axis */
     uint32_t cells[3];     /* first-level cells per axis */
     uint32_t subgrid;      /* second-level samples per axis, corners included */
@@ -2281,7 +2305,12 @@ static void irrvol__grid_dims(irrvol *v, const uint32_t samples[3], uint32_t sub
         v->scale[d] = (float)((double)v->cells[d] / ((double)v->hi[d] - (double)v->lo[d]));
         v->cell_limit[d] = (float)v->cells[d];
         v->last_cell[d] = (float)(v->cells[d] - 1);
+        v->sub_cells[d] = (float)(subgrid - 1);
+        v->sub_last[d] = (float)(subgrid - 2);
     }
+    v->sub_stride[0] = 1.0f;
+    v->sub_stride[1] = (float)(subgrid - 1);
+    v->sub_stride[2] = (float)((subgrid - 1) * (subgrid - 1));
     v->subgrid = subgrid;
     v->first_level_count = samples[0] * samples[1] * samples[2];
 }
@@ -4566,7 +4595,11 @@ IRRVOL__HOT const irrvol__corners *irrvol__cell_corners(const irrvol *v, const u
 /* Eq. 4.4-4.6 and the sub-cell: the record of the eight samples around
    pos and their trilinear weights. With SSE2 the three axes share a
    register (the same operations, so the same bits): no loop, and the
-   integer clamps become float minima of whole numbers. */
+   integer clamps become float minima of whole numbers. Every refined cell
+   has subgrid samples a side, so the sub-cell and its offsets are worked
+   out as if the cell were refined while the cell is read (an unrefined
+   cell, of side 2, keeps its first-level offsets, which is what its one
+   sub-cell would give): no computation waits for the cell but the choice. */
 #ifdef IRRVOL__SSE2
 IRRVOL__HOT const irrvol__corners *irrvol__locate(const irrvol *v, const float pos[3], uint32_t ids[8], float w[8])
 {
@@ -4575,9 +4608,9 @@ IRRVOL__HOT const irrvol__corners *irrvol__locate(const irrvol *v, const float p
     const irrvol__corners *rec;
     __m128 p = _mm_movelh_ps(_mm_unpacklo_ps(_mm_load_ss(pos), _mm_load_ss(pos + 1)), _mm_load_ss(pos + 2));
     __m128 q = _mm_mul_ps(_mm_sub_ps(p, _mm_loadu_ps(v->lo)), _mm_loadu_ps(v->scale));   /* eq. 4.4 */
-    __m128 c, o, f, s, t, u, xs, ys, xy, z0, z1;
-    __m128i ci, si;
-    uint32_t side, m;
+    __m128 c, o, s, t, u, xs, ys, xy, z0, z1, sum, refined;
+    __m128i ci;
+    uint32_t sub;
     q = _mm_min_ps(_mm_max_ps(q, zero), _mm_loadu_ps(v->cell_limit));   /* NaN gives 0 */
     c = _mm_min_ps(_mm_cvtepi32_ps(_mm_cvttps_epi32(q)), _mm_loadu_ps(v->last_cell));   /* eq. 4.5 */
     o = _mm_sub_ps(q, c);                                                                /* eq. 4.6 */
@@ -4585,16 +4618,14 @@ IRRVOL__HOT const irrvol__corners *irrvol__locate(const irrvol *v, const float p
     cell = &v->cell[(uint32_t)_mm_cvtsi128_si32(ci) +
                     v->cells[0] * ((uint32_t)_mm_cvtsi128_si32(_mm_shuffle_epi32(ci, 0x55)) +
                                    v->cells[1] * (uint32_t)_mm_cvtsi128_si32(_mm_shuffle_epi32(ci, 0xAA)))];
-    side = cell->side;
-    m = side - 1;
-    f = _mm_set1_ps((float)m);
-    q = _mm_mul_ps(o, f);
-    s = _mm_min_ps(_mm_cvtepi32_ps(_mm_cvttps_epi32(q)), _mm_set1_ps((float)(side - 2)));
-    t = _mm_sub_ps(q, s);
-    si = _mm_cvttps_epi32(s);
-    rec = v->corners + cell->corners + (uint32_t)_mm_cvtsi128_si32(si) +
-          m * ((uint32_t)_mm_cvtsi128_si32(_mm_shuffle_epi32(si, 0x55)) +
-               m * (uint32_t)_mm_cvtsi128_si32(_mm_shuffle_epi32(si, 0xAA)));
+    q = _mm_mul_ps(o, _mm_loadu_ps(v->sub_cells));
+    s = _mm_min_ps(_mm_cvtepi32_ps(_mm_cvttps_epi32(q)), _mm_loadu_ps(v->sub_last));
+    sum = _mm_mul_ps(s, _mm_loadu_ps(v->sub_stride));   /* whole numbers below 2^15: exact */
+    sum = _mm_add_ps(sum, _mm_movehl_ps(sum, sum));
+    sub = (uint32_t)_mm_cvtsi128_si32(_mm_cvttps_epi32(_mm_add_ss(sum, _mm_shuffle_ps(sum, sum, 1))));
+    refined = _mm_castsi128_ps(_mm_set1_epi32(cell->side > 2 ? -1 : 0));
+    t = irrvol__select(refined, _mm_sub_ps(q, s), o);
+    rec = v->corners + cell->corners + (cell->side > 2 ? sub : 0u);
     u = _mm_unpacklo_ps(_mm_sub_ps(one, t), t);      /* x0 x1 y0 y1 */
     xs = _mm_shuffle_ps(u, u, _MM_SHUFFLE(1, 0, 1, 0));
     ys = _mm_shuffle_ps(u, u, _MM_SHUFFLE(3, 3, 2, 2));
@@ -5147,17 +5178,27 @@ IRRVOL__HOT void irrvol__finish_floats(const irrvol *v, const irrvol__prepared *
    short chain of additions instead of one per term. With SSE2 a lane is a
    term. The scalar code computes the same operations in the same order. */
 #ifdef IRRVOL__SSE2
+/* sum + term k's word of the bin b times its weight, place values left in. */
+IRRVOL__HOT __m128 irrvol__nearest_term(const irrvol *v, const uint32_t *b, const irrvol__prepared *q, uint32_t k,
+                                        __m128 sum)
+{
+    const __m128i mask = _mm_set_epi32(0, 0x1FF << 18, 0x1FF << 9, 0x1FF);
+    uint32_t word = b[q->id[k]];
+    __m128 m = _mm_cvtepi32_ps(_mm_and_si128(_mm_set1_epi32((int)word), mask));
+    return _mm_add_ps(sum, _mm_mul_ps(m, _mm_set1_ps(q->w[k] * v->unpack[word >> 27])));
+}
+
 IRRVOL__HOT void irrvol__finish_nearest(const irrvol *v, const irrvol__prepared *q, float rgb[3])
 {
     const uint32_t *b = v->packed + (size_t)q->bin[0] * v->sample_count;
-    const __m128i mask = _mm_set_epi32(0, 0x1FF << 18, 0x1FF << 9, 0x1FF);
     __m128 sum = _mm_setzero_ps();
     float out[4];
     uint32_t i;
-    for (i = 0; i < q->count; i++) {
-        uint32_t word = b[q->id[i]];
-        __m128 m = _mm_cvtepi32_ps(_mm_and_si128(_mm_set1_epi32((int)word), mask));
-        sum = _mm_add_ps(sum, _mm_mul_ps(m, _mm_set1_ps(q->w[i] * v->unpack[word >> 27])));
+    for (i = 0; i < q->count; i += 4) {   /* a multiple of 4: one loop test a group */
+        sum = irrvol__nearest_term(v, b, q, i, sum);
+        sum = irrvol__nearest_term(v, b, q, i + 1, sum);
+        sum = irrvol__nearest_term(v, b, q, i + 2, sum);
+        sum = irrvol__nearest_term(v, b, q, i + 3, sum);
     }
     _mm_storeu_ps(out, _mm_mul_ps(_mm_mul_ps(sum, _mm_set_ps(0.0f, 1.0f / 262144.0f, 1.0f / 512.0f, 1.0f)),
                                   _mm_set1_ps(q->scale)));
