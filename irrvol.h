@@ -4799,9 +4799,9 @@ IRRVOL__HOT void irrvol__lanes4_texels(const irrvol *v, const uint32_t s[4], irr
 {
     const __m128 one = _mm_set1_ps(1.0f), half = _mm_set1_ps(0.5f), zero = _mm_setzero_ps();
     const __m128 sign = _mm_set1_ps(-0.0f), fn = _mm_set1_ps((float)v->vis_res);
-    __m128 inv_a, px, py, neg, qx, qy, u, t;
+    __m128 inv_a, px, py, neg, qx, qy, u, t, fi, fj;
     __m128i i0, j0;
-    int iu[4], ju[4], k;
+    int at[4], k;
     inv_a = _mm_div_ps(one, _mm_add_ps(_mm_add_ps(_mm_andnot_ps(sign, l->dx), _mm_andnot_ps(sign, l->dy)),
                                        _mm_andnot_ps(sign, l->dz)));
     px = _mm_mul_ps(l->dx, inv_a);
@@ -4817,13 +4817,16 @@ IRRVOL__HOT void irrvol__lanes4_texels(const irrvol *v, const uint32_t s[4], irr
     t = _mm_min_ps(_mm_max_ps(t, half), _mm_add_ps(fn, half));
     i0 = _mm_cvttps_epi32(u);
     j0 = _mm_cvttps_epi32(t);
-    l->fu = _mm_sub_ps(u, _mm_cvtepi32_ps(i0));
-    l->ft = _mm_sub_ps(t, _mm_cvtepi32_ps(j0));
-    _mm_storeu_si128((__m128i *)(void *)iu, i0);
-    _mm_storeu_si128((__m128i *)(void *)ju, j0);
-    for (k = 0; k < 4; k++)
-        if (!(l->near >> k & 1))
-            l->texel[k] = v->visibility + ((size_t)s[k] * v->map_texels + (size_t)ju[k] * (v->vis_res + 2) + (size_t)iu[k]) * 4;
+    fi = _mm_cvtepi32_ps(i0);
+    fj = _mm_cvtepi32_ps(j0);
+    l->fu = _mm_sub_ps(u, fi);
+    l->ft = _mm_sub_ps(t, fj);
+    /* the texel in its map, j0 (n + 2) + i0: whole numbers below 2^13, exact as floats */
+    _mm_storeu_si128((__m128i *)(void *)at, _mm_cvttps_epi32(_mm_add_ps(_mm_mul_ps(fj, _mm_add_ps(fn, _mm_set1_ps(2.0f))), fi)));
+    for (k = 0; k < 4; k++) {   /* a select, not a branch: which lanes are near is random */
+        size_t texel = ((size_t)s[k] * v->map_texels + (size_t)at[k]) * 4;
+        l->texel[k] = v->visibility + (l->near >> k & 1 ? 0 : texel);
+    }
 }
 
 /* Step 1: directions, the backface term and the texels of four samples
@@ -4929,17 +4932,25 @@ IRRVOL__HOT void irrvol__visibility_weights(const irrvol *v, const uint32_t *s, 
 /* Asks the caches for the values of samples ids in bins (the words, or
    the floats, that the sums read), so that they arrive while other work
    runs: a leak-safe query's visibility weights, the next queries of
-   irrvol_query_many. */
+   irrvol_query_many. id_count is a multiple of 4 (a record's eight
+   samples, or a padded term list): each bin's row of the store is found
+   once and its ids asked for four at a time, a few instructions each
+   where a loop per value cost about nine. */
 IRRVOL__HOT void irrvol__prefetch_values(const irrvol *v, const uint32_t *bins, uint32_t bin_count, const uint32_t *ids,
                                          uint32_t id_count)
 {
+    const size_t size = v->packed ? sizeof *v->packed : 3 * sizeof *v->irradiance;
+    const char *store = v->packed ? (const char *)v->packed : (const char *)v->irradiance;
     uint32_t j, k;
-    for (k = 0; k < bin_count; k++)
-        for (j = 0; j < id_count; j++) {
-            size_t at = (size_t)bins[k] * v->sample_count + ids[j];
-            if (v->packed) IRRVOL__PREFETCH(v->packed + at);
-            else IRRVOL__PREFETCH(v->irradiance + 3 * at);
+    for (k = 0; k < bin_count; k++) {
+        const char *row = store + (size_t)bins[k] * v->sample_count * size;
+        for (j = 0; j < id_count; j += 4) {
+            IRRVOL__PREFETCH(row + ids[j] * size);
+            IRRVOL__PREFETCH(row + ids[j + 1] * size);
+            IRRVOL__PREFETCH(row + ids[j + 2] * size);
+            IRRVOL__PREFETCH(row + ids[j + 3] * size);
         }
+    }
 }
 
 /* The visibility weights of a record's eight samples (its corners, or a
@@ -5041,12 +5052,12 @@ IRRVOL__HOT void irrvol__visibility_terms(const irrvol *v, const irrvol__corners
         irrvol__prefetch_values(v, q->bin, prefetch ? q->bins : 0u, q->id, q->count);
         irrvol__visibility_weights(v, q->id, q->count, x, n, vis);
     }
-    for (i = 0; i < q->count; i++) {
-        w[i] = q->w[i] * vis[i];
-        sum += w[i];
+    for (i = 0; i < q->count; i += 4) {   /* a multiple of 4: products four at a time, the sum in term order */
+        for (j = 0; j < 4; j++) w[i + j] = q->w[i + j] * vis[i + j];
+        sum = (((sum + w[i]) + w[i + 1]) + w[i + 2]) + w[i + 3];
     }
     if (sum >= FLT_MIN && sum <= FLT_MAX) {   /* 1 / sum is finite */
-        memcpy(q->w, w, q->count * sizeof(float));
+        for (i = 0; i < q->count; i += 4) memcpy(q->w + i, w + i, 4 * sizeof(float));
         q->scale = 1.0f / sum;
     }
 }
