@@ -5120,8 +5120,9 @@ IRRVOL__HOT void irrvol__direction_bins(const irrvol *v, irrvol_filter filter, c
 IRRVOL__HOT void irrvol__prepare(const irrvol *v, irrvol_filter filter, irrvol_weighting weighting, const float pos[3],
                                  const float normal[3], const float dir[3], irrvol__prepared *q)
 {
+    const irrvol__corners *rec = irrvol__locate(v, pos, q->id, q->w);   /* first: its record's load starts early */
     irrvol__direction_bins(v, filter, dir, q);
-    irrvol__prepare_terms(v, irrvol__locate(v, pos, q->id, q->w), weighting, pos, normal, 1, q);
+    irrvol__prepare_terms(v, rec, weighting, pos, normal, 1, q);
 }
 
 /* irrvol__finish from the floats (full precision). With SSE2 the rgb of
