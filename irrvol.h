@@ -2245,7 +2245,8 @@ struct irrvol {
     float scale[4];        /* first-level cells per unit length: num_cells / (max - min), eq. 4.4 */
     float cell_limit[4];   /* cells per axis as float: the clamp bound of q_d */
     float last_cell[4];    /* cells per axis less 1, as float: the cell of q_d = num_cells */
-    float sub_cells[4];    /* sub-cells per axis of a refined cell (subgrid - 1), as float, in three lanes */
+    float sub_cells[4];    /* sub-cells per axis of a refined cell (subgrid - 1), as float; the fourth float
+                              of this and the next two is 0 too (irrvol__create zeroes the struct) */
     float sub_last[4];     /* sub_cells less 1: the sub-cell of a point on a refined cell's upper face */
     float sub_stride[4];   /* 1, sub_cells, sub_cells^2: a sub-cell's record from its coordinates */
     uint32_t samples[3];   /* first-level samples per axis */
