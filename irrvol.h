@@ -389,11 +389,11 @@
    building_4k and the Cornell box), and on office queries with zero,
    infinite and NaN inputs built with GCC, with clang and with
    IRRVOL_NO_SIMD.
-   What bounds the rates: a random query reads the eight corners' words in
-   one bin row (3-5 cache lines, NEAREST), four rows for BILINEAR, and the
-   leak-safe weights add the sub-cell's record (three lines) and two lines
-   of texels for each sample that reads its map (about 25 lines for the
-   default). The office volume is 6.1 MB, its bins 3.6 MB, against 1 MB of
+   What bounds the rates: a random office query reads the corners' words
+   in one bin row, 3.45 distinct cache lines on average (NEAREST), 13.8 in
+   four rows (BILINEAR), besides its sub-cell's record; the leak-safe
+   weights read the record's three lines and two rows of texels for each
+   sample that reads its map (about half of them on the office). The office volume is 6.1 MB, its bins 3.6 MB, against 1 MB of
    L2 per core on the benchmark's machine (AMD EPYC Zen 4), so most of
    those lines come from L3 or memory. The misses of one query overlap
    each other; those of consecutive single queries overlap only as far as
