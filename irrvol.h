@@ -403,7 +403,7 @@
    bit for bit, about 13 instructions a term. irrvol_query_many prepares
    queries ahead and prefetches, so its misses overlap (1.3x the single
    rate at a load of 1, 2.5x at a load of 5). 20 M single NEAREST
-   queries/s is 50 ns a query: without misses one takes 40-50 ns (8
+   queries/s is 50 ns a query: without misses one takes 40-55 ns (8
    repeated queries), with the office's misses about 70 ns at a load of 1
    (v0.5.4) and 150 ns at a load of 5, when other processes take the
    shared caches.
