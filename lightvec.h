@@ -3649,21 +3649,28 @@ static uint32_t lightvec__tree_levels(uint32_t leaves)
     return d;
 }
 
-/* Quickselect on perm[lo, hi) by item position on axis: afterwards the
-   k-th smallest is at k, smaller keys before, larger after. Three-way
+/* What the build of a kd-tree reads of an item, 20 bytes: the build moves
+   these (its quickselects and boxes read consecutive memory) instead of a
+   permutation of 192-byte entries, which it would read scattered. */
+typedef struct lightvec__key {
+    float pos[3], radius;
+    uint32_t index;                  /* the entry's */
+} lightvec__key;
+
+/* Quickselect on keys[lo, hi) by position on axis: afterwards the k-th
+   smallest is at k, smaller keys before, larger after. Three-way
    partition around a median-of-three pivot, robust to equal keys. */
-static void lightvec__select(uint32_t *perm, const lightvec__entry *src, int axis, uint32_t lo, uint32_t hi,
-                             uint32_t k)
+static void lightvec__select(lightvec__key *keys, int axis, uint32_t lo, uint32_t hi, uint32_t k)
 {
     while (hi - lo > 1) {
-        float a = src[perm[lo]].item.pos[axis], b = src[perm[lo + (hi - lo) / 2]].item.pos[axis];
-        float c = src[perm[hi - 1]].item.pos[axis], pivot;
+        float a = keys[lo].pos[axis], b = keys[lo + (hi - lo) / 2].pos[axis], c = keys[hi - 1].pos[axis], pivot;
         uint32_t lt = lo, i = lo, gt = hi;
         pivot = a < b ? (b < c ? b : (a < c ? c : a)) : (a < c ? a : (b < c ? c : b));
         while (i < gt) {
-            float key = src[perm[i]].item.pos[axis];
-            if (key < pivot) { uint32_t t = perm[lt]; perm[lt] = perm[i]; perm[i] = t; lt++; i++; }
-            else if (key > pivot) { uint32_t t; gt--; t = perm[gt]; perm[gt] = perm[i]; perm[i] = t; }
+            float key = keys[i].pos[axis];
+            lightvec__key t;
+            if (key < pivot) { t = keys[lt]; keys[lt] = keys[i]; keys[i] = t; lt++; i++; }
+            else if (key > pivot) { gt--; t = keys[gt]; keys[gt] = keys[i]; keys[i] = t; }
             else i++;
         }
         if (k < lt) hi = lt;
@@ -3672,25 +3679,28 @@ static void lightvec__select(uint32_t *perm, const lightvec__entry *src, int axi
     }
 }
 
-/* Box of the validity spheres of perm[lo, hi), widened by a relative 1e-6 so
-   that the float test d^2 < R^2 never accepts a point the box rejects. */
-static int lightvec__tree_box(float *box, const uint32_t *perm, const lightvec__entry *src, uint32_t lo, uint32_t hi)
+/* Box of the validity spheres of keys[lo, hi), widened by a relative 1e-6 so
+   that the float test d^2 < R^2 never accepts a point the box rejects; the
+   axis of the positions' largest extent. */
+static int lightvec__tree_box(float *box, const lightvec__key *keys, uint32_t lo, uint32_t hi)
 {
-    float clo[3], chi[3];
+    float blo[3], bhi[3], clo[3], chi[3];
     uint32_t i;
     int k, axis = 0;
-    lightvec__box_empty(box, box + 3);
+    lightvec__box_empty(blo, bhi);
     lightvec__box_empty(clo, chi);
     for (i = lo; i < hi; i++) {
-        const lightvec__item *it = &src[perm[i]].item;
+        const lightvec__key *it = &keys[i];
         for (k = 0; k < 3; k++) {
             float tol = (fabsf(it->pos[k]) + it->radius) * 1e-6f;
-            box[k] = lightvec__minf(box[k], it->pos[k] - it->radius - tol);
-            box[3 + k] = lightvec__maxf(box[3 + k], it->pos[k] + it->radius + tol);
+            blo[k] = lightvec__minf(blo[k], it->pos[k] - it->radius - tol);
+            bhi[k] = lightvec__maxf(bhi[k], it->pos[k] + it->radius + tol);
             clo[k] = lightvec__minf(clo[k], it->pos[k]);
             chi[k] = lightvec__maxf(chi[k], it->pos[k]);
         }
     }
+    memcpy(box, blo, sizeof blo);
+    memcpy(box + 3, bhi, sizeof bhi);
     for (k = 1; k < 3; k++)
         if (chi[k] - clo[k] > chi[axis] - clo[axis]) axis = k;
     return axis;
@@ -3698,16 +3708,15 @@ static int lightvec__tree_box(float *box, const uint32_t *perm, const lightvec__
 
 /* Binary node `node` over leaves [a, b) of n items: its box (6 floats at
    boxes + 6 node), then its halves. */
-static void lightvec__tree_build_node(float *boxes, uint32_t n, const lightvec__entry *src, uint32_t *perm, uint32_t node,
-                                      uint32_t a, uint32_t b)
+static void lightvec__tree_build_node(float *boxes, uint32_t n, lightvec__key *keys, uint32_t node, uint32_t a, uint32_t b)
 {
     uint32_t lo = a * LIGHTVEC__LEAF, hi = b * LIGHTVEC__LEAF < n ? b * LIGHTVEC__LEAF : n;
     uint32_t m = a + (b - a) / 2;
-    int axis = lightvec__tree_box(boxes + 6 * (size_t)node, perm, src, lo, hi);
+    int axis = lightvec__tree_box(boxes + 6 * (size_t)node, keys, lo, hi);
     if (b - a <= 1) return;
-    lightvec__select(perm, src, axis, lo, hi, m * LIGHTVEC__LEAF);
-    lightvec__tree_build_node(boxes, n, src, perm, 2 * node + 1, a, m);
-    lightvec__tree_build_node(boxes, n, src, perm, 2 * node + 2, m, b);
+    lightvec__select(keys, axis, lo, hi, m * LIGHTVEC__LEAF);
+    lightvec__tree_build_node(boxes, n, keys, 2 * node + 1, a, m);
+    lightvec__tree_build_node(boxes, n, keys, 2 * node + 2, m, b);
 }
 
 typedef struct lightvec__kd_span { uint32_t node, a, b; } lightvec__kd_span; /* binary node over leaves [a, b) */
@@ -3763,10 +3772,11 @@ static void lightvec__kd_collapse(lightvec__tree *t, const float *boxes, lightve
 
 static lightvec__tree *lightvec__tree_build(const lightvec_allocator *a, const lightvec__entry *src, uint32_t n)
 {
-    uint32_t leaves = lightvec__leaf_count(n), binary = (2u << lightvec__tree_levels(leaves)) - 1u, nodes = 0, i, *perm;
+    uint32_t leaves = lightvec__leaf_count(n), binary = (2u << lightvec__tree_levels(leaves)) - 1u, nodes = 0, i;
     size_t head = (sizeof(lightvec__tree) + 63u) & ~(size_t)63u, node_bytes, block_bytes, bytes;
     lightvec__kd_span root;
     lightvec__tree *t, shape;
+    lightvec__key *keys;
     float *boxes;
     if ((size_t)leaves > (SIZE_MAX - head - 128u) / (sizeof(lightvec__kd_node) + sizeof(lightvec__block) +
                                                       LIGHTVEC__LEAF * sizeof(lightvec__item)))
@@ -3778,11 +3788,11 @@ static lightvec__tree *lightvec__tree_build(const lightvec_allocator *a, const l
     block_bytes = (size_t)leaves * sizeof(lightvec__block);
     bytes = head + node_bytes + block_bytes + (size_t)n * sizeof(lightvec__item) + 64u; /* + room to align */
     t = (lightvec__tree *)lightvec__alloc(a, bytes);
-    perm = (uint32_t *)lightvec__alloc_array(a, n, sizeof(uint32_t));
+    keys = (lightvec__key *)lightvec__alloc_array(a, n, sizeof *keys);
     boxes = (float *)lightvec__alloc_array(a, binary, 6u * sizeof(float));
-    if (!t || !perm || !boxes) {
+    if (!t || !keys || !boxes) {
         lightvec__free(a, t);
-        lightvec__free(a, perm);
+        lightvec__free(a, keys);
         lightvec__free(a, boxes);
         return NULL;
     }
@@ -3794,18 +3804,22 @@ static lightvec__tree *lightvec__tree_build(const lightvec_allocator *a, const l
     t->items = (lightvec__item *)((char *)t->blocks + block_bytes);
     t->bytes = bytes;
     memset(t->blocks, 0, block_bytes); /* the last leaf's empty slots: radius 0, never inside */
-    for (i = 0; i < n; i++) perm[i] = i;
+    for (i = 0; i < n; i++) {
+        memcpy(keys[i].pos, src[i].item.pos, sizeof keys[i].pos);
+        keys[i].radius = src[i].item.radius;
+        keys[i].index = i;
+    }
     if (n) {
-        lightvec__tree_build_node(boxes, n, src, perm, 0, 0, leaves);
+        lightvec__tree_build_node(boxes, n, keys, 0, 0, leaves);
         nodes = 0;
         lightvec__kd_collapse(t, boxes, root, &nodes);
     }
     for (i = 0; i < n; i++) {
-        t->items[i] = src[perm[i]].item;
-        lightvec__block_put(&t->blocks[i / LIGHTVEC__LEAF], i % LIGHTVEC__LEAF, &src[perm[i]]);
+        t->items[i] = src[keys[i].index].item;
+        lightvec__block_put(&t->blocks[i / LIGHTVEC__LEAF], i % LIGHTVEC__LEAF, &src[keys[i].index]);
     }
     lightvec__free(a, boxes);
-    lightvec__free(a, perm);
+    lightvec__free(a, keys);
     return t;
 }
 
