@@ -4236,8 +4236,10 @@ static void lightvec__tail_query(const lightvec__index *idx, lightvec__query *q)
 {
     uint32_t n = lightvec__load_u32(&idx->tail_count), i;
     for (i = 0; i * LIGHTVEC__LEAF < n; i++) {
-        LIGHTVEC__PREFETCH(&idx->tail_blocks[i].row[LIGHTVEC__ROW_SX * LIGHTVEC__LEAF]);
-        LIGHTVEC__PREFETCH(&idx->tail_blocks[i].row[LIGHTVEC__ROW_NY * LIGHTVEC__LEAF]);
+        const float *near = idx->tail_blocks[i].row;   /* its NEAR_ROWS, as a leaf's (on three lines at most) */
+        LIGHTVEC__PREFETCH(near);
+        LIGHTVEC__PREFETCH(near + 16);
+        LIGHTVEC__PREFETCH(near + LIGHTVEC__NEAR_ROWS * LIGHTVEC__LEAF - 1);
         lightvec__queue_block(q, &idx->tail_blocks[i], idx->tail + i * LIGHTVEC__LEAF, n - i * LIGHTVEC__LEAF, 0);
     }
 }
