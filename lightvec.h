@@ -1,4 +1,4 @@
-/* lightvec.h - v0.4.6 - cached 5D indirect light vectors - public domain or MIT, see end of file
+/* lightvec.h - v0.4.7 - cached 5D indirect light vectors - public domain or MIT, see end of file
 
    LIGHTVEC.H: cached light vectors over position and direction for interactive glossy global illumination.
 
@@ -460,8 +460,41 @@
      sparse, in alternating passes of 10^5 lookups). Transparent huge pages
      (glibc.malloc.hugetlb=1, v0.4.5) took 8 to 17% off dense random
      lookups in three alternating runs of this round.
-     Memory: 545 bytes per record at 10^5 (records, radii, items, blocks,
-     nodes). Insertion with neighbour clamping (v0.4.4): 4.8 us at 10^5 records,
+     v0.4.7 tests a kd-tree node's eight child boxes in one AVX step where
+     the target has AVX (the same masks as the SSE, NEON and scalar
+     kernels), prefetches the roots of a face's kd-trees at once, keeps a
+     face's tail at 8 items, one block (every lookup of a face tests its
+     whole tail), and prefetches the tail's position rows; kd-tree builds
+     move 20-byte keys instead of reading entries through a permutation
+     (the same trees). Every result is the same bit for bit (2 x 10^5
+     lookups of the benchmark's caches). A dense lookup at 10^5 records
+     now reaches 2.63 faces, 4.85 kd-trees, 67 node tests, 26.3 leaves
+     (19.2 with a sphere holding A) and 2.63 tail blocks (v0.4.6, a tail
+     of 16: 4.62 trees, 66 node tests, 26.5 leaves, 3.5 tail blocks; after
+     lightvec_cache_optimize 2.63 trees, 64 node tests, 25 leaves, no
+     tail). Both versions in one process, chunks of 2,000
+     lookups old, new, new, old (thread CPU, load 6; medians of 250 chunk
+     ratios, quartiles in brackets): dense random 0.957x (0.91-1.00),
+     2.66 against 2.81 us; sparse random 0.932x (0.88-0.98); dense sorted
+     0.963x (0.95-0.98); insertions 1.04x dense and 1.08x sparse (the
+     smaller tail merges twice as often). The benchmark run alternately
+     with v0.4.6 at load 5 to 7 printed 2.58 and 2.42 us dense random
+     (v0.4.6: 2.80 and 2.29): at that load its swing is larger than the
+     change. The 2 us target for dense random lookups is not met. Tried
+     and left out, paired the same way against the version before it:
+     the rest of 4.2's tests and the weights four slots at a time in SIMD
+     (the same weights bit for bit; 1.02x: the block visits wait on
+     memory and on the branches per valid slot more than on square roots
+     and divisions); on top of it, appending all eight slots of a block as
+     candidates without a branch on which are valid (1.07x); the first
+     sweep without a branch on its test (1.00x); prefetching and handing
+     over a last-level node's leaves in one loop (1.00x); faces split at
+     32768 records instead of 8192 (0.99x); a merge ratio of 256 (0.95x
+     to 0.97x, insertions 1.6x). lightvec_cache_optimize, one kd-tree per
+     face, took 0.91x in the same harness, more than the 2 trees, 2 node
+     tests, 1.5 leaves and tail it saves suggest.
+     Memory: 534 bytes per record at 10^5 (545 before v0.4.7; records,
+     radii, items, blocks, nodes). Insertion with neighbour clamping (v0.4.4): 4.8 us at 10^5 records,
      10.5 us in the dense cache (a gather takes about 1 ms);
      lightvec_cache_optimize of 10^5 records 28 ms (22 ms dense).
 
@@ -513,7 +546,7 @@
 
 #define LIGHTVEC_VERSION_MAJOR 0
 #define LIGHTVEC_VERSION_MINOR 4
-#define LIGHTVEC_VERSION_PATCH 6
+#define LIGHTVEC_VERSION_PATCH 7
 #define LIGHTVEC_FILE_FORMAT_VERSION 2
 
 #ifndef LIGHTVEC_API
@@ -986,6 +1019,9 @@ static float lightvec__rng_float(lightvec__rng *r)
 #if LIGHTVEC_BVH_SIMD && (defined(__SSE2__) || defined(_M_X64) || defined(_M_AMD64))
 #define LIGHTVEC__SSE 1
 #include <emmintrin.h>
+#if defined(__AVX__)
+#include <immintrin.h>
+#endif
 #elif LIGHTVEC_BVH_SIMD && defined(__aarch64__) && (defined(__GNUC__) || defined(__clang__))
 #define LIGHTVEC__NEON 1
 #include <arm_neon.h>
@@ -3228,12 +3264,15 @@ LIGHTVEC_API lightvec_result lightvec_gather_direct(const lightvec_scene *s, con
    small tail list; a full tail is merged with the smallest kd-trees (each up
    to 64 times what has been merged so far) into one new balanced kd-tree,
    so the trees of a face grow more than 64-fold from one to the next (at
-   most log64(n / 16) + 1 of them) and an item is rebuilt O(log n) times.
+   most log64(n / TAIL) + 1 of them) and an item is rebuilt O(log n) times.
+   Every lookup of the face tests its whole tail: a tail of 8 (one block)
+   rather than 16 took 1 to 6% off lookups at 10^5 records and added 4 to
+   8% to insertions (v0.4.7).
    Trees are immutable once published (but for the radii neighbour clamping
    shrinks, read and written atomically): readers never see a half-built one.
    ---------------------------------------------------------------------- */
 #define LIGHTVEC__LEAF 8u            /* items per kd-tree leaf */
-#define LIGHTVEC__TAIL 16u           /* items a face holds outside its kd-trees */
+#define LIGHTVEC__TAIL 8u            /* items a face holds outside its kd-trees: one block */
 #define LIGHTVEC__MAX_TREES 40u      /* > log8(2^32 / TAIL) + 1 */
 #define LIGHTVEC__MERGE_RATIO 64u    /* a merge absorbs kd-trees up to 64x its size so far */
 #define LIGHTVEC__CHUNK0 1024u       /* records in the first chunk; chunk k holds CHUNK0 << k */
@@ -3646,21 +3685,28 @@ static uint32_t lightvec__tree_levels(uint32_t leaves)
     return d;
 }
 
-/* Quickselect on perm[lo, hi) by item position on axis: afterwards the
-   k-th smallest is at k, smaller keys before, larger after. Three-way
+/* What the build of a kd-tree reads of an item, 20 bytes: the build moves
+   these (its quickselects and boxes read consecutive memory) instead of a
+   permutation of 192-byte entries, which it would read scattered. */
+typedef struct lightvec__key {
+    float pos[3], radius;
+    uint32_t index;                  /* the entry's */
+} lightvec__key;
+
+/* Quickselect on keys[lo, hi) by position on axis: afterwards the k-th
+   smallest is at k, smaller keys before, larger after. Three-way
    partition around a median-of-three pivot, robust to equal keys. */
-static void lightvec__select(uint32_t *perm, const lightvec__entry *src, int axis, uint32_t lo, uint32_t hi,
-                             uint32_t k)
+static void lightvec__select(lightvec__key *keys, int axis, uint32_t lo, uint32_t hi, uint32_t k)
 {
     while (hi - lo > 1) {
-        float a = src[perm[lo]].item.pos[axis], b = src[perm[lo + (hi - lo) / 2]].item.pos[axis];
-        float c = src[perm[hi - 1]].item.pos[axis], pivot;
+        float a = keys[lo].pos[axis], b = keys[lo + (hi - lo) / 2].pos[axis], c = keys[hi - 1].pos[axis], pivot;
         uint32_t lt = lo, i = lo, gt = hi;
         pivot = a < b ? (b < c ? b : (a < c ? c : a)) : (a < c ? a : (b < c ? c : b));
         while (i < gt) {
-            float key = src[perm[i]].item.pos[axis];
-            if (key < pivot) { uint32_t t = perm[lt]; perm[lt] = perm[i]; perm[i] = t; lt++; i++; }
-            else if (key > pivot) { uint32_t t; gt--; t = perm[gt]; perm[gt] = perm[i]; perm[i] = t; }
+            float key = keys[i].pos[axis];
+            lightvec__key t;
+            if (key < pivot) { t = keys[lt]; keys[lt] = keys[i]; keys[i] = t; lt++; i++; }
+            else if (key > pivot) { gt--; t = keys[gt]; keys[gt] = keys[i]; keys[i] = t; }
             else i++;
         }
         if (k < lt) hi = lt;
@@ -3669,25 +3715,28 @@ static void lightvec__select(uint32_t *perm, const lightvec__entry *src, int axi
     }
 }
 
-/* Box of the validity spheres of perm[lo, hi), widened by a relative 1e-6 so
-   that the float test d^2 < R^2 never accepts a point the box rejects. */
-static int lightvec__tree_box(float *box, const uint32_t *perm, const lightvec__entry *src, uint32_t lo, uint32_t hi)
+/* Box of the validity spheres of keys[lo, hi), widened by a relative 1e-6 so
+   that the float test d^2 < R^2 never accepts a point the box rejects; the
+   axis of the positions' largest extent. */
+static int lightvec__tree_box(float *box, const lightvec__key *keys, uint32_t lo, uint32_t hi)
 {
-    float clo[3], chi[3];
+    float blo[3], bhi[3], clo[3], chi[3];
     uint32_t i;
     int k, axis = 0;
-    lightvec__box_empty(box, box + 3);
+    lightvec__box_empty(blo, bhi);
     lightvec__box_empty(clo, chi);
     for (i = lo; i < hi; i++) {
-        const lightvec__item *it = &src[perm[i]].item;
+        const lightvec__key *it = &keys[i];
         for (k = 0; k < 3; k++) {
             float tol = (fabsf(it->pos[k]) + it->radius) * 1e-6f;
-            box[k] = lightvec__minf(box[k], it->pos[k] - it->radius - tol);
-            box[3 + k] = lightvec__maxf(box[3 + k], it->pos[k] + it->radius + tol);
+            blo[k] = lightvec__minf(blo[k], it->pos[k] - it->radius - tol);
+            bhi[k] = lightvec__maxf(bhi[k], it->pos[k] + it->radius + tol);
             clo[k] = lightvec__minf(clo[k], it->pos[k]);
             chi[k] = lightvec__maxf(chi[k], it->pos[k]);
         }
     }
+    memcpy(box, blo, sizeof blo);
+    memcpy(box + 3, bhi, sizeof bhi);
     for (k = 1; k < 3; k++)
         if (chi[k] - clo[k] > chi[axis] - clo[axis]) axis = k;
     return axis;
@@ -3695,16 +3744,15 @@ static int lightvec__tree_box(float *box, const uint32_t *perm, const lightvec__
 
 /* Binary node `node` over leaves [a, b) of n items: its box (6 floats at
    boxes + 6 node), then its halves. */
-static void lightvec__tree_build_node(float *boxes, uint32_t n, const lightvec__entry *src, uint32_t *perm, uint32_t node,
-                                      uint32_t a, uint32_t b)
+static void lightvec__tree_build_node(float *boxes, uint32_t n, lightvec__key *keys, uint32_t node, uint32_t a, uint32_t b)
 {
     uint32_t lo = a * LIGHTVEC__LEAF, hi = b * LIGHTVEC__LEAF < n ? b * LIGHTVEC__LEAF : n;
     uint32_t m = a + (b - a) / 2;
-    int axis = lightvec__tree_box(boxes + 6 * (size_t)node, perm, src, lo, hi);
+    int axis = lightvec__tree_box(boxes + 6 * (size_t)node, keys, lo, hi);
     if (b - a <= 1) return;
-    lightvec__select(perm, src, axis, lo, hi, m * LIGHTVEC__LEAF);
-    lightvec__tree_build_node(boxes, n, src, perm, 2 * node + 1, a, m);
-    lightvec__tree_build_node(boxes, n, src, perm, 2 * node + 2, m, b);
+    lightvec__select(keys, axis, lo, hi, m * LIGHTVEC__LEAF);
+    lightvec__tree_build_node(boxes, n, keys, 2 * node + 1, a, m);
+    lightvec__tree_build_node(boxes, n, keys, 2 * node + 2, m, b);
 }
 
 typedef struct lightvec__kd_span { uint32_t node, a, b; } lightvec__kd_span; /* binary node over leaves [a, b) */
@@ -3760,10 +3808,11 @@ static void lightvec__kd_collapse(lightvec__tree *t, const float *boxes, lightve
 
 static lightvec__tree *lightvec__tree_build(const lightvec_allocator *a, const lightvec__entry *src, uint32_t n)
 {
-    uint32_t leaves = lightvec__leaf_count(n), binary = (2u << lightvec__tree_levels(leaves)) - 1u, nodes = 0, i, *perm;
+    uint32_t leaves = lightvec__leaf_count(n), binary = (2u << lightvec__tree_levels(leaves)) - 1u, nodes = 0, i;
     size_t head = (sizeof(lightvec__tree) + 63u) & ~(size_t)63u, node_bytes, block_bytes, bytes;
     lightvec__kd_span root;
     lightvec__tree *t, shape;
+    lightvec__key *keys;
     float *boxes;
     if ((size_t)leaves > (SIZE_MAX - head - 128u) / (sizeof(lightvec__kd_node) + sizeof(lightvec__block) +
                                                       LIGHTVEC__LEAF * sizeof(lightvec__item)))
@@ -3775,11 +3824,11 @@ static lightvec__tree *lightvec__tree_build(const lightvec_allocator *a, const l
     block_bytes = (size_t)leaves * sizeof(lightvec__block);
     bytes = head + node_bytes + block_bytes + (size_t)n * sizeof(lightvec__item) + 64u; /* + room to align */
     t = (lightvec__tree *)lightvec__alloc(a, bytes);
-    perm = (uint32_t *)lightvec__alloc_array(a, n, sizeof(uint32_t));
+    keys = (lightvec__key *)lightvec__alloc_array(a, n, sizeof *keys);
     boxes = (float *)lightvec__alloc_array(a, binary, 6u * sizeof(float));
-    if (!t || !perm || !boxes) {
+    if (!t || !keys || !boxes) {
         lightvec__free(a, t);
-        lightvec__free(a, perm);
+        lightvec__free(a, keys);
         lightvec__free(a, boxes);
         return NULL;
     }
@@ -3791,28 +3840,44 @@ static lightvec__tree *lightvec__tree_build(const lightvec_allocator *a, const l
     t->items = (lightvec__item *)((char *)t->blocks + block_bytes);
     t->bytes = bytes;
     memset(t->blocks, 0, block_bytes); /* the last leaf's empty slots: radius 0, never inside */
-    for (i = 0; i < n; i++) perm[i] = i;
+    for (i = 0; i < n; i++) {
+        memcpy(keys[i].pos, src[i].item.pos, sizeof keys[i].pos);
+        keys[i].radius = src[i].item.radius;
+        keys[i].index = i;
+    }
     if (n) {
-        lightvec__tree_build_node(boxes, n, src, perm, 0, 0, leaves);
+        lightvec__tree_build_node(boxes, n, keys, 0, 0, leaves);
         nodes = 0;
         lightvec__kd_collapse(t, boxes, root, &nodes);
     }
     for (i = 0; i < n; i++) {
-        t->items[i] = src[perm[i]].item;
-        lightvec__block_put(&t->blocks[i / LIGHTVEC__LEAF], i % LIGHTVEC__LEAF, &src[perm[i]]);
+        t->items[i] = src[keys[i].index].item;
+        lightvec__block_put(&t->blocks[i / LIGHTVEC__LEAF], i % LIGHTVEC__LEAF, &src[keys[i].index]);
     }
     lightvec__free(a, boxes);
-    lightvec__free(a, perm);
+    lightvec__free(a, keys);
     return t;
 }
 
 /* The children of node nd whose box, grown by reach on every side, holds p
    (reach 0: the boxes holding p), as a bit mask. Exact compares: the SIMD
-   and the scalar kernel agree bit for bit. */
+   and the scalar kernel agree bit for bit. With AVX, all eight children in
+   one step. */
 static unsigned lightvec__kd_hits(const lightvec__kd_node *nd, const float p[3], float reach)
 {
     unsigned mask = 0;
-#if LIGHTVEC__SIMD
+#if defined(LIGHTVEC__SSE) && defined(__AVX__)
+    const __m256 g = _mm256_set1_ps(reach);
+    __m256 in = _mm256_and_ps(
+        _mm256_and_ps(_mm256_cmp_ps(_mm256_sub_ps(_mm256_loadu_ps(nd->box[0]), g), _mm256_set1_ps(p[0]), _CMP_LE_OQ),
+                      _mm256_cmp_ps(_mm256_sub_ps(_mm256_loadu_ps(nd->box[1]), g), _mm256_set1_ps(p[1]), _CMP_LE_OQ)),
+        _mm256_and_ps(_mm256_cmp_ps(_mm256_sub_ps(_mm256_loadu_ps(nd->box[2]), g), _mm256_set1_ps(p[2]), _CMP_LE_OQ),
+                      _mm256_cmp_ps(_mm256_set1_ps(p[0]), _mm256_add_ps(_mm256_loadu_ps(nd->box[3]), g), _CMP_LE_OQ)));
+    in = _mm256_and_ps(in, _mm256_and_ps(
+        _mm256_cmp_ps(_mm256_set1_ps(p[1]), _mm256_add_ps(_mm256_loadu_ps(nd->box[4]), g), _CMP_LE_OQ),
+        _mm256_cmp_ps(_mm256_set1_ps(p[2]), _mm256_add_ps(_mm256_loadu_ps(nd->box[5]), g), _CMP_LE_OQ)));
+    mask = (unsigned)_mm256_movemask_ps(in);
+#elif LIGHTVEC__SIMD
     const lightvec__f4 px = lightvec__f4_set(p[0]), py = lightvec__f4_set(p[1]), pz = lightvec__f4_set(p[2]);
     const lightvec__f4 g = lightvec__f4_set(reach);
     int i;
@@ -4207,8 +4272,10 @@ static void lightvec__tail_query(const lightvec__index *idx, lightvec__query *q)
 {
     uint32_t n = lightvec__load_u32(&idx->tail_count), i;
     for (i = 0; i * LIGHTVEC__LEAF < n; i++) {
-        LIGHTVEC__PREFETCH(&idx->tail_blocks[i].row[LIGHTVEC__ROW_SX * LIGHTVEC__LEAF]);
-        LIGHTVEC__PREFETCH(&idx->tail_blocks[i].row[LIGHTVEC__ROW_NY * LIGHTVEC__LEAF]);
+        const float *near = idx->tail_blocks[i].row;   /* its NEAR_ROWS, as a leaf's (on three lines at most) */
+        LIGHTVEC__PREFETCH(near);
+        LIGHTVEC__PREFETCH(near + 16);
+        LIGHTVEC__PREFETCH(near + LIGHTVEC__NEAR_ROWS * LIGHTVEC__LEAF - 1);
         lightvec__queue_block(q, &idx->tail_blocks[i], idx->tail + i * LIGHTVEC__LEAF, n - i * LIGHTVEC__LEAF, 0);
     }
 }
@@ -4217,6 +4284,9 @@ static void lightvec__index_query(void *ctx, const lightvec__index *idx)
 {
     lightvec__query *q = (lightvec__query *)ctx;
     uint32_t i;
+    /* the roots at once: a small tree's root is often not in cache, and its
+       walk would wait for it after the walks before it */
+    for (i = 0; i < idx->tree_count; i++) lightvec__prefetch_child(idx->trees[i], 0);
     for (i = 0; i < idx->tree_count; i++) lightvec__tree_walk(idx->trees[i], q->a, 0.0f, lightvec__query_leaf, q);
     lightvec__tail_query(idx, q);
 }
