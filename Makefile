@@ -102,6 +102,12 @@ CLANG_UBSAN := -fsanitize=undefined,implicit-conversion -fno-sanitize-recover=al
 # 17, item 7); gcc's run checks every other pointer overflow meanwhile.
 CLANG_UBSAN_PENDING := -fno-sanitize=pointer-overflow
 CLANG_UBSAN_BINS := $(if $(CLANG),$(patsubst tests/%.c,$(BUILD)/clang-ubsan/%-clang-ubsan,$(wildcard tests/test_*.c)))
+# The kernels behind __AVX__ and __FMA__ (lightvec's kd-tree node test of
+# eight children at once, the BVHs' fused multiply-adds) are compiled only
+# with those flags: where this machine runs AVX2 and FMA, lightvec's cache
+# tests (lookups against a brute-force scan) run once more built with them.
+HOST_AVX2 := $(shell grep -qw avx2 /proc/cpuinfo 2>/dev/null && grep -qw fma /proc/cpuinfo && echo yes)
+AVX2_BINS := $(if $(HOST_AVX2),$(BUILD)/avx2/test_lightvec_cache-avx2)
 
 # Compile checks: each header with its implementation, as C99, C11 and C++,
 # with gcc and (when present) clang, and once as static.
@@ -135,10 +141,10 @@ test: deps viewer-deps
 
 # A make of its own after deps: Assimp may just have been installed.
 test-run:
-	@tests/run.sh $(DATA_CHECKS) $(LINKAGE_BIN) $(UNIT_BINS) $(CLANG_UBSAN_BINS) $(REPLAY_BINS) $(TSAN_BINS) \
+	@tests/run.sh $(DATA_CHECKS) $(LINKAGE_BIN) $(UNIT_BINS) $(CLANG_UBSAN_BINS) $(AVX2_BINS) $(REPLAY_BINS) $(TSAN_BINS) \
 	    $(REF_BINS) $(ASSIMP_BINS)
 
-test-build: $(CHECK_OBJS) $(LINKAGE_BIN) $(UNIT_BINS) $(CLANG_UBSAN_BINS) $(REPLAY_BINS) $(TSAN_BINS) $(REF_BINS) \
+test-build: $(CHECK_OBJS) $(LINKAGE_BIN) $(UNIT_BINS) $(CLANG_UBSAN_BINS) $(AVX2_BINS) $(REPLAY_BINS) $(TSAN_BINS) $(REF_BINS) \
             $(ASSIMP_BINS) $(EXAMPLE_BINS) $(VIEWER_BINS)
 
 bench: deps
@@ -231,6 +237,9 @@ $(BUILD)/data/building_%.obj: examples/data/make_building.py | $(BUILD)/data
 $(BUILD)/clang-ubsan/%-clang-ubsan: tests/%.c $(ALL_H) | $(BUILD)/clang-ubsan
 	$(CLANG) $(CFLAGS_PROJECT) -O1 $(TEST_DEBUG) $(CLANG_UBSAN) $(CLANG_UBSAN_PENDING) $< -o $@ $(LIBS)
 
+$(BUILD)/avx2/%-avx2: tests/%.c $(ALL_H) | $(BUILD)/avx2
+	$(CC) $(CFLAGS_PROJECT) -O1 $(TEST_DEBUG) $(SAN) -mavx2 -mfma $< -o $@ $(LIBS)
+
 # The replays use the fuzzers' sanitizers when clang is present, else gcc's.
 REPLAY_CC := $(if $(CLANG),$(CLANG) $(CFLAGS_PROJECT) -O1 $(TEST_DEBUG) -fsanitize=address $(CLANG_UBSAN),$(CC) $(CFLAGS_PROJECT) -O1 $(TEST_DEBUG) $(SAN))
 $(BUILD)/fuzz/replay_%: tests/fuzz/fuzz_%.c tests/fuzz/replay.c tests/fuzz/fuzz.h $(ALL_H) | $(BUILD)/fuzz
@@ -265,7 +274,7 @@ $(BUILD)/examples/viewer: examples/viewer.c $(ALL_H) $(ASSIMP_STAMP) | $(BUILD)/
 $(BUILD)/tests/viewer_asan: examples/viewer.c $(ALL_H) | $(BUILD)/tests
 	$(CC) $(CFLAGS_PROJECT) -O1 $(TEST_DEBUG) $(SAN) $$(sdl2-config --cflags) $< -o $@ $$(sdl2-config --libs) $(LIBS)
 
-$(BUILD)/check $(BUILD)/tests $(BUILD)/ref $(BUILD)/bench $(BUILD)/examples $(BUILD)/data $(BUILD)/clang-ubsan $(BUILD)/fuzz:
+$(BUILD)/check $(BUILD)/tests $(BUILD)/ref $(BUILD)/bench $(BUILD)/examples $(BUILD)/data $(BUILD)/clang-ubsan $(BUILD)/avx2 $(BUILD)/fuzz:
 	@mkdir -p $@
 
 clean:
