@@ -586,9 +586,9 @@ typedef struct rendercache_stats {
                                     predicted ones finding no slot the frame does not show */
     /* seconds spent in each phase of the last frame (0 without desc.clock) */
     double time_project;         /* projection and z-buffer of every point */
-    double time_cull;            /* depth cull, with the colour and priority of the pixels showing points;
-                                    without parallel_for also the hole filling, interleaved with it */
-    double time_interpolate;     /* hole filling, with the priority of the holes (0 without parallel_for) */
+    double time_cull;            /* depth cull, with the colour and priority of the pixels showing points,
+                                    and the hole filling interleaved with it */
+    double time_interpolate;     /* 0: the hole filling is timed with the cull (time_cull) */
     double time_predict;         /* rendercache_predict (begin_frame_predicted: in time_project) */
     double time_request;         /* threshold and error diffusion (all request calls) */
     double time_insert;
@@ -1963,6 +1963,8 @@ static void rendercache__splat_run_cover(rendercache__splat *s,
    behind an object that moves 8 pixels in a frame. */
 #define RENDERCACHE__HOLE_REACH RENDERCACHE__TILE_ROWS
 
+#define RENDERCACHE__CULL_JOBS 8u            /* ranges of tiles culled and filled in parallel with parallel_for:
+                                                the tiles at their ends (2 of 8 at 512x512) are filled apart */
 #define RENDERCACHE__BAND_ROWS 128u          /* rows per band of the error diffusion: 9 bands at 1080p */
 #define RENDERCACHE__SORT_RANGE 16384u       /* slots re-sorted together: a range (656 KB of points) and its
                                                 scratch stay in a core's L2 cache */
@@ -3175,27 +3177,83 @@ static void rendercache__interpolate_job(void *ctx, uint32_t tile)
     stats[4] = counts[RENDERCACHE_PIXEL_EMPTY];
 }
 
-/* The cull and the hole filling on the calling thread, interleaved: the
+/* Whether the cull of the tiles [a, b) fills tile t (a <= t < b) right
+   after culling the tile below it (or after its own cull, for the last
+   tile of the image): when the tile above it is culled by the same range
+   too, or there is none. Else a second pass fills it, after every range
+   has culled (rendercache__cull_and_interpolate). */
+static int rendercache__filled_with_cull(uint32_t a, uint32_t b, uint32_t t, uint32_t tile_count)
+{
+    return (t > a || a == 0) && (t + 1 < b || b == tile_count);
+}
+
+/* The cull and the hole filling of the tiles [a, b), interleaved: the
    holes of tile t - 1 are filled right after the cull of tile t, while the
    rows both touch (the depths and colours around a hole) are still in
    cache; as two passes, the filling read them back from memory, about one
    miss per hole and row. A hole reads at most RENDERCACHE__HOLE_REACH
-   (TILE_ROWS = 8) rows below its own (its rays; its filters wide_radius
-   <= 7), which the cull of the next tile has written, so the filling reads what it read after a full cull pass: the
-   same image, bit for bit. The depths of tile t + 1 are converted from
-   the keys just before the cull of tile t reads them. The two are timed together (stats.time_cull): a
+   (TILE_ROWS = 8) rows below its own and above it (its rays; its filters
+   wide_radius <= 7), which the cull of the tiles before and after has
+   written, so the filling reads what it read after a full cull pass: the
+   same image, bit for bit. A tile whose neighbour above lies in another
+   range is left to rendercache__fill_range_ends (filled_with_cull). With
+   depths set, the depths of tile t + 1 are converted from the keys just
+   before the cull of tile t reads them (one range over the whole image:
+   the cull of a range clears its keys, which the range above would read). */
+static void rendercache__cull_fill_range(rendercache *rc, uint32_t a, uint32_t b, int depths)
+{
+    uint32_t t;
+    for (t = a; t <= b; t++) {
+        if (depths && t == a) rendercache__depth_job(rc, a);
+        if (depths && t + 1 < b) rendercache__depth_job(rc, t + 1);   /* the rows below tile t */
+        if (t < b) rendercache__cull_job(rc, t);
+        if (t > a && rendercache__filled_with_cull(a, b, t - 1, rc->tile_count)) rendercache__interpolate_job(rc, t - 1);
+    }
+}
+
+/* The tiles of range r of RENDERCACHE__CULL_JOBS: [*a, *b). */
+static void rendercache__cull_range(const rendercache *rc, uint32_t r, uint32_t *a, uint32_t *b)
+{
+    *a = (uint32_t)((uint64_t)rc->tile_count * r / RENDERCACHE__CULL_JOBS);
+    *b = (uint32_t)((uint64_t)rc->tile_count * (r + 1) / RENDERCACHE__CULL_JOBS);
+}
+
+/* Job per range: its cull and filling (the depths were converted before). */
+static void rendercache__cull_fill_job(void *ctx, uint32_t r)
+{
+    rendercache *rc = (rendercache *)ctx;
+    uint32_t a, b;
+    rendercache__cull_range(rc, r, &a, &b);
+    rendercache__cull_fill_range(rc, a, b, 0);
+}
+
+/* Job per range: the filling of its tiles that its cull could not fill
+   (their neighbour above is another range's, culled now). */
+static void rendercache__fill_range_ends(void *ctx, uint32_t r)
+{
+    rendercache *rc = (rendercache *)ctx;
+    uint32_t a, b, t;
+    rendercache__cull_range(rc, r, &a, &b);
+    for (t = a; t < b; t++)
+        if (!rendercache__filled_with_cull(a, b, t, rc->tile_count)) rendercache__interpolate_job(rc, t);
+}
+
+/* The depth cull and the hole filling of the frame: on the calling thread
+   one range of every tile; with parallel_for the depths first, then
+   RENDERCACHE__CULL_JOBS ranges of tiles in parallel, each culling and
+   filling as the calling thread does, then the tiles at the ranges' ends
+   (a filling reads only rows culled by then, so the image is the same for
+   any thread count). The two are timed together (stats.time_cull): a
    clock read per tile would cost more than the saving. */
 static void rendercache__cull_and_interpolate(rendercache *rc)
 {
-    uint32_t t;
     double t0 = rendercache__now(rc);
-    for (t = 0; t <= rc->tile_count; t++) {
-        if (t == 0) rendercache__depth_job(rc, 0);
-        if (t + 1 < rc->tile_count) rendercache__depth_job(rc, t + 1);   /* the rows below tile t */
-        if (t < rc->tile_count) {
-            rendercache__cull_job(rc, t);
-        }
-        if (t > 0) rendercache__interpolate_job(rc, t - 1);
+    if (rc->parallel_for) {
+        rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__depth_job, rc, rc->tile_count);
+        rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__cull_fill_job, rc, RENDERCACHE__CULL_JOBS);
+        rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__fill_range_ends, rc, RENDERCACHE__CULL_JOBS);
+    } else {
+        rendercache__cull_fill_range(rc, 0, rc->tile_count, 1);
     }
     rc->stats.time_cull = rendercache__now(rc) - t0;
     rc->stats.time_interpolate = 0.0;
@@ -3340,7 +3398,6 @@ static void rendercache__begin(rendercache *rc, const rendercache__view *v, cons
 {
     rendercache__frame_record *record;
     rendercache__projector cells;
-    double t1, t2;
     rc->frame++;
     if (rendercache__mark(rc->frame) == 1u) memset(rc->shown, 0, (size_t)rc->capacity + rc->tile_count);
     rc->view = *v;
@@ -3361,17 +3418,7 @@ static void rendercache__begin(rendercache *rc, const rendercache__view *v, cons
     }
     rendercache__splat_points(rc, &rc->view, rc->obj_camera, next ? &cells : NULL, &rc->stats.time_project);
     if (next) rendercache__predict_finish(rc);
-    if (rc->parallel_for) {
-        t1 = rendercache__now(rc);
-        rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__depth_job, rc, rc->tile_count);
-        rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__cull_job, rc, rc->tile_count);
-        t2 = rendercache__now(rc);
-        rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__interpolate_job, rc, rc->tile_count);
-        rc->stats.time_cull = t2 - t1;
-        rc->stats.time_interpolate = rendercache__now(rc) - t2;
-    } else {
-        rendercache__cull_and_interpolate(rc);
-    }
+    rendercache__cull_and_interpolate(rc);
     rc->splat.clean = 1;   /* every cull job cleared its keys */
     rc->stats.projected = rc->splat.projected;
     rc->stats.visible = rendercache__tile_sum(rc, 0);
