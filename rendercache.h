@@ -4034,11 +4034,18 @@ static void rendercache__sample_new_point(const rendercache *rc, const rendercac
     np->age = 0;
 }
 
-/* Stores a new point in slot. */
-static void rendercache__store(rendercache *rc, uint32_t slot, const rendercache__new_point *np)
+/* What placing points counts (rendercache__put_point): each job of a parallel
+   insertion its own, summed after. */
+typedef struct rendercache__put_counts {
+    uint32_t replaced, evicted, live;
+} rendercache__put_counts;
+
+/* Stores a new point in slot (a free one is one more live point). */
+static void rendercache__store(rendercache *rc, uint32_t slot, const rendercache__new_point *np,
+                               rendercache__put_counts *n)
 {
     rendercache__point *pt = &rc->data[slot];
-    if (rc->geo.object[slot] == RENDERCACHE__FREE_SLOT) rc->live++;
+    n->live += rc->geo.object[slot] == RENDERCACHE__FREE_SLOT;
     rendercache__slot_set(&rc->geo, slot, &np->g);
     memcpy(pt->rgb, np->rgb, sizeof pt->rgb);
     pt->scale = np->scale;
@@ -4099,9 +4106,9 @@ static void rendercache__show(rendercache *rc, uint32_t p, uint32_t slot, float 
    differ too, so the differences of each frame's replacements are
    counted (rendercache__change_level): a change must also lie three
    standard deviations out in the previous frame's differences. */
-static int rendercache__colour_changed(rendercache *rc, const float old_rgb[3], const float rgb[3])
+static float rendercache__colour_difference(const float old_rgb[3], const float rgb[3])
 {
-    float d = 0.0f, m = 0.0f, r;
+    float d = 0.0f, m = 0.0f;
     int k;
     for (k = 0; k < 3; k++) {
         float a = fabsf(old_rgb[k]), b = fabsf(rgb[k]), e = fabsf(rgb[k] - old_rgb[k]);
@@ -4109,8 +4116,19 @@ static int rendercache__colour_changed(rendercache *rc, const float old_rgb[3], 
         m = b > m ? b : m;
         d = e > d ? e : d;
     }
-    r = m > 0.0f ? d / m : 0.0f;   /* in [0, 2] for finite colours; inf when the difference overflows */
+    return m > 0.0f ? d / m : 0.0f;   /* in [0, 2] for finite colours; inf when the difference overflows */
+}
+
+/* Counts a replacement's colour difference r for the next frame's level. */
+static void rendercache__count_change(rendercache *rc, float r)
+{
     rc->change_hist[r < 2.0f ? (uint32_t)(r * (0.5f * RENDERCACHE__CHANGE_BINS)) : RENDERCACHE__CHANGE_BINS - 1]++;
+}
+
+static int rendercache__colour_changed(rendercache *rc, const float old_rgb[3], const float rgb[3])
+{
+    float r = rendercache__colour_difference(old_rgb, rgb);
+    rendercache__count_change(rc, r);
     return r > rc->change_level;
 }
 
@@ -4167,36 +4185,59 @@ static void rendercache__age_around(rendercache *rc, uint32_t p)
    lands in a hole has the holes around it filled again: the frame it
    shows in was filled without it. The requests of the current frame were
    made knowing the filling; their neighbours wait for the next frame. */
+static RENDERCACHE__INLINE void rendercache__put_point(rendercache *rc, uint32_t slot, int replacing, int refill,
+                             const rendercache__new_point *np, uint32_t p, float depth2, rendercache__put_counts *n)
+{
+    if (replacing) n->replaced++;
+    else if (rc->geo.object[slot] != RENDERCACHE__FREE_SLOT) n->evicted++;
+    rendercache__store(rc, slot, np, n);
+    if (p != RENDERCACHE__NONE && refill && rc->px_index[p] == RENDERCACHE__NONE) rendercache__mark_refill(rc, p);
+    if (p != RENDERCACHE__NONE) rendercache__show(rc, p, slot, depth2, np->rgb);
+}
+
+/* Adds what placing points counted to the frame's stats. */
+static void rendercache__add_counts(rendercache *rc, const rendercache__put_counts *n)
+{
+    rc->stats.replaced += n->replaced;
+    rc->stats.evicted += n->evicted;
+    rc->live += n->live;
+}
+
+/* rendercache__put_point, and the colour-change detection of a replacement
+   (which ages the points around it). */
 static void rendercache__place(rendercache *rc, uint32_t slot, int replacing, int refill,
                                const rendercache__new_point *np, uint32_t p, float depth2)
 {
     int changed = replacing && np->age == 0 && rendercache__colour_changed(rc, rc->data[slot].rgb, np->rgb);
-    if (replacing) rc->stats.replaced++;
-    else if (rc->geo.object[slot] != RENDERCACHE__FREE_SLOT) rc->stats.evicted++;
-    rendercache__store(rc, slot, np);
-    if (p != RENDERCACHE__NONE && refill && rc->px_index[p] == RENDERCACHE__NONE) rendercache__mark_refill(rc, p);
-    if (p != RENDERCACHE__NONE) rendercache__show(rc, p, slot, depth2, np->rgb);
+    rendercache__put_counts n = { 0, 0, 0 };
+    rendercache__put_point(rc, slot, replacing, refill, np, p, depth2, &n);
+    rendercache__add_counts(rc, &n);
     if (changed) {
         rc->stats.changed++;
         rendercache__age_around(rc, p);
     }
 }
 
+/* The new point of a sample of the current frame, and its squared
+   distance (the hit point projects into its own pixel). */
+static float rendercache__current_point(const rendercache *rc, const rendercache_sample *s, rendercache__new_point *np)
+{
+    float dx, dy, dz;
+    rendercache__sample_new_point(rc, s, rc->frame, &rc->view, np);
+    if (s->object == RENDERCACHE_MISS) return RENDERCACHE__FAR2;
+    dx = s->position[0] - rc->view.eye[0];
+    dy = s->position[1] - rc->view.eye[1];
+    dz = s->position[2] - rc->view.eye[2];
+    return dx * dx + dy * dy + dz * dz;
+}
+
 /* A sample of the current frame: it replaces the point its pixel shows, or
-   fills the hole there (the hit point projects into its own pixel). */
+   fills the hole there. */
 static void rendercache__insert_current(rendercache *rc, const rendercache_sample *s)
 {
     uint32_t p = s->y * rc->width + s->x, slot = rc->px_index[p];
     rendercache__new_point np;
-    float d;
-    rendercache__sample_new_point(rc, s, rc->frame, &rc->view, &np);
-    if (s->object == RENDERCACHE_MISS) {
-        d = RENDERCACHE__FAR2;
-    } else {
-        float dx = s->position[0] - rc->view.eye[0], dy = s->position[1] - rc->view.eye[1];
-        float dz = s->position[2] - rc->view.eye[2];
-        d = dx * dx + dy * dy + dz * dz;
-    }
+    float d = rendercache__current_point(rc, s, &np);
     rendercache__place(rc, slot != RENDERCACHE__NONE ? slot : rendercache__victim(rc), slot != RENDERCACHE__NONE, 0, &np,
                        p, d);
 }
@@ -4272,40 +4313,207 @@ static uint32_t rendercache__touch_slots(const rendercache *rc, const rendercach
     return sum;
 }
 
+/* Parallel insertion (with parallel_for). The samples of the current
+   frame (not late, not predicted) are placed in chunks of consecutive
+   ones: each replaces the point its pixel shows or takes the slot the
+   eviction's clock gives it, and writes its own pixel. Within a chunk of
+   distinct pixels (a chunk ends before a pixel it has already) these are
+   distinct slots and pixels, so the samples of a chunk can be placed in
+   any order once their slots are known: the calling thread first walks
+   the clock for the chunk's holes in sample order (nothing the chunk
+   writes changes which slots the clock takes: the slots it passes are
+   behind it), then jobs look for colour changes and, when there is none,
+   place the samples. A chunk with a colour change (its ageing of the
+   points around depends on the order of the samples), a turn of the clock
+   that found nothing (it then takes slots that pixels show), and every
+   other sample go one by one, in order, as without parallel_for: the same
+   cache for any thread count. A chunk's slots and colour differences are
+   kept in the re-sort's scratch (free outside begin_frame). */
+#define RENDERCACHE__INSERT_CHUNK 8192u   /* samples placed together, at most (and at most a sort range) */
+#define RENDERCACHE__INSERT_JOBS 8u       /* jobs of a chunk */
+#define RENDERCACHE__MARK 4u              /* the chosen byte (request scratch) of a pixel the chunk has */
+
+typedef struct rendercache__insert_job {
+    rendercache *rc;
+    const rendercache_sample *s;   /* the chunk's samples */
+    uint32_t n;
+    uint32_t *slot;                /* per sample: the slot it takes */
+    float *change;                 /* per sample: its colour's difference from the point it replaces, -1: none */
+    int changed[RENDERCACHE__INSERT_JOBS];
+    rendercache__put_counts counts[RENDERCACHE__INSERT_JOBS];
+} rendercache__insert_job;
+
+/* Whether a sample is one of the current frame's that a chunk may take. */
+static int rendercache__chunk_sample(const rendercache *rc, const rendercache_sample *s)
+{
+    return rendercache__sample_valid(rc, s) && rendercache__sample_frame(rc, s) == rc->frame &&
+           !(s->flags & RENDERCACHE_REQUEST_PREDICTED);
+}
+
+/* The samples [*i0, *i1) of job j of a chunk. */
+static void rendercache__insert_range(const rendercache__insert_job *job, uint32_t j, uint32_t *i0, uint32_t *i1)
+{
+    *i0 = (uint32_t)((uint64_t)job->n * j / RENDERCACHE__INSERT_JOBS);
+    *i1 = (uint32_t)((uint64_t)job->n * (j + 1) / RENDERCACHE__INSERT_JOBS);
+}
+
+/* Job j: the colour differences of its replacements, and whether one is a change. */
+static void rendercache__change_job(void *ctx, uint32_t j)
+{
+    rendercache__insert_job *job = (rendercache__insert_job *)ctx;
+    const rendercache *rc = job->rc;
+    uint32_t i, i0, i1;
+    int changed = 0;
+    rendercache__insert_range(job, j, &i0, &i1);
+    for (i = i0; i < i1; i++) {
+        if (job->change[i] < 0.0f) continue;
+        job->change[i] = rendercache__colour_difference(rc->data[job->slot[i]].rgb, job->s[i].rgb);
+        changed |= job->change[i] > rc->change_level;
+    }
+    job->changed[j] = changed;
+}
+
+/* Job j: places its samples. */
+static void rendercache__put_job(void *ctx, uint32_t j)
+{
+    rendercache__insert_job *job = (rendercache__insert_job *)ctx;
+    rendercache *rc = job->rc;
+    rendercache__put_counts n = { 0, 0, 0 };
+    uint32_t i, i0, i1;
+    rendercache__insert_range(job, j, &i0, &i1);
+    for (i = i0; i < i1; i++) {
+        const rendercache_sample *s = &job->s[i];
+        rendercache__new_point np;
+        float d = rendercache__current_point(rc, s, &np);
+        rendercache__put_point(rc, job->slot[i], job->change[i] >= 0.0f, 0, &np, s->y * rc->width + s->x, d, &n);
+    }
+    job->counts[j] = n;
+}
+
+/* The most samples of a chunk: its slots and colour differences fill
+   2 words per sample of the re-sort's scratch (8 words per slot of a range). */
+static uint32_t rendercache__chunk_most(const rendercache *rc)
+{
+    const uint32_t range = rendercache__sort_range_size(rc);
+    return range < RENDERCACHE__INSERT_CHUNK ? range : RENDERCACHE__INSERT_CHUNK;
+}
+
+/* The slots of the chunk that starts at samples[0] (up to n samples), in
+   job: how many samples it has; 0 when the first is not one for a chunk or
+   the clock turned once (the clock is then as it was). */
+static uint32_t rendercache__chunk_slots(rendercache *rc, const rendercache_sample *samples, uint32_t n,
+                                         rendercache__insert_job *job)
+{
+    const uint32_t hand = rc->hand, most = rendercache__chunk_most(rc);
+    uint32_t m, i, marked = 0;
+    uint64_t walked = 0;   /* slots the clock passed: a whole turn would meet the chunk's own slots again */
+    for (m = 0; m < n && m < most && rendercache__chunk_sample(rc, &samples[m]); m++) {
+        uint32_t p = samples[m].y * rc->width + samples[m].x, slot = rc->px_index[p], before = rc->hand;
+        if (rc->chosen[p] & RENDERCACHE__MARK) break;   /* the chunk has this pixel already */
+        rc->chosen[p] |= RENDERCACHE__MARK;
+        marked++;
+        job->change[m] = slot != RENDERCACHE__NONE ? 0.0f : -1.0f;
+        job->slot[m] = slot != RENDERCACHE__NONE ? slot : rendercache__victim(rc);
+        walked += (rc->hand + (uint64_t)rc->capacity - before) % rc->capacity;
+        if (rc->hand_exhausted || walked >= rc->capacity) break;
+    }
+    for (i = 0; i < marked; i++) rc->chosen[samples[i].y * rc->width + samples[i].x] &= (unsigned char)~RENDERCACHE__MARK;
+    if (rc->hand_exhausted || walked >= rc->capacity) {
+        rc->hand = hand;
+        rc->hand_exhausted = 0;
+        return 0;
+    }
+    return m;
+}
+
+/* Places the chunk that starts at samples[0] (up to n samples) in
+   parallel; returns how many samples it placed. When none, *alone says
+   how many go one by one before the next chunk: the first sample (not one
+   for a chunk), the chunk (a colour change), or all of them (the clock). */
+static uint32_t rendercache__insert_chunk(rendercache *rc, const rendercache_sample *samples, uint32_t n,
+                                          uint32_t *alone)
+{
+    rendercache__insert_job job;
+    rendercache__put_counts sum = { 0, 0, 0 };
+    const uint32_t hand = rc->hand;
+    uint32_t j, i;
+    int changed = 0;
+    job.rc = rc;
+    job.s = samples;
+    job.slot = rc->sort_scratch;
+    job.change = (float *)(void *)(rc->sort_scratch + rendercache__chunk_most(rc));
+    job.n = rc->hand_exhausted ? 0 : rendercache__chunk_slots(rc, samples, n, &job);
+    *alone = 0;
+    if (job.n == 0) {
+        *alone = rendercache__chunk_sample(rc, samples) ? n : 1;   /* (a sample for a chunk: the clock) */
+        return 0;
+    }
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__change_job, &job, RENDERCACHE__INSERT_JOBS);
+    for (j = 0; j < RENDERCACHE__INSERT_JOBS; j++) changed |= job.changed[j];
+    if (changed) {
+        rc->hand = hand;
+        *alone = job.n;
+        return 0;
+    }
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__put_job, &job, RENDERCACHE__INSERT_JOBS);
+    for (j = 0; j < RENDERCACHE__INSERT_JOBS; j++) {
+        sum.replaced += job.counts[j].replaced;
+        sum.evicted += job.counts[j].evicted;
+        sum.live += job.counts[j].live;
+    }
+    rendercache__add_counts(rc, &sum);
+    for (i = 0; i < job.n; i++)
+        if (job.change[i] >= 0.0f) rendercache__count_change(rc, job.change[i]);
+    return job.n;
+}
+
+/* One sample, as rendercache_insert takes it without parallel_for. */
+static RENDERCACHE__INLINE void rendercache__insert_one(rendercache *rc, const rendercache_sample *s, uint32_t *stored, uint32_t *bad)
+{
+    const rendercache__frame_record *record;
+    int predicted = (s->flags & RENDERCACHE_REQUEST_PREDICTED) != 0;
+    uint64_t f;
+    if (!rendercache__sample_valid(rc, s)) { (*bad)++; return; }
+    f = rendercache__sample_frame(rc, s);
+    if (rc->frame - f > rc->max_latency) { rc->stats.dropped++; return; }
+    record = &rc->history[f % ((uint64_t)rc->max_latency + 1)];
+    if (record->frame != f || (predicted && !record->has_prediction)) { (*bad)++; return; }
+    if (f == rc->frame && !predicted) {
+        rendercache__insert_current(rc, s);
+    } else {
+        rendercache__new_point np;
+        rendercache__sample_new_point(rc, s, f, predicted ? &record->predicted : &record->view, &np);
+        if (!rendercache__insert_other(rc, &np, 0)) {
+            rc->stats.dropped++;
+            return;
+        }
+    }
+    rc->stats.late += f != rc->frame;
+    (*stored)++;
+}
+
 RENDERCACHE_API rendercache_result rendercache_insert(rendercache *rc, const rendercache_sample *samples, uint32_t n,
                                                       uint32_t *taken)
 {
-    const uint64_t slots = rc ? (uint64_t)rc->max_latency + 1 : 1;
-    uint32_t i, stored = 0, bad = 0;
+    uint32_t i = 0, stored = 0, bad = 0, alone = 0;
     double t0;
     if (taken) *taken = 0;
     if (!rc || (!samples && n)) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
     t0 = rendercache__now(rc);
-    for (i = 0; i < n; i++) {
+    while (i < n) {
         const rendercache_sample *s = &samples[i];
-        const rendercache__frame_record *record;
-        int predicted = (s->flags & RENDERCACHE_REQUEST_PREDICTED) != 0;
-        uint64_t f;
+        if (rc->parallel_for && alone == 0) {
+            uint32_t m = rendercache__insert_chunk(rc, s, n - i, &alone);
+            stored += m;
+            i += m;
+            if (m) continue;
+        }
         if (i == 0) rc->touched += rendercache__touch_slots(rc, s, n < 32 ? n : 32);
         if (i % 32 == 0 && n - i > 32)   /* a batch ahead, so that the misses complete before the stores */
             rc->touched += rendercache__touch_slots(rc, s + 32, n - i - 32 < 32 ? n - i - 32 : 32);
-        if (!rendercache__sample_valid(rc, s)) { bad++; continue; }
-        f = rendercache__sample_frame(rc, s);
-        if (rc->frame - f > rc->max_latency) { rc->stats.dropped++; continue; }
-        record = &rc->history[f % slots];
-        if (record->frame != f || (predicted && !record->has_prediction)) { bad++; continue; }
-        if (f == rc->frame && !predicted) {
-            rendercache__insert_current(rc, s);
-        } else {
-            rendercache__new_point np;
-            rendercache__sample_new_point(rc, s, f, predicted ? &record->predicted : &record->view, &np);
-            if (!rendercache__insert_other(rc, &np, 0)) {
-                rc->stats.dropped++;
-                continue;
-            }
-        }
-        rc->stats.late += f != rc->frame;
-        stored++;
+        rendercache__insert_one(rc, s, &stored, &bad);
+        i++;
+        alone -= alone > 0;
     }
     rendercache__refill(rc);
     rc->stats.inserted += stored;
