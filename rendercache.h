@@ -1,4 +1,4 @@
-/* rendercache.h - v0.5.2 - render cache and range-image walkthroughs - public domain or MIT, see end of file
+/* rendercache.h - v0.5.3 - render cache and range-image walkthroughs - public domain or MIT, see end of file
 
    RENDERCACHE.H: an image-space point cache that reprojects and resamples, and range-image walkthroughs of animated scenes.
 
@@ -191,7 +191,11 @@
        the window (the farther on a tie); the
        priority image ranks old points (age, faster for moving objects,
        times the sample's priority_scale) below holes (the fewer points
-       around, the higher), and pixels with nothing near at 1 (WDP99).
+       around, the higher), and pixels with nothing near at 1 (WDP99). The
+       cull and the filling run interleaved, tile of 8 rows by tile, so
+       that a hole's neighbourhood is still in cache when it is filled (with
+       parallel_for, 8 ranges of tiles each so, and the tiles at the ranges'
+       ends filled after).
        request: the levels of the priority image above a threshold are all
        requested, the level at the threshold gets the rest of the budget,
        spread by Floyd-Steinberg error diffusion (WDP99) in bands of 128 rows
@@ -203,7 +207,11 @@
        begin_frame_predicted counts them in the same pass as the projection
        into the current camera, each batch of points while it is in cache.
        insert: a sample of the current frame replaces the point its pixel
-       showed, or takes the slot of the oldest point not visible (clock); a
+       showed, or takes the slot of the oldest point not visible (clock;
+       with parallel_for, chunks of such samples are placed in 8 jobs once
+       the clock has given their slots in sample order; a chunk with a
+       colour change goes one sample at a time, as its ageing depends on the
+       order); a
        late or predicted sample is stored at its own point, replaces the
        point of the same surface where that lands now, and is shown there
        (the holes around it filled again) when nothing nearer is. A sample
@@ -389,7 +397,8 @@
        sees nothing (its threshold rises with the noise). Error diffusion
        runs in bands of 128 rows whose error does not cross into the next
        band (seams a 2-pixel-tall image would not have); the rest of a frame
-       runs in parallel too.
+       runs in parallel too, but for the requests' rays and the late and
+       predicted samples' insertion, which run on the calling thread.
        Walkthroughs: a range image takes 20 bytes per pixel; a warper about
        37 bytes per target pixel (61 with parallel_for, 20 more after a
        motion blend, and 20 per input when averaging) plus, with foreground
@@ -415,7 +424,7 @@
 
 #define RENDERCACHE_VERSION_MAJOR 0
 #define RENDERCACHE_VERSION_MINOR 5
-#define RENDERCACHE_VERSION_PATCH 2
+#define RENDERCACHE_VERSION_PATCH 3
 
 #ifndef RENDERCACHE_API
 #  ifdef RENDERCACHE_STATIC
@@ -2068,7 +2077,8 @@ struct rendercache {
                                 stays in cache where data would not. After the slots, one byte per
                                 tile that the tile's pixels without a point write instead */
     uint32_t hand;           /* clock hand of the eviction */
-    uint32_t *sort_scratch;  /* rendercache__sort_range: 2 words and a point record per slot of a range, per job */
+    uint32_t *sort_scratch;  /* rendercache__sort_range: 2 words and a point record per slot of a range, per job;
+                                between frames the parallel insertion's chunk (rendercache__insert_chunk) */
     uint32_t *sort_bands;    /* per range, SORT_BANDS + 1 offsets into it: where the points of each band of the
                                 image begin at its last re-sort, and (the last) those outside the image; all 0
                                 for a range not sorted yet (all of it "outside") */
@@ -3872,26 +3882,86 @@ static uint32_t rendercache__select(rendercache *rc, const float *priority, uint
     return rendercache__correct_count(rc, count, target, best_add, best_drop);
 }
 
-/* Writes the chosen pixels as requests in scan order and zeroes their
-   priority, so a further request call moves on to the next pixels. */
-static uint32_t rendercache__emit(rendercache *rc, const rendercache__view *v, float *priority, uint32_t flags,
-                                  rendercache_pixel_request *out, uint32_t max)
+/* Writes the chosen pixels among pixels [p, end) as requests out[n],
+   out[n + 1], ... (in scan order, while n < max) and zeroes their
+   priority, so a further request call moves on to the next pixels;
+   returns the n after the last. */
+static uint32_t rendercache__emit_range(rendercache *rc, uint32_t p, uint32_t end, rendercache_pixel_request *out,
+                                        uint32_t n, uint32_t max)
 {
-    uint32_t p = 0, n = 0;
+    const rendercache__view *v = &rc->view;
     for (; n < max; p++) {
         rendercache_pixel_request *r;
-        p = (uint32_t)rendercache__next_marked(rc->chosen, (int)p, (int)rc->pixel_count, 1, 1u);
-        if (p == rc->pixel_count) break;
+        p = (uint32_t)rendercache__next_marked(rc->chosen, (int)p, (int)end, 1, 1u);
+        if (p == end) break;
         r = &out[n++];
         r->x = p % rc->width;
         r->y = p / rc->width;
-        r->flags = flags;
+        r->flags = 0u;
         r->frame = rc->frame;
         memcpy(r->org, v->eye, sizeof r->org);
         rendercache__view_ray(v, (float)r->x + 0.5f, (float)r->y + 0.5f, r->dir);
-        priority[p] = 0.0f;
+        rc->priority[p] = 0.0f;
     }
     return n;
+}
+
+/* The requests of the chosen pixels, tile by tile in parallel (with
+   parallel_for): each tile's start in out is the count of the chosen
+   pixels of the tiles before it (RENDERCACHE__TILE_STATS column 5, free
+   after the selection), so out is what one pass in scan order writes. */
+typedef struct rendercache__emit_job {
+    rendercache *rc;
+    rendercache_pixel_request *out;
+    uint32_t max;
+} rendercache__emit_job;
+
+/* The pixels [*p0, *p1) of tile. */
+static void rendercache__tile_pixels(const rendercache *rc, uint32_t tile, uint32_t *p0, uint32_t *p1)
+{
+    *p0 = tile * RENDERCACHE__TILE_ROWS * rc->width;
+    *p1 = *p0 + RENDERCACHE__TILE_ROWS * rc->width < rc->pixel_count ? *p0 + RENDERCACHE__TILE_ROWS * rc->width
+                                                                    : rc->pixel_count;
+}
+
+/* Job per tile: counts its chosen pixels. */
+static void rendercache__count_chosen_job(void *ctx, uint32_t tile)
+{
+    const rendercache__emit_job *job = (const rendercache__emit_job *)ctx;
+    rendercache *rc = job->rc;
+    uint32_t p0, p1, p, count = 0;
+    rendercache__tile_pixels(rc, tile, &p0, &p1);
+    for (p = p0; p < p1; p++) count += rc->chosen[p] & 1u;
+    rc->tile_stats[RENDERCACHE__TILE_STATS * (size_t)tile + 5] = count;
+}
+
+/* Job per tile: its requests, from its start. */
+static void rendercache__emit_job_tile(void *ctx, uint32_t tile)
+{
+    const rendercache__emit_job *job = (const rendercache__emit_job *)ctx;
+    rendercache *rc = job->rc;
+    uint32_t p0, p1;
+    rendercache__tile_pixels(rc, tile, &p0, &p1);
+    rendercache__emit_range(rc, p0, p1, job->out, rc->tile_stats[RENDERCACHE__TILE_STATS * (size_t)tile + 5], job->max);
+}
+
+/* The requests of the chosen pixels in scan order, up to max; returns their count. */
+static uint32_t rendercache__emit(rendercache *rc, rendercache_pixel_request *out, uint32_t max)
+{
+    rendercache__emit_job job;
+    uint32_t t, start = 0;
+    if (!rc->parallel_for) return rendercache__emit_range(rc, 0, rc->pixel_count, out, 0, max);
+    job.rc = rc;
+    job.out = out;
+    job.max = max;
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__count_chosen_job, &job, rc->tile_count);
+    for (t = 0; t < rc->tile_count; t++) {   /* counts to starts */
+        uint32_t *s = &rc->tile_stats[RENDERCACHE__TILE_STATS * (size_t)t + 5], count = *s;
+        *s = start;
+        start = count < max - start ? start + count : max;
+    }
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__emit_job_tile, &job, rc->tile_count);
+    return start;
 }
 
 /* Requests for min(max, empty cells) empty cells of the prediction,
@@ -3944,7 +4014,7 @@ RENDERCACHE_API rendercache_result rendercache_request(rendercache *rc, renderca
         if (pred_budget > rc->pred_cells) pred_budget = rc->pred_cells;
     }
     if (rendercache__select(rc, rc->priority, max - pred_budget))
-        n = rendercache__emit(rc, &rc->view, rc->priority, 0u, out, max - pred_budget);
+        n = rendercache__emit(rc, out, max - pred_budget);
     if (rc->has_prediction && n < max && rc->pred_cells) {   /* the share, and what the priority image left */
         uint32_t m = rendercache__emit_predicted(rc, out + n, max - n);
         rc->stats.predicted += m;
