@@ -397,8 +397,9 @@
        sees nothing (its threshold rises with the noise). Error diffusion
        runs in bands of 128 rows whose error does not cross into the next
        band (seams a 2-pixel-tall image would not have); the rest of a frame
-       runs in parallel too, but for the requests' rays and the late and
-       predicted samples' insertion, which run on the calling thread.
+       runs in parallel too (the requests tile by tile), but for the
+       predicted requests and the insertion of late and predicted samples,
+       which run on the calling thread.
        Walkthroughs: a range image takes 20 bytes per pixel; a warper about
        37 bytes per target pixel (61 with parallel_for, 20 more after a
        motion blend, and 20 per input when averaging) plus, with foreground
