@@ -1459,21 +1459,30 @@ static uint64_t hash_bytes(uint64_t h, const void *p, size_t n)
    image order; 24: 12 ranges, 2 re-sorted per frame, in 2 jobs with a
    parallel_for); fused: each frame starts with begin_frame_predicted
    instead of begin_frame and predict. */
+/* A cache of w x h pixels with parallel_for pf (NULL: serial) and ppp
+   points per pixel (0: the default), or NULL. */
+static rendercache *create_with(void (*pf)(void *, rendercache_job_fn, void *, uint32_t), void *user, float ppp,
+                                uint32_t w, uint32_t h)
+{
+    rendercache_desc d = make_desc(w, h);
+    rendercache *rc;
+    d.parallel_for = pf;
+    d.parallel_user = user;
+    d.points_per_pixel = ppp;
+    return rendercache_create(&d, &rc) == RENDERCACHE_OK ? rc : NULL;
+}
+
 static uint64_t run_sequence(void (*pf)(void *, rendercache_job_fn, void *, uint32_t), void *user, float ppp,
                              int fused)
 {
     const uint32_t w = 96, h = 80;
-    rendercache_desc d = make_desc(w, h);
-    rendercache *rc;
+    rendercache *rc = create_with(pf, user, ppp, w, h);
     scene s;
     float m[12] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0 };
     uint64_t hash = 1469598103934665603ull;
     int f;
     memset(&s, 0, sizeof s);
-    d.parallel_for = pf;
-    d.parallel_user = user;
-    d.points_per_pixel = ppp;
-    if (rendercache_create(&d, &rc) != RENDERCACHE_OK) return 0;
+    if (!rc) return 0;
     for (f = 0; f < 12; f++) {
         float t = (float)f * 0.1f;
         rendercache_camera cam = make_camera(t, 0.3f * t, t, 0.2f, 0.0f, 10.0f, w, h), next = cam;
@@ -1533,17 +1542,13 @@ static uint64_t run_insert_sequence(void (*pf)(void *, rendercache_job_fn, void 
 {
     const uint32_t w = 96, h = 80;
     static rendercache_sample late[MAX_PIXELS];
-    rendercache_desc d = make_desc(w, h);
-    rendercache *rc;
+    rendercache *rc = create_with(pf, user, ppp, w, h);
     scene s;
     uint64_t hash = 1469598103934665603ull;
     uint32_t held = 0;
     int f;
     memset(&s, 0, sizeof s);
-    d.parallel_for = pf;
-    d.parallel_user = user;
-    d.points_per_pixel = ppp;
-    if (rendercache_create(&d, &rc) != RENDERCACHE_OK) return 0;
+    if (!rc) return 0;
     for (f = 0; f < 10; f++) {
         rendercache_camera cam = make_camera(0.1f * (float)f, 0.05f * (float)f, 0.0f, 0.2f, 0.0f, 10.0f, w, h), next = cam;
         rendercache_stats st;
