@@ -1,4 +1,4 @@
-/* rendercache.h - v0.5.2 - render cache and range-image walkthroughs - public domain or MIT, see end of file
+/* rendercache.h - v0.5.3 - render cache and range-image walkthroughs - public domain or MIT, see end of file
 
    RENDERCACHE.H: an image-space point cache that reprojects and resamples, and range-image walkthroughs of animated scenes.
 
@@ -191,7 +191,11 @@
        the window (the farther on a tie); the
        priority image ranks old points (age, faster for moving objects,
        times the sample's priority_scale) below holes (the fewer points
-       around, the higher), and pixels with nothing near at 1 (WDP99).
+       around, the higher), and pixels with nothing near at 1 (WDP99). The
+       cull and the filling run interleaved, tile of 8 rows by tile, so
+       that a hole's neighbourhood is still in cache when it is filled (with
+       parallel_for, 8 ranges of tiles each so, and the tiles at the ranges'
+       ends filled after).
        request: the levels of the priority image above a threshold are all
        requested, the level at the threshold gets the rest of the budget,
        spread by Floyd-Steinberg error diffusion (WDP99) in bands of 128 rows
@@ -203,7 +207,11 @@
        begin_frame_predicted counts them in the same pass as the projection
        into the current camera, each batch of points while it is in cache.
        insert: a sample of the current frame replaces the point its pixel
-       showed, or takes the slot of the oldest point not visible (clock); a
+       showed, or takes the slot of the oldest point not visible (clock;
+       with parallel_for, chunks of such samples are placed in 8 jobs once
+       the clock has given their slots in sample order; a chunk with a
+       colour change goes one sample at a time, as its ageing depends on the
+       order); a
        late or predicted sample is stored at its own point, replaces the
        point of the same surface where that lands now, and is shown there
        (the holes around it filled again) when nothing nearer is. A sample
@@ -389,7 +397,9 @@
        sees nothing (its threshold rises with the noise). Error diffusion
        runs in bands of 128 rows whose error does not cross into the next
        band (seams a 2-pixel-tall image would not have); the rest of a frame
-       runs in parallel too.
+       runs in parallel too (the requests tile by tile), but for the
+       predicted requests and the insertion of late and predicted samples,
+       which run on the calling thread.
        Walkthroughs: a range image takes 20 bytes per pixel; a warper about
        37 bytes per target pixel (61 with parallel_for, 20 more after a
        motion blend, and 20 per input when averaging) plus, with foreground
@@ -415,7 +425,7 @@
 
 #define RENDERCACHE_VERSION_MAJOR 0
 #define RENDERCACHE_VERSION_MINOR 5
-#define RENDERCACHE_VERSION_PATCH 2
+#define RENDERCACHE_VERSION_PATCH 3
 
 #ifndef RENDERCACHE_API
 #  ifdef RENDERCACHE_STATIC
@@ -586,9 +596,9 @@ typedef struct rendercache_stats {
                                     predicted ones finding no slot the frame does not show */
     /* seconds spent in each phase of the last frame (0 without desc.clock) */
     double time_project;         /* projection and z-buffer of every point */
-    double time_cull;            /* depth cull, with the colour and priority of the pixels showing points;
-                                    without parallel_for also the hole filling, interleaved with it */
-    double time_interpolate;     /* hole filling, with the priority of the holes (0 without parallel_for) */
+    double time_cull;            /* depth cull, with the colour and priority of the pixels showing points,
+                                    and the hole filling interleaved with it */
+    double time_interpolate;     /* 0: the hole filling is timed with the cull (time_cull) */
     double time_predict;         /* rendercache_predict (begin_frame_predicted: in time_project) */
     double time_request;         /* threshold and error diffusion (all request calls) */
     double time_insert;
@@ -1963,6 +1973,8 @@ static void rendercache__splat_run_cover(rendercache__splat *s,
    behind an object that moves 8 pixels in a frame. */
 #define RENDERCACHE__HOLE_REACH RENDERCACHE__TILE_ROWS
 
+#define RENDERCACHE__CULL_JOBS 8u            /* ranges of tiles culled and filled in parallel with parallel_for:
+                                                the tiles at their ends (2 of 8 at 512x512) are filled apart */
 #define RENDERCACHE__BAND_ROWS 128u          /* rows per band of the error diffusion: 9 bands at 1080p */
 #define RENDERCACHE__SORT_RANGE 16384u       /* slots re-sorted together: a range (656 KB of points) and its
                                                 scratch stay in a core's L2 cache */
@@ -2066,7 +2078,8 @@ struct rendercache {
                                 stays in cache where data would not. After the slots, one byte per
                                 tile that the tile's pixels without a point write instead */
     uint32_t hand;           /* clock hand of the eviction */
-    uint32_t *sort_scratch;  /* rendercache__sort_range: 2 words and a point record per slot of a range, per job */
+    uint32_t *sort_scratch;  /* rendercache__sort_range: 2 words and a point record per slot of a range, per job;
+                                between frames the parallel insertion's chunk (rendercache__insert_chunk) */
     uint32_t *sort_bands;    /* per range, SORT_BANDS + 1 offsets into it: where the points of each band of the
                                 image begin at its last re-sort, and (the last) those outside the image; all 0
                                 for a range not sorted yet (all of it "outside") */
@@ -3175,27 +3188,83 @@ static void rendercache__interpolate_job(void *ctx, uint32_t tile)
     stats[4] = counts[RENDERCACHE_PIXEL_EMPTY];
 }
 
-/* The cull and the hole filling on the calling thread, interleaved: the
+/* Whether the cull of the tiles [a, b) fills tile t (a <= t < b) right
+   after culling the tile below it (or after its own cull, for the last
+   tile of the image): when the tile above it is culled by the same range
+   too, or there is none. Else a second pass fills it, after every range
+   has culled (rendercache__cull_and_interpolate). */
+static int rendercache__filled_with_cull(uint32_t a, uint32_t b, uint32_t t, uint32_t tile_count)
+{
+    return (t > a || a == 0) && (t + 1 < b || b == tile_count);
+}
+
+/* The cull and the hole filling of the tiles [a, b), interleaved: the
    holes of tile t - 1 are filled right after the cull of tile t, while the
    rows both touch (the depths and colours around a hole) are still in
    cache; as two passes, the filling read them back from memory, about one
    miss per hole and row. A hole reads at most RENDERCACHE__HOLE_REACH
-   (TILE_ROWS = 8) rows below its own (its rays; its filters wide_radius
-   <= 7), which the cull of the next tile has written, so the filling reads what it read after a full cull pass: the
-   same image, bit for bit. The depths of tile t + 1 are converted from
-   the keys just before the cull of tile t reads them. The two are timed together (stats.time_cull): a
+   (TILE_ROWS = 8) rows below its own and above it (its rays; its filters
+   wide_radius <= 7), which the cull of the tiles before and after has
+   written, so the filling reads what it read after a full cull pass: the
+   same image, bit for bit. A tile whose neighbour above lies in another
+   range is left to rendercache__fill_range_ends (filled_with_cull). With
+   depths set, the depths of tile t + 1 are converted from the keys just
+   before the cull of tile t reads them (one range over the whole image:
+   the cull of a range clears its keys, which the range above would read). */
+static void rendercache__cull_fill_range(rendercache *rc, uint32_t a, uint32_t b, int depths)
+{
+    uint32_t t;
+    for (t = a; t <= b; t++) {
+        if (depths && t == a) rendercache__depth_job(rc, a);
+        if (depths && t + 1 < b) rendercache__depth_job(rc, t + 1);   /* the rows below tile t */
+        if (t < b) rendercache__cull_job(rc, t);
+        if (t > a && rendercache__filled_with_cull(a, b, t - 1, rc->tile_count)) rendercache__interpolate_job(rc, t - 1);
+    }
+}
+
+/* The tiles of range r of RENDERCACHE__CULL_JOBS: [*a, *b). */
+static void rendercache__cull_range(const rendercache *rc, uint32_t r, uint32_t *a, uint32_t *b)
+{
+    *a = (uint32_t)((uint64_t)rc->tile_count * r / RENDERCACHE__CULL_JOBS);
+    *b = (uint32_t)((uint64_t)rc->tile_count * (r + 1) / RENDERCACHE__CULL_JOBS);
+}
+
+/* Job per range: its cull and filling (the depths were converted before). */
+static void rendercache__cull_fill_job(void *ctx, uint32_t r)
+{
+    rendercache *rc = (rendercache *)ctx;
+    uint32_t a, b;
+    rendercache__cull_range(rc, r, &a, &b);
+    rendercache__cull_fill_range(rc, a, b, 0);
+}
+
+/* Job per range: the filling of its tiles that its cull could not fill
+   (their neighbour above is another range's, culled now). */
+static void rendercache__fill_range_ends(void *ctx, uint32_t r)
+{
+    rendercache *rc = (rendercache *)ctx;
+    uint32_t a, b, t;
+    rendercache__cull_range(rc, r, &a, &b);
+    for (t = a; t < b; t++)
+        if (!rendercache__filled_with_cull(a, b, t, rc->tile_count)) rendercache__interpolate_job(rc, t);
+}
+
+/* The depth cull and the hole filling of the frame: on the calling thread
+   one range of every tile; with parallel_for the depths first, then
+   RENDERCACHE__CULL_JOBS ranges of tiles in parallel, each culling and
+   filling as the calling thread does, then the tiles at the ranges' ends
+   (a filling reads only rows culled by then, so the image is the same for
+   any thread count). The two are timed together (stats.time_cull): a
    clock read per tile would cost more than the saving. */
 static void rendercache__cull_and_interpolate(rendercache *rc)
 {
-    uint32_t t;
     double t0 = rendercache__now(rc);
-    for (t = 0; t <= rc->tile_count; t++) {
-        if (t == 0) rendercache__depth_job(rc, 0);
-        if (t + 1 < rc->tile_count) rendercache__depth_job(rc, t + 1);   /* the rows below tile t */
-        if (t < rc->tile_count) {
-            rendercache__cull_job(rc, t);
-        }
-        if (t > 0) rendercache__interpolate_job(rc, t - 1);
+    if (rc->parallel_for) {
+        rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__depth_job, rc, rc->tile_count);
+        rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__cull_fill_job, rc, RENDERCACHE__CULL_JOBS);
+        rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__fill_range_ends, rc, RENDERCACHE__CULL_JOBS);
+    } else {
+        rendercache__cull_fill_range(rc, 0, rc->tile_count, 1);
     }
     rc->stats.time_cull = rendercache__now(rc) - t0;
     rc->stats.time_interpolate = 0.0;
@@ -3340,7 +3409,6 @@ static void rendercache__begin(rendercache *rc, const rendercache__view *v, cons
 {
     rendercache__frame_record *record;
     rendercache__projector cells;
-    double t1, t2;
     rc->frame++;
     if (rendercache__mark(rc->frame) == 1u) memset(rc->shown, 0, (size_t)rc->capacity + rc->tile_count);
     rc->view = *v;
@@ -3361,17 +3429,7 @@ static void rendercache__begin(rendercache *rc, const rendercache__view *v, cons
     }
     rendercache__splat_points(rc, &rc->view, rc->obj_camera, next ? &cells : NULL, &rc->stats.time_project);
     if (next) rendercache__predict_finish(rc);
-    if (rc->parallel_for) {
-        t1 = rendercache__now(rc);
-        rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__depth_job, rc, rc->tile_count);
-        rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__cull_job, rc, rc->tile_count);
-        t2 = rendercache__now(rc);
-        rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__interpolate_job, rc, rc->tile_count);
-        rc->stats.time_cull = t2 - t1;
-        rc->stats.time_interpolate = rendercache__now(rc) - t2;
-    } else {
-        rendercache__cull_and_interpolate(rc);
-    }
+    rendercache__cull_and_interpolate(rc);
     rc->splat.clean = 1;   /* every cull job cleared its keys */
     rc->stats.projected = rc->splat.projected;
     rc->stats.visible = rendercache__tile_sum(rc, 0);
@@ -3825,26 +3883,86 @@ static uint32_t rendercache__select(rendercache *rc, const float *priority, uint
     return rendercache__correct_count(rc, count, target, best_add, best_drop);
 }
 
-/* Writes the chosen pixels as requests in scan order and zeroes their
-   priority, so a further request call moves on to the next pixels. */
-static uint32_t rendercache__emit(rendercache *rc, const rendercache__view *v, float *priority, uint32_t flags,
-                                  rendercache_pixel_request *out, uint32_t max)
+/* Writes the chosen pixels among pixels [p, end) as requests out[n],
+   out[n + 1], ... (in scan order, while n < max) and zeroes their
+   priority, so a further request call moves on to the next pixels;
+   returns the n after the last. */
+static uint32_t rendercache__emit_range(rendercache *rc, uint32_t p, uint32_t end, rendercache_pixel_request *out,
+                                        uint32_t n, uint32_t max)
 {
-    uint32_t p = 0, n = 0;
+    const rendercache__view *v = &rc->view;
     for (; n < max; p++) {
         rendercache_pixel_request *r;
-        p = (uint32_t)rendercache__next_marked(rc->chosen, (int)p, (int)rc->pixel_count, 1, 1u);
-        if (p == rc->pixel_count) break;
+        p = (uint32_t)rendercache__next_marked(rc->chosen, (int)p, (int)end, 1, 1u);
+        if (p == end) break;
         r = &out[n++];
         r->x = p % rc->width;
         r->y = p / rc->width;
-        r->flags = flags;
+        r->flags = 0u;
         r->frame = rc->frame;
         memcpy(r->org, v->eye, sizeof r->org);
         rendercache__view_ray(v, (float)r->x + 0.5f, (float)r->y + 0.5f, r->dir);
-        priority[p] = 0.0f;
+        rc->priority[p] = 0.0f;
     }
     return n;
+}
+
+/* The requests of the chosen pixels, tile by tile in parallel (with
+   parallel_for): each tile's start in out is the count of the chosen
+   pixels of the tiles before it (RENDERCACHE__TILE_STATS column 5, free
+   after the selection), so out is what one pass in scan order writes. */
+typedef struct rendercache__emit_job {
+    rendercache *rc;
+    rendercache_pixel_request *out;
+    uint32_t max;
+} rendercache__emit_job;
+
+/* The pixels [*p0, *p1) of tile. */
+static void rendercache__tile_pixels(const rendercache *rc, uint32_t tile, uint32_t *p0, uint32_t *p1)
+{
+    *p0 = tile * RENDERCACHE__TILE_ROWS * rc->width;
+    *p1 = *p0 + RENDERCACHE__TILE_ROWS * rc->width < rc->pixel_count ? *p0 + RENDERCACHE__TILE_ROWS * rc->width
+                                                                    : rc->pixel_count;
+}
+
+/* Job per tile: counts its chosen pixels. */
+static void rendercache__count_chosen_job(void *ctx, uint32_t tile)
+{
+    const rendercache__emit_job *job = (const rendercache__emit_job *)ctx;
+    rendercache *rc = job->rc;
+    uint32_t p0, p1, p, count = 0;
+    rendercache__tile_pixels(rc, tile, &p0, &p1);
+    for (p = p0; p < p1; p++) count += rc->chosen[p] & 1u;
+    rc->tile_stats[RENDERCACHE__TILE_STATS * (size_t)tile + 5] = count;
+}
+
+/* Job per tile: its requests, from its start. */
+static void rendercache__emit_job_tile(void *ctx, uint32_t tile)
+{
+    const rendercache__emit_job *job = (const rendercache__emit_job *)ctx;
+    rendercache *rc = job->rc;
+    uint32_t p0, p1;
+    rendercache__tile_pixels(rc, tile, &p0, &p1);
+    rendercache__emit_range(rc, p0, p1, job->out, rc->tile_stats[RENDERCACHE__TILE_STATS * (size_t)tile + 5], job->max);
+}
+
+/* The requests of the chosen pixels in scan order, up to max; returns their count. */
+static uint32_t rendercache__emit(rendercache *rc, rendercache_pixel_request *out, uint32_t max)
+{
+    rendercache__emit_job job;
+    uint32_t t, start = 0;
+    if (!rc->parallel_for) return rendercache__emit_range(rc, 0, rc->pixel_count, out, 0, max);
+    job.rc = rc;
+    job.out = out;
+    job.max = max;
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__count_chosen_job, &job, rc->tile_count);
+    for (t = 0; t < rc->tile_count; t++) {   /* counts to starts */
+        uint32_t *s = &rc->tile_stats[RENDERCACHE__TILE_STATS * (size_t)t + 5], count = *s;
+        *s = start;
+        start = count < max - start ? start + count : max;
+    }
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__emit_job_tile, &job, rc->tile_count);
+    return start;
 }
 
 /* Requests for min(max, empty cells) empty cells of the prediction,
@@ -3897,7 +4015,7 @@ RENDERCACHE_API rendercache_result rendercache_request(rendercache *rc, renderca
         if (pred_budget > rc->pred_cells) pred_budget = rc->pred_cells;
     }
     if (rendercache__select(rc, rc->priority, max - pred_budget))
-        n = rendercache__emit(rc, &rc->view, rc->priority, 0u, out, max - pred_budget);
+        n = rendercache__emit(rc, out, max - pred_budget);
     if (rc->has_prediction && n < max && rc->pred_cells) {   /* the share, and what the priority image left */
         uint32_t m = rendercache__emit_predicted(rc, out + n, max - n);
         rc->stats.predicted += m;
@@ -3987,11 +4105,18 @@ static void rendercache__sample_new_point(const rendercache *rc, const rendercac
     np->age = 0;
 }
 
-/* Stores a new point in slot. */
-static void rendercache__store(rendercache *rc, uint32_t slot, const rendercache__new_point *np)
+/* What placing points counts (rendercache__put_point): each job of a parallel
+   insertion its own, summed after. */
+typedef struct rendercache__put_counts {
+    uint32_t replaced, evicted, live;
+} rendercache__put_counts;
+
+/* Stores a new point in slot (a free one is one more live point). */
+static void rendercache__store(rendercache *rc, uint32_t slot, const rendercache__new_point *np,
+                               rendercache__put_counts *n)
 {
     rendercache__point *pt = &rc->data[slot];
-    if (rc->geo.object[slot] == RENDERCACHE__FREE_SLOT) rc->live++;
+    n->live += rc->geo.object[slot] == RENDERCACHE__FREE_SLOT;
     rendercache__slot_set(&rc->geo, slot, &np->g);
     memcpy(pt->rgb, np->rgb, sizeof pt->rgb);
     pt->scale = np->scale;
@@ -4052,9 +4177,9 @@ static void rendercache__show(rendercache *rc, uint32_t p, uint32_t slot, float 
    differ too, so the differences of each frame's replacements are
    counted (rendercache__change_level): a change must also lie three
    standard deviations out in the previous frame's differences. */
-static int rendercache__colour_changed(rendercache *rc, const float old_rgb[3], const float rgb[3])
+static float rendercache__colour_difference(const float old_rgb[3], const float rgb[3])
 {
-    float d = 0.0f, m = 0.0f, r;
+    float d = 0.0f, m = 0.0f;
     int k;
     for (k = 0; k < 3; k++) {
         float a = fabsf(old_rgb[k]), b = fabsf(rgb[k]), e = fabsf(rgb[k] - old_rgb[k]);
@@ -4062,8 +4187,19 @@ static int rendercache__colour_changed(rendercache *rc, const float old_rgb[3], 
         m = b > m ? b : m;
         d = e > d ? e : d;
     }
-    r = m > 0.0f ? d / m : 0.0f;   /* in [0, 2] for finite colours; inf when the difference overflows */
+    return m > 0.0f ? d / m : 0.0f;   /* in [0, 2] for finite colours; inf when the difference overflows */
+}
+
+/* Counts a replacement's colour difference r for the next frame's level. */
+static void rendercache__count_change(rendercache *rc, float r)
+{
     rc->change_hist[r < 2.0f ? (uint32_t)(r * (0.5f * RENDERCACHE__CHANGE_BINS)) : RENDERCACHE__CHANGE_BINS - 1]++;
+}
+
+static int rendercache__colour_changed(rendercache *rc, const float old_rgb[3], const float rgb[3])
+{
+    float r = rendercache__colour_difference(old_rgb, rgb);
+    rendercache__count_change(rc, r);
     return r > rc->change_level;
 }
 
@@ -4120,36 +4256,59 @@ static void rendercache__age_around(rendercache *rc, uint32_t p)
    lands in a hole has the holes around it filled again: the frame it
    shows in was filled without it. The requests of the current frame were
    made knowing the filling; their neighbours wait for the next frame. */
+static RENDERCACHE__INLINE void rendercache__put_point(rendercache *rc, uint32_t slot, int replacing, int refill,
+                             const rendercache__new_point *np, uint32_t p, float depth2, rendercache__put_counts *n)
+{
+    if (replacing) n->replaced++;
+    else if (rc->geo.object[slot] != RENDERCACHE__FREE_SLOT) n->evicted++;
+    rendercache__store(rc, slot, np, n);
+    if (p != RENDERCACHE__NONE && refill && rc->px_index[p] == RENDERCACHE__NONE) rendercache__mark_refill(rc, p);
+    if (p != RENDERCACHE__NONE) rendercache__show(rc, p, slot, depth2, np->rgb);
+}
+
+/* Adds what placing points counted to the frame's stats. */
+static void rendercache__add_counts(rendercache *rc, const rendercache__put_counts *n)
+{
+    rc->stats.replaced += n->replaced;
+    rc->stats.evicted += n->evicted;
+    rc->live += n->live;
+}
+
+/* rendercache__put_point, and the colour-change detection of a replacement
+   (which ages the points around it). */
 static void rendercache__place(rendercache *rc, uint32_t slot, int replacing, int refill,
                                const rendercache__new_point *np, uint32_t p, float depth2)
 {
     int changed = replacing && np->age == 0 && rendercache__colour_changed(rc, rc->data[slot].rgb, np->rgb);
-    if (replacing) rc->stats.replaced++;
-    else if (rc->geo.object[slot] != RENDERCACHE__FREE_SLOT) rc->stats.evicted++;
-    rendercache__store(rc, slot, np);
-    if (p != RENDERCACHE__NONE && refill && rc->px_index[p] == RENDERCACHE__NONE) rendercache__mark_refill(rc, p);
-    if (p != RENDERCACHE__NONE) rendercache__show(rc, p, slot, depth2, np->rgb);
+    rendercache__put_counts n = { 0, 0, 0 };
+    rendercache__put_point(rc, slot, replacing, refill, np, p, depth2, &n);
+    rendercache__add_counts(rc, &n);
     if (changed) {
         rc->stats.changed++;
         rendercache__age_around(rc, p);
     }
 }
 
+/* The new point of a sample of the current frame, and its squared
+   distance (the hit point projects into its own pixel). */
+static float rendercache__current_point(const rendercache *rc, const rendercache_sample *s, rendercache__new_point *np)
+{
+    float dx, dy, dz;
+    rendercache__sample_new_point(rc, s, rc->frame, &rc->view, np);
+    if (s->object == RENDERCACHE_MISS) return RENDERCACHE__FAR2;
+    dx = s->position[0] - rc->view.eye[0];
+    dy = s->position[1] - rc->view.eye[1];
+    dz = s->position[2] - rc->view.eye[2];
+    return dx * dx + dy * dy + dz * dz;
+}
+
 /* A sample of the current frame: it replaces the point its pixel shows, or
-   fills the hole there (the hit point projects into its own pixel). */
+   fills the hole there. */
 static void rendercache__insert_current(rendercache *rc, const rendercache_sample *s)
 {
     uint32_t p = s->y * rc->width + s->x, slot = rc->px_index[p];
     rendercache__new_point np;
-    float d;
-    rendercache__sample_new_point(rc, s, rc->frame, &rc->view, &np);
-    if (s->object == RENDERCACHE_MISS) {
-        d = RENDERCACHE__FAR2;
-    } else {
-        float dx = s->position[0] - rc->view.eye[0], dy = s->position[1] - rc->view.eye[1];
-        float dz = s->position[2] - rc->view.eye[2];
-        d = dx * dx + dy * dy + dz * dz;
-    }
+    float d = rendercache__current_point(rc, s, &np);
     rendercache__place(rc, slot != RENDERCACHE__NONE ? slot : rendercache__victim(rc), slot != RENDERCACHE__NONE, 0, &np,
                        p, d);
 }
@@ -4225,40 +4384,207 @@ static uint32_t rendercache__touch_slots(const rendercache *rc, const rendercach
     return sum;
 }
 
+/* Parallel insertion (with parallel_for). The samples of the current
+   frame (not late, not predicted) are placed in chunks of consecutive
+   ones: each replaces the point its pixel shows or takes the slot the
+   eviction's clock gives it, and writes its own pixel. Within a chunk of
+   distinct pixels (a chunk ends before a pixel it has already) these are
+   distinct slots and pixels, so the samples of a chunk can be placed in
+   any order once their slots are known: the calling thread first walks
+   the clock for the chunk's holes in sample order (nothing the chunk
+   writes changes which slots the clock takes: the slots it passes are
+   behind it), then jobs look for colour changes and, when there is none,
+   place the samples. A chunk with a colour change (its ageing of the
+   points around depends on the order of the samples), a turn of the clock
+   that found nothing (it then takes slots that pixels show), and every
+   other sample go one by one, in order, as without parallel_for: the same
+   cache for any thread count. A chunk's slots and colour differences are
+   kept in the re-sort's scratch (free outside begin_frame). */
+#define RENDERCACHE__INSERT_CHUNK 8192u   /* samples placed together, at most (and at most a sort range) */
+#define RENDERCACHE__INSERT_JOBS 8u       /* jobs of a chunk */
+#define RENDERCACHE__MARK 4u              /* the chosen byte (request scratch) of a pixel the chunk has */
+
+typedef struct rendercache__insert_job {
+    rendercache *rc;
+    const rendercache_sample *s;   /* the chunk's samples */
+    uint32_t n;
+    uint32_t *slot;                /* per sample: the slot it takes */
+    float *change;                 /* per sample: its colour's difference from the point it replaces, -1: none */
+    int changed[RENDERCACHE__INSERT_JOBS];
+    rendercache__put_counts counts[RENDERCACHE__INSERT_JOBS];
+} rendercache__insert_job;
+
+/* Whether a sample is one of the current frame's that a chunk may take. */
+static int rendercache__chunk_sample(const rendercache *rc, const rendercache_sample *s)
+{
+    return rendercache__sample_valid(rc, s) && rendercache__sample_frame(rc, s) == rc->frame &&
+           !(s->flags & RENDERCACHE_REQUEST_PREDICTED);
+}
+
+/* The samples [*i0, *i1) of job j of a chunk. */
+static void rendercache__insert_range(const rendercache__insert_job *job, uint32_t j, uint32_t *i0, uint32_t *i1)
+{
+    *i0 = (uint32_t)((uint64_t)job->n * j / RENDERCACHE__INSERT_JOBS);
+    *i1 = (uint32_t)((uint64_t)job->n * (j + 1) / RENDERCACHE__INSERT_JOBS);
+}
+
+/* Job j: the colour differences of its replacements, and whether one is a change. */
+static void rendercache__change_job(void *ctx, uint32_t j)
+{
+    rendercache__insert_job *job = (rendercache__insert_job *)ctx;
+    const rendercache *rc = job->rc;
+    uint32_t i, i0, i1;
+    int changed = 0;
+    rendercache__insert_range(job, j, &i0, &i1);
+    for (i = i0; i < i1; i++) {
+        if (job->change[i] < 0.0f) continue;
+        job->change[i] = rendercache__colour_difference(rc->data[job->slot[i]].rgb, job->s[i].rgb);
+        changed |= job->change[i] > rc->change_level;
+    }
+    job->changed[j] = changed;
+}
+
+/* Job j: places its samples. */
+static void rendercache__put_job(void *ctx, uint32_t j)
+{
+    rendercache__insert_job *job = (rendercache__insert_job *)ctx;
+    rendercache *rc = job->rc;
+    rendercache__put_counts n = { 0, 0, 0 };
+    uint32_t i, i0, i1;
+    rendercache__insert_range(job, j, &i0, &i1);
+    for (i = i0; i < i1; i++) {
+        const rendercache_sample *s = &job->s[i];
+        rendercache__new_point np;
+        float d = rendercache__current_point(rc, s, &np);
+        rendercache__put_point(rc, job->slot[i], job->change[i] >= 0.0f, 0, &np, s->y * rc->width + s->x, d, &n);
+    }
+    job->counts[j] = n;
+}
+
+/* The most samples of a chunk: its slots and colour differences fill
+   2 words per sample of the re-sort's scratch (8 words per slot of a range). */
+static uint32_t rendercache__chunk_most(const rendercache *rc)
+{
+    const uint32_t range = rendercache__sort_range_size(rc);
+    return range < RENDERCACHE__INSERT_CHUNK ? range : RENDERCACHE__INSERT_CHUNK;
+}
+
+/* The slots of the chunk that starts at samples[0] (up to n samples), in
+   job: how many samples it has; 0 when the first is not one for a chunk or
+   the clock turned once (the clock is then as it was). */
+static uint32_t rendercache__chunk_slots(rendercache *rc, const rendercache_sample *samples, uint32_t n,
+                                         rendercache__insert_job *job)
+{
+    const uint32_t hand = rc->hand, most = rendercache__chunk_most(rc);
+    uint32_t m, i, marked = 0;
+    uint64_t walked = 0;   /* slots the clock passed: a whole turn would meet the chunk's own slots again */
+    for (m = 0; m < n && m < most && rendercache__chunk_sample(rc, &samples[m]); m++) {
+        uint32_t p = samples[m].y * rc->width + samples[m].x, slot = rc->px_index[p], before = rc->hand;
+        if (rc->chosen[p] & RENDERCACHE__MARK) break;   /* the chunk has this pixel already */
+        rc->chosen[p] |= RENDERCACHE__MARK;
+        marked++;
+        job->change[m] = slot != RENDERCACHE__NONE ? 0.0f : -1.0f;
+        job->slot[m] = slot != RENDERCACHE__NONE ? slot : rendercache__victim(rc);
+        walked += (rc->hand + (uint64_t)rc->capacity - before) % rc->capacity;
+        if (rc->hand_exhausted || walked >= rc->capacity) break;
+    }
+    for (i = 0; i < marked; i++) rc->chosen[samples[i].y * rc->width + samples[i].x] &= (unsigned char)~RENDERCACHE__MARK;
+    if (rc->hand_exhausted || walked >= rc->capacity) {
+        rc->hand = hand;
+        rc->hand_exhausted = 0;
+        return 0;
+    }
+    return m;
+}
+
+/* Places the chunk that starts at samples[0] (up to n samples) in
+   parallel; returns how many samples it placed. When none, *alone says
+   how many go one by one before the next chunk: the first sample (not one
+   for a chunk), the chunk (a colour change), or all of them (the clock). */
+static uint32_t rendercache__insert_chunk(rendercache *rc, const rendercache_sample *samples, uint32_t n,
+                                          uint32_t *alone)
+{
+    rendercache__insert_job job;
+    rendercache__put_counts sum = { 0, 0, 0 };
+    const uint32_t hand = rc->hand;
+    uint32_t j, i;
+    int changed = 0;
+    job.rc = rc;
+    job.s = samples;
+    job.slot = rc->sort_scratch;
+    job.change = (float *)(void *)(rc->sort_scratch + rendercache__chunk_most(rc));
+    job.n = rc->hand_exhausted ? 0 : rendercache__chunk_slots(rc, samples, n, &job);
+    *alone = 0;
+    if (job.n == 0) {
+        *alone = rendercache__chunk_sample(rc, samples) ? n : 1;   /* (a sample for a chunk: the clock) */
+        return 0;
+    }
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__change_job, &job, RENDERCACHE__INSERT_JOBS);
+    for (j = 0; j < RENDERCACHE__INSERT_JOBS; j++) changed |= job.changed[j];
+    if (changed) {
+        rc->hand = hand;
+        *alone = job.n;
+        return 0;
+    }
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__put_job, &job, RENDERCACHE__INSERT_JOBS);
+    for (j = 0; j < RENDERCACHE__INSERT_JOBS; j++) {
+        sum.replaced += job.counts[j].replaced;
+        sum.evicted += job.counts[j].evicted;
+        sum.live += job.counts[j].live;
+    }
+    rendercache__add_counts(rc, &sum);
+    for (i = 0; i < job.n; i++)
+        if (job.change[i] >= 0.0f) rendercache__count_change(rc, job.change[i]);
+    return job.n;
+}
+
+/* One sample, as rendercache_insert takes it without parallel_for. */
+static RENDERCACHE__INLINE void rendercache__insert_one(rendercache *rc, const rendercache_sample *s, uint32_t *stored, uint32_t *bad)
+{
+    const rendercache__frame_record *record;
+    int predicted = (s->flags & RENDERCACHE_REQUEST_PREDICTED) != 0;
+    uint64_t f;
+    if (!rendercache__sample_valid(rc, s)) { (*bad)++; return; }
+    f = rendercache__sample_frame(rc, s);
+    if (rc->frame - f > rc->max_latency) { rc->stats.dropped++; return; }
+    record = &rc->history[f % ((uint64_t)rc->max_latency + 1)];
+    if (record->frame != f || (predicted && !record->has_prediction)) { (*bad)++; return; }
+    if (f == rc->frame && !predicted) {
+        rendercache__insert_current(rc, s);
+    } else {
+        rendercache__new_point np;
+        rendercache__sample_new_point(rc, s, f, predicted ? &record->predicted : &record->view, &np);
+        if (!rendercache__insert_other(rc, &np, 0)) {
+            rc->stats.dropped++;
+            return;
+        }
+    }
+    rc->stats.late += f != rc->frame;
+    (*stored)++;
+}
+
 RENDERCACHE_API rendercache_result rendercache_insert(rendercache *rc, const rendercache_sample *samples, uint32_t n,
                                                       uint32_t *taken)
 {
-    const uint64_t slots = rc ? (uint64_t)rc->max_latency + 1 : 1;
-    uint32_t i, stored = 0, bad = 0;
+    uint32_t i = 0, stored = 0, bad = 0, alone = 0;
     double t0;
     if (taken) *taken = 0;
     if (!rc || (!samples && n)) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
     t0 = rendercache__now(rc);
-    for (i = 0; i < n; i++) {
+    while (i < n) {
         const rendercache_sample *s = &samples[i];
-        const rendercache__frame_record *record;
-        int predicted = (s->flags & RENDERCACHE_REQUEST_PREDICTED) != 0;
-        uint64_t f;
+        if (rc->parallel_for && alone == 0) {
+            uint32_t m = rendercache__insert_chunk(rc, s, n - i, &alone);
+            stored += m;
+            i += m;
+            if (m) continue;
+        }
         if (i == 0) rc->touched += rendercache__touch_slots(rc, s, n < 32 ? n : 32);
         if (i % 32 == 0 && n - i > 32)   /* a batch ahead, so that the misses complete before the stores */
             rc->touched += rendercache__touch_slots(rc, s + 32, n - i - 32 < 32 ? n - i - 32 : 32);
-        if (!rendercache__sample_valid(rc, s)) { bad++; continue; }
-        f = rendercache__sample_frame(rc, s);
-        if (rc->frame - f > rc->max_latency) { rc->stats.dropped++; continue; }
-        record = &rc->history[f % slots];
-        if (record->frame != f || (predicted && !record->has_prediction)) { bad++; continue; }
-        if (f == rc->frame && !predicted) {
-            rendercache__insert_current(rc, s);
-        } else {
-            rendercache__new_point np;
-            rendercache__sample_new_point(rc, s, f, predicted ? &record->predicted : &record->view, &np);
-            if (!rendercache__insert_other(rc, &np, 0)) {
-                rc->stats.dropped++;
-                continue;
-            }
-        }
-        rc->stats.late += f != rc->frame;
-        stored++;
+        rendercache__insert_one(rc, s, &stored, &bad);
+        i++;
+        alone -= alone > 0;
     }
     rendercache__refill(rc);
     rc->stats.inserted += stored;

@@ -277,18 +277,23 @@ int main(int argc, char **argv)
         rendercache_stats st;
         uint32_t n = 0;
         double t0, t1, t2, t3;
+        int fused;
         if (o.bunny) {
             bunny_at(&o, frame, lo, hi, m);
             ex_tracer_set_transform(tracer, bunny_instance, m);
             rendercache_set_object_transform(rc, 1, m);
         }
+        /* the prediction in the projection's pass over the points, unless late samples are inserted
+           first (predict then counts them too) */
+        fused = o.predict && frame > 0 && frame + 1 < o.frames && !(o.late && waiting);
         t0 = seconds();
-        rendercache_begin_frame(rc, &cam);
+        if (fused) rendercache_begin_frame_predicted(rc, &cam, &next);
+        else rendercache_begin_frame(rc, &cam);
         if (o.late && waiting) {   /* last frame's samples, back from the renderer now */
             rendercache_insert(rc, pending, waiting, NULL);
             waiting = 0;
         }
-        if (o.predict && frame > 0 && frame + 1 < o.frames) rendercache_predict(rc, &next);
+        if (!fused && o.predict && frame > 0 && frame + 1 < o.frames) rendercache_predict(rc, &next);
         /* the first frame is traced in full, as in the paper */
         rendercache_request(rc, req, frame == 0 ? pixels : budget, &n);
         t1 = seconds();

@@ -194,15 +194,41 @@ static void shade_all(ex_pool *pool, const ex_tracer *t, const rendercache_pixel
     ex_pool_parallel_for(pool, shade_one, &j, (n + 255) / 256);
 }
 
-enum { P_PROJECT, P_CULL, P_INTERP, P_SORT, P_PREDICT, P_REQUEST, P_INSERT, P_TOTAL, P_COUNT };
+/* FNV-1a hash of n bytes. */
+static uint64_t fnv1a(const void *bytes, size_t n)
+{
+    const unsigned char *b = (const unsigned char *)bytes;
+    uint64_t h = 0xcbf29ce484222325ull;
+    size_t i;
+    for (i = 0; i < n; i++) h = (h ^ b[i]) * 0x100000001b3ull;
+    return h;
+}
+
+/* Hash of the requests' fields (the struct has padding). */
+static uint64_t requests_hash(const rendercache_pixel_request *req, uint32_t n)
+{
+    uint64_t h = 0;
+    uint32_t i;
+    for (i = 0; i < n; i++) {
+        const rendercache_pixel_request *r = &req[i];
+        uint64_t f[2];
+        f[0] = r->frame;
+        f[1] = (uint64_t)r->x << 32 | r->y;
+        h = h * 31 + fnv1a(f, sizeof f) + fnv1a(&r->flags, sizeof r->flags) + fnv1a(r->org, sizeof r->org) +
+            fnv1a(r->dir, sizeof r->dir);
+    }
+    return h;
+}
+
+enum { P_PROJECT, P_CULL, P_SORT, P_PREDICT, P_REQUEST, P_INSERT, P_TOTAL, P_COUNT };
 
 static void run(const ex_tracer *tracer, ex_pool *shade_pool, uint32_t w, uint32_t h, int threads,
                 double *frame_ms, double *sample_us, double *bytes_per_pixel, int huge)
 {
-    /* priority is computed inside cull (pixels with a point) and interp (holes); on one thread the
-       two run interleaved, timed together under cull */
-    static const char *names[P_COUNT] = { "project+z-buffer(+predict)", "cull(+interp on 1 thread)", "interp+priority", "sort",
-                                          "predict", "request", "insert", "total" };
+    /* priority is computed inside the cull (pixels with a point) and the hole filling, which run
+       interleaved, timed together (stats.time_cull) */
+    static const char *names[P_COUNT] = { "project+z-buffer(+predict)", "cull+interp", "sort", "predict", "request",
+                                          "insert", "total" };
     double times[P_COUNT][FRAMES], cpu[FRAMES], wall[FRAMES];
     rendercache_desc d;
     rendercache *rc;
@@ -262,13 +288,16 @@ static void run(const ex_tracer *tracer, ex_pool *shade_pool, uint32_t w, uint32
         rendercache_get_stats(rc, &st);
         times[P_PROJECT][f] = st.time_project;
         times[P_CULL][f] = st.time_cull;
-        times[P_INTERP][f] = st.time_interpolate;
         times[P_PREDICT][f] = st.time_predict;
         times[P_REQUEST][f] = st.time_request;
         times[P_INSERT][f] = st.time_insert;
         times[P_SORT][f] = st.time_sort;
         if (getenv("BENCH_DEBUG")) printf("frame %d: inserted %u replaced %u changed %u\n", f, st.inserted, st.replaced, st.changed);
-        times[P_TOTAL][f] = st.time_project + st.time_cull + st.time_interpolate + st.time_sort + st.time_predict +
+        if (getenv("BENCH_HASH"))   /* to compare two versions' frames and requests bit for bit */
+            printf("frame %d: image %016llx requests %016llx\n", f,
+                   (unsigned long long)fnv1a(rendercache_image(rc), sizeof(float) * 3 * w * h),
+                   (unsigned long long)requests_hash(req, n));
+        times[P_TOTAL][f] = st.time_project + st.time_cull + st.time_sort + st.time_predict +
                             st.time_request + st.time_insert;
     }
     *bytes_per_pixel = (double)memory.peak / ((double)w * h);

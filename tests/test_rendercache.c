@@ -1459,21 +1459,30 @@ static uint64_t hash_bytes(uint64_t h, const void *p, size_t n)
    image order; 24: 12 ranges, 2 re-sorted per frame, in 2 jobs with a
    parallel_for); fused: each frame starts with begin_frame_predicted
    instead of begin_frame and predict. */
+/* A cache of w x h pixels with parallel_for pf (NULL: serial) and ppp
+   points per pixel (0: the default), or NULL. */
+static rendercache *create_with(void (*pf)(void *, rendercache_job_fn, void *, uint32_t), void *user, float ppp,
+                                uint32_t w, uint32_t h)
+{
+    rendercache_desc d = make_desc(w, h);
+    rendercache *rc;
+    d.parallel_for = pf;
+    d.parallel_user = user;
+    d.points_per_pixel = ppp;
+    return rendercache_create(&d, &rc) == RENDERCACHE_OK ? rc : NULL;
+}
+
 static uint64_t run_sequence(void (*pf)(void *, rendercache_job_fn, void *, uint32_t), void *user, float ppp,
                              int fused)
 {
     const uint32_t w = 96, h = 80;
-    rendercache_desc d = make_desc(w, h);
-    rendercache *rc;
+    rendercache *rc = create_with(pf, user, ppp, w, h);
     scene s;
     float m[12] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0 };
     uint64_t hash = 1469598103934665603ull;
     int f;
     memset(&s, 0, sizeof s);
-    d.parallel_for = pf;
-    d.parallel_user = user;
-    d.points_per_pixel = ppp;
-    if (rendercache_create(&d, &rc) != RENDERCACHE_OK) return 0;
+    if (!rc) return 0;
     for (f = 0; f < 12; f++) {
         float t = (float)f * 0.1f;
         rendercache_camera cam = make_camera(t, 0.3f * t, t, 0.2f, 0.0f, 10.0f, w, h), next = cam;
@@ -1522,6 +1531,81 @@ static void test_deterministic_for_any_thread_count(void)
     ex_pool_destroy(pool);
 }
 
+/* The insertion of one frame's samples in the mixed order an engine may
+   give them: the current frame's (in chunks placed in parallel with
+   parallel_for), a few twice (the same pixel in one call), a share kept
+   back and inserted after the next begin_frame (late), the predicted
+   ones; a shadow that comes and goes changes colours (a colour change
+   makes a chunk go one sample at a time). Returns a hash of the requests,
+   images, priorities and the insertion's counts over the frames. */
+static uint64_t run_insert_sequence(void (*pf)(void *, rendercache_job_fn, void *, uint32_t), void *user, float ppp)
+{
+    const uint32_t w = 96, h = 80;
+    static rendercache_sample late[MAX_PIXELS];
+    rendercache *rc = create_with(pf, user, ppp, w, h);
+    scene s;
+    uint64_t hash = 1469598103934665603ull;
+    uint32_t held = 0;
+    int f;
+    memset(&s, 0, sizeof s);
+    if (!rc) return 0;
+    for (f = 0; f < 10; f++) {
+        rendercache_camera cam = make_camera(0.1f * (float)f, 0.05f * (float)f, 0.0f, 0.2f, 0.0f, 10.0f, w, h), next = cam;
+        rendercache_stats st;
+        uint32_t n = 0, i, now = 0;
+        next.eye[0] += 0.1f;
+        s.shadow[0] = -3.0f; s.shadow[1] = -1.8f; s.shadow[2] = (f % 3 == 1) ? 2.5f : 0.0f;
+        rendercache_begin_frame_predicted(rc, &cam, &next);
+        CHECK(rendercache_insert(rc, late, held, NULL) == RENDERCACHE_OK);   /* last frame's, late */
+        rendercache_request(rc, g_req, f == 0 ? w * h : 900, &n);
+        for (i = 0; i < n; i++) {
+            rendercache_sample *out = i % 5 == 4 && f > 0 ? &late[i / 5] : &g_samples[now++];
+            shade(&s, &g_req[i], out);
+            out->frame = g_req[i].frame;
+        }
+        held = f > 0 ? n / 5 : 0;
+        for (i = 0; i + 1 < now && i < 40; i += 8) {   /* the same pixel again, a little brighter */
+            g_samples[now] = g_samples[i];
+            g_samples[now].rgb[0] += 0.01f;
+            now++;
+        }
+        CHECK(rendercache_insert(rc, g_samples, now, NULL) == RENDERCACHE_OK);
+        rendercache_get_stats(rc, &st);
+        hash = hash_bytes(hash, g_req, n * sizeof *g_req);
+        hash = hash_bytes(hash, rendercache_image(rc), 3 * sizeof(float) * w * h);
+        hash = hash_bytes(hash, rendercache_priority_image(rc), sizeof(float) * w * h);
+        hash = hash_bytes(hash, rendercache_pixel_kinds(rc), w * h);
+        {
+            uint32_t counts[8];
+            counts[0] = st.inserted; counts[1] = st.replaced; counts[2] = st.evicted; counts[3] = st.late;
+            counts[4] = st.changed; counts[5] = st.dropped; counts[6] = st.live_points; counts[7] = st.rejected;
+            hash = hash_bytes(hash, counts, sizeof counts);
+        }
+    }
+    rendercache_destroy(rc);
+    return hash;
+}
+
+/* The insertion places the current frame's samples in parallel chunks
+   with parallel_for: the same cache, images and counts as one by one, on
+   any thread count; also with a cache smaller than a frame's samples
+   (0.3 points per pixel: the eviction's clock turns without finding a
+   slot the frame does not show, and chunks are as small as the cache's
+   sort range), and with colour changes and repeated pixels. */
+static void test_parallel_insert_matches_serial(void)
+{
+    ex_pool *pool = ex_pool_create(3);
+    float ppp[3] = { 0.0f, 0.3f, 24.0f };
+    int k;
+    for (k = 0; k < 3; k++) {
+        uint64_t serial = run_insert_sequence(NULL, NULL, ppp[k]);
+        CHECK(serial != 0);
+        CHECK(run_insert_sequence(reversed_parallel_for, NULL, ppp[k]) == serial);
+        if (pool) CHECK(run_insert_sequence(ex_pool_parallel_for, pool, ppp[k]) == serial);
+    }
+    ex_pool_destroy(pool);
+}
+
 int main(int argc, char **argv)
 {
     TEST_INIT(argc, argv);
@@ -1546,5 +1630,6 @@ int main(int argc, char **argv)
     RUN(test_no_allocation_per_frame);
     RUN(test_bad_input_is_rejected);
     RUN(test_deterministic_for_any_thread_count);
+    RUN(test_parallel_insert_matches_serial);
     return test_finish();
 }
