@@ -508,7 +508,10 @@
      pointer, so that its prefetch does not wait for the tree's head
      (0.99x). One tree per face at all times would rebuild a face at every
      merge (every 8 insertions): about 140 us per insertion at 5,000
-     records per face, against 20 us.
+     records per face, against 20 us. The benchmark run alternately with
+     v0.4.6 at load 2 to 4, three runs each: 2.02, 2.06 and 2.03 us dense
+     random (v0.4.6: 2.10, 2.59, 2.22), 1.57 to 1.61 us sorted (1.65 to
+     1.75), 0.76 to 0.77 us sparse (0.84 to 0.95).
      Memory: 534 bytes per record at 10^5 (545 before v0.4.7; records,
      radii, items, blocks, nodes). Insertion with neighbour clamping (v0.4.4): 4.8 us at 10^5 records,
      10.5 us in the dense cache (a gather takes about 1 ms);
