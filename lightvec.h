@@ -506,7 +506,8 @@
      0.99x, 1.03x: a face still has a second tree between rebuilds, and its
      size does not matter); the root's address computed from the tree
      pointer, so that its prefetch does not wait for the tree's head
-     (0.99x). One tree per face at all times would rebuild a face at every
+     (0.99x); the tail's near test at once, queued only where a sphere
+     holds A (1.00x dense, 0.99x sparse). One tree per face at all times would rebuild a face at every
      merge (every 8 insertions): about 140 us per insertion at 5,000
      records per face, against 20 us. The benchmark run alternately with
      v0.4.6 at load 2 to 4, three runs each: 2.02, 2.06 and 2.03 us dense
