@@ -491,8 +491,30 @@
      over a last-level node's leaves in one loop (1.00x); faces split at
      32768 records instead of 8192 (0.99x); a merge ratio of 256 (0.95x
      to 0.97x, insertions 1.6x). lightvec_cache_optimize, one kd-tree per
-     face, took 0.91x in the same harness, more than the 2 trees, 2 node
-     tests, 1.5 leaves and tail it saves suggest.
+     face, takes 0.92x to 0.95x in the same harness, because a random
+     lookup's time follows the cache lines it touches, and the second tree
+     and the tail of each face cost more lines than node tests suggest:
+     counted through the prefetches, a dense lookup touches 290 distinct
+     lines on 26.0 distinct 4 KB pages as inserted, 268 lines on 20.7 pages
+     after it (sparse: 104 lines, 16.4 pages against 84, 11.2): node lines
+     88.5 against 78.9, tail 7.9 against none, leaf blocks and heads 193
+     against 189. Not placement: the same trees copied bit for bit to fresh
+     memory, face after face, took 1.01x; with transparent huge pages
+     optimize still took 0.94x to 0.95x. An optimized cache against itself
+     with records inserted after: 60 (tails of about 3 records) 0.97x, 400
+     (a tail and a second tree of about 20 records per face) 0.925x. Left
+     out: merging all of a face's trees once the records outside its
+     largest come to 1/1, 1/8 or 1/32 of it (1.00x, 0.99x, 1.03x: a face
+     still has a second tree between rebuilds, and its size does not
+     matter); the root's address computed from the tree pointer, so that
+     its prefetch does not wait for the tree's head (0.99x); the tail's
+     near test at once, queued only where a sphere holds A (1.00x dense,
+     0.99x sparse). One tree per face at all times would rebuild a face at
+     every merge (every 8 insertions): about 140 us per insertion at 5,000
+     records per face, against 20 us. The benchmark run alternately with
+     v0.4.6 at load 2 to 4, three runs each: 2.02, 2.06 and 2.03 us dense
+     random (v0.4.6: 2.10, 2.59, 2.22), 1.57 to 1.61 us sorted (1.65 to
+     1.75), 0.76 to 0.77 us sparse (0.84 to 0.95).
      Memory: 534 bytes per record at 10^5 (545 before v0.4.7; records,
      radii, items, blocks, nodes). Insertion with neighbour clamping (v0.4.4): 4.8 us at 10^5 records,
      10.5 us in the dense cache (a gather takes about 1 ms);
