@@ -372,12 +372,17 @@
    PERFORMANCE
 
      Lookups at 10^5 records on the walls of a room (tests/bench_lightvec.c,
-     one thread, CPU time, medians of 3 runs, a shared 2-core machine at a
-     load of 7 to 8): 6 valid records per query 0.81 us in a random query
-     order (every one a cache miss), 0.54 us sorted by position (as a
-     frame's pixels come); 45 valid 2.25 us random, 1.57 us sorted (after
-     lightvec_cache_optimize 1.91 and 1.35 us). At 10^6 records, 6 valid:
-     2.7 us random (memory latency), 1.07 us sorted. (v0.4.2 on the same
+     one thread, CPU time, medians of 5 passes; v0.4.7, three runs at a
+     load of 1.3 to 2.3): 6 valid records per query 0.76 to 0.77 us in a
+     random query order (every one a cache miss), 0.52 us sorted by
+     position (as a frame's pixels come); 45 valid 1.88 to 1.95 us random,
+     1.58 to 1.60 us sorted (after lightvec_cache_optimize 1.77 and 1.48
+     us). At 10^6 records, 6 valid: 2.6 us random (memory latency), 1.03
+     us sorted. The random figures rise with the load, as other programs
+     take the shared caches: 2.0 to 2.6 us dense at a load of 2 to 7. What
+     each version changed follows, oldest first. v0.4.3 on a load of 7 to
+     8: 0.81, 0.54, 2.25, 1.57, 1.91, 1.35, 2.7, 1.07 us in the order
+     above. (v0.4.2 on the same
      runs: 0.92, 0.56, 2.41, 1.58, 2.12, 1.35, 3.45, 1.21 us.) v0.4.5
      merges the kd-trees of a face at a ratio of 64 instead of 8 (fewer,
      larger trees: 4.6 instead of 7 per dense lookup). The same records
@@ -480,8 +485,8 @@
      smaller tail merges twice as often). The benchmark run alternately
      with v0.4.6 at load 5 to 7 printed 2.58 and 2.42 us dense random
      (v0.4.6: 2.80 and 2.29): at that load its swing is larger than the
-     change. The 2 us target for dense random lookups is not met. Tried
-     and left out, paired the same way against the version before it:
+     change (at a load of 1.3 to 2.3 it prints 1.88 to 1.95 us, under the
+     2 us target: see the first paragraph). Tried and left out, paired the same way against the version before it:
      the rest of 4.2's tests and the weights four slots at a time in SIMD
      (the same weights bit for bit; 1.02x: the block visits wait on
      memory and on the branches per valid slot more than on square roots
