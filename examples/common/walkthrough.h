@@ -17,9 +17,9 @@
    Shading (modes raytrace and baseviews). A primary hit gets its emission,
    direct light from the emitting polygons (many-light sampling: a fixed
    number of shadow rays per point, --light-samples, each choosing a light
-   by an importance bound of power, distance and both cosines, times 1
-   for the lights a coarse grid's cell around the point sees and 1/16 for
-   the others (wt__light_grid_build: lights behind walls rarely take a
+   by an importance bound of power, distance and both cosines, mixed with
+   that bound times what a coarse grid's cell around the point sees of
+   each light (wt__light_grid_build: lights behind walls rarely take a
    ray), and divided by the choice's probability; shadow rays through
    examples/common/trace.h, so the bunny casts shadows; Lambert +
    normalized Phong) and indirect light from a light
@@ -866,7 +866,7 @@ typedef struct wt_world {
     wt_light *lights;                  /* emitting polygons */
     uint32_t light_count;
     /* which lights each cell of a coarse grid sees (wt__light_grid_build) */
-    float *light_seen;                 /* cell-major: light_count weights a cell, in (0, 1] */
+    float *light_seen;                 /* cell-major: a flag (0 or 1) and a visibility share in [0, 1] per light a cell */
     float grid_lo[3], grid_cell;       /* the grid's corner and cells' edge, metres */
     uint32_t grid_dims[3];
     ex_pool *pool;
@@ -1878,7 +1878,7 @@ EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t
    follows it along the same route, that far behind, at eye height.
    ---------------------------------------------------------------------- */
 #define WT_PATH_VERSION 3u     /* bump when the paths change: precompute keys depend on them */
-#define WT_SHADING_VERSION 4u  /* bump when the shading changes: cached light vectors and base images */
+#define WT_SHADING_VERSION 5u  /* bump when the shading changes: cached light vectors and base images */
 #define WT__WAYPOINTS 9
 static const float wt__waypoints[WT__WAYPOINTS][2] = {   /* (x, z) on the floor */
     { 1.35f, 1.55f }, { 1.65f, 2.35f }, { 1.80f, 3.15f }, { 2.15f, 3.35f }, { 2.40f, 2.80f },
@@ -2259,24 +2259,46 @@ static float wt__light_importance(const wt_light *L, const float x[3], const flo
    one of WT__GRID_RAYS rays between points of the cell and points of the
    light reaches past everything static (glass passes light; the bunny
    moves, so it is left out), in the cell or in one of its 26 neighbours
-   (a point near a cell's side sees what the next cell sees). The sampler
-   multiplies a light's importance by 1 for the cell's lights and by
-   WT__GRID_FLOOR for the others: never zero, so a light that every ray
-   missed (a slit of a door, a point the rays did not come near) still
-   gets picks, and dividing by the actual probability keeps the estimator
-   unbiased everywhere; the grid only moves shadow rays from lights behind
-   walls to lights in view. Measured at 8 rays on building_4k (82 lights;
-   17 x 7 x 14 cells, 13 lights a cell on average, built in 0.21 s of one
-   thread): the direct light's relative RMS noise 0.448 -> 0.155, 0.092 ->
-   0.069, 0.129 -> 0.103 (test_light_grid); full renders at 160x120
-   against converged ones, frames 15, 31, 47: LRMS of the direct light
-   0.189 -> 0.083 (mean), of the whole 0.193 -> 0.093; building_1k (16
-   lights) 0.093 -> 0.078, 0.078 -> 0.063, 0.030 -> 0.030; the office (6
-   lights in one room) unchanged to the bit. */
+   (a point near a cell's side sees what the next cell sees): its flag; and
+   the share of the cell's own rays that arrive: its visibility share.
+   The sampler picks a light from a defensive mixture (Hesterberg 1995,
+   "Weighted Average Importance Sampling and Defensive Mixture
+   Distributions"; Veach's one-sample model, 1997, sec. 9.2.4): with
+   probability WT__GRID_FLAG_SHARE by importance x flag, with
+   WT__GRID_VIS_SHARE by importance x visibility share (the expected
+   contribution over the cell: Wald et al. 2003, "Interactive Global
+   Illumination in Complex and Highly Occluded Environments"), and with
+   what remains by importance alone, and divides by the mixture's
+   probability: every light the importance allows keeps picks (a slit of a
+   door, a point the rays did not come near), so the estimator stays
+   unbiased everywhere. The flag alone, as this grid had it before (with
+   1/16 of the importance for lights no ray reached in place of the last
+   term), was measured to leave fireflies where the building is dark:
+   dilated over 26 neighbours, a cell's flag also holds the lamps of the
+   room behind the wall, and 1/16 of each of the 14 lamps of the storey
+   above still took half the picks in a room without a lamp, whose light
+   came through a door from lamps 8 m away with a few per cent of the
+   picks (the sparkles on the first room's floor in
+   docs/walkthrough_building_raytrace_sheet.png). The visibility share
+   ranks the lights a cell really sees; the flag's half keeps what a
+   share of 32 rays misses near a cell's sides. Measured at 8 rays
+   against 256 (wt_render_converged, 160x120, the same 2 x 2 gather in
+   both, so that the difference is the direct light's noise; LRMS of the
+   displayed frames), flag + 1/16 floor -> this mixture: building_4k
+   frames 15, 23, 31, 120: 0.162, 0.569, 0.576, 0.060 -> 0.106, 0.233,
+   0.229, 0.056 (pooled 0.414 -> 0.174); building_1k frames 15, 31, 120,
+   200: pooled 0.0462 -> 0.0464; the office frames 7, 23, 39: pooled
+   0.0556 -> 0.0567 (its 6 lights are flagged in every cell: the share's
+   half spends a few picks by a 32-ray estimate). Shares 0.25 / 0.7:
+   building_4k 0.166, the office 0.061 (16 rays a cell); the share alone
+   (0 / 0.9): 0.172 and the flag alone (0.9 / 0): 0.379 on building_4k;
+   origins in the cell grown by half a cell: 0.255. Grid built on
+   building_4k: 17 x 7 x 14 cells, 82 lights. */
 #define WT__GRID_CELL 1.0f            /* metres: a cell's edge at most, a room's corner */
 #define WT__GRID_MAX_CELLS 8192u      /* larger scenes get larger cells */
-#define WT__GRID_RAYS 16              /* rays per cell and light, until one arrives */
-#define WT__GRID_FLOOR (1.0f / 16.0f) /* weight of a light no ray of the cell or its neighbours reached */
+#define WT__GRID_RAYS 32              /* rays per cell and light: the visibility share in steps of 1/32 */
+#define WT__GRID_FLAG_SHARE 0.45f     /* of the picks: importance x flag (the cell or a neighbour sees the light) */
+#define WT__GRID_VIS_SHARE 0.45f      /* of the picks: importance x the cell's visibility share */
 #define WT__GRID_STREAM 0x6C16E7ull   /* the grid's random numbers: not the frames' */
 
 /* A point y of light L chosen uniformly from u1 (by area over its fan
@@ -2313,13 +2335,14 @@ static int wt__static_visible(const wt_world *w, const float x[3], const float y
     return ex_tracer_transmittance(t, x, wi, d * (1.0f - 1e-4f) - t->epsilon, through);
 }
 
-/* Whether one of light L's rays from the cell with corner lo arrives:
-   cell points uniform in the cell, light points stratified over L's area.
-   A cell wholly behind L (one-sided) is never lit by it: no rays. */
+/* How many of light L's WT__GRID_RAYS rays from the cell with corner lo
+   arrive: cell points uniform in the cell, light points stratified over
+   L's area. A cell wholly behind L (one-sided) is never lit by it: no
+   rays. */
 static int wt__cell_sees(const wt_world *w, const wt_light *L, const float lo[3], ex_rng *r)
 {
     float cell = w->grid_cell, x[3], y[3];
-    int corner, k, i;
+    int corner, k, i, arrived = 0;
     for (corner = 0; corner < 8; corner++) {
         float front = 0.0f;
         for (k = 0; k < 3; k++) front += (lo[k] + (float)((corner >> k) & 1) * cell - L->point[k]) * L->normal[k];
@@ -2333,9 +2356,9 @@ static int wt__cell_sees(const wt_world *w, const wt_light *L, const float lo[3]
         for (k = 0; k < 3; k++) front += (x[k] - L->point[k]) * L->normal[k];
         if (front <= 0.0f) continue;
         wt__light_point(w, L, u1, u2, y);
-        if (wt__static_visible(w, x, y)) return 1;
+        arrived += wt__static_visible(w, x, y);
     }
-    return 0;
+    return arrived;
 }
 
 static void wt__grid_cell_coords(const wt_world *w, uint32_t c, int i[3])
@@ -2347,7 +2370,7 @@ static void wt__grid_cell_coords(const wt_world *w, uint32_t c, int i[3])
 
 typedef struct wt__grid_job {
     wt_world *w;
-    unsigned char *sees;   /* cell-major, light_count a cell: wt__cell_sees */
+    unsigned char *sees;   /* cell-major, light_count a cell: wt__cell_sees's counts */
 } wt__grid_job;
 
 static void wt__grid_cell_job(void *ctx, uint32_t c)
@@ -2363,14 +2386,19 @@ static void wt__grid_cell_job(void *ctx, uint32_t c)
     for (e = 0; e < w->light_count; e++) j->sees[(size_t)c * w->light_count + e] = (unsigned char)wt__cell_sees(w, &w->lights[e], lo, &r);
 }
 
-/* A cell's weights: 1 for the lights that it or a neighbour sees. */
+/* A cell's two weights per light: the flag, 1 for the lights that a ray
+   of the cell or of a neighbour reached and 0 for the others, and the
+   share of the cell's own rays that reached the light. */
 static void wt__grid_cell_weights(const wt_world *w, const unsigned char *sees, uint32_t c)
 {
-    float *out = w->light_seen + (size_t)c * w->light_count;
+    float *out = w->light_seen + (size_t)c * 2u * w->light_count;
     uint32_t e;
     int i[3], a, b, d;
     wt__grid_cell_coords(w, c, i);
-    for (e = 0; e < w->light_count; e++) out[e] = WT__GRID_FLOOR;
+    for (e = 0; e < w->light_count; e++) {
+        out[2 * e] = 0.0f;
+        out[2 * e + 1] = (float)sees[(size_t)c * w->light_count + e] / (float)WT__GRID_RAYS;
+    }
     for (a = i[2] - 1; a <= i[2] + 1; a++)
         for (b = i[1] - 1; b <= i[1] + 1; b++)
             for (d = i[0] - 1; d <= i[0] + 1; d++) {
@@ -2379,7 +2407,7 @@ static void wt__grid_cell_weights(const wt_world *w, const unsigned char *sees, 
                     continue;
                 n = sees + ((size_t)a * w->grid_dims[1] * w->grid_dims[0] + (size_t)b * w->grid_dims[0] + (size_t)d) * w->light_count;
                 for (e = 0; e < w->light_count; e++)
-                    if (n[e]) out[e] = 1.0f;
+                    if (n[e]) out[2 * e] = 1.0f;
             }
 }
 
@@ -2411,7 +2439,7 @@ static int wt__light_grid_build(wt_world *w)
     memcpy(w->grid_lo, lo, sizeof lo);
     j.w = w;
     j.sees = (unsigned char *)malloc((size_t)cells * w->light_count);
-    w->light_seen = (float *)malloc(sizeof(float) * cells * (size_t)w->light_count);
+    w->light_seen = (float *)malloc(sizeof(float) * 2u * cells * (size_t)w->light_count);
     if (!j.sees || !w->light_seen) {
         free(j.sees);
         return -1;
@@ -2434,7 +2462,7 @@ static const float *wt__lights_seen(const wt_world *w, const float x[3])
         uint32_t i = f > 0.0f ? (uint32_t)fminf(f, (float)(w->grid_dims[k] - 1)) : 0u;
         c = c * w->grid_dims[k] + i;
     }
-    return w->light_seen + c * w->light_count;
+    return w->light_seen + c * 2u * w->light_count;
 }
 
 /* One shadow-ray sample of light L for direct light at org (normal n,
@@ -2473,9 +2501,10 @@ static void wt__light_sample(const wt_world *w, const wt_light *L, const float o
    Phong), by many-light sampling as a production renderer does it: a fixed
    number n = opt.light_samples of shadow rays per point, whatever the
    number of emitting polygons. Each sample picks a light with probability
-   p = importance / total (wt__light_importance) and a uniform point on it,
+   p (wt__light_probability: importance and the grid's weights) and a
+   uniform point on it,
    and is weighted by 1 / (p n): an unbiased estimate of the sum over every
-   light. The n picks are stratified over the importance CDF (sample s at
+   light. The n picks are stratified over the CDF of p (sample s at
    (s + xi) / n, so a light of probability p gets n p picks up to one), and
    what is left of a pick's stratum inside its light's interval, uniform in
    [0, 1), places the point on the light: one light alone (the office's
@@ -2500,14 +2529,53 @@ static float wt__radical_inverse(uint32_t i)
     return (float)(i >> 8) * (1.0f / 16777216.0f);
 }
 
+/* The sums over the lights of importance alone, of importance x flag and
+   of importance x visibility share (the grid's weights at x, NULL without
+   a grid), and the last light of non-zero importance. */
+static uint32_t wt__light_totals(const wt_world *w, const float *seen, const float x[3], const float n[3],
+                                 float totals[3])
+{
+    uint32_t e, last = 0;
+    totals[0] = totals[1] = totals[2] = 0.0f;
+    for (e = 0; e < w->light_count; e++) {
+        float imp = wt__light_importance(&w->lights[e], x, n);
+        if (imp > 0.0f) last = e;
+        totals[0] += imp;
+        if (seen) {
+            totals[1] += imp * seen[2 * e];
+            totals[2] += imp * seen[2 * e + 1];
+        }
+    }
+    return last;
+}
+
+/* Light e's selection probability, the defensive mixture (the grid's
+   comment): positive wherever its importance is, as the importance-alone
+   term takes what the other two leave. A term whose total is 0 (no light
+   flagged or seen) gives its share to importance alone. */
+static float wt__light_probability(const wt_world *w, const float *seen, const float totals[3], uint32_t e,
+                                   const float x[3], const float n[3])
+{
+    float imp = wt__light_importance(&w->lights[e], x, n), p = 0.0f, rest = 1.0f;
+    if (seen && totals[1] > 0.0f) {
+        p += WT__GRID_FLAG_SHARE * imp * seen[2 * e] / totals[1];
+        rest -= WT__GRID_FLAG_SHARE;
+    }
+    if (seen && totals[2] > 0.0f) {
+        p += WT__GRID_VIS_SHARE * imp * seen[2 * e + 1] / totals[2];
+        rest -= WT__GRID_VIS_SHARE;
+    }
+    return p + rest * imp / totals[0];
+}
+
 static void wt__direct(const wt_world *w, const ex_trace_hit *h, const float dir[3], const lightvec_material *m,
                        ex_rng *r, float rgb[3], float gloss[3], int *bunny_shadow)
 {
-    float pick[WT__MAX_LIGHT_SAMPLES], org[3], mirror[3], total = 0.0f, below = 0.0f, shift;
+    float pick[WT__MAX_LIGHT_SAMPLES], org[3], mirror[3], totals[3], below = 0.0f, shift;
     const float *seen;
     float vn = -(dir[0] * h->normal[0] + dir[1] * h->normal[1] + dir[2] * h->normal[2]);
     int n = w->opt.light_samples, s = 0, k;
-    uint32_t e, last = 0;
+    uint32_t e, last;
     rgb[0] = rgb[1] = rgb[2] = gloss[0] = gloss[1] = gloss[2] = 0.0f;
     if (n < 1 || n > WT__MAX_LIGHT_SAMPLES) return;
     for (k = 0; k < 3; k++) {
@@ -2515,23 +2583,19 @@ static void wt__direct(const wt_world *w, const ex_trace_hit *h, const float dir
         mirror[k] = dir[k] + 2.0f * vn * h->normal[k];   /* the view direction reflected */
     }
     seen = wt__lights_seen(w, org);
-    for (e = 0; e < w->light_count; e++) {
-        float imp = wt__light_importance(&w->lights[e], org, h->normal) * (seen ? seen[e] : 1.0f);
-        if (imp > 0.0f) last = e;
-        total += imp;
-    }
-    if (!(total > 0.0f) || !isfinite(total)) return;
-    for (s = 0; s < n; s++) pick[s] = ((float)s + ex_rng_float(r)) / (float)n * total;
+    last = wt__light_totals(w, seen, org, h->normal, totals);
+    if (!(totals[0] > 0.0f) || !isfinite(totals[0]) || !isfinite(totals[1]) || !isfinite(totals[2])) return;
+    for (s = 0; s < n; s++) pick[s] = ((float)s + ex_rng_float(r)) / (float)n;
     shift = ex_rng_float(r);
     s = 0;
     for (e = 0; e < w->light_count && s < n; e++) {
-        float imp = wt__light_importance(&w->lights[e], org, h->normal) * (seen ? seen[e] : 1.0f), above = below + imp;
-        if (imp > 0.0f)   /* the picks in [below, above); the last light takes what rounding leaves */
+        float p = wt__light_probability(w, seen, totals, e, org, h->normal), above = below + p;
+        if (p > 0.0f)   /* the picks in [below, above); the last light takes what rounding leaves */
             for (; s < n && (pick[s] < above || e == last); s++) {
-                float u1 = fminf(fmaxf((pick[s] - below) / imp, 0.0f), 0.99999994f);
+                float u1 = fminf(fmaxf((pick[s] - below) / p, 0.0f), 0.99999994f);
                 float u2 = wt__radical_inverse((uint32_t)s) + shift;
                 wt__light_sample(w, &w->lights[e], org, h->normal, mirror, m, u1, u2 < 1.0f ? u2 : u2 - 1.0f,
-                                 total / (imp * (float)n), rgb, gloss, bunny_shadow);
+                                 1.0f / (p * (float)n), rgb, gloss, bunny_shadow);
             }
         below = above;
     }
