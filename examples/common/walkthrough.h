@@ -18,7 +18,7 @@
    direct light from the emitting polygons (many-light sampling: a fixed
    number of shadow rays per point, --light-samples, each choosing a light
    by an importance bound of power, distance and both cosines, mixed with
-   that bound times what a coarse grid's cell around the point sees of
+   that bound times whether a coarse grid's cell around the point sees
    each light (wt__light_grid_build: lights behind walls rarely take a
    ray), and divided by the choice's probability; shadow rays through
    examples/common/trace.h, so the bunny casts shadows; Lambert +
@@ -866,7 +866,7 @@ typedef struct wt_world {
     wt_light *lights;                  /* emitting polygons */
     uint32_t light_count;
     /* which lights each cell of a coarse grid sees (wt__light_grid_build) */
-    float *light_seen;                 /* cell-major: a flag (0 or 1) and a visibility share in [0, 1] per light a cell */
+    float *light_seen;                 /* cell-major: a neighbourhood and a cell flag (0 or 1) per light a cell */
     float grid_lo[3], grid_cell;       /* the grid's corner and cells' edge, metres */
     uint32_t grid_dims[3];
     ex_pool *pool;
@@ -2259,46 +2259,46 @@ static float wt__light_importance(const wt_light *L, const float x[3], const flo
    one of WT__GRID_RAYS rays between points of the cell and points of the
    light reaches past everything static (glass passes light; the bunny
    moves, so it is left out), in the cell or in one of its 26 neighbours
-   (a point near a cell's side sees what the next cell sees): its flag; and
-   the share of the cell's own rays that arrive: its visibility share.
-   The sampler picks a light from a defensive mixture (Hesterberg 1995,
-   "Weighted Average Importance Sampling and Defensive Mixture
+   (a point near a cell's side sees what the next cell sees): its
+   neighbourhood flag; and those a ray of the cell itself reaches: its cell
+   flag. The sampler picks a light from a defensive mixture (Hesterberg
+   1995, "Weighted Average Importance Sampling and Defensive Mixture
    Distributions"; Veach's one-sample model, 1997, sec. 9.2.4): with
-   probability WT__GRID_FLAG_SHARE by importance x flag, with
-   WT__GRID_VIS_SHARE by importance x visibility share (the expected
-   contribution over the cell: Wald et al. 2003, "Interactive Global
-   Illumination in Complex and Highly Occluded Environments"), and with
-   what remains by importance alone, and divides by the mixture's
-   probability: every light the importance allows keeps picks (a slit of a
-   door, a point the rays did not come near), so the estimator stays
-   unbiased everywhere. The flag alone, as this grid had it before (with
-   1/16 of the importance for lights no ray reached in place of the last
-   term), was measured to leave fireflies where the building is dark:
-   dilated over 26 neighbours, a cell's flag also holds the lamps of the
-   room behind the wall, and 1/16 of each of the 14 lamps of the storey
-   above still took half the picks in a room without a lamp, whose light
-   came through a door from lamps 8 m away with a few per cent of the
-   picks (the sparkles on the first room's floor in
-   docs/walkthrough_building_raytrace_sheet.png). The visibility share
-   ranks the lights a cell really sees; the flag's half keeps what a
-   share of 32 rays misses near a cell's sides. Measured at 8 rays
-   against 256 (wt_render_converged, 160x120, the same 2 x 2 gather in
-   both, so that the difference is the direct light's noise; LRMS of the
-   displayed frames), flag + 1/16 floor -> this mixture: building_4k
-   frames 15, 23, 31, 120: 0.162, 0.569, 0.576, 0.060 -> 0.106, 0.233,
-   0.229, 0.056 (pooled 0.414 -> 0.174); building_1k frames 15, 31, 120,
-   200: pooled 0.0462 -> 0.0464; the office frames 7, 23, 39: pooled
-   0.0556 -> 0.0567 (its 6 lights are flagged in every cell: the share's
-   half spends a few picks by a 32-ray estimate). Shares 0.25 / 0.7:
-   building_4k 0.166, the office 0.061 (16 rays a cell); the share alone
-   (0 / 0.9): 0.172 and the flag alone (0.9 / 0): 0.379 on building_4k;
-   origins in the cell grown by half a cell: 0.255. Grid built on
-   building_4k: 17 x 7 x 14 cells, 82 lights. */
+   probability WT__GRID_NEAR_SHARE by importance x neighbourhood flag,
+   with WT__GRID_CELL_SHARE by importance x cell flag, and with what
+   remains by importance alone, and divides by the mixture's probability:
+   every light the importance allows keeps picks (a slit of a door, a
+   point the rays did not come near), so the estimator stays unbiased
+   everywhere, and the grid only moves shadow rays from lights behind
+   walls to lights in view. Measured at 8 rays on building_4k (82 lights;
+   17 x 7 x 14 cells, 13 lights a cell on average, built in 0.20 s of one
+   thread, as before the cell flag): the direct light's relative RMS
+   noise 0.448 -> 0.155, 0.092 -> 0.069, 0.129 -> 0.103 (test_light_grid,
+   before the mixture). The neighbourhood flag alone, with 1/16 of the
+   importance for the lights it lacks in place of the other two terms,
+   left fireflies where the building is dark (the first rooms' floors in
+   docs/walkthrough_building_raytrace_sheet.png): a cell's neighbours hold
+   the lamps of the room behind the wall, and 1/16 of each of the 14 lamps
+   of the storey above still took half the picks in a room without a lamp,
+   whose light came through a door from lamps 8 m away with a few per cent
+   of the picks. Measured with 8 shadow rays against 256
+   (wt_render_converged, 160x120, the same 2 x 2 gather in both, so the
+   difference is the direct light's noise; LRMS of the displayed frames),
+   that sampler -> this mixture: building_4k frames 15, 23, 31, 120, 190,
+   203, 215: 0.162, 0.569, 0.576, 0.060, 0.071, 0.080, 0.060 -> 0.102,
+   0.228, 0.228, 0.055, 0.077, 0.082, 0.068 (pooled 0.316 -> 0.139);
+   building_1k frames 15, 31, 120, 200: pooled 0.046 -> 0.047; the office
+   (6 lights flagged in every cell) 0.0556 -> 0.0556. Tried and left: the
+   cell's share of 32 rays that arrive in place of its flag (0.233 and
+   0.229 in the dark rooms, but 0.089, 0.119, 0.082 upstairs and the
+   office 0.057: a cell's volume, half inside walls and stairs, misjudges
+   what its surfaces see); the neighbourhood flag with the importance-alone
+   term, no cell flag (0.52 in the dark rooms). */
 #define WT__GRID_CELL 1.0f            /* metres: a cell's edge at most, a room's corner */
 #define WT__GRID_MAX_CELLS 8192u      /* larger scenes get larger cells */
-#define WT__GRID_RAYS 32              /* rays per cell and light: the visibility share in steps of 1/32 */
-#define WT__GRID_FLAG_SHARE 0.45f     /* of the picks: importance x flag (the cell or a neighbour sees the light) */
-#define WT__GRID_VIS_SHARE 0.45f      /* of the picks: importance x the cell's visibility share */
+#define WT__GRID_RAYS 16              /* rays per cell and light, until one arrives */
+#define WT__GRID_NEAR_SHARE 0.45f     /* of the picks: importance x neighbourhood flag */
+#define WT__GRID_CELL_SHARE 0.45f     /* of the picks: importance x cell flag; 0.1 left for importance alone */
 #define WT__GRID_STREAM 0x6C16E7ull   /* the grid's random numbers: not the frames' */
 
 /* A point y of light L chosen uniformly from u1 (by area over its fan
@@ -2335,14 +2335,13 @@ static int wt__static_visible(const wt_world *w, const float x[3], const float y
     return ex_tracer_transmittance(t, x, wi, d * (1.0f - 1e-4f) - t->epsilon, through);
 }
 
-/* How many of light L's WT__GRID_RAYS rays from the cell with corner lo
-   arrive: cell points uniform in the cell, light points stratified over
-   L's area. A cell wholly behind L (one-sided) is never lit by it: no
-   rays. */
+/* Whether one of light L's rays from the cell with corner lo arrives:
+   cell points uniform in the cell, light points stratified over L's area.
+   A cell wholly behind L (one-sided) is never lit by it: no rays. */
 static int wt__cell_sees(const wt_world *w, const wt_light *L, const float lo[3], ex_rng *r)
 {
     float cell = w->grid_cell, x[3], y[3];
-    int corner, k, i, arrived = 0;
+    int corner, k, i;
     for (corner = 0; corner < 8; corner++) {
         float front = 0.0f;
         for (k = 0; k < 3; k++) front += (lo[k] + (float)((corner >> k) & 1) * cell - L->point[k]) * L->normal[k];
@@ -2356,9 +2355,9 @@ static int wt__cell_sees(const wt_world *w, const wt_light *L, const float lo[3]
         for (k = 0; k < 3; k++) front += (x[k] - L->point[k]) * L->normal[k];
         if (front <= 0.0f) continue;
         wt__light_point(w, L, u1, u2, y);
-        arrived += wt__static_visible(w, x, y);
+        if (wt__static_visible(w, x, y)) return 1;
     }
-    return arrived;
+    return 0;
 }
 
 static void wt__grid_cell_coords(const wt_world *w, uint32_t c, int i[3])
@@ -2370,7 +2369,7 @@ static void wt__grid_cell_coords(const wt_world *w, uint32_t c, int i[3])
 
 typedef struct wt__grid_job {
     wt_world *w;
-    unsigned char *sees;   /* cell-major, light_count a cell: wt__cell_sees's counts */
+    unsigned char *sees;   /* cell-major, light_count a cell: wt__cell_sees */
 } wt__grid_job;
 
 static void wt__grid_cell_job(void *ctx, uint32_t c)
@@ -2386,9 +2385,9 @@ static void wt__grid_cell_job(void *ctx, uint32_t c)
     for (e = 0; e < w->light_count; e++) j->sees[(size_t)c * w->light_count + e] = (unsigned char)wt__cell_sees(w, &w->lights[e], lo, &r);
 }
 
-/* A cell's two weights per light: the flag, 1 for the lights that a ray
-   of the cell or of a neighbour reached and 0 for the others, and the
-   share of the cell's own rays that reached the light. */
+/* A cell's two flags per light: 1 when a ray of the cell or of a
+   neighbour reached it (neighbourhood), 1 when a ray of the cell did
+   (cell); 0 otherwise. */
 static void wt__grid_cell_weights(const wt_world *w, const unsigned char *sees, uint32_t c)
 {
     float *out = w->light_seen + (size_t)c * 2u * w->light_count;
@@ -2397,7 +2396,7 @@ static void wt__grid_cell_weights(const wt_world *w, const unsigned char *sees, 
     wt__grid_cell_coords(w, c, i);
     for (e = 0; e < w->light_count; e++) {
         out[2 * e] = 0.0f;
-        out[2 * e + 1] = (float)sees[(size_t)c * w->light_count + e] / (float)WT__GRID_RAYS;
+        out[2 * e + 1] = (float)sees[(size_t)c * w->light_count + e];   /* 0 or 1 */
     }
     for (a = i[2] - 1; a <= i[2] + 1; a++)
         for (b = i[1] - 1; b <= i[1] + 1; b++)
@@ -2529,9 +2528,9 @@ static float wt__radical_inverse(uint32_t i)
     return (float)(i >> 8) * (1.0f / 16777216.0f);
 }
 
-/* The sums over the lights of importance alone, of importance x flag and
-   of importance x visibility share (the grid's weights at x, NULL without
-   a grid), and the last light of non-zero importance. */
+/* The sums over the lights of importance alone, of importance x
+   neighbourhood flag and of importance x cell flag (the grid's flags at x,
+   NULL without a grid), and the last light of non-zero importance. */
 static uint32_t wt__light_totals(const wt_world *w, const float *seen, const float x[3], const float n[3],
                                  float totals[3])
 {
@@ -2552,18 +2551,18 @@ static uint32_t wt__light_totals(const wt_world *w, const float *seen, const flo
 /* Light e's selection probability, the defensive mixture (the grid's
    comment): positive wherever its importance is, as the importance-alone
    term takes what the other two leave. A term whose total is 0 (no light
-   flagged or seen) gives its share to importance alone. */
+   flagged) gives its share to importance alone. */
 static float wt__light_probability(const wt_world *w, const float *seen, const float totals[3], uint32_t e,
                                    const float x[3], const float n[3])
 {
     float imp = wt__light_importance(&w->lights[e], x, n), p = 0.0f, rest = 1.0f;
     if (seen && totals[1] > 0.0f) {
-        p += WT__GRID_FLAG_SHARE * imp * seen[2 * e] / totals[1];
-        rest -= WT__GRID_FLAG_SHARE;
+        p += WT__GRID_NEAR_SHARE * imp * seen[2 * e] / totals[1];
+        rest -= WT__GRID_NEAR_SHARE;
     }
     if (seen && totals[2] > 0.0f) {
-        p += WT__GRID_VIS_SHARE * imp * seen[2 * e + 1] / totals[2];
-        rest -= WT__GRID_VIS_SHARE;
+        p += WT__GRID_CELL_SHARE * imp * seen[2 * e + 1] / totals[2];
+        rest -= WT__GRID_CELL_SHARE;
     }
     return p + rest * imp / totals[0];
 }
