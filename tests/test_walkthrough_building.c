@@ -310,8 +310,9 @@ static void test_direct_light_unbiased(void)
    cells around it; 1 % leaves room for a light a door's slit shows to
    another seed's rays), and with the grid the direct light at 8 rays is
    less noisy than without it (measured 0.155 against 0.448 in the lit
-   room, 0.069 against 0.092 and 0.103 against 0.129 before the mixture;
-   with it, FIGURES; a ratio of at most 0.5 in the lit room, where 82 lights
+   room, 0.069 against 0.092 and 0.103 against 0.129 with the
+   neighbourhood flag alone; 0.105, 0.062 and 0.105 with the mixture of
+   wt__light_probability; a ratio of at most 0.5 in the lit room, where 82 lights
    mostly behind walls took most rays before, and no worse elsewhere
    within the 5 % that another seed moves these figures). */
 static void test_light_grid(void)

@@ -2528,49 +2528,55 @@ static float wt__radical_inverse(uint32_t i)
     return (float)(i >> 8) * (1.0f / 16777216.0f);
 }
 
-/* The sums over the lights of importance alone, of importance x
-   neighbourhood flag and of importance x cell flag (the grid's flags at x,
-   NULL without a grid), and the last light of non-zero importance. */
-static uint32_t wt__light_totals(const wt_world *w, const float *seen, const float x[3], const float n[3],
-                                 float totals[3])
+/* The defensive mixture's coefficients at x (the grid's comment), from
+   the sums over the lights of importance alone, of importance x
+   neighbourhood flag and of importance x cell flag (seen: the grid's flags
+   at x, NULL without a grid): a light's probability is its importance x
+   (coef[0] + coef[1] x neighbourhood flag + coef[2] x cell flag). A term
+   whose sum is 0 (no light flagged) gives its share to importance alone.
+   Returns the last light of non-zero importance; coef[0] is 0 when there
+   is none. */
+static uint32_t wt__light_mixture(const wt_world *w, const float *seen, const float x[3], const float n[3],
+                                  float coef[3])
 {
+    float total[3] = { 0.0f, 0.0f, 0.0f }, rest = 1.0f;
     uint32_t e, last = 0;
-    totals[0] = totals[1] = totals[2] = 0.0f;
     for (e = 0; e < w->light_count; e++) {
         float imp = wt__light_importance(&w->lights[e], x, n);
         if (imp > 0.0f) last = e;
-        totals[0] += imp;
+        total[0] += imp;
         if (seen) {
-            totals[1] += imp * seen[2 * e];
-            totals[2] += imp * seen[2 * e + 1];
+            total[1] += imp * seen[2 * e];
+            total[2] += imp * seen[2 * e + 1];
         }
     }
+    coef[0] = coef[1] = coef[2] = 0.0f;
+    if (!(total[0] > 0.0f) || !isfinite(total[0])) return last;
+    if (total[1] > 0.0f) {
+        coef[1] = WT__GRID_NEAR_SHARE / total[1];
+        rest -= WT__GRID_NEAR_SHARE;
+    }
+    if (total[2] > 0.0f) {
+        coef[2] = WT__GRID_CELL_SHARE / total[2];
+        rest -= WT__GRID_CELL_SHARE;
+    }
+    coef[0] = rest / total[0];
     return last;
 }
 
-/* Light e's selection probability, the defensive mixture (the grid's
-   comment): positive wherever its importance is, as the importance-alone
-   term takes what the other two leave. A term whose total is 0 (no light
-   flagged) gives its share to importance alone. */
-static float wt__light_probability(const wt_world *w, const float *seen, const float totals[3], uint32_t e,
+/* Light e's selection probability from the mixture's coefficients:
+   positive wherever its importance is (coef[0] > 0). */
+static float wt__light_probability(const wt_world *w, const float *seen, const float coef[3], uint32_t e,
                                    const float x[3], const float n[3])
 {
-    float imp = wt__light_importance(&w->lights[e], x, n), p = 0.0f, rest = 1.0f;
-    if (seen && totals[1] > 0.0f) {
-        p += WT__GRID_NEAR_SHARE * imp * seen[2 * e] / totals[1];
-        rest -= WT__GRID_NEAR_SHARE;
-    }
-    if (seen && totals[2] > 0.0f) {
-        p += WT__GRID_CELL_SHARE * imp * seen[2 * e + 1] / totals[2];
-        rest -= WT__GRID_CELL_SHARE;
-    }
-    return p + rest * imp / totals[0];
+    float mix = coef[0] + (seen ? coef[1] * seen[2 * e] + coef[2] * seen[2 * e + 1] : 0.0f);
+    return wt__light_importance(&w->lights[e], x, n) * mix;
 }
 
 static void wt__direct(const wt_world *w, const ex_trace_hit *h, const float dir[3], const lightvec_material *m,
                        ex_rng *r, float rgb[3], float gloss[3], int *bunny_shadow)
 {
-    float pick[WT__MAX_LIGHT_SAMPLES], org[3], mirror[3], totals[3], below = 0.0f, shift;
+    float pick[WT__MAX_LIGHT_SAMPLES], org[3], mirror[3], coef[3], below = 0.0f, shift;
     const float *seen;
     float vn = -(dir[0] * h->normal[0] + dir[1] * h->normal[1] + dir[2] * h->normal[2]);
     int n = w->opt.light_samples, s = 0, k;
@@ -2582,13 +2588,13 @@ static void wt__direct(const wt_world *w, const ex_trace_hit *h, const float dir
         mirror[k] = dir[k] + 2.0f * vn * h->normal[k];   /* the view direction reflected */
     }
     seen = wt__lights_seen(w, org);
-    last = wt__light_totals(w, seen, org, h->normal, totals);
-    if (!(totals[0] > 0.0f) || !isfinite(totals[0]) || !isfinite(totals[1]) || !isfinite(totals[2])) return;
+    last = wt__light_mixture(w, seen, org, h->normal, coef);
+    if (!(coef[0] > 0.0f) || !isfinite(coef[0]) || !isfinite(coef[1]) || !isfinite(coef[2])) return;
     for (s = 0; s < n; s++) pick[s] = ((float)s + ex_rng_float(r)) / (float)n;
     shift = ex_rng_float(r);
     s = 0;
     for (e = 0; e < w->light_count && s < n; e++) {
-        float p = wt__light_probability(w, seen, totals, e, org, h->normal), above = below + p;
+        float p = wt__light_probability(w, seen, coef, e, org, h->normal), above = below + p;
         if (p > 0.0f)   /* the picks in [below, above); the last light takes what rounding leaves */
             for (; s < n && (pick[s] < above || e == last); s++) {
                 float u1 = fminf(fmaxf((pick[s] - below) / p, 0.0f), 0.99999994f);
