@@ -2288,7 +2288,7 @@ static float wt__light_importance(const wt_light *L, const float x[3], const flo
    203, 215: 0.162, 0.569, 0.576, 0.060, 0.071, 0.080, 0.060 -> 0.102,
    0.228, 0.228, 0.055, 0.077, 0.082, 0.068 (pooled 0.316 -> 0.139);
    building_1k frames 15, 31, 120, 200: pooled 0.046 -> 0.047; the office
-   (6 lights flagged in every cell) 0.0556 -> 0.0556. Tried and left: the
+   (6 lights flagged in every cell) 0.0556 -> 0.0557. Tried and left: the
    cell's share of 32 rays that arrive in place of its flag (0.233 and
    0.229 in the dark rooms, but 0.089, 0.119, 0.082 upstairs and the
    office 0.057: a cell's volume, half inside walls and stairs, misjudges
