@@ -17,9 +17,9 @@
    Shading (modes raytrace and baseviews). A primary hit gets its emission,
    direct light from the emitting polygons (many-light sampling: a fixed
    number of shadow rays per point, --light-samples, each choosing a light
-   by an importance bound of power, distance and both cosines, times 1
-   for the lights a coarse grid's cell around the point sees and 1/16 for
-   the others (wt__light_grid_build: lights behind walls rarely take a
+   by an importance bound of power, distance and both cosines, mixed with
+   that bound times whether a coarse grid's cell around the point sees
+   each light (wt__light_grid_build: lights behind walls rarely take a
    ray), and divided by the choice's probability; shadow rays through
    examples/common/trace.h, so the bunny casts shadows; Lambert +
    normalized Phong) and indirect light from a light
@@ -866,7 +866,7 @@ typedef struct wt_world {
     wt_light *lights;                  /* emitting polygons */
     uint32_t light_count;
     /* which lights each cell of a coarse grid sees (wt__light_grid_build) */
-    float *light_seen;                 /* cell-major: light_count weights a cell, in (0, 1] */
+    float *light_seen;                 /* cell-major: a neighbourhood and a cell flag (0 or 1) per light a cell */
     float grid_lo[3], grid_cell;       /* the grid's corner and cells' edge, metres */
     uint32_t grid_dims[3];
     ex_pool *pool;
@@ -1878,7 +1878,7 @@ EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t
    follows it along the same route, that far behind, at eye height.
    ---------------------------------------------------------------------- */
 #define WT_PATH_VERSION 3u     /* bump when the paths change: precompute keys depend on them */
-#define WT_SHADING_VERSION 4u  /* bump when the shading changes: cached light vectors and base images */
+#define WT_SHADING_VERSION 5u  /* bump when the shading changes: cached light vectors and base images */
 #define WT__WAYPOINTS 9
 static const float wt__waypoints[WT__WAYPOINTS][2] = {   /* (x, z) on the floor */
     { 1.35f, 1.55f }, { 1.65f, 2.35f }, { 1.80f, 3.15f }, { 2.15f, 3.35f }, { 2.40f, 2.80f },
@@ -2259,24 +2259,46 @@ static float wt__light_importance(const wt_light *L, const float x[3], const flo
    one of WT__GRID_RAYS rays between points of the cell and points of the
    light reaches past everything static (glass passes light; the bunny
    moves, so it is left out), in the cell or in one of its 26 neighbours
-   (a point near a cell's side sees what the next cell sees). The sampler
-   multiplies a light's importance by 1 for the cell's lights and by
-   WT__GRID_FLOOR for the others: never zero, so a light that every ray
-   missed (a slit of a door, a point the rays did not come near) still
-   gets picks, and dividing by the actual probability keeps the estimator
-   unbiased everywhere; the grid only moves shadow rays from lights behind
+   (a point near a cell's side sees what the next cell sees): its
+   neighbourhood flag; and those a ray of the cell itself reaches: its cell
+   flag. The sampler picks a light from a defensive mixture (Hesterberg
+   1995, "Weighted Average Importance Sampling and Defensive Mixture
+   Distributions"; Veach's one-sample model, 1997, sec. 9.2.4): with
+   probability WT__GRID_NEAR_SHARE by importance x neighbourhood flag,
+   with WT__GRID_CELL_SHARE by importance x cell flag, and with what
+   remains by importance alone, and divides by the mixture's probability:
+   every light the importance allows keeps picks (a slit of a door, a
+   point the rays did not come near), so the estimator stays unbiased
+   everywhere, and the grid only moves shadow rays from lights behind
    walls to lights in view. Measured at 8 rays on building_4k (82 lights;
-   17 x 7 x 14 cells, 13 lights a cell on average, built in 0.21 s of one
-   thread): the direct light's relative RMS noise 0.448 -> 0.155, 0.092 ->
-   0.069, 0.129 -> 0.103 (test_light_grid); full renders at 160x120
-   against converged ones, frames 15, 31, 47: LRMS of the direct light
-   0.189 -> 0.083 (mean), of the whole 0.193 -> 0.093; building_1k (16
-   lights) 0.093 -> 0.078, 0.078 -> 0.063, 0.030 -> 0.030; the office (6
-   lights in one room) unchanged to the bit. */
+   17 x 7 x 14 cells, 13 lights a cell on average, built in 0.20 s of one
+   thread, as before the cell flag): the direct light's relative RMS
+   noise 0.448 -> 0.155, 0.092 -> 0.069, 0.129 -> 0.103 (test_light_grid,
+   before the mixture). The neighbourhood flag alone, with 1/16 of the
+   importance for the lights it lacks in place of the other two terms,
+   left fireflies where the building is dark (the first rooms' floors in
+   docs/walkthrough_building_raytrace_sheet.png): a cell's neighbours hold
+   the lamps of the room behind the wall, and 1/16 of each of the 14 lamps
+   of the storey above still took half the picks in a room without a lamp,
+   whose light came through a door from lamps 8 m away with a few per cent
+   of the picks. Measured with 8 shadow rays against 256
+   (wt_render_converged, 160x120, the same 2 x 2 gather in both, so the
+   difference is the direct light's noise; LRMS of the displayed frames),
+   that sampler -> this mixture: building_4k frames 15, 23, 31, 120, 190,
+   203, 215: 0.162, 0.569, 0.576, 0.060, 0.071, 0.080, 0.060 -> 0.102,
+   0.228, 0.228, 0.055, 0.077, 0.082, 0.068 (pooled 0.316 -> 0.139);
+   building_1k frames 15, 31, 120, 200: pooled 0.046 -> 0.047; the office
+   (6 lights flagged in every cell) 0.0556 -> 0.0557. Tried and left: the
+   cell's share of 32 rays that arrive in place of its flag (0.233 and
+   0.229 in the dark rooms, but 0.089, 0.119, 0.082 upstairs and the
+   office 0.057: a cell's volume, half inside walls and stairs, misjudges
+   what its surfaces see); the neighbourhood flag with the importance-alone
+   term, no cell flag (0.52 in the dark rooms). */
 #define WT__GRID_CELL 1.0f            /* metres: a cell's edge at most, a room's corner */
 #define WT__GRID_MAX_CELLS 8192u      /* larger scenes get larger cells */
 #define WT__GRID_RAYS 16              /* rays per cell and light, until one arrives */
-#define WT__GRID_FLOOR (1.0f / 16.0f) /* weight of a light no ray of the cell or its neighbours reached */
+#define WT__GRID_NEAR_SHARE 0.45f     /* of the picks: importance x neighbourhood flag */
+#define WT__GRID_CELL_SHARE 0.45f     /* of the picks: importance x cell flag; 0.1 left for importance alone */
 #define WT__GRID_STREAM 0x6C16E7ull   /* the grid's random numbers: not the frames' */
 
 /* A point y of light L chosen uniformly from u1 (by area over its fan
@@ -2363,14 +2385,19 @@ static void wt__grid_cell_job(void *ctx, uint32_t c)
     for (e = 0; e < w->light_count; e++) j->sees[(size_t)c * w->light_count + e] = (unsigned char)wt__cell_sees(w, &w->lights[e], lo, &r);
 }
 
-/* A cell's weights: 1 for the lights that it or a neighbour sees. */
+/* A cell's two flags per light: 1 when a ray of the cell or of a
+   neighbour reached it (neighbourhood), 1 when a ray of the cell did
+   (cell); 0 otherwise. */
 static void wt__grid_cell_weights(const wt_world *w, const unsigned char *sees, uint32_t c)
 {
-    float *out = w->light_seen + (size_t)c * w->light_count;
+    float *out = w->light_seen + (size_t)c * 2u * w->light_count;
     uint32_t e;
     int i[3], a, b, d;
     wt__grid_cell_coords(w, c, i);
-    for (e = 0; e < w->light_count; e++) out[e] = WT__GRID_FLOOR;
+    for (e = 0; e < w->light_count; e++) {
+        out[2 * e] = 0.0f;
+        out[2 * e + 1] = (float)sees[(size_t)c * w->light_count + e];   /* 0 or 1 */
+    }
     for (a = i[2] - 1; a <= i[2] + 1; a++)
         for (b = i[1] - 1; b <= i[1] + 1; b++)
             for (d = i[0] - 1; d <= i[0] + 1; d++) {
@@ -2379,7 +2406,7 @@ static void wt__grid_cell_weights(const wt_world *w, const unsigned char *sees, 
                     continue;
                 n = sees + ((size_t)a * w->grid_dims[1] * w->grid_dims[0] + (size_t)b * w->grid_dims[0] + (size_t)d) * w->light_count;
                 for (e = 0; e < w->light_count; e++)
-                    if (n[e]) out[e] = 1.0f;
+                    if (n[e]) out[2 * e] = 1.0f;
             }
 }
 
@@ -2411,7 +2438,7 @@ static int wt__light_grid_build(wt_world *w)
     memcpy(w->grid_lo, lo, sizeof lo);
     j.w = w;
     j.sees = (unsigned char *)malloc((size_t)cells * w->light_count);
-    w->light_seen = (float *)malloc(sizeof(float) * cells * (size_t)w->light_count);
+    w->light_seen = (float *)malloc(sizeof(float) * 2u * cells * (size_t)w->light_count);
     if (!j.sees || !w->light_seen) {
         free(j.sees);
         return -1;
@@ -2434,7 +2461,7 @@ static const float *wt__lights_seen(const wt_world *w, const float x[3])
         uint32_t i = f > 0.0f ? (uint32_t)fminf(f, (float)(w->grid_dims[k] - 1)) : 0u;
         c = c * w->grid_dims[k] + i;
     }
-    return w->light_seen + c * w->light_count;
+    return w->light_seen + c * 2u * w->light_count;
 }
 
 /* One shadow-ray sample of light L for direct light at org (normal n,
@@ -2473,9 +2500,10 @@ static void wt__light_sample(const wt_world *w, const wt_light *L, const float o
    Phong), by many-light sampling as a production renderer does it: a fixed
    number n = opt.light_samples of shadow rays per point, whatever the
    number of emitting polygons. Each sample picks a light with probability
-   p = importance / total (wt__light_importance) and a uniform point on it,
+   p (wt__light_probability: importance and the grid's weights) and a
+   uniform point on it,
    and is weighted by 1 / (p n): an unbiased estimate of the sum over every
-   light. The n picks are stratified over the importance CDF (sample s at
+   light. The n picks are stratified over the CDF of p (sample s at
    (s + xi) / n, so a light of probability p gets n p picks up to one), and
    what is left of a pick's stratum inside its light's interval, uniform in
    [0, 1), places the point on the light: one light alone (the office's
@@ -2500,14 +2528,59 @@ static float wt__radical_inverse(uint32_t i)
     return (float)(i >> 8) * (1.0f / 16777216.0f);
 }
 
+/* The defensive mixture's coefficients at x (the grid's comment), from
+   the sums over the lights of importance alone, of importance x
+   neighbourhood flag and of importance x cell flag (seen: the grid's flags
+   at x, NULL without a grid): a light's probability is its importance x
+   (coef[0] + coef[1] x neighbourhood flag + coef[2] x cell flag). A term
+   whose sum is 0 (no light flagged) gives its share to importance alone.
+   Returns the last light of non-zero importance; coef[0] is 0 when there
+   is none. */
+static uint32_t wt__light_mixture(const wt_world *w, const float *seen, const float x[3], const float n[3],
+                                  float coef[3])
+{
+    float total[3] = { 0.0f, 0.0f, 0.0f }, rest = 1.0f;
+    uint32_t e, last = 0;
+    for (e = 0; e < w->light_count; e++) {
+        float imp = wt__light_importance(&w->lights[e], x, n);
+        if (imp > 0.0f) last = e;
+        total[0] += imp;
+        if (seen) {
+            total[1] += imp * seen[2 * e];
+            total[2] += imp * seen[2 * e + 1];
+        }
+    }
+    coef[0] = coef[1] = coef[2] = 0.0f;
+    if (!(total[0] > 0.0f) || !isfinite(total[0])) return last;
+    if (total[1] > 0.0f) {
+        coef[1] = WT__GRID_NEAR_SHARE / total[1];
+        rest -= WT__GRID_NEAR_SHARE;
+    }
+    if (total[2] > 0.0f) {
+        coef[2] = WT__GRID_CELL_SHARE / total[2];
+        rest -= WT__GRID_CELL_SHARE;
+    }
+    coef[0] = rest / total[0];
+    return last;
+}
+
+/* Light e's selection probability from the mixture's coefficients:
+   positive wherever its importance is (coef[0] > 0). */
+static float wt__light_probability(const wt_world *w, const float *seen, const float coef[3], uint32_t e,
+                                   const float x[3], const float n[3])
+{
+    float mix = coef[0] + (seen ? coef[1] * seen[2 * e] + coef[2] * seen[2 * e + 1] : 0.0f);
+    return wt__light_importance(&w->lights[e], x, n) * mix;
+}
+
 static void wt__direct(const wt_world *w, const ex_trace_hit *h, const float dir[3], const lightvec_material *m,
                        ex_rng *r, float rgb[3], float gloss[3], int *bunny_shadow)
 {
-    float pick[WT__MAX_LIGHT_SAMPLES], org[3], mirror[3], total = 0.0f, below = 0.0f, shift;
+    float pick[WT__MAX_LIGHT_SAMPLES], org[3], mirror[3], coef[3], below = 0.0f, shift;
     const float *seen;
     float vn = -(dir[0] * h->normal[0] + dir[1] * h->normal[1] + dir[2] * h->normal[2]);
     int n = w->opt.light_samples, s = 0, k;
-    uint32_t e, last = 0;
+    uint32_t e, last;
     rgb[0] = rgb[1] = rgb[2] = gloss[0] = gloss[1] = gloss[2] = 0.0f;
     if (n < 1 || n > WT__MAX_LIGHT_SAMPLES) return;
     for (k = 0; k < 3; k++) {
@@ -2515,23 +2588,19 @@ static void wt__direct(const wt_world *w, const ex_trace_hit *h, const float dir
         mirror[k] = dir[k] + 2.0f * vn * h->normal[k];   /* the view direction reflected */
     }
     seen = wt__lights_seen(w, org);
-    for (e = 0; e < w->light_count; e++) {
-        float imp = wt__light_importance(&w->lights[e], org, h->normal) * (seen ? seen[e] : 1.0f);
-        if (imp > 0.0f) last = e;
-        total += imp;
-    }
-    if (!(total > 0.0f) || !isfinite(total)) return;
-    for (s = 0; s < n; s++) pick[s] = ((float)s + ex_rng_float(r)) / (float)n * total;
+    last = wt__light_mixture(w, seen, org, h->normal, coef);
+    if (!(coef[0] > 0.0f) || !isfinite(coef[0]) || !isfinite(coef[1]) || !isfinite(coef[2])) return;
+    for (s = 0; s < n; s++) pick[s] = ((float)s + ex_rng_float(r)) / (float)n;
     shift = ex_rng_float(r);
     s = 0;
     for (e = 0; e < w->light_count && s < n; e++) {
-        float imp = wt__light_importance(&w->lights[e], org, h->normal) * (seen ? seen[e] : 1.0f), above = below + imp;
-        if (imp > 0.0f)   /* the picks in [below, above); the last light takes what rounding leaves */
+        float p = wt__light_probability(w, seen, coef, e, org, h->normal), above = below + p;
+        if (p > 0.0f)   /* the picks in [below, above); the last light takes what rounding leaves */
             for (; s < n && (pick[s] < above || e == last); s++) {
-                float u1 = fminf(fmaxf((pick[s] - below) / imp, 0.0f), 0.99999994f);
+                float u1 = fminf(fmaxf((pick[s] - below) / p, 0.0f), 0.99999994f);
                 float u2 = wt__radical_inverse((uint32_t)s) + shift;
                 wt__light_sample(w, &w->lights[e], org, h->normal, mirror, m, u1, u2 < 1.0f ? u2 : u2 - 1.0f,
-                                 total / (imp * (float)n), rgb, gloss, bunny_shadow);
+                                 1.0f / (p * (float)n), rgb, gloss, bunny_shadow);
             }
         below = above;
     }
