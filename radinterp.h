@@ -9194,19 +9194,12 @@ static void radinterp__sum_links(radinterp__query *q, radinterp__plink *pl, uint
     }
 }
 
-/* Irradiance at p on a patch, summed over the links of its leaf and of the
-   leaf's ancestors (6.2), past the blockers of the leaf lists, and over the
-   cluster links above it; pl holds max links for the ranking (see above). */
-static radinterp_result radinterp__irradiance_in(const radinterp_solution *s, uint32_t patch, const float p[3],
-                                                 const float toward[3], double *h, uint32_t *triangulated,
-                                                 radinterp__plink *pl, uint32_t max)
+/* A query at p (valid, finite) on patch, seen from p nudged toward
+   `toward` (may be NULL) along the patch (q->pv), with no hints yet. */
+static void radinterp__query_start(radinterp__query *q, const radinterp_solution *s, uint32_t patch, const float p[3],
+                                   const float toward[3])
 {
-    radinterp__query query, *q = &query;  /* about 110 KB of stack: no allocation in the common case */
-    uint32_t leaf, n;
-    int k, leaf_lists;
-    h[0] = h[1] = h[2] = 0.0;
-    if (!p || !radinterp__patch_ok(s, patch) || !radinterp__finite3(p) || (toward && !radinterp__finite3(toward)))
-        return RADINTERP_ERROR_INVALID_ARGUMENT;
+    int k;
     q->s = s;
     q->known_node = RADINTERP__NONE;
     q->cdt_ready = 0;
@@ -9231,6 +9224,22 @@ static radinterp_result radinterp__irradiance_in(const radinterp_solution *s, ui
             for (k = 0; k < 3; k++) q->pv[k] += d[k] * (step / len);
         }
     }
+}
+
+/* Irradiance at p on a patch, summed over the links of its leaf and of the
+   leaf's ancestors (6.2), past the blockers of the leaf lists, and over the
+   cluster links above it; pl holds max links for the ranking (see above). */
+static radinterp_result radinterp__irradiance_in(const radinterp_solution *s, uint32_t patch, const float p[3],
+                                                 const float toward[3], double *h, uint32_t *triangulated,
+                                                 radinterp__plink *pl, uint32_t max)
+{
+    radinterp__query query, *q = &query;  /* about 110 KB of stack: no allocation in the common case */
+    uint32_t leaf, n;
+    int leaf_lists;
+    h[0] = h[1] = h[2] = 0.0;
+    if (!p || !radinterp__patch_ok(s, patch) || !radinterp__finite3(p) || (toward && !radinterp__finite3(toward)))
+        return RADINTERP_ERROR_INVALID_ARGUMENT;
+    radinterp__query_start(q, s, patch, p, toward);
     leaf = radinterp__locate_leaf(s, patch, q->pv);
     q->child_tol = 0.02 * radinterp__tolerance(s, s->nodes[leaf].level);
     leaf_lists = s->leaf_link_first && radinterp__near_box(&s->nodes[leaf], q->pv, 0.5 * s->leaf_margin) &&
