@@ -1,4 +1,4 @@
-/* radinterp.h - v0.8.2 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
+/* radinterp.h - v0.8.3 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
 
    RADINTERP.H: hierarchical radiosity, ranked discontinuities and quadratic irradiance interpolants evaluated per pixel.
 
@@ -711,6 +711,26 @@
    moved, by at most 3e-14 of their irradiance, and 561 of the mesh's
    2.87 M interpolant coefficients, by at most 3.7e-9 W/m^2, most likely
    because a skipped source leaves the query's hints as they were).
+   Of the 45 M unions of shadows building_1k's mesh samples then build
+   (v0.8.2, counted in an instrumented copy), 16.0 M end with the source
+   hidden; 10.0 M of those by one shadow the exact containment test had
+   missed (a wall spanning the whole pyramid from the point over the source
+   is clipped by the pyramid's sides to the source's outline, its corners
+   moved by rounding, often just outside), 6.0 M by two or more shadows,
+   only 0.67 M of them all in one plane (so a leaf verdict from coplanar
+   pieces of a wall would reach few); 18.4 M end partly visible, 6.1 M
+   clear, 3.3 M hidden by one shadow or the hints, 1.45 M go to the
+   triangulation. Since v0.8.3 a staged shadow that leaves less than 1e-12
+   of the source's area (what the union counts as rounding) hides it at
+   once, before the other blockers are staged: building_1k's mesh built
+   1.04x and 1.09x faster (two pairs in one process, thread CPU time, load
+   5-8), the office's as fast (median of 5 pairs' ratios 1.00). The
+   meshes' vertices and triangles are the same to the bit; 9,898 of
+   building_1k's 3.06 M interpolant coefficients moved, by at most 6e-8
+   W/m^2 (its largest is 6.65), and 169 of the office's 739,494, by at most
+   1.5e-8 W/m^2: the union, which drops parts below its rounding size and
+   triangulates when a later shadow cannot be represented, had left a
+   sliver of such a source or triangulated it.
    Interpolants are only as accurate as IrradianceAtPoint, whose
    sources are the solution's elements: for a more accurate image solve
    with a smaller eps and mesh with a larger min_leaf_area. Discontinuity
@@ -732,7 +752,7 @@
 
 #define RADINTERP_VERSION_MAJOR 0
 #define RADINTERP_VERSION_MINOR 8
-#define RADINTERP_VERSION_PATCH 2
+#define RADINTERP_VERSION_PATCH 3
 #define RADINTERP_FILE_FORMAT_VERSION 2   /* of saved meshes */
 
 #include <stddef.h>
