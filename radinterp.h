@@ -733,9 +733,10 @@
    sliver of such a source or triangulated it. What remains is mostly
    staging: the unions then take 128 M shadows, 47 M of them of faces
    turned away from the point, and of the 181 M such faces the queries
-   examine, 66 M belong to no closed solid (the generator's walls are
-   boxes without the faces that touch another piece, the slab or another
-   wall), so radinterp__back_face_covered cannot leave them out.
+   examine, 66 M belong to no closed solid (most likely the generator's
+   wall pieces and furniture: boxes without the faces that touch another
+   piece, the slab or another wall), so radinterp__back_face_covered
+   cannot leave them out.
    Interpolants are only as accurate as IrradianceAtPoint, whose
    sources are the solution's elements: for a more accurate image solve
    with a smaller eps and mesh with a larger min_leaf_area. Discontinuity
