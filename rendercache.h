@@ -2590,9 +2590,9 @@ static uint32_t rendercache__project_point(const rendercache__projector *pr, con
    0.95 / x), so that points keep their order however old they get.
    Clamped at 1, as it was, every point of scale 2 or more (most of the
    walkthrough's: 1/W of an interpolated light vector) reached the top
-   within age_ramp / 2 frames, and the budget then went to them at random
-   while points of scale 1 (vectors gathered at the point, misses) never
-   ranked above them: in the building walkthrough such points stayed for
+   within age_ramp frames (half that for scale 4), and the budget then
+   went to them at random while points of scale 1 (vectors gathered at
+   the point, misses) never ranked above them: in the building walkthrough such points stayed for
    hundreds of frames, showing windows seen long ago through the walls
    and carrying almost all of the stale points' error (points older than
    24 frames: 3 % of the pixels, 90 % of that error at frame 135). */
