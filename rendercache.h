@@ -2583,25 +2583,27 @@ static uint32_t rendercache__project_point(const rendercache__projector *pr, con
 /* Priority of a pixel showing a point (WDP99: age is the main measure of
    how likely a colour is stale; points of moving objects age faster),
    times its priority scale (the light-vector weight of Crespin and Peroche
-   2004, section 4.2.4), in [0, 1). motion: the object's obj_motion. The
+   2004, section 4.2.4), in [0, 1]. motion: the object's obj_motion. The
    product x = POINT_MAX age scale / age_ramp is the priority up to the
-   top of the filled holes' (PRIORITY_HOLE_TOP); above it, it is squeezed
-   into the levels between that and 1 (empty pixels), 0.95 + 0.05 (1 -
-   0.95 / x), so that points keep their order however old they get.
-   Clamped at 1, as it was, every point of scale 2 or more (most of the
-   walkthrough's: 1/W of an interpolated light vector) reached the top
-   within age_ramp frames (half that for scale 4), and the budget then
-   went to them at random while points of scale 1 (vectors gathered at
-   the point, misses) never ranked above them: in the building walkthrough such points stayed for
-   hundreds of frames, showing windows seen long ago through the walls
-   and carrying almost all of the stale points' error (points older than
-   24 frames: 3 % of the pixels, 90 % of that error at frame 135). */
+   filled holes' top (PRIORITY_HOLE_TOP); above it, it is squeezed into
+   the levels between that and 1 (empty pixels), 0.95 + 0.05 (1 - 0.95 /
+   x), so that points keep their order however old they get. Clamped at
+   1, as it was, every point of scale 2 or more (most of the walkthrough's:
+   1/W of an interpolated light vector) reached the top within age_ramp
+   frames (half that for scale 4), and the budget then went to them at
+   random while points of scale 1 (vectors gathered at the point, misses)
+   never ranked above them: in the building walkthrough such points
+   stayed for hundreds of frames, showing windows seen long ago through
+   the walls and carrying almost all of the stale points' error (points
+   older than 24 frames: 3 % of the pixels, 90 % of that error at frame
+   135). */
 static float rendercache__point_priority(const rendercache *rc, const rendercache__point *pt, uint32_t motion)
 {
     uint32_t age = (uint32_t)rc->frame + motion - pt->base;
     float x = (float)age * rc->inv_age_ramp * (RENDERCACHE__PRIORITY_POINT_MAX * pt->scale);
     if (x <= RENDERCACHE__PRIORITY_HOLE_TOP) return x;
-    return RENDERCACHE__PRIORITY_HOLE_TOP + (1.0f - RENDERCACHE__PRIORITY_HOLE_TOP) * (1.0f - RENDERCACHE__PRIORITY_HOLE_TOP / x);
+    return RENDERCACHE__PRIORITY_HOLE_TOP +
+           (1.0f - RENDERCACHE__PRIORITY_HOLE_TOP) * (1.0f - RENDERCACHE__PRIORITY_HOLE_TOP / x);
 }
 
 /* Perspective projection of slots [begin, begin + n) of one object
