@@ -390,7 +390,11 @@ static void test_threads(void)
    (0.175 at frame 23 at 64x48, 0.21 before glossy points were refreshed
    as the eye turns, wt__view_priority; 0.182 with the shadow rays'
    Hammersley points, which redrew every random number: one frame of the
-   render cache moves by about 0.01 with its random numbers) plus 10% for a
+   render cache moves by about 0.01 with its random numbers; 0.181 since
+   old points rise in priority past the holes, rendercache.h, which
+   redrew the requests from frame 2 on: over the odd frames of the
+   48-frame walk at 64x48 the pooled LRMS went from 0.169 to 0.168, single
+   frames moving by up to 0.03 either way) plus 10% for a
    compiler flipping a light-vector decision (a flip redraws at most the 8%
    of a frame's pixels requested after it); a frame without its indirect
    light (63% of the luminance) is at 0.7. The issue's target (0.07) is not met: the bound
