@@ -1,4 +1,4 @@
-/* rendercache.h - v0.5.3 - render cache and range-image walkthroughs - public domain or MIT, see end of file
+/* rendercache.h - v0.5.4 - render cache and range-image walkthroughs - public domain or MIT, see end of file
 
    RENDERCACHE.H: an image-space point cache that reprojects and resamples, and range-image walkthroughs of animated scenes.
 
@@ -427,7 +427,7 @@
 
 #define RENDERCACHE_VERSION_MAJOR 0
 #define RENDERCACHE_VERSION_MINOR 5
-#define RENDERCACHE_VERSION_PATCH 3
+#define RENDERCACHE_VERSION_PATCH 4
 
 #ifndef RENDERCACHE_API
 #  ifdef RENDERCACHE_STATIC
