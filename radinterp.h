@@ -8819,6 +8819,79 @@ RADINTERP_API void radinterp_solution_destroy(radinterp_solution *s)
     radinterp__free(&a, s);
 }
 
+/* Does the entry's list of leaf blockers equal the one at `old` (count n)? */
+static int radinterp__same_leaf_list(const radinterp_solution *s, const radinterp__leaf_link *ll, uint64_t old,
+                                     uint32_t n)
+{
+    uint32_t count = radinterp__leaf_kept(ll);
+    return count == n && (count == 0 || !memcmp(s->leaf_blockers + ll->first, s->leaf_blockers + old,
+                                                (size_t)count * sizeof(uint32_t)));
+}
+
+/* Neighbouring leaves keep the same blockers of a link: the shaft from a
+   small leaf to the source changes little from one leaf to the next, so
+   most lists repeat the one the same link kept at the leaf before (76% of
+   the office's leaf blockers, 70-80% on the buildings, where the leaf lists
+   are 90% of the solution). After the leaf lists are built, an entry whose
+   list equals the one its link kept at the previous leaf (leaves in
+   s->leaves order) points at that list, and the pool keeps each list once.
+   Entries keep their first and count, so point queries read the same
+   blockers in the same order. Two passes over the entries: the size of the
+   new pool, then the copy; while they run, each link's last list (in the
+   old pool, and where it went in the new one) is remembered. */
+static radinterp_result radinterp__share_leaf_blockers(radinterp_solution *s, const radinterp__run *run)
+{
+    uint64_t *old_at, *new_at, kept = 0;
+    uint32_t *last_count, *pool = NULL, i, e;
+    radinterp_result res = RADINTERP_OK;
+    int pass;
+    if (!s->leaf_link_count || !s->leaf_blocker_count) return RADINTERP_OK;
+    old_at = (uint64_t *)radinterp__alloc_array(&s->allocator, s->link_count, sizeof(uint64_t));
+    new_at = (uint64_t *)radinterp__alloc_array(&s->allocator, s->link_count, sizeof(uint64_t));
+    last_count = (uint32_t *)radinterp__alloc_array(&s->allocator, s->link_count, sizeof(uint32_t));
+    if (!old_at || !new_at || !last_count) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    for (pass = 0; pass < 2 && res == RADINTERP_OK; pass++) {
+        if (pass == 1 && !(pool = (uint32_t *)radinterp__alloc_array(&s->allocator, (size_t)kept, sizeof(uint32_t)))) {
+            res = RADINTERP_ERROR_OUT_OF_MEMORY;
+            break;
+        }
+        memset(last_count, 0xFF, (size_t)s->link_count * sizeof(uint32_t)); /* no list yet */
+        kept = 0;
+        for (i = 0; i < s->leaf_count && res == RADINTERP_OK; i++) {
+            if (i % 4096 == 0 && radinterp__cancelled(s, run)) res = RADINTERP_ERROR_CANCELLED;
+            for (e = s->leaf_link_first[s->leaves[i]]; e < s->leaf_link_first[s->leaves[i] + 1]; e++) {
+                radinterp__leaf_link *ll = &s->leaf_links[e];
+                uint32_t l = ll->link, count = radinterp__leaf_kept(ll);
+                uint64_t old = ll->first;
+                if (!count) continue;
+                if (last_count[l] != RADINTERP__NONE && radinterp__same_leaf_list(s, ll, old_at[l], last_count[l])) {
+                    if (pass == 1) ll->first = new_at[l];
+                    continue;
+                }
+                old_at[l] = old;
+                last_count[l] = count;
+                new_at[l] = kept;
+                if (pass == 1) {
+                    memcpy(pool + kept, s->leaf_blockers + old, (size_t)count * sizeof(uint32_t));
+                    ll->first = kept;
+                }
+                kept += count;
+            }
+        }
+    }
+    radinterp__free(&s->allocator, old_at);
+    radinterp__free(&s->allocator, new_at);
+    radinterp__free(&s->allocator, last_count);
+    if (res != RADINTERP_OK) { /* the entries may point into either pool: the caller destroys the solution */
+        radinterp__free(&s->allocator, pool);
+        return res;
+    }
+    radinterp__free(&s->allocator, s->leaf_blockers);
+    s->leaf_blockers = pool;
+    s->leaf_blocker_count = kept;
+    return RADINTERP_OK;
+}
+
 /* Glass and sky parameters of the solution: the panes counted, the sky
    copied (a sky of zero radiance is no sky). */
 static radinterp_result radinterp__setup_sky(radinterp_solution *s, const radinterp_desc *d)
@@ -8905,6 +8978,7 @@ RADINTERP_API radinterp_result radinterp_solve(const radinterp_desc *desc, radin
     if (res == RADINTERP_OK) res = radinterp__iterate(s, &run);
     if (res == RADINTERP_OK) res = radinterp__collect_leaves(s);
     if (res == RADINTERP_OK) res = radinterp__build_leaf_lists(s, &run);
+    if (res == RADINTERP_OK) res = radinterp__share_leaf_blockers(s, &run);
     if (res != RADINTERP_OK) {
         if (res == RADINTERP_ERROR_OUT_OF_MEMORY) radinterp__log(desc, "radinterp_solve: out of memory");
         radinterp_solution_destroy(s);
