@@ -899,6 +899,10 @@ typedef struct radinterp_info {
     uint64_t shadow_rays;        /* rays cast for link visibility */
     size_t bytes;                /* memory held by the solution */
     uint32_t glass_patches;      /* patches that pass light (GLASS AND SKY) */
+    size_t link_bytes;           /* of bytes: the links and their blocker lists */
+    size_t leaf_list_bytes;      /* of bytes: the leaf lists (each leaf's links and blockers), most of it on a building */
+    uint64_t leaf_list_entries;  /* (leaf, link) entries of the leaf lists */
+    uint64_t leaf_blocker_entries; /* blockers the leaf lists hold (each list once, shared by the leaves that keep it) */
 } radinterp_info;
 
 /* One quadtree leaf: a convex polygon of 3 or 4 corners on its patch. */
@@ -8863,7 +8867,10 @@ static radinterp_result radinterp__share_leaf_blockers(radinterp_solution *s, co
                 radinterp__leaf_link *ll = &s->leaf_links[e];
                 uint32_t l = ll->link, count = radinterp__leaf_kept(ll);
                 uint64_t old = ll->first;
-                if (!count) continue;
+                if (!count) { /* reads nothing: an offset inside the new pool */
+                    if (pass == 1) ll->first = kept;
+                    continue;
+                }
                 if (last_count[l] != RADINTERP__NONE && radinterp__same_leaf_list(s, ll, old_at[l], last_count[l])) {
                     if (pass == 1) ll->first = new_at[l];
                     continue;
@@ -9008,16 +9015,19 @@ RADINTERP_API void radinterp_solution_info(const radinterp_solution *s, radinter
     info->max_relative_change = s->max_relative_change;
     info->shadow_rays = s->shadow_rays;
     info->glass_patches = s->glass_patches;
+    info->link_bytes = (size_t)s->link_count * sizeof(radinterp__link) + (size_t)s->blocker_count * sizeof(uint32_t);
+    info->leaf_list_entries = s->leaf_link_count;
+    info->leaf_blocker_entries = s->leaf_blocker_count;
+    info->leaf_list_bytes = (s->leaf_link_first ? ((size_t)s->node_count + 1) * sizeof(uint32_t) : 0) +
+                            (size_t)s->leaf_link_count * sizeof(radinterp__leaf_link) +
+                            (size_t)s->leaf_blocker_count * sizeof(uint32_t);
     info->bytes = sizeof *s + (size_t)s->patch_count * sizeof(radinterp__patch) +
-                  (size_t)s->node_cap * sizeof(radinterp__node) + (size_t)s->link_count * sizeof(radinterp__link) +
-                  (size_t)s->blocker_count * sizeof(uint32_t) + (size_t)s->leaf_count * sizeof(uint32_t) +
+                  (size_t)s->node_cap * sizeof(radinterp__node) + info->link_bytes + (size_t)s->leaf_count * sizeof(uint32_t) +
                   (size_t)s->clink_count * sizeof(radinterp__clink) + (size_t)s->cluster_count * sizeof(radinterp__cluster) +
                   (size_t)s->patch_count * (2 * sizeof(uint32_t) + sizeof(double)) +
                   (size_t)s->patch_count * sizeof(uint32_t) + (size_t)s->solid_count * sizeof(radinterp__solid) +
                   (size_t)s->solid_plane_count * (sizeof s->solid_planes[0] + sizeof(uint32_t)) +
-                  (size_t)s->solid_member_count * sizeof(uint32_t) +
-                  ((size_t)s->node_count + 1) * sizeof(uint32_t) + (size_t)s->leaf_link_count * sizeof(radinterp__leaf_link) +
-                  (size_t)s->leaf_blocker_count * sizeof(uint32_t) +
+                  (size_t)s->solid_member_count * sizeof(uint32_t) + info->leaf_list_bytes +
                   (size_t)s->bvh.node_count * sizeof(radinterp__bvh_node) +
                   (size_t)s->bvh.block_count * sizeof(radinterp__bvh_tris) + (size_t)s->bvh.tri_count * sizeof(uint32_t) +
                   (s->environment ? 3 * sizeof(float) * s->environment_width * s->environment_height : 0);
