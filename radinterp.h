@@ -3578,6 +3578,8 @@ RADINTERP_API double radinterp_form_factor_point_polygon(const float p[3], const
      block between the leaf and the source: leaf_links[leaf_link_first[leaf]
      .. leaf_link_first[leaf + 1]) (empty for other nodes), their blockers in
      leaf_blockers. A point query reads these shorter lists (section 14).
+     Entries of one link at neighbouring leaves whose blockers are equal
+     share one list in leaf_blockers (radinterp__share_leaf_blockers).
    - node.b is the radiosity of the node's open part and node.open the
      fraction of the node not enclosed by geometry resting on it.
    Helpers the mesher reuses: radinterp__node_split(s, node) (children with

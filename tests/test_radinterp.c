@@ -1279,6 +1279,7 @@ static void test_cancel_and_allocation_failures(void)
     CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_ERROR_CANCELLED);
     CHECK_EQ_INT(cnt.live, 0);
     cancel_at = 1 << 30;
+    calls = 0;
     CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_OK);
     {
         float p[3] = {0.5f, 0.5f, 0.0f}, rgb[3];
@@ -1286,6 +1287,17 @@ static void test_cancel_and_allocation_failures(void)
     }
     radinterp_solution_destroy(sol);
     CHECK_EQ_INT(cnt.live, 0);
+    /* the last two progress calls: the two passes that share the leaf
+       lists' blockers, the solve's last step */
+    for (k = calls - 1; k <= calls; k++) {
+        int all = calls;
+        calls = 0;
+        cancel_at = k;
+        CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_ERROR_CANCELLED);
+        CHECK_EQ_INT(cnt.live, 0);
+        calls = all;
+    }
+    cancel_at = 1 << 30;
     /* every allocation failing in turn: out of memory, nothing leaked */
     for (k = 0; k < 1000 && !ok; k++) {
         radinterp_result r;
