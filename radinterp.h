@@ -671,7 +671,7 @@
    1,021 MB), the links 75 MB and their blockers 50 MB (12.5 M, 14.5 per
    link that has any), the nodes 22 MB; on building_1k 273 MB, the leaf
    lists 233 MB. Neighbouring leaves mostly keep the same blockers of a
-   link, so the entries now share equal lists (radinterp__share_leaf_blockers,
+   link, so the entries now share equal lists (radinterp__build_leaf_lists,
    the same lists in the same order): building_4k holds 1,818 MB (154 M
    leaf blockers), building_1k 212 MB (28.8 M -> 13.6 M), the office 28 MB
    instead of 34 MB, for 0.6-1% of the solve's time. The lists are shared
@@ -3593,7 +3593,7 @@ RADINTERP_API double radinterp_form_factor_point_polygon(const float p[3], const
      .. leaf_link_first[leaf + 1]) (empty for other nodes), their blockers in
      leaf_blockers. A point query reads these shorter lists (section 14).
      Entries of one link at neighbouring leaves whose blockers are equal
-     share one list in leaf_blockers (radinterp__share_leaf_blockers).
+     share one list in leaf_blockers (radinterp__build_leaf_lists).
    - node.b is the radiosity of the node's open part and node.open the
      fraction of the node not enclosed by geometry resting on it.
    Helpers the mesher reuses: radinterp__node_split(s, node) (children with
@@ -8724,14 +8724,21 @@ static void radinterp__leaf_lists_job(void *ctx_, uint32_t index)
    RADINTERP__LEAF_BATCH entries (a leaf with more alone), lists filled per
    leaf in parallel and packed onto the end of those kept. The room summed
    over all leaves grows with leaves x links x blockers (billions on a
-   building), what is kept with what really lies between leaf and source. */
+   building), what is kept with what really lies between leaf and source.
+   With share, an entry whose list equals the one its link kept last
+   (leaves in s->leaves order) points at that list instead of a copy:
+   neighbouring leaves mostly keep the same blockers of a link, because the
+   shaft from a small leaf to the source changes little from one leaf to
+   the next (of the leaf blockers: the office's 76%, building_1k's 53%,
+   building_4k's 39%). Entries keep their count and read the same blockers
+   in the same order, shared or not. */
 #ifndef RADINTERP__LEAF_BATCH
 #define RADINTERP__LEAF_BATCH (1u << 24)
 #endif
-static radinterp_result radinterp__build_leaf_lists(radinterp_solution *s, const radinterp__run *run)
+static radinterp_result radinterp__build_leaf_lists(radinterp_solution *s, const radinterp__run *run, int share)
 {
-    uint64_t entries = 0, room = 0, *wide_first, widest = RADINTERP__LEAF_BATCH;
-    uint32_t i, *wide = NULL;
+    uint64_t entries = 0, room = 0, *wide_first, widest = RADINTERP__LEAF_BATCH, *last_at = NULL;
+    uint32_t i, *wide = NULL, *last_count = NULL;
     radinterp__buf kept;
     radinterp__leaf_ctx ctx;
     radinterp_result res = RADINTERP_OK;
@@ -8768,7 +8775,12 @@ static radinterp_result radinterp__build_leaf_lists(radinterp_solution *s, const
     s->leaf_links = (radinterp__leaf_link *)radinterp__alloc_array(&s->allocator, (size_t)entries, sizeof *s->leaf_links);
     if (widest <= (uint64_t)SIZE_MAX / sizeof(uint32_t))
         wide = (uint32_t *)radinterp__alloc_array(&s->allocator, (size_t)widest, sizeof(uint32_t));
-    if (!s->leaf_links || !wide) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    if (share) {
+        last_at = (uint64_t *)radinterp__alloc_array(&s->allocator, (size_t)s->link_count + 1, sizeof(uint64_t));
+        last_count = (uint32_t *)radinterp__alloc_array(&s->allocator, (size_t)s->link_count + 1, sizeof(uint32_t));
+        if (last_count) memset(last_count, 0, ((size_t)s->link_count + 1) * sizeof(uint32_t));   /* no list yet */
+    }
+    if (!s->leaf_links || !wide || (share && (!last_at || !last_count))) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     ctx.s = s;
     ctx.wide = wide;
     ctx.wide_first = wide_first;
@@ -8784,7 +8796,12 @@ static radinterp_result radinterp__build_leaf_lists(radinterp_solution *s, const
             for (e = s->leaf_link_first[leaf]; e < s->leaf_link_first[leaf + 1]; e++) {
                 radinterp__leaf_link *ll = &s->leaf_links[e];
                 size_t at = kept.count;
-                uint32_t count = radinterp__leaf_kept(ll);
+                uint32_t count = radinterp__leaf_kept(ll), l = ll->link;
+                if (share && count && last_count[l] == count &&
+                    !memcmp((uint32_t *)kept.data + last_at[l], wide + ll->first, (size_t)count * sizeof(uint32_t))) {
+                    ll->first = last_at[l];   /* the list this link kept at an earlier leaf */
+                    continue;
+                }
                 if (count && radinterp__buf_reserve(&s->allocator, &kept, at + count) != 0) {
                     res = RADINTERP_ERROR_OUT_OF_MEMORY;
                     break;
@@ -8792,12 +8809,18 @@ static radinterp_result radinterp__build_leaf_lists(radinterp_solution *s, const
                 if (count) memcpy((uint32_t *)kept.data + at, wide + ll->first, (size_t)count * sizeof(uint32_t));
                 kept.count += count;
                 ll->first = at;
+                if (share && count) {
+                    last_at[l] = at;
+                    last_count[l] = count;
+                }
             }
         }
         if (res == RADINTERP_OK && radinterp__cancelled(s, run)) res = RADINTERP_ERROR_CANCELLED;
     }
     radinterp__free(&s->allocator, wide);
     radinterp__free(&s->allocator, wide_first);
+    radinterp__free(&s->allocator, last_at);
+    radinterp__free(&s->allocator, last_count);
     s->leaf_blockers = (uint32_t *)kept.data;
     s->leaf_blocker_count = kept.count;
     if (res == RADINTERP_OK && !s->leaf_blockers) { /* no blockers at all: an empty list, not a missing one */
@@ -8837,81 +8860,6 @@ RADINTERP_API void radinterp_solution_destroy(radinterp_solution *s)
     radinterp__free(&a, s->leaf_blockers);
     radinterp__free(&a, s->environment);
     radinterp__free(&a, s);
-}
-
-/* Does the entry's list of leaf blockers equal the one at `old` (count n)? */
-static int radinterp__same_leaf_list(const radinterp_solution *s, const radinterp__leaf_link *ll, uint64_t old,
-                                     uint32_t n)
-{
-    return radinterp__leaf_kept(ll) == n &&
-           !memcmp(s->leaf_blockers + ll->first, s->leaf_blockers + old, (size_t)n * sizeof(uint32_t));
-}
-
-/* Neighbouring leaves keep the same blockers of a link: the shaft from a
-   small leaf to the source changes little from one leaf to the next, so
-   many lists repeat the one the same link kept at the leaf before (of the
-   leaf blockers: the office's 76%, building_1k's 53%, building_4k's 39%,
-   where the leaf lists are 85-93% of the solution). After the leaf lists are built, an entry whose
-   list equals the one its link kept at the previous leaf (leaves in
-   s->leaves order) points at that list, and the pool keeps each list once.
-   Entries keep their first and count, so point queries read the same
-   blockers in the same order. Two passes over the entries: the size of the
-   new pool, then the copy; while they run, each link's last list (in the
-   old pool, and where it went in the new one) is remembered. */
-static radinterp_result radinterp__share_leaf_blockers(radinterp_solution *s, const radinterp__run *run)
-{
-    uint64_t *old_at, *new_at, kept = 0;
-    uint32_t *last_count, *pool = NULL, i, e;
-    radinterp_result res = RADINTERP_OK;
-    int pass;
-    if (!s->leaf_link_count || !s->leaf_blocker_count) return RADINTERP_OK;
-    old_at = (uint64_t *)radinterp__alloc_array(&s->allocator, s->link_count, sizeof(uint64_t));
-    new_at = (uint64_t *)radinterp__alloc_array(&s->allocator, s->link_count, sizeof(uint64_t));
-    last_count = (uint32_t *)radinterp__alloc_array(&s->allocator, s->link_count, sizeof(uint32_t));
-    if (!old_at || !new_at || !last_count) res = RADINTERP_ERROR_OUT_OF_MEMORY;
-    for (pass = 0; pass < 2 && res == RADINTERP_OK; pass++) {
-        if (pass == 1 && !(pool = (uint32_t *)radinterp__alloc_array(&s->allocator, (size_t)kept, sizeof(uint32_t)))) {
-            res = RADINTERP_ERROR_OUT_OF_MEMORY;
-            break;
-        }
-        memset(last_count, 0xFF, (size_t)s->link_count * sizeof(uint32_t)); /* no list yet */
-        kept = 0;
-        for (i = 0; i < s->leaf_count && res == RADINTERP_OK; i++) {
-            if (i % 4096 == 0 && radinterp__cancelled(s, run)) res = RADINTERP_ERROR_CANCELLED;
-            for (e = s->leaf_link_first[s->leaves[i]]; e < s->leaf_link_first[s->leaves[i] + 1]; e++) {
-                radinterp__leaf_link *ll = &s->leaf_links[e];
-                uint32_t l = ll->link, count = radinterp__leaf_kept(ll);
-                uint64_t old = ll->first;
-                if (!count) { /* reads nothing: an offset inside the new pool */
-                    if (pass == 1) ll->first = kept;
-                    continue;
-                }
-                if (last_count[l] != RADINTERP__NONE && radinterp__same_leaf_list(s, ll, old_at[l], last_count[l])) {
-                    if (pass == 1) ll->first = new_at[l];
-                    continue;
-                }
-                old_at[l] = old;
-                last_count[l] = count;
-                new_at[l] = kept;
-                if (pass == 1) {
-                    memcpy(pool + kept, s->leaf_blockers + old, (size_t)count * sizeof(uint32_t));
-                    ll->first = kept;
-                }
-                kept += count;
-            }
-        }
-    }
-    radinterp__free(&s->allocator, old_at);
-    radinterp__free(&s->allocator, new_at);
-    radinterp__free(&s->allocator, last_count);
-    if (res != RADINTERP_OK) { /* the entries may point into either pool: the caller destroys the solution */
-        radinterp__free(&s->allocator, pool);
-        return res;
-    }
-    radinterp__free(&s->allocator, s->leaf_blockers);
-    s->leaf_blockers = pool;
-    s->leaf_blocker_count = kept;
-    return RADINTERP_OK;
 }
 
 /* Glass and sky parameters of the solution: the panes counted, the sky
@@ -8999,8 +8947,7 @@ RADINTERP_API radinterp_result radinterp_solve(const radinterp_desc *desc, radin
                                                           : radinterp__initial_cluster_links(s, &run);
     if (res == RADINTERP_OK) res = radinterp__iterate(s, &run);
     if (res == RADINTERP_OK) res = radinterp__collect_leaves(s);
-    if (res == RADINTERP_OK) res = radinterp__build_leaf_lists(s, &run);
-    if (res == RADINTERP_OK) res = radinterp__share_leaf_blockers(s, &run);
+    if (res == RADINTERP_OK) res = radinterp__build_leaf_lists(s, &run, 1);
     if (res != RADINTERP_OK) {
         if (res == RADINTERP_ERROR_OUT_OF_MEMORY) radinterp__log(desc, "radinterp_solve: out of memory");
         radinterp_solution_destroy(s);

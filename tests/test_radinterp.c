@@ -1179,8 +1179,8 @@ static void count_free(void *p, void *user)
 }
 
 /* The leaf lists share a list between neighbouring leaves where the
-   blockers are equal (radinterp__share_leaf_blockers). Against the lists
-   built again without sharing, on the office: every entry must read the
+   blockers are equal (radinterp__build_leaf_lists with share). Against the
+   lists built again without sharing, on the office: every entry must read the
    same link and the same blockers in the same order, point queries must be
    bit-identical (300 random points of random faces), and the shared pool
    must be smaller (the office's is a quarter). */
@@ -1220,7 +1220,7 @@ static void test_leaf_lists_shared(void)
     shared_count = sol->leaf_blocker_count;
     run.desc = &d;
     run.iteration = 0;
-    if (CHECK(radinterp__build_leaf_lists(sol, &run) == RADINTERP_OK)) {
+    if (CHECK(radinterp__build_leaf_lists(sol, &run, 0) == RADINTERP_OK)) {
         test_note("office leaf blockers: %llu shared, %llu unshared", (unsigned long long)shared_count,
                   (unsigned long long)sol->leaf_blocker_count);
         CHECK(shared_count * 2 < sol->leaf_blocker_count);
@@ -1287,8 +1287,8 @@ static void test_cancel_and_allocation_failures(void)
     }
     radinterp_solution_destroy(sol);
     CHECK_EQ_INT(cnt.live, 0);
-    /* the last two progress calls: the two passes that share the leaf
-       lists' blockers, the solve's last step */
+    /* the last two progress calls: the leaf lists' batches (built and
+       shared), the solve's last step */
     for (k = calls - 1; k <= calls; k++) {
         int all = calls;
         calls = 0;
