@@ -675,10 +675,10 @@
    the same lists in the same order): building_4k holds 1,818 MB (154 M
    leaf blockers), building_1k 212 MB (28.8 M -> 13.6 M), the office 28 MB
    instead of 34 MB, for 0.6-1% of the solve's time. The lists are shared
-   after they are built, so the solve's peak does not fall: building_1k's
-   stays 361 MB, and building_4k's rises from 2,240 MB to 2,765 MB while the
-   shared pool is copied (sharing as the build packs each batch would lower
-   both). The
+   as the build packs each batch, so no second pool is held: building_4k's
+   peak after the solve is 2,210 MB (2,240 MB unshared), building_1k's
+   322 MB (a pass sharing them after the build held both pools: 2,765 MB
+   and 380 MB). The
    mesh build does not finish in reasonable time at that scale: a point
    query in a building sums hundreds of partly hidden sources (about 620 a
    point on building_4k, 155 queries per second), and the mesh samples six
