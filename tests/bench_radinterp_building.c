@@ -53,6 +53,8 @@ typedef struct run_result {
     uint32_t triangles, patches, leaves, links, cluster_links, mesh_triangles, mesh_leaves;
     double solve_s, mesh_s;        /* thread CPU (1 thread) or wall (2 threads) */
     double peak_mb, solution_mb, mesh_mb;
+    double link_mb, leaf_list_mb;  /* of solution_mb: links with their blockers; leaf lists */
+    uint64_t leaf_entries, leaf_blockers;
     double max_gap_s;              /* longest wall time between progress calls */
 } run_result;
 
@@ -134,6 +136,10 @@ static void run_scene(const char *path, int threads, run_result *r, int fd)
     r->links = info.link_count;
     r->cluster_links = info.cluster_link_count;
     r->solution_mb = info.bytes / 1e6;
+    r->link_mb = info.link_bytes / 1e6;
+    r->leaf_list_mb = info.leaf_list_bytes / 1e6;
+    r->leaf_entries = info.leaf_list_entries;
+    r->leaf_blockers = info.leaf_blocker_entries;
     r->max_gap_s = clock.max_gap;
     getrusage(RUSAGE_SELF, &ru);
     r->peak_mb = ru.ru_maxrss / 1024.0;
@@ -200,6 +206,15 @@ static run_result run_child(const char *path, int threads, unsigned limit)
     return r;
 }
 
+/* Where the solution's memory goes (radinterp_info): the rest is nodes,
+   patches, clusters and the ray-tracing structure. */
+static void print_memory(const run_result *r)
+{
+    printf("          solution %.0f MB: links and their blockers %.0f MB, leaf lists %.0f MB (%llu entries, %llu blockers)\n",
+           r->solution_mb, r->link_mb, r->leaf_list_mb, (unsigned long long)r->leaf_entries,
+           (unsigned long long)r->leaf_blockers);
+}
+
 static void print_run(const char *name, int threads, const run_result *r, const run_result *prev)
 {
     printf("  %-7s %dt", name, threads);
@@ -207,6 +222,7 @@ static void print_run(const char *name, int threads, const run_result *r, const 
         printf(" %6u tris %6u patches | solve %8.2f s %7u leaves %9u links (%u cluster) | %s | peak after solve %.0f MB "
                "(solution %.0f) | progress gap %.2f s\n", r->triangles, r->patches, r->solve_s, r->leaves, r->links,
                r->cluster_links, r->error, r->peak_mb, r->solution_mb, r->max_gap_s);
+        print_memory(r);
         return;
     }
     if (r->ok != 1) { printf("  %s\n", r->error); return; }
@@ -218,6 +234,7 @@ static void print_run(const char *name, int threads, const run_result *r, const 
         printf(" | growth %.2f", log((r->solve_s + r->mesh_s) / (prev->solve_s + prev->mesh_s)) /
                                  log((double)r->triangles / prev->triangles));
     printf("\n");
+    print_memory(r);
 }
 
 int main(int argc, char **argv)
