@@ -5916,34 +5916,47 @@ static RENDERCACHE__INLINE void rendercache__warp_quad(const rendercache__warp_s
    similar depth (a bunny's feet on the floor), a triangle across the two
    would stretch as the object moves. Static warps keep bridging such
    contacts, as pinterp does. */
-static void rendercache__warp_quad_flags_one_object(const rendercache__warp_src *ws, uint32_t y,
-                                                    const uint32_t s0[2], const uint32_t s1[2],
+static void rendercache__warp_quad_flags_one_object(const rendercache__warp_src *ws, uint32_t y, size_t x, size_t end,
                                                     unsigned char *flags)
 {
     const uint32_t *o0 = ws->image->object + (size_t)y * ws->source.width, *o1 = o0 + ws->source.width;
-    size_t x = s0[0] > s1[0] ? s0[0] : s1[0], end = s0[1] < s1[1] ? s0[1] : s1[1];
-    for (; x + 1 < end; x++) {
+    for (; x < end; x++) {
         int upper = (o0[x] == o0[x + 1]) & (o0[x] == o1[x + 1]);   /* (x, y) (x+1, y) (x+1, y+1) */
         int lower = (o0[x] == o1[x + 1]) & (o0[x] == o1[x]);       /* (x, y) (x+1, y+1) (x, y+1) */
         flags[x] &= (unsigned char)(upper | lower << 1);
     }
 }
 
-/* Which triangles of the quads of source row y (between rows y and y + 1,
-   projected in r0 and r1) are drawn: bit 0 the upper-right triangle
-   (x, y) (x+1, y) (x+1, y+1), bit 1 the lower-left (x, y) (x+1, y+1)
-   (x, y+1). Quads with a corner that has no projection, or whose box misses
-   the image, draw nothing (and cost little). */
+/* A row of quad flags, computed where they are needed: the quads of
+   source row y, between rows y and y + 1 (projected in r0 and r1, spans s0
+   and s1), and per run of HIDDEN_RUN pixels a byte set once its flags are
+   computed. */
+typedef struct rendercache__flag_row {
+    unsigned char *flags, *done;
+    const float *r0, *r1;
+    uint32_t s0[2], s1[2];
+    uint32_t y;
+} rendercache__flag_row;
+
+/* Which triangles of the quads of pixels [xa, xb) of a flag row are drawn:
+   bit 0 the upper-right triangle (x, y) (x+1, y) (x+1, y+1), bit 1 the
+   lower-left (x, y) (x+1, y+1) (x, y+1). Quads with a corner that has no
+   projection, or whose box misses the image, draw nothing (and cost
+   little). */
 static void rendercache__warp_quad_flags(const rendercache__warp_set *set, const rendercache__warp_src *ws,
-                                         uint32_t y, const float *r0, const float *r1, const uint32_t s0[2],
-                                         const uint32_t s1[2], unsigned char *RENDERCACHE__RESTRICT flags)
+                                         const rendercache__flag_row *fr, size_t xa, size_t xb)
 {
     const float w = (float)ws->target->width, h = (float)ws->target->height, tol2x = set->tol2x;
     const float max_extent = set->max_extent;
-    const rendercache__corner *c0 = (const rendercache__corner *)r0, *c1 = (const rendercache__corner *)r1;
-    size_t x = s0[0] > s1[0] ? s0[0] : s1[0], end = s0[1] < s1[1] ? s0[1] : s1[1];   /* both rows projected */
-    memset(flags, 0, ws->source.width);
-    for (; x + 1 < end; x++) {   /* without branches: the loop vectorises */
+    const rendercache__corner *c0 = (const rendercache__corner *)fr->r0, *c1 = (const rendercache__corner *)fr->r1;
+    unsigned char *RENDERCACHE__RESTRICT flags = fr->flags;
+    size_t start = fr->s0[0] > fr->s1[0] ? fr->s0[0] : fr->s1[0];   /* both rows projected */
+    size_t end = fr->s0[1] < fr->s1[1] ? fr->s0[1] : fr->s1[1], x;
+    end = end > 0 ? end - 1 : 0;   /* a quad needs its pixel's right neighbour */
+    end = end < xb ? end : xb;
+    start = start > xa ? start : xa;
+    memset(flags + xa, 0, xb - xa);
+    for (x = start; x < end; x++) {   /* without branches: the loop vectorises */
         rendercache__corner a = c0[x], b = c0[x + 1], c = c1[x + 1], d = c1[x];
         float xmin = rendercache__minf(rendercache__minf(a.x, b.x), rendercache__minf(c.x, d.x));
         float xmax = rendercache__maxf(rendercache__maxf(a.x, b.x), rendercache__maxf(c.x, d.x));
@@ -5956,7 +5969,35 @@ static void rendercache__warp_quad_flags(const rendercache__warp_set *set, const
         flags[x] = (unsigned char)(draw * (rendercache__warp_triangle_ok(tol2x, max_extent, a, b, c) |
                                            rendercache__warp_triangle_ok(tol2x, max_extent, a, c, d) << 1));
     }
-    if (ws->motion) rendercache__warp_quad_flags_one_object(ws, y, s0, s1, flags);
+    if (ws->motion) rendercache__warp_quad_flags_one_object(ws, fr->y, start, end, flags);
+}
+
+/* Computes the flags of [x0, x1) of a flag row that are not computed yet
+   (in whole runs). Later inputs need the flags only around the runs that
+   are not hidden: most of their rows never compute them. */
+static void rendercache__warp_flags_needed(const rendercache__warp_set *set, const rendercache__warp_src *ws,
+                                           const rendercache__flag_row *fr, uint32_t x0, uint32_t x1)
+{
+    const uint32_t run = RENDERCACHE__HIDDEN_RUN, sw = ws->source.width;
+    uint32_t c = x0 / run, c1 = (x1 + run - 1) / run, first;
+    while (c < c1) {
+        if (fr->done[c]) { c++; continue; }
+        for (first = c; c < c1 && !fr->done[c]; c++) fr->done[c] = 1;
+        rendercache__warp_quad_flags(set, ws, fr, (size_t)first * run, (size_t)c * run < sw ? (size_t)c * run : sw);
+    }
+}
+
+/* A flag row of source row y (rows r0 and r1, spans s0 and s1) with no
+   flags computed yet. */
+static void rendercache__flag_row_start(rendercache__flag_row *fr, uint32_t y, const float *r0, const float *r1,
+                                        const uint32_t s0[2], const uint32_t s1[2], uint32_t width)
+{
+    fr->y = y;
+    fr->r0 = r0;
+    fr->r1 = r1;
+    memcpy(fr->s0, s0, sizeof fr->s0);
+    memcpy(fr->s1, s1, sizeof fr->s1);
+    memset(fr->done, 0, (width + RENDERCACHE__HIDDEN_RUN - 1) / RENDERCACHE__HIDDEN_RUN);
 }
 
 /* Whether all six triangles around source pixel x of a row are drawn, from
@@ -6061,23 +6102,34 @@ static uint32_t rendercache__warp_cover_input(const rendercache__warp_set *set, 
     const uint32_t sw = ws->source.width, sh = ws->source.height, width = ws->target->width;
     const float w = (float)ws->target->width, h = (float)ws->target->height;
     float *rp = set->rows + set->rows_per_job * job, *rc = rp + 4 * (size_t)sw, *rn = rc + 4 * (size_t)sw, *t;
-    unsigned char *fu = (unsigned char *)(rn + 4 * (size_t)sw), *fd = fu + sw, *ft;
+    unsigned char *fu, *fd;
     uint32_t y0 = begin / sw, y1 = (end - 1) / sw, y, projected = 0, sp[2], sc[2], sn[2], st;
+    rendercache__flag_row up, down, fs;   /* the quad flags of the rows above and below the pixels */
+    up.flags = (unsigned char *)(rn + 4 * (size_t)sw);
+    down.flags = up.flags + sw;
+    up.done = down.flags + sw;
+    down.done = up.done + (sw + RENDERCACHE__HIDDEN_RUN - 1) / RENDERCACHE__HIDDEN_RUN;
     rendercache__warp_project_row(ws, y0, rc, sc);
     if (y0 > 0) {
         rendercache__warp_project_row(ws, y0 - 1, rp, sp);
-        rendercache__warp_quad_flags(set, ws, y0 - 1, rp, rc, sp, sc, fu);
+        rendercache__flag_row_start(&up, y0 - 1, rp, rc, sp, sc, sw);
     }
     for (y = y0; y <= y1; y++) {
         uint32_t xa = y == y0 ? begin - y * sw : 0, xb = y == y1 ? end - y * sw : sw, x;
         int below = y + 1 < sh;
         if (below) {
             rendercache__warp_project_row(ws, y + 1, rn, sn);
-            rendercache__warp_quad_flags(set, ws, y, rc, rn, sc, sn, fd);
+            rendercache__flag_row_start(&down, y, rc, rn, sc, sn, sw);
         }
         /* only the projected part of the row has quads and points */
         xa = xa > sc[0] ? xa : sc[0];
         xb = xb < sc[1] ? xb : sc[1];
+        fu = up.flags;
+        fd = down.flags;
+        if (!hidden && xa < xb) {   /* every run is drawn: the rows' flags at once */
+            if (y > 0) rendercache__warp_flags_needed(set, ws, &up, xa > 0 ? xa - 1 : 0, xb);
+            if (below) rendercache__warp_flags_needed(set, ws, &down, xa > 0 ? xa - 1 : 0, xb);
+        }
         for (x = xa; x < xb; x++) {
             const float *a = rc + 4 * (size_t)x;
             uint32_t p = y * sw + x, e = ws->first + p;
@@ -6089,6 +6141,9 @@ static uint32_t rendercache__warp_cover_input(const rendercache__warp_set *set, 
                     x = xe - 1;
                     continue;
                 }
+                /* drawn: its quads' flags, and those around its points */
+                if (y > 0) rendercache__warp_flags_needed(set, ws, &up, x > 0 ? x - 1 : 0, xe);
+                if (below) rendercache__warp_flags_needed(set, ws, &down, x > 0 ? x - 1 : 0, xe);
             }
             if (below && x + 1 < sw && fd[x])
                 rendercache__warp_quad(ws, zb, a, a + 4, rn + 4 * (size_t)(x + 1), rn + 4 * (size_t)x, p, p + 1,
@@ -6103,7 +6158,7 @@ static uint32_t rendercache__warp_cover_input(const rendercache__warp_set *set, 
             }
         }
         t = rp; rp = rc; rc = rn; rn = t;
-        ft = fu; fu = fd; fd = ft;
+        fs = up; up = down; down = fs;
         st = sc[0]; sc[0] = sn[0]; sn[0] = st;
         st = sc[1]; sc[1] = sn[1]; sn[1] = st;
     }
@@ -6292,7 +6347,8 @@ static int rendercache__warp_set_init(rendercache_warper *w, rendercache__warp_s
     if (!rendercache__warp_tile_culling(w, set, src)) return 0;
     if (!foreground) return 1;
     for (i = 0; i < n; i++) widest = src[i].source.width > widest ? src[i].source.width : widest;
-    set->rows_per_job = 13 * (size_t)widest;   /* three rows of 4 floats and two rows of flag bytes */
+    set->rows_per_job = 13 * (size_t)widest + 2;   /* three rows of 4 floats, two rows of flag bytes and
+                                                      their bytes per run */
     if (!rendercache__reserve(&w->alloc, (void **)&w->rows, &w->rows_cap, set->rows_per_job * w->splat.jobs, sizeof(float)))
         return 0;
     set->rows = w->rows;
