@@ -418,6 +418,39 @@ static void warp_run(rendercache_range_image *const *bases, uint32_t n, renderca
     ex_pool_destroy(pool);
 }
 
+/* Bytes allocated through the base images' allocator (what prepare takes). */
+static size_t g_base_bytes;
+static void *counting_alloc(size_t size, void *user)
+{
+    (void)user;
+    g_base_bytes += size;
+    return malloc(size);
+}
+static void counting_free(void *p, void *user)
+{
+    (void)user;
+    free(p);
+}
+
+/* The prepared warp beside the unprepared one, the same warps alternating
+   in this process (pairs of 16-frame runs; the medians of the runs' medians
+   and of the pairwise ratios). */
+static double warp_prepared_line(rendercache_range_image *const *bases, uint32_t n, int average, const char *what)
+{
+    double plain[5], prepared[5], ratio[5];
+    int r, i;
+    for (r = 0; r < 5; r++) {
+        for (i = 0; i < (int)n; i++) rendercache_range_image_unprepare(bases[i]);
+        warp_run(bases, n, RENDERCACHE_FILL_BOTH, 1, average, &plain[r]);
+        for (i = 0; i < (int)n; i++) rendercache_range_image_prepare(bases[i]);
+        warp_run(bases, n, RENDERCACHE_FILL_BOTH, 1, average, &prepared[r]);
+        ratio[r] = prepared[r] / plain[r];
+    }
+    printf("  warp from %u bases, both fills%s, prepared: %6.2f ms on 1 thread (cpu), unprepared %6.2f ms "
+           "(alternating, ratio %.3f)\n", n, what, median(prepared, 5), median(plain, 5), median(ratio, 5));
+    return median(prepared, 5);
+}
+
 static void bench_walkthrough(ex_pool *shade_pool, int quick)
 {
     static const float corners[4][2] = { { 1.5f, 0.5f }, { 2.5f, 0.5f }, { 1.5f, 1.5f }, { 2.5f, 1.5f } };
@@ -426,9 +459,10 @@ static void bench_walkthrough(ex_pool *shade_pool, int quick)
     rendercache_range_image *bases[4];
     const uint32_t *ids[4];
     char err[256];
-    double ms[2][4][2], blend_times[8], motion_times[8], fit_times[8];
+    double ms[2][4][2], blend_times[8], motion_times[8], fit_times[8], prepared_ms;
     uint32_t i, k;
     int counts[2] = { 2, 4 }, c, fi, threads;
+    rendercache_allocator counting;
     static const rendercache_fill fills[4] = { RENDERCACHE_FILL_NONE, RENDERCACHE_FILL_FOREGROUND,
                                                RENDERCACHE_FILL_BACKGROUND, RENDERCACHE_FILL_BOTH };
     static const char *fill_names[4] = { "no fill", "foreground", "background", "both fills" };
@@ -438,11 +472,14 @@ static void bench_walkthrough(ex_pool *shade_pool, int quick)
     }
     tracer = ex_tracer_create(&scene);
     if (!tracer) return;
+    memset(&counting, 0, sizeof counting);
+    counting.alloc = counting_alloc;
+    counting.free = counting_free;
     for (i = 0; i < 4; i++) {   /* fish-eyes at the corners of a 1 m square, looking at the desk */
         rendercache_camera cam = office_camera(RENDERCACHE_CAMERA_FISHEYE, corners[i][0], corners[i][1], 0.0f, BASE_SIZE, BASE_SIZE);
         base_job j;
         bases[i] = NULL;
-        if (rendercache_range_image_create(&cam, NULL, &bases[i]) != RENDERCACHE_OK) exit(1);
+        if (rendercache_range_image_create(&cam, &counting, &bases[i]) != RENDERCACHE_OK) exit(1);
         j.tracer = tracer;
         j.scene = &scene;
         j.img = bases[i];
@@ -466,6 +503,21 @@ static void bench_walkthrough(ex_pool *shade_pool, int quick)
         double avg[2] = { 0.0, 0.0 };
         for (threads = 1; threads <= (quick ? 1 : 2); threads++) warp_run(bases, 4, RENDERCACHE_FILL_BOTH, threads, 1, &avg[threads - 1]);
         printf("  warp from 4 bases, both fills, averaged: %6.2f ms on 1 thread (cpu)%s\n", avg[0], two_thread_column(avg[1], quick));
+    }
+    {   /* prepared bases (rendercache_range_image_prepare): their cost once, then the warps */
+        double prep[8], t0;
+        size_t bytes0 = g_base_bytes;
+        for (k = 0; k < 8; k++) {
+            t0 = now_seconds(&g_cpu_clock);
+            if (rendercache_range_image_prepare(bases[k % 4]) != RENDERCACHE_OK) exit(1);
+            prep[k] = now_seconds(&g_cpu_clock) - t0;
+        }
+        printf("  prepare a base (tile depth bounds): %.2f ms on 1 thread (cpu), %.1f KB per %dx%d base\n",
+               median(prep, 8) * 1e3, (double)(g_base_bytes - bytes0) / 8.0 / 1024.0, BASE_SIZE, BASE_SIZE);
+        prepared_ms = warp_prepared_line(bases, 4, 0, "");
+        warp_prepared_line(bases, 2, 0, "");
+        warp_prepared_line(bases, 4, 1, ", averaged");
+        for (i = 0; i < 4; i++) rendercache_range_image_unprepare(bases[i]);
     }
     {   /* time interpolation of two images of one base view (the second a copy: a static scene), and fitness */
         rendercache_range_image *out = NULL, *later = NULL;
@@ -505,7 +557,8 @@ static void bench_walkthrough(ex_pool *shade_pool, int quick)
     }
     printf("paper (Nimeroff et al. 1996, table 3): pinterp synthesis 0.046-0.061 min = 2.8-3.7 s per frame\n");
     printf("ours, 640x480 from 4 bases on 1 thread (target < 20 ms): %.2f ms with background fill, %.2f ms with "
-           "both fills (%.0fx faster than pinterp's 3 s)\n", ms[1][2][0], ms[1][3][0], 3000.0 / ms[1][3][0]);
+           "both fills (%.0fx faster than pinterp's 3 s), %.2f ms with both fills from prepared bases\n", ms[1][2][0],
+           ms[1][3][0], 3000.0 / ms[1][3][0], prepared_ms);
     for (i = 0; i < 4; i++) rendercache_range_image_destroy(bases[i]);
     ex_tracer_destroy(tracer);
     obj_free(&scene);

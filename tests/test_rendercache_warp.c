@@ -1290,6 +1290,207 @@ static void test_extreme_depths_and_colours(void)
     rendercache_warper_destroy(w);
 }
 
+/* ---------------------------------------------------------------------
+   Prepared inputs (rendercache_range_image_prepare)
+   --------------------------------------------------------------------- */
+
+/* The warps of n inputs into four perspective targets with every fill, as
+   one hash of the images and the warp statistics. */
+static uint64_t warp_configurations(rendercache_range_image *const *in, uint32_t n, int average,
+                                    void (*pf)(void *, rendercache_job_fn, void *, uint32_t), void *user)
+{
+    rendercache_camera to[4];
+    rendercache_warp_desc d;
+    rendercache_warper *w = NULL;
+    rendercache_range_image *out = NULL;
+    uint64_t h = 0;
+    int f, t;
+    to[0] = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, 0.1f, 0, 0.5f, -0.3f, 0, 10, 60, 64, 48);
+    to[1] = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, -0.2f, 0.1f, 0.2f, -5.0f, 0, 6, 50, 64, 48);   /* half the inputs' tiles outside */
+    to[2] = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, 0.1f, 0, 0.3f, 3.5f, 1.0f, 10, 40, 64, 48);   /* narrow: tiles */
+    to[3] = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, 0.1f, -0.05f, -0.6f, 1.5f, 0.4f, 10, 40, 64, 48);   /* cut at the border */
+    memset(&d, 0, sizeof d);
+    d.parallel_for = pf;
+    d.parallel_user = user;
+    d.average = average;
+    if (!CHECK_EQ_INT(rendercache_warper_create(&d, &w), RENDERCACHE_OK) ||
+        !CHECK_EQ_INT(rendercache_range_image_create(&to[0], NULL, &out), RENDERCACHE_OK))
+        return 0;
+    for (t = 0; t < 4; t++)
+        for (f = 1; f <= 4; f++) {
+            rendercache_warp_stats st;
+            CHECK_EQ_INT(rendercache_warp(w, (const rendercache_range_image *const *)in, n, &to[t], (rendercache_fill)f, out),
+                         RENDERCACHE_OK);
+            rendercache_warp_get_stats(w, &st);
+            h = h * 31u + hash_image(out);
+            h = h * 31u + st.projected + 7u * st.warped + 13u * st.background + 17u * st.empty;
+        }
+    rendercache_range_image_destroy(out);
+    rendercache_warper_destroy(w);
+    return h;
+}
+
+/* Prepared inputs warp bit for bit as unprepared ones (the prepared tile
+   bounds are the same numbers, and the lazily computed quad flags the same
+   flags): two fish-eyes and a perspective view, 1 to 3 inputs, every fill,
+   with and without averaging, serial and on 3 threads. */
+static void test_prepared_inputs_warp_bit_identically(void)
+{
+    scene s = boxes_scene();
+    rendercache_camera c[3];
+    rendercache_range_image *in[3];
+    ex_pool *pool = ex_pool_create(3);
+    uint32_t n, i, differ = 0;
+    int average, threads;
+    c[0] = make_camera(RENDERCACHE_CAMERA_FISHEYE, -1, 0, 0, -1, 0, 10, 0, 128, 128);
+    c[1] = make_camera(RENDERCACHE_CAMERA_FISHEYE, 1, 0.3f, 0.5f, 1, 0.3f, 10, 0, 112, 112);
+    c[2] = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, 0, 0.5f, -0.5f, 0, 0, 10, 70, 96, 72);
+    for (i = 0; i < 3; i++) in[i] = render(&s, &c[i], 0);
+    if (!CHECK(in[0] && in[1] && in[2])) return;
+    for (threads = 0; threads < (pool ? 2 : 1); threads++)
+        for (average = 0; average < 2; average++)
+            for (n = 1; n <= 3; n++) {
+                uint64_t plain = warp_configurations(in, n, average, threads ? ex_pool_parallel_for : NULL, pool), prepared;
+                for (i = 0; i < n; i++) CHECK_EQ_INT(rendercache_range_image_prepare(in[i]), RENDERCACHE_OK);
+                prepared = warp_configurations(in, n, average, threads ? ex_pool_parallel_for : NULL, pool);
+                for (i = 0; i < n; i++) rendercache_range_image_unprepare(in[i]);
+                CHECK(plain != 0);
+                differ += plain != prepared;
+            }
+    CHECK_EQ_INT(differ, 0);
+    for (i = 0; i < 3; i++) rendercache_range_image_destroy(in[i]);
+    ex_pool_destroy(pool);
+}
+
+/* The contract of prepare: depths changed in place afterwards give the
+   image the stale bounds let through (here another image than an
+   unprepared warp of the same arrays: so the warp does read the prepared
+   bounds), a valid image and no read outside the arrays (ASan). */
+static void test_prepared_input_changed_in_place(void)
+{
+    scene s = boxes_scene();
+    rendercache_camera c = make_camera(RENDERCACHE_CAMERA_FISHEYE, -1, 0, 0, -1, 0, 10, 0, 128, 128);
+    rendercache_camera to = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, -0.2f, 0.1f, 0.2f, -5.0f, 0, 6, 50, 64, 48);
+    rendercache_range_image *a = render(&s, &c, 0), *out = NULL, copy;
+    const rendercache_range_image *in[1];
+    rendercache_warper *w = make_warper(NULL, NULL);
+    uint64_t stale, fresh;
+    size_t p;
+    if (!CHECK(a && w) || !CHECK_EQ_INT(rendercache_range_image_create(&to, NULL, &out), RENDERCACHE_OK)) return;
+    CHECK_EQ_INT(rendercache_range_image_prepare(a), RENDERCACHE_OK);
+    for (p = 0; p < (size_t)128 * 128; p++)   /* everything 20 times nearer: tiles culled by the far wall now land */
+        if (a->object[p] < RENDERCACHE_NO_SAMPLE) a->depth[p] *= 0.05f;
+    in[0] = a;
+    CHECK_EQ_INT(rendercache_warp(w, in, 1, &to, RENDERCACHE_FILL_BOTH, out), RENDERCACHE_OK);
+    CHECK(image_valid(out));
+    stale = hash_image(out);
+    copy = *a;   /* the same arrays, unprepared */
+    copy.prepared = NULL;
+    in[0] = &copy;
+    CHECK_EQ_INT(rendercache_warp(w, in, 1, &to, RENDERCACHE_FILL_BOTH, out), RENDERCACHE_OK);
+    fresh = hash_image(out);
+    CHECK(stale != fresh);
+    CHECK_EQ_INT(rendercache_range_image_prepare(a), RENDERCACHE_OK);   /* prepared again: the fresh image */
+    in[0] = a;
+    CHECK_EQ_INT(rendercache_warp(w, in, 1, &to, RENDERCACHE_FILL_BOTH, out), RENDERCACHE_OK);
+    CHECK(hash_image(out) == fresh);
+    rendercache_range_image_destroy(a);
+    rendercache_range_image_destroy(out);
+    rendercache_warper_destroy(w);
+}
+
+/* An allocator that fails once `left` allocations have succeeded. */
+typedef struct failing_allocator { int left; } failing_allocator;
+static void *failing_alloc(size_t size, void *user)
+{
+    failing_allocator *f = (failing_allocator *)user;
+    if (f->left <= 0) return NULL;
+    f->left--;
+    return malloc(size);
+}
+
+static void test_prepare_rejects_bad_input(void)
+{
+    scene s = boxes_scene();
+    rendercache_camera cam = make_camera(RENDERCACHE_CAMERA_FISHEYE, 0, 0, 0, 0, 0, 10, 0, 48, 48);
+    rendercache_camera to = make_camera(RENDERCACHE_CAMERA_PERSPECTIVE, 0.3f, 0, 0, 0.3f, 0, 10, 60, 16, 12);
+    rendercache_range_image *a = render(&s, &cam, 0), *out = NULL, *img = NULL, copy;
+    const rendercache_range_image *in[1];
+    rendercache_warper *w = make_warper(NULL, NULL);
+    rendercache_allocator fa;
+    failing_allocator budget;
+    float *depth2;
+    if (!CHECK(a && w) || !CHECK_EQ_INT(rendercache_range_image_create(&to, NULL, &out), RENDERCACHE_OK)) return;
+    in[0] = a;
+    /* NULL, an invalid camera, a missing array, a lone alloc callback: INVALID_ARGUMENT, left unprepared */
+    CHECK_EQ_INT(rendercache_range_image_prepare(NULL), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    copy = *a;
+    copy.camera.vfov_degrees = NAN;
+    copy.camera.kind = (rendercache_camera_kind)7;
+    CHECK_EQ_INT(rendercache_range_image_prepare(&copy), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK(copy.prepared == NULL);
+    copy = *a;
+    copy.object = NULL;
+    CHECK_EQ_INT(rendercache_range_image_prepare(&copy), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    copy = *a;
+    copy.allocator.free = lone_free;
+    CHECK_EQ_INT(rendercache_range_image_prepare(&copy), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK(copy.prepared == NULL);
+    /* the size changed since prepare: warp and blend_motion refuse it (its bounds are for other tiles) */
+    CHECK_EQ_INT(rendercache_range_image_prepare(a), RENDERCACHE_OK);
+    CHECK(a->prepared != NULL);
+    CHECK_EQ_INT(rendercache_range_image_prepare(a), RENDERCACHE_OK);   /* again: recomputed, the first freed (ASan) */
+    a->camera.width = 32;
+    CHECK_EQ_INT(rendercache_warp(w, in, 1, &to, RENDERCACHE_FILL_BOTH, out), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(rendercache_blend_motion(w, a, a, 0.5f, NULL, RENDERCACHE_FILL_BOTH, out), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    a->camera.width = 48;
+    CHECK_EQ_INT(rendercache_warp(w, in, 1, &to, RENDERCACHE_FILL_BOTH, out), RENDERCACHE_OK);
+    /* other arrays under the prepared data (a struct copy given new depths) */
+    copy = *a;
+    depth2 = (float *)malloc(48 * 48 * sizeof(float));
+    if (CHECK(depth2 != NULL)) {
+        memcpy(depth2, a->depth, 48 * 48 * sizeof(float));
+        copy.depth = depth2;
+        in[0] = &copy;
+        CHECK_EQ_INT(rendercache_warp(w, in, 1, &to, RENDERCACHE_FILL_BOTH, out), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+        copy.prepared = NULL;
+        CHECK_EQ_INT(rendercache_warp(w, in, 1, &to, RENDERCACHE_FILL_BOTH, out), RENDERCACHE_OK);
+        free(depth2);
+    }
+    /* an image the library writes loses its prepared data */
+    CHECK_EQ_INT(rendercache_range_image_prepare(out), RENDERCACHE_OK);
+    in[0] = a;
+    CHECK_EQ_INT(rendercache_warp(w, in, 1, &to, RENDERCACHE_FILL_BOTH, out), RENDERCACHE_OK);
+    CHECK(out->prepared == NULL);
+    CHECK_EQ_INT(rendercache_range_image_prepare(out), RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_blend(out, out, 0.5f, out), RENDERCACHE_OK);
+    CHECK(out->prepared == NULL);
+    /* allocation failure: OUT_OF_MEMORY, the image left unprepared and still warped */
+    memset(&fa, 0, sizeof fa);
+    fa.alloc = failing_alloc;
+    fa.free = lone_free;
+    fa.user = &budget;
+    budget.left = 4;   /* the image and its three arrays */
+    if (CHECK_EQ_INT(rendercache_range_image_create(&cam, &fa, &img), RENDERCACHE_OK)) {
+        memcpy(img->rgb, a->rgb, 3 * 48 * 48 * sizeof(float));
+        memcpy(img->depth, a->depth, 48 * 48 * sizeof(float));
+        memcpy(img->object, a->object, 48 * 48 * sizeof(uint32_t));
+        CHECK_EQ_INT(rendercache_range_image_prepare(img), RENDERCACHE_ERROR_OUT_OF_MEMORY);
+        CHECK(img->prepared == NULL);
+        in[0] = img;
+        CHECK_EQ_INT(rendercache_warp(w, in, 1, &to, RENDERCACHE_FILL_BOTH, out), RENDERCACHE_OK);
+        budget.left = 1;
+        CHECK_EQ_INT(rendercache_range_image_prepare(img), RENDERCACHE_OK);
+        CHECK(img->prepared != NULL);
+        rendercache_range_image_destroy(img);   /* frees the prepared data too (ASan: no leak) */
+    }
+    rendercache_range_image_unprepare(NULL);
+    rendercache_range_image_unprepare(out);   /* not prepared: nothing */
+    rendercache_range_image_destroy(a);
+    rendercache_range_image_destroy(out);
+    rendercache_warper_destroy(w);
+}
+
 static void test_warp_rejects_bad_input(void)
 {
     scene s = boxes_scene();
@@ -1373,6 +1574,9 @@ int main(int argc, char **argv)
     RUN(test_averaging_weighs_inputs_by_ray_angle);
     RUN(test_seed_render_cache_from_base_views);
     RUN(test_extreme_depths_and_colours);
+    RUN(test_prepared_inputs_warp_bit_identically);
+    RUN(test_prepared_input_changed_in_place);
+    RUN(test_prepare_rejects_bad_input);
     RUN(test_warp_rejects_bad_input);
     return test_finish();
 }
