@@ -1,4 +1,4 @@
-/* rendercache.h - v0.5.4 - render cache and range-image walkthroughs - public domain or MIT, see end of file
+/* rendercache.h - v0.6.0 - render cache and range-image walkthroughs - public domain or MIT, see end of file
 
    RENDERCACHE.H: an image-space point cache that reprojects and resamples, and range-image walkthroughs of animated scenes.
 
@@ -80,6 +80,7 @@
        rendercache_view_space_create(&vd, &vs);
        // base images: for each view i (rendercache_view_space_camera) and key
        // time (rendercache_subdivide_time), fill a range image's rgb, depth, object
+       // (an image warped into many frames as it is: rendercache_range_image_prepare(img))
        rendercache_warper_create(&warp_desc, &warper);
        for (each frame) {
            rendercache_view_space_locate(vs, camera.eye, corners, &n);
@@ -122,6 +123,7 @@
        rendercache_range_image_save(img, write, user) / _load(a, read, user, &img)
        rendercache_range_image_save_to_memory(img, a, &data, &size) / _load_from_memory(data, size, a, &img)
        rendercache_free_memory(a, data)                               what save_to_memory returned
+       rendercache_range_image_prepare(img) / _unprepare(img)         keep what warps read of a base view
      view and time interpolation
        rendercache_warper_create(desc, &w) / rendercache_warper_destroy(w)
        rendercache_warp(w, images, n, camera, fill, out)              reproject range images into a view
@@ -249,7 +251,11 @@
        eye. With foreground fill, runs of 8 pixels of a later input whose
        quads and points would all fail their z-tests (against a coarse
        z-buffer of what the nearer inputs drew) are skipped too, with the
-       same result. With desc.average (pinterp's -a), each input is warped
+       same result, and the quad flags of a row are computed only around
+       the runs that are drawn. A prepared input (range_image_prepare: the
+       depth bounds of its tiles, rings included, computed once) saves each
+       warp reading the depths and objects of its tiles for the culling;
+       the warp is bit for bit the same. With desc.average (pinterp's -a), each input is warped
        alone and every pixel averages the inputs that see the surface the
        ranked z-buffer keeps (squared distances within the tolerance),
        weighted by 1 / sin of the angle between each input's ray and the
@@ -317,8 +323,19 @@
          or not finite; its outputs may be NULL.
        range_image_create(camera, allocator, &out): checks out, the camera
          and the allocator (NULL: default). range_image_destroy(img): NULL
-         does nothing. Contract: img came from create or load (an image the
-         caller assembled is the caller's to free).
+         does nothing; frees the prepared data too. Contract: img came from
+         create or load (an image the caller assembled is the caller's to
+         free, after unprepare); an image the caller assembled has prepared
+         NULL until it is prepared.
+       range_image_prepare(img): checks img, its arrays, camera and
+         allocator (INVALID_ARGUMENT), OUT_OF_MEMORY when the allocator
+         fails; on failure img is left unprepared. unprepare(img): NULL or
+         unprepared does nothing. Contract: until unprepare, img's depth and
+         object arrays keep their contents (changed in place, warps show
+         what the stale bounds let through: a wrong image, never a read
+         outside the arrays); a change of size or of array pointers is
+         checked (below). A struct copy shares the prepared data: unprepare
+         or destroy one copy only.
        range_image_save(img, write, user): checks img's arrays and camera,
          write non-NULL, time finite, every colour finite and every surface
          depth positive and finite (what a loader accepts). Contract: the
@@ -337,14 +354,18 @@
        warp(w, images, n, camera, fill, out): checks w, images non-NULL and n
          > 0, each input's arrays and camera, out's arrays and camera (camera
          NULL: out's), the sizes of camera and out, no input being out, the
-         fill mode, at most 2^32 - 1 input pixels; input pixels that are
+         fill mode, at most 2^32 - 1 input pixels, a prepared input's size
+         and arrays still those it was prepared with (else
+         INVALID_ARGUMENT); out loses its prepared data (as blend's and
+         blend_motion's out do); input pixels that are
          RENDERCACHE_NO_SAMPLE or have no positive finite depth are skipped,
          and any valid inputs give a valid output (see HOW A WARP WORKS).
          Contract: every array holds its image's pixels; input colours are
          finite (as save and load ensure).
        blend(a, b, t, out): checks the three images' arrays and cameras,
          equal sizes, t in [0, 1]. blend_motion(w, a, b, t, motion, fill,
-         out): as blend, and out is neither a nor b, the fill mode, a
+         out): as blend, and out is neither a nor b, prepared inputs as
+         warp, the fill mode, a
          motion's arrays non-NULL, its transforms finite and invertible,
          object_count <= 2^24. Contract: world_a, world_b and world_t hold 12
          object_count floats.
@@ -406,8 +427,9 @@
        37 bytes per target pixel (61 with parallel_for, 20 more after a
        motion blend, and 20 per input when averaging) plus, with foreground
        fill, 52 bytes per pixel of the widest input's row and half a byte per
-       target pixel per job, and 10 bytes per 16x16 tile of the inputs. At most 2^32 - 1 input pixels per
-       warp. Warps reproduce no view-dependent shading the inputs lack, and a
+       target pixel per job, and 10 bytes per 16x16 tile of the inputs. A
+       prepared image keeps 18 bytes per 16x16 tile (72 KB for 1024x1024).
+       At most 2^32 - 1 input pixels per warp. Warps reproduce no view-dependent shading the inputs lack, and a
        pixelwise blend ghosts moving objects; the motion-compensated blend
        moves objects but not their shadows or reflections on static surfaces
        (those still blend pixelwise). Fitness counts pixels, so objects small
@@ -426,8 +448,8 @@
 #include <stdint.h>
 
 #define RENDERCACHE_VERSION_MAJOR 0
-#define RENDERCACHE_VERSION_MINOR 5
-#define RENDERCACHE_VERSION_PATCH 4
+#define RENDERCACHE_VERSION_MINOR 6
+#define RENDERCACHE_VERSION_PATCH 0
 
 #ifndef RENDERCACHE_API
 #  ifdef RENDERCACHE_STATIC
