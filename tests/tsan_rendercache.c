@@ -1,8 +1,8 @@
 /* Concurrency test of rendercache.h under ThreadSanitizer: every parallel
    part of the library runs on a pool of two workers and the calling thread
    (the render cache's frame with prediction, apart or counted in the
-   projection's pass, requests and insertion; warps
-   of fish-eye and perspective range images with every fill mode and a fill
+   projection's pass, requests and insertion; warps of fish-eye and
+   perspective range images, prepared or not, with every fill mode and a fill
    callback; pixelwise and motion-compensated time blends), and its result
    must equal, bit for bit, the same calls made serially. ThreadSanitizer
    reports any two jobs that touch the same memory without order (the
@@ -180,12 +180,14 @@ static uint64_t run_warps(ex_pool *pool)
     CHECK_EQ_INT(rendercache_warper_create(&d, &w), RENDERCACHE_OK);
     CHECK_EQ_INT(rendercache_range_image_create(&target, NULL, &out), RENDERCACHE_OK);
     CHECK_EQ_INT(rendercache_range_image_create(&fish[0], NULL, &blend), RENDERCACHE_OK);
-    for (f = 0; f < 8; f++) {   /* every fill, then every fill averaging the inputs */
-        if (f == 4) {
+    for (f = 0; f < 12; f++) {   /* every fill, every fill averaging the inputs, every fill from prepared inputs */
+        if (f == 4 || f == 8) {
             rendercache_warper_destroy(w);
-            d.average = 1;
+            d.average = f == 4;
             CHECK_EQ_INT(rendercache_warper_create(&d, &w), RENDERCACHE_OK);
         }
+        if (f == 8)
+            for (i = 0; i < 3; i++) CHECK_EQ_INT(rendercache_range_image_prepare(in[i]), RENDERCACHE_OK);
         CHECK_EQ_INT(rendercache_warp(w, (const rendercache_range_image *const *)in, 3, &target, fills[f % 4], out),
                      RENDERCACHE_OK);
         h = hash_bytes(h, out->rgb, sizeof(float) * 3 * W * H);
