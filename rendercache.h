@@ -255,12 +255,12 @@
        the runs that are drawn. A prepared input (range_image_prepare: the
        depth bounds of its tiles, rings included, computed once) saves each
        warp reading the depths and objects of its tiles for the culling;
-       the warp is bit for bit the same. With desc.average (pinterp's -a), each input is warped
-       alone and every pixel averages the inputs that see the surface the
-       ranked z-buffer keeps (squared distances within the tolerance),
-       weighted by 1 / sin of the angle between each input's ray and the
-       target's (at most 1000): views from nearly the target's direction
-       count most, and the inputs' noise and staircases average out.
+       the warp is bit for bit the same. With desc.average (pinterp's -a),
+       each input is warped alone and every pixel averages the inputs that see
+       the surface the ranked z-buffer keeps (squared distances within the
+       tolerance), weighted by 1 / sin of the angle between each input's ray
+       and the target's (at most 1000): views from nearly the target's
+       direction count most, and the inputs' noise and staircases average out.
        desc.max_fill_distance bounds the background fill (pinterp's -fs):
        farther gaps stay for fill_pixel. Positions more than 2^24 pixels
        from the image have no projection, squared distances are capped at
@@ -429,13 +429,14 @@
        fill, 52 bytes per pixel of the widest input's row and half a byte per
        target pixel per job, and 10 bytes per 16x16 tile of the inputs. A
        prepared image keeps 18 bytes per 16x16 tile (72 KB for 1024x1024).
-       At most 2^32 - 1 input pixels per warp. Warps reproduce no view-dependent shading the inputs lack, and a
-       pixelwise blend ghosts moving objects; the motion-compensated blend
-       moves objects but not their shadows or reflections on static surfaces
-       (those still blend pixelwise). Fitness counts pixels, so objects small
-       in the id images hardly drive the subdivision, and an interval whose
-       ends look alike is not split even if things happen in between (the
-       paper's tests compare the ends only).
+       At most 2^32 - 1 input pixels per warp. Warps reproduce no
+       view-dependent shading the inputs lack, and a pixelwise blend ghosts
+       moving objects; the motion-compensated blend moves objects but not
+       their shadows or reflections on static surfaces (those still blend
+       pixelwise). Fitness counts pixels, so objects small in the id images
+       hardly drive the subdivision, and an interval whose ends look alike is
+       not split even if things happen in between (the paper's tests compare
+       the ends only).
 
    PAPER
 
@@ -921,9 +922,8 @@ RENDERCACHE_API rendercache_result rendercache_range_image_load_from_memory(cons
 RENDERCACHE_API void rendercache_free_memory(const rendercache_allocator *allocator, void *data);
 /* Prepares an image for warps (a base view warped again and again): stores,
    with image->allocator, what the warp needs of the image alone (the depth
-   bounds of its tiles), so that warps read it instead of the pixels, and
-   skip the tiles of a later input that lie behind what nearer inputs drew.
-   Warps give bit for bit the images they give unprepared. The caller
+   bounds of its tiles, rings included), so that warps read it instead of
+   the depths and objects of half its tiles. Warps give bit for bit the images they give unprepared. The caller
    promises that the image's size and its depth and object arrays do not
    change until unprepare (or destroy): a warp of an image whose size or
    array pointers changed fails with INVALID_ARGUMENT, and one whose depths
@@ -5128,7 +5128,7 @@ typedef struct rendercache__warp_src {
     const unsigned char *skip;   /* per tile of CULL_TILE^2 pixels: 1 when no pixel of it, nor of
                                     the ring of pixels around it, lands in the target; NULL: none */
     uint32_t tiles_x, tiles_y;
-    const struct rendercache_range_prepared *prepared;   /* the image's (when it fits the image), or NULL */
+    const rendercache_range_prepared *prepared;   /* the image's (when it fits the image), or NULL */
 } rendercache__warp_src;
 
 /* All inputs of a splat, and the foreground fill's parameters. */
@@ -5378,8 +5378,7 @@ static int rendercache__tile_skipped(const rendercache__warp_src *ws, float dlo,
    base view is warped into frame after frame: rendercache_range_image_
    prepare computes them once, rings included, rather than every warp
    reading the depths and objects of half its tiles again (8 bytes a
-   pixel). A warp of a prepared input also skips its tiles that lie behind
-   what nearer inputs drew (warp_hidden_tiles). */
+   pixel). */
 struct rendercache_range_prepared {
     uint32_t width, height;            /* the image's size when prepared */
     const float *depth;                /* and its arrays: a warp checks that they are still the image's */
