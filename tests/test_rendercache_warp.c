@@ -529,7 +529,8 @@ static void test_culled_tiles_lose_no_landing_pixel(void)
    culling; and so for any number of jobs. (The input's eye lies inside the
    target's frustum, a little in front of its eye, so that only the tiles
    cull: the older culling of single rows by the planes whose outside holds
-   the input's eye drops some quads at the border, see warp_culled.) */
+   the input's eye drops some quads at the border, see warp_culled.) The
+   same from the input prepared (its tiles' bounds with their rings kept). */
 static void test_culled_tiles_keep_quads_at_the_border(void)
 {
     scene s;
@@ -545,10 +546,11 @@ static void test_culled_tiles_keep_quads_at_the_border(void)
     src = render(&s, &base, 0);
     in[0] = src;
     if (!CHECK(src) || !CHECK_EQ_INT(rendercache_range_image_create(&target, NULL, &out), RENDERCACHE_OK)) return;
-    for (run = 0; run < 2; run++) {
+    for (run = 0; run < 3; run++) {
         rendercache_warper *w = run ? make_warper(pool ? ex_pool_parallel_for : NULL, pool) : make_warper(NULL, NULL);
         uint32_t p, holes = 0, border_holes = 0, none_filled = 0;
         if (!w) break;
+        if (run == 2) CHECK_EQ_INT(rendercache_range_image_prepare(src), RENDERCACHE_OK);
         CHECK_EQ_INT(rendercache_warp(w, in, 1, NULL, RENDERCACHE_FILL_NONE, out), RENDERCACHE_OK);
         for (p = 0; p < 128 * 96; p++) none_filled += out->object[p] == 0;
         CHECK_EQ_INT(rendercache_warp(w, in, 1, NULL, RENDERCACHE_FILL_FOREGROUND, out), RENDERCACHE_OK);
