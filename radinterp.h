@@ -196,7 +196,13 @@
    bring light through one door share its geometry and each spreads its
    light evenly over a receiver that sees the door from near and far, so a
    room lit through a door came out 30-90% too bright in its far corners
-   with each link within its own tolerance. Parts of a
+   with each link within its own tolerance. A link's share of that budget
+   is its transport error plus its source's variation (the spread of the
+   source's children times F): a source element that straddles a wall
+   between a lit room and a lampless one is seen from the dark side by its
+   dark part alone, and hundreds of such links each carrying the lit mean
+   add up as the links through a door do; a link the budget marks for its
+   source's variation is split at the source. Parts of a
    patch enclosed by geometry resting on it (the floor under a box, the
    strip of floor under a wall) are found by rays (both rays of an opposite
    pair meet back faces) and left out of its radiosity
@@ -460,11 +466,12 @@
                                  when the compiler offers them; 0: the portable scalar
                                  kernels only (the same hits and radiosities, bit for bit)
        RADINTERP_RECEIVER_BUDGET the links one element gathers may err by this many of its
-                                 tolerances together (default 16; see METHOD). 8 halves
+                                 tolerances together (default 16; see METHOD). 8 halved
                                  the 90th percentile error of building_1k's points against
                                  Embree's (27% -> 12%) at 3x the office's links, 5x its
-                                 solve time and 2x its mesh time; 16 takes it to 20% at
-                                 1.1-1.4x the links
+                                 solve time and 2x its mesh time; 16 takes it to 18% at
+                                 1.1-1.5x the links (measured before the budget counted
+                                 the sources' variation, except the 18%)
 
    FUNCTION REFERENCE
 
@@ -691,11 +698,19 @@
    percent there (about 2% on average elsewhere in the Cornell box with
    eps = 5 mW/m^2). With the defaults on building_1k (tests/
    ref_radinterp_building.c, against Embree) the points' median error is
-   3.6% and their 90th percentile 20% (v0.8.1, before the receiver's
-   error budget: 3.8% and 27%): the far corner of a room without lamps,
-   lit through its door and stair opening, is still 20-50% too bright
-   (90% before); RADINTERP_RECEIVER_BUDGET 8 takes the 90th percentile to
-   12% at 2.3x the links of the default. A point query costs a shadow union per partly visible
+   4.0% and their 90th percentile 18% (3.6% and 20% before the budget
+   counted the sources' variation; 3.8% and 27% before the receiver's
+   error budget): the far corner of a room without lamps, lit through its
+   door and stair opening, is still 10-50% too bright (90% before), and
+   the lit rooms beside it 5-10% too dark. These are errors of the
+   solution, not of the point query: integrating the leaves' radiosities
+   from the point (path-traced, each hit at its leaf's B) gives the worst
+   points' errors within a few percent of the query's. A signed error
+   budget at each receiver's corners and centre, with 2 tolerances, took
+   the building's 90th percentile to 15% and the office's to 5.8% (median
+   1.6%), but at 2x and 4x the links and 3x and 14x the solve time, so it
+   is not the default. RADINTERP_RECEIVER_BUDGET 8 took the 90th
+   percentile to 12% at 2.3x the links of the default. A point query costs a shadow union per partly visible
    source: about 15,000 per second on one core on the office scene, where
    nearly every point has one (about 28 such sources of 52, 3 shadows each
    once the faces of convex solids turned away from the point are left
