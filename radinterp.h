@@ -685,7 +685,9 @@
    as the build packs each batch, so no second pool is held: building_4k's
    peak after the solve is 2,210 MB (2,240 MB unshared), building_1k's
    322 MB (a pass sharing them after the build held both pools: 2,765 MB
-   and 380 MB). The
+   and 380 MB). Counting the sources' variation in the receiver's budget
+   (METHOD) took building_1k to 223 MB and a peak of 364 MB, the office to
+   31 MB (bench_radinterp_building 1k 1t, building_4k not measured). The
    mesh build does not finish in reasonable time at that scale: a point
    query in a building sums hundreds of partly hidden sources (about 620 a
    point on building_4k, 155 queries per second), and the mesh samples six
