@@ -5987,9 +5987,10 @@ static unsigned char *radinterp__budget_marks(const radinterp_solution *s)
 /* Transport-based refinement (4.4.1): a link whose estimated transport
    error B_src * (max - min point factor) exceeds eps, or is among the
    largest of its receiver's that overrun the receiver's budget (above), is
-   replaced by four links to the children of its larger element (of its
-   source when the budget marked it for the source's variation) (the other one when the
-   larger may not be split; a link that can go no further is final). A link
+   replaced by four links to the children of its larger element (the
+   other one when the larger may not be split; a link that can go no
+   further is final), or of its source when the budget marked it for the
+   source's variation. A link
    whose source has children that differ by more than eps / F is replaced by
    links from those children. A cluster link that could carry more than eps
    is split as radinterp__split_clink says.
