@@ -196,7 +196,13 @@
    bring light through one door share its geometry and each spreads its
    light evenly over a receiver that sees the door from near and far, so a
    room lit through a door came out 30-90% too bright in its far corners
-   with each link within its own tolerance. Parts of a
+   with each link within its own tolerance. A link's share of that budget
+   is its transport error plus its source's variation (the spread of the
+   source's children times F): a source element that straddles a wall
+   between a lit room and a lampless one is seen from the dark side by its
+   dark part alone, and hundreds of such links each carrying the lit mean
+   add up as the links through a door do; a link the budget marks for its
+   source's variation is split at the source. Parts of a
    patch enclosed by geometry resting on it (the floor under a box, the
    strip of floor under a wall) are found by rays (both rays of an opposite
    pair meet back faces) and left out of its radiosity
@@ -460,11 +466,12 @@
                                  when the compiler offers them; 0: the portable scalar
                                  kernels only (the same hits and radiosities, bit for bit)
        RADINTERP_RECEIVER_BUDGET the links one element gathers may err by this many of its
-                                 tolerances together (default 16; see METHOD). 8 halves
+                                 tolerances together (default 16; see METHOD). 8 halved
                                  the 90th percentile error of building_1k's points against
                                  Embree's (27% -> 12%) at 3x the office's links, 5x its
-                                 solve time and 2x its mesh time; 16 takes it to 20% at
-                                 1.1-1.4x the links
+                                 solve time and 2x its mesh time; 16 takes it to 18% at
+                                 1.1-1.5x the links (measured before the budget counted
+                                 the sources' variation, except the 18%)
 
    FUNCTION REFERENCE
 
@@ -678,7 +685,9 @@
    as the build packs each batch, so no second pool is held: building_4k's
    peak after the solve is 2,210 MB (2,240 MB unshared), building_1k's
    322 MB (a pass sharing them after the build held both pools: 2,765 MB
-   and 380 MB). The
+   and 380 MB). Counting the sources' variation in the receiver's budget
+   (METHOD) took building_1k to 223 MB and a peak of 364 MB, the office to
+   31 MB (bench_radinterp_building 1k 1t, building_4k not measured). The
    mesh build does not finish in reasonable time at that scale: a point
    query in a building sums hundreds of partly hidden sources (about 620 a
    point on building_4k, 155 queries per second), and the mesh samples six
@@ -691,11 +700,19 @@
    percent there (about 2% on average elsewhere in the Cornell box with
    eps = 5 mW/m^2). With the defaults on building_1k (tests/
    ref_radinterp_building.c, against Embree) the points' median error is
-   3.6% and their 90th percentile 20% (v0.8.1, before the receiver's
-   error budget: 3.8% and 27%): the far corner of a room without lamps,
-   lit through its door and stair opening, is still 20-50% too bright
-   (90% before); RADINTERP_RECEIVER_BUDGET 8 takes the 90th percentile to
-   12% at 2.3x the links of the default. A point query costs a shadow union per partly visible
+   4.0% and their 90th percentile 18% (3.6% and 20% before the budget
+   counted the sources' variation; 3.8% and 27% before the receiver's
+   error budget): the far corner of a room without lamps, lit through its
+   door and stair opening, is still 10-50% too bright (90% before), and
+   the lit rooms beside it 5-10% too dark. These are errors of the
+   solution, not of the point query: integrating the leaves' radiosities
+   from the point (path-traced, each hit at its leaf's B) gives the worst
+   points' errors within a few percent of the query's. A signed error
+   budget at each receiver's corners and centre, with 2 tolerances, took
+   the building's 90th percentile to 15% and the office's to 5.8% (median
+   1.6%), but at 2x and 4x the links and 3x and 14x the solve time, so it
+   is not the default. RADINTERP_RECEIVER_BUDGET 8 took the 90th
+   percentile to 12% at 2.3x the links of the default. A point query costs a shadow union per partly visible
    source: about 15,000 per second on one core on the office scene, where
    nearly every point has one (about 28 such sources of 52, 3 shadows each
    once the faces of convex solids turned away from the point are left
@@ -5889,6 +5906,16 @@ static double radinterp__link_error(const radinterp_solution *s, const radinterp
     return (double)radinterp__maxf(b[0], radinterp__maxf(b[1], b[2])) * (double)l->dff;
 }
 
+/* What a link's source mean may misjudge (4.4.1's transport error on the
+   source's side): the spread of the source's children times the link's
+   factor. Visibility picks a part of the source: a floor element under a
+   wall between a lit room and a dark one is seen from the dark room by its
+   dark part alone, and the link would carry its lit mean there. */
+static double radinterp__source_error(const radinterp_solution *s, const radinterp__link *l)
+{
+    return radinterp__source_spread(s, l->source) * radinterp__link_ff_max(l);
+}
+
 static int radinterp__cmp_double(const void *a, const void *b)
 {
     double x = *(const double *)a, y = *(const double *)b;
@@ -5902,41 +5929,68 @@ static int radinterp__cmp_double(const void *a, const void *b)
    evenly over a receiver that sees the door from near and from far, and
    hundreds of links each within the tolerance left the far corner of a
    lampless room 30-90% too bright (its whole surface 2x too bright there:
-   what came in was right in sum, spread too evenly). For each node this
-   finds the least error at which its links are split, largest first, so
-   that the rest fit the budget: FLT_MAX when all fit. The bound B dff is
-   a worst case (max - min over the receiver), far from the error the
-   link's mean makes at most points, so the budget is several tolerances,
-   not one (one tolerance split the office's links 30-fold). Returns NULL
-   when out of memory. */
-static float *radinterp__budget_limits(const radinterp_solution *s)
+   what came in was right in sum, spread too evenly). This marks, for each
+   node, its links to be split, largest error first, so that the rest fit
+   the budget. The bound B dff is a worst case (max - min over the
+   receiver), far from the error the link's mean makes at most points, so
+   the budget is several tolerances, not one (one tolerance split the
+   office's links 30-fold). A link's share of the budget is both of its
+   errors, the transport error across the receiver and the source's
+   variation (radinterp__source_error): hundreds of links from sources that
+   straddle a wall between a lit room and a lampless one, each carrying a
+   little of the lit side's light into the dark room, add up as the links
+   through a door do. A link marked for the budget is split on the side
+   whose error is the larger. */
+#define RADINTERP__SPLIT 1          /* budget marks: split the larger element */
+#define RADINTERP__SPLIT_SOURCE 2   /* split the source: its variation is most of the error */
+
+static double radinterp__budget_error(const radinterp_solution *s, const radinterp__link *l)
 {
-    float *limit = (float *)radinterp__alloc_array(&s->allocator, s->node_count ? s->node_count : 1, sizeof(float));
+    return radinterp__link_error(s, l) + radinterp__source_error(s, l);
+}
+
+static void radinterp__spread_budget(const radinterp_solution *s, const radinterp__node *nd, double *err,
+                                     unsigned char *mark)
+{
+    double budget = RADINTERP_RECEIVER_BUDGET * radinterp__tolerance(s, nd->dim), sum = 0.0, limit = DBL_MAX;
+    uint32_t j;
+    for (j = 0; j < nd->link_count; j++) sum += err[j] = radinterp__budget_error(s, &s->links[nd->first_link + j]);
+    if (sum <= budget) return;
+    qsort(err, nd->link_count, sizeof(double), radinterp__cmp_double);
+    for (sum = 0.0, j = 0; j < nd->link_count; j++)   /* from the smallest: the first that no longer fits */
+        if ((sum += err[j]) > budget) { limit = err[j]; break; }
+    for (j = 0; j < nd->link_count; j++) {
+        const radinterp__link *l = &s->links[nd->first_link + j];
+        if (radinterp__budget_error(s, l) < limit) continue;
+        mark[j] = radinterp__source_error(s, l) > radinterp__link_error(s, l) ? RADINTERP__SPLIT_SOURCE : RADINTERP__SPLIT;
+    }
+}
+
+/* Each link's budget mark (above; 0 when the budget keeps it). Returns NULL
+   when out of memory. */
+static unsigned char *radinterp__budget_marks(const radinterp_solution *s)
+{
+    unsigned char *mark = (unsigned char *)radinterp__alloc_array(&s->allocator, s->link_count ? s->link_count : 1, 1);
     double *err;
-    uint32_t i, j, most = 1;
-    if (!limit) return NULL;
+    uint32_t i, most = 1;
+    if (!mark) return NULL;
+    memset(mark, 0, s->link_count);
     for (i = 0; i < s->node_count; i++) most = s->nodes[i].link_count > most ? s->nodes[i].link_count : most;
     err = (double *)radinterp__alloc_array(&s->allocator, most, sizeof(double));
-    if (!err) { radinterp__free(&s->allocator, limit); return NULL; }
-    for (i = 0; i < s->node_count; i++) {
-        const radinterp__node *nd = &s->nodes[i];
-        double budget = RADINTERP_RECEIVER_BUDGET * radinterp__tolerance(s, nd->dim), sum = 0.0;
-        limit[i] = FLT_MAX;
-        for (j = 0; j < nd->link_count; j++) sum += err[j] = radinterp__link_error(s, &s->links[nd->first_link + j]);
-        if (sum <= budget) continue;
-        qsort(err, nd->link_count, sizeof(double), radinterp__cmp_double);
-        for (sum = 0.0, j = 0; j < nd->link_count; j++)   /* from the smallest: the first that no longer fits */
-            if ((sum += err[j]) > budget) { limit[i] = (float)err[j]; break; }
-    }
+    if (!err) { radinterp__free(&s->allocator, mark); return NULL; }
+    for (i = 0; i < s->node_count; i++)
+        if (s->nodes[i].link_count) radinterp__spread_budget(s, &s->nodes[i], err, mark + s->nodes[i].first_link);
     radinterp__free(&s->allocator, err);
-    return limit;
+    return mark;
 }
 
 /* Transport-based refinement (4.4.1): a link whose estimated transport
    error B_src * (max - min point factor) exceeds eps, or is among the
-   largest of its receiver's that overrun the receiver's budget (above), is replaced by four
-   links to the children of its larger element (the other one when the
-   larger may not be split; a link that can go no further is final). A link
+   largest of its receiver's that overrun the receiver's budget (above), is
+   replaced by four links to the children of its larger element (the
+   other one when the larger may not be split; a link that can go no
+   further is final), or of its source when the budget marked it for the
+   source's variation. A link
    whose source has children that differ by more than eps / F is replaced by
    links from those children. A cluster link that could carry more than eps
    is split as radinterp__split_clink says.
@@ -5946,18 +6000,19 @@ static int radinterp__refine(radinterp_solution *s, const radinterp__run *run, r
     radinterp__buf keep, ckeep;
     radinterp__linker L;
     uint32_t i, split = 0, nodes_before = s->node_count;
-    float *limit = radinterp__budget_limits(s);
+    unsigned char *mark = radinterp__budget_marks(s);
     memset(&keep, 0, sizeof keep);
     memset(&ckeep, 0, sizeof ckeep);
     keep.item = sizeof(radinterp__link);
     ckeep.item = sizeof(radinterp__clink);
     *res = RADINTERP_OK;
-    if (!radinterp__linker_init(s, &L) || !limit) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    if (!radinterp__linker_init(s, &L) || !mark) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
     for (i = 0; i < s->link_count && *res == RADINTERP_OK; i++) {
         radinterp__link l = s->links[i];
         double error = radinterp__link_error(s, &l), tol = radinterp__tolerance(s, s->nodes[l.receiver].dim);
         int which = -1;
-        if (!(l.flags & RADINTERP__LINK_FINAL) && (error > tol || error >= limit[l.receiver])) {
+        if (!(l.flags & RADINTERP__LINK_FINAL) && mark[i] == RADINTERP__SPLIT_SOURCE) which = 1;
+        else if (!(l.flags & RADINTERP__LINK_FINAL) && (error > tol || mark[i])) {
             const radinterp__node *r = &s->nodes[l.receiver], *src = &s->nodes[l.source];
             int rs = radinterp__can_split(s, r), ss = radinterp__can_split(s, src);
             if (rs && (r->area >= src->area || !ss)) which = 0;
@@ -6000,7 +6055,7 @@ static int radinterp__refine(radinterp_solution *s, const radinterp__run *run, r
     else if (*res == RADINTERP_OK && keep.count)
         memcpy(s->links, keep.data, keep.count * sizeof(radinterp__link)); /* keeps the final flags */
     radinterp__linker_free(s, &L);
-    radinterp__free(&s->allocator, limit);
+    radinterp__free(&s->allocator, mark);
     radinterp__free(&s->allocator, keep.data);
     radinterp__free(&s->allocator, ckeep.data);
     return *res == RADINTERP_OK ? (int)split : -1;

@@ -25,7 +25,12 @@
    the stair opening: v0.8.1 made it 30-90% too bright (27.2%); v0.8.2's
    receiver error budget (the links one element gathers may err by 16
    tolerances together, not each by one) brought it to 26-53% (20.3%),
-   and its patches beyond the bound from 100 to 68. With
+   and its patches beyond the bound from 100 to 68. Counting each link's
+   source variation in that budget (a source straddling the wall between
+   the lit room and the lampless one is seen from the dark side by its dark
+   part) brought it to 17.6% and 59 patches, the median of the points
+   from 3.63% to 3.97% (the lit rooms beside it stay 5-10% too dark; the
+   solution changed there by its sampling only). With
    RADINTERP_RECEIVER_BUDGET 8 (not the default: 2.3x the links) the
    90th percentile was 12.0%, the median 3.10% and 39 patches.
 
@@ -54,7 +59,8 @@
    (the figures are in the notes this test prints): checked only when the
    environment variable RADINTERP_REF_STRICT is 1. Otherwise each prints
    "NOT MET" with its measured figure, and the figure is held to a guard
-   instead: what radinterp v0.8.2 measured here plus a quarter, so that a
+   instead: what radinterp measured here plus a quarter (v0.8.2's figures for
+   the office and the building's median, later ones for the rest), so that a
    change that makes the solution or the point query worse fails (the
    reference and the points are deterministic, so the quarter is room for
    changes in the library's own sampling, not for noise). A bound left out
@@ -71,7 +77,7 @@ typedef struct scene_case {
        the time make test can give this test on a 2-core machine. */
     uint32_t patch_samples, point_samples;
     unsigned unmet;
-    double guard[3];   /* per unmet bound (patch share, point median, point P90): v0.8.2's figure + 25% */
+    double guard[3];   /* per unmet bound (patch share, point median, point P90): a measured figure + 25% */
     int loaded, ok;
     obj_scene obj;
     uint32_t *patches;
@@ -88,7 +94,10 @@ static scene_case office = { .path = "examples/data/office.obj", .patch_samples 
                              .guard = { 0.114, 0.027, 0.097 } }; /* measured 9.1%, 2.10%, 7.77% (v0.8.1: 10.9%, 2.13%, 7.94%) */
 static scene_case building_1k = { .path = "examples/data/building_1k.obj", .patch_samples = 16000, .point_samples = 48000,
                                   .unmet = UNMET_PATCHES | UNMET_POINT_MEDIAN | UNMET_POINT_P90,
-                                  .guard = { 0.136, 0.045, 0.253 } }; /* measured 10.9%, 3.63%, 20.3% (v0.8.1: 16.0%, 3.75%, 27.2%) */
+                                  .guard = { 0.118, 0.045, 0.220 } }; /* measured 9.44%, 3.97%, 17.6% with the source
+                                                                         variation in the receiver's budget (v0.8.2: 10.9%,
+                                                                         3.63%, 20.3%; v0.8.1: 16.0%, 3.75%, 27.2%); the
+                                                                         median's guard stays v0.8.2's + 25% */
 static scene_case building_4k = { .path = "examples/data/building_4k.obj", .patch_samples = 8000, .point_samples = 32000,
                                   .unmet = 0 }; /* run on request only, held to the issue's bounds */
 
@@ -104,7 +113,7 @@ static void check_bound(const scene_case *c, unsigned bound, int which, const ch
     }
     test_note("%s %s: %s %.2f%% (bound %.0f%%)", ok ? "now met, to be asserted:" : "NOT MET (issue 13)", c->path, what,
               100 * measured, 100 * limit);
-    CHECK_MSG(measured <= c->guard[which], "%s: %s %.2f%%, worse than its guard (v0.8.2's figure + 25%%) %.2f%%", c->path, what,
+    CHECK_MSG(measured <= c->guard[which], "%s: %s %.2f%%, worse than its guard (a measured figure + 25%%) %.2f%%", c->path, what,
               100 * measured, 100 * c->guard[which]);
 }
 
