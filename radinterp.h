@@ -1,4 +1,4 @@
-/* radinterp.h - v0.8.3 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
+/* radinterp.h - v0.8.4 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
 
    RADINTERP.H: hierarchical radiosity, ranked discontinuities and quadratic irradiance interpolants evaluated per pixel.
 
@@ -197,7 +197,7 @@
    light evenly over a receiver that sees the door from near and far, so a
    room lit through a door came out 30-90% too bright in its far corners
    with each link within its own tolerance. A link's share of that budget
-   is its transport error plus its source's variation (the spread of the
+   is its transport error plus (since v0.8.4) its source's variation (the spread of the
    source's children times F): a source element that straddles a wall
    between a lit room and a lampless one is seen from the dark side by its
    dark part alone, and hundreds of such links each carrying the lit mean
@@ -789,7 +789,7 @@
 
 #define RADINTERP_VERSION_MAJOR 0
 #define RADINTERP_VERSION_MINOR 8
-#define RADINTERP_VERSION_PATCH 3
+#define RADINTERP_VERSION_PATCH 4
 #define RADINTERP_FILE_FORMAT_VERSION 2   /* of saved meshes */
 
 #include <stddef.h>
