@@ -529,7 +529,11 @@
 
      Up to 2^32 - 1 records per cache, LIGHTVEC_MAX_TRIANGLES triangles per
      scene. Strata: at most 256 x 512 cells. The built-in renderer shades hit
-     points as Lambertian (direct light by area sampling of the emitters plus
+     points as Lambertian (direct light by area sampling of the emitters,
+     each sample picking an emitter by its importance at the hit: power,
+     distance and both cosines bounded over the emitter's sphere, so lamps
+     behind the hit or far away rarely take a sample, though lamps behind a
+     wall still do: the cost is linear in the emitter count; plus
      `bounces - 1` cosine-sampled bounces); surfaces are one-sided as in
      radiosity (the front is the side the counter-clockwise winding faces; a
      back face is black and emits nothing, unless it is glass); rays that
@@ -560,6 +564,8 @@
        Jaroslav Krivanek, Kadi Bouatouch, Sumanta Pattanaik and Jiri Zara, Making
        radiance and irradiance caching practical: adaptive caching and neighbor
        clamping, EGSR 2006 (neighbour clamping).
+       Alejandro Conty Estevez and Christopher Kulla, Importance sampling of many lights
+       with adaptive tree splitting, HPG 2018 (the emitter importance at a gather hit).
        Eric Veach, Robust Monte Carlo methods for light transport simulation, PhD thesis,
        Stanford 1997 (the balance heuristic).
        J. L. Bentley and J. B. Saxe, Decomposable searching problems I: static-to-dynamic
@@ -735,7 +741,8 @@ typedef struct lightvec_gather_desc {
     uint32_t strata_phi;         /* eq. 5 azimuth strata; 0 = 3 * strata_theta */
     uint32_t bounces;            /* reflections of the gathered light: 1 = direct light reflected
                                     at the hit points, each more = one diffuse bounce; 0 = 2 */
-    uint32_t light_samples;      /* emitter samples per hit point; 0 = 1 */
+    uint32_t light_samples;      /* emitter samples per hit point, each picking an emitter by its
+                                    importance there (power, distance, cosines); 0 = 1 */
     uint32_t glossy_samples;     /* rays sampled from the glossy lobe (in antithetic pairs: rounded
                                     down to even), combined with the strata by multiple importance
                                     sampling; 0 = a quarter of the strata (glossy surfaces only) */
@@ -2373,8 +2380,6 @@ static lightvec_result lightvec__scene_validate(const lightvec_scene_desc *d)
     return LIGHTVEC_OK;
 }
 
-/* Normals, materials, bounds; the emitter list with selection proportional
-   to area times emitted luminance. */
 /* The bounds of an emitter triangle (verts: 9 floats) that its importance
    needs (lightvec__emitter_importance): the sphere about its centroid
    through its farthest corner, and its power up to a constant (area times
@@ -2393,6 +2398,9 @@ static void lightvec__emitter_bound(const float *verts, double power, float out[
     out[4] = (float)power;
 }
 
+/* Normals, materials, bounds; the emitter list with selection proportional
+   to area times emitted luminance (lightvec_gather_direct) and each
+   emitter's bounds (a gather hit's light samples). */
 static int lightvec__scene_fill(lightvec_scene *s, const lightvec_scene_desc *d, const lightvec__mesh_view *m)
 {
     uint32_t i, e = 0;
