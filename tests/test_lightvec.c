@@ -454,6 +454,18 @@ static void test_direct_light_closed_form(void)
 
 /* ---- the DLV cache: penumbra records and mixed classes make misses ------------------------------ */
 
+/* A Lambertian surface facing +y, seen from above (its position is set by the caller). */
+static lightvec_surface upward_surface(lightvec_material m)
+{
+    lightvec_surface sf;
+    memset(&sf, 0, sizeof sf);
+    set3(sf.normal, 0, 1, 0);
+    set3(sf.outgoing, 0, 1, 0);
+    sf.flags = LIGHTVEC_RECORD_VIEW_INDEPENDENT;
+    sf.material = m;
+    return sf;
+}
+
 static void test_direct_cache_visibility_rule(void)
 {
     light_scene ls;
@@ -477,11 +489,7 @@ static void test_direct_cache_visibility_rule(void)
     memset(&gd, 0, sizeof gd);
     gd.strata_theta = 8;
     gd.strata_phi = 8;
-    memset(&sf, 0, sizeof sf);
-    set3(sf.normal, 0, 1, 0);
-    set3(sf.outgoing, 0, 1, 0);
-    sf.flags = LIGHTVEC_RECORD_VIEW_INDEPENDENT;
-    sf.material = ls.mats[0];
+    sf = upward_surface(ls.mats[0]);
     /* a line of points along x through the plate's shadow (plate x 0.6..1 at
        half the light's height, light x -0.25..0.25): umbra x 1.45..1.75,
        penumbrae 0.95..1.45 and 1.75..2.25 */
@@ -653,11 +661,7 @@ static void test_hit_light_sampling_skips_dark_emitters(void)
     gd.strata_theta = 8;
     gd.bounces = 1;
     gd.light_samples = 4;
-    memset(&sf, 0, sizeof sf);
-    set3(sf.normal, 0, 1, 0);
-    set3(sf.outgoing, 0, 1, 0);
-    sf.flags = LIGHTVEC_RECORD_VIEW_INDEPENDENT;
-    sf.material = mats[0];
+    sf = upward_surface(mats[0]);
     for (i = 0; i < 3; i++) {
         set3(sf.position, -0.3f * (float)i, 0, 0.1f * (float)i);
         if (!CHECK(lightvec_gather(without, &gd, &sf, (uint64_t)i, &a) == LIGHTVEC_OK &&
