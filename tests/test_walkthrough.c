@@ -385,9 +385,12 @@ static void test_threads(void)
    shadow rays, no interpolation, no render-cache reuse), at the demo's
    shading settings (default strata and light samples) on a small image.
    The converged render is itself noisy at CONVERGED_STRATA (its LRMS
-   against one of 48 x 144 rays is 0.048 at 80x60), so the error printed
-   includes that noise in quadrature. The bound is the error measured
-   (0.175 at frame 23 at 64x48, 0.21 before glossy points were refreshed
+   against one of 48 x 144 rays is 0.048 at 80x60; two converged renders
+   of frames 7, 23, 39 at 160x120 with other random numbers differ by
+   0.062-0.073, and by 0.047-0.054 since lightvec.h v0.4.8 picks a gather
+   hit's lamps by importance), so the error printed includes that noise in
+   quadrature. The bound is the error measured (0.172 since lightvec.h
+   v0.4.8; 0.175 at frame 23 at 64x48, 0.21 before glossy points were refreshed
    as the eye turns, wt__view_priority; 0.182 with the shadow rays'
    Hammersley points, which redrew every random number: one frame of the
    render cache moves by about 0.01 with its random numbers; 0.181 since
