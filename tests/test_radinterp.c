@@ -923,6 +923,85 @@ static void test_enclosed_floor_under_wall(void)
               up[1][0], up[1][1], up[1][2], up[1][3], up[0][0], up[0][1], up[0][2], up[0][3]);
 }
 
+/* A closed room whose floor and ceiling run on under its walls, as a
+   level's slabs do (one rectangle a storey, the walls standing on it: a
+   T-junction at each wall's foot): walls 12 cm thick as solids (inner and
+   outer faces), floor and ceiling from -0.12 to 1.12. Every face emits 1
+   and reflects 0.5, so every open point inside the room has
+   B = E / (1 - rho) = 2 (the room is a closed enclosure), and the strips of
+   floor and ceiling inside the walls are enclosed. The strips lie along
+   the edges of the floor and of many of its nodes, where a 3 x 3 grid of a
+   node's points (a sixth of it from its edges) finds none of them: the
+   node's open fraction came out 1 where a third of it is under the walls,
+   its links' factors (means over the whole node, enclosed points counting
+   zero) were not divided back up, and the floor and ceiling came out too
+   dark. */
+static void add_box_faces(scene *s, const float *lo, const float *hi, uint32_t m)
+{
+    float c[8][3];
+    int i;
+    for (i = 0; i < 8; i++) {
+        c[i][0] = i & 1 ? hi[0] : lo[0];
+        c[i][1] = (i >> 1) & 1 ? hi[1] : lo[1];
+        c[i][2] = (i >> 2) & 1 ? hi[2] : lo[2];
+    }
+    /* the four sides, facing out (the top and bottom lie against the slabs) */
+    add_quad(s, c[0], c[1], c[5], c[4], m);   /* y = lo */
+    add_quad(s, c[2], c[6], c[7], c[3], m);   /* y = hi */
+    add_quad(s, c[0], c[4], c[6], c[2], m);   /* x = lo */
+    add_quad(s, c[1], c[3], c[7], c[5], m);   /* x = hi */
+}
+
+static void test_furnace_room_on_slabs(void)
+{
+    const float t = 0.12f;
+    scene s;
+    radinterp_desc d;
+    radinterp_solution *sol;
+    uint32_t m, i, n;
+    double area[2] = {0.0, 0.0}, sum[2] = {0.0, 0.0};
+    memset(&s, 0, sizeof s);
+    m = add_material(&s, 0.5f, 1.0f);
+    add_hrect(&s, -t, -t, 1.0f + t, 1.0f + t, 0.0f, 1, m);   /* patch 0: the floor, facing up */
+    add_hrect(&s, -t, -t, 1.0f + t, 1.0f + t, 1.0f, 0, m);   /* patch 1: the ceiling */
+    {   /* four walls: along y at x = -t..0 and 1..1+t, along x between them */
+        float lo[4][3] = {{-t, -t, 0.0f}, {1.0f, -t, 0.0f}, {0.0f, -t, 0.0f}, {0.0f, 1.0f, 0.0f}};
+        float hi[4][3] = {{0.0f, 1.0f + t, 1.0f}, {1.0f + t, 1.0f + t, 1.0f}, {1.0f, 0.0f, 1.0f}, {1.0f, 1.0f + t, 1.0f}};
+        int w;
+        for (w = 0; w < 4; w++) add_box_faces(&s, lo[w], hi[w], m);
+    }
+    d = scene_desc(&s);
+    if (!CHECK(radinterp_solve(&d, &sol) == RADINTERP_OK)) return;
+    n = radinterp_leaf_count(sol);
+    for (i = 0; i < n; i++) {
+        radinterp_leaf lf;
+        double w, lo = 1e9, hi = -1e9;
+        uint32_t v, face;
+        radinterp_get_leaf(sol, i, &lf);
+        w = lf.area * lf.open;
+        face = lf.patch < 2 ? 0 : 1;   /* floor and ceiling, or the walls' faces */
+        for (v = 0; v < lf.vertex_count; v++) {
+            lo = fmin(lo, fmin(lf.vertices[v][0], lf.vertices[v][1]));
+            hi = fmax(hi, fmax(lf.vertices[v][0], lf.vertices[v][1]));
+        }
+        /* inside the room: faces of the walls turned outward see nothing */
+        if (!(w > 0.0) || lo < -1e-4 || hi > 1.0 + 1e-4) continue;
+        area[face] += w;
+        sum[face] += w * (lf.radiosity[0] / 2.0 - 1.0);
+    }
+    test_note("furnace room on slabs: B / 2 - 1 over the open area, floor and ceiling %+.3f%%, walls %+.3f%%",
+              100 * sum[0] / area[0], 100 * sum[1] / area[1]);
+    /* 2%: with the strips measured, the means come out 0.2-0.5% (floor and
+       ceiling) and 0.2-1.0% (walls) high over seeds 1-4, the share of the
+       hierarchy's per-leaf averaging (leaves in the room's corners take
+       their ancestors' mean factors; a closed cube shows the same few
+       tenths); with the strips missed the floor and ceiling came out
+       8.8-10.9% high, the walls 5.7-7.7% */
+    CHECK_CLOSE(sum[0] / area[0], 0.0, 0.0, 2e-2);
+    CHECK_CLOSE(sum[1] / area[1], 0.0, 0.0, 2e-2);
+    radinterp_solution_destroy(sol);
+}
+
 /* ---- the office: leaves, determinism, threads, callbacks ------------------ */
 static obj_scene office;
 static uint32_t *office_patches;
@@ -1403,6 +1482,7 @@ int main(int argc, char **argv)
     RUN(test_energy_closed_box);
     RUN(test_enclosed_floor_under_box);
     RUN(test_enclosed_floor_under_wall);
+    RUN(test_furnace_room_on_slabs);
     RUN(test_leaves_tile_patches_and_budget);
     RUN(test_outline_points_continuous);
     RUN(test_deterministic_any_thread_count);
