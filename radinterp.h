@@ -206,7 +206,16 @@
    patch enclosed by geometry resting on it (the floor under a box, the
    strip of floor under a wall) are found by rays (both rays of an opposite
    pair meet back faces) and left out of its radiosity
-   (radinterp_leaf.open).
+   (radinterp_leaf.open). The open fraction is measured on an
+   8 x 8 grid of the element's points (a 3 x 3 grid missed the strip under
+   a wall along most elements' edges), a link's receiver points found
+   enclosed are left out of its factor (they saw the enclosed strip of the
+   slab above, inside the wall, unblocked), and cluster links deliver to
+   the open part only: building_1k's row sums of the factors (B = 1 on
+   every face, against rays cast from the leaves) went from 0.966 to 0.981
+   on floors and 0.973 to 0.990 on ceilings, and a closed room on slabs
+   that run on under its walls (a furnace, B = E / (1 - rho) exactly) from
+   +9.9% to +0.35% (test_radinterp).
 
    radinterp_irradiance_at_point (chapter 6): the sum of B_src * F over the
    links of the leaf containing p and of its ancestors. F is eq. 6.1 for the
