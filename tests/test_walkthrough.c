@@ -388,8 +388,8 @@ static double polygon_irradiance(const float x[3], const float n[3], const float
 }
 
 /* Mean and variance of one sample of the irradiance at x (normal n) from
-   light L: sampler 0 wt__light_area_direction, 1
-   wt__light_solid_angle_direction, 2 wt__light_sample (the sampler it
+   light L: sampler 0 wt__light_area_direction, 1 by solid angle
+   (wt__light_view_solid_angle), 2 wt__light_sample (the sampler it
    picks, shadow rays, a white Lambert surface); count stratified samples
    as wt__direct draws them for one light. */
 static void light_irradiance(const wt_world *w, const wt_light *L, const float x[3], const float n[3], int sampler,
@@ -407,7 +407,9 @@ static void light_irradiance(const wt_world *w, const wt_light *L, const float x
             wt__light_sample(w, L, x, n, mirror, &white, u1, u2, 1.0f, rgb, gloss, &shadow);
             e = rgb[1] * WT_PI / L->ke[1];
         } else {
-            got = sampler ? wt__light_solid_angle_direction(w, L, x, u1, u2, wi, &d, &weight)
+            wt__light_view v;
+            if (sampler) wt__light_view_solid_angle(w, L, x, &v);
+            got = sampler ? wt__light_view_direction(w, &v, x, u1, u2, wi, &d, &weight)
                           : wt__light_area_direction(w, L, x, u1, u2, wi, &d, &weight);
             if (got > 0) e = fmax(wi[0] * n[0] + wi[1] * n[1] + wi[2] * n[2], 0.0) * weight;
         }

@@ -2500,49 +2500,46 @@ static const float *wt__lights_seen(const wt_world *w, const float x[3])
    area, and L sends almost nothing anyway. */
 #define WT__SOLID_ANGLE_REACH 8.0f     /* L's radii from its centre: solid angle nearer, area farther */
 #define WT__SOLID_ANGLE_MIN 1e-5       /* steradians: area sampling below (edge-on) */
+#define WT__SOLID_ANGLE_TRIS 4         /* a light of more triangles is sampled by area (the scenes' lamps are quads) */
 
 /* A spherical triangle seen from a point: the unit vectors to its corners
-   a, b, c, the angle at a (between the great circles ab and ac), cos of
-   the side ab, and its area (the solid angle). */
+   a, b, c, the angle at a (between the great circles ab and ac) with its
+   cosine and sine, cos of the side ab, the unit vector along c's part
+   perpendicular to a, and its area (the solid angle). */
 typedef struct wt__spherical_triangle {
-    double a[3], b[3], c[3];
-    double alpha, cos_c, area;
+    double a[3], b[3], c_perp[3];
+    double cos_alpha, sin_alpha, alpha, cos_c, area;
 } wt__spherical_triangle;
 
 static double wt__dot3(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
-/* The unit vector along v's part perpendicular to unit u, in out; 0 when v
-   is parallel to u. */
+/* The unit vector along v's part perpendicular to unit u, in out; 0 (and
+   out = 0) when v is parallel to u. */
 static int wt__perpendicular(const double v[3], const double u[3], double out[3])
 {
     double vu = wt__dot3(v, u), len;
     int k;
     for (k = 0; k < 3; k++) out[k] = v[k] - vu * u[k];
     len = sqrt(wt__dot3(out, out));
-    if (!(len > 0.0)) return 0;
+    if (!(len > 0.0)) {
+        out[0] = out[1] = out[2] = 0.0;
+        return 0;
+    }
     for (k = 0; k < 3; k++) out[k] /= len;
     return 1;
 }
 
-/* The spherical triangle of corners p[0..2] (a plane's triangle whose front
-   is along normal n) seen from x; returns its solid angle, 0 when x is not
-   in front of the plane. The solid angle by Van Oosterom & Strackee's
-   formula (1983: tan(omega / 2) = |a . (b x c)| / (1 + a.b + b.c + c.a)), and
-   the angle at a by the same triple product ((a x b) x (a x c) =
-   (a . (b x c)) a): both from atan2, which keeps their precision for
-   small triangles where the angle sum's excess (alpha + beta + gamma - pi)
-   would cancel. */
-static double wt__spherical_triangle_make(const float x[3], const float *const p[3], const float n[3],
-                                          wt__spherical_triangle *s)
+/* The spherical triangle of corners p[0..2] seen from x, which lies in
+   front of their plane (height front > 0 along its normal); returns its
+   solid angle. The solid angle by Van Oosterom & Strackee's formula (1983:
+   tan(omega / 2) = |a . (b x c)| / (1 + a.b + b.c + c.a)), and the angle at
+   a by the same triple product ((a x b) x (a x c) = (a . (b x c)) a): both
+   from atan2, which keeps their precision for small triangles where the
+   angle sum's excess (alpha + beta + gamma - pi) would cancel. */
+static double wt__spherical_triangle_make(const float x[3], const float *const p[3], wt__spherical_triangle *s)
 {
-    double *v[3];
-    double front = 0.0, ab, bc, ca, det;
+    double v[3][3], ab, bc, ca, det;
     int i, k;
-    v[0] = s->a;
-    v[1] = s->b;
-    v[2] = s->c;
-    for (k = 0; k < 3; k++) front += ((double)x[k] - p[0][k]) * n[k];
-    if (!(front > 0.0)) return s->area = 0.0;
     for (i = 0; i < 3; i++) {
         double len;
         for (k = 0; k < 3; k++) v[i][k] = (double)p[i][k] - x[k];
@@ -2550,18 +2547,23 @@ static double wt__spherical_triangle_make(const float x[3], const float *const p
         if (!(len > 0.0)) return s->area = 0.0;
         for (k = 0; k < 3; k++) v[i][k] /= len;
     }
-    ab = wt__dot3(s->a, s->b);
-    bc = wt__dot3(s->b, s->c);
-    ca = wt__dot3(s->c, s->a);
-    det = fabs(s->a[0] * (s->b[1] * s->c[2] - s->b[2] * s->c[1]) + s->a[1] * (s->b[2] * s->c[0] - s->b[0] * s->c[2]) +
-               s->a[2] * (s->b[0] * s->c[1] - s->b[1] * s->c[0]));
+    ab = wt__dot3(v[0], v[1]);
+    bc = wt__dot3(v[1], v[2]);
+    ca = wt__dot3(v[2], v[0]);
+    det = fabs(v[0][0] * (v[1][1] * v[2][2] - v[1][2] * v[2][1]) + v[0][1] * (v[1][2] * v[2][0] - v[1][0] * v[2][2]) +
+               v[0][2] * (v[1][0] * v[2][1] - v[1][1] * v[2][0]));
+    memcpy(s->a, v[0], sizeof s->a);
+    memcpy(s->b, v[1], sizeof s->b);
+    wt__perpendicular(v[2], v[0], s->c_perp);
     s->area = 2.0 * atan2(det, 1.0 + ab + bc + ca);
     s->alpha = atan2(det, bc - ab * ca);
+    s->cos_alpha = cos(s->alpha);
+    s->sin_alpha = sin(s->alpha);
     s->cos_c = ab;
     return s->area;
 }
 
-/* A direction uniform in the spherical triangle s from (u1, u2) in [0, 1)^2
+/* A direction uniform in the spherical triangle s from (u1, u2) in [0, 1]^2
    (Arvo 1995, fig. 2): u1 picks the sub-triangle a b c' of area u1 x area,
    whose corner c' lies on the arc from a to c, and u2 the point on the arc
    from b to c' with cos(angle to b) uniform: area-preserving, so
@@ -2569,17 +2571,18 @@ static double wt__spherical_triangle_make(const float x[3], const float *const p
 static void wt__spherical_triangle_sample(const wt__spherical_triangle *s, double u1, double u2, double dir[3])
 {
     double part = u1 * s->area, sp = sin(part - s->alpha), tp = cos(part - s->alpha);
-    double ca = cos(s->alpha), sa = sin(s->alpha), u = tp - ca, v = sp + sa * s->cos_c;
-    double q = ((v * tp - u * sp) * ca - v) / ((v * sp + u * tp) * sa);   /* cos of the arc a c' */
-    double e[3], c2[3], z;
+    double u = tp - s->cos_alpha, v = sp + s->sin_alpha * s->cos_c;
+    double q = ((v * tp - u * sp) * s->cos_alpha - v) / ((v * sp + u * tp) * s->sin_alpha);   /* cos of the arc a c' */
+    double e[3], c2[3], z, r;
     int k;
     q = q < 1.0 ? (q > -1.0 ? q : -1.0) : 1.0;   /* rounding; NaN (sin alpha = 0, no area) becomes 1: c' = a */
-    if (!wt__perpendicular(s->c, s->a, e)) memset(e, 0, sizeof e);
-    for (k = 0; k < 3; k++) c2[k] = q * s->a[k] + sqrt(1.0 - q * q) * e[k];
+    r = sqrt(1.0 - q * q);
+    for (k = 0; k < 3; k++) c2[k] = q * s->a[k] + r * s->c_perp[k];
     z = 1.0 - u2 * (1.0 - wt__dot3(c2, s->b));
-    if (!wt__perpendicular(c2, s->b, e)) memset(e, 0, sizeof e);
-    z = z > -1.0 ? (z < 1.0 ? z : 1.0) : -1.0;
-    for (k = 0; k < 3; k++) dir[k] = z * s->b[k] + sqrt(1.0 - z * z) * e[k];
+    z = z < 1.0 ? (z > -1.0 ? z : -1.0) : 1.0;
+    wt__perpendicular(c2, s->b, e);
+    r = sqrt(1.0 - z * z);
+    for (k = 0; k < 3; k++) dir[k] = z * s->b[k] + r * e[k];
 }
 
 /* The corners of light L's triangle i (0 .. tri_count - 1). */
@@ -2590,18 +2593,52 @@ static void wt__light_corners(const wt_world *w, const wt_light *L, uint32_t i, 
     for (k = 0; k < 3; k++) p[k] = w->office.positions + 3 * (size_t)v[k];
 }
 
-/* Light L's solid angle seen from x: the sum of its triangles' in front of x. */
-static double wt__light_solid_angle(const wt_world *w, const wt_light *L, const float x[3])
+/* Light L as a point sees it, for its samples (wt__light_view_direction):
+   its triangles in front of the point as spherical triangles, with their
+   planes' heights above the point and normals (the distance along a
+   direction), and their solid angles' sum; count 0: by area. */
+typedef struct wt__light_view {
+    const wt_light *L;
+    int count;
+    double solid_angle, front[WT__SOLID_ANGLE_TRIS];
+    const float *normal[WT__SOLID_ANGLE_TRIS];
+    wt__spherical_triangle tri[WT__SOLID_ANGLE_TRIS];
+} wt__light_view;
+
+/* L's spherical triangles seen from x (at most WT__SOLID_ANGLE_TRIS);
+   returns their solid angle, -1 when L has more triangles. */
+static double wt__light_view_solid_angle(const wt_world *w, const wt_light *L, const float x[3], wt__light_view *v)
 {
-    wt__spherical_triangle s;
-    double sum = 0.0;
     uint32_t i;
+    v->L = L;
+    v->count = 0;
+    v->solid_angle = 0.0;
+    if (L->tri_count > WT__SOLID_ANGLE_TRIS) return -1.0;
     for (i = 0; i < L->tri_count; i++) {
-        const float *p[3];
+        const float *p[3], *n = w->tracer->tri_normal + 3 * (size_t)(L->first_tri + i);
+        double front = 0.0;
+        int k;
         wt__light_corners(w, L, i, p);
-        sum += wt__spherical_triangle_make(x, p, w->tracer->tri_normal + 3 * (size_t)(L->first_tri + i), &s);
+        for (k = 0; k < 3; k++) front += ((double)x[k] - p[0][k]) * n[k];
+        if (!(front > 0.0) || !(wt__spherical_triangle_make(x, p, &v->tri[v->count]) > 0.0)) continue;   /* one-sided */
+        v->front[v->count] = front;
+        v->normal[v->count] = n;
+        v->solid_angle += v->tri[v->count++].area;
     }
-    return sum;
+    return v->solid_angle;
+}
+
+/* How x samples L (the comment above): by solid angle within
+   WT__SOLID_ANGLE_REACH radii of its centre unless L is edge-on or of more
+   triangles, by area otherwise (count 0). */
+static void wt__light_view_make(const wt_world *w, const wt_light *L, const float x[3], wt__light_view *v)
+{
+    float d[3] = { x[0] - L->centre[0], x[1] - L->centre[1], x[2] - L->centre[2] };
+    float reach = WT__SOLID_ANGLE_REACH * L->radius;
+    v->L = L;
+    v->count = 0;
+    if (d[0] * d[0] + d[1] * d[1] + d[2] * d[2] < reach * reach && !(wt__light_view_solid_angle(w, L, x, v) >= WT__SOLID_ANGLE_MIN))
+        v->count = 0;   /* edge-on or too many triangles: by area */
 }
 
 /* A sample of L's directions from x by area (wt__light_point): wi, the
@@ -2625,72 +2662,42 @@ static int wt__light_area_direction(const wt_world *w, const wt_light *L, const 
     return 1;
 }
 
-/* A sample of L's directions from x by solid angle (Arvo 1995): the
-   triangle whose share of L's solid angle holds u1, a direction uniform in
-   it from what is left of u1 and u2, the distance to the triangle along
-   it, weight = L's solid angle. 0 when nothing comes (the direction grazes
-   the plane by rounding), -1 when L's solid angle is below
-   WT__SOLID_ANGLE_MIN (then by area). */
-static int wt__light_solid_angle_direction(const wt_world *w, const wt_light *L, const float x[3], float u1, float u2,
-                                           float wi[3], float *dist, float *weight)
+/* A sample of L's directions from x as v says: by area, or by solid angle
+   (Arvo 1995): the triangle whose share of the solid angle holds u1, a
+   direction uniform in it from what is left of u1 and u2, the distance to
+   its plane along it, weight = L's solid angle. 0 when nothing comes. */
+static int wt__light_view_direction(const wt_world *w, const wt__light_view *v, const float x[3], float u1, float u2,
+                                    float wi[3], float *dist, float *weight)
 {
-    wt__spherical_triangle s, pick;
-    double total = wt__light_solid_angle(w, L, x), left, area = 0.0, dir[3], front = 0.0, down = 0.0;
-    const float *n = NULL, *p[3] = { NULL, NULL, NULL }, *corner = NULL;
-    uint32_t i;
-    int k;
-    if (!(total >= WT__SOLID_ANGLE_MIN)) return -1;
-    left = (double)u1 * total;
-    for (i = 0; i < L->tri_count; i++) {   /* the last triangle in view takes what rounding leaves */
-        const float *ni = w->tracer->tri_normal + 3 * (size_t)(L->first_tri + i);
-        wt__light_corners(w, L, i, p);
-        if (!(wt__spherical_triangle_make(x, p, ni, &s) > 0.0)) continue;
-        pick = s;
-        area = s.area;
-        n = ni;
-        corner = p[0];
-        if (left < s.area) break;
-        left -= s.area;
-    }
-    if (!n) return 0;
-    wt__spherical_triangle_sample(&pick, fmin(fmax(left / area, 0.0), 1.0), u2, dir);
+    double left = (double)u1 * v->solid_angle, dir[3], down = 0.0;
+    int i = 0, k;
+    if (!v->count) return wt__light_area_direction(w, v->L, x, u1, u2, wi, dist, weight);
+    while (i + 1 < v->count && left >= v->tri[i].area) left -= v->tri[i++].area;   /* the last takes what rounding leaves */
+    wt__spherical_triangle_sample(&v->tri[i], fmin(fmax(left / v->tri[i].area, 0.0), 1.0), u2, dir);
     for (k = 0; k < 3; k++) {
-        front += ((double)x[k] - corner[k]) * n[k];
-        down -= dir[k] * n[k];
+        down -= dir[k] * v->normal[i][k];
         wi[k] = (float)dir[k];
     }
-    if (!(down > 0.0)) return 0;
-    *dist = (float)(front / down);   /* along dir to the triangle's plane */
-    *weight = (float)total;
+    if (!(down > 0.0)) return 0;   /* grazing the plane by rounding */
+    *dist = (float)(v->front[i] / down);
+    *weight = (float)v->solid_angle;
     return 1;
 }
 
-/* A sample of L's directions from x: by solid angle near L, by area
-   farther or edge-on (the comment above). */
-static int wt__light_direction(const wt_world *w, const wt_light *L, const float x[3], float u1, float u2, float wi[3],
-                               float *dist, float *weight)
-{
-    float v[3] = { x[0] - L->centre[0], x[1] - L->centre[1], x[2] - L->centre[2] }, reach = WT__SOLID_ANGLE_REACH * L->radius;
-    if (v[0] * v[0] + v[1] * v[1] + v[2] * v[2] < reach * reach) {
-        int got = wt__light_solid_angle_direction(w, L, x, u1, u2, wi, dist, weight);
-        if (got >= 0) return got;
-    }
-    return wt__light_area_direction(w, L, x, u1, u2, wi, dist, weight);
-}
-
-/* One shadow-ray sample of light L for direct light at org (normal n,
-   mirror: the view direction reflected): a direction towards L
-   (wt__light_direction) from u1 and u2, added to rgb with the sampler's
-   weight x scale (scale = 1 / (selection probability * samples)); its
-   specular (view-dependent) term is added to gloss as well. */
-static void wt__light_sample(const wt_world *w, const wt_light *L, const float org[3], const float n[3],
-                             const float mirror[3], const lightvec_material *m, float u1, float u2, float scale,
-                             float rgb[3], float gloss[3], int *bunny_shadow)
+/* One shadow-ray sample of the light v sees from org (normal n, mirror:
+   the view direction reflected) for direct light: a direction towards it
+   (wt__light_view_direction) from u1 and u2, added to rgb with the
+   sampler's weight x scale (scale = 1 / (selection probability *
+   samples)); its specular (view-dependent) term is added to gloss as well. */
+static void wt__light_view_sample(const wt_world *w, const wt__light_view *v, const float org[3], const float n[3],
+                                  const float mirror[3], const lightvec_material *m, float u1, float u2, float scale,
+                                  float rgb[3], float gloss[3], int *bunny_shadow)
 {
     const ex_tracer *t = w->tracer;
+    const wt_light *L = v->L;
     float wi[3], through[3], d, weight, cos_x, g, f, c_m = 0.0f;
     int k;
-    if (!wt__light_direction(w, L, org, u1, u2, wi, &d, &weight)) return;
+    if (!wt__light_view_direction(w, v, org, u1, u2, wi, &d, &weight)) return;
     cos_x = wi[0] * n[0] + wi[1] * n[1] + wi[2] * n[2];
     if (cos_x <= 0.0f) return;
     if (wt__occluded(w, org, wi, d * (1.0f - 1e-4f) - t->epsilon, through, bunny_shadow)) return;
@@ -2703,18 +2710,30 @@ static void wt__light_sample(const wt_world *w, const wt_light *L, const float o
     }
 }
 
+/* One sample of light L at org as wt__light_view_sample, for one sample
+   alone (wt__direct makes a light's view once for all of its samples). */
+static void wt__light_sample(const wt_world *w, const wt_light *L, const float org[3], const float n[3],
+                             const float mirror[3], const lightvec_material *m, float u1, float u2, float scale,
+                             float rgb[3], float gloss[3], int *bunny_shadow)
+{
+    wt__light_view v;
+    wt__light_view_make(w, L, org, &v);
+    wt__light_view_sample(w, &v, org, n, mirror, m, u1, u2, scale, rgb, gloss, bunny_shadow);
+}
+
 /* Direct light reflected at a hit towards -dir (Lambert + normalized
    Phong), by many-light sampling as a production renderer does it: a fixed
    number n = opt.light_samples of shadow rays per point, whatever the
    number of emitting polygons. Each sample picks a light with probability
    p (wt__light_probability: importance and the grid's weights) and a
-   uniform point on it,
-   and is weighted by 1 / (p n): an unbiased estimate of the sum over every
+   direction towards it (wt__light_view_direction: uniform in its solid
+   angle near it, through a uniform point on it farther), and is weighted
+   by 1 / (p n): an unbiased estimate of the sum over every
    light. The n picks are stratified over the CDF of p (sample s at
    (s + xi) / n, so a light of probability p gets n p picks up to one), and
    what is left of a pick's stratum inside its light's interval, uniform in
-   [0, 1), places the point on the light: one light alone (the office's
-   lamp face) gets n stratified points. The point's other coordinate is the
+   [0, 1), places the sample on the light: one light alone (the office's
+   lamp face) gets n stratified samples. The sample's other coordinate is the
    van der Corput sequence of the sample's index, rotated by one random
    offset per shaded point (Cranley-Patterson): with the first coordinate
    stratified in n, the n points of one light form a randomized Hammersley
@@ -2802,12 +2821,15 @@ static void wt__direct(const wt_world *w, const ex_trace_hit *h, const float dir
     s = 0;
     for (e = 0; e < w->light_count && s < n; e++) {
         float p = wt__light_probability(w, seen, coef, e, org, h->normal), above = below + p;
+        wt__light_view view;
+        if (p > 0.0f && s < n && (pick[s] < above || e == last))   /* a pick lands: how org sees the light */
+            wt__light_view_make(w, &w->lights[e], org, &view);
         if (p > 0.0f)   /* the picks in [below, above); the last light takes what rounding leaves */
             for (; s < n && (pick[s] < above || e == last); s++) {
                 float u1 = fminf(fmaxf((pick[s] - below) / p, 0.0f), 0.99999994f);
                 float u2 = wt__radical_inverse((uint32_t)s) + shift;
-                wt__light_sample(w, &w->lights[e], org, h->normal, mirror, m, u1, u2 < 1.0f ? u2 : u2 - 1.0f,
-                                 1.0f / (p * (float)n), rgb, gloss, bunny_shadow);
+                wt__light_view_sample(w, &view, org, h->normal, mirror, m, u1, u2 < 1.0f ? u2 : u2 - 1.0f,
+                                      1.0f / (p * (float)n), rgb, gloss, bunny_shadow);
             }
         below = above;
     }
