@@ -20,7 +20,10 @@
    by an importance bound of power, distance and both cosines, mixed with
    that bound times whether a coarse grid's cell around the point sees
    each light (wt__light_grid_build: lights behind walls rarely take a
-   ray), and divided by the choice's probability; shadow rays through
+   ray), and divided by the choice's probability; within 8 of a light's
+   radii the ray's direction is uniform in the light's solid angle (Arvo
+   1995's spherical triangles, wt__light_view_direction), farther it aims
+   at a uniform point of its area; shadow rays through
    examples/common/trace.h, so the bunny casts shadows; Lambert +
    normalized Phong) and indirect light from a light
    vector (lightvec.h, Crespin & Peroche 2004): looked up in a cache, and
@@ -2497,7 +2500,17 @@ static const float *wt__lights_seen(const wt_world *w, const float x[3])
    for its trigonometry. Area also where L's solid angle is below
    WT__SOLID_ANGLE_MIN: L seen edge-on, where Arvo's step divides by the
    sine of a corner's angle that tends to 0 with the triangle's spherical
-   area, and L sends almost nothing anyway. */
+   area, and L sends almost nothing anyway. Measured with 8 shadow rays
+   against 256 (wt_render_converged at 160x120, the same 2 x 2 gather in
+   both, LRMS of the displayed frames; area -> solid angle): the office's
+   frames 7, 23, 39 pooled 0.056 -> 0.043, the relative RMS noise of
+   wt__direct at their hits 0.10, 0.11, 0.18 -> 0.06, 0.05, 0.09;
+   building_4k's frames 15-215 pooled 0.115 -> 0.113 (its dark rooms'
+   lamps are farther than 8 radii: their frames are the same bit for
+   bit), building_1k's 0.047 -> 0.045. Cost (wt__direct x 8 at 64 x 48
+   hits, one thread): the office 41 -> 50 ms (81 ms when every sample made
+   its light's spherical triangles again: wt__light_view makes them once a
+   point), building_4k near its first lamps 87 -> 91 ms. */
 #define WT__SOLID_ANGLE_REACH 8.0f     /* L's radii from its centre: solid angle nearer, area farther */
 #define WT__SOLID_ANGLE_MIN 1e-5       /* steradians: area sampling below (edge-on) */
 #define WT__SOLID_ANGLE_TRIS 4         /* a light of more triangles is sampled by area (the scenes' lamps are quads) */
