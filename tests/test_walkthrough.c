@@ -389,7 +389,7 @@ static double polygon_irradiance(const float x[3], const float n[3], const float
 
 /* Mean and variance of one sample of the irradiance at x (normal n) from
    light L: sampler 0 wt__light_area_direction, 1 by solid angle
-   (wt__light_view_solid_angle), 2 wt__light_sample (the sampler it
+   (wt__light_view_solid_angle), 2 light_sample (the sampler it
    picks, shadow rays, a white Lambert surface); count stratified samples
    as wt__direct draws them for one light. */
 static void light_irradiance(const wt_world *w, const wt_light *L, const float x[3], const float n[3], int sampler,
@@ -404,7 +404,7 @@ static void light_irradiance(const wt_world *w, const wt_light *L, const float x
         double e = 0.0;
         int shadow = 0, got;
         if (sampler == 2) {
-            wt__light_sample(w, L, x, n, mirror, &white, u1, u2, 1.0f, rgb, gloss, &shadow);
+            light_sample(w, L, x, n, mirror, &white, u1, u2, 1.0f, rgb, gloss, &shadow);
             e = rgb[1] * WT_PI / L->ke[1];
         } else {
             wt__light_view v;
@@ -429,7 +429,7 @@ static void light_irradiance(const wt_world *w, const wt_light *L, const float x
    Each sampler's mean over N stratified samples matches the closed form
    within 4 of its standard errors (the plain Monte Carlo error, sqrt(var /
    N): stratification only lowers it) plus 1e-4 of the value (float
-   directions and weights); the light path wt__light_sample takes (shadow
+   directions and weights); the light path light_sample takes (shadow
    rays included: nothing stands in front of the shade's top and x sides
    with the bunny on the floor) does too. Near the
    face, one sample's variance by solid angle is below half of area's

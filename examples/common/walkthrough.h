@@ -2723,17 +2723,6 @@ static void wt__light_view_sample(const wt_world *w, const wt__light_view *v, co
     }
 }
 
-/* One sample of light L at org as wt__light_view_sample, for one sample
-   alone (wt__direct makes a light's view once for all of its samples). */
-static void wt__light_sample(const wt_world *w, const wt_light *L, const float org[3], const float n[3],
-                             const float mirror[3], const lightvec_material *m, float u1, float u2, float scale,
-                             float rgb[3], float gloss[3], int *bunny_shadow)
-{
-    wt__light_view v;
-    wt__light_view_make(w, L, org, &v);
-    wt__light_view_sample(w, &v, org, n, mirror, m, u1, u2, scale, rgb, gloss, bunny_shadow);
-}
-
 /* Direct light reflected at a hit towards -dir (Lambert + normalized
    Phong), by many-light sampling as a production renderer does it: a fixed
    number n = opt.light_samples of shadow rays per point, whatever the
