@@ -352,7 +352,7 @@ static void test_light_grid(void)
                 for (e = 0; e < w->light_count; e++) {
                     float rgb[3] = { 0, 0, 0 }, gloss[3] = { 0, 0, 0 };
                     for (s = 0; s < 16; s++)
-                        wt__light_sample(w, &w->lights[e], p, h.normal, mirror, mat, ((float)s + 0.5f) / 16.0f,
+                        light_sample(w, &w->lights[e], p, h.normal, mirror, mat, ((float)s + 0.5f) / 16.0f,
                                          wt__radical_inverse((uint32_t)s), 1.0f / 16.0f, rgb, gloss, &shadow);
                     all += luminance(rgb);
                     if (weights[2 * e] == 0.0f) left += luminance(rgb);

@@ -37,6 +37,17 @@ TEST__FN void reference_path(char *path, size_t size, wt_mode mode, int frame)
     snprintf(path, size, "tests/data/walkthrough_%s_f%d.pfm", wt_mode_name(mode), frame);
 }
 
+/* One sample of light L at org for direct light (wt__light_view_sample),
+   with the light's view made for this sample alone. */
+TEST__FN void light_sample(const wt_world *w, const wt_light *L, const float org[3], const float n[3],
+                           const float mirror[3], const lightvec_material *m, float u1, float u2, float scale,
+                           float rgb[3], float gloss[3], int *bunny_shadow)
+{
+    wt__light_view v;
+    wt__light_view_make(w, L, org, &v);
+    wt__light_view_sample(w, &v, org, n, mirror, m, u1, u2, scale, rgb, gloss, bunny_shadow);
+}
+
 /* The time at which the bunny is deepest under the office's desk (x 1.0-2.6, z 2.9-3.7). */
 TEST__FN double time_under_desk(void)
 {
@@ -118,7 +129,7 @@ TEST__FN int count_files(const char *dir, const char *pattern)
    primary hits of a cols x rows image of the path's camera at time t, its
    mean over `streams` random streams agrees with the sum over every light
    of `per_light` stratified samples each (the estimator that samples every
-   light: wt__light_sample with probability 1, no importance involved),
+   light: light_sample with probability 1, no importance involved),
    summed over the hits, within 4 standard errors of the difference (both
    estimates' spreads measured from their own repeats: 4 sigma leaves a
    false alarm 1 time in 16000, and a missing 1 / p or a light never chosen
@@ -169,13 +180,13 @@ TEST__FN double direct_light_bias(wt_world *w, double t, int cols, int rows, int
                 int s, shadow = 0;
                 for (e = 0; e < w->light_count; e++)
                     for (s = 0; s < per_light; s++)
-                        wt__light_sample(w, &w->lights[e], o, h.normal, mirror, mat,
+                        light_sample(w, &w->lights[e], o, h.normal, mirror, mat,
                                          ((float)s + ex_rng_float(&r)) / (float)per_light, ex_rng_float(&r),
                                          1.0f / (float)per_light, rgb, gloss, &shadow);
                 a1 += luminance(rgb);
                 a2 += (double)luminance(rgb) * luminance(rgb);
                 for (e = 0; e < w->light_count; e++) {   /* one sample per light: the old default's spread */
-                    wt__light_sample(w, &w->lights[e], o, h.normal, mirror, mat, ex_rng_float(&r), ex_rng_float(&r),
+                    light_sample(w, &w->lights[e], o, h.normal, mirror, mat, ex_rng_float(&r), ex_rng_float(&r),
                                      1.0f, one, gloss, &shadow);
                     if (i == 0) *rays += wt__light_importance(&w->lights[e], o, h.normal) > 0.0f;
                 }
