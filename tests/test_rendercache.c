@@ -325,11 +325,11 @@ static void test_static_camera_converges_to_full_render(void)
     }
     /* while holes remain they outrank every point that has not changed,
        so each frame samples about `budget` new pixels: ceil(n / budget)
-       frames, and one more: a hole beside the square's edge is filled
-       from one layer, and a sample there that shows the other differs
-       from the hole's colour, so it ages the points around it to the
-       holes' lowest priority (colour-change detection of holes), and some
-       of them are sampled again before the last holes */
+       frames, and one more: a sample that lands in a hole beside the
+       square's edge differs from the hole's colour (the filter's blend of
+       one layer's points across the edge), so it ages the points around
+       it to the holes' lowest priority (colour-change detection of holes),
+       and some of them are sampled again before the last holes */
     CHECK(frames >= (n + budget - 1) / budget && frames <= (n + budget - 1) / budget + 1);
     CHECK(images_equal(rendercache_image(rc), reference, 3 * (size_t)n));
     /* further frames refresh the oldest points; the image stays exact and
