@@ -1,4 +1,4 @@
-/* rendercache.h - v0.6.1 - render cache and range-image walkthroughs - public domain or MIT, see end of file
+/* rendercache.h - v0.6.0 - render cache and range-image walkthroughs - public domain or MIT, see end of file
 
    RENDERCACHE.H: an image-space point cache that reprojects and resamples, and range-image walkthroughs of animated scenes.
 
@@ -224,15 +224,7 @@
        the last frame's resample differences: a noisy renderer does not
        trigger it) ages the points shown within RENDERCACHE_CHANGE_RADIUS
        pixels to the top of the age ramp (WDG02): a new shadow is found by
-       the samples that land in it and filled in by the next requests. So
-       does a sample of the current frame that lands in a filled hole and
-       differs from the hole's colour beyond the same level: the points
-       that coloured the hole were stale or blurred an edge (with the
-       camera walking forward most samples land in holes, and an old
-       point that colours a dozen holes was otherwise compared with
-       nothing; in the building walkthrough the cached frames' LRMS
-       against converged renders fell from 0.313 to 0.303, the office's
-       from 0.121 to 0.118).
+       the samples that land in it and filled in by the next requests.
 
    HOW A WARP WORKS (NDR96 section 4.4, after Radiance's pinterp)
 
@@ -458,7 +450,7 @@
 
 #define RENDERCACHE_VERSION_MAJOR 0
 #define RENDERCACHE_VERSION_MINOR 6
-#define RENDERCACHE_VERSION_PATCH 1
+#define RENDERCACHE_VERSION_PATCH 0
 
 #ifndef RENDERCACHE_API
 #  ifdef RENDERCACHE_STATIC
@@ -690,9 +682,9 @@ RENDERCACHE_API rendercache_result rendercache_request(rendercache *rc, renderca
    that is the same surface (within the depth tolerance) and is shown when
    nothing nearer is; otherwise, and for predicted samples, it takes the
    slot of the oldest point the frame does not show. A sample that replaces
-   a point of another colour (desc.change_threshold), or that lands in a
-   filled hole of another colour, ages the points shown within
-   RENDERCACHE_CHANGE_RADIUS pixels of it, so that they are requested next. Returns RENDERCACHE_ERROR_INVALID_ARGUMENT when some
+   a point of another colour (desc.change_threshold) ages the points shown
+   within RENDERCACHE_CHANGE_RADIUS pixels of it, so that they are
+   requested next. Returns RENDERCACHE_ERROR_INVALID_ARGUMENT when some
    sample was malformed (pixel outside the image, unknown object or flag,
    non-finite value, a frame not yet begun, a predicted sample of a frame
    without prediction): those are skipped and counted in stats.rejected,
@@ -4272,26 +4264,6 @@ static int rendercache__colour_changed(rendercache *rc, const float old_rgb[3], 
     return r > rc->change_level;
 }
 
-/* Whether a sample of the current frame that lands in a filled hole p
-   shows that the hole's filter was wrong: its colour differs from the
-   hole's (the mean of the points around, of the hole's layer) beyond the
-   frame's change level. The points that coloured the hole are then stale
-   (shaded under other light, or for a view-dependent colour) or lie across
-   an edge the filter blurred; either way they are aged like the neighbours
-   of a changed point, so that the next requests look around it (WDG02's
-   colour-change detection, taken to the samples that fill holes: with the
-   camera walking forward most samples land in holes, and an old point that
-   coloured a dozen holes was never compared with anything). These
-   differences are not counted in the noise level (they include the
-   filter's own error). */
-static int rendercache__hole_changed(const rendercache *rc, uint32_t p, const float rgb[3])
-{
-    unsigned char kind = (unsigned char)(rc->kind[p] & ~RENDERCACHE__REFILL);
-    if (rc->px_index[p] != RENDERCACHE__NONE || (kind != RENDERCACHE_PIXEL_INTERPOLATED && kind != RENDERCACHE_PIXEL_SPARSE))
-        return 0;
-    return rendercache__colour_difference(rc->image + 3 * (size_t)p, rgb) > rc->change_level;
-}
-
 /* At the start of a frame: the threshold of colour changes for the frame,
    the larger of desc.change_threshold and three standard deviations of
    the last frame's replacement differences (the renderer's noise),
@@ -4368,8 +4340,7 @@ static void rendercache__add_counts(rendercache *rc, const rendercache__put_coun
 static void rendercache__place(rendercache *rc, uint32_t slot, int replacing, int refill,
                                const rendercache__new_point *np, uint32_t p, float depth2)
 {
-    int changed = np->age == 0 && (replacing ? rendercache__colour_changed(rc, rc->data[slot].rgb, np->rgb)
-                                             : !refill && p != RENDERCACHE__NONE && rendercache__hole_changed(rc, p, np->rgb));
+    int changed = replacing && np->age == 0 && rendercache__colour_changed(rc, rc->data[slot].rgb, np->rgb);
     rendercache__put_counts n = { 0, 0, 0 };
     rendercache__put_point(rc, slot, replacing, refill, np, p, depth2, &n);
     rendercache__add_counts(rc, &n);
@@ -4527,10 +4498,7 @@ static void rendercache__change_job(void *ctx, uint32_t j)
     int changed = 0;
     rendercache__insert_range(job, j, &i0, &i1);
     for (i = i0; i < i1; i++) {
-        if (job->change[i] < 0.0f) {   /* a hole */
-            changed |= rendercache__hole_changed(rc, job->s[i].y * rc->width + job->s[i].x, job->s[i].rgb);
-            continue;
-        }
+        if (job->change[i] < 0.0f) continue;
         job->change[i] = rendercache__colour_difference(rc->data[job->slot[i]].rgb, job->s[i].rgb);
         changed |= job->change[i] > rc->change_level;
     }
