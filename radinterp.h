@@ -293,7 +293,13 @@
    along their common edge), except on a contact discontinuity, where each
    triangle approaches the point from its own centre and so takes its own
    side of the jump; then the closed form of eq. 3.3 for (A, 2B, 2C, D, 2E,
-   F) per channel. With refine, representation-based refinement (4.4.2):
+   F) per channel. These queries are 94 % of building_1k's mesh build
+   (v0.8.4, profiled outside make bench): 2.4 a triangle, each taking about
+   270 links, 152 of them exactly with 115 unions of shadows; the unions
+   (43 % of the time, most of it staging the shadows), the nodes below
+   shared unions (20 %) and the unoccluded factors (10 %) share it, so the
+   cost follows the exact links a point takes, not one stage.
+   With refine, representation-based refinement (4.4.2):
    SAMPLES x SAMPLES more points per triangle measure the interpolant's
    error, leaves above refine_eps are split (children inherit their parent's
    clipped DSets), and the pass repeats; unchanged triangles keep their
