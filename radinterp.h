@@ -297,8 +297,9 @@
    (v0.8.4, profiled outside make bench): 2.4 a triangle, each taking about
    270 links, 152 of them exactly with 115 unions of shadows; the unions
    (43 % of the time, most of it staging the shadows), the nodes below
-   shared unions (20 %) and the unoccluded factors (10 %) share it, so the
-   cost follows the exact links a point takes, not one stage.
+   shared unions (20 %) and the unoccluded factors (10 %) share it. Most of
+   it is in the brightest links, whose sources a point takes child by child
+   (child_tol): approximating many more dim links gains little.
    With refine, representation-based refinement (4.4.2):
    SAMPLES x SAMPLES more points per triangle measure the interpolant's
    error, leaves above refine_eps are split (children inherit their parent's
