@@ -1,4 +1,4 @@
-/* lightvec.h - v0.4.8 - cached 5D indirect light vectors - public domain or MIT, see end of file
+/* lightvec.h - v0.4.9 - cached 5D indirect light vectors - public domain or MIT, see end of file
 
    LIGHTVEC.H: cached light vectors over position and direction for interactive glossy global illumination.
 
@@ -579,7 +579,7 @@
 
 #define LIGHTVEC_VERSION_MAJOR 0
 #define LIGHTVEC_VERSION_MINOR 4
-#define LIGHTVEC_VERSION_PATCH 8
+#define LIGHTVEC_VERSION_PATCH 9
 #define LIGHTVEC_FILE_FORMAT_VERSION 2
 
 #ifndef LIGHTVEC_API
@@ -4963,17 +4963,18 @@ static void lightvec__for_indexes(const lightvec_cache *c, int directional, cons
     }
 }
 
-/* Every record valid at the query, as a registered reader. */
+/* Every record valid at the query. The caller is a registered reader
+   (lightvec__enter) until it has read the candidates too: their heads point
+   into leaf blocks that a restructured face retires, and the writer frees
+   retired memory once no registered reader is left. */
 static void lightvec__search(const lightvec_cache *c, lightvec__query *q)
 {
     lightvec__block_ref pending[LIGHTVEC__PENDING];
-    uint32_t e = lightvec__enter(c->readers);
     q->pending = pending;
     q->pending_count = 0;
     lightvec__for_indexes(c, q->directional, q->w, lightvec__index_query, q);
     lightvec__drain(q);
     q->pending = NULL;
-    lightvec__leave(c->readers, e);
 }
 
 /* 4.2.3: the normalised weighted interpolation of the kept records.
@@ -5059,6 +5060,7 @@ LIGHTVEC_API lightvec_result lightvec_lookup(const lightvec_cache *c, const floa
     uint64_t ranks[LIGHTVEC__MAX_NEIGHBORS + LIGHTVEC__KEPT_SLACK];
     lightvec__query q;
     lightvec_result r;
+    uint32_t e;
     if (!out) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
     memset(out, 0, sizeof *out);
     r = lightvec__query_init(c, position, normal, outgoing, &q);
@@ -5066,10 +5068,12 @@ LIGHTVEC_API lightvec_result lightvec_lookup(const lightvec_cache *c, const floa
     q.kept = kept;
     q.ranks = ranks;
     q.best = c->p.max_neighbors;
+    e = lightvec__enter(c->readers);
     lightvec__search(c, &q);
     out->valid_count = q.count;
     q.kept_count = lightvec__select_best(q.ranks, q.kept, q.kept_count, q.best);
-    lightvec__interpolate(&q, out);
+    lightvec__interpolate(&q, out); /* reads the kept heads: still registered */
+    lightvec__leave(c->readers, e);
     return LIGHTVEC_OK;
 }
 
@@ -5079,6 +5083,7 @@ LIGHTVEC_API lightvec_result lightvec_find(const lightvec_cache *c, const float 
 {
     lightvec__query q;
     lightvec_result r;
+    uint32_t e;
     if (!count || (capacity && (!ids || !weights))) return LIGHTVEC_ERROR_INVALID_ARGUMENT;
     *count = 0;
     r = lightvec__query_init(c, position, normal, outgoing, &q);
@@ -5086,7 +5091,9 @@ LIGHTVEC_API lightvec_result lightvec_find(const lightvec_cache *c, const float 
     q.ids = ids;
     q.weights = weights;
     q.capacity = capacity;
+    e = lightvec__enter(c->readers);
     lightvec__search(c, &q);
+    lightvec__leave(c->readers, e);
     *count = q.count;
     return LIGHTVEC_OK;
 }
