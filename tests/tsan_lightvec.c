@@ -17,7 +17,7 @@
 #include "tests/test.h"
 
 #define RECORDS 30000u
-#define RACE_RECORDS 150u
+#define RACE_RECORDS 150u /* about 2-3 s under TSan; a report in 8 of 8 runs against v0.4.8 */
 #define READERS 3
 
 typedef struct shared {
