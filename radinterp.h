@@ -9842,6 +9842,7 @@ typedef struct radinterp__builder {
     uint32_t *chain_first, *chain_len;
     radinterp__buf pos, tris;        /* output of the pass */
     radinterp__hmap vmap;            /* point -> output vertex */
+    double reported;                 /* RADINTERP_CPU_SECONDS() at the last progress call */
     /* statistics */
     uint32_t balance_splits, hanging, seam, fallback, degenerate, skipped;
     uint64_t samples;
@@ -10350,8 +10351,28 @@ static double radinterp__source_reach(const radinterp__builder *b, uint32_t R, c
     return best;
 }
 
+/* A progress call between the steps that come before the samples: (0, 1),
+   none of the sampling's count done yet. A building's discontinuities and
+   triangulations take seconds, during which the caller may still see
+   progress and cancel. Non-zero: cancel. */
+static int radinterp__mesh_cancelled(radinterp__builder *b)
+{
+    b->reported = RADINTERP_CPU_SECONDS();
+    return b->desc->progress && b->desc->progress(b->desc->progress_user, 0, 1) != 0;
+}
+
+/* The same call inside one long serial step (a receiver that many sources
+   light), once progress_interval has passed since the last call. */
+static int radinterp__mesh_tick(radinterp__builder *b)
+{
+    double interval = b->desc->progress_interval > 0.0f ? (double)b->desc->progress_interval : RADINTERP__PROGRESS_INTERVAL;
+    if (!(RADINTERP_CPU_SECONDS() - b->reported >= interval)) return 0;
+    return radinterp__mesh_cancelled(b);
+}
+
 /* Every discontinuity on receiver R (5.5.3: from the links, so only
-   mutually visible pairs and their potential blockers are considered). */
+   mutually visible pairs and their potential blockers are considered).
+   0, or -1 when memory runs out, 1 when progress asks to cancel. */
 static int radinterp__receiver_discs(radinterp__builder *b, uint32_t R, radinterp__buf *pairs, radinterp__buf *stack)
 {
     const radinterp_solution *s = b->s;
@@ -10366,6 +10387,7 @@ static int radinterp__receiver_discs(radinterp__builder *b, uint32_t R, radinter
         radinterp__wedge_ctx w;
         for (j = i; j < pairs->count && (uint32_t)(pr[j] >> 32) == S; j++) {}
         if (S == R || !(radinterp__brightness(s, S) > 0.0f)) { i = j; continue; }
+        if (radinterp__mesh_tick(b)) return 1;
         rn = radinterp__front_region(b, R, S, region, label);
         if (rn >= 3) {
             size_t from = b->discs.count, m;
@@ -10517,15 +10539,6 @@ static int radinterp__group_dsets(radinterp__builder *b, uint32_t R)
 }
 
 /* All discontinuities of the scene, by receiver. */
-/* A progress call between the steps that come before the samples: (0, 1),
-   none of the sampling's count done yet. A building's discontinuities and
-   triangulations take seconds, during which the caller may still see
-   progress and cancel. Non-zero: cancel. */
-static int radinterp__mesh_cancelled(const radinterp__builder *b)
-{
-    return b->desc->progress && b->desc->progress(b->desc->progress_user, 0, 1) != 0;
-}
-
 static radinterp_result radinterp__find_discontinuities(radinterp__builder *b)
 {
     const radinterp_solution *s = b->s;
@@ -10535,11 +10548,14 @@ static radinterp_result radinterp__find_discontinuities(radinterp__builder *b)
     radinterp__buf_init(&pairs, sizeof(uint64_t));
     radinterp__buf_init(&stack, sizeof(uint32_t));
     for (R = 0; R < s->patch_count && !fail && !cancelled; R++) {
+        int r = 0;
         if ((cancelled = radinterp__mesh_cancelled(b)) != 0) break;
         b->disc_first[R] = (uint32_t)b->discs.count;
-        if (s->patches[R].count && !b->desc->no_discontinuities) fail = radinterp__receiver_discs(b, R, &pairs, &stack) != 0;
+        if (s->patches[R].count && !b->desc->no_discontinuities) r = radinterp__receiver_discs(b, R, &pairs, &stack);
+        cancelled = r > 0;
+        fail = r < 0;
         b->disc_count[R] = (uint32_t)b->discs.count - b->disc_first[R];
-        if (!fail) fail = radinterp__group_dsets(b, R) != 0;
+        if (!fail && !cancelled) fail = radinterp__group_dsets(b, R) != 0;
     }
     radinterp__buf_free(&b->a, &pairs);
     radinterp__buf_free(&b->a, &stack);
