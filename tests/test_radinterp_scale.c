@@ -530,6 +530,24 @@ static void test_progress_paced_by_work(void)
     float *ref, *out;
     uint32_t k;
     soup_room(&s, 0);
+    {   /* the interval is a parameter like the others: negative or NaN is refused */
+        radinterp_desc d = rb_desc(&s);
+        radinterp_mesh_desc md;
+        radinterp_solution *sol = NULL;
+        radinterp_mesh *mesh = NULL;
+        d.progress_interval = -1.0f;
+        CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_ERROR_INVALID_ARGUMENT);
+        d.progress_interval = NAN;
+        CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_ERROR_INVALID_ARGUMENT);
+        d.progress_interval = 0.0f;
+        if (CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_OK)) {
+            memset(&md, 0, sizeof md);
+            md.progress_interval = -1.0f;
+            CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &mesh), RADINTERP_ERROR_INVALID_ARGUMENT);
+            CHECK(mesh == NULL);
+        }
+        radinterp_solution_destroy(sol);
+    }
     ref = paced_run(&s, &free_jobs, &sg, &mg, &free_calls, &n0);
     for (k = 0; k < sizeof costs / sizeof costs[0] && ref; k++) {
         c.job_cost = costs[k];
