@@ -366,9 +366,28 @@ static int progress_cb(void *user, uint64_t done, uint64_t total)
     return ++p->calls == p->cancel_at;
 }
 
+/* Cancels mesh builds at `parts` calls spread over the first `calls` ones
+   (every one when there are fewer): each returns CANCELLED and no mesh. */
+static void cancel_mesh_sweep(const radinterp_solution *sol, const radinterp_mesh_desc *md, progress_state *ps,
+                              long calls, long parts)
+{
+    long k, step = (calls + parts - 1) / parts;
+    for (k = 1; k <= calls; k += step) {
+        radinterp_mesh *c = NULL;
+        memset(ps, 0, sizeof *ps);
+        ps->cancel_at = k;
+        CHECK_EQ_INT(radinterp_build_mesh(sol, md, &c), RADINTERP_ERROR_CANCELLED);
+        CHECK(c == NULL);
+    }
+}
+
 /* Cancel from progress calls spread over the run (every one up to 8, else
    8 evenly spaced): the solve and the mesh build return CANCELLED and free
-   everything they allocated. */
+   everything they allocated. A receiver's discontinuity search (a slab lit
+   by a storey's lamps takes seconds at building scale) also reports between
+   its sources once the interval has passed: with a clock that moves a
+   second at every reading it reports at every lit source, and a cancel from
+   16 of the calls before the samples frees everything too. */
 static void test_cancel_everywhere(void)
 {
     rb_scene s;
@@ -378,7 +397,7 @@ static void test_cancel_everywhere(void)
     radinterp_mesh *mesh = NULL;
     counting cnt;
     progress_state ps;
-    long n, k, step, solve_step;
+    long n, k, solve_step;
     soup_room(&s, 1);
     memset(&cnt, 0, sizeof cnt);
     d = rb_desc(&s);
@@ -392,8 +411,8 @@ static void test_cancel_everywhere(void)
     n = ps.calls;
     CHECK(n >= 3);
     CHECK(!ps.backwards);
-    solve_step = step = (n + 7) / 8;
-    for (k = 1; k <= n; k += step) {
+    solve_step = (n + 7) / 8;
+    for (k = 1; k <= n; k += solve_step) {
         radinterp_solution *c = NULL;
         memset(&ps, 0, sizeof ps);
         ps.cancel_at = k;
@@ -407,20 +426,27 @@ static void test_cancel_everywhere(void)
     md.progress_user = &ps;
     memset(&ps, 0, sizeof ps);
     if (CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &mesh), RADINTERP_OK)) {
-        long m = ps.calls;
+        long m = ps.calls, stopped = ps.before_samples, running;
         CHECK(m >= 3);
         CHECK(!ps.backwards);
         radinterp_mesh_destroy(mesh);
-        step = (m + 7) / 8;
-        for (k = 1; k <= m; k += step) {
-            radinterp_mesh *c = NULL;
-            memset(&ps, 0, sizeof ps);
-            ps.cancel_at = k;
-            CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &c), RADINTERP_ERROR_CANCELLED);
-            CHECK(c == NULL);
-        }
-        test_note("cancelled from %ld of %ld solve progress calls and %ld of %ld mesh ones", (n + solve_step - 1) / solve_step, n,
-                  (m + step - 1) / step, m);
+        mesh = NULL;
+        cancel_mesh_sweep(sol, &md, &ps, m, 8);
+        clock_step = 1.0;
+        memset(&ps, 0, sizeof ps);
+        CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &mesh), RADINTERP_OK);
+        radinterp_mesh_destroy(mesh);
+        running = ps.before_samples;
+        /* stopped: one call a patch while discontinuities are found, one
+           while they are triangulated; running: one more at every lit
+           source of a receiver */
+        CHECK_MSG(running > stopped + (long)s.np, "%ld calls before the samples with a running clock, %ld stopped", running,
+                  stopped);
+        cancel_mesh_sweep(sol, &md, &ps, running, 16);
+        clock_step = 0.0;
+        test_note("cancelled from %ld of %ld solve progress calls and %ld of %ld mesh ones; %ld calls before the samples with "
+                  "a clock that runs (%ld stopped), cancelled from 16", (n + solve_step - 1) / solve_step, n,
+                  m < 8 ? m : 8, m, running, stopped);
     }
     radinterp_solution_destroy(sol);
     CHECK_EQ_INT(cnt.live, 0);
@@ -566,62 +592,6 @@ static void test_progress_paced_by_work(void)
     rb_free(&s);
 }
 
-/* A receiver's discontinuity search reports progress between its sources
-   once the interval has passed (a slab lit by a storey's lamps takes seconds
-   at building scale): with a clock that moves a second at every reading it
-   reports at every source, and a cancel from any of those calls returns
-   CANCELLED with nothing leaked. */
-static void test_cancel_inside_a_receiver(void)
-{
-    rb_scene s;
-    radinterp_desc d;
-    radinterp_mesh_desc md;
-    radinterp_solution *sol = NULL;
-    radinterp_mesh *mesh = NULL;
-    counting cnt;
-    progress_state ps;
-    long stopped, running, k, step;
-    soup_room(&s, 0);
-    memset(&cnt, 0, sizeof cnt);
-    d = rb_desc(&s);
-    if (!CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_OK)) { rb_free(&s); return; }
-    memset(&md, 0, sizeof md);
-    md.min_leaf_area = 0.25f;
-    md.allocator.alloc = count_alloc;
-    md.allocator.free = count_free;
-    md.allocator.user = &cnt;
-    md.progress = progress_cb;
-    md.progress_user = &ps;
-    memset(&ps, 0, sizeof ps);
-    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &mesh), RADINTERP_OK);
-    radinterp_mesh_destroy(mesh);
-    stopped = ps.before_samples;
-    clock_step = 1.0;
-    memset(&ps, 0, sizeof ps);
-    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &mesh), RADINTERP_OK);
-    radinterp_mesh_destroy(mesh);
-    running = ps.before_samples;
-    /* stopped: one call a patch while discontinuities are found, one while
-       they are triangulated; running: one more at every lit source of a
-       receiver */
-    CHECK_MSG(running > stopped + (long)s.np, "%ld calls before the samples with a running clock, %ld with a stopped one",
-              running, stopped);
-    step = (running + 15) / 16;
-    for (k = 1; k <= running; k += step) {
-        mesh = NULL;
-        memset(&ps, 0, sizeof ps);
-        ps.cancel_at = k;
-        CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &mesh), RADINTERP_ERROR_CANCELLED);
-        CHECK(mesh == NULL);
-    }
-    clock_step = 0.0;
-    test_note("mesh build: %ld progress calls before the samples with a clock that runs (%ld stopped); cancelled at 16 of them",
-              running, stopped);
-    radinterp_solution_destroy(sol);
-    CHECK_EQ_INT(cnt.live, 0);
-    rb_free(&s);
-}
-
 /* ---- coordinate range ----------------------------------------------------------- */
 /* Radiosity does not depend on the scene's scale: the room scaled by 1e-15
    and by 1e15 (inside the accepted range) gives the radiosities of the
@@ -676,7 +646,6 @@ int main(int argc, char **argv)
     RUN(test_triangle_soup);
     RUN(test_cancel_everywhere);
     RUN(test_progress_paced_by_work);
-    RUN(test_cancel_inside_a_receiver);
     RUN(test_coordinate_range);
     RUN(test_clustered_equals_unclustered);
     return test_finish();
