@@ -1,4 +1,4 @@
-/* radinterp.h - v0.8.5 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
+/* radinterp.h - v0.8.6 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
 
    RADINTERP.H: hierarchical radiosity, ranked discontinuities and quadratic irradiance interpolants evaluated per pixel.
 
@@ -481,6 +481,8 @@
                                  solve time and 2x its mesh time; 16 takes it to 18% at
                                  1.1-1.5x the links (measured before the budget counted
                                  the sources' variation, except the 18%)
+       RADINTERP_CPU_SECONDS()   the process's CPU time in seconds, negative when there is no
+                                 clock; paces progress calls (THREADS). Default: clock()
 
    FUNCTION REFERENCE
 
@@ -650,10 +652,20 @@
    triangulation moves to the allocator only when it outgrows 32 KB; 20 KB
    rank its sources).
    radinterp_build_mesh samples its interpolants through
-   mesh_desc.parallel_for (jobs of 2 sample points, progress every 128;
-   before the samples, while discontinuities are found and patches
-   triangulated, progress is called once a patch with (0, 1));
-   the mesh is bit-identical for any thread count. radinterp_shade splits
+   mesh_desc.parallel_for (jobs of 2 sample points; before the samples,
+   while discontinuities are found and patches triangulated, progress is
+   called once a patch with (0, 1)); the mesh is bit-identical for any
+   thread count.
+   Progress is called from the calling thread, between batches of jobs,
+   never concurrently with itself. A batch is sized from the last one's cost
+   so that it takes about progress_interval seconds of the process's CPU
+   time (default 0.25; RADINTERP_CPU_SECONDS): however costly the jobs, a
+   slow region shrinks the batches rather than stretching the gap. Two
+   long serial loops call progress inside once the interval has passed: a
+   receiver's discontinuity search (between its sources) and refinement's
+   pass over the links (every 256 splits). The batches never change a
+   result. bench_radinterp_building's longest gap on building_1k, one
+   thread: 0.64 s with v0.8.5's fixed batches, 0.46 s. radinterp_shade splits
    its pixels into jobs of 16384 through the mesh's parallel_for (the
    build's, or radinterp_mesh_set_parallel_for). Queries on a mesh are const.
 
@@ -798,7 +810,7 @@
 
 #define RADINTERP_VERSION_MAJOR 0
 #define RADINTERP_VERSION_MINOR 8
-#define RADINTERP_VERSION_PATCH 5
+#define RADINTERP_VERSION_PATCH 6
 #define RADINTERP_FILE_FORMAT_VERSION 2   /* of saved meshes */
 
 #include <stddef.h>
@@ -829,6 +841,7 @@ typedef enum radinterp_result {
 
 #define RADINTERP__POINT_REST (1.0 / 256.0)   /* default of radinterp_desc.point_rest */
 #define RADINTERP__MIN_CONTRAST (1.0 / 32.0)  /* default of radinterp_mesh_desc.min_discont_contrast */
+#define RADINTERP__PROGRESS_INTERVAL 0.25     /* default of progress_interval: seconds of CPU time */
 
 /* Limits of radinterp_desc.ff_samples and visibility_rays: a link costs
    ff_samples x visibility_rays shadow rays, so larger values would run for
@@ -942,6 +955,7 @@ typedef struct radinterp_desc {
     void *parallel_user;
     int (*progress)(void *user, uint64_t done, uint64_t total);  /* non-zero cancels */
     void *progress_user;
+    float progress_interval;           /* seconds of CPU time between progress calls; 0 = 0.25 (THREADS) */
     void (*log)(void *user, const char *message);
     void *log_user;
 } radinterp_desc;
@@ -1046,6 +1060,7 @@ typedef struct radinterp_mesh_desc {
     void *parallel_user;
     int (*progress)(void *user, uint64_t done, uint64_t total);  /* non-zero cancels */
     void *progress_user;
+    float progress_interval;           /* seconds of CPU time between progress calls; 0 = 0.25 (THREADS) */
     void (*log)(void *user, const char *message);
     void *log_user;
 } radinterp_mesh_desc;
@@ -1198,6 +1213,7 @@ RADINTERP_API void radinterp_free_memory(const radinterp_allocator *allocator, v
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #if defined(RADINTERP_MALLOC) != defined(RADINTERP_FREE)
 #  error "radinterp.h: define both RADINTERP_MALLOC and RADINTERP_FREE, or neither"
@@ -1205,6 +1221,9 @@ RADINTERP_API void radinterp_free_memory(const radinterp_allocator *allocator, v
 #ifndef RADINTERP_MALLOC
 #  define RADINTERP_MALLOC(size) malloc(size)
 #  define RADINTERP_FREE(ptr) free(ptr)
+#endif
+#ifndef RADINTERP_CPU_SECONDS
+#  define RADINTERP_CPU_SECONDS() ((double)clock() / (double)CLOCKS_PER_SEC)   /* (clock_t)-1: no clock */
 #endif
 
 /* The exact predicates below rely on IEEE double arithmetic rounded to
@@ -2382,6 +2401,50 @@ static void radinterp__run_jobs(void (*parallel_for)(void *, radinterp_job_fn, v
     if (count == 0) return;
     if (parallel_for) { parallel_for(user, job, ctx, count); return; }
     for (i = 0; i < count; i++) job(ctx, i);
+}
+
+/* Sizes the batches of a long loop of independent jobs so that progress is
+   called after about `interval` seconds of the process's CPU time, whatever
+   one job costs (a mesh sample point in a penumbra costs a hundred times one
+   in the open). CPU time (RADINTERP_CPU_SECONDS) measures work: a loaded
+   machine does not shrink the batches, two threads fill them twice as fast.
+   The first batch is one job; a batch doubles while it takes under half the
+   interval and shrinks in proportion when it takes longer, so with jobs of
+   even cost no batch takes more than the interval or one job. Every batched
+   loop in this file is split-invariant (a job writes only its own results;
+   what is gathered after a batch is gathered in index order), so the split
+   changes how often progress is called, never a result. With no clock (a
+   negative reading) batches keep their largest size. */
+typedef struct radinterp__pacer {
+    uint32_t jobs;      /* jobs in the next batch */
+    uint32_t max_jobs;  /* the loop's ceiling (its buffers) */
+    double interval;    /* seconds of CPU time between progress calls */
+    double start;       /* CPU seconds when the running batch began */
+} radinterp__pacer;
+
+static void radinterp__pacer_init(radinterp__pacer *p, float interval, uint32_t max_jobs)
+{
+    p->max_jobs = max_jobs ? max_jobs : 1u;
+    p->jobs = 1;
+    p->interval = interval > 0.0f ? (double)interval : RADINTERP__PROGRESS_INTERVAL;
+    p->start = -1.0;
+}
+
+/* Jobs for the next batch (at most remaining); starts its clock. */
+static uint32_t radinterp__pacer_next(radinterp__pacer *p, uint32_t remaining)
+{
+    p->start = RADINTERP_CPU_SECONDS();
+    if (!(p->start >= 0.0)) p->jobs = p->max_jobs;
+    return p->jobs < remaining ? p->jobs : remaining;
+}
+
+/* After a batch: the next one's size from this one's cost. */
+static void radinterp__pacer_adapt(radinterp__pacer *p)
+{
+    double spent = RADINTERP_CPU_SECONDS() - p->start, jobs;
+    if (!(p->start >= 0.0) || !(spent >= 0.0)) return;   /* no clock, or one that wrapped: keep the size */
+    jobs = spent < 0.5 * p->interval ? 2.0 * p->jobs : spent > p->interval ? p->jobs * (p->interval / spent) : p->jobs;
+    p->jobs = jobs >= p->max_jobs ? p->max_jobs : jobs < 1.0 ? 1u : (uint32_t)jobs;
 }
 
 /* ======================================================================
@@ -3733,6 +3796,7 @@ struct radinterp_solution {
     int levels_known;                  /* the receivers' levels have been measured (a gather ran) */
     double *patch_hmin;                /* per patch: least irradiance of a lit leaf (largest channel), 0 if none */
     uint32_t max_iterations, ff_samples, visibility_rays;
+    double reported;                   /* RADINTERP_CPU_SECONDS() at the solve's last progress call */
     uint32_t visibility;               /* radinterp_visibility of point queries, never DEFAULT */
     uint32_t clustering;               /* radinterp_clustering, never DEFAULT */
     uint64_t seed;
@@ -4877,11 +4941,21 @@ typedef struct radinterp__run {
     uint32_t iteration;          /* for progress reports */
 } radinterp__run;
 
-static int radinterp__cancelled(const radinterp_solution *s, const radinterp__run *run)
+static int radinterp__cancelled(radinterp_solution *s, const radinterp__run *run)
 {
     const radinterp_desc *d = run->desc;
-    (void)s;
+    s->reported = RADINTERP_CPU_SECONDS();
     return d->progress && d->progress(d->progress_user, run->iteration, s->max_iterations) != 0;
+}
+
+/* The same call inside one long serial loop (refinement's pass over every
+   link), once progress_interval has passed since the last call; the clock is
+   read every 256 steps only. */
+static int radinterp__solve_tick(radinterp_solution *s, const radinterp__run *run, uint32_t step)
+{
+    double interval = run->desc->progress_interval > 0.0f ? (double)run->desc->progress_interval : RADINTERP__PROGRESS_INTERVAL;
+    if ((step & 255u) != 255u || !(RADINTERP_CPU_SECONDS() - s->reported >= interval)) return 0;
+    return radinterp__cancelled(s, run);
 }
 
 /* Computes every pending link, in batches with a progress check between. */
@@ -4889,21 +4963,25 @@ static radinterp_result radinterp__compute_pending(radinterp_solution *s, const 
                                                    radinterp__pending *pending, uint32_t count,
                                                    const uint32_t *in_pool, uint32_t *out_pool)
 {
-    const uint32_t batch = 16384, per_job = 64;
-    uint32_t begin;
-    for (begin = 0; begin < count; begin += batch) {
+    const uint32_t per_job = 64;
+    uint32_t begin = 0, jobs;
+    radinterp__pacer pacer;
+    radinterp__pacer_init(&pacer, run->desc->progress_interval, 16384 / per_job);
+    while (begin < count) {
         radinterp__ff_ctx ctx;
         uint32_t i;
+        jobs = radinterp__pacer_next(&pacer, (count - begin + per_job - 1) / per_job);
         ctx.s = s;
         ctx.pending = pending;
         ctx.begin = begin;
-        ctx.end = begin + batch < count ? begin + batch : count;
+        ctx.end = count - begin > jobs * per_job ? begin + jobs * per_job : count;
         ctx.per_job = per_job;
         ctx.in_pool = in_pool;
         ctx.out_pool = out_pool;
-        radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__ff_job, &ctx,
-                            (ctx.end - ctx.begin + per_job - 1) / per_job);
+        radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__ff_job, &ctx, jobs);
+        radinterp__pacer_adapt(&pacer);
         for (i = ctx.begin; i < ctx.end; i++) s->shadow_rays += pending[i].rays;
+        begin = ctx.end;
         if (radinterp__cancelled(s, run)) return RADINTERP_ERROR_CANCELLED;
     }
     return RADINTERP_OK;
@@ -5793,17 +5871,21 @@ static int radinterp__split_clink(radinterp_solution *s, radinterp__linker *L, u
 static radinterp_result radinterp__compute_cpending(radinterp_solution *s, const radinterp__run *run,
                                                     radinterp__cpending *pending, uint32_t count)
 {
-    const uint32_t batch = 4096;
-    uint32_t begin, i;
-    for (begin = 0; begin < count; begin += batch) {
+    const uint32_t per_job = RADINTERP__CLINK_JOB;
+    uint32_t begin = 0, i, jobs;
+    radinterp__pacer pacer;
+    radinterp__pacer_init(&pacer, run->desc->progress_interval, 4096 / per_job);
+    while (begin < count) {
         radinterp__cctx ctx;
+        jobs = radinterp__pacer_next(&pacer, (count - begin + per_job - 1) / per_job);
         ctx.s = s;
         ctx.pending = pending;
         ctx.begin = begin;
-        ctx.end = begin + batch < count ? begin + batch : count;
-        radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__clink_job, &ctx,
-                            (ctx.end - ctx.begin + RADINTERP__CLINK_JOB - 1) / RADINTERP__CLINK_JOB);
+        ctx.end = count - begin > jobs * per_job ? begin + jobs * per_job : count;
+        radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__clink_job, &ctx, jobs);
+        radinterp__pacer_adapt(&pacer);
         for (i = ctx.begin; i < ctx.end; i++) s->shadow_rays += pending[i].rays;
+        begin = ctx.end;
         if (radinterp__cancelled(s, run)) return RADINTERP_ERROR_CANCELLED;
     }
     return RADINTERP_OK;
@@ -6077,6 +6159,7 @@ static int radinterp__refine(radinterp_solution *s, const radinterp__run *run, r
             continue;
         }
         if (!radinterp__split_link(s, &L, &l, which)) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
+        else if (radinterp__solve_tick(s, run, split)) *res = RADINTERP_ERROR_CANCELLED;
         split++;
     }
     if (s->has_sky && *res == RADINTERP_OK) {
@@ -8348,7 +8431,7 @@ static radinterp_result radinterp__check_desc(const radinterp_desc *d)
     if (radinterp__bad_param(d->eps) || radinterp__bad_param(d->eps_relative) || radinterp__bad_param(d->min_area) || radinterp__bad_param(d->rel_error_cutoff) ||
         radinterp__bad_param(d->push_off) || radinterp__bad_param(d->nudge) || radinterp__bad_param(d->min_bp_segment) ||
         radinterp__bad_param(d->epsilon) || radinterp__bad_param(d->planarity_tolerance) ||
-        radinterp__bad_param(d->point_rest) || d->point_rest > 1.0f) {
+        radinterp__bad_param(d->point_rest) || d->point_rest > 1.0f || radinterp__bad_param(d->progress_interval)) {
         radinterp__log(d, "radinterp_solve: a parameter is negative, NaN or infinite");
         return RADINTERP_ERROR_INVALID_ARGUMENT;
     }
@@ -8888,6 +8971,7 @@ static radinterp_result radinterp__build_leaf_lists(radinterp_solution *s, const
     uint32_t i, *wide = NULL, *last_count = NULL;
     radinterp__buf kept;
     radinterp__leaf_ctx ctx;
+    radinterp__pacer pacer;
     radinterp_result res = RADINTERP_OK;
     radinterp__buf_init(&kept, sizeof(uint32_t));
     s->leaf_margin = 10.0 * (s->nudge + s->epsilon * s->diag);
@@ -8932,12 +9016,17 @@ static radinterp_result radinterp__build_leaf_lists(radinterp_solution *s, const
     ctx.wide = wide;
     ctx.wide_first = wide_first;
     ctx.per_job = 16;
+    radinterp__pacer_init(&pacer, run->desc->progress_interval, 0xFFFFFFFFu / ctx.per_job);
     for (ctx.end = 0; res == RADINTERP_OK && ctx.end < s->leaf_count;) {
+        uint32_t last;
         ctx.first = ctx.end;
         ctx.base = wide_first[ctx.first];
-        while (ctx.end < s->leaf_count && wide_first[ctx.end + 1] - ctx.base <= widest) ctx.end++;
+        last = ctx.first + radinterp__pacer_next(&pacer, (s->leaf_count - ctx.first + ctx.per_job - 1) / ctx.per_job) *
+                               ctx.per_job;   /* as many as the pacer allows and the wide buffer holds */
+        while (ctx.end < s->leaf_count && ctx.end < last && wide_first[ctx.end + 1] - ctx.base <= widest) ctx.end++;
         radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__leaf_lists_job, &ctx,
                             (ctx.end - ctx.first + ctx.per_job - 1) / ctx.per_job);
+        radinterp__pacer_adapt(&pacer);
         for (i = ctx.first; i < ctx.end && res == RADINTERP_OK; i++) { /* pack */
             uint32_t leaf = s->leaves[i], e;
             for (e = s->leaf_link_first[leaf]; e < s->leaf_link_first[leaf + 1]; e++) {
@@ -9768,6 +9857,7 @@ typedef struct radinterp__builder {
     uint32_t *chain_first, *chain_len;
     radinterp__buf pos, tris;        /* output of the pass */
     radinterp__hmap vmap;            /* point -> output vertex */
+    double reported;                 /* RADINTERP_CPU_SECONDS() at the last progress call */
     /* statistics */
     uint32_t balance_splits, hanging, seam, fallback, degenerate, skipped;
     uint64_t samples;
@@ -10276,8 +10366,28 @@ static double radinterp__source_reach(const radinterp__builder *b, uint32_t R, c
     return best;
 }
 
+/* A progress call between the steps that come before the samples: (0, 1),
+   none of the sampling's count done yet. A building's discontinuities and
+   triangulations take seconds, during which the caller may still see
+   progress and cancel. Non-zero: cancel. */
+static int radinterp__mesh_cancelled(radinterp__builder *b)
+{
+    b->reported = RADINTERP_CPU_SECONDS();
+    return b->desc->progress && b->desc->progress(b->desc->progress_user, 0, 1) != 0;
+}
+
+/* The same call inside one long serial step (a receiver that many sources
+   light), once progress_interval has passed since the last call. */
+static int radinterp__mesh_tick(radinterp__builder *b)
+{
+    double interval = b->desc->progress_interval > 0.0f ? (double)b->desc->progress_interval : RADINTERP__PROGRESS_INTERVAL;
+    if (!(RADINTERP_CPU_SECONDS() - b->reported >= interval)) return 0;
+    return radinterp__mesh_cancelled(b);
+}
+
 /* Every discontinuity on receiver R (5.5.3: from the links, so only
-   mutually visible pairs and their potential blockers are considered). */
+   mutually visible pairs and their potential blockers are considered).
+   0, or -1 when memory runs out, 1 when progress asks to cancel. */
 static int radinterp__receiver_discs(radinterp__builder *b, uint32_t R, radinterp__buf *pairs, radinterp__buf *stack)
 {
     const radinterp_solution *s = b->s;
@@ -10292,6 +10402,7 @@ static int radinterp__receiver_discs(radinterp__builder *b, uint32_t R, radinter
         radinterp__wedge_ctx w;
         for (j = i; j < pairs->count && (uint32_t)(pr[j] >> 32) == S; j++) {}
         if (S == R || !(radinterp__brightness(s, S) > 0.0f)) { i = j; continue; }
+        if (radinterp__mesh_tick(b)) return 1;
         rn = radinterp__front_region(b, R, S, region, label);
         if (rn >= 3) {
             size_t from = b->discs.count, m;
@@ -10443,15 +10554,6 @@ static int radinterp__group_dsets(radinterp__builder *b, uint32_t R)
 }
 
 /* All discontinuities of the scene, by receiver. */
-/* A progress call between the steps that come before the samples: (0, 1),
-   none of the sampling's count done yet. A building's discontinuities and
-   triangulations take seconds, during which the caller may still see
-   progress and cancel. Non-zero: cancel. */
-static int radinterp__mesh_cancelled(const radinterp__builder *b)
-{
-    return b->desc->progress && b->desc->progress(b->desc->progress_user, 0, 1) != 0;
-}
-
 static radinterp_result radinterp__find_discontinuities(radinterp__builder *b)
 {
     const radinterp_solution *s = b->s;
@@ -10461,11 +10563,14 @@ static radinterp_result radinterp__find_discontinuities(radinterp__builder *b)
     radinterp__buf_init(&pairs, sizeof(uint64_t));
     radinterp__buf_init(&stack, sizeof(uint32_t));
     for (R = 0; R < s->patch_count && !fail && !cancelled; R++) {
+        int r = 0;
         if ((cancelled = radinterp__mesh_cancelled(b)) != 0) break;
         b->disc_first[R] = (uint32_t)b->discs.count;
-        if (s->patches[R].count && !b->desc->no_discontinuities) fail = radinterp__receiver_discs(b, R, &pairs, &stack) != 0;
+        if (s->patches[R].count && !b->desc->no_discontinuities) r = radinterp__receiver_discs(b, R, &pairs, &stack);
+        cancelled = r > 0;
+        fail = r < 0;
         b->disc_count[R] = (uint32_t)b->discs.count - b->disc_first[R];
-        if (!fail) fail = radinterp__group_dsets(b, R) != 0;
+        if (!fail && !cancelled) fail = radinterp__group_dsets(b, R) != 0;
     }
     radinterp__buf_free(&b->a, &pairs);
     radinterp__buf_free(&b->a, &stack);
@@ -11818,13 +11923,15 @@ static radinterp_result radinterp__run_batches(radinterp__builder *b, radinterp_
                                                uint32_t n, uint64_t *done, uint64_t total)
 {
     uint32_t at = 0, i;
+    radinterp__pacer pacer;
+    radinterp__pacer_init(&pacer, b->desc->progress_interval, RADINTERP__SAMPLE_BATCH);
     while (at < n) {
-        uint32_t count = n - at, jobs;
-        if (count > RADINTERP__SAMPLE_BATCH * RADINTERP__SAMPLE_JOB) count = RADINTERP__SAMPLE_BATCH * RADINTERP__SAMPLE_JOB;
-        jobs = (count + RADINTERP__SAMPLE_JOB - 1) / RADINTERP__SAMPLE_JOB;
+        uint32_t jobs = radinterp__pacer_next(&pacer, (n - at + RADINTERP__SAMPLE_JOB - 1) / RADINTERP__SAMPLE_JOB);
+        uint32_t count = n - at > jobs * RADINTERP__SAMPLE_JOB ? jobs * RADINTERP__SAMPLE_JOB : n - at;
         ctx->first = at;
         ctx->count = count;
         radinterp__run_jobs(b->desc->parallel_for, b->desc->parallel_user, job, ctx, jobs);
+        radinterp__pacer_adapt(&pacer);
         for (i = 0; i < jobs; i++)
             if (ctx->status[i] != RADINTERP_OK) return ctx->status[i];
         at += count;
@@ -12311,7 +12418,7 @@ static radinterp_result radinterp__check_mesh_desc(const radinterp_mesh_desc *d)
     else if (radinterp__bad_param(d->min_discont_weight) || radinterp__bad_param(d->min_discont_contrast) ||
              radinterp__bad_param(d->refine_eps) ||
              radinterp__bad_param(d->refine_min_area) || radinterp__bad_param(d->weld_distance) ||
-             radinterp__bad_param(d->min_leaf_area))
+             radinterp__bad_param(d->min_leaf_area) || radinterp__bad_param(d->progress_interval))
         bad = "a parameter is negative, NaN or infinite";
     else if (d->max_leaf_dsets > 4096) bad = "max_leaf_dsets is above 4096";
     else if (d->refine_samples > 64) bad = "refine_samples is above 64";

@@ -3,6 +3,10 @@
    against exact clipped polygons and a 10^6-sample integration, the nudge of
    points on blocker edges, closed-box furnace and energy balance, and the
    solver's determinism, cancellation and allocation behaviour. */
+/* A stopped clock for the pacer (RADINTERP_CPU_SECONDS): batches grow to
+   their largest, so progress calls come at the same places in every run, as
+   the cancel tests, which count them, require. */
+#define RADINTERP_CPU_SECONDS() 0.0
 #define RADINTERP_IMPLEMENTATION
 #include "../radinterp.h"
 #include "examples/common/obj.h"

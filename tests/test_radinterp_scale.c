@@ -4,8 +4,15 @@
    unclustered one on the Cornell box, no light through a
    solid wall between two rooms, triangle-soup input (T-junctions, slivers,
    zero-area triangles, duplicates, coplanar overlaps), cancel from every
-   progress call of the solve and of the mesh build without a leak, and the
-   accepted coordinate range. */
+   progress call of the solve and of the mesh build without a leak, progress
+   paced by work, and the accepted coordinate range. */
+
+/* The pacer's clock (RADINTERP_CPU_SECONDS) is simulated work: it moves
+   when costly_for charges the jobs it runs, and by clock_step at every
+   reading, so progress calls come at the same places in every run (the
+   cancel sweeps count them) and a test can give work a cost. */
+static double work_seconds, clock_step;
+#define RADINTERP_CPU_SECONDS() (work_seconds += clock_step)
 #define RADINTERP_IMPLEMENTATION
 #include "../radinterp.h"
 #include "examples/common/obj.h"
@@ -349,18 +356,38 @@ typedef struct counting { long live, calls; } counting;
 static void *count_alloc(size_t n, void *user) { ((counting *)user)->live++; return malloc(n); }
 static void count_free(void *p, void *user) { if (p) ((counting *)user)->live--; free(p); }
 
-typedef struct progress_state { long calls, cancel_at; uint64_t last_done; int backwards; } progress_state;
+typedef struct progress_state { long calls, cancel_at, before_samples; uint64_t last_done; int backwards; } progress_state;
 static int progress_cb(void *user, uint64_t done, uint64_t total)
 {
     progress_state *p = (progress_state *)user;
     p->backwards |= done > total;
+    p->before_samples += done == 0 && total == 1;   /* the mesh build's calls before its samples */
     p->last_done = done;
     return ++p->calls == p->cancel_at;
 }
 
+/* Cancels mesh builds at `parts` calls spread over the first `calls` ones
+   (every one when there are fewer): each returns CANCELLED and no mesh. */
+static void cancel_mesh_sweep(const radinterp_solution *sol, const radinterp_mesh_desc *md, progress_state *ps,
+                              long calls, long parts)
+{
+    long k, step = (calls + parts - 1) / parts;
+    for (k = 1; k <= calls; k += step) {
+        radinterp_mesh *c = NULL;
+        memset(ps, 0, sizeof *ps);
+        ps->cancel_at = k;
+        CHECK_EQ_INT(radinterp_build_mesh(sol, md, &c), RADINTERP_ERROR_CANCELLED);
+        CHECK(c == NULL);
+    }
+}
+
 /* Cancel from progress calls spread over the run (every one up to 8, else
    8 evenly spaced): the solve and the mesh build return CANCELLED and free
-   everything they allocated. */
+   everything they allocated. A receiver's discontinuity search (a slab lit
+   by a storey's lamps takes seconds at building scale) also reports between
+   its sources once the interval has passed: with a clock that moves a
+   second at every reading it reports at every lit source, and a cancel from
+   16 of the calls before the samples frees everything too. */
 static void test_cancel_everywhere(void)
 {
     rb_scene s;
@@ -370,7 +397,7 @@ static void test_cancel_everywhere(void)
     radinterp_mesh *mesh = NULL;
     counting cnt;
     progress_state ps;
-    long n, k, step, solve_step;
+    long n, k, solve_step;
     soup_room(&s, 1);
     memset(&cnt, 0, sizeof cnt);
     d = rb_desc(&s);
@@ -384,8 +411,8 @@ static void test_cancel_everywhere(void)
     n = ps.calls;
     CHECK(n >= 3);
     CHECK(!ps.backwards);
-    solve_step = step = (n + 7) / 8;
-    for (k = 1; k <= n; k += step) {
+    solve_step = (n + 7) / 8;
+    for (k = 1; k <= n; k += solve_step) {
         radinterp_solution *c = NULL;
         memset(&ps, 0, sizeof ps);
         ps.cancel_at = k;
@@ -399,23 +426,169 @@ static void test_cancel_everywhere(void)
     md.progress_user = &ps;
     memset(&ps, 0, sizeof ps);
     if (CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &mesh), RADINTERP_OK)) {
-        long m = ps.calls;
+        long m = ps.calls, stopped = ps.before_samples, running;
         CHECK(m >= 3);
         CHECK(!ps.backwards);
         radinterp_mesh_destroy(mesh);
-        step = (m + 7) / 8;
-        for (k = 1; k <= m; k += step) {
-            radinterp_mesh *c = NULL;
-            memset(&ps, 0, sizeof ps);
-            ps.cancel_at = k;
-            CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &c), RADINTERP_ERROR_CANCELLED);
-            CHECK(c == NULL);
-        }
-        test_note("cancelled from %ld of %ld solve progress calls and %ld of %ld mesh ones", (n + solve_step - 1) / solve_step, n,
-                  (m + step - 1) / step, m);
+        mesh = NULL;
+        cancel_mesh_sweep(sol, &md, &ps, m, 8);
+        clock_step = 1.0;
+        memset(&ps, 0, sizeof ps);
+        CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &mesh), RADINTERP_OK);
+        radinterp_mesh_destroy(mesh);
+        running = ps.before_samples;
+        /* stopped: one call a patch while discontinuities are found, one
+           while they are triangulated; running: one more at every lit
+           source of a receiver */
+        CHECK_MSG(running > stopped + (long)s.np, "%ld calls before the samples with a running clock, %ld stopped", running,
+                  stopped);
+        cancel_mesh_sweep(sol, &md, &ps, running, 16);
+        clock_step = 0.0;
+        test_note("cancelled from %ld of %ld solve progress calls and %ld of %ld mesh ones; %ld calls before the samples with "
+                  "a clock that runs (%ld stopped), cancelled from 16", (n + solve_step - 1) / solve_step, n,
+                  m < 8 ? m : 8, m, running, stopped);
     }
     radinterp_solution_destroy(sol);
     CHECK_EQ_INT(cnt.live, 0);
+    rb_free(&s);
+}
+
+/* ---- progress paced by work ------------------------------------------------ */
+typedef struct cost_model { double job_cost; int paced_only; } cost_model;
+
+/* A parallel_for that runs the jobs in order on the calling thread and
+   charges each job_cost seconds of the simulated clock: with paced_only, only
+   the jobs of the loops the pacer sizes (link form factors, cluster links,
+   leaf lists, mesh samples), so that a gap measures those loops alone. */
+static void costly_for(void *user, radinterp_job_fn job, void *ctx, uint32_t count)
+{
+    const cost_model *c = (const cost_model *)user;
+    uint32_t i;
+    int paced = job == radinterp__ff_job || job == radinterp__clink_job || job == radinterp__leaf_lists_job ||
+                job == radinterp__point_job || job == radinterp__error_job;
+    for (i = 0; i < count; i++) job(ctx, i);
+    if (paced || !c->paced_only) work_seconds += c->job_cost * count;
+}
+
+typedef struct pace_state { double last, widest; long calls; } pace_state;
+static int pace_cb(void *user, uint64_t done, uint64_t total)
+{
+    pace_state *p = (pace_state *)user;
+    (void)done; (void)total;
+    if (work_seconds - p->last > p->widest) p->widest = work_seconds - p->last;
+    p->last = work_seconds;
+    p->calls++;
+    return 0;
+}
+
+/* Radiosities then mesh coefficients of sol and mesh, into out (n floats). */
+static float *results_of(const radinterp_solution *sol, const radinterp_mesh *mesh, size_t *n)
+{
+    radinterp_info info;
+    radinterp_mesh_info mi;
+    radinterp_mesh_data data;
+    float *out;
+    uint32_t i;
+    radinterp_solution_info(sol, &info);
+    radinterp_mesh_get_info(mesh, &mi);
+    radinterp_mesh_get_data(mesh, &data);
+    *n = 3 * (size_t)info.patch_count + 18 * (size_t)mi.triangle_count;
+    out = (float *)calloc(*n ? *n : 1, sizeof(float));
+    for (i = 0; i < info.patch_count; i++) radinterp_patch_radiosity(sol, i, out + 3 * i);
+    memcpy(out + 3 * (size_t)info.patch_count, data.coefficients, sizeof(float) * 18 * mi.triangle_count);
+    return out;
+}
+
+/* One solve and mesh build with jobs of the given cost; the longest gap
+   between progress calls, in seconds of simulated work, and the results. */
+static float *paced_run(const rb_scene *s, const cost_model *c, double *solve_gap, double *mesh_gap, long *calls, size_t *n)
+{
+    radinterp_desc d = rb_desc(s);
+    radinterp_mesh_desc md;
+    radinterp_solution *sol = NULL;
+    radinterp_mesh *mesh = NULL;
+    pace_state ps;
+    float *out = NULL;
+    memset(&ps, 0, sizeof ps);
+    work_seconds = 0.0;
+    d.parallel_for = costly_for;
+    d.parallel_user = (void *)c;
+    d.progress = pace_cb;
+    d.progress_user = &ps;
+    memset(&md, 0, sizeof md);
+    md.min_leaf_area = 0.25f;
+    md.parallel_for = costly_for;
+    md.parallel_user = (void *)c;
+    md.progress = pace_cb;
+    md.progress_user = &ps;
+    *n = 0;
+    if (CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_OK)) {
+        *solve_gap = ps.widest;
+        *calls = ps.calls;
+        ps.widest = 0.0;
+        if (CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &mesh), RADINTERP_OK)) out = results_of(sol, mesh, n);
+        *mesh_gap = ps.widest;
+        *calls += ps.calls;
+    }
+    radinterp_mesh_destroy(mesh);
+    radinterp_solution_destroy(sol);
+    return out;
+}
+
+/* Progress comes after a bounded amount of work, however costly the jobs:
+   with jobs of 10 ms (a penumbra's sample points cost that much at building
+   scale) no gap in the paced loops exceeds the default interval of 0.25 s
+   (the pacer doubles a batch only while it takes under half the interval, so
+   with jobs of even cost a batch never takes longer); with jobs of 1 s a gap
+   is one job. The fixed batches of v0.8.5 (256 link jobs, leaf lists by
+   the memory they fill, 64 sample jobs) gave gaps of 3.29 s (solve) and
+   0.64 s (mesh) at 10 ms a job. The batches never change a result: the
+   radiosities and the mesh coefficients are bit-identical to a run whose
+   clock never moves (batches at their largest). */
+static void test_progress_paced_by_work(void)
+{
+    static const double costs[] = {0.01, 1.0};
+    rb_scene s;
+    cost_model free_jobs = {0.0, 0}, c;
+    double sg, mg;
+    long calls, free_calls;
+    size_t n0, n;
+    float *ref, *out;
+    uint32_t k;
+    soup_room(&s, 0);
+    {   /* the interval is a parameter like the others: negative or NaN is refused */
+        radinterp_desc d = rb_desc(&s);
+        radinterp_mesh_desc md;
+        radinterp_solution *sol = NULL;
+        radinterp_mesh *mesh = NULL;
+        d.progress_interval = -1.0f;
+        CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_ERROR_INVALID_ARGUMENT);
+        d.progress_interval = NAN;
+        CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_ERROR_INVALID_ARGUMENT);
+        d.progress_interval = 0.0f;
+        if (CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_OK)) {
+            memset(&md, 0, sizeof md);
+            md.progress_interval = -1.0f;
+            CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &mesh), RADINTERP_ERROR_INVALID_ARGUMENT);
+            CHECK(mesh == NULL);
+        }
+        radinterp_solution_destroy(sol);
+    }
+    ref = paced_run(&s, &free_jobs, &sg, &mg, &free_calls, &n0);
+    for (k = 0; k < sizeof costs / sizeof costs[0] && ref; k++) {
+        c.job_cost = costs[k];
+        c.paced_only = 1;
+        out = paced_run(&s, &c, &sg, &mg, &calls, &n);
+        if (!out) break;
+        CHECK_MSG(sg <= (costs[k] > 0.25 ? costs[k] : 0.25) + 1e-9, "jobs of %g s: solve gap %.3f s", costs[k], sg);
+        CHECK_MSG(mg <= (costs[k] > 0.25 ? costs[k] : 0.25) + 1e-9, "jobs of %g s: mesh gap %.3f s", costs[k], mg);
+        CHECK(calls > free_calls);
+        CHECK(n == n0 && !memcmp(out, ref, n * sizeof(float)));
+        test_note("jobs of %g s: longest gap %.3f s (solve), %.3f s (mesh); %ld progress calls (%ld with free jobs)",
+                  costs[k], sg, mg, calls, free_calls);
+        free(out);
+    }
+    free(ref);
     rb_free(&s);
 }
 
@@ -472,6 +645,7 @@ int main(int argc, char **argv)
     RUN(test_wall_between_rooms);
     RUN(test_triangle_soup);
     RUN(test_cancel_everywhere);
+    RUN(test_progress_paced_by_work);
     RUN(test_coordinate_range);
     RUN(test_clustered_equals_unclustered);
     return test_finish();
