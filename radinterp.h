@@ -2422,11 +2422,24 @@ typedef struct radinterp__pacer {
     double start;       /* CPU seconds when the running batch began */
 } radinterp__pacer;
 
+/* A desc's progress_interval, its default for 0. */
+static double radinterp__progress_interval(float interval)
+{
+    return interval > 0.0f ? (double)interval : RADINTERP__PROGRESS_INTERVAL;
+}
+
+/* Whether progress is due inside a serial loop: the interval has passed
+   since the last call (at `reported` CPU seconds). */
+static int radinterp__progress_due(double reported, float interval)
+{
+    return RADINTERP_CPU_SECONDS() - reported >= radinterp__progress_interval(interval);
+}
+
 static void radinterp__pacer_init(radinterp__pacer *p, float interval, uint32_t max_jobs)
 {
     p->max_jobs = max_jobs ? max_jobs : 1u;
     p->jobs = 1;
-    p->interval = interval > 0.0f ? (double)interval : RADINTERP__PROGRESS_INTERVAL;
+    p->interval = radinterp__progress_interval(interval);
     p->start = -1.0;
 }
 
@@ -4953,8 +4966,7 @@ static int radinterp__cancelled(radinterp_solution *s, const radinterp__run *run
    read every 256 steps only. */
 static int radinterp__solve_tick(radinterp_solution *s, const radinterp__run *run, uint32_t step)
 {
-    double interval = run->desc->progress_interval > 0.0f ? (double)run->desc->progress_interval : RADINTERP__PROGRESS_INTERVAL;
-    if ((step & 255u) != 255u || !(RADINTERP_CPU_SECONDS() - s->reported >= interval)) return 0;
+    if ((step & 255u) != 255u || !radinterp__progress_due(s->reported, run->desc->progress_interval)) return 0;
     return radinterp__cancelled(s, run);
 }
 
@@ -10380,8 +10392,7 @@ static int radinterp__mesh_cancelled(radinterp__builder *b)
    light), once progress_interval has passed since the last call. */
 static int radinterp__mesh_tick(radinterp__builder *b)
 {
-    double interval = b->desc->progress_interval > 0.0f ? (double)b->desc->progress_interval : RADINTERP__PROGRESS_INTERVAL;
-    if (!(RADINTERP_CPU_SECONDS() - b->reported >= interval)) return 0;
+    if (!radinterp__progress_due(b->reported, b->desc->progress_interval)) return 0;
     return radinterp__mesh_cancelled(b);
 }
 
