@@ -660,10 +660,9 @@
    never concurrently with itself. A batch is sized from the last one's cost
    so that it takes about progress_interval seconds of the process's CPU
    time (default 0.25; RADINTERP_CPU_SECONDS): however costly the jobs, a
-   slow region shrinks the batches rather than stretching the gap. Two
-   long serial loops call progress inside once the interval has passed: a
-   receiver's discontinuity search (between its sources) and refinement's
-   pass over the links (every 256 splits). The batches never change a
+   slow region shrinks the batches rather than stretching the gap. A
+   receiver's discontinuity search, one serial step, calls progress between
+   its sources once the interval has passed. The batches never change a
    result. bench_radinterp_building's longest gap on building_1k, one
    thread: 0.64 s with v0.8.5's fixed batches, 0.46 s. radinterp_shade splits
    its pixels into jobs of 16384 through the mesh's parallel_for (the
@@ -3809,7 +3808,6 @@ struct radinterp_solution {
     int levels_known;                  /* the receivers' levels have been measured (a gather ran) */
     double *patch_hmin;                /* per patch: least irradiance of a lit leaf (largest channel), 0 if none */
     uint32_t max_iterations, ff_samples, visibility_rays;
-    double reported;                   /* RADINTERP_CPU_SECONDS() at the solve's last progress call */
     uint32_t visibility;               /* radinterp_visibility of point queries, never DEFAULT */
     uint32_t clustering;               /* radinterp_clustering, never DEFAULT */
     uint64_t seed;
@@ -4954,20 +4952,10 @@ typedef struct radinterp__run {
     uint32_t iteration;          /* for progress reports */
 } radinterp__run;
 
-static int radinterp__cancelled(radinterp_solution *s, const radinterp__run *run)
+static int radinterp__cancelled(const radinterp_solution *s, const radinterp__run *run)
 {
     const radinterp_desc *d = run->desc;
-    s->reported = RADINTERP_CPU_SECONDS();
     return d->progress && d->progress(d->progress_user, run->iteration, s->max_iterations) != 0;
-}
-
-/* The same call inside one long serial loop (refinement's pass over every
-   link), once progress_interval has passed since the last call; the clock is
-   read every 256 steps only. */
-static int radinterp__solve_tick(radinterp_solution *s, const radinterp__run *run, uint32_t step)
-{
-    if ((step & 255u) != 255u || !radinterp__progress_due(s->reported, run->desc->progress_interval)) return 0;
-    return radinterp__cancelled(s, run);
 }
 
 /* Computes every pending link, in batches with a progress check between. */
@@ -6171,7 +6159,6 @@ static int radinterp__refine(radinterp_solution *s, const radinterp__run *run, r
             continue;
         }
         if (!radinterp__split_link(s, &L, &l, which)) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
-        else if (radinterp__solve_tick(s, run, split)) *res = RADINTERP_ERROR_CANCELLED;
         split++;
     }
     if (s->has_sky && *res == RADINTERP_OK) {
