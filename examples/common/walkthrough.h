@@ -874,6 +874,8 @@ typedef struct wt_world {
     float *bunny_normals;              /* smooth vertex normals, OBJ coordinates */
     ex_tracer *tracer;
     int bunny_instance;
+    int bunny_casts;                   /* the bunny blocks shadow rays and darkens contact (0 while the
+                                          baseviews mode traces its static base images) */
     wt_light *lights;                  /* emitting polygons */
     uint32_t light_count;
     /* which lights each cell of a coarse grid sees (wt__light_grid_build) */
@@ -1841,6 +1843,7 @@ EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t
         return -1;
     }
     w->bunny_instance = ex_tracer_add_instance(w->tracer, &w->bunny, grey);
+    w->bunny_casts = 1;
     wt__materials_from_obj(&w->office, w->materials);
     memcpy(w->materials[w->bunny_material].diffuse, grey, sizeof grey);
     if (o->mode == WT_MODE_RADIOSITY) {   /* a diffuse method: its full renders (--reference) are Lambertian too */
@@ -2218,7 +2221,7 @@ static int wt__occluded(const wt_world *w, const float org[3], const float dir[3
     if (!t->has_glass && tr__bvh_occluded(&t->bvh, org, dir, 0.0f, tmax)) return 1;
     ex__affine_point(b->to_object, org, o);
     ex__affine_vector(b->to_object, dir, d);
-    if (tr__bvh_occluded(&b->bvh, o, d, 0.0f, tmax)) {
+    if (w->bunny_casts && tr__bvh_occluded(&b->bvh, o, d, 0.0f, tmax)) {
         *by_bunny = 1;
         return 1;
     }
@@ -2966,7 +2969,7 @@ static void wt__trace_point(const wt_world *w, wt_point *p, int direct)
         p->bunny_shadow = (unsigned char)shadow;
         for (k = 0; k < 3; k++) p->direct[k] += d[k];
     }
-    if (p->object == WT_OBJECT_OFFICE && w->opt.bunny_shadow) {
+    if (p->object == WT_OBJECT_OFFICE && w->opt.bunny_shadow && w->bunny_casts) {
         p->contact = 1.0f - wt__contact_occlusion(w, p->pos, p->normal, p->stream);
         if (p->contact < 1.0f) p->bunny_shadow = 1;   /* refreshed sooner by the render cache: the shadow moves */
     }
@@ -3895,7 +3898,8 @@ static uint64_t wt__baseviews_key(const wt_renderer *r)
     h = wt_hash_u64(h, (uint64_t)o->light_samples);
     h = wt_hash_u64(h, (uint64_t)o->bunny_strata);
     h = wt_hash_f32(h, WT_KEY_EPSILON);   /* the bunny's key-time solutions are saved with the images */
-    h = wt_hash_u64(h, (uint64_t)o->bunny_shadow);   /* contact shadows in the base images */
+    h = wt_hash_u64(h, (uint64_t)o->bunny_shadow);
+    h = wt_hash_u64(h, 2u);   /* 2: base images without the bunny's shadows (wt__baseviews_shadows) */
     return h;
 }
 
@@ -4041,14 +4045,19 @@ static int wt__render_base(wt_renderer *r, uint32_t view, uint32_t key, renderca
     rendercache_camera c = ex_baseviews_base_camera(&r->bv, view, (uint32_t)w->opt.base_size);
     wt_light_stats st = { 0, 0, 0, 0 };
     uint32_t i, n = c.width * c.height;
+    int shaded;
     rendercache_range_image *img;
     if (rendercache_range_image_create(&c, NULL, &img) != RENDERCACHE_OK) return -1;
     img->time = r->bv.times[key];
     wt_set_time(w, img->time);
-    /* the office's light vectors; the bunny's indirect light from its key-time solution */
-    if (wt__shade_camera(w, &c, WT_STREAM_BASE, view * r->bv.time_count + key,
-                         WT_SHADE_DIRECT | WT_SHADE_INSERT | WT_SHADE_STATIC_ONLY, r->points, r->index, &st) != 0 ||
-        wt__bunny_light_at(r, img->time) != 0) {
+    /* the office's light vectors; the bunny's indirect light from its key-time solution.
+       The bunny casts no shadow here: its shadows belong to the frame's time
+       (wt__baseviews_shadows), not to the key time's pose */
+    w->bunny_casts = 0;
+    shaded = wt__shade_camera(w, &c, WT_STREAM_BASE, view * r->bv.time_count + key,
+                              WT_SHADE_DIRECT | WT_SHADE_INSERT | WT_SHADE_STATIC_ONLY, r->points, r->index, &st);
+    w->bunny_casts = 1;
+    if (shaded != 0 || wt__bunny_light_at(r, img->time) != 0) {
         rendercache_range_image_destroy(img);
         return -1;
     }
@@ -4318,6 +4327,76 @@ static int wt__baseviews_create(wt_renderer *r, char *err, size_t err_size)
     return 0;
 }
 
+/* The bunny's shadows at the frame's time (Nimeroff et al. keep moving
+   objects' effects out of the static base images): the base images are
+   traced without them, so a warped office pixel the posed bunny may
+   shadow is traced again with the frame's shading (wt__fill_pixel: shadow
+   rays that see the bunny, its contact occlusion). May shadow: within the
+   contact shadow's reach of the bunny's bounding sphere, or with that
+   sphere within a light's bounding sphere's radius of the segment from
+   the point to the light's centre (the shadow rays to a light lie in the
+   cone from the point to its bounding sphere, within radius of that
+   segment). A conservative test: the rest of the office keeps its warped
+   colour, which is what the trace would give there. */
+static int wt__bunny_may_shadow(const wt_world *w, const float pos[3])
+{
+    float c[3], v[3], d2 = 0.0f, r = w->bunny_bound_radius, reach = r + WT_CONTACT_REACH * r;
+    uint32_t e;
+    int k;
+    if (!w->opt.bunny_shadow) return 0;
+    ex__affine_point(w->pose, w->bunny_bound_centre, c);
+    for (k = 0; k < 3; k++) {
+        v[k] = c[k] - pos[k];
+        d2 += v[k] * v[k];
+    }
+    if (d2 < reach * reach) return 1;
+    for (e = 0; e < w->light_count; e++) {
+        const wt_light *L = &w->lights[e];
+        float s[3], s2 = 0.0f, u = 0.0f, q2 = 0.0f, m = r + L->radius;
+        for (k = 0; k < 3; k++) {
+            s[k] = L->centre[k] - pos[k];
+            s2 += s[k] * s[k];
+            u += s[k] * v[k];
+        }
+        u = s2 > 0.0f ? u / s2 : 0.0f;
+        u = u < 0.0f ? 0.0f : (u > 1.0f ? 1.0f : u);
+        for (k = 0; k < 3; k++) q2 += (v[k] - u * s[k]) * (v[k] - u * s[k]);
+        if (q2 < m * m) return 1;
+    }
+    return 0;
+}
+
+typedef struct wt__shadow_job {
+    wt_renderer *r;
+    const rendercache_camera *camera;
+} wt__shadow_job;
+
+static void wt__shadow_row(void *ctx, uint32_t y)
+{
+    const wt__shadow_job *j = (const wt__shadow_job *)ctx;
+    rendercache_range_image *out = j->r->out;
+    uint32_t x;
+    for (x = 0; x < j->camera->width; x++) {
+        size_t i = (size_t)y * j->camera->width + x;
+        float org[3], dir[3], pos[3];
+        int k;
+        if (out->object[i] != WT_OBJECT_OFFICE ||
+            rendercache_camera_ray(j->camera, (float)x + 0.5f, (float)y + 0.5f, org, dir) != RENDERCACHE_OK)
+            continue;
+        for (k = 0; k < 3; k++) pos[k] = org[k] + out->depth[i] * dir[k];
+        if (wt__bunny_may_shadow(j->r->w, pos))
+            wt__fill_pixel(j->r, x, y, org, dir, out->rgb + 3 * i, &out->depth[i], &out->object[i]);
+    }
+}
+
+static void wt__baseviews_shadows(wt_renderer *r, const rendercache_camera *camera)
+{
+    wt__shadow_job j;
+    j.r = r;
+    j.camera = camera;
+    ex_pool_parallel_for(r->w->pool, wt__shadow_row, &j, camera->height);
+}
+
 static int wt__baseviews_frame(wt_renderer *r, int frame, float *rgb, wt_frame_stats *st)
 {
     wt_world *w = r->w;
@@ -4328,6 +4407,7 @@ static int wt__baseviews_frame(wt_renderer *r, int frame, float *rgb, wt_frame_s
     r->fill_frame = (uint32_t)frame;
     if (wt__bunny_light_at(r, t) != 0) return -1;
     if (ex_baseviews_reconstruct(&r->bv, &r->rec, &cam, t, r->blend, r->out) != 0) return -1;
+    wt__baseviews_shadows(r, &cam);
     memcpy(rgb, r->out->rgb, sizeof(float) * 3 * r->width * r->height);
     rendercache_warp_get_stats(r->rec.warper, &ws);
     st->phase[0] = r->rec.seconds_blend;
