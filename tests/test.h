@@ -15,7 +15,9 @@
    rel, abs) passes when |actual - expected| <= abs + rel * |expected|; NaN never
    passes. Each failure prints file, line, both values, the difference and the
    tolerance. test_finish() prints "N passed, N failed" alone on the last line and
-   returns the process exit code (non-zero when anything failed).
+   returns the process exit code (non-zero when anything failed). Each case's
+   line ("ok   name (1.2 s CPU)") gives the CPU time it took, all threads
+   together: the figure to look at when make test grows.
 
    Running "prog NAME" runs only the test cases whose name contains NAME.
    test_note() prints a measured number that belongs in an issue note (an error
@@ -35,6 +37,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #if defined(__GNUC__) || defined(__clang__)
 #  define TEST__FN static __attribute__((unused))
@@ -154,15 +157,18 @@ TEST__FN void test_note(const char *fmt, ...)
 TEST__FN void test_run(const char *name, void (*fn)(void))
 {
     if (test__state.filter && !strstr(name, test__state.filter)) return;
+    clock_t start = clock();
+    double cpu;
     test__state.current = name;
     test__state.case_failures = 0;
     fn();
+    cpu = (double)(clock() - start) / CLOCKS_PER_SEC;
     if (test__state.case_failures) {
         test__state.failed++;
-        printf("FAIL %s\n", name);
+        printf("FAIL %s (%.1f s CPU)\n", name, cpu);
     } else {
         test__state.passed++;
-        printf("ok   %s\n", name);
+        printf("ok   %s (%.1f s CPU)\n", name, cpu);
     }
     fflush(stdout);
     test__state.current = NULL;
