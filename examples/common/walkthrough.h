@@ -2207,7 +2207,8 @@ static void wt__bunny_normal(const wt_world *w, const ex_trace_hit *h, float n[3
 /* Shadow ray test through the tracer: 1 when something opaque blocks the
    ray (*by_bunny set when the bunny does; it blocks only when
    bunny_casts), else 0 with through = the transmittance of the glass it
-   crosses (ex_tracer_transmittance; 1 without glass in the scene). */
+   crosses (ex_tracer_transmittance_static: the bunny was tested first; 1
+   without glass in the scene). */
 static int wt__occluded(const wt_world *w, const float org[3], const float dir[3], float tmax, int bunny_casts,
                         float through[3], int *by_bunny)
 {
@@ -2222,7 +2223,7 @@ static int wt__occluded(const wt_world *w, const float org[3], const float dir[3
         *by_bunny = 1;
         return 1;
     }
-    return t->has_glass && !ex_tracer_transmittance(t, org, dir, tmax, through);
+    return t->has_glass && !ex_tracer_transmittance_static(t, org, dir, tmax, through);
 }
 
 /* The many-light sampler's importance of light L at a point x with normal
@@ -2343,7 +2344,7 @@ static int wt__static_visible(const wt_world *w, const float x[3], const float y
     if (!(d > 2.0f * t->epsilon)) return 1;
     for (k = 0; k < 3; k++) wi[k] /= d;
     if (!t->has_glass) return !tr__bvh_occluded(&t->bvh, x, wi, 0.0f, d * (1.0f - 1e-4f) - t->epsilon);
-    return ex_tracer_transmittance(t, x, wi, d * (1.0f - 1e-4f) - t->epsilon, through);
+    return ex_tracer_transmittance_static(t, x, wi, d * (1.0f - 1e-4f) - t->epsilon, through);
 }
 
 /* Whether one of light L's rays from the cell with corner lo arrives:
