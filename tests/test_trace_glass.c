@@ -1,7 +1,8 @@
 /* Unit tests of the examples' tracer with glass and a sky
    (examples/common/trace.h, scene_sky.h): known answers for light through
    a thin glass window from a constant sky, from an environment map and from
-   an area light, shadow rays through several panes, the sky seen through
+   an area light, shadow rays through several panes (with and without an
+   instance in the way), the sky seen through
    glass, and bad skies refused. */
 #include "examples/common/trace.h"
 #include "tests/test.h"
@@ -146,7 +147,7 @@ static void test_area_light_through_panes(void)
         "usemtl lamp\nf 1 2 3 4\nusemtl floor\nf 5 8 7 6\n"
         "usemtl half\nf 9 10 11 12\nusemtl most\nf 13 16 15 14\n";
     const float org[3] = { 0, 0.5f, 0 }, down[3] = { 0, -1, 0 }, up[3] = { 0, 1, 0 };
-    obj_scene s;
+    obj_scene s, blocker;
     ex_tracer *t;
     double mean[3], se[3];
     float through[3];
@@ -163,6 +164,20 @@ static void test_area_light_through_panes(void)
     CHECK_CLOSE(through[1], 0.8, 1e-6, 0);
     CHECK(!ex_tracer_transmittance(t, org, up, 10.0f, through));   /* the lamp's back is opaque */
     CHECK(through[0] == 0.0f);
+    /* an instance between the panes blocks the ray; the static scene's
+       transmittance lets it through (what a moving object's shadow-free
+       pass sees) */
+    if (load("v -1 0.7 -1\nv 1 0.7 -1\nv 1 0.7 1\nv -1 0.7 1\nusemtl grey\nf 1 2 3 4\n", "newmtl grey\nKd 0.5 0.5 0.5\n",
+             &blocker)) {
+        static const float grey[3] = { 0.5f, 0.5f, 0.5f };
+        CHECK(ex_tracer_add_instance(t, &blocker, grey) == 0);
+        CHECK(!ex_tracer_transmittance(t, org, up, 0.45f, through));
+        CHECK(through[1] == 0.0f);
+        CHECK(ex_tracer_transmittance_static(t, org, up, 0.45f, through));
+        CHECK_CLOSE(through[1], 0.4, 1e-6, 0);
+        CHECK(!ex_tracer_transmittance_static(t, org, up, 10.0f, through));   /* the lamp still is opaque */
+        obj_free(&blocker);
+    }
     ex_tracer_destroy(t);
     obj_free(&s);
 }

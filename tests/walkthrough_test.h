@@ -37,7 +37,7 @@ TEST__FN void reference_path(char *path, size_t size, wt_mode mode, int frame)
     snprintf(path, size, "tests/data/walkthrough_%s_f%d.pfm", wt_mode_name(mode), frame);
 }
 
-/* One sample of light L at org for direct light (wt__light_view_sample),
+/* One sample of light L at org for direct light (wt__light_view_sample, the bunny casting),
    with the light's view made for this sample alone. */
 TEST__FN void light_sample(const wt_world *w, const wt_light *L, const float org[3], const float n[3],
                            const float mirror[3], const lightvec_material *m, float u1, float u2, float scale,
@@ -45,7 +45,7 @@ TEST__FN void light_sample(const wt_world *w, const wt_light *L, const float org
 {
     wt__light_view v;
     wt__light_view_make(w, L, org, &v);
-    wt__light_view_sample(w, &v, org, n, mirror, m, u1, u2, scale, rgb, gloss, bunny_shadow);
+    wt__light_view_sample(w, &v, org, n, mirror, m, u1, u2, scale, 1, rgb, gloss, bunny_shadow);
 }
 
 /* The time at which the bunny is deepest under the office's desk (x 1.0-2.6, z 2.9-3.7). */
@@ -163,7 +163,7 @@ TEST__FN double direct_light_bias(wt_world *w, double t, int cols, int rows, int
                 float rgb[3], gloss[3];
                 int shadow = 0;
                 double l;
-                wt__direct(w, &h, dir, mat, &r, rgb, gloss, &shadow);
+                wt__direct(w, &h, dir, mat, &r, 1, rgb, gloss, &shadow);
                 l = luminance(rgb);
                 m1 += l;
                 m2 += l * l;

@@ -19,7 +19,8 @@
 
    Glass and sky: a surface with transmittance tf passes tf of the light
    straight through, from either side (no refraction); shadow rays are
-   attenuated by every such surface they cross (ex_tracer_transmittance),
+   attenuated by every such surface they cross (ex_tracer_transmittance;
+   ex_tracer_transmittance_static leaves the instances out),
    and a path crossing one goes on through it or bounces, chosen in
    proportion to tf and Kd, without using up a bounce. A sky
    (ex_tracer_set_sky, scene_sky.h: constant or an environment map) is seen
@@ -839,8 +840,10 @@ static void ex__tracer_finish_hit(const ex_tracer *t, const float org[3], const 
 
 /* Closest hit along org + t dir, t in (0, tmax), over the static scene and
    every instance. */
-EX_FN int ex_tracer_intersect(const ex_tracer *t, const float org[3], const float dir[3], float tmax,
-                              ex_trace_hit *hit)
+/* ex_tracer_intersect against the static scene and the first `instances`
+   instances (all of them, or none for the static scene alone). */
+static int ex__tracer_intersect(const ex_tracer *t, const float org[3], const float dir[3], float tmax, int instances,
+                                ex_trace_hit *hit)
 {
     tr__hit h;
     int i;
@@ -850,7 +853,7 @@ EX_FN int ex_tracer_intersect(const ex_tracer *t, const float org[3], const floa
     if (tr__bvh_intersect(&t->bvh, org, dir, 0.0f, tmax, &h)) {
         hit->t = h.t; hit->tri = h.tri; hit->u = h.u; hit->v = h.v;
     }
-    for (i = 0; i < t->instance_count; i++) {
+    for (i = 0; i < instances; i++) {
         const ex__instance *in = &t->instances[i];
         float o[3], d[3];
         ex__affine_point(in->to_object, org, o);
@@ -863,6 +866,12 @@ EX_FN int ex_tracer_intersect(const ex_tracer *t, const float org[3], const floa
     if (hit->tri == TR__NO_HIT) return 0;
     ex__tracer_finish_hit(t, org, dir, hit);
     return 1;
+}
+
+EX_FN int ex_tracer_intersect(const ex_tracer *t, const float org[3], const float dir[3], float tmax,
+                              ex_trace_hit *hit)
+{
+    return ex__tracer_intersect(t, org, dir, tmax, t->instance_count, hit);
 }
 
 EX_FN int ex_tracer_occluded(const ex_tracer *t, const float org[3], const float dir[3], float tmax)
@@ -906,8 +915,8 @@ static float ex__tracer_step_through(const ex_tracer *t, const ex_trace_hit *h, 
    distance from org. Returns 1 with that surface in hit, or 0 when the ray
    leaves the scene (through: what the glass passes of the sky). The pane
    after EX_TRACE_MAX_PASSES crossed counts as opaque (it is the hit). */
-EX_FN int ex_tracer_intersect_through(const ex_tracer *t, const float org[3], const float dir[3], float tmax,
-                                      ex_trace_hit *hit, float through[3])
+static int ex__tracer_intersect_through(const ex_tracer *t, const float org[3], const float dir[3], float tmax,
+                                        int instances, ex_trace_hit *hit, float through[3])
 {
     float o[3], travelled = 0.0f;
     int pass, k;
@@ -916,7 +925,7 @@ EX_FN int ex_tracer_intersect_through(const ex_tracer *t, const float org[3], co
     for (pass = 0;; pass++) {
         const float *tf;
         float step;
-        if (!ex_tracer_intersect(t, o, dir, tmax, hit)) return 0;
+        if (!ex__tracer_intersect(t, o, dir, tmax, instances, hit)) return 0;
         tf = ex__tracer_tf(t, hit);
         if (!ex__passes(tf) || pass == EX_TRACE_MAX_PASSES) break;
         for (k = 0; k < 3; k++) through[k] *= tf[k];
@@ -929,21 +938,44 @@ EX_FN int ex_tracer_intersect_through(const ex_tracer *t, const float org[3], co
     return 1;
 }
 
+EX_FN int ex_tracer_intersect_through(const ex_tracer *t, const float org[3], const float dir[3], float tmax,
+                                      ex_trace_hit *hit, float through[3])
+{
+    return ex__tracer_intersect_through(t, org, dir, tmax, t->instance_count, hit, through);
+}
+
+/* ex_tracer_transmittance with the first `instances` instances in the way. */
+static int ex__tracer_transmittance(const ex_tracer *t, const float org[3], const float dir[3], float tmax,
+                                    int instances, float rgb[3])
+{
+    ex_trace_hit h;
+    if (!t->has_glass) {
+        rgb[0] = rgb[1] = rgb[2] = 1.0f;
+        if (instances == t->instance_count ? !ex_tracer_occluded(t, org, dir, tmax)
+                                           : !tr__bvh_occluded(&t->bvh, org, dir, 0.0f, tmax))
+            return 1;
+    } else if (!ex__tracer_intersect_through(t, org, dir, tmax, instances, &h, rgb)) {
+        return 1;
+    }
+    rgb[0] = rgb[1] = rgb[2] = 0.0f;
+    return 0;
+}
+
 /* What reaches org + tmax dir from org: rgb = the product of the
    transmittances of the glass crossed, 0 when something opaque is in the
    way (or more than EX_TRACE_MAX_PASSES panes). Returns whether any light
    gets through. Without glass in the scene, a shadow ray. */
 EX_FN int ex_tracer_transmittance(const ex_tracer *t, const float org[3], const float dir[3], float tmax, float rgb[3])
 {
-    ex_trace_hit h;
-    if (!t->has_glass) {
-        rgb[0] = rgb[1] = rgb[2] = 1.0f;
-        if (!ex_tracer_occluded(t, org, dir, tmax)) return 1;
-    } else if (!ex_tracer_intersect_through(t, org, dir, tmax, &h, rgb)) {
-        return 1;
-    }
-    rgb[0] = rgb[1] = rgb[2] = 0.0f;
-    return 0;
+    return ex__tracer_transmittance(t, org, dir, tmax, t->instance_count, rgb);
+}
+
+/* The same with the static scene alone in the way (the instances let
+   everything through). */
+EX_FN int ex_tracer_transmittance_static(const ex_tracer *t, const float org[3], const float dir[3], float tmax,
+                                         float rgb[3])
+{
+    return ex__tracer_transmittance(t, org, dir, tmax, 0, rgb);
 }
 
 /* Material of a hit: reflectances and emission. */

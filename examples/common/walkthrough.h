@@ -880,8 +880,6 @@ typedef struct wt_world {
     float *bunny_normals;              /* smooth vertex normals, OBJ coordinates */
     ex_tracer *tracer;
     int bunny_instance;
-    int bunny_casts;                   /* the bunny blocks shadow rays and darkens contact (0 while the
-                                          baseviews mode traces its static base images) */
     wt_light *lights;                  /* emitting polygons */
     uint32_t light_count;
     /* which lights each cell of a coarse grid sees (wt__light_grid_build) */
@@ -1849,7 +1847,6 @@ EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t
         return -1;
     }
     w->bunny_instance = ex_tracer_add_instance(w->tracer, &w->bunny, grey);
-    w->bunny_casts = 1;
     wt__materials_from_obj(&w->office, w->materials);
     memcpy(w->materials[w->bunny_material].diffuse, grey, sizeof grey);
     if (o->mode == WT_MODE_RADIOSITY) {   /* a diffuse method: its full renders (--reference) are Lambertian too */
@@ -2214,11 +2211,12 @@ static void wt__bunny_normal(const wt_world *w, const ex_trace_hit *h, float n[3
 }
 
 /* Shadow ray test through the tracer: 1 when something opaque blocks the
-   ray (*by_bunny set when the bunny does), else 0 with through = the
-   transmittance of the glass it crosses (ex_tracer_transmittance; 1
+   ray (*by_bunny set when the bunny does; it blocks only when
+   bunny_casts), else 0 with through = the transmittance of the glass it
+   crosses (ex_tracer_transmittance_static: the bunny was tested first; 1
    without glass in the scene). */
-static int wt__occluded(const wt_world *w, const float org[3], const float dir[3], float tmax, float through[3],
-                        int *by_bunny)
+static int wt__occluded(const wt_world *w, const float org[3], const float dir[3], float tmax, int bunny_casts,
+                        float through[3], int *by_bunny)
 {
     const ex_tracer *t = w->tracer;
     const ex__instance *b = &t->instances[w->bunny_instance];
@@ -2227,11 +2225,11 @@ static int wt__occluded(const wt_world *w, const float org[3], const float dir[3
     if (!t->has_glass && tr__bvh_occluded(&t->bvh, org, dir, 0.0f, tmax)) return 1;
     ex__affine_point(b->to_object, org, o);
     ex__affine_vector(b->to_object, dir, d);
-    if (w->bunny_casts && tr__bvh_occluded(&b->bvh, o, d, 0.0f, tmax)) {
+    if (bunny_casts && tr__bvh_occluded(&b->bvh, o, d, 0.0f, tmax)) {
         *by_bunny = 1;
         return 1;
     }
-    return t->has_glass && !ex_tracer_transmittance(t, org, dir, tmax, through);
+    return t->has_glass && !ex_tracer_transmittance_static(t, org, dir, tmax, through);
 }
 
 /* The many-light sampler's importance of light L at a point x with normal
@@ -2352,7 +2350,7 @@ static int wt__static_visible(const wt_world *w, const float x[3], const float y
     if (!(d > 2.0f * t->epsilon)) return 1;
     for (k = 0; k < 3; k++) wi[k] /= d;
     if (!t->has_glass) return !tr__bvh_occluded(&t->bvh, x, wi, 0.0f, d * (1.0f - 1e-4f) - t->epsilon);
-    return ex_tracer_transmittance(t, x, wi, d * (1.0f - 1e-4f) - t->epsilon, through);
+    return ex_tracer_transmittance_static(t, x, wi, d * (1.0f - 1e-4f) - t->epsilon, through);
 }
 
 /* Whether one of light L's rays from the cell with corner lo arrives:
@@ -2710,10 +2708,11 @@ static int wt__light_view_direction(const wt_world *w, const wt__light_view *v, 
    the view direction reflected) for direct light: a direction towards it
    (wt__light_view_direction) from u1 and u2, added to rgb with the
    sampler's weight x scale (scale = 1 / (selection probability *
-   samples)); its specular (view-dependent) term is added to gloss as well. */
+   samples)); its specular (view-dependent) term is added to gloss as well.
+   The bunny blocks the shadow ray only when bunny_casts. */
 static void wt__light_view_sample(const wt_world *w, const wt__light_view *v, const float org[3], const float n[3],
                                   const float mirror[3], const lightvec_material *m, float u1, float u2, float scale,
-                                  float rgb[3], float gloss[3], int *bunny_shadow)
+                                  int bunny_casts, float rgb[3], float gloss[3], int *bunny_shadow)
 {
     const ex_tracer *t = w->tracer;
     const wt_light *L = v->L;
@@ -2722,7 +2721,7 @@ static void wt__light_view_sample(const wt_world *w, const wt__light_view *v, co
     if (!wt__light_view_direction(w, v, org, u1, u2, wi, &d, &weight)) return;
     cos_x = wi[0] * n[0] + wi[1] * n[1] + wi[2] * n[2];
     if (cos_x <= 0.0f) return;
-    if (wt__occluded(w, org, wi, d * (1.0f - 1e-4f) - t->epsilon, through, bunny_shadow)) return;
+    if (wt__occluded(w, org, wi, d * (1.0f - 1e-4f) - t->epsilon, bunny_casts, through, bunny_shadow)) return;
     g = cos_x * weight * scale;
     for (k = 0; k < 3; k++) c_m += mirror[k] * wi[k];
     f = c_m > 0.0f && m->exponent > 0.0f ? (m->exponent + 2.0f) / (2.0f * WT_PI) * powf(c_m, m->exponent) : 0.0f;
@@ -2811,7 +2810,7 @@ static float wt__light_probability(const wt_world *w, const float *seen, const f
 }
 
 static void wt__direct(const wt_world *w, const ex_trace_hit *h, const float dir[3], const lightvec_material *m,
-                       ex_rng *r, float rgb[3], float gloss[3], int *bunny_shadow)
+                       ex_rng *r, int bunny_casts, float rgb[3], float gloss[3], int *bunny_shadow)
 {
     float pick[WT__MAX_LIGHT_SAMPLES], org[3], mirror[3], coef[3], below = 0.0f, shift;
     const float *seen;
@@ -2840,7 +2839,7 @@ static void wt__direct(const wt_world *w, const ex_trace_hit *h, const float dir
                 float u1 = fminf(fmaxf((pick[s] - below) / p, 0.0f), 0.99999994f);
                 float u2 = wt__radical_inverse((uint32_t)s) + shift;
                 wt__light_view_sample(w, &view, org, h->normal, mirror, m, u1, u2 < 1.0f ? u2 : u2 - 1.0f,
-                                      1.0f / (p * (float)n), rgb, gloss, bunny_shadow);
+                                      1.0f / (p * (float)n), bunny_casts, rgb, gloss, bunny_shadow);
             }
         below = above;
     }
@@ -2920,14 +2919,24 @@ static float wt__contact_occlusion(const wt_world *w, const float pos[3], const 
     return (float)hits / (float)WT_CONTACT_RAYS;
 }
 
+/* How wt_shade_points (and wt__trace_point: the first and last flags) works. */
+enum {
+    WT_SHADE_DIRECT = 1,           /* emission + direct light (else emission only) */
+    WT_SHADE_INSERT = 2,           /* new light vectors go into the caches */
+    WT_SHADE_STATIC_ONLY = 4,      /* light vectors for the office only (the bunny's points get none) */
+    WT_SHADE_NO_BUNNY_SHADOWS = 8  /* the bunny casts no shadow and darkens no contact (the baseviews
+                                      mode's base images: its shadows belong to the frame's time) */
+};
+
 /* Traces a point's ray and computes its emission and direct light. Camera
    rays see through glass (ex_tracer_intersect_through): the point is the
    first opaque surface behind the panes, or the sky, its radiance dimmed
    by their transmittance. A pane's own reflection is not drawn (the
    daylight building's glass has Kd 0; its faint mirror term, Ks 0.08, is
    left out). */
-static void wt__trace_point(const wt_world *w, wt_point *p, int direct)
+static void wt__trace_point(const wt_world *w, wt_point *p, int flags)
 {
+    int bunny_casts = !(flags & WT_SHADE_NO_BUNNY_SHADOWS);
     ex_trace_hit h;
     ex_rng rng;
     float d[3];
@@ -2969,13 +2978,13 @@ static void wt__trace_point(const wt_world *w, wt_point *p, int direct)
     if (h.instance == EX_TRACE_STATIC && ex__passes(w->office.materials[p->material].tf))
         return;                           /* the pane after EX_TRACE_MAX_PASSES others: seen as black */
     for (k = 0; k < 3; k++) p->direct[k] = w->materials[p->material].emission[k];
-    if (direct) {
+    if (flags & WT_SHADE_DIRECT) {
         rng = ex_rng_stream(w->opt.seed, p->stream);
-        wt__direct(w, &h, p->dir, &w->materials[p->material], &rng, d, p->direct_gloss, &shadow);
+        wt__direct(w, &h, p->dir, &w->materials[p->material], &rng, bunny_casts, d, p->direct_gloss, &shadow);
         p->bunny_shadow = (unsigned char)shadow;
         for (k = 0; k < 3; k++) p->direct[k] += d[k];
     }
-    if (p->object == WT_OBJECT_OFFICE && w->opt.bunny_shadow && w->bunny_casts) {
+    if (p->object == WT_OBJECT_OFFICE && w->opt.bunny_shadow && bunny_casts) {
         p->contact = 1.0f - wt__contact_occlusion(w, p->pos, p->normal, p->stream);
         if (p->contact < 1.0f) p->bunny_shadow = 1;   /* refreshed sooner by the render cache: the shadow moves */
     }
@@ -2988,7 +2997,7 @@ typedef struct wt__job {
     wt_world *w;
     wt_point *points;
     uint32_t count;
-    int direct;
+    int flags;             /* WT_SHADE_* */
 } wt__job;
 
 static void wt__trace_job(void *ctx, uint32_t batch)
@@ -2996,7 +3005,7 @@ static void wt__trace_job(void *ctx, uint32_t batch)
     const wt__job *j = (const wt__job *)ctx;
     uint32_t i, end = batch * WT__BATCH + WT__BATCH;
     if (end > j->count) end = j->count;
-    for (i = batch * WT__BATCH; i < end; i++) wt__trace_point(j->w, &j->points[i], j->direct);
+    for (i = batch * WT__BATCH; i < end; i++) wt__trace_point(j->w, &j->points[i], j->flags);
 }
 
 static const float *wt__outgoing(const wt_point *p, float wo[3])
@@ -3191,13 +3200,6 @@ static int wt__light_points(wt_world *w, wt_point *points, uint32_t count, int i
     return 0;
 }
 
-/* How wt_shade_points works. */
-enum {
-    WT_SHADE_DIRECT = 1,        /* emission + direct light (else emission only) */
-    WT_SHADE_INSERT = 2,        /* new light vectors go into the caches */
-    WT_SHADE_STATIC_ONLY = 4    /* light vectors for the office only (the bunny's points get none) */
-};
-
 /* Shades points: traces them, computes emission and direct light, and adds
    the indirect light of light vectors. Adds the seconds spent tracing and
    in light vectors to *seconds_trace, *seconds_light (either may be NULL). */
@@ -3210,7 +3212,7 @@ EX_FN int wt_shade_points(wt_world *w, wt_point *points, uint32_t count, int fla
     j.w = w;
     j.points = points;
     j.count = count;
-    j.direct = flags & WT_SHADE_DIRECT;
+    j.flags = flags;
     ex_pool_parallel_for(w->pool, wt__trace_job, &j, (count + WT__BATCH - 1) / WT__BATCH);
     if (flags & WT_SHADE_STATIC_ONLY)
         for (i = 0; i < count; i++)
@@ -3377,7 +3379,7 @@ EX_FN int wt_render_converged(wt_world *w, const rendercache_camera *c, double t
         tj.w = w;
         tj.points = points;
         tj.count = n;
-        tj.direct = 1;
+        tj.flags = WT_SHADE_DIRECT;
         ex_pool_parallel_for(w->pool, wt__trace_job, &tj, (n + WT__BATCH - 1) / WT__BATCH);
         w->opt.light_samples = saved;
         for (i = 0; i < n; i++) wt__point_radiance(&points[i]);
@@ -4059,10 +4061,9 @@ static int wt__render_base(wt_renderer *r, uint32_t view, uint32_t key, renderca
     /* the office's light vectors; the bunny's indirect light from its key-time solution.
        The bunny casts no shadow here: its shadows belong to the frame's time
        (wt__baseviews_shadows), not to the key time's pose */
-    w->bunny_casts = 0;
     shaded = wt__shade_camera(w, &c, WT_STREAM_BASE, view * r->bv.time_count + key,
-                              WT_SHADE_DIRECT | WT_SHADE_INSERT | WT_SHADE_STATIC_ONLY, r->points, r->index, &st);
-    w->bunny_casts = 1;
+                              WT_SHADE_DIRECT | WT_SHADE_INSERT | WT_SHADE_STATIC_ONLY | WT_SHADE_NO_BUNNY_SHADOWS,
+                              r->points, r->index, &st);
     if (shaded != 0 || wt__bunny_light_at(r, img->time) != 0) {
         rendercache_range_image_destroy(img);
         return -1;
@@ -4169,7 +4170,7 @@ static int wt__fill_pixel(void *user, uint32_t x, uint32_t y, const float org[3]
     memcpy(p.org, org, sizeof p.org);
     memcpy(p.dir, dir, sizeof p.dir);
     p.stream = wt__stream(WT_STREAM_FILL, r->fill_frame, y * r->width + x);
-    wt__trace_point(w, &p, 1);
+    wt__trace_point(w, &p, WT_SHADE_DIRECT);
     if (!p.lit && p.light == WT_LIGHT_BUNNY) {   /* the key-time solution, at the frame's time (wt__baseviews_frame) */
         wt__bunny_indirect_at(r, &p);
     } else if (!p.lit) {
