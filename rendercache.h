@@ -590,6 +590,11 @@ typedef struct rendercache_sample {
     float rgb[3];            /* radiance towards the eye, linear RGB, finite */
     float priority_scale;    /* multiplies the point's priority, e.g. lightvec_priority(1, W);
                                 0 means 1 */
+    float view_lobe;         /* radians, >= 0: how far the view may turn before a view-dependent
+                                colour (a highlight) is as stale as a point of age age_ramp_frames;
+                                0 (the default): the colour does not depend on the view. The
+                                point's priority grows with the angle between the eye that shaded
+                                it and the current eye, seen from the point, over this */
 } rendercache_sample;
 
 /* What a pixel of the current image shows (rendercache_pixel_kinds). */
@@ -2072,16 +2077,29 @@ static void rendercache__slot_set(rendercache__slots *s, uint32_t slot, const re
 }
 
 /* The rest of a slot, read by the depth cull for the points that win a
-   pixel: 24 bytes. A point's age is not stored but derived, so nothing is
+   pixel: 28 bytes. A point's age is not stored but derived, so nothing is
    written per point and frame: age = frame - birth + (motion of its object
    since birth), the last term making points of moving objects age faster;
-   it is kept as one sum, age = frame + obj_motion - base (modulo 2^32). */
+   it is kept as one sum, age = frame + obj_motion - base (modulo 2^32).
+   Nor is the eye that shaded it: the cache keeps the eyes of the last
+   RENDERCACHE__EYE_FRAMES frames, and the point the frame it was shaded
+   in (rendercache__view_age). */
 typedef struct rendercache__point {
     float rgb[3];
     float scale;             /* priority scale */
     uint32_t base;           /* frame of insertion + the object's obj_motion then */
     uint32_t object;         /* geo's object, here too for the priority */
+    uint16_t eye_frame;      /* the frame of the eye that shaded it (rendercache__eye_frame) */
+    uint16_t view_lobe;      /* its view lobe (rendercache__lobe_bits), 0: view-independent */
 } rendercache__point;
+
+/* The eyes remembered for the view-dependent points' ageing: a point shaded
+   longer ago is compared with the oldest (about 6 KB in the cache). */
+#define RENDERCACHE__EYE_FRAMES 256u
+#define RENDERCACHE__EYE_FRAME_MASK 0x7FFFu      /* eye_frame: the frame's low 15 bits ... */
+#define RENDERCACHE__EYE_PREDICTED 0x8000u       /* ... and whether it was the predicted camera's eye */
+#define RENDERCACHE__LOBE_MIN 1e-6f              /* view lobes are stored between these (radians) */
+#define RENDERCACHE__LOBE_MAX 1e6f
 
 /* A band of the error diffusion (rendercache__diffuse): its count and its
    marginal choices. */
@@ -2154,6 +2172,8 @@ struct rendercache {
     int has_frame, has_prediction;
     rendercache__view view, predicted;
     rendercache__frame_record *history;   /* max_latency + 1 slots, frame f in slot f % that */
+    float eyes[RENDERCACHE__EYE_FRAMES][2][3];   /* frame f's eye and its predicted camera's, in slot
+                                                    f % RENDERCACHE__EYE_FRAMES (rendercache__shading_eye) */
     rendercache__splat splat;
     uint32_t *px_index;      /* per pixel: the slot shown, after the depth cull */
     float *px_depth;         /* per pixel: its squared distance, FLT_MAX without a point */
@@ -2621,10 +2641,72 @@ static uint32_t rendercache__project_point(const rendercache__projector *pr, con
     return p;
 }
 
+/* A frame's number as a point keeps it, with whether the predicted
+   camera's eye shaded it. */
+static uint16_t rendercache__eye_frame(uint64_t frame, int predicted)
+{
+    return (uint16_t)((frame & RENDERCACHE__EYE_FRAME_MASK) | (predicted ? RENDERCACHE__EYE_PREDICTED : 0u));
+}
+
+/* A view lobe in 16 bits: the upper half of the float (8 bits of mantissa,
+   rounded to nearest even), clamped to [LOBE_MIN, LOBE_MAX]; 0 for 0. The
+   priority needs no more than 3 digits of it. */
+static uint16_t rendercache__lobe_bits(float lobe)
+{
+    uint32_t bits;
+    if (!(lobe > 0.0f)) return 0;
+    lobe = lobe < RENDERCACHE__LOBE_MIN ? RENDERCACHE__LOBE_MIN : lobe > RENDERCACHE__LOBE_MAX ? RENDERCACHE__LOBE_MAX : lobe;
+    memcpy(&bits, &lobe, sizeof bits);
+    bits += 0x7FFFu + ((bits >> 16) & 1u);
+    return (uint16_t)(bits >> 16);
+}
+
+static float rendercache__lobe(uint16_t code)
+{
+    uint32_t bits = (uint32_t)code << 16;
+    float lobe;
+    memcpy(&lobe, &bits, sizeof lobe);
+    return lobe;
+}
+
+/* The eye that shaded a point: its frame's (or that frame's predicted
+   camera's), or for a point shaded more than EYE_FRAMES - 1 frames ago
+   the oldest eye remembered. */
+static const float *rendercache__shading_eye(const rendercache *rc, uint16_t eye_frame)
+{
+    const uint32_t since = ((uint32_t)rc->frame - eye_frame) & RENDERCACHE__EYE_FRAME_MASK;
+    const int known = since < RENDERCACHE__EYE_FRAMES;
+    const uint64_t f = rc->frame - (known ? since : RENDERCACHE__EYE_FRAMES - 1u);
+    return rc->eyes[f % RENDERCACHE__EYE_FRAMES][known && (eye_frame & RENDERCACHE__EYE_PREDICTED)];
+}
+
+/* How stale a view-dependent colour is, in units of the age ramp: the
+   angle between the eye that shaded the point and the current eye, seen
+   from the point, over the point's view lobe (a glossy highlight slides
+   as the view turns, whatever the age). The point is where pixel p's ray
+   meets it (depth2: its squared distance), exact to half a pixel. */
+static float rendercache__view_age(const rendercache *rc, const rendercache__point *pt, uint32_t p, float depth2)
+{
+    const float *e = rendercache__shading_eye(rc, pt->eye_frame), *eye = rc->view.eye;
+    const float dist = sqrtf(depth2);
+    float dir[3], a[3], c[3];
+    int k;
+    rendercache__view_ray(&rc->view, (float)(p % rc->width) + 0.5f, (float)(p / rc->width) + 0.5f, dir);
+    for (k = 0; k < 3; k++) a[k] = eye[k] + dir[k] * dist - e[k];   /* shading eye to the point */
+    c[0] = a[1] * dir[2] - a[2] * dir[1];
+    c[1] = a[2] * dir[0] - a[0] * dir[2];
+    c[2] = a[0] * dir[1] - a[1] * dir[0];
+    return atan2f(sqrtf(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]), a[0] * dir[0] + a[1] * dir[1] + a[2] * dir[2]) /
+           rendercache__lobe(pt->view_lobe);
+}
+
 /* Priority of a pixel showing a point (WDP99: age is the main measure of
-   how likely a colour is stale; points of moving objects age faster),
-   times its priority scale (the light-vector weight of Crespin and Peroche
-   2004, section 4.2.4), in [0, 1]. motion: the object's obj_motion. The
+   how likely a colour is stale; points of moving objects age faster), for
+   a view-dependent point plus the view's turn since it was shaded over its
+   lobe (rendercache__view_age, as age_ramp frames per lobe), times its
+   priority scale (the light-vector weight of Crespin and Peroche 2004,
+   section 4.2.4), in [0, 1]. motion: the object's obj_motion; p: the
+   pixel, depth2: the point's squared distance. The
    product x = POINT_MAX age scale / age_ramp is the priority up to the
    filled holes' top (PRIORITY_HOLE_TOP); above it, it is squeezed into
    the levels between that and 1 (empty pixels), 0.95 + 0.05 (1 - 0.95 /
@@ -2638,10 +2720,13 @@ static uint32_t rendercache__project_point(const rendercache__projector *pr, con
    the walls and carrying almost all of the stale points' error (points
    older than 24 frames: 3 % of the pixels, 90 % of that error at frame
    135). */
-static float rendercache__point_priority(const rendercache *rc, const rendercache__point *pt, uint32_t motion)
+static float rendercache__point_priority(const rendercache *rc, const rendercache__point *pt, uint32_t motion,
+                                         uint32_t p, float depth2)
 {
     uint32_t age = (uint32_t)rc->frame + motion - pt->base;
-    float x = (float)age * rc->inv_age_ramp * (RENDERCACHE__PRIORITY_POINT_MAX * pt->scale);
+    float ramps = (float)age * rc->inv_age_ramp, x;
+    if (pt->view_lobe) ramps += rendercache__view_age(rc, pt, p, depth2);
+    x = ramps * (RENDERCACHE__PRIORITY_POINT_MAX * pt->scale);
     if (x <= RENDERCACHE__PRIORITY_HOLE_TOP) return x;
     return RENDERCACHE__PRIORITY_HOLE_TOP +
            (1.0f - RENDERCACHE__PRIORITY_HOLE_TOP) * (1.0f - RENDERCACHE__PRIORITY_HOLE_TOP / x);
@@ -2950,7 +3035,7 @@ static void rendercache__write_row(rendercache *rc, const uint64_t *key, const f
             RENDERCACHE__PREFETCH_WRITE(&shown[next == RENDERCACHE__NONE ? empty : next]);
         }
         memcpy(image + 3 * (size_t)p, data[slot].rgb, 3 * sizeof(float));
-        priority[p] = rendercache__point_priority(rc, &data[slot], motion);
+        priority[p] = rendercache__point_priority(rc, &data[slot], motion, p, depth[p]);   /* (no lobe in the empty slot) */
         px_index[p] = shows ? k : RENDERCACHE__NONE;
         px_depth[p] = shows ? depth[p] : FLT_MAX;
         shown[shows ? k : sink] = mark;   /* spared by the eviction in this frame */
@@ -3479,6 +3564,8 @@ static void rendercache__begin(rendercache *rc, const rendercache__view *v, cons
     memset(record, 0, sizeof *record);
     record->frame = rc->frame;
     record->view = *v;
+    memcpy(rc->eyes[rc->frame % RENDERCACHE__EYE_FRAMES][0], v->eye, sizeof v->eye);
+    memcpy(rc->eyes[rc->frame % RENDERCACHE__EYE_FRAMES][1], v->eye, sizeof v->eye);   /* until a prediction */
     rendercache__start_stats(rc);
     rendercache__change_level(rc);
     rendercache__commit_transforms(rc);
@@ -3573,6 +3660,7 @@ static void rendercache__predict_start(rendercache *rc, const rendercache__view 
     rc->predicted = *next;
     rc->history[rc->frame % ((uint64_t)rc->max_latency + 1)].predicted = *next;
     rc->history[rc->frame % ((uint64_t)rc->max_latency + 1)].has_prediction = 1;
+    memcpy(rc->eyes[rc->frame % RENDERCACHE__EYE_FRAMES][1], next->eye, sizeof next->eye);
     rendercache__compose_objects(rc, &rc->predicted, rc->obj_predicted);
     memset(rc->occupancy, 0, ((size_t)rc->cell_count + 1) * rendercache__cell_arrays(rc));
 }
@@ -4134,6 +4222,7 @@ static int rendercache__sample_valid(const rendercache *rc, const rendercache_sa
     if (s->object != RENDERCACHE_MISS && s->object >= rc->object_count) return 0;
     if (s->object != RENDERCACHE_MISS && !rendercache__finite3(s->position)) return 0;
     if (!rendercache__finite3(s->rgb) || !(s->priority_scale >= 0.0f) || !isfinite(s->priority_scale)) return 0;
+    if (!(s->view_lobe >= 0.0f) || !isfinite(s->view_lobe)) return 0;
     return 1;
 }
 
@@ -4154,6 +4243,7 @@ typedef struct rendercache__new_point {
     float rgb[3];
     float scale;             /* priority scale, > 0 */
     uint32_t age;            /* the age it starts with (frames) */
+    uint16_t eye_frame, view_lobe;   /* as rendercache__point's */
 } rendercache__new_point;
 
 /* The new point of a sample requested in frame f through view v. */
@@ -4164,6 +4254,8 @@ static void rendercache__sample_new_point(const rendercache *rc, const rendercac
     memcpy(np->rgb, s->rgb, sizeof np->rgb);
     np->scale = s->priority_scale > 0.0f ? s->priority_scale : 1.0f;
     np->age = 0;
+    np->eye_frame = rendercache__eye_frame(f, (s->flags & RENDERCACHE_REQUEST_PREDICTED) != 0);
+    np->view_lobe = s->object == RENDERCACHE_MISS ? 0 : rendercache__lobe_bits(s->view_lobe);   /* the sky is still */
 }
 
 /* What placing points counts (rendercache__put_point): each job of a parallel
@@ -4183,6 +4275,8 @@ static void rendercache__store(rendercache *rc, uint32_t slot, const rendercache
     pt->scale = np->scale;
     pt->base = (uint32_t)rc->frame + rc->obj_motion[rendercache__motion_index(rc, np->g.object)] - np->age;
     pt->object = np->g.object;
+    pt->eye_frame = np->eye_frame;
+    pt->view_lobe = np->view_lobe;
     rc->shown[slot] = rendercache__mark(rc->frame);   /* new points are not evicted in their own frame */
 }
 
@@ -4305,7 +4399,7 @@ static void rendercache__age_around(rendercache *rc, uint32_t p)
             pt = &rc->data[k];
             motion = rc->obj_motion[rendercache__motion_index(rc, pt->object)];
             if ((uint32_t)rc->frame + motion - pt->base < rc->age_ramp) pt->base = (uint32_t)rc->frame + motion - rc->age_ramp;
-            rc->priority[q] = rendercache__point_priority(rc, pt, motion);
+            rc->priority[q] = rendercache__point_priority(rc, pt, motion, q, rc->px_depth[q]);
         }
     }
 }
@@ -4523,7 +4617,7 @@ static void rendercache__put_job(void *ctx, uint32_t j)
 }
 
 /* The most samples of a chunk: its slots and colour differences fill
-   2 words per sample of the re-sort's scratch (8 words per slot of a range). */
+   2 words per sample of the re-sort's scratch (9 words per slot of a range). */
 static uint32_t rendercache__chunk_most(const rendercache *rc)
 {
     const uint32_t range = rendercache__sort_range_size(rc);
@@ -4670,7 +4764,8 @@ RENDERCACHE_API rendercache_result rendercache_invalidate(rendercache *rc, uint3
         if (rc->px_index[p] == RENDERCACHE__NONE) continue;
         pt = &rc->data[rc->px_index[p]];
         if (object != RENDERCACHE_ALL_OBJECTS && pt->object != object) continue;
-        rc->priority[p] = rendercache__point_priority(rc, pt, rc->obj_motion[rendercache__motion_index(rc, pt->object)]);
+        rc->priority[p] = rendercache__point_priority(rc, pt, rc->obj_motion[rendercache__motion_index(rc, pt->object)], p,
+                                                      rc->px_depth[p]);
     }
     return RENDERCACHE_OK;
 }
@@ -4833,6 +4928,8 @@ static uint32_t rendercache__seed_image(rendercache *rc, const rendercache_range
             memcpy(np.rgb, img->rgb + 3 * p, sizeof np.rgb);
             np.scale = 1.0f;
             np.age = rc->age_ramp;
+            np.eye_frame = rendercache__eye_frame(rc->frame, 0);
+            np.view_lobe = 0;   /* range images carry no lobe */
             stored += (uint32_t)rendercache__insert_other(rc, &np, 1);
         }
     return stored;
