@@ -3681,7 +3681,12 @@ static int wt__raytrace_create(wt_renderer *r, char *err, size_t err_size)
    there once it is about half wrong, as a hole is. The cache measures the
    turn from the eye that shaded the point to the current eye every frame,
    so points of the first frame age too, and a point seen again from where
-   it was shaded is fresh again. 0 for view-independent points. */
+   it was shaded is fresh again. 0 for view-independent points. Measured
+   against converged renders (12 strata, 32 shadow rays) at 160x120,
+   pooled LRMS, against the one-step scale fixed at insertion it replaces:
+   building (every 24th frame from 7) 0.3129 -> 0.3031, office (every 8th
+   from 7) 0.1136 -> 0.1126; the lobe s_n / share 0.3015 / 0.1175, no
+   view term at all 0.1233 in the office. */
 static float wt__view_lobe(const wt_point *p, const lightvec_material *m)
 {
     float s_n;
