@@ -14,7 +14,10 @@
    asynchronous renderer): a late sample is stored at its own point. A
    sample whose colour differs from the point it replaces ages the points
    around it, so that changed lighting is found and resampled first (or the
-   engine says so: rendercache_invalidate). Objects may move: each point
+   engine says so: rendercache_invalidate). A view-dependent sample (a
+   glossy highlight) carries its view lobe, and its point ages by the
+   angle the view has turned since it was shaded, over that lobe, as well
+   as by its age. Objects may move: each point
    belongs to an object whose transform the caller updates, and the point
    moves with it. Range images can seed the cache (rendercache_seed), so
    that precomputed views warm-start an interactive session.
@@ -56,7 +59,7 @@
            // (or both at once, reading the points once: rendercache_begin_frame_predicted(rc, &camera, &next_camera))
            rendercache_request(rc, req, budget, &n);  // the pixels that deserve a ray
            for (i = 0; i < n; i++) {
-               memset(&s[i], 0, sizeof s[i]);         // priority_scale 0: 1
+               memset(&s[i], 0, sizeof s[i]);         // priority_scale 0: 1; view_lobe 0: matte
                s[i].frame = req[i].frame;             // the request's frame, x, y and flags
                s[i].x = req[i].x; s[i].y = req[i].y; s[i].flags = req[i].flags;
                shade(req[i].org, req[i].dir, s[i].position, s[i].rgb, &s[i].object);
@@ -192,7 +195,9 @@
        lies beyond the 7x7 window); elsewhere the layer of more weight in
        the window (the farther on a tie); the
        priority image ranks young points (age, faster for moving objects,
-       times the sample's priority_scale) below holes (the fewer points
+       plus for a sample with a view_lobe age_ramp frames per lobe of the
+       turn of the view, seen from the point, since the frame whose eye
+       shaded it, times the sample's priority_scale) below holes (the fewer points
        around, the higher), points whose age times scale passes the
        holes' top above them in that order (however old: every point is
        refreshed in turn), and pixels with nothing near at 1 (WDP99). The
@@ -301,7 +306,8 @@
          > 0; each sample: frame begun and not in the future, pixel inside
          the image, only known flags (a predicted one from a frame with a
          prediction), object < object_count or RENDERCACHE_MISS, finite
-         position (hits), finite colour, priority_scale >= 0 and finite;
+         position (hits), finite colour, priority_scale and view_lobe >= 0
+         and finite;
          the others are stored and the call reports INVALID_ARGUMENT.
          Contract: samples holds n samples.
        invalidate(rc, object): checks rc, and object < object_count,
@@ -395,13 +401,14 @@
    LIMITS
 
        Render cache: image up to 2^28 pixels, cache up to 2^31 points, up to
-       2^24 objects, samples up to 64 frames late. Memory: 41 bytes per cache
+       2^24 objects, samples up to 64 frames late. Memory: 45 bytes per cache
        point (2 per pixel by default), 43 bytes per pixel (43.5 with
-       parallel_for), about 48 (max_latency + 8) bytes per object, and 512
-       KB for the re-sort into image order (1 MB with parallel_for, and 260
-       bytes per 16384 points for where each band of the image starts): 125
-       bytes per pixel in all and the re-sort's scratch, 34 MB for 512x512
-       (129 bytes per pixel) and 260 MB for 1920x1080.
+       parallel_for), about 48 (max_latency + 8) bytes per object, 6 KB
+       for the eyes of the last 256 frames, and 576 KB for the re-sort into
+       image order (1.1 MB with parallel_for, and 260 bytes per 16384
+       points for where each band of the image starts): 133 bytes per pixel
+       in all and the re-sort's scratch, 36 MB for 512x512 (137 bytes per
+       pixel) and 277 MB for 1920x1080.
        A compiler without the GNU atomic builtins projects the points in one
        job (the rest of the frame still runs in parallel). A frame reads and
        writes at random over these tens of megabytes: an allocator (desc.
@@ -411,7 +418,13 @@
        colours are fixed when they are inserted (the cache ages them so that
        they get refreshed, and faster where samples find a colour changed);
        view-dependent shading changes only as points are resampled, as in
-       the paper. A hole's layer is found along rays of 8 pixels: the middle
+       the paper (a sample's view_lobe has its point resampled sooner as
+       the view turns: the turn is measured from the point where its
+       pixel's ray meets it, exact to half a pixel, in world space, so for
+       a point of a moving object the object's own turn is not counted,
+       only its motion's ageing; a point shaded more than 255 frames ago is
+       compared with the eye of 255 frames ago, and view lobes are kept to
+       3 digits, between 1e-6 and 1e6 radians). A hole's layer is found along rays of 8 pixels: the middle
        of a wider disocclusion stays sparse or empty until it is sampled,
        and a sample refills the holes within wide_radius of it only. A late sample of a moving object is placed with the
        transform of its frame, which the cache keeps for max_latency frames.
@@ -590,6 +603,11 @@ typedef struct rendercache_sample {
     float rgb[3];            /* radiance towards the eye, linear RGB, finite */
     float priority_scale;    /* multiplies the point's priority, e.g. lightvec_priority(1, W);
                                 0 means 1 */
+    float view_lobe;         /* radians, >= 0: how far the view may turn before a view-dependent
+                                colour (a highlight) is as stale as a point of age age_ramp_frames;
+                                0 (the default): the colour does not depend on the view. The
+                                point's priority grows with the angle between the eye that shaded
+                                it and the current eye, seen from the point, over this */
 } rendercache_sample;
 
 /* What a pixel of the current image shows (rendercache_pixel_kinds). */
@@ -1104,6 +1122,14 @@ static void rendercache__free(const rendercache_allocator *a, void *p)
 #  define RENDERCACHE__INLINE inline
 #else
 #  define RENDERCACHE__INLINE
+#endif
+
+/* Rare work that a hot loop calls: kept out of the loop's code, so that
+   the loop's registers and instructions stay those of its common case. */
+#if defined(__GNUC__) || defined(__clang__)
+#  define RENDERCACHE__NOINLINE __attribute__((noinline))
+#else
+#  define RENDERCACHE__NOINLINE
 #endif
 
 /* Outputs that alias nothing, so that loops writing them vectorise. */
@@ -2072,16 +2098,29 @@ static void rendercache__slot_set(rendercache__slots *s, uint32_t slot, const re
 }
 
 /* The rest of a slot, read by the depth cull for the points that win a
-   pixel: 24 bytes. A point's age is not stored but derived, so nothing is
+   pixel: 28 bytes. A point's age is not stored but derived, so nothing is
    written per point and frame: age = frame - birth + (motion of its object
    since birth), the last term making points of moving objects age faster;
-   it is kept as one sum, age = frame + obj_motion - base (modulo 2^32). */
+   it is kept as one sum, age = frame + obj_motion - base (modulo 2^32).
+   Nor is the eye that shaded it: the cache keeps the eyes of the last
+   RENDERCACHE__EYE_FRAMES frames, and the point the frame it was shaded
+   in (rendercache__view_age). */
 typedef struct rendercache__point {
     float rgb[3];
     float scale;             /* priority scale */
     uint32_t base;           /* frame of insertion + the object's obj_motion then */
     uint32_t object;         /* geo's object, here too for the priority */
+    uint16_t eye_frame;      /* the frame of the eye that shaded it (rendercache__eye_frame) */
+    uint16_t view_lobe;      /* its view lobe (rendercache__lobe_bits), 0: view-independent */
 } rendercache__point;
+
+/* The eyes remembered for the view-dependent points' ageing: a point shaded
+   longer ago is compared with the oldest (about 6 KB in the cache). */
+#define RENDERCACHE__EYE_FRAMES 256u
+#define RENDERCACHE__EYE_FRAME_MASK 0x7FFFu      /* eye_frame: the frame's low 15 bits ... */
+#define RENDERCACHE__EYE_PREDICTED 0x8000u       /* ... and whether it was the predicted camera's eye */
+#define RENDERCACHE__LOBE_MIN 1e-6f              /* view lobes are stored between these (radians) */
+#define RENDERCACHE__LOBE_MAX 1e6f
 
 /* A band of the error diffusion (rendercache__diffuse): its count and its
    marginal choices. */
@@ -2154,6 +2193,8 @@ struct rendercache {
     int has_frame, has_prediction;
     rendercache__view view, predicted;
     rendercache__frame_record *history;   /* max_latency + 1 slots, frame f in slot f % that */
+    float eyes[RENDERCACHE__EYE_FRAMES][2][3];   /* frame f's eye and its predicted camera's, in slot
+                                                    f % RENDERCACHE__EYE_FRAMES (rendercache__shading_eye) */
     rendercache__splat splat;
     uint32_t *px_index;      /* per pixel: the slot shown, after the depth cull */
     float *px_depth;         /* per pixel: its squared distance, FLT_MAX without a point */
@@ -2621,10 +2662,75 @@ static uint32_t rendercache__project_point(const rendercache__projector *pr, con
     return p;
 }
 
+/* A frame's number as a point keeps it, with whether the predicted
+   camera's eye shaded it. */
+static uint16_t rendercache__eye_frame(uint64_t frame, int predicted)
+{
+    return (uint16_t)((frame & RENDERCACHE__EYE_FRAME_MASK) | (predicted ? RENDERCACHE__EYE_PREDICTED : 0u));
+}
+
+/* A view lobe in 16 bits: the upper half of the float (8 bits of mantissa,
+   rounded to nearest even), clamped to [LOBE_MIN, LOBE_MAX]; 0 for 0. The
+   priority needs no more than 3 digits of it. */
+static uint16_t rendercache__lobe_bits(float lobe)
+{
+    uint32_t bits;
+    if (!(lobe > 0.0f)) return 0;
+    lobe = lobe < RENDERCACHE__LOBE_MIN ? RENDERCACHE__LOBE_MIN : lobe > RENDERCACHE__LOBE_MAX ? RENDERCACHE__LOBE_MAX : lobe;
+    memcpy(&bits, &lobe, sizeof bits);
+    bits += 0x7FFFu + ((bits >> 16) & 1u);
+    return (uint16_t)(bits >> 16);
+}
+
+static float rendercache__lobe(uint16_t code)
+{
+    uint32_t bits = (uint32_t)code << 16;
+    float lobe;
+    memcpy(&lobe, &bits, sizeof lobe);
+    return lobe;
+}
+
+/* The eye that shaded a point: its frame's (or that frame's predicted
+   camera's), or for a point shaded more than EYE_FRAMES - 1 frames ago
+   the oldest eye remembered. */
+static const float *rendercache__shading_eye(const rendercache *rc, uint16_t eye_frame)
+{
+    const uint32_t since = ((uint32_t)rc->frame - eye_frame) & RENDERCACHE__EYE_FRAME_MASK;
+    const int known = since < RENDERCACHE__EYE_FRAMES;
+    const uint64_t f = rc->frame - (known ? since : RENDERCACHE__EYE_FRAMES - 1u);
+    return rc->eyes[f % RENDERCACHE__EYE_FRAMES][known && (eye_frame & RENDERCACHE__EYE_PREDICTED)];
+}
+
+/* How stale a view-dependent colour is, in units of the age ramp: the
+   angle between the eye that shaded the point and the current eye, seen
+   from the point, over the point's view lobe (a glossy highlight slides
+   as the view turns, whatever the age). The point is where pixel p's ray
+   meets it (depth2: its squared distance), exact to half a pixel. Not
+   inlined: in the depth cull's loop (rendercache__write_row) it cost 1.5
+   ms of a 512x512 frame (cull 5.1 -> 6.9 ms) to points without a lobe. */
+static RENDERCACHE__NOINLINE float rendercache__view_age(const rendercache *rc, const rendercache__point *pt, uint32_t p,
+                                                          float depth2)
+{
+    const float *e = rendercache__shading_eye(rc, pt->eye_frame), *eye = rc->view.eye;
+    const float dist = sqrtf(depth2);
+    float dir[3], a[3], c[3];
+    int k;
+    rendercache__view_ray(&rc->view, (float)(p % rc->width) + 0.5f, (float)(p / rc->width) + 0.5f, dir);
+    for (k = 0; k < 3; k++) a[k] = eye[k] + dir[k] * dist - e[k];   /* shading eye to the point */
+    c[0] = a[1] * dir[2] - a[2] * dir[1];
+    c[1] = a[2] * dir[0] - a[0] * dir[2];
+    c[2] = a[0] * dir[1] - a[1] * dir[0];
+    return atan2f(sqrtf(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]), a[0] * dir[0] + a[1] * dir[1] + a[2] * dir[2]) /
+           rendercache__lobe(pt->view_lobe);
+}
+
 /* Priority of a pixel showing a point (WDP99: age is the main measure of
-   how likely a colour is stale; points of moving objects age faster),
-   times its priority scale (the light-vector weight of Crespin and Peroche
-   2004, section 4.2.4), in [0, 1]. motion: the object's obj_motion. The
+   how likely a colour is stale; points of moving objects age faster), for
+   a view-dependent point plus the view's turn since it was shaded over its
+   lobe (rendercache__view_age, as age_ramp frames per lobe), times its
+   priority scale (the light-vector weight of Crespin and Peroche 2004,
+   section 4.2.4), in [0, 1]. motion: the object's obj_motion; p: the
+   pixel, depth2: the point's squared distance. The
    product x = POINT_MAX age scale / age_ramp is the priority up to the
    filled holes' top (PRIORITY_HOLE_TOP); above it, it is squeezed into
    the levels between that and 1 (empty pixels), 0.95 + 0.05 (1 - 0.95 /
@@ -2638,10 +2744,13 @@ static uint32_t rendercache__project_point(const rendercache__projector *pr, con
    the walls and carrying almost all of the stale points' error (points
    older than 24 frames: 3 % of the pixels, 90 % of that error at frame
    135). */
-static float rendercache__point_priority(const rendercache *rc, const rendercache__point *pt, uint32_t motion)
+static float rendercache__point_priority(const rendercache *rc, const rendercache__point *pt, uint32_t motion,
+                                         uint32_t p, float depth2)
 {
     uint32_t age = (uint32_t)rc->frame + motion - pt->base;
-    float x = (float)age * rc->inv_age_ramp * (RENDERCACHE__PRIORITY_POINT_MAX * pt->scale);
+    float ramps = (float)age * rc->inv_age_ramp, x;
+    if (pt->view_lobe) ramps += rendercache__view_age(rc, pt, p, depth2);
+    x = ramps * (RENDERCACHE__PRIORITY_POINT_MAX * pt->scale);
     if (x <= RENDERCACHE__PRIORITY_HOLE_TOP) return x;
     return RENDERCACHE__PRIORITY_HOLE_TOP +
            (1.0f - RENDERCACHE__PRIORITY_HOLE_TOP) * (1.0f - RENDERCACHE__PRIORITY_HOLE_TOP / x);
@@ -2950,7 +3059,7 @@ static void rendercache__write_row(rendercache *rc, const uint64_t *key, const f
             RENDERCACHE__PREFETCH_WRITE(&shown[next == RENDERCACHE__NONE ? empty : next]);
         }
         memcpy(image + 3 * (size_t)p, data[slot].rgb, 3 * sizeof(float));
-        priority[p] = rendercache__point_priority(rc, &data[slot], motion);
+        priority[p] = rendercache__point_priority(rc, &data[slot], motion, p, depth[p]);   /* (no lobe in the empty slot) */
         px_index[p] = shows ? k : RENDERCACHE__NONE;
         px_depth[p] = shows ? depth[p] : FLT_MAX;
         shown[shows ? k : sink] = mark;   /* spared by the eviction in this frame */
@@ -3479,6 +3588,8 @@ static void rendercache__begin(rendercache *rc, const rendercache__view *v, cons
     memset(record, 0, sizeof *record);
     record->frame = rc->frame;
     record->view = *v;
+    memcpy(rc->eyes[rc->frame % RENDERCACHE__EYE_FRAMES][0], v->eye, sizeof v->eye);
+    memcpy(rc->eyes[rc->frame % RENDERCACHE__EYE_FRAMES][1], v->eye, sizeof v->eye);   /* until a prediction */
     rendercache__start_stats(rc);
     rendercache__change_level(rc);
     rendercache__commit_transforms(rc);
@@ -3573,6 +3684,7 @@ static void rendercache__predict_start(rendercache *rc, const rendercache__view 
     rc->predicted = *next;
     rc->history[rc->frame % ((uint64_t)rc->max_latency + 1)].predicted = *next;
     rc->history[rc->frame % ((uint64_t)rc->max_latency + 1)].has_prediction = 1;
+    memcpy(rc->eyes[rc->frame % RENDERCACHE__EYE_FRAMES][1], next->eye, sizeof next->eye);
     rendercache__compose_objects(rc, &rc->predicted, rc->obj_predicted);
     memset(rc->occupancy, 0, ((size_t)rc->cell_count + 1) * rendercache__cell_arrays(rc));
 }
@@ -4134,6 +4246,7 @@ static int rendercache__sample_valid(const rendercache *rc, const rendercache_sa
     if (s->object != RENDERCACHE_MISS && s->object >= rc->object_count) return 0;
     if (s->object != RENDERCACHE_MISS && !rendercache__finite3(s->position)) return 0;
     if (!rendercache__finite3(s->rgb) || !(s->priority_scale >= 0.0f) || !isfinite(s->priority_scale)) return 0;
+    if (!(s->view_lobe >= 0.0f) || !isfinite(s->view_lobe)) return 0;
     return 1;
 }
 
@@ -4154,6 +4267,7 @@ typedef struct rendercache__new_point {
     float rgb[3];
     float scale;             /* priority scale, > 0 */
     uint32_t age;            /* the age it starts with (frames) */
+    uint16_t eye_frame, view_lobe;   /* as rendercache__point's */
 } rendercache__new_point;
 
 /* The new point of a sample requested in frame f through view v. */
@@ -4164,6 +4278,8 @@ static void rendercache__sample_new_point(const rendercache *rc, const rendercac
     memcpy(np->rgb, s->rgb, sizeof np->rgb);
     np->scale = s->priority_scale > 0.0f ? s->priority_scale : 1.0f;
     np->age = 0;
+    np->eye_frame = rendercache__eye_frame(f, (s->flags & RENDERCACHE_REQUEST_PREDICTED) != 0);
+    np->view_lobe = s->object == RENDERCACHE_MISS ? 0 : rendercache__lobe_bits(s->view_lobe);   /* the sky is still */
 }
 
 /* What placing points counts (rendercache__put_point): each job of a parallel
@@ -4183,6 +4299,8 @@ static void rendercache__store(rendercache *rc, uint32_t slot, const rendercache
     pt->scale = np->scale;
     pt->base = (uint32_t)rc->frame + rc->obj_motion[rendercache__motion_index(rc, np->g.object)] - np->age;
     pt->object = np->g.object;
+    pt->eye_frame = np->eye_frame;
+    pt->view_lobe = np->view_lobe;
     rc->shown[slot] = rendercache__mark(rc->frame);   /* new points are not evicted in their own frame */
 }
 
@@ -4305,7 +4423,7 @@ static void rendercache__age_around(rendercache *rc, uint32_t p)
             pt = &rc->data[k];
             motion = rc->obj_motion[rendercache__motion_index(rc, pt->object)];
             if ((uint32_t)rc->frame + motion - pt->base < rc->age_ramp) pt->base = (uint32_t)rc->frame + motion - rc->age_ramp;
-            rc->priority[q] = rendercache__point_priority(rc, pt, motion);
+            rc->priority[q] = rendercache__point_priority(rc, pt, motion, q, rc->px_depth[q]);
         }
     }
 }
@@ -4523,7 +4641,7 @@ static void rendercache__put_job(void *ctx, uint32_t j)
 }
 
 /* The most samples of a chunk: its slots and colour differences fill
-   2 words per sample of the re-sort's scratch (8 words per slot of a range). */
+   2 words per sample of the re-sort's scratch (9 words per slot of a range). */
 static uint32_t rendercache__chunk_most(const rendercache *rc)
 {
     const uint32_t range = rendercache__sort_range_size(rc);
@@ -4670,7 +4788,8 @@ RENDERCACHE_API rendercache_result rendercache_invalidate(rendercache *rc, uint3
         if (rc->px_index[p] == RENDERCACHE__NONE) continue;
         pt = &rc->data[rc->px_index[p]];
         if (object != RENDERCACHE_ALL_OBJECTS && pt->object != object) continue;
-        rc->priority[p] = rendercache__point_priority(rc, pt, rc->obj_motion[rendercache__motion_index(rc, pt->object)]);
+        rc->priority[p] = rendercache__point_priority(rc, pt, rc->obj_motion[rendercache__motion_index(rc, pt->object)], p,
+                                                      rc->px_depth[p]);
     }
     return RENDERCACHE_OK;
 }
@@ -4833,6 +4952,8 @@ static uint32_t rendercache__seed_image(rendercache *rc, const rendercache_range
             memcpy(np.rgb, img->rgb + 3 * p, sizeof np.rgb);
             np.scale = 1.0f;
             np.age = rc->age_ramp;
+            np.eye_frame = rendercache__eye_frame(rc->frame, 0);
+            np.view_lobe = 0;   /* range images carry no lobe */
             stored += (uint32_t)rendercache__insert_other(rc, &np, 1);
         }
     return stored;

@@ -1225,6 +1225,146 @@ static void test_priority_scale(void)
 }
 
 /* ---------------------------------------------------------------------
+   View-dependent points (rendercache_sample.view_lobe): a highlight is
+   stale once the view has turned by about its lobe, whatever its age.
+   The eye orbits the wall's point C = (0, 0, 10) at radius 10, looking at
+   it, so the view of C turns by exactly the orbit's angle (the square is
+   moved out of sight).
+   --------------------------------------------------------------------- */
+#define ORBIT_W 33u          /* odd: the centre pixel's ray passes through C */
+#define ORBIT_LOBE 0.125f    /* radians; a power of two, stored exactly */
+
+static rendercache_camera orbit_camera(float phi)
+{
+    return make_camera(10.0f * sinf(phi), 0.0f, 10.0f - 10.0f * cosf(phi), 0.0f, 0.0f, WALL_Z, ORBIT_W, ORBIT_W);
+}
+
+/* A cache filled from the orbit's start (phi = 0), every point of the
+   wall's right half (x >= 0, C included: the half the orbit moves
+   towards, whose points win the pixels as the wall turns) with lobe
+   ORBIT_LOBE, the rest view-independent (lobe 0; all of them with glossy
+   0). */
+static rendercache *orbit_cache(int glossy)
+{
+    const uint32_t n = ORBIT_W * ORBIT_W;
+    rendercache_camera cam = orbit_camera(0.0f);
+    rendercache_desc d = make_desc(ORBIT_W, ORBIT_W);
+    rendercache *rc = NULL;
+    scene s;
+    uint32_t got = 0, i;
+    memset(&s, 0, sizeof s);
+    s.shift[0] = 100.0f;   /* the square out of sight: the wall alone */
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return NULL;
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_request(rc, g_req, n, &got), RENDERCACHE_OK);
+    for (i = 0; i < got; i++) {
+        shade(&s, &g_req[i], &g_samples[i]);
+        g_samples[i].view_lobe = glossy && g_samples[i].position[0] >= 0.0f ? ORBIT_LOBE : 0.0f;
+    }
+    CHECK_EQ_INT(rendercache_insert(rc, g_samples, got, NULL), RENDERCACHE_OK);
+    CHECK_EQ_INT(got, n);
+    return rc;
+}
+
+static void test_view_lobe_ages_highlights(void)
+{
+    const uint32_t n = ORBIT_W * ORBIT_W, centre = n / 2;
+    const float step = 0.025f;   /* radians of orbit per frame: a lobe in 5 frames */
+    rendercache *glossy = orbit_cache(1), *matte = orbit_cache(0);
+    rendercache_camera cam;
+    scene s;
+    uint32_t f, i, got = 0, budget = 0, points = 0, wrong = 0, glossy_points = 0;
+    static unsigned char kind[ORBIT_W * ORBIT_W];   /* the pixel kinds before the requests */
+    memset(&s, 0, sizeof s);
+    s.shift[0] = 100.0f;   /* the square out of sight: the wall alone */
+    if (!glossy || !matte) {
+        rendercache_destroy(glossy);
+        rendercache_destroy(matte);
+        return;
+    }
+    /* Frame f + 1 of the orbit, at phi = f step, no new samples: C's
+       point, at age f, ranks at 0.5 (f / 32 + f step / lobe) (age ramp
+       32: POINT_MAX 0.5 at the end of the ramp, and as much per lobe of
+       turn), 0.5 f / 32 without a lobe. The cache measures the turn at
+       the depth of the point the centre pixel shows: a neighbour of C's
+       point (within a pixel's footprint, 0.35 at distance 10) may win the
+       pixel as the wall turns, and the angle seen from a point that far
+       from C differs from phi by up to 0.35 / 10 of it; hence 4%. */
+    for (f = 1; f <= 6; f++) {
+        const float phi = (float)f * step;
+        cam = orbit_camera(phi);
+        CHECK_EQ_INT(rendercache_begin_frame(glossy, &cam), RENDERCACHE_OK);
+        CHECK_EQ_INT(rendercache_begin_frame(matte, &cam), RENDERCACHE_OK);
+        CHECK_CLOSE(rendercache_priority_image(glossy)[centre],
+                    0.5f * ((float)f / 32.0f + phi / ORBIT_LOBE), 0.04, 0.0);
+        CHECK_CLOSE(rendercache_priority_image(matte)[centre], 0.5f * (float)f / 32.0f, 1e-6, 0.0);
+    }
+    /* After a turn of 1.2 lobes the right half's points rank above the
+       holes the orbit opened (0.5 to 0.95) and far above the left half's
+       (0.5 6 / 32): a budget of the holes plus half of the right half's
+       points goes to them alone, none to a point of the left half (its
+       pixels' rays meet the wall at x < 0; one pixel's footprint, 0.35,
+       of slack at the line between the halves). */
+    memcpy(kind, rendercache_pixel_kinds(glossy), sizeof kind);
+    for (i = 0; i < n; i++) {
+        float o[3], d[3], pos[3], rgb[3];
+        int is_point = kind[i] == RENDERCACHE_PIXEL_POINT, is_glossy;
+        rendercache_camera_ray(&cam, (float)(i % ORBIT_W) + 0.5f, (float)(i / ORBIT_W) + 0.5f, o, d);
+        trace(&s, o, d, pos, rgb);
+        is_glossy = pos[0] >= 0.0f;
+        budget += !is_point;
+        points += is_point && is_glossy;
+    }
+    budget += points / 2;
+    CHECK(points > n / 3);
+    CHECK_EQ_INT(rendercache_request(glossy, g_req, budget, &got), RENDERCACHE_OK);
+    CHECK_EQ_INT(got, budget);
+    for (i = 0; i < got; i++) {
+        float pos[3], rgb[3];
+        const uint32_t p = g_req[i].y * ORBIT_W + g_req[i].x;
+        if (kind[p] != RENDERCACHE_PIXEL_POINT) continue;
+        trace(&s, g_req[i].org, g_req[i].dir, pos, rgb);
+        wrong += pos[0] <= -0.35f;
+        glossy_points += pos[0] >= 0.0f;
+    }
+    test_note("view lobe: after a turn of 1.2 lobes, %u of %u requests went to the glossy half's points, %u to the "
+              "matte half's", glossy_points, got, wrong);
+    CHECK_EQ_INT(wrong, 0);
+    CHECK(glossy_points + ORBIT_W >= points / 2);   /* (a column by the line between the halves may be in neither) */
+    /* The matte cache at the same age gives its points no such rank: the
+       same budget takes the holes and then points of both halves. */
+    memcpy(kind, rendercache_pixel_kinds(matte), sizeof kind);
+    CHECK_EQ_INT(rendercache_request(matte, g_req, budget, &got), RENDERCACHE_OK);
+    for (i = 0, wrong = 0; i < got; i++) {
+        float pos[3], rgb[3];
+        const uint32_t p = g_req[i].y * ORBIT_W + g_req[i].x;
+        if (kind[p] != RENDERCACHE_PIXEL_POINT) continue;
+        trace(&s, g_req[i].org, g_req[i].dir, pos, rgb);
+        wrong += pos[0] <= -0.35f;
+    }
+    CHECK(wrong > 0);
+    /* Back where the points were shaded, the view term is gone: the right
+       half ranks by age alone again, as the matte cache does. */
+    cam = orbit_camera(0.0f);
+    CHECK_EQ_INT(rendercache_begin_frame(glossy, &cam), RENDERCACHE_OK);
+    CHECK_EQ_INT(rendercache_begin_frame(matte, &cam), RENDERCACHE_OK);
+    CHECK_CLOSE(rendercache_priority_image(glossy)[centre], rendercache_priority_image(matte)[centre], 1e-4, 0.0);
+    CHECK_CLOSE(rendercache_priority_image(glossy)[centre + 5], rendercache_priority_image(matte)[centre + 5], 1e-4, 0.0);
+    /* A lobe must be finite and not negative. */
+    memset(&g_samples[0], 0, sizeof g_samples[0]);
+    g_samples[0].object = RENDERCACHE_MISS;
+    g_samples[0].view_lobe = -1.0f;
+    g_samples[1] = g_samples[0];
+    g_samples[1].view_lobe = INFINITY;
+    g_samples[2] = g_samples[0];
+    g_samples[2].view_lobe = NAN;
+    CHECK_EQ_INT(rendercache_insert(glossy, g_samples, 3, &got), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(got, 0);
+    rendercache_destroy(glossy);
+    rendercache_destroy(matte);
+}
+
+/* ---------------------------------------------------------------------
    Interpolation: the 3x3 filter, the wide filter where points are sparse,
    empty beyond it; a plane of one colour is filled with exactly it.
    --------------------------------------------------------------------- */
@@ -1676,6 +1816,7 @@ int main(int argc, char **argv)
     RUN(test_changed_colours_are_resampled_first);
     RUN(test_invalidate_ranks_an_object_first);
     RUN(test_priority_scale);
+    RUN(test_view_lobe_ages_highlights);
     RUN(test_sparse_points_use_the_wide_filter);
     RUN(test_huge_colours_stay_finite);
     RUN(test_no_allocation_per_frame);

@@ -3472,7 +3472,6 @@ typedef struct wt_renderer {
     uint64_t static_vectors;    /* light vectors in the static cache after the precompute */
     /* raytrace */
     rendercache *rc;
-    float last_eye[3];          /* the eye of the last frame rendered (frames_done > 0) */
     rendercache_pixel_request *req;
     rendercache_sample *samples;
     uint32_t budget;
@@ -3675,48 +3674,33 @@ static int wt__raytrace_create(wt_renderer *r, char *err, size_t err_size)
     return 0;
 }
 
-/* How much sooner the render cache should refresh a point because its
-   colour depends on the view (its priority scale). WDP99 ages points to
-   find stale colours; age is the wrong clock for a highlight, which slides
-   over the floor as the eye moves while the diffuse light stays put. The
-   glossy part of a point's radiance is its light blurred by the Phong
-   lobe, a Gaussian of angular radius s_n = acos(exp(-1 / (2n))) (GLOSSY
-   SURFACES in lightvec.h), so seen from a direction turned by omega it is
-   off by about share * omega / s_n of the point's radiance (share:
-   wt_point.view_share). The eye's last step turned the point's view
-   direction by omega; at the same pace, after `age` frames the expected
-   relative error is share * omega * age / s_n. The render cache ranks an
-   old point at RENDERCACHE__PRIORITY_POINT_MAX age / age_ramp = age / (2
-   ramp) times its scale, and holes at 0.5 to 0.95; the scale 1 + 2 ramp
-   share omega / s_n makes a point's priority its diffuse ageing plus that
-   expected error, so a highlight is requested once it is about half
-   wrong, as a hole is. 1 for view-independent points and a still eye.
-   Measured against converged renders (wt_render_converged, 12 strata, 32
-   shadow rays) at 160x120, frames 7 to 47 every 8th: mean LRMS 0.138 ->
-   0.127 (frame 39 0.159 -> 0.129, frame 47 0.162 -> 0.140); full renders
-   of the same frames (every pixel shaded anew, no render cache) are at
-   0.084, most of it the direct light's noise at 8 shadow rays. The same
-   scale for the parallax along depth edges, where the nearer surface
-   slides over the farther one, moved the budget away from highlights and
-   holes for less than it gained (frame 39 0.129 -> 0.136). */
-#define WT_AGE_RAMP 32.0f   /* rendercache_desc.age_ramp_frames' default */
-
-static float wt__view_priority(const wt_point *p, const lightvec_material *m, const float eye[3],
-                               const float last_eye[3])
+/* The view lobe of a point for the render cache (rendercache_sample.
+   view_lobe): how far the view may turn before its colour is as stale as
+   a point of age age_ramp. WDP99 ages points to find stale colours; age
+   is the wrong clock for a highlight, which slides over the floor as the
+   eye moves while the diffuse light stays put. The glossy part of a
+   point's radiance is its light blurred by the Phong lobe, a Gaussian of
+   angular radius s_n = acos(exp(-1 / (2n))) (GLOSSY SURFACES in
+   lightvec.h), so seen from a direction turned by omega it is off by about
+   share * omega / s_n of the point's radiance (share: wt_point.view_share).
+   The render cache ranks a point turned by one lobe as one of age
+   age_ramp, at RENDERCACHE__PRIORITY_POINT_MAX = 0.5 (times its scale),
+   with the holes (0.5 to 0.95); the lobe s_n / (2 share) puts a highlight
+   there once it is about half wrong, as a hole is. The cache measures the
+   turn from the eye that shaded the point to the current eye every frame,
+   so points of the first frame age too, and a point seen again from where
+   it was shaded is fresh again. 0 for view-independent points. Measured
+   against converged renders (12 strata, 32 shadow rays) at 160x120,
+   pooled LRMS, against the one-step scale fixed at insertion it replaces:
+   building (every 24th frame from 7) 0.3129 -> 0.3031, office (every 8th
+   from 7) 0.1136 -> 0.1126; the lobe s_n / share 0.3015 / 0.1175, no
+   view term at all 0.1233 in the office. */
+static float wt__view_lobe(const wt_point *p, const lightvec_material *m)
 {
-    float a[3], b[3], c[3], omega, s_n;
-    int k;
-    if (p->object == RENDERCACHE_MISS || !(p->view_share > 0.0f) || !(m->exponent > 0.0f)) return 1.0f;
-    for (k = 0; k < 3; k++) {
-        a[k] = p->pos[k] - last_eye[k];
-        b[k] = p->pos[k] - eye[k];
-    }
-    c[0] = a[1] * b[2] - a[2] * b[1];
-    c[1] = a[2] * b[0] - a[0] * b[2];
-    c[2] = a[0] * b[1] - a[1] * b[0];
-    omega = atan2f(sqrtf(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]), a[0] * b[0] + a[1] * b[1] + a[2] * b[2]);
+    float s_n;
+    if (p->object == RENDERCACHE_MISS || !(p->view_share > 0.0f) || !(m->exponent > 0.0f)) return 0.0f;
     s_n = acosf(expf(-0.5f / m->exponent));
-    return s_n > 0.0f ? 1.0f + 2.0f * WT_AGE_RAMP * p->view_share * omega / s_n : 1.0f;
+    return s_n > 0.0f ? s_n / (2.0f * p->view_share) : 0.0f;
 }
 
 /* One frame of the render cache: reproject, request, shade, insert. The
@@ -3780,9 +3764,8 @@ static int wt__raytrace_view(wt_renderer *r, const rendercache_camera *camera, c
            these points are refreshed first (the 1/W scale raises the
            priority of every static point lit by an interpolated vector) */
         if (p->object == WT_OBJECT_BUNNY || p->bunny_shadow) s->priority_scale *= WT_BUNNY_PRIORITY;
-        if (!full) s->priority_scale *= wt__view_priority(p, &w->materials[p->material], cam.eye, r->last_eye);
+        s->view_lobe = wt__view_lobe(p, &w->materials[p->material]);
     }
-    memcpy(r->last_eye, cam.eye, sizeof r->last_eye);
     a = wt_seconds();
     if (rendercache_insert(r->rc, r->samples, n, NULL) != RENDERCACHE_OK) return -1;
     st->phase[0] += wt_seconds() - a;
