@@ -1,4 +1,4 @@
-/* rendercache.h - v0.6.0 - render cache and range-image walkthroughs - public domain or MIT, see end of file
+/* rendercache.h - v0.7.0 - render cache and range-image walkthroughs - public domain or MIT, see end of file
 
    RENDERCACHE.H: an image-space point cache that reprojects and resamples, and range-image walkthroughs of animated scenes.
 
@@ -462,7 +462,7 @@
 #include <stdint.h>
 
 #define RENDERCACHE_VERSION_MAJOR 0
-#define RENDERCACHE_VERSION_MINOR 6
+#define RENDERCACHE_VERSION_MINOR 7
 #define RENDERCACHE_VERSION_PATCH 0
 
 #ifndef RENDERCACHE_API

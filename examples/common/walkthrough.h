@@ -3890,7 +3890,7 @@ static uint64_t wt__baseviews_key(const wt_renderer *r)
     h = wt_hash_u64(h, (uint64_t)o->bunny_strata);
     h = wt_hash_f32(h, WT_KEY_EPSILON);   /* the bunny's key-time solutions are saved with the images */
     h = wt_hash_u64(h, (uint64_t)o->bunny_shadow);
-    h = wt_hash_u64(h, 2u);   /* 2: base images without the bunny's shadows (wt__baseviews_shadows) */
+    h = wt_hash_u64(h, 3u);   /* 3: base images without the bunny's shadows (wt__baseviews_shadows), through glass too */
     return h;
 }
 
