@@ -533,34 +533,30 @@ static void test_threads(void)
 /* Issue 19's measure of the raytrace mode: the LRMS of its frames against
    converged renders (wt_render_converged: a gather at every pixel, 32
    shadow rays, no interpolation, no render-cache reuse), at the demo's
-   shading settings (default strata and light samples) on a small image.
-   The converged render is itself noisy at CONVERGED_STRATA (its LRMS
-   against one of 48 x 144 rays is 0.048 at 80x60; two converged renders
-   of frames 7, 23, 39 at 160x120 with other random numbers differ by
-   0.062-0.073, and by 0.047-0.054 since lightvec.h v0.4.8 picks a gather
-   hit's lamps by importance), so the error printed includes that noise in
-   quadrature. The bound is the error measured (0.176 since the direct
-   light samples a near lamp face by solid angle, which redrew its random
-   numbers near the lamp: the full renders' pooled LRMS went from 0.073
-   to 0.062 over frames 7-47 at 160x120, this one frame moves with its
-   random numbers; 0.172 since lightvec.h
-   v0.4.8; 0.175 at frame 23 at 64x48, 0.21 before glossy points were refreshed
-   as the eye turns, wt__view_priority; 0.182 with the shadow rays'
-   Hammersley points, which redrew every random number: one frame of the
-   render cache moves by about 0.01 with its random numbers; 0.181 since
-   old points rise in priority past the holes, rendercache.h, which
-   redrew the requests from frame 2 on: over the odd frames of the
-   48-frame walk at 64x48 the pooled LRMS went from 0.169 to 0.168, single
-   frames moving by up to 0.03 either way) plus 10% for a
+   shading settings (default strata and light samples) on a small image,
+   pooled over CONVERGED_FRAMES frames of the walk (the root of their mean
+   squared LRMS). The converged render is itself noisy at CONVERGED_STRATA
+   (its LRMS against one of 48 x 144 rays is 0.048 at 80x60; two converged
+   renders of frames 7, 23, 39 at 160x120 with other random numbers differ
+   by 0.047-0.054), so the error printed includes that noise in quadrature.
+   One frame alone moves by up to 0.04 whenever the render cache's requests
+   are drawn anew (frame 23 of this walk: 0.176 with glossy points' priority
+   fixed at insertion, 0.219 with them aged by the view's turn since they
+   were shaded, rendercache's view_lobe, while the pooled LRMS of the odd
+   frames went from 0.1749 to 0.1744), so the test pools frames 7, 15 and
+   23: 0.1772 before view_lobe (frames 0.130, 0.215, 0.176), 0.1778 with it
+   (0.127, 0.175, 0.219). The bound is that plus 10% for a
    compiler flipping a light-vector decision (a flip redraws at most the 8%
    of a frame's pixels requested after it); a frame without its indirect
-   light (63% of the luminance) is at 0.7. The issue's target (0.07) is not met: the bound
-   guards against regressions. */
+   light (63% of the luminance) is at 0.7. The issue's target (0.07) is not
+   met: the bound guards against regressions. */
 #define CONVERGED_STRATA 12
 #define CONVERGED_LIGHT_SAMPLES 32
-#define CONVERGED_MAX_LRMS 0.20
+#define CONVERGED_FRAMES 3
+#define CONVERGED_MAX_LRMS 0.196
 static void test_raytrace_against_converged(void)
 {
+    static const int frames[CONVERGED_FRAMES] = { 7, 15, 23 };
     wt_options o = small_options(WT_MODE_RAYTRACE), d;
     wt_world *w = NULL;
     wt_renderer *r = NULL;
@@ -568,30 +564,36 @@ static void test_raytrace_against_converged(void)
     char err[512];
     float *rgb = (float *)malloc(sizeof(float) * 3 * REF_W * REF_H), *ref = (float *)malloc(sizeof(float) * 3 * REF_W * REF_H);
     float e0 = 0.0f;
+    double squares = 0.0, pooled;
     int f, checked = 0;
     wt_options_default(&d);
     o.strata = d.strata;
     o.bunny_strata = d.bunny_strata;
     o.light_samples = d.light_samples;
-    if (!CHECK(rgb && ref) || !CHECK(wt_world_create(&o, &w, err, sizeof err) == 0 && wt_renderer_create(w, &r, err, sizeof err) == 0))
+    if (!CHECK(rgb && ref) || !CHECK(o.frames == frames[CONVERGED_FRAMES - 1] + 1) ||
+        !CHECK(wt_world_create(&o, &w, err, sizeof err) == 0 && wt_renderer_create(w, &r, err, sizeof err) == 0))
         goto done;
     for (f = 0; f < o.frames; f++) {
         float e;
         if (!CHECK(wt_render_frame(r, f, rgb, &st) == 0)) break;
         e = wt_exposure(&o, rgb, e0);
         if (f == 0) e0 = e;
-        if (f == o.frames - 1) {
+        if (checked < CONVERGED_FRAMES && f == frames[checked]) {
             double t = wt_frame_time(&o, f), lrms = -1.0;
             rendercache_camera c = wt_camera(&w->opt, t, REF_W, REF_H);
-            CHECK(wt_render_converged(w, &c, t, CONVERGED_STRATA, CONVERGED_LIGHT_SAMPLES, ref) == 0 &&
-                  wt_display_lrms(ref, rgb, REF_W, REF_H, e, &lrms) == 0);
-            test_note("raytrace frame %d against a converged render: LRMS %.4f (bound %.2f, issue target 0.07)", f, lrms,
-                      CONVERGED_MAX_LRMS);
-            CHECK_MSG(lrms >= 0.0 && lrms <= CONVERGED_MAX_LRMS, "frame %d: LRMS %.4f", f, lrms);
+            if (!CHECK(wt_render_converged(w, &c, t, CONVERGED_STRATA, CONVERGED_LIGHT_SAMPLES, ref) == 0 &&
+                       wt_display_lrms(ref, rgb, REF_W, REF_H, e, &lrms) == 0 && lrms >= 0.0))
+                break;
+            test_note("raytrace frame %d against a converged render: LRMS %.4f", f, lrms);
+            squares += lrms * lrms;
             checked++;
         }
     }
-    CHECK(checked == 1);
+    if (CHECK(checked == CONVERGED_FRAMES)) {
+        pooled = sqrt(squares / CONVERGED_FRAMES);
+        test_note("raytrace frames pooled: LRMS %.4f (bound %.3f, issue target 0.07)", pooled, CONVERGED_MAX_LRMS);
+        CHECK(pooled <= CONVERGED_MAX_LRMS);
+    }
 done:
     wt_renderer_destroy(r);
     wt_world_destroy(w);
