@@ -4950,16 +4950,37 @@ static void radinterp__ff_job(void *ctx_, uint32_t index)
 typedef struct radinterp__run {
     const radinterp_desc *desc;
     uint32_t iteration;          /* for progress reports */
+    double reported;             /* RADINTERP_CPU_SECONDS() at the last progress call */
 } radinterp__run;
 
-static int radinterp__cancelled(const radinterp_solution *s, const radinterp__run *run)
+static int radinterp__cancelled(const radinterp_solution *s, radinterp__run *run)
 {
     const radinterp_desc *d = run->desc;
+    run->reported = RADINTERP_CPU_SECONDS();
     return d->progress && d->progress(d->progress_user, run->iteration, s->max_iterations) != 0;
 }
 
+/* The same call inside a serial stretch of the solve (refinement's pass
+   over the links, a wave of cluster links split into shaft queries, the
+   steps of an iteration), once progress_interval has passed since the last
+   call. At building scale each of these takes seconds between two batches.
+   Loops of short steps call it every RADINTERP__TICK_STEPS steps: a clock
+   reading costs as much as a step. Non-zero: cancel. */
+#define RADINTERP__TICK_STEPS 64
+static int radinterp__solve_tick(const radinterp_solution *s, radinterp__run *run)
+{
+    if (!radinterp__progress_due(run->reported, run->desc->progress_interval)) return 0;
+    return radinterp__cancelled(s, run);
+}
+
+/* The tick of a loop of short steps, at its step i. */
+static int radinterp__solve_step(const radinterp_solution *s, radinterp__run *run, size_t i)
+{
+    return i % RADINTERP__TICK_STEPS == 0 && radinterp__solve_tick(s, run);
+}
+
 /* Computes every pending link, in batches with a progress check between. */
-static radinterp_result radinterp__compute_pending(radinterp_solution *s, const radinterp__run *run,
+static radinterp_result radinterp__compute_pending(radinterp_solution *s, radinterp__run *run,
                                                    radinterp__pending *pending, uint32_t count,
                                                    const uint32_t *in_pool, uint32_t *out_pool)
 {
@@ -5868,7 +5889,7 @@ static int radinterp__split_clink(radinterp_solution *s, radinterp__linker *L, u
 }
 
 /* Computes the pending cluster links in batches, with progress between. */
-static radinterp_result radinterp__compute_cpending(radinterp_solution *s, const radinterp__run *run,
+static radinterp_result radinterp__compute_cpending(radinterp_solution *s, radinterp__run *run,
                                                     radinterp__cpending *pending, uint32_t count)
 {
     const uint32_t per_job = RADINTERP__CLINK_JOB;
@@ -5892,7 +5913,7 @@ static radinterp_result radinterp__compute_cpending(radinterp_solution *s, const
 }
 
 /* Measures the open fractions of the nodes made since *mark. */
-static void radinterp__open_new_nodes(radinterp_solution *s, const radinterp__run *run, uint32_t *mark)
+static void radinterp__open_new_nodes(radinterp_solution *s, radinterp__run *run, uint32_t *mark)
 {
     radinterp__open_ctx oc;
     oc.s = s;
@@ -5908,7 +5929,7 @@ static void radinterp__open_new_nodes(radinterp_solution *s, const radinterp__ru
    become pending ordinary links), the others are kept in *accepted. So no
    cluster link carries more than its share of the tolerance, even for one
    iteration. */
-static radinterp_result radinterp__resolve_clinks(radinterp_solution *s, const radinterp__run *run, radinterp__linker *L,
+static radinterp_result radinterp__resolve_clinks(radinterp_solution *s, radinterp__run *run, radinterp__linker *L,
                                                   radinterp__buf *accepted, uint32_t *mark)
 {
     radinterp_result res = RADINTERP_OK;
@@ -5922,6 +5943,7 @@ static radinterp_result radinterp__resolve_clinks(radinterp_solution *s, const r
         res = radinterp__compute_cpending(s, run, w, (uint32_t)wave.count);
         for (i = 0; i < wave.count && res == RADINTERP_OK; i++) {
             radinterp__cpending *slot;
+            if (radinterp__solve_step(s, run, i)) { res = RADINTERP_ERROR_CANCELLED; break; }
             s->culled_links += w[i].hidden;
             if (w[i].dead) continue;
             if (w[i].coarse) {
@@ -5940,7 +5962,7 @@ static radinterp_result radinterp__resolve_clinks(radinterp_solution *s, const r
 /* Resolves the pending cluster links, measures the new nodes' open
    fractions, computes every pending ordinary link and installs them all
    beside the kept ones. */
-static radinterp_result radinterp__finish_linking(radinterp_solution *s, const radinterp__run *run, radinterp__linker *L,
+static radinterp_result radinterp__finish_linking(radinterp_solution *s, radinterp__run *run, radinterp__linker *L,
                                                   uint32_t nodes_before, const radinterp__link *keep, uint32_t nkeep,
                                                   const radinterp__clink *ckeep, uint32_t nckeep)
 {
@@ -5964,6 +5986,7 @@ static radinterp_result radinterp__finish_linking(radinterp_solution *s, const r
     }
     for (i = 0; i < L->pend.count && res == RADINTERP_OK; i++) {
         const uint32_t *from = p[i].fresh ? (const uint32_t *)L->shaft.data : s->blockers;
+        if (radinterp__solve_step(s, run, i)) { res = RADINTERP_ERROR_CANCELLED; break; }
         if (p[i].count) memcpy(wide + at, from + p[i].first, p[i].count * sizeof(uint32_t));
         p[i].first = at;
         at += p[i].count;
@@ -5971,6 +5994,7 @@ static radinterp_result radinterp__finish_linking(radinterp_solution *s, const r
     if (res == RADINTERP_OK) res = radinterp__compute_pending(s, run, p, (uint32_t)L->pend.count, wide, out);
     radinterp__free(&s->allocator, wide);
     if (res == RADINTERP_OK) res = radinterp__install_links(s, keep, nkeep, p, (uint32_t)L->pend.count, out);
+    if (res == RADINTERP_OK && radinterp__solve_tick(s, run)) res = RADINTERP_ERROR_CANCELLED;
     if (res == RADINTERP_OK)
         res = radinterp__install_clinks(s, ckeep, nckeep, (const radinterp__cpending *)accepted.data,
                                         (uint32_t)accepted.count);
@@ -5981,7 +6005,7 @@ static radinterp_result radinterp__finish_linking(radinterp_solution *s, const r
 
 /* Initial links of the clustered solver: every cluster's two children,
    both ways. */
-static radinterp_result radinterp__initial_cluster_links(radinterp_solution *s, const radinterp__run *run)
+static radinterp_result radinterp__initial_cluster_links(radinterp_solution *s, radinterp__run *run)
 {
     radinterp__linker L;
     radinterp_result res = RADINTERP_OK;
@@ -5991,6 +6015,7 @@ static radinterp_result radinterp__initial_cluster_links(radinterp_solution *s, 
     for (c = 0; c < s->cluster_count && res == RADINTERP_OK; c++) {
         const radinterp__cluster *cl = &s->clusters[c];
         uint32_t a = cl->child[0], b = cl->child[1];
+        if (radinterp__solve_step(s, run, c)) { res = RADINTERP_ERROR_CANCELLED; break; }
         if (!radinterp__link_elements(s, &L, a, b) || !radinterp__link_elements(s, &L, b, a)) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     }
     if (res == RADINTERP_OK) res = radinterp__finish_linking(s, run, &L, s->node_count, NULL, 0, NULL, 0);
@@ -6123,7 +6148,7 @@ static unsigned char *radinterp__budget_marks(const radinterp_solution *s)
    links from those children. A cluster link that could carry more than eps
    is split as radinterp__split_clink says.
    Returns the number of links split, or -1 when out of memory (*res). */
-static int radinterp__refine(radinterp_solution *s, const radinterp__run *run, radinterp_result *res)
+static int radinterp__refine(radinterp_solution *s, radinterp__run *run, radinterp_result *res)
 {
     radinterp__buf keep, ckeep;
     radinterp__linker L;
@@ -6139,6 +6164,7 @@ static int radinterp__refine(radinterp_solution *s, const radinterp__run *run, r
         radinterp__link l = s->links[i];
         double error = radinterp__link_error(s, &l), tol = radinterp__tolerance(s, s->nodes[l.receiver].dim);
         int which = -1;
+        if (radinterp__solve_step(s, run, i)) { *res = RADINTERP_ERROR_CANCELLED; break; }
         if (!(l.flags & RADINTERP__LINK_FINAL) && mark[i] == RADINTERP__SPLIT_SOURCE) which = 1;
         else if (!(l.flags & RADINTERP__LINK_FINAL) && (error > tol || mark[i])) {
             const radinterp__node *r = &s->nodes[l.receiver], *src = &s->nodes[l.source];
@@ -6168,6 +6194,7 @@ static int radinterp__refine(radinterp_solution *s, const radinterp__run *run, r
     }
     for (i = 0; i < s->clink_count && *res == RADINTERP_OK; i++) {
         radinterp__clink l = s->clinks[i];
+        if (radinterp__solve_step(s, run, i)) { *res = RADINTERP_ERROR_CANCELLED; break; }
         if (!radinterp__clink_too_coarse(s, l.receiver, l.source)) {
             radinterp__clink *slot = (radinterp__clink *)radinterp__buf_push(&s->allocator, &ckeep);
             if (!slot) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
@@ -6193,7 +6220,7 @@ static int radinterp__refine(radinterp_solution *s, const radinterp__run *run, r
    that face each other (part of each lies in front of the other's plane),
    with the blockers from shaft culling. Sources that can never shine
    (black, not emitting) get none. */
-static radinterp_result radinterp__initial_links(radinterp_solution *s, const radinterp__run *run)
+static radinterp_result radinterp__initial_links(radinterp_solution *s, radinterp__run *run)
 {
     radinterp__linker L;
     radinterp_result res = RADINTERP_OK;
@@ -6203,6 +6230,7 @@ static radinterp_result radinterp__initial_links(radinterp_solution *s, const ra
     for (i = 0; i < s->patch_count && res == RADINTERP_OK; i++) {
         const radinterp__patch *pr = &s->patches[i];
         if (!pr->count) continue;
+        if (radinterp__solve_tick(s, run)) { res = RADINTERP_ERROR_CANCELLED; break; }
         for (j = 0; j < s->patch_count && res == RADINTERP_OK; j++) {
             const radinterp__patch *ps = &s->patches[j];
             if (j == i || !ps->count) continue;
@@ -6353,9 +6381,11 @@ static radinterp_result radinterp__iterate(radinterp_solution *s, radinterp__run
         run->iteration = it;
         radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__gather_job, &ctx,
                             (s->node_count + ctx.per_job - 1) / ctx.per_job);
+        if (radinterp__solve_tick(s, run)) { res = RADINTERP_ERROR_CANCELLED; break; }
         radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__cluster_gather_job, s,
                             (s->cluster_count + 63) / 64);
         radinterp__push_clusters(s);
+        if (radinterp__solve_tick(s, run)) { res = RADINTERP_ERROR_CANCELLED; break; }
         radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__push_pull_job, &ctx,
                             s->patch_count);
         radinterp__pull_clusters(s);
@@ -8690,7 +8720,7 @@ static radinterp_result radinterp__build_bvh(radinterp_solution *s)
     return ok ? RADINTERP_OK : RADINTERP_ERROR_OUT_OF_MEMORY;
 }
 
-static radinterp_result radinterp__make_roots(radinterp_solution *s, const radinterp__run *run)
+static radinterp_result radinterp__make_roots(radinterp_solution *s, radinterp__run *run)
 {
     uint32_t i;
     for (i = 0; i < s->patch_count; i++) {
@@ -8964,7 +8994,7 @@ static void radinterp__leaf_lists_job(void *ctx_, uint32_t index)
 #ifndef RADINTERP__LEAF_BATCH
 #define RADINTERP__LEAF_BATCH (1u << 24)
 #endif
-static radinterp_result radinterp__build_leaf_lists(radinterp_solution *s, const radinterp__run *run, int share)
+static radinterp_result radinterp__build_leaf_lists(radinterp_solution *s, radinterp__run *run, int share)
 {
     uint64_t entries = 0, room = 0, *wide_first, widest = RADINTERP__LEAF_BATCH, *last_at = NULL;
     uint32_t i, *wide = NULL, *last_count = NULL;
@@ -9138,6 +9168,7 @@ RADINTERP_API radinterp_result radinterp_solve(const radinterp_desc *desc, radin
     s->trace_user = desc->trace_user;
     run.desc = desc;
     run.iteration = 0;
+    run.reported = RADINTERP_CPU_SECONDS();
     res = radinterp__build_patches(s, desc);
     if (res == RADINTERP_OK) res = radinterp__setup_sky(s, desc);
     if (res == RADINTERP_OK) {
