@@ -10421,7 +10421,7 @@ static int radinterp__mesh_tick(radinterp__builder *b)
 /* Every discontinuity on receiver R (5.5.3: from the links, so only
    mutually visible pairs and their potential blockers are considered).
    0, or -1 when memory runs out, 1 when progress asks to cancel. */
-#define RADINTERP__WEDGE_TICK 8   /* blockers between clock readings: one blocker's wedges cost about a reading */
+#define RADINTERP__WEDGE_TICK 8   /* blockers between clock readings: most cost microseconds, some milliseconds */
 static int radinterp__receiver_discs(radinterp__builder *b, uint32_t R, radinterp__buf *pairs, radinterp__buf *stack)
 {
     const radinterp_solution *s = b->s;
@@ -10458,7 +10458,7 @@ static int radinterp__receiver_discs(radinterp__builder *b, uint32_t R, radinter
                 uint32_t B = (uint32_t)(pr[i] & 0xFFFFFFFFu);
                 if (B == RADINTERP__NONE || B == R || B == S || !s->patches[B].count) continue;
                 if (i > 0 && pr[i - 1] == pr[i]) continue;
-                /* a source lit behind a slab of furniture: seconds of blockers on building_4k */
+                /* building_4k: 380 blockers of one source took 2.8 s (6882 discontinuities) */
                 if (++wedged % RADINTERP__WEDGE_TICK == 0 && radinterp__mesh_tick(b)) return 1;
                 w.B = B;
                 if (radinterp__wedges(b, &w, (const double (*)[3])Sc, nc) != 0) return -1;
