@@ -366,6 +366,22 @@ static int progress_cb(void *user, uint64_t done, uint64_t total)
     return ++p->calls == p->cancel_at;
 }
 
+/* The soup room's desc with a counting allocator and progress_cb. */
+static radinterp_desc counted_soup(rb_scene *s, counting *cnt, progress_state *ps)
+{
+    radinterp_desc d;
+    soup_room(s, 1);
+    memset(cnt, 0, sizeof *cnt);
+    memset(ps, 0, sizeof *ps);
+    d = rb_desc(s);
+    d.allocator.alloc = count_alloc;
+    d.allocator.free = count_free;
+    d.allocator.user = cnt;
+    d.progress = progress_cb;
+    d.progress_user = ps;
+    return d;
+}
+
 /* Cancels solves at `parts` calls spread over the first `calls` ones (every
    one when there are fewer): each returns CANCELLED and no solution. */
 static void cancel_solve_sweep(const radinterp_desc *d, progress_state *ps, long calls, long parts)
@@ -412,15 +428,7 @@ static void test_cancel_everywhere(void)
     counting cnt;
     progress_state ps;
     long n;
-    soup_room(&s, 1);
-    memset(&cnt, 0, sizeof cnt);
-    d = rb_desc(&s);
-    d.allocator.alloc = count_alloc;
-    d.allocator.free = count_free;
-    d.allocator.user = &cnt;
-    d.progress = progress_cb;
-    d.progress_user = &ps;
-    memset(&ps, 0, sizeof ps);
+    d = counted_soup(&s, &cnt, &ps);
     if (!CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_OK)) { rb_free(&s); return; }
     n = ps.calls;
     CHECK(n >= 3);
@@ -635,18 +643,10 @@ static void test_progress_in_serial_passes(void)
     counting cnt;
     progress_state ps;
     long batches = 0, stopped, calls, passes;
-    soup_room(&s, 1);
-    memset(&cnt, 0, sizeof cnt);
-    d = rb_desc(&s);
-    d.allocator.alloc = count_alloc;
-    d.allocator.free = count_free;
-    d.allocator.user = &cnt;
+    d = counted_soup(&s, &cnt, &ps);
     d.parallel_for = batch_counting_for;
     d.parallel_user = &batches;
-    d.progress = progress_cb;
-    d.progress_user = &ps;
     d.eps_relative = 0.5f;   /* a coarse solve (3k links, not 57k) keeps the test at about 1 s under ASan */
-    memset(&ps, 0, sizeof ps);
     if (!CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_OK)) goto done;
     radinterp_solution_info(sol, &info);
     stopped = ps.calls;
