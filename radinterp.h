@@ -664,8 +664,8 @@
    serial stretches between batches call progress too once the interval has
    passed (a receiver's discontinuity search between its sources; in the
    solve, refinement's pass over the links, the shaft queries of a wave of
-   split cluster links, an iteration's gathers): on building_16k they took
-   up to 1.8 s of CPU time with v0.8.6. The batches never change a
+   split cluster links, installing the new links, an iteration's gathers):
+   on building_16k they took up to 1.8 s of CPU time with v0.8.6. The batches never change a
    result. bench_radinterp_building's longest gap on building_1k, one
    thread: 0.64 s with v0.8.5's fixed batches, 0.46 s. radinterp_shade splits
    its pixels into jobs of 16384 through the mesh's parallel_for (the
@@ -5012,12 +5012,14 @@ static radinterp_result radinterp__compute_pending(radinterp_solution *s, radint
 }
 
 /* Replaces the link list by the kept links plus the live pending ones,
-   sorted by receiver (stable), with their blockers copied into one pool. */
-static radinterp_result radinterp__install_links(radinterp_solution *s, const radinterp__link *keep, uint32_t keep_count,
-                                                 const radinterp__pending *pend, uint32_t pend_count,
+   sorted by receiver (stable), with their blockers copied into one pool
+   (building_16k: up to 1.7 s, so the copies call progress as they go). */
+static radinterp_result radinterp__install_links(radinterp_solution *s, radinterp__run *run, const radinterp__link *keep,
+                                                 uint32_t keep_count, const radinterp__pending *pend, uint32_t pend_count,
                                                  const uint32_t *pend_pool)
 {
     uint32_t *start = NULL, *pool = NULL, i, total = keep_count, at;
+    int stop = 0;
     uint64_t blockers = 0;
     radinterp__link *links = NULL;
     for (i = 0; i < keep_count; i++) blockers += keep[i].blocker_count;
@@ -5044,14 +5046,14 @@ static radinterp_result radinterp__install_links(radinterp_solution *s, const ra
         start[i + 1] += start[i];
     }
     at = 0;
-    for (i = 0; i < keep_count; i++) {
+    for (i = 0; i < keep_count && !(stop = radinterp__solve_step(s, run, i)); i++) {
         radinterp__link *l = &links[start[keep[i].receiver]++];
         *l = keep[i];
         if (l->blocker_count) memcpy(pool + at, s->blockers + keep[i].first_blocker, l->blocker_count * sizeof *pool);
         l->first_blocker = at;
         at += l->blocker_count;
     }
-    for (i = 0; i < pend_count; i++) {
+    for (i = 0; i < pend_count && !stop && !(stop = radinterp__solve_step(s, run, i)); i++) {
         radinterp__link *l;
         if (pend[i].dead) continue;
         l = &links[start[pend[i].receiver]++];
@@ -5069,6 +5071,11 @@ static radinterp_result radinterp__install_links(radinterp_solution *s, const ra
         at += l->blocker_count;
     }
     radinterp__free(&s->allocator, start);
+    if (stop) {
+        radinterp__free(&s->allocator, links);
+        radinterp__free(&s->allocator, pool);
+        return RADINTERP_ERROR_CANCELLED;
+    }
     radinterp__free(&s->allocator, s->links);
     radinterp__free(&s->allocator, s->blockers);
     s->links = links;
@@ -5996,7 +6003,7 @@ static radinterp_result radinterp__finish_linking(radinterp_solution *s, radinte
     }
     if (res == RADINTERP_OK) res = radinterp__compute_pending(s, run, p, (uint32_t)L->pend.count, wide, out);
     radinterp__free(&s->allocator, wide);
-    if (res == RADINTERP_OK) res = radinterp__install_links(s, keep, nkeep, p, (uint32_t)L->pend.count, out);
+    if (res == RADINTERP_OK) res = radinterp__install_links(s, run, keep, nkeep, p, (uint32_t)L->pend.count, out);
     if (res == RADINTERP_OK && radinterp__solve_tick(s, run)) res = RADINTERP_ERROR_CANCELLED;
     if (res == RADINTERP_OK)
         res = radinterp__install_clinks(s, ckeep, nckeep, (const radinterp__cpending *)accepted.data,

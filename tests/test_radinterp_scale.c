@@ -625,7 +625,7 @@ static void batch_counting_for(void *user, radinterp_job_fn job, void *ctx, uint
 /* Between the paced batches the solve has serial passes that take seconds
    at building scale: on building_16k (one thread) a wave of 700k cluster
    links split into shaft queries took 1.8 s, refinement's pass over 1.4M
-   cluster links 0.9 s, an iteration's gathers 0.8 s, so v0.8.6 left gaps
+   cluster links 0.9 s, installing the new links 1.7 s, so v0.8.6 left gaps
    of up to 1.9 s between progress calls. These passes now call progress
    too, once the interval has passed. With a stopped clock nothing is due:
    the calls are exactly one per paced batch and one per iteration (so the
