@@ -662,11 +662,11 @@
    time (default 0.25; RADINTERP_CPU_SECONDS): however costly the jobs, a
    slow region shrinks the batches rather than stretching the gap. The
    serial stretches between batches call progress too once the interval has
-   passed (a receiver's discontinuity search between its sources; in the
-   solve, refinement's pass over the links, the shaft queries of a wave of
-   split cluster links, installing the new links, an iteration's gathers):
-   on building_16k they took up to 1.8 s of CPU time with v0.8.6. The batches never change a
-   result. bench_radinterp_building's longest gap on building_1k, one
+   passed (a receiver's discontinuity search between its sources and its
+   blockers; in the solve, refinement's pass over the links, the shaft
+   queries of a wave of split cluster links, installing the new links, an
+   iteration's gathers): on building_16k they took up to 1.8 s of CPU time
+   with v0.8.6. The batches never change a result. bench_radinterp_building's longest gap on building_1k, one
    thread: 0.64 s with v0.8.5's fixed batches, 0.46 s. radinterp_shade splits
    its pixels into jobs of 16384 through the mesh's parallel_for (the
    build's, or radinterp_mesh_set_parallel_for). Queries on a mesh are const.
@@ -4965,8 +4965,8 @@ static int radinterp__cancelled(const radinterp_solution *s, radinterp__run *run
 
 /* The same call inside a serial stretch of the solve (refinement's pass
    over the links, a wave of cluster links split into shaft queries, the
-   steps of an iteration), once progress_interval has passed since the last
-   call. At building scale each of these takes seconds between two batches.
+   installation of the new links, the steps of an iteration), once
+   progress_interval has passed since the last call. At building scale each of these takes seconds between two batches.
    Loops of short steps call it every RADINTERP__TICK_STEPS steps: a clock
    reading costs as much as a step. Non-zero: cancel. */
 #define RADINTERP__TICK_STEPS 64
@@ -6157,7 +6157,8 @@ static unsigned char *radinterp__budget_marks(const radinterp_solution *s)
    whose source has children that differ by more than eps / F is replaced by
    links from those children. A cluster link that could carry more than eps
    is split as radinterp__split_clink says.
-   Returns the number of links split, or -1 when out of memory (*res). */
+   Returns the number of links split, or -1 when out of memory or cancelled
+   (*res). */
 static int radinterp__refine(radinterp_solution *s, radinterp__run *run, radinterp_result *res)
 {
     radinterp__buf keep, ckeep;
