@@ -666,8 +666,9 @@
    blockers; in the solve, refinement's pass over the links, the shaft
    queries of a wave of split cluster links, installing the new links, an
    iteration's gathers): on building_16k they took up to 1.8 s of CPU time
-   with v0.8.6. The batches never change a result. bench_radinterp_building's longest gap on building_1k, one
-   thread: 0.64 s with v0.8.5's fixed batches, 0.46 s. radinterp_shade splits
+   with v0.8.6. The batches never change a result.
+   bench_radinterp_building's longest gap on building_1k, one thread: 0.64 s
+   with v0.8.5's fixed batches, 0.46 s. radinterp_shade splits
    its pixels into jobs of 16384 through the mesh's parallel_for (the
    build's, or radinterp_mesh_set_parallel_for). Queries on a mesh are const.
 
