@@ -366,6 +366,36 @@ static int progress_cb(void *user, uint64_t done, uint64_t total)
     return ++p->calls == p->cancel_at;
 }
 
+/* The soup room's desc with a counting allocator and progress_cb. */
+static radinterp_desc counted_soup(rb_scene *s, counting *cnt, progress_state *ps)
+{
+    radinterp_desc d;
+    soup_room(s, 1);
+    memset(cnt, 0, sizeof *cnt);
+    memset(ps, 0, sizeof *ps);
+    d = rb_desc(s);
+    d.allocator.alloc = count_alloc;
+    d.allocator.free = count_free;
+    d.allocator.user = cnt;
+    d.progress = progress_cb;
+    d.progress_user = ps;
+    return d;
+}
+
+/* Cancels solves at `parts` calls spread over the first `calls` ones (every
+   one when there are fewer): each returns CANCELLED and no solution. */
+static void cancel_solve_sweep(const radinterp_desc *d, progress_state *ps, long calls, long parts)
+{
+    long k, step = (calls + parts - 1) / parts;
+    for (k = 1; k <= calls; k += step) {
+        radinterp_solution *c = NULL;
+        memset(ps, 0, sizeof *ps);
+        ps->cancel_at = k;
+        CHECK_EQ_INT(radinterp_solve(d, &c), RADINTERP_ERROR_CANCELLED);
+        CHECK(c == NULL);
+    }
+}
+
 /* Cancels mesh builds at `parts` calls spread over the first `calls` ones
    (every one when there are fewer): each returns CANCELLED and no mesh. */
 static void cancel_mesh_sweep(const radinterp_solution *sol, const radinterp_mesh_desc *md, progress_state *ps,
@@ -397,28 +427,13 @@ static void test_cancel_everywhere(void)
     radinterp_mesh *mesh = NULL;
     counting cnt;
     progress_state ps;
-    long n, k, solve_step;
-    soup_room(&s, 1);
-    memset(&cnt, 0, sizeof cnt);
-    d = rb_desc(&s);
-    d.allocator.alloc = count_alloc;
-    d.allocator.free = count_free;
-    d.allocator.user = &cnt;
-    d.progress = progress_cb;
-    d.progress_user = &ps;
-    memset(&ps, 0, sizeof ps);
+    long n;
+    d = counted_soup(&s, &cnt, &ps);
     if (!CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_OK)) { rb_free(&s); return; }
     n = ps.calls;
     CHECK(n >= 3);
     CHECK(!ps.backwards);
-    solve_step = (n + 7) / 8;
-    for (k = 1; k <= n; k += solve_step) {
-        radinterp_solution *c = NULL;
-        memset(&ps, 0, sizeof ps);
-        ps.cancel_at = k;
-        CHECK_EQ_INT(radinterp_solve(&d, &c), RADINTERP_ERROR_CANCELLED);
-        CHECK(c == NULL);
-    }
+    cancel_solve_sweep(&d, &ps, n, 8);
     memset(&md, 0, sizeof md);
     md.min_leaf_area = 0.25f;
     md.allocator = d.allocator;
@@ -445,7 +460,7 @@ static void test_cancel_everywhere(void)
         cancel_mesh_sweep(sol, &md, &ps, running, 16);
         clock_step = 0.0;
         test_note("cancelled from %ld of %ld solve progress calls and %ld of %ld mesh ones; %ld calls before the samples with "
-                  "a clock that runs (%ld stopped), cancelled from 16", (n + solve_step - 1) / solve_step, n,
+                  "a clock that runs (%ld stopped), cancelled from 16", n < 8 ? n : 8, n,
                   m < 8 ? m : 8, m, running, stopped);
     }
     radinterp_solution_destroy(sol);
@@ -454,6 +469,12 @@ static void test_cancel_everywhere(void)
 }
 
 /* ---- progress paced by work ------------------------------------------------ */
+/* The jobs of the solve's loops that the pacer sizes, with a progress call
+   after each batch: link form factors, cluster links, leaf lists. */
+static int paced_solve_job(radinterp_job_fn job)
+{
+    return job == radinterp__ff_job || job == radinterp__clink_job || job == radinterp__leaf_lists_job;
+}
 typedef struct cost_model { double job_cost; int paced_only; } cost_model;
 
 /* A parallel_for that runs the jobs in order on the calling thread and
@@ -464,8 +485,7 @@ static void costly_for(void *user, radinterp_job_fn job, void *ctx, uint32_t cou
 {
     const cost_model *c = (const cost_model *)user;
     uint32_t i;
-    int paced = job == radinterp__ff_job || job == radinterp__clink_job || job == radinterp__leaf_lists_job ||
-                job == radinterp__point_job || job == radinterp__error_job;
+    int paced = paced_solve_job(job) || job == radinterp__point_job || job == radinterp__error_job;
     for (i = 0; i < count; i++) job(ctx, i);
     if (paced || !c->paced_only) work_seconds += c->job_cost * count;
 }
@@ -592,6 +612,72 @@ static void test_progress_paced_by_work(void)
     rb_free(&s);
 }
 
+/* ---- progress inside the solve's serial passes ------------------------------- */
+/* A parallel_for that counts the batches of the solve's paced loops (a
+   progress call after each) in *(long *)user. */
+static void batch_counting_for(void *user, radinterp_job_fn job, void *ctx, uint32_t count)
+{
+    uint32_t i;
+    if (paced_solve_job(job)) ++*(long *)user;
+    for (i = 0; i < count; i++) job(ctx, i);
+}
+
+/* Between the paced batches the solve has serial passes that take seconds
+   at building scale: on building_16k (one thread) a wave of 700k cluster
+   links split into shaft queries took 1.8 s, refinement's pass over 1.4M
+   cluster links 0.9 s, installing the new links 1.7 s, so v0.8.6 left gaps
+   of up to 1.9 s between progress calls. These passes now call progress
+   too, once the interval has passed. With a stopped clock nothing is due:
+   the calls are exactly one per paced batch and one per iteration (so the
+   count below is what the passes add). With a clock that moves 1 s at every
+   reading every check is due: each iteration's steps report, and so do the
+   passes; refinement's pass over a finished solve's links and cluster links
+   reports once every RADINTERP__TICK_STEPS of them, exactly. A cancel from
+   16 of these calls returns CANCELLED and frees everything. */
+static void test_progress_in_serial_passes(void)
+{
+    rb_scene s;
+    radinterp_desc d;
+    radinterp_solution *sol = NULL;
+    radinterp_info info;
+    counting cnt;
+    progress_state ps;
+    long batches = 0, stopped, calls, passes;
+    d = counted_soup(&s, &cnt, &ps);
+    d.parallel_for = batch_counting_for;
+    d.parallel_user = &batches;
+    d.eps_relative = 0.5f;   /* a coarse solve (3k links, not 57k) keeps the test at about 1 s under ASan */
+    if (!CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_OK)) goto done;
+    radinterp_solution_info(sol, &info);
+    stopped = ps.calls;
+    CHECK_EQ_INT(stopped, batches + (long)info.iterations);
+    radinterp_solution_destroy(sol);
+    sol = NULL;
+    clock_step = 1.0;
+    batches = 0;
+    memset(&ps, 0, sizeof ps);
+    if (!CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_OK)) goto done;
+    radinterp_solution_info(sol, &info);
+    calls = ps.calls;
+    passes = calls - batches - (long)info.iterations;
+    /* two steps of every iteration report; the last refinement pass, which
+       split nothing, went over the final links and cluster links */
+    CHECK(sol->converged);
+    CHECK_MSG(passes >= 2 * (long)info.iterations + (long)((sol->link_count + RADINTERP__TICK_STEPS - 1) / RADINTERP__TICK_STEPS) +
+                            (long)((sol->clink_count + RADINTERP__TICK_STEPS - 1) / RADINTERP__TICK_STEPS),
+              "%ld calls from the serial passes in %u iterations, %u links, %u cluster links", passes, info.iterations,
+              sol->link_count, sol->clink_count);
+    cancel_solve_sweep(&d, &ps, calls, 16);
+    test_note("%ld progress calls with a stopped clock (batches and iterations), %ld with a running one of which %ld "
+              "from the serial passes; %u links, %u cluster links, %u iterations, converged %d",
+              stopped, calls, passes, sol->link_count, sol->clink_count, info.iterations, sol->converged);
+done:
+    clock_step = 0.0;
+    radinterp_solution_destroy(sol);
+    CHECK_EQ_INT(cnt.live, 0);
+    rb_free(&s);
+}
+
 /* ---- coordinate range ----------------------------------------------------------- */
 /* Radiosity does not depend on the scene's scale: the room scaled by 1e-15
    and by 1e15 (inside the accepted range) gives the radiosities of the
@@ -646,6 +732,7 @@ int main(int argc, char **argv)
     RUN(test_triangle_soup);
     RUN(test_cancel_everywhere);
     RUN(test_progress_paced_by_work);
+    RUN(test_progress_in_serial_passes);
     RUN(test_coordinate_range);
     RUN(test_clustered_equals_unclustered);
     return test_finish();
