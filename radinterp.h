@@ -4967,9 +4967,10 @@ static int radinterp__cancelled(const radinterp_solution *s, radinterp__run *run
 /* The same call inside a serial stretch of the solve (refinement's pass
    over the links, a wave of cluster links split into shaft queries, the
    installation of the new links, the steps of an iteration), once
-   progress_interval has passed since the last call. At building scale each of these takes seconds between two batches.
-   Loops of short steps call it every RADINTERP__TICK_STEPS steps: a clock
-   reading costs as much as a step. Non-zero: cancel. */
+   progress_interval has passed since the last call. At building scale
+   each of these takes seconds between two batches. Loops of short steps
+   call it every RADINTERP__TICK_STEPS steps: a clock reading costs as much
+   as a step. Non-zero: cancel. */
 #define RADINTERP__TICK_STEPS 64
 static int radinterp__solve_tick(const radinterp_solution *s, radinterp__run *run)
 {
