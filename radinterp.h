@@ -1091,6 +1091,8 @@ typedef struct radinterp_mesh_info {
     uint32_t refined_leaves;          /* leaves they split */
     float max_fit_error;              /* largest representation error measured (refine only) */
     uint64_t samples;                 /* IrradianceAtPoint calls of the build */
+    size_t leaf_list_bytes;           /* the largest batch of leaf lists the samples held at once (the lists are
+                                         built for the leaves of a run of samples and freed after them) */
     size_t bytes;                     /* memory held by the mesh */
 } radinterp_mesh_info;
 
@@ -3849,11 +3851,8 @@ struct radinterp_solution {
     uint64_t culled_links;             /* links dropped because every ray between their ends was blocked */
     uint32_t *leaves;                  /* leaf node indices in patch order */
     uint32_t leaf_count;
-    uint32_t *leaf_link_first;         /* per node (+ 1 at the end): into leaf_links */
-    struct radinterp__leaf_link *leaf_links;
-    uint32_t *leaf_blockers;
-    uint64_t leaf_blocker_count, leaf_link_count;
-    double leaf_margin;                /* the leaf lists hold for points this close to the leaf's box */
+    double leaf_margin;                /* the leaf lists hold for points this close to the leaf's box; 0: no leaf
+                                          lists, every query reads the links' own blockers */
     /* convex solids (section 13): their back faces cast no shadow of their own */
     uint32_t *patch_solid;             /* solid of each patch; NONE when it belongs to none */
     struct radinterp__solid *solids;
@@ -8804,29 +8803,45 @@ static radinterp_result radinterp__collect_leaves(radinterp_solution *s)
    grown leaf (radinterp__leaf_hides), the entry keeps no blockers and is
    marked hidden: every query there would find the source hidden, and on
    the buildings a wall between a leaf and a source in the next room is the
-   common case (leaf lists of partly hidden links). */
+   common case (leaf lists of partly hidden links).
+   The solution keeps no lists: for every leaf they grow with leaves x
+   links x blockers (building_4k's were 1,818 MB of its 2.2 GB, and at
+   building_16k their build had not ended after 255 s of one core). A point
+   query filters a link's blockers for its own leaf when it reaches the
+   link (radinterp__leaf_entry); the mesh build, which queries each leaf
+   about ten times, builds the lists of the leaves a run of its sample
+   points lies in (radinterp__leaf_lists_build, at most
+   RADINTERP__LEAF_BATCH_BYTES a batch) and frees them after those points.
+   Both give each entry the same blockers in the same order, so a point's
+   irradiance does not depend on which one it came from. */
 #define RADINTERP__LEAF_HIDDEN 0xFFFFFFFFu   /* leaf_link.count of an entry whose source the leaf cannot see */
 
 typedef struct radinterp__leaf_link {
     uint32_t link;
     uint32_t count;   /* blockers kept, or RADINTERP__LEAF_HIDDEN (none kept) */
-    uint64_t first;   /* into leaf_blockers */
+    uint64_t first;   /* into radinterp__leaf_lists.blockers */
 } radinterp__leaf_link;
 
-/* Blockers an entry keeps in leaf_blockers. */
-static uint32_t radinterp__leaf_kept(const radinterp__leaf_link *ll)
+/* Blockers an entry of this count keeps. */
+static uint32_t radinterp__leaf_kept(uint32_t count)
 {
-    return ll->count == RADINTERP__LEAF_HIDDEN ? 0u : ll->count;
+    return count == RADINTERP__LEAF_HIDDEN ? 0u : count;
 }
 
-typedef struct radinterp__leaf_ctx {
-    radinterp_solution *s;
-    uint32_t *wide;          /* room for every link blocker of each leaf's path, for one batch of leaves */
-    const uint64_t *wide_first;
-    uint64_t base;           /* wide_first of the batch's first leaf: wide[0] (entries hold offsets into wide) */
-    uint32_t first, end;     /* the batch's leaves */
-    uint32_t per_job;
-} radinterp__leaf_ctx;
+/* The lists of some leaves: leaf[i]'s entries are link[first[i] ..
+   first[i + 1]), their blockers in blockers from room[i] on (room for all
+   the blockers of its links; an entry keeps those of link[e].first ..
+   + radinterp__leaf_kept). */
+typedef struct radinterp__leaf_lists {
+    const radinterp_solution *s;
+    uint32_t *leaf;          /* ascending node indices */
+    uint32_t count;
+    uint32_t *first;         /* count + 1 */
+    uint64_t *room;          /* count + 1 */
+    radinterp__leaf_link *link;
+    uint32_t *blockers;
+    size_t bytes;            /* all of the above */
+} radinterp__leaf_lists;
 
 /* The box of a node grown by margin. */
 static void radinterp__grown_box(const radinterp__node *nd, double margin, float *lo, float *hi)
@@ -8950,162 +8965,136 @@ static int radinterp__leaf_hidden(const radinterp_solution *s, const float *lo, 
     return 0;
 }
 
+/* The entry of link l at leaf, whose box grown by the lists' margin is
+   lo, hi (radinterp__grown_box): the link's blockers that may come between
+   that box and the source, into blk (room for the link's blocker_count),
+   and their count, or RADINTERP__LEAF_HIDDEN when one of them hides the
+   source from the whole box. */
+static uint32_t radinterp__leaf_entry(const radinterp_solution *s, uint32_t leaf, const float *lo, const float *hi,
+                                      uint32_t l, uint32_t *blk)
+{
+    const radinterp__link *lk = &s->links[l];
+    radinterp__shaft sh;
+    float slo[3], shi[3];
+    uint32_t k, n = 0;
+    if (!lk->blocker_count) return 0;
+    radinterp__grown_box(&s->nodes[lk->source], s->leaf_margin, slo, shi);
+    radinterp__shaft_build(&sh, lo, hi, slo, shi);
+    for (k = 0; k < lk->blocker_count; k++) {
+        uint32_t b = s->blockers[lk->first_blocker + k];
+        if (radinterp__may_block(s, &sh, b, &s->nodes[leaf], &s->nodes[lk->source])) blk[n++] = b;
+    }
+    return radinterp__leaf_hidden(s, lo, hi, &s->nodes[lk->source], blk, n) ? RADINTERP__LEAF_HIDDEN : n;
+}
+
+/* A leaf's list: its entries (the links of the leaf and its ancestors) and
+   the room their blockers may need. */
+static void radinterp__leaf_size(const radinterp_solution *s, uint32_t leaf, uint32_t *entries, uint64_t *room)
+{
+    uint32_t node, l;
+    *entries = 0;
+    *room = 0;
+    for (node = leaf; node != RADINTERP__NONE; node = s->nodes[node].parent) {
+        const radinterp__node *nd = &s->nodes[node];
+        *entries += nd->link_count;
+        for (l = nd->first_link; l < nd->first_link + nd->link_count; l++) *room += s->links[l].blocker_count;
+    }
+}
+
+/* Bytes a leaf's list takes in radinterp__leaf_lists. */
+static size_t radinterp__leaf_bytes(const radinterp_solution *s, uint32_t leaf)
+{
+    uint32_t entries;
+    uint64_t room;
+    radinterp__leaf_size(s, leaf, &entries, &room);
+    return (size_t)entries * sizeof(radinterp__leaf_link) + (size_t)room * sizeof(uint32_t) +
+           2 * sizeof(uint32_t) + sizeof(uint64_t);
+}
+
+#define RADINTERP__LEAF_JOB 16   /* leaves per job */
+
 static void radinterp__leaf_lists_job(void *ctx_, uint32_t index)
 {
-    radinterp__leaf_ctx *ctx = (radinterp__leaf_ctx *)ctx_;
-    radinterp_solution *s = ctx->s;
-    uint32_t i = ctx->first + index * ctx->per_job, end = i + ctx->per_job;
-    if (end > ctx->end) end = ctx->end;
+    radinterp__leaf_lists *ll = (radinterp__leaf_lists *)ctx_;
+    const radinterp_solution *s = ll->s;
+    uint32_t i = index * RADINTERP__LEAF_JOB, end = i + RADINTERP__LEAF_JOB;
+    if (end > ll->count) end = ll->count;
     for (; i < end; i++) {
-        uint32_t leaf = s->leaves[i], node, e = s->leaf_link_first[leaf];
-        uint64_t at = ctx->wide_first[i] - ctx->base;
-        float llo[3], lhi[3];
-        radinterp__grown_box(&s->nodes[leaf], s->leaf_margin, llo, lhi);
+        uint32_t leaf = ll->leaf[i], node, e = ll->first[i], l;
+        uint64_t at = ll->room[i];
+        float lo[3], hi[3];
+        radinterp__grown_box(&s->nodes[leaf], s->leaf_margin, lo, hi);
         for (node = leaf; node != RADINTERP__NONE; node = s->nodes[node].parent) {
             const radinterp__node *nd = &s->nodes[node];
-            uint32_t l, k;
             for (l = nd->first_link; l < nd->first_link + nd->link_count; l++, e++) {
-                const radinterp__link *lk = &s->links[l];
-                radinterp__leaf_link *ll = &s->leaf_links[e];
-                radinterp__shaft sh;
-                float slo[3], shi[3];
-                ll->link = l;
-                ll->first = at;
-                ll->count = 0;
-                if (!lk->blocker_count) continue;
-                radinterp__grown_box(&s->nodes[lk->source], s->leaf_margin, slo, shi);
-                radinterp__shaft_build(&sh, llo, lhi, slo, shi);
-                for (k = 0; k < lk->blocker_count; k++) {
-                    uint32_t b = s->blockers[lk->first_blocker + k];
-                    if (radinterp__may_block(s, &sh, b, &s->nodes[leaf], &s->nodes[lk->source])) {
-                        ctx->wide[at++] = b;
-                        ll->count++;
-                    }
-                }
-                if (radinterp__leaf_hidden(s, llo, lhi, &s->nodes[lk->source], ctx->wide + ll->first, ll->count)) {
-                    at = ll->first;
-                    ll->count = RADINTERP__LEAF_HIDDEN;
-                }
+                radinterp__leaf_link *lk = &ll->link[e];
+                lk->link = l;
+                lk->first = at;
+                lk->count = radinterp__leaf_entry(s, leaf, lo, hi, l, ll->blockers + at);
+                at += radinterp__leaf_kept(lk->count);
             }
         }
     }
 }
 
-/* Builds the leaf lists (see above): entries and room counted serially,
-   then, batch by batch of leaves whose links' blockers fit in
-   RADINTERP__LEAF_BATCH entries (a leaf with more alone), lists filled per
-   leaf in parallel and packed onto the end of those kept. The room summed
-   over all leaves grows with leaves x links x blockers (billions on a
-   building), what is kept with what really lies between leaf and source.
-   With share, an entry whose list equals the one its link kept last
-   (leaves in s->leaves order) points at that list instead of a copy:
-   neighbouring leaves mostly keep the same blockers of a link, because the
-   shaft from a small leaf to the source changes little from one leaf to
-   the next (of the leaf blockers: the office's 76%, building_1k's 53%,
-   building_4k's 39%). Entries keep their count and read the same blockers
-   in the same order, shared or not. */
-#ifndef RADINTERP__LEAF_BATCH
-#define RADINTERP__LEAF_BATCH (1u << 24)
-#endif
-static radinterp_result radinterp__build_leaf_lists(radinterp_solution *s, radinterp__run *run, int share)
+static void radinterp__leaf_lists_free(const radinterp_allocator *a, radinterp__leaf_lists *ll)
 {
-    uint64_t entries = 0, room = 0, *wide_first, widest = RADINTERP__LEAF_BATCH, *last_at = NULL;
-    uint32_t i, *wide = NULL, *last_count = NULL;
-    radinterp__buf kept;
-    radinterp__leaf_ctx ctx;
-    radinterp__pacer pacer;
-    radinterp_result res = RADINTERP_OK;
-    radinterp__buf_init(&kept, sizeof(uint32_t));
-    s->leaf_margin = 10.0 * (s->nudge + s->epsilon * s->diag);
-    s->leaf_link_first = (uint32_t *)radinterp__alloc_array(&s->allocator, (size_t)s->node_count + 1, sizeof(uint32_t));
-    wide_first = (uint64_t *)radinterp__alloc_array(&s->allocator, (size_t)s->leaf_count + 1, sizeof(uint64_t));
-    if (!s->leaf_link_first || !wide_first) {
-        radinterp__free(&s->allocator, wide_first);
-        return RADINTERP_ERROR_OUT_OF_MEMORY;
+    radinterp__free(a, ll->leaf);
+    radinterp__free(a, ll->first);
+    radinterp__free(a, ll->room);
+    radinterp__free(a, ll->link);
+    radinterp__free(a, ll->blockers);
+    memset(ll, 0, sizeof *ll);
+}
+
+/* The lists of the n leaves (distinct, ascending node indices; copied)
+   into ll: sizes counted serially, lists filled RADINTERP__LEAF_JOB leaves
+   a job. */
+static radinterp_result radinterp__leaf_lists_build(const radinterp_solution *s, const radinterp_allocator *a,
+                                                    void (*parallel_for)(void *, radinterp_job_fn, void *, uint32_t),
+                                                    void *parallel_user, const uint32_t *leaves, uint32_t n,
+                                                    radinterp__leaf_lists *ll)
+{
+    uint32_t i;
+    memset(ll, 0, sizeof *ll);
+    ll->s = s;
+    ll->count = n;
+    ll->leaf = (uint32_t *)radinterp__alloc_array(a, (size_t)n + 1, sizeof(uint32_t));
+    ll->first = (uint32_t *)radinterp__alloc_array(a, (size_t)n + 1, sizeof(uint32_t));
+    ll->room = (uint64_t *)radinterp__alloc_array(a, (size_t)n + 1, sizeof(uint64_t));
+    if (!ll->leaf || !ll->first || !ll->room) { radinterp__leaf_lists_free(a, ll); return RADINTERP_ERROR_OUT_OF_MEMORY; }
+    ll->first[0] = 0;
+    ll->room[0] = 0;
+    for (i = 0; i < n; i++) {
+        uint32_t entries;
+        uint64_t room;
+        radinterp__leaf_size(s, leaves[i], &entries, &room);
+        if ((uint64_t)ll->first[i] + entries > 0xFFFFFFFFu) { radinterp__leaf_lists_free(a, ll); return RADINTERP_ERROR_OUT_OF_MEMORY; }
+        ll->leaf[i] = leaves[i];
+        ll->first[i + 1] = ll->first[i] + entries;
+        ll->room[i + 1] = ll->room[i] + room;
     }
-    memset(s->leaf_link_first, 0, ((size_t)s->node_count + 1) * sizeof(uint32_t));
-    for (i = 0; i < s->leaf_count; i++) { /* entries per leaf, by leaf node index */
-        uint32_t node;
-        uint64_t own = room;
-        wide_first[i] = room;
-        for (node = s->leaves[i]; node != RADINTERP__NONE; node = s->nodes[node].parent) {
-            const radinterp__node *nd = &s->nodes[node];
-            uint32_t l;
-            s->leaf_link_first[s->leaves[i]] += nd->link_count;
-            for (l = nd->first_link; l < nd->first_link + nd->link_count; l++) room += s->links[l].blocker_count;
-        }
-        if (room - own > widest) widest = room - own;
+    ll->link = (radinterp__leaf_link *)radinterp__alloc_array(a, (size_t)ll->first[n] + 1, sizeof *ll->link);
+    if (ll->room[n] < (uint64_t)SIZE_MAX / sizeof(uint32_t))
+        ll->blockers = (uint32_t *)radinterp__alloc_array(a, (size_t)ll->room[n] + 1, sizeof(uint32_t));
+    if (!ll->link || !ll->blockers) { radinterp__leaf_lists_free(a, ll); return RADINTERP_ERROR_OUT_OF_MEMORY; }
+    ll->bytes = ((size_t)n + 1) * (2 * sizeof(uint32_t) + sizeof(uint64_t)) +
+                ((size_t)ll->first[n] + 1) * sizeof *ll->link + ((size_t)ll->room[n] + 1) * sizeof(uint32_t);
+    radinterp__run_jobs(parallel_for, parallel_user, radinterp__leaf_lists_job, ll,
+                        (n + RADINTERP__LEAF_JOB - 1) / RADINTERP__LEAF_JOB);
+    return RADINTERP_OK;
+}
+
+/* Where leaf's list is in ll, or NONE. */
+static uint32_t radinterp__leaf_lists_find(const radinterp__leaf_lists *ll, uint32_t leaf)
+{
+    uint32_t lo = 0, hi = ll ? ll->count : 0;
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (ll->leaf[mid] < leaf) lo = mid + 1;
+        else hi = mid;
     }
-    wide_first[s->leaf_count] = room;
-    if (widest > room) widest = room ? room : 1;
-    for (i = 0; i <= s->node_count; i++) { /* counts to offsets */
-        uint32_t c = i < s->node_count ? s->leaf_link_first[i] : 0;
-        if (entries + c > 0xFFFFFFFFu) { radinterp__free(&s->allocator, wide_first); return RADINTERP_ERROR_OUT_OF_MEMORY; }
-        s->leaf_link_first[i] = (uint32_t)entries;
-        entries += c;
-    }
-    s->leaf_link_count = entries;
-    s->leaf_links = (radinterp__leaf_link *)radinterp__alloc_array(&s->allocator, (size_t)entries, sizeof *s->leaf_links);
-    if (widest <= (uint64_t)SIZE_MAX / sizeof(uint32_t))
-        wide = (uint32_t *)radinterp__alloc_array(&s->allocator, (size_t)widest, sizeof(uint32_t));
-    if (share) {
-        last_at = (uint64_t *)radinterp__alloc_array(&s->allocator, (size_t)s->link_count + 1, sizeof(uint64_t));
-        last_count = (uint32_t *)radinterp__alloc_array(&s->allocator, (size_t)s->link_count + 1, sizeof(uint32_t));
-        if (last_count) memset(last_count, 0, ((size_t)s->link_count + 1) * sizeof(uint32_t));   /* no list yet */
-    }
-    if (!s->leaf_links || !wide || (share && (!last_at || !last_count))) res = RADINTERP_ERROR_OUT_OF_MEMORY;
-    ctx.s = s;
-    ctx.wide = wide;
-    ctx.wide_first = wide_first;
-    ctx.per_job = 16;
-    radinterp__pacer_init(&pacer, run->desc->progress_interval, 0xFFFFFFFFu / ctx.per_job);
-    for (ctx.end = 0; res == RADINTERP_OK && ctx.end < s->leaf_count;) {
-        uint32_t last;
-        ctx.first = ctx.end;
-        ctx.base = wide_first[ctx.first];
-        last = ctx.first + radinterp__pacer_next(&pacer, (s->leaf_count - ctx.first + ctx.per_job - 1) / ctx.per_job) *
-                               ctx.per_job;   /* as many as the pacer allows and the wide buffer holds */
-        while (ctx.end < s->leaf_count && ctx.end < last && wide_first[ctx.end + 1] - ctx.base <= widest) ctx.end++;
-        radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__leaf_lists_job, &ctx,
-                            (ctx.end - ctx.first + ctx.per_job - 1) / ctx.per_job);
-        radinterp__pacer_adapt(&pacer);
-        for (i = ctx.first; i < ctx.end && res == RADINTERP_OK; i++) { /* pack */
-            uint32_t leaf = s->leaves[i], e;
-            for (e = s->leaf_link_first[leaf]; e < s->leaf_link_first[leaf + 1]; e++) {
-                radinterp__leaf_link *ll = &s->leaf_links[e];
-                size_t at = kept.count;
-                uint32_t count = radinterp__leaf_kept(ll), l = ll->link;
-                if (share && count && last_count[l] == count &&
-                    !memcmp((uint32_t *)kept.data + last_at[l], wide + ll->first, (size_t)count * sizeof(uint32_t))) {
-                    ll->first = last_at[l];   /* the list this link kept at an earlier leaf */
-                    continue;
-                }
-                if (count && radinterp__buf_reserve(&s->allocator, &kept, at + count) != 0) {
-                    res = RADINTERP_ERROR_OUT_OF_MEMORY;
-                    break;
-                }
-                if (count) memcpy((uint32_t *)kept.data + at, wide + ll->first, (size_t)count * sizeof(uint32_t));
-                kept.count += count;
-                ll->first = at;
-                if (share && count) {
-                    last_at[l] = at;
-                    last_count[l] = count;
-                }
-            }
-        }
-        if (res == RADINTERP_OK && radinterp__cancelled(s, run)) res = RADINTERP_ERROR_CANCELLED;
-    }
-    radinterp__free(&s->allocator, wide);
-    radinterp__free(&s->allocator, wide_first);
-    radinterp__free(&s->allocator, last_at);
-    radinterp__free(&s->allocator, last_count);
-    s->leaf_blockers = (uint32_t *)kept.data;
-    s->leaf_blocker_count = kept.count;
-    if (res == RADINTERP_OK && !s->leaf_blockers) { /* no blockers at all: an empty list, not a missing one */
-        s->leaf_blockers = (uint32_t *)radinterp__alloc(&s->allocator, sizeof(uint32_t));
-        if (!s->leaf_blockers) res = RADINTERP_ERROR_OUT_OF_MEMORY;
-    }
-    return res;
+    return lo < (ll ? ll->count : 0) && ll->leaf[lo] == leaf ? lo : RADINTERP__NONE;
 }
 
 RADINTERP_API void radinterp_solution_destroy(radinterp_solution *s)
@@ -9133,9 +9122,6 @@ RADINTERP_API void radinterp_solution_destroy(radinterp_solution *s)
     radinterp__free(&a, s->solid_planes);
     radinterp__free(&a, s->solid_members);
     radinterp__free(&a, s->solid_plugs);
-    radinterp__free(&a, s->leaf_link_first);
-    radinterp__free(&a, s->leaf_links);
-    radinterp__free(&a, s->leaf_blockers);
     radinterp__free(&a, s->environment);
     radinterp__free(&a, s);
 }
@@ -9226,7 +9212,7 @@ RADINTERP_API radinterp_result radinterp_solve(const radinterp_desc *desc, radin
                                                           : radinterp__initial_cluster_links(s, &run);
     if (res == RADINTERP_OK) res = radinterp__iterate(s, &run);
     if (res == RADINTERP_OK) res = radinterp__collect_leaves(s);
-    if (res == RADINTERP_OK) res = radinterp__build_leaf_lists(s, &run, 1);
+    s->leaf_margin = 10.0 * (s->nudge + s->epsilon * s->diag);   /* leaf lists (section 14): built where used */
     if (res != RADINTERP_OK) {
         if (res == RADINTERP_ERROR_OUT_OF_MEMORY) radinterp__log(desc, "radinterp_solve: out of memory");
         radinterp_solution_destroy(s);
@@ -9257,11 +9243,9 @@ RADINTERP_API void radinterp_solution_info(const radinterp_solution *s, radinter
     info->shadow_rays = s->shadow_rays;
     info->glass_patches = s->glass_patches;
     info->link_bytes = (size_t)s->link_count * sizeof(radinterp__link) + (size_t)s->blocker_count * sizeof(uint32_t);
-    info->leaf_list_entries = s->leaf_link_count;
-    info->leaf_blocker_entries = s->leaf_blocker_count;
-    info->leaf_list_bytes = (s->leaf_link_first ? ((size_t)s->node_count + 1) * sizeof(uint32_t) : 0) +
-                            (size_t)s->leaf_link_count * sizeof(radinterp__leaf_link) +
-                            (size_t)s->leaf_blocker_count * sizeof(uint32_t);
+    info->leaf_list_entries = 0;   /* the solution keeps no leaf lists (section 14: built where they are used) */
+    info->leaf_blocker_entries = 0;
+    info->leaf_list_bytes = 0;
     info->bytes = sizeof *s + (size_t)s->patch_count * sizeof(radinterp__patch) +
                   (size_t)s->node_cap * sizeof(radinterp__node) + info->link_bytes + (size_t)s->leaf_count * sizeof(uint32_t) +
                   (size_t)s->clink_count * sizeof(radinterp__clink) + (size_t)s->cluster_count * sizeof(radinterp__cluster) +
@@ -9413,6 +9397,7 @@ typedef struct radinterp__plink {
     const uint32_t *blk;      /* its blockers near the point: the leaf list's, or the link's own */
     uint32_t nblk;
     int hidden;               /* the leaf list's entry is hidden (RADINTERP__LEAF_HIDDEN): F = 0 */
+    int listed;               /* blk, nblk and hidden hold; else radinterp__plink_filter fills them */
     double full, reach;       /* unoccluded factor at the point, and that times B_src (largest channel); once
                                  ranked, what this source and those after it could carry */
 } radinterp__plink;
@@ -9424,45 +9409,93 @@ static int radinterp__cmp_reach(const void *a_, const void *b_)
     return a->lk < b->lk ? -1 : a->lk > b->lk;   /* ties in link order: the same sum on every run */
 }
 
-/* Lists the links of the point's leaf (its leaf list, or the links of the
-   leaf and its ancestors with their own blockers), those at positions
-   first .. first + max of the list, into pl; returns the length of the
-   whole list. */
-static uint32_t radinterp__point_links(const radinterp__query *q, uint32_t leaf, int leaf_lists, uint32_t first,
+/* The leaf a query reads and where its links' blockers come from: the
+   leaf's list in a batch (radinterp__leaf_lists), or each link's entry
+   filtered when the sum reaches it (radinterp__plink_filter), or, for a
+   point too far from the leaf's box, the links' own lists. */
+typedef struct radinterp__point_leaf {
+    uint32_t leaf;
+    int lists;                          /* the leaf lists hold at the point */
+    const radinterp__leaf_lists *batch; /* lists built for a batch of leaves, or NULL */
+    uint32_t slot;                      /* the leaf's place in batch, or NONE */
+    float lo[3], hi[3];                 /* the leaf's box grown by the lists' margin */
+} radinterp__point_leaf;
+
+/* The leaf a query at p, seen from pv, reads, and whether its leaf lists
+   hold there: both points within half the lists' margin of its box. */
+static uint32_t radinterp__query_leaf(const radinterp_solution *s, uint32_t patch, const double *p, const double *pv,
+                                      int *lists)
+{
+    uint32_t leaf = radinterp__locate_leaf(s, patch, pv);
+    *lists = s->leaf_margin > 0.0 && radinterp__near_box(&s->nodes[leaf], pv, 0.5 * s->leaf_margin) &&
+             radinterp__near_box(&s->nodes[leaf], p, 0.5 * s->leaf_margin);
+    return leaf;
+}
+
+/* Lists the links of the point's leaf (the leaf's and its ancestors', as
+   in its leaf list), those at positions first .. first + max, into pl;
+   returns the length of the whole list. */
+static uint32_t radinterp__point_links(const radinterp__query *q, const radinterp__point_leaf *pt, uint32_t first,
                                        radinterp__plink *pl, uint32_t max)
 {
     const radinterp_solution *s = q->s;
-    uint32_t n = 0, e, node, l;
-    if (leaf_lists) {
-        for (e = s->leaf_link_first[leaf]; e < s->leaf_link_first[leaf + 1]; e++, n++) {
-            const radinterp__leaf_link *ll = &s->leaf_links[e];
-            if (n < first || n - first >= max) continue;
-            pl[n - first].lk = &s->links[ll->link];
-            pl[n - first].blk = s->leaf_blockers + ll->first;
-            pl[n - first].nblk = radinterp__leaf_kept(ll);
-            pl[n - first].hidden = ll->count == RADINTERP__LEAF_HIDDEN;
-        }
-        return n;
-    }
-    for (node = leaf; node != RADINTERP__NONE; node = s->nodes[node].parent)
+    uint32_t n = 0, node, l;
+    for (node = pt->leaf; node != RADINTERP__NONE; node = s->nodes[node].parent)
         for (l = s->nodes[node].first_link; l < s->nodes[node].first_link + s->nodes[node].link_count; l++, n++) {
+            radinterp__plink *p;
             if (n < first || n - first >= max) continue;
-            pl[n - first].lk = &s->links[l];
-            pl[n - first].blk = s->blockers + s->links[l].first_blocker;
-            pl[n - first].nblk = s->links[l].blocker_count;
-            pl[n - first].hidden = 0;
+            p = &pl[n - first];
+            p->lk = &s->links[l];
+            p->listed = 1;
+            p->hidden = 0;
+            if (!pt->lists) {
+                p->blk = s->blockers + s->links[l].first_blocker;
+                p->nblk = s->links[l].blocker_count;
+            } else if (pt->slot != RADINTERP__NONE) {   /* entries in the order above */
+                const radinterp__leaf_link *ll = &pt->batch->link[pt->batch->first[pt->slot] + n];
+                p->blk = pt->batch->blockers + ll->first;
+                p->nblk = radinterp__leaf_kept(ll->count);
+                p->hidden = ll->count == RADINTERP__LEAF_HIDDEN;
+            } else {
+                p->listed = 0;
+            }
         }
     return n;
+}
+
+/* Fills p's blockers with the leaf's entry for its link
+   (radinterp__leaf_entry) in buf (room for cap), or in *heap, allocated,
+   when the link has more blockers; out of memory, the link's own list and
+   the query failed. */
+static void radinterp__plink_filter(radinterp__query *q, const radinterp__point_leaf *pt, radinterp__plink *p,
+                                    uint32_t *buf, uint32_t cap, uint32_t **heap)
+{
+    const radinterp_solution *s = q->s;
+    uint32_t *blk = buf, count;
+    p->listed = 1;
+    p->hidden = 0;
+    if (p->lk->blocker_count > cap) blk = *heap = (uint32_t *)radinterp__alloc_array(&s->allocator, p->lk->blocker_count, sizeof(uint32_t));
+    if (!blk) {
+        q->failed = 1;
+        p->blk = s->blockers + p->lk->first_blocker;
+        p->nblk = p->lk->blocker_count;
+        return;
+    }
+    count = radinterp__leaf_entry(s, pt->leaf, pt->lo, pt->hi, (uint32_t)(p->lk - s->links), blk);
+    p->blk = blk;
+    p->nblk = radinterp__leaf_kept(count);
+    p->hidden = count == RADINTERP__LEAF_HIDDEN;
 }
 
 /* Sums B_src * F over the listed links into h, exactly (backprojection)
    while the links left could still matter, then by their visible
    fractions (see above). */
-static void radinterp__sum_links(radinterp__query *q, radinterp__plink *pl, uint32_t n, int ranked, double *h)
+static void radinterp__sum_links(radinterp__query *q, const radinterp__point_leaf *pt, radinterp__plink *pl, uint32_t n,
+                                 int ranked, double *h)
 {
     const radinterp_solution *s = q->s;
     double rest = 0.0, Sc[RADINTERP__POLY_MAX][3];
-    uint32_t i;
+    uint32_t i, local[256];
     int k;
     if (ranked) {
         for (i = 0; i < n; i++) {
@@ -9484,6 +9517,8 @@ static void radinterp__sum_links(radinterp__query *q, radinterp__plink *pl, uint
     }
     for (i = 0; i < n; i++) {
         const radinterp__node *src = &s->nodes[pl[i].lk->source];
+        uint32_t *heap = NULL;
+        if (!pl[i].listed) radinterp__plink_filter(q, pt, &pl[i], local, 256, &heap);
         if (ranked && pl[i].reach <= s->point_rest * radinterp__max3(h)) {
             double f = pl[i].nblk || pl[i].hidden ? pl[i].full * pl[i].lk->vis : pl[i].full;
             for (k = 0; k < 3; k++) h[k] += f * src->b[k];
@@ -9497,6 +9532,29 @@ static void radinterp__sum_links(radinterp__query *q, radinterp__plink *pl, uint
             radinterp__link_point_glass(q, pl[i].lk, h);
             q->known_node = RADINTERP__NONE;
         }
+        if (heap) radinterp__free(&s->allocator, heap);
+    }
+}
+
+/* p nudged toward `toward` (may be NULL) along the patch, by nudge at most:
+   where a query at p judges visibility from. */
+static void radinterp__nudge(const radinterp_solution *s, uint32_t patch, const double *p, const float toward[3],
+                             double *pv)
+{
+    const double *n = s->patches[patch].n;
+    int k;
+    memcpy(pv, p, 3 * sizeof(double));
+    if (toward) {
+        double t[3], d[3], len, k2;
+        radinterp__d3_from_f(toward, t);
+        radinterp__d3_sub(t, p, d);
+        k2 = radinterp__d3_dot(d, n);
+        for (k = 0; k < 3; k++) d[k] -= k2 * n[k];
+        len = radinterp__d3_len(d);
+        if (len > 0.0) {
+            double step = len < s->nudge ? len : s->nudge;
+            for (k = 0; k < 3; k++) pv[k] += d[k] * (step / len);
+        }
     }
 }
 
@@ -9505,7 +9563,6 @@ static void radinterp__sum_links(radinterp__query *q, radinterp__plink *pl, uint
 static void radinterp__query_start(radinterp__query *q, const radinterp_solution *s, uint32_t patch, const float p[3],
                                    const float toward[3])
 {
-    int k;
     q->s = s;
     q->known_node = RADINTERP__NONE;
     q->cdt_ready = 0;
@@ -9517,49 +9574,39 @@ static void radinterp__query_start(radinterp__query *q, const radinterp_solution
     radinterp__d3_from_f(p, q->p);
     memcpy(q->n, s->patches[patch].n, sizeof q->n);
     q->dr = radinterp__d3_dot(q->n, q->p);
-    memcpy(q->pv, q->p, sizeof q->pv);
-    if (toward) {
-        double t[3], d[3], len, k2;
-        radinterp__d3_from_f(toward, t);
-        radinterp__d3_sub(t, q->p, d);
-        k2 = radinterp__d3_dot(d, q->n);
-        for (k = 0; k < 3; k++) d[k] -= k2 * q->n[k];
-        len = radinterp__d3_len(d);
-        if (len > 0.0) {
-            double step = len < s->nudge ? len : s->nudge;
-            for (k = 0; k < 3; k++) q->pv[k] += d[k] * (step / len);
-        }
-    }
+    radinterp__nudge(s, patch, q->p, toward, q->pv);
 }
 
 /* Irradiance at p on a patch, summed over the links of its leaf and of the
-   leaf's ancestors (6.2), past the blockers of the leaf lists, and over the
-   cluster links above it; pl holds max links for the ranking (see above). */
+   leaf's ancestors (6.2), past the blockers of the leaf lists (from batch
+   when it holds the leaf's, may be NULL), and over the cluster links above
+   it; pl holds max links for the ranking (see above). */
 static radinterp_result radinterp__irradiance_in(const radinterp_solution *s, uint32_t patch, const float p[3],
                                                  const float toward[3], double *h, uint32_t *triangulated,
-                                                 radinterp__plink *pl, uint32_t max)
+                                                 radinterp__plink *pl, uint32_t max, const radinterp__leaf_lists *batch)
 {
     radinterp__query query, *q = &query;  /* about 110 KB of stack: no allocation in the common case */
-    uint32_t leaf, n;
-    int leaf_lists;
+    radinterp__point_leaf pt;
+    uint32_t n;
     h[0] = h[1] = h[2] = 0.0;
     if (!p || !radinterp__patch_ok(s, patch) || !radinterp__finite3(p) || (toward && !radinterp__finite3(toward)))
         return RADINTERP_ERROR_INVALID_ARGUMENT;
     radinterp__query_start(q, s, patch, p, toward);
-    leaf = radinterp__locate_leaf(s, patch, q->pv);
-    q->child_tol = 0.02 * radinterp__tolerance(s, s->nodes[leaf].level);
-    leaf_lists = s->leaf_link_first && radinterp__near_box(&s->nodes[leaf], q->pv, 0.5 * s->leaf_margin) &&
-                 radinterp__near_box(&s->nodes[leaf], q->p, 0.5 * s->leaf_margin);   /* leaf lists (section 14) */
+    pt.leaf = radinterp__query_leaf(s, patch, q->p, q->pv, &pt.lists);
+    pt.batch = batch;
+    pt.slot = pt.lists ? radinterp__leaf_lists_find(batch, pt.leaf) : RADINTERP__NONE;
+    radinterp__grown_box(&s->nodes[pt.leaf], s->leaf_margin, pt.lo, pt.hi);
+    q->child_tol = 0.02 * radinterp__tolerance(s, s->nodes[pt.leaf].level);
     /* first: they count in the sum the ranking compares with */
-    radinterp__cluster_links_add(s, patch, leaf, h);
+    radinterp__cluster_links_add(s, patch, pt.leaf, h);
     if (s->has_sky) radinterp__sky_point_add(s, patch, q->pv, h);
-    n = radinterp__point_links(q, leaf, leaf_lists, 0, pl, max);
-    if (n <= max) radinterp__sum_links(q, pl, n, 1, h);
+    n = radinterp__point_links(q, &pt, 0, pl, max);
+    if (n <= max) radinterp__sum_links(q, &pt, pl, n, 1, h);
     else {   /* too many to rank: every one exactly, a chunk at a time */
         uint32_t at;
         for (at = 0; at < n; at += max) {
-            if (at) radinterp__point_links(q, leaf, leaf_lists, at, pl, max);
-            radinterp__sum_links(q, pl, n - at < max ? n - at : max, 0, h);
+            if (at) radinterp__point_links(q, &pt, at, pl, max);
+            radinterp__sum_links(q, &pt, pl, n - at < max ? n - at : max, 0, h);
         }
     }
     if (q->cdt_ready) radinterp__cdt_free(&q->cdt);
@@ -9567,11 +9614,20 @@ static radinterp_result radinterp__irradiance_in(const radinterp_solution *s, ui
     return q->failed ? RADINTERP_ERROR_OUT_OF_MEMORY : RADINTERP_OK;
 }
 
+/* The same with room for RADINTERP__POINT_LINKS links on the stack. */
+static radinterp_result radinterp__irradiance_listed(const radinterp_solution *s, const radinterp__leaf_lists *batch,
+                                                     uint32_t patch, const float p[3], const float toward[3], double *h,
+                                                     uint32_t *triangulated)
+{
+    radinterp__plink pl[RADINTERP__POINT_LINKS];   /* 20 KB */
+    return radinterp__irradiance_in(s, patch, p, toward, h, triangulated, pl, RADINTERP__POINT_LINKS, batch);
+}
+
+/* Without lists built beforehand: each link's entry filtered as it is reached. */
 static radinterp_result radinterp__irradiance(const radinterp_solution *s, uint32_t patch, const float p[3],
                                               const float toward[3], double *h, uint32_t *triangulated)
 {
-    radinterp__plink pl[RADINTERP__POINT_LINKS];   /* 20 KB */
-    return radinterp__irradiance_in(s, patch, p, toward, h, triangulated, pl, RADINTERP__POINT_LINKS);
+    return radinterp__irradiance_listed(s, NULL, patch, p, toward, h, triangulated);
 }
 
 RADINTERP_API radinterp_result radinterp_irradiance_at_point(const radinterp_solution *s, uint32_t patch,
@@ -9904,6 +9960,7 @@ typedef struct radinterp__builder {
     /* statistics */
     uint32_t balance_splits, hanging, seam, fallback, degenerate, skipped;
     uint64_t samples;
+    size_t leaf_list_bytes;          /* the largest batch of leaf lists held (radinterp__sample_listed) */
     int cancelled;
 } radinterp__builder;
 
@@ -11894,6 +11951,7 @@ typedef struct radinterp__sample_ctx {
     const radinterp__builder *b;
     const radinterp__spoint *pts;   /* the points to sample; their values go to value (3 per point) */
     double *value;
+    const radinterp__leaf_lists *lists;   /* the leaf lists of the points' leaves (radinterp__sample_listed) */
     const radinterp__otri *tris;    /* the triangles whose representation error is measured (refine) */
     const uint32_t *unsampled;
     const float *coeff;
@@ -11917,7 +11975,8 @@ static void radinterp__point_job(void *ctx_, uint32_t index)
     ctx->status[index] = RADINTERP_OK;
     for (; i < end; i++) {
         const radinterp__spoint *p = &ctx->pts[i];
-        radinterp_result r = radinterp__irradiance(ctx->b->s, p->patch, p->x, p->toward, ctx->value + 3 * (size_t)i, NULL);
+        radinterp_result r = radinterp__irradiance_listed(ctx->b->s, ctx->lists, p->patch, p->x, p->toward,
+                                                          ctx->value + 3 * (size_t)i, NULL);
         if (r != RADINTERP_OK) ctx->status[index] = r;
     }
 }
@@ -12055,6 +12114,76 @@ static int radinterp__sample_points(radinterp__builder *b, const uint32_t *list,
     return failed ? -1 : 0;
 }
 
+/* The leaves the points pts[at ..) read (radinterp__query_leaf, where the
+   leaf lists hold), into leaves (ascending), from at up to the first point
+   whose leaf's list would take the batch past RADINTERP__LEAF_BATCH_BYTES
+   (at least one leaf); mark[leaf] = batch for those taken. Returns that
+   point. */
+#ifndef RADINTERP__LEAF_BATCH_BYTES
+#define RADINTERP__LEAF_BATCH_BYTES ((size_t)1 << 24)
+#endif
+static uint32_t radinterp__batch_leaves(const radinterp_solution *s, const radinterp__spoint *pts, uint32_t at,
+                                        uint32_t n, uint32_t *mark, uint32_t batch, uint32_t *leaves, uint32_t *count)
+{
+    size_t bytes = 0;
+    *count = 0;
+    for (; at < n; at++) {
+        double p[3], pv[3];
+        uint32_t leaf;
+        size_t size;
+        int lists;
+        if (!radinterp__patch_ok(s, pts[at].patch) || !radinterp__finite3(pts[at].x) || !radinterp__finite3(pts[at].toward))
+            continue;   /* the query says so */
+        radinterp__d3_from_f(pts[at].x, p);
+        radinterp__nudge(s, pts[at].patch, p, pts[at].toward, pv);
+        leaf = radinterp__query_leaf(s, pts[at].patch, p, pv, &lists);
+        if (!lists || mark[leaf] == batch) continue;
+        size = radinterp__leaf_bytes(s, leaf);
+        if (*count && bytes + size > RADINTERP__LEAF_BATCH_BYTES) break;
+        mark[leaf] = batch;
+        leaves[(*count)++] = leaf;
+        bytes += size;
+    }
+    qsort(leaves, *count, sizeof *leaves, radinterp__cmp_u32);
+    return at;
+}
+
+/* Samples ctx's n points (radinterp__point_job) batch by batch of the
+   leaves they read (radinterp__batch_leaves): each batch's leaf lists are
+   built before its points and freed after them, so the lists held at once
+   stay within the batch's bound whatever the building's size. */
+static radinterp_result radinterp__sample_listed(radinterp__builder *b, radinterp__sample_ctx *ctx, uint32_t n,
+                                                 uint64_t *done, uint64_t total)
+{
+    const radinterp_solution *s = b->s;
+    const radinterp__spoint *pts = ctx->pts;
+    double *value = ctx->value;
+    uint32_t *mark = (uint32_t *)radinterp__alloc_array(&b->a, (size_t)s->node_count + 1, sizeof(uint32_t));
+    uint32_t *leaves = (uint32_t *)radinterp__alloc_array(&b->a, (size_t)s->leaf_count + 1, sizeof(uint32_t));
+    uint32_t at = 0, batch = 0, count;
+    radinterp_result res = mark && leaves ? RADINTERP_OK : RADINTERP_ERROR_OUT_OF_MEMORY;
+    if (mark) memset(mark, 0xFF, ((size_t)s->node_count + 1) * sizeof(uint32_t));
+    while (res == RADINTERP_OK && at < n) {
+        radinterp__leaf_lists lists;
+        uint32_t end = radinterp__batch_leaves(s, pts, at, n, mark, batch++, leaves, &count);
+        res = radinterp__leaf_lists_build(s, &b->a, b->desc->parallel_for, b->desc->parallel_user, leaves, count, &lists);
+        if (res != RADINTERP_OK) break;
+        if (lists.bytes > b->leaf_list_bytes) b->leaf_list_bytes = lists.bytes;
+        ctx->pts = pts + at;
+        ctx->value = value + 3 * (size_t)at;
+        ctx->lists = &lists;
+        res = radinterp__run_batches(b, radinterp__point_job, ctx, end - at, done, total);
+        radinterp__leaf_lists_free(&b->a, &lists);
+        at = end;
+    }
+    ctx->pts = pts;
+    ctx->value = value;
+    ctx->lists = NULL;
+    radinterp__free(&b->a, mark);
+    radinterp__free(&b->a, leaves);
+    return res;
+}
+
 /* The coefficients (eq. 3.3) of the listed triangles from their six
    samples, with refinement their representation error too. */
 static radinterp_result radinterp__sample_all(radinterp__builder *b, const uint32_t *unsampled, uint32_t n,
@@ -12074,7 +12203,7 @@ static radinterp_result radinterp__sample_all(radinterp__builder *b, const uint3
     total = pts.count + (b->desc->refine ? n : 0u);
     ctx.b = b;
     ctx.pts = (const radinterp__spoint *)pts.data;
-    if (res == RADINTERP_OK) res = radinterp__run_batches(b, radinterp__point_job, &ctx, (uint32_t)pts.count, &done, total);
+    if (res == RADINTERP_OK) res = radinterp__sample_listed(b, &ctx, (uint32_t)pts.count, &done, total);
     for (i = 0; i < n && res == RADINTERP_OK; i++) {
         float *c = coeff + 18 * (size_t)unsampled[i];
         for (ch = 0; ch < 3; ch++) {
@@ -12454,6 +12583,7 @@ static radinterp_result radinterp__assemble(radinterp__builder *b, const float *
     info->fallback_patches = b->fallback;
     info->skipped_patches = b->skipped;
     info->samples = b->samples;
+    info->leaf_list_bytes = b->leaf_list_bytes;
     *out = m;
     return RADINTERP_OK;
 }
