@@ -8965,13 +8965,12 @@ static int radinterp__leaf_hidden(const radinterp_solution *s, const float *lo, 
     return 0;
 }
 
-/* The entry of link l at leaf, whose box grown by the lists' margin is
-   lo, hi (radinterp__grown_box): the link's blockers that may come between
-   that box and the source, into blk (room for the link's blocker_count),
-   and their count, or RADINTERP__LEAF_HIDDEN when one of them hides the
-   source from the whole box. */
-static uint32_t radinterp__leaf_entry(const radinterp_solution *s, uint32_t leaf, const float *lo, const float *hi,
-                                      uint32_t l, uint32_t *blk)
+/* The blockers of link l that may come between leaf, whose box grown by
+   the lists' margin is lo, hi (radinterp__grown_box), and the link's
+   source, into blk (room for the link's blocker_count); their count.
+   With blk NULL: 1 at the first such blocker, else 0. */
+static uint32_t radinterp__leaf_filter(const radinterp_solution *s, uint32_t leaf, const float *lo, const float *hi,
+                                       uint32_t l, uint32_t *blk)
 {
     const radinterp__link *lk = &s->links[l];
     radinterp__shaft sh;
@@ -8982,9 +8981,21 @@ static uint32_t radinterp__leaf_entry(const radinterp_solution *s, uint32_t leaf
     radinterp__shaft_build(&sh, lo, hi, slo, shi);
     for (k = 0; k < lk->blocker_count; k++) {
         uint32_t b = s->blockers[lk->first_blocker + k];
-        if (radinterp__may_block(s, &sh, b, &s->nodes[leaf], &s->nodes[lk->source])) blk[n++] = b;
+        if (!radinterp__may_block(s, &sh, b, &s->nodes[leaf], &s->nodes[lk->source])) continue;
+        if (!blk) return 1;
+        blk[n++] = b;
     }
-    return radinterp__leaf_hidden(s, lo, hi, &s->nodes[lk->source], blk, n) ? RADINTERP__LEAF_HIDDEN : n;
+    return n;
+}
+
+/* The entry of link l at leaf (lo, hi as above): its blockers, into blk,
+   and their count, or RADINTERP__LEAF_HIDDEN when one of them hides the
+   source from the whole box. */
+static uint32_t radinterp__leaf_entry(const radinterp_solution *s, uint32_t leaf, const float *lo, const float *hi,
+                                      uint32_t l, uint32_t *blk)
+{
+    uint32_t n = radinterp__leaf_filter(s, leaf, lo, hi, l, blk);
+    return radinterp__leaf_hidden(s, lo, hi, &s->nodes[s->links[l].source], blk, n) ? RADINTERP__LEAF_HIDDEN : n;
 }
 
 /* A leaf's list: its entries (the links of the leaf and its ancestors) and
@@ -9518,11 +9529,17 @@ static void radinterp__sum_links(radinterp__query *q, const radinterp__point_lea
     for (i = 0; i < n; i++) {
         const radinterp__node *src = &s->nodes[pl[i].lk->source];
         uint32_t *heap = NULL;
-        if (!pl[i].listed) radinterp__plink_filter(q, pt, &pl[i], local, 256, &heap);
         if (ranked && pl[i].reach <= s->point_rest * radinterp__max3(h)) {
-            double f = pl[i].nblk || pl[i].hidden ? pl[i].full * pl[i].lk->vis : pl[i].full;
+            /* a blocker in the leaf's entry (hidden ones keep some too) */
+            int blocked = pl[i].listed ? pl[i].nblk || pl[i].hidden
+                                       : radinterp__leaf_filter(s, pt->leaf, pt->lo, pt->hi,
+                                                                (uint32_t)(pl[i].lk - s->links), NULL) != 0;
+            double f = blocked ? pl[i].full * pl[i].lk->vis : pl[i].full;
             for (k = 0; k < 3; k++) h[k] += f * src->b[k];
-        } else if (!pl[i].hidden) {   /* a hidden one adds 0, as its backprojection would */
+            continue;
+        }
+        if (!pl[i].listed) radinterp__plink_filter(q, pt, &pl[i], local, 256, &heap);
+        if (!pl[i].hidden) {   /* a hidden one adds 0, as its backprojection would */
             q->blk = pl[i].blk;
             q->nblk = pl[i].nblk;
             if (ranked) {

@@ -12,6 +12,9 @@
    their largest, so progress calls come at the same places in every run, as
    the cancel tests, which count them, require. */
 #define RADINTERP_CPU_SECONDS() 0.0
+/* Batches of leaf lists far smaller than the default (16 MB), so that the
+   mesh builds here run many batches (test_leaf_lists_bounded). */
+#define RADINTERP__LEAF_BATCH_BYTES ((size_t)16 << 10)
 #define RADINTERP_IMPLEMENTATION
 #include "../radinterp.h"
 #include "examples/common/camera.h"
@@ -1519,6 +1522,162 @@ static void test_no_discontinuities_and_eval_arguments(void)
     radinterp_mesh_destroy(m);
 }
 
+/* ---- leaf lists built where they are used ---------------------------------- */
+/* Four rooms in a row, each with a ceiling lamp and a desk under it: a
+   building small enough for the sanitizers. */
+static radinterp_solution *rooms_scene(scene *s, float point_rest)
+{
+    radinterp_desc d;
+    radinterp_solution *sol = NULL;
+    uint32_t grey, light, i;
+    memset(s, 0, sizeof *s);
+    grey = add_material(s, 0.6f, 0.0f);
+    light = add_material(s, 0.0f, 50.0f);
+    for (i = 0; i < 4; i++) {
+        float x = 4.0f * (float)i;
+        add_room(s, x, 0.0f, 0.0f, x + 3.8f, 3.0f, 2.5f, grey);
+        add_hrect(s, x + 1.4f, 1.2f, x + 2.4f, 1.8f, 2.4f, 0, light);
+        add_block(s, x + 1.2f, 1.0f, 0.0f, x + 2.6f, 2.0f, 0.75f, grey);
+    }
+    d = scene_desc(s);
+    d.point_rest = point_rest;
+    d.min_area = 0.15f;   /* coarse leaves: fast under the sanitizers */
+    CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_OK);
+    return sol;
+}
+
+/* The solution keeps no leaf lists (radinterp_info.leaf_list_bytes 0), and
+   the mesh build holds the lists of one batch of leaves at a time: this file
+   bounds a batch at RADINTERP__LEAF_BATCH_BYTES (16 KB), a batch passes it
+   only when one leaf's list alone does, and the lists of all the leaves
+   take many times that. A build that kept the lists of every leaf, or let
+   a batch grow past its bound, fails. */
+static void test_leaf_lists_bounded(void)
+{
+    scene s;
+    radinterp_solution *sol = rooms_scene(&s, 0.0f);
+    radinterp_mesh_desc md = mesh_desc();
+    radinterp_mesh *m = NULL;
+    radinterp_mesh_info mi;
+    radinterp_info info;
+    size_t all = 0, largest = 0, bound;
+    uint32_t i;
+    if (!sol) return;
+    radinterp_solution_info(sol, &info);
+    CHECK(info.leaf_list_bytes == 0 && info.leaf_list_entries == 0 && info.leaf_blocker_entries == 0);
+    for (i = 0; i < sol->leaf_count; i++) {
+        size_t b = radinterp__leaf_bytes(sol, sol->leaves[i]);
+        all += b;
+        largest = b > largest ? b : largest;
+    }
+    /* a batch's arrays take one more item each than its leaves' lists */
+    bound = (largest > RADINTERP__LEAF_BATCH_BYTES ? largest : RADINTERP__LEAF_BATCH_BYTES) +
+            2 * sizeof(uint32_t) + sizeof(uint64_t) + sizeof(radinterp__leaf_link) + sizeof(uint32_t);
+    CHECK_MSG(all > 8 * bound, "the lists of all %u leaves take %zu bytes, a batch at most %zu", sol->leaf_count, all, bound);
+    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &m), RADINTERP_OK);
+    if (m) {
+        radinterp_mesh_get_info(m, &mi);
+        CHECK_MSG(mi.leaf_list_bytes > 0 && mi.leaf_list_bytes <= bound, "largest batch %zu bytes, bound %zu",
+                  mi.leaf_list_bytes, bound);
+        test_note("four rooms: %u leaves, their lists %zu bytes in all; the mesh's largest batch %zu bytes",
+                  sol->leaf_count, all, mi.leaf_list_bytes);
+    }
+    radinterp_mesh_destroy(m);
+    radinterp_solution_destroy(sol);
+}
+
+/* A point's irradiance does not depend on where its leaf's list came from:
+   filtered link by link as the query reaches each (radinterp_irradiance_at_
+   point) or read from the lists of a batch of leaves (the mesh build's),
+   bit for bit. Both agree with the sum over the links' own blockers (no
+   leaf lists: leaf_margin 0), which backprojects the same shadows and more,
+   to rounding: 1e-12, as test_radinterp_visibility's leaf list test finds
+   in the office. Every source is exact (point_rest FLT_MIN): with the
+   default, a source left to its link's visible fraction counts whole where
+   the leaf's entry holds no blocker, by design. Points: random ones, and
+   corners of random leaves nudged toward the leaf's centre, where the mesh
+   samples. The meshes built with and without lists must agree to 1e-6 of
+   the largest coefficient: their samples agree to rounding, and the fitted
+   coefficients are floats (a few float roundings of 6e-8 each). */
+static void test_leaf_lists_known_answers(void)
+{
+    scene s;
+    radinterp_solution *sol = rooms_scene(&s, FLT_MIN);
+    radinterp__leaf_lists all;
+    radinterp_mesh_desc md = mesh_desc();
+    radinterp_mesh *with = NULL, *without = NULL;
+    uint32_t *sorted, i, differ = 0, hidden = 0, kept = 0;
+    double worst = 0.0, margin;
+    if (!sol) return;
+    sorted = (uint32_t *)malloc(sol->leaf_count * sizeof(uint32_t));
+    if (!CHECK(sorted != NULL)) { radinterp_solution_destroy(sol); return; }
+    memcpy(sorted, sol->leaves, sol->leaf_count * sizeof(uint32_t));
+    qsort(sorted, sol->leaf_count, sizeof(uint32_t), radinterp__cmp_u32);
+    CHECK_EQ_INT(radinterp__leaf_lists_build(sol, &sol->allocator, NULL, NULL, sorted, sol->leaf_count, &all), RADINTERP_OK);
+    for (i = 0; i < (all.count ? all.first[all.count] : 0); i++) {   /* both kinds of entry are exercised */
+        hidden += all.link[i].count == RADINTERP__LEAF_HIDDEN;
+        kept += all.link[i].count != RADINTERP__LEAF_HIDDEN && all.link[i].count > 0;
+    }
+    CHECK_MSG(hidden > 0 && kept > 0, "%u hidden entries, %u with blockers", hidden, kept);
+    margin = sol->leaf_margin;
+    for (i = 0; i < 400 && all.count; i++) {
+        const radinterp__node *leaf = &sol->nodes[sol->leaves[(uint32_t)(rnd() * sol->leaf_count) % sol->leaf_count]];
+        float p[3], centre[3] = {0.0f, 0.0f, 0.0f};
+        const float *toward = NULL;
+        double h_query[3], h_batch[3], h_links[3];
+        uint32_t c = (uint32_t)(rnd() * leaf->count) % leaf->count, j;
+        int k;
+        for (k = 0; k < 3; k++) {
+            for (j = 0; j < leaf->count; j++) centre[k] += leaf->v[j][k] / (float)leaf->count;
+            p[k] = i % 2 ? leaf->v[c][k] : centre[k];
+        }
+        if (i % 2) {   /* a corner, seen from inside its leaf */
+            toward = centre;
+        } else {       /* a random point of the leaf's first triangle */
+            double u = rnd(), v = rnd() * (1.0 - u);
+            for (k = 0; k < 3; k++)
+                p[k] = (float)(leaf->v[0][k] + u * (leaf->v[1][k] - leaf->v[0][k]) + v * (leaf->v[2][k] - leaf->v[0][k]));
+        }
+        CHECK_EQ_INT(radinterp__irradiance(sol, leaf->patch, p, toward, h_query, NULL), RADINTERP_OK);
+        CHECK_EQ_INT(radinterp__irradiance_listed(sol, &all, leaf->patch, p, toward, h_batch, NULL), RADINTERP_OK);
+        differ += memcmp(h_query, h_batch, sizeof h_query) != 0;
+        sol->leaf_margin = 0.0;
+        CHECK_EQ_INT(radinterp__irradiance(sol, leaf->patch, p, toward, h_links, NULL), RADINTERP_OK);
+        sol->leaf_margin = margin;
+        for (k = 0; k < 3; k++) {
+            double rel = fabs(h_query[k] - h_links[k]) / (h_links[k] > 1e-3 ? h_links[k] : 1e-3);
+            worst = rel > worst ? rel : worst;
+        }
+    }
+    CHECK_EQ_INT(differ, 0);
+    CHECK_MSG(worst <= 1e-12, "leaf lists against the links' own blockers: %.3g", worst);
+    radinterp__leaf_lists_free(&sol->allocator, &all);
+    free(sorted);
+    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &with), RADINTERP_OK);
+    sol->leaf_margin = 0.0;
+    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &without), RADINTERP_OK);
+    sol->leaf_margin = margin;
+    if (with && without) {
+        radinterp_mesh_data a, b;
+        double top = 0.0, diff = 0.0;
+        size_t e;
+        radinterp_mesh_get_data(with, &a);
+        radinterp_mesh_get_data(without, &b);
+        CHECK_EQ_INT(a.triangle_count, b.triangle_count);
+        for (e = 0; a.triangle_count == b.triangle_count && e < 18 * (size_t)a.triangle_count; e++) {
+            double x = a.irradiance_coefficients[e], y = b.irradiance_coefficients[e];
+            top = fabs(y) > top ? fabs(y) : top;
+            diff = fabs(x - y) > diff ? fabs(x - y) : diff;
+        }
+        CHECK_MSG(diff <= 1e-6 * top, "meshes with and without leaf lists differ by %.3g (largest coefficient %.3g)", diff, top);
+        test_note("four rooms: %u hidden entries, %u with blockers; points %.2e from the links' own blockers; meshes "
+                  "%.2e of the largest coefficient", hidden, kept, worst, top > 0.0 ? diff / top : 0.0);
+    }
+    radinterp_mesh_destroy(with);
+    radinterp_mesh_destroy(without);
+    radinterp_solution_destroy(sol);
+}
+
 static void test_determinism(void)
 {
     scene s;
@@ -1569,5 +1728,7 @@ int main(int argc, char **argv)
     RUN(test_degenerate_patches);
     RUN(test_no_discontinuities_and_eval_arguments);
     RUN(test_determinism);
+    RUN(test_leaf_lists_bounded);
+    RUN(test_leaf_lists_known_answers);
     return test_finish();
 }
