@@ -8841,6 +8841,7 @@ typedef struct radinterp__leaf_lists {
     radinterp__leaf_link *link;
     uint32_t *blockers;
     size_t bytes;            /* all of the above */
+    uint32_t job_first;      /* radinterp__leaf_lists_job's index 0 (a batch of its jobs) */
 } radinterp__leaf_lists;
 
 /* The box of a node grown by margin. */
@@ -9028,7 +9029,7 @@ static void radinterp__leaf_lists_job(void *ctx_, uint32_t index)
 {
     radinterp__leaf_lists *ll = (radinterp__leaf_lists *)ctx_;
     const radinterp_solution *s = ll->s;
-    uint32_t i = index * RADINTERP__LEAF_JOB, end = i + RADINTERP__LEAF_JOB;
+    uint32_t i = (ll->job_first + index) * RADINTERP__LEAF_JOB, end = i + RADINTERP__LEAF_JOB;
     if (end > ll->count) end = ll->count;
     for (; i < end; i++) {
         uint32_t leaf = ll->leaf[i], node, e = ll->first[i], l;
@@ -9058,13 +9059,11 @@ static void radinterp__leaf_lists_free(const radinterp_allocator *a, radinterp__
     memset(ll, 0, sizeof *ll);
 }
 
-/* The lists of the n leaves (distinct, ascending node indices; copied)
-   into ll: sizes counted serially, lists filled RADINTERP__LEAF_JOB leaves
-   a job. */
-static radinterp_result radinterp__leaf_lists_build(const radinterp_solution *s, const radinterp_allocator *a,
-                                                    void (*parallel_for)(void *, radinterp_job_fn, void *, uint32_t),
-                                                    void *parallel_user, const uint32_t *leaves, uint32_t n,
-                                                    radinterp__leaf_lists *ll)
+/* Room for the lists of the n leaves (distinct, ascending node indices;
+   copied) in ll, sized serially; radinterp__leaf_lists_job fills them,
+   RADINTERP__LEAF_JOB leaves a job (radinterp__leaf_lists_jobs of them). */
+static radinterp_result radinterp__leaf_lists_make(const radinterp_solution *s, const radinterp_allocator *a,
+                                                   const uint32_t *leaves, uint32_t n, radinterp__leaf_lists *ll)
 {
     uint32_t i;
     memset(ll, 0, sizeof *ll);
@@ -9091,9 +9090,12 @@ static radinterp_result radinterp__leaf_lists_build(const radinterp_solution *s,
     if (!ll->link || !ll->blockers) { radinterp__leaf_lists_free(a, ll); return RADINTERP_ERROR_OUT_OF_MEMORY; }
     ll->bytes = ((size_t)n + 1) * (2 * sizeof(uint32_t) + sizeof(uint64_t)) +
                 ((size_t)ll->first[n] + 1) * sizeof *ll->link + ((size_t)ll->room[n] + 1) * sizeof(uint32_t);
-    radinterp__run_jobs(parallel_for, parallel_user, radinterp__leaf_lists_job, ll,
-                        (n + RADINTERP__LEAF_JOB - 1) / RADINTERP__LEAF_JOB);
     return RADINTERP_OK;
+}
+
+static uint32_t radinterp__leaf_lists_jobs(const radinterp__leaf_lists *ll)
+{
+    return (ll->count + RADINTERP__LEAF_JOB - 1) / RADINTERP__LEAF_JOB;
 }
 
 /* Where leaf's list is in ll, or NONE. */
@@ -12165,6 +12167,26 @@ static uint32_t radinterp__batch_leaves(const radinterp_solution *s, const radin
     return at;
 }
 
+/* Fills ll's lists (radinterp__leaf_lists_job) in batches of jobs the
+   pacer sizes, with a progress call after each (done of total, the
+   samples' count); CANCELLED when progress asks. */
+static radinterp_result radinterp__fill_leaf_lists(radinterp__builder *b, radinterp__leaf_lists *ll, uint64_t done,
+                                                   uint64_t total)
+{
+    uint32_t jobs = radinterp__leaf_lists_jobs(ll), at = 0;
+    radinterp__pacer pacer;
+    radinterp__pacer_init(&pacer, b->desc->progress_interval, jobs);
+    while (at < jobs) {
+        uint32_t k = radinterp__pacer_next(&pacer, jobs - at);
+        ll->job_first = at;
+        radinterp__run_jobs(b->desc->parallel_for, b->desc->parallel_user, radinterp__leaf_lists_job, ll, k);
+        radinterp__pacer_adapt(&pacer);
+        at += k;
+        if (b->desc->progress && b->desc->progress(b->desc->progress_user, done, total)) return RADINTERP_ERROR_CANCELLED;
+    }
+    return RADINTERP_OK;
+}
+
 /* Samples ctx's n points (radinterp__point_job) batch by batch of the
    leaves they read (radinterp__batch_leaves): each batch's leaf lists are
    built before its points and freed after them, so the lists held at once
@@ -12183,8 +12205,10 @@ static radinterp_result radinterp__sample_listed(radinterp__builder *b, radinter
     while (res == RADINTERP_OK && at < n) {
         radinterp__leaf_lists lists;
         uint32_t end = radinterp__batch_leaves(s, pts, at, n, mark, batch++, leaves, &count);
-        res = radinterp__leaf_lists_build(s, &b->a, b->desc->parallel_for, b->desc->parallel_user, leaves, count, &lists);
+        res = radinterp__leaf_lists_make(s, &b->a, leaves, count, &lists);
         if (res != RADINTERP_OK) break;
+        res = radinterp__fill_leaf_lists(b, &lists, *done, total);
+        if (res != RADINTERP_OK) { radinterp__leaf_lists_free(&b->a, &lists); break; }
         if (lists.bytes > b->leaf_list_bytes) b->leaf_list_bytes = lists.bytes;
         ctx->pts = pts + at;
         ctx->value = value + 3 * (size_t)at;

@@ -1261,69 +1261,6 @@ static void count_free(void *p, void *user)
     free(p);
 }
 
-/* The leaf lists share a list between neighbouring leaves where the
-   blockers are equal (radinterp__build_leaf_lists with share). Against the
-   lists built again without sharing, on the office: every entry must read the
-   same link and the same blockers in the same order, point queries must be
-   bit-identical (300 random points of random faces), and the shared pool
-   must be smaller (the office's is a quarter). */
-#define SHARED_POINTS 300
-static void query_points(const radinterp_solution *sol, const uint32_t *face, const float (*p)[3], float (*h)[3])
-{
-    uint32_t i;
-    for (i = 0; i < SHARED_POINTS; i++)
-        if (radinterp_irradiance_at_point(sol, face[i], p[i], NULL, h[i]) != RADINTERP_OK) h[i][0] = -1.0f;
-}
-
-static void test_leaf_lists_shared(void)
-{
-    radinterp_desc d;
-    radinterp_solution *sol;
-    radinterp__run run;
-    radinterp__leaf_link *shared_links;
-    uint32_t *shared_first, *shared_blockers, i, differ = 0, face[SHARED_POINTS];
-    uint64_t shared_count, e;
-    float p[SHARED_POINTS][3], h_shared[SHARED_POINTS][3], h_unshared[SHARED_POINTS][3];
-    if (!load_office()) return;
-    d = office_desc();
-    if (!CHECK(radinterp_solve(&d, &sol) == RADINTERP_OK)) return;
-    for (i = 0; i < SHARED_POINTS; i++) { /* a random point of a random face's first triangle */
-        uint32_t f = (uint32_t)(rnd() * office.face_count) % office.face_count, a = office.face_start[f], k;
-        float u = (float)rnd(), v = (float)rnd() * (1.0f - u);
-        const float *x0 = office.positions + 3 * (size_t)office.face_vertices[a],
-                    *x1 = office.positions + 3 * (size_t)office.face_vertices[a + 1],
-                    *x2 = office.positions + 3 * (size_t)office.face_vertices[a + 2];
-        face[i] = f;
-        for (k = 0; k < 3; k++) p[i][k] = x0[k] + u * (x1[k] - x0[k]) + v * (x2[k] - x0[k]);
-    }
-    query_points(sol, face, (const float (*)[3])p, h_shared);
-    shared_links = sol->leaf_links;
-    shared_first = sol->leaf_link_first;
-    shared_blockers = sol->leaf_blockers;
-    shared_count = sol->leaf_blocker_count;
-    run.desc = &d;
-    run.iteration = 0;
-    if (CHECK(radinterp__build_leaf_lists(sol, &run, 0) == RADINTERP_OK)) {
-        test_note("office leaf blockers: %llu shared, %llu unshared", (unsigned long long)shared_count,
-                  (unsigned long long)sol->leaf_blocker_count);
-        CHECK(shared_count * 2 < sol->leaf_blocker_count);
-        for (e = 0; e < sol->leaf_link_count; e++) {
-            const radinterp__leaf_link *a = &shared_links[e], *b = &sol->leaf_links[e];
-            uint32_t n = radinterp__leaf_kept(b);
-            if (a->link != b->link || a->count != b->count || a->first + n > shared_count ||
-                (n && memcmp(shared_blockers + a->first, sol->leaf_blockers + b->first, n * sizeof(uint32_t))))
-                differ++;
-        }
-        CHECK_EQ_INT(differ, 0);
-        query_points(sol, face, (const float (*)[3])p, h_unshared);
-        CHECK(memcmp(h_shared, h_unshared, sizeof h_shared) == 0);
-    }
-    radinterp__free(&sol->allocator, shared_links);
-    radinterp__free(&sol->allocator, shared_first);
-    radinterp__free(&sol->allocator, shared_blockers);
-    radinterp_solution_destroy(sol);
-}
-
 static int cancel_at;
 static int progress_cb(void *user, uint64_t done, uint64_t total)
 {
@@ -1490,7 +1427,6 @@ int main(int argc, char **argv)
     RUN(test_leaves_tile_patches_and_budget);
     RUN(test_outline_points_continuous);
     RUN(test_deterministic_any_thread_count);
-    RUN(test_leaf_lists_shared);
     RUN(test_cancel_and_allocation_failures);
     RUN(test_trace_callback);
     RUN(test_queries);

@@ -1613,7 +1613,8 @@ static void test_leaf_lists_known_answers(void)
     if (!CHECK(sorted != NULL)) { radinterp_solution_destroy(sol); return; }
     memcpy(sorted, sol->leaves, sol->leaf_count * sizeof(uint32_t));
     qsort(sorted, sol->leaf_count, sizeof(uint32_t), radinterp__cmp_u32);
-    CHECK_EQ_INT(radinterp__leaf_lists_build(sol, &sol->allocator, NULL, NULL, sorted, sol->leaf_count, &all), RADINTERP_OK);
+    CHECK_EQ_INT(radinterp__leaf_lists_make(sol, &sol->allocator, sorted, sol->leaf_count, &all), RADINTERP_OK);
+    radinterp__run_jobs(NULL, NULL, radinterp__leaf_lists_job, &all, radinterp__leaf_lists_jobs(&all));
     for (i = 0; i < (all.count ? all.first[all.count] : 0); i++) {   /* both kinds of entry are exercised */
         hidden += all.link[i].count == RADINTERP__LEAF_HIDDEN;
         kept += all.link[i].count != RADINTERP__LEAF_HIDDEN && all.link[i].count > 0;

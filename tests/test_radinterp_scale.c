@@ -470,10 +470,10 @@ static void test_cancel_everywhere(void)
 
 /* ---- progress paced by work ------------------------------------------------ */
 /* The jobs of the solve's loops that the pacer sizes, with a progress call
-   after each batch: link form factors, cluster links, leaf lists. */
+   after each batch: link form factors, cluster links. */
 static int paced_solve_job(radinterp_job_fn job)
 {
-    return job == radinterp__ff_job || job == radinterp__clink_job || job == radinterp__leaf_lists_job;
+    return job == radinterp__ff_job || job == radinterp__clink_job;
 }
 typedef struct cost_model { double job_cost; int paced_only; } cost_model;
 
@@ -485,7 +485,8 @@ static void costly_for(void *user, radinterp_job_fn job, void *ctx, uint32_t cou
 {
     const cost_model *c = (const cost_model *)user;
     uint32_t i;
-    int paced = paced_solve_job(job) || job == radinterp__point_job || job == radinterp__error_job;
+    int paced = paced_solve_job(job) || job == radinterp__leaf_lists_job || job == radinterp__point_job ||
+                job == radinterp__error_job;
     for (i = 0; i < count; i++) job(ctx, i);
     if (paced || !c->paced_only) work_seconds += c->job_cost * count;
 }

@@ -6,11 +6,7 @@
    Cornell box, on the backprojection scenes of test_radinterp.c (one and two
    blockers, crossing blockers, a blocker touching the source plane), and on
    many overlapping blockers, which also make the union outgrow its arrays
-   so that the default falls back to the triangulation.
-   The leaf lists are built here in batches of at most 4,096 candidate
-   blockers (millions in the library), so the office's lists take many
-   batches and test_leaf_lists checks the packing across them. */
-#define RADINTERP__LEAF_BATCH 4096u
+   so that the default falls back to the triangulation. */
 #define RADINTERP_IMPLEMENTATION
 #include "../radinterp.h"
 #include "examples/common/obj.h"
@@ -253,11 +249,11 @@ static void test_cornell_random_points(void)
 static void check_leaf_lists(const char *path, const char *name, uint32_t n, double rel_tol)
 {
     obj_scene o;
-    uint32_t *patches = NULL, i, *saved, worst_patch = 0;
+    uint32_t *patches = NULL, i, worst_patch = 0;
     radinterp_material *mats = NULL;
     radinterp_desc d;
     radinterp_solution *s = NULL;
-    double worst = 0.0;
+    double worst = 0.0, saved;
     memset(&o, 0, sizeof o);
     if (!load_scene(path, &o, &patches, &mats, &d)) goto done;
     /* every source exact: with the default point_rest, sources left to their
@@ -266,11 +262,22 @@ static void check_leaf_lists(const char *path, const char *name, uint32_t n, dou
     d.point_rest = FLT_MIN;
     if (!CHECK(radinterp_solve(&d, &s) == RADINTERP_OK)) goto done;
     { /* the lists are shorter than the links' */
-        uint64_t e, full = 0;
-        for (e = 0; e < s->leaf_link_count; e++) full += s->links[s->leaf_links[e].link].blocker_count;
-        CHECK(s->leaf_blocker_count < full);
-        test_note("%s: leaf lists hold %llu blockers where the links' lists hold %llu", name,
-                  (unsigned long long)s->leaf_blocker_count, (unsigned long long)full);
+        uint64_t kept = 0, full = 0;
+        uint32_t j;
+        for (j = 0; j < s->leaf_count; j++) {
+            uint32_t leaf = s->leaves[j], node, l, blk[4096];
+            float lo[3], hi[3];
+            radinterp__grown_box(&s->nodes[leaf], s->leaf_margin, lo, hi);
+            for (node = leaf; node != RADINTERP__NONE; node = s->nodes[node].parent)
+                for (l = s->nodes[node].first_link; l < s->nodes[node].first_link + s->nodes[node].link_count; l++) {
+                    if (!CHECK(s->links[l].blocker_count <= 4096)) continue;
+                    full += s->links[l].blocker_count;
+                    kept += radinterp__leaf_kept(radinterp__leaf_entry(s, leaf, lo, hi, l, blk));
+                }
+        }
+        CHECK(kept < full);
+        test_note("%s: leaf lists hold %llu blockers where the links' lists hold %llu", name, (unsigned long long)kept,
+                  (unsigned long long)full);
     }
     for (i = 0; i < n; i++) {
         float p[3], t[3];
@@ -295,10 +302,10 @@ static void check_leaf_lists(const char *path, const char *name, uint32_t n, dou
             if ((i / 8) % 3 != 2) toward = t;
         }
         CHECK_EQ_INT(radinterp__irradiance(s, patch, p, toward, h1, NULL), RADINTERP_OK);
-        saved = s->leaf_link_first;
-        s->leaf_link_first = NULL;
+        saved = s->leaf_margin;
+        s->leaf_margin = 0.0;   /* no leaf lists */
         CHECK_EQ_INT(radinterp__irradiance(s, patch, p, toward, h2, NULL), RADINTERP_OK);
-        s->leaf_link_first = saved;
+        s->leaf_margin = saved;
         for (k = 0; k < 3; k++) {
             double rel = fabs(h1[k] - h2[k]) / (h2[k] > 1e-3 ? h2[k] : 1e-3);
             CHECK_MSG(rel <= rel_tol, "%s: patch %u point (%.9g %.9g %.9g): leaf lists %.15g, link lists %.15g", name,
@@ -358,7 +365,7 @@ static void check_point_rest(const char *path, const char *name, uint32_t n)
         CHECK_EQ_INT(radinterp__irradiance(s, patch, p, NULL, h2, NULL), RADINTERP_OK);
         {
             double h3[3];
-            CHECK_EQ_INT(radinterp__irradiance_in(s, patch, p, NULL, h3, NULL, four, 4), RADINTERP_OK);
+            CHECK_EQ_INT(radinterp__irradiance_in(s, patch, p, NULL, h3, NULL, four, 4, NULL), RADINTERP_OK);
             for (k = 0; k < 3; k++) {
                 double e = fabs(h3[k] - h2[k]) / (h2[k] > 1e-3 ? h2[k] : 1e-3);
                 CHECK_MSG(e <= 1e-10, "%s: patch %u: chunks of 4 links %.15g, all exact %.15g", name, patch, h3[k], h2[k]);
