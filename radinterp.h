@@ -693,25 +693,21 @@
    building_1k (1,250 triangles) solves in about 9 s (23,000 leaves, 212,000
    links, 210 MB held, 450 MB peak); building_4k (4,282 triangles) in about
    105 s (65,000 leaves, 684,000 links and 150,000 cluster links, 2.4 GB
-   held, 2.7 GB peak: the per-leaf blocker lists are most of it; they are
-   built in batches of at most RADINTERP__LEAF_BATCH (16M) candidates, so
-   the transient room no longer grows with leaves x links x blockers).
+   held, 2.7 GB peak, when the solution kept the per-leaf blocker lists).
    radinterp_info says where the memory goes (link_bytes, leaf_list_bytes):
    on building_4k with v0.8.2, 2,221 MB held, of which the leaf lists
    2,066 MB (65.4 M entries of 16 bytes, 1,046 MB, and 255 M blockers,
    1,021 MB), the links 75 MB and their blockers 50 MB (12.5 M, 14.5 per
    link that has any), the nodes 22 MB; on building_1k 273 MB, the leaf
-   lists 233 MB. Neighbouring leaves mostly keep the same blockers of a
-   link, so the entries now share equal lists (radinterp__build_leaf_lists,
-   the same lists in the same order): building_4k holds 1,818 MB (154 M
-   leaf blockers), building_1k 212 MB (28.8 M -> 13.6 M), the office 28 MB
-   instead of 34 MB, for 0.6-1% of the solve's time. The lists are shared
-   as the build packs each batch, so no second pool is held: building_4k's
-   peak after the solve is 2,210 MB (2,240 MB unshared), building_1k's
-   322 MB (a pass sharing them after the build held both pools: 2,765 MB
-   and 380 MB). Counting the sources' variation in the receiver's budget
-   (METHOD) took building_1k to 223 MB and a peak of 364 MB, the office to
-   31 MB (bench_radinterp_building 1k 1t, building_4k not measured). The
+   lists 233 MB (1,818 MB and 172 MB once equal lists were shared). The
+   solution no longer keeps them (leaf_list_bytes is 0): a point query
+   filters each link's blockers for its own leaf as it reaches the link,
+   and the mesh build builds the lists of the leaves a run of its samples
+   reads, at most RADINTERP__LEAF_BATCH_BYTES (16 MB) a batch, and frees
+   them after those samples (radinterp_mesh_info.leaf_list_bytes: the
+   largest batch). Results are bit-identical to the kept lists'. building_
+   1k's solution went from 218 MB to 42 MB, the office's from 30 MB to
+   8 MB (see README for the times and peaks). The
    mesh build does not finish in reasonable time at that scale: a point
    query in a building sums hundreds of partly hidden sources (about 620 a
    point on building_4k, 155 queries per second), and the mesh samples six
@@ -751,7 +747,7 @@
    before v0.7.0) at about 2,000 per second of one core (185 s; v0.7.0:
    about 1,200, before a source's parts shared one union of shadows):
    minutes on two threads, too slow still for a level loaded at run time.
-   The solve's leaf lists mark the links a whole leaf cannot see: one
+   The leaf lists mark the links a whole leaf cannot see: one
    opaque blocker turned toward the leaf meets every segment from the
    leaf's box (grown by the lists' margin) to the source, as the near face
    of a wall does between a leaf and a lamp of the next room. Point queries
@@ -983,9 +979,10 @@ typedef struct radinterp_info {
     size_t bytes;                /* memory held by the solution */
     uint32_t glass_patches;      /* patches that pass light (GLASS AND SKY) */
     size_t link_bytes;           /* of bytes: the links and their blocker lists */
-    size_t leaf_list_bytes;      /* of bytes: the leaf lists (each leaf's links and blockers), most of it on a building */
-    uint64_t leaf_list_entries;  /* (leaf, link) entries of the leaf lists */
-    uint64_t leaf_blocker_entries; /* blockers the leaf lists hold (each list once, shared by the leaves that keep it) */
+    size_t leaf_list_bytes;      /* of bytes: the leaf lists the solution keeps: 0 since they are built where used
+                                    (a point query's per link, the mesh build's per batch: radinterp_mesh_info) */
+    uint64_t leaf_list_entries;  /* (leaf, link) entries of the leaf lists kept: 0 */
+    uint64_t leaf_blocker_entries; /* blockers the leaf lists kept hold: 0 */
 } radinterp_info;
 
 /* One quadtree leaf: a convex polygon of 3 or 4 corners on its patch. */
@@ -3720,13 +3717,11 @@ RADINTERP_API double radinterp_form_factor_point_polygon(const float p[3], const
      leaf and of every ancestor.
    - blockers: a link's potential occluders (patch indices) from shaft
      culling, blockers[link.first_blocker .. + link.blocker_count).
-   - leaf lists: for each leaf, the links delivering to it (its own and its
-     ancestors', in that order), each with the blockers of the link that may
-     block between the leaf and the source: leaf_links[leaf_link_first[leaf]
-     .. leaf_link_first[leaf + 1]) (empty for other nodes), their blockers in
-     leaf_blockers. A point query reads these shorter lists (section 14).
-     Entries of one link at neighbouring leaves whose blockers are equal
-     share one list in leaf_blockers (radinterp__build_leaf_lists).
+   - leaf lists are not kept: a leaf's list (the links delivering to it,
+     its own and its ancestors', in that order, each with the blockers of
+     the link that may block between the leaf and the source) is built
+     where it is used (section 14): by a point query link by link, by the
+     mesh build for a batch of leaves. leaf_margin says where they hold.
    - node.b is the radiosity of the node's open part and node.open the
      fraction of the node not enclosed by geometry resting on it.
    Helpers the mesher reuses: radinterp__node_split(s, node) (children with
@@ -8810,8 +8805,9 @@ static radinterp_result radinterp__collect_leaves(radinterp_solution *s)
    query filters a link's blockers for its own leaf when it reaches the
    link (radinterp__leaf_entry); the mesh build, which queries each leaf
    about ten times, builds the lists of the leaves a run of its sample
-   points lies in (radinterp__leaf_lists_build, at most
-   RADINTERP__LEAF_BATCH_BYTES a batch) and frees them after those points.
+   points lies in (radinterp__leaf_lists_make, radinterp__sample_listed:
+   at most RADINTERP__LEAF_BATCH_BYTES a batch) and frees them after those
+   points.
    Both give each entry the same blockers in the same order, so a point's
    irradiance does not depend on which one it came from. */
 #define RADINTERP__LEAF_HIDDEN 0xFFFFFFFFu   /* leaf_link.count of an entry whose source the leaf cannot see */
