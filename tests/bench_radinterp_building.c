@@ -53,7 +53,8 @@ typedef struct run_result {
     uint32_t triangles, patches, leaves, links, cluster_links, mesh_triangles, mesh_leaves;
     double solve_s, mesh_s;        /* thread CPU (1 thread) or wall (2 threads) */
     double peak_mb, solution_mb, mesh_mb;
-    double link_mb, leaf_list_mb;  /* of solution_mb: links with their blockers; leaf lists */
+    double link_mb, leaf_list_mb;  /* of solution_mb: links with their blockers; leaf lists (0: the solution keeps none) */
+    double batch_mb;               /* the mesh build's largest batch of leaf lists */
     uint64_t leaf_entries, leaf_blockers;
     double max_gap_s;              /* longest wall time between progress calls */
 } run_result;
@@ -161,6 +162,7 @@ static void run_scene(const char *path, int threads, run_result *r, int fd)
     r->mesh_triangles = mi.triangle_count;
     r->mesh_leaves = mi.leaf_count;
     r->mesh_mb = mi.bytes / 1e6;
+    r->batch_mb = mi.leaf_list_bytes / 1e6;
     r->max_gap_s = clock.max_gap;
     getrusage(RUSAGE_SELF, &ru);
     r->peak_mb = ru.ru_maxrss / 1024.0;
@@ -210,9 +212,11 @@ static run_result run_child(const char *path, int threads, unsigned limit)
    patches, clusters and the ray-tracing structure. */
 static void print_memory(const run_result *r)
 {
-    printf("          solution %.0f MB: links and their blockers %.0f MB, leaf lists %.0f MB (%llu entries, %llu blockers)\n",
+    printf("          solution %.0f MB: links and their blockers %.0f MB, leaf lists %.0f MB (%llu entries, %llu blockers)",
            r->solution_mb, r->link_mb, r->leaf_list_mb, (unsigned long long)r->leaf_entries,
            (unsigned long long)r->leaf_blockers);
+    if (r->ok == 1) printf("; the mesh's largest batch of leaf lists %.1f MB", r->batch_mb);
+    printf("\n");
 }
 
 static void print_run(const char *name, int threads, const run_result *r, const run_result *prev)
