@@ -1155,6 +1155,65 @@ static void test_changed_colours_are_resampled_first(void)
     CHECK(told < blind);
 }
 
+/* A change ages the points around the samples that find it, but not the
+   samples of the same frame: they show the new light already. A shadow
+   falls over the whole converged view and one frame of an 8% budget
+   samples it; every sample finds the change (0.7 of the colour), and
+   the samples lie about 3.5 pixels apart, inside each other's ageing
+   windows. In the next frame a sampled pixel is a point of age 1 and
+   scale 1: priority POINT_MAX / age_ramp = 0.5 / 32 exactly (quotients
+   of powers of two, so ==); every other point within
+   RENDERCACHE_CHANGE_RADIUS of a sample is aged past the top of the age
+   ramp (> 0.5), and the points farther away stay young (< 0.5). Ageing a frame's own samples too had them
+   requested again at once, before every hole of a moving camera. */
+static void test_change_spares_the_samples_of_its_frame(void)
+{
+    enum { W = 64, H = 64 };
+    const uint32_t n = W * H, budget = (uint32_t)(0.08 * n);
+    rendercache_camera cam = make_camera(0.3f, 0.2f, 0.0f, 0.3f, 0.2f, 10.0f, W, H);
+    rendercache_desc d = make_desc(W, H);
+    static unsigned char sampled[W * H];
+    rendercache *rc;
+    scene s;
+    uint32_t i, p, got, fresh_aged = 0, others = 0, others_aged = 0, far_aged = 0;
+    rendercache_stats st;
+    const float *prio;
+    memset(&s, 0, sizeof s);
+    s.shift[0] = 100.0f;   /* the square out of the view: the wall alone, which the shadow darkens everywhere */
+    memset(sampled, 0, sizeof sampled);
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+    converge(rc, &s, &cam);
+    run_frame(rc, &s, &cam, budget);   /* resamples that find no change: the noise level (0) for the next */
+    s.shadow[0] = 0.0f; s.shadow[1] = 0.0f; s.shadow[2] = 100.0f;   /* the whole wall */
+    got = run_frame(rc, &s, &cam, budget);
+    rendercache_get_stats(rc, &st);
+    CHECK_EQ_INT(got, budget);
+    CHECK_EQ_INT(st.changed, got);   /* every sample found the change */
+    for (i = 0; i < got; i++) sampled[g_samples[i].y * W + g_samples[i].x] = 1;
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
+    prio = rendercache_priority_image(rc);
+    for (p = 0; p < n; p++) {
+        int x = (int)(p % W), y = (int)(p / W), near = 0, qx, qy;
+        for (qy = y - RENDERCACHE_CHANGE_RADIUS; qy <= y + RENDERCACHE_CHANGE_RADIUS; qy++)
+            for (qx = x - RENDERCACHE_CHANGE_RADIUS; qx <= x + RENDERCACHE_CHANGE_RADIUS; qx++)
+                near |= qx >= 0 && qy >= 0 && qx < W && qy < H && sampled[qy * W + qx];
+        if (sampled[p]) {
+            fresh_aged += prio[p] != 0.5f / 32.0f;
+        } else if (near) {   /* in a changed sample's window */
+            others++;
+            others_aged += prio[p] > 0.5f;
+        } else {
+            far_aged += prio[p] > 0.5f;   /* young (age 2 or 3) */
+        }
+    }
+    test_note("a shadow over the whole view, one frame at 8%%: %u of %u samples aged, %u of the %u points around them",
+              fresh_aged, got, others_aged, others);
+    CHECK_EQ_INT(fresh_aged, 0);
+    CHECK_EQ_INT(others_aged, others);
+    CHECK_EQ_INT(far_aged, 0);
+    rendercache_destroy(rc);
+}
+
 /* An engine that knows an object's light changed says so: its points are
    requested before every other one, from the current frame on. */
 static void test_invalidate_ranks_an_object_first(void)
@@ -1814,6 +1873,7 @@ int main(int argc, char **argv)
     RUN(test_slow_turn_keeps_pixels_covered_by_points);
     RUN(test_late_samples_land_where_they_were_seen);
     RUN(test_changed_colours_are_resampled_first);
+    RUN(test_change_spares_the_samples_of_its_frame);
     RUN(test_invalidate_ranks_an_object_first);
     RUN(test_priority_scale);
     RUN(test_view_lobe_ages_highlights);
