@@ -228,8 +228,10 @@
        desc.change_threshold (and by more than three standard deviations of
        the last frame's resample differences: a noisy renderer does not
        trigger it) ages the points shown within RENDERCACHE_CHANGE_RADIUS
-       pixels to the top of the age ramp (WDG02): a new shadow is found by
-       the samples that land in it and filled in by the next requests.
+       pixels to the top of the age ramp (WDG02), but for the points shaded
+       in the same frame, which show the change already: a new shadow is
+       found by the samples that land in it and filled in by the next
+       requests.
 
    HOW A WARP WORKS (NDR96 section 4.4, after Radiance's pinterp)
 
@@ -511,9 +513,10 @@ typedef enum rendercache_result {
 #define RENDERCACHE_ALL_OBJECTS 0xFFFFFFFDu
 
 /* Colour-change detection (rendercache_insert): a sample that changed the
-   colour of its point ages the points shown within this many pixels of it
-   (a window of 7 x 7: at an 8% budget, requests lie about 3.5 pixels apart,
-   so the windows of one frame's changed samples cover a changed region). */
+   colour of its point ages the points shown within this many pixels of it,
+   but for those shaded in the same frame (a window of 7 x 7: at an 8%
+   budget, requests lie about 3.5 pixels apart, so the windows of one
+   frame's changed samples cover a changed region). */
 #define RENDERCACHE_CHANGE_RADIUS 3
 
 typedef struct rendercache rendercache;
@@ -4411,9 +4414,11 @@ static void rendercache__change_level(rendercache *rc)
    Points shaded in this frame are left young: they already show the
    change. Aged, they were requested again in the next frame (at an 8%
    budget a frame's samples lie about 3.5 pixels apart, inside each
-   other's windows): in the building walkthrough a quarter of the samples
-   find a change, and a new point aged so outranks every hole (its 1/W
-   scale is 2-4), so the first rooms' holes got no request at all. */
+   other's windows): in the building walkthrough, where a fifth of the
+   replacements find a change and most points' scale (1/W) is 2-4, so
+   that an aged point outranks every hole, a third of each frame's
+   requests went to the previous frame's samples (43 of 1536 since), and
+   at frames 31 and 55 (the first rooms) none to the holes. */
 static void rendercache__age_around(rendercache *rc, uint32_t p)
 {
     const int r = RENDERCACHE_CHANGE_RADIUS, x = (int)(p % rc->width), y = (int)(p / rc->width);
