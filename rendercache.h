@@ -4431,7 +4431,7 @@ static uint32_t rendercache__change_age(const rendercache *rc, float s)
    Points shaded in this frame are left young: they already show the
    change. Aged, they were requested again in the next frame (at an 8%
    budget a frame's samples lie about 3.5 pixels apart, inside each
-   other's windows): in the building walkthrough, where a fifth of the
+   other's windows): in the building walkthrough, where 14-25 % of the
    replacements find a change and most points' scale (1/W) is 2-4, so
    that an aged point outranks every hole, a third of each frame's
    requests went to the previous frame's samples (43 of 1536 since), and
