@@ -74,9 +74,13 @@ static uint32_t trace(const scene *s, const float o[3], const float d[3], float 
     return object;
 }
 
+/* The priority scale shade gives its samples (0: the default, 1). */
+static float g_priority_scale;
+
 static void shade(const scene *s, const rendercache_pixel_request *r, rendercache_sample *out)
 {
     memset(out, 0, sizeof *out);
+    out->priority_scale = g_priority_scale;
     out->x = r->x;
     out->y = r->y;
     out->flags = r->flags;
@@ -1155,6 +1159,79 @@ static void test_changed_colours_are_resampled_first(void)
     CHECK(told < blind);
 }
 
+/* A change ages the points around the samples that find it, but not the
+   samples of the same frame: they show the new light already. A shadow
+   falls over the whole converged view and one frame of an 8% budget
+   samples it; every sample finds the change (0.7 of the colour), and
+   the samples lie about 3.5 pixels apart, inside each other's ageing
+   windows. In the next frame a sampled pixel is a point of age 1:
+   priority POINT_MAX scale / age_ramp = 0.5 scale / 32; every other
+   point within RENDERCACHE_CHANGE_RADIUS of a sample has the age the
+   change gave it plus 1, where the change's age is the top of the age
+   ramp (32) for scale 1 and 32 / scale for a larger one, so that it ranks
+   with the least urgent holes (0.5) rather than above them all: 0.5
+   scale (age + 1) / 32; the points farther away stay young (< 0.5). The
+   priorities are products of powers of two and small integers, exact in
+   floats, so ==. Ageing a frame's own samples too had them requested
+   again at once, and ageing points of scale 4 to 32 put them above every
+   hole (0.99), before the holes of a moving camera. Returns the number
+   of pixels off their expected priority. */
+static uint32_t change_ageing(float scale, uint32_t change_age)
+{
+    enum { W = 64, H = 64 };
+    const uint32_t n = W * H, budget = (uint32_t)(0.08 * n);
+    rendercache_camera cam = make_camera(0.3f, 0.2f, 0.0f, 0.3f, 0.2f, 10.0f, W, H);
+    rendercache_desc d = make_desc(W, H);
+    static unsigned char sampled[W * H];
+    const float fresh = 1.0f / 32.0f * (0.5f * scale), aged = (float)(change_age + 1) / 32.0f * (0.5f * scale);
+    rendercache *rc;
+    scene s;
+    uint32_t i, p, got, fresh_off = 0, others = 0, others_off = 0, far_off = 0;
+    rendercache_stats st;
+    const float *prio;
+    memset(&s, 0, sizeof s);
+    s.shift[0] = 100.0f;   /* the square out of the view: the wall alone, which the shadow darkens everywhere */
+    memset(sampled, 0, sizeof sampled);
+    g_priority_scale = scale;
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return n;
+    converge(rc, &s, &cam);
+    run_frame(rc, &s, &cam, budget);   /* resamples that find no change: the noise level (0) for the next */
+    s.shadow[0] = 0.0f; s.shadow[1] = 0.0f; s.shadow[2] = 100.0f;   /* the whole wall */
+    got = run_frame(rc, &s, &cam, budget);
+    rendercache_get_stats(rc, &st);
+    CHECK_EQ_INT(got, budget);
+    CHECK_EQ_INT(st.changed, got);   /* every sample found the change */
+    for (i = 0; i < got; i++) sampled[g_samples[i].y * W + g_samples[i].x] = 1;
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
+    prio = rendercache_priority_image(rc);
+    for (p = 0; p < n; p++) {
+        int x = (int)(p % W), y = (int)(p / W), near = 0, qx, qy;
+        for (qy = y - RENDERCACHE_CHANGE_RADIUS; qy <= y + RENDERCACHE_CHANGE_RADIUS; qy++)
+            for (qx = x - RENDERCACHE_CHANGE_RADIUS; qx <= x + RENDERCACHE_CHANGE_RADIUS; qx++)
+                near |= qx >= 0 && qy >= 0 && qx < W && qy < H && sampled[qy * W + qx];
+        if (sampled[p]) {
+            fresh_off += prio[p] != fresh;
+        } else if (near) {   /* in a changed sample's window */
+            others++;
+            others_off += prio[p] != aged;
+        } else {
+            far_off += prio[p] >= 0.5f;
+        }
+    }
+    test_note("a shadow over the whole view, one frame at 8%%, priority scale %g: %u of %u samples and %u of the %u "
+              "points around them off their priority, %u farther ones", scale, fresh_off, got, others_off, others, far_off);
+    CHECK(others > 0);
+    rendercache_destroy(rc);
+    g_priority_scale = 0.0f;
+    return fresh_off + others_off + far_off;
+}
+
+static void test_change_ages_the_points_around_it(void)
+{
+    CHECK_EQ_INT(change_ageing(1.0f, 32), 0);
+    CHECK_EQ_INT(change_ageing(4.0f, 8), 0);
+}
+
 /* An engine that knows an object's light changed says so: its points are
    requested before every other one, from the current frame on. */
 static void test_invalidate_ranks_an_object_first(void)
@@ -1814,6 +1891,7 @@ int main(int argc, char **argv)
     RUN(test_slow_turn_keeps_pixels_covered_by_points);
     RUN(test_late_samples_land_where_they_were_seen);
     RUN(test_changed_colours_are_resampled_first);
+    RUN(test_change_ages_the_points_around_it);
     RUN(test_invalidate_ranks_an_object_first);
     RUN(test_priority_scale);
     RUN(test_view_lobe_ages_highlights);

@@ -545,15 +545,19 @@ static void test_threads(void)
    were shaded, rendercache's view_lobe, while the pooled LRMS of the odd
    frames went from 0.1749 to 0.1744), so the test pools frames 7, 15 and
    23: 0.1772 before view_lobe (frames 0.130, 0.215, 0.176), 0.1778 with it
-   (0.127, 0.175, 0.219). The bound is that plus 10% for a
-   compiler flipping a light-vector decision (a flip redraws at most the 8%
-   of a frame's pixels requested after it); a frame without its indirect
-   light (63% of the luminance) is at 0.7. The issue's target (0.07) is not
+   (0.127, 0.175, 0.219), 0.1550 once a colour change no longer aged the
+   points shaded in its own frame and aged the others only to where they
+   rank with the holes (0.123, 0.156, 0.181; in the building walkthrough a
+   third of each frame's requests had gone to the previous frame's
+   samples; 0.1708 with the first change alone). The bound is that plus
+   10% for a compiler flipping a light-vector decision (a flip redraws at
+   most the 8% of a frame's pixels requested after it); a frame without
+   its indirect light (63% of the luminance) is at 0.7. The issue's target (0.07) is not
    met: the bound guards against regressions. */
 #define CONVERGED_STRATA 12
 #define CONVERGED_LIGHT_SAMPLES 32
 #define CONVERGED_FRAMES 3
-#define CONVERGED_MAX_LRMS 0.196
+#define CONVERGED_MAX_LRMS 0.171
 static void test_raytrace_against_converged(void)
 {
     static const int frames[CONVERGED_FRAMES] = { 7, 15, 23 };
