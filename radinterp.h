@@ -9827,7 +9827,56 @@ typedef struct radinterp__disc {
     float weight;             /* cached geom * B_src */
     uint32_t weight_stamp;    /* radiosity state of the cached weight; 0 = not computed */
     uint32_t active;
+    uint32_t found;           /* its record in the list the mesh returns (radinterp__disc_list) */
 } radinterp__disc;
+
+/* Every discontinuity found, as the mesh returns them, in blocks of
+   2^RADINTERP__DISC_BLOCK_BITS records. The list grows without moving what
+   it holds (a doubling array holds up to three times its contents while it
+   grows: building_1k finds 2.5M discontinuities), and the mesh takes the
+   blocks over as they are. */
+#define RADINTERP__DISC_BLOCK_BITS 16
+#define RADINTERP__DISC_BLOCK (1u << RADINTERP__DISC_BLOCK_BITS)
+#define RADINTERP__DISC_MAX 0xFFFFFFF0u   /* records a list holds: indices are uint32_t */
+typedef struct radinterp__disc_list {
+    radinterp__buf blocks;    /* radinterp_discontinuity *, each RADINTERP__DISC_BLOCK records */
+    uint32_t count;
+} radinterp__disc_list;
+
+static void radinterp__disc_list_init(radinterp__disc_list *l)
+{
+    radinterp__buf_init(&l->blocks, sizeof(radinterp_discontinuity *));
+    l->count = 0;
+}
+
+static radinterp_discontinuity *radinterp__disc_list_at(const radinterp__disc_list *l, uint32_t i)
+{
+    return ((radinterp_discontinuity **)l->blocks.data)[i >> RADINTERP__DISC_BLOCK_BITS] + (i & (RADINTERP__DISC_BLOCK - 1u));
+}
+
+/* A new zeroed record at the end, or NULL when memory runs out or the list is full. */
+static radinterp_discontinuity *radinterp__disc_list_push(const radinterp_allocator *a, radinterp__disc_list *l)
+{
+    radinterp_discontinuity *d;
+    if (l->count >= RADINTERP__DISC_MAX) return NULL;
+    if ((l->count & (RADINTERP__DISC_BLOCK - 1u)) == 0) {
+        radinterp_discontinuity **slot = (radinterp_discontinuity **)radinterp__buf_push(a, &l->blocks);
+        if (!slot) return NULL;
+        *slot = (radinterp_discontinuity *)radinterp__alloc_array(a, RADINTERP__DISC_BLOCK, sizeof **slot);
+        if (!*slot) { l->blocks.count--; return NULL; }
+    }
+    d = radinterp__disc_list_at(l, l->count++);
+    memset(d, 0, sizeof *d);
+    return d;
+}
+
+static void radinterp__disc_list_free(const radinterp_allocator *a, radinterp__disc_list *l)
+{
+    size_t i;
+    for (i = 0; i < l->blocks.count; i++) radinterp__free(a, ((radinterp_discontinuity **)l->blocks.data)[i]);
+    radinterp__buf_free(a, &l->blocks);
+    l->count = 0;
+}
 
 /* A DSet's line on a receiver (5.5.4): point o, unit direction d. */
 typedef struct radinterp__dset { double o[2], d[2]; uint32_t receiver; } radinterp__dset;
@@ -9881,7 +9930,9 @@ typedef struct radinterp__builder {
     uint32_t refine_samples, refine_passes;
     radinterp__frame *frames;       /* per patch */
     double *outline;                 /* per patch: corners in its frame, 8 doubles */
-    /* discontinuities, grouped by receiver and by DSet inside */
+    /* discontinuities: every one found (the mesh's list), and the candidates
+       (radinterp__candidate), grouped by receiver and by DSet inside */
+    radinterp__disc_list found;
     radinterp__buf discs, dsets;
     uint32_t *disc_first, *disc_count;
     /* quadtrees */
@@ -10599,6 +10650,46 @@ static int radinterp__group_dsets(radinterp__builder *b, uint32_t R)
     return 0;
 }
 
+/* The record the mesh returns for discontinuity d (grouped: its ends on its
+   DSet's line). */
+static void radinterp__export_disc(const radinterp__builder *b, radinterp__disc *d, radinterp_discontinuity *o)
+{
+    const radinterp_solution *s = b->s;
+    radinterp__frame_to3df(&b->frames[d->receiver], d->p, o->a);
+    radinterp__frame_to3df(&b->frames[d->receiver], d->q, o->b);
+    o->type = d->type;
+    o->receiver = s->first_caller[d->receiver];
+    o->source = d->source != RADINTERP_NO_PATCH ? s->first_caller[d->source] : RADINTERP_NO_PATCH;
+    o->blocker = d->blocker != RADINTERP_NO_PATCH ? s->first_caller[d->blocker] : RADINTERP_NO_PATCH;
+    o->dset = d->dset;
+    o->weight = radinterp__disc_weight(s, d);
+    o->active = 0;
+}
+
+/* Moves R's discontinuities (grouped) to the list the mesh returns and keeps
+   only R's candidates in b->discs, in their order: the steps after the
+   grouping use no other, and the rest are most of them (building_1k: 23k
+   candidates among 2.5M discontinuities, 96 bytes each here). The weights
+   cannot change while the mesh is built (5.4), so each is computed here
+   once. */
+static int radinterp__keep_candidates(radinterp__builder *b, uint32_t R)
+{
+    radinterp__disc *dd;
+    uint32_t n = b->disc_count[R], i, kept = 0;
+    if (n == 0) return 0;   /* discs.data may be NULL: no pointer arithmetic on it */
+    dd = (radinterp__disc *)b->discs.data + b->disc_first[R];
+    for (i = 0; i < n; i++) {
+        radinterp_discontinuity *o = radinterp__disc_list_push(&b->a, &b->found);
+        if (!o) return -1;
+        radinterp__export_disc(b, &dd[i], o);
+        dd[i].found = b->found.count - 1u;
+        if (radinterp__candidate(b, &dd[i])) dd[kept++] = dd[i];
+    }
+    b->disc_count[R] = kept;
+    b->discs.count = (size_t)b->disc_first[R] + kept;
+    return 0;
+}
+
 /* All discontinuities of the scene, by receiver. */
 static radinterp_result radinterp__find_discontinuities(radinterp__builder *b)
 {
@@ -10618,10 +10709,10 @@ static radinterp_result radinterp__find_discontinuities(radinterp__builder *b)
         b->disc_count[R] = (uint32_t)b->discs.count - b->disc_first[R];
         if (!fail && !cancelled) cancelled = radinterp__mesh_tick(b);
         if (!fail && !cancelled) fail = radinterp__group_dsets(b, R) != 0;
+        if (!fail && !cancelled) fail = radinterp__keep_candidates(b, R) != 0;
     }
     radinterp__buf_free(&b->a, &pairs);
     radinterp__buf_free(&b->a, &stack);
-    if (!fail && b->discs.count > 0xFFFFFFF0u) fail = 1;
     if (cancelled) return RADINTERP_ERROR_CANCELLED;
     return fail ? RADINTERP_ERROR_OUT_OF_MEMORY : RADINTERP_OK;
 }
@@ -10730,7 +10821,6 @@ static int radinterp__mnode_split(radinterp__builder *b, uint32_t index)
 static int radinterp__copy_tree(radinterp__builder *b, uint32_t R, radinterp__buf *queue)
 {
     const radinterp_solution *s = b->s;
-    const radinterp__disc *dd = (const radinterp__disc *)b->discs.data;
     radinterp__mnode *root;
     uint32_t head = 0, i;
     b->roots[R] = (uint32_t)b->nodes.count;
@@ -10743,7 +10833,7 @@ static int radinterp__copy_tree(radinterp__builder *b, uint32_t R, radinterp__bu
     radinterp__mnode_frame(b, root);
     root->first_disc = (uint32_t)b->node_discs.count;
     for (i = b->disc_first[R]; i < b->disc_first[R] + b->disc_count[R]; i++)
-        if (radinterp__candidate(b, &dd[i]) && radinterp__buf_u32(&b->a, &b->node_discs, i) != 0) return -1;
+        if (radinterp__buf_u32(&b->a, &b->node_discs, i) != 0) return -1;
     RADINTERP__MNODES(b)[b->roots[R]].disc_count = (uint32_t)b->node_discs.count - RADINTERP__MNODES(b)[b->roots[R]].first_disc;
     for (i = 0; i < s->patches[R].count; i++)
         if (radinterp__corner_put(b, R, s->patches[R].v[i]) != 0) return -1;
@@ -11834,7 +11924,7 @@ struct radinterp_mesh {
     float *corner;               /* 9 per triangle */
     float *vertex_rad;           /* 3 per vertex */
     float *patch_rho, *patch_e;  /* 3 per patch */
-    radinterp_discontinuity *discs;
+    radinterp__disc_list discs;  /* disc_count records */
     radinterp_mesh_leaf *leaves;
     radinterp_mesh_info info;
 };
@@ -12285,11 +12375,9 @@ static int radinterp__mesh_alloc(radinterp_mesh *m)
     m->vertex_rad = (float *)radinterp__alloc_array(a, V, 3 * sizeof(float));
     m->patch_rho = (float *)radinterp__alloc_array(a, P, 3 * sizeof(float));
     m->patch_e = (float *)radinterp__alloc_array(a, P, 3 * sizeof(float));
-    m->discs = (radinterp_discontinuity *)radinterp__alloc_array(a, m->disc_count, sizeof(radinterp_discontinuity));
     m->leaves = (radinterp_mesh_leaf *)radinterp__alloc_array(a, m->leaf_count, sizeof(radinterp_mesh_leaf));
     return m->positions && m->indices && m->tri_patch && m->tri_leaf && m->edge_flags && m->irr && m->rad && m->shade &&
-                   m->reflectance && m->emission && m->corner && m->vertex_rad && m->patch_rho && m->patch_e && m->discs &&
-                   m->leaves
+                   m->reflectance && m->emission && m->corner && m->vertex_rad && m->patch_rho && m->patch_e && m->leaves
                ? 0
                : -1;
 }
@@ -12313,7 +12401,7 @@ RADINTERP_API void radinterp_mesh_destroy(radinterp_mesh *m)
     radinterp__free(&a, m->vertex_rad);
     radinterp__free(&a, m->patch_rho);
     radinterp__free(&a, m->patch_e);
-    radinterp__free(&a, m->discs);
+    radinterp__disc_list_free(&a, &m->discs);
     radinterp__free(&a, m->leaves);
     radinterp__free(&a, m);
 }
@@ -12372,7 +12460,7 @@ static radinterp_result radinterp__assemble(radinterp__builder *b, const float *
 {
     const radinterp_solution *s = b->s;
     const radinterp__otri *tris = (const radinterp__otri *)b->tris.data;
-    radinterp__disc *dd = (radinterp__disc *)b->discs.data;
+    const radinterp__disc *dd = (const radinterp__disc *)b->discs.data;
     radinterp_mesh *m = (radinterp_mesh *)radinterp__alloc(&b->a, sizeof *m);
     radinterp_mesh_info *info;
     uint32_t i;
@@ -12384,7 +12472,7 @@ static radinterp_result radinterp__assemble(radinterp__builder *b, const float *
     m->vertex_count = (uint32_t)(b->pos.count / 3);
     m->triangle_count = (uint32_t)b->tris.count;
     m->patch_count = s->caller_count;
-    m->disc_count = (uint32_t)b->discs.count;
+    m->disc_count = b->found.count;
     m->leaf_count = (uint32_t)b->leaves.count;
     if (radinterp__mesh_alloc(m) != 0) { radinterp_mesh_destroy(m); return RADINTERP_ERROR_OUT_OF_MEMORY; }
     memcpy(m->positions, b->pos.data, b->pos.count * sizeof(float));
@@ -12400,24 +12488,19 @@ static radinterp_result radinterp__assemble(radinterp__builder *b, const float *
         memcpy(m->patch_e + 3 * (size_t)i, s->patches[s->caller_patch[i]].e, 3 * sizeof(float));
     }
     info = &m->info;
+    m->discs = b->found;   /* the mesh takes the blocks over */
+    radinterp__disc_list_init(&b->found);
     for (i = 0; i < m->disc_count; i++) {
-        radinterp_discontinuity *o = &m->discs[i];
-        const radinterp__disc *d = &dd[i];
-        radinterp__frame_to3df(&b->frames[d->receiver], d->p, o->a);
-        radinterp__frame_to3df(&b->frames[d->receiver], d->q, o->b);
-        o->type = d->type;
-        o->receiver = s->first_caller[d->receiver];
-        o->source = d->source != RADINTERP_NO_PATCH ? s->first_caller[d->source] : RADINTERP_NO_PATCH;
-        o->blocker = d->blocker != RADINTERP_NO_PATCH ? s->first_caller[d->blocker] : RADINTERP_NO_PATCH;
-        o->dset = d->dset;
-        o->weight = radinterp__disc_weight(s, &dd[i]);
-        o->active = (int)d->active;
-        info->ev += d->type == RADINTERP_DISCONTINUITY_EV;
-        info->ve += d->type == RADINTERP_DISCONTINUITY_VE;
-        info->horizon += d->type == RADINTERP_DISCONTINUITY_HORIZON;
-        info->contact += d->type == RADINTERP_DISCONTINUITY_CONTACT;
-        info->candidates += radinterp__candidate(b, d);
-        info->active_discontinuities += d->active;
+        uint32_t type = radinterp__disc_list_at(&m->discs, i)->type;
+        info->ev += type == RADINTERP_DISCONTINUITY_EV;
+        info->ve += type == RADINTERP_DISCONTINUITY_VE;
+        info->horizon += type == RADINTERP_DISCONTINUITY_HORIZON;
+        info->contact += type == RADINTERP_DISCONTINUITY_CONTACT;
+    }
+    info->candidates = (uint32_t)b->discs.count;
+    for (i = 0; i < b->discs.count; i++) {
+        radinterp__disc_list_at(&m->discs, dd[i].found)->active = (int)dd[i].active;
+        info->active_discontinuities += dd[i].active;
     }
     for (i = 0; i < m->leaf_count; i++) {
         const radinterp__mnode *nd = &RADINTERP__MNODES(b)[RADINTERP__U32(b->leaves)[i]];
@@ -12493,6 +12576,7 @@ static void radinterp__builder_free(radinterp__builder *b)
     radinterp__free(a, b->seg_count);
     radinterp__free(a, b->chain_first);
     radinterp__free(a, b->chain_len);
+    radinterp__disc_list_free(a, &b->found);
     radinterp__buf_free(a, &b->discs);
     radinterp__buf_free(a, &b->dsets);
     radinterp__buf_free(a, &b->nodes);
@@ -12532,6 +12616,7 @@ static radinterp_result radinterp__builder_init(radinterp__builder *b, const rad
     b->min_leaf_area = d->min_leaf_area;
     b->refine_samples = radinterp__def(d->refine_samples, 3u);
     b->refine_passes = radinterp__def(d->refine_passes, 8u);
+    radinterp__disc_list_init(&b->found);
     radinterp__buf_init(&b->discs, sizeof(radinterp__disc));
     radinterp__buf_init(&b->dsets, sizeof(radinterp__dset));
     radinterp__buf_init(&b->nodes, sizeof(radinterp__mnode));
@@ -12591,7 +12676,7 @@ RADINTERP_API radinterp_result radinterp_build_mesh(const radinterp_solution *s,
     radinterp__builder b;
     radinterp__interp ip;
     radinterp_result res;
-    uint32_t pass = 0, refined = 0, i;
+    uint32_t pass = 0, refined = 0;
     float worst = 0.0f;
     if (!out) return RADINTERP_ERROR_INVALID_ARGUMENT;
     *out = NULL;
@@ -12604,8 +12689,6 @@ RADINTERP_API radinterp_result radinterp_build_mesh(const radinterp_solution *s,
     if (res == RADINTERP_OK && b.hidden_events)
         radinterp__mesh_log(&b, "radinterp_build_mesh: %u discontinuity events hidden behind other surfaces left out",
                             b.hidden_events);
-    if (res == RADINTERP_OK)
-        for (i = 0; i < b.discs.count; i++) radinterp__disc_weight(s, &((radinterp__disc *)b.discs.data)[i]);
     if (res == RADINTERP_OK) res = radinterp__build_trees(&b);
     while (res == RADINTERP_OK) {
         int split;
@@ -12669,7 +12752,7 @@ RADINTERP_API radinterp_result radinterp_mesh_get_discontinuity(const radinterp_
     if (!d) return RADINTERP_ERROR_INVALID_ARGUMENT;
     memset(d, 0, sizeof *d);
     if (!m || index >= m->disc_count) return RADINTERP_ERROR_INVALID_ARGUMENT;
-    *d = m->discs[index];
+    *d = *radinterp__disc_list_at(&m->discs, index);
     return RADINTERP_OK;
 }
 
@@ -12931,7 +13014,7 @@ RADINTERP_API radinterp_result radinterp_mesh_save(const radinterp_mesh *m, radi
     radinterp__put_f32_array(&w, m->patch_rho, 3 * (size_t)m->patch_count);
     radinterp__put_f32_array(&w, m->patch_e, 3 * (size_t)m->patch_count);
     for (i = 0; i < m->disc_count; i++) {
-        const radinterp_discontinuity *d = &m->discs[i];
+        const radinterp_discontinuity *d = radinterp__disc_list_at(&m->discs, i);
         radinterp__put_f32_array(&w, d->a, 3);
         radinterp__put_f32_array(&w, d->b, 3);
         radinterp__put_u32(&w, d->type);
@@ -12991,7 +13074,7 @@ static int radinterp__read_discs(radinterp__reader *r, radinterp_mesh *m)
 {
     uint32_t i;
     for (i = 0; i < m->disc_count && !r->failed; i++) {
-        radinterp_discontinuity *d = &m->discs[i];
+        radinterp_discontinuity *d = radinterp__disc_list_at(&m->discs, i);
         uint32_t active;
         radinterp__get_finite(r, d->a, 3);
         radinterp__get_finite(r, d->b, 3);
@@ -13061,6 +13144,8 @@ static radinterp_result radinterp__mesh_read(radinterp_mesh *m, radinterp__reade
         !radinterp__can_hold(r, m->leaf_count, RADINTERP__LEAF_BYTES) || r->remaining != radinterp__mesh_payload(m) - (5 * 4 + RADINTERP__MESH_STATS * 4 + 12))
         return RADINTERP_ERROR_CORRUPT_DATA;
     if (radinterp__mesh_alloc(m) != 0) return RADINTERP_ERROR_OUT_OF_MEMORY;
+    for (i = 0; i < m->disc_count; i++)
+        if (!radinterp__disc_list_push(&m->allocator, &m->discs)) return RADINTERP_ERROR_OUT_OF_MEMORY;
     radinterp__get_finite(r, m->positions, 3 * (size_t)m->vertex_count);
     radinterp__get_indices(r, m->indices, 3 * (size_t)m->triangle_count, m->vertex_count);
     radinterp__get_indices(r, m->tri_patch, m->triangle_count, m->patch_count);
@@ -13105,6 +13190,7 @@ RADINTERP_API radinterp_result radinterp_mesh_load(const radinterp_allocator *al
     if (!m) return RADINTERP_ERROR_OUT_OF_MEMORY;
     memset(m, 0, sizeof *m);
     m->allocator = a;
+    radinterp__disc_list_init(&m->discs);
     memset(&r, 0, sizeof r);
     r.read = read;
     r.user = user;
