@@ -1339,6 +1339,22 @@ static void radinterp__buf_free(const radinterp_allocator *a, radinterp__buf *b)
     b->count = b->cap = 0;
 }
 
+/* Gives back the capacity beyond the count, after a buffer held more for a
+   while than it keeps. */
+static int radinterp__buf_trim(const radinterp_allocator *a, radinterp__buf *b)
+{
+    void *p;
+    if (b->cap == b->count) return 0;
+    if (b->count == 0) { radinterp__buf_free(a, b); return 0; }
+    p = radinterp__alloc_array(a, b->count, b->item);
+    if (!p) return -1;
+    memcpy(p, b->data, b->count * b->item);
+    radinterp__free(a, b->data);
+    b->data = p;
+    b->cap = b->count;
+    return 0;
+}
+
 #define RADINTERP__U32(b) ((uint32_t *)(b).data)
 
 /* Zero means default: the documented default replaces a zero field. */
@@ -9925,6 +9941,7 @@ typedef struct radinterp__builder {
     float min_weight;
     double min_contrast;             /* see min_discont_contrast */
     uint32_t hidden_events;          /* candidate EV/VE events whose generating line is blocked (not kept) */
+    uint64_t event_tests;            /* radinterp__event_seen calls */
     uint32_t max_dsets;
     double refine_eps, refine_min_area, min_leaf_area;
     uint32_t refine_samples, refine_passes;
@@ -9967,6 +9984,38 @@ static void radinterp__mesh_log(const radinterp__builder *b, const char *fmt, ..
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
     b->desc->log(b->desc->log_user, msg);
+}
+
+/* A progress call between the steps that come before the samples: (0, 1),
+   none of the sampling's count done yet. A building's discontinuities and
+   triangulations take seconds, during which the caller may still see
+   progress and cancel. Non-zero: cancel. */
+static int radinterp__mesh_cancelled(radinterp__builder *b)
+{
+    b->reported = RADINTERP_CPU_SECONDS();
+    return b->desc->progress && b->desc->progress(b->desc->progress_user, 0, 1) != 0;
+}
+
+/* The same call inside one long serial step (a receiver that many sources
+   light, a source with thousands of blockers between it and the receiver),
+   once progress_interval has passed since the last call. */
+static int radinterp__mesh_tick(radinterp__builder *b)
+{
+    if (!radinterp__progress_due(b->reported, b->desc->progress_interval)) return 0;
+    return radinterp__mesh_cancelled(b);
+}
+
+/* radinterp__mesh_tick for loops of short steps (i counts them): the clock
+   is read every RADINTERP__TICK_STEPS steps, as in the solve. */
+static int radinterp__mesh_step(radinterp__builder *b, size_t i)
+{
+    return i % RADINTERP__TICK_STEPS == 0 && radinterp__mesh_tick(b);
+}
+
+/* The result of a step that returns 0, -1 (memory) or 1 (cancel). */
+static radinterp_result radinterp__step_result(int r)
+{
+    return r > 0 ? RADINTERP_ERROR_CANCELLED : (r < 0 ? RADINTERP_ERROR_OUT_OF_MEMORY : RADINTERP_OK);
 }
 
 /* Largest channel of a patch's radiosity: B_src of the weights. */
@@ -10274,7 +10323,13 @@ static int radinterp__event_seen(const radinterp__builder *b, int ev, const doub
     return 0;
 }
 
-/* Trace (3D ends p3, q3) -> clipped segment on R with its geometric factor. */
+/* Blockers, or event tests (radinterp__event_seen), between clock readings:
+   most cost microseconds, some milliseconds (building_4k: a source's 22
+   blockers took 9.3 s, about 0.4 s each, in their event tests' rays). */
+#define RADINTERP__WEDGE_TICK 8
+
+/* Trace (3D ends p3, q3) -> clipped segment on R with its geometric factor.
+   0, or -1 when memory runs out, 1 when progress asks to cancel. */
 static int radinterp__wedge_disc(radinterp__builder *b, const radinterp__wedge_ctx *w, int ev, const double *f,
                                  const double *l0, const double *l1, const double *p3, const double *q3)
 {
@@ -10289,22 +10344,25 @@ static int radinterp__wedge_disc(radinterp__builder *b, const radinterp__wedge_c
     radinterp__frame_to3d(fr, cq, r);
     g2 = radinterp__wedge_ratio(ev, f, l0, l1, r);
     if (g2 > geom) geom = g2;
-    if (w->may_count && geom >= w->geom_min && !radinterp__event_seen(b, ev, f, l0, l1, fr, cp, cq)) {
-        b->hidden_events++;
-        return 0;
+    if (w->may_count && geom >= w->geom_min) {
+        if (++b->event_tests % RADINTERP__WEDGE_TICK == 0 && radinterp__mesh_tick(b)) return 1;
+        if (!radinterp__event_seen(b, ev, f, l0, l1, fr, cp, cq)) {
+            b->hidden_events++;
+            return 0;
+        }
     }
     return radinterp__push_disc(b, w->R, cp, cq, on_p, on_q,
                                 ev ? RADINTERP_DISCONTINUITY_EV : RADINTERP_DISCONTINUITY_VE, w->S, w->B, geom);
 }
 
 /* EV and VE discontinuities of one source (clipped to R's front: Sc) and
-   one blocker on R. */
+   one blocker on R. 0, -1 (memory) or 1 (cancel), as radinterp__wedge_disc. */
 static int radinterp__wedges(radinterp__builder *b, const radinterp__wedge_ctx *w, const double (*Sc)[3], int nc)
 {
     const radinterp_solution *s = b->s;
     const radinterp__patch *pr = &s->patches[w->R], *ps = &s->patches[w->S], *pb = &s->patches[w->B];
     double B[4][3], m[3], p3[3], q3[3];
-    int nb = radinterp__patch_poly(pb, B), i, k;
+    int nb = radinterp__patch_poly(pb, B), i, k, r;
     /* EV: source edge (Sc[k], Sc[k+1]), blocker vertex B[i] */
     for (k = 0; k < nc; k++) {
         const double *e0 = Sc[k], *e1 = Sc[(k + 1) % nc];
@@ -10314,7 +10372,7 @@ static int radinterp__wedges(radinterp__builder *b, const radinterp__wedge_ctx *
             if (fabs(radinterp__d3_dot(m, ps->n)) > 1.0 - 1e-9) continue;     /* the source's own plane */
             if (!radinterp__supports(m, e0, (const double (*)[3])B, nb, b->tol)) continue;
             if (!radinterp__wedge_trace(b, pr, ps, e0, e1, B[i], B[i], p3, q3)) continue;
-            if (radinterp__wedge_disc(b, w, 1, B[i], e0, e1, p3, q3) != 0) return -1;
+            if ((r = radinterp__wedge_disc(b, w, 1, B[i], e0, e1, p3, q3)) != 0) return r;
         }
     }
     /* VE: source vertex Sc[k], blocker edge (B[i], B[i+1]) */
@@ -10325,7 +10383,7 @@ static int radinterp__wedges(radinterp__builder *b, const radinterp__wedge_ctx *
             if (fabs(radinterp__d3_dot(m, pb->n)) > 1.0 - 1e-9) continue;     /* the blocker's own plane */
             if (!radinterp__supports(m, f0, Sc, nc, b->tol)) continue;
             if (!radinterp__wedge_trace(b, pr, ps, Sc[k], Sc[k], f0, f1, p3, q3)) continue;
-            if (radinterp__wedge_disc(b, w, 0, Sc[k], f0, f1, p3, q3) != 0) return -1;
+            if ((r = radinterp__wedge_disc(b, w, 0, Sc[k], f0, f1, p3, q3)) != 0) return r;
         }
     }
     return 0;
@@ -10460,34 +10518,15 @@ static double radinterp__source_reach(const radinterp__builder *b, uint32_t R, c
     return best;
 }
 
-/* A progress call between the steps that come before the samples: (0, 1),
-   none of the sampling's count done yet. A building's discontinuities and
-   triangulations take seconds, during which the caller may still see
-   progress and cancel. Non-zero: cancel. */
-static int radinterp__mesh_cancelled(radinterp__builder *b)
-{
-    b->reported = RADINTERP_CPU_SECONDS();
-    return b->desc->progress && b->desc->progress(b->desc->progress_user, 0, 1) != 0;
-}
-
-/* The same call inside one long serial step (a receiver that many sources
-   light, a source with thousands of blockers between it and the receiver),
-   once progress_interval has passed since the last call. */
-static int radinterp__mesh_tick(radinterp__builder *b)
-{
-    if (!radinterp__progress_due(b->reported, b->desc->progress_interval)) return 0;
-    return radinterp__mesh_cancelled(b);
-}
-
 /* Every discontinuity on receiver R (5.5.3: from the links, so only
    mutually visible pairs and their potential blockers are considered).
    0, or -1 when memory runs out, 1 when progress asks to cancel. */
-#define RADINTERP__WEDGE_TICK 8   /* blockers between clock readings: most cost microseconds, some milliseconds */
 static int radinterp__receiver_discs(radinterp__builder *b, uint32_t R, radinterp__buf *pairs, radinterp__buf *stack)
 {
     const radinterp_solution *s = b->s;
     const uint64_t *pr;
     size_t i = 0, j, wedged = 0;
+    int r;
     if (radinterp__link_pairs(b, R, pairs, stack) != 0) return -1;
     pr = (const uint64_t *)pairs->data;
     while (i < pairs->count) {
@@ -10522,7 +10561,7 @@ static int radinterp__receiver_discs(radinterp__builder *b, uint32_t R, radinter
                 /* building_4k: 380 blockers of one source took 2.8 s (6882 discontinuities) */
                 if (++wedged % RADINTERP__WEDGE_TICK == 0 && radinterp__mesh_tick(b)) return 1;
                 w.B = B;
-                if (radinterp__wedges(b, &w, (const double (*)[3])Sc, nc) != 0) return -1;
+                if ((r = radinterp__wedges(b, &w, (const double (*)[3])Sc, nc)) != 0) return r;
             }
             for (m = from; m < b->discs.count; m++) ((radinterp__disc *)b->discs.data)[m].reach = reach;
         }
@@ -10591,11 +10630,13 @@ static void radinterp__disc_on_line(radinterp__disc *x, const double *o, const d
 }
 
 /* Groups R's discontinuities into DSets (lines within RADINTERP__DSET_ANGLE
-   and tol of each other) and orders them by DSet, then along it. */
+   and tol of each other) and orders them by DSet, then along it. 0, or -1
+   when memory runs out, 1 when progress asks to cancel (a receiver can hold
+   millions: building_4k's took up to 8.2 s here). */
 static int radinterp__group_dsets(radinterp__builder *b, uint32_t R)
 {
     radinterp__disc *dd;
-    uint32_t n = b->disc_count[R], i, j, k;
+    uint32_t n = b->disc_count[R], i, j, k, placed = 0;
     radinterp__dkey *key;
     if (n == 0) return 0;   /* discs.data may be NULL: no pointer arithmetic on it */
     dd = (radinterp__disc *)b->discs.data + b->disc_first[R];
@@ -10629,6 +10670,7 @@ static int radinterp__group_dsets(radinterp__builder *b, uint32_t R)
             if (radinterp__new_dset(b, R, o, dir) != 0) { radinterp__free(&b->a, key); return -1; }
             for (m = k; m < j && key[m].offset - key[k].offset <= b->tol; m++) {
                 radinterp__disc *x = &dd[key[m].id];
+                if (radinterp__mesh_step(b, ++placed)) { radinterp__free(&b->a, key); return 1; }
                 double hp = nrm[0] * x->p[0] + nrm[1] * x->p[1] - key[k].offset;
                 double hq = nrm[0] * x->q[0] + nrm[1] * x->q[1] - key[k].offset;
                 if (fabs(hp) > 2.0 * b->tol || fabs(hq) > 2.0 * b->tol) {
@@ -10646,6 +10688,7 @@ static int radinterp__group_dsets(radinterp__builder *b, uint32_t R)
         }
     }
     radinterp__free(&b->a, key);
+    if (radinterp__mesh_tick(b)) return 1;
     qsort(dd, n, sizeof *dd, radinterp__cmp_disc_order);
     return 0;
 }
@@ -10708,11 +10751,17 @@ static radinterp_result radinterp__find_discontinuities(radinterp__builder *b)
         fail = r < 0;
         b->disc_count[R] = (uint32_t)b->discs.count - b->disc_first[R];
         if (!fail && !cancelled) cancelled = radinterp__mesh_tick(b);
-        if (!fail && !cancelled) fail = radinterp__group_dsets(b, R) != 0;
+        if (!fail && !cancelled) {
+            r = radinterp__group_dsets(b, R);
+            cancelled = r > 0;
+            fail = r < 0;
+        }
         if (!fail && !cancelled) fail = radinterp__keep_candidates(b, R) != 0;
     }
     radinterp__buf_free(&b->a, &pairs);
     radinterp__buf_free(&b->a, &stack);
+    /* b->discs held the largest receiver's discontinuities for a while */
+    if (!fail && !cancelled) fail = radinterp__buf_trim(&b->a, &b->discs) != 0;
     if (cancelled) return RADINTERP_ERROR_CANCELLED;
     return fail ? RADINTERP_ERROR_OUT_OF_MEMORY : RADINTERP_OK;
 }
@@ -10817,7 +10866,8 @@ static int radinterp__mnode_split(radinterp__builder *b, uint32_t index)
 }
 
 /* Copies patch R's quadtree from the solution, breadth first; the root
-   lists R's candidate discontinuities. */
+   lists R's candidate discontinuities. 0, or -1 when memory runs out, 1 when
+   progress asks to cancel. */
 static int radinterp__copy_tree(radinterp__builder *b, uint32_t R, radinterp__buf *queue)
 {
     const radinterp_solution *s = b->s;
@@ -10843,6 +10893,7 @@ static int radinterp__copy_tree(radinterp__builder *b, uint32_t R, radinterp__bu
     while (head < queue->count) {
         uint32_t sn = RADINTERP__U32(*queue)[head], mn = RADINTERP__U32(*queue)[head + 1], k, first;
         head += 2;
+        if (radinterp__mesh_step(b, head / 2)) return 1;
         if (s->nodes[sn].child == RADINTERP__NONE || (double)s->nodes[s->nodes[sn].child].area < b->min_leaf_area) continue;
         first = (uint32_t)b->nodes.count;
         if (radinterp__buf_reserve(&b->a, &b->nodes, b->nodes.count + 4) != 0) return -1;
@@ -10899,7 +10950,8 @@ static int radinterp__unbalanced(const radinterp__builder *b, const radinterp__m
 }
 
 /* Restricted quadtree (3.6): split until neighbouring leaves of a patch
-   differ by at most one level. */
+   differ by at most one level. 0, or -1 when memory runs out, 1 when
+   progress asks to cancel. */
 static int radinterp__balance(radinterp__builder *b)
 {
     int changed = 1;
@@ -10907,6 +10959,7 @@ static int radinterp__balance(radinterp__builder *b)
         uint32_t i;
         changed = 0;
         for (i = 0; i < b->nodes.count; i++) {
+            if (radinterp__mesh_step(b, i)) return 1;
             if (RADINTERP__MNODES(b)[i].child != RADINTERP__NONE || !radinterp__unbalanced(b, &RADINTERP__MNODES(b)[i]))
                 continue;
             if (radinterp__mnode_split(b, i) != 0) return -1;
@@ -11080,13 +11133,13 @@ static radinterp_result radinterp__activate(radinterp__builder *b)
     radinterp__buf_init(&w.active, sizeof(uint32_t));
     radinterp__buf_init(&w.active_n, sizeof(uint32_t));
     for (i = 0; i < b->discs.count; i++) dd[i].active = 0;
-    for (R = 0; R < b->s->patch_count && !fail; R++) fail = radinterp__activate_patch(b, R, &w) != 0;
+    for (R = 0; R < b->s->patch_count && !fail; R++) fail = radinterp__mesh_tick(b) ? 1 : radinterp__activate_patch(b, R, &w);
     radinterp__buf_free(&b->a, &w.order);
     radinterp__buf_free(&b->a, &w.start);
     radinterp__buf_free(&b->a, &w.list);
     radinterp__buf_free(&b->a, &w.active);
     radinterp__buf_free(&b->a, &w.active_n);
-    return fail ? RADINTERP_ERROR_OUT_OF_MEMORY : RADINTERP_OK;
+    return radinterp__step_result(fail);
 }
 
 /* DSets of a leaf's list (they are grouped), and how many are active. */
@@ -12312,11 +12365,13 @@ static radinterp_result radinterp__mesh_pass(radinterp__builder *b)
     if (radinterp__collect_mleaves(b, &w.stack) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     if (res == RADINTERP_OK) res = radinterp__activate(b);
     for (P = 0; P < s->patch_count && res == RADINTERP_OK; P++)
-        if (radinterp__patch_segments(b, P) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+        if (radinterp__mesh_tick(b)) res = RADINTERP_ERROR_CANCELLED;
+        else if (radinterp__patch_segments(b, P) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     if (res == RADINTERP_OK && radinterp__hmap_init(&b->a, &seen, 4, 1024) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     for (P = 0; P < s->patch_count && res == RADINTERP_OK; P++) {
         if (!s->patches[P].count) continue;
-        if (radinterp__outline_vertices(b, P, &seen) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+        if (radinterp__mesh_tick(b)) res = RADINTERP_ERROR_CANCELLED;
+        else if (radinterp__outline_vertices(b, P, &seen) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     }
     if (res == RADINTERP_OK && radinterp__weld(b) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     if (res == RADINTERP_OK) {   /* the pool is in patch order */
@@ -12661,13 +12716,13 @@ static radinterp_result radinterp__build_trees(radinterp__builder *b)
 {
     radinterp__buf queue;
     uint32_t R;
-    int fail = 0;
+    int r = 0;
     radinterp__buf_init(&queue, sizeof(uint32_t));
-    for (R = 0; R < b->s->patch_count && !fail; R++)
-        if (b->s->patches[R].count) fail = radinterp__copy_tree(b, R, &queue) != 0;
+    for (R = 0; R < b->s->patch_count && r == 0; R++)
+        if (b->s->patches[R].count) r = radinterp__copy_tree(b, R, &queue);
     radinterp__buf_free(&b->a, &queue);
-    if (!fail) fail = radinterp__balance(b) != 0;
-    return fail ? RADINTERP_ERROR_OUT_OF_MEMORY : RADINTERP_OK;
+    if (r == 0) r = radinterp__balance(b);
+    return radinterp__step_result(r);
 }
 
 RADINTERP_API radinterp_result radinterp_build_mesh(const radinterp_solution *s, const radinterp_mesh_desc *desc,
@@ -12700,7 +12755,7 @@ RADINTERP_API radinterp_result radinterp_build_mesh(const radinterp_solution *s,
         if (split <= 0) break;
         refined += (uint32_t)split;
         pass++;
-        if (radinterp__balance(&b) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+        res = radinterp__step_result(radinterp__balance(&b));
     }
     if (res == RADINTERP_OK) {
         res = radinterp__assemble(&b, desc->refine ? ip.prev_coeff : ip.coeff, desc->refine ? ip.prev_error : ip.error, out);
