@@ -1092,6 +1092,9 @@ typedef struct radinterp_mesh_info {
     float max_fit_error;              /* largest representation error measured (refine only) */
     uint64_t samples;                 /* IrradianceAtPoint calls of the build */
     size_t bytes;                     /* memory held by the mesh */
+    size_t build_bytes;               /* the most the build held at once: its arrays at each step (the
+                                         discontinuities found, the candidates, the quadtrees, a pass) and the
+                                         mesh; 0 for a loaded mesh */
 } radinterp_mesh_info;
 
 /* The mesh as arrays an engine can upload. Pointers stay valid until
@@ -9851,7 +9854,7 @@ typedef struct radinterp__disc {
    it holds (a doubling array holds up to three times its contents while it
    grows: building_1k finds 2.5M discontinuities), and the mesh takes the
    blocks over as they are. */
-#define RADINTERP__DISC_BLOCK_BITS 16
+#define RADINTERP__DISC_BLOCK_BITS 14
 #define RADINTERP__DISC_BLOCK (1u << RADINTERP__DISC_BLOCK_BITS)
 #define RADINTERP__DISC_MAX 0xFFFFFFF0u   /* records a list holds: indices are uint32_t */
 typedef struct radinterp__disc_list {
@@ -9969,6 +9972,7 @@ typedef struct radinterp__builder {
     radinterp__buf pos, tris;        /* output of the pass */
     radinterp__hmap vmap;            /* point -> output vertex */
     double reported;                 /* RADINTERP_CPU_SECONDS() at the last progress call */
+    size_t peak_bytes;               /* the most radinterp__builder_bytes has been (radinterp_mesh_info.build_bytes) */
     /* statistics */
     uint32_t balance_splits, hanging, seam, fallback, degenerate, skipped;
     uint64_t samples;
@@ -10016,6 +10020,26 @@ static int radinterp__mesh_step(radinterp__builder *b, size_t i)
 static radinterp_result radinterp__step_result(int r)
 {
     return r > 0 ? RADINTERP_ERROR_CANCELLED : (r < 0 ? RADINTERP_ERROR_OUT_OF_MEMORY : RADINTERP_OK);
+}
+
+static size_t radinterp__hmap_bytes(const radinterp__hmap *m) { return (size_t)m->cap * (m->words + 1u) * sizeof(uint32_t); }
+
+/* Bytes the builder's arrays hold now (their capacities), plus `extra`
+   held beside them; the peak is kept for radinterp_mesh_info.build_bytes.
+   Taken at the build's steps: short-lived work arrays inside a step are not
+   counted. */
+static void radinterp__note_bytes(radinterp__builder *b, size_t extra)
+{
+    const radinterp__buf *bufs[11];
+    size_t n = extra + (size_t)b->found.blocks.count * RADINTERP__DISC_BLOCK * sizeof(radinterp_discontinuity), k;
+    size_t P = b->s->patch_count;
+    bufs[0] = &b->found.blocks; bufs[1] = &b->discs; bufs[2] = &b->dsets; bufs[3] = &b->nodes; bufs[4] = &b->node_discs;
+    bufs[5] = &b->leaves; bufs[6] = &b->segs; bufs[7] = &b->pool; bufs[8] = &b->chains; bufs[9] = &b->pos;
+    bufs[10] = &b->tris;
+    for (k = 0; k < 11; k++) n += bufs[k]->cap * bufs[k]->item;
+    n += radinterp__hmap_bytes(&b->corners) + radinterp__hmap_bytes(&b->canon) + radinterp__hmap_bytes(&b->vmap);
+    n += P * (sizeof(radinterp__frame) + 8 * sizeof(double) + 15 * sizeof(uint32_t)) + (b->pool_first ? P + 1 : 0) * sizeof(uint32_t);
+    if (n > b->peak_bytes) b->peak_bytes = n;
 }
 
 /* Largest channel of a patch's radiosity: B_src of the weights. */
@@ -10757,6 +10781,7 @@ static radinterp_result radinterp__find_discontinuities(radinterp__builder *b)
             fail = r < 0;
         }
         if (!fail && !cancelled) fail = radinterp__keep_candidates(b, R) != 0;
+        radinterp__note_bytes(b, 0);
     }
     radinterp__buf_free(&b->a, &pairs);
     radinterp__buf_free(&b->a, &stack);
@@ -12267,6 +12292,13 @@ static void radinterp__interp_free(const radinterp_allocator *a, radinterp__inte
     memset(ip, 0, sizeof *ip);
 }
 
+/* Bytes ip holds for a pass of n triangles: their coefficients and errors
+   (this pass's, or kept as the previous pass's) and the previous pass's keys. */
+static size_t radinterp__interp_bytes(const radinterp__interp *ip, size_t n)
+{
+    return n * 19 * sizeof(float) + radinterp__hmap_bytes(&ip->prev);
+}
+
 /* Coefficients of the pass's triangles: from the previous pass where the
    triangle is unchanged, else sampled. Remembers them for the next pass. */
 static radinterp_result radinterp__interpolants(radinterp__builder *b, radinterp__interp *ip)
@@ -12505,7 +12537,8 @@ static size_t radinterp__mesh_bytes(const radinterp_mesh *m)
 {
     return sizeof *m + (size_t)m->vertex_count * 6 * sizeof(float) +
            (size_t)m->triangle_count * (5 * sizeof(uint32_t) + 1 + (18 + 18 + 24 + 3 + 3 + 9) * sizeof(float)) +
-           (size_t)m->patch_count * 6 * sizeof(float) + (size_t)m->disc_count * sizeof(radinterp_discontinuity) +
+           (size_t)m->patch_count * 6 * sizeof(float) +
+           m->discs.blocks.count * (RADINTERP__DISC_BLOCK * sizeof(radinterp_discontinuity) + sizeof(radinterp_discontinuity *)) +
            (size_t)m->leaf_count * sizeof(radinterp_mesh_leaf);
 }
 
@@ -12747,8 +12780,11 @@ RADINTERP_API radinterp_result radinterp_build_mesh(const radinterp_solution *s,
     if (res == RADINTERP_OK) res = radinterp__build_trees(&b);
     while (res == RADINTERP_OK) {
         int split;
+        radinterp__note_bytes(&b, 0);
         res = radinterp__mesh_pass(&b);
+        radinterp__note_bytes(&b, 0);
         if (res == RADINTERP_OK) res = radinterp__interpolants(&b, &ip);
+        radinterp__note_bytes(&b, radinterp__interp_bytes(&ip, b.tris.count));
         if (res != RADINTERP_OK || !desc->refine || pass >= b.refine_passes) break;
         split = radinterp__refine_leaves(&b, ip.prev_error, &worst);
         if (split < 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
@@ -12764,6 +12800,8 @@ RADINTERP_API radinterp_result radinterp_build_mesh(const radinterp_solution *s,
             (*out)->info.refined_leaves = refined;
             (*out)->info.max_fit_error = worst;
             (*out)->info.bytes = radinterp__mesh_bytes(*out);
+            radinterp__note_bytes(&b, (*out)->info.bytes + radinterp__interp_bytes(&ip, b.tris.count));
+            (*out)->info.build_bytes = b.peak_bytes;
         }
     }
     if (res == RADINTERP_ERROR_OUT_OF_MEMORY) radinterp__mesh_log(&b, "radinterp_build_mesh: out of memory");
