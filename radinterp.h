@@ -662,11 +662,17 @@
    time (default 0.25; RADINTERP_CPU_SECONDS): however costly the jobs, a
    slow region shrinks the batches rather than stretching the gap. The
    serial stretches between batches call progress too once the interval has
-   passed (a receiver's discontinuity search between its sources and its
-   blockers; in the solve, refinement's pass over the links, the shaft
+   passed (in the mesh build, a receiver's discontinuity search between its
+   sources, every 8 blockers and every 8 event tests, the grouping of its
+   discontinuities into DSets every 64 of them, the quadtrees' copy and
+   restriction every 64 nodes, a pass's activation, segments and outlines
+   once a patch; in the solve, refinement's pass over the links, the shaft
    queries of a wave of split cluster links, installing the new links, an
-   iteration's gathers): on building_16k they took up to 1.8 s of CPU time
-   with v0.8.6. The batches never change a result.
+   iteration's gathers): on building_16k the solve's took up to 1.8 s of
+   CPU time with v0.8.6; on building_4k the mesh's grouping of one receiver
+   8.2 s, one source's event tests 9.3 s, the quadtrees and the first
+   pass's steps before its samples 6.6 s. The batches never change a
+   result.
    bench_radinterp_building's longest gap on building_1k, one thread: 0.64 s
    with v0.8.5's fixed batches, 0.46 s. radinterp_shade splits
    its pixels into jobs of 16384 through the mesh's parallel_for (the
