@@ -382,6 +382,20 @@ static radinterp_desc counted_soup(rb_scene *s, counting *cnt, progress_state *p
     return d;
 }
 
+/* The soup room's mesh desc: a coarse tree, d's counting allocator, and
+   progress(user). */
+static radinterp_mesh_desc counted_mesh_desc(const radinterp_desc *d, int (*progress)(void *, uint64_t, uint64_t),
+                                             void *user)
+{
+    radinterp_mesh_desc md;
+    memset(&md, 0, sizeof md);
+    md.min_leaf_area = 0.25f;
+    md.allocator = d->allocator;
+    md.progress = progress;
+    md.progress_user = user;
+    return md;
+}
+
 /* Cancels solves at `parts` calls spread over the first `calls` ones (every
    one when there are fewer): each returns CANCELLED and no solution. */
 static void cancel_solve_sweep(const radinterp_desc *d, progress_state *ps, long calls, long parts)
@@ -434,11 +448,7 @@ static void test_cancel_everywhere(void)
     CHECK(n >= 3);
     CHECK(!ps.backwards);
     cancel_solve_sweep(&d, &ps, n, 8);
-    memset(&md, 0, sizeof md);
-    md.min_leaf_area = 0.25f;
-    md.allocator = d.allocator;
-    md.progress = progress_cb;
-    md.progress_user = &ps;
+    md = counted_mesh_desc(&d, progress_cb, &ps);
     memset(&ps, 0, sizeof ps);
     if (CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &mesh), RADINTERP_OK)) {
         long m = ps.calls, stopped = ps.before_samples, running;
@@ -715,26 +725,22 @@ static int mesh_tick_cb(void *user, uint64_t done, uint64_t total)
    CANCELLED and frees everything. */
 static void test_progress_in_mesh_steps(void)
 {
+    long grouping = 0, expected = 0, trees, pass, lit = 0, held = 0;
+    uint32_t R;
+    radinterp__builder b;
+    radinterp__buf pairs, stack;
+    mesh_ticks t;
+    counting cnt;
+    progress_state ps;
     rb_scene s;
     radinterp_desc d;
     radinterp_mesh_desc md;
     radinterp_solution *sol = NULL;
     radinterp_mesh *mesh = NULL;
-    radinterp__builder b;
-    radinterp__buf pairs, stack;
-    counting cnt;
-    progress_state ps;
-    mesh_ticks t;
-    long grouping = 0, expected = 0, trees, pass, lit = 0, held = 0;
-    uint32_t R;
     d = counted_soup(&s, &cnt, &ps);
     d.eps_relative = 0.5f;   /* a coarse solve keeps the test short under ASan; the mesh's steps are the same */
     if (!CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_OK)) goto done;
-    memset(&md, 0, sizeof md);
-    md.min_leaf_area = 0.25f;
-    md.allocator = d.allocator;
-    md.progress = mesh_tick_cb;
-    md.progress_user = &t;
+    md = counted_mesh_desc(&d, mesh_tick_cb, &t);
     memset(&t, 0, sizeof t);
     t.b = &b;
     clock_step = 1.0;
