@@ -757,6 +757,22 @@
    before v0.7.0) at about 2,000 per second of one core (185 s; v0.7.0:
    about 1,200, before a source's parts shared one union of shadows):
    minutes on two threads, too slow still for a level loaded at run time.
+   The build's memory: the mesh keeps every discontinuity found
+   (radinterp_mesh_get_discontinuity), 52 bytes each, in blocks of 16,384
+   that the build fills and the mesh takes over; the build's own records
+   (104 bytes) are kept only for the candidates, and for one receiver's
+   discontinuities while they are grouped into DSets (the grouping needs
+   them all for the lines it draws). building_1k finds 2.54 M, of which
+   23,269 are candidates; its build's allocations beyond the solution peak
+   at 302 MB before the first sample (643 MB when every one was held in one
+   growing array of records), 317 MB in all, for a mesh of 190 MB, 132 MB
+   of it discontinuities. building_4k finds 41.0 M (92,446 candidates, 5.35
+   M DSets): the mesh's list is 2.1 GB, the DSets' lines 0.34 GB, and the
+   receiver with the most discontinuities held about 1.75 GB more while it
+   was grouped: 4.27 GB beyond the solution's 2.31 GB before the first
+   sample. In one array the records take 3.9 GB there, and 9.7 GB while
+   it doubles (computed; v0.8.7 reached 8.2 GB of resident memory).
+   radinterp_mesh_info.build_bytes reports the peak of the build's arrays.
    The solve's leaf lists mark the links a whole leaf cannot see: one
    opaque blocker turned toward the leaf meets every segment from the
    leaf's box (grown by the lists' margin) to the source, as the near face
