@@ -771,7 +771,7 @@
    receiver with the most discontinuities held about 1.75 GB more while it
    was grouped: 4.27 GB beyond the solution's 2.31 GB before the first
    sample. In one array the records take 3.9 GB there, and 9.7 GB while
-   it doubles (computed; v0.8.7 reached 8.2 GB of resident memory).
+   it doubles (computed; v0.8.6 reached 8.2 GB of resident memory).
    radinterp_mesh_info.build_bytes reports the peak of the build's arrays.
    The solve's leaf lists mark the links a whole leaf cannot see: one
    opaque blocker turned toward the leaf meets every segment from the
