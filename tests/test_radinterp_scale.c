@@ -784,7 +784,12 @@ free_builder:
     md.progress = progress_cb;
     md.progress_user = &ps;
     memset(&ps, 0, sizeof ps);
-    if (CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &mesh), RADINTERP_OK)) cancel_mesh_sweep(sol, &md, &ps, ps.before_samples, 24);
+    if (CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &mesh), RADINTERP_OK)) {
+        radinterp_mesh_info mi;
+        radinterp_mesh_get_info(mesh, &mi);
+        CHECK(mi.bytes > 0 && mi.build_bytes >= mi.bytes);   /* the build held the mesh at its end */
+        cancel_mesh_sweep(sol, &md, &ps, ps.before_samples, 24);
+    }
     radinterp_mesh_destroy(mesh);
 done:
     clock_step = 0.0;
