@@ -722,7 +722,8 @@ static int mesh_tick_cb(void *user, uint64_t done, uint64_t total)
      segments, outlines and triangulation.
    Without these calls the counts are 0, 0 (or a few by chance), 0 and one
    a patch. A cancel from 24 of the build's calls before its samples returns
-   CANCELLED and frees everything. */
+   CANCELLED and frees everything; the whole build's build_bytes counts at
+   least the mesh it returns. */
 static void test_progress_in_mesh_steps(void)
 {
     long grouping = 0, expected = 0, trees, pass, lit = 0, held = 0;
