@@ -9994,7 +9994,7 @@ typedef struct radinterp__builder {
     radinterp__buf pos, tris;        /* output of the pass */
     radinterp__hmap vmap;            /* point -> output vertex */
     double reported;                 /* RADINTERP_CPU_SECONDS() at the last progress call */
-    size_t peak_bytes;               /* the most radinterp__builder_bytes has been (radinterp_mesh_info.build_bytes) */
+    size_t peak_bytes;               /* the most radinterp__note_bytes counted (radinterp_mesh_info.build_bytes) */
     /* statistics */
     uint32_t balance_splits, hanging, seam, fallback, degenerate, skipped;
     uint64_t samples;
@@ -10060,7 +10060,8 @@ static void radinterp__note_bytes(radinterp__builder *b, size_t extra)
     bufs[10] = &b->tris;
     for (k = 0; k < 11; k++) n += bufs[k]->cap * bufs[k]->item;
     n += radinterp__hmap_bytes(&b->corners) + radinterp__hmap_bytes(&b->canon) + radinterp__hmap_bytes(&b->vmap);
-    n += P * (sizeof(radinterp__frame) + 8 * sizeof(double) + 15 * sizeof(uint32_t)) + (b->pool_first ? P + 1 : 0) * sizeof(uint32_t);
+    n += P * (sizeof(radinterp__frame) + 8 * sizeof(double) + 15 * sizeof(uint32_t));   /* the per-patch arrays */
+    n += (b->pool_first ? P + 1 : 0) * sizeof(uint32_t);
     if (n > b->peak_bytes) b->peak_bytes = n;
 }
 
@@ -10716,9 +10717,9 @@ static int radinterp__group_dsets(radinterp__builder *b, uint32_t R)
             if (radinterp__new_dset(b, R, o, dir) != 0) { radinterp__free(&b->a, key); return -1; }
             for (m = k; m < j && key[m].offset - key[k].offset <= b->tol; m++) {
                 radinterp__disc *x = &dd[key[m].id];
-                if (radinterp__mesh_step(b, ++placed)) { radinterp__free(&b->a, key); return 1; }
                 double hp = nrm[0] * x->p[0] + nrm[1] * x->p[1] - key[k].offset;
                 double hq = nrm[0] * x->q[0] + nrm[1] * x->q[1] - key[k].offset;
+                if (radinterp__mesh_step(b, ++placed)) { radinterp__free(&b->a, key); return 1; }
                 if (fabs(hp) > 2.0 * b->tol || fabs(hq) > 2.0 * b->tol) {
                     /* a long segment at a slightly different angle: a line of its own */
                     double d2[2], len = sqrt((x->q[0] - x->p[0]) * (x->q[0] - x->p[0]) + (x->q[1] - x->p[1]) * (x->q[1] - x->p[1]));
@@ -10758,7 +10759,7 @@ static void radinterp__export_disc(const radinterp__builder *b, radinterp__disc 
 /* Moves R's discontinuities (grouped) to the list the mesh returns and keeps
    only R's candidates in b->discs, in their order: the steps after the
    grouping use no other, and the rest are most of them (building_1k: 23k
-   candidates among 2.5M discontinuities, 96 bytes each here). The weights
+   candidates among 2.5M discontinuities, 104 bytes each here). The weights
    cannot change while the mesh is built (5.4), so each is computed here
    once. */
 static int radinterp__keep_candidates(radinterp__builder *b, uint32_t R)
