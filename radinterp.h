@@ -764,9 +764,10 @@
    discontinuities while they are grouped into DSets (the grouping needs
    them all for the lines it draws). building_1k finds 2.54 M, of which
    23,269 are candidates; its build's allocations beyond the solution peak
-   at 302 MB before the first sample (643 MB when every one was held in one
-   growing array of records), 317 MB in all, for a mesh of 190 MB, 132 MB
-   of it discontinuities. building_4k finds 41.0 M (92,446 candidates, 5.35
+   at 249 MB before the first sample (643 MB when every one was held in one
+   growing array of records), 264 MB in all, for a mesh of 190 MB, 132 MB
+   of it discontinuities; build_bytes agrees with an allocator's count
+   within 0.1 MB on the office (31.6 MB). building_4k finds 41.0 M (92,446 candidates, 5.35
    M DSets): the mesh's list is 2.1 GB, the DSets' lines 0.34 GB, and the
    receiver with the most discontinuities held about 1.75 GB more while it
    was grouped: 4.27 GB beyond the solution's 2.31 GB before the first
