@@ -1,4 +1,4 @@
-/* radinterp.h - v0.8.7 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
+/* radinterp.h - v0.8.8 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
 
    RADINTERP.H: hierarchical radiosity, ranked discontinuities and quadratic irradiance interpolants evaluated per pixel.
 
@@ -662,11 +662,17 @@
    time (default 0.25; RADINTERP_CPU_SECONDS): however costly the jobs, a
    slow region shrinks the batches rather than stretching the gap. The
    serial stretches between batches call progress too once the interval has
-   passed (a receiver's discontinuity search between its sources and its
-   blockers; in the solve, refinement's pass over the links, the shaft
+   passed (in the mesh build, a receiver's discontinuity search between its
+   sources, every 8 blockers and every 8 event tests, the grouping of its
+   discontinuities into DSets every 64 of them, the quadtrees' copy and
+   restriction every 64 nodes, a pass's activation, segments and outlines
+   once a patch; in the solve, refinement's pass over the links, the shaft
    queries of a wave of split cluster links, installing the new links, an
-   iteration's gathers): on building_16k they took up to 1.8 s of CPU time
-   with v0.8.6. The batches never change a result.
+   iteration's gathers): on building_16k the solve's took up to 1.8 s of
+   CPU time with v0.8.6; on building_4k the mesh's grouping of one receiver
+   8.2 s, one source's event tests 9.3 s, the quadtrees and the first
+   pass's steps before its samples 6.6 s. The batches never change a
+   result.
    bench_radinterp_building's longest gap on building_1k, one thread: 0.64 s
    with v0.8.5's fixed batches, 0.46 s. radinterp_shade splits
    its pixels into jobs of 16384 through the mesh's parallel_for (the
@@ -747,6 +753,23 @@
    before v0.7.0) at about 2,000 per second of one core (185 s; v0.7.0:
    about 1,200, before a source's parts shared one union of shadows):
    minutes on two threads, too slow still for a level loaded at run time.
+   The build's memory: the mesh keeps every discontinuity found
+   (radinterp_mesh_get_discontinuity), 52 bytes each, in blocks of 16,384
+   that the build fills and the mesh takes over; the build's own records
+   (104 bytes) are kept only for the candidates, and for one receiver's
+   discontinuities while they are grouped into DSets (the grouping needs
+   them all for the lines it draws). building_1k finds 2.54 M, of which
+   23,269 are candidates; its build's allocations beyond the solution peak
+   at 249 MB before the first sample (643 MB when every one was held in one
+   growing array of records), 264 MB in all, for a mesh of 190 MB, 132 MB
+   of it discontinuities; build_bytes agrees with an allocator's count
+   within 0.1 MB on the office (31.6 MB). building_4k finds 41.0 M (92,446 candidates, 5.35
+   M DSets): the mesh's list is 2.1 GB, the DSets' lines 0.34 GB, and the
+   receiver with the most discontinuities held about 1.75 GB more while it
+   was grouped: 4.27 GB beyond the solution's 2.31 GB before the first
+   sample. In one array the records take 3.9 GB there, and 9.7 GB while
+   it doubles (computed; v0.8.6 reached 8.2 GB of resident memory).
+   radinterp_mesh_info.build_bytes reports the peak of the build's arrays.
    The leaf lists mark the links a whole leaf cannot see: one
    opaque blocker turned toward the leaf meets every segment from the
    leaf's box (grown by the lists' margin) to the source, as the near face
@@ -809,7 +832,7 @@
 
 #define RADINTERP_VERSION_MAJOR 0
 #define RADINTERP_VERSION_MINOR 8
-#define RADINTERP_VERSION_PATCH 7
+#define RADINTERP_VERSION_PATCH 8
 #define RADINTERP_FILE_FORMAT_VERSION 2   /* of saved meshes */
 
 #include <stddef.h>
@@ -1091,6 +1114,9 @@ typedef struct radinterp_mesh_info {
     size_t leaf_list_bytes;           /* the largest batch of leaf lists the samples held at once (the lists are
                                          built for the leaves of a run of samples and freed after them) */
     size_t bytes;                     /* memory held by the mesh */
+    size_t build_bytes;               /* the most the build held at once: its arrays at each step (the
+                                         discontinuities found, the candidates, the quadtrees, a pass, a batch
+                                         of leaf lists) and the mesh; 0 for a loaded mesh */
 } radinterp_mesh_info;
 
 /* The mesh as arrays an engine can upload. Pointers stay valid until
@@ -1336,6 +1362,22 @@ static void radinterp__buf_free(const radinterp_allocator *a, radinterp__buf *b)
     radinterp__free(a, b->data);
     b->data = NULL;
     b->count = b->cap = 0;
+}
+
+/* Gives back the capacity beyond the count, after a buffer held more for a
+   while than it keeps. */
+static int radinterp__buf_trim(const radinterp_allocator *a, radinterp__buf *b)
+{
+    void *p;
+    if (b->cap == b->count) return 0;
+    if (b->count == 0) { radinterp__buf_free(a, b); return 0; }
+    p = radinterp__alloc_array(a, b->count, b->item);
+    if (!p) return -1;
+    memcpy(p, b->data, b->count * b->item);
+    radinterp__free(a, b->data);
+    b->data = p;
+    b->cap = b->count;
+    return 0;
 }
 
 #define RADINTERP__U32(b) ((uint32_t *)(b).data)
@@ -9898,7 +9940,56 @@ typedef struct radinterp__disc {
     float weight;             /* cached geom * B_src */
     uint32_t weight_stamp;    /* radiosity state of the cached weight; 0 = not computed */
     uint32_t active;
+    uint32_t found;           /* its record in the list the mesh returns (radinterp__disc_list) */
 } radinterp__disc;
+
+/* Every discontinuity found, as the mesh returns them, in blocks of
+   2^RADINTERP__DISC_BLOCK_BITS records. The list grows without moving what
+   it holds (a doubling array holds up to three times its contents while it
+   grows: building_1k finds 2.5M discontinuities), and the mesh takes the
+   blocks over as they are. */
+#define RADINTERP__DISC_BLOCK_BITS 14
+#define RADINTERP__DISC_BLOCK (1u << RADINTERP__DISC_BLOCK_BITS)
+#define RADINTERP__DISC_MAX 0xFFFFFFF0u   /* records a list holds: indices are uint32_t */
+typedef struct radinterp__disc_list {
+    radinterp__buf blocks;    /* radinterp_discontinuity *, each RADINTERP__DISC_BLOCK records */
+    uint32_t count;
+} radinterp__disc_list;
+
+static void radinterp__disc_list_init(radinterp__disc_list *l)
+{
+    radinterp__buf_init(&l->blocks, sizeof(radinterp_discontinuity *));
+    l->count = 0;
+}
+
+static radinterp_discontinuity *radinterp__disc_list_at(const radinterp__disc_list *l, uint32_t i)
+{
+    return ((radinterp_discontinuity **)l->blocks.data)[i >> RADINTERP__DISC_BLOCK_BITS] + (i & (RADINTERP__DISC_BLOCK - 1u));
+}
+
+/* A new zeroed record at the end, or NULL when memory runs out or the list is full. */
+static radinterp_discontinuity *radinterp__disc_list_push(const radinterp_allocator *a, radinterp__disc_list *l)
+{
+    radinterp_discontinuity *d;
+    if (l->count >= RADINTERP__DISC_MAX) return NULL;
+    if ((l->count & (RADINTERP__DISC_BLOCK - 1u)) == 0) {
+        radinterp_discontinuity **slot = (radinterp_discontinuity **)radinterp__buf_push(a, &l->blocks);
+        if (!slot) return NULL;
+        *slot = (radinterp_discontinuity *)radinterp__alloc_array(a, RADINTERP__DISC_BLOCK, sizeof **slot);
+        if (!*slot) { l->blocks.count--; return NULL; }
+    }
+    d = radinterp__disc_list_at(l, l->count++);
+    memset(d, 0, sizeof *d);
+    return d;
+}
+
+static void radinterp__disc_list_free(const radinterp_allocator *a, radinterp__disc_list *l)
+{
+    size_t i;
+    for (i = 0; i < l->blocks.count; i++) radinterp__free(a, ((radinterp_discontinuity **)l->blocks.data)[i]);
+    radinterp__buf_free(a, &l->blocks);
+    l->count = 0;
+}
 
 /* A DSet's line on a receiver (5.5.4): point o, unit direction d. */
 typedef struct radinterp__dset { double o[2], d[2]; uint32_t receiver; } radinterp__dset;
@@ -9947,12 +10038,15 @@ typedef struct radinterp__builder {
     float min_weight;
     double min_contrast;             /* see min_discont_contrast */
     uint32_t hidden_events;          /* candidate EV/VE events whose generating line is blocked (not kept) */
+    uint64_t event_tests;            /* radinterp__event_seen calls */
     uint32_t max_dsets;
     double refine_eps, refine_min_area, min_leaf_area;
     uint32_t refine_samples, refine_passes;
     radinterp__frame *frames;       /* per patch */
     double *outline;                 /* per patch: corners in its frame, 8 doubles */
-    /* discontinuities, grouped by receiver and by DSet inside */
+    /* discontinuities: every one found (the mesh's list), and the candidates
+       (radinterp__candidate), grouped by receiver and by DSet inside */
+    radinterp__disc_list found;
     radinterp__buf discs, dsets;
     uint32_t *disc_first, *disc_count;
     /* quadtrees */
@@ -9972,6 +10066,7 @@ typedef struct radinterp__builder {
     radinterp__buf pos, tris;        /* output of the pass */
     radinterp__hmap vmap;            /* point -> output vertex */
     double reported;                 /* RADINTERP_CPU_SECONDS() at the last progress call */
+    size_t peak_bytes;               /* the most radinterp__note_bytes counted (radinterp_mesh_info.build_bytes) */
     /* statistics */
     uint32_t balance_splits, hanging, seam, fallback, degenerate, skipped;
     uint64_t samples;
@@ -9988,6 +10083,59 @@ static void radinterp__mesh_log(const radinterp__builder *b, const char *fmt, ..
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
     b->desc->log(b->desc->log_user, msg);
+}
+
+/* A progress call between the steps that come before the samples: (0, 1),
+   none of the sampling's count done yet. A building's discontinuities and
+   triangulations take seconds, during which the caller may still see
+   progress and cancel. Non-zero: cancel. */
+static int radinterp__mesh_cancelled(radinterp__builder *b)
+{
+    b->reported = RADINTERP_CPU_SECONDS();
+    return b->desc->progress && b->desc->progress(b->desc->progress_user, 0, 1) != 0;
+}
+
+/* The same call inside one long serial step (a receiver that many sources
+   light, a source with thousands of blockers between it and the receiver),
+   once progress_interval has passed since the last call. */
+static int radinterp__mesh_tick(radinterp__builder *b)
+{
+    if (!radinterp__progress_due(b->reported, b->desc->progress_interval)) return 0;
+    return radinterp__mesh_cancelled(b);
+}
+
+/* radinterp__mesh_tick for loops of short steps (i counts them): the clock
+   is read every RADINTERP__TICK_STEPS steps, as in the solve. */
+static int radinterp__mesh_step(radinterp__builder *b, size_t i)
+{
+    return i % RADINTERP__TICK_STEPS == 0 && radinterp__mesh_tick(b);
+}
+
+/* The result of a step that returns 0, -1 (memory) or 1 (cancel). */
+static radinterp_result radinterp__step_result(int r)
+{
+    return r > 0 ? RADINTERP_ERROR_CANCELLED : (r < 0 ? RADINTERP_ERROR_OUT_OF_MEMORY : RADINTERP_OK);
+}
+
+static size_t radinterp__hmap_bytes(const radinterp__hmap *m) { return (size_t)m->cap * (m->words + 1u) * sizeof(uint32_t); }
+
+/* Bytes the builder's arrays hold now (their capacities), plus `extra`
+   held beside them; the peak is kept for radinterp_mesh_info.build_bytes.
+   Taken at the build's steps: short-lived work arrays inside a step are not
+   counted. */
+static void radinterp__note_bytes(radinterp__builder *b, size_t extra)
+{
+    const radinterp__buf *bufs[11];
+    size_t n = extra + (size_t)b->found.blocks.count * RADINTERP__DISC_BLOCK * sizeof(radinterp_discontinuity), k;
+    size_t P = b->s->patch_count;
+    bufs[0] = &b->found.blocks; bufs[1] = &b->discs; bufs[2] = &b->dsets; bufs[3] = &b->nodes; bufs[4] = &b->node_discs;
+    bufs[5] = &b->leaves; bufs[6] = &b->segs; bufs[7] = &b->pool; bufs[8] = &b->chains; bufs[9] = &b->pos;
+    bufs[10] = &b->tris;
+    for (k = 0; k < 11; k++) n += bufs[k]->cap * bufs[k]->item;
+    n += radinterp__hmap_bytes(&b->corners) + radinterp__hmap_bytes(&b->canon) + radinterp__hmap_bytes(&b->vmap);
+    n += P * (sizeof(radinterp__frame) + 8 * sizeof(double) + 15 * sizeof(uint32_t));   /* the per-patch arrays */
+    n += (b->pool_first ? P + 1 : 0) * sizeof(uint32_t);
+    if (n > b->peak_bytes) b->peak_bytes = n;
 }
 
 /* Largest channel of a patch's radiosity: B_src of the weights. */
@@ -10295,7 +10443,13 @@ static int radinterp__event_seen(const radinterp__builder *b, int ev, const doub
     return 0;
 }
 
-/* Trace (3D ends p3, q3) -> clipped segment on R with its geometric factor. */
+/* Blockers, or event tests (radinterp__event_seen), between clock readings:
+   most cost microseconds, some milliseconds (building_4k: a source's 22
+   blockers took 9.3 s, about 0.4 s each, in their event tests' rays). */
+#define RADINTERP__WEDGE_TICK 8
+
+/* Trace (3D ends p3, q3) -> clipped segment on R with its geometric factor.
+   0, or -1 when memory runs out, 1 when progress asks to cancel. */
 static int radinterp__wedge_disc(radinterp__builder *b, const radinterp__wedge_ctx *w, int ev, const double *f,
                                  const double *l0, const double *l1, const double *p3, const double *q3)
 {
@@ -10310,22 +10464,25 @@ static int radinterp__wedge_disc(radinterp__builder *b, const radinterp__wedge_c
     radinterp__frame_to3d(fr, cq, r);
     g2 = radinterp__wedge_ratio(ev, f, l0, l1, r);
     if (g2 > geom) geom = g2;
-    if (w->may_count && geom >= w->geom_min && !radinterp__event_seen(b, ev, f, l0, l1, fr, cp, cq)) {
-        b->hidden_events++;
-        return 0;
+    if (w->may_count && geom >= w->geom_min) {
+        if (++b->event_tests % RADINTERP__WEDGE_TICK == 0 && radinterp__mesh_tick(b)) return 1;
+        if (!radinterp__event_seen(b, ev, f, l0, l1, fr, cp, cq)) {
+            b->hidden_events++;
+            return 0;
+        }
     }
     return radinterp__push_disc(b, w->R, cp, cq, on_p, on_q,
                                 ev ? RADINTERP_DISCONTINUITY_EV : RADINTERP_DISCONTINUITY_VE, w->S, w->B, geom);
 }
 
 /* EV and VE discontinuities of one source (clipped to R's front: Sc) and
-   one blocker on R. */
+   one blocker on R. 0, -1 (memory) or 1 (cancel), as radinterp__wedge_disc. */
 static int radinterp__wedges(radinterp__builder *b, const radinterp__wedge_ctx *w, const double (*Sc)[3], int nc)
 {
     const radinterp_solution *s = b->s;
     const radinterp__patch *pr = &s->patches[w->R], *ps = &s->patches[w->S], *pb = &s->patches[w->B];
     double B[4][3], m[3], p3[3], q3[3];
-    int nb = radinterp__patch_poly(pb, B), i, k;
+    int nb = radinterp__patch_poly(pb, B), i, k, r;
     /* EV: source edge (Sc[k], Sc[k+1]), blocker vertex B[i] */
     for (k = 0; k < nc; k++) {
         const double *e0 = Sc[k], *e1 = Sc[(k + 1) % nc];
@@ -10335,7 +10492,7 @@ static int radinterp__wedges(radinterp__builder *b, const radinterp__wedge_ctx *
             if (fabs(radinterp__d3_dot(m, ps->n)) > 1.0 - 1e-9) continue;     /* the source's own plane */
             if (!radinterp__supports(m, e0, (const double (*)[3])B, nb, b->tol)) continue;
             if (!radinterp__wedge_trace(b, pr, ps, e0, e1, B[i], B[i], p3, q3)) continue;
-            if (radinterp__wedge_disc(b, w, 1, B[i], e0, e1, p3, q3) != 0) return -1;
+            if ((r = radinterp__wedge_disc(b, w, 1, B[i], e0, e1, p3, q3)) != 0) return r;
         }
     }
     /* VE: source vertex Sc[k], blocker edge (B[i], B[i+1]) */
@@ -10346,7 +10503,7 @@ static int radinterp__wedges(radinterp__builder *b, const radinterp__wedge_ctx *
             if (fabs(radinterp__d3_dot(m, pb->n)) > 1.0 - 1e-9) continue;     /* the blocker's own plane */
             if (!radinterp__supports(m, f0, Sc, nc, b->tol)) continue;
             if (!radinterp__wedge_trace(b, pr, ps, Sc[k], Sc[k], f0, f1, p3, q3)) continue;
-            if (radinterp__wedge_disc(b, w, 0, Sc[k], f0, f1, p3, q3) != 0) return -1;
+            if ((r = radinterp__wedge_disc(b, w, 0, Sc[k], f0, f1, p3, q3)) != 0) return r;
         }
     }
     return 0;
@@ -10481,34 +10638,15 @@ static double radinterp__source_reach(const radinterp__builder *b, uint32_t R, c
     return best;
 }
 
-/* A progress call between the steps that come before the samples: (0, 1),
-   none of the sampling's count done yet. A building's discontinuities and
-   triangulations take seconds, during which the caller may still see
-   progress and cancel. Non-zero: cancel. */
-static int radinterp__mesh_cancelled(radinterp__builder *b)
-{
-    b->reported = RADINTERP_CPU_SECONDS();
-    return b->desc->progress && b->desc->progress(b->desc->progress_user, 0, 1) != 0;
-}
-
-/* The same call inside one long serial step (a receiver that many sources
-   light, a source with thousands of blockers between it and the receiver),
-   once progress_interval has passed since the last call. */
-static int radinterp__mesh_tick(radinterp__builder *b)
-{
-    if (!radinterp__progress_due(b->reported, b->desc->progress_interval)) return 0;
-    return radinterp__mesh_cancelled(b);
-}
-
 /* Every discontinuity on receiver R (5.5.3: from the links, so only
    mutually visible pairs and their potential blockers are considered).
    0, or -1 when memory runs out, 1 when progress asks to cancel. */
-#define RADINTERP__WEDGE_TICK 8   /* blockers between clock readings: most cost microseconds, some milliseconds */
 static int radinterp__receiver_discs(radinterp__builder *b, uint32_t R, radinterp__buf *pairs, radinterp__buf *stack)
 {
     const radinterp_solution *s = b->s;
     const uint64_t *pr;
     size_t i = 0, j, wedged = 0;
+    int r;
     if (radinterp__link_pairs(b, R, pairs, stack) != 0) return -1;
     pr = (const uint64_t *)pairs->data;
     while (i < pairs->count) {
@@ -10543,7 +10681,7 @@ static int radinterp__receiver_discs(radinterp__builder *b, uint32_t R, radinter
                 /* building_4k: 380 blockers of one source took 2.8 s (6882 discontinuities) */
                 if (++wedged % RADINTERP__WEDGE_TICK == 0 && radinterp__mesh_tick(b)) return 1;
                 w.B = B;
-                if (radinterp__wedges(b, &w, (const double (*)[3])Sc, nc) != 0) return -1;
+                if ((r = radinterp__wedges(b, &w, (const double (*)[3])Sc, nc)) != 0) return r;
             }
             for (m = from; m < b->discs.count; m++) ((radinterp__disc *)b->discs.data)[m].reach = reach;
         }
@@ -10612,11 +10750,13 @@ static void radinterp__disc_on_line(radinterp__disc *x, const double *o, const d
 }
 
 /* Groups R's discontinuities into DSets (lines within RADINTERP__DSET_ANGLE
-   and tol of each other) and orders them by DSet, then along it. */
+   and tol of each other) and orders them by DSet, then along it. 0, or -1
+   when memory runs out, 1 when progress asks to cancel (a receiver can hold
+   millions: building_4k's took up to 8.2 s here). */
 static int radinterp__group_dsets(radinterp__builder *b, uint32_t R)
 {
     radinterp__disc *dd;
-    uint32_t n = b->disc_count[R], i, j, k;
+    uint32_t n = b->disc_count[R], i, j, k, placed = 0;
     radinterp__dkey *key;
     if (n == 0) return 0;   /* discs.data may be NULL: no pointer arithmetic on it */
     dd = (radinterp__disc *)b->discs.data + b->disc_first[R];
@@ -10652,6 +10792,7 @@ static int radinterp__group_dsets(radinterp__builder *b, uint32_t R)
                 radinterp__disc *x = &dd[key[m].id];
                 double hp = nrm[0] * x->p[0] + nrm[1] * x->p[1] - key[k].offset;
                 double hq = nrm[0] * x->q[0] + nrm[1] * x->q[1] - key[k].offset;
+                if (radinterp__mesh_step(b, ++placed)) { radinterp__free(&b->a, key); return 1; }
                 if (fabs(hp) > 2.0 * b->tol || fabs(hq) > 2.0 * b->tol) {
                     /* a long segment at a slightly different angle: a line of its own */
                     double d2[2], len = sqrt((x->q[0] - x->p[0]) * (x->q[0] - x->p[0]) + (x->q[1] - x->p[1]) * (x->q[1] - x->p[1]));
@@ -10667,7 +10808,48 @@ static int radinterp__group_dsets(radinterp__builder *b, uint32_t R)
         }
     }
     radinterp__free(&b->a, key);
+    if (radinterp__mesh_tick(b)) return 1;
     qsort(dd, n, sizeof *dd, radinterp__cmp_disc_order);
+    return 0;
+}
+
+/* The record the mesh returns for discontinuity d (grouped: its ends on its
+   DSet's line). */
+static void radinterp__export_disc(const radinterp__builder *b, radinterp__disc *d, radinterp_discontinuity *o)
+{
+    const radinterp_solution *s = b->s;
+    radinterp__frame_to3df(&b->frames[d->receiver], d->p, o->a);
+    radinterp__frame_to3df(&b->frames[d->receiver], d->q, o->b);
+    o->type = d->type;
+    o->receiver = s->first_caller[d->receiver];
+    o->source = d->source != RADINTERP_NO_PATCH ? s->first_caller[d->source] : RADINTERP_NO_PATCH;
+    o->blocker = d->blocker != RADINTERP_NO_PATCH ? s->first_caller[d->blocker] : RADINTERP_NO_PATCH;
+    o->dset = d->dset;
+    o->weight = radinterp__disc_weight(s, d);
+    o->active = 0;
+}
+
+/* Moves R's discontinuities (grouped) to the list the mesh returns and keeps
+   only R's candidates in b->discs, in their order: the steps after the
+   grouping use no other, and the rest are most of them (building_1k: 23k
+   candidates among 2.5M discontinuities, 104 bytes each here). The weights
+   cannot change while the mesh is built (5.4), so each is computed here
+   once. */
+static int radinterp__keep_candidates(radinterp__builder *b, uint32_t R)
+{
+    radinterp__disc *dd;
+    uint32_t n = b->disc_count[R], i, kept = 0;
+    if (n == 0) return 0;   /* discs.data may be NULL: no pointer arithmetic on it */
+    dd = (radinterp__disc *)b->discs.data + b->disc_first[R];
+    for (i = 0; i < n; i++) {
+        radinterp_discontinuity *o = radinterp__disc_list_push(&b->a, &b->found);
+        if (!o) return -1;
+        radinterp__export_disc(b, &dd[i], o);
+        dd[i].found = b->found.count - 1u;
+        if (radinterp__candidate(b, &dd[i])) dd[kept++] = dd[i];
+    }
+    b->disc_count[R] = kept;
+    b->discs.count = (size_t)b->disc_first[R] + kept;
     return 0;
 }
 
@@ -10689,11 +10871,18 @@ static radinterp_result radinterp__find_discontinuities(radinterp__builder *b)
         fail = r < 0;
         b->disc_count[R] = (uint32_t)b->discs.count - b->disc_first[R];
         if (!fail && !cancelled) cancelled = radinterp__mesh_tick(b);
-        if (!fail && !cancelled) fail = radinterp__group_dsets(b, R) != 0;
+        if (!fail && !cancelled) {
+            r = radinterp__group_dsets(b, R);
+            cancelled = r > 0;
+            fail = r < 0;
+        }
+        if (!fail && !cancelled) fail = radinterp__keep_candidates(b, R) != 0;
+        radinterp__note_bytes(b, 0);
     }
     radinterp__buf_free(&b->a, &pairs);
     radinterp__buf_free(&b->a, &stack);
-    if (!fail && b->discs.count > 0xFFFFFFF0u) fail = 1;
+    /* b->discs held the largest receiver's discontinuities for a while */
+    if (!fail && !cancelled) fail = radinterp__buf_trim(&b->a, &b->discs) != 0;
     if (cancelled) return RADINTERP_ERROR_CANCELLED;
     return fail ? RADINTERP_ERROR_OUT_OF_MEMORY : RADINTERP_OK;
 }
@@ -10798,11 +10987,11 @@ static int radinterp__mnode_split(radinterp__builder *b, uint32_t index)
 }
 
 /* Copies patch R's quadtree from the solution, breadth first; the root
-   lists R's candidate discontinuities. */
+   lists R's candidate discontinuities. 0, or -1 when memory runs out, 1 when
+   progress asks to cancel. */
 static int radinterp__copy_tree(radinterp__builder *b, uint32_t R, radinterp__buf *queue)
 {
     const radinterp_solution *s = b->s;
-    const radinterp__disc *dd = (const radinterp__disc *)b->discs.data;
     radinterp__mnode *root;
     uint32_t head = 0, i;
     b->roots[R] = (uint32_t)b->nodes.count;
@@ -10815,7 +11004,7 @@ static int radinterp__copy_tree(radinterp__builder *b, uint32_t R, radinterp__bu
     radinterp__mnode_frame(b, root);
     root->first_disc = (uint32_t)b->node_discs.count;
     for (i = b->disc_first[R]; i < b->disc_first[R] + b->disc_count[R]; i++)
-        if (radinterp__candidate(b, &dd[i]) && radinterp__buf_u32(&b->a, &b->node_discs, i) != 0) return -1;
+        if (radinterp__buf_u32(&b->a, &b->node_discs, i) != 0) return -1;
     RADINTERP__MNODES(b)[b->roots[R]].disc_count = (uint32_t)b->node_discs.count - RADINTERP__MNODES(b)[b->roots[R]].first_disc;
     for (i = 0; i < s->patches[R].count; i++)
         if (radinterp__corner_put(b, R, s->patches[R].v[i]) != 0) return -1;
@@ -10825,6 +11014,7 @@ static int radinterp__copy_tree(radinterp__builder *b, uint32_t R, radinterp__bu
     while (head < queue->count) {
         uint32_t sn = RADINTERP__U32(*queue)[head], mn = RADINTERP__U32(*queue)[head + 1], k, first;
         head += 2;
+        if (radinterp__mesh_step(b, head / 2)) return 1;
         if (s->nodes[sn].child == RADINTERP__NONE || (double)s->nodes[s->nodes[sn].child].area < b->min_leaf_area) continue;
         first = (uint32_t)b->nodes.count;
         if (radinterp__buf_reserve(&b->a, &b->nodes, b->nodes.count + 4) != 0) return -1;
@@ -10881,7 +11071,8 @@ static int radinterp__unbalanced(const radinterp__builder *b, const radinterp__m
 }
 
 /* Restricted quadtree (3.6): split until neighbouring leaves of a patch
-   differ by at most one level. */
+   differ by at most one level. 0, or -1 when memory runs out, 1 when
+   progress asks to cancel. */
 static int radinterp__balance(radinterp__builder *b)
 {
     int changed = 1;
@@ -10889,6 +11080,7 @@ static int radinterp__balance(radinterp__builder *b)
         uint32_t i;
         changed = 0;
         for (i = 0; i < b->nodes.count; i++) {
+            if (radinterp__mesh_step(b, i)) return 1;
             if (RADINTERP__MNODES(b)[i].child != RADINTERP__NONE || !radinterp__unbalanced(b, &RADINTERP__MNODES(b)[i]))
                 continue;
             if (radinterp__mnode_split(b, i) != 0) return -1;
@@ -11062,13 +11254,13 @@ static radinterp_result radinterp__activate(radinterp__builder *b)
     radinterp__buf_init(&w.active, sizeof(uint32_t));
     radinterp__buf_init(&w.active_n, sizeof(uint32_t));
     for (i = 0; i < b->discs.count; i++) dd[i].active = 0;
-    for (R = 0; R < b->s->patch_count && !fail; R++) fail = radinterp__activate_patch(b, R, &w) != 0;
+    for (R = 0; R < b->s->patch_count && !fail; R++) fail = radinterp__mesh_tick(b) ? 1 : radinterp__activate_patch(b, R, &w);
     radinterp__buf_free(&b->a, &w.order);
     radinterp__buf_free(&b->a, &w.start);
     radinterp__buf_free(&b->a, &w.list);
     radinterp__buf_free(&b->a, &w.active);
     radinterp__buf_free(&b->a, &w.active_n);
-    return fail ? RADINTERP_ERROR_OUT_OF_MEMORY : RADINTERP_OK;
+    return radinterp__step_result(fail);
 }
 
 /* DSets of a leaf's list (they are grouped), and how many are active. */
@@ -11906,7 +12098,7 @@ struct radinterp_mesh {
     float *corner;               /* 9 per triangle */
     float *vertex_rad;           /* 3 per vertex */
     float *patch_rho, *patch_e;  /* 3 per patch */
-    radinterp_discontinuity *discs;
+    radinterp__disc_list discs;  /* disc_count records */
     radinterp_mesh_leaf *leaves;
     radinterp_mesh_info info;
 };
@@ -12206,6 +12398,7 @@ static radinterp_result radinterp__sample_listed(radinterp__builder *b, radinter
         res = radinterp__fill_leaf_lists(b, &lists, *done, total);
         if (res != RADINTERP_OK) { radinterp__leaf_lists_free(&b->a, &lists); break; }
         if (lists.bytes > b->leaf_list_bytes) b->leaf_list_bytes = lists.bytes;
+        radinterp__note_bytes(b, lists.bytes);   /* the batch is held beside the builder's arrays */
         ctx->pts = pts + at;
         ctx->value = value + 3 * (size_t)at;
         ctx->lists = &lists;
@@ -12288,6 +12481,13 @@ static void radinterp__interp_free(const radinterp_allocator *a, radinterp__inte
     radinterp__free(a, ip->prev_error);
     radinterp__hmap_free(a, &ip->prev);
     memset(ip, 0, sizeof *ip);
+}
+
+/* Bytes ip holds for a pass of n triangles: their coefficients and errors
+   (this pass's, or kept as the previous pass's) and the previous pass's keys. */
+static size_t radinterp__interp_bytes(const radinterp__interp *ip, size_t n)
+{
+    return n * 19 * sizeof(float) + radinterp__hmap_bytes(&ip->prev);
 }
 
 /* Coefficients of the pass's triangles: from the previous pass where the
@@ -12388,11 +12588,13 @@ static radinterp_result radinterp__mesh_pass(radinterp__builder *b)
     if (radinterp__collect_mleaves(b, &w.stack) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     if (res == RADINTERP_OK) res = radinterp__activate(b);
     for (P = 0; P < s->patch_count && res == RADINTERP_OK; P++)
-        if (radinterp__patch_segments(b, P) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+        if (radinterp__mesh_tick(b)) res = RADINTERP_ERROR_CANCELLED;
+        else if (radinterp__patch_segments(b, P) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     if (res == RADINTERP_OK && radinterp__hmap_init(&b->a, &seen, 4, 1024) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     for (P = 0; P < s->patch_count && res == RADINTERP_OK; P++) {
         if (!s->patches[P].count) continue;
-        if (radinterp__outline_vertices(b, P, &seen) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+        if (radinterp__mesh_tick(b)) res = RADINTERP_ERROR_CANCELLED;
+        else if (radinterp__outline_vertices(b, P, &seen) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     }
     if (res == RADINTERP_OK && radinterp__weld(b) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     if (res == RADINTERP_OK) {   /* the pool is in patch order */
@@ -12451,11 +12653,9 @@ static int radinterp__mesh_alloc(radinterp_mesh *m)
     m->vertex_rad = (float *)radinterp__alloc_array(a, V, 3 * sizeof(float));
     m->patch_rho = (float *)radinterp__alloc_array(a, P, 3 * sizeof(float));
     m->patch_e = (float *)radinterp__alloc_array(a, P, 3 * sizeof(float));
-    m->discs = (radinterp_discontinuity *)radinterp__alloc_array(a, m->disc_count, sizeof(radinterp_discontinuity));
     m->leaves = (radinterp_mesh_leaf *)radinterp__alloc_array(a, m->leaf_count, sizeof(radinterp_mesh_leaf));
     return m->positions && m->indices && m->tri_patch && m->tri_leaf && m->edge_flags && m->irr && m->rad && m->shade &&
-                   m->reflectance && m->emission && m->corner && m->vertex_rad && m->patch_rho && m->patch_e && m->discs &&
-                   m->leaves
+                   m->reflectance && m->emission && m->corner && m->vertex_rad && m->patch_rho && m->patch_e && m->leaves
                ? 0
                : -1;
 }
@@ -12479,7 +12679,7 @@ RADINTERP_API void radinterp_mesh_destroy(radinterp_mesh *m)
     radinterp__free(&a, m->vertex_rad);
     radinterp__free(&a, m->patch_rho);
     radinterp__free(&a, m->patch_e);
-    radinterp__free(&a, m->discs);
+    radinterp__disc_list_free(&a, &m->discs);
     radinterp__free(&a, m->leaves);
     radinterp__free(&a, m);
 }
@@ -12528,7 +12728,8 @@ static size_t radinterp__mesh_bytes(const radinterp_mesh *m)
 {
     return sizeof *m + (size_t)m->vertex_count * 6 * sizeof(float) +
            (size_t)m->triangle_count * (5 * sizeof(uint32_t) + 1 + (18 + 18 + 24 + 3 + 3 + 9) * sizeof(float)) +
-           (size_t)m->patch_count * 6 * sizeof(float) + (size_t)m->disc_count * sizeof(radinterp_discontinuity) +
+           (size_t)m->patch_count * 6 * sizeof(float) +
+           m->discs.blocks.count * (RADINTERP__DISC_BLOCK * sizeof(radinterp_discontinuity) + sizeof(radinterp_discontinuity *)) +
            (size_t)m->leaf_count * sizeof(radinterp_mesh_leaf);
 }
 
@@ -12538,7 +12739,7 @@ static radinterp_result radinterp__assemble(radinterp__builder *b, const float *
 {
     const radinterp_solution *s = b->s;
     const radinterp__otri *tris = (const radinterp__otri *)b->tris.data;
-    radinterp__disc *dd = (radinterp__disc *)b->discs.data;
+    const radinterp__disc *dd = (const radinterp__disc *)b->discs.data;
     radinterp_mesh *m = (radinterp_mesh *)radinterp__alloc(&b->a, sizeof *m);
     radinterp_mesh_info *info;
     uint32_t i;
@@ -12550,7 +12751,7 @@ static radinterp_result radinterp__assemble(radinterp__builder *b, const float *
     m->vertex_count = (uint32_t)(b->pos.count / 3);
     m->triangle_count = (uint32_t)b->tris.count;
     m->patch_count = s->caller_count;
-    m->disc_count = (uint32_t)b->discs.count;
+    m->disc_count = b->found.count;
     m->leaf_count = (uint32_t)b->leaves.count;
     if (radinterp__mesh_alloc(m) != 0) { radinterp_mesh_destroy(m); return RADINTERP_ERROR_OUT_OF_MEMORY; }
     memcpy(m->positions, b->pos.data, b->pos.count * sizeof(float));
@@ -12566,24 +12767,19 @@ static radinterp_result radinterp__assemble(radinterp__builder *b, const float *
         memcpy(m->patch_e + 3 * (size_t)i, s->patches[s->caller_patch[i]].e, 3 * sizeof(float));
     }
     info = &m->info;
+    m->discs = b->found;   /* the mesh takes the blocks over */
+    radinterp__disc_list_init(&b->found);
     for (i = 0; i < m->disc_count; i++) {
-        radinterp_discontinuity *o = &m->discs[i];
-        const radinterp__disc *d = &dd[i];
-        radinterp__frame_to3df(&b->frames[d->receiver], d->p, o->a);
-        radinterp__frame_to3df(&b->frames[d->receiver], d->q, o->b);
-        o->type = d->type;
-        o->receiver = s->first_caller[d->receiver];
-        o->source = d->source != RADINTERP_NO_PATCH ? s->first_caller[d->source] : RADINTERP_NO_PATCH;
-        o->blocker = d->blocker != RADINTERP_NO_PATCH ? s->first_caller[d->blocker] : RADINTERP_NO_PATCH;
-        o->dset = d->dset;
-        o->weight = radinterp__disc_weight(s, &dd[i]);
-        o->active = (int)d->active;
-        info->ev += d->type == RADINTERP_DISCONTINUITY_EV;
-        info->ve += d->type == RADINTERP_DISCONTINUITY_VE;
-        info->horizon += d->type == RADINTERP_DISCONTINUITY_HORIZON;
-        info->contact += d->type == RADINTERP_DISCONTINUITY_CONTACT;
-        info->candidates += radinterp__candidate(b, d);
-        info->active_discontinuities += d->active;
+        uint32_t type = radinterp__disc_list_at(&m->discs, i)->type;
+        info->ev += type == RADINTERP_DISCONTINUITY_EV;
+        info->ve += type == RADINTERP_DISCONTINUITY_VE;
+        info->horizon += type == RADINTERP_DISCONTINUITY_HORIZON;
+        info->contact += type == RADINTERP_DISCONTINUITY_CONTACT;
+    }
+    info->candidates = (uint32_t)b->discs.count;
+    for (i = 0; i < b->discs.count; i++) {
+        radinterp__disc_list_at(&m->discs, dd[i].found)->active = (int)dd[i].active;
+        info->active_discontinuities += dd[i].active;
     }
     for (i = 0; i < m->leaf_count; i++) {
         const radinterp__mnode *nd = &RADINTERP__MNODES(b)[RADINTERP__U32(b->leaves)[i]];
@@ -12660,6 +12856,7 @@ static void radinterp__builder_free(radinterp__builder *b)
     radinterp__free(a, b->seg_count);
     radinterp__free(a, b->chain_first);
     radinterp__free(a, b->chain_len);
+    radinterp__disc_list_free(a, &b->found);
     radinterp__buf_free(a, &b->discs);
     radinterp__buf_free(a, &b->dsets);
     radinterp__buf_free(a, &b->nodes);
@@ -12699,6 +12896,7 @@ static radinterp_result radinterp__builder_init(radinterp__builder *b, const rad
     b->min_leaf_area = d->min_leaf_area;
     b->refine_samples = radinterp__def(d->refine_samples, 3u);
     b->refine_passes = radinterp__def(d->refine_passes, 8u);
+    radinterp__disc_list_init(&b->found);
     radinterp__buf_init(&b->discs, sizeof(radinterp__disc));
     radinterp__buf_init(&b->dsets, sizeof(radinterp__dset));
     radinterp__buf_init(&b->nodes, sizeof(radinterp__mnode));
@@ -12743,13 +12941,13 @@ static radinterp_result radinterp__build_trees(radinterp__builder *b)
 {
     radinterp__buf queue;
     uint32_t R;
-    int fail = 0;
+    int r = 0;
     radinterp__buf_init(&queue, sizeof(uint32_t));
-    for (R = 0; R < b->s->patch_count && !fail; R++)
-        if (b->s->patches[R].count) fail = radinterp__copy_tree(b, R, &queue) != 0;
+    for (R = 0; R < b->s->patch_count && r == 0; R++)
+        if (b->s->patches[R].count) r = radinterp__copy_tree(b, R, &queue);
     radinterp__buf_free(&b->a, &queue);
-    if (!fail) fail = radinterp__balance(b) != 0;
-    return fail ? RADINTERP_ERROR_OUT_OF_MEMORY : RADINTERP_OK;
+    if (r == 0) r = radinterp__balance(b);
+    return radinterp__step_result(r);
 }
 
 RADINTERP_API radinterp_result radinterp_build_mesh(const radinterp_solution *s, const radinterp_mesh_desc *desc,
@@ -12758,7 +12956,7 @@ RADINTERP_API radinterp_result radinterp_build_mesh(const radinterp_solution *s,
     radinterp__builder b;
     radinterp__interp ip;
     radinterp_result res;
-    uint32_t pass = 0, refined = 0, i;
+    uint32_t pass = 0, refined = 0;
     float worst = 0.0f;
     if (!out) return RADINTERP_ERROR_INVALID_ARGUMENT;
     *out = NULL;
@@ -12771,20 +12969,21 @@ RADINTERP_API radinterp_result radinterp_build_mesh(const radinterp_solution *s,
     if (res == RADINTERP_OK && b.hidden_events)
         radinterp__mesh_log(&b, "radinterp_build_mesh: %u discontinuity events hidden behind other surfaces left out",
                             b.hidden_events);
-    if (res == RADINTERP_OK)
-        for (i = 0; i < b.discs.count; i++) radinterp__disc_weight(s, &((radinterp__disc *)b.discs.data)[i]);
     if (res == RADINTERP_OK) res = radinterp__build_trees(&b);
     while (res == RADINTERP_OK) {
         int split;
+        radinterp__note_bytes(&b, 0);
         res = radinterp__mesh_pass(&b);
+        radinterp__note_bytes(&b, 0);
         if (res == RADINTERP_OK) res = radinterp__interpolants(&b, &ip);
+        radinterp__note_bytes(&b, radinterp__interp_bytes(&ip, b.tris.count));
         if (res != RADINTERP_OK || !desc->refine || pass >= b.refine_passes) break;
         split = radinterp__refine_leaves(&b, ip.prev_error, &worst);
         if (split < 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
         if (split <= 0) break;
         refined += (uint32_t)split;
         pass++;
-        if (radinterp__balance(&b) != 0) res = RADINTERP_ERROR_OUT_OF_MEMORY;
+        res = radinterp__step_result(radinterp__balance(&b));
     }
     if (res == RADINTERP_OK) {
         res = radinterp__assemble(&b, desc->refine ? ip.prev_coeff : ip.coeff, desc->refine ? ip.prev_error : ip.error, out);
@@ -12793,6 +12992,8 @@ RADINTERP_API radinterp_result radinterp_build_mesh(const radinterp_solution *s,
             (*out)->info.refined_leaves = refined;
             (*out)->info.max_fit_error = worst;
             (*out)->info.bytes = radinterp__mesh_bytes(*out);
+            radinterp__note_bytes(&b, (*out)->info.bytes + radinterp__interp_bytes(&ip, b.tris.count));
+            (*out)->info.build_bytes = b.peak_bytes;
         }
     }
     if (res == RADINTERP_ERROR_OUT_OF_MEMORY) radinterp__mesh_log(&b, "radinterp_build_mesh: out of memory");
@@ -12836,7 +13037,7 @@ RADINTERP_API radinterp_result radinterp_mesh_get_discontinuity(const radinterp_
     if (!d) return RADINTERP_ERROR_INVALID_ARGUMENT;
     memset(d, 0, sizeof *d);
     if (!m || index >= m->disc_count) return RADINTERP_ERROR_INVALID_ARGUMENT;
-    *d = m->discs[index];
+    *d = *radinterp__disc_list_at(&m->discs, index);
     return RADINTERP_OK;
 }
 
@@ -13098,7 +13299,7 @@ RADINTERP_API radinterp_result radinterp_mesh_save(const radinterp_mesh *m, radi
     radinterp__put_f32_array(&w, m->patch_rho, 3 * (size_t)m->patch_count);
     radinterp__put_f32_array(&w, m->patch_e, 3 * (size_t)m->patch_count);
     for (i = 0; i < m->disc_count; i++) {
-        const radinterp_discontinuity *d = &m->discs[i];
+        const radinterp_discontinuity *d = radinterp__disc_list_at(&m->discs, i);
         radinterp__put_f32_array(&w, d->a, 3);
         radinterp__put_f32_array(&w, d->b, 3);
         radinterp__put_u32(&w, d->type);
@@ -13158,7 +13359,7 @@ static int radinterp__read_discs(radinterp__reader *r, radinterp_mesh *m)
 {
     uint32_t i;
     for (i = 0; i < m->disc_count && !r->failed; i++) {
-        radinterp_discontinuity *d = &m->discs[i];
+        radinterp_discontinuity *d = radinterp__disc_list_at(&m->discs, i);
         uint32_t active;
         radinterp__get_finite(r, d->a, 3);
         radinterp__get_finite(r, d->b, 3);
@@ -13228,6 +13429,8 @@ static radinterp_result radinterp__mesh_read(radinterp_mesh *m, radinterp__reade
         !radinterp__can_hold(r, m->leaf_count, RADINTERP__LEAF_BYTES) || r->remaining != radinterp__mesh_payload(m) - (5 * 4 + RADINTERP__MESH_STATS * 4 + 12))
         return RADINTERP_ERROR_CORRUPT_DATA;
     if (radinterp__mesh_alloc(m) != 0) return RADINTERP_ERROR_OUT_OF_MEMORY;
+    for (i = 0; i < m->disc_count; i++)
+        if (!radinterp__disc_list_push(&m->allocator, &m->discs)) return RADINTERP_ERROR_OUT_OF_MEMORY;
     radinterp__get_finite(r, m->positions, 3 * (size_t)m->vertex_count);
     radinterp__get_indices(r, m->indices, 3 * (size_t)m->triangle_count, m->vertex_count);
     radinterp__get_indices(r, m->tri_patch, m->triangle_count, m->patch_count);
@@ -13272,6 +13475,7 @@ RADINTERP_API radinterp_result radinterp_mesh_load(const radinterp_allocator *al
     if (!m) return RADINTERP_ERROR_OUT_OF_MEMORY;
     memset(m, 0, sizeof *m);
     m->allocator = a;
+    radinterp__disc_list_init(&m->discs);
     memset(&r, 0, sizeof r);
     r.read = read;
     r.user = user;

@@ -53,6 +53,7 @@ typedef struct run_result {
     uint32_t triangles, patches, leaves, links, cluster_links, mesh_triangles, mesh_leaves;
     double solve_s, mesh_s;        /* thread CPU (1 thread) or wall (2 threads) */
     double peak_mb, solution_mb, mesh_mb;
+    double mesh_build_mb;          /* radinterp_mesh_info.build_bytes: the most the mesh build held */
     double link_mb, leaf_list_mb;  /* of solution_mb: links with their blockers; leaf lists (0: the solution keeps none) */
     double batch_mb;               /* the mesh build's largest batch of leaf lists */
     uint64_t leaf_entries, leaf_blockers;
@@ -163,6 +164,7 @@ static void run_scene(const char *path, int threads, run_result *r, int fd)
     r->mesh_leaves = mi.leaf_count;
     r->mesh_mb = mi.bytes / 1e6;
     r->batch_mb = mi.leaf_list_bytes / 1e6;
+    r->mesh_build_mb = mi.build_bytes / 1e6;
     r->max_gap_s = clock.max_gap;
     getrusage(RUSAGE_SELF, &ru);
     r->peak_mb = ru.ru_maxrss / 1024.0;
@@ -231,9 +233,9 @@ static void print_run(const char *name, int threads, const run_result *r, const 
     }
     if (r->ok != 1) { printf("  %s\n", r->error); return; }
     printf(" %6u tris %6u patches | solve %8.2f s %7u leaves %9u links (%u cluster) | mesh %8.2f s %8u tris | "
-           "peak %7.0f MB (solution %.0f, mesh %.0f) | progress gap %.2f s",
+           "peak %7.0f MB (solution %.0f, mesh %.0f, mesh build %.0f) | progress gap %.2f s",
            r->triangles, r->patches, r->solve_s, r->leaves, r->links, r->cluster_links, r->mesh_s, r->mesh_triangles,
-           r->peak_mb, r->solution_mb, r->mesh_mb, r->max_gap_s);
+           r->peak_mb, r->solution_mb, r->mesh_mb, r->mesh_build_mb, r->max_gap_s);
     if (prev && prev->ok == 1 && prev->triangles > 0 && r->triangles > prev->triangles)
         printf(" | growth %.2f", log((r->solve_s + r->mesh_s) / (prev->solve_s + prev->mesh_s)) /
                                  log((double)r->triangles / prev->triangles));
@@ -258,7 +260,8 @@ int main(int argc, char **argv)
     if (!n) for (i = 0; i < 5; i++) names[n++] = all[i];
     if (!nthreads) { thread_list[0] = 1; thread_list[1] = 2; nthreads = 2; }
     printf("radinterp.h at building scale, default settings (1t: thread CPU time; 2t: wall time; peak = the run's\n"
-           "process peak resident set; growth = exponent of solve + mesh time in the triangle count from the line above)\n"
+           "process peak resident set; mesh build = the most the mesh build held, radinterp_mesh_info.build_bytes;\n"
+           "growth = exponent of solve + mesh time in the triangle count from the line above)\n"
            "targets: 16k solve + mesh < 60 s on 2 threads and < 2 GB; growth 4k -> 16k <= 1.3; 64k < 10 minutes\n");
     for (t = 0; t < nthreads; t++) {
         run_result prev;

@@ -382,6 +382,20 @@ static radinterp_desc counted_soup(rb_scene *s, counting *cnt, progress_state *p
     return d;
 }
 
+/* The soup room's mesh desc: a coarse tree, d's counting allocator, and
+   progress(user). */
+static radinterp_mesh_desc counted_mesh_desc(const radinterp_desc *d, int (*progress)(void *, uint64_t, uint64_t),
+                                             void *user)
+{
+    radinterp_mesh_desc md;
+    memset(&md, 0, sizeof md);
+    md.min_leaf_area = 0.25f;
+    md.allocator = d->allocator;
+    md.progress = progress;
+    md.progress_user = user;
+    return md;
+}
+
 /* Cancels solves at `parts` calls spread over the first `calls` ones (every
    one when there are fewer): each returns CANCELLED and no solution. */
 static void cancel_solve_sweep(const radinterp_desc *d, progress_state *ps, long calls, long parts)
@@ -434,11 +448,7 @@ static void test_cancel_everywhere(void)
     CHECK(n >= 3);
     CHECK(!ps.backwards);
     cancel_solve_sweep(&d, &ps, n, 8);
-    memset(&md, 0, sizeof md);
-    md.min_leaf_area = 0.25f;
-    md.allocator = d.allocator;
-    md.progress = progress_cb;
-    md.progress_user = &ps;
+    md = counted_mesh_desc(&d, progress_cb, &ps);
     memset(&ps, 0, sizeof ps);
     if (CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &mesh), RADINTERP_OK)) {
         long m = ps.calls, stopped = ps.before_samples, running;
@@ -679,6 +689,117 @@ done:
     rb_free(&s);
 }
 
+/* ---- progress inside the mesh build's serial steps ---------------------------- */
+/* Progress calls of the mesh build, with the builder they come from: the
+   calls that came right before an event test (radinterp__event_seen) are
+   the first ones at a multiple of RADINTERP__WEDGE_TICK tests. */
+typedef struct mesh_ticks { const radinterp__builder *b; long calls, event_calls; uint64_t last_event; } mesh_ticks;
+static int mesh_tick_cb(void *user, uint64_t done, uint64_t total)
+{
+    mesh_ticks *t = (mesh_ticks *)user;
+    uint64_t e = t->b->event_tests;
+    (void)done; (void)total;
+    if (e && e % RADINTERP__WEDGE_TICK == 0 && e != t->last_event) t->event_calls++;
+    t->last_event = e;
+    t->calls++;
+    return 0;
+}
+
+/* The mesh build's steps before its samples are serial and took seconds
+   at building_4k with no progress call inside: grouping one receiver's
+   discontinuities into DSets 8.2 s, a source's event tests 9.3 s for 22
+   blockers, the quadtrees' copy and restriction and the first pass's
+   activation, segments and outlines 6.6 s. Each now calls progress once the
+   interval has passed. The steps run here one by one on the soup room, as
+   radinterp_build_mesh runs them, with a clock that moves 1 s at every
+   reading, so that every check is due and the calls can be counted exactly
+   or from below:
+   - grouping a receiver's n discontinuities: one call every
+     RADINTERP__TICK_STEPS of them and one before the final sort;
+   - the search: a call before every RADINTERP__WEDGE_TICK-th event test;
+   - the quadtrees: at least one every RADINTERP__TICK_STEPS nodes in the
+     restriction's last sweep over all of them;
+   - the first pass before its samples: one a patch in activation,
+     segments, outlines and triangulation.
+   Without these calls the counts are 0, 0 (or a few by chance), 0 and one
+   a patch. A cancel from 24 of the build's calls before its samples returns
+   CANCELLED and frees everything; the whole build's build_bytes counts at
+   least the mesh it returns. */
+static void test_progress_in_mesh_steps(void)
+{
+    long grouping = 0, expected = 0, trees, pass, lit = 0, held = 0;
+    uint32_t R;
+    radinterp__builder b;
+    radinterp__buf pairs, stack;
+    mesh_ticks t;
+    counting cnt;
+    progress_state ps;
+    rb_scene s;
+    radinterp_desc d;
+    radinterp_mesh_desc md;
+    radinterp_solution *sol = NULL;
+    radinterp_mesh *mesh = NULL;
+    d = counted_soup(&s, &cnt, &ps);
+    d.eps_relative = 0.5f;   /* a coarse solve keeps the test short under ASan; the mesh's steps are the same */
+    if (!CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_OK)) goto done;
+    md = counted_mesh_desc(&d, mesh_tick_cb, &t);
+    memset(&t, 0, sizeof t);
+    t.b = &b;
+    clock_step = 1.0;
+    held = cnt.live;
+    radinterp__buf_init(&pairs, sizeof(uint64_t));
+    radinterp__buf_init(&stack, sizeof(uint32_t));
+    if (!CHECK_EQ_INT(radinterp__builder_init(&b, sol, &md), RADINTERP_OK)) goto free_builder;
+    for (R = 0; R < sol->patch_count; R++) {
+        uint32_t n;
+        b.disc_first[R] = (uint32_t)b.discs.count;
+        if (sol->patches[R].count && !CHECK_EQ_INT(radinterp__receiver_discs(&b, R, &pairs, &stack), 0)) goto free_builder;
+        n = b.disc_count[R] = (uint32_t)b.discs.count - b.disc_first[R];
+        t.calls = 0;
+        if (!CHECK_EQ_INT(radinterp__group_dsets(&b, R), 0)) goto free_builder;
+        grouping += t.calls;
+        expected += n / RADINTERP__TICK_STEPS + (n > 0);
+        if (!CHECK_EQ_INT(radinterp__keep_candidates(&b, R), 0)) goto free_builder;
+        lit += sol->patches[R].count != 0;
+    }
+    CHECK_EQ_INT(grouping, expected);
+    CHECK(expected > lit);   /* receivers of more than RADINTERP__TICK_STEPS discontinuities were grouped */
+    CHECK(b.event_tests >= 8 * RADINTERP__WEDGE_TICK);
+    CHECK_EQ_INT(t.event_calls, (long)(b.event_tests / RADINTERP__WEDGE_TICK));
+    t.calls = 0;
+    if (!CHECK_EQ_INT(radinterp__build_trees(&b), RADINTERP_OK)) goto free_builder;
+    trees = t.calls;
+    CHECK_MSG(trees >= (long)((b.nodes.count + RADINTERP__TICK_STEPS - 1) / RADINTERP__TICK_STEPS),
+              "%ld calls while %zu nodes were copied and restricted", trees, b.nodes.count);
+    t.calls = 0;
+    if (!CHECK_EQ_INT(radinterp__mesh_pass(&b), RADINTERP_OK)) goto free_builder;
+    pass = t.calls;
+    CHECK_MSG(pass >= 3 * (long)sol->patch_count + lit, "%ld calls in the first pass, %u patches", pass, sol->patch_count);
+    test_note("%ld calls grouping %zu discontinuities, %ld before %llu event tests, %ld for %zu quadtree nodes, %ld in "
+              "the first pass (%u patches)", grouping, (size_t)b.found.count, t.event_calls,
+              (unsigned long long)b.event_tests, trees, b.nodes.count, pass, sol->patch_count);
+free_builder:
+    radinterp__buf_free(&b.a, &pairs);
+    radinterp__buf_free(&b.a, &stack);
+    radinterp__builder_free(&b);
+    CHECK_EQ_INT(cnt.live, held);   /* the solution's */
+    md.progress = progress_cb;
+    md.progress_user = &ps;
+    memset(&ps, 0, sizeof ps);
+    if (CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &mesh), RADINTERP_OK)) {
+        radinterp_mesh_info mi;
+        radinterp_mesh_get_info(mesh, &mi);
+        CHECK(mi.bytes > 0 && mi.build_bytes >= mi.bytes);   /* the build held the mesh at its end */
+        cancel_mesh_sweep(sol, &md, &ps, ps.before_samples, 24);
+    }
+    radinterp_mesh_destroy(mesh);
+done:
+    clock_step = 0.0;
+    radinterp_solution_destroy(sol);
+    CHECK_EQ_INT(cnt.live, 0);
+    rb_free(&s);
+}
+
 /* ---- coordinate range ----------------------------------------------------------- */
 /* Radiosity does not depend on the scene's scale: the room scaled by 1e-15
    and by 1e15 (inside the accepted range) gives the radiosities of the
@@ -734,6 +855,7 @@ int main(int argc, char **argv)
     RUN(test_cancel_everywhere);
     RUN(test_progress_paced_by_work);
     RUN(test_progress_in_serial_passes);
+    RUN(test_progress_in_mesh_steps);
     RUN(test_coordinate_range);
     RUN(test_clustered_equals_unclustered);
     return test_finish();
