@@ -766,8 +766,8 @@
    within 0.1 MB on the office (31.6 MB). building_4k finds 41.0 M (92,446 candidates, 5.35
    M DSets): the mesh's list is 2.1 GB, the DSets' lines 0.34 GB, and the
    receiver with the most discontinuities held about 1.75 GB more while it
-   was grouped: 4.27 GB beyond the solution's 2.31 GB before the first
-   sample. In one array the records take 3.9 GB there, and 9.7 GB while
+   was grouped: 4.27 GB beyond the solution (2.31 GB while it kept its
+   leaf lists) before the first sample. In one array the records take 3.9 GB there, and 9.7 GB while
    it doubles (computed; v0.8.6 reached 8.2 GB of resident memory).
    radinterp_mesh_info.build_bytes reports the peak of the build's arrays.
    The leaf lists mark the links a whole leaf cannot see: one
