@@ -765,22 +765,26 @@
    before v0.7.0) at about 2,000 per second of one core (185 s; v0.7.0:
    about 1,200, before a source's parts shared one union of shadows):
    minutes on two threads, too slow still for a level loaded at run time.
-   The build's memory: the mesh keeps every discontinuity found
-   (radinterp_mesh_get_discontinuity), 52 bytes each, in blocks of 16,384
-   that the build fills and the mesh takes over; the build's own records
-   (104 bytes) are kept only for the candidates, and for one receiver's
-   discontinuities while they are grouped into DSets (the grouping needs
-   them all for the lines it draws). building_1k finds 2.54 M, of which
-   23,269 are candidates; its build's allocations beyond the solution peak
-   at 249 MB before the first sample (643 MB when every one was held in one
-   growing array of records), 264 MB in all, for a mesh of 190 MB, 132 MB
-   of it discontinuities; build_bytes agrees with an allocator's count
-   within 0.1 MB on the office (31.6 MB). building_4k finds 41.0 M (92,446 candidates, 5.35
-   M DSets): the mesh's list is 2.1 GB, the DSets' lines 0.34 GB, and the
-   receiver with the most discontinuities held about 1.75 GB more while it
-   was grouped: 4.27 GB beyond the solution (2.31 GB while it kept its
-   leaf lists) before the first sample. In one array the records take 3.9 GB there, and 9.7 GB while
-   it doubles (computed; v0.8.6 reached 8.2 GB of resident memory).
+   The build's memory: the mesh keeps its candidate discontinuities
+   (radinterp_mesh_get_discontinuity; every one found with
+   keep_all_discontinuities), 52 bytes each, in blocks of 16,384 that the
+   build fills and the mesh takes over (the last one trimmed to its
+   records); the build's own records (104 bytes) are kept only for the
+   candidates, and for one receiver's discontinuities while they are
+   grouped into DSets (the grouping needs them all for the lines it draws).
+   building_1k finds 2.54 M, of which 23,269 are candidates: its mesh holds
+   59 MB (190 MB with every discontinuity), and its build's allocations
+   beyond the solution peak at 133 MB (264 MB keeping every one, 643 MB
+   when every one was held in one growing array of records), the same mesh
+   to the bit; build_bytes agrees with an allocator's count within 0.1 MB
+   on the office (31.6 MB keeping every one, 29.3 MB by default).
+   building_4k finds 41.0 M (92,446 candidates, 5.35 M DSets): kept, they
+   were a list of 2.1 GB, and the DSets' lines take 0.34 GB; the receiver
+   with the most discontinuities holds about 1.75 GB more while it is
+   grouped (measured keeping every one: 4.27 GB beyond the solution, which
+   then still kept its leaf lists, before the first sample). In one array
+   the records take 3.9 GB there, and 9.7 GB while it doubles (computed;
+   v0.8.6 reached 8.2 GB of resident memory).
    radinterp_mesh_info.build_bytes reports the peak of the build's arrays.
    The leaf lists mark the links a whole leaf cannot see: one
    opaque blocker turned toward the leaf meets every segment from the
