@@ -453,6 +453,15 @@
                           solution (accurate sources for IrradianceAtPoint)
                           can be meshed coarsely.  default 0: every leaf
        no_discontinuities non-zero: leaves are triangulated without them
+       keep_all_discontinuities non-zero: radinterp_mesh_get_discontinuity
+                          returns every discontinuity found, for figures
+                          and debugging. By default the mesh keeps only the
+                          candidates (those that can enter a triangulation,
+                          active or not): the others are most of them and
+                          no triangle follows them (building_4k: 41.0 M
+                          found, 2.1 GB of records, of which 92,446
+                          candidates, 4.8 MB). The counts of info are the
+                          same either way.                  default 0
        refine             non-zero: representation-based refinement (4.4.2)
        refine_eps         Gur::eps of that refinement: largest difference, in
                           W/m^2 of irradiance, between an interpolant and
@@ -517,6 +526,7 @@
        uint32_t radinterp_mesh_discontinuity_count(const radinterp_mesh *m);
        radinterp_result radinterp_mesh_get_discontinuity(const radinterp_mesh *m, uint32_t i,
                                     radinterp_discontinuity *d);   segment, kind, weight, active
+                                    (the candidates; every one found with keep_all_discontinuities)
        uint32_t radinterp_mesh_leaf_count(const radinterp_mesh *m);
        radinterp_result radinterp_mesh_get_leaf(const radinterp_mesh *m, uint32_t i, radinterp_mesh_leaf *leaf);
                                     a leaf, its DSets and its triangles
@@ -755,22 +765,26 @@
    before v0.7.0) at about 2,000 per second of one core (185 s; v0.7.0:
    about 1,200, before a source's parts shared one union of shadows):
    minutes on two threads, too slow still for a level loaded at run time.
-   The build's memory: the mesh keeps every discontinuity found
-   (radinterp_mesh_get_discontinuity), 52 bytes each, in blocks of 16,384
-   that the build fills and the mesh takes over; the build's own records
-   (104 bytes) are kept only for the candidates, and for one receiver's
-   discontinuities while they are grouped into DSets (the grouping needs
-   them all for the lines it draws). building_1k finds 2.54 M, of which
-   23,269 are candidates; its build's allocations beyond the solution peak
-   at 249 MB before the first sample (643 MB when every one was held in one
-   growing array of records), 264 MB in all, for a mesh of 190 MB, 132 MB
-   of it discontinuities; build_bytes agrees with an allocator's count
-   within 0.1 MB on the office (31.6 MB). building_4k finds 41.0 M (92,446 candidates, 5.35
-   M DSets): the mesh's list is 2.1 GB, the DSets' lines 0.34 GB, and the
-   receiver with the most discontinuities held about 1.75 GB more while it
-   was grouped: 4.27 GB beyond the solution (2.31 GB while it kept its
-   leaf lists) before the first sample. In one array the records take 3.9 GB there, and 9.7 GB while
-   it doubles (computed; v0.8.6 reached 8.2 GB of resident memory).
+   The build's memory: the mesh keeps its candidate discontinuities
+   (radinterp_mesh_get_discontinuity; every one found with
+   keep_all_discontinuities), 52 bytes each, in blocks of 16,384 that the
+   build fills and the mesh takes over (the last one trimmed to its
+   records); the build's own records (104 bytes) are kept only for the
+   candidates, and for one receiver's discontinuities while they are
+   grouped into DSets (the grouping needs them all for the lines it draws).
+   building_1k finds 2.54 M, of which 23,269 are candidates: its mesh holds
+   59 MB (190 MB with every discontinuity), and its build's allocations
+   beyond the solution peak at 133 MB (264 MB keeping every one, 643 MB
+   when every one was held in one growing array of records), the same mesh
+   to the bit; build_bytes agrees with an allocator's count within 0.1 MB
+   on the office (31.6 MB keeping every one, 29.3 MB by default).
+   building_4k finds 41.0 M (92,446 candidates, 5.35 M DSets): kept, they
+   were a list of 2.1 GB, and the DSets' lines take 0.34 GB; the receiver
+   with the most discontinuities holds about 1.75 GB more while it is
+   grouped (measured keeping every one: 4.27 GB beyond the solution, which
+   then still kept its leaf lists, before the first sample). In one array
+   the records take 3.9 GB there, and 9.7 GB while it doubles (computed;
+   v0.8.6 reached 8.2 GB of resident memory).
    radinterp_mesh_info.build_bytes reports the peak of the build's arrays.
    The leaf lists mark the links a whole leaf cannot see: one
    opaque blocker turned toward the leaf meets every segment from the
@@ -1072,6 +1086,7 @@ typedef struct radinterp_mesh_desc {
     uint32_t max_leaf_dsets;     /* Tree::maxLeafDSets */
     float min_leaf_area;         /* the mesh stops where the solution's quadtrees split into smaller nodes (m^2) */
     int no_discontinuities;      /* non-zero: leaves are triangulated without discontinuities */
+    int keep_all_discontinuities; /* non-zero: the mesh returns every discontinuity found, not only the candidates */
     int refine;                  /* non-zero: representation-based refinement (4.4.2) */
     float refine_eps;            /* Gur::eps of that refinement, W/m^2 of irradiance */
     uint32_t refine_samples;     /* SAMPLES: SAMPLES x SAMPLES test points per triangle */
@@ -1101,6 +1116,8 @@ typedef struct radinterp_mesh_info {
     uint32_t candidates;              /* discontinuities with weight >= min_discont_weight and a source
                                          reaching min_discont_contrast */
     uint32_t active_discontinuities;
+    uint32_t kept_discontinuities;    /* the records the mesh returns (radinterp_mesh_get_discontinuity): the
+                                         candidates, or every one found with keep_all_discontinuities */
     uint32_t active_leaf_dsets;       /* sum over leaves of their active DSets */
     uint32_t max_leaf_active_dsets;   /* the most on one leaf (<= max_leaf_dsets) */
     uint32_t balance_splits;          /* leaves split to restrict the quadtrees */
@@ -9956,12 +9973,14 @@ typedef struct radinterp__disc {
 typedef struct radinterp__disc_list {
     radinterp__buf blocks;    /* radinterp_discontinuity *, each RADINTERP__DISC_BLOCK records */
     uint32_t count;
+    int trimmed;              /* the last block holds only its records (radinterp__disc_list_trim) */
 } radinterp__disc_list;
 
 static void radinterp__disc_list_init(radinterp__disc_list *l)
 {
     radinterp__buf_init(&l->blocks, sizeof(radinterp_discontinuity *));
     l->count = 0;
+    l->trimmed = 0;
 }
 
 static radinterp_discontinuity *radinterp__disc_list_at(const radinterp__disc_list *l, uint32_t i)
@@ -9973,7 +9992,7 @@ static radinterp_discontinuity *radinterp__disc_list_at(const radinterp__disc_li
 static radinterp_discontinuity *radinterp__disc_list_push(const radinterp_allocator *a, radinterp__disc_list *l)
 {
     radinterp_discontinuity *d;
-    if (l->count >= RADINTERP__DISC_MAX) return NULL;
+    if (l->count >= RADINTERP__DISC_MAX || l->trimmed) return NULL;
     if ((l->count & (RADINTERP__DISC_BLOCK - 1u)) == 0) {
         radinterp_discontinuity **slot = (radinterp_discontinuity **)radinterp__buf_push(a, &l->blocks);
         if (!slot) return NULL;
@@ -9983,6 +10002,32 @@ static radinterp_discontinuity *radinterp__disc_list_push(const radinterp_alloca
     d = radinterp__disc_list_at(l, l->count++);
     memset(d, 0, sizeof *d);
     return d;
+}
+
+/* Frees what the last block holds beyond the list's records, once the
+   list is complete: a small mesh's list need not take a whole block
+   (16,384 records, 852 KB). A trimmed list takes no more records. */
+static int radinterp__disc_list_trim(const radinterp_allocator *a, radinterp__disc_list *l)
+{
+    uint32_t used = l->count & (RADINTERP__DISC_BLOCK - 1u);
+    radinterp_discontinuity **last, *p;
+    if (used && !l->trimmed) {
+        last = (radinterp_discontinuity **)l->blocks.data + l->blocks.count - 1;
+        p = (radinterp_discontinuity *)radinterp__alloc_array(a, used, sizeof *p);
+        if (!p) return -1;
+        memcpy(p, *last, used * sizeof *p);
+        radinterp__free(a, *last);
+        *last = p;
+    }
+    l->trimmed = 1;
+    return 0;
+}
+
+/* The memory of the list's records (not of its array of blocks). */
+static size_t radinterp__disc_list_bytes(const radinterp__disc_list *l)
+{
+    size_t records = l->trimmed ? l->count : l->blocks.count * (size_t)RADINTERP__DISC_BLOCK;
+    return records * sizeof(radinterp_discontinuity);
 }
 
 static void radinterp__disc_list_free(const radinterp_allocator *a, radinterp__disc_list *l)
@@ -10046,9 +10091,12 @@ typedef struct radinterp__builder {
     uint32_t refine_samples, refine_passes;
     radinterp__frame *frames;       /* per patch */
     double *outline;                 /* per patch: corners in its frame, 8 doubles */
-    /* discontinuities: every one found (the mesh's list), and the candidates
+    /* discontinuities: the list the mesh returns (the candidates, or every
+       one found with keep_all_discontinuities), the count of each kind found
+       (by radinterp_discontinuity_type), and the candidates
        (radinterp__candidate), grouped by receiver and by DSet inside */
     radinterp__disc_list found;
+    uint32_t found_kinds[5];
     radinterp__buf discs, dsets;
     uint32_t *disc_first, *disc_count;
     /* quadtrees */
@@ -10128,7 +10176,7 @@ static size_t radinterp__hmap_bytes(const radinterp__hmap *m) { return (size_t)m
 static void radinterp__note_bytes(radinterp__builder *b, size_t extra)
 {
     const radinterp__buf *bufs[11];
-    size_t n = extra + (size_t)b->found.blocks.count * RADINTERP__DISC_BLOCK * sizeof(radinterp_discontinuity), k;
+    size_t n = extra + radinterp__disc_list_bytes(&b->found), k;
     size_t P = b->s->patch_count;
     bufs[0] = &b->found.blocks; bufs[1] = &b->discs; bufs[2] = &b->dsets; bufs[3] = &b->nodes; bufs[4] = &b->node_discs;
     bufs[5] = &b->leaves; bufs[6] = &b->segs; bufs[7] = &b->pool; bufs[8] = &b->chains; bufs[9] = &b->pos;
@@ -10831,12 +10879,13 @@ static void radinterp__export_disc(const radinterp__builder *b, radinterp__disc 
     o->active = 0;
 }
 
-/* Moves R's discontinuities (grouped) to the list the mesh returns and keeps
-   only R's candidates in b->discs, in their order: the steps after the
-   grouping use no other, and the rest are most of them (building_1k: 23k
-   candidates among 2.5M discontinuities, 104 bytes each here). The weights
-   cannot change while the mesh is built (5.4), so each is computed here
-   once. */
+/* Counts R's discontinuities (grouped) by kind, moves those the mesh
+   returns to its list (the candidates, or all of them with
+   keep_all_discontinuities) and keeps only R's candidates in b->discs, in
+   their order: the steps after the grouping use no other, and the rest are
+   most of them (building_1k: 23k candidates among 2.5M discontinuities, 104
+   bytes each here). The weights cannot change while the mesh is built
+   (5.4), so each is computed here once. */
 static int radinterp__keep_candidates(radinterp__builder *b, uint32_t R)
 {
     radinterp__disc *dd;
@@ -10844,11 +10893,17 @@ static int radinterp__keep_candidates(radinterp__builder *b, uint32_t R)
     if (n == 0) return 0;   /* discs.data may be NULL: no pointer arithmetic on it */
     dd = (radinterp__disc *)b->discs.data + b->disc_first[R];
     for (i = 0; i < n; i++) {
-        radinterp_discontinuity *o = radinterp__disc_list_push(&b->a, &b->found);
-        if (!o) return -1;
-        radinterp__export_disc(b, &dd[i], o);
-        dd[i].found = b->found.count - 1u;
-        if (radinterp__candidate(b, &dd[i])) dd[kept++] = dd[i];
+        int candidate;
+        radinterp__disc_weight(b->s, &dd[i]);   /* the weight the candidate test reads */
+        candidate = radinterp__candidate(b, &dd[i]);
+        if (b->found_kinds[dd[i].type] < 0xFFFFFFFFu) b->found_kinds[dd[i].type]++;   /* counts saturate */
+        if (candidate || b->desc->keep_all_discontinuities) {
+            radinterp_discontinuity *o = radinterp__disc_list_push(&b->a, &b->found);
+            if (!o) return -1;
+            radinterp__export_disc(b, &dd[i], o);
+            dd[i].found = b->found.count - 1u;
+        }
+        if (candidate) dd[kept++] = dd[i];
     }
     b->disc_count[R] = kept;
     b->discs.count = (size_t)b->disc_first[R] + kept;
@@ -10885,6 +10940,7 @@ static radinterp_result radinterp__find_discontinuities(radinterp__builder *b)
     radinterp__buf_free(&b->a, &stack);
     /* b->discs held the largest receiver's discontinuities for a while */
     if (!fail && !cancelled) fail = radinterp__buf_trim(&b->a, &b->discs) != 0;
+    if (!fail && !cancelled) fail = radinterp__disc_list_trim(&b->a, &b->found) != 0;
     if (cancelled) return RADINTERP_ERROR_CANCELLED;
     return fail ? RADINTERP_ERROR_OUT_OF_MEMORY : RADINTERP_OK;
 }
@@ -12731,8 +12787,16 @@ static size_t radinterp__mesh_bytes(const radinterp_mesh *m)
     return sizeof *m + (size_t)m->vertex_count * 6 * sizeof(float) +
            (size_t)m->triangle_count * (5 * sizeof(uint32_t) + 1 + (18 + 18 + 24 + 3 + 3 + 9) * sizeof(float)) +
            (size_t)m->patch_count * 6 * sizeof(float) +
-           m->discs.blocks.count * (RADINTERP__DISC_BLOCK * sizeof(radinterp_discontinuity) + sizeof(radinterp_discontinuity *)) +
+           radinterp__disc_list_bytes(&m->discs) + m->discs.blocks.count * sizeof(radinterp_discontinuity *) +
            (size_t)m->leaf_count * sizeof(radinterp_mesh_leaf);
+}
+
+/* Discontinuities found: the four kinds together, saturated like each of
+   them (a loaded mesh's counts are the file's). */
+static uint32_t radinterp__kinds_total(const radinterp_mesh_info *info)
+{
+    uint64_t n = (uint64_t)info->ev + info->ve + info->horizon + info->contact;
+    return n < 0xFFFFFFFFu ? (uint32_t)n : 0xFFFFFFFFu;
 }
 
 /* The mesh from the last pass. */
@@ -12771,13 +12835,10 @@ static radinterp_result radinterp__assemble(radinterp__builder *b, const float *
     info = &m->info;
     m->discs = b->found;   /* the mesh takes the blocks over */
     radinterp__disc_list_init(&b->found);
-    for (i = 0; i < m->disc_count; i++) {
-        uint32_t type = radinterp__disc_list_at(&m->discs, i)->type;
-        info->ev += type == RADINTERP_DISCONTINUITY_EV;
-        info->ve += type == RADINTERP_DISCONTINUITY_VE;
-        info->horizon += type == RADINTERP_DISCONTINUITY_HORIZON;
-        info->contact += type == RADINTERP_DISCONTINUITY_CONTACT;
-    }
+    info->ev = b->found_kinds[RADINTERP_DISCONTINUITY_EV];
+    info->ve = b->found_kinds[RADINTERP_DISCONTINUITY_VE];
+    info->horizon = b->found_kinds[RADINTERP_DISCONTINUITY_HORIZON];
+    info->contact = b->found_kinds[RADINTERP_DISCONTINUITY_CONTACT];
     info->candidates = (uint32_t)b->discs.count;
     for (i = 0; i < b->discs.count; i++) {
         radinterp__disc_list_at(&m->discs, dd[i].found)->active = (int)dd[i].active;
@@ -12810,7 +12871,8 @@ static radinterp_result radinterp__assemble(radinterp__builder *b, const float *
     info->vertex_count = m->vertex_count;
     info->leaf_count = m->leaf_count;
     info->patch_count = m->patch_count;
-    info->discontinuities = m->disc_count;
+    info->discontinuities = radinterp__kinds_total(info);
+    info->kept_discontinuities = m->disc_count;
     info->dsets = (uint32_t)b->dsets.count;
     info->balance_splits = b->balance_splits;
     info->hanging_vertices = b->hanging;
@@ -13433,6 +13495,7 @@ static radinterp_result radinterp__mesh_read(radinterp_mesh *m, radinterp__reade
     if (radinterp__mesh_alloc(m) != 0) return RADINTERP_ERROR_OUT_OF_MEMORY;
     for (i = 0; i < m->disc_count; i++)
         if (!radinterp__disc_list_push(&m->allocator, &m->discs)) return RADINTERP_ERROR_OUT_OF_MEMORY;
+    if (radinterp__disc_list_trim(&m->allocator, &m->discs) != 0) return RADINTERP_ERROR_OUT_OF_MEMORY;
     radinterp__get_finite(r, m->positions, 3 * (size_t)m->vertex_count);
     radinterp__get_indices(r, m->indices, 3 * (size_t)m->triangle_count, m->vertex_count);
     radinterp__get_indices(r, m->tri_patch, m->triangle_count, m->patch_count);
@@ -13455,7 +13518,9 @@ static radinterp_result radinterp__mesh_read(radinterp_mesh *m, radinterp__reade
     m->info.vertex_count = m->vertex_count;
     m->info.leaf_count = m->leaf_count;
     m->info.patch_count = m->patch_count;
-    m->info.discontinuities = m->disc_count;
+    m->info.discontinuities = radinterp__kinds_total(&m->info);
+    m->info.kept_discontinuities = m->disc_count;
+    if (m->info.discontinuities < m->disc_count) return RADINTERP_ERROR_CORRUPT_DATA;   /* it keeps no more than it found */
     if (radinterp__mesh_derive(m) != 0) return RADINTERP_ERROR_OUT_OF_MEMORY;
     m->info.bytes = radinterp__mesh_bytes(m);
     return RADINTERP_OK;

@@ -125,10 +125,13 @@ static double rnd(void)
     return (double)(rng_state >> 11) * (1.0 / 9007199254740992.0);
 }
 
+/* The tests here look at every discontinuity found, not only at the
+   candidates the mesh keeps by default (test_candidates_only_by_default). */
 static radinterp_mesh_desc mesh_desc(void)
 {
     radinterp_mesh_desc md;
     memset(&md, 0, sizeof md);
+    md.keep_all_discontinuities = 1;
     return md;
 }
 
@@ -1707,6 +1710,97 @@ static void test_determinism(void)
     radinterp_solution_destroy(sol);
 }
 
+/* Index of the first record at or after `from` in m's list equal to d,
+   or the list's count. */
+static uint32_t find_discontinuity(const radinterp_mesh *m, uint32_t from, const radinterp_discontinuity *d)
+{
+    uint32_t n = radinterp_mesh_discontinuity_count(m);
+    for (; from < n; from++) {
+        radinterp_discontinuity x;
+        radinterp_mesh_get_discontinuity(m, from, &x);
+        if (memcmp(&x, d, sizeof x) == 0) break;
+    }
+    return from;
+}
+
+/* By default the mesh returns only the candidate discontinuities. Against
+   keep_all_discontinuities: the same triangles and interpolants and the
+   same counts in info; its list is the candidates of the full list (as
+   many as info.candidates), in the same order, with every active one; it
+   holds less memory; a save and a load keep the counts of what was found. */
+static void test_candidates_only_by_default(void)
+{
+    scene s;
+    radinterp_solution *sol = room_scene(&s);
+    radinterp_mesh_desc md = mesh_desc();
+    radinterp_mesh *all = NULL, *cand = NULL, *back = NULL;
+    radinterp_mesh_info ia, ic, ib;
+    radinterp_mesh_data da, dc;
+    void *bytes = NULL;
+    size_t size = 0;
+    uint32_t i, at = 0, active = 0, n;
+    if (!sol) return;
+    md.min_leaf_area = 0.05f;
+    md.min_discont_contrast = 0.25f;   /* leaves most of the room's discontinuities out of the candidates */
+    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &all), RADINTERP_OK);
+    md.keep_all_discontinuities = 0;
+    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &cand), RADINTERP_OK);
+    if (!all || !cand) goto done;
+    radinterp_mesh_get_info(all, &ia);
+    radinterp_mesh_get_info(cand, &ic);
+    n = radinterp_mesh_discontinuity_count(cand);
+    CHECK_EQ_INT(radinterp_mesh_discontinuity_count(all), ia.discontinuities);
+    CHECK_EQ_INT(ia.kept_discontinuities, ia.discontinuities);
+    CHECK_EQ_INT(n, ic.candidates);
+    CHECK_EQ_INT(ic.kept_discontinuities, n);
+    /* the scene must have discontinuities that are not candidates, or the
+       test would not see the difference */
+    CHECK_MSG(ic.candidates > 0 && ic.candidates * 2 < ic.discontinuities, "%u candidates of %u found",
+              ic.candidates, ic.discontinuities);
+    CHECK_EQ_INT(ic.discontinuities, ia.discontinuities);
+    CHECK_EQ_INT(ic.ev, ia.ev);
+    CHECK_EQ_INT(ic.ve, ia.ve);
+    CHECK_EQ_INT(ic.horizon, ia.horizon);
+    CHECK_EQ_INT(ic.contact, ia.contact);
+    CHECK_EQ_INT(ic.dsets, ia.dsets);
+    CHECK_EQ_INT(ic.candidates, ia.candidates);
+    CHECK_EQ_INT(ic.active_discontinuities, ia.active_discontinuities);
+    CHECK(ic.bytes < ia.bytes);
+    radinterp_mesh_get_data(all, &da);
+    radinterp_mesh_get_data(cand, &dc);
+    CHECK(da.triangle_count == dc.triangle_count && da.vertex_count == dc.vertex_count);
+    if (da.triangle_count == dc.triangle_count && da.vertex_count == dc.vertex_count) {
+        CHECK(memcmp(da.positions, dc.positions, 12 * (size_t)da.vertex_count) == 0);
+        CHECK(memcmp(da.indices, dc.indices, 12 * (size_t)da.triangle_count) == 0);
+        CHECK(memcmp(da.coefficients, dc.coefficients, 72 * (size_t)da.triangle_count) == 0);
+    }
+    for (i = 0; i < n; i++) {
+        radinterp_discontinuity d;
+        radinterp_mesh_get_discontinuity(cand, i, &d);
+        at = find_discontinuity(all, at, &d);
+        if (!CHECK_MSG(at < ia.discontinuities, "candidate %u is not in the full list after the one before", i)) break;
+        at++;
+        active += d.active != 0;
+    }
+    CHECK_EQ_INT(active, ia.active_discontinuities);
+    CHECK_EQ_INT(radinterp_mesh_save_to_memory(cand, NULL, &bytes, &size), RADINTERP_OK);
+    CHECK_EQ_INT(radinterp_mesh_load_from_memory(bytes, size, NULL, &back), RADINTERP_OK);
+    if (back) {
+        radinterp_mesh_get_info(back, &ib);
+        CHECK_EQ_INT(ib.discontinuities, ic.discontinuities);
+        CHECK_EQ_INT(ib.kept_discontinuities, n);
+        CHECK_EQ_INT(radinterp_mesh_discontinuity_count(back), n);
+    }
+    test_note("default list: %u candidates of %u found (%.1f of %.1f KB of mesh)", n, ic.discontinuities,
+              ic.bytes / 1024.0, ia.bytes / 1024.0);
+done:
+    radinterp_free_memory(NULL, bytes);
+    radinterp_mesh_destroy(back);
+    radinterp_mesh_destroy(all);
+    radinterp_mesh_destroy(cand);
+    radinterp_solution_destroy(sol);
+}
+
 int main(int argc, char **argv)
 {
     TEST_INIT(argc, argv);
@@ -1731,5 +1825,6 @@ int main(int argc, char **argv)
     RUN(test_determinism);
     RUN(test_leaf_lists_bounded);
     RUN(test_leaf_lists_known_answers);
+    RUN(test_candidates_only_by_default);
     return test_finish();
 }
