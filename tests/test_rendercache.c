@@ -1873,6 +1873,89 @@ static void test_parallel_insert_matches_serial(void)
     ex_pool_destroy(pool);
 }
 
+/* A wall at z = 5 seen by input camera eye (x, 0, 0) looking down +z,
+   64 x 48, in one colour; pixels [hx0, hx1) x [hy0, hy1) have no sample. */
+static rendercache_range_image *wall_image(float x, const float rgb[3], uint32_t hx0, uint32_t hx1, uint32_t hy0,
+                                           uint32_t hy1)
+{
+    rendercache_camera c;
+    rendercache_range_image *img = NULL;
+    uint32_t px, py;
+    memset(&c, 0, sizeof c);
+    c.kind = RENDERCACHE_CAMERA_PERSPECTIVE;
+    c.eye[0] = x;
+    c.look_at[0] = x;
+    c.look_at[2] = 1.0f;
+    c.up[1] = 1.0f;
+    c.vfov_degrees = 60.0f;
+    c.width = 64;
+    c.height = 48;
+    if (rendercache_range_image_create(&c, NULL, &img) != RENDERCACHE_OK) return NULL;
+    for (py = 0; py < c.height; py++)
+        for (px = 0; px < c.width; px++) {
+            size_t p = (size_t)py * c.width + px;
+            float o[3], d[3];
+            rendercache_camera_ray(&c, (float)px + 0.5f, (float)py + 0.5f, o, d);
+            memcpy(img->rgb + 3 * p, rgb, 3 * sizeof(float));
+            img->depth[p] = (5.0f - o[2]) / d[2];
+            img->object[p] = px >= hx0 && px < hx1 && py >= hy0 && py < hy1 ? RENDERCACHE_NO_SAMPLE : 1u;
+        }
+    return img;
+}
+
+/* A later input fills, with its foreground quads, the hole the nearest
+   input leaves, and stays behind it elsewhere (its quads there are skipped
+   by the coarse z-buffer, or lose their z-tests): a red wall with a hole
+   of 16 x 16 pixels seen from x = 0, a green one with none from x = 0.4,
+   warped to x = 0.1 with the foreground fill only. The hole moves by 0.83
+   pixels (focal 41.6 pixels, 0.1 m at 5 m): its pixels 3 or more from its
+   edges must be green, those 3 or more outside red (2 from the image's
+   side edges, which the red view does not reach on the right). */
+static void test_warp_later_input_fills_the_hole(void)
+{
+    static const float red[3] = { 1.0f, 0.0f, 0.0f }, green[3] = { 0.0f, 1.0f, 0.0f };
+    rendercache_range_image *in[2], *out = NULL;
+    rendercache_warper *w = NULL;
+    rendercache_warp_desc d;
+    uint32_t x, y, wrong_hole = 0, wrong_wall = 0, hole = 0, wall = 0;
+    in[0] = wall_image(0.0f, red, 24, 40, 16, 32);
+    in[1] = wall_image(0.4f, green, 0, 0, 0, 0);
+    memset(&d, 0, sizeof d);
+    if (!CHECK(in[0] && in[1] && rendercache_warper_create(&d, &w) == RENDERCACHE_OK)) goto done;
+    {
+        rendercache_camera t = in[0]->camera;
+        t.eye[0] = t.look_at[0] = 0.1f;
+        if (!CHECK(rendercache_range_image_create(&t, NULL, &out) == RENDERCACHE_OK)) goto done;
+        CHECK_EQ_INT(rendercache_warp(w, (const rendercache_range_image *const *)in, 2, &t, RENDERCACHE_FILL_FOREGROUND,
+                                      out), RENDERCACHE_OK);
+    }
+    for (y = 0; y < 48; y++)
+        for (x = 2; x < 62; x++) {
+            const float *c = out->rgb + 3 * ((size_t)y * 64 + x);
+            /* uniform inputs: a barycentric mean of equal colours is that colour to a few ulps */
+            int is_green = fabsf(c[0]) < 1e-5f && fabsf(c[1] - 1.0f) < 1e-5f && fabsf(c[2]) < 1e-5f;
+            int is_red = fabsf(c[0] - 1.0f) < 1e-5f && fabsf(c[1]) < 1e-5f && fabsf(c[2]) < 1e-5f;
+            int none = out->object[(size_t)y * 64 + x] != 1u;
+            if (x >= 27 && x < 36 && y >= 19 && y < 29) {
+                hole++;
+                wrong_hole += none || !is_green;
+            } else if (x < 20 || x >= 43 || y < 13 || y >= 35) {
+                wall++;
+                wrong_wall += none || !is_red;
+            }
+        }
+    test_note("later input: %u of %u hole pixels not green, %u of %u wall pixels not red", wrong_hole, hole, wrong_wall,
+              wall);
+    CHECK(hole == 90 && wall > 1500);
+    CHECK_EQ_INT(wrong_hole, 0);
+    CHECK_EQ_INT(wrong_wall, 0);
+done:
+    rendercache_range_image_destroy(out);
+    rendercache_range_image_destroy(in[0]);
+    rendercache_range_image_destroy(in[1]);
+    rendercache_warper_destroy(w);
+}
+
 int main(int argc, char **argv)
 {
     TEST_INIT(argc, argv);
@@ -1901,5 +1984,6 @@ int main(int argc, char **argv)
     RUN(test_bad_input_is_rejected);
     RUN(test_deterministic_for_any_thread_count);
     RUN(test_parallel_insert_matches_serial);
+    RUN(test_warp_later_input_fills_the_hole);
     return test_finish();
 }
