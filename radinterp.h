@@ -4564,62 +4564,143 @@ static double radinterp__ray_offset(const radinterp_solution *s) { return 10.0 *
 
 /* ---- shadow rays inside a shaft ----------------------------------------
    Every shadow ray of a link (or cluster link) runs between points of its
-   two elements moved off their surfaces by at most `grow`, so it lies in
-   the shaft (Haines and Wallace) of their boxes grown by that much: a
-   triangle it meets lies in a BVH leaf whose box meets the shaft. When few
-   leaves do, the link's rays test just those, eight at a time with the
-   BVH's own box test and their triangles with its own triangle test,
-   instead of walking the tree from its root for each ray (a ray's walk was
-   47% of building_1k's solve). A ray is blocked by the same triangles
-   either way, so the links come out bit-identical: the tree's box tests are
-   conservative and a leaf's box lies inside its ancestors' boxes, so a
-   leaf the walk would not reach is one this test rejects too. */
-#define RADINTERP__SHAFT_GROUPS 2   /* groups of eight leaves: more leaves and the rays walk the tree */
+   two elements moved off their surfaces by radinterp__ray_offset, so it
+   lies in the shaft (Haines and Wallace) of their boxes grown by that much,
+   and, where an end is one surface (not a cluster), on the near side of
+   that surface's plane as far as the other end allows. Only the triangles
+   that reach that region can block a ray: those of the BVH leaves that
+   meet the shaft, less the triangles outside it and those wholly behind
+   either end's plane (the receiver's and source's own triangles, which lie
+   in the tree's leaves on every ray's path, whenever the other end stands
+   clear of the plane). When few are left, the link's rays test just those,
+   four at a time with the BVH's own triangle test, instead of walking the
+   tree from its root for each ray (the walk was 47% of building_1k's
+   solve). A ray is blocked by the same triangles either way, so the links
+   come out bit-identical: the tree's box tests are conservative, so the
+   walk tests every triangle it could meet, and the triangles left out here
+   are ones it cannot meet. */
+#define RADINTERP__SHAFT_TRIS 64   /* more triangles and the rays walk the tree */
 
 typedef struct radinterp__shaft_rays {
-    int walk;            /* 1: the rays walk the tree (too many leaves, a trace callback, a one-leaf tree) */
-    uint32_t leaves;
-    radinterp__bvh_node group[RADINTERP__SHAFT_GROUPS];   /* the leaves as the children of pseudo-nodes */
+    int walk;            /* 1: the rays walk the tree (too many triangles, a trace callback, a one-leaf tree) */
+    uint32_t tris;
+    radinterp__bvh_tris block[RADINTERP__SHAFT_TRIS / 4];
+    radinterp__bvh_node box[RADINTERP__SHAFT_TRIS / RADINTERP__BVH_WIDTH];   /* the triangles' boxes, block by block */
 } radinterp__shaft_rays;
 
-/* Appends child i of node n (a leaf) to the groups; 0 when they are full. */
-static int radinterp__shaft_rays_add(radinterp__shaft_rays *sr, const radinterp__bvh_node *n, int i)
+/* One end of a link's rays: its box and, when it is one surface, its plane
+   and how far behind that plane the rays may reach (below). */
+typedef struct radinterp__ray_end {
+    const float *lo, *hi;
+    const double *n;     /* NULL for a cluster */
+    double d, floor;     /* plane n . x = d; every ray point has n . x - d >= floor */
+} radinterp__ray_end;
+
+/* Where the rays run relative to end e's plane: from offset in front at e
+   to the other end's points moved by offset, at worst its box's lowest
+   corner less offset; pad covers the rounding of the rays' floats. */
+static void radinterp__ray_end_floor(radinterp__ray_end *e, const radinterp__ray_end *other, double offset, double pad)
 {
-    uint32_t g = sr->leaves / RADINTERP__BVH_WIDTH, c = sr->leaves % RADINTERP__BVH_WIDTH, j;
-    int row;
-    if (g >= RADINTERP__SHAFT_GROUPS) return 0;
-    if (c == 0)   /* a new group: its unused children are empty boxes, as in the tree */
-        for (j = 0; j < RADINTERP__BVH_WIDTH; j++) {
-            for (row = 0; row < 6; row++) sr->group[g].box[row][j] = row & 1 ? -INFINITY : INFINITY;
-            sr->group[g].child[j] = RADINTERP__BVH_NONE;
-        }
-    for (row = 0; row < 6; row++) sr->group[g].box[row][c] = n->box[row][i];
-    sr->group[g].child[c] = n->child[i];
-    sr->leaves++;
+    double least = DBL_MAX;
+    int c, k;
+    if (!e->n) return;
+    for (c = 0; c < 8; c++) {
+        double x = -e->d;
+        for (k = 0; k < 3; k++) x += e->n[k] * (double)((c >> k) & 1 ? other->hi[k] : other->lo[k]);
+        least = x < least ? x : least;
+    }
+    e->floor = (least - offset < offset ? least - offset : offset) - pad;
+}
+
+/* Is the triangle wholly behind the region of end e's plane the rays reach? */
+static int radinterp__tri_behind(const radinterp__ray_end *e, const radinterp__bvh_tris *b, int lane)
+{
+    int v;
+    if (!e->n) return 0;
+    for (v = 0; v < 3; v++)
+        if (e->n[0] * b->v[3 * v][lane] + e->n[1] * b->v[3 * v + 1][lane] + e->n[2] * b->v[3 * v + 2][lane] - e->d >=
+            e->floor)
+            return 0;
     return 1;
 }
 
-/* The leaves whose boxes meet the shaft between boxes a and b grown by
-   `grow`, plus a margin for the rounding of the rays' floats. */
-static void radinterp__shaft_rays_init(const radinterp_solution *s, radinterp__shaft_rays *sr, const float *alo,
-                                       const float *ahi, const float *blo, const float *bhi, double grow)
+/* Sets the box of the next triangle: the rays test the boxes first, eight
+   at a time with the tree's own box test, and the blocks whose boxes they
+   enter. A ray that misses a triangle's box misses the triangle, as the
+   tree's walk relies on. */
+static void radinterp__shaft_rays_box(radinterp__shaft_rays *sr, const float *lo, const float *hi)
+{
+    radinterp__bvh_node *n = &sr->box[sr->tris / RADINTERP__BVH_WIDTH];
+    uint32_t c = sr->tris % RADINTERP__BVH_WIDTH, j;
+    int k;
+    if (c == 0)   /* a new group: its unused columns are empty boxes, as in the tree */
+        for (j = 0; j < RADINTERP__BVH_WIDTH; j++)
+            for (k = 0; k < 3; k++) {
+                n->box[2 * k][j] = INFINITY;
+                n->box[2 * k + 1][j] = -INFINITY;
+            }
+    for (k = 0; k < 3; k++) {
+        n->box[2 * k][c] = lo[k];
+        n->box[2 * k + 1][c] = hi[k];
+    }
+}
+
+/* Appends the triangles of leaf ref that may meet the rays; 0 when there
+   are too many. */
+static int radinterp__shaft_rays_leaf(const radinterp_solution *s, radinterp__shaft_rays *sr, const radinterp__shaft *sh,
+                                      const radinterp__ray_end *end, uint32_t ref)
+{
+    uint32_t block = (ref & ~RADINTERP__BVH_LEAF) >> 3, last = block + (ref & 7u) + 1;
+    for (; block < last; block++) {
+        const radinterp__bvh_tris *b = &s->bvh.blocks[block];
+        int i, k;
+        for (i = 0; i < 4; i++) {
+            float lo[3], hi[3];
+            radinterp__bvh_tris *to;
+            if (i > 0 && b->id[i] == b->id[i - 1]) continue;   /* unused columns repeat the last triangle */
+            for (k = 0; k < 3; k++) {
+                lo[k] = radinterp__minf(b->v[k][i], radinterp__minf(b->v[3 + k][i], b->v[6 + k][i]));
+                hi[k] = radinterp__maxf(b->v[k][i], radinterp__maxf(b->v[3 + k][i], b->v[6 + k][i]));
+            }
+            if (radinterp__shaft_culls(sh, lo, hi, 0.0) || radinterp__tri_behind(&end[0], b, i) ||
+                radinterp__tri_behind(&end[1], b, i))
+                continue;
+            if (sr->tris == RADINTERP__SHAFT_TRIS) return 0;
+            radinterp__shaft_rays_box(sr, lo, hi);
+            to = &sr->block[sr->tris / 4];
+            for (k = 0; k < 9; k++) to->v[k][sr->tris % 4] = b->v[k][i];
+            to->id[sr->tris % 4] = b->id[i];
+            sr->tris++;
+        }
+    }
+    return 1;
+}
+
+/* The triangles the rays between ends a and b may meet (above). */
+static void radinterp__shaft_rays_init(const radinterp_solution *s, radinterp__shaft_rays *sr, radinterp__ray_end a,
+                                       radinterp__ray_end b)
 {
     uint32_t stack[RADINTERP__BVH_STACK], top = 0, ref = s->bvh.root;
     radinterp__shaft sh;
+    radinterp__ray_end end[2];
     float glo[2][3], ghi[2][3];
-    double size = s->diag;
+    double size = s->diag, grow = radinterp__ray_offset(s), pad;
     int i, k;
     sr->walk = 1;
-    sr->leaves = 0;
+    sr->tris = 0;
     if (s->trace || s->bvh.tri_count == 0 || (ref & RADINTERP__BVH_LEAF)) return;
     for (k = 0; k < 3; k++) {
         size = fabs((double)s->scene_lo[k]) > size ? fabs((double)s->scene_lo[k]) : size;
         size = fabs((double)s->scene_hi[k]) > size ? fabs((double)s->scene_hi[k]) : size;
     }
-    grow += 1e-5 * size;   /* float rays round their ends by about 1e-7 of the coordinates */
+    pad = 1e-5 * size;   /* float rays round their ends by about 1e-7 of the coordinates */
+    end[0] = a;
+    end[1] = b;
+    radinterp__ray_end_floor(&end[0], &b, grow, pad);
+    radinterp__ray_end_floor(&end[1], &a, grow, pad);
     for (k = 0; k < 3; k++) {
-        glo[0][k] = (float)(alo[k] - grow); ghi[0][k] = (float)(ahi[k] + grow);
-        glo[1][k] = (float)(blo[k] - grow); ghi[1][k] = (float)(bhi[k] + grow);
+        glo[0][k] = (float)(a.lo[k] - grow - pad); ghi[0][k] = (float)(a.hi[k] + grow + pad);
+        glo[1][k] = (float)(b.lo[k] - grow - pad); ghi[1][k] = (float)(b.hi[k] + grow + pad);
     }
     radinterp__shaft_build(&sh, glo[0], ghi[0], glo[1], ghi[1]);
     for (;;) {
@@ -4630,16 +4711,24 @@ static void radinterp__shaft_rays_init(const radinterp_solution *s, radinterp__s
             hi[0] = n->box[1][i]; hi[1] = n->box[3][i]; hi[2] = n->box[5][i];
             if (!(lo[0] <= hi[0]) || radinterp__shaft_culls(&sh, lo, hi, 0.0)) continue;
             if (!(n->child[i] & RADINTERP__BVH_LEAF)) stack[top++] = n->child[i];
-            else if (!radinterp__shaft_rays_add(sr, n, i)) return;
+            else if (!radinterp__shaft_rays_leaf(s, sr, &sh, end, n->child[i])) return;
         }
         if (!top) break;
         ref = stack[--top];
     }
+    for (k = (int)sr->tris; k % 4; k++) {   /* the last block's unused columns repeat its last triangle */
+        radinterp__bvh_tris *to = &sr->block[k / 4];
+        for (i = 0; i < 9; i++) to->v[i][k % 4] = to->v[i][k % 4 - 1];
+        to->id[k % 4] = to->id[k % 4 - 1];
+    }
     sr->walk = 0;
 }
 
+/* An end of a link's rays: element el (a node or a cluster). */
+static radinterp__ray_end radinterp__elem_ray_end(const radinterp_solution *s, uint32_t el);   /* below */
+
 /* Is the segment from a to b blocked? radinterp__segment_blocked's answer,
-   from the shaft's leaves when they are known. */
+   from the shaft's triangles when they are known. */
 static int radinterp__shaft_blocked(const radinterp_solution *s, const radinterp__shaft_rays *sr, const double *a,
                                     const double *b)
 {
@@ -4657,15 +4746,12 @@ static int radinterp__shaft_blocked(const radinterp_solution *s, const radinterp
     hit.t = 1.0f;
     hit.u = hit.v = 0.0f;
     hit.tri = RADINTERP__NO_HIT;
-    for (g = 0; g * RADINTERP__BVH_WIDTH < sr->leaves; g++) {
+    for (g = 0; g * RADINTERP__BVH_WIDTH < sr->tris; g++) {
         float t[RADINTERP__BVH_WIDTH];
-        unsigned mask = radinterp__bvh_node_hits(&s->bvh, &r, &sr->group[g], 0.0f, hit.t, t);
-        for (; mask; mask &= mask - 1) {
-            uint32_t ref = sr->group[g].child[radinterp__bvh_first_bit(mask)];
-            uint32_t block = (ref & ~RADINTERP__BVH_LEAF) >> 3, end = block + (ref & 7u) + 1;
-            for (; block < end; block++)
-                if (radinterp__bvh_leaf_hit(&s->bvh, &r, &s->bvh.blocks[block], 0.0f, &hit)) return 1;
-        }
+        unsigned mask = radinterp__bvh_node_hits(&s->bvh, &r, &sr->box[g], 0.0f, 1.0f, t), i;
+        for (i = 0; i < RADINTERP__BVH_WIDTH / 4; i++)
+            if ((mask >> (4 * i) & 15u) && radinterp__bvh_leaf_hit(&s->bvh, &r, &sr->block[RADINTERP__BVH_WIDTH / 4 * g + i], 0.0f, &hit))
+                return 1;
     }
     return 0;
 }
@@ -5002,7 +5088,8 @@ static void radinterp__link_compute(radinterp_solution *s, radinterp__pending *p
     total = radinterp__fan_areas((const double (*)[3])Rc, nRc, tri_area);
     if (total <= tiny) return;
     pl->dead = 0;
-    if (pl->kept && !glass) radinterp__shaft_rays_init(s, &sr, r->lo, r->hi, src->lo, src->hi, radinterp__ray_offset(s));
+    if (pl->kept && !glass)
+        radinterp__shaft_rays_init(s, &sr, radinterp__elem_ray_end(s, pl->receiver), radinterp__elem_ray_end(s, pl->source));
     else sr.walk = 1;
     clipped = radinterp__node_front(r, ps->n, ps->d) > 0.0 && total < 0.999999 * r->area;
     ratio = clipped ? total / r->area : 1.0;
@@ -5499,6 +5586,19 @@ static void radinterp__elem_box(const radinterp_solution *s, uint32_t el, const 
     else { *lo = s->nodes[el].lo; *hi = s->nodes[el].hi; }
 }
 
+static radinterp__ray_end radinterp__elem_ray_end(const radinterp_solution *s, uint32_t el)
+{
+    radinterp__ray_end e;
+    radinterp__elem_box(s, el, &e.lo, &e.hi);
+    e.n = NULL;
+    e.d = e.floor = 0.0;
+    if (!radinterp__is_cluster(el)) {   /* its rays start on one patch's plane */
+        e.n = s->patches[s->nodes[el].patch].n;
+        e.d = s->patches[s->nodes[el].patch].d;
+    }
+    return e;
+}
+
 static void radinterp__elem_centre(const radinterp_solution *s, uint32_t el, double *c)
 {
     int k;
@@ -5653,8 +5753,9 @@ typedef struct radinterp__cpending {
 static void radinterp__clink_compute(const radinterp_solution *s, radinterp__cpending *pc)
 {
     const float *rlo, *rhi, *slo, *shi;
-    double cr[3], cs[3], d[3], r, open[3] = {0.0, 0.0, 0.0}, all = 0.0, off = 10.0 * s->epsilon * s->diag, tol = s->epsilon * s->diag;
+    double cr[3], cs[3], d[3], r, open[3] = {0.0, 0.0, 0.0}, all = 0.0, off = radinterp__ray_offset(s), tol = s->epsilon * s->diag;
     radinterp__rng rng = radinterp__rng_stream(s->seed ^ 0xC1C1C1C1u, (uint64_t)pc->receiver << 32 | pc->source);
+    radinterp__shaft_rays sr;
     int i, k;
     pc->dead = 1;
     pc->hidden = pc->coarse = 0;
@@ -5677,6 +5778,8 @@ static void radinterp__clink_compute(const radinterp_solution *s, radinterp__cpe
     r = radinterp__d3_len(d);
     pc->dead = 0;
     if (!(r > 0.0)) { pc->dir[2] = 1.0f; return; } /* centres at one point: carries nothing, refined at once */
+    if (s->glass_patches) sr.walk = 1;
+    else radinterp__shaft_rays_init(s, &sr, radinterp__elem_ray_end(s, pc->receiver), radinterp__elem_ray_end(s, pc->source));
     for (k = 0; k < 3; k++) pc->dir[k] = (float)(d[k] / r);
     /* the visible fraction weighs the transfer; rays cannot prove a pair
        hidden (a small close part they miss may carry most of it), so when
@@ -5692,7 +5795,7 @@ static void radinterp__clink_compute(const radinterp_solution *s, radinterp__cpe
         for (k = 0; k < 3; k++) { a[k] += off * na[k]; b[k] += off * nb[k]; }
         all += w;
         pc->rays++;
-        radinterp__segment_light(s, a, b, s->glass_patches != 0, T);
+        radinterp__shaft_light(s, &sr, a, b, s->glass_patches != 0, T);
         for (k = 0; k < 3; k++) open[k] += w * T[k];
     }
     /* no ray got through, or no pair of points faced each other (then the
