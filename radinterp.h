@@ -4573,12 +4573,15 @@ static double radinterp__ray_offset(const radinterp_solution *s) { return 10.0 *
    either end's plane (the receiver's and source's own triangles, which lie
    in the tree's leaves on every ray's path, whenever the other end stands
    clear of the plane). When few are left, the link's rays test just those,
-   four at a time with the BVH's own triangle test, instead of walking the
-   tree from its root for each ray (the walk was 47% of building_1k's
-   solve). A ray is blocked by the same triangles either way, so the links
-   come out bit-identical: the tree's box tests are conservative, so the
-   walk tests every triangle it could meet, and the triangles left out here
-   are ones it cannot meet. */
+   with the BVH's own triangle test, instead of walking the tree from its
+   root for each ray (the walk was 47% of building_1k's solve). A ray is
+   blocked when one of these triangles accepts it, as when any triangle of
+   the scene does: the triangles left out are ones it cannot meet (tested
+   against every triangle in test_radinterp_visibility). The walk of the
+   tree answers the same but for rays that run exactly along a face of one
+   of its boxes, which it may let through (see radinterp__shaft_rays_box);
+   the solutions of the office, the Cornell box and building_1k are
+   bit-identical to the walk's. */
 #define RADINTERP__SHAFT_TRIS 64   /* more triangles and the rays walk the tree */
 
 typedef struct radinterp__shaft_rays {
@@ -4625,10 +4628,11 @@ static int radinterp__tri_behind(const radinterp__ray_end *e, const radinterp__b
 }
 
 /* Sets the box of the next triangle: the rays test the boxes first, eight
-   at a time with the tree's own box test, and the blocks whose boxes they
-   enter. A ray that misses a triangle's box misses the triangle, as the
-   tree's walk relies on. */
-static void radinterp__shaft_rays_box(radinterp__shaft_rays *sr, const float *lo, const float *hi)
+   at a time with the tree's box test, and then the blocks whose boxes they
+   enter. The box is grown by pad: the box test rejects a ray that runs
+   exactly along a face of a box (a zero direction component gives a far
+   distance of zero there), and a flat triangle's box is all faces. */
+static void radinterp__shaft_rays_box(radinterp__shaft_rays *sr, const float *lo, const float *hi, double pad)
 {
     radinterp__bvh_node *n = &sr->box[sr->tris / RADINTERP__BVH_WIDTH];
     uint32_t c = sr->tris % RADINTERP__BVH_WIDTH, j;
@@ -4640,15 +4644,15 @@ static void radinterp__shaft_rays_box(radinterp__shaft_rays *sr, const float *lo
                 n->box[2 * k + 1][j] = -INFINITY;
             }
     for (k = 0; k < 3; k++) {
-        n->box[2 * k][c] = lo[k];
-        n->box[2 * k + 1][c] = hi[k];
+        n->box[2 * k][c] = (float)(lo[k] - pad);
+        n->box[2 * k + 1][c] = (float)(hi[k] + pad);
     }
 }
 
 /* Appends the triangles of leaf ref that may meet the rays; 0 when there
    are too many. */
 static int radinterp__shaft_rays_leaf(const radinterp_solution *s, radinterp__shaft_rays *sr, const radinterp__shaft *sh,
-                                      const radinterp__ray_end *end, uint32_t ref)
+                                      const radinterp__ray_end *end, double pad, uint32_t ref)
 {
     uint32_t block = (ref & ~RADINTERP__BVH_LEAF) >> 3, last = block + (ref & 7u) + 1;
     for (; block < last; block++) {
@@ -4666,7 +4670,7 @@ static int radinterp__shaft_rays_leaf(const radinterp_solution *s, radinterp__sh
                 radinterp__tri_behind(&end[1], b, i))
                 continue;
             if (sr->tris == RADINTERP__SHAFT_TRIS) return 0;
-            radinterp__shaft_rays_box(sr, lo, hi);
+            radinterp__shaft_rays_box(sr, lo, hi, pad);
             to = &sr->block[sr->tris / 4];
             for (k = 0; k < 9; k++) to->v[k][sr->tris % 4] = b->v[k][i];
             to->id[sr->tris % 4] = b->id[i];
@@ -4711,7 +4715,7 @@ static void radinterp__shaft_rays_init(const radinterp_solution *s, radinterp__s
             hi[0] = n->box[1][i]; hi[1] = n->box[3][i]; hi[2] = n->box[5][i];
             if (!(lo[0] <= hi[0]) || radinterp__shaft_culls(&sh, lo, hi, 0.0)) continue;
             if (!(n->child[i] & RADINTERP__BVH_LEAF)) stack[top++] = n->child[i];
-            else if (!radinterp__shaft_rays_leaf(s, sr, &sh, end, n->child[i])) return;
+            else if (!radinterp__shaft_rays_leaf(s, sr, &sh, end, pad, n->child[i])) return;
         }
         if (!top) break;
         ref = stack[--top];

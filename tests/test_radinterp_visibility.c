@@ -759,6 +759,110 @@ static void test_validation(void)
     radinterp_solution_destroy(sol);
 }
 
+/* ---- a link's rays inside its shaft -------------------------------------
+   The solver's shadow rays test only the triangles kept for their link
+   (radinterp__shaft_rays): those that reach the shaft between its ends and
+   are not wholly behind either end's plane. Each ray must be blocked
+   exactly when some triangle of the scene accepts it (every block tested,
+   no boxes), for rays from random points and from the elements' corners
+   (the edges of the shaft and of the planes' regions), moved off the
+   surfaces as the solver moves them; and most links must use the kept
+   triangles, or the test proves nothing. The walk of the tree is counted
+   beside them: it may let through a ray that runs exactly along a face of
+   one of its boxes (two corners at one coordinate). */
+typedef struct shaft_tally { uint32_t pairs, fast, rays, blocked, differ, walk_differs; } shaft_tally;
+
+/* Is the segment blocked by any triangle of the scene? Every block of the
+   tree tested in turn. */
+static int blocked_by_any(const radinterp_solution *s, const double *a, const double *b)
+{
+    float org[3], dir[3];
+    radinterp__ray r;
+    radinterp__hit hit;
+    uint32_t i;
+    int k;
+    for (k = 0; k < 3; k++) {
+        org[k] = (float)a[k];
+        dir[k] = (float)(b[k] - a[k]);
+    }
+    radinterp__ray_setup(&r, org, dir);
+    hit.t = 1.0f;
+    hit.u = hit.v = 0.0f;
+    hit.tri = RADINTERP__NO_HIT;
+    for (i = 0; i < s->bvh.block_count; i++)
+        if (radinterp__bvh_leaf_hit(&s->bvh, &r, &s->bvh.blocks[i], 0.0f, &hit)) return 1;
+    return 0;
+}
+
+/* A point of element el and its surface normal: a corner (node ends only,
+   corner < 4) or a random point. */
+static void shaft_ray_point(const radinterp_solution *s, uint32_t el, radinterp__rng *rng, int corner, double *p, double *n)
+{
+    double v[RADINTERP__POLY_MAX][3];
+    int count;
+    if (corner < 0 || radinterp__is_cluster(el)) {
+        radinterp__elem_point(s, el, rng, p, n);
+        return;
+    }
+    count = radinterp__node_poly(&s->nodes[el], v);
+    memcpy(p, v[corner % count], sizeof v[0]);
+    memcpy(n, s->patches[s->nodes[el].patch].n, sizeof v[0]);
+}
+
+static void check_shaft_pair(const radinterp_solution *s, uint32_t receiver, uint32_t source, shaft_tally *t)
+{
+    radinterp__shaft_rays sr;
+    radinterp__rng rng = radinterp__rng_stream(11, (uint64_t)receiver << 32 | source);
+    double off = radinterp__ray_offset(s);
+    int j, k;
+    radinterp__shaft_rays_init(s, &sr, radinterp__elem_ray_end(s, receiver), radinterp__elem_ray_end(s, source));
+    t->pairs++;
+    t->fast += !sr.walk;
+    for (j = 0; j < 24; j++) {
+        double a[3], na[3], b[3], nb[3];
+        int any, walked, kept;
+        shaft_ray_point(s, receiver, &rng, j < 16 ? j % 4 : -1, a, na);
+        shaft_ray_point(s, source, &rng, j < 16 ? j / 4 : -1, b, nb);
+        for (k = 0; k < 3; k++) { a[k] += off * na[k]; b[k] += off * nb[k]; }
+        any = blocked_by_any(s, a, b);
+        walked = radinterp__segment_blocked(s, a, b);
+        kept = radinterp__shaft_blocked(s, &sr, a, b);
+        t->rays++;
+        t->blocked += (uint32_t)any;
+        t->differ += (uint32_t)(!sr.walk && any != kept);   /* a link with too many triangles walks the tree */
+        t->walk_differs += (uint32_t)(any != walked);
+    }
+}
+
+static void test_shaft_rays(void)
+{
+    obj_scene o;
+    uint32_t *patches = NULL, i;
+    radinterp_material *mats = NULL;
+    radinterp_desc d;
+    radinterp_solution *s = NULL;
+    shaft_tally links, clinks;
+    memset(&o, 0, sizeof o);
+    memset(&links, 0, sizeof links);
+    memset(&clinks, 0, sizeof clinks);
+    if (load_scene("examples/data/office.obj", &o, &patches, &mats, &d) && CHECK(radinterp_solve(&d, &s) == RADINTERP_OK)) {
+        for (i = 0; i < s->link_count; i += 13) check_shaft_pair(s, s->links[i].receiver, s->links[i].source, &links);
+        for (i = 0; i < s->clink_count; i++) check_shaft_pair(s, s->clinks[i].receiver, s->clinks[i].source, &clinks);
+        test_note("office: %u links' %u rays (%u blocked), %u on kept triangles; %u cluster links' %u rays (%u blocked), "
+                  "%u on kept triangles; %u and %u answers differ (the tree's walk: %u and %u)", links.pairs, links.rays,
+                  links.blocked, links.fast, clinks.pairs, clinks.rays, clinks.blocked, clinks.fast, links.differ,
+                  clinks.differ, links.walk_differs, clinks.walk_differs);
+        CHECK(links.differ == 0 && clinks.differ == 0);
+        CHECK(links.fast > links.pairs / 2);                                  /* the kept triangles are used */
+        CHECK(links.blocked > links.rays / 20 && links.blocked < links.rays); /* rays of both kinds */
+        CHECK(clinks.pairs > 0 && clinks.blocked > 0);
+    }
+    radinterp_solution_destroy(s);
+    free(patches);
+    free(mats);
+    if (o.positions) obj_free(&o);
+}
+
 int main(int argc, char **argv)
 {
     TEST_INIT(argc, argv);
@@ -775,5 +879,6 @@ int main(int argc, char **argv)
     RUN(test_leaf_lists);
     RUN(test_point_rest);
     RUN(test_cornell_random_points);
+    RUN(test_shaft_rays);
     return test_finish();
 }
