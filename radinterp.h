@@ -171,7 +171,9 @@
    from shaft culling (Haines and Wallace) through a BVH of the patches; link
    form factors = the mean of eq. 6.1 at a jittered grid of receiver points,
    each scaled by the visible fraction of the source (shadow rays through the
-   BVH or desc.trace), with horizon clipping of both elements (4.2); Jacobi
+   BVH or desc.trace; a link whose shaft at most 64 triangles reach tests
+   just those, see shadow rays inside a shaft in the implementation), with
+   horizon clipping of both elements (4.2); Jacobi
    gather + push-pull iterations (4.3); after each, transport refinement
    (4.4.1): a link whose B_src times the spread of the point factors over
    its receiver exceeds its tolerance (eps, or eps_relative of the least
@@ -4737,25 +4739,32 @@ static void radinterp__shaft_rays_init(const radinterp_solution *s, radinterp__s
 /* An end of a link's rays: element el (a node or a cluster). */
 static radinterp__ray_end radinterp__elem_ray_end(const radinterp_solution *s, uint32_t el);   /* below */
 
+/* The shadow ray radinterp__segment_blocked casts from a to b (t in
+   (0, 1)), with no hit yet. */
+static void radinterp__segment_ray(const double *a, const double *b, radinterp__ray *r, radinterp__hit *hit)
+{
+    float org[3], dir[3];
+    int k;
+    for (k = 0; k < 3; k++) {
+        org[k] = (float)a[k];
+        dir[k] = (float)(b[k] - a[k]);
+    }
+    radinterp__ray_setup(r, org, dir);
+    hit->t = 1.0f;
+    hit->u = hit->v = 0.0f;
+    hit->tri = RADINTERP__NO_HIT;
+}
+
 /* Is the segment from a to b blocked? radinterp__segment_blocked's answer,
    from the shaft's triangles when they are known. */
 static int radinterp__shaft_blocked(const radinterp_solution *s, const radinterp__shaft_rays *sr, const double *a,
                                     const double *b)
 {
-    float org[3], dir[3];
     radinterp__ray r;
     radinterp__hit hit;
     uint32_t g;
-    int k;
     if (sr->walk) return radinterp__segment_blocked(s, a, b);
-    for (k = 0; k < 3; k++) {   /* the ray radinterp__segment_blocked casts */
-        org[k] = (float)a[k];
-        dir[k] = (float)(b[k] - a[k]);
-    }
-    radinterp__ray_setup(&r, org, dir);
-    hit.t = 1.0f;
-    hit.u = hit.v = 0.0f;
-    hit.tri = RADINTERP__NO_HIT;
+    radinterp__segment_ray(a, b, &r, &hit);
     for (g = 0; g * RADINTERP__BVH_WIDTH < sr->tris; g++) {
         float t[RADINTERP__BVH_WIDTH];
         unsigned mask = radinterp__bvh_node_hits(&s->bvh, &r, &sr->box[g], 0.0f, 1.0f, t), i;

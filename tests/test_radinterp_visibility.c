@@ -776,19 +776,10 @@ typedef struct shaft_tally { uint32_t pairs, fast, rays, blocked, differ, walk_d
    tree tested in turn. */
 static int blocked_by_any(const radinterp_solution *s, const double *a, const double *b)
 {
-    float org[3], dir[3];
     radinterp__ray r;
     radinterp__hit hit;
     uint32_t i;
-    int k;
-    for (k = 0; k < 3; k++) {
-        org[k] = (float)a[k];
-        dir[k] = (float)(b[k] - a[k]);
-    }
-    radinterp__ray_setup(&r, org, dir);
-    hit.t = 1.0f;
-    hit.u = hit.v = 0.0f;
-    hit.tri = RADINTERP__NO_HIT;
+    radinterp__segment_ray(a, b, &r, &hit);
     for (i = 0; i < s->bvh.block_count; i++)
         if (radinterp__bvh_leaf_hit(&s->bvh, &r, &s->bvh.blocks[i], 0.0f, &hit)) return 1;
     return 0;
