@@ -3792,7 +3792,10 @@ typedef struct radinterp__patch {
 
 typedef struct radinterp__node {
     float v[4][3];            /* corners, as the patch's */
-    uint32_t count;           /* 3 or 4 */
+    uint16_t count;           /* 3 or 4 */
+    uint16_t enclosed;        /* a partly open node: which points its links sample are enclosed, when
+                                 RADINTERP__ENCLOSED_KNOWN is set (radinterp__node_enclosure); beside
+                                 count, so that the node keeps its size */
     uint32_t patch;
     uint32_t parent;          /* NONE for a root */
     uint32_t child;           /* first of four consecutive children; NONE for a leaf */
@@ -3810,11 +3813,9 @@ typedef struct radinterp__node {
                                  floor under a box standing on it); enclosed parts receive and show nothing */
     float sky[3];             /* irradiance from the sky (mean over the whole node), measured when made */
     float sky_spread;         /* max - min of the sky's irradiance at fixed points of the node (refinement) */
-    uint32_t enclosed;        /* a partly open node: which points its links sample are enclosed, when
-                                 RADINTERP__ENCLOSED_KNOWN is set (radinterp__node_enclosure) */
 } radinterp__node;
 
-#define RADINTERP__ENCLOSED_KNOWN 0x80000000u
+#define RADINTERP__ENCLOSED_KNOWN 0x8000u
 
 #define RADINTERP__LINK_FINAL 1u   /* may not be refined further */
 #define RADINTERP__LINK_DEAD 2u    /* carries nothing: dropped at the next rebuild */
@@ -5098,18 +5099,18 @@ static void radinterp__node_enclosure(radinterp_solution *s, uint32_t index)
     int nR = radinterp__node_poly(nd, R), k;
     uint32_t i;
     nd->enclosed = 0;
-    if (!(nd->open < 1.0f) || s->ff_samples + (uint32_t)nR + 1 > 31) return;
+    if (!(nd->open < 1.0f) || s->ff_samples + (uint32_t)nR + 1 > 15) return;   /* more: each link tests its points */
     total = radinterp__fan_areas((const double (*)[3])R, nR, tri_area);
     for (i = 0; i < s->ff_samples; i++) {   /* as the link's loop draws them */
         radinterp__receiver_point((const double (*)[3])R, nR, tri_area, total, i, s->ff_samples, &rng, q);
-        if (radinterp__point_enclosed(s, n, q)) nd->enclosed |= 1u << i;
+        if (radinterp__point_enclosed(s, n, q)) nd->enclosed = (uint16_t)(nd->enclosed | 1u << i);
     }
     radinterp__poly_centre((const double (*)[3])R, nR, c);
     for (k = 0; k <= nR; k++) {
         radinterp__fixed_point((const double (*)[3])R, nR, c, k, q);
-        if (radinterp__point_enclosed(s, n, q)) nd->enclosed |= 1u << (s->ff_samples + (uint32_t)k);
+        if (radinterp__point_enclosed(s, n, q)) nd->enclosed = (uint16_t)(nd->enclosed | 1u << (s->ff_samples + (uint32_t)k));
     }
-    nd->enclosed |= RADINTERP__ENCLOSED_KNOWN;
+    nd->enclosed = (uint16_t)(nd->enclosed | RADINTERP__ENCLOSED_KNOWN);
 }
 
 /* Is point q (sample `bit`, above) of receiver r enclosed? From r's bits
