@@ -705,11 +705,11 @@
    The shadow rays of a link whose shaft few triangles reach test just
    those (shadow rays inside a shaft, in the implementation), and a partly
    enclosed node tests its sample points for enclosure once for all its
-   links: the solution is bit-identical, and building_1k solves 1.25x
-   faster (11.2 s against 14.1 s of CPU time, one thread), building_4k
-   about 1.06x (70.5 s against 74.7 s; 1.71 M links, 96,827 leaves, 64
-   iterations), the office in 0.96x the time (measured outside make bench,
-   README).
+   links: the solution is bit-identical, and building_1k solves in 0.81x
+   the CPU time (11.6 s against 14.3 s, one thread), building_4k in 0.93x
+   (68.4 s against 73.6 s one thread; 70.1 s against 73.7 s of wall time
+   on 2 threads; 1.71 M links, 96,827 leaves, 64 iterations), the office
+   in 0.96x (measured outside make bench, README).
    radinterp_info says where the memory goes (link_bytes, leaf_list_bytes):
    on building_4k with v0.8.2, 2,221 MB held, of which the leaf lists
    2,066 MB (65.4 M entries of 16 bytes, 1,046 MB, and 255 M blockers,
