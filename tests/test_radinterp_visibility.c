@@ -759,6 +759,156 @@ static void test_validation(void)
     radinterp_solution_destroy(sol);
 }
 
+/* ---- a link's rays inside its shaft -------------------------------------
+   The solver's shadow rays test only the triangles kept for their link
+   (radinterp__shaft_rays): those that reach the shaft between its ends and
+   are not wholly behind either end's plane. Each ray must be blocked
+   exactly when some triangle of the scene accepts it (every block tested,
+   no boxes), for rays from random points and from the elements' corners
+   (the edges of the shaft and of the planes' regions), moved off the
+   surfaces as the solver moves them; and most links must use the kept
+   triangles, or the test proves nothing. The walk of the tree is counted
+   beside them: it may let through a ray that runs exactly along a face of
+   one of its boxes (two corners at one coordinate). */
+typedef struct shaft_tally { uint32_t pairs, fast, rays, blocked, differ, walk_differs; } shaft_tally;
+
+/* Is the segment blocked by any triangle of the scene? Every block of the
+   tree tested in turn. */
+static int blocked_by_any(const radinterp_solution *s, const double *a, const double *b)
+{
+    radinterp__ray r;
+    radinterp__hit hit;
+    uint32_t i;
+    radinterp__segment_ray(a, b, &r, &hit);
+    for (i = 0; i < s->bvh.block_count; i++)
+        if (radinterp__bvh_leaf_hit(&s->bvh, &r, &s->bvh.blocks[i], 0.0f, &hit)) return 1;
+    return 0;
+}
+
+/* A point of element el and its surface normal: a corner (node ends only,
+   corner < 4) or a random point. */
+static void shaft_ray_point(const radinterp_solution *s, uint32_t el, radinterp__rng *rng, int corner, double *p, double *n)
+{
+    double v[RADINTERP__POLY_MAX][3];
+    int count;
+    if (corner < 0 || radinterp__is_cluster(el)) {
+        radinterp__elem_point(s, el, rng, p, n);
+        return;
+    }
+    count = radinterp__node_poly(&s->nodes[el], v);
+    memcpy(p, v[corner % count], sizeof v[0]);
+    memcpy(n, s->patches[s->nodes[el].patch].n, sizeof v[0]);
+}
+
+static void check_shaft_pair(const radinterp_solution *s, uint32_t receiver, uint32_t source, shaft_tally *t)
+{
+    radinterp__shaft_rays sr;
+    radinterp__rng rng = radinterp__rng_stream(11, (uint64_t)receiver << 32 | source);
+    double off = radinterp__ray_offset(s);
+    int j, k;
+    radinterp__shaft_rays_init(s, &sr, radinterp__elem_ray_end(s, receiver), radinterp__elem_ray_end(s, source));
+    t->pairs++;
+    t->fast += !sr.walk;
+    for (j = 0; j < 24; j++) {
+        double a[3], na[3], b[3], nb[3];
+        int any, walked, kept;
+        shaft_ray_point(s, receiver, &rng, j < 16 ? j % 4 : -1, a, na);
+        shaft_ray_point(s, source, &rng, j < 16 ? j / 4 : -1, b, nb);
+        for (k = 0; k < 3; k++) { a[k] += off * na[k]; b[k] += off * nb[k]; }
+        any = blocked_by_any(s, a, b);
+        walked = radinterp__segment_blocked(s, a, b);
+        kept = radinterp__shaft_blocked(s, &sr, a, b);
+        t->rays++;
+        t->blocked += (uint32_t)any;
+        t->differ += (uint32_t)(!sr.walk && any != kept);   /* a link with too many triangles walks the tree */
+        t->walk_differs += (uint32_t)(any != walked);
+    }
+}
+
+static void test_shaft_rays(void)
+{
+    obj_scene o;
+    uint32_t *patches = NULL, i;
+    radinterp_material *mats = NULL;
+    radinterp_desc d;
+    radinterp_solution *s = NULL;
+    shaft_tally links, clinks;
+    memset(&o, 0, sizeof o);
+    memset(&links, 0, sizeof links);
+    memset(&clinks, 0, sizeof clinks);
+    if (load_scene("examples/data/office.obj", &o, &patches, &mats, &d) && CHECK(radinterp_solve(&d, &s) == RADINTERP_OK)) {
+        for (i = 0; i < s->link_count; i += 13) check_shaft_pair(s, s->links[i].receiver, s->links[i].source, &links);
+        for (i = 0; i < s->clink_count; i++) check_shaft_pair(s, s->clinks[i].receiver, s->clinks[i].source, &clinks);
+        test_note("office: %u links' %u rays (%u blocked), %u on kept triangles; %u cluster links' %u rays (%u blocked), "
+                  "%u on kept triangles; %u and %u answers differ (the tree's walk: %u and %u)", links.pairs, links.rays,
+                  links.blocked, links.fast, clinks.pairs, clinks.rays, clinks.blocked, clinks.fast, links.differ,
+                  clinks.differ, links.walk_differs, clinks.walk_differs);
+        CHECK(links.differ == 0 && clinks.differ == 0);
+        CHECK(links.fast > links.pairs / 2);                                  /* the kept triangles are used */
+        CHECK(links.blocked > links.rays / 20 && links.blocked < links.rays); /* rays of both kinds */
+        CHECK(clinks.pairs > 0 && clinks.blocked > 0);
+    }
+    radinterp_solution_destroy(s);
+    free(patches);
+    free(mats);
+    if (o.positions) obj_free(&o);
+}
+
+/* A partly enclosed node keeps which of the points its links sample are
+   enclosed (radinterp__node_enclosure), so that its unclipped links need
+   not test them again: every bit must be what the rays say at the point a
+   link draws (its stratified points from the receiver's own seed, then its
+   fixed points), and the office must have such nodes with points of both
+   kinds, or the bits are never read. */
+static void check_enclosure_bits(const radinterp_solution *s, uint32_t index, uint32_t *points, uint32_t *enclosed,
+                                 uint32_t *wrong)
+{
+    const radinterp__node *nd = &s->nodes[index];
+    double R[RADINTERP__POLY_MAX][3], tri_area[RADINTERP__POLY_MAX], total, c[3], q[3];
+    radinterp__rng rng = radinterp__rng_stream(s->seed, index);
+    int nR = radinterp__node_poly(nd, R), k;
+    uint32_t i, bits = nd->enclosed, ray;
+    total = radinterp__fan_areas((const double (*)[3])R, nR, tri_area);
+    radinterp__poly_centre((const double (*)[3])R, nR, c);
+    for (i = 0; i < s->ff_samples + (uint32_t)nR + 1; i++) {
+        k = (int)i - (int)s->ff_samples;
+        if (k < 0) radinterp__receiver_point((const double (*)[3])R, nR, tri_area, total, i, s->ff_samples, &rng, q);
+        else radinterp__fixed_point((const double (*)[3])R, nR, c, k, q);
+        ray = (uint32_t)radinterp__point_enclosed(s, s->patches[nd->patch].n, q);
+        (*points)++;
+        *enclosed += ray;
+        *wrong += ray != (bits >> i & 1u);
+    }
+}
+
+static void test_enclosure_bits(void)
+{
+    obj_scene o;
+    uint32_t *patches = NULL, i, nodes = 0, points = 0, enclosed = 0, wrong = 0;
+    radinterp_material *mats = NULL;
+    radinterp_desc d;
+    radinterp_solution *s = NULL;
+    memset(&o, 0, sizeof o);
+    if (load_scene("examples/data/office.obj", &o, &patches, &mats, &d) && CHECK(radinterp_solve(&d, &s) == RADINTERP_OK)) {
+        for (i = 0; i < s->node_count; i++) {
+            if (!(s->nodes[i].enclosed & RADINTERP__ENCLOSED_KNOWN)) {
+                CHECK(!(s->nodes[i].open < 1.0f));   /* known for every partly open node at the default ff_samples */
+                continue;
+            }
+            nodes++;
+            check_enclosure_bits(s, i, &points, &enclosed, &wrong);
+        }
+        test_note("office: %u partly open nodes, %u points of which %u enclosed, %u bits wrong", nodes, points, enclosed,
+                  wrong);
+        CHECK(wrong == 0);
+        CHECK(nodes > 0 && enclosed > 0 && enclosed < points);
+    }
+    radinterp_solution_destroy(s);
+    free(patches);
+    free(mats);
+    if (o.positions) obj_free(&o);
+}
+
 int main(int argc, char **argv)
 {
     TEST_INIT(argc, argv);
@@ -775,5 +925,7 @@ int main(int argc, char **argv)
     RUN(test_leaf_lists);
     RUN(test_point_rest);
     RUN(test_cornell_random_points);
+    RUN(test_shaft_rays);
+    RUN(test_enclosure_bits);
     return test_finish();
 }
