@@ -1956,6 +1956,80 @@ done:
     rendercache_warper_destroy(w);
 }
 
+/* Inserts samples[0, n) in calls of the sizes in pieces (cycled), each
+   from its own buffer of exactly that many samples, so that a read past a
+   call's last sample (the insertion prefetches the slots of samples ahead
+   of the one it places) is a heap overflow under AddressSanitizer. */
+static void insert_in_pieces(rendercache *rc, const rendercache_sample *samples, uint32_t n)
+{
+    static const uint32_t pieces[] = { 1, 15, 16, 17, 31, 33, 64 };
+    uint32_t i = 0, k = 0;
+    while (i < n) {
+        uint32_t m = pieces[k++ % (sizeof pieces / sizeof pieces[0])];
+        rendercache_sample *copy;
+        if (m > n - i) m = n - i;
+        copy = (rendercache_sample *)malloc(m * sizeof *copy);
+        CHECK(copy != NULL);
+        if (!copy) return;
+        memcpy(copy, samples + i, m * sizeof *copy);
+        CHECK_EQ_INT(rendercache_insert(rc, copy, m, NULL), RENDERCACHE_OK);
+        free(copy);
+        i += m;
+    }
+}
+
+/* A walk of 8 frames (a full first frame, then 900 samples a frame, the
+   camera moving), its samples inserted in one call a frame or in pieces;
+   the hash of every frame's requests, images, kinds and counts. */
+static uint64_t run_pieces_walk(float ppp, int pieces)
+{
+    const uint32_t w = 96, h = 80;
+    rendercache *rc = create_with(NULL, NULL, ppp, w, h);
+    scene s;
+    uint64_t hash = 1469598103934665603ull;
+    int f;
+    memset(&s, 0, sizeof s);
+    if (!rc) return 0;
+    for (f = 0; f < 8; f++) {
+        rendercache_camera cam = make_camera(0.1f * (float)f, 0.05f * (float)f, 0.0f, 0.2f, 0.0f, 10.0f, w, h);
+        rendercache_stats st;
+        uint32_t n = 0, i, counts[6];
+        s.shadow[0] = -3.0f; s.shadow[1] = -1.8f; s.shadow[2] = (f % 3 == 1) ? 2.5f : 0.0f;
+        CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
+        CHECK_EQ_INT(rendercache_request(rc, g_req, f == 0 ? w * h : 900, &n), RENDERCACHE_OK);
+        for (i = 0; i < n; i++) shade(&s, &g_req[i], &g_samples[i]);
+        if (pieces) insert_in_pieces(rc, g_samples, n);
+        else CHECK_EQ_INT(rendercache_insert(rc, g_samples, n, NULL), RENDERCACHE_OK);
+        rendercache_get_stats(rc, &st);
+        counts[0] = st.inserted; counts[1] = st.replaced; counts[2] = st.evicted;
+        counts[3] = st.changed; counts[4] = st.live_points; counts[5] = st.rejected;
+        hash = hash_bytes(hash, g_req, n * sizeof *g_req);
+        hash = hash_bytes(hash, rendercache_image(rc), 3 * sizeof(float) * w * h);
+        hash = hash_bytes(hash, rendercache_priority_image(rc), sizeof(float) * w * h);
+        hash = hash_bytes(hash, rendercache_pixel_kinds(rc), w * h);
+        hash = hash_bytes(hash, counts, sizeof counts);
+    }
+    rendercache_destroy(rc);
+    return hash;
+}
+
+/* The current frame's samples inserted in calls of 1 to 64 samples (on
+   both sides of the insertion's look-ahead of 16) give the cache, images,
+   requests and counts of one call a frame: samples of the current frame
+   go one by one in order either way. Also with a cache smaller than a
+   frame's samples (0.3 points per pixel: evictions). Under
+   AddressSanitizer, a look-ahead past a call's samples fails here. */
+static void test_insert_in_pieces_matches_one_call(void)
+{
+    float ppp[2] = { 0.0f, 0.3f };
+    int k;
+    for (k = 0; k < 2; k++) {
+        uint64_t whole = run_pieces_walk(ppp[k], 0);
+        CHECK(whole != 0);
+        CHECK(run_pieces_walk(ppp[k], 1) == whole);
+    }
+}
+
 int main(int argc, char **argv)
 {
     TEST_INIT(argc, argv);
@@ -1985,5 +2059,6 @@ int main(int argc, char **argv)
     RUN(test_deterministic_for_any_thread_count);
     RUN(test_parallel_insert_matches_serial);
     RUN(test_warp_later_input_fills_the_hole);
+    RUN(test_insert_in_pieces_matches_one_call);
     return test_finish();
 }
