@@ -2020,6 +2020,9 @@ static void test_fallback_bad_input(void)
     fb.confidence = conf;
     CHECK_EQ_INT(rendercache_compose_fallback(rc, &fb, out), RENDERCACHE_OK);
     CHECK(memcmp(out, rendercache_image(rc), 3 * n * sizeof(float)) == 0);
+    for (p = 0; p < n; p++) conf[p] = 1.0f;   /* the step leaves holes a usable fallback changes */
+    CHECK_EQ_INT(rendercache_compose_fallback(rc, &fb, out), RENDERCACHE_OK);
+    CHECK(memcmp(out, rendercache_image(rc), 3 * n * sizeof(float)) != 0);
     for (p = 0; p < n; p++) {   /* every pixel broken one way or another */
         conf[p] = p % 4 == 0 ? NAN : p % 4 == 1 ? 2.0f : 1.0f;
         rgb[3 * p] = p % 4 == 2 ? NAN : p % 4 == 3 ? 1e35f : 0.25f;
