@@ -263,7 +263,6 @@ typedef struct wt_frame_stats {
     uint32_t lookups, hits, gathers;   /* light vectors */
     uint32_t bunny_gathers;            /* of which on the bunny */
     int full;                 /* raytrace: the first frame, traced in full */
-    uint32_t fallback_rays;   /* raytrace: camera rays of the holes' fallback (wt__raytrace_fallback) */
     double lrms;              /* against a full render (wt_options.reference), else -1 */
 } wt_frame_stats;
 
@@ -2925,8 +2924,6 @@ enum {
     WT_SHADE_DIRECT = 1,           /* emission + direct light (else emission only) */
     WT_SHADE_INSERT = 2,           /* new light vectors go into the caches */
     WT_SHADE_STATIC_ONLY = 4,      /* light vectors for the office only (the bunny's points get none) */
-    WT_SHADE_LOOKUP_ONLY = 16,     /* indirect light only where a stored vector covers the point: no gather
-                                      (the others keep lit 0 and no indirect light) */
     WT_SHADE_NO_BUNNY_SHADOWS = 8  /* the bunny casts no shadow and darkens no contact (the baseviews
                                       mode's base images: its shadows belong to the frame's time) */
 };
@@ -3154,8 +3151,7 @@ typedef struct wt_light_stats { uint32_t lookups, hits, gathers, bunny_gathers; 
 
 /* Indirect light of every point with p->light set (see above). Without
    insert the caches stay as they are: a miss gathers a vector for itself. */
-static int wt__light_points(wt_world *w, wt_point *points, uint32_t count, int insert, int gather,
-                             wt_light_stats *st)
+static int wt__light_points(wt_world *w, wt_point *points, uint32_t count, int insert, wt_light_stats *st)
 {
     uint32_t pending = 0, i, round;
     wt__job j;
@@ -3179,7 +3175,7 @@ static int wt__light_points(wt_world *w, wt_point *points, uint32_t count, int i
             else w->pending[kept++] = w->pending[i];
         }
         pending = kept;
-        if (!pending || !gather) break;
+        if (!pending) break;
         if (round + 1 >= WT__ROUNDS || !insert) {
             memcpy(w->picks, w->pending, sizeof(uint32_t) * pending);
             picks = pending;
@@ -3226,8 +3222,7 @@ EX_FN int wt_shade_points(wt_world *w, wt_point *points, uint32_t count, int fla
             }
     if (seconds_trace) *seconds_trace += wt_seconds() - t0;
     t0 = wt_seconds();
-    if (wt__light_points(w, points, count, (flags & WT_SHADE_INSERT) != 0, !(flags & WT_SHADE_LOOKUP_ONLY), st) != 0)
-        return -1;
+    if (wt__light_points(w, points, count, (flags & WT_SHADE_INSERT) != 0, st) != 0) return -1;
     for (i = 0; i < count; i++)
         wt__point_radiance(&points[i]);
     if (seconds_light) *seconds_light += wt_seconds() - t0;
@@ -3240,8 +3235,7 @@ EX_FN int wt_shade_points(wt_world *w, wt_point *points, uint32_t count, int fla
 
 /* Random stream of pixel p of frame f in a given use (frames, warm-up,
    base images, full renders draw from disjoint streams). */
-enum { WT_STREAM_FRAME = 0, WT_STREAM_WARMUP = 1, WT_STREAM_BASE = 2, WT_STREAM_FULL = 3, WT_STREAM_FILL = 4,
-       WT_STREAM_FALLBACK = 5 };
+enum { WT_STREAM_FRAME = 0, WT_STREAM_WARMUP = 1, WT_STREAM_BASE = 2, WT_STREAM_FULL = 3, WT_STREAM_FILL = 4 };
 static uint64_t wt__stream(int use, uint32_t frame, uint32_t pixel)
 {
     return (uint64_t)use << 56 | (uint64_t)(frame & 0xFFFFFFu) << 32 | pixel;
@@ -3480,7 +3474,6 @@ typedef struct wt_renderer {
     rendercache *rc;
     rendercache_pixel_request *req;
     rendercache_sample *samples;
-    float *fallback_rgb, *fallback_confidence;   /* (width / WT_FALLBACK_STEP) x (height / ...) */
     uint32_t budget;
     /* baseviews */
     ex_baseviews bv;
@@ -3673,9 +3666,7 @@ static int wt__raytrace_create(wt_renderer *r, char *err, size_t err_size)
     if (r->budget < 1) r->budget = 1;
     r->req = (rendercache_pixel_request *)malloc(sizeof *r->req * n);
     r->samples = (rendercache_sample *)malloc(sizeof *r->samples * n);
-    r->fallback_rgb = (float *)malloc(sizeof(float) * 3 * n);
-    r->fallback_confidence = (float *)malloc(sizeof(float) * n);
-    if (rr != RENDERCACHE_OK || !r->req || !r->samples || !r->fallback_rgb || !r->fallback_confidence) {
+    if (rr != RENDERCACHE_OK || !r->req || !r->samples) {
         snprintf(err, err_size, "cannot create the render cache: %s",
                  rr != RENDERCACHE_OK ? rendercache_result_string(rr) : "out of memory");
         return -1;
@@ -3710,65 +3701,6 @@ static float wt__view_lobe(const wt_point *p, const lightvec_material *m)
     if (p->object == RENDERCACHE_MISS || !(p->view_share > 0.0f) || !(m->exponent > 0.0f)) return 0.0f;
     s_n = acosf(expf(-0.5f / m->exponent));
     return s_n > 0.0f ? s_n / (2.0f * p->view_share) : 0.0f;
-}
-
-/* The holes' fallback (rendercache_compose_fallback): one ray per block of
-   WT_FALLBACK_STEP x WT_FALLBACK_STEP pixels, traced only for the blocks
-   holding a pixel of the wide filter or none (a hole with few points
-   around: a disocclusion), shaded with emission, direct light and the
-   light vectors already stored (no gather, nothing inserted). A block
-   whose point no stored vector covers gets confidence 0: without its
-   indirect light it would be too dark, and the hole filters keep it. At
-   most 1/16 of the pixels, so at most 0.78 times an 8 % budget's rays. */
-#define WT_FALLBACK_STEP 4u
-
-static int wt__fallback_block_needed(const unsigned char *kind, uint32_t width, uint32_t bx, uint32_t by)
-{
-    uint32_t x, y;
-    for (y = by * WT_FALLBACK_STEP; y < (by + 1) * WT_FALLBACK_STEP; y++)
-        for (x = bx * WT_FALLBACK_STEP; x < (bx + 1) * WT_FALLBACK_STEP; x++)
-            if (kind[y * width + x] == RENDERCACHE_PIXEL_SPARSE || kind[y * width + x] == RENDERCACHE_PIXEL_EMPTY)
-                return 1;
-    return 0;
-}
-
-/* Writes the frame (rgb) as the render cache's image with the fallback in
-   its wide holes. r->points is free again (its samples are inserted). */
-static int wt__raytrace_fallback(wt_renderer *r, const rendercache_camera *cam, int frame, float *rgb,
-                                 wt_frame_stats *st)
-{
-    wt_light_stats ls = { 0, 0, 0, 0 };   /* lookups only: not counted with the frame's samples */
-    const unsigned char *kind = rendercache_pixel_kinds(r->rc);
-    uint32_t fw = r->width / WT_FALLBACK_STEP, fh = r->height / WT_FALLBACK_STEP, n = 0, b, i;
-    rendercache_fallback fb;
-    if (r->width % WT_FALLBACK_STEP || r->height % WT_FALLBACK_STEP) {   /* no block grid: the image as it is */
-        memcpy(rgb, rendercache_image(r->rc), sizeof(float) * 3 * r->width * r->height);
-        return 0;
-    }
-    for (b = 0; b < fw * fh; b++) {
-        r->fallback_confidence[b] = 0.0f;
-        if (!wt__fallback_block_needed(kind, r->width, b % fw, b / fw)) continue;
-        r->points[n].stream = wt__stream(WT_STREAM_FALLBACK, (uint32_t)frame, b);
-        if (rendercache_camera_ray(cam, ((float)(b % fw) + 0.5f) * (float)WT_FALLBACK_STEP,
-                                   ((float)(b / fw) + 0.5f) * (float)WT_FALLBACK_STEP, r->points[n].org,
-                                   r->points[n].dir) == RENDERCACHE_OK)
-            r->req[n++].x = b;
-    }
-    if (n && wt_shade_points(r->w, r->points, n, WT_SHADE_DIRECT | WT_SHADE_LOOKUP_ONLY, &ls, &st->phase[1],
-                             &st->phase[2]) != 0)
-        return -1;
-    for (i = 0; i < n; i++) {
-        const wt_point *p = &r->points[i];
-        memcpy(r->fallback_rgb + 3 * (size_t)r->req[i].x, p->rgb, sizeof p->rgb);
-        r->fallback_confidence[r->req[i].x] = p->lit ? 1.0f : 0.0f;
-    }
-    st->fallback_rays = n;
-    memset(&fb, 0, sizeof fb);
-    fb.rgb = r->fallback_rgb;
-    fb.confidence = r->fallback_confidence;
-    fb.width = fw;
-    fb.height = fh;
-    return rendercache_compose_fallback(r->rc, &fb, rgb) == RENDERCACHE_OK ? 0 : -1;
 }
 
 /* One frame of the render cache: reproject, request, shade, insert. The
@@ -3837,7 +3769,7 @@ static int wt__raytrace_view(wt_renderer *r, const rendercache_camera *camera, c
     a = wt_seconds();
     if (rendercache_insert(r->rc, r->samples, n, NULL) != RENDERCACHE_OK) return -1;
     st->phase[0] += wt_seconds() - a;
-    if (wt__raytrace_fallback(r, &cam, frame, rgb, st) != 0) return -1;
+    memcpy(rgb, rendercache_image(r->rc), sizeof(float) * 3 * r->width * r->height);
     st->samples = n;
     st->full = full;
     st->lookups = ls.lookups;
@@ -5282,8 +5214,6 @@ EX_FN void wt_renderer_destroy(wt_renderer *r)
     rendercache_destroy(r->rc);
     free(r->req);
     free(r->samples);
-    free(r->fallback_rgb);
-    free(r->fallback_confidence);
     ex_baseviews_free(&r->bv);
     rendercache_keytimes_destroy(r->bunny_light);
     free(r->bunny_indirect);
