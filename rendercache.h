@@ -69,6 +69,15 @@
        }
        rendercache_destroy(rc);
 
+   A caller with a cheap estimate of the frame (a coarse trace, a raster
+   of albedo x stored irradiance) shows it in the wide holes instead:
+       rendercache_fallback fb = { est_rgb, est_conf, width / 4, height / 4, 0, 0 };
+       rendercache_compose_fallback(rc, &fb, out);   // out: width * height RGB floats
+   Each hole is blended towards the estimate by its distance to the
+   nearest point (not at all within near_pixels, fully from far_pixels
+   on); pixels showing points are copied. Not calling it leaves every
+   frame as it was.
+
    An asynchronous renderer returns the samples of frame f's requests after
    begin_frame(f + 1) or later: insert them then, with the frame field
    copied (desc.max_latency frames at most). Each is stored where its own
@@ -114,6 +123,7 @@
        rendercache_invalidate(rc, object)                             an object's (or all) lighting changed
        rendercache_seed(rc, images, n, &taken)                        range images become points
        rendercache_image(rc)                                          the current RGB float image
+       rendercache_compose_fallback(rc, &fallback, out)               the image, a cheap estimate in its wide holes
        rendercache_priority_image(rc), rendercache_pixel_kinds(rc),
        rendercache_depth_image(rc)                                    per-pixel internals (inspection)
        rendercache_get_stats(rc, &stats)                              counts and phase times of the frame
