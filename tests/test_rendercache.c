@@ -1890,6 +1890,20 @@ static void render_truth(const scene *s, const rendercache_camera *cam, uint32_t
         }
 }
 
+/* A cache converged from camera a, then moved to camera b (nothing
+   sampled after the move): b's holes are the disocclusions. NULL on failure. */
+static rendercache *moved_cache(const rendercache_camera *a, const rendercache_camera *b)
+{
+    rendercache_desc d = make_desc(a->width, a->height);
+    rendercache *rc;
+    scene s;
+    memset(&s, 0, sizeof s);
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return NULL;
+    converge(rc, &s, a);
+    CHECK_EQ_INT(rendercache_begin_frame(rc, b), RENDERCACHE_OK);
+    return rc;
+}
+
 /* Summed absolute error of the hole pixels of image against truth. */
 static double hole_error(const unsigned char *kind, const float *image, const float *truth, uint32_t n)
 {
@@ -1913,9 +1927,8 @@ static void test_fallback_fills_wide_disocclusions(void)
     const uint32_t w = 96, h = 80, n = 96 * 80;
     rendercache_camera a = make_camera(0, 0, 0, 0, 0, 10, w, h);
     rendercache_camera b = make_camera(0.7f, 0.25f, 0.0f, 2.5f, 0.1f, 10.0f, w, h);
-    rendercache_desc d = make_desc(w, h);
     rendercache_fallback fb;
-    rendercache *rc;
+    rendercache *rc = moved_cache(&a, &b);
     scene s;
     static float truth[3 * MAX_PIXELS], half[3 * MAX_PIXELS], out[3 * MAX_PIXELS];
     const unsigned char *kind;
@@ -1923,9 +1936,7 @@ static void test_fallback_fills_wide_disocclusions(void)
     double without, with_full, with_half;
     uint32_t p, far_holes = 0, exact = 0;
     memset(&s, 0, sizeof s);
-    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
-    converge(rc, &s, &a);
-    CHECK_EQ_INT(rendercache_begin_frame(rc, &b), RENDERCACHE_OK);
+    if (!rc) return;
     kind = rendercache_pixel_kinds(rc);
     image = rendercache_image(rc);
     render_truth(&s, &b, 1, truth);
@@ -1984,10 +1995,8 @@ static void test_fallback_bad_input(void)
     rendercache_desc d = make_desc(w, h);
     rendercache_fallback fb;
     rendercache *rc;
-    scene s;
     static float rgb[3 * MAX_PIXELS], conf[MAX_PIXELS], out[3 * MAX_PIXELS];
     uint32_t p;
-    memset(&s, 0, sizeof s);
     memset(&fb, 0, sizeof fb);
     for (p = 0; p < 3 * n; p++) rgb[p] = 0.25f;
     fb.rgb = rgb;
@@ -1995,8 +2004,8 @@ static void test_fallback_bad_input(void)
     fb.height = h;
     if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
     CHECK_EQ_INT(rendercache_compose_fallback(rc, &fb, out), RENDERCACHE_ERROR_INVALID_ARGUMENT);   /* no frame */
-    converge(rc, &s, &a);
-    CHECK_EQ_INT(rendercache_begin_frame(rc, &b), RENDERCACHE_OK);
+    rendercache_destroy(rc);
+    if (!(rc = moved_cache(&a, &b))) return;
     CHECK_EQ_INT(rendercache_compose_fallback(NULL, &fb, out), RENDERCACHE_ERROR_INVALID_ARGUMENT);
     CHECK_EQ_INT(rendercache_compose_fallback(rc, NULL, out), RENDERCACHE_ERROR_INVALID_ARGUMENT);
     CHECK_EQ_INT(rendercache_compose_fallback(rc, &fb, NULL), RENDERCACHE_ERROR_INVALID_ARGUMENT);
