@@ -69,6 +69,15 @@
        }
        rendercache_destroy(rc);
 
+   A caller with a cheap estimate of the frame (a coarse trace, a raster
+   of albedo x stored irradiance) shows it in the wide holes instead:
+       rendercache_fallback fb = { est_rgb, est_conf, width / 4, height / 4, 0, 0 };
+       rendercache_compose_fallback(rc, &fb, out);   // out: width * height RGB floats
+   Each hole is blended towards the estimate by its distance to the
+   nearest point (not at all within near_pixels, fully from far_pixels
+   on); pixels showing points are copied. Not calling it leaves every
+   frame as it was.
+
    An asynchronous renderer returns the samples of frame f's requests after
    begin_frame(f + 1) or later: insert them then, with the frame field
    copied (desc.max_latency frames at most). Each is stored where its own
@@ -114,6 +123,7 @@
        rendercache_invalidate(rc, object)                             an object's (or all) lighting changed
        rendercache_seed(rc, images, n, &taken)                        range images become points
        rendercache_image(rc)                                          the current RGB float image
+       rendercache_compose_fallback(rc, &fallback, out)               the image, a cheap estimate in its wide holes
        rendercache_priority_image(rc), rendercache_pixel_kinds(rc),
        rendercache_depth_image(rc)                                    per-pixel internals (inspection)
        rendercache_get_stats(rc, &stats)                              counts and phase times of the frame
@@ -729,6 +739,34 @@ RENDERCACHE_API const float *rendercache_image(const rendercache *rc);
 RENDERCACHE_API const float *rendercache_priority_image(const rendercache *rc);
 /* Per-pixel rendercache_pixel_kind values. */
 RENDERCACHE_API const unsigned char *rendercache_pixel_kinds(const rendercache *rc);
+
+/* A cheap estimate of the frame for its holes (e.g. a rasterized direct
+   light or albedo x stored irradiance), as temporal reprojection fills
+   disocclusions (WDG02 section 6 suggests a coarse render). rgb holds
+   width * height * 3 floats, row-major; the size is the frame's or an
+   integer fraction of it (each fallback pixel covers an equal block).
+   confidence (optional, width * height in [0, 1]) scales its weight; 0
+   where the estimate knows nothing. A pixel with a non-finite or huge
+   value, or a confidence outside [0, 1], is skipped (the filter stays). */
+typedef struct rendercache_fallback {
+    const float *rgb;
+    const float *confidence;    /* NULL: 1 everywhere */
+    uint32_t width, height;
+    float near_pixels;          /* a hole whose nearest point is this close keeps the filter; 0: default 1 */
+    float far_pixels;           /* this far or farther, the fallback replaces it; 0: default wide_radius + 1 */
+} rendercache_fallback;
+
+/* The current image with its holes blended towards the fallback by how
+   far the nearest point is (chamfer distance, pixels): weight
+   confidence * clamp((d - near) / (far - near), 0, 1), so a hole ringed by
+   close points keeps the hole filters' colour and a wide disocclusion
+   takes the fallback. Pixels showing points are copied. out holds
+   width * height * 3 floats of the frame. Reads the cache only; the
+   image rendercache_image returns is unchanged. Errors: NULL pointers, no
+   frame begun, a size that does not divide the frame's, near < 0 or
+   far <= near or non-finite. */
+RENDERCACHE_API rendercache_result rendercache_compose_fallback(const rendercache *rc, const rendercache_fallback *fallback,
+                                                                float *out);
 /* Per-pixel depth of the point shown (distance from the eye; 1e18 for a
    background point), FLT_MAX where the pixel shows no point. Computed on
    each call. */
@@ -4836,6 +4874,91 @@ RENDERCACHE_API rendercache_result rendercache_invalidate(rendercache *rc, uint3
 RENDERCACHE_API const float *rendercache_image(const rendercache *rc) { return rc ? rc->image : NULL; }
 RENDERCACHE_API const float *rendercache_priority_image(const rendercache *rc) { return rc ? rc->priority : NULL; }
 RENDERCACHE_API const unsigned char *rendercache_pixel_kinds(const rendercache *rc) { return rc ? rc->kind : NULL; }
+/* Largest fallback value taken: beyond it a value is treated as broken. */
+#define RENDERCACHE__FALLBACK_MAX 1e30f
+
+/* Chamfer distance (1 and sqrt 2 steps, within 8 % of Euclidean) from each
+   pixel to the nearest pixel showing a point, capped at cap, written to
+   dist[3 * p] (the caller's output image serves as scratch). Two raster
+   passes, forward then backward (Borgefors 1986). */
+static void rendercache__point_distance(const rendercache *rc, float cap, float *dist)
+{
+    const float diag = 1.41421356f;
+    uint32_t x, y, w = rc->width, h = rc->height;
+    for (y = 0; y < h; y++)
+        for (x = 0; x < w; x++) {
+            uint32_t p = y * w + x;
+            float d = rc->kind[p] == RENDERCACHE_PIXEL_POINT ? 0.0f : cap;
+            if (x > 0) d = rendercache__minf(d, dist[3 * (p - 1)] + 1.0f);
+            if (y > 0) {
+                d = rendercache__minf(d, dist[3 * (p - w)] + 1.0f);
+                if (x > 0) d = rendercache__minf(d, dist[3 * (p - w - 1)] + diag);
+                if (x + 1 < w) d = rendercache__minf(d, dist[3 * (p - w + 1)] + diag);
+            }
+            dist[3 * p] = d;
+        }
+    for (y = h; y-- > 0;)
+        for (x = w; x-- > 0;) {
+            uint32_t p = y * w + x;
+            float d = dist[3 * p];
+            if (x + 1 < w) d = rendercache__minf(d, dist[3 * (p + 1)] + 1.0f);
+            if (y + 1 < h) {
+                d = rendercache__minf(d, dist[3 * (p + w)] + 1.0f);
+                if (x + 1 < w) d = rendercache__minf(d, dist[3 * (p + w + 1)] + diag);
+                if (x > 0) d = rendercache__minf(d, dist[3 * (p + w - 1)] + diag);
+            }
+            dist[3 * p] = d;
+        }
+}
+
+/* The fallback's weight at frame pixel (x, y) at distance d from the nearest
+   point; 0 where its value or confidence is unusable. */
+static float rendercache__fallback_weight(const rendercache *rc, const rendercache_fallback *f, uint32_t x, uint32_t y,
+                                          float d, float near_px, float far_px, const float **rgb)
+{
+    uint32_t q = (y / (rc->height / f->height)) * f->width + x / (rc->width / f->width);
+    const float *c = f->rgb + 3 * (size_t)q;
+    float conf = f->confidence ? f->confidence[q] : 1.0f, t;
+    int k;
+    if (!(conf >= 0.0f && conf <= 1.0f)) return 0.0f;   /* NaN fails both */
+    for (k = 0; k < 3; k++)
+        if (!(fabsf(c[k]) <= RENDERCACHE__FALLBACK_MAX)) return 0.0f;
+    *rgb = c;
+    t = (d - near_px) / (far_px - near_px);
+    return conf * rendercache__minf(rendercache__maxf(t, 0.0f), 1.0f);
+}
+
+RENDERCACHE_API rendercache_result rendercache_compose_fallback(const rendercache *rc, const rendercache_fallback *fallback,
+                                                                float *out)
+{
+    float near_px, far_px;
+    uint32_t x, y;
+    if (!rc || !fallback || !fallback->rgb || !out || !rc->has_frame) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    if (fallback->width == 0 || fallback->height == 0 || fallback->width > rc->width ||
+        fallback->height > rc->height || rc->width % fallback->width || rc->height % fallback->height) {
+        rendercache__log_to(rc->log, rc->log_user, "rendercache_compose_fallback: size does not divide the frame's");
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    }
+    near_px = fallback->near_pixels == 0.0f ? 1.0f : fallback->near_pixels;
+    far_px = fallback->far_pixels == 0.0f ? (float)rc->wide_radius + 1.0f : fallback->far_pixels;
+    if (!(near_px >= 0.0f) || !(far_px > near_px) || !isfinite(far_px)) {
+        rendercache__log_to(rc->log, rc->log_user, "rendercache_compose_fallback: need 0 <= near < far, finite");
+        return RENDERCACHE_ERROR_INVALID_ARGUMENT;
+    }
+    rendercache__point_distance(rc, far_px, out);
+    for (y = 0; y < rc->height; y++)
+        for (x = 0; x < rc->width; x++) {
+            uint32_t p = y * rc->width + x;
+            const float *img = rc->image + 3 * (size_t)p, *fb = NULL;
+            float w = rc->kind[p] == RENDERCACHE_PIXEL_POINT
+                          ? 0.0f
+                          : rendercache__fallback_weight(rc, fallback, x, y, out[3 * p], near_px, far_px, &fb);
+            int k;
+            for (k = 0; k < 3; k++) out[3 * p + k] = w > 0.0f ? img[k] + w * (fb[k] - img[k]) : img[k];
+        }
+    return RENDERCACHE_OK;
+}
+
 RENDERCACHE_API const float *rendercache_depth_image(rendercache *rc)
 {
     uint32_t p;

@@ -68,6 +68,26 @@ static uint64_t hash_bytes(uint64_t h, const void *p, size_t n)
 }
 
 /* ---- the render cache ---------------------------------------------- */
+/* The frame with a half-resolution grey ramp in its holes
+   (rendercache_compose_fallback, after the frame's parallel passes). */
+static const float *composed_with_fallback(const rendercache *rc)
+{
+    static float rgb[3 * (W / 2) * (H / 2)], conf[(W / 2) * (H / 2)], out[3 * W * H];
+    rendercache_fallback fb;
+    uint32_t p;
+    for (p = 0; p < (W / 2) * (H / 2); p++) {
+        rgb[3 * p] = rgb[3 * p + 1] = rgb[3 * p + 2] = (float)(p % (W / 2)) / (float)W;
+        conf[p] = p % 3 ? 1.0f : 0.5f;
+    }
+    memset(&fb, 0, sizeof fb);
+    fb.rgb = rgb;
+    fb.confidence = conf;
+    fb.width = W / 2;
+    fb.height = H / 2;
+    CHECK_EQ_INT(rendercache_compose_fallback(rc, &fb, out), RENDERCACHE_OK);
+    return out;
+}
+
 /* The frame sequence with points_per_pixel ppp (0: the default). */
 static uint64_t run_cache(ex_pool *pool, float ppp)
 {
@@ -116,6 +136,7 @@ static uint64_t run_cache(ex_pool *pool, float ppp)
         h = hash_bytes(h, req, n * sizeof *req);
         h = hash_bytes(h, rendercache_image(rc), sizeof(float) * 3 * W * H);
         h = hash_bytes(h, rendercache_priority_image(rc), sizeof(float) * W * H);
+        h = hash_bytes(h, composed_with_fallback(rc), sizeof(float) * 3 * W * H);
     }
     rendercache_destroy(rc);
     return h;
