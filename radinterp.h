@@ -4523,14 +4523,20 @@ static double radinterp__receiver_point(const double (*v)[3], int count, const d
 
 /* Is the segment from a to b blocked? Through the caller's ray caster or
    the built-in BVH. */
-static int radinterp__segment_blocked(const radinterp_solution *s, const double *a, const double *b)
+/* The segment from a to b as a float origin and direction (b at t = 1). */
+static void radinterp__segment_floats(const double *a, const double *b, float org[3], float dir[3])
 {
-    float org[3], dir[3];
     int k;
     for (k = 0; k < 3; k++) {
         org[k] = (float)a[k];
         dir[k] = (float)(b[k] - a[k]);
     }
+}
+
+static int radinterp__segment_blocked(const radinterp_solution *s, const double *a, const double *b)
+{
+    float org[3], dir[3];
+    radinterp__segment_floats(a, b, org, dir);
     if (s->trace) {
         radinterp_hit hit;
         float len = sqrtf(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
@@ -4574,21 +4580,21 @@ static int radinterp__ray_light(const radinterp_solution *s, const float org[3],
     }
 }
 
+/* The answer of a ray through no glass: 0 and T = 1 when open, -1 and
+   T = 0 when blocked. */
+static int radinterp__opaque_light(int blocked, double T[3])
+{
+    T[0] = T[1] = T[2] = blocked ? 0.0 : 1.0;
+    return blocked ? -1 : 0;
+}
+
 /* The same for the segment from a to b; without glass on it (glass = 0) a
    plain shadow ray: 0 when open (T = 1), -1 when blocked. */
 static int radinterp__segment_light(const radinterp_solution *s, const double *a, const double *b, int glass, double T[3])
 {
     float org[3], dir[3];
-    int k;
-    if (!glass) {
-        int blocked = radinterp__segment_blocked(s, a, b);
-        T[0] = T[1] = T[2] = blocked ? 0.0 : 1.0;
-        return blocked ? -1 : 0;
-    }
-    for (k = 0; k < 3; k++) {
-        org[k] = (float)a[k];
-        dir[k] = (float)(b[k] - a[k]);
-    }
+    if (!glass) return radinterp__opaque_light(radinterp__segment_blocked(s, a, b), T);
+    radinterp__segment_floats(a, b, org, dir);
     return radinterp__ray_light(s, org, dir, 1.0f, T);
 }
 
@@ -4770,11 +4776,7 @@ static radinterp__ray_end radinterp__elem_ray_end(const radinterp_solution *s, u
 static void radinterp__segment_ray(const double *a, const double *b, radinterp__ray *r, radinterp__hit *hit)
 {
     float org[3], dir[3];
-    int k;
-    for (k = 0; k < 3; k++) {
-        org[k] = (float)a[k];
-        dir[k] = (float)(b[k] - a[k]);
-    }
+    radinterp__segment_floats(a, b, org, dir);
     radinterp__ray_setup(r, org, dir);
     hit->t = 1.0f;
     hit->u = hit->v = 0.0f;
@@ -4805,11 +4807,8 @@ static int radinterp__shaft_blocked(const radinterp_solution *s, const radinterp
 static int radinterp__shaft_light(const radinterp_solution *s, const radinterp__shaft_rays *sr, const double *a,
                                   const double *b, int glass, double T[3])
 {
-    int blocked;
     if (glass || !sr) return radinterp__segment_light(s, a, b, glass, T);
-    blocked = radinterp__shaft_blocked(s, sr, a, b);
-    T[0] = T[1] = T[2] = blocked ? 0.0 : 1.0;
-    return blocked ? -1 : 0;
+    return radinterp__opaque_light(radinterp__shaft_blocked(s, sr, a, b), T);
 }
 
 /* The largest of three values. */
