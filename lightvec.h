@@ -1090,6 +1090,14 @@ static float lightvec__rng_float(lightvec__rng *r)
 /* Far plane distances are rounded up by 1 + 2 gamma_3 (Ize 2013): a box that
    the ray touches is never lost to the rounding of three operations. */
 #define LIGHTVEC__BVH_ROUND_UP 1.00000036f
+/* Node boxes are pushed outward by 2^-20 of each bound plus 1e-20 (in the
+   scene's units). A ray with a zero direction component (its inverse is
+   1e30, lightvec__ray_setup) that runs exactly in the plane of a box's face
+   would otherwise leave the box at t = 0 and miss a triangle lying on that
+   face; pushed out, it stays inside for t of 1e10 or more. The boxes grow by
+   a millionth. */
+#define LIGHTVEC__BVH_PAD_RELATIVE 9.5367431640625e-07f   /* 2^-20 */
+#define LIGHTVEC__BVH_PAD_ABSOLUTE 1e-20f
 
 typedef struct lightvec__bvh_node {
     float box[6][LIGHTVEC__BVH_WIDTH]; /* rows lo x, hi x, lo y, hi y, lo z, hi z; column = child.
@@ -1357,6 +1365,13 @@ static void lightvec__bvh_store_leaf(lightvec__bvh *bvh, const lightvec__mesh_vi
 
 typedef struct lightvec__bvh_place { uint32_t bnode, parent, slot; } lightvec__bvh_place;
 
+/* A box bound v pushed outward (side -1 for a lower bound, +1 for an
+   upper one): see LIGHTVEC__BVH_PAD_RELATIVE. */
+static float lightvec__bvh_pad(float v, float side)
+{
+    return v + side * (fabsf(v) * LIGHTVEC__BVH_PAD_RELATIVE + LIGHTVEC__BVH_PAD_ABSOLUTE);
+}
+
 /* Collapses the binary tree into 4-wide nodes, depth first. With
    bvh->nodes NULL it only counts them (into bvh->node_count). */
 static void lightvec__bvh_collapse(lightvec__bvh *bvh, const lightvec__bvh_bnode *bn, const lightvec__bvh_ref *refs,
@@ -1381,8 +1396,8 @@ static void lightvec__bvh_collapse(lightvec__bvh *bvh, const lightvec__bvh_bnode
                 lightvec__bvh_node *node = &bvh->nodes[ref];
                 for (j = 0; j < LIGHTVEC__BVH_WIDTH; j++) {
                     for (r = 0; r < 3; r++) {
-                        node->box[2 * r][j] = j < k ? bn[kids[j]].lo[r] : INFINITY;
-                        node->box[2 * r + 1][j] = j < k ? bn[kids[j]].hi[r] : -INFINITY;
+                        node->box[2 * r][j] = j < k ? lightvec__bvh_pad(bn[kids[j]].lo[r], -1.0f) : INFINITY;
+                        node->box[2 * r + 1][j] = j < k ? lightvec__bvh_pad(bn[kids[j]].hi[r], 1.0f) : -INFINITY;
                     }
                     node->child[j] = 0;
                 }

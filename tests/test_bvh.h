@@ -211,9 +211,11 @@ static void scene_degenerate(bvh_scene *s, const char *name, uint32_t valid)
     scene_bounds(s);
 }
 
-/* Ray i of a scene: four kinds in turn. Random directions; through a random
+/* Ray i of a scene: five kinds in turn. Random directions; through a random
    vertex (edge functions exactly zero); along an axis or with zero
-   components; from a point on a triangle (self hits at t ~ 0). */
+   components; from a point on a triangle (self hits at t ~ 0); toward a
+   vertex inside the coordinate plane through it (a zero component, and the
+   ray runs in the face plane of every box the vertex bounds). */
 static void make_ray(const bvh_scene *s, uint32_t i, float o[3], float d[3])
 {
     int k;
@@ -222,7 +224,7 @@ static void make_ray(const bvh_scene *s, uint32_t i, float o[3], float d[3])
         float pad = 0.1f * (s->hi[k] - s->lo[k]);
         o[k] = s->lo[k] - pad + frand() * (s->hi[k] - s->lo[k] + 2.0f * pad);
     }
-    switch (i % 4) {
+    switch (i % 5) {
     case 0: default: {
         float z = 2.0f * frand() - 1.0f, phi = 6.2831853f * frand(), q = sqrtf(1.0f - z * z);
         d[0] = q * cosf(phi); d[1] = q * sinf(phi); d[2] = z;
@@ -252,6 +254,16 @@ static void make_ray(const bvh_scene *s, uint32_t i, float o[3], float d[3])
                        b * s->positions[3 * t[2] + (uint32_t)k];
         }
         d[0] = 2.0f * frand() - 1.0f; d[1] = 2.0f * frand() - 1.0f; d[2] = 2.0f * frand() - 1.0f;
+        break;
+    case 4:
+        d[0] = 1.0f; d[1] = d[2] = 0.0f;
+        if (s->vertex_count) {
+            const float *v = s->positions + 3 * irand(s->vertex_count);
+            uint32_t axis = irand(3);
+            o[axis] = v[axis];
+            for (k = 0; k < 3; k++) d[k] = v[k] - o[k];   /* d[axis] = 0 exactly */
+            if (d[0] == 0.0f && d[1] == 0.0f && d[2] == 0.0f) d[(axis + 1) % 3] = 1.0f;
+        }
         break;
     }
 }
