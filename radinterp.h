@@ -7975,6 +7975,7 @@ static int radinterp__union_add(radinterp__query *q, int *count, double tol, dou
 #define RADINTERP__HIDE_PATCHES 96   /* patches in separating planes examined per pair at most */
 #define RADINTERP__HIDE_VISITS 1024  /* triangles the search may visit per pair */
 #define RADINTERP__HIDE_INSIDE 8     /* uncovered parts that may be shown inside solids */
+#define RADINTERP__HIDE_SLOTS 256    /* hash slots of the patches found: a power of two over 2 x HIDE_PATCHES */
 
 typedef struct radinterp__hide_ctx {
     const radinterp_solution *s;
@@ -7983,6 +7984,8 @@ typedef struct radinterp__hide_ctx {
     const float *lo[2], *hi[2];
     double tol;
     uint32_t found[RADINTERP__HIDE_PATCHES], count, visits;
+    uint32_t last;                   /* the patch visited last, + 1 (0: none) */
+    uint32_t slot[RADINTERP__HIDE_SLOTS];   /* the patches found, + 1, by hash (0: empty) */
 } radinterp__hide_ctx;
 
 /* Least and greatest n . x - d over a box. */
@@ -8025,10 +8028,14 @@ static int radinterp__hide_visit(void *ctx_, uint32_t b)
     const radinterp__patch *pt = &c->s->patches[b];
     uint32_t i;
     if (++c->visits > RADINTERP__HIDE_VISITS) return 0;
+    /* a patch's triangles come one after another: the first settled it */
+    if (c->last == b + 1) return 1;
+    c->last = b + 1;
     if (pt->glass || !radinterp__plane_separates(c, pt->n, pt->d)) return 1;   /* a pane hides nothing */
-    for (i = 0; i < c->count; i++)
-        if (c->found[i] == b) return 1;
+    for (i = (b * 2654435761u) >> 24 & (RADINTERP__HIDE_SLOTS - 1); c->slot[i]; i = (i + 1) & (RADINTERP__HIDE_SLOTS - 1))
+        if (c->slot[i] == b + 1) return 1;   /* found already */
     if (c->count == RADINTERP__HIDE_PATCHES) return 0;
+    c->slot[i] = b + 1;
     c->found[c->count++] = b;
     return 1;
 }
@@ -8190,7 +8197,8 @@ static int radinterp__planes_hide(const radinterp_solution *s, const float *alo,
             c.ihi[h][k] = (float)((double)c.hi[h][k] - c.tol);
         }
     }
-    c.count = c.visits = 0;
+    c.count = c.visits = c.last = 0;
+    memset(c.slot, 0, sizeof c.slot);
     if (!radinterp__bvh_walk(s, radinterp__hide_box, radinterp__hide_visit, &c)) return 0;
     memset(used, 0, sizeof used);
     for (i = 0; i < c.count; i++)
