@@ -12,7 +12,8 @@
    reading, so progress calls come at the same places in every run (the
    cancel sweeps count them) and a test can give work a cost. */
 static double work_seconds, clock_step;
-#define RADINTERP_CPU_SECONDS() (work_seconds += clock_step)
+static long clock_readings;
+#define RADINTERP_CPU_SECONDS() (clock_readings++, work_seconds += clock_step)
 #define RADINTERP_IMPLEMENTATION
 #include "../radinterp.h"
 #include "examples/common/obj.h"
@@ -689,6 +690,50 @@ done:
     rb_free(&s);
 }
 
+/* A loop of short steps reads the process's CPU clock, a system call, every
+   64 steps at first (radinterp__solve_step): 600k readings and 3-5% of
+   building_1k's and building_4k's solves at every 64 steps. The stride
+   doubles while readings come close together, up to 4096 steps, and halves
+   when they come far apart: a loop of 100k steps with a stopped clock
+   reads it fewer than 100k / 64 / 8 times (at every 64 steps: 1563); with
+   a clock that moves 1 s at every reading the stride falls back to one
+   step and progress is called at (almost) every step; a new loop starts
+   again at 64. */
+static void test_progress_step_stride(void)
+{
+    static radinterp_solution sol;   /* progress reports its iteration count */
+    radinterp_desc d;
+    radinterp__run run;
+    progress_state ps;
+    size_t i;
+    long stopped, running, restarted;
+    memset(&d, 0, sizeof d);
+    memset(&ps, 0, sizeof ps);
+    d.progress = progress_cb;
+    d.progress_user = &ps;
+    run.desc = &d;
+    run.iteration = 0;
+    run.reported = run.read = RADINTERP_CPU_SECONDS();
+    run.stride = run.countdown = RADINTERP__TICK_STEPS;
+    clock_readings = 0;
+    for (i = 0; i < 100000; i++) CHECK(!radinterp__solve_step(&sol, &run, i));
+    stopped = clock_readings;
+    CHECK_MSG(stopped < 100000 / 64 / 8, "%ld readings in 100k steps with a stopped clock", stopped);
+    CHECK_EQ_INT(ps.calls, 0);
+    clock_step = 1.0;
+    for (i = 0; i < 1000; i++) CHECK(!radinterp__solve_step(&sol, &run, i));
+    running = ps.calls;
+    CHECK_MSG(running >= 1000 - 2 * RADINTERP__TICK_STEPS, "%ld progress calls in 1000 steps with a running clock", running);
+    clock_step = 0.0;
+    clock_readings = 0;
+    for (i = 0; i < 64 * RADINTERP__TICK_STEPS; i++) CHECK(!radinterp__solve_step(&sol, &run, i));
+    restarted = clock_readings;
+    CHECK_MSG(restarted >= 6 && restarted <= 8, "%ld readings in a new loop's first %d steps", restarted, 64 * RADINTERP__TICK_STEPS);
+    test_note("%ld clock readings in 100k steps with a stopped clock; %ld progress calls in 1000 steps with a running "
+              "one; %ld readings in the first %d steps of the next loop", stopped, running, restarted,
+              64 * RADINTERP__TICK_STEPS);
+}
+
 /* ---- progress inside the mesh build's serial steps ---------------------------- */
 /* Progress calls of the mesh build, with the builder they come from: the
    calls that came right before an event test (radinterp__event_seen) are
@@ -855,6 +900,7 @@ int main(int argc, char **argv)
     RUN(test_cancel_everywhere);
     RUN(test_progress_paced_by_work);
     RUN(test_progress_in_serial_passes);
+    RUN(test_progress_step_stride);
     RUN(test_progress_in_mesh_steps);
     RUN(test_coordinate_range);
     RUN(test_clustered_equals_unclustered);
