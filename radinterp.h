@@ -2226,32 +2226,12 @@ static uint32_t radinterp__bvh_push_children(const radinterp__bvh_node *n, unsig
     return e[0].ref;
 }
 
-#define RADINTERP__BVH_CUT_GROUPS 2   /* nodes of a cut (radinterp__bvh_traverse) */
-
-/* Closest hit in (tmin, hit->t), or with any_hit the first hit found. The
-   walk starts at the root, or with cut (groups nodes, not in the tree) at
-   the children of those nodes the ray enters: a cut of the tree made by
-   its caller, subtrees the caller knows to hold every triangle the ray may
-   meet (radinterp__shaft_rays_cut). */
-static int radinterp__bvh_traverse(const radinterp__bvh *bvh, const radinterp__ray *r, float tmin, radinterp__hit *hit,
-                                   int any_hit, const radinterp__bvh_node *cut, uint32_t groups)
+/* Closest hit in (tmin, hit->t), or with any_hit the first hit found. */
+static int radinterp__bvh_traverse(const radinterp__bvh *bvh, const radinterp__ray *r, float tmin, radinterp__hit *hit, int any_hit)
 {
-    radinterp__bvh_entry stack[RADINTERP__BVH_STACK + RADINTERP__BVH_CUT_GROUPS * RADINTERP__BVH_WIDTH];
-    uint32_t top = 0, ref = bvh->root, g;
+    radinterp__bvh_entry stack[RADINTERP__BVH_STACK];
+    uint32_t top = 0, ref = bvh->root;
     if (bvh->tri_count == 0) return 0;   /* an empty tree: no root to enter */
-    for (g = 0; g < groups; g++) {   /* the cut's subtrees, in any order */
-        float t[RADINTERP__BVH_WIDTH];
-        unsigned mask = radinterp__bvh_node_hits(bvh, r, &cut[g], tmin, hit->t, t);
-        for (; mask; mask &= mask - 1) {
-            uint32_t i = radinterp__bvh_first_bit(mask);
-            stack[top].ref = cut[g].child[i];
-            stack[top++].t = t[i];
-        }
-    }
-    if (cut) {
-        if (!top) return 0;
-        ref = stack[--top].ref;
-    }
     for (;;) {
         if (ref & RADINTERP__BVH_LEAF) {
             uint32_t b = (ref & ~RADINTERP__BVH_LEAF) >> 3, end = b + (ref & 7u) + 1;
@@ -2283,7 +2263,7 @@ static int radinterp__bvh_intersect(const radinterp__bvh *bvh, const float org[3
     hit->t = tmax;
     hit->u = hit->v = 0.0f;
     hit->tri = RADINTERP__NO_HIT;
-    return radinterp__bvh_traverse(bvh, &r, tmin, hit, 0, NULL, 0);
+    return radinterp__bvh_traverse(bvh, &r, tmin, hit, 0);
 }
 
 /* Any hit in (tmin, tmax): for shadow rays. */
@@ -2296,7 +2276,7 @@ static int radinterp__bvh_occluded(const radinterp__bvh *bvh, const float org[3]
     hit.t = tmax;
     hit.u = hit.v = 0.0f;
     hit.tri = RADINTERP__NO_HIT;
-    return radinterp__bvh_traverse(bvh, &r, tmin, &hit, 1, NULL, 0);
+    return radinterp__bvh_traverse(bvh, &r, tmin, &hit, 1);
 }
 
 /* ======================================================================
@@ -4641,23 +4621,14 @@ static double radinterp__ray_offset(const radinterp_solution *s) { return 10.0 *
    tree answers the same but for rays that run exactly along a face of one
    of its boxes, which it may let through (see radinterp__shaft_rays_box);
    the solutions of the office, the Cornell box and building_1k are
-   bit-identical to the walk's.
-   When more are left, the rays walk a cut of the tree instead of starting
-   at its root (radinterp__shaft_rays_cut): the subtrees that meet the
-   shaft and are not wholly behind either end's plane, at most
-   RADINTERP__SHAFT_CUT of them, as deep as that many allows. The walk
-   below the cut is the tree's own, so a ray meets the triangles it would
-   meet from the root, less those the cut left out, which it cannot meet. */
-#define RADINTERP__SHAFT_TRIS 64   /* more triangles and the rays walk a cut of the tree */
-#define RADINTERP__SHAFT_CUT (RADINTERP__BVH_CUT_GROUPS * RADINTERP__BVH_WIDTH)
+   bit-identical to the walk's. */
+#define RADINTERP__SHAFT_TRIS 64   /* more triangles and the rays walk the tree */
 
 typedef struct radinterp__shaft_rays {
-    int walk;            /* 1: the rays walk the tree from its root (a trace callback, a one-leaf tree) */
-    uint32_t tris;       /* without a cut: the triangles the rays test */
-    uint32_t groups;     /* > 0: the rays walk the subtrees of cut[0 .. groups - 1] */
+    int walk;            /* 1: the rays walk the tree (too many triangles, a trace callback, a one-leaf tree) */
+    uint32_t tris;
     radinterp__bvh_tris block[RADINTERP__SHAFT_TRIS / 4];
     radinterp__bvh_node box[RADINTERP__SHAFT_TRIS / RADINTERP__BVH_WIDTH];   /* the triangles' boxes, block by block */
-    radinterp__bvh_node cut[RADINTERP__BVH_CUT_GROUPS];
 } radinterp__shaft_rays;
 
 /* One end of a link's rays: its box and, when it is one surface, its plane
@@ -4696,29 +4667,6 @@ static int radinterp__tri_behind(const radinterp__ray_end *e, const radinterp__b
     return 1;
 }
 
-/* Is the box wholly behind the region of end e's plane the rays reach? */
-static int radinterp__box_behind_end(const radinterp__ray_end *e, const float *lo, const float *hi)
-{
-    double x = -e->d;
-    int k;
-    if (!e->n) return 0;
-    for (k = 0; k < 3; k++) x += e->n[k] * (double)(e->n[k] > 0.0 ? hi[k] : lo[k]);
-    return x < e->floor;
-}
-
-/* May the rays meet triangle (block b, column lane)? Sets its box. */
-static int radinterp__shaft_tri_kept(const radinterp__shaft *sh, const radinterp__ray_end *end, const radinterp__bvh_tris *b,
-                                     int lane, float lo[3], float hi[3])
-{
-    int k;
-    for (k = 0; k < 3; k++) {
-        lo[k] = radinterp__minf(b->v[k][lane], radinterp__minf(b->v[3 + k][lane], b->v[6 + k][lane]));
-        hi[k] = radinterp__maxf(b->v[k][lane], radinterp__maxf(b->v[3 + k][lane], b->v[6 + k][lane]));
-    }
-    return !radinterp__shaft_culls(sh, lo, hi, 0.0) && !radinterp__tri_behind(&end[0], b, lane) &&
-           !radinterp__tri_behind(&end[1], b, lane);
-}
-
 /* Sets the box of the next triangle: the rays test the boxes first, eight
    at a time with the tree's box test, and then the blocks whose boxes they
    enter. The box is grown by pad: the box test rejects a ray that runs
@@ -4754,7 +4702,13 @@ static int radinterp__shaft_rays_leaf(const radinterp_solution *s, radinterp__sh
             float lo[3], hi[3];
             radinterp__bvh_tris *to;
             if (i > 0 && b->id[i] == b->id[i - 1]) continue;   /* unused columns repeat the last triangle */
-            if (!radinterp__shaft_tri_kept(sh, end, b, i, lo, hi)) continue;
+            for (k = 0; k < 3; k++) {
+                lo[k] = radinterp__minf(b->v[k][i], radinterp__minf(b->v[3 + k][i], b->v[6 + k][i]));
+                hi[k] = radinterp__maxf(b->v[k][i], radinterp__maxf(b->v[3 + k][i], b->v[6 + k][i]));
+            }
+            if (radinterp__shaft_culls(sh, lo, hi, 0.0) || radinterp__tri_behind(&end[0], b, i) ||
+                radinterp__tri_behind(&end[1], b, i))
+                continue;
             if (sr->tris == RADINTERP__SHAFT_TRIS) return 0;
             radinterp__shaft_rays_box(sr, lo, hi, pad);
             to = &sr->block[sr->tris / 4];
@@ -4764,75 +4718,6 @@ static int radinterp__shaft_rays_leaf(const radinterp_solution *s, radinterp__sh
         }
     }
     return 1;
-}
-
-/* Does the subtree in column i of node n hold a triangle the rays may meet?
-   Its box meets the shaft and is not behind either end; a leaf holds such
-   a triangle. */
-static int radinterp__shaft_child_kept(const radinterp_solution *s, const radinterp__shaft *sh, const radinterp__ray_end *end,
-                                       const radinterp__bvh_node *n, int i)
-{
-    float lo[3], hi[3], tlo[3], thi[3];
-    uint32_t ref = n->child[i], block, last;
-    int k;
-    for (k = 0; k < 3; k++) {
-        lo[k] = n->box[2 * k][i];
-        hi[k] = n->box[2 * k + 1][i];
-    }
-    if (!(lo[0] <= hi[0]) || radinterp__shaft_culls(sh, lo, hi, 0.0) || radinterp__box_behind_end(&end[0], lo, hi) ||
-        radinterp__box_behind_end(&end[1], lo, hi))
-        return 0;
-    if (!(ref & RADINTERP__BVH_LEAF)) return 1;
-    block = (ref & ~RADINTERP__BVH_LEAF) >> 3;
-    for (last = block + (ref & 7u) + 1; block < last; block++)
-        for (k = 0; k < 4; k++)
-            if (radinterp__shaft_tri_kept(sh, end, &s->bvh.blocks[block], k, tlo, thi)) return 1;
-    return 0;
-}
-
-/* Sets the rays to walk a cut of the tree (above): breadth first from the
-   root, a subtree is replaced by its children that hold triangles the
-   rays may meet while the cut stays within RADINTERP__SHAFT_CUT. */
-static void radinterp__shaft_rays_cut(const radinterp_solution *s, radinterp__shaft_rays *sr, const radinterp__shaft *sh,
-                                      const radinterp__ray_end *end)
-{
-    /* an entry: a node and a column of it; a replaced entry's node is NONE */
-    uint32_t node[4 * RADINTERP__SHAFT_CUT], col[4 * RADINTERP__SHAFT_CUT], count = 0, live, e, j, g;
-    int i, k;
-    const radinterp__bvh_node *n;
-    n = &s->bvh.nodes[s->bvh.root];
-    for (i = 0; i < RADINTERP__BVH_WIDTH; i++)
-        if (radinterp__shaft_child_kept(s, sh, end, n, i)) { node[count] = s->bvh.root; col[count++] = (uint32_t)i; }
-    live = count;
-    for (e = 0; e < count; e++) {
-        uint32_t ref = s->bvh.nodes[node[e]].child[col[e]], kept = 0;
-        if (ref & RADINTERP__BVH_LEAF) continue;
-        n = &s->bvh.nodes[ref];
-        for (i = 0; i < RADINTERP__BVH_WIDTH; i++) kept += (uint32_t)radinterp__shaft_child_kept(s, sh, end, n, i);
-        if (live - 1 + kept > RADINTERP__SHAFT_CUT || count + kept > 4 * RADINTERP__SHAFT_CUT) continue;
-        for (i = 0; i < RADINTERP__BVH_WIDTH; i++)
-            if (radinterp__shaft_child_kept(s, sh, end, n, i)) { node[count] = ref; col[count++] = (uint32_t)i; }
-        node[e] = RADINTERP__BVH_NONE;
-        live = live - 1 + kept;
-    }
-    sr->groups = (live + RADINTERP__BVH_WIDTH - 1) / RADINTERP__BVH_WIDTH;
-    for (g = 0; g < sr->groups; g++)   /* unused columns are empty boxes, as in the tree */
-        for (j = 0; j < RADINTERP__BVH_WIDTH; j++) {
-            for (k = 0; k < 3; k++) {
-                sr->cut[g].box[2 * k][j] = INFINITY;
-                sr->cut[g].box[2 * k + 1][j] = -INFINITY;
-            }
-            sr->cut[g].child[j] = 0;
-        }
-    for (e = 0, j = 0; e < count; e++) {
-        if (node[e] == RADINTERP__BVH_NONE) continue;
-        n = &s->bvh.nodes[node[e]];
-        for (k = 0; k < 6; k++) sr->cut[j / RADINTERP__BVH_WIDTH].box[k][j % RADINTERP__BVH_WIDTH] = n->box[k][col[e]];
-        sr->cut[j / RADINTERP__BVH_WIDTH].child[j % RADINTERP__BVH_WIDTH] = n->child[col[e]];
-        j++;
-    }
-    sr->tris = 0;   /* with no subtree left no ray is blocked */
-    sr->walk = 0;
 }
 
 /* The triangles the rays between ends a and b may meet (above). */
@@ -4847,7 +4732,6 @@ static void radinterp__shaft_rays_init(const radinterp_solution *s, radinterp__s
     int i, k;
     sr->walk = 1;
     sr->tris = 0;
-    sr->groups = 0;
     if (s->trace || s->bvh.tri_count == 0 || (ref & RADINTERP__BVH_LEAF)) return;
     for (k = 0; k < 3; k++) {
         size = fabs((double)s->scene_lo[k]) > size ? fabs((double)s->scene_lo[k]) : size;
@@ -4871,10 +4755,7 @@ static void radinterp__shaft_rays_init(const radinterp_solution *s, radinterp__s
             hi[0] = n->box[1][i]; hi[1] = n->box[3][i]; hi[2] = n->box[5][i];
             if (!(lo[0] <= hi[0]) || radinterp__shaft_culls(&sh, lo, hi, 0.0)) continue;
             if (!(n->child[i] & RADINTERP__BVH_LEAF)) stack[top++] = n->child[i];
-            else if (!radinterp__shaft_rays_leaf(s, sr, &sh, end, pad, n->child[i])) {
-                radinterp__shaft_rays_cut(s, sr, &sh, end);
-                return;
-            }
+            else if (!radinterp__shaft_rays_leaf(s, sr, &sh, end, pad, n->child[i])) return;
         }
         if (!top) break;
         ref = stack[--top];
@@ -4912,7 +4793,6 @@ static int radinterp__shaft_blocked(const radinterp_solution *s, const radinterp
     uint32_t g;
     if (sr->walk) return radinterp__segment_blocked(s, a, b);
     radinterp__segment_ray(a, b, &r, &hit);
-    if (sr->groups) return radinterp__bvh_traverse(&s->bvh, &r, 0.0f, &hit, 1, sr->cut, sr->groups);
     for (g = 0; g * RADINTERP__BVH_WIDTH < sr->tris; g++) {
         float t[RADINTERP__BVH_WIDTH];
         unsigned mask = radinterp__bvh_node_hits(&s->bvh, &r, &sr->box[g], 0.0f, 1.0f, t), i;

@@ -769,11 +769,8 @@ static void test_validation(void)
    surfaces as the solver moves them; and most links must use the kept
    triangles, or the test proves nothing. The walk of the tree is counted
    beside them: it may let through a ray that runs exactly along a face of
-   one of its boxes (two corners at one coordinate). A link with too many
-   triangles walks a cut of the tree (radinterp__shaft_rays_cut): its rays
-   must answer as the walk from the root or as every triangle, and some of
-   the office's links must be such links with blocked rays. */
-typedef struct shaft_tally { uint32_t pairs, fast, rays, blocked, differ, walk_differs, cut, cut_blocked; } shaft_tally;
+   one of its boxes (two corners at one coordinate). */
+typedef struct shaft_tally { uint32_t pairs, fast, rays, blocked, differ, walk_differs; } shaft_tally;
 
 /* Is the segment blocked by any triangle of the scene? Every block of the
    tree tested in turn. */
@@ -812,7 +809,6 @@ static void check_shaft_pair(const radinterp_solution *s, uint32_t receiver, uin
     radinterp__shaft_rays_init(s, &sr, radinterp__elem_ray_end(s, receiver), radinterp__elem_ray_end(s, source));
     t->pairs++;
     t->fast += !sr.walk;
-    t->cut += sr.groups > 0;
     for (j = 0; j < 24; j++) {
         double a[3], na[3], b[3], nb[3];
         int any, walked, kept;
@@ -824,11 +820,7 @@ static void check_shaft_pair(const radinterp_solution *s, uint32_t receiver, uin
         kept = radinterp__shaft_blocked(s, &sr, a, b);
         t->rays++;
         t->blocked += (uint32_t)any;
-        if (sr.groups) {   /* the cut's walk is the tree's */
-            t->cut_blocked += (uint32_t)any;
-            t->differ += (uint32_t)(kept != any && kept != walked);
-        } else
-            t->differ += (uint32_t)(!sr.walk && any != kept);
+        t->differ += (uint32_t)(!sr.walk && any != kept);   /* a link with too many triangles walks the tree */
         t->walk_differs += (uint32_t)(any != walked);
     }
 }
@@ -847,16 +839,14 @@ static void test_shaft_rays(void)
     if (load_scene("examples/data/office.obj", &o, &patches, &mats, &d) && CHECK(radinterp_solve(&d, &s) == RADINTERP_OK)) {
         for (i = 0; i < s->link_count; i += 13) check_shaft_pair(s, s->links[i].receiver, s->links[i].source, &links);
         for (i = 0; i < s->clink_count; i++) check_shaft_pair(s, s->clinks[i].receiver, s->clinks[i].source, &clinks);
-        test_note("office: %u links' %u rays (%u blocked), %u on kept triangles or a cut (%u, %u rays blocked); %u cluster "
-                  "links' %u rays (%u blocked), %u on kept triangles or a cut (%u, %u rays blocked); %u and %u answers differ "
-                  "(the tree's walk: %u and %u)", links.pairs, links.rays, links.blocked, links.fast, links.cut,
-                  links.cut_blocked, clinks.pairs, clinks.rays, clinks.blocked, clinks.fast, clinks.cut, clinks.cut_blocked,
-                  links.differ, clinks.differ, links.walk_differs, clinks.walk_differs);
+        test_note("office: %u links' %u rays (%u blocked), %u on kept triangles; %u cluster links' %u rays (%u blocked), "
+                  "%u on kept triangles; %u and %u answers differ (the tree's walk: %u and %u)", links.pairs, links.rays,
+                  links.blocked, links.fast, clinks.pairs, clinks.rays, clinks.blocked, clinks.fast, links.differ,
+                  clinks.differ, links.walk_differs, clinks.walk_differs);
         CHECK(links.differ == 0 && clinks.differ == 0);
         CHECK(links.fast > links.pairs / 2);                                  /* the kept triangles are used */
         CHECK(links.blocked > links.rays / 20 && links.blocked < links.rays); /* rays of both kinds */
         CHECK(clinks.pairs > 0 && clinks.blocked > 0);
-        CHECK(links.cut_blocked + clinks.cut_blocked > 0);                     /* the cuts are used */
     }
     radinterp_solution_destroy(s);
     free(patches);
