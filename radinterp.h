@@ -7919,6 +7919,10 @@ static int radinterp__hide_box(const void *ctx_, const float *lo, const float *h
     return !radinterp__inside_box(lo, hi, c->ilo[0], c->ihi[0]) && !radinterp__inside_box(lo, hi, c->ilo[1], c->ihi[1]);
 }
 
+/* Keeps patch b when its plane separates the boxes: each such patch once,
+   in the order the walk first meets it, stopping at HIDE_VISITS triangles
+   or when a patch finds no room (the test's planes_search_matches keeps
+   the list by a plain scan and must find the same). */
 static int radinterp__hide_visit(void *ctx_, uint32_t b)
 {
     radinterp__hide_ctx *c = (radinterp__hide_ctx *)ctx_;
@@ -8074,6 +8078,26 @@ static int radinterp__plane_covers(const radinterp__hide_ctx *c, uint32_t first,
     return 1;
 }
 
+/* The search of radinterp__planes_hide between boxes a and b, before its walk. */
+static void radinterp__hide_init(radinterp__hide_ctx *c, const radinterp_solution *s, const float *alo, const float *ahi,
+                                 const float *blo, const float *bhi)
+{
+    int k, h;
+    c->s = s;
+    c->tol = s->epsilon * s->diag;
+    c->lo[0] = alo; c->hi[0] = ahi; c->lo[1] = blo; c->hi[1] = bhi;
+    for (k = 0; k < 3; k++) {
+        c->ulo[k] = radinterp__minf(alo[k], blo[k]);
+        c->uhi[k] = radinterp__maxf(ahi[k], bhi[k]);
+        for (h = 0; h < 2; h++) {
+            c->ilo[h][k] = (float)((double)c->lo[h][k] + c->tol);
+            c->ihi[h][k] = (float)((double)c->hi[h][k] - c->tol);
+        }
+    }
+    c->count = c->visits = c->last = 0;
+    memset(c->slot, 0, sizeof c->slot);
+}
+
 /* Are boxes a and b hidden from each other by patches in one plane between
    them (see above)? A search that finds too much answers no. */
 static int radinterp__planes_hide(const radinterp_solution *s, const float *alo, const float *ahi, const float *blo,
@@ -8082,20 +8106,7 @@ static int radinterp__planes_hide(const radinterp_solution *s, const float *alo,
     radinterp__hide_ctx c;
     unsigned char used[RADINTERP__HIDE_PATCHES];
     uint32_t i;
-    int k, h;
-    c.s = s;
-    c.tol = s->epsilon * s->diag;
-    c.lo[0] = alo; c.hi[0] = ahi; c.lo[1] = blo; c.hi[1] = bhi;
-    for (k = 0; k < 3; k++) {
-        c.ulo[k] = radinterp__minf(alo[k], blo[k]);
-        c.uhi[k] = radinterp__maxf(ahi[k], bhi[k]);
-        for (h = 0; h < 2; h++) {
-            c.ilo[h][k] = (float)((double)c.lo[h][k] + c.tol);
-            c.ihi[h][k] = (float)((double)c.hi[h][k] - c.tol);
-        }
-    }
-    c.count = c.visits = c.last = 0;
-    memset(c.slot, 0, sizeof c.slot);
+    radinterp__hide_init(&c, s, alo, ahi, blo, bhi);
     if (!radinterp__bvh_walk(s, radinterp__hide_box, radinterp__hide_visit, &c)) return 0;
     memset(used, 0, sizeof used);
     for (i = 0; i < c.count; i++)
