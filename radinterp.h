@@ -10504,7 +10504,8 @@ static int radinterp__mesh_tick(radinterp__builder *b)
 }
 
 /* radinterp__mesh_tick for loops of short steps (i counts them): the clock
-   is read every RADINTERP__TICK_STEPS steps, as in the solve. */
+   is read every RADINTERP__TICK_STEPS steps (the solve's loops start there
+   and widen the stride: radinterp__solve_step). */
 static int radinterp__mesh_step(radinterp__builder *b, size_t i)
 {
     return i % RADINTERP__TICK_STEPS == 0 && radinterp__mesh_tick(b);

@@ -721,7 +721,8 @@ static void batch_counting_for(void *user, radinterp_job_fn job, void *ctx, uint
    count below is what the passes add). With a clock that moves 1 s at every
    reading every check is due: each iteration's steps report, and so do the
    passes; refinement's pass over a finished solve's links and cluster links
-   reports once every RADINTERP__TICK_STEPS of them, exactly. A cancel from
+   reports at least once every RADINTERP__TICK_STEPS of them (more often as
+   the readings' stride narrows, test_progress_step_stride). A cancel from
    16 of these calls returns CANCELLED and frees everything. */
 static void test_progress_in_serial_passes(void)
 {
