@@ -5321,6 +5321,8 @@ typedef struct radinterp__run {
     const radinterp_desc *desc;
     uint32_t iteration;          /* for progress reports */
     double reported;             /* RADINTERP_CPU_SECONDS() at the last progress call */
+    double read;                 /* RADINTERP_CPU_SECONDS() at the last reading of a loop of short steps */
+    uint32_t stride, countdown;  /* steps between such readings; steps to the next */
 } radinterp__run;
 
 static int radinterp__cancelled(const radinterp_solution *s, radinterp__run *run)
@@ -5335,19 +5337,34 @@ static int radinterp__cancelled(const radinterp_solution *s, radinterp__run *run
    installation of the new links, the steps of an iteration), once
    progress_interval has passed since the last call. At building scale
    each of these takes seconds between two batches. Loops of short steps
-   call it every RADINTERP__TICK_STEPS steps: a clock reading costs as much
-   as a step. Non-zero: cancel. */
-#define RADINTERP__TICK_STEPS 64
+   read the clock every few steps (radinterp__solve_step): a reading of the
+   process's CPU clock is a system call that costs as much as many steps
+   (every 64 steps it was 3% of building_4k's solve). Non-zero: cancel. */
+#define RADINTERP__TICK_STEPS 64         /* a loop's first stride */
+#define RADINTERP__TICK_MAX_STEPS 4096
 static int radinterp__solve_tick(const radinterp_solution *s, radinterp__run *run)
 {
     if (!radinterp__progress_due(run->reported, run->desc->progress_interval)) return 0;
     return radinterp__cancelled(s, run);
 }
 
-/* The tick of a loop of short steps, at its step i. */
+/* The tick of a loop of short steps, at its step i (from 0). It reads the
+   clock at step 0 and then every `stride` steps, the stride doubling while
+   readings come less than 1/64 of the progress interval apart and halving
+   when more than 1/8 apart: a few hundred readings per interval at most,
+   whatever a step costs. */
 static int radinterp__solve_step(const radinterp_solution *s, radinterp__run *run, size_t i)
 {
-    return i % RADINTERP__TICK_STEPS == 0 && radinterp__solve_tick(s, run);
+    double now, interval = radinterp__progress_interval(run->desc->progress_interval);
+    if (i == 0) run->stride = RADINTERP__TICK_STEPS;
+    else if (--run->countdown > 0) return 0;
+    now = RADINTERP_CPU_SECONDS();
+    if (i > 0 && now - run->read < interval / 64.0 && run->stride < RADINTERP__TICK_MAX_STEPS) run->stride *= 2;
+    else if (i > 0 && now - run->read > interval / 8.0 && run->stride > 1) run->stride /= 2;
+    run->countdown = run->stride;
+    run->read = now;
+    if (now - run->reported < interval) return 0;
+    return radinterp__cancelled(s, run);
 }
 
 /* Computes every pending link, in batches with a progress check between. */
@@ -7870,6 +7887,7 @@ static int radinterp__union_add(radinterp__query *q, int *count, double tol, dou
 #define RADINTERP__HIDE_PATCHES 96   /* patches in separating planes examined per pair at most */
 #define RADINTERP__HIDE_VISITS 1024  /* triangles the search may visit per pair */
 #define RADINTERP__HIDE_INSIDE 8     /* uncovered parts that may be shown inside solids */
+#define RADINTERP__HIDE_SLOTS 256    /* hash slots of the patches found: a power of two over 2 x HIDE_PATCHES */
 
 typedef struct radinterp__hide_ctx {
     const radinterp_solution *s;
@@ -7878,6 +7896,8 @@ typedef struct radinterp__hide_ctx {
     const float *lo[2], *hi[2];
     double tol;
     uint32_t found[RADINTERP__HIDE_PATCHES], count, visits;
+    uint32_t last;                   /* the patch visited last, + 1 (0: none) */
+    uint32_t slot[RADINTERP__HIDE_SLOTS];   /* the patches found, + 1, by hash (0: empty) */
 } radinterp__hide_ctx;
 
 /* Least and greatest n . x - d over a box. */
@@ -7914,16 +7934,24 @@ static int radinterp__hide_box(const void *ctx_, const float *lo, const float *h
     return !radinterp__inside_box(lo, hi, c->ilo[0], c->ihi[0]) && !radinterp__inside_box(lo, hi, c->ilo[1], c->ihi[1]);
 }
 
+/* Keeps patch b when its plane separates the boxes: each such patch once,
+   in the order the walk first meets it, stopping at HIDE_VISITS triangles
+   or when a patch finds no room (the test's planes_search_matches keeps
+   the list by a plain scan and must find the same). */
 static int radinterp__hide_visit(void *ctx_, uint32_t b)
 {
     radinterp__hide_ctx *c = (radinterp__hide_ctx *)ctx_;
     const radinterp__patch *pt = &c->s->patches[b];
     uint32_t i;
     if (++c->visits > RADINTERP__HIDE_VISITS) return 0;
+    /* a patch's triangles come one after another: the first settled it */
+    if (c->last == b + 1) return 1;
+    c->last = b + 1;
     if (pt->glass || !radinterp__plane_separates(c, pt->n, pt->d)) return 1;   /* a pane hides nothing */
-    for (i = 0; i < c->count; i++)
-        if (c->found[i] == b) return 1;
+    for (i = (b * 2654435761u) >> 24 & (RADINTERP__HIDE_SLOTS - 1); c->slot[i]; i = (i + 1) & (RADINTERP__HIDE_SLOTS - 1))
+        if (c->slot[i] == b + 1) return 1;   /* found already */
     if (c->count == RADINTERP__HIDE_PATCHES) return 0;
+    c->slot[i] = b + 1;
     c->found[c->count++] = b;
     return 1;
 }
@@ -8065,6 +8093,26 @@ static int radinterp__plane_covers(const radinterp__hide_ctx *c, uint32_t first,
     return 1;
 }
 
+/* The search of radinterp__planes_hide between boxes a and b, before its walk. */
+static void radinterp__hide_init(radinterp__hide_ctx *c, const radinterp_solution *s, const float *alo, const float *ahi,
+                                 const float *blo, const float *bhi)
+{
+    int k, h;
+    c->s = s;
+    c->tol = s->epsilon * s->diag;
+    c->lo[0] = alo; c->hi[0] = ahi; c->lo[1] = blo; c->hi[1] = bhi;
+    for (k = 0; k < 3; k++) {
+        c->ulo[k] = radinterp__minf(alo[k], blo[k]);
+        c->uhi[k] = radinterp__maxf(ahi[k], bhi[k]);
+        for (h = 0; h < 2; h++) {
+            c->ilo[h][k] = (float)((double)c->lo[h][k] + c->tol);
+            c->ihi[h][k] = (float)((double)c->hi[h][k] - c->tol);
+        }
+    }
+    c->count = c->visits = c->last = 0;
+    memset(c->slot, 0, sizeof c->slot);
+}
+
 /* Are boxes a and b hidden from each other by patches in one plane between
    them (see above)? A search that finds too much answers no. */
 static int radinterp__planes_hide(const radinterp_solution *s, const float *alo, const float *ahi, const float *blo,
@@ -8073,19 +8121,7 @@ static int radinterp__planes_hide(const radinterp_solution *s, const float *alo,
     radinterp__hide_ctx c;
     unsigned char used[RADINTERP__HIDE_PATCHES];
     uint32_t i;
-    int k, h;
-    c.s = s;
-    c.tol = s->epsilon * s->diag;
-    c.lo[0] = alo; c.hi[0] = ahi; c.lo[1] = blo; c.hi[1] = bhi;
-    for (k = 0; k < 3; k++) {
-        c.ulo[k] = radinterp__minf(alo[k], blo[k]);
-        c.uhi[k] = radinterp__maxf(ahi[k], bhi[k]);
-        for (h = 0; h < 2; h++) {
-            c.ilo[h][k] = (float)((double)c.lo[h][k] + c.tol);
-            c.ihi[h][k] = (float)((double)c.hi[h][k] - c.tol);
-        }
-    }
-    c.count = c.visits = 0;
+    radinterp__hide_init(&c, s, alo, ahi, blo, bhi);
     if (!radinterp__bvh_walk(s, radinterp__hide_box, radinterp__hide_visit, &c)) return 0;
     memset(used, 0, sizeof used);
     for (i = 0; i < c.count; i++)
@@ -9564,7 +9600,8 @@ RADINTERP_API radinterp_result radinterp_solve(const radinterp_desc *desc, radin
     s->trace_user = desc->trace_user;
     run.desc = desc;
     run.iteration = 0;
-    run.reported = RADINTERP_CPU_SECONDS();
+    run.reported = run.read = RADINTERP_CPU_SECONDS();
+    run.stride = run.countdown = RADINTERP__TICK_STEPS;
     res = radinterp__build_patches(s, desc);
     if (res == RADINTERP_OK) res = radinterp__setup_sky(s, desc);
     if (res == RADINTERP_OK) {
@@ -10482,7 +10519,8 @@ static int radinterp__mesh_tick(radinterp__builder *b)
 }
 
 /* radinterp__mesh_tick for loops of short steps (i counts them): the clock
-   is read every RADINTERP__TICK_STEPS steps, as in the solve. */
+   is read every RADINTERP__TICK_STEPS steps (the solve's loops start there
+   and widen the stride: radinterp__solve_step). */
 static int radinterp__mesh_step(radinterp__builder *b, size_t i)
 {
     return i % RADINTERP__TICK_STEPS == 0 && radinterp__mesh_tick(b);

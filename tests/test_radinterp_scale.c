@@ -12,7 +12,8 @@
    reading, so progress calls come at the same places in every run (the
    cancel sweeps count them) and a test can give work a cost. */
 static double work_seconds, clock_step;
-#define RADINTERP_CPU_SECONDS() (work_seconds += clock_step)
+static long clock_readings;
+#define RADINTERP_CPU_SECONDS() (clock_readings++, work_seconds += clock_step)
 #define RADINTERP_IMPLEMENTATION
 #include "../radinterp.h"
 #include "examples/common/obj.h"
@@ -237,6 +238,83 @@ static void test_wall_between_rooms(void)
               (unsigned long long)info.culled_links, crossing, lit, right);
     radinterp_solution_destroy(sol);
     rb_free(&s);
+}
+
+/* The planes search between two boxes (radinterp__planes_hide) keeps the
+   patches whose planes separate them, once each, in the order the walk
+   meets them; it finds them by hash and skips a patch's second triangle.
+   A plain scan of the list kept so far (the search before) must end the
+   same walk with the same answer, visits and list, for every pair of
+   elements the solve of a building of 3 x 2 rooms of quadrilaterals (two
+   triangles a patch), with doors and without, linked and for the pairs of
+   its largest clusters, of which some must fill the list or stop at the
+   visit limit, and some must be hidden. */
+static int scan_visit(void *ctx_, uint32_t b)
+{
+    radinterp__hide_ctx *c = (radinterp__hide_ctx *)ctx_;
+    const radinterp__patch *pt = &c->s->patches[b];
+    uint32_t i;
+    if (++c->visits > RADINTERP__HIDE_VISITS) return 0;
+    if (pt->glass || !radinterp__plane_separates(c, pt->n, pt->d)) return 1;
+    for (i = 0; i < c->count; i++)
+        if (c->found[i] == b) return 1;
+    if (c->count == RADINTERP__HIDE_PATCHES) return 0;
+    c->found[c->count++] = b;
+    return 1;
+}
+
+typedef struct planes_tally { uint32_t pairs, differ, full, hidden; } planes_tally;
+static void planes_search_matches(const radinterp_solution *sol, const float *alo, const float *ahi, const float *blo,
+                                  const float *bhi, planes_tally *t)
+{
+    radinterp__hide_ctx c, ref;
+    int got, want;
+    radinterp__hide_init(&c, sol, alo, ahi, blo, bhi);
+    radinterp__hide_init(&ref, sol, alo, ahi, blo, bhi);
+    got = radinterp__bvh_walk(sol, radinterp__hide_box, radinterp__hide_visit, &c);
+    want = radinterp__bvh_walk(sol, radinterp__hide_box, scan_visit, &ref);
+    t->pairs++;
+    t->differ += got != want || c.visits != ref.visits || c.count != ref.count ||
+                 memcmp(c.found, ref.found, c.count * sizeof c.found[0]) != 0;
+    t->full += !want;
+    t->hidden += (uint32_t)radinterp__planes_hide(sol, alo, ahi, blo, bhi);
+}
+
+static void test_planes_search(void)
+{
+    static const unsigned flags[2] = {0, RB_NO_DOORS};
+    planes_tally t;
+    uint32_t i, j, f;
+    memset(&t, 0, sizeof t);
+    for (f = 0; f < 2; f++) {
+        rb_scene s;
+        radinterp_desc d;
+        radinterp_solution *sol;
+        uint32_t big[8], nbig = 0;
+        rb_building(&s, 3, 2, 1, flags[f]);
+        d = rb_desc(&s);
+        d.eps_relative = 0.5f;   /* a coarse solve: the pairs, not the links, are tested */
+        if (!CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_OK)) { rb_free(&s); return; }
+        for (i = 0; i < sol->link_count; i += 7) {
+            const radinterp__node *r = &sol->nodes[sol->links[i].receiver], *src = &sol->nodes[sol->links[i].source];
+            planes_search_matches(sol, r->lo, r->hi, src->lo, src->hi, &t);
+        }
+        for (i = 0; i < sol->cluster_count; i++) {   /* the 8 clusters of most patches */
+            for (j = nbig < 8 ? nbig++ : 8; j > 0 && sol->clusters[big[j - 1]].count < sol->clusters[i].count; j--)
+                if (j < 8) big[j] = big[j - 1];
+            if (j < 8) big[j] = i;
+        }
+        for (i = 0; i < nbig; i++)
+            for (j = 0; j < sol->cluster_count; j += 3)
+                planes_search_matches(sol, sol->clusters[big[i]].lo, sol->clusters[big[i]].hi, sol->clusters[j].lo,
+                                      sol->clusters[j].hi, &t);
+        radinterp_solution_destroy(sol);
+        rb_free(&s);
+    }
+    test_note("%u pairs: %u differ from the scan, %u stopped (list full or visit limit), %u hidden", t.pairs, t.differ,
+              t.full, t.hidden);
+    CHECK_EQ_INT(t.differ, 0);
+    CHECK(t.full > 0 && t.hidden > 0);
 }
 
 /* ---- triangle soup ----------------------------------------------------------- */
@@ -643,7 +721,8 @@ static void batch_counting_for(void *user, radinterp_job_fn job, void *ctx, uint
    count below is what the passes add). With a clock that moves 1 s at every
    reading every check is due: each iteration's steps report, and so do the
    passes; refinement's pass over a finished solve's links and cluster links
-   reports once every RADINTERP__TICK_STEPS of them, exactly. A cancel from
+   reports at least once every RADINTERP__TICK_STEPS of them (more often as
+   the readings' stride narrows, test_progress_step_stride). A cancel from
    16 of these calls returns CANCELLED and frees everything. */
 static void test_progress_in_serial_passes(void)
 {
@@ -687,6 +766,50 @@ done:
     radinterp_solution_destroy(sol);
     CHECK_EQ_INT(cnt.live, 0);
     rb_free(&s);
+}
+
+/* A loop of short steps reads the process's CPU clock, a system call, every
+   64 steps at first (radinterp__solve_step): 600k readings and 3-5% of
+   building_1k's and building_4k's solves at every 64 steps. The stride
+   doubles while readings come close together, up to 4096 steps, and halves
+   when they come far apart: a loop of 100k steps with a stopped clock
+   reads it fewer than 100k / 64 / 8 times (at every 64 steps: 1563); with
+   a clock that moves 1 s at every reading the stride falls back to one
+   step and progress is called at (almost) every step; a new loop starts
+   again at 64. */
+static void test_progress_step_stride(void)
+{
+    static radinterp_solution sol;   /* progress reports its iteration count */
+    radinterp_desc d;
+    radinterp__run run;
+    progress_state ps;
+    size_t i;
+    long stopped, running, restarted;
+    memset(&d, 0, sizeof d);
+    memset(&ps, 0, sizeof ps);
+    d.progress = progress_cb;
+    d.progress_user = &ps;
+    run.desc = &d;
+    run.iteration = 0;
+    run.reported = run.read = RADINTERP_CPU_SECONDS();
+    run.stride = run.countdown = RADINTERP__TICK_STEPS;
+    clock_readings = 0;
+    for (i = 0; i < 100000; i++) CHECK(!radinterp__solve_step(&sol, &run, i));
+    stopped = clock_readings;
+    CHECK_MSG(stopped < 100000 / 64 / 8, "%ld readings in 100k steps with a stopped clock", stopped);
+    CHECK_EQ_INT(ps.calls, 0);
+    clock_step = 1.0;
+    for (i = 0; i < 1000; i++) CHECK(!radinterp__solve_step(&sol, &run, i));
+    running = ps.calls;
+    CHECK_MSG(running >= 1000 - 2 * RADINTERP__TICK_STEPS, "%ld progress calls in 1000 steps with a running clock", running);
+    clock_step = 0.0;
+    clock_readings = 0;
+    for (i = 0; i < 64 * RADINTERP__TICK_STEPS; i++) CHECK(!radinterp__solve_step(&sol, &run, i));
+    restarted = clock_readings;
+    CHECK_MSG(restarted >= 6 && restarted <= 8, "%ld readings in a new loop's first %d steps", restarted, 64 * RADINTERP__TICK_STEPS);
+    test_note("%ld clock readings in 100k steps with a stopped clock; %ld progress calls in 1000 steps with a running "
+              "one; %ld readings in the first %d steps of the next loop", stopped, running, restarted,
+              64 * RADINTERP__TICK_STEPS);
 }
 
 /* ---- progress inside the mesh build's serial steps ---------------------------- */
@@ -851,10 +974,12 @@ int main(int argc, char **argv)
 {
     TEST_INIT(argc, argv);
     RUN(test_wall_between_rooms);
+    RUN(test_planes_search);
     RUN(test_triangle_soup);
     RUN(test_cancel_everywhere);
     RUN(test_progress_paced_by_work);
     RUN(test_progress_in_serial_passes);
+    RUN(test_progress_step_stride);
     RUN(test_progress_in_mesh_steps);
     RUN(test_coordinate_range);
     RUN(test_clustered_equals_unclustered);
