@@ -1,4 +1,4 @@
-/* irrvol.h - v0.5.5 - irradiance volume for lighting moving objects - public domain or MIT, see end of file
+/* irrvol.h - v0.5.6 - irradiance volume for lighting moving objects - public domain or MIT, see end of file
 
    IRRVOL.H: a bilevel grid of directional irradiance samples that lights moving objects by interpolation.
 
@@ -532,7 +532,7 @@
 
 #define IRRVOL_VERSION_MAJOR 0
 #define IRRVOL_VERSION_MINOR 5
-#define IRRVOL_VERSION_PATCH 5
+#define IRRVOL_VERSION_PATCH 6
 #define IRRVOL_FILE_FORMAT_VERSION 3
 
 /* Fixed limits of the desc's fields (see LIMITS). */

@@ -1,4 +1,4 @@
-/* lightvec.h - v0.4.9 - cached 5D indirect light vectors - public domain or MIT, see end of file
+/* lightvec.h - v0.4.10 - cached 5D indirect light vectors - public domain or MIT, see end of file
 
    LIGHTVEC.H: cached light vectors over position and direction for interactive glossy global illumination.
 
@@ -579,7 +579,7 @@
 
 #define LIGHTVEC_VERSION_MAJOR 0
 #define LIGHTVEC_VERSION_MINOR 4
-#define LIGHTVEC_VERSION_PATCH 9
+#define LIGHTVEC_VERSION_PATCH 10
 #define LIGHTVEC_FILE_FORMAT_VERSION 2
 
 #ifndef LIGHTVEC_API
