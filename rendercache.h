@@ -4637,6 +4637,17 @@ static uint32_t rendercache__touch_slots(const rendercache *rc, const rendercach
     return sum;
 }
 
+/* The touches of an insertion at sample i of samples[first, end): the
+   first TOUCH_AHEAD samples at its start, then the sample TOUCH_AHEAD on. */
+static uint32_t rendercache__touch_ahead(const rendercache *rc, const rendercache_sample *samples, uint32_t i,
+                                         uint32_t first, uint32_t end)
+{
+    uint32_t sum = 0;
+    if (i == first) sum += rendercache__touch_slots(rc, samples + i, end - i < RENDERCACHE__TOUCH_AHEAD ? end - i : RENDERCACHE__TOUCH_AHEAD);
+    if (end - i > RENDERCACHE__TOUCH_AHEAD) sum += rendercache__touch_slots(rc, samples + i + RENDERCACHE__TOUCH_AHEAD, 1);
+    return sum;
+}
+
 /* Parallel insertion (with parallel_for). The samples of the current
    frame (not late, not predicted) are placed in chunks of consecutive
    ones: each replaces the point its pixel shows or takes the slot the
@@ -4652,7 +4663,11 @@ static uint32_t rendercache__touch_slots(const rendercache *rc, const rendercach
    that found nothing (it then takes slots that pixels show), and every
    other sample go one by one, in order, as without parallel_for: the same
    cache for any thread count. A chunk's slots and colour differences are
-   kept in the re-sort's scratch (free outside begin_frame). */
+   kept in the re-sort's scratch (free outside begin_frame). The walk and
+   the jobs touch their samples TOUCH_AHEAD on, as one-by-one insertion
+   does: without it the chunks, at 2 threads, were slower than one thread
+   inserting alone (1920x1080: 10.2-10.4 ms against 8.6-8.7; with the
+   touches 8.6-8.9). */
 #define RENDERCACHE__INSERT_CHUNK 8192u   /* samples placed together, at most (and at most a sort range) */
 #define RENDERCACHE__INSERT_JOBS 8u       /* jobs of a chunk */
 #define RENDERCACHE__MARK 4u              /* the chosen byte (request scratch) of a pixel the chunk has */
@@ -4690,6 +4705,8 @@ static void rendercache__change_job(void *ctx, uint32_t j)
     int changed = 0;
     rendercache__insert_range(job, j, &i0, &i1);
     for (i = i0; i < i1; i++) {
+        if (i + RENDERCACHE__TOUCH_AHEAD < i1 && job->change[i + RENDERCACHE__TOUCH_AHEAD] >= 0.0f)
+            RENDERCACHE__PREFETCH(&rc->data[job->slot[i + RENDERCACHE__TOUCH_AHEAD]]);
         if (job->change[i] < 0.0f) continue;
         job->change[i] = rendercache__colour_difference(rc->data[job->slot[i]].rgb, job->s[i].rgb);
         changed |= job->change[i] > rc->change_level;
@@ -4708,7 +4725,9 @@ static void rendercache__put_job(void *ctx, uint32_t j)
     for (i = i0; i < i1; i++) {
         const rendercache_sample *s = &job->s[i];
         rendercache__new_point np;
-        float d = rendercache__current_point(rc, s, &np);
+        float d;
+        (void)rendercache__touch_ahead(rc, job->s, i, i0, i1);   /* (the prefetches' addresses keep their loads) */
+        d = rendercache__current_point(rc, s, &np);
         rendercache__put_point(rc, job->slot[i], job->change[i] >= 0.0f, 0, &np, s->y * rc->width + s->x, d, &n);
     }
     job->counts[j] = n;
@@ -4732,7 +4751,15 @@ static uint32_t rendercache__chunk_slots(rendercache *rc, const rendercache_samp
     uint32_t m, i, marked = 0;
     uint64_t walked = 0;   /* slots the clock passed: a whole turn would meet the chunk's own slots again */
     for (m = 0; m < n && m < most && rendercache__chunk_sample(rc, &samples[m]); m++) {
-        uint32_t p = samples[m].y * rc->width + samples[m].x, slot = rc->px_index[p], before = rc->hand;
+        uint32_t p = samples[m].y * rc->width + samples[m].x, slot, before = rc->hand;
+        if (m + RENDERCACHE__TOUCH_AHEAD < n) {   /* the walk's misses overlap (a sample past the chunk: harmless) */
+            const rendercache_sample *t = &samples[m + RENDERCACHE__TOUCH_AHEAD];
+            if (t->x < rc->width && t->y < rc->height) {
+                RENDERCACHE__PREFETCH(&rc->px_index[t->y * rc->width + t->x]);
+                RENDERCACHE__PREFETCH_WRITE(&rc->chosen[t->y * rc->width + t->x]);
+            }
+        }
+        slot = rc->px_index[p];
         if (rc->chosen[p] & RENDERCACHE__MARK) break;   /* the chunk has this pixel already */
         rc->chosen[p] |= RENDERCACHE__MARK;
         marked++;
@@ -4832,9 +4859,7 @@ RENDERCACHE_API rendercache_result rendercache_insert(rendercache *rc, const ren
             i += m;
             if (m) continue;
         }
-        if (i == 0) rc->touched += rendercache__touch_slots(rc, s, n < RENDERCACHE__TOUCH_AHEAD ? n : RENDERCACHE__TOUCH_AHEAD);
-        if (n - i > RENDERCACHE__TOUCH_AHEAD)   /* the misses complete before the stores */
-            rc->touched += rendercache__touch_slots(rc, s + RENDERCACHE__TOUCH_AHEAD, 1);
+        rc->touched += rendercache__touch_ahead(rc, samples, i, 0, n);   /* the misses complete before the stores */
         rendercache__insert_one(rc, s, &stored, &bad);
         i++;
         alone -= alone > 0;
