@@ -2195,6 +2195,10 @@ static int wt__ensure_pose(wt_world *w)
 #define WT__CELL_BUNNY 0.08f
 #define WT__CELL_SHRINK 0.7f
 #define WT__BATCH 64              /* points per parallel job */
+/* Picks per gather job: a gather costs about a millisecond, and a round
+   often picks fewer than two batches of WT__BATCH, which left the second
+   thread idle. */
+#define WT__GATHER_BATCH 2
 
 /* Smooth normal of a bunny hit, in world space. */
 static void wt__bunny_normal(const wt_world *w, const ex_trace_hit *h, float n[3])
@@ -3067,9 +3071,9 @@ static void wt__gather_job(void *ctx, uint32_t batch)
 {
     const wt__job *j = (const wt__job *)ctx;
     const wt_world *w = j->w;
-    uint32_t i, end = batch * WT__BATCH + WT__BATCH;
+    uint32_t i, end = batch * WT__GATHER_BATCH + WT__GATHER_BATCH;
     if (end > j->count) end = j->count;
-    for (i = batch * WT__BATCH; i < end; i++) {
+    for (i = batch * WT__GATHER_BATCH; i < end; i++) {
         const wt_point *p = &j->points[w->picks[i]];
         lightvec_surface s;
         wt__surface_of(w, p, &s);
@@ -3183,7 +3187,7 @@ static int wt__light_points(wt_world *w, wt_point *points, uint32_t count, int i
             picks = wt__pick(w, points, pending, (int)round);
         }
         j.count = picks;
-        ex_pool_parallel_for(w->pool, wt__gather_job, &j, (picks + WT__BATCH - 1) / WT__BATCH);
+        ex_pool_parallel_for(w->pool, wt__gather_job, &j, (picks + WT__GATHER_BATCH - 1) / WT__GATHER_BATCH);
         st->gathers += picks;
         for (i = 0; i < picks; i++) st->bunny_gathers += points[w->picks[i]].light == WT_LIGHT_BUNNY;
         for (i = 0; i < picks; i++) {   /* one writer, in a fixed order */
