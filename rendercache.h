@@ -4484,11 +4484,13 @@ static void rendercache__age_around(rendercache *rc, uint32_t p)
             uint32_t q = (uint32_t)qy * rc->width + (uint32_t)qx, k, motion, top;
             rendercache__point *pt;
             if (qx < 0 || qx >= (int)rc->width || q == p || rc->px_index[q] == RENDERCACHE__NONE || rc->count[q]) continue;
-            rc->count[q] = 1;   /* aged in this frame (count is 0 for every pixel showing a point) */
             k = rc->px_index[q];
             pt = &rc->data[k];
             motion = rc->obj_motion[rendercache__motion_index(rc, pt->object)];
-            if ((uint32_t)rc->frame + motion == pt->base) continue;   /* shaded in this frame */
+            if ((uint32_t)rc->frame + motion == pt->base) continue;   /* shaded in this frame (not marked: so
+                                                                         the order of agings and placings
+                                                                         within a parallel chunk is free) */
+            rc->count[q] = 1;   /* aged in this frame (count is 0 for every pixel showing a point) */
             top = rendercache__change_age(rc, pt->scale);
             if ((uint32_t)rc->frame + motion - pt->base < top) pt->base = (uint32_t)rc->frame + motion - top;
             rc->priority[q] = rendercache__point_priority(rc, pt, motion, q, rc->px_depth[q]);
@@ -4657,9 +4659,13 @@ static uint32_t rendercache__touch_ahead(const rendercache *rc, const rendercach
    any order once their slots are known: the calling thread first walks
    the clock for the chunk's holes in sample order (nothing the chunk
    writes changes which slots the clock takes: the slots it passes are
-   behind it), then jobs look for colour changes and, when there is none,
-   place the samples. A chunk with a colour change (its ageing of the
-   points around depends on the order of the samples), a turn of the clock
+   behind it), then jobs find the colour differences and place the
+   samples, and the calling thread ages the points around the colour
+   changes (rendercache__age_around), in sample order. That is the cache
+   one-by-one insertion leaves: an ageing never marks nor ages a point
+   shaded in this frame, so it finds the chunk's placed pixels as it would
+   have found them placed or not yet (a hole then, a point the placing
+   replaces, ageing and all, later). A turn of the clock
    that found nothing (it then takes slots that pixels show), and every
    other sample go one by one, in order, as without parallel_for: the same
    cache for any thread count. A chunk's slots and colour differences are
@@ -4780,13 +4786,12 @@ static uint32_t rendercache__chunk_slots(rendercache *rc, const rendercache_samp
 /* Places the chunk that starts at samples[0] (up to n samples) in
    parallel; returns how many samples it placed. When none, *alone says
    how many go one by one before the next chunk: the first sample (not one
-   for a chunk), the chunk (a colour change), or all of them (the clock). */
+   for a chunk), or all of them (the clock). */
 static uint32_t rendercache__insert_chunk(rendercache *rc, const rendercache_sample *samples, uint32_t n,
                                           uint32_t *alone)
 {
     rendercache__insert_job job;
     rendercache__put_counts sum = { 0, 0, 0 };
-    const uint32_t hand = rc->hand;
     uint32_t j, i;
     int changed = 0;
     job.rc = rc;
@@ -4801,11 +4806,6 @@ static uint32_t rendercache__insert_chunk(rendercache *rc, const rendercache_sam
     }
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__change_job, &job, RENDERCACHE__INSERT_JOBS);
     for (j = 0; j < RENDERCACHE__INSERT_JOBS; j++) changed |= job.changed[j];
-    if (changed) {
-        rc->hand = hand;
-        *alone = job.n;
-        return 0;
-    }
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__put_job, &job, RENDERCACHE__INSERT_JOBS);
     for (j = 0; j < RENDERCACHE__INSERT_JOBS; j++) {
         sum.replaced += job.counts[j].replaced;
@@ -4813,8 +4813,14 @@ static uint32_t rendercache__insert_chunk(rendercache *rc, const rendercache_sam
         sum.live += job.counts[j].live;
     }
     rendercache__add_counts(rc, &sum);
-    for (i = 0; i < job.n; i++)
-        if (job.change[i] >= 0.0f) rendercache__count_change(rc, job.change[i]);
+    for (i = 0; i < job.n; i++) {
+        if (job.change[i] < 0.0f) continue;
+        rendercache__count_change(rc, job.change[i]);
+        if (changed && job.change[i] > rc->change_level) {
+            rc->stats.changed++;
+            rendercache__age_around(rc, samples[i].y * rc->width + samples[i].x);
+        }
+    }
     return job.n;
 }
 

@@ -1802,8 +1802,8 @@ static void test_deterministic_for_any_thread_count(void)
    give them: the current frame's (in chunks placed in parallel with
    parallel_for), a few twice (the same pixel in one call), a share kept
    back and inserted after the next begin_frame (late), the predicted
-   ones; a shadow that comes and goes changes colours (a colour change
-   makes a chunk go one sample at a time). Returns a hash of the requests,
+   ones; a shadow that comes and goes changes colours (a chunk's colour
+   changes age the points around them after the chunk is placed). Returns a hash of the requests,
    images, priorities and the insertion's counts over the frames. */
 static uint64_t run_insert_sequence(void (*pf)(void *, rendercache_job_fn, void *, uint32_t), void *user, float ppp)
 {
