@@ -4473,29 +4473,53 @@ static uint32_t rendercache__change_age(const rendercache *rc, float s)
    replacements find a change and most points' scale (1/W) is 2-4, so
    that an aged point outranks every hole, a third of each frame's
    requests went to the previous frame's samples (43 of 1536 since), and
-   at frames 31 and 55 (the first rooms) none to the holes. */
-static void rendercache__age_around(rendercache *rc, uint32_t p)
+   at frames 31 and 55 (the first rooms) none to the holes.
+   An ageing sets a point's age to at least a value of its own (its
+   scale's), so agings in any order, or twice, age alike: those of a
+   parallel chunk run in jobs that each age only the pixels of the rows y
+   with y % parts == part (rendercache__age_job; interleaved rows, since
+   the changes gather where a shadow or a light moved). */
+static void rendercache__age_pixel(rendercache *rc, uint32_t q)
+{
+    rendercache__point *pt = &rc->data[rc->px_index[q]];
+    uint32_t motion = rc->obj_motion[rendercache__motion_index(rc, pt->object)], top;
+    if ((uint32_t)rc->frame + motion == pt->base) return;   /* shaded in this frame (not marked: so the order
+                                                               of agings and placings within a parallel chunk
+                                                               is free) */
+    rc->count[q] = 1;   /* aged in this frame (count is 0 for every pixel showing a point) */
+    top = rendercache__change_age(rc, pt->scale);
+    if ((uint32_t)rc->frame + motion - pt->base < top) pt->base = (uint32_t)rc->frame + motion - top;
+    rc->priority[q] = rendercache__point_priority(rc, pt, motion, q, rc->px_depth[q]);
+}
+
+/* The window's points lie anywhere in the cache, a miss each: a first
+   pass asks for all of them, so that the misses overlap (agings of a
+   change whose points came from many frames were 80 % waiting). */
+static void rendercache__age_rows(rendercache *rc, uint32_t p, uint32_t part, uint32_t parts)
 {
     const int r = RENDERCACHE_CHANGE_RADIUS, x = (int)(p % rc->width), y = (int)(p / rc->width);
-    int qx, qy;
-    for (qy = y - r; qy <= y + r; qy++) {
-        if (qy < 0 || qy >= (int)rc->height) continue;
-        for (qx = x - r; qx <= x + r; qx++) {
-            uint32_t q = (uint32_t)qy * rc->width + (uint32_t)qx, k, motion, top;
-            rendercache__point *pt;
-            if (qx < 0 || qx >= (int)rc->width || q == p || rc->px_index[q] == RENDERCACHE__NONE || rc->count[q]) continue;
-            k = rc->px_index[q];
-            pt = &rc->data[k];
-            motion = rc->obj_motion[rendercache__motion_index(rc, pt->object)];
-            if ((uint32_t)rc->frame + motion == pt->base) continue;   /* shaded in this frame (not marked: so
-                                                                         the order of agings and placings
-                                                                         within a parallel chunk is free) */
-            rc->count[q] = 1;   /* aged in this frame (count is 0 for every pixel showing a point) */
-            top = rendercache__change_age(rc, pt->scale);
-            if ((uint32_t)rc->frame + motion - pt->base < top) pt->base = (uint32_t)rc->frame + motion - top;
-            rc->priority[q] = rendercache__point_priority(rc, pt, motion, q, rc->px_depth[q]);
+    const int x0 = x - r < 0 ? 0 : x - r, x1 = x + r >= (int)rc->width ? (int)rc->width - 1 : x + r;
+    int qx, qy, touch;
+    for (touch = 1; touch >= 0; touch--)
+        for (qy = y - r; qy <= y + r; qy++) {
+            if (qy < 0 || qy >= (int)rc->height || (uint32_t)qy % parts != part) continue;
+            for (qx = x0; qx <= x1; qx++) {
+                uint32_t q = (uint32_t)qy * rc->width + (uint32_t)qx;
+                if (q == p || rc->px_index[q] == RENDERCACHE__NONE || rc->count[q]) continue;
+                if (touch) {
+                    const rendercache__point *pt = &rc->data[rc->px_index[q]];
+                    RENDERCACHE__PREFETCH(pt);
+                    RENDERCACHE__PREFETCH((const char *)pt + sizeof *pt - 1);   /* may straddle two lines */
+                } else {
+                    rendercache__age_pixel(rc, q);
+                }
+            }
         }
-    }
+}
+
+static void rendercache__age_around(rendercache *rc, uint32_t p)
+{
+    rendercache__age_rows(rc, p, 0, 1);
 }
 
 /* Puts sample s in slot, replacing the point that was there (replacing:
@@ -4660,12 +4684,12 @@ static uint32_t rendercache__touch_ahead(const rendercache *rc, const rendercach
    the clock for the chunk's holes in sample order (nothing the chunk
    writes changes which slots the clock takes: the slots it passes are
    behind it), then jobs find the colour differences and place the
-   samples, and the calling thread ages the points around the colour
-   changes (rendercache__age_around), in sample order. That is the cache
-   one-by-one insertion leaves: an ageing never marks nor ages a point
-   shaded in this frame, so it finds the chunk's placed pixels as it would
-   have found them placed or not yet (a hole then, a point the placing
-   replaces, ageing and all, later). A turn of the clock
+   samples, then age the points around the colour changes, by rows
+   (rendercache__age_job). That is the cache one-by-one insertion
+   leaves: an ageing never marks nor ages a point shaded in this frame, so
+   it finds the chunk's placed pixels as it would have found them placed
+   or not yet (a hole then, a point the placing replaces, ageing and all,
+   later), and agings age alike in any order. A turn of the clock
    that found nothing (it then takes slots that pixels show), and every
    other sample go one by one, in order, as without parallel_for: the same
    cache for any thread count. A chunk's slots and colour differences are
@@ -4783,6 +4807,19 @@ static uint32_t rendercache__chunk_slots(rendercache *rc, const rendercache_samp
     return m;
 }
 
+/* Job j: the agings of the chunk's colour changes in the rows y with
+   y % INSERT_JOBS == j (the pixels of those rows, and the points they
+   show, are its own). */
+static void rendercache__age_job(void *ctx, uint32_t j)
+{
+    rendercache__insert_job *job = (rendercache__insert_job *)ctx;
+    rendercache *rc = job->rc;
+    uint32_t i;
+    for (i = 0; i < job->n; i++)
+        if (job->change[i] > rc->change_level)
+            rendercache__age_rows(rc, job->s[i].y * rc->width + job->s[i].x, j, RENDERCACHE__INSERT_JOBS);
+}
+
 /* Places the chunk that starts at samples[0] (up to n samples) in
    parallel; returns how many samples it placed. When none, *alone says
    how many go one by one before the next chunk: the first sample (not one
@@ -4813,13 +4850,11 @@ static uint32_t rendercache__insert_chunk(rendercache *rc, const rendercache_sam
         sum.live += job.counts[j].live;
     }
     rendercache__add_counts(rc, &sum);
+    if (changed) rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__age_job, &job, RENDERCACHE__INSERT_JOBS);
     for (i = 0; i < job.n; i++) {
         if (job.change[i] < 0.0f) continue;
         rendercache__count_change(rc, job.change[i]);
-        if (changed && job.change[i] > rc->change_level) {
-            rc->stats.changed++;
-            rendercache__age_around(rc, samples[i].y * rc->width + samples[i].x);
-        }
+        rc->stats.changed += job.change[i] > rc->change_level;
     }
     return job.n;
 }
