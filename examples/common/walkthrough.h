@@ -4141,40 +4141,55 @@ static int wt__save_bases(const wt_renderer *r, wt_bytes *b)
     return b->failed ? -1 : 0;
 }
 
-/* Traces what the warp's fills left empty (Radiance's pinterp -fr), with
-   the frames' shading; light vectors are looked up, not inserted. */
-static int wt__fill_pixel(void *user, uint32_t x, uint32_t y, const float org[3], const float dir[3], float rgb[3],
-                          float *depth, uint32_t *object)
+/* What the warp's fills left empty is traced (Radiance's pinterp -fr) with
+   the frames' shading; light vectors are looked up, not inserted. First
+   the ray of pixel (x, y), with its direct light. */
+static void wt__fill_trace(const wt_renderer *r, uint32_t x, uint32_t y, const float org[3], const float dir[3],
+                           wt_point *p)
 {
-    wt_renderer *r = (wt_renderer *)user;
+    memcpy(p->org, org, sizeof p->org);
+    memcpy(p->dir, dir, sizeof p->dir);
+    p->stream = wt__stream(WT_STREAM_FILL, r->fill_frame, y * r->width + x);
+    wt__trace_point(r->w, p, WT_SHADE_DIRECT);
+}
+
+/* Then its indirect light; its colour, depth and object out. Returns 0
+   when a gather failed. */
+static int wt__fill_shade(wt_renderer *r, wt_point *p, float rgb[3], float *depth, uint32_t *object)
+{
     wt_world *w = r->w;
-    wt_point p;
     lightvec_lookup_result lr;
     lightvec_record rec;
     lightvec_surface s;
     float wo[3];
     const float *out;
-    memcpy(p.org, org, sizeof p.org);
-    memcpy(p.dir, dir, sizeof p.dir);
-    p.stream = wt__stream(WT_STREAM_FILL, r->fill_frame, y * r->width + x);
-    wt__trace_point(w, &p, WT_SHADE_DIRECT);
-    if (!p.lit && p.light == WT_LIGHT_BUNNY) {   /* the key-time solution, at the frame's time (wt__baseviews_frame) */
-        wt__bunny_indirect_at(r, &p);
-    } else if (!p.lit) {
-        out = wt__outgoing(&p, wo);
-        if (lightvec_lookup(wt__cache_of(w, &p), p.pos, p.normal, out, &lr) == LIGHTVEC_OK && lr.hit) {
+    if (!p->lit && p->light == WT_LIGHT_BUNNY) {   /* the key-time solution, at the frame's time (wt__baseviews_frame) */
+        wt__bunny_indirect_at(r, p);
+    } else if (!p->lit) {
+        out = wt__outgoing(p, wo);
+        if (lightvec_lookup(wt__cache_of(w, p), p->pos, p->normal, out, &lr) == LIGHTVEC_OK && lr.hit) {
             rec.vector = lr.vector;
         } else {
-            wt__surface_of(w, &p, &s);
-            if (lightvec_gather(w->office_scene, &w->static_gather, &s, p.stream, &rec) != LIGHTVEC_OK) return 0;
+            wt__surface_of(w, p, &s);
+            if (lightvec_gather(w->office_scene, &w->static_gather, &s, p->stream, &rec) != LIGHTVEC_OK) return 0;
         }
-        lightvec_radiance(&w->materials[p.material], p.normal, out, &rec.vector, p.indirect);
+        lightvec_radiance(&w->materials[p->material], p->normal, out, &rec.vector, p->indirect);
     }
-    wt__point_radiance(&p);
-    memcpy(rgb, p.rgb, sizeof p.rgb);
-    *depth = p.object == RENDERCACHE_MISS ? RENDERCACHE_FAR_DEPTH : p.t;
-    *object = p.object;
+    wt__point_radiance(p);
+    memcpy(rgb, p->rgb, sizeof p->rgb);
+    *depth = p->object == RENDERCACHE_MISS ? RENDERCACHE_FAR_DEPTH : p->t;
+    *object = p->object;
     return 1;
+}
+
+/* The warp's fill callback: both. */
+static int wt__fill_pixel(void *user, uint32_t x, uint32_t y, const float org[3], const float dir[3], float rgb[3],
+                          float *depth, uint32_t *object)
+{
+    wt_renderer *r = (wt_renderer *)user;
+    wt_point p;
+    wt__fill_trace(r, x, y, org, dir, &p);
+    return wt__fill_shade(r, &p, rgb, depth, object);
 }
 
 static int wt__baseviews_create(wt_renderer *r, char *err, size_t err_size)
@@ -4325,13 +4340,19 @@ static int wt__baseviews_create(wt_renderer *r, char *err, size_t err_size)
    objects' effects out of the static base images): the base images are
    traced without them, so a warped office pixel the posed bunny may
    shadow is traced again with the frame's shading (wt__fill_pixel: shadow
-   rays that see the bunny, its contact occlusion). May shadow: within the
-   contact shadow's reach of the bunny's bounding sphere, or with that
-   sphere within a light's bounding sphere's radius of the segment from
-   the point to the light's centre (the shadow rays to a light lie in the
-   cone from the point to its bounding sphere, within radius of that
-   segment). A conservative test: the rest of the office keeps its warped
-   colour, which is what the trace would give there. */
+   rays that see the bunny, its contact occlusion), and where none of its
+   shadow or contact rays met the bunny, its trace is dropped and the
+   warped colour kept: an estimate of the same light, already paid for
+   (in the office's frames, 72 % of the pixels the test below flags; the
+   light-vector lookups of those were most of the frame). May shadow:
+   within the contact shadow's reach of the bunny's bounding sphere, or
+   where the cone from the point around a light's bounding sphere (which
+   holds its shadow rays) meets the cone from the point around the bunny's,
+   nearer than the light's far side. A conservative test: the rest of the
+   office keeps its warped colour, which is what the trace would give
+   there. (Its first form, the bunny's sphere within the light's radius of
+   the segment from the point to the light's centre, flagged about 13 % of
+   the office frame's pixels.) */
 static int wt__bunny_may_shadow(const wt_world *w, const float pos[3])
 {
     float c[3], v[3], d2 = 0.0f, r = w->bunny_bound_radius, reach = r + WT_CONTACT_REACH * r;
@@ -4346,16 +4367,20 @@ static int wt__bunny_may_shadow(const wt_world *w, const float pos[3])
     if (d2 < reach * reach) return 1;
     for (e = 0; e < w->light_count; e++) {
         const wt_light *L = &w->lights[e];
-        float s[3], s2 = 0.0f, u = 0.0f, q2 = 0.0f, m = r + L->radius;
+        float s[3], s2 = 0.0f, vs = 0.0f, ls, lv = sqrtf(d2), cone, gap;
         for (k = 0; k < 3; k++) {
             s[k] = L->centre[k] - pos[k];
             s2 += s[k] * s[k];
-            u += s[k] * v[k];
+            vs += s[k] * v[k];
         }
-        u = s2 > 0.0f ? u / s2 : 0.0f;
-        u = u < 0.0f ? 0.0f : (u > 1.0f ? 1.0f : u);
-        for (k = 0; k < 3; k++) q2 += (v[k] - u * s[k]) * (v[k] - u * s[k]);
-        if (q2 < m * m) return 1;
+        ls = sqrtf(s2);
+        if (ls <= L->radius || lv - r >= ls + L->radius) {   /* inside the light's sphere; the bunny beyond it */
+            if (ls <= L->radius) return 1;
+            continue;
+        }
+        cone = asinf(L->radius / ls) + asinf(r / lv);   /* half-angles of the cones from pos to the two spheres */
+        gap = acosf(fmaxf(-1.0f, fminf(1.0f, vs / (ls * lv))));   /* between their axes */
+        if (gap < cone * (1.0f + 1e-5f)) return 1;   /* (a margin for the rounding) */
     }
     return 0;
 }
@@ -4373,13 +4398,16 @@ static void wt__shadow_row(void *ctx, uint32_t y)
     for (x = 0; x < j->camera->width; x++) {
         size_t i = (size_t)y * j->camera->width + x;
         float org[3], dir[3], pos[3];
+        wt_point p;
         int k;
         if (out->object[i] != WT_OBJECT_OFFICE ||
             rendercache_camera_ray(j->camera, (float)x + 0.5f, (float)y + 0.5f, org, dir) != RENDERCACHE_OK)
             continue;
         for (k = 0; k < 3; k++) pos[k] = org[k] + out->depth[i] * dir[k];
-        if (wt__bunny_may_shadow(j->r->w, pos))
-            wt__fill_pixel(j->r, x, y, org, dir, out->rgb + 3 * i, &out->depth[i], &out->object[i]);
+        if (!wt__bunny_may_shadow(j->r->w, pos)) continue;
+        wt__fill_trace(j->r, x, y, org, dir, &p);
+        if (p.object == WT_OBJECT_OFFICE && !p.bunny_shadow) continue;   /* the bunny hid none of its light */
+        wt__fill_shade(j->r, &p, out->rgb + 3 * i, &out->depth[i], &out->object[i]);
     }
 }
 
