@@ -4355,7 +4355,7 @@ static int wt__baseviews_create(wt_renderer *r, char *err, size_t err_size)
    the office frame's pixels.) */
 static int wt__bunny_may_shadow(const wt_world *w, const float pos[3])
 {
-    float c[3], v[3], d2 = 0.0f, r = w->bunny_bound_radius, reach = r + WT_CONTACT_REACH * r;
+    float c[3], v[3], d2 = 0.0f, r = w->bunny_bound_radius, reach = r + WT_CONTACT_REACH * r, lv, sin_b, cos_b;
     uint32_t e;
     int k;
     if (!w->opt.bunny_shadow) return 0;
@@ -4365,22 +4365,25 @@ static int wt__bunny_may_shadow(const wt_world *w, const float pos[3])
         d2 += v[k] * v[k];
     }
     if (d2 < reach * reach) return 1;
+    lv = sqrtf(d2);
+    sin_b = r / lv;   /* the cone from pos around the bunny's sphere: half-angle b (d2 > r^2 here) */
+    cos_b = sqrtf(1.0f - sin_b * sin_b);
     for (e = 0; e < w->light_count; e++) {
         const wt_light *L = &w->lights[e];
-        float s[3], s2 = 0.0f, vs = 0.0f, ls, lv = sqrtf(d2), cone, gap;
+        float s[3], s2 = 0.0f, vs = 0.0f, ls, sin_a, cos_a;
         for (k = 0; k < 3; k++) {
             s[k] = L->centre[k] - pos[k];
             s2 += s[k] * s[k];
             vs += s[k] * v[k];
         }
         ls = sqrtf(s2);
-        if (ls <= L->radius || lv - r >= ls + L->radius) {   /* inside the light's sphere; the bunny beyond it */
-            if (ls <= L->radius) return 1;
-            continue;
-        }
-        cone = asinf(L->radius / ls) + asinf(r / lv);   /* half-angles of the cones from pos to the two spheres */
-        gap = acosf(fmaxf(-1.0f, fminf(1.0f, vs / (ls * lv))));   /* between their axes */
-        if (gap < cone * (1.0f + 1e-5f)) return 1;   /* (a margin for the rounding) */
+        if (ls <= L->radius) return 1;               /* inside the light's sphere */
+        if (lv - r >= ls + L->radius) continue;      /* the bunny beyond the light */
+        sin_a = L->radius / ls;                      /* the cone around the light's sphere: half-angle a */
+        cos_a = sqrtf(1.0f - sin_a * sin_a);
+        /* the cones meet when the angle between their axes is below a + b (<= pi), i.e. its cosine
+           above cos(a + b); a margin for the rounding */
+        if (vs > (cos_a * cos_b - sin_a * sin_b) * ls * lv - 1e-5f * ls * lv) return 1;
     }
     return 0;
 }
