@@ -6530,22 +6530,90 @@ static void radinterp__spread_budget(const radinterp_solution *s, const radinter
     }
 }
 
-/* Each link's budget mark (above; 0 when the budget keeps it). Returns NULL
-   when out of memory. */
-static unsigned char *radinterp__budget_marks(const radinterp_solution *s)
+/* Each link's budget mark (above; 0 when the budget keeps it), one job per
+   RADINTERP__MARK_JOBS-th of the receivers (blocks of RADINTERP__MARK_BLOCK
+   taken in turn, so each job gets its share of the busy ones), each with
+   its own scratch for the sort: a node writes only its own links' marks,
+   so the marks do not depend on the jobs. */
+#define RADINTERP__MARK_JOBS 32
+#define RADINTERP__MARK_BLOCK 256
+
+typedef struct radinterp__marks_ctx {
+    const radinterp_solution *s;
+    unsigned char *mark;
+    double *err;                 /* RADINTERP__MARK_JOBS scratch arrays of `most` */
+    uint32_t most;               /* the most links one node gathers */
+} radinterp__marks_ctx;
+
+static void radinterp__marks_job(void *ctx_, uint32_t job)
 {
-    unsigned char *mark = (unsigned char *)radinterp__alloc_array(&s->allocator, s->link_count ? s->link_count : 1, 1);
-    double *err;
-    uint32_t i, most = 1;
-    if (!mark) return NULL;
-    memset(mark, 0, s->link_count);
-    for (i = 0; i < s->node_count; i++) most = s->nodes[i].link_count > most ? s->nodes[i].link_count : most;
-    err = (double *)radinterp__alloc_array(&s->allocator, most, sizeof(double));
-    if (!err) { radinterp__free(&s->allocator, mark); return NULL; }
-    for (i = 0; i < s->node_count; i++)
-        if (s->nodes[i].link_count) radinterp__spread_budget(s, &s->nodes[i], err, mark + s->nodes[i].first_link);
-    radinterp__free(&s->allocator, err);
-    return mark;
+    const radinterp__marks_ctx *c = (const radinterp__marks_ctx *)ctx_;
+    const radinterp_solution *s = c->s;
+    uint32_t b, i;
+    for (b = job * RADINTERP__MARK_BLOCK; b < s->node_count; b += RADINTERP__MARK_JOBS * RADINTERP__MARK_BLOCK)
+        for (i = b; i < s->node_count && i < b + RADINTERP__MARK_BLOCK; i++)
+            if (s->nodes[i].link_count)
+                radinterp__spread_budget(s, &s->nodes[i], c->err + (size_t)job * c->most, c->mark + s->nodes[i].first_link);
+}
+
+/* Returns NULL when out of memory. */
+static unsigned char *radinterp__budget_marks(const radinterp_solution *s, const radinterp__run *run)
+{
+    radinterp__marks_ctx c;
+    uint32_t i;
+    c.s = s;
+    c.most = 1;
+    c.mark = (unsigned char *)radinterp__alloc_array(&s->allocator, s->link_count ? s->link_count : 1, 1);
+    if (!c.mark) return NULL;
+    memset(c.mark, 0, s->link_count);
+    for (i = 0; i < s->node_count; i++) c.most = s->nodes[i].link_count > c.most ? s->nodes[i].link_count : c.most;
+    c.err = (double *)radinterp__alloc_array(&s->allocator, (size_t)RADINTERP__MARK_JOBS * c.most, sizeof(double));
+    if (!c.err) { radinterp__free(&s->allocator, c.mark); return NULL; }
+    radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__marks_job, &c,
+                        RADINTERP__MARK_JOBS);
+    radinterp__free(&s->allocator, c.err);
+    return c.mark;
+}
+
+/* What refinement does with a link (below), from its budget mark. */
+#define RADINTERP__REFINE_KEEP 0
+#define RADINTERP__REFINE_RECEIVER 1   /* to the receiver's children */
+#define RADINTERP__REFINE_SOURCE 2     /* to the source's children */
+#define RADINTERP__REFINE_FINAL 3      /* kept, marked final: neither end may be split */
+
+static unsigned char radinterp__refine_decision(const radinterp_solution *s, const radinterp__link *l, unsigned char mark)
+{
+    double tol = radinterp__tolerance(s, s->nodes[l->receiver].dim);
+    if (l->flags & RADINTERP__LINK_FINAL) return RADINTERP__REFINE_KEEP;
+    if (mark == RADINTERP__SPLIT_SOURCE) return RADINTERP__REFINE_SOURCE;
+    if (radinterp__link_error(s, l) > tol || mark) {
+        const radinterp__node *r = &s->nodes[l->receiver], *src = &s->nodes[l->source];
+        int rs = radinterp__can_split(s, r), ss = radinterp__can_split(s, src);
+        if (rs && (r->area >= src->area || !ss)) return RADINTERP__REFINE_RECEIVER;
+        return ss ? RADINTERP__REFINE_SOURCE : RADINTERP__REFINE_FINAL;
+    }
+    /* the source is not uniform (its children differ): the link carries
+       its mean where the receiver may see a brighter or darker part, so it
+       goes to the children */
+    return radinterp__source_spread(s, l->source) * radinterp__link_ff_max(l) > tol ? RADINTERP__REFINE_SOURCE
+                                                                                      : RADINTERP__REFINE_KEEP;
+}
+
+/* Replaces each link's budget mark by its decision, RADINTERP__REFINE_BLOCK
+   links a job. */
+#define RADINTERP__REFINE_BLOCK 4096
+
+typedef struct radinterp__decide_ctx {
+    const radinterp_solution *s;
+    unsigned char *mark;
+} radinterp__decide_ctx;
+
+static void radinterp__decide_job(void *ctx_, uint32_t job)
+{
+    const radinterp__decide_ctx *c = (const radinterp__decide_ctx *)ctx_;
+    uint32_t i, end = c->s->link_count - job * RADINTERP__REFINE_BLOCK < RADINTERP__REFINE_BLOCK
+                          ? c->s->link_count : (job + 1) * RADINTERP__REFINE_BLOCK;
+    for (i = job * RADINTERP__REFINE_BLOCK; i < end; i++) c->mark[i] = radinterp__refine_decision(c->s, &c->s->links[i], c->mark[i]);
 }
 
 /* Transport-based refinement (4.4.1): a link whose estimated transport
@@ -6558,6 +6626,13 @@ static unsigned char *radinterp__budget_marks(const radinterp_solution *s)
    whose source has children that differ by more than eps / F is replaced by
    links from those children. A cluster link that could carry more than eps
    is split as radinterp__split_clink says.
+   The decisions are made first, in parallel (radinterp__decide_job), and
+   the splits applied after, in link order: what decides a link (its
+   factors, its nodes' radiosities, levels and areas, the spread of its
+   source's children, its budget mark) is not changed by the pass's splits
+   (a node split in the pass gets children that copy its radiosity, so its
+   spread stays 0, as it was without children), so the result is the one a
+   link-by-link pass would give.
    Returns the number of links split, or -1 when out of memory or cancelled
    (*res). */
 static int radinterp__refine(radinterp_solution *s, radinterp__run *run, radinterp_result *res)
@@ -6565,38 +6640,31 @@ static int radinterp__refine(radinterp_solution *s, radinterp__run *run, radinte
     radinterp__buf keep, ckeep;
     radinterp__linker L;
     uint32_t i, split = 0, nodes_before = s->node_count;
-    unsigned char *mark = radinterp__budget_marks(s);
+    unsigned char *mark = radinterp__budget_marks(s, run);
     memset(&keep, 0, sizeof keep);
     memset(&ckeep, 0, sizeof ckeep);
     keep.item = sizeof(radinterp__link);
     ckeep.item = sizeof(radinterp__clink);
     *res = RADINTERP_OK;
     if (!radinterp__linker_init(s, &L) || !mark) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    else {
+        radinterp__decide_ctx dc;
+        dc.s = s;
+        dc.mark = mark;
+        radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__decide_job, &dc,
+                            (s->link_count + RADINTERP__REFINE_BLOCK - 1) / RADINTERP__REFINE_BLOCK);
+    }
     for (i = 0; i < s->link_count && *res == RADINTERP_OK; i++) {
         radinterp__link l = s->links[i];
-        double error = radinterp__link_error(s, &l), tol = radinterp__tolerance(s, s->nodes[l.receiver].dim);
-        int which = -1;
         if (radinterp__solve_step(s, run, i)) { *res = RADINTERP_ERROR_CANCELLED; break; }
-        if (!(l.flags & RADINTERP__LINK_FINAL) && mark[i] == RADINTERP__SPLIT_SOURCE) which = 1;
-        else if (!(l.flags & RADINTERP__LINK_FINAL) && (error > tol || mark[i])) {
-            const radinterp__node *r = &s->nodes[l.receiver], *src = &s->nodes[l.source];
-            int rs = radinterp__can_split(s, r), ss = radinterp__can_split(s, src);
-            if (rs && (r->area >= src->area || !ss)) which = 0;
-            else if (ss) which = 1;
-            else l.flags |= RADINTERP__LINK_FINAL;
-        } else if (!(l.flags & RADINTERP__LINK_FINAL) && radinterp__source_spread(s, l.source) * radinterp__link_ff_max(&l) > tol) {
-            /* the source is not uniform (its children differ): the link
-               carries its mean where the receiver may see a brighter or
-               darker part, so it goes to the children */
-            which = 1;
-        }
-        if (which < 0) {
+        if (mark[i] == RADINTERP__REFINE_KEEP || mark[i] == RADINTERP__REFINE_FINAL) {
             radinterp__link *slot = (radinterp__link *)radinterp__buf_push(&s->allocator, &keep);
+            if (mark[i] == RADINTERP__REFINE_FINAL) l.flags |= RADINTERP__LINK_FINAL;
             if (!slot) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
             else *slot = l;
             continue;
         }
-        if (!radinterp__split_link(s, &L, &l, which)) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
+        if (!radinterp__split_link(s, &L, &l, mark[i] == RADINTERP__REFINE_SOURCE)) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
         split++;
     }
     if (s->has_sky && *res == RADINTERP_OK) {
