@@ -317,6 +317,89 @@ static void test_planes_search(void)
     CHECK(t.full > 0 && t.hidden > 0);
 }
 
+/* ---- refinement's decisions ---------------------------------------------------- */
+/* Refinement decides every link first, in parallel jobs (budget marks, then
+   decisions), and splits after. The pass it replaces decided link by link,
+   each after the splits of the links before it; the decisions must be the
+   same. The reference here is that pass (its code as it was, one scratch
+   array for the budgets, splitting nodes as it goes) on a building of
+   3 x 2 rooms stopped after 3 iterations (much left to refine), against the
+   library's jobs run last to first. Some links must see a source split
+   earlier in the pass (the case the claim is about), and each kind of
+   decision must occur. */
+static void reversed_for(void *user, radinterp_job_fn job, void *ctx, uint32_t count)
+{
+    (void)user;
+    while (count > 0) job(ctx, --count);
+}
+
+static unsigned char reference_decision(const radinterp_solution *s, const radinterp__link *l, unsigned char mark)
+{
+    double error = radinterp__link_error(s, l), tol = radinterp__tolerance(s, s->nodes[l->receiver].dim);
+    if (!(l->flags & RADINTERP__LINK_FINAL) && mark == RADINTERP__SPLIT_SOURCE) return RADINTERP__REFINE_SOURCE;
+    if (!(l->flags & RADINTERP__LINK_FINAL) && (error > tol || mark)) {
+        const radinterp__node *r = &s->nodes[l->receiver], *src = &s->nodes[l->source];
+        int rs = radinterp__can_split(s, r), ss = radinterp__can_split(s, src);
+        if (rs && (r->area >= src->area || !ss)) return RADINTERP__REFINE_RECEIVER;
+        if (ss) return RADINTERP__REFINE_SOURCE;
+        return RADINTERP__REFINE_FINAL;
+    }
+    if (!(l->flags & RADINTERP__LINK_FINAL) && radinterp__source_spread(s, l->source) * radinterp__link_ff_max(l) > tol)
+        return RADINTERP__REFINE_SOURCE;
+    return RADINTERP__REFINE_KEEP;
+}
+
+static void test_refine_decisions(void)
+{
+    rb_scene s;
+    radinterp_desc d;
+    radinterp_solution *sol;
+    radinterp__run run;
+    unsigned char *got, *want;
+    double *err;
+    uint32_t i, most = 1, nodes_before, differ = 0, after_split = 0, kinds[4] = {0, 0, 0, 0};
+    rb_building(&s, 3, 2, 1, 0);
+    d = rb_desc(&s);
+    d.max_iterations = 3;
+    d.parallel_for = reversed_for;
+    if (!CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_OK)) { rb_free(&s); return; }
+    memset(&run, 0, sizeof run);
+    run.desc = &d;
+    got = radinterp__budget_marks(sol, &run);
+    want = (unsigned char *)calloc(sol->link_count ? sol->link_count : 1, 1);
+    for (i = 0; i < sol->node_count; i++) most = sol->nodes[i].link_count > most ? sol->nodes[i].link_count : most;
+    err = (double *)malloc(most * sizeof(double));
+    if (CHECK(got && want && err)) {
+        radinterp__decide_ctx dc;
+        dc.s = sol;
+        dc.mark = got;
+        reversed_for(NULL, radinterp__decide_job, &dc, (sol->link_count + RADINTERP__REFINE_BLOCK - 1) / RADINTERP__REFINE_BLOCK);
+        for (i = 0; i < sol->node_count; i++)
+            if (sol->nodes[i].link_count) radinterp__spread_budget(sol, &sol->nodes[i], err, want + sol->nodes[i].first_link);
+        nodes_before = sol->node_count;
+        for (i = 0; i < sol->link_count; i++) {
+            const radinterp__link *l = &sol->links[i];
+            uint32_t src = l->source;
+            after_split += sol->nodes[src].child >= nodes_before && sol->nodes[src].child != RADINTERP__NONE;
+            want[i] = reference_decision(sol, l, want[i]);
+            differ += got[i] != want[i];
+            kinds[want[i]]++;
+            if (want[i] == RADINTERP__REFINE_RECEIVER || want[i] == RADINTERP__REFINE_SOURCE)
+                CHECK_EQ_INT(radinterp__node_split(sol, want[i] == RADINTERP__REFINE_SOURCE ? src : l->receiver), 0);
+        }
+        test_note("%u links: %u differ; kept %u, to receivers' children %u, to sources' children %u, final %u; "
+                  "%u met a source split earlier in the pass", sol->link_count, differ, kinds[0], kinds[1], kinds[2],
+                  kinds[3], after_split);
+        CHECK_EQ_INT(differ, 0);
+        CHECK(kinds[0] > 0 && kinds[1] > 0 && kinds[2] > 0 && after_split > 0);
+    }
+    radinterp__free(&sol->allocator, got);
+    free(want);
+    free(err);
+    radinterp_solution_destroy(sol);
+    rb_free(&s);
+}
+
 /* ---- triangle soup ----------------------------------------------------------- */
 static void v3(float *v, float x, float y, float z) { v[0] = x; v[1] = y; v[2] = z; }
 
@@ -975,6 +1058,7 @@ int main(int argc, char **argv)
     TEST_INIT(argc, argv);
     RUN(test_wall_between_rooms);
     RUN(test_planes_search);
+    RUN(test_refine_decisions);
     RUN(test_triangle_soup);
     RUN(test_cancel_everywhere);
     RUN(test_progress_paced_by_work);
