@@ -3830,6 +3830,15 @@ typedef struct radinterp__patch {
     uint32_t glass;           /* some channel of tf is above 0 */
 } radinterp__patch;
 
+/* A patch's plane and glass flag, copied from the patch into an array of
+   their own: radinterp__planes_hide's walk tests the plane of every
+   triangle it meets, and the patches are five times the size (the walk
+   missed the cache on each). */
+typedef struct radinterp__plane {
+    double n[3], d;
+    uint32_t glass;
+} radinterp__plane;
+
 typedef struct radinterp__node {
     float v[4][3];            /* corners, as the patch's */
     uint16_t count;           /* 3 or 4 */
@@ -3920,6 +3929,7 @@ struct radinterp_solution {
     float scene_lo[3], scene_hi[3];
     radinterp__bvh bvh;
     uint32_t *tri_patch;               /* BVH triangle -> patch */
+    radinterp__plane *planes;          /* per patch: its plane (radinterp__planes_hide) */
     /* hierarchy */
     radinterp__node *nodes;
     uint32_t node_count, node_cap;
@@ -8009,12 +8019,13 @@ static int radinterp__hide_box(const void *ctx_, const float *lo, const float *h
 static int radinterp__hide_visit(void *ctx_, uint32_t b)
 {
     radinterp__hide_ctx *c = (radinterp__hide_ctx *)ctx_;
-    const radinterp__patch *pt = &c->s->patches[b];
+    const radinterp__plane *pt;
     uint32_t i;
     if (++c->visits > RADINTERP__HIDE_VISITS) return 0;
     /* a patch's triangles come one after another: the first settled it */
     if (c->last == b + 1) return 1;
     c->last = b + 1;
+    pt = &c->s->planes[b];
     if (pt->glass || !radinterp__plane_separates(c, pt->n, pt->d)) return 1;   /* a pane hides nothing */
     for (i = (b * 2654435761u) >> 24 & (RADINTERP__HIDE_SLOTS - 1); c->slot[i]; i = (i + 1) & (RADINTERP__HIDE_SLOTS - 1))
         if (c->slot[i] == b + 1) return 1;   /* found already */
@@ -8070,7 +8081,7 @@ static int radinterp__inside_solid(const radinterp_solution *s, const double *x,
 static int radinterp__plane_covers(const radinterp__hide_ctx *c, uint32_t first, unsigned char *used)
 {
     const radinterp_solution *s = c->s;
-    const radinterp__patch *p0 = &s->patches[c->found[first]];
+    const radinterp__plane *p0 = &s->planes[c->found[first]];
     double rect[4][2], lo[2] = {DBL_MAX, DBL_MAX}, hi[2] = {-DBL_MAX, -DBL_MAX}, e1[3], e2[3], len;
     radinterp__piece work[RADINTERP__PIECES], cover;
     int i, j, k, end = 1, whole = 1, facing = 0;
@@ -8126,14 +8137,16 @@ static int radinterp__plane_covers(const radinterp__hide_ctx *c, uint32_t first,
     rect[3][0] = lo[0]; rect[3][1] = hi[1];
     if (!radinterp__piece_from_poly((const double (*)[2])rect, 4, c->tol, &work[0])) return 0;
     for (g = first; g < c->count && end > 0; g++) {
-        const radinterp__patch *pt = &s->patches[c->found[g]];
+        const radinterp__plane *pl = &s->planes[c->found[g]];   /* the patch itself only when in the plane */
+        const radinterp__patch *pt;
         double v[4][2];
-        if (used[g] || fabs(fabs(radinterp__d3_dot(pt->n, p0->n)) - 1.0) > 1e-9) continue;
-        if (fabs(radinterp__d3_dot(pt->n, p0->n) > 0.0 ? pt->d - p0->d : pt->d + p0->d) > c->tol) continue;
+        if (used[g] || fabs(fabs(radinterp__d3_dot(pl->n, p0->n)) - 1.0) > 1e-9) continue;
+        if (fabs(radinterp__d3_dot(pl->n, p0->n) > 0.0 ? pl->d - p0->d : pl->d + p0->d) > c->tol) continue;
         used[g] = 1;
-        if (facing && (radinterp__d3_dot(pt->n, p0->n) > 0.0 ? 1 : -1) != facing) continue;
+        if (facing && (radinterp__d3_dot(pl->n, p0->n) > 0.0 ? 1 : -1) != facing) continue;
+        pt = &s->patches[c->found[g]];
         for (k = 0; k < (int)pt->count; k++) {  /* counter-clockwise in the frame whichever way it faces */
-            int from = radinterp__d3_dot(pt->n, p0->n) > 0.0 ? k : (int)pt->count - 1 - k;
+            int from = radinterp__d3_dot(pl->n, p0->n) > 0.0 ? k : (int)pt->count - 1 - k;
             double x[3];
             radinterp__d3_from_f(pt->v[from], x);
             v[k][0] = radinterp__d3_dot(x, e1);
@@ -9194,7 +9207,9 @@ static radinterp_result radinterp__build_bvh(radinterp_solution *s)
     pos = (float *)radinterp__alloc_array(&s->allocator, (size_t)s->patch_count * 4, 3 * sizeof(float));
     idx = (uint32_t *)radinterp__alloc_array(&s->allocator, tris, 3 * sizeof(uint32_t));
     s->tri_patch = (uint32_t *)radinterp__alloc_array(&s->allocator, tris, sizeof(uint32_t));
-    if (!pos || !idx || !s->tri_patch) {
+    s->planes = (radinterp__plane *)radinterp__alloc_array(&s->allocator, s->patch_count ? s->patch_count : 1,
+                                                           sizeof(radinterp__plane));
+    if (!pos || !idx || !s->tri_patch || !s->planes) {
         radinterp__free(&s->allocator, pos);
         radinterp__free(&s->allocator, idx);
         return RADINTERP_ERROR_OUT_OF_MEMORY;
@@ -9202,6 +9217,9 @@ static radinterp_result radinterp__build_bvh(radinterp_solution *s)
     for (i = 0; i < s->patch_count; i++) {
         const radinterp__patch *pt = &s->patches[i];
         memcpy(pos + 12 * (size_t)i, pt->v, sizeof pt->v);
+        memcpy(s->planes[i].n, pt->n, sizeof pt->n);
+        s->planes[i].d = pt->d;
+        s->planes[i].glass = pt->glass;
         for (k = 1; k + 1 < pt->count; k++) {
             idx[3 * t] = 4 * i;
             idx[3 * t + 1] = 4 * i + k;
@@ -9608,6 +9626,7 @@ RADINTERP_API void radinterp_solution_destroy(radinterp_solution *s)
     radinterp__free(&a, s->first_caller);
     radinterp__bvh_free(&s->bvh, &a);
     radinterp__free(&a, s->tri_patch);
+    radinterp__free(&a, s->planes);
     radinterp__free(&a, s->nodes);
     radinterp__free(&a, s->links);
     radinterp__free(&a, s->blockers);
@@ -9752,7 +9771,8 @@ RADINTERP_API void radinterp_solution_info(const radinterp_solution *s, radinter
                   (size_t)s->node_cap * sizeof(radinterp__node) + info->link_bytes + (size_t)s->leaf_count * sizeof(uint32_t) +
                   (size_t)s->clink_count * sizeof(radinterp__clink) + (size_t)s->cluster_count * sizeof(radinterp__cluster) +
                   (size_t)s->patch_count * (2 * sizeof(uint32_t) + sizeof(double)) +
-                  (size_t)s->patch_count * sizeof(uint32_t) + (size_t)s->solid_count * sizeof(radinterp__solid) +
+                  (size_t)s->patch_count * (sizeof(uint32_t) + sizeof(radinterp__plane)) +
+                  (size_t)s->solid_count * sizeof(radinterp__solid) +
                   (size_t)s->solid_plane_count * (sizeof s->solid_planes[0] + sizeof(uint32_t)) +
                   (size_t)s->solid_member_count * sizeof(uint32_t) + info->leaf_list_bytes +
                   (size_t)s->bvh.node_count * sizeof(radinterp__bvh_node) +
