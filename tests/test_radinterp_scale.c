@@ -248,7 +248,9 @@ static void test_wall_between_rooms(void)
    elements the solve of a building of 3 x 2 rooms of quadrilaterals (two
    triangles a patch), with doors and without, linked and for the pairs of
    its largest clusters, of which some must fill the list or stop at the
-   visit limit, and some must be hidden. */
+   visit limit, and some must be hidden. The scan reads the planes from the
+   patches, the library from its compact copy (radinterp__plane): a copy
+   that differs makes the walks differ. */
 static int scan_visit(void *ctx_, uint32_t b)
 {
     radinterp__hide_ctx *c = (radinterp__hide_ctx *)ctx_;
