@@ -8083,6 +8083,7 @@ static int radinterp__plane_covers(const radinterp__hide_ctx *c, uint32_t first,
     const radinterp_solution *s = c->s;
     const radinterp__plane *p0 = &s->planes[c->found[first]];
     double rect[4][2], lo[2] = {DBL_MAX, DBL_MAX}, hi[2] = {-DBL_MAX, -DBL_MAX}, e1[3], e2[3], len;
+    double corner[2][8][3], height[2][8];
     radinterp__piece work[RADINTERP__PIECES], cover;
     int i, j, k, end = 1, whole = 1, facing = 0;
     uint32_t g;
@@ -8111,15 +8112,15 @@ static int radinterp__plane_covers(const radinterp__hide_ctx *c, uint32_t first,
     len = radinterp__d3_len(e2);
     for (k = 0; k < 3; k++) e2[k] /= len;
     radinterp__d3_cross(e2, p0->n, e1);   /* e1 x e2 = n: counter-clockwise seen from the front */
+    for (i = 0; i < 8; i++)   /* the boxes' corners and their heights over the plane, once each */
+        for (j = 0; j < 2; j++) {
+            for (k = 0; k < 3; k++) corner[j][i][k] = (i >> k) & 1 ? c->hi[j][k] : c->lo[j][k];
+            height[j][i] = radinterp__d3_dot(p0->n, corner[j][i]) - p0->d;
+        }
     for (i = 0; i < 8; i++)
         for (j = 0; j < 8; j++) {
-            double a[3], b[3], ta, tb, t, x[3];
-            for (k = 0; k < 3; k++) {
-                a[k] = (i >> k) & 1 ? c->hi[0][k] : c->lo[0][k];
-                b[k] = (j >> k) & 1 ? c->hi[1][k] : c->lo[1][k];
-            }
-            ta = radinterp__d3_dot(p0->n, a) - p0->d;
-            tb = radinterp__d3_dot(p0->n, b) - p0->d;
+            const double *a = corner[0][i], *b = corner[1][j], ta = height[0][i], tb = height[1][j];
+            double t, x[3];
             t = ta != tb ? ta / (ta - tb) : 0.0;
             t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
             for (k = 0; k < 3; k++) x[k] = a[k] + t * (b[k] - a[k]);
