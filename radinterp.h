@@ -8076,6 +8076,36 @@ static int radinterp__inside_solid(const radinterp_solution *s, const double *x,
     return 1;
 }
 
+/* The range in the frame (e1, e2) of the points where the segments between
+   the two boxes' corners cross the plane n . x = d (a segment that does not
+   cross it: its end nearer the plane), into lo and hi (which hold the
+   range to widen). The corners' heights over the plane are computed once
+   each, not once per segment. */
+static void radinterp__crossings_range(const radinterp__hide_ctx *c, const double *n, double d, const double *e1,
+                                       const double *e2, double *lo, double *hi)
+{
+    double corner[2][8][3], height[2][8];
+    int i, j, k;
+    for (i = 0; i < 8; i++)
+        for (j = 0; j < 2; j++) {
+            for (k = 0; k < 3; k++) corner[j][i][k] = (i >> k) & 1 ? c->hi[j][k] : c->lo[j][k];
+            height[j][i] = radinterp__d3_dot(n, corner[j][i]) - d;
+        }
+    for (i = 0; i < 8; i++)
+        for (j = 0; j < 8; j++) {
+            const double *a = corner[0][i], *b = corner[1][j], ta = height[0][i], tb = height[1][j];
+            double t, x[3];
+            t = ta != tb ? ta / (ta - tb) : 0.0;
+            t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
+            for (k = 0; k < 3; k++) x[k] = a[k] + t * (b[k] - a[k]);
+            for (k = 0; k < 2; k++) {
+                double u = radinterp__d3_dot(x, k ? e2 : e1);
+                lo[k] = u < lo[k] ? u : lo[k];
+                hi[k] = u > hi[k] ? u : hi[k];
+            }
+        }
+}
+
 /* Do the patches of c->found lying in the plane of c->found[first] cover
    the crossings of the segments between the two boxes? */
 static int radinterp__plane_covers(const radinterp__hide_ctx *c, uint32_t first, unsigned char *used)
@@ -8083,9 +8113,8 @@ static int radinterp__plane_covers(const radinterp__hide_ctx *c, uint32_t first,
     const radinterp_solution *s = c->s;
     const radinterp__plane *p0 = &s->planes[c->found[first]];
     double rect[4][2], lo[2] = {DBL_MAX, DBL_MAX}, hi[2] = {-DBL_MAX, -DBL_MAX}, e1[3], e2[3], len;
-    double corner[2][8][3], height[2][8];
     radinterp__piece work[RADINTERP__PIECES], cover;
-    int i, j, k, end = 1, whole = 1, facing = 0;
+    int i, k, end = 1, whole = 1, facing = 0;
     uint32_t g;
     {   /* a box touching the plane admits only patches turned away from the
            other box: a segment that starts on such a patch leaves it from
@@ -8112,24 +8141,7 @@ static int radinterp__plane_covers(const radinterp__hide_ctx *c, uint32_t first,
     len = radinterp__d3_len(e2);
     for (k = 0; k < 3; k++) e2[k] /= len;
     radinterp__d3_cross(e2, p0->n, e1);   /* e1 x e2 = n: counter-clockwise seen from the front */
-    for (i = 0; i < 8; i++)   /* the boxes' corners and their heights over the plane, once each */
-        for (j = 0; j < 2; j++) {
-            for (k = 0; k < 3; k++) corner[j][i][k] = (i >> k) & 1 ? c->hi[j][k] : c->lo[j][k];
-            height[j][i] = radinterp__d3_dot(p0->n, corner[j][i]) - p0->d;
-        }
-    for (i = 0; i < 8; i++)
-        for (j = 0; j < 8; j++) {
-            const double *a = corner[0][i], *b = corner[1][j], ta = height[0][i], tb = height[1][j];
-            double t, x[3];
-            t = ta != tb ? ta / (ta - tb) : 0.0;
-            t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
-            for (k = 0; k < 3; k++) x[k] = a[k] + t * (b[k] - a[k]);
-            for (k = 0; k < 2; k++) {
-                double u = radinterp__d3_dot(x, k ? e2 : e1);
-                lo[k] = u < lo[k] ? u : lo[k];
-                hi[k] = u > hi[k] ? u : hi[k];
-            }
-        }
+    radinterp__crossings_range(c, p0->n, p0->d, e1, e2, lo, hi);
     /* the crossings' bounding rectangle in the plane (a little more than
        their hull: covering it is enough) */
     rect[0][0] = lo[0]; rect[0][1] = lo[1];

@@ -250,7 +250,10 @@ static void test_wall_between_rooms(void)
    its largest clusters, of which some must fill the list or stop at the
    visit limit, and some must be hidden. The scan reads the planes from the
    patches, the library from its compact copy (radinterp__plane): a copy
-   that differs makes the walks differ. */
+   that differs makes the walks differ. For each plane found, the range of
+   the segments' crossings (radinterp__crossings_range, corner heights
+   computed once) must equal, bit for bit, the range computed segment by
+   segment. */
 static int scan_visit(void *ctx_, uint32_t b)
 {
     radinterp__hide_ctx *c = (radinterp__hide_ctx *)ctx_;
@@ -265,12 +268,39 @@ static int scan_visit(void *ctx_, uint32_t b)
     return 1;
 }
 
-typedef struct planes_tally { uint32_t pairs, differ, full, hidden; } planes_tally;
+/* The range of the crossings as plane_covers computed it before, each
+   segment's end heights computed for the segment. */
+static void scan_crossings(const radinterp__hide_ctx *c, const double *n, double d, const double *e1, const double *e2,
+                           double *lo, double *hi)
+{
+    int i, j, k;
+    for (i = 0; i < 8; i++)
+        for (j = 0; j < 8; j++) {
+            double a[3], b[3], ta, tb, t, x[3];
+            for (k = 0; k < 3; k++) {
+                a[k] = (i >> k) & 1 ? c->hi[0][k] : c->lo[0][k];
+                b[k] = (j >> k) & 1 ? c->hi[1][k] : c->lo[1][k];
+            }
+            ta = radinterp__d3_dot(n, a) - d;
+            tb = radinterp__d3_dot(n, b) - d;
+            t = ta != tb ? ta / (ta - tb) : 0.0;
+            t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
+            for (k = 0; k < 3; k++) x[k] = a[k] + t * (b[k] - a[k]);
+            for (k = 0; k < 2; k++) {
+                double u = radinterp__d3_dot(x, k ? e2 : e1);
+                lo[k] = u < lo[k] ? u : lo[k];
+                hi[k] = u > hi[k] ? u : hi[k];
+            }
+        }
+}
+
+typedef struct planes_tally { uint32_t pairs, differ, full, hidden, planes, crossings_differ; } planes_tally;
 static void planes_search_matches(const radinterp_solution *sol, const float *alo, const float *ahi, const float *blo,
                                   const float *bhi, planes_tally *t)
 {
     radinterp__hide_ctx c, ref;
     int got, want;
+    uint32_t i;
     radinterp__hide_init(&c, sol, alo, ahi, blo, bhi);
     radinterp__hide_init(&ref, sol, alo, ahi, blo, bhi);
     got = radinterp__bvh_walk(sol, radinterp__hide_box, radinterp__hide_visit, &c);
@@ -280,6 +310,16 @@ static void planes_search_matches(const radinterp_solution *sol, const float *al
                  memcmp(c.found, ref.found, c.count * sizeof c.found[0]) != 0;
     t->full += !want;
     t->hidden += (uint32_t)radinterp__planes_hide(sol, alo, ahi, blo, bhi);
+    for (i = 0; i < c.count; i++) {   /* the crossings of each separating plane found, in a skewed frame */
+        static const double e1[3] = {0.6, 0.8, 0.0}, e2[3] = {0.0, 0.28, 0.96};
+        const radinterp__patch *pt = &sol->patches[c.found[i]];
+        double lo[2] = {DBL_MAX, DBL_MAX}, hi[2] = {-DBL_MAX, -DBL_MAX}, rlo[2] = {DBL_MAX, DBL_MAX},
+               rhi[2] = {-DBL_MAX, -DBL_MAX};
+        radinterp__crossings_range(&c, pt->n, pt->d, e1, e2, lo, hi);
+        scan_crossings(&c, pt->n, pt->d, e1, e2, rlo, rhi);
+        t->planes++;
+        t->crossings_differ += memcmp(lo, rlo, sizeof lo) != 0 || memcmp(hi, rhi, sizeof hi) != 0;
+    }
 }
 
 static void test_planes_search(void)
@@ -313,9 +353,11 @@ static void test_planes_search(void)
         radinterp_solution_destroy(sol);
         rb_free(&s);
     }
-    test_note("%u pairs: %u differ from the scan, %u stopped (list full or visit limit), %u hidden", t.pairs, t.differ,
-              t.full, t.hidden);
+    test_note("%u pairs: %u differ from the scan, %u stopped (list full or visit limit), %u hidden; crossings of %u "
+              "planes: %u differ", t.pairs, t.differ, t.full, t.hidden, t.planes, t.crossings_differ);
     CHECK_EQ_INT(t.differ, 0);
+    CHECK_EQ_INT(t.crossings_differ, 0);
+    CHECK(t.planes > 0);
     CHECK(t.full > 0 && t.hidden > 0);
 }
 
