@@ -6623,7 +6623,8 @@ static void radinterp__decide_job(void *ctx_, uint32_t job)
     const radinterp__decide_ctx *c = (const radinterp__decide_ctx *)ctx_;
     uint32_t i, end = c->s->link_count - job * RADINTERP__REFINE_BLOCK < RADINTERP__REFINE_BLOCK
                           ? c->s->link_count : (job + 1) * RADINTERP__REFINE_BLOCK;
-    for (i = job * RADINTERP__REFINE_BLOCK; i < end; i++) c->mark[i] = radinterp__refine_decision(c->s, &c->s->links[i], c->mark[i]);
+    for (i = job * RADINTERP__REFINE_BLOCK; i < end; i++)
+        c->mark[i] = radinterp__refine_decision(c->s, &c->s->links[i], c->mark[i]);
 }
 
 /* Transport-based refinement (4.4.1): a link whose estimated transport
