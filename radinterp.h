@@ -3830,6 +3830,15 @@ typedef struct radinterp__patch {
     uint32_t glass;           /* some channel of tf is above 0 */
 } radinterp__patch;
 
+/* A patch's plane and glass flag, copied from the patch into an array of
+   their own: radinterp__planes_hide's walk tests the plane of every
+   triangle it meets, and the patches are five times the size (the walk
+   missed the cache on each). */
+typedef struct radinterp__plane {
+    double n[3], d;
+    uint32_t glass;
+} radinterp__plane;
+
 typedef struct radinterp__node {
     float v[4][3];            /* corners, as the patch's */
     uint16_t count;           /* 3 or 4 */
@@ -3920,6 +3929,7 @@ struct radinterp_solution {
     float scene_lo[3], scene_hi[3];
     radinterp__bvh bvh;
     uint32_t *tri_patch;               /* BVH triangle -> patch */
+    radinterp__plane *planes;          /* per patch: its plane (radinterp__planes_hide) */
     /* hierarchy */
     radinterp__node *nodes;
     uint32_t node_count, node_cap;
@@ -6530,22 +6540,91 @@ static void radinterp__spread_budget(const radinterp_solution *s, const radinter
     }
 }
 
-/* Each link's budget mark (above; 0 when the budget keeps it). Returns NULL
-   when out of memory. */
-static unsigned char *radinterp__budget_marks(const radinterp_solution *s)
+/* Each link's budget mark (above; 0 when the budget keeps it), one job per
+   RADINTERP__MARK_JOBS-th of the receivers (blocks of RADINTERP__MARK_BLOCK
+   taken in turn, so each job gets its share of the busy ones), each with
+   its own scratch for the sort: a node writes only its own links' marks,
+   so the marks do not depend on the jobs. */
+#define RADINTERP__MARK_JOBS 32
+#define RADINTERP__MARK_BLOCK 256
+
+typedef struct radinterp__marks_ctx {
+    const radinterp_solution *s;
+    unsigned char *mark;
+    double *err;                 /* RADINTERP__MARK_JOBS scratch arrays of `most` */
+    uint32_t most;               /* the most links one node gathers */
+} radinterp__marks_ctx;
+
+static void radinterp__marks_job(void *ctx_, uint32_t job)
 {
-    unsigned char *mark = (unsigned char *)radinterp__alloc_array(&s->allocator, s->link_count ? s->link_count : 1, 1);
-    double *err;
-    uint32_t i, most = 1;
-    if (!mark) return NULL;
-    memset(mark, 0, s->link_count);
-    for (i = 0; i < s->node_count; i++) most = s->nodes[i].link_count > most ? s->nodes[i].link_count : most;
-    err = (double *)radinterp__alloc_array(&s->allocator, most, sizeof(double));
-    if (!err) { radinterp__free(&s->allocator, mark); return NULL; }
-    for (i = 0; i < s->node_count; i++)
-        if (s->nodes[i].link_count) radinterp__spread_budget(s, &s->nodes[i], err, mark + s->nodes[i].first_link);
-    radinterp__free(&s->allocator, err);
-    return mark;
+    const radinterp__marks_ctx *c = (const radinterp__marks_ctx *)ctx_;
+    const radinterp_solution *s = c->s;
+    uint32_t b, i;
+    for (b = job * RADINTERP__MARK_BLOCK; b < s->node_count; b += RADINTERP__MARK_JOBS * RADINTERP__MARK_BLOCK)
+        for (i = b; i < s->node_count && i < b + RADINTERP__MARK_BLOCK; i++)
+            if (s->nodes[i].link_count)
+                radinterp__spread_budget(s, &s->nodes[i], c->err + (size_t)job * c->most, c->mark + s->nodes[i].first_link);
+}
+
+/* Returns NULL when out of memory. */
+static unsigned char *radinterp__budget_marks(const radinterp_solution *s, const radinterp__run *run)
+{
+    radinterp__marks_ctx c;
+    uint32_t i;
+    c.s = s;
+    c.most = 1;
+    c.mark = (unsigned char *)radinterp__alloc_array(&s->allocator, s->link_count ? s->link_count : 1, 1);
+    if (!c.mark) return NULL;
+    memset(c.mark, 0, s->link_count);
+    for (i = 0; i < s->node_count; i++) c.most = s->nodes[i].link_count > c.most ? s->nodes[i].link_count : c.most;
+    c.err = (double *)radinterp__alloc_array(&s->allocator, (size_t)RADINTERP__MARK_JOBS * c.most, sizeof(double));
+    if (!c.err) { radinterp__free(&s->allocator, c.mark); return NULL; }
+    radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__marks_job, &c,
+                        RADINTERP__MARK_JOBS);
+    radinterp__free(&s->allocator, c.err);
+    return c.mark;
+}
+
+/* What refinement does with a link (below), from its budget mark. */
+#define RADINTERP__REFINE_KEEP 0
+#define RADINTERP__REFINE_RECEIVER 1   /* to the receiver's children */
+#define RADINTERP__REFINE_SOURCE 2     /* to the source's children */
+#define RADINTERP__REFINE_FINAL 3      /* kept, marked final: neither end may be split */
+
+static unsigned char radinterp__refine_decision(const radinterp_solution *s, const radinterp__link *l, unsigned char mark)
+{
+    double tol = radinterp__tolerance(s, s->nodes[l->receiver].dim);
+    if (l->flags & RADINTERP__LINK_FINAL) return RADINTERP__REFINE_KEEP;
+    if (mark == RADINTERP__SPLIT_SOURCE) return RADINTERP__REFINE_SOURCE;
+    if (radinterp__link_error(s, l) > tol || mark) {
+        const radinterp__node *r = &s->nodes[l->receiver], *src = &s->nodes[l->source];
+        int rs = radinterp__can_split(s, r), ss = radinterp__can_split(s, src);
+        if (rs && (r->area >= src->area || !ss)) return RADINTERP__REFINE_RECEIVER;
+        return ss ? RADINTERP__REFINE_SOURCE : RADINTERP__REFINE_FINAL;
+    }
+    /* the source is not uniform (its children differ): the link carries
+       its mean where the receiver may see a brighter or darker part, so it
+       goes to the children */
+    return radinterp__source_spread(s, l->source) * radinterp__link_ff_max(l) > tol ? RADINTERP__REFINE_SOURCE
+                                                                                      : RADINTERP__REFINE_KEEP;
+}
+
+/* Replaces each link's budget mark by its decision, RADINTERP__REFINE_BLOCK
+   links a job. */
+#define RADINTERP__REFINE_BLOCK 4096
+
+typedef struct radinterp__decide_ctx {
+    const radinterp_solution *s;
+    unsigned char *mark;
+} radinterp__decide_ctx;
+
+static void radinterp__decide_job(void *ctx_, uint32_t job)
+{
+    const radinterp__decide_ctx *c = (const radinterp__decide_ctx *)ctx_;
+    uint32_t i, end = c->s->link_count - job * RADINTERP__REFINE_BLOCK < RADINTERP__REFINE_BLOCK
+                          ? c->s->link_count : (job + 1) * RADINTERP__REFINE_BLOCK;
+    for (i = job * RADINTERP__REFINE_BLOCK; i < end; i++)
+        c->mark[i] = radinterp__refine_decision(c->s, &c->s->links[i], c->mark[i]);
 }
 
 /* Transport-based refinement (4.4.1): a link whose estimated transport
@@ -6558,6 +6637,13 @@ static unsigned char *radinterp__budget_marks(const radinterp_solution *s)
    whose source has children that differ by more than eps / F is replaced by
    links from those children. A cluster link that could carry more than eps
    is split as radinterp__split_clink says.
+   The decisions are made first, in parallel (radinterp__decide_job), and
+   the splits applied after, in link order: what decides a link (its
+   factors, its nodes' radiosities, levels and areas, the spread of its
+   source's children, its budget mark) is not changed by the pass's splits
+   (a node split in the pass gets children that copy its radiosity, so its
+   spread stays 0, as it was without children), so the result is the one a
+   link-by-link pass would give.
    Returns the number of links split, or -1 when out of memory or cancelled
    (*res). */
 static int radinterp__refine(radinterp_solution *s, radinterp__run *run, radinterp_result *res)
@@ -6565,38 +6651,31 @@ static int radinterp__refine(radinterp_solution *s, radinterp__run *run, radinte
     radinterp__buf keep, ckeep;
     radinterp__linker L;
     uint32_t i, split = 0, nodes_before = s->node_count;
-    unsigned char *mark = radinterp__budget_marks(s);
+    unsigned char *mark = radinterp__budget_marks(s, run);
     memset(&keep, 0, sizeof keep);
     memset(&ckeep, 0, sizeof ckeep);
     keep.item = sizeof(radinterp__link);
     ckeep.item = sizeof(radinterp__clink);
     *res = RADINTERP_OK;
     if (!radinterp__linker_init(s, &L) || !mark) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
+    else {
+        radinterp__decide_ctx dc;
+        dc.s = s;
+        dc.mark = mark;
+        radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__decide_job, &dc,
+                            (s->link_count + RADINTERP__REFINE_BLOCK - 1) / RADINTERP__REFINE_BLOCK);
+    }
     for (i = 0; i < s->link_count && *res == RADINTERP_OK; i++) {
         radinterp__link l = s->links[i];
-        double error = radinterp__link_error(s, &l), tol = radinterp__tolerance(s, s->nodes[l.receiver].dim);
-        int which = -1;
         if (radinterp__solve_step(s, run, i)) { *res = RADINTERP_ERROR_CANCELLED; break; }
-        if (!(l.flags & RADINTERP__LINK_FINAL) && mark[i] == RADINTERP__SPLIT_SOURCE) which = 1;
-        else if (!(l.flags & RADINTERP__LINK_FINAL) && (error > tol || mark[i])) {
-            const radinterp__node *r = &s->nodes[l.receiver], *src = &s->nodes[l.source];
-            int rs = radinterp__can_split(s, r), ss = radinterp__can_split(s, src);
-            if (rs && (r->area >= src->area || !ss)) which = 0;
-            else if (ss) which = 1;
-            else l.flags |= RADINTERP__LINK_FINAL;
-        } else if (!(l.flags & RADINTERP__LINK_FINAL) && radinterp__source_spread(s, l.source) * radinterp__link_ff_max(&l) > tol) {
-            /* the source is not uniform (its children differ): the link
-               carries its mean where the receiver may see a brighter or
-               darker part, so it goes to the children */
-            which = 1;
-        }
-        if (which < 0) {
+        if (mark[i] == RADINTERP__REFINE_KEEP || mark[i] == RADINTERP__REFINE_FINAL) {
             radinterp__link *slot = (radinterp__link *)radinterp__buf_push(&s->allocator, &keep);
+            if (mark[i] == RADINTERP__REFINE_FINAL) l.flags |= RADINTERP__LINK_FINAL;
             if (!slot) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
             else *slot = l;
             continue;
         }
-        if (!radinterp__split_link(s, &L, &l, which)) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
+        if (!radinterp__split_link(s, &L, &l, mark[i] == RADINTERP__REFINE_SOURCE)) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
         split++;
     }
     if (s->has_sky && *res == RADINTERP_OK) {
@@ -7941,12 +8020,13 @@ static int radinterp__hide_box(const void *ctx_, const float *lo, const float *h
 static int radinterp__hide_visit(void *ctx_, uint32_t b)
 {
     radinterp__hide_ctx *c = (radinterp__hide_ctx *)ctx_;
-    const radinterp__patch *pt = &c->s->patches[b];
+    const radinterp__plane *pt;
     uint32_t i;
     if (++c->visits > RADINTERP__HIDE_VISITS) return 0;
     /* a patch's triangles come one after another: the first settled it */
     if (c->last == b + 1) return 1;
     c->last = b + 1;
+    pt = &c->s->planes[b];
     if (pt->glass || !radinterp__plane_separates(c, pt->n, pt->d)) return 1;   /* a pane hides nothing */
     for (i = (b * 2654435761u) >> 24 & (RADINTERP__HIDE_SLOTS - 1); c->slot[i]; i = (i + 1) & (RADINTERP__HIDE_SLOTS - 1))
         if (c->slot[i] == b + 1) return 1;   /* found already */
@@ -7997,15 +8077,45 @@ static int radinterp__inside_solid(const radinterp_solution *s, const double *x,
     return 1;
 }
 
+/* The range in the frame (e1, e2) of the points where the segments between
+   the two boxes' corners cross the plane n . x = d (a segment that does not
+   cross it: its end nearer the plane), into lo and hi (which hold the
+   range to widen). The corners' heights over the plane are computed once
+   each, not once per segment. */
+static void radinterp__crossings_range(const radinterp__hide_ctx *c, const double *n, double d, const double *e1,
+                                       const double *e2, double *lo, double *hi)
+{
+    double corner[2][8][3], height[2][8];
+    int i, j, k;
+    for (i = 0; i < 8; i++)
+        for (j = 0; j < 2; j++) {
+            for (k = 0; k < 3; k++) corner[j][i][k] = (i >> k) & 1 ? c->hi[j][k] : c->lo[j][k];
+            height[j][i] = radinterp__d3_dot(n, corner[j][i]) - d;
+        }
+    for (i = 0; i < 8; i++)
+        for (j = 0; j < 8; j++) {
+            const double *a = corner[0][i], *b = corner[1][j], ta = height[0][i], tb = height[1][j];
+            double t, x[3];
+            t = ta != tb ? ta / (ta - tb) : 0.0;
+            t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
+            for (k = 0; k < 3; k++) x[k] = a[k] + t * (b[k] - a[k]);
+            for (k = 0; k < 2; k++) {
+                double u = radinterp__d3_dot(x, k ? e2 : e1);
+                lo[k] = u < lo[k] ? u : lo[k];
+                hi[k] = u > hi[k] ? u : hi[k];
+            }
+        }
+}
+
 /* Do the patches of c->found lying in the plane of c->found[first] cover
    the crossings of the segments between the two boxes? */
 static int radinterp__plane_covers(const radinterp__hide_ctx *c, uint32_t first, unsigned char *used)
 {
     const radinterp_solution *s = c->s;
-    const radinterp__patch *p0 = &s->patches[c->found[first]];
+    const radinterp__plane *p0 = &s->planes[c->found[first]];
     double rect[4][2], lo[2] = {DBL_MAX, DBL_MAX}, hi[2] = {-DBL_MAX, -DBL_MAX}, e1[3], e2[3], len;
     radinterp__piece work[RADINTERP__PIECES], cover;
-    int i, j, k, end = 1, whole = 1, facing = 0;
+    int i, k, end = 1, whole = 1, facing = 0;
     uint32_t g;
     {   /* a box touching the plane admits only patches turned away from the
            other box: a segment that starts on such a patch leaves it from
@@ -8032,24 +8142,7 @@ static int radinterp__plane_covers(const radinterp__hide_ctx *c, uint32_t first,
     len = radinterp__d3_len(e2);
     for (k = 0; k < 3; k++) e2[k] /= len;
     radinterp__d3_cross(e2, p0->n, e1);   /* e1 x e2 = n: counter-clockwise seen from the front */
-    for (i = 0; i < 8; i++)
-        for (j = 0; j < 8; j++) {
-            double a[3], b[3], ta, tb, t, x[3];
-            for (k = 0; k < 3; k++) {
-                a[k] = (i >> k) & 1 ? c->hi[0][k] : c->lo[0][k];
-                b[k] = (j >> k) & 1 ? c->hi[1][k] : c->lo[1][k];
-            }
-            ta = radinterp__d3_dot(p0->n, a) - p0->d;
-            tb = radinterp__d3_dot(p0->n, b) - p0->d;
-            t = ta != tb ? ta / (ta - tb) : 0.0;
-            t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
-            for (k = 0; k < 3; k++) x[k] = a[k] + t * (b[k] - a[k]);
-            for (k = 0; k < 2; k++) {
-                double u = radinterp__d3_dot(x, k ? e2 : e1);
-                lo[k] = u < lo[k] ? u : lo[k];
-                hi[k] = u > hi[k] ? u : hi[k];
-            }
-        }
+    radinterp__crossings_range(c, p0->n, p0->d, e1, e2, lo, hi);
     /* the crossings' bounding rectangle in the plane (a little more than
        their hull: covering it is enough) */
     rect[0][0] = lo[0]; rect[0][1] = lo[1];
@@ -8058,14 +8151,16 @@ static int radinterp__plane_covers(const radinterp__hide_ctx *c, uint32_t first,
     rect[3][0] = lo[0]; rect[3][1] = hi[1];
     if (!radinterp__piece_from_poly((const double (*)[2])rect, 4, c->tol, &work[0])) return 0;
     for (g = first; g < c->count && end > 0; g++) {
-        const radinterp__patch *pt = &s->patches[c->found[g]];
+        const radinterp__plane *pl = &s->planes[c->found[g]];   /* the patch itself only when in the plane */
+        const radinterp__patch *pt;
         double v[4][2];
-        if (used[g] || fabs(fabs(radinterp__d3_dot(pt->n, p0->n)) - 1.0) > 1e-9) continue;
-        if (fabs(radinterp__d3_dot(pt->n, p0->n) > 0.0 ? pt->d - p0->d : pt->d + p0->d) > c->tol) continue;
+        if (used[g] || fabs(fabs(radinterp__d3_dot(pl->n, p0->n)) - 1.0) > 1e-9) continue;
+        if (fabs(radinterp__d3_dot(pl->n, p0->n) > 0.0 ? pl->d - p0->d : pl->d + p0->d) > c->tol) continue;
         used[g] = 1;
-        if (facing && (radinterp__d3_dot(pt->n, p0->n) > 0.0 ? 1 : -1) != facing) continue;
+        if (facing && (radinterp__d3_dot(pl->n, p0->n) > 0.0 ? 1 : -1) != facing) continue;
+        pt = &s->patches[c->found[g]];
         for (k = 0; k < (int)pt->count; k++) {  /* counter-clockwise in the frame whichever way it faces */
-            int from = radinterp__d3_dot(pt->n, p0->n) > 0.0 ? k : (int)pt->count - 1 - k;
+            int from = radinterp__d3_dot(pl->n, p0->n) > 0.0 ? k : (int)pt->count - 1 - k;
             double x[3];
             radinterp__d3_from_f(pt->v[from], x);
             v[k][0] = radinterp__d3_dot(x, e1);
@@ -9126,7 +9221,9 @@ static radinterp_result radinterp__build_bvh(radinterp_solution *s)
     pos = (float *)radinterp__alloc_array(&s->allocator, (size_t)s->patch_count * 4, 3 * sizeof(float));
     idx = (uint32_t *)radinterp__alloc_array(&s->allocator, tris, 3 * sizeof(uint32_t));
     s->tri_patch = (uint32_t *)radinterp__alloc_array(&s->allocator, tris, sizeof(uint32_t));
-    if (!pos || !idx || !s->tri_patch) {
+    s->planes = (radinterp__plane *)radinterp__alloc_array(&s->allocator, s->patch_count ? s->patch_count : 1,
+                                                           sizeof(radinterp__plane));
+    if (!pos || !idx || !s->tri_patch || !s->planes) {
         radinterp__free(&s->allocator, pos);
         radinterp__free(&s->allocator, idx);
         return RADINTERP_ERROR_OUT_OF_MEMORY;
@@ -9134,6 +9231,9 @@ static radinterp_result radinterp__build_bvh(radinterp_solution *s)
     for (i = 0; i < s->patch_count; i++) {
         const radinterp__patch *pt = &s->patches[i];
         memcpy(pos + 12 * (size_t)i, pt->v, sizeof pt->v);
+        memcpy(s->planes[i].n, pt->n, sizeof pt->n);
+        s->planes[i].d = pt->d;
+        s->planes[i].glass = pt->glass;
         for (k = 1; k + 1 < pt->count; k++) {
             idx[3 * t] = 4 * i;
             idx[3 * t + 1] = 4 * i + k;
@@ -9540,6 +9640,7 @@ RADINTERP_API void radinterp_solution_destroy(radinterp_solution *s)
     radinterp__free(&a, s->first_caller);
     radinterp__bvh_free(&s->bvh, &a);
     radinterp__free(&a, s->tri_patch);
+    radinterp__free(&a, s->planes);
     radinterp__free(&a, s->nodes);
     radinterp__free(&a, s->links);
     radinterp__free(&a, s->blockers);
@@ -9684,7 +9785,8 @@ RADINTERP_API void radinterp_solution_info(const radinterp_solution *s, radinter
                   (size_t)s->node_cap * sizeof(radinterp__node) + info->link_bytes + (size_t)s->leaf_count * sizeof(uint32_t) +
                   (size_t)s->clink_count * sizeof(radinterp__clink) + (size_t)s->cluster_count * sizeof(radinterp__cluster) +
                   (size_t)s->patch_count * (2 * sizeof(uint32_t) + sizeof(double)) +
-                  (size_t)s->patch_count * sizeof(uint32_t) + (size_t)s->solid_count * sizeof(radinterp__solid) +
+                  (size_t)s->patch_count * (sizeof(uint32_t) + sizeof(radinterp__plane)) +
+                  (size_t)s->solid_count * sizeof(radinterp__solid) +
                   (size_t)s->solid_plane_count * (sizeof s->solid_planes[0] + sizeof(uint32_t)) +
                   (size_t)s->solid_member_count * sizeof(uint32_t) + info->leaf_list_bytes +
                   (size_t)s->bvh.node_count * sizeof(radinterp__bvh_node) +

@@ -248,7 +248,12 @@ static void test_wall_between_rooms(void)
    elements the solve of a building of 3 x 2 rooms of quadrilaterals (two
    triangles a patch), with doors and without, linked and for the pairs of
    its largest clusters, of which some must fill the list or stop at the
-   visit limit, and some must be hidden. */
+   visit limit, and some must be hidden. The scan reads the planes from the
+   patches, the library from its compact copy (radinterp__plane): a copy
+   that differs makes the walks differ. For each plane found, the range of
+   the segments' crossings (radinterp__crossings_range, corner heights
+   computed once) must equal, bit for bit, the range computed segment by
+   segment. */
 static int scan_visit(void *ctx_, uint32_t b)
 {
     radinterp__hide_ctx *c = (radinterp__hide_ctx *)ctx_;
@@ -263,12 +268,39 @@ static int scan_visit(void *ctx_, uint32_t b)
     return 1;
 }
 
-typedef struct planes_tally { uint32_t pairs, differ, full, hidden; } planes_tally;
+/* The range of the crossings as plane_covers computed it before, each
+   segment's end heights computed for the segment. */
+static void scan_crossings(const radinterp__hide_ctx *c, const double *n, double d, const double *e1, const double *e2,
+                           double *lo, double *hi)
+{
+    int i, j, k;
+    for (i = 0; i < 8; i++)
+        for (j = 0; j < 8; j++) {
+            double a[3], b[3], ta, tb, t, x[3];
+            for (k = 0; k < 3; k++) {
+                a[k] = (i >> k) & 1 ? c->hi[0][k] : c->lo[0][k];
+                b[k] = (j >> k) & 1 ? c->hi[1][k] : c->lo[1][k];
+            }
+            ta = radinterp__d3_dot(n, a) - d;
+            tb = radinterp__d3_dot(n, b) - d;
+            t = ta != tb ? ta / (ta - tb) : 0.0;
+            t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
+            for (k = 0; k < 3; k++) x[k] = a[k] + t * (b[k] - a[k]);
+            for (k = 0; k < 2; k++) {
+                double u = radinterp__d3_dot(x, k ? e2 : e1);
+                lo[k] = u < lo[k] ? u : lo[k];
+                hi[k] = u > hi[k] ? u : hi[k];
+            }
+        }
+}
+
+typedef struct planes_tally { uint32_t pairs, differ, full, hidden, planes, crossings_differ; } planes_tally;
 static void planes_search_matches(const radinterp_solution *sol, const float *alo, const float *ahi, const float *blo,
                                   const float *bhi, planes_tally *t)
 {
     radinterp__hide_ctx c, ref;
     int got, want;
+    uint32_t i;
     radinterp__hide_init(&c, sol, alo, ahi, blo, bhi);
     radinterp__hide_init(&ref, sol, alo, ahi, blo, bhi);
     got = radinterp__bvh_walk(sol, radinterp__hide_box, radinterp__hide_visit, &c);
@@ -278,6 +310,16 @@ static void planes_search_matches(const radinterp_solution *sol, const float *al
                  memcmp(c.found, ref.found, c.count * sizeof c.found[0]) != 0;
     t->full += !want;
     t->hidden += (uint32_t)radinterp__planes_hide(sol, alo, ahi, blo, bhi);
+    for (i = 0; i < c.count; i++) {   /* the crossings of each separating plane found, in a skewed frame */
+        static const double e1[3] = {0.6, 0.8, 0.0}, e2[3] = {0.0, 0.28, 0.96};
+        const radinterp__patch *pt = &sol->patches[c.found[i]];
+        double lo[2] = {DBL_MAX, DBL_MAX}, hi[2] = {-DBL_MAX, -DBL_MAX}, rlo[2] = {DBL_MAX, DBL_MAX},
+               rhi[2] = {-DBL_MAX, -DBL_MAX};
+        radinterp__crossings_range(&c, pt->n, pt->d, e1, e2, lo, hi);
+        scan_crossings(&c, pt->n, pt->d, e1, e2, rlo, rhi);
+        t->planes++;
+        t->crossings_differ += memcmp(lo, rlo, sizeof lo) != 0 || memcmp(hi, rhi, sizeof hi) != 0;
+    }
 }
 
 static void test_planes_search(void)
@@ -311,10 +353,95 @@ static void test_planes_search(void)
         radinterp_solution_destroy(sol);
         rb_free(&s);
     }
-    test_note("%u pairs: %u differ from the scan, %u stopped (list full or visit limit), %u hidden", t.pairs, t.differ,
-              t.full, t.hidden);
+    test_note("%u pairs: %u differ from the scan, %u stopped (list full or visit limit), %u hidden; crossings of %u "
+              "planes: %u differ", t.pairs, t.differ, t.full, t.hidden, t.planes, t.crossings_differ);
     CHECK_EQ_INT(t.differ, 0);
+    CHECK_EQ_INT(t.crossings_differ, 0);
+    CHECK(t.planes > 0);
     CHECK(t.full > 0 && t.hidden > 0);
+}
+
+/* ---- refinement's decisions ---------------------------------------------------- */
+/* Refinement decides every link first, in parallel jobs (budget marks, then
+   decisions), and splits after. The pass it replaces decided link by link,
+   each after the splits of the links before it; the decisions must be the
+   same. The reference here is that pass (its code as it was, one scratch
+   array for the budgets, splitting nodes as it goes) on a building of
+   3 x 2 rooms stopped after 3 iterations (much left to refine), against the
+   library's jobs run last to first. Some links must see a source split
+   earlier in the pass (the case the claim is about), and each kind of
+   decision must occur. */
+static void reversed_for(void *user, radinterp_job_fn job, void *ctx, uint32_t count)
+{
+    (void)user;
+    while (count > 0) job(ctx, --count);
+}
+
+static unsigned char reference_decision(const radinterp_solution *s, const radinterp__link *l, unsigned char mark)
+{
+    double error = radinterp__link_error(s, l), tol = radinterp__tolerance(s, s->nodes[l->receiver].dim);
+    if (!(l->flags & RADINTERP__LINK_FINAL) && mark == RADINTERP__SPLIT_SOURCE) return RADINTERP__REFINE_SOURCE;
+    if (!(l->flags & RADINTERP__LINK_FINAL) && (error > tol || mark)) {
+        const radinterp__node *r = &s->nodes[l->receiver], *src = &s->nodes[l->source];
+        int rs = radinterp__can_split(s, r), ss = radinterp__can_split(s, src);
+        if (rs && (r->area >= src->area || !ss)) return RADINTERP__REFINE_RECEIVER;
+        if (ss) return RADINTERP__REFINE_SOURCE;
+        return RADINTERP__REFINE_FINAL;
+    }
+    if (!(l->flags & RADINTERP__LINK_FINAL) && radinterp__source_spread(s, l->source) * radinterp__link_ff_max(l) > tol)
+        return RADINTERP__REFINE_SOURCE;
+    return RADINTERP__REFINE_KEEP;
+}
+
+static void test_refine_decisions(void)
+{
+    rb_scene s;
+    radinterp_desc d;
+    radinterp_solution *sol;
+    radinterp__run run;
+    unsigned char *got, *want;
+    double *err;
+    uint32_t i, most = 1, nodes_before, differ = 0, after_split = 0, kinds[4] = {0, 0, 0, 0};
+    rb_building(&s, 3, 2, 1, 0);
+    d = rb_desc(&s);
+    d.max_iterations = 3;
+    d.parallel_for = reversed_for;
+    if (!CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_OK)) { rb_free(&s); return; }
+    memset(&run, 0, sizeof run);
+    run.desc = &d;
+    got = radinterp__budget_marks(sol, &run);
+    want = (unsigned char *)calloc(sol->link_count ? sol->link_count : 1, 1);
+    for (i = 0; i < sol->node_count; i++) most = sol->nodes[i].link_count > most ? sol->nodes[i].link_count : most;
+    err = (double *)malloc(most * sizeof(double));
+    if (CHECK(got && want && err)) {
+        radinterp__decide_ctx dc;
+        dc.s = sol;
+        dc.mark = got;
+        reversed_for(NULL, radinterp__decide_job, &dc, (sol->link_count + RADINTERP__REFINE_BLOCK - 1) / RADINTERP__REFINE_BLOCK);
+        for (i = 0; i < sol->node_count; i++)
+            if (sol->nodes[i].link_count) radinterp__spread_budget(sol, &sol->nodes[i], err, want + sol->nodes[i].first_link);
+        nodes_before = sol->node_count;
+        for (i = 0; i < sol->link_count; i++) {
+            const radinterp__link *l = &sol->links[i];
+            uint32_t src = l->source;
+            after_split += sol->nodes[src].child >= nodes_before && sol->nodes[src].child != RADINTERP__NONE;
+            want[i] = reference_decision(sol, l, want[i]);
+            differ += got[i] != want[i];
+            kinds[want[i]]++;
+            if (want[i] == RADINTERP__REFINE_RECEIVER || want[i] == RADINTERP__REFINE_SOURCE)
+                CHECK_EQ_INT(radinterp__node_split(sol, want[i] == RADINTERP__REFINE_SOURCE ? src : l->receiver), 0);
+        }
+        test_note("%u links: %u differ; kept %u, to receivers' children %u, to sources' children %u, final %u; "
+                  "%u met a source split earlier in the pass", sol->link_count, differ, kinds[0], kinds[1], kinds[2],
+                  kinds[3], after_split);
+        CHECK_EQ_INT(differ, 0);
+        CHECK(kinds[0] > 0 && kinds[1] > 0 && kinds[2] > 0 && after_split > 0);
+    }
+    radinterp__free(&sol->allocator, got);
+    free(want);
+    free(err);
+    radinterp_solution_destroy(sol);
+    rb_free(&s);
 }
 
 /* ---- triangle soup ----------------------------------------------------------- */
@@ -975,6 +1102,7 @@ int main(int argc, char **argv)
     TEST_INIT(argc, argv);
     RUN(test_wall_between_rooms);
     RUN(test_planes_search);
+    RUN(test_refine_decisions);
     RUN(test_triangle_soup);
     RUN(test_cancel_everywhere);
     RUN(test_progress_paced_by_work);
