@@ -1,4 +1,4 @@
-/* rendercache.h - v0.7.3 - render cache and range-image walkthroughs - public domain or MIT, see end of file
+/* rendercache.h - v0.7.4 - render cache and range-image walkthroughs - public domain or MIT, see end of file
 
    RENDERCACHE.H: an image-space point cache that reprojects and resamples, and range-image walkthroughs of animated scenes.
 
@@ -476,7 +476,7 @@
 
 #define RENDERCACHE_VERSION_MAJOR 0
 #define RENDERCACHE_VERSION_MINOR 7
-#define RENDERCACHE_VERSION_PATCH 3
+#define RENDERCACHE_VERSION_PATCH 4
 
 #ifndef RENDERCACHE_API
 #  ifdef RENDERCACHE_STATIC
