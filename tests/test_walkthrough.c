@@ -552,12 +552,17 @@ static void test_threads(void)
    samples; 0.1708 with the first change alone). The bound is that plus
    10% for a compiler flipping a light-vector decision (a flip redraws at
    most the 8% of a frame's pixels requested after it); a frame without
-   its indirect light (63% of the luminance) is at 0.7. The issue's target (0.07) is not
+   its indirect light (63% of the luminance) is at 0.7. Requests at the
+   reprojected image's shading edges (wt__edge_requests, half the budget)
+   brought the pooled LRMS from 0.1550 to 0.1439 here (at 160x120, where
+   the edges are thinner against the frame, from 0.109 to 0.082); the
+   frames are deterministic, so the bound 0.150 sits between the two and
+   fails when the edge requests are lost. The issue's target (0.07) is not
    met: the bound guards against regressions. */
 #define CONVERGED_STRATA 12
 #define CONVERGED_LIGHT_SAMPLES 32
 #define CONVERGED_FRAMES 3
-#define CONVERGED_MAX_LRMS 0.171
+#define CONVERGED_MAX_LRMS 0.150
 static void test_raytrace_against_converged(void)
 {
     static const int frames[CONVERGED_FRAMES] = { 7, 15, 23 };

@@ -3478,6 +3478,7 @@ typedef struct wt_renderer {
     rendercache *rc;
     rendercache_pixel_request *req;
     rendercache_sample *samples;
+    unsigned char *requested;   /* raytrace: per pixel, chosen in this frame (edge requests) */
     uint32_t budget;
     /* baseviews */
     ex_baseviews bv;
@@ -3670,12 +3671,71 @@ static int wt__raytrace_create(wt_renderer *r, char *err, size_t err_size)
     if (r->budget < 1) r->budget = 1;
     r->req = (rendercache_pixel_request *)malloc(sizeof *r->req * n);
     r->samples = (rendercache_sample *)malloc(sizeof *r->samples * n);
-    if (rr != RENDERCACHE_OK || !r->req || !r->samples) {
+    r->requested = (unsigned char *)calloc(n, 1);
+    if (rr != RENDERCACHE_OK || !r->req || !r->samples || !r->requested) {
         snprintf(err, err_size, "cannot create the render cache: %s",
                  rr != RENDERCACHE_OK ? rendercache_result_string(rr) : "out of memory");
         return -1;
     }
     return 0;
+}
+
+/* Requests at the shading edges of the reprojected image (after
+   begin_frame), appended to the cache's own n requests up to max in all.
+   Points of earlier frames land anywhere in their pixel, so where the
+   image steps (a depth edge, a shadow's edge, a wall's corner) a pixel
+   often shows a point of the other side: measured against converged
+   renders (office, 160x120, frames 7-47 every 8th), 4 % of the pixels
+   carry 65-73 % of the cached frames' squared error, and a fresh sample in
+   each of them would bring the pooled LRMS from 0.109 to 0.072. An edge
+   pixel: its luminance, clamped at WT__EDGE_WHITE times the image's mean
+   (about the display's white point), differs from a neighbour's by more
+   than WT__EDGE_STEP times the mean. A fresh sample of the current frame
+   lies at the pixel's centre and shows there at once. Up to
+   WT__EDGE_SHARE of the frame's budget goes to edge pixels and the rest to
+   the cache's priorities: a frame shades no more samples than before. */
+#define WT__EDGE_SHARE 0.5f
+#define WT__EDGE_WHITE 4.0f
+#define WT__EDGE_STEP 0.5f
+
+static uint32_t wt__edge_requests(wt_renderer *r, const rendercache_camera *cam, uint32_t n, uint32_t max)
+{
+    const float *rgb = rendercache_image(r->rc);
+    uint32_t W = r->width, H = r->height, x, y, i;
+    double sum = 0.0;
+    float mean, white, step;
+    for (i = 0; i < W * H; i++) sum += 0.2126f * rgb[3 * i] + 0.7152f * rgb[3 * i + 1] + 0.0722f * rgb[3 * i + 2];
+    mean = (float)(sum / (double)(W * H));
+    if (!(mean > 0.0f) || n >= max) return n;
+    white = WT__EDGE_WHITE * mean;
+    step = WT__EDGE_STEP * mean;
+    for (i = 0; i < n; i++) r->requested[r->req[i].y * W + r->req[i].x] = 1;
+    for (y = 1; y + 1 < H && n < max; y++)
+        for (x = 1; x + 1 < W && n < max; x++) {
+            uint32_t p = y * W + x;
+            float l0 = 0.2126f * rgb[3 * p] + 0.7152f * rgb[3 * p + 1] + 0.0722f * rgb[3 * p + 2], g = 0.0f;
+            int dx, dy;
+            if (r->requested[p]) continue;
+            l0 = l0 < white ? l0 : white;
+            for (dy = -1; dy <= 1; dy++)
+                for (dx = -1; dx <= 1; dx++) {
+                    const float *c = &rgb[3 * (p + (uint32_t)(dy * (int)W + dx))];
+                    float l1 = 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2];
+                    l1 = l1 < white ? l1 : white;
+                    g = fabsf(l1 - l0) > g ? fabsf(l1 - l0) : g;
+                }
+            if (g > step) {
+                rendercache_pixel_request *q = &r->req[n++];
+                q->x = x;
+                q->y = y;
+                q->flags = 0;
+                q->frame = 0;   /* the current frame */
+                rendercache_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f, q->org, q->dir);
+                r->requested[p] = 1;
+            }
+        }
+    for (i = 0; i < n; i++) r->requested[r->req[i].y * W + r->req[i].x] = 0;
+    return n;
 }
 
 /* The view lobe of a point for the render cache (rendercache_sample.
@@ -3737,7 +3797,9 @@ static int wt__raytrace_view(wt_renderer *r, const rendercache_camera *camera, c
         }
         n = r->width * r->height;
     } else {
-        if (rendercache_request(r->rc, r->req, r->budget, &n) != RENDERCACHE_OK) return -1;
+        uint32_t edges = (uint32_t)(WT__EDGE_SHARE * (float)r->budget);
+        if (rendercache_request(r->rc, r->req, r->budget - edges, &n) != RENDERCACHE_OK) return -1;
+        n = wt__edge_requests(r, &cam, n, r->budget);
     }
     st->phase[0] += wt_seconds() - a;
     for (i = 0; i < n; i++) {
@@ -5217,6 +5279,7 @@ EX_FN void wt_renderer_destroy(wt_renderer *r)
     if (!r) return;
     rendercache_destroy(r->rc);
     free(r->req);
+    free(r->requested);
     free(r->samples);
     ex_baseviews_free(&r->bv);
     rendercache_keytimes_destroy(r->bunny_light);
