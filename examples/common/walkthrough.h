@@ -3693,7 +3693,8 @@ static int wt__raytrace_create(wt_renderer *r, char *err, size_t err_size)
    than WT__EDGE_STEP times the mean. A fresh sample of the current frame
    lies at the pixel's centre and shows there at once. Up to
    WT__EDGE_SHARE of the frame's budget goes to edge pixels and the rest to
-   the cache's priorities: a frame shades no more samples than before. */
+   the cache's priorities (wt__frame_requests): a frame shades as many
+   samples as before. */
 #define WT__EDGE_SHARE 0.5f
 #define WT__EDGE_WHITE 4.0f
 #define WT__EDGE_STEP 0.5f
@@ -3736,6 +3737,27 @@ static uint32_t wt__edge_requests(wt_renderer *r, const rendercache_camera *cam,
         }
     for (i = 0; i < n; i++) r->requested[r->req[i].y * W + r->req[i].x] = 0;
     return n;
+}
+
+/* A frame's requests: WT__EDGE_SHARE of the budget at the edges, the rest
+   from the cache's priorities; what the edges leave goes back to the cache
+   (its next most important pixels, but those the edges took). Returns the
+   count. */
+static int wt__frame_requests(wt_renderer *r, const rendercache_camera *cam, uint32_t *count)
+{
+    uint32_t edges = (uint32_t)(WT__EDGE_SHARE * (float)r->budget), n = 0, more = 0, i, k;
+    if (rendercache_request(r->rc, r->req, r->budget - edges, &n) != RENDERCACHE_OK) return -1;
+    n = wt__edge_requests(r, cam, n, r->budget);
+    if (n < r->budget) {
+        if (rendercache_request(r->rc, r->req + n, r->budget - n, &more) != RENDERCACHE_OK) return -1;
+        for (i = 0; i < n; i++) r->requested[r->req[i].y * r->width + r->req[i].x] = 1;
+        for (i = k = n; i < n + more; i++)
+            if (!r->requested[r->req[i].y * r->width + r->req[i].x]) r->req[k++] = r->req[i];
+        for (i = 0; i < n; i++) r->requested[r->req[i].y * r->width + r->req[i].x] = 0;
+        n = k;
+    }
+    *count = n;
+    return 0;
 }
 
 /* The view lobe of a point for the render cache (rendercache_sample.
@@ -3797,9 +3819,7 @@ static int wt__raytrace_view(wt_renderer *r, const rendercache_camera *camera, c
         }
         n = r->width * r->height;
     } else {
-        uint32_t edges = (uint32_t)(WT__EDGE_SHARE * (float)r->budget);
-        if (rendercache_request(r->rc, r->req, r->budget - edges, &n) != RENDERCACHE_OK) return -1;
-        n = wt__edge_requests(r, &cam, n, r->budget);
+        if (wt__frame_requests(r, &cam, &n) != 0) return -1;
     }
     st->phase[0] += wt_seconds() - a;
     for (i = 0; i < n; i++) {
