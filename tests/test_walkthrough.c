@@ -615,7 +615,7 @@ done:
    its indirect light (63% of the luminance) is at 0.7. Requests at the
    reprojected image's shading edges (wt__edge_requests, half the budget)
    brought the pooled LRMS from 0.1550 to 0.1439 here (at 160x120, where
-   the edges are thinner against the frame, from 0.109 to 0.082); the
+   the edges are thinner against the frame, from 0.109 to 0.079); the
    frames are deterministic, so the bound 0.150 sits between the two and
    fails when the edge requests are lost. The issue's target (0.07) is not
    met: the bound guards against regressions. */

@@ -3694,7 +3694,9 @@ static int wt__raytrace_create(wt_renderer *r, char *err, size_t err_size)
    lies at the pixel's centre and shows there at once. Up to
    WT__EDGE_SHARE of the frame's budget goes to edge pixels and the rest to
    the cache's priorities (wt__frame_requests): a frame shades as many
-   samples as before. */
+   samples as before. Measured (160x120, pooled as above; building_1k
+   every 24th frame from 7): office 0.109 -> 0.079, building 0.194 ->
+   0.152; a share of 0.3: building 0.182. */
 #define WT__EDGE_SHARE 0.5f
 #define WT__EDGE_WHITE 4.0f
 #define WT__EDGE_STEP 0.5f
