@@ -3479,6 +3479,7 @@ typedef struct wt_renderer {
     rendercache_pixel_request *req;
     rendercache_sample *samples;
     unsigned char *requested;   /* raytrace: per pixel, chosen in this frame (edge requests) */
+    float *edge_lum;            /* raytrace: per pixel, the image's clamped luminance (edge requests) */
     uint32_t budget;
     /* baseviews */
     ex_baseviews bv;
@@ -3672,7 +3673,8 @@ static int wt__raytrace_create(wt_renderer *r, char *err, size_t err_size)
     r->req = (rendercache_pixel_request *)malloc(sizeof *r->req * n);
     r->samples = (rendercache_sample *)malloc(sizeof *r->samples * n);
     r->requested = (unsigned char *)calloc(n, 1);
-    if (rr != RENDERCACHE_OK || !r->req || !r->samples || !r->requested) {
+    r->edge_lum = (float *)malloc(sizeof(float) * n);
+    if (rr != RENDERCACHE_OK || !r->req || !r->samples || !r->requested || !r->edge_lum) {
         snprintf(err, err_size, "cannot create the render cache: %s",
                  rr != RENDERCACHE_OK ? rendercache_result_string(rr) : "out of memory");
         return -1;
@@ -3704,28 +3706,30 @@ static int wt__raytrace_create(wt_renderer *r, char *err, size_t err_size)
 static uint32_t wt__edge_requests(wt_renderer *r, const rendercache_camera *cam, uint32_t n, uint32_t max)
 {
     const float *rgb = rendercache_image(r->rc);
+    float *lum = r->edge_lum;
     uint32_t W = r->width, H = r->height, x, y, i;
     double sum = 0.0;
     float mean, white, step;
-    for (i = 0; i < W * H; i++) sum += 0.2126f * rgb[3 * i] + 0.7152f * rgb[3 * i + 1] + 0.0722f * rgb[3 * i + 2];
+    for (i = 0; i < W * H; i++) {
+        lum[i] = 0.2126f * rgb[3 * i] + 0.7152f * rgb[3 * i + 1] + 0.0722f * rgb[3 * i + 2];
+        sum += lum[i];
+    }
     mean = (float)(sum / (double)(W * H));
     if (!(mean > 0.0f) || n >= max) return n;
     white = WT__EDGE_WHITE * mean;
     step = WT__EDGE_STEP * mean;
+    for (i = 0; i < W * H; i++) lum[i] = lum[i] < white ? lum[i] : white;
     for (i = 0; i < n; i++) r->requested[r->req[i].y * W + r->req[i].x] = 1;
     for (y = 1; y + 1 < H && n < max; y++)
         for (x = 1; x + 1 < W && n < max; x++) {
             uint32_t p = y * W + x;
-            float l0 = 0.2126f * rgb[3 * p] + 0.7152f * rgb[3 * p + 1] + 0.0722f * rgb[3 * p + 2], g = 0.0f;
+            float l0 = lum[p], g = 0.0f;
             int dx, dy;
             if (r->requested[p]) continue;
-            l0 = l0 < white ? l0 : white;
             for (dy = -1; dy <= 1; dy++)
                 for (dx = -1; dx <= 1; dx++) {
-                    const float *c = &rgb[3 * (p + (uint32_t)(dy * (int)W + dx))];
-                    float l1 = 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2];
-                    l1 = l1 < white ? l1 : white;
-                    g = fabsf(l1 - l0) > g ? fabsf(l1 - l0) : g;
+                    float d = fabsf(lum[p + (uint32_t)(dy * (int)W + dx)] - l0);
+                    g = d > g ? d : g;
                 }
             if (g > step) {
                 rendercache_pixel_request *q = &r->req[n++];
@@ -5302,6 +5306,7 @@ EX_FN void wt_renderer_destroy(wt_renderer *r)
     rendercache_destroy(r->rc);
     free(r->req);
     free(r->requested);
+    free(r->edge_lum);
     free(r->samples);
     ex_baseviews_free(&r->bv);
     rendercache_keytimes_destroy(r->bunny_light);
