@@ -561,7 +561,7 @@ static void test_raytrace_edge_requests(void)
             int dx, dy;
             for (dy = -1; dy <= 1; dy++)
                 for (dx = -1; dx <= 1; dx++)
-                    if (fabsf(fminf(luminance(&rgb[3 * ((y + dy) * REF_W + x + dx)]), WT__EDGE_WHITE * mean) - l0) >
+                    if (fabsf(fminf(luminance(&rgb[3 * (int)(y * REF_W + x) + 3 * (dy * REF_W + dx)]), WT__EDGE_WHITE * mean) - l0) >
                         WT__EDGE_STEP * mean)
                         edge[y * REF_W + x] = 1;
             edges += edge[y * REF_W + x];
