@@ -1,44 +1,43 @@
-/* walkthrough.c - the project's main example: a walkthrough of the office
-   (the bunny under the desk and past the yellow divider) or, with --scene
-   building, of a generated building (examples/data/building_4k.*: two
-   storeys of rooms, doors, windows, a staircase, lamps) with a bunny
-   walking from a lit room into a room without a lamp and up the stairs,
-   the camera following it, rendered with global illumination at
+/* walkthrough.c - the project's main example: a walkthrough of a generated
+   building (the default, --scene house: examples/data/building_1k.*, two
+   storeys of two rooms, doors, windows, a staircase, lamps; --scene
+   building: building_4k.*, two storeys of nine rooms) with a bunny walking
+   from a lit room into a room without a lamp and up the stairs, the camera
+   following it, or of the office (--scene office: the bunny under the desk
+   and past the yellow divider), rendered with global illumination at
    interactive rates by composing the project's headers
    (examples/common/walkthrough.h holds the frame pipeline and plans the
    walk from the building's layout file; this file is the command line, the
-   output and the timing table). The office is the default while the
-   building's radiosity precompute (radinterp.h at building scale) does not
-   fit in memory; mode raytrace walks the building today. Unless --frames
-   is given, the number of frames follows the camera's route
-   (wt_route_frames: 0.1 m and 1.5 degrees a frame on average, at least
-   48: the office's walk 48 frames, the building's 239); the header line
-   prints it with the route's length and turn.
+   output and the timing table). Unless --frames is given, the number of
+   frames follows the camera's route (wt_route_frames: 0.1 m and 1.5
+   degrees a frame on average, at least 48); the header line prints it with
+   the route's length and turn.
    Frames are tone-mapped by examples/common/image.h's filmic pipeline
    (exposure to middle grey per frame, ACES filmic curve, sRGB), the same
    as the interactive viewer (examples/viewer.c).
 
        cc -O2 -I. examples/walkthrough.c -o walkthrough -lm -lpthread
-       ./walkthrough --out build/demo                 # mode radiosity
+       ./walkthrough --out build/demo                 # mode radiosity, the house
        ./walkthrough --mode raytrace --out build/demo
        ./walkthrough --mode raytrace --scene daylight --out build/demo   # by day: glass and a sky
 
    Modes:
-     radiosity  (the default) the online phase of Hardt 1996: the office's
+     radiosity  (the default) the online phase of Hardt 1996: the scene's
                 radiosity solution and discontinuity mesh are precomputed
-                (radinterp.h); per frame the rasterizer fills an ID +
-                barycentric buffer and radinterp_shade_span evaluates the
-                quadratic interpolants at every pixel, a run of pixels of
-                one triangle at a time. The bunny is lit per
+                (radinterp.h; the house's take about a minute on two
+                cores, building_4k's far longer); per frame the rasterizer
+                fills an ID + barycentric buffer and radinterp_shade_span
+                evaluates the quadratic interpolants at every pixel, a run
+                of pixels of one triangle at a time. The bunny is lit per
                 vertex from an irradiance volume built from the radiosity
                 solution (Greger 1996, irrvol.h), attenuated by its
                 self-occlusion ratio, and casts an occlusion blob.
      raytrace   the render cache (Walter et al. 1999) fed by a ray tracer with
-                direct light from the lamp and indirect light from cached 5D
+                direct light from the lamps and indirect light from cached 5D
                 light vectors (Crespin & Peroche 2004): a pixel lit by an
                 interpolated vector of weight W gets 1/W times the priority;
                 a fixed sample budget per frame (8% of the pixels). The first
-                frame is traced in full. Near the bunny the office's
+                frame is traced in full. Near the bunny the scene's
                 indirect light is dimmed by the share of the hemisphere the
                 bunny covers (ray-traced contact shadows; also in baseviews).
      baseviews  range-image reconstruction (Nimeroff, Dorsey & Rushmeier 1996):
@@ -55,19 +54,20 @@
    (<out>/walkthrough_<mode>_NNN_full.png) and the table shows the LRMS error
    of the displayed range. --help lists the options.
 
-   --scene daylight walks the building by day (building_1k_daylight.*:
+   --scene daylight walks the house by day (building_1k_daylight.*:
    glass in the windows, lamps off, a sky named by its layout; every mode:
    radiosity passes light through the panes and lights the rooms with the
-   sky, radinterp.h's GLASS AND SKY; at this size its interpolant mesh
-   takes long to build).
+   sky, radinterp.h's GLASS AND SKY; its interpolant mesh takes longer to
+   build than the house's).
 
-   --scene FILE (with --up, --scale, --drop-coincident; scene_load.h; but
-   --scene building, daylight and office, the built-in scenes) walks through
-   a user's scene instead: any format the build reads
-   (OBJ; glTF, FBX, IFC, ... with Assimp), turned to y-up metres and written
-   as the OBJ + MTL pair the walkthrough reads, beside a copy of the bunny,
-   in a directory under --cache that becomes the data directory. The camera
-   and the bunny keep the office's paths. */
+   --scene FILE walks through a user's scene instead. An OBJ with a
+   make_building.py layout beside it (FILE.layout) is read in place and
+   walked along the route planned from its layout. Any other scene (or one
+   given with --up, --scale, --drop-coincident; scene_load.h) in any format
+   the build reads (OBJ; glTF, FBX, IFC, ... with Assimp) is turned to y-up
+   metres and written as the OBJ + MTL pair the walkthrough reads, beside a
+   copy of the bunny, in a directory under --cache that becomes the data
+   directory; the camera and the bunny keep the office's paths. */
 #define _POSIX_C_SOURCE 200809L
 #include "examples/common/walkthrough.h"
 #include "examples/common/scene_load.h"
@@ -202,6 +202,9 @@ static void table_summary(const run *u)
     printf("  %12.3f", total);
     for (k = 0; k < WT_PHASES && wt_phase_name(o->mode, k); k++) printf(" %11.1f", total > 0 ? 100.0 * phase[k] / total : 0.0);
     printf(" %8.1f\n", total > 0 ? n / total : 0.0);
+    if (o->mode == WT_MODE_RADIOSITY && ex_pool_threads(u->w->pool) > 1)
+        printf("  (raster, shade and volume are CPU time summed over the threads: their shares of the wall time\n"
+               "  add up to more than 100%% when the threads ran them side by side)\n");
     if (o->mode == WT_MODE_RAYTRACE && total > 0)
         printf("  displayed %.1f frames/s, sampled %.0f samples/s (%.1f%% of the pixels per frame); "
                "the first frame (all %d pixels) took %.2f s\n", n / total, samples / total,
@@ -220,9 +223,7 @@ static int take_scene_options(int *argc, char **argv, ex_scene_options *so, char
     ex_scene_options_default(so, NULL);
     for (i = 1; i < *argc; i++) {
         int first = i;
-        if (!strcmp(argv[i], "--scene") && i + 1 < *argc &&
-            (!strcmp(argv[i + 1], "building") || !strcmp(argv[i + 1], "daylight") ||
-             !strcmp(argv[i + 1], "office"))) {   /* the walkthrough's own */
+        if (!strcmp(argv[i], "--scene") && i + 1 < *argc && wt_builtin_scene_file(argv[i + 1])) {   /* the walkthrough's own */
             argv[kept++] = argv[i++];
             argv[kept++] = argv[i];
             continue;
@@ -248,6 +249,20 @@ static int copy_file(const char *from, const char *to)
     }
     if (out && fclose(out) != 0) ok = 0;
     return ok ? 0 : -1;
+}
+
+/* Is the user's scene an OBJ with a make_building.py layout beside it (the
+   same name, .layout), loaded as it is (no --up, --scale or
+   --drop-coincident)? The walkthrough then reads it in place, layout and
+   sky map included, and walks the route planned from the layout. */
+static int building_in_place(const ex_scene_options *so)
+{
+    char layout[1024];
+    size_t n = strlen(so->path);
+    if (n < 5 || n > 1000 || strcmp(so->path + n - 4, ".obj") != 0) return 0;
+    if ((so->up && so->up != 'y') || (so->scale != 0.0f && so->scale != 1.0f) || so->drop_coincident) return 0;
+    snprintf(layout, sizeof layout, "%.*s.layout", (int)(n - 4), so->path);
+    return access(layout, R_OK) == 0;
 }
 
 /* Loads the user's scene and writes it, with the bunny, as the walkthrough's
@@ -305,7 +320,8 @@ int main(int argc, char **argv)
         else fputs(ex_scene_options_help(), stdout);
         return parsed < 0 ? 2 : 0;
     }
-    if (user_scene && prepare_scene(&so, &u.o, scene_dir, sizeof scene_dir, err, sizeof err) != 0) {
+    if (user_scene && building_in_place(&so)) u.o.scene = so.path;
+    else if (user_scene && prepare_scene(&so, &u.o, scene_dir, sizeof scene_dir, err, sizeof err) != 0) {
         fprintf(stderr, "walkthrough: %s\n", err);
         return 1;
     }

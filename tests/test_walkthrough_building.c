@@ -137,31 +137,6 @@ static int near_stairs(const wt_layout *l, const float p[3])
     return 0;
 }
 
-/* The time when the bunny is deepest inside a room of the given kind (lit
-   or dark); its depth (metres from the room's walls) into *depth. */
-static double deepest_in_room(const wt_world *w, int lit, float *depth)
-{
-    double best = -1.0;
-    int i;
-    *depth = -1.0f;
-    for (i = 0; i <= 400; i++) {
-        float p[3], d;
-        int room;
-        const wt_room *r;
-        wt_bunny_position(&w->opt, i / 400.0, p, NULL);
-        room = wt_layout_room_at(&w->layout, p);
-        if (room < 0) continue;
-        r = &w->layout.rooms[room];
-        if (r->lamp != lit) continue;
-        d = fminf(fminf(p[0] - r->lo[0], r->hi[0] - p[0]), fminf(p[2] - r->lo[2], r->hi[2] - p[2]));
-        if (d > *depth) {
-            *depth = d;
-            best = i / 400.0;
-        }
-    }
-    return best;
-}
-
 static void check_walk(const char *scene)
 {
     wt_options o = small_options(WT_MODE_RAYTRACE, scene);

@@ -1,7 +1,8 @@
 /* What the walkthrough's test files share (tests/test_walkthrough*.c,
    tests/test_viewer.c): luminance, the stored reference frames' paths, the
    moment the bunny is deepest under the desk, the tests' common settings, the bunny's luminance in a
-   full render, temporary cache directories and small files. Include after examples/common/walkthrough.h. */
+   full render, the moment it is deepest inside a building's lit or dark room, temporary cache
+   directories and small files. Include after examples/common/walkthrough.h. */
 #ifndef TESTS_WALKTHROUGH_TEST_H
 #define TESTS_WALKTHROUGH_TEST_H
 
@@ -84,6 +85,31 @@ TEST__FN double bunny_pixels(wt_world *w, double t, int *count)
     free(rgb);
     free(obj);
     return *count ? sum / *count : 0.0;
+}
+
+/* The time when the bunny is deepest inside a room of the given kind (lit
+   or dark); its depth (metres from the room's walls) into *depth. */
+TEST__FN double deepest_in_room(const wt_world *w, int lit, float *depth)
+{
+    double best = -1.0;
+    int i;
+    *depth = -1.0f;
+    for (i = 0; i <= 400; i++) {
+        float p[3], d;
+        int room;
+        const wt_room *r;
+        wt_bunny_position(&w->opt, i / 400.0, p, NULL);
+        room = wt_layout_room_at(&w->layout, p);
+        if (room < 0) continue;
+        r = &w->layout.rooms[room];
+        if (r->lamp != lit) continue;
+        d = fminf(fminf(p[0] - r->lo[0], r->hi[0] - p[0]), fminf(p[2] - r->lo[2], r->hi[2] - p[2]));
+        if (d > *depth) {
+            *depth = d;
+            best = i / 400.0;
+        }
+    }
+    return best;
 }
 
 /* Writes text to a new file at path; 0 when it cannot. */

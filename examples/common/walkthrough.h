@@ -1,11 +1,13 @@
 /* walkthrough.h - the frame pipeline of examples/walkthrough.c and
-   examples/viewer.c: the office (the default: the bunny under the desk and
-   past the yellow divider, the camera along the front wall) or a generated
-   building (--scene building: make_building.py's OBJ, MTL and layout; the
-   walk is planned from the layout: a lit room, a room without a lamp, up
-   the stairs, the camera following the bunny) or the building by day
-   (--scene daylight, below), rendered in one of three modes that compose the
-   project's four headers. Tests and the benchmark drive it too.
+   examples/viewer.c: a generated building (make_building.py's OBJ, MTL and
+   layout; the walk is planned from the layout: a lit room, a room without a
+   lamp, up the stairs, the camera following the bunny): --scene house (the
+   default, building_1k: two storeys of two rooms) or --scene building
+   (building_4k: two storeys of nine rooms); the office (--scene office: the
+   bunny under the desk and past the yellow divider, the camera along the
+   front wall); or the house by day (--scene daylight, below), rendered in
+   one of three modes that compose the project's four headers. Tests and
+   the benchmark drive it too.
 
        wt_options o;  wt_world *w;  wt_renderer *r;  wt_frame_stats st;
        wt_options_default(&o);                         // or wt_parse_options
@@ -210,10 +212,11 @@ typedef struct wt_options {
     const char *out;          /* PNG frames, contact sheet */
     const char *cache_dir;    /* precompute cache */
     const char *data_dir;     /* bunny.obj, and the scenes named by scene */
-    const char *scene;        /* "office" (data_dir/office.*; the default until radinterp solves the building
-                                 within memory), "building" (data_dir/building_4k.*), "daylight"
-                                 (data_dir/building_1k_daylight.*: glass and a sky), or the path
-                                 of an OBJ with a .layout file beside it (make_building.py's format) */
+    const char *scene;        /* "house" (the default: data_dir/building_1k.*, two storeys of two rooms),
+                                 "office" (data_dir/office.*), "building" (data_dir/building_4k.*, two
+                                 storeys of nine rooms), "daylight" (data_dir/building_1k_daylight.*:
+                                 glass and a sky), or the path of an OBJ with a .layout file beside it
+                                 (make_building.py's format) */
     const struct wt_path *path;   /* set by wt_world_create in the world's copy: the walk planned through the
                                      scene's layout; NULL: the office's built-in walk */
     int frames;               /* frames along the walk; 0 = from the route (wt_route_frames), which
@@ -276,7 +279,7 @@ EX_FN void wt_options_default(wt_options *o)
     o->out = "build/out";
     o->cache_dir = "build/cache";
     o->data_dir = "examples/data";
-    o->scene = "office";      /* the building's radiosity precompute needs radinterp at building scale */
+    o->scene = "house";       /* the largest building whose radiosity precompute takes about a minute */
     o->frames = 0;            /* from the route: wt_world_create calls wt_route_frames */
     o->width = 640;
     o->height = 480;
@@ -337,10 +340,11 @@ EX_FN void wt_usage(FILE *f)
           "  --out DIR            where frames go (default build/out)\n"
           "  --cache DIR          precompute cache (default build/cache)\n"
           "  --no-cache           neither read nor write the precompute cache\n"
-          "  --scene S            office (default: DIR/office.obj, .mtl), building (DIR/building_4k.obj,\n"
-          "                       .mtl, .layout), daylight (DIR/building_1k_daylight.*: glass in the windows\n"
-          "                       and a sky), or an OBJ with a make_building.py layout beside it (a sky\n"
-          "                       line makes it daylight)\n"
+          "  --scene S            house (default: DIR/building_1k.obj, .mtl, .layout: two storeys of two\n"
+          "                       rooms), office (DIR/office.*), building (DIR/building_4k.*: two storeys\n"
+          "                       of nine rooms), daylight (DIR/building_1k_daylight.*: glass in the\n"
+          "                       windows and a sky), or an OBJ with a make_building.py layout beside it\n"
+          "                       (a sky line makes it daylight)\n"
           "  --data DIR           bunny.obj and the scenes (default examples/data)\n"
           "  --threads N          threads, 0 = one per core (default 0)\n"
           "  --seed N             random seed (default 1)\n"
@@ -844,6 +848,8 @@ typedef struct wt_layout {
 typedef struct wt_path {
     float *points;             /* 3 per point: the bunny's feet */
     float *eye;                /* 1 per point: the camera's eye height when it stands there */
+    float *sight;              /* 1 per point: metres of route ahead the camera standing there sees
+                                  (wt__path_sight), at most WT_CAMERA_TRAIL + WT__LOOK_AHEAD */
     uint32_t count;
     float length;              /* metres along the route (in plan) */
     float start;               /* the bunny's place on the route at t = 0: the camera starts at 0 */
@@ -864,6 +870,7 @@ EX_FN void wt_path_free(wt_path *p)
 {
     free(p->points);
     free(p->eye);
+    free(p->sight);
     memset(p, 0, sizeof *p);
 }
 
@@ -1037,16 +1044,29 @@ static void wt__scene_desc(const wt_world *w, lightvec_scene_desc *sd)
     sd->environment_height = (uint32_t)w->layout.sky.height;
 }
 
+/* The file name (without .obj) in the data directory of a built-in scene:
+   "house" is building_1k (two storeys of two rooms), "building" building_4k,
+   "daylight" building_1k_daylight (make_building.py --daylight); NULL when
+   name is not a built-in scene but a path. */
+EX_FN const char *wt_builtin_scene_file(const char *name)
+{
+    static const char *const names[][2] = {
+        { "office", "office" }, { "house", "building_1k" }, { "building", "building_4k" }, { "daylight", "building_1k_daylight" }
+    };
+    size_t i;
+    for (i = 0; name && i < sizeof names / sizeof *names; i++)
+        if (!strcmp(name, names[i][0])) return names[i][1];
+    return NULL;
+}
+
 /* The files of o->scene: the OBJ, its MTL (same name, .mtl) and for a
-   building its layout (.layout; "" for the office, whose walk is built in).
-   "daylight" is building_1k_daylight (make_building.py --daylight). */
+   building its layout (.layout; "" for the office, whose walk is built in). */
 static void wt__scene_files(const wt_options *o, char *obj, char *mtl, char *layout, size_t size)
 {
-    const char *scene = o->scene ? o->scene : "office";
+    const char *scene = o->scene ? o->scene : "office", *file = wt_builtin_scene_file(scene);
     size_t n;
-    if (!strcmp(scene, "office") || !strcmp(scene, "building") || !strcmp(scene, "daylight"))
-        snprintf(obj, size, "%.900s/%s.obj", o->data_dir,
-                 !strcmp(scene, "office") ? "office" : !strcmp(scene, "building") ? "building_4k" : "building_1k_daylight");
+    if (file)
+        snprintf(obj, size, "%.900s/%s.obj", o->data_dir, file);
     else
         snprintf(obj, size, "%.1000s", scene);
     n = strlen(obj);
@@ -1595,6 +1615,76 @@ static float wt__support(const wt_world *w, float x, float z, float guess)
    positions (a moving average over WT__SMOOTH each side, which cuts a
    corner by less than the clearance's margin), stands the feet on what
    supports them and sets the camera's eye height. */
+/* Where the camera looks on a planned route (wt_camera): the route's
+   points from the bunny to WT__LOOK_AHEAD metres past it, at
+   WT__LOOK_HEIGHT above their floor. Where the route turns through a door
+   those points leave the camera's sight behind the door's jamb, and a
+   camera aimed at them filled the frame with the wall beside the door
+   (the house's frames 220-226); it aims instead at the route as far as it
+   sees it, its sight, measured here from each point of the route by rays
+   through the static scene to the look points ahead, every WT__SIGHT_STEP
+   metres from WT__SIGHT_NEAR on, and along the parallel lines
+   WT__SIGHT_MARGIN either side: the sight ends before the first point
+   hidden or grazed, averaged over WT__SIGHT_SMOOTH metres of route each
+   side so that the view turns smoothly where the sight jumps. */
+#define WT__LOOK_AHEAD 1.0f    /* metres past the bunny the camera looks at */
+#define WT__LOOK_HEIGHT 0.25f  /* above the floor */
+#define WT__SIGHT_NEAR 0.3f    /* metres: nearer look points count as seen */
+#define WT__SIGHT_STEP 0.05f
+#define WT__SIGHT_SMOOTH 0.5f  /* metres each side: the sight's moving average along the route */
+#define WT__SIGHT_MARGIN 0.2f  /* metres each side of a line of sight that must be clear too: a
+                                  line grazing a jamb still shows mostly wall; less than the
+                                  route's clearance from walls (WT__CLEARANCE) */
+
+static void wt__path_at(const wt_path *p, float s, float pos[3], float *eye);
+
+static int wt__path_sight(const wt_world *w, wt_path *p)
+{
+    uint32_t i, k, half = (uint32_t)(WT__SIGHT_SMOOTH / WT_PATH_STEP + 0.5f);
+    float *raw = (float *)malloc(sizeof(float) * p->count);
+    p->sight = (float *)malloc(sizeof(float) * p->count);
+    if (!p->sight || !raw) {
+        free(raw);
+        return -1;
+    }
+    for (i = 0; i < p->count; i++) {
+        float s = (float)i * WT_PATH_STEP, far = WT_CAMERA_TRAIL + WT__LOOK_AHEAD, ahead, org[3];
+        wt__path_at(p, s, org, &org[1]);
+        p->sight[i] = far;
+        for (ahead = WT__SIGHT_NEAR; ahead <= far && p->sight[i] == far; ahead += WT__SIGHT_STEP) {
+            float q[3], eye, side[2], flat;
+            int m;
+            wt__path_at(p, s + ahead, q, &eye);
+            q[1] = eye - WT_EYE_HEIGHT + WT__LOOK_HEIGHT;
+            flat = hypotf(q[0] - org[0], q[2] - org[2]);
+            if (!(flat > 0.0f)) continue;
+            side[0] = -(q[2] - org[2]) / flat * WT__SIGHT_MARGIN;
+            side[1] = (q[0] - org[0]) / flat * WT__SIGHT_MARGIN;
+            for (m = -1; m <= 1; m++) {
+                float from[3] = { org[0] + (float)m * side[0], org[1], org[2] + (float)m * side[1] }, dir[3], len;
+                tr__hit h;
+                int k;
+                for (k = 0; k < 3; k++) dir[k] = q[k] - org[k];
+                len = sqrtf(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+                for (k = 0; k < 3; k++) dir[k] /= len;
+                if (tr__bvh_intersect(&w->tracer->bvh, from, dir, 0.0f, len, &h)) {
+                    p->sight[i] = ahead - WT__SIGHT_STEP;
+                    break;
+                }
+            }
+        }
+    }
+    memcpy(raw, p->sight, sizeof(float) * p->count);
+    for (i = 0; i < p->count; i++) {   /* a moving average: the sight jumps where a corner is passed */
+        uint32_t lo = i > half ? i - half : 0, hi = i + half < p->count ? i + half : p->count - 1;
+        float sum = 0.0f;
+        for (k = lo; k <= hi; k++) sum += raw[k];
+        p->sight[i] = sum / (float)(hi - lo + 1);
+    }
+    free(raw);
+    return 0;
+}
+
 static int wt__path_finish(const wt_world *w, wt_path *p, const float *corners, uint32_t ncorners)
 {
     uint32_t i, k, half = (uint32_t)(WT__SMOOTH / WT_PATH_STEP + 0.5f), eye_half = (uint32_t)(0.8f / WT_PATH_STEP);
@@ -1647,7 +1737,7 @@ static int wt__path_finish(const wt_world *w, wt_path *p, const float *corners, 
         p->eye[i] = sum / (float)(hi - lo + 1) + WT_EYE_HEIGHT;
     }
     free(raw);
-    return 0;
+    return wt__path_sight(w, p);
 }
 
 /* Plans the walk through w's layout (see the section's comment). Returns 0,
@@ -1894,7 +1984,7 @@ EX_FN int wt_world_create(const wt_options *o, wt_world **out, char *err, size_t
    route at constant speed from WT_CAMERA_TRAIL metres in, and the camera
    follows it along the same route, that far behind, at eye height.
    ---------------------------------------------------------------------- */
-#define WT_PATH_VERSION 3u     /* bump when the paths change: precompute keys depend on them */
+#define WT_PATH_VERSION 4u     /* bump when the paths change: precompute keys depend on them */
 #define WT_SHADING_VERSION 7u  /* bump when the shading changes: cached light vectors and base images */
 #define WT__WAYPOINTS 9
 static const float wt__waypoints[WT__WAYPOINTS][2] = {   /* (x, z) on the floor */
@@ -1944,24 +2034,42 @@ static void wt__office_position(double t, float pos[3], float *heading)
     if (heading) *heading = atan2f(b[0] - a[0], b[1] - a[1]);
 }
 
+/* Where arc s (metres, clamped to the route) lies between the route's
+   points: after point *i, a share *u of the way to the next. */
+static void wt__path_place(const wt_path *p, float s, uint32_t *i, float *u)
+{
+    float x = s / WT_PATH_STEP;
+    if (!(x > 0.0f)) x = 0.0f;
+    if (x > (float)(p->count - 1)) x = (float)(p->count - 1);
+    *i = (uint32_t)x;
+    if (*i + 1 >= p->count) *i = p->count > 1 ? p->count - 2 : 0;
+    *u = p->count > 1 ? x - (float)*i : 0.0f;
+}
+
 /* The point of a planned route at arc s (metres, clamped to the route),
    linear between its points; and the camera's eye height there. */
 static void wt__path_at(const wt_path *p, float s, float pos[3], float *eye)
 {
-    float x = s / WT_PATH_STEP, u;
+    float u;
     uint32_t i;
     int k;
-    if (!(x > 0.0f)) x = 0.0f;
-    if (x > (float)(p->count - 1)) x = (float)(p->count - 1);
-    i = (uint32_t)x;
-    if (i + 1 >= p->count) i = p->count > 1 ? p->count - 2 : 0;
-    u = p->count > 1 ? x - (float)i : 0.0f;
+    wt__path_place(p, s, &i, &u);
     for (k = 0; k < 3; k++) pos[k] = p->points[3 * i + k] + u * (p->points[3 * (i + (p->count > 1)) + k] - p->points[3 * i + k]);
     if (eye) *eye = p->eye[i] + u * (p->eye[i + (p->count > 1)] - p->eye[i]);
 }
 
 /* The bunny's place on a planned route at time t. */
 static float wt__path_arc(const wt_path *p, double t) { return p->start + (float)t * (p->length - p->start); }
+
+/* The camera's sight (wt__path_sight) standing at arc s, linear between
+   the route's points. */
+static float wt__path_sight_at(const wt_path *p, float s)
+{
+    float u;
+    uint32_t i;
+    wt__path_place(p, s, &i, &u);
+    return p->sight[i] + u * (p->sight[i + (p->count > 1)] - p->sight[i]);
+}
 
 /* The bunny's feet (x, y, z) and heading (radians about +y, 0 = facing +z)
    at time t in [0, 1]: on o->path when it is set, else on the office's walk. */
@@ -2019,20 +2127,29 @@ EX_FN rendercache_camera wt_camera(const wt_options *o, double t, uint32_t width
     c.kind = RENDERCACHE_CAMERA_PERSPECTIVE;
     if (o && o->path) {
         const wt_path *p = o->path;
-        float arc = wt__path_arc(p, t < 0.0 ? 0.0 : t > 1.0 ? 1.0 : t);
+        float arc = wt__path_arc(p, t < 0.0 ? 0.0 : t > 1.0 ? 1.0 : t), seen[3] = { 0, 0, 0 }, to[2], d, ds;
+        float sight = wt__path_sight_at(p, arc - WT_CAMERA_TRAIL) + arc - WT_CAMERA_TRAIL;
         wt__path_at(p, arc - WT_CAMERA_TRAIL, c.eye, &c.eye[1]);
         for (j = -2; j <= 2; j++) {   /* the bunny and 1 m ahead, at the floor smoothed over the stairs'
                                           treads: the feet's height rises a tread at a time and would
                                           jerk the view up by 2-4 degrees at each one */
-            float q[3], eye;
-            wt__path_at(p, arc + 0.25f * (float)(j + 2), q, &eye);
+            float q[3], eye, at = arc + 0.25f * WT__LOOK_AHEAD * (float)(j + 2);
+            wt__path_at(p, at, q, &eye);
             look[0] += 0.2f * q[0];
             look[1] += 0.2f * (eye - WT_EYE_HEIGHT);
             look[2] += 0.2f * q[2];
+            wt__path_at(p, at < sight ? at : sight, q, NULL);   /* the same, as far as the camera sees */
+            seen[0] += 0.2f * q[0];
+            seen[2] += 0.2f * q[2];
         }
-        c.look_at[0] = look[0];
-        c.look_at[1] = look[1] + 0.25f;
-        c.look_at[2] = look[2];
+        /* aimed at the route it sees, at the pitch of the bunny's look points */
+        to[0] = seen[0] - c.eye[0];
+        to[1] = seen[2] - c.eye[2];
+        d = hypotf(look[0] - c.eye[0], look[2] - c.eye[2]);
+        ds = hypotf(to[0], to[1]);
+        c.look_at[0] = ds > 0.0f ? c.eye[0] + to[0] * (d / ds) : look[0];
+        c.look_at[1] = look[1] + WT__LOOK_HEIGHT;
+        c.look_at[2] = ds > 0.0f ? c.eye[2] + to[1] * (d / ds) : look[2];
     } else {
         c.eye[0] = 1.10f + 1.30f * s;
         c.eye[1] = 1.35f;
