@@ -1,11 +1,13 @@
-/* viewer.c - the walkthrough in a window: walk the office (or a building)
-   with the mouse and WASD while the bunny walks its route, switch between
-   the three rendering modes, and read what each frame cost. Needs SDL2
+/* viewer.c - the walkthrough in a window: walk the house (or the office,
+   or a larger building) with the mouse and WASD while the bunny walks its
+   route, switch between the three rendering modes, and read what each
+   frame cost. Needs SDL2
    (Debian: libsdl2-dev); `make view` installs it when it can, builds this
    and starts it. Every other example and header stays dependency-free.
 
        cc -O2 -I. examples/viewer.c -o viewer $(sdl2-config --cflags --libs) -lm -lpthread
-       ./viewer                       # the office, mode radiosity
+       ./viewer                       # the house, mode radiosity (a minute's precompute, once)
+       ./viewer --scene office
        ./viewer --mode raytrace --scene building --size 960x540
        ./viewer --mode raytrace --scene daylight   # by day (M skips mode radiosity)
 
