@@ -500,18 +500,10 @@ EX_FN void wt_progress_begin(wt_progress *p, const char *label, int enabled)
     p->tty = isatty(2);
 }
 
-/* Matches the headers' progress callback; never cancels (Ctrl-C ends the
-   process, see wt_install_interrupt_handler). */
-EX_FN int wt_progress_update(void *user, uint64_t done, uint64_t total)
+static void wt__progress_draw(wt_progress *p, int permille)
 {
-    wt_progress *p = (wt_progress *)user;
-    int permille, filled, i;
+    int filled, i;
     char bar[41];
-    if (!p || !p->enabled) return 0;
-    permille = total ? (int)(1000.0 * (double)done / (double)total) : 1000;
-    if (permille > 1000) permille = 1000;
-    if (permille < 1000 && (!p->tty || permille - p->shown < 5)) return 0;
-    if (permille == 1000 && p->shown == 1000) return 0;
     p->shown = permille;
     filled = permille * 40 / 1000;
     for (i = 0; i < 40; i++) bar[i] = i < filled ? '#' : '.';
@@ -519,12 +511,26 @@ EX_FN int wt_progress_update(void *user, uint64_t done, uint64_t total)
     fprintf(stderr, "%s  %-34s [%s] %3d%% %6.1f s%s", p->tty ? "\r" : "", p->label, bar, permille / 10,
             wt_seconds() - p->start, permille == 1000 ? "\n" : "");
     fflush(stderr);
+}
+
+/* Matches the headers' progress callback; never cancels (Ctrl-C ends the
+   process, see wt_install_interrupt_handler). 100% is drawn by
+   wt_progress_end alone: a total may still grow (irrvol's refined cells
+   join once the first level is gathered), and the bar then steps back. */
+EX_FN int wt_progress_update(void *user, uint64_t done, uint64_t total)
+{
+    wt_progress *p = (wt_progress *)user;
+    int permille;
+    if (!p || !p->enabled || !p->tty || p->shown == 1000) return 0;
+    permille = total ? (int)(1000.0 * (double)done / (double)total) : 999;
+    if (permille > 999) permille = 999;
+    if (abs(permille - p->shown) >= 5) wt__progress_draw(p, permille);
     return 0;
 }
 
 EX_FN void wt_progress_end(wt_progress *p)
 {
-    wt_progress_update(p, 1, 1);
+    if (p && p->enabled && p->shown != 1000) wt__progress_draw(p, 1000);
 }
 
 /* ======================================================================
@@ -4764,6 +4770,7 @@ static int wt__radiosity_solve(wt_world *w, radinterp_solution **sol, char *err,
     radinterp_material *mats = (radinterp_material *)calloc(s->material_count ? s->material_count : 1, sizeof *mats);
     radinterp_desc d;
     radinterp_result rr;
+    wt_progress bar;
     wt__log log;
     log.text[0] = 0;
     if (!patches || !mats) {
@@ -4807,7 +4814,11 @@ static int wt__radiosity_solve(wt_world *w, radinterp_solution **sol, char *err,
     d.parallel_user = w->pool;
     d.log = wt__keep_log;
     d.log_user = &log;
+    wt_progress_begin(&bar, "radiosity solve (iterations)", w->opt.progress);   /* ends early when it converges */
+    d.progress = wt_progress_update;
+    d.progress_user = &bar;
     rr = radinterp_solve(&d, sol);
+    if (rr == RADINTERP_OK) wt_progress_end(&bar);
     free(patches);
     free(mats);
     if (rr != RADINTERP_OK) {
