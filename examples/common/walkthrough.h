@@ -1644,9 +1644,22 @@ static float wt__support(const wt_world *w, float x, float z, float guess)
 
 static void wt__path_at(const wt_path *p, float s, float pos[3], float *eye);
 
+/* out[i] = the mean of v[k * stride] over k within half of i (clipped to
+   0 .. count - 1). */
+static void wt__window_mean(const float *v, uint32_t stride, uint32_t count, uint32_t half, float *out)
+{
+    uint32_t i, k;
+    for (i = 0; i < count; i++) {
+        uint32_t lo = i > half ? i - half : 0, hi = i + half < count ? i + half : count - 1;
+        float sum = 0.0f;
+        for (k = lo; k <= hi; k++) sum += v[(size_t)k * stride];
+        out[i] = sum / (float)(hi - lo + 1);
+    }
+}
+
 static int wt__path_sight(const wt_world *w, wt_path *p)
 {
-    uint32_t i, k, half = (uint32_t)(WT__SIGHT_SMOOTH / WT_PATH_STEP + 0.5f);
+    uint32_t i, half = (uint32_t)(WT__SIGHT_SMOOTH / WT_PATH_STEP + 0.5f);
     float *raw = (float *)malloc(sizeof(float) * p->count);
     p->sight = (float *)malloc(sizeof(float) * p->count);
     if (!p->sight || !raw) {
@@ -1681,12 +1694,7 @@ static int wt__path_sight(const wt_world *w, wt_path *p)
         }
     }
     memcpy(raw, p->sight, sizeof(float) * p->count);
-    for (i = 0; i < p->count; i++) {   /* a moving average: the sight jumps where a corner is passed */
-        uint32_t lo = i > half ? i - half : 0, hi = i + half < p->count ? i + half : p->count - 1;
-        float sum = 0.0f;
-        for (k = lo; k <= hi; k++) sum += raw[k];
-        p->sight[i] = sum / (float)(hi - lo + 1);
-    }
+    wt__window_mean(raw, 1, p->count, half, p->sight);   /* the sight jumps where a corner is passed */
     free(raw);
     return 0;
 }
@@ -1736,12 +1744,8 @@ static int wt__path_finish(const wt_world *w, wt_path *p, const float *corners, 
         p->points[3 * i + 2] = sum[1] / (float)(hi - lo + 1);
         p->points[3 * i + 1] = wt__support(w, p->points[3 * i], p->points[3 * i + 2], raw[3 * i + 1]);
     }
-    for (i = 0; i < p->count; i++) {   /* the eye: the floor smoothed over 0.8 m each side */
-        uint32_t lo = i > eye_half ? i - eye_half : 0, hi = i + eye_half < p->count ? i + eye_half : p->count - 1;
-        float sum = 0.0f;
-        for (k = lo; k <= hi; k++) sum += p->points[3 * k + 1];
-        p->eye[i] = sum / (float)(hi - lo + 1) + WT_EYE_HEIGHT;
-    }
+    wt__window_mean(p->points + 1, 3, p->count, eye_half, p->eye);   /* the eye: the floor smoothed over 0.8 m each side */
+    for (i = 0; i < p->count; i++) p->eye[i] += WT_EYE_HEIGHT;
     free(raw);
     return wt__path_sight(w, p);
 }
