@@ -3664,9 +3664,10 @@ static int wt__static_lightvec(wt_renderer *r, char *err, size_t err_size)
    before they were spread) 0.079 and 0.165, 0.67: 0.079 and 0.149, 1 (the
    priority image gets what the steps leave): 0.078 and 0.128; spread
    over the steps when they are more than the budget: 1: 0.078 and 0.120,
-   0.85: 0.079 and -, 0.75: 0.079 and 0.133. Where steps are many against
+   0.85: 0.079 and 0.128, 0.75: 0.079 and 0.133. Where steps are many against
    the budget (test_walkthrough's 64x48 walk of 24 frames: fast, with many
-   holes) 1 starves the holes: pooled 0.155 without steps, 0.186 with 1,
+   holes) 1 starves the holes: pooled 0.155 without steps, 0.144 with the
+   walkthrough's own requests before, 0.186 with 1,
    0.141 with 0.85, 0.128 with 0.75, 0.129 with 0.65, 0.135 with 0.5.
    edge_step (with 1) 0.4: 0.077 and 0.141, 0.6: 0.082 and 0.110 (single
    frames of the building move by 0.05 as the requests change: within the
