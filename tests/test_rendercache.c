@@ -1838,6 +1838,9 @@ static uint64_t hash_bytes(uint64_t h, const void *p, size_t n)
    image order; 24: 12 ranges, 2 re-sorted per frame, in 2 jobs with a
    parallel_for); fused: each frame starts with begin_frame_predicted
    instead of begin_frame and predict. */
+/* The edge_fraction of create_with's caches. */
+static float g_edge_fraction;
+
 /* A cache of w x h pixels with parallel_for pf (NULL: serial) and ppp
    points per pixel (0: the default), or NULL. */
 static rendercache *create_with(void (*pf)(void *, rendercache_job_fn, void *, uint32_t), void *user, float ppp,
@@ -1848,6 +1851,7 @@ static rendercache *create_with(void (*pf)(void *, rendercache_job_fn, void *, u
     d.parallel_for = pf;
     d.parallel_user = user;
     d.points_per_pixel = ppp;
+    d.edge_fraction = g_edge_fraction;
     return rendercache_create(&d, &rc) == RENDERCACHE_OK ? rc : NULL;
 }
 
@@ -1892,21 +1896,29 @@ static uint64_t run_sequence(void (*pf)(void *, rendercache_job_fn, void *, uint
    camera's cells in the projection's pass over them, gives what
    begin_frame followed by predict gives, bit for bit, on any thread count
    too (with a moving object, so the predicted camera's object matrices
-   count). */
+   count). The same with requests at the image's steps (edge_fraction:
+   a serial pass between two parallel selections). */
 static void test_deterministic_for_any_thread_count(void)
 {
     ex_pool *pool = ex_pool_create(3);
     float ppp[2] = { 0.0f, 24.0f };
-    int k, fused;
-    for (k = 0; k < 2; k++) {
-        uint64_t serial = run_sequence(NULL, NULL, ppp[k], 0);
-        CHECK(serial != 0);
-        for (fused = 0; fused < 2; fused++) {
-            if (fused) CHECK(run_sequence(NULL, NULL, ppp[k], 1) == serial);
-            CHECK(run_sequence(reversed_parallel_for, NULL, ppp[k], fused) == serial);
-            if (pool) CHECK(run_sequence(ex_pool_parallel_for, pool, ppp[k], fused) == serial);
+    int k, fused, e;
+    uint64_t without = 0;
+    for (e = 0; e < 2; e++) {
+        g_edge_fraction = e ? 0.75f : 0.0f;
+        for (k = 0; k < 2; k++) {
+            uint64_t serial = run_sequence(NULL, NULL, ppp[k], 0);
+            CHECK(serial != 0);
+            if (k == 0 && e == 0) without = serial;
+            if (k == 0 && e == 1) CHECK(serial != without);   /* the steps change the requests */
+            for (fused = 0; fused < 2; fused++) {
+                if (fused) CHECK(run_sequence(NULL, NULL, ppp[k], 1) == serial);
+                CHECK(run_sequence(reversed_parallel_for, NULL, ppp[k], fused) == serial);
+                if (pool) CHECK(run_sequence(ex_pool_parallel_for, pool, ppp[k], fused) == serial);
+            }
         }
     }
+    g_edge_fraction = 0.0f;
     ex_pool_destroy(pool);
 }
 
