@@ -578,6 +578,118 @@ static void test_camera_motion_reprojects_and_requests_disocclusions(void)
     rendercache_destroy(rc);
 }
 
+/* ---------------------------------------------------------------------
+   Requests at the image's steps (desc.edge_fraction): after a camera
+   step, the pixels of the reprojected image whose luminance differs from
+   a 3x3 neighbour's by more than edge_step times the mean (both clamped at
+   4 x the mean; the square's border here) and whose priority is positive
+   are requested first, each once, in scan order, through their centres;
+   the rest of the budget goes to the priority image and never repeats
+   them. With a budget smaller than the steps, the requests spread over all
+   of them (the bottom half gets its share). Without edge_fraction nothing
+   of this happens: the first requests are the priority image's.
+   --------------------------------------------------------------------- */
+static uint32_t edge_pixels(rendercache *rc, uint32_t w, uint32_t h, unsigned char *edge)
+{
+    const float *img = rendercache_image(rc), *prio = rendercache_priority_image(rc);
+    static float lum[MAX_PIXELS];
+    double sum = 0.0;
+    float mean;
+    uint32_t x, y, p, count = 0;
+    for (p = 0; p < w * h; p++) {
+        lum[p] = 0.2126f * img[3 * p] + 0.7152f * img[3 * p + 1] + 0.0722f * img[3 * p + 2];
+        sum += lum[p];
+    }
+    mean = (float)(sum / (double)(w * h));
+    for (p = 0; p < w * h; p++) lum[p] = fminf(lum[p], 4.0f * mean);
+    memset(edge, 0, w * h);
+    for (y = 1; y + 1 < h; y++)
+        for (x = 1; x + 1 < w; x++) {
+            int dx, dy, step = 0;
+            p = y * w + x;
+            for (dy = -1; dy <= 1; dy++)
+                for (dx = -1; dx <= 1; dx++)
+                    step |= fabsf(lum[(int)p + dy * (int)w + dx] - lum[p]) > 0.5f * mean;
+            edge[p] = (unsigned char)(step && prio[p] > 0.0f);
+            count += edge[p];
+        }
+    return count;
+}
+
+static void test_edge_requests_go_first(void)
+{
+    const uint32_t w = 96, h = 80;
+    rendercache_camera a = make_camera(0, 0, 0, 0, 0, 10, w, h);
+    rendercache_camera b = make_camera(0.7f, 0.25f, 0.0f, 0.3f, 0.1f, 10.0f, w, h);
+    static unsigned char edge[MAX_PIXELS], seen[MAX_PIXELS];
+    uint32_t edges = 0, got = 0, i, at_edge = 0, lower = 0, y_mid = 0, count = 0;
+    int pass;
+    scene s;
+    memset(&s, 0, sizeof s);
+    for (pass = 0; pass < 3; pass++) {   /* all the steps and more; half of them; edge_fraction 0 */
+        rendercache_desc d = make_desc(w, h);
+        rendercache *rc;
+        d.edge_fraction = pass < 2 ? 1.0f : 0.0f;
+        if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+        converge(rc, &s, &a);
+        CHECK_EQ_INT(rendercache_begin_frame(rc, &b), RENDERCACHE_OK);
+        edges = edge_pixels(rc, w, h, edge);
+        CHECK(edges > 40);   /* the square's border */
+        if (pass == 0) {
+            CHECK_EQ_INT(rendercache_request(rc, g_req, edges + 200, &got), RENDERCACHE_OK);
+            CHECK_EQ_INT(got, edges + 200);
+            memset(seen, 0, sizeof seen);
+            for (i = 0; i < got; i++) {
+                uint32_t q = g_req[i].y * w + g_req[i].x;
+                float o[3], dir[3];
+                CHECK(!seen[q]);
+                seen[q] = 1;
+                if (i < edges) {   /* the steps first, in scan order, pixel centres */
+                    at_edge += edge[q];
+                    if (i) CHECK(q > g_req[i - 1].y * w + g_req[i - 1].x);
+                    rendercache_camera_ray(&b, (float)g_req[i].x + 0.5f, (float)g_req[i].y + 0.5f, o, dir);
+                    CHECK_CLOSE(g_req[i].dir[0], dir[0], 1e-6, 1e-6);
+                    CHECK_CLOSE(g_req[i].dir[1], dir[1], 1e-6, 1e-6);
+                } else {
+                    CHECK(!edge[q]);   /* then the priority image, without the steps again */
+                }
+            }
+            CHECK_EQ_INT(at_edge, edges);
+        } else if (pass == 1) {
+            for (i = 0; i < w * h && count < edges / 2; i++) count += edge[i];
+            y_mid = i / w;   /* half the steps lie above this row */
+            CHECK_EQ_INT(rendercache_request(rc, g_req, edges / 2, &got), RENDERCACHE_OK);
+            CHECK_EQ_INT(got, edges / 2);
+            at_edge = 0;
+            for (i = 0; i < got; i++) {
+                at_edge += edge[g_req[i].y * w + g_req[i].x];
+                lower += g_req[i].y >= y_mid;
+            }
+            CHECK_EQ_INT(at_edge, got);
+            CHECK(lower + 2 >= got / 2);   /* spread over all the steps, not the first half */
+        } else {
+            CHECK_EQ_INT(rendercache_request(rc, g_req, edges, &got), RENDERCACHE_OK);
+            at_edge = 0;
+            for (i = 0; i < got; i++) at_edge += edge[g_req[i].y * w + g_req[i].x];
+            CHECK(at_edge < got / 2);   /* the priority image's holes and old points */
+        }
+        rendercache_destroy(rc);
+    }
+    {   /* edge_fraction in [0, 1], edge_step >= 0 */
+        rendercache_desc d = make_desc(w, h);
+        rendercache *rc = NULL;
+        d.edge_fraction = 1.5f;
+        CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+        d.edge_fraction = -0.5f;
+        CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+        d.edge_fraction = 0.5f;
+        d.edge_step = -1.0f;
+        CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    }
+    test_note("edge requests: %u pixels at steps after a camera step, all requested first; "
+              "half a budget: %u of %u below the middle row", edges, lower, edges / 2);
+}
+
 static uint32_t square_interior_leaks(rendercache *rc, const scene *s, const rendercache_camera *cam,
                                       uint32_t *interior)
 {
@@ -1726,6 +1838,9 @@ static uint64_t hash_bytes(uint64_t h, const void *p, size_t n)
    image order; 24: 12 ranges, 2 re-sorted per frame, in 2 jobs with a
    parallel_for); fused: each frame starts with begin_frame_predicted
    instead of begin_frame and predict. */
+/* The edge_fraction of create_with's caches. */
+static float g_edge_fraction;
+
 /* A cache of w x h pixels with parallel_for pf (NULL: serial) and ppp
    points per pixel (0: the default), or NULL. */
 static rendercache *create_with(void (*pf)(void *, rendercache_job_fn, void *, uint32_t), void *user, float ppp,
@@ -1736,6 +1851,7 @@ static rendercache *create_with(void (*pf)(void *, rendercache_job_fn, void *, u
     d.parallel_for = pf;
     d.parallel_user = user;
     d.points_per_pixel = ppp;
+    d.edge_fraction = g_edge_fraction;
     return rendercache_create(&d, &rc) == RENDERCACHE_OK ? rc : NULL;
 }
 
@@ -1780,21 +1896,29 @@ static uint64_t run_sequence(void (*pf)(void *, rendercache_job_fn, void *, uint
    camera's cells in the projection's pass over them, gives what
    begin_frame followed by predict gives, bit for bit, on any thread count
    too (with a moving object, so the predicted camera's object matrices
-   count). */
+   count). The same with requests at the image's steps (edge_fraction:
+   a serial pass between two parallel selections). */
 static void test_deterministic_for_any_thread_count(void)
 {
     ex_pool *pool = ex_pool_create(3);
     float ppp[2] = { 0.0f, 24.0f };
-    int k, fused;
-    for (k = 0; k < 2; k++) {
-        uint64_t serial = run_sequence(NULL, NULL, ppp[k], 0);
-        CHECK(serial != 0);
-        for (fused = 0; fused < 2; fused++) {
-            if (fused) CHECK(run_sequence(NULL, NULL, ppp[k], 1) == serial);
-            CHECK(run_sequence(reversed_parallel_for, NULL, ppp[k], fused) == serial);
-            if (pool) CHECK(run_sequence(ex_pool_parallel_for, pool, ppp[k], fused) == serial);
+    int k, fused, e;
+    uint64_t without = 0;
+    for (e = 0; e < 2; e++) {
+        g_edge_fraction = e ? 0.75f : 0.0f;
+        for (k = 0; k < 2; k++) {
+            uint64_t serial = run_sequence(NULL, NULL, ppp[k], 0);
+            CHECK(serial != 0);
+            if (k == 0 && e == 0) without = serial;
+            if (k == 0 && e == 1) CHECK(serial != without);   /* the steps change the requests */
+            for (fused = 0; fused < 2; fused++) {
+                if (fused) CHECK(run_sequence(NULL, NULL, ppp[k], 1) == serial);
+                CHECK(run_sequence(reversed_parallel_for, NULL, ppp[k], fused) == serial);
+                if (pool) CHECK(run_sequence(ex_pool_parallel_for, pool, ppp[k], fused) == serial);
+            }
         }
     }
+    g_edge_fraction = 0.0f;
     ex_pool_destroy(pool);
 }
 
@@ -2207,6 +2331,7 @@ int main(int argc, char **argv)
     RUN(test_error_diffusion_counts_and_spreads);
     RUN(test_error_diffusion_odd_sizes);
     RUN(test_camera_motion_reprojects_and_requests_disocclusions);
+    RUN(test_edge_requests_go_first);
     RUN(test_depth_cull_drops_hidden_points);
     RUN(test_moving_object_points_follow);
     RUN(test_holes_take_the_layer_they_uncover);

@@ -530,66 +530,6 @@ static void test_threads(void)
 /* ---- the bunny under the desk ------------------------------------------------- */
 
 
-/* The raytrace frames' edge requests (wt__edge_requests): on a cached
-   frame's image, every interior pixel whose clamped luminance steps by more
-   than WT__EDGE_STEP times the mean against a neighbour is requested once,
-   with its centre's ray, no other pixel is, a pixel the cache already
-   requested is not requested again, and max caps the count. */
-static void test_raytrace_edge_requests(void)
-{
-    wt_options o = small_options(WT_MODE_RAYTRACE);
-    wt_world *w = NULL;
-    wt_renderer *r = NULL;
-    wt_frame_stats st;
-    char err[512];
-    float *rgb = (float *)malloc(sizeof(float) * 3 * REF_W * REF_H);
-    unsigned char *edge = (unsigned char *)calloc(REF_W * REF_H, 1), *seen = (unsigned char *)calloc(REF_W * REF_H, 1);
-    uint32_t n, i, edges = 0, x, y;
-    double sum = 0.0;
-    float mean;
-    rendercache_camera c;
-    if (!CHECK(rgb && edge && seen) ||
-        !CHECK(wt_world_create(&o, &w, err, sizeof err) == 0 && wt_renderer_create(w, &r, err, sizeof err) == 0))
-        goto done;
-    for (i = 0; i < 3; i++) CHECK(wt_render_frame(r, (int)i, rgb, &st) == 0);
-    c = wt_camera(&w->opt, wt_frame_time(&w->opt, 2), REF_W, REF_H);
-    for (i = 0; i < REF_W * REF_H; i++) sum += luminance(&rgb[3 * i]);
-    mean = (float)(sum / (REF_W * REF_H));
-    for (y = 1; y + 1 < REF_H; y++)
-        for (x = 1; x + 1 < REF_W; x++) {
-            float l0 = fminf(luminance(&rgb[3 * (y * REF_W + x)]), WT__EDGE_WHITE * mean);
-            int dx, dy;
-            for (dy = -1; dy <= 1; dy++)
-                for (dx = -1; dx <= 1; dx++)
-                    if (fabsf(fminf(luminance(&rgb[3 * (int)(y * REF_W + x) + 3 * (dy * REF_W + dx)]), WT__EDGE_WHITE * mean) - l0) >
-                        WT__EDGE_STEP * mean)
-                        edge[y * REF_W + x] = 1;
-            edges += edge[y * REF_W + x];
-        }
-    CHECK_MSG(edges > 0 && edges < REF_W * REF_H / 4, "%u edge pixels", edges);
-    n = wt__edge_requests(r, &c, 0, REF_W * REF_H);
-    CHECK_MSG(n == edges, "%u requests for %u edge pixels", n, edges);
-    for (i = 0; i < n; i++) {
-        const rendercache_pixel_request *q = &r->req[i];
-        float org[3], dir[3];
-        uint32_t p = q->y * REF_W + q->x;
-        rendercache_camera_ray(&c, (float)q->x + 0.5f, (float)q->y + 0.5f, org, dir);
-        CHECK(edge[p] && !seen[p] && q->flags == 0 && q->frame == 0 && memcmp(dir, q->dir, sizeof dir) == 0);
-        seen[p] = 1;
-    }
-    for (i = 0; i < REF_W * REF_H; i++) CHECK(r->requested[i] == 0);
-    /* the cache's own first request stays, and is not asked again; max caps */
-    n = wt__edge_requests(r, &c, 1, edges / 2);
-    CHECK(n == edges / 2);
-    for (i = 1; i < n; i++) CHECK(r->req[i].x != r->req[0].x || r->req[i].y != r->req[0].y);
-done:
-    wt_renderer_destroy(r);
-    wt_world_destroy(w);
-    free(rgb);
-    free(edge);
-    free(seen);
-}
-
 /* Issue 19's measure of the raytrace mode: the LRMS of its frames against
    converged renders (wt_render_converged: a gather at every pixel, 32
    shadow rays, no interpolation, no render-cache reuse), at the demo's
@@ -613,16 +553,18 @@ done:
    10% for a compiler flipping a light-vector decision (a flip redraws at
    most the 8% of a frame's pixels requested after it); a frame without
    its indirect light (63% of the luminance) is at 0.7. Requests at the
-   reprojected image's shading edges (wt__edge_requests, half the budget)
-   brought the pooled LRMS from 0.1550 to 0.1439 here (at 160x120, where
-   the edges are thinner against the frame, from 0.109 to 0.079); the
-   frames are deterministic, so the bound 0.150 sits between the two and
-   fails when the edge requests are lost. The issue's target (0.07) is not
-   met: the bound guards against regressions. */
+   reprojected image's steps brought the pooled LRMS from 0.1550 to 0.1439
+   here when the walkthrough made them itself (half the budget), and to
+   0.1278 from the render cache (rendercache_desc.edge_fraction 0.75,
+   spread over the steps; 0.1862 with 1, which starves the holes of this
+   fast walk). The frames are deterministic, so the bound 0.140 sits
+   between 0.1278 and the two before, and fails when the steps' requests
+   are lost or take the whole budget. The issue's target (0.07) is not met:
+   the bound guards against regressions. */
 #define CONVERGED_STRATA 12
 #define CONVERGED_LIGHT_SAMPLES 32
 #define CONVERGED_FRAMES 3
-#define CONVERGED_MAX_LRMS 0.150
+#define CONVERGED_MAX_LRMS 0.140
 static void test_raytrace_against_converged(void)
 {
     static const int frames[CONVERGED_FRAMES] = { 7, 15, 23 };
@@ -926,7 +868,6 @@ int main(int argc, char **argv)
     RUN(test_direct_light_unbiased);
     RUN(test_light_solid_angle);
     RUN(test_threads);
-    RUN(test_raytrace_edge_requests);
     RUN(test_raytrace_against_converged);
     RUN(test_baseviews_no_ghost_shadows);
     RUN(test_bunny_darkens_in_frames);

@@ -3605,8 +3605,6 @@ typedef struct wt_renderer {
     rendercache *rc;
     rendercache_pixel_request *req;
     rendercache_sample *samples;
-    unsigned char *requested;   /* raytrace: per pixel, chosen in this frame (edge requests) */
-    float *edge_lum;            /* raytrace: per pixel, the image's clamped luminance (edge requests) */
     uint32_t budget;
     /* baseviews */
     ex_baseviews bv;
@@ -3781,6 +3779,31 @@ static int wt__static_lightvec(wt_renderer *r, char *err, size_t err_size)
 
 /* ---- mode raytrace ------------------------------------------------------ */
 
+/* The render cache's requests at the image's steps (rendercache_desc.
+   edge_fraction; edge_step at its default, 0.5): points of earlier frames
+   land anywhere in their pixel, and at a depth edge, a shadow's edge or a
+   wall's corner a pixel often shows a point of the other side. Measured
+   against converged renders (12 strata, 32 shadow rays; pooled LRMS at
+   160x120, office frames 7-47 every 8th, building_1k frames 7-247 every
+   24th), without steps 0.109 and 0.194; the walkthrough's own requests at
+   steps before (half the budget) 0.079 and 0.152; edge_fraction 0.5 (up
+   to half the requests for the current camera; steps taken in scan order,
+   before they were spread) 0.079 and 0.165, 0.67: 0.079 and 0.149, 1 (the
+   priority image gets what the steps leave): 0.078 and 0.128; spread
+   over the steps when they are more than the budget: 1: 0.078 and 0.120,
+   0.85: 0.079 and 0.128, 0.75: 0.079 and 0.133. Where steps are many against
+   the budget (test_walkthrough's 64x48 walk of 24 frames: fast, with many
+   holes) 1 starves the holes: pooled 0.155 without steps, 0.144 with the
+   walkthrough's own requests before, 0.186 with 1,
+   0.141 with 0.85, 0.128 with 0.75, 0.129 with 0.65, 0.135 with 0.5.
+   edge_step (with 1) 0.4: 0.077 and 0.141, 0.6: 0.082 and 0.110; with
+   0.75 (office, building, 64x48) 0.4: 0.077, 0.132, 0.136; 0.5: 0.079,
+   0.133, 0.128; 0.6: 0.083, 0.124, 0.121: the office wants small steps,
+   the others large ones, so the default stays (single frames of the
+   building move by 0.05 as the requests change: within the noise); requesting steps only where a point shows (holes left to the
+   priority image): 0.150 at 64x48. */
+#define WT__EDGE_FRACTION 0.75f
+
 static int wt__raytrace_create(wt_renderer *r, char *err, size_t err_size)
 {
     rendercache_desc d;
@@ -3794,102 +3817,17 @@ static int wt__raytrace_create(wt_renderer *r, char *err, size_t err_size)
     d.parallel_for = ex_pool_parallel_for;
     d.parallel_user = r->w->pool;
     d.clock = wt__clock;
+    d.edge_fraction = WT__EDGE_FRACTION;
     rr = rendercache_create(&d, &r->rc);
     r->budget = (uint32_t)(r->w->opt.budget * (float)n + 0.5f);
     if (r->budget < 1) r->budget = 1;
     r->req = (rendercache_pixel_request *)malloc(sizeof *r->req * n);
     r->samples = (rendercache_sample *)malloc(sizeof *r->samples * n);
-    r->requested = (unsigned char *)calloc(n, 1);
-    r->edge_lum = (float *)malloc(sizeof(float) * n);
-    if (rr != RENDERCACHE_OK || !r->req || !r->samples || !r->requested || !r->edge_lum) {
+    if (rr != RENDERCACHE_OK || !r->req || !r->samples) {
         snprintf(err, err_size, "cannot create the render cache: %s",
                  rr != RENDERCACHE_OK ? rendercache_result_string(rr) : "out of memory");
         return -1;
     }
-    return 0;
-}
-
-/* Requests at the shading edges of the reprojected image (after
-   begin_frame), appended to the cache's own n requests up to max in all.
-   Points of earlier frames land anywhere in their pixel, so where the
-   image steps (a depth edge, a shadow's edge, a wall's corner) a pixel
-   often shows a point of the other side: measured against converged
-   renders (office, 160x120, frames 7-47 every 8th), 4 % of the pixels
-   carry 65-73 % of the cached frames' squared error, and a fresh sample in
-   each of them would bring the pooled LRMS from 0.109 to 0.072. An edge
-   pixel: its luminance, clamped at WT__EDGE_WHITE times the image's mean
-   (about the display's white point), differs from a neighbour's by more
-   than WT__EDGE_STEP times the mean. A fresh sample of the current frame
-   lies at the pixel's centre and shows there at once. Up to
-   WT__EDGE_SHARE of the frame's budget goes to edge pixels and the rest to
-   the cache's priorities (wt__frame_requests): a frame shades as many
-   samples as before. Measured (160x120, pooled as above; building_1k
-   every 24th frame from 7): office 0.109 -> 0.079, building 0.194 ->
-   0.152; a share of 0.3: building 0.182. */
-#define WT__EDGE_SHARE 0.5f
-#define WT__EDGE_WHITE 4.0f
-#define WT__EDGE_STEP 0.5f
-
-static uint32_t wt__edge_requests(wt_renderer *r, const rendercache_camera *cam, uint32_t n, uint32_t max)
-{
-    const float *rgb = rendercache_image(r->rc);
-    float *lum = r->edge_lum;
-    uint32_t W = r->width, H = r->height, x, y, i;
-    double sum = 0.0;
-    float mean, white, step;
-    for (i = 0; i < W * H; i++) {
-        lum[i] = 0.2126f * rgb[3 * i] + 0.7152f * rgb[3 * i + 1] + 0.0722f * rgb[3 * i + 2];
-        sum += lum[i];
-    }
-    mean = (float)(sum / (double)(W * H));
-    if (!(mean > 0.0f) || n >= max) return n;
-    white = WT__EDGE_WHITE * mean;
-    step = WT__EDGE_STEP * mean;
-    for (i = 0; i < W * H; i++) lum[i] = lum[i] < white ? lum[i] : white;
-    for (i = 0; i < n; i++) r->requested[r->req[i].y * W + r->req[i].x] = 1;
-    for (y = 1; y + 1 < H && n < max; y++)
-        for (x = 1; x + 1 < W && n < max; x++) {
-            uint32_t p = y * W + x;
-            float l0 = lum[p], g = 0.0f;
-            int dx, dy;
-            if (r->requested[p]) continue;
-            for (dy = -1; dy <= 1; dy++)
-                for (dx = -1; dx <= 1; dx++) {
-                    float d = fabsf(lum[p + (uint32_t)(dy * (int)W + dx)] - l0);
-                    g = d > g ? d : g;
-                }
-            if (g > step) {
-                rendercache_pixel_request *q = &r->req[n++];
-                q->x = x;
-                q->y = y;
-                q->flags = 0;
-                q->frame = 0;   /* the current frame */
-                rendercache_camera_ray(cam, (float)x + 0.5f, (float)y + 0.5f, q->org, q->dir);
-                r->requested[p] = 1;
-            }
-        }
-    for (i = 0; i < n; i++) r->requested[r->req[i].y * W + r->req[i].x] = 0;
-    return n;
-}
-
-/* A frame's requests: WT__EDGE_SHARE of the budget at the edges, the rest
-   from the cache's priorities; what the edges leave goes back to the cache
-   (its next most important pixels, but those the edges took). Returns the
-   count. */
-static int wt__frame_requests(wt_renderer *r, const rendercache_camera *cam, uint32_t *count)
-{
-    uint32_t edges = (uint32_t)(WT__EDGE_SHARE * (float)r->budget), n = 0, more = 0, i, k;
-    if (rendercache_request(r->rc, r->req, r->budget - edges, &n) != RENDERCACHE_OK) return -1;
-    n = wt__edge_requests(r, cam, n, r->budget);
-    if (n < r->budget) {
-        if (rendercache_request(r->rc, r->req + n, r->budget - n, &more) != RENDERCACHE_OK) return -1;
-        for (i = 0; i < n; i++) r->requested[r->req[i].y * r->width + r->req[i].x] = 1;
-        for (i = k = n; i < n + more; i++)
-            if (!r->requested[r->req[i].y * r->width + r->req[i].x]) r->req[k++] = r->req[i];
-        for (i = 0; i < n; i++) r->requested[r->req[i].y * r->width + r->req[i].x] = 0;
-        n = k;
-    }
-    *count = n;
     return 0;
 }
 
@@ -3952,7 +3890,7 @@ static int wt__raytrace_view(wt_renderer *r, const rendercache_camera *camera, c
         }
         n = r->width * r->height;
     } else {
-        if (wt__frame_requests(r, &cam, &n) != 0) return -1;
+        if (rendercache_request(r->rc, r->req, r->budget, &n) != RENDERCACHE_OK) return -1;
     }
     st->phase[0] += wt_seconds() - a;
     for (i = 0; i < n; i++) {
@@ -5521,8 +5459,6 @@ EX_FN void wt_renderer_destroy(wt_renderer *r)
     if (!r) return;
     rendercache_destroy(r->rc);
     free(r->req);
-    free(r->requested);
-    free(r->edge_lum);
     free(r->samples);
     ex_baseviews_free(&r->bv);
     rendercache_keytimes_destroy(r->bunny_light);
