@@ -1917,7 +1917,13 @@ static uint32_t rendercache__zbuffer_keys(uint64_t *key, uint32_t sink, const ui
 }
 
 /* Z-buffers the keys of elements [begin, end) (no payload) into key,
-   through the atomic minimum when shared, in job j; returns how many landed. */
+   through the atomic minimum when shared, in job j; returns how many landed.
+   A locked compare-and-swap waits for its key's line and holds back the
+   loads after it, so the misses of the shared z-buffer's keys would come
+   one at a time: each element asks for the key KEY_AHEAD elements on
+   first (a prefetch for writing, which no lock waits for), so that many
+   are under way at once. */
+#define RENDERCACHE__KEY_AHEAD 32u
 static uint32_t rendercache__splat_keys(const rendercache__splat_job *job, uint32_t j, uint64_t *key, uint32_t begin,
                                         uint32_t end)
 {
@@ -1929,7 +1935,14 @@ static uint32_t rendercache__splat_keys(const rendercache__splat_job *job, uint3
         if (!landed) continue;   /* nothing landed */
 #if RENDERCACHE__ATOMICS
         if (job->shared) {
+            const uint32_t sink = job->s->pixel_count;
+            for (i = 0; i < n && i < RENDERCACHE__KEY_AHEAD; i++)
+                RENDERCACHE__PREFETCH_WRITE(&key[pix[i] == RENDERCACHE__NONE ? sink : pix[i]]);
             for (i = 0; i < n; i++) {
+                if (i + RENDERCACHE__KEY_AHEAD < n) {
+                    const uint32_t q = pix[i + RENDERCACHE__KEY_AHEAD];
+                    RENDERCACHE__PREFETCH_WRITE(&key[q == RENDERCACHE__NONE ? sink : q]);
+                }
                 if (pix[i] == RENDERCACHE__NONE) continue;
                 rendercache__atomic_min(&key[pix[i]], rendercache__key(d[i], b + i));
                 projected++;
