@@ -4712,7 +4712,8 @@ static uint32_t rendercache__touch_ahead(const rendercache *rc, const rendercach
    does: without it the chunks, at 2 threads, were slower than one thread
    inserting alone (1920x1080: 10.2-10.4 ms against 8.6-8.7; with the
    touches 8.6-8.9). */
-#define RENDERCACHE__INSERT_CHUNK 8192u   /* samples placed together, at most (and at most a sort range) */
+#define RENDERCACHE__INSERT_CHUNK 65536u  /* samples placed together, at most (and as many as the re-sort's
+                                             scratch holds) */
 #define RENDERCACHE__INSERT_JOBS 8u       /* jobs of a chunk */
 #define RENDERCACHE__MARK 4u              /* the chosen byte (request scratch) of a pixel the chunk has */
 
@@ -4778,11 +4779,13 @@ static void rendercache__put_job(void *ctx, uint32_t j)
 }
 
 /* The most samples of a chunk: its slots and colour differences fill
-   2 words per sample of the re-sort's scratch (9 words per slot of a range). */
+   2 words per sample of the re-sort's scratch (9 words per slot of a
+   range, a range per job of the re-sort). */
 static uint32_t rendercache__chunk_most(const rendercache *rc)
 {
-    const uint32_t range = rendercache__sort_range_size(rc);
-    return range < RENDERCACHE__INSERT_CHUNK ? range : RENDERCACHE__INSERT_CHUNK;
+    const size_t words = (size_t)rendercache__sort_range_size(rc) * rendercache__sort_jobs(rc) *
+                         (2 + sizeof(rendercache__point) / sizeof(uint32_t));
+    return words / 2 < RENDERCACHE__INSERT_CHUNK ? (uint32_t)(words / 2) : RENDERCACHE__INSERT_CHUNK;
 }
 
 /* The slots of the chunk that starts at samples[0] (up to n samples), in
