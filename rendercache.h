@@ -4772,6 +4772,19 @@ static void rendercache__put_job(void *ctx, uint32_t j)
         rendercache__new_point np;
         float d;
         (void)rendercache__touch_ahead(rc, job->s, i, i0, i1);   /* (the prefetches' addresses keep their loads) */
+        if (i + RENDERCACHE__TOUCH_AHEAD < i1) {   /* the slot the clock gave a hole: touch_ahead knows only the
+                                                      slots pixels show */
+            const uint32_t t = job->slot[i + RENDERCACHE__TOUCH_AHEAD];
+            if (job->change[i + RENDERCACHE__TOUCH_AHEAD] < 0.0f) {
+                RENDERCACHE__PREFETCH_WRITE(&rc->geo.x[t]);
+                RENDERCACHE__PREFETCH_WRITE(&rc->geo.y[t]);
+                RENDERCACHE__PREFETCH_WRITE(&rc->geo.z[t]);
+                RENDERCACHE__PREFETCH_WRITE(&rc->geo.object[t]);
+                RENDERCACHE__PREFETCH_WRITE(&rc->data[t]);
+                RENDERCACHE__PREFETCH_WRITE((const char *)&rc->data[t] + sizeof rc->data[0] - 1);
+                RENDERCACHE__PREFETCH_WRITE(&rc->shown[t]);
+            }
+        }
         d = rendercache__current_point(rc, s, &np);
         rendercache__put_point(rc, job->slot[i], job->change[i] >= 0.0f, 0, &np, s->y * rc->width + s->x, d, &n);
     }
