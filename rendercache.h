@@ -4424,10 +4424,16 @@ static float rendercache__colour_difference(const float old_rgb[3], const float 
     return m > 0.0f ? d / m : 0.0f;   /* in [0, 2] for finite colours; inf when the difference overflows */
 }
 
+/* The bin of the histogram of colour differences that difference r falls in. */
+static uint32_t rendercache__change_bin(float r)
+{
+    return r < 2.0f ? (uint32_t)(r * (0.5f * RENDERCACHE__CHANGE_BINS)) : RENDERCACHE__CHANGE_BINS - 1;
+}
+
 /* Counts a replacement's colour difference r for the next frame's level. */
 static void rendercache__count_change(rendercache *rc, float r)
 {
-    rc->change_hist[r < 2.0f ? (uint32_t)(r * (0.5f * RENDERCACHE__CHANGE_BINS)) : RENDERCACHE__CHANGE_BINS - 1]++;
+    rc->change_hist[rendercache__change_bin(r)]++;
 }
 
 static int rendercache__colour_changed(rendercache *rc, const float old_rgb[3], const float rgb[3])
@@ -4723,7 +4729,9 @@ typedef struct rendercache__insert_job {
     uint32_t n;
     uint32_t *slot;                /* per sample: the slot it takes */
     float *change;                 /* per sample: its colour's difference from the point it replaces, -1: none */
-    int changed[RENDERCACHE__INSERT_JOBS];
+    uint32_t changed[RENDERCACHE__INSERT_JOBS];   /* per job: its colour changes */
+    uint32_t hist[RENDERCACHE__INSERT_JOBS][RENDERCACHE__CHANGE_BINS];   /* per job: its replacements' colour
+                                                                           differences (rc->change_hist) */
     rendercache__put_counts counts[RENDERCACHE__INSERT_JOBS];
 } rendercache__insert_job;
 
@@ -4741,20 +4749,23 @@ static void rendercache__insert_range(const rendercache__insert_job *job, uint32
     *i1 = (uint32_t)((uint64_t)job->n * (j + 1) / RENDERCACHE__INSERT_JOBS);
 }
 
-/* Job j: the colour differences of its replacements, and whether one is a change. */
+/* Job j: the colour differences of its replacements, how many are changes,
+   and their histogram (summed into the frame's after the chunk: counts,
+   the same in any order). */
 static void rendercache__change_job(void *ctx, uint32_t j)
 {
     rendercache__insert_job *job = (rendercache__insert_job *)ctx;
     const rendercache *rc = job->rc;
-    uint32_t i, i0, i1;
-    int changed = 0;
+    uint32_t i, i0, i1, changed = 0, *hist = job->hist[j];
+    memset(hist, 0, sizeof job->hist[j]);
     rendercache__insert_range(job, j, &i0, &i1);
     for (i = i0; i < i1; i++) {
         if (i + RENDERCACHE__TOUCH_AHEAD < i1 && job->change[i + RENDERCACHE__TOUCH_AHEAD] >= 0.0f)
             RENDERCACHE__PREFETCH(&rc->data[job->slot[i + RENDERCACHE__TOUCH_AHEAD]]);
         if (job->change[i] < 0.0f) continue;
         job->change[i] = rendercache__colour_difference(rc->data[job->slot[i]].rgb, job->s[i].rgb);
-        changed |= job->change[i] > rc->change_level;
+        hist[rendercache__change_bin(job->change[i])]++;
+        changed += job->change[i] > rc->change_level;
     }
     job->changed[j] = changed;
 }
@@ -4859,8 +4870,7 @@ static uint32_t rendercache__insert_chunk(rendercache *rc, const rendercache_sam
 {
     rendercache__insert_job job;
     rendercache__put_counts sum = { 0, 0, 0 };
-    uint32_t j, i;
-    int changed = 0;
+    uint32_t j, b, changed = 0;
     job.rc = rc;
     job.s = samples;
     job.slot = rc->sort_scratch;
@@ -4872,7 +4882,7 @@ static uint32_t rendercache__insert_chunk(rendercache *rc, const rendercache_sam
         return 0;
     }
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__change_job, &job, RENDERCACHE__INSERT_JOBS);
-    for (j = 0; j < RENDERCACHE__INSERT_JOBS; j++) changed |= job.changed[j];
+    for (j = 0; j < RENDERCACHE__INSERT_JOBS; j++) changed += job.changed[j];
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__put_job, &job, RENDERCACHE__INSERT_JOBS);
     for (j = 0; j < RENDERCACHE__INSERT_JOBS; j++) {
         sum.replaced += job.counts[j].replaced;
@@ -4881,11 +4891,9 @@ static uint32_t rendercache__insert_chunk(rendercache *rc, const rendercache_sam
     }
     rendercache__add_counts(rc, &sum);
     if (changed) rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__age_job, &job, RENDERCACHE__INSERT_JOBS);
-    for (i = 0; i < job.n; i++) {
-        if (job.change[i] < 0.0f) continue;
-        rendercache__count_change(rc, job.change[i]);
-        rc->stats.changed += job.change[i] > rc->change_level;
-    }
+    for (j = 0; j < RENDERCACHE__INSERT_JOBS; j++)
+        for (b = 0; b < RENDERCACHE__CHANGE_BINS; b++) rc->change_hist[b] += job.hist[j][b];
+    rc->stats.changed += changed;
     return job.n;
 }
 
