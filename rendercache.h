@@ -1932,7 +1932,13 @@ static uint32_t rendercache__zbuffer_keys(uint64_t *key, uint32_t sink, const ui
 }
 
 /* Z-buffers the keys of elements [begin, end) (no payload) into key,
-   through the atomic minimum when shared, in job j; returns how many landed. */
+   through the atomic minimum when shared, in job j; returns how many landed.
+   A locked compare-and-swap waits for its key's line and holds back the
+   loads after it, so the misses of the shared z-buffer's keys would come
+   one at a time: each element asks for the key KEY_AHEAD elements on
+   first (a prefetch for writing, which no lock waits for), so that many
+   are under way at once. */
+#define RENDERCACHE__KEY_AHEAD 32u
 static uint32_t rendercache__splat_keys(const rendercache__splat_job *job, uint32_t j, uint64_t *key, uint32_t begin,
                                         uint32_t end)
 {
@@ -1944,7 +1950,14 @@ static uint32_t rendercache__splat_keys(const rendercache__splat_job *job, uint3
         if (!landed) continue;   /* nothing landed */
 #if RENDERCACHE__ATOMICS
         if (job->shared) {
+            const uint32_t sink = job->s->pixel_count;
+            for (i = 0; i < n && i < RENDERCACHE__KEY_AHEAD; i++)
+                RENDERCACHE__PREFETCH_WRITE(&key[pix[i] == RENDERCACHE__NONE ? sink : pix[i]]);
             for (i = 0; i < n; i++) {
+                if (i + RENDERCACHE__KEY_AHEAD < n) {
+                    const uint32_t q = pix[i + RENDERCACHE__KEY_AHEAD];
+                    RENDERCACHE__PREFETCH_WRITE(&key[q == RENDERCACHE__NONE ? sink : q]);
+                }
                 if (pix[i] == RENDERCACHE__NONE) continue;
                 rendercache__atomic_min(&key[pix[i]], rendercache__key(d[i], b + i));
                 projected++;
@@ -4512,10 +4525,16 @@ static float rendercache__colour_difference(const float old_rgb[3], const float 
     return m > 0.0f ? d / m : 0.0f;   /* in [0, 2] for finite colours; inf when the difference overflows */
 }
 
+/* The bin of the histogram of colour differences that difference r falls in. */
+static uint32_t rendercache__change_bin(float r)
+{
+    return r < 2.0f ? (uint32_t)(r * (0.5f * RENDERCACHE__CHANGE_BINS)) : RENDERCACHE__CHANGE_BINS - 1;
+}
+
 /* Counts a replacement's colour difference r for the next frame's level. */
 static void rendercache__count_change(rendercache *rc, float r)
 {
-    rc->change_hist[r < 2.0f ? (uint32_t)(r * (0.5f * RENDERCACHE__CHANGE_BINS)) : RENDERCACHE__CHANGE_BINS - 1]++;
+    rc->change_hist[rendercache__change_bin(r)]++;
 }
 
 static int rendercache__colour_changed(rendercache *rc, const float old_rgb[3], const float rgb[3])
@@ -4800,7 +4819,8 @@ static uint32_t rendercache__touch_ahead(const rendercache *rc, const rendercach
    does: without it the chunks, at 2 threads, were slower than one thread
    inserting alone (1920x1080: 10.2-10.4 ms against 8.6-8.7; with the
    touches 8.6-8.9). */
-#define RENDERCACHE__INSERT_CHUNK 8192u   /* samples placed together, at most (and at most a sort range) */
+#define RENDERCACHE__INSERT_CHUNK 65536u  /* samples placed together, at most (and as many as the re-sort's
+                                             scratch holds) */
 #define RENDERCACHE__INSERT_JOBS 8u       /* jobs of a chunk */
 #define RENDERCACHE__MARK 4u              /* the chosen byte (request scratch) of a pixel the chunk has */
 
@@ -4810,7 +4830,9 @@ typedef struct rendercache__insert_job {
     uint32_t n;
     uint32_t *slot;                /* per sample: the slot it takes */
     float *change;                 /* per sample: its colour's difference from the point it replaces, -1: none */
-    int changed[RENDERCACHE__INSERT_JOBS];
+    uint32_t changed[RENDERCACHE__INSERT_JOBS];   /* per job: its colour changes */
+    uint32_t hist[RENDERCACHE__INSERT_JOBS][RENDERCACHE__CHANGE_BINS];   /* per job: its replacements' colour
+                                                                           differences (rc->change_hist) */
     rendercache__put_counts counts[RENDERCACHE__INSERT_JOBS];
 } rendercache__insert_job;
 
@@ -4828,20 +4850,23 @@ static void rendercache__insert_range(const rendercache__insert_job *job, uint32
     *i1 = (uint32_t)((uint64_t)job->n * (j + 1) / RENDERCACHE__INSERT_JOBS);
 }
 
-/* Job j: the colour differences of its replacements, and whether one is a change. */
+/* Job j: the colour differences of its replacements, how many are changes,
+   and their histogram (summed into the frame's after the chunk: counts,
+   the same in any order). */
 static void rendercache__change_job(void *ctx, uint32_t j)
 {
     rendercache__insert_job *job = (rendercache__insert_job *)ctx;
     const rendercache *rc = job->rc;
-    uint32_t i, i0, i1;
-    int changed = 0;
+    uint32_t i, i0, i1, changed = 0, *hist = job->hist[j];
+    memset(hist, 0, sizeof job->hist[j]);
     rendercache__insert_range(job, j, &i0, &i1);
     for (i = i0; i < i1; i++) {
         if (i + RENDERCACHE__TOUCH_AHEAD < i1 && job->change[i + RENDERCACHE__TOUCH_AHEAD] >= 0.0f)
             RENDERCACHE__PREFETCH(&rc->data[job->slot[i + RENDERCACHE__TOUCH_AHEAD]]);
         if (job->change[i] < 0.0f) continue;
         job->change[i] = rendercache__colour_difference(rc->data[job->slot[i]].rgb, job->s[i].rgb);
-        changed |= job->change[i] > rc->change_level;
+        hist[rendercache__change_bin(job->change[i])]++;
+        changed += job->change[i] > rc->change_level;
     }
     job->changed[j] = changed;
 }
@@ -4859,6 +4884,19 @@ static void rendercache__put_job(void *ctx, uint32_t j)
         rendercache__new_point np;
         float d;
         (void)rendercache__touch_ahead(rc, job->s, i, i0, i1);   /* (the prefetches' addresses keep their loads) */
+        if (i + RENDERCACHE__TOUCH_AHEAD < i1) {   /* the slot the clock gave a hole: touch_ahead knows only the
+                                                      slots pixels show */
+            const uint32_t t = job->slot[i + RENDERCACHE__TOUCH_AHEAD];
+            if (job->change[i + RENDERCACHE__TOUCH_AHEAD] < 0.0f) {
+                RENDERCACHE__PREFETCH_WRITE(&rc->geo.x[t]);
+                RENDERCACHE__PREFETCH_WRITE(&rc->geo.y[t]);
+                RENDERCACHE__PREFETCH_WRITE(&rc->geo.z[t]);
+                RENDERCACHE__PREFETCH_WRITE(&rc->geo.object[t]);
+                RENDERCACHE__PREFETCH_WRITE(&rc->data[t]);
+                RENDERCACHE__PREFETCH_WRITE((const char *)&rc->data[t] + sizeof rc->data[0] - 1);
+                RENDERCACHE__PREFETCH_WRITE(&rc->shown[t]);
+            }
+        }
         d = rendercache__current_point(rc, s, &np);
         rendercache__put_point(rc, job->slot[i], job->change[i] >= 0.0f, 0, &np, s->y * rc->width + s->x, d, &n);
     }
@@ -4866,11 +4904,13 @@ static void rendercache__put_job(void *ctx, uint32_t j)
 }
 
 /* The most samples of a chunk: its slots and colour differences fill
-   2 words per sample of the re-sort's scratch (9 words per slot of a range). */
+   2 words per sample of the re-sort's scratch (9 words per slot of a
+   range, a range per job of the re-sort). */
 static uint32_t rendercache__chunk_most(const rendercache *rc)
 {
-    const uint32_t range = rendercache__sort_range_size(rc);
-    return range < RENDERCACHE__INSERT_CHUNK ? range : RENDERCACHE__INSERT_CHUNK;
+    const size_t words = (size_t)rendercache__sort_range_size(rc) * rendercache__sort_jobs(rc) *
+                         (2 + sizeof(rendercache__point) / sizeof(uint32_t));
+    return words / 2 < RENDERCACHE__INSERT_CHUNK ? (uint32_t)(words / 2) : RENDERCACHE__INSERT_CHUNK;
 }
 
 /* The slots of the chunk that starts at samples[0] (up to n samples), in
@@ -4931,8 +4971,7 @@ static uint32_t rendercache__insert_chunk(rendercache *rc, const rendercache_sam
 {
     rendercache__insert_job job;
     rendercache__put_counts sum = { 0, 0, 0 };
-    uint32_t j, i;
-    int changed = 0;
+    uint32_t j, b, changed = 0;
     job.rc = rc;
     job.s = samples;
     job.slot = rc->sort_scratch;
@@ -4944,7 +4983,7 @@ static uint32_t rendercache__insert_chunk(rendercache *rc, const rendercache_sam
         return 0;
     }
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__change_job, &job, RENDERCACHE__INSERT_JOBS);
-    for (j = 0; j < RENDERCACHE__INSERT_JOBS; j++) changed |= job.changed[j];
+    for (j = 0; j < RENDERCACHE__INSERT_JOBS; j++) changed += job.changed[j];
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__put_job, &job, RENDERCACHE__INSERT_JOBS);
     for (j = 0; j < RENDERCACHE__INSERT_JOBS; j++) {
         sum.replaced += job.counts[j].replaced;
@@ -4953,11 +4992,9 @@ static uint32_t rendercache__insert_chunk(rendercache *rc, const rendercache_sam
     }
     rendercache__add_counts(rc, &sum);
     if (changed) rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__age_job, &job, RENDERCACHE__INSERT_JOBS);
-    for (i = 0; i < job.n; i++) {
-        if (job.change[i] < 0.0f) continue;
-        rendercache__count_change(rc, job.change[i]);
-        rc->stats.changed += job.change[i] > rc->change_level;
-    }
+    for (j = 0; j < RENDERCACHE__INSERT_JOBS; j++)
+        for (b = 0; b < RENDERCACHE__CHANGE_BINS; b++) rc->change_hist[b] += job.hist[j][b];
+    rc->stats.changed += changed;
     return job.n;
 }
 

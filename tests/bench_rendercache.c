@@ -220,6 +220,28 @@ static uint64_t requests_hash(const rendercache_pixel_request *req, uint32_t n)
     return h;
 }
 
+/* Hash of n 32-bit words, a word at a time (the cache holds hundreds of megabytes). */
+static uint64_t words_hash(const void *words, size_t n)
+{
+    const uint32_t *w = (const uint32_t *)words;
+    uint64_t h = 0xcbf29ce484222325ull;
+    size_t i;
+    for (i = 0; i < n; i++) h = (h ^ w[i]) * 0x100000001b3ull;
+    return h;
+}
+
+/* Hash of the cache's contents (its slots' positions, objects and records, the clock's hand, the live
+   count): the frames of two versions may match while their caches differ, which later frames would show. */
+static uint64_t cache_hash(const rendercache *rc)
+{
+    uint64_t h = words_hash(rc->geo.x, rc->capacity);
+    h = h * 31 + words_hash(rc->geo.y, rc->capacity);
+    h = h * 31 + words_hash(rc->geo.z, rc->capacity);
+    h = h * 31 + words_hash(rc->geo.object, rc->capacity);
+    h = h * 31 + words_hash(rc->data, (size_t)rc->capacity * sizeof rc->data[0] / sizeof(uint32_t));
+    return h * 31 + ((uint64_t)rc->hand << 32 | rc->live);
+}
+
 enum { P_PROJECT, P_CULL, P_SORT, P_PREDICT, P_REQUEST, P_INSERT, P_TOTAL, P_COUNT };
 
 static void run(const ex_tracer *tracer, ex_pool *shade_pool, uint32_t w, uint32_t h, int threads,
@@ -293,10 +315,10 @@ static void run(const ex_tracer *tracer, ex_pool *shade_pool, uint32_t w, uint32
         times[P_INSERT][f] = st.time_insert;
         times[P_SORT][f] = st.time_sort;
         if (getenv("BENCH_DEBUG")) printf("frame %d: inserted %u replaced %u changed %u\n", f, st.inserted, st.replaced, st.changed);
-        if (getenv("BENCH_HASH"))   /* to compare two versions' frames and requests bit for bit */
-            printf("frame %d: image %016llx requests %016llx\n", f,
+        if (getenv("BENCH_HASH"))   /* to compare two versions' frames, requests and caches bit for bit */
+            printf("frame %d: image %016llx requests %016llx cache %016llx\n", f,
                    (unsigned long long)fnv1a(rendercache_image(rc), sizeof(float) * 3 * w * h),
-                   (unsigned long long)requests_hash(req, n));
+                   (unsigned long long)requests_hash(req, n), (unsigned long long)cache_hash(rc));
         times[P_TOTAL][f] = st.time_project + st.time_cull + st.time_sort + st.time_predict +
                             st.time_request + st.time_insert;
     }

@@ -1981,8 +1981,8 @@ static uint64_t run_insert_sequence(void (*pf)(void *, rendercache_job_fn, void 
    with parallel_for: the same cache, images and counts as one by one, on
    any thread count; also with a cache smaller than a frame's samples
    (0.3 points per pixel: the eviction's clock turns without finding a
-   slot the frame does not show, and chunks are as small as the cache's
-   sort range), and with colour changes and repeated pixels. */
+   slot the frame does not show, and a chunk may ask for more slots than
+   the cache has), and with colour changes and repeated pixels. */
 static void test_parallel_insert_matches_serial(void)
 {
     ex_pool *pool = ex_pool_create(3);
