@@ -3680,14 +3680,84 @@ static double radinterp__ff_edge(const double *ra, const double *rb, const doubl
     return radinterp__atan2_pos(s, radinterp__d3_dot(ra, rb)) * radinterp__d3_dot(n, c) / s;
 }
 
+#if defined(RADINTERP__SSE)
+static __m128d radinterp__sel_pd(__m128d m, __m128d a, __m128d b)
+{
+    return _mm_or_pd(_mm_and_pd(m, a), _mm_andnot_pd(m, b));
+}
+
+/* radinterp__ff_edge for two edges at once, operation for operation (the
+   same products, sums, quotients and roots in the same order, the
+   branches as selections), so every lane is bit for bit the scalar
+   result; ax..bz hold the two edges' ends. */
+static __m128d radinterp__ff_edge2(__m128d ax, __m128d ay, __m128d az, __m128d bx, __m128d by, __m128d bz,
+                                   const double *n)
+{
+    const __m128d zero = _mm_setzero_pd(), pi = _mm_set1_pd(RADINTERP__PI);
+    __m128d cx = _mm_sub_pd(_mm_mul_pd(ay, bz), _mm_mul_pd(az, by));
+    __m128d cy = _mm_sub_pd(_mm_mul_pd(az, bx), _mm_mul_pd(ax, bz));
+    __m128d cz = _mm_sub_pd(_mm_mul_pd(ax, by), _mm_mul_pd(ay, bx));
+    __m128d s = _mm_sqrt_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(cx, cx), _mm_mul_pd(cy, cy)), _mm_mul_pd(cz, cz)));
+    __m128d x = _mm_add_pd(_mm_add_pd(_mm_mul_pd(ax, bx), _mm_mul_pd(ay, by)), _mm_mul_pd(az, bz));
+    __m128d nc = _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_set1_pd(n[0]), cx), _mm_mul_pd(_mm_set1_pd(n[1]), cy)),
+                            _mm_mul_pd(_mm_set1_pd(n[2]), cz));
+    /* radinterp__atan2_pos(s, x) */
+    __m128d fx = _mm_andnot_pd(_mm_set1_pd(-0.0), x), swap = _mm_cmpgt_pd(s, fx);
+    __m128d a = radinterp__sel_pd(swap, fx, s), b = radinterp__sel_pd(swap, s, fx);
+    __m128d big = _mm_cmpgt_pd(a, _mm_mul_pd(_mm_set1_pd(0.41421356237309504880), b));
+    __m128d t = _mm_div_pd(radinterp__sel_pd(big, _mm_sub_pd(a, b), a), radinterp__sel_pd(big, _mm_add_pd(a, b), b));
+    __m128d base = _mm_and_pd(big, _mm_set1_pd(0.25 * RADINTERP__PI)), z = _mm_mul_pd(t, t), num, den, r, neg;
+    num = _mm_add_pd(_mm_mul_pd(_mm_set1_pd(-8.750608600031904122785e-01), z), _mm_set1_pd(-1.615753718733365076637e+01));
+    num = _mm_add_pd(_mm_mul_pd(num, z), _mm_set1_pd(-7.500855792314704667340e+01));
+    num = _mm_add_pd(_mm_mul_pd(num, z), _mm_set1_pd(-1.228866684490136173410e+02));
+    num = _mm_add_pd(_mm_mul_pd(num, z), _mm_set1_pd(-6.485021904942025371773e+01));
+    den = _mm_add_pd(_mm_mul_pd(_mm_add_pd(z, _mm_set1_pd(2.485846490142306297962e+01)), z),
+                     _mm_set1_pd(1.650270098316988542046e+02));
+    den = _mm_add_pd(_mm_mul_pd(den, z), _mm_set1_pd(4.328810604912902668951e+02));
+    den = _mm_add_pd(_mm_mul_pd(den, z), _mm_set1_pd(4.853903996359136964868e+02));
+    den = _mm_add_pd(_mm_mul_pd(den, z), _mm_set1_pd(1.945506571482613964425e+02));
+    r = _mm_div_pd(num, den);
+    r = _mm_add_pd(base, _mm_add_pd(t, _mm_mul_pd(_mm_mul_pd(t, z), r)));
+    r = radinterp__sel_pd(swap, _mm_sub_pd(_mm_set1_pd(0.5 * RADINTERP__PI), r), r);
+    neg = _mm_cmplt_pd(x, zero);
+    r = radinterp__sel_pd(neg, _mm_sub_pd(pi, r), r);
+    /* atan2_pos's !(b > 0) needs s = 0, masked below, or s NaN, NaN anyway */
+    r = _mm_div_pd(_mm_mul_pd(r, nc), s);
+    return _mm_andnot_pd(_mm_cmpeq_pd(s, zero), r);   /* an edge through p: 0 */
+}
+#endif
+
+/* radinterp__ff_edge of the edges r[i] -> r[(i + 1) % count] into e[i]
+   (count <= RADINTERP__POLY_MAX), two at a time where SSE2 is at hand:
+   the form factors of sources and shadow pieces are the larger part of a
+   mesh build's time, and their edges are independent. Bit for bit the
+   scalar terms (radinterp__ff_edge2); the callers sum them in edge order. */
+static void radinterp__ff_edges(const double (*r)[3], int count, const double *n, double *e)
+{
+    int i = 0;
+#if defined(RADINTERP__SSE)
+    double c[3][RADINTERP__POLY_MAX + 1];
+    int k;
+    for (i = 0; i < count; i++)
+        for (k = 0; k < 3; k++) c[k][i] = r[i][k];
+    for (k = 0; k < 3; k++) c[k][count] = r[0][k];
+    for (i = 0; i + 1 < count; i += 2)
+        _mm_storeu_pd(e + i, radinterp__ff_edge2(_mm_loadu_pd(c[0] + i), _mm_loadu_pd(c[1] + i), _mm_loadu_pd(c[2] + i),
+                                                 _mm_loadu_pd(c[0] + i + 1), _mm_loadu_pd(c[1] + i + 1),
+                                                 _mm_loadu_pd(c[2] + i + 1), n));
+#endif
+    for (; i < count; i++) e[i] = radinterp__ff_edge(r[i], r[(i + 1) % count], n);
+}
+
 /* Eq. 6.1 for a polygon wholly in front of p's tangent plane: positive when
    the polygon winds counter-clockwise seen from the side facing p. */
 static double radinterp__ff_poly(const double *p, const double *n, const double (*v)[3], int count)
 {
-    double r[RADINTERP__POLY_MAX][3], sum = 0.0;
+    double r[RADINTERP__POLY_MAX][3], e[RADINTERP__POLY_MAX], sum = 0.0;
     int i;
     for (i = 0; i < count; i++) radinterp__d3_sub(v[i], p, r[i]);
-    for (i = 0; i < count; i++) sum += radinterp__ff_edge(r[i], r[(i + 1) % count], n);
+    radinterp__ff_edges((const double (*)[3])r, count, n, e);
+    for (i = 0; i < count; i++) sum += e[i];
     return -sum / (2.0 * RADINTERP__PI);
 }
 
@@ -8228,13 +8298,14 @@ static int radinterp__planes_hide(const radinterp_solution *s, const float *alo,
    (either winding). */
 static double radinterp__ff_frame(const radinterp__query *q, const radinterp__frame *f, const double (*v)[2], int n)
 {
-    double r[RADINTERP__PIECE_VERTS][3], sum = 0.0;
+    double r[RADINTERP__PIECE_VERTS][3], e[RADINTERP__PIECE_VERTS], sum = 0.0;
     int i;
     for (i = 0; i < n; i++) {
         radinterp__frame_to3d(f, v[i], r[i]);
         radinterp__d3_sub(r[i], q->p, r[i]);
     }
-    for (i = 0; i < n; i++) sum += radinterp__ff_edge(r[i], r[(i + 1) % n], q->n);
+    radinterp__ff_edges((const double (*)[3])r, n, q->n, e);
+    for (i = 0; i < n; i++) sum += e[i];
     return fabs(sum) / (2.0 * RADINTERP__PI);
 }
 
