@@ -10009,11 +10009,58 @@ typedef struct radinterp__plink {
                                  ranked, what this source and those after it could carry */
 } radinterp__plink;
 
-static int radinterp__cmp_reach(const void *a_, const void *b_)
+/* A link's place in the ranking: its reach and its position in pl. */
+typedef struct radinterp__rank {
+    double reach;
+    uint32_t at;
+} radinterp__rank;
+
+/* Does a rank before b: larger reach first, ties in link order (the same
+   sum on every run)? */
+static int radinterp__rank_before(const radinterp__plink *pl, const radinterp__rank *a, const radinterp__rank *b)
 {
-    const radinterp__plink *a = (const radinterp__plink *)a_, *b = (const radinterp__plink *)b_;
-    if (a->reach != b->reach) return a->reach > b->reach ? -1 : 1;
-    return a->lk < b->lk ? -1 : a->lk > b->lk;   /* ties in link order: the same sum on every run */
+    if (a->reach != b->reach) return a->reach > b->reach;
+    return pl[a->at].lk < pl[b->at].lk;
+}
+
+/* Ranks pl[0 .. n) (n <= RADINTERP__POINT_LINKS) by radinterp__rank_before.
+   A merge sort of 16-byte keys, then the links moved once along the cycles
+   of the permutation: qsort moving the links themselves through a compare
+   callback was a twentieth of a building's mesh. The order is total (links
+   are distinct), so it is the order any sort finds. */
+static void radinterp__rank_links(radinterp__plink *pl, uint32_t n)
+{
+    radinterp__rank key[RADINTERP__POINT_LINKS], tmp[RADINTERP__POINT_LINKS], *a = key, *b = tmp, *t;
+    unsigned char done[RADINTERP__POINT_LINKS];
+    uint32_t i, w;
+    for (i = 0; i < n; i++) {
+        key[i].reach = pl[i].reach;
+        key[i].at = i;
+    }
+    for (w = 1; w < n; w *= 2) {   /* bottom-up: runs of w merged into runs of 2w */
+        uint32_t lo;
+        for (lo = 0; lo < n; lo += 2 * w) {
+            uint32_t mid = lo + w < n ? lo + w : n, hi = lo + 2 * w < n ? lo + 2 * w : n, x = lo, y = mid, o = lo;
+            while (x < mid && y < hi) b[o++] = radinterp__rank_before(pl, &a[y], &a[x]) ? a[y++] : a[x++];
+            while (x < mid) b[o++] = a[x++];
+            while (y < hi) b[o++] = a[y++];
+        }
+        t = a; a = b; b = t;
+    }
+    memset(done, 0, n);
+    for (i = 0; i < n; i++) {   /* pl[j] = old pl[a[j].at], cycle by cycle */
+        radinterp__plink hold;
+        uint32_t j = i;
+        if (done[i]) continue;
+        hold = pl[i];
+        for (;;) {
+            uint32_t k = a[j].at;
+            done[j] = 1;
+            if (k == i) { pl[j] = hold; break; }
+            pl[j] = pl[k];
+            j = k;
+        }
+    }
 }
 
 /* The leaf a query reads and where its links' blockers come from: the
@@ -10112,7 +10159,7 @@ static void radinterp__sum_links(radinterp__query *q, const radinterp__point_lea
             radinterp__query_source(q, pl[i].lk->source, Sc, &pl[i].full);
             pl[i].reach = pl[i].full * radinterp__max3(b);
         }
-        qsort(pl, n, sizeof *pl, radinterp__cmp_reach);
+        radinterp__rank_links(pl, n);
         /* each source's reach becomes what it and those after it could
            carry, summed from the smallest: a running difference would leave
            a rounding residue that can fall to zero or below before the last

@@ -229,6 +229,33 @@ static void test_ff_edges_exact(void)
     CHECK_MSG(differ == 0, "%d of %d edge terms differ from the scalar ones", differ, checked);
 }
 
+/* The ranking of a point's links (radinterp__rank_links): larger reach
+   first, ties in link order, for every length up to
+   RADINTERP__POINT_LINKS, with many ties; each link once. */
+static void test_rank_links(void)
+{
+    static radinterp__link links[RADINTERP__POINT_LINKS];
+    static radinterp__plink pl[RADINTERP__POINT_LINKS];
+    uint64_t state = 5;
+    uint32_t n, i, bad = 0;
+    for (n = 0; n <= RADINTERP__POINT_LINKS; n += (n < 40 ? 1 : 37)) {
+        unsigned char seen[RADINTERP__POINT_LINKS];
+        memset(seen, 0, sizeof seen);
+        for (i = 0; i < n; i++) {
+            state = state * 6364136223846793005ull + 1442695040888963407ull;
+            pl[i].lk = &links[(i * 7919u) % n];   /* links out of list order */
+            pl[i].reach = (double)((state >> 40) % (n / 3 + 2));   /* ties */
+            pl[i].nblk = (uint32_t)(pl[i].lk - links);
+        }
+        radinterp__rank_links(pl, n);
+        for (i = 0; i < n; i++) {
+            if (pl[i].nblk != (uint32_t)(pl[i].lk - links) || seen[pl[i].nblk]++) bad++;   /* moved whole, once */
+            if (i && (pl[i - 1].reach < pl[i].reach || (pl[i - 1].reach == pl[i].reach && pl[i - 1].lk > pl[i].lk))) bad++;
+        }
+    }
+    CHECK_MSG(bad == 0, "%u links out of rank", bad);
+}
+
 static void test_form_factor_robustness(void)
 {
     float n[3] = {0, 0, 1}, p[3] = {0.2f, 0.3f, 0.0f}, sq[12] = {-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0};
@@ -1458,6 +1485,7 @@ int main(int argc, char **argv)
     RUN(test_form_factor_known_answers);
     RUN(test_atan2);
     RUN(test_ff_edges_exact);
+    RUN(test_rank_links);
     RUN(test_form_factor_robustness);
     RUN(test_validation);
     RUN(test_patch_shapes);
