@@ -3680,7 +3680,17 @@ static double radinterp__ff_edge(const double *ra, const double *rb, const doubl
     return radinterp__atan2_pos(s, radinterp__d3_dot(ra, rb)) * radinterp__d3_dot(n, c) / s;
 }
 
-#if defined(RADINTERP__SSE)
+/* The two-lane kernel below matches the scalar radinterp__ff_edge only
+   where the compiler fuses no a * b + c on its own: no FMA in the target,
+   or GCC in an ISO mode (-std=c99 turns its contraction off). Clang
+   contracts within an expression by default and GCC's GNU modes across
+   them, so there the scalar code serves. */
+#if defined(RADINTERP__SSE) && \
+    (!defined(__FMA__) || (defined(__GNUC__) && !defined(__clang__) && defined(__STRICT_ANSI__)))
+#define RADINTERP__FF_SSE 1
+#endif
+
+#if defined(RADINTERP__FF_SSE)
 static __m128d radinterp__sel_pd(__m128d m, __m128d a, __m128d b)
 {
     return _mm_or_pd(_mm_and_pd(m, a), _mm_andnot_pd(m, b));
@@ -3728,14 +3738,15 @@ static __m128d radinterp__ff_edge2(__m128d ax, __m128d ay, __m128d az, __m128d b
 #endif
 
 /* radinterp__ff_edge of the edges r[i] -> r[(i + 1) % count] into e[i]
-   (count <= RADINTERP__POLY_MAX), two at a time where SSE2 is at hand:
+   (count <= RADINTERP__POLY_MAX), two at a time where SSE2 is at hand
+   (RADINTERP__FF_SSE):
    the form factors of sources and shadow pieces are the larger part of a
    mesh build's time, and their edges are independent. Bit for bit the
    scalar terms (radinterp__ff_edge2); the callers sum them in edge order. */
 static void radinterp__ff_edges(const double (*r)[3], int count, const double *n, double *e)
 {
     int i = 0;
-#if defined(RADINTERP__SSE)
+#if defined(RADINTERP__FF_SSE)
     double c[3][RADINTERP__POLY_MAX + 1];
     int k;
     for (i = 0; i < count; i++)
