@@ -7839,8 +7839,8 @@ static void radinterp__piece_bounds(radinterp__piece *pc)
 static int radinterp__bp_shadow_piece(const radinterp_solution *s, const radinterp__bp *bp, const radinterp__patch *pb,
                                       radinterp__piece *out)
 {
-    double poly[RADINTERP__POLY_MAX][3], tmp[RADINTERP__POLY_MAX][3], inside[2] = {0.0, 0.0};
-    int tag[RADINTERP__POLY_MAX], ttmp[RADINTERP__POLY_MAX], m, j, i;
+    double buf[2][RADINTERP__POLY_MAX][3], (*poly)[3] = buf[0], inside[2] = {0.0, 0.0};
+    int tags[2][RADINTERP__POLY_MAX], *tag = tags[0], m, j, i, at = 0;
     uint32_t cut = 0;
     for (j = 0; j < bp->np; j++) /* bounding sphere first */
         if (radinterp__d3_dot(bp->plane_n[j], pb->centre) - bp->plane_d[j] < -pb->radius) return 0;
@@ -7855,10 +7855,11 @@ static int radinterp__bp_shadow_piece(const radinterp_solution *s, const radinte
     for (i = 0; i < m; i++) tag[i] = RADINTERP__TAG_EDGE + i;
     for (j = 0; j < bp->np && m >= 3; j++) {
         if (!((cut >> j) & 1u)) continue;
-        m = radinterp__clip_tagged((const double (*)[3])poly, tag, m, bp->plane_n[j], bp->plane_d[j], j, tmp, ttmp);
+        at ^= 1;   /* from one buffer into the other */
+        m = radinterp__clip_tagged((const double (*)[3])poly, tag, m, bp->plane_n[j], bp->plane_d[j], j, buf[at], tags[at]);
         if (m < 0) return -1;
-        memcpy(poly, tmp, (size_t)m * sizeof(double[3]));
-        memcpy(tag, ttmp, (size_t)m * sizeof(int));
+        poly = buf[at];
+        tag = tags[at];
     }
     if (m < 3) return 0;
     if (m > RADINTERP__PIECE_VERTS) return -1;
