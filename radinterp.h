@@ -3680,84 +3680,110 @@ static double radinterp__ff_edge(const double *ra, const double *rb, const doubl
     return radinterp__atan2_pos(s, radinterp__d3_dot(ra, rb)) * radinterp__d3_dot(n, c) / s;
 }
 
-/* The two-lane kernel below matches the scalar radinterp__ff_edge only
+/* The vector kernel below matches the scalar radinterp__ff_edge only
    where the compiler fuses no a * b + c on its own: no FMA in the target,
    or GCC in an ISO mode (-std=c99 turns its contraction off). Clang
    contracts within an expression by default and GCC's GNU modes across
-   them, so there the scalar code serves. */
+   them, so there the scalar code serves. Four lanes with AVX, else two
+   (SSE2). */
 #if defined(RADINTERP__SSE) && \
     (!defined(__FMA__) || (defined(__GNUC__) && !defined(__clang__) && defined(__STRICT_ANSI__)))
-#define RADINTERP__FF_SSE 1
+#define RADINTERP__FF_SIMD 1
+#if defined(__AVX__)
+#include <immintrin.h>
+typedef __m256d radinterp__vd;
+#define RADINTERP__VW 4
+#define RADINTERP__V(op) _mm256_##op
+#define RADINTERP__VGT(a, b) _mm256_cmp_pd(a, b, _CMP_GT_OQ)
+#define RADINTERP__VEQ(a, b) _mm256_cmp_pd(a, b, _CMP_EQ_OQ)
+#else
+typedef __m128d radinterp__vd;
+#define RADINTERP__VW 2
+#define RADINTERP__V(op) _mm_##op
+#define RADINTERP__VGT(a, b) _mm_cmpgt_pd(a, b)
+#define RADINTERP__VEQ(a, b) _mm_cmpeq_pd(a, b)
 #endif
+#define RADINTERP__VADD(a, b) RADINTERP__V(add_pd)(a, b)
+#define RADINTERP__VSUB(a, b) RADINTERP__V(sub_pd)(a, b)
+#define RADINTERP__VMUL(a, b) RADINTERP__V(mul_pd)(a, b)
+#define RADINTERP__VDIV(a, b) RADINTERP__V(div_pd)(a, b)
+#define RADINTERP__VSET(x) RADINTERP__V(set1_pd)(x)
 
-#if defined(RADINTERP__FF_SSE)
-static __m128d radinterp__sel_pd(__m128d m, __m128d a, __m128d b)
+static radinterp__vd radinterp__vsel(radinterp__vd m, radinterp__vd a, radinterp__vd b)
 {
-    return _mm_or_pd(_mm_and_pd(m, a), _mm_andnot_pd(m, b));
+    return RADINTERP__V(or_pd)(RADINTERP__V(and_pd)(m, a), RADINTERP__V(andnot_pd)(m, b));
 }
 
-/* radinterp__ff_edge for two edges at once, operation for operation (the
-   same products, sums, quotients and roots in the same order, the
-   branches as selections), so every lane is bit for bit the scalar
-   result; ax..bz hold the two edges' ends. */
-static __m128d radinterp__ff_edge2(__m128d ax, __m128d ay, __m128d az, __m128d bx, __m128d by, __m128d bz,
-                                   const double *n)
+/* radinterp__ff_edge for RADINTERP__VW edges at once, operation for
+   operation (the same products, sums, quotients and roots in the same
+   order, the branches as selections), so every lane is bit for bit the
+   scalar result; ax..bz hold the edges' ends. */
+static radinterp__vd radinterp__ff_edge_v(radinterp__vd ax, radinterp__vd ay, radinterp__vd az, radinterp__vd bx,
+                                          radinterp__vd by, radinterp__vd bz, const double *n)
 {
-    const __m128d zero = _mm_setzero_pd(), pi = _mm_set1_pd(RADINTERP__PI);
-    __m128d cx = _mm_sub_pd(_mm_mul_pd(ay, bz), _mm_mul_pd(az, by));
-    __m128d cy = _mm_sub_pd(_mm_mul_pd(az, bx), _mm_mul_pd(ax, bz));
-    __m128d cz = _mm_sub_pd(_mm_mul_pd(ax, by), _mm_mul_pd(ay, bx));
-    __m128d s = _mm_sqrt_pd(_mm_add_pd(_mm_add_pd(_mm_mul_pd(cx, cx), _mm_mul_pd(cy, cy)), _mm_mul_pd(cz, cz)));
-    __m128d x = _mm_add_pd(_mm_add_pd(_mm_mul_pd(ax, bx), _mm_mul_pd(ay, by)), _mm_mul_pd(az, bz));
-    __m128d nc = _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_set1_pd(n[0]), cx), _mm_mul_pd(_mm_set1_pd(n[1]), cy)),
-                            _mm_mul_pd(_mm_set1_pd(n[2]), cz));
+    const radinterp__vd zero = RADINTERP__V(setzero_pd)(), pi = RADINTERP__VSET(RADINTERP__PI);
+    radinterp__vd cx = RADINTERP__VSUB(RADINTERP__VMUL(ay, bz), RADINTERP__VMUL(az, by));
+    radinterp__vd cy = RADINTERP__VSUB(RADINTERP__VMUL(az, bx), RADINTERP__VMUL(ax, bz));
+    radinterp__vd cz = RADINTERP__VSUB(RADINTERP__VMUL(ax, by), RADINTERP__VMUL(ay, bx));
+    radinterp__vd s = RADINTERP__V(sqrt_pd)(RADINTERP__VADD(RADINTERP__VADD(RADINTERP__VMUL(cx, cx), RADINTERP__VMUL(cy, cy)),
+                                                            RADINTERP__VMUL(cz, cz)));
+    radinterp__vd x = RADINTERP__VADD(RADINTERP__VADD(RADINTERP__VMUL(ax, bx), RADINTERP__VMUL(ay, by)), RADINTERP__VMUL(az, bz));
+    radinterp__vd nc = RADINTERP__VADD(RADINTERP__VADD(RADINTERP__VMUL(RADINTERP__VSET(n[0]), cx),
+                                                       RADINTERP__VMUL(RADINTERP__VSET(n[1]), cy)),
+                                       RADINTERP__VMUL(RADINTERP__VSET(n[2]), cz));
     /* radinterp__atan2_pos(s, x) */
-    __m128d fx = _mm_andnot_pd(_mm_set1_pd(-0.0), x), swap = _mm_cmpgt_pd(s, fx);
-    __m128d a = radinterp__sel_pd(swap, fx, s), b = radinterp__sel_pd(swap, s, fx);
-    __m128d big = _mm_cmpgt_pd(a, _mm_mul_pd(_mm_set1_pd(0.41421356237309504880), b));
-    __m128d t = _mm_div_pd(radinterp__sel_pd(big, _mm_sub_pd(a, b), a), radinterp__sel_pd(big, _mm_add_pd(a, b), b));
-    __m128d base = _mm_and_pd(big, _mm_set1_pd(0.25 * RADINTERP__PI)), z = _mm_mul_pd(t, t), num, den, r, neg;
-    num = _mm_add_pd(_mm_mul_pd(_mm_set1_pd(-8.750608600031904122785e-01), z), _mm_set1_pd(-1.615753718733365076637e+01));
-    num = _mm_add_pd(_mm_mul_pd(num, z), _mm_set1_pd(-7.500855792314704667340e+01));
-    num = _mm_add_pd(_mm_mul_pd(num, z), _mm_set1_pd(-1.228866684490136173410e+02));
-    num = _mm_add_pd(_mm_mul_pd(num, z), _mm_set1_pd(-6.485021904942025371773e+01));
-    den = _mm_add_pd(_mm_mul_pd(_mm_add_pd(z, _mm_set1_pd(2.485846490142306297962e+01)), z),
-                     _mm_set1_pd(1.650270098316988542046e+02));
-    den = _mm_add_pd(_mm_mul_pd(den, z), _mm_set1_pd(4.328810604912902668951e+02));
-    den = _mm_add_pd(_mm_mul_pd(den, z), _mm_set1_pd(4.853903996359136964868e+02));
-    den = _mm_add_pd(_mm_mul_pd(den, z), _mm_set1_pd(1.945506571482613964425e+02));
-    r = _mm_div_pd(num, den);
-    r = _mm_add_pd(base, _mm_add_pd(t, _mm_mul_pd(_mm_mul_pd(t, z), r)));
-    r = radinterp__sel_pd(swap, _mm_sub_pd(_mm_set1_pd(0.5 * RADINTERP__PI), r), r);
-    neg = _mm_cmplt_pd(x, zero);
-    r = radinterp__sel_pd(neg, _mm_sub_pd(pi, r), r);
+    radinterp__vd fx = RADINTERP__V(andnot_pd)(RADINTERP__VSET(-0.0), x), swap = RADINTERP__VGT(s, fx);
+    radinterp__vd a = radinterp__vsel(swap, fx, s), b = radinterp__vsel(swap, s, fx);
+    radinterp__vd big = RADINTERP__VGT(a, RADINTERP__VMUL(RADINTERP__VSET(0.41421356237309504880), b));
+    radinterp__vd t = RADINTERP__VDIV(radinterp__vsel(big, RADINTERP__VSUB(a, b), a), radinterp__vsel(big, RADINTERP__VADD(a, b), b));
+    radinterp__vd base = RADINTERP__V(and_pd)(big, RADINTERP__VSET(0.25 * RADINTERP__PI)), z = RADINTERP__VMUL(t, t);
+    radinterp__vd num, den, r, neg;
+    num = RADINTERP__VADD(RADINTERP__VMUL(RADINTERP__VSET(-8.750608600031904122785e-01), z),
+                          RADINTERP__VSET(-1.615753718733365076637e+01));
+    num = RADINTERP__VADD(RADINTERP__VMUL(num, z), RADINTERP__VSET(-7.500855792314704667340e+01));
+    num = RADINTERP__VADD(RADINTERP__VMUL(num, z), RADINTERP__VSET(-1.228866684490136173410e+02));
+    num = RADINTERP__VADD(RADINTERP__VMUL(num, z), RADINTERP__VSET(-6.485021904942025371773e+01));
+    den = RADINTERP__VADD(RADINTERP__VMUL(RADINTERP__VADD(z, RADINTERP__VSET(2.485846490142306297962e+01)), z),
+                          RADINTERP__VSET(1.650270098316988542046e+02));
+    den = RADINTERP__VADD(RADINTERP__VMUL(den, z), RADINTERP__VSET(4.328810604912902668951e+02));
+    den = RADINTERP__VADD(RADINTERP__VMUL(den, z), RADINTERP__VSET(4.853903996359136964868e+02));
+    den = RADINTERP__VADD(RADINTERP__VMUL(den, z), RADINTERP__VSET(1.945506571482613964425e+02));
+    r = RADINTERP__VDIV(num, den);
+    r = RADINTERP__VADD(base, RADINTERP__VADD(t, RADINTERP__VMUL(RADINTERP__VMUL(t, z), r)));
+    r = radinterp__vsel(swap, RADINTERP__VSUB(RADINTERP__VSET(0.5 * RADINTERP__PI), r), r);
+    neg = RADINTERP__VGT(zero, x);
+    r = radinterp__vsel(neg, RADINTERP__VSUB(pi, r), r);
     /* atan2_pos's !(b > 0) needs s = 0, masked below, or s NaN, NaN anyway */
-    r = _mm_div_pd(_mm_mul_pd(r, nc), s);
-    return _mm_andnot_pd(_mm_cmpeq_pd(s, zero), r);   /* an edge through p: 0 */
+    r = RADINTERP__VDIV(RADINTERP__VMUL(r, nc), s);
+    return RADINTERP__V(andnot_pd)(RADINTERP__VEQ(s, zero), r);   /* an edge through p: 0 */
 }
 #endif
 
 /* radinterp__ff_edge of the edges r[i] -> r[(i + 1) % count] into e[i]
-   (count <= RADINTERP__POLY_MAX), two at a time where SSE2 is at hand
-   (RADINTERP__FF_SSE):
-   the form factors of sources and shadow pieces are the larger part of a
-   mesh build's time, and their edges are independent. Bit for bit the
-   scalar terms (radinterp__ff_edge2); the callers sum them in edge order. */
+   (count <= RADINTERP__POLY_MAX), RADINTERP__VW at a time where the vector
+   kernel is compiled (RADINTERP__FF_SIMD): the form factors of sources and
+   shadow pieces are the larger part of a mesh build's time, and their
+   edges are independent. The last lanes repeat the first edges, their
+   terms unused. Bit for bit the scalar terms; the callers sum them in edge
+   order. */
 static void radinterp__ff_edges(const double (*r)[3], int count, const double *n, double *e)
 {
-    int i = 0;
-#if defined(RADINTERP__FF_SSE)
-    double c[3][RADINTERP__POLY_MAX + 1];
-    int k;
-    for (i = 0; i < count; i++)
-        for (k = 0; k < 3; k++) c[k][i] = r[i][k];
-    for (k = 0; k < 3; k++) c[k][count] = r[0][k];
-    for (i = 0; i + 1 < count; i += 2)
-        _mm_storeu_pd(e + i, radinterp__ff_edge2(_mm_loadu_pd(c[0] + i), _mm_loadu_pd(c[1] + i), _mm_loadu_pd(c[2] + i),
-                                                 _mm_loadu_pd(c[0] + i + 1), _mm_loadu_pd(c[1] + i + 1),
-                                                 _mm_loadu_pd(c[2] + i + 1), n));
+#if defined(RADINTERP__FF_SIMD)
+    double c[3][RADINTERP__POLY_MAX + RADINTERP__VW], out[RADINTERP__POLY_MAX + RADINTERP__VW];
+    int i, k;
+    if (count < 1) return;
+    for (i = 0; i < count + RADINTERP__VW; i++)
+        for (k = 0; k < 3; k++) c[k][i] = r[i % count][k];
+    for (i = 0; i < count; i += RADINTERP__VW)
+        RADINTERP__V(storeu_pd)(out + i, radinterp__ff_edge_v(RADINTERP__V(loadu_pd)(c[0] + i), RADINTERP__V(loadu_pd)(c[1] + i),
+                                                             RADINTERP__V(loadu_pd)(c[2] + i), RADINTERP__V(loadu_pd)(c[0] + i + 1),
+                                                             RADINTERP__V(loadu_pd)(c[1] + i + 1),
+                                                             RADINTERP__V(loadu_pd)(c[2] + i + 1), n));
+    memcpy(e, out, (size_t)count * sizeof *e);
+#else
+    int i;
+    for (i = 0; i < count; i++) e[i] = radinterp__ff_edge(r[i], r[(i + 1) % count], n);
 #endif
-    for (; i < count; i++) e[i] = radinterp__ff_edge(r[i], r[(i + 1) % count], n);
 }
 
 /* Eq. 6.1 for a polygon wholly in front of p's tangent plane: positive when

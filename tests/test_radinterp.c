@@ -182,8 +182,9 @@ static void test_atan2(void)
     test_note("arctangent: largest relative difference from the C library's atan2 %.2e", worst);
 }
 
-/* The edge terms of eq. 6.1 taken two at a time (radinterp__ff_edges, SSE2)
-   are the scalar radinterp__ff_edge's bit for bit: polygons of 3 to
+/* The edge terms of eq. 6.1 taken several at a time (radinterp__ff_edges:
+   SSE2, or AVX where the test is built for it) are the scalar
+   radinterp__ff_edge's bit for bit: polygons of 3 to
    RADINTERP__POLY_MAX corners at every scale, with corners repeated (an
    edge through nothing), opposite (gamma = pi), on the point (r = 0),
    parallel to each other, NaN, and with the reduction's switch at
