@@ -482,8 +482,11 @@
        RADINTERP_MALLOC, RADINTERP_FREE  replace malloc/free (define both or neither)
        RADINTERP_BVH_BINS        SAH bins of the built-in BVH (default 16)
        RADINTERP_BVH_SIMD        1 (default): SSE2 (x86-64) or NEON (AArch64) BVH kernels
-                                 and shading kernel (radinterp_shade, radinterp_shade_span)
-                                 when the compiler offers them; 0: the portable scalar
+                                 and shading kernel (radinterp_shade, radinterp_shade_span),
+                                 and the SSE2 or AVX form factor kernel of point queries
+                                 (where the compiler cannot contract a * b + c: no FMA, or
+                                 GCC with -std=c99 or similar) when the compiler offers
+                                 them; 0: the portable scalar
                                  kernels only (the same hits and radiosities, bit for bit)
        RADINTERP_RECEIVER_BUDGET the links one element gathers may err by this many of its
                                  tolerances together (default 16; see METHOD). 8 halved
