@@ -482,8 +482,11 @@
        RADINTERP_MALLOC, RADINTERP_FREE  replace malloc/free (define both or neither)
        RADINTERP_BVH_BINS        SAH bins of the built-in BVH (default 16)
        RADINTERP_BVH_SIMD        1 (default): SSE2 (x86-64) or NEON (AArch64) BVH kernels
-                                 and shading kernel (radinterp_shade, radinterp_shade_span)
-                                 when the compiler offers them; 0: the portable scalar
+                                 and shading kernel (radinterp_shade, radinterp_shade_span),
+                                 and the SSE2 or AVX form factor kernel of point queries
+                                 (where the compiler cannot contract a * b + c: no FMA, or
+                                 GCC with -std=c99 or similar) when the compiler offers
+                                 them; 0: the portable scalar
                                  kernels only (the same hits and radiosities, bit for bit)
        RADINTERP_RECEIVER_BUDGET the links one element gathers may err by this many of its
                                  tolerances together (default 16; see METHOD). 8 halved
@@ -3680,14 +3683,121 @@ static double radinterp__ff_edge(const double *ra, const double *rb, const doubl
     return radinterp__atan2_pos(s, radinterp__d3_dot(ra, rb)) * radinterp__d3_dot(n, c) / s;
 }
 
+/* The vector kernel below matches the scalar radinterp__ff_edge only
+   where the compiler fuses no a * b + c on its own: no FMA in the target,
+   or GCC in an ISO mode (-std=c99 turns its contraction off). Clang
+   contracts within an expression by default and GCC's GNU modes across
+   them, so there the scalar code serves. Four lanes with AVX, else two
+   (SSE2). */
+#if defined(RADINTERP__SSE) && \
+    (!defined(__FMA__) || (defined(__GNUC__) && !defined(__clang__) && defined(__STRICT_ANSI__)))
+#define RADINTERP__FF_SIMD 1
+#if defined(__AVX__)
+#include <immintrin.h>
+typedef __m256d radinterp__vd;
+#define RADINTERP__VW 4
+#define RADINTERP__V(op) _mm256_##op
+#define RADINTERP__VGT(a, b) _mm256_cmp_pd(a, b, _CMP_GT_OQ)
+#define RADINTERP__VEQ(a, b) _mm256_cmp_pd(a, b, _CMP_EQ_OQ)
+#else
+typedef __m128d radinterp__vd;
+#define RADINTERP__VW 2
+#define RADINTERP__V(op) _mm_##op
+#define RADINTERP__VGT(a, b) _mm_cmpgt_pd(a, b)
+#define RADINTERP__VEQ(a, b) _mm_cmpeq_pd(a, b)
+#endif
+#define RADINTERP__VADD(a, b) RADINTERP__V(add_pd)(a, b)
+#define RADINTERP__VSUB(a, b) RADINTERP__V(sub_pd)(a, b)
+#define RADINTERP__VMUL(a, b) RADINTERP__V(mul_pd)(a, b)
+#define RADINTERP__VDIV(a, b) RADINTERP__V(div_pd)(a, b)
+#define RADINTERP__VSET(x) RADINTERP__V(set1_pd)(x)
+
+static radinterp__vd radinterp__vsel(radinterp__vd m, radinterp__vd a, radinterp__vd b)
+{
+    return RADINTERP__V(or_pd)(RADINTERP__V(and_pd)(m, a), RADINTERP__V(andnot_pd)(m, b));
+}
+
+/* radinterp__ff_edge for RADINTERP__VW edges at once, operation for
+   operation (the same products, sums, quotients and roots in the same
+   order, the branches as selections), so every lane is bit for bit the
+   scalar result; ax..bz hold the edges' ends. */
+static radinterp__vd radinterp__ff_edge_v(radinterp__vd ax, radinterp__vd ay, radinterp__vd az, radinterp__vd bx,
+                                          radinterp__vd by, radinterp__vd bz, const double *n)
+{
+    const radinterp__vd zero = RADINTERP__V(setzero_pd)(), pi = RADINTERP__VSET(RADINTERP__PI);
+    radinterp__vd cx = RADINTERP__VSUB(RADINTERP__VMUL(ay, bz), RADINTERP__VMUL(az, by));
+    radinterp__vd cy = RADINTERP__VSUB(RADINTERP__VMUL(az, bx), RADINTERP__VMUL(ax, bz));
+    radinterp__vd cz = RADINTERP__VSUB(RADINTERP__VMUL(ax, by), RADINTERP__VMUL(ay, bx));
+    radinterp__vd s = RADINTERP__V(sqrt_pd)(RADINTERP__VADD(RADINTERP__VADD(RADINTERP__VMUL(cx, cx), RADINTERP__VMUL(cy, cy)),
+                                                            RADINTERP__VMUL(cz, cz)));
+    radinterp__vd x = RADINTERP__VADD(RADINTERP__VADD(RADINTERP__VMUL(ax, bx), RADINTERP__VMUL(ay, by)), RADINTERP__VMUL(az, bz));
+    radinterp__vd nc = RADINTERP__VADD(RADINTERP__VADD(RADINTERP__VMUL(RADINTERP__VSET(n[0]), cx),
+                                                       RADINTERP__VMUL(RADINTERP__VSET(n[1]), cy)),
+                                       RADINTERP__VMUL(RADINTERP__VSET(n[2]), cz));
+    /* radinterp__atan2_pos(s, x) */
+    radinterp__vd fx = RADINTERP__V(andnot_pd)(RADINTERP__VSET(-0.0), x), swap = RADINTERP__VGT(s, fx);
+    radinterp__vd a = radinterp__vsel(swap, fx, s), b = radinterp__vsel(swap, s, fx);
+    radinterp__vd big = RADINTERP__VGT(a, RADINTERP__VMUL(RADINTERP__VSET(0.41421356237309504880), b));
+    radinterp__vd t = RADINTERP__VDIV(radinterp__vsel(big, RADINTERP__VSUB(a, b), a), radinterp__vsel(big, RADINTERP__VADD(a, b), b));
+    radinterp__vd base = RADINTERP__V(and_pd)(big, RADINTERP__VSET(0.25 * RADINTERP__PI)), z = RADINTERP__VMUL(t, t);
+    radinterp__vd num, den, r, neg;
+    num = RADINTERP__VADD(RADINTERP__VMUL(RADINTERP__VSET(-8.750608600031904122785e-01), z),
+                          RADINTERP__VSET(-1.615753718733365076637e+01));
+    num = RADINTERP__VADD(RADINTERP__VMUL(num, z), RADINTERP__VSET(-7.500855792314704667340e+01));
+    num = RADINTERP__VADD(RADINTERP__VMUL(num, z), RADINTERP__VSET(-1.228866684490136173410e+02));
+    num = RADINTERP__VADD(RADINTERP__VMUL(num, z), RADINTERP__VSET(-6.485021904942025371773e+01));
+    den = RADINTERP__VADD(RADINTERP__VMUL(RADINTERP__VADD(z, RADINTERP__VSET(2.485846490142306297962e+01)), z),
+                          RADINTERP__VSET(1.650270098316988542046e+02));
+    den = RADINTERP__VADD(RADINTERP__VMUL(den, z), RADINTERP__VSET(4.328810604912902668951e+02));
+    den = RADINTERP__VADD(RADINTERP__VMUL(den, z), RADINTERP__VSET(4.853903996359136964868e+02));
+    den = RADINTERP__VADD(RADINTERP__VMUL(den, z), RADINTERP__VSET(1.945506571482613964425e+02));
+    r = RADINTERP__VDIV(num, den);
+    r = RADINTERP__VADD(base, RADINTERP__VADD(t, RADINTERP__VMUL(RADINTERP__VMUL(t, z), r)));
+    r = radinterp__vsel(swap, RADINTERP__VSUB(RADINTERP__VSET(0.5 * RADINTERP__PI), r), r);
+    neg = RADINTERP__VGT(zero, x);
+    r = radinterp__vsel(neg, RADINTERP__VSUB(pi, r), r);
+    /* atan2_pos's !(b > 0) needs s = 0, masked below, or s NaN, NaN anyway */
+    r = RADINTERP__VDIV(RADINTERP__VMUL(r, nc), s);
+    return RADINTERP__V(andnot_pd)(RADINTERP__VEQ(s, zero), r);   /* an edge through p: 0 */
+}
+#endif
+
+/* radinterp__ff_edge of the edges r[i] -> r[(i + 1) % count] into e[i]
+   (count <= RADINTERP__POLY_MAX), RADINTERP__VW at a time where the vector
+   kernel is compiled (RADINTERP__FF_SIMD): the form factors of sources and
+   shadow pieces took a seventh (building_1k) to a fifth (the office) of a
+   mesh build's time, and their edges are independent. The last lanes repeat the first edges, their
+   terms unused. Bit for bit the scalar terms; the callers sum them in edge
+   order. */
+static void radinterp__ff_edges(const double (*r)[3], int count, const double *n, double *e)
+{
+#if defined(RADINTERP__FF_SIMD)
+    double c[3][RADINTERP__POLY_MAX + RADINTERP__VW], out[RADINTERP__POLY_MAX + RADINTERP__VW];
+    int i, k;
+    if (count < 1) return;
+    for (i = 0; i < count + RADINTERP__VW; i++)
+        for (k = 0; k < 3; k++) c[k][i] = r[i % count][k];
+    for (i = 0; i < count; i += RADINTERP__VW)
+        RADINTERP__V(storeu_pd)(out + i, radinterp__ff_edge_v(RADINTERP__V(loadu_pd)(c[0] + i), RADINTERP__V(loadu_pd)(c[1] + i),
+                                                             RADINTERP__V(loadu_pd)(c[2] + i), RADINTERP__V(loadu_pd)(c[0] + i + 1),
+                                                             RADINTERP__V(loadu_pd)(c[1] + i + 1),
+                                                             RADINTERP__V(loadu_pd)(c[2] + i + 1), n));
+    memcpy(e, out, (size_t)count * sizeof *e);
+#else
+    int i;
+    for (i = 0; i < count; i++) e[i] = radinterp__ff_edge(r[i], r[(i + 1) % count], n);
+#endif
+}
+
 /* Eq. 6.1 for a polygon wholly in front of p's tangent plane: positive when
    the polygon winds counter-clockwise seen from the side facing p. */
 static double radinterp__ff_poly(const double *p, const double *n, const double (*v)[3], int count)
 {
-    double r[RADINTERP__POLY_MAX][3], sum = 0.0;
+    double r[RADINTERP__POLY_MAX][3], e[RADINTERP__POLY_MAX], sum = 0.0;
     int i;
     for (i = 0; i < count; i++) radinterp__d3_sub(v[i], p, r[i]);
-    for (i = 0; i < count; i++) sum += radinterp__ff_edge(r[i], r[(i + 1) % count], n);
+    radinterp__ff_edges((const double (*)[3])r, count, n, e);
+    for (i = 0; i < count; i++) sum += e[i];
     return -sum / (2.0 * RADINTERP__PI);
 }
 
@@ -7758,8 +7868,8 @@ static void radinterp__piece_bounds(radinterp__piece *pc)
 static int radinterp__bp_shadow_piece(const radinterp_solution *s, const radinterp__bp *bp, const radinterp__patch *pb,
                                       radinterp__piece *out)
 {
-    double poly[RADINTERP__POLY_MAX][3], tmp[RADINTERP__POLY_MAX][3], inside[2] = {0.0, 0.0};
-    int tag[RADINTERP__POLY_MAX], ttmp[RADINTERP__POLY_MAX], m, j, i;
+    double buf[2][RADINTERP__POLY_MAX][3], (*poly)[3] = buf[0], inside[2] = {0.0, 0.0};
+    int tags[2][RADINTERP__POLY_MAX], *tag = tags[0], m, j, i, at = 0;
     uint32_t cut = 0;
     for (j = 0; j < bp->np; j++) /* bounding sphere first */
         if (radinterp__d3_dot(bp->plane_n[j], pb->centre) - bp->plane_d[j] < -pb->radius) return 0;
@@ -7774,10 +7884,11 @@ static int radinterp__bp_shadow_piece(const radinterp_solution *s, const radinte
     for (i = 0; i < m; i++) tag[i] = RADINTERP__TAG_EDGE + i;
     for (j = 0; j < bp->np && m >= 3; j++) {
         if (!((cut >> j) & 1u)) continue;
-        m = radinterp__clip_tagged((const double (*)[3])poly, tag, m, bp->plane_n[j], bp->plane_d[j], j, tmp, ttmp);
+        at ^= 1;   /* from one buffer into the other */
+        m = radinterp__clip_tagged((const double (*)[3])poly, tag, m, bp->plane_n[j], bp->plane_d[j], j, buf[at], tags[at]);
         if (m < 0) return -1;
-        memcpy(poly, tmp, (size_t)m * sizeof(double[3]));
-        memcpy(tag, ttmp, (size_t)m * sizeof(int));
+        poly = buf[at];
+        tag = tags[at];
     }
     if (m < 3) return 0;
     if (m > RADINTERP__PIECE_VERTS) return -1;
@@ -8228,13 +8339,14 @@ static int radinterp__planes_hide(const radinterp_solution *s, const float *alo,
    (either winding). */
 static double radinterp__ff_frame(const radinterp__query *q, const radinterp__frame *f, const double (*v)[2], int n)
 {
-    double r[RADINTERP__PIECE_VERTS][3], sum = 0.0;
+    double r[RADINTERP__PIECE_VERTS][3], e[RADINTERP__PIECE_VERTS], sum = 0.0;
     int i;
     for (i = 0; i < n; i++) {
         radinterp__frame_to3d(f, v[i], r[i]);
         radinterp__d3_sub(r[i], q->p, r[i]);
     }
-    for (i = 0; i < n; i++) sum += radinterp__ff_edge(r[i], r[(i + 1) % n], q->n);
+    radinterp__ff_edges((const double (*)[3])r, n, q->n, e);
+    for (i = 0; i < n; i++) sum += e[i];
     return fabs(sum) / (2.0 * RADINTERP__PI);
 }
 
@@ -9938,11 +10050,58 @@ typedef struct radinterp__plink {
                                  ranked, what this source and those after it could carry */
 } radinterp__plink;
 
-static int radinterp__cmp_reach(const void *a_, const void *b_)
+/* A link's place in the ranking: its reach and its position in pl. */
+typedef struct radinterp__rank {
+    double reach;
+    uint32_t at;
+} radinterp__rank;
+
+/* Does a rank before b: larger reach first, ties in link order (the same
+   sum on every run)? */
+static int radinterp__rank_before(const radinterp__plink *pl, const radinterp__rank *a, const radinterp__rank *b)
 {
-    const radinterp__plink *a = (const radinterp__plink *)a_, *b = (const radinterp__plink *)b_;
-    if (a->reach != b->reach) return a->reach > b->reach ? -1 : 1;
-    return a->lk < b->lk ? -1 : a->lk > b->lk;   /* ties in link order: the same sum on every run */
+    if (a->reach != b->reach) return a->reach > b->reach;
+    return pl[a->at].lk < pl[b->at].lk;
+}
+
+/* Ranks pl[0 .. n) (n <= RADINTERP__POINT_LINKS) by radinterp__rank_before.
+   A merge sort of 16-byte keys, then the links moved once along the cycles
+   of the permutation: qsort moving the links themselves through a compare
+   callback was a twentieth of a building's mesh. The order is total (links
+   are distinct), so it is the order any sort finds. */
+static void radinterp__rank_links(radinterp__plink *pl, uint32_t n)
+{
+    radinterp__rank key[RADINTERP__POINT_LINKS], tmp[RADINTERP__POINT_LINKS], *a = key, *b = tmp, *t;
+    unsigned char done[RADINTERP__POINT_LINKS];
+    uint32_t i, w;
+    for (i = 0; i < n; i++) {
+        key[i].reach = pl[i].reach;
+        key[i].at = i;
+    }
+    for (w = 1; w < n; w *= 2) {   /* bottom-up: runs of w merged into runs of 2w */
+        uint32_t lo;
+        for (lo = 0; lo < n; lo += 2 * w) {
+            uint32_t mid = lo + w < n ? lo + w : n, hi = lo + 2 * w < n ? lo + 2 * w : n, x = lo, y = mid, o = lo;
+            while (x < mid && y < hi) b[o++] = radinterp__rank_before(pl, &a[y], &a[x]) ? a[y++] : a[x++];
+            while (x < mid) b[o++] = a[x++];
+            while (y < hi) b[o++] = a[y++];
+        }
+        t = a; a = b; b = t;
+    }
+    memset(done, 0, n);
+    for (i = 0; i < n; i++) {   /* pl[j] = old pl[a[j].at], cycle by cycle */
+        radinterp__plink hold;
+        uint32_t j = i;
+        if (done[i]) continue;
+        hold = pl[i];
+        for (;;) {
+            uint32_t k = a[j].at;
+            done[j] = 1;
+            if (k == i) { pl[j] = hold; break; }
+            pl[j] = pl[k];
+            j = k;
+        }
+    }
 }
 
 /* The leaf a query reads and where its links' blockers come from: the
@@ -10041,7 +10200,7 @@ static void radinterp__sum_links(radinterp__query *q, const radinterp__point_lea
             radinterp__query_source(q, pl[i].lk->source, Sc, &pl[i].full);
             pl[i].reach = pl[i].full * radinterp__max3(b);
         }
-        qsort(pl, n, sizeof *pl, radinterp__cmp_reach);
+        radinterp__rank_links(pl, n);
         /* each source's reach becomes what it and those after it could
            carry, summed from the smallest: a running difference would leave
            a rounding residue that can fall to zero or below before the last

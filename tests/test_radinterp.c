@@ -182,6 +182,81 @@ static void test_atan2(void)
     test_note("arctangent: largest relative difference from the C library's atan2 %.2e", worst);
 }
 
+/* The edge terms of eq. 6.1 taken several at a time (radinterp__ff_edges:
+   SSE2, or AVX where the test is built for it) are the scalar
+   radinterp__ff_edge's bit for bit: polygons of 3 to
+   RADINTERP__POLY_MAX corners at every scale, with corners repeated (an
+   edge through nothing), opposite (gamma = pi), on the point (r = 0),
+   parallel to each other, NaN, and with the reduction's switch at
+   tan(pi / 8) and |x| = y nearby. */
+static void test_ff_edges_exact(void)
+{
+    uint64_t state = 11;
+    int i, differ = 0, checked = 0;
+    for (i = 0; i < 200000; i++) {
+        double r[RADINTERP__POLY_MAX][3], e[RADINTERP__POLY_MAX], n[3], u;
+        int count, j, k;
+        state = state * 6364136223846793005ull + 1442695040888963407ull;
+        count = 3 + (int)((state >> 33) % (RADINTERP__POLY_MAX - 2));
+        for (j = 0; j < count; j++)
+            for (k = 0; k < 3; k++) {
+                state = state * 6364136223846793005ull + 1442695040888963407ull;
+                u = (double)(state >> 11) * (1.0 / 9007199254740992.0);
+                r[j][k] = ldexp(u * 2.0 - 1.0, (int)((state >> 3) % 41) - 20);
+            }
+        for (k = 0; k < 3; k++) n[k] = r[(i + 1) % count][k] - r[i % count][k];
+        switch (i % 9) {
+        case 1: memcpy(r[1], r[0], sizeof r[0]); break;                            /* repeated corner */
+        case 2: for (k = 0; k < 3; k++) r[1][k] = -3.0 * r[0][k]; break;           /* opposite */
+        case 3: memset(r[2], 0, sizeof r[2]); break;                                /* on the point */
+        case 4: for (k = 0; k < 3; k++) r[1][k] = 0.5 * r[0][k]; break;            /* parallel */
+        case 5:   /* gamma near pi / 8, where the reduction switches */
+            r[1][0] = r[0][0];
+            r[1][1] = r[0][1] + r[0][0] * (0.41421356237309504880 + (u - 0.5) * 1e-4);
+            r[1][2] = r[0][2] = 0.0;
+            r[0][1] = 0.0;
+            break;
+        case 6: r[count - 1][1] = NAN; break;
+        case 7: r[0][0] = r[1][0] = 0.0; r[0][1] = r[1][2] = 1.0; r[0][2] = r[1][1] = 0.0; break; /* |x| = 0, y = 1 */
+        default: break;
+        }
+        radinterp__ff_edges((const double (*)[3])r, count, n, e);
+        for (j = 0; j < count; j++) {
+            double a = radinterp__ff_edge(r[j], r[(j + 1) % count], n);
+            checked++;
+            if (memcmp(&a, &e[j], sizeof a) != 0 && !(a != a && e[j] != e[j])) differ++;
+        }
+    }
+    CHECK_MSG(differ == 0, "%d of %d edge terms differ from the scalar ones", differ, checked);
+}
+
+/* The ranking of a point's links (radinterp__rank_links): larger reach
+   first, ties in link order, for every length up to
+   RADINTERP__POINT_LINKS, with many ties; each link once. */
+static void test_rank_links(void)
+{
+    static radinterp__link links[RADINTERP__POINT_LINKS];
+    static radinterp__plink pl[RADINTERP__POINT_LINKS];
+    uint64_t state = 5;
+    uint32_t n, i, bad = 0;
+    for (n = 0; n <= RADINTERP__POINT_LINKS; n += (n < 40 ? 1 : 37)) {
+        unsigned char seen[RADINTERP__POINT_LINKS];
+        memset(seen, 0, sizeof seen);
+        for (i = 0; i < n; i++) {
+            state = state * 6364136223846793005ull + 1442695040888963407ull;
+            pl[i].lk = &links[(i * 7919u) % n];   /* links out of list order */
+            pl[i].reach = (double)((state >> 40) % (n / 3 + 2));   /* ties */
+            pl[i].nblk = (uint32_t)(pl[i].lk - links);
+        }
+        radinterp__rank_links(pl, n);
+        for (i = 0; i < n; i++) {
+            if (pl[i].nblk != (uint32_t)(pl[i].lk - links) || seen[pl[i].nblk]++) bad++;   /* moved whole, once */
+            if (i && (pl[i - 1].reach < pl[i].reach || (pl[i - 1].reach == pl[i].reach && pl[i - 1].lk > pl[i].lk))) bad++;
+        }
+    }
+    CHECK_MSG(bad == 0, "%u links out of rank", bad);
+}
+
 static void test_form_factor_robustness(void)
 {
     float n[3] = {0, 0, 1}, p[3] = {0.2f, 0.3f, 0.0f}, sq[12] = {-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0};
@@ -1410,6 +1485,8 @@ int main(int argc, char **argv)
     TEST_INIT(argc, argv);
     RUN(test_form_factor_known_answers);
     RUN(test_atan2);
+    RUN(test_ff_edges_exact);
+    RUN(test_rank_links);
     RUN(test_form_factor_robustness);
     RUN(test_validation);
     RUN(test_patch_shapes);
