@@ -1626,13 +1626,13 @@ static float wt__support(const wt_world *w, float x, float z, float guess)
    WT__LOOK_HEIGHT above their floor. Where the route turns through a door
    those points leave the camera's sight behind the door's jamb, and a
    camera aimed at them filled the frame with the wall beside the door
-   (the house's frames 220-226); it aims instead at the route as far as it
-   sees it, its sight, measured here from each point of the route by rays
-   through the static scene to the look points ahead, every WT__SIGHT_STEP
-   metres from WT__SIGHT_NEAR on, and along the parallel lines
-   WT__SIGHT_MARGIN either side: the sight ends before the first point
-   hidden or grazed, averaged over WT__SIGHT_SMOOTH metres of route each
-   side so that the view turns smoothly where the sight jumps. */
+   (in the house, 7 of its 262 frames before this); it aims instead at
+   the route as far as it sees it, its sight, measured here from each
+   point of the route by rays through the static scene to the look points
+   ahead, every WT__SIGHT_STEP metres from WT__SIGHT_NEAR on, and along the
+   parallel lines WT__SIGHT_MARGIN either side: the sight ends before the
+   first point hidden or grazed, averaged over WT__SIGHT_SMOOTH metres of
+   route each side so that the view turns smoothly where the sight jumps. */
 #define WT__LOOK_AHEAD 1.0f    /* metres past the bunny the camera looks at */
 #define WT__LOOK_HEIGHT 0.25f  /* above the floor */
 #define WT__SIGHT_NEAR 0.3f    /* metres: nearer look points count as seen */
