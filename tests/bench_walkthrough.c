@@ -39,7 +39,8 @@
    mode, a size and a thread count, e.g. `radiosity 1920x1080 1t`. */
 #define _POSIX_C_SOURCE 200809L
 #include "examples/common/walkthrough.h"
-#include <dirent.h>
+#include "tests/test.h"
+#include "tests/walkthrough_test.h"   /* make_temp_dir, remove_dir */
 
 #define FRAMES 48
 
@@ -152,21 +153,6 @@ static void report(wt_mode mode, int threads, int width, int height)
     fflush(stdout);
 }
 
-/* Removes the temporary cache directory dir and its files. */
-static void remove_cache(const char *dir)
-{
-    DIR *d = opendir(dir);
-    struct dirent *e;
-    char path[512];
-    while (d && (e = readdir(d)) != NULL) {
-        if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..")) continue;
-        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
-        remove(path);
-    }
-    if (d) closedir(d);
-    if (rmdir(dir) != 0) printf("  (could not remove %s)\n", dir);
-}
-
 /* The first run's precompute of mode radiosity in the demo's scene on 2
    threads, from an empty temporary cache (wall time). */
 static void report_precompute(void)
@@ -174,9 +160,9 @@ static void report_precompute(void)
     wt_options o = bench_options(WT_MODE_RADIOSITY, 2, 640, 480);
     wt_world *w = NULL;
     wt_renderer *r = NULL;
-    char err[512], dir[] = "/tmp/bench-walkthrough-XXXXXX";
+    char err[512], dir[256];
     double t0 = wt_seconds(), total;
-    if (!mkdtemp(dir)) {
+    if (!make_temp_dir(dir, sizeof dir)) {
         printf("  precompute: not run: no temporary directory\n");
         return;
     }
@@ -194,7 +180,7 @@ static void report_precompute(void)
     }
     wt_renderer_destroy(r);
     wt_world_destroy(w);
-    remove_cache(dir);
+    remove_dir(dir);
     fflush(stdout);
 }
 
