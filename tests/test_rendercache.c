@@ -1922,6 +1922,53 @@ static void test_deterministic_for_any_thread_count(void)
     ex_pool_destroy(pool);
 }
 
+/* A camera that tilts up and down by a third of the image from frame to
+   frame, over a cache of 24 points per pixel: most points land in pixels
+   that another projection job owns, more than the deferral buffers hold,
+   so the jobs go through several rounds. Returns a hash of the requests
+   and images, and the most rounds a projection took in *rounds. */
+static uint64_t run_tilt_sequence(void (*pf)(void *, rendercache_job_fn, void *, uint32_t), void *user,
+                                  uint32_t *rounds)
+{
+    const uint32_t w = 96, h = 80;
+    rendercache *rc = create_with(pf, user, 24.0f, w, h);
+    scene s;
+    uint64_t hash = 1469598103934665603ull;
+    int f;
+    memset(&s, 0, sizeof s);
+    *rounds = 0;
+    if (!rc) return 0;
+    for (f = 0; f < 8; f++) {
+        rendercache_camera cam = make_camera(0.0f, 0.0f, 0.0f, 0.2f, f % 2 ? 2.0f : -2.0f, 10.0f, w, h);
+        uint32_t n = 0, i;
+        rendercache_begin_frame(rc, &cam);
+        if (rc->splat.rounds > *rounds) *rounds = rc->splat.rounds;
+        rendercache_request(rc, g_req, f == 0 ? w * h : 2000, &n);
+        for (i = 0; i < n; i++) shade(&s, &g_req[i], &g_samples[i]);
+        rendercache_insert(rc, g_samples, n, NULL);
+        hash = hash_bytes(hash, g_req, n * sizeof *g_req);
+        hash = hash_bytes(hash, rendercache_image(rc), 3 * sizeof(float) * w * h);
+    }
+    rendercache_destroy(rc);
+    return hash;
+}
+
+/* The projection's jobs share the z-buffer, each owning the pixels of its
+   bands and handing the points that land elsewhere to their owners, in
+   rounds when the hand-over buffers fill up: the same frames as serial. */
+static void test_owned_zbuffer_hands_points_over(void)
+{
+    ex_pool *pool = ex_pool_create(3);
+    uint32_t rounds, serial_rounds;
+    uint64_t serial = run_tilt_sequence(NULL, NULL, &serial_rounds);
+    CHECK(serial != 0);
+    CHECK(serial_rounds == 0);   /* (serial: one job, no owners) */
+    CHECK(run_tilt_sequence(reversed_parallel_for, NULL, &rounds) == serial);
+    CHECK(rounds >= 2);
+    if (pool) CHECK(run_tilt_sequence(ex_pool_parallel_for, pool, &rounds) == serial);
+    ex_pool_destroy(pool);
+}
+
 /* The insertion of one frame's samples in the mixed order an engine may
    give them: the current frame's (in chunks placed in parallel with
    parallel_for), a few twice (the same pixel in one call), a share kept
@@ -2350,6 +2397,7 @@ int main(int argc, char **argv)
     RUN(test_no_allocation_per_frame);
     RUN(test_bad_input_is_rejected);
     RUN(test_deterministic_for_any_thread_count);
+    RUN(test_owned_zbuffer_hands_points_over);
     RUN(test_parallel_insert_matches_serial);
     RUN(test_warp_later_input_fills_the_hole);
     RUN(test_insert_in_pieces_matches_one_call);

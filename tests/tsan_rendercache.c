@@ -89,6 +89,10 @@ static const float *composed_with_fallback(const rendercache *rc)
 }
 
 /* The frame sequence with points_per_pixel ppp (0: the default). */
+/* The most rounds a projection of run_cache took (the projection's jobs
+   hand the points that land in another job's pixels over in rounds). */
+static uint32_t g_rounds;
+
 static uint64_t run_cache(ex_pool *pool, float ppp)
 {
     static rendercache_pixel_request req[W * H];
@@ -116,6 +120,7 @@ static uint64_t run_cache(ex_pool *pool, float ppp)
             CHECK_EQ_INT(rendercache_insert(rc, late, pending, NULL), RENDERCACHE_OK);
         } else {
             CHECK_EQ_INT(rendercache_begin_frame(rc, &c), RENDERCACHE_OK);
+            if (rc->splat.rounds > g_rounds) g_rounds = rc->splat.rounds;
             CHECK_EQ_INT(rendercache_insert(rc, late, pending, NULL), RENDERCACHE_OK);
             CHECK_EQ_INT(rendercache_predict(rc, &next), RENDERCACHE_OK);
         }
@@ -249,7 +254,9 @@ static void test_parallel_frame_matches_serial(void)
     uint64_t serial = run_cache(NULL, 0.0f);
     if (!CHECK(pool != NULL)) return;
     CHECK(serial != 0);
+    g_rounds = 0;
     CHECK(run_cache(pool, 0.0f) == serial);
+    CHECK(g_rounds >= 2);   /* the jobs handed points over, in more than one round */
     ex_pool_destroy(pool);
 }
 
