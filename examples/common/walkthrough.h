@@ -53,14 +53,17 @@
                 changes while it walks). The first frame is traced in full.
      baseviews  range images (rendercache.h part 2, Nimeroff, Dorsey &
                 Rushmeier 1996, through examples/common/baseviews.h): the
-                camera's line of eyes is subdivided until fish-eye id images
-                agree on a fraction q of their pixels (base views), key
-                times are refined with the same test (a fish-eye at the lamp
-                and the base views), base images are traced with the shading
+                camera's line of eyes (the office), or its route through a
+                building as a chain of 2 m stretches, is subdivided until
+                fish-eye id images agree on a fraction q of their pixels
+                (base views), key times are refined with the same test
+                (a fish-eye below each lamp and the base views), the base
+                images some frame warps from are traced with the shading
                 above and saved; the bunny's indirect light is solved at key
                 times of its own (rendercache_keytimes_create, section 4.3)
                 and interpolated in time for the base images. A frame blends
-                the base images of the two views around its eye to its time,
+                the base images of the two views around its eye (on a route:
+                around its time) to its time,
                 moving the bunny by its transforms, and warps them into its
                 camera with both fills, averaging the views that see a
                 surface (pinterp -a); gaps wider than 8 pixels are traced.
