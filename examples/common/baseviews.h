@@ -61,8 +61,9 @@
 #include "trace.h"
 #include "rendercache.h"
 
-/* The view at time t of a route (its eye and look direction; the kind, up
-   and size are replaced by ex_baseviews_desc.fisheye's kind and size). */
+/* Sets the view at time t of a route: its eye, look direction and up, in
+   camera, which holds ex_baseviews_desc.fisheye (its kind and size are
+   kept: those of the id images). */
 typedef void (*ex_baseviews_route_fn)(void *user, double t, rendercache_camera *camera);
 
 typedef struct ex_baseviews_desc {
