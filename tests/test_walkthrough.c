@@ -612,6 +612,74 @@ done:
     free(ref);
 }
 
+/* A route's view space (ex_baseviews_desc.route, the house's walk) on a
+   stub scene: the view at time t stands at (t, 0, 0), and its id image
+   shows object 1 on a share clamp(4 t - 3, 0, 1) of its pixels, object 2
+   elsewhere, so the fitness of the views at t and u is 1 - |share(t) -
+   share(u)| and the images change only in the last quarter of the walk.
+   Two stretches, q 0.9, 3 halvings: the first stretch and [0.5, 0.75]
+   (halved once) keep their ends; [0.75, 1] is halved down to eighths of
+   the stretch (the third halving is the last, whatever the fitness of
+   its halves). A frame at t warps from the two views around t.
+   Splitting everywhere (17 views) or nowhere (3) fails, and so does a
+   frame located by its eye in a box (the stub's eyes lie on a line). */
+static void route_view_stub(void *user, double t, rendercache_camera *c)
+{
+    (void)user;
+    memset(c->eye, 0, sizeof c->eye);
+    c->eye[0] = (float)t;
+    c->look_at[0] = (float)t;
+    c->look_at[1] = 0.0f;
+    c->look_at[2] = 1.0f;
+}
+
+static int route_ids_stub(void *user, const rendercache_camera *c, double time, uint32_t *ids)
+{
+    uint32_t i, n = c->width * c->height;
+    float share = 4.0f * c->eye[0] - 3.0f;
+    (void)user;
+    (void)time;
+    share = share < 0.0f ? 0.0f : share > 1.0f ? 1.0f : share;
+    for (i = 0; i < n; i++) ids[i] = (float)i < share * (float)n ? 1u : 2u;
+    return 0;
+}
+
+static void test_baseviews_route(void)
+{
+    static const double expect[] = { 0.0, 0.5, 0.75, 0.8125, 0.875, 0.9375, 1.0 };
+    const double times[2] = { 0.0, 1.0 };
+    const uint32_t n = (uint32_t)(sizeof expect / sizeof expect[0]);
+    ex_baseviews_desc d;
+    ex_baseviews bv;
+    uint32_t views[8], count = 0, key = 9, i;
+    memset(&d, 0, sizeof d);
+    d.fisheye.kind = RENDERCACHE_CAMERA_FISHEYE;
+    d.fisheye.look_at[2] = 1.0f;
+    d.fisheye.up[1] = 1.0f;
+    d.fisheye.width = d.fisheye.height = 16;
+    d.route = route_view_stub;
+    d.stretches = 2;
+    d.quality = 0.9f;
+    d.times = times;
+    d.time_count = 2;
+    d.render_ids = route_ids_stub;
+    if (!CHECK(ex_baseviews_build(&d, &bv) == 0)) return;
+    CHECK(bv.vs == NULL && bv.time_count == 2);
+    if (CHECK_MSG(bv.view_count == n, "%u views", bv.view_count))
+        for (i = 0; i < n; i++) {
+            rendercache_camera c = ex_baseviews_base_camera(&bv, i, 32);
+            CHECK_MSG(bv.view_times[i] == expect[i] && c.eye[0] == (float)expect[i] && c.width == 32 &&
+                      c.kind == RENDERCACHE_CAMERA_FISHEYE, "view %u at %g", i, bv.view_times[i]);
+        }
+    CHECK(ex_baseviews_needs(&bv, bv.view_cameras[0].eye, 0.3, views, &count, &key) == 0 && count == 2 &&
+          views[0] == 0 && views[1] == 1 && key == 0);
+    CHECK(ex_baseviews_needs(&bv, bv.view_cameras[0].eye, 0.8, views, &count, &key) == 0 && count == 2 &&
+          views[0] == 2 && views[1] == 3);
+    CHECK(ex_baseviews_needs(&bv, bv.view_cameras[0].eye, 1.0, views, &count, &key) == 0 && count == 2 &&
+          views[0] == n - 2 && views[1] == n - 1);
+    ex_baseviews_free(&bv);
+}
+
 /* Ghost shadows in the baseviews frames (issue 19): the floor the bunny
    shadowed at key time 0 must not stay dark once it has left. Pixels: the
    office pixels of frame GHOST_FRAME that a converged render of the
@@ -869,6 +937,7 @@ int main(int argc, char **argv)
     RUN(test_light_solid_angle);
     RUN(test_threads);
     RUN(test_raytrace_against_converged);
+    RUN(test_baseviews_route);
     RUN(test_baseviews_no_ghost_shadows);
     RUN(test_bunny_darkens_in_frames);
     RUN(test_bunny_darkens_in_volume);

@@ -4,7 +4,9 @@
    lit room, a room without a lamp, up the stairs; never through anything;
    the camera inside the building and seeing the bunny), mode raytrace's
    frames against stored references and across thread counts, and the
-   bunny darker in the room without a lamp than in a lit one.
+   bunny darker in the room without a lamp than in a lit one; mode
+   baseviews in the house (building_1k): its view space along the route
+   and its frames against stored references.
 
    Reference frames (tests/data/walkthrough_building_<mode>_f<frame>.pfm,
    64x48) were written by this program from the repository root with
@@ -387,6 +389,110 @@ static void test_reference_frames(void)
     CHECK_MSG(lrms >= 0.0 && lrms <= tol, "LRMS %.4f", lrms);
 }
 
+/* ---- mode baseviews in the house ----------------------------------------------
+   The house's walk (17.3 m through two storeys) in mode baseviews at small
+   settings (the office's: 64x48 frames of a 24-frame walk, base images
+   64x64, id images 24x24, 3 key times, q = 0.6). Its view space follows
+   the route (a chain of 2 m stretches halved by the id images' fitness):
+   a box of eyes around the walk planned 729 views (3645 base images at 5
+   key times) and never finished. The references
+   (tests/data/walkthrough_house_baseviews_f<frame>.pfm) are written by
+   this program with WT_WRITE_REFERENCE=1 and compared, as the office's
+   baseviews frames are (tests/test_walkthrough.c), within half the LRMS of
+   another seed: rendering is deterministic, so on the machine that wrote
+   them the error is 0; another compiler or libm may flip a light-vector
+   lookup in a base image or a traced hole, which redraws those pixels with
+   other random numbers (a small share of them: passes), while other random
+   numbers everywhere or another decomposition (other base views, other
+   key times) move every pixel (fails). */
+#define HOUSE_VIEWS_PER_METRE 5.0   /* base views per metre of route at most: 4.2 at most by construction
+                                       (9 stretches of 2 m, 3 halvings each); main's box: 42 */
+#define HOUSE_IMAGES_PER_VIEW 3.0   /* base images traced per view at most: a view serves the frames of
+                                       its two stretches, at the key times around them */
+
+typedef struct house_walk {
+    uint32_t views, images;   /* base views; base images traced */
+    double metres;            /* the camera's route */
+} house_walk;
+
+/* Frames 0 and 1 of the house's baseviews walk at seed, and its counts. */
+static int house_baseviews(uint64_t seed, float *frames, house_walk *hw)
+{
+    wt_options o = small_options(WT_MODE_BASEVIEWS, "house");
+    wt_world *w;
+    wt_renderer *r = NULL;
+    wt_frame_stats st;
+    char err[512];
+    int f, ok;
+    o.base_size = 64;
+    o.id_size = 24;
+    o.keys = 3;
+    o.quality = 0.6f;
+    o.seed = seed;
+    w = open_world(&o);
+    ok = w != NULL;
+    if (ok && wt_renderer_create(w, &r, err, sizeof err) != 0) {
+        fprintf(stderr, "  %s\n", err);
+        ok = 0;
+    }
+    if (ok) {
+        hw->views = r->bv.view_count;
+        hw->images = r->base_needed_count;
+        hw->metres = wt_route_measure(&w->opt).length;
+    }
+    for (f = 0; f < 2 && ok; f++) ok = wt_render_frame(r, f, frames + (size_t)f * 3 * REF_W * REF_H, &st) == 0;
+    wt_renderer_destroy(r);
+    wt_world_destroy(w);
+    return ok;
+}
+
+static void house_reference_path(char *path, size_t size, int frame)
+{
+    snprintf(path, size, "tests/data/walkthrough_house_baseviews_f%d.pfm", frame);
+}
+
+/* Worst LRMS of frames 0 and 1 against the references (writes them instead
+   when write is set; 0 then); -1 on failure. */
+static double house_vs_reference(uint64_t seed, int write, house_walk *hw)
+{
+    size_t n = 3 * (size_t)REF_W * REF_H;
+    float *frames = (float *)malloc(sizeof(float) * 2 * n), *ref = (float *)malloc(sizeof(float) * n);
+    double worst = -1.0, lrms;
+    int f;
+    if (frames && ref && house_baseviews(seed, frames, hw)) {
+        worst = 0.0;
+        for (f = 0; f < 2 && worst >= 0.0; f++) {
+            char path[256];
+            house_reference_path(path, sizeof path, f);
+            if (write) {
+                if (ex_write_pfm(path, REF_W, REF_H, frames + (size_t)f * n) != 0) worst = -1.0;
+                else printf("  wrote %s\n", path);
+            } else if (ex_read_pfm(path, REF_W, REF_H, ref) != 0 ||
+                       rendercache_lrms(ref, frames + (size_t)f * n, REF_W, REF_H, &lrms) != RENDERCACHE_OK) {
+                worst = -1.0;
+            } else if (lrms > worst) {
+                worst = lrms;
+            }
+        }
+    }
+    free(frames);
+    free(ref);
+    return worst;
+}
+
+static void test_house_baseviews(void)
+{
+    house_walk a, b;
+    double other = house_vs_reference(2, 0, &b), lrms = house_vs_reference(1, 0, &a), tol = REF_TOLERANCE_SHARE * other;
+    test_note("house baseviews: %u views along %.1f m (%.1f per metre), %u base images traced; frames 0 and 1 "
+              "against the references: LRMS %.4f; with another seed %.4f (tolerance %.4f)", a.views, a.metres,
+              a.views / a.metres, a.images, lrms, other, tol);
+    CHECK(other > 0.0);
+    CHECK_MSG(lrms >= 0.0 && lrms <= tol, "LRMS %.4f", lrms);
+    CHECK_MSG(a.views >= 2 && a.views <= HOUSE_VIEWS_PER_METRE * a.metres, "%u views along %.1f m", a.views, a.metres);
+    CHECK_MSG(a.images <= HOUSE_IMAGES_PER_VIEW * a.views, "%u base images of %u views", a.images, a.views);
+}
+
 static void test_threads(void)
 {
     wt_options o = small_options(WT_MODE_RAYTRACE, "building");
@@ -475,7 +581,9 @@ static void test_dark_room(void)
 
 static void write_references(void)
 {
+    house_walk hw;
     CHECK(frames_vs_reference(WT_MODE_RAYTRACE, 1, 1) == 0.0);
+    CHECK(house_vs_reference(1, 1, &hw) == 0.0);
 }
 
 int main(int argc, char **argv)
@@ -490,6 +598,7 @@ int main(int argc, char **argv)
     RUN(test_walk);
     RUN(test_route_frames);
     RUN(test_reference_frames);
+    RUN(test_house_baseviews);
     RUN(test_direct_light_unbiased);
     RUN(test_light_grid);
     RUN(test_threads);

@@ -17,6 +17,16 @@
            ex_baseviews_reconstruct(&bv, &r, camera, t, blend, out);
        ex_baseviews_free(&bv);
 
+   A walk through a building is a path through rooms, not a box: a box of
+   eyes around it holds walls, storeys and rooms the camera never enters,
+   and its subdivision plans hundreds of views. Instead, the view space can
+   be the route itself (d.route: the fish-eye the walk has at time t), a
+   chain of one-dimensional stretches of time, each halved by the same
+   fitness test where the id images at its ends differ (turns, doors); the
+   views of a frame at time t are the two ends of the stretch around t, and
+   neighbouring stretches share their end. Base views then grow with the
+   route's length and its occlusion changes, not with its bounding box.
+
    The caller owns the rendering (ray tracer, shading) and the base images'
    storage policy (all precomputed, or traced when first needed); this file
    owns the decomposition and the per-frame reconstruction.
@@ -51,10 +61,18 @@
 #include "trace.h"
 #include "rendercache.h"
 
+/* Sets the view at time t of a route: its eye, look direction and up, in
+   camera, which holds ex_baseviews_desc.fisheye (its kind and size are
+   kept: those of the id images). */
+typedef void (*ex_baseviews_route_fn)(void *user, double t, rendercache_camera *camera);
+
 typedef struct ex_baseviews_desc {
     rendercache_camera fisheye;      /* every base view's kind, look direction (look_at - eye) and up;
                                         width x height = the id images of the coherence tests */
     float lo[3], hi[3];              /* the view space: a box of eyes (an axis with lo == hi is not split) */
+    ex_baseviews_route_fn route;     /* instead of the box (when set): the route's views, times[0] .. times[last] */
+    void *route_user;
+    uint32_t stretches;              /* route: equal stretches of time before the fitness test halves them (0 = 1) */
     float quality;                   /* q: id images at the ends of every cell and interval agree on this
                                         fraction of their pixels */
     uint32_t view_depth;             /* halvings of each view-space axis at most (0 = 3) */
@@ -68,7 +86,9 @@ typedef struct ex_baseviews_desc {
 } ex_baseviews_desc;
 
 typedef struct ex_baseviews {
-    rendercache_view_space *vs;
+    rendercache_view_space *vs;      /* the box (NULL for a route) */
+    double *view_times;              /* a route: the views' times, increasing (NULL for the box) */
+    rendercache_camera *view_cameras;   /* a route: the views' fish-eyes (id image size) */
     double *times;                   /* key times (rendercache_subdivide_time's list) */
     uint32_t time_count, view_count;
     rendercache_range_image **base;  /* view * time_count + key: set by the caller, NULL until then */
@@ -105,14 +125,115 @@ EX_FN void ex_baseviews_free(ex_baseviews *bv)
     if (bv->base)
         for (i = 0; i < bv->view_count * bv->time_count; i++) rendercache_range_image_destroy(bv->base[i]);
     free(bv->base);
+    free(bv->view_times);
+    free(bv->view_cameras);
     rendercache_free_memory(NULL, bv->times);
     rendercache_view_space_destroy(bv->vs);
     memset(bv, 0, sizeof *bv);
 }
 
-/* The decomposition: base views (section 4.1) and key times (section 4.2,
-   with the base views and the extra cameras). Returns 0, or -1 when a call
-   failed or render_ids cancelled. */
+/* The route's view at time t, with the id images' kind and size. */
+static rendercache_camera ex__baseviews_route_camera(const ex_baseviews_desc *d, double t)
+{
+    rendercache_camera c = d->fisheye;
+    d->route(d->route_user, t, &c);
+    c.kind = d->fisheye.kind;
+    c.width = d->fisheye.width;
+    c.height = d->fisheye.height;
+    return c;
+}
+
+typedef struct ex__baseviews_route {
+    const ex_baseviews_desc *d;
+    ex_baseviews *bv;
+    uint32_t capacity, max_depth;
+    uint32_t **ids;                  /* one id image per depth: the middle of the stretch halved there */
+} ex__baseviews_route;
+
+/* Appends the view at time t. */
+static int ex__baseviews_route_add(ex__baseviews_route *r, double t)
+{
+    ex_baseviews *bv = r->bv;
+    if (bv->view_count == r->capacity) {
+        uint32_t n = r->capacity ? 2 * r->capacity : 16;
+        double *times = (double *)realloc(bv->view_times, sizeof *times * n);
+        rendercache_camera *cams;
+        if (!times) return -1;
+        bv->view_times = times;
+        cams = (rendercache_camera *)realloc(bv->view_cameras, sizeof *cams * n);
+        if (!cams) return -1;
+        bv->view_cameras = cams;
+        r->capacity = n;
+    }
+    bv->view_times[bv->view_count] = t;
+    bv->view_cameras[bv->view_count++] = ex__baseviews_route_camera(r->d, t);
+    return 0;
+}
+
+/* The stretch (a, b], whose end views have id images ia and ib: halved
+   while their fitness is below quality (depth halvings at most), its views
+   after a appended in time order. */
+static int ex__baseviews_route_split(ex__baseviews_route *r, double a, double b, const uint32_t *ia, const uint32_t *ib,
+                                     uint32_t depth)
+{
+    const rendercache_camera *c = &r->d->fisheye;
+    const uint32_t *pair[2];
+    float fitness = 1.0f;
+    double m = 0.5 * (a + b);
+    rendercache_camera cm;
+    pair[0] = ia;
+    pair[1] = ib;
+    if (depth < r->max_depth && rendercache_fitness(pair, 2, c->width, c->height, &fitness) != RENDERCACHE_OK) return -1;
+    if (depth >= r->max_depth || fitness >= r->d->quality) return ex__baseviews_route_add(r, b);
+    cm = ex__baseviews_route_camera(r->d, m);
+    if (r->d->render_ids(r->d->user, &cm, r->d->times[0], r->ids[depth]) != 0) return -1;
+    if (ex__baseviews_route_split(r, a, m, ia, r->ids[depth], depth + 1) != 0) return -1;
+    return ex__baseviews_route_split(r, m, b, r->ids[depth], ib, depth + 1);
+}
+
+/* The views of a route: the ends of d->stretches equal stretches of
+   [times[0], times[last]], each split by ex__baseviews_route_split, with
+   the id images at time times[0] (as the box's). */
+static int ex__baseviews_route_views(const ex_baseviews_desc *d, ex_baseviews *bv)
+{
+    ex__baseviews_route r;
+    const double t0 = d->times[0], t1 = d->times[d->time_count - 1];
+    const size_t pixels = (size_t)d->fisheye.width * d->fisheye.height;
+    const uint32_t stretches = d->stretches ? d->stretches : 1;
+    uint32_t *ends[2], s, i;
+    rendercache_camera c;
+    int result = 0;
+    memset(&r, 0, sizeof r);
+    r.d = d;
+    r.bv = bv;
+    r.max_depth = d->view_depth ? d->view_depth : 3;
+    r.ids = (uint32_t **)calloc(r.max_depth + 2, sizeof *r.ids);
+    if (!r.ids) return -1;
+    for (i = 0; i < r.max_depth + 2; i++)
+        if (!(r.ids[i] = (uint32_t *)malloc(sizeof(uint32_t) * (pixels ? pixels : 1)))) result = -1;
+    ends[0] = r.ids[r.max_depth];
+    ends[1] = r.ids[r.max_depth + 1];
+    if (result == 0) result = ex__baseviews_route_add(&r, t0);
+    c = ex__baseviews_route_camera(d, t0);
+    if (result == 0 && d->render_ids(d->user, &c, t0, ends[0]) != 0) result = -1;
+    for (s = 1; s <= stretches && result == 0; s++) {   /* (t(s-1), t(s)] */
+        double a = t0 + (t1 - t0) * (double)(s - 1) / stretches, b = s == stretches ? t1 : t0 + (t1 - t0) * (double)s / stretches;
+        uint32_t *swap;
+        c = ex__baseviews_route_camera(d, b);
+        if (d->render_ids(d->user, &c, t0, ends[1]) != 0 || ex__baseviews_route_split(&r, a, b, ends[0], ends[1], 0) != 0)
+            result = -1;
+        swap = ends[0];   /* this stretch's end begins the next */
+        ends[0] = ends[1];
+        ends[1] = swap;
+    }
+    for (i = 0; i < r.max_depth + 2; i++) free(r.ids[i]);
+    free(r.ids);
+    return result;
+}
+
+/* The decomposition: base views (section 4.1: the box, or the route) and
+   key times (section 4.2, with the base views and the extra cameras).
+   Returns 0, or -1 when a call failed or render_ids cancelled. */
 EX_FN int ex_baseviews_build(const ex_baseviews_desc *d, ex_baseviews *bv)
 {
     rendercache_view_space_desc vd;
@@ -121,23 +242,33 @@ EX_FN int ex_baseviews_build(const ex_baseviews_desc *d, ex_baseviews *bv)
     double t0 = ex__baseviews_seconds();
     uint32_t v;
     memset(bv, 0, sizeof *bv);
-    memset(&vd, 0, sizeof vd);
-    vd.camera = d->fisheye;
-    memcpy(vd.lo, d->lo, sizeof vd.lo);
-    memcpy(vd.hi, d->hi, sizeof vd.hi);
-    vd.time = d->times[0];
-    vd.quality = d->quality;
-    vd.max_depth = d->view_depth ? d->view_depth : 3;
-    vd.render_ids = d->render_ids;
-    vd.user = d->user;
-    if (rendercache_view_space_create(&vd, &bv->vs) != RENDERCACHE_OK) return -1;
-    bv->view_count = rendercache_view_space_count(bv->vs);
+    if (d->route) {
+        if (ex__baseviews_route_views(d, bv) != 0) {
+            ex_baseviews_free(bv);
+            return -1;
+        }
+    } else {
+        memset(&vd, 0, sizeof vd);
+        vd.camera = d->fisheye;
+        memcpy(vd.lo, d->lo, sizeof vd.lo);
+        memcpy(vd.hi, d->hi, sizeof vd.hi);
+        vd.time = d->times[0];
+        vd.quality = d->quality;
+        vd.max_depth = d->view_depth ? d->view_depth : 3;
+        vd.render_ids = d->render_ids;
+        vd.user = d->user;
+        if (rendercache_view_space_create(&vd, &bv->vs) != RENDERCACHE_OK) return -1;
+        bv->view_count = rendercache_view_space_count(bv->vs);
+    }
     bv->seconds_views = ex__baseviews_seconds() - t0;
     t0 = ex__baseviews_seconds();
     cams = (rendercache_camera *)malloc(sizeof *cams * (bv->view_count + d->extra_count));
     if (!cams) { ex_baseviews_free(bv); return -1; }
     for (v = 0; v < d->extra_count; v++) cams[v] = d->extra_cameras[v];
-    for (v = 0; v < bv->view_count; v++) rendercache_view_space_camera(bv->vs, v, &cams[d->extra_count + v]);
+    for (v = 0; v < bv->view_count; v++) {
+        if (bv->vs) rendercache_view_space_camera(bv->vs, v, &cams[d->extra_count + v]);
+        else cams[d->extra_count + v] = bv->view_cameras[v];
+    }
     memset(&td, 0, sizeof td);
     td.cameras = cams;
     td.camera_count = bv->view_count + d->extra_count;
@@ -163,7 +294,8 @@ EX_FN int ex_baseviews_build(const ex_baseviews_desc *d, ex_baseviews *bv)
 EX_FN rendercache_camera ex_baseviews_base_camera(const ex_baseviews *bv, uint32_t view, uint32_t size)
 {
     rendercache_camera c;
-    rendercache_view_space_camera(bv->vs, view, &c);
+    if (bv->vs) rendercache_view_space_camera(bv->vs, view, &c);
+    else c = bv->view_cameras[view];
     c.width = c.height = size;
     return c;
 }
@@ -177,11 +309,25 @@ EX_FN uint32_t ex_baseviews_interval(const ex_baseviews *bv, double t)
 }
 
 /* The base images a frame at eye and time t needs: the views at the corners
-   of the view-space cell around the eye (*count of them) at keys k and k+1. */
+   of the view-space cell around the eye (*count of them; on a route the two
+   ends of the stretch around t) at keys k and k+1. */
 EX_FN int ex_baseviews_needs(const ex_baseviews *bv, const float eye[3], double t, uint32_t views[8],
                              uint32_t *count, uint32_t *key)
 {
-    if (rendercache_view_space_locate(bv->vs, eye, views, count) != RENDERCACHE_OK) return -1;
+    if (bv->vs) {
+        if (rendercache_view_space_locate(bv->vs, eye, views, count) != RENDERCACHE_OK) return -1;
+    } else {
+        uint32_t lo = 0, hi = bv->view_count - 1;   /* view_times[lo] <= t < view_times[hi], clamped */
+        if (bv->view_count < 2) return -1;
+        while (hi - lo > 1) {
+            uint32_t mid = lo + (hi - lo) / 2;
+            if (bv->view_times[mid] <= t) lo = mid;
+            else hi = mid;
+        }
+        views[0] = lo;
+        views[1] = hi;
+        *count = 2;
+    }
     *key = ex_baseviews_interval(bv, t);
     return 0;
 }

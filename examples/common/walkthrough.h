@@ -53,14 +53,17 @@
                 changes while it walks). The first frame is traced in full.
      baseviews  range images (rendercache.h part 2, Nimeroff, Dorsey &
                 Rushmeier 1996, through examples/common/baseviews.h): the
-                camera's line of eyes is subdivided until fish-eye id images
-                agree on a fraction q of their pixels (base views), key
-                times are refined with the same test (a fish-eye at the lamp
-                and the base views), base images are traced with the shading
+                camera's line of eyes (the office), or its route through a
+                building as a chain of 2 m stretches, is subdivided until
+                fish-eye id images agree on a fraction q of their pixels
+                (base views), key times are refined with the same test
+                (a fish-eye below each lamp and the base views), the base
+                images some frame warps from are traced with the shading
                 above and saved; the bunny's indirect light is solved at key
                 times of its own (rendercache_keytimes_create, section 4.3)
                 and interpolated in time for the base images. A frame blends
-                the base images of the two views around its eye to its time,
+                the base images of the two views around its eye (on a route:
+                around its time) to its time,
                 moving the bunny by its transforms, and warps them into its
                 camera with both fills, averaging the views that see a
                 surface (pinterp -a); gaps wider than 8 pixels are traced.
@@ -3608,6 +3611,9 @@ typedef struct wt_renderer {
     uint32_t budget;
     /* baseviews */
     ex_baseviews bv;
+    unsigned char *base_needed; /* per base image (view * time_count + key): some frame warps from it */
+    uint32_t base_needed_count;
+    double route_length;        /* metres of the camera's route (a planned route's view space) */
     ex_baseviews_reconstructor rec;
     rendercache_range_image *blend[8], *out;
     uint32_t fill_frame;
@@ -3994,8 +4000,9 @@ static void wt__object_transforms(void *user, double t, float *m)
     wt_bunny_transform(w, t, m + 12);
 }
 
-/* The base views look along the mean view direction of the path, from a box
-   around the path's eyes. */
+/* The office's base views look along the mean view direction of the path,
+   from a box around the path's eyes (a line along the front wall). A planned
+   route has its own view space (wt__route_view). */
 static void wt__view_space(const wt_options *o, float lo[3], float hi[3], float axis[3])
 {
     int f, k, frames = o->frames > 1 ? o->frames : 2;
@@ -4033,6 +4040,73 @@ static rendercache_camera wt__fisheye(const float eye[3], const float axis[3], u
     return c;
 }
 
+/* A planned route's view space (ex_baseviews_desc.route): the fish-eye at
+   the camera's eye at time t, looking where the camera looks. Stretches of
+   WT_BASEVIEWS_STRETCH metres of the route before the fitness test halves
+   them (a box of eyes around the house's walk planned 729 views). */
+#define WT_BASEVIEWS_STRETCH 2.0f
+static void wt__route_view(void *user, double t, rendercache_camera *camera)
+{
+    rendercache_camera c = wt_camera((const wt_options *)user, t, 8, 8);
+    float d[3], l;
+    int k;
+    for (k = 0; k < 3; k++) d[k] = c.look_at[k] - c.eye[k];
+    l = sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    for (k = 0; k < 3; k++) d[k] = l > 0.0f ? d[k] / l : (k == 2 ? 1.0f : 0.0f);
+    *camera = wt__fisheye(c.eye, d, camera->width);
+}
+
+/* The cameras of the time test's direct light coherence: a fish-eye looking
+   down from WT_LAMP_EYE_DROP below each lamp (the lights whose bounding
+   spheres overlap, joined: a lamp's faces are lights of their own), at
+   the middle of the lamp in plan. In the office: below the lamp's shade,
+   (3.30, 1.55, 3.40). *count of them into cams (w->light_count at most). */
+#define WT_LAMP_EYE_DROP 0.05f
+static void wt__lamp_cameras(const wt_world *w, rendercache_camera *cams, uint32_t *count, int *lamp_of)
+{
+    const float down[3] = { 0.0f, -1.0f, 0.0f };
+    uint32_t e, f, lamps = 0;
+    for (e = 0; e < w->light_count; e++) lamp_of[e] = -1;
+    for (e = 0; e < w->light_count; e++) {   /* flood: e's lamp takes every light touching one of it */
+        uint32_t changed = 1;
+        float lo[3], hi[3], eye[3];
+        int k;
+        if (lamp_of[e] >= 0) continue;
+        lamp_of[e] = (int)lamps;
+        while (changed)
+            for (changed = 0, f = 0; f < w->light_count; f++) {
+                uint32_t g;
+                if (lamp_of[f] >= 0) continue;
+                for (g = 0; g < w->light_count; g++) {
+                    const wt_light *a = &w->lights[f], *b = &w->lights[g];
+                    float d2 = 0.0f;
+                    if (lamp_of[g] != (int)lamps) continue;
+                    for (k = 0; k < 3; k++) d2 += (a->centre[k] - b->centre[k]) * (a->centre[k] - b->centre[k]);
+                    if (d2 <= (a->radius + b->radius) * (a->radius + b->radius)) {
+                        lamp_of[f] = (int)lamps;
+                        changed = 1;
+                        break;
+                    }
+                }
+            }
+        for (k = 0; k < 3; k++) {
+            lo[k] = FLT_MAX;
+            hi[k] = -FLT_MAX;
+        }
+        for (f = 0; f < w->light_count; f++)
+            if (lamp_of[f] == (int)lamps)
+                for (k = 0; k < 3; k++) {
+                    lo[k] = fminf(lo[k], w->lights[f].centre[k]);
+                    hi[k] = fmaxf(hi[k], w->lights[f].centre[k]);
+                }
+        eye[0] = 0.5f * (lo[0] + hi[0]);
+        eye[1] = lo[1] - WT_LAMP_EYE_DROP;
+        eye[2] = 0.5f * (lo[2] + hi[2]);
+        cams[lamps++] = wt__fisheye(eye, down, (uint32_t)w->opt.id_size);
+    }
+    *count = lamps;
+}
+
 static uint64_t wt__baseviews_key(const wt_renderer *r)
 {
     const wt_options *o = &r->w->opt;
@@ -4048,6 +4122,10 @@ static uint64_t wt__baseviews_key(const wt_renderer *r)
     h = wt_hash_f32(h, WT_KEY_EPSILON);   /* the bunny's key-time solutions are saved with the images */
     h = wt_hash_u64(h, (uint64_t)o->bunny_shadow);
     h = wt_hash_u64(h, 3u);   /* 3: base images without the bunny's shadows (wt__baseviews_shadows), through glass too */
+    if (o->path) {   /* a route's views, and the frames that choose which base images are traced */
+        h = wt_hash_f32(h, WT_BASEVIEWS_STRETCH);
+        h = wt_hash_u64(h, (uint64_t)o->frames);
+    }
     return h;
 }
 
@@ -4249,8 +4327,9 @@ static int wt__load_bases(wt_renderer *r, const void *data, size_t size)
         if (t != r->bv.times[i]) return -1;
     }
     for (i = 0; i < r->bv.view_count * r->bv.time_count; i++) {
-        if (!wt_bytes_get_u64(&b, &n) || n > b.size - b.read ||
-            rendercache_range_image_load_from_memory(b.data + b.read, (size_t)n, NULL, &r->bv.base[i]) != RENDERCACHE_OK)
+        if (!wt_bytes_get_u64(&b, &n) || n > b.size - b.read) return -1;
+        if (n == 0 && !r->base_needed[i]) continue;   /* no frame warps from it: not traced */
+        if (rendercache_range_image_load_from_memory(b.data + b.read, (size_t)n, NULL, &r->bv.base[i]) != RENDERCACHE_OK)
             return -1;
         b.read += (size_t)n;
     }
@@ -4279,6 +4358,10 @@ static int wt__save_bases(const wt_renderer *r, wt_bytes *b)
     for (i = 0; i < r->bv.view_count * r->bv.time_count; i++) {
         void *data;
         size_t size;
+        if (!r->bv.base[i]) {   /* not needed: not traced */
+            wt_bytes_put_u64(b, 0);
+            continue;
+        }
         if (rendercache_range_image_save_to_memory(r->bv.base[i], NULL, &data, &size) != RENDERCACHE_OK) return -1;
         wt_bytes_put_u64(b, size);
         wt_bytes_put(b, data, size);
@@ -4345,15 +4428,51 @@ static int wt__fill_pixel(void *user, uint32_t x, uint32_t y, const float org[3]
     return wt__fill_shade(r, &p, rgb, depth, object);
 }
 
+/* The base images the frames warp from (r->base_needed): on a planned
+   route, those of the stretch and key interval around each frame's time;
+   in the office's box, all of them (as its reference frames were made:
+   base images insert light vectors that later ones look up). */
+static int wt__baseviews_needed(wt_renderer *r)
+{
+    const wt_options *o = &r->w->opt;
+    const uint32_t n = r->bv.view_count * r->bv.time_count;
+    uint32_t views[8], count, key, i;
+    int f;
+    r->base_needed = (unsigned char *)calloc(n ? n : 1, 1);
+    if (!r->base_needed) return -1;
+    if (!o->path) memset(r->base_needed, 1, n);
+    for (f = 0; f < o->frames && o->path; f++) {
+        double t = wt_frame_time(o, f);
+        rendercache_camera c = wt_camera(o, t, 8, 8);
+        if (ex_baseviews_needs(&r->bv, c.eye, t, views, &count, &key) != 0) return -1;
+        for (i = 0; i < count; i++) {
+            r->base_needed[views[i] * r->bv.time_count + key] = 1;
+            r->base_needed[views[i] * r->bv.time_count + key + 1] = 1;
+        }
+    }
+    for (r->base_needed_count = 0, i = 0; i < n; i++) r->base_needed_count += r->base_needed[i];
+    return 0;
+}
+
+/* Every base image a frame warps from is there. */
+static int wt__baseviews_complete(const wt_renderer *r)
+{
+    uint32_t i;
+    for (i = 0; i < r->bv.view_count * r->bv.time_count; i++)
+        if (r->base_needed[i] && !r->bv.base[i]) return 0;
+    return 1;
+}
+
 static int wt__baseviews_create(wt_renderer *r, char *err, size_t err_size)
 {
     wt_world *w = r->w;
     const wt_options *o = &w->opt;
     ex_baseviews_desc d;
     rendercache_warp_desc wd;
-    rendercache_camera lamp, frame_cam;
+    rendercache_camera *lamps, frame_cam;
     double *keys;
-    float axis[3], eye[3], down[3] = { 0.0f, -1.0f, 0.0f }, lamp_eye[3] = { 3.30f, 1.55f, 3.40f };
+    float axis[3], eye[3];
+    int *lamp_of;
     char path[1024];
     void *data = NULL;
     size_t size = 0;
@@ -4364,15 +4483,33 @@ static int wt__baseviews_create(wt_renderer *r, char *err, size_t err_size)
     /* the decomposition (id images are cheap: recomputed every run) */
     t0 = wt_seconds();
     memset(&d, 0, sizeof d);
-    wt__view_space(o, d.lo, d.hi, axis);
-    for (k0 = 0; k0 < 3; k0++) eye[k0] = 0.5f * (d.lo[k0] + d.hi[k0]);
-    d.fisheye = wt__fisheye(eye, axis, (uint32_t)o->id_size);
-    lamp = wt__fisheye(lamp_eye, down, (uint32_t)o->id_size);   /* direct light coherence */
-    d.extra_cameras = &lamp;
-    d.extra_count = 1;
-    d.quality = o->quality;
+    if (o->path) {   /* a chain of stretches along the route */
+        r->route_length = wt_route_measure(o).length;
+        d.route = wt__route_view;
+        d.route_user = (void *)o;
+        d.stretches = (uint32_t)ceil(r->route_length / WT_BASEVIEWS_STRETCH);
+        d.stretches = d.stretches ? d.stretches : 1;
+        d.fisheye.width = d.fisheye.height = (uint32_t)o->id_size;
+        wt__route_view(d.route_user, 0.0, &d.fisheye);
+    } else {
+        wt__view_space(o, d.lo, d.hi, axis);
+        for (k0 = 0; k0 < 3; k0++) eye[k0] = 0.5f * (d.lo[k0] + d.hi[k0]);
+        d.fisheye = wt__fisheye(eye, axis, (uint32_t)o->id_size);
+    }
+    /* direct light coherence */
+    lamps = (rendercache_camera *)malloc(sizeof *lamps * (w->light_count + 1));
+    lamp_of = (int *)malloc(sizeof *lamp_of * (w->light_count + 1));
     keys = (double *)malloc(sizeof(double) * (size_t)o->keys);
-    if (!keys) return wt__fail(err, err_size, "%s", "out of memory");
+    if (!lamps || !lamp_of || !keys) {
+        free(lamps);
+        free(lamp_of);
+        free(keys);
+        return wt__fail(err, err_size, "%s", "out of memory");
+    }
+    wt__lamp_cameras(w, lamps, &d.extra_count, lamp_of);
+    free(lamp_of);
+    d.extra_cameras = lamps;
+    d.quality = o->quality;
     for (k0 = 0; k0 < o->keys; k0++) keys[k0] = (double)k0 / (o->keys - 1);
     d.times = keys;
     d.time_count = (uint32_t)o->keys;
@@ -4380,11 +4517,20 @@ static int wt__baseviews_create(wt_renderer *r, char *err, size_t err_size)
     d.user = w;
     k0 = ex_baseviews_build(&d, &r->bv);
     free(keys);
-    if (k0 != 0) return wt__fail(err, err_size, "%s", "the base-view decomposition failed (out of memory)");
+    free(lamps);
+    if (k0 != 0 || wt__baseviews_needed(r) != 0)
+        return wt__fail(err, err_size, "%s", "the base-view decomposition failed (out of memory)");
     if (o->verbose) {
-        printf("base views: %u views x %u key times = %u base images of %dx%d (q = %.2f, decomposition %.1f s)\n",
-               r->bv.view_count, r->bv.time_count, r->bv.view_count * r->bv.time_count, o->base_size, o->base_size,
-               (double)o->quality, wt_seconds() - t0);
+        if (o->path)
+            printf("base views: %u views along the route's %.1f m (%.1f per metre, %u stretches), %u lamps; %u key "
+                   "times; %u base images of %dx%d that the frames warp from (q = %.2f, decomposition %.1f s)\n",
+                   r->bv.view_count, r->route_length, r->bv.view_count / (r->route_length > 0.0 ? r->route_length : 1.0),
+                   d.stretches, d.extra_count, r->bv.time_count, r->base_needed_count, o->base_size, o->base_size,
+                   (double)o->quality, wt_seconds() - t0);
+        else
+            printf("base views: %u views x %u key times = %u base images of %dx%d (q = %.2f, decomposition %.1f s)\n",
+                   r->bv.view_count, r->bv.time_count, r->bv.view_count * r->bv.time_count, o->base_size, o->base_size,
+                   (double)o->quality, wt_seconds() - t0);
         fflush(stdout);
     }
     /* the base images */
@@ -4393,7 +4539,7 @@ static int wt__baseviews_create(wt_renderer *r, char *err, size_t err_size)
     wt_cache_path(o->cache_dir, "baseviews", r->baseviews_key, path, sizeof path);
     if (o->use_cache) got = wt_cache_load(o->cache_dir, "baseviews", r->baseviews_key, &data, &size);
     if (got == 1) {
-        if (wt__load_bases(r, data, size) == 0) r->reused_baseviews = 1;
+        if (wt__load_bases(r, data, size) == 0 && wt__baseviews_complete(r)) r->reused_baseviews = 1;
         else got = -1;
         free(data);
     }
@@ -4431,13 +4577,14 @@ static int wt__baseviews_create(wt_renderer *r, char *err, size_t err_size)
         w->static_cache = copy;
         wt_progress_begin(&bar, "base images", o->progress);
         for (k = 0, i = 0; k < r->bv.time_count; k++)   /* key by key: the bunny's pose changes least often */
-            for (v = 0; v < r->bv.view_count; v++, i++) {
+            for (v = 0; v < r->bv.view_count; v++) {
+                if (!r->base_needed[v * r->bv.time_count + k]) continue;
                 if (wt__render_base(r, v, k, &r->bv.base[v * r->bv.time_count + k]) != 0) {
                     w->static_cache = saved;
                     lightvec_cache_destroy(copy);
                     return wt__fail(err, err_size, "%s", "rendering a base image failed (out of memory)");
                 }
-                wt_progress_update(&bar, i + 1, (uint64_t)r->bv.view_count * r->bv.time_count);
+                wt_progress_update(&bar, ++i, r->base_needed_count);
             }
         wt_progress_end(&bar);
         w->static_cache = saved;
@@ -5461,6 +5608,7 @@ EX_FN void wt_renderer_destroy(wt_renderer *r)
     free(r->req);
     free(r->samples);
     ex_baseviews_free(&r->bv);
+    free(r->base_needed);
     rendercache_keytimes_destroy(r->bunny_light);
     free(r->bunny_indirect);
     free(r->saved_key_times);
