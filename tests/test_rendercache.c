@@ -1411,7 +1411,9 @@ static int left_pixel(const scene *s, const rendercache_camera *cam, uint32_t x,
 
 /* An engine that knows where the light changed (a shadow moved) ages
    exactly the points there: the priorities of the pixels showing them
-   rise, no other pixel's changes, and the next requests go to them. */
+   rise (their points are at most 11 frames old, below the age a change
+   gives, the age ramp of 32), no other pixel's changes, a second call
+   changes nothing, and the next requests go to them. */
 static void test_invalidate_where_ages_exactly_those_points(void)
 {
     const uint32_t w = 64, h = 48, n = w * h;
@@ -1454,6 +1456,9 @@ static void test_invalidate_where_ages_exactly_those_points(void)
     CHECK(left > n / 3);
     CHECK_EQ_INT(raised, left);
     CHECK_EQ_INT(other, 0);
+    memcpy(before, rendercache_priority_image(rc), sizeof(float) * n);   /* aged twice ages alike */
+    CHECK_EQ_INT(rendercache_invalidate_where(rc, left_of_wall, &ctx, NULL), RENDERCACHE_OK);
+    CHECK(memcmp(before, rendercache_priority_image(rc), sizeof(float) * n) == 0);
     CHECK_EQ_INT(rendercache_request(rc, g_req, left, &got), RENDERCACHE_OK);
     CHECK_EQ_INT(got, left);
     for (i = 0; i < got; i++) wrong += side[(size_t)g_req[i].y * w + g_req[i].x] == 0;
