@@ -771,9 +771,12 @@ RENDERCACHE_API rendercache_result rendercache_invalidate(rendercache *rc, uint3
    shows is asked twice (once to age it, once for its pixel's priority),
    so changed must give the same answer both times; it is called from the
    calling thread, in slot order, and the result does not depend on
-   threads. Cost: one affine transform and one call per live point (at
-   640x480 and 2 points per pixel, 614400 calls plus one per pixel that
-   shows a point). aged (may be NULL) gets the number of points aged. */
+   threads. Cost: one affine transform and one call per point on an
+   object, plus one per pixel that shows one (at 640x480, 2 points per
+   pixel: up to 614400 + 307200 calls; with a predicate that says no,
+   2.1 ms on one core, about 3.5 ns a slot; the walkthrough's, which tests
+   the cones of 16 lights, 22 ms). aged (may be NULL) gets the number of
+   points aged. */
 RENDERCACHE_API rendercache_result rendercache_invalidate_where(rendercache *rc,
                                                                 int (*changed)(void *user, const float p[3],
                                                                                uint32_t object),

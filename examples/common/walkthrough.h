@@ -3875,7 +3875,18 @@ static float wt__view_lobe(const wt_point *p, const lightvec_material *m)
    own points among them. In a building only the lights the grid says are
    seen around the bunny's centres (wt__lights_seen's neighbourhood flag)
    count: a lamp behind a wall casts no shadow of the bunny, and its cones
-   would age the floor of the next room for nothing. */
+   would age the floor of the next room for nothing. The points are aged as
+   a colour change ages them (they rank with the least urgent holes):
+   aged as rendercache_invalidate ages an object's points, above every
+   hole, the office's region (up to a fifth of its image) took the budget
+   from the holes, pooled LRMS against converged renders (160x120, frames
+   7-47 every 8th) 0.079 -> 0.100; as now 0.079, and 0.081 -> 0.076 over
+   the pixels whose floor lay in the bunny's cones or reach in the last 8
+   frames. In a probe of the house at 320x240 (48 frames, frame 4) the
+   floor behind the bunny showed points 1-2 frames old at a fifth of their
+   brightness before, and only points of the current frame now; the dark
+   patch left there is holes filled dark. Cost: 5 ms a frame at 320x240
+   (house, 16 lights, one core), 22 at 640x480. */
 typedef struct wt__trail {
     const wt_world *w;
     const float *seen[2];   /* wt__lights_seen at the two centres (NULL without a grid: every light counts) */
