@@ -1374,6 +1374,103 @@ static void test_invalidate_ranks_an_object_first(void)
     rendercache_destroy(rc);
 }
 
+/* rendercache_invalidate_where's predicate in the test below: the left
+   half of the wall (object 0, x < 0). It counts its calls and notes any
+   call about a point it should never see (the background, a non-finite
+   position). */
+typedef struct where_ctx {
+    uint32_t calls, yes, strange;
+    int answer;   /* 0: always answer no (counting only) */
+} where_ctx;
+
+static int left_of_wall(void *user, const float p[3], uint32_t object)
+{
+    where_ctx *c = (where_ctx *)user;
+    int in = object == 0 && p[0] < 0.0f;
+    c->calls++;
+    c->yes += (uint32_t)in;
+    if (object >= 2 || !isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2]) || fabsf(p[2] - WALL_Z) > 1e-3f * WALL_Z) {
+        if (object != 1) c->strange++;   /* the square lies at SQUARE_Z */
+    }
+    return in && c->answer;
+}
+
+/* Which side of the predicate a pixel's footprint lies on: 1 when all four
+   corners see the wall at x < 0, 0 when none does, -1 when they disagree
+   (the point it shows may be either). */
+static int left_pixel(const scene *s, const rendercache_camera *cam, uint32_t x, uint32_t y)
+{
+    int k, left = 0;
+    for (k = 0; k < 4; k++) {
+        float o[3], d[3], pos[3], rgb[3];
+        rendercache_camera_ray(cam, (float)x + (float)(k & 1), (float)y + (float)(k >> 1), o, d);
+        left += trace(s, o, d, pos, rgb) == 0 && pos[0] < 0.0f;
+    }
+    return left == 4 ? 1 : left == 0 ? 0 : -1;
+}
+
+/* An engine that knows where the light changed (a shadow moved) ages
+   exactly the points there: the priorities of the pixels showing them
+   rise (their points are at most 11 frames old, below the age a change
+   gives, the age ramp of 32), no other pixel's changes, a second call
+   changes nothing, and the next requests go to them. */
+static void test_invalidate_where_ages_exactly_those_points(void)
+{
+    const uint32_t w = 64, h = 48, n = w * h;
+    rendercache_camera cam = make_camera(0, 0, 0, 0, 0, 10, w, h);
+    rendercache_desc d = make_desc(w, h);
+    rendercache *rc;
+    scene s;
+    where_ctx count = { 0, 0, 0, 0 }, ctx = { 0, 0, 0, 1 };
+    static float before[MAX_PIXELS];
+    static signed char side[MAX_PIXELS];
+    uint32_t got = 0, i, f, aged = 7, left = 0, raised = 0, other = 0, wrong = 0;
+    memset(&s, 0, sizeof s);
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+    CHECK_EQ_INT(rendercache_invalidate_where(rc, left_of_wall, &ctx, &aged), RENDERCACHE_OK);   /* empty: fine */
+    CHECK_EQ_INT(aged, 0);
+    CHECK_EQ_INT(ctx.calls, 0);
+    converge(rc, &s, &cam);
+    for (f = 0; f < 10; f++) run_frame(rc, &s, &cam, n / 20);
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
+    memcpy(before, rendercache_priority_image(rc), sizeof(float) * n);
+    /* a predicate that says no changes nothing; it is asked about every
+       point on an object and again about every one shown */
+    CHECK_EQ_INT(rendercache_invalidate_where(rc, left_of_wall, &count, &aged), RENDERCACHE_OK);
+    CHECK_EQ_INT(aged, 0);
+    CHECK(count.calls > n);
+    CHECK_EQ_INT(count.strange, 0);
+    CHECK(memcmp(before, rendercache_priority_image(rc), sizeof(float) * n) == 0);
+    CHECK_EQ_INT(rendercache_invalidate_where(rc, left_of_wall, &ctx, &aged), RENDERCACHE_OK);
+    CHECK_EQ_INT(ctx.calls, count.calls);
+    CHECK(aged > 0 && aged < ctx.yes);   /* the shown ones were asked twice */
+    for (i = 0; i < n; i++) {
+        float now = rendercache_priority_image(rc)[i];
+        side[i] = (signed char)left_pixel(&s, &cam, i % w, i / w);
+        if (side[i] == 1) {
+            left++;
+            raised += now > before[i];
+        }
+        if (side[i] == 0) other += now != before[i];
+    }
+    CHECK(left > n / 3);
+    CHECK_EQ_INT(raised, left);
+    CHECK_EQ_INT(other, 0);
+    memcpy(before, rendercache_priority_image(rc), sizeof(float) * n);   /* aged twice ages alike */
+    CHECK_EQ_INT(rendercache_invalidate_where(rc, left_of_wall, &ctx, NULL), RENDERCACHE_OK);
+    CHECK(memcmp(before, rendercache_priority_image(rc), sizeof(float) * n) == 0);
+    CHECK_EQ_INT(rendercache_request(rc, g_req, left, &got), RENDERCACHE_OK);
+    CHECK_EQ_INT(got, left);
+    for (i = 0; i < got; i++) wrong += side[(size_t)g_req[i].y * w + g_req[i].x] == 0;
+    CHECK_EQ_INT(wrong, 0);
+    CHECK_EQ_INT(rendercache_invalidate_where(NULL, left_of_wall, &ctx, &aged), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(aged, 0);
+    aged = 7;
+    CHECK_EQ_INT(rendercache_invalidate_where(rc, NULL, &ctx, &aged), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(aged, 0);
+    rendercache_destroy(rc);
+}
+
 /* ---------------------------------------------------------------------
    Per-point priority scale (the light-vector weight of Crespin-Peroche).
    --------------------------------------------------------------------- */
@@ -2390,6 +2487,7 @@ int main(int argc, char **argv)
     RUN(test_changed_colours_are_resampled_first);
     RUN(test_change_ages_the_points_around_it);
     RUN(test_invalidate_ranks_an_object_first);
+    RUN(test_invalidate_where_ages_exactly_those_points);
     RUN(test_priority_scale);
     RUN(test_view_lobe_ages_highlights);
     RUN(test_sparse_points_use_the_wide_filter);
