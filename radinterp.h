@@ -3772,6 +3772,15 @@ static radinterp__vd radinterp__ff_edge_v(radinterp__vd ax, radinterp__vd ay, ra
 #if !defined(RADINTERP__VW)
 #define RADINTERP__VW 1
 #endif
+/* Edge terms are exactly antisymmetric in the edge's ends where no a * b + c
+   is fused differently in the two orders, which the guard of the vector
+   kernel ensures; elsewhere (a compiler that contracts) radinterp__query_children
+   computes every edge. */
+#if defined(RADINTERP__FF_SIMD)
+#define RADINTERP__FF_SHARE 1
+#else
+#define RADINTERP__FF_SHARE 0
+#endif
 #define RADINTERP__FF_ROWS 16   /* edges radinterp__ff_rows takes at once: a quad's four children */
 
 /* radinterp__ff_edge of the edges a -> b given as rows of coordinates
@@ -8942,7 +8951,7 @@ static const unsigned char radinterp__inner_edges[2][4][4] = {
    both ends of such an edge are equal, bit for bit, in the two children
    (the horizon cut neither), the second takes the first's term negated,
    12 edge terms instead of 16 for a quad, and the same sums as the
-   children taken one by one. */
+   children taken one by one (where RADINTERP__FF_SHARE allows). */
 static void radinterp__query_children(const radinterp__query *q, uint32_t node, double (*Sc)[RADINTERP__POLY_MAX][3],
                                       int *nc, double *full)
 {
@@ -8959,7 +8968,7 @@ static void radinterp__query_children(const radinterp__query *q, uint32_t node, 
         else if (nc[c]) full[c] = radinterp__ff_poly(q->p, q->n, (const double (*)[3])Sc[c], nc[c]);
         for (k = 0; k < nc[c]; k++) from[c][k] = -1;
     }
-    for (j = 0; j < (layout ? 4 : 3); j++) {
+    for (j = 0; RADINTERP__FF_SHARE && j < (layout ? 4 : 3); j++) {
         const unsigned char *ie = radinterp__inner_edges[layout][j];
         int c0 = ie[0], k0 = ie[1], c1 = ie[2], k1 = ie[3], n0 = (int)nd->count;
         if (((todo >> c0) & (todo >> c1) & 1) && memcmp(Sc[c0][k0], Sc[c1][(k1 + 1) % n0], sizeof Sc[c0][k0]) == 0 &&
