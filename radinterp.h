@@ -3762,13 +3762,6 @@ static radinterp__vd radinterp__ff_edge_v(radinterp__vd ax, radinterp__vd ay, ra
 }
 #endif
 
-/* radinterp__ff_edge of the edges r[i] -> r[(i + 1) % count] into e[i]
-   (count <= RADINTERP__POLY_MAX), RADINTERP__VW at a time where the vector
-   kernel is compiled (RADINTERP__FF_SIMD): the form factors of sources and
-   shadow pieces took a seventh (building_1k) to a fifth (the office) of a
-   mesh build's time, and their edges are independent. The last lanes repeat the first edges, their
-   terms unused. Bit for bit the scalar terms; the callers sum them in edge
-   order. */
 #if !defined(RADINTERP__VW)
 #define RADINTERP__VW 1
 #endif
@@ -3808,6 +3801,13 @@ static void radinterp__ff_rows(const double *const a[3], const double *const b[3
 #endif
 }
 
+/* radinterp__ff_edge of the edges r[i] -> r[(i + 1) % count] into e[i]
+   (count <= RADINTERP__POLY_MAX), RADINTERP__VW at a time where the vector
+   kernel is compiled (RADINTERP__FF_SIMD): the form factors of sources and
+   shadow pieces took a seventh (building_1k) to a fifth (the office) of a
+   mesh build's time, and their edges are independent. The last lanes repeat the first edges, their
+   terms unused. Bit for bit the scalar terms; the callers sum them in edge
+   order. */
 static void radinterp__ff_edges(const double (*r)[3], int count, const double *n, double *e)
 {
     double c[3][RADINTERP__POLY_MAX + RADINTERP__VW];
@@ -8904,11 +8904,8 @@ static double radinterp__backproject(radinterp__query *q, const radinterp__link 
     return radinterp__bp_by_triangulation(q, &bp, survivors, nsurv, overflow);
 }
 
-/* A source node as the query point sees it: moved push_off behind its
-   plane (6.4) and clipped by the receiver's horizon (6.2.1), into Sc, and
-   its unoccluded factor (eq. 6.1) into *full (q->known_full for
-   q->known_node). Returns the corner count; 0 when no part of it lies in
-   front of p. */
+/* The corners of radinterp__query_source below (the moved, clipped source
+   node) without its factor. */
 static int radinterp__source_poly(const radinterp__query *q, uint32_t node, double (*Sc)[3])
 {
     const radinterp_solution *s = q->s;
@@ -8927,6 +8924,11 @@ static int radinterp__source_poly(const radinterp__query *q, uint32_t node, doub
     return nc < 3 ? 0 : nc;
 }
 
+/* A source node as the query point sees it: moved push_off behind its
+   plane (6.4) and clipped by the receiver's horizon (6.2.1), into Sc, and
+   its unoccluded factor (eq. 6.1) into *full (q->known_full for
+   q->known_node). Returns the corner count; 0 when no part of it lies in
+   front of p. */
 static int radinterp__query_source(const radinterp__query *q, uint32_t node, double (*Sc)[3], double *full)
 {
     int nc = radinterp__source_poly(q, node, Sc);
