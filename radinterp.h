@@ -3762,6 +3762,45 @@ static radinterp__vd radinterp__ff_edge_v(radinterp__vd ax, radinterp__vd ay, ra
 }
 #endif
 
+#if !defined(RADINTERP__VW)
+#define RADINTERP__VW 1
+#endif
+/* Edge terms are exactly antisymmetric in the edge's ends where no a * b + c
+   is fused differently in the two orders, which the guard of the vector
+   kernel ensures; elsewhere (a compiler that contracts) radinterp__query_children
+   computes every edge. */
+#if defined(RADINTERP__FF_SIMD)
+#define RADINTERP__FF_SHARE 1
+#else
+#define RADINTERP__FF_SHARE 0
+#endif
+#define RADINTERP__FF_ROWS 16   /* edges radinterp__ff_rows takes at once: a quad's four children */
+
+/* radinterp__ff_edge of the edges a -> b given as rows of coordinates
+   (a[k][i] is coordinate k of edge i's start) into e[0 .. count), count <=
+   RADINTERP__FF_ROWS; each row readable RADINTERP__VW - 1 entries past
+   count (those lanes' terms are unused). */
+static void radinterp__ff_rows(const double *const a[3], const double *const b[3], int count, const double *n, double *e)
+{
+#if defined(RADINTERP__FF_SIMD)
+    double out[RADINTERP__FF_ROWS + RADINTERP__VW];
+    int i;
+    for (i = 0; i < count; i += RADINTERP__VW)
+        RADINTERP__V(storeu_pd)(out + i, radinterp__ff_edge_v(RADINTERP__V(loadu_pd)(a[0] + i), RADINTERP__V(loadu_pd)(a[1] + i),
+                                                             RADINTERP__V(loadu_pd)(a[2] + i), RADINTERP__V(loadu_pd)(b[0] + i),
+                                                             RADINTERP__V(loadu_pd)(b[1] + i), RADINTERP__V(loadu_pd)(b[2] + i), n));
+    if (count > 0) memcpy(e, out, (size_t)count * sizeof *e);
+#else
+    int i;
+    for (i = 0; i < count; i++) {
+        double ra[3], rb[3];
+        int k;
+        for (k = 0; k < 3; k++) { ra[k] = a[k][i]; rb[k] = b[k][i]; }
+        e[i] = radinterp__ff_edge(ra, rb, n);
+    }
+#endif
+}
+
 /* radinterp__ff_edge of the edges r[i] -> r[(i + 1) % count] into e[i]
    (count <= RADINTERP__POLY_MAX), RADINTERP__VW at a time where the vector
    kernel is compiled (RADINTERP__FF_SIMD): the form factors of sources and
@@ -3771,34 +3810,34 @@ static radinterp__vd radinterp__ff_edge_v(radinterp__vd ax, radinterp__vd ay, ra
    order. */
 static void radinterp__ff_edges(const double (*r)[3], int count, const double *n, double *e)
 {
-#if defined(RADINTERP__FF_SIMD)
-    double c[3][RADINTERP__POLY_MAX + RADINTERP__VW], out[RADINTERP__POLY_MAX + RADINTERP__VW];
+    double c[3][RADINTERP__POLY_MAX + RADINTERP__VW];
+    const double *a[3], *b[3];
     int i, k;
     if (count < 1) return;
     for (i = 0; i < count + RADINTERP__VW; i++)
         for (k = 0; k < 3; k++) c[k][i] = r[i % count][k];
-    for (i = 0; i < count; i += RADINTERP__VW)
-        RADINTERP__V(storeu_pd)(out + i, radinterp__ff_edge_v(RADINTERP__V(loadu_pd)(c[0] + i), RADINTERP__V(loadu_pd)(c[1] + i),
-                                                             RADINTERP__V(loadu_pd)(c[2] + i), RADINTERP__V(loadu_pd)(c[0] + i + 1),
-                                                             RADINTERP__V(loadu_pd)(c[1] + i + 1),
-                                                             RADINTERP__V(loadu_pd)(c[2] + i + 1), n));
-    memcpy(e, out, (size_t)count * sizeof *e);
-#else
+    for (k = 0; k < 3; k++) { a[k] = c[k]; b[k] = c[k] + 1; }
+    radinterp__ff_rows(a, b, count, n, e);
+}
+
+/* Eq. 6.1 from a polygon's edge terms e[0 .. count), summed in edge order. */
+static double radinterp__ff_sum(const double *e, int count)
+{
+    double sum = 0.0;
     int i;
-    for (i = 0; i < count; i++) e[i] = radinterp__ff_edge(r[i], r[(i + 1) % count], n);
-#endif
+    for (i = 0; i < count; i++) sum += e[i];
+    return -sum / (2.0 * RADINTERP__PI);
 }
 
 /* Eq. 6.1 for a polygon wholly in front of p's tangent plane: positive when
    the polygon winds counter-clockwise seen from the side facing p. */
 static double radinterp__ff_poly(const double *p, const double *n, const double (*v)[3], int count)
 {
-    double r[RADINTERP__POLY_MAX][3], e[RADINTERP__POLY_MAX], sum = 0.0;
+    double r[RADINTERP__POLY_MAX][3], e[RADINTERP__POLY_MAX];
     int i;
     for (i = 0; i < count; i++) radinterp__d3_sub(v[i], p, r[i]);
     radinterp__ff_edges((const double (*)[3])r, count, n, e);
-    for (i = 0; i < count; i++) sum += e[i];
-    return -sum / (2.0 * RADINTERP__PI);
+    return radinterp__ff_sum(e, count);
 }
 
 /* Sutherland-Hodgman: the part of the convex polygon in n . x >= d.
@@ -8865,19 +8904,15 @@ static double radinterp__backproject(radinterp__query *q, const radinterp__link 
     return radinterp__bp_by_triangulation(q, &bp, survivors, nsurv, overflow);
 }
 
-/* A source node as the query point sees it: moved push_off behind its
-   plane (6.4) and clipped by the receiver's horizon (6.2.1), into Sc, and
-   its unoccluded factor (eq. 6.1) into *full (q->known_full for
-   q->known_node). Returns the corner count; 0 when no part of it lies in
-   front of p. */
-static int radinterp__query_source(const radinterp__query *q, uint32_t node, double (*Sc)[3], double *full)
+/* The corners of radinterp__query_source below (the moved, clipped source
+   node) without its factor. */
+static int radinterp__source_poly(const radinterp__query *q, uint32_t node, double (*Sc)[3])
 {
     const radinterp_solution *s = q->s;
     const radinterp__node *src = &s->nodes[node];
     const radinterp__patch *ps = &s->patches[src->patch];
     double S[RADINTERP__POLY_MAX][3];
     int n, nc, i;
-    *full = 0.0;
     if (radinterp__d3_dot(ps->n, q->p) - (ps->d - s->push_off) <= 0.0) return 0;  /* p behind the source */
     n = radinterp__node_poly(src, S);
     for (i = 0; i < n; i++) {  /* push-off (6.4) */
@@ -8886,9 +8921,93 @@ static int radinterp__query_source(const radinterp__query *q, uint32_t node, dou
         S[i][2] -= s->push_off * ps->n[2];
     }
     nc = radinterp__clip_poly((const double (*)[3])S, n, q->n, q->dr, Sc);  /* horizon (6.2.1) */
-    if (nc < 3) return 0;
+    return nc < 3 ? 0 : nc;
+}
+
+/* A source node as the query point sees it: moved push_off behind its
+   plane (6.4) and clipped by the receiver's horizon (6.2.1), into Sc, and
+   its unoccluded factor (eq. 6.1) into *full (q->known_full for
+   q->known_node). Returns the corner count; 0 when no part of it lies in
+   front of p. */
+static int radinterp__query_source(const radinterp__query *q, uint32_t node, double (*Sc)[3], double *full)
+{
+    int nc = radinterp__source_poly(q, node, Sc);
+    *full = 0.0;
+    if (nc == 0) return 0;
     *full = node == q->known_node ? q->known_full : radinterp__ff_poly(q->p, q->n, (const double (*)[3])Sc, nc);
     return nc;
+}
+
+/* The inner edges the children of a quad (count 4) and of a triangle
+   (count 3) share, in section 4's layout: {child c, its edge k, child d,
+   its edge e} where edge e of d is edge k of c taken the other way. */
+static const unsigned char radinterp__inner_edges[2][4][4] = {
+    {{0, 1, 3, 1}, {1, 2, 3, 2}, {2, 0, 3, 0}, {0, 0, 0, 0}},                 /* triangle: the middle child's */
+    {{0, 1, 1, 3}, {1, 2, 2, 0}, {2, 3, 3, 1}, {0, 2, 3, 0}}};                /* quad: around the centre */
+
+/* radinterp__query_source for the four children of node at once. An edge
+   taken the other way round has exactly the opposite term of eq. 6.1 (the
+   cross product's components change sign exactly, its length and the dot
+   product do not), and the children meet along inner edges (a quad's
+   share four, a triangle's middle child its three with the others): where
+   both ends of such an edge are equal, bit for bit, in the two children
+   (the horizon cut neither), the second takes the first's term negated,
+   12 edge terms instead of 16 for a quad, and the same sums as the
+   children taken one by one (where RADINTERP__FF_SHARE allows). */
+static void radinterp__query_children(const radinterp__query *q, uint32_t node, double (*Sc)[RADINTERP__POLY_MAX][3],
+                                      int *nc, double *full)
+{
+    const radinterp__node *nd = &q->s->nodes[node];
+    double rows[6][RADINTERP__FF_ROWS + RADINTERP__VW], term[RADINTERP__FF_ROWS];
+    const double *a[3], *b[3];
+    int from[4][RADINTERP__POLY_MAX], c, k, j, m = 0, todo = 0, layout = nd->count == 4;
+    /* edge k of child c: term from[c][k]; a shared edge's partner: ~ its term */
+    for (c = 0; c < 4; c++) {
+        nc[c] = radinterp__source_poly(q, nd->child + c, Sc[c]);
+        full[c] = 0.0;
+        if (nd->child + (uint32_t)c == q->known_node) full[c] = q->known_full;
+        else if (nc[c] == (int)nd->count) todo |= 1 << c;   /* else clipped: on its own */
+        else if (nc[c]) full[c] = radinterp__ff_poly(q->p, q->n, (const double (*)[3])Sc[c], nc[c]);
+        for (k = 0; k < nc[c]; k++) from[c][k] = -1;
+    }
+    for (j = 0; RADINTERP__FF_SHARE && j < (layout ? 4 : 3); j++) {
+        const unsigned char *ie = radinterp__inner_edges[layout][j];
+        int c0 = ie[0], k0 = ie[1], c1 = ie[2], k1 = ie[3], n0 = (int)nd->count;
+        if (((todo >> c0) & (todo >> c1) & 1) && memcmp(Sc[c0][k0], Sc[c1][(k1 + 1) % n0], sizeof Sc[c0][k0]) == 0 &&
+            memcmp(Sc[c0][(k0 + 1) % n0], Sc[c1][k1], sizeof Sc[c0][k0]) == 0)
+            from[c1][k1] = -2 - (c0 * RADINTERP__POLY_MAX + k0);   /* resolved below */
+    }
+    for (c = 0; c < 4; c++) {
+        if (!((todo >> c) & 1)) continue;
+        for (k = 0; k < nc[c]; k++) {
+            const double *u = Sc[c][k], *v = Sc[c][(k + 1) % nc[c]];
+            if (from[c][k] != -1) continue;
+            for (j = 0; j < 3; j++) {
+                rows[j][m] = u[j] - q->p[j];
+                rows[3 + j][m] = v[j] - q->p[j];
+            }
+            from[c][k] = m++;
+        }
+    }
+    if (m) {
+        for (j = 0; j < 6; j++)
+            for (k = m; k < m + RADINTERP__VW; k++) rows[j][k] = rows[j][0];   /* unused lanes */
+        for (j = 0; j < 3; j++) { a[j] = rows[j]; b[j] = rows[3 + j]; }
+        radinterp__ff_rows(a, b, m, q->n, term);
+    }
+    for (c = 0; c < 4; c++) {
+        double e[RADINTERP__POLY_MAX];
+        if (!((todo >> c) & 1)) continue;
+        for (k = 0; k < nc[c]; k++) {
+            int f = from[c][k];
+            if (f >= 0) e[k] = term[f];
+            else {
+                f = -2 - f;
+                e[k] = -term[from[f / RADINTERP__POLY_MAX][f % RADINTERP__POLY_MAX]];
+            }
+        }
+        full[c] = radinterp__ff_sum(e, nc[c]);
+    }
 }
 
 /* Point-to-polygon factor from the query point to one node of a link's
@@ -8952,13 +9071,13 @@ static void radinterp__shared_add(radinterp__query *q, radinterp__shared *sh, co
     const radinterp__node *nd = &q->s->nodes[node];
     double f;
     if (radinterp__take_children(q, node, q->depth_left, full)) {
-        double Scc[RADINTERP__POLY_MAX][3], fullc;
+        double Scc[4][RADINTERP__POLY_MAX][3], fullc[4];
+        int ncc[4];
         uint32_t c;
         q->depth_left--;
-        for (c = 0; c < 4; c++) {
-            int ncc = radinterp__query_source(q, nd->child + c, Scc, &fullc);
-            radinterp__shared_add(q, sh, lk, nd->child + c, (const double (*)[3])Scc, ncc, fullc, h);
-        }
+        radinterp__query_children(q, node, Scc, ncc, fullc);
+        for (c = 0; c < 4; c++)
+            radinterp__shared_add(q, sh, lk, nd->child + c, (const double (*)[3])Scc[c], ncc[c], fullc[c], h);
         q->depth_left++;
         return;
     }

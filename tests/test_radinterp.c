@@ -1126,6 +1126,103 @@ static radinterp_desc office_desc(void)
     return d;
 }
 
+/* The four children of a source node at once (radinterp__query_children),
+   with the terms of their inner edges shared: every child's corners and
+   unoccluded factor must be bit for bit those radinterp__query_source
+   gives it alone, at random points (some behind a child or cutting it with
+   their horizon) over the office's nodes (quads) and over the nodes of a
+   triangle split three levels deep. */
+static void check_children(radinterp_solution *s, uint32_t first_node, uint32_t seed, int *checked, int *whole,
+                           int *differ)
+{
+    static radinterp__query q;   /* about 110 KB */
+    uint64_t r = seed;
+    uint32_t node, i;
+    for (node = first_node; node < s->node_count; node++) {
+        const radinterp__node *nd = &s->nodes[node];
+        if (nd->child == RADINTERP__NONE) continue;
+        for (i = 0; i < 4; i++) {
+            double Sc[4][RADINTERP__POLY_MAX][3], full[4], one[RADINTERP__POLY_MAX][3], f1;
+            float p[3];
+            uint32_t patch, c;
+            int nc[4], all = 1;
+            const radinterp__patch *pt;
+            r = r * 6364136223846793005ull + 1442695040888963407ull;
+            patch = (uint32_t)(r >> 33) % s->patch_count;
+            pt = &s->patches[patch];
+            if (pt->count == 0) continue;
+            {   /* a point inside the patch: a convex combination of its corners */
+                double w[4], sum = 0.0;
+                int k, j;
+                for (k = 0; k < (int)pt->count; k++) {
+                    r = r * 6364136223846793005ull + 1442695040888963407ull;
+                    w[k] = 0.05 + (double)(r >> 11) * (1.0 / 9007199254740992.0);
+                    sum += w[k];
+                }
+                for (j = 0; j < 3; j++) {
+                    double x = 0.0;
+                    for (k = 0; k < (int)pt->count; k++) x += w[k] / sum * pt->v[k][j];
+                    p[j] = (float)x;
+                }
+            }
+            radinterp__query_start(&q, s, patch, p, NULL);
+            radinterp__query_children(&q, node, Sc, nc, full);
+            for (c = 0; c < 4; c++) {
+                int n1 = radinterp__query_source(&q, nd->child + c, one, &f1);
+                all &= n1 == (int)nd->count;
+                *differ += n1 != nc[c] || memcmp(&f1, &full[c], sizeof f1) != 0 ||
+                           (n1 && memcmp(one, Sc[c], (size_t)n1 * sizeof one[0]) != 0);
+            }
+            (*checked)++;
+            *whole += all;
+        }
+    }
+}
+
+static void test_children_shared_edges(void)
+{
+    radinterp_solution *s = NULL;
+    radinterp_desc d;
+    int checked = 0, whole = 0, differ = 0, level;
+    if (!load_office()) return;
+    d = office_desc();
+    if (CHECK(radinterp_solve(&d, &s) == RADINTERP_OK)) check_children(s, 0, 7, &checked, &whole, &differ);
+    radinterp_solution_destroy(s);
+    s = NULL;
+    {   /* a triangle over a floor quad; its quadtree split three levels by hand */
+        static const float pos[] = {-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0, -0.6f, -0.5f, 1.2f, 0.7f, -0.4f, 0.9f,
+                                    0.1f, 0.8f, 1.1f};
+        static const uint32_t quads[] = {0, 1, 2, 3, 4, 6, 5, RADINTERP_NO_VERTEX};
+        static const uint32_t mats[] = {0, 1};
+        radinterp_material m[2];
+        uint32_t node;
+        memset(m, 0, sizeof m);
+        m[0].reflectance[0] = m[0].reflectance[1] = m[0].reflectance[2] = 0.5f;
+        m[1].emission[0] = m[1].emission[1] = m[1].emission[2] = 1.0f;
+        memset(&d, 0, sizeof d);
+        d.positions = pos;
+        d.vertex_count = 7;
+        d.patches = quads;
+        d.patch_count = 2;
+        d.patch_materials = mats;
+        d.materials = m;
+        d.material_count = 2;
+        if (CHECK(radinterp_solve(&d, &s) == RADINTERP_OK)) {
+            for (level = 0; level < 3; level++) {
+                uint32_t end = s->node_count;
+                for (node = 0; node < end; node++)
+                    if (s->patches[s->nodes[node].patch].count == 3 && s->nodes[node].child == RADINTERP__NONE)
+                        CHECK(radinterp__node_split(s, node) == 0);
+            }
+            check_children(s, 0, 11, &checked, &whole, &differ);
+        }
+        radinterp_solution_destroy(s);
+    }
+    CHECK_MSG(whole > 100, "only %d queries took four whole children", whole);
+    CHECK_MSG(differ == 0, "%d children differ from radinterp__query_source's", differ);
+    test_note("%d node queries, %d with four whole children (shared inner edges)", checked, whole);
+}
+
 /* Links that overrun their receiver's error budget (radinterp__budget_limits)
    and could still be split, with the budget grown by `margin`; the node
    with the largest sum of link errors over its tolerance in *worst. */
@@ -1487,6 +1584,7 @@ int main(int argc, char **argv)
     RUN(test_atan2);
     RUN(test_ff_edges_exact);
     RUN(test_rank_links);
+    RUN(test_children_shared_edges);
     RUN(test_form_factor_robustness);
     RUN(test_validation);
     RUN(test_patch_shapes);
