@@ -454,7 +454,9 @@
        compared with the eye of 255 frames ago, and view lobes are kept to
        3 digits, between 1e-6 and 1e6 radians). A hole's layer is found along rays of 8 pixels: the middle
        of a wider disocclusion stays sparse or empty until it is sampled,
-       and a sample refills the holes within wide_radius of it only. A late sample of a moving object is placed with the
+       and a sample refills the holes within wide_radius of it only (a late or
+       predicted sample, whose frame was filled without it, or one whose
+       colour changed, whose holes were filled from the point it replaced). A late sample of a moving object is placed with the
        transform of its frame, which the cache keeps for max_latency frames.
        Colour-change detection compares a sample with the one point it
        replaces: with a renderer as noisy as the changes it should see, it
@@ -4840,7 +4842,10 @@ static void rendercache__age_around(rendercache *rc, uint32_t p)
    comes after its frame's hole filling (refill: late or predicted) and
    lands in a hole has the holes around it filled again: the frame it
    shows in was filled without it. The requests of the current frame were
-   made knowing the filling; their neighbours wait for the next frame. */
+   made knowing the filling; their neighbours wait for the next frame,
+   unless the sample's colour changed (rendercache__place): then the holes
+   around it were filled from the stale colour it replaced (behind a
+   moving shadow, a dark patch of holes between bright new samples). */
 static RENDERCACHE__INLINE void rendercache__put_point(rendercache *rc, uint32_t slot, int replacing, int refill,
                              const rendercache__new_point *np, uint32_t p, float depth2, rendercache__put_counts *n)
 {
@@ -4871,6 +4876,7 @@ static void rendercache__place(rendercache *rc, uint32_t slot, int replacing, in
     if (changed) {
         rc->stats.changed++;
         rendercache__age_around(rc, p);
+        rendercache__mark_refill(rc, p);
     }
 }
 
@@ -5182,7 +5188,11 @@ static uint32_t rendercache__insert_chunk(rendercache *rc, const rendercache_sam
         sum.live += job.counts[j].live;
     }
     rendercache__add_counts(rc, &sum);
-    if (changed) rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__age_job, &job, RENDERCACHE__INSERT_JOBS);
+    if (changed) {
+        rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__age_job, &job, RENDERCACHE__INSERT_JOBS);
+        for (j = 0; j < job.n; j++)   /* (serial: few, and their windows overlap) */
+            if (job.change[j] > rc->change_level) rendercache__mark_refill(rc, job.s[j].y * rc->width + job.s[j].x);
+    }
     for (j = 0; j < RENDERCACHE__INSERT_JOBS; j++)
         for (b = 0; b < RENDERCACHE__CHANGE_BINS; b++) rc->change_hist[b] += job.hist[j][b];
     rc->stats.changed += changed;

@@ -2066,6 +2066,76 @@ static void test_owned_zbuffer_hands_points_over(void)
     ex_pool_destroy(pool);
 }
 
+/* The holes around a sample whose colour changed show the change in its
+   own frame. A converged view of the wall is zoomed in (vfov 60 -> 42
+   degrees): the points spread apart and the holes between them are
+   filled from them when the frame begins. Then a shadow covers the wall
+   (0.3 of its colour) and every pixel showing a point is resampled: every
+   sample finds the change. The holes were filled before, from the lit
+   colours; they are filled again when the insert call ends, so none may
+   keep more than half of its lit colour (a shadowed fill keeps 0.3). Before, a dark patch of such holes followed a moving
+   shadow in the walkthrough, between the bright samples of its floor.
+   Serial and parallel insertion (chunks) give the same image. Returns a
+   hash of the image, or 0 when a check failed. */
+static uint64_t changed_holes_image(void (*pf)(void *, rendercache_job_fn, void *, uint32_t))
+{
+    enum { W = 64, H = 48 };
+    rendercache_camera cam = make_camera(0, 0, 0, 0, 0, 10, W, H), zoom = cam;
+    rendercache_desc d = make_desc(W, H);
+    static float lit[W * H];
+    const unsigned char *kinds;
+    const float *image;
+    rendercache *rc;
+    rendercache_stats st;
+    scene s;
+    uint32_t p, n = 0, holes = 0, unlit = 0, bright = 0;
+    uint64_t h = 1469598103934665603ull;
+    memset(&s, 0, sizeof s);
+    s.shift[0] = 100.0f;   /* the wall alone */
+    d.parallel_for = pf;
+    zoom.vfov_degrees = 42.0f;
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return 0;
+    converge(rc, &s, &cam);
+    run_frame(rc, &s, &cam, W * H / 12);   /* resamples that find no change: the noise level (0) */
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &zoom), RENDERCACHE_OK);
+    kinds = rendercache_pixel_kinds(rc);
+    image = rendercache_image(rc);
+    for (p = 0; p < W * H; p++) {
+        lit[p] = image[3 * p];
+        if (kinds[p] == RENDERCACHE_PIXEL_POINT) {
+            rendercache_pixel_request *q = &g_req[n++];
+            memset(q, 0, sizeof *q);
+            q->x = p % W;
+            q->y = p / W;
+            rendercache_camera_ray(&zoom, (float)q->x + 0.5f, (float)q->y + 0.5f, q->org, q->dir);
+        } else {
+            holes++;
+            unlit += !(lit[p] > 0.0f);
+        }
+    }
+    s.shadow[2] = 100.0f;   /* the whole wall */
+    for (p = 0; p < n; p++) shade(&s, &g_req[p], &g_samples[p]);
+    CHECK_EQ_INT(rendercache_insert(rc, g_samples, n, NULL), RENDERCACHE_OK);
+    rendercache_get_stats(rc, &st);
+    CHECK_EQ_INT(st.changed, n);   /* every sample found the change */
+    for (p = 0; p < W * H; p++) bright += kinds[p] != RENDERCACHE_PIXEL_POINT && image[3 * p] > 0.5f * lit[p];
+    test_note("zoomed view, %u holes among %u points: %u holes brighter than half their lit colour after the insert "
+              "(shadowed: 0.3 of it)", holes, n, bright);
+    CHECK(holes > W * H / 5);
+    CHECK_EQ_INT(unlit, 0);   /* every hole was filled from lit points: the test sees a stale fill */
+    CHECK_EQ_INT(bright, 0);
+    h = hash_bytes(h, image, sizeof(float) * 3 * W * H);
+    rendercache_destroy(rc);
+    return bright ? 0 : h;
+}
+
+static void test_changed_samples_refill_their_holes(void)
+{
+    uint64_t serial = changed_holes_image(NULL);
+    CHECK(serial != 0);
+    CHECK(changed_holes_image(reversed_parallel_for) == serial);
+}
+
 /* The insertion of one frame's samples in the mixed order an engine may
    give them: the current frame's (in chunks placed in parallel with
    parallel_for), a few twice (the same pixel in one call), a share kept
@@ -2486,6 +2556,7 @@ int main(int argc, char **argv)
     RUN(test_late_samples_land_where_they_were_seen);
     RUN(test_changed_colours_are_resampled_first);
     RUN(test_change_ages_the_points_around_it);
+    RUN(test_changed_samples_refill_their_holes);
     RUN(test_invalidate_ranks_an_object_first);
     RUN(test_invalidate_where_ages_exactly_those_points);
     RUN(test_priority_scale);
