@@ -714,12 +714,13 @@ static void test_raytrace_trail_ageing(void)
     int f, i;
     if (!CHECK(rgb) || !CHECK(wt_world_create(&o, &w, err, sizeof err) == 0 && wt_renderer_create(w, &r, err, sizeof err) == 0))
         goto done;
-    if (!CHECK(w->light_count >= 1)) goto done;
+    if (!CHECK(w->light_count >= 1) || !CHECK(wt__trail_lamps(r) == 0)) goto done;
+    CHECK(r->trail_lamp_count == 1);   /* the office's lamp: 6 lights, one sphere */
     for (i = 0; i < 2; i++) {
-        wt_set_time(w, wt_frame_time(&o, TRAIL_STEP_FRAME - 4 + 4 * i));   /* a step long enough to tell them apart */
+        wt_set_time(w, wt_frame_time(&o, TRAIL_STEP_FRAME - 8 + 8 * i));   /* a step long enough to tell them apart */
         ex__affine_point(w->pose, w->bunny_bound_centre, c[i]);
     }
-    wt__trail_make(w, c[0], c[1], &tr);
+    wt__trail_make(r, c[0], c[1], &tr);
     for (i = 0; i < 2; i++) {
         trail_point(w->lights[0].centre, c[i], 0.5f, p);   /* in the shadow at either place */
         CHECK(wt__trail_changed(&tr, p, WT_OBJECT_OFFICE));
@@ -734,7 +735,7 @@ static void test_raytrace_trail_ageing(void)
     p[2] += 2.0f;   /* two metres off, level with it: nowhere near a cone of the lamp above */
     CHECK(!wt__trail_changed(&tr, p, WT_OBJECT_OFFICE));
     /* the same, only the new place: its old shadow is then missed */
-    wt__trail_make(w, c[1], c[1], &tr);
+    wt__trail_make(r, c[1], c[1], &tr);
     trail_point(w->lights[0].centre, c[0], 0.5f, p);
     CHECK(!wt__trail_changed(&tr, p, WT_OBJECT_OFFICE));
     for (f = 0; f <= TRAIL_STEP_FRAME; f++)
@@ -750,7 +751,7 @@ static void test_raytrace_trail_ageing(void)
         CHECK(rendercache_set_object_transform(r->rc, WT_OBJECT_BUNNY, w->pose) == RENDERCACHE_OK &&
               rendercache_begin_frame(r->rc, &cam) == RENDERCACHE_OK);
         prio = rendercache_priority_image(r->rc);
-        wt__trail_make(w, c[0], c[0], &tr);
+        wt__trail_make(r, c[0], c[0], &tr);
         memcpy(tr.centre[0], r->trail_centre, sizeof tr.centre[0]);
         memcpy(tr.centre[1], r->trail_centre, sizeof tr.centre[1]);
         for (y = 0; y < REF_H; y++)

@@ -3610,6 +3610,10 @@ typedef struct wt_renderer {
     rendercache_sample *samples;
     uint32_t budget;
     float trail_centre[3];      /* the centre of the bunny's bounding sphere in the last frame (wt__age_trail) */
+    wt_light *trail_lamps;      /* the lamps' spheres (wt__trail_lamps), trail_lamp_count of them */
+    int *trail_lamp_of;         /* each light's lamp */
+    unsigned char *trail_seen;  /* 2 x trail_lamp_count: lamps seen around the two centres of a step */
+    uint32_t trail_lamp_count;
     /* baseviews */
     ex_baseviews bv;
     unsigned char *base_needed; /* per base image (view * time_count + key): some frame warps from it */
@@ -3867,15 +3871,48 @@ static float wt__view_lobe(const wt_point *p, const lightvec_material *m)
     return s_n > 0.0f ? s_n / (2.0f * p->view_share) : 0.0f;
 }
 
+/* The lamps: the lights whose bounding spheres overlap, joined (a lamp's
+   faces are lights of their own: the office's lamp is 6). lamp_of[e] is
+   light e's lamp; returns the number of lamps. */
+static uint32_t wt__lamps(const wt_world *w, int *lamp_of)
+{
+    uint32_t e, f, lamps = 0;
+    for (e = 0; e < w->light_count; e++) lamp_of[e] = -1;
+    for (e = 0; e < w->light_count; e++) {   /* flood: e's lamp takes every light touching one of it */
+        uint32_t changed = 1;
+        if (lamp_of[e] >= 0) continue;
+        lamp_of[e] = (int)lamps;
+        while (changed)
+            for (changed = 0, f = 0; f < w->light_count; f++) {
+                uint32_t g;
+                if (lamp_of[f] >= 0) continue;
+                for (g = 0; g < w->light_count; g++) {
+                    const wt_light *a = &w->lights[f], *b = &w->lights[g];
+                    float d2 = 0.0f;
+                    int k;
+                    if (lamp_of[g] != (int)lamps) continue;
+                    for (k = 0; k < 3; k++) d2 += (a->centre[k] - b->centre[k]) * (a->centre[k] - b->centre[k]);
+                    if (d2 <= (a->radius + b->radius) * (a->radius + b->radius)) {
+                        lamp_of[f] = (int)lamps;
+                        changed = 1;
+                        break;
+                    }
+                }
+            }
+        lamps++;
+    }
+    return lamps;
+}
+
 /* The trails behind the bunny (issues 16 and 19): the render cache only
    learns that the light changed where its samples land, so the floor the
    bunny shadowed kept its dark colour, and the floor it now shadows its
    lit one, until their age came up: a dark trail followed it. The
    walkthrough knows what moved: every frame it ages
    (rendercache_invalidate_where) the points whose light the bunny's step
-   may have changed: those from which a light (a sphere around each
-   emitting polygon, wt_light.centre and radius, as wt__direct samples
-   them) is partly hidden by the bunny's bounding sphere at its last or
+   may have changed: those from which a lamp (a sphere around the
+   emitting polygons of one lamp, wt__trail_lamps) is partly hidden by
+   the bunny's bounding sphere at its last or
    its new place (the old shadow and the new one), and those within its
    contact shadow's reach (wt__contact_occlusion) of either, the bunny's
    own points among them. In a building only the lights the grid says are
@@ -3890,12 +3927,16 @@ static float wt__view_lobe(const wt_point *p, const lightvec_material *m)
    the pixels whose floor lay in the bunny's cones or reach in the last 8
    frames. In a probe of the house at 320x240 (48 frames, frame 4) the
    floor behind the bunny showed points 1-2 frames old at a fifth of their
-   brightness before, and only points of the current frame now; the dark
-   patch left there is holes filled dark. Cost: 5 ms a frame at 320x240
-   (house, 16 lights, one core), 22 at 640x480. */
+   brightness before, and only points of the current frame now (the holes
+   between them: rendercache refills them since v0.9.0). Cost, one core,
+   640x480: a light per face made the office's cache phase 24 -> 60 ms a
+   frame; a sphere per lamp, 39 ms. LRMS against full renders
+   (`--reference`, 320x240, with the refill): office 0.0736 without the
+   ageing, 0.0727 with it; the house (48 frames) 0.2352 and 0.2338. */
 typedef struct wt__trail {
-    const wt_world *w;
-    const float *seen[2];   /* wt__lights_seen at the two centres (NULL without a grid: every light counts) */
+    const wt_light *lamps;   /* a sphere around each lamp (wt__lamps): a lamp's faces count once */
+    uint32_t lamp_count;
+    const unsigned char *seen[2];   /* per lamp: one of its lights is seen around the two centres */
     float centre[2][3];   /* the bounding sphere's centre at the last and at the new place */
     float radius;         /* its radius, with a margin for the cone's slope */
     float near2;          /* squared reach of the contact shadow from the centre */
@@ -3934,25 +3975,65 @@ static int wt__trail_changed(void *user, const float p[3], uint32_t object)
         for (k = 0; k < 3; k++) d2 += (p[k] - tr->centre[i][k]) * (p[k] - tr->centre[i][k]);
         if (d2 <= tr->near2) return 1;
     }
-    for (e = 0; e < tr->w->light_count; e++)
+    for (e = 0; e < tr->lamp_count; e++)
         for (i = 0; i < 2; i++)
-            if ((!tr->seen[i] || tr->seen[i][2 * e] > 0.0f) && wt__hides_light(p, tr->centre[i], tr->radius, &tr->w->lights[e]))
-                return 1;
+            if (tr->seen[i][e] && wt__hides_light(p, tr->centre[i], tr->radius, &tr->lamps[e])) return 1;
     return 0;
 }
 
 /* The trail of the bunny's step from the bounding sphere's centre from to
    the one to. */
-static void wt__trail_make(const wt_world *w, const float from[3], const float to[3], wt__trail *tr)
+static void wt__trail_make(const wt_renderer *r, const float from[3], const float to[3], wt__trail *tr)
 {
+    const wt_world *w = r->w;
     float reach = (1.0f + WT_CONTACT_REACH) * w->bunny_bound_radius;
-    tr->w = w;
+    uint32_t i, e;
+    tr->lamps = r->trail_lamps;
+    tr->lamp_count = r->trail_lamp_count;
     memcpy(tr->centre[0], from, sizeof tr->centre[0]);
     memcpy(tr->centre[1], to, sizeof tr->centre[1]);
-    tr->seen[0] = wt__lights_seen(w, from);
-    tr->seen[1] = wt__lights_seen(w, to);
+    for (i = 0; i < 2; i++) {
+        const float *seen = wt__lights_seen(w, tr->centre[i]);   /* NULL without a grid: every light counts */
+        unsigned char *lamp_seen = r->trail_seen + i * (size_t)r->trail_lamp_count;
+        memset(lamp_seen, 0, r->trail_lamp_count);
+        for (e = 0; e < w->light_count; e++) lamp_seen[r->trail_lamp_of[e]] |= !seen || seen[2 * e] > 0.0f;
+        tr->seen[i] = lamp_seen;
+    }
     tr->radius = w->bunny_bound_radius * 1.05f;
     tr->near2 = reach * reach;
+}
+
+/* The lamps' spheres for the trail (made once): each bounds the spheres of
+   its lights. A light of its own per face tested 6 cones in the office's
+   lamp instead of 1, 16 in the house instead of 3. */
+static int wt__trail_lamps(wt_renderer *r)
+{
+    const wt_world *w = r->w;
+    uint32_t n = w->light_count ? w->light_count : 1, e, l;
+    int k;
+    r->trail_lamp_of = (int *)malloc(sizeof *r->trail_lamp_of * n);
+    r->trail_lamps = (wt_light *)calloc(n, sizeof *r->trail_lamps);
+    r->trail_seen = (unsigned char *)malloc(2 * (size_t)n);
+    if (!r->trail_lamp_of || !r->trail_lamps || !r->trail_seen) return -1;
+    r->trail_lamp_count = wt__lamps(w, r->trail_lamp_of);
+    for (l = 0; l < r->trail_lamp_count; l++) {
+        wt_light *L = &r->trail_lamps[l];
+        float lo[3] = { FLT_MAX, FLT_MAX, FLT_MAX }, hi[3] = { -FLT_MAX, -FLT_MAX, -FLT_MAX };
+        for (e = 0; e < w->light_count; e++)
+            if (r->trail_lamp_of[e] == (int)l)
+                for (k = 0; k < 3; k++) {
+                    lo[k] = fminf(lo[k], w->lights[e].centre[k] - w->lights[e].radius);
+                    hi[k] = fmaxf(hi[k], w->lights[e].centre[k] + w->lights[e].radius);
+                }
+        for (k = 0; k < 3; k++) L->centre[k] = 0.5f * (lo[k] + hi[k]);
+        for (e = 0; e < w->light_count; e++)
+            if (r->trail_lamp_of[e] == (int)l) {
+                float d2 = 0.0f;
+                for (k = 0; k < 3; k++) d2 += (w->lights[e].centre[k] - L->centre[k]) * (w->lights[e].centre[k] - L->centre[k]);
+                L->radius = fmaxf(L->radius, sqrtf(d2) + w->lights[e].radius);
+            }
+    }
+    return 0;
 }
 
 /* Ages the points where the bunny's step from the last frame's place to
@@ -3962,9 +4043,10 @@ static int wt__age_trail(wt_renderer *r, int full)
     wt__trail tr;
     float now[3];
     int moved;
+    if (!r->trail_lamps && wt__trail_lamps(r) != 0) return -1;
     ex__affine_point(r->w->pose, r->w->bunny_bound_centre, now);
     moved = memcmp(now, r->trail_centre, sizeof now) != 0;
-    wt__trail_make(r->w, r->trail_centre, now, &tr);
+    wt__trail_make(r, r->trail_centre, now, &tr);
     memcpy(r->trail_centre, now, sizeof now);
     if (full || !moved) return 0;   /* nothing cached yet, or the bunny stands still */
     return rendercache_invalidate_where(r->rc, wt__trail_changed, &tr, NULL) == RENDERCACHE_OK ? 0 : -1;
@@ -4162,44 +4244,23 @@ static void wt__route_view(void *user, double t, rendercache_camera *camera)
 }
 
 /* The cameras of the time test's direct light coherence: a fish-eye looking
-   down from WT_LAMP_EYE_DROP below each lamp (the lights whose bounding
-   spheres overlap, joined: a lamp's faces are lights of their own), at
-   the middle of the lamp in plan. In the office: below the lamp's shade,
-   (3.30, 1.55, 3.40). *count of them into cams (w->light_count at most). */
+   down from WT_LAMP_EYE_DROP below each lamp (wt__lamps), at the middle of
+   the lamp in plan. In the office: below the lamp's shade, (3.30, 1.55,
+   3.40). *count of them into cams (w->light_count at most). */
 #define WT_LAMP_EYE_DROP 0.05f
 static void wt__lamp_cameras(const wt_world *w, rendercache_camera *cams, uint32_t *count, int *lamp_of)
 {
     const float down[3] = { 0.0f, -1.0f, 0.0f };
-    uint32_t e, f, lamps = 0;
-    for (e = 0; e < w->light_count; e++) lamp_of[e] = -1;
-    for (e = 0; e < w->light_count; e++) {   /* flood: e's lamp takes every light touching one of it */
-        uint32_t changed = 1;
+    uint32_t lamps = wt__lamps(w, lamp_of), l, f;
+    for (l = 0; l < lamps; l++) {
         float lo[3], hi[3], eye[3];
         int k;
-        if (lamp_of[e] >= 0) continue;
-        lamp_of[e] = (int)lamps;
-        while (changed)
-            for (changed = 0, f = 0; f < w->light_count; f++) {
-                uint32_t g;
-                if (lamp_of[f] >= 0) continue;
-                for (g = 0; g < w->light_count; g++) {
-                    const wt_light *a = &w->lights[f], *b = &w->lights[g];
-                    float d2 = 0.0f;
-                    if (lamp_of[g] != (int)lamps) continue;
-                    for (k = 0; k < 3; k++) d2 += (a->centre[k] - b->centre[k]) * (a->centre[k] - b->centre[k]);
-                    if (d2 <= (a->radius + b->radius) * (a->radius + b->radius)) {
-                        lamp_of[f] = (int)lamps;
-                        changed = 1;
-                        break;
-                    }
-                }
-            }
         for (k = 0; k < 3; k++) {
             lo[k] = FLT_MAX;
             hi[k] = -FLT_MAX;
         }
         for (f = 0; f < w->light_count; f++)
-            if (lamp_of[f] == (int)lamps)
+            if (lamp_of[f] == (int)l)
                 for (k = 0; k < 3; k++) {
                     lo[k] = fminf(lo[k], w->lights[f].centre[k]);
                     hi[k] = fmaxf(hi[k], w->lights[f].centre[k]);
@@ -4207,7 +4268,7 @@ static void wt__lamp_cameras(const wt_world *w, rendercache_camera *cams, uint32
         eye[0] = 0.5f * (lo[0] + hi[0]);
         eye[1] = lo[1] - WT_LAMP_EYE_DROP;
         eye[2] = 0.5f * (lo[2] + hi[2]);
-        cams[lamps++] = wt__fisheye(eye, down, (uint32_t)w->opt.id_size);
+        cams[l] = wt__fisheye(eye, down, (uint32_t)w->opt.id_size);
     }
     *count = lamps;
 }
@@ -5712,6 +5773,9 @@ EX_FN void wt_renderer_destroy(wt_renderer *r)
     rendercache_destroy(r->rc);
     free(r->req);
     free(r->samples);
+    free(r->trail_lamps);
+    free(r->trail_lamp_of);
+    free(r->trail_seen);
     ex_baseviews_free(&r->bv);
     free(r->base_needed);
     rendercache_keytimes_destroy(r->bunny_light);
