@@ -348,6 +348,27 @@ static void test_light_grid(void)
     wt_world_destroy(w);
 }
 
+/* Worst LRMS of the two frames (frames: 2 x n floats) against the files at
+   paths (ref: scratch of n floats); writes the files instead when write is
+   set (0 then). -1 on failure. */
+static double two_frames_vs_files(char paths[2][256], const float *frames, float *ref, size_t n, int write)
+{
+    double worst = 0.0, lrms;
+    int f;
+    for (f = 0; f < 2; f++) {
+        if (write) {
+            if (ex_write_pfm(paths[f], REF_W, REF_H, frames + (size_t)f * n) != 0) return -1.0;
+            printf("  wrote %s\n", paths[f]);
+        } else if (ex_read_pfm(paths[f], REF_W, REF_H, ref) != 0 ||
+                   rendercache_lrms(ref, frames + (size_t)f * n, REF_W, REF_H, &lrms) != RENDERCACHE_OK) {
+            return -1.0;
+        } else if (lrms > worst) {
+            worst = lrms;
+        }
+    }
+    return worst;
+}
+
 /* Worst LRMS of frames 0 and 1 against the references; writes them instead
    when write is set. -1 on failure. */
 static double frames_vs_reference(wt_mode mode, uint64_t seed, int write)
@@ -355,25 +376,12 @@ static double frames_vs_reference(wt_mode mode, uint64_t seed, int write)
     wt_options o = small_options(mode, "building");
     size_t n = 3 * (size_t)REF_W * REF_H;
     float *frames = (float *)malloc(sizeof(float) * 2 * n), *ref = (float *)malloc(sizeof(float) * n);
-    double worst = -1.0, lrms;
+    char paths[2][256];
+    double worst = -1.0;
     int f;
     o.seed = seed;
-    if (frames && ref && render_frames(&o, 2, frames)) {
-        worst = 0.0;
-        for (f = 0; f < 2 && worst >= 0.0; f++) {
-            char path[256];
-            building_reference_path(path, sizeof path, mode, f);
-            if (write) {
-                if (ex_write_pfm(path, REF_W, REF_H, frames + (size_t)f * n) != 0) worst = -1.0;
-                else printf("  wrote %s\n", path);
-            } else if (ex_read_pfm(path, REF_W, REF_H, ref) != 0 ||
-                       rendercache_lrms(ref, frames + (size_t)f * n, REF_W, REF_H, &lrms) != RENDERCACHE_OK) {
-                worst = -1.0;
-            } else if (lrms > worst) {
-                worst = lrms;
-            }
-        }
-    }
+    for (f = 0; f < 2; f++) building_reference_path(paths[f], sizeof paths[f], mode, f);
+    if (frames && ref && render_frames(&o, 2, frames)) worst = two_frames_vs_files(paths, frames, ref, n, write);
     free(frames);
     free(ref);
     return worst;
@@ -457,24 +465,11 @@ static double house_vs_reference(uint64_t seed, int write, house_walk *hw)
 {
     size_t n = 3 * (size_t)REF_W * REF_H;
     float *frames = (float *)malloc(sizeof(float) * 2 * n), *ref = (float *)malloc(sizeof(float) * n);
-    double worst = -1.0, lrms;
+    char paths[2][256];
+    double worst = -1.0;
     int f;
-    if (frames && ref && house_baseviews(seed, frames, hw)) {
-        worst = 0.0;
-        for (f = 0; f < 2 && worst >= 0.0; f++) {
-            char path[256];
-            house_reference_path(path, sizeof path, f);
-            if (write) {
-                if (ex_write_pfm(path, REF_W, REF_H, frames + (size_t)f * n) != 0) worst = -1.0;
-                else printf("  wrote %s\n", path);
-            } else if (ex_read_pfm(path, REF_W, REF_H, ref) != 0 ||
-                       rendercache_lrms(ref, frames + (size_t)f * n, REF_W, REF_H, &lrms) != RENDERCACHE_OK) {
-                worst = -1.0;
-            } else if (lrms > worst) {
-                worst = lrms;
-            }
-        }
-    }
+    for (f = 0; f < 2; f++) house_reference_path(paths[f], sizeof paths[f], f);
+    if (frames && ref && house_baseviews(seed, frames, hw)) worst = two_frames_vs_files(paths, frames, ref, n, write);
     free(frames);
     free(ref);
     return worst;
