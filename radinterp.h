@@ -8960,25 +8960,26 @@ static void radinterp__query_children(const radinterp__query *q, uint32_t node, 
     const radinterp__node *nd = &q->s->nodes[node];
     double rows[6][RADINTERP__FF_ROWS + RADINTERP__VW], term[RADINTERP__FF_ROWS];
     const double *a[3], *b[3];
-    int from[4][RADINTERP__POLY_MAX], c, k, j, m = 0, todo = 0, layout = nd->count == 4;
+    int from[4][RADINTERP__POLY_MAX], c, k, j, m = 0, layout = nd->count == 4;
+    int whole = 0;   /* bit c: child c is whole (unclipped), its terms computed together */
     /* edge k of child c: term from[c][k]; a shared edge's partner: ~ its term */
     for (c = 0; c < 4; c++) {
         nc[c] = radinterp__source_poly(q, nd->child + c, Sc[c]);
         full[c] = 0.0;
         if (nd->child + (uint32_t)c == q->known_node) full[c] = q->known_full;
-        else if (nc[c] == (int)nd->count) todo |= 1 << c;   /* else clipped: on its own */
+        else if (nc[c] == (int)nd->count) whole |= 1 << c;   /* else clipped: on its own */
         else if (nc[c]) full[c] = radinterp__ff_poly(q->p, q->n, (const double (*)[3])Sc[c], nc[c]);
         for (k = 0; k < nc[c]; k++) from[c][k] = -1;
     }
     for (j = 0; RADINTERP__FF_SHARE && j < (layout ? 4 : 3); j++) {
         const unsigned char *ie = radinterp__inner_edges[layout][j];
         int c0 = ie[0], k0 = ie[1], c1 = ie[2], k1 = ie[3], n0 = (int)nd->count;
-        if (((todo >> c0) & (todo >> c1) & 1) && memcmp(Sc[c0][k0], Sc[c1][(k1 + 1) % n0], sizeof Sc[c0][k0]) == 0 &&
+        if (((whole >> c0) & (whole >> c1) & 1) && memcmp(Sc[c0][k0], Sc[c1][(k1 + 1) % n0], sizeof Sc[c0][k0]) == 0 &&
             memcmp(Sc[c0][(k0 + 1) % n0], Sc[c1][k1], sizeof Sc[c0][k0]) == 0)
             from[c1][k1] = -2 - (c0 * RADINTERP__POLY_MAX + k0);   /* resolved below */
     }
     for (c = 0; c < 4; c++) {
-        if (!((todo >> c) & 1)) continue;
+        if (!((whole >> c) & 1)) continue;
         for (k = 0; k < nc[c]; k++) {
             const double *u = Sc[c][k], *v = Sc[c][(k + 1) % nc[c]];
             if (from[c][k] != -1) continue;
@@ -8997,7 +8998,7 @@ static void radinterp__query_children(const radinterp__query *q, uint32_t node, 
     }
     for (c = 0; c < 4; c++) {
         double e[RADINTERP__POLY_MAX];
-        if (!((todo >> c) & 1)) continue;
+        if (!((whole >> c) & 1)) continue;
         for (k = 0; k < nc[c]; k++) {
             int f = from[c][k];
             if (f >= 0) e[k] = term[f];
