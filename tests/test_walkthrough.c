@@ -613,8 +613,9 @@ done:
 }
 
 /* A route's view space (ex_baseviews_desc.route, the house's walk) on a
-   stub scene: the view at time t stands at (t, 0, 0), and its id image
-   shows object 1 on a share clamp(4 t - 3, 0, 1) of its pixels, object 2
+   synthetic scene with known answers: the view at time t stands at
+   (t, 0, 0), and its id image shows object 1 on a share
+   clamp(4 t - 3, 0, 1) of its pixels, object 2
    elsewhere, so the fitness of the views at t and u is 1 - |share(t) -
    share(u)| and the images change only in the last quarter of the walk.
    Two stretches, q 0.9, 3 halvings: the first stretch and [0.5, 0.75]
@@ -622,8 +623,8 @@ done:
    the stretch (the third halving is the last, whatever the fitness of
    its halves). A frame at t warps from the two views around t.
    Splitting everywhere (17 views) or nowhere (3) fails, and so does a
-   frame located by its eye in a box (the stub's eyes lie on a line). */
-static void route_view_stub(void *user, double t, rendercache_camera *c)
+   frame located by its eye in a box (its eyes lie on a line). */
+static void route_view_on_line(void *user, double t, rendercache_camera *c)
 {
     (void)user;
     memset(c->eye, 0, sizeof c->eye);
@@ -633,7 +634,7 @@ static void route_view_stub(void *user, double t, rendercache_camera *c)
     c->look_at[2] = 1.0f;
 }
 
-static int route_ids_stub(void *user, const rendercache_camera *c, double time, uint32_t *ids)
+static int route_ids_on_line(void *user, const rendercache_camera *c, double time, uint32_t *ids)
 {
     uint32_t i, n = c->width * c->height;
     float share = 4.0f * c->eye[0] - 3.0f;
@@ -657,12 +658,12 @@ static void test_baseviews_route(void)
     d.fisheye.look_at[2] = 1.0f;
     d.fisheye.up[1] = 1.0f;
     d.fisheye.width = d.fisheye.height = 16;
-    d.route = route_view_stub;
+    d.route = route_view_on_line;
     d.stretches = 2;
     d.quality = 0.9f;
     d.times = times;
     d.time_count = 2;
-    d.render_ids = route_ids_stub;
+    d.render_ids = route_ids_on_line;
     if (!CHECK(ex_baseviews_build(&d, &bv) == 0)) return;
     CHECK(bv.vs == NULL && bv.time_count == 2);
     if (CHECK_MSG(bv.view_count == n, "%u views", bv.view_count))
