@@ -1589,6 +1589,60 @@ static void test_leaf_lists_bounded(void)
     radinterp_solution_destroy(sol);
 }
 
+/* The sample points' batches (radinterp__run_batches), as a parallel_for
+   sees them: jobs of the point job, and where the batch starts in its run of
+   points (one run per batch of leaf lists). */
+typedef struct batch_log { uint32_t jobs[4096], first[4096], n; } batch_log;
+static void logging_for(void *user, radinterp_job_fn job, void *ctx, uint32_t count)
+{
+    batch_log *l = (batch_log *)user;
+    uint32_t i;
+    if (job == radinterp__point_job && l->n < 4096) {
+        l->jobs[l->n] = count;
+        l->first[l->n++] = ((const radinterp__sample_ctx *)ctx)->first;
+    }
+    for (i = 0; i < count; i++) job(ctx, i);
+}
+
+/* Each batch of sample points ends with the threads waiting for its last
+   job, so the batches are as large as the pacer allows: with this file's
+   stopped clock the pacer doubles a batch after every batch up to
+   RADINTERP__SAMPLE_BATCH jobs (at least 512 points), and keeps its size
+   from one run of points to the next (this file's small batches of leaf
+   lists make many runs). So batch k takes min(2^k, SAMPLE_BATCH) jobs, or
+   fewer only as the last batch of its run. A pacer started afresh for each
+   run (v0.8.13: one job, two points, at the start of every run), or a
+   ceiling of 64 jobs, fails. */
+static void test_sample_batches(void)
+{
+    scene s;
+    radinterp_solution *sol = rooms_scene(&s, 0.0f);
+    radinterp_mesh_desc md = mesh_desc();
+    radinterp_mesh *m = NULL;
+    static batch_log log;
+    uint32_t k, want = 1, runs = 0, full = 0, wrong = 0;
+    if (!sol) return;
+    memset(&log, 0, sizeof log);
+    md.parallel_for = logging_for;
+    md.parallel_user = &log;
+    CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &m), RADINTERP_OK);
+    CHECK(RADINTERP__SAMPLE_BATCH * RADINTERP__SAMPLE_JOB >= 512);
+    CHECK(log.n > 0 && log.n < 4096);
+    for (k = 0; k < log.n; k++) {
+        int last_of_run = k + 1 == log.n || log.first[k + 1] == 0;
+        runs += log.first[k] == 0;
+        full += log.jobs[k] == RADINTERP__SAMPLE_BATCH;
+        if (log.jobs[k] != want && !(log.jobs[k] < want && last_of_run)) wrong++;
+        want = want * 2 < RADINTERP__SAMPLE_BATCH ? want * 2 : RADINTERP__SAMPLE_BATCH;
+    }
+    CHECK_MSG(wrong == 0, "%u of %u batches not sized as the pacer's", wrong, log.n);
+    CHECK_MSG(runs > 4 && full > 4, "%u runs of points, %u batches of %u jobs", runs, full, RADINTERP__SAMPLE_BATCH);
+    test_note("four rooms: %u batches of sample points in %u runs, %u of them of %u jobs", log.n, runs, full,
+              RADINTERP__SAMPLE_BATCH);
+    radinterp_mesh_destroy(m);
+    radinterp_solution_destroy(sol);
+}
+
 /* A point's irradiance does not depend on where its leaf's list came from:
    filtered link by link as the query reaches each (radinterp_irradiance_at_
    point) or read from the lists of a batch of leaves (the mesh build's),
@@ -1824,6 +1878,7 @@ int main(int argc, char **argv)
     RUN(test_no_discontinuities_and_eval_arguments);
     RUN(test_determinism);
     RUN(test_leaf_lists_bounded);
+    RUN(test_sample_batches);
     RUN(test_leaf_lists_known_answers);
     RUN(test_candidates_only_by_default);
     return test_finish();
