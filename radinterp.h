@@ -13165,20 +13165,20 @@ static uint32_t radinterp__batch_leaves(const radinterp_solution *s, const radin
     return at;
 }
 
-/* Fills ll's lists (radinterp__leaf_lists_job) in batches of jobs the
-   pacer sizes, with a progress call after each (done of total, the
-   samples' count); CANCELLED when progress asks. */
-static radinterp_result radinterp__fill_leaf_lists(radinterp__builder *b, radinterp__leaf_lists *ll, uint64_t done,
-                                                   uint64_t total)
+/* Fills ll's lists (radinterp__leaf_lists_job) in batches of jobs pacer
+   sizes (kept from one batch of leaves to the next: started afresh, each
+   batch's lists began with a job of 16 leaves, then 32, ...), with a
+   progress call after each (done of total, the samples' count); CANCELLED
+   when progress asks. */
+static radinterp_result radinterp__fill_leaf_lists(radinterp__builder *b, radinterp__leaf_lists *ll,
+                                                   radinterp__pacer *pacer, uint64_t done, uint64_t total)
 {
     uint32_t jobs = radinterp__leaf_lists_jobs(ll), at = 0;
-    radinterp__pacer pacer;
-    radinterp__pacer_init(&pacer, b->desc->progress_interval, jobs);
     while (at < jobs) {
-        uint32_t k = radinterp__pacer_next(&pacer, jobs - at);
+        uint32_t k = radinterp__pacer_next(pacer, jobs - at);
         ll->job_first = at;
         radinterp__run_jobs(b->desc->parallel_for, b->desc->parallel_user, radinterp__leaf_lists_job, ll, k);
-        radinterp__pacer_adapt(&pacer);
+        radinterp__pacer_adapt(pacer);
         at += k;
         if (b->desc->progress && b->desc->progress(b->desc->progress_user, done, total)) return RADINTERP_ERROR_CANCELLED;
     }
@@ -13198,14 +13198,16 @@ static radinterp_result radinterp__sample_listed(radinterp__builder *b, radinter
     uint32_t *mark = (uint32_t *)radinterp__alloc_array(&b->a, (size_t)s->node_count + 1, sizeof(uint32_t));
     uint32_t *leaves = (uint32_t *)radinterp__alloc_array(&b->a, (size_t)s->leaf_count + 1, sizeof(uint32_t));
     uint32_t at = 0, batch = 0, count;
+    radinterp__pacer pacer;   /* the lists' jobs; no buffer bounds a batch of them */
     radinterp_result res = mark && leaves ? RADINTERP_OK : RADINTERP_ERROR_OUT_OF_MEMORY;
+    radinterp__pacer_init(&pacer, b->desc->progress_interval, UINT32_MAX);
     if (mark) memset(mark, 0xFF, ((size_t)s->node_count + 1) * sizeof(uint32_t));
     while (res == RADINTERP_OK && at < n) {
         radinterp__leaf_lists lists;
         uint32_t end = radinterp__batch_leaves(s, pts, at, n, mark, batch++, leaves, &count);
         res = radinterp__leaf_lists_make(s, &b->a, leaves, count, &lists);
         if (res != RADINTERP_OK) break;
-        res = radinterp__fill_leaf_lists(b, &lists, *done, total);
+        res = radinterp__fill_leaf_lists(b, &lists, &pacer, *done, total);
         if (res != RADINTERP_OK) { radinterp__leaf_lists_free(&b->a, &lists); break; }
         if (lists.bytes > b->leaf_list_bytes) b->leaf_list_bytes = lists.bytes;
         radinterp__note_bytes(b, lists.bytes);   /* the batch is held beside the builder's arrays */

@@ -1589,56 +1589,73 @@ static void test_leaf_lists_bounded(void)
     radinterp_solution_destroy(sol);
 }
 
-/* The sample points' batches (radinterp__run_batches), as a parallel_for
-   sees them: jobs of the point job, and where the batch starts in its run of
-   points (one run per batch of leaf lists). */
+/* The batches of the sample points (radinterp__run_batches) and of their
+   leaf lists (radinterp__fill_leaf_lists) as a parallel_for sees them: a
+   batch's jobs, and where it starts in its run (one run of each per batch
+   of leaves). */
 typedef struct batch_log { uint32_t jobs[4096], first[4096], n; } batch_log;
 static void logging_for(void *user, radinterp_job_fn job, void *ctx, uint32_t count)
 {
-    batch_log *l = (batch_log *)user;
+    batch_log *logs = (batch_log *)user, *l = NULL;
     uint32_t i;
-    if (job == radinterp__point_job && l->n < 4096) {
+    if (job == radinterp__point_job) l = &logs[0];
+    if (job == radinterp__leaf_lists_job) l = &logs[1];
+    if (l && l->n < 4096) {
         l->jobs[l->n] = count;
-        l->first[l->n++] = ((const radinterp__sample_ctx *)ctx)->first;
+        l->first[l->n++] = l == &logs[0] ? ((const radinterp__sample_ctx *)ctx)->first
+                                         : ((const radinterp__leaf_lists *)ctx)->job_first;
     }
     for (i = 0; i < count; i++) job(ctx, i);
 }
 
-/* Each batch of sample points ends with the threads waiting for its last
-   job, so the batches are as large as the pacer allows: with this file's
-   stopped clock the pacer doubles a batch after every batch up to
-   RADINTERP__SAMPLE_BATCH jobs (at least 512 points), and keeps its size
-   from one run of points to the next (this file's small batches of leaf
-   lists make many runs). So batch k takes min(2^k, SAMPLE_BATCH) jobs, or
-   fewer only as the last batch of its run. A pacer started afresh for each
-   run (v0.8.13: one job, two points, at the start of every run), or a
-   ceiling of 64 jobs, fails. */
+/* Batches of l not sized as one pacer with a stopped clock sizes them:
+   batch k takes min(2^k, cap) jobs, or fewer only as the last of its run.
+   *runs: the runs; *full: the batches of cap jobs. */
+static uint32_t unpaced_batches(const batch_log *l, uint32_t cap, uint32_t *runs, uint32_t *full)
+{
+    uint32_t k, want = 1, wrong = 0;
+    *runs = *full = 0;
+    for (k = 0; k < l->n; k++) {
+        int last_of_run = k + 1 == l->n || l->first[k + 1] == 0;
+        *runs += l->first[k] == 0;
+        *full += l->jobs[k] == cap;
+        if (l->jobs[k] != want && !(l->jobs[k] < want && last_of_run)) wrong++;
+        want = want < cap / 2 ? want * 2 : cap;
+    }
+    return wrong;
+}
+
+/* Each batch of jobs ends with the threads waiting for its last job, so
+   the batches are as large as the pacer allows: with this file's stopped
+   clock the pacer doubles a batch after every batch, the sample points' up
+   to RADINTERP__SAMPLE_BATCH jobs (at least 512 points), and it keeps its
+   size from one run to the next (this file's small batches of leaf lists
+   make many runs), for the points and for their leaf lists alike. A pacer
+   started afresh for each run (v0.8.13: a first batch of one job, of two
+   points or 16 leaves, in every run), or a ceiling of 64 point jobs, fails. */
 static void test_sample_batches(void)
 {
     scene s;
     radinterp_solution *sol = rooms_scene(&s, 0.0f);
     radinterp_mesh_desc md = mesh_desc();
     radinterp_mesh *m = NULL;
-    static batch_log log;
-    uint32_t k, want = 1, runs = 0, full = 0, wrong = 0;
+    static batch_log logs[2];
+    uint32_t wrong, runs, full, lists_runs, lists_full;
     if (!sol) return;
-    memset(&log, 0, sizeof log);
+    memset(logs, 0, sizeof logs);
     md.parallel_for = logging_for;
-    md.parallel_user = &log;
+    md.parallel_user = logs;
     CHECK_EQ_INT(radinterp_build_mesh(sol, &md, &m), RADINTERP_OK);
     CHECK(RADINTERP__SAMPLE_BATCH * RADINTERP__SAMPLE_JOB >= 512);
-    CHECK(log.n > 0 && log.n < 4096);
-    for (k = 0; k < log.n; k++) {
-        int last_of_run = k + 1 == log.n || log.first[k + 1] == 0;
-        runs += log.first[k] == 0;
-        full += log.jobs[k] == RADINTERP__SAMPLE_BATCH;
-        if (log.jobs[k] != want && !(log.jobs[k] < want && last_of_run)) wrong++;
-        want = want * 2 < RADINTERP__SAMPLE_BATCH ? want * 2 : RADINTERP__SAMPLE_BATCH;
-    }
-    CHECK_MSG(wrong == 0, "%u of %u batches not sized as the pacer's", wrong, log.n);
+    CHECK(logs[0].n > 0 && logs[0].n < 4096 && logs[1].n > 0 && logs[1].n < 4096);
+    wrong = unpaced_batches(&logs[0], RADINTERP__SAMPLE_BATCH, &runs, &full);
+    CHECK_MSG(wrong == 0, "%u of %u batches of points not sized as the pacer's", wrong, logs[0].n);
     CHECK_MSG(runs > 4 && full > 4, "%u runs of points, %u batches of %u jobs", runs, full, RADINTERP__SAMPLE_BATCH);
-    test_note("four rooms: %u batches of sample points in %u runs, %u of them of %u jobs", log.n, runs, full,
-              RADINTERP__SAMPLE_BATCH);
+    wrong = unpaced_batches(&logs[1], UINT32_MAX, &lists_runs, &lists_full);
+    CHECK_MSG(wrong == 0, "%u of %u batches of leaf lists not sized as the pacer's", wrong, logs[1].n);
+    CHECK_MSG(lists_runs == runs, "%u runs of leaf lists, %u of points", lists_runs, runs);
+    test_note("four rooms: %u batches of sample points in %u runs, %u of them of %u jobs; %u batches of leaf lists",
+              logs[0].n, runs, full, RADINTERP__SAMPLE_BATCH, logs[1].n);
     radinterp_mesh_destroy(m);
     radinterp_solution_destroy(sol);
 }
