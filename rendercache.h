@@ -5376,7 +5376,7 @@ RENDERCACHE_API rendercache_result rendercache_invalidate_where(rendercache *rc,
     job.yes = rc->sort_scratch;   /* (free between frames' calls; a bit per slot: sort_scratch_words) */
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__where_slots_job, &job, RENDERCACHE__WHERE_JOBS);
     for (j = 0; j < RENDERCACHE__WHERE_JOBS; j++) n += job.aged[j];
-    if (rc->has_frame)   /* the priorities of this frame's pixels showing them */
+    if (rc->has_frame && n)   /* the priorities of this frame's pixels showing them */
         rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__where_pixels_job, &job,
                               RENDERCACHE__WHERE_JOBS);
     if (aged) *aged = n;
