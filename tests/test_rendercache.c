@@ -891,6 +891,78 @@ static void test_holes_take_the_layer_they_uncover(void)
     rendercache_destroy(rc);
 }
 
+/* The layer of a hole from its rays (rendercache__find_layer), set up
+   directly in the pixel arrays of a square image: the rays reach every
+   image edge alike (a hole's layer equals that of its mirror image, left to
+   right, and of its transpose, on random holes and two layers), and they
+   reach exactly RENDERCACHE__HOLE_REACH pixels (a hole enclosed by points
+   that far on the left and the right takes the nearer layer, one pixel
+   farther it does not). */
+static void set_depths(rendercache *rc, const float *depth, int mirror, int transpose)
+{
+    const uint32_t n = rc->width;
+    uint32_t x, y;
+    for (y = 0; y < n; y++)
+        for (x = 0; x < n; x++) {
+            uint32_t sx = mirror ? n - 1 - x : x, sy = y;
+            if (transpose) { uint32_t t = sx; sx = sy; sy = t; }
+            rc->px_depth[y * n + x] = depth[sy * n + sx];
+            rc->px_index[y * n + x] = depth[sy * n + sx] == FLT_MAX ? RENDERCACHE__NONE : 0;   /* (a background point) */
+        }
+}
+
+static void test_hole_rays_reach_every_edge_alike(void)
+{
+    enum { N = 23 };
+    static float depth[N * N];
+    static rendercache__hole_layer base[N * N];
+    rendercache_desc d = make_desc(N, N);
+    rendercache *rc;
+    uint32_t x, y, seed = 12345u, enclosed = 0, differ = 0;
+    const uint32_t r = RENDERCACHE__HOLE_REACH;
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+    for (x = 0; x < N * N; x++) {   /* 60 % holes; the points on two layers, 1 and 4 (squared distances) */
+        float u;
+        seed = seed * 1664525u + 1013904223u;
+        u = (float)(seed >> 8) / 16777216.0f;
+        depth[x] = u < 0.6f ? FLT_MAX : (u < 0.8f ? 1.0f : 4.0f) + 0.01f * u;
+    }
+    set_depths(rc, depth, 0, 0);
+    for (y = 0; y < N; y++)
+        for (x = 0; x < N; x++) {
+            base[y * N + x] = rendercache__find_layer(rc, x, y);
+            enclosed += !base[y * N + x].any;
+        }
+    CHECK(enclosed > 20);
+    {
+        int variant;
+        for (variant = 0; variant < 2; variant++) {
+            set_depths(rc, depth, !variant, variant);
+            for (y = 0; y < N; y++)
+                for (x = 0; x < N; x++) {
+                    uint32_t ox = variant ? y : N - 1 - x, oy = variant ? x : y;   /* the pixel of the original */
+                    rendercache__hole_layer a = base[oy * N + ox], b = rendercache__find_layer(rc, x, y);
+                    differ += a.any != b.any || a.lo != b.lo || a.hi != b.hi;
+                }
+        }
+    }
+    CHECK_MSG(differ == 0, "%u holes take another layer in the mirrored or transposed image", differ);
+
+    /* all holes but a far point above (x, 11) and near points r pixels to its left and right */
+    for (y = 0; y < N * N; y++) depth[y] = FLT_MAX;
+    depth[10 * N + r] = 4.0f;
+    depth[11 * N + 0] = depth[11 * N + 2 * r] = 1.0f;
+    set_depths(rc, depth, 0, 0);
+    CHECK(!rendercache__find_layer(rc, r, 11).any);   /* enclosed by the near points */
+    depth[10 * N + r] = FLT_MAX;
+    depth[10 * N + r + 1] = 4.0f;
+    depth[11 * N + 2 * r] = FLT_MAX;
+    depth[11 * N + 2 * r + 2] = 1.0f;
+    set_depths(rc, depth, 0, 0);
+    CHECK(rendercache__find_layer(rc, r + 1, 11).any);   /* r + 1 pixels away: beyond the rays */
+    rendercache_destroy(rc);
+}
+
 /* ---------------------------------------------------------------------
    Background points at infinity.
    --------------------------------------------------------------------- */
@@ -2617,6 +2689,7 @@ int main(int argc, char **argv)
     RUN(test_depth_cull_drops_hidden_points);
     RUN(test_moving_object_points_follow);
     RUN(test_holes_take_the_layer_they_uncover);
+    RUN(test_hole_rays_reach_every_edge_alike);
     RUN(test_misses_are_points_at_infinity);
     RUN(test_predictive_sampling_fills_next_holes);
     RUN(test_eviction_spares_visible_points);
