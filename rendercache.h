@@ -1245,7 +1245,6 @@ static void rendercache__free(const rendercache_allocator *a, void *p)
    2. small math
    ---------------------------------------------------------------------- */
 static int rendercache__iabs(int v) { return v < 0 ? -v : v; }
-static int rendercache__imin(int a, int b) { return a < b ? a : b; }
 static RENDERCACHE__INLINE float rendercache__minf(float a, float b) { return a < b ? a : b; }
 static RENDERCACHE__INLINE float rendercache__maxf(float a, float b) { return a > b ? a : b; }
 /* x clamped to the finite floats: a weighted mean of finite colours that
@@ -3447,24 +3446,18 @@ static rendercache__hole_layer rendercache__find_layer(const rendercache *rc, ui
     int k, s, step[8], near[8], smin = 0, far = 0, moved = 0;
     uint32_t at[8];
     rendercache__hole_layer layer = { 1, 0.0f, FLT_MAX, { 0, 0, 0, 0 } };
-    /* the pixels to the image's edge each way, so that the walk along a ray
-       tests no bounds at each step */
-    const int left = (int)x, right = w - 1 - (int)x, up = (int)y, down = h - 1 - (int)y;
     for (k = 0; k < 8; k++) {
-        const int sx = rendercache__nx[k] < 0 ? left : rendercache__nx[k] > 0 ? right : (int)RENDERCACHE__HOLE_REACH;
-        const int sy = rendercache__ny[k] < 0 ? up : rendercache__ny[k] > 0 ? down : (int)RENDERCACHE__HOLE_REACH;
-        const int reach = rendercache__imin(rendercache__imin(sx, sy), (int)RENDERCACHE__HOLE_REACH);
-        const ptrdiff_t stride = (ptrdiff_t)rendercache__ny[k] * w + rendercache__nx[k];
-        ptrdiff_t q = (ptrdiff_t)y * w + (ptrdiff_t)x;
-        float d = FLT_MAX;
-        for (s = 1; s <= reach; s++) {
-            q += stride;
-            d = rc->px_depth[q];
-            if (d != FLT_MAX) break;
+        first[k] = FLT_MAX;
+        step[k] = 0;
+        at[k] = 0;
+        for (s = 1; s <= (int)RENDERCACHE__HOLE_REACH; s++) {
+            int qx = (int)x + s * rendercache__nx[k], qy = (int)y + s * rendercache__ny[k];
+            if (qx < 0 || qy < 0 || qx >= w || qy >= h) break;
+            at[k] = (uint32_t)qy * (uint32_t)w + (uint32_t)qx;
+            first[k] = rc->px_depth[at[k]];
+            step[k] = s;
+            if (first[k] != FLT_MAX) break;
         }
-        first[k] = d;   /* FLT_MAX: no point within reach */
-        step[k] = s > reach ? reach : s;
-        at[k] = reach > 0 ? (uint32_t)q : 0;
         if (first[k] < dmin) {
             dmin = first[k];
             smin = step[k];
