@@ -254,6 +254,9 @@
        rather than above them all), but for the points shaded in the same
        frame, which show the change already: a new shadow is found by the
        samples that land in it and filled in by the next requests.
+       invalidate_where: with parallel_for, 16 jobs over ranges of slots ask
+       changed and age, noting the answers a bit per slot, then 16 jobs over
+       ranges of pixels set the priorities of those showing an aged point.
 
    HOW A WARP WORKS (NDR96 section 4.4, after Radiance's pinterp)
 
@@ -338,8 +341,8 @@
        invalidate(rc, object): checks rc, and object < object_count,
          RENDERCACHE_MISS or RENDERCACHE_ALL_OBJECTS.
        invalidate_where(rc, changed, user, &aged): checks rc and changed
-         non-NULL; aged may be NULL. Contract: changed returns the same
-         answer whenever it is asked about the same point in one call.
+         non-NULL; aged may be NULL. Contract: with parallel_for, changed
+         may be called from several threads at once.
        seed(rc, images, count, &taken): checks rc, a frame begun, images
          non-NULL when count > 0, each image's arrays non-NULL and camera
          valid; pixels of unknown objects, without a positive finite depth or
@@ -434,7 +437,8 @@
        parallel_for: 6 hold the points the projection's jobs hand to each
        other), about 48 (max_latency + 8) bytes per object, 6 KB
        for the eyes of the last 256 frames, and 576 KB for the re-sort into
-       image order (1.1 MB with parallel_for, and 260 bytes per 16384
+       image order (1.1 MB with parallel_for; at least a bit per point,
+       which takes more beyond 4.7 million points; and 260 bytes per 16384
        points for where each band of the image starts): 133 bytes per pixel
        in all and the re-sort's scratch, 36 MB for 512x512 (137 bytes per
        pixel) and 277 MB for 1920x1080.
@@ -771,16 +775,18 @@ RENDERCACHE_API rendercache_result rendercache_invalidate(rendercache *rc, uint3
    object, this does not let a wide region outrank the holes: the
    walkthrough's bunny, whose step may change the light of a fifth of the
    office's image, took the budget from the holes with that (pooled LRMS
-   against converged renders 0.079 -> 0.100). A point the current frame
-   shows is asked twice (once to age it, once for its pixel's priority),
-   so changed must give the same answer both times; it is called from the
-   calling thread, in slot order, and the result does not depend on
-   threads. Cost: one affine transform and one call per point on an
-   object, plus one per pixel that shows one (at 640x480, 2 points per
-   pixel: up to 614400 + 307200 calls; with a predicate that says no,
-   2.1 ms on one core, about 3.5 ns a slot; the walkthrough's, which tests
-   the cones of 16 lights, 22 ms). aged (may be NULL) gets the number of
-   points aged. */
+   against converged renders 0.079 -> 0.100). Each point is asked once (a
+   pixel's priority takes the answer about the point it shows). With
+   desc.parallel_for, changed is called from several threads at once (in
+   jobs over ranges of slots, each in slot order), so it must be safe to
+   call concurrently (e.g. only read user); without, from the calling
+   thread in slot order. The result does not depend on threads. Cost: one
+   affine transform and one call per point on an object, then a pass over
+   the pixels when a point was aged (at 640x480, 2 points per pixel: up to
+   614400 calls; in the walkthrough's office, whose predicate tests the
+   cones of its lamps, 5.9 ms of CPU a frame, 9.0 when a shown point was
+   asked twice; with parallel_for, spread over the threads).
+   aged (may be NULL) gets the number of points aged. */
 RENDERCACHE_API rendercache_result rendercache_invalidate_where(rendercache *rc,
                                                                 int (*changed)(void *user, const float p[3],
                                                                                uint32_t object),
@@ -2408,7 +2414,8 @@ struct rendercache {
                                 tile that the tile's pixels without a point write instead */
     uint32_t hand;           /* clock hand of the eviction */
     uint32_t *sort_scratch;  /* rendercache__sort_range: 2 words and a point record per slot of a range, per job;
-                                between frames the parallel insertion's chunk (rendercache__insert_chunk) */
+                                between frames the parallel insertion's chunk (rendercache__insert_chunk) and
+                                rendercache_invalidate_where's bit per slot */
     uint32_t *sort_bands;    /* per range, SORT_BANDS + 1 offsets into it: where the points of each band of the
                                 image begin at its last re-sort, and (the last) those outside the image; all 0
                                 for a range not sorted yet (all of it "outside") */
@@ -2562,6 +2569,17 @@ static uint32_t rendercache__sort_jobs(const rendercache *rc)
     return rc->parallel_for ? (count < RENDERCACHE__SORT_JOBS ? count : RENDERCACHE__SORT_JOBS) : 1u;
 }
 
+/* Words of sort_scratch: a range's scratch per job of the re-sort, and at
+   least a bit per slot (rendercache_invalidate_where's answers), which
+   takes more only beyond 4.7 million slots (1 job; 9.4 with 2). */
+static size_t rendercache__sort_scratch_words(const rendercache *rc)
+{
+    const size_t sort = (size_t)rendercache__sort_range_size(rc) * rendercache__sort_jobs(rc) *
+                        (2 + sizeof(rendercache__point) / sizeof(uint32_t)),
+                 bits = ((size_t)rc->capacity + 31) / 32;
+    return sort > bits ? sort : bits;
+}
+
 static void rendercache__release(rendercache *rc)
 {
     const rendercache_allocator a = rc->alloc;
@@ -2645,8 +2663,7 @@ static int rendercache__alloc_buffers(rendercache *rc)
     rc->chosen = (unsigned char *)rendercache__alloc_array(a, px, 1);
     rc->err_rows = (float *)rendercache__alloc_array(a, 2 * (size_t)rc->band_count * ((size_t)rc->width + 2), sizeof(float));
     rc->bands = (rendercache__band *)rendercache__alloc_array(a, rc->band_count, sizeof *rc->bands);
-    rc->sort_scratch = (uint32_t *)rendercache__alloc_array(a, (size_t)rendercache__sort_range_size(rc) * rendercache__sort_jobs(rc),
-                                                            2 * sizeof(uint32_t) + sizeof(rendercache__point));
+    rc->sort_scratch = (uint32_t *)rendercache__alloc_array(a, rendercache__sort_scratch_words(rc), sizeof(uint32_t));
     rc->sort_bands = (uint32_t *)rendercache__alloc_array(a, rendercache__sort_ranges(rc),
                                                           (RENDERCACHE__SORT_BANDS + 1) * sizeof(uint32_t));
     if (!rc->geo.x || !rc->data || !rc->shown || !rc->obj_predicted || !rc->obj_motion || !rc->obj_world ||
@@ -5290,33 +5307,80 @@ static void rendercache__world_point(const rendercache *rc, uint32_t slot, float
     rendercache__affine(rc->obj_world + 12 * (size_t)rc->geo.object[slot], x, p);
 }
 
+/* rendercache_invalidate_where's jobs: first ranges of slots, then ranges
+   of pixels. */
+#define RENDERCACHE__WHERE_JOBS 16u
+typedef struct rendercache__where_job {
+    rendercache *rc;
+    int (*changed)(void *user, const float p[3], uint32_t object);
+    void *user;
+    uint32_t *yes;   /* a bit per slot: changed said yes (sort_scratch) */
+    uint32_t aged[RENDERCACHE__WHERE_JOBS];
+} rendercache__where_job;
+
+/* Slot job j: asks changed about the points on an object in its whole
+   words of yes (32 slots each, so that no two jobs write one word), ages
+   those it says changed and notes them in yes. Ageing touches only the
+   point's own record, so the result is the serial one. */
+static void rendercache__where_slots_job(void *ctx, uint32_t j)
+{
+    rendercache__where_job *job = (rendercache__where_job *)ctx;
+    rendercache *rc = job->rc;
+    const uint32_t words = (rc->capacity + 31) / 32;
+    uint32_t w = (uint32_t)((uint64_t)words * j / RENDERCACHE__WHERE_JOBS),
+             end = (uint32_t)((uint64_t)words * (j + 1) / RENDERCACHE__WHERE_JOBS), n = 0;
+    for (; w < end; w++) {
+        uint32_t s = 32 * w, last = rc->capacity - s < 32 ? rc->capacity : s + 32, bits = 0;
+        for (; s < last; s++) {   /* free slots and background points are not asked */
+            float x[3];
+            if (rc->geo.object[s] >= rc->object_count) continue;
+            rendercache__world_point(rc, s, x);
+            if (!job->changed(job->user, x, rc->geo.object[s])) continue;
+            rendercache__age_at_least(rc, &rc->data[s]);
+            bits |= 1u << (s & 31);
+            n++;
+        }
+        job->yes[w] = bits;
+    }
+    job->aged[j] = n;
+}
+
+/* Pixel job j: the priorities of its pixels that show a point changed said
+   yes about (asked once: the answer in yes). */
+static void rendercache__where_pixels_job(void *ctx, uint32_t j)
+{
+    const rendercache__where_job *job = (const rendercache__where_job *)ctx;
+    rendercache *rc = job->rc;
+    uint32_t p = (uint32_t)((uint64_t)rc->pixel_count * j / RENDERCACHE__WHERE_JOBS),
+             end = (uint32_t)((uint64_t)rc->pixel_count * (j + 1) / RENDERCACHE__WHERE_JOBS);
+    for (; p < end; p++) {
+        const rendercache__point *pt;
+        uint32_t slot = rc->px_index[p];
+        if (slot == RENDERCACHE__NONE || !(job->yes[slot / 32] >> (slot & 31) & 1u)) continue;
+        pt = &rc->data[slot];
+        rc->priority[p] = rendercache__point_priority(rc, pt, rc->obj_motion[rendercache__motion_index(rc, pt->object)], p,
+                                                      rc->px_depth[p]);
+    }
+}
+
 RENDERCACHE_API rendercache_result rendercache_invalidate_where(rendercache *rc,
                                                                 int (*changed)(void *user, const float p[3],
                                                                                uint32_t object),
                                                                 void *user, uint32_t *aged)
 {
-    uint32_t s, p, n = 0;
-    float x[3];
+    rendercache__where_job job;
+    uint32_t j, n = 0;
     if (aged) *aged = 0;
     if (!rc || !changed) return RENDERCACHE_ERROR_INVALID_ARGUMENT;
-    for (s = 0; s < rc->capacity; s++) {   /* free slots and background points are not asked */
-        if (rc->geo.object[s] >= rc->object_count) continue;
-        rendercache__world_point(rc, s, x);
-        if (!changed(user, x, rc->geo.object[s])) continue;
-        rendercache__age_at_least(rc, &rc->data[s]);
-        n++;
-    }
-    if (rc->has_frame)   /* the priorities of this frame's pixels showing them */
-        for (p = 0; p < rc->pixel_count; p++) {
-            const rendercache__point *pt;
-            uint32_t slot = rc->px_index[p];
-            if (slot == RENDERCACHE__NONE || rc->geo.object[slot] >= rc->object_count) continue;
-            rendercache__world_point(rc, slot, x);
-            if (!changed(user, x, rc->geo.object[slot])) continue;
-            pt = &rc->data[slot];
-            rc->priority[p] = rendercache__point_priority(rc, pt, rc->obj_motion[rendercache__motion_index(rc, pt->object)],
-                                                          p, rc->px_depth[p]);
-        }
+    job.rc = rc;
+    job.changed = changed;
+    job.user = user;
+    job.yes = rc->sort_scratch;   /* (free between frames' calls; a bit per slot: sort_scratch_words) */
+    rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__where_slots_job, &job, RENDERCACHE__WHERE_JOBS);
+    for (j = 0; j < RENDERCACHE__WHERE_JOBS; j++) n += job.aged[j];
+    if (rc->has_frame && n)   /* the priorities of this frame's pixels showing them */
+        rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__where_pixels_job, &job,
+                              RENDERCACHE__WHERE_JOBS);
     if (aged) *aged = n;
     return RENDERCACHE_OK;
 }

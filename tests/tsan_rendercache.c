@@ -1,7 +1,8 @@
 /* Concurrency test of rendercache.h under ThreadSanitizer: every parallel
    part of the library runs on a pool of two workers and the calling thread
    (the render cache's frame with prediction, apart or counted in the
-   projection's pass, requests and insertion; warps of fish-eye and
+   projection's pass, requests, insertion and rendercache_invalidate_where;
+   warps of fish-eye and
    perspective range images, prepared or not, with every fill mode and a fill
    callback; pixelwise and motion-compensated time blends), and its result
    must equal, bit for bit, the same calls made serially. ThreadSanitizer
@@ -88,6 +89,15 @@ static const float *composed_with_fallback(const rendercache *rc)
     return out;
 }
 
+/* rendercache_invalidate_where's predicate, called from several threads
+   at once: only reads. The wall's points in the square's shadow from a
+   light up and to the left (the square's x is *user). */
+static int in_shadow(void *user, const float p[3], uint32_t object)
+{
+    const float *shift = (const float *)user;
+    return object == 0 && fabsf(p[0] - *shift - 2.0f) <= 2.0f && fabsf(p[1] + 2.0f) <= 2.0f;
+}
+
 /* The frame sequence with points_per_pixel ppp (0: the default). */
 /* The most rounds a projection of run_cache took (the projection's jobs
    hand the points that land in another job's pixels over in rounds). */
@@ -138,6 +148,12 @@ static uint64_t run_cache(ex_pool *pool, float ppp)
         pending = n / 2;
         CHECK_EQ_INT(rendercache_insert(rc, now, n - n / 2, NULL), RENDERCACHE_OK);
         if (f == 5) CHECK_EQ_INT(rendercache_invalidate(rc, 1), RENDERCACHE_OK);
+        if (f % 3 == 1) {   /* the square's shadow moved: its points asked in the jobs */
+            uint32_t aged = 0;
+            CHECK_EQ_INT(rendercache_invalidate_where(rc, in_shadow, &shift, &aged), RENDERCACHE_OK);
+            CHECK(aged > 0);
+            h = hash_bytes(h, &aged, sizeof aged);
+        }
         h = hash_bytes(h, req, n * sizeof *req);
         h = hash_bytes(h, rendercache_image(rc), sizeof(float) * 3 * W * H);
         h = hash_bytes(h, rendercache_priority_image(rc), sizeof(float) * W * H);
