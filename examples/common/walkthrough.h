@@ -175,6 +175,7 @@
                                          emitted luminance) are traced at the frame */
 #define WT__MAX_LIGHT_SAMPLES 1024  /* bound of --light-samples: shadow rays per shaded point */
 #define WT_KEY_EPSILON 0.1f        /* baseviews: a bunny vertex changed when its radiance moved by more than 10% */
+#define WT_KEY_EXTRA_DEPTH 1u      /* baseviews: more halvings of the bunny's key intervals (wt__key_depth) */
 /* Shadow rays at each hit point of a light-vector gather (lightvec's
    default is 1). With one, a gather ray that lands near the lamp (the wall
    and ceiling beside it, lit at 1/d^2) brings back a rare huge value: a
@@ -4292,6 +4293,7 @@ static uint64_t wt__baseviews_key(const wt_renderer *r)
     h = wt_hash_u64(h, (uint64_t)o->light_samples);
     h = wt_hash_u64(h, (uint64_t)o->bunny_strata);
     h = wt_hash_f32(h, WT_KEY_EPSILON);   /* the bunny's key-time solutions are saved with the images */
+    h = wt_hash_u64(h, WT_KEY_EXTRA_DEPTH);
     h = wt_hash_u64(h, (uint64_t)o->bunny_shadow);
     h = wt_hash_u64(h, 3u);   /* 3: base images without the bunny's shadows (wt__baseviews_shadows), through glass too */
     if (o->path) {   /* a route's views, and the frames that choose which base images are traced */
@@ -4308,12 +4310,19 @@ static uint64_t wt__baseviews_key(const wt_renderer *r)
    at key times that rendercache_keytimes_create chooses (an interval is
    halved while more than 1 - q of the vertices change by more than 5%),
    and base images and traced pixels interpolate it linearly in time and
-   across each triangle. Its intervals are halved at most once more than
-   the base images' initial key intervals (--keys) need to be (--keys 5: 9
-   key times at most). The office's indirect light comes from its static
-   light vectors, as in the other modes. The gathers use one random stream
-   per vertex at every time, so that the changes the test sees are the
-   light's, not the noise's. */
+   across each triangle. Its intervals are halved at most
+   1 + WT_KEY_EXTRA_DEPTH times more than the base images' initial key
+   intervals (--keys) need to be (--keys 5: 17 key times at most; a solve
+   is a gather at each vertex, 0.2-0.6 s on 2 cores). Once more was not
+   enough in the house: the bunny walks from a lit room into the room
+   without a lamp within one interval, and the interpolated light drew it
+   5x brighter there than the full render (the small walk of
+   test_walkthrough_building: the bunny's luminance off by 8.6 % of the
+   full renders' summed over the frames; 4.9 % with one more halving,
+   3.8 % with two, at twice the solves). The office's indirect light
+   comes from its static light vectors, as in the other modes. The
+   gathers use one random stream per vertex at every time, so that the
+   changes the test sees are the light's, not the noise's. */
 
 typedef struct wt__key_job {
     wt_world *w;
@@ -4372,7 +4381,7 @@ static uint32_t wt__key_depth(const wt_options *o)
 {
     uint32_t depth = 1;
     while ((1 << (depth - 1)) < o->keys - 1) depth++;
-    return depth;
+    return depth + WT_KEY_EXTRA_DEPTH;
 }
 
 static int wt__bunny_keys(wt_renderer *r)
@@ -4900,7 +4909,8 @@ typedef struct wt__shadow_job {
    shadow test says: the bunny's (its base images saw it lit as it stood
    at the key times, in another room perhaps, and the blend moves those
    colours with it: drawn bright in the room without a lamp, where the
-   full render shows it dark), and the lamps' (a bright emitter warped
+   full render shows it dark; the pixels of the bunny's own shadow test
+   are the office's), and the lamps' (a bright emitter warped
    from a coarser base image is a blob around the lamp and its quads
    smear its radiance onto the ceiling beside it; a few pixels, each
    worth hundreds of a dim wall's in the luminance error). */
