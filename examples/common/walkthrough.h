@@ -167,9 +167,15 @@
 #define WT_BUNNY_NORMAL_ANGLE 30.0f  /* degrees: light vectors valid between the bunny's normals */
 #define WT_BUNNY_PRIORITY 4.0f      /* render-cache priority scale of the bunny's points */
 #define WT_PHASES 4
-#define WT_BASEVIEWS_MAX_FILL 8u   /* baseviews: background fill reaches this many pixels; farther ones are traced */
+#define WT_BASEVIEWS_MAX_FILL 8u   /* baseviews: background fill reaches this many pixels of a 640-pixel-wide frame
+                                      (as far in angle at other widths); farther ones are traced */
+#define WT_BASEVIEWS_SLOPE 7.0f     /* baseviews: the final warp joins neighbouring base pixels of a surface seen
+                                      this steeply (tan 82 degrees from its normal) into foreground quads */
+#define WT_BASEVIEWS_LAMP_SHARE 0.2f   /* baseviews: warped pixels this bright (share of the dimmest lamp's
+                                         emitted luminance) are traced at the frame */
 #define WT__MAX_LIGHT_SAMPLES 1024  /* bound of --light-samples: shadow rays per shaded point */
 #define WT_KEY_EPSILON 0.1f        /* baseviews: a bunny vertex changed when its radiance moved by more than 10% */
+#define WT_KEY_EXTRA_DEPTH 1u      /* baseviews: more halvings of the bunny's key intervals (wt__key_depth) */
 /* Shadow rays at each hit point of a light-vector gather (lightvec's
    default is 1). With one, a gather ray that lands near the lamp (the wall
    and ceiling beside it, lit at 1/d^2) brings back a rare huge value: a
@@ -3622,6 +3628,7 @@ typedef struct wt_renderer {
     ex_baseviews_reconstructor rec;
     rendercache_range_image *blend[8], *out;
     uint32_t fill_frame;
+    float lamp_luminance;       /* WT_BASEVIEWS_LAMP_SHARE of the dimmest lamp's emitted luminance (wt__retraced) */
     rendercache_keytimes *bunny_light;   /* the bunny's indirect light at key times (Nimeroff 4.3) */
     float *bunny_indirect;      /* per bunny vertex: its indirect radiance (RGB) at bunny_time */
     double bunny_time;
@@ -4286,6 +4293,7 @@ static uint64_t wt__baseviews_key(const wt_renderer *r)
     h = wt_hash_u64(h, (uint64_t)o->light_samples);
     h = wt_hash_u64(h, (uint64_t)o->bunny_strata);
     h = wt_hash_f32(h, WT_KEY_EPSILON);   /* the bunny's key-time solutions are saved with the images */
+    h = wt_hash_u64(h, WT_KEY_EXTRA_DEPTH);
     h = wt_hash_u64(h, (uint64_t)o->bunny_shadow);
     h = wt_hash_u64(h, 3u);   /* 3: base images without the bunny's shadows (wt__baseviews_shadows), through glass too */
     if (o->path) {   /* a route's views, and the frames that choose which base images are traced */
@@ -4302,12 +4310,19 @@ static uint64_t wt__baseviews_key(const wt_renderer *r)
    at key times that rendercache_keytimes_create chooses (an interval is
    halved while more than 1 - q of the vertices change by more than 5%),
    and base images and traced pixels interpolate it linearly in time and
-   across each triangle. Its intervals are halved at most once more than
-   the base images' initial key intervals (--keys) need to be (--keys 5: 9
-   key times at most). The office's indirect light comes from its static
-   light vectors, as in the other modes. The gathers use one random stream
-   per vertex at every time, so that the changes the test sees are the
-   light's, not the noise's. */
+   across each triangle. Its intervals are halved at most
+   1 + WT_KEY_EXTRA_DEPTH times more than the base images' initial key
+   intervals (--keys) need to be (--keys 5: 17 key times at most; a solve
+   is a gather at each vertex, 0.2-0.6 s on 2 cores). Once more was not
+   enough in the house: the bunny walks from a lit room into the room
+   without a lamp within one interval, and the interpolated light drew it
+   5x brighter there than the full render (the small walk of
+   test_walkthrough_building: the bunny's luminance off by 8.6 % of the
+   full renders' summed over the frames; 4.9 % with one more halving,
+   3.8 % with two, at twice the solves). The office's indirect light
+   comes from its static light vectors, as in the other modes. The
+   gathers use one random stream per vertex at every time, so that the
+   changes the test sees are the light's, not the noise's. */
 
 typedef struct wt__key_job {
     wt_world *w;
@@ -4366,7 +4381,7 @@ static uint32_t wt__key_depth(const wt_options *o)
 {
     uint32_t depth = 1;
     while ((1 << (depth - 1)) < o->keys - 1) depth++;
-    return depth;
+    return depth + WT_KEY_EXTRA_DEPTH;
 }
 
 static int wt__bunny_keys(wt_renderer *r)
@@ -4594,6 +4609,32 @@ static int wt__fill_pixel(void *user, uint32_t x, uint32_t y, const float org[3]
     return wt__fill_shade(r, &p, rgb, depth, object);
 }
 
+/* The background fill's reach in pixels of a frame width pixels wide:
+   WT_BASEVIEWS_MAX_FILL at 640, as far in angle at other widths (at 160
+   wide, 8 pixels smeared a lit wall across a door's opening that a trace
+   shows; at least 1). */
+static uint32_t wt__baseviews_max_fill(uint32_t width)
+{
+    uint32_t d = (WT_BASEVIEWS_MAX_FILL * width + 320u) / 640u;
+    return d ? d : 1u;
+}
+
+/* The final warp's relative depth tolerance for base images size pixels
+   wide: neighbouring pixels of an equidistant fish-eye are pi / size
+   radians apart, so the depths of a plane seen at an angle a from its
+   normal differ by about tan(a) pi / size from one to the next, and the
+   warp joins them into a foreground quad within twice the tolerance.
+   rendercache's default (0.02) joins up to tan(a) = 3.3 at 512 pixels but
+   only 0.8 (39 degrees) at 128: walls seen obliquely were splatted as
+   points, and the farther surfaces behind them showed through the dots
+   between (the house at 160x120, base 128: mean LRMS 0.187 -> 0.160 with
+   0.10). Never below the default. */
+static float wt__baseviews_tolerance(uint32_t size)
+{
+    float tol = WT_BASEVIEWS_SLOPE * WT_PI / (2.0f * (float)(size ? size : 1u));
+    return tol > 0.02f ? tol : 0.02f;
+}
+
 /* The base images the frames warp from (r->base_needed): on a planned
    route, those of the stretch and key interval around each frame's time;
    in the office's box, all of them (as its reference frames were made:
@@ -4781,8 +4822,12 @@ static int wt__baseviews_create(wt_renderer *r, char *err, size_t err_size)
     wd.fill_pixel = wt__fill_pixel;
     wd.fill_user = r;
     wd.average = 1;                     /* the corner views that see a surface are averaged (pinterp -a) */
-    wd.max_fill_distance = WT_BASEVIEWS_MAX_FILL;   /* wider gaps are traced, not smeared (pinterp -fs) */
+    wd.max_fill_distance = wt__baseviews_max_fill(r->width);   /* wider gaps are traced, not smeared (pinterp -fs) */
+    wd.depth_tolerance = wt__baseviews_tolerance((uint32_t)o->base_size);
     if (rendercache_warper_create(&wd, &r->rec.warper) != RENDERCACHE_OK) return wt__fail(err, err_size, "%s", "out of memory");
+    r->lamp_luminance = FLT_MAX;
+    for (i = 0; i < w->light_count; i++)
+        r->lamp_luminance = fminf(r->lamp_luminance, WT_BASEVIEWS_LAMP_SHARE * wt__luminance(w->lights[i].ke));
     r->rec.object_count = 2;
     r->rec.motion = wt__object_transforms;
     r->rec.motion_user = w;
@@ -4860,8 +4905,24 @@ typedef struct wt__shadow_job {
     uint32_t count;          /* pixels flagged (r->index[0 .. count)) */
 } wt__shadow_job;
 
+/* Warped pixels traced again at the frame's time whatever the bunny's
+   shadow test says: the bunny's (its base images saw it lit as it stood
+   at the key times, in another room perhaps, and the blend moves those
+   colours with it: drawn bright in the room without a lamp, where the
+   full render shows it dark; the pixels of the bunny's own shadow test
+   are the office's), and the lamps' (a bright emitter warped
+   from a coarser base image is a blob around the lamp and its quads
+   smear its radiance onto the ceiling beside it; a few pixels, each
+   worth hundreds of a dim wall's in the luminance error). */
+static int wt__retraced(const wt_renderer *r, size_t i)
+{
+    const rendercache_range_image *out = r->out;
+    return out->object[i] == WT_OBJECT_BUNNY ||
+           (out->object[i] == WT_OBJECT_OFFICE && wt__luminance(out->rgb + 3 * i) >= r->lamp_luminance);
+}
+
 /* Job per row: r->index[i] = 1 for each pixel i of the row that shows the
-   office where the bunny may shadow it, else 0. */
+   office where the bunny may shadow it, or that wt__retraced, else 0. */
 static void wt__shadow_flag_row(void *ctx, uint32_t y)
 {
     const wt__shadow_job *j = (const wt__shadow_job *)ctx;
@@ -4872,11 +4933,11 @@ static void wt__shadow_flag_row(void *ctx, uint32_t y)
         float org[3], dir[3], pos[3];
         int k;
         j->r->index[i] = 0;
-        if (out->object[i] != WT_OBJECT_OFFICE ||
+        if ((out->object[i] != WT_OBJECT_OFFICE && out->object[i] != WT_OBJECT_BUNNY) ||
             rendercache_camera_ray(j->camera, (float)x + 0.5f, (float)y + 0.5f, org, dir) != RENDERCACHE_OK)
             continue;
         for (k = 0; k < 3; k++) pos[k] = org[k] + out->depth[i] * dir[k];
-        j->r->index[i] = (uint32_t)wt__bunny_may_shadow(j->r->w, pos);
+        j->r->index[i] = (uint32_t)(wt__retraced(j->r, i) || wt__bunny_may_shadow(j->r->w, pos));
     }
 }
 
@@ -4896,7 +4957,8 @@ static void wt__shadow_trace_job(void *ctx, uint32_t batch)
 }
 
 /* The pass: flags (in parallel), the flagged pixels in pixel order,
-   traced (in parallel); those the bunny touched keep their trace: the
+   traced (in parallel); those the bunny touched or wt__retraced chose
+   keep their trace: the
    bunny's own points take the key-time solution, the office's their
    light vectors, looked up and gathered in rounds with the picks of the
    raytrace mode (wt__light_points), and inserted, in that fixed order, so
@@ -4918,7 +4980,8 @@ static int wt__baseviews_shadows(wt_renderer *r, const rendercache_camera *camer
     ex_pool_parallel_for(r->w->pool, wt__shadow_trace_job, &j, (j.count + WT__BATCH - 1) / WT__BATCH);
     for (k = 0; k < j.count; k++) {
         wt_point *p = &r->points[k];
-        if (p->object == WT_OBJECT_OFFICE && !p->bunny_shadow) continue;   /* the bunny hid none of its light */
+        if (p->object == WT_OBJECT_OFFICE && !p->bunny_shadow && !wt__retraced(r, r->index[k]))
+            continue;   /* the bunny hid none of its light */
         if (!p->lit && p->light == WT_LIGHT_BUNNY) {   /* the key-time solution, at the frame's time */
             wt__bunny_indirect_at(r, p);
             p->lit = 1;
