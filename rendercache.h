@@ -4698,17 +4698,30 @@ static void rendercache__mark_refill_current(rendercache *rc, const rendercache_
     }
 }
 
-/* Fills the marked holes again. */
-static void rendercache__refill(rendercache *rc)
+/* Fills the marked holes of one band of RENDERCACHE__TILE_ROWS rows from
+   refill_rows[0]. A hole's filling reads points only and writes its own
+   pixel, as the frame's filling does tile by tile: bands run in parallel. */
+static void rendercache__refill_job(void *ctx, uint32_t band)
 {
-    uint32_t x, y;
-    for (y = rc->refill_rows[0]; y < rc->refill_rows[1]; y++)
+    rendercache *rc = (rendercache *)ctx;
+    uint32_t x, y = rc->refill_rows[0] + band * RENDERCACHE__TILE_ROWS, end = y + RENDERCACHE__TILE_ROWS;
+    if (end > rc->refill_rows[1]) end = rc->refill_rows[1];
+    for (; y < end; y++)
         for (x = 0; x < rc->width; x++) {
             uint32_t q = y * rc->width + x;
             if (!(rc->kind[q] & RENDERCACHE__REFILL)) continue;
             rc->kind[q] = (unsigned char)(rc->kind[q] & ~RENDERCACHE__REFILL);
             if (rc->px_index[q] == RENDERCACHE__NONE) rendercache__fill_hole(rc, x, y);
         }
+}
+
+/* Fills the marked holes again (in parallel with parallel_for: a fast
+   walk refills most holes of the image). */
+static void rendercache__refill(rendercache *rc)
+{
+    if (rc->refill_rows[1] > rc->refill_rows[0])
+        rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__refill_job, rc,
+                              (rc->refill_rows[1] - rc->refill_rows[0] + RENDERCACHE__TILE_ROWS - 1) / RENDERCACHE__TILE_ROWS);
     rc->refill_rows[0] = rc->height;
     rc->refill_rows[1] = 0;
 }
