@@ -2210,6 +2210,70 @@ static void test_changed_samples_refill_their_holes(void)
     CHECK(changed_holes_image(reversed_parallel_for) == serial);
 }
 
+/* The holes around a sample of the current frame show it in its own
+   frame. An empty cache begins a frame (every pixel a hole showing the
+   background), then a few scattered samples of the wall are inserted, as
+   the requests of a fast walk land in a wide disocclusion: the holes
+   within wide_radius (3) of a sample take the wall's colour at once,
+   those farther stay the background. Before, they waited for the next
+   frame's filling and the frame showed black pixels between the new
+   points. Serial and parallel insertion (chunks) give the same image.
+   Returns a hash of the image, or 0 when a check failed. */
+static uint64_t current_holes_image(void (*pf)(void *, rendercache_job_fn, void *, uint32_t))
+{
+    enum { W = 64, H = 48, STEP = 16 };
+    rendercache_camera cam = make_camera(0, 0, 0, 0, 0, 10, W, H);
+    rendercache_desc d = make_desc(W, H);
+    const unsigned char *kinds;
+    const float *image;
+    rendercache *rc;
+    scene s;
+    uint32_t p, n = 0, near_dark = 0, far_lit = 0, near = 0;
+    uint64_t h = 1469598103934665603ull;
+    memset(&s, 0, sizeof s);
+    s.shift[0] = 100.0f;   /* the wall alone */
+    d.parallel_for = pf;
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return 0;
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
+    for (p = 0; p < W * H; p++) {
+        rendercache_pixel_request *q;
+        if ((p % W) % STEP != STEP / 2 || (p / W) % STEP != STEP / 2) continue;
+        q = &g_req[n++];
+        memset(q, 0, sizeof *q);
+        q->x = p % W;
+        q->y = p / W;
+        rendercache_camera_ray(&cam, (float)q->x + 0.5f, (float)q->y + 0.5f, q->org, q->dir);
+    }
+    for (p = 0; p < n; p++) shade(&s, &g_req[p], &g_samples[p]);
+    CHECK_EQ_INT(rendercache_insert(rc, g_samples, n, NULL), RENDERCACHE_OK);
+    kinds = rendercache_pixel_kinds(rc);
+    image = rendercache_image(rc);
+    for (p = 0; p < W * H; p++) {
+        int dx = (int)(p % W % STEP) - STEP / 2, dy = (int)(p / W % STEP) - STEP / 2;
+        int close = dx >= -3 && dx <= 3 && dy >= -3 && dy <= 3;   /* within wide_radius of a sample */
+        if (kinds[p] == RENDERCACHE_PIXEL_POINT) continue;
+        near += close;
+        near_dark += close && (kinds[p] == RENDERCACHE_PIXEL_EMPTY || !(image[3 * p] > 0.0f));
+        far_lit += !close && (kinds[p] != RENDERCACHE_PIXEL_EMPTY || image[3 * p] != 0.0f);
+    }
+    test_note("%u samples on an empty frame: %u of %u holes within reach still dark after the insert, %u beyond lit",
+              n, near_dark, near, far_lit);
+    CHECK_EQ_INT(n, (W / STEP) * (H / STEP));
+    CHECK_EQ_INT(near, n * 48u);
+    CHECK_EQ_INT(near_dark, 0);
+    CHECK_EQ_INT(far_lit, 0);
+    h = hash_bytes(h, image, sizeof(float) * 3 * W * H);
+    rendercache_destroy(rc);
+    return near_dark || far_lit ? 0 : h;
+}
+
+static void test_current_samples_refill_their_holes(void)
+{
+    uint64_t serial = current_holes_image(NULL);
+    CHECK(serial != 0);
+    CHECK(current_holes_image(reversed_parallel_for) == serial);
+}
+
 /* The insertion of one frame's samples in the mixed order an engine may
    give them: the current frame's (in chunks placed in parallel with
    parallel_for), a few twice (the same pixel in one call), a share kept
@@ -2698,6 +2762,7 @@ int main(int argc, char **argv)
     RUN(test_changed_colours_are_resampled_first);
     RUN(test_change_ages_the_points_around_it);
     RUN(test_changed_samples_refill_their_holes);
+    RUN(test_current_samples_refill_their_holes);
     RUN(test_invalidate_ranks_an_object_first);
     RUN(test_invalidate_where_ages_exactly_those_points);
     RUN(test_priority_scale);
