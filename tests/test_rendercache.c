@@ -2218,8 +2218,10 @@ static void test_changed_samples_refill_their_holes(void)
    those farther stay the background. Before, they waited for the next
    frame's filling and the frame showed black pixels between the new
    points. Serial and parallel insertion (chunks) give the same image.
-   Returns a hash of the image, or 0 when a check failed. */
-static uint64_t current_holes_image(void (*pf)(void *, rendercache_job_fn, void *, uint32_t))
+   That is desc.refill_samples; without it (the default) every hole keeps
+   the background until the next frame. Returns a hash of the image, or 0
+   when a check failed. */
+static uint64_t current_holes_image(void (*pf)(void *, rendercache_job_fn, void *, uint32_t), int refill)
 {
     enum { W = 64, H = 48, STEP = 16 };
     rendercache_camera cam = make_camera(0, 0, 0, 0, 0, 10, W, H);
@@ -2233,6 +2235,7 @@ static uint64_t current_holes_image(void (*pf)(void *, rendercache_job_fn, void 
     memset(&s, 0, sizeof s);
     s.shift[0] = 100.0f;   /* the wall alone */
     d.parallel_for = pf;
+    d.refill_samples = refill;
     if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return 0;
     CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);
     for (p = 0; p < W * H; p++) {
@@ -2260,18 +2263,19 @@ static uint64_t current_holes_image(void (*pf)(void *, rendercache_job_fn, void 
               n, near_dark, near, far_lit);
     CHECK_EQ_INT(n, (W / STEP) * (H / STEP));
     CHECK_EQ_INT(near, n * 48u);
-    CHECK_EQ_INT(near_dark, 0);
+    CHECK_EQ_INT(near_dark, refill ? 0u : near);
     CHECK_EQ_INT(far_lit, 0);
     h = hash_bytes(h, image, sizeof(float) * 3 * W * H);
     rendercache_destroy(rc);
-    return near_dark || far_lit ? 0 : h;
+    return near_dark != (refill ? 0u : near) || far_lit ? 0 : h;
 }
 
 static void test_current_samples_refill_their_holes(void)
 {
-    uint64_t serial = current_holes_image(NULL);
+    uint64_t serial = current_holes_image(NULL, 1);
     CHECK(serial != 0);
-    CHECK(current_holes_image(reversed_parallel_for) == serial);
+    CHECK(current_holes_image(reversed_parallel_for, 1) == serial);
+    CHECK(current_holes_image(NULL, 0) != 0);   /* the default: no refill */
 }
 
 /* Every hole within the reach of a current frame's sample (the larger of
@@ -2291,6 +2295,7 @@ static void test_current_samples_refill_their_whole_reach(void)
     int f, r;
     memset(&s, 0, sizeof s);
     if (!rc) return;
+    rc->refill_samples = 1;
     r = (int)(rc->wide_radius > RENDERCACHE__HOLE_REACH ? rc->wide_radius : RENDERCACHE__HOLE_REACH);
     for (f = 0; f < 6; f++) {
         rendercache_camera cam = make_camera(0.6f * (float)f, 0.2f * (float)f, 0.0f, 0.2f, 0.0f, 10.0f, W, H);
@@ -2575,9 +2580,10 @@ static void insert_in_pieces(rendercache *rc, const rendercache_sample *samples,
 }
 
 /* A walk of 8 frames (a full first frame, then 900 samples a frame, the
-   camera moving), its samples inserted in one call a frame or in pieces;
-   the hash of every frame's requests, images, kinds and counts. */
-static uint64_t run_pieces_walk(float ppp, int pieces)
+   camera moving), its samples inserted in one call a frame or in pieces,
+   with or without desc.refill_samples; the hash of every frame's
+   requests, images, kinds and counts. */
+static uint64_t run_pieces_walk(float ppp, int pieces, int refill)
 {
     const uint32_t w = 96, h = 80;
     rendercache *rc = create_with(NULL, NULL, ppp, w, h);
@@ -2586,6 +2592,7 @@ static uint64_t run_pieces_walk(float ppp, int pieces)
     int f;
     memset(&s, 0, sizeof s);
     if (!rc) return 0;
+    rc->refill_samples = refill;
     for (f = 0; f < 8; f++) {
         rendercache_camera cam = make_camera(0.1f * (float)f, 0.05f * (float)f, 0.0f, 0.2f, 0.0f, 10.0f, w, h);
         rendercache_stats st;
@@ -2619,10 +2626,10 @@ static void test_insert_in_pieces_matches_one_call(void)
 {
     float ppp[2] = { 0.0f, 0.3f };
     int k;
-    for (k = 0; k < 2; k++) {
-        uint64_t whole = run_pieces_walk(ppp[k], 0);
+    for (k = 0; k < 4; k++) {
+        uint64_t whole = run_pieces_walk(ppp[k / 2], 0, k % 2);
         CHECK(whole != 0);
-        CHECK(run_pieces_walk(ppp[k], 1) == whole);
+        CHECK(run_pieces_walk(ppp[k / 2], 1, k % 2) == whole);
     }
 }
 

@@ -117,6 +117,7 @@ static uint64_t run_cache(ex_pool *pool, float ppp)
     d.points_per_pixel = ppp;
     d.parallel_for = pool ? ex_pool_parallel_for : NULL;
     d.parallel_user = pool;
+    d.refill_samples = 1;   /* the refill's bands run after every insert */
     if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return 0;
     for (f = 0; f < FRAMES; f++) {
         float shift = 0.1f * (float)f, m[12] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0 };

@@ -3881,6 +3881,7 @@ static int wt__raytrace_create(wt_renderer *r, char *err, size_t err_size)
     d.parallel_user = r->w->pool;
     d.clock = wt__clock;
     d.edge_fraction = WT__EDGE_FRACTION;
+    d.refill_samples = 1;   /* each frame is shown after its samples are in */
     rr = rendercache_create(&d, &r->rc);
     r->budget = (uint32_t)(r->w->opt.budget * (float)n + 0.5f);
     if (r->budget < 1) r->budget = 1;
