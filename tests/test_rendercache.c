@@ -2005,6 +2005,25 @@ static uint64_t hash_bytes(uint64_t h, const void *p, size_t n)
     return h;
 }
 
+/* A frame's n requests (g_req), image and priorities added to hash. */
+static uint64_t hash_frame(uint64_t hash, const rendercache *rc, uint32_t n, uint32_t w, uint32_t h)
+{
+    hash = hash_bytes(hash, g_req, n * sizeof *g_req);
+    hash = hash_bytes(hash, rendercache_image(rc), 3 * sizeof(float) * w * h);
+    return hash_bytes(hash, rendercache_priority_image(rc), sizeof(float) * w * h);
+}
+
+/* Frame f of the sequences' walk: the square (object 1, s's shift) moved
+   to its place, and the camera of that frame. */
+static rendercache_camera sequence_step(rendercache *rc, scene *s, float m[12], int f, uint32_t w, uint32_t h)
+{
+    float t = (float)f * 0.1f;
+    m[3] = 0.05f * (float)f;
+    s->shift[0] = m[3];
+    rendercache_set_object_transform(rc, 1, m);
+    return make_camera(t, 0.3f * t, t, 0.2f, 0.0f, 10.0f, w, h);
+}
+
 /* ppp: points per pixel (0: the default, one range of the re-sort into
    image order; 24: 12 ranges, 2 re-sorted per frame, in 2 jobs with a
    parallel_for); fused: each frame starts with begin_frame_predicted
@@ -2038,13 +2057,9 @@ static uint64_t run_sequence(void (*pf)(void *, rendercache_job_fn, void *, uint
     memset(&s, 0, sizeof s);
     if (!rc) return 0;
     for (f = 0; f < 12; f++) {
-        float t = (float)f * 0.1f;
-        rendercache_camera cam = make_camera(t, 0.3f * t, t, 0.2f, 0.0f, 10.0f, w, h), next = cam;
+        rendercache_camera cam = sequence_step(rc, &s, m, f, w, h), next = cam;
         uint32_t n = 0, i;
         next.eye[0] += 0.1f;
-        m[3] = 0.05f * (float)f;
-        s.shift[0] = m[3];
-        rendercache_set_object_transform(rc, 1, m);
         if (fused) {
             rendercache_begin_frame_predicted(rc, &cam, &next);
         } else {
@@ -2054,9 +2069,7 @@ static uint64_t run_sequence(void (*pf)(void *, rendercache_job_fn, void *, uint
         rendercache_request(rc, g_req, 600, &n);
         for (i = 0; i < n; i++) shade(&s, &g_req[i], &g_samples[i]);
         rendercache_insert(rc, g_samples, n, NULL);
-        hash = hash_bytes(hash, g_req, n * sizeof *g_req);
-        hash = hash_bytes(hash, rendercache_image(rc), 3 * sizeof(float) * w * h);
-        hash = hash_bytes(hash, rendercache_priority_image(rc), sizeof(float) * w * h);
+        hash = hash_frame(hash, rc, n, w, h);
     }
     rendercache_destroy(rc);
     return hash;
@@ -2373,9 +2386,7 @@ static uint64_t run_insert_sequence(void (*pf)(void *, rendercache_job_fn, void 
         }
         CHECK(rendercache_insert(rc, g_samples, now, NULL) == RENDERCACHE_OK);
         rendercache_get_stats(rc, &st);
-        hash = hash_bytes(hash, g_req, n * sizeof *g_req);
-        hash = hash_bytes(hash, rendercache_image(rc), 3 * sizeof(float) * w * h);
-        hash = hash_bytes(hash, rendercache_priority_image(rc), sizeof(float) * w * h);
+        hash = hash_frame(hash, rc, n, w, h);
         hash = hash_bytes(hash, rendercache_pixel_kinds(rc), w * h);
         {
             uint32_t counts[8];
@@ -2433,12 +2444,9 @@ static uint64_t run_where_sequence(void (*pf)(void *, rendercache_job_fn, void *
     memset(&s, 0, sizeof s);
     if (!rc) return 0;
     for (f = 0; f < 10; f++) {
-        float t = (float)f * 0.1f, centre[2];
-        rendercache_camera cam = make_camera(t, 0.3f * t, t, 0.2f, 0.0f, 10.0f, w, h);
+        float centre[2];
+        rendercache_camera cam = sequence_step(rc, &s, m, f, w, h);
         uint32_t n = 0, i, aged = 0;
-        m[3] = 0.05f * (float)f;
-        s.shift[0] = m[3];
-        rendercache_set_object_transform(rc, 1, m);
         rendercache_begin_frame(rc, &cam);
         rendercache_request(rc, g_req, f == 0 ? w * h : 900, &n);
         for (i = 0; i < n; i++) shade(&s, &g_req[i], &g_samples[i]);
@@ -2448,9 +2456,7 @@ static uint64_t run_where_sequence(void (*pf)(void *, rendercache_job_fn, void *
         CHECK_EQ_INT(rendercache_invalidate_where(rc, near_centre, centre, &aged), RENDERCACHE_OK);
         CHECK(aged > 0);
         hash = hash_bytes(hash, &aged, sizeof aged);
-        hash = hash_bytes(hash, g_req, n * sizeof *g_req);
-        hash = hash_bytes(hash, rendercache_image(rc), 3 * sizeof(float) * w * h);
-        hash = hash_bytes(hash, rendercache_priority_image(rc), sizeof(float) * w * h);
+        hash = hash_frame(hash, rc, n, w, h);
     }
     rendercache_destroy(rc);
     return hash;
@@ -2606,9 +2612,7 @@ static uint64_t run_pieces_walk(float ppp, int pieces, int refill)
         rendercache_get_stats(rc, &st);
         counts[0] = st.inserted; counts[1] = st.replaced; counts[2] = st.evicted;
         counts[3] = st.changed; counts[4] = st.live_points; counts[5] = st.rejected;
-        hash = hash_bytes(hash, g_req, n * sizeof *g_req);
-        hash = hash_bytes(hash, rendercache_image(rc), 3 * sizeof(float) * w * h);
-        hash = hash_bytes(hash, rendercache_priority_image(rc), sizeof(float) * w * h);
+        hash = hash_frame(hash, rc, n, w, h);
         hash = hash_bytes(hash, rendercache_pixel_kinds(rc), w * h);
         hash = hash_bytes(hash, counts, sizeof counts);
     }
