@@ -2294,6 +2294,8 @@ static void rendercache__splat_run_cover(rendercache__splat *s,
 #define RENDERCACHE__CELL_JOBS 8u            /* jobs of the occupancy count with parallel_for, each with its own
                                                 bytes (1/16 byte per pixel each): fine enough that a thread
                                                 the system holds back holds back little */
+#define RENDERCACHE__CELL_SINKS 16u          /* bytes after the cells of each count that the points missing them
+                                                take in turn (rendercache__count_cells) */
 /* How far (pixels) a hole looks for the layers around it: the rows the
    cull of the next tile has written when the filling of a tile runs
    (rendercache__cull_and_interpolate), and as wide as the disocclusion
@@ -2470,9 +2472,9 @@ struct rendercache {
     float *err_rows;         /* per band, two rows of diffused error */
     rendercache__band *bands;   /* per band: its count and marginal choices */
     uint32_t band_count;
-    unsigned char *occupancy; /* predictive sampling, per job (CELL_JOBS) cell_count + 1 bytes: the points
-                                that land in the cell, up to 255 (the last byte takes the points that
-                                miss); after rendercache_predict job 0's: the sum over the jobs, and
+    unsigned char *occupancy; /* predictive sampling, per job (CELL_JOBS) cell_count + CELL_SINKS bytes: the
+                                points that land in the cell, up to 255 (the last bytes take the points
+                                that miss); after rendercache_predict job 0's: the sum over the jobs, and
                                 255 once the cell was requested */
     uint32_t cells_x, cells_y, cell_count, pred_cells;   /* the cells, and those empty not yet requested */
     uint32_t change_hist[RENDERCACHE__CHANGE_BINS];   /* relative colour differences of this frame's replacements */
@@ -2634,6 +2636,12 @@ static int rendercache__share_splat(rendercache *rc)
                                     &rc->alloc);
 }
 
+/* Bytes of one array of the occupancy count: the cells, then the sinks. */
+static size_t rendercache__cell_stride(const rendercache *rc)
+{
+    return (size_t)rc->cell_count + RENDERCACHE__CELL_SINKS;
+}
+
 static int rendercache__alloc_buffers(rendercache *rc)
 {
     const rendercache_allocator *a = &rc->alloc;
@@ -2663,7 +2671,7 @@ static int rendercache__alloc_buffers(rendercache *rc)
     rc->depth_out = (float *)rendercache__alloc_array(a, px, sizeof(float));
     rc->image = (float *)rendercache__alloc_array(a, px, 3 * sizeof(float));
     rc->priority = (float *)rendercache__alloc_array(a, px, sizeof(float));
-    rc->occupancy = (unsigned char *)rendercache__alloc_array(a, (size_t)rc->cell_count + 1,
+    rc->occupancy = (unsigned char *)rendercache__alloc_array(a, rendercache__cell_stride(rc),
                                                               rc->parallel_for ? RENDERCACHE__CELL_JOBS : 1u);
     rc->kind = (unsigned char *)rendercache__alloc_array(a, px, 1);
     rc->count = (unsigned char *)rendercache__alloc_array(a, px, 1);
@@ -3945,21 +3953,38 @@ static uint32_t rendercache__cell_arrays(const rendercache *rc)
 }
 typedef char rendercache__cell_arrays_cover_splat_jobs[RENDERCACHE__SHARED_JOBS <= RENDERCACHE__CELL_JOBS ? 1 : -1];
 
+/* Adds inc (1 or 2) to a count, up to 255: the same as adding 1 inc times. */
+static RENDERCACHE__INLINE void rendercache__count_add(unsigned char *o, uint32_t inc)
+{
+    uint32_t v = *o + inc;
+    *o = (unsigned char)(v < 255u ? v : 255u);
+}
+
 /* Counts points [begin, end) in the cells of the projector (pr; its
-   cells) they land in, in job j's bytes. */
+   cells) they land in, in job j's bytes. Without a branch, two points at
+   a time. An increment waits for the store of the one before when both
+   are of one byte, and neighbouring points often are (the cache is in
+   image order): so the misses (a third of the points, in runs) take the
+   sinks in turn, and a pair in one cell adds 2 at once (the second point
+   then counts in a sink). Before, the misses' chain in one byte took a
+   quarter of the count's time, and pairs in one cell a fifth. */
 static void rendercache__count_cells(const void *pr, uint32_t j, uint32_t begin, uint32_t end)
 {
     const rendercache *rc = ((const rendercache__projector *)pr)->rc;
     const uint32_t cells = rc->cell_count;
-    unsigned char *occ = rc->occupancy + (size_t)j * (cells + 1);
-    uint32_t cell[RENDERCACHE__BATCH], b, i;
+    unsigned char *occ = rc->occupancy + (size_t)j * rendercache__cell_stride(rc);
+    uint32_t cell[RENDERCACHE__BATCH + 1], b, i;
     float d[RENDERCACHE__BATCH];
     for (b = begin; b < end; b += RENDERCACHE__BATCH) {
         uint32_t n = end - b < RENDERCACHE__BATCH ? end - b : RENDERCACHE__BATCH;
         rendercache__project_points(pr, b, b + n, cell, d);
-        for (i = 0; i < n; i++) {   /* without a branch */
-            unsigned char *o = &occ[cell[i] == RENDERCACHE__NONE ? cells : cell[i]];
-            *o = (unsigned char)(*o + (*o < 255u));
+        cell[n] = RENDERCACHE__NONE;   /* an odd count's pair: a miss */
+        for (i = 0; i < n; i += 2) {
+            const uint32_t s0 = cells + (i & (RENDERCACHE__CELL_SINKS - 1u)), s1 = s0 + 1u;   /* (SINKS even) */
+            const uint32_t c0 = cell[i] == RENDERCACHE__NONE ? s0 : cell[i];
+            const uint32_t c1 = cell[i + 1] == RENDERCACHE__NONE ? s1 : cell[i + 1], same = c0 == c1;
+            rendercache__count_add(&occ[c0], 1u + same);
+            rendercache__count_add(&occ[same ? s1 : c1], 1u);
         }
     }
 }
@@ -3981,7 +4006,7 @@ static void rendercache__predict_start(rendercache *rc, const rendercache__view 
     rc->history[rc->frame % ((uint64_t)rc->max_latency + 1)].has_prediction = 1;
     memcpy(rc->eyes[rc->frame % RENDERCACHE__EYE_FRAMES][1], next->eye, sizeof next->eye);
     rendercache__compose_objects(rc, &rc->predicted, rc->obj_predicted);
-    memset(rc->occupancy, 0, ((size_t)rc->cell_count + 1) * rendercache__cell_arrays(rc));
+    memset(rc->occupancy, 0, rendercache__cell_stride(rc) * rendercache__cell_arrays(rc));
 }
 
 /* The counts of the jobs summed into the first array (up to 255), and the
@@ -3993,7 +4018,7 @@ static void rendercache__predict_finish(rendercache *rc)
     rc->pred_cells = 0;
     for (c = 0; c < rc->cell_count; c++) {
         uint32_t sum = rc->occupancy[c];
-        for (j = 1; j < arrays; j++) sum += rc->occupancy[(size_t)j * (rc->cell_count + 1) + c];
+        for (j = 1; j < arrays; j++) sum += rc->occupancy[(size_t)j * rendercache__cell_stride(rc) + c];
         rc->occupancy[c] = (unsigned char)(sum < 255u ? sum : 255u);
         rc->pred_cells += sum < RENDERCACHE__CELL_FEW;
     }

@@ -1069,6 +1069,63 @@ static void test_predictive_sampling_fills_next_holes(void)
     rendercache_destroy(without);
 }
 
+/* The occupancy count of the predicted camera's cells, which counts two
+   points at a time (a pair in one cell adds 2; the misses count in sinks
+   in turn), against a count of its own, one point at a time: equal up to
+   255, serial and on a pool. A camera beside the first sees most points
+   in runs of one cell (the cache holds them in scan order) and misses the
+   rest; one far back at the image's edge puts hundreds in a cell. */
+static void test_cell_count_matches_one_by_one(void)
+{
+    const uint32_t w = 96, h = 80;
+    rendercache_camera a = make_camera(0, 0, 0, 0, 0, 10, w, h);
+    rendercache_camera next[2];
+    ex_pool *pool = ex_pool_create(3);
+    scene s;
+    int k, t;
+    memset(&s, 0, sizeof s);
+    next[0] = make_camera(2.0f, 0.0f, 0.0f, 2.0f, 0.0f, 10.0f, w, h);
+    next[1] = make_camera(0.0f, 0.0f, -200.0f, -140.0f, 0.0f, 10.0f, w, h);
+    for (t = 0; t < 2; t++) {
+        rendercache_desc d = make_desc(w, h);
+        rendercache *rc;
+        d.parallel_for = t && pool ? ex_pool_parallel_for : NULL;
+        d.parallel_user = pool;
+        if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) break;
+        converge(rc, &s, &a);
+        CHECK_EQ_INT(rendercache_begin_frame(rc, &a), RENDERCACHE_OK);
+        for (k = 0; k < 2; k++) {
+            rendercache__projector pr;
+            uint32_t *want = (uint32_t *)calloc(rc->cell_count, sizeof *want), slot, c, misses = 0, wrong = 0,
+                     middling = 0, full = 0;
+            if (!CHECK(want != NULL)) break;
+            CHECK_EQ_INT(rendercache_predict(rc, &next[k]), RENDERCACHE_OK);
+            rendercache__projector_init(&pr, rc, &rc->predicted, rc->obj_predicted, RENDERCACHE__CELL_SHIFT);
+            for (slot = 0; slot < rc->capacity; slot++) {
+                uint32_t cell;
+                float d2;
+                if (rc->geo.object[slot] == RENDERCACHE__FREE_SLOT) continue;
+                rendercache__project_points(&pr, slot, slot + 1, &cell, &d2);
+                if (cell == RENDERCACHE__NONE) misses++;
+                else want[cell]++;
+            }
+            for (c = 0; c < rc->cell_count; c++) {
+                wrong += rc->occupancy[c] != (want[c] < 255u ? want[c] : 255u);
+                middling += want[c] >= 2 && want[c] < 255u;
+                full += want[c] > 255u;
+            }
+            CHECK_EQ_INT(wrong, 0);
+            if (k == 0) CHECK(misses > 1000 && middling > 100);
+            if (k == 1) CHECK(misses > 100 && full > 0);
+            test_note("cell count, %s, camera %d: %u misses, %u cells of 2-254 points, %u of more; %u wrong",
+                      t ? "pool" : "serial", k, misses, middling, full, wrong);
+            free(want);
+        }
+        rendercache_destroy(rc);
+    }
+    ex_pool_destroy(pool);
+}
+
 /* ---------------------------------------------------------------------
    Eviction keeps the points the frame shows.
    --------------------------------------------------------------------- */
@@ -2821,6 +2878,7 @@ int main(int argc, char **argv)
     RUN(test_hole_rays_reach_every_edge_alike);
     RUN(test_misses_are_points_at_infinity);
     RUN(test_predictive_sampling_fills_next_holes);
+    RUN(test_cell_count_matches_one_by_one);
     RUN(test_eviction_spares_visible_points);
     RUN(test_slow_turn_keeps_pixels_covered_by_points);
     RUN(test_late_samples_land_where_they_were_seen);
