@@ -1831,6 +1831,8 @@ static void rendercache__view_compose(const rendercache__view *v, const float m[
 #endif
 #define RENDERCACHE__BATCH 256u      /* elements per source call */
 #define RENDERCACHE__TILE_ROWS 8u    /* image rows per tile job */
+#define RENDERCACHE__KEY_AHEAD 64u   /* elements between a key's prefetch and its z-test (16, 32: slower;
+                                        128 the same) */
 
 /* Projects elements [begin, end): pix[i - begin] = y * width + x of the
    pixel it lands in, or RENDERCACHE__NONE; depth[...] its distance.
@@ -2014,14 +2016,23 @@ static void rendercache__zbuffer_test(rendercache__zbuffer *zb, uint32_t p, floa
 /* The z-test of n elements (from element first on) without payload:
    written without branches, since which of two elements in a pixel is
    nearer, and whether an element lands at all, are coin tosses for a
-   branch predictor. Returns how many landed. */
+   branch predictor. The keys of the elements RENDERCACHE__KEY_AHEAD further
+   on are asked for ahead of time: the points inserted since their range's
+   last re-sort, a third of them, land anywhere in the image, and the keys
+   of a large image do not stay in cache (perf at 512x512: -20 % of the
+   z-test's time). Returns how many landed. */
 static uint32_t rendercache__zbuffer_keys(uint64_t *key, uint32_t sink, const uint32_t *pix, const float *depth,
                                           uint32_t first, uint32_t n)
 {
     uint32_t i, landed = 0;
     for (i = 0; i < n; i++) {
         uint32_t p = pix[i] == RENDERCACHE__NONE ? sink : pix[i];
-        uint64_t k = rendercache__key(depth[i], first + i), old = key[p];
+        uint64_t k = rendercache__key(depth[i], first + i), old;
+        if (i + RENDERCACHE__KEY_AHEAD < n) {
+            const uint32_t q = pix[i + RENDERCACHE__KEY_AHEAD];
+            RENDERCACHE__PREFETCH_WRITE(&key[q == RENDERCACHE__NONE ? sink : q]);
+        }
+        old = key[p];
         key[p] = k < old ? k : old;
         landed += pix[i] != RENDERCACHE__NONE;
     }
