@@ -2086,6 +2086,10 @@ static uint32_t rendercache__splat_keys_owned(const rendercache__splat_job *job,
         for (i = 0; i < n; i++) {
             const uint32_t p = pix[i];
             const uint64_t k = rendercache__key(d[i], b + i);
+            if (i + RENDERCACHE__KEY_AHEAD < n) {   /* (as zbuffer_keys does; only the job's own keys) */
+                const uint32_t q = pix[i + RENDERCACHE__KEY_AHEAD];
+                RENDERCACHE__PREFETCH_WRITE(&key[q - lo < size ? q : lo]);
+            }
             if (p - lo < size) {   /* most elements: the chunks of a job land mostly in its own pixels */
                 const uint64_t old = key[p];
                 key[p] = k < old ? k : old;
