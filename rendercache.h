@@ -3960,7 +3960,8 @@ typedef struct rendercache__predict_job {
 
 /* The byte arrays of the count: one per job (RENDERCACHE__CELL_JOBS with
    parallel_for, which covers the jobs of a splat too), each a count per
-   cell up to 255 and a last byte for the points that miss. A count up to
+   cell up to 255 and RENDERCACHE__CELL_SINKS bytes for the points that
+   miss (rendercache__cell_stride). A count up to
    255 is the same whatever the order or the split of the points. */
 static uint32_t rendercache__cell_arrays(const rendercache *rc)
 {
