@@ -4703,7 +4703,10 @@ static float wt__baseviews_tolerance(uint32_t size)
    320x240, base 256), and the quads across a crease (a jamb's shaded
    side beside its lit face: no depth edge) blurred the crease over
    three pixels. Those pixels are traced again at the frame's time
-   (wt__retraced): their edges come out as sharp as a full render's. */
+   (wt__retraced): their edges come out as sharp as a full render's
+   (320x240, base 256, mean LRMS against full renders: house 0.109 ->
+   0.078, office 0.113 -> 0.073, for about 2400 more pixels traced a
+   frame, +30-37 % CPU time). */
 static int wt__edge_pixel(const wt_renderer *r, size_t i)
 {
     const rendercache_range_image *out = r->out;
@@ -5006,8 +5009,6 @@ typedef struct wt__shadow_job {
    smear its radiance onto the ceiling beside it; a few pixels, each
    worth hundreds of a dim wall's in the luminance error), and those
    near an edge (wt__edge_pixel). */
-static int wt__edge_pixel(const wt_renderer *r, size_t i);
-
 static int wt__retraced(const wt_renderer *r, size_t i)
 {
     const rendercache_range_image *out = r->out;
