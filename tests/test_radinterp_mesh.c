@@ -356,6 +356,77 @@ static void test_one_shadow_hides(void)
     radinterp_solution_destroy(sol);
 }
 
+/* The staged shadows' areas are computed once, where the shadow is made
+   (radinterp__bp_shadow_piece), and kept for the covered test and the
+   largest-first order: each kept area must equal the area of the shadow
+   staged in its slot, bit for bit, and the order must be by those areas
+   (ties by list position). A source over a floor with five overlapping
+   blockers, some turned toward the floor and some away (staged after the
+   order). Also radinterp__next, the polygon loops' next corner, against
+   (i + 1) % n. */
+static void test_staged_shadow_areas(void)
+{
+    static radinterp__query q;   /* about 110 KB */
+    static const float blk[5][5] = {   /* x0, y0, x1, y1, z */
+        {-0.9f, -0.6f, 0.3f, 0.5f, 0.6f}, {-0.2f, -0.9f, 0.8f, 0.2f, 0.9f}, {-0.5f, 0.1f, 0.6f, 0.9f, 1.2f},
+        {-0.7f, -0.4f, 0.1f, 0.4f, 1.5f}, {0.0f, -0.5f, 0.7f, 0.6f, 0.4f}};
+    scene s;
+    radinterp_desc d;
+    radinterp_solution *sol = NULL;
+    uint32_t blocker[5], i, k;
+    int n, m, multi = 0, later = 0, next_ok = 1;
+    for (n = 1; n <= RADINTERP__POLY_MAX; n++)
+        for (m = 0; m < n; m++) next_ok &= radinterp__next(m, n) == (m + 1) % n;
+    CHECK(next_ok);
+    memset(&s, 0, sizeof s);
+    {
+        uint32_t grey = add_material(&s, 0.5f, 0.0f), light = add_material(&s, 0.0f, 100.0f);
+        add_hrect(&s, -2, -2, 2, 2, 0, 1, grey);                    /* 0: floor */
+        add_hrect(&s, -0.5f, -0.5f, 0.5f, 0.5f, 2.0f, 0, light);    /* 1: source */
+        for (k = 0; k < 5; k++)                                     /* 2..6: blockers, 1 and 3 turned up */
+            blocker[k] = add_hrect(&s, blk[k][0], blk[k][1], blk[k][2], blk[k][3], blk[k][4], (int)(k & 1), grey);
+    }
+    d = scene_desc(&s);
+    CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_OK);
+    if (!sol) return;
+    for (i = 0; i < 3000; i++) {
+        const radinterp__patch *ps = &sol->patches[1];
+        float p[3];
+        double Sc[RADINTERP__POLY_MAX][3], full;
+        radinterp__bp bp;
+        int nc, hides, j;
+        p[0] = (float)(-1.5 + 3.0 * rnd());
+        p[1] = (float)(-1.5 + 3.0 * rnd());
+        p[2] = 0.0f;
+        radinterp__query_start(&q, sol, 0, p, NULL);
+        nc = radinterp__query_source(&q, ps->root, Sc, &full);
+        if (nc < 3) continue;
+        q.blk = blocker;
+        q.nblk = 5;
+        radinterp__bp_setup(&q, &bp, NULL, (const double (*)[3])Sc, nc, ps->n, ps->d - sol->push_off, sol->push_off);
+        n = radinterp__bp_stage(&q, &bp, &hides);
+        if (n < 2) continue;
+        multi++;
+        for (j = 0; j < n; j++) {
+            double a = fabs(radinterp__area2((const double (*)[2])q.staged[j].v, q.staged[j].count));
+            CHECK_MSG(memcmp(&a, &q.staged_area[j], sizeof a) == 0, "point (%g, %g): shadow %d's kept area %.17g, its area %.17g",
+                      p[0], p[1], j, q.staged_area[j], a);
+            later += !radinterp__faces_point(&q, &bp, blocker[q.staged_at[j]]);
+        }
+        for (j = 1; j < n; j++) {   /* faces toward the point first, largest first */
+            int a = q.order[j - 1], b = q.order[j];
+            if (!radinterp__faces_point(&q, &bp, blocker[q.staged_at[b]])) break;
+            CHECK_MSG(q.staged_area[a] > q.staged_area[b] ||
+                      (q.staged_area[a] == q.staged_area[b] && q.staged_at[a] < q.staged_at[b]),
+                      "point (%g, %g): shadows %d, %d out of order", p[0], p[1], a, b);
+        }
+    }
+    CHECK(multi > 500);
+    CHECK(later > 100);   /* shadows staged after the order are checked too */
+    test_note("%d floor points staged 2 or more shadows (%d of blockers turned away)", multi, later);
+    radinterp_solution_destroy(sol);
+}
+
 /* The rays from a source edge at coordinate xs through a blocker edge at xb
    meet the floor at xb + t (xb - xs), t = h / (H - h): for xs = -a, a and
    xb = both blocker edges, four lines per axis bound the penumbra and the
@@ -1879,6 +1950,7 @@ int main(int argc, char **argv)
     RUN(test_penumbra_boundaries);
     RUN(test_leaf_hidden_links);
     RUN(test_one_shadow_hides);
+    RUN(test_staged_shadow_areas);
     RUN(test_weights);
     RUN(test_weight_cache);
     RUN(test_hidden_events);
