@@ -7334,11 +7334,16 @@ static int radinterp__shadow_negligible(const radinterp__bp *bp, double area)
    corners before their rounding to float, which moves each by up to 2^-24
    of its coordinates (1.04e-7 of |centre|_1 + radius in length); slack
    1e-6 of |centre|_1 + radius + |d| covers that and the rounding of the
-   dot products many times over. */
-static int radinterp__sphere_inside(const radinterp__patch *pb, double sd, double d)
+   dot products many times over. size: |centre|_1 + radius
+   (radinterp__sphere_size), the same for every plane. */
+static int radinterp__sphere_inside(const radinterp__patch *pb, double size, double sd, double d)
 {
-    double slack = 1e-6 * (fabs(pb->centre[0]) + fabs(pb->centre[1]) + fabs(pb->centre[2]) + pb->radius + fabs(d));
-    return sd > pb->radius + slack;
+    return sd > pb->radius + 1e-6 * (size + fabs(d));
+}
+
+static double radinterp__sphere_size(const radinterp__patch *pb)
+{
+    return fabs(pb->centre[0]) + fabs(pb->centre[1]) + fabs(pb->centre[2]) + pb->radius;
 }
 
 /* Which planes of bp's pyramid cut patch pb: bit j of *cut for plane j,
@@ -7353,7 +7358,7 @@ static int radinterp__sphere_inside(const radinterp__patch *pb, double sd, doubl
 static int radinterp__pyramid_cut(const radinterp_solution *s, const radinterp__bp *bp, const radinterp__patch *pb,
                                   double (*poly)[3], uint32_t *cut)
 {
-    double sd[RADINTERP__POLY_MAX + 1];
+    double sd[RADINTERP__POLY_MAX + 1], size;
     int m, j, i;
     *cut = 0;
     for (j = 0; j < bp->np; j++) { /* bounding sphere first */
@@ -7362,9 +7367,10 @@ static int radinterp__pyramid_cut(const radinterp_solution *s, const radinterp__
     }
     if (fabs(radinterp__d3_dot(pb->n, bp->pv) - pb->d) <= s->epsilon * s->diag) return 0; /* seen edge-on */
     m = radinterp__patch_poly(pb, poly);
+    size = radinterp__sphere_size(pb);
     for (j = 0; j < bp->np; j++) {
         int inside = 0;
-        if (radinterp__sphere_inside(pb, sd[j], bp->plane_d[j])) continue;
+        if (radinterp__sphere_inside(pb, size, sd[j], bp->plane_d[j])) continue;
         for (i = 0; i < m; i++) inside += radinterp__d3_dot(bp->plane_n[j], poly[i]) >= bp->plane_d[j];
         if (inside == 0) return 0;
         if (inside < m) *cut |= 1u << j;

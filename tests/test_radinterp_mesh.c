@@ -478,7 +478,7 @@ static void test_pyramid_cut_skips(void)
                 for (c = 0; c < m_all; c++) in += radinterp__d3_dot(bp.plane_n[j], all[c]) >= bp.plane_d[j];
                 none |= in == 0;
                 if (in > 0 && in < m_all) cut_all |= 1u << j;
-                skipped += !sphere_out && radinterp__sphere_inside(pb, sd, bp.plane_d[j]);
+                skipped += !sphere_out && radinterp__sphere_inside(pb, radinterp__sphere_size(pb), sd, bp.plane_d[j]);
             }
             if (sphere_out || fabs(radinterp__d3_dot(pb->n, bp.pv) - pb->d) <= sol->epsilon * sol->diag) {
                 CHECK_EQ_INT(m, 0);
