@@ -3625,6 +3625,10 @@ static int radinterp__cdt_add_segment(radinterp__cdt *c, uint32_t a, uint32_t b)
 #define RADINTERP__PI 3.14159265358979323846
 #define RADINTERP__POLY_MAX 16   /* a quadrilateral clipped by up to 12 planes */
 
+/* (i + 1) % n for 0 <= i < n: the next corner of a polygon of n. Without
+   the division: a mesh sample's polygon loops (clipping, splitting, areas)
+   spent a few percent of a building's mesh in it. */
+static int radinterp__next(int i, int n) { return i + 1 < n ? i + 1 : 0; }
 static void radinterp__d3_sub(const double *a, const double *b, double *r) { r[0] = a[0] - b[0]; r[1] = a[1] - b[1]; r[2] = a[2] - b[2]; }
 static double radinterp__d3_dot(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 static void radinterp__d3_cross(const double *a, const double *b, double *r)
@@ -3812,10 +3816,10 @@ static void radinterp__ff_edges(const double (*r)[3], int count, const double *n
 {
     double c[3][RADINTERP__POLY_MAX + RADINTERP__VW];
     const double *a[3], *b[3];
-    int i, k;
+    int i, k, j = 0;
     if (count < 1) return;
-    for (i = 0; i < count + RADINTERP__VW; i++)
-        for (k = 0; k < 3; k++) c[k][i] = r[i % count][k];
+    for (i = 0; i < count + RADINTERP__VW; i++, j = radinterp__next(j, count))   /* j = i % count */
+        for (k = 0; k < 3; k++) c[k][i] = r[j][k];
     for (k = 0; k < 3; k++) { a[k] = c[k]; b[k] = c[k] + 1; }
     radinterp__ff_rows(a, b, count, n, e);
 }
@@ -3846,7 +3850,7 @@ static int radinterp__clip_poly(const double (*in)[3], int count, const double *
 {
     int i, m = 0;
     for (i = 0; i < count; i++) {
-        const double *a = in[i], *b = in[(i + 1) % count];
+        const double *a = in[i], *b = in[radinterp__next(i, count)];
         double da = radinterp__d3_dot(n, a) - d, db = radinterp__d3_dot(n, b) - d;
         if (da >= 0.0 && m < RADINTERP__POLY_MAX) { out[m][0] = a[0]; out[m][1] = a[1]; out[m][2] = a[2]; m++; }
         if (((da > 0.0 && db < 0.0) || (da < 0.0 && db > 0.0)) && m < RADINTERP__POLY_MAX) {
@@ -7108,6 +7112,7 @@ typedef struct radinterp__query {
     radinterp__piece staged[RADINTERP__BP_MAX_SURVIVORS];   /* the shadows before their union */
     unsigned char order[RADINTERP__BP_MAX_SURVIVORS];       /* the order they enter it */
     uint32_t staged_at[RADINTERP__BP_MAX_SURVIVORS];        /* their blockers' positions in the list */
+    double staged_area[RADINTERP__BP_MAX_SURVIVORS];        /* their areas (radinterp__order_staged's key) */
     uint32_t hint[RADINTERP__HINTS];                        /* blockers that hid sources whole, latest first */
     int nhint;
     const uint32_t *blk;  /* the blockers of the link being summed (a leaf list or the link's own) */
@@ -7182,11 +7187,11 @@ static int radinterp__covers(const double (*a)[2], int na, const double (*b)[2],
     }
     for (j = 0; j < nb; j++) /* bounding boxes first: most pairs fail here */
         if (b[j][0] < lo[0] || b[j][0] > hi[0] || b[j][1] < lo[1] || b[j][1] > hi[1]) return 0;
-    for (i = 0; i < na; i++) area += a[i][0] * a[(i + 1) % na][1] - a[(i + 1) % na][0] * a[i][1];
+    for (i = 0; i < na; i++) area += a[i][0] * a[radinterp__next(i, na)][1] - a[radinterp__next(i, na)][0] * a[i][1];
     if (area == 0.0) return 0;
     for (j = 0; j < nb; j++)
         for (i = 0; i < na; i++) {
-            double o = radinterp__orient2d(a[i], a[(i + 1) % na], b[j]);
+            double o = radinterp__orient2d(a[i], a[radinterp__next(i, na)], b[j]);
             if (area > 0.0 ? o < 0.0 : o > 0.0) return 0;
         }
     return 1;
@@ -7203,7 +7208,7 @@ static double radinterp__area2(const double (*v)[2], int n)
 {
     double a = 0.0;
     int i;
-    for (i = 0; i < n; i++) a += v[i][0] * v[(i + 1) % n][1] - v[(i + 1) % n][0] * v[i][1];
+    for (i = 0; i < n; i++) a += v[i][0] * v[radinterp__next(i, n)][1] - v[radinterp__next(i, n)][0] * v[i][1];
     return a;
 }
 
@@ -7242,7 +7247,7 @@ static void radinterp__bp_pyramid(radinterp__bp *bp)
     for (k = 0; k < nc; k++) {
         double a[3], b[3], m[3], c[3], len;
         radinterp__d3_sub(bp->Sr[k], pv, a);
-        radinterp__d3_sub(bp->Sr[(k + 1) % nc], pv, b);
+        radinterp__d3_sub(bp->Sr[radinterp__next(k, nc)], pv, b);
         radinterp__d3_cross(a, b, m);
         len = radinterp__d3_len(m);
         if (!(len > 0.0)) continue;
@@ -7316,33 +7321,72 @@ static void radinterp__bp_project(const radinterp__bp *bp, const double (*poly)[
 /* Is a shadow (2D, in the frame) too small to matter? Below 1e-12 of the
    square of pv's height above the source it subtends less than 1e-12 / pi.
    Judged on the source, not by the blocker's part in 3D, which is tiny
-   when the blocker stands right next to pv yet may hide the whole source. */
-static int radinterp__shadow_negligible(const radinterp__bp *bp, const double (*v)[2], int m)
+   when the blocker stands right next to pv yet may hide the whole source.
+   area: |radinterp__area2| of the shadow. */
+static int radinterp__shadow_negligible(const radinterp__bp *bp, double area)
 {
-    return fabs(radinterp__area2(v, m)) <= 2e-12 * bp->hp * bp->hp;
+    return area <= 2e-12 * bp->hp * bp->hp;
+}
+
+/* Does the bounding sphere of patch pb lie inside the plane n . x >= d so
+   far (sd = n . centre - d) that every corner of pb, as the floats it
+   keeps, tests inside it (n . x >= d)? The radius is taken from the
+   corners before their rounding to float, which moves each by up to 2^-24
+   of its coordinates (1.04e-7 of |centre|_1 + radius in length); slack
+   1e-6 of |centre|_1 + radius + |d| covers that and the rounding of the
+   dot products many times over. size: |centre|_1 + radius
+   (radinterp__sphere_size), the same for every plane. */
+static int radinterp__sphere_inside(const radinterp__patch *pb, double size, double sd, double d)
+{
+    return sd > pb->radius + 1e-6 * (size + fabs(d));
+}
+
+static double radinterp__sphere_size(const radinterp__patch *pb)
+{
+    return fabs(pb->centre[0]) + fabs(pb->centre[1]) + fabs(pb->centre[2]) + pb->radius;
+}
+
+/* Which planes of bp's pyramid cut patch pb: bit j of *cut for plane j,
+   pb's corners into poly. Returns the corner count, 0 when pb casts no
+   shadow (its bounding sphere or every corner outside a plane, or seen
+   edge-on from pv). Each corner is tested against each plane once: a plane
+   that has every corner outside culls the blocker, one that has every
+   corner inside needs no clipping (the common cases), the others clip. A
+   plane with the bounding sphere well inside (radinterp__sphere_inside)
+   has every corner inside without testing them: on building_1k most
+   planes of most blockers that cast a shadow. */
+static int radinterp__pyramid_cut(const radinterp_solution *s, const radinterp__bp *bp, const radinterp__patch *pb,
+                                  double (*poly)[3], uint32_t *cut)
+{
+    double sd[RADINTERP__POLY_MAX + 1], size;
+    int m, j, i;
+    *cut = 0;
+    for (j = 0; j < bp->np; j++) { /* bounding sphere first */
+        sd[j] = radinterp__d3_dot(bp->plane_n[j], pb->centre) - bp->plane_d[j];
+        if (sd[j] < -pb->radius) return 0;
+    }
+    if (fabs(radinterp__d3_dot(pb->n, bp->pv) - pb->d) <= s->epsilon * s->diag) return 0; /* seen edge-on */
+    m = radinterp__patch_poly(pb, poly);
+    size = radinterp__sphere_size(pb);
+    for (j = 0; j < bp->np; j++) {
+        int inside = 0;
+        if (radinterp__sphere_inside(pb, size, sd[j], bp->plane_d[j])) continue;
+        for (i = 0; i < m; i++) inside += radinterp__d3_dot(bp->plane_n[j], poly[i]) >= bp->plane_d[j];
+        if (inside == 0) return 0;
+        if (inside < m) *cut |= 1u << j;
+    }
+    return m;
 }
 
 /* The shadow of patch pb on the source: its part inside the pyramid,
-   projected from pv. Returns the corner count, 0 when it casts none. Each
-   corner is tested against each plane once: a plane that has every corner
-   outside culls the blocker, one that has every corner inside needs no
-   clipping (the common cases), the others clip. */
+   projected from pv. Returns the corner count, 0 when it casts none. */
 static int radinterp__bp_shadow(const radinterp_solution *s, const radinterp__bp *bp, const radinterp__patch *pb,
                                 double (*shadow)[2])
 {
     double poly[RADINTERP__POLY_MAX][3], tmp[RADINTERP__POLY_MAX][3];
-    uint32_t cut = 0;
-    int m, j, i;
-    for (j = 0; j < bp->np; j++) /* bounding sphere first */
-        if (radinterp__d3_dot(bp->plane_n[j], pb->centre) - bp->plane_d[j] < -pb->radius) return 0;
-    if (fabs(radinterp__d3_dot(pb->n, bp->pv) - pb->d) <= s->epsilon * s->diag) return 0; /* seen edge-on */
-    m = radinterp__patch_poly(pb, poly);
-    for (j = 0; j < bp->np; j++) {
-        int inside = 0;
-        for (i = 0; i < m; i++) inside += radinterp__d3_dot(bp->plane_n[j], poly[i]) >= bp->plane_d[j];
-        if (inside == 0) return 0;
-        if (inside < m) cut |= 1u << j;
-    }
+    uint32_t cut;
+    int m, j;
+    if ((m = radinterp__pyramid_cut(s, bp, pb, poly, &cut)) == 0) return 0;
     for (j = 0; j < bp->np && m >= 3; j++) {
         if (!((cut >> j) & 1u)) continue;
         m = radinterp__clip_poly((const double (*)[3])poly, m, bp->plane_n[j], bp->plane_d[j], tmp);
@@ -7350,7 +7394,7 @@ static int radinterp__bp_shadow(const radinterp_solution *s, const radinterp__bp
     }
     if (m < 3) return 0;
     radinterp__bp_project(bp, (const double (*)[3])poly, m, shadow);
-    return radinterp__shadow_negligible(bp, (const double (*)[2])shadow, m) ? 0 : m;
+    return radinterp__shadow_negligible(bp, fabs(radinterp__area2((const double (*)[2])shadow, m))) ? 0 : m;
 }
 
 /* The shadows of the link's blockers into q->shadow (at most
@@ -7571,7 +7615,7 @@ static int radinterp__outside_edge_2d(const double (*a)[2], int na, const double
 {
     int i, j;
     for (i = 0; i < na; i++) {
-        const double *p0 = a[i], *p1 = a[(i + 1) % na];
+        const double *p0 = a[i], *p1 = a[radinterp__next(i, na)];
         double len = sqrt((p1[0] - p0[0]) * (p1[0] - p0[0]) + (p1[1] - p0[1]) * (p1[1] - p0[1]));
         for (j = 0; j < nb; j++)
             if (radinterp__orient2d_area(p0, p1, b[j]) > tol * len) break;
@@ -7831,8 +7875,8 @@ static int radinterp__clip_tagged(const double (*in)[3], const int *tin, int cou
     int i, m = 0, k;
     for (i = 0; i < count; i++) dist[i] = radinterp__d3_dot(n, in[i]) - d;
     for (i = 0; i < count; i++) {
-        const double *a = in[i], *b = in[(i + 1) % count];
-        double da = dist[i], db = dist[(i + 1) % count];
+        const double *a = in[i], *b = in[radinterp__next(i, count)];
+        double da = dist[i], db = dist[radinterp__next(i, count)];
         if (m + 2 > RADINTERP__POLY_MAX) return -1;
         if (da >= 0.0) {
             memcpy(out[m], a, sizeof(double[3]));
@@ -7876,7 +7920,7 @@ static int radinterp__shadow_line(const radinterp__bp *bp, const radinterp__patc
         double a[3], b[3], ra[3], rb[3];
         int k = tag - RADINTERP__TAG_EDGE;
         radinterp__d3_from_f(pb->v[k], a);
-        radinterp__d3_from_f(pb->v[(k + 1) % pb->count], b);
+        radinterp__d3_from_f(pb->v[radinterp__next(k, (int)pb->count)], b);
         radinterp__d3_sub(a, bp->pv, ra);
         radinterp__d3_sub(b, bp->pv, rb);
         radinterp__d3_cross(ra, rb, m);
@@ -7902,24 +7946,15 @@ static void radinterp__piece_bounds(radinterp__piece *pc)
 
 /* The shadow of patch pb as a piece: its part inside the pyramid (clipped
    only by the planes that cut it), projected from pv, with its edges'
-   lines. Returns 1; 0 when it casts none; -1 when it cannot be represented
-   (the caller then triangulates). */
+   lines, and *area, |radinterp__area2| of it. Returns 1; 0 when it casts
+   none; -1 when it cannot be represented (the caller then triangulates). */
 static int radinterp__bp_shadow_piece(const radinterp_solution *s, const radinterp__bp *bp, const radinterp__patch *pb,
-                                      radinterp__piece *out)
+                                      radinterp__piece *out, double *area)
 {
     double buf[2][RADINTERP__POLY_MAX][3], (*poly)[3] = buf[0], inside[2] = {0.0, 0.0};
     int tags[2][RADINTERP__POLY_MAX], *tag = tags[0], m, j, i, at = 0;
-    uint32_t cut = 0;
-    for (j = 0; j < bp->np; j++) /* bounding sphere first */
-        if (radinterp__d3_dot(bp->plane_n[j], pb->centre) - bp->plane_d[j] < -pb->radius) return 0;
-    if (fabs(radinterp__d3_dot(pb->n, bp->pv) - pb->d) <= s->epsilon * s->diag) return 0; /* seen edge-on */
-    m = radinterp__patch_poly(pb, poly);
-    for (j = 0; j < bp->np; j++) {
-        int in = 0;
-        for (i = 0; i < m; i++) in += radinterp__d3_dot(bp->plane_n[j], poly[i]) >= bp->plane_d[j];
-        if (in == 0) return 0;
-        if (in < m) cut |= 1u << j;
-    }
+    uint32_t cut;
+    if ((m = radinterp__pyramid_cut(s, bp, pb, poly, &cut)) == 0) return 0;
     for (i = 0; i < m; i++) tag[i] = RADINTERP__TAG_EDGE + i;
     for (j = 0; j < bp->np && m >= 3; j++) {
         if (!((cut >> j) & 1u)) continue;
@@ -7932,7 +7967,8 @@ static int radinterp__bp_shadow_piece(const radinterp_solution *s, const radinte
     if (m < 3) return 0;
     if (m > RADINTERP__PIECE_VERTS) return -1;
     radinterp__bp_project(bp, (const double (*)[3])poly, m, out->v);
-    if (radinterp__shadow_negligible(bp, (const double (*)[2])out->v, m)) return 0;
+    *area = fabs(radinterp__area2((const double (*)[2])out->v, m));
+    if (radinterp__shadow_negligible(bp, *area)) return 0;
     for (i = 0; i < m; i++) { inside[0] += out->v[i][0] / m; inside[1] += out->v[i][1] / m; }
     for (i = 0; i < m; i++)
         if (!radinterp__shadow_line(bp, pb, tag[i], inside, out->ln[i])) return -1;
@@ -7990,7 +8026,7 @@ static int radinterp__split_piece(const radinterp__piece *f, const double *L, do
     pos->count = 0;
     if (neg) neg->count = 0;
     for (i = 0; i < n; i++) {
-        int j = (i + 1) % n;
+        int j = radinterp__next(i, n);
         if (pos->count + 2 > RADINTERP__PIECE_VERTS || (neg && neg->count + 2 > RADINTERP__PIECE_VERTS)) return -1;
         if (d[i] >= 0.0) radinterp__piece_add(pos, f->v[i], (d[j] >= 0.0 || d[i] > 0.0) ? f->ln[i] : L, 1.0);
         if (d[i] <= 0.0 && neg) {
@@ -8194,7 +8230,7 @@ static int radinterp__piece_from_poly(const double (*v)[2], int n, double tol, r
     int i;
     out->count = 0;
     for (i = 0; i < n; i++) {
-        const double *a = v[i], *b = v[(i + 1) % n];
+        const double *a = v[i], *b = v[radinterp__next(i, n)];
         double dx = b[0] - a[0], dy = b[1] - a[1], len = sqrt(dx * dx + dy * dy), ln[3];
         if (!(len > tol)) continue;
         if (out->count == RADINTERP__PIECE_VERTS) return 0;
@@ -8413,11 +8449,11 @@ static int radinterp__stage_shadow(radinterp__query *q, const radinterp__bp *bp,
     radinterp__piece *sh = &q->staged[*n];
     int r;
     if (*n == RADINTERP__BP_MAX_SURVIVORS) return -1;
-    r = radinterp__bp_shadow_piece(q->s, bp, &q->s->patches[bp->blk[at]], sh);
+    r = radinterp__bp_shadow_piece(q->s, bp, &q->s->patches[bp->blk[at]], sh, &q->staged_area[*n]);
     if (r <= 0) return r;
     q->staged_at[*n] = at;
     if (radinterp__covers((const double (*)[2])sh->v, sh->count, (const double (*)[2])bp->sc2, bp->nc) ||
-        radinterp__source_covered(bp, fabs(radinterp__area2((const double (*)[2])sh->v, sh->count))))
+        radinterp__source_covered(bp, q->staged_area[*n]))
         return 1;
     q->order[*n] = (unsigned char)*n;
     (*n)++;
@@ -8436,12 +8472,9 @@ static int radinterp__faces_point(const radinterp__query *q, const radinterp__bp
    the order does not depend on the order they were staged in. */
 static void radinterp__order_staged(radinterp__query *q, int n)
 {
-    double area[RADINTERP__BP_MAX_SURVIVORS];
+    const double *area = q->staged_area;
     int k, j;
-    for (k = 0; k < n; k++) {
-        area[k] = fabs(radinterp__area2((const double (*)[2])q->staged[k].v, q->staged[k].count));
-        q->order[k] = (unsigned char)k;
-    }
+    for (k = 0; k < n; k++) q->order[k] = (unsigned char)k;
     for (k = 1; k < n; k++) {   /* insertion sort */
         unsigned char o = q->order[k];
         for (j = k; j > 0; j--) {
@@ -8643,7 +8676,7 @@ static int radinterp__part_make(const radinterp__bp *bp, const double (*Sc)[3], 
     if (pt->area == 0.0) return 0;
     pt->nl = 0;
     for (k = 0; k < nc; k++) { /* its edges' lines */
-        const double *a = pt->c2[k], *b = pt->c2[(k + 1) % nc];
+        const double *a = pt->c2[k], *b = pt->c2[radinterp__next(k, nc)];
         double dx = b[0] - a[0], dy = b[1] - a[1], len = sqrt(dx * dx + dy * dy), sg = pt->area > 0.0 ? 1.0 : -1.0;
         double *L = pt->L[pt->nl];
         if (!(len > bp->tol)) continue; /* a vanishing edge: its neighbours' lines enclose it */
@@ -8981,7 +9014,7 @@ static void radinterp__query_children(const radinterp__query *q, uint32_t node, 
     for (c = 0; c < 4; c++) {
         if (!((whole >> c) & 1)) continue;
         for (k = 0; k < nc[c]; k++) {
-            const double *u = Sc[c][k], *v = Sc[c][(k + 1) % nc[c]];
+            const double *u = Sc[c][k], *v = Sc[c][radinterp__next(k, nc[c])];
             if (from[c][k] != -1) continue;
             for (j = 0; j < 3; j++) {
                 rows[j][m] = u[j] - q->p[j];
@@ -10648,7 +10681,7 @@ static int radinterp__clip_segment2(const double (*poly)[2], int n, double inset
     int i;
     *t0 = 0.0; *t1 = 1.0; *e0 = *e1 = -1;
     for (i = 0; i < n; i++) {
-        const double *a = poly[i], *b = poly[(i + 1) % n];
+        const double *a = poly[i], *b = poly[radinterp__next(i, n)];
         double dx = b[0] - a[0], dy = b[1] - a[1], len = sqrt(dx * dx + dy * dy), fp, fq, t;
         if (!(len > 0.0)) continue;
         fp = (-dy * (p[0] - a[0]) + dx * (p[1] - a[1])) / len - inset;

@@ -356,6 +356,147 @@ static void test_one_shadow_hides(void)
     radinterp_solution_destroy(sol);
 }
 
+/* The staged shadows' areas are computed once, where the shadow is made
+   (radinterp__bp_shadow_piece), and kept for the covered test and the
+   largest-first order: each kept area must equal the area of the shadow
+   staged in its slot, bit for bit, and the order must be by those areas
+   (ties by list position). A source over a floor with five overlapping
+   blockers, some turned toward the floor and some away (staged after the
+   order). Also radinterp__next, the polygon loops' next corner, against
+   (i + 1) % n. */
+/* A square source (patch 1) 2 m over a floor (patch 0) with five
+   overlapping blockers between them (patches 2..6, the second and fourth
+   turned up, away from the floor), solved. */
+static radinterp_solution *five_blockers_scene(uint32_t *blocker)
+{
+    static const float blk[5][5] = {   /* x0, y0, x1, y1, z */
+        {-0.9f, -0.6f, 0.3f, 0.5f, 0.6f}, {-0.2f, -0.9f, 0.8f, 0.2f, 0.9f}, {-0.5f, 0.1f, 0.6f, 0.9f, 1.2f},
+        {-0.7f, -0.4f, 0.1f, 0.4f, 1.5f}, {0.0f, -0.5f, 0.7f, 0.6f, 0.4f}};
+    scene s;
+    radinterp_desc d;
+    radinterp_solution *sol = NULL;
+    uint32_t grey, light, k;
+    memset(&s, 0, sizeof s);
+    grey = add_material(&s, 0.5f, 0.0f);
+    light = add_material(&s, 0.0f, 100.0f);
+    add_hrect(&s, -2, -2, 2, 2, 0, 1, grey);
+    add_hrect(&s, -0.5f, -0.5f, 0.5f, 0.5f, 2.0f, 0, light);
+    for (k = 0; k < 5; k++)
+        blocker[k] = add_hrect(&s, blk[k][0], blk[k][1], blk[k][2], blk[k][3], blk[k][4], (int)(k & 1), grey);
+    d = scene_desc(&s);
+    CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_OK);
+    return sol;
+}
+
+static void test_staged_shadow_areas(void)
+{
+    static radinterp__query q;   /* about 110 KB */
+    radinterp_solution *sol;
+    uint32_t blocker[5], i;
+    int n, m, multi = 0, later = 0, next_ok = 1;
+    for (n = 1; n <= RADINTERP__POLY_MAX; n++)
+        for (m = 0; m < n; m++) next_ok &= radinterp__next(m, n) == (m + 1) % n;
+    CHECK(next_ok);
+    sol = five_blockers_scene(blocker);
+    if (!sol) return;
+    for (i = 0; i < 3000; i++) {
+        const radinterp__patch *ps = &sol->patches[1];
+        float p[3];
+        double Sc[RADINTERP__POLY_MAX][3], full;
+        radinterp__bp bp;
+        int nc, hides, j;
+        p[0] = (float)(-1.5 + 3.0 * rnd());
+        p[1] = (float)(-1.5 + 3.0 * rnd());
+        p[2] = 0.0f;
+        radinterp__query_start(&q, sol, 0, p, NULL);
+        nc = radinterp__query_source(&q, ps->root, Sc, &full);
+        if (nc < 3) continue;
+        q.blk = blocker;
+        q.nblk = 5;
+        radinterp__bp_setup(&q, &bp, NULL, (const double (*)[3])Sc, nc, ps->n, ps->d - sol->push_off, sol->push_off);
+        n = radinterp__bp_stage(&q, &bp, &hides);
+        if (n < 2) continue;
+        multi++;
+        for (j = 0; j < n; j++) {
+            double a = fabs(radinterp__area2((const double (*)[2])q.staged[j].v, q.staged[j].count));
+            CHECK_MSG(memcmp(&a, &q.staged_area[j], sizeof a) == 0, "point (%g, %g): shadow %d's kept area %.17g, its area %.17g",
+                      p[0], p[1], j, q.staged_area[j], a);
+            later += !radinterp__faces_point(&q, &bp, blocker[q.staged_at[j]]);
+        }
+        for (j = 1; j < n; j++) {   /* faces toward the point first, largest first */
+            int a = q.order[j - 1], b = q.order[j];
+            if (!radinterp__faces_point(&q, &bp, blocker[q.staged_at[b]])) break;
+            CHECK_MSG(q.staged_area[a] > q.staged_area[b] ||
+                      (q.staged_area[a] == q.staged_area[b] && q.staged_at[a] < q.staged_at[b]),
+                      "point (%g, %g): shadows %d, %d out of order", p[0], p[1], a, b);
+        }
+    }
+    CHECK(multi > 500);
+    CHECK(later > 100);   /* shadows staged after the order are checked too */
+    test_note("%d floor points staged 2 or more shadows (%d of blockers turned away)", multi, later);
+    radinterp_solution_destroy(sol);
+}
+
+/* radinterp__pyramid_cut leaves out the corner tests of a plane that has a
+   blocker's bounding sphere well inside it (radinterp__sphere_inside): its
+   verdict (culled, or which planes cut) must be the one testing every
+   corner against every plane gives. Points on the floor and in the air
+   around and between the five blockers, over the source and its children
+   (smaller pyramids). */
+static void test_pyramid_cut_skips(void)
+{
+    static radinterp__query q;   /* about 110 KB */
+    radinterp_solution *sol;
+    uint32_t blocker[5], i, k, skipped = 0, cutting = 0, culled = 0;
+    sol = five_blockers_scene(blocker);
+    if (!sol) return;
+    for (i = 0; i < 4000; i++) {
+        const radinterp__patch *ps = &sol->patches[1];
+        uint32_t node = ps->root;
+        float p[3];
+        double Sc[RADINTERP__POLY_MAX][3], full;
+        radinterp__bp bp;
+        int nc;
+        p[0] = (float)(-1.5 + 3.0 * rnd());
+        p[1] = (float)(-1.5 + 3.0 * rnd());
+        p[2] = (float)(i % 2 ? 1.9 * rnd() : 0.0);
+        if (i % 3 && sol->nodes[node].child != RADINTERP__NONE) node = sol->nodes[node].child + (uint32_t)(i % 4);
+        radinterp__query_start(&q, sol, 0, p, NULL);
+        nc = radinterp__query_source(&q, node, Sc, &full);
+        if (nc < 3) continue;
+        radinterp__bp_setup(&q, &bp, NULL, (const double (*)[3])Sc, nc, ps->n, ps->d - sol->push_off, sol->push_off);
+        for (k = 0; k < 5; k++) {
+            const radinterp__patch *pb = &sol->patches[blocker[k]];
+            double poly[RADINTERP__POLY_MAX][3], all[RADINTERP__POLY_MAX][3];
+            uint32_t cut, cut_all = 0;
+            int m = radinterp__pyramid_cut(sol, &bp, pb, poly, &cut), m_all = radinterp__patch_poly(pb, all), j, c;
+            int none = 0, sphere_out = 0;
+            for (j = 0; j < bp.np; j++) {
+                int in = 0;
+                double sd = radinterp__d3_dot(bp.plane_n[j], pb->centre) - bp.plane_d[j];
+                sphere_out |= sd < -pb->radius;
+                for (c = 0; c < m_all; c++) in += radinterp__d3_dot(bp.plane_n[j], all[c]) >= bp.plane_d[j];
+                none |= in == 0;
+                if (in > 0 && in < m_all) cut_all |= 1u << j;
+                skipped += !sphere_out && radinterp__sphere_inside(pb, radinterp__sphere_size(pb), sd, bp.plane_d[j]);
+            }
+            if (sphere_out || fabs(radinterp__d3_dot(pb->n, bp.pv) - pb->d) <= sol->epsilon * sol->diag) {
+                CHECK_EQ_INT(m, 0);
+                continue;
+            }
+            CHECK_MSG(m == (none ? 0 : m_all), "point (%g, %g, %g), blocker %u: %d corners, expected %d", p[0], p[1], p[2], k,
+                      m, none ? 0 : m_all);
+            if (m && !none) CHECK_MSG(cut == cut_all, "point (%g, %g, %g), blocker %u: cut %x, expected %x", p[0], p[1],
+                                      p[2], k, cut, cut_all);
+            culled += none;
+            cutting += !none && cut_all != 0;
+        }
+    }
+    CHECK(skipped > 10000 && cutting > 1000 && culled > 1000);
+    test_note("%u planes' corner tests left out; %u blockers cut, %u culled by their corners", skipped, cutting, culled);
+    radinterp_solution_destroy(sol);
+}
+
 /* The rays from a source edge at coordinate xs through a blocker edge at xb
    meet the floor at xb + t (xb - xs), t = h / (H - h): for xs = -a, a and
    xb = both blocker edges, four lines per axis bound the penumbra and the
@@ -1879,6 +2020,8 @@ int main(int argc, char **argv)
     RUN(test_penumbra_boundaries);
     RUN(test_leaf_hidden_links);
     RUN(test_one_shadow_hides);
+    RUN(test_staged_shadow_areas);
+    RUN(test_pyramid_cut_skips);
     RUN(test_weights);
     RUN(test_weight_cache);
     RUN(test_hidden_events);
