@@ -52,7 +52,10 @@
    prints a per-frame timing table in the style of Greger's figure 5.8. With
    --reference every frame is also traced in full with the same shading
    (<out>/walkthrough_<mode>_NNN_full.png) and the table shows the LRMS error
-   of the displayed range. --help lists the options.
+   of the displayed range. With --converged N frames N-1, 2N-1, ... are also
+   rendered converged, twice with other random numbers, and the table shows
+   their LRMS against a converged render with its own noise taken out
+   (wt_converged_lrms; slow: 2 x 432 rays a pixel). --help lists the options.
 
    --scene daylight walks the house by day (building_1k_daylight.*:
    glass in the windows, lamps off, a sky named by its layout; every mode:
@@ -164,6 +167,7 @@ static void table_header(const run *u)
     if (u->o.mode == WT_MODE_RAYTRACE) printf(" %8s %7s %6s %6s", "samples", "gathers", "bunny", "hit %");
     if (u->o.mode == WT_MODE_BASEVIEWS) printf(" %8s", "traced");
     if (u->o.reference) printf(" %7s", "LRMS");
+    if (u->o.converged) printf(" %7s", "conv");
     printf("\n");
 }
 
@@ -177,6 +181,8 @@ static void table_row(const run *u, int f, const wt_frame_stats *s)
                s->lookups ? 100.0 * s->hits / s->lookups : 100.0);
     if (u->o.mode == WT_MODE_BASEVIEWS) printf(" %8u", s->samples);
     if (u->o.reference) printf(" %7.4f", s->lrms);
+    if (u->o.converged && s->converged >= 0.0) printf(" %7.4f", s->converged);
+    else if (u->o.converged) printf(" %7s", "-");
     printf("%s\n", s->full ? "   (traced in full)" : "");
 }
 
@@ -187,8 +193,10 @@ static void table_summary(const run *u)
 {
     const wt_options *o = &u->o;
     int first = o->mode == WT_MODE_RAYTRACE && o->frames > 1 ? 1 : 0, f, k, n = o->frames - first;
-    double total = 0.0, phase[WT_PHASES] = { 0 }, samples = 0.0, lrms = 0.0;
+    double total = 0.0, phase[WT_PHASES] = { 0 }, samples = 0.0, lrms = 0.0, converged = 0.0;
+    int measured = 0;
     for (f = first; f < o->frames; f++) {
+        if (u->stats[f].converged >= 0.0) { converged += u->stats[f].converged; measured++; }
         total += u->stats[f].total;
         samples += u->stats[f].samples;
         lrms += u->stats[f].lrms;
@@ -211,6 +219,8 @@ static void table_summary(const run *u)
                100.0 * samples / n / ((double)o->width * o->height), o->width * o->height, u->stats[0].total);
     printf("  Greger 1996 (fig. 5.8): 5.3 fps with a 1162-polygon rabbit; Hardt 1996: 2.3 updates/s at 640x480\n");
     if (o->reference) printf("  mean LRMS against full renders: %.4f\n", lrms / n);
+    if (measured) printf("  mean LRMS against converged renders (their noise taken out), %d frames: %.4f\n", measured,
+                         converged / measured);
 }
 
 /* ---- a user's scene ------------------------------------------------------- */
@@ -379,6 +389,10 @@ int main(int argc, char **argv)
             if (wt_render_full(u.w, &c, wt_frame_time(&u.o, f), (uint32_t)f, u.full, NULL) != 0 ||
                 wt_display_lrms(u.full, u.rgb, u.o.width, u.o.height, u.exposure, &s->lrms) != 0)
                 s->lrms = -1.0;
+        }
+        if (u.o.converged && f % u.o.converged == u.o.converged - 1) {
+            rendercache_camera c = wt_camera(&u.w->opt, wt_frame_time(&u.o, f), (uint32_t)u.o.width, (uint32_t)u.o.height);
+            if (wt_converged_lrms(u.w, &c, wt_frame_time(&u.o, f), u.rgb, u.exposure, &s->converged) != 0) s->converged = -1.0;
         }
         table_row(&u, f, s);
         if (write_frame(&u, f) != 0) return 1;

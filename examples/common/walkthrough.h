@@ -266,6 +266,7 @@ typedef struct wt_options {
     int progress;             /* progress bars on stderr */
     int verbose;              /* messages on stdout */
     int reference;            /* trace every frame in full too and report LRMS */
+    int converged;            /* N > 0: frames N-1, 2N-1, ... also against converged renders (wt_converged_lrms) */
     float exposure;           /* 0 = automatic per frame (wt_exposure) */
 } wt_options;
 
@@ -281,6 +282,7 @@ typedef struct wt_frame_stats {
     uint32_t bunny_gathers;            /* of which on the bunny */
     int full;                 /* raytrace: the first frame, traced in full */
     double lrms;              /* against a full render (wt_options.reference), else -1 */
+    double converged;         /* against converged renders, their noise taken out (wt_options.converged), else -1 */
 } wt_frame_stats;
 
 /* ======================================================================
@@ -377,6 +379,8 @@ EX_FN void wt_usage(FILE *f)
           "  --gouraud            radiosity: Gouraud shading of the mesh instead of its interpolants\n"
           "  --exposure E         exposure before the filmic curve (default: automatic per frame)\n"
           "  --reference          also trace every frame in full and print the LRMS error\n"
+          "  --converged N        also render frames N-1, 2N-1, ... converged (slow) and print the\n"
+          "                       LRMS error against them, their own noise taken out\n"
           "  --no-frames          do not write PNG frames\n"
           "  --quiet              no progress bars or messages, only the timing table\n"
           "  --help               this text\n", f);
@@ -429,7 +433,8 @@ EX_FN int wt_parse_options(int argc, char **argv, wt_options *o, char *err, size
                 !strcmp(a, "--cache") || !strcmp(a, "--data") || !strcmp(a, "--scene") || !strcmp(a, "--threads") || !strcmp(a, "--seed") ||
                 !strcmp(a, "--budget") || !strcmp(a, "--light-samples") || !strcmp(a, "--strata") ||
                 !strcmp(a, "--base") || !strcmp(a, "--keys") || !strcmp(a, "--quality") || !strcmp(a, "--exposure") ||
-                !strcmp(a, "--eps") || !strcmp(a, "--min-leaf-area") || !strcmp(a, "--volume-k"))
+                !strcmp(a, "--eps") || !strcmp(a, "--min-leaf-area") || !strcmp(a, "--volume-k") ||
+                !strcmp(a, "--converged"))
                 snprintf(err, err_size, "%s needs a value (see --help)", a);
             else
                 snprintf(err, err_size, "unknown option '%s' (see --help)", a);
@@ -441,6 +446,7 @@ EX_FN int wt_parse_options(int argc, char **argv, wt_options *o, char *err, size
             else if (!strcmp(v, "radiosity")) o->mode = WT_MODE_RADIOSITY;
             else { snprintf(err, err_size, "--mode must be raytrace, baseviews or radiosity, not '%s'", v); return -1; }
         } else if (!strcmp(a, "--frames")) ok = wt__parse_int(v, 1, 100000, &o->frames);
+        else if (!strcmp(a, "--converged")) ok = wt__parse_int(v, 1, 100000, &o->converged);
         else if (!strcmp(a, "--size")) {
             const char *x = strchr(v, 'x');
             char w[32];
@@ -3476,6 +3482,7 @@ EX_FN int wt_render_full(wt_world *w, const rendercache_camera *c, double t, uin
 
 /* Converged renders: every pixel gets its own light vector (a gather at
    its point, no interpolation) and many shadow rays. */
+#define WT__CONVERGED_STREAM 0xFFFFFFu   /* their random numbers: a stream no frame's number reaches */
 typedef struct wt__converged_job {
     wt_world *w;
     wt_point *points;
@@ -3506,10 +3513,11 @@ static void wt__converged_gather_job(void *ctx, uint32_t batch)
    light plus one light vector per point) without its two approximations,
    i.e. every pixel gathers its own light vector with strata x 3 strata
    rays (no cache, no interpolation, no render-cache reuse) and takes
-   light_samples shadow rays. The measure of the raytrace mode's error
-   (issue: LRMS <= 0.07). Returns 0, or -1 when out of memory. */
-EX_FN int wt_render_converged(wt_world *w, const rendercache_camera *c, double t, int strata, int light_samples,
-                              float *rgb)
+   light_samples shadow rays, its random numbers from `stream` (as a
+   frame's pixels take theirs from the frame's number). Returns 0, or -1
+   when out of memory. */
+static int wt__render_converged(wt_world *w, const rendercache_camera *c, double t, int strata, int light_samples,
+                                uint32_t stream, float *rgb)
 {
     uint32_t n = c->width * c->height, i;
     wt_point *points = (wt_point *)malloc(sizeof(wt_point) * n);
@@ -3518,7 +3526,7 @@ EX_FN int wt_render_converged(wt_world *w, const rendercache_camera *c, double t
     wt__job tj;
     wt_set_time(w, t);
     if (points && wt__ensure_pose(w) == 0) {
-        wt__camera_points(c, WT_STREAM_FULL, 0xFFFFFFu, points);
+        wt__camera_points(c, WT_STREAM_FULL, stream, points);
         w->opt.light_samples = light_samples < 1 ? 1 : light_samples > WT__MAX_LIGHT_SAMPLES ? WT__MAX_LIGHT_SAMPLES
                                                                                                 : light_samples;
         tj.w = w;
@@ -3541,6 +3549,14 @@ EX_FN int wt_render_converged(wt_world *w, const rendercache_camera *c, double t
     }
     free(points);
     return result;
+}
+
+/* wt__render_converged with the one stream the tests compare with: the
+   measure of the raytrace mode's error (issue: LRMS <= 0.07). */
+EX_FN int wt_render_converged(wt_world *w, const rendercache_camera *c, double t, int strata, int light_samples,
+                              float *rgb)
+{
+    return wt__render_converged(w, c, t, strata, light_samples, WT__CONVERGED_STREAM, rgb);
 }
 
 /* The exposure of a frame (examples/common/image.h's filmic pipeline):
@@ -3581,6 +3597,41 @@ EX_FN int wt_display_lrms(const float *reference, const float *image, int width,
     }
     free(a);
     free(b);
+    return result;
+}
+
+/* The LRMS of a displayed frame (rgb, shown at `exposure`) against a
+   converged render with that render's own noise taken out: issue 19's
+   measure (--converged). A converged render (WT_CONVERGED_STRATA,
+   WT_CONVERGED_LIGHT_SAMPLES) is itself noisy, 0.034-0.040 LRMS at 320x240
+   in the office; so two are made with other random numbers, C1 and C2, and
+   with Cm their mean, independent noise gives
+   E[LRMS(Cm, frame)^2] = e^2 + s^2 / 2 and E[LRMS(C1, C2)^2] = 2 s^2, s one
+   render's noise: e^2 = LRMS(Cm, frame)^2 - LRMS(C1, C2)^2 / 4 (0 if the
+   noise's estimate exceeds it). Camera c and time t are the frame's.
+   Returns 0, or -1 when out of memory. */
+#define WT_CONVERGED_STRATA 12         /* as the tests' converged renders (tests/test_walkthrough.c) */
+#define WT_CONVERGED_LIGHT_SAMPLES 32
+EX_FN int wt_converged_lrms(wt_world *w, const rendercache_camera *c, double t, const float *rgb, float exposure,
+                            double *lrms)
+{
+    size_t i, n = 3 * (size_t)c->width * (size_t)c->height;
+    float *c1 = (float *)malloc(sizeof(float) * n), *c2 = (float *)malloc(sizeof(float) * n);
+    double to_mean = -1.0, apart = -1.0;
+    int result = -1;
+    if (c1 && c2 &&
+        wt__render_converged(w, c, t, WT_CONVERGED_STRATA, WT_CONVERGED_LIGHT_SAMPLES, WT__CONVERGED_STREAM, c1) == 0 &&
+        wt__render_converged(w, c, t, WT_CONVERGED_STRATA, WT_CONVERGED_LIGHT_SAMPLES, WT__CONVERGED_STREAM - 1u, c2) == 0 &&
+        wt_display_lrms(c1, c2, (int)c->width, (int)c->height, exposure, &apart) == 0) {
+        for (i = 0; i < n; i++) c1[i] = 0.5f * (c1[i] + c2[i]);
+        if (wt_display_lrms(c1, rgb, (int)c->width, (int)c->height, exposure, &to_mean) == 0) {
+            double e2 = to_mean * to_mean - 0.25 * apart * apart;
+            *lrms = e2 > 0.0 ? sqrt(e2) : 0.0;
+            result = 0;
+        }
+    }
+    free(c1);
+    free(c2);
     return result;
 }
 
@@ -6020,7 +6071,7 @@ EX_FN int wt_render_frame(wt_renderer *r, int frame, float *rgb, wt_frame_stats 
 {
     int result;
     memset(st, 0, sizeof *st);
-    st->lrms = -1.0;
+    st->lrms = st->converged = -1.0;
     switch (r->mode) {
     case WT_MODE_RAYTRACE: result = wt__raytrace_frame(r, frame, rgb, st); break;
     case WT_MODE_BASEVIEWS: result = wt__baseviews_frame(r, frame, rgb, st); break;
@@ -6038,7 +6089,7 @@ EX_FN int wt_render_view(wt_renderer *r, const rendercache_camera *camera, doubl
 {
     int result;
     memset(st, 0, sizeof *st);
-    st->lrms = -1.0;
+    st->lrms = st->converged = -1.0;
     if (!camera || camera->width != r->width || camera->height != r->height || r->mode == WT_MODE_BASEVIEWS) return -1;
     result = r->mode == WT_MODE_RAYTRACE ? wt__raytrace_view(r, camera, NULL, t, r->frames_done, rgb, st)
                                          : wt__radiosity_view(r, camera, t, rgb, st);
