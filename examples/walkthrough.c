@@ -384,15 +384,15 @@ int main(int argc, char **argv)
         }
         u.exposure = wt_exposure(&u.o, u.rgb, u.exposure_first);
         if (f == 0) u.exposure_first = u.exposure;
-        if (u.o.reference) {
-            rendercache_camera c = wt_camera(&u.w->opt, wt_frame_time(&u.o, f), (uint32_t)u.o.width, (uint32_t)u.o.height);
-            if (wt_render_full(u.w, &c, wt_frame_time(&u.o, f), (uint32_t)f, u.full, NULL) != 0 ||
-                wt_display_lrms(u.full, u.rgb, u.o.width, u.o.height, u.exposure, &s->lrms) != 0)
+        if (u.o.reference || u.o.converged) {   /* the frame measured against other renders of its camera */
+            const double t = wt_frame_time(&u.o, f);
+            rendercache_camera c = wt_camera(&u.w->opt, t, (uint32_t)u.o.width, (uint32_t)u.o.height);
+            if (u.o.reference && (wt_render_full(u.w, &c, t, (uint32_t)f, u.full, NULL) != 0 ||
+                                  wt_display_lrms(u.full, u.rgb, u.o.width, u.o.height, u.exposure, &s->lrms) != 0))
                 s->lrms = -1.0;
-        }
-        if (u.o.converged && f % u.o.converged == u.o.converged - 1) {
-            rendercache_camera c = wt_camera(&u.w->opt, wt_frame_time(&u.o, f), (uint32_t)u.o.width, (uint32_t)u.o.height);
-            if (wt_converged_lrms(u.w, &c, wt_frame_time(&u.o, f), u.rgb, u.exposure, &s->converged) != 0) s->converged = -1.0;
+            if (u.o.converged && f % u.o.converged == u.o.converged - 1 &&
+                wt_converged_lrms(u.w, &c, t, u.rgb, u.exposure, &s->converged) != 0)
+                s->converged = -1.0;
         }
         table_row(&u, f, s);
         if (write_frame(&u, f) != 0) return 1;

@@ -2070,17 +2070,6 @@ static uint64_t hash_frame(uint64_t hash, const rendercache *rc, uint32_t n, uin
     return hash_bytes(hash, rendercache_priority_image(rc), sizeof(float) * w * h);
 }
 
-/* Frame f of the sequences' walk: the square (object 1, s's shift) moved
-   to its place, and the camera of that frame. */
-static rendercache_camera sequence_step(rendercache *rc, scene *s, float m[12], int f, uint32_t w, uint32_t h)
-{
-    float t = (float)f * 0.1f;
-    m[3] = 0.05f * (float)f;
-    s->shift[0] = m[3];
-    rendercache_set_object_transform(rc, 1, m);
-    return make_camera(t, 0.3f * t, t, 0.2f, 0.0f, 10.0f, w, h);
-}
-
 /* ppp: points per pixel (0: the default, one range of the re-sort into
    image order; 24: 12 ranges, 2 re-sorted per frame, in 2 jobs with a
    parallel_for); fused: each frame starts with begin_frame_predicted
@@ -2102,34 +2091,63 @@ static rendercache *create_with(void (*pf)(void *, rendercache_job_fn, void *, u
     return rendercache_create(&d, &rc) == RENDERCACHE_OK ? rc : NULL;
 }
 
+/* The sequences' walk: a cache of SEQUENCE_W x SEQUENCE_H pixels, the
+   scene with its moving square (object 1), the square's matrix, and the
+   hash of what the frames showed. */
+#define SEQUENCE_W 96u
+#define SEQUENCE_H 80u
+typedef struct sequence {
+    rendercache *rc;
+    scene s;
+    float m[12];
+    uint64_t hash;
+} sequence;
+
+/* Starts a walk on a cache made by create_with; 0 when there is none. */
+static int sequence_open(sequence *q, void (*pf)(void *, rendercache_job_fn, void *, uint32_t), void *user, float ppp)
+{
+    static const float identity[12] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0 };
+    memset(&q->s, 0, sizeof q->s);
+    memcpy(q->m, identity, sizeof identity);
+    q->hash = 1469598103934665603ull;
+    q->rc = create_with(pf, user, ppp, SEQUENCE_W, SEQUENCE_H);
+    return q->rc != NULL;
+}
+
+/* Frame f of the walk: the square (s's shift) moved to its place, and the
+   camera of that frame. */
+static rendercache_camera sequence_step(sequence *q, int f)
+{
+    float t = (float)f * 0.1f;
+    q->m[3] = 0.05f * (float)f;
+    q->s.shift[0] = q->m[3];
+    rendercache_set_object_transform(q->rc, 1, q->m);
+    return make_camera(t, 0.3f * t, t, 0.2f, 0.0f, 10.0f, SEQUENCE_W, SEQUENCE_H);
+}
+
 static uint64_t run_sequence(void (*pf)(void *, rendercache_job_fn, void *, uint32_t), void *user, float ppp,
                              int fused)
 {
-    const uint32_t w = 96, h = 80;
-    rendercache *rc = create_with(pf, user, ppp, w, h);
-    scene s;
-    float m[12] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0 };
-    uint64_t hash = 1469598103934665603ull;
+    sequence q;
     int f;
-    memset(&s, 0, sizeof s);
-    if (!rc) return 0;
+    if (!sequence_open(&q, pf, user, ppp)) return 0;
     for (f = 0; f < 12; f++) {
-        rendercache_camera cam = sequence_step(rc, &s, m, f, w, h), next = cam;
+        rendercache_camera cam = sequence_step(&q, f), next = cam;
         uint32_t n = 0, i;
         next.eye[0] += 0.1f;
         if (fused) {
-            rendercache_begin_frame_predicted(rc, &cam, &next);
+            rendercache_begin_frame_predicted(q.rc, &cam, &next);
         } else {
-            rendercache_begin_frame(rc, &cam);
-            rendercache_predict(rc, &next);
+            rendercache_begin_frame(q.rc, &cam);
+            rendercache_predict(q.rc, &next);
         }
-        rendercache_request(rc, g_req, 600, &n);
-        for (i = 0; i < n; i++) shade(&s, &g_req[i], &g_samples[i]);
-        rendercache_insert(rc, g_samples, n, NULL);
-        hash = hash_frame(hash, rc, n, w, h);
+        rendercache_request(q.rc, g_req, 600, &n);
+        for (i = 0; i < n; i++) shade(&q.s, &g_req[i], &g_samples[i]);
+        rendercache_insert(q.rc, g_samples, n, NULL);
+        q.hash = hash_frame(q.hash, q.rc, n, SEQUENCE_W, SEQUENCE_H);
     }
-    rendercache_destroy(rc);
-    return hash;
+    rendercache_destroy(q.rc);
+    return q.hash;
 }
 
 /* The same requests, images and priorities on any thread count; and
@@ -2492,31 +2510,26 @@ static int near_centre(void *user, const float p[3], uint32_t object)
    and requests). */
 static uint64_t run_where_sequence(void (*pf)(void *, rendercache_job_fn, void *, uint32_t), void *user, float ppp)
 {
-    const uint32_t w = 96, h = 80;
-    rendercache *rc = create_with(pf, user, ppp, w, h);
-    scene s;
-    float m[12] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0 };
-    uint64_t hash = 1469598103934665603ull;
+    sequence q;
     int f;
-    memset(&s, 0, sizeof s);
-    if (!rc) return 0;
+    if (!sequence_open(&q, pf, user, ppp)) return 0;
     for (f = 0; f < 10; f++) {
         float centre[2];
-        rendercache_camera cam = sequence_step(rc, &s, m, f, w, h);
+        rendercache_camera cam = sequence_step(&q, f);
         uint32_t n = 0, i, aged = 0;
-        rendercache_begin_frame(rc, &cam);
-        rendercache_request(rc, g_req, f == 0 ? w * h : 900, &n);
-        for (i = 0; i < n; i++) shade(&s, &g_req[i], &g_samples[i]);
-        rendercache_insert(rc, g_samples, n, NULL);
+        rendercache_begin_frame(q.rc, &cam);
+        rendercache_request(q.rc, g_req, f == 0 ? SEQUENCE_W * SEQUENCE_H : 900, &n);
+        for (i = 0; i < n; i++) shade(&q.s, &g_req[i], &g_samples[i]);
+        rendercache_insert(q.rc, g_samples, n, NULL);
         centre[0] = -3.0f + 0.6f * (float)f;
         centre[1] = 1.0f - 0.2f * (float)f;
-        CHECK_EQ_INT(rendercache_invalidate_where(rc, near_centre, centre, &aged), RENDERCACHE_OK);
+        CHECK_EQ_INT(rendercache_invalidate_where(q.rc, near_centre, centre, &aged), RENDERCACHE_OK);
         CHECK(aged > 0);
-        hash = hash_bytes(hash, &aged, sizeof aged);
-        hash = hash_frame(hash, rc, n, w, h);
+        q.hash = hash_bytes(q.hash, &aged, sizeof aged);
+        q.hash = hash_frame(q.hash, q.rc, n, SEQUENCE_W, SEQUENCE_H);
     }
-    rendercache_destroy(rc);
-    return hash;
+    rendercache_destroy(q.rc);
+    return q.hash;
 }
 
 /* rendercache_invalidate_where asks the predicate in jobs over ranges of
