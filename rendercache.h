@@ -125,6 +125,7 @@
        rendercache_insert(rc, samples, n, &taken)                     shaded samples become points (late too)
        rendercache_invalidate(rc, object)                             an object's (or all) lighting changed
        rendercache_invalidate_where(rc, changed, user, &aged)         the points where the engine says it changed
+       rendercache_invalidate_where_next_frame(rc, changed, user, &aged)  the same, between frames: no pixel pass
        rendercache_seed(rc, images, n, &taken)                        range images become points
        rendercache_image(rc)                                          the current RGB float image
        rendercache_compose_fallback(rc, &fallback, out)               the image, a cheap estimate in its wide holes
@@ -256,7 +257,9 @@
        samples that land in it and filled in by the next requests.
        invalidate_where: with parallel_for, 16 jobs over ranges of slots ask
        changed and age, noting the answers a bit per slot, then 16 jobs over
-       ranges of pixels set the priorities of those showing an aged point.
+       ranges of pixels set the priorities of those showing an aged point
+       (invalidate_where_next_frame leaves that pass to the next
+       begin_frame, which ranks every pixel anyway).
 
    HOW A WARP WORKS (NDR96 section 4.4, after Radiance's pinterp)
 
@@ -340,7 +343,8 @@
          Contract: samples holds n samples.
        invalidate(rc, object): checks rc, and object < object_count,
          RENDERCACHE_MISS or RENDERCACHE_ALL_OBJECTS.
-       invalidate_where(rc, changed, user, &aged): checks rc and changed
+       invalidate_where(rc, changed, user, &aged), and
+       invalidate_where_next_frame: checks rc and changed
          non-NULL; aged may be NULL. Contract: with parallel_for, changed
          may be called from several threads at once.
        seed(rc, images, count, &taken): checks rc, a frame begun, images
@@ -800,6 +804,21 @@ RENDERCACHE_API rendercache_result rendercache_invalidate_where(rendercache *rc,
                                                                 int (*changed)(void *user, const float p[3],
                                                                                uint32_t object),
                                                                 void *user, uint32_t *aged);
+
+/* rendercache_invalidate_where for a caller between frames, whose frame's
+   requests are made and whose next call is begin_frame (the walkthrough
+   ages the points a moving object's step shadows before it begins the
+   frame that shows the step): the same points are aged alike, and the
+   current frame's priority image is left as it is, since begin_frame
+   ranks every pixel again from the points' ages; the frames that follow
+   are the same bit for bit. It saves the pass over the pixels (at 640x480
+   a read of every pixel's point, spread over the threads). A request made
+   before the next begin_frame would not see the ageing: call
+   rendercache_invalidate_where then. */
+RENDERCACHE_API rendercache_result rendercache_invalidate_where_next_frame(rendercache *rc,
+                                                                           int (*changed)(void *user, const float p[3],
+                                                                                          uint32_t object),
+                                                                           void *user, uint32_t *aged);
 
 /* The current image: width * height * 3 floats, valid until the next call
    that changes the cache. */
@@ -5477,10 +5496,11 @@ static void rendercache__where_pixels_job(void *ctx, uint32_t j)
     }
 }
 
-RENDERCACHE_API rendercache_result rendercache_invalidate_where(rendercache *rc,
-                                                                int (*changed)(void *user, const float p[3],
-                                                                               uint32_t object),
-                                                                void *user, uint32_t *aged)
+/* rendercache_invalidate_where, and with rank_pixels 0 its _next_frame
+   form: the ageing without the pixel pass. */
+static rendercache_result rendercache__invalidate_where(rendercache *rc,
+                                                        int (*changed)(void *user, const float p[3], uint32_t object),
+                                                        void *user, uint32_t *aged, int rank_pixels)
 {
     rendercache__where_job job;
     uint32_t j, n = 0;
@@ -5492,11 +5512,27 @@ RENDERCACHE_API rendercache_result rendercache_invalidate_where(rendercache *rc,
     job.yes = rc->sort_scratch;   /* (free between frames' calls; a bit per slot: sort_scratch_words) */
     rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__where_slots_job, &job, RENDERCACHE__WHERE_JOBS);
     for (j = 0; j < RENDERCACHE__WHERE_JOBS; j++) n += job.aged[j];
-    if (rc->has_frame && n)   /* the priorities of this frame's pixels showing them */
+    if (rank_pixels && rc->has_frame && n)   /* the priorities of this frame's pixels showing them */
         rendercache__run_jobs(rc->parallel_for, rc->parallel_user, rendercache__where_pixels_job, &job,
                               RENDERCACHE__WHERE_JOBS);
     if (aged) *aged = n;
     return RENDERCACHE_OK;
+}
+
+RENDERCACHE_API rendercache_result rendercache_invalidate_where(rendercache *rc,
+                                                                int (*changed)(void *user, const float p[3],
+                                                                               uint32_t object),
+                                                                void *user, uint32_t *aged)
+{
+    return rendercache__invalidate_where(rc, changed, user, aged, 1);
+}
+
+RENDERCACHE_API rendercache_result rendercache_invalidate_where_next_frame(rendercache *rc,
+                                                                           int (*changed)(void *user, const float p[3],
+                                                                                          uint32_t object),
+                                                                           void *user, uint32_t *aged)
+{
+    return rendercache__invalidate_where(rc, changed, user, aged, 0);
 }
 
 /* ======================================================================

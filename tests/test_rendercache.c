@@ -2550,6 +2550,67 @@ static void test_parallel_invalidate_where_matches_serial(void)
     ex_pool_destroy(pool);
 }
 
+/* rendercache_invalidate_where_next_frame, called where the walkthrough
+   calls it (after a frame's insertion, before the next begin_frame), ages
+   what rendercache_invalidate_where ages and leaves the shown frame's
+   priorities alone: run_where_sequence's walk with either, the same aged
+   counts, requests, images and priorities in every later frame (so it
+   ages: without the ageing the requests differ), while right after the
+   call the priority image is the one before it (so the pixel pass is
+   skipped; invalidate_where raises some of them in the same walk). On
+   any thread count. */
+static uint64_t run_where_next_sequence(void (*pf)(void *, rendercache_job_fn, void *, uint32_t), void *user,
+                                        int next_frame, uint32_t *raised_frames)
+{
+    static float before[SEQUENCE_W * SEQUENCE_H];
+    sequence q;
+    int f;
+    *raised_frames = 0;
+    if (!sequence_open(&q, pf, user, 0.0f)) return 0;
+    for (f = 0; f < 10; f++) {
+        float centre[2];
+        rendercache_camera cam = sequence_step(&q, f);
+        uint32_t n = 0, i, aged = 0;
+        rendercache_begin_frame(q.rc, &cam);
+        rendercache_request(q.rc, g_req, f == 0 ? SEQUENCE_W * SEQUENCE_H : 900, &n);
+        q.hash = hash_frame(q.hash, q.rc, n, SEQUENCE_W, SEQUENCE_H);   /* the frame as begin_frame ranked it */
+        for (i = 0; i < n; i++) shade(&q.s, &g_req[i], &g_samples[i]);
+        rendercache_insert(q.rc, g_samples, n, NULL);
+        memcpy(before, rendercache_priority_image(q.rc), sizeof before);
+        centre[0] = -3.0f + 0.6f * (float)f;
+        centre[1] = 1.0f - 0.2f * (float)f;
+        CHECK_EQ_INT(next_frame ? rendercache_invalidate_where_next_frame(q.rc, near_centre, centre, &aged)
+                                : rendercache_invalidate_where(q.rc, near_centre, centre, &aged),
+                     RENDERCACHE_OK);
+        CHECK(aged > 0);
+        *raised_frames += memcmp(before, rendercache_priority_image(q.rc), sizeof before) != 0;
+        q.hash = hash_bytes(q.hash, &aged, sizeof aged);
+    }
+    rendercache_destroy(q.rc);
+    return q.hash;
+}
+
+static void test_invalidate_where_next_frame_matches(void)
+{
+    ex_pool *pool = ex_pool_create(3);
+    uint32_t raised = 0, untouched = 0, aged = 7;
+    uint64_t now = run_where_next_sequence(NULL, NULL, 0, &raised);
+    uint64_t next = run_where_next_sequence(NULL, NULL, 1, &untouched);
+    rendercache *rc = create_with(NULL, NULL, 0.0f, 8, 8);
+    CHECK(now != 0);
+    CHECK(raised > 0);
+    CHECK_EQ_INT(untouched, 0);
+    CHECK(next == now);
+    CHECK(run_where_next_sequence(reversed_parallel_for, NULL, 1, &untouched) == now);
+    if (pool) CHECK(run_where_next_sequence(ex_pool_parallel_for, pool, 1, &untouched) == now);
+    CHECK_EQ_INT(untouched, 0);
+    CHECK_EQ_INT(rendercache_invalidate_where_next_frame(NULL, near_centre, NULL, &aged), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    CHECK_EQ_INT(aged, 0);
+    if (rc) CHECK_EQ_INT(rendercache_invalidate_where_next_frame(rc, NULL, NULL, NULL), RENDERCACHE_ERROR_INVALID_ARGUMENT);
+    rendercache_destroy(rc);
+    ex_pool_destroy(pool);
+}
+
 /* A wall at z = 5 seen by input camera eye (x, 0, 0) looking down +z,
    64 x 48, in one colour; pixels [hx0, hx1) x [hy0, hy1) have no sample. */
 static rendercache_range_image *wall_image(float x, const float rgb[3], uint32_t hx0, uint32_t hx1, uint32_t hy0,
@@ -2912,6 +2973,7 @@ int main(int argc, char **argv)
     RUN(test_owned_zbuffer_hands_points_over);
     RUN(test_parallel_insert_matches_serial);
     RUN(test_parallel_invalidate_where_matches_serial);
+    RUN(test_invalidate_where_next_frame_matches);
     RUN(test_warp_later_input_fills_the_hole);
     RUN(test_insert_in_pieces_matches_one_call);
     RUN(test_fallback_fills_wide_disocclusions);
