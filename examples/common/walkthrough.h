@@ -4148,7 +4148,11 @@ static int wt__trail_lamps(wt_renderer *r)
 }
 
 /* Ages the points where the bunny's step from the last frame's place to
-   the current pose (w->pose) may have changed the light (wt__trail). */
+   the current pose (w->pose) may have changed the light (wt__trail).
+   Called between frames, before begin_frame: the _next_frame form, whose
+   ageing begin_frame's ranking of every pixel takes up (the last frame's
+   priority image, which invalidate_where would update, is not read
+   again). */
 static int wt__age_trail(wt_renderer *r, int full)
 {
     wt__trail tr;
@@ -4160,7 +4164,7 @@ static int wt__age_trail(wt_renderer *r, int full)
     wt__trail_make(r, r->trail_centre, now, &tr);
     memcpy(r->trail_centre, now, sizeof now);
     if (full || !moved) return 0;   /* nothing cached yet, or the bunny stands still */
-    return rendercache_invalidate_where(r->rc, wt__trail_changed, &tr, NULL) == RENDERCACHE_OK ? 0 : -1;
+    return rendercache_invalidate_where_next_frame(r->rc, wt__trail_changed, &tr, NULL) == RENDERCACHE_OK ? 0 : -1;
 }
 
 /* One frame of the render cache: reproject, request, shade, insert. The
