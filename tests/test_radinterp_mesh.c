@@ -415,7 +415,10 @@ static void test_staged_shadow_areas(void)
         q.nblk = 5;
         radinterp__bp_setup(&q, &bp, NULL, (const double (*)[3])Sc, nc, ps->n, ps->d - sol->push_off, sol->push_off);
         n = radinterp__bp_stage(&q, &bp, &hides);
-        if (n < 2) continue;
+        if (n < 0 || hides) continue;
+        for (j = 0; j < (int)q.nlater; j++)   /* turned away: each staged as the union reaches it */
+            if (radinterp__stage_shadow(&q, &bp, q.later[j], &n) != 0) break;
+        if (j < (int)q.nlater || n < 2) continue;
         multi++;
         for (j = 0; j < n; j++) {
             double a = fabs(radinterp__area2((const double (*)[2])q.staged[j].v, q.staged[j].count));
@@ -434,6 +437,91 @@ static void test_staged_shadow_areas(void)
     CHECK(multi > 500);
     CHECK(later > 100);   /* shadows staged after the order are checked too */
     test_note("%d floor points staged 2 or more shadows (%d of blockers turned away)", multi, later);
+    radinterp_solution_destroy(sol);
+}
+
+/* The union of a query's shadows in radinterp__bp_stage's order,
+   everything staged first (as radinterp__union_staged did before it
+   staged the faces turned away itself), into e's pieces: -1, 0 hidden or
+   1 with *count pieces. */
+static int union_all_staged(radinterp__query *e, const radinterp__bp *bp, int *count)
+{
+    int hides, n = radinterp__bp_stage(e, bp, &hides), r;
+    uint32_t k;
+    if (n < 0) return -1;
+    if (hides) return 0;
+    for (k = 0; k < e->nlater; k++)
+        if ((r = radinterp__stage_shadow(e, bp, e->later[k], &n)) != 0) return r > 0 ? 0 : -1;
+    r = radinterp__union_staged(e, bp, n, 0, count);
+    return r < 0 ? -1 : r == 0 ? 0 : 1;
+}
+
+/* radinterp__union_staged stages the shadows of faces turned away only when
+   the union reaches them. Its verdict and pieces must be those of staging
+   every shadow first, and where the shadows of the faces turned toward the
+   point hide the source, no shadow of a face turned away may be made.
+   The five blockers (two turned up) at points on the floor and in the air,
+   over the source and its children. */
+static void test_later_shadows_when_reached(void)
+{
+    static radinterp__query q, e;   /* about 110 KB each */
+    radinterp_solution *sol;
+    uint32_t blocker[5], i, skipped = 0, reached = 0, unions = 0;
+    sol = five_blockers_scene(blocker);
+    if (!sol) return;
+    for (i = 0; i < 4000; i++) {
+        const radinterp__patch *ps = &sol->patches[1];
+        uint32_t node = ps->root;
+        float p[3];
+        double Sc[RADINTERP__POLY_MAX][3], full;
+        radinterp__bp bp;
+        int nc, n, hides, raw, r, re, count = 0, count_e = 0, k, front = 0, away = 0;
+        p[0] = (float)(-1.5 + 3.0 * rnd());
+        p[1] = (float)(-1.5 + 3.0 * rnd());
+        p[2] = (float)(i % 2 ? 1.9 * rnd() : 0.0);
+        if (i % 3 && sol->nodes[node].child != RADINTERP__NONE) node = sol->nodes[node].child + (uint32_t)(i % 4);
+        radinterp__query_start(&q, sol, 0, p, NULL);
+        radinterp__query_start(&e, sol, 0, p, NULL);
+        nc = radinterp__query_source(&q, node, Sc, &full);
+        if (nc < 3) continue;
+        q.blk = e.blk = blocker;
+        q.nblk = e.nblk = 5;
+        radinterp__bp_setup(&q, &bp, NULL, (const double (*)[3])Sc, nc, ps->n, ps->d - sol->push_off, sol->push_off);
+        re = union_all_staged(&e, &bp, &count_e);
+        for (k = 0; k < RADINTERP__BP_MAX_SURVIVORS; k++) q.staged_at[k] = RADINTERP__NONE;
+        n = radinterp__bp_stage(&q, &bp, &hides);
+        if (n < 0 || hides) {
+            CHECK_MSG(re == (n < 0 ? -1 : 0), "point (%g, %g, %g): staging gave %d, everything staged first %d", p[0],
+                      p[1], p[2], n < 0 ? -1 : 0, re);
+            continue;
+        }
+        raw = radinterp__union_staged(&q, &bp, n, q.nlater, &count);
+        r = raw < 0 ? -1 : raw == 1 ? 1 : 0;
+        unions++;
+        CHECK_MSG(r == re, "point (%g, %g, %g): union %d, everything staged first %d", p[0], p[1], p[2], r, re);
+        if (r == 1 && re == 1) {
+            CHECK_EQ_INT(count, count_e);
+            for (k = 0; k < count && k < count_e; k++)
+                CHECK_MSG(q.piece[k].count == e.piece[k].count &&
+                          memcmp(q.piece[k].v, e.piece[k].v, (size_t)q.piece[k].count * sizeof q.piece[k].v[0]) == 0 &&
+                          memcmp(q.piece[k].ln, e.piece[k].ln, (size_t)q.piece[k].count * sizeof q.piece[k].ln[0]) == 0,
+                          "point (%g, %g, %g): piece %d differs", p[0], p[1], p[2], k);
+        }
+        for (k = 0; k < RADINTERP__BP_MAX_SURVIVORS; k++) {   /* the shadows made, by the faces' sides */
+            if (q.staged_at[k] == RADINTERP__NONE) continue;
+            if (radinterp__faces_point(&q, &bp, blocker[q.staged_at[k]])) front++;
+            else away++;
+        }
+        reached += away > 0;
+        if (raw == 0 && count <= front && q.nlater > 0) {   /* hidden before the faces turned away */
+            CHECK_MSG(away == 0, "point (%g, %g, %g): hidden by %d shadows, yet %d of faces turned away made", p[0],
+                      p[1], p[2], count, away);
+            skipped++;
+        }
+    }
+    CHECK(unions > 1000 && reached > 500 && skipped > 20);
+    test_note("%u unions, %u of them staged shadows of faces turned away, %u ended hidden without making theirs",
+              unions, reached, skipped);
     radinterp_solution_destroy(sol);
 }
 
@@ -2022,6 +2110,7 @@ int main(int argc, char **argv)
     RUN(test_one_shadow_hides);
     RUN(test_staged_shadow_areas);
     RUN(test_pyramid_cut_skips);
+    RUN(test_later_shadows_when_reached);
     RUN(test_weights);
     RUN(test_weight_cache);
     RUN(test_hidden_events);
