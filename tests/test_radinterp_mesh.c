@@ -388,6 +388,32 @@ static radinterp_solution *five_blockers_scene(uint32_t *blocker)
     return sol;
 }
 
+/* Query i of the five blockers' scene started in q, its source's pyramid in
+   bp: a point over the floor (p, drawn with rnd), on the floor, or with
+   `air` in the air for odd i, where two of every three queries take one of
+   the source's children instead of its root (a smaller pyramid). blk: the
+   blockers the query stages (NULL for none). Returns 0 when the source
+   has fewer than 3 corners left in front of the point (no query). */
+static int five_blockers_query(const radinterp_solution *sol, uint32_t i, int air, const uint32_t *blk,
+                               radinterp__query *q, radinterp__bp *bp, float p[3])
+{
+    const radinterp__patch *ps = &sol->patches[1];
+    uint32_t node = ps->root;
+    double Sc[RADINTERP__POLY_MAX][3], full;
+    int nc;
+    p[0] = (float)(-1.5 + 3.0 * rnd());
+    p[1] = (float)(-1.5 + 3.0 * rnd());
+    p[2] = (float)(air && i % 2 ? 1.9 * rnd() : 0.0);
+    if (air && i % 3 && sol->nodes[node].child != RADINTERP__NONE) node = sol->nodes[node].child + (uint32_t)(i % 4);
+    radinterp__query_start(q, sol, 0, p, NULL);
+    nc = radinterp__query_source(q, node, Sc, &full);
+    if (nc < 3) return 0;
+    q->blk = blk;
+    q->nblk = blk ? 5 : 0;
+    radinterp__bp_setup(q, bp, NULL, (const double (*)[3])Sc, nc, ps->n, ps->d - sol->push_off, sol->push_off);
+    return 1;
+}
+
 static void test_staged_shadow_areas(void)
 {
     static radinterp__query q;   /* about 110 KB */
@@ -400,20 +426,10 @@ static void test_staged_shadow_areas(void)
     sol = five_blockers_scene(blocker);
     if (!sol) return;
     for (i = 0; i < 3000; i++) {
-        const radinterp__patch *ps = &sol->patches[1];
         float p[3];
-        double Sc[RADINTERP__POLY_MAX][3], full;
         radinterp__bp bp;
-        int nc, hides, j;
-        p[0] = (float)(-1.5 + 3.0 * rnd());
-        p[1] = (float)(-1.5 + 3.0 * rnd());
-        p[2] = 0.0f;
-        radinterp__query_start(&q, sol, 0, p, NULL);
-        nc = radinterp__query_source(&q, ps->root, Sc, &full);
-        if (nc < 3) continue;
-        q.blk = blocker;
-        q.nblk = 5;
-        radinterp__bp_setup(&q, &bp, NULL, (const double (*)[3])Sc, nc, ps->n, ps->d - sol->push_off, sol->push_off);
+        int hides, j;
+        if (!five_blockers_query(sol, i, 0, blocker, &q, &bp, p)) continue;
         n = radinterp__bp_stage(&q, &bp, &hides);
         if (n < 0 || hides) continue;
         for (j = 0; j < (int)q.nlater; j++)   /* turned away: each staged as the union reaches it */
@@ -470,23 +486,13 @@ static void test_later_shadows_when_reached(void)
     sol = five_blockers_scene(blocker);
     if (!sol) return;
     for (i = 0; i < 4000; i++) {
-        const radinterp__patch *ps = &sol->patches[1];
-        uint32_t node = ps->root;
         float p[3];
-        double Sc[RADINTERP__POLY_MAX][3], full;
         radinterp__bp bp;
-        int nc, n, hides, raw, r, re, count = 0, count_e = 0, k, front = 0, away = 0;
-        p[0] = (float)(-1.5 + 3.0 * rnd());
-        p[1] = (float)(-1.5 + 3.0 * rnd());
-        p[2] = (float)(i % 2 ? 1.9 * rnd() : 0.0);
-        if (i % 3 && sol->nodes[node].child != RADINTERP__NONE) node = sol->nodes[node].child + (uint32_t)(i % 4);
-        radinterp__query_start(&q, sol, 0, p, NULL);
-        radinterp__query_start(&e, sol, 0, p, NULL);
-        nc = radinterp__query_source(&q, node, Sc, &full);
-        if (nc < 3) continue;
-        q.blk = e.blk = blocker;
-        q.nblk = e.nblk = 5;
-        radinterp__bp_setup(&q, &bp, NULL, (const double (*)[3])Sc, nc, ps->n, ps->d - sol->push_off, sol->push_off);
+        int n, hides, raw, r, re, count = 0, count_e = 0, k, front = 0, away = 0;
+        if (!five_blockers_query(sol, i, 1, blocker, &q, &bp, p)) continue;
+        radinterp__query_start(&e, sol, 0, p, NULL);   /* the same point, everything staged first */
+        e.blk = blocker;
+        e.nblk = 5;
         re = union_all_staged(&e, &bp, &count_e);
         for (k = 0; k < RADINTERP__BP_MAX_SURVIVORS; k++) q.staged_at[k] = RADINTERP__NONE;
         n = radinterp__bp_stage(&q, &bp, &hides);
@@ -539,20 +545,9 @@ static void test_pyramid_cut_skips(void)
     sol = five_blockers_scene(blocker);
     if (!sol) return;
     for (i = 0; i < 4000; i++) {
-        const radinterp__patch *ps = &sol->patches[1];
-        uint32_t node = ps->root;
         float p[3];
-        double Sc[RADINTERP__POLY_MAX][3], full;
         radinterp__bp bp;
-        int nc;
-        p[0] = (float)(-1.5 + 3.0 * rnd());
-        p[1] = (float)(-1.5 + 3.0 * rnd());
-        p[2] = (float)(i % 2 ? 1.9 * rnd() : 0.0);
-        if (i % 3 && sol->nodes[node].child != RADINTERP__NONE) node = sol->nodes[node].child + (uint32_t)(i % 4);
-        radinterp__query_start(&q, sol, 0, p, NULL);
-        nc = radinterp__query_source(&q, node, Sc, &full);
-        if (nc < 3) continue;
-        radinterp__bp_setup(&q, &bp, NULL, (const double (*)[3])Sc, nc, ps->n, ps->d - sol->push_off, sol->push_off);
+        if (!five_blockers_query(sol, i, 1, NULL, &q, &bp, p)) continue;
         for (k = 0; k < 5; k++) {
             const radinterp__patch *pb = &sol->patches[blocker[k]];
             double poly[RADINTERP__POLY_MAX][3], all[RADINTERP__POLY_MAX][3];

@@ -2504,69 +2504,27 @@ static int near_centre(void *user, const float p[3], uint32_t object)
 }
 
 /* Frames of run_sequence's moving camera and square, and after each
-   insertion rendercache_invalidate_where over a disc of the wall that
-   moves. Returns a hash of the aged counts, priority images, requests and
-   images over the frames (the ageing shows in the next frames' priorities
-   and requests). */
-static uint64_t run_where_sequence(void (*pf)(void *, rendercache_job_fn, void *, uint32_t), void *user, float ppp)
-{
-    sequence q;
-    int f;
-    if (!sequence_open(&q, pf, user, ppp)) return 0;
-    for (f = 0; f < 10; f++) {
-        float centre[2];
-        rendercache_camera cam = sequence_step(&q, f);
-        uint32_t n = 0, i, aged = 0;
-        rendercache_begin_frame(q.rc, &cam);
-        rendercache_request(q.rc, g_req, f == 0 ? SEQUENCE_W * SEQUENCE_H : 900, &n);
-        for (i = 0; i < n; i++) shade(&q.s, &g_req[i], &g_samples[i]);
-        rendercache_insert(q.rc, g_samples, n, NULL);
-        centre[0] = -3.0f + 0.6f * (float)f;
-        centre[1] = 1.0f - 0.2f * (float)f;
-        CHECK_EQ_INT(rendercache_invalidate_where(q.rc, near_centre, centre, &aged), RENDERCACHE_OK);
-        CHECK(aged > 0);
-        q.hash = hash_bytes(q.hash, &aged, sizeof aged);
-        q.hash = hash_frame(q.hash, q.rc, n, SEQUENCE_W, SEQUENCE_H);
-    }
-    rendercache_destroy(q.rc);
-    return q.hash;
-}
+   insertion rendercache_invalidate_where (next_frame: its _next_frame
+   form, where the walkthrough calls it, before the next begin_frame) over
+   a disc of the wall that moves. Returns a hash of the requests, images
+   and priorities as each begin_frame ranked them, and of the aged counts
+   (the ageing shows in the next frames' priorities and requests). *after:
+   a hash of the same right after each call (the pixel pass's priorities);
+   *raised_frames: the frames whose priority image the call changed. */
+typedef struct where_run {
+    uint64_t after;
+    uint32_t raised_frames;
+} where_run;
 
-/* rendercache_invalidate_where asks the predicate in jobs over ranges of
-   slots and sets the priorities in jobs over ranges of pixels: the same
-   aged counts, priorities, requests and images on any thread count, with
-   the default cache and with 24 points per pixel (many slots per job). */
-static void test_parallel_invalidate_where_matches_serial(void)
-{
-    ex_pool *pool = ex_pool_create(3);
-    float ppp[2] = { 0.0f, 24.0f };
-    int k;
-    for (k = 0; k < 2; k++) {
-        uint64_t serial = run_where_sequence(NULL, NULL, ppp[k]);
-        CHECK(serial != 0);
-        CHECK(run_where_sequence(reversed_parallel_for, NULL, ppp[k]) == serial);
-        if (pool) CHECK(run_where_sequence(ex_pool_parallel_for, pool, ppp[k]) == serial);
-    }
-    ex_pool_destroy(pool);
-}
-
-/* rendercache_invalidate_where_next_frame, called where the walkthrough
-   calls it (after a frame's insertion, before the next begin_frame), ages
-   what rendercache_invalidate_where ages and leaves the shown frame's
-   priorities alone: run_where_sequence's walk with either, the same aged
-   counts, requests, images and priorities in every later frame (so it
-   ages: without the ageing the requests differ), while right after the
-   call the priority image is the one before it (so the pixel pass is
-   skipped; invalidate_where raises some of them in the same walk). On
-   any thread count. */
-static uint64_t run_where_next_sequence(void (*pf)(void *, rendercache_job_fn, void *, uint32_t), void *user,
-                                        int next_frame, uint32_t *raised_frames)
+static uint64_t run_where_sequence(void (*pf)(void *, rendercache_job_fn, void *, uint32_t), void *user, float ppp,
+                                   int next_frame, where_run *out)
 {
     static float before[SEQUENCE_W * SEQUENCE_H];
     sequence q;
     int f;
-    *raised_frames = 0;
-    if (!sequence_open(&q, pf, user, 0.0f)) return 0;
+    out->after = 1469598103934665603ull;
+    out->raised_frames = 0;
+    if (!sequence_open(&q, pf, user, ppp)) return 0;
     for (f = 0; f < 10; f++) {
         float centre[2];
         rendercache_camera cam = sequence_step(&q, f);
@@ -2583,27 +2541,57 @@ static uint64_t run_where_next_sequence(void (*pf)(void *, rendercache_job_fn, v
                                 : rendercache_invalidate_where(q.rc, near_centre, centre, &aged),
                      RENDERCACHE_OK);
         CHECK(aged > 0);
-        *raised_frames += memcmp(before, rendercache_priority_image(q.rc), sizeof before) != 0;
+        out->raised_frames += memcmp(before, rendercache_priority_image(q.rc), sizeof before) != 0;
+        out->after = hash_frame(out->after, q.rc, n, SEQUENCE_W, SEQUENCE_H);
         q.hash = hash_bytes(q.hash, &aged, sizeof aged);
     }
     rendercache_destroy(q.rc);
     return q.hash;
 }
 
+/* rendercache_invalidate_where asks the predicate in jobs over ranges of
+   slots and sets the priorities in jobs over ranges of pixels: the same
+   aged counts, priorities, requests and images on any thread count, with
+   the default cache and with 24 points per pixel (many slots per job). */
+static void test_parallel_invalidate_where_matches_serial(void)
+{
+    ex_pool *pool = ex_pool_create(3);
+    float ppp[2] = { 0.0f, 24.0f };
+    where_run a, b;
+    int k;
+    for (k = 0; k < 2; k++) {
+        uint64_t serial = run_where_sequence(NULL, NULL, ppp[k], 0, &a);
+        CHECK(serial != 0);
+        CHECK(run_where_sequence(reversed_parallel_for, NULL, ppp[k], 0, &b) == serial && b.after == a.after);
+        if (pool) CHECK(run_where_sequence(ex_pool_parallel_for, pool, ppp[k], 0, &b) == serial && b.after == a.after);
+    }
+    ex_pool_destroy(pool);
+}
+
+/* rendercache_invalidate_where_next_frame ages what
+   rendercache_invalidate_where ages and leaves the shown frame's
+   priorities alone: run_where_sequence's walk with either, the same aged
+   counts, requests, images and priorities in every later frame (so it
+   ages: without the ageing the requests differ), while right after the
+   call the priority image is the one before it (so the pixel pass is
+   skipped; invalidate_where raises some of them in the same walk). On
+   any thread count. */
 static void test_invalidate_where_next_frame_matches(void)
 {
     ex_pool *pool = ex_pool_create(3);
-    uint32_t raised = 0, untouched = 0, aged = 7;
-    uint64_t now = run_where_next_sequence(NULL, NULL, 0, &raised);
-    uint64_t next = run_where_next_sequence(NULL, NULL, 1, &untouched);
+    uint32_t aged = 7;
+    where_run a, b;
+    uint64_t now = run_where_sequence(NULL, NULL, 0.0f, 0, &a);
+    uint64_t next = run_where_sequence(NULL, NULL, 0.0f, 1, &b);
     rendercache *rc = create_with(NULL, NULL, 0.0f, 8, 8);
     CHECK(now != 0);
-    CHECK(raised > 0);
-    CHECK_EQ_INT(untouched, 0);
+    CHECK(a.raised_frames > 0);
+    CHECK_EQ_INT(b.raised_frames, 0);
     CHECK(next == now);
-    CHECK(run_where_next_sequence(reversed_parallel_for, NULL, 1, &untouched) == now);
-    if (pool) CHECK(run_where_next_sequence(ex_pool_parallel_for, pool, 1, &untouched) == now);
-    CHECK_EQ_INT(untouched, 0);
+    CHECK(run_where_sequence(reversed_parallel_for, NULL, 0.0f, 1, &b) == now);
+    CHECK_EQ_INT(b.raised_frames, 0);
+    if (pool) CHECK(run_where_sequence(ex_pool_parallel_for, pool, 0.0f, 1, &b) == now);
+    CHECK_EQ_INT(b.raised_frames, 0);
     CHECK_EQ_INT(rendercache_invalidate_where_next_frame(NULL, near_centre, NULL, &aged), RENDERCACHE_ERROR_INVALID_ARGUMENT);
     CHECK_EQ_INT(aged, 0);
     if (rc) CHECK_EQ_INT(rendercache_invalidate_where_next_frame(rc, NULL, NULL, NULL), RENDERCACHE_ERROR_INVALID_ARGUMENT);
