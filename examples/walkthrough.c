@@ -55,7 +55,9 @@
    of the displayed range. With --converged N frames N-1, 2N-1, ... are also
    rendered converged, twice with other random numbers, and the table shows
    their LRMS against a converged render with its own noise taken out
-   (wt_converged_lrms; slow: 2 x 432 rays a pixel). --help lists the options.
+   (wt_converged_lrms; slow: 2 x 432 rays a pixel, kept in the
+   precompute cache, so a second run of the same walk renders only its
+   frames). --help lists the options.
 
    --scene daylight walks the house by day (building_1k_daylight.*:
    glass in the windows, lamps off, a sky named by its layout; every mode:

@@ -654,6 +654,50 @@ done:
     free(c3);
 }
 
+/* With the precompute cache on, wt_converged_lrms keeps its two converged
+   renders there (one file per camera and time) and reads them back: a
+   pair stored under the frame's key that are both the frame itself must
+   make the frame read 0, which a render made again (one render's noise,
+   about 0.035 here) would not; another time makes another file. */
+static void test_converged_renders_cached(void)
+{
+    wt_options o = small_options(WT_MODE_RAYTRACE);
+    wt_world *w = NULL;
+    char dir[256], err[512];
+    const size_t n = 3 * (size_t)REF_W * REF_H;
+    float *frame = (float *)malloc(sizeof(float) * n), *pair = (float *)malloc(sizeof(float) * 2 * n), e;
+    double t, first = -1.0, again = -1.0, stored = -1.0;
+    rendercache_camera c;
+    int made = 0;
+    if (!CHECK(frame && pair && (made = make_temp_dir(dir, sizeof dir)) != 0)) goto done;
+    o.cache_dir = dir;
+    o.use_cache = 1;
+    if (!CHECK(wt_world_create(&o, &w, err, sizeof err) == 0)) goto done;
+    t = wt_frame_time(&o, 7);
+    c = wt_camera(&w->opt, t, REF_W, REF_H);
+    if (!CHECK(wt__render_converged(w, &c, t, 2, 1, 0xABCDEu, frame) == 0)) goto done;   /* a noisy frame */
+    e = wt_exposure(&o, frame, 0.0f);
+    CHECK(wt_converged_lrms(w, &c, t, frame, e, &first) == 0 && first > 0.0);
+    CHECK_EQ_INT(count_files(dir, "^walkthrough-converged-.*bin$"), 1);
+    CHECK(wt_converged_lrms(w, &c, t, frame, e, &again) == 0 && again == first);   /* read back: the same figure */
+    memcpy(pair, frame, sizeof(float) * n);
+    memcpy(pair + n, frame, sizeof(float) * n);
+    CHECK(wt_cache_store(dir, "converged", wt__converged_key(w, &c, t), pair, sizeof(float) * 2 * n, err, sizeof err) == 0);
+    CHECK(wt_converged_lrms(w, &c, t, frame, e, &stored) == 0);
+    test_note("against converged renders %.4f, read back %.4f, against the frame stored as both %.4f", first, again, stored);
+    CHECK(stored == 0.0);
+    t = wt_frame_time(&o, 8);
+    c = wt_camera(&w->opt, t, REF_W, REF_H);
+    CHECK(wt_converged_lrms(w, &c, t, frame, e, &again) == 0);
+    CHECK_EQ_INT(count_files(dir, "^walkthrough-converged-.*bin$"), 2);
+    CHECK_EQ_INT(count_files(dir, "tmp[0-9]*$"), 0);
+done:
+    wt_world_destroy(w);
+    if (made) remove_dir(dir);
+    free(frame);
+    free(pair);
+}
+
 /* A route's view space (ex_baseviews_desc.route, the house's walk) on a
    synthetic scene with known answers: the view at time t stands at
    (t, 0, 0), and its id image shows object 1 on a share
@@ -1081,6 +1125,7 @@ int main(int argc, char **argv)
     RUN(test_threads);
     RUN(test_raytrace_against_converged);
     RUN(test_converged_lrms_takes_out_the_noise);
+    RUN(test_converged_renders_cached);
     RUN(test_baseviews_route);
     RUN(test_raytrace_trail_ageing);
     RUN(test_baseviews_no_ghost_shadows);

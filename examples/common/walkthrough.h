@@ -380,7 +380,8 @@ EX_FN void wt_usage(FILE *f)
           "  --exposure E         exposure before the filmic curve (default: automatic per frame)\n"
           "  --reference          also trace every frame in full and print the LRMS error\n"
           "  --converged N        also render frames N-1, 2N-1, ... converged (slow) and print the\n"
-          "                       LRMS error against them, their own noise taken out\n"
+          "                       LRMS error against them, their own noise taken out (kept in the\n"
+          "                       precompute cache: a second run renders only its frames)\n"
           "  --no-frames          do not write PNG frames\n"
           "  --quiet              no progress bars or messages, only the timing table\n"
           "  --help               this text\n", f);
@@ -3600,6 +3601,72 @@ EX_FN int wt_display_lrms(const float *reference, const float *image, int width,
     return result;
 }
 
+/* The two converged renders of camera c at time t that wt_converged_lrms
+   compares with (WT_CONVERGED_STRATA, WT_CONVERGED_LIGHT_SAMPLES, two
+   streams), into c1 and c2 (3 x width x height floats each). They cost
+   2 x 432 rays a pixel and depend on nothing a frame's renderer chooses,
+   so with the precompute cache on (opt.use_cache) they are kept in it,
+   keyed by what they depend on: the scene, the bunny's pose at t and its
+   contact shadow, the camera, the gathers, the shading model's version and their own
+   parameters. A second measure of a walk then renders only its frames.
+   WT_CONVERGED_VERSION changes when what the shading model converges to
+   changes (a new term, another BRDF), not when only its sampling does: an
+   unbiased sampler converges to the same picture. Returns 0, or -1 when
+   out of memory. */
+#define WT_CONVERGED_STRATA 12         /* as the tests' converged renders (tests/test_walkthrough.c) */
+#define WT_CONVERGED_LIGHT_SAMPLES 32
+#define WT_CONVERGED_VERSION 1u
+
+static uint64_t wt__converged_key(const wt_world *w, const rendercache_camera *c, double t)
+{
+    uint64_t h = wt_hash_str(w->scene_hash, "converged"), bits;
+    float pose[12];
+    int k;
+    h = wt_hash_u64(h, WT_CONVERGED_VERSION);
+    h = wt_hash_u64(h, LIGHTVEC_VERSION_MAJOR * 10000u + LIGHTVEC_VERSION_MINOR * 100u + LIGHTVEC_VERSION_PATCH);
+    h = wt_hash_u64(h, w->opt.seed);
+    h = wt_hash_u64(h, (uint64_t)w->static_gather.bounces << 32 | w->bunny_gather.bounces);
+    h = wt_hash_u64(h, (uint64_t)w->opt.bunny_shadow);
+    wt_bunny_transform(w, t, pose);
+    for (k = 0; k < 12; k++) h = wt_hash_f32(h, pose[k]);
+    h = wt_hash_u64(h, (uint64_t)c->kind);
+    for (k = 0; k < 3; k++) h = wt_hash_f32(wt_hash_f32(wt_hash_f32(h, c->eye[k]), c->look_at[k]), c->up[k]);
+    h = wt_hash_f32(h, c->vfov_degrees);
+    h = wt_hash_u64(h, (uint64_t)c->width << 32 | c->height);
+    memcpy(&bits, &t, sizeof bits);
+    h = wt_hash_u64(h, bits);
+    h = wt_hash_u64(h, WT_CONVERGED_STRATA);
+    h = wt_hash_u64(h, WT_CONVERGED_LIGHT_SAMPLES);
+    return wt_hash_u64(h, WT__CONVERGED_STREAM);
+}
+
+static int wt__converged_pair(wt_world *w, const rendercache_camera *c, double t, float *c1, float *c2)
+{
+    const wt_options *o = &w->opt;
+    size_t n = 3 * (size_t)c->width * (size_t)c->height, size = 0;
+    uint64_t key = wt__converged_key(w, c, t);
+    void *data = NULL;
+    char err[256];
+    if (o->use_cache && wt_cache_load(o->cache_dir, "converged", key, &data, &size) == 1 &&
+        size == 2 * n * sizeof(float)) {
+        memcpy(c1, data, n * sizeof(float));
+        memcpy(c2, (const float *)data + n, n * sizeof(float));
+        free(data);
+        return 0;
+    }
+    free(data);   /* none, damaged or of another size: rendered again */
+    if (wt__render_converged(w, c, t, WT_CONVERGED_STRATA, WT_CONVERGED_LIGHT_SAMPLES, WT__CONVERGED_STREAM, c1) != 0 ||
+        wt__render_converged(w, c, t, WT_CONVERGED_STRATA, WT_CONVERGED_LIGHT_SAMPLES, WT__CONVERGED_STREAM - 1u, c2) != 0)
+        return -1;
+    if (o->use_cache && (data = malloc(2 * n * sizeof(float))) != NULL) {   /* a failed store only costs time later */
+        memcpy(data, c1, n * sizeof(float));
+        memcpy((float *)data + n, c2, n * sizeof(float));
+        wt_cache_store(o->cache_dir, "converged", key, data, 2 * n * sizeof(float), err, sizeof err);
+        free(data);
+    }
+    return 0;
+}
+
 /* The LRMS of a displayed frame (rgb, shown at `exposure`) against a
    converged render with that render's own noise taken out: issue 19's
    measure (--converged). A converged render (WT_CONVERGED_STRATA,
@@ -3608,10 +3675,9 @@ EX_FN int wt_display_lrms(const float *reference, const float *image, int width,
    with Cm their mean, independent noise gives
    E[LRMS(Cm, frame)^2] = e^2 + s^2 / 2 and E[LRMS(C1, C2)^2] = 2 s^2, s one
    render's noise: e^2 = LRMS(Cm, frame)^2 - LRMS(C1, C2)^2 / 4 (0 if the
-   noise's estimate exceeds it). Camera c and time t are the frame's.
-   Returns 0, or -1 when out of memory. */
-#define WT_CONVERGED_STRATA 12         /* as the tests' converged renders (tests/test_walkthrough.c) */
-#define WT_CONVERGED_LIGHT_SAMPLES 32
+   noise's estimate exceeds it). Camera c and time t are the frame's; the
+   two renders come from the precompute cache when it holds them
+   (wt__converged_pair). Returns 0, or -1 when out of memory. */
 EX_FN int wt_converged_lrms(wt_world *w, const rendercache_camera *c, double t, const float *rgb, float exposure,
                             double *lrms)
 {
@@ -3619,9 +3685,7 @@ EX_FN int wt_converged_lrms(wt_world *w, const rendercache_camera *c, double t, 
     float *c1 = (float *)malloc(sizeof(float) * n), *c2 = (float *)malloc(sizeof(float) * n);
     double to_mean = -1.0, apart = -1.0;
     int result = -1;
-    if (c1 && c2 &&
-        wt__render_converged(w, c, t, WT_CONVERGED_STRATA, WT_CONVERGED_LIGHT_SAMPLES, WT__CONVERGED_STREAM, c1) == 0 &&
-        wt__render_converged(w, c, t, WT_CONVERGED_STRATA, WT_CONVERGED_LIGHT_SAMPLES, WT__CONVERGED_STREAM - 1u, c2) == 0 &&
+    if (c1 && c2 && wt__converged_pair(w, c, t, c1, c2) == 0 &&
         wt_display_lrms(c1, c2, (int)c->width, (int)c->height, exposure, &apart) == 0) {
         for (i = 0; i < n; i++) c1[i] = 0.5f * (c1[i] + c2[i]);
         if (wt_display_lrms(c1, rgb, (int)c->width, (int)c->height, exposure, &to_mean) == 0) {
