@@ -867,6 +867,78 @@ done:
     free(rgb);
 }
 
+/* The view lobe of a glossy point that shows no highlight (wt__view_lobe,
+   wt__highlight_lobe): a wood-floor point 1.5 m beside a ceiling lamp's
+   panel, shaded from 8 m away at a grazing angle (its mirror direction
+   0.8 rad below the lamp), then seen from where the lamp's mirror image
+   falls on it. The render cache ages it by the turn between the two eyes
+   over its lobe (rendercache__view_age); at one lobe it ranks with the
+   holes. By the glossy share it showed (0) alone it had no lobe and never
+   aged for the view: a dark blotch in the house's frame 29. It must be
+   stale there, and still fresh after a small turn (0.1 rad); the same
+   point in the lamp's shadow, and a matte one, have no lobe. */
+static void test_view_lobe_of_highlights(void)
+{
+    static const lightvec_material wood = { { 0.45f, 0.33f, 0.22f }, { 0.06f, 0.06f, 0.06f }, 40.0f, { 0, 0, 0 }, { 0, 0, 0 } };
+    static const lightvec_material plaster = { { 0.72f, 0.71f, 0.68f }, { 0, 0, 0 }, 0.0f, { 0, 0, 0 }, { 0, 0, 0 } };
+    const float far_eye[3] = { 9.5f, 1.6f, 0.0f }, omega_lamp = 0.25f * (2.5f / sqrtf(8.5f)) / 8.5f;
+    float near_eye[3], to_far[3], to_near[3], lamp_dir[3], turn, lobe, len;
+    wt_world w;
+    wt_light lamp;
+    wt_point p;
+    int k;
+    memset(&w, 0, sizeof w);
+    memset(&lamp, 0, sizeof lamp);
+    lamp.area = 0.25f;   /* a 0.5 m square panel 2.5 m up, facing down */
+    lamp.normal[1] = -1.0f;
+    lamp.point[1] = lamp.centre[1] = 2.5f;
+    lamp.radius = 0.3536f;
+    lamp.ke[0] = 20.0f;
+    lamp.ke[1] = 19.0f;
+    lamp.ke[2] = 17.0f;
+    w.lights = &lamp;
+    w.light_count = 1;   /* no grid: every light counts */
+    memset(&p, 0, sizeof p);
+    p.object = WT_OBJECT_OFFICE;
+    p.pos[0] = 1.5f;
+    p.normal[1] = 1.0f;
+    for (k = 0; k < 3; k++) {
+        p.org[k] = far_eye[k];
+        p.dir[k] = p.pos[k] - far_eye[k];
+        lamp_dir[k] = lamp.centre[k] - p.pos[k];
+    }
+    len = sqrtf(ex__dot(p.dir, p.dir));
+    for (k = 0; k < 3; k++) {
+        p.dir[k] /= len;
+        /* its diffuse light from the lamp, Kd / pi L Omega cos_x, and some indirect light; no highlight */
+        p.direct[k] = wood.diffuse[k] / WT_PI * lamp.ke[k] * omega_lamp * (2.5f / sqrtf(8.5f));
+        p.indirect[k] = 0.3f * p.direct[k];
+        p.through[k] = 1.0f;
+    }
+    p.contact = 1.0f;
+    wt__point_radiance(&p);
+    CHECK(p.view_share == 0.0f);
+    /* the eye whose mirror direction points at the lamp: the lamp's direction mirrored in the floor */
+    for (k = 0; k < 3; k++) near_eye[k] = p.pos[k] + (k == 1 ? 0.6f : -0.6f) * lamp_dir[k];
+    for (k = 0; k < 3; k++) {
+        to_far[k] = far_eye[k] - p.pos[k];
+        to_near[k] = near_eye[k] - p.pos[k];
+    }
+    turn = acosf(ex__dot(to_far, to_near) / sqrtf(ex__dot(to_far, to_far) * ex__dot(to_near, to_near)));
+    lobe = wt__view_lobe(&w, &p, &wood);
+    test_note("a wood-floor point shaded at a grazing angle: lobe %.3f rad; the turn to the lamp's mirror image %.3f rad, "
+              "%.2f lobes", lobe, turn, lobe > 0.0f ? turn / lobe : 0.0f);
+    CHECK_MSG(lobe > 0.0f && isfinite(lobe), "lobe %g", lobe);
+    CHECK_MSG(turn >= lobe, "turn %g, lobe %g: not stale under the highlight", turn, lobe);
+    CHECK_MSG(0.1f <= 0.5f * lobe, "lobe %g: stale after a small turn", lobe);
+    CHECK(wt__view_lobe(&w, &p, &plaster) == 0.0f);   /* matte: view-independent */
+    for (k = 0; k < 3; k++) p.direct[k] = 0.0f;        /* in the lamp's shadow: no highlight can come */
+    wt__point_radiance(&p);
+    CHECK(wt__view_lobe(&w, &p, &wood) == 0.0f);
+    p.object = RENDERCACHE_MISS;
+    CHECK(wt__view_lobe(&w, &p, &wood) == 0.0f);      /* the sky is still */
+}
+
 /* Ghost shadows in the baseviews frames (issue 19): the floor the bunny
    shadowed at key time 0 must not stay dark once it has left. Pixels: the
    office pixels of frame GHOST_FRAME that a converged render of the
@@ -1128,6 +1200,7 @@ int main(int argc, char **argv)
     RUN(test_converged_renders_cached);
     RUN(test_baseviews_route);
     RUN(test_raytrace_trail_ageing);
+    RUN(test_view_lobe_of_highlights);
     RUN(test_baseviews_no_ghost_shadows);
     RUN(test_bunny_darkens_in_frames);
     RUN(test_bunny_darkens_in_volume);
