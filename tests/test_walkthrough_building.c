@@ -401,8 +401,8 @@ static void direct_at(const wt_world *w, const ex_trace_hit *h, const float dir[
    the grid's flags give the lights that reach it 10 % of the picks
    (measured 0.103). After 8 frames of 64 of the point's own estimates
    (4,096 shadow rays recorded and merged, as frames record theirs), they
-   get most (measured 0.86), the direct light's relative RMS noise there
-   falls (measured 2.50 -> 0.84) and its mean still agrees with sampling
+   get most (measured 0.70), the direct light's relative RMS noise there
+   falls (measured 2.49 -> 0.77) and its mean still agrees with sampling
    every light (4,096 estimates against 256 samples per light, within 4
    standard errors). Without the counts' merge, their use in the mixture
    or the recording, the share stays at 0.10 and the test fails. */

@@ -2487,11 +2487,25 @@ static float wt__light_importance(const wt_light *L, const float x[3], const flo
    them to the earlier frames' counts once the frame's trace is done.
    Integer sums by atomic adds: the same in any order, so the frames stay
    bit-identical on any thread count. Both flagged terms then weigh a
-   light by the share of its rays from the key that arrived, the flag
-   counting as WT__LEARN_PRIOR rays (wt__light_flag_weight): exactly the
-   flags while a key has no rays, so a first frame is unchanged, and a
-   light the grid missed gains picks once rays of the importance-alone
-   term reach it. Unbiased: a frame's picks read only counts merged
+   light by the square root of the share of its rays from the key that
+   arrived, the flag counting as WT__LEARN_PRIOR rays
+   (wt__light_flag_weight): exactly the flags while a key has no rays, so
+   a first frame is unchanged, and a light the grid missed gains picks
+   once rays of the importance-alone term reach it. The root because the
+   share is the key's average: where part of a cell sees a lamp and part
+   does not, the share itself took picks from the points that see it.
+   Measured (the direct light's relative RMS noise at 8 rays over 64 x 48
+   hits of a frame's view, 32 estimates each, counts recorded at 40 x 30
+   hits of every earlier frame of the walk; flags -> root of the share,
+   [the share itself, 1 once a ray arrived]): house frames 29, 59, 119,
+   269: 0.062, 0.074, 0.058, 0.111 -> 0.062, 0.069, 0.055, 0.089 [0.065,
+   0.068, 0.055, 0.104; 0.062, 0.072, 0.055, 0.089]; building_4k frames
+   15, 36, 60, 72: 0.120, 0.075, 0.073, 0.069 -> 0.115, 0.068, 0.069,
+   0.069 [0.115, 0.069, 0.076, 0.078; 0.115, 0.071, 0.069, 0.091]; the
+   office (every light flagged everywhere) frames 7, 23: 0.073, 0.045 ->
+   0.075, 0.046. At the floor point above: the two lamps that reach it
+   get 70 % of the picks after 4,096 recorded rays, and its noise falls
+   from 2.49 to 0.77 (test_light_learning). Unbiased: a frame's picks read only counts merged
    before it (frozen while it is traced), never the point's own rays (a
    sampler that chose its rays from the point's own samples, as an
    adaptive penumbra test does, would be biased), and the importance-alone
@@ -3039,7 +3053,7 @@ static float wt__radical_inverse(uint32_t i)
 static float wt__light_flag_weight(const float *seen, const uint16_t *learned, uint32_t e, int flag)
 {
     if (!learned) return seen[2 * e + flag];
-    return ((float)learned[2 * e + 1] + WT__LEARN_PRIOR * seen[2 * e + flag]) / ((float)learned[2 * e] + WT__LEARN_PRIOR);
+    return sqrtf(((float)learned[2 * e + 1] + WT__LEARN_PRIOR * seen[2 * e + flag]) / ((float)learned[2 * e] + WT__LEARN_PRIOR));
 }
 
 /* The defensive mixture's coefficients at x (the grid's comment), from
