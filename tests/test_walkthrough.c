@@ -338,23 +338,43 @@ static void test_reference_frames(void)
 
 /* Direct light by many-light sampling has the mean of sampling every light
    (tests/walkthrough_test.h): the office's lamp, at the hits of a 16 x 12
-   view of frame 0 and of the bunny under the desk. */
+   view of frame 0 and of the bunny under the desk; first with the grid's
+   flags alone, then with the counts that the 24 raytrace frames of the
+   walk learned (wt__light_learn_merge: the picks then depend on earlier
+   frames' shadow rays, never on the point's own). */
 static void test_direct_light_unbiased(void)
 {
     wt_options o = small_options(WT_MODE_RAYTRACE);
     wt_world *w = NULL;
+    wt_renderer *r = NULL;
+    wt_frame_stats st;
+    float *rgb = (float *)malloc(sizeof(float) * 3 * REF_W * REF_H);
     char err[512];
-    int i;
+    int i, f;
+    size_t counted = 0, j;
     o.light_samples = 8;
-    if (!CHECK(wt_world_create(&o, &w, err, sizeof err) == 0)) return;
-    for (i = 0; i < 2; i++) {
-        double sigmas = 0.0, noise[2], rays = 0.0, t = i ? time_under_desk() : 0.0;
-        double bias = direct_light_bias(w, t, 16, 12, 64, 4, &sigmas, noise, &rays);
-        test_note("office, t %.2f: many-light mean %.4f from every light's (%.1f sigma); relative RMS noise "
-                  "%.3f at 8 rays against %.3f at 4 rays per light (%.1f rays)", t, bias, sigmas, noise[0], noise[1], rays);
+    if (!CHECK(rgb && wt_world_create(&o, &w, err, sizeof err) == 0)) goto done;
+    for (i = 0; i < 4; i++) {
+        double sigmas = 0.0, noise[2], rays = 0.0, t = i % 2 ? time_under_desk() : 0.0, bias;
+        if (i == 2) {   /* the walk's frames: their shadow rays are counted */
+            if (!CHECK(w->learn_sides > 0 && wt_renderer_create(w, &r, err, sizeof err) == 0)) break;
+            for (f = 0; f < o.frames; f++)
+                if (!CHECK(wt_render_frame(r, f, rgb, &st) == 0)) goto done;
+            for (j = 0; j < (size_t)w->grid_dims[0] * w->grid_dims[1] * w->grid_dims[2] * w->learn_sides * w->light_count; j++)
+                counted += w->light_learned[2 * j] > 0;
+            CHECK(counted > 0);
+        }
+        bias = direct_light_bias(w, t, 16, 12, 64, 4, &sigmas, noise, &rays);
+        test_note("office, t %.2f%s: many-light mean %.4f from every light's (%.1f sigma); relative RMS noise "
+                  "%.3f at 8 rays against %.3f at 4 rays per light (%.1f rays)", t,
+                  i < 2 ? "" : ", learned counts", bias, sigmas, noise[0], noise[1], rays);
         CHECK_MSG(bias >= 0.0 && sigmas < 4.0, "office t %.2f: relative difference %.4f, %.1f sigma", t, bias, sigmas);
     }
+    test_note("%zu (key, light) pairs counted after the walk", counted);
+done:
+    wt_renderer_destroy(r);
     wt_world_destroy(w);
+    free(rgb);
 }
 
 /* The irradiance a convex planar polygon of unit radiance sends to x
@@ -559,7 +579,9 @@ static void test_threads(void)
    spread over the steps; 0.1862 with 1, which starves the holes of this
    fast walk). The frames are deterministic, so the bound 0.140 sits
    between 0.1278 and the two before, and fails when the steps' requests
-   are lost or take the whole budget. The issue's target (0.07) is not met:
+   are lost or take the whole budget (0.1311 once the light picks learned
+   from the frames' shadow rays, frames 0.099, 0.162, 0.124: their
+   requests are drawn anew). The issue's target (0.07) is not met:
    the bound guards against regressions. */
 #define CONVERGED_STRATA 12
 #define CONVERGED_LIGHT_SAMPLES 32

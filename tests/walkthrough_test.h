@@ -189,7 +189,7 @@ TEST__FN double direct_light_bias(wt_world *w, double t, int cols, int rows, int
                 float rgb[3], gloss[3];
                 int shadow = 0;
                 double l;
-                wt__direct(w, &h, dir, mat, &r, 1, rgb, gloss, &shadow);
+                wt__direct(w, &h, dir, mat, &r, 1, WT__LEARN_USE, rgb, gloss, &shadow);
                 l = luminance(rgb);
                 m1 += l;
                 m2 += l * l;
