@@ -146,7 +146,7 @@ static void write_sheet(run *u)
     char path[1024];
     int rows = (u->sheet_count + SHEET_COLUMNS - 1) / SHEET_COLUMNS, cols = u->sheet_count < SHEET_COLUMNS ? u->sheet_count : SHEET_COLUMNS;
     unsigned char *sheet;
-    if (u->sheet_count == 0) return;
+    if (u->sheet_count == 0 || !u->o.write_frames) return;   /* --no-frames: no PNG at all (the directory is not made) */
     sheet = (unsigned char *)malloc(3 * (size_t)u->sheet_cell_w * (size_t)u->sheet_cell_h * (size_t)(rows * cols));
     if (!sheet) return;
     ex_contact_sheet((const unsigned char *const *)u->sheet_cells, u->sheet_count, u->sheet_cell_w, u->sheet_cell_h,

@@ -382,7 +382,7 @@ EX_FN void wt_usage(FILE *f)
           "  --converged N        also render frames N-1, 2N-1, ... converged (slow) and print the\n"
           "                       LRMS error against them, their own noise taken out (kept in the\n"
           "                       precompute cache: a second run renders only its frames)\n"
-          "  --no-frames          do not write PNG frames\n"
+          "  --no-frames          do not write PNG frames or the contact sheet\n"
           "  --quiet              no progress bars or messages, only the timing table\n"
           "  --help               this text\n", f);
 }
