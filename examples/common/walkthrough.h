@@ -3788,6 +3788,16 @@ EX_FN int wt_display_lrms(const float *reference, const float *image, int width,
 #define WT_CONVERGED_LIGHT_SAMPLES 32
 #define WT_CONVERGED_VERSION 1u
 
+/* A camera's place and view in a hash: eye, look-at and up, axis by
+   axis, then the field of view (the precompute keys' paths and the
+   converged renders' keys). */
+static uint64_t wt__camera_hash(uint64_t h, const rendercache_camera *c)
+{
+    int k;
+    for (k = 0; k < 3; k++) h = wt_hash_f32(wt_hash_f32(wt_hash_f32(h, c->eye[k]), c->look_at[k]), c->up[k]);
+    return wt_hash_f32(h, c->vfov_degrees);
+}
+
 static uint64_t wt__converged_key(const wt_world *w, const rendercache_camera *c, double t)
 {
     uint64_t h = wt_hash_str(w->scene_hash, "converged"), bits;
@@ -3801,8 +3811,7 @@ static uint64_t wt__converged_key(const wt_world *w, const rendercache_camera *c
     wt_bunny_transform(w, t, pose);
     for (k = 0; k < 12; k++) h = wt_hash_f32(h, pose[k]);
     h = wt_hash_u64(h, (uint64_t)c->kind);
-    for (k = 0; k < 3; k++) h = wt_hash_f32(wt_hash_f32(wt_hash_f32(h, c->eye[k]), c->look_at[k]), c->up[k]);
-    h = wt_hash_f32(h, c->vfov_degrees);
+    h = wt__camera_hash(h, c);
     h = wt_hash_u64(h, (uint64_t)c->width << 32 | c->height);
     memcpy(&bits, &t, sizeof bits);
     h = wt_hash_u64(h, bits);
@@ -3962,8 +3971,7 @@ static uint64_t wt__path_hash(const wt_world *w, uint64_t h)
     int f, k;
     for (f = 0; f < w->opt.frames; f++) {
         rendercache_camera c = wt_camera(&w->opt, wt_frame_time(&w->opt, f), 8, 8);
-        for (k = 0; k < 3; k++) h = wt_hash_f32(wt_hash_f32(wt_hash_f32(h, c.eye[k]), c.look_at[k]), c.up[k]);
-        h = wt_hash_f32(h, c.vfov_degrees);
+        h = wt__camera_hash(h, &c);
     }
     for (f = 0; f <= 64; f++) {
         float m[12];
