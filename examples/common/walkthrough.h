@@ -3119,7 +3119,7 @@ static void wt__direct(const wt_world *w, const ex_trace_hit *h, const float dir
     const uint16_t *learned = NULL;
     uint32_t *record = NULL;
     float vn = -(dir[0] * h->normal[0] + dir[1] * h->normal[1] + dir[2] * h->normal[2]);
-    int n = w->opt.light_samples, s = 0, k;
+    int n = w->opt.light_samples, s = 0, k, recorded = 0;
     uint32_t e, last;
     size_t key = 0;
     rgb[0] = rgb[1] = rgb[2] = gloss[0] = gloss[1] = gloss[2] = 0.0f;
@@ -3156,10 +3156,11 @@ static void wt__direct(const wt_world *w, const ex_trace_hit *h, const float dir
         if (record && tried) {   /* integer sums: the same in any order (wt__light_learn_merge) */
             (void)__atomic_fetch_add(&record[2 * e], tried, __ATOMIC_RELAXED);
             (void)__atomic_fetch_add(&record[2 * e + 1], arrived, __ATOMIC_RELAXED);
-            __atomic_store_n(&w->learn_touched[key], (unsigned char)1, __ATOMIC_RELAXED);
+            recorded = 1;
         }
         below = above;
     }
+    if (recorded) __atomic_store_n(&w->learn_touched[key], (unsigned char)1, __ATOMIC_RELAXED);   /* once a point */
 }
 
 static float wt__luminance(const float c[3]) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; }
@@ -3772,21 +3773,9 @@ EX_FN int wt_display_lrms(const float *reference, const float *image, int width,
     return result;
 }
 
-/* The two converged renders of camera c at time t that wt_converged_lrms
-   compares with (WT_CONVERGED_STRATA, WT_CONVERGED_LIGHT_SAMPLES, two
-   streams), into c1 and c2 (3 x width x height floats each). They cost
-   2 x 432 rays a pixel and depend on nothing a frame's renderer chooses,
-   so with the precompute cache on (opt.use_cache) they are kept in it,
-   keyed by what they depend on: the scene, the bunny's pose at t and its
-   contact shadow, the camera, the gathers, the shading model's version and their own
-   parameters. A second measure of a walk then renders only its frames.
-   WT_CONVERGED_VERSION changes when what the shading model converges to
-   changes (a new term, another BRDF), not when only its sampling does: an
-   unbiased sampler converges to the same picture. Returns 0, or -1 when
-   out of memory. */
 #define WT_CONVERGED_STRATA 12         /* as the tests' converged renders (tests/test_walkthrough.c) */
 #define WT_CONVERGED_LIGHT_SAMPLES 32
-#define WT_CONVERGED_VERSION 1u
+#define WT_CONVERGED_VERSION 1u        /* of what the shading converges to (wt__converged_pair) */
 
 /* A camera's place and view in a hash: eye, look-at and up, axis by
    axis, then the field of view (the precompute keys' paths and the
@@ -3820,6 +3809,18 @@ static uint64_t wt__converged_key(const wt_world *w, const rendercache_camera *c
     return wt_hash_u64(h, WT__CONVERGED_STREAM);
 }
 
+/* The two converged renders of camera c at time t that wt_converged_lrms
+   compares with (WT_CONVERGED_STRATA, WT_CONVERGED_LIGHT_SAMPLES, two
+   streams), into c1 and c2 (3 x width x height floats each). They cost
+   2 x 432 rays a pixel and depend on nothing a frame's renderer chooses,
+   so with the precompute cache on (opt.use_cache) they are kept in it,
+   keyed by what they depend on: the scene, the bunny's pose at t and its
+   contact shadow, the camera, the gathers, the shading model's version and their own
+   parameters. A second measure of a walk then renders only its frames.
+   WT_CONVERGED_VERSION changes when what the shading model converges to
+   changes (a new term, another BRDF), not when only its sampling does: an
+   unbiased sampler converges to the same picture. Returns 0, or -1 when
+   out of memory. */
 static int wt__converged_pair(wt_world *w, const rendercache_camera *c, double t, float *c1, float *c2)
 {
     const wt_options *o = &w->opt;
