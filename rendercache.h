@@ -1873,8 +1873,8 @@ typedef uint32_t (*rendercache__cover_fn)(const void *src, uint32_t job, uint32_
 /* One job's z-buffer: per pixel the key (depth bits << 32 | element; depths
    are non-negative, so their bits order as the values do, and one compare
    settles depth and then index) and the payload. One random access per test.
-   Keys have one more entry, after the last pixel, where elements that miss
-   the image go when the test runs without a branch. */
+   Keys have one more entry, after the last pixel, where the z-test's
+   prefetch of an element that misses the image points. */
 typedef struct rendercache__zbuffer {
     uint64_t *key;
     float *payload;
@@ -2033,9 +2033,14 @@ static void rendercache__zbuffer_test(rendercache__zbuffer *zb, uint32_t p, floa
 }
 
 /* The z-test of n elements (from element first on) without payload:
-   written without branches, since which of two elements in a pixel is
-   nearer, and whether an element lands at all, are coin tosses for a
-   branch predictor. The keys of the elements RENDERCACHE__KEY_AHEAD further
+   without a branch on which of two elements in a pixel is nearer (a coin
+   toss for a branch predictor). Elements that miss the image are skipped:
+   they come in runs (a range's points outside the image at its last
+   re-sort are its last chunk; a third of the points at 512x512), which a
+   branch predicts. (Without the branch they went through the key past the
+   last pixel, one chain of loads and stores through it: the projection
+   took 3-5 % longer, bench_rendercache 512x512 on one thread.)
+   The keys of the elements RENDERCACHE__KEY_AHEAD further
    on are asked for ahead of time: the points inserted since their range's
    last re-sort, a third of them, land anywhere in the image, and the keys
    of a large image do not stay in cache (perf at 512x512: -20 % of the
@@ -2045,15 +2050,16 @@ static uint32_t rendercache__zbuffer_keys(uint64_t *key, uint32_t sink, const ui
 {
     uint32_t i, landed = 0;
     for (i = 0; i < n; i++) {
-        uint32_t p = pix[i] == RENDERCACHE__NONE ? sink : pix[i];
+        uint32_t p = pix[i];
         uint64_t k = rendercache__key(depth[i], first + i), old;
         if (i + RENDERCACHE__KEY_AHEAD < n) {
             const uint32_t q = pix[i + RENDERCACHE__KEY_AHEAD];
             RENDERCACHE__PREFETCH_WRITE(&key[q == RENDERCACHE__NONE ? sink : q]);
         }
+        if (p == RENDERCACHE__NONE) continue;
         old = key[p];
         key[p] = k < old ? k : old;
-        landed += pix[i] != RENDERCACHE__NONE;
+        landed++;
     }
     return landed;
 }
@@ -4002,7 +4008,8 @@ static RENDERCACHE__INLINE void rendercache__count_add(unsigned char *o, uint32_
    image order): so the misses (a third of the points, in runs) take the
    sinks in turn, and a pair in one cell adds 2 at once (the second point
    then counts in a sink). Before, the misses' chain in one byte took a
-   quarter of the count's time, and pairs in one cell a fifth. */
+   quarter of the count's time, and pairs in one cell a fifth. A pair of
+   misses counts nowhere (a branch, predicted in the misses' runs). */
 static void rendercache__count_cells(const void *pr, uint32_t j, uint32_t begin, uint32_t end)
 {
     const rendercache *rc = ((const rendercache__projector *)pr)->rc;
@@ -4018,6 +4025,7 @@ static void rendercache__count_cells(const void *pr, uint32_t j, uint32_t begin,
             const uint32_t s0 = cells + (i & (RENDERCACHE__CELL_SINKS - 1u)), s1 = s0 + 1u;   /* (SINKS even) */
             const uint32_t c0 = cell[i] == RENDERCACHE__NONE ? s0 : cell[i];
             const uint32_t c1 = cell[i + 1] == RENDERCACHE__NONE ? s1 : cell[i + 1], same = c0 == c1;
+            if ((cell[i] & cell[i + 1]) == RENDERCACHE__NONE) continue;   /* two misses: nothing to count */
             rendercache__count_add(&occ[c0], 1u + same);
             rendercache__count_add(&occ[same ? s1 : c1], 1u);
         }

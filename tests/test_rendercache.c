@@ -1074,18 +1074,22 @@ static void test_predictive_sampling_fills_next_holes(void)
    in turn), against a count of its own, one point at a time: equal up to
    255, serial and on a pool. A camera beside the first sees most points
    in runs of one cell (the cache holds them in scan order) and misses the
-   rest; one far back at the image's edge puts hundreds in a cell. */
+   rest; one far back at the image's edge puts hundreds in a cell; the
+   first one rolled misses where pairs of slots hold a miss and a point
+   (pairs of misses are skipped). */
 static void test_cell_count_matches_one_by_one(void)
 {
     const uint32_t w = 96, h = 80;
     rendercache_camera a = make_camera(0, 0, 0, 0, 0, 10, w, h);
-    rendercache_camera next[2];
+    rendercache_camera next[3];
     ex_pool *pool = ex_pool_create(3);
     scene s;
     int k, t;
     memset(&s, 0, sizeof s);
     next[0] = make_camera(2.0f, 0.0f, 0.0f, 2.0f, 0.0f, 10.0f, w, h);
     next[1] = make_camera(0.0f, 0.0f, -200.0f, -140.0f, 0.0f, 10.0f, w, h);
+    next[2] = make_camera(2.0f, 0.0f, 0.0f, 2.0f, 0.0f, 10.0f, w, h);   /* rolled: the misses' edge slants, so */
+    next[2].up[0] = 0.3f;                                                /* pairs of a miss and a point occur */
     for (t = 0; t < 2; t++) {
         rendercache_desc d = make_desc(w, h);
         rendercache *rc;
@@ -1094,10 +1098,10 @@ static void test_cell_count_matches_one_by_one(void)
         if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) break;
         converge(rc, &s, &a);
         CHECK_EQ_INT(rendercache_begin_frame(rc, &a), RENDERCACHE_OK);
-        for (k = 0; k < 2; k++) {
+        for (k = 0; k < 3; k++) {
             rendercache__projector pr;
             uint32_t *want = (uint32_t *)calloc(rc->cell_count, sizeof *want), slot, c, misses = 0, wrong = 0,
-                     middling = 0, full = 0;
+                     middling = 0, full = 0, mixed = 0, even_missed = 0;
             if (!CHECK(want != NULL)) break;
             CHECK_EQ_INT(rendercache_predict(rc, &next[k]), RENDERCACHE_OK);
             rendercache__projector_init(&pr, rc, &rc->predicted, rc->obj_predicted, RENDERCACHE__CELL_SHIFT);
@@ -1108,6 +1112,8 @@ static void test_cell_count_matches_one_by_one(void)
                 rendercache__project_points(&pr, slot, slot + 1, &cell, &d2);
                 if (cell == RENDERCACHE__NONE) misses++;
                 else want[cell]++;
+                if (slot & 1u) mixed += even_missed != (cell == RENDERCACHE__NONE);   /* slots 2i, 2i + 1 */
+                else even_missed = cell == RENDERCACHE__NONE;
             }
             for (c = 0; c < rc->cell_count; c++) {
                 wrong += rc->occupancy[c] != (want[c] < 255u ? want[c] : 255u);
@@ -1117,10 +1123,76 @@ static void test_cell_count_matches_one_by_one(void)
             CHECK_EQ_INT(wrong, 0);
             if (k == 0) CHECK(misses > 1000 && middling > 100);
             if (k == 1) CHECK(misses > 100 && full > 0);
-            test_note("cell count, %s, camera %d: %u misses, %u cells of 2-254 points, %u of more; %u wrong",
-                      t ? "pool" : "serial", k, misses, middling, full, wrong);
+            if (k == 2) CHECK(misses > 1000 && mixed > 20);
+            test_note("cell count, %s, camera %d: %u misses, %u cells of 2-254 points, %u of more, %u pairs of a miss"
+                      " and a point; %u wrong", t ? "pool" : "serial", k, misses, middling, full, mixed, wrong);
             free(want);
         }
+        rendercache_destroy(rc);
+    }
+    ex_pool_destroy(pool);
+}
+
+/* The projection's z-buffer against one of its own: every slot projected
+   alone through the same projector, the least key of each pixel, and the
+   count of the points that land. The camera turns away from the points,
+   so that many miss the image (the z-test skips them) and many pixels
+   take two or more; serial (rendercache__zbuffer_keys) and on a 3-worker
+   pool (the jobs' own pixels and the points they hand over). */
+static void test_zbuffer_keys_match_one_by_one(void)
+{
+    const uint32_t w = 96, h = 80, n = w * h;
+    rendercache_camera a = make_camera(0, 0, 0, 0, 0, 10, w, h);
+    rendercache_camera b = make_camera(0, 0, 0, 4, 0, 10, w, h), c = make_camera(0.5f, 0, -1, 7, 0, 10, w, h);
+    ex_pool *pool = ex_pool_create(3);
+    scene s;
+    int t;
+    memset(&s, 0, sizeof s);
+    for (t = 0; t < 2; t++) {
+        rendercache_desc d = make_desc(w, h);
+        rendercache *rc;
+        rendercache__projector pr;
+        uint64_t *want = (uint64_t *)malloc(sizeof *want * n);
+        uint32_t *hits = (uint32_t *)calloc(n, sizeof *hits), slot, p, landed = 0, misses = 0, wrong = 0, shared = 0;
+        d.parallel_for = t && pool ? ex_pool_parallel_for : NULL;
+        d.parallel_user = pool;
+        if (!CHECK(want && hits) || !CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) {
+            free(want);
+            free(hits);
+            break;
+        }
+        converge(rc, &s, &a);
+        run_frame(rc, &s, &b, n / 4);
+        CHECK_EQ_INT(rendercache_begin_frame(rc, &c), RENDERCACHE_OK);
+        rendercache__splat_points(rc, &rc->view, rc->obj_camera, NULL, NULL);   /* the frame's z-buffer again */
+        rendercache__projector_init(&pr, rc, &rc->view, rc->obj_camera, 0);
+        for (p = 0; p < n; p++) want[p] = RENDERCACHE__EMPTY_KEY;
+        for (slot = 0; slot < rc->capacity; slot++) {
+            uint32_t pix;
+            float d2;
+            uint64_t k;
+            if (rc->geo.object[slot] == RENDERCACHE__FREE_SLOT) continue;
+            rendercache__project_points(&pr, slot, slot + 1, &pix, &d2);
+            if (pix == RENDERCACHE__NONE) {
+                misses++;
+                continue;
+            }
+            landed++;
+            hits[pix]++;
+            k = rendercache__key(d2, slot);
+            if (k < want[pix]) want[pix] = k;
+        }
+        for (p = 0; p < n; p++) {
+            wrong += rc->splat.zb[0].key[p] != want[p];
+            shared += hits[p] >= 2;
+        }
+        CHECK_EQ_INT(wrong, 0);
+        CHECK_EQ_INT(rc->splat.projected, landed);
+        CHECK(misses > 1000 && shared > 500);
+        test_note("z-buffer, %s: %u points landed, %u missed, %u pixels of 2 or more; %u keys wrong",
+                  t ? "pool" : "serial", landed, misses, shared, wrong);
+        free(want);
+        free(hits);
         rendercache_destroy(rc);
     }
     ex_pool_destroy(pool);
@@ -2941,6 +3013,7 @@ int main(int argc, char **argv)
     RUN(test_misses_are_points_at_infinity);
     RUN(test_predictive_sampling_fills_next_holes);
     RUN(test_cell_count_matches_one_by_one);
+    RUN(test_zbuffer_keys_match_one_by_one);
     RUN(test_eviction_spares_visible_points);
     RUN(test_slow_turn_keeps_pixels_covered_by_points);
     RUN(test_late_samples_land_where_they_were_seen);
