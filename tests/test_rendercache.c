@@ -1133,6 +1133,60 @@ static void test_cell_count_matches_one_by_one(void)
     ex_pool_destroy(pool);
 }
 
+/* Batches of points of several objects (each through its own matrix, a
+   vectorised pass per object, up to RENDERCACHE__OBJECT_PASSES, then
+   point by point) against each point projected alone, into pixels and
+   into the prediction's cells: the same pixel or cell and depth. Seven
+   objects moved apart, background points and free slots, mixed in runs
+   of 1 to 5 slots, in batches of 256 and of odd sizes. */
+static void test_mixed_batches_project_as_one_by_one(void)
+{
+    const uint32_t w = 64, h = 48, objects = 7;
+    rendercache_camera cam = make_camera(0, 0, 0, 0.5f, 0.2f, 10, w, h);
+    rendercache_desc d = make_desc(w, h);
+    rendercache *rc;
+    uint32_t o, i, shift, wrong = 0, landed = 0, runs = 0, mixed = 0;
+    if (!CHECK_EQ_INT(rendercache_create(&d, &rc), RENDERCACHE_OK)) return;
+    for (o = 0; o < objects; o++) {
+        float m[12] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0 };
+        m[3] = 0.3f * (float)o; m[7] = -0.2f * (float)o; m[11] = 0.5f * (float)o;
+        CHECK_EQ_INT(rendercache_set_object_transform(rc, o, m), RENDERCACHE_OK);
+    }
+    CHECK_EQ_INT(rendercache_begin_frame(rc, &cam), RENDERCACHE_OK);   /* the transforms, composed for cam */
+    for (i = 0, o = 0; i < rc->capacity; i++) {   /* objects 0..6, background (7), free (8), in runs */
+        uint32_t r = (i * 2654435761u) >> 29;
+        if (r < 3) { o = (o + 1 + r) % (objects + 2); runs++; }
+        rc->geo.object[i] = o < objects ? o : o == objects ? RENDERCACHE_MISS : RENDERCACHE__FREE_SLOT;
+        rc->geo.x[i] = -6.0f + 12.0f * (float)((i * 7919u) % 1000u) / 1000.0f;
+        rc->geo.y[i] = -5.0f + 10.0f * (float)((i * 104729u) % 997u) / 997.0f;
+        rc->geo.z[i] = o == objects ? 1.0f : 4.0f + (float)(i % 13u);   /* (a background point: a direction) */
+    }
+    for (shift = 0; shift <= RENDERCACHE__CELL_SHIFT; shift += RENDERCACHE__CELL_SHIFT) {
+        rendercache__projector pr;
+        uint32_t b, m, sizes[3] = { RENDERCACHE__BATCH, 77, 255 }, k;
+        rendercache__projector_init(&pr, rc, &rc->view, rc->obj_camera, shift);
+        for (k = 0; k < 3; k++)
+            for (b = 0; b < rc->capacity; b += m) {
+                uint32_t pix[RENDERCACHE__BATCH], one;
+                float depth[RENDERCACHE__BATCH], d1;
+                int others;
+                uint32_t least;
+                m = rc->capacity - b < sizes[k] ? rc->capacity - b : sizes[k];
+                rendercache__project_points(&pr, b, b + m, pix, depth);
+                mixed += rendercache__batch_object(rc->geo.object, b, b + m, &others, &least) == RENDERCACHE__NONE;
+                for (i = 0; i < m; i++) {
+                    rendercache__project_points(&pr, b + i, b + i + 1, &one, &d1);
+                    wrong += pix[i] != one || (one != RENDERCACHE__NONE && memcmp(&depth[i], &d1, sizeof d1) != 0);
+                    landed += one != RENDERCACHE__NONE;
+                }
+            }
+    }
+    CHECK_EQ_INT(wrong, 0);
+    CHECK(landed > 1000 && mixed > 10 && runs > 100);
+    test_note("mixed batches: %u of them, %u points landed, %u wrong", mixed, landed, wrong);
+    rendercache_destroy(rc);
+}
+
 /* The projection's z-buffer against one of its own: every slot projected
    alone through the same projector, the least key of each pixel, and the
    count of the points that land. The camera turns away from the points,
@@ -3014,6 +3068,7 @@ int main(int argc, char **argv)
     RUN(test_predictive_sampling_fills_next_holes);
     RUN(test_cell_count_matches_one_by_one);
     RUN(test_zbuffer_keys_match_one_by_one);
+    RUN(test_mixed_batches_project_as_one_by_one);
     RUN(test_eviction_spares_visible_points);
     RUN(test_slow_turn_keeps_pixels_covered_by_points);
     RUN(test_late_samples_land_where_they_were_seen);
