@@ -1,4 +1,4 @@
-/* rendercache.h - v0.11.0 - render cache and range-image walkthroughs - public domain or MIT, see end of file
+/* rendercache.h - v0.11.1 - render cache and range-image walkthroughs - public domain or MIT, see end of file
 
    RENDERCACHE.H: an image-space point cache that reprojects and resamples, and range-image walkthroughs of animated scenes.
 
@@ -503,7 +503,7 @@
 
 #define RENDERCACHE_VERSION_MAJOR 0
 #define RENDERCACHE_VERSION_MINOR 11
-#define RENDERCACHE_VERSION_PATCH 0
+#define RENDERCACHE_VERSION_PATCH 1
 
 #ifndef RENDERCACHE_API
 #  ifdef RENDERCACHE_STATIC
