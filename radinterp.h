@@ -6968,7 +6968,9 @@ static void radinterp__gather_job(void *ctx_, uint32_t index)
    (eq. 2.1), and pull averages back up. Irradiance and radiosity are those
    of the open part of each node: a node's gathered irradiance is a mean over
    the whole node, in which enclosed points count zero, so it is divided by
-   the open fraction, and averages weigh children by their open areas. */
+   the open fraction, and averages weigh children by their open areas.
+   b_lo / b_hi take in the least and largest radiosity (per channel) of the
+   open leaves below, from which each node keeps its spread. */
 static void radinterp__push_pull(radinterp_solution *s, uint32_t index, const double *down, double floor,
                                  double *change, double *b_out, double *hmin, double *b_lo, double *b_hi)
 {
