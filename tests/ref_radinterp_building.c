@@ -32,7 +32,17 @@
    from 3.63% to 3.97% (the lit rooms beside it stay 5-10% too dark; the
    solution changed there by its sampling only). With
    RADINTERP_RECEIVER_BUDGET 8 (not the default: 2.3x the links) the
-   90th percentile was 12.0%, the median 3.10% and 39 patches.
+   90th percentile was 12.0%, the median 3.10% and 39 patches. Later, with
+   enclosed strips on an 8 x 8 grid: 18.7%, 3.12% and 62 patches, the
+   lampless room's points +17.5% (median of their signed errors): its
+   leaves gathered 8% more from their sources' means than from the leaves
+   of those sources they see. Measuring a partly hidden link's source
+   variation over the source's leaves, not its children (3% more links),
+   brought that to 17.1%, 3.00% and 53 patches (the room +15.9%), the
+   office's points to 1.92% (bound met) and 7.10%. What is left there is the
+   tolerance: the dark room's links are held to the absolute floor eps (1%
+   of the mean emitted radiosity, 8-25% of its irradiance); 0.1% brings
+   the room to +9% at 1.3x the links and 10% more leaves.
 
        build/tests/ref_radinterp_building [NAME]     NAME filters the cases
 
@@ -90,14 +100,18 @@ typedef struct scene_case {
 static ex_pool *pool;
 static int strict;
 static scene_case office = { .path = "examples/data/office.obj", .patch_samples = 64000, .point_samples = 64000,
-                             .unmet = UNMET_PATCHES | UNMET_POINT_MEDIAN | UNMET_POINT_P90,
-                             .guard = { 0.114, 0.027, 0.097 } }; /* measured 9.1%, 2.15%, 6.88% with enclosed strips on an
-                                                                    8 x 8 grid (before 9.1%, 2.02%, 7.80%; v0.8.2 2.10%,
-                                                                    7.77%; v0.8.1: 10.9%, 2.13%, 7.94%) */
+                             .unmet = UNMET_PATCHES | UNMET_POINT_P90,
+                             .guard = { 0.114, 0.0, 0.089 } }; /* measured 9.1%, 1.92%, 7.10% with partly hidden sources'
+                                                                  variation over their leaves (before: 9.1%, 2.15%, 6.88%
+                                                                  with enclosed strips on an 8 x 8 grid; 9.1%, 2.02%,
+                                                                  7.80%; v0.8.2 2.10%, 7.77%; v0.8.1: 10.9%, 2.13%,
+                                                                  7.94%); the median is checked */
 static scene_case building_1k = { .path = "examples/data/building_1k.obj", .patch_samples = 16000, .point_samples = 48000,
                                   .unmet = UNMET_PATCHES | UNMET_POINT_MEDIAN | UNMET_POINT_P90,
-                                  .guard = { 0.118, 0.045, 0.220 } }; /* measured 9.92%, 3.12%, 18.7% with enclosed
-                                                                         strips measured on an 8 x 8 grid (before: 9.44%,
+                                  .guard = { 0.106, 0.045, 0.214 } }; /* measured 8.48%, 3.00%, 17.1% with partly
+                                                                         hidden sources' variation over their leaves
+                                                                         (before: 9.92%, 3.12%, 18.7% with enclosed
+                                                                         strips measured on an 8 x 8 grid; 9.44%,
                                                                          3.97%, 17.6% with the source
                                                                          variation in the receiver's budget; v0.8.2: 10.9%,
                                                                          3.63%, 20.3%; v0.8.1: 16.0%, 3.75%, 27.2%); the
