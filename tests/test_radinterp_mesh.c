@@ -2016,7 +2016,10 @@ static uint32_t unpaced_batches(const batch_log *l, uint32_t cap, uint32_t *runs
    size from one run to the next (this file's small batches of leaf lists
    make many runs), for the points and for their leaf lists alike. A pacer
    started afresh for each run (v0.8.13: a first batch of one job, of two
-   points or 16 leaves, in every run), or a ceiling of 64 point jobs, fails. */
+   points or 16 leaves, in every run), or a ceiling of 64 point jobs, fails.
+   (With one sample per side of a contact discontinuity at a vertex the
+   scene has 4% fewer points, and two batches, not five, reach the ceiling;
+   either failure above leaves none.) */
 static void test_sample_batches(void)
 {
     scene s;
@@ -2034,7 +2037,7 @@ static void test_sample_batches(void)
     CHECK(logs[0].n > 0 && logs[0].n < 4096 && logs[1].n > 0 && logs[1].n < 4096);
     wrong = unpaced_batches(&logs[0], RADINTERP__SAMPLE_BATCH, &runs, &full);
     CHECK_MSG(wrong == 0, "%u of %u batches of points not sized as the pacer's", wrong, logs[0].n);
-    CHECK_MSG(runs > 4 && full > 4, "%u runs of points, %u batches of %u jobs", runs, full, RADINTERP__SAMPLE_BATCH);
+    CHECK_MSG(runs > 4 && full > 1, "%u runs of points, %u batches of %u jobs", runs, full, RADINTERP__SAMPLE_BATCH);
     wrong = unpaced_batches(&logs[1], UINT32_MAX, &lists_runs, &lists_full);
     CHECK_MSG(wrong == 0, "%u of %u batches of leaf lists not sized as the pacer's", wrong, logs[1].n);
     CHECK_MSG(lists_runs == runs, "%u runs of leaf lists, %u of points", lists_runs, runs);
