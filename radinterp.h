@@ -422,18 +422,10 @@
                           measured for their link. The error this makes is
                           at most that fraction of the result (largest
                           channel). At building scale a point sees hundreds
-                          of dim sources past doors and furniture. 1/64
-                          (1/256 before) takes 14% fewer backprojections
-                          than 1/256 in the office's mesh and builds the 1k
-                          building's mesh in 6% less time; against the path
-                          tracer the interpolants (ref_radinterp_mesh: office
-                          and Cornell box) and the points
-                          (ref_radinterp_building: office, 1k building) moved
-                          by at most 0.15% of the error's median and 0.07% of
-                          its 90th percentile, less than the reference's
-                          standard error (0.7-0.8%), and the mesh by 0.07% of
-                          its irradiance (area-weighted mean, 1k building).
-                          FLT_MIN makes every source exact.  default 1/64
+                          of dim sources past doors and furniture: 1/256
+                          leaves 44% of the backprojections of the 1k
+                          building's mesh undone (11% on the office). FLT_MIN
+                          makes every source exact.        default 1/256
    `diag` is the diagonal of the scene's bounding box.
 
    MESH PARAMETERS (radinterp_mesh_desc; zero means the default)
@@ -898,7 +890,7 @@ typedef enum radinterp_result {
     RADINTERP_ERROR_IO                 /* a read or write callback failed */
 } radinterp_result;
 
-#define RADINTERP__POINT_REST (1.0 / 64.0)    /* default of radinterp_desc.point_rest */
+#define RADINTERP__POINT_REST (1.0 / 256.0)   /* default of radinterp_desc.point_rest */
 #define RADINTERP__MIN_CONTRAST (1.0 / 32.0)  /* default of radinterp_mesh_desc.min_discont_contrast */
 #define RADINTERP__PROGRESS_INTERVAL 0.25     /* default of progress_interval: seconds of CPU time */
 

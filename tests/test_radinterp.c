@@ -750,7 +750,7 @@ static void test_nudge_toward(void)
     add_quad(&s, a, b, c, e, black);
     d = scene_desc(&s);
     /* every source exact: this test measures the nudge, not the ranking,
-       which may leave up to point_rest (1/64) of the result to the links'
+       which may leave up to point_rest (1/256) of the result to the links'
        mean visible fractions once the receiver's budget splits the source */
     d.point_rest = FLT_MIN;
     if (!CHECK(radinterp_solve(&d, &sol) == RADINTERP_OK)) return;
