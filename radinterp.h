@@ -12937,9 +12937,9 @@ static radinterp_result radinterp__triangulate_patch(radinterp__builder *b, radi
    triangles of a patch share the samples at the points where they meet
    (taken toward the centre of the first triangle in triangle order), but on
    a contact discontinuity each side takes its own, approached from the
-   centre of a triangle on that side so that it takes its side's value. With
-   refinement, SAMPLES x SAMPLES
-   more points per triangle compare the interpolant with IrradianceAtPoint;
+   centre of a triangle on that side so that it takes its side's value.
+   With refinement, SAMPLES x SAMPLES more points per triangle compare the
+   interpolant with IrradianceAtPoint;
    a leaf whose worst difference exceeds eps is split and the pass repeats
    (triangles that did not change keep their samples).
    ---------------------------------------------------------------------- */
