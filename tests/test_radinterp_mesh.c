@@ -1246,6 +1246,166 @@ static void test_crack_free_room(void)
     radinterp_solution_destroy(sol);
 }
 
+/* Is corner k of triangle t at a vertex on a contact discontinuity (an end of
+   an edge on one of any listed triangle, on_disc)? */
+static int own_corner(const radinterp__otri *t, uint32_t k, const unsigned char *on_disc)
+{
+    return on_disc[t->v[k]] != 0;
+}
+
+/* Do triangles t and u share an edge through corner k of t that lies on no
+   contact discontinuity in either? */
+static int sector_neighbours(const radinterp__otri *t, uint32_t k, const radinterp__otri *u)
+{
+    uint32_t e, f;
+    if (t->patch != u->patch) return 0;
+    for (e = 0; e < 3; e++) {   /* edge e of t: corners e + 1, e + 2 */
+        uint32_t a = t->v[(e + 1) % 3], c = t->v[(e + 2) % 3];
+        if (e == k || (t->flags & (RADINTERP__EDGE_JUMP << e))) continue;
+        for (f = 0; f < 3; f++) {
+            uint32_t x = u->v[(f + 1) % 3], y = u->v[(f + 2) % 3];
+            if (((x == a && y == c) || (x == c && y == a)) && !(u->flags & (RADINTERP__EDGE_JUMP << f))) return 1;
+        }
+    }
+    return 0;
+}
+
+/* Samples at vertices on a contact discontinuity, one per side of it
+   (radinterp__disc_sectors): in the room with a block on the floor, the
+   sectors of the triangles around each such vertex are found here by a
+   flood across the edges through it that lie on no contact discontinuity.
+   Two corners there must share their sample exactly when they are of one
+   sector, taken toward the centre of its first triangle (in list order);
+   the other samples are as before, one per vertex and edge of a patch but
+   one per triangle at the midpoint of an edge on the discontinuity, so the
+   count of points is known. Some sectors must hold several triangles and
+   some vertices several sectors (both sides of the block's foot). */
+static void test_disc_sectors(void)
+{
+    scene s;
+    radinterp_solution *sol = room_scene(&s);
+    radinterp_mesh_desc md = mesh_desc();
+    radinterp__builder b;
+    radinterp__buf pts;
+    const radinterp__otri *tris;
+    const radinterp__spoint *sp;
+    const float *pos;
+    uint32_t n, i, k, j, e, *list = NULL, *tri_pt = NULL, *label = NULL, *stack = NULL, sectors = 0, shared_corners = 0;
+    uint32_t plain = 0, own_edges = 0, split_vertices = 0, wrong_share = 0, wrong_toward = 0;
+    unsigned char *on_disc = NULL;
+    if (!sol) return;
+    md.min_discont_weight = 0.05f;
+    radinterp__buf_init(&pts, sizeof(radinterp__spoint));
+    if (!CHECK_EQ_INT(radinterp__builder_init(&b, sol, &md), RADINTERP_OK) ||
+        !CHECK_EQ_INT(radinterp__find_discontinuities(&b), RADINTERP_OK) ||
+        !CHECK_EQ_INT(radinterp__build_trees(&b), RADINTERP_OK) || !CHECK_EQ_INT(radinterp__mesh_pass(&b), RADINTERP_OK))
+        goto done;
+    tris = (const radinterp__otri *)b.tris.data;
+    pos = (const float *)b.pos.data;
+    n = (uint32_t)b.tris.count;
+    list = (uint32_t *)malloc(sizeof(uint32_t) * (n + 1));
+    tri_pt = (uint32_t *)malloc(sizeof(uint32_t) * (6 * n + 1));
+    label = (uint32_t *)malloc(sizeof(uint32_t) * (3 * n + 1));
+    stack = (uint32_t *)malloc(sizeof(uint32_t) * (3 * n + 1));
+    on_disc = (unsigned char *)calloc(b.pos.count / 3 + 1, 1);
+    if (!CHECK(list && tri_pt && label && stack && on_disc)) goto done;
+    for (i = 0; i < n; i++) list[i] = i;
+    for (i = 0; i < n; i++)
+        for (e = 0; e < 3; e++)
+            if (tris[i].flags & (RADINTERP__EDGE_JUMP << e)) on_disc[tris[i].v[(e + 1) % 3]] = on_disc[tris[i].v[(e + 2) % 3]] = 1;
+    if (!CHECK_EQ_INT(radinterp__sample_points(&b, list, n, &pts, tri_pt), 0)) goto done;
+    sp = (const radinterp__spoint *)pts.data;
+    /* sectors by flood fill; label = the sector's first corner 3 i + k (i in list order) */
+    for (i = 0; i < 3 * n; i++) label[i] = RADINTERP__NONE;
+    for (i = 0; i < n; i++)
+        for (k = 0; k < 3; k++) {
+            uint32_t top = 0, size = 0;
+            if (!own_corner(&tris[i], k, on_disc) || label[3 * i + k] != RADINTERP__NONE) continue;
+            label[3 * i + k] = 3 * i + k;
+            stack[top++] = 3 * i + k;
+            sectors++;
+            while (top) {
+                uint32_t c = stack[--top], t = c / 3, v = tris[t].v[c % 3];
+                size++;
+                for (j = 0; j < n; j++)
+                    for (e = 0; e < 3; e++)
+                        if (tris[j].v[e] == v && label[3 * j + e] == RADINTERP__NONE &&
+                            sector_neighbours(&tris[t], c % 3, &tris[j])) {
+                            label[3 * j + e] = 3 * i + k;
+                            stack[top++] = 3 * j + e;
+                        }
+            }
+            if (size > 1) shared_corners += size;
+        }
+    for (i = 0; i < n; i++)
+        for (k = 0; k < 3; k++) {
+            uint32_t c = 3 * i + k, first, t0;
+            float toward[3];
+            if (label[c] == RADINTERP__NONE) continue;
+            first = label[c];
+            t0 = first / 3;
+            if (tri_pt[6 * i + 2 * k] != tri_pt[6 * t0 + 2 * (first % 3)]) wrong_share++;
+            for (j = 0; j < n; j++)   /* corners of other sectors at the same vertex and patch: other samples */
+                for (e = 0; e < 3; e++)
+                    if (tris[j].v[e] == tris[i].v[k] && tris[j].patch == tris[i].patch && label[3 * j + e] != first &&
+                        tri_pt[6 * j + 2 * e] == tri_pt[6 * i + 2 * k])
+                        wrong_share++;
+            radinterp__point_in(pos + 3 * tris[t0].v[0], pos + 3 * tris[t0].v[1], pos + 3 * tris[t0].v[2], 1.0 / 3.0,
+                                1.0 / 3.0, toward);
+            if (memcmp(sp[tri_pt[6 * i + 2 * k]].toward, toward, sizeof toward) != 0) wrong_toward++;
+            if (first != c) continue;
+            for (j = 0; j < i; j++)   /* a vertex with a sector before this one: sides apart */
+                for (e = 0; e < 3; e++)
+                    if (tris[j].v[e] == tris[i].v[k] && tris[j].patch == tris[i].patch && label[3 * j + e] != first &&
+                        label[3 * j + e] != RADINTERP__NONE && label[3 * j + e] / 3 == j && label[3 * j + e] % 3 == e) {
+                        split_vertices++;
+                        j = i;
+                        break;
+                    }
+        }
+    /* the other points: distinct (vertex, patch) off the discontinuities and (edge, patch) off them, and each
+       triangle's own midpoint of an edge on one */
+    for (i = 0; i < n; i++)
+        for (e = 0; e < 3; e++) {
+            uint32_t a = tris[i].v[e], c = tris[i].v[(e + 1) % 3], u;
+            int seen = 0;
+            if (!on_disc[a]) {
+                for (j = 0; j < i && !seen; j++)
+                    for (u = 0; u < 3; u++)
+                        if (tris[j].v[u] == a && tris[j].patch == tris[i].patch) seen = 1;
+                plain += !seen;
+            }
+            seen = 0;
+            if (tris[i].flags & (RADINTERP__EDGE_JUMP << ((e + 2) % 3))) { own_edges++; continue; }
+            for (j = 0; j < i && !seen; j++)
+                for (u = 0; u < 3; u++) {
+                    uint32_t x = tris[j].v[u], y = tris[j].v[(u + 1) % 3];
+                    if (tris[j].patch == tris[i].patch && ((x == a && y == c) || (x == c && y == a)) &&
+                        !(tris[j].flags & (RADINTERP__EDGE_JUMP << ((u + 2) % 3))))
+                        seen = 1;
+                }
+            plain += !seen;
+        }
+    CHECK_MSG(wrong_share == 0, "%u corners at a contact discontinuity share a sample across sectors or miss "
+              "their sector's", wrong_share);
+    CHECK_MSG(wrong_toward == 0, "%u samples not taken toward their sector's first triangle", wrong_toward);
+    CHECK_EQ_INT(pts.count, plain + own_edges + sectors);
+    CHECK(shared_corners > 0);
+    CHECK(split_vertices > 0);
+    test_note("contact sectors: %u triangles, %u samples (%u at vertices and edges off contact discontinuities, %u "
+              "midpoints of edges on them, %u sectors); %u corners in sectors of several, %u vertices with two or "
+              "more sectors", n, (unsigned)pts.count, plain, own_edges, sectors, shared_corners, split_vertices);
+done:
+    free(list);
+    free(tri_pt);
+    free(label);
+    free(stack);
+    free(on_disc);
+    radinterp__buf_free(&b.a, &pts);
+    radinterp__builder_free(&b);
+    radinterp_solution_destroy(sol);
+}
+
 /* ---- online phase ------------------------------------------------------------ */
 
 static void test_shading(void)
@@ -1856,7 +2016,10 @@ static uint32_t unpaced_batches(const batch_log *l, uint32_t cap, uint32_t *runs
    size from one run to the next (this file's small batches of leaf lists
    make many runs), for the points and for their leaf lists alike. A pacer
    started afresh for each run (v0.8.13: a first batch of one job, of two
-   points or 16 leaves, in every run), or a ceiling of 64 point jobs, fails. */
+   points or 16 leaves, in every run), or a ceiling of 64 point jobs, fails.
+   (With one sample per side of a contact discontinuity at a vertex the
+   scene has 4% fewer points, and two batches, not five, reach the ceiling;
+   either failure above leaves none.) */
 static void test_sample_batches(void)
 {
     scene s;
@@ -1874,7 +2037,7 @@ static void test_sample_batches(void)
     CHECK(logs[0].n > 0 && logs[0].n < 4096 && logs[1].n > 0 && logs[1].n < 4096);
     wrong = unpaced_batches(&logs[0], RADINTERP__SAMPLE_BATCH, &runs, &full);
     CHECK_MSG(wrong == 0, "%u of %u batches of points not sized as the pacer's", wrong, logs[0].n);
-    CHECK_MSG(runs > 4 && full > 4, "%u runs of points, %u batches of %u jobs", runs, full, RADINTERP__SAMPLE_BATCH);
+    CHECK_MSG(runs > 4 && full > 1, "%u runs of points, %u batches of %u jobs", runs, full, RADINTERP__SAMPLE_BATCH);
     wrong = unpaced_batches(&logs[1], UINT32_MAX, &lists_runs, &lists_full);
     CHECK_MSG(wrong == 0, "%u of %u batches of leaf lists not sized as the pacer's", wrong, logs[1].n);
     CHECK_MSG(lists_runs == runs, "%u runs of leaf lists, %u of points", lists_runs, runs);
@@ -2113,6 +2276,7 @@ int main(int argc, char **argv)
     RUN(test_horizon_and_contact);
     RUN(test_activation_rules);
     RUN(test_crack_free_room);
+    RUN(test_disc_sectors);
     RUN(test_shading);
     RUN(test_interpolant_accuracy);
     RUN(test_save_load);
