@@ -306,6 +306,51 @@ static void test_partly_hidden_source_spread(void)
     rb_free(&s);
 }
 
+/* A source's variation has its own floor, eps_source (default a tenth of
+   eps): splitting a source adds links, not leaves, so the lampless room's
+   sources are split finer than its receivers. Three rooms in a row, doors,
+   a lamp in the left room only, a default solve: the right rooms' receivers
+   are dim enough that the floors set their tolerances. Checks that the
+   floors are as documented (explicit eps: eps_source = eps), that links
+   whose tolerance eps's floor sets above the source floor's exist (the
+   case), and that after the solve no link that could still split its source
+   carries a source error beyond a quarter over its source tolerance (the
+   iterations after the last refinement pass move the radiosities a little).
+   With eps_source = eps (built with -DRADINTERP__EPS_SOURCE_FLOOR=0.01, the
+   mechanism off) the first and the last check fail. */
+static void test_source_floor(void)
+{
+    rb_scene s;
+    radinterp_desc d;
+    radinterp_solution *sol;
+    uint32_t i, floor_set = 0, over = 0;
+    rb_building(&s, 3, 1, 1, 0);
+    for (i = 0; i < s.np; i++)
+        if (s.mat[i] == RB_LAMP && s.pos[3 * s.patch[4 * i]] > RB_ROOM_W + RB_WALL) s.mat[i] = RB_LAMP_FRAME;
+    d = rb_desc(&s);
+    if (!CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_OK)) { rb_free(&s); return; }
+    CHECK_CLOSE(sol->eps_source, 0.1 * sol->eps, 1e-12, 0.0);
+    for (i = 0; i < sol->link_count; i++) {   /* the source tolerance recomputed: eps_relative of the level, 0.1 eps */
+        const radinterp__link *l = &sol->links[i];
+        double level = sol->nodes[l->receiver].dim, err = radinterp__source_error(sol, l);
+        double src_tol = sol->eps_relative * level > 0.1 * sol->eps ? sol->eps_relative * level : 0.1 * sol->eps;
+        floor_set += radinterp__tolerance(sol, level) > 1.25 * src_tol;
+        over += !(l->flags & RADINTERP__LINK_FINAL) && radinterp__can_split(sol, &sol->nodes[l->source]) &&
+                err > 1.25 * src_tol;
+    }
+    test_note("three rooms, one lamp: %u links, %u where eps's floor sets the tolerance above the source's by a "
+              "quarter, %u over their source tolerance by a quarter", sol->link_count, floor_set, over);
+    CHECK(floor_set > 0);
+    CHECK_EQ_INT(over, 0);
+    radinterp_solution_destroy(sol);
+    d.eps = 0.01f;   /* explicit: one floor, as before */
+    if (CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_OK)) {
+        CHECK(sol->eps_source == sol->eps);
+        radinterp_solution_destroy(sol);
+    }
+    rb_free(&s);
+}
+
 /* The planes search between two boxes (radinterp__planes_hide) keeps the
    patches whose planes separate them, once each, in the order the walk
    meets them; it finds them by hash and skips a patch's second triangle.
@@ -456,8 +501,9 @@ static unsigned char reference_decision(const radinterp_solution *s, const radin
     }
     {   /* a partly hidden source: the spread of its leaves where that is more (its children may be alike) */
         double spread = radinterp__source_spread(s, l->source), leaves = s->nodes[l->source].spread;
+        double src_tol = radinterp__source_tolerance(s, s->nodes[l->receiver].dim);   /* eps_source's floor */
         if ((l->flags & RADINTERP__LINK_PARTLY) && leaves > spread) spread = leaves;
-        if (!(l->flags & RADINTERP__LINK_FINAL) && spread * radinterp__link_ff_max(l) > tol) return RADINTERP__REFINE_SOURCE;
+        if (!(l->flags & RADINTERP__LINK_FINAL) && spread * radinterp__link_ff_max(l) > src_tol) return RADINTERP__REFINE_SOURCE;
     }
     return RADINTERP__REFINE_KEEP;
 }
@@ -1171,6 +1217,7 @@ int main(int argc, char **argv)
     TEST_INIT(argc, argv);
     RUN(test_wall_between_rooms);
     RUN(test_partly_hidden_source_spread);
+    RUN(test_source_floor);
     RUN(test_planes_search);
     RUN(test_refine_decisions);
     RUN(test_triangle_soup);
