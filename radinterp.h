@@ -6742,7 +6742,8 @@ static void radinterp__spread_budget(const radinterp_solution *s, const radinter
     double tol = radinterp__tolerance(s, nd->dim), budget = RADINTERP_RECEIVER_BUDGET * tol, sum = 0.0, limit = DBL_MAX;
     double source_scale = tol / radinterp__source_tolerance(s, nd->dim);
     uint32_t j;
-    for (j = 0; j < nd->link_count; j++) sum += err[j] = radinterp__budget_error(s, &s->links[nd->first_link + j], source_scale);
+    for (j = 0; j < nd->link_count; j++)
+        sum += err[j] = radinterp__budget_error(s, &s->links[nd->first_link + j], source_scale);
     if (sum <= budget) return;
     qsort(err, nd->link_count, sizeof(double), radinterp__cmp_double);
     for (sum = 0.0, j = 0; j < nd->link_count; j++)   /* from the smallest: the first that no longer fits */
@@ -6750,7 +6751,8 @@ static void radinterp__spread_budget(const radinterp_solution *s, const radinter
     for (j = 0; j < nd->link_count; j++) {
         const radinterp__link *l = &s->links[nd->first_link + j];
         if (radinterp__budget_error(s, l, source_scale) < limit) continue;
-        mark[j] = source_scale * radinterp__source_error(s, l) > radinterp__link_error(s, l) ? RADINTERP__SPLIT_SOURCE : RADINTERP__SPLIT;
+        mark[j] = source_scale * radinterp__source_error(s, l) > radinterp__link_error(s, l) ? RADINTERP__SPLIT_SOURCE
+                                                                                            : RADINTERP__SPLIT;
     }
 }
 
@@ -6819,7 +6821,8 @@ static unsigned char radinterp__refine_decision(const radinterp_solution *s, con
     /* the source is not uniform (its children differ): the link carries
        its mean where the receiver may see a brighter or darker part, so it
        goes to the children */
-    return radinterp__source_error(s, l) > radinterp__source_tolerance(s, s->nodes[l->receiver].dim) ? RADINTERP__REFINE_SOURCE : RADINTERP__REFINE_KEEP;
+    return radinterp__source_error(s, l) > radinterp__source_tolerance(s, s->nodes[l->receiver].dim)
+               ? RADINTERP__REFINE_SOURCE : RADINTERP__REFINE_KEEP;
 }
 
 /* Replaces each link's budget mark by its decision, RADINTERP__REFINE_BLOCK
