@@ -5821,13 +5821,19 @@ static int radinterp__shaft_query(radinterp_solution *s, const radinterp__node *
     return radinterp__bvh_walk(s, radinterp__shaft_box, radinterp__shaft_visit, &ctx);
 }
 
+/* eps_relative of `level`, or `floor` where that is more. */
+static double radinterp__tolerance_over(const radinterp_solution *s, double level, double floor)
+{
+    double rel = s->eps_relative * level;
+    return rel > floor ? rel : floor;
+}
+
 /* The transport error a link to a receiver at irradiance `level` (the
    least over its lit parts) may make: eps, or eps_relative of the level
    where that is more (relative refinement, the default). */
 static double radinterp__tolerance(const radinterp_solution *s, double level)
 {
-    double rel = s->eps_relative * level;
-    return rel > s->eps ? rel : s->eps;
+    return radinterp__tolerance_over(s, level, s->eps);
 }
 
 /* The same for what a link's source mean may misjudge
@@ -5835,8 +5841,7 @@ static double radinterp__tolerance(const radinterp_solution *s, double level)
    default. Splitting a source adds links, not leaves to the receiver. */
 static double radinterp__source_tolerance(const radinterp_solution *s, double level)
 {
-    double rel = s->eps_relative * level;
-    return rel > s->eps_source ? rel : s->eps_source;
+    return radinterp__tolerance_over(s, level, s->eps_source);
 }
 
 static int radinterp__can_split(const radinterp_solution *s, const radinterp__node *nd)
