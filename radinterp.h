@@ -6745,7 +6745,8 @@ static void radinterp__spread_budget(const radinterp_solution *s, const radinter
                                      unsigned char *mark)
 {
     double tol = radinterp__tolerance(s, nd->dim), budget = RADINTERP_RECEIVER_BUDGET * tol, sum = 0.0, limit = DBL_MAX;
-    double source_scale = tol / radinterp__source_tolerance(s, nd->dim);
+    double stol = radinterp__source_tolerance(s, nd->dim);
+    double source_scale = stol > 0.0 ? tol / stol : 1.0;   /* a floor flushed to 0 (emission near FLT_MIN) */
     uint32_t j;
     for (j = 0; j < nd->link_count; j++)
         sum += err[j] = radinterp__budget_error(s, &s->links[nd->first_link + j], source_scale);
