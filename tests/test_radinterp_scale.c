@@ -240,6 +240,17 @@ static void test_wall_between_rooms(void)
     rb_free(&s);
 }
 
+/* Three rooms in a row with doors between them, the lamp of the left one
+   alone lit (the others' lamps made frames): the right rooms are lit only
+   through the doors, dim enough that the eps floors set their tolerances. */
+static void rooms_lit_from_the_left(rb_scene *s)
+{
+    uint32_t i;
+    rb_building(s, 3, 1, 1, 0);
+    for (i = 0; i < s->np; i++)
+        if (s->mat[i] == RB_LAMP && s->pos[3 * s->patch[4 * i]] > RB_ROOM_W + RB_WALL) s->mat[i] = RB_LAMP_FRAME;
+}
+
 /* A link whose source is partly hidden from its receiver measures the
    source's variation over its leaves, not its children (radinterp__link_
    source_spread): three rooms in a row, doors between them, a lamp in the
@@ -258,9 +269,7 @@ static void test_partly_hidden_source_spread(void)
     radinterp_desc d;
     radinterp_solution *sol;
     uint32_t i, partly = 0, deeper = 0, over = 0, bad_spread = 0, wrong = 0;
-    rb_building(&s, 3, 1, 1, 0);
-    for (i = 0; i < s.np; i++)
-        if (s.mat[i] == RB_LAMP && s.pos[3 * s.patch[4 * i]] > RB_ROOM_W + RB_WALL) s.mat[i] = RB_LAMP_FRAME;
+    rooms_lit_from_the_left(&s);
     d = rb_desc(&s);
     d.max_iterations = 3;
     if (!CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_OK)) { rb_free(&s); return; }
@@ -324,9 +333,7 @@ static void test_source_floor(void)
     radinterp_desc d;
     radinterp_solution *sol;
     uint32_t i, floor_set = 0, over = 0;
-    rb_building(&s, 3, 1, 1, 0);
-    for (i = 0; i < s.np; i++)
-        if (s.mat[i] == RB_LAMP && s.pos[3 * s.patch[4 * i]] > RB_ROOM_W + RB_WALL) s.mat[i] = RB_LAMP_FRAME;
+    rooms_lit_from_the_left(&s);
     d = rb_desc(&s);
     if (!CHECK_EQ_INT(radinterp_solve(&d, &sol), RADINTERP_OK)) { rb_free(&s); return; }
     CHECK_CLOSE(sol->eps_source, 0.1 * sol->eps, 1e-12, 0.0);
