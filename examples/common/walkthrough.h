@@ -1738,7 +1738,9 @@ static int wt__path_finish(const wt_world *w, wt_path *p, const float *corners, 
         total += hypotf(corners[3 * i] - corners[3 * i - 3], corners[3 * i + 2] - corners[3 * i - 1]);
     p->count = (uint32_t)(total / WT_PATH_STEP) + 1;
     p->length = (float)(p->count - 1) * WT_PATH_STEP;
-    p->points = (float *)malloc(3 * sizeof(float) * p->count);
+    /* calloc: the loops below write every point before it is read, but gcc 12
+       at -O3 cannot see it and warns that the eye's mean reads them unset */
+    p->points = (float *)calloc((size_t)p->count * 3, sizeof(float));
     p->eye = (float *)malloc(sizeof(float) * p->count);
     raw = (float *)malloc(3 * sizeof(float) * p->count);
     if (!p->points || !p->eye || !raw) {
