@@ -5626,22 +5626,42 @@ static void *radinterp__room_for(const radinterp_allocator *a, void *arr, size_t
     return p;
 }
 
+/* A copy of the first n items of arr, or NULL when out of memory or
+   cancelled (*res): copied a few megabytes at a time, with progress
+   between (building_16k's blocker pool is most of a gigabyte). */
+#define RADINTERP__COPY_CHUNK (1u << 22)   /* bytes between progress checks */
+static void *radinterp__copy_ticking(radinterp_solution *s, radinterp__run *run, const void *arr, size_t n, size_t item,
+                                     radinterp_result *res)
+{
+    size_t at, bytes = n * item;
+    char *p = (char *)radinterp__alloc_array(&s->allocator, n, item);
+    if (!p) { *res = RADINTERP_ERROR_OUT_OF_MEMORY; return NULL; }
+    for (at = 0; at < bytes; at += RADINTERP__COPY_CHUNK) {
+        memcpy(p + at, (const char *)arr + at, bytes - at < RADINTERP__COPY_CHUNK ? bytes - at : RADINTERP__COPY_CHUNK);
+        if (radinterp__solve_tick(s, run)) {
+            radinterp__free(&s->allocator, p);
+            *res = RADINTERP_ERROR_CANCELLED;
+            return NULL;
+        }
+    }
+    return p;
+}
+
 /* Gives back the room refinement kept in the link and blocker arrays
    (radinterp__room_for), so that the solution holds what it reports. */
-static radinterp_result radinterp__trim_links(radinterp_solution *s)
+static radinterp_result radinterp__trim_links(radinterp_solution *s, radinterp__run *run)
 {
+    radinterp_result res = RADINTERP_OK;
     if (s->link_cap > s->link_count) {
-        void *p = radinterp__alloc_array(&s->allocator, s->link_count, sizeof(radinterp__link));
-        if (!p) return RADINTERP_ERROR_OUT_OF_MEMORY;
-        if (s->link_count) memcpy(p, s->links, s->link_count * sizeof(radinterp__link));
+        void *p = radinterp__copy_ticking(s, run, s->links, s->link_count, sizeof(radinterp__link), &res);
+        if (!p) return res;
         radinterp__free(&s->allocator, s->links);
         s->links = (radinterp__link *)p;
         s->link_cap = s->link_count;
     }
     if (s->blocker_cap > s->blocker_count) {
-        void *p = radinterp__alloc_array(&s->allocator, (size_t)s->blocker_count, sizeof(uint32_t));
-        if (!p) return RADINTERP_ERROR_OUT_OF_MEMORY;
-        if (s->blocker_count) memcpy(p, s->blockers, (size_t)s->blocker_count * sizeof(uint32_t));
+        void *p = radinterp__copy_ticking(s, run, s->blockers, (size_t)s->blocker_count, sizeof(uint32_t), &res);
+        if (!p) return res;
         radinterp__free(&s->allocator, s->blockers);
         s->blockers = (uint32_t *)p;
         s->blocker_cap = (size_t)s->blocker_count;
@@ -5653,12 +5673,12 @@ static radinterp_result radinterp__trim_links(radinterp_solution *s)
    front of the pool, in link order. The pool holds the links' lists in
    link order (radinterp__install_links leaves it so, and refinement keeps
    the order of the links it keeps), so each list moves toward the front or
-   stays. Returns the blockers kept. */
-static uint64_t radinterp__pack_kept_blockers(radinterp_solution *s, uint32_t keep_count)
+   stays. Returns the blockers kept; *stop non-zero when cancelled. */
+static uint64_t radinterp__pack_kept_blockers(radinterp_solution *s, radinterp__run *run, uint32_t keep_count, int *stop)
 {
     uint64_t at = 0;
     uint32_t i;
-    for (i = 0; i < keep_count; i++) {
+    for (i = 0; i < keep_count && !(*stop = radinterp__solve_step(s, run, i)); i++) {
         radinterp__link *l = &s->links[i];
         if (l->blocker_count && l->first_blocker != at)
             memmove(s->blockers + at, s->blockers + l->first_blocker, l->blocker_count * sizeof(uint32_t));
@@ -5702,8 +5722,10 @@ static radinterp_result radinterp__install_links(radinterp_solution *s, radinter
     uint32_t *start = NULL, *order = NULL, i, total = keep_count, live = 0, w, k, j;
     uint64_t packed, blockers, pw;
     void *grown;
+    int stop = 0;
     for (i = 0; i < pend_count; i++) s->culled_links += pend[i].hidden;
-    blockers = packed = radinterp__pack_kept_blockers(s, keep_count);
+    blockers = packed = radinterp__pack_kept_blockers(s, run, keep_count, &stop);
+    if (stop) return RADINTERP_ERROR_CANCELLED;   /* the solution is only destroyed now */
     for (i = 0; i < pend_count; i++)
         if (!pend[i].dead) { live++; blockers += pend[i].kept; }
     total += live;
@@ -10280,7 +10302,7 @@ RADINTERP_API radinterp_result radinterp_solve(const radinterp_desc *desc, radin
         res = s->clustering == RADINTERP_CLUSTERING_OFF ? radinterp__initial_links(s, &run)
                                                           : radinterp__initial_cluster_links(s, &run);
     if (res == RADINTERP_OK) res = radinterp__iterate(s, &run);
-    if (res == RADINTERP_OK) res = radinterp__trim_links(s);
+    if (res == RADINTERP_OK) res = radinterp__trim_links(s, &run);
     if (res == RADINTERP_OK) res = radinterp__collect_leaves(s);
     s->leaf_margin = 10.0 * (s->nudge + s->epsilon * s->diag);   /* leaf lists (section 14): built where used */
     if (res != RADINTERP_OK) {
