@@ -4115,8 +4115,9 @@ struct radinterp_solution {
     uint32_t node_count, node_cap;
     radinterp__link *links;
     uint32_t link_count;
-    uint32_t *blockers;
+    uint32_t *blockers;                /* the links' blocker lists, in link order */
     uint64_t blocker_count;
+    size_t link_cap, blocker_cap;      /* room in links and blockers (refinement reuses them) */
     struct radinterp__clink *clinks;   /* links with a cluster at either end, by receiver */
     uint32_t clink_count;
     radinterp__cluster *clusters;      /* clusters[0] is the top; parents before children */
@@ -4833,6 +4834,7 @@ static double radinterp__ray_offset(const radinterp_solution *s) { return 10.0 *
 typedef struct radinterp__shaft_rays {
     int walk;            /* 1: the rays walk the tree (too many triangles, a trace callback, a one-leaf tree) */
     uint32_t tris;
+    uint32_t last;       /* the group of triangles that blocked the last blocked ray: tried first */
     radinterp__bvh_tris block[RADINTERP__SHAFT_TRIS / 4];
     radinterp__bvh_node box[RADINTERP__SHAFT_TRIS / RADINTERP__BVH_WIDTH];   /* the triangles' boxes, block by block */
 } radinterp__shaft_rays;
@@ -4938,6 +4940,7 @@ static void radinterp__shaft_rays_init(const radinterp_solution *s, radinterp__s
     int i, k;
     sr->walk = 1;
     sr->tris = 0;
+    sr->last = 0;
     if (s->trace || s->bvh.tri_count == 0 || (ref & RADINTERP__BVH_LEAF)) return;
     for (k = 0; k < 3; k++) {
         size = fabs((double)s->scene_lo[k]) > size ? fabs((double)s->scene_lo[k]) : size;
@@ -4989,9 +4992,25 @@ static void radinterp__segment_ray(const double *a, const double *b, radinterp__
     hit->tri = RADINTERP__NO_HIT;
 }
 
+/* Does a triangle of the shaft's group g block ray r (no hit yet)? */
+static int radinterp__shaft_group_blocks(const radinterp_solution *s, const radinterp__shaft_rays *sr, const radinterp__ray *r,
+                                         radinterp__hit *hit, uint32_t g)
+{
+    float t[RADINTERP__BVH_WIDTH];
+    unsigned mask = radinterp__bvh_node_hits(&s->bvh, r, &sr->box[g], 0.0f, 1.0f, t), i;
+    for (i = 0; i < RADINTERP__BVH_WIDTH / 4; i++)
+        if ((mask >> (4 * i) & 15u) && radinterp__bvh_leaf_hit(&s->bvh, r, &sr->block[RADINTERP__BVH_WIDTH / 4 * g + i], 0.0f, hit))
+            return 1;
+    return 0;
+}
+
 /* Is the segment from a to b blocked? radinterp__segment_blocked's answer,
-   from the shaft's triangles when they are known. */
-static int radinterp__shaft_blocked(const radinterp_solution *s, const radinterp__shaft_rays *sr, const double *a,
+   from the shaft's triangles when they are known. The group that blocked
+   the link's last blocked ray goes first: the rays of a link that a wall
+   hides in part meet that wall again and again. Any hit answers, and a
+   group's test does not depend on the groups tried before it (the ray's
+   end stays at 1 until a hit), so the order changes no answer. */
+static int radinterp__shaft_blocked(const radinterp_solution *s, radinterp__shaft_rays *sr, const double *a,
                                     const double *b)
 {
     radinterp__ray r;
@@ -4999,18 +5018,17 @@ static int radinterp__shaft_blocked(const radinterp_solution *s, const radinterp
     uint32_t g;
     if (sr->walk) return radinterp__segment_blocked(s, a, b);
     radinterp__segment_ray(a, b, &r, &hit);
-    for (g = 0; g * RADINTERP__BVH_WIDTH < sr->tris; g++) {
-        float t[RADINTERP__BVH_WIDTH];
-        unsigned mask = radinterp__bvh_node_hits(&s->bvh, &r, &sr->box[g], 0.0f, 1.0f, t), i;
-        for (i = 0; i < RADINTERP__BVH_WIDTH / 4; i++)
-            if ((mask >> (4 * i) & 15u) && radinterp__bvh_leaf_hit(&s->bvh, &r, &sr->block[RADINTERP__BVH_WIDTH / 4 * g + i], 0.0f, &hit))
-                return 1;
-    }
+    if (sr->last * RADINTERP__BVH_WIDTH < sr->tris && radinterp__shaft_group_blocks(s, sr, &r, &hit, sr->last)) return 1;
+    for (g = 0; g * RADINTERP__BVH_WIDTH < sr->tris; g++)
+        if (g != sr->last && radinterp__shaft_group_blocks(s, sr, &r, &hit, g)) {
+            sr->last = g;
+            return 1;
+        }
     return 0;
 }
 
 /* radinterp__segment_light for a ray of the shaft sr (NULL: none known). */
-static int radinterp__shaft_light(const radinterp_solution *s, const radinterp__shaft_rays *sr, const double *a,
+static int radinterp__shaft_light(const radinterp_solution *s, radinterp__shaft_rays *sr, const double *a,
                                   const double *b, int glass, double T[3])
 {
     if (glass || !sr) return radinterp__segment_light(s, a, b, glass, T);
@@ -5221,7 +5239,7 @@ static void radinterp__sky_point_add(const radinterp_solution *s, uint32_t patch
    (counted clear) and v->t[c] the light of channel c that passes them. */
 typedef struct radinterp__vis { double open, glass, t[3]; } radinterp__vis;
 
-static void radinterp__visible_fraction(const radinterp_solution *s, const radinterp__shaft_rays *sr, const double *q,
+static void radinterp__visible_fraction(const radinterp_solution *s, radinterp__shaft_rays *sr, const double *q,
                                         const double *nr, const double (*src)[3], int count, const double *ns,
                                         radinterp__rng *rng, uint32_t rays, int glass, radinterp__vis *v)
 {
@@ -5590,76 +5608,180 @@ static radinterp_result radinterp__compute_pending(radinterp_solution *s, radint
     return RADINTERP_OK;
 }
 
-/* Replaces the link list by the kept links plus the live pending ones,
-   sorted by receiver (stable), with their blockers copied into one pool
-   (building_16k: up to 1.7 s, so the copies call progress as they go). */
-static radinterp_result radinterp__install_links(radinterp_solution *s, radinterp__run *run, const radinterp__link *keep,
-                                                 uint32_t keep_count, const radinterp__pending *pend, uint32_t pend_count,
+/* An array of `item`-byte items with room for n, keeping its first `keep`
+   items: arr itself when its capacity *cap holds n, else a larger one (an
+   eighth to spare, so that the refinement passes that add a few links find
+   room) with the kept items copied and arr freed (also when arr is NULL:
+   an empty array is not NULL). NULL when out of memory (arr is kept). */
+static void *radinterp__room_for(const radinterp_allocator *a, void *arr, size_t *cap, size_t n, size_t keep, size_t item)
+{
+    void *p;
+    size_t want = n + n / 8;
+    if (n <= *cap && arr) return arr;
+    p = radinterp__alloc_array(a, want, item);
+    if (!p) return NULL;
+    if (keep) memcpy(p, arr, keep * item);
+    radinterp__free(a, arr);
+    *cap = want;
+    return p;
+}
+
+/* A copy of the first n items of arr, or NULL when out of memory or
+   cancelled (*res): copied a few megabytes at a time, with progress
+   between (building_16k's blocker pool is most of a gigabyte). */
+#define RADINTERP__COPY_CHUNK (1u << 22)   /* bytes between progress checks */
+static void *radinterp__copy_ticking(radinterp_solution *s, radinterp__run *run, const void *arr, size_t n, size_t item,
+                                     radinterp_result *res)
+{
+    size_t at, bytes = n * item;
+    char *p = (char *)radinterp__alloc_array(&s->allocator, n, item);
+    if (!p) { *res = RADINTERP_ERROR_OUT_OF_MEMORY; return NULL; }
+    for (at = 0; at < bytes; at += RADINTERP__COPY_CHUNK) {
+        memcpy(p + at, (const char *)arr + at, bytes - at < RADINTERP__COPY_CHUNK ? bytes - at : RADINTERP__COPY_CHUNK);
+        if (radinterp__solve_tick(s, run)) {
+            radinterp__free(&s->allocator, p);
+            *res = RADINTERP_ERROR_CANCELLED;
+            return NULL;
+        }
+    }
+    return p;
+}
+
+/* Gives back the room refinement kept in the link and blocker arrays
+   (radinterp__room_for), so that the solution holds what it reports. */
+static radinterp_result radinterp__trim_links(radinterp_solution *s, radinterp__run *run)
+{
+    radinterp_result res = RADINTERP_OK;
+    if (s->link_cap > s->link_count) {
+        void *p = radinterp__copy_ticking(s, run, s->links, s->link_count, sizeof(radinterp__link), &res);
+        if (!p) return res;
+        radinterp__free(&s->allocator, s->links);
+        s->links = (radinterp__link *)p;
+        s->link_cap = s->link_count;
+    }
+    if (s->blocker_cap > s->blocker_count) {
+        void *p = radinterp__copy_ticking(s, run, s->blockers, (size_t)s->blocker_count, sizeof(uint32_t), &res);
+        if (!p) return res;
+        radinterp__free(&s->allocator, s->blockers);
+        s->blockers = (uint32_t *)p;
+        s->blocker_cap = (size_t)s->blocker_count;
+    }
+    return RADINTERP_OK;
+}
+
+/* Moves the blockers of the kept links s->links[0 .. keep_count) to the
+   front of the pool, in link order. The pool holds the links' lists in
+   link order (radinterp__install_links leaves it so, and refinement keeps
+   the order of the links it keeps), so each list moves toward the front or
+   stays. Returns the blockers kept; *stop non-zero when cancelled. */
+static uint64_t radinterp__pack_kept_blockers(radinterp_solution *s, radinterp__run *run, uint32_t keep_count, int *stop)
+{
+    uint64_t at = 0;
+    uint32_t i;
+    for (i = 0; i < keep_count && !(*stop = radinterp__solve_step(s, run, i)); i++) {
+        radinterp__link *l = &s->links[i];
+        if (l->blocker_count && l->first_blocker != at)
+            memmove(s->blockers + at, s->blockers + l->first_blocker, l->blocker_count * sizeof(uint32_t));
+        l->first_blocker = (uint32_t)at;
+        at += l->blocker_count;
+    }
+    return at;
+}
+
+/* Link i of the pending ones, its blockers at pool position at. */
+static radinterp__link radinterp__pending_link(const radinterp__pending *p, uint32_t at)
+{
+    radinterp__link l;
+    l.receiver = p->receiver;
+    l.source = p->source;
+    l.ff = p->ff;
+    l.dff = p->dff;
+    l.vis = p->vis;
+    l.gff = p->gff;
+    memcpy(l.glass, p->glass, sizeof l.glass);
+    l.flags = p->partly ? RADINTERP__LINK_PARTLY : 0u;
+    l.blocker_count = p->kept;
+    l.first_blocker = at;
+    return l;
+}
+
+/* Replaces the link list by the kept links (s->links[0 .. keep_count), in
+   receiver order: refinement packs them there) plus the live pending ones,
+   sorted by receiver (stable: a receiver's kept links, then its pending
+   ones in their order), each link's blockers in one pool in link order.
+   The arrays are reused in place: the live pending links, sorted by
+   receiver, are merged with the kept ones from the back, each kept link
+   and its list moving toward the end or staying. A new array is made only
+   when the links outgrow it: copying all links and lists into new arrays
+   at every refinement pass touched fresh memory each time (page faults and
+   copies were about a tenth of building_4k's solve). */
+static radinterp_result radinterp__install_links(radinterp_solution *s, radinterp__run *run, uint32_t keep_count,
+                                                 const radinterp__pending *pend, uint32_t pend_count,
                                                  const uint32_t *pend_pool)
 {
-    uint32_t *start = NULL, *pool = NULL, i, total = keep_count, at;
+    uint32_t *start = NULL, *order = NULL, i, total = keep_count, live = 0, w, k, j;
+    uint64_t packed, blockers, pw;
+    void *grown;
     int stop = 0;
-    uint64_t blockers = 0;
-    radinterp__link *links = NULL;
-    for (i = 0; i < keep_count; i++) blockers += keep[i].blocker_count;
     for (i = 0; i < pend_count; i++) s->culled_links += pend[i].hidden;
+    blockers = packed = radinterp__pack_kept_blockers(s, run, keep_count, &stop);
+    if (stop) return RADINTERP_ERROR_CANCELLED;   /* the solution is only destroyed now */
     for (i = 0; i < pend_count; i++)
-        if (!pend[i].dead) { total++; blockers += pend[i].kept; }
+        if (!pend[i].dead) { live++; blockers += pend[i].kept; }
+    total += live;
     if (blockers > 0xFFFFFFFFu) return RADINTERP_ERROR_OUT_OF_MEMORY;
-    links = (radinterp__link *)radinterp__alloc_array(&s->allocator, total, sizeof *links);
-    pool = (uint32_t *)radinterp__alloc_array(&s->allocator, (size_t)blockers, sizeof *pool);
+    grown = radinterp__room_for(&s->allocator, s->links, &s->link_cap, total, keep_count, sizeof(radinterp__link));
+    if (!grown) return RADINTERP_ERROR_OUT_OF_MEMORY;
+    s->links = (radinterp__link *)grown;
+    grown = radinterp__room_for(&s->allocator, s->blockers, &s->blocker_cap, (size_t)blockers, (size_t)packed, sizeof(uint32_t));
+    if (!grown) return RADINTERP_ERROR_OUT_OF_MEMORY;
+    s->blockers = (uint32_t *)grown;
+    /* the live pending links by receiver (counting sort, stable) */
     start = (uint32_t *)radinterp__alloc_array(&s->allocator, (size_t)s->node_count + 1, sizeof *start);
-    if (!links || !pool || !start) {
-        radinterp__free(&s->allocator, links);
-        radinterp__free(&s->allocator, pool);
+    order = (uint32_t *)radinterp__alloc_array(&s->allocator, live ? live : 1, sizeof *order);
+    if (!start || !order) {
         radinterp__free(&s->allocator, start);
+        radinterp__free(&s->allocator, order);
         return RADINTERP_ERROR_OUT_OF_MEMORY;
     }
     memset(start, 0, ((size_t)s->node_count + 1) * sizeof *start);
-    for (i = 0; i < keep_count; i++) start[keep[i].receiver + 1]++;
     for (i = 0; i < pend_count; i++)
         if (!pend[i].dead) start[pend[i].receiver + 1]++;
-    for (i = 0; i < s->node_count; i++) {
-        s->nodes[i].first_link = start[i];
-        s->nodes[i].link_count = start[i + 1];
-        start[i + 1] += start[i];
-    }
-    at = 0;
-    for (i = 0; i < keep_count && !(stop = radinterp__solve_step(s, run, i)); i++) {
-        radinterp__link *l = &links[start[keep[i].receiver]++];
-        *l = keep[i];
-        if (l->blocker_count) memcpy(pool + at, s->blockers + keep[i].first_blocker, l->blocker_count * sizeof *pool);
-        l->first_blocker = at;
-        at += l->blocker_count;
-    }
-    for (i = 0; i < pend_count && !stop && !(stop = radinterp__solve_step(s, run, i)); i++) {
-        radinterp__link *l;
-        if (pend[i].dead) continue;
-        l = &links[start[pend[i].receiver]++];
-        l->receiver = pend[i].receiver;
-        l->source = pend[i].source;
-        l->ff = pend[i].ff;
-        l->dff = pend[i].dff;
-        l->vis = pend[i].vis;
-        l->gff = pend[i].gff;
-        memcpy(l->glass, pend[i].glass, sizeof l->glass);
-        l->flags = pend[i].partly ? RADINTERP__LINK_PARTLY : 0u;
-        l->blocker_count = pend[i].kept;
-        if (l->blocker_count) memcpy(pool + at, pend_pool + pend[i].first, l->blocker_count * sizeof *pool);
-        l->first_blocker = at;
-        at += l->blocker_count;
-    }
+    for (i = 0; i < s->node_count; i++) start[i + 1] += start[i];
+    for (i = 0; i < pend_count; i++)
+        if (!pend[i].dead) order[start[pend[i].receiver]++] = i;
     radinterp__free(&s->allocator, start);
-    if (stop) {
-        radinterp__free(&s->allocator, links);
-        radinterp__free(&s->allocator, pool);
-        return RADINTERP_ERROR_CANCELLED;
+    /* merge from the back; once the pending ones are placed, the kept ones
+       before them are where they belong */
+    w = total;
+    pw = blockers;
+    k = keep_count;
+    for (j = live; j > 0; ) {
+        if (radinterp__solve_step(s, run, total - w)) {
+            radinterp__free(&s->allocator, order);
+            return RADINTERP_ERROR_CANCELLED;   /* the solution is only destroyed now */
+        }
+        if (k == 0 || pend[order[j - 1]].receiver >= s->links[k - 1].receiver) {
+            const radinterp__pending *p = &pend[order[--j]];
+            pw -= p->kept;
+            if (p->kept) memcpy(s->blockers + pw, pend_pool + p->first, p->kept * sizeof(uint32_t));
+            s->links[--w] = radinterp__pending_link(p, (uint32_t)pw);
+        } else {
+            radinterp__link l = s->links[--k];
+            pw -= l.blocker_count;
+            if (l.blocker_count) memmove(s->blockers + pw, s->blockers + l.first_blocker, l.blocker_count * sizeof(uint32_t));
+            l.first_blocker = (uint32_t)pw;
+            s->links[--w] = l;
+        }
     }
-    radinterp__free(&s->allocator, s->links);
-    radinterp__free(&s->allocator, s->blockers);
-    s->links = links;
+    radinterp__free(&s->allocator, order);
+    for (i = 0; i < s->node_count; i++) s->nodes[i].link_count = 0;
+    for (i = 0; i < total; i++) s->nodes[s->links[i].receiver].link_count++;
+    for (w = 0, i = 0; i < s->node_count; i++) {
+        s->nodes[i].first_link = w;
+        w += s->nodes[i].link_count;
+    }
     s->link_count = total;
-    s->blockers = pool;
     s->blocker_count = blockers;
     return RADINTERP_OK;
 }
@@ -6585,7 +6707,7 @@ static radinterp_result radinterp__resolve_clinks(radinterp_solution *s, radinte
    fractions, computes every pending ordinary link and installs them all
    beside the kept ones. */
 static radinterp_result radinterp__finish_linking(radinterp_solution *s, radinterp__run *run, radinterp__linker *L,
-                                                  uint32_t nodes_before, const radinterp__link *keep, uint32_t nkeep,
+                                                  uint32_t nodes_before, uint32_t nkeep,
                                                   const radinterp__clink *ckeep, uint32_t nckeep)
 {
     radinterp__pending *p;
@@ -6615,7 +6737,7 @@ static radinterp_result radinterp__finish_linking(radinterp_solution *s, radinte
     }
     if (res == RADINTERP_OK) res = radinterp__compute_pending(s, run, p, (uint32_t)L->pend.count, wide, out);
     radinterp__free(&s->allocator, wide);
-    if (res == RADINTERP_OK) res = radinterp__install_links(s, run, keep, nkeep, p, (uint32_t)L->pend.count, out);
+    if (res == RADINTERP_OK) res = radinterp__install_links(s, run, nkeep, p, (uint32_t)L->pend.count, out);
     if (res == RADINTERP_OK && radinterp__solve_tick(s, run)) res = RADINTERP_ERROR_CANCELLED;
     if (res == RADINTERP_OK)
         res = radinterp__install_clinks(s, ckeep, nckeep, (const radinterp__cpending *)accepted.data,
@@ -6640,7 +6762,7 @@ static radinterp_result radinterp__initial_cluster_links(radinterp_solution *s, 
         if (radinterp__solve_step(s, run, c)) { res = RADINTERP_ERROR_CANCELLED; break; }
         if (!radinterp__link_elements(s, &L, a, b) || !radinterp__link_elements(s, &L, b, a)) res = RADINTERP_ERROR_OUT_OF_MEMORY;
     }
-    if (res == RADINTERP_OK) res = radinterp__finish_linking(s, run, &L, s->node_count, NULL, 0, NULL, 0);
+    if (res == RADINTERP_OK) res = radinterp__finish_linking(s, run, &L, s->node_count, 0, NULL, 0);
     radinterp__linker_free(s, &L);
     return res;
 }
@@ -6673,27 +6795,70 @@ static int radinterp__refine_sky(radinterp_solution *s, uint32_t nodes_before)
     return split;
 }
 
+/* What refinement reads of a node as a link's source, one entry a node,
+   made at the start of each refinement pass: the pass reads it for every
+   link (millions), twice, and the node with its four children lies on five
+   or six cache lines where this entry takes 16 bytes. The same values as
+   the nodes give: bmax the largest channel of B, near the spread of its
+   children (radinterp__source_spread), deep the spread of its leaves. */
+typedef struct radinterp__source_sum {
+    double near;
+    float bmax, deep;
+} radinterp__source_sum;
+
+#define RADINTERP__SUM_BLOCK 4096   /* nodes a job */
+
+typedef struct radinterp__sums_ctx {
+    const radinterp_solution *s;
+    radinterp__source_sum *ss;
+} radinterp__sums_ctx;
+
+static void radinterp__sums_job(void *ctx_, uint32_t job)
+{
+    const radinterp__sums_ctx *c = (const radinterp__sums_ctx *)ctx_;
+    const radinterp_solution *s = c->s;
+    uint32_t i, end = s->node_count - job * RADINTERP__SUM_BLOCK < RADINTERP__SUM_BLOCK ? s->node_count
+                                                                                       : (job + 1) * RADINTERP__SUM_BLOCK;
+    for (i = job * RADINTERP__SUM_BLOCK; i < end; i++) {
+        const float *b = s->nodes[i].b;
+        c->ss[i].near = radinterp__source_spread(s, i);
+        c->ss[i].bmax = radinterp__maxf(b[0], radinterp__maxf(b[1], b[2]));
+        c->ss[i].deep = s->nodes[i].spread;
+    }
+}
+
+/* Returns NULL when out of memory. */
+static radinterp__source_sum *radinterp__source_sums(const radinterp_solution *s, const radinterp__run *run)
+{
+    radinterp__sums_ctx c;
+    c.s = s;
+    c.ss = (radinterp__source_sum *)radinterp__alloc_array(&s->allocator, s->node_count ? s->node_count : 1, sizeof *c.ss);
+    if (!c.ss) return NULL;
+    radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__sums_job, &c,
+                        (s->node_count + RADINTERP__SUM_BLOCK - 1) / RADINTERP__SUM_BLOCK);
+    return c.ss;
+}
+
 /* How far a link's source mean may be from the part of the source its
-   receiver sees: the spread of the source's children when the receiver
-   sees all of it, of its leaves when part of it is hidden (the link is
+   receiver sees (ss: radinterp__source_sums): the spread of the source's
+   children when the receiver sees all of it, of its leaves when part of it is hidden (the link is
    partly blocked, or some receiver point sees none of it): then the
    receiver may see only the darkest or the brightest leaves, and the
    children of a source that straddles a wall (a floor running under the
    partition between a lit room and a dark one) each straddle it too, so
    their means are alike. A source node made in the pass has no leaves'
    spread yet (0), as it has no children's. */
-static double radinterp__link_source_spread(const radinterp_solution *s, const radinterp__link *l)
+static double radinterp__link_source_spread(const radinterp__source_sum *ss, const radinterp__link *l)
 {
-    double near = radinterp__source_spread(s, l->source), deep = (double)s->nodes[l->source].spread;
+    double near = ss[l->source].near, deep = (double)ss[l->source].deep;
     return (l->flags & RADINTERP__LINK_PARTLY) && deep > near ? deep : near;
 }
 
 /* A link's estimated transport error (4.4.1): B_src (largest channel)
    times the spread of its point factors over the receiver. */
-static double radinterp__link_error(const radinterp_solution *s, const radinterp__link *l)
+static double radinterp__link_error(const radinterp__source_sum *ss, const radinterp__link *l)
 {
-    const float *b = s->nodes[l->source].b;
-    return (double)radinterp__maxf(b[0], radinterp__maxf(b[1], b[2])) * (double)l->dff;
+    return (double)ss[l->source].bmax * (double)l->dff;
 }
 
 /* What a link's source mean may misjudge (4.4.1's transport error on the
@@ -6701,9 +6866,9 @@ static double radinterp__link_error(const radinterp_solution *s, const radinterp
    factor. Visibility picks a part of the source: a floor element under a
    wall between a lit room and a dark one is seen from the dark room by its
    dark part alone, and the link would carry its lit mean there. */
-static double radinterp__source_error(const radinterp_solution *s, const radinterp__link *l)
+static double radinterp__source_error(const radinterp__source_sum *ss, const radinterp__link *l)
 {
-    return radinterp__link_source_spread(s, l) * radinterp__link_ff_max(l);
+    return radinterp__link_source_spread(ss, l) * radinterp__link_ff_max(l);
 }
 
 static int radinterp__cmp_double(const void *a, const void *b)
@@ -6736,28 +6901,28 @@ static int radinterp__cmp_double(const void *a, const void *b)
 #define RADINTERP__SPLIT 1          /* budget marks: split the larger element */
 #define RADINTERP__SPLIT_SOURCE 2   /* split the source: its variation is most of the error */
 
-static double radinterp__budget_error(const radinterp_solution *s, const radinterp__link *l, double source_scale)
+static double radinterp__budget_error(const radinterp__source_sum *ss, const radinterp__link *l, double source_scale)
 {
-    return radinterp__link_error(s, l) + source_scale * radinterp__source_error(s, l);
+    return radinterp__link_error(ss, l) + source_scale * radinterp__source_error(ss, l);
 }
 
-static void radinterp__spread_budget(const radinterp_solution *s, const radinterp__node *nd, double *err,
-                                     unsigned char *mark)
+static void radinterp__spread_budget(const radinterp_solution *s, const radinterp__source_sum *ss, const radinterp__node *nd,
+                                     double *err, unsigned char *mark)
 {
     double tol = radinterp__tolerance(s, nd->dim), budget = RADINTERP_RECEIVER_BUDGET * tol, sum = 0.0, limit = DBL_MAX;
     double stol = radinterp__source_tolerance(s, nd->dim);
     double source_scale = stol > 0.0 ? tol / stol : 1.0;   /* a floor flushed to 0 (emission near FLT_MIN) */
     uint32_t j;
     for (j = 0; j < nd->link_count; j++)
-        sum += err[j] = radinterp__budget_error(s, &s->links[nd->first_link + j], source_scale);
+        sum += err[j] = radinterp__budget_error(ss, &s->links[nd->first_link + j], source_scale);
     if (sum <= budget) return;
     qsort(err, nd->link_count, sizeof(double), radinterp__cmp_double);
     for (sum = 0.0, j = 0; j < nd->link_count; j++)   /* from the smallest: the first that no longer fits */
         if ((sum += err[j]) > budget) { limit = err[j]; break; }
     for (j = 0; j < nd->link_count; j++) {
         const radinterp__link *l = &s->links[nd->first_link + j];
-        if (radinterp__budget_error(s, l, source_scale) < limit) continue;
-        mark[j] = source_scale * radinterp__source_error(s, l) > radinterp__link_error(s, l) ? RADINTERP__SPLIT_SOURCE
+        if (radinterp__budget_error(ss, l, source_scale) < limit) continue;
+        mark[j] = source_scale * radinterp__source_error(ss, l) > radinterp__link_error(ss, l) ? RADINTERP__SPLIT_SOURCE
                                                                                             : RADINTERP__SPLIT;
     }
 }
@@ -6772,6 +6937,7 @@ static void radinterp__spread_budget(const radinterp_solution *s, const radinter
 
 typedef struct radinterp__marks_ctx {
     const radinterp_solution *s;
+    const radinterp__source_sum *ss;
     unsigned char *mark;
     double *err;                 /* RADINTERP__MARK_JOBS scratch arrays of `most` */
     uint32_t most;               /* the most links one node gathers */
@@ -6785,15 +6951,17 @@ static void radinterp__marks_job(void *ctx_, uint32_t job)
     for (b = job * RADINTERP__MARK_BLOCK; b < s->node_count; b += RADINTERP__MARK_JOBS * RADINTERP__MARK_BLOCK)
         for (i = b; i < s->node_count && i < b + RADINTERP__MARK_BLOCK; i++)
             if (s->nodes[i].link_count)
-                radinterp__spread_budget(s, &s->nodes[i], c->err + (size_t)job * c->most, c->mark + s->nodes[i].first_link);
+                radinterp__spread_budget(s, c->ss, &s->nodes[i], c->err + (size_t)job * c->most, c->mark + s->nodes[i].first_link);
 }
 
 /* Returns NULL when out of memory. */
-static unsigned char *radinterp__budget_marks(const radinterp_solution *s, const radinterp__run *run)
+static unsigned char *radinterp__budget_marks(const radinterp_solution *s, const radinterp__source_sum *ss,
+                                              const radinterp__run *run)
 {
     radinterp__marks_ctx c;
     uint32_t i;
     c.s = s;
+    c.ss = ss;
     c.most = 1;
     c.mark = (unsigned char *)radinterp__alloc_array(&s->allocator, s->link_count ? s->link_count : 1, 1);
     if (!c.mark) return NULL;
@@ -6813,12 +6981,13 @@ static unsigned char *radinterp__budget_marks(const radinterp_solution *s, const
 #define RADINTERP__REFINE_SOURCE 2     /* to the source's children */
 #define RADINTERP__REFINE_FINAL 3      /* kept, marked final: neither end may be split */
 
-static unsigned char radinterp__refine_decision(const radinterp_solution *s, const radinterp__link *l, unsigned char mark)
+static unsigned char radinterp__refine_decision(const radinterp_solution *s, const radinterp__source_sum *ss,
+                                                const radinterp__link *l, unsigned char mark)
 {
     double tol = radinterp__tolerance(s, s->nodes[l->receiver].dim);
     if (l->flags & RADINTERP__LINK_FINAL) return RADINTERP__REFINE_KEEP;
     if (mark == RADINTERP__SPLIT_SOURCE) return RADINTERP__REFINE_SOURCE;
-    if (radinterp__link_error(s, l) > tol || mark) {
+    if (radinterp__link_error(ss, l) > tol || mark) {
         const radinterp__node *r = &s->nodes[l->receiver], *src = &s->nodes[l->source];
         int rs = radinterp__can_split(s, r), ss = radinterp__can_split(s, src);
         if (rs && (r->area >= src->area || !ss)) return RADINTERP__REFINE_RECEIVER;
@@ -6827,7 +6996,7 @@ static unsigned char radinterp__refine_decision(const radinterp_solution *s, con
     /* the source is not uniform (its children differ): the link carries
        its mean where the receiver may see a brighter or darker part, so it
        goes to the children */
-    return radinterp__source_error(s, l) > radinterp__source_tolerance(s, s->nodes[l->receiver].dim)
+    return radinterp__source_error(ss, l) > radinterp__source_tolerance(s, s->nodes[l->receiver].dim)
                ? RADINTERP__REFINE_SOURCE : RADINTERP__REFINE_KEEP;
 }
 
@@ -6837,6 +7006,7 @@ static unsigned char radinterp__refine_decision(const radinterp_solution *s, con
 
 typedef struct radinterp__decide_ctx {
     const radinterp_solution *s;
+    const radinterp__source_sum *ss;
     unsigned char *mark;
 } radinterp__decide_ctx;
 
@@ -6846,7 +7016,7 @@ static void radinterp__decide_job(void *ctx_, uint32_t job)
     uint32_t i, end = c->s->link_count - job * RADINTERP__REFINE_BLOCK < RADINTERP__REFINE_BLOCK
                           ? c->s->link_count : (job + 1) * RADINTERP__REFINE_BLOCK;
     for (i = job * RADINTERP__REFINE_BLOCK; i < end; i++)
-        c->mark[i] = radinterp__refine_decision(c->s, &c->s->links[i], c->mark[i]);
+        c->mark[i] = radinterp__refine_decision(c->s, c->ss, &c->s->links[i], c->mark[i]);
 }
 
 /* Transport-based refinement (4.4.1): a link whose estimated transport
@@ -6865,36 +7035,37 @@ static void radinterp__decide_job(void *ctx_, uint32_t job)
    source's children, its budget mark) is not changed by the pass's splits
    (a node split in the pass gets children that copy its radiosity, so its
    spread stays 0, as it was without children), so the result is the one a
-   link-by-link pass would give.
+   link-by-link pass would give. The kept links are packed at the front of
+   the link array, in their order (radinterp__install_links merges the new
+   ones among them).
    Returns the number of links split, or -1 when out of memory or cancelled
    (*res). */
 static int radinterp__refine(radinterp_solution *s, radinterp__run *run, radinterp_result *res)
 {
-    radinterp__buf keep, ckeep;
+    radinterp__buf ckeep;
     radinterp__linker L;
-    uint32_t i, split = 0, nodes_before = s->node_count;
-    unsigned char *mark = radinterp__budget_marks(s, run);
-    memset(&keep, 0, sizeof keep);
+    uint32_t i, split = 0, kept = 0, nodes_before = s->node_count;
+    radinterp__source_sum *ss = radinterp__source_sums(s, run);
+    unsigned char *mark = ss ? radinterp__budget_marks(s, ss, run) : NULL;
     memset(&ckeep, 0, sizeof ckeep);
-    keep.item = sizeof(radinterp__link);
     ckeep.item = sizeof(radinterp__clink);
     *res = RADINTERP_OK;
     if (!radinterp__linker_init(s, &L) || !mark) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
     else {
         radinterp__decide_ctx dc;
         dc.s = s;
+        dc.ss = ss;
         dc.mark = mark;
         radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__decide_job, &dc,
                             (s->link_count + RADINTERP__REFINE_BLOCK - 1) / RADINTERP__REFINE_BLOCK);
     }
+    radinterp__free(&s->allocator, ss);   /* the decisions are made: the splits below change the nodes */
     for (i = 0; i < s->link_count && *res == RADINTERP_OK; i++) {
         radinterp__link l = s->links[i];
         if (radinterp__solve_step(s, run, i)) { *res = RADINTERP_ERROR_CANCELLED; break; }
         if (mark[i] == RADINTERP__REFINE_KEEP || mark[i] == RADINTERP__REFINE_FINAL) {
-            radinterp__link *slot = (radinterp__link *)radinterp__buf_push(&s->allocator, &keep);
             if (mark[i] == RADINTERP__REFINE_FINAL) l.flags |= RADINTERP__LINK_FINAL;
-            if (!slot) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
-            else *slot = l;
+            s->links[kept++] = l;
             continue;
         }
         if (!radinterp__split_link(s, &L, &l, mark[i] == RADINTERP__REFINE_SOURCE)) *res = RADINTERP_ERROR_OUT_OF_MEMORY;
@@ -6918,13 +7089,10 @@ static int radinterp__refine(radinterp_solution *s, radinterp__run *run, radinte
         split++;
     }
     if (*res == RADINTERP_OK && split)
-        *res = radinterp__finish_linking(s, run, &L, nodes_before, (const radinterp__link *)keep.data, (uint32_t)keep.count,
+        *res = radinterp__finish_linking(s, run, &L, nodes_before, kept,
                                          (const radinterp__clink *)ckeep.data, (uint32_t)ckeep.count);
-    else if (*res == RADINTERP_OK && keep.count)
-        memcpy(s->links, keep.data, keep.count * sizeof(radinterp__link)); /* keeps the final flags */
     radinterp__linker_free(s, &L);
     radinterp__free(&s->allocator, mark);
-    radinterp__free(&s->allocator, keep.data);
     radinterp__free(&s->allocator, ckeep.data);
     return *res == RADINTERP_OK ? (int)split : -1;
 }
@@ -6952,7 +7120,7 @@ static radinterp_result radinterp__initial_links(radinterp_solution *s, radinter
             if (!radinterp__link_elements(s, &L, pr->root, ps->root)) res = RADINTERP_ERROR_OUT_OF_MEMORY;
         }
     }
-    if (res == RADINTERP_OK) res = radinterp__finish_linking(s, run, &L, s->node_count, NULL, 0, NULL, 0);
+    if (res == RADINTERP_OK) res = radinterp__finish_linking(s, run, &L, s->node_count, 0, NULL, 0);
     radinterp__linker_free(s, &L);
     return res;
 }
@@ -8477,6 +8645,23 @@ static void radinterp__hide_init(radinterp__hide_ctx *c, const radinterp_solutio
     memset(c->slot, 0, sizeof c->slot);
 }
 
+/* Do the boxes overlap by more than 4 tol along every axis? Then no plane
+   has one on each side as radinterp__plane_separates asks (at most tol
+   into either): along a unit normal their common part spans at least its
+   least extent, more than the 2 tol such a plane leaves room for (the
+   rest covers rounding), so the walk would keep no patch. Cluster links
+   whose boxes overlap are always split (radinterp__clink_too_coarse), and
+   each asked the walk first. */
+static int radinterp__boxes_inseparable(const radinterp__hide_ctx *c)
+{
+    int k;
+    for (k = 0; k < 3; k++) {
+        double lo = radinterp__maxf(c->lo[0][k], c->lo[1][k]), hi = radinterp__minf(c->hi[0][k], c->hi[1][k]);
+        if (!(hi - lo > 4.0 * c->tol)) return 0;
+    }
+    return 1;
+}
+
 /* Are boxes a and b hidden from each other by patches in one plane between
    them (see above)? A search that finds too much answers no. */
 static int radinterp__planes_hide(const radinterp_solution *s, const float *alo, const float *ahi, const float *blo,
@@ -8486,6 +8671,7 @@ static int radinterp__planes_hide(const radinterp_solution *s, const float *alo,
     unsigned char used[RADINTERP__HIDE_PATCHES];
     uint32_t i;
     radinterp__hide_init(&c, s, alo, ahi, blo, bhi);
+    if (radinterp__boxes_inseparable(&c)) return 0;
     if (!radinterp__bvh_walk(s, radinterp__hide_box, radinterp__hide_visit, &c)) return 0;
     memset(used, 0, sizeof used);
     for (i = 0; i < c.count; i++)
@@ -10116,6 +10302,7 @@ RADINTERP_API radinterp_result radinterp_solve(const radinterp_desc *desc, radin
         res = s->clustering == RADINTERP_CLUSTERING_OFF ? radinterp__initial_links(s, &run)
                                                           : radinterp__initial_cluster_links(s, &run);
     if (res == RADINTERP_OK) res = radinterp__iterate(s, &run);
+    if (res == RADINTERP_OK) res = radinterp__trim_links(s, &run);
     if (res == RADINTERP_OK) res = radinterp__collect_leaves(s);
     s->leaf_margin = 10.0 * (s->nudge + s->epsilon * s->diag);   /* leaf lists (section 14): built where used */
     if (res != RADINTERP_OK) {

@@ -1223,6 +1223,13 @@ static void test_children_shared_edges(void)
     test_note("%d node queries, %d with four whole children (shared inner edges)", checked, whole);
 }
 
+/* A link's transport error (radinterp__link_error) from its source node. */
+static double node_link_error(const radinterp_solution *s, const radinterp__link *l)
+{
+    const float *b = s->nodes[l->source].b;
+    return (double)radinterp__maxf(b[0], radinterp__maxf(b[1], b[2])) * (double)l->dff;
+}
+
 /* Links that overrun their receiver's error budget (radinterp__budget_limits)
    and could still be split, with the budget grown by `margin`; the node
    with the largest sum of link errors over its tolerance in *worst. */
@@ -1237,7 +1244,7 @@ static uint32_t budget_overruns(const radinterp_solution *sol, double margin, do
     for (i = 0; i < sol->node_count; i++) {
         const radinterp__node *nd = &sol->nodes[i];
         double tol = radinterp__tolerance(sol, nd->dim), budget = margin * RADINTERP_RECEIVER_BUDGET * tol, sum = 0.0, limit = DBL_MAX;
-        for (j = 0; j < nd->link_count; j++) sum += err[j] = radinterp__link_error(sol, &sol->links[nd->first_link + j]);
+        for (j = 0; j < nd->link_count; j++) sum += err[j] = node_link_error(sol, &sol->links[nd->first_link + j]);
         if (sum / tol > *worst) *worst = sum / tol;
         if (sum <= budget) continue;
         qsort(err, nd->link_count, sizeof(double), radinterp__cmp_double);
@@ -1245,7 +1252,7 @@ static uint32_t budget_overruns(const radinterp_solution *sol, double margin, do
             if ((sum += err[j]) > budget) limit = err[j];
         for (j = 0; j < nd->link_count; j++) {
             const radinterp__link *l = &sol->links[nd->first_link + j];
-            over += !(l->flags & RADINTERP__LINK_FINAL) && radinterp__link_error(sol, l) >= limit;
+            over += !(l->flags & RADINTERP__LINK_FINAL) && node_link_error(sol, l) >= limit;
         }
     }
     free(err);
