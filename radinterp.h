@@ -6989,9 +6989,9 @@ static unsigned char radinterp__refine_decision(const radinterp_solution *s, con
     if (mark == RADINTERP__SPLIT_SOURCE) return RADINTERP__REFINE_SOURCE;
     if (radinterp__link_error(ss, l) > tol || mark) {
         const radinterp__node *r = &s->nodes[l->receiver], *src = &s->nodes[l->source];
-        int rs = radinterp__can_split(s, r), ss = radinterp__can_split(s, src);
-        if (rs && (r->area >= src->area || !ss)) return RADINTERP__REFINE_RECEIVER;
-        return ss ? RADINTERP__REFINE_SOURCE : RADINTERP__REFINE_FINAL;
+        int rs = radinterp__can_split(s, r), src_splits = radinterp__can_split(s, src);
+        if (rs && (r->area >= src->area || !src_splits)) return RADINTERP__REFINE_RECEIVER;
+        return src_splits ? RADINTERP__REFINE_SOURCE : RADINTERP__REFINE_FINAL;
     }
     /* the source is not uniform (its children differ): the link carries
        its mean where the receiver may see a brighter or darker part, so it
