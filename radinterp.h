@@ -1,4 +1,4 @@
-/* radinterp.h - v0.8.17 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
+/* radinterp.h - v0.8.18 - radiosity with per-pixel quadratic irradiance interpolants - public domain or MIT, see end of file
 
    RADINTERP.H: hierarchical radiosity, ranked discontinuities and quadratic irradiance interpolants evaluated per pixel.
 
@@ -884,7 +884,7 @@
 
 #define RADINTERP_VERSION_MAJOR 0
 #define RADINTERP_VERSION_MINOR 8
-#define RADINTERP_VERSION_PATCH 17
+#define RADINTERP_VERSION_PATCH 18
 #define RADINTERP_FILE_FORMAT_VERSION 2   /* of saved meshes */
 
 #include <stddef.h>
