@@ -5,7 +5,7 @@
    (Debian: libsdl2-dev); `make view` installs it when it can, builds this
    and starts it. Every other example and header stays dependency-free.
 
-       cc -O3 -I. examples/viewer.c -o viewer $(sdl2-config --cflags --libs) -lm -lpthread
+       cc -O2 -I. examples/viewer.c -o viewer $(sdl2-config --cflags --libs) -lm -lpthread
        ./viewer                       # the house, mode radiosity (a minute's precompute, once)
        ./viewer --scene office
        ./viewer --mode raytrace --scene building --size 960x540

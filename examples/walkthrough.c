@@ -16,7 +16,7 @@
    (exposure to middle grey per frame, ACES filmic curve, sRGB), the same
    as the interactive viewer (examples/viewer.c).
 
-       cc -O3 -I. examples/walkthrough.c -o walkthrough -lm -lpthread
+       cc -O2 -I. examples/walkthrough.c -o walkthrough -lm -lpthread
        ./walkthrough --out build/demo                 # mode radiosity, the house
        ./walkthrough --mode raytrace --out build/demo
        ./walkthrough --mode raytrace --scene daylight --out build/demo   # by day: glass and a sky
