@@ -1081,6 +1081,71 @@ static void test_furnace_room_on_slabs(void)
     radinterp_solution_destroy(sol);
 }
 
+/* Two rooms on one floor slab and one ceiling slab that run on under the
+   wall between them, as a level's slabs do, the left room lit by a lamp,
+   the right one closed and unlit: no light can reach the right room, so
+   every point of it has irradiance 0. min_area stops the slabs' quadtrees
+   at nodes 0.55 m wide, wider than the 10 cm wall, and one of them holds
+   the wall whole (a strip of each room beside it): as a leaf its radiosity,
+   the mean of its open part, would carry the lit room's light into the
+   strip of the dark room beside the wall, and everything in the dark room
+   would see it (building_1k's lampless room came out 10-40% too bright,
+   partly by its slabs' strips). Such a node, whose open points lie on both
+   sides of an enclosed band, splits below min_area, and its links go to
+   its children. */
+static void test_slab_under_wall_between_rooms(void)
+{
+    const float t = 0.1f, wall = 1.2f;   /* the outer walls t thick, the partition [wall, wall + t] */
+    scene s;
+    radinterp_desc d;
+    radinterp_solution *sol;
+    uint32_t m, lamp, dark_face, i;
+    float h[3], b[3], lit = 0.0f, worst = 0.0f;
+    memset(&s, 0, sizeof s);
+    m = add_material(&s, 0.5f, 0.0f);
+    lamp = add_material(&s, 0.0f, 10.0f);
+    add_hrect(&s, -t, -t, 2.0f + t, 1.0f + t, 0.0f, 1, m);   /* patch 0: the floor slab, facing up */
+    add_hrect(&s, -t, -t, 2.0f + t, 1.0f + t, 1.0f, 0, m);   /* patch 1: the ceiling slab */
+    add_hrect(&s, 0.4f, 0.4f, 0.8f, 0.6f, 0.99f, 0, lamp);   /* the lamp, facing down */
+    dark_face = s.np + 4 * 4 + 3;   /* the partition's face x = wall + t, toward the dark room */
+    {   /* outer walls along y at x = -t..0 and 2..2+t, along x between them; the partition */
+        float lo[5][3] = {{-t, -t, 0.0f}, {2.0f, -t, 0.0f}, {0.0f, -t, 0.0f}, {0.0f, 1.0f, 0.0f}, {wall, 0.0f, 0.0f}};
+        float hi[5][3] = {{0.0f, 1.0f + t, 1.0f}, {2.0f + t, 1.0f + t, 1.0f}, {2.0f, 0.0f, 1.0f}, {2.0f, 1.0f + t, 1.0f},
+                          {wall + t, 1.0f, 1.0f}};
+        int w;
+        for (w = 0; w < 5; w++) add_box_faces(&s, lo[w], hi[w], m);
+    }
+    d = scene_desc(&s);
+    d.min_area = 0.05f;   /* the slabs' nodes stop at 0.55 x 0.3 m (a quarter of that is below it) */
+    if (!CHECK(radinterp_solve(&d, &sol) == RADINTERP_OK)) return;
+    for (i = 0; i < 5; i++) {   /* floor and ceiling of the dark room, 1 and 4 cm from the partition, and
+                                   of the lit room as a scale */
+        float y = 0.1f + 0.2f * (float)i, p[4][3] = {{wall + t + 0.01f, y, 0.0f}, {wall + t + 0.04f, y, 1.0f},
+                                                     {wall + t + 0.04f, y, 0.0f}, {wall - 0.04f, y, 0.0f}};
+        int k;
+        for (k = 0; k < 4; k++) {
+            if (!CHECK_EQ_INT(radinterp_irradiance_at_point(sol, p[k][2] > 0.5f ? 1u : 0u, p[k], NULL, h), RADINTERP_OK))
+                break;
+            if (k == 3) lit = h[0] > lit ? h[0] : lit;
+            else worst = h[0] > worst ? h[0] : worst;
+        }
+    }
+    CHECK_EQ_INT(radinterp_patch_radiosity(sol, dark_face, b), RADINTERP_OK);
+    test_note("slab under a wall between a lit room and a dark one: dark room's slabs beside the wall H <= %.3g "
+              "(lit room's beside it up to %.3g), the partition's dark face B = %.3g", worst, lit, b[0]);
+    CHECK(lit > 0.1f);
+    /* Every path into the dark room is blocked, so its irradiance is 0 but
+       for what the solution's error test lets through: weak links of the
+       larger nodes that hold the wall (each within its tolerance) still
+       deliver to their strip of the dark room. 0.1% of the lit room's
+       level: with the leaf at the wall's foot one radiosity, the strip
+       showed 8.7% of it (0.021 W/m^2) and the partition's dark face 0.0094;
+       split, 0.023% and 0.000025. */
+    CHECK(worst <= 1e-3f * lit);
+    CHECK(b[0] <= 1e-3f * lit && b[1] <= 1e-3f * lit && b[2] <= 1e-3f * lit);
+    radinterp_solution_destroy(sol);
+}
+
 /* ---- the office: leaves, determinism, threads, callbacks ------------------ */
 static obj_scene office;
 static uint32_t *office_patches;
@@ -1606,6 +1671,7 @@ int main(int argc, char **argv)
     RUN(test_enclosed_floor_under_box);
     RUN(test_enclosed_floor_under_wall);
     RUN(test_furnace_room_on_slabs);
+    RUN(test_slab_under_wall_between_rooms);
     RUN(test_leaves_tile_patches_and_budget);
     RUN(test_outline_points_continuous);
     RUN(test_deterministic_any_thread_count);
