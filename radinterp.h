@@ -239,24 +239,24 @@
    that run on under its walls (a furnace, B = E / (1 - rho) exactly) from
    +9.9% to +0.35% (test_radinterp). A node whose open points lie on both
    sides of an enclosed band (on a row or column of that grid: the foot of
-   a wall standing on a slab that runs under two rooms) holds a strip of
-   each room, and its one radiosity, mostly the lit room's, lit the strip
-   of the dark one, which everything in the dark room sees: building_1k's
-   upper floor showed 0.19 W/m^2 in the lampless room's 4 cm strip beside
-   the partition, against 0.009 a few centimetres on. Such a node may split
-   down to min_area / 16 (two levels below min_area, so that walls thinner
-   than the smallest nodes still get leaves on each side), and when it is
-   within two levels of min_area its links go to its children whatever
-   their error (each of a lit room's many weak links passes the error test
-   and together they carry the room's light across). On building_1k this
-   took the patches beyond 5% + 3 SE from 45 to 38, the points' median from
-   2.96% to 2.70% and their 90th percentile from 14.5% to 12.7%, for 9%
-   more leaves and 6% more links; a test room with a lit and a closed dark
-   room on shared slabs went from 8.7% of the lit room's irradiance in the
-   dark strip to 0.023% (test_radinterp). Larger nodes that hold a wall
-   keep the error test: their grid points often miss the wall, and forcing
-   their links down as well (up to six levels above min_area) added 21%
-   links for a little more (36 patches, 2.46%, 12.6%).
+   a wall standing on a slab that runs under two rooms), or whose child's
+   do, holds a strip of each room, and what it gathers, mostly the lit
+   room's light, lit the strip of the dark one, which everything in the
+   dark room sees: building_1k's upper floor showed 0.19 W/m^2 in the
+   lampless room's 4 cm strip beside the partition, against 0.009 a few
+   centimetres on, and the partition's dark face twice its reference. Such
+   a node may split down to min_area / 16 (two levels below min_area, so
+   that walls thinner than the smallest nodes still get leaves on each
+   side), and within three levels of min_area its links go to its children
+   whatever their error (each of a lit room's many weak links passes the
+   error test, and together they carry the room's light across). On
+   building_1k this took the patches beyond 5% + 3 SE from 45 to 18, the
+   points' median from 2.96% to 2.21%, their 90th percentile from 14.5% to
+   8.75% and the largest from 406% to 52% (the strip: 0.0039 W/m^2), for
+   2.3x the links and 27% more leaves; the office's patches beyond from 5
+   to 3, its points 1.84% and 6.73% for 1.5x the links. Within one level of
+   min_area only: 1.06x the links, 38 patches, 2.70%, 12.7%, and the strip
+   still at 0.11 W/m^2; at every level: 3.4x the links for 2.15% and 8.60%.
 
    radinterp_irradiance_at_point (chapter 6): the sum of B_src * F over the
    links of the leaf containing p and of its ancestors. F is eq. 6.1 for the
@@ -6024,15 +6024,16 @@ static int radinterp__can_split(const radinterp_solution *s, const radinterp__no
     return 0.25 * nd->area >= (nd->divided ? s->min_area / RADINTERP__DIVIDED_SPLIT : s->min_area);
 }
 
-/* A divided node near min_area (within RADINTERP__DIVIDED_NEAR times it):
-   each of its links goes to its children whatever its error. Its one
-   radiosity pushes the light of one room into the strip of the other, and
-   the many weak links of a lit room each pass the error test (their
-   errors add up in the receiver's budget to most of its light, and once
-   split its dark children show their parent's mean, so the test cannot
-   see them). Larger divided nodes are left to the error test: forcing
-   their links down would refine every link that reaches a wall's foot. */
-#define RADINTERP__DIVIDED_NEAR 4.0
+/* A divided node within three levels of min_area (its children below
+   RADINTERP__DIVIDED_NEAR times it): each of its links goes to its
+   children whatever its error. Its links deliver one room's light to its
+   strip of the other, and the many weak links of a lit room each pass the
+   error test (their errors add up in the receiver's budget to most of its
+   light, and once split its dark children show their parent's mean, so
+   the test cannot see them). Larger divided nodes (a storey's slab as a
+   whole) are left to the error test: forcing theirs down as well took
+   building_1k's links from 2.3x to 3.4x for little. */
+#define RADINTERP__DIVIDED_NEAR 64.0
 static int radinterp__divided_below(const radinterp_solution *s, const radinterp__node *nd)
 {
     return nd->divided && 0.25 * nd->area < RADINTERP__DIVIDED_NEAR * s->min_area && radinterp__can_split(s, nd);
@@ -6723,6 +6724,19 @@ static radinterp_result radinterp__compute_cpending(radinterp_solution *s, radin
     return RADINTERP_OK;
 }
 
+/* A node whose child is divided is divided too, though its own grid of
+   points, coarser, may have missed the wall between them: its links would
+   deliver the lit room's light to the child's strip of the dark room.
+   Serial, after the grids of the nodes made since `first`. */
+static void radinterp__divide_ancestors(radinterp_solution *s, uint32_t first)
+{
+    uint32_t i, p;
+    for (i = first; i < s->node_count; i++)
+        if (s->nodes[i].divided)
+            for (p = s->nodes[i].parent; p != RADINTERP__NONE && !s->nodes[p].divided; p = s->nodes[p].parent)
+                s->nodes[p].divided = 1;
+}
+
 /* Measures the open fractions of the nodes made since *mark. */
 static void radinterp__open_new_nodes(radinterp_solution *s, radinterp__run *run, uint32_t *mark)
 {
@@ -6731,6 +6745,7 @@ static void radinterp__open_new_nodes(radinterp_solution *s, radinterp__run *run
     oc.first = *mark;
     oc.count = s->node_count - *mark;
     radinterp__run_jobs(run->desc->parallel_for, run->desc->parallel_user, radinterp__open_job, &oc, (oc.count + 63) / 64);
+    radinterp__divide_ancestors(s, *mark);
     *mark = s->node_count;
 }
 

@@ -1136,13 +1136,15 @@ static void test_slab_under_wall_between_rooms(void)
     CHECK(lit > 0.1f);
     /* Every path into the dark room is blocked, so its irradiance is 0 but
        for what the solution's error test lets through: weak links of the
-       larger nodes that hold the wall (each within its tolerance) still
-       deliver to their strip of the dark room. 0.1% of the lit room's
-       level: with the leaf at the wall's foot one radiosity, the strip
-       showed 8.7% of it (0.021 W/m^2) and the partition's dark face 0.0094;
-       split, 0.023% and 0.000025. */
-    CHECK(worst <= 1e-3f * lit);
-    CHECK(b[0] <= 1e-3f * lit && b[1] <= 1e-3f * lit && b[2] <= 1e-3f * lit);
+       slabs' top nodes, more than three levels above min_area, which are
+       left to that test, still deliver a little to the strip. 1e-4 of the
+       lit room's level: with the node at the wall's foot one leaf, the
+       strip showed 8.7% of it (0.021 W/m^2) and the partition's dark face
+       0.0094; split below min_area alone, 0.023% and 0.000025; with its
+       links and those of its divided ancestors sent to the children,
+       0.0005% and 0.0000008. */
+    CHECK(worst <= 1e-4f * lit);
+    CHECK(b[0] <= 1e-4f * lit && b[1] <= 1e-4f * lit && b[2] <= 1e-4f * lit);
     radinterp_solution_destroy(sol);
 }
 
