@@ -541,6 +541,9 @@ static void reversed_for(void *user, radinterp_job_fn job, void *ctx, uint32_t c
 static unsigned char reference_decision(const radinterp_solution *s, const radinterp__link *l, unsigned char mark)
 {
     double error = node_link_error(s, l), tol = radinterp__tolerance(s, s->nodes[l->receiver].dim);
+    /* a receiver that holds a wall's foot near min_area: to its children (v0.8.19) */
+    if (!(l->flags & RADINTERP__LINK_FINAL) && radinterp__divided_below(s, &s->nodes[l->receiver]))
+        return RADINTERP__REFINE_RECEIVER;
     if (!(l->flags & RADINTERP__LINK_FINAL) && mark == RADINTERP__SPLIT_SOURCE) return RADINTERP__REFINE_SOURCE;
     if (!(l->flags & RADINTERP__LINK_FINAL) && (error > tol || mark)) {
         const radinterp__node *r = &s->nodes[l->receiver], *src = &s->nodes[l->source];
