@@ -4046,8 +4046,8 @@ typedef struct radinterp__node {
     uint32_t parent;          /* NONE for a root */
     uint32_t child;           /* first of four consecutive children; NONE for a leaf */
     uint16_t depth;           /* 0 for a root */
-    uint16_t divided;         /* its open points lie on both sides of an enclosed band (a wall standing on
-                                 it): it may split below min_area (radinterp__can_split) */
+    uint16_t divided;         /* its open points, or a child's, lie on both sides of an enclosed band (a wall
+                                 standing on it): it may split below min_area (radinterp__can_split) */
     uint32_t first_link, link_count;   /* the links this node gathers */
     uint32_t first_clink, clink_count; /* the cluster links it gathers (section 12) */
     float area;
